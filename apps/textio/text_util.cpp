@@ -1,0 +1,52 @@
+#include "text_util.hpp"
+
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+
+namespace hivecal::textio {
+
+bool read_text_file(const std::string& path, std::string* text, std::string* error) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) {
+    *error = path + ": cannot open: " + std::strerror(errno);
+    return false;
+  }
+  text->clear();
+  char buffer[65536];
+  std::size_t got = 0;
+  while ((got = std::fread(buffer, 1, sizeof buffer, file)) > 0) text->append(buffer, got);
+  const bool failed = std::ferror(file) != 0;
+  std::fclose(file);
+  if (failed) {
+    *error = path + ": read error";
+    return false;
+  }
+  return true;
+}
+
+std::string_view trim(std::string_view s) {
+  const char* blanks = " \t\r\n";
+  const std::size_t first = s.find_first_not_of(blanks);
+  if (first == std::string_view::npos) return {};
+  const std::size_t last = s.find_last_not_of(blanks);
+  return s.substr(first, last - first + 1);
+}
+
+bool parse_double(std::string_view field, double* value) {
+  field = trim(field);
+  if (field.empty()) return false;
+  if (field.front() == '+') field.remove_prefix(1);
+  const char* end = field.data() + field.size();
+  const auto result = std::from_chars(field.data(), end, *value);
+  return result.ec == std::errc() && result.ptr == end;
+}
+
+std::string format_double(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", value);
+  return buffer;
+}
+
+}  // namespace hivecal::textio

@@ -1,0 +1,18 @@
+// Small locale-independent text helpers shared by the text formats.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+namespace hivecal::textio {
+
+/// Whole file into *text; false with a message (including strerror) on failure.
+bool read_text_file(const std::string& path, std::string* text, std::string* error);
+/// s without leading and trailing blanks (space, tab, CR, LF).
+std::string_view trim(std::string_view s);
+/// Parses a whole field as a double (C locale, no trailing junk); false otherwise.
+bool parse_double(std::string_view field, double* value);
+/// Formats a double so that it reads back to the same bits (%.17g).
+std::string format_double(double value);
+
+}  // namespace hivecal::textio

@@ -1,0 +1,116 @@
+#include "ur_calibration_conf.hpp"
+
+#include <string_view>
+
+#include "hivecal/math.hpp"
+#include "text_util.hpp"
+
+namespace hivecal::textio {
+namespace {
+
+struct DeltaKey {
+  const char* name;
+  double* values;
+  bool seen;
+};
+
+ParseResult failure(const std::string& source, std::size_t line, const std::string& what) {
+  return ParseResult{false, source + ":" + std::to_string(line) + ": " + what};
+}
+
+/// Parses "[ v1, v2, ..., v6 ]" into values; returns an error text or "".
+std::string parse_six_values(std::string_view list, double* values) {
+  list = trim(list);
+  if (list.size() < 2 || list.front() != '[' || list.back() != ']') return "expected [v1, ..., v6]";
+  list = list.substr(1, list.size() - 2);
+  int count = 0;
+  while (!list.empty()) {
+    const std::size_t comma = list.find(',');
+    const std::string_view field = list.substr(0, comma);
+    if (count == kJointCount) return "more than 6 values";
+    double v = 0.0;
+    if (!parse_double(field, &v)) return "not a number: '" + std::string(trim(field)) + "'";
+    if (!math::is_finite(v)) return "value is NaN or Inf";
+    values[count++] = v;
+    if (comma == std::string_view::npos) break;
+    list.remove_prefix(comma + 1);
+  }
+  if (count != kJointCount) return "expected 6 values, found " + std::to_string(count);
+  return "";
+}
+
+}  // namespace
+
+ParseResult parse_ur_calibration_conf(const std::string& text, const std::string& source_name,
+                                      UrCalibrationDeltas* deltas) {
+  UrCalibrationDeltas parsed;
+  DeltaKey keys[] = {{"delta_theta", parsed.delta_theta_rad, false},
+                     {"delta_a", parsed.delta_a_m, false},
+                     {"delta_d", parsed.delta_d_m, false},
+                     {"delta_alpha", parsed.delta_alpha_rad, false}};
+  bool in_mounting = false;
+  bool saw_mounting = false;
+  std::size_t line_number = 0;
+  std::string_view rest(text);
+  while (!rest.empty()) {
+    ++line_number;
+    const std::size_t newline = rest.find('\n');
+    std::string_view line = rest.substr(0, newline);
+    rest = newline == std::string_view::npos ? std::string_view() : rest.substr(newline + 1);
+    const std::size_t hash = line.find('#');
+    line = trim(line.substr(0, hash));
+    if (line.empty()) continue;
+    if (line.front() == '[' && line.find('=') == std::string_view::npos) {
+      in_mounting = line == "[mounting]";
+      saw_mounting = saw_mounting || in_mounting;
+      continue;
+    }
+    if (!in_mounting) continue;
+    const std::size_t equals = line.find('=');
+    if (equals == std::string_view::npos) return failure(source_name, line_number, "expected key = value");
+    const std::string_view key = trim(line.substr(0, equals));
+    for (DeltaKey& entry : keys) {
+      if (key != entry.name) continue;
+      if (entry.seen) return failure(source_name, line_number, std::string(entry.name) + " given twice");
+      const std::string error = parse_six_values(line.substr(equals + 1), entry.values);
+      if (!error.empty()) return failure(source_name, line_number, std::string(entry.name) + ": " + error);
+      entry.seen = true;
+    }
+  }
+  if (!saw_mounting) return ParseResult{false, source_name + ": no [mounting] section"};
+  for (const DeltaKey& entry : keys) {
+    if (!entry.seen) return ParseResult{false, source_name + ": [mounting] has no " + entry.name};
+  }
+  *deltas = parsed;
+  return ParseResult{true, ""};
+}
+
+ParseResult read_ur_calibration_conf(const std::string& path, UrCalibrationDeltas* deltas) {
+  std::string text;
+  std::string error;
+  if (!read_text_file(path, &text, &error)) return ParseResult{false, error};
+  return parse_ur_calibration_conf(text, path, deltas);
+}
+
+std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas) {
+  const struct {
+    const char* name;
+    const double* values;
+  } rows[] = {{"delta_theta", deltas.delta_theta_rad},
+              {"delta_a", deltas.delta_a_m},
+              {"delta_d", deltas.delta_d_m},
+              {"delta_alpha", deltas.delta_alpha_rad}};
+  std::string out = "[mounting]\n";
+  for (const auto& row : rows) {
+    out += row.name;
+    out += " = [";
+    for (int j = 0; j < kJointCount; ++j) {
+      out += (j == 0 ? " " : ", ");
+      out += format_double(row.values[j]);
+    }
+    out += "]\n";
+  }
+  return out;
+}
+
+}  // namespace hivecal::textio

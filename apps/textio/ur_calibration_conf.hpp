@@ -1,0 +1,27 @@
+// Reader of the [mounting] section of a UR controller's calibration.conf.
+#pragma once
+
+#include <string>
+
+#include "hivecal/kinematics.hpp"
+
+namespace hivecal::textio {
+
+/// Outcome of a text parse: ok, or a message naming the file, line and problem.
+struct ParseResult {
+  bool ok = false;       ///< true when the whole input was understood
+  std::string message;   ///< what was wrong (empty when ok)
+};
+
+/// Parses calibration.conf text; needs delta_theta, delta_a, delta_d and delta_alpha in
+/// [mounting], six finite numbers each. `source_name` prefixes error messages.
+ParseResult parse_ur_calibration_conf(const std::string& text, const std::string& source_name,
+                                      UrCalibrationDeltas* deltas);
+
+/// Reads and parses a calibration.conf file.
+ParseResult read_ur_calibration_conf(const std::string& path, UrCalibrationDeltas* deltas);
+
+/// Writes deltas in calibration.conf's [mounting] syntax (%.17g).
+std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas);
+
+}  // namespace hivecal::textio

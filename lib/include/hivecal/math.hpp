@@ -1,0 +1,33 @@
+// Elementary functions of the library's own, so results do not depend on the
+// platform's libm (glibc, newlib and musl round sin/cos/exp/log differently).
+// Only +, -, *, / and sqrt (all correctly rounded by IEEE-754) are used, so with
+// -ffp-contract=off every target computes the same bits.
+#pragma once
+
+namespace hivecal::math {
+
+/// pi to double precision.
+inline constexpr double kPi = 3.14159265358979311600;
+/// pi/2 to double precision.
+inline constexpr double kHalfPi = 1.57079632679489655800;
+/// Largest |x| [rad] for which sin/cos reduce the argument accurately; beyond it they return NaN.
+inline constexpr double kTrigMaxArgument_rad = 1647099.3291652855;  // 2^20 * pi/2
+
+/// Sine of x [rad]; error <= 1 ulp for |x| <= kTrigMaxArgument_rad, NaN beyond or for NaN/Inf.
+double sin(double x);
+/// Cosine of x [rad]; error <= 1 ulp for |x| <= kTrigMaxArgument_rad, NaN beyond or for NaN/Inf.
+double cos(double x);
+/// Sine and cosine of x [rad] with one argument reduction; same accuracy as sin/cos.
+void sincos(double x, double* sin_out, double* cos_out);
+/// e^x; error < 1 ulp; +Inf above ~709.78, 0 below ~-745.13.
+double exp(double x);
+/// Natural logarithm; error < 1 ulp; -Inf at 0, NaN for x < 0.
+double log(double x);
+/// Arc tangent of y/x in (-pi, pi] [rad], quadrant from the signs; error < 2 ulp.
+double atan2(double y, double x);
+/// Arc cosine [rad] of x clamped to [-1, 1].
+double acos_clamped(double x);
+/// True when x is neither NaN nor Inf (bit test: immune to -ffast-math).
+bool is_finite(double x);
+
+}  // namespace hivecal::math

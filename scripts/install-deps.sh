@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages hivecal needs (only what is missing). Idempotent.
+#   scripts/install-deps.sh            everything: build, tests, cross targets, benchmarks
+set -euo pipefail
+
+packages=(
+  cmake ninja-build g++ libeigen3-dev googletest          # host build and tests
+  clang libclang-rt-14-dev                                # libFuzzer target for the decoder
+  qemu-user qemu-system-arm                               # running cross-built tests
+  g++-aarch64-linux-gnu g++-arm-linux-gnueabihf            # Linux ARM edge controllers
+  gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib  # Cortex-M
+  libpagmo-dev libceres-dev                               # benchmark peers only
+  valgrind hyperfine                                      # instruction counts and timings
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}" >&2
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

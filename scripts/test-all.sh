@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Runs every test on every target: host at -O3, -O0, -march=native and with ASan+UBSan,
+# then aarch64 and armhf under qemu-user. Installs what it needs first.
+#   scripts/test-all.sh [preset ...]     (default: all of them)
+set -uo pipefail
+cd "$(dirname "$0")/.."
+
+scripts/install-deps.sh || { echo "test-all: dependency install failed" >&2; exit 1; }
+
+presets=("$@")
+if [ ${#presets[@]} -eq 0 ]; then
+  presets=(host host-O0 host-native host-asan aarch64 armhf)
+fi
+
+passed=0
+failed=0
+failed_presets=()
+for preset in "${presets[@]}"; do
+  echo "=== $preset ==="
+  log="build/test-$preset.log"
+  mkdir -p build
+  cmake --workflow --preset "$preset" >"$log" 2>&1
+  rc=$?
+  grep -E "[0-9]+% tests passed|The following tests FAILED|^\s+[0-9]+ - |error:|Failed" "$log" | head -40
+  result=$(grep -E "tests passed, [0-9]+ tests failed out of [0-9]+" "$log" | tail -1)
+  if [ "$rc" -ne 0 ] || [ -z "$result" ] || ! grep -q " 0 tests failed" <<<"$result"; then
+    failed_presets+=("$preset")
+  fi
+  total=$(sed -E 's/.*out of ([0-9]+).*/\1/' <<<"$result")
+  bad=$(sed -E 's/.*passed, ([0-9]+) tests failed.*/\1/' <<<"$result")
+  if [ -n "$result" ]; then
+    passed=$((passed + total - bad))
+    failed=$((failed + bad))
+  fi
+done
+
+echo
+if [ ${#failed_presets[@]} -ne 0 ]; then
+  echo "test-all: FAILED presets: ${failed_presets[*]} (logs in build/test-<preset>.log)"
+  [ "$failed" -eq 0 ] && failed=1
+fi
+echo "$passed passed, $failed failed"
+[ ${#failed_presets[@]} -eq 0 ]

@@ -1,0 +1,175 @@
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <set>
+
+#include "alloc_trap.hpp"
+#include "hivecal/cost.hpp"
+#include "hivecal/dataset.hpp"
+#include "hivecal/metrics.hpp"
+#include "test_data.hpp"
+
+namespace hivecal {
+namespace {
+
+TEST(Dataset, ReportsFullInsteadOfDropping) {
+  static Dataset<4> dataset;
+  dataset.clear();
+  EXPECT_EQ(dataset.capacity(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    Status s = Status::ok;
+    EXPECT_NO_HEAP(s = dataset.add(JointVector::Constant(i), Vec3::Constant(i)));
+    EXPECT_EQ(s, Status::ok);
+  }
+  EXPECT_TRUE(dataset.full());
+  EXPECT_EQ(dataset.add(JointVector::Zero(), Vec3::Zero()), Status::dataset_full);
+  EXPECT_EQ(dataset.size(), 4u);
+}
+
+TEST(Dataset, RejectsNonFiniteSamples) {
+  static Dataset<8> dataset;
+  JointVector q = JointVector::Zero();
+  q(3) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(dataset.add(q, Vec3::Zero()), Status::non_finite_input);
+  EXPECT_EQ(dataset.add(JointVector::Zero(), Vec3(0, std::numeric_limits<double>::infinity(), 0)),
+            Status::non_finite_input);
+  EXPECT_EQ(dataset.size(), 0u);
+}
+
+TEST(Dataset, SplitIsSeededPermutationWithRequestedShare) {
+  static Dataset<100> a;
+  static Dataset<100> b;
+  for (int i = 0; i < 100; ++i) {
+    ASSERT_EQ(a.add(JointVector::Constant(i), Vec3::Constant(i)), Status::ok);
+    ASSERT_EQ(b.add(JointVector::Constant(i), Vec3::Constant(i)), Status::ok);
+  }
+  EXPECT_EQ(a.train().size(), 100u);
+  EXPECT_EQ(a.test().size(), 0u);
+  Status s = Status::ok;
+  EXPECT_NO_HEAP(s = a.split(kDefaultTrainFraction, 5));
+  ASSERT_EQ(s, Status::ok);
+  ASSERT_EQ(b.split(kDefaultTrainFraction, 5), Status::ok);
+  EXPECT_EQ(a.train().size(), 70u);
+  EXPECT_EQ(a.test().size(), 30u);
+  std::set<double> seen;
+  bool moved = false;
+  for (std::size_t i = 0; i < 100; ++i) {
+    EXPECT_EQ(a.samples()[i].point_m, b.samples()[i].point_m);  // same seed, same order
+    seen.insert(a.samples()[i].point_m.x());
+    moved = moved || a.samples()[i].point_m.x() != static_cast<double>(i);
+  }
+  EXPECT_EQ(seen.size(), 100u);  // a permutation: nothing lost or duplicated
+  EXPECT_TRUE(moved);
+  ASSERT_EQ(b.split(kDefaultTrainFraction, 6), Status::ok);
+  EXPECT_NE(a.samples()[0].point_m, b.samples()[0].point_m);
+}
+
+TEST(Dataset, SplitErrors) {
+  static Dataset<8> dataset;
+  dataset.clear();
+  EXPECT_EQ(dataset.split(0.7, 1), Status::dataset_empty);
+  ASSERT_EQ(dataset.add(JointVector::Zero(), Vec3::Zero()), Status::ok);
+  EXPECT_EQ(dataset.split(0.0, 1), Status::invalid_argument);
+  EXPECT_EQ(dataset.split(1.5, 1), Status::invalid_argument);
+  EXPECT_EQ(dataset.split(std::numeric_limits<double>::quiet_NaN(), 1), Status::invalid_argument);
+  EXPECT_EQ(dataset.split(0.2, 1), Status::invalid_argument);  // rounds to zero training samples
+  EXPECT_EQ(dataset.split(1.0, 1), Status::ok);
+}
+
+struct CostFixture : ::testing::Test {
+  static Dataset<256>& dataset() {
+    static Dataset<256> d;
+    return d;
+  }
+  RobotModel truth;
+  RigidTransform base_to_tracker = test::example_base_to_tracker();
+  void SetUp() override {
+    Random random(31);
+    truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, 2e-4, 2e-4);
+    truth.tool_m << 0.0, 0.0, 0.1;
+    dataset().clear();
+    test::fill_dataset(truth, base_to_tracker, 200, 0.0, &random, &dataset());
+  }
+};
+
+TEST_F(CostFixture, TrueModelHasZeroCostAndRefitFindsTheTracker) {
+  double mae = 1.0;
+  RigidTransform fitted;
+  Status s = Status::ok;
+  EXPECT_NO_HEAP(s = evaluate_cost(truth, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &mae));
+  ASSERT_EQ(s, Status::ok);
+  EXPECT_LT(mae, 1e-12);
+  EXPECT_LT((fitted.rotation - base_to_tracker.rotation).norm(), 1e-12);
+  EXPECT_LT((fitted.translation_m - base_to_tracker.translation_m).norm(), 1e-12);
+  double sos = 1.0;
+  EXPECT_NO_HEAP(s = evaluate_cost(to_params(truth), dataset().samples(), CostKind::sum_squares, BaseFrame::fixed,
+                                   &base_to_tracker, &sos));
+  ASSERT_EQ(s, Status::ok);
+  EXPECT_LT(sos, 1e-20);
+}
+
+TEST_F(CostFixture, NominalModelCostsWhatTheMetricsSay) {
+  RobotModel nominal = nominal_model(RobotType::ur5);
+  nominal.tool_m = truth.tool_m;
+  RigidTransform fitted;
+  double mae = 0.0;
+  ASSERT_EQ(evaluate_cost(nominal, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &mae),
+            Status::ok);
+  EXPECT_GT(mae, 1e-4);
+  double sos = 0.0;
+  ASSERT_EQ(evaluate_cost(nominal, dataset().samples(), CostKind::sum_squares, BaseFrame::fixed, &fitted, &sos),
+            Status::ok);
+  ErrorStats stats;
+  EXPECT_NO_HEAP(stats = position_error_stats(nominal, fitted, dataset().samples()));
+  EXPECT_EQ(stats.count, 200u);
+  EXPECT_NEAR(stats.mae(ErrorAxis::norm_3d), mae, 1e-15);
+  EXPECT_GT(stats.sigma(ErrorAxis::norm_3d), 0.0);
+  EXPECT_GE(stats.max(ErrorAxis::norm_3d), stats.mae(ErrorAxis::norm_3d));
+  for (ErrorAxis axis : {ErrorAxis::x, ErrorAxis::y, ErrorAxis::z}) {
+    EXPECT_LE(stats.mae(axis), stats.mae(ErrorAxis::norm_3d));
+  }
+  // RMS from the sum of squares is at least the mean norm.
+  EXPECT_GE(std::sqrt(sos / 200.0), mae);
+}
+
+TEST_F(CostFixture, AccuracyReportCoversTrainTestOverall) {
+  ASSERT_EQ(dataset().split(0.7, 9), Status::ok);
+  RobotModel nominal = nominal_model(RobotType::ur5);
+  AccuracyReport report;
+  EXPECT_NO_HEAP(report = accuracy_report(nominal, base_to_tracker, dataset()));
+  EXPECT_EQ(report.train.count, 140u);
+  EXPECT_EQ(report.test.count, 60u);
+  EXPECT_EQ(report.overall.count, 200u);
+  const double weighted = (140 * report.train.mae(ErrorAxis::x) + 60 * report.test.mae(ErrorAxis::x)) / 200;
+  EXPECT_NEAR(weighted, report.overall.mae(ErrorAxis::x), 1e-15);
+}
+
+TEST_F(CostFixture, BadInputsGetSpecificErrors) {
+  RigidTransform fitted;
+  double cost = 0.0;
+  EXPECT_EQ(evaluate_cost(truth, Span<const Sample>(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &cost),
+            Status::dataset_empty);
+  EXPECT_EQ(evaluate_cost(truth, dataset().samples().subspan(0, 2), CostKind::mean_abs_3d, BaseFrame::refit, &fitted,
+                          &cost),
+            Status::too_few_samples);
+  ModelParams params = to_params(truth);
+  params(5) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(evaluate_cost(params, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::fixed, &fitted, &cost),
+            Status::non_finite_input);
+  // All samples at one pose: the base transform is undetermined.
+  static Dataset<8> one_pose;
+  one_pose.clear();
+  for (int i = 0; i < 5; ++i) ASSERT_EQ(one_pose.add(JointVector::Zero(), Vec3(1, 2, 3)), Status::ok);
+  EXPECT_EQ(evaluate_cost(truth, one_pose.samples(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &cost),
+            Status::degenerate_geometry);
+}
+
+TEST(Status, EveryCodeHasAMessage) {
+  for (int code = 0; code <= static_cast<int>(Status::clock_fit_failed); ++code) {
+    const char* message = status_message(static_cast<Status>(code));
+    EXPECT_STRNE(message, "unknown status") << code;
+  }
+}
+
+}  // namespace
+}  // namespace hivecal
