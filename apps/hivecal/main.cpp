@@ -8,6 +8,7 @@
 #include "hivecal/kinematics.hpp"
 #include "hivecal/metrics.hpp"
 #include "hivecal/random.hpp"
+#include "commands.hpp"
 
 namespace {
 
@@ -48,6 +49,7 @@ int run_demo() {
 
 int main(int argc, char** argv) {
   if (argc >= 2 && std::strcmp(argv[1], "demo") == 0) return run_demo();
-  std::fprintf(stderr, "usage: hivecal demo\n");
+  if (argc >= 2 && std::strcmp(argv[1], "predict") == 0) return hivecal::cli::predict_main(argc - 2, argv + 2);
+  std::fprintf(stderr, "usage: hivecal demo | predict [--help]\n");
   return 2;
 }
