@@ -228,11 +228,11 @@ count_run() {
 
 instruction_table() {
   read -r base base_stack < <(count_run "$probe" fill 1)
-  echo "| workload (core probe, 512 samples) | instructions per call | per sample | stack high-water [bytes] |"
+  echo "| workload (core probe, 512 samples) | instructions per call | per sample (per sincos) | stack high-water [bytes] |"
   echo "|---|---:|---:|---:|"
   printf '| startup + fill 512 samples (baseline) | %d | %d | %d |\n' "$base" $((base / 512)) "$base_stack"
   local w n label total stack per
-  for w in fk:512:"fk_tool_point x 512" jacobian:512:"tool_point_jacobian x 512" \
+  for w in sincos:3072:"math::sincos x 3072 (6 per sample)" fk:512:"fk_tool_point x 512" jacobian:512:"tool_point_jacobian x 512" \
            cost:512:"evaluate_cost mean_abs_3d, refit, 512 samples" \
            cost_358:358:"evaluate_cost mean_abs_3d, refit, 358 training samples" \
            cost_fixed:512:"evaluate_cost sum_squares, fixed base, 512 samples" \

@@ -4,6 +4,7 @@
 //   run-qemu-mps2.sh <machine> hivecal_firmware_core.elf [workload [repeats]]
 // Workloads (each starts by filling the dataset, so `fill` is the baseline to subtract):
 //   fill      only fill the 512-sample dataset (synthetic UR5 + tracker, own PRNG)
+//   sincos    + repeats x 512 x 6 math::sincos (the trig inside one FK per sample, half of it)
 //   fk        + repeats x 512 fk_tool_point
 //   jacobian  + repeats x 512 tool_point_jacobian
 //   cost      + repeats x evaluate_cost(mean_abs_3d, refit) over 512 samples  (a solver's inner call)
@@ -61,6 +62,21 @@ void run_fk(const Scene& scene, unsigned repeats) {
     for (const Sample& s : g_dataset.samples()) g_sink.add(fk_tool_point(scene.nominal, s.q_rad));
 }
 
+void run_sincos(unsigned repeats) {
+  double sum = 0.0;
+  for (unsigned r = 0; r < repeats; ++r) {
+    for (const Sample& s : g_dataset.samples()) {
+      for (int j = 0; j < kJointCount; ++j) {
+        double sine = 0.0;
+        double cosine = 0.0;
+        math::sincos(s.q_rad(j), &sine, &cosine);
+        sum += sine + cosine;
+      }
+    }
+  }
+  g_sink.add(sum);
+}
+
 void run_jacobian(const Scene& scene, unsigned repeats) {
   ToolPointJacobian jacobian;
   for (unsigned r = 0; r < repeats; ++r)
@@ -94,6 +110,7 @@ Span<const Sample> training_samples() {
 bool run_workload(const char* name, unsigned repeats, const Scene& scene) {
   const auto is = [name](const char* candidate) { return std::strcmp(name, candidate) == 0; };
   const bool all = is("all");
+  if (all || is("sincos")) run_sincos(repeats);
   if (all || is("fk")) run_fk(scene, repeats);
   if (all || is("jacobian")) run_jacobian(scene, repeats);
   if (all || is("cost"))
@@ -103,7 +120,7 @@ bool run_workload(const char* name, unsigned repeats, const Scene& scene) {
   if (all || is("cost_358"))
     run_cost(scene, repeats, training_samples(), CostKind::mean_abs_3d, BaseFrame::refit);
   if (all || is("metrics")) run_metrics(scene, repeats);
-  return all || is("fill") || is("fk") || is("jacobian") || is("cost") || is("cost_fixed") || is("cost_358") ||
+  return all || is("fill") || is("sincos") || is("fk") || is("jacobian") || is("cost") || is("cost_fixed") || is("cost_358") ||
          is("metrics");
 }
 
