@@ -31,7 +31,7 @@ timeout --foreground "${HIVECAL_QEMU_TIMEOUT:-600}" \
 status=$?
 case $status in
   0) ;;
-  1) echo "run-qemu-mps2: firmware reported failed checks" >&2 ;;
+  1) echo "run-qemu-mps2: firmware main returned non-zero (failed checks)" >&2 ;;
   2) echo "run-qemu-mps2: firmware stopped on a fault, assert or abort" >&2 ;;
   124) echo "run-qemu-mps2: timed out after ${HIVECAL_QEMU_TIMEOUT:-600} s" >&2 ;;
   *) echo "run-qemu-mps2: qemu-system-arm exited with status $status" >&2 ;;
