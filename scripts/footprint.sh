@@ -209,6 +209,7 @@ lib_entry_stack() {
 
 plugin=$build/libinsncount.so
 build_plugin() {
+  [ -f "$plugin_src" ] || { echo "footprint: plugin source $plugin_src missing (set HIVECAL_INSN_PLUGIN_SRC)" >&2; exit 1; }
   if [ ! -f "$plugin" ] || [ "$plugin_src" -nt "$plugin" ]; then
     gcc -shared -fPIC -O2 "$plugin_src" -o "$plugin"
   fi
