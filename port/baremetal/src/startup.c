@@ -45,8 +45,7 @@ _Noreturn void hivecal_reset_continue(void) {
   stack_guard_enable();
   stack_paint();
   run_constructors();
-  const int status = main();
-  board_exit(status == 0 ? BOARD_EXIT_OK : BOARD_EXIT_FAILED);
+  board_exit(main());
 }
 
 /* Naked: no prologue may touch VFP registers before CPACR grants CP10/CP11 access (with
