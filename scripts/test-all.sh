@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every test on every target: host at -O3, -O0, -march=native and with ASan+UBSan,
-# then aarch64 and armhf under qemu-user. Installs what it needs first.
+# aarch64 and armhf under qemu-user, then the bare-metal Cortex-M7 (hardware doubles) and
+# Cortex-M4F (soft-float doubles) firmware under qemu-system-arm. Installs what it needs first.
 #   scripts/test-all.sh [preset ...]     (default: all of them)
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -9,7 +10,7 @@ scripts/install-deps.sh || { echo "test-all: dependency install failed" >&2; exi
 
 presets=("$@")
 if [ ${#presets[@]} -eq 0 ]; then
-  presets=(host host-O0 host-native host-asan aarch64 armhf)
+  presets=(host host-O0 host-native host-asan aarch64 armhf cortex-m7 cortex-m4)
 fi
 
 passed=0
