@@ -125,13 +125,23 @@ std::string figures(const ReportData& data) {
   }
   const std::size_t n = data.test_measured_m.size();
   if (n > 0) {
-    s += "<h2>Test samples per axis (Fig 6)</h2>\n";
+    // Positions differ by tens of micrometres on a metre scale: plot them relative to the
+    // measurement so that the three sets can be told apart.
+    s += "<h2>Test samples per axis: measured vs uncalibrated vs calibrated (Fig 6)</h2>\n";
     const char* names[] = {"x", "y", "z"};
     for (int axis = 0; axis < 3; ++axis) {
-      s += svg_chart(ChartSpec{std::string("Test samples: ") + names[axis], "sample", std::string(names[axis]) + " [mm]"},
-                     {Series{"measured", index_axis(n), component(data.test_measured_m, axis, 1e3), true},
-                      Series{"uncalibrated", index_axis(n), component(data.test_uncalibrated_m, axis, 1e3), true},
-                      Series{"calibrated", index_axis(n), component(data.test_calibrated_m, axis, 1e3), true}});
+      const std::vector<double> measured = component(data.test_measured_m, axis, 1e6);
+      std::vector<double> uncalibrated = component(data.test_uncalibrated_m, axis, 1e6);
+      std::vector<double> calibrated = component(data.test_calibrated_m, axis, 1e6);
+      for (std::size_t i = 0; i < n; ++i) {
+        uncalibrated[i] -= measured[i];
+        calibrated[i] -= measured[i];
+      }
+      s += svg_chart(ChartSpec{std::string("Test samples: ") + names[axis] + " relative to the measurement", "sample",
+                               std::string("predicted - measured ") + names[axis] + " [um]"},
+                     {Series{"measured", index_axis(n), std::vector<double>(n, 0.0), false},
+                      Series{"uncalibrated", index_axis(n), uncalibrated, true},
+                      Series{"calibrated", index_axis(n), calibrated, true}});
     }
     s += "<h2>Validation in the x-y and x-z planes (Fig 7)</h2>\n";
     for (int axis : {1, 2}) {
@@ -178,6 +188,11 @@ std::string render_html(const ReportData& data) {
 bool write_html_report(const std::string& dir, const ReportData& data, std::string* error) {
   if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
     *error = dir + ": cannot create report folder: " + std::strerror(errno);
+    return false;
+  }
+  struct stat info {};
+  if (::stat(dir.c_str(), &info) != 0 || !S_ISDIR(info.st_mode)) {
+    *error = dir + ": exists and is not a folder";
     return false;
   }
   return textio::write_file_atomically(dir + "/index.html", render_html(data), error);
