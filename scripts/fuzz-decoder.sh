@@ -33,7 +33,7 @@ build/fuzz/tests/fuzz/decoder_fuzz -max_total_time="$seconds" -max_len=4096 -pri
   -artifact_prefix="$work/" "$corpus" >"$log" 2>&1
 rc=$?
 set -e
-grep -E "^(INFO: seed corpus|#[0-9]+ +DONE)|stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY|runtime error" "$log" || true
+grep -E "^(INFO: seed corpus|#[0-9]+[[:space:]]+DONE)|stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY|runtime error" "$log" || true
 if [ "$rc" -ne 0 ]; then
   echo "fuzz-decoder: FAILED (exit $rc); log: $log, crash input: $work/crash-*" >&2
   exit "$rc"
