@@ -113,6 +113,7 @@ struct ChannelResult {
   std::size_t errors = 0;
   std::uint64_t false_accepts = 0;
   std::size_t untouched_missed = 0;  ///< undamaged frames the decoder did not deliver
+  std::size_t garbage_fragments = 0; ///< deliberate garbage pieces in the sent stream
 };
 
 ChannelResult run_channel(std::uint64_t seed, std::size_t frames, double byte_error_rate, std::size_t max_chunk) {
@@ -140,6 +141,7 @@ ChannelResult run_channel(std::uint64_t seed, std::size_t frames, double byte_er
   result.stats = s;
   result.sent_valid = sent.valid_frames();
   result.errors = received.errors;
+  result.garbage_fragments = sent.garbage_fragments;
   result.false_accepts = handler.false_accepts;
   std::vector<char> arrived[3] = {std::vector<char>(sent.joint_states.size()),
                                   std::vector<char>(sent.tracker_points.size()),
@@ -219,17 +221,19 @@ TEST(CodecStream, NoisyChannelRoundTripProperty) {
 
 TEST(CodecStream, CorruptionSweepHasNoFalseAccepts) {
   constexpr std::size_t kFrames = 20000;
-  std::printf("  byte error rate | errors | frames sent | accepted | lost (gaps)   | crc  | cobs | length | false accepts\n");
+  std::printf("  byte error rate | errors | frames sent | accepted | lost (gaps)    | garbage | crc  | cobs | length | "
+              "oversized | false accepts\n");
   for (double rate : {1e-5, 1e-4, 1e-3, 1e-2}) {
     const ChannelResult r = run_channel(2026, kFrames, rate, 4096);
     const double sent = static_cast<double>(r.sent_valid);
-    std::printf("  %15.0e | %6zu | %11zu | %7.3f%% | %7.3f%% (%llu) | %4llu | %4llu | %6llu | %llu\n", rate, r.errors,
-                r.sent_valid, 100.0 * static_cast<double>(r.stats.frames_ok) / sent,
+    std::printf("  %15.0e | %6zu | %11zu | %7.3f%% | %7.3f%% (%4llu) | %7zu | %4llu | %4llu | %6llu | %9llu | %llu\n", rate,
+                r.errors, r.sent_valid, 100.0 * static_cast<double>(r.stats.frames_ok) / sent,
                 100.0 * static_cast<double>(r.stats.packets_lost) / sent,
-                static_cast<unsigned long long>(r.stats.sequence_gaps),
+                static_cast<unsigned long long>(r.stats.sequence_gaps), r.garbage_fragments,
                 static_cast<unsigned long long>(r.stats.crc_failures),
                 static_cast<unsigned long long>(r.stats.cobs_errors),
-                static_cast<unsigned long long>(r.stats.bad_lengths), static_cast<unsigned long long>(r.false_accepts));
+                static_cast<unsigned long long>(r.stats.bad_lengths),
+                static_cast<unsigned long long>(r.stats.oversized_frames), static_cast<unsigned long long>(r.false_accepts));
     EXPECT_EQ(r.false_accepts, 0u) << rate;
     EXPECT_EQ(r.untouched_missed, 0u) << rate;
     EXPECT_EQ(r.stats.bad_versions + r.stats.bad_payloads, 0u) << rate;  // only intact packets reach these checks
