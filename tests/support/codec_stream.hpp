@@ -65,7 +65,8 @@ inline std::size_t make_unknown_frame(Random* random, std::uint8_t* frame) {
   packet[1] = static_cast<std::uint8_t>(pick == 0 ? 0 : pick + 3);  // 0x00 or 0x04..0xFF
   for (std::size_t i = 2; i < size - kPacketCrcBytes; ++i) packet[i] = static_cast<std::uint8_t>(random->next());
   const std::uint32_t crc = crc32c(packet, size - kPacketCrcBytes);
-  for (std::size_t i = 0; i < kPacketCrcBytes; ++i) packet[size - kPacketCrcBytes + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+  for (std::size_t i = 0; i < kPacketCrcBytes; ++i)
+    packet[size - kPacketCrcBytes + i] = static_cast<std::uint8_t>(crc >> (8 * i));
   std::size_t encoded = 0;
   (void)cobs_encode(Span<const std::uint8_t>(packet, size), Span<std::uint8_t>(frame, kMaxFrameBytes - 1), &encoded);
   frame[encoded] = 0;

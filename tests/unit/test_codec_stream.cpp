@@ -226,14 +226,15 @@ TEST(CodecStream, CorruptionSweepHasNoFalseAccepts) {
   for (double rate : {1e-5, 1e-4, 1e-3, 1e-2}) {
     const ChannelResult r = run_channel(2026, kFrames, rate, 4096);
     const double sent = static_cast<double>(r.sent_valid);
-    std::printf("  %15.0e | %6zu | %11zu | %7.3f%% | %7.3f%% (%4llu) | %7zu | %4llu | %4llu | %6llu | %9llu | %llu\n", rate,
-                r.errors, r.sent_valid, 100.0 * static_cast<double>(r.stats.frames_ok) / sent,
+    std::printf("  %15.0e | %6zu | %11zu | %7.3f%% | %7.3f%% (%4llu) | %7zu | %4llu | %4llu | %6llu | %9llu | %llu\n",
+                rate, r.errors, r.sent_valid, 100.0 * static_cast<double>(r.stats.frames_ok) / sent,
                 100.0 * static_cast<double>(r.stats.packets_lost) / sent,
                 static_cast<unsigned long long>(r.stats.sequence_gaps), r.garbage_fragments,
                 static_cast<unsigned long long>(r.stats.crc_failures),
                 static_cast<unsigned long long>(r.stats.cobs_errors),
                 static_cast<unsigned long long>(r.stats.bad_lengths),
-                static_cast<unsigned long long>(r.stats.oversized_frames), static_cast<unsigned long long>(r.false_accepts));
+                static_cast<unsigned long long>(r.stats.oversized_frames),
+                static_cast<unsigned long long>(r.false_accepts));
     EXPECT_EQ(r.false_accepts, 0u) << rate;
     EXPECT_EQ(r.untouched_missed, 0u) << rate;
     EXPECT_EQ(r.stats.bad_versions + r.stats.bad_payloads, 0u) << rate;  // only intact packets reach these checks

@@ -81,7 +81,7 @@ struct DecoderStats {
   std::uint64_t leading_fragments = 0;  ///< unusable bytes before the first delimiter (stream began mid-frame) [frames]
   std::uint64_t sequence_gaps = 0;      ///< jumps forward in a type's sequence numbers [events]
   std::uint64_t packets_lost = 0;       ///< packets missing in those jumps [packets]
-  std::uint64_t sequence_resets = 0;    ///< sequence or timestamp went backwards (sender restart): no loss counted [events]
+  std::uint64_t sequence_resets = 0;    ///< sequence or timestamp went backwards (restart): no loss counted [events]
 
   /// Frames closed without delivery: the sum of the eight rejection counters [frames].
   std::uint64_t frames_rejected() const {
