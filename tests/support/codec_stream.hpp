@@ -59,7 +59,7 @@ inline void append_frame(const std::uint8_t* frame, std::size_t size, std::uint8
 /// A CRC-valid version-1 packet of an unknown type and random length, framed.
 inline std::size_t make_unknown_frame(Random* random, std::uint8_t* frame) {
   std::uint8_t packet[kMaxPacketBytes];
-  const std::size_t size = kPacketHeaderBytes + kPacketCrcBytes + random->below(kMaxPacketBytes - 15);
+  const std::size_t size = kPacketHeaderBytes + kPacketCrcBytes + static_cast<std::size_t>(random->below(kMaxPacketBytes - 15));
   packet[0] = kProtocolVersion;
   const std::uint64_t pick = random->below(253);
   packet[1] = static_cast<std::uint8_t>(pick == 0 ? 0 : pick + 3);  // 0x00 or 0x04..0xFF
@@ -115,7 +115,7 @@ inline void make_stream(std::uint64_t seed, const StreamShape& shape, SentStream
       }
       if (status != Status::ok) out->bytes.clear();  // makes every caller's checks fail loudly
     }
-    if (random.uniform01() < shape.idle_chance) out->bytes.insert(out->bytes.end(), 1 + random.below(3), 0);
+    if (random.uniform01() < shape.idle_chance) out->bytes.insert(out->bytes.end(), 1 + static_cast<std::size_t>(random.below(3)), 0);
     if (random.uniform01() < shape.garbage_chance) {
       const std::uint64_t length = 1 + random.below(300);
       std::size_t run = 0;
@@ -144,7 +144,7 @@ struct Corrupted {
 inline void corrupt(const SentStream& sent, double byte_error_rate, Random* random, Corrupted* out) {
   const std::size_t n = sent.bytes.size();
   std::vector<std::size_t> positions(static_cast<std::size_t>(byte_error_rate * static_cast<double>(n) + 0.5));
-  for (std::size_t& p : positions) p = random->below(n);
+  for (std::size_t& p : positions) p = static_cast<std::size_t>(random->below(n));
   std::sort(positions.begin(), positions.end());
   out->errors = positions.size();
   // Which frame owns each byte, so that an error can be charged to the frame it damages.

@@ -184,7 +184,7 @@ TEST(Cobs, KnownEncodings) {
 
 TEST(Cobs, LongRunsRoundTripInPlace) {
   Random random(4);
-  for (std::size_t size = 0; size < 800; size += 1 + random.below(7)) {
+  for (std::size_t size = 0; size < 800; size += 1 + static_cast<std::size_t>(random.below(7))) {
     Bytes packet(size);
     const bool sparse_zeros = random.below(2) == 0;
     for (auto& b : packet) b = static_cast<std::uint8_t>(sparse_zeros ? 1 + random.below(255) : random.below(3));

@@ -210,7 +210,7 @@ TEST(CodecStream, CleanStreamRoundTripsExactly) {
 TEST(CodecStream, NoisyChannelRoundTripProperty) {
   for (std::uint64_t seed = 10; seed < 16; ++seed) {
     const double rate = seed % 2 == 0 ? 1e-3 : 5e-3;
-    const ChannelResult r = run_channel(seed, 2000, rate, 1 + seed * 40);
+    const ChannelResult r = run_channel(seed, 2000, rate, static_cast<std::size_t>(1 + seed * 40));
     EXPECT_GT(r.errors, 0u);
     EXPECT_EQ(r.false_accepts, 0u) << seed;
     EXPECT_EQ(r.untouched_missed, 0u) << seed;
