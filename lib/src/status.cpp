@@ -21,6 +21,9 @@ const char* status_message(Status status) {
     case Status::bad_version: return "unsupported packet version";
     case Status::unknown_type: return "unknown packet type";
     case Status::clock_fit_failed: return "clock relation could not be estimated";
+    case Status::population_out_of_range: return "population size out of range";
+    case Status::dimension_out_of_range: return "problem dimension out of range";
+    case Status::bad_bounds: return "search bounds not finite or not increasing";
   }
   return "unknown status";
 }

@@ -31,6 +31,10 @@ enum class Status : std::uint8_t {
   unknown_type,             ///< valid CRC but an unknown packet type (skipped, counted)
   // Sync.
   clock_fit_failed,         ///< not enough motion to relate the two clocks
+  // Population solvers (ABC, GSA).
+  population_out_of_range,  ///< population below the solver's minimum or above its capacity
+  dimension_out_of_range,   ///< problem dimension 0, above capacity, or not matching the bounds
+  bad_bounds,               ///< a search bound is NaN/Inf or lower >= upper
 };
 
 /// A short, stable, human-readable name for a status (for logs and CLI messages).
