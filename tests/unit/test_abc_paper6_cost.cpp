@@ -30,7 +30,7 @@ struct Paper6CostTest : ::testing::Test {
   test::Paper6Cell cell;
   void SetUp() override {
     Random random(404);
-    cell = test::paper6_cell(&random, 3e-4);
+    cell = test::paper6_cell(&random, test::Paper6Truth::six_lengths);
     dataset().clear();
     test::fill_tool_down(cell, 200, 1e-5, &random, &dataset());
     Status s = Status::invalid_argument;

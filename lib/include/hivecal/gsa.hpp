@@ -14,11 +14,13 @@
 namespace hivecal {
 
 /// GSA settings; the defaults are the paper's (N = 150, t_max = 200, beta = 20, eps = 2.22e-16).
-/// The distance power r_p is 1 (force ~ 1 / R), as in the paper.
+/// The distance power r_p is 1 (force ~ 1 / R), as in the paper. The paper gives no G0; 5 box
+/// widths works on the six-length problem where Rashedi's 100 on a 200-wide box (0.5) stalls
+/// (docs/solvers-abc-gsa.md).
 struct GsaOptions {
   std::size_t agents = 150;            ///< N: agents, >= 2 [-]
   std::size_t iterations = 200;        ///< t_max: iterations, each evaluates every agent once, >= 1 [-]
-  double g0 = 0.5;                     ///< G0: initial gravitational constant [box widths / iteration^2]
+  double g0 = 5.0;                     ///< G0: initial gravitational constant [box widths / iteration^2]
   double beta = 20.0;                  ///< decay of G(t) = G0 exp(-beta t / t_max) [-]
   double epsilon = 2.22e-16;           ///< added to agent distances [box widths]
   std::size_t final_attractors = 1;    ///< k_best at t_max; k_best falls linearly from N, >= 1 [-]
