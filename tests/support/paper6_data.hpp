@@ -61,7 +61,8 @@ inline void fill_tool_down(const Paper6Cell& cell, std::size_t count, double noi
                            DatasetBase* dataset) {
   for (std::size_t i = 0; i < count; ++i) {
     const JointVector q = random_joints_tool_down(random);
-    const Vec3 noise(random->normal(), random->normal(), random->normal());
+    Vec3 noise;
+    noise << random->normal(), random->normal(), random->normal();  // comma: drawn in order
     (void)dataset->add(q, cell.base_to_tracker.apply(fk_tool_point(cell.truth, q)) + noise_m * noise);
   }
 }

@@ -75,7 +75,7 @@ TEST(AbcPaper6, PaperVariantAsWrittenConvergesWorseThanCanonical) {
     for (AbcVariant variant : {AbcVariant::canonical, AbcVariant::paper_as_written}) {
       AbcOptions options;
       options.food_sources = 40;
-      options.cycles = 120;
+      options.cycles = 200;
       options.seed = 100 + i;
       options.variant = variant;
       SolverResult result;

@@ -174,7 +174,8 @@ TEST(Paper6Cost, LengthsRoundTripAndBoxIsNominalPlusMinusHalfWidth) {
 }
 
 Mat3 random_rotation(Random* random) {
-  Vec3 axis(random->normal(), random->normal(), random->normal());
+  Vec3 axis;
+  axis << random->normal(), random->normal(), random->normal();  // comma: drawn in order
   axis.normalize();
   const double angle = random->uniform(-3.1, 3.1);
   Mat3 k;
