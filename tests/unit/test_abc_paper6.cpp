@@ -46,6 +46,23 @@ TEST(AbcPaper6, PaperConfigReachesTheLeastSquaresMaeOnPaperSizedSessions) {
   }
 }
 
+TEST(AbcPaper6, FirmwareFloatLayoutReachesTheSameMae) {
+  // The 84-byte-per-sample layout (docs/solvers-abc-gsa.md, memory) on a paper-sized session.
+  static Paper6Cost<test::kMaxSessionSamples, float> compact;
+  test::Paper6Session& session = test::shared_session();
+  ASSERT_TRUE(session.simulate(14, 38, test::Paper6Truth::paper_like));
+  ASSERT_EQ(compact.build(session.cell.nominal, session.dataset.train()), Status::ok);
+  AbcOptions options;
+  options.seed = 14;
+  SolverResult result;
+  EXPECT_NO_HEAP((void)solver().minimize(compact, session.box.view(), options, &result));
+  ASSERT_EQ(result.status, Status::ok);
+  EXPECT_LE(result.best_cost, kWithinReference * session.reference_mae_m);
+  const double generic_m = test::generic_mae(session.cell.nominal, Eigen::Map<const Paper6Lengths>(result.best_x.data()),
+                                             session.dataset.train());
+  EXPECT_NEAR(result.best_cost, generic_m, 1e-6 * generic_m);
+}
+
 TEST(AbcPaper6, ReachesTheLeastSquaresMaeOnAFewHundredPoses) {
   test::Paper6Session& session = test::shared_session();
   ASSERT_TRUE(session.simulate(21, 300, test::Paper6Truth::six_lengths));

@@ -6,9 +6,11 @@
 #include <limits>
 
 #include "alloc_trap.hpp"
+#include "hivecal/abc.hpp"
 #include "hivecal/cost.hpp"
 #include "hivecal/paper6_cost.hpp"
 #include "hivecal/rigid_fit.hpp"
+#include "hivecal/trace.hpp"
 #include "paper6_data.hpp"
 
 namespace hivecal {
@@ -93,7 +95,7 @@ TEST_F(Paper6CostTest, D1IsAbsorbedByTheBaseTranslation) {
 TEST_F(Paper6CostTest, StreamingEqualsBuildBitForBit) {
   static Paper6Cost<256> streamed;
   Status s = Status::invalid_argument;
-  EXPECT_NO_HEAP(s = streamed.reset(cell.nominal));
+  EXPECT_NO_HEAP(s = streamed.reset(cell.nominal, cost().reference()));
   ASSERT_EQ(s, Status::ok);
   for (const Sample& sample : dataset().samples()) {
     EXPECT_NO_HEAP(s = streamed.add(sample.q_rad, sample.point_m));
@@ -116,6 +118,75 @@ TEST_F(Paper6CostTest, TruthBeatsNominalByFarAndMatchesTheNoise) {
   EXPECT_GT(cost().evaluate(nominal_m.data()), 5.0 * truth_mae_m);
 }
 
+/// Largest |cost - generic| / generic over the nominal, true and random lengths in the box.
+double worst_relative_error(Paper6CostBase& candidate, const test::Paper6Cell& cell, Span<const Sample> samples) {
+  Paper6Box box;
+  EXPECT_EQ(paper6_box(cell.nominal, kPaper6DefaultHalfWidth_m, &box), Status::ok);
+  Random random(407);
+  double worst = 0.0;
+  for (int trial = 0; trial < 40; ++trial) {
+    Paper6Lengths lengths_m = trial == 0 ? paper6_lengths(cell.nominal) : paper6_lengths(cell.truth);
+    for (int k = 0; k < 6 && trial > 1; ++k) lengths_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
+    const double generic_m = test::generic_mae(cell.nominal, lengths_m, samples);
+    const double relative = std::fabs(candidate.evaluate(lengths_m.data()) - generic_m) / generic_m;
+    if (relative > worst) worst = relative;
+  }
+  return worst;
+}
+
+/// A reference 5 mm and ~6 mrad off the nominal fit, as a quick fit of a few poses might be.
+RigidTransform rough_reference(const RigidTransform& exact) {
+  RigidTransform rough = exact;
+  Mat3 tilt;
+  tilt << 1.0, -0.004, 0.003, 0.004, 1.0, -0.002, -0.003, 0.002, 1.0;  // small rotation, re-orthonormalised below
+  rough.rotation = rotation_from_cross_covariance(tilt.transpose()) * exact.rotation;
+  rough.translation_m += Vec3(0.003, -0.004, 0.0);
+  return rough;
+}
+
+TEST_F(Paper6CostTest, CompactFloatLayoutStaysWithinAMillionth) {
+  static Paper6Cost<256, float> compact;
+  Status s = Status::invalid_argument;
+  EXPECT_NO_HEAP(s = compact.build(cell.nominal, dataset().samples()));
+  ASSERT_EQ(s, Status::ok);
+  const double built = worst_relative_error(compact, cell, dataset().samples());
+  // Streamed against a rough reference: the residuals it stores are then mm, not um.
+  ASSERT_EQ(compact.reset(cell.nominal, rough_reference(cost().reference())), Status::ok);
+  for (const Sample& sample : dataset().samples()) ASSERT_EQ(compact.add(sample.q_rad, sample.point_m), Status::ok);
+  ASSERT_EQ(compact.finalize(), Status::ok);
+  const double streamed = worst_relative_error(compact, cell, dataset().samples());
+  std::printf("compact layout, worst relative error: built %.2e, rough reference %.2e (exact layout %.2e)\n", built,
+              streamed, worst_relative_error(cost(), cell, dataset().samples()));
+  EXPECT_LT(built, 1e-6);
+  EXPECT_LT(streamed, 1e-5);
+}
+
+TEST_F(Paper6CostTest, ExactLayoutIsExactForAnyReference) {
+  static Paper6Cost<256> streamed;
+  for (const RigidTransform& reference : {RigidTransform(), rough_reference(cost().reference())}) {
+    ASSERT_EQ(streamed.reset(cell.nominal, reference), Status::ok);
+    for (const Sample& sample : dataset().samples()) ASSERT_EQ(streamed.add(sample.q_rad, sample.point_m), Status::ok);
+    ASSERT_EQ(streamed.finalize(), Status::ok);
+    EXPECT_LT(worst_relative_error(streamed, cell, dataset().samples()), 2 * kRelativeTolerance);
+    RigidTransform base;
+    double mae_m = 0.0;
+    ASSERT_EQ(streamed.evaluate(paper6_lengths(cell.truth), &mae_m, &base), Status::ok);
+    EXPECT_LT((base.rotation - cell.base_to_tracker.rotation).norm(), 1e-5);  // the truth, to the noise
+    EXPECT_LT((base.translation_m - cell.base_to_tracker.translation_m).norm(), 1e-5);
+  }
+}
+
+TEST(Paper6Cost, FirmwareLayoutFitsIn64KiB) {
+  // 512 poses, the paper's ABC (150 x 6) and its 300-cycle trace in static RAM.
+  EXPECT_EQ(sizeof(Paper6Term), 168u);
+  EXPECT_EQ(sizeof(Paper6CompactTerm), 84u);
+  const std::size_t total = sizeof(Paper6Cost<512, float>) + sizeof(AbcSolver<150, kPaper6Dimension>) + sizeof(Trace<300>);
+  std::printf("firmware static RAM: cost %zu + ABC %zu + trace %zu = %zu bytes\n", sizeof(Paper6Cost<512, float>),
+              sizeof(AbcSolver<150, kPaper6Dimension>), sizeof(Trace<300>), total);
+  EXPECT_LE(total, 64u * 1024u);
+  EXPECT_GT(sizeof(Paper6Cost<512, double>) + sizeof(AbcSolver<150, kPaper6Dimension>), 64u * 1024u);
+}
+
 TEST(Paper6Cost, ErrorsAreSpecific) {
   static Paper6Cost<4> small;
   const RobotModel nominal = nominal_model(RobotType::ur5);
@@ -127,9 +198,12 @@ TEST(Paper6Cost, ErrorsAreSpecific) {
 
   RobotModel broken = nominal;
   broken.joints[2].a_m = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(small.reset(broken), Status::non_finite_input);
+  EXPECT_EQ(small.reset(broken, RigidTransform()), Status::non_finite_input);
+  RigidTransform bad_reference;
+  bad_reference.translation_m(1) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(small.reset(nominal, bad_reference), Status::non_finite_input);
 
-  ASSERT_EQ(small.reset(nominal), Status::ok);
+  ASSERT_EQ(small.reset(nominal, RigidTransform()), Status::ok);
   JointVector q = JointVector::Zero();
   q(4) = std::numeric_limits<double>::infinity();
   EXPECT_EQ(small.add(q, Vec3::Zero()), Status::non_finite_input);

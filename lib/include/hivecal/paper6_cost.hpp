@@ -6,11 +6,15 @@
 // With the joint angles fixed, the tool point is affine in these lengths:
 // p_i(L) = p_i(L0) + V_i (L - L0), V_i the Jacobian columns (z_0, x_2, x_3, z_3, z_4, z_5).
 // The Kabsch cross-covariance is then affine too, H(L) = H_0 + sum_k (L - L0)_k G_k, so a
-// candidate costs one 3x3 SVD plus one pass of ~40 flops per sample (docs/solvers-abc-gsa.md).
-// Terms live in Paper6Cost<Capacity>; algorithms take the size-erased Paper6CostBase.
+// candidate costs one 3x3 rotation fit plus one pass of ~50 flops per sample
+// (docs/solvers-abc-gsa.md). Everything is expressed in a reference base frame (the nominal
+// fit), where measured and predicted points nearly coincide: their differences are small, so
+// the terms keep their accuracy even stored as float (the firmware layout, 84 bytes/sample).
+// Terms live in Paper6Cost<Capacity, Scalar>; algorithms take the size-erased Paper6CostBase.
 #pragma once
 
 #include <cstddef>
+#include <type_traits>
 
 #include "hivecal/dataset.hpp"
 #include "hivecal/kinematics.hpp"
@@ -49,18 +53,24 @@ struct Paper6Box {
 /// Errors: non_finite_input (NaN/Inf in the lengths), invalid_argument (half width not finite and > 0).
 Status paper6_box(const RobotModel& nominal, double half_width_m, Paper6Box* box);
 
-/// d(tool point)/d(a2, a3, d4, d5, d6) in the base frame [m/m], one column per length.
-using Paper6Directions = Eigen::Matrix<double, 3, static_cast<int>(kPaper6Dimension) - 1>;
-
-/// What is kept per sample: 21 doubles, 168 bytes (docs/solvers-abc-gsa.md, memory). Points
-/// are stored relative to the first sample's, so sums keep their precision far from the origin.
-struct Paper6Term {
-  Vec3 point_m = Vec3::Zero();     ///< predicted tool point at the expansion point, minus the first one [m]
-  Vec3 measured_m = Vec3::Zero();  ///< measured tracker point, minus the first one [m]
-  /// Jacobian columns of a2..d6; d1's column is the constant base z axis, which the refitted
-  /// translation absorbs (d1 does not change the cost), so it is not stored [m/m].
-  Paper6Directions directions = Paper6Directions::Zero();
+/// What is kept per sample, in a storage precision: 21 values (docs/solvers-abc-gsa.md, memory).
+template <typename Scalar>
+struct Paper6TermT {
+  using Vector = Eigen::Matrix<Scalar, 3, 1>;                                        ///< [m]
+  using Directions = Eigen::Matrix<Scalar, 3, static_cast<int>(kPaper6Dimension) - 1>;  ///< [m/m]
+  /// Predicted tool point at the expansion point, minus the first sample's [m].
+  Vector point_m = Vector::Zero();
+  /// Measured point mapped into the reference base frame, minus the predicted point: the
+  /// nominal residual, small (sub-mm) when the reference is the nominal fit [m].
+  Vector error_m = Vector::Zero();
+  /// Jacobian columns of a2..d6 in the base frame; d1's column is the constant base z axis,
+  /// which the refitted translation absorbs (d1 does not change the cost), so it is not stored [m/m].
+  Directions directions = Directions::Zero();
 };
+/// The exact layout: 168 bytes per sample; agrees with evaluate_cost to ~1e-12.
+using Paper6Term = Paper6TermT<double>;
+/// The compact layout for firmware: 84 bytes per sample; agrees with evaluate_cost to ~1e-6.
+using Paper6CompactTerm = Paper6TermT<float>;
 
 /// The precomputed cost over caller-sized term storage (see Paper6Cost for the owning type).
 /// Fill it with build(), or stream samples with reset(), add()... and finalize().
@@ -70,16 +80,19 @@ class Paper6CostBase : public Objective {
   Paper6CostBase& operator=(const Paper6CostBase&) = delete;
 
   /// Forgets every sample and sets the geometry: its six lengths are the expansion point,
-  /// everything else (angles, other lengths, tool) stays fixed. Errors: non_finite_input.
-  Status reset(const RobotModel& nominal);
+  /// everything else (angles, other lengths, tool) stays fixed. `reference_base_to_tracker` is
+  /// the frame the terms are kept in: any transform is exact with double terms; float terms
+  /// need it within ~1 cm and ~10 mrad of the truth (a previous calibration, or a fit of the
+  /// first poses). Errors: non_finite_input.
+  Status reset(const RobotModel& nominal, const RigidTransform& reference_base_to_tracker);
   /// Adds one sample (the cost is not usable until finalize()). Errors: non_finite_input,
   /// dataset_full (not stored).
   Status add(const JointVector& q_rad, const Vec3& point_m);
-  /// Precomputes the centroids and base-fit matrices (again after more add()s). Errors: too_few_samples (< 3),
-  /// degenerate_geometry (measured or predicted points collinear or coincident).
+  /// Precomputes the centroids and base-fit matrices (again after more add()s). Errors:
+  /// too_few_samples (< 3), degenerate_geometry (measured or predicted points collinear or coincident).
   Status finalize();
-  /// reset(nominal), add() of every sample, finalize(). Errors: those of the three, and
-  /// dataset_empty for no samples.
+  /// Fits the nominal base -> tracker transform as the reference, then reset(), add() of every
+  /// sample, finalize(). Errors: dataset_empty, and those of fit_base_to_tracker and the three.
   Status build(const RobotModel& nominal, Span<const Sample> samples);
 
   /// kPaper6Dimension.
@@ -92,6 +105,8 @@ class Paper6CostBase : public Objective {
 
   /// The geometry given to reset() (the six lengths at the expansion point).
   const RobotModel& nominal() const { return nominal_; }
+  /// The frame the terms are kept in (see reset()).
+  const RigidTransform& reference() const { return reference_; }
   /// The nominal geometry with lengths_m[0..6) [m] put in.
   RobotModel model_for(const double* lengths_m) const { return with_paper6_lengths(nominal_, lengths_m); }
   std::size_t size() const { return size_; }          ///< samples added
@@ -100,35 +115,46 @@ class Paper6CostBase : public Objective {
 
  protected:
   Paper6CostBase(Paper6Term* terms, std::size_t capacity) : terms_(terms), capacity_(capacity) {}
+  Paper6CostBase(Paper6CompactTerm* terms, std::size_t capacity) : compact_terms_(terms), capacity_(capacity) {}
   ~Paper6CostBase() = default;
 
  private:
   using Directions = Eigen::Matrix<double, 3, static_cast<int>(kPaper6Dimension)>;
+  template <typename Term>
+  void store(const Vec3& predicted_m, const Vec3& measured_m, const ToolPointJacobian& jacobian, Term* term) const;
+  template <typename Term>
+  Status precompute(const Term* terms);
+  template <typename Term>
+  double sum_abs_residuals(const Term* terms, const Mat3& rotation, const Vec3& shift_m, const double* tail_m) const;
   double mean_abs_error(const double* lengths_m, RigidTransform* base_to_tracker) const;
 
-  Paper6Term* terms_;
+  Paper6Term* terms_ = nullptr;                // exact layout, or
+  Paper6CompactTerm* compact_terms_ = nullptr;  // compact layout
   std::size_t capacity_;
   std::size_t size_ = 0;
   bool ready_ = false;
   RobotModel nominal_;
+  RigidTransform reference_;
   Paper6Lengths nominal_lengths_m_ = Paper6Lengths::Zero();
   Vec3 point_origin_m_ = Vec3::Zero();       // first sample's predicted point [m]
-  Vec3 measured_origin_m_ = Vec3::Zero();    // first sample's measured point [m]
   Vec3 point_mean_m_ = Vec3::Zero();         // predicted centroid at the expansion point, relative [m]
-  Vec3 measured_mean_m_ = Vec3::Zero();      // measured centroid, relative [m]
+  Vec3 measured_mean_m_ = Vec3::Zero();      // measured centroid in the reference frame, relative [m]
   Directions direction_mean_ = Directions::Zero();  // mean Jacobian columns, all six [m/m]
-  Mat3 cross_nominal_m2_ = Mat3::Zero();     // H_0 = sum p_c m_c^T [m^2]
+  Mat3 cross_nominal_m2_ = Mat3::Zero();     // H_0 = sum p_c m_c^T, reference frame [m^2]
   Mat3 cross_per_length_m_[kPaper6Dimension - 1];  // G_k = sum v_c,k m_c^T for a2..d6 [m]
 };
 
-/// A precomputed paper-6 cost owning room for `Capacity` samples (168 bytes each), no heap.
-template <std::size_t Capacity>
+/// A precomputed paper-6 cost owning room for `Capacity` samples, no heap: 168 bytes each
+/// with Scalar = double (exact), 84 with float (firmware: docs/solvers-abc-gsa.md, memory).
+template <std::size_t Capacity, typename Scalar = double>
 class Paper6Cost final : public Paper6CostBase {
+  static_assert(std::is_same<Scalar, double>::value || std::is_same<Scalar, float>::value, "double or float terms");
+
  public:
   Paper6Cost() : Paper6CostBase(terms_, Capacity) {}
 
  private:
-  Paper6Term terms_[Capacity];
+  Paper6TermT<Scalar> terms_[Capacity];
 };
 
 }  // namespace hivecal
