@@ -162,11 +162,15 @@ Status Paper6CostBase::build(const RobotModel& nominal, Span<const Sample> sampl
 template <typename Term>
 double Paper6CostBase::sum_abs_residuals(const Term* terms, const Mat3& rotation, const Vec3& shift_m,
                                          const double* tail_m) const {
+  // The hot loop: read the stored fields in place (cast<double> is free for double terms).
   const Eigen::Map<const TailLengths> tail(tail_m);
   double sum_m = 0.0;
   for (std::size_t i = 0; i < size_; ++i) {
-    const WideTerm term = widen(terms[i]);
-    sum_m += (rotation * (term.point_m + term.directions * tail) - term.measured_m - shift_m).norm();
+    const Term& term = terms[i];
+    const auto point_m = term.point_m.template cast<double>();
+    const Vec3 measured_m = point_m + term.error_m.template cast<double>();
+    const Vec3 predicted_m = point_m + term.directions.template cast<double>() * tail;
+    sum_m += (rotation * predicted_m - measured_m - shift_m).norm();
   }
   return sum_m;
 }

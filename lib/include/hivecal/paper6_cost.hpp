@@ -69,7 +69,7 @@ struct Paper6TermT {
 };
 /// The exact layout: 168 bytes per sample; agrees with evaluate_cost to ~1e-12.
 using Paper6Term = Paper6TermT<double>;
-/// The compact layout for firmware: 84 bytes per sample; agrees with evaluate_cost to ~1e-6.
+/// The compact layout for firmware: 84 bytes per sample; agrees with evaluate_cost to ~1e-7.
 using Paper6CompactTerm = Paper6TermT<float>;
 
 /// The precomputed cost over caller-sized term storage (see Paper6Cost for the owning type).
