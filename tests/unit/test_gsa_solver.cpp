@@ -201,7 +201,7 @@ TEST(GsaPaper6, PaperConfigReachesTheLeastSquaresMaeOnPaperSizedSessions) {
 
 TEST(GsaPaper6, ReachesTheLeastSquaresMaeOnAFewHundredPoses) {
   test::Paper6Session& session = test::shared_session();
-  ASSERT_TRUE(session.simulate(21, 300, test::Paper6Truth::six_lengths));
+  ASSERT_TRUE(session.simulate(21, 200, test::Paper6Truth::six_lengths));
   GsaOptions options;
   options.agents = 60;
   options.iterations = 150;
