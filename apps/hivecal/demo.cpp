@@ -33,7 +33,8 @@ int demo_main(int argc, char** argv) {
     JointVector q;
     q << random.uniform(-3, 3), random.uniform(-2.5, -0.6), random.uniform(-2.2, 2.2), random.uniform(-3, 0),
         random.uniform(-2.8, -0.3), random.uniform(-3, 3);
-    const Vec3 noise(random.normal(), random.normal(), random.normal());
+    Vec3 noise;
+    noise << random.normal(), random.normal(), random.normal();  // defined draw order
     if (dataset.add(q, tracker_pose.apply(fk_tool_point(truth, q)) + 1e-5 * noise) != Status::ok) return kExitFailure;
   }
   for (const auto& [name, model] : {std::pair<const char*, RobotModel>{"nominal", nominal}, {"true", truth}}) {

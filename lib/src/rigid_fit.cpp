@@ -1,6 +1,7 @@
 #include "hivecal/rigid_fit.hpp"
 
 #include <Eigen/SVD>
+#include <cmath>
 
 namespace hivecal {
 
@@ -73,6 +74,96 @@ Status fit_rigid_transform(Span<const Vec3> source_m, Span<const Vec3> target_m,
     accumulator.add(source_m[i], target_m[i], weights.empty() ? 1.0 : weights[i]);
   }
   return accumulator.solve(source_to_target);
+}
+
+}  // namespace hivecal
+
+namespace hivecal {
+namespace {
+
+using Mat4 = Eigen::Matrix<double, 4, 4>;
+
+/// Horn's symmetric key matrix of S = sum s t^T: q^T N q = sum t . (R(q) s) for unit q.
+Mat4 horn_key_matrix(const Mat3& s) {
+  const double sxx = s(0, 0), sxy = s(0, 1), sxz = s(0, 2);
+  const double syx = s(1, 0), syy = s(1, 1), syz = s(1, 2);
+  const double szx = s(2, 0), szy = s(2, 1), szz = s(2, 2);
+  Mat4 n;
+  n << sxx + syy + szz, syz - szy, szx - sxz, sxy - syx,
+       syz - szy, sxx - syy - szz, sxy + syx, szx + sxz,
+       szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy,
+       sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz;
+  return n;
+}
+
+/// Rows (or columns) left when index `skip` of four is deleted.
+constexpr int kKept[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+
+/// Determinant of a's 3x3 minor without row `row` and column `col`.
+double minor_of(const Mat4& a, int row, int col) {
+  const int* r = kKept[row];
+  const int* c = kKept[col];
+  return a(r[0], c[0]) * (a(r[1], c[1]) * a(r[2], c[2]) - a(r[1], c[2]) * a(r[2], c[1])) -
+         a(r[0], c[1]) * (a(r[1], c[0]) * a(r[2], c[2]) - a(r[1], c[2]) * a(r[2], c[0])) +
+         a(r[0], c[2]) * (a(r[1], c[0]) * a(r[2], c[1]) - a(r[1], c[1]) * a(r[2], c[0]));
+}
+
+/// Largest root of x^4 + c2 x^2 + c1 x + c0 (all roots real: N is symmetric) by Newton's
+/// method from an upper bound: monotone from above, so it stops when x no longer decreases.
+double largest_quartic_root(double c2, double c1, double c0, double upper_bound) {
+  constexpr int kMaxSteps = 64;
+  double x = upper_bound;
+  for (int step = 0; step < kMaxSteps; ++step) {
+    const double x2 = x * x;
+    const double value = (x2 + c2) * x2 + c1 * x + c0;
+    const double slope = (4.0 * x2 + 2.0 * c2) * x + c1;
+    const double next = x - value / slope;
+    if (!(next < x)) break;
+    x = next;
+  }
+  return x;
+}
+
+Mat3 rotation_of_quaternion(const Eigen::Matrix<double, 4, 1>& q) {
+  const double w = q(0), x = q(1), y = q(2), z = q(3);
+  Mat3 r;
+  r << w * w + x * x - y * y - z * z, 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
+       2.0 * (x * y + w * z), w * w - x * x + y * y - z * z, 2.0 * (y * z - w * x),
+       2.0 * (x * z - w * y), 2.0 * (y * z + w * x), w * w - x * x - y * y + z * z;
+  return r;
+}
+
+}  // namespace
+
+Mat3 rotation_from_cross_covariance_qcp(const Mat3& cross_covariance) {
+  // Below this, the top eigenvalue is too close to the next one for the cofactor eigenvector.
+  constexpr double kMinRelativeCofactor = 1e-3;
+  const Mat4 key = horn_key_matrix(cross_covariance);
+  const double frobenius_squared = cross_covariance.squaredNorm();
+  // Characteristic polynomial of N (trace 0): x^4 - 2|S|^2 x^2 - 8 det(S) x + det(N).
+  // sqrt(3)|S| >= s1 + s2 + s3 >= the largest eigenvalue.
+  const double lambda = largest_quartic_root(-2.0 * frobenius_squared, -8.0 * cross_covariance.determinant(),
+                                             key.determinant(), std::sqrt(3.0 * frobenius_squared));
+  const Mat4 shifted = key - lambda * Mat4::Identity();
+  // The adjugate of N - lambda I is q q^T times a scalar: its best-scaled column is the eigenvector.
+  int column = 0;
+  double largest = 0.0;
+  for (int j = 0; j < 4; ++j) {
+    const double diagonal = std::fabs(minor_of(shifted, j, j));
+    if (diagonal > largest) {
+      largest = diagonal;
+      column = j;
+    }
+  }
+  if (!(largest > kMinRelativeCofactor * lambda * lambda * lambda)) {
+    return rotation_from_cross_covariance(cross_covariance);
+  }
+  Eigen::Matrix<double, 4, 1> q;
+  for (int i = 0; i < 4; ++i) {
+    const double m = minor_of(shifted, column, i);
+    q(i) = (i + column) % 2 == 0 ? m : -m;
+  }
+  return rotation_of_quaternion(q / q.norm());
 }
 
 }  // namespace hivecal

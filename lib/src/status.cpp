@@ -22,6 +22,9 @@ const char* status_message(Status status) {
     case Status::unknown_type: return "unknown packet type";
     case Status::clock_fit_failed: return "clock relation could not be estimated";
     case Status::bad_payload: return "packet padding or name bytes not as specified";
+    case Status::population_out_of_range: return "population size out of range";
+    case Status::dimension_out_of_range: return "problem dimension out of range";
+    case Status::bad_bounds: return "search bounds not finite or not increasing";
   }
   return "unknown status";
 }

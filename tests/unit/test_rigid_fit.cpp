@@ -12,7 +12,8 @@ namespace {
 
 Mat3 random_rotation(Random* random) {
   // Axis-angle with own trig: Rodrigues' formula.
-  Vec3 axis(random->normal(), random->normal(), random->normal());
+  Vec3 axis;
+  axis << random->normal(), random->normal(), random->normal();  // defined order (not constructor arguments)
   axis.normalize();
   const double angle = random->uniform(-3.1, 3.1);
   Mat3 k;

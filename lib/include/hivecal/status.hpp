@@ -33,6 +33,10 @@ enum class Status : std::uint8_t {
   clock_fit_failed,         ///< not enough motion to relate the two clocks
   // Codec (added later, kept at the end so existing values do not move).
   bad_payload,              ///< valid CRC but padding not zero or device name not printable ASCII
+  // Population solvers (ABC, GSA).
+  population_out_of_range,  ///< population below the solver's minimum or above its capacity
+  dimension_out_of_range,   ///< problem dimension 0, above capacity, or not matching the bounds
+  bad_bounds,               ///< a search bound is NaN/Inf or lower >= upper
 };
 
 /// A short, stable, human-readable name for a status (for logs and CLI messages).

@@ -1,0 +1,107 @@
+// Standard benchmark functions as hivecal::Objective, for the population solver tests.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "hivecal/math.hpp"
+#include "hivecal/objective.hpp"
+
+namespace hivecal::test {
+
+/// Counts its evaluations, so tests can check the solvers' own count.
+class CountingObjective : public Objective {
+ public:
+  explicit CountingObjective(std::size_t dimension) : dimension_(dimension) {}
+  std::size_t dimension() const override { return dimension_; }
+  double evaluate(const double* x) override {
+    ++calls;
+    return value(x);
+  }
+  std::uint64_t calls = 0;  ///< evaluate() calls so far
+
+ protected:
+  virtual double value(const double* x) const = 0;
+  std::size_t dimension_;
+};
+
+/// sum x_d^2; minimum 0 at the origin.
+class Sphere final : public CountingObjective {
+ public:
+  using CountingObjective::CountingObjective;
+
+ private:
+  double value(const double* x) const override {
+    double sum = 0.0;
+    for (std::size_t d = 0; d < dimension_; ++d) sum += x[d] * x[d];
+    return sum;
+  }
+};
+
+/// sum 100 (x_{d+1} - x_d^2)^2 + (1 - x_d)^2; minimum 0 at (1, ..., 1).
+class Rosenbrock final : public CountingObjective {
+ public:
+  using CountingObjective::CountingObjective;
+
+ private:
+  double value(const double* x) const override {
+    double sum = 0.0;
+    for (std::size_t d = 0; d + 1 < dimension_; ++d) {
+      const double valley = x[d + 1] - x[d] * x[d];
+      sum += 100.0 * valley * valley + (1.0 - x[d]) * (1.0 - x[d]);
+    }
+    return sum;
+  }
+};
+
+/// 10 D + sum x_d^2 - 10 cos(2 pi x_d); minimum 0 at the origin, a local minimum near every integer point.
+class Rastrigin final : public CountingObjective {
+ public:
+  using CountingObjective::CountingObjective;
+
+ private:
+  double value(const double* x) const override {
+    double sum = 10.0 * static_cast<double>(dimension_);
+    for (std::size_t d = 0; d < dimension_; ++d) sum += x[d] * x[d] - 10.0 * math::cos(2.0 * math::kPi * x[d]);
+    return sum;
+  }
+};
+
+/// The same value everywhere: no move ever improves (exercises trial counters and scouts).
+class Flat final : public CountingObjective {
+ public:
+  using CountingObjective::CountingObjective;
+
+ private:
+  double value(const double*) const override { return 1.0; }
+};
+
+/// NaN everywhere except near the origin, where it is the sphere.
+class MostlyNan final : public CountingObjective {
+ public:
+  using CountingObjective::CountingObjective;
+
+ private:
+  double value(const double* x) const override {
+    double sum = 0.0;
+    for (std::size_t d = 0; d < dimension_; ++d) sum += x[d] * x[d];
+    return sum < 1.0 ? sum : 0.0 / (sum - sum);
+  }
+};
+
+/// A symmetric box [-half_width, half_width]^D, owning its bounds (D <= 16).
+struct CubeBox {
+  static constexpr std::size_t kMaxDimension = 16;
+  double lower[kMaxDimension] = {};
+  double upper[kMaxDimension] = {};
+  std::size_t dimension = 0;
+  CubeBox(std::size_t dim, double half_width) : dimension(dim) {
+    for (std::size_t d = 0; d < dim; ++d) {
+      lower[d] = -half_width;
+      upper[d] = half_width;
+    }
+  }
+  SearchBox view() const { return SearchBox{Span<const double>(lower, dimension), Span<const double>(upper, dimension)}; }
+};
+
+}  // namespace hivecal::test
