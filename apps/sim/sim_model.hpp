@@ -25,8 +25,8 @@ struct SimConfig {
   double duration_s = 600.0;                  ///< target session length [s] (moves are slowed down to fill it)
   double max_joint_speed_rad_s = 0.5;         ///< fastest peak joint speed of a move [rad/s]
   double min_move_s = 2.0;                    ///< shortest move [s]
-  double mean_stop_s = 3.0;                   ///< mean stop at a waypoint (uniform 0.5..1.5 times) [s]
-  double min_stop_s = 2.0;                    ///< shortest stop at a waypoint [s]
+  double mean_stop_s = 2.0;                   ///< mean stop at a waypoint (uniform 0.5..1.5 times) [s]
+  double min_stop_s = 1.5;                    ///< shortest stop at a waypoint [s]
   // Geometry.
   bool use_deltas = false;                    ///< true: true geometry = nominal + `deltas` (calibration.conf)
   UrCalibrationDeltas deltas;                 ///< used when use_deltas

@@ -76,6 +76,20 @@ SampleExtractorBase::SampleExtractorBase(const ExtractionConfig& config, const C
       robot_(robot_storage, robot_capacity),
       tracker_(tracker_storage, tracker_capacity) {}
 
+void SampleExtractorBase::reset(const ExtractionConfig& config, const ClockFit& clock, DatasetBase* dataset) {
+  config_ = config;
+  clock_ = clock;
+  dataset_ = dataset;
+  observer_ = nullptr;
+  robot_.clear();
+  tracker_.clear();
+  tracker_decided_ = 0;
+  counts_ = ExtractionCounts();
+  robot_started_ = false;
+  robot_evicted_ = false;
+  tracker_started_ = false;
+}
+
 bool SampleExtractorBase::config_ok() const {
   return dataset_ != nullptr && robot_.capacity() >= 2 && tracker_.capacity() >= 2 &&
          config_.max_speed_m_s > 0.0 && config_.window_us > 0 && config_.speed_baseline_us > 0 &&

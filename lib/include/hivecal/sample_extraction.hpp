@@ -117,6 +117,8 @@ class SampleExtractorBase {
   Status push_tracker(const TrackerPointRecord& record);
   /// Decides every pending tracker point with the data at hand. Errors as push_robot.
   Status finish();
+  /// Starts over (empty rings, zero counts, no observer) with new settings.
+  void reset(const ExtractionConfig& config, const ClockFit& clock, DatasetBase* dataset);
   /// Counters so far.
   const ExtractionCounts& counts() const { return counts_; }
   /// Listener of decisions (nullptr for none); not owned.
