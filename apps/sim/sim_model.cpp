@@ -18,6 +18,14 @@ double min_jerk(double u) { return u * u * u * (10.0 + u * (-15.0 + 6.0 * u)); }
 /// ds/du of min_jerk.
 double min_jerk_rate(double u) { return 30.0 * u * u * (1.0 - u) * (1.0 - u); }
 
+/// Three standard normal deviates drawn x, y, z in this order (the order of a
+/// constructor's arguments is unspecified and differs between targets).
+Vec3 normal_vector(Random* random) {
+  Vec3 v;
+  for (int axis = 0; axis < 3; ++axis) v(axis) = random->normal();
+  return v;
+}
+
 /// Nearest integer of a non-negative value.
 std::uint64_t round_us(double x_us) { return static_cast<std::uint64_t>(std::llround(x_us)); }
 
@@ -80,8 +88,9 @@ void Session::build_truth(Random* random) {
   math::sincos(azimuth_rad, &s, &c);
   const Vec3 tracker_in_base(config_.tracker_distance_m * c, config_.tracker_distance_m * s,
                              random->uniform(-0.3, 0.3));
-  const Mat3 tracker_axes_in_base =
-      rotation_z(random->uniform(-math::kPi, math::kPi)) * rotation_x(random->uniform(-0.02, 0.02));
+  const double yaw_rad = random->uniform(-math::kPi, math::kPi);  // draws in statement order:
+  const double tilt_rad = random->uniform(-0.02, 0.02);           // argument order is unspecified
+  const Mat3 tracker_axes_in_base = rotation_z(yaw_rad) * rotation_x(tilt_rad);
   truth_.base_to_tracker.rotation = tracker_axes_in_base.transpose();
   truth_.base_to_tracker.translation_m = -(tracker_axes_in_base.transpose() * tracker_in_base);
 
@@ -243,7 +252,7 @@ bool TrackerStream::next(TrackerPointRecord* record) {
   const double t_s = session_.true_time_of_tracker_us(t_us);
   if (t_s > session_.duration_s()) return false;
   ++index_;
-  const Vec3 noise(random_.normal(), random_.normal(), random_.normal());
+  const Vec3 noise = normal_vector(&random_);
   Vec3 point = session_.true_point(session_.joints_at(t_s)) + config.tracker_noise_m * noise;
   std::uint8_t status = static_cast<std::uint8_t>(TrackerStatus::valid);
   if (burst_left_ == 0 && random_.uniform01() < config.beam_lost_probability)
@@ -254,7 +263,7 @@ bool TrackerStream::next(TrackerPointRecord* record) {
     point = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   } else if (random_.uniform01() < config.unstable_probability) {
     status = static_cast<std::uint8_t>(TrackerStatus::unstable);
-    point += 20.0 * config.tracker_noise_m * Vec3(random_.normal(), random_.normal(), random_.normal());
+    point += 20.0 * config.tracker_noise_m * normal_vector(&random_);
   }
   record->sequence = sequence_++;
   record->timestamp_us = t_us;
