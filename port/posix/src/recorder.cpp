@@ -62,6 +62,7 @@ bool record_streams(const std::vector<ByteSource*>& sources, const std::vector<C
       if (got.status == ReadStatus::data) {
         ok = writers[i]->write(chunk.data(), got.bytes, error);
         stats->bytes[i] += got.bytes;
+        if (ok && options.on_bytes) options.on_bytes(i, chunk.data(), got.bytes);
       } else if (got.status == ReadStatus::disconnected) {
         if (!was_lost) ++stats->disconnects[i];  // count each loss once, not each retry
       } else if (got.status == ReadStatus::end_of_stream) {

@@ -5,6 +5,7 @@
 
 #include <csignal>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,9 @@ struct RecordOptions {
   int poll_timeout_ms = 100;     ///< longest wait before checking the stop flag [ms]
   int sync_interval_ms = 1000;   ///< fsync period [ms]
   double duration_s = 0.0;       ///< stop after this long [s]; 0: until stopped
+  /// Optional tap: called with (source index, bytes, count) after each chunk is written,
+  /// e.g. to decode the live streams while they are recorded.
+  std::function<void(std::size_t, const std::uint8_t*, std::size_t)> on_bytes;
 };
 
 /// What was recorded per source.
