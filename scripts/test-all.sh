@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test on every target: host at -O3, -O0, -march=native and with ASan+UBSan,
-# then aarch64 and armhf under qemu-user. Installs what it needs first.
+# aarch64 and armhf under qemu-user, then the bare-metal Cortex-M7 (hardware doubles) and
+# Cortex-M4F (soft-float doubles) firmware under qemu-system-arm, then the wire decoder
+# fuzzer for HIVECAL_FUZZ_SECONDS (default 60). Installs what it needs first.
 #   scripts/test-all.sh [preset ...]     (default: all of them)
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -9,7 +11,7 @@ scripts/install-deps.sh || { echo "test-all: dependency install failed" >&2; exi
 
 presets=("$@")
 if [ ${#presets[@]} -eq 0 ]; then
-  presets=(host host-O0 host-native host-asan aarch64 armhf)
+  presets=(host host-O0 host-native host-asan aarch64 armhf cortex-m7 cortex-m4 fuzz)
 fi
 
 passed=0
@@ -19,8 +21,16 @@ for preset in "${presets[@]}"; do
   echo "=== $preset ==="
   log="build/test-$preset.log"
   mkdir -p build
-  cmake --workflow --preset "$preset" >"$log" 2>&1
-  rc=$?
+  if [ "$preset" = fuzz ]; then
+    # The decoder fuzz target for a bounded time (ASan + UBSan); one test, pass or fail.
+    scripts/fuzz-decoder.sh "${HIVECAL_FUZZ_SECONDS:-60}" >"$log" 2>&1
+    rc=$?
+    tail -3 "$log"
+    if [ "$rc" -eq 0 ]; then echo "100% tests passed, 0 tests failed out of 1" >>"$log"; fi
+  else
+    cmake --workflow --preset "$preset" >"$log" 2>&1
+    rc=$?
+  fi
   grep -E "[0-9]+% tests passed|The following tests FAILED|^\s+[0-9]+ - |error:|Failed" "$log" | head -40
   result=$(grep -E "tests passed, [0-9]+ tests failed out of [0-9]+" "$log" | tail -1)
   if [ "$rc" -ne 0 ] || [ -z "$result" ] || ! grep -q " 0 tests failed" <<<"$result"; then

@@ -1,53 +1,42 @@
-// hivecal command-line tool. For now: `hivecal demo`, a small simulated check of the
-// core library (nominal vs true geometry seen through a fitted tracker transform).
+// hivecal: robot geometry calibration from laser-tracker data (docs/cli.md).
 #include <cstdio>
 #include <cstring>
 
-#include "hivecal/cost.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/metrics.hpp"
-#include "hivecal/random.hpp"
+#include "commands.hpp"
 
 namespace {
 
-int run_demo() {
-  using namespace hivecal;
-  Random random(1);
-  const RobotModel nominal = nominal_model(RobotType::ur5);
-  RobotModel truth = nominal;
-  for (DhJoint& joint : truth.joints) {
-    joint.d_m += 2e-4 * random.normal();
-    joint.a_m += 2e-4 * random.normal();
-  }
-  RigidTransform tracker_pose;
-  tracker_pose.translation_m << 2.5, -1.0, 0.3;
-  static Dataset<> dataset;
-  for (int i = 0; i < 38; ++i) {
-    JointVector q;
-    q << random.uniform(-3, 3), random.uniform(-2.5, -0.6), random.uniform(-2.2, 2.2), random.uniform(-3, 0),
-        random.uniform(-2.8, -0.3), random.uniform(-3, 3);
-    Vec3 noise(random.normal(), random.normal(), random.normal());
-    if (dataset.add(q, tracker_pose.apply(fk_tool_point(truth, q)) + 1e-5 * noise) != Status::ok) return 1;
-  }
-  for (const auto& [name, model] : {std::pair<const char*, RobotModel>{"nominal", nominal}, {"true", truth}}) {
-    RigidTransform base;
-    const Status fit = fit_base_to_tracker(model, dataset.samples(), &base);
-    if (fit != Status::ok) {
-      std::fprintf(stderr, "hivecal: base fit failed: %s\n", status_message(fit));
-      return 1;
-    }
-    const ErrorStats stats = position_error_stats(model, base, dataset.samples());
-    std::printf("%-8s geometry: MAE 3D %.1f um, sigma %.1f um over %zu samples\n", name,
-                stats.mae(ErrorAxis::norm_3d) * 1e6, stats.sigma(ErrorAxis::norm_3d) * 1e6, stats.count);
-  }
-  return 0;
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(int argc, char** argv);
+};
+
+const Command kCommands[] = {
+    {"predict", "tool positions of joint poses from a calibration result", hivecal::cli::predict_main},
+    {"demo", "small simulated check of the core library", hivecal::cli::demo_main},
+};
+
+void print_usage(std::FILE* out) {
+  std::fprintf(out, "usage: hivecal <command> [options]   (hivecal <command> --help for its options)\n\ncommands:\n");
+  for (const Command& c : kCommands) std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
+  std::fprintf(out,
+               "\nexit codes: 0 ok, 1 computation failed, 2 bad command line, 3 bad input file,\n"
+               "            4 output could not be written\n");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc >= 2 && std::strcmp(argv[1], "demo") == 0) return run_demo();
-  std::fprintf(stderr, "usage: hivecal demo\n");
-  return 2;
+  if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
+      std::strcmp(argv[1], "help") == 0) {
+    print_usage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? hivecal::cli::kExitUsage : hivecal::cli::kExitOk;
+  }
+  for (const Command& c : kCommands) {
+    if (std::strcmp(argv[1], c.name) == 0) return c.run(argc - 2, argv + 2);
+  }
+  std::fprintf(stderr, "hivecal: unknown command '%s'\n\n", argv[1]);
+  print_usage(stderr);
+  return hivecal::cli::kExitUsage;
 }

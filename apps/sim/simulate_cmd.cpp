@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "hivecal/port/byte_source.hpp"
 #include "hivecal/port/pty.hpp"
 #include "sim_model.hpp"
 #include "sim_outputs.hpp"

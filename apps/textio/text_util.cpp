@@ -4,6 +4,9 @@
 #include <charconv>
 #include <cstdio>
 #include <cstring>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace hivecal::textio {
 
@@ -41,6 +44,32 @@ bool parse_double(std::string_view field, double* value) {
   const char* end = field.data() + field.size();
   const auto result = std::from_chars(field.data(), end, *value);
   return result.ec == std::errc() && result.ptr == end;
+}
+
+bool write_file_atomically(const std::string& path, const std::string& content, std::string* error) {
+  std::string temp = path + ".tmp.XXXXXX";
+  const int fd = mkstemp(temp.data());
+  if (fd < 0) {
+    *error = path + ": cannot create a temporary file beside it: " + std::strerror(errno);
+    return false;
+  }
+  std::size_t done = 0;
+  bool ok = true;
+  while (ok && done < content.size()) {
+    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    ok = n > 0;
+    if (ok) done += static_cast<std::size_t>(n);
+  }
+  ok = ok && ::fchmod(fd, 0644) == 0 && ::fsync(fd) == 0;
+  const int saved_errno = errno;
+  ok = (::close(fd) == 0) && ok;
+  if (!ok || std::rename(temp.c_str(), path.c_str()) != 0) {
+    *error = path + ": write failed: " + std::strerror(ok ? errno : saved_errno);
+    std::remove(temp.c_str());
+    return false;
+  }
+  return true;
 }
 
 std::string format_double(double value) {

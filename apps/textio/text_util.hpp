@@ -12,6 +12,9 @@ bool read_text_file(const std::string& path, std::string* text, std::string* err
 std::string_view trim(std::string_view s);
 /// Parses a whole field as a double (C locale, no trailing junk); false otherwise.
 bool parse_double(std::string_view field, double* value);
+/// Writes `content` to `path` atomically: a temporary in the same folder, fsync, rename.
+/// On failure nothing is left at `path` (an older file stays untouched).
+bool write_file_atomically(const std::string& path, const std::string& content, std::string* error);
 /// Formats a double so that it reads back to the same bits (%.17g).
 std::string format_double(double value);
 

@@ -21,6 +21,7 @@ const char* status_message(Status status) {
     case Status::bad_version: return "unsupported packet version";
     case Status::unknown_type: return "unknown packet type";
     case Status::clock_fit_failed: return "clock relation could not be estimated";
+    case Status::bad_payload: return "packet padding or name bytes not as specified";
   }
   return "unknown status";
 }

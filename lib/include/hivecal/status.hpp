@@ -31,6 +31,8 @@ enum class Status : std::uint8_t {
   unknown_type,             ///< valid CRC but an unknown packet type (skipped, counted)
   // Sync.
   clock_fit_failed,         ///< not enough motion to relate the two clocks
+  // Codec (added later, kept at the end so existing values do not move).
+  bad_payload,              ///< valid CRC but padding not zero or device name not printable ASCII
 };
 
 /// A short, stable, human-readable name for a status (for logs and CLI messages).

@@ -1,0 +1,88 @@
+#include "cli.hpp"
+
+#include <cstdio>
+#include <unistd.h>
+
+namespace hivecal::cli {
+
+std::string Options::get(const std::string& name) const {
+  const auto it = values_.find(name);
+  if (it != values_.end()) return it->second;
+  const auto def = defaults_.find(name);
+  return def == defaults_.end() ? std::string() : def->second;
+}
+
+void error(const std::string& command, const std::string& message) {
+  std::fprintf(stderr, "hivecal %s: %s\n", command.c_str(), message.c_str());
+}
+
+namespace {
+
+void print_help(const std::string& command, const std::string& summary, const std::vector<OptionSpec>& specs) {
+  std::printf("usage: hivecal %s [options]\n\n%s\n\noptions:\n", command.c_str(), summary.c_str());
+  for (const OptionSpec& spec : specs) {
+    std::string left = "  --" + spec.name + (spec.value_name.empty() ? "" : " " + spec.value_name);
+    if (left.size() < 30) left.resize(30, ' ');
+    std::printf("%s %s%s\n", left.c_str(), spec.help.c_str(),
+                spec.default_value.empty() ? "" : (" (default: " + spec.default_value + ")").c_str());
+  }
+  std::printf("  --help                       this text\n");
+}
+
+}  // namespace
+
+int parse_options(const std::string& command, const std::string& summary, const std::vector<OptionSpec>& specs,
+                  int argc, char** argv, Options* options) {
+  for (const OptionSpec& spec : specs) {
+    if (!spec.default_value.empty()) options->defaults_[spec.name] = spec.default_value;
+  }
+  for (int i = 0; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      print_help(command, summary, specs);
+      return kExitOk;
+    }
+    if (arg.rfind("--", 0) != 0) {
+      error(command, "unexpected argument '" + arg + "' (see --help)");
+      return kExitUsage;
+    }
+    std::string name = arg.substr(2);
+    std::string value;
+    bool has_inline_value = false;
+    const std::size_t equals = name.find('=');
+    if (equals != std::string::npos) {
+      value = name.substr(equals + 1);
+      name = name.substr(0, equals);
+      has_inline_value = true;
+    }
+    const OptionSpec* spec = nullptr;
+    for (const OptionSpec& candidate : specs) {
+      if (candidate.name == name) spec = &candidate;
+    }
+    if (spec == nullptr) {
+      error(command, "unknown option '--" + name + "' (see --help)");
+      return kExitUsage;
+    }
+    if (spec->value_name.empty()) {
+      if (has_inline_value) {
+        error(command, "option --" + name + " takes no value");
+        return kExitUsage;
+      }
+      options->values_[name] = "1";
+      continue;
+    }
+    if (!has_inline_value) {
+      if (i + 1 >= argc) {
+        error(command, "option --" + name + " needs a value " + spec->value_name);
+        return kExitUsage;
+      }
+      value = argv[++i];
+    }
+    options->values_[name] = value;
+  }
+  return -1;
+}
+
+bool progress_enabled(const Options& options) { return !options.given("quiet") && isatty(STDERR_FILENO) != 0; }
+
+}  // namespace hivecal::cli

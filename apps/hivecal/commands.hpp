@@ -1,0 +1,11 @@
+// The hivecal subcommands; each takes argv after its own name and returns an exit code.
+#pragma once
+
+#include "cli.hpp"
+
+namespace hivecal::cli {
+
+int predict_main(int argc, char** argv);  ///< positions of poses from a calibration result
+int demo_main(int argc, char** argv);     ///< small simulated check of the core library
+
+}  // namespace hivecal::cli

@@ -1,0 +1,323 @@
+#include "json.hpp"
+
+#include <cstdio>
+
+#include "hivecal/math.hpp"
+#include "text_util.hpp"
+
+namespace hivecal::textio {
+
+const JsonValue* JsonValue::find(const std::string& key) const {
+  if (kind != Kind::object) return nullptr;
+  const auto it = object.find(key);
+  return it == object.end() ? nullptr : &it->second;
+}
+
+namespace {
+
+class JsonParser {
+ public:
+  explicit JsonParser(const std::string& text) : text_(text) {}
+
+  bool parse_document(JsonValue* value, std::string* error) {
+    skip_blanks();
+    if (!parse_value(value, 0)) return fail_with(error);
+    skip_blanks();
+    if (pos_ != text_.size()) {
+      problem_ = "unexpected text after the document";
+      return fail_with(error);
+    }
+    return true;
+  }
+
+ private:
+  static constexpr int kMaxDepth = 64;
+
+  bool fail_with(std::string* error) {
+    std::size_t line = 1;
+    std::size_t column = 1;
+    for (std::size_t i = 0; i < pos_ && i < text_.size(); ++i) {
+      if (text_[i] == '\n') {
+        ++line;
+        column = 1;
+      } else {
+        ++column;
+      }
+    }
+    *error = std::to_string(line) + ":" + std::to_string(column) + ": " + problem_;
+    return false;
+  }
+  bool fail(const char* what) {
+    problem_ = what;
+    return false;
+  }
+  void skip_blanks() {
+    while (pos_ < text_.size() && (text_[pos_] == ' ' || text_[pos_] == '\t' || text_[pos_] == '\n' || text_[pos_] == '\r')) ++pos_;
+  }
+  bool consume(const char* word) {
+    std::size_t n = 0;
+    while (word[n] != '\0') ++n;
+    if (text_.compare(pos_, n, word) != 0) return false;
+    pos_ += n;
+    return true;
+  }
+
+  bool parse_value(JsonValue* v, int depth) {
+    if (depth > kMaxDepth) return fail("nesting too deep");
+    if (pos_ >= text_.size()) return fail("unexpected end of input");
+    const char c = text_[pos_];
+    if (c == '{') return parse_object(v, depth);
+    if (c == '[') return parse_array(v, depth);
+    if (c == '"') {
+      v->kind = JsonValue::Kind::string;
+      return parse_string(&v->string);
+    }
+    if (consume("true")) {
+      v->kind = JsonValue::Kind::boolean;
+      v->boolean = true;
+      return true;
+    }
+    if (consume("false")) {
+      v->kind = JsonValue::Kind::boolean;
+      return true;
+    }
+    if (consume("null")) {
+      v->kind = JsonValue::Kind::null;
+      return true;
+    }
+    return parse_number(v);
+  }
+
+  bool parse_number(JsonValue* v) {
+    const std::size_t start = pos_;
+    while (pos_ < text_.size() && std::string("+-0123456789.eE").find(text_[pos_]) != std::string::npos) ++pos_;
+    if (start == pos_) return fail("expected a value");
+    if (!parse_double(std::string_view(text_).substr(start, pos_ - start), &v->number) ||
+        !math::is_finite(v->number)) {
+      pos_ = start;
+      return fail("malformed number");
+    }
+    v->kind = JsonValue::Kind::number;
+    return true;
+  }
+
+  bool parse_string(std::string* out) {
+    ++pos_;  // opening quote
+    while (pos_ < text_.size()) {
+      const char c = text_[pos_++];
+      if (c == '"') return true;
+      if (static_cast<unsigned char>(c) < 0x20) return fail("control character in string");
+      if (c != '\\') {
+        out->push_back(c);
+        continue;
+      }
+      if (pos_ >= text_.size()) break;
+      const char e = text_[pos_++];
+      switch (e) {
+        case '"': out->push_back('"'); break;
+        case '\\': out->push_back('\\'); break;
+        case '/': out->push_back('/'); break;
+        case 'b': out->push_back('\b'); break;
+        case 'f': out->push_back('\f'); break;
+        case 'n': out->push_back('\n'); break;
+        case 'r': out->push_back('\r'); break;
+        case 't': out->push_back('\t'); break;
+        case 'u': {
+          if (pos_ + 4 > text_.size()) return fail("short \\u escape");
+          unsigned code = 0;
+          for (int i = 0; i < 4; ++i) {
+            const char h = text_[pos_++];
+            code <<= 4U;
+            if (h >= '0' && h <= '9') code |= static_cast<unsigned>(h - '0');
+            else if (h >= 'a' && h <= 'f') code |= static_cast<unsigned>(h - 'a' + 10);
+            else if (h >= 'A' && h <= 'F') code |= static_cast<unsigned>(h - 'A' + 10);
+            else return fail("bad \\u escape");
+          }
+          out->push_back(code < 0x80 ? static_cast<char>(code) : '?');  // names here are ASCII
+          break;
+        }
+        default: return fail("bad escape");
+      }
+    }
+    return fail("unterminated string");
+  }
+
+  bool parse_array(JsonValue* v, int depth) {
+    v->kind = JsonValue::Kind::array;
+    ++pos_;
+    skip_blanks();
+    if (pos_ < text_.size() && text_[pos_] == ']') {
+      ++pos_;
+      return true;
+    }
+    for (;;) {
+      skip_blanks();
+      v->array.emplace_back();
+      if (!parse_value(&v->array.back(), depth + 1)) return false;
+      skip_blanks();
+      if (pos_ < text_.size() && text_[pos_] == ',') {
+        ++pos_;
+        continue;
+      }
+      if (pos_ < text_.size() && text_[pos_] == ']') {
+        ++pos_;
+        return true;
+      }
+      return fail("expected ',' or ']'");
+    }
+  }
+
+  bool parse_object(JsonValue* v, int depth) {
+    v->kind = JsonValue::Kind::object;
+    ++pos_;
+    skip_blanks();
+    if (pos_ < text_.size() && text_[pos_] == '}') {
+      ++pos_;
+      return true;
+    }
+    for (;;) {
+      skip_blanks();
+      if (pos_ >= text_.size() || text_[pos_] != '"') return fail("expected a key string");
+      std::string key;
+      if (!parse_string(&key)) return false;
+      skip_blanks();
+      if (pos_ >= text_.size() || text_[pos_] != ':') return fail("expected ':'");
+      ++pos_;
+      skip_blanks();
+      JsonValue member;
+      if (!parse_value(&member, depth + 1)) return false;
+      v->object[key] = std::move(member);
+      skip_blanks();
+      if (pos_ < text_.size() && text_[pos_] == ',') {
+        ++pos_;
+        continue;
+      }
+      if (pos_ < text_.size() && text_[pos_] == '}') {
+        ++pos_;
+        return true;
+      }
+      return fail("expected ',' or '}'");
+    }
+  }
+
+  const std::string& text_;
+  std::size_t pos_ = 0;
+  std::string problem_;
+};
+
+std::string escape(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string number_text(double x) { return math::is_finite(x) ? format_double(x) : "null"; }
+
+}  // namespace
+
+bool parse_json(const std::string& text, JsonValue* value, std::string* error) {
+  *value = JsonValue();
+  return JsonParser(text).parse_document(value, error);
+}
+
+void JsonWriter::newline() {
+  out_ += '\n';
+  out_.append(2 * first_in_scope_.size(), ' ');
+}
+
+void JsonWriter::before_value() {
+  if (after_key_) {
+    after_key_ = false;
+    return;
+  }
+  if (!first_in_scope_.empty()) {
+    if (!first_in_scope_.back()) out_ += ',';
+    first_in_scope_.back() = false;
+    newline();
+  }
+}
+
+JsonWriter& JsonWriter::begin_object() {
+  before_value();
+  out_ += '{';
+  first_in_scope_.push_back(true);
+  return *this;
+}
+
+JsonWriter& JsonWriter::end_object() {
+  const bool empty = first_in_scope_.back();
+  first_in_scope_.pop_back();
+  if (!empty) newline();
+  out_ += '}';
+  if (first_in_scope_.empty()) out_ += '\n';
+  return *this;
+}
+
+JsonWriter& JsonWriter::begin_array() {
+  before_value();
+  out_ += '[';
+  first_in_scope_.push_back(true);
+  return *this;
+}
+
+JsonWriter& JsonWriter::end_array() {
+  const bool empty = first_in_scope_.back();
+  first_in_scope_.pop_back();
+  if (!empty) newline();
+  out_ += ']';
+  return *this;
+}
+
+JsonWriter& JsonWriter::key(const std::string& name) {
+  before_value();
+  out_ += escape(name) + ": ";
+  after_key_ = true;
+  return *this;
+}
+
+JsonWriter& JsonWriter::value(double number) {
+  before_value();
+  out_ += number_text(number);
+  return *this;
+}
+
+JsonWriter& JsonWriter::value(long long integer) {
+  before_value();
+  out_ += std::to_string(integer);
+  return *this;
+}
+
+JsonWriter& JsonWriter::value(const std::string& text) {
+  before_value();
+  out_ += escape(text);
+  return *this;
+}
+
+JsonWriter& JsonWriter::value(const char* text) { return value(std::string(text)); }
+
+JsonWriter& JsonWriter::value(bool flag) {
+  before_value();
+  out_ += flag ? "true" : "false";
+  return *this;
+}
+
+JsonWriter& JsonWriter::inline_array(const double* values, std::size_t count) {
+  before_value();
+  out_ += '[';
+  for (std::size_t i = 0; i < count; ++i) out_ += (i == 0 ? "" : ", ") + number_text(values[i]);
+  out_ += ']';
+  return *this;
+}
+
+}  // namespace hivecal::textio

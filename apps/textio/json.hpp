@@ -1,0 +1,53 @@
+// Minimal JSON for the calibration result format: a writer that produces readable,
+// round-trip-exact output, and a strict parser into a small value tree (hosted code only).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hivecal::textio {
+
+/// A parsed JSON value.
+struct JsonValue {
+  enum class Kind { null, boolean, number, string, array, object };
+  Kind kind = Kind::null;                  ///< which member is meaningful
+  bool boolean = false;                    ///< for Kind::boolean
+  double number = 0.0;                     ///< for Kind::number
+  std::string string;                      ///< for Kind::string
+  std::vector<JsonValue> array;            ///< for Kind::array
+  std::map<std::string, JsonValue> object; ///< for Kind::object
+
+  /// Member `key` of an object, or nullptr.
+  const JsonValue* find(const std::string& key) const;
+};
+
+/// Parses a whole JSON text; on failure returns false with "line:column: problem".
+bool parse_json(const std::string& text, JsonValue* value, std::string* error);
+
+/// Streaming writer with two-space indentation; numbers as %.17g (NaN/Inf written as null).
+class JsonWriter {
+ public:
+  JsonWriter& begin_object();                     ///< `{`
+  JsonWriter& end_object();                       ///< `}`
+  JsonWriter& begin_array();                      ///< `[`
+  JsonWriter& end_array();                        ///< `]`
+  JsonWriter& key(const std::string& name);       ///< `"name": ` inside an object
+  JsonWriter& value(double number);               ///< a number
+  JsonWriter& value(long long integer);           ///< an integer
+  JsonWriter& value(const std::string& text);     ///< an escaped string
+  JsonWriter& value(const char* text);            ///< an escaped string
+  JsonWriter& value(bool flag);                   ///< true / false
+  JsonWriter& inline_array(const double* values, std::size_t count);  ///< `[a, b, c]` on one line
+  const std::string& text() const { return out_; }  ///< the document so far
+
+ private:
+  void before_value();
+  void newline();
+  std::string out_;
+  std::vector<bool> first_in_scope_;
+  bool after_key_ = false;
+};
+
+}  // namespace hivecal::textio

@@ -1,0 +1,309 @@
+#!/usr/bin/env bash
+# Footprint report of the bare-metal build, as Markdown for docs/footprint.md:
+# flash and static RAM per component, stack (static .su/.ci analysis and the measured paint
+# high-water mark), and executed instructions per core workload (QEMU instruction-count plugin).
+#   cmake --workflow --preset cortex-m7 && scripts/footprint.sh [build-dir] [qemu-machine]
+# Defaults: build/cortex-m7, mps2-an500. Environment:
+#   HIVECAL_INSN_PLUGIN_SRC  plugin source (default /work/shared/tools/qemu-insn-count.c)
+#   HIVECAL_FOOTPRINT_REPEATS repeats per workload for the instruction counts (default 10)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+build=${1:-build/cortex-m7}
+machine=${2:-mps2-an500}
+plugin_src=${HIVECAL_INSN_PLUGIN_SRC:-/work/shared/tools/qemu-insn-count.c}
+repeats=${HIVECAL_FOOTPRINT_REPEATS:-10}
+probe=$build/tests/firmware/hivecal_firmware_core.elf
+tests_elf=$build/tests/firmware/hivecal_firmware_tests.elf
+runner=scripts/run-qemu-mps2.sh
+for f in "$probe" "$tests_elf"; do
+  [ -f "$f" ] || { echo "footprint: $f missing; build the preset first" >&2; exit 1; }
+done
+
+kib() { awk -v b="$1" 'BEGIN { printf "%.1f", b / 1024 }'; }
+
+# --- sizes ------------------------------------------------------------------------------
+
+# Berkeley sizes of an ELF: "text data bss" (bss includes the stack and its guard).
+elf_sizes() { arm-none-eabi-size "$1" | awk 'NR == 2 { print $1, $2, $3 }'; }
+
+image_table() {
+  echo "| image | text (flash) | data (flash + RAM) | bss incl. stack (RAM) | flash total | static RAM total |"
+  echo "|---|---:|---:|---:|---:|---:|"
+  for elf in "$probe" "$tests_elf"; do
+    read -r text data bss < <(elf_sizes "$elf")
+    printf '| %s | %d | %d | %d | %d (%s KiB) | %d (%s KiB) |\n' "$(basename "$elf")" "$text" "$data" "$bss" \
+      $((text + data)) "$(kib $((text + data)))" $((data + bss)) "$(kib $((data + bss)))"
+  done
+}
+
+# Per-component bytes in a linked image, from its GNU ld map: every input section kept in an
+# allocated output section, grouped by the object or archive it came from.
+map_components() {
+  awk '
+    function component(file) {
+      if (file ~ /libhivecal\.a\(/) { sub(/.*\(/, "", file); sub(/\.obj\)$/, "", file); return "lib: " file }
+      if (file ~ /hivecal_baremetal\.dir/) { sub(/.*\/src\//, "", file); sub(/\.obj$/, "", file); return "port/baremetal: " file }
+      if (file ~ /tests\/firmware/) { sub(/.*\.dir\//, "", file); sub(/\.obj$/, "", file); return "firmware: " file }
+      if (file ~ /libstdc\+\+|libsupc\+\+/) return "toolchain: libstdc++ (nano)"
+      if (file ~ /libm\.a/) return "toolchain: newlib libm"
+      if (file ~ /libc_nano\.a|libc\.a/) return "toolchain: newlib libc (nano)"
+      if (file ~ /libgcc\.a/) return "toolchain: libgcc"
+      if (file == "padding") return "alignment padding"
+      if (file == "stack") return "stack + 32-byte MPU guard (linker script)"
+      return "other: " file
+    }
+    function kind(section) {
+      if (section == ".data") return "data"
+      if (section == ".bss" || section == ".stack") return "bss"
+      return "text"
+    }
+    function add(file, size) {
+      if (output == "" || size == 0) return
+      c = component(file)
+      bytes[c, kind(output)] += size
+      seen[c] = 1
+    }
+    /^Linker script and memory map/ { in_map = 1; next }
+    /^Cross Reference Table/ { in_map = 0 }
+    !in_map { next }
+    # Output section header: ".name addr size" or ".name" then "addr size" on the next line.
+    /^\.[A-Za-z_.]+/ {
+      output = ($1 ~ /^\.(isr_vector|text|rodata|ARM\.extab|ARM\.exidx|preinit_array|init_array|data|bss|stack)$/) ? $1 : ""
+      next
+    }
+    $1 == "*fill*" && NF >= 3 { add(output == ".stack" ? "stack" : "padding", hex($3)); next }
+    # Input section: " .name addr size file" or " .name" then "addr size file".
+    /^ [.*A-Za-z_]/ && $1 !~ /^\*/ {
+      if (NF >= 4 && $2 ~ /^0x/) { add($4, hex($3)); next }
+      if (NF == 1) { pending = 1; next }
+      next
+    }
+    pending && /^ +0x[0-9a-f]+ +0x[0-9a-f]+ +[^ ]/ { add($3, hex($2)); pending = 0; next }
+    { pending = 0 }
+    function hex(s,   v, i, c) {
+      v = 0; s = tolower(s); sub(/^0x/, "", s)
+      for (i = 1; i <= length(s); i++) { c = index("0123456789abcdef", substr(s, i, 1)) - 1; v = v * 16 + c }
+      return v
+    }
+    END {
+      for (c in seen) printf "%s\t%d\t%d\t%d\n", c, bytes[c, "text"], bytes[c, "data"], bytes[c, "bss"]
+    }' "$1"
+}
+
+component_table() {
+  local map=${1%.elf}.map
+  [ -f "$map" ] || { echo "(no link map $map)"; return; }
+  echo "| component | text+rodata (flash) | data (flash + RAM) | bss (RAM) |"
+  echo "|---|---:|---:|---:|"
+  map_components "$map" | sort | awk -F'\t' '
+    { printf "| %s | %d | %d | %d |\n", $1, $2, $3, $4; t += $2; d += $3; b += $4 }
+    END { printf "| **total** | **%d** | **%d** | **%d** |\n", t, d, b }'
+}
+
+archive_table() {
+  echo "| lib object (before --gc-sections) | text | data | bss |"
+  echo "|---|---:|---:|---:|"
+  arm-none-eabi-size "$build/lib/libhivecal.a" | awk 'NR > 1 {
+      name = $6; sub(/\.obj.*/, "", name); sub(/.*\//, "", name)
+      printf "| %s | %d | %d | %d |\n", name, $1, $2, $3; t += $1; d += $2; b += $3 }
+    END { printf "| **libhivecal.a** | **%d** | **%d** | **%d** |\n", t, d, b }'
+}
+
+# --- stack ------------------------------------------------------------------------------
+
+su_files() { find "$build/lib" "$build/port" "$build/tests/firmware" -name '*.su' 2>/dev/null; }
+
+biggest_frames() {
+  echo "| frame [bytes] | kind | function |"
+  echo "|---:|---|---|"
+  su_files | xargs cat | awk -F'\t' '{ n = $1; sub(/^[^:]*:[0-9]+:[0-9]+:/, "", n); print $2 "\t" $3 "\t" n }' |
+    sort -t$'\t' -k1,1nr | awk -F'\t' '!seen[$3]++' | head -12 |
+    awk -F'\t' '{ gsub(/\|/, "\\|", $3); printf "| %d | %s | `%s` |\n", $1, $2, $3 }'
+}
+
+# Static stack analysis over GCC's -fcallgraph-info=su call graphs (.ci): a function's worst
+# depth is its own frame plus its deepest callee. Library functions without .ci (newlib,
+# libgcc) count 0 and are listed; an indirect call counts as the worst of the functions whose
+# name matches `indirect` (the FW_TEST bodies for the test image).
+CALLGRAPH_AWK='
+  /^node:/ {
+    split($0, f, "\"")
+    title = f[2]; label = f[4]
+    if (match(label, /[0-9]+ bytes/)) {
+      s = substr(label, RSTART, RLENGTH) + 0
+      if (!(title in size) || s > size[title]) size[title] = s
+      if (label ~ /dynamic/) dynamic[title] = 1
+    }
+    next
+  }
+  /^edge:/ {
+    split($0, f, "\"")
+    # Complete-object constructors/destructors (C1/D1) are emitted as aliases of C2/D2.
+    sub(/C1E/, "C2E", f[4]); sub(/D1Ev/, "D2Ev", f[4])
+    key = f[2] SUBSEP f[4]
+    if (!(key in have)) { have[key] = 1; edges[f[2]] = edges[f[2]] " " f[4] }
+    next
+  }
+  function worst(node,   list, k, i, v, best, child) {
+    if (node in memo) return memo[node]
+    if (node in active) { recursive = recursive " " node; return 0 }
+    active[node] = 1
+    best = 0; child = ""
+    k = split(edges[node], list, " ")
+    for (i = 1; i <= k; i++) {
+      if (list[i] == "__indirect_call" && indirect != "") {
+        v = worst_indirect(); if (v > best) { best = v; child = best_indirect }
+        continue
+      }
+      v = worst(list[i]); if (v > best) { best = v; child = list[i] }
+    }
+    delete active[node]
+    if (!(node in size) && node != "__indirect_call") unaccounted[node] = 1
+    next_on_path[node] = child
+    memo[node] = size[node] + best
+    return memo[node]
+  }
+  function worst_indirect(   t, v, best) {
+    if (indirect_done) return indirect_value
+    best = 0
+    for (t in size) if (t ~ indirect) { v = worst(t); if (v > best) { best = v; best_indirect = t } }
+    indirect_done = 1; indirect_value = best
+    return best
+  }
+  function display(node) { sub(/.*:/, "", node); return node }  # local functions: "file:symbol"
+  function notes(   u, list, d, dl) {
+    list = ""; for (u in unaccounted) list = list " `" u "`"
+    if (list != "") printf "\nLibrary functions reached without stack data (counted 0):%s\n", list
+    dl = ""; for (d in dynamic) dl = dl " `" display(d) "`"
+    if (dl != "") printf "\nFunctions with dynamic frames:%s\n", dl
+    if (recursive != "") printf "\nRecursion found at:%s\n", recursive
+  }
+'
+
+# Worst path from `root` in the objects given, as a table.
+worst_path() {
+  local root=$1 indirect_regex=$2
+  shift 2
+  cat "$@" | awk -v root="$root" -v indirect="$indirect_regex" "$CALLGRAPH_AWK"'
+    END {
+      printf "static worst path from `%s`: **%d bytes**\n\n", root, worst(root)
+      printf "| frame [bytes] | function |\n|---:|---|\n"
+      for (node = root; node != ""; node = next_on_path[node])
+        printf "| %d | `%s`%s |\n", size[node], display(node), (node in size) ? "" : " (library, not analysed)"
+      notes()
+    }' | c++filt
+}
+
+# Worst stack depth of every public lib function (what a caller must budget for it).
+lib_entry_stack() {
+  cat "$@" | awk "$CALLGRAPH_AWK"'
+    END {
+      for (t in size) if (t ~ /^_ZN?K?7hivecal/) printf "%d\t%d\t%s\n", worst(t), size[t], t
+    }' | sort -t$'\t' -k1,1nr | head -12 | c++filt |
+    awk -F'\t' 'BEGIN { print "| worst depth [bytes] | own frame | function |"; print "|---:|---:|---|" }
+                { printf "| %d | %d | `%s` |\n", $1, $2, $3 }'
+}
+
+# --- instructions -----------------------------------------------------------------------
+
+plugin=$build/libinsncount.so
+build_plugin() {
+  [ -f "$plugin_src" ] || { echo "footprint: plugin source $plugin_src missing (set HIVECAL_INSN_PLUGIN_SRC)" >&2; exit 1; }
+  if [ ! -f "$plugin" ] || [ "$plugin_src" -nt "$plugin" ]; then
+    gcc -shared -fPIC -O2 "$plugin_src" -o "$plugin"
+  fi
+}
+
+# Executed guest instructions of one run: "<instructions> <stack high-water bytes>".
+count_run() {
+  local elf=$1
+  shift
+  local out
+  out=$(HIVECAL_QEMU_EXTRA="-plugin $plugin -d plugin" "$runner" "$machine" "$elf" "$@" 2>&1)
+  local insns stack
+  insns=$(sed -n 's/^insns: //p' <<<"$out" | tail -1)
+  stack=$(sed -n 's/.*stack high-water:\{0,1\} \([0-9]*\) of.*/\1/p' <<<"$out" | tail -1)
+  echo "${insns:-0} ${stack:-0}"
+}
+
+instruction_table() {
+  read -r base base_stack < <(count_run "$probe" fill 1)
+  echo "| workload (core probe, 512 samples) | instructions per call | per sample (per sincos) | stack high-water [bytes] |"
+  echo "|---|---:|---:|---:|"
+  printf '| startup + fill 512 samples (baseline) | %d | %d | %d |\n' "$base" $((base / 512)) "$base_stack"
+  local w n label total stack per
+  for w in sincos:3072:"math::sincos x 3072 (6 per sample)" fk:512:"fk_tool_point x 512" jacobian:512:"tool_point_jacobian x 512" \
+           cost:512:"evaluate_cost mean_abs_3d, refit, 512 samples" \
+           cost_358:358:"evaluate_cost mean_abs_3d, refit, 358 training samples" \
+           cost_fixed:512:"evaluate_cost sum_squares, fixed base, 512 samples" \
+           metrics:512:"accuracy_report (train/test/overall)"; do
+    IFS=: read -r name n label <<<"$w"
+    read -r total stack < <(count_run "$probe" "$name" "$repeats")
+    per=$(((total - base) / repeats))
+    printf '| %s | %d | %d | %d |\n' "$label" "$per" $((per / n)) "$stack"
+    [ "$name" = cost_358 ] && echo "$per" >"$build/footprint-cost358.txt"
+  done
+}
+
+# --- report -----------------------------------------------------------------------------
+
+ci_files_for() {  # objects of lib, port and the given firmware directory
+  find "$build/lib" "$build/port" "$build/tests/firmware/CMakeFiles/$1.dir" -name '*.ci' 2>/dev/null
+}
+
+build_plugin
+read -r probe_text probe_data probe_bss < <(elf_sizes "$probe")
+probe_stack=$(arm-none-eabi-size -A "$probe" | awk '$1 == ".stack" { print $2 }')
+dataset_bytes=$(arm-none-eabi-nm -S --size-sort "$probe" | awk '$4 ~ /g_dataset/ { print strtonum_hex($2) } function strtonum_hex(s, v, i) { v = 0; s = tolower(s); for (i = 1; i <= length(s); i++) v = v * 16 + index("0123456789abcdef", substr(s, i, 1)) - 1; return v }')
+read -r tests_insns tests_stack < <(count_run "$tests_elf")
+
+cat <<EOF
+### Images (\`arm-none-eabi-size\`)
+
+$(image_table)
+
+### Per component, core probe image (from its link map, after --gc-sections)
+
+$(component_table "$probe")
+
+### Per component, firmware test image
+
+$(component_table "$tests_elf")
+
+### lib archive members (compiled, before the linker drops unused sections)
+
+$(archive_table)
+
+### Stack
+
+Biggest frames (\`-fstack-usage\`, lib + port + firmware):
+
+$(biggest_frames)
+
+Public lib functions by worst static stack depth (own frame + deepest callee chain):
+
+$(lib_entry_stack $(find "$build/lib" -name '*.ci'))
+
+Core probe, $(worst_path hivecal_reset_continue "" $(ci_files_for hivecal_firmware_core))
+
+Firmware tests, $(worst_path hivecal_reset_continue "fw_test_" $(ci_files_for hivecal_firmware_tests))
+
+Measured high-water mark (paint): core probe (all workloads) $(count_run "$probe" all 1 | awk '{ print $2 }') bytes;
+firmware tests $tests_stack bytes.
+
+### Executed instructions (QEMU plugin, $machine, ${repeats} repeats per workload)
+
+$(instruction_table)
+
+Firmware test image, whole run: $tests_insns instructions.
+
+### Budgets
+
+- Dataset<512>: $dataset_bytes bytes; core probe static RAM $((probe_data + probe_bss)) bytes
+  (including a $probe_stack-byte stack + guard) of 65536: $((65536 - probe_data - probe_bss)) bytes left.
+- Core probe flash $((probe_text + probe_data)) bytes of 131072: $((131072 - probe_text - probe_data)) bytes left.
+- One cost evaluation on 358 training samples: $(cat "$build/footprint-cost358.txt") instructions;
+  2e9 instructions allow $((2000000000 / $(cat "$build/footprint-cost358.txt"))) such evaluations
+  (ABC 150 x 300 = 45000 evaluations would need $((45000 * $(cat "$build/footprint-cost358.txt"))) instructions).
+EOF

@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# Command-line behaviour of the hivecal binary: bad inputs give a clear message, a
+# non-zero documented exit code, no crash and no output file; good inputs work end to end.
+#   cli_test.sh <hivecal binary> [emulator words...]
+set -u
+bin=$1
+shift
+run=("$@" "$bin")
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0
+failed=0
+
+# expect CODE SUBSTRING -- ARGS...: runs hivecal ARGS, checks the exit code and stderr.
+expect() {
+  local code=$1 pattern=$2
+  shift 3
+  local err
+  err=$("${run[@]}" "$@" 2>&1 >/dev/null)
+  local got=$?
+  if [ "$got" -eq "$code" ] && grep -qF -- "$pattern" <<<"$err"; then
+    passed=$((passed + 1))
+  else
+    failed=$((failed + 1))
+    echo "FAIL: hivecal $* -> exit $got (want $code), stderr: $err (want: $pattern)"
+  fi
+}
+
+# no_file PATH: the output must not exist after a failed run.
+no_file() {
+  if [ -e "$1" ] || compgen -G "$1.tmp.*" >/dev/null; then
+    failed=$((failed + 1))
+    echo "FAIL: partial output left at $1"
+  else
+    passed=$((passed + 1))
+  fi
+}
+
+printf 'q1,q2,q3,q4,q5,q6\n0,-1.5707963267948966,1.5707963267948966,-1.5707963267948966,-1.5707963267948966,0\n' >"$work/joints.csv"
+cat >"$work/result.json" <<'JSON'
+{
+  "format": "robot-calibration/1",
+  "robot": "ur5",
+  "convention": "standard-dh",
+  "dh": [
+    {"theta_offset": 0.0, "d": 0.089159, "a": 0.0, "alpha": 1.5707963267948966},
+    {"theta_offset": 0.0, "d": 0.0, "a": -0.425, "alpha": 0.0},
+    {"theta_offset": 0.0, "d": 0.0, "a": -0.39225, "alpha": 0.0},
+    {"theta_offset": 0.0, "d": 0.10915, "a": 0.0, "alpha": 1.5707963267948966},
+    {"theta_offset": 0.0, "d": 0.09465, "a": 0.0, "alpha": -1.5707963267948966},
+    {"theta_offset": 0.0, "d": 0.0823, "a": 0.0, "alpha": 0.0}
+  ],
+  "tool": [0.0, 0.0, 0.0],
+  "base_to_tracker": [[1, 0, 0, 1], [0, 1, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]]
+}
+JSON
+
+# --- usage errors (exit 2)
+expect 2 "unknown command 'frobnicate'" -- frobnicate
+expect 2 "unknown option '--bogus'" -- predict --bogus
+expect 2 "--calibration and --joints are required" -- predict --joints "$work/joints.csv"
+expect 2 "needs a value" -- predict --calibration
+expect 2 "--frame must be 'tracker' or 'base'" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --frame world
+# --- bad input files (exit 3), and no output left behind
+expect 3 "cannot open" -- predict --calibration "$work/missing.json" --joints "$work/joints.csv" --out "$work/p1.csv"
+no_file "$work/p1.csv"
+: >"$work/empty.json"
+expect 3 "empty file" -- predict --calibration "$work/empty.json" --joints "$work/joints.csv" --out "$work/p2.csv"
+no_file "$work/p2.csv"
+sed 's/"ur5"/"ur7"/' "$work/result.json" >"$work/ur7.json"
+expect 3 "unknown robot model 'ur7'" -- predict --calibration "$work/ur7.json" --joints "$work/joints.csv" --out "$work/p3.csv"
+no_file "$work/p3.csv"
+head -c 200 "$work/result.json" >"$work/cut.json"
+expect 3 "malformed JSON" -- predict --calibration "$work/cut.json" --joints "$work/joints.csv" --out "$work/p4.csv"
+printf 'q1,q2,q3\n1,2,3\n' >"$work/badjoints.csv"
+expect 3 "unexpected header" -- predict --calibration "$work/result.json" --joints "$work/badjoints.csv" --out "$work/p5.csv"
+no_file "$work/p5.csv"
+printf 'q1,q2,q3,q4,q5,q6\n0,0,inf,0,0,0\n' >"$work/infjoints.csv"
+expect 3 "NaN or Inf" -- predict --calibration "$work/result.json" --joints "$work/infjoints.csv" --out "$work/p6.csv"
+# --- output errors (exit 4)
+expect 4 "cannot create a temporary" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/no/dir/p.csv"
+
+# --- a good prediction: UR5 at the zero-like pose through a pure translation
+if "${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/p.csv" &&
+   [ "$(head -1 "$work/p.csv")" = "x,y,z" ] && [ "$(wc -l <"$work/p.csv")" -eq 2 ]; then
+  passed=$((passed + 1))
+else
+  failed=$((failed + 1))
+  echo "FAIL: predict on good input"
+fi
+# --- every command has --help
+for cmd in predict demo; do
+  if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then passed=$((passed + 1)); else
+    failed=$((failed + 1)); echo "FAIL: $cmd --help"; fi
+done
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]

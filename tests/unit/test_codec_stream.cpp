@@ -1,0 +1,276 @@
+// Wire codec on whole streams: chunking invariance, round trips through a noisy channel
+// (bit flips, dropped and inserted bytes, garbage), the corruption sweep, the golden digest.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <vector>
+
+#include "alloc_trap.hpp"
+#include "codec_stream.hpp"
+#include "codec_support.hpp"
+#include "hivecal/codec.hpp"
+
+namespace hivecal {
+namespace {
+
+using test::Corrupted;
+using test::SentStream;
+using test::StreamShape;
+
+/// Feeds `stream` in chunks of 1..max_chunk bytes (sizes from `chunk_seed`); max_chunk 0 = all at once.
+void feed_chunked(const std::vector<std::uint8_t>& stream, std::size_t max_chunk, std::uint64_t chunk_seed,
+                  StreamDecoder* decoder, FrameHandler& handler) {
+  Random random(chunk_seed);
+  std::size_t at = 0;
+  while (at < stream.size()) {
+    std::size_t chunk = max_chunk == 0 ? stream.size() : 1 + static_cast<std::size_t>(random.below(max_chunk));
+    if (chunk > stream.size() - at) chunk = stream.size() - at;
+    EXPECT_NO_HEAP(decoder->feed(stream.data() + at, chunk, handler));
+    at += chunk;
+  }
+}
+
+/// Checks every delivered record against what was sent (looked up by sequence number) and
+/// remembers which sent packets arrived, in arrival order.
+class CheckingHandler : public test::DigestHandler {
+ public:
+  explicit CheckingHandler(const SentStream& sent) : sent_(sent) {
+    // Reserved up front: the callbacks run under the allocation trap.
+    accepted[0].reserve(sent.joint_states.size());
+    accepted[1].reserve(sent.tracker_points.size());
+    accepted[2].reserve(sent.device_infos.size());
+  }
+  void on_joint_state(const JointStateRecord& r) override {
+    DigestHandler::on_joint_state(r);
+    check(0, r, sent_.joint_states);
+  }
+  void on_tracker_point(const TrackerPointRecord& r) override {
+    DigestHandler::on_tracker_point(r);
+    check(1, r, sent_.tracker_points);
+  }
+  void on_device_info(const DeviceInfoRecord& r) override {
+    DigestHandler::on_device_info(r);
+    check(2, r, sent_.device_infos);
+  }
+
+  std::vector<std::size_t> accepted[3];  ///< per type: indices of sent records, arrival order
+  std::uint64_t per_type[3] = {};        ///< records delivered per type
+  std::uint64_t false_accepts = 0;       ///< delivered records that were never sent
+
+ private:
+  template <typename Record>
+  void check(int type, const Record& record, const std::vector<Record>& sent) {
+    ++per_type[type];
+    const std::size_t index = static_cast<std::uint16_t>(record.sequence - sent_.first_sequence[type]);
+    const bool known = index < sent.size() && test::same_bits(sent[index], record);
+    if (!known || accepted[type].size() == accepted[type].capacity()) {
+      ++false_accepts;
+      return;
+    }
+    accepted[type].push_back(index);
+  }
+  const SentStream& sent_;
+};
+
+/// Counter identities that hold for any input.
+void expect_consistent(const DecoderStats& s, std::size_t fed_bytes, const CheckingHandler& handler) {
+  EXPECT_EQ(s.bytes_total, fed_bytes);
+  EXPECT_EQ(s.bytes_accepted + s.bytes_idle + s.bytes_discarded + s.bytes_pending, s.bytes_total);
+  EXPECT_LE(s.bytes_pending, kMaxFrameBytes - 1);
+  EXPECT_EQ(s.frames_ok, handler.count);
+  EXPECT_EQ(s.joint_states, handler.per_type[0]);
+  EXPECT_EQ(s.tracker_points, handler.per_type[1]);
+  EXPECT_EQ(s.device_infos, handler.per_type[2]);
+  EXPECT_EQ(s.frames_ok, s.joint_states + s.tracker_points + s.device_infos);
+  EXPECT_LE(s.leading_fragments, 1u);
+}
+
+/// Gaps, losses and restarts implied by the arrival order of sent packets.
+struct ExpectedSequence {
+  std::uint64_t gaps = 0;
+  std::uint64_t lost = 0;
+  std::uint64_t resets = 0;
+};
+ExpectedSequence expected_sequence(const CheckingHandler& handler) {
+  ExpectedSequence e;
+  for (const auto& order : handler.accepted) {
+    for (std::size_t k = 1; k < order.size(); ++k) {
+      if (order[k] <= order[k - 1]) {
+        ++e.resets;
+      } else if (order[k] > order[k - 1] + 1) {
+        ++e.gaps;
+        e.lost += order[k] - order[k - 1] - 1;
+      }
+    }
+  }
+  return e;
+}
+
+/// Outcome of one stream through the channel.
+struct ChannelResult {
+  DecoderStats stats;
+  std::size_t sent_valid = 0;
+  std::size_t errors = 0;
+  std::uint64_t false_accepts = 0;
+  std::size_t untouched_missed = 0;  ///< undamaged frames the decoder did not deliver
+  std::size_t garbage_fragments = 0; ///< deliberate garbage pieces in the sent stream
+};
+
+ChannelResult run_channel(std::uint64_t seed, std::size_t frames, double byte_error_rate, std::size_t max_chunk) {
+  StreamShape shape;
+  shape.frames = frames;
+  static SentStream sent;  // static: large streams stay off the test's stack
+  test::make_stream(seed, shape, &sent);
+  EXPECT_EQ(sent.library_allocations, 0u);
+  Random channel(seed ^ 0x5EED);
+  static Corrupted received;
+  test::corrupt(sent, byte_error_rate, &channel, &received);
+
+  StreamDecoder decoder;
+  CheckingHandler handler(sent);
+  feed_chunked(received.bytes, max_chunk, seed + 1, &decoder, handler);
+  const DecoderStats& s = decoder.stats();
+  expect_consistent(s, received.bytes.size(), handler);
+
+  const ExpectedSequence e = expected_sequence(handler);
+  EXPECT_EQ(s.sequence_gaps, e.gaps);
+  EXPECT_EQ(s.packets_lost, e.lost);
+  EXPECT_EQ(s.sequence_resets, e.resets);
+
+  ChannelResult result;
+  result.stats = s;
+  result.sent_valid = sent.valid_frames();
+  result.errors = received.errors;
+  result.garbage_fragments = sent.garbage_fragments;
+  result.false_accepts = handler.false_accepts;
+  std::vector<char> arrived[3] = {std::vector<char>(sent.joint_states.size()),
+                                  std::vector<char>(sent.tracker_points.size()),
+                                  std::vector<char>(sent.device_infos.size())};
+  for (int t = 0; t < 3; ++t)
+    for (std::size_t index : handler.accepted[t]) arrived[t][index] = 1;
+  std::size_t untouched_unknown = 0;
+  for (std::size_t f = 0; f < sent.frames.size(); ++f) {
+    if (received.frame_touched[f]) continue;
+    const test::SentFrame& frame = sent.frames[f];
+    if (frame.type == test::kUnknownTypeMarker) {
+      ++untouched_unknown;
+    } else if (!arrived[frame.type - 1][frame.index]) {
+      ++result.untouched_missed;
+    }
+  }
+  EXPECT_GE(s.unknown_types, untouched_unknown);
+  EXPECT_LE(s.unknown_types, sent.unknown_frames);
+  if (byte_error_rate == 0.0) {
+    EXPECT_EQ(s.frames_ok, sent.valid_frames());
+    EXPECT_EQ(s.unknown_types, sent.unknown_frames);
+    EXPECT_EQ(s.frames_rejected() - s.unknown_types, sent.garbage_fragments);
+    EXPECT_EQ(s.sequence_gaps + s.packets_lost + s.sequence_resets + s.leading_fragments, 0u);
+  }
+  return result;
+}
+
+TEST(CodecStream, ChunkingDoesNotChangeAnything) {
+  StreamShape shape;
+  shape.frames = 1500;
+  static SentStream sent;
+  test::make_stream(77, shape, &sent);
+  Random channel(78);
+  static Corrupted received;
+  test::corrupt(sent, 1e-3, &channel, &received);
+  received.bytes.erase(received.bytes.begin(), received.bytes.begin() + 9);  // start mid-frame
+
+  StreamDecoder whole;
+  test::DigestHandler reference;
+  EXPECT_NO_HEAP(whole.feed(received.bytes.data(), received.bytes.size(), reference));
+  EXPECT_EQ(whole.stats().leading_fragments, 1u);
+  EXPECT_GT(whole.stats().frames_ok, 1000u);
+  EXPECT_GT(whole.stats().crc_failures, 0u);
+
+  for (std::size_t max_chunk : {1, 2, 3, 16, 137, 138, 139, 1000, 100000}) {
+    for (std::uint64_t chunk_seed : {1, 2}) {
+      StreamDecoder decoder;
+      test::DigestHandler handler;
+      feed_chunked(received.bytes, max_chunk, chunk_seed, &decoder, handler);
+      EXPECT_EQ(handler.count, reference.count) << max_chunk;
+      EXPECT_EQ(handler.digest.value(), reference.digest.value()) << max_chunk;
+      EXPECT_TRUE(test::same_stats(decoder.stats(), whole.stats())) << max_chunk;
+    }
+  }
+}
+
+TEST(CodecStream, CleanStreamRoundTripsExactly) {
+  for (std::uint64_t seed : {1, 2, 3}) {
+    const ChannelResult r = run_channel(seed, 3000, 0.0, 300);
+    EXPECT_EQ(r.false_accepts, 0u);
+    EXPECT_EQ(r.untouched_missed, 0u);
+    EXPECT_EQ(r.stats.frames_ok, r.sent_valid);
+  }
+}
+
+TEST(CodecStream, NoisyChannelRoundTripProperty) {
+  for (std::uint64_t seed = 10; seed < 16; ++seed) {
+    const double rate = seed % 2 == 0 ? 1e-3 : 5e-3;
+    const ChannelResult r = run_channel(seed, 2000, rate, static_cast<std::size_t>(1 + seed * 40));
+    EXPECT_GT(r.errors, 0u);
+    EXPECT_EQ(r.false_accepts, 0u) << seed;
+    EXPECT_EQ(r.untouched_missed, 0u) << seed;
+    EXPECT_LT(r.stats.frames_ok, r.sent_valid) << seed;
+    EXPECT_GT(r.stats.crc_failures + r.stats.cobs_errors + r.stats.bad_lengths, 0u) << seed;
+  }
+}
+
+TEST(CodecStream, CorruptionSweepHasNoFalseAccepts) {
+  constexpr std::size_t kFrames = 20000;
+  std::printf("  byte error rate | errors | frames sent | accepted | lost (gaps)    | garbage | crc  | cobs | length | "
+              "oversized | false accepts\n");
+  for (double rate : {1e-5, 1e-4, 1e-3, 1e-2}) {
+    const ChannelResult r = run_channel(2026, kFrames, rate, 4096);
+    const double sent = static_cast<double>(r.sent_valid);
+    std::printf("  %15.0e | %6zu | %11zu | %7.3f%% | %7.3f%% (%4llu) | %7zu | %4llu | %4llu | %6llu | %9llu | %llu\n",
+                rate, r.errors, r.sent_valid, 100.0 * static_cast<double>(r.stats.frames_ok) / sent,
+                100.0 * static_cast<double>(r.stats.packets_lost) / sent,
+                static_cast<unsigned long long>(r.stats.sequence_gaps), r.garbage_fragments,
+                static_cast<unsigned long long>(r.stats.crc_failures),
+                static_cast<unsigned long long>(r.stats.cobs_errors),
+                static_cast<unsigned long long>(r.stats.bad_lengths),
+                static_cast<unsigned long long>(r.stats.oversized_frames),
+                static_cast<unsigned long long>(r.false_accepts));
+    EXPECT_EQ(r.false_accepts, 0u) << rate;
+    EXPECT_EQ(r.untouched_missed, 0u) << rate;
+    EXPECT_EQ(r.stats.bad_versions + r.stats.bad_payloads, 0u) << rate;  // only intact packets reach these checks
+  }
+}
+
+// Golden digest of the codec: encoded bytes of a seeded stream through a seeded channel,
+// every decoded record's bits and every counter. Same value on every target and -O level.
+constexpr std::uint64_t kCodecGoldenDigest = 0x8d67fab6dd738ebdULL;
+
+std::uint64_t codec_digest() {
+  StreamShape shape;
+  shape.frames = 4000;
+  static SentStream sent;
+  test::make_stream(20261122, shape, &sent);
+  EXPECT_EQ(sent.library_allocations, 0u);
+  Random channel(20261123);
+  static Corrupted received;
+  test::corrupt(sent, 2e-3, &channel, &received);
+  Digest digest;
+  digest.add_bytes(sent.bytes.data(), sent.bytes.size());
+  digest.add_bytes(received.bytes.data(), received.bytes.size());
+  StreamDecoder decoder;
+  test::DigestHandler handler;
+  feed_chunked(received.bytes, 200, 20261124, &decoder, handler);
+  digest.add_u64(handler.digest.value());
+  digest.add_u64(handler.count);
+  test::add_stats(&digest, decoder.stats());
+  return digest.value();
+}
+
+TEST(CodecGolden, DigestIsTheSameOnEveryTarget) {
+  const std::uint64_t digest = codec_digest();
+  std::printf("codec digest: 0x%016llx\n", static_cast<unsigned long long>(digest));
+  EXPECT_EQ(digest, kCodecGoldenDigest);
+}
+
+}  // namespace
+}  // namespace hivecal

@@ -1,0 +1,107 @@
+// The HTML report must be well formed, self-contained, and show what it claims.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "report.hpp"
+#include "svg.hpp"
+
+namespace hivecal {
+namespace {
+
+/// Checks tag balance of an HTML document with inline SVG; returns "" or the first problem.
+std::string check_well_formed(const std::string& html) {
+  const std::vector<std::string> void_elements = {"meta", "br", "img", "input", "link", "hr", "!DOCTYPE"};
+  std::vector<std::string> open;
+  std::size_t pos = 0;
+  while ((pos = html.find('<', pos)) != std::string::npos) {
+    const std::size_t end = html.find('>', pos);
+    if (end == std::string::npos) return "unterminated tag at " + std::to_string(pos);
+    std::string tag = html.substr(pos + 1, end - pos - 1);
+    pos = end + 1;
+    const bool closing = !tag.empty() && tag[0] == '/';
+    const bool self_closing = !tag.empty() && tag.back() == '/';
+    std::string name = tag.substr(closing ? 1 : 0);
+    name = name.substr(0, name.find_first_of(" \t\n/"));
+    // Attribute quotes must balance.
+    std::size_t quotes = 0;
+    for (char c : tag) quotes += c == '\'' ? 1 : 0;
+    if (quotes % 2 != 0) return "unbalanced quotes in <" + tag + ">";
+    if (self_closing) continue;
+    bool is_void = false;
+    for (const std::string& v : void_elements) is_void = is_void || v == name;
+    if (is_void) continue;
+    if (!closing) {
+      open.push_back(name);
+    } else {
+      if (open.empty() || open.back() != name) return "</" + name + "> closes <" + (open.empty() ? "" : open.back()) + ">";
+      open.pop_back();
+    }
+  }
+  return open.empty() ? "" : "unclosed <" + open.back() + ">";
+}
+
+report::ReportData example() {
+  report::ReportData data;
+  data.title = "Calibration <UR5> & tracker";
+  data.info_lines = {"samples kept: 38", "clock offset: 1.234 s"};
+  report::MethodRow before;
+  before.method = "uncalibrated";
+  before.test.mae_m[3] = 75.4e-6;
+  report::MethodRow abc;
+  abc.method = "ABC";
+  abc.parameters = "paper-6";
+  abc.test.mae_m[3] = 60.1e-6;
+  abc.seconds = 0.05;
+  data.methods = {before, abc};
+  data.uncalibrated.test.mae_m[0] = 40e-6;
+  data.calibrated.test.mae_m[0] = 30e-6;
+  data.convergence = {{"ABC", {1e-4, 8e-5, 7e-5, 6.01e-5}}, {"GSA", {1e-4, 9e-5, 6.5e-5}}};
+  for (int i = 0; i < 12; ++i) {
+    const Vec3 p(0.5 + 0.01 * i, -0.2 + 0.02 * i, 0.3);
+    data.test_measured_m.push_back(p);
+    data.test_uncalibrated_m.push_back(p + Vec3(7e-5, 0, 0));
+    data.test_calibrated_m.push_back(p + Vec3(0, 6e-5, 0));
+  }
+  data.parameter_lines = {"d1 = 0.089159 m +- 1.2e-6"};
+  return data;
+}
+
+TEST(Report, HtmlIsWellFormedAndSelfContained) {
+  const std::string html = report::render_html(example());
+  EXPECT_EQ(check_well_formed(html), "");
+  EXPECT_EQ(html.find("<script"), std::string::npos);
+  EXPECT_EQ(html.find("href="), std::string::npos);
+  EXPECT_EQ(html.find("src="), std::string::npos);
+  EXPECT_NE(html.find("Calibration &lt;UR5&gt; &amp; tracker"), std::string::npos);
+  std::size_t svgs = 0;
+  for (std::size_t p = 0; (p = html.find("<svg", p)) != std::string::npos; ++p) ++svgs;
+  EXPECT_EQ(svgs, 1u + 3u + 2u + 1u);  // convergence, 3 axes, x-y and x-z, histogram
+  EXPECT_NE(html.find("-20.3 %"), std::string::npos);  // 75.4 -> 60.1 um
+}
+
+TEST(Report, CheckerCatchesBrokenMarkup) {
+  EXPECT_NE(check_well_formed("<div><span></div>"), "");
+  EXPECT_NE(check_well_formed("<div a='1>x</div>"), "");
+  EXPECT_NE(check_well_formed("<svg>"), "");
+}
+
+TEST(Report, TextTablesShowBothTables) {
+  const std::string text = report::format_tables_text(example());
+  EXPECT_NE(text.find("Table 1"), std::string::npos);
+  EXPECT_NE(text.find("Table 2"), std::string::npos);
+  EXPECT_NE(text.find("75.4"), std::string::npos);
+  EXPECT_NE(text.find("60.1"), std::string::npos);
+}
+
+TEST(Report, EmptyAndDegenerateSeriesStillRender) {
+  report::ReportData data;
+  data.title = "empty";
+  data.convergence = {{"flat", {1e-5, 1e-5}}, {"none", {}}};
+  EXPECT_EQ(check_well_formed(report::render_html(data)), "");
+  EXPECT_EQ(check_well_formed(report::svg_histogram(report::ChartSpec{"h", "x", "y"}, {"a"}, {{}}, 10)), "");
+}
+
+}  // namespace
+}  // namespace hivecal
