@@ -18,7 +18,7 @@
 
 namespace hivecal {
 
-/// Why a tracker point did not become a sample (checked in this order).
+/// Why a tracker point did not become a sample (docs/streams.md gives the order of the checks).
 enum class DropReason : std::uint8_t {
   beam_lost = 0,          ///< status 1
   unstable,               ///< status 2
