@@ -17,6 +17,7 @@
 #include "sim_model.hpp"
 #include "simulate_cmd.hpp"
 #include "stream_commands.hpp"
+#include "ur_calibration_conf.hpp"
 
 namespace hivecal {
 namespace {
@@ -76,6 +77,33 @@ TEST(StreamCommands, SimulateWritesReadableOutputsAndExtractPairsThem) {
   EXPECT_GT(samples.size(), 150u);
   for (const char* name : {"robot.cap", "tracker.cap", "robot_joints.csv", "tracker.csv", "truth.json",
                            "truth_samples.csv", "samples.csv"})
+    std::remove((dir + "/" + name).c_str());
+  ::rmdir(dir.c_str());
+}
+
+TEST(StreamCommands, SimulateTakesTheTrueGeometryFromACalibrationConf) {
+  // A real UR5e factory calibration (shared test data) as the simulated robot's geometry.
+  const std::string conf = std::string(HIVECAL_TEST_DATA_DIR) + "/ur5e-pendant/calibration.conf";
+  const std::string dir = make_temp_dir();
+  ASSERT_FALSE(dir.empty());
+  ASSERT_EQ(run(sim::simulate_main, {"--out-dir", dir, "--robot-model", "ur5e", "--calibration-conf", conf,
+                                     "--waypoints", "3", "--duration-s", "20"}),
+            cli::kExitOk);
+  UrCalibrationDeltas deltas;
+  ASSERT_TRUE(textio::read_ur_calibration_conf(conf, &deltas).ok);
+  RobotModel expected;
+  ASSERT_EQ(apply_ur_deltas(nominal_model(RobotType::ur5e), deltas, &expected), Status::ok);
+  textio::CalibrationFile truth;
+  ASSERT_TRUE(textio::read_calibration_json(dir + "/truth.json", &truth).ok);
+  EXPECT_EQ(truth.robot, RobotType::ur5e);
+  for (int j = 0; j < kJointCount; ++j) {
+    EXPECT_DOUBLE_EQ(truth.model.joints[j].a_m, expected.joints[j].a_m);
+    EXPECT_DOUBLE_EQ(truth.model.joints[j].d_m, expected.joints[j].d_m);
+    EXPECT_DOUBLE_EQ(truth.model.joints[j].theta_offset_rad, expected.joints[j].theta_offset_rad);
+    EXPECT_DOUBLE_EQ(truth.model.joints[j].alpha_rad, expected.joints[j].alpha_rad);
+  }
+  for (const char* name : {"robot.cap", "tracker.cap", "robot_joints.csv", "tracker.csv", "truth.json",
+                           "truth_samples.csv"})
     std::remove((dir + "/" + name).c_str());
   ::rmdir(dir.c_str());
 }
