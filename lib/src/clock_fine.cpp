@@ -2,7 +2,6 @@
 //   tracker_chord(a, b) = gain_block * (s_robot(map(b)) - s_robot(map(a)))
 // scanned over lag x drift, then refined by Gauss-Newton with one free gain per block of
 // chords (eliminated in closed form), weighted by a fitted residual-variance model.
-#include <Eigen/Cholesky>
 #include <cmath>
 
 #include "clock_detail.hpp"
@@ -156,6 +155,15 @@ Normal accumulate(const ClockProfiles& profiles, const ClockSyncConfig& config, 
   return out;
 }
 
+/// Inverse of a symmetric 2x2 matrix in closed form (Eigen's decompositions pull in heap
+/// code paths on some targets); false unless positive definite.
+bool invert_spd(const Mat2& m, Mat2* inverse) {
+  const double det = m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0);
+  if (!(m(0, 0) > 0.0) || !(det > 0.0)) return false;
+  *inverse << m(1, 1) / det, -m(0, 1) / det, -m(1, 0) / det, m(0, 0) / det;
+  return true;
+}
+
 /// Mean squared residual with one best gain: the score of the lag x drift scan.
 double chord_cost(const ClockProfiles& profiles, const LagDrift& map) {
   double sdc = 0.0, scc = 0.0, sdd = 0.0, n = 0.0;
@@ -225,10 +233,9 @@ Status fit_lag_drift(const ClockProfiles& profiles, const ClockSyncConfig& confi
   while (iterations < config.max_iterations) {
     const NoiseModel noise = normal.noise_model();
     const double gain = normal.gain();
-    const Eigen::LDLT<Mat2> ldlt(normal.normal);
-    if (normal.chords < 3 || ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0))
-      return Status::clock_fit_failed;
-    const Vec2 step = ldlt.solve(normal.rhs);
+    Mat2 inverse;
+    if (normal.chords < 3 || !invert_spd(normal.normal, &inverse)) return Status::clock_fit_failed;
+    const Vec2 step = inverse * normal.rhs;
     if (!all_finite(step)) return Status::clock_fit_failed;
     map.lag_us += step(0) * kUsPerMs;
     map.drift += step(1) * kPpm;
@@ -236,10 +243,10 @@ Status fit_lag_drift(const ClockProfiles& profiles, const ClockSyncConfig& confi
     ++iterations;
     if (std::fabs(step(0)) < 1e-5 && std::fabs(step(1)) < 1e-4) break;  // 0.01 us, 1e-4 ppm
   }
-  const Eigen::LDLT<Mat2> ldlt(normal.normal);
+  Mat2 inverse;
   const double dof = normal.n - 2.0 - static_cast<double>(normal.gain_blocks);
-  if (normal.chords < 3 || ldlt.info() != Eigen::Success || !(dof > 0.0)) return Status::clock_fit_failed;
-  const Mat2 covariance = (normal.weighted_sse / dof) * ldlt.solve(Mat2::Identity());
+  if (normal.chords < 3 || !invert_spd(normal.normal, &inverse) || !(dof > 0.0)) return Status::clock_fit_failed;
+  const Mat2 covariance = (normal.weighted_sse / dof) * inverse;
   result->estimate = map;
   result->var_lag_us2 = covariance(0, 0) * kUsPerMs * kUsPerMs;
   result->var_drift = covariance(1, 1) * kPpm * kPpm;
