@@ -86,7 +86,6 @@ void SampleExtractorBase::reset(const ExtractionConfig& config, const ClockFit& 
   tracker_decided_ = 0;
   counts_ = ExtractionCounts();
   robot_started_ = false;
-  robot_evicted_ = false;
   tracker_started_ = false;
 }
 
@@ -118,7 +117,7 @@ Status SampleExtractorBase::push_robot(const JointStateRecord& record) {
     robot_first_us_ = t_us;
   }
   robot_latest_us_ = t_us;
-  if (robot_.push(ExtractorRobotEntry{t_us, q, fk_tool_point(config_.speed_model, q)})) robot_evicted_ = true;
+  robot_.push(ExtractorRobotEntry{t_us, q, fk_tool_point(config_.speed_model, q)});  // the oldest may go: see check_robot
   return drain(false);
 }
 

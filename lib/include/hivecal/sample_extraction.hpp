@@ -154,7 +154,6 @@ class SampleExtractorBase {
   double robot_first_us_ = 0.0;
   double robot_latest_us_ = 0.0;
   bool robot_started_ = false;
-  bool robot_evicted_ = false;
   double tracker_latest_us_ = 0.0;  // newest tracker timestamp of any status
   bool tracker_started_ = false;
 };
