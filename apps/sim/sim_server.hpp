@@ -1,0 +1,33 @@
+// Serves a simulated session live: the robot and tracker frames are written, in true-time
+// order, into the master sides of two pseudo-terminals, at real time, accelerated, or as
+// fast as the readers take them. A SerialPort on the slave paths reads them like real ports.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "hivecal/port/pty.hpp"
+#include "sim_model.hpp"
+
+namespace hivecal::sim {
+
+/// Pacing of a live session.
+struct ServeOptions {
+  double speed = 1.0;      ///< session seconds per wall-clock second; 0: no pacing
+};
+
+/// What was served.
+struct ServeStats {
+  std::uint64_t robot_bytes = 0;    ///< bytes written to the robot pty
+  std::uint64_t tracker_bytes = 0;  ///< bytes written to the tracker pty
+  std::uint64_t robot_frames = 0;   ///< frames (DEVICE_INFO included)
+  std::uint64_t tracker_frames = 0; ///< frames (DEVICE_INFO included)
+};
+
+/// Writes the whole session into the two ptys' masters (or until *stop is set). False
+/// with a message if a write fails (e.g. the pty was closed).
+bool serve_session(const Session& session, const port::PtyPair& robot, const port::PtyPair& tracker,
+                   const ServeOptions& options, const std::atomic<bool>* stop, ServeStats* stats, std::string* error);
+
+}  // namespace hivecal::sim

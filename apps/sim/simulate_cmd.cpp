@@ -1,0 +1,158 @@
+#include "simulate_cmd.hpp"
+
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "cli.hpp"
+#include "hivecal/port/byte_source.hpp"
+#include "hivecal/port/pty.hpp"
+#include "sim_model.hpp"
+#include "sim_outputs.hpp"
+#include "sim_server.hpp"
+#include "text_util.hpp"
+#include "ur_calibration_conf.hpp"
+
+namespace hivecal::sim {
+namespace {
+
+using cli::kExitBadInput;
+using cli::kExitFailure;
+using cli::kExitOk;
+using cli::kExitOutputError;
+using cli::kExitUsage;
+
+constexpr const char* kCommand = "simulate";
+constexpr double kTruthMarginS = 0.6;  // ideal samples: at least this far inside a stop
+
+std::atomic<bool> g_stop{false};
+void request_stop(int) { g_stop = true; }
+
+const std::vector<cli::OptionSpec>& option_specs() {
+  static const std::vector<cli::OptionSpec> specs = {
+      {"out-dir", "DIR", "where robot.cap, tracker.cap, the CSV logs and the truth go", "."},
+      {"robot-model", "NAME", "ur3, ur5, ur10 or ur5e", "ur5"},
+      {"seed", "N", "seed of every random choice", "1"},
+      {"waypoints", "N", "waypoints visited", "38"},
+      {"duration-s", "S", "session length [s]", "600"},
+      {"drift-ppm", "X", "tracker clock rate error: t_robot = offset + (1 + drift) t_tracker [ppm]", "40"},
+      {"robot-clock-start-us", "T", "robot clock at the start of the session [us]", "1000000000"},
+      {"tracker-clock-start-us", "T", "tracker clock at the start of the session [us]", "5000000"},
+      {"noise-um", "X", "tracker noise per axis, 1 sigma [um]", "10"},
+      {"jitter-us", "X", "robot period jitter, 1 sigma [us]", "400"},
+      {"calibration-conf", "FILE", "true geometry = nominal + the [mounting] deltas of this UR calibration.conf", ""},
+      {"serve", "", "serve the streams live on two pseudo-terminals instead of writing captures", ""},
+      {"speed", "X", "with --serve: session seconds per second (0: as fast as read)", "1"},
+      {"serve-delay-s", "S", "with --serve: wait before streaming, to start a reader", "3"},
+  };
+  return specs;
+}
+
+/// Parses a number option; false (message printed) if malformed.
+bool number_option(const cli::Options& options, const char* name, double* value) {
+  if (textio::parse_double(options.get(name), value)) return true;
+  cli::error(kCommand, std::string("--") + name + ": not a number: '" + options.get(name) + "'");
+  return false;
+}
+
+/// Builds the session configuration; returns an exit code, or -1 to go on.
+int configure(const cli::Options& options, SimConfig* config) {
+  if (robot_type_from_name(options.get("robot-model").c_str(), &config->robot_type) != Status::ok) {
+    cli::error(kCommand, "--robot-model must be ur3, ur5, ur10 or ur5e, not '" + options.get("robot-model") + "'");
+    return kExitUsage;
+  }
+  double seed = 0, waypoints = 0, drift_ppm = 0, robot_start = 0, tracker_start = 0, noise_um = 0, jitter_us = 0;
+  if (!number_option(options, "seed", &seed) || !number_option(options, "waypoints", &waypoints) ||
+      !number_option(options, "duration-s", &config->duration_s) ||
+      !number_option(options, "drift-ppm", &drift_ppm) ||
+      !number_option(options, "robot-clock-start-us", &robot_start) ||
+      !number_option(options, "tracker-clock-start-us", &tracker_start) ||
+      !number_option(options, "noise-um", &noise_um) || !number_option(options, "jitter-us", &jitter_us))
+    return kExitUsage;
+  if (seed < 0 || waypoints < 2 || config->duration_s <= 0 || std::abs(drift_ppm) > 1000 || robot_start < 0 ||
+      tracker_start < 0 || noise_um < 0 || jitter_us < 0) {
+    cli::error(kCommand, "out-of-range option (seed >= 0, waypoints >= 2, duration > 0, |drift| <= 1000 ppm)");
+    return kExitUsage;
+  }
+  config->seed = static_cast<std::uint64_t>(seed);
+  config->waypoint_count = static_cast<int>(waypoints);
+  config->clock_drift = drift_ppm * 1e-6;
+  config->robot_clock_start_us = static_cast<std::uint64_t>(robot_start);
+  config->tracker_clock_start_us = static_cast<std::uint64_t>(tracker_start);
+  config->tracker_noise_m = noise_um * 1e-6;
+  config->robot_jitter_s = jitter_us * 1e-6;
+  if (!options.get("calibration-conf").empty()) {
+    const textio::ParseResult read = textio::read_ur_calibration_conf(options.get("calibration-conf"), &config->deltas);
+    if (!read.ok) {
+      cli::error(kCommand, read.message);
+      return kExitBadInput;
+    }
+    config->use_deltas = true;
+  }
+  return -1;
+}
+
+/// Serves the session on two ptys, printing their paths first.
+int serve(const Session& session, const cli::Options& options) {
+  double speed = 1.0;
+  double delay_s = 0.0;
+  if (!number_option(options, "speed", &speed) || !number_option(options, "serve-delay-s", &delay_s) || speed < 0)
+    return kExitUsage;
+  port::PtyPair robot;
+  port::PtyPair tracker;
+  std::string error;
+  if (!port::open_pty(&robot, &error) || !port::open_pty(&tracker, &error)) {
+    cli::error(kCommand, error);
+    return kExitFailure;
+  }
+  std::printf("robot   %s\ntracker %s\n", robot.slave_path.c_str(), tracker.slave_path.c_str());
+  std::fflush(stdout);
+  std::signal(SIGINT, request_stop);
+  std::signal(SIGTERM, request_stop);
+  port::sleep_ms(static_cast<std::int64_t>(delay_s * 1000.0));
+  ServeStats stats;
+  const bool ok = serve_session(session, robot, tracker, ServeOptions{speed}, &g_stop, &stats, &error);
+  port::sleep_ms(500);  // let readers drain the ptys before the hangup
+  port::close_pty(&robot);
+  port::close_pty(&tracker);
+  std::printf("served %llu robot frames (%llu bytes), %llu tracker frames (%llu bytes)\n",
+              static_cast<unsigned long long>(stats.robot_frames), static_cast<unsigned long long>(stats.robot_bytes),
+              static_cast<unsigned long long>(stats.tracker_frames),
+              static_cast<unsigned long long>(stats.tracker_bytes));
+  if (!ok) cli::error(kCommand, error);
+  return ok ? kExitOk : kExitFailure;
+}
+
+}  // namespace
+
+int simulate_main(int argc, char** argv) {
+  cli::Options options;
+  const int parsed = cli::parse_options(
+      kCommand,
+      "Simulates a UR arm visiting waypoints, seen by its joint-state publisher (125 Hz) and a\n"
+      "laser tracker (10 Hz) on their own clocks. Writes robot.cap and tracker.cap (wire format),\n"
+      "robot_joints.csv and tracker.csv (io-formats), truth.json (true model, base->tracker,\n"
+      "clocks: robot-calibration/1 + \"simulation\") and truth_samples.csv (ideal static pairs);\n"
+      "or, with --serve, streams live on two pseudo-terminals (truth files still written).",
+      option_specs(), argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  SimConfig config;
+  const int configured = configure(options, &config);
+  if (configured >= 0) return configured;
+  const Session session(config);
+  OutputPaths paths = output_paths_in(options.get("out-dir"));
+  if (options.given("serve")) {
+    paths.robot_capture.clear();  // `hivecal record` makes them from the ptys
+    paths.tracker_capture.clear();
+  }
+  std::string error;
+  if (!write_outputs(session, paths, kTruthMarginS, &error)) {
+    cli::error(kCommand, error);
+    return kExitOutputError;
+  }
+  return options.given("serve") ? serve(session, options) : kExitOk;
+}
+
+}  // namespace hivecal::sim

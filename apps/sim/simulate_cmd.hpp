@@ -1,0 +1,10 @@
+// `hivecal simulate`: a simulated UR + laser-tracker session written as capture files,
+// CSV logs and ground truth, or served live on two pseudo-terminals (docs/streams.md).
+#pragma once
+
+namespace hivecal::sim {
+
+/// Entry point of `hivecal simulate` (argv after the command name); returns the exit code.
+int simulate_main(int argc, char** argv);
+
+}  // namespace hivecal::sim

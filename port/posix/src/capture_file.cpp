@@ -1,0 +1,106 @@
+#include "hivecal/port/capture_file.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <utility>
+
+namespace hivecal::port {
+
+CaptureWriter::~CaptureWriter() {
+  std::string ignored;
+  (void)close(&ignored);
+}
+
+bool CaptureWriter::open(const std::string& path, std::string* error) {
+  path_ = path;
+  bytes_written_ = 0;
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) {
+    *error = path + ": cannot create: " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
+bool CaptureWriter::write(const std::uint8_t* bytes, std::size_t count, std::string* error) {
+  while (count > 0) {
+    const ssize_t put = ::write(fd_, bytes, count);
+    if (put < 0) {
+      if (errno == EINTR) continue;
+      *error = path_ + ": write failed: " + std::strerror(errno);
+      return false;
+    }
+    bytes += put;
+    count -= static_cast<std::size_t>(put);
+    bytes_written_ += static_cast<std::uint64_t>(put);
+  }
+  return true;
+}
+
+bool CaptureWriter::sync(std::string* error) {
+  if (fd_ >= 0 && ::fsync(fd_) != 0 && errno != EINVAL) {  // EINVAL: a pipe or tty, nothing to sync
+    *error = path_ + ": fsync failed: " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
+bool CaptureWriter::close(std::string* error) {
+  if (fd_ < 0) return true;
+  const bool synced = sync(error);
+  const bool closed = ::close(fd_) == 0;
+  if (!closed && synced) *error = path_ + ": close failed: " + std::strerror(errno);
+  fd_ = -1;
+  return synced && closed;
+}
+
+CaptureFileSource::CaptureFileSource(std::string path, double pace_bytes_per_s)
+    : path_(std::move(path)), pace_bytes_per_s_(pace_bytes_per_s) {}
+
+CaptureFileSource::~CaptureFileSource() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool CaptureFileSource::open(std::string* error) {
+  fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) {
+    *error = path_ + ": cannot open: " + std::strerror(errno);
+    return false;
+  }
+  bytes_read_ = 0;
+  start_ms_ = monotonic_ms();
+  return true;
+}
+
+ReadResult CaptureFileSource::read(std::uint8_t* buffer, std::size_t capacity, int timeout_ms) {
+  if (fd_ < 0) return ReadResult{ReadStatus::error, 0, EBADF};
+  if (pace_bytes_per_s_ > 0.0) {
+    // Bytes allowed by now; wait (up to the timeout) for at least one.
+    const std::int64_t deadline_ms = monotonic_ms() + (timeout_ms > 0 ? timeout_ms : 0);
+    for (;;) {
+      const double elapsed_s = static_cast<double>(monotonic_ms() - start_ms_) / 1000.0;
+      const double allowed = elapsed_s * pace_bytes_per_s_ - static_cast<double>(bytes_read_);
+      if (allowed >= 1.0) {
+        if (static_cast<double>(capacity) > allowed) capacity = static_cast<std::size_t>(allowed);
+        break;
+      }
+      const std::int64_t now_ms = monotonic_ms();
+      if (now_ms >= deadline_ms) return ReadResult{ReadStatus::timeout, 0, 0};
+      const auto need_ms = static_cast<std::int64_t>((1.0 - allowed) * 1000.0 / pace_bytes_per_s_) + 1;
+      sleep_ms(need_ms < deadline_ms - now_ms ? need_ms : deadline_ms - now_ms);
+    }
+  }
+  for (;;) {
+    const ssize_t got = ::read(fd_, buffer, capacity);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) return ReadResult{ReadStatus::error, 0, errno};
+    if (got == 0) return ReadResult{ReadStatus::end_of_stream, 0, 0};
+    bytes_read_ += static_cast<std::uint64_t>(got);
+    return ReadResult{ReadStatus::data, static_cast<std::size_t>(got), 0};
+  }
+}
+
+}  // namespace hivecal::port

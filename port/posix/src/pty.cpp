@@ -1,0 +1,61 @@
+#include "hivecal/port/pty.hpp"
+
+#include <fcntl.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+
+namespace hivecal::port {
+
+bool open_pty(PtyPair* pty, std::string* error) {
+  close_pty(pty);
+  pty->master_fd = posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
+  char name[128] = {};
+  if (pty->master_fd < 0 || grantpt(pty->master_fd) != 0 || unlockpt(pty->master_fd) != 0 ||
+      ptsname_r(pty->master_fd, name, sizeof name) != 0) {
+    *error = std::string("cannot open a pseudo-terminal: ") + std::strerror(errno);
+    close_pty(pty);
+    return false;
+  }
+  pty->slave_path = name;
+  pty->slave_fd = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
+  termios tio{};
+  if (pty->slave_fd < 0 || tcgetattr(pty->slave_fd, &tio) != 0) {
+    *error = pty->slave_path + ": cannot open: " + std::strerror(errno);
+    close_pty(pty);
+    return false;
+  }
+  cfmakeraw(&tio);  // no echo back into the master, no line editing, 8-bit clean
+  if (tcsetattr(pty->slave_fd, TCSANOW, &tio) != 0) {
+    *error = pty->slave_path + ": cannot configure: " + std::strerror(errno);
+    close_pty(pty);
+    return false;
+  }
+  return true;
+}
+
+void close_pty(PtyPair* pty) {
+  if (pty->master_fd >= 0) ::close(pty->master_fd);
+  if (pty->slave_fd >= 0) ::close(pty->slave_fd);
+  pty->master_fd = -1;
+  pty->slave_fd = -1;
+}
+
+bool write_all(int fd, const void* bytes, std::size_t count) {
+  const auto* p = static_cast<const std::uint8_t*>(bytes);
+  while (count > 0) {
+    const ssize_t put = ::write(fd, p, count);
+    if (put < 0) {
+      if (errno == EINTR) continue;
+      return false;
+    }
+    p += put;
+    count -= static_cast<std::size_t>(put);
+  }
+  return true;
+}
+
+}  // namespace hivecal::port

@@ -1,0 +1,230 @@
+// POSIX serial reader through real pseudo-terminals: partial reads, signals during waits,
+// a device that vanishes and comes back, capture replay with pacing, and recording.
+#include <gtest/gtest.h>
+
+#include <pthread.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hivecal/port/capture_file.hpp"
+#include "hivecal/port/pty.hpp"
+#include "hivecal/port/recorder.hpp"
+#include "hivecal/port/serial_port.hpp"
+
+namespace hivecal::port {
+namespace {
+
+/// A deterministic byte pattern with every value, zeros included.
+std::vector<std::uint8_t> pattern(std::size_t count, unsigned seed) {
+  std::vector<std::uint8_t> bytes(count);
+  unsigned x = seed;
+  for (std::uint8_t& b : bytes) {
+    x = x * 1103515245u + 12345u;
+    b = static_cast<std::uint8_t>(x >> 16);
+  }
+  return bytes;
+}
+
+/// Reads from `port` until `count` bytes came, the stream ended or `limit_ms` passed.
+std::vector<std::uint8_t> read_bytes(ByteSource* port, std::size_t count, int limit_ms) {
+  std::vector<std::uint8_t> got;
+  std::uint8_t buffer[512];
+  const std::int64_t end_ms = monotonic_ms() + limit_ms;
+  while (got.size() < count && monotonic_ms() < end_ms) {
+    const ReadResult r = port->read(buffer, sizeof buffer, 50);
+    if (r.status == ReadStatus::data) got.insert(got.end(), buffer, buffer + r.bytes);
+    if (r.status == ReadStatus::end_of_stream) break;
+  }
+  return got;
+}
+
+/// A temporary path under the test's working directory.
+std::string temp_path(const std::string& name) {
+  return "hivecal_port_test_" + std::to_string(::getpid()) + "_" + name;
+}
+
+TEST(SerialPort, DeliversEveryByteOfDribbledWrites) {
+  PtyPair pty;
+  std::string error;
+  ASSERT_TRUE(open_pty(&pty, &error)) << error;
+  SerialPort port(SerialOptions{pty.slave_path, kRobotBaud});
+  ASSERT_TRUE(port.open(&error)) << error;
+  const std::vector<std::uint8_t> sent = pattern(20000, 7);
+  std::thread writer([&] {
+    std::size_t at = 0;
+    std::size_t piece = 1;
+    while (at < sent.size()) {
+      const std::size_t n = std::min(piece, sent.size() - at);
+      ASSERT_TRUE(write_all(pty.master_fd, sent.data() + at, n));
+      at += n;
+      piece = piece * 7 % 257 + 1;  // 1..257-byte pieces, frames cut anywhere
+      if (at % 5 == 0) usleep(200);
+    }
+  });
+  const std::vector<std::uint8_t> got = read_bytes(&port, sent.size(), 10000);
+  writer.join();
+  EXPECT_EQ(got, sent);
+  close_pty(&pty);
+}
+
+std::atomic<int> g_signals{0};
+void count_signal(int) { g_signals.fetch_add(1); }
+
+TEST(SerialPort, SignalsNeitherLoseBytesNorShortenTimeouts) {
+  struct sigaction action {};
+  action.sa_handler = count_signal;  // no SA_RESTART: poll() and read() see EINTR
+  sigemptyset(&action.sa_mask);
+  struct sigaction previous {};
+  ASSERT_EQ(sigaction(SIGUSR1, &action, &previous), 0);
+  PtyPair pty;
+  std::string error;
+  ASSERT_TRUE(open_pty(&pty, &error)) << error;
+  SerialPort port(SerialOptions{pty.slave_path, kTrackerBaud});
+  ASSERT_TRUE(port.open(&error)) << error;
+
+  const pthread_t reader = pthread_self();
+  std::atomic<bool> running{true};
+  g_signals = 0;
+  std::thread pest([&] {
+    while (running) {
+      pthread_kill(reader, SIGUSR1);
+      usleep(500);
+    }
+  });
+  // Nothing to read: the timeout is honoured in full despite the signals.
+  std::uint8_t buffer[64];
+  const std::int64_t start_ms = monotonic_ms();
+  const ReadResult idle = port.read(buffer, sizeof buffer, 150);
+  EXPECT_EQ(idle.status, ReadStatus::timeout);
+  EXPECT_GE(monotonic_ms() - start_ms, 150);
+  // Bytes written while signals keep coming all arrive.
+  const std::vector<std::uint8_t> sent = pattern(3000, 9);
+  std::thread writer([&] {
+    for (std::size_t at = 0; at < sent.size(); at += 100) {
+      ASSERT_TRUE(write_all(pty.master_fd, sent.data() + at, 100));
+      usleep(1000);
+    }
+  });
+  const std::vector<std::uint8_t> got = read_bytes(&port, sent.size(), 10000);
+  writer.join();
+  running = false;
+  pest.join();
+  EXPECT_EQ(got, sent);
+  EXPECT_GT(g_signals.load(), 10);
+  sigaction(SIGUSR1, &previous, nullptr);
+  close_pty(&pty);
+}
+
+TEST(SerialPort, ReopensADeviceThatVanishesAndComesBack) {
+  // The port is opened through a symlink (like /dev/serial/by-id/...); the first pty goes
+  // away (master closed), a new one appears under the same link.
+  const std::string link = temp_path("link");
+  PtyPair first;
+  std::string error;
+  ASSERT_TRUE(open_pty(&first, &error)) << error;
+  ::unlink(link.c_str());
+  ASSERT_EQ(::symlink(first.slave_path.c_str(), link.c_str()), 0);
+  SerialPort port(SerialOptions{link, kRobotBaud, 10, 100});
+  ASSERT_TRUE(port.open(&error)) << error;
+  const std::vector<std::uint8_t> before = pattern(500, 1);
+  ASSERT_TRUE(write_all(first.master_fd, before.data(), before.size()));
+  EXPECT_EQ(read_bytes(&port, before.size(), 5000), before);
+
+  close_pty(&first);
+  std::uint8_t buffer[64];
+  ReadResult lost = port.read(buffer, sizeof buffer, 1000);
+  EXPECT_EQ(lost.status, ReadStatus::disconnected);
+  EXPECT_FALSE(port.is_open());
+  EXPECT_EQ(port.read(buffer, sizeof buffer, 50).status, ReadStatus::disconnected);  // link points nowhere useful
+
+  PtyPair second;
+  ASSERT_TRUE(open_pty(&second, &error)) << error;
+  const std::string fresh = link + ".new";
+  ASSERT_EQ(::symlink(second.slave_path.c_str(), fresh.c_str()), 0);
+  ASSERT_EQ(::rename(fresh.c_str(), link.c_str()), 0);
+  const std::vector<std::uint8_t> after = pattern(700, 2);
+  ASSERT_TRUE(write_all(second.master_fd, after.data(), after.size()));
+  EXPECT_EQ(read_bytes(&port, after.size(), 5000), after);
+  EXPECT_EQ(port.reconnects(), 1u);
+  EXPECT_EQ(port.disconnects(), 1u);
+  close_pty(&second);
+  ::unlink(link.c_str());
+}
+
+TEST(CaptureFile, ReplaysExactlyAndPaces) {
+  const std::string path = temp_path("replay.cap");
+  const std::vector<std::uint8_t> bytes = pattern(5000, 3);
+  CaptureWriter writer;
+  std::string error;
+  ASSERT_TRUE(writer.open(path, &error)) << error;
+  ASSERT_TRUE(writer.write(bytes.data(), bytes.size(), &error)) << error;
+  ASSERT_TRUE(writer.close(&error)) << error;
+  EXPECT_EQ(writer.bytes_written(), bytes.size());
+
+  CaptureFileSource fast(path);
+  ASSERT_TRUE(fast.open(&error)) << error;
+  EXPECT_EQ(read_bytes(&fast, bytes.size() + 1, 2000), bytes);
+  std::uint8_t buffer[16];
+  EXPECT_EQ(fast.read(buffer, sizeof buffer, 0).status, ReadStatus::end_of_stream);
+
+  CaptureFileSource paced(path, 20000.0);  // 5000 bytes at 20 kB/s: >= 250 ms
+  ASSERT_TRUE(paced.open(&error)) << error;
+  const std::int64_t start_ms = monotonic_ms();
+  EXPECT_EQ(read_bytes(&paced, bytes.size(), 5000), bytes);
+  EXPECT_GE(monotonic_ms() - start_ms, 240);
+  ::unlink(path.c_str());
+}
+
+TEST(Recorder, CopiesTwoPortsToCaptures) {
+  PtyPair robot;
+  PtyPair tracker;
+  std::string error;
+  ASSERT_TRUE(open_pty(&robot, &error)) << error;
+  ASSERT_TRUE(open_pty(&tracker, &error)) << error;
+  SerialPort robot_port(SerialOptions{robot.slave_path, kRobotBaud});
+  SerialPort tracker_port(SerialOptions{tracker.slave_path, kTrackerBaud});
+  ASSERT_TRUE(robot_port.open(&error) && tracker_port.open(&error)) << error;
+  const std::string robot_path = temp_path("robot.cap");
+  const std::string tracker_path = temp_path("tracker.cap");
+  CaptureWriter robot_file;
+  CaptureWriter tracker_file;
+  ASSERT_TRUE(robot_file.open(robot_path, &error) && tracker_file.open(tracker_path, &error)) << error;
+  const std::vector<std::uint8_t> robot_bytes = pattern(30000, 4);
+  const std::vector<std::uint8_t> tracker_bytes = pattern(4000, 5);
+  volatile std::sig_atomic_t stop = 0;
+  std::thread devices([&] {
+    for (std::size_t i = 0; i < 10; ++i) {
+      ASSERT_TRUE(write_all(robot.master_fd, robot_bytes.data() + i * 3000, 3000));
+      ASSERT_TRUE(write_all(tracker.master_fd, tracker_bytes.data() + i * 400, 400));
+      usleep(5000);
+    }
+    usleep(300000);
+    stop = 1;
+  });
+  RecordStats stats;
+  EXPECT_TRUE(record_streams({&robot_port, &tracker_port}, {&robot_file, &tracker_file}, &stop, RecordOptions(),
+                             &stats, &error))
+      << error;
+  devices.join();
+  EXPECT_TRUE(stats.ended_by_stop_flag);
+  EXPECT_EQ(stats.bytes[0], robot_bytes.size());
+  EXPECT_EQ(stats.bytes[1], tracker_bytes.size());
+  CaptureFileSource robot_replay(robot_path);
+  CaptureFileSource tracker_replay(tracker_path);
+  ASSERT_TRUE(robot_replay.open(&error) && tracker_replay.open(&error)) << error;
+  EXPECT_EQ(read_bytes(&robot_replay, robot_bytes.size() + 1, 2000), robot_bytes);
+  EXPECT_EQ(read_bytes(&tracker_replay, tracker_bytes.size() + 1, 2000), tracker_bytes);
+  close_pty(&robot);
+  close_pty(&tracker);
+  ::unlink(robot_path.c_str());
+  ::unlink(tracker_path.c_str());
+}
+
+}  // namespace
+}  // namespace hivecal::port

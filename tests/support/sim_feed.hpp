@@ -1,0 +1,57 @@
+// Feeds simulated device streams (apps/sim) into the sync and extraction classes, the way
+// the serial readers would: each stream in its own time order.
+#pragma once
+
+#include "hivecal/clock_sync.hpp"
+#include "hivecal/sample_extraction.hpp"
+#include "sim_model.hpp"
+
+namespace hivecal::test {
+
+/// Pushes the whole robot stream, then the whole tracker stream (allowed: the estimator
+/// keeps the two profiles apart).
+inline void feed_clock(const sim::Session& session, ClockEstimatorBase* estimator) {
+  sim::RobotStream robot(session);
+  JointStateRecord joint;
+  while (robot.next(&joint)) estimator->push_robot(joint);
+  sim::TrackerStream tracker(session);
+  TrackerPointRecord point;
+  while (tracker.next(&point)) estimator->push_tracker(point);
+}
+
+/// What feed_extractor saw come back from the pushes.
+struct FeedResult {
+  std::size_t dataset_full_returns = 0;  ///< pushes that returned Status::dataset_full
+  std::size_t other_errors = 0;          ///< pushes that returned anything else but ok
+};
+
+/// Pushes both streams interleaved in true-time order (as live ports deliver them), then
+/// finish(). `lead_s` delays the tracker stream (positive) or the robot stream (negative).
+inline FeedResult feed_extractor(const sim::Session& session, SampleExtractorBase* extractor, double lead_s = 0.0) {
+  FeedResult result;
+  auto note = [&result](Status s) {
+    if (s == Status::dataset_full) ++result.dataset_full_returns;
+    else if (s != Status::ok) ++result.other_errors;
+  };
+  sim::RobotStream robot(session);
+  sim::TrackerStream tracker(session);
+  JointStateRecord joint;
+  TrackerPointRecord point;
+  bool has_joint = robot.next(&joint);
+  bool has_point = tracker.next(&point);
+  while (has_joint || has_point) {
+    const bool tracker_first =
+        has_point && (!has_joint || tracker.last_true_time_s() + lead_s < robot.last_true_time_s());
+    if (tracker_first) {
+      note(extractor->push_tracker(point));
+      has_point = tracker.next(&point);
+    } else {
+      note(extractor->push_robot(joint));
+      has_joint = robot.next(&joint);
+    }
+  }
+  note(extractor->finish());
+  return result;
+}
+
+}  // namespace hivecal::test
