@@ -3,6 +3,8 @@
 #include <cstring>
 
 #include "commands.hpp"
+#include "simulate_cmd.hpp"
+#include "stream_commands.hpp"
 
 namespace {
 
@@ -14,6 +16,9 @@ struct Command {
 
 const Command kCommands[] = {
     {"predict", "tool positions of joint poses from a calibration result", hivecal::cli::predict_main},
+    {"simulate", "simulated UR + tracker session: captures, CSV logs, ground truth, live ptys", hivecal::sim::simulate_main},
+    {"record", "record serial ports (or ptys) to capture files, nothing lost on SIGINT/SIGTERM", hivecal::streams::record_main},
+    {"extract", "captures -> clock sync -> quasi-static paired samples (CSV) with drop statistics", hivecal::streams::extract_main},
     {"demo", "small simulated check of the core library", hivecal::cli::demo_main},
 };
 

@@ -89,7 +89,7 @@ else
   echo "FAIL: predict on good input"
 fi
 # --- every command has --help
-for cmd in predict demo; do
+for cmd in predict simulate record extract demo; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then passed=$((passed + 1)); else
     failed=$((failed + 1)); echo "FAIL: $cmd --help"; fi
 done
