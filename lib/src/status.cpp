@@ -21,6 +21,8 @@ const char* status_message(Status status) {
     case Status::bad_version: return "unsupported packet version";
     case Status::unknown_type: return "unknown packet type";
     case Status::clock_fit_failed: return "clock relation could not be estimated";
+    case Status::poses_not_distinct: return "all samples at the same joint positions";
+    case Status::solver_cancelled: return "solver cancelled by its observer";
   }
   return "unknown status";
 }

@@ -31,6 +31,9 @@ enum class Status : std::uint8_t {
   unknown_type,             ///< valid CRC but an unknown packet type (skipped, counted)
   // Sync.
   clock_fit_failed,         ///< not enough motion to relate the two clocks
+  // Levenberg-Marquardt calibration.
+  poses_not_distinct,       ///< every sample was taken at the same joint positions: nothing to identify
+  solver_cancelled,         ///< the progress observer asked the solver to stop
 };
 
 /// A short, stable, human-readable name for a status (for logs and CLI messages).
