@@ -22,23 +22,78 @@ Mat3 skew(const Vec3& v) {
   return k;
 }
 
-/// The same bits as full_residual_jacobian's residual: tool_point_jacobian chains the flange
-/// pose exactly like fk_flange, so trial costs and accumulated costs compare exactly.
 Vec3 point_residual(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample) {
-  return base_to_tracker.apply(fk_flange(model, sample.q_rad).apply(model.tool_m)) - sample.point_m;
+  return base_to_tracker.apply(fk_tool_point(model, sample.q_rad)) - sample.point_m;
 }
 
-/// eq += w J^T J (upper triangle) and w J^T r. Column-major order: contiguous writes.
-void add_weighted_sample(const FullJacobian& jacobian, const Vec3& residual_m, double weight,
-                         NormalEquations* eq) {
-  const FullJacobian weighted = weight * jacobian;
-  for (int b = 0; b < kFullParamCount; ++b) {
-    eq->jtwr(b) += weighted(0, b) * residual_m(0) + weighted(1, b) * residual_m(1) + weighted(2, b) * residual_m(2);
-    for (int a = 0; a <= b; ++a) {
-      eq->jtwj(a, b) += weighted(0, a) * jacobian(0, b) + weighted(1, a) * jacobian(1, b) +
-                        weighted(2, a) * jacobian(2, b);
+/// The parameters of a mask as a list of indices, increasing.
+struct IndexList {
+  int index[kFullParamCount];
+  int count = 0;
+};
+
+IndexList indices_of(ParamMask mask) {
+  IndexList list;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(mask, i)) list.index[list.count++] = i;
+  }
+  return list;
+}
+
+/// Rows of the local Jacobian [J_tool | -skew(p) | I] at the listed columns, gathered into
+/// contiguous arrays, and the residual rotated into the base frame, R^T r [m].
+Vec3 local_rows(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                const IndexList& columns, double rows[3][kFullParamCount]) {
+  ToolPointJacobian tool_jacobian;
+  const Vec3 point_m = tool_point_jacobian(model, sample.q_rad, &tool_jacobian);
+  for (int k = 0; k < columns.count; ++k) {
+    const int c = columns.index[k];
+    if (c < kModelParamCount) {
+      for (int r = 0; r < 3; ++r) rows[r][k] = tool_jacobian(r, c);
+    } else if (c < base_translation_param_index(0)) {
+      // d(Exp(w) p)/dw_k at w = 0 is e_k x p.
+      const Vec3 column = Vec3::Unit(c - base_rotation_param_index(0)).cross(point_m);
+      for (int r = 0; r < 3; ++r) rows[r][k] = column(r);
+    } else {  // the translation increment is along the base axes
+      for (int r = 0; r < 3; ++r) rows[r][k] = r == c - base_translation_param_index(0) ? 1.0 : 0.0;
     }
   }
+  return base_to_tracker.rotation.transpose() * (base_to_tracker.apply(point_m) - sample.point_m);
+}
+
+/// eq += w J^T J and w J^T r over the listed columns, in compact coordinates (entry (k, l)
+/// for columns index[k], index[l]; upper triangle), one contiguous column at a time.
+void add_weighted_sample(const double rows[3][kFullParamCount], const Vec3& residual_m, double weight, int count,
+                         NormalEquations* eq) {
+  double* compact = eq->jtwj.data();
+  for (int l = 0; l < count; ++l) {
+    const double w0 = weight * rows[0][l];
+    const double w1 = weight * rows[1][l];
+    const double w2 = weight * rows[2][l];
+    eq->jtwr(l) += w0 * residual_m(0) + w1 * residual_m(1) + w2 * residual_m(2);
+    double* column = compact + l * kFullParamCount;
+    for (int k = 0; k <= l; ++k) column[k] += rows[0][k] * w0 + rows[1][k] * w1 + rows[2][k] * w2;
+  }
+}
+
+/// Moves the compact sums to their parameter positions and mirrors the upper triangle.
+/// In place: a compact entry (k, l) goes to (index[k], index[l]) with index[k] >= k, so
+/// walking down from the last one never overwrites an entry still to be moved.
+void expand_compact(const IndexList& columns, NormalEquations* eq) {
+  NormalMatrix& h = eq->jtwj;
+  for (int l = columns.count - 1; l >= 0; --l) {
+    const int b = columns.index[l];
+    eq->jtwr(b) = eq->jtwr(l);
+    if (b != l) eq->jtwr(l) = 0.0;
+    for (int k = l; k >= 0; --k) {
+      const int a = columns.index[k];
+      const double value = h(k, l);
+      h(k, l) = 0.0;
+      h(a, b) = value;
+    }
+  }
+  for (int b = 0; b < kFullParamCount; ++b)
+    for (int a = b + 1; a < kFullParamCount; ++a) h(a, b) = h(b, a);
 }
 
 // Log-spaced bins of the median histogram: 4 per decade from 1e-12 m to 100 m, plus an
@@ -100,16 +155,21 @@ void apply_full_increment(const FullParams& increment, RobotModel* model, RigidT
   base_to_tracker->rotation = base_to_tracker->rotation * rotation_from_vector(rotation_rad);
 }
 
+Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                             FullJacobian* local_jacobian) {
+  double rows[3][kFullParamCount];
+  const Vec3 local_residual_m = local_rows(model, base_to_tracker, sample, indices_of(kAllParamsMask), rows);
+  for (int c = 0; c < kFullParamCount; ++c)
+    for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
+  return local_residual_m;
+}
+
 Vec3 full_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
                             FullJacobian* jacobian) {
-  ToolPointJacobian tool_jacobian;
-  const Vec3 point_m = tool_point_jacobian(model, sample.q_rad, &tool_jacobian);
-  const Mat3& rotation = base_to_tracker.rotation;
-  jacobian->leftCols<kModelParamCount>() = rotation * tool_jacobian;
-  // d(R Exp(w) p)/dw at w = 0 is R (e_k x p) = -R skew(p) e_k; d(R tau)/dtau = R.
-  jacobian->block<3, 3>(0, base_rotation_param_index(0)) = -(rotation * skew(point_m));
-  jacobian->block<3, 3>(0, base_translation_param_index(0)) = rotation;
-  return base_to_tracker.apply(point_m) - sample.point_m;
+  FullJacobian local;
+  const Vec3 local_residual_m = local_residual_jacobian(model, base_to_tracker, sample, &local);
+  *jacobian = base_to_tracker.rotation * local;
+  return base_to_tracker.rotation * local_residual_m;
 }
 
 void scale_normal_matrix(const NormalMatrix& jtwj, ParamMask mask, double outside_diagonal, NormalMatrix* scaled,
@@ -139,7 +199,8 @@ double PointLoss::weight(double norm_m) const {
 }
 
 Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
-                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* out) {
+                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
+                                   ParamMask columns) {
   if (samples.empty()) return Status::dataset_empty;
   NormalEquations& eq = *out;
   eq.jtwj.setZero();
@@ -148,19 +209,19 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   eq.weighted_squares_m2 = 0.0;
   eq.squares_sum_m2 = 0.0;
   eq.count = samples.size();
-  FullJacobian jacobian;
+  const IndexList list = indices_of(columns);
+  double rows[3][kFullParamCount];
   for (const Sample& sample : samples) {
-    const Vec3 residual_m = full_residual_jacobian(model, base_to_tracker, sample, &jacobian);
+    const Vec3 residual_m = local_rows(model, base_to_tracker, sample, list, rows);
     const double squared = residual_m.squaredNorm();
     const double norm_m = std::sqrt(squared);
     const double weight = loss.weight(norm_m);
-    add_weighted_sample(jacobian, residual_m, weight, &eq);
+    add_weighted_sample(rows, residual_m, weight, list.count, &eq);
     eq.loss_sum_m2 += loss.rho(norm_m);
     eq.weighted_squares_m2 += weight * squared;
     eq.squares_sum_m2 += squared;
   }
-  for (int b = 0; b < kFullParamCount; ++b)
-    for (int a = b + 1; a < kFullParamCount; ++a) eq.jtwj(a, b) = eq.jtwj(b, a);
+  expand_compact(list, &eq);
   if (!math::is_finite(eq.loss_sum_m2) || !all_finite(eq.jtwr) || !all_finite(eq.jtwj)) {
     return Status::non_finite_input;
   }

@@ -141,28 +141,43 @@ void drop_null_directions(IdentifiabilityWorkspace* ws, int null_count, double s
   }
 }
 
-/// Drops the free parameters whose column norm is below threshold * the largest one.
+/// The free parameters whose column norm is below threshold * the largest column of all 33
+/// (the base translation columns, |e_k| per sample, are among them when accumulated, so a
+/// single free parameter is still judged against a physical scale).
+ParamMask no_effect_params(const NormalMatrix& jtwj, ParamMask free_mask, double threshold) {
+  double largest = 0.0;
+  for (int i = 0; i < kFullParamCount; ++i) largest = std::fmax(largest, std::sqrt(jtwj(i, i)));
+  ParamMask no_effect = 0;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(free_mask, i) && !(std::sqrt(jtwj(i, i)) > threshold * largest)) no_effect |= param_bit(i);
+  }
+  return no_effect;
+}
+
+/// Reports the no-effect parameters; returns the free ones left.
 ParamMask drop_no_effect(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
                          IdentifiabilityReport* report) {
+  const ParamMask no_effect = no_effect_params(jtwj, free_mask, threshold);
   double largest = 0.0;
+  for (int i = 0; i < kFullParamCount; ++i) largest = std::fmax(largest, std::sqrt(jtwj(i, i)));
   for (int i = 0; i < kFullParamCount; ++i) {
-    if (mask_has(free_mask, i) && std::sqrt(jtwj(i, i)) > largest) largest = std::sqrt(jtwj(i, i));
-  }
-  ParamMask mask = free_mask;
-  for (int i = 0; i < kFullParamCount; ++i) {
-    if (!mask_has(free_mask, i)) continue;
-    const double norm = std::sqrt(jtwj(i, i));
-    if (norm > threshold * largest) continue;
+    if (!mask_has(no_effect, i)) continue;
     DroppedParam& entry = report->dropped[report->dropped_count++];
     entry = DroppedParam{};
     entry.index = i;
     entry.reason = DropReason::no_effect;
-    entry.singular_ratio = largest > 0.0 ? norm / largest : 0.0;
+    entry.singular_ratio = largest > 0.0 ? std::sqrt(jtwj(i, i)) / largest : 0.0;
     entry.component_index[0] = i;
     entry.component[0] = 1.0;
-    mask &= ~param_bit(i);
   }
-  return mask;
+  return free_mask & ~no_effect;
+}
+
+Status check_arguments(const NormalMatrix& jtwj, ParamMask free_mask, double threshold) {
+  if (!(threshold > 0.0 && threshold < 1.0)) return Status::invalid_argument;
+  if (free_mask == 0 || (free_mask & ~kAllParamsMask) != 0) return Status::invalid_argument;
+  if (!all_finite(jtwj)) return Status::non_finite_input;
+  return Status::ok;
 }
 
 }  // namespace
@@ -177,9 +192,8 @@ const char* drop_reason_name(DropReason reason) {
 
 Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
                                IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report) {
-  if (!(threshold > 0.0 && threshold < 1.0)) return Status::invalid_argument;
-  if (free_mask == 0 || (free_mask & ~kAllParamsMask) != 0) return Status::invalid_argument;
-  if (!all_finite(jtwj)) return Status::non_finite_input;
+  const Status status = check_arguments(jtwj, free_mask, threshold);
+  if (status != Status::ok) return status;
   *report = IdentifiabilityReport{};
   report->free_mask = free_mask;
   ParamMask mask = drop_no_effect(jtwj, free_mask, threshold, report);
@@ -188,19 +202,19 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
   for (bool first_round = true; mask != 0; first_round = false) {
     FullParams scale;
     scale_normal_matrix(jtwj, mask, kInactiveEigenvalue, &workspace->scaled, &scale);
-    workspace->eigen.compute(workspace->scaled, Eigen::ComputeEigenvectors);
+    // Later rounds only confirm that no null direction is left: eigenvalues suffice.
+    workspace->eigen.compute(workspace->scaled, first_round ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
     if (workspace->eigen.info() != Eigen::Success) return Status::singular_system;
     const int count = mask_count(mask);
-    const FullParams& eigenvalues = workspace->eigen.eigenvalues();
-    const double sigma_max = singular_from_eigen(eigenvalues(kFullParamCount - 1));
+    const double sigma_max = singular_from_eigen(workspace->eigen.eigenvalues()(kFullParamCount - 1));
     if (first_round) {
       fill_spectrum(workspace->eigen, count, report->singular_values_before, &report->singular_count_before,
                     &report->condition_before);
     }
     int null_count = 0;
     for (int k = kFullParamCount - count; k < kFullParamCount; ++k) {
-      if (singular_from_eigen(eigenvalues(k)) >= threshold * sigma_max) break;
-      workspace->null_basis.col(null_count++) = workspace->eigen.eigenvectors().col(k);
+      if (singular_from_eigen(workspace->eigen.eigenvalues()(k)) >= threshold * sigma_max) break;
+      ++null_count;
     }
     if (null_count == 0) {
       fill_spectrum(workspace->eigen, count, report->singular_values_after, &report->singular_count_after,
@@ -208,11 +222,47 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
       report->kept_mask = mask;
       return Status::ok;
     }
+    if (!first_round) workspace->eigen.compute(workspace->scaled, Eigen::ComputeEigenvectors);
+    const int first_null = kFullParamCount - count;
+    for (int j = 0; j < null_count; ++j) workspace->null_basis.col(j) = workspace->eigen.eigenvectors().col(first_null + j);
     const ParamMask before_drop = mask;
     drop_null_directions(workspace, null_count, sigma_max, &mask, report);
     if (mask == before_drop) return Status::singular_system;
   }
   return Status::singular_system;
+}
+
+Status select_identifiable(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
+                           IdentifiabilityWorkspace* workspace, ParamMask* kept) {
+  const Status status = check_arguments(jtwj, free_mask, threshold);
+  if (status != Status::ok) return status;
+  ParamMask mask = free_mask & ~no_effect_params(jtwj, free_mask, threshold);
+  FullParams scale;
+  scale_normal_matrix(jtwj, mask, 0.0, &workspace->scaled, &scale);
+  const NormalMatrix& s = workspace->scaled;
+  NormalMatrix& l = workspace->null_basis;  // Cholesky rows of the kept columns, in kept order
+  int order[kFullParamCount] = {};
+  int count = 0;
+  for (int i = kFullParamCount - 1; i >= 0; --i) {  // the base first, theta1 last
+    if (!mask_has(mask, i)) continue;
+    // Forward substitution: the new row of L, and what is left of column i (squared
+    // distance from the span of the kept columns, which are of unit norm).
+    double left = s(i, i);
+    for (int j = 0; j < count; ++j) {
+      double value = s(i, order[j]);
+      for (int m = 0; m < j; ++m) value -= l(count, m) * l(j, m);
+      l(count, j) = value / l(j, j);
+      left -= l(count, j) * l(count, j);
+    }
+    if (left > threshold * threshold) {
+      l(count, count) = std::sqrt(left);
+      order[count++] = i;
+    } else {
+      mask &= ~param_bit(i);
+    }
+  }
+  *kept = mask;
+  return mask != 0 ? Status::ok : Status::singular_system;
 }
 
 }  // namespace hivecal

@@ -14,8 +14,6 @@ constexpr double kMedianNormPerAxisSigma = 1.5381722;
 constexpr double kHuberNoiseMultiple = 3.0;
 // Damping beyond which no step can lower the cost any more at double precision.
 constexpr double kMaxDamping = 1e16;
-// Rounds of (identifiability analysis, iterations) before the kept set must be final.
-constexpr int kMaxPhases = 4;
 // Joint positions closer than this count as the same pose [rad].
 constexpr double kSamePose_rad = 1e-9;
 
@@ -71,13 +69,13 @@ double gradient_cosine(const NormalEquations& eq, const FullParams& scale, Param
 /// Solves (D H D + damping I) step_s = -D g over the kept parameters, with D H D already in
 /// ws->system (damped in place); returns the step in parameter units (D step_s), 0 outside
 /// `kept`. False when the system cannot be solved.
-bool solve_step(LmWorkspace* ws, const FullParams& scale, ParamMask kept, double damping, FullParams* step,
-                FullParams* scaled_step) {
+bool solve_step(LmWorkspace* ws, const NormalEquations& eq, const FullParams& scale, ParamMask kept, double damping,
+                FullParams* step, FullParams* scaled_step) {
   FullParams rhs = FullParams::Zero();
   for (int i = 0; i < kFullParamCount; ++i) {
     if (!mask_has(kept, i)) continue;
     ws->system(i, i) += damping;
-    rhs(i) = -ws->normal.jtwr(i) * scale(i);
+    rhs(i) = -eq.jtwr(i) * scale(i);
   }
   ws->factorization.compute(ws->system);
   if (ws->factorization.info() != Eigen::Success) return false;
@@ -103,8 +101,7 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
 
 /// sigma_p = sqrt(diag(H^-1) * sum w r^2 / (3N - p)) over the kept parameters, from the
 /// normal equations at the final point (Jacobi-scaled for conditioning).
-Status parameter_sigmas(LmWorkspace* ws, ParamMask kept, LmResult* result) {
-  const NormalEquations& eq = ws->normal;
+Status parameter_sigmas(LmWorkspace* ws, const NormalEquations& eq, ParamMask kept, LmResult* result) {
   FullParams scale;
   scale_normal_matrix(eq.jtwj, kept, 1.0, &ws->system, &scale);
   ws->factorization.compute(ws->system);
@@ -144,84 +141,159 @@ double rms_of(double squares_sum_m2, std::size_t count) {
   return std::sqrt(squares_sum_m2 / static_cast<double>(count));
 }
 
-/// One damped Gauss-Newton step from `point` with the normal equations at `point` in
-/// ws->normal. Accepts it when the loss drops (moving *point and re-accumulating there) and
-/// adapts *damping (Nielsen). Sets *stop when a convergence test fires.
-bool try_step(const LmOptions& options, Span<const Sample> samples, ParamMask kept, LmWorkspace* ws,
-              Point* point, double* damping, double* growth, bool* stop, LmTermination* termination) {
-  const NormalEquations& eq = ws->normal;
+/// Everything one calibration works with.
+struct Run {
+  const LmOptions& options;
+  Span<const Sample> samples;
+  LmWorkspace* ws;
+  LmResult* result;
+  ParamMask free_mask;
+  ParamMask kept;
+  Point point;
+  NormalEquations* current;  ///< normal equations at `point`
+  NormalEquations* trial;    ///< normal equations at the last trial point
+  double damping;
+  double growth;
+  bool analysed;  ///< the reported identifiability analysis has run
+};
+
+/// Normal equations of `at` into *out: over the kept parameters, or, before the reported
+/// analysis, over the free ones plus the base translation (the analysis's reference scale,
+/// see analyze_identifiability).
+Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
+  ParamMask columns = run.kept;
+  if (!run.analysed) {
+    columns = run.free_mask;
+    for (int axis = 0; axis < 3; ++axis) columns |= param_bit(base_translation_param_index(axis));
+  }
+  return accumulate_normal_equations(at.model, at.base, run.samples, at.loss, out, columns);
+}
+
+/// The reported identifiability analysis of the current normal equations; sets the kept set.
+Status analyse(Run* run) {
+  const Status status =
+      analyze_identifiability(run->current->jtwj, run->free_mask, run->options.identifiability_threshold,
+                              &run->ws->identifiability, &run->result->identifiability);
+  run->kept = run->result->identifiability.kept_mask;
+  run->analysed = true;
+  return status;
+}
+
+/// Moves to an accepted trial point whose normal equations are in run->trial. Identifiability
+/// is a property of the geometry, and a start on a special configuration (a tool point on the
+/// flange axis hides theta6 and couples joint 5 with it) has ranks the solution does not: so
+/// the first step uses a quick selection at the start and the reported analysis runs after
+/// it, at a generic point. Sets *kept_changed when that analysis changed the kept set.
+Status move_to(Run* run, const Point& trial, bool* kept_changed) {
+  run->point = trial;
+  NormalEquations* swap = run->current;
+  run->current = run->trial;
+  run->trial = swap;
+  *kept_changed = false;
+  const double threshold_before_m = run->point.loss.huber_threshold_m;
+  Status status = update_huber_threshold(run->options, run->samples, &run->point);
+  if (status == Status::ok && run->point.loss.huber_threshold_m != threshold_before_m) {
+    status = accumulate(*run, run->point, run->current);  // IRLS weights for the new scale
+  }
+  if (status != Status::ok || run->analysed) return status;
+  const ParamMask before = run->kept;
+  status = analyse(run);
+  *kept_changed = run->kept != before;
+  return status;
+}
+
+/// One damped Gauss-Newton step from the current point. Accepts it when the loss drops and
+/// adapts the damping (Nielsen). Sets *stop, with the reason, when a convergence test fires
+/// or the accepted point cannot be prepared.
+bool try_step(Run* run, bool* stop, LmTermination* termination) {
+  LmWorkspace* ws = run->ws;
+  const LmOptions& options = run->options;
+  const NormalEquations& eq = *run->current;
   FullParams scale;
   FullParams step;
   FullParams scaled_step;
-  scale_normal_matrix(eq.jtwj, kept, 1.0, &ws->system, &scale);
+  scale_normal_matrix(eq.jtwj, run->kept, 1.0, &ws->system, &scale);
   *stop = true;
-  if (gradient_cosine(eq, scale, kept) <= options.gradient_tolerance) {
+  if (gradient_cosine(eq, scale, run->kept) <= options.gradient_tolerance) {
     *termination = LmTermination::gradient;
     return false;
   }
-  if (!solve_step(ws, scale, kept, *damping, &step, &scaled_step)) {
+  if (!solve_step(ws, eq, scale, run->kept, run->damping, &step, &scaled_step)) {
     *stop = false;
     return false;
   }
-  const double model_decrease = scaled_quadratic(eq.jtwj, scale, kept, scaled_step);
+  const double model_decrease = scaled_quadratic(eq.jtwj, scale, run->kept, scaled_step);
   if (std::sqrt(model_decrease / static_cast<double>(eq.count)) < options.step_tolerance_m) {
     *termination = LmTermination::step_size;
     return false;
   }
   *stop = false;
-  Point trial = *point;
+  // The trial's normal equations are summed right away: steps are nearly always accepted,
+  // and then they are the next iteration's (a separate cost pass would be wasted).
+  Point trial = run->point;
   apply_full_increment(step, &trial.model, &trial.base);
-  double trial_loss_m2 = 0.0;
-  double trial_squares_m2 = 0.0;
-  const Status status =
-      evaluate_point_loss(trial.model, trial.base, samples, trial.loss, &trial_loss_m2, &trial_squares_m2);
+  const Status status = accumulate(*run, trial, run->trial);
   // Predicted decrease of sum w|r + J d|^2: d^T S d + 2 lambda |d_s|^2 (scaled units).
-  const double predicted = model_decrease + 2.0 * *damping * scaled_step.squaredNorm();
-  const double actual = eq.loss_sum_m2 - trial_loss_m2;
+  const double predicted = model_decrease + 2.0 * run->damping * scaled_step.squaredNorm();
+  const double actual = eq.loss_sum_m2 - run->trial->loss_sum_m2;
   const double gain = status == Status::ok && predicted > 0.0 ? actual / predicted : -1.0;
   if (!(gain > 0.0)) return false;
   const double cube = 2.0 * gain - 1.0;
-  *damping *= std::fmax(1.0 / 3.0, 1.0 - cube * cube * cube);
-  *growth = 2.0;
+  run->damping *= std::fmax(1.0 / 3.0, 1.0 - cube * cube * cube);
+  run->growth = 2.0;
   const bool small_change = actual <= options.cost_tolerance * eq.loss_sum_m2;
-  *point = trial;
-  if (update_huber_threshold(options, samples, point) != Status::ok ||
-      accumulate_normal_equations(point->model, point->base, samples, point->loss, &ws->normal) != Status::ok) {
+  bool kept_changed = false;
+  if (move_to(run, trial, &kept_changed) != Status::ok) {
     *stop = true;  // cannot happen: the same point evaluated finite a moment ago
     *termination = LmTermination::no_progress;
-  } else if (small_change) {
+  } else if (small_change && !kept_changed) {
     *stop = true;
     *termination = LmTermination::cost_change;
   }
   return true;
 }
 
-/// The Levenberg-Marquardt iterations from `point` with the normal equations at `point`
-/// already in ws->normal, until a test fires or the shared iteration budget is spent.
-/// Every iteration that tried a step is traced and reported to the observer.
-LmTermination iterate(const LmOptions& options, Span<const Sample> samples, ParamMask kept, LmWorkspace* ws,
-                      Point* point, LmResult* result, TraceBase* trace, LmObserver* observer) {
-  double damping = options.initial_damping;
-  double growth = 2.0;
-  while (result->iterations < options.max_iterations) {
+/// The Levenberg-Marquardt iterations until a test fires or the budget is spent. Every
+/// iteration that tried a step is traced and reported to the observer.
+LmTermination iterate(Run* run, TraceBase* trace, LmObserver* observer) {
+  LmResult* result = run->result;
+  while (result->iterations < run->options.max_iterations) {
     const int iteration = ++result->iterations;
     bool stop = false;
     LmTermination termination = LmTermination::no_progress;
-    const double used_damping = damping;
-    const bool accepted = try_step(options, samples, kept, ws, point, &damping, &growth, &stop, &termination);
+    const double used_damping = run->damping;
+    const bool accepted = try_step(run, &stop, &termination);
     if (stop && !accepted) return termination;  // converged before stepping: nothing to report
     if (!accepted) {
-      damping *= growth;
-      growth *= 2.0;
+      run->damping *= run->growth;
+      run->growth *= 2.0;
     }
-    const double rms_m = rms_of(ws->normal.squares_sum_m2, ws->normal.count);
+    const NormalEquations& eq = *run->current;
+    const double rms_m = rms_of(eq.squares_sum_m2, eq.count);
     if (trace != nullptr) trace->push(rms_m);
-    const LmIterationInfo info{iteration, rms_m, ws->normal.loss_sum_m2, used_damping, accepted};
+    const LmIterationInfo info{iteration, rms_m, eq.loss_sum_m2, used_damping, accepted};
     if (observer != nullptr && !observer->on_iteration(info)) return LmTermination::cancelled;
     if (stop) return termination;
-    if (damping > kMaxDamping) return LmTermination::no_progress;
+    if (run->damping > kMaxDamping) return LmTermination::no_progress;
   }
   return LmTermination::max_iterations;
+}
+
+/// Starts a run: base transform, Huber scale, normal equations and a quick selection of the
+/// identifiable parameters at the start point.
+Status start(const RigidTransform* start_base_to_tracker, Run* run) {
+  Point& point = run->point;
+  if (start_base_to_tracker != nullptr) {
+    point.base = *start_base_to_tracker;
+  } else {
+    const Status fit = fit_base_to_tracker(point.model, run->samples, &point.base);
+    if (fit != Status::ok) return fit;
+  }
+  Status status = update_huber_threshold(run->options, run->samples, &point);
+  if (status == Status::ok) status = accumulate(*run, point, run->current);
+  if (status != Status::ok) return status;
+  return select_identifiable(run->current->jtwj, run->free_mask, run->options.identifiability_threshold,
+                             &run->ws->identifiability, &run->kept);
 }
 
 Status status_of(LmTermination termination) {
@@ -269,42 +341,24 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   ParamMask free_mask = 0;
   Status status = validate_inputs(start_model, start_base_to_tracker, samples, options, &free_mask);
   if (status != Status::ok) return status;
-  Point point{start_model, RigidTransform{}, PointLoss{}};
-  if (start_base_to_tracker != nullptr) {
-    point.base = *start_base_to_tracker;
-  } else {
-    status = fit_base_to_tracker(start_model, samples, &point.base);
-    if (status != Status::ok) return status;
-  }
   *result = LmResult{};
-  status = update_huber_threshold(options, samples, &point);
-  if (status == Status::ok) {
-    status = accumulate_normal_equations(point.model, point.base, samples, point.loss, &workspace->normal);
-  }
+  Run run{options, samples, workspace, result, free_mask, 0, Point{start_model, RigidTransform{}, PointLoss{}},
+          &workspace->normal, &workspace->trial, options.initial_damping, 2.0, false};
+  status = start(start_base_to_tracker, &run);
   if (status != Status::ok) return status;
-  if (trace != nullptr) trace->push(rms_of(workspace->normal.squares_sum_m2, samples.size()));
-  // Identifiability is a property of the geometry: a start on a special configuration (a
-  // tool point on the flange axis hides theta6 and couples joint 5 with it) can lose ranks
-  // the solution has. So the analysis is repeated at each converged point until the kept
-  // set no longer changes; dropped parameters stay at their values from before.
-  ParamMask kept = 0;
-  for (int phase = 0; phase < kMaxPhases; ++phase) {
-    status = analyze_identifiability(workspace->normal.jtwj, free_mask, options.identifiability_threshold,
-                                     &workspace->identifiability, &result->identifiability);
+  if (trace != nullptr) trace->push(rms_of(run.current->squares_sum_m2, samples.size()));
+  result->termination = iterate(&run, trace, observer);
+  if (!run.analysed) {  // no step was accepted: report the analysis at the start point
+    status = accumulate(run, run.point, run.current);
+    if (status == Status::ok) status = analyse(&run);
     if (status != Status::ok) return status;
-    if (result->identifiability.kept_mask == kept) break;
-    kept = result->identifiability.kept_mask;
-    result->termination = iterate(options, samples, kept, workspace, &point, result, trace, observer);
-    if (result->termination == LmTermination::max_iterations || result->termination == LmTermination::cancelled) {
-      break;
-    }
   }
-  result->model = point.model;
-  result->base_to_tracker = point.base;
-  result->loss_sum_m2 = workspace->normal.loss_sum_m2;
-  result->rms_m = rms_of(workspace->normal.squares_sum_m2, samples.size());
-  result->huber_threshold_m = point.loss.huber_threshold_m;
-  status = parameter_sigmas(workspace, kept, result);
+  result->model = run.point.model;
+  result->base_to_tracker = run.point.base;
+  result->loss_sum_m2 = run.current->loss_sum_m2;
+  result->rms_m = rms_of(run.current->squares_sum_m2, samples.size());
+  result->huber_threshold_m = run.point.loss.huber_threshold_m;
+  status = parameter_sigmas(workspace, *run.current, run.kept, result);
   if (status != Status::ok) return status;
   return status_of(result->termination);
 }

@@ -64,11 +64,21 @@ struct IdentifiabilityWorkspace {
 };
 
 /// Analyses normal equations J^T W J (from accumulate_normal_equations) over the parameters
-/// in `free_mask`: drops no-effect columns (norm below threshold * largest), then null
-/// directions (sigma_k / sigma_max below threshold), and fills *report.
+/// in `free_mask`: drops no-effect columns (norm below threshold * the largest diagonal
+/// entry of all 33: accumulate the base translation columns too, whose norm sqrt(sum w) is
+/// the physical reference), then null directions (sigma_k / sigma_max of the column-scaled
+/// Jacobian below threshold), and fills *report.
 /// Errors: invalid_argument (threshold not in (0, 1), empty or out-of-range mask),
 /// non_finite_input, singular_system (no parameter left).
 Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
                                IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report);
+
+/// Fast selection without a report (a pivoted Cholesky, no eigen-decomposition): drops the
+/// no-effect parameters as above, then, from the base down to theta1 (the reverse of the
+/// analysis's drop priority), keeps each free parameter whose scaled column is at least
+/// `threshold` away from the span of the ones kept before. Gives the analysis's kept set on
+/// clear-cut data; the solver uses it for its first step. Errors: as analyze_identifiability.
+Status select_identifiable(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
+                           IdentifiabilityWorkspace* workspace, ParamMask* kept);
 
 }  // namespace hivecal

@@ -51,7 +51,7 @@ struct LmOptions {
   double cost_tolerance = 1e-12;              ///< stop on relative cost decrease below this [-]
   double step_tolerance_m = 1e-12;            ///< stop when the step moves predictions less (RMS) [m]
   double gradient_tolerance = 1e-10;          ///< stop when max |cos(column, residual)| is below [-]
-  double initial_damping = 1e-3;              ///< lambda at start, relative to the scaled diagonal (1) [-]
+  double initial_damping = 1e-6;              ///< lambda at start, relative to the scaled diagonal (1) [-]
   LmLoss loss = LmLoss::squared;              ///< per-sample loss
   double huber_threshold_m = 0.0;             ///< Huber k [m]; 0: 3 x noise sigma estimated from the median residual
   double identifiability_threshold = kDefaultIdentifiabilityThreshold;  ///< sigma_k / sigma_max to drop [-]
@@ -98,10 +98,11 @@ struct LmResult {
   LmTermination termination = LmTermination::max_iterations;  ///< why it stopped
 };
 
-/// Scratch memory of the solver (~45 kB): give it static storage or put it in the
+/// Scratch memory of the solver (~54 kB): give it static storage or put it in the
 /// caller's memory plan, not on a small stack.
 struct LmWorkspace {
-  NormalEquations normal;                     ///< normal equations at the current point
+  NormalEquations normal;                     ///< normal equations at one point (current or trial)
+  NormalEquations trial;                      ///< the same at the other point
   NormalMatrix system;                        ///< scaled, damped system matrix
   Eigen::LDLT<NormalMatrix> factorization;    ///< its factorization
   IdentifiabilityWorkspace identifiability;   ///< scratch of the identifiability analysis
