@@ -113,6 +113,7 @@ CeresOutcome run_ceres(const hivecal::RobotModel& start, const hivecal::RigidTra
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
+  if (std::getenv("BENCH_VERBOSE") != nullptr) std::printf("%s\n", summary.FullReport().c_str());
 
   CeresOutcome out;
   out.usable = summary.IsSolutionUsable();
@@ -168,34 +169,30 @@ int main(int argc, char** argv) {
 
   static LmWorkspace workspace;
   static LmResult ours;
-  std::vector<double> our_times;
-  Status status = Status::ok;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    status = calibrate_lm(start, &start_base, train.samples(), LmOptions{}, &workspace, &ours);
-    our_times.push_back(seconds_since(t0));
-  }
-  if (status != Status::ok) {
-    std::fprintf(stderr, "hivecal LM failed: %s\n", status_message(status));
+  if (calibrate_lm(start, &start_base, train.samples(), LmOptions{}, &workspace, &ours) != Status::ok) {
+    std::fprintf(stderr, "hivecal LM failed\n");
     return 1;
   }
-
   const ParamMask kept = ours.identifiability.kept_mask;
-  std::vector<double> ceres_times;
-  CeresOutcome theirs;
-  const int ceres_repeats = std::max(1, repeats / 4);
-  for (int r = 0; r < ceres_repeats; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    theirs = run_ceres(start, start_base, train.samples(), kept);
-    ceres_times.push_back(seconds_since(t0));
-  }
+  CeresOutcome theirs = run_ceres(start, start_base, train.samples(), kept);
   if (!theirs.usable) {
     std::fprintf(stderr, "Ceres found no usable solution\n");
     return 1;
   }
-
-  const double our_time = median(our_times);
-  const double ceres_time = median(ceres_times);
+  // Interleaved, so that both see the same machine load; the minimum is the least disturbed
+  // run, the median the typical one.
+  std::vector<double> our_times;
+  std::vector<double> ceres_times;
+  for (int r = 0; r < repeats; ++r) {
+    auto t0 = std::chrono::steady_clock::now();
+    (void)calibrate_lm(start, &start_base, train.samples(), LmOptions{}, &workspace, &ours);
+    our_times.push_back(seconds_since(t0));
+    t0 = std::chrono::steady_clock::now();
+    theirs = run_ceres(start, start_base, train.samples(), kept);
+    ceres_times.push_back(seconds_since(t0));
+  }
+  const double our_time = *std::min_element(our_times.begin(), our_times.end());
+  const double ceres_time = *std::min_element(ceres_times.begin(), ceres_times.end());
   const auto mae = [](const RobotModel& m, const RigidTransform& b, const DatasetBase& d) {
     return position_error_stats(m, b, d.samples()).mae(ErrorAxis::norm_3d);
   };
@@ -203,14 +200,16 @@ int main(int argc, char** argv) {
   const double ceres_mae = mae(theirs.model, theirs.base, fresh);
   std::printf("UR5, %zu samples, noise %.1f um/axis, %d free parameters of 33 (%d dropped by identifiability)\n",
               count, noise_m * 1e6, ours.identifiability.kept_count(), ours.identifiability.dropped_count);
-  std::printf("%-22s %12s %10s %22s %22s\n", "solver", "time [ms]", "iterations", "validation MAE [um]",
-              "vs noise-free [um]");
-  std::printf("%-22s %12.3f %10d %22.4f %22.4f\n", "hivecal LM", our_time * 1e3, ours.iterations, our_mae * 1e6,
-              mae(ours.model, ours.base_to_tracker, fresh_exact) * 1e6);
-  std::printf("%-22s %12.3f %10d %22.4f %22.4f\n", "Ceres LM (DENSE_QR)", ceres_time * 1e3, theirs.iterations,
-              ceres_mae * 1e6, mae(theirs.model, theirs.base, fresh_exact) * 1e6);
-  std::printf("speed-up: %.1fx (target >= 20x); MAE difference: %.3f %% (target <= 1 %%)\n", ceres_time / our_time,
-              100.0 * (our_mae - ceres_mae) / ceres_mae);
+  std::printf("%-22s %14s %14s %10s %20s %20s\n", "solver", "min time [ms]", "median [ms]", "iterations",
+              "valid. MAE [um]", "vs noise-free [um]");
+  std::printf("%-22s %14.3f %14.3f %10d %20.4f %20.4f\n", "hivecal LM", our_time * 1e3, median(our_times) * 1e3,
+              ours.iterations, our_mae * 1e6, mae(ours.model, ours.base_to_tracker, fresh_exact) * 1e6);
+  std::printf("%-22s %14.3f %14.3f %10d %20.4f %20.4f\n", "Ceres LM (DENSE_QR)", ceres_time * 1e3,
+              median(ceres_times) * 1e3, theirs.iterations, ceres_mae * 1e6,
+              mae(theirs.model, theirs.base, fresh_exact) * 1e6);
+  std::printf("speed-up: %.1fx on the minimum, %.1fx on the median (target >= 20x); MAE difference: %.3f %% "
+              "(target <= 1 %%)\n",
+              ceres_time / our_time, median(ceres_times) / median(our_times), 100.0 * (our_mae - ceres_mae) / ceres_mae);
   std::printf("max prediction gap between the two calibrations: %.3g um\n",
               test::max_prediction_gap(ours.model, ours.base_to_tracker, theirs.model, theirs.base,
                                        fresh.samples()) * 1e6);

@@ -22,8 +22,9 @@ Mat3 skew(const Vec3& v) {
   return k;
 }
 
-Vec3 point_residual(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample) {
-  return base_to_tracker.apply(fk_tool_point(model, sample.q_rad)) - sample.point_m;
+Vec3 point_residual(const RobotModel& model, const TwistTrig& trig, const RigidTransform& base_to_tracker,
+                   const Sample& sample) {
+  return base_to_tracker.apply(fk_tool_point(model, trig, sample.q_rad)) - sample.point_m;
 }
 
 /// The parameters of a mask as a list of indices, increasing.
@@ -40,12 +41,26 @@ IndexList indices_of(ParamMask mask) {
   return list;
 }
 
-/// Rows of the local Jacobian [J_tool | -skew(p) | I] at the listed columns, gathered into
-/// contiguous arrays, and the residual rotated into the base frame, R^T r [m].
-Vec3 local_rows(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
-                const IndexList& columns, double rows[3][kFullParamCount]) {
+/// Samples whose Jacobian rows are summed into the normal matrix together: each entry is
+/// then loaded and stored once per batch instead of once per sample (memory traffic, not
+/// arithmetic, bounds this update). 2 samples keep the scratch at 1.6 kB of stack.
+constexpr int kBatchSamples = 2;
+constexpr int kBatchRows = 3 * kBatchSamples;
+
+/// Jacobian rows of a few samples over the listed columns, with their weights and residuals.
+struct RowBatch {
+  double rows[kBatchRows][kFullParamCount];  ///< local Jacobian rows, compact column order
+  double weight[kBatchRows] = {};            ///< IRLS weight of each row's sample
+  double residual_m[kBatchRows] = {};        ///< residual component of each row (base frame) [m]
+  int samples = 0;                           ///< samples held
+};
+
+/// Appends one sample's rows of the local Jacobian [J_tool | -skew(p) | I] at the listed
+/// columns; returns its residual rotated into the base frame, R^T r [m].
+Vec3 add_rows(const RobotModel& model, const TwistTrig& trig, const RigidTransform& base_to_tracker,
+              const Sample& sample, const IndexList& columns, double (*rows)[kFullParamCount]) {
   ToolPointJacobian tool_jacobian;
-  const Vec3 point_m = tool_point_jacobian(model, sample.q_rad, &tool_jacobian);
+  const Vec3 point_m = tool_point_jacobian(model, trig, sample.q_rad, &tool_jacobian);
   for (int k = 0; k < columns.count; ++k) {
     const int c = columns.index[k];
     if (c < kModelParamCount) {
@@ -61,19 +76,32 @@ Vec3 local_rows(const RobotModel& model, const RigidTransform& base_to_tracker, 
   return base_to_tracker.rotation.transpose() * (base_to_tracker.apply(point_m) - sample.point_m);
 }
 
-/// eq += w J^T J and w J^T r over the listed columns, in compact coordinates (entry (k, l)
-/// for columns index[k], index[l]; upper triangle), one contiguous column at a time.
-void add_weighted_sample(const double rows[3][kFullParamCount], const Vec3& residual_m, double weight, int count,
-                         NormalEquations* eq) {
+/// eq += sum over the batch of w J^T J and w J^T r, in compact coordinates (entry (k, l) for
+/// columns index[k], index[l]; upper triangle), one contiguous column at a time. Unused rows
+/// are zero, which adds exact zeros.
+void flush(RowBatch* batch, int count, NormalEquations* eq) {
+  for (int j = 3 * batch->samples; j < kBatchRows; ++j) {
+    for (int k = 0; k < count; ++k) batch->rows[j][k] = 0.0;
+    batch->weight[j] = 0.0;
+    batch->residual_m[j] = 0.0;
+  }
   double* compact = eq->jtwj.data();
   for (int l = 0; l < count; ++l) {
-    const double w0 = weight * rows[0][l];
-    const double w1 = weight * rows[1][l];
-    const double w2 = weight * rows[2][l];
-    eq->jtwr(l) += w0 * residual_m(0) + w1 * residual_m(1) + w2 * residual_m(2);
+    double w[kBatchRows];
+    double gradient = 0.0;
+    for (int j = 0; j < kBatchRows; ++j) {
+      w[j] = batch->weight[j] * batch->rows[j][l];
+      gradient += w[j] * batch->residual_m[j];
+    }
+    eq->jtwr(l) += gradient;
     double* column = compact + l * kFullParamCount;
-    for (int k = 0; k <= l; ++k) column[k] += rows[0][k] * w0 + rows[1][k] * w1 + rows[2][k] * w2;
+    for (int k = 0; k <= l; ++k) {
+      double sum = 0.0;
+      for (int j = 0; j < kBatchRows; ++j) sum += batch->rows[j][k] * w[j];
+      column[k] += sum;
+    }
   }
+  batch->samples = 0;
 }
 
 /// Moves the compact sums to their parameter positions and mirrors the upper triangle.
@@ -158,7 +186,8 @@ void apply_full_increment(const FullParams& increment, RobotModel* model, RigidT
 Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
                              FullJacobian* local_jacobian) {
   double rows[3][kFullParamCount];
-  const Vec3 local_residual_m = local_rows(model, base_to_tracker, sample, indices_of(kAllParamsMask), rows);
+  const Vec3 local_residual_m =
+      add_rows(model, twist_trig(model), base_to_tracker, sample, indices_of(kAllParamsMask), rows);
   for (int c = 0; c < kFullParamCount; ++c)
     for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
   return local_residual_m;
@@ -210,19 +239,27 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   eq.squares_sum_m2 = 0.0;
   eq.count = samples.size();
   const IndexList list = indices_of(columns);
-  double rows[3][kFullParamCount];
+  const TwistTrig trig = twist_trig(model);
+  RowBatch batch;
   for (const Sample& sample : samples) {
-    const Vec3 residual_m = local_rows(model, base_to_tracker, sample, list, rows);
+    const int first_row = 3 * batch.samples;
+    const Vec3 residual_m = add_rows(model, trig, base_to_tracker, sample, list, batch.rows + first_row);
     const double squared = residual_m.squaredNorm();
     const double norm_m = std::sqrt(squared);
     const double weight = loss.weight(norm_m);
-    add_weighted_sample(rows, residual_m, weight, list.count, &eq);
+    for (int r = 0; r < 3; ++r) {
+      batch.weight[first_row + r] = weight;
+      batch.residual_m[first_row + r] = residual_m(r);
+    }
+    if (++batch.samples == kBatchSamples) flush(&batch, list.count, &eq);
     eq.loss_sum_m2 += loss.rho(norm_m);
     eq.weighted_squares_m2 += weight * squared;
     eq.squares_sum_m2 += squared;
   }
+  if (batch.samples > 0) flush(&batch, list.count, &eq);
   expand_compact(list, &eq);
-  if (!math::is_finite(eq.loss_sum_m2) || !all_finite(eq.jtwr) || !all_finite(eq.jtwj)) {
+  // A NaN or Inf anywhere in J or r reaches the diagonal, the gradient or the loss.
+  if (!math::is_finite(eq.loss_sum_m2) || !all_finite(eq.jtwr) || !all_finite(eq.jtwj.diagonal())) {
     return Status::non_finite_input;
   }
   return Status::ok;
@@ -232,10 +269,11 @@ Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_t
                            Span<const Sample> samples, const PointLoss& loss, double* loss_sum_m2,
                            double* squares_sum_m2) {
   if (samples.empty()) return Status::dataset_empty;
+  const TwistTrig trig = twist_trig(model);
   double loss_sum = 0.0;
   double squares = 0.0;
   for (const Sample& sample : samples) {
-    const double squared = point_residual(model, base_to_tracker, sample).squaredNorm();
+    const double squared = point_residual(model, trig, base_to_tracker, sample).squaredNorm();
     loss_sum += loss.rho(std::sqrt(squared));
     squares += squared;
   }
@@ -248,9 +286,10 @@ Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_t
 Status median_residual_norm(const RobotModel& model, const RigidTransform& base_to_tracker,
                             Span<const Sample> samples, double* median_m) {
   if (samples.empty()) return Status::dataset_empty;
+  const TwistTrig trig = twist_trig(model);
   std::size_t counts[kHistogramBins + 2] = {};
   for (const Sample& sample : samples) {
-    const double norm_m = point_residual(model, base_to_tracker, sample).norm();
+    const double norm_m = point_residual(model, trig, base_to_tracker, sample).norm();
     if (!math::is_finite(norm_m)) return Status::non_finite_input;
     ++counts[histogram_bin(norm_m)];
   }
@@ -267,7 +306,7 @@ Status median_residual_norm(const RobotModel& model, const RigidTransform& base_
   const double upper_m = bin <= kHistogramBins ? histogram_bin_lower_m(bin + 1) : 10.0 * lower_m;
   std::size_t refined[kRefineBins] = {};
   for (const Sample& sample : samples) {
-    const double norm_m = point_residual(model, base_to_tracker, sample).norm();
+    const double norm_m = point_residual(model, trig, base_to_tracker, sample).norm();
     if (histogram_bin(norm_m) != bin) continue;
     const double position = (norm_m - lower_m) / (upper_m - lower_m) * kRefineBins;
     int sub = position <= 0.0 ? 0 : static_cast<int>(position);
