@@ -10,6 +10,14 @@
 
 namespace hivecal::test {
 
+/// Three standard normal deviates, drawn x, y, z in this order (constructor arguments would
+/// be evaluated in an unspecified order, so the data would differ between compilers/targets).
+inline Vec3 gaussian_vector(Random* random) {
+  Vec3 v;
+  v << random->normal(), random->normal(), random->normal();  // comma initialiser: sequenced
+  return v;
+}
+
 /// perturbed_model, but joints 2-4 stay exactly parallel (alpha2 = alpha3 = 0, as standard
 /// DH assumes for a UR: a tilt between parallel axes is not a DH parameter), with `tool_m`.
 inline RobotModel perturbed_parallel_model(RobotType type, Random* random, double length_sigma_m,
@@ -62,7 +70,7 @@ inline void fill_tool_down_dataset(const RobotModel& truth, const RigidTransform
                                    double noise_m, Random* random, DatasetBase* dataset) {
   for (std::size_t i = 0; i < count; ++i) {
     const JointVector q = tool_down_joints(truth, i % 2 == 1, random);
-    const Vec3 noise(random->normal(), random->normal(), random->normal());
+    const Vec3 noise = gaussian_vector(random);
     (void)dataset->add(q, base_to_tracker.apply(fk_tool_point(truth, q)) + noise_m * noise);
   }
 }
@@ -75,7 +83,7 @@ inline void copy_with_outliers(const DatasetBase& source, std::size_t period, st
   for (std::size_t i = 0; i < source.size(); ++i) {
     Vec3 point = source.samples()[i].point_m;
     if (i % period == offset) {
-      const Vec3 direction(random->normal(), random->normal(), random->normal());
+      const Vec3 direction = gaussian_vector(random);
       point += direction.normalized() * random->uniform(min_m, max_m);
     }
     (void)target->add(source.samples()[i].q_rad, point);

@@ -152,7 +152,7 @@ TEST(Lm, SigmaMatchesMonteCarloSpread) {
   for (int run = 0; run < kRuns; ++run) {
     noisy.clear();
     for (const Sample& sample : poses.samples()) {
-      const Vec3 noise(random.normal(), random.normal(), random.normal());
+      const Vec3 noise = test::gaussian_vector(&random);
       ASSERT_EQ(noisy.add(sample.q_rad, sample.point_m + noise_m * noise), Status::ok);
     }
     Status status = Status::ok;

@@ -72,7 +72,7 @@ TEST_F(LmErrors, AllSamplesAtOnePose) {
   const JointVector q = test::random_joints(&random);
   for (Sample& s : samples) {
     s.q_rad = q;
-    s.point_m = base.apply(fk_tool_point(model, q)) + 1e-5 * Vec3(random.normal(), random.normal(), random.normal());
+    s.point_m = base.apply(fk_tool_point(model, q)) + 1e-5 * test::gaussian_vector(&random);
   }
   EXPECT_EQ(run(samples), Status::poses_not_distinct);
   EXPECT_EQ(run(samples, LmOptions{}, &base), Status::poses_not_distinct);

@@ -16,7 +16,7 @@ TEST(FullModel, RotationFromVectorIsRodrigues) {
   Random random(301);
   for (int trial = 0; trial < 200; ++trial) {
     const double scale = trial % 2 == 0 ? 1e-6 : 2.0;  // both the series and the trig branch
-    const Vec3 v(scale * random.normal(), scale * random.normal(), scale * random.normal());
+    const Vec3 v = scale * test::gaussian_vector(&random);
     Mat3 r;
     EXPECT_NO_HEAP(r = rotation_from_vector(v));
     EXPECT_LT((r * r.transpose() - Mat3::Identity()).norm(), 1e-14);
@@ -49,8 +49,8 @@ TEST(FullModel, ResidualJacobianMatchesCentralDifferences) {
     RobotModel model = test::perturbed_model(nominal_model(RobotType::ur10), &random, 5e-3, 5e-3);
     model.tool_m << random.uniform(-0.05, 0.05), random.uniform(-0.05, 0.05), random.uniform(0.0, 0.2);
     RigidTransform base = test::example_base_to_tracker();
-    base.rotation = base.rotation * rotation_from_vector(Vec3(random.normal(), random.normal(), random.normal()));
-    const Sample sample{test::random_joints(&random), Vec3(random.normal(), random.normal(), random.normal())};
+    base.rotation = base.rotation * rotation_from_vector(test::gaussian_vector(&random));
+    const Sample sample{test::random_joints(&random), test::gaussian_vector(&random)};
     FullJacobian jacobian;
     Vec3 residual;
     EXPECT_NO_HEAP(residual = full_residual_jacobian(model, base, sample, &jacobian));
