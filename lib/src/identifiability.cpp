@@ -141,27 +141,18 @@ void drop_null_directions(IdentifiabilityWorkspace* ws, int null_count, double s
   }
 }
 
-/// The free parameters whose column norm is below threshold * the largest column of all 33
-/// (the base translation columns, |e_k| per sample, are among them when accumulated, so a
-/// single free parameter is still judged against a physical scale).
-ParamMask no_effect_params(const NormalMatrix& jtwj, ParamMask free_mask, double threshold) {
+/// Drops and reports the free parameters whose column norm is below threshold * the largest
+/// column of all 33 (the base translation columns, |e_k| per sample, are among them when
+/// accumulated, so a single free parameter is still judged against a physical scale);
+/// returns the free ones left.
+ParamMask drop_no_effect(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
+                         IdentifiabilityReport* report) {
   double largest = 0.0;
   for (int i = 0; i < kFullParamCount; ++i) largest = std::fmax(largest, std::sqrt(jtwj(i, i)));
   ParamMask no_effect = 0;
   for (int i = 0; i < kFullParamCount; ++i) {
-    if (mask_has(free_mask, i) && !(std::sqrt(jtwj(i, i)) > threshold * largest)) no_effect |= param_bit(i);
-  }
-  return no_effect;
-}
-
-/// Reports the no-effect parameters; returns the free ones left.
-ParamMask drop_no_effect(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
-                         IdentifiabilityReport* report) {
-  const ParamMask no_effect = no_effect_params(jtwj, free_mask, threshold);
-  double largest = 0.0;
-  for (int i = 0; i < kFullParamCount; ++i) largest = std::fmax(largest, std::sqrt(jtwj(i, i)));
-  for (int i = 0; i < kFullParamCount; ++i) {
-    if (!mask_has(no_effect, i)) continue;
+    if (!mask_has(free_mask, i) || std::sqrt(jtwj(i, i)) > threshold * largest) continue;
+    no_effect |= param_bit(i);
     DroppedParam& entry = report->dropped[report->dropped_count++];
     entry = DroppedParam{};
     entry.index = i;
@@ -182,6 +173,22 @@ Status check_arguments(const NormalMatrix& jtwj, ParamMask free_mask, double thr
 
 }  // namespace
 
+void clear_report(IdentifiabilityReport* report) {
+  // Field by field: `*report = IdentifiabilityReport{}` would build a 2.7 kB temporary on the stack.
+  report->free_mask = 0;
+  report->kept_mask = 0;
+  report->dropped_count = 0;
+  for (DroppedParam& entry : report->dropped) entry = DroppedParam{};
+  report->singular_count_before = 0;
+  report->singular_count_after = 0;
+  for (int k = 0; k < kFullParamCount; ++k) {
+    report->singular_values_before[k] = 0.0;
+    report->singular_values_after[k] = 0.0;
+  }
+  report->condition_before = 0.0;
+  report->condition_after = 0.0;
+}
+
 const char* drop_reason_name(DropReason reason) {
   switch (reason) {
     case DropReason::no_effect: return "no_effect";
@@ -194,7 +201,7 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
                                IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report) {
   const Status status = check_arguments(jtwj, free_mask, threshold);
   if (status != Status::ok) return status;
-  *report = IdentifiabilityReport{};
+  clear_report(report);
   report->free_mask = free_mask;
   ParamMask mask = drop_no_effect(jtwj, free_mask, threshold, report);
   // Each round removes every direction it finds; a second round only confirms (or catches a
@@ -230,39 +237,6 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
     if (mask == before_drop) return Status::singular_system;
   }
   return Status::singular_system;
-}
-
-Status select_identifiable(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
-                           IdentifiabilityWorkspace* workspace, ParamMask* kept) {
-  const Status status = check_arguments(jtwj, free_mask, threshold);
-  if (status != Status::ok) return status;
-  ParamMask mask = free_mask & ~no_effect_params(jtwj, free_mask, threshold);
-  FullParams scale;
-  scale_normal_matrix(jtwj, mask, 0.0, &workspace->scaled, &scale);
-  const NormalMatrix& s = workspace->scaled;
-  NormalMatrix& l = workspace->null_basis;  // Cholesky rows of the kept columns, in kept order
-  int order[kFullParamCount] = {};
-  int count = 0;
-  for (int i = kFullParamCount - 1; i >= 0; --i) {  // the base first, theta1 last
-    if (!mask_has(mask, i)) continue;
-    // Forward substitution: the new row of L, and what is left of column i (squared
-    // distance from the span of the kept columns, which are of unit norm).
-    double left = s(i, i);
-    for (int j = 0; j < count; ++j) {
-      double value = s(i, order[j]);
-      for (int m = 0; m < j; ++m) value -= l(count, m) * l(j, m);
-      l(count, j) = value / l(j, j);
-      left -= l(count, j) * l(count, j);
-    }
-    if (left > threshold * threshold) {
-      l(count, count) = std::sqrt(left);
-      order[count++] = i;
-    } else {
-      mask &= ~param_bit(i);
-    }
-  }
-  *kept = mask;
-  return mask != 0 ? Status::ok : Status::singular_system;
 }
 
 }  // namespace hivecal

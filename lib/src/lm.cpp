@@ -141,6 +141,20 @@ double rms_of(double squares_sum_m2, std::size_t count) {
   return std::sqrt(squares_sum_m2 / static_cast<double>(count));
 }
 
+/// Resets *result in place (`*result = LmResult{}` would build a 3.3 kB temporary on the stack).
+void clear_result(LmResult* result) {
+  result->model = RobotModel{};
+  result->base_to_tracker = RigidTransform{};
+  clear_report(&result->identifiability);
+  result->sigma.setZero();
+  result->loss_sum_m2 = 0.0;
+  result->rms_m = 0.0;
+  result->residual_sigma_m = 0.0;
+  result->huber_threshold_m = 0.0;
+  result->iterations = 0;
+  result->termination = LmTermination::max_iterations;
+}
+
 /// Everything one calibration works with.
 struct Run {
   const LmOptions& options;
@@ -154,36 +168,35 @@ struct Run {
   NormalEquations* trial;    ///< normal equations at the last trial point
   double damping;
   double growth;
-  bool analysed;  ///< the reported identifiability analysis has run
+  bool reanalysed;  ///< the analysis has been repeated after the first accepted step
 };
 
-/// Normal equations of `at` into *out: over the kept parameters, or, before the reported
-/// analysis, over the free ones plus the base translation (the analysis's reference scale,
-/// see analyze_identifiability).
+/// Normal equations of `at` into *out: over the kept parameters, or, while an analysis is
+/// ahead, over the free ones plus the base translation (the analysis's reference scale, see
+/// analyze_identifiability).
 Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
   ParamMask columns = run.kept;
-  if (!run.analysed) {
+  if (!run.reanalysed) {
     columns = run.free_mask;
     for (int axis = 0; axis < 3; ++axis) columns |= param_bit(base_translation_param_index(axis));
   }
   return accumulate_normal_equations(at.model, at.base, run.samples, at.loss, out, columns);
 }
 
-/// The reported identifiability analysis of the current normal equations; sets the kept set.
+/// Identifiability analysis of the current normal equations; sets the kept set and the report.
 Status analyse(Run* run) {
   const Status status =
       analyze_identifiability(run->current->jtwj, run->free_mask, run->options.identifiability_threshold,
                               &run->ws->identifiability, &run->result->identifiability);
   run->kept = run->result->identifiability.kept_mask;
-  run->analysed = true;
   return status;
 }
 
 /// Moves to an accepted trial point whose normal equations are in run->trial. Identifiability
 /// is a property of the geometry, and a start on a special configuration (a tool point on the
 /// flange axis hides theta6 and couples joint 5 with it) has ranks the solution does not: so
-/// the first step uses a quick selection at the start and the reported analysis runs after
-/// it, at a generic point. Sets *kept_changed when that analysis changed the kept set.
+/// the analysis made at the start is repeated after the first accepted step, at a generic
+/// point, and that one is reported. Sets *kept_changed when it changed the kept set.
 Status move_to(Run* run, const Point& trial, bool* kept_changed) {
   run->point = trial;
   NormalEquations* swap = run->current;
@@ -195,8 +208,9 @@ Status move_to(Run* run, const Point& trial, bool* kept_changed) {
   if (status == Status::ok && run->point.loss.huber_threshold_m != threshold_before_m) {
     status = accumulate(*run, run->point, run->current);  // IRLS weights for the new scale
   }
-  if (status != Status::ok || run->analysed) return status;
+  if (status != Status::ok || run->reanalysed) return status;
   const ParamMask before = run->kept;
+  run->reanalysed = true;
   status = analyse(run);
   *kept_changed = run->kept != before;
   return status;
@@ -279,8 +293,8 @@ LmTermination iterate(Run* run, TraceBase* trace, LmObserver* observer) {
   return LmTermination::max_iterations;
 }
 
-/// Starts a run: base transform, Huber scale, normal equations and a quick selection of the
-/// identifiable parameters at the start point.
+/// Starts a run: base transform, Huber scale, normal equations and identifiability at the
+/// start point.
 Status start(const RigidTransform* start_base_to_tracker, Run* run) {
   Point& point = run->point;
   if (start_base_to_tracker != nullptr) {
@@ -292,8 +306,7 @@ Status start(const RigidTransform* start_base_to_tracker, Run* run) {
   Status status = update_huber_threshold(run->options, run->samples, &point);
   if (status == Status::ok) status = accumulate(*run, point, run->current);
   if (status != Status::ok) return status;
-  return select_identifiable(run->current->jtwj, run->free_mask, run->options.identifiability_threshold,
-                             &run->ws->identifiability, &run->kept);
+  return analyse(run);
 }
 
 Status status_of(LmTermination termination) {
@@ -341,18 +354,13 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   ParamMask free_mask = 0;
   Status status = validate_inputs(start_model, start_base_to_tracker, samples, options, &free_mask);
   if (status != Status::ok) return status;
-  *result = LmResult{};
+  clear_result(result);
   Run run{options, samples, workspace, result, free_mask, 0, Point{start_model, RigidTransform{}, PointLoss{}},
           &workspace->normal, &workspace->trial, options.initial_damping, 2.0, false};
   status = start(start_base_to_tracker, &run);
   if (status != Status::ok) return status;
   if (trace != nullptr) trace->push(rms_of(run.current->squares_sum_m2, samples.size()));
   result->termination = iterate(&run, trace, observer);
-  if (!run.analysed) {  // no step was accepted: report the analysis at the start point
-    status = accumulate(run, run.point, run.current);
-    if (status == Status::ok) status = analyse(&run);
-    if (status != Status::ok) return status;
-  }
   result->model = run.point.model;
   result->base_to_tracker = run.point.base;
   result->loss_sum_m2 = run.current->loss_sum_m2;

@@ -58,7 +58,8 @@ std::uint64_t lm_digest() {
   Digest digest;
   LmOptions options;
   trace.clear();
-  add_result(result, calibrate_lm(start, nullptr, clean.samples(), options, &ws, &result, &trace), trace, &digest);
+  add_result(result, calibrate_lm(start, nullptr, clean.samples(), options, &ws, &result, &trace), trace,
+             &digest);  // the whole digest runs under EXPECT_NO_HEAP below
   options.loss = LmLoss::huber;
   trace.clear();
   add_result(result, calibrate_lm(start, nullptr, dirty.samples(), options, &ws, &result, &trace), trace, &digest);

@@ -51,7 +51,9 @@ struct RobustFixture : ::testing::Test {
     Status status = Status::ok;
     EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, data.samples(), options, &workspace(), &result()));
     EXPECT_EQ(status, Status::ok) << status_message(status);
-    return position_error_stats(result().model, result().base_to_tracker, fresh().samples()).mae(ErrorAxis::norm_3d);
+    ErrorStats stats;
+    EXPECT_NO_HEAP(stats = position_error_stats(result().model, result().base_to_tracker, fresh().samples()));
+    return stats.mae(ErrorAxis::norm_3d);
   }
 };
 

@@ -97,15 +97,14 @@ struct NormalEquations {
 };
 
 /// Sums the normal equations over `samples`, for the parameters in `columns` only (the
-/// other rows and columns of jtwj and jtwr are 0: an iteration over 25 kept parameters costs
-/// about half of all 33). Errors: dataset_empty, non_finite_input (a NaN or Inf residual or
-/// Jacobian).
+/// other rows and columns of jtwj and jtwr are 0; fewer columns, less work). Errors:
+/// dataset_empty, non_finite_input (a NaN or Inf residual or Jacobian).
 Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
                                    Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
                                    ParamMask columns = kAllParamsMask);
 
-/// Loss sums only (no Jacobian, fk_tool_point), for trial points: sum rho(|r_i|) and sum
-/// |r_i|^2 [m^2]. Agrees with the sums of accumulate_normal_equations to rounding.
+/// Loss sums only (no Jacobian, fk_tool_point), e.g. to compare candidate geometries: sum
+/// rho(|r_i|) and sum |r_i|^2 [m^2]. Agrees with accumulate_normal_equations to rounding.
 /// Errors: dataset_empty, non_finite_input.
 Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_to_tracker,
                            Span<const Sample> samples, const PointLoss& loss, double* loss_sum_m2,

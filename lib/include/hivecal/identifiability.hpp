@@ -56,7 +56,10 @@ struct IdentifiabilityReport {
   int kept_count() const { return mask_count(kept_mask); }  ///< parameters estimated
 };
 
-/// Scratch memory of the analysis (~18 kB): keep it static or in the caller's workspace.
+/// Resets every field of *report to its default, in place.
+void clear_report(IdentifiabilityReport* report);
+
+/// Scratch memory of the analysis (26 kB): keep it static or in the caller's workspace.
 struct IdentifiabilityWorkspace {
   NormalMatrix scaled;                                   ///< column-scaled normal matrix
   NormalMatrix null_basis;                               ///< null directions, reduced as parameters drop
@@ -72,13 +75,5 @@ struct IdentifiabilityWorkspace {
 /// non_finite_input, singular_system (no parameter left).
 Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
                                IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report);
-
-/// Fast selection without a report (a pivoted Cholesky, no eigen-decomposition): drops the
-/// no-effect parameters as above, then, from the base down to theta1 (the reverse of the
-/// analysis's drop priority), keeps each free parameter whose scaled column is at least
-/// `threshold` away from the span of the ones kept before. Gives the analysis's kept set on
-/// clear-cut data; the solver uses it for its first step. Errors: as analyze_identifiability.
-Status select_identifiable(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
-                           IdentifiabilityWorkspace* workspace, ParamMask* kept);
 
 }  // namespace hivecal

@@ -98,7 +98,7 @@ struct LmResult {
   LmTermination termination = LmTermination::max_iterations;  ///< why it stopped
 };
 
-/// Scratch memory of the solver (~54 kB): give it static storage or put it in the
+/// Scratch memory of the solver (61 kB): give it static storage or put it in the
 /// caller's memory plan, not on a small stack.
 struct LmWorkspace {
   NormalEquations normal;                     ///< normal equations at one point (current or trial)
