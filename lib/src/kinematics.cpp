@@ -11,19 +11,24 @@ struct Link {
   Vec3 translation_m;
 };
 
-Link dh_link(const DhJoint& joint, double q_rad) {
+/// The link of joint j with its twist's sin and cos taken from `twist`.
+Link dh_link(const DhJoint& joint, double sa, double ca, double q_rad) {
   double st = 0.0;
   double ct = 0.0;
-  double sa = 0.0;
-  double ca = 0.0;
   math::sincos(q_rad + joint.theta_offset_rad, &st, &ct);
-  math::sincos(joint.alpha_rad, &sa, &ca);
   Link link;
   link.rotation << ct, -st * ca, st * sa,
                    st, ct * ca, -ct * sa,
                    0.0, sa, ca;
   link.translation_m << joint.a_m * ct, joint.a_m * st, joint.d_m;
   return link;
+}
+
+Link dh_link(const DhJoint& joint, double q_rad) {
+  double sa = 0.0;
+  double ca = 0.0;
+  math::sincos(joint.alpha_rad, &sa, &ca);
+  return dh_link(joint, sa, ca, q_rad);
 }
 
 struct NominalTable {
@@ -157,17 +162,32 @@ RigidTransform fk_flange(const RobotModel& model, const JointVector& q_rad) {
   return pose;
 }
 
+TwistTrig twist_trig(const RobotModel& model) {
+  TwistTrig trig;
+  for (int j = 0; j < kJointCount; ++j) math::sincos(model.joints[j].alpha_rad, &trig.sin_alpha[j], &trig.cos_alpha[j]);
+  return trig;
+}
+
 Vec3 fk_tool_point(const RobotModel& model, const JointVector& q_rad) {
+  return fk_tool_point(model, twist_trig(model), q_rad);
+}
+
+Vec3 fk_tool_point(const RobotModel& model, const TwistTrig& trig, const JointVector& q_rad) {
   // Innermost first: p <- R_j p + t_j needs only matrix-vector products.
   Vec3 point_m = model.tool_m;
   for (int j = kJointCount - 1; j >= 0; --j) {
-    const Link link = dh_link(model.joints[j], q_rad(j));
+    const Link link = dh_link(model.joints[j], trig.sin_alpha[j], trig.cos_alpha[j], q_rad(j));
     point_m = link.rotation * point_m + link.translation_m;
   }
   return point_m;
 }
 
 Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, ToolPointJacobian* jacobian) {
+  return tool_point_jacobian(model, twist_trig(model), q_rad, jacobian);
+}
+
+Vec3 tool_point_jacobian(const RobotModel& model, const TwistTrig& trig, const JointVector& q_rad,
+                         ToolPointJacobian* jacobian) {
   // Frame i-1 (before joint i) gives z_{i-1}, o_{i-1}: theta_i rotates and d_i slides about/along
   // it. After Rz(theta) Tz(d) Tx(a) the x axis is x_i and the origin o_i: a_i slides along x_i and
   // alpha_i rotates about it. Each column is a screw applied to the final tool point.
@@ -179,7 +199,7 @@ Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, Tool
   for (int j = 0; j < kJointCount; ++j) {
     axes_before[j] = pose.rotation;
     origin_before_m[j] = pose.translation_m;
-    const Link link = dh_link(model.joints[j], q_rad(j));
+    const Link link = dh_link(model.joints[j], trig.sin_alpha[j], trig.cos_alpha[j], q_rad(j));
     pose.translation_m = pose.rotation * link.translation_m + pose.translation_m;
     pose.rotation = pose.rotation * link.rotation;
     x_axis_after[j] = pose.rotation.col(0);

@@ -25,6 +25,8 @@ const char* status_message(Status status) {
     case Status::population_out_of_range: return "population size out of range";
     case Status::dimension_out_of_range: return "problem dimension out of range";
     case Status::bad_bounds: return "search bounds not finite or not increasing";
+    case Status::poses_not_distinct: return "all samples at the same joint positions";
+    case Status::solver_cancelled: return "solver cancelled by its observer";
   }
   return "unknown status";
 }

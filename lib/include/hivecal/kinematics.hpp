@@ -81,4 +81,18 @@ Vec3 fk_tool_point(const RobotModel& model, const JointVector& q_rad);
 /// Tool point [m] and, into *jacobian, its analytic derivative w.r.t. all 27 parameters.
 Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, ToolPointJacobian* jacobian);
 
+/// sin and cos of each joint's twist: they do not depend on the pose, so loops over many
+/// samples of one model compute them once (half the trig of FK). Same bits either way.
+struct TwistTrig {
+  double sin_alpha[kJointCount] = {};  ///< sin(alpha_j) [-]
+  double cos_alpha[kJointCount] = {};  ///< cos(alpha_j) [-]
+};
+/// The twist trig of `model`.
+TwistTrig twist_trig(const RobotModel& model);
+/// fk_tool_point with the twist trig of `model` precomputed.
+Vec3 fk_tool_point(const RobotModel& model, const TwistTrig& trig, const JointVector& q_rad);
+/// tool_point_jacobian with the twist trig of `model` precomputed.
+Vec3 tool_point_jacobian(const RobotModel& model, const TwistTrig& trig, const JointVector& q_rad,
+                         ToolPointJacobian* jacobian);
+
 }  // namespace hivecal

@@ -37,6 +37,9 @@ enum class Status : std::uint8_t {
   population_out_of_range,  ///< population below the solver's minimum or above its capacity
   dimension_out_of_range,   ///< problem dimension 0, above capacity, or not matching the bounds
   bad_bounds,               ///< a search bound is NaN/Inf or lower >= upper
+  // Levenberg-Marquardt calibration.
+  poses_not_distinct,       ///< every sample was taken at the same joint positions: nothing to identify
+  solver_cancelled,         ///< the progress observer asked the solver to stop
 };
 
 /// A short, stable, human-readable name for a status (for logs and CLI messages).

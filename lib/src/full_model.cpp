@@ -1,0 +1,322 @@
+#include "hivecal/full_model.hpp"
+
+#include <cmath>
+
+#include "hivecal/math.hpp"
+
+namespace hivecal {
+namespace {
+
+constexpr const char* kParamNames[kFullParamCount] = {
+    "theta1", "d1", "a1", "alpha1", "theta2", "d2", "a2", "alpha2", "theta3", "d3", "a3",
+    "alpha3", "theta4", "d4", "a4", "alpha4", "theta5", "d5", "a5", "alpha5", "theta6", "d6",
+    "a6", "alpha6", "tool_x", "tool_y", "tool_z", "base_rx", "base_ry", "base_rz", "base_tx", "base_ty",
+    "base_tz"};
+
+/// Cross-product matrix: skew(v) * x = v x x.
+Mat3 skew(const Vec3& v) {
+  Mat3 k;
+  k << 0.0, -v.z(), v.y(),
+       v.z(), 0.0, -v.x(),
+       -v.y(), v.x(), 0.0;
+  return k;
+}
+
+Vec3 point_residual(const RobotModel& model, const TwistTrig& trig, const RigidTransform& base_to_tracker,
+                   const Sample& sample) {
+  return base_to_tracker.apply(fk_tool_point(model, trig, sample.q_rad)) - sample.point_m;
+}
+
+/// The parameters of a mask as a list of indices, increasing.
+struct IndexList {
+  int index[kFullParamCount];
+  int count = 0;
+};
+
+IndexList indices_of(ParamMask mask) {
+  IndexList list;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(mask, i)) list.index[list.count++] = i;
+  }
+  return list;
+}
+
+/// Samples whose Jacobian rows are summed into the normal matrix together: each entry is
+/// then loaded and stored once per batch instead of once per sample (memory traffic, not
+/// arithmetic, bounds this update). 2 samples keep the scratch at 1.6 kB of stack.
+constexpr int kBatchSamples = 2;
+constexpr int kBatchRows = 3 * kBatchSamples;
+
+/// Jacobian rows of a few samples over the listed columns, with their weights and residuals.
+struct RowBatch {
+  double rows[kBatchRows][kFullParamCount];  ///< local Jacobian rows, compact column order
+  double weight[kBatchRows] = {};            ///< IRLS weight of each row's sample
+  double residual_m[kBatchRows] = {};        ///< residual component of each row (base frame) [m]
+  int samples = 0;                           ///< samples held
+};
+
+/// Appends one sample's rows of the local Jacobian [J_tool | -skew(p) | I] at the listed
+/// columns; returns its residual rotated into the base frame, R^T r [m].
+Vec3 add_rows(const RobotModel& model, const TwistTrig& trig, const RigidTransform& base_to_tracker,
+              const Sample& sample, const IndexList& columns, double (*rows)[kFullParamCount]) {
+  ToolPointJacobian tool_jacobian;
+  const Vec3 point_m = tool_point_jacobian(model, trig, sample.q_rad, &tool_jacobian);
+  for (int k = 0; k < columns.count; ++k) {
+    const int c = columns.index[k];
+    if (c < kModelParamCount) {
+      for (int r = 0; r < 3; ++r) rows[r][k] = tool_jacobian(r, c);
+    } else if (c < base_translation_param_index(0)) {
+      // d(Exp(w) p)/dw_k at w = 0 is e_k x p.
+      const Vec3 column = Vec3::Unit(c - base_rotation_param_index(0)).cross(point_m);
+      for (int r = 0; r < 3; ++r) rows[r][k] = column(r);
+    } else {  // the translation increment is along the base axes
+      for (int r = 0; r < 3; ++r) rows[r][k] = r == c - base_translation_param_index(0) ? 1.0 : 0.0;
+    }
+  }
+  return base_to_tracker.rotation.transpose() * (base_to_tracker.apply(point_m) - sample.point_m);
+}
+
+/// eq += sum over the batch of w J^T J and w J^T r, in compact coordinates (entry (k, l) for
+/// columns index[k], index[l]; upper triangle), one contiguous column at a time. Unused rows
+/// are zero, which adds exact zeros.
+void flush(RowBatch* batch, int count, NormalEquations* eq) {
+  for (int j = 3 * batch->samples; j < kBatchRows; ++j) {
+    for (int k = 0; k < count; ++k) batch->rows[j][k] = 0.0;
+    batch->weight[j] = 0.0;
+    batch->residual_m[j] = 0.0;
+  }
+  double* compact = eq->jtwj.data();
+  for (int l = 0; l < count; ++l) {
+    double w[kBatchRows];
+    double gradient = 0.0;
+    for (int j = 0; j < kBatchRows; ++j) {
+      w[j] = batch->weight[j] * batch->rows[j][l];
+      gradient += w[j] * batch->residual_m[j];
+    }
+    eq->jtwr(l) += gradient;
+    double* column = compact + l * kFullParamCount;
+    for (int k = 0; k <= l; ++k) {
+      double sum = 0.0;
+      for (int j = 0; j < kBatchRows; ++j) sum += batch->rows[j][k] * w[j];
+      column[k] += sum;
+    }
+  }
+  batch->samples = 0;
+}
+
+/// Moves the compact sums to their parameter positions and mirrors the upper triangle.
+/// In place: a compact entry (k, l) goes to (index[k], index[l]) with index[k] >= k, so
+/// walking down from the last one never overwrites an entry still to be moved.
+void expand_compact(const IndexList& columns, NormalEquations* eq) {
+  NormalMatrix& h = eq->jtwj;
+  for (int l = columns.count - 1; l >= 0; --l) {
+    const int b = columns.index[l];
+    eq->jtwr(b) = eq->jtwr(l);
+    if (b != l) eq->jtwr(l) = 0.0;
+    for (int k = l; k >= 0; --k) {
+      const int a = columns.index[k];
+      const double value = h(k, l);
+      h(k, l) = 0.0;
+      h(a, b) = value;
+    }
+  }
+  for (int b = 0; b < kFullParamCount; ++b)
+    for (int a = b + 1; a < kFullParamCount; ++a) h(a, b) = h(b, a);
+}
+
+// Log-spaced bins of the median histogram: 4 per decade from 1e-12 m to 100 m, plus an
+// underflow bin (index 0, norms below 1e-12 m, zero included) and an overflow bin.
+constexpr int kHistogramBins = 56;
+constexpr int kRefineBins = 64;
+constexpr double kHistogramFloor_m = 1e-12;
+constexpr double kLn10 = 2.302585092994045684;
+constexpr double kBinsPerLnUnit = 4.0 / kLn10;
+
+int histogram_bin(double norm_m) {
+  if (!(norm_m >= kHistogramFloor_m)) return 0;
+  const double position = math::log(norm_m / kHistogramFloor_m) * kBinsPerLnUnit;
+  if (position >= static_cast<double>(kHistogramBins)) return kHistogramBins + 1;
+  return 1 + static_cast<int>(position);
+}
+
+double histogram_bin_lower_m(int bin) {
+  return kHistogramFloor_m * math::exp(static_cast<double>(bin - 1) / kBinsPerLnUnit);
+}
+
+}  // namespace
+
+int mask_count(ParamMask mask) {
+  int count = 0;
+  for (int i = 0; i < kFullParamCount; ++i) count += mask_has(mask, i) ? 1 : 0;
+  return count;
+}
+
+const char* full_param_name(int index) {
+  if (index < 0 || index >= kFullParamCount) return "?";
+  return kParamNames[index];
+}
+
+Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
+  const double angle2 = rotation_vector_rad.squaredNorm();
+  double sin_ratio = 1.0;      // sin(t) / t
+  double cos_ratio = 0.5;      // (1 - cos(t)) / t^2
+  if (angle2 < 1e-8) {         // t < 1e-4: Taylor terms beyond t^4 are below 1e-24
+    sin_ratio = 1.0 - angle2 / 6.0 + angle2 * angle2 / 120.0;
+    cos_ratio = 0.5 - angle2 / 24.0 + angle2 * angle2 / 720.0;
+  } else {
+    const double angle = std::sqrt(angle2);
+    double s = 0.0;
+    double c = 0.0;
+    math::sincos(angle, &s, &c);
+    sin_ratio = s / angle;
+    cos_ratio = (1.0 - c) / angle2;
+  }
+  const Mat3 k = skew(rotation_vector_rad);
+  return Mat3::Identity() + sin_ratio * k + cos_ratio * (k * k);
+}
+
+void apply_full_increment(const FullParams& increment, RobotModel* model, RigidTransform* base_to_tracker) {
+  *model = from_params(to_params(*model) + increment.head<kModelParamCount>());
+  const Vec3 rotation_rad = increment.segment<3>(base_rotation_param_index(0));
+  const Vec3 translation_m = increment.segment<3>(base_translation_param_index(0));
+  base_to_tracker->translation_m += base_to_tracker->rotation * translation_m;
+  base_to_tracker->rotation = base_to_tracker->rotation * rotation_from_vector(rotation_rad);
+}
+
+Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                             FullJacobian* local_jacobian) {
+  double rows[3][kFullParamCount];
+  const Vec3 local_residual_m =
+      add_rows(model, twist_trig(model), base_to_tracker, sample, indices_of(kAllParamsMask), rows);
+  for (int c = 0; c < kFullParamCount; ++c)
+    for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
+  return local_residual_m;
+}
+
+Vec3 full_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                            FullJacobian* jacobian) {
+  FullJacobian local;
+  const Vec3 local_residual_m = local_residual_jacobian(model, base_to_tracker, sample, &local);
+  *jacobian = base_to_tracker.rotation * local;
+  return base_to_tracker.rotation * local_residual_m;
+}
+
+void scale_normal_matrix(const NormalMatrix& jtwj, ParamMask mask, double outside_diagonal, NormalMatrix* scaled,
+                         FullParams* scale) {
+  for (int i = 0; i < kFullParamCount; ++i) (*scale)(i) = mask_has(mask, i) ? 1.0 / std::sqrt(jtwj(i, i)) : 1.0;
+  for (int b = 0; b < kFullParamCount; ++b) {
+    for (int a = 0; a < kFullParamCount; ++a) {
+      if (mask_has(mask, a) && mask_has(mask, b)) {
+        (*scaled)(a, b) = jtwj(a, b) * (*scale)(a) * (*scale)(b);
+      } else {
+        (*scaled)(a, b) = a == b ? outside_diagonal : 0.0;
+      }
+    }
+  }
+}
+
+double PointLoss::rho(double norm_m) const {
+  const double k = huber_threshold_m;
+  if (k <= 0.0 || norm_m <= k) return norm_m * norm_m;
+  return 2.0 * k * norm_m - k * k;
+}
+
+double PointLoss::weight(double norm_m) const {
+  const double k = huber_threshold_m;
+  if (k <= 0.0 || norm_m <= k) return 1.0;
+  return k / norm_m;
+}
+
+Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
+                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
+                                   ParamMask columns) {
+  if (samples.empty()) return Status::dataset_empty;
+  NormalEquations& eq = *out;
+  eq.jtwj.setZero();
+  eq.jtwr.setZero();
+  eq.loss_sum_m2 = 0.0;
+  eq.weighted_squares_m2 = 0.0;
+  eq.squares_sum_m2 = 0.0;
+  eq.count = samples.size();
+  const IndexList list = indices_of(columns);
+  const TwistTrig trig = twist_trig(model);
+  RowBatch batch;
+  for (const Sample& sample : samples) {
+    const int first_row = 3 * batch.samples;
+    const Vec3 residual_m = add_rows(model, trig, base_to_tracker, sample, list, batch.rows + first_row);
+    const double squared = residual_m.squaredNorm();
+    const double norm_m = std::sqrt(squared);
+    const double weight = loss.weight(norm_m);
+    for (int r = 0; r < 3; ++r) {
+      batch.weight[first_row + r] = weight;
+      batch.residual_m[first_row + r] = residual_m(r);
+    }
+    if (++batch.samples == kBatchSamples) flush(&batch, list.count, &eq);
+    eq.loss_sum_m2 += loss.rho(norm_m);
+    eq.weighted_squares_m2 += weight * squared;
+    eq.squares_sum_m2 += squared;
+  }
+  if (batch.samples > 0) flush(&batch, list.count, &eq);
+  expand_compact(list, &eq);
+  // A NaN or Inf anywhere in J or r reaches the diagonal, the gradient or the loss.
+  if (!math::is_finite(eq.loss_sum_m2) || !all_finite(eq.jtwr) || !all_finite(eq.jtwj.diagonal())) {
+    return Status::non_finite_input;
+  }
+  return Status::ok;
+}
+
+Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_to_tracker,
+                           Span<const Sample> samples, const PointLoss& loss, double* loss_sum_m2,
+                           double* squares_sum_m2) {
+  if (samples.empty()) return Status::dataset_empty;
+  const TwistTrig trig = twist_trig(model);
+  double loss_sum = 0.0;
+  double squares = 0.0;
+  for (const Sample& sample : samples) {
+    const double squared = point_residual(model, trig, base_to_tracker, sample).squaredNorm();
+    loss_sum += loss.rho(std::sqrt(squared));
+    squares += squared;
+  }
+  if (!math::is_finite(loss_sum) || !math::is_finite(squares)) return Status::non_finite_input;
+  *loss_sum_m2 = loss_sum;
+  *squares_sum_m2 = squares;
+  return Status::ok;
+}
+
+Status median_residual_norm(const RobotModel& model, const RigidTransform& base_to_tracker,
+                            Span<const Sample> samples, double* median_m) {
+  if (samples.empty()) return Status::dataset_empty;
+  const TwistTrig trig = twist_trig(model);
+  std::size_t counts[kHistogramBins + 2] = {};
+  for (const Sample& sample : samples) {
+    const double norm_m = point_residual(model, trig, base_to_tracker, sample).norm();
+    if (!math::is_finite(norm_m)) return Status::non_finite_input;
+    ++counts[histogram_bin(norm_m)];
+  }
+  const std::size_t rank = (samples.size() - 1) / 2;  // lower median, 0-based
+  std::size_t below = 0;
+  int bin = 0;
+  while (below + counts[bin] <= rank) below += counts[bin++];
+  if (bin == 0) {  // at or below the floor: report the floor
+    *median_m = kHistogramFloor_m;
+    return Status::ok;
+  }
+  const double lower_m = histogram_bin_lower_m(bin);
+  // The overflow bin has no upper edge: split [100 m, 10 * 100 m) and clamp into it.
+  const double upper_m = bin <= kHistogramBins ? histogram_bin_lower_m(bin + 1) : 10.0 * lower_m;
+  std::size_t refined[kRefineBins] = {};
+  for (const Sample& sample : samples) {
+    const double norm_m = point_residual(model, trig, base_to_tracker, sample).norm();
+    if (histogram_bin(norm_m) != bin) continue;
+    const double position = (norm_m - lower_m) / (upper_m - lower_m) * kRefineBins;
+    int sub = position <= 0.0 ? 0 : static_cast<int>(position);
+    if (sub >= kRefineBins) sub = kRefineBins - 1;
+    ++refined[sub];
+  }
+  int sub = 0;
+  while (sub < kRefineBins - 1 && below + refined[sub] <= rank) below += refined[sub++];
+  *median_m = lower_m + (static_cast<double>(sub) + 0.5) / kRefineBins * (upper_m - lower_m);
+  return Status::ok;
+}
+
+}  // namespace hivecal
