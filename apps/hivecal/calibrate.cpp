@@ -1,0 +1,444 @@
+// hivecal calibrate: inputs (paired samples, serial captures or CSV logs) -> dataset ->
+// ABC / GSA / Levenberg-Marquardt -> tables, result JSON, UR deltas and HTML report.
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "calibrate_inputs.hpp"
+#include "calibration_json.hpp"
+#include "cli.hpp"
+#include "commands.hpp"
+#include "hivecal/abc.hpp"
+#include "hivecal/cost.hpp"
+#include "hivecal/dataset.hpp"
+#include "hivecal/gsa.hpp"
+#include "hivecal/lm.hpp"
+#include "hivecal/metrics.hpp"
+#include "hivecal/paper6_cost.hpp"
+#include "hivecal/trace.hpp"
+#include "report.hpp"
+#include "text_util.hpp"
+#include "ur_calibration_conf.hpp"
+
+namespace hivecal::cli {
+namespace {
+
+constexpr std::size_t kTraceCapacity = 1024;
+
+/// What one solver stage produced.
+struct Stage {
+  std::string method;                ///< "ABC", "GSA", "LM", ...
+  std::string params;                ///< "paper-6" or "full"
+  RobotModel model;                  ///< calibrated geometry
+  RigidTransform base_to_tracker;    ///< fitted or estimated base -> tracker
+  std::vector<double> trace_m;       ///< best cost per iteration [m]
+  double seconds = 0.0;              ///< wall time [s]
+  long long evaluations = 0;         ///< cost evaluations (LM: iterations)
+  bool is_lm = false;                ///< lm below is meaningful
+  LmResult lm;                       ///< LM details (identifiability, sigma)
+};
+
+/// Prints one progress line per iteration on stderr, overwritten in place.
+class Progress final : public ProgressObserver, public LmObserver {
+ public:
+  Progress(bool enabled, std::string label) : enabled_(enabled), label_(std::move(label)) {}
+  ~Progress() {
+    if (enabled_ && printed_) std::fprintf(stderr, "\n");
+  }
+  void on_iteration(const SolverProgress& p) override {
+    print("iteration %zu/%zu, best MAE %.2f um", p.iteration, p.iteration_count, p.best_cost * 1e6);
+  }
+  bool on_iteration(const LmIterationInfo& info) override {
+    print("iteration %d, RMS %.2f um", info.iteration, info.rms_m * 1e6);
+    return true;
+  }
+
+ private:
+  template <typename... Args>
+  void print(const char* format, Args... args) {
+    if (!enabled_) return;
+    std::fprintf(stderr, "\r[%s] ", label_.c_str());
+    std::fprintf(stderr, format, args...);
+    std::fflush(stderr);
+    printed_ = true;
+  }
+  bool enabled_;
+  std::string label_;
+  bool printed_ = false;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::vector<double> trace_values(const TraceBase& trace) {
+  std::vector<double> v;
+  for (double x : trace.values()) v.push_back(x);
+  return v;
+}
+
+/// ABC or GSA on the paper's six lengths, base refitted per candidate.
+Status run_population(bool use_abc, const RobotModel& start, Span<const Sample> train, std::uint64_t seed,
+                      bool progress_on, Stage* stage) {
+  static Paper6Cost<kCliDatasetCapacity> cost;
+  static AbcSolver<150, kPaper6Dimension> abc;
+  static GsaSolver<150, kPaper6Dimension> gsa;
+  static Trace<kTraceCapacity> trace;
+  trace.clear();
+  Status status = cost.build(start, train);
+  if (status != Status::ok) return status;
+  Paper6Box box;
+  status = paper6_box(start, kPaper6DefaultHalfWidth_m, &box);
+  if (status != Status::ok) return status;
+  SolverResult result;
+  Progress progress(progress_on, use_abc ? "ABC" : "GSA");
+  const auto start_time = std::chrono::steady_clock::now();
+  if (use_abc) {
+    AbcOptions options;
+    options.seed = seed;
+    status = abc.minimize(cost, box.view(), options, &result, &trace, &progress);
+  } else {
+    GsaOptions options;
+    options.seed = seed;
+    status = gsa.minimize(cost, box.view(), options, &result, &trace, &progress);
+  }
+  if (status != Status::ok) return status;
+  stage->method = use_abc ? "ABC" : "GSA";
+  stage->params = "paper-6";
+  stage->seconds = seconds_since(start_time);
+  stage->evaluations = static_cast<long long>(result.evaluations);
+  stage->trace_m = trace_values(trace);
+  stage->model = cost.model_for(result.best_x.data());
+  return fit_base_to_tracker(stage->model, train, &stage->base_to_tracker);
+}
+
+/// Levenberg-Marquardt from a starting geometry.
+Status run_lm(const RobotModel& start, const RigidTransform* start_base, Span<const Sample> train, bool paper_params,
+              bool robust, bool progress_on, Stage* stage) {
+  static LmWorkspace workspace;
+  static Trace<kTraceCapacity> trace;
+  trace.clear();
+  LmOptions options;
+  options.params = paper_params ? LmParamSet::paper6 : LmParamSet::full;
+  options.loss = robust ? LmLoss::huber : LmLoss::squared;
+  Progress progress(progress_on, "LM");
+  const auto start_time = std::chrono::steady_clock::now();
+  const Status status = calibrate_lm(start, start_base, train, options, &workspace, &stage->lm, &trace, &progress);
+  if (status != Status::ok && status != Status::not_converged) return status;
+  stage->method = "LM";
+  stage->params = paper_params ? "paper-6" : "full";
+  stage->is_lm = true;
+  stage->seconds = seconds_since(start_time);
+  stage->evaluations = stage->lm.iterations;
+  stage->trace_m = trace_values(trace);
+  stage->model = stage->lm.model;
+  stage->base_to_tracker = stage->lm.base_to_tracker;
+  return Status::ok;
+}
+
+report::MethodRow method_row(const Stage& stage, const DatasetBase& dataset) {
+  report::MethodRow row;
+  row.method = stage.method;
+  row.parameters = stage.params;
+  if (stage.is_lm) {
+    row.parameters += " (" + std::to_string(stage.lm.identifiability.kept_count()) + " estimated)";
+  }
+  row.train = position_error_stats(stage.model, stage.base_to_tracker, dataset.train());
+  row.test = position_error_stats(stage.model, stage.base_to_tracker, dataset.test());
+  row.seconds = stage.seconds;
+  row.evaluations = stage.evaluations;
+  return row;
+}
+
+std::vector<std::string> identifiability_lines(const LmResult& lm) {
+  std::vector<std::string> lines;
+  const IdentifiabilityReport& id = lm.identifiability;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "identifiability: %d of %d free parameters estimated, condition number %.3g -> %.3g",
+                id.kept_count(), mask_count(id.free_mask), id.condition_before, id.condition_after);
+  lines.push_back(buf);
+  for (int k = 0; k < id.dropped_count; ++k) {
+    const DroppedParam& d = id.dropped[k];
+    std::string combination;
+    for (int c = 0; c < kNullComponentCount; ++c) {
+      if (d.component_index[c] < 0) continue;
+      std::snprintf(buf, sizeof buf, "%s%+.3g*%s", combination.empty() ? "" : " ", d.component[c],
+                    full_param_name(d.component_index[c]));
+      combination += buf;
+    }
+    std::snprintf(buf, sizeof buf, "  dropped %-8s (%s, sigma ratio %.2g): %s", full_param_name(d.index),
+                  unidentifiable_reason_name(d.reason), d.singular_ratio, combination.c_str());
+    lines.push_back(buf);
+  }
+  return lines;
+}
+
+std::vector<std::string> parameter_lines(const Stage& stage, const RobotModel& start) {
+  std::vector<std::string> lines;
+  const ModelParams before = to_params(start);
+  const ModelParams after = to_params(stage.model);
+  char buf[160];
+  for (int k = 0; k < kModelParamCount; ++k) {
+    const bool estimated = stage.is_lm && mask_has(stage.lm.identifiability.kept_mask, k);
+    const bool changed = after(k) != before(k);
+    if (!estimated && !changed) continue;
+    const bool angle = k < kDhParamCount && (k % kParamsPerJoint == 0 || k % kParamsPerJoint == 3);
+    const double scale = angle ? 1e3 : 1e3;
+    std::snprintf(buf, sizeof buf, "%-8s %+.9f %s  (change %+.4f %s%s)", full_param_name(k), after(k),
+                  angle ? "rad" : "m", (after(k) - before(k)) * scale, angle ? "mrad" : "mm",
+                  estimated ? (", sigma " + std::to_string(stage.lm.sigma(k) * scale) + (angle ? " mrad" : " mm")).c_str()
+                            : "");
+    lines.push_back(buf);
+  }
+  return lines;
+}
+
+void write_stage_list(textio::JsonWriter& json, const std::vector<report::MethodRow>& rows) {
+  json.key("methods").begin_array();
+  for (const report::MethodRow& row : rows) {
+    json.begin_object();
+    json.key("method").value(row.method);
+    json.key("params").value(row.parameters);
+    json.key("train_mae_m").value(row.train.mae(ErrorAxis::norm_3d));
+    json.key("test_mae_m").value(row.test.mae(ErrorAxis::norm_3d));
+    json.key("seconds").value(row.seconds);
+    json.key("evaluations").value(row.evaluations);
+    json.end_object();
+  }
+  json.end_array();
+}
+
+void write_lm_details(textio::JsonWriter& json, const LmResult& lm) {
+  const IdentifiabilityReport& id = lm.identifiability;
+  json.key("identifiability").begin_object();
+  json.key("estimated").begin_array();
+  for (int k = 0; k < kFullParamCount; ++k)
+    if (mask_has(id.kept_mask, k)) json.value(full_param_name(k));
+  json.end_array();
+  json.key("dropped").begin_array();
+  for (int k = 0; k < id.dropped_count; ++k) {
+    const DroppedParam& d = id.dropped[k];
+    json.begin_object();
+    json.key("param").value(full_param_name(d.index));
+    json.key("reason").value(unidentifiable_reason_name(d.reason));
+    json.key("singular_ratio").value(d.singular_ratio);
+    json.key("combination").begin_object();
+    for (int c = 0; c < kNullComponentCount; ++c)
+      if (d.component_index[c] >= 0) json.key(full_param_name(d.component_index[c])).value(d.component[c]);
+    json.end_object();
+    json.end_object();
+  }
+  json.end_array();
+  json.key("singular_values").inline_array(id.singular_values_before, static_cast<std::size_t>(id.singular_count_before));
+  json.key("condition_before").value(id.condition_before);
+  json.key("condition_after").value(id.condition_after);
+  json.end_object();
+  json.key("sigma").begin_object();
+  for (int k = 0; k < kFullParamCount; ++k)
+    if (mask_has(id.kept_mask, k)) json.key(full_param_name(k)).value(lm.sigma(k));
+  json.end_object();
+  json.key("lm").begin_object();
+  json.key("iterations").value(static_cast<long long>(lm.iterations));
+  json.key("termination").value(lm_termination_name(lm.termination));
+  json.key("rms_m").value(lm.rms_m);
+  json.key("residual_sigma_m").value(lm.residual_sigma_m);
+  json.end_object();
+}
+
+void write_ur_deltas(textio::JsonWriter& json, const UrCalibrationDeltas& deltas) {
+  json.key("ur_deltas").begin_object();
+  json.key("delta_theta").inline_array(deltas.delta_theta_rad, kJointCount);
+  json.key("delta_a").inline_array(deltas.delta_a_m, kJointCount);
+  json.key("delta_d").inline_array(deltas.delta_d_m, kJointCount);
+  json.key("delta_alpha").inline_array(deltas.delta_alpha_rad, kJointCount);
+  json.end_object();
+}
+
+}  // namespace
+
+int calibrate_main(int argc, char** argv) {
+  const std::vector<OptionSpec> specs = {
+      {"robot", "FILE", "robot joint stream: serial capture or CSV log t,q1..q6 (detected by content)", ""},
+      {"tracker", "FILE", "tracker stream: serial capture or CSV log t,x,y,z[,status]", ""},
+      {"samples", "FILE", "paired static samples q1..q6,x,y,z (CSV) instead of --robot/--tracker", ""},
+      {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
+      {"robot-model", "ur5|ur3|ur10|ur5e", "nominal geometry", "ur5"},
+      {"tool", "X,Y,Z", "nominal retroreflector centre in the flange frame [m] (LM refines it)", "0,0,0.1695"},
+      {"params", "full|paper", "full identifiable model, or the paper's six lengths", "full"},
+      {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
+      {"robust", "", "Huber loss in LM (a few bad tracker points do not drag the fit)", ""},
+      {"seed", "N", "seed of the train/test split and of ABC/GSA", "1"},
+      {"split", "FRACTION", "share of samples used for training", "0.7"},
+      {"out", "FILE", "calibration result (robot-calibration/1 JSON)", "result.json"},
+      {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
+      {"report", "DIR", "write an HTML report with figures into DIR", ""},
+      {"quiet", "", "no progress on stderr", ""},
+  };
+  Options options;
+  const int parsed = parse_options("calibrate",
+                                   "Estimates the robot geometry and the base -> tracker transform from tracker\n"
+                                   "measurements, prints the paper-style tables and writes the result.",
+                                   specs, argc, argv, &options);
+  if (parsed >= 0) return parsed;
+
+  // --- options
+  CalibrateSettings settings;
+  std::string problem = settings_from_options(options, &settings);
+  if (!problem.empty()) {
+    error("calibrate", problem);
+    return kExitUsage;
+  }
+  const bool progress_on = progress_enabled(options);
+
+  // --- start geometry and data
+  RobotModel start = nominal_model(settings.robot);
+  start.tool_m = settings.tool_m;
+  if (!options.get("ur-calibration").empty()) {
+    UrCalibrationDeltas deltas;
+    const textio::ParseResult r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
+    if (!r.ok) {
+      error("calibrate", r.message);
+      return kExitBadInput;
+    }
+    (void)apply_ur_deltas(nominal_model(settings.robot), deltas, &start);
+    start.tool_m = settings.tool_m;
+  }
+  static CliDataset dataset;
+  InputFacts facts;
+  const int load = load_dataset(options, settings, progress_on, &dataset, &facts);
+  if (load != kExitOk) return load;
+  const std::size_t minimum = settings.paper_params ? 12 : 24;
+  if (dataset.size() < minimum) {
+    error("calibrate", "only " + std::to_string(dataset.size()) + " static samples; at least " +
+                           std::to_string(minimum) + " are needed to identify the parameters");
+    return kExitBadInput;
+  }
+  if (dataset.split(settings.train_fraction, settings.seed) != Status::ok || dataset.test().empty()) {
+    error("calibrate", "--split " + options.get("split") + " leaves no training or no test sample");
+    return kExitUsage;
+  }
+  std::vector<std::string> info = facts.info_lines;
+  info.push_back("samples: " + std::to_string(dataset.size()) + " (train " + std::to_string(dataset.train().size()) +
+                 ", test " + std::to_string(dataset.test().size()) + ")");
+
+  // --- uncalibrated row
+  Stage uncalibrated;
+  uncalibrated.method = "uncalibrated";
+  uncalibrated.params = options.get("ur-calibration").empty() ? "nominal" : "controller";
+  uncalibrated.model = start;
+  Status status = fit_base_to_tracker(start, dataset.train(), &uncalibrated.base_to_tracker);
+  if (status != Status::ok) {
+    error("calibrate", std::string("cannot fit the tracker frame: ") + status_message(status) +
+                           (status == Status::degenerate_geometry ? " (are all samples at one pose?)" : ""));
+    return kExitBadInput;
+  }
+
+  // --- solvers
+  std::vector<Stage> stages;
+  auto fail = [&](const char* what, Status s) {
+    error("calibrate", std::string(what) + " failed: " + status_message(s));
+    return kExitFailure;
+  };
+  const std::string& method = settings.method;
+  const bool run_gsa = method == "gsa" || method == "gsa+lm" || method == "all";
+  const bool run_abc = method == "abc" || method == "abc+lm" || method == "all";
+  const bool run_lm_stage = method == "lm" || method == "abc+lm" || method == "gsa+lm" || method == "all";
+  if (run_gsa) {
+    Stage gsa;
+    status = run_population(false, start, dataset.train(), settings.seed, progress_on, &gsa);
+    if (status != Status::ok) return fail("GSA", status);
+    stages.push_back(gsa);
+  }
+  if (run_abc) {
+    Stage abc;
+    status = run_population(true, start, dataset.train(), settings.seed, progress_on, &abc);
+    if (status != Status::ok) return fail("ABC", status);
+    stages.push_back(abc);
+  }
+  if (run_lm_stage) {
+    // Hybrid: start LM where the population solver ended ('all' starts from the nominal model
+    // so that its row stands on its own).
+    const bool hybrid = method == "abc+lm" || method == "gsa+lm";
+    const Stage* seed_stage = hybrid ? &stages.back() : nullptr;
+    Stage lm;
+    status = run_lm(seed_stage ? seed_stage->model : start, seed_stage ? &seed_stage->base_to_tracker : nullptr,
+                    dataset.train(), settings.paper_params, options.given("robust"), progress_on, &lm);
+    if (status != Status::ok) return fail("LM", status);
+    if (hybrid) lm.method = seed_stage->method + "+LM";
+    stages.push_back(lm);
+  }
+  const Stage& final_stage = stages.back();
+
+  // --- tables and facts
+  report::ReportData data;
+  data.title = "hivecal calibration: " + std::string(robot_type_name(settings.robot));
+  data.info_lines = info;
+  data.methods.push_back(method_row(uncalibrated, dataset));
+  for (const Stage& stage : stages) data.methods.push_back(method_row(stage, dataset));
+  data.uncalibrated = accuracy_report(uncalibrated.model, uncalibrated.base_to_tracker, dataset);
+  data.calibrated = accuracy_report(final_stage.model, final_stage.base_to_tracker, dataset);
+  for (const Stage& stage : stages) data.convergence.push_back({stage.method, stage.trace_m});
+  for (const Sample& s : dataset.test()) {
+    data.test_measured_m.push_back(s.point_m);
+    data.test_uncalibrated_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
+    data.test_calibrated_m.push_back(final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)));
+  }
+  if (final_stage.is_lm) {
+    for (const std::string& line : identifiability_lines(final_stage.lm)) data.info_lines.push_back(line);
+  }
+  data.parameter_lines = parameter_lines(final_stage, start);
+
+  for (const std::string& line : data.info_lines) std::printf("%s\n", line.c_str());
+  std::printf("\n%s", report::format_tables_text(data).c_str());
+  std::printf("\nCalibrated parameters (%s):\n", final_stage.method.c_str());
+  for (const std::string& line : data.parameter_lines) std::printf("  %s\n", line.c_str());
+
+  // --- outputs
+  textio::CalibrationFile file;
+  file.robot = settings.robot;
+  file.model = final_stage.model;
+  file.base_to_tracker = final_stage.base_to_tracker;
+  file.has_metrics = true;
+  file.metrics = data.calibrated;
+  const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
+  const std::string json = textio::format_calibration_json(file, [&](textio::JsonWriter& w) {
+    w.key("method").value(final_stage.method);
+    w.key("params").value(settings.paper_params ? "paper" : "full");
+    w.key("seed").value(static_cast<long long>(settings.seed));
+    w.key("split").value(settings.train_fraction);
+    w.key("uncalibrated_metrics").begin_object();
+    w.key("train");
+    textio::write_error_stats(w, data.uncalibrated.train);
+    w.key("test");
+    textio::write_error_stats(w, data.uncalibrated.test);
+    w.end_object();
+    write_stage_list(w, data.methods);
+    if (final_stage.is_lm) write_lm_details(w, final_stage.lm);
+    write_ur_deltas(w, deltas);
+    write_input_facts(w, facts);
+  });
+  std::string write_error;
+  if (!textio::write_file_atomically(options.get("out"), json, &write_error)) {
+    error("calibrate", write_error);
+    return kExitOutputError;
+  }
+  std::printf("\nresult: %s\n", options.get("out").c_str());
+  if (!options.get("ur-deltas").empty()) {
+    if (!textio::write_file_atomically(options.get("ur-deltas"), textio::format_ur_calibration_conf(deltas), &write_error)) {
+      error("calibrate", write_error);
+      return kExitOutputError;
+    }
+    std::printf("UR deltas: %s\n", options.get("ur-deltas").c_str());
+  }
+  if (!options.get("report").empty()) {
+    if (!report::write_html_report(options.get("report"), data, &write_error)) {
+      error("calibrate", write_error);
+      return kExitOutputError;
+    }
+    std::printf("report: %s/index.html\n", options.get("report").c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace hivecal::cli
