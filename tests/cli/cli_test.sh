@@ -80,6 +80,27 @@ expect 3 "NaN or Inf" -- predict --calibration "$work/result.json" --joints "$wo
 # --- output errors (exit 4)
 expect 4 "cannot create a temporary" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/no/dir/p.csv"
 
+# --- calibrate: bad inputs
+expect 2 "give either --samples, or --robot and --tracker" -- calibrate
+expect 2 "--robot and --tracker go together" -- calibrate --robot "$work/joints.csv"
+expect 2 "unknown robot model 'ur7'" -- calibrate --samples "$work/joints.csv" --robot-model ur7
+expect 2 "--method must be one of" -- calibrate --samples "$work/joints.csv" --method sgd
+expect 2 "--split must be a fraction" -- calibrate --samples "$work/joints.csv" --split 1.5
+expect 2 "--tool must be X,Y,Z" -- calibrate --samples "$work/joints.csv" --tool 1,2
+expect 3 "unexpected header" -- calibrate --samples "$work/joints.csv" --out "$work/r1.json"
+no_file "$work/r1.json"
+printf 'q1,q2,q3,q4,q5,q6,x,y,z\n' >"$work/s.csv"
+for i in 1 2 3 4 5; do printf '0,-1.5,1.5,-1.5,-1.5,0,1,2,3\n' >>"$work/s.csv"; done
+expect 3 "static samples; at least" -- calibrate --samples "$work/s.csv" --out "$work/r2.json"
+no_file "$work/r2.json"
+for i in $(seq 1 40); do printf '0,-1.5,1.5,-1.5,-1.5,0,1,2,3\n' >>"$work/s.csv"; done
+expect 3 "cannot fit the tracker frame" -- calibrate --samples "$work/s.csv" --out "$work/r3.json"
+no_file "$work/r3.json"
+head -c 3000 /dev/urandom | tr -d '\000' | head -c 2000 >"$work/noise.cap"
+printf '\000' >>"$work/noise.cap"
+expect 3 "no valid frame" -- calibrate --robot "$work/noise.cap" --tracker "$work/noise.cap" --out "$work/r4.json"
+no_file "$work/r4.json"
+
 # --- a good prediction: UR5 at the zero-like pose through a pure translation
 if "${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/p.csv" &&
    [ "$(head -1 "$work/p.csv")" = "x,y,z" ] && [ "$(wc -l <"$work/p.csv")" -eq 2 ]; then
@@ -89,7 +110,7 @@ else
   echo "FAIL: predict on good input"
 fi
 # --- every command has --help
-for cmd in predict simulate record extract demo; do
+for cmd in calibrate validate predict simulate record extract demo; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then passed=$((passed + 1)); else
     failed=$((failed + 1)); echo "FAIL: $cmd --help"; fi
 done
