@@ -314,6 +314,7 @@ double acos_clamped(double x) {
   if (x != x) return x;
   if (x >= 1.0) return 0.0;
   if (x <= -1.0) return kPi;
+  // sqrt is IEEE correctly rounded on every target (the one libm function allowed); atan2 is ours.
   return atan2(__builtin_sqrt((1.0 - x) * (1.0 + x)), x);
 }
 

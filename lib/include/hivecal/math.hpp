@@ -6,6 +6,9 @@
 
 namespace hivecal::math {
 
+// These are the library's own definitions (hivecal::math::sin etc.), not libm's: the names
+// match the standard ones on purpose so that formulas read as usual.
+
 /// pi to double precision.
 inline constexpr double kPi = 3.14159265358979311600;
 /// pi/2 to double precision.
