@@ -20,33 +20,63 @@ std::string format(const char* fmt, double a, double b) {
 }
 
 /// The stream path: two captures -> clock fit -> quasi-static samples.
-int load_streams(const Options& options, const CalibrateSettings& settings, DatasetBase* dataset, InputFacts* facts) {
+/// "[decode] pass 1/2 (clock): 45 %" on stderr, in place, when a percent changes.
+class DecodeProgress {
+ public:
+  explicit DecodeProgress(bool enabled) : enabled_(enabled) {}
+  ~DecodeProgress() {
+    if (printed_) std::fprintf(stderr, "\n");
+  }
+  void operator()(int pass, std::uint64_t done_bytes, std::uint64_t total_bytes) {
+    if (!enabled_ || total_bytes == 0) return;
+    const int percent = static_cast<int>(100.0 * static_cast<double>(done_bytes) / static_cast<double>(total_bytes));
+    if (pass == last_pass_ && percent == last_percent_) return;
+    last_pass_ = pass;
+    last_percent_ = percent;
+    std::fprintf(stderr, "\r[decode] pass %d/2 (%s): %3d %%", pass, pass == 1 ? "clock" : "samples", percent);
+    std::fflush(stderr);
+    printed_ = true;
+  }
+
+ private:
+  bool enabled_;
+  bool printed_ = false;
+  int last_pass_ = 0;
+  int last_percent_ = -1;
+};
+
+int load_streams(const Options& options, const CalibrateSettings& settings, bool progress_on, DatasetBase* dataset,
+                 InputFacts* facts) {
   const std::string robot = options.get("robot");
   const std::string tracker = options.get("tracker");
-  if (textio::looks_like_csv(robot) || textio::looks_like_csv(tracker)) {
-    error(kCommand, "CSV logs as --robot/--tracker are not supported yet; use serial captures, or pair the logs "
-                    "into --samples q1..q6,x,y,z");
-    return kExitBadInput;
-  }
   RobotModel speed_model = nominal_model(settings.robot);
   speed_model.tool_m = settings.tool_m;  // for tool speeds only
   streams::CaptureRunReport report;
   std::string problem;
-  if (!streams::extract_from_captures(robot, tracker, make_clock_sync_config(speed_model),
-                                      make_extraction_config(speed_model), dataset, &report, &problem)) {
+  DecodeProgress progress(progress_on);
+  const bool read = streams::extract_from_files(
+      robot, tracker, make_clock_sync_config(speed_model), make_extraction_config(speed_model), dataset, &report,
+      &problem, nullptr, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); });
+  if (!read) {
     error(kCommand, problem);
     return kExitBadInput;
   }
   const DecoderStats& r = report.decoding.robot_decoder;
   const DecoderStats& t = report.decoding.tracker_decoder;
-  facts->info_lines.push_back("robot stream: " + std::to_string(r.joint_states) + " joint states, " +
-                              std::to_string(r.frames_rejected()) + " frames rejected, " +
-                              std::to_string(r.packets_lost) + " packets lost");
-  facts->info_lines.push_back("tracker stream: " + std::to_string(t.tracker_points) + " points, " +
-                              std::to_string(t.frames_rejected()) + " frames rejected, " +
-                              std::to_string(t.packets_lost) + " packets lost");
+  auto frames = [](const DecoderStats& s, bool is_log) {
+    return is_log ? std::string(" (CSV log rows)")
+                  : ", " + std::to_string(s.frames_rejected()) + " frames rejected, " + std::to_string(s.packets_lost) +
+                        " packets lost";
+  };
+  facts->info_lines.push_back("robot stream: " + std::to_string(r.joint_states) + " joint states" +
+                              frames(r, report.robot_is_log));
+  facts->info_lines.push_back("tracker stream: " + std::to_string(t.tracker_points) + " points" +
+                              frames(t, report.tracker_is_log));
   if (r.joint_states == 0 || t.tracker_points == 0) {
-    error(kCommand, std::string("no valid frame in the ") + (r.joint_states == 0 ? "robot" : "tracker") + " capture");
+    const bool robot_empty = r.joint_states == 0;
+    const bool is_log = robot_empty ? report.robot_is_log : report.tracker_is_log;
+    error(kCommand, std::string(is_log ? "no data row in the " : "no valid frame in the ") +
+                        (robot_empty ? "robot" : "tracker") + (is_log ? " log" : " capture"));
     return kExitBadInput;
   }
   if (report.clock_status != Status::ok) {
@@ -133,7 +163,7 @@ std::string settings_from_options(const Options& options, CalibrateSettings* set
   return "";
 }
 
-int load_dataset(const Options& options, const CalibrateSettings& settings, bool /*progress*/, DatasetBase* dataset,
+int load_dataset(const Options& options, const CalibrateSettings& settings, bool progress, DatasetBase* dataset,
                  InputFacts* facts) {
   if (!options.get("samples").empty()) {
     const textio::ParseResult r = textio::read_samples_csv(options.get("samples"), dataset);
@@ -146,7 +176,7 @@ int load_dataset(const Options& options, const CalibrateSettings& settings, bool
     return kExitOk;
   }
   facts->info_lines.push_back("input: robot " + options.get("robot") + ", tracker " + options.get("tracker"));
-  return load_streams(options, settings, dataset, facts);
+  return load_streams(options, settings, progress, dataset, facts);
 }
 
 void write_input_facts(textio::JsonWriter& json, const InputFacts& facts) {

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <sys/stat.h>
 
 #include "svg.hpp"
 #include "text_util.hpp"
@@ -186,15 +185,7 @@ std::string render_html(const ReportData& data) {
 }
 
 bool write_html_report(const std::string& dir, const ReportData& data, std::string* error) {
-  if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
-    *error = dir + ": cannot create report folder: " + std::strerror(errno);
-    return false;
-  }
-  struct stat info {};
-  if (::stat(dir.c_str(), &info) != 0 || !S_ISDIR(info.st_mode)) {
-    *error = dir + ": exists and is not a folder";
-    return false;
-  }
+  if (!textio::make_directories(dir, error)) return false;
   return textio::write_file_atomically(dir + "/index.html", render_html(data), error);
 }
 

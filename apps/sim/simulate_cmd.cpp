@@ -148,7 +148,8 @@ int simulate_main(int argc, char** argv) {
     paths.tracker_capture.clear();
   }
   std::string error;
-  if (!write_outputs(session, paths, kTruthMarginS, &error)) {
+  if (!textio::make_directories(options.get("out-dir"), &error) ||
+      !write_outputs(session, paths, kTruthMarginS, &error)) {
     cli::error(kCommand, error);
     return kExitOutputError;
   }

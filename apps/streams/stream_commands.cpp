@@ -159,8 +159,8 @@ int record_main(int argc, char** argv) {
 int extract_main(int argc, char** argv) {
   const std::string command = "extract";
   const std::vector<cli::OptionSpec> specs = {
-      {"robot", "FILE", "robot capture (wire format)", ""},
-      {"tracker", "FILE", "tracker capture (wire format)", ""},
+      {"robot", "FILE", "robot stream: capture (wire format) or CSV log t,q1..q6 (detected by content)", ""},
+      {"tracker", "FILE", "tracker stream: capture (wire format) or CSV log t,x,y,z[,status]", ""},
       {"robot-model", "NAME", "ur3, ur5, ur10 or ur5e (nominal geometry for tool speeds)", "ur5"},
       {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
       {"max-speed-mm-s", "X", "quasi-static threshold on both sides [mm/s]", "2"},
@@ -196,7 +196,7 @@ int extract_main(int argc, char** argv) {
   const auto dataset = std::make_unique<Dataset<65536>>();
   CaptureRunReport report;
   std::string error;
-  if (!extract_from_captures(options.get("robot"), options.get("tracker"), make_clock_sync_config(speed_model),
+  if (!extract_from_files(options.get("robot"), options.get("tracker"), make_clock_sync_config(speed_model),
                              extraction, dataset.get(), &report, &error)) {
     cli::error(command, error);
     return kExitBadInput;

@@ -11,21 +11,6 @@
 namespace hivecal::textio {
 namespace {
 
-/// Expected header: `columns` in order, optionally one `leading` column before them and
-/// `trailing` optional columns after them; further columns are ignored.
-struct CsvSchema {
-  std::vector<std::string> columns;
-  std::string optional_leading;
-  std::vector<std::string> optional_trailing;
-};
-
-/// Values of one data row in schema order (columns, then present optional trailing ones).
-struct CsvRow {
-  std::size_t line = 0;
-  std::vector<double> values;
-  std::size_t trailing_present = 0;
-};
-
 std::vector<std::string_view> split_fields(std::string_view line) {
   std::vector<std::string_view> fields;
   std::size_t start = 0;
@@ -51,96 +36,117 @@ std::string join(const std::vector<std::string>& names) {
   return out;
 }
 
-/// Matches the header; sets the column offset (0 or 1) and how many trailing optionals exist.
-bool match_header(const std::vector<std::string_view>& header, const CsvSchema& schema, std::size_t* offset,
-                  std::size_t* trailing) {
-  *offset = (!schema.optional_leading.empty() && !header.empty() && lower(header[0]) == schema.optional_leading) ? 1 : 0;
-  if (header.size() < *offset + schema.columns.size()) return false;
-  for (std::size_t i = 0; i < schema.columns.size(); ++i) {
-    if (lower(header[*offset + i]) != schema.columns[i]) return false;
+std::string where(const std::string& path, std::size_t line) { return path + ":" + std::to_string(line) + ": "; }
+
+}  // namespace
+
+CsvReader::CsvReader(CsvSchema schema) : schema_(std::move(schema)) {}
+
+CsvReader::~CsvReader() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+std::string CsvReader::expected_header() const {
+  std::string expected = (schema_.optional_leading.empty() ? "" : "[" + schema_.optional_leading + ",]") +
+                         join(schema_.columns);
+  if (!schema_.optional_trailing.empty()) expected += "[," + join(schema_.optional_trailing) + "]";
+  return expected;
+}
+
+bool CsvReader::match_header(const std::vector<std::string_view>& header) {
+  offset_ = (!schema_.optional_leading.empty() && !header.empty() && lower(header[0]) == schema_.optional_leading) ? 1 : 0;
+  if (header.size() < offset_ + schema_.columns.size()) return false;
+  for (std::size_t i = 0; i < schema_.columns.size(); ++i) {
+    if (lower(header[offset_ + i]) != schema_.columns[i]) return false;
   }
-  *trailing = 0;
-  const std::size_t after = *offset + schema.columns.size();
-  while (*trailing < schema.optional_trailing.size() && after + *trailing < header.size() &&
-         lower(header[after + *trailing]) == schema.optional_trailing[*trailing]) {
-    ++*trailing;
+  trailing_ = 0;
+  const std::size_t after = offset_ + schema_.columns.size();
+  while (trailing_ < schema_.optional_trailing.size() && after + trailing_ < header.size() &&
+         lower(header[after + trailing_]) == schema_.optional_trailing[trailing_]) {
+    ++trailing_;
   }
   return true;
 }
 
-std::string where(const std::string& path, std::size_t line) { return path + ":" + std::to_string(line) + ": "; }
-
-/// Reads the file line by line (bounded memory), checks the header and parses each row's
-/// numeric fields; `on_row` may reject a row by returning an error text.
-ParseResult read_csv(const std::string& path, const CsvSchema& schema,
-                     const std::function<std::string(const CsvRow&)>& on_row) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) return ParseResult{false, path + ": cannot open: " + std::strerror(errno)};
-  struct Closer {
-    std::FILE* f;
-    ~Closer() { std::fclose(f); }
-  } closer{file};
-
-  std::string expected = (schema.optional_leading.empty() ? "" : "[" + schema.optional_leading + ",]") +
-                         join(schema.columns);
-  if (!schema.optional_trailing.empty()) expected += "[," + join(schema.optional_trailing) + "]";
-  std::string line;
-  std::size_t line_number = 0;
-  std::size_t offset = 0;
-  std::size_t trailing = 0;
-  bool have_header = false;
-  std::size_t rows = 0;
+bool CsvReader::read_line(std::string* line) {
+  line->clear();
   char buffer[4096];
-  auto handle_line = [&](std::string_view text) -> ParseResult {
-    ++line_number;
-    if (line_number == 1 && text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // BOM
-    if (trim(text).empty()) return ParseResult{true, ""};
-    const std::vector<std::string_view> fields = split_fields(text);
-    if (!have_header) {
-      if (!match_header(fields, schema, &offset, &trailing)) {
-        return ParseResult{false, where(path, line_number) + "unexpected header '" + std::string(trim(text)) +
-                                      "', expected " + expected};
-      }
-      have_header = true;
-      return ParseResult{true, ""};
+  while (std::fgets(buffer, sizeof buffer, file_) != nullptr) {
+    *line += buffer;
+    if (line->back() == '\n') break;  // else a line longer than the buffer: keep reading
+  }
+  if (line->empty()) return false;
+  bytes_read_ += line->size();
+  ++line_number_;
+  if (line_number_ == 1 && line->compare(0, 3, "\xEF\xBB\xBF") == 0) line->erase(0, 3);  // BOM
+  return true;
+}
+
+ParseResult CsvReader::open(const std::string& path) {
+  path_ = path;
+  file_ = std::fopen(path.c_str(), "rb");
+  if (file_ == nullptr) return ParseResult{false, path + ": cannot open: " + std::strerror(errno)};
+  std::string line;
+  while (read_line(&line)) {
+    if (trim(line).empty()) continue;
+    if (!match_header(split_fields(line))) {
+      return ParseResult{false, where(path, line_number_) + "unexpected header '" + std::string(trim(line)) +
+                                    "', expected " + expected_header()};
     }
-    const std::size_t needed = offset + schema.columns.size() + trailing;
+    return ParseResult{true, ""};
+  }
+  if (std::ferror(file_) != 0) return ParseResult{false, path + ": read error"};
+  return ParseResult{false, path + ": empty file (expected header " + expected_header() + ")"};
+}
+
+ParseResult CsvReader::next(CsvRow* row, bool* got_row) {
+  *got_row = false;
+  std::string line;
+  while (read_line(&line)) {
+    if (trim(line).empty()) continue;
+    const std::vector<std::string_view> fields = split_fields(line);
+    const std::size_t needed = offset_ + schema_.columns.size() + trailing_;
     if (fields.size() < needed) {
-      return ParseResult{false, where(path, line_number) + "expected at least " + std::to_string(needed) +
+      return ParseResult{false, where(path_, line_number_) + "expected at least " + std::to_string(needed) +
                                     " columns, found " + std::to_string(fields.size())};
     }
-    CsvRow row;
-    row.line = line_number;
-    row.trailing_present = trailing;
-    for (std::size_t i = offset; i < needed; ++i) {
+    row->line = line_number_;
+    row->trailing_present = trailing_;
+    row->values.clear();
+    for (std::size_t i = offset_; i < needed; ++i) {
       double v = 0.0;
       if (!parse_double(fields[i], &v)) {
-        return ParseResult{false, where(path, line_number) + "not a number: '" + std::string(fields[i]) + "'"};
+        return ParseResult{false, where(path_, line_number_) + "not a number: '" + std::string(fields[i]) + "'"};
       }
-      row.values.push_back(v);
+      row->values.push_back(v);
     }
-    const std::string rejection = on_row(row);
-    if (!rejection.empty()) return ParseResult{false, where(path, line_number) + rejection};
-    ++rows;
+    ++rows_;
+    *got_row = true;
     return ParseResult{true, ""};
-  };
-  while (std::fgets(buffer, sizeof buffer, file) != nullptr) {
-    line += buffer;
-    if (line.empty() || line.back() != '\n') {
-      if (!std::feof(file)) continue;  // a line longer than the buffer: keep reading
-    }
-    const ParseResult r = handle_line(line);
-    line.clear();
-    if (!r.ok) return r;
   }
-  if (std::ferror(file) != 0) return ParseResult{false, path + ": read error"};
-  if (!line.empty()) {
-    const ParseResult r = handle_line(line);
-    if (!r.ok) return r;
-  }
-  if (!have_header) return ParseResult{false, path + ": empty file (expected header " + expected + ")"};
-  if (rows == 0) return ParseResult{false, path + ": no data rows"};
+  if (std::ferror(file_) != 0) return ParseResult{false, path_ + ": read error"};
+  if (rows_ == 0) return ParseResult{false, path_ + ": no data rows"};
   return ParseResult{true, ""};
+}
+
+ParseResult CsvReader::reject(const std::string& problem) const {
+  return ParseResult{false, where(path_, line_number_) + problem};
+}
+
+namespace {
+
+/// Reads the whole file through `on_row`, which may reject a row by returning an error text.
+ParseResult read_csv(const std::string& path, const CsvSchema& schema,
+                     const std::function<std::string(const CsvRow&)>& on_row) {
+  CsvReader reader(schema);
+  ParseResult result = reader.open(path);
+  CsvRow row;
+  bool got_row = false;
+  while (result.ok && (result = reader.next(&row, &got_row)).ok && got_row) {
+    const std::string rejection = on_row(row);
+    if (!rejection.empty()) return reader.reject(rejection);
+  }
+  return result;
 }
 
 std::string check_finite(const std::vector<double>& values, std::size_t first, std::size_t count) {
@@ -149,20 +155,6 @@ std::string check_finite(const std::vector<double>& values, std::size_t first, s
   }
   return "";
 }
-
-/// Rejects timestamps that do not strictly increase.
-struct MonotonicClock {
-  bool started = false;
-  double last_s = 0.0;
-  std::string check(double t_s) {
-    if (started && !(t_s > last_s)) {
-      return "timestamp " + format_double(t_s) + " s does not increase (previous " + format_double(last_s) + " s)";
-    }
-    started = true;
-    last_s = t_s;
-    return "";
-  }
-};
 
 const std::vector<std::string> kJointColumns = {"q1", "q2", "q3", "q4", "q5", "q6"};
 
@@ -173,40 +165,71 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 
 }  // namespace
 
+std::string IncreasingTimestamps::check(double t_s) {
+  if (started && !(t_s > last_s)) {
+    return "timestamp " + format_double(t_s) + " s does not increase (previous " + format_double(last_s) + " s)";
+  }
+  started = true;
+  last_s = t_s;
+  return "";
+}
+
+RobotLogReader::RobotLogReader() : csv_(CsvSchema{with({"t"}, kJointColumns), "", {}}) {}
+
+ParseResult RobotLogReader::next(RobotLogRow* row, bool* got_row) {
+  const ParseResult result = csv_.next(&raw_, got_row);
+  if (!result.ok || !*got_row) return result;
+  std::string error = check_finite(raw_.values, 0, 7);
+  if (error.empty()) error = timestamps_.check(raw_.values[0]);
+  if (!error.empty()) return csv_.reject(error);
+  row->t_s = raw_.values[0];
+  for (int j = 0; j < kJointCount; ++j) row->q_rad(j) = raw_.values[static_cast<std::size_t>(j) + 1];
+  return result;
+}
+
+TrackerLogReader::TrackerLogReader() : csv_(CsvSchema{{"t", "x", "y", "z"}, "", {"status"}}) {}
+
+ParseResult TrackerLogReader::next(TrackerLogRow* row, bool* got_row) {
+  const ParseResult result = csv_.next(&raw_, got_row);
+  if (!result.ok || !*got_row) return result;
+  row->status = 0;  // no status column: every row is valid
+  if (raw_.trailing_present == 1) {
+    const double status = raw_.values[4];
+    if (!(status >= 0.0 && status <= 255.0) || status != static_cast<double>(static_cast<int>(status))) {
+      return csv_.reject("status must be an integer 0..255");
+    }
+    row->status = static_cast<std::uint8_t>(status);
+  }
+  std::string error = check_finite(raw_.values, 0, 1);
+  if (error.empty() && row->status == 0) error = check_finite(raw_.values, 1, 3);
+  if (error.empty()) error = timestamps_.check(raw_.values[0]);
+  if (!error.empty()) return csv_.reject(error);
+  row->t_s = raw_.values[0];
+  row->point_m << raw_.values[1], raw_.values[2], raw_.values[3];
+  return result;
+}
+
+namespace {
+
+/// Streams every row of a log reader into `on_row`.
+template <typename Reader, typename Row>
+ParseResult read_log(const std::string& path, const std::function<void(const Row&)>& on_row) {
+  Reader reader;
+  ParseResult result = reader.open(path);
+  Row row;
+  bool got_row = false;
+  while (result.ok && (result = reader.next(&row, &got_row)).ok && got_row) on_row(row);
+  return result;
+}
+
+}  // namespace
+
 ParseResult read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row) {
-  MonotonicClock clock;
-  return read_csv(path, CsvSchema{with({"t"}, kJointColumns), "", {}}, [&](const CsvRow& row) {
-    std::string error = check_finite(row.values, 0, 7);
-    if (error.empty()) error = clock.check(row.values[0]);
-    if (!error.empty()) return error;
-    RobotLogRow out;
-    out.t_s = row.values[0];
-    for (int j = 0; j < kJointCount; ++j) out.q_rad(j) = row.values[static_cast<std::size_t>(j) + 1];
-    on_row(out);
-    return std::string();
-  });
+  return read_log<RobotLogReader>(path, on_row);
 }
 
 ParseResult read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row) {
-  MonotonicClock clock;
-  return read_csv(path, CsvSchema{{"t", "x", "y", "z"}, "", {"status"}}, [&](const CsvRow& row) {
-    TrackerLogRow out;
-    if (row.trailing_present == 1) {
-      const double status = row.values[4];
-      if (!(status >= 0.0 && status <= 255.0) || status != static_cast<double>(static_cast<int>(status))) {
-        return std::string("status must be an integer 0..255");
-      }
-      out.status = static_cast<std::uint8_t>(status);
-    }
-    std::string error = check_finite(row.values, 0, 1);
-    if (error.empty() && out.status == 0) error = check_finite(row.values, 1, 3);
-    if (error.empty()) error = clock.check(row.values[0]);
-    if (!error.empty()) return error;
-    out.t_s = row.values[0];
-    out.point_m << row.values[1], row.values[2], row.values[3];
-    on_row(out);
-    return std::string();
-  });
+  return read_log<TrackerLogReader>(path, on_row);
 }
 
 ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
@@ -251,20 +274,21 @@ std::string format_samples_csv(Span<const Sample> samples) {
   return out;
 }
 
-bool looks_like_csv(const std::string& path) {
+StreamFileKind detect_stream_file(const std::string& path) {
   std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) return false;
-  unsigned char head[256];
+  if (file == nullptr) return StreamFileKind::capture;  // the capture reader reports the open error
+  unsigned char head[512];
   const std::size_t got = std::fread(head, 1, sizeof head, file);
   std::fclose(file);
-  if (got == 0) return false;
-  for (std::size_t i = 0; i < got; ++i) {
-    const unsigned char c = head[i];
-    if (c == '\n') return true;
-    const bool printable = (c >= 0x20 && c < 0x7f) || c == '\t' || c == '\r' || c >= 0x80;
-    if (!printable) return false;
+  std::size_t at = (got >= 3 && head[0] == 0xEF && head[1] == 0xBB && head[2] == 0xBF) ? 3 : 0;  // BOM
+  bool comma = false;
+  for (; at < got && head[at] != '\n'; ++at) {
+    const unsigned char c = head[at];
+    // A capture's frames end in 0x00 and are mostly bytes outside printable ASCII.
+    if (!((c >= 0x20 && c < 0x7f) || c == '\t' || c == '\r')) return StreamFileKind::capture;
+    comma = comma || c == ',';
   }
-  return true;
+  return comma ? StreamFileKind::csv_log : StreamFileKind::capture;
 }
 
 }  // namespace hivecal::textio

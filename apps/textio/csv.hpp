@@ -4,8 +4,10 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hivecal/dataset.hpp"
@@ -27,6 +29,92 @@ struct TrackerLogRow {
   std::uint8_t status = 0;          ///< 0 valid, 1 beam lost, 2 unstable, other: not valid
 };
 
+/// Expected header: `columns` in order, optionally one `optional_leading` column before them
+/// and `optional_trailing` columns after them (in that order); further columns are ignored.
+struct CsvSchema {
+  std::vector<std::string> columns;            ///< required column names, lower case
+  std::string optional_leading;                ///< a column that may come first (ignored), or ""
+  std::vector<std::string> optional_trailing;  ///< columns that may follow, in order
+};
+
+/// Values of one data row in schema order (columns, then the optional trailing ones present).
+struct CsvRow {
+  std::size_t line = 0;              ///< 1-based line number in the file
+  std::vector<double> values;        ///< numeric fields
+  std::size_t trailing_present = 0;  ///< how many optional trailing columns the file has
+};
+
+/// Pull reader of a CSV file: checks the header, then parses one numeric row per next().
+/// Memory is one line, whatever the file length. Every error names the file and line.
+class CsvReader {
+ public:
+  explicit CsvReader(CsvSchema schema);
+  ~CsvReader();
+  CsvReader(const CsvReader&) = delete;
+  CsvReader& operator=(const CsvReader&) = delete;
+  /// Opens `path` and reads its header (blank lines and a UTF-8 BOM are skipped).
+  ParseResult open(const std::string& path);
+  /// Next data row into *row (*got_row true), or the end of the file (*got_row false; an
+  /// error if the file had no data row), or an error.
+  ParseResult next(CsvRow* row, bool* got_row);
+  /// An error at the current line: `problem` prefixed with file:line.
+  ParseResult reject(const std::string& problem) const;
+  /// Bytes of the file read so far [bytes].
+  std::uint64_t bytes_read() const { return bytes_read_; }
+
+ private:
+  bool read_line(std::string* line);
+  bool match_header(const std::vector<std::string_view>& header);
+  std::string expected_header() const;
+
+  CsvSchema schema_;
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  std::size_t line_number_ = 0;
+  std::size_t offset_ = 0;    ///< 1 when the optional leading column is present
+  std::size_t trailing_ = 0;  ///< optional trailing columns present
+  std::size_t rows_ = 0;      ///< data rows returned so far
+  std::uint64_t bytes_read_ = 0;
+};
+
+/// Rejects timestamps that do not strictly increase.
+struct IncreasingTimestamps {
+  bool started = false;  ///< a timestamp has been seen
+  double last_s = 0.0;   ///< the last one [s]
+  /// "" when t_s is later than the last one, else the problem.
+  std::string check(double t_s);
+};
+
+/// Pull reader of a robot joint log (`t,q1..q6`, extra columns ignored; t must increase).
+class RobotLogReader {
+ public:
+  RobotLogReader();
+  ParseResult open(const std::string& path) { return csv_.open(path); }  ///< opens, checks the header
+  std::uint64_t bytes_read() const { return csv_.bytes_read(); }          ///< [bytes]
+  /// Next row (*got_row true), or the end (*got_row false), or an error naming file:line.
+  ParseResult next(RobotLogRow* row, bool* got_row);
+
+ private:
+  CsvReader csv_;
+  CsvRow raw_;
+  IncreasingTimestamps timestamps_;
+};
+
+/// Pull reader of a tracker log (`t,x,y,z[,status]`; t must increase; no status: valid).
+class TrackerLogReader {
+ public:
+  TrackerLogReader();
+  ParseResult open(const std::string& path) { return csv_.open(path); }  ///< opens, checks the header
+  std::uint64_t bytes_read() const { return csv_.bytes_read(); }          ///< [bytes]
+  /// Next row (*got_row true), or the end (*got_row false), or an error naming file:line.
+  ParseResult next(TrackerLogRow* row, bool* got_row);
+
+ private:
+  CsvReader csv_;
+  CsvRow raw_;
+  IncreasingTimestamps timestamps_;
+};
+
 /// Streams a robot joint log (`t,q1..q6`, extra columns ignored); timestamps must increase.
 ParseResult read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row);
 /// Streams a tracker log (`t,x,y,z[,status]`); timestamps must increase.
@@ -41,7 +129,14 @@ std::string format_points_csv(const std::vector<Vec3>& points_m);
 /// `q1..q6,x,y,z` rows with round-trip precision.
 std::string format_samples_csv(Span<const Sample> samples);
 
-/// True when the file looks like text CSV (a printable first line), false for binary captures.
-bool looks_like_csv(const std::string& path);
+/// What a --robot/--tracker file is.
+enum class StreamFileKind {
+  capture,  ///< raw serial bytes (serial-protocol.md)
+  csv_log,  ///< a CSV log of io-formats.md
+};
+/// Detects the kind by content: a first line of printable ASCII with a comma is a CSV log
+/// (its header is checked when read); anything else, including an unreadable file, is a
+/// capture (whose reader then reports the problem).
+StreamFileKind detect_stream_file(const std::string& path);
 
 }  // namespace hivecal::textio

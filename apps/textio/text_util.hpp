@@ -15,6 +15,9 @@ bool parse_double(std::string_view field, double* value);
 /// Writes `content` to `path` atomically: a temporary in the same folder, fsync, rename.
 /// On failure nothing is left at `path` (an older file stays untouched).
 bool write_file_atomically(const std::string& path, const std::string& content, std::string* error);
+/// Creates the folder `path` and its missing parents (like mkdir -p); true if it exists as
+/// a folder afterwards, else false with a message.
+bool make_directories(const std::string& path, std::string* error);
 /// Formats a double so that it reads back to the same bits (%.17g).
 std::string format_double(double value);
 

@@ -96,7 +96,8 @@ no_file "$work/r2.json"
 for i in $(seq 1 40); do printf '0,-1.5,1.5,-1.5,-1.5,0,1,2,3\n' >>"$work/s.csv"; done
 expect 3 "cannot fit the tracker frame" -- calibrate --samples "$work/s.csv" --out "$work/r3.json"
 no_file "$work/r3.json"
-head -c 3000 /dev/urandom | tr -d '\000' | head -c 2000 >"$work/noise.cap"
+# Noise that starts with a control byte, so it is a capture whatever the random bytes are.
+{ printf '\001'; head -c 3000 /dev/urandom | tr -d '\000' | head -c 2000; } >"$work/noise.cap"
 printf '\000' >>"$work/noise.cap"
 expect 3 "no valid frame" -- calibrate --robot "$work/noise.cap" --tracker "$work/noise.cap" --out "$work/r4.json"
 no_file "$work/r4.json"
@@ -109,6 +110,62 @@ else
   failed=$((failed + 1))
   echo "FAIL: predict on good input"
 fi
+# --- end to end: simulated captures and CSV logs -> calibrate -> result.json -> predict
+sim="$work/sim/session"  # a folder that does not exist yet: simulate creates it
+if "${run[@]}" simulate --out-dir "$sim" --waypoints 12 --duration-s 150 --seed 5 >/dev/null; then
+  passed=$((passed + 1))
+else
+  failed=$((failed + 1)); echo "FAIL: simulate --out-dir (new folder)"
+fi
+calibrated() {  # calibrated NAME ROBOT TRACKER: result JSON without the run times
+  "${run[@]}" calibrate --robot "$2" --tracker "$3" --out "$work/$1.json" >"$work/$1.out" 2>&1 &&
+    grep -v '"seconds"' "$work/$1.json" >"$work/$1.stable"
+}
+if calibrated cap "$sim/robot.cap" "$sim/tracker.cap" && calibrated csv "$sim/robot_joints.csv" "$sim/tracker.csv" &&
+   calibrated mixed "$sim/robot_joints.csv" "$sim/tracker.cap" && grep -q "(CSV log rows)" "$work/csv.out" &&
+   cmp -s "$work/cap.stable" "$work/csv.stable" && cmp -s "$work/cap.stable" "$work/mixed.stable"; then
+  passed=$((passed + 1))
+else
+  failed=$((failed + 1)); echo "FAIL: captures, CSV logs and a mix must give the same calibration"
+  cat "$work/csv.out" "$work/mixed.out"
+fi
+# Predict the simulator's noise-free static points from their joints (truth_samples.csv:
+# waypoint,t_tracker,t_robot,q1..q6,x,y,z): the calibration must be far better than nominal.
+{ echo "q1,q2,q3,q4,q5,q6"; tail -n +2 "$sim/truth_samples.csv" | cut -d, -f4-9; } >"$work/truth_joints.csv"
+if "${run[@]}" predict --calibration "$work/cap.json" --joints "$work/truth_joints.csv" --out "$work/pred.csv"; then
+  mean_um=$(paste -d, <(tail -n +2 "$sim/truth_samples.csv" | cut -d, -f10-12) <(tail -n +2 "$work/pred.csv") |
+    awk -F, '{ d = sqrt(($1-$4)^2 + ($2-$5)^2 + ($3-$6)^2); s += d; n++ } END { if (n == 0) print 1e9; else printf "%.1f", 1e6 * s / n }')
+  if awk -v m="$mean_um" 'BEGIN { exit !(m < 60) }'; then passed=$((passed + 1)); else
+    failed=$((failed + 1)); echo "FAIL: predict vs truth: mean error $mean_um um (want < 60 um)"; fi
+  echo "predict vs noise-free truth: mean error $mean_um um"
+else
+  failed=$((failed + 1)); echo "FAIL: predict on the calibration of the captures"
+fi
+# A CSV log with a bad row is a clear error naming file and line, and no result.
+{ head -5 "$sim/tracker.csv"; echo "5.9,1,2"; } >"$work/short_tracker.csv"
+expect 3 "short_tracker.csv:6: expected at least 5 columns" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/short_tracker.csv" --out "$work/r5.json"
+no_file "$work/r5.json"
+{ head -3 "$sim/robot_joints.csv"; head -2 "$sim/robot_joints.csv" | tail -1; } >"$work/backwards.csv"
+expect 3 "does not increase" -- calibrate --robot "$work/backwards.csv" --tracker "$sim/tracker.csv" --out "$work/r6.json"
+no_file "$work/r6.json"
+printf 't,q1,q2,q3,q4,q5,q6\n-1,0,0,0,0,0,0\n' >"$work/negative.csv"
+expect 3 "outside 0 .. 1.8e13 s" -- calibrate --robot "$work/negative.csv" --tracker "$sim/tracker.csv" --out "$work/r7.json"
+printf 't,q1,q2,q3,q4,q5,q6\n' >"$work/header_only.csv"
+expect 3 "no data rows" -- calibrate --robot "$work/header_only.csv" --tracker "$sim/tracker.csv" --out "$work/r8.json"
+
+# --- progress: on stderr when it is a terminal (script(1) gives one), never in a pipe or with --quiet
+if command -v script >/dev/null; then
+  tty_cmd="$(printf '%q ' "${run[@]}") calibrate --robot $sim/robot.cap --tracker $sim/tracker.cap --out $work/tty.json"
+  script -qec "$tty_cmd" /dev/null >"$work/tty.out" 2>&1
+  script -qec "$tty_cmd --quiet" /dev/null >"$work/tty_quiet.out" 2>&1
+  if grep -q "decode\] pass 2/2 (samples): 100 %" "$work/tty.out" && grep -q "\[LM\] iteration" "$work/tty.out" &&
+     ! grep -q "\[decode\]\|\[LM\]" "$work/tty_quiet.out" "$work/cap.out"; then
+    passed=$((passed + 1))
+  else
+    failed=$((failed + 1)); echo "FAIL: progress on a terminal only"
+  fi
+fi
+
 # --- every command has --help
 for cmd in calibrate validate predict simulate record extract demo; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then passed=$((passed + 1)); else

@@ -123,8 +123,10 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   port::CaptureFileSource robot_replay(robot_path);
   port::CaptureFileSource tracker_replay(tracker_path);
   ASSERT_TRUE(robot_replay.open(&error) && tracker_replay.open(&error)) << error;
+  streams::RecordQueue robot_records(&robot_replay);
+  streams::RecordQueue tracker_records(&tracker_replay);
   streams::PassStats pass;
-  EXPECT_EQ(streams::extract_samples(&robot_replay, &tracker_replay, extractor.get(), &pass, &error), Status::ok)
+  EXPECT_EQ(streams::extract_samples(&robot_records, &tracker_records, extractor.get(), &pass, &error), Status::ok)
       << error;
   const ExtractionCounts& counts = extractor->counts();
   EXPECT_EQ(counts.pending(), 0u);
