@@ -174,40 +174,54 @@ std::string IncreasingTimestamps::check(double t_s) {
   return "";
 }
 
-RobotLogReader::RobotLogReader() : csv_(CsvSchema{with({"t"}, kJointColumns), "", {}}) {}
+namespace {
 
-ParseResult RobotLogReader::next(RobotLogRow* row, bool* got_row) {
-  const ParseResult result = csv_.next(&raw_, got_row);
-  if (!result.ok || !*got_row) return result;
-  std::string error = check_finite(raw_.values, 0, 7);
-  if (error.empty()) error = timestamps_.check(raw_.values[0]);
-  if (!error.empty()) return csv_.reject(error);
-  row->t_s = raw_.values[0];
-  for (int j = 0; j < kJointCount; ++j) row->q_rad(j) = raw_.values[static_cast<std::size_t>(j) + 1];
-  return result;
+CsvSchema schema_of(const RobotLogRow*) { return CsvSchema{with({"t"}, kJointColumns), "", {}}; }
+CsvSchema schema_of(const TrackerLogRow*) { return CsvSchema{{"t", "x", "y", "z"}, "", {"status"}}; }
+
+/// Fills *row from a robot log row's values (t, q1..q6); "" or the problem.
+std::string to_row(const CsvRow& raw, RobotLogRow* row) {
+  const std::string error = check_finite(raw.values, 0, 7);
+  if (!error.empty()) return error;
+  row->t_s = raw.values[0];
+  for (int j = 0; j < kJointCount; ++j) row->q_rad(j) = raw.values[static_cast<std::size_t>(j) + 1];
+  return "";
 }
 
-TrackerLogReader::TrackerLogReader() : csv_(CsvSchema{{"t", "x", "y", "z"}, "", {"status"}}) {}
-
-ParseResult TrackerLogReader::next(TrackerLogRow* row, bool* got_row) {
-  const ParseResult result = csv_.next(&raw_, got_row);
-  if (!result.ok || !*got_row) return result;
+/// Fills *row from a tracker log row's values (t, x, y, z[, status]); "" or the problem.
+std::string to_row(const CsvRow& raw, TrackerLogRow* row) {
   row->status = 0;  // no status column: every row is valid
-  if (raw_.trailing_present == 1) {
-    const double status = raw_.values[4];
+  if (raw.trailing_present == 1) {
+    const double status = raw.values[4];
     if (!(status >= 0.0 && status <= 255.0) || status != static_cast<double>(static_cast<int>(status))) {
-      return csv_.reject("status must be an integer 0..255");
+      return "status must be an integer 0..255";
     }
     row->status = static_cast<std::uint8_t>(status);
   }
-  std::string error = check_finite(raw_.values, 0, 1);
-  if (error.empty() && row->status == 0) error = check_finite(raw_.values, 1, 3);
-  if (error.empty()) error = timestamps_.check(raw_.values[0]);
-  if (!error.empty()) return csv_.reject(error);
-  row->t_s = raw_.values[0];
-  row->point_m << raw_.values[1], raw_.values[2], raw_.values[3];
-  return result;
+  std::string error = check_finite(raw.values, 0, 1);
+  if (error.empty() && row->status == 0) error = check_finite(raw.values, 1, 3);  // beam lost: NaN allowed
+  if (!error.empty()) return error;
+  row->t_s = raw.values[0];
+  row->point_m << raw.values[1], raw.values[2], raw.values[3];
+  return "";
 }
+
+}  // namespace
+
+template <typename Row>
+LogReader<Row>::LogReader() : csv_(schema_of(static_cast<const Row*>(nullptr))) {}
+
+template <typename Row>
+ParseResult LogReader<Row>::next(Row* row, bool* got_row) {
+  const ParseResult result = csv_.next(&raw_, got_row);
+  if (!result.ok || !*got_row) return result;
+  std::string error = to_row(raw_, row);
+  if (error.empty()) error = timestamps_.check(row->t_s);
+  return error.empty() ? result : csv_.reject(error);
+}
+
+template class LogReader<RobotLogRow>;
+template class LogReader<TrackerLogRow>;
 
 namespace {
 

@@ -85,35 +85,24 @@ struct IncreasingTimestamps {
   std::string check(double t_s);
 };
 
-/// Pull reader of a robot joint log (`t,q1..q6`, extra columns ignored; t must increase).
-class RobotLogReader {
+/// Pull reader of a timed log: robot joint log (`t,q1..q6`, extra columns ignored) or tracker
+/// log (`t,x,y,z[,status]`; no status: valid). Timestamps must increase.
+template <typename Row>
+class LogReader {
  public:
-  RobotLogReader();
+  LogReader();
   ParseResult open(const std::string& path) { return csv_.open(path); }  ///< opens, checks the header
   std::uint64_t bytes_read() const { return csv_.bytes_read(); }          ///< [bytes]
   /// Next row (*got_row true), or the end (*got_row false), or an error naming file:line.
-  ParseResult next(RobotLogRow* row, bool* got_row);
+  ParseResult next(Row* row, bool* got_row);
 
  private:
   CsvReader csv_;
   CsvRow raw_;
   IncreasingTimestamps timestamps_;
 };
-
-/// Pull reader of a tracker log (`t,x,y,z[,status]`; t must increase; no status: valid).
-class TrackerLogReader {
- public:
-  TrackerLogReader();
-  ParseResult open(const std::string& path) { return csv_.open(path); }  ///< opens, checks the header
-  std::uint64_t bytes_read() const { return csv_.bytes_read(); }          ///< [bytes]
-  /// Next row (*got_row true), or the end (*got_row false), or an error naming file:line.
-  ParseResult next(TrackerLogRow* row, bool* got_row);
-
- private:
-  CsvReader csv_;
-  CsvRow raw_;
-  IncreasingTimestamps timestamps_;
-};
+using RobotLogReader = LogReader<RobotLogRow>;      ///< robot joint log reader
+using TrackerLogReader = LogReader<TrackerLogRow>;  ///< tracker log reader
 
 /// Streams a robot joint log (`t,q1..q6`, extra columns ignored); timestamps must increase.
 ParseResult read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row);
