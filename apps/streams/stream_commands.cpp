@@ -72,7 +72,11 @@ void print_counts(const ExtractionCounts& counts) {
                   static_cast<unsigned long long>(counts.dropped[r]));
 }
 
-void print_decoder(const char* stream, const DecoderStats& s) {
+void print_decoder(const char* stream, const DecoderStats& s, bool is_log) {
+  if (is_log) {
+    std::printf("%s CSV log: %llu rows\n", stream, static_cast<unsigned long long>(s.frames_ok));
+    return;
+  }
   std::printf("%s frames %llu ok, %llu rejected, %llu packets lost in %llu gaps\n", stream,
               static_cast<unsigned long long>(s.frames_ok), static_cast<unsigned long long>(s.frames_rejected()),
               static_cast<unsigned long long>(s.packets_lost), static_cast<unsigned long long>(s.sequence_gaps));
@@ -201,8 +205,8 @@ int extract_main(int argc, char** argv) {
     cli::error(command, error);
     return kExitBadInput;
   }
-  print_decoder("robot  ", report.decoding.robot_decoder);
-  print_decoder("tracker", report.decoding.tracker_decoder);
+  print_decoder("robot  ", report.decoding.robot_decoder, report.robot_is_log);
+  print_decoder("tracker", report.decoding.tracker_decoder, report.tracker_is_log);
   if (report.clock_status != Status::ok) {
     cli::error(command, std::string("clock relation not found: ") + status_message(report.clock_status));
     return kExitFailure;
