@@ -117,14 +117,16 @@ int record_main(int argc, char** argv) {
   const struct {
     const char* port;
     const char* out;
+    const char* baud_option;
     double baud;
-  } streams[] = {{"robot-port", "robot-out", robot_baud}, {"tracker-port", "tracker-out", tracker_baud}};
+  } streams[] = {{"robot-port", "robot-out", "robot-baud", robot_baud},
+                 {"tracker-port", "tracker-out", "tracker-baud", tracker_baud}};
   std::string error;
   for (const auto& s : streams) {
     if (options.get(s.port).empty()) continue;
     const int baud = static_cast<int>(s.baud);
     if (!port::baud_supported(baud)) {
-      cli::error(command, std::string("--") + s.port + ": unsupported baud rate " + options.get(s.port));
+      cli::error(command, std::string("--") + s.baud_option + ": unsupported baud rate " + options.get(s.baud_option));
       return kExitUsage;
     }
     ports.push_back(std::make_unique<port::SerialPort>(port::SerialOptions{options.get(s.port), baud}));

@@ -80,6 +80,10 @@ expect 3 "NaN or Inf" -- predict --calibration "$work/result.json" --joints "$wo
 # --- output errors (exit 4)
 expect 4 "cannot create a temporary" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/no/dir/p.csv"
 
+# --- record: usage errors
+expect 2 "give --robot-port and/or --tracker-port" -- record
+expect 2 "--robot-baud: unsupported baud rate 1234" -- record --robot-port /dev/null --robot-baud 1234
+
 # --- calibrate: bad inputs
 expect 2 "give either --samples, or --robot and --tracker" -- calibrate
 expect 2 "--robot and --tracker go together" -- calibrate --robot "$work/joints.csv"
