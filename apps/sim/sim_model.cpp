@@ -59,6 +59,14 @@ DeviceInfoRecord make_device_info(DeviceKind kind, float rate_hz, const char* na
 
 }  // namespace
 
+void use_large_errors(SimConfig* config) {
+  config->length_sigma_m = 3e-4;
+  config->angle_sigma_rad = 3e-4;
+  config->tool_sigma_m = 1e-3;
+  config->compliance_j2_rad = 2e-4;
+  config->compliance_j3_rad = 1e-4;
+}
+
 Session::Session(const SimConfig& config) : config_(config) {
   Random random(config.seed);
   build_truth(&random);
