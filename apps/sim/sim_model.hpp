@@ -175,7 +175,16 @@ struct TruthSample {
   Vec3 point_m = Vec3::Zero();                ///< true point in the tracker frame [m]
 };
 
+/// Margin of `hivecal simulate`'s truth_samples.csv: at least this far inside a stop [s].
+inline constexpr double kTruthSampleMarginS = 0.6;
+
 /// Every tracker instant at least `margin_s` inside a stop (before any status is drawn).
 std::vector<TruthSample> truth_samples(const Session& session, double margin_s);
+
+/// Every tracker instant (whatever its status: nothing dropped) at which the true tool speed
+/// stays at or below `max_speed_m_s` throughout a window of `window_s` centred on it (checked
+/// every 10 ms): the quasi-static instants a perfect extraction would keep. Each comes with
+/// the true joints at that instant and the noise-free point (compliance included).
+std::vector<TruthSample> quasi_static_truth_samples(const Session& session, double max_speed_m_s, double window_s);
 
 }  // namespace hivecal::sim

@@ -26,7 +26,6 @@ using cli::kExitOutputError;
 using cli::kExitUsage;
 
 constexpr const char* kCommand = "simulate";
-constexpr double kTruthMarginS = 0.6;  // ideal samples: at least this far inside a stop
 
 std::atomic<bool> g_stop{false};
 void request_stop(int) { g_stop = true; }
@@ -185,7 +184,7 @@ int simulate_main(int argc, char** argv) {
     paths.tracker_capture.clear();
   }
   std::string error;
-  if (!write_outputs(session, paths, kTruthMarginS, &error)) {
+  if (!write_outputs(session, paths, kTruthSampleMarginS, &error)) {
     cli::error(kCommand, error);
     return kExitOutputError;
   }
