@@ -96,32 +96,40 @@ TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent)
   ASSERT_TRUE(textio::read_calibration_json(path("truth.json"), &truth).ok);
   ASSERT_EQ(truth.model.joints[1].a_m, session.truth().model.joints[1].a_m) << "not the simulated session";
 
-  std::vector<Sample> ideal;
-  Random noise(0x6964656131ULL);
-  const ExtractionConfig rule = make_extraction_config(session.truth().nominal);  // the quasi-static rule
-  for (const sim::TruthSample& t :
-       sim::quasi_static_truth_samples(session, rule.max_speed_m_s, static_cast<double>(rule.window_us) * 1e-6)) {
-    Sample s;
-    s.q_rad = t.q_rad;
-    s.point_m = t.point_m;
-    for (int axis = 0; axis < 3; ++axis) s.point_m(axis) += config.tracker_noise_m * noise.normal();
-    ideal.push_back(s);
-  }
-  std::string error;
-  ASSERT_TRUE(textio::write_file_atomically(path("ideal_samples.csv"),
-                                            textio::format_samples_csv(Span<const Sample>(ideal.data(), ideal.size())),
-                                            &error))
-      << error;
-
   ASSERT_EQ(run(cli::calibrate_main, {"--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--out",
                                       path("captures.json"), "--quiet"}),
             cli::kExitOk);
-  ASSERT_EQ(run(cli::calibrate_main, {"--samples", path("ideal_samples.csv"), "--out", path("ideal.json"), "--quiet"}),
-            cli::kExitOk);
   const double captures_m = validation_mae_m(path("captures.json"));
-  const double ideal_m = validation_mae_m(path("ideal.json"));
-  std::printf("validation MAE on %ld fresh poses: captures %.2f um, ideal samples (%zu) %.2f um, ratio %.3f\n",
-              kValidationPoses, captures_m * 1e6, ideal.size(), ideal_m * 1e6, captures_m / ideal_m);
+
+  // One noise draw moves the ideal fit's validation MAE by about +-12 % (29-38 um over ten
+  // draws), as much as the claim's margin: the reference is the mean over kDraws draws.
+  constexpr int kDraws = 4;
+  const ExtractionConfig rule = make_extraction_config(session.truth().nominal);  // the quasi-static rule
+  const std::vector<sim::TruthSample> truth_samples =
+      sim::quasi_static_truth_samples(session, rule.max_speed_m_s, static_cast<double>(rule.window_us) * 1e-6);
+  double ideal_m = 0.0;
+  for (int draw = 0; draw < kDraws; ++draw) {
+    std::vector<Sample> ideal;
+    Random noise(0x6964656131ULL + static_cast<std::uint64_t>(draw));
+    for (const sim::TruthSample& t : truth_samples) {
+      Sample s;
+      s.q_rad = t.q_rad;
+      s.point_m = t.point_m;
+      for (int axis = 0; axis < 3; ++axis) s.point_m(axis) += config.tracker_noise_m * noise.normal();
+      ideal.push_back(s);
+    }
+    std::string error;
+    ASSERT_TRUE(textio::write_file_atomically(
+        path("ideal_samples.csv"), textio::format_samples_csv(Span<const Sample>(ideal.data(), ideal.size())), &error))
+        << error;
+    ASSERT_EQ(run(cli::calibrate_main, {"--samples", path("ideal_samples.csv"), "--out", path("ideal.json"), "--quiet"}),
+              cli::kExitOk);
+    const double draw_m = validation_mae_m(path("ideal.json"));
+    std::printf("ideal samples (%zu), noise draw %d: validation MAE %.2f um\n", ideal.size(), draw, draw_m * 1e6);
+    ideal_m += draw_m / kDraws;
+  }
+  std::printf("validation MAE on %ld fresh poses: captures %.2f um, ideal samples %.2f um (mean of %d), ratio %.3f\n",
+              kValidationPoses, captures_m * 1e6, ideal_m * 1e6, kDraws, captures_m / ideal_m);
   EXPECT_GT(ideal_m, 0.0);
   EXPECT_LE(captures_m, 1.10 * ideal_m);
 }
