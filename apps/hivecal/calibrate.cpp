@@ -304,7 +304,8 @@ int calibrate_main(int argc, char** argv) {
     (void)apply_ur_deltas(nominal_model(settings.robot), deltas, &start);
     start.tool_m = settings.tool_m;
   }
-  static CliDataset dataset;
+  static CliDataset dataset;  // static: 8192 samples; emptied for each call (tests run several in one process)
+  dataset.clear();
   InputFacts facts;
   const int load = load_dataset(options, settings, progress_on, &dataset, &facts);
   if (load != kExitOk) return load;

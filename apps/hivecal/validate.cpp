@@ -1,5 +1,6 @@
 // hivecal validate: a calibration against a reference geometry (e.g. the simulator's
 // noise-free truth.json) on fresh random poses: how far apart do they predict the tool?
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -8,8 +9,30 @@
 #include "commands.hpp"
 #include "hivecal/random.hpp"
 #include "text_util.hpp"
+#include "validation.hpp"
 
 namespace hivecal::cli {
+
+ValidationStats validate_on_fresh_poses(const RobotModel& model, const RigidTransform& base_to_tracker,
+                                        const RobotModel& reference, const RigidTransform& reference_base_to_tracker,
+                                        long poses, std::uint64_t seed) {
+  Random random(seed);
+  ValidationStats stats;
+  double sum_m = 0.0;
+  for (long i = 0; i < poses; ++i) {
+    JointVector q;  // the workspace the simulator and the paper use: shoulder up, tool down-ish
+    q << random.uniform(-3.0, 3.0), random.uniform(-2.6, -0.5), random.uniform(-2.4, 2.4), random.uniform(-3.0, 0.0),
+        random.uniform(-2.8, -0.3), random.uniform(-3.0, 3.0);
+    const Vec3 a = base_to_tracker.apply(fk_tool_point(model, q));
+    const Vec3 b = reference_base_to_tracker.apply(fk_tool_point(reference, q));
+    const double e = (a - b).norm();
+    sum_m += e;
+    stats.max_m = std::max(stats.max_m, e);
+  }
+  stats.poses = poses;
+  stats.mae_m = poses > 0 ? sum_m / static_cast<double>(poses) : 0.0;
+  return stats;
+}
 
 int validate_main(int argc, char** argv) {
   const std::vector<OptionSpec> specs = {
@@ -44,22 +67,11 @@ int validate_main(int argc, char** argv) {
       return kExitBadInput;
     }
   }
-  Random random(static_cast<std::uint64_t>(seed));
-  double sum_m = 0.0;
-  double max_m = 0.0;
-  const auto count = static_cast<long>(poses);
-  for (long i = 0; i < count; ++i) {
-    JointVector q;  // the workspace the simulator and the paper use: shoulder up, tool down-ish
-    q << random.uniform(-3.0, 3.0), random.uniform(-2.6, -0.5), random.uniform(-2.4, 2.4), random.uniform(-3.0, 0.0),
-        random.uniform(-2.8, -0.3), random.uniform(-3.0, 3.0);
-    const Vec3 a = calibration.base_to_tracker.apply(fk_tool_point(calibration.model, q));
-    const Vec3 b = truth.base_to_tracker.apply(fk_tool_point(truth.model, q));
-    const double e = (a - b).norm();
-    sum_m += e;
-    max_m = std::max(max_m, e);
-  }
-  std::printf("validation on %ld fresh poses vs %s: MAE 3D %.2f um, max %.2f um\n", count,
-              options.get("truth").c_str(), sum_m / static_cast<double>(count) * 1e6, max_m * 1e6);
+  const ValidationStats stats = validate_on_fresh_poses(calibration.model, calibration.base_to_tracker, truth.model,
+                                                       truth.base_to_tracker, static_cast<long>(poses),
+                                                       static_cast<std::uint64_t>(seed));
+  std::printf("validation on %ld fresh poses vs %s: MAE 3D %.2f um, max %.2f um\n", stats.poses,
+              options.get("truth").c_str(), stats.mae_m * 1e6, stats.max_m * 1e6);
   return kExitOk;
 }
 

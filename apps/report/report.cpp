@@ -66,13 +66,14 @@ std::string html_table(const std::vector<std::vector<std::string>>& rows) {
 
 std::vector<std::vector<std::string>> table1_rows(const ReportData& data) {
   std::vector<std::vector<std::string>> rows = {
-      {"method", "parameters", "train MAE [um]", "test MAE [um]", "test sigma [um]", "test vs uncalibrated", "time [s]"}};
+      {"method", "parameters", "train MAE [um]", "train sigma [um]", "test MAE [um]", "test sigma [um]",
+       "test vs uncalibrated", "time [s]"}};
   const double before = data.methods.empty() ? 0.0 : data.methods.front().test.mae(ErrorAxis::norm_3d);
   for (const MethodRow& m : data.methods) {
     char seconds[32];
     std::snprintf(seconds, sizeof seconds, "%.3f", m.seconds);
-    rows.push_back({m.method, m.parameters, um(m.train.mae(ErrorAxis::norm_3d)), um(m.test.mae(ErrorAxis::norm_3d)),
-                    um(m.test.sigma(ErrorAxis::norm_3d)),
+    rows.push_back({m.method, m.parameters, um(m.train.mae(ErrorAxis::norm_3d)), um(m.train.sigma(ErrorAxis::norm_3d)),
+                    um(m.test.mae(ErrorAxis::norm_3d)), um(m.test.sigma(ErrorAxis::norm_3d)),
                     &m == &data.methods.front() ? "" : improvement(before, m.test.mae(ErrorAxis::norm_3d)),
                     m.seconds > 0.0 ? seconds : ""});
   }

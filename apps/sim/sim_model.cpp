@@ -59,6 +59,14 @@ DeviceInfoRecord make_device_info(DeviceKind kind, float rate_hz, const char* na
 
 }  // namespace
 
+void use_large_errors(SimConfig* config) {
+  config->length_sigma_m = 3e-4;
+  config->angle_sigma_rad = 3e-4;
+  config->tool_sigma_m = 1e-3;
+  config->compliance_j2_rad = 2e-4;
+  config->compliance_j3_rad = 1e-4;
+}
+
 Session::Session(const SimConfig& config) : config_(config) {
   Random random(config.seed);
   build_truth(&random);
@@ -289,6 +297,38 @@ std::vector<TruthSample> truth_samples(const Session& session, double margin_s) 
     sample.tracker_us = record.timestamp_us;
     sample.robot_us = session.truth().clock_offset_us + (1.0 + drift) * static_cast<double>(record.timestamp_us);
     sample.q_rad = segment.from_rad;
+    sample.point_m = session.true_point(sample.q_rad);
+    samples.push_back(sample);
+  }
+  return samples;
+}
+
+std::vector<TruthSample> quasi_static_truth_samples(const Session& session, double max_speed_m_s, double window_s) {
+  constexpr double kStepS = 0.01;
+  constexpr double kHalfDifferenceS = 0.001;
+  const RobotModel& model = session.truth().model;
+  auto speed_m_s = [&](double t_s) {
+    const Vec3 a = fk_tool_point(model, session.joints_at(t_s - kHalfDifferenceS));
+    const Vec3 b = fk_tool_point(model, session.joints_at(t_s + kHalfDifferenceS));
+    return (b - a).norm() / (2.0 * kHalfDifferenceS);
+  };
+  std::vector<TruthSample> samples;
+  TrackerStream tracker(session);
+  TrackerPointRecord record;
+  const double drift = session.truth().clock_drift;
+  const int steps = static_cast<int>(std::ceil(0.5 * window_s / kStepS));
+  while (tracker.next(&record)) {
+    const double t_s = tracker.last_true_time_s();
+    if (t_s - 0.5 * window_s < 0.0 || t_s + 0.5 * window_s > session.duration_s()) continue;
+    bool still = true;
+    for (int k = -steps; k <= steps && still; ++k)
+      still = speed_m_s(t_s + std::clamp(k * kStepS, -0.5 * window_s, 0.5 * window_s)) <= max_speed_m_s;
+    if (!still) continue;
+    TruthSample sample;
+    sample.waypoint = session.segment_at(t_s).waypoint;
+    sample.tracker_us = record.timestamp_us;
+    sample.robot_us = session.truth().clock_offset_us + (1.0 + drift) * static_cast<double>(record.timestamp_us);
+    sample.q_rad = session.joints_at(t_s);
     sample.point_m = session.true_point(sample.q_rad);
     samples.push_back(sample);
   }

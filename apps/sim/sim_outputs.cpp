@@ -143,6 +143,15 @@ void write_simulation_members(const Session& session, double truth_margin_s, tex
   json.key("drift").value(truth.clock_drift);
   json.end_object();
   json.key("nominal_tool").inline_array(truth.nominal.tool_m.data(), 3);
+  json.key("geometry_errors").begin_object();
+  if (c.use_deltas) {
+    json.key("source").value("calibration.conf deltas");
+  } else {
+    json.key("length_sigma_m").value(c.length_sigma_m);
+    json.key("angle_sigma_rad").value(c.angle_sigma_rad);
+  }
+  json.key("tool_sigma_m").value(c.tool_sigma_m);
+  json.end_object();
   json.key("compliance").begin_object();
   json.key("joint2_rad").value(c.compliance_j2_rad);
   json.key("joint3_rad").value(c.compliance_j3_rad);

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "cli.hpp"
@@ -25,7 +26,6 @@ using cli::kExitOutputError;
 using cli::kExitUsage;
 
 constexpr const char* kCommand = "simulate";
-constexpr double kTruthMarginS = 0.6;  // ideal samples: at least this far inside a stop
 
 std::atomic<bool> g_stop{false};
 void request_stop(int) { g_stop = true; }
@@ -42,6 +42,11 @@ const std::vector<cli::OptionSpec>& option_specs() {
       {"tracker-clock-start-us", "T", "tracker clock at the start of the session [us]", "5000000"},
       {"noise-um", "X", "tracker noise per axis, 1 sigma [um]", "10"},
       {"jitter-us", "X", "robot period jitter, 1 sigma [us]", "400"},
+      {"errors", "paper|large", "geometry errors: paper-like (tens of um/urad) or the large ones (0.3 mm/mrad)", "paper"},
+      {"length-sigma-um", "X", "sigma of the true d and a errors [um] (default: from --errors)", ""},
+      {"angle-sigma-urad", "X", "sigma of the true theta and alpha errors [urad] (default: from --errors)", ""},
+      {"tool-sigma-um", "X", "sigma of the true tool's error per axis [um] (default: from --errors)", ""},
+      {"compliance-urad", "J2,J3", "joint 2 and 3 gravity deflection [urad] (default: from --errors)", ""},
       {"calibration-conf", "FILE", "true geometry = nominal + the [mounting] deltas of this UR calibration.conf", ""},
       {"serve", "", "serve the streams live on two pseudo-terminals instead of writing captures", ""},
       {"speed", "X", "with --serve: session seconds per second (0: as fast as read)", "1"},
@@ -83,6 +88,37 @@ int configure(const cli::Options& options, SimConfig* config) {
   config->tracker_clock_start_us = static_cast<std::uint64_t>(tracker_start);
   config->tracker_noise_m = noise_um * 1e-6;
   config->robot_jitter_s = jitter_us * 1e-6;
+  if (options.get("errors") == "large") {
+    use_large_errors(config);
+  } else if (options.get("errors") != "paper") {
+    cli::error(kCommand, "--errors must be paper or large, not '" + options.get("errors") + "'");
+    return kExitUsage;
+  }
+  for (auto [name, target, scale] : {std::tuple{"length-sigma-um", &config->length_sigma_m, 1e-6},
+                                     std::tuple{"angle-sigma-urad", &config->angle_sigma_rad, 1e-6},
+                                     std::tuple{"tool-sigma-um", &config->tool_sigma_m, 1e-6}}) {
+    if (!options.given(name)) continue;
+    double value = 0.0;
+    if (!number_option(options, name, &value)) return kExitUsage;
+    if (value < 0.0) {
+      cli::error(kCommand, std::string("--") + name + " must not be negative");
+      return kExitUsage;
+    }
+    *target = value * scale;
+  }
+  if (options.given("compliance-urad")) {
+    const std::string text = options.get("compliance-urad");
+    const std::size_t comma = text.find(',');
+    double j2 = 0.0;
+    double j3 = 0.0;
+    if (comma == std::string::npos || !textio::parse_double(text.substr(0, comma), &j2) ||
+        !textio::parse_double(text.substr(comma + 1), &j3)) {
+      cli::error(kCommand, "--compliance-urad must be J2,J3 (e.g. 40,20), not '" + text + "'");
+      return kExitUsage;
+    }
+    config->compliance_j2_rad = j2 * 1e-6;
+    config->compliance_j3_rad = j3 * 1e-6;
+  }
   if (!options.get("calibration-conf").empty()) {
     const textio::ParseResult read = textio::read_ur_calibration_conf(options.get("calibration-conf"), &config->deltas);
     if (!read.ok) {
@@ -149,7 +185,7 @@ int simulate_main(int argc, char** argv) {
   }
   std::string error;
   if (!textio::make_directories(options.get("out-dir"), &error) ||
-      !write_outputs(session, paths, kTruthMarginS, &error)) {
+      !write_outputs(session, paths, kTruthSampleMarginS, &error)) {
     cli::error(kCommand, error);
     return kExitOutputError;
   }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "calibration_json.hpp"
+#include "cli_run.hpp"
 #include "cli.hpp"
 #include "csv.hpp"
 #include "hivecal/dataset.hpp"
@@ -22,19 +23,8 @@
 namespace hivecal {
 namespace {
 
-/// Runs an entry point with the given arguments (after the command name).
-template <typename Main>
-int run(Main entry, std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  return entry(static_cast<int>(argv.size()), argv.data());
-}
-
-/// A fresh folder for one test's files.
-std::string make_temp_dir() {
-  std::string pattern = "hivecal_cmd_XXXXXX";
-  return ::mkdtemp(pattern.data()) != nullptr ? pattern : std::string();
-}
+using test::make_temp_dir;
+using test::run;
 
 TEST(StreamCommands, SimulateWritesReadableOutputsAndExtractPairsThem) {
   const std::string dir = make_temp_dir();

@@ -80,6 +80,7 @@ TEST(ClockSync, RecoversOffsetAndDriftOfSimulatedSessions) {
   };
   for (const Case& c : cases) {
     sim::SimConfig config;
+    sim::use_large_errors(&config);  // the 1 mm tool error these tests were written for
     config.seed = c.seed;
     config.clock_drift = c.drift;
     config.robot_jitter_s = c.robot_jitter_s;
@@ -91,6 +92,7 @@ TEST(ClockSync, RecoversOffsetAndDriftOfSimulatedSessions) {
 
 TEST(ClockSync, StreamsStartingMidMotionAndAtDifferentTimes) {
   sim::SimConfig config;
+  sim::use_large_errors(&config);  // the 1 mm tool error these tests were written for
   config.seed = 11;
   config.clock_drift = 70e-6;
   const sim::Session probe(config);
@@ -106,6 +108,7 @@ TEST(ClockSync, StreamsStartingMidMotionAndAtDifferentTimes) {
 
 TEST(ClockSync, LossyStreams) {
   sim::SimConfig config;
+  sim::use_large_errors(&config);  // the 1 mm tool error these tests were written for
   config.seed = 12;
   config.robot_drop_probability = 0.02;
   config.beam_lost_probability = 0.02;
@@ -116,6 +119,7 @@ TEST(ClockSync, LossyStreams) {
 TEST(ClockSync, ToleratesAToolModelError) {
   // The speed model's tool is 5 mm off the true one: per-block gains keep the timing unbiased.
   sim::SimConfig config;
+  sim::use_large_errors(&config);  // the 1 mm tool error these tests were written for
   config.seed = 13;
   config.tool_sigma_m = 5e-3;
   expect_recovered(config, "5 mm tool error");
@@ -199,6 +203,7 @@ TEST(ClockSync, ConstantMemoryOnAnHourLongCapture) {
   // Small profiles (16384 knots = 5.5 min, 2048 points = 3.4 min) over a one-hour session:
   // the rest is counted, not stored, and the fit from the first minutes holds for the hour.
   sim::SimConfig config;
+  sim::use_large_errors(&config);  // the 1 mm tool error these tests were written for
   config.seed = 14;
   config.waypoint_count = 230;
   config.duration_s = 3600.0;

@@ -108,6 +108,7 @@ JointVector home_pose() {
 
 TEST(Extraction, PairsQuasiStaticSamplesWithTheSimulatorTruth) {
   sim::SimConfig config;
+  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
   config.seed = 21;
   const sim::Session session(config);
   static ClockEstimator<> estimator(make_clock_sync_config(session.truth().nominal));
@@ -342,6 +343,7 @@ TEST(Extraction, TrackerInstantsOutsideTheRobotRecord) {
 
 TEST(Extraction, ReportsDatasetFull) {
   sim::SimConfig config;
+  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
   config.seed = 22;
   config.waypoint_count = 10;
   config.duration_s = 150.0;
@@ -363,6 +365,7 @@ TEST(Extraction, ReportsDatasetFull) {
 
 TEST(Extraction, RingOverrunsAreCountedNotHidden) {
   sim::SimConfig config;
+  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
   config.seed = 23;
   config.waypoint_count = 8;
   config.duration_s = 100.0;
@@ -390,6 +393,7 @@ TEST(Extraction, ConstantMemoryOverHours) {
   // Two hours of 125 Hz joints (900 000 records) through fixed rings into a small
   // dataset: no allocation, every point accounted for, dataset_full reported.
   sim::SimConfig config;
+  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
   config.seed = 24;
   config.waypoint_count = 460;
   config.duration_s = 7200.0;
@@ -432,6 +436,7 @@ constexpr std::uint64_t kExtractionGoldenDigest = 0x3fb38e81275a06eaULL;
 
 std::uint64_t extraction_digest() {
   sim::SimConfig config;
+  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
   config.seed = 25;
   config.waypoint_count = 12;
   config.duration_s = 150.0;
