@@ -1,12 +1,14 @@
 // Wires port/ to lib/ for the stream path: byte sources (capture files, serial ports) ->
-// StreamDecoder -> ClockEstimator (pass 1) -> SampleExtractor (pass 2) -> dataset.
-// Memory stays bounded: records are decoded one read chunk at a time.
+// the library's two passes (hivecal/capture_pipeline.hpp: StreamDecoder -> ClockEstimator,
+// then SampleExtractor in robot-clock order) -> dataset. RecordQueue decodes bytes tapped
+// elsewhere (a live recording). Memory stays bounded: records are decoded a chunk at a time.
 #pragma once
 
 #include <cstdint>
 #include <deque>
 #include <string>
 
+#include "hivecal/capture_pipeline.hpp"
 #include "hivecal/clock_sync.hpp"
 #include "hivecal/codec.hpp"
 #include "hivecal/port/byte_source.hpp"
@@ -14,38 +16,26 @@
 
 namespace hivecal::streams {
 
-/// Decodes a byte source into short queues of records, one read chunk at a time.
+/// Decodes bytes obtained elsewhere (e.g. a recorder's tap) into queues of records.
 class RecordQueue final : public FrameHandler {
  public:
-  /// A queue over `source` (not owned).
-  explicit RecordQueue(port::ByteSource* source) : source_(source) {}
-  /// Reads and decodes chunks until a record is queued or the source ends; false at the end
-  /// of the source with nothing queued (or on a read error: see error()).
-  bool fill();
   std::deque<JointStateRecord>& joints() { return joints_; }      ///< decoded robot records
   std::deque<TrackerPointRecord>& points() { return points_; }    ///< decoded tracker records
   const DecoderStats& decoder_stats() const { return decoder_.stats(); }  ///< frame counters
-  const std::string& error() const { return error_; }            ///< read error, if any
-  /// Decodes bytes obtained elsewhere (e.g. a recorder's tap) into the queues.
+  /// Decodes `count` bytes into the queues.
   void feed(const std::uint8_t* bytes, std::size_t count) { decoder_.feed(bytes, count, *this); }
 
   void on_joint_state(const JointStateRecord& record) override { joints_.push_back(record); }
   void on_tracker_point(const TrackerPointRecord& record) override { points_.push_back(record); }
 
  private:
-  port::ByteSource* source_;
   StreamDecoder decoder_;
   std::deque<JointStateRecord> joints_;
   std::deque<TrackerPointRecord> points_;
-  bool ended_ = false;
-  std::string error_;
 };
 
 /// Counters of one pass over the two streams.
-struct PassStats {
-  DecoderStats robot_decoder;     ///< frames of the robot stream
-  DecoderStats tracker_decoder;   ///< frames of the tracker stream
-};
+using PassStats = StreamPassStats;
 
 /// Pass 1: every record of both sources into `estimator`, then estimate() into *fit.
 /// Returns the estimate's status; I/O problems give invalid_argument with *error set.

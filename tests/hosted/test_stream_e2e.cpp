@@ -57,8 +57,8 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
 
   // Pass 1 live: decode what the recorder writes and fold it into the clock profiles.
   const auto estimator = std::make_unique<ClockEstimator<>>(make_clock_sync_config(session.truth().nominal));
-  streams::RecordQueue robot_decoder(nullptr);
-  streams::RecordQueue tracker_decoder(nullptr);
+  streams::RecordQueue robot_decoder;
+  streams::RecordQueue tracker_decoder;
   std::atomic<std::uint64_t> received[2] = {{0}, {0}};
   port::RecordOptions record_options;
   record_options.on_bytes = [&](std::size_t source, const std::uint8_t* bytes, std::size_t count) {
