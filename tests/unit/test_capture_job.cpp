@@ -3,6 +3,7 @@
 // Cortex-M7/M4 under QEMU, compared with the same committed digest.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -90,6 +91,53 @@ TEST_F(CaptureJob, ATruncatedTrackerCaptureChangesTheDigest) {
   MemoryCaptures captures(robot_, tracker_);
   (void)test::run_capture_job(captures, test::golden_capture_job_config(), &workspace, &report);
   EXPECT_NE(report.digest, test::kCaptureJobGoldenDigest);
+}
+
+/// Hands out at most `step` bytes per read, then fails after `fail_after` bytes (0: never).
+class ChoppyReader final : public ByteReader {
+ public:
+  ChoppyReader(const std::vector<std::uint8_t>& bytes, std::size_t step, std::size_t fail_after)
+      : bytes_(bytes), step_(step), fail_after_(fail_after) {}
+  Status read(std::uint8_t* out, std::size_t capacity, std::size_t* count) override {
+    if (fail_after_ != 0 && position_ >= fail_after_) return Status::read_failed;
+    std::size_t n = std::min({capacity, step_, bytes_.size() - position_});
+    std::copy(bytes_.begin() + static_cast<std::ptrdiff_t>(position_),
+              bytes_.begin() + static_cast<std::ptrdiff_t>(position_ + n), out);
+    position_ += n;
+    *count = n;
+    return Status::ok;
+  }
+
+ private:
+  const std::vector<std::uint8_t>& bytes_;
+  std::size_t step_;
+  std::size_t fail_after_;
+  std::size_t position_ = 0;
+};
+
+TEST_F(CaptureJob, ClockPassDoesNotDependOnHowTheBytesArriveAndReportsReadErrors) {
+  static test::JobClockEstimator whole(make_clock_sync_config(nominal_model(RobotType::ur5)));
+  static test::JobClockEstimator choppy(make_clock_sync_config(nominal_model(RobotType::ur5)));
+  MemoryByteReader robot(Span<const std::uint8_t>(robot_.data(), robot_.size()));
+  MemoryByteReader tracker(Span<const std::uint8_t>(tracker_.data(), tracker_.size()));
+  ClockFit a;
+  ClockFit b;
+  StreamPassStats stats_a;
+  StreamPassStats stats_b;
+  ASSERT_EQ(estimate_clock_from_streams(robot, tracker, &whole, &a, &stats_a), Status::ok);
+  ChoppyReader robot_bits(robot_, 7, 0);
+  ChoppyReader tracker_bits(tracker_, 13, 0);
+  ASSERT_EQ(estimate_clock_from_streams(robot_bits, tracker_bits, &choppy, &b, &stats_b), Status::ok);
+  EXPECT_EQ(a.offset_us, b.offset_us);
+  EXPECT_EQ(a.drift, b.drift);
+  EXPECT_EQ(stats_a.robot_decoder.joint_states, stats_b.robot_decoder.joint_states);
+  EXPECT_EQ(stats_a.tracker_decoder.tracker_points, stats_b.tracker_decoder.tracker_points);
+  EXPECT_GT(stats_a.robot_decoder.joint_states, 10000u);
+
+  choppy.reset();
+  ChoppyReader robot_fails(robot_, 4096, 100000);
+  tracker.rewind();
+  EXPECT_EQ(estimate_clock_from_streams(robot_fails, tracker, &choppy, &b, nullptr), Status::read_failed);
 }
 
 }  // namespace
