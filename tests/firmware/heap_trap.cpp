@@ -2,7 +2,7 @@
  * Eigen's SelfAdjointEigenSolver<Matrix<double, 33, 33>>, whose Householder products on
  * dynamic-size blocks declare their temporaries with ei_declare_aligned_stack_constructed_variable.
  * Off Linux/Windows Eigen has no alloca, so that macro keeps a branch to aligned_malloc ->
- * malloc/free, taken only when no buffer was passed (here a fixed-capacity one always is).
+ * malloc/free, taken only when no buffer was passed (never so far in these runs).
  * The reference alone would pull newlib's malloc and fail the link (no _sbrk). Until lib/ stops
  * instantiating it (docs/firmware.md), this image defines malloc/free as traps: any call ends
  * the run as a fault, so a test run also proves at run time that no allocation happens.
