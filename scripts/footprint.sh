@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
 # Footprint report of the bare-metal build, as Markdown for docs/footprint.md:
 # flash and static RAM per component, stack (static .su/.ci analysis and the measured paint
-# high-water mark), and executed instructions per core workload (QEMU instruction-count plugin).
-#   cmake --workflow --preset cortex-m7 && scripts/footprint.sh [build-dir] [qemu-machine]
+# high-water mark), executed instructions per core workload and per stage of one full
+# calibration from captures (QEMU instruction-count plugin).
+#   cmake --workflow --preset cortex-m7 && cmake --build --preset host --target hivecal_cli &&
+#   scripts/footprint.sh [build-dir] [qemu-machine]
 # Defaults: build/cortex-m7, mps2-an500. Environment:
 #   HIVECAL_INSN_PLUGIN_SRC  plugin source (default /work/shared/tools/qemu-insn-count.c)
 #   HIVECAL_FOOTPRINT_REPEATS repeats per workload for the instruction counts (default 10)
+#   HIVECAL_HOST_TOOL        host `hivecal` that simulates the 512-sample session
+#                            (default build/host/apps/hivecal/hivecal)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -15,8 +19,10 @@ plugin_src=${HIVECAL_INSN_PLUGIN_SRC:-/work/shared/tools/qemu-insn-count.c}
 repeats=${HIVECAL_FOOTPRINT_REPEATS:-10}
 probe=$build/tests/firmware/hivecal_firmware_core.elf
 tests_elf=$build/tests/firmware/hivecal_firmware_tests.elf
+job_elf=$build/tests/firmware/hivecal_firmware_capture_job.elf
+host_tool=${HIVECAL_HOST_TOOL:-build/host/apps/hivecal/hivecal}
 runner=scripts/run-qemu-mps2.sh
-for f in "$probe" "$tests_elf"; do
+for f in "$probe" "$tests_elf" "$job_elf" "$host_tool"; do
   [ -f "$f" ] || { echo "footprint: $f missing; build the preset first" >&2; exit 1; }
 done
 
@@ -30,7 +36,7 @@ elf_sizes() { arm-none-eabi-size "$1" | awk 'NR == 2 { print $1, $2, $3 }'; }
 image_table() {
   echo "| image | text (flash) | data (flash + RAM) | bss incl. stack (RAM) | flash total | static RAM total |"
   echo "|---|---:|---:|---:|---:|---:|"
-  for elf in "$probe" "$tests_elf"; do
+  for elf in "$probe" "$job_elf" "$tests_elf"; do
     read -r text data bss < <(elf_sizes "$elf")
     printf '| %s | %d | %d | %d | %d (%s KiB) | %d (%s KiB) |\n' "$(basename "$elf")" "$text" "$data" "$bss" \
       $((text + data)) "$(kib $((text + data)))" $((data + bss)) "$(kib $((data + bss)))"
@@ -246,6 +252,53 @@ instruction_table() {
   done
 }
 
+# The full calibration from captures: a simulated session of 36 waypoints (508 quasi-static
+# samples, 292 s) written by the host tool, then the capture job image stopped after each
+# stage: the differences are the stages' instructions.
+session=$build/fw-session-512
+make_session() {
+  if [ ! -f "$session/robot.cap" ]; then
+    mkdir -p "$session"
+    "$host_tool" simulate --out-dir "$session" --waypoints 36 --duration-s 1 --seed 1 >/dev/null
+  fi
+}
+
+job_run() {  # <SN> <cycles> [stop]: "<instructions> <stack> <samples> <evaluations> <digest>"
+  local out insns stack samples evals digest
+  out=$(HIVECAL_QEMU_EXTRA="-plugin $plugin -d plugin" "$runner" "$machine" "$job_elf" \
+        "$PWD/$session/robot.cap" "$PWD/$session/tracker.cap" "$@" 2>&1)
+  insns=$(sed -n 's/^insns: //p' <<<"$out" | tail -1)
+  stack=$(sed -n 's/^stack high-water: \([0-9]*\) of.*/\1/p' <<<"$out")
+  samples=$(sed -n 's/^samples kept: //p' <<<"$out")
+  evals=$(sed -n 's/^ABC evaluations: //p' <<<"$out")
+  digest=$(sed -n 's/^capture job digest: //p' <<<"$out")
+  echo "${insns:-0} ${stack:-0} ${samples:-0} ${evals:-0} ${digest:-none}"
+  grep -q "^test MAE" <<<"$out" && sed -n 's/^\(test MAE [a-z]*\) \[m\]: \([^ ]*\).*/\1 \2/p' <<<"$out" >"$build/footprint-job-mae.txt"
+  return 0
+}
+
+job_table() {
+  local c s e a1 a full stack samples evals digest x
+  read -r c _ <<<"$(job_run 150 300 clock)"
+  read -r e _ samples _ <<<"$(job_run 150 300 extraction)"
+  read -r a1 _ _ x _ <<<"$(job_run 150 1 abc)"
+  read -r a _ _ evals _ <<<"$(job_run 150 300 abc)"
+  read -r full stack _ _ digest <<<"$(job_run 150 300)"
+  local per_eval=$(((a - a1) / (evals - x)))
+  echo "| stage (512-capacity image, $samples samples, ABC 150 x 300) | instructions | share |"
+  echo "|---|---:|---:|"
+  awk -v c="$c" -v e="$e" -v a="$a" -v f="$full" -v n="$evals" -v pe="$per_eval" 'BEGIN {
+    printf "| startup + pass 1: decode both captures, clock sync | %.0f | %.1f %% |\n", c, 100 * c / f
+    printf "| pass 2: decode again, sample extraction | %.0f | %.1f %% |\n", e - c, 100 * (e - c) / f
+    printf "| split + ABC (%.0f evaluations, ~%.0f instructions each incl. solver) | %.0f | %.1f %% |\n", n, pe, a - e, 100 * (a - e) / f
+    printf "| LM on the full model + validation | %.0f | %.1f %% |\n", f - a, 100 * (f - a) / f
+    printf "| **whole run** | **%.0f** | 100 %% |\n", f }'
+  echo
+  echo "Digest of this run: \`$digest\`; stack high-water $stack bytes; $(tr '\n' ';' <"$build/footprint-job-mae.txt" | sed 's/;$//; s/;/; /g') m."
+  echo "$full" >"$build/footprint-job-insns.txt"
+  echo "$per_eval" >"$build/footprint-job-per-eval.txt"
+}
+
 # --- report -----------------------------------------------------------------------------
 
 ci_files_for() {  # objects of lib, port and the given firmware directory
@@ -253,6 +306,9 @@ ci_files_for() {  # objects of lib, port and the given firmware directory
 }
 
 build_plugin
+make_session
+read -r job_text job_data job_bss < <(elf_sizes "$job_elf")
+job_stack=$(arm-none-eabi-size -A "$job_elf" | awk '$1 == ".stack" { print $2 }')
 read -r probe_text probe_data probe_bss < <(elf_sizes "$probe")
 probe_stack=$(arm-none-eabi-size -A "$probe" | awk '$1 == ".stack" { print $2 }')
 dataset_bytes=$(arm-none-eabi-nm -S --size-sort "$probe" | awk '$4 ~ /g_dataset/ { print strtonum_hex($2) } function strtonum_hex(s, v, i) { v = 0; s = tolower(s); for (i = 1; i <= length(s); i++) v = v * 16 + index("0123456789abcdef", substr(s, i, 1)) - 1; return v }')
@@ -266,6 +322,10 @@ $(image_table)
 ### Per component, core probe image (from its link map, after --gc-sections)
 
 $(component_table "$probe")
+
+### Per component, capture calibration image
+
+$(component_table "$job_elf")
 
 ### Per component, firmware test image
 
@@ -287,10 +347,12 @@ $(lib_entry_stack $(find "$build/lib" -name '*.ci'))
 
 Core probe, $(worst_path hivecal_reset_continue "" $(ci_files_for hivecal_firmware_core))
 
+Capture calibration image (indirect calls: the worst cost evaluation, byte read or frame handler), $(worst_path hivecal_reset_continue "8evaluateEPKd|4readEPhjPj|on_joint_state|on_tracker_point" $(ci_files_for hivecal_firmware_capture_job))
+
 Firmware tests, $(worst_path hivecal_reset_continue "fw_test_" $(ci_files_for hivecal_firmware_tests))
 
 Measured high-water mark (paint): core probe (all workloads) $(count_run "$probe" all 1 | awk '{ print $2 }') bytes;
-firmware tests $tests_stack bytes.
+firmware tests $tests_stack bytes; capture calibration: see below.
 
 ### Executed instructions (QEMU plugin, $machine, ${repeats} repeats per workload)
 
@@ -298,7 +360,17 @@ $(instruction_table)
 
 Firmware test image, whole run: $tests_insns instructions.
 
+### One full calibration from captures (capture job image, QEMU plugin, $machine)
+
+$(job_table)
+
 ### Budgets
+
+- Capture calibration image: flash $((job_text + job_data)) bytes of 131072 ($((131072 - job_text - job_data)) left);
+  static RAM $((job_data + job_bss)) bytes of 65536 (including a $job_stack-byte stack + guard).
+- One full calibration from captures (about 512 samples, ABC 150 x 300, LM):
+  $(cat "$build/footprint-job-insns.txt") instructions against 2e9:
+  $(awk -v f="$(cat "$build/footprint-job-insns.txt")" 'BEGIN { printf "%.2f x the budget", f / 2e9 }').
 
 - Dataset<512>: $dataset_bytes bytes; core probe static RAM $((probe_data + probe_bss)) bytes
   (including a $probe_stack-byte stack + guard) of 65536: $((65536 - probe_data - probe_bss)) bytes left.

@@ -13,6 +13,7 @@
 #include "hivecal/cost.hpp"
 #include "hivecal/dataset.hpp"
 #include "hivecal/gsa.hpp"
+#include "hivecal/hybrid.hpp"
 #include "hivecal/lm.hpp"
 #include "hivecal/metrics.hpp"
 #include "hivecal/paper6_cost.hpp"
@@ -86,22 +87,20 @@ Status run_population(bool use_abc, const RobotModel& start, Span<const Sample> 
   static GsaSolver<150, kPaper6Dimension> gsa;
   static Trace<kTraceCapacity> trace;
   trace.clear();
-  Status status = cost.build(start, train);
-  if (status != Status::ok) return status;
-  Paper6Box box;
-  status = paper6_box(start, kPaper6DefaultHalfWidth_m, &box);
-  if (status != Status::ok) return status;
-  SolverResult result;
+  Paper6StageResult result;
   Progress progress(progress_on, use_abc ? "ABC" : "GSA");
   const auto start_time = std::chrono::steady_clock::now();
+  Status status = Status::ok;
   if (use_abc) {
     AbcOptions options;
     options.seed = seed;
-    status = abc.minimize(cost, box.view(), options, &result, &trace, &progress);
+    status = calibrate_paper6_abc(start, train, options, kPaper6DefaultHalfWidth_m, &cost, &abc, &result, &trace,
+                                  &progress);
   } else {
     GsaOptions options;
     options.seed = seed;
-    status = gsa.minimize(cost, box.view(), options, &result, &trace, &progress);
+    status = calibrate_paper6_gsa(start, train, options, kPaper6DefaultHalfWidth_m, &cost, &gsa, &result, &trace,
+                                  &progress);
   }
   if (status != Status::ok) return status;
   stage->method = use_abc ? "ABC" : "GSA";
@@ -109,8 +108,9 @@ Status run_population(bool use_abc, const RobotModel& start, Span<const Sample> 
   stage->seconds = seconds_since(start_time);
   stage->evaluations = static_cast<long long>(result.evaluations);
   stage->trace_m = trace_values(trace);
-  stage->model = cost.model_for(result.best_x.data());
-  return fit_base_to_tracker(stage->model, train, &stage->base_to_tracker);
+  stage->model = result.model;
+  stage->base_to_tracker = result.base_to_tracker;
+  return Status::ok;
 }
 
 /// Levenberg-Marquardt from a starting geometry.

@@ -10,45 +10,9 @@
 namespace hivecal::streams {
 namespace {
 
-constexpr std::size_t kChunkBytes = 4096;  // one read: at most ~30 joint frames queued
 constexpr int kReadTimeoutMs = 200;
-constexpr int kLogRowsPerFill = 32;        // rows parsed per fill() of a CSV log
-constexpr double kMaxLogTime_s = 1.8e13;   // microseconds still fit a u64 (and a double's integers)
-
-/// Pops every queued record of `queue` into the estimator.
-void drain_into(RecordSource* queue, ClockEstimatorBase* estimator) {
-  for (const JointStateRecord& r : queue->joints()) estimator->push_robot(r);
-  for (const TrackerPointRecord& r : queue->points()) estimator->push_tracker(r);
-  queue->joints().clear();
-  queue->points().clear();
-}
-
-/// Calls `progress` when another kProgressStepBytes of input have been read.
-class ProgressTicker {
- public:
-  ProgressTicker(const PassProgress& progress, int pass, const RecordSource& a, const RecordSource& b,
-                 std::uint64_t total_bytes)
-      : progress_(progress), pass_(pass), a_(a), b_(b), total_(total_bytes) {}
-  void tick() {
-    if (!progress_) return;
-    const std::uint64_t done = a_.bytes_read() + b_.bytes_read();
-    if (done < next_) return;
-    next_ = done + kProgressStepBytes;
-    progress_(pass_, done, total_);
-  }
-  void finish() {
-    if (progress_) progress_(pass_, a_.bytes_read() + b_.bytes_read(), total_);
-  }
-
- private:
-  static constexpr std::uint64_t kProgressStepBytes = 256 * 1024;
-  const PassProgress& progress_;
-  int pass_;
-  const RecordSource& a_;
-  const RecordSource& b_;
-  std::uint64_t total_;
-  std::uint64_t next_ = 0;
-};
+constexpr double kMaxLogTime_s = 1.8e13;  // microseconds still fit a u64 (and a double's integers)
+constexpr std::uint64_t kProgressStepBytes = 256 * 1024;
 
 /// Size of a file [bytes], 0 when unknown.
 std::uint64_t file_bytes(const std::string& path) {
@@ -56,37 +20,115 @@ std::uint64_t file_bytes(const std::string& path) {
   return ::stat(path.c_str(), &info) == 0 ? static_cast<std::uint64_t>(info.st_size) : 0;
 }
 
-Status io_failure(const RecordSource& queue, std::string* error) {
-  *error = queue.error();
-  return Status::invalid_argument;
-}
+/// One input opened for one pass: a capture (bytes -> frames) or a CSV log (rows).
+class Input {
+ public:
+  bool open(const std::string& path, LogRecordReader::Kind kind, std::string* error) {
+    if (textio::detect_stream_file(path) == textio::StreamFileKind::csv_log) {
+      log_ = std::make_unique<LogRecordReader>(kind, path);
+      return true;
+    }
+    capture_ = std::make_unique<port::CaptureFileSource>(path);
+    if (!capture_->open(error)) return false;
+    bytes_ = std::make_unique<SourceReader>(capture_.get());
+    frames_ = std::make_unique<FrameRecordReader>(bytes_.get());
+    return true;
+  }
+  RecordReader& records() { return log_ != nullptr ? static_cast<RecordReader&>(*log_) : *frames_; }
+  std::uint64_t bytes_read() const { return log_ != nullptr ? log_->bytes_read() : bytes_->bytes_read(); }
+  const std::string& error() const { return log_ != nullptr ? log_->error() : bytes_->error(); }
+
+ private:
+  std::unique_ptr<port::CaptureFileSource> capture_;
+  std::unique_ptr<SourceReader> bytes_;
+  std::unique_ptr<FrameRecordReader> frames_;
+  std::unique_ptr<LogRecordReader> log_;
+};
+
+/// A RecordReader that reports progress as its input is read (the passes live in lib/).
+class ProgressReader final : public RecordReader {
+ public:
+  ProgressReader(Input* input, const std::function<void()>& tick) : input_(input), tick_(tick) {}
+  Status next(StreamRecord* record) override {
+    tick_();
+    return input_->records().next(record);
+  }
+  const DecoderStats& counters() const override { return input_->records().counters(); }
+
+ private:
+  Input* input_;
+  const std::function<void()>& tick_;
+};
+
+/// The two inputs of one pass, with progress.
+class Pass {
+ public:
+  Pass(int number, const PassProgress& progress, std::uint64_t total_bytes)
+      : number_(number), progress_(progress), total_(total_bytes), tick_([this] { tick(); }),
+        robot_(&robot_input_, tick_), tracker_(&tracker_input_, tick_) {}
+  bool open(const std::string& robot_path, const std::string& tracker_path, std::string* error) {
+    return robot_input_.open(robot_path, LogRecordReader::Kind::robot, error) &&
+           tracker_input_.open(tracker_path, LogRecordReader::Kind::tracker, error);
+  }
+  RecordReader& robot() { return robot_; }
+  RecordReader& tracker() { return tracker_; }
+  /// read_failed becomes invalid_argument with the reader's message.
+  Status finish(Status status, std::string* error) {
+    if (progress_) progress_(number_, bytes_done(), total_);
+    if (status != Status::read_failed) return status;
+    *error = robot_input_.error().empty() ? tracker_input_.error() : robot_input_.error();
+    return Status::invalid_argument;
+  }
+
+ private:
+  std::uint64_t bytes_done() const { return robot_input_.bytes_read() + tracker_input_.bytes_read(); }
+  void tick() {
+    if (!progress_ || ++calls_ % 64 != 0) return;
+    const std::uint64_t done = bytes_done();
+    if (done < next_report_) return;
+    next_report_ = done + kProgressStepBytes;
+    progress_(number_, done, total_);
+  }
+
+  int number_;
+  const PassProgress& progress_;
+  std::uint64_t total_;
+  std::uint64_t calls_ = 0;
+  std::uint64_t next_report_ = 0;
+  std::function<void()> tick_;
+  Input robot_input_;
+  Input tracker_input_;
+  ProgressReader robot_;
+  ProgressReader tracker_;
+};
 
 }  // namespace
 
-bool RecordQueue::fill() {
-  std::uint8_t chunk[kChunkBytes];
-  while (joints_.empty() && points_.empty() && !ended_ && source_ != nullptr) {
-    const port::ReadResult got = source_->read(chunk, sizeof chunk, kReadTimeoutMs);
+Status SourceReader::read(std::uint8_t* out, std::size_t capacity, std::size_t* count) {
+  for (;;) {
+    const port::ReadResult got = source_->read(out, capacity, kReadTimeoutMs);
     if (got.status == port::ReadStatus::data) {
-      decoder_.feed(chunk, got.bytes, *this);
-    } else if (got.status == port::ReadStatus::end_of_stream) {
-      ended_ = true;
-    } else if (got.status == port::ReadStatus::error) {
+      *count = got.bytes;
+      bytes_ += got.bytes;
+      return Status::ok;
+    }
+    if (got.status == port::ReadStatus::end_of_stream) {
+      *count = 0;
+      return Status::ok;
+    }
+    if (got.status == port::ReadStatus::error) {
       error_ = source_->name() + ": read failed: " + std::strerror(got.error_number);
-      ended_ = true;
+      return Status::read_failed;
     }
   }
-  return !joints_.empty() || !points_.empty();
 }
 
-bool LogRecordQueue::open() {
-  opened_ = true;
-  const textio::ParseResult r = kind_ == Kind::robot ? robot_.open(path_) : tracker_.open(path_);
-  if (!r.ok) error_ = r.message;
-  return r.ok;
+Status LogRecordReader::fail(const std::string& problem) {
+  error_ = problem;
+  return Status::read_failed;
 }
 
-bool LogRecordQueue::to_microseconds(double t_s, std::uint64_t* t_us) {
+bool LogRecordReader::to_microseconds(double t_s, std::uint64_t* t_us) {
   if (!(t_s >= 0.0 && t_s <= kMaxLogTime_s)) {
     error_ = path_ + ": timestamp " + textio::format_double(t_s) + " s outside 0 .. 1.8e13 s";
     return false;
@@ -100,158 +142,66 @@ bool LogRecordQueue::to_microseconds(double t_s, std::uint64_t* t_us) {
   return true;
 }
 
-bool LogRecordQueue::read_row() {
+Status LogRecordReader::next(StreamRecord* record) {
+  record->kind = StreamRecord::Kind::end;
+  if (!error_.empty()) return Status::read_failed;
+  if (!opened_) {
+    opened_ = true;
+    const textio::ParseResult r = kind_ == Kind::robot ? robot_.open(path_) : tracker_.open(path_);
+    if (!r.ok) return fail(r.message);
+  }
   bool got_row = false;
   textio::ParseResult r;
   if (kind_ == Kind::robot) {
     textio::RobotLogRow row;
     r = robot_.next(&row, &got_row);
     if (r.ok && got_row) {
-      JointStateRecord record;
-      if (!to_microseconds(row.t_s, &record.timestamp_us)) return false;
-      for (int j = 0; j < kJointCount; ++j) record.q_rad[j] = row.q_rad(j);
-      joints_.push_back(record);
+      if (!to_microseconds(row.t_s, &record->joint.timestamp_us)) return Status::read_failed;
+      for (int j = 0; j < kJointCount; ++j) record->joint.q_rad[j] = row.q_rad(j);
+      record->kind = StreamRecord::Kind::joint_state;
       ++stats_.joint_states;
     }
   } else {
     textio::TrackerLogRow row;
     r = tracker_.next(&row, &got_row);
     if (r.ok && got_row) {
-      TrackerPointRecord record;
-      if (!to_microseconds(row.t_s, &record.timestamp_us)) return false;
-      for (int k = 0; k < 3; ++k) record.point_m[k] = row.point_m(k);
-      record.status = row.status;
-      points_.push_back(record);
+      if (!to_microseconds(row.t_s, &record->point.timestamp_us)) return Status::read_failed;
+      for (int k = 0; k < 3; ++k) record->point.point_m[k] = row.point_m(k);
+      record->point.status = row.status;
+      record->kind = StreamRecord::Kind::tracker_point;
       ++stats_.tracker_points;
     }
   }
-  if (!r.ok) error_ = r.message;
+  if (!r.ok) return fail(r.message);
   if (got_row) ++stats_.frames_ok;
-  return r.ok && got_row;
+  return Status::ok;
 }
-
-bool LogRecordQueue::fill() {
-  if (!opened_ && !open()) ended_ = true;
-  for (int k = 0; k < kLogRowsPerFill && !ended_; ++k) {
-    if (!read_row()) ended_ = true;
-  }
-  return !joints_.empty() || !points_.empty();
-}
-
-std::unique_ptr<RecordSource> open_record_source(const std::string& path, LogRecordQueue::Kind stream,
-                                                 std::unique_ptr<port::ByteSource>* bytes, std::string* error) {
-  if (textio::detect_stream_file(path) == textio::StreamFileKind::csv_log) {
-    return std::make_unique<LogRecordQueue>(stream, path);
-  }
-  auto capture = std::make_unique<port::CaptureFileSource>(path);
-  if (!capture->open(error)) return nullptr;
-  *bytes = std::move(capture);
-  return std::make_unique<RecordQueue>(bytes->get());
-}
-
-Status estimate_clock(RecordSource* robot, RecordSource* tracker, ClockEstimatorBase* estimator,
-                      ClockFit* fit, PassStats* stats, std::string* error, const PassProgress& progress) {
-  ProgressTicker ticker(progress, 1, *robot, *tracker, 0);
-  // The estimator keeps the two streams apart: each source is read to its end in turn.
-  for (RecordSource* queue : {robot, tracker}) {
-    while (queue->fill()) {
-      drain_into(queue, estimator);
-      ticker.tick();
-    }
-    if (!queue->error().empty()) return io_failure(*queue, error);
-  }
-  ticker.finish();
-  stats->robot_decoder = robot->decoder_stats();
-  stats->tracker_decoder = tracker->decoder_stats();
-  return estimator->estimate(fit);
-}
-
-Status extract_samples(RecordSource* robot, RecordSource* tracker, SampleExtractorBase* extractor,
-                       PassStats* stats, std::string* error, const PassProgress& progress) {
-  RecordSource& robot_queue = *robot;
-  RecordSource& tracker_queue = *tracker;
-  ProgressTicker ticker(progress, 2, robot_queue, tracker_queue, 0);
-  Status result = Status::ok;
-  auto note = [&result](Status s) {
-    if (s != Status::ok) result = s;
-  };
-  for (;;) {
-    if (robot_queue.joints().empty()) robot_queue.fill();
-    if (tracker_queue.points().empty()) tracker_queue.fill();
-    robot_queue.points().clear();   // a robot capture carries no tracker points (ignored if any)
-    tracker_queue.joints().clear();
-    const bool has_joint = !robot_queue.joints().empty();
-    const bool has_point = !tracker_queue.points().empty();
-    if (!has_joint && !has_point) break;
-    ticker.tick();
-    // Robot-clock order keeps the two streams within the extractor's rings.
-    if (has_point && (!has_joint || extractor->clock().robot_us(static_cast<double>(
-                                        tracker_queue.points().front().timestamp_us)) <=
-                                        static_cast<double>(robot_queue.joints().front().timestamp_us))) {
-      note(extractor->push_tracker(tracker_queue.points().front()));
-      tracker_queue.points().pop_front();
-    } else {
-      note(extractor->push_robot(robot_queue.joints().front()));
-      robot_queue.joints().pop_front();
-    }
-  }
-  for (const RecordSource* queue : {robot, tracker})
-    if (!queue->error().empty()) return io_failure(*queue, error);
-  ticker.finish();
-  note(extractor->finish());
-  stats->robot_decoder = robot_queue.decoder_stats();
-  stats->tracker_decoder = tracker_queue.decoder_stats();
-  return result;
-}
-
-namespace {
-
-/// The two inputs opened for one pass.
-struct OpenInputs {
-  std::unique_ptr<port::ByteSource> robot_bytes;
-  std::unique_ptr<port::ByteSource> tracker_bytes;
-  std::unique_ptr<RecordSource> robot;
-  std::unique_ptr<RecordSource> tracker;
-
-  bool open(const std::string& robot_path, const std::string& tracker_path, std::string* error) {
-    robot = open_record_source(robot_path, LogRecordQueue::Kind::robot, &robot_bytes, error);
-    if (robot == nullptr) return false;
-    tracker = open_record_source(tracker_path, LogRecordQueue::Kind::tracker, &tracker_bytes, error);
-    return tracker != nullptr;
-  }
-};
-
-}  // namespace
 
 bool extract_from_files(const std::string& robot_path, const std::string& tracker_path,
                         const ClockSyncConfig& clock_config, const ExtractionConfig& extraction_config,
                         DatasetBase* dataset, CaptureRunReport* report, std::string* error,
                         ExtractionObserver* observer, const PassProgress& progress) {
   const std::uint64_t total_bytes = file_bytes(robot_path) + file_bytes(tracker_path);
-  PassProgress with_total;
-  if (progress) {
-    with_total = [&progress, total_bytes](int pass, std::uint64_t done, std::uint64_t) { progress(pass, done, total_bytes); };
-  }
   report->robot_is_log = textio::detect_stream_file(robot_path) == textio::StreamFileKind::csv_log;
   report->tracker_is_log = textio::detect_stream_file(tracker_path) == textio::StreamFileKind::csv_log;
   // Large fixed-size objects: on the heap of the app, once (bounded whatever the input length).
   const auto estimator = std::make_unique<ClockEstimator<>>(clock_config);
   {
-    OpenInputs inputs;
-    if (!inputs.open(robot_path, tracker_path, error)) return false;
-    report->clock_status = estimate_clock(inputs.robot.get(), inputs.tracker.get(), estimator.get(), &report->clock,
-                                          &report->decoding, error, with_total);
+    Pass pass(1, progress, total_bytes);
+    if (!pass.open(robot_path, tracker_path, error)) return false;
+    report->clock_status = pass.finish(
+        estimate_clock_from_streams(pass.robot(), pass.tracker(), estimator.get(), &report->clock, &report->decoding),
+        error);
     report->clock_stats = estimator->stats();
     if (report->clock_status == Status::invalid_argument && !error->empty()) return false;
     if (report->clock_status != Status::ok) return true;
   }
   const auto extractor = std::make_unique<SampleExtractor<>>(extraction_config, report->clock, dataset);
   extractor->set_observer(observer);
-  OpenInputs inputs;
-  if (!inputs.open(robot_path, tracker_path, error)) return false;
-  PassStats second;
+  Pass pass(2, progress, total_bytes);
+  if (!pass.open(robot_path, tracker_path, error)) return false;
   report->extraction_status =
-      extract_samples(inputs.robot.get(), inputs.tracker.get(), extractor.get(), &second, error, with_total);
+      pass.finish(extract_samples_from_streams(pass.robot(), pass.tracker(), extractor.get(), nullptr), error);
   report->counts = extractor->counts();
   return report->extraction_status != Status::invalid_argument || error->empty();
 }

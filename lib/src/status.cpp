@@ -27,6 +27,7 @@ const char* status_message(Status status) {
     case Status::bad_bounds: return "search bounds not finite or not increasing";
     case Status::poses_not_distinct: return "all samples at the same joint positions";
     case Status::solver_cancelled: return "solver cancelled by its observer";
+    case Status::read_failed: return "reading the byte stream failed";
   }
   return "unknown status";
 }

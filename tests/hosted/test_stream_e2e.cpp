@@ -57,8 +57,8 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
 
   // Pass 1 live: decode what the recorder writes and fold it into the clock profiles.
   const auto estimator = std::make_unique<ClockEstimator<>>(make_clock_sync_config(session.truth().nominal));
-  streams::RecordQueue robot_decoder(nullptr);
-  streams::RecordQueue tracker_decoder(nullptr);
+  streams::RecordQueue robot_decoder;
+  streams::RecordQueue tracker_decoder;
   std::atomic<std::uint64_t> received[2] = {{0}, {0}};
   port::RecordOptions record_options;
   record_options.on_bytes = [&](std::size_t source, const std::uint8_t* bytes, std::size_t count) {
@@ -123,10 +123,10 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   port::CaptureFileSource robot_replay(robot_path);
   port::CaptureFileSource tracker_replay(tracker_path);
   ASSERT_TRUE(robot_replay.open(&error) && tracker_replay.open(&error)) << error;
-  streams::RecordQueue robot_records(&robot_replay);
-  streams::RecordQueue tracker_records(&tracker_replay);
+  streams::SourceReader robot_bytes(&robot_replay);
+  streams::SourceReader tracker_bytes(&tracker_replay);
   streams::PassStats pass;
-  EXPECT_EQ(streams::extract_samples(&robot_records, &tracker_records, extractor.get(), &pass, &error), Status::ok)
+  EXPECT_EQ(extract_samples_from_streams(robot_bytes, tracker_bytes, extractor.get(), &pass), Status::ok)
       << error;
   const ExtractionCounts& counts = extractor->counts();
   EXPECT_EQ(counts.pending(), 0u);

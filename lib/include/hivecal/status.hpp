@@ -40,6 +40,8 @@ enum class Status : std::uint8_t {
   // Levenberg-Marquardt calibration.
   poses_not_distinct,       ///< every sample was taken at the same joint positions: nothing to identify
   solver_cancelled,         ///< the progress observer asked the solver to stop
+  // Stream input.
+  read_failed,              ///< a byte source reported an I/O error
 };
 
 /// A short, stable, human-readable name for a status (for logs and CLI messages).

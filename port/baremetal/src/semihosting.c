@@ -48,3 +48,29 @@ const char* board_command_line(void) {
   while (*rest == ' ') ++rest;
   return rest;
 }
+
+int board_file_open(const char* path) {
+  size_t length = 0;
+  while (path[length] != '\0') ++length;
+  /* Mode 1 is fopen's "rb". */
+  const uint32_t block[3] = {(uint32_t)(uintptr_t)path, 1u, (uint32_t)length};
+  return (int)semihosting_call(SEMIHOSTING_SYS_OPEN, block);
+}
+
+long board_file_read(int handle, void* out, size_t capacity) {
+  const uint32_t block[3] = {(uint32_t)handle, (uint32_t)(uintptr_t)out, (uint32_t)capacity};
+  /* SYS_READ returns the number of bytes NOT read: capacity at the end of the file. */
+  const intptr_t not_read = semihosting_call(SEMIHOSTING_SYS_READ, block);
+  if (not_read < 0 || (size_t)not_read > capacity) return -1;
+  return (long)(capacity - (size_t)not_read);
+}
+
+int board_file_rewind(int handle) {
+  const uint32_t block[2] = {(uint32_t)handle, 0u};
+  return semihosting_call(SEMIHOSTING_SYS_SEEK, block) == 0 ? 0 : -1;
+}
+
+void board_file_close(int handle) {
+  const uint32_t block[1] = {(uint32_t)handle};
+  (void)semihosting_call(SEMIHOSTING_SYS_CLOSE, block);
+}

@@ -27,6 +27,17 @@ __attribute__((noreturn)) void board_exit(int status);
 /* The arguments after the program name passed with -semihosting-config arg=... ("" if none). */
 const char* board_command_line(void);
 
+/* Host files through semihosting (SYS_OPEN, SYS_READ, SYS_SEEK, SYS_CLOSE), read-only and
+ * binary: test data such as recorded captures (a product reads its UARTs instead). */
+/* Opens `path` (relative to QEMU's working directory) for reading; a handle >= 0, or -1. */
+int board_file_open(const char* path);
+/* Reads up to `capacity` bytes; the bytes read (0 at the end of the file), or -1 on error. */
+long board_file_read(int handle, void* out, size_t capacity);
+/* Back to the first byte; 0, or -1 on error. */
+int board_file_rewind(int handle);
+/* Closes the handle. */
+void board_file_close(int handle);
+
 /* Size of the stack region reserved by the linker script [bytes]. */
 size_t board_stack_size_bytes(void);
 /* Deepest stack use since reset, from the paint pattern left untouched [bytes]. */

@@ -1,0 +1,47 @@
+// The hybrid calibration (docs/solvers-abc-gsa.md, docs/solver-lm.md): a population solver
+// (ABC or GSA) on the paper's six lengths with the base refitted per candidate, then
+// Levenberg-Marquardt on the full model started from its geometry and base:
+//   calibrate_lm(stage.model, &stage.base_to_tracker, train, LmOptions{}, ...). One implementation for the
+// command-line tool and the firmware: no heap, every large object is the caller's.
+#pragma once
+
+#include <cstdint>
+
+#include "hivecal/abc.hpp"
+#include "hivecal/dataset.hpp"
+#include "hivecal/gsa.hpp"
+#include "hivecal/kinematics.hpp"
+#include "hivecal/lm.hpp"
+#include "hivecal/objective.hpp"
+#include "hivecal/paper6_cost.hpp"
+#include "hivecal/rigid_fit.hpp"
+#include "hivecal/status.hpp"
+#include "hivecal/trace.hpp"
+
+namespace hivecal {
+
+/// What the population stage on the paper's six lengths produced.
+struct Paper6StageResult {
+  RobotModel model;                  ///< the start geometry with the best six lengths
+  RigidTransform base_to_tracker;    ///< Kabsch fit of `model` on the training samples
+  double best_cost_m = 0.0;          ///< training MAE at the best lengths, as the cost computed it [m]
+  std::uint64_t evaluations = 0;     ///< cost evaluations made
+  std::size_t iterations = 0;        ///< solver iterations (cycles) run
+};
+
+/// ABC on the paper-6 cost: cost->build(start, train), box = start's lengths +/- half_width_m,
+/// solver->minimize, then the best geometry and its base fit. `cost` and `solver` are scratch
+/// (static storage: Paper6Cost<N[, float]>, AbcSolver<SN, 6>). Errors: those of build,
+/// paper6_box, minimize and fit_base_to_tracker; *result is written only on success.
+Status calibrate_paper6_abc(const RobotModel& start, Span<const Sample> train, const AbcOptions& options,
+                            double half_width_m, Paper6CostBase* cost, AbcSolverBase* solver,
+                            Paper6StageResult* result, TraceBase* trace = nullptr,
+                            ProgressObserver* progress = nullptr);
+
+/// The same with GSA.
+Status calibrate_paper6_gsa(const RobotModel& start, Span<const Sample> train, const GsaOptions& options,
+                            double half_width_m, Paper6CostBase* cost, GsaSolverBase* solver,
+                            Paper6StageResult* result, TraceBase* trace = nullptr,
+                            ProgressObserver* progress = nullptr);
+
+}  // namespace hivecal
