@@ -33,22 +33,28 @@ void append(Capture* capture, Status (*encode)(const Record&, Span<std::uint8_t>
   ++capture->frames;
 }
 
-DeviceInfoRecord device_info(DeviceKind kind, float rate_hz, const char* name, std::uint16_t sequence) {
+DeviceInfoRecord device_info(DeviceKind kind, float rate_hz, const char* name, std::uint16_t sequence,
+                             std::uint64_t timestamp_us) {
   DeviceInfoRecord info;
   info.sequence = sequence;
+  info.timestamp_us = timestamp_us;
   info.device_kind = static_cast<std::uint8_t>(kind);
   info.nominal_rate_hz = rate_hz;
   std::strncpy(info.name, name, kDeviceNameBytes);
   return info;
 }
 
+/// Every packet of a capture takes the stream's next sequence number, whatever its type.
+std::uint16_t next_sequence(const Capture& capture) { return static_cast<std::uint16_t>(capture.frames); }
+
 /// 125 Hz joint states with a DEVICE_INFO once a second.
 void make_robot_capture(Capture* capture) {
   Random random(1);
   JointStateRecord record;
   for (std::size_t i = 0; capture->frames < kCaptureFrames; ++i) {
-    if (i % 125 == 0) append(capture, encode_device_info, device_info(DeviceKind::robot, 125.0f, "ur5-sim", 0));
-    record.sequence = static_cast<std::uint16_t>(i);
+    if (i % 125 == 0)
+      append(capture, encode_device_info, device_info(DeviceKind::robot, 125.0f, "ur5-sim", next_sequence(*capture), 8000 * i));
+    record.sequence = next_sequence(*capture);
     record.timestamp_us = 8000 * i;
     for (int j = 0; j < kJointCount; ++j) {
       record.q_rad[j] = random.uniform(-3.0, 3.0);
@@ -64,8 +70,10 @@ void make_tracker_capture(Capture* capture) {
   Random random(2);
   TrackerPointRecord record;
   for (std::size_t i = 0; capture->frames < kCaptureFrames; ++i) {
-    if (i % 10 == 0) append(capture, encode_device_info, device_info(DeviceKind::tracker, 10.0f, "tracker-sim", 0));
-    record.sequence = static_cast<std::uint16_t>(i);
+    if (i % 10 == 0)
+      append(capture, encode_device_info,
+             device_info(DeviceKind::tracker, 10.0f, "tracker-sim", next_sequence(*capture), 100000 * i));
+    record.sequence = next_sequence(*capture);
     record.timestamp_us = 100000 * i;
     record.status = random.below(50) == 0 ? 1 : 0;
     for (double& c : record.point_m) c = random.uniform(-5.0, 5.0);

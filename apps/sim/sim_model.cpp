@@ -47,9 +47,10 @@ Mat3 rotation_x(double angle_rad) {
   return r;
 }
 
-DeviceInfoRecord make_device_info(DeviceKind kind, float rate_hz, const char* name, std::uint64_t t_us) {
+DeviceInfoRecord make_device_info(DeviceKind kind, float rate_hz, const char* name, std::uint16_t sequence,
+                                  std::uint64_t t_us) {
   DeviceInfoRecord info;
-  info.sequence = 0;
+  info.sequence = sequence;
   info.timestamp_us = t_us;
   info.device_kind = static_cast<std::uint8_t>(kind);
   info.nominal_rate_hz = rate_hz;
@@ -212,9 +213,9 @@ RobotStream::RobotStream(const Session& session)
       random_(session.config().seed ^ 0x526f626f74ULL),
       next_us_(session.robot_clock_us(std::max(0.0, session.config().robot_start_s))) {}
 
-DeviceInfoRecord RobotStream::device_info() const {
+DeviceInfoRecord RobotStream::device_info() {
   return make_device_info(DeviceKind::robot, static_cast<float>(1.0 / session_.config().robot_period_s),
-                          robot_type_name(session_.config().robot_type), next_us_);
+                          robot_type_name(session_.config().robot_type), sequence_++, next_us_);
 }
 
 bool RobotStream::next(JointStateRecord* record) {
@@ -247,9 +248,9 @@ TrackerStream::TrackerStream(const Session& session)
       random_(session.config().seed ^ 0x547261636bULL),
       first_us_(session.tracker_clock_us(std::max(0.0, session.config().tracker_start_s))) {}
 
-DeviceInfoRecord TrackerStream::device_info() const {
+DeviceInfoRecord TrackerStream::device_info() {
   return make_device_info(DeviceKind::tracker, static_cast<float>(1.0 / session_.config().tracker_period_s),
-                          "tracker-sim", first_us_);
+                          "tracker-sim", sequence_++, first_us_);
 }
 
 bool TrackerStream::next(TrackerPointRecord* record) {

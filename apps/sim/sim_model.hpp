@@ -128,8 +128,8 @@ class RobotStream {
  public:
   /// A publisher over `session` (which must outlive it).
   explicit RobotStream(const Session& session);
-  /// The DEVICE_INFO sent at stream start.
-  DeviceInfoRecord device_info() const;
+  /// A DEVICE_INFO (sent at stream start); it takes the stream's next sequence number.
+  DeviceInfoRecord device_info();
   /// Next packet; false once the session is over.
   bool next(JointStateRecord* record);
   /// True time of the packet last returned [s].
@@ -139,7 +139,7 @@ class RobotStream {
   const Session& session_;
   Random random_;
   std::uint64_t next_us_;
-  std::uint16_t sequence_ = 1;  // 0 went to DEVICE_INFO
+  std::uint16_t sequence_ = 0;  ///< the stream's next sequence number, shared by every packet type
   double last_s_ = 0.0;
 };
 
@@ -148,8 +148,8 @@ class TrackerStream {
  public:
   /// A tracker over `session` (which must outlive it).
   explicit TrackerStream(const Session& session);
-  /// The DEVICE_INFO sent at stream start.
-  DeviceInfoRecord device_info() const;
+  /// A DEVICE_INFO (sent at stream start); it takes the stream's next sequence number.
+  DeviceInfoRecord device_info();
   /// Next packet; false once the session is over.
   bool next(TrackerPointRecord* record);
   /// True time of the packet last returned [s].
@@ -160,7 +160,7 @@ class TrackerStream {
   Random random_;
   std::uint64_t first_us_;
   std::uint64_t index_ = 0;
-  std::uint16_t sequence_ = 1;
+  std::uint16_t sequence_ = 0;  ///< the stream's next sequence number, shared by every packet type
   int burst_left_ = 0;
   double last_s_ = 0.0;
 };

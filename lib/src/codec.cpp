@@ -135,6 +135,12 @@ void transfer_header(Io& io, Record& record) {
   io.u64(record.timestamp_us);
 }
 
+/// The header fields every version-1 packet has, whatever its type.
+struct PacketHeader {
+  std::uint16_t sequence = 0;      ///< sequence number of the stream
+  std::uint64_t timestamp_us = 0;  ///< sender's clock [us]
+};
+
 /// Per record type: its type byte, payload layout, counter and handler callback.
 template <typename Record>
 struct Wire;
@@ -297,6 +303,12 @@ Status StreamDecoder::decode_frame(FrameHandler& handler) {
   const std::size_t covered_bytes = packet_bytes - kPacketCrcBytes;
   if (crc32c(packet, covered_bytes) != load_le(packet + covered_bytes, kPacketCrcBytes)) return Status::bad_crc;
   if (packet[0] != kProtocolVersion) return Status::bad_version;
+  // Intact version-1 header: this packet was sent and took the stream's next sequence number,
+  // whether it is then delivered or rejected for its type, length or payload.
+  PacketHeader header;
+  PacketReader header_reader(packet + 2, covered_bytes - 2);  // after version and type
+  transfer_header(header_reader, header);
+  track_sequence(header.sequence, header.timestamp_us);
   switch (static_cast<PacketType>(packet[1])) {
     case PacketType::joint_state: return deliver<JointStateRecord>(packet, packet_bytes, handler);
     case PacketType::tracker_point: return deliver<TrackerPointRecord>(packet, packet_bytes, handler);
@@ -314,7 +326,6 @@ Status StreamDecoder::deliver(const std::uint8_t* packet, std::size_t packet_byt
   Wire<Record>::payload(reader, record);
   if (!reader.in_bounds()) return Status::bad_length;
   if (!reader.well_formed()) return Status::bad_payload;
-  track_sequence(Wire<Record>::kType, record.sequence, record.timestamp_us);
   ++stats_.frames_ok;
   ++(stats_.*Wire<Record>::kCounter);
   stats_.bytes_accepted += frame_bytes_ + 1;  // counted before the callback so it sees final stats
@@ -322,8 +333,8 @@ Status StreamDecoder::deliver(const std::uint8_t* packet, std::size_t packet_byt
   return Status::ok;
 }
 
-void StreamDecoder::track_sequence(PacketType type, std::uint16_t sequence, std::uint64_t timestamp_us) {
-  SequenceState& last = sequences_[static_cast<std::size_t>(type) - 1];
+void StreamDecoder::track_sequence(std::uint16_t sequence, std::uint64_t timestamp_us) {
+  SequenceState& last = sequence_;  // the one counter of the stream, whatever the packet type
   if (last.seen) {
     const auto expected = static_cast<std::uint16_t>(last.sequence + 1u);    // 65535 + 1 -> 0: no gap
     const auto skipped = static_cast<std::uint16_t>(sequence - expected);  // modulo 2^16

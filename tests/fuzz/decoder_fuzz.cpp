@@ -73,7 +73,9 @@ void check_stats(const DecoderStats& s, const std::uint8_t* wire, std::size_t si
   require(s.frames_ok + s.frames_rejected() + s.bytes_idle <= zeros + s.oversized_frames + s.leading_fragments);
   require(s.bytes_accepted <= s.frames_ok * kMaxFrameBytes);
   require(s.leading_fragments <= 1);
-  require(s.sequence_gaps + s.sequence_resets <= s.frames_ok);
+  // Sequenced packets: every CRC-valid version-1 packet, delivered or not; the first has no base.
+  require(s.sequence_gaps + s.sequence_resets <=
+          s.frames_ok + s.unknown_types + s.bad_lengths + s.bad_payloads + s.leading_fragments);
   require(s.packets_lost <= s.sequence_gaps * 0x7FFF);
 }
 

@@ -98,6 +98,10 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   EXPECT_EQ(robot_decoder.decoder_stats().frames_ok, served.robot_frames);
   EXPECT_EQ(tracker_decoder.decoder_stats().frames_ok, served.tracker_frames);
   EXPECT_EQ(robot_decoder.decoder_stats().frames_rejected(), 0u);
+  // One sequence counter per stream, DEVICE_INFO included: the tracker drops nothing, so no
+  // gap at all; neither stream restarts (a DEVICE_INFO numbered apart would show as one).
+  EXPECT_EQ(tracker_decoder.decoder_stats().sequence_gaps + tracker_decoder.decoder_stats().packets_lost, 0u);
+  EXPECT_EQ(tracker_decoder.decoder_stats().sequence_resets + robot_decoder.decoder_stats().sequence_resets, 0u);
 
   ClockFit fit;
   ASSERT_EQ(estimator->estimate(&fit), Status::ok);

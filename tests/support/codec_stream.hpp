@@ -15,7 +15,7 @@ namespace hivecal::test {
 /// SentFrame::type of a CRC-valid frame of an unknown type.
 inline constexpr std::uint8_t kUnknownTypeMarker = 0;
 
-/// One frame put on the wire by make_stream.
+/// One frame put on the wire by make_stream; each takes the stream's next sequence number.
 struct SentFrame {
   std::uint8_t type = 0;     ///< packet type byte 1..3, or kUnknownTypeMarker
   std::size_t begin = 0;     ///< first byte in SentStream::bytes
@@ -30,7 +30,7 @@ struct SentStream {
   std::vector<TrackerPointRecord> tracker_points;   ///< sent in this order
   std::vector<DeviceInfoRecord> device_infos;       ///< sent in this order
   std::vector<SentFrame> frames;                    ///< valid and unknown-type frames, in order
-  std::uint16_t first_sequence[3] = {};             ///< per known type
+  std::uint16_t first_sequence = 0;                 ///< sequence of frames[0]; frames[k] has first_sequence + k
   std::size_t unknown_frames = 0;                   ///< CRC-valid frames of unknown type
   std::size_t garbage_fragments = 0;                ///< non-empty garbage pieces between 0x00s
   std::size_t library_allocations = 0;              ///< heap allocations inside codec calls (must be 0)
@@ -56,14 +56,18 @@ inline void append_frame(const std::uint8_t* frame, std::size_t size, std::uint8
   out->frames.push_back(sent);
 }
 
-/// A CRC-valid version-1 packet of an unknown type and random length, framed.
-inline std::size_t make_unknown_frame(Random* random, std::uint8_t* frame) {
+/// A CRC-valid version-1 packet of an unknown type and random length and payload, with the
+/// stream's sequence number and timestamp in its header, framed.
+inline std::size_t make_unknown_frame(Random* random, std::uint16_t sequence, std::uint64_t timestamp_us,
+                                      std::uint8_t* frame) {
   std::uint8_t packet[kMaxPacketBytes];
   const std::size_t size = kPacketHeaderBytes + kPacketCrcBytes + static_cast<std::size_t>(random->below(kMaxPacketBytes - 15));
   packet[0] = kProtocolVersion;
   const std::uint64_t pick = random->below(253);
   packet[1] = static_cast<std::uint8_t>(pick == 0 ? 0 : pick + 3);  // 0x00 or 0x04..0xFF
-  for (std::size_t i = 2; i < size - kPacketCrcBytes; ++i) packet[i] = static_cast<std::uint8_t>(random->next());
+  for (std::size_t i = 0; i < 2; ++i) packet[2 + i] = static_cast<std::uint8_t>(sequence >> (8 * i));
+  for (std::size_t i = 0; i < 8; ++i) packet[4 + i] = static_cast<std::uint8_t>(timestamp_us >> (8 * i));
+  for (std::size_t i = kPacketHeaderBytes; i < size - kPacketCrcBytes; ++i) packet[i] = static_cast<std::uint8_t>(random->next());
   const std::uint32_t crc = crc32c(packet, size - kPacketCrcBytes);
   for (std::size_t i = 0; i < kPacketCrcBytes; ++i)
     packet[size - kPacketCrcBytes + i] = static_cast<std::uint8_t>(crc >> (8 * i));
@@ -73,42 +77,41 @@ inline std::size_t make_unknown_frame(Random* random, std::uint8_t* frame) {
   return encoded + 1;
 }
 
-/// A seeded stream; sequences start near 65535 so that every type wraps.
+/// A seeded stream from one device: every frame, whatever its type (unknown ones included),
+/// takes the stream's next sequence number (starting near 65535, so it wraps) and a later
+/// timestamp. At most 65536 frames, so that a sequence number names one frame.
 inline void make_stream(std::uint64_t seed, const StreamShape& shape, SentStream* out) {
   *out = SentStream();
+  if (shape.frames > 65536) return;  // every caller's checks then fail loudly
   Random random(seed);
-  std::uint16_t sequence[3];
-  std::uint64_t time_us[3];
-  for (int t = 0; t < 3; ++t) {
-    sequence[t] = static_cast<std::uint16_t>(65535 - random.below(400));
-    out->first_sequence[t] = sequence[t];
-    time_us[t] = random.below(1ULL << 40);
-  }
+  std::uint16_t sequence = static_cast<std::uint16_t>(65535 - random.below(400));
+  out->first_sequence = sequence;
+  std::uint64_t time_us = random.below(1ULL << 40);
   std::uint8_t frame[kMaxFrameBytes];
   for (std::size_t f = 0; f < shape.frames; ++f) {
     std::size_t size = 0;
+    const std::uint16_t seq = sequence++;
+    time_us += 1 + random.below(200000);
     if (f > 0 && random.uniform01() < shape.unknown_chance) {
-      out->library_allocations += count_allocations([&] { size = make_unknown_frame(&random, frame); });
+      out->library_allocations += count_allocations([&] { size = make_unknown_frame(&random, seq, time_us, frame); });
       append_frame(frame, size, kUnknownTypeMarker, 0, out);
       ++out->unknown_frames;
     } else {
       const std::uint64_t pick = random.below(10);
       const int t = pick < 6 ? 0 : pick < 9 ? 1 : 2;
-      time_us[t] += 1 + random.below(200000);
-      const std::uint16_t seq = sequence[t]++;
       Status status = Status::ok;
       if (t == 0) {
-        out->joint_states.push_back(random_joint_state(&random, seq, time_us[t]));
+        out->joint_states.push_back(random_joint_state(&random, seq, time_us));
         out->library_allocations +=
             count_allocations([&] { status = encode_joint_state(out->joint_states.back(), frame, &size); });
         append_frame(frame, size, 1, out->joint_states.size() - 1, out);
       } else if (t == 1) {
-        out->tracker_points.push_back(random_tracker_point(&random, seq, time_us[t]));
+        out->tracker_points.push_back(random_tracker_point(&random, seq, time_us));
         out->library_allocations +=
             count_allocations([&] { status = encode_tracker_point(out->tracker_points.back(), frame, &size); });
         append_frame(frame, size, 2, out->tracker_points.size() - 1, out);
       } else {
-        out->device_infos.push_back(random_device_info(&random, seq, time_us[t]));
+        out->device_infos.push_back(random_device_info(&random, seq, time_us));
         out->library_allocations +=
             count_allocations([&] { status = encode_device_info(out->device_infos.back(), frame, &size); });
         append_frame(frame, size, 3, out->device_infos.size() - 1, out);

@@ -1,5 +1,6 @@
 // Wire codec: spec test vectors both ways, CRC-32C, COBS, every rejection path, name
-// padding, unknown types, sequence gaps with wrap-around, streams that start mid-frame.
+// padding, unknown types, one sequence counter per stream with wrap-around, streams that start
+// mid-frame.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -444,7 +445,9 @@ TEST(CodecDecode, CountsEveryRejectionAndResynchronises) {
   EXPECT_EQ(stats.bytes_accepted, 3 * good.size());
   EXPECT_EQ(stats.bytes_accepted + stats.bytes_idle + stats.bytes_discarded + stats.bytes_pending, stats.bytes_total);
   EXPECT_EQ(stats.bytes_pending, 0u);
-  EXPECT_EQ(stats.sequence_resets, 2u);  // the same packet three times: sequence went "backwards"
+  // The same header (sequence 65535) five times: good, good, unknown type, wrong length, good
+  // (not the CRC failure nor the other version): four repeats, each read as a restart.
+  EXPECT_EQ(stats.sequence_resets, 4u);
   EXPECT_EQ(stats.packets_lost, 0u);
 }
 
@@ -518,44 +521,138 @@ TEST(CodecDecode, UnfinishedFrameStaysPendingAndResetForgetsIt) {
   EXPECT_EQ(decoder.stats().bytes_total, 1u);
 }
 
-/// Frames of one type with the given sequence numbers and timestamps.
-Bytes tracker_frames(std::initializer_list<std::pair<std::uint16_t, std::uint64_t>> packets) {
+/// What one packet of a mixed test stream is.
+enum class Kind { joint, tracker, info, unknown_type, wrong_length, bad_version, bad_crc };
+
+/// One packet of a mixed test stream.
+struct Packet {
+  Kind kind;
+  std::uint16_t sequence;
+  std::uint64_t timestamp_us;
+};
+
+/// The frame of one packet: a valid one of each type, or a CRC-valid version-1 packet of an
+/// unknown type (0x04) or of TRACKER_POINT one byte too long, or one that fails the version
+/// or CRC check.
+Bytes frame_of(const Packet& p) {
+  JointStateRecord joint = vector1_record();
+  TrackerPointRecord tracker = vector2_record();
+  DeviceInfoRecord info = vector3_record();
+  joint.sequence = tracker.sequence = info.sequence = p.sequence;
+  joint.timestamp_us = tracker.timestamp_us = info.timestamp_us = p.timestamp_us;
+  switch (p.kind) {
+    case Kind::joint: return encode(joint, encode_joint_state);
+    case Kind::tracker: return encode(tracker, encode_tracker_point);
+    case Kind::info: return encode(info, encode_device_info);
+    case Kind::unknown_type: return frame_of_packet(patched(packet_of_frame(encode(tracker, encode_tracker_point)), 1, 0x04));
+    case Kind::wrong_length: {
+      Bytes packet = packet_of_frame(encode(tracker, encode_tracker_point));
+      packet.push_back(0);
+      return frame_of_packet(packet);
+    }
+    case Kind::bad_version: return frame_of_packet(patched(packet_of_frame(encode(tracker, encode_tracker_point)), 0, 2));
+    case Kind::bad_crc: {
+      const Bytes frame = encode(tracker, encode_tracker_point);
+      return patched(frame, 20, static_cast<std::uint8_t>(frame[20] ^ 0x10));
+    }
+  }
+  return {};
+}
+
+Bytes frames_of(std::initializer_list<Packet> packets) {
   Bytes stream;
-  for (const auto& [sequence, timestamp_us] : packets) {
-    TrackerPointRecord record = vector2_record();
-    record.sequence = sequence;
-    record.timestamp_us = timestamp_us;
-    const Bytes frame = encode(record, encode_tracker_point);
+  for (const Packet& p : packets) {
+    const Bytes frame = frame_of(p);
     stream.insert(stream.end(), frame.begin(), frame.end());
   }
   return stream;
 }
 
-TEST(CodecSequence, GapsPerTypeWithWrapAround) {
-  // Tracker: wrap 65535 -> 0 is no gap; 1 -> 5 loses 3; 5 -> 65534 is a jump backwards in
-  // sequence space (a restart), not 65528 lost packets.
-  Bytes stream = tracker_frames({{65533, 10}, {65534, 20}, {65535, 30}, {0, 40}, {1, 50}, {5, 90}});
-  // Interleaved joint states are their own stream: 10 -> 12 loses one.
-  JointStateRecord joint = vector1_record();
-  for (std::uint16_t sequence : {std::uint16_t{10}, std::uint16_t{12}}) {
-    joint.sequence = sequence;
-    const Bytes frame = encode(joint, encode_joint_state);
+/// Frames of one type with the given sequence numbers and timestamps.
+Bytes tracker_frames(std::initializer_list<std::pair<std::uint16_t, std::uint64_t>> packets) {
+  Bytes stream;
+  for (const auto& [sequence, timestamp_us] : packets) {
+    const Bytes frame = frame_of({Kind::tracker, sequence, timestamp_us});
     stream.insert(stream.end(), frame.begin(), frame.end());
   }
-  const Bytes more = tracker_frames({{6, 100}, {65534, 110}, {65535, 120}, {2, 130}});
-  stream.insert(stream.end(), more.begin(), more.end());
-  LastRecordHandler handler;
-  const DecoderStats stats = decode_all(stream, handler);
-  EXPECT_EQ(stats.frames_ok, 12u);
-  EXPECT_EQ(stats.sequence_gaps, 3u);  // 1->5, 10->12, 65535->2
-  EXPECT_EQ(stats.packets_lost, 3u + 1u + 2u);
-  EXPECT_EQ(stats.sequence_resets, 1u);  // 6 -> 65534
+  return stream;
+}
 
-  // A restart detected by the timestamp: sequence 100 -> 120 but the clock went back.
+TEST(CodecSequence, OneCounterPerStreamWithWrapAround) {
+  // One stream, one counter: wrap 65535 -> 0 is no gap; 1 -> 5 loses 3; 5 -> 65534 is a jump
+  // backwards in sequence space (a restart), not 65528 lost packets.
+  LastRecordHandler handler;
+  const DecoderStats single =
+      decode_all(tracker_frames({{65533, 10}, {65534, 20}, {65535, 30}, {0, 40}, {1, 50}, {5, 90}, {6, 100},
+                                 {65534, 110}, {65535, 120}, {2, 130}}),
+                 handler);
+  EXPECT_EQ(single.frames_ok, 10u);
+  EXPECT_EQ(single.sequence_gaps, 2u);  // 1->5, 65535->2
+  EXPECT_EQ(single.packets_lost, 3u + 2u);
+  EXPECT_EQ(single.sequence_resets, 1u);  // 6 -> 65534
+
+  // The types share the counter: a decoder tracking each type on its own would see gaps in
+  // every type here (joint 65534 -> 0 -> 2, tracker 65535 -> 1 -> 5, ...).
+  const DecoderStats mixed = decode_all(
+      frames_of({{Kind::info, 65533, 10}, {Kind::joint, 65534, 20}, {Kind::tracker, 65535, 30},
+                 {Kind::joint, 0, 40}, {Kind::tracker, 1, 50}, {Kind::joint, 2, 60}, {Kind::joint, 3, 70},
+                 {Kind::info, 4, 80}, {Kind::tracker, 5, 90}}),
+      handler);
+  EXPECT_EQ(mixed.frames_ok, 9u);
+  EXPECT_EQ(mixed.joint_states, 4u);
+  EXPECT_EQ(mixed.sequence_gaps + mixed.packets_lost + mixed.sequence_resets, 0u);
+
+  // A real loss between packets of different types is counted once, with its size.
+  const DecoderStats lost =
+      decode_all(frames_of({{Kind::joint, 10, 10}, {Kind::tracker, 11, 20}, {Kind::joint, 14, 50}}), handler);
+  EXPECT_EQ(lost.sequence_gaps, 1u);
+  EXPECT_EQ(lost.packets_lost, 2u);  // 12 and 13, whatever their types were
+}
+
+TEST(CodecSequence, SkippedIntactPacketsAreNotLost) {
+  // A CRC-valid version-1 packet of an unknown type, or of a known type with the wrong length,
+  // was sent and took its number: skipping it is not a loss. A packet damaged in transit or
+  // of another version has no header we can trust, so its number shows as lost.
+  LastRecordHandler handler;
+  const DecoderStats stats =
+      decode_all(frames_of({{Kind::joint, 100, 10}, {Kind::unknown_type, 101, 20}, {Kind::joint, 102, 30},
+                            {Kind::wrong_length, 103, 40}, {Kind::unknown_type, 104, 50}, {Kind::tracker, 105, 60},
+                            {Kind::bad_crc, 106, 70}, {Kind::joint, 107, 80}, {Kind::bad_version, 108, 90},
+                            {Kind::info, 109, 100}}),
+                 handler);
+  EXPECT_EQ(stats.frames_ok, 5u);
+  EXPECT_EQ(stats.unknown_types, 2u);
+  EXPECT_EQ(stats.bad_lengths, 1u);
+  EXPECT_EQ(stats.crc_failures, 1u);
+  EXPECT_EQ(stats.bad_versions, 1u);
+  EXPECT_EQ(stats.sequence_gaps, 2u);  // 105 -> 107 (CRC failure), 107 -> 109 (version 2)
+  EXPECT_EQ(stats.packets_lost, 2u);
+  EXPECT_EQ(stats.sequence_resets, 0u);
+
+  // Skipped packets are also the base of the next comparison: an unknown-type packet after a
+  // gap carries the gap, and its restart is a restart.
+  const DecoderStats skipped_base =
+      decode_all(frames_of({{Kind::joint, 1, 10}, {Kind::unknown_type, 4, 20}, {Kind::joint, 5, 30},
+                            {Kind::unknown_type, 0, 5}, {Kind::joint, 1, 15}}),
+                 handler);
+  EXPECT_EQ(skipped_base.frames_ok, 3u);
+  EXPECT_EQ(skipped_base.sequence_gaps, 1u);  // 1 -> 4
+  EXPECT_EQ(skipped_base.packets_lost, 2u);
+  EXPECT_EQ(skipped_base.sequence_resets, 1u);  // 5 -> 0 with the clock going back
+}
+
+TEST(CodecSequence, RestartsAreNotLoss) {
+  LastRecordHandler handler;
+  // A restart detected by the timestamp: sequence 100 -> 120 but the clock went back, also
+  // across types (one device, one clock).
   const DecoderStats restart = decode_all(tracker_frames({{100, 5000}, {120, 10}}), handler);
   EXPECT_EQ(restart.sequence_gaps, 0u);
   EXPECT_EQ(restart.packets_lost, 0u);
   EXPECT_EQ(restart.sequence_resets, 1u);
+  const DecoderStats across = decode_all(frames_of({{Kind::joint, 100, 5000}, {Kind::info, 0, 0}, {Kind::joint, 1, 8}}),
+                                         handler);
+  EXPECT_EQ(across.sequence_resets, 1u);  // DEVICE_INFO of a restarted sender
+  EXPECT_EQ(across.sequence_gaps + across.packets_lost, 0u);
 
   // Largest forward jump still read as loss: 32767 missing packets; one more is a restart.
   const DecoderStats big = decode_all(tracker_frames({{0, 1}, {32768, 2}, {32769, 3}, {100, 4}}), handler);

@@ -79,7 +79,7 @@ struct DecoderStats {
   std::uint64_t cobs_errors = 0;        ///< malformed COBS [frames]
   std::uint64_t oversized_frames = 0;   ///< longer than kMaxFrameBytes before a delimiter [frames]
   std::uint64_t leading_fragments = 0;  ///< unusable bytes before the first delimiter (stream began mid-frame) [frames]
-  std::uint64_t sequence_gaps = 0;      ///< jumps forward in a type's sequence numbers [events]
+  std::uint64_t sequence_gaps = 0;      ///< jumps forward in the stream's sequence numbers (every CRC-valid v1 packet) [events]
   std::uint64_t packets_lost = 0;       ///< packets missing in those jumps [packets]
   std::uint64_t sequence_resets = 0;    ///< sequence or timestamp went backwards (restart): no loss counted [events]
 
@@ -102,27 +102,26 @@ class StreamDecoder {
   void reset();
 
  private:
-  /// Last accepted packet of one type: the base for gap detection.
+  /// Last CRC-valid version-1 packet of the stream, whatever its type: the base for gap detection.
   struct SequenceState {
     std::uint64_t timestamp_us = 0;  ///< its timestamp [us]
     std::uint16_t sequence = 0;      ///< its sequence number
-    bool seen = false;               ///< false until the first packet of the type
+    bool seen = false;               ///< false until the stream's first such packet
   };
-  static constexpr std::size_t kTypeCount = 3;
 
   void take_frame_bytes(const std::uint8_t* bytes, std::size_t count);
   void close_frame(FrameHandler& handler);
   Status decode_frame(FrameHandler& handler);
   template <typename Record>
   Status deliver(const std::uint8_t* packet, std::size_t packet_bytes, FrameHandler& handler);
-  void track_sequence(PacketType type, std::uint16_t sequence, std::uint64_t timestamp_us);
+  void track_sequence(std::uint16_t sequence, std::uint64_t timestamp_us);
   void count_rejection(Status status);
 
   std::uint8_t frame_[kMaxFrameBytes - 1] = {};  ///< encoded frame so far, delimiter excluded
   std::size_t frame_bytes_ = 0;                 ///< bytes used in frame_ [bytes]
   bool discarding_ = false;                     ///< dropping an oversized frame up to the next delimiter
   bool synchronised_ = false;                   ///< a delimiter has been seen since reset
-  SequenceState sequences_[kTypeCount] = {};    ///< per packet type, indexed by type - 1
+  SequenceState sequence_;                      ///< one per stream: every type shares the counter
   DecoderStats stats_;                          ///< counters
 };
 
