@@ -154,7 +154,8 @@ class Paper6Cost final : public Paper6CostBase {
   Paper6Cost() : Paper6CostBase(values_, Capacity) {}
 
  private:
-  Scalar values_[paper6_storage_values(Capacity)];
+  // Zero-initialised: the evaluation reads whole pairs of samples, past the last one too.
+  Scalar values_[paper6_storage_values(Capacity)] = {};
 };
 
 }  // namespace hivecal
