@@ -100,9 +100,15 @@ void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
     double* column = compact + l * kFullParamCount;
     const int axis = columns.index[l] - base_translation_param_index(0);
     if (axis >= 0) {
+      const double* rows[kBatchSamples];
+      double weights[kBatchSamples];
+      for (int s = 0; s < kBatchSamples; ++s) {
+        rows[s] = batch->rows[3 * s + axis];
+        weights[s] = w[3 * s + axis];
+      }
       for (int k = 0; k <= l; ++k) {
         double sum = 0.0;
-        for (int j = axis; j < kBatchRows; j += 3) sum += batch->rows[j][k] * w[j];
+        for (int s = 0; s < kBatchSamples; ++s) sum += rows[s][k] * weights[s];
         column[k] += sum;
       }
       continue;
