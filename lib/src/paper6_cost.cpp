@@ -212,9 +212,8 @@ Pair broadcast(double x) { return Pair{x, x}; }
 template <typename Scalar>
 double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m,
                                          const double* tail_m) const {
-  // The hot loop. The norms of a block of samples are computed first, two samples at a time
-  // (a block's unused tail is zero-initialised storage, computed and ignored), then summed in
-  // sample order. The operation order is Eigen's (pairwise sums in products and norms), which
+  // The hot loop, two samples at a time (a block's unused tail is zero-initialised storage,
+  // computed and ignored), the norms summed in sample order. The operation order is Eigen's (pairwise sums in products and norms), which
   // the golden digest pins.
   static_assert(kPaper6BlockSamples % 2 == 0, "whole pairs per block");
   constexpr std::size_t kPoint = kPointValue * kPaper6BlockSamples;
@@ -222,7 +221,6 @@ double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotat
   constexpr std::size_t kDirection = kDirectionValue * kPaper6BlockSamples;
   constexpr std::size_t kRow = kPaper6BlockSamples;         // next row of a value triple
   constexpr std::size_t kColumn = 3 * kPaper6BlockSamples;  // next direction column
-  double norms_m[kPaper6BlockSamples];
   const Pair t0 = broadcast(tail_m[0]), t1 = broadcast(tail_m[1]), t2 = broadcast(tail_m[2]),
              t3 = broadcast(tail_m[3]), t4 = broadcast(tail_m[4]);
   const Pair e00 = broadcast(rotation(0, 0)), e01 = broadcast(rotation(0, 1)), e02 = broadcast(rotation(0, 2));
@@ -249,10 +247,9 @@ double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotat
       const Pair r1 = ((e10 * q0 + (e11 * q1 + e12 * q2)) - (p1 + load_pair(pair + kError + kRow))) - sy;
       const Pair r2 = ((e20 * q0 + (e21 * q1 + e22 * q2)) - (p2 + load_pair(pair + kError + 2 * kRow))) - sz;
       const Pair squared = r0 * r0 + (r1 * r1 + r2 * r2);
-      norms_m[j] = std::sqrt(squared[0]);
-      norms_m[j + 1] = std::sqrt(squared[1]);
+      sum_m += std::sqrt(squared[0]);
+      if (j + 1 < count) sum_m += std::sqrt(squared[1]);
     }
-    for (std::size_t j = 0; j < count; ++j) sum_m += norms_m[j];
   }
   return sum_m;
 }
