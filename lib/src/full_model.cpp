@@ -78,8 +78,11 @@ Vec3 add_rows(const RobotModel& model, const TwistTrig& trig, const RigidTransfo
 
 /// eq += sum over the batch of w J^T J and w J^T r, in compact coordinates (entry (k, l) for
 /// columns index[k], index[l]; upper triangle), one contiguous column at a time. Unused rows
-/// are zero, which adds exact zeros.
-void flush(RowBatch* batch, int count, NormalEquations* eq) {
+/// are zero, which adds exact zeros. The base-translation columns (the last ones of the list,
+/// identity blocks of J) are 1 on their axis' row and 0 elsewhere: their entries only take
+/// that row's products, the same sum without the exact zeros, so the same bits.
+void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
+  const int count = columns.count;
   for (int j = 3 * batch->samples; j < kBatchRows; ++j) {
     for (int k = 0; k < count; ++k) batch->rows[j][k] = 0.0;
     batch->weight[j] = 0.0;
@@ -95,6 +98,21 @@ void flush(RowBatch* batch, int count, NormalEquations* eq) {
     }
     eq->jtwr(l) += gradient;
     double* column = compact + l * kFullParamCount;
+    const int axis = columns.index[l] - base_translation_param_index(0);
+    if (axis >= 0) {
+      const double* rows[kBatchSamples];
+      double weights[kBatchSamples];
+      for (int s = 0; s < kBatchSamples; ++s) {
+        rows[s] = batch->rows[3 * s + axis];
+        weights[s] = w[3 * s + axis];
+      }
+      for (int k = 0; k <= l; ++k) {
+        double sum = 0.0;
+        for (int s = 0; s < kBatchSamples; ++s) sum += rows[s][k] * weights[s];
+        column[k] += sum;
+      }
+      continue;
+    }
     for (int k = 0; k <= l; ++k) {
       double sum = 0.0;
       for (int j = 0; j < kBatchRows; ++j) sum += batch->rows[j][k] * w[j];
@@ -251,12 +269,12 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
       batch.weight[first_row + r] = weight;
       batch.residual_m[first_row + r] = residual_m(r);
     }
-    if (++batch.samples == kBatchSamples) flush(&batch, list.count, &eq);
+    if (++batch.samples == kBatchSamples) flush(&batch, list, &eq);
     eq.loss_sum_m2 += loss.rho(norm_m);
     eq.weighted_squares_m2 += weight * squared;
     eq.squares_sum_m2 += squared;
   }
-  if (batch.samples > 0) flush(&batch, list.count, &eq);
+  if (batch.samples > 0) flush(&batch, list, &eq);
   expand_compact(list, &eq);
   // A NaN or Inf anywhere in J or r reaches the diagonal, the gradient or the loss.
   if (!math::is_finite(eq.loss_sum_m2) || !all_finite(eq.jtwr) || !all_finite(eq.jtwj.diagonal())) {

@@ -1,5 +1,7 @@
 #include "hivecal/paper6_cost.hpp"
 
+#include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "hivecal/cost.hpp"
@@ -12,19 +14,36 @@ constexpr int kTailCount = static_cast<int>(kPaper6Dimension) - 1;  // a2..d6: t
 using TailLengths = Eigen::Matrix<double, kTailCount, 1>;
 using TailDirections = Eigen::Matrix<double, 3, kTailCount>;
 
-/// A stored term widened to double (exact: float -> double loses nothing).
+// Positions of the stored values (kPaper6ValuesPerSample): point, error, directions.
+constexpr std::size_t kPointValue = 0;
+constexpr std::size_t kErrorValue = 3;
+constexpr std::size_t kDirectionValue = 6;
+static_assert(kDirectionValue + 3 * kTailCount == kPaper6ValuesPerSample, "value layout");
+constexpr std::size_t kBlockValues = kPaper6ValuesPerSample * kPaper6BlockSamples;
+
+/// Position of value v of sample i in the block storage.
+constexpr std::size_t value_index(std::size_t v, std::size_t i) {
+  return i / kPaper6BlockSamples * kBlockValues + v * kPaper6BlockSamples + i % kPaper6BlockSamples;
+}
+
+/// A stored sample widened to double (exact: float -> double loses nothing).
 struct WideTerm {
   Vec3 point_m;
   Vec3 measured_m;  // point + error: the measured point in the reference frame, relative
   TailDirections directions;
 };
 
-template <typename Term>
-WideTerm widen(const Term& term) {
+/// Sample i of the block storage.
+template <typename Scalar>
+WideTerm widen(const Scalar* values, std::size_t i) {
+  const auto value = [&](std::size_t v) { return static_cast<double>(values[value_index(v, i)]); };
   WideTerm wide;
-  wide.point_m = term.point_m.template cast<double>();
-  wide.measured_m = wide.point_m + term.error_m.template cast<double>();
-  wide.directions = term.directions.template cast<double>();
+  for (int r = 0; r < 3; ++r) {
+    const auto row = static_cast<std::size_t>(r);
+    wide.point_m(r) = value(kPointValue + row);
+    wide.measured_m(r) = wide.point_m(r) + value(kErrorValue + row);
+    for (int k = 0; k < kTailCount; ++k) wide.directions(r, k) = value(kDirectionValue + 3 * static_cast<std::size_t>(k) + row);
+  }
   return wide;
 }
 
@@ -67,15 +86,20 @@ Status Paper6CostBase::reset(const RobotModel& nominal, const RigidTransform& re
   return Status::ok;
 }
 
-template <typename Term>
+template <typename Scalar>
 void Paper6CostBase::store(const Vec3& predicted_m, const Vec3& measured_m, const ToolPointJacobian& jacobian,
-                           Term* term) const {
-  using Scalar = typename Term::Vector::Scalar;
+                           Scalar* values) const {
   const Vec3 measured_in_base_m = reference_.rotation.transpose() * (measured_m - reference_.translation_m);
-  term->point_m = (predicted_m - point_origin_m_).template cast<Scalar>();
-  term->error_m = (measured_in_base_m - predicted_m).template cast<Scalar>();
-  for (std::size_t k = 1; k < kPaper6Dimension; ++k) {
-    term->directions.col(static_cast<int>(k) - 1) = jacobian.col(kPaper6ParamIndex[k]).template cast<Scalar>();
+  const Vec3 point_m = predicted_m - point_origin_m_;
+  const Vec3 error_m = measured_in_base_m - predicted_m;
+  for (int r = 0; r < 3; ++r) {
+    const auto row = static_cast<std::size_t>(r);
+    values[value_index(kPointValue + row, size_)] = static_cast<Scalar>(point_m(r));
+    values[value_index(kErrorValue + row, size_)] = static_cast<Scalar>(error_m(r));
+    for (std::size_t k = 1; k < kPaper6Dimension; ++k) {
+      values[value_index(kDirectionValue + 3 * (k - 1) + row, size_)] =
+          static_cast<Scalar>(jacobian(r, kPaper6ParamIndex[k]));
+    }
   }
 }
 
@@ -86,24 +110,24 @@ Status Paper6CostBase::add(const JointVector& q_rad, const Vec3& point_m) {
   (void)tool_point_jacobian(nominal_, q_rad, &jacobian);
   const Vec3 predicted_m = fk_tool_point(nominal_, q_rad);  // as evaluate_cost computes it
   if (size_ == 0) point_origin_m_ = predicted_m;
-  if (terms_ != nullptr) {
-    store(predicted_m, point_m, jacobian, &terms_[size_]);
+  if (values_ != nullptr) {
+    store(predicted_m, point_m, jacobian, values_);
   } else {
-    store(predicted_m, point_m, jacobian, &compact_terms_[size_]);
+    store(predicted_m, point_m, jacobian, compact_values_);
   }
   ++size_;
   ready_ = false;
   return Status::ok;
 }
 
-template <typename Term>
-Status Paper6CostBase::precompute(const Term* terms) {
+template <typename Scalar>
+Status Paper6CostBase::precompute(const Scalar* values) {
   const auto count = static_cast<double>(size_);
   Vec3 point_sum_m = Vec3::Zero();
   Vec3 measured_sum_m = Vec3::Zero();
   TailDirections direction_sum = TailDirections::Zero();
   for (std::size_t i = 0; i < size_; ++i) {
-    const WideTerm term = widen(terms[i]);
+    const WideTerm term = widen(values, i);
     point_sum_m += term.point_m;
     measured_sum_m += term.measured_m;
     direction_sum += term.directions;
@@ -120,7 +144,7 @@ Status Paper6CostBase::precompute(const Term* terms) {
   cross_nominal_m2_.setZero();
   for (Mat3& cross : cross_per_length_m_) cross.setZero();
   for (std::size_t i = 0; i < size_; ++i) {
-    const WideTerm term = widen(terms[i]);
+    const WideTerm term = widen(values, i);
     const Vec3 point_m = term.point_m - point_mean_m_;
     const Vec3 measured_m = term.measured_m - measured_mean_m_;
     const TailDirections directions = term.directions - tail_direction_mean;
@@ -140,7 +164,7 @@ Status Paper6CostBase::precompute(const Term* terms) {
 Status Paper6CostBase::finalize() {
   ready_ = false;
   if (size_ < 3) return Status::too_few_samples;
-  const Status status = terms_ != nullptr ? precompute(terms_) : precompute(compact_terms_);
+  const Status status = values_ != nullptr ? precompute(values_) : precompute(compact_values_);
   ready_ = status == Status::ok;
   return status;
 }
@@ -159,18 +183,73 @@ Status Paper6CostBase::build(const RobotModel& nominal, Span<const Sample> sampl
   return finalize();
 }
 
-template <typename Term>
-double Paper6CostBase::sum_abs_residuals(const Term* terms, const Mat3& rotation, const Vec3& shift_m,
+namespace {
+
+// Two samples at a time, in GCC/Clang vector types: element-wise IEEE operations (the same
+// bits as scalar code; lowered to scalar code where the target has no double SIMD), read at
+// fixed offsets from one pointer. Left to the auto-vectoriser, the loop kept 21 pointers in
+// spilled registers.
+using Pair = double __attribute__((vector_size(2 * sizeof(double))));
+using FloatPair = float __attribute__((vector_size(2 * sizeof(float))));
+
+/// Value of two consecutive samples, widened to double (exact).
+Pair load_pair(const double* value) {
+  Pair pair;
+  std::memcpy(&pair, value, sizeof pair);
+  return pair;
+}
+Pair load_pair(const float* value) {
+  FloatPair pair;
+  std::memcpy(&pair, value, sizeof pair);
+  return __builtin_convertvector(pair, Pair);
+}
+
+/// Both lanes set to x.
+Pair broadcast(double x) { return Pair{x, x}; }
+
+}  // namespace
+
+template <typename Scalar>
+double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m,
                                          const double* tail_m) const {
-  // The hot loop: read the stored fields in place (cast<double> is free for double terms).
-  const Eigen::Map<const TailLengths> tail(tail_m);
+  // The hot loop, two samples at a time (a block's unused tail is zero-initialised storage,
+  // computed and ignored), the norms summed in sample order. The operation order is Eigen's (pairwise sums in products and norms), which
+  // the golden digest pins.
+  static_assert(kPaper6BlockSamples % 2 == 0, "whole pairs per block");
+  constexpr std::size_t kPoint = kPointValue * kPaper6BlockSamples;
+  constexpr std::size_t kError = kErrorValue * kPaper6BlockSamples;
+  constexpr std::size_t kDirection = kDirectionValue * kPaper6BlockSamples;
+  constexpr std::size_t kRow = kPaper6BlockSamples;         // next row of a value triple
+  constexpr std::size_t kColumn = 3 * kPaper6BlockSamples;  // next direction column
+  const Pair t0 = broadcast(tail_m[0]), t1 = broadcast(tail_m[1]), t2 = broadcast(tail_m[2]),
+             t3 = broadcast(tail_m[3]), t4 = broadcast(tail_m[4]);
+  const Pair e00 = broadcast(rotation(0, 0)), e01 = broadcast(rotation(0, 1)), e02 = broadcast(rotation(0, 2));
+  const Pair e10 = broadcast(rotation(1, 0)), e11 = broadcast(rotation(1, 1)), e12 = broadcast(rotation(1, 2));
+  const Pair e20 = broadcast(rotation(2, 0)), e21 = broadcast(rotation(2, 1)), e22 = broadcast(rotation(2, 2));
+  const Pair sx = broadcast(shift_m(0)), sy = broadcast(shift_m(1)), sz = broadcast(shift_m(2));
   double sum_m = 0.0;
-  for (std::size_t i = 0; i < size_; ++i) {
-    const Term& term = terms[i];
-    const auto point_m = term.point_m.template cast<double>();
-    const Vec3 measured_m = point_m + term.error_m.template cast<double>();
-    const Vec3 predicted_m = point_m + term.directions.template cast<double>() * tail;
-    sum_m += (rotation * predicted_m - measured_m - shift_m).norm();
+  for (std::size_t start = 0; start < size_; start += kPaper6BlockSamples) {
+    const Scalar* const block = values + value_index(0, start);
+    const std::size_t count = size_ - start < kPaper6BlockSamples ? size_ - start : kPaper6BlockSamples;
+    for (std::size_t j = 0; j < count; j += 2) {
+      const Scalar* const pair = block + j;
+      // D t of row r: (D0 t0 + D1 t1) + (D2 t2 + (D3 t3 + D4 t4)).
+      const auto moved = [pair, &t0, &t1, &t2, &t3, &t4](std::size_t r) {
+        const Scalar* const d = pair + kDirection + r * kRow;
+        return (load_pair(d) * t0 + load_pair(d + kColumn) * t1) +
+               (load_pair(d + 2 * kColumn) * t2 + (load_pair(d + 3 * kColumn) * t3 + load_pair(d + 4 * kColumn) * t4));
+      };
+      const Pair p0 = load_pair(pair + kPoint), p1 = load_pair(pair + kPoint + kRow),
+                 p2 = load_pair(pair + kPoint + 2 * kRow);
+      const Pair q0 = p0 + moved(0), q1 = p1 + moved(1), q2 = p2 + moved(2);
+      // r = E q - (p + e) - s, E q per row as e_r0 q0 + (e_r1 q1 + e_r2 q2).
+      const Pair r0 = ((e00 * q0 + (e01 * q1 + e02 * q2)) - (p0 + load_pair(pair + kError))) - sx;
+      const Pair r1 = ((e10 * q0 + (e11 * q1 + e12 * q2)) - (p1 + load_pair(pair + kError + kRow))) - sy;
+      const Pair r2 = ((e20 * q0 + (e21 * q1 + e22 * q2)) - (p2 + load_pair(pair + kError + 2 * kRow))) - sz;
+      const Pair squared = r0 * r0 + (r1 * r1 + r2 * r2);
+      sum_m += std::sqrt(squared[0]);
+      if (j + 1 < count) sum_m += std::sqrt(squared[1]);
+    }
   }
   return sum_m;
 }
@@ -180,14 +259,20 @@ double Paper6CostBase::mean_abs_error(const double* lengths_m, RigidTransform* b
   const Paper6Lengths offsets_m = Eigen::Map<const Paper6Lengths>(lengths_m) - nominal_lengths_m_;
   const TailLengths tail_m = offsets_m.tail<kTailCount>();
   // Kabsch in the reference frame on centred points: H(L) = sum p_c(L) m_c^T is affine in L.
-  Mat3 cross_m2 = cross_nominal_m2_;
-  for (int k = 0; k < kTailCount; ++k) cross_m2 += tail_m(k) * cross_per_length_m_[k];
+  // Entry by entry, each summed in registers in the order k = 0..4 (the same bits as five
+  // matrix updates, without storing and reloading the matrix after each).
+  Mat3 cross_m2;
+  for (int e = 0; e < 9; ++e) {
+    double entry_m2 = cross_nominal_m2_.data()[e];
+    for (int k = 0; k < kTailCount; ++k) entry_m2 += tail_m(k) * cross_per_length_m_[k].data()[e];
+    cross_m2.data()[e] = entry_m2;
+  }
   const Mat3 rotation = rotation_from_cross_covariance_qcp(cross_m2);
   // r_i = E (p_i(L) - mean p(L)) - (m_i - mean m): the fitted translation cancels; d1 only
   // shifts every p_i(L) alike and drops out.
   const Vec3 shift_m = rotation * (point_mean_m_ + direction_mean_.rightCols<kTailCount>() * tail_m) - measured_mean_m_;
-  const double sum_m = terms_ != nullptr ? sum_abs_residuals(terms_, rotation, shift_m, tail_m.data())
-                                         : sum_abs_residuals(compact_terms_, rotation, shift_m, tail_m.data());
+  const double sum_m = values_ != nullptr ? sum_abs_residuals(values_, rotation, shift_m, tail_m.data())
+                                          : sum_abs_residuals(compact_values_, rotation, shift_m, tail_m.data());
   if (base_to_tracker != nullptr) {
     // In the reference frame m ~ E p + tau; in the tracker frame R = R_ref E, t = R_ref tau + t_ref.
     const Vec3 tau_m = (point_origin_m_ + measured_mean_m_) -

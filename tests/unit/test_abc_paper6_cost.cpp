@@ -178,8 +178,8 @@ TEST_F(Paper6CostTest, ExactLayoutIsExactForAnyReference) {
 
 TEST(Paper6Cost, FirmwareLayoutFitsIn64KiB) {
   // 512 poses, the paper's ABC (150 x 6) and its 300-cycle trace in static RAM.
-  EXPECT_EQ(sizeof(Paper6Term), 168u);
-  EXPECT_EQ(sizeof(Paper6CompactTerm), 84u);
+  EXPECT_EQ(kPaper6ValuesPerSample * sizeof(double), 168u);
+  EXPECT_EQ(kPaper6ValuesPerSample * sizeof(float), 84u);
   const std::size_t total = sizeof(Paper6Cost<512, float>) + sizeof(AbcSolver<150, kPaper6Dimension>) + sizeof(Trace<300>);
   std::printf("firmware static RAM: cost %zu + ABC %zu + trace %zu = %zu bytes\n", sizeof(Paper6Cost<512, float>),
               sizeof(AbcSolver<150, kPaper6Dimension>), sizeof(Trace<300>), total);

@@ -53,24 +53,23 @@ struct Paper6Box {
 /// Errors: non_finite_input (NaN/Inf in the lengths), invalid_argument (half width not finite and > 0).
 Status paper6_box(const RobotModel& nominal, double half_width_m, Paper6Box* box);
 
-/// What is kept per sample, in a storage precision: 21 values (docs/solvers-abc-gsa.md, memory).
-template <typename Scalar>
-struct Paper6TermT {
-  using Vector = Eigen::Matrix<Scalar, 3, 1>;                                        ///< [m]
-  using Directions = Eigen::Matrix<Scalar, 3, static_cast<int>(kPaper6Dimension) - 1>;  ///< [m/m]
-  /// Predicted tool point at the expansion point, minus the first sample's [m].
-  Vector point_m = Vector::Zero();
-  /// Measured point mapped into the reference base frame, minus the predicted point: the
-  /// nominal residual, small (sub-mm) when the reference is the nominal fit [m].
-  Vector error_m = Vector::Zero();
-  /// Jacobian columns of a2..d6 in the base frame; d1's column is the constant base z axis,
-  /// which the refitted translation absorbs (d1 does not change the cost), so it is not stored [m/m].
-  Directions directions = Directions::Zero();
-};
-/// The exact layout: 168 bytes per sample; agrees with evaluate_cost to ~1e-12.
-using Paper6Term = Paper6TermT<double>;
-/// The compact layout for firmware: 84 bytes per sample; agrees with evaluate_cost to ~1e-7.
-using Paper6CompactTerm = Paper6TermT<float>;
+/// Values kept per sample, in a storage precision (docs/solvers-abc-gsa.md, memory):
+///  [0, 3)  predicted tool point at the expansion point, minus the first sample's [m];
+///  [3, 6)  measured point mapped into the reference base frame, minus the predicted point:
+///          the nominal residual, small (sub-mm) when the reference is the nominal fit [m];
+///  [6, 21) Jacobian columns of a2..d6 in the base frame, column-major [m/m]; d1's column is
+///          the constant base z axis, which the refitted translation absorbs (d1 does not
+///          change the cost), so it is not stored.
+/// Stored in blocks of kPaper6BlockSamples samples, value-major inside a block (the block's
+/// value 0, then its value 1, ...): the per-candidate pass reads each value as a contiguous
+/// run at a fixed offset from one pointer, which the compiler turns into SIMD across samples.
+inline constexpr std::size_t kPaper6ValuesPerSample = 21;
+/// Samples per storage block; capacities are rounded up to a whole number of blocks.
+inline constexpr std::size_t kPaper6BlockSamples = 32;
+/// Values a cost with room for `capacity` samples stores (whole blocks).
+constexpr std::size_t paper6_storage_values(std::size_t capacity) {
+  return (capacity + kPaper6BlockSamples - 1) / kPaper6BlockSamples * kPaper6BlockSamples * kPaper6ValuesPerSample;
+}
 
 /// The precomputed cost over caller-sized term storage (see Paper6Cost for the owning type).
 /// Fill it with build(), or stream samples with reset(), add()... and finalize().
@@ -114,22 +113,23 @@ class Paper6CostBase : public Objective {
   bool ready() const { return ready_; }               ///< finalize() succeeded since the last change
 
  protected:
-  Paper6CostBase(Paper6Term* terms, std::size_t capacity) : terms_(terms), capacity_(capacity) {}
-  Paper6CostBase(Paper6CompactTerm* terms, std::size_t capacity) : compact_terms_(terms), capacity_(capacity) {}
+  /// `values`: paper6_storage_values(capacity) values, exact (double) or compact (float).
+  Paper6CostBase(double* values, std::size_t capacity) : values_(values), capacity_(capacity) {}
+  Paper6CostBase(float* values, std::size_t capacity) : compact_values_(values), capacity_(capacity) {}
   ~Paper6CostBase() = default;
 
  private:
   using Directions = Eigen::Matrix<double, 3, static_cast<int>(kPaper6Dimension)>;
-  template <typename Term>
-  void store(const Vec3& predicted_m, const Vec3& measured_m, const ToolPointJacobian& jacobian, Term* term) const;
-  template <typename Term>
-  Status precompute(const Term* terms);
-  template <typename Term>
-  double sum_abs_residuals(const Term* terms, const Mat3& rotation, const Vec3& shift_m, const double* tail_m) const;
+  template <typename Scalar>
+  void store(const Vec3& predicted_m, const Vec3& measured_m, const ToolPointJacobian& jacobian, Scalar* values) const;
+  template <typename Scalar>
+  Status precompute(const Scalar* values);
+  template <typename Scalar>
+  double sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m, const double* tail_m) const;
   double mean_abs_error(const double* lengths_m, RigidTransform* base_to_tracker) const;
 
-  Paper6Term* terms_ = nullptr;                // exact layout, or
-  Paper6CompactTerm* compact_terms_ = nullptr;  // compact layout
+  double* values_ = nullptr;         // exact layout, or
+  float* compact_values_ = nullptr;  // compact layout (blocks, see kPaper6ValuesPerSample)
   std::size_t capacity_;
   std::size_t size_ = 0;
   bool ready_ = false;
@@ -151,10 +151,11 @@ class Paper6Cost final : public Paper6CostBase {
   static_assert(std::is_same<Scalar, double>::value || std::is_same<Scalar, float>::value, "double or float terms");
 
  public:
-  Paper6Cost() : Paper6CostBase(terms_, Capacity) {}
+  Paper6Cost() : Paper6CostBase(values_, Capacity) {}
 
  private:
-  Paper6TermT<Scalar> terms_[Capacity];
+  // Zero-initialised: the evaluation reads whole pairs of samples, past the last one too.
+  Scalar values_[paper6_storage_values(Capacity)] = {};
 };
 
 }  // namespace hivecal
