@@ -185,70 +185,81 @@ Status Paper6CostBase::build(const RobotModel& nominal, Span<const Sample> sampl
 
 namespace {
 
-// Two samples at a time, in GCC/Clang vector types: element-wise IEEE operations (the same
-// bits as scalar code; lowered to scalar code where the target has no double SIMD), read at
-// fixed offsets from one pointer. Left to the auto-vectoriser, the loop kept 21 pointers in
-// spilled registers.
-using Pair = double __attribute__((vector_size(2 * sizeof(double))));
-using FloatPair = float __attribute__((vector_size(2 * sizeof(float))));
+// Two samples at a time in GCC/Clang vector types where the target has double SIMD (SSE2,
+// NEON): element-wise IEEE operations, the same bits as scalar code, read at fixed offsets
+// from one pointer (left to the auto-vectoriser, the loop kept 21 pointers in spilled
+// registers). Without double SIMD (armhf VFP, Cortex-M) the pairs would only double the
+// live registers and spill, so one sample at a time, the same operations in the same order.
+#if defined(__SSE2__) || defined(__aarch64__)
+constexpr std::size_t kLanes = 2;
+using Lane = double __attribute__((vector_size(2 * sizeof(double))));
+using FloatLane = float __attribute__((vector_size(2 * sizeof(float))));
 
-/// Value of two consecutive samples, widened to double (exact).
-Pair load_pair(const double* value) {
-  Pair pair;
-  std::memcpy(&pair, value, sizeof pair);
-  return pair;
+/// Values of two consecutive samples, widened to double (exact).
+Lane load_lane(const double* value) {
+  Lane lane;
+  std::memcpy(&lane, value, sizeof lane);
+  return lane;
 }
-Pair load_pair(const float* value) {
-  FloatPair pair;
-  std::memcpy(&pair, value, sizeof pair);
-  return __builtin_convertvector(pair, Pair);
+Lane load_lane(const float* value) {
+  FloatLane lane;
+  std::memcpy(&lane, value, sizeof lane);
+  return __builtin_convertvector(lane, Lane);
 }
-
-/// Both lanes set to x.
-Pair broadcast(double x) { return Pair{x, x}; }
+/// Every lane set to x.
+Lane broadcast(double x) { return Lane{x, x}; }
+/// Lane k of a value.
+double lane_value(const Lane& v, std::size_t k) { return v[k]; }
+#else
+constexpr std::size_t kLanes = 1;
+using Lane = double;
+Lane load_lane(const double* value) { return *value; }
+Lane load_lane(const float* value) { return static_cast<double>(*value); }
+Lane broadcast(double x) { return x; }
+double lane_value(const Lane& v, std::size_t) { return v; }
+#endif
 
 }  // namespace
 
 template <typename Scalar>
 double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m,
                                          const double* tail_m) const {
-  // The hot loop, two samples at a time (a block's unused tail is zero-initialised storage,
-  // computed and ignored), the norms summed in sample order. The operation order is Eigen's (pairwise sums in products and norms), which
-  // the golden digest pins.
+  // The hot loop, kLanes samples at a time (a block's unused tail is zero-initialised
+  // storage, computed and ignored), the norms summed in sample order. The operation order is
+  // Eigen's (pairwise sums in products and norms), which the golden digest pins.
   static_assert(kPaper6BlockSamples % 2 == 0, "whole pairs per block");
   constexpr std::size_t kPoint = kPointValue * kPaper6BlockSamples;
   constexpr std::size_t kError = kErrorValue * kPaper6BlockSamples;
   constexpr std::size_t kDirection = kDirectionValue * kPaper6BlockSamples;
   constexpr std::size_t kRow = kPaper6BlockSamples;         // next row of a value triple
   constexpr std::size_t kColumn = 3 * kPaper6BlockSamples;  // next direction column
-  const Pair t0 = broadcast(tail_m[0]), t1 = broadcast(tail_m[1]), t2 = broadcast(tail_m[2]),
+  const Lane t0 = broadcast(tail_m[0]), t1 = broadcast(tail_m[1]), t2 = broadcast(tail_m[2]),
              t3 = broadcast(tail_m[3]), t4 = broadcast(tail_m[4]);
-  const Pair e00 = broadcast(rotation(0, 0)), e01 = broadcast(rotation(0, 1)), e02 = broadcast(rotation(0, 2));
-  const Pair e10 = broadcast(rotation(1, 0)), e11 = broadcast(rotation(1, 1)), e12 = broadcast(rotation(1, 2));
-  const Pair e20 = broadcast(rotation(2, 0)), e21 = broadcast(rotation(2, 1)), e22 = broadcast(rotation(2, 2));
-  const Pair sx = broadcast(shift_m(0)), sy = broadcast(shift_m(1)), sz = broadcast(shift_m(2));
+  const Lane e00 = broadcast(rotation(0, 0)), e01 = broadcast(rotation(0, 1)), e02 = broadcast(rotation(0, 2));
+  const Lane e10 = broadcast(rotation(1, 0)), e11 = broadcast(rotation(1, 1)), e12 = broadcast(rotation(1, 2));
+  const Lane e20 = broadcast(rotation(2, 0)), e21 = broadcast(rotation(2, 1)), e22 = broadcast(rotation(2, 2));
+  const Lane sx = broadcast(shift_m(0)), sy = broadcast(shift_m(1)), sz = broadcast(shift_m(2));
   double sum_m = 0.0;
   for (std::size_t start = 0; start < size_; start += kPaper6BlockSamples) {
     const Scalar* const block = values + value_index(0, start);
     const std::size_t count = size_ - start < kPaper6BlockSamples ? size_ - start : kPaper6BlockSamples;
-    for (std::size_t j = 0; j < count; j += 2) {
-      const Scalar* const pair = block + j;
+    for (std::size_t j = 0; j < count; j += kLanes) {
+      const Scalar* const lanes = block + j;
       // D t of row r: (D0 t0 + D1 t1) + (D2 t2 + (D3 t3 + D4 t4)).
-      const auto moved = [pair, &t0, &t1, &t2, &t3, &t4](std::size_t r) {
-        const Scalar* const d = pair + kDirection + r * kRow;
-        return (load_pair(d) * t0 + load_pair(d + kColumn) * t1) +
-               (load_pair(d + 2 * kColumn) * t2 + (load_pair(d + 3 * kColumn) * t3 + load_pair(d + 4 * kColumn) * t4));
+      const auto moved = [lanes, &t0, &t1, &t2, &t3, &t4](std::size_t r) {
+        const Scalar* const d = lanes + kDirection + r * kRow;
+        return (load_lane(d) * t0 + load_lane(d + kColumn) * t1) +
+               (load_lane(d + 2 * kColumn) * t2 + (load_lane(d + 3 * kColumn) * t3 + load_lane(d + 4 * kColumn) * t4));
       };
-      const Pair p0 = load_pair(pair + kPoint), p1 = load_pair(pair + kPoint + kRow),
-                 p2 = load_pair(pair + kPoint + 2 * kRow);
-      const Pair q0 = p0 + moved(0), q1 = p1 + moved(1), q2 = p2 + moved(2);
+      const Lane p0 = load_lane(lanes + kPoint), p1 = load_lane(lanes + kPoint + kRow),
+                 p2 = load_lane(lanes + kPoint + 2 * kRow);
+      const Lane q0 = p0 + moved(0), q1 = p1 + moved(1), q2 = p2 + moved(2);
       // r = E q - (p + e) - s, E q per row as e_r0 q0 + (e_r1 q1 + e_r2 q2).
-      const Pair r0 = ((e00 * q0 + (e01 * q1 + e02 * q2)) - (p0 + load_pair(pair + kError))) - sx;
-      const Pair r1 = ((e10 * q0 + (e11 * q1 + e12 * q2)) - (p1 + load_pair(pair + kError + kRow))) - sy;
-      const Pair r2 = ((e20 * q0 + (e21 * q1 + e22 * q2)) - (p2 + load_pair(pair + kError + 2 * kRow))) - sz;
-      const Pair squared = r0 * r0 + (r1 * r1 + r2 * r2);
-      sum_m += std::sqrt(squared[0]);
-      if (j + 1 < count) sum_m += std::sqrt(squared[1]);
+      const Lane r0 = ((e00 * q0 + (e01 * q1 + e02 * q2)) - (p0 + load_lane(lanes + kError))) - sx;
+      const Lane r1 = ((e10 * q0 + (e11 * q1 + e12 * q2)) - (p1 + load_lane(lanes + kError + kRow))) - sy;
+      const Lane r2 = ((e20 * q0 + (e21 * q1 + e22 * q2)) - (p2 + load_lane(lanes + kError + 2 * kRow))) - sz;
+      const Lane squared = r0 * r0 + (r1 * r1 + r2 * r2);
+      for (std::size_t k = 0; k < kLanes && j + k < count; ++k) sum_m += std::sqrt(lane_value(squared, k));
     }
   }
   return sum_m;
