@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "hivecal/math.hpp"
+#include "hivecal/symmetric_eigen.hpp"
 
 namespace hivecal {
 namespace {
@@ -23,13 +24,19 @@ constexpr double kReportedComponentFloor = 1e-3;
 double singular_from_eigen(double eigenvalue) { return std::sqrt(eigenvalue > 0.0 ? eigenvalue : 0.0); }
 
 /// Writes the singular values of the analysed block (decreasing) and its condition number.
-void fill_spectrum(const Eigen::SelfAdjointEigenSolver<NormalMatrix>& eigen, int count, double* values,
-                   int* value_count, double* condition) {
-  const FullParams& eigenvalues = eigen.eigenvalues();  // increasing
+void fill_spectrum(const FullParams& eigenvalues, int count, double* values, int* value_count, double* condition) {
   for (int k = 0; k < count; ++k) values[k] = singular_from_eigen(eigenvalues(kFullParamCount - 1 - k));
   *value_count = count;
   const double smallest = values[count - 1];
   *condition = smallest > 0.0 ? values[0] / smallest : std::numeric_limits<double>::infinity();
+}
+
+/// Decomposes ws->scaled: eigenvalues (increasing) and, if `vectors`, the eigenvectors in
+/// ws->null_basis. False if the Jacobi sweeps did not converge.
+bool decompose(IdentifiabilityWorkspace* ws, bool vectors) {
+  ws->rotated = ws->scaled;
+  return symmetric_eigen(&ws->rotated, kFullParamCount, &ws->eigenvalues, vectors ? &ws->null_basis : nullptr) ==
+         Status::ok;
 }
 
 /// sigma of the scaled Jacobian along v: sqrt(v^T S v / v^T v) over the parameters in `mask`.
@@ -210,28 +217,31 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
     FullParams scale;
     scale_normal_matrix(jtwj, mask, kInactiveEigenvalue, &workspace->scaled, &scale);
     // Later rounds only confirm that no null direction is left: eigenvalues suffice.
-    workspace->eigen.compute(workspace->scaled, first_round ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
-    if (workspace->eigen.info() != Eigen::Success) return Status::singular_system;
+    if (!decompose(workspace, first_round)) return Status::singular_system;
+    const FullParams& eigenvalues = workspace->eigenvalues;
     const int count = mask_count(mask);
-    const double sigma_max = singular_from_eigen(workspace->eigen.eigenvalues()(kFullParamCount - 1));
+    const double sigma_max = singular_from_eigen(eigenvalues(kFullParamCount - 1));
     if (first_round) {
-      fill_spectrum(workspace->eigen, count, report->singular_values_before, &report->singular_count_before,
+      fill_spectrum(eigenvalues, count, report->singular_values_before, &report->singular_count_before,
                     &report->condition_before);
     }
     int null_count = 0;
     for (int k = kFullParamCount - count; k < kFullParamCount; ++k) {
-      if (singular_from_eigen(workspace->eigen.eigenvalues()(k)) >= threshold * sigma_max) break;
+      if (singular_from_eigen(eigenvalues(k)) >= threshold * sigma_max) break;
       ++null_count;
     }
     if (null_count == 0) {
-      fill_spectrum(workspace->eigen, count, report->singular_values_after, &report->singular_count_after,
+      fill_spectrum(eigenvalues, count, report->singular_values_after, &report->singular_count_after,
                     &report->condition_after);
       report->kept_mask = mask;
       return Status::ok;
     }
-    if (!first_round) workspace->eigen.compute(workspace->scaled, Eigen::ComputeEigenvectors);
+    // Same eigenvalues (bits) with the vectors as without: only the vectors are new.
+    if (!first_round && !decompose(workspace, true)) return Status::singular_system;
+    // Null directions to the front; in increasing j each source lies at or after its target.
     const int first_null = kFullParamCount - count;
-    for (int j = 0; j < null_count; ++j) workspace->null_basis.col(j) = workspace->eigen.eigenvectors().col(first_null + j);
+    NormalMatrix& basis = workspace->null_basis;
+    for (int j = 0; j < null_count; ++j) basis.col(j) = basis.col(first_null + j);
     const ParamMask before_drop = mask;
     drop_null_directions(workspace, null_count, sigma_max, &mask, report);
     if (mask == before_drop) return Status::singular_system;

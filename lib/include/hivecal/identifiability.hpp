@@ -6,8 +6,6 @@
 
 #include <cstdint>
 
-#include <Eigen/Eigenvalues>
-
 #include "hivecal/full_model.hpp"
 #include "hivecal/status.hpp"
 
@@ -61,9 +59,10 @@ void clear_report(IdentifiabilityReport* report);
 
 /// Scratch memory of the analysis (26 kB): keep it static or in the caller's workspace.
 struct IdentifiabilityWorkspace {
-  NormalMatrix scaled;                                   ///< column-scaled normal matrix
-  NormalMatrix null_basis;                               ///< null directions, reduced as parameters drop
-  Eigen::SelfAdjointEigenSolver<NormalMatrix> eigen;     ///< decomposition of `scaled`
+  NormalMatrix scaled;      ///< column-scaled normal matrix
+  NormalMatrix rotated;     ///< copy of `scaled` diagonalised by symmetric_eigen
+  NormalMatrix null_basis;  ///< eigenvectors of `scaled`, then the null directions, reduced as parameters drop
+  FullParams eigenvalues;   ///< of `scaled`, increasing (inactive parameters first, at -1)
 };
 
 /// Analyses normal equations J^T W J (from accumulate_normal_equations) over the parameters
