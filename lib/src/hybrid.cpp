@@ -29,24 +29,29 @@ Status run_paper6_stage(const RobotModel& start, Span<const Sample> train, doubl
   return Status::ok;
 }
 
-}  // namespace
-
-Status calibrate_paper6_abc(const RobotModel& start, Span<const Sample> train, const AbcOptions& options,
-                            double half_width_m, Paper6CostBase* cost, AbcSolverBase* solver,
-                            Paper6StageResult* result, TraceBase* trace, ProgressObserver* progress) {
+/// A population stage with `solver` (ABC or GSA, each with its options type).
+template <typename Solver, typename Options>
+Status run_population_stage(const RobotModel& start, Span<const Sample> train, const Options& options,
+                            double half_width_m, Paper6CostBase* cost, Solver* solver, Paper6StageResult* result,
+                            TraceBase* trace, ProgressObserver* progress) {
   if (solver == nullptr) return Status::invalid_argument;
   return run_paper6_stage(start, train, half_width_m, cost, result, [&](const SearchBox& box, SolverResult* solved) {
     return solver->minimize(*cost, box, options, solved, trace, progress);
   });
 }
 
+}  // namespace
+
+Status calibrate_paper6_abc(const RobotModel& start, Span<const Sample> train, const AbcOptions& options,
+                            double half_width_m, Paper6CostBase* cost, AbcSolverBase* solver,
+                            Paper6StageResult* result, TraceBase* trace, ProgressObserver* progress) {
+  return run_population_stage(start, train, options, half_width_m, cost, solver, result, trace, progress);
+}
+
 Status calibrate_paper6_gsa(const RobotModel& start, Span<const Sample> train, const GsaOptions& options,
                             double half_width_m, Paper6CostBase* cost, GsaSolverBase* solver,
                             Paper6StageResult* result, TraceBase* trace, ProgressObserver* progress) {
-  if (solver == nullptr) return Status::invalid_argument;
-  return run_paper6_stage(start, train, half_width_m, cost, result, [&](const SearchBox& box, SolverResult* solved) {
-    return solver->minimize(*cost, box, options, solved, trace, progress);
-  });
+  return run_population_stage(start, train, options, half_width_m, cost, solver, result, trace, progress);
 }
 
 }  // namespace hivecal
