@@ -23,8 +23,8 @@ std::uint64_t file_bytes(const std::string& path) {
 /// One input opened for one pass: a capture (bytes -> frames) or a CSV log (rows).
 class Input {
  public:
-  bool open(const std::string& path, LogRecordReader::Kind kind, std::string* error) {
-    if (textio::detect_stream_file(path) == textio::StreamFileKind::csv_log) {
+  bool open(const std::string& path, bool is_log, LogRecordReader::Kind kind, std::string* error) {
+    if (is_log) {
       log_ = std::make_unique<LogRecordReader>(kind, path);
       return true;
     }
@@ -66,9 +66,10 @@ class Pass {
   Pass(int number, const PassProgress& progress, std::uint64_t total_bytes)
       : number_(number), progress_(progress), total_(total_bytes), tick_([this] { tick(); }),
         robot_(&robot_input_, tick_), tracker_(&tracker_input_, tick_) {}
-  bool open(const std::string& robot_path, const std::string& tracker_path, std::string* error) {
-    return robot_input_.open(robot_path, LogRecordReader::Kind::robot, error) &&
-           tracker_input_.open(tracker_path, LogRecordReader::Kind::tracker, error);
+  bool open(const std::string& robot_path, const std::string& tracker_path, const CaptureRunReport& kinds,
+            std::string* error) {
+    return robot_input_.open(robot_path, kinds.robot_is_log, LogRecordReader::Kind::robot, error) &&
+           tracker_input_.open(tracker_path, kinds.tracker_is_log, LogRecordReader::Kind::tracker, error);
   }
   RecordReader& robot() { return robot_; }
   RecordReader& tracker() { return tracker_; }
@@ -182,13 +183,14 @@ bool extract_from_files(const std::string& robot_path, const std::string& tracke
                         DatasetBase* dataset, CaptureRunReport* report, std::string* error,
                         ExtractionObserver* observer, const PassProgress& progress) {
   const std::uint64_t total_bytes = file_bytes(robot_path) + file_bytes(tracker_path);
+  // Each input's kind is read once here; both passes open it as that kind.
   report->robot_is_log = textio::detect_stream_file(robot_path) == textio::StreamFileKind::csv_log;
   report->tracker_is_log = textio::detect_stream_file(tracker_path) == textio::StreamFileKind::csv_log;
   // Large fixed-size objects: on the heap of the app, once (bounded whatever the input length).
   const auto estimator = std::make_unique<ClockEstimator<>>(clock_config);
   {
     Pass pass(1, progress, total_bytes);
-    if (!pass.open(robot_path, tracker_path, error)) return false;
+    if (!pass.open(robot_path, tracker_path, *report, error)) return false;
     report->clock_status = pass.finish(
         estimate_clock_from_streams(pass.robot(), pass.tracker(), estimator.get(), &report->clock, &report->decoding),
         error);
@@ -199,7 +201,7 @@ bool extract_from_files(const std::string& robot_path, const std::string& tracke
   const auto extractor = std::make_unique<SampleExtractor<>>(extraction_config, report->clock, dataset);
   extractor->set_observer(observer);
   Pass pass(2, progress, total_bytes);
-  if (!pass.open(robot_path, tracker_path, error)) return false;
+  if (!pass.open(robot_path, tracker_path, *report, error)) return false;
   report->extraction_status =
       pass.finish(extract_samples_from_streams(pass.robot(), pass.tracker(), extractor.get(), nullptr), error);
   report->counts = extractor->counts();

@@ -176,8 +176,8 @@ const char* full_param_name(int index) {
 
 Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
   const double angle2 = rotation_vector_rad.squaredNorm();
-  double sin_ratio = 1.0;      // sin(t) / t
-  double cos_ratio = 0.5;      // (1 - cos(t)) / t^2
+  double sin_ratio = 1.0;      // sine of t over t (evaluated with math::sincos below)
+  double cos_ratio = 0.5;      // (1 - cosine of t) / t^2 (math::sincos, not libm)
   if (angle2 < 1e-8) {         // t < 1e-4: Taylor terms beyond t^4 are below 1e-24
     sin_ratio = 1.0 - angle2 / 6.0 + angle2 * angle2 / 120.0;
     cos_ratio = 0.5 - angle2 / 24.0 + angle2 * angle2 / 720.0;

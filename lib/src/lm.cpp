@@ -206,7 +206,7 @@ Status move_to(Run* run, const Point& trial, bool* kept_changed) {
   const double threshold_before_m = run->point.loss.huber_threshold_m;
   Status status = update_huber_threshold(run->options, run->samples, &run->point);
   if (status == Status::ok && run->point.loss.huber_threshold_m != threshold_before_m) {
-    status = accumulate(*run, run->point, run->current);  // IRLS weights for the new scale
+    status = accumulate(*run, run->point, run->current);  // IRLS weights for the updated scale
   }
   if (status != Status::ok || run->reanalysed) return status;
   const ParamMask before = run->kept;

@@ -200,14 +200,14 @@ void sincos(double x, double* sin_out, double* cos_out) {
   }
 }
 
-double sin(double x) {
+double sin(double x) {  // hivecal::math::sin, the library's own (libm differs between CPUs)
   double s = 0.0;
   double c = 0.0;
   sincos(x, &s, &c);
   return s;
 }
 
-double cos(double x) {
+double cos(double x) {  // hivecal::math::cos, the library's own (libm differs between CPUs)
   double s = 0.0;
   double c = 0.0;
   sincos(x, &s, &c);
@@ -277,7 +277,7 @@ double log(double x) {
   return dk * kLn2Hi - ((half_f_squared - (s * (half_f_squared + r) + dk * kLn2Lo)) - f);
 }
 
-double atan2(double y, double x) {
+double atan2(double y, double x) {  // hivecal::math::atan2, the library's own, not libm
   constexpr double kPiLo = 1.2246467991473531772e-16;
   if (x != x || y != y) return x + y;
   const bool y_negative = (bits_of(y) >> 63) != 0;
@@ -315,7 +315,7 @@ double acos_clamped(double x) {
   if (x >= 1.0) return 0.0;
   if (x <= -1.0) return kPi;
   // sqrt is IEEE correctly rounded on every target (the one libm function allowed); atan2 is ours.
-  return atan2(__builtin_sqrt((1.0 - x) * (1.0 + x)), x);
+  return atan2(__builtin_sqrt((1.0 - x) * (1.0 + x)), x);  // math::atan2 (ours) + IEEE sqrt
 }
 
 }  // namespace hivecal::math

@@ -31,8 +31,8 @@ constexpr int tool_param_index(int axis) { return kDhParamCount + axis; }
 struct DhJoint {
   double theta_offset_rad = 0.0;  ///< added to the joint reading [rad]
   double d_m = 0.0;               ///< offset along the previous z [m]
-  double a_m = 0.0;               ///< length along the new x [m]
-  double alpha_rad = 0.0;         ///< twist about the new x [rad]
+  double a_m = 0.0;               ///< length along x of the next frame [m]
+  double alpha_rad = 0.0;         ///< twist about x of the next frame [rad]
 };
 
 /// The geometry the calibration estimates: six DH joints and the tool point.
@@ -84,8 +84,8 @@ Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, Tool
 /// sin and cos of each joint's twist: they do not depend on the pose, so loops over many
 /// samples of one model compute them once (half the trig of FK). Same bits either way.
 struct TwistTrig {
-  double sin_alpha[kJointCount] = {};  ///< sin(alpha_j) [-]
-  double cos_alpha[kJointCount] = {};  ///< cos(alpha_j) [-]
+  double sin_alpha[kJointCount] = {};  ///< sine of alpha_j, from math::sincos [-]
+  double cos_alpha[kJointCount] = {};  ///< cosine of alpha_j, from math::sincos [-]
 };
 /// The twist trig of `model`.
 TwistTrig twist_trig(const RobotModel& model);

@@ -17,9 +17,9 @@ inline constexpr double kHalfPi = 1.57079632679489655800;
 inline constexpr double kTrigMaxArgument_rad = 1647099.3291652855;  // 2^20 * pi/2
 
 /// Sine of x [rad]; error <= 1 ulp for |x| <= kTrigMaxArgument_rad, NaN beyond or for NaN/Inf.
-double sin(double x);
+double sin(double x);  // the library's own, not libm's
 /// Cosine of x [rad]; error <= 1 ulp for |x| <= kTrigMaxArgument_rad, NaN beyond or for NaN/Inf.
-double cos(double x);
+double cos(double x);  // the library's own, not libm's
 /// Sine and cosine of x [rad] with one argument reduction; same accuracy as sin/cos.
 void sincos(double x, double* sin_out, double* cos_out);
 /// e^x; error < 1 ulp; +Inf above ~709.78, 0 below ~-745.13.
@@ -27,7 +27,7 @@ double exp(double x);
 /// Natural logarithm; error < 1 ulp; -Inf at 0, NaN for x < 0.
 double log(double x);
 /// Arc tangent of y/x in (-pi, pi] [rad], quadrant from the signs; error < 2 ulp.
-double atan2(double y, double x);
+double atan2(double y, double x);  // the library's own, not libm's
 /// Arc cosine [rad] of x clamped to [-1, 1].
 double acos_clamped(double x);
 /// True when x is neither NaN nor Inf (bit test: immune to -ffast-math).
