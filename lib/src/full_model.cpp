@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "hivecal/math.hpp"
+#include "lanes.hpp"
 
 namespace hivecal {
 namespace {
@@ -76,6 +77,25 @@ Vec3 add_rows(const RobotModel& model, const TwistTrig& trig, const RigidTransfo
   return base_to_tracker.rotation.transpose() * (base_to_tracker.apply(point_m) - sample.point_m);
 }
 
+/// column[k] += sum_j rows[j][k] * weight[j] for k in [0, count): each sum starts at 0 and
+/// takes the rows in order, kLanes entries at a time (the same bits at any lane count).
+template <std::size_t kRows>
+void add_weighted_rows(const double* const (&rows)[kRows], const double (&weight)[kRows], int count,
+                       double* column) {
+  using lanes::Lane;
+  int k = 0;
+  for (; k + lanes::kLanes <= count; k += lanes::kLanes) {
+    Lane sum = lanes::broadcast(0.0);
+    for (std::size_t j = 0; j < kRows; ++j) sum += lanes::load(rows[j] + k) * lanes::broadcast(weight[j]);
+    lanes::store(column + k, lanes::load(column + k) + sum);
+  }
+  for (; k < count; ++k) {
+    double sum = 0.0;
+    for (std::size_t j = 0; j < kRows; ++j) sum += rows[j][k] * weight[j];
+    column[k] += sum;
+  }
+}
+
 /// eq += sum over the batch of w J^T J and w J^T r, in compact coordinates (entry (k, l) for
 /// columns index[k], index[l]; upper triangle), one contiguous column at a time. Unused rows
 /// are zero, which adds exact zeros. The base-translation columns (the last ones of the list,
@@ -88,6 +108,8 @@ void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
     batch->weight[j] = 0.0;
     batch->residual_m[j] = 0.0;
   }
+  const double* all_rows[kBatchRows];
+  for (int j = 0; j < kBatchRows; ++j) all_rows[j] = batch->rows[j];
   double* compact = eq->jtwj.data();
   for (int l = 0; l < count; ++l) {
     double w[kBatchRows];
@@ -99,25 +121,17 @@ void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
     eq->jtwr(l) += gradient;
     double* column = compact + l * kFullParamCount;
     const int axis = columns.index[l] - base_translation_param_index(0);
-    if (axis >= 0) {
-      const double* rows[kBatchSamples];
-      double weights[kBatchSamples];
-      for (int s = 0; s < kBatchSamples; ++s) {
-        rows[s] = batch->rows[3 * s + axis];
-        weights[s] = w[3 * s + axis];
-      }
-      for (int k = 0; k <= l; ++k) {
-        double sum = 0.0;
-        for (int s = 0; s < kBatchSamples; ++s) sum += rows[s][k] * weights[s];
-        column[k] += sum;
-      }
+    if (axis < 0) {
+      add_weighted_rows(all_rows, w, l + 1, column);
       continue;
     }
-    for (int k = 0; k <= l; ++k) {
-      double sum = 0.0;
-      for (int j = 0; j < kBatchRows; ++j) sum += batch->rows[j][k] * w[j];
-      column[k] += sum;
+    const double* axis_rows[kBatchSamples];
+    double axis_weights[kBatchSamples];
+    for (int s = 0; s < kBatchSamples; ++s) {
+      axis_rows[s] = batch->rows[3 * s + axis];
+      axis_weights[s] = w[3 * s + axis];
     }
+    add_weighted_rows(axis_rows, axis_weights, l + 1, column);
   }
   batch->samples = 0;
 }

@@ -32,7 +32,7 @@ void fill_spectrum(const FullParams& eigenvalues, int count, double* values, int
 }
 
 /// Decomposes ws->scaled: eigenvalues (increasing) and, if `vectors`, the eigenvectors in
-/// ws->null_basis. False if the Jacobi sweeps did not converge.
+/// ws->null_basis. False if the QL iterations did not converge.
 bool decompose(IdentifiabilityWorkspace* ws, bool vectors) {
   ws->rotated = ws->scaled;
   return symmetric_eigen(&ws->rotated, kFullParamCount, &ws->eigenvalues, vectors ? &ws->null_basis : nullptr) ==

@@ -1,11 +1,11 @@
 #include "hivecal/paper6_cost.hpp"
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 #include "hivecal/cost.hpp"
 #include "hivecal/rigid_fit.hpp"
+#include "lanes.hpp"
 
 namespace hivecal {
 namespace {
@@ -183,51 +183,20 @@ Status Paper6CostBase::build(const RobotModel& nominal, Span<const Sample> sampl
   return finalize();
 }
 
-namespace {
-
-// Two samples at a time in GCC/Clang vector types where the target has double SIMD (SSE2,
-// NEON): element-wise IEEE operations, the same bits as scalar code, read at fixed offsets
-// from one pointer (left to the auto-vectoriser, the loop kept 21 pointers in spilled
-// registers). Without double SIMD (armhf VFP, Cortex-M) the pairs would only double the
-// live registers and spill, so one sample at a time, the same operations in the same order.
-#if defined(__SSE2__) || defined(__aarch64__)
-constexpr std::size_t kLanes = 2;
-using Lane = double __attribute__((vector_size(2 * sizeof(double))));
-using FloatLane = float __attribute__((vector_size(2 * sizeof(float))));
-
-/// Values of two consecutive samples, widened to double (exact).
-Lane load_lane(const double* value) {
-  Lane lane;
-  std::memcpy(&lane, value, sizeof lane);
-  return lane;
-}
-Lane load_lane(const float* value) {
-  FloatLane lane;
-  std::memcpy(&lane, value, sizeof lane);
-  return __builtin_convertvector(lane, Lane);
-}
-/// Every lane set to x.
-Lane broadcast(double x) { return Lane{x, x}; }
-/// Lane k of a value.
-double lane_value(const Lane& v, std::size_t k) { return v[k]; }
-#else
-constexpr std::size_t kLanes = 1;
-using Lane = double;
-Lane load_lane(const double* value) { return *value; }
-Lane load_lane(const float* value) { return static_cast<double>(*value); }
-Lane broadcast(double x) { return x; }
-double lane_value(const Lane& v, std::size_t) { return v; }
-#endif
-
-}  // namespace
 
 template <typename Scalar>
 double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m,
                                          const double* tail_m) const {
-  // The hot loop, kLanes samples at a time (a block's unused tail is zero-initialised
+  // The hot loop, kLanes samples at a time (two where the target has double SIMD: read at
+  // fixed offsets from one pointer, where the auto-vectoriser kept 21 pointers in spilled
+  // registers; one without, where pairs would only double the live registers and spill) (a block's unused tail is zero-initialised
   // storage, computed and ignored), the norms summed in sample order. The operation order is
   // Eigen's (pairwise sums in products and norms), which the golden digest pins.
   static_assert(kPaper6BlockSamples % 2 == 0, "whole pairs per block");
+  using lanes::Lane;
+  using lanes::broadcast;
+  using lanes::lane_value;
+  constexpr auto kLanes = static_cast<std::size_t>(lanes::kLanes);
   constexpr std::size_t kPoint = kPointValue * kPaper6BlockSamples;
   constexpr std::size_t kError = kErrorValue * kPaper6BlockSamples;
   constexpr std::size_t kDirection = kDirectionValue * kPaper6BlockSamples;
@@ -244,22 +213,22 @@ double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotat
     const Scalar* const block = values + value_index(0, start);
     const std::size_t count = size_ - start < kPaper6BlockSamples ? size_ - start : kPaper6BlockSamples;
     for (std::size_t j = 0; j < count; j += kLanes) {
-      const Scalar* const lanes = block + j;
+      const Scalar* const first = block + j;
       // D t of row r: (D0 t0 + D1 t1) + (D2 t2 + (D3 t3 + D4 t4)).
-      const auto moved = [lanes, &t0, &t1, &t2, &t3, &t4](std::size_t r) {
-        const Scalar* const d = lanes + kDirection + r * kRow;
-        return (load_lane(d) * t0 + load_lane(d + kColumn) * t1) +
-               (load_lane(d + 2 * kColumn) * t2 + (load_lane(d + 3 * kColumn) * t3 + load_lane(d + 4 * kColumn) * t4));
+      const auto moved = [first, &t0, &t1, &t2, &t3, &t4](std::size_t r) {
+        const Scalar* const d = first + kDirection + r * kRow;
+        return (lanes::load(d) * t0 + lanes::load(d + kColumn) * t1) +
+               (lanes::load(d + 2 * kColumn) * t2 + (lanes::load(d + 3 * kColumn) * t3 + lanes::load(d + 4 * kColumn) * t4));
       };
-      const Lane p0 = load_lane(lanes + kPoint), p1 = load_lane(lanes + kPoint + kRow),
-                 p2 = load_lane(lanes + kPoint + 2 * kRow);
+      const Lane p0 = lanes::load(first + kPoint), p1 = lanes::load(first + kPoint + kRow),
+                 p2 = lanes::load(first + kPoint + 2 * kRow);
       const Lane q0 = p0 + moved(0), q1 = p1 + moved(1), q2 = p2 + moved(2);
       // r = E q - (p + e) - s, E q per row as e_r0 q0 + (e_r1 q1 + e_r2 q2).
-      const Lane r0 = ((e00 * q0 + (e01 * q1 + e02 * q2)) - (p0 + load_lane(lanes + kError))) - sx;
-      const Lane r1 = ((e10 * q0 + (e11 * q1 + e12 * q2)) - (p1 + load_lane(lanes + kError + kRow))) - sy;
-      const Lane r2 = ((e20 * q0 + (e21 * q1 + e22 * q2)) - (p2 + load_lane(lanes + kError + 2 * kRow))) - sz;
+      const Lane r0 = ((e00 * q0 + (e01 * q1 + e02 * q2)) - (p0 + lanes::load(first + kError))) - sx;
+      const Lane r1 = ((e10 * q0 + (e11 * q1 + e12 * q2)) - (p1 + lanes::load(first + kError + kRow))) - sy;
+      const Lane r2 = ((e20 * q0 + (e21 * q1 + e22 * q2)) - (p2 + lanes::load(first + kError + 2 * kRow))) - sz;
       const Lane squared = r0 * r0 + (r1 * r1 + r2 * r2);
-      for (std::size_t k = 0; k < kLanes && j + k < count; ++k) sum_m += std::sqrt(lane_value(squared, k));
+      for (std::size_t k = 0; k < kLanes && j + k < count; ++k) sum_m += std::sqrt(lane_value(squared, static_cast<int>(k)));
     }
   }
   return sum_m;

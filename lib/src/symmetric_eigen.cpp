@@ -9,18 +9,6 @@ namespace hivecal {
 namespace {
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
-// An off-diagonal entry is negligible below epsilon * sqrt(|a_pp| |a_qq|) (the relative
-// criterion of Demmel and Veselic: a pair of small diagonal entries is still rotated while
-// its coupling matters to them) ...
-constexpr double kRelativeTolerance = kEpsilon;
-// ... or below epsilon * the largest entry of the input: the accuracy of a tridiagonal QR
-// (Eigen's solver), so the eigenvalues are as good as before. Without this floor the sweeps
-// go on resolving exact null blocks, whose entries are rounding noise: on the UR's normal
-// matrix with 8 null directions 13-15 sweeps instead of 9-11, for the same decisions.
-constexpr double kAbsoluteTolerance = kEpsilon;
-// Beyond this |theta| = |a_qq - a_pp| / |2 a_pq|, theta^2 + 1 would overflow; tan(phi) is then
-// 1 / (2 theta) to double precision.
-constexpr double kLargeTheta = 1e150;
 
 double largest_magnitude(const NormalMatrix& a, int size) {
   double largest = 0.0;
@@ -39,52 +27,187 @@ bool block_finite(const NormalMatrix& a, int size) {
   return true;
 }
 
-bool negligible(double off_diagonal, double diagonal_p, double diagonal_q, double floor) {
-  const double magnitude = std::fabs(off_diagonal);
-  return magnitude <= floor ||
-         magnitude <= kRelativeTolerance * std::sqrt(std::fabs(diagonal_p)) * std::sqrt(std::fabs(diagonal_q));
+/// sqrt(a^2 + b^2) without overflow or destructive underflow.
+double hypotenuse(double a, double b) {
+  const double abs_a = std::fabs(a);
+  const double abs_b = std::fabs(b);
+  if (abs_a > abs_b) {
+    const double ratio = abs_b / abs_a;
+    return abs_a * std::sqrt(1.0 + ratio * ratio);
+  }
+  if (abs_b == 0.0) return 0.0;
+  const double ratio = abs_a / abs_b;
+  return abs_b * std::sqrt(1.0 + ratio * ratio);
 }
 
-/// Applies the rotation (c, s) with tau = s / (1 + c) to columns p and q of the first `size`
-/// rows of *m: the update of Numerical Recipes' jacobi, written as a correction of each entry
-/// so that a small angle changes it by a small rounding.
-void rotate_columns(NormalMatrix* m, int size, int p, int q, double s, double tau) {
-  NormalMatrix& v = *m;
-  for (int k = 0; k < size; ++k) {
-    const double g = v(k, p);
-    const double h = v(k, q);
-    v(k, p) = g - s * (h + g * tau);
-    v(k, q) = h + s * (g - h * tau);
+/// Indices of the block, split into those coupled to another by a non-zero off-diagonal
+/// entry and those that are not (already eigenpairs).
+struct Coupling {
+  int coupled[kFullParamCount];
+  int coupled_count = 0;
+};
+
+Coupling find_coupling(const NormalMatrix& a, int size) {
+  Coupling coupling;
+  for (int i = 0; i < size; ++i) {
+    bool coupled = false;
+    for (int j = 0; j < size && !coupled; ++j) coupled = j != i && a(i, j) != 0.0;
+    if (coupled) coupling.coupled[coupling.coupled_count++] = i;
+  }
+  return coupling;
+}
+
+/// Moves the coupled rows and columns to the leading block. In place: entry (i, j) comes
+/// from (coupled[i], coupled[j]), never before (i, j) in column-major order, so walking
+/// forward never overwrites an entry still to be read.
+void pack(const Coupling& coupling, NormalMatrix* a) {
+  const int m = coupling.coupled_count;
+  for (int j = 0; j < m; ++j) {
+    for (int i = 0; i < m; ++i) (*a)(i, j) = (*a)(coupling.coupled[i], coupling.coupled[j]);
   }
 }
 
-/// One Jacobi rotation zeroing a(p, q) (not negligible). Rows p and q are kept equal to
-/// columns p and q, so the matrix stays exactly symmetric.
-void rotate(NormalMatrix* matrix, int size, int p, int q, NormalMatrix* eigenvectors) {
+/// The tridiagonal form Q^T A Q = T of the leading m x m block: diagonal d, subdiagonal e
+/// (e[k] couples k and k + 1; e[m-1] = 0). Reflection k acts on indices k+1..m-1; its vector
+/// is kept in column k below the subdiagonal of *a (from row k+1), its scale in h[k] (0: none).
+void tridiagonalize(NormalMatrix* matrix, int m, double* d, double* e, double* h) {
   NormalMatrix& a = *matrix;
-  const double apq = a(p, q);
-  const double theta = (a(q, q) - a(p, p)) / (2.0 * apq);
-  const double magnitude = std::fabs(theta);
-  // tan of the rotation angle: the smaller root of t^2 + 2 theta t - 1 = 0 (|angle| <= pi/4).
-  double t = magnitude > kLargeTheta ? 0.5 / magnitude : 1.0 / (magnitude + std::sqrt(magnitude * magnitude + 1.0));
-  if (theta < 0.0) t = -t;
-  const double c = 1.0 / std::sqrt(t * t + 1.0);
-  const double s = t * c;
-  const double tau = s / (1.0 + c);
-  const double shift = t * apq;
-  const double app = a(p, p) - shift;
-  const double aqq = a(q, q) + shift;
-  rotate_columns(matrix, size, p, q, s, tau);
-  for (int k = 0; k < size; ++k) {
-    a(p, k) = a(k, p);
-    a(q, k) = a(k, q);
+  for (int k = 0; k + 2 < m; ++k) {
+    double tail2 = 0.0;  // |x|^2 without its first entry, x = a(k+1.., k)
+    for (int i = k + 2; i < m; ++i) tail2 += a(i, k) * a(i, k);
+    const double head = a(k + 1, k);
+    if (tail2 == 0.0) {  // already tridiagonal in this column
+      e[k] = head;
+      h[k] = 0.0;
+      continue;
+    }
+    const double norm = std::sqrt(head * head + tail2);
+    const double alpha = head >= 0.0 ? -norm : norm;  // H x = alpha e_1; v_1 = x_1 - alpha does not cancel
+    a(k + 1, k) = head - alpha;                       // v, with v^T v = 2 h
+    const double scale = norm * (norm + std::fabs(head));
+    e[k] = alpha;
+    h[k] = scale;
+    // B <- H B H with H = I - v v^T / h: p = B v / h, q = p - (v^T p / 2h) v, B -= v q^T + q v^T.
+    double p[kFullParamCount];
+    double vp = 0.0;
+    for (int i = k + 1; i < m; ++i) {
+      double sum = 0.0;
+      for (int j = k + 1; j < m; ++j) sum += a(i, j) * a(j, k);
+      p[i] = sum / scale;
+      vp += a(i, k) * p[i];
+    }
+    const double half = vp / (2.0 * scale);
+    for (int i = k + 1; i < m; ++i) p[i] -= half * a(i, k);
+    for (int j = k + 1; j < m; ++j) {
+      for (int i = k + 1; i < m; ++i) a(i, j) -= a(i, k) * p[j] + p[i] * a(j, k);
+    }
   }
-  // The 2x2 block is set from its closed form: the rotated diagonal and an exact zero.
-  a(p, p) = app;
-  a(q, q) = aqq;
-  a(p, q) = 0.0;
-  a(q, p) = 0.0;
-  if (eigenvectors != nullptr) rotate_columns(eigenvectors, size, p, q, s, tau);
+  for (int k = 0; k < m; ++k) d[k] = a(k, k);
+  if (m >= 2) {
+    e[m - 2] = a(m - 1, m - 2);
+    h[m - 2] = 0.0;
+  }
+  e[m - 1] = 0.0;
+}
+
+/// Q = H_0 H_1 ... H_{m-3} into the leading m x m block of *q, which holds the identity.
+/// Backwards, H_k Q: the product so far is the identity on indices up to k + 1.
+void accumulate_reflections(const NormalMatrix& a, int m, const double* h, NormalMatrix* q) {
+  for (int k = m - 3; k >= 0; --k) {
+    if (h[k] == 0.0) continue;
+    for (int j = k + 1; j < m; ++j) {
+      double dot = 0.0;
+      for (int i = k + 1; i < m; ++i) dot += a(i, k) * (*q)(i, j);
+      const double factor = dot / h[k];
+      for (int i = k + 1; i < m; ++i) (*q)(i, j) -= factor * a(i, k);
+    }
+  }
+}
+
+/// Implicit QL with Wilkinson shifts on (d, e) (Numerical Recipes' tqli, 0-based), the plane
+/// rotations also applied to the columns of *z when not null. A coupling e[i] counts as zero
+/// below epsilon * (|d[i]| + |d[i+1]|) or below `floor`. False if it did not converge.
+bool diagonalize_tridiagonal(double* d, double* e, int m, double floor, NormalMatrix* z, int* iterations) {
+  for (int l = 0; l < m; ++l) {
+    int tries = 0;
+    for (;;) {
+      int n = l;  // first negligible coupling at or after l
+      for (; n + 1 < m; ++n) {
+        const double magnitude = std::fabs(e[n]);
+        if (magnitude <= floor || magnitude <= kEpsilon * (std::fabs(d[n]) + std::fabs(d[n + 1]))) break;
+      }
+      if (n == l) break;
+      if (++tries > kSymmetricEigenMaxIterations) return false;
+      ++*iterations;
+      double g = (d[l + 1] - d[l]) / (2.0 * e[l]);
+      double r = hypotenuse(g, 1.0);
+      g = d[n] - d[l] + e[l] / (g + (g >= 0.0 ? r : -r));
+      double s = 1.0;
+      double c = 1.0;
+      double p = 0.0;
+      bool deflated = false;  // a rotation met an exact zero: restart on the split problem
+      for (int i = n - 1; i >= l; --i) {
+        const double f = s * e[i];
+        const double b = c * e[i];
+        r = hypotenuse(f, g);
+        e[i + 1] = r;
+        if (r == 0.0) {
+          d[i + 1] -= p;
+          e[n] = 0.0;
+          deflated = true;
+          break;
+        }
+        s = f / r;
+        c = g / r;
+        g = d[i + 1] - p;
+        r = (d[i] - g) * s + 2.0 * c * b;
+        p = s * r;
+        d[i + 1] = g + p;
+        g = c * r - b;
+        if (z != nullptr) {
+          for (int k = 0; k < m; ++k) {
+            const double upper = (*z)(k, i + 1);
+            (*z)(k, i + 1) = s * (*z)(k, i) + c * upper;
+            (*z)(k, i) = c * (*z)(k, i) - s * upper;
+          }
+        }
+      }
+      if (deflated) continue;
+      d[l] -= p;
+      e[l] = g;
+      e[n] = 0.0;
+    }
+  }
+  return true;
+}
+
+/// Moves the packed m x m eigenvectors to the rows and columns of the coupled indices and
+/// makes every other column of the size x size block its unit vector. In place: targets are
+/// at or after their sources, so rows and columns are walked backwards.
+void unpack_vectors(const Coupling& coupling, int size, NormalMatrix* v) {
+  const int m = coupling.coupled_count;
+  const int* index = coupling.coupled;
+  for (int j = 0; j < m; ++j) {
+    for (int i = m - 1; i >= 0; --i) (*v)(index[i], j) = (*v)(i, j);
+    for (int i = 0, next = 0; i < size; ++i) {
+      if (next < m && index[next] == i) {
+        ++next;
+      } else {
+        (*v)(i, j) = 0.0;
+      }
+    }
+  }
+  for (int j = m - 1; j >= 0; --j) {
+    if (index[j] != j) v->col(index[j]).head(size) = v->col(j).head(size);
+  }
+  for (int j = 0, next = 0; j < size; ++j) {
+    if (next < m && index[next] == j) {
+      ++next;
+    } else {
+      v->col(j).head(size).setZero();
+      (*v)(j, j) = 1.0;
+    }
+  }
 }
 
 /// Selection sort, increasing; ties keep their order, so the result is the same everywhere.
@@ -106,29 +229,30 @@ void sort_increasing(FullParams* eigenvalues, int size, NormalMatrix* eigenvecto
 }  // namespace
 
 Status symmetric_eigen(NormalMatrix* matrix, int size, FullParams* eigenvalues, NormalMatrix* eigenvectors,
-                       int* sweeps) {
-  if (sweeps != nullptr) *sweeps = 0;
+                       int* iterations) {
+  int iteration_count = 0;
+  if (iterations != nullptr) *iterations = 0;
   if (size < 1 || size > kFullParamCount) return Status::invalid_argument;
   NormalMatrix& a = *matrix;
   if (!block_finite(a, size)) return Status::non_finite_input;
+  const double floor = kEpsilon * largest_magnitude(a, size);
+  const Coupling coupling = find_coupling(a, size);
+  for (int i = 0; i < size; ++i) (*eigenvalues)(i) = a(i, i);  // the uncoupled ones are final
+  const int m = coupling.coupled_count;
+  double d[kFullParamCount];
+  double e[kFullParamCount];
+  double h[kFullParamCount];
+  bool converged = true;
   if (eigenvectors != nullptr) eigenvectors->setIdentity();
-  const double floor = kAbsoluteTolerance * largest_magnitude(a, size);
-  // Cyclic by rows: a fixed order of pairs, and a sweep without a rotation ends it.
-  bool converged = false;
-  int sweep = 0;
-  while (!converged && sweep < kSymmetricEigenMaxSweeps) {
-    ++sweep;
-    converged = true;
-    for (int p = 0; p + 1 < size; ++p) {
-      for (int q = p + 1; q < size; ++q) {
-        if (negligible(a(p, q), a(p, p), a(q, q), floor)) continue;
-        rotate(matrix, size, p, q, eigenvectors);
-        converged = false;
-      }
-    }
+  if (m > 0) {
+    pack(coupling, &a);
+    tridiagonalize(&a, m, d, e, h);
+    if (eigenvectors != nullptr) accumulate_reflections(a, m, h, eigenvectors);
+    converged = diagonalize_tridiagonal(d, e, m, floor, eigenvectors, &iteration_count);
+    for (int j = 0; j < m; ++j) (*eigenvalues)(coupling.coupled[j]) = d[j];
+    if (eigenvectors != nullptr) unpack_vectors(coupling, size, eigenvectors);
   }
-  if (sweeps != nullptr) *sweeps = sweep;
-  for (int k = 0; k < size; ++k) (*eigenvalues)(k) = a(k, k);
+  if (iterations != nullptr) *iterations = iteration_count;
   sort_increasing(eigenvalues, size, eigenvectors);
   return converged ? Status::ok : Status::not_converged;
 }

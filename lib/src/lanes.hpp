@@ -1,0 +1,47 @@
+// A few doubles per operation where the target has double SIMD (SSE2 on x86-64, NEON on
+// aarch64), one where it has not (armhf VFP, Cortex-M): GCC/Clang vector types with
+// element-wise IEEE operations, so each lane is computed exactly as the scalar code would
+// and the bits do not depend on the lane count. Internal to lib/src.
+#pragma once
+
+#include <cstring>
+
+namespace hivecal {
+namespace lanes {
+
+#if defined(__SSE2__) || defined(__aarch64__)
+/// Doubles per Lane.
+constexpr int kLanes = 2;
+using Lane = double __attribute__((vector_size(2 * sizeof(double))));
+using FloatLane = float __attribute__((vector_size(2 * sizeof(float))));
+
+/// kLanes consecutive doubles from `value` (any alignment).
+inline Lane load(const double* value) {
+  Lane lane;
+  std::memcpy(&lane, value, sizeof lane);
+  return lane;
+}
+/// kLanes consecutive floats from `value`, widened to double (exact).
+inline Lane load(const float* value) {
+  FloatLane lane;
+  std::memcpy(&lane, value, sizeof lane);
+  return __builtin_convertvector(lane, Lane);
+}
+/// Writes the lanes to kLanes consecutive doubles at `value`.
+inline void store(double* value, const Lane& lane) { std::memcpy(value, &lane, sizeof lane); }
+/// Every lane set to x.
+inline Lane broadcast(double x) { return Lane{x, x}; }
+/// Lane k of a value.
+inline double lane_value(const Lane& v, int k) { return v[k]; }
+#else
+constexpr int kLanes = 1;
+using Lane = double;
+inline Lane load(const double* value) { return *value; }
+inline Lane load(const float* value) { return static_cast<double>(*value); }
+inline void store(double* value, const Lane& lane) { *value = lane; }
+inline Lane broadcast(double x) { return x; }
+inline double lane_value(const Lane& v, int) { return v; }
+#endif
+
+}  // namespace lanes
+}  // namespace hivecal
