@@ -51,6 +51,13 @@ class AbcRun {
     if (s_.trials[most_tried] >= limit_ && !objective_->exhausted()) place_randomly(most_tried);
   }
 
+  /// One cycle: employed bees, onlookers, then at most one scout.
+  void iterate(std::size_t /*cycle*/) {
+    employed_phase();
+    onlooker_phase();
+    scout_phase();
+  }
+
   double best_cost() const { return best_.cost(); }  ///< best cost so far
 
  private:
@@ -139,10 +146,9 @@ class AbcRun {
 
 Status validate(const AbcOptions& options, const SearchBox& box, std::size_t dimension, std::size_t max_sources,
                 std::size_t max_dimension) {
-  const Status population = detail::validate_population(options.food_sources, max_sources, options.max_evaluations);
-  if (population != Status::ok) return population;
-  const Status bounds = validate_search_box(box, dimension, max_dimension);
-  if (bounds != Status::ok) return bounds;
+  const Status common = detail::validate_population_and_box(options.food_sources, max_sources, options.max_evaluations,
+                                                            box, dimension, max_dimension);
+  if (common != Status::ok) return common;
   if (options.cycles == 0) return Status::invalid_argument;
   if (options.variant != AbcVariant::canonical && options.variant != AbcVariant::paper_as_written) {
     return Status::invalid_argument;
@@ -156,28 +162,8 @@ Status AbcSolverBase::minimize(Objective& objective, const SearchBox& box, const
                                SolverResult* result, TraceBase* trace, ProgressObserver* progress) {
   const std::size_t dimension = objective.dimension();
   const Status valid = validate(options, box, dimension, storage_.max_food_sources, storage_.max_dimension);
-  if (valid != Status::ok) {
-    *result = detail::failed_result(valid);
-    return valid;
-  }
-  detail::CountedObjective counted(objective, options.max_evaluations);
-  AbcRun run(storage_, &counted, box, dimension, options);
-  run.initialise();
-  std::size_t cycle = 0;
-  while (cycle < options.cycles && !counted.exhausted()) {
-    run.employed_phase();
-    run.onlooker_phase();
-    run.scout_phase();
-    ++cycle;
-    detail::report_iteration(SolverProgress{cycle, options.cycles, run.best_cost(), counted.count()}, trace,
-                             progress);
-  }
-  result->status = Status::ok;
-  result->best_x = Span<const double>(storage_.best, dimension);
-  result->best_cost = run.best_cost();
-  result->evaluations = counted.count();
-  result->iterations = cycle;
-  return Status::ok;
+  return detail::run_population<AbcRun>(valid, objective, box, dimension, storage_, options, options.cycles, result,
+                                        trace, progress);
 }
 
 }  // namespace hivecal

@@ -145,39 +145,44 @@ struct PacketHeader {
 template <typename Record>
 struct Wire;
 
+/// The constants of a Wire<Record>; each specialisation adds only its payload layout.
+template <typename Record, PacketType Type, std::size_t PayloadBytes, std::uint64_t DecoderStats::*Counter,
+          void (FrameHandler::*Callback)(const Record&)>
+struct WireTraits {
+  static constexpr PacketType kType = Type;
+  static constexpr std::size_t kPayloadBytes = PayloadBytes;
+  static constexpr std::uint64_t DecoderStats::*kCounter = Counter;
+  static void notify(FrameHandler& handler, const Record& record) { (handler.*Callback)(record); }
+};
+
 template <>
-struct Wire<JointStateRecord> {
-  static constexpr PacketType kType = PacketType::joint_state;
-  static constexpr std::size_t kPayloadBytes = kJointStatePayloadBytes;
-  static constexpr std::uint64_t DecoderStats::*kCounter = &DecoderStats::joint_states;
+struct Wire<JointStateRecord>
+    : WireTraits<JointStateRecord, PacketType::joint_state, kJointStatePayloadBytes,
+                 &DecoderStats::joint_states, &FrameHandler::on_joint_state> {
   template <typename Io, typename Record>
   static void payload(Io& io, Record& record) {
     for (auto& q : record.q_rad) io.f64(q);
     for (auto& qd : record.qd_rad_s) io.f64(qd);
     for (auto& current : record.current_a) io.f32(current);
   }
-  static void notify(FrameHandler& handler, const JointStateRecord& record) { handler.on_joint_state(record); }
 };
 
 template <>
-struct Wire<TrackerPointRecord> {
-  static constexpr PacketType kType = PacketType::tracker_point;
-  static constexpr std::size_t kPayloadBytes = kTrackerPointPayloadBytes;
-  static constexpr std::uint64_t DecoderStats::*kCounter = &DecoderStats::tracker_points;
+struct Wire<TrackerPointRecord>
+    : WireTraits<TrackerPointRecord, PacketType::tracker_point, kTrackerPointPayloadBytes,
+                 &DecoderStats::tracker_points, &FrameHandler::on_tracker_point> {
   template <typename Io, typename Record>
   static void payload(Io& io, Record& record) {
     for (auto& coordinate : record.point_m) io.f64(coordinate);
     io.u8(record.status);
     io.zeros(3);
   }
-  static void notify(FrameHandler& handler, const TrackerPointRecord& record) { handler.on_tracker_point(record); }
 };
 
 template <>
-struct Wire<DeviceInfoRecord> {
-  static constexpr PacketType kType = PacketType::device_info;
-  static constexpr std::size_t kPayloadBytes = kDeviceInfoPayloadBytes;
-  static constexpr std::uint64_t DecoderStats::*kCounter = &DecoderStats::device_infos;
+struct Wire<DeviceInfoRecord>
+    : WireTraits<DeviceInfoRecord, PacketType::device_info, kDeviceInfoPayloadBytes,
+                 &DecoderStats::device_infos, &FrameHandler::on_device_info> {
   template <typename Io, typename Record>
   static void payload(Io& io, Record& record) {
     io.u8(record.device_kind);
@@ -185,7 +190,6 @@ struct Wire<DeviceInfoRecord> {
     io.f32(record.nominal_rate_hz);
     io.name(record.name);
   }
-  static void notify(FrameHandler& handler, const DeviceInfoRecord& record) { handler.on_device_info(record); }
 };
 
 template <typename Record>

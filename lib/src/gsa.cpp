@@ -56,6 +56,12 @@ class GsaRun {
     for (std::size_t i = 0; i < agents_; ++i) advance(i);
   }
 
+  /// Iteration t (1-based) of t_max: every agent evaluated, then one move unless this was the
+  /// last iteration or the budget ran out (those positions would never be evaluated).
+  void iterate(std::size_t iteration) {
+    if (evaluate_agents() && iteration != options_.iterations) move(iteration);
+  }
+
   double best_cost() const { return best_.cost(); }  ///< best cost so far
 
  private:
@@ -161,10 +167,9 @@ bool finite_at_least(double value, double minimum) { return math::is_finite(valu
 
 Status validate(const GsaOptions& options, const SearchBox& box, std::size_t dimension, std::size_t max_agents,
                 std::size_t max_dimension) {
-  const Status population = detail::validate_population(options.agents, max_agents, options.max_evaluations);
-  if (population != Status::ok) return population;
-  const Status bounds = validate_search_box(box, dimension, max_dimension);
-  if (bounds != Status::ok) return bounds;
+  const Status common = detail::validate_population_and_box(options.agents, max_agents, options.max_evaluations,
+                                                            box, dimension, max_dimension);
+  if (common != Status::ok) return common;
   if (options.iterations == 0 || !finite_at_least(options.g0, 0.0) || !finite_at_least(options.beta, 0.0)) {
     return Status::invalid_argument;
   }
@@ -179,29 +184,8 @@ Status GsaSolverBase::minimize(Objective& objective, const SearchBox& box, const
                                SolverResult* result, TraceBase* trace, ProgressObserver* progress) {
   const std::size_t dimension = objective.dimension();
   const Status valid = validate(options, box, dimension, storage_.max_agents, storage_.max_dimension);
-  if (valid != Status::ok) {
-    *result = detail::failed_result(valid);
-    return valid;
-  }
-  detail::CountedObjective counted(objective, options.max_evaluations);
-  GsaRun run(storage_, &counted, box, dimension, options);
-  run.initialise();
-  std::size_t iteration = 0;
-  while (iteration < options.iterations && !counted.exhausted()) {
-    const bool complete = run.evaluate_agents();
-    ++iteration;
-    detail::report_iteration(SolverProgress{iteration, options.iterations, run.best_cost(), counted.count()}, trace,
-                             progress);
-    // No move after the last evaluation: its positions would never be evaluated.
-    if (!complete || iteration == options.iterations) break;
-    run.move(iteration);
-  }
-  result->status = Status::ok;
-  result->best_x = Span<const double>(storage_.best, dimension);
-  result->best_cost = run.best_cost();
-  result->evaluations = counted.count();
-  result->iterations = iteration;
-  return Status::ok;
+  return detail::run_population<GsaRun>(valid, objective, box, dimension, storage_, options, options.iterations,
+                                        result, trace, progress);
 }
 
 }  // namespace hivecal

@@ -38,6 +38,13 @@ Status validate_population(std::size_t population, std::size_t capacity, std::ui
   return Status::ok;
 }
 
+Status validate_population_and_box(std::size_t population, std::size_t capacity, std::uint64_t max_evaluations,
+                                   const SearchBox& box, std::size_t dimension, std::size_t max_dimension) {
+  const Status population_status = validate_population(population, capacity, max_evaluations);
+  if (population_status != Status::ok) return population_status;
+  return validate_search_box(box, dimension, max_dimension);
+}
+
 void random_point_in_box(const SearchBox& box, std::size_t dimension, Random* random, double* x) {
   for (std::size_t d = 0; d < dimension; ++d) x[d] = random->uniform(box.lower[d], box.upper[d]);
 }
@@ -50,6 +57,17 @@ void report_iteration(const SolverProgress& progress, TraceBase* trace, Progress
 SolverResult failed_result(Status status) {
   SolverResult result;
   result.status = status;
+  return result;
+}
+
+SolverResult finished_result(Span<const double> best_x, double best_cost, std::uint64_t evaluations,
+                             std::size_t iterations) {
+  SolverResult result;
+  result.status = Status::ok;
+  result.best_x = best_x;
+  result.best_cost = best_cost;
+  result.evaluations = evaluations;
+  result.iterations = iterations;
   return result;
 }
 

@@ -54,6 +54,11 @@ class BestSoFar {
 /// evaluation budget against the initial population (invalid_argument).
 Status validate_population(std::size_t population, std::size_t capacity, std::uint64_t max_evaluations);
 
+/// The checks every population solver starts with, in this order: validate_population, then
+/// validate_search_box. The solver's own option checks follow when this returns ok.
+Status validate_population_and_box(std::size_t population, std::size_t capacity, std::uint64_t max_evaluations,
+                                   const SearchBox& box, std::size_t dimension, std::size_t max_dimension);
+
 /// Uniform random point in the box (box already validated), one draw per dimension in order.
 void random_point_in_box(const SearchBox& box, std::size_t dimension, Random* random, double* x);
 
@@ -62,5 +67,34 @@ void report_iteration(const SolverProgress& progress, TraceBase* trace, Progress
 
 /// The result of a run that did nothing (an option error).
 SolverResult failed_result(Status status);
+
+/// The result of a completed run: status ok and the best point, its cost and the counts.
+SolverResult finished_result(Span<const double> best_x, double best_cost, std::uint64_t evaluations,
+                             std::size_t iterations);
+
+/// The frame of a population solver's minimize(): a failed result for invalid options, else
+/// count the evaluations, initialise the run, iterate while iterations and budget remain
+/// (reporting each) and fill the result. `Run` is built from (storage, counted objective, box,
+/// dimension, options) and has initialise(), iterate(1-based iteration) and best_cost().
+template <typename Run, typename Storage, typename Options>
+Status run_population(Status valid, Objective& objective, const SearchBox& box, std::size_t dimension,
+                      const Storage& storage, const Options& options, std::size_t iterations, SolverResult* result,
+                      TraceBase* trace, ProgressObserver* progress) {
+  if (valid != Status::ok) {
+    *result = failed_result(valid);
+    return valid;
+  }
+  CountedObjective counted(objective, options.max_evaluations);
+  Run run(storage, &counted, box, dimension, options);
+  run.initialise();
+  std::size_t iteration = 0;
+  while (iteration < iterations && !counted.exhausted()) {
+    ++iteration;
+    run.iterate(iteration);
+    report_iteration(SolverProgress{iteration, iterations, run.best_cost(), counted.count()}, trace, progress);
+  }
+  *result = finished_result(Span<const double>(storage.best, dimension), run.best_cost(), counted.count(), iteration);
+  return Status::ok;
+}
 
 }  // namespace hivecal::detail

@@ -28,6 +28,17 @@ char* format_unsigned(std::uint64_t value, unsigned base, std::size_t min_digits
   return p;
 }
 
+/// The "FAILED file:line: expression" line of a failed check.
+void print_failure_at(const char* expression, const char* file, int line) {
+  print("  FAILED ");
+  print(file);
+  print(":");
+  print_signed(line);
+  print(": ");
+  print(expression);
+  print("\n");
+}
+
 }  // namespace
 
 Registrar::Registrar(TestCase* test) {
@@ -98,13 +109,7 @@ bool record(bool ok, const char* expression, const char* file, int line) {
   ++g_checks_total;
   if (ok) return true;
   ++g_checks_failed_in_test;
-  print("  FAILED ");
-  print(file);
-  print(":");
-  print_signed(line);
-  print(": ");
-  print(expression);
-  print("\n");
+  print_failure_at(expression, file, line);
   return false;
 }
 
@@ -113,6 +118,22 @@ bool check_near(double a, double b, double tolerance, const char* expression, co
   const bool ok = difference <= tolerance;
   if (!record(ok, expression, file, line)) print_operands(a, b);
   return ok;
+}
+
+bool check_log(const test::CheckLog& log, const char* expression, const char* file, int line) {
+  // Every check of the shared body counts, as if it had been written here.
+  g_checks_total += log.checks();
+  if (log.ok()) return true;
+  g_checks_failed_in_test += log.failures();
+  print_failure_at(expression, file, line);
+  for (std::size_t i = 0; i < log.kept(); ++i) {
+    const test::CheckFailure& failure = log.failure(i);
+    print("    ");
+    print(failure.what);
+    print("\n");
+    print_operands(failure.value, failure.limit);
+  }
+  return false;
 }
 
 std::size_t run_all_tests() {

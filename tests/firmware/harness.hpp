@@ -3,12 +3,14 @@
 // failures over semihosting, and run_all_tests() ends with the line "N passed, M failed".
 //
 //   FW_TEST(Suite, Name) { FW_CHECK_EQ(f(), 3); FW_ASSERT(ok); FW_CHECK_NEAR(x, 1.0, 1e-12); }
+//   FW_TEST(Suite, Shared) { FW_CHECK_LOG(test::some_shared_check_body(10)); }  // tests/support
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
 
+#include "check_log.hpp"
 #include "hivecal/status.hpp"
 
 namespace hivecal::fw {
@@ -82,6 +84,10 @@ bool compare(const A& a, const B& b, Compare holds, const char* expression, cons
 /// |a - b| <= tolerance (false for NaN).
 bool check_near(double a, double b, double tolerance, const char* expression, const char* file, int line);
 
+/// Counts a shared check body's checks (tests/support/check_log.hpp); on failure prints each
+/// failed check with its numbers. Returns log.ok().
+bool check_log(const test::CheckLog& log, const char* expression, const char* file, int line);
+
 }  // namespace hivecal::fw
 
 #define FW_TEST(suite, name)                                                                   \
@@ -102,6 +108,7 @@ bool check_near(double a, double b, double tolerance, const char* expression, co
 #define FW_CHECK_GE(a, b) FW_CHECK_OP(a, b, >=)
 #define FW_CHECK_NEAR(a, b, tolerance) \
   ::hivecal::fw::check_near((a), (b), (tolerance), #a " ~ " #b " within " #tolerance, __FILE__, __LINE__)
+#define FW_CHECK_LOG(log) ::hivecal::fw::check_log((log), #log, __FILE__, __LINE__)
 /// Stops the current test when the check fails (later checks would read garbage).
 #define FW_ASSERT(condition) \
   do {                       \

@@ -25,9 +25,20 @@ struct FeedResult {
   std::size_t other_errors = 0;          ///< pushes that returned anything else but ok
 };
 
+/// Runs a push as it is: the default `around_push` of feed_extractor.
+struct PlainPush {
+  template <typename Push>
+  Status operator()(Push push) const {
+    return push();
+  }
+};
+
 /// Pushes both streams interleaved in true-time order (as live ports deliver them), then
 /// finish(). `lead_s` delays the tracker stream (positive) or the robot stream (negative).
-inline FeedResult feed_extractor(const sim::Session& session, SampleExtractorBase* extractor, double lead_s = 0.0) {
+/// Each push runs as around_push(push) (say, under the allocation trap); finish() does not.
+template <typename AroundPush = PlainPush>
+FeedResult feed_extractor(const sim::Session& session, SampleExtractorBase* extractor, double lead_s = 0.0,
+                          AroundPush around_push = AroundPush()) {
   FeedResult result;
   auto note = [&result](Status s) {
     if (s == Status::dataset_full) ++result.dataset_full_returns;
@@ -43,10 +54,10 @@ inline FeedResult feed_extractor(const sim::Session& session, SampleExtractorBas
     const bool tracker_first =
         has_point && (!has_joint || tracker.last_true_time_s() + lead_s < robot.last_true_time_s());
     if (tracker_first) {
-      note(extractor->push_tracker(point));
+      note(around_push([&] { return extractor->push_tracker(point); }));
       has_point = tracker.next(&point);
     } else {
-      note(extractor->push_robot(joint));
+      note(around_push([&] { return extractor->push_robot(joint); }));
       has_joint = robot.next(&joint);
     }
   }

@@ -20,6 +20,17 @@ inline RobotModel perturbed_model(const RobotModel& nominal, Random* random, dou
   return model;
 }
 
+/// A random proper rotation: axis-angle with the library's own trig (Rodrigues' formula).
+inline Mat3 random_rotation(Random* random) {
+  Vec3 axis;
+  axis << random->normal(), random->normal(), random->normal();  // defined order (not constructor arguments)
+  axis.normalize();
+  const double angle = random->uniform(-3.1, 3.1);
+  Mat3 k;
+  k << 0, -axis.z(), axis.y(), axis.z(), 0, -axis.x(), -axis.y(), axis.x(), 0;
+  return Mat3::Identity() + math::sin(angle) * k + (1.0 - math::cos(angle)) * k * k;
+}
+
 /// Joint positions spread over a UR's useful workspace [rad].
 inline JointVector random_joints(Random* random) {
   JointVector q;

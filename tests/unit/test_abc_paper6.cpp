@@ -6,6 +6,8 @@
 #include "alloc_trap.hpp"
 #include "hivecal/abc.hpp"
 #include "paper6_session.hpp"
+#include "paper6_solver_checks.hpp"
+#include "solver_fixture.hpp"
 #include "test_objectives.hpp"
 
 namespace hivecal {
@@ -13,13 +15,9 @@ namespace {
 
 using Solver = AbcSolver<150, kPaper6Dimension>;
 
-Solver& solver() {
-  static Solver s;
-  return s;
-}
+Solver& solver() { return test::shared_solver<Solver>(); }
 
-// ABC minimises the MAE itself, so it may end below the least-squares solution's MAE.
-constexpr double kWithinReference = 1.02;
+using test::kWithinReference;
 
 TEST(AbcPaper6, PaperConfigReachesTheLeastSquaresMaeOnPaperSizedSessions) {
   // The paper: 38 poses, 27 for training; ABC with 150 food sources and 300 cycles; the arm
@@ -52,10 +50,7 @@ TEST(AbcPaper6, FirmwareFloatLayoutReachesTheSameMae) {
   test::Paper6Session& session = test::shared_session();
   ASSERT_TRUE(session.simulate(14, 38, test::Paper6Truth::paper_like));
   ASSERT_EQ(compact.build(session.cell.nominal, session.dataset.train()), Status::ok);
-  AbcOptions options;
-  options.food_sources = 60;
-  options.cycles = 200;
-  options.seed = 14;
+  AbcOptions options = test::abc_options(60, 200, 14);
   SolverResult result;
   EXPECT_NO_HEAP((void)solver().minimize(compact, session.box.view(), options, &result));
   ASSERT_EQ(result.status, Status::ok);
@@ -66,21 +61,7 @@ TEST(AbcPaper6, FirmwareFloatLayoutReachesTheSameMae) {
 }
 
 TEST(AbcPaper6, ReachesTheLeastSquaresMaeOnAFewHundredPoses) {
-  test::Paper6Session& session = test::shared_session();
-  ASSERT_TRUE(session.simulate(21, 200, test::Paper6Truth::six_lengths));
-  AbcOptions options;
-  options.food_sources = 60;
-  options.cycles = 150;
-  options.seed = 21;
-  SolverResult result;
-  EXPECT_NO_HEAP((void)solver().minimize(session.cost, session.box.view(), options, &result));
-  ASSERT_EQ(result.status, Status::ok);
-  EXPECT_LE(result.best_cost, kWithinReference * session.reference_mae_m);
-  EXPECT_LT(result.best_cost, 0.2 * session.nominal_mae_m);
-  // With 140 training poses the five observable lengths come out within ~20 um of the truth;
-  // d1 is not observable (the refitted base absorbs it).
-  const Paper6Lengths truth_m = paper6_lengths(session.cell.truth);
-  for (int k = 1; k < 6; ++k) EXPECT_NEAR(result.best_x[static_cast<std::size_t>(k)], truth_m(k), 2e-5) << "length " << k;
+  test::expect_least_squares_mae_on_a_few_hundred_poses(solver(), test::abc_options(60, 150, 21));
 }
 
 TEST(AbcPaper6, PaperVariantAsWrittenConvergesWorseThanCanonical) {
@@ -92,10 +73,7 @@ TEST(AbcPaper6, PaperVariantAsWrittenConvergesWorseThanCanonical) {
   double paper_excess[kSeeds];
   for (std::size_t i = 0; i < kSeeds; ++i) {
     for (AbcVariant variant : {AbcVariant::canonical, AbcVariant::paper_as_written}) {
-      AbcOptions options;
-      options.food_sources = 40;
-      options.cycles = 200;
-      options.seed = 100 + i;
+      AbcOptions options = test::abc_options(40, 200, 100 + i);
       options.variant = variant;
       SolverResult result;
       EXPECT_NO_HEAP((void)solver().minimize(session.cost, session.box.view(), options, &result));
@@ -123,10 +101,7 @@ TEST(AbcPaper6, PaperVariantAsWrittenCannotContractOnTheSphere) {
     for (AbcVariant variant : {AbcVariant::canonical, AbcVariant::paper_as_written}) {
       test::Sphere sphere(5);
       const test::CubeBox box(5, 5.12);
-      AbcOptions options;
-      options.food_sources = 20;
-      options.cycles = 500;
-      options.seed = 200 + i;
+      AbcOptions options = test::abc_options(20, 500, 200 + i);
       options.variant = variant;
       SolverResult result;
       ASSERT_EQ(small.minimize(sphere, box.view(), options, &result), Status::ok);

@@ -247,16 +247,6 @@ TEST(Paper6Cost, LengthsRoundTripAndBoxIsNominalPlusMinusHalfWidth) {
   EXPECT_EQ(paper6_box(nominal, std::numeric_limits<double>::quiet_NaN(), &box), Status::invalid_argument);
 }
 
-Mat3 random_rotation(Random* random) {
-  Vec3 axis;
-  axis << random->normal(), random->normal(), random->normal();  // comma: drawn in order
-  axis.normalize();
-  const double angle = random->uniform(-3.1, 3.1);
-  Mat3 k;
-  k << 0, -axis.z(), axis.y(), axis.z(), 0, -axis.x(), -axis.y(), axis.x(), 0;
-  return Mat3::Identity() + math::sin(angle) * k + (1.0 - math::cos(angle)) * k * k;
-}
-
 TEST(QcpRotation, AgreesWithTheSvdRotation) {
   Random random(406);
   for (int trial = 0; trial < 3000; ++trial) {
@@ -264,7 +254,7 @@ TEST(QcpRotation, AgreesWithTheSvdRotation) {
     if (trial % 2 == 0) {  // like calibration data: a scatter seen through a rotation, plus noise
       Mat3 a;
       for (int i = 0; i < 9; ++i) a(i / 3, i % 3) = random.uniform(-1.0, 1.0);
-      cross = a * a.transpose() * random_rotation(&random).transpose() + 1e-3 * a;
+      cross = a * a.transpose() * test::random_rotation(&random).transpose() + 1e-3 * a;
     } else {  // anything, reflections included
       for (int i = 0; i < 9; ++i) cross(i / 3, i % 3) = random.uniform(-1.0, 1.0);
     }

@@ -9,6 +9,8 @@
 #include "hivecal/gsa.hpp"
 #include "hivecal/trace.hpp"
 #include "paper6_session.hpp"
+#include "paper6_solver_checks.hpp"
+#include "solver_fixture.hpp"
 #include "test_objectives.hpp"
 
 namespace hivecal {
@@ -16,20 +18,9 @@ namespace {
 
 using Solver = GsaSolver<150, 8>;
 
-Solver& solver() {
-  static Solver s;
-  return s;
-}
+Solver& solver() { return test::shared_solver<Solver>(); }
 
-GsaOptions small_options(std::size_t agents, std::size_t iterations, std::uint64_t seed) {
-  GsaOptions options;
-  options.agents = agents;
-  options.iterations = iterations;
-  options.seed = seed;
-  return options;
-}
-
-constexpr double kWithinReference = 1.02;
+using test::kWithinReference;
 
 TEST(GsaSolver, ConvergesOnTheSphere) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
@@ -37,7 +28,7 @@ TEST(GsaSolver, ConvergesOnTheSphere) {
     const test::CubeBox box(5, 5.12);
     SolverResult result;
     Status s = Status::invalid_argument;
-    EXPECT_NO_HEAP(s = solver().minimize(sphere, box.view(), small_options(30, 300, seed), &result));
+    EXPECT_NO_HEAP(s = solver().minimize(sphere, box.view(), test::gsa_options(30, 300, seed), &result));
     ASSERT_EQ(s, Status::ok);
     EXPECT_LT(result.best_cost, 1e-8) << "seed " << seed;
   }
@@ -49,7 +40,7 @@ TEST(GsaSolver, EvaluatesEveryAgentOncePerIteration) {
   static Trace<32> trace;
   trace.clear();
   SolverResult result;
-  ASSERT_EQ(solver().minimize(sphere, box.view(), small_options(12, 9, 2), &result, &trace), Status::ok);
+  ASSERT_EQ(solver().minimize(sphere, box.view(), test::gsa_options(12, 9, 2), &result, &trace), Status::ok);
   EXPECT_EQ(result.evaluations, 12u * 9u);
   EXPECT_EQ(sphere.calls, result.evaluations);
   EXPECT_EQ(result.iterations, 9u);
@@ -62,7 +53,7 @@ TEST(GsaSolver, EvaluatesEveryAgentOncePerIteration) {
 TEST(GsaSolver, StopsAtTheEvaluationBudget) {
   test::Sphere sphere(3);
   const test::CubeBox box(3, 1.0);
-  GsaOptions options = small_options(10, 50, 3);
+  GsaOptions options = test::gsa_options(10, 50, 3);
   options.max_evaluations = 35;
   SolverResult result;
   ASSERT_EQ(solver().minimize(sphere, box.view(), options, &result), Status::ok);
@@ -84,7 +75,7 @@ TEST(GsaSolver, ReportsProgressOncePerIteration) {
   const test::CubeBox box(2, 2.048);
   CountingObserver observer;
   SolverResult result;
-  EXPECT_NO_HEAP((void)solver().minimize(rosenbrock, box.view(), small_options(20, 40, 4), &result, nullptr, &observer));
+  EXPECT_NO_HEAP((void)solver().minimize(rosenbrock, box.view(), test::gsa_options(20, 40, 4), &result, nullptr, &observer));
   EXPECT_EQ(observer.calls, 40u);
   EXPECT_EQ(observer.last.iteration, 40u);
   EXPECT_EQ(observer.last.iteration_count, 40u);
@@ -99,7 +90,7 @@ TEST(GsaSolver, SameSeedSameBits) {
     test::Rastrigin rastrigin(4);
     const test::CubeBox box(4, 5.12);
     SolverResult result;
-    ASSERT_EQ(solver().minimize(rastrigin, box.view(), small_options(25, 30, 99), &result), Status::ok);
+    ASSERT_EQ(solver().minimize(rastrigin, box.view(), test::gsa_options(25, 30, 99), &result), Status::ok);
     for (std::size_t d = 0; d < 4; ++d) {
       if (run == 0) first_x[d] = result.best_x[d];
       EXPECT_EQ(result.best_x[d], first_x[d]);
@@ -113,7 +104,7 @@ TEST(GsaSolver, NanCostsWeighNothing) {
   test::MostlyNan mostly_nan(2);
   const test::CubeBox box(2, 3.0);
   SolverResult result;
-  ASSERT_EQ(solver().minimize(mostly_nan, box.view(), small_options(40, 100, 5), &result), Status::ok);
+  ASSERT_EQ(solver().minimize(mostly_nan, box.view(), test::gsa_options(40, 100, 5), &result), Status::ok);
   EXPECT_TRUE(math::is_finite(result.best_cost));
   EXPECT_LT(result.best_cost, 1e-3);
 }
@@ -125,7 +116,7 @@ TEST(GsaSolver, AllEqualCostsGiveEqualMassesAndStayInTheBox) {
   const double upper[3] = {1.0, 0.5, 11.0};
   const SearchBox box{Span<const double>(lower), Span<const double>(upper)};
   SolverResult result;
-  ASSERT_EQ(solver().minimize(flat, box, small_options(10, 20, 6), &result), Status::ok);
+  ASSERT_EQ(solver().minimize(flat, box, test::gsa_options(10, 20, 6), &result), Status::ok);
   EXPECT_EQ(result.best_cost, 1.0);
   for (std::size_t d = 0; d < 3; ++d) {
     EXPECT_GE(result.best_x[d], lower[d]);
@@ -138,35 +129,35 @@ TEST(GsaSolver, RejectsBadOptionsWithoutEvaluating) {
   const test::CubeBox box(3, 1.0);
   SolverResult result;
   auto run = [&](const GsaOptions& options) { return solver().minimize(sphere, box.view(), options, &result); };
-  EXPECT_EQ(run(small_options(1, 10, 1)), Status::population_out_of_range);
-  EXPECT_EQ(run(small_options(151, 10, 1)), Status::population_out_of_range);
-  EXPECT_EQ(run(small_options(10, 0, 1)), Status::invalid_argument);
-  GsaOptions options = small_options(10, 10, 1);
+  EXPECT_EQ(run(test::gsa_options(1, 10, 1)), Status::population_out_of_range);
+  EXPECT_EQ(run(test::gsa_options(151, 10, 1)), Status::population_out_of_range);
+  EXPECT_EQ(run(test::gsa_options(10, 0, 1)), Status::invalid_argument);
+  GsaOptions options = test::gsa_options(10, 10, 1);
   options.g0 = -1.0;
   EXPECT_EQ(run(options), Status::invalid_argument);
   options.g0 = std::numeric_limits<double>::infinity();
   EXPECT_EQ(run(options), Status::invalid_argument);
-  options = small_options(10, 10, 1);
+  options = test::gsa_options(10, 10, 1);
   options.beta = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(run(options), Status::invalid_argument);
-  options = small_options(10, 10, 1);
+  options = test::gsa_options(10, 10, 1);
   options.epsilon = 0.0;
   EXPECT_EQ(run(options), Status::invalid_argument);
-  options = small_options(10, 10, 1);
+  options = test::gsa_options(10, 10, 1);
   options.final_attractors = 0;
   EXPECT_EQ(run(options), Status::invalid_argument);
   options.final_attractors = 11;
   EXPECT_EQ(run(options), Status::invalid_argument);
-  options = small_options(10, 10, 1);
+  options = test::gsa_options(10, 10, 1);
   options.max_evaluations = 5;
   EXPECT_EQ(run(options), Status::invalid_argument);
   const test::CubeBox wrong_box(2, 1.0);
-  EXPECT_EQ(solver().minimize(sphere, wrong_box.view(), small_options(10, 10, 1), &result),
+  EXPECT_EQ(solver().minimize(sphere, wrong_box.view(), test::gsa_options(10, 10, 1), &result),
             Status::dimension_out_of_range);
   double lower[3] = {-1.0, -1.0, 2.0};
   const double upper[3] = {1.0, 1.0, 1.0};
   EXPECT_EQ(solver().minimize(sphere, SearchBox{Span<const double>(lower), Span<const double>(upper)},
-                              small_options(10, 10, 1), &result),
+                              test::gsa_options(10, 10, 1), &result),
             Status::bad_bounds);
   EXPECT_EQ(result.status, Status::bad_bounds);
   EXPECT_EQ(sphere.calls, 0u);
@@ -174,10 +165,7 @@ TEST(GsaSolver, RejectsBadOptionsWithoutEvaluating) {
 
 using Paper6Solver = GsaSolver<150, kPaper6Dimension>;
 
-Paper6Solver& paper6_solver() {
-  static Paper6Solver s;
-  return s;
-}
+Paper6Solver& paper6_solver() { return test::shared_solver<Paper6Solver>(); }
 
 TEST(GsaPaper6, PaperConfigReachesTheLeastSquaresMaeOnPaperSizedSessions) {
   test::Paper6Session& session = test::shared_session();
@@ -200,19 +188,7 @@ TEST(GsaPaper6, PaperConfigReachesTheLeastSquaresMaeOnPaperSizedSessions) {
 }
 
 TEST(GsaPaper6, ReachesTheLeastSquaresMaeOnAFewHundredPoses) {
-  test::Paper6Session& session = test::shared_session();
-  ASSERT_TRUE(session.simulate(21, 200, test::Paper6Truth::six_lengths));
-  GsaOptions options;
-  options.agents = 60;
-  options.iterations = 150;
-  options.seed = 21;
-  SolverResult result;
-  EXPECT_NO_HEAP((void)paper6_solver().minimize(session.cost, session.box.view(), options, &result));
-  ASSERT_EQ(result.status, Status::ok);
-  EXPECT_LE(result.best_cost, kWithinReference * session.reference_mae_m);
-  EXPECT_LT(result.best_cost, 0.2 * session.nominal_mae_m);
-  const Paper6Lengths truth_m = paper6_lengths(session.cell.truth);
-  for (int k = 1; k < 6; ++k) EXPECT_NEAR(result.best_x[static_cast<std::size_t>(k)], truth_m(k), 2e-5) << "length " << k;
+  test::expect_least_squares_mae_on_a_few_hundred_poses(paper6_solver(), test::gsa_options(60, 150, 21));
 }
 
 }  // namespace

@@ -5,8 +5,10 @@
 #include <cstring>
 #include <limits>
 
+#include "check_log_gtest.hpp"
 #include "hivecal/math.hpp"
 #include "hivecal/random.hpp"
+#include "random_checks.hpp"
 
 namespace hivecal {
 namespace {
@@ -98,32 +100,13 @@ TEST(OwnAtan2, WithinTwoUlpOfLibmAllQuadrants) {
   EXPECT_EQ(math::acos_clamped(1.5), 0.0);
 }
 
-TEST(OwnRandom, StreamIsTheDocumentedOne) {
-  // SplitMix64 from seed 0 gives 0xe220a8397b1dcdaf first (reference implementation).
-  std::uint64_t state = 0;
-  EXPECT_EQ(splitmix64_next(&state), 0xe220a8397b1dcdafULL);
-  Random a(42);
-  Random b(42);
-  Random c(43);
-  for (int i = 0; i < 100; ++i) {
-    const std::uint64_t va = a.next();
-    EXPECT_EQ(va, b.next());
-    EXPECT_NE(va, c.next());
-  }
-}
+TEST(OwnRandom, StreamIsTheDocumentedOne) { EXPECT_CHECKS(test::random_stream_is_the_documented_one()); }
 
 TEST(OwnRandom, DistributionsHaveTheirMoments) {
   Random random(7);
-  double sum = 0.0;
-  double sum_sq = 0.0;
-  const int n = 200000;
-  for (int i = 0; i < n; ++i) {
-    const double z = random.normal();
-    sum += z;
-    sum_sq += z * z;
-  }
-  EXPECT_NEAR(sum / n, 0.0, 0.01);
-  EXPECT_NEAR(sum_sq / n, 1.0, 0.01);
+  const test::NormalMoments moments = test::normal_moments(&random, 200000);
+  EXPECT_NEAR(moments.mean, 0.0, 0.01);
+  EXPECT_NEAR(moments.mean_square, 1.0, 0.01);
   int counts[5] = {};
   for (int i = 0; i < 50000; ++i) ++counts[random.below(5)];
   for (int k : counts) EXPECT_NEAR(k, 10000, 400);

@@ -51,6 +51,22 @@ std::string describe(const ExtractionCounts& counts) {
   return text;
 }
 
+/// The simulator settings these expectations (and the digest) were set on: large errors.
+sim::SimConfig large_error_config(std::uint64_t seed) {
+  sim::SimConfig config;
+  sim::use_large_errors(&config);
+  config.seed = seed;
+  return config;
+}
+
+/// The same over `waypoint_count` waypoints in `duration_s`.
+sim::SimConfig large_error_config(std::uint64_t seed, int waypoint_count, double duration_s) {
+  sim::SimConfig config = large_error_config(seed);
+  config.waypoint_count = waypoint_count;
+  config.duration_s = duration_s;
+  return config;
+}
+
 /// A clock relation with known offset and drift (reference at tracker time 0).
 ClockFit known_clock(double offset_us, double drift) {
   ClockFit fit;
@@ -107,9 +123,7 @@ JointVector home_pose() {
 }
 
 TEST(Extraction, PairsQuasiStaticSamplesWithTheSimulatorTruth) {
-  sim::SimConfig config;
-  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
-  config.seed = 21;
+  const sim::SimConfig config = large_error_config(21);
   const sim::Session session(config);
   static ClockEstimator<> estimator(make_clock_sync_config(session.truth().nominal));
   estimator.reset();
@@ -342,12 +356,7 @@ TEST(Extraction, TrackerInstantsOutsideTheRobotRecord) {
 }
 
 TEST(Extraction, ReportsDatasetFull) {
-  sim::SimConfig config;
-  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
-  config.seed = 22;
-  config.waypoint_count = 10;
-  config.duration_s = 150.0;
-  const sim::Session session(config);
+  const sim::Session session(large_error_config(22, 10, 150.0));
   static Dataset<50> dataset;
   dataset.clear();
   const ClockFit clock = known_clock(session.truth().clock_offset_us, session.truth().clock_drift);
@@ -364,12 +373,7 @@ TEST(Extraction, ReportsDatasetFull) {
 }
 
 TEST(Extraction, RingOverrunsAreCountedNotHidden) {
-  sim::SimConfig config;
-  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
-  config.seed = 23;
-  config.waypoint_count = 8;
-  config.duration_s = 100.0;
-  const sim::Session session(config);
+  const sim::Session session(large_error_config(23, 8, 100.0));
   const ClockFit clock = known_clock(session.truth().clock_offset_us, session.truth().clock_drift);
   static Dataset<1024> dataset;
   // Robot stream 3 s ahead of the tracker with a 1 s robot ring: history lost.
@@ -392,12 +396,7 @@ TEST(Extraction, RingOverrunsAreCountedNotHidden) {
 TEST(Extraction, ConstantMemoryOverHours) {
   // Two hours of 125 Hz joints (900 000 records) through fixed rings into a small
   // dataset: no allocation, every point accounted for, dataset_full reported.
-  sim::SimConfig config;
-  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
-  config.seed = 24;
-  config.waypoint_count = 460;
-  config.duration_s = 7200.0;
-  const sim::Session session(config);
+  const sim::Session session(large_error_config(24, 460, 7200.0));
   static Dataset<512> dataset;
   dataset.clear();
   const ClockFit clock = known_clock(session.truth().clock_offset_us, session.truth().clock_drift);
@@ -406,22 +405,11 @@ TEST(Extraction, ConstantMemoryOverHours) {
   EXPECT_EQ(sizeof(extractor), sizeof(SampleExtractorBase) + 1024 * sizeof(ExtractorRobotEntry) +
                                    64 * sizeof(ExtractorTrackerEntry));
   std::size_t allocations = 0;
-  sim::RobotStream robot(session);
-  sim::TrackerStream tracker(session);
-  JointStateRecord joint;
-  TrackerPointRecord point;
-  bool has_joint = robot.next(&joint);
-  bool has_point = tracker.next(&point);
-  while (has_joint || has_point) {
-    if (has_point && (!has_joint || tracker.last_true_time_s() < robot.last_true_time_s())) {
-      allocations += test::count_allocations([&] { (void)extractor.push_tracker(point); });
-      has_point = tracker.next(&point);
-    } else {
-      allocations += test::count_allocations([&] { (void)extractor.push_robot(joint); });
-      has_joint = robot.next(&joint);
-    }
-  }
-  (void)extractor.finish();
+  (void)test::feed_extractor(session, &extractor, 0.0, [&](auto push) {
+    Status status = Status::ok;
+    allocations += test::count_allocations([&] { status = push(); });
+    return status;
+  });
   EXPECT_EQ(allocations, 0u);
   const ExtractionCounts& counts = extractor.counts();
   expect_accounted(counts);
@@ -435,12 +423,7 @@ TEST(Extraction, ConstantMemoryOverHours) {
 constexpr std::uint64_t kExtractionGoldenDigest = 0x3fb38e81275a06eaULL;
 
 std::uint64_t extraction_digest() {
-  sim::SimConfig config;
-  sim::use_large_errors(&config);  // the session these expectations (and the digest) were set on
-  config.seed = 25;
-  config.waypoint_count = 12;
-  config.duration_s = 150.0;
-  const sim::Session session(config);
+  const sim::Session session(large_error_config(25, 12, 150.0));
   static ClockEstimator<16384, 4096> estimator(make_clock_sync_config(session.truth().nominal));
   estimator.reset();
   test::feed_clock(session, &estimator);
