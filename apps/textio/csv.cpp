@@ -1,6 +1,7 @@
 #include "csv.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string_view>
@@ -188,9 +189,21 @@ std::string to_row(const CsvRow& raw, RobotLogRow* row) {
   return "";
 }
 
+/// Status 1 (beam lost) of the wire format: its position fields carry NaN.
+constexpr std::uint8_t kBeamLostStatus = 1;
+
+bool all_nan(const std::vector<double>& values, std::size_t first, std::size_t count) {
+  for (std::size_t i = first; i < first + count; ++i) {
+    if (!std::isnan(values[i])) return false;
+  }
+  return true;
+}
+
 /// Fills *row from a tracker log row's values (t, x, y, z[, status]); "" or the problem.
 std::string to_row(const CsvRow& raw, TrackerLogRow* row) {
-  row->status = 0;  // no status column: every row is valid
+  // No status column: every row is valid, except one whose x, y and z are all NaN, which is
+  // how the wire format marks a lost beam (a log written without the column keeps that mark).
+  row->status = all_nan(raw.values, 1, 3) ? kBeamLostStatus : 0;
   if (raw.trailing_present == 1) {
     const double status = raw.values[4];
     if (!(status >= 0.0 && status <= 255.0) || status != static_cast<double>(static_cast<int>(status))) {

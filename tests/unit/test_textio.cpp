@@ -97,6 +97,15 @@ TEST(TextCsv, TrackerLogStatusOptionalAndNaNOnlyWhenInvalid) {
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[1].status, 1);
   EXPECT_FALSE(textio::read_tracker_log(dir.write("c.csv", "t,x,y,z,status\n3.1,nan,0,0,0\n"), collect).ok);
+  // Without the status column a row of three NaN is a lost beam, as on the wire; a partly
+  // non-finite row is still refused.
+  rows.clear();
+  ASSERT_TRUE(textio::read_tracker_log(dir.write("f.csv", "t,x,y,z\n3.1,1.25,-0.5,0.75\n3.2,nan,NaN,nan\n"), collect).ok);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].status, 0);
+  EXPECT_EQ(rows[1].status, 1);
+  EXPECT_FALSE(textio::read_tracker_log(dir.write("g.csv", "t,x,y,z\n3.1,nan,nan,0\n"), collect).ok);
+  EXPECT_FALSE(textio::read_tracker_log(dir.write("h.csv", "t,x,y,z\n3.1,inf,inf,inf\n"), collect).ok);
   EXPECT_FALSE(textio::read_tracker_log(dir.write("d.csv", "t,x,y,z,status\n3.1,0,0,0,1.5\n"), collect).ok);
   EXPECT_FALSE(textio::read_tracker_log(dir.write("e.csv", "t,x,y,z,status\n3.1,0,0,0,300\n"), collect).ok);
 }
