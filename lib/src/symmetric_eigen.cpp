@@ -235,7 +235,9 @@ Status symmetric_eigen(NormalMatrix* matrix, int size, FullParams* eigenvalues, 
   if (size < 1 || size > kFullParamCount) return Status::invalid_argument;
   NormalMatrix& a = *matrix;
   if (!block_finite(a, size)) return Status::non_finite_input;
-  const double floor = kEpsilon * largest_magnitude(a, size);
+  const double largest = largest_magnitude(a, size);
+  if (largest > kSymmetricEigenMaxMagnitude) return Status::invalid_argument;
+  const double floor = kEpsilon * largest;
   const Coupling coupling = find_coupling(a, size);
   for (int i = 0; i < size; ++i) (*eigenvalues)(i) = a(i, i);  // the uncoupled ones are final
   const int m = coupling.coupled_count;

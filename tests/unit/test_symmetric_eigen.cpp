@@ -218,6 +218,12 @@ TEST(SymmetricEigen, RejectsBadSizeAndNonFiniteEntries) {
   FullParams values = FullParams::Zero();
   EXPECT_EQ(symmetric_eigen(&a, 0, &values, nullptr), Status::invalid_argument);
   EXPECT_EQ(symmetric_eigen(&a, kFullParamCount + 1, &values, nullptr), Status::invalid_argument);
+  a(2, 2) = 2.0 * kSymmetricEigenMaxMagnitude;  // would overflow when squared
+  EXPECT_EQ(symmetric_eigen(&a, kFullParamCount, &values, nullptr), Status::invalid_argument);
+  a(2, 2) = kSymmetricEigenMaxMagnitude;  // the largest accepted
+  EXPECT_EQ(symmetric_eigen(&a, kFullParamCount, &values, nullptr), Status::ok);
+  EXPECT_EQ(values(kFullParamCount - 1), kSymmetricEigenMaxMagnitude);
+  a = NormalMatrix::Identity();
   a(3, 4) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(symmetric_eigen(&a, kFullParamCount, &values, nullptr), Status::non_finite_input);
   EXPECT_EQ(symmetric_eigen(&a, 4, &values, nullptr), Status::ok);  // outside the block

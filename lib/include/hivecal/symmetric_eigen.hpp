@@ -14,6 +14,8 @@ namespace hivecal {
 
 /// QL iterations per eigenvalue after which symmetric_eigen gives up (2-3 is typical).
 inline constexpr int kSymmetricEigenMaxIterations = 30;
+/// Largest entry magnitude accepted: the Householder norms square the entries once.
+inline constexpr double kSymmetricEigenMaxMagnitude = 1e150;
 
 /// Decomposes the symmetric leading size x size block of *matrix (upper and lower triangle
 /// both read, assumed equal) as V diag(lambda) V^T. *matrix is the working copy and is
@@ -24,7 +26,8 @@ inline constexpr int kSymmetricEigenMaxIterations = 30;
 /// off-diagonal entry gives its diagonal entry and unit vector exactly. The eigenvalues do
 /// not depend on whether eigenvectors are computed (same bits). If iterations is not null it
 /// receives the number of QL iterations made (0 for a diagonal block).
-/// Errors: invalid_argument (size not in 1..33), non_finite_input (NaN/Inf in the block),
+/// Errors: invalid_argument (size not in 1..33, or an entry above kSymmetricEigenMaxMagnitude),
+/// non_finite_input (NaN/Inf in the block),
 /// not_converged (an eigenvalue not isolated after kSymmetricEigenMaxIterations iterations).
 Status symmetric_eigen(NormalMatrix* matrix, int size, FullParams* eigenvalues, NormalMatrix* eigenvectors,
                        int* iterations = nullptr);
