@@ -201,10 +201,12 @@ bool all_nan(const std::vector<double>& values, std::size_t first, std::size_t c
 
 /// Fills *row from a tracker log row's values (t, x, y, z[, status]); "" or the problem.
 std::string to_row(const CsvRow& raw, TrackerLogRow* row) {
-  // No status column: every row is valid, except one whose x, y and z are all NaN, which is
-  // how the wire format marks a lost beam (a log written without the column keeps that mark).
-  row->status = all_nan(raw.values, 1, 3) ? kBeamLostStatus : 0;
-  if (raw.trailing_present == 1) {
+  row->status = 0;
+  if (raw.trailing_present == 0) {
+    // No status column: every row is valid, except one whose x, y and z are all NaN, which
+    // is how the wire format marks a lost beam (a log written without the column keeps it).
+    if (all_nan(raw.values, 1, 3)) row->status = kBeamLostStatus;
+  } else {
     const double status = raw.values[4];
     if (!(status >= 0.0 && status <= 255.0) || status != static_cast<double>(static_cast<int>(status))) {
       return "status must be an integer 0..255";

@@ -183,15 +183,15 @@ Status Paper6CostBase::build(const RobotModel& nominal, Span<const Sample> sampl
   return finalize();
 }
 
-
 template <typename Scalar>
 double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m,
                                          const double* tail_m) const {
-  // The hot loop, kLanes samples at a time (two where the target has double SIMD: read at
-  // fixed offsets from one pointer, where the auto-vectoriser kept 21 pointers in spilled
-  // registers; one without, where pairs would only double the live registers and spill) (a block's unused tail is zero-initialised
-  // storage, computed and ignored), the norms summed in sample order. The operation order is
-  // Eigen's (pairwise sums in products and norms), which the golden digest pins.
+  // The hot loop, kLanes samples at a time: two where the target has double SIMD, each value
+  // read at a fixed offset from one pointer (left to the auto-vectoriser, the loop kept 21
+  // pointers in spilled registers); one without, where pairs would only double the live
+  // registers and spill. A block's unused tail is zero-initialised storage, computed and
+  // ignored; the norms are summed in sample order. The operation order is Eigen's (pairwise
+  // sums in products and norms), which the golden digest pins.
   static_assert(kPaper6BlockSamples % 2 == 0, "whole pairs per block");
   using lanes::Lane;
   using lanes::broadcast;

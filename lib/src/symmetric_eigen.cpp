@@ -43,8 +43,9 @@ double hypotenuse(double a, double b) {
 /// Indices of the block, split into those coupled to another by a non-zero off-diagonal
 /// entry and those that are not (already eigenpairs).
 struct Coupling {
-  int coupled[kFullParamCount];
-  int coupled_count = 0;
+  int coupled[kFullParamCount];              ///< the coupled indices, increasing
+  int coupled_count = 0;                     ///< how many
+  bool is_coupled[kFullParamCount] = {};     ///< per index of the block
 };
 
 Coupling find_coupling(const NormalMatrix& a, int size) {
@@ -52,6 +53,7 @@ Coupling find_coupling(const NormalMatrix& a, int size) {
   for (int i = 0; i < size; ++i) {
     bool coupled = false;
     for (int j = 0; j < size && !coupled; ++j) coupled = j != i && a(i, j) != 0.0;
+    coupling.is_coupled[i] = coupled;
     if (coupled) coupling.coupled[coupling.coupled_count++] = i;
   }
   return coupling;
@@ -184,29 +186,22 @@ bool diagonalize_tridiagonal(double* d, double* e, int m, double floor, NormalMa
 /// Moves the packed m x m eigenvectors to the rows and columns of the coupled indices and
 /// makes every other column of the size x size block its unit vector. In place: targets are
 /// at or after their sources, so rows and columns are walked backwards.
-void unpack_vectors(const Coupling& coupling, int size, NormalMatrix* v) {
+void unpack_vectors(const Coupling& coupling, int size, NormalMatrix* matrix) {
+  NormalMatrix& v = *matrix;
   const int m = coupling.coupled_count;
   const int* index = coupling.coupled;
   for (int j = 0; j < m; ++j) {
-    for (int i = m - 1; i >= 0; --i) (*v)(index[i], j) = (*v)(i, j);
-    for (int i = 0, next = 0; i < size; ++i) {
-      if (next < m && index[next] == i) {
-        ++next;
-      } else {
-        (*v)(i, j) = 0.0;
-      }
+    for (int i = m - 1; i >= 0; --i) v(index[i], j) = v(i, j);
+    for (int i = 0; i < size; ++i) {
+      if (!coupling.is_coupled[i]) v(i, j) = 0.0;
     }
   }
   for (int j = m - 1; j >= 0; --j) {
-    if (index[j] != j) v->col(index[j]).head(size) = v->col(j).head(size);
+    for (int i = 0; i < size; ++i) v(i, index[j]) = v(i, j);
   }
-  for (int j = 0, next = 0; j < size; ++j) {
-    if (next < m && index[next] == j) {
-      ++next;
-    } else {
-      v->col(j).head(size).setZero();
-      (*v)(j, j) = 1.0;
-    }
+  for (int j = 0; j < size; ++j) {
+    if (coupling.is_coupled[j]) continue;
+    for (int i = 0; i < size; ++i) v(i, j) = i == j ? 1.0 : 0.0;
   }
 }
 

@@ -50,7 +50,7 @@ struct LmOptions {
   int max_iterations = 100;                   ///< LM iterations, rejected steps included [-]
   double cost_tolerance = 1e-12;              ///< stop on relative cost decrease below this [-]
   double step_tolerance_m = 1e-12;            ///< stop when the step moves predictions less (RMS) [m]
-  double gradient_tolerance = 1e-10;          ///< stop when the largest |cosine of the angle between a column and the residual| is below [-]
+  double gradient_tolerance = 1e-10;          ///< stop when every scaled column is this close to orthogonal to the residual (|cosine|) [-]
   double initial_damping = 1e-6;              ///< lambda at start, relative to the scaled diagonal (1) [-]
   LmLoss loss = LmLoss::squared;              ///< per-sample loss
   double huber_threshold_m = 0.0;             ///< Huber k [m]; 0: 3 x noise sigma estimated from the median residual
