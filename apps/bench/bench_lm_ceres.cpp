@@ -6,15 +6,13 @@
 // MAE on fresh poses. Not a test: figures go to docs/solver-lm.md.
 //
 //   bench_lm_ceres [samples=300] [noise_um=10] [repeats=20]
-#include <ceres/ceres.h>
-#include <ceres/rotation.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <vector>
 
+#include "ceres_peer.hpp"
 #include "hivecal/cost.hpp"
 #include "hivecal/lm.hpp"
 #include "hivecal/metrics.hpp"
@@ -22,46 +20,10 @@
 
 namespace {
 
-using hivecal::kDhParamCount;
 using hivecal::kJointCount;
-using hivecal::kParamsPerJoint;
 
-/// r = R0 Exp(w) FK(q; dh, tool) + t0 + R0 tau - m, templated for Ceres' Jets. Uses std
-/// trig (via ADL for Jets): Ceres cannot use hivecal::math, and the bits do not matter here.
-struct PointResidual {
-  hivecal::JointVector q_rad;
-  hivecal::Vec3 point_m;
-  hivecal::Mat3 base_rotation;
-  hivecal::Vec3 base_translation_m;
-
-  template <typename T>
-  bool operator()(const T* dh, const T* tool, const T* rotation, const T* translation, T* residual) const {
-    using std::cos;
-    using std::sin;
-    using std::sqrt;
-    T p[3] = {tool[0], tool[1], tool[2]};
-    for (int j = kJointCount - 1; j >= 0; --j) {  // innermost first, as fk_tool_point
-      const T* joint = dh + j * kParamsPerJoint;  // theta_offset, d, a, alpha
-      const T theta = T(q_rad(j)) + joint[0];
-      const T ct = cos(theta), st = sin(theta), ca = cos(joint[3]), sa = sin(joint[3]);
-      const T x = ct * p[0] - st * ca * p[1] + st * sa * p[2] + joint[2] * ct;
-      const T y = st * p[0] + ct * ca * p[1] - ct * sa * p[2] + joint[2] * st;
-      const T z = sa * p[1] + ca * p[2] + joint[1];
-      p[0] = x;
-      p[1] = y;
-      p[2] = z;
-    }
-    T rotated[3];
-    ceres::AngleAxisRotatePoint(rotation, p, rotated);
-    for (int i = 0; i < 3; ++i) rotated[i] += translation[i];
-    for (int i = 0; i < 3; ++i) {
-      T value = T(base_translation_m(i)) - T(point_m(i));
-      for (int k = 0; k < 3; ++k) value += T(base_rotation(i, k)) * rotated[k];
-      residual[i] = value;
-    }
-    return true;
-  }
-};
+static_assert(ceres_peer::kJoints == kJointCount && ceres_peer::kDhParams == hivecal::kDhParamCount,
+              "ceres_peer mirrors the model layout");
 
 struct CeresOutcome {
   hivecal::RobotModel model;
@@ -70,58 +32,45 @@ struct CeresOutcome {
   bool usable = false;
 };
 
-/// Ceres on the same parameterisation: dh (24), tool (3), base rotation vector and
-/// translation increments (3 + 3) around the start base; dropped parameters held constant.
-CeresOutcome run_ceres(const hivecal::RobotModel& start, const hivecal::RigidTransform& start_base,
-                       hivecal::Span<const hivecal::Sample> samples, hivecal::ParamMask kept) {
-  const hivecal::ModelParams start_params = hivecal::to_params(start);
-  double dh[kDhParamCount];
-  double tool[3];
-  double rotation[3] = {0.0, 0.0, 0.0};
-  double translation[3] = {0.0, 0.0, 0.0};
-  for (int i = 0; i < kDhParamCount; ++i) dh[i] = start_params(i);
-  for (int i = 0; i < 3; ++i) tool[i] = start_params(hivecal::tool_param_index(i));
-  ceres::Problem problem;
-  for (const hivecal::Sample& s : samples) {
-    auto* cost = new ceres::AutoDiffCostFunction<PointResidual, 3, kDhParamCount, 3, 3, 3>(
-        new PointResidual{s.q_rad, s.point_m, start_base.rotation, start_base.translation_m});
-    problem.AddResidualBlock(cost, nullptr, dh, tool, rotation, translation);
-  }
-  double* blocks[] = {dh, tool, rotation, translation};
-  const int sizes[] = {kDhParamCount, 3, 3, 3};
-  int first = 0;
-  for (int b = 0; b < 4; ++b) {
-    std::vector<int> fixed;
-    for (int i = 0; i < sizes[b]; ++i) {
-      if (!hivecal::mask_has(kept, first + i)) fixed.push_back(i);
-    }
-    if (static_cast<int>(fixed.size()) == sizes[b]) {
-      problem.SetParameterBlockConstant(blocks[b]);
-    } else if (!fixed.empty()) {
-      problem.SetManifold(blocks[b], new ceres::SubsetManifold(sizes[b], fixed));
-    }
-    first += sizes[b];
-  }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.num_threads = 1;
-  options.max_num_iterations = 100;
-  options.function_tolerance = 1e-12;  // as our cost_tolerance
-  options.parameter_tolerance = 1e-12;
-  options.gradient_tolerance = 1e-10;  // as our gradient_tolerance (Ceres: max-norm of the projected gradient)
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  if (std::getenv("BENCH_VERBOSE") != nullptr) std::printf("%s\n", summary.FullReport().c_str());
+/// The session in ceres_peer's plain arrays (built once, outside the timed runs).
+struct CeresInput {
+  std::vector<double> q_rad;
+  std::vector<double> point_m;
+  ceres_peer::Problem problem;
+};
 
+/// The same parameterisation as ours: dh (24), tool (3), base rotation vector and translation
+/// increments (3 + 3) around the start base; the parameters our analysis dropped held fixed.
+void prepare_ceres(const hivecal::RobotModel& start, const hivecal::RigidTransform& start_base,
+                   hivecal::Span<const hivecal::Sample> samples, hivecal::ParamMask kept, CeresInput* in) {
+  for (const hivecal::Sample& s : samples) {
+    for (int j = 0; j < kJointCount; ++j) in->q_rad.push_back(s.q_rad(j));
+    for (int i = 0; i < 3; ++i) in->point_m.push_back(s.point_m(i));
+  }
+  ceres_peer::Problem& p = in->problem;
+  p.q_rad = in->q_rad.data();
+  p.point_m = in->point_m.data();
+  p.count = samples.size();
+  for (int i = 0; i < 3; ++i) {
+    p.base_translation_m[i] = start_base.translation_m(i);
+    for (int k = 0; k < 3; ++k) p.base_rotation[3 * i + k] = start_base.rotation(i, k);
+  }
+  const hivecal::ModelParams start_params = hivecal::to_params(start);
+  for (int i = 0; i < hivecal::kModelParamCount; ++i) p.start[i] = start_params(i);
+  for (int i = 0; i < ceres_peer::kParams; ++i) p.fixed[i] = !hivecal::mask_has(kept, i);
+}
+
+CeresOutcome run_ceres(const hivecal::RigidTransform& start_base, const CeresInput& in) {
+  static_assert(ceres_peer::kParams == hivecal::kFullParamCount, "same parameter vector");
+  const ceres_peer::Outcome solved = ceres_peer::solve(in.problem, std::getenv("BENCH_VERBOSE") != nullptr);
   CeresOutcome out;
-  out.usable = summary.IsSolutionUsable();
-  out.iterations = static_cast<int>(summary.iterations.size()) - 1;  // entry 0 is the start
-  hivecal::ModelParams params = start_params;
-  for (int i = 0; i < kDhParamCount; ++i) params(i) = dh[i];
-  for (int i = 0; i < 3; ++i) params(hivecal::tool_param_index(i)) = tool[i];
+  out.usable = solved.usable;
+  out.iterations = solved.iterations;
+  hivecal::ModelParams params;
+  for (int i = 0; i < hivecal::kModelParamCount; ++i) params(i) = solved.params[i];
   out.model = hivecal::from_params(params);
+  const double* rotation = solved.params + hivecal::base_rotation_param_index(0);
+  const double* translation = solved.params + hivecal::base_translation_param_index(0);
   out.base.rotation = start_base.rotation * hivecal::rotation_from_vector(hivecal::Vec3(rotation[0], rotation[1], rotation[2]));
   out.base.translation_m = start_base.translation_m + start_base.rotation * hivecal::Vec3(translation[0], translation[1], translation[2]);
   return out;
@@ -174,7 +123,9 @@ int main(int argc, char** argv) {
     return 1;
   }
   const ParamMask kept = ours.identifiability.kept_mask;
-  CeresOutcome theirs = run_ceres(start, start_base, train.samples(), kept);
+  CeresInput ceres_input;
+  prepare_ceres(start, start_base, train.samples(), kept, &ceres_input);
+  CeresOutcome theirs = run_ceres(start_base, ceres_input);
   if (!theirs.usable) {
     std::fprintf(stderr, "Ceres found no usable solution\n");
     return 1;
@@ -188,7 +139,7 @@ int main(int argc, char** argv) {
     (void)calibrate_lm(start, &start_base, train.samples(), LmOptions{}, &workspace, &ours);
     our_times.push_back(seconds_since(t0));
     t0 = std::chrono::steady_clock::now();
-    theirs = run_ceres(start, start_base, train.samples(), kept);
+    theirs = run_ceres(start_base, ceres_input);
     ceres_times.push_back(seconds_since(t0));
   }
   const double our_time = *std::min_element(our_times.begin(), our_times.end());
