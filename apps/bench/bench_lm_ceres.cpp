@@ -117,6 +117,8 @@ int main(int argc, char** argv) {
   if (fit_base_to_tracker(start, train.samples(), &start_base) != Status::ok) return 1;
 
   static LmWorkspace workspace;
+  static JointTrig joint_trig_storage[2000];
+  workspace.joint_trig = joint_trig_storage;
   static LmResult ours;
   if (calibrate_lm(start, &start_base, train.samples(), LmOptions{}, &workspace, &ours) != Status::ok) {
     std::fprintf(stderr, "hivecal LM failed\n");

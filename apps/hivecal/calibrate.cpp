@@ -117,6 +117,8 @@ Status run_population(bool use_abc, const RobotModel& start, Span<const Sample> 
 Status run_lm(const RobotModel& start, const RigidTransform* start_base, Span<const Sample> train, bool paper_params,
               bool robust, bool progress_on, Stage* stage) {
   static LmWorkspace workspace;
+  static JointTrig joint_trig_storage[kCliDatasetCapacity];
+  workspace.joint_trig = joint_trig_storage;
   static Trace<kTraceCapacity> trace;
   trace.clear();
   LmOptions options;

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "hivecal/math.hpp"
+#include "kinematics_detail.hpp"
 #include "lanes.hpp"
 
 namespace hivecal {
@@ -23,14 +24,17 @@ Mat3 skew(const Vec3& v) {
   return k;
 }
 
-Vec3 point_residual(const RobotModel& model, const TwistTrig& trig, const RigidTransform& base_to_tracker,
+Vec3 point_residual(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
                    const Sample& sample) {
   return base_to_tracker.apply(fk_tool_point(model, trig, sample.q_rad)) - sample.point_m;
 }
 
-/// The parameters of a mask as a list of indices, increasing.
+/// The parameters of a mask as a list of indices, increasing, and where each of the 33
+/// columns sits in a compact row: the listed ones at 0..count-1 in order, the others after
+/// them (scratch that the normal-equation update never reads).
 struct IndexList {
   int index[kFullParamCount];
+  int slot[kFullParamCount];
   int count = 0;
 };
 
@@ -38,6 +42,11 @@ IndexList indices_of(ParamMask mask) {
   IndexList list;
   for (int i = 0; i < kFullParamCount; ++i) {
     if (mask_has(mask, i)) list.index[list.count++] = i;
+  }
+  int unlisted = list.count;
+  for (int k = 0; k < list.count; ++k) list.slot[list.index[k]] = k;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (!mask_has(mask, i)) list.slot[i] = unlisted++;
   }
   return list;
 }
@@ -56,42 +65,57 @@ struct RowBatch {
   int samples = 0;                           ///< samples held
 };
 
-/// Appends one sample's rows of the local Jacobian [J_tool | -skew(p) | I] at the listed
-/// columns; returns its residual rotated into the base frame, R^T r [m].
-Vec3 add_rows(const RobotModel& model, const TwistTrig& trig, const RigidTransform& base_to_tracker,
-              const Sample& sample, const IndexList& columns, double (*rows)[kFullParamCount]) {
-  ToolPointJacobian tool_jacobian;
-  const Vec3 point_m = tool_point_jacobian(model, trig, sample.q_rad, &tool_jacobian);
-  for (int k = 0; k < columns.count; ++k) {
-    const int c = columns.index[k];
-    if (c < kModelParamCount) {
-      for (int r = 0; r < 3; ++r) rows[r][k] = tool_jacobian(r, c);
-    } else if (c < base_translation_param_index(0)) {
-      // d(Exp(w) p)/dw_k at w = 0 is e_k x p.
-      const Vec3 column = Vec3::Unit(c - base_rotation_param_index(0)).cross(point_m);
-      for (int r = 0; r < 3; ++r) rows[r][k] = column(r);
-    } else {  // the translation increment is along the base axes
-      for (int r = 0; r < 3; ++r) rows[r][k] = r == c - base_translation_param_index(0) ? 1.0 : 0.0;
+/// Writes one sample's rows of the local Jacobian [J_tool | -skew(p) | I] at the columns
+/// slots; returns its residual rotated into the base frame, R^T r [m].
+Vec3 add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
+              const Sample& sample, const JointTrig& sample_trig, const IndexList& columns,
+              double (*rows)[kFullParamCount]) {
+  const detail::JacobianRowsTarget target{{rows[0], rows[1], rows[2]}, columns.slot};
+  const Vec3 point_m = detail::tool_point_jacobian_rows(model, trig, sample_trig, target);
+  // d(Exp(w) p)/dw_k at w = 0 is e_k x p; the translation increment is along the base axes.
+  const int* rotation_slot = columns.slot + base_rotation_param_index(0);
+  const int* translation_slot = columns.slot + base_translation_param_index(0);
+  const double moment[3][3] = {{0.0, -point_m.z(), point_m.y()},
+                               {point_m.z(), 0.0, -point_m.x()},
+                               {-point_m.y(), point_m.x(), 0.0}};  // column k = e_k x p
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) {
+      rows[r][rotation_slot[k]] = moment[k][r];
+      rows[r][translation_slot[k]] = r == k ? 1.0 : 0.0;
     }
   }
   return base_to_tracker.rotation.transpose() * (base_to_tracker.apply(point_m) - sample.point_m);
 }
 
-/// column[k] += sum_j rows[j][k] * weight[j] for k in [0, count): each sum starts at 0 and
-/// takes the rows in order, kLanes entries at a time (the same bits at any lane count).
-template <std::size_t kRows>
-void add_weighted_rows(const double* const (&rows)[kRows], const double (&weight)[kRows], int count,
-                       double* column) {
-  using lanes::Lane;
+/// column[k] += sum_j rows[j][k] * weight[j] for k in [0, count): each sum takes the rows in
+/// order, sizeof(Lane)/8 entries at a time, then single ones (the same bits at any lane
+/// width). The sum starts from the first product, not from 0 + it: they differ only in the
+/// sign of a zero, and the column, which starts at +0, never becomes -0 under addition. The last full lane may run past `count` (up to kFullParamCount): the
+/// entries below the diagonal it writes are scratch, overwritten by expand_compact's mirror,
+/// and the rows are written up to kFullParamCount for every sample (IndexList::slot).
+template <class Lane, std::size_t kRows>
+__attribute__((always_inline)) inline void add_weighted_rows(const double* const (&rows)[kRows],
+                                                             const double (&weight)[kRows], int count,
+                                                             double* column) {
+  constexpr int kWidth = static_cast<int>(sizeof(Lane) / sizeof(double));
   int k = 0;
-  for (; k + lanes::kLanes <= count; k += lanes::kLanes) {
-    Lane sum = lanes::broadcast(0.0);
-    for (std::size_t j = 0; j < kRows; ++j) sum += lanes::load(rows[j] + k) * lanes::broadcast(weight[j]);
-    lanes::store(column + k, lanes::load(column + k) + sum);
+  for (; k < count && k + kWidth <= kFullParamCount; k += kWidth) {
+    Lane sum;
+    lanes::load_any(rows[0] + k, &sum);
+    sum *= weight[0];
+    for (std::size_t j = 1; j < kRows; ++j) {
+      Lane row;
+      lanes::load_any(rows[j] + k, &row);
+      sum += row * weight[j];
+    }
+    Lane total;
+    lanes::load_any(column + k, &total);
+    total += sum;
+    lanes::store_any(column + k, total);
   }
   for (; k < count; ++k) {
-    double sum = 0.0;
-    for (std::size_t j = 0; j < kRows; ++j) sum += rows[j][k] * weight[j];
+    double sum = rows[0][k] * weight[0];
+    for (std::size_t j = 1; j < kRows; ++j) sum += rows[j][k] * weight[j];
     column[k] += sum;
   }
 }
@@ -101,7 +125,9 @@ void add_weighted_rows(const double* const (&rows)[kRows], const double (&weight
 /// are zero, which adds exact zeros. The base-translation columns (the last ones of the list,
 /// identity blocks of J) are 1 on their axis' row and 0 elsewhere: their entries only take
 /// that row's products, the same sum without the exact zeros, so the same bits.
-void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
+template <class Lane>
+__attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const IndexList& columns,
+                                                         NormalEquations* eq) {
   const int count = columns.count;
   for (int j = 3 * batch->samples; j < kBatchRows; ++j) {
     for (int k = 0; k < count; ++k) batch->rows[j][k] = 0.0;
@@ -122,7 +148,7 @@ void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
     double* column = compact + l * kFullParamCount;
     const int axis = columns.index[l] - base_translation_param_index(0);
     if (axis < 0) {
-      add_weighted_rows(all_rows, w, l + 1, column);
+      add_weighted_rows<Lane>(all_rows, w, l + 1, column);
       continue;
     }
     const double* axis_rows[kBatchSamples];
@@ -131,9 +157,29 @@ void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
       axis_rows[s] = batch->rows[3 * s + axis];
       axis_weights[s] = w[3 * s + axis];
     }
-    add_weighted_rows(axis_rows, axis_weights, l + 1, column);
+    add_weighted_rows<Lane>(axis_rows, axis_weights, l + 1, column);
   }
   batch->samples = 0;
+}
+
+void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
+  flush_columns<lanes::Lane>(batch, columns, eq);
+}
+
+#ifdef HIVECAL_WIDE_LANES
+/// flush on 4-double lanes, for CPUs with AVX2 (lanes::wide_lanes_available).
+__attribute__((target("avx2"))) void flush_wide(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
+  flush_columns<lanes::WideLane>(batch, columns, eq);
+}
+#endif
+
+/// The flush this CPU runs fastest; all give the same bits.
+using FlushFunction = void (*)(RowBatch*, const IndexList&, NormalEquations*);
+FlushFunction fastest_flush() {
+#ifdef HIVECAL_WIDE_LANES
+  if (lanes::wide_lanes_available()) return flush_wide;
+#endif
+  return flush;
 }
 
 /// Moves the compact sums to their parameter positions and mirrors the upper triangle.
@@ -219,7 +265,8 @@ Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base
                              FullJacobian* local_jacobian) {
   double rows[3][kFullParamCount];
   const Vec3 local_residual_m =
-      add_rows(model, twist_trig(model), base_to_tracker, sample, indices_of(kAllParamsMask), rows);
+      add_rows(model, model_trig(model), base_to_tracker, sample, joint_trig(sample.q_rad), indices_of(kAllParamsMask),
+               rows);
   for (int c = 0; c < kFullParamCount; ++c)
     for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
   return local_residual_m;
@@ -261,7 +308,7 @@ double PointLoss::weight(double norm_m) const {
 
 Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
                                    Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
-                                   ParamMask columns) {
+                                   ParamMask columns, Span<const JointTrig> sample_trig) {
   if (samples.empty()) return Status::dataset_empty;
   NormalEquations& eq = *out;
   eq.jtwj.setZero();
@@ -271,11 +318,15 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   eq.squares_sum_m2 = 0.0;
   eq.count = samples.size();
   const IndexList list = indices_of(columns);
-  const TwistTrig trig = twist_trig(model);
+  const ModelTrig trig = model_trig(model);
+  const FlushFunction flush_batch = fastest_flush();
   RowBatch batch;
-  for (const Sample& sample : samples) {
+  const bool trig_stored = sample_trig.size() >= samples.size();
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Sample& sample = samples[i];
+    const JointTrig q_trig = trig_stored ? sample_trig[i] : joint_trig(sample.q_rad);
     const int first_row = 3 * batch.samples;
-    const Vec3 residual_m = add_rows(model, trig, base_to_tracker, sample, list, batch.rows + first_row);
+    const Vec3 residual_m = add_rows(model, trig, base_to_tracker, sample, q_trig, list, batch.rows + first_row);
     const double squared = residual_m.squaredNorm();
     const double norm_m = std::sqrt(squared);
     const double weight = loss.weight(norm_m);
@@ -283,12 +334,12 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
       batch.weight[first_row + r] = weight;
       batch.residual_m[first_row + r] = residual_m(r);
     }
-    if (++batch.samples == kBatchSamples) flush(&batch, list, &eq);
+    if (++batch.samples == kBatchSamples) flush_batch(&batch, list, &eq);
     eq.loss_sum_m2 += loss.rho(norm_m);
     eq.weighted_squares_m2 += weight * squared;
     eq.squares_sum_m2 += squared;
   }
-  if (batch.samples > 0) flush(&batch, list, &eq);
+  if (batch.samples > 0) flush_batch(&batch, list, &eq);
   expand_compact(list, &eq);
   // A NaN or Inf anywhere in J or r reaches the diagonal, the gradient or the loss.
   if (!math::is_finite(eq.loss_sum_m2) || !all_finite(eq.jtwr) || !all_finite(eq.jtwj.diagonal())) {
@@ -301,7 +352,7 @@ Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_t
                            Span<const Sample> samples, const PointLoss& loss, double* loss_sum_m2,
                            double* squares_sum_m2) {
   if (samples.empty()) return Status::dataset_empty;
-  const TwistTrig trig = twist_trig(model);
+  const ModelTrig trig = model_trig(model);
   double loss_sum = 0.0;
   double squares = 0.0;
   for (const Sample& sample : samples) {
@@ -318,7 +369,7 @@ Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_t
 Status median_residual_norm(const RobotModel& model, const RigidTransform& base_to_tracker,
                             Span<const Sample> samples, double* median_m) {
   if (samples.empty()) return Status::dataset_empty;
-  const TwistTrig trig = twist_trig(model);
+  const ModelTrig trig = model_trig(model);
   std::size_t counts[kHistogramBins + 2] = {};
   for (const Sample& sample : samples) {
     const double norm_m = point_residual(model, trig, base_to_tracker, sample).norm();

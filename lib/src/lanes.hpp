@@ -43,5 +43,31 @@ inline Lane broadcast(double x) { return x; }
 inline double lane_value(const Lane& v, int) { return v; }
 #endif
 
+/// Consecutive doubles from `value` into a lane of any width (a plain double, a GCC vector).
+/// memcpy and the built-in vector operators need no target-specific helper, so a kernel
+/// written with these can be instantiated for a wider target inside a target("...") function
+/// (no vector crosses a call by value: that would change the ABI, -Wpsabi).
+template <class AnyLane>
+inline void load_any(const double* value, AnyLane* lane) {
+  std::memcpy(lane, value, sizeof *lane);
+}
+/// Writes a lane of any width to consecutive doubles at `value`.
+template <class AnyLane>
+inline void store_any(double* value, const AnyLane& lane) {
+  std::memcpy(value, &lane, sizeof lane);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+/// x86-64 machines with AVX2 (most since 2013) add a 4-double lane, chosen at run time
+/// (wide_lanes_available) so that the baseline build still runs everywhere. Element-wise
+/// IEEE operations and no FMA: the same bits as kLanes or one.
+#define HIVECAL_WIDE_LANES 1
+/// Doubles per WideLane.
+constexpr int kWideLanes = 4;
+using WideLane = double __attribute__((vector_size(kWideLanes * sizeof(double))));
+/// True when this CPU runs the target("avx2") instances.
+inline bool wide_lanes_available() { return __builtin_cpu_supports("avx2") != 0; }
+#endif
+
 }  // namespace lanes
 }  // namespace hivecal

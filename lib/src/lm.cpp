@@ -137,6 +137,14 @@ Status validate_inputs(const RobotModel& start_model, const RigidTransform* star
   return Status::ok;
 }
 
+/// Fills `storage` with the joint trig of every sample and returns the filled part; empty
+/// when it cannot hold them all.
+Span<const JointTrig> store_joint_trig(Span<const Sample> samples, Span<JointTrig> storage) {
+  if (storage.size() < samples.size()) return {};
+  for (std::size_t i = 0; i < samples.size(); ++i) storage[i] = joint_trig(samples[i].q_rad);
+  return Span<const JointTrig>(storage.data(), samples.size());
+}
+
 double rms_of(double squares_sum_m2, std::size_t count) {
   return std::sqrt(squares_sum_m2 / static_cast<double>(count));
 }
@@ -164,6 +172,7 @@ struct Run {
   ParamMask free_mask;
   ParamMask kept;
   Point point;
+  Span<const JointTrig> sample_trig;  ///< joint trig of every sample, or empty
   NormalEquations* current;  ///< normal equations at `point`
   NormalEquations* trial;    ///< normal equations at the last trial point
   double damping;
@@ -180,7 +189,7 @@ Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
     columns = run.free_mask;
     for (int axis = 0; axis < 3; ++axis) columns |= param_bit(base_translation_param_index(axis));
   }
-  return accumulate_normal_equations(at.model, at.base, run.samples, at.loss, out, columns);
+  return accumulate_normal_equations(at.model, at.base, run.samples, at.loss, out, columns, run.sample_trig);
 }
 
 /// Identifiability analysis of the current normal equations; sets the kept set and the report.
@@ -356,7 +365,8 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   if (status != Status::ok) return status;
   clear_result(result);
   Run run{options, samples, workspace, result, free_mask, 0, Point{start_model, RigidTransform{}, PointLoss{}},
-          &workspace->normal, &workspace->trial, options.initial_damping, 2.0, false};
+          store_joint_trig(samples, workspace->joint_trig), &workspace->normal, &workspace->trial,
+          options.initial_damping, 2.0, false};
   status = start(start_base_to_tracker, &run);
   if (status != Status::ok) return status;
   if (trace != nullptr) trace->push(rms_of(run.current->squares_sum_m2, samples.size()));

@@ -176,8 +176,6 @@ double atan(double x) {
 
 }  // namespace
 
-bool is_finite(double x) { return exponent_field(x) != 0x7ff; }
-
 void sincos(double x, double* sin_out, double* cos_out) {
   if (!is_finite(x) || !trig_argument_ok(x)) {
     *sin_out = quiet_nan();

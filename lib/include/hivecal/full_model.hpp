@@ -97,11 +97,13 @@ struct NormalEquations {
 };
 
 /// Sums the normal equations over `samples`, for the parameters in `columns` only (the
-/// other rows and columns of jtwj and jtwr are 0; fewer columns, less work). Errors:
+/// other rows and columns of jtwj and jtwr are 0; fewer columns, less work). `sample_trig`,
+/// if it holds an entry per sample (joint_trig of sample i at i), saves the joint trig of
+/// every sample; otherwise it is computed here. The same bits either way. Errors:
 /// dataset_empty, non_finite_input (a NaN or Inf residual or Jacobian).
 Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
                                    Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
-                                   ParamMask columns = kAllParamsMask);
+                                   ParamMask columns = kAllParamsMask, Span<const JointTrig> sample_trig = {});
 
 /// Loss sums only (no Jacobian, fk_tool_point), e.g. to compare candidate geometries: sum
 /// rho(|r_i|) and sum |r_i|^2 [m^2]. Agrees with accumulate_normal_equations to rounding.

@@ -78,21 +78,32 @@ UrCalibrationDeltas ur_deltas_between(const RobotModel& nominal, const RobotMode
 RigidTransform fk_flange(const RobotModel& model, const JointVector& q_rad);
 /// Tool point in the robot base frame [m]; cheaper than fk_flange (vector recursion only).
 Vec3 fk_tool_point(const RobotModel& model, const JointVector& q_rad);
-/// Tool point [m] and, into *jacobian, its analytic derivative w.r.t. all 27 parameters.
+/// Tool point [m] and, into *jacobian, its analytic derivative w.r.t. all 27 parameters. The
+/// joint angles enter as sin/cos(q_j + offset_j) by the angle-sum formulas from JointTrig and
+/// ModelTrig (so that solvers can keep the JointTrig of their samples); the point agrees with
+/// fk_tool_point to rounding.
 Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, ToolPointJacobian* jacobian);
 
-/// sin and cos of each joint's twist: they do not depend on the pose, so loops over many
-/// samples of one model compute them once (half the trig of FK). Same bits either way.
-struct TwistTrig {
-  double sin_alpha[kJointCount] = {};  ///< sine of alpha_j, from math::sincos [-]
-  double cos_alpha[kJointCount] = {};  ///< cosine of alpha_j, from math::sincos [-]
+/// sin and cos of each joint's twist and offset: they do not depend on the pose, so loops
+/// over many samples of one model compute them once.
+struct ModelTrig {
+  double sin_alpha[kJointCount] = {};   ///< sine of alpha_j, from math::sincos [-]
+  double cos_alpha[kJointCount] = {};   ///< cosine of alpha_j, from math::sincos [-]
+  double sin_offset[kJointCount] = {};  ///< sine of theta_offset_j, from math::sincos [-]
+  double cos_offset[kJointCount] = {};  ///< cosine of theta_offset_j, from math::sincos [-]
 };
-/// The twist trig of `model`.
-TwistTrig twist_trig(const RobotModel& model);
-/// fk_tool_point with the twist trig of `model` precomputed.
-Vec3 fk_tool_point(const RobotModel& model, const TwistTrig& trig, const JointVector& q_rad);
-/// tool_point_jacobian with the twist trig of `model` precomputed.
-Vec3 tool_point_jacobian(const RobotModel& model, const TwistTrig& trig, const JointVector& q_rad,
-                         ToolPointJacobian* jacobian);
+/// The trig of `model`.
+ModelTrig model_trig(const RobotModel& model);
+/// fk_tool_point with the trig of `model` precomputed (same bits).
+Vec3 fk_tool_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad);
+
+/// sin and cos of one pose's joint readings, without the offsets: they do not depend on the
+/// model, so a solver that visits the samples many times can compute them once per sample.
+struct JointTrig {
+  double sin_q[kJointCount] = {};  ///< sine of q_j, from math::sincos [-]
+  double cos_q[kJointCount] = {};  ///< cosine of q_j, from math::sincos [-]
+};
+/// The joint trig of a pose.
+JointTrig joint_trig(const JointVector& q_rad);
 
 }  // namespace hivecal

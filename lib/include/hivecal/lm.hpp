@@ -106,6 +106,10 @@ struct LmWorkspace {
   NormalMatrix system;                        ///< scaled, damped system matrix
   Eigen::LDLT<NormalMatrix> factorization;    ///< its factorization
   IdentifiabilityWorkspace identifiability;   ///< scratch of the identifiability analysis
+  /// Optional storage for the joint trig of the samples, one entry per sample (no ownership):
+  /// with it the joint angles' sin/cos are computed once instead of in every pass (~10 %
+  /// faster). Too small or empty: computed in every pass. The same bits either way.
+  Span<JointTrig> joint_trig;
 };
 
 /// Calibrates `start_model` (and the base transform, from `*start_base_to_tracker` or, when

@@ -4,6 +4,9 @@
 // -ffp-contract=off every target computes the same bits.
 #pragma once
 
+#include <cstdint>
+#include <cstring>
+
 namespace hivecal::math {
 
 // These are the library's own definitions (hivecal::math::sin etc.), not libm's: the names
@@ -30,7 +33,12 @@ double log(double x);
 double atan2(double y, double x);  // the library's own, not libm's
 /// Arc cosine [rad] of x clamped to [-1, 1].
 double acos_clamped(double x);
-/// True when x is neither NaN nor Inf (bit test: immune to -ffast-math).
-bool is_finite(double x);
+/// True when x is neither NaN nor Inf (exponent bit test: immune to -ffast-math). Inline:
+/// it guards every entry of the 33x33 matrices.
+inline bool is_finite(double x) {
+  std::uint64_t bits = 0;
+  std::memcpy(&bits, &x, sizeof bits);
+  return ((bits >> 52) & 0x7ffU) != 0x7ffU;
+}
 
 }  // namespace hivecal::math
