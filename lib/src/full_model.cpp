@@ -1,5 +1,6 @@
 #include "hivecal/full_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "hivecal/math.hpp"
@@ -65,26 +66,40 @@ struct RowBatch {
   int samples = 0;                           ///< samples held
 };
 
-/// Writes one sample's rows of the local Jacobian [J_tool | -skew(p) | I] at the columns
-/// slots; returns its residual rotated into the base frame, R^T r [m].
-Vec3 add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
-              const Sample& sample, const JointTrig& sample_trig, const IndexList& columns,
-              double (*rows)[kFullParamCount]) {
-  const detail::JacobianRowsTarget target{{rows[0], rows[1], rows[2]}, columns.slot};
-  const Vec3 point_m = detail::tool_point_jacobian_rows(model, trig, sample_trig, target);
+/// Samples whose Jacobian rows one kernel call writes (one per double lane).
+constexpr int kGroupSamples = detail::kJacobianLanes;
+static_assert(kBatchSamples % kGroupSamples == 0, "a group of samples never straddles two batches");
+
+/// Writes the rows of the local Jacobian [J_tool | -skew(p) | I] of `count` samples (1 ..
+/// kGroupSamples) at the columns' slots, sample k at rows 3k .. 3k+2, and their residuals
+/// rotated into the base frame, R^T r [m]. Lanes beyond `count` repeat the last sample into
+/// their rows (which must exist) as scratch.
+void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
+              const Sample* const* sample, const JointTrig* const* sample_trig, int count, const IndexList& columns,
+              double (*rows)[kFullParamCount], Vec3* residual_m) {
+  const JointTrig* lane_trig[kGroupSamples];
+  detail::JacobianRowsTarget target[kGroupSamples];
+  for (int k = 0; k < kGroupSamples; ++k) {
+    lane_trig[k] = sample_trig[k < count ? k : count - 1];
+    double(*lane_rows)[kFullParamCount] = rows + 3 * k;
+    target[k] = {{lane_rows[0], lane_rows[1], lane_rows[2]}, columns.slot};
+  }
+  Vec3 point_m[kGroupSamples];
+  detail::tool_point_jacobian_rows(model, trig, lane_trig, target, point_m);
   // d(Exp(w) p)/dw_k at w = 0 is e_k x p; the translation increment is along the base axes.
   const int* rotation_slot = columns.slot + base_rotation_param_index(0);
   const int* translation_slot = columns.slot + base_translation_param_index(0);
-  const double moment[3][3] = {{0.0, -point_m.z(), point_m.y()},
-                               {point_m.z(), 0.0, -point_m.x()},
-                               {-point_m.y(), point_m.x(), 0.0}};  // column k = e_k x p
-  for (int r = 0; r < 3; ++r) {
-    for (int k = 0; k < 3; ++k) {
-      rows[r][rotation_slot[k]] = moment[k][r];
-      rows[r][translation_slot[k]] = r == k ? 1.0 : 0.0;
+  for (int k = 0; k < count; ++k) {
+    const Vec3& p = point_m[k];
+    const double moment[3][3] = {{0.0, -p.z(), p.y()}, {p.z(), 0.0, -p.x()}, {-p.y(), p.x(), 0.0}};  // e_a x p
+    for (int r = 0; r < 3; ++r) {
+      for (int a = 0; a < 3; ++a) {
+        rows[3 * k + r][rotation_slot[a]] = moment[a][r];
+        rows[3 * k + r][translation_slot[a]] = r == a ? 1.0 : 0.0;
+      }
     }
+    residual_m[k] = base_to_tracker.rotation.transpose() * (base_to_tracker.apply(p) - sample[k]->point_m);
   }
-  return base_to_tracker.rotation.transpose() * (base_to_tracker.apply(point_m) - sample.point_m);
 }
 
 /// column[k] += sum_j rows[j][k] * weight[j] for k in [0, count): each sum takes the rows in
@@ -263,10 +278,13 @@ void apply_full_increment(const FullParams& increment, RobotModel* model, RigidT
 
 Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
                              FullJacobian* local_jacobian) {
-  double rows[3][kFullParamCount];
-  const Vec3 local_residual_m =
-      add_rows(model, model_trig(model), base_to_tracker, sample, joint_trig(sample.q_rad), indices_of(kAllParamsMask),
-               rows);
+  double rows[3 * kGroupSamples][kFullParamCount];
+  const Sample* const samples[1] = {&sample};
+  const JointTrig q_trig = joint_trig(sample.q_rad);
+  const JointTrig* const trig_of[1] = {&q_trig};
+  Vec3 local_residual_m;
+  add_rows(model, model_trig(model), base_to_tracker, samples, trig_of, 1, indices_of(kAllParamsMask), rows,
+           &local_residual_m);
   for (int c = 0; c < kFullParamCount; ++c)
     for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
   return local_residual_m;
@@ -322,22 +340,34 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   const FlushFunction flush_batch = fastest_flush();
   RowBatch batch;
   const bool trig_stored = sample_trig.size() >= samples.size();
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Sample& sample = samples[i];
-    const JointTrig q_trig = trig_stored ? sample_trig[i] : joint_trig(sample.q_rad);
-    const int first_row = 3 * batch.samples;
-    const Vec3 residual_m = add_rows(model, trig, base_to_tracker, sample, q_trig, list, batch.rows + first_row);
-    const double squared = residual_m.squaredNorm();
-    const double norm_m = std::sqrt(squared);
-    const double weight = loss.weight(norm_m);
-    for (int r = 0; r < 3; ++r) {
-      batch.weight[first_row + r] = weight;
-      batch.residual_m[first_row + r] = residual_m(r);
+  for (std::size_t first = 0; first < samples.size(); first += kGroupSamples) {
+    const int count = static_cast<int>(std::min<std::size_t>(kGroupSamples, samples.size() - first));
+    const Sample* group[kGroupSamples];
+    JointTrig computed[kGroupSamples];
+    const JointTrig* group_trig[kGroupSamples];
+    for (int k = 0; k < count; ++k) {
+      const std::size_t i = first + static_cast<std::size_t>(k);
+      group[k] = &samples[i];
+      if (!trig_stored) computed[k] = joint_trig(samples[i].q_rad);
+      group_trig[k] = trig_stored ? &sample_trig[i] : &computed[k];
     }
-    if (++batch.samples == kBatchSamples) flush_batch(&batch, list, &eq);
-    eq.loss_sum_m2 += loss.rho(norm_m);
-    eq.weighted_squares_m2 += weight * squared;
-    eq.squares_sum_m2 += squared;
+    Vec3 residual_m[kGroupSamples];
+    add_rows(model, trig, base_to_tracker, group, group_trig, count, list, batch.rows + 3 * batch.samples, residual_m);
+    for (int k = 0; k < count; ++k) {
+      const double squared = residual_m[k].squaredNorm();
+      const double norm_m = std::sqrt(squared);
+      const double weight = loss.weight(norm_m);
+      const int first_row = 3 * batch.samples;
+      for (int r = 0; r < 3; ++r) {
+        batch.weight[first_row + r] = weight;
+        batch.residual_m[first_row + r] = residual_m[k](r);
+      }
+      ++batch.samples;
+      eq.loss_sum_m2 += loss.rho(norm_m);
+      eq.weighted_squares_m2 += weight * squared;
+      eq.squares_sum_m2 += squared;
+    }
+    if (batch.samples == kBatchSamples) flush_batch(&batch, list, &eq);
   }
   if (batch.samples > 0) flush_batch(&batch, list, &eq);
   expand_compact(list, &eq);

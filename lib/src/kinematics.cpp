@@ -193,69 +193,86 @@ Vec3 fk_tool_point(const RobotModel& model, const ModelTrig& trig, const JointVe
   return point_m;
 }
 
-Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, ToolPointJacobian* jacobian) {
-  double rows[3][kModelParamCount];
-  int slot[kModelParamCount];
-  for (int c = 0; c < kModelParamCount; ++c) slot[c] = c;
-  const Vec3 point_m = detail::tool_point_jacobian_rows(model, model_trig(model), joint_trig(q_rad),
-                                                        {{rows[0], rows[1], rows[2]}, slot});
-  for (int c = 0; c < kModelParamCount; ++c)
-    for (int r = 0; r < 3; ++r) (*jacobian)(r, c) = rows[r][c];
-  return point_m;
-}
-
 namespace detail {
 namespace {
 
+/// Lane k of a value (a plain double has one).
+inline double lane_at(double v, int) { return v; }
+#if defined(HIVECAL_LANES_ARE_VECTORS)
+inline double lane_at(const lanes::Lane& v, int k) { return lanes::lane_value(v, k); }
+#endif
+
 /// a * u + b * v, per component (the x and y axes after a rotation about z, or y and z after
 /// one about x).
-void combine(double a, const double* u, double b, const double* v, double* out) {
+template <class Lane>
+void combine(const Lane& a, const Lane* u, const Lane& b, const Lane* v, Lane* out) {
   for (int r = 0; r < 3; ++r) out[r] = a * u[r] + b * v[r];
 }
 
-/// u x (p - o) into column c of the target (the screw of a rotation about u through o).
-void write_moment(const double* u, const double* p, const double* o, int c, const JacobianRowsTarget& target) {
-  const double dx = p[0] - o[0];
-  const double dy = p[1] - o[1];
-  const double dz = p[2] - o[2];
-  double* const* row = target.row;
-  const int k = target.slot[c];
-  row[0][k] = u[1] * dz - u[2] * dy;
-  row[1][k] = u[2] * dx - u[0] * dz;
-  row[2][k] = u[0] * dy - u[1] * dx;
+/// Where the lanes' columns go.
+template <int kWidth>
+struct LaneTargets {
+  const JacobianRowsTarget* target;  ///< one per lane
+  /// Writes component r of column c of every lane.
+  template <class Lane>
+  void put(int c, int r, const Lane& value) const {
+    for (int k = 0; k < kWidth; ++k) target[k].row[r][target[k].slot[c]] = lane_at(value, k);
+  }
+};
+
+/// u x (p - o) into column c (the screw of a rotation about u through o).
+template <class Lane, int kWidth>
+void write_moment(const Lane* u, const Lane* p, const Lane* o, int c, const LaneTargets<kWidth>& out) {
+  const Lane dx = p[0] - o[0];
+  const Lane dy = p[1] - o[1];
+  const Lane dz = p[2] - o[2];
+  out.put(c, 0, u[1] * dz - u[2] * dy);
+  out.put(c, 1, u[2] * dx - u[0] * dz);
+  out.put(c, 2, u[0] * dy - u[1] * dx);
 }
 
-void write_vector(const double* u, int c, const JacobianRowsTarget& target) {
-  for (int r = 0; r < 3; ++r) target.row[r][target.slot[c]] = u[r];
+template <class Lane, int kWidth>
+void write_vector(const Lane* u, int c, const LaneTargets<kWidth>& out) {
+  for (int r = 0; r < 3; ++r) out.put(c, r, u[r]);
 }
 
-}  // namespace
-
-Vec3 tool_point_jacobian_rows(const RobotModel& model, const ModelTrig& model_trig, const JointTrig& joint_trig,
-                              const JacobianRowsTarget& target) {
-  // The frame before joint j is kept as its axes x, y, z and origin o (base frame). Joint j
-  // turns x, y about z by theta and slides o by d along z and a along the new x: that is
-  // where theta_j rotates, d_j slides (z before), a_j slides (x after); then alpha_j turns
-  // y, z about the new x through the new origin. Plain column rotations: 48 flops per joint
-  // instead of two 3x3 products.
-  double x[3] = {1.0, 0.0, 0.0};
-  double y[3] = {0.0, 1.0, 0.0};
-  double z[3] = {0.0, 0.0, 1.0};
-  double origin_m[kJointCount + 1][3] = {};  ///< origin before joint j; [kJointCount] = flange
-  double z_before[kJointCount][3];
-  double x_after[kJointCount][3];
+/// The kernel, lane k for sample k. The frame before joint j is kept as its axes x, y, z and
+/// origin o (base frame). Joint j turns x, y about z by theta and slides o by d along z and a
+/// along the new x: that is where theta_j rotates, d_j slides (z before), a_j slides (x
+/// after); then alpha_j turns y, z about the new x through the new origin. Plain column
+/// rotations: 48 flops per joint instead of two 3x3 products.
+template <class Lane, int kWidth>
+void jacobian_lanes(const RobotModel& model, const ModelTrig& model_trig, const JointTrig* const* joint_trig,
+                    const LaneTargets<kWidth>& out, Vec3* point_out_m) {
+  const Lane zero = Lane{};
+  const Lane one = zero + 1.0;
+  Lane x[3] = {one, zero, zero};
+  Lane y[3] = {zero, one, zero};
+  Lane z[3] = {zero, zero, one};
+  Lane origin_m[kJointCount + 1][3];  // origin before joint j; [kJointCount] = flange
+  Lane z_before[kJointCount][3];
+  Lane x_after[kJointCount][3];
+  for (int r = 0; r < 3; ++r) origin_m[0][r] = zero;
   for (int j = 0; j < kJointCount; ++j) {
     const DhJoint& joint = model.joints[j];
+    double sin_q[static_cast<std::size_t>(kWidth)];
+    double cos_q[static_cast<std::size_t>(kWidth)];
+    for (int k = 0; k < kWidth; ++k) {
+      sin_q[k] = joint_trig[k]->sin_q[j];
+      cos_q[k] = joint_trig[k]->cos_q[j];
+    }
+    Lane sq;
+    Lane cq;
+    lanes::load_any(sin_q, &sq);
+    lanes::load_any(cos_q, &cq);
     // sin and cos of q + offset by the angle-sum formulas: a few ulp, as rounding q + offset
     // to a double already costs.
-    const double sq = joint_trig.sin_q[j];
-    const double cq = joint_trig.cos_q[j];
-    const double st = sq * model_trig.cos_offset[j] + cq * model_trig.sin_offset[j];
-    const double ct = cq * model_trig.cos_offset[j] - sq * model_trig.sin_offset[j];
-    const double sa = model_trig.sin_alpha[j];
-    const double ca = model_trig.cos_alpha[j];
-    double turned_x[3];
-    double turned_y[3];
+    const Lane st = sq * model_trig.cos_offset[j] + cq * model_trig.sin_offset[j];
+    const Lane ct = cq * model_trig.cos_offset[j] - sq * model_trig.sin_offset[j];
+    const Lane sa = zero + model_trig.sin_alpha[j];
+    const Lane ca = zero + model_trig.cos_alpha[j];
+    Lane turned_x[3];
+    Lane turned_y[3];
     combine(ct, x, st, y, turned_x);
     combine(-st, x, ct, y, turned_y);
     for (int r = 0; r < 3; ++r) {
@@ -264,26 +281,52 @@ Vec3 tool_point_jacobian_rows(const RobotModel& model, const ModelTrig& model_tr
       origin_m[j + 1][r] = origin_m[j][r] + joint.d_m * z[r] + joint.a_m * turned_x[r];
       x[r] = turned_x[r];
     }
-    double new_z[3];
+    Lane new_z[3];
     combine(ca, turned_y, sa, z, y);
     combine(-sa, turned_y, ca, z, new_z);
     for (int r = 0; r < 3; ++r) z[r] = new_z[r];
   }
-  const double* flange_m = origin_m[kJointCount];
+  const Lane* flange_m = origin_m[kJointCount];
   const Vec3& tool = model.tool_m;
-  double point_m[3];
+  Lane point_m[3];
   for (int r = 0; r < 3; ++r) point_m[r] = flange_m[r] + tool.x() * x[r] + tool.y() * y[r] + tool.z() * z[r];
   for (int j = 0; j < kJointCount; ++j) {
-    write_moment(z_before[j], point_m, origin_m[j], model_param_index(j, DhField::theta_offset), target);
-    write_vector(z_before[j], model_param_index(j, DhField::d), target);
-    write_vector(x_after[j], model_param_index(j, DhField::a), target);
-    write_moment(x_after[j], point_m, origin_m[j + 1], model_param_index(j, DhField::alpha), target);
+    write_moment(z_before[j], point_m, origin_m[j], model_param_index(j, DhField::theta_offset), out);
+    write_vector(z_before[j], model_param_index(j, DhField::d), out);
+    write_vector(x_after[j], model_param_index(j, DhField::a), out);
+    write_moment(x_after[j], point_m, origin_m[j + 1], model_param_index(j, DhField::alpha), out);
   }
-  write_vector(x, tool_param_index(0), target);
-  write_vector(y, tool_param_index(1), target);
-  write_vector(z, tool_param_index(2), target);
-  return Vec3(point_m[0], point_m[1], point_m[2]);
+  write_vector(x, tool_param_index(0), out);
+  write_vector(y, tool_param_index(1), out);
+  write_vector(z, tool_param_index(2), out);
+  for (int k = 0; k < kWidth; ++k) {
+    point_out_m[k] = Vec3(lane_at(point_m[0], k), lane_at(point_m[1], k), lane_at(point_m[2], k));
+  }
+}
+
+}  // namespace
+
+void tool_point_jacobian_rows(const RobotModel& model, const ModelTrig& model_trig,
+                              const JointTrig* const (&joint_trig)[kJacobianLanes],
+                              const JacobianRowsTarget (&target)[kJacobianLanes], Vec3 (&point_m)[kJacobianLanes]) {
+  jacobian_lanes<lanes::Lane, kJacobianLanes>(model, model_trig, joint_trig, LaneTargets<kJacobianLanes>{target},
+                                              point_m);
 }
 
 }  // namespace detail
+
+Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, ToolPointJacobian* jacobian) {
+  double rows[3][kModelParamCount];
+  int slot[kModelParamCount];
+  for (int c = 0; c < kModelParamCount; ++c) slot[c] = c;
+  const JointTrig q_trig = joint_trig(q_rad);
+  const JointTrig* const trig_of[1] = {&q_trig};
+  const detail::JacobianRowsTarget target[1] = {{{rows[0], rows[1], rows[2]}, slot}};
+  Vec3 point_m;
+  detail::jacobian_lanes<double, 1>(model, model_trig(model), trig_of, detail::LaneTargets<1>{target}, &point_m);
+  for (int c = 0; c < kModelParamCount; ++c)
+    for (int r = 0; r < 3; ++r) (*jacobian)(r, c) = rows[r][c];
+  return point_m;
+}
+
 }  // namespace hivecal

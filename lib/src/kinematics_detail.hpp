@@ -1,9 +1,11 @@
 // Internals of the kinematics (library-private): the Jacobian kernel that writes its columns
 // straight into the row buffers of the normal-equation update (full_model.cpp), so that the
-// hot loop needs no 3 x 27 matrix and no copy.
+// hot loop needs no 3 x 27 matrix and no copy, for as many samples at once as the target has
+// double lanes.
 #pragma once
 
 #include "hivecal/kinematics.hpp"
+#include "lanes.hpp"
 
 namespace hivecal::detail {
 
@@ -14,9 +16,14 @@ struct JacobianRowsTarget {
   const int* slot;                ///< position of each of the 27 model columns in the rows
 };
 
-/// Tool point in the robot base frame [m]; writes d(tool point)/d(model parameters) to
-/// `target`. Same values as tool_point_jacobian.
-Vec3 tool_point_jacobian_rows(const RobotModel& model, const ModelTrig& model_trig, const JointTrig& joint_trig,
-                              const JacobianRowsTarget& target);
+/// Width of the batched kernel: one sample per lane (lanes::kLanes).
+inline constexpr int kJacobianLanes = lanes::kLanes;
+
+/// For kJacobianLanes samples at once, lane k computing exactly what a single sample would
+/// (element-wise IEEE operations, the same bits): writes sample k's d(tool point)/d(model
+/// parameters) to target[k] and its tool point in the robot base frame to point_m[k] [m].
+void tool_point_jacobian_rows(const RobotModel& model, const ModelTrig& model_trig,
+                              const JointTrig* const (&joint_trig)[kJacobianLanes],
+                              const JacobianRowsTarget (&target)[kJacobianLanes], Vec3 (&point_m)[kJacobianLanes]);
 
 }  // namespace hivecal::detail

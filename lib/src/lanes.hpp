@@ -10,6 +10,7 @@ namespace hivecal {
 namespace lanes {
 
 #if defined(__SSE2__) || defined(__aarch64__)
+#define HIVECAL_LANES_ARE_VECTORS 1
 /// Doubles per Lane.
 constexpr int kLanes = 2;
 using Lane = double __attribute__((vector_size(2 * sizeof(double))));
