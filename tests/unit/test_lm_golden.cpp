@@ -13,7 +13,7 @@
 namespace hivecal {
 namespace {
 
-constexpr std::uint64_t kLmGoldenDigest = 0x3c54722f41aa1304ULL;
+constexpr std::uint64_t kLmGoldenDigest = 0x6b9789a35403c11cULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));
