@@ -12,10 +12,14 @@ namespace {
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 
+/// Largest |a_ij| of a finite block (a comparison, not std::fmax: that is a libm call).
 double largest_magnitude(const NormalMatrix& a, int size) {
   double largest = 0.0;
   for (int c = 0; c < size; ++c) {
-    for (int r = 0; r < size; ++r) largest = std::fmax(largest, std::fabs(a(r, c)));
+    for (int r = 0; r < size; ++r) {
+      const double magnitude = std::fabs(a(r, c));
+      if (magnitude > largest) largest = magnitude;
+    }
   }
   return largest;
 }
