@@ -477,6 +477,7 @@ Status symmetric_eigenvalues(NormalMatrix* matrix, int size, FullParams* eigenva
   }
   if (iterations != nullptr) *iterations = iteration_count;
   sort_increasing(eigenvalues, size, nullptr, r.source);
+  if (!converged) r.size = 0;  // symmetric_eigenvectors_lowest refuses it
   return converged ? Status::ok : Status::not_converged;
 }
 

@@ -20,13 +20,13 @@ inline constexpr int kSymmetricEigenMaxIterations = 30;
 /// Largest entry magnitude accepted: the Householder norms square the entries once.
 inline constexpr double kSymmetricEigenMaxMagnitude = 1e150;
 /// Inverse-iteration steps per selected eigenvector after which symmetric_eigenvectors_lowest
-/// gives up (LAPACK dstein's MAXITS; 3 is typical: growth reached, then 2 more).
+/// gives up (LAPACK dstein's MAXITS; 3 is typical: residual reached, then 2 more).
 inline constexpr int kInverseIterationMaxSteps = 5;
 
-/// What symmetric_eigenvalues keeps for symmetric_eigenvectors_lowest (1.4 kB); the
+/// What symmetric_eigenvalues keeps for symmetric_eigenvectors_lowest (1.1 kB); the
 /// Householder vectors themselves stay in the working matrix, below its subdiagonal.
 struct SymmetricEigenReduction {
-  int size = 0;                                  ///< decomposed block size [-] (0: none yet)
+  int size = 0;                                  ///< decomposed block size [-] (0: none, or the decomposition failed)
   int coupled_count = 0;                         ///< block indices with an off-diagonal entry, reduced to T [-]
   int coupled[kFullParamCount] = {};             ///< those indices, increasing: row i of T is coupled[i] [-]
   int source[kFullParamCount] = {};              ///< block index whose eigenvalue sorted to position k [-]
@@ -53,7 +53,7 @@ Status symmetric_eigen(NormalMatrix* matrix, int size, FullParams* eigenvalues, 
 
 /// The eigenvalues of symmetric_eigen without vectors (same bits, same order, same errors and
 /// iterations), keeping in *reduction and in *matrix (the working copy) what
-/// symmetric_eigenvectors_lowest needs. *reduction is written even on error.
+/// symmetric_eigenvectors_lowest needs. On error reduction->size is 0.
 Status symmetric_eigenvalues(NormalMatrix* matrix, int size, FullParams* eigenvalues,
                              SymmetricEigenReduction* reduction, int* iterations = nullptr);
 
@@ -64,8 +64,9 @@ Status symmetric_eigenvalues(NormalMatrix* matrix, int size, FullParams* eigenva
 /// 10 eps |lambda| above the previous one of its block when closer; modified Gram-Schmidt
 /// against the earlier vectors of its cluster, eigenvalues less than 1e-3 |T| apart), then
 /// the reflections. A row with no off-diagonal entry gives its unit vector exactly.
-/// Errors: invalid_argument (vector_count not in 0..size, or no reduction), not_converged (an
-/// iteration without growth after kInverseIterationMaxSteps steps; its vector is still written).
+/// Errors: invalid_argument (vector_count not in 0..size, or reduction->size 0), not_converged
+/// (a vector whose residual |(T - shift) x| stayed above n^1.5 sqrt(10) eps |T|_1 |x| after
+/// kInverseIterationMaxSteps steps; it is still written).
 Status symmetric_eigenvectors_lowest(const NormalMatrix& matrix, const SymmetricEigenReduction& reduction,
                                      const FullParams& eigenvalues, int vector_count, NormalMatrix* eigenvectors);
 
