@@ -31,12 +31,24 @@ void fill_spectrum(const FullParams& eigenvalues, int count, double* values, int
   *condition = smallest > 0.0 ? values[0] / smallest : std::numeric_limits<double>::infinity();
 }
 
-/// Decomposes ws->scaled: eigenvalues (increasing) and, if `vectors`, the eigenvectors in
-/// ws->null_basis. False if the QL iterations did not converge.
-bool decompose(IdentifiabilityWorkspace* ws, bool vectors) {
+/// Eigenvalues of ws->scaled (increasing), its reduction kept in ws->rotated and
+/// ws->reduction for null_vectors. False if the QL iterations did not converge.
+bool decompose(IdentifiabilityWorkspace* ws) {
   ws->rotated = ws->scaled;
-  return symmetric_eigen(&ws->rotated, kFullParamCount, &ws->eigenvalues, vectors ? &ws->null_basis : nullptr) ==
-         Status::ok;
+  return symmetric_eigenvalues(&ws->rotated, kFullParamCount, &ws->eigenvalues, &ws->reduction) == Status::ok;
+}
+
+/// Orthonormal eigenvectors of the null_count smallest eigenvalues of the analysed block
+/// (after the inactive parameters' `first_null`) into columns 0..null_count-1 of ws->null_basis.
+bool null_vectors(IdentifiabilityWorkspace* ws, int first_null, int null_count) {
+  NormalMatrix& basis = ws->null_basis;
+  if (symmetric_eigenvectors_lowest(ws->rotated, ws->reduction, ws->eigenvalues, first_null + null_count, &basis) !=
+      Status::ok) {
+    return false;
+  }
+  // To the front; in increasing j each source lies at or after its target.
+  for (int j = 0; j < null_count; ++j) basis.col(j) = basis.col(first_null + j);
+  return true;
 }
 
 /// sigma of the scaled Jacobian along v: sqrt(v^T S v / v^T v) over the parameters in `mask`.
@@ -212,12 +224,12 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
   report->free_mask = free_mask;
   ParamMask mask = drop_no_effect(jtwj, free_mask, threshold, report);
   // Each round removes every direction it finds; a second round only confirms (or catches a
-  // direction that was hidden below a stronger null one).
+  // direction that was hidden below a stronger null one). Eigenvalues first, then the
+  // vectors of the null directions only.
   for (bool first_round = true; mask != 0; first_round = false) {
     FullParams scale;
     scale_normal_matrix(jtwj, mask, kInactiveEigenvalue, &workspace->scaled, &scale);
-    // Later rounds only confirm that no null direction is left: eigenvalues suffice.
-    if (!decompose(workspace, first_round)) return Status::singular_system;
+    if (!decompose(workspace)) return Status::singular_system;
     const FullParams& eigenvalues = workspace->eigenvalues;
     const int count = mask_count(mask);
     const double sigma_max = singular_from_eigen(eigenvalues(kFullParamCount - 1));
@@ -236,12 +248,7 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
       report->kept_mask = mask;
       return Status::ok;
     }
-    // Same eigenvalues (bits) with the vectors as without: only the vectors are new.
-    if (!first_round && !decompose(workspace, true)) return Status::singular_system;
-    // Null directions to the front; in increasing j each source lies at or after its target.
-    const int first_null = kFullParamCount - count;
-    NormalMatrix& basis = workspace->null_basis;
-    for (int j = 0; j < null_count; ++j) basis.col(j) = basis.col(first_null + j);
+    if (!null_vectors(workspace, kFullParamCount - count, null_count)) return Status::singular_system;
     const ParamMask before_drop = mask;
     drop_null_directions(workspace, null_count, sigma_max, &mask, report);
     if (mask == before_drop) return Status::singular_system;

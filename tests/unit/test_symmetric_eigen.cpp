@@ -229,5 +229,246 @@ TEST(SymmetricEigen, RejectsBadSizeAndNonFiniteEntries) {
   EXPECT_EQ(symmetric_eigen(&a, 4, &values, nullptr), Status::ok);  // outside the block
 }
 
+// ---- Selected eigenvectors (symmetric_eigen_lowest: values-only QL, inverse iteration on
+// the tridiagonal form, back through the reflections) ----
+
+struct Lowest {
+  FullParams values = FullParams::Zero();
+  NormalMatrix vectors = NormalMatrix::Constant(kOutside);  // must be fully overwritten
+  NormalMatrix work = NormalMatrix::Zero();
+  int iterations = 0;
+  Status status = Status::ok;
+};
+
+Lowest decompose_lowest(const NormalMatrix& a, int size, int count) {
+  Lowest d;
+  d.work = a;
+  EXPECT_NO_HEAP(d.status = symmetric_eigen_lowest(&d.work, size, count, &d.values, &d.vectors, &d.iterations));
+  return d;
+}
+
+/// The `count` selected vectors of `lowest` against the full decomposition of the same block:
+/// same eigenvalue bits and iterations; orthonormal; eigenvectors (residual); zero elsewhere;
+/// and for each j <= count, the first j vectors lie in the span of the full decomposition's
+/// first c >= j vectors, c the first index with a gap lambda_c - lambda_{c-1} above
+/// 1e-9 |A| (c = j: the same subspace), to eps |A| / gap.
+void expect_valid_lowest(const NormalMatrix& a, int size, int count, const Lowest& lowest) {
+  ASSERT_EQ(lowest.status, Status::ok);
+  const Decomposition full = decompose(a, size);
+  ASSERT_EQ(full.status, Status::ok);
+  EXPECT_EQ(std::memcmp(lowest.values.data(), full.values.data(), sizeof(double) * kFullParamCount), 0);
+  EXPECT_EQ(lowest.iterations, full.iterations);
+  const Eigen::MatrixXd block = a.topLeftCorner(size, size);
+  const double norm = std::fmax(block.norm(), 1e-300);
+  for (int c = 0; c < kFullParamCount; ++c) {
+    for (int r = 0; r < kFullParamCount; ++r) {
+      if (r < size && c < count) continue;
+      ASSERT_EQ(lowest.vectors(r, c), 0.0) << "(" << r << ", " << c << ") outside the selected vectors";
+    }
+  }
+  if (count == 0) return;
+  const Eigen::MatrixXd v = lowest.vectors.topLeftCorner(size, count);
+  EXPECT_LE((v.transpose() * v - Eigen::MatrixXd::Identity(count, count)).cwiseAbs().maxCoeff(), 1e-12)
+      << "orthonormal";
+  for (int k = 0; k < count; ++k) {
+    const double residual = (block * v.col(k) - lowest.values(k) * v.col(k)).norm();
+    EXPECT_LE(residual, 1e-13 * norm) << "A v = lambda v for vector " << k << ", lambda " << lowest.values(k);
+  }
+  const Eigen::MatrixXd w = full.vectors.topLeftCorner(size, size);
+  for (int j = 1; j <= count; ++j) {
+    int c = j;
+    while (c < size && full.values(c) - full.values(c - 1) <= 1e-9 * norm) ++c;
+    const double gap = c < size ? full.values(c) - full.values(c - 1) : norm;
+    const Eigen::MatrixXd wc = w.leftCols(c);
+    const Eigen::MatrixXd vj = v.leftCols(j);
+    const double outside = (vj - wc * (wc.transpose() * vj)).norm();
+    EXPECT_LE(outside, 1000.0 * kEpsilon * norm / gap) << "first " << j << " vectors inside the first " << c;
+  }
+}
+
+TEST(SymmetricEigenLowest, RandomMatricesOfSeveralSizes) {
+  Random random(21);
+  for (int size : {1, 2, 3, 5, 8, 13, 21, 32, 33}) {
+    for (int count : {0, 1, size / 2, size}) {
+      SCOPED_TRACE(testing::Message() << "size " << size << " count " << count);
+      const NormalMatrix a = random_symmetric(size, &random);
+      expect_valid_lowest(a, size, count, decompose_lowest(a, size, count));
+    }
+  }
+}
+
+// The identifiability case: ~8 eigenvalues at rounding level (a tight cluster near 0, some
+// negative), a gap of four decades, then the identifiable ones.
+TEST(SymmetricEigenLowest, TightClusterOfEightNearZero) {
+  Random random(22);
+  for (int trial = 0; trial < 6; ++trial) {
+    SCOPED_TRACE(testing::Message() << "trial " << trial);
+    Eigen::VectorXd values(kFullParamCount);
+    for (int k = 0; k < kFullParamCount; ++k) {
+      values(k) = k < 8 ? random.uniform(-1.0, 1.0) * 1e-16 * static_cast<double>(trial % 3)
+                        : std::pow(10.0, -3.0 + 3.5 * static_cast<double>(k - 8) / (kFullParamCount - 9));
+    }
+    const NormalMatrix a = with_spectrum(values, &random);
+    for (int count : {3, 8, 10}) {
+      SCOPED_TRACE(testing::Message() << "count " << count);
+      expect_valid_lowest(a, kFullParamCount, count, decompose_lowest(a, kFullParamCount, count));
+    }
+  }
+}
+
+TEST(SymmetricEigenLowest, GradedSpectra) {
+  Random random(23);
+  for (double decades : {8.0, 16.0, 20.0}) {
+    Eigen::VectorXd values(kFullParamCount);
+    for (int k = 0; k < kFullParamCount; ++k) {
+      values(k) = std::pow(10.0, -decades * static_cast<double>(k) / (kFullParamCount - 1));
+    }
+    const NormalMatrix a = with_spectrum(values, &random);
+    for (int count : {4, 8, 16}) {
+      SCOPED_TRACE(testing::Message() << decades << " decades, count " << count);
+      expect_valid_lowest(a, kFullParamCount, count, decompose_lowest(a, kFullParamCount, count));
+    }
+  }
+}
+
+TEST(SymmetricEigenLowest, RankDeficientNullSpace) {
+  Random random(24);
+  for (int size : {4, 12, 33}) {
+    for (int rank : {1, size / 2, size - 1}) {
+      SCOPED_TRACE(testing::Message() << "size " << size << " rank " << rank);
+      Eigen::MatrixXd b(size, rank);
+      for (int c = 0; c < rank; ++c) {
+        for (int r = 0; r < size; ++r) b(r, c) = random.normal();
+      }
+      NormalMatrix a = NormalMatrix::Constant(kOutside);
+      const Eigen::MatrixXd product = b * b.transpose();
+      a.topLeftCorner(size, size) = 0.5 * (product + product.transpose());
+      for (int count : {size - rank, std::min(size, size - rank + 2)}) {
+        const Lowest lowest = decompose_lowest(a, size, count);
+        expect_valid_lowest(a, size, count, lowest);
+        // The null vectors are orthogonal to the range of b.
+        const Eigen::MatrixXd v = lowest.vectors.topLeftCorner(size, size - rank);
+        EXPECT_LE((b.transpose() * v).norm(), 1e-13 * b.squaredNorm());
+      }
+    }
+  }
+}
+
+TEST(SymmetricEigenLowest, RepeatedEigenvaluesAndSplitTridiagonal) {
+  Random random(25);
+  // An exact 5-fold lowest eigenvalue.
+  Eigen::VectorXd values(kFullParamCount);
+  for (int k = 0; k < kFullParamCount; ++k) values(k) = k < 5 ? 0.5 : 1.0 + static_cast<double>(k);
+  const NormalMatrix a = with_spectrum(values, &random);
+  expect_valid_lowest(a, kFullParamCount, 5, decompose_lowest(a, kFullParamCount, 5));
+  // Already tridiagonal and split in two identical halves: every eigenvalue twice, one in
+  // each block of T; the vectors must still come out orthonormal.
+  NormalMatrix t = NormalMatrix::Zero();
+  for (int half = 0; half < 2; ++half) {
+    for (int i = 0; i < 6; ++i) {
+      const int r = 6 * half + i;
+      t(r, r) = 2.0 + 0.1 * static_cast<double>(i);
+      if (i + 1 < 6) t(r, r + 1) = t(r + 1, r) = 0.7;
+    }
+  }
+  for (int count : {1, 2, 7, 12}) expect_valid_lowest(t, 12, count, decompose_lowest(t, 12, count));
+}
+
+// Rows without off-diagonal entries are exact eigenpairs wherever their eigenvalue sorts:
+// here among the coupled ones, and the inactive -1 of the identifiability analysis first.
+TEST(SymmetricEigenLowest, DecoupledRowsGiveUnitVectors) {
+  Random random(26);
+  NormalMatrix a = random_symmetric(kFullParamCount, &random);
+  const int decoupled[] = {0, 4, 17, 32};
+  const double diagonal[] = {-1.0, -1.0, 0.01, -0.2};
+  for (int n = 0; n < 4; ++n) {
+    const int i = decoupled[n];
+    a.row(i).setZero();
+    a.col(i).setZero();
+    a(i, i) = diagonal[n];
+  }
+  for (int count : {2, 9, kFullParamCount}) {
+    SCOPED_TRACE(testing::Message() << "count " << count);
+    const Lowest lowest = decompose_lowest(a, kFullParamCount, count);
+    expect_valid_lowest(a, kFullParamCount, count, lowest);
+    for (int k = 0; k < count; ++k) {
+      for (int n = 0; n < 4; ++n) {
+        const int i = decoupled[n];
+        const double entry = lowest.vectors(i, k);
+        if (lowest.values(k) == diagonal[n] && entry != 0.0) {
+          EXPECT_EQ(entry, 1.0);
+          for (int r = 0; r < kFullParamCount; ++r) {
+            if (r != i) {
+              EXPECT_EQ(lowest.vectors(r, k), 0.0);
+            }
+          }
+        } else {
+          EXPECT_EQ(entry, 0.0) << "a coupled vector touches decoupled row " << i;
+        }
+      }
+    }
+  }
+  // The inactive parameters first at -1, the rest coupled: as analyze_identifiability does it.
+  const NormalMatrix graded = [&] {
+    Eigen::VectorXd values(25);
+    for (int k = 0; k < 25; ++k) values(k) = k < 8 ? 1e-17 * static_cast<double>(k) : static_cast<double>(k) * 0.1;
+    const NormalMatrix block = with_spectrum(values, &random);
+    NormalMatrix m = NormalMatrix::Zero();
+    for (int c = 0; c < 25; ++c) {
+      for (int r = 0; r < 25; ++r) m(r + (r >= 10 ? 8 : 0), c + (c >= 10 ? 8 : 0)) = block(r, c);
+    }
+    for (int i = 10; i < 18; ++i) m(i, i) = -1.0;
+    return m;
+  }();
+  const Lowest lowest = decompose_lowest(graded, kFullParamCount, 16);
+  expect_valid_lowest(graded, kFullParamCount, 16, lowest);
+  for (int k = 0; k < 8; ++k) EXPECT_EQ(lowest.vectors(10 + k, k), 1.0);
+}
+
+TEST(SymmetricEigenLowest, StagesAgreeWithTheOneCall) {
+  Random random(27);
+  const NormalMatrix a = random_symmetric(kFullParamCount, &random);
+  const Lowest one_call = decompose_lowest(a, kFullParamCount, 7);
+  NormalMatrix work = a;
+  FullParams values = FullParams::Zero();
+  NormalMatrix vectors = NormalMatrix::Zero();
+  SymmetricEigenReduction reduction;
+  int iterations = 0;
+  EXPECT_NO_HEAP({
+    EXPECT_EQ(symmetric_eigenvalues(&work, kFullParamCount, &values, &reduction, &iterations), Status::ok);
+    EXPECT_EQ(symmetric_eigenvectors_lowest(work, reduction, values, 7, &vectors), Status::ok);
+  });
+  EXPECT_EQ(std::memcmp(values.data(), one_call.values.data(), sizeof(double) * kFullParamCount), 0);
+  EXPECT_EQ(std::memcmp(vectors.data(), one_call.vectors.data(), sizeof(double) * kFullParamCount * kFullParamCount),
+            0);
+  EXPECT_EQ(iterations, one_call.iterations);
+  // The vectors can be asked for again, more or fewer, from the same reduction.
+  NormalMatrix more = NormalMatrix::Zero();
+  EXPECT_EQ(symmetric_eigenvectors_lowest(work, reduction, values, 9, &more), Status::ok);
+  EXPECT_EQ(std::memcmp(more.data(), vectors.data(), sizeof(double) * kFullParamCount * 7), 0);
+}
+
+TEST(SymmetricEigenLowest, RejectsBadArguments) {
+  NormalMatrix a = NormalMatrix::Identity();
+  FullParams values = FullParams::Zero();
+  NormalMatrix vectors = NormalMatrix::Zero();
+  EXPECT_EQ(symmetric_eigen_lowest(&a, 0, 0, &values, &vectors), Status::invalid_argument);
+  EXPECT_EQ(symmetric_eigen_lowest(&a, kFullParamCount + 1, 1, &values, &vectors), Status::invalid_argument);
+  EXPECT_EQ(symmetric_eigen_lowest(&a, 5, -1, &values, &vectors), Status::invalid_argument);
+  EXPECT_EQ(symmetric_eigen_lowest(&a, 5, 6, &values, &vectors), Status::invalid_argument);
+  EXPECT_EQ(symmetric_eigen_lowest(&a, 5, 5, &values, &vectors), Status::ok);
+  a(2, 2) = 2.0 * kSymmetricEigenMaxMagnitude;
+  EXPECT_EQ(symmetric_eigen_lowest(&a, 5, 1, &values, &vectors), Status::invalid_argument);
+  a = NormalMatrix::Identity();
+  a(3, 4) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(symmetric_eigen_lowest(&a, 5, 1, &values, &vectors), Status::non_finite_input);
+  // No reduction (never made, or its decomposition refused): nothing to take vectors from.
+  const SymmetricEigenReduction none;
+  EXPECT_EQ(symmetric_eigenvectors_lowest(a, none, values, 1, &vectors), Status::invalid_argument);
+  SymmetricEigenReduction refused;
+  EXPECT_EQ(symmetric_eigenvalues(&a, 5, &values, &refused), Status::non_finite_input);
+  EXPECT_EQ(symmetric_eigenvectors_lowest(a, refused, values, 1, &vectors), Status::invalid_argument);
+}
+
 }  // namespace
 }  // namespace hivecal

@@ -8,6 +8,7 @@
 
 #include "hivecal/full_model.hpp"
 #include "hivecal/status.hpp"
+#include "hivecal/symmetric_eigen.hpp"
 
 namespace hivecal {
 
@@ -57,12 +58,13 @@ struct IdentifiabilityReport {
 /// Resets every field of *report to its default, in place.
 void clear_report(IdentifiabilityReport* report);
 
-/// Scratch memory of the analysis (26 kB): keep it static or in the caller's workspace.
+/// Scratch memory of the analysis (27 kB): keep it static or in the caller's workspace.
 struct IdentifiabilityWorkspace {
-  NormalMatrix scaled;      ///< column-scaled normal matrix
-  NormalMatrix rotated;     ///< copy of `scaled` diagonalised by symmetric_eigen
-  NormalMatrix null_basis;  ///< eigenvectors of `scaled`, then the null directions, reduced as parameters drop
-  FullParams eigenvalues;   ///< of `scaled`, increasing (inactive parameters first, at -1)
+  NormalMatrix scaled;                ///< column-scaled normal matrix
+  NormalMatrix rotated;               ///< copy of `scaled` reduced by symmetric_eigenvalues (keeps its reflections)
+  NormalMatrix null_basis;            ///< eigenvectors of the null directions of `scaled`, reduced as parameters drop
+  FullParams eigenvalues;             ///< of `scaled`, increasing (inactive parameters first, at -1)
+  SymmetricEigenReduction reduction;  ///< tridiagonal form of `scaled`, for the null directions' eigenvectors
 };
 
 /// Analyses normal equations J^T W J (from accumulate_normal_equations) over the parameters

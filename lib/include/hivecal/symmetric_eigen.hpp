@@ -4,7 +4,10 @@
 // and sqrt, gives the same bits everywhere. Method: rows and columns with no off-diagonal
 // entry are exact eigenpairs and are set aside; the coupled rest is reduced to tridiagonal
 // form by Householder reflections and diagonalised by the implicit QL algorithm with
-// Wilkinson shifts (docs/solver-lm.md, identifiability).
+// Wilkinson shifts (docs/solver-lm.md, identifiability). When only the eigenvectors of the
+// smallest eigenvalues are needed, symmetric_eigenvalues + symmetric_eigenvectors_lowest get
+// them LAPACK-style (dstein + dormtr): inverse iteration on the tridiagonal form, then the
+// stored Householder reflections.
 #pragma once
 
 #include "hivecal/full_model.hpp"
@@ -16,6 +19,22 @@ namespace hivecal {
 inline constexpr int kSymmetricEigenMaxIterations = 30;
 /// Largest entry magnitude accepted: the Householder norms square the entries once.
 inline constexpr double kSymmetricEigenMaxMagnitude = 1e150;
+/// Inverse-iteration steps per selected eigenvector after which symmetric_eigenvectors_lowest
+/// gives up (LAPACK dstein's MAXITS; 3 is typical: residual reached, then 2 more).
+inline constexpr int kInverseIterationMaxSteps = 5;
+
+/// What symmetric_eigenvalues keeps for symmetric_eigenvectors_lowest (1.1 kB); the
+/// Householder vectors themselves stay in the working matrix, below its subdiagonal.
+struct SymmetricEigenReduction {
+  int size = 0;                                  ///< decomposed block size [-] (0: none, or the decomposition failed)
+  int coupled_count = 0;                         ///< block indices with an off-diagonal entry, reduced to T [-]
+  int coupled[kFullParamCount] = {};             ///< those indices, increasing: row i of T is coupled[i] [-]
+  int source[kFullParamCount] = {};              ///< block index whose eigenvalue sorted to position k [-]
+  double diagonal[kFullParamCount] = {};         ///< diagonal of the tridiagonal T [matrix unit]
+  double subdiagonal[kFullParamCount] = {};      ///< entry k couples rows k and k + 1 of T, the last 0 [matrix unit]
+  double reflector_scale[kFullParamCount] = {};  ///< v^T v / 2 of reflection k (acts on k+1..), 0: none [matrix unit^2]
+  double negligible = 0.0;                       ///< couplings of T at or below this count as zero: eps * largest entry [matrix unit]
+};
 
 /// Decomposes the symmetric leading size x size block of *matrix (upper and lower triangle
 /// both read, assumed equal) as V diag(lambda) V^T. *matrix is the working copy and is
@@ -31,5 +50,29 @@ inline constexpr double kSymmetricEigenMaxMagnitude = 1e150;
 /// not_converged (an eigenvalue not isolated after kSymmetricEigenMaxIterations iterations).
 Status symmetric_eigen(NormalMatrix* matrix, int size, FullParams* eigenvalues, NormalMatrix* eigenvectors,
                        int* iterations = nullptr);
+
+/// The eigenvalues of symmetric_eigen without vectors (same bits, same order, same errors and
+/// iterations), keeping in *reduction and in *matrix (the working copy) what
+/// symmetric_eigenvectors_lowest needs. On error reduction->size is 0.
+Status symmetric_eigenvalues(NormalMatrix* matrix, int size, FullParams* eigenvalues,
+                             SymmetricEigenReduction* reduction, int* iterations = nullptr);
+
+/// Orthonormal eigenvectors of the vector_count smallest eigenvalues: column k of
+/// *eigenvectors belongs to eigenvalues(k) (sign arbitrary), every other entry becomes 0.
+/// `matrix`, `reduction` and `eigenvalues` as a successful symmetric_eigenvalues left them.
+/// Inverse iteration on each unreduced block of T (shift: the eigenvalue, raised by
+/// 10 eps |lambda| above the previous one of its block when closer; modified Gram-Schmidt
+/// against the earlier vectors of its cluster, eigenvalues less than 1e-3 |T| apart), then
+/// the reflections. A row with no off-diagonal entry gives its unit vector exactly.
+/// Errors: invalid_argument (vector_count not in 0..size, or reduction->size 0), not_converged
+/// (a vector whose residual |(T - shift) x| stayed above n^1.5 sqrt(10) eps |T|_1 |x| after
+/// kInverseIterationMaxSteps steps; it is still written).
+Status symmetric_eigenvectors_lowest(const NormalMatrix& matrix, const SymmetricEigenReduction& reduction,
+                                     const FullParams& eigenvalues, int vector_count, NormalMatrix* eigenvectors);
+
+/// symmetric_eigenvalues then symmetric_eigenvectors_lowest: every eigenvalue, and the
+/// eigenvectors of the vector_count smallest (columns 0 .. vector_count-1). Errors of both.
+Status symmetric_eigen_lowest(NormalMatrix* matrix, int size, int vector_count, FullParams* eigenvalues,
+                              NormalMatrix* eigenvectors, int* iterations = nullptr);
 
 }  // namespace hivecal
