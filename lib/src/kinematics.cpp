@@ -202,6 +202,18 @@ inline double lane_at(double v, int) { return v; }
 inline double lane_at(const lanes::Lane& v, int k) { return lanes::lane_value(v, k); }
 #endif
 
+/// Entry j of `field` of each lane's JointTrig, one per lane, built in registers (a store of
+/// the halves and a vector load would stall on store forwarding).
+template <class Lane, int kWidth>
+Lane gather(const JointTrig* const* trig, const double (JointTrig::*field)[kJointCount], int j) {
+  static_assert(kWidth == 1 || kWidth == 2, "one or two lanes");
+  if constexpr (kWidth == 1) {
+    return (trig[0]->*field)[j];
+  } else {
+    return Lane{(trig[0]->*field)[j], (trig[1]->*field)[j]};
+  }
+}
+
 /// a * u + b * v, per component (the x and y axes after a rotation about z, or y and z after
 /// one about x).
 template <class Lane>
@@ -255,16 +267,8 @@ void jacobian_lanes(const RobotModel& model, const ModelTrig& model_trig, const 
   for (int r = 0; r < 3; ++r) origin_m[0][r] = zero;
   for (int j = 0; j < kJointCount; ++j) {
     const DhJoint& joint = model.joints[j];
-    double sin_q[static_cast<std::size_t>(kWidth)];
-    double cos_q[static_cast<std::size_t>(kWidth)];
-    for (int k = 0; k < kWidth; ++k) {
-      sin_q[k] = joint_trig[k]->sin_q[j];
-      cos_q[k] = joint_trig[k]->cos_q[j];
-    }
-    Lane sq;
-    Lane cq;
-    lanes::load_any(sin_q, &sq);
-    lanes::load_any(cos_q, &cq);
+    const Lane sq = gather<Lane, kWidth>(joint_trig, &JointTrig::sin_q, j);
+    const Lane cq = gather<Lane, kWidth>(joint_trig, &JointTrig::cos_q, j);
     // sin and cos of q + offset by the angle-sum formulas: a few ulp, as rounding q + offset
     // to a double already costs.
     const Lane st = sq * model_trig.cos_offset[j] + cq * model_trig.sin_offset[j];
