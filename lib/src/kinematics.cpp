@@ -227,14 +227,14 @@ struct LaneTargets {
   const JacobianRowsTarget* target;  ///< one per lane
   /// Writes component r of column c of every lane.
   template <class Lane>
-  void put(int c, int r, const Lane& value) const {
+  __attribute__((always_inline)) void put(int c, int r, const Lane& value) const {
     for (int k = 0; k < kWidth; ++k) target[k].row[r][target[k].slot[c]] = lane_at(value, k);
   }
 };
 
 /// u x (p - o) into column c (the screw of a rotation about u through o).
 template <class Lane, int kWidth>
-void write_moment(const Lane* u, const Lane* p, const Lane* o, int c, const LaneTargets<kWidth>& out) {
+__attribute__((always_inline)) inline void write_moment(const Lane* u, const Lane* p, const Lane* o, int c, const LaneTargets<kWidth>& out) {
   const Lane dx = p[0] - o[0];
   const Lane dy = p[1] - o[1];
   const Lane dz = p[2] - o[2];
@@ -244,7 +244,7 @@ void write_moment(const Lane* u, const Lane* p, const Lane* o, int c, const Lane
 }
 
 template <class Lane, int kWidth>
-void write_vector(const Lane* u, int c, const LaneTargets<kWidth>& out) {
+__attribute__((always_inline)) inline void write_vector(const Lane* u, int c, const LaneTargets<kWidth>& out) {
   for (int r = 0; r < 3; ++r) out.put(c, r, u[r]);
 }
 
