@@ -66,6 +66,69 @@ double gradient_cosine(const NormalEquations& eq, const FullParams& scale, Param
   return largest / std::sqrt(eq.weighted_squares_m2);
 }
 
+/// Factors a(kept, kept) = U^T U (plain Cholesky, column-oriented dot products over
+/// contiguous columns). False unless every pivot is positive and finite: the kept block of a
+/// scaled normal matrix is positive definite, damped or identifiable.
+bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f) {
+  f->count = 0;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(kept, i)) f->index[f->count++] = i;
+  }
+  NormalMatrix& u = f->upper;
+  for (int j = 0; j < f->count; ++j) {
+    const int pj = f->index[j];
+    for (int i = 0; i < j; ++i) {
+      double sum = a(f->index[i], pj);
+      for (int k = 0; k < i; ++k) sum -= u(k, i) * u(k, j);
+      u(i, j) = sum / u(i, i);
+    }
+    double pivot = a(pj, pj);
+    for (int k = 0; k < j; ++k) pivot -= u(k, j) * u(k, j);
+    if (!(pivot > 0.0) || !math::is_finite(pivot)) return false;
+    u(j, j) = std::sqrt(pivot);
+  }
+  return true;
+}
+
+/// x = A^-1 b over the factored parameters (U^T y = b, then U x = y); 0 elsewhere.
+void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x) {
+  const NormalMatrix& u = f.upper;
+  double y[kFullParamCount];
+  for (int i = 0; i < f.count; ++i) {
+    double sum = b(f.index[i]);
+    for (int k = 0; k < i; ++k) sum -= u(k, i) * y[k];
+    y[i] = sum / u(i, i);
+  }
+  x->setZero();
+  for (int i = f.count - 1; i >= 0; --i) {
+    double sum = y[i];
+    for (int k = i + 1; k < f.count; ++k) sum -= u(i, k) * y[k];
+    y[i] = sum / u(i, i);
+    (*x)(f.index[i]) = y[i];
+  }
+}
+
+/// diag(A^-1) over the factored parameters, 0 elsewhere: A^-1 = W W^T with W = U^-1 (upper),
+/// built in *scratch.
+void cholesky_inverse_diagonal(const KeptCholesky& f, NormalMatrix* scratch, FullParams* diagonal) {
+  const NormalMatrix& u = f.upper;
+  NormalMatrix& w = *scratch;
+  for (int j = 0; j < f.count; ++j) {
+    w(j, j) = 1.0 / u(j, j);
+    for (int i = 0; i < j; ++i) {
+      double sum = 0.0;
+      for (int k = i; k < j; ++k) sum += w(i, k) * u(k, j);
+      w(i, j) = -sum / u(j, j);
+    }
+  }
+  diagonal->setZero();
+  for (int i = 0; i < f.count; ++i) {
+    double sum = 0.0;
+    for (int k = i; k < f.count; ++k) sum += w(i, k) * w(i, k);
+    (*diagonal)(f.index[i]) = sum;
+  }
+}
+
 /// Solves (D H D + damping I) step_s = -D g over the kept parameters, with D H D already in
 /// ws->system (damped in place); returns the step in parameter units (D step_s), 0 outside
 /// `kept`. False when the system cannot be solved.
@@ -77,9 +140,8 @@ bool solve_step(LmWorkspace* ws, const NormalEquations& eq, const FullParams& sc
     ws->system(i, i) += damping;
     rhs(i) = -eq.jtwr(i) * scale(i);
   }
-  ws->factorization.compute(ws->system);
-  if (ws->factorization.info() != Eigen::Success) return false;
-  *scaled_step = ws->factorization.solve(rhs);
+  if (!cholesky_factor(ws->system, kept, &ws->factorization)) return false;
+  cholesky_solve(ws->factorization, rhs, scaled_step);
   for (int i = 0; i < kFullParamCount; ++i) {
     if (!mask_has(kept, i)) (*scaled_step)(i) = 0.0;
     (*step)(i) = (*scaled_step)(i) * scale(i);
@@ -104,19 +166,15 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
 Status parameter_sigmas(LmWorkspace* ws, const NormalEquations& eq, ParamMask kept, LmResult* result) {
   FullParams scale;
   scale_normal_matrix(eq.jtwj, kept, 1.0, &ws->system, &scale);
-  ws->factorization.compute(ws->system);
-  if (ws->factorization.info() != Eigen::Success) return Status::singular_system;
+  if (!cholesky_factor(ws->system, kept, &ws->factorization)) return Status::singular_system;
   const int dof = 3 * static_cast<int>(eq.count) - mask_count(kept);
   const double variance_m2 = eq.weighted_squares_m2 / static_cast<double>(dof);
   result->residual_sigma_m = std::sqrt(variance_m2);
+  FullParams inverse_diagonal;
+  cholesky_inverse_diagonal(ws->factorization, &ws->system, &inverse_diagonal);
   result->sigma.setZero();
-  FullParams unit;
   for (int i = 0; i < kFullParamCount; ++i) {
-    if (!mask_has(kept, i)) continue;
-    unit.setZero();
-    unit(i) = 1.0;
-    const FullParams column = ws->factorization.solve(unit);
-    result->sigma(i) = std::sqrt(std::fmax(column(i), 0.0) * variance_m2) * scale(i);
+    if (mask_has(kept, i)) result->sigma(i) = std::sqrt(std::fmax(inverse_diagonal(i), 0.0) * variance_m2) * scale(i);
   }
   return all_finite(result->sigma) ? Status::ok : Status::singular_system;
 }

@@ -15,7 +15,7 @@
 namespace hivecal {
 namespace {
 
-constexpr std::uint64_t kLmGoldenDigest = 0x83d607f625d306fbULL;
+constexpr std::uint64_t kLmGoldenDigest = 0xe8eca2abfab7abcfULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));

@@ -7,7 +7,6 @@
 
 #include <cstdint>
 
-#include <Eigen/Cholesky>
 
 #include "hivecal/dataset.hpp"
 #include "hivecal/full_model.hpp"
@@ -98,13 +97,21 @@ struct LmResult {
   LmTermination termination = LmTermination::max_iterations;  ///< why it stopped
 };
 
+/// Cholesky factor of a symmetric positive definite matrix restricted to a parameter set:
+/// A(kept, kept) = U^T U, in compact order (position k holds parameter index[k]).
+struct KeptCholesky {
+  NormalMatrix upper;                 ///< U in the leading count x count block (upper triangle) [-]
+  int index[kFullParamCount] = {};    ///< parameter at compact position k
+  int count = 0;                      ///< parameters factored
+};
+
 /// Scratch memory of the solver (61 kB): give it static storage or put it in the
 /// caller's memory plan, not on a small stack.
 struct LmWorkspace {
   NormalEquations normal;                     ///< normal equations at one point (current or trial)
   NormalEquations trial;                      ///< the same at the other point
   NormalMatrix system;                        ///< scaled, damped system matrix
-  Eigen::LDLT<NormalMatrix> factorization;    ///< its factorization
+  KeptCholesky factorization;                 ///< its Cholesky factor over the kept parameters
   IdentifiabilityWorkspace identifiability;   ///< scratch of the identifiability analysis
   /// Optional storage for the joint trig of the samples, one entry per sample (no ownership):
   /// with it the joint angles' sin/cos are computed once instead of in every pass (~10 %
