@@ -105,9 +105,11 @@ void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransfo
 /// column[k] += sum_j rows[j][k] * weight[j] for k in [0, count): each sum takes the rows in
 /// order, sizeof(Lane)/8 entries at a time, then single ones (the same bits at any lane
 /// width). The sum starts from the first product, not from 0 + it: they differ only in the
-/// sign of a zero, and the column, which starts at +0, never becomes -0 under addition. The last full lane may run past `count` (up to kFullParamCount): the
-/// entries below the diagonal it writes are scratch, overwritten by expand_compact's mirror,
-/// and the rows are written up to kFullParamCount for every sample (IndexList::slot).
+/// sign of a zero, and the column, which starts at +0, never becomes -0 under addition.
+/// The last full lane may run past `count` (up to kFullParamCount): the entries below the
+/// diagonal it writes are scratch, overwritten by expand_compact's mirror, and the rows it
+/// reads there are initialised (every kernel call writes all 33 slots of all its lanes' rows,
+/// and wider lanes come with kGroupSamples == kBatchSamples).
 template <class Lane, std::size_t kRows>
 __attribute__((always_inline)) inline void add_weighted_rows(const double* const (&rows)[kRows],
                                                              const double (&weight)[kRows], int count,
