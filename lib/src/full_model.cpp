@@ -41,9 +41,7 @@ struct IndexList {
 
 IndexList indices_of(ParamMask mask) {
   IndexList list;
-  for (int i = 0; i < kFullParamCount; ++i) {
-    if (mask_has(mask, i)) list.index[list.count++] = i;
-  }
+  list.count = mask_indices(mask, list.index);
   int unlisted = list.count;
   for (int k = 0; k < list.count; ++k) list.slot[list.index[k]] = k;
   for (int i = 0; i < kFullParamCount; ++i) {
@@ -246,6 +244,14 @@ int mask_count(ParamMask mask) {
   return count;
 }
 
+int mask_indices(ParamMask mask, int (&index)[kFullParamCount]) {
+  int count = 0;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(mask, i)) index[count++] = i;
+  }
+  return count;
+}
+
 const char* full_param_name(int index) {
   if (index < 0 || index >= kFullParamCount) return "?";
   return kParamNames[index];
@@ -303,13 +309,17 @@ Vec3 full_residual_jacobian(const RobotModel& model, const RigidTransform& base_
 void scale_normal_matrix(const NormalMatrix& jtwj, ParamMask mask, double outside_diagonal, NormalMatrix* scaled,
                          FullParams* scale) {
   for (int i = 0; i < kFullParamCount; ++i) (*scale)(i) = mask_has(mask, i) ? 1.0 / std::sqrt(jtwj(i, i)) : 1.0;
-  for (int b = 0; b < kFullParamCount; ++b) {
-    for (int a = 0; a < kFullParamCount; ++a) {
-      if (mask_has(mask, a) && mask_has(mask, b)) {
-        (*scaled)(a, b) = jtwj(a, b) * (*scale)(a) * (*scale)(b);
-      } else {
-        (*scaled)(a, b) = a == b ? outside_diagonal : 0.0;
-      }
+  scaled->setZero();
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (!mask_has(mask, i)) (*scaled)(i, i) = outside_diagonal;
+  }
+  int index[kFullParamCount];
+  const int count = mask_indices(mask, index);
+  for (int jb = 0; jb < count; ++jb) {
+    const int b = index[jb];
+    for (int ja = 0; ja < count; ++ja) {
+      const int a = index[ja];
+      (*scaled)(a, b) = jtwj(a, b) * (*scale)(a) * (*scale)(b);
     }
   }
 }

@@ -53,13 +53,16 @@ bool null_vectors(IdentifiabilityWorkspace* ws, int first_null, int null_count) 
 
 /// sigma of the scaled Jacobian along v: sqrt(v^T S v / v^T v) over the parameters in `mask`.
 double direction_sigma(const NormalMatrix& scaled, const FullParams& v, ParamMask mask) {
+  int index[kFullParamCount];
+  const int count = mask_indices(mask, index);
   double quadratic = 0.0;
   double length2 = 0.0;
-  for (int b = 0; b < kFullParamCount; ++b) {
-    if (!mask_has(mask, b)) continue;
+  for (int jb = 0; jb < count; ++jb) {
+    const int b = index[jb];
     length2 += v(b) * v(b);
-    for (int a = 0; a < kFullParamCount; ++a) {
-      if (mask_has(mask, a)) quadratic += v(a) * scaled(a, b) * v(b);
+    for (int ja = 0; ja < count; ++ja) {
+      const int a = index[ja];
+      quadratic += v(a) * scaled(a, b) * v(b);
     }
   }
   return length2 > 0.0 ? singular_from_eigen(quadratic / length2) : 0.0;

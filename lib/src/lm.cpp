@@ -70,10 +70,7 @@ double gradient_cosine(const NormalEquations& eq, const FullParams& scale, Param
 /// contiguous columns). False unless every pivot is positive and finite: the kept block of a
 /// scaled normal matrix is positive definite, damped or identifiable.
 bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f) {
-  f->count = 0;
-  for (int i = 0; i < kFullParamCount; ++i) {
-    if (mask_has(kept, i)) f->index[f->count++] = i;
-  }
+  f->count = mask_indices(kept, f->index);
   NormalMatrix& u = f->upper;
   for (int j = 0; j < f->count; ++j) {
     const int pj = f->index[j];
@@ -151,11 +148,14 @@ bool solve_step(LmWorkspace* ws, const NormalEquations& eq, const FullParams& sc
 
 /// x^T S x over the kept parameters, S the undamped scaled normal matrix.
 double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, ParamMask kept, const FullParams& x) {
+  int index[kFullParamCount];
+  const int count = mask_indices(kept, index);
   double sum = 0.0;
-  for (int b = 0; b < kFullParamCount; ++b) {
-    if (!mask_has(kept, b)) continue;
-    for (int a = 0; a < kFullParamCount; ++a) {
-      if (mask_has(kept, a)) sum += x(a) * jtwj(a, b) * scale(a) * scale(b) * x(b);
+  for (int jb = 0; jb < count; ++jb) {
+    const int b = index[jb];
+    for (int ja = 0; ja < count; ++ja) {
+      const int a = index[ja];
+      sum += x(a) * jtwj(a, b) * scale(a) * scale(b) * x(b);
     }
   }
   return sum;

@@ -45,6 +45,8 @@ inline constexpr ParamMask kAllParamsMask = (ParamMask{1} << kFullParamCount) - 
 constexpr bool mask_has(ParamMask mask, int index) { return (mask & param_bit(index)) != 0; }
 /// Number of parameters in `mask`.
 int mask_count(ParamMask mask);
+/// The parameters of `mask` in increasing order into index[0 .. count-1]; returns count.
+int mask_indices(ParamMask mask, int (&index)[kFullParamCount]);
 
 /// Short name of a full-model parameter: "theta1", "d2", "a3", "alpha4", "tool_x",
 /// "base_rz", "base_tx", ...; "?" outside [0, kFullParamCount). Static storage.
