@@ -139,7 +139,8 @@ __attribute__((always_inline)) inline void add_weighted_rows(const double* const
 /// columns index[k], index[l]; upper triangle), one contiguous column at a time. Unused rows
 /// are zero, which adds exact zeros. The base-translation columns (the last ones of the list,
 /// identity blocks of J) are 1 on their axis' row and 0 elsewhere: their entries only take
-/// that row's products, the same sum without the exact zeros, so the same bits.
+/// that row's products; the base-rotation columns e_k x p are exactly 0 on row k: their
+/// entries skip that row. The same sums without exact zeros, so the same bits.
 template <class Lane>
 __attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const IndexList& columns,
                                                          NormalEquations* eq) {
@@ -161,18 +162,32 @@ __attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const 
     }
     eq->jtwr(l) += gradient;
     double* column = compact + l * kFullParamCount;
-    const int axis = columns.index[l] - base_translation_param_index(0);
-    if (axis < 0) {
+    const int parameter = columns.index[l];
+    if (parameter >= base_translation_param_index(0)) {  // e_axis: one row per sample
+      const int axis = parameter - base_translation_param_index(0);
+      const double* axis_rows[kBatchSamples];
+      double axis_weights[kBatchSamples];
+      for (int s = 0; s < kBatchSamples; ++s) {
+        axis_rows[s] = batch->rows[3 * s + axis];
+        axis_weights[s] = w[3 * s + axis];
+      }
+      add_weighted_rows<Lane>(axis_rows, axis_weights, l + 1, column);
+    } else if (parameter >= base_rotation_param_index(0)) {  // e_axis x p: 0 on the axis' row
+      const int axis = parameter - base_rotation_param_index(0);
+      const double* other_rows[2 * kBatchSamples];
+      double other_weights[2 * kBatchSamples];
+      int n = 0;
+      for (int s = 0; s < kBatchSamples; ++s) {
+        for (int r = 0; r < 3; ++r) {
+          if (r == axis) continue;
+          other_rows[n] = batch->rows[3 * s + r];
+          other_weights[n++] = w[3 * s + r];
+        }
+      }
+      add_weighted_rows<Lane>(other_rows, other_weights, l + 1, column);
+    } else {
       add_weighted_rows<Lane>(all_rows, w, l + 1, column);
-      continue;
     }
-    const double* axis_rows[kBatchSamples];
-    double axis_weights[kBatchSamples];
-    for (int s = 0; s < kBatchSamples; ++s) {
-      axis_rows[s] = batch->rows[3 * s + axis];
-      axis_weights[s] = w[3 * s + axis];
-    }
-    add_weighted_rows<Lane>(axis_rows, axis_weights, l + 1, column);
   }
   batch->samples = 0;
 }
