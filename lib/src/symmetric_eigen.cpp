@@ -95,12 +95,17 @@ void tridiagonalize(NormalMatrix* matrix, int m, double* d, double* e, double* h
     e[k] = alpha;
     h[k] = scale;
     // B <- H B H with H = I - v v^T / h: p = B v / h, q = p - (v^T p / 2h) v, B -= v q^T + q v^T.
-    double p[kFullParamCount];
+    // p_i = sum_j b_ij v_j, summed over j in order for each i; the loops run j outer so that
+    // the inner one walks a contiguous column and the compiler can do several i at once
+    // (independent sums: the same bits).
+    double p[kFullParamCount] = {};
+    for (int j = k + 1; j < m; ++j) {
+      const double vj = a(j, k);
+      for (int i = k + 1; i < m; ++i) p[i] += a(i, j) * vj;
+    }
     double vp = 0.0;
     for (int i = k + 1; i < m; ++i) {
-      double sum = 0.0;
-      for (int j = k + 1; j < m; ++j) sum += a(i, j) * a(j, k);
-      p[i] = sum / scale;
+      p[i] /= scale;
       vp += a(i, k) * p[i];
     }
     const double half = vp / (2.0 * scale);
