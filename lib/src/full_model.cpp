@@ -56,34 +56,57 @@ IndexList indices_of(ParamMask mask) {
 constexpr int kBatchSamples = 2;
 constexpr int kBatchRows = 3 * kBatchSamples;
 
-/// Jacobian rows of a few samples over the listed columns, with their weights and residuals.
-struct RowBatch {
-  double rows[kBatchRows][kFullParamCount];  ///< local Jacobian rows, compact column order
-  double weight[kBatchRows] = {};            ///< IRLS weight of each row's sample
-  double residual_m[kBatchRows] = {};        ///< residual component of each row (base frame) [m]
-  int samples = 0;                           ///< samples held
-};
-
 /// Samples whose Jacobian rows one kernel call writes (one per double lane).
 constexpr int kGroupSamples = detail::kJacobianLanes;
-static_assert(kBatchSamples % kGroupSamples == 0, "a group of samples never straddles two batches");
+#ifdef HIVECAL_WIDE_LANES
+constexpr int kWideGroupSamples = detail::kWideJacobianLanes;
+/// Samples the row buffer holds: a wide group, flushed as batches of kBatchSamples.
+constexpr int kHeldSamples = kWideGroupSamples;
+#else
+constexpr int kHeldSamples = kBatchSamples;
+#endif
+static_assert(kBatchSamples % kGroupSamples == 0 && kHeldSamples % kBatchSamples == 0,
+              "groups and batches tile the row buffer");
+
+/// Jacobian rows of a few samples over the listed columns, with their weights and residuals.
+struct RowBatch {
+  double rows[3 * kHeldSamples][kFullParamCount];  ///< local Jacobian rows, compact column order
+  double weight[3 * kHeldSamples] = {};            ///< IRLS weight of each row's sample
+  double residual_m[3 * kHeldSamples] = {};        ///< residual component of each row (base frame) [m]
+  int samples = 0;                                 ///< samples held
+};
+
+/// The Jacobian kernel for kWidth samples at once (detail::tool_point_jacobian_rows and its
+/// AVX2 form).
+template <std::size_t kWidth>
+void kernel_rows(const RobotModel& model, const ModelTrig& trig, const JointTrig* const (&lane_trig)[kWidth],
+                 const detail::JacobianRowsTarget (&target)[kWidth], Vec3 (&point_m)[kWidth]) {
+#ifdef HIVECAL_WIDE_LANES
+  if constexpr (kWidth == static_cast<std::size_t>(kWideGroupSamples)) {
+    detail::tool_point_jacobian_rows_wide(model, trig, lane_trig, target, point_m);
+    return;
+  }
+#endif
+  if constexpr (kWidth == static_cast<std::size_t>(kGroupSamples)) detail::tool_point_jacobian_rows(model, trig, lane_trig, target, point_m);
+}
 
 /// Writes the rows of the local Jacobian [J_tool | -skew(p) | I] of `count` samples (1 ..
-/// kGroupSamples) at the columns' slots, sample k at rows 3k .. 3k+2, and their residuals
-/// rotated into the base frame, R^T r [m]. Lanes beyond `count` repeat the last sample into
-/// their rows (which must exist) as scratch.
+/// kWidth) at the columns' slots, sample k at rows 3k .. 3k+2, and their residuals rotated
+/// into the base frame, R^T r [m]. Lanes beyond `count` repeat the last sample into their
+/// rows (which must exist) as scratch.
+template <std::size_t kWidth>
 void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
               const Sample* const* sample, const JointTrig* const* sample_trig, int count, const IndexList& columns,
               double (*rows)[kFullParamCount], Vec3* residual_m) {
-  const JointTrig* lane_trig[kGroupSamples];
-  detail::JacobianRowsTarget target[kGroupSamples];
-  for (int k = 0; k < kGroupSamples; ++k) {
+  const JointTrig* lane_trig[kWidth];
+  detail::JacobianRowsTarget target[kWidth];
+  for (int k = 0; k < static_cast<int>(kWidth); ++k) {
     lane_trig[k] = sample_trig[k < count ? k : count - 1];
     double(*lane_rows)[kFullParamCount] = rows + 3 * k;
     target[k] = {{lane_rows[0], lane_rows[1], lane_rows[2]}, columns.slot};
   }
-  Vec3 point_m[kGroupSamples];
-  detail::tool_point_jacobian_rows(model, trig, lane_trig, target, point_m);
+  Vec3 point_m[kWidth];
+  kernel_rows<kWidth>(model, trig, lane_trig, target, point_m);
   // d(Exp(w) p)/dw_k at w = 0 is e_k x p; the translation increment is along the base axes.
   const int* rotation_slot = columns.slot + base_rotation_param_index(0);
   const int* translation_slot = columns.slot + base_translation_param_index(0);
@@ -142,23 +165,27 @@ __attribute__((always_inline)) inline void add_weighted_rows(const double* const
 /// that row's products; the base-rotation columns e_k x p are exactly 0 on row k: their
 /// entries skip that row. The same sums without exact zeros, so the same bits.
 template <class Lane>
-__attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const IndexList& columns,
-                                                         NormalEquations* eq) {
+__attribute__((always_inline)) inline void flush_batch_columns(RowBatch* batch, int first_sample,
+                                                               const IndexList& columns, NormalEquations* eq) {
   const int count = columns.count;
-  for (int j = 3 * batch->samples; j < kBatchRows; ++j) {
-    for (int k = 0; k < count; ++k) batch->rows[j][k] = 0.0;
-    batch->weight[j] = 0.0;
-    batch->residual_m[j] = 0.0;
+  const int held = std::min(kBatchSamples, batch->samples - first_sample);
+  double(*rows)[kFullParamCount] = batch->rows + 3 * first_sample;
+  double* weight = batch->weight + 3 * first_sample;
+  double* residual_m = batch->residual_m + 3 * first_sample;
+  for (int j = 3 * held; j < kBatchRows; ++j) {
+    for (int k = 0; k < count; ++k) rows[j][k] = 0.0;
+    weight[j] = 0.0;
+    residual_m[j] = 0.0;
   }
   const double* all_rows[kBatchRows];
-  for (int j = 0; j < kBatchRows; ++j) all_rows[j] = batch->rows[j];
+  for (int j = 0; j < kBatchRows; ++j) all_rows[j] = rows[j];
   double* compact = eq->jtwj.data();
   for (int l = 0; l < count; ++l) {
     double w[kBatchRows];
     double gradient = 0.0;
     for (int j = 0; j < kBatchRows; ++j) {
-      w[j] = batch->weight[j] * batch->rows[j][l];
-      gradient += w[j] * batch->residual_m[j];
+      w[j] = weight[j] * rows[j][l];
+      gradient += w[j] * residual_m[j];
     }
     eq->jtwr(l) += gradient;
     double* column = compact + l * kFullParamCount;
@@ -168,7 +195,7 @@ __attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const 
       const double* axis_rows[kBatchSamples];
       double axis_weights[kBatchSamples];
       for (int s = 0; s < kBatchSamples; ++s) {
-        axis_rows[s] = batch->rows[3 * s + axis];
+        axis_rows[s] = rows[3 * s + axis];
         axis_weights[s] = w[3 * s + axis];
       }
       add_weighted_rows<Lane>(axis_rows, axis_weights, l + 1, column);
@@ -180,7 +207,7 @@ __attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const 
       for (int s = 0; s < kBatchSamples; ++s) {
         for (int r = 0; r < 3; ++r) {
           if (r == axis) continue;
-          other_rows[n] = batch->rows[3 * s + r];
+          other_rows[n] = rows[3 * s + r];
           other_weights[n++] = w[3 * s + r];
         }
       }
@@ -188,6 +215,16 @@ __attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const 
     } else {
       add_weighted_rows<Lane>(all_rows, w, l + 1, column);
     }
+  }
+}
+
+/// Flushes every sample held, kBatchSamples at a time in order (the sums are those of
+/// flushing each batch as it fills), and empties the buffer.
+template <class Lane>
+__attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const IndexList& columns,
+                                                         NormalEquations* eq) {
+  for (int first = 0; first < batch->samples; first += kBatchSamples) {
+    flush_batch_columns<Lane>(batch, first, columns, eq);
   }
   batch->samples = 0;
 }
@@ -306,8 +343,8 @@ Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base
   const JointTrig q_trig = joint_trig(sample.q_rad);
   const JointTrig* const trig_of[1] = {&q_trig};
   Vec3 local_residual_m;
-  add_rows(model, model_trig(model), base_to_tracker, samples, trig_of, 1, indices_of(kAllParamsMask), rows,
-           &local_residual_m);
+  add_rows<static_cast<std::size_t>(kGroupSamples)>(model, model_trig(model), base_to_tracker, samples, trig_of, 1, indices_of(kAllParamsMask),
+                          rows, &local_residual_m);
   for (int c = 0; c < kFullParamCount; ++c)
     for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
   return local_residual_m;
@@ -351,6 +388,45 @@ double PointLoss::weight(double norm_m) const {
   return k / norm_m;
 }
 
+namespace {
+
+/// Appends samples [first, first + kWidth) (fewer at the end) to the row buffer, which has
+/// room for them, with their weights, and adds their losses to *eq in sample order.
+template <std::size_t kWidth>
+void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
+               Span<const Sample> samples, Span<const JointTrig> stored_trig, std::size_t first,
+               const PointLoss& loss, const IndexList& list, RowBatch* batch, NormalEquations* eq) {
+  const int count = static_cast<int>(std::min<std::size_t>(kWidth, samples.size() - first));
+  const Sample* group[kWidth];
+  JointTrig computed[kWidth];
+  const JointTrig* group_trig[kWidth];
+  for (int k = 0; k < count; ++k) {
+    const std::size_t i = first + static_cast<std::size_t>(k);
+    group[k] = &samples[i];
+    if (stored_trig.empty()) computed[k] = joint_trig(samples[i].q_rad);
+    group_trig[k] = stored_trig.empty() ? &computed[k] : &stored_trig[i];
+  }
+  Vec3 residual_m[kWidth];
+  add_rows<kWidth>(model, trig, base_to_tracker, group, group_trig, count, list, batch->rows + 3 * batch->samples,
+                   residual_m);
+  for (int k = 0; k < count; ++k) {
+    const double squared = residual_m[k].squaredNorm();
+    const double norm_m = std::sqrt(squared);
+    const double weight = loss.weight(norm_m);
+    const int first_row = 3 * batch->samples;
+    for (int r = 0; r < 3; ++r) {
+      batch->weight[first_row + r] = weight;
+      batch->residual_m[first_row + r] = residual_m[k](r);
+    }
+    ++batch->samples;
+    eq->loss_sum_m2 += loss.rho(norm_m);
+    eq->weighted_squares_m2 += weight * squared;
+    eq->squares_sum_m2 += squared;
+  }
+}
+
+}  // namespace
+
 Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
                                    Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
                                    ParamMask columns, Span<const JointTrig> sample_trig) {
@@ -366,35 +442,19 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   const ModelTrig trig = model_trig(model);
   const FlushFunction flush_batch = fastest_flush();
   RowBatch batch;
-  const bool trig_stored = sample_trig.size() >= samples.size();
-  for (std::size_t first = 0; first < samples.size(); first += kGroupSamples) {
-    const int count = static_cast<int>(std::min<std::size_t>(kGroupSamples, samples.size() - first));
-    const Sample* group[kGroupSamples];
-    JointTrig computed[kGroupSamples];
-    const JointTrig* group_trig[kGroupSamples];
-    for (int k = 0; k < count; ++k) {
-      const std::size_t i = first + static_cast<std::size_t>(k);
-      group[k] = &samples[i];
-      if (!trig_stored) computed[k] = joint_trig(samples[i].q_rad);
-      group_trig[k] = trig_stored ? &sample_trig[i] : &computed[k];
+  const Span<const JointTrig> stored = sample_trig.size() >= samples.size() ? sample_trig : Span<const JointTrig>{};
+  std::size_t first = 0;
+#ifdef HIVECAL_WIDE_LANES
+  if (lanes::wide_lanes_available()) {
+    for (; first < samples.size(); first += kWideGroupSamples) {
+      add_group<static_cast<std::size_t>(kWideGroupSamples)>(model, trig, base_to_tracker, samples, stored, first, loss, list, &batch, &eq);
+      if (batch.samples == kHeldSamples) flush_batch(&batch, list, &eq);
     }
-    Vec3 residual_m[kGroupSamples];
-    add_rows(model, trig, base_to_tracker, group, group_trig, count, list, batch.rows + 3 * batch.samples, residual_m);
-    for (int k = 0; k < count; ++k) {
-      const double squared = residual_m[k].squaredNorm();
-      const double norm_m = std::sqrt(squared);
-      const double weight = loss.weight(norm_m);
-      const int first_row = 3 * batch.samples;
-      for (int r = 0; r < 3; ++r) {
-        batch.weight[first_row + r] = weight;
-        batch.residual_m[first_row + r] = residual_m[k](r);
-      }
-      ++batch.samples;
-      eq.loss_sum_m2 += loss.rho(norm_m);
-      eq.weighted_squares_m2 += weight * squared;
-      eq.squares_sum_m2 += squared;
-    }
-    if (batch.samples == kBatchSamples) flush_batch(&batch, list, &eq);
+  }
+#endif
+  for (; first < samples.size(); first += kGroupSamples) {
+    add_group<static_cast<std::size_t>(kGroupSamples)>(model, trig, base_to_tracker, samples, stored, first, loss, list, &batch, &eq);
+    if (batch.samples == kHeldSamples) flush_batch(&batch, list, &eq);
   }
   if (batch.samples > 0) flush_batch(&batch, list, &eq);
   expand_compact(list, &eq);

@@ -201,23 +201,30 @@ inline double lane_at(double v, int) { return v; }
 #if defined(HIVECAL_LANES_ARE_VECTORS)
 inline double lane_at(const lanes::Lane& v, int k) { return lanes::lane_value(v, k); }
 #endif
+#ifdef HIVECAL_WIDE_LANES
+inline double lane_at(const lanes::WideLane& v, int k) { return v[k]; }
+#endif
 
 /// Entry j of `field` of each lane's JointTrig, one per lane, built in registers (a store of
-/// the halves and a vector load would stall on store forwarding).
+/// the halves and a vector load would stall on store forwarding). Out-parameter: a 32-byte
+/// vector returned by value would change the ABI outside AVX code (-Wpsabi).
 template <class Lane, int kWidth>
-Lane gather(const JointTrig* const* trig, const double (JointTrig::*field)[kJointCount], int j) {
-  static_assert(kWidth == 1 || kWidth == 2, "one or two lanes");
+__attribute__((always_inline)) inline void gather(const JointTrig* const* trig,
+                                                  const double (JointTrig::*field)[kJointCount], int j, Lane* out) {
+  static_assert(kWidth == 1 || kWidth == 2 || kWidth == 4, "one, two or four lanes");
   if constexpr (kWidth == 1) {
-    return (trig[0]->*field)[j];
+    *out = (trig[0]->*field)[j];
+  } else if constexpr (kWidth == 2) {
+    *out = Lane{(trig[0]->*field)[j], (trig[1]->*field)[j]};
   } else {
-    return Lane{(trig[0]->*field)[j], (trig[1]->*field)[j]};
+    *out = Lane{(trig[0]->*field)[j], (trig[1]->*field)[j], (trig[2]->*field)[j], (trig[3]->*field)[j]};
   }
 }
 
 /// a * u + b * v, per component (the x and y axes after a rotation about z, or y and z after
 /// one about x).
 template <class Lane>
-void combine(const Lane& a, const Lane* u, const Lane& b, const Lane* v, Lane* out) {
+__attribute__((always_inline)) inline void combine(const Lane& a, const Lane* u, const Lane& b, const Lane* v, Lane* out) {
   for (int r = 0; r < 3; ++r) out[r] = a * u[r] + b * v[r];
 }
 
@@ -254,7 +261,7 @@ __attribute__((always_inline)) inline void write_vector(const Lane* u, int c, co
 /// after); then alpha_j turns y, z about the new x through the new origin. Plain column
 /// rotations: 48 flops per joint instead of two 3x3 products.
 template <class Lane, int kWidth>
-void jacobian_lanes(const RobotModel& model, const ModelTrig& model_trig, const JointTrig* const* joint_trig,
+__attribute__((always_inline)) inline void jacobian_lanes(const RobotModel& model, const ModelTrig& model_trig, const JointTrig* const* joint_trig,
                     const LaneTargets<kWidth>& out, Vec3* point_out_m) {
   const Lane zero = Lane{};
   const Lane one = zero + 1.0;
@@ -267,8 +274,10 @@ void jacobian_lanes(const RobotModel& model, const ModelTrig& model_trig, const 
   for (int r = 0; r < 3; ++r) origin_m[0][r] = zero;
   for (int j = 0; j < kJointCount; ++j) {
     const DhJoint& joint = model.joints[j];
-    const Lane sq = gather<Lane, kWidth>(joint_trig, &JointTrig::sin_q, j);
-    const Lane cq = gather<Lane, kWidth>(joint_trig, &JointTrig::cos_q, j);
+    Lane sq;
+    Lane cq;
+    gather<Lane, kWidth>(joint_trig, &JointTrig::sin_q, j, &sq);
+    gather<Lane, kWidth>(joint_trig, &JointTrig::cos_q, j, &cq);
     // sin and cos of q + offset by the angle-sum formulas: a few ulp, as rounding q + offset
     // to a double already costs.
     const Lane st = sq * model_trig.cos_offset[j] + cq * model_trig.sin_offset[j];
@@ -316,6 +325,15 @@ void tool_point_jacobian_rows(const RobotModel& model, const ModelTrig& model_tr
   jacobian_lanes<lanes::Lane, kJacobianLanes>(model, model_trig, joint_trig, LaneTargets<kJacobianLanes>{target},
                                               point_m);
 }
+
+#ifdef HIVECAL_WIDE_LANES
+__attribute__((target("avx2"))) void tool_point_jacobian_rows_wide(
+    const RobotModel& model, const ModelTrig& model_trig, const JointTrig* const (&joint_trig)[kWideJacobianLanes],
+    const JacobianRowsTarget (&target)[kWideJacobianLanes], Vec3 (&point_m)[kWideJacobianLanes]) {
+  jacobian_lanes<lanes::WideLane, kWideJacobianLanes>(model, model_trig, joint_trig,
+                                                      LaneTargets<kWideJacobianLanes>{target}, point_m);
+}
+#endif
 
 }  // namespace detail
 

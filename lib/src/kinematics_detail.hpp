@@ -26,4 +26,15 @@ void tool_point_jacobian_rows(const RobotModel& model, const ModelTrig& model_tr
                               const JointTrig* const (&joint_trig)[kJacobianLanes],
                               const JacobianRowsTarget (&target)[kJacobianLanes], Vec3 (&point_m)[kJacobianLanes]);
 
+#ifdef HIVECAL_WIDE_LANES
+/// Width of the AVX2 kernel (lanes::kWideLanes samples at once).
+inline constexpr int kWideJacobianLanes = lanes::kWideLanes;
+/// tool_point_jacobian_rows on 4-double lanes: call only when lanes::wide_lanes_available().
+/// The same bits per sample.
+void tool_point_jacobian_rows_wide(const RobotModel& model, const ModelTrig& model_trig,
+                                   const JointTrig* const (&joint_trig)[kWideJacobianLanes],
+                                   const JacobianRowsTarget (&target)[kWideJacobianLanes],
+                                   Vec3 (&point_m)[kWideJacobianLanes]);
+#endif
+
 }  // namespace hivecal::detail
