@@ -173,6 +173,18 @@ ModelTrig model_trig(const RobotModel& model) {
   return trig;
 }
 
+namespace {
+
+/// The twist half of model_trig, all that fk_tool_point reads (it takes sin/cos of q + offset
+/// directly): half the trig of a one-shot FK call.
+ModelTrig twist_trig(const RobotModel& model) {
+  ModelTrig trig;
+  for (int j = 0; j < kJointCount; ++j) math::sincos(model.joints[j].alpha_rad, &trig.sin_alpha[j], &trig.cos_alpha[j]);
+  return trig;
+}
+
+}  // namespace
+
 JointTrig joint_trig(const JointVector& q_rad) {
   JointTrig trig;
   for (int j = 0; j < kJointCount; ++j) math::sincos(q_rad(j), &trig.sin_q[j], &trig.cos_q[j]);
@@ -180,7 +192,7 @@ JointTrig joint_trig(const JointVector& q_rad) {
 }
 
 Vec3 fk_tool_point(const RobotModel& model, const JointVector& q_rad) {
-  return fk_tool_point(model, model_trig(model), q_rad);
+  return fk_tool_point(model, twist_trig(model), q_rad);
 }
 
 Vec3 fk_tool_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad) {

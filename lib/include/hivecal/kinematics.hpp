@@ -94,7 +94,7 @@ struct ModelTrig {
 };
 /// The trig of `model`.
 ModelTrig model_trig(const RobotModel& model);
-/// fk_tool_point with the trig of `model` precomputed (same bits).
+/// fk_tool_point with the trig of `model` precomputed (same bits; reads the twist half only).
 Vec3 fk_tool_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad);
 
 /// sin and cos of one pose's joint readings, without the offsets: they do not depend on the
