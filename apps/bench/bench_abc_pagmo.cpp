@@ -26,7 +26,7 @@
 #include "hivecal/abc.hpp"
 #include "hivecal/cost.hpp"
 #include "hivecal/paper6_cost.hpp"
-#include "paper6_data.hpp"
+#include "testkit/paper6_data.hpp"
 
 namespace {
 

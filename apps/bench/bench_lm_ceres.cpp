@@ -16,7 +16,7 @@
 #include "hivecal/cost.hpp"
 #include "hivecal/lm.hpp"
 #include "hivecal/metrics.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 
 #include "hivecal/lm.hpp"
 #include "hivecal/metrics.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace {
 

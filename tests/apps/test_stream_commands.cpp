@@ -11,13 +11,14 @@
 #include <vector>
 
 #include "calibration_json.hpp"
-#include "cli_run.hpp"
 #include "cli.hpp"
 #include "csv.hpp"
 #include "hivecal/dataset.hpp"
 #include "sim_model.hpp"
 #include "simulate_cmd.hpp"
 #include "stream_commands.hpp"
+#include "testkit/cli_run.hpp"
+#include "testkit/shared_data.hpp"
 #include "ur_calibration_conf.hpp"
 
 namespace hivecal {
@@ -72,6 +73,7 @@ TEST(StreamCommands, SimulateWritesReadableOutputsAndExtractPairsThem) {
 }
 
 TEST(StreamCommands, SimulateTakesTheTrueGeometryFromACalibrationConf) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/calibration.conf");
   // A real UR5e factory calibration (shared test data) as the simulated robot's geometry.
   const std::string conf = std::string(HIVECAL_TEST_DATA_DIR) + "/ur5e-pendant/calibration.conf";
   const std::string dir = make_temp_dir();

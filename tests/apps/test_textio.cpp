@@ -10,7 +10,7 @@
 #include "calibration_json.hpp"
 #include "csv.hpp"
 #include "hivecal/random.hpp"
-#include "test_data.hpp"
+#include "testkit/test_data.hpp"
 #include "text_util.hpp"
 
 namespace hivecal {

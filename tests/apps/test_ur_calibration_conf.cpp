@@ -1,6 +1,6 @@
 // Real-controller check: a UR5e's factory calibration and 18 pendant readings
 // (../shared/data/ur5e-pendant). Calibrated FK must match the pendant to its rounding;
-// nominal FK must not (so the test can fail).
+// nominal FK must not (so the test can fail). Skipped when that data is absent.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hivecal/kinematics.hpp"
+#include "testkit/shared_data.hpp"
 #include "text_util.hpp"
 #include "ur_calibration_conf.hpp"
 
@@ -65,6 +66,8 @@ ErrorSummary compare(const RobotModel& model, const std::vector<PendantReading>&
 }
 
 TEST(Ur5ePendant, CalibratedFkMatchesControllerNominalDoesNot) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/calibration.conf");
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
   const std::vector<PendantReading> readings = read_pendant_csv();
   ASSERT_EQ(readings.size(), 18u);
   UrCalibrationDeltas deltas;
@@ -84,6 +87,8 @@ TEST(Ur5ePendant, CalibratedFkMatchesControllerNominalDoesNot) {
 }
 
 TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/calibration.conf");
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
   // Why the library is double: the same chain in float is off by more than half the tracker noise.
   UrCalibrationDeltas deltas;
   ASSERT_TRUE(textio::read_ur_calibration_conf(kDir + "calibration.conf", &deltas).ok);
@@ -135,6 +140,7 @@ TEST(UrCalibrationConf, MalformedInputsAreNamed) {
 }
 
 TEST(UrCalibrationConf, FormatReadsBackToTheSameBits) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/calibration.conf");
   UrCalibrationDeltas d;
   ASSERT_TRUE(textio::read_ur_calibration_conf(kDir + "calibration.conf", &d).ok);
   UrCalibrationDeltas back;

@@ -13,7 +13,6 @@
 
 #include "calibration_json.hpp"
 #include "cli.hpp"
-#include "cli_run.hpp"
 #include "commands.hpp"
 #include "csv.hpp"
 #include "hivecal/random.hpp"
@@ -21,6 +20,7 @@
 #include "json.hpp"
 #include "sim_model.hpp"
 #include "simulate_cmd.hpp"
+#include "testkit/cli_run.hpp"
 #include "text_util.hpp"
 #include "validation.hpp"
 

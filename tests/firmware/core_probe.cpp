@@ -19,7 +19,7 @@
 #include "hivecal/cost.hpp"
 #include "hivecal/digest.hpp"
 #include "hivecal/metrics.hpp"
-#include "test_data.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal {
 namespace {

@@ -7,7 +7,7 @@
 #include "hivecal/cost.hpp"
 #include "hivecal/dataset.hpp"
 #include "hivecal/metrics.hpp"
-#include "test_data.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal {
 namespace {

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <cstring>
 
-#include "codec_support.hpp"
 #include "hivecal/codec.hpp"
+#include "testkit/codec_support.hpp"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "alloc_trap.hpp"
+#include "testkit/alloc_trap.hpp"
 
 #include <atomic>
 #include <cstdlib>

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "check_log.hpp"
+#include "testkit/check_log.hpp"
 
 namespace hivecal::test {
 

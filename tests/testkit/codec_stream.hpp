@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "alloc_trap.hpp"
-#include "codec_support.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/codec_support.hpp"
 
 namespace hivecal::test {
 

@@ -1,5 +1,5 @@
 // The core golden digest: FK, Jacobian, transform fit, cost and metrics over a fixed synthetic
-// data set, hashed over their raw bits. Shared by the GoogleTest suite (tests/unit/test_golden.cpp)
+// data set, hashed over their raw bits. Shared by the GoogleTest suite (tests/lib/solve/test_golden_core.cpp)
 // and the bare-metal firmware (tests/firmware/test_golden.cpp), so both compute exactly the same
 // thing and compare it with the same committed value. Heap-free, exception-free.
 #pragma once
@@ -10,7 +10,7 @@
 #include "hivecal/digest.hpp"
 #include "hivecal/metrics.hpp"
 #include "hivecal/rigid_fit.hpp"
-#include "test_data.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal::test {
 

@@ -1,4 +1,4 @@
-// Kinematics checks run by both tests/unit/test_kinematics.cpp and the firmware image
+// Kinematics checks run by both tests/lib/model/test_kinematics.cpp and the firmware image
 // (tests/firmware/test_kinematics.cpp): the datasheet point, the two FK paths agreeing, the
 // analytic Jacobian against central differences, parameter and UR-delta round trips, names.
 #pragma once
@@ -6,10 +6,10 @@
 #include <cstring>
 #include <limits>
 
-#include "check_log.hpp"
 #include "hivecal/kinematics.hpp"
 #include "hivecal/random.hpp"
-#include "test_data.hpp"
+#include "testkit/check_log.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal::test {
 

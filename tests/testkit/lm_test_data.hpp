@@ -6,7 +6,7 @@
 #include <Eigen/LU>
 
 #include "hivecal/full_model.hpp"
-#include "test_data.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal::test {
 

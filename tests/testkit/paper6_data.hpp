@@ -10,7 +10,7 @@
 #include "hivecal/kinematics.hpp"
 #include "hivecal/paper6_cost.hpp"
 #include "hivecal/random.hpp"
-#include "test_data.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal::test {
 

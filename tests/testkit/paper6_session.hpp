@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "hivecal/paper6_cost.hpp"
-#include "paper6_data.hpp"
+#include "testkit/paper6_data.hpp"
 
 namespace hivecal::test {
 

@@ -1,14 +1,14 @@
 // Host checks (GoogleTest) that ABC and GSA both pass on the paper's six-length problem
-// (tests/unit/test_abc_paper6.cpp, tests/unit/test_gsa_solver.cpp).
+// (tests/lib/solve/test_abc_paper6.cpp, tests/lib/solve/test_gsa.cpp).
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <cstddef>
 
-#include "alloc_trap.hpp"
 #include "hivecal/objective.hpp"
-#include "paper6_session.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/paper6_session.hpp"
 
 namespace hivecal::test {
 

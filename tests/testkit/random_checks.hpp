@@ -1,11 +1,11 @@
-// Checks of the library's PRNG run by both tests/unit/test_math.cpp and the firmware image
+// Checks of the library's PRNG run by both tests/lib/core/test_math.cpp and the firmware image
 // (tests/firmware/test_math.cpp): the documented stream, and the moments of its normals.
 #pragma once
 
 #include <cstdint>
 
-#include "check_log.hpp"
 #include "hivecal/random.hpp"
+#include "testkit/check_log.hpp"
 
 namespace hivecal::test {
 

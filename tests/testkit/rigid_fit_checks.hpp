@@ -1,4 +1,4 @@
-// Rigid fit (Kabsch) checks run by both tests/unit/test_rigid_fit.cpp and the firmware image
+// Rigid fit (Kabsch) checks run by both tests/lib/model/test_rigid_fit.cpp and the firmware image
 // (tests/firmware/test_rigid_fit.cpp): exact recovery, reflection guard, weights, the specific
 // error of each degenerate input, accuracy far from the origin.
 #pragma once
@@ -6,10 +6,10 @@
 #include <cstddef>
 #include <limits>
 
-#include "check_log.hpp"
 #include "hivecal/random.hpp"
 #include "hivecal/rigid_fit.hpp"
-#include "test_data.hpp"
+#include "testkit/check_log.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal::test {
 

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <memory>
 
-#include "alloc_trap.hpp"
+#include "testkit/alloc_trap.hpp"
 
 namespace hivecal {
 namespace {

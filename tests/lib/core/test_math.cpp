@@ -5,10 +5,10 @@
 #include <cstring>
 #include <limits>
 
-#include "check_log_gtest.hpp"
 #include "hivecal/math.hpp"
 #include "hivecal/random.hpp"
-#include "random_checks.hpp"
+#include "testkit/check_log_gtest.hpp"
+#include "testkit/random_checks.hpp"
 
 namespace hivecal {
 namespace {

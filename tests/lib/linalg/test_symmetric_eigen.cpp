@@ -10,9 +10,9 @@
 #include <cstring>
 #include <limits>
 
-#include "alloc_trap.hpp"
 #include "hivecal/random.hpp"
 #include "hivecal/symmetric_eigen.hpp"
+#include "testkit/alloc_trap.hpp"
 
 namespace hivecal {
 namespace {

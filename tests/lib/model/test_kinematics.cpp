@@ -1,10 +1,10 @@
-// Kinematics: the checks are tests/support/kinematics_checks.hpp, shared with the firmware
+// Kinematics: the checks are tests/testkit/kinematics_checks.hpp, shared with the firmware
 // image; here with more random poses and under the allocation trap.
 #include <gtest/gtest.h>
 
-#include "alloc_trap.hpp"
-#include "check_log_gtest.hpp"
-#include "kinematics_checks.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/check_log_gtest.hpp"
+#include "testkit/kinematics_checks.hpp"
 
 namespace hivecal {
 namespace {

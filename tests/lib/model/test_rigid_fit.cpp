@@ -1,10 +1,10 @@
-// Rigid fit (Kabsch): the checks are tests/support/rigid_fit_checks.hpp, shared with the
+// Rigid fit (Kabsch): the checks are tests/testkit/rigid_fit_checks.hpp, shared with the
 // firmware image; here with more random trials and under the allocation trap.
 #include <gtest/gtest.h>
 
-#include "alloc_trap.hpp"
-#include "check_log_gtest.hpp"
-#include "rigid_fit_checks.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/check_log_gtest.hpp"
+#include "testkit/rigid_fit_checks.hpp"
 
 namespace hivecal {
 namespace {

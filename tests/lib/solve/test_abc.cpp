@@ -5,11 +5,11 @@
 #include <cmath>
 #include <limits>
 
-#include "alloc_trap.hpp"
 #include "hivecal/abc.hpp"
 #include "hivecal/trace.hpp"
-#include "solver_fixture.hpp"
-#include "test_objectives.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/solver_fixture.hpp"
+#include "testkit/test_objectives.hpp"
 
 namespace hivecal {
 namespace {

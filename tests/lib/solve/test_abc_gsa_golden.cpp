@@ -6,12 +6,12 @@
 
 #include <cstdio>
 
-#include "alloc_trap.hpp"
 #include "hivecal/abc.hpp"
 #include "hivecal/digest.hpp"
 #include "hivecal/gsa.hpp"
-#include "paper6_session.hpp"
-#include "test_objectives.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/paper6_session.hpp"
+#include "testkit/test_objectives.hpp"
 
 namespace hivecal {
 namespace {

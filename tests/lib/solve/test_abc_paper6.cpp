@@ -3,12 +3,12 @@
 // does worse than the canonical algorithm.
 #include <gtest/gtest.h>
 
-#include "alloc_trap.hpp"
 #include "hivecal/abc.hpp"
-#include "paper6_session.hpp"
-#include "paper6_solver_checks.hpp"
-#include "solver_fixture.hpp"
-#include "test_objectives.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/paper6_session.hpp"
+#include "testkit/paper6_solver_checks.hpp"
+#include "testkit/solver_fixture.hpp"
+#include "testkit/test_objectives.hpp"
 
 namespace hivecal {
 namespace {

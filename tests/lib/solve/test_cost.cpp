@@ -3,11 +3,11 @@
 #include <limits>
 #include <set>
 
-#include "alloc_trap.hpp"
 #include "hivecal/cost.hpp"
 #include "hivecal/dataset.hpp"
 #include "hivecal/metrics.hpp"
-#include "test_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal {
 namespace {

@@ -1,13 +1,13 @@
 // Golden digest: FK, Jacobian, transform fit, cost and metrics over a fixed synthetic
 // data set, hashed over their raw bits. The committed value must come out on every
 // target and optimisation level (host -O0/-O3/-march=native, aarch64, armhf, and the
-// Cortex-M firmware, which runs the same support/golden_core.hpp).
+// Cortex-M firmware, which runs the same testkit/golden_core.hpp).
 #include <gtest/gtest.h>
 
 #include <cstdio>
 
-#include "alloc_trap.hpp"
-#include "golden_core.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/golden_core.hpp"
 
 namespace hivecal {
 namespace {

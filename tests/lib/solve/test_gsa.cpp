@@ -5,13 +5,13 @@
 #include <cmath>
 #include <limits>
 
-#include "alloc_trap.hpp"
 #include "hivecal/gsa.hpp"
 #include "hivecal/trace.hpp"
-#include "paper6_session.hpp"
-#include "paper6_solver_checks.hpp"
-#include "solver_fixture.hpp"
-#include "test_objectives.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/paper6_session.hpp"
+#include "testkit/paper6_solver_checks.hpp"
+#include "testkit/solver_fixture.hpp"
+#include "testkit/test_objectives.hpp"
 
 namespace hivecal {
 namespace {

@@ -5,10 +5,10 @@
 
 #include <cmath>
 
-#include "alloc_trap.hpp"
 #include "hivecal/identifiability.hpp"
 #include "hivecal/lm.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace hivecal {
 namespace {

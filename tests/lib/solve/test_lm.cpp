@@ -4,10 +4,10 @@
 
 #include <cmath>
 
-#include "alloc_trap.hpp"
 #include "hivecal/lm.hpp"
 #include "hivecal/metrics.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace hivecal {
 namespace {

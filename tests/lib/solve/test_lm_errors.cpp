@@ -3,9 +3,9 @@
 
 #include <limits>
 
-#include "alloc_trap.hpp"
 #include "hivecal/lm.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace hivecal {
 namespace {

@@ -7,10 +7,10 @@
 #include <cstdio>
 #include <limits>
 
-#include "alloc_trap.hpp"
 #include "hivecal/digest.hpp"
 #include "hivecal/lm.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace hivecal {
 namespace {

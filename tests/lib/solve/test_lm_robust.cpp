@@ -1,10 +1,10 @@
 // Huber loss: 5 % gross tracker errors (millimetres) must not drag the fit.
 #include <gtest/gtest.h>
 
-#include "alloc_trap.hpp"
 #include "hivecal/lm.hpp"
 #include "hivecal/metrics.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace hivecal {
 namespace {

@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "alloc_trap.hpp"
 #include "hivecal/full_model.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace hivecal {
 namespace {

@@ -5,13 +5,13 @@
 #include <cmath>
 #include <limits>
 
-#include "alloc_trap.hpp"
 #include "hivecal/abc.hpp"
 #include "hivecal/cost.hpp"
 #include "hivecal/paper6_cost.hpp"
 #include "hivecal/rigid_fit.hpp"
 #include "hivecal/trace.hpp"
-#include "paper6_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/paper6_data.hpp"
 
 namespace hivecal {
 namespace {

@@ -5,12 +5,12 @@
 
 #include <cstdio>
 
-#include "alloc_trap.hpp"
 #include "hivecal/clock_sync.hpp"
 #include "hivecal/kinematics.hpp"
 #include "hivecal/random.hpp"
-#include "sim_feed.hpp"
 #include "sim_model.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/sim_feed.hpp"
 
 namespace hivecal {
 namespace {

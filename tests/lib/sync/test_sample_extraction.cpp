@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "alloc_trap.hpp"
 #include "hivecal/clock_sync.hpp"
 #include "hivecal/digest.hpp"
 #include "hivecal/random.hpp"
 #include "hivecal/sample_extraction.hpp"
-#include "sim_feed.hpp"
 #include "sim_model.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/sim_feed.hpp"
 
 namespace hivecal {
 namespace {

@@ -6,10 +6,10 @@
 #include <cstring>
 #include <vector>
 
-#include "alloc_trap.hpp"
-#include "codec_support.hpp"
 #include "hivecal/codec.hpp"
 #include "hivecal/math.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/codec_support.hpp"
 
 namespace hivecal {
 namespace {

@@ -6,10 +6,10 @@
 #include <map>
 #include <vector>
 
-#include "alloc_trap.hpp"
-#include "codec_stream.hpp"
-#include "codec_support.hpp"
 #include "hivecal/codec.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/codec_stream.hpp"
+#include "testkit/codec_support.hpp"
 
 namespace hivecal {
 namespace {
