@@ -4,12 +4,7 @@
 // a tracker 3 m away with 10 um noise); real ones come from `hivecal extract` or your own code.
 #include <cstdio>
 
-#include "hivecal/cost.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/lm.hpp"
-#include "hivecal/metrics.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/hivecal.hpp"  // the whole library; single headers build faster
 
 namespace {
 

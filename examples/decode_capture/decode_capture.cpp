@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 
-#include "hivecal/codec.hpp"
+#include "hivecal/hivecal.hpp"  // the whole library; single headers build faster
 
 namespace {
 

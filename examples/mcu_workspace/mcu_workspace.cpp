@@ -7,9 +7,7 @@
 #include <cstdlib>
 #include <new>
 
-#include "hivecal/dataset.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/lm.hpp"
+#include "hivecal/hivecal.hpp"  // the whole library; single headers build faster
 
 // A firmware build links no allocator; here any C++ allocation would stop the program.
 void* operator new(std::size_t) { std::abort(); }

@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <type_traits>
 
-#include "hivecal/status.hpp"
+#include "hivecal/core/status.hpp"
 #include "testkit/check_log.hpp"
 
 namespace hivecal::fw {

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <cstring>
 
-#include "hivecal/codec.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "testkit/codec_support.hpp"
 
 namespace {

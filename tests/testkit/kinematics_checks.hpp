@@ -6,8 +6,9 @@
 #include <cstring>
 #include <limits>
 
-#include "hivecal/kinematics.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/model/ur_deltas.hpp"
 #include "testkit/check_log.hpp"
 #include "testkit/test_data.hpp"
 

@@ -6,7 +6,7 @@
 
 #include <cstddef>
 
-#include "hivecal/objective.hpp"
+#include "hivecal/solve/objective.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/paper6_session.hpp"
 

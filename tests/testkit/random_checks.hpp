@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
 #include "testkit/check_log.hpp"
 
 namespace hivecal::test {

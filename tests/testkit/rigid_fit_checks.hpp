@@ -6,8 +6,8 @@
 #include <cstddef>
 #include <limits>
 
-#include "hivecal/random.hpp"
-#include "hivecal/rigid_fit.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/model/rigid_fit.hpp"
 #include "testkit/check_log.hpp"
 #include "testkit/test_data.hpp"
 

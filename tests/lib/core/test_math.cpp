@@ -5,8 +5,8 @@
 #include <cstring>
 #include <limits>
 
-#include "hivecal/math.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/math.hpp"
+#include "hivecal/core/random.hpp"
 #include "testkit/check_log_gtest.hpp"
 #include "testkit/random_checks.hpp"
 

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "hivecal/abc.hpp"
-#include "hivecal/trace.hpp"
+#include "hivecal/core/trace.hpp"
+#include "hivecal/solve/abc.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/solver_fixture.hpp"
 #include "testkit/test_objectives.hpp"

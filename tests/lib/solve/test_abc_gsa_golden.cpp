@@ -6,9 +6,9 @@
 
 #include <cstdio>
 
-#include "hivecal/abc.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/gsa.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/solve/abc.hpp"
+#include "hivecal/solve/gsa.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/paper6_session.hpp"
 #include "testkit/test_objectives.hpp"

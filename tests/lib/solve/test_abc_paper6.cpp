@@ -3,7 +3,7 @@
 // does worse than the canonical algorithm.
 #include <gtest/gtest.h>
 
-#include "hivecal/abc.hpp"
+#include "hivecal/solve/abc.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/paper6_session.hpp"
 #include "testkit/paper6_solver_checks.hpp"

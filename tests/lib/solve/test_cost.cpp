@@ -3,9 +3,9 @@
 #include <limits>
 #include <set>
 
-#include "hivecal/cost.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/metrics.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/solve/cost.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "hivecal/gsa.hpp"
-#include "hivecal/trace.hpp"
+#include "hivecal/core/trace.hpp"
+#include "hivecal/solve/gsa.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/paper6_session.hpp"
 #include "testkit/paper6_solver_checks.hpp"

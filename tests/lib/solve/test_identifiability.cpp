@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "hivecal/identifiability.hpp"
-#include "hivecal/lm.hpp"
+#include "hivecal/solve/identifiability.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 

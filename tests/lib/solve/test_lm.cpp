@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "hivecal/lm.hpp"
-#include "hivecal/metrics.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 

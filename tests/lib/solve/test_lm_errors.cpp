@@ -3,7 +3,7 @@
 
 #include <limits>
 
-#include "hivecal/lm.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 

@@ -7,8 +7,8 @@
 #include <cstdio>
 #include <limits>
 
-#include "hivecal/digest.hpp"
-#include "hivecal/lm.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 

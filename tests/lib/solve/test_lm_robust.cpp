@@ -1,8 +1,8 @@
 // Huber loss: 5 % gross tracker errors (millimetres) must not drag the fit.
 #include <gtest/gtest.h>
 
-#include "hivecal/lm.hpp"
-#include "hivecal/metrics.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hivecal/full_model.hpp"
+#include "hivecal/solve/normal_equations.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 

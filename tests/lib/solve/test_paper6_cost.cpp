@@ -5,11 +5,11 @@
 #include <cmath>
 #include <limits>
 
-#include "hivecal/abc.hpp"
-#include "hivecal/cost.hpp"
-#include "hivecal/paper6_cost.hpp"
-#include "hivecal/rigid_fit.hpp"
-#include "hivecal/trace.hpp"
+#include "hivecal/core/trace.hpp"
+#include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/solve/abc.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/solve/paper6_cost.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/paper6_data.hpp"
 

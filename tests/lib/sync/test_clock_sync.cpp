@@ -5,9 +5,11 @@
 
 #include <cstdio>
 
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/sim_feed.hpp"
 #include "sim_model.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/sim_feed.hpp"

@@ -11,10 +11,12 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/random.hpp"
-#include "hivecal/sample_extraction.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/sim_feed.hpp"
 #include "sim_model.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/sim_feed.hpp"

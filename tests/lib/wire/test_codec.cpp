@@ -6,8 +6,8 @@
 #include <cstring>
 #include <vector>
 
-#include "hivecal/codec.hpp"
-#include "hivecal/math.hpp"
+#include "hivecal/core/math.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/codec_support.hpp"
 

@@ -6,7 +6,7 @@
 #include <map>
 #include <vector>
 
-#include "hivecal/codec.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/codec_stream.hpp"
 #include "testkit/codec_support.hpp"
