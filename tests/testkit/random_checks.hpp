@@ -1,4 +1,4 @@
-// Checks of the library's PRNG run by both tests/lib/core/test_math.cpp and the firmware image
+// Checks of the library's PRNG run by both tests/lib/core/test_random.cpp and the firmware image
 // (tests/firmware/test_math.cpp): the documented stream, and the moments of its normals.
 #pragma once
 
