@@ -1,4 +1,4 @@
-#include "sim_outputs.hpp"
+#include "sim/sim_outputs.hpp"
 
 #include <unistd.h>
 
@@ -8,11 +8,11 @@
 #include <cstring>
 #include <functional>
 
-#include "calibration_json.hpp"
-#include "csv.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
 #include "hivecal/codec.hpp"
-#include "json.hpp"
-#include "text_util.hpp"
+#include "textio/json.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::sim {
 namespace {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "sim_model.hpp"
+#include "sim/sim_model.hpp"
 
 namespace hivecal::sim {
 

@@ -1,9 +1,9 @@
-#include "sim_server.hpp"
+#include "sim/sim_server.hpp"
 
 #include <vector>
 
 #include "hivecal/port/byte_source.hpp"
-#include "sim_outputs.hpp"
+#include "sim/sim_outputs.hpp"
 
 namespace hivecal::sim {
 namespace {

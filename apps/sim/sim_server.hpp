@@ -8,7 +8,7 @@
 #include <string>
 
 #include "hivecal/port/pty.hpp"
-#include "sim_model.hpp"
+#include "sim/sim_model.hpp"
 
 namespace hivecal::sim {
 

@@ -1,7 +1,7 @@
-#include "calibration_json.hpp"
+#include "textio/calibration_json.hpp"
 
 #include "hivecal/rigid_fit.hpp"
-#include "text_util.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 namespace {

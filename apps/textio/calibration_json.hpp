@@ -6,8 +6,8 @@
 
 #include "hivecal/kinematics.hpp"
 #include "hivecal/metrics.hpp"
-#include "json.hpp"
-#include "ur_calibration_conf.hpp"  // ParseResult
+#include "textio/json.hpp"
+#include "textio/ur_calibration_conf.hpp"  // ParseResult
 
 namespace hivecal::textio {
 

@@ -11,8 +11,9 @@
 #include <vector>
 
 #include "hivecal/dataset.hpp"
+#include "hivecal/port/input_file.hpp"
 #include "hivecal/types.hpp"
-#include "ur_calibration_conf.hpp"  // ParseResult
+#include "textio/ur_calibration_conf.hpp"  // ParseResult
 
 namespace hivecal::textio {
 
@@ -45,10 +46,15 @@ struct CsvRow {
 };
 
 /// Pull reader of a CSV file: checks the header, then parses one numeric row per next().
-/// Memory is one line, whatever the file length. Every error names the file and line.
+/// Memory is one line (at most kMaxLineBytes), whatever the file length. Every error names
+/// the file and line; a NUL byte or an over-long line is an error, never a silent cut.
+/// The bytes come through port::InputFile (regular files or '-' only, size-checked).
 class CsvReader {
  public:
-  explicit CsvReader(CsvSchema schema);
+  /// Longest line accepted [bytes].
+  static constexpr std::size_t kMaxLineBytes = 64 * 1024;
+  /// A reader of `schema`; `max_file_bytes` bounds the file [bytes].
+  explicit CsvReader(CsvSchema schema, std::uint64_t max_file_bytes = port::kMaxStreamInputBytes);
   ~CsvReader();
   CsvReader(const CsvReader&) = delete;
   CsvReader& operator=(const CsvReader&) = delete;
@@ -63,13 +69,19 @@ class CsvReader {
   std::uint64_t bytes_read() const { return bytes_read_; }
 
  private:
-  bool read_line(std::string* line);
+  /// Next line into *line (without its end); false at the end of the file or on an error
+  /// (then *error is set).
+  bool read_line(std::string* line, ParseResult* error);
   bool match_header(const std::vector<std::string_view>& header);
   std::string expected_header() const;
 
   CsvSchema schema_;
   std::string path_;
-  std::FILE* file_ = nullptr;
+  std::uint64_t max_file_bytes_;
+  port::InputFile file_;
+  std::string buffer_;        ///< bytes read and not yet returned as lines
+  std::size_t buffer_at_ = 0;  ///< first unreturned byte of buffer_
+  bool at_end_ = false;       ///< the file has no more bytes
   std::size_t line_number_ = 0;
   std::size_t offset_ = 0;    ///< 1 when the optional leading column is present
   std::size_t trailing_ = 0;  ///< optional trailing columns present

@@ -1,9 +1,9 @@
-#include "json.hpp"
+#include "textio/json.hpp"
 
 #include <cstdio>
 
 #include "hivecal/math.hpp"
-#include "text_util.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 

@@ -1,4 +1,7 @@
-#include "text_util.hpp"
+#include "textio/text_util.hpp"
+
+#include "hivecal/port/input_file.hpp"
+#include "hivecal/port/output_files.hpp"
 
 #include <cerrno>
 #include <charconv>
@@ -28,22 +31,9 @@ bool make_directories(const std::string& path, std::string* error) {
 }
 
 bool read_text_file(const std::string& path, std::string* text, std::string* error) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) {
-    *error = path + ": cannot open: " + std::strerror(errno);
-    return false;
-  }
-  text->clear();
-  char buffer[65536];
-  std::size_t got = 0;
-  while ((got = std::fread(buffer, 1, sizeof buffer, file)) > 0) text->append(buffer, got);
-  const bool failed = std::ferror(file) != 0;
-  std::fclose(file);
-  if (failed) {
-    *error = path + ": read error";
-    return false;
-  }
-  return true;
+  const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, text);
+  if (!read.ok()) *error = read.message;
+  return read.ok();
 }
 
 std::string_view trim(std::string_view s) {
@@ -64,29 +54,13 @@ bool parse_double(std::string_view field, double* value) {
 }
 
 bool write_file_atomically(const std::string& path, const std::string& content, std::string* error) {
-  std::string temp = path + ".tmp.XXXXXX";
-  const int fd = mkstemp(temp.data());
-  if (fd < 0) {
-    *error = path + ": cannot create a temporary file beside it: " + std::strerror(errno);
-    return false;
-  }
-  std::size_t done = 0;
-  bool ok = true;
-  while (ok && done < content.size()) {
-    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    ok = n > 0;
-    if (ok) done += static_cast<std::size_t>(n);
-  }
-  ok = ok && ::fchmod(fd, 0644) == 0 && ::fsync(fd) == 0;
-  const int saved_errno = errno;
-  ok = (::close(fd) == 0) && ok;
-  if (!ok || std::rename(temp.c_str(), path.c_str()) != 0) {
-    *error = path + ": write failed: " + std::strerror(ok ? errno : saved_errno);
-    std::remove(temp.c_str());
-    return false;
-  }
-  return true;
+  port::OutputSet outputs;
+  std::size_t id = 0;
+  port::Error result = outputs.add_file(path, "", &id);
+  if (result.ok()) result = outputs.stage_text(id, "", content);
+  if (result.ok()) result = outputs.commit();
+  if (!result.ok()) *error = result.message;
+  return result.ok();
 }
 
 std::string format_double(double value) {

@@ -1,9 +1,9 @@
-#include "ur_calibration_conf.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 #include <string_view>
 
 #include "hivecal/math.hpp"
-#include "text_util.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 namespace {

@@ -78,7 +78,7 @@ no_file "$work/p5.csv"
 printf 'q1,q2,q3,q4,q5,q6\n0,0,inf,0,0,0\n' >"$work/infjoints.csv"
 expect 3 "NaN or Inf" -- predict --calibration "$work/result.json" --joints "$work/infjoints.csv" --out "$work/p6.csv"
 # --- output errors (exit 4)
-expect 4 "cannot create a temporary" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/no/dir/p.csv"
+expect 4 "does not exist" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/no/dir/p.csv"
 
 # --- record: usage errors
 expect 2 "give --robot-port and/or --tracker-port" -- record

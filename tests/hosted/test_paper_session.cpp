@@ -11,18 +11,18 @@
 #include <string>
 #include <vector>
 
-#include "calibration_json.hpp"
-#include "cli.hpp"
+#include "textio/calibration_json.hpp"
+#include "cli/options.hpp"
 #include "cli_run.hpp"
-#include "commands.hpp"
-#include "csv.hpp"
+#include "hivecal/commands/commands.hpp"
+#include "textio/csv.hpp"
 #include "hivecal/random.hpp"
 #include "hivecal/sample_extraction.hpp"
-#include "json.hpp"
-#include "sim_model.hpp"
-#include "simulate_cmd.hpp"
-#include "text_util.hpp"
-#include "validation.hpp"
+#include "textio/json.hpp"
+#include "sim/sim_model.hpp"
+#include "hivecal/commands/simulate.hpp"
+#include "textio/text_util.hpp"
+#include "hivecal/commands/validation.hpp"
 
 namespace hivecal {
 namespace {

@@ -162,7 +162,7 @@ TEST(CaptureFile, ReplaysExactlyAndPaces) {
   const std::vector<std::uint8_t> bytes = pattern(5000, 3);
   CaptureWriter writer;
   std::string error;
-  ASSERT_TRUE(writer.open(path, &error)) << error;
+  ASSERT_TRUE(writer.open(path, true, &error)) << error;
   ASSERT_TRUE(writer.write(bytes.data(), bytes.size(), &error)) << error;
   ASSERT_TRUE(writer.close(&error)) << error;
   EXPECT_EQ(writer.bytes_written(), bytes.size());
@@ -194,7 +194,7 @@ TEST(Recorder, CopiesTwoPortsToCaptures) {
   const std::string tracker_path = temp_path("tracker.cap");
   CaptureWriter robot_file;
   CaptureWriter tracker_file;
-  ASSERT_TRUE(robot_file.open(robot_path, &error) && tracker_file.open(tracker_path, &error)) << error;
+  ASSERT_TRUE(robot_file.open(robot_path, true, &error) && tracker_file.open(tracker_path, true, &error)) << error;
   const std::vector<std::uint8_t> robot_bytes = pattern(30000, 4);
   const std::vector<std::uint8_t> tracker_bytes = pattern(4000, 5);
   volatile std::sig_atomic_t stop = 0;

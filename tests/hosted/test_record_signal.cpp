@@ -13,9 +13,9 @@
 #include "hivecal/codec.hpp"
 #include "hivecal/port/byte_source.hpp"
 #include "hivecal/port/pty.hpp"
-#include "sim_model.hpp"
-#include "sim_outputs.hpp"
-#include "stream_commands.hpp"
+#include "sim/sim_model.hpp"
+#include "sim/sim_outputs.hpp"
+#include "hivecal/commands/streams.hpp"
 
 namespace hivecal {
 namespace {

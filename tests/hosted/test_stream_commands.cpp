@@ -10,15 +10,15 @@
 #include <string>
 #include <vector>
 
-#include "calibration_json.hpp"
+#include "textio/calibration_json.hpp"
 #include "cli_run.hpp"
-#include "cli.hpp"
-#include "csv.hpp"
+#include "cli/options.hpp"
+#include "textio/csv.hpp"
 #include "hivecal/dataset.hpp"
-#include "sim_model.hpp"
-#include "simulate_cmd.hpp"
-#include "stream_commands.hpp"
-#include "ur_calibration_conf.hpp"
+#include "sim/sim_model.hpp"
+#include "hivecal/commands/simulate.hpp"
+#include "hivecal/commands/streams.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal {
 namespace {

@@ -15,13 +15,14 @@
 
 #include "hivecal/clock_sync.hpp"
 #include "hivecal/port/capture_file.hpp"
+#include "hivecal/port/input_file.hpp"
 #include "hivecal/port/pty.hpp"
 #include "hivecal/port/recorder.hpp"
 #include "hivecal/port/serial_port.hpp"
 #include "hivecal/sample_extraction.hpp"
-#include "sim_model.hpp"
-#include "sim_server.hpp"
-#include "stream_pipeline.hpp"
+#include "sim/sim_model.hpp"
+#include "sim/sim_server.hpp"
+#include "streams/stream_pipeline.hpp"
 
 namespace hivecal {
 namespace {
@@ -53,7 +54,7 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   const std::string tracker_path = temp_path("tracker.cap");
   port::CaptureWriter robot_file;
   port::CaptureWriter tracker_file;
-  ASSERT_TRUE(robot_file.open(robot_path, &error) && tracker_file.open(tracker_path, &error)) << error;
+  ASSERT_TRUE(robot_file.open(robot_path, true, &error) && tracker_file.open(tracker_path, true, &error)) << error;
 
   // Pass 1 live: decode what the recorder writes and fold it into the clock profiles.
   const auto estimator = std::make_unique<ClockEstimator<>>(make_clock_sync_config(session.truth().nominal));
@@ -124,11 +125,10 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
       std::make_unique<SampleExtractor<>>(make_extraction_config(session.truth().nominal), fit, &dataset);
   Kept kept;
   extractor->set_observer(&kept);
-  port::CaptureFileSource robot_replay(robot_path);
-  port::CaptureFileSource tracker_replay(tracker_path);
-  ASSERT_TRUE(robot_replay.open(&error) && tracker_replay.open(&error)) << error;
-  streams::SourceReader robot_bytes(&robot_replay);
-  streams::SourceReader tracker_bytes(&tracker_replay);
+  port::InputFile robot_bytes;
+  port::InputFile tracker_bytes;
+  ASSERT_TRUE(robot_bytes.open(robot_path, port::kMaxStreamInputBytes).ok());
+  ASSERT_TRUE(tracker_bytes.open(tracker_path, port::kMaxStreamInputBytes).ok());
   streams::PassStats pass;
   EXPECT_EQ(extract_samples_from_streams(robot_bytes, tracker_bytes, extractor.get(), &pass), Status::ok)
       << error;

@@ -10,7 +10,7 @@
 #include "hivecal/kinematics.hpp"
 #include "hivecal/random.hpp"
 #include "sim_feed.hpp"
-#include "sim_model.hpp"
+#include "sim/sim_model.hpp"
 
 namespace hivecal {
 namespace {

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "hivecal/kinematics.hpp"
-#include "text_util.hpp"
-#include "ur_calibration_conf.hpp"
+#include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal {
 namespace {

@@ -1,11 +1,14 @@
 #include "hivecal/port/capture_file.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
 #include <utility>
+
+#include "hivecal/port/error.hpp"
 
 namespace hivecal::port {
 
@@ -14,12 +17,19 @@ CaptureWriter::~CaptureWriter() {
   (void)close(&ignored);
 }
 
-bool CaptureWriter::open(const std::string& path, std::string* error) {
+bool CaptureWriter::open(const std::string& path, bool replace, std::string* error) {
   path_ = path;
   bytes_written_ = 0;
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  struct stat info {};
+  if (replace && ::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) {
+    *error = quoted(path, 200) + ": not a regular file; refusing to write a capture over it";
+    return false;
+  }
+  const int mode = replace ? O_TRUNC : O_EXCL;  // never truncates an existing capture unasked
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | mode | O_CLOEXEC, 0666);
   if (fd_ < 0) {
-    *error = path + ": cannot create: " + std::strerror(errno);
+    *error = quoted(path, 200) + (errno == EEXIST ? ": exists; refusing to overwrite a capture (--force replaces it)"
+                                                  : ": cannot create: " + system_message(errno));
     return false;
   }
   return true;

@@ -19,8 +19,9 @@ class CaptureWriter {
   CaptureWriter(const CaptureWriter&) = delete;
   CaptureWriter& operator=(const CaptureWriter&) = delete;
 
-  /// Creates (or truncates) `path`. False with a message on failure.
-  bool open(const std::string& path, std::string* error);
+  /// Creates `path`; an existing file is an error unless `replace` (then a regular file is
+  /// truncated; a device, FIFO or folder is still refused). False with a message on failure.
+  bool open(const std::string& path, bool replace, std::string* error);
   /// Writes all `count` bytes (retrying short writes and EINTR). False with a message on failure.
   bool write(const std::uint8_t* bytes, std::size_t count, std::string* error);
   /// Forces the written bytes to storage (fsync).

@@ -1,19 +1,27 @@
-// Shared plumbing of the hivecal subcommands: option parsing, --help, exit codes, messages.
+// Plumbing shared by every hivecal command: option parsing, --help, the shared option
+// helpers, exit codes and the one way an error reaches the user (docs/cli.md).
 #pragma once
 
 #include <map>
 #include <string>
 #include <vector>
 
+#include "hivecal/kinematics.hpp"
+#include "hivecal/port/error.hpp"
+#include "hivecal/types.hpp"
+
 namespace hivecal::cli {
 
-/// Process exit codes (docs/cli.md).
+using port::Error;
+using port::Fault;
+
+/// Process exit codes of every command (docs/cli.md): the values of port::Fault.
 enum ExitCode : int {
-  kExitOk = 0,           ///< success
-  kExitFailure = 1,      ///< the computation failed (e.g. calibration did not converge)
-  kExitUsage = 2,        ///< bad command line
-  kExitBadInput = 3,     ///< an input file is missing, unreadable or malformed
-  kExitOutputError = 4,  ///< an output file could not be written
+  kExitOk = static_cast<int>(Fault::none),           ///< success
+  kExitFailure = static_cast<int>(Fault::failure),   ///< the computation failed (e.g. no convergence)
+  kExitUsage = static_cast<int>(Fault::usage),       ///< bad command line, or refused paths
+  kExitBadInput = static_cast<int>(Fault::input),    ///< an input is missing, not a regular file, or malformed
+  kExitOutputError = static_cast<int>(Fault::output),  ///< an output cannot be created or written
 };
 
 /// One command-line option.
@@ -44,10 +52,20 @@ class Options {
 int parse_options(const std::string& command, const std::string& summary, const std::vector<OptionSpec>& specs,
                   int argc, char** argv, Options* options);
 
-/// Prints "hivecal <command>: <message>" to stderr.
+/// Prints "hivecal <command>: <message>" to stderr (control bytes escaped, cut when huge).
 void error(const std::string& command, const std::string& message);
+/// Prints a failed Error as error() does and returns its exit code (kExitOk when ok).
+int exit_with(const std::string& command, const Error& result);
 
 /// True when progress lines should go to stderr (a terminal and not --quiet).
 bool progress_enabled(const Options& options);
+
+// --- option helpers shared by the commands (one parser per kind of value)
+/// --<name> as a number; Fault::usage naming the option otherwise.
+Error number_option(const Options& options, const std::string& name, double* value);
+/// --<name> as X,Y,Z in metres (e.g. --tool).
+Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
+/// --<name> as a robot model name (ur3, ur5, ur10, ur5e).
+Error robot_model_option(const Options& options, const std::string& name, RobotType* type);
 
 }  // namespace hivecal::cli

@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <utility>
 
-#include "cli.hpp"
-#include "commands.hpp"
+#include "cli/options.hpp"
+#include "hivecal/commands/commands.hpp"
 #include "hivecal/cost.hpp"
 #include "hivecal/dataset.hpp"
 #include "hivecal/kinematics.hpp"
@@ -40,10 +40,7 @@ int demo_main(int argc, char** argv) {
   for (const auto& [name, model] : {std::pair<const char*, RobotModel>{"nominal", nominal}, {"true", truth}}) {
     RigidTransform base;
     const Status fit = fit_base_to_tracker(model, dataset.samples(), &base);
-    if (fit != Status::ok) {
-      error("demo", std::string("base fit failed: ") + status_message(fit));
-      return kExitFailure;
-    }
+    if (fit != Status::ok) return exit_with("demo", Error::failure(std::string("base fit failed: ") + status_message(fit)));
     const ErrorStats stats = position_error_stats(model, base, dataset.samples());
     std::printf("%-8s geometry: MAE 3D %.1f um, sigma %.1f um over %zu samples\n", name,
                 stats.mae(ErrorAxis::norm_3d) * 1e6, stats.sigma(ErrorAxis::norm_3d) * 1e6, stats.count);

@@ -1,4 +1,4 @@
-#include "simulate_cmd.hpp"
+#include "hivecal/commands/simulate.hpp"
 
 #include <csignal>
 #include <cstdio>
@@ -7,14 +7,14 @@
 #include <tuple>
 #include <vector>
 
-#include "cli.hpp"
+#include "cli/options.hpp"
 #include "hivecal/port/byte_source.hpp"
 #include "hivecal/port/pty.hpp"
-#include "sim_model.hpp"
-#include "sim_outputs.hpp"
-#include "sim_server.hpp"
-#include "text_util.hpp"
-#include "ur_calibration_conf.hpp"
+#include "sim/sim_model.hpp"
+#include "sim/sim_outputs.hpp"
+#include "sim/sim_server.hpp"
+#include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal::sim {
 namespace {
