@@ -13,23 +13,6 @@
 
 namespace hivecal::textio {
 
-bool make_directories(const std::string& path, std::string* error) {
-  for (std::size_t slash = path.find('/', 1);; slash = path.find('/', slash + 1)) {
-    const std::string prefix = path.substr(0, slash);
-    if (!prefix.empty() && ::mkdir(prefix.c_str(), 0755) != 0 && errno != EEXIST) {
-      *error = prefix + ": cannot create folder: " + std::strerror(errno);
-      return false;
-    }
-    if (slash == std::string::npos) break;
-  }
-  struct stat info {};
-  if (::stat(path.c_str(), &info) != 0 || !S_ISDIR(info.st_mode)) {
-    *error = path + ": exists and is not a folder";
-    return false;
-  }
-  return true;
-}
-
 bool read_text_file(const std::string& path, std::string* text, std::string* error) {
   const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, text);
   if (!read.ok()) *error = read.message;

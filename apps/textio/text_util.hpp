@@ -16,9 +16,6 @@ bool parse_double(std::string_view field, double* value);
 /// Writes `content` to `path` as the only output of a port::OutputSet (temporary beside it,
 /// rename; special files refused, symlink and mode kept). On failure an older file stays.
 bool write_file_atomically(const std::string& path, const std::string& content, std::string* error);
-/// Creates the folder `path` and its missing parents (like mkdir -p); true if it exists as
-/// a folder afterwards, else false with a message.
-bool make_directories(const std::string& path, std::string* error);
 /// Formats a double so that it reads back to the same bits (%.17g).
 std::string format_double(double value);
 

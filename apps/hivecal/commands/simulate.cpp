@@ -9,6 +9,7 @@
 
 #include "cli/options.hpp"
 #include "hivecal/port/byte_source.hpp"
+#include "hivecal/port/output_files.hpp"
 #include "hivecal/port/pty.hpp"
 #include "sim/sim_model.hpp"
 #include "sim/sim_outputs.hpp"
@@ -177,18 +178,16 @@ int simulate_main(int argc, char** argv) {
   SimConfig config;
   const int configured = configure(options, &config);
   if (configured >= 0) return configured;
+  port::OutputSet outputs;
+  std::size_t folder = 0;
+  port::Error error = outputs.add_input(options.get("calibration-conf"), "--calibration-conf");
+  if (error.ok()) error = outputs.add_folder(options.get("out-dir"), "--out-dir", &folder);
+  if (!error.ok()) return cli::exit_with(kCommand, error);
   const Session session(config);
-  OutputPaths paths = output_paths_in(options.get("out-dir"));
-  if (options.given("serve")) {
-    paths.robot_capture.clear();  // `hivecal record` makes them from the ptys
-    paths.tracker_capture.clear();
-  }
-  std::string error;
-  if (!textio::make_directories(options.get("out-dir"), &error) ||
-      !write_outputs(session, paths, kTruthSampleMarginS, &error)) {
-    cli::error(kCommand, error);
-    return kExitOutputError;
-  }
+  // With --serve, `hivecal record` makes the captures from the ptys.
+  error = stage_outputs(session, !options.given("serve"), kTruthSampleMarginS, &outputs, folder);
+  if (error.ok()) error = outputs.commit();
+  if (!error.ok()) return cli::exit_with(kCommand, error);
   return options.given("serve") ? serve(session, options) : kExitOk;
 }
 
