@@ -109,8 +109,8 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
     facts->info_lines.push_back("input: robot " + sources.robot + ", tracker " + sources.tracker);
     return load_streams(sources, config, dataset, facts);
   }
-  const textio::ParseResult r = textio::read_samples_csv(sources.samples, dataset);
-  if (!r.ok) return port::Error::input(r.message);
+  const port::Error r = textio::read_samples_csv(sources.samples, dataset);
+  if (!r.ok()) return r;
   facts->info_lines.push_back("input: " + sources.samples + " (" + std::to_string(dataset->size()) +
                               " paired samples)");
   return port::Error{};

@@ -127,15 +127,15 @@ Status LogRecordReader::next(StreamRecord* record) {
   if (!error_.empty()) return Status::read_failed;
   if (!opened_) {
     opened_ = true;
-    const textio::ParseResult r = kind_ == Kind::robot ? robot_.open(path_) : tracker_.open(path_);
-    if (!r.ok) return fail(r.message);
+    const port::Error r = kind_ == Kind::robot ? robot_.open(path_) : tracker_.open(path_);
+    if (!r.ok()) return fail(r.message);
   }
   bool got_row = false;
-  textio::ParseResult r;
+  port::Error r;
   if (kind_ == Kind::robot) {
     textio::RobotLogRow row;
     r = robot_.next(&row, &got_row);
-    if (r.ok && got_row) {
+    if (r.ok() && got_row) {
       if (!to_microseconds(row.t_s, &record->joint.timestamp_us)) return Status::read_failed;
       for (int j = 0; j < kJointCount; ++j) record->joint.q_rad[j] = row.q_rad(j);
       record->kind = StreamRecord::Kind::joint_state;
@@ -143,14 +143,14 @@ Status LogRecordReader::next(StreamRecord* record) {
   } else {
     textio::TrackerLogRow row;
     r = tracker_.next(&row, &got_row);
-    if (r.ok && got_row) {
+    if (r.ok() && got_row) {
       if (!to_microseconds(row.t_s, &record->point.timestamp_us)) return Status::read_failed;
       for (int k = 0; k < 3; ++k) record->point.point_m[k] = row.point_m(k);
       record->point.status = row.status;
       record->kind = StreamRecord::Kind::tracker_point;
     }
   }
-  if (!r.ok) return fail(r.message);
+  if (!r.ok()) return fail(r.message);
   if (got_row) ++rows_;
   return Status::ok;
 }

@@ -69,7 +69,7 @@ bool CsvReader::match_header(const std::vector<std::string_view>& header) {
   return true;
 }
 
-bool CsvReader::read_line(std::string* line, ParseResult* error) {
+bool CsvReader::read_line(std::string* line, port::Error* error) {
   line->clear();
   for (;;) {
     const std::size_t newline = buffer_.find('\n', buffer_at_);
@@ -82,8 +82,8 @@ bool CsvReader::read_line(std::string* line, ParseResult* error) {
     }
     if (at_end_) return false;
     if (buffer_.size() - buffer_at_ > kMaxLineBytes) {
-      *error = ParseResult{false, where(path_, line_number_ + 1) + "line longer than " +
-                                      std::to_string(kMaxLineBytes) + " bytes (not a CSV text file?)"};
+      *error = port::Error::input(where(path_, line_number_ + 1) + "line longer than " +
+                                      std::to_string(kMaxLineBytes) + " bytes (not a CSV text file?)");
       return false;
     }
     buffer_.erase(0, buffer_at_);
@@ -91,7 +91,7 @@ bool CsvReader::read_line(std::string* line, ParseResult* error) {
     std::uint8_t chunk[16384];
     std::size_t got = 0;
     if (file_.read(chunk, sizeof chunk, &got) != Status::ok) {
-      *error = ParseResult{false, file_.error().message};
+      *error = port::Error::input(file_.error().message);
       return false;
     }
     at_end_ = got == 0;
@@ -99,47 +99,47 @@ bool CsvReader::read_line(std::string* line, ParseResult* error) {
   }
   ++line_number_;
   if (line->size() > kMaxLineBytes) {
-    *error = ParseResult{false, where(path_, line_number_) + "line longer than " + std::to_string(kMaxLineBytes) +
-                                    " bytes (not a CSV text file?)"};
+    *error = port::Error::input(where(path_, line_number_) + "line longer than " + std::to_string(kMaxLineBytes) +
+                                    " bytes (not a CSV text file?)");
     return false;
   }
   if (line->find('\0') != std::string::npos) {
-    *error = ParseResult{false, where(path_, line_number_) + "NUL byte in the line (binary data in a CSV file?)"};
+    *error = port::Error::input(where(path_, line_number_) + "NUL byte in the line (binary data in a CSV file?)");
     return false;
   }
   if (line_number_ == 1 && line->compare(0, 3, "\xEF\xBB\xBF") == 0) line->erase(0, 3);  // BOM
   return true;
 }
 
-ParseResult CsvReader::open(const std::string& path) {
+port::Error CsvReader::open(const std::string& path) {
   path_ = path;
   const port::Error opened = file_.open(path, max_file_bytes_);
-  if (!opened.ok()) return ParseResult{false, opened.message};
+  if (!opened.ok()) return opened;
   std::string line;
-  ParseResult error{true, ""};
+  port::Error error;
   while (read_line(&line, &error)) {
     if (trim(line).empty()) continue;
     if (!match_header(split_fields(line))) {
-      return ParseResult{false, where(path, line_number_) + "unexpected header " + port::quoted(trim(line)) +
-                                    ", expected " + expected_header()};
+      return port::Error::input(where(path, line_number_) + "unexpected header " + port::quoted(trim(line)) +
+                                    ", expected " + expected_header());
     }
-    return ParseResult{true, ""};
+    return port::Error{};
   }
-  if (!error.ok) return error;
-  return ParseResult{false, path + ": empty file (expected header " + expected_header() + ")"};
+  if (!error.ok()) return error;
+  return port::Error::input(path + ": empty file (expected header " + expected_header() + ")");
 }
 
-ParseResult CsvReader::next(CsvRow* row, bool* got_row) {
+port::Error CsvReader::next(CsvRow* row, bool* got_row) {
   *got_row = false;
   std::string line;
-  ParseResult error{true, ""};
+  port::Error error;
   while (read_line(&line, &error)) {
     if (trim(line).empty()) continue;
     const std::vector<std::string_view> fields = split_fields(line);
     const std::size_t needed = offset_ + schema_.columns.size() + trailing_;
     if (fields.size() < needed) {
-      return ParseResult{false, where(path_, line_number_) + "expected at least " + std::to_string(needed) +
-                                    " columns, found " + std::to_string(fields.size())};
+      return port::Error::input(where(path_, line_number_) + "expected at least " + std::to_string(needed) +
+                                    " columns, found " + std::to_string(fields.size()));
     }
     row->line = line_number_;
     row->trailing_present = trailing_;
@@ -147,33 +147,33 @@ ParseResult CsvReader::next(CsvRow* row, bool* got_row) {
     for (std::size_t i = offset_; i < needed; ++i) {
       double v = 0.0;
       if (!parse_double(fields[i], &v)) {
-        return ParseResult{false, where(path_, line_number_) + "not a number: " + port::quoted(fields[i])};
+        return port::Error::input(where(path_, line_number_) + "not a number: " + port::quoted(fields[i]));
       }
       row->values.push_back(v);
     }
     ++rows_;
     *got_row = true;
-    return ParseResult{true, ""};
+    return port::Error{};
   }
-  if (!error.ok) return error;
-  if (rows_ == 0) return ParseResult{false, path_ + ": no data rows"};
-  return ParseResult{true, ""};
+  if (!error.ok()) return error;
+  if (rows_ == 0) return port::Error::input(path_ + ": no data rows");
+  return port::Error{};
 }
 
-ParseResult CsvReader::reject(const std::string& problem) const {
-  return ParseResult{false, where(path_, line_number_) + problem};
+port::Error CsvReader::reject(const std::string& problem) const {
+  return port::Error::input(where(path_, line_number_) + problem);
 }
 
 namespace {
 
 /// Reads the whole file through `on_row`, which may reject a row by returning an error text.
-ParseResult read_csv(const std::string& path, const CsvSchema& schema,
+port::Error read_csv(const std::string& path, const CsvSchema& schema,
                      const std::function<std::string(const CsvRow&)>& on_row) {
   CsvReader reader(schema);
-  ParseResult result = reader.open(path);
+  port::Error result = reader.open(path);
   CsvRow row;
   bool got_row = false;
-  while (result.ok && (result = reader.next(&row, &got_row)).ok && got_row) {
+  while (result.ok() && (result = reader.next(&row, &got_row)).ok() && got_row) {
     const std::string rejection = on_row(row);
     if (!rejection.empty()) return reader.reject(rejection);
   }
@@ -257,9 +257,9 @@ template <typename Row>
 LogReader<Row>::LogReader() : csv_(schema_of(static_cast<const Row*>(nullptr))) {}
 
 template <typename Row>
-ParseResult LogReader<Row>::next(Row* row, bool* got_row) {
-  const ParseResult result = csv_.next(&raw_, got_row);
-  if (!result.ok || !*got_row) return result;
+port::Error LogReader<Row>::next(Row* row, bool* got_row) {
+  const port::Error result = csv_.next(&raw_, got_row);
+  if (!result.ok() || !*got_row) return result;
   std::string error = to_row(raw_, row);
   if (error.empty()) error = timestamps_.check(row->t_s);
   return error.empty() ? result : csv_.reject(error);
@@ -272,26 +272,26 @@ namespace {
 
 /// Streams every row of a log reader into `on_row`.
 template <typename Reader, typename Row>
-ParseResult read_log(const std::string& path, const std::function<void(const Row&)>& on_row) {
+port::Error read_log(const std::string& path, const std::function<void(const Row&)>& on_row) {
   Reader reader;
-  ParseResult result = reader.open(path);
+  port::Error result = reader.open(path);
   Row row;
   bool got_row = false;
-  while (result.ok && (result = reader.next(&row, &got_row)).ok && got_row) on_row(row);
+  while (result.ok() && (result = reader.next(&row, &got_row)).ok() && got_row) on_row(row);
   return result;
 }
 
 }  // namespace
 
-ParseResult read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row) {
+port::Error read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row) {
   return read_log<RobotLogReader>(path, on_row);
 }
 
-ParseResult read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row) {
+port::Error read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row) {
   return read_log<TrackerLogReader>(path, on_row);
 }
 
-ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset) {
   return read_csv(path, CsvSchema{with(kJointColumns, {"x", "y", "z"}), "", {}}, [&](const CsvRow& row) {
     const std::string error = check_finite(row.values, 0, 9);
     if (!error.empty()) return error;
@@ -305,7 +305,7 @@ ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
   });
 }
 
-ParseResult read_joints_csv(const std::string& path, std::vector<JointVector>* poses) {
+port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses) {
   return read_csv(path, CsvSchema{kJointColumns, "t", {}}, [&](const CsvRow& row) {
     const std::string error = check_finite(row.values, 0, 6);
     if (!error.empty()) return error;

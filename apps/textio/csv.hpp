@@ -13,7 +13,7 @@
 #include "hivecal/dataset.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/types.hpp"
-#include "textio/ur_calibration_conf.hpp"  // ParseResult
+#include "textio/ur_calibration_conf.hpp"  // port::Error
 
 namespace hivecal::textio {
 
@@ -59,19 +59,19 @@ class CsvReader {
   CsvReader(const CsvReader&) = delete;
   CsvReader& operator=(const CsvReader&) = delete;
   /// Opens `path` and reads its header (blank lines and a UTF-8 BOM are skipped).
-  ParseResult open(const std::string& path);
+  port::Error open(const std::string& path);
   /// Next data row into *row (*got_row true), or the end of the file (*got_row false; an
   /// error if the file had no data row), or an error.
-  ParseResult next(CsvRow* row, bool* got_row);
+  port::Error next(CsvRow* row, bool* got_row);
   /// An error at the current line: `problem` prefixed with file:line.
-  ParseResult reject(const std::string& problem) const;
+  port::Error reject(const std::string& problem) const;
   /// Bytes of the file read so far [bytes].
   std::uint64_t bytes_read() const { return bytes_read_; }
 
  private:
   /// Next line into *line (without its end); false at the end of the file or on an error
   /// (then *error is set).
-  bool read_line(std::string* line, ParseResult* error);
+  bool read_line(std::string* line, port::Error* error);
   bool match_header(const std::vector<std::string_view>& header);
   std::string expected_header() const;
 
@@ -103,10 +103,10 @@ template <typename Row>
 class LogReader {
  public:
   LogReader();
-  ParseResult open(const std::string& path) { return csv_.open(path); }  ///< opens, checks the header
+  port::Error open(const std::string& path) { return csv_.open(path); }  ///< opens, checks the header
   std::uint64_t bytes_read() const { return csv_.bytes_read(); }          ///< [bytes]
   /// Next row (*got_row true), or the end (*got_row false), or an error naming file:line.
-  ParseResult next(Row* row, bool* got_row);
+  port::Error next(Row* row, bool* got_row);
 
  private:
   CsvReader csv_;
@@ -117,13 +117,13 @@ using RobotLogReader = LogReader<RobotLogRow>;      ///< robot joint log reader
 using TrackerLogReader = LogReader<TrackerLogRow>;  ///< tracker log reader
 
 /// Streams a robot joint log (`t,q1..q6`, extra columns ignored); timestamps must increase.
-ParseResult read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row);
+port::Error read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row);
 /// Streams a tracker log (`t,x,y,z[,status]`); timestamps must increase.
-ParseResult read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row);
+port::Error read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row);
 /// Reads paired static samples (`q1..q6,x,y,z`) into a dataset; reports a full dataset as an error.
-ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset);
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset);
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`).
-ParseResult read_joints_csv(const std::string& path, std::vector<JointVector>* poses);
+port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses);
 
 /// `x,y,z` rows with round-trip precision.
 std::string format_points_csv(const std::vector<Vec3>& points_m);

@@ -13,12 +13,6 @@
 
 namespace hivecal::textio {
 
-bool read_text_file(const std::string& path, std::string* text, std::string* error) {
-  const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, text);
-  if (!read.ok()) *error = read.message;
-  return read.ok();
-}
-
 std::string_view trim(std::string_view s) {
   const char* blanks = " \t\r\n";
   const std::size_t first = s.find_first_not_of(blanks);
@@ -36,14 +30,12 @@ bool parse_double(std::string_view field, double* value) {
   return result.ec == std::errc() && result.ptr == end;
 }
 
-bool write_file_atomically(const std::string& path, const std::string& content, std::string* error) {
+port::Error write_text_file(const std::string& path, const std::string& content) {
   port::OutputSet outputs;
   std::size_t id = 0;
   port::Error result = outputs.add_file(path, "", &id);
   if (result.ok()) result = outputs.stage_text(id, "", content);
-  if (result.ok()) result = outputs.commit();
-  if (!result.ok()) *error = result.message;
-  return result.ok();
+  return result.ok() ? outputs.commit() : result;
 }
 
 std::string format_double(double value) {

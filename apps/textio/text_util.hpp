@@ -4,18 +4,17 @@
 #include <string>
 #include <string_view>
 
+#include "hivecal/port/error.hpp"
+
 namespace hivecal::textio {
 
-/// Whole file into *text (port::read_whole_file: a regular file of at most
-/// port::kMaxTextInputBytes, or '-'); false with a message on failure.
-bool read_text_file(const std::string& path, std::string* text, std::string* error);
 /// s without leading and trailing blanks (space, tab, CR, LF).
 std::string_view trim(std::string_view s);
 /// Parses a whole field as a double (C locale, no trailing junk); false otherwise.
 bool parse_double(std::string_view field, double* value);
 /// Writes `content` to `path` as the only output of a port::OutputSet (temporary beside it,
 /// rename; special files refused, symlink and mode kept). On failure an older file stays.
-bool write_file_atomically(const std::string& path, const std::string& content, std::string* error);
+port::Error write_text_file(const std::string& path, const std::string& content);
 /// Formats a double so that it reads back to the same bits (%.17g).
 std::string format_double(double value);
 

@@ -361,8 +361,8 @@ Error start_geometry(const Options& options, const CalibrateSettings& settings, 
   start->tool_m = settings.tool_m;
   if (options.get("ur-calibration").empty()) return Error{};
   UrCalibrationDeltas deltas;
-  const textio::ParseResult r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
-  if (!r.ok) return Error::input(r.message);
+  const port::Error r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
+  if (!r.ok()) return r;
   (void)apply_ur_deltas(nominal_model(settings.robot), deltas, start);
   start->tool_m = settings.tool_m;
   return Error{};

@@ -32,11 +32,11 @@ Error predict(const Options& options) {
   if (!error.ok()) return error;
   // load
   textio::CalibrationFile calibration;
-  textio::ParseResult r = textio::read_calibration_json(options.get("calibration"), &calibration);
-  if (!r.ok) return Error::input(r.message);
+  port::Error r = textio::read_calibration_json(options.get("calibration"), &calibration);
+  if (!r.ok()) return r;
   std::vector<JointVector> poses;
   r = textio::read_joints_csv(options.get("joints"), &poses);
-  if (!r.ok) return Error::input(r.message);
+  if (!r.ok()) return r;
   // run
   std::vector<Vec3> points;
   points.reserve(poses.size());

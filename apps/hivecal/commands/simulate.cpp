@@ -121,8 +121,8 @@ int configure(const cli::Options& options, SimConfig* config) {
     config->compliance_j3_rad = j3 * 1e-6;
   }
   if (!options.get("calibration-conf").empty()) {
-    const textio::ParseResult read = textio::read_ur_calibration_conf(options.get("calibration-conf"), &config->deltas);
-    if (!read.ok) {
+    const port::Error read = textio::read_ur_calibration_conf(options.get("calibration-conf"), &config->deltas);
+    if (!read.ok()) {
       cli::error(kCommand, read.message);
       return kExitBadInput;
     }

@@ -59,8 +59,8 @@ int validate_main(int argc, char** argv) {
   textio::CalibrationFile calibration;
   textio::CalibrationFile truth;
   for (auto [path, file] : {std::pair{options.get("calibration"), &calibration}, std::pair{options.get("truth"), &truth}}) {
-    const textio::ParseResult r = textio::read_calibration_json(path, file);
-    if (!r.ok) return exit_with("validate", Error::input(r.message));
+    const port::Error r = textio::read_calibration_json(path, file);
+    if (!r.ok()) return exit_with("validate", r);
   }
   const ValidationStats stats = validate_on_fresh_poses(calibration.model, calibration.base_to_tracker, truth.model,
                                                        truth.base_to_tracker, static_cast<long>(poses),
