@@ -34,7 +34,7 @@ long long file_size(const std::string& path) {
 TEST(RecordCommand, SigtermKeepsEveryByteReadAndTheCaptureDecodesUpToTheCut) {
   port::PtyPair pty;
   std::string error;
-  ASSERT_TRUE(port::open_pty(&pty, &error)) << error;
+  ASSERT_TRUE(port::open_pty(&pty).ok()) << error;
   const std::string capture = "hivecal_sigterm_" + std::to_string(::getpid()) + ".cap";
 
   const pid_t child = ::fork();

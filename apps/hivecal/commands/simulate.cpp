@@ -136,17 +136,16 @@ Error serve(const Session& session, const cli::Options& options) {
     return numbers.error;
   port::PtyPair robot;
   port::PtyPair tracker;
-  std::string error;
-  if (!port::open_pty(&robot, &error) || !port::open_pty(&tracker, &error)) {
-    return Error::failure(error);
-  }
+  Error error = port::open_pty(&robot);
+  if (error.ok()) error = port::open_pty(&tracker);
+  if (!error.ok()) return error;
   std::printf("robot   %s\ntracker %s\n", robot.slave_path.c_str(), tracker.slave_path.c_str());
   std::fflush(stdout);
   std::signal(SIGINT, request_stop);
   std::signal(SIGTERM, request_stop);
   port::sleep_ms(static_cast<std::int64_t>(delay_s * 1000.0));
   ServeStats stats;
-  const bool ok = serve_session(session, robot, tracker, ServeOptions{speed}, &g_stop, &stats, &error);
+  error = serve_session(session, robot, tracker, ServeOptions{speed}, &g_stop, &stats);
   port::sleep_ms(500);  // let readers drain the ptys before the hangup
   port::close_pty(&robot);
   port::close_pty(&tracker);
@@ -154,7 +153,7 @@ Error serve(const Session& session, const cli::Options& options) {
               static_cast<unsigned long long>(stats.robot_frames), static_cast<unsigned long long>(stats.robot_bytes),
               static_cast<unsigned long long>(stats.tracker_frames),
               static_cast<unsigned long long>(stats.tracker_bytes));
-  return ok ? Error{} : Error::failure(error);
+  return error;
 }
 
 }  // namespace

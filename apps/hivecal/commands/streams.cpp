@@ -120,17 +120,18 @@ Error record(const cli::Options& options) {
   // Every port is opened before any file is created: a missing port leaves no empty capture.
   std::vector<std::unique_ptr<port::SerialPort>> ports;
   std::vector<const StreamOptions*> recorded;
-  std::string message;
   for (std::size_t k = 0; k < 2; ++k) {
     if (options.get(kStreams[k].port).empty()) continue;
     ports.push_back(std::make_unique<port::SerialPort>(port::SerialOptions{options.get(kStreams[k].port), bauds[k]}));
     recorded.push_back(&kStreams[k]);
-    if (!ports.back()->open(&message)) return Error::input(message);
+    error = ports.back()->open();
+    if (!error.ok()) return error;
   }
   std::vector<std::unique_ptr<port::CaptureWriter>> files;
   for (const StreamOptions* s : recorded) {
     files.push_back(std::make_unique<port::CaptureWriter>());
-    if (!files.back()->open(options.get(s->out), options.given("force"), &message)) return Error::output(message);
+    error = files.back()->open(options.get(s->out), options.given("force"));
+    if (!error.ok()) return error;
   }
   std::vector<port::ByteSource*> sources;
   std::vector<port::CaptureWriter*> writers;
@@ -142,12 +143,12 @@ Error record(const cli::Options& options) {
   port::RecordOptions record_options;
   record_options.duration_s = duration_s;
   port::RecordStats stats;
-  const bool ok = port::record_streams(sources, writers, &g_stop, record_options, &stats, &message);
+  error = port::record_streams(sources, writers, &g_stop, record_options, &stats);
   for (std::size_t i = 0; i < sources.size(); ++i)
     std::printf("%s -> %s: %llu bytes, %llu disconnections\n", sources[i]->name().c_str(),
                 writers[i]->path().c_str(), static_cast<unsigned long long>(stats.bytes[i]),
                 static_cast<unsigned long long>(stats.disconnects[i]));
-  return ok ? Error{} : Error::output(message);
+  return error;
 }
 
 Error extract(const cli::Options& options) {
