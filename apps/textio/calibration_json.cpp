@@ -129,8 +129,8 @@ std::string format_calibration_json(const CalibrationFile& file, const std::func
 
 port::Error parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file) {
   JsonValue root;
-  std::string error;
-  if (!parse_json(text, &root, &error)) return fail(source_name, "malformed JSON: " + error);
+  const port::Error syntax = parse_json(text, &root);
+  if (!syntax.ok()) return fail(source_name, "malformed JSON: " + syntax.message);
   if (root.kind != JsonValue::Kind::object) return fail(source_name, "top level must be an object");
   const JsonValue* format = root.find("format");
   if (format == nullptr || format->kind != JsonValue::Kind::string || format->string != kFormat) {

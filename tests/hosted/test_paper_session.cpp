@@ -69,11 +69,10 @@ std::string PaperSession::dir_;
 /// The "methods" rows of a calibrate result: method name -> test MAE [m].
 std::vector<std::pair<std::string, double>> test_mae_by_method(const std::string& result_path) {
   std::string text;
-  std::string error;
   std::vector<std::pair<std::string, double>> rows;
   EXPECT_TRUE(port::read_whole_file(result_path, port::kMaxTextInputBytes, &text).ok());
   textio::JsonValue root;
-  EXPECT_TRUE(textio::parse_json(text, &root, &error)) << error;
+  EXPECT_TRUE(textio::parse_json(text, &root).ok());
   const textio::JsonValue* methods = root.find("methods");
   if (methods == nullptr) return rows;
   for (const textio::JsonValue& m : methods->array) {

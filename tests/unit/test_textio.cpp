@@ -207,8 +207,7 @@ TEST(TextJson, CalibrationRoundTripsBitExactly) {
   EXPECT_LT((back.base_to_tracker.rotation - file.base_to_tracker.rotation).cwiseAbs().maxCoeff(), 1e-15);
   EXPECT_EQ(back.base_to_tracker.translation_m, file.base_to_tracker.translation_m);
   textio::JsonValue root;
-  std::string error;
-  ASSERT_TRUE(textio::parse_json(text, &root, &error)) << error;
+  ASSERT_TRUE(textio::parse_json(text, &root).ok());
   EXPECT_EQ(root.find("method")->string, "lm");
   EXPECT_EQ(root.find("metrics")->find("test")->find("mae_m")->find("3d")->number, 6.01e-5);
   EXPECT_EQ(root.find("convention")->string, "standard-dh");
