@@ -10,7 +10,7 @@
 
 #include "textio/calibration_json.hpp"
 #include "textio/csv.hpp"
-#include "hivecal/codec.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "textio/json.hpp"
 #include "textio/text_util.hpp"
 #include "hivecal/port/output_files.hpp"

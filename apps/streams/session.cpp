@@ -2,8 +2,8 @@
 
 #include <cstdio>
 
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/sample_extraction.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
 #include "textio/csv.hpp"
 
 namespace hivecal::streams {

@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "hivecal/dataset.hpp"
-#include "hivecal/kinematics.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/error.hpp"
 #include "streams/stream_pipeline.hpp"
 

@@ -1,6 +1,6 @@
 #include "textio/calibration_json.hpp"
 
-#include "hivecal/rigid_fit.hpp"
+#include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/text_util.hpp"
 

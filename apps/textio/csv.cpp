@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string_view>
 
-#include "hivecal/math.hpp"
+#include "hivecal/core/math.hpp"
 #include "hivecal/port/error.hpp"
 #include "textio/text_util.hpp"
 

@@ -2,7 +2,7 @@
 
 #include <string_view>
 
-#include "hivecal/math.hpp"
+#include "hivecal/core/math.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/text_util.hpp"
 

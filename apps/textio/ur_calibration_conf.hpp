@@ -3,7 +3,8 @@
 
 #include <string>
 
-#include "hivecal/kinematics.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/model/ur_deltas.hpp"
 #include "hivecal/port/error.hpp"  // every parse returns a port::Error (Fault::input naming file and line)
 
 namespace hivecal::textio {

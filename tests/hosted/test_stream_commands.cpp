@@ -14,7 +14,7 @@
 #include "cli_run.hpp"
 #include "cli/options.hpp"
 #include "textio/csv.hpp"
-#include "hivecal/dataset.hpp"
+#include "hivecal/model/dataset.hpp"
 #include "sim/sim_model.hpp"
 #include "hivecal/commands/simulate.hpp"
 #include "hivecal/commands/streams.hpp"

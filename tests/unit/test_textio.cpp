@@ -10,7 +10,7 @@
 #include "hivecal/port/input_file.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/csv.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
 #include "test_data.hpp"
 #include "textio/text_util.hpp"
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/kinematics.hpp"
+#include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/text_util.hpp"
 #include "textio/ur_calibration_conf.hpp"

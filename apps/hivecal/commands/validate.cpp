@@ -7,7 +7,7 @@
 #include "textio/calibration_json.hpp"
 #include "cli/options.hpp"
 #include "hivecal/commands/commands.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
 #include "textio/text_util.hpp"
 #include "hivecal/commands/validation.hpp"
 

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <string>
 
-#include "hivecal/capture_pipeline.hpp"  // ByteReader
+#include "hivecal/wire/byte_reader.hpp"
 #include "hivecal/port/error.hpp"
 
 namespace hivecal::port {
