@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "hivecal/core/types.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/error.hpp"
-#include "hivecal/core/types.hpp"
 
 namespace hivecal::cli {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/model/metrics.hpp"
 #include "hivecal/core/types.hpp"
+#include "hivecal/model/metrics.hpp"
 
 namespace hivecal::report {
 

@@ -8,12 +8,12 @@
 #include <cstring>
 #include <functional>
 
+#include "hivecal/port/output_files.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/csv.hpp"
-#include "hivecal/wire/codec.hpp"
 #include "textio/json.hpp"
 #include "textio/text_util.hpp"
-#include "hivecal/port/output_files.hpp"
 
 namespace hivecal::sim {
 namespace {

@@ -12,13 +12,13 @@
 #include <memory>
 #include <string>
 
-#include "textio/csv.hpp"
-#include "hivecal/sync/capture_pipeline.hpp"
-#include "hivecal/sync/clock_sync.hpp"
-#include "hivecal/wire/codec.hpp"
 #include "hivecal/port/error.hpp"
 #include "hivecal/port/input_file.hpp"
+#include "hivecal/sync/capture_pipeline.hpp"
+#include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
+#include "hivecal/wire/codec.hpp"
+#include "textio/csv.hpp"
 
 namespace hivecal::streams {
 

@@ -10,9 +10,9 @@
 #include <string_view>
 #include <vector>
 
+#include "hivecal/core/types.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/port/input_file.hpp"
-#include "hivecal/core/types.hpp"
 #include "textio/ur_calibration_conf.hpp"  // port::Error
 
 namespace hivecal::textio {

@@ -11,19 +11,19 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/port/input_file.hpp"
-#include "textio/calibration_json.hpp"
 #include "cli/options.hpp"
 #include "cli_run.hpp"
 #include "hivecal/commands/commands.hpp"
-#include "textio/csv.hpp"
-#include "hivecal/core/random.hpp"
-#include "hivecal/sync/sample_extraction.hpp"
-#include "textio/json.hpp"
-#include "sim/sim_model.hpp"
 #include "hivecal/commands/simulate.hpp"
-#include "textio/text_util.hpp"
 #include "hivecal/commands/validation.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
+#include "sim/sim_model.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+#include "textio/json.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal {
 namespace {

@@ -10,12 +10,12 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/wire/codec.hpp"
+#include "hivecal/commands/streams.hpp"
 #include "hivecal/port/byte_source.hpp"
 #include "hivecal/port/pty.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "sim/sim_model.hpp"
 #include "sim/sim_outputs.hpp"
-#include "hivecal/commands/streams.hpp"
 
 namespace hivecal {
 namespace {

@@ -10,14 +10,14 @@
 #include <string>
 #include <vector>
 
-#include "textio/calibration_json.hpp"
-#include "cli_run.hpp"
 #include "cli/options.hpp"
-#include "textio/csv.hpp"
-#include "hivecal/model/dataset.hpp"
-#include "sim/sim_model.hpp"
+#include "cli_run.hpp"
 #include "hivecal/commands/simulate.hpp"
 #include "hivecal/commands/streams.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "sim/sim_model.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
 #include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal {

@@ -13,12 +13,12 @@
 #include <thread>
 #include <vector>
 
-#include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/port/capture_file.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/port/pty.hpp"
 #include "hivecal/port/recorder.hpp"
 #include "hivecal/port/serial_port.hpp"
+#include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
 #include "sim/sim_model.hpp"
 #include "sim/sim_server.hpp"

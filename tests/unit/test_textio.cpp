@@ -7,11 +7,11 @@
 #include <unistd.h>
 #include <vector>
 
+#include "hivecal/core/random.hpp"
 #include "hivecal/port/input_file.hpp"
+#include "test_data.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/csv.hpp"
-#include "hivecal/core/random.hpp"
-#include "test_data.hpp"
 #include "textio/text_util.hpp"
 
 namespace hivecal {

@@ -5,12 +5,12 @@
 
 #include "cli/options.hpp"
 #include "hivecal/commands/commands.hpp"
-#include "hivecal/solve/cost.hpp"
+#include "hivecal/core/random.hpp"
 #include "hivecal/model/dataset.hpp"
-#include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/metrics.hpp"
-#include "hivecal/core/random.hpp"
+#include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/solve/cost.hpp"
 
 namespace hivecal::cli {
 

@@ -2,10 +2,10 @@
 #include <cstdio>
 #include <vector>
 
-#include "textio/calibration_json.hpp"
 #include "cli/options.hpp"
 #include "hivecal/commands/commands.hpp"
 #include "hivecal/port/output_files.hpp"
+#include "textio/calibration_json.hpp"
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
 

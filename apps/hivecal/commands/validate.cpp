@@ -4,12 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
-#include "textio/calibration_json.hpp"
 #include "cli/options.hpp"
 #include "hivecal/commands/commands.hpp"
-#include "hivecal/core/random.hpp"
-#include "textio/text_util.hpp"
 #include "hivecal/commands/validation.hpp"
+#include "hivecal/core/random.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::cli {
 

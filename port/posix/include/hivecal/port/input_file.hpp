@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <string>
 
-#include "hivecal/wire/byte_reader.hpp"
 #include "hivecal/port/error.hpp"
+#include "hivecal/wire/byte_reader.hpp"
 
 namespace hivecal::port {
 
