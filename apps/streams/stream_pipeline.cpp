@@ -15,7 +15,7 @@ constexpr std::uint64_t kProgressStepBytes = 256 * 1024;
 /// One input opened for one pass: a capture (bytes -> frames) or a CSV log (rows).
 class Input {
  public:
-  port::Error open(const std::string& path, bool is_log, LogRecordReader::Kind kind) {
+  port::Error open(const std::string& path, bool is_log, LogKind kind) {
     if (path == "-") return port::Error::input("'-': a stream is read twice (clock, then samples): give a file");
     if (is_log) {
       log_ = open_log_records(kind, path);
@@ -34,7 +34,7 @@ class Input {
  private:
   std::unique_ptr<port::InputFile> capture_;
   std::unique_ptr<FrameRecordReader> frames_;
-  std::unique_ptr<LogRecordReader> log_;
+  std::unique_ptr<LogRecords> log_;
 };
 
 /// A RecordReader that reports progress as its input is read (the passes live in lib/).
@@ -59,8 +59,8 @@ class Pass {
       : number_(number), progress_(progress), total_(total_bytes), tick_([this] { tick(); }),
         robot_(&robot_input_, tick_), tracker_(&tracker_input_, tick_) {}
   port::Error open(const std::string& robot_path, const std::string& tracker_path, const CaptureRunReport& kinds) {
-    port::Error error = robot_input_.open(robot_path, kinds.robot.is_log(), LogRecordReader::Kind::robot);
-    if (error.ok()) error = tracker_input_.open(tracker_path, kinds.tracker.is_log(), LogRecordReader::Kind::tracker);
+    port::Error error = robot_input_.open(robot_path, kinds.robot.is_log(), LogKind::robot);
+    if (error.ok()) error = tracker_input_.open(tracker_path, kinds.tracker.is_log(), LogKind::tracker);
     return error;
   }
   const Input& robot_input() const { return robot_input_; }
@@ -99,7 +99,7 @@ class Pass {
 
 }  // namespace
 
-std::unique_ptr<LogRecordReader> open_log_records(LogRecordReader::Kind kind, const std::string& path) {
+std::unique_ptr<LogRecords> open_log_records(LogKind kind, const std::string& path) {
   return std::make_unique<LogRecordReader>(kind, path);
 }
 

@@ -40,22 +40,40 @@ class RecordQueue final : public FrameHandler {
   std::deque<TrackerPointRecord> points_;
 };
 
+/// Which stream a log holds.
+enum class LogKind { robot, tracker };
+
+/// Records of a text log, whatever tool wrote it: what the two passes need of any log reader.
+/// A log counts rows, not frames: counters() (the library's frame counters) stays zero and
+/// rows() says how many records the log gave.
+class LogRecords : public RecordReader {
+ public:
+  virtual ~LogRecords() = default;
+  virtual std::uint64_t rows() const = 0;         ///< data rows turned into records
+  virtual const std::string& error() const = 0;   ///< what failed (file:line: what), if anything
+  virtual std::uint64_t bytes_read() const = 0;   ///< [bytes]
+
+ protected:
+  LogRecords() = default;
+  LogRecords(const LogRecords&) = default;
+  LogRecords& operator=(const LogRecords&) = default;
+};
+
 /// Records of a CSV log of io-formats.md (robot `t,q1..q6` or tracker `t,x,y,z[,status]`),
 /// one row per record. Seconds become whole microseconds; a log has no sequence numbers,
 /// velocities or currents (they stay 0, nothing downstream uses them).
-/// A log counts rows, not frames: counters() (the library's frame counters) stays zero and
-/// rows() says how many records the log gave.
-class LogRecordReader final : public RecordReader {
+class LogRecordReader final : public LogRecords {
  public:
-  /// Which log the file holds.
-  enum class Kind { robot, tracker };
+  using Kind = LogKind;  ///< which log the file holds
   /// A reader of the log at `path`, opened by the first next().
   LogRecordReader(Kind kind, std::string path) : kind_(kind), path_(std::move(path)) {}
   Status next(StreamRecord* record) override;
   const DecoderStats& counters() const override { return no_frames_; }
-  std::uint64_t rows() const { return rows_; }  ///< data rows turned into records
-  const std::string& error() const { return error_; }  ///< parse error (file:line: what), if any
-  std::uint64_t bytes_read() const { return kind_ == Kind::robot ? robot_.bytes_read() : tracker_.bytes_read(); }
+  std::uint64_t rows() const override { return rows_; }
+  const std::string& error() const override { return error_; }
+  std::uint64_t bytes_read() const override {
+    return kind_ == Kind::robot ? robot_.bytes_read() : tracker_.bytes_read();
+  }
 
  private:
   Status fail(const std::string& problem);
@@ -72,8 +90,9 @@ class LogRecordReader final : public RecordReader {
   std::string error_;
 };
 
-/// The one place a log file becomes records (the readers of other tools' logs plug in here).
-std::unique_ptr<LogRecordReader> open_log_records(LogRecordReader::Kind kind, const std::string& path);
+/// The one place a log file becomes records: today the CSV logs of io-formats.md; the readers
+/// of other tools' logs (apps/textio/logs*) plug in here, chosen by content.
+std::unique_ptr<LogRecords> open_log_records(LogKind kind, const std::string& path);
 
 /// Told how far a pass over the two inputs is: pass 1 (clock) or 2 (samples), bytes read of
 /// both inputs so far and in all (0 when unknown) [bytes]. Called about every 256 kB read, and
