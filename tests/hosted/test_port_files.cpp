@@ -141,6 +141,20 @@ TEST(OutputFiles, NothingAppearsUnlessEverythingIsCommitted) {
   EXPECT_EQ(read(dir.path + "/report/deep/index.html"), "<html>");
 }
 
+TEST(OutputFiles, ATargetThatBecomesAFifoDuringTheRunIsNotReplaced) {
+  Folder dir;
+  const std::string path = dir.path + "/out.csv";
+  OutputSet outputs;
+  std::size_t id = 0;
+  ASSERT_TRUE(outputs.add_file(path, "--out", &id).ok());
+  ASSERT_TRUE(outputs.stage_text(id, "", "x").ok());
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);  // appears while the run computes
+  EXPECT_EQ(outputs.commit().fault, Fault::output);
+  struct stat info {};
+  ASSERT_EQ(::stat(path.c_str(), &info), 0);
+  EXPECT_TRUE(S_ISFIFO(info.st_mode));
+}
+
 TEST(OutputFiles, AMissingFolderIsFoundBeforeAnyWork) {
   Folder dir;
   OutputSet outputs;

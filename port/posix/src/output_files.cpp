@@ -349,6 +349,15 @@ Error OutputSet::commit() {
       if (error.ok() && !finished.ok()) error = finished;
     }
   }
+  for (auto& output : outputs_) {  // what was checked at declaration may have changed since
+    for (std::size_t k = 0; k < output->files.size() && error.ok() && !output->is_stdout; ++k) {
+      struct stat now {};
+      if (::stat(output->finals[k].c_str(), &now) == 0 && !S_ISREG(now.st_mode)) {
+        error = Error::output(named(output->label, output->finals[k]) + ": became " + kind_of(now.st_mode) +
+                              " during the run; refusing to replace it");
+      }
+    }
+  }
   for (auto& output : outputs_) {  // stdout first: it cannot be taken back
     if (!error.ok() || !output->is_stdout || output->files.empty()) continue;
     const std::string& bytes = output->files.front()->memory_;
