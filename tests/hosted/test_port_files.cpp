@@ -155,6 +155,24 @@ TEST(OutputFiles, ATargetThatBecomesAFifoDuringTheRunIsNotReplaced) {
   EXPECT_TRUE(S_ISFIFO(info.st_mode));
 }
 
+TEST(OutputFiles, AFailedMovePutsBackWhatWasMovedBefore) {
+  Folder dir;
+  const std::string first = dir.file("first.json", "old first");
+  ASSERT_EQ(::mkdir((dir.path + "/sub").c_str(), 0755), 0);
+  OutputSet outputs;
+  std::size_t a = 0, b = 0;
+  ASSERT_TRUE(outputs.add_file(first, "--out", &a).ok());
+  ASSERT_TRUE(outputs.add_file(dir.path + "/sub/second.conf", "--ur-deltas", &b).ok());
+  ASSERT_TRUE(outputs.stage_text(a, "", "new first").ok());
+  ASSERT_TRUE(outputs.stage_text(b, "", "new second").ok());
+  // The second temporary vanishes: its move fails after the first output was moved.
+  ASSERT_EQ(std::system(("rm -f '" + dir.path + "'/sub/second.conf.tmp.*").c_str()), 0);
+  EXPECT_EQ(outputs.commit().fault, Fault::output);
+  EXPECT_EQ(read(first), "old first");
+  EXPECT_EQ(std::system(("test \"$(ls -A '" + dir.path + "')\" = \"first.json\nsub\"").c_str()), 0)
+      << "backups or temporaries left";
+}
+
 TEST(OutputFiles, AMissingFolderIsFoundBeforeAnyWork) {
   Folder dir;
   OutputSet outputs;

@@ -349,6 +349,14 @@ Error OutputSet::commit() {
       if (error.ok() && !finished.ok()) error = finished;
     }
   }
+  struct Moved {
+    std::string path;    ///< where a file or folder was moved
+    std::string backup;  ///< the old file's second name, "" when there was none
+    bool existed;        ///< an old file was replaced
+    Output* output;      ///< whose
+    std::size_t file;    ///< which staged file; files.size() for the folder itself
+  };
+  std::vector<Moved> done;
   for (auto& output : outputs_) {  // what was checked at declaration may have changed since
     for (std::size_t k = 0; k < output->files.size() && error.ok() && !output->is_stdout; ++k) {
       struct stat now {};
@@ -370,12 +378,19 @@ Error OutputSet::commit() {
     if (!error.ok()) break;
     if (output->is_stdout) continue;
     for (std::size_t k = 0; k < output->files.size() && error.ok(); ++k) {
-      if (std::rename(output->files[k]->temp_path_.c_str(), output->finals[k].c_str()) != 0) {
+      const std::string& final_path = output->finals[k];
+      // The old file stays reachable under a second name until every output is in place.
+      std::string backup = final_path + ".old." + std::to_string(::getpid());
+      const bool existed = ::access(final_path.c_str(), F_OK) == 0;
+      if (!existed || ::link(final_path.c_str(), backup.c_str()) != 0) backup.clear();  // or no hard links here
+      if (std::rename(output->files[k]->temp_path_.c_str(), final_path.c_str()) != 0) {
         error = Error::output(named(output->label, output->path) + ": cannot move the new file into place: " +
                               system_message(errno));
+        if (!backup.empty()) ::unlink(backup.c_str());
       } else {
         output->moved[k] = true;
-        sync_folder(folder_of(output->finals[k]));
+        done.push_back(Moved{final_path, backup, existed, output.get(), k});
+        sync_folder(folder_of(final_path));
       }
     }
     if (error.ok() && !output->temp_folder.empty()) {
@@ -385,9 +400,29 @@ Error OutputSet::commit() {
                               system_message(errno));
       } else {
         output->folder_moved = true;
+        done.push_back(Moved{output->target, "", false, output.get(), output->files.size()});
         sync_folder(parent);
       }
     }
+  }
+  // All or nothing: after a failed move, what was moved goes back (old files restored).
+  for (auto it = done.rbegin(); it != done.rend(); ++it) {
+    if (error.ok()) {
+      if (!it->backup.empty()) ::unlink(it->backup.c_str());
+      continue;
+    }
+    Output& output = *it->output;
+    if (it->file == output.files.size()) {  // a new folder: back to its temporary name
+      if (std::rename(output.target.c_str(), output.temp_folder.c_str()) == 0) output.folder_moved = false;
+    } else if (!output.temp_folder.empty()) {
+      // inside a new folder's temporary: removed with it by abandon()
+    } else if (!it->backup.empty()) {
+      (void)std::rename(it->backup.c_str(), it->path.c_str());
+      output.moved[it->file] = false;
+    } else if (!it->existed) {
+      ::unlink(it->path.c_str());
+      output.moved[it->file] = false;
+    }  // else: an old file without a second name (no hard links) cannot come back
   }
   committed_ = true;
   abandon();  // whatever is left (after a failure) goes
