@@ -36,7 +36,9 @@ int demo_main(int argc, char** argv) {
         random.uniform(-2.8, -0.3), random.uniform(-3, 3);
     Vec3 noise;
     noise << random.normal(), random.normal(), random.normal();  // defined draw order
-    if (dataset.add(q, tracker_pose.apply(fk_tool_point(truth, q)) + 1e-5 * noise) != Status::ok) return kExitFailure;
+    if (dataset.add(q, tracker_pose.apply(fk_tool_point(truth, q)) + 1e-5 * noise) != Status::ok) {
+      return exit_with("demo", Error::failure("a simulated sample does not fit the dataset"));
+    }
   }
   for (const auto& [name, model] : {std::pair<const char*, RobotModel>{"nominal", nominal}, {"true", truth}}) {
     RigidTransform base;
