@@ -20,7 +20,7 @@ namespace {
 
 struct Folder {
   Folder() : path(test::make_temp_dir("hivecal_port_files")) {}
-  ~Folder() { std::system(("rm -rf '" + path + "'").c_str()); }
+  ~Folder() { (void)std::system(("rm -rf '" + path + "'").c_str()); }
   std::string file(const std::string& name, const std::string& text) const {
     const std::string p = path + "/" + name;
     std::FILE* f = std::fopen(p.c_str(), "wb");
