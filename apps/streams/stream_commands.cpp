@@ -169,8 +169,8 @@ int extract_main(int argc, char** argv) {
       {"tracker", "FILE", "tracker stream: capture (wire format) or CSV log t,x,y,z[,status]", ""},
       {"robot-model", "NAME", "ur3, ur5, ur10 or ur5e (nominal geometry for tool speeds)", "ur5"},
       {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
-      {"max-speed-mm-s", "X", "quasi-static threshold on both sides [mm/s]", "2"},
-      {"window-s", "S", "width of the quasi-static window around each tracker instant [s]", "1"},
+      {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
+      {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
       {"samples", "FILE", "paired samples q1..q6,x,y,z (CSV); '-' for stdout; empty: none", ""},
   };
   cli::Options options;
@@ -190,7 +190,7 @@ int extract_main(int argc, char** argv) {
   double max_speed_mm_s = 0, window_s = 0;
   if (robot_type_from_name(options.get("robot-model").c_str(), &type) != Status::ok ||
       !parse_vec3(options.get("tool"), &tool) || !parse_number(command, options, "max-speed-mm-s", &max_speed_mm_s) ||
-      !parse_number(command, options, "window-s", &window_s) || max_speed_mm_s <= 0 || window_s <= 0) {
+      !parse_number(command, options, "window-s", &window_s) || !(max_speed_mm_s > 0) || !(window_s >= 0) || window_s > 60) {
     cli::error(command, "bad --robot-model, --tool, --max-speed-mm-s or --window-s (see --help)");
     return kExitUsage;
   }
