@@ -261,8 +261,9 @@ void write_ur_deltas(textio::JsonWriter& json, const UrCalibrationDeltas& deltas
 
 int calibrate_main(int argc, char** argv) {
   const std::vector<OptionSpec> specs = {
-      {"robot", "FILE", "robot joint stream: serial capture or CSV log t,q1..q6 (detected by content)", ""},
-      {"tracker", "FILE", "tracker stream: serial capture or CSV log t,x,y,z[,status]", ""},
+      {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
+      {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
+      {"joint-names", "N1,..,N6", "joint names of ROS logs (rostopic, bag), joints 1..6 in order (default: UR driver names)", ""},
       {"samples", "FILE", "paired static samples q1..q6,x,y,z (CSV) instead of --robot/--tracker", ""},
       {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
       {"robot-model", "ur5|ur3|ur10|ur5e", "nominal geometry", "ur5"},

@@ -54,24 +54,30 @@ int load_streams(const Options& options, const CalibrateSettings& settings, bool
   streams::CaptureRunReport report;
   std::string problem;
   DecodeProgress progress(progress_on);
+  textio::RobotLogOptions log_options;
+  if (!options.get("joint-names").empty() && !textio::parse_joint_names(options.get("joint-names"), &log_options)) {
+    error(kCommand, "--joint-names needs six comma-separated names");
+    return kExitUsage;
+  }
   const bool read = streams::extract_from_files(
       robot, tracker, make_clock_sync_config(speed_model), make_extraction_config(speed_model), dataset, &report,
-      &problem, nullptr, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); });
+      &problem, nullptr, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); },
+      log_options);
   if (!read) {
     error(kCommand, problem);
     return kExitBadInput;
   }
   const DecoderStats& r = report.decoding.robot_decoder;
   const DecoderStats& t = report.decoding.tracker_decoder;
-  auto frames = [](const DecoderStats& s, bool is_log) {
-    return is_log ? std::string(" (CSV log rows)")
+  auto frames = [](const DecoderStats& s, bool is_log, textio::LogFormat format, const textio::LogCounters& log) {
+    return is_log ? " (" + textio::describe_log(format, log) + ")"
                   : ", " + std::to_string(s.frames_rejected()) + " frames rejected, " + std::to_string(s.packets_lost) +
                         " packets lost";
   };
   facts->info_lines.push_back("robot stream: " + std::to_string(r.joint_states) + " joint states" +
-                              frames(r, report.robot_is_log));
+                              frames(r, report.robot_is_log, report.robot_format, report.robot_log));
   facts->info_lines.push_back("tracker stream: " + std::to_string(t.tracker_points) + " points" +
-                              frames(t, report.tracker_is_log));
+                              frames(t, report.tracker_is_log, report.tracker_format, report.tracker_log));
   if (r.joint_states == 0 || t.tracker_points == 0) {
     const bool robot_empty = r.joint_states == 0;
     const bool is_log = robot_empty ? report.robot_is_log : report.tracker_is_log;

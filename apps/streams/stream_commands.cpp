@@ -72,9 +72,10 @@ void print_counts(const ExtractionCounts& counts) {
                   static_cast<unsigned long long>(counts.dropped[r]));
 }
 
-void print_decoder(const char* stream, const DecoderStats& s, bool is_log) {
+void print_decoder(const char* stream, const DecoderStats& s, bool is_log, textio::LogFormat format,
+                   const textio::LogCounters& log) {
   if (is_log) {
-    std::printf("%s CSV log: %llu rows\n", stream, static_cast<unsigned long long>(s.frames_ok));
+    std::printf("%s %s\n", stream, textio::describe_log(format, log).c_str());
     return;
   }
   std::printf("%s frames %llu ok, %llu rejected, %llu packets lost in %llu gaps\n", stream,
@@ -165,8 +166,9 @@ int record_main(int argc, char** argv) {
 int extract_main(int argc, char** argv) {
   const std::string command = "extract";
   const std::vector<cli::OptionSpec> specs = {
-      {"robot", "FILE", "robot stream: capture (wire format) or CSV log t,q1..q6 (detected by content)", ""},
-      {"tracker", "FILE", "tracker stream: capture (wire format) or CSV log t,x,y,z[,status]", ""},
+      {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
+      {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
+      {"joint-names", "N1,..,N6", "joint names of ROS logs (rostopic, bag), joints 1..6 in order (default: UR driver names)", ""},
       {"robot-model", "NAME", "ur3, ur5, ur10 or ur5e (nominal geometry for tool speeds)", "ur5"},
       {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
       {"max-speed-mm-s", "X", "quasi-static threshold on both sides [mm/s]", "2"},
@@ -199,16 +201,22 @@ int extract_main(int argc, char** argv) {
   ExtractionConfig extraction = make_extraction_config(speed_model);
   extraction.max_speed_m_s = max_speed_mm_s * 1e-3;
   extraction.window_us = static_cast<std::uint32_t>(window_s * 1e6);
+  textio::RobotLogOptions log_options;
+  if (!options.get("joint-names").empty() && !textio::parse_joint_names(options.get("joint-names"), &log_options)) {
+    cli::error(command, "--joint-names needs six comma-separated names");
+    return kExitUsage;
+  }
   const auto dataset = std::make_unique<Dataset<65536>>();
   CaptureRunReport report;
   std::string error;
   if (!extract_from_files(options.get("robot"), options.get("tracker"), make_clock_sync_config(speed_model),
-                             extraction, dataset.get(), &report, &error)) {
+                             extraction, dataset.get(), &report, &error, nullptr, {}, log_options)) {
     cli::error(command, error);
     return kExitBadInput;
   }
-  print_decoder("robot  ", report.decoding.robot_decoder, report.robot_is_log);
-  print_decoder("tracker", report.decoding.tracker_decoder, report.tracker_is_log);
+  print_decoder("robot  ", report.decoding.robot_decoder, report.robot_is_log, report.robot_format, report.robot_log);
+  print_decoder("tracker", report.decoding.tracker_decoder, report.tracker_is_log, report.tracker_format,
+                report.tracker_log);
   if (report.clock_status != Status::ok) {
     cli::error(command, std::string("clock relation not found: ") + status_message(report.clock_status));
     return kExitFailure;

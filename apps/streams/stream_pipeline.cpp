@@ -11,7 +11,6 @@ namespace hivecal::streams {
 namespace {
 
 constexpr int kReadTimeoutMs = 200;
-constexpr double kMaxLogTime_s = 1.8e13;  // microseconds still fit a u64 (and a double's integers)
 constexpr std::uint64_t kProgressStepBytes = 256 * 1024;
 
 /// Size of a file [bytes], 0 when unknown.
@@ -20,12 +19,19 @@ std::uint64_t file_bytes(const std::string& path) {
   return ::stat(path.c_str(), &info) == 0 ? static_cast<std::uint64_t>(info.st_size) : 0;
 }
 
-/// One input opened for one pass: a capture (bytes -> frames) or a CSV log (rows).
+/// The two logs of a run, read once before the passes (empty for a capture).
+struct Logs {
+  textio::RobotLog robot;      ///< when the robot input is a log
+  textio::TrackerLog tracker;  ///< when the tracker input is a log
+};
+
+/// One input opened for one pass: a capture (bytes -> frames) or a log read before (records).
 class Input {
  public:
-  bool open(const std::string& path, bool is_log, LogRecordReader::Kind kind, std::string* error) {
+  template <typename Log>
+  bool open(const std::string& path, bool is_log, const Log& log, std::string* error) {
     if (is_log) {
-      log_ = std::make_unique<LogRecordReader>(kind, path);
+      log_ = std::make_unique<LogRecordReader>(&log);
       return true;
     }
     capture_ = std::make_unique<port::CaptureFileSource>(path);
@@ -36,13 +42,14 @@ class Input {
   }
   RecordReader& records() { return log_ != nullptr ? static_cast<RecordReader&>(*log_) : *frames_; }
   std::uint64_t bytes_read() const { return log_ != nullptr ? log_->bytes_read() : bytes_->bytes_read(); }
-  const std::string& error() const { return log_ != nullptr ? log_->error() : bytes_->error(); }
+  const std::string& error() const { return log_ != nullptr ? no_error_ : bytes_->error(); }
 
  private:
   std::unique_ptr<port::CaptureFileSource> capture_;
   std::unique_ptr<SourceReader> bytes_;
   std::unique_ptr<FrameRecordReader> frames_;
   std::unique_ptr<LogRecordReader> log_;
+  std::string no_error_;  ///< a log read whole has no read error left
 };
 
 /// A RecordReader that reports progress as its input is read (the passes live in lib/).
@@ -67,9 +74,9 @@ class Pass {
       : number_(number), progress_(progress), total_(total_bytes), tick_([this] { tick(); }),
         robot_(&robot_input_, tick_), tracker_(&tracker_input_, tick_) {}
   bool open(const std::string& robot_path, const std::string& tracker_path, const CaptureRunReport& kinds,
-            std::string* error) {
-    return robot_input_.open(robot_path, kinds.robot_is_log, LogRecordReader::Kind::robot, error) &&
-           tracker_input_.open(tracker_path, kinds.tracker_is_log, LogRecordReader::Kind::tracker, error);
+            const Logs& logs, std::string* error) {
+    return robot_input_.open(robot_path, kinds.robot_is_log, logs.robot, error) &&
+           tracker_input_.open(tracker_path, kinds.tracker_is_log, logs.tracker, error);
   }
   RecordReader& robot() { return robot_; }
   RecordReader& tracker() { return tracker_; }
@@ -124,84 +131,94 @@ Status SourceReader::read(std::uint8_t* out, std::size_t capacity, std::size_t* 
   }
 }
 
-Status LogRecordReader::fail(const std::string& problem) {
-  error_ = problem;
-  return Status::read_failed;
-}
-
-bool LogRecordReader::to_microseconds(double t_s, std::uint64_t* t_us) {
-  if (!(t_s >= 0.0 && t_s <= kMaxLogTime_s)) {
-    error_ = path_ + ": timestamp " + textio::format_double(t_s) + " s outside 0 .. 1.8e13 s";
-    return false;
-  }
-  *t_us = static_cast<std::uint64_t>(t_s * 1e6 + 0.5);
-  if (stats_.frames_ok > 0 && *t_us <= last_us_) {
-    error_ = path_ + ": timestamps " + textio::format_double(t_s) + " s and the previous one are less than 1 us apart";
-    return false;
-  }
-  last_us_ = *t_us;
-  return true;
-}
-
 Status LogRecordReader::next(StreamRecord* record) {
   record->kind = StreamRecord::Kind::end;
-  if (!error_.empty()) return Status::read_failed;
-  if (!opened_) {
-    opened_ = true;
-    const textio::ParseResult r = kind_ == Kind::robot ? robot_.open(path_) : tracker_.open(path_);
-    if (!r.ok) return fail(r.message);
+  if (joints_ != nullptr && next_ < joints_->size()) {
+    record->kind = StreamRecord::Kind::joint_state;
+    record->joint = (*joints_)[next_++];
+    ++stats_.joint_states;
+    ++stats_.frames_ok;
+  } else if (points_ != nullptr && next_ < points_->size()) {
+    record->kind = StreamRecord::Kind::tracker_point;
+    record->point = (*points_)[next_++];
+    ++stats_.tracker_points;
+    ++stats_.frames_ok;
   }
-  bool got_row = false;
-  textio::ParseResult r;
-  if (kind_ == Kind::robot) {
-    textio::RobotLogRow row;
-    r = robot_.next(&row, &got_row);
-    if (r.ok && got_row) {
-      if (!to_microseconds(row.t_s, &record->joint.timestamp_us)) return Status::read_failed;
-      for (int j = 0; j < kJointCount; ++j) record->joint.q_rad[j] = row.q_rad(j);
-      record->kind = StreamRecord::Kind::joint_state;
-      ++stats_.joint_states;
-    }
-  } else {
-    textio::TrackerLogRow row;
-    r = tracker_.next(&row, &got_row);
-    if (r.ok && got_row) {
-      if (!to_microseconds(row.t_s, &record->point.timestamp_us)) return Status::read_failed;
-      for (int k = 0; k < 3; ++k) record->point.point_m[k] = row.point_m(k);
-      record->point.status = row.status;
-      record->kind = StreamRecord::Kind::tracker_point;
-      ++stats_.tracker_points;
-    }
-  }
-  if (!r.ok) return fail(r.message);
-  if (got_row) ++stats_.frames_ok;
   return Status::ok;
 }
+
+std::uint64_t LogRecordReader::bytes_read() const {
+  const std::size_t size = joints_ != nullptr ? joints_->size() : points_->size();
+  return size == 0 ? bytes_ : bytes_ / size * next_;
+}
+
+namespace {
+
+/// Reads the inputs that are logs into *logs (kinds in *report); false with a message.
+bool read_logs(const std::string& robot_path, const std::string& tracker_path, const textio::RobotLogOptions& options,
+               Logs* logs, CaptureRunReport* report, std::string* error) {
+  using textio::StreamFileKind;
+  report->robot_is_log = textio::detect_stream_file(robot_path) != StreamFileKind::capture;
+  report->tracker_is_log = textio::detect_stream_file(tracker_path) != StreamFileKind::capture;
+  if (report->robot_is_log) {
+    logs->robot = textio::read_robot_log(robot_path, options);
+    report->robot_format = logs->robot.format;
+    report->robot_log = logs->robot.counters;
+    if (!logs->robot.ok) *error = logs->robot.error;
+  }
+  if (error->empty() && report->tracker_is_log) {
+    logs->tracker = textio::read_tracker_log(tracker_path);
+    report->tracker_format = logs->tracker.format;
+    report->tracker_log = logs->tracker.counters;
+    if (!logs->tracker.ok) *error = logs->tracker.error;
+  }
+  return error->empty();
+}
+
+/// A capture holding only the other stream's frames: the two files were swapped.
+bool check_not_swapped(const std::string& robot_path, const std::string& tracker_path, const CaptureRunReport& report,
+                       std::string* error) {
+  const DecoderStats& r = report.decoding.robot_decoder;
+  const DecoderStats& t = report.decoding.tracker_decoder;
+  if (!report.robot_is_log && r.joint_states == 0 && r.tracker_points > 0) {
+    *error = robot_path + ": no joint state but " + std::to_string(r.tracker_points) +
+             " tracker frames: --robot and --tracker swapped?";
+  } else if (!report.tracker_is_log && t.tracker_points == 0 && t.joint_states > 0) {
+    *error = tracker_path + ": no tracker point but " + std::to_string(t.joint_states) +
+             " joint state frames: --robot and --tracker swapped?";
+  }
+  return error->empty();
+}
+
+}  // namespace
 
 bool extract_from_files(const std::string& robot_path, const std::string& tracker_path,
                         const ClockSyncConfig& clock_config, const ExtractionConfig& extraction_config,
                         DatasetBase* dataset, CaptureRunReport* report, std::string* error,
-                        ExtractionObserver* observer, const PassProgress& progress) {
+                        ExtractionObserver* observer, const PassProgress& progress,
+                        const textio::RobotLogOptions& log_options) {
   const std::uint64_t total_bytes = file_bytes(robot_path) + file_bytes(tracker_path);
-  // Each input's kind is read once here; both passes open it as that kind.
-  report->robot_is_log = textio::detect_stream_file(robot_path) == textio::StreamFileKind::csv_log;
-  report->tracker_is_log = textio::detect_stream_file(tracker_path) == textio::StreamFileKind::csv_log;
+  // Each input's kind is read once here; both passes open it as that kind, a log's records
+  // are read once and served to both.
+  Logs logs;
+  if (!read_logs(robot_path, tracker_path, log_options, &logs, report, error)) return false;
   // Large fixed-size objects: on the heap of the app, once (bounded whatever the input length).
   const auto estimator = std::make_unique<ClockEstimator<>>(clock_config);
   {
     Pass pass(1, progress, total_bytes);
-    if (!pass.open(robot_path, tracker_path, *report, error)) return false;
+    if (!pass.open(robot_path, tracker_path, *report, logs, error)) return false;
     report->clock_status = pass.finish(
         estimate_clock_from_streams(pass.robot(), pass.tracker(), estimator.get(), &report->clock, &report->decoding),
         error);
     report->clock_stats = estimator->stats();
     if (report->clock_status == Status::invalid_argument && !error->empty()) return false;
+    if (!check_not_swapped(robot_path, tracker_path, *report, error)) return false;
     if (report->clock_status != Status::ok) return true;
   }
   const auto extractor = std::make_unique<SampleExtractor<>>(extraction_config, report->clock, dataset);
   extractor->set_observer(observer);
   Pass pass(2, progress, total_bytes);
-  if (!pass.open(robot_path, tracker_path, *report, error)) return false;
+  if (!pass.open(robot_path, tracker_path, *report, logs, error)) return false;
   report->extraction_status =
       pass.finish(extract_samples_from_streams(pass.robot(), pass.tracker(), extractor.get(), nullptr), error);
   report->counts = extractor->counts();

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <string_view>
 
 #include "hivecal/math.hpp"
@@ -166,101 +167,6 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 
 }  // namespace
 
-std::string IncreasingTimestamps::check(double t_s) {
-  if (started && !(t_s > last_s)) {
-    return "timestamp " + format_double(t_s) + " s does not increase (previous " + format_double(last_s) + " s)";
-  }
-  started = true;
-  last_s = t_s;
-  return "";
-}
-
-namespace {
-
-CsvSchema schema_of(const RobotLogRow*) { return CsvSchema{with({"t"}, kJointColumns), "", {}}; }
-CsvSchema schema_of(const TrackerLogRow*) { return CsvSchema{{"t", "x", "y", "z"}, "", {"status"}}; }
-
-/// Fills *row from a robot log row's values (t, q1..q6); "" or the problem.
-std::string to_row(const CsvRow& raw, RobotLogRow* row) {
-  const std::string error = check_finite(raw.values, 0, 7);
-  if (!error.empty()) return error;
-  row->t_s = raw.values[0];
-  for (int j = 0; j < kJointCount; ++j) row->q_rad(j) = raw.values[static_cast<std::size_t>(j) + 1];
-  return "";
-}
-
-/// Status 1 (beam lost) of the wire format: its position fields carry NaN.
-constexpr std::uint8_t kBeamLostStatus = 1;
-
-bool all_nan(const std::vector<double>& values, std::size_t first, std::size_t count) {
-  for (std::size_t i = first; i < first + count; ++i) {
-    if (!std::isnan(values[i])) return false;
-  }
-  return true;
-}
-
-/// Fills *row from a tracker log row's values (t, x, y, z[, status]); "" or the problem.
-std::string to_row(const CsvRow& raw, TrackerLogRow* row) {
-  row->status = 0;
-  if (raw.trailing_present == 0) {
-    // No status column: every row is valid, except one whose x, y and z are all NaN, which
-    // is how the wire format marks a lost beam (a log written without the column keeps it).
-    if (all_nan(raw.values, 1, 3)) row->status = kBeamLostStatus;
-  } else {
-    const double status = raw.values[4];
-    if (!(status >= 0.0 && status <= 255.0) || status != static_cast<double>(static_cast<int>(status))) {
-      return "status must be an integer 0..255";
-    }
-    row->status = static_cast<std::uint8_t>(status);
-  }
-  std::string error = check_finite(raw.values, 0, 1);
-  if (error.empty() && row->status == 0) error = check_finite(raw.values, 1, 3);  // beam lost: NaN allowed
-  if (!error.empty()) return error;
-  row->t_s = raw.values[0];
-  row->point_m << raw.values[1], raw.values[2], raw.values[3];
-  return "";
-}
-
-}  // namespace
-
-template <typename Row>
-LogReader<Row>::LogReader() : csv_(schema_of(static_cast<const Row*>(nullptr))) {}
-
-template <typename Row>
-ParseResult LogReader<Row>::next(Row* row, bool* got_row) {
-  const ParseResult result = csv_.next(&raw_, got_row);
-  if (!result.ok || !*got_row) return result;
-  std::string error = to_row(raw_, row);
-  if (error.empty()) error = timestamps_.check(row->t_s);
-  return error.empty() ? result : csv_.reject(error);
-}
-
-template class LogReader<RobotLogRow>;
-template class LogReader<TrackerLogRow>;
-
-namespace {
-
-/// Streams every row of a log reader into `on_row`.
-template <typename Reader, typename Row>
-ParseResult read_log(const std::string& path, const std::function<void(const Row&)>& on_row) {
-  Reader reader;
-  ParseResult result = reader.open(path);
-  Row row;
-  bool got_row = false;
-  while (result.ok && (result = reader.next(&row, &got_row)).ok && got_row) on_row(row);
-  return result;
-}
-
-}  // namespace
-
-ParseResult read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row) {
-  return read_log<RobotLogReader>(path, on_row);
-}
-
-ParseResult read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row) {
-  return read_log<TrackerLogReader>(path, on_row);
-}
-
 ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
   return read_csv(path, CsvSchema{with(kJointColumns, {"x", "y", "z"}), "", {}}, [&](const CsvRow& row) {
     const std::string error = check_finite(row.values, 0, 9);
@@ -301,23 +207,6 @@ std::string format_samples_csv(Span<const Sample> samples) {
     out += format_double(s.point_m.x()) + "," + format_double(s.point_m.y()) + "," + format_double(s.point_m.z()) + "\n";
   }
   return out;
-}
-
-StreamFileKind detect_stream_file(const std::string& path) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) return StreamFileKind::capture;  // the capture reader reports the open error
-  unsigned char head[512];
-  const std::size_t got = std::fread(head, 1, sizeof head, file);
-  std::fclose(file);
-  std::size_t at = (got >= 3 && head[0] == 0xEF && head[1] == 0xBB && head[2] == 0xBF) ? 3 : 0;  // BOM
-  bool comma = false;
-  for (; at < got && head[at] != '\n'; ++at) {
-    const unsigned char c = head[at];
-    // A capture's frames end in 0x00 and are mostly bytes outside printable ASCII.
-    if (!((c >= 0x20 && c < 0x7f) || c == '\t' || c == '\r')) return StreamFileKind::capture;
-    comma = comma || c == ',';
-  }
-  return comma ? StreamFileKind::csv_log : StreamFileKind::capture;
 }
 
 }  // namespace hivecal::textio

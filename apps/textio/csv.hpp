@@ -1,11 +1,11 @@
-// Readers and writers of the CSV formats of docs/formats.md (shared/spec/io-formats.md):
-// robot joint log, tracker log, paired samples, poses to predict, predicted positions.
+// Readers and writers of the fixed-column CSV formats of docs/formats.md
+// (shared/spec/io-formats.md): paired samples, poses to predict, predicted positions. The
+// robot and tracker logs (hivecal's and other tools') are read by logs.hpp.
 // Every error names the file and line; nothing is half-read silently.
 #pragma once
 
 #include <cstdint>
 #include <cstdio>
-#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,19 +15,6 @@
 #include "ur_calibration_conf.hpp"  // ParseResult
 
 namespace hivecal::textio {
-
-/// One row of a robot joint log (t on the robot clock).
-struct RobotLogRow {
-  double t_s = 0.0;                         ///< robot clock [s]
-  JointVector q_rad = JointVector::Zero();  ///< joint positions [rad]
-};
-
-/// One row of a tracker log (t on the tracker clock).
-struct TrackerLogRow {
-  double t_s = 0.0;                 ///< tracker clock [s]
-  Vec3 point_m = Vec3::Zero();      ///< position in the tracker frame [m] (NaN allowed when not valid)
-  std::uint8_t status = 0;          ///< 0 valid, 1 beam lost, 2 unstable, other: not valid
-};
 
 /// Expected header: `columns` in order, optionally one `optional_leading` column before them
 /// and `optional_trailing` columns after them (in that order); further columns are ignored.
@@ -77,37 +64,6 @@ class CsvReader {
   std::uint64_t bytes_read_ = 0;
 };
 
-/// Rejects timestamps that do not strictly increase.
-struct IncreasingTimestamps {
-  bool started = false;  ///< a timestamp has been seen
-  double last_s = 0.0;   ///< the last one [s]
-  /// "" when t_s is later than the last one, else the problem.
-  std::string check(double t_s);
-};
-
-/// Pull reader of a timed log: robot joint log (`t,q1..q6`, extra columns ignored) or tracker
-/// log (`t,x,y,z[,status]`; no status: valid). Timestamps must increase.
-template <typename Row>
-class LogReader {
- public:
-  LogReader();
-  ParseResult open(const std::string& path) { return csv_.open(path); }  ///< opens, checks the header
-  std::uint64_t bytes_read() const { return csv_.bytes_read(); }          ///< [bytes]
-  /// Next row (*got_row true), or the end (*got_row false), or an error naming file:line.
-  ParseResult next(Row* row, bool* got_row);
-
- private:
-  CsvReader csv_;
-  CsvRow raw_;
-  IncreasingTimestamps timestamps_;
-};
-using RobotLogReader = LogReader<RobotLogRow>;      ///< robot joint log reader
-using TrackerLogReader = LogReader<TrackerLogRow>;  ///< tracker log reader
-
-/// Streams a robot joint log (`t,q1..q6`, extra columns ignored); timestamps must increase.
-ParseResult read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row);
-/// Streams a tracker log (`t,x,y,z[,status]`); timestamps must increase.
-ParseResult read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row);
 /// Reads paired static samples (`q1..q6,x,y,z`) into a dataset; reports a full dataset as an error.
 ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset);
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`).
@@ -117,15 +73,5 @@ ParseResult read_joints_csv(const std::string& path, std::vector<JointVector>* p
 std::string format_points_csv(const std::vector<Vec3>& points_m);
 /// `q1..q6,x,y,z` rows with round-trip precision.
 std::string format_samples_csv(Span<const Sample> samples);
-
-/// What a --robot/--tracker file is.
-enum class StreamFileKind {
-  capture,  ///< raw serial bytes (serial-protocol.md)
-  csv_log,  ///< a CSV log of io-formats.md
-};
-/// Detects the kind by content: a first line of printable ASCII with a comma is a CSV log
-/// (its header is checked when read); anything else, including an unreadable file, is a
-/// capture (whose reader then reports the problem).
-StreamFileKind detect_stream_file(const std::string& path);
 
 }  // namespace hivecal::textio

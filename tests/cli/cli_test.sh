@@ -126,7 +126,7 @@ calibrated() {  # calibrated NAME ROBOT TRACKER: result JSON without the run tim
     grep -v '"seconds"' "$work/$1.json" >"$work/$1.stable"
 }
 if calibrated cap "$sim/robot.cap" "$sim/tracker.cap" && calibrated csv "$sim/robot_joints.csv" "$sim/tracker.csv" &&
-   calibrated mixed "$sim/robot_joints.csv" "$sim/tracker.cap" && grep -q "(CSV log rows)" "$work/csv.out" &&
+   calibrated mixed "$sim/robot_joints.csv" "$sim/tracker.cap" && grep -q "(hivecal robot log: " "$work/csv.out" &&
    cmp -s "$work/cap.stable" "$work/csv.stable" && cmp -s "$work/cap.stable" "$work/mixed.stable"; then
   passed=$((passed + 1))
 else
@@ -147,7 +147,7 @@ else
 fi
 # A CSV log with a bad row is a clear error naming file and line, and no result.
 { head -5 "$sim/tracker.csv"; echo "5.9,1,2"; } >"$work/short_tracker.csv"
-expect 3 "short_tracker.csv:6: expected at least 5 columns" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/short_tracker.csv" --out "$work/r5.json"
+expect 3 "short_tracker.csv:6: 3 fields where the header has 5" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/short_tracker.csv" --out "$work/r5.json"
 no_file "$work/r5.json"
 { head -3 "$sim/robot_joints.csv"; head -2 "$sim/robot_joints.csv" | tail -1; } >"$work/backwards.csv"
 expect 3 "does not increase" -- calibrate --robot "$work/backwards.csv" --tracker "$sim/tracker.csv" --out "$work/r6.json"
@@ -156,6 +156,14 @@ printf 't,q1,q2,q3,q4,q5,q6\n-1,0,0,0,0,0,0\n' >"$work/negative.csv"
 expect 3 "outside 0 .. 1.8e13 s" -- calibrate --robot "$work/negative.csv" --tracker "$sim/tracker.csv" --out "$work/r7.json"
 printf 't,q1,q2,q3,q4,q5,q6\n' >"$work/header_only.csv"
 expect 3 "no data rows" -- calibrate --robot "$work/header_only.csv" --tracker "$sim/tracker.csv" --out "$work/r8.json"
+# Logs of other tools: a wrong file says what was expected and found; swapped inputs are named.
+expect 3 "tracker.cap: no joint state but" -- calibrate --robot "$sim/tracker.cap" --tracker "$sim/robot.cap" --out "$work/r9.json"
+expect 3 "--robot and --tracker swapped?" -- calibrate --robot "$sim/tracker.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
+printf 'Time [ms];X [mm];Y [mm];Z [mm]\n1500;1000,5;2;3\n' >"$work/comma.csv"
+expect 3 "comma.csv:2: column 'x': '1000,5' has a comma decimal separator" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/comma.csv" --out "$work/r9.json"
+printf 'Zeit;Achse 1;Achse 2\n1;2;3\n' >"$work/other.csv"
+expect 3 "other.csv:1: not a robot joint log: expected t,q1..q6" -- calibrate --robot "$work/other.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
+no_file "$work/r9.json"
 
 # --- progress: on stderr when it is a terminal (script(1) gives one), never in a pipe or with --quiet
 if command -v script >/dev/null; then
