@@ -12,12 +12,12 @@
 #include <memory>
 #include <string>
 
-#include "logs.hpp"
-#include "hivecal/capture_pipeline.hpp"
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/codec.hpp"
 #include "hivecal/port/byte_source.hpp"
-#include "hivecal/sample_extraction.hpp"
+#include "hivecal/sync/capture_pipeline.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
+#include "hivecal/wire/codec.hpp"
+#include "logs.hpp"
 
 namespace hivecal::streams {
 

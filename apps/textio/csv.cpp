@@ -7,7 +7,7 @@
 #include <functional>
 #include <string_view>
 
-#include "hivecal/math.hpp"
+#include "hivecal/core/math.hpp"
 #include "text_util.hpp"
 
 namespace hivecal::textio {

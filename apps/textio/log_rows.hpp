@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "hivecal/types.hpp"
+#include "hivecal/core/types.hpp"
 
 namespace hivecal::textio {
 

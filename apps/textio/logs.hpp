@@ -15,7 +15,7 @@
 #include <string_view>
 #include <vector>
 
-#include "hivecal/records.hpp"
+#include "hivecal/wire/records.hpp"
 
 namespace hivecal::textio {
 

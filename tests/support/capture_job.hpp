@@ -12,18 +12,18 @@
 #include <cstdint>
 #include <new>
 
-#include "hivecal/capture_pipeline.hpp"
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/cost.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/hybrid.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/lm.hpp"
-#include "hivecal/metrics.hpp"
-#include "hivecal/paper6_cost.hpp"
-#include "hivecal/sample_extraction.hpp"
-#include "hivecal/trace.hpp"
+#include "hivecal/sync/capture_pipeline.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/solve/population_stage.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/solve/lm.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/solve/paper6_cost.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
+#include "hivecal/core/trace.hpp"
 
 namespace hivecal::test {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/records.hpp"
+#include "hivecal/wire/records.hpp"
 
 #if HIVECAL_HAVE_SQLITE3
 #include <sqlite3.h>

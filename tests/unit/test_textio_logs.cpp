@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "delimited.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
 #include "log_forms.hpp"
 #include "logs.hpp"
 #include "ros2_bag.hpp"
