@@ -1,36 +1,22 @@
 #include "csv.hpp"
 
-#include <cerrno>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <functional>
 #include <string_view>
 
 #include "hivecal/core/math.hpp"
+#include "delimited.hpp"
 #include "text_util.hpp"
 
 namespace hivecal::textio {
 namespace {
 
-std::vector<std::string_view> split_fields(std::string_view line) {
-  std::vector<std::string_view> fields;
-  std::size_t start = 0;
-  for (;;) {
-    const std::size_t comma = line.find(',', start);
-    fields.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
-
-std::string lower(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
-  if (out.size() >= 2 && out.front() == '"' && out.back() == '"') out = out.substr(1, out.size() - 2);
-  return out;
-}
+/// Expected header: `columns` in order, optionally one `optional_leading` column before them
+/// (ignored); further columns after them are ignored.
+struct CsvSchema {
+  std::vector<std::string> columns;  ///< required column names, lower case
+  std::string optional_leading;      ///< a column that may come first (ignored), or ""
+};
 
 std::string join(const std::vector<std::string>& names) {
   std::string out;
@@ -38,117 +24,40 @@ std::string join(const std::vector<std::string>& names) {
   return out;
 }
 
-std::string where(const std::string& path, std::size_t line) { return path + ":" + std::to_string(line) + ": "; }
-
-}  // namespace
-
-CsvReader::CsvReader(CsvSchema schema) : schema_(std::move(schema)) {}
-
-CsvReader::~CsvReader() {
-  if (file_ != nullptr) std::fclose(file_);
-}
-
-std::string CsvReader::expected_header() const {
-  std::string expected = (schema_.optional_leading.empty() ? "" : "[" + schema_.optional_leading + ",]") +
-                         join(schema_.columns);
-  if (!schema_.optional_trailing.empty()) expected += "[," + join(schema_.optional_trailing) + "]";
-  return expected;
-}
-
-bool CsvReader::match_header(const std::vector<std::string_view>& header) {
-  offset_ = (!schema_.optional_leading.empty() && !header.empty() && lower(header[0]) == schema_.optional_leading) ? 1 : 0;
-  if (header.size() < offset_ + schema_.columns.size()) return false;
-  for (std::size_t i = 0; i < schema_.columns.size(); ++i) {
-    if (lower(header[offset_ + i]) != schema_.columns[i]) return false;
-  }
-  trailing_ = 0;
-  const std::size_t after = offset_ + schema_.columns.size();
-  while (trailing_ < schema_.optional_trailing.size() && after + trailing_ < header.size() &&
-         lower(header[after + trailing_]) == schema_.optional_trailing[trailing_]) {
-    ++trailing_;
-  }
-  return true;
-}
-
-bool CsvReader::read_line(std::string* line) {
-  line->clear();
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, file_) != nullptr) {
-    *line += buffer;
-    if (line->back() == '\n') break;  // else a line longer than the buffer: keep reading
-  }
-  if (line->empty()) return false;
-  bytes_read_ += line->size();
-  ++line_number_;
-  if (line_number_ == 1 && line->compare(0, 3, "\xEF\xBB\xBF") == 0) line->erase(0, 3);  // BOM
-  return true;
-}
-
-ParseResult CsvReader::open(const std::string& path) {
-  path_ = path;
-  file_ = std::fopen(path.c_str(), "rb");
-  if (file_ == nullptr) return ParseResult{false, path + ": cannot open: " + std::strerror(errno)};
-  std::string line;
-  while (read_line(&line)) {
-    if (trim(line).empty()) continue;
-    if (!match_header(split_fields(line))) {
-      return ParseResult{false, where(path, line_number_) + "unexpected header '" + std::string(trim(line)) +
-                                    "', expected " + expected_header()};
-    }
-    return ParseResult{true, ""};
-  }
-  if (std::ferror(file_) != 0) return ParseResult{false, path + ": read error"};
-  return ParseResult{false, path + ": empty file (expected header " + expected_header() + ")"};
-}
-
-ParseResult CsvReader::next(CsvRow* row, bool* got_row) {
-  *got_row = false;
-  std::string line;
-  while (read_line(&line)) {
-    if (trim(line).empty()) continue;
-    const std::vector<std::string_view> fields = split_fields(line);
-    const std::size_t needed = offset_ + schema_.columns.size() + trailing_;
-    if (fields.size() < needed) {
-      return ParseResult{false, where(path_, line_number_) + "expected at least " + std::to_string(needed) +
-                                    " columns, found " + std::to_string(fields.size())};
-    }
-    row->line = line_number_;
-    row->trailing_present = trailing_;
-    row->values.clear();
-    for (std::size_t i = offset_; i < needed; ++i) {
-      double v = 0.0;
-      if (!parse_double(fields[i], &v)) {
-        return ParseResult{false, where(path_, line_number_) + "not a number: '" + std::string(fields[i]) + "'"};
-      }
-      row->values.push_back(v);
-    }
-    ++rows_;
-    *got_row = true;
-    return ParseResult{true, ""};
-  }
-  if (std::ferror(file_) != 0) return ParseResult{false, path_ + ": read error"};
-  if (rows_ == 0) return ParseResult{false, path_ + ": no data rows"};
-  return ParseResult{true, ""};
-}
-
-ParseResult CsvReader::reject(const std::string& problem) const {
-  return ParseResult{false, where(path_, line_number_) + problem};
-}
-
-namespace {
-
-/// Reads the whole file through `on_row`, which may reject a row by returning an error text.
+/// Reads the whole file (through the one delimited-text reader, delimited.hpp) into
+/// `on_row`, given the values of the schema's columns in order; on_row may reject a row by
+/// returning an error text. Every error names the file and line.
 ParseResult read_csv(const std::string& path, const CsvSchema& schema,
-                     const std::function<std::string(const CsvRow&)>& on_row) {
-  CsvReader reader(schema);
-  ParseResult result = reader.open(path);
-  CsvRow row;
-  bool got_row = false;
-  while (result.ok && (result = reader.next(&row, &got_row)).ok && got_row) {
-    const std::string rejection = on_row(row);
-    if (!rejection.empty()) return reader.reject(rejection);
+                     const std::function<std::string(const std::vector<double>&)>& on_row) {
+  const std::string expected =
+      (schema.optional_leading.empty() ? "" : "[" + schema.optional_leading + ",]") + join(schema.columns);
+  DelimitedReader r;
+  if (!r.open(path)) return ParseResult{false, r.error()};
+  if (!r.read_header()) return ParseResult{false, r.error() + " (expected header " + expected + ")"};
+  const std::vector<Column>& header = r.columns();
+  const std::size_t offset =
+      (!schema.optional_leading.empty() && !header.empty() && header[0].name == schema.optional_leading) ? 1 : 0;
+  bool match = header.size() >= offset + schema.columns.size();
+  for (std::size_t i = 0; match && i < schema.columns.size(); ++i) {
+    match = header[offset + i].name == schema.columns[i] && header[offset + i].unit.empty();
   }
-  return result;
+  if (!match) return ParseResult{false, r.where() + "unexpected header " + quoted(r.header_line()) + ", expected " + expected};
+  std::vector<double> values(schema.columns.size());
+  std::size_t rows = 0;
+  while (r.next_row()) {
+    ++rows;
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      if (!r.number(offset + i, 1.0, &values[i])) return ParseResult{false, r.error()};
+    }
+    const std::string rejection = on_row(values);
+    if (!rejection.empty()) {
+      r.fail(rejection);
+      return ParseResult{false, r.error()};
+    }
+  }
+  if (!r.error().empty()) return ParseResult{false, r.error()};
+  if (rows == 0) return ParseResult{false, path + ": no data rows"};
+  return ParseResult{true, ""};
 }
 
 std::string check_finite(const std::vector<double>& values, std::size_t first, std::size_t count) {
@@ -168,12 +77,12 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 }  // namespace
 
 ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
-  return read_csv(path, CsvSchema{with(kJointColumns, {"x", "y", "z"}), "", {}}, [&](const CsvRow& row) {
-    const std::string error = check_finite(row.values, 0, 9);
+  return read_csv(path, CsvSchema{with(kJointColumns, {"x", "y", "z"}), ""}, [&](const std::vector<double>& values) {
+    const std::string error = check_finite(values, 0, 9);
     if (!error.empty()) return error;
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = row.values[static_cast<std::size_t>(j)];
-    const Status status = dataset->add(q, Vec3(row.values[6], row.values[7], row.values[8]));
+    for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
+    const Status status = dataset->add(q, Vec3(values[6], values[7], values[8]));
     if (status == Status::dataset_full) {
       return "dataset over capacity (" + std::to_string(dataset->capacity()) + " samples max)";
     }
@@ -182,11 +91,11 @@ ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
 }
 
 ParseResult read_joints_csv(const std::string& path, std::vector<JointVector>* poses) {
-  return read_csv(path, CsvSchema{kJointColumns, "t", {}}, [&](const CsvRow& row) {
-    const std::string error = check_finite(row.values, 0, 6);
+  return read_csv(path, CsvSchema{kJointColumns, "t"}, [&](const std::vector<double>& values) {
+    const std::string error = check_finite(values, 0, 6);
     if (!error.empty()) return error;
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = row.values[static_cast<std::size_t>(j)];
+    for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
     poses->push_back(q);
     return std::string();
   });
