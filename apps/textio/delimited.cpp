@@ -42,16 +42,6 @@ Delimiter delimiter_of(std::string_view header) {
   return Delimiter::spaces;
 }
 
-const char* delimiter_name(Delimiter d) {
-  switch (d) {
-    case Delimiter::comma: return "comma";
-    case Delimiter::semicolon: return "semicolon";
-    case Delimiter::tab: return "tab";
-    case Delimiter::spaces: return "spaces";
-  }
-  return "?";
-}
-
 }  // namespace
 
 std::string quoted(std::string_view text, std::size_t max_chars) {
@@ -73,6 +63,16 @@ std::string quoted(std::string_view text, std::size_t max_chars) {
     ++shown;
   }
   return out + "'";
+}
+
+const char* delimiter_name(Delimiter d) {
+  switch (d) {
+    case Delimiter::comma: return "comma";
+    case Delimiter::semicolon: return "semicolon";
+    case Delimiter::tab: return "tab";
+    case Delimiter::spaces: return "space";
+  }
+  return "?";
 }
 
 bool si_scale(std::string_view unit, Quantity quantity, double* scale) {
@@ -196,7 +196,7 @@ bool DelimitedReader::read_header() {
     for (const std::string_view token : fields_) {
       // "Time [ms] X [mm]" with spaces between fields: a lone "[unit]" belongs to the name before it.
       if (delimiter_ == Delimiter::spaces && is_unit_token(token) && !columns_.empty() && columns_.back().unit.empty()) {
-        columns_.back().unit = column_of("x" + std::string(token)).unit;
+        columns_.back().unit = lower(trim(token.substr(1, token.size() - 2)));
         continue;
       }
       columns_.push_back(column_of(token));

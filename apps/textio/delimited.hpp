@@ -71,6 +71,9 @@ class LineReader {
 /// The field separator of a delimited file, chosen from its header line.
 enum class Delimiter : char { comma = ',', semicolon = ';', tab = '\t', spaces = ' ' };
 
+/// "comma", "semicolon", "tab" or "space", for messages.
+const char* delimiter_name(Delimiter delimiter);
+
 /// One header column: name in lower case without blanks, quotes and unit; unit text.
 struct Column {
   std::string name;  ///< e.g. "x" for "X [mm]"

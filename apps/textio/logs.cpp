@@ -26,10 +26,8 @@ std::string column_name(const char* prefix, int k) { return prefix + std::to_str
 
 /// "found 'header' (semicolon-separated, 4 columns)" for messages.
 std::string found(const DelimitedReader& r) {
-  static const char* const kNames[] = {"comma", "semicolon", "tab", "space"};
-  const int d = r.delimiter() == Delimiter::comma ? 0 : r.delimiter() == Delimiter::semicolon ? 1 : r.delimiter() == Delimiter::tab ? 2 : 3;
-  return "found " + quoted(r.header_line(), 120) + " (" + kNames[d] + "-separated, " + std::to_string(r.columns().size()) +
-         " columns)";
+  return "found " + quoted(r.header_line(), 120) + " (" + delimiter_name(r.delimiter()) + "-separated, " +
+         std::to_string(r.columns().size()) + " columns)";
 }
 
 int find_time(const DelimitedReader& r) {
