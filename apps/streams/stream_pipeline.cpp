@@ -181,11 +181,11 @@ bool check_not_swapped(const std::string& robot_path, const std::string& tracker
   const DecoderStats& r = report.decoding.robot_decoder;
   const DecoderStats& t = report.decoding.tracker_decoder;
   if (!report.robot_is_log && r.joint_states == 0 && r.tracker_points > 0) {
-    *error = robot_path + ": no joint state but " + std::to_string(r.tracker_points) +
-             " tracker frames: --robot and --tracker swapped?";
+    *error = robot_path + ": contains tracker frames (" + std::to_string(r.tracker_points) +
+             ") and no joint state: --robot and --tracker swapped?";
   } else if (!report.tracker_is_log && t.tracker_points == 0 && t.joint_states > 0) {
-    *error = tracker_path + ": no tracker point but " + std::to_string(t.joint_states) +
-             " joint state frames: --robot and --tracker swapped?";
+    *error = tracker_path + ": contains joint state frames (" + std::to_string(t.joint_states) +
+             ") and no tracker point: --robot and --tracker swapped?";
   }
   return error->empty();
 }

@@ -157,7 +157,7 @@ expect 3 "outside 0 .. 1.8e13 s" -- calibrate --robot "$work/negative.csv" --tra
 printf 't,q1,q2,q3,q4,q5,q6\n' >"$work/header_only.csv"
 expect 3 "no data rows" -- calibrate --robot "$work/header_only.csv" --tracker "$sim/tracker.csv" --out "$work/r8.json"
 # Logs of other tools: a wrong file says what was expected and found; swapped inputs are named.
-expect 3 "tracker.cap: no joint state but" -- calibrate --robot "$sim/tracker.cap" --tracker "$sim/robot.cap" --out "$work/r9.json"
+expect 3 "tracker.cap: contains tracker frames (" -- calibrate --robot "$sim/tracker.cap" --tracker "$sim/robot.cap" --out "$work/r9.json"
 expect 3 "--robot and --tracker swapped?" -- calibrate --robot "$sim/tracker.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
 printf 'Time [ms];X [mm];Y [mm];Z [mm]\n1500;1000,5;2;3\n' >"$work/comma.csv"
 expect 3 "comma.csv:2: column 'x': '1000,5' has a comma decimal separator" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/comma.csv" --out "$work/r9.json"
