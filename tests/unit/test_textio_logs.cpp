@@ -351,8 +351,32 @@ TEST(TextLogs, Ros2BagGivesTheSameRecords) {
   expect_same_joints(db3, joints);
   const textio::TrackerLog swapped = textio::read_tracker_log(dir.path());
   EXPECT_NE(swapped.error.find("--robot and --tracker swapped?"), std::string::npos) << swapped.error;
+  // A bag without /joint_states, and one with a message that is not a JointState.
+  const std::string db3_path = dir.path() + "/bag_0.db3";
+  auto exec = [&](const char* sql) {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(db3_path.c_str(), &db), SQLITE_OK);
+    EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(db);
+  };
+  exec("INSERT INTO messages(topic_id, timestamp, data) VALUES(2, 99999999999999, x'00010000ffff');");
+  EXPECT_NE(textio::read_robot_log(dir.path()).error.find(
+                "bag_0.db3: /joint_states message " + std::to_string(joints.size() + 1) +
+                ": not a CDR sensor_msgs/msg/JointState (truncated or malformed)"),
+            std::string::npos)
+      << textio::read_robot_log(dir.path()).error;
+  exec("UPDATE topics SET type = 'std_msgs/msg/String' WHERE id = 2;");
+  EXPECT_NE(textio::read_robot_log(dir.path()).error.find(
+                "bag_0.db3: /joint_states is std_msgs/msg/String (cdr), expected sensor_msgs/msg/JointState (cdr)"),
+            std::string::npos);
+  exec("DELETE FROM topics WHERE id = 2;");
+  EXPECT_NE(textio::read_robot_log(dir.path()).error.find("bag_0.db3: no /joint_states topic (topics: /tf)"),
+            std::string::npos);
   TempDir empty;
   EXPECT_NE(textio::read_robot_log(empty.path()).error.find("a folder without metadata.yaml: not a ROS 2 bag"),
+            std::string::npos);
+  empty.write("metadata.yaml", "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n");
+  EXPECT_NE(textio::read_robot_log(empty.path()).error.find("no .db3 file (sqlite3 storage) in the bag"),
             std::string::npos);
   empty.write("metadata.yaml", "rosbag2_bagfile_information:\n  storage_identifier: mcap\n");
   EXPECT_NE(textio::read_robot_log(empty.path()).error.find("MCAP storage is not read"), std::string::npos);
