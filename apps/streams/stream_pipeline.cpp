@@ -1,55 +1,40 @@
-#include "stream_pipeline.hpp"
+#include "streams/stream_pipeline.hpp"
 
 #include <cstring>
 #include <memory>
 #include <sys/stat.h>
 
-#include "hivecal/port/capture_file.hpp"
-#include "text_util.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::streams {
 namespace {
 
-constexpr int kReadTimeoutMs = 200;
 constexpr std::uint64_t kProgressStepBytes = 256 * 1024;
 
-/// Size of a file [bytes], 0 when unknown.
-std::uint64_t file_bytes(const std::string& path) {
-  struct stat info {};
-  return ::stat(path.c_str(), &info) == 0 ? static_cast<std::uint64_t>(info.st_size) : 0;
-}
-
-/// The two logs of a run, read once before the passes (empty for a capture).
-struct Logs {
-  textio::RobotLog robot;      ///< when the robot input is a log
-  textio::TrackerLog tracker;  ///< when the tracker input is a log
-};
-
-/// One input opened for one pass: a capture (bytes -> frames) or a log read before (records).
+/// One input opened for one pass: a capture (bytes -> frames) or a CSV log (rows).
 class Input {
  public:
-  template <typename Log>
-  bool open(const std::string& path, bool is_log, const Log& log, std::string* error) {
-    if (is_log) {
-      log_ = std::make_unique<LogRecordReader>(&log);
-      return true;
+  /// `loaded`: the log read before the passes, when the input is one.
+  port::Error open(const std::string& path, const LogRecordReader* loaded) {
+    if (path == "-") return port::Error::input("'-': a stream is read twice (clock, then samples): give a file");
+    if (loaded != nullptr) {
+      log_ = loaded->replay();
+      return port::Error{};
     }
-    capture_ = std::make_unique<port::CaptureFileSource>(path);
-    if (!capture_->open(error)) return false;
-    bytes_ = std::make_unique<SourceReader>(capture_.get());
-    frames_ = std::make_unique<FrameRecordReader>(bytes_.get());
-    return true;
+    capture_ = std::make_unique<port::InputFile>();
+    const port::Error opened = capture_->open(path, port::kMaxStreamInputBytes);
+    if (opened.ok()) frames_ = std::make_unique<FrameRecordReader>(capture_.get());
+    return opened;
   }
   RecordReader& records() { return log_ != nullptr ? static_cast<RecordReader&>(*log_) : *frames_; }
-  std::uint64_t bytes_read() const { return log_ != nullptr ? log_->bytes_read() : bytes_->bytes_read(); }
-  const std::string& error() const { return log_ != nullptr ? no_error_ : bytes_->error(); }
+  std::uint64_t bytes_read() const { return log_ != nullptr ? log_->bytes_read() : capture_->bytes_read(); }
+  std::string error() const { return log_ != nullptr ? log_->error() : capture_->error().message; }
+  std::uint64_t log_rows() const { return log_ != nullptr ? log_->rows() : 0; }
 
  private:
-  std::unique_ptr<port::CaptureFileSource> capture_;
-  std::unique_ptr<SourceReader> bytes_;
+  std::unique_ptr<port::InputFile> capture_;
   std::unique_ptr<FrameRecordReader> frames_;
-  std::unique_ptr<LogRecordReader> log_;
-  std::string no_error_;  ///< a log read whole has no read error left
+  std::unique_ptr<LogRecords> log_;
 };
 
 /// A RecordReader that reports progress as its input is read (the passes live in lib/).
@@ -73,11 +58,14 @@ class Pass {
   Pass(int number, const PassProgress& progress, std::uint64_t total_bytes)
       : number_(number), progress_(progress), total_(total_bytes), tick_([this] { tick(); }),
         robot_(&robot_input_, tick_), tracker_(&tracker_input_, tick_) {}
-  bool open(const std::string& robot_path, const std::string& tracker_path, const CaptureRunReport& kinds,
-            const Logs& logs, std::string* error) {
-    return robot_input_.open(robot_path, kinds.robot_is_log, logs.robot, error) &&
-           tracker_input_.open(tracker_path, kinds.tracker_is_log, logs.tracker, error);
+  port::Error open(const std::string& robot_path, const std::string& tracker_path, const LogRecordReader* robot_log,
+                   const LogRecordReader* tracker_log) {
+    port::Error error = robot_input_.open(robot_path, robot_log);
+    if (error.ok()) error = tracker_input_.open(tracker_path, tracker_log);
+    return error;
   }
+  const Input& robot_input() const { return robot_input_; }
+  const Input& tracker_input() const { return tracker_input_; }
   RecordReader& robot() { return robot_; }
   RecordReader& tracker() { return tracker_; }
   /// read_failed becomes invalid_argument with the reader's message.
@@ -112,117 +100,124 @@ class Pass {
 
 }  // namespace
 
-Status SourceReader::read(std::uint8_t* out, std::size_t capacity, std::size_t* count) {
-  for (;;) {
-    const port::ReadResult got = source_->read(out, capacity, kReadTimeoutMs);
-    if (got.status == port::ReadStatus::data) {
-      *count = got.bytes;
-      bytes_ += got.bytes;
-      return Status::ok;
-    }
-    if (got.status == port::ReadStatus::end_of_stream) {
-      *count = 0;
-      return Status::ok;
-    }
-    if (got.status == port::ReadStatus::error) {
-      error_ = source_->name() + ": read failed: " + std::strerror(got.error_number);
-      return Status::read_failed;
-    }
-  }
-}
+LogRecordReader::LogRecordReader(std::shared_ptr<const textio::RobotLog> log)
+    : joints_(std::move(log)), size_(joints_->records.size()), bytes_(joints_->bytes_read), format_(joints_->format),
+      log_counters_(joints_->counters), error_(joints_->ok ? "" : joints_->error) {}
+
+LogRecordReader::LogRecordReader(std::shared_ptr<const textio::TrackerLog> log)
+    : points_(std::move(log)), size_(points_->records.size()), bytes_(points_->bytes_read), format_(points_->format),
+      log_counters_(points_->counters), error_(points_->ok ? "" : points_->error) {}
 
 Status LogRecordReader::next(StreamRecord* record) {
   record->kind = StreamRecord::Kind::end;
-  if (joints_ != nullptr && next_ < joints_->size()) {
+  if (!error_.empty()) return Status::read_failed;
+  if (next_ == size_) return Status::ok;
+  if (joints_ != nullptr) {
     record->kind = StreamRecord::Kind::joint_state;
-    record->joint = (*joints_)[next_++];
-    ++stats_.joint_states;
-    ++stats_.frames_ok;
-  } else if (points_ != nullptr && next_ < points_->size()) {
+    record->joint = joints_->records[next_++];
+  } else {
     record->kind = StreamRecord::Kind::tracker_point;
-    record->point = (*points_)[next_++];
-    ++stats_.tracker_points;
-    ++stats_.frames_ok;
+    record->point = points_->records[next_++];
   }
   return Status::ok;
 }
 
-std::uint64_t LogRecordReader::bytes_read() const {
-  const std::size_t size = joints_ != nullptr ? joints_->size() : points_->size();
-  return size == 0 ? bytes_ : bytes_ / size * next_;
+std::uint64_t LogRecordReader::bytes_read() const { return size_ == 0 ? bytes_ : bytes_ / size_ * next_; }
+
+std::unique_ptr<LogRecordReader> LogRecordReader::replay() const {
+  return joints_ != nullptr ? std::make_unique<LogRecordReader>(joints_) : std::make_unique<LogRecordReader>(points_);
+}
+
+std::unique_ptr<LogRecordReader> open_log_records(LogKind kind, const std::string& path,
+                                                  const textio::RobotLogOptions& options) {
+  if (kind == LogKind::robot) {
+    return std::make_unique<LogRecordReader>(std::make_shared<const textio::RobotLog>(textio::read_robot_log(path, options)));
+  }
+  return std::make_unique<LogRecordReader>(std::make_shared<const textio::TrackerLog>(textio::read_tracker_log(path)));
 }
 
 namespace {
 
-/// Reads the inputs that are logs into *logs (kinds in *report); false with a message.
-bool read_logs(const std::string& robot_path, const std::string& tracker_path, const textio::RobotLogOptions& options,
-               Logs* logs, CaptureRunReport* report, std::string* error) {
-  using textio::StreamFileKind;
-  report->robot_is_log = textio::detect_stream_file(robot_path) != StreamFileKind::capture;
-  report->tracker_is_log = textio::detect_stream_file(tracker_path) != StreamFileKind::capture;
-  if (report->robot_is_log) {
-    logs->robot = textio::read_robot_log(robot_path, options);
-    report->robot_format = logs->robot.format;
-    report->robot_log = logs->robot.counters;
-    if (!logs->robot.ok) *error = logs->robot.error;
+/// Size of an input [bytes], 0 when unknown (for progress only).
+std::uint64_t size_of(const std::string& path) {
+  port::InputFile file;
+  return file.open(path, port::kMaxStreamInputBytes).ok() ? file.size_bytes() : 0;
+}
+
+/// The counts of one input after the first pass.
+void count_input(const Input& input, const DecoderStats& frames, bool robot, const LogRecordReader* log,
+                 StreamInputCounts* counts) {
+  counts->frames = counts->is_log() ? DecoderStats{} : frames;
+  if (log != nullptr) {
+    counts->format = log->format();
+    counts->log = log->log_counters();
   }
-  if (error->empty() && report->tracker_is_log) {
-    logs->tracker = textio::read_tracker_log(tracker_path);
-    report->tracker_format = logs->tracker.format;
-    report->tracker_log = logs->tracker.counters;
-    if (!logs->tracker.ok) *error = logs->tracker.error;
-  }
-  return error->empty();
+  counts->log_rows = input.log_rows();
+  counts->records = counts->is_log() ? input.log_rows() : (robot ? frames.joint_states : frames.tracker_points);
 }
 
 /// A capture holding only the other stream's frames: the two files were swapped.
-bool check_not_swapped(const std::string& robot_path, const std::string& tracker_path, const CaptureRunReport& report,
-                       std::string* error) {
-  const DecoderStats& r = report.decoding.robot_decoder;
-  const DecoderStats& t = report.decoding.tracker_decoder;
-  if (!report.robot_is_log && r.joint_states == 0 && r.tracker_points > 0) {
-    *error = robot_path + ": contains tracker frames (" + std::to_string(r.tracker_points) +
-             ") and no joint state: --robot and --tracker swapped?";
-  } else if (!report.tracker_is_log && t.tracker_points == 0 && t.joint_states > 0) {
-    *error = tracker_path + ": contains joint state frames (" + std::to_string(t.joint_states) +
-             ") and no tracker point: --robot and --tracker swapped?";
+port::Error check_not_swapped(const std::string& robot_path, const std::string& tracker_path,
+                              const CaptureRunReport& report) {
+  const DecoderStats& r = report.robot.frames;
+  const DecoderStats& t = report.tracker.frames;
+  if (!report.robot.is_log() && r.joint_states == 0 && r.tracker_points > 0) {
+    return port::Error::input(robot_path + ": contains tracker frames (" + std::to_string(r.tracker_points) +
+                              ") and no joint state: --robot and --tracker swapped?");
   }
-  return error->empty();
+  if (!report.tracker.is_log() && t.tracker_points == 0 && t.joint_states > 0) {
+    return port::Error::input(tracker_path + ": contains joint state frames (" + std::to_string(t.joint_states) +
+                              ") and no tracker point: --robot and --tracker swapped?");
+  }
+  return port::Error{};
 }
 
 }  // namespace
 
-bool extract_from_files(const std::string& robot_path, const std::string& tracker_path,
-                        const ClockSyncConfig& clock_config, const ExtractionConfig& extraction_config,
-                        DatasetBase* dataset, CaptureRunReport* report, std::string* error,
-                        ExtractionObserver* observer, const PassProgress& progress,
-                        const textio::RobotLogOptions& log_options) {
-  const std::uint64_t total_bytes = file_bytes(robot_path) + file_bytes(tracker_path);
+port::Error extract_from_files(const std::string& robot_path, const std::string& tracker_path,
+                               const ClockSyncConfig& clock_config, const ExtractionConfig& extraction_config,
+                               DatasetBase* dataset, CaptureRunReport* report, ExtractionObserver* observer,
+                               const PassProgress& progress, const textio::RobotLogOptions& log_options) {
   // Each input's kind is read once here; both passes open it as that kind, a log's records
-  // are read once and served to both.
-  Logs logs;
-  if (!read_logs(robot_path, tracker_path, log_options, &logs, report, error)) return false;
+  // are read once here and replayed to both.
+  report->robot.kind = textio::detect_stream_file(robot_path);
+  report->tracker.kind = textio::detect_stream_file(tracker_path);
+  const std::unique_ptr<LogRecordReader> robot_log =
+      report->robot.is_log() ? open_log_records(LogKind::robot, robot_path, log_options) : nullptr;
+  const std::unique_ptr<LogRecordReader> tracker_log =
+      report->tracker.is_log() ? open_log_records(LogKind::tracker, tracker_path) : nullptr;
+  for (const LogRecordReader* log : {robot_log.get(), tracker_log.get()}) {
+    if (log != nullptr && !log->error().empty()) return port::Error::input(log->error());
+  }
   // Large fixed-size objects: on the heap of the app, once (bounded whatever the input length).
   const auto estimator = std::make_unique<ClockEstimator<>>(clock_config);
+  const std::uint64_t total_bytes = size_of(robot_path) + size_of(tracker_path);
+  std::string error;
   {
     Pass pass(1, progress, total_bytes);
-    if (!pass.open(robot_path, tracker_path, *report, logs, error)) return false;
+    port::Error opened = pass.open(robot_path, tracker_path, robot_log.get(), tracker_log.get());
+    if (!opened.ok()) return opened;
+    PassStats decoding;
     report->clock_status = pass.finish(
-        estimate_clock_from_streams(pass.robot(), pass.tracker(), estimator.get(), &report->clock, &report->decoding),
-        error);
+        estimate_clock_from_streams(pass.robot(), pass.tracker(), estimator.get(), &report->clock, &decoding), &error);
+    count_input(pass.robot_input(), decoding.robot_decoder, true, robot_log.get(), &report->robot);
+    count_input(pass.tracker_input(), decoding.tracker_decoder, false, tracker_log.get(), &report->tracker);
     report->clock_stats = estimator->stats();
-    if (report->clock_status == Status::invalid_argument && !error->empty()) return false;
-    if (!check_not_swapped(robot_path, tracker_path, *report, error)) return false;
-    if (report->clock_status != Status::ok) return true;
+    if (report->clock_status == Status::invalid_argument && !error.empty()) return port::Error::input(error);
+    const port::Error swapped = check_not_swapped(robot_path, tracker_path, *report);
+    if (!swapped.ok()) return swapped;
+    if (report->clock_status != Status::ok) return port::Error{};
   }
   const auto extractor = std::make_unique<SampleExtractor<>>(extraction_config, report->clock, dataset);
   extractor->set_observer(observer);
   Pass pass(2, progress, total_bytes);
-  if (!pass.open(robot_path, tracker_path, *report, logs, error)) return false;
+  port::Error opened = pass.open(robot_path, tracker_path, robot_log.get(), tracker_log.get());
+  if (!opened.ok()) return opened;
   report->extraction_status =
-      pass.finish(extract_samples_from_streams(pass.robot(), pass.tracker(), extractor.get(), nullptr), error);
+      pass.finish(extract_samples_from_streams(pass.robot(), pass.tracker(), extractor.get(), nullptr), &error);
   report->counts = extractor->counts();
-  return report->extraction_status != Status::invalid_argument || error->empty();
+  if (report->extraction_status == Status::invalid_argument && !error.empty()) return port::Error::input(error);
+  return port::Error{};
 }
 
 }  // namespace hivecal::streams

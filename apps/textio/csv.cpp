@@ -1,12 +1,13 @@
-#include "csv.hpp"
+#include "textio/csv.hpp"
 
 #include <cmath>
 #include <functional>
 #include <string_view>
 
 #include "hivecal/core/math.hpp"
-#include "delimited.hpp"
-#include "text_util.hpp"
+#include "hivecal/port/error.hpp"
+#include "textio/delimited.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 namespace {
@@ -27,13 +28,13 @@ std::string join(const std::vector<std::string>& names) {
 /// Reads the whole file (through the one delimited-text reader, delimited.hpp) into
 /// `on_row`, given the values of the schema's columns in order; on_row may reject a row by
 /// returning an error text. Every error names the file and line.
-ParseResult read_csv(const std::string& path, const CsvSchema& schema,
+port::Error read_csv(const std::string& path, const CsvSchema& schema,
                      const std::function<std::string(const std::vector<double>&)>& on_row) {
   const std::string expected =
       (schema.optional_leading.empty() ? "" : "[" + schema.optional_leading + ",]") + join(schema.columns);
   DelimitedReader r;
-  if (!r.open(path)) return ParseResult{false, r.error()};
-  if (!r.read_header()) return ParseResult{false, r.error() + " (expected header " + expected + ")"};
+  if (!r.open(path, port::kMaxTextInputBytes)) return port::Error::input(r.error());
+  if (!r.read_header()) return port::Error::input(r.error() + " (expected header " + expected + ")");
   const std::vector<Column>& header = r.columns();
   const std::size_t offset =
       (!schema.optional_leading.empty() && !header.empty() && header[0].name == schema.optional_leading) ? 1 : 0;
@@ -41,23 +42,23 @@ ParseResult read_csv(const std::string& path, const CsvSchema& schema,
   for (std::size_t i = 0; match && i < schema.columns.size(); ++i) {
     match = header[offset + i].name == schema.columns[i] && header[offset + i].unit.empty();
   }
-  if (!match) return ParseResult{false, r.where() + "unexpected header " + quoted(r.header_line()) + ", expected " + expected};
+  if (!match) return port::Error::input(r.where() + "unexpected header " + port::quoted(r.header_line()) + ", expected " + expected);
   std::vector<double> values(schema.columns.size());
   std::size_t rows = 0;
   while (r.next_row()) {
     ++rows;
     for (std::size_t i = 0; i < values.size(); ++i) {
-      if (!r.number(offset + i, 1.0, &values[i])) return ParseResult{false, r.error()};
+      if (!r.number(offset + i, 1.0, &values[i])) return port::Error::input(r.error());
     }
     const std::string rejection = on_row(values);
     if (!rejection.empty()) {
       r.fail(rejection);
-      return ParseResult{false, r.error()};
+      return port::Error::input(r.error());
     }
   }
-  if (!r.error().empty()) return ParseResult{false, r.error()};
-  if (rows == 0) return ParseResult{false, path + ": no data rows"};
-  return ParseResult{true, ""};
+  if (!r.error().empty()) return port::Error::input(r.error());
+  if (rows == 0) return port::Error::input(path + ": no data rows");
+  return port::Error{};
 }
 
 std::string check_finite(const std::vector<double>& values, std::size_t first, std::size_t count) {
@@ -76,7 +77,7 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 
 }  // namespace
 
-ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset) {
   return read_csv(path, CsvSchema{with(kJointColumns, {"x", "y", "z"}), ""}, [&](const std::vector<double>& values) {
     const std::string error = check_finite(values, 0, 9);
     if (!error.empty()) return error;
@@ -90,7 +91,7 @@ ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
   });
 }
 
-ParseResult read_joints_csv(const std::string& path, std::vector<JointVector>* poses) {
+port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses) {
   return read_csv(path, CsvSchema{kJointColumns, "t"}, [&](const std::vector<double>& values) {
     const std::string error = check_finite(values, 0, 6);
     if (!error.empty()) return error;

@@ -1,22 +1,23 @@
 // Readers and writers of the fixed-column CSV formats of docs/formats.md
 // (shared/spec/io-formats.md): paired samples, poses to predict, predicted positions. The
-// robot and tracker logs (hivecal's and other tools') are read by logs.hpp; both read text
-// through delimited.hpp. Every error names the file and line; nothing is half-read silently.
+// robot and tracker logs (hivecal's and other tools') are read by textio/logs.hpp; both read
+// text through textio/delimited.hpp (port::InputFile underneath). Every error names the file
+// and line; nothing is half-read silently.
 #pragma once
 
 #include <string>
 #include <vector>
 
-#include "hivecal/model/dataset.hpp"
 #include "hivecal/core/types.hpp"
-#include "ur_calibration_conf.hpp"  // ParseResult
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/port/error.hpp"
 
 namespace hivecal::textio {
 
 /// Reads paired static samples (`q1..q6,x,y,z`) into a dataset; reports a full dataset as an error.
-ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset);
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset);
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`).
-ParseResult read_joints_csv(const std::string& path, std::vector<JointVector>* poses);
+port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses);
 
 /// `x,y,z` rows with round-trip precision.
 std::string format_points_csv(const std::vector<Vec3>& points_m);

@@ -1,10 +1,10 @@
-#include "delimited.hpp"
+#include "textio/delimited.hpp"
 
-#include <cerrno>
 #include <charconv>
 #include <cstring>
 
-#include "text_util.hpp"
+#include "hivecal/port/error.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 namespace {
@@ -44,27 +44,6 @@ Delimiter delimiter_of(std::string_view header) {
 
 }  // namespace
 
-std::string quoted(std::string_view text, std::size_t max_chars) {
-  std::string out = "'";
-  std::size_t shown = 0;
-  for (const char ch : text) {
-    if (shown == max_chars) {
-      out += "...";
-      break;
-    }
-    const auto c = static_cast<unsigned char>(ch);
-    if (c >= 0x20 && c < 0x7f && c != '\\') {
-      out += ch;
-    } else {
-      char hex[8];
-      std::snprintf(hex, sizeof hex, "\\x%02x", c);
-      out += hex;
-    }
-    ++shown;
-  }
-  return out + "'";
-}
-
 const char* delimiter_name(Delimiter d) {
   switch (d) {
     case Delimiter::comma: return "comma";
@@ -100,14 +79,13 @@ bool si_scale(std::string_view unit, Quantity quantity, double* scale) {
   return false;
 }
 
-LineReader::~LineReader() {
-  if (file_ != nullptr) std::fclose(file_);
-}
+LineReader::~LineReader() = default;
 
-bool LineReader::open(const std::string& path) {
+bool LineReader::open(const std::string& path, std::uint64_t max_bytes) {
   name_ = path;
-  file_ = std::fopen(path.c_str(), "rb");
-  if (file_ == nullptr) return fail(path + ": cannot open: " + std::strerror(errno));
+  const port::Error opened = file_.open(path, max_bytes);
+  if (!opened.ok()) return fail(opened.message);
+  from_file_ = true;
   buffer_.resize(kBufferBytes);
   data_ = buffer_.data();
   return true;
@@ -128,16 +106,16 @@ bool LineReader::fail(const std::string& problem) {
 std::string LineReader::where() const { return name_ + ":" + std::to_string(line_number_) + ": "; }
 
 bool LineReader::refill() {
-  if (file_ == nullptr) return false;
+  if (!from_file_) return false;
   std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
   end_ -= begin_;
   begin_ = 0;
-  const std::size_t got = std::fread(buffer_.data() + end_, 1, buffer_.size() - end_, file_);
-  end_ += got;
-  if (got == 0) {
-    if (std::ferror(file_) != 0) return fail(name_ + ": read error");
-    eof_ = true;
+  std::size_t got = 0;
+  if (file_.read(reinterpret_cast<std::uint8_t*>(buffer_.data() + end_), buffer_.size() - end_, &got) != Status::ok) {
+    return fail(file_.error().message);
   }
+  end_ += got;
+  eof_ = got == 0;
   return true;
 }
 
@@ -266,17 +244,17 @@ bool DelimitedReader::number(std::size_t index, double scale, double* value) {
     *value *= scale;
     return true;
   }
-  const std::string column = quoted(columns_[index].name, 32);
+  const std::string column = port::quoted(columns_[index].name, 32);
   if (field.find(',') != std::string_view::npos) {
     std::string dotted(field);
     for (char& c : dotted) c = c == ',' ? '.' : c;
     double ignored = 0.0;
     if (parse_double(dotted, &ignored)) {
-      return fail("column " + column + ": " + quoted(fields_[index]) +
+      return fail("column " + column + ": " + port::quoted(fields_[index]) +
                   " has a comma decimal separator; export with a '.' decimal point (C locale)");
     }
   }
-  return fail("column " + column + ": not a number: " + quoted(fields_[index]));
+  return fail("column " + column + ": not a number: " + port::quoted(fields_[index]));
 }
 
 bool DelimitedReader::whole_number(std::size_t index, std::uint64_t* value) const {

@@ -4,23 +4,20 @@
 // Bounded: a line is at most kMaxLineBytes, read through a fixed buffer, whatever the file
 // length. Refused with file:line: binary bytes (NUL, control bytes), over-long lines, comma
 // decimal separators, rows whose field count differs from the header's. Messages quote the
-// file's text through quoted() (control bytes escaped, long text cut).
+// file's text through port::quoted() (control bytes escaped, long text cut).
 #pragma once
 
 #include <cstdint>
-#include <cstdio>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "hivecal/port/input_file.hpp"
 
 namespace hivecal::textio {
 
 constexpr std::size_t kMaxLineBytes = 65536;  ///< longest line read [bytes]; longer is refused
 constexpr std::size_t kMaxColumns = 1024;     ///< most fields in a line; more is refused
-
-/// `text` fit for a one-line message: bytes outside printable ASCII as \xNN, cut to
-/// `max_chars` characters with "..." after.
-std::string quoted(std::string_view text, std::size_t max_chars = 60);
 
 /// What a column measures: decides which bracket units it accepts.
 enum class Quantity { length, angle, time };
@@ -39,8 +36,9 @@ class LineReader {
   ~LineReader();
   LineReader(const LineReader&) = delete;
   LineReader& operator=(const LineReader&) = delete;
-  /// Reads the file at `path`; false with error() set when it cannot be opened.
-  bool open(const std::string& path);
+  /// Reads the file at `path` (port::InputFile: a regular file of at most `max_bytes`, or
+  /// "-"); false with error() set when it cannot be opened.
+  bool open(const std::string& path, std::uint64_t max_bytes = port::kMaxStreamInputBytes);
   /// Reads `text` (not copied: it must outlive the reader); `name` stands for it in messages.
   void open_memory(std::string_view text, std::string name);
   /// The next line into *line (valid until the next call); false at the end or on an error.
@@ -57,7 +55,8 @@ class LineReader {
   bool fail(const std::string& problem);
 
   std::string name_;
-  std::FILE* file_ = nullptr;
+  port::InputFile file_;
+  bool from_file_ = false;
   std::vector<char> buffer_;  ///< file mode: bytes read and not yet returned
   const char* data_ = nullptr;
   std::size_t begin_ = 0;
@@ -83,8 +82,10 @@ struct Column {
 /// Delimited text, header first, then one row of fields per non-blank line.
 class DelimitedReader {
  public:
-  /// Opens the file; false with error() set.
-  bool open(const std::string& path) { return lines_.open(path); }
+  /// Opens the file (as LineReader::open); false with error() set.
+  bool open(const std::string& path, std::uint64_t max_bytes = port::kMaxStreamInputBytes) {
+    return lines_.open(path, max_bytes);
+  }
   /// Reads `text` in memory (it must outlive the reader); `name` stands for it in messages.
   void open_memory(std::string_view text, std::string name) { lines_.open_memory(text, std::move(name)); }
   /// Reads the header (first non-blank line): delimiter and columns. False with error() set

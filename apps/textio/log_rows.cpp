@@ -1,7 +1,7 @@
-#include "log_rows.hpp"
+#include "textio/log_rows.hpp"
 
-#include "delimited.hpp"
-#include "text_util.hpp"
+#include "hivecal/port/error.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 
@@ -40,7 +40,7 @@ std::string missing_joints_message(const std::string& file, const std::array<std
                                    const std::string& names_found) {
   return file + ": no message names all of the joints " +
          join_names(std::vector<std::string_view>(expected.begin(), expected.end())) + "; the log names " +
-         quoted(names_found, 200) + " (give the robot's joint names)";
+         port::quoted(names_found, 200) + " (give the robot's joint names)";
 }
 
 }  // namespace hivecal::textio

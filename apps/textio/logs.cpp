@@ -1,14 +1,16 @@
-#include "logs.hpp"
+#include "textio/logs.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <sys/stat.h>
 
-#include "delimited.hpp"
-#include "log_rows.hpp"
-#include "ros2_bag.hpp"
-#include "text_util.hpp"
+#include "hivecal/port/error.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "textio/delimited.hpp"
+#include "textio/log_rows.hpp"
+#include "textio/ros2_bag.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 namespace {
@@ -26,7 +28,7 @@ std::string column_name(const char* prefix, int k) { return prefix + std::to_str
 
 /// "found 'header' (semicolon-separated, 4 columns)" for messages.
 std::string found(const DelimitedReader& r) {
-  return "found " + quoted(r.header_line(), 120) + " (" + delimiter_name(r.delimiter()) + "-separated, " +
+  return "found " + port::quoted(r.header_line(), 120) + " (" + delimiter_name(r.delimiter()) + "-separated, " +
          std::to_string(r.columns().size()) + " columns)";
 }
 
@@ -55,7 +57,7 @@ bool scale_of(DelimitedReader& r, int index, Quantity quantity, double* scale) {
   const Column& c = r.columns()[static_cast<std::size_t>(index)];
   if (si_scale(c.unit, quantity, scale)) return true;
   static const char* const kAccepted[] = {"[m], [mm], [um]", "[rad], [deg]", "[s], [ms], [us], [ns]"};
-  r.fail("column " + quoted(c.name, 32) + ": unit " + quoted("[" + c.unit + "]", 16) + " is not one of " +
+  r.fail("column " + port::quoted(c.name, 32) + ": unit " + port::quoted("[" + c.unit + "]", 16) + " is not one of " +
          kAccepted[static_cast<int>(quantity)]);
   return false;
 }
@@ -352,11 +354,11 @@ std::string describe_log(LogFormat format, const LogCounters& c) {
 StreamFileKind detect_stream_file(const std::string& path) {
   struct stat info {};
   if (::stat(path.c_str(), &info) == 0 && S_ISDIR(info.st_mode)) return StreamFileKind::ros2_bag;
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) return StreamFileKind::capture;  // the capture reader reports the open error
+  port::InputFile file;  // regular files only: a device or FIFO is left to the capture reader to refuse
+  if (!file.open(path, port::kMaxStreamInputBytes).ok() || file.is_stdin()) return StreamFileKind::capture;
   unsigned char head[4096];
-  const std::size_t got = std::fread(head, 1, sizeof head, file);
-  std::fclose(file);
+  std::size_t got = 0;
+  if (file.read(head, sizeof head, &got) != Status::ok) return StreamFileKind::capture;
   if (got >= 8 && std::memcmp(head, kMcapMagic, 8) == 0) return StreamFileKind::mcap;
   if (got >= 16 && std::memcmp(head, kSqliteMagic, 16) == 0) return StreamFileKind::ros2_bag;
   std::size_t at = (got >= 3 && head[0] == 0xEF && head[1] == 0xBB && head[2] == 0xBF) ? 3 : 0;  // BOM

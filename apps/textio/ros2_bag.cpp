@@ -1,4 +1,4 @@
-#include "ros2_bag.hpp"
+#include "textio/ros2_bag.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,8 +6,9 @@
 #include <dirent.h>
 #include <sys/stat.h>
 
-#include "log_rows.hpp"
-#include "text_util.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "textio/log_rows.hpp"
+#include "textio/text_util.hpp"
 
 #if HIVECAL_HAVE_SQLITE3
 #include <sqlite3.h>
@@ -90,8 +91,7 @@ bool bag_files(const std::string& path, std::vector<std::string>* files, std::st
     return true;
   }
   std::string metadata;
-  std::string ignored;
-  if (!read_text_file(path + "/metadata.yaml", &metadata, &ignored)) {
+  if (!port::read_whole_file(path + "/metadata.yaml", port::kMaxTextInputBytes, &metadata).ok()) {
     *error = path + ": a folder without metadata.yaml: not a ROS 2 bag";
     return false;
   }

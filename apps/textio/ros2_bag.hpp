@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "logs.hpp"
+#include "textio/logs.hpp"
 
 namespace hivecal::textio {
 

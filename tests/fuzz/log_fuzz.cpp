@@ -9,8 +9,8 @@
 #include <string>
 #include <string_view>
 
-#include "logs.hpp"
-#include "ros2_bag.hpp"
+#include "textio/logs.hpp"
+#include "textio/ros2_bag.hpp"
 
 namespace {
 

@@ -10,13 +10,13 @@
 #include <sys/stat.h>
 #include <vector>
 
-#include "calibration_json.hpp"
-#include "cli.hpp"
+#include "cli/options.hpp"
 #include "cli_run.hpp"
-#include "commands.hpp"
+#include "hivecal/commands/commands.hpp"
+#include "hivecal/commands/simulate.hpp"
 #include "log_forms.hpp"
-#include "logs.hpp"
-#include "simulate_cmd.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/logs.hpp"
 
 namespace hivecal {
 namespace {
@@ -35,8 +35,8 @@ textio::CalibrationFile calibrate(const std::string& dir, const std::string& nam
   EXPECT_EQ(test::run(cli::calibrate_main, {"--robot", robot, "--tracker", tracker, "--out", out, "--quiet"}), cli::kExitOk)
       << name;
   textio::CalibrationFile file;
-  const textio::ParseResult read = textio::read_calibration_json(out, &file);
-  EXPECT_TRUE(read.ok) << name << ": " << read.message;
+  const port::Error read = textio::read_calibration_json(out, &file);
+  EXPECT_TRUE(read.ok()) << name << ": " << read.message;
   return file;
 }
 

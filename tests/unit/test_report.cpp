@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "report.hpp"
-#include "svg.hpp"
+#include "report/report.hpp"
+#include "report/svg.hpp"
 
 namespace hivecal {
 namespace {

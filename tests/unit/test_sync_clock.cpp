@@ -10,7 +10,7 @@
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/core/random.hpp"
 #include "sim_feed.hpp"
-#include "sim_model.hpp"
+#include "sim/sim_model.hpp"
 
 namespace hivecal {
 namespace {

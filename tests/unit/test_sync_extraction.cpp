@@ -17,7 +17,7 @@
 #include "hivecal/core/random.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
 #include "sim_feed.hpp"
-#include "sim_model.hpp"
+#include "sim/sim_model.hpp"
 
 namespace hivecal {
 namespace {

@@ -7,11 +7,12 @@
 #include <unistd.h>
 #include <vector>
 
-#include "calibration_json.hpp"
-#include "csv.hpp"
 #include "hivecal/core/random.hpp"
+#include "hivecal/port/input_file.hpp"
 #include "test_data.hpp"
-#include "text_util.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal {
 namespace {
@@ -45,7 +46,7 @@ TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
   const std::string path = dir.write("s.csv", textio::format_samples_csv(written.samples()));
   static Dataset<16> read_back;
   read_back.clear();
-  ASSERT_TRUE(textio::read_samples_csv(path, &read_back).ok);
+  ASSERT_TRUE(textio::read_samples_csv(path, &read_back).ok());
   ASSERT_EQ(read_back.size(), 10u);
   for (std::size_t i = 0; i < 10; ++i) {
     EXPECT_EQ(read_back.samples()[i].q_rad, written.samples()[i].q_rad);  // bit-exact round trip
@@ -53,13 +54,13 @@ TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
   }
   static Dataset<4> small;
   small.clear();
-  const textio::ParseResult full = textio::read_samples_csv(path, &small);
-  EXPECT_FALSE(full.ok);
+  const port::Error full = textio::read_samples_csv(path, &small);
+  EXPECT_FALSE(full.ok());
   EXPECT_NE(full.message.find("dataset over capacity (4 samples max)"), std::string::npos) << full.message;
 
   std::vector<JointVector> poses;
-  ASSERT_TRUE(textio::read_joints_csv(dir.write("j.csv", "t,q1,q2,q3,q4,q5,q6\n0,1,2,3,4,5,6\n"), &poses).ok);
-  ASSERT_TRUE(textio::read_joints_csv(dir.write("k.csv", "q1,q2,q3,q4,q5,q6\n1,2,3,4,5,6\n"), &poses).ok);
+  ASSERT_TRUE(textio::read_joints_csv(dir.write("j.csv", "t,q1,q2,q3,q4,q5,q6\n0,1,2,3,4,5,6\n"), &poses).ok());
+  ASSERT_TRUE(textio::read_joints_csv(dir.write("k.csv", "q1,q2,q3,q4,q5,q6\n1,2,3,4,5,6\n"), &poses).ok());
   ASSERT_EQ(poses.size(), 2u);
   EXPECT_EQ(poses[0], poses[1]);
 }
@@ -83,15 +84,14 @@ TEST(TextJson, CalibrationRoundTripsBitExactly) {
     json.key("method").value("lm");
   });
   textio::CalibrationFile back;
-  const textio::ParseResult r = textio::parse_calibration_json(text, "result.json", &back);
-  ASSERT_TRUE(r.ok) << r.message;
+  const port::Error r = textio::parse_calibration_json(text, "result.json", &back);
+  ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(back.robot, RobotType::ur10);
   EXPECT_EQ(to_params(back.model), to_params(file.model));
   EXPECT_LT((back.base_to_tracker.rotation - file.base_to_tracker.rotation).cwiseAbs().maxCoeff(), 1e-15);
   EXPECT_EQ(back.base_to_tracker.translation_m, file.base_to_tracker.translation_m);
   textio::JsonValue root;
-  std::string error;
-  ASSERT_TRUE(textio::parse_json(text, &root, &error)) << error;
+  ASSERT_TRUE(textio::parse_json(text, &root).ok());
   EXPECT_EQ(root.find("method")->string, "lm");
   EXPECT_EQ(root.find("metrics")->find("test")->find("mae_m")->find("3d")->number, 6.01e-5);
   EXPECT_EQ(root.find("convention")->string, "standard-dh");
@@ -121,8 +121,8 @@ TEST(TextJson, MalformedResultsAreNamed) {
   };
   for (const auto& c : cases) {
     textio::CalibrationFile file;
-    const textio::ParseResult r = textio::parse_calibration_json(c.text, "result.json", &file);
-    EXPECT_FALSE(r.ok);
+    const port::Error r = textio::parse_calibration_json(c.text, "result.json", &file);
+    EXPECT_FALSE(r.ok());
     EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message;
   }
 }
@@ -130,14 +130,14 @@ TEST(TextJson, MalformedResultsAreNamed) {
 TEST(TextFiles, AtomicWriteReplacesOrLeavesNothing) {
   TempDir dir;
   const std::string path = dir.path() + "/out.json";
-  std::string error;
-  ASSERT_TRUE(textio::write_file_atomically(path, "first", &error)) << error;
-  ASSERT_TRUE(textio::write_file_atomically(path, "second", &error)) << error;
+  ASSERT_TRUE(textio::write_text_file(path, "first").ok());
+  ASSERT_TRUE(textio::write_text_file(path, "second").ok());
   std::string text;
-  ASSERT_TRUE(textio::read_text_file(path, &text, &error));
+  ASSERT_TRUE(port::read_whole_file(path, port::kMaxTextInputBytes, &text).ok());
   EXPECT_EQ(text, "second");
-  EXPECT_FALSE(textio::write_file_atomically(dir.path() + "/no/such/dir/out.json", "x", &error));
-  EXPECT_NE(error.find("cannot create a temporary"), std::string::npos);
+  const port::Error error = textio::write_text_file(dir.path() + "/no/such/dir/out.json", "x");
+  EXPECT_EQ(error.fault, port::Fault::output);
+  EXPECT_NE(error.message.find("does not exist"), std::string::npos);
 }
 
 }  // namespace

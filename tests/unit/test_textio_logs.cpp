@@ -13,12 +13,13 @@
 #include <unistd.h>
 #include <vector>
 
-#include "delimited.hpp"
 #include "hivecal/core/random.hpp"
+#include "hivecal/port/error.hpp"
 #include "log_forms.hpp"
-#include "logs.hpp"
-#include "ros2_bag.hpp"
-#include "sim_model.hpp"
+#include "sim/sim_model.hpp"
+#include "textio/delimited.hpp"
+#include "textio/logs.hpp"
+#include "textio/ros2_bag.hpp"
 
 namespace hivecal {
 namespace {
@@ -264,7 +265,7 @@ TEST(TextLogs, EveryRefusalIsNamed) {
   };
   for (const auto& c : cases) {
     const std::string error = error_of(c.text, c.robot);
-    EXPECT_EQ(error.substr(0, c.expected.size()), c.expected) << "for " << textio::quoted(c.text);
+    EXPECT_EQ(error.substr(0, c.expected.size()), c.expected) << "for " << port::quoted(c.text);
   }
   // Messages cut long text and escape control bytes.
   const std::string junk = "\x1b[31m" + std::string(500, 'A') + "\x7f;b\n";
@@ -272,8 +273,7 @@ TEST(TextLogs, EveryRefusalIsNamed) {
   EXPECT_NE(error.find("binary byte 0x1b"), std::string::npos) << error;
   const std::string wide = error_of(std::string(300, 'h') + ";b\n1;2\n", false);
   EXPECT_LT(wide.size(), 400u) << wide;
-  EXPECT_NE(wide.find("hhh...'"), std::string::npos) << wide;
-  EXPECT_EQ(textio::quoted("a\tb\\\xff"), "'a\\x09b\\x5c\\xff'");
+  EXPECT_NE(wide.find("hhh...[302 bytes]'"), std::string::npos) << wide;
 }
 
 TEST(TextLogs, LinesAndFieldsAreBounded) {

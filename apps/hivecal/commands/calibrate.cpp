@@ -5,28 +5,46 @@
 #include <string>
 #include <vector>
 
-#include "calibrate_inputs.hpp"
-#include "calibration_json.hpp"
-#include "cli.hpp"
-#include "commands.hpp"
+#include "cli/options.hpp"
+#include "hivecal/commands/commands.hpp"
+#include "hivecal/core/trace.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/port/output_files.hpp"
 #include "hivecal/solve/abc.hpp"
 #include "hivecal/solve/cost.hpp"
-#include "hivecal/model/dataset.hpp"
 #include "hivecal/solve/gsa.hpp"
-#include "hivecal/solve/population_stage.hpp"
 #include "hivecal/solve/lm.hpp"
-#include "hivecal/model/metrics.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
-#include "hivecal/core/trace.hpp"
-#include "hivecal/model/ur_deltas.hpp"
-#include "report.hpp"
-#include "text_util.hpp"
-#include "ur_calibration_conf.hpp"
+#include "hivecal/solve/population_stage.hpp"
+#include "report/report.hpp"
+#include "streams/session.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal::cli {
 namespace {
 
+constexpr const char* kCommand = "calibrate";
 constexpr std::size_t kTraceCapacity = 1024;
+
+/// Dataset capacity of the command-line tool (samples).
+constexpr std::size_t kCliDatasetCapacity = 8192;
+using CliDataset = Dataset<kCliDatasetCapacity>;
+
+/// Validated command-line settings.
+struct CalibrateSettings {
+  RobotType robot = RobotType::ur5;  ///< --robot-model
+  Vec3 tool_m = Vec3(0.0, 0.0, 0.1695);  ///< --tool: nominal tool point in the flange frame [m]
+  bool paper_params = false;         ///< --params paper
+  std::string method = "abc+lm";     ///< --method
+  std::uint64_t seed = 1;            ///< --seed
+  double train_fraction = 0.7;       ///< --split
+  bool robust = false;               ///< --robust
+  bool progress = false;             ///< progress lines on stderr
+};
 
 /// What one solver stage produced.
 struct Stage {
@@ -258,14 +276,11 @@ void write_ur_deltas(textio::JsonWriter& json, const UrCalibrationDeltas& deltas
   json.end_object();
 }
 
-}  // namespace
-
-int calibrate_main(int argc, char** argv) {
-  const std::vector<OptionSpec> specs = {
+const std::vector<OptionSpec>& option_specs() {
+  static const std::vector<OptionSpec> specs = {
       {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
       {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
-      {"joint-names", "N1,..,N6", "joint names of ROS logs (rostopic, bag), joints 1..6 in order (default: UR driver names)", ""},
-      {"samples", "FILE", "paired static samples q1..q6,x,y,z (CSV) instead of --robot/--tracker", ""},
+      {"samples", "FILE", "paired static samples q1..q6,x,y,z (CSV; '-': stdin) instead of --robot/--tracker", ""},
       {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
       {"robot-model", "ur5|ur3|ur10|ur5e", "nominal geometry", "ur5"},
       {"tool", "X,Y,Z", "nominal retroreflector centre in the flange frame [m] (LM refines it)", "0,0,0.1695"},
@@ -274,77 +289,126 @@ int calibrate_main(int argc, char** argv) {
       {"robust", "", "Huber loss in LM (a few bad tracker points do not drag the fit)", ""},
       {"seed", "N", "seed of the train/test split and of ABC/GSA", "1"},
       {"split", "FRACTION", "share of samples used for training", "0.7"},
-      {"out", "FILE", "calibration result (robot-calibration/1 JSON)", "result.json"},
+      {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
       {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
       {"report", "DIR", "write an HTML report with figures into DIR", ""},
       {"quiet", "", "no progress on stderr", ""},
   };
-  Options options;
-  const int parsed = parse_options("calibrate",
-                                   "Estimates the robot geometry and the base -> tracker transform from tracker\n"
-                                   "measurements, prints the paper-style tables and writes the result.",
-                                   specs, argc, argv, &options);
-  if (parsed >= 0) return parsed;
+  return specs;
+}
 
-  // --- options
-  CalibrateSettings settings;
-  std::string problem = settings_from_options(options, &settings);
-  if (!problem.empty()) {
-    error("calibrate", problem);
-    return kExitUsage;
-  }
-  const bool progress_on = progress_enabled(options);
+// --- parse ------------------------------------------------------------------------------------
 
-  // --- start geometry and data
-  RobotModel start = nominal_model(settings.robot);
-  start.tool_m = settings.tool_m;
-  if (!options.get("ur-calibration").empty()) {
-    UrCalibrationDeltas deltas;
-    const textio::ParseResult r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
-    if (!r.ok) {
-      error("calibrate", r.message);
-      return kExitBadInput;
-    }
-    (void)apply_ur_deltas(nominal_model(settings.robot), deltas, &start);
-    start.tool_m = settings.tool_m;
+Error settings_from_options(const Options& options, CalibrateSettings* settings) {
+  Error error = robot_model_option(options, "robot-model", &settings->robot);
+  if (error.ok()) error = vec3_option(options, "tool", &settings->tool_m);
+  if (!error.ok()) return error;
+  const std::string params = options.get("params");
+  if (params != "full" && params != "paper") return Error::usage("--params must be 'full' or 'paper', not " + port::quoted(params));
+  settings->paper_params = params == "paper";
+  settings->method = options.get("method");
+  const char* methods[] = {"abc+lm", "gsa+lm", "lm", "abc", "gsa", "all"};
+  bool known = false;
+  for (const char* m : methods) known = known || settings->method == m;
+  if (!known) {
+    return Error::usage("--method must be one of abc+lm, gsa+lm, lm, abc, gsa, all; not " + port::quoted(settings->method));
   }
-  static CliDataset dataset;  // static: 8192 samples; emptied for each call (tests run several in one process)
-  dataset.clear();
-  InputFacts facts;
-  const int load = load_dataset(options, settings, progress_on, &dataset, &facts);
-  if (load != kExitOk) return load;
+  double seed = 0.0;
+  if (!textio::parse_double(options.get("seed"), &seed) || seed < 0.0 || seed > 9.007199254740992e15 ||
+      seed != static_cast<double>(static_cast<std::uint64_t>(seed))) {
+    return Error::usage("--seed must be a non-negative integer");
+  }
+  settings->seed = static_cast<std::uint64_t>(seed);
+  if (!textio::parse_double(options.get("split"), &settings->train_fraction) ||
+      !(settings->train_fraction > 0.0 && settings->train_fraction < 1.0)) {
+    return Error::usage("--split must be a fraction in (0, 1)");
+  }
+  const bool samples = !options.get("samples").empty();
+  const bool streams = !options.get("robot").empty() || !options.get("tracker").empty();
+  if (samples == streams) return Error::usage("give either --samples, or --robot and --tracker (see --help)");
+  if (streams && (options.get("robot").empty() || options.get("tracker").empty())) {
+    return Error::usage("--robot and --tracker go together");
+  }
+  settings->robust = options.given("robust");
+  settings->progress = progress_enabled(options);
+  return Error{};
+}
+
+/// Where the results go, declared (and checked) before the long work.
+struct OutputIds {
+  std::size_t result = 0;     ///< --out
+  std::size_t ur_deltas = 0;  ///< --ur-deltas, when given
+  std::size_t report = 0;     ///< --report, when given
+};
+
+Error declare_outputs(const Options& options, port::OutputSet* outputs, OutputIds* ids) {
+  for (const char* input : {"samples", "robot", "tracker", "ur-calibration"}) {
+    Error error = outputs->add_input(options.get(input), std::string("--") + input);
+    if (!error.ok()) return error;
+  }
+  Error error = outputs->add_file(options.get("out"), "--out", &ids->result);
+  if (error.ok() && !options.get("ur-deltas").empty()) {
+    error = outputs->add_file(options.get("ur-deltas"), "--ur-deltas", &ids->ur_deltas);
+  }
+  if (error.ok() && !options.get("report").empty()) {
+    error = outputs->add_folder(options.get("report"), "--report", &ids->report);
+  }
+  return error;
+}
+
+/// The start geometry: nominal, or the controller's calibration.conf.
+Error start_geometry(const Options& options, const CalibrateSettings& settings, RobotModel* start) {
+  *start = nominal_model(settings.robot);
+  start->tool_m = settings.tool_m;
+  if (options.get("ur-calibration").empty()) return Error{};
+  UrCalibrationDeltas deltas;
+  const port::Error r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
+  if (!r.ok()) return r;
+  (void)apply_ur_deltas(nominal_model(settings.robot), deltas, start);
+  start->tool_m = settings.tool_m;
+  return Error{};
+}
+
+/// The dataset, checked for size and split.
+Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
+                   streams::SessionFacts* facts) {
+  streams::SessionConfig config;
+  config.speed_model = nominal_model(settings.robot);
+  config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
+  config.progress = settings.progress;
+  Error error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
+                                      dataset, facts);
+  if (!error.ok()) return error;
   const std::size_t minimum = settings.paper_params ? 12 : 24;
-  if (dataset.size() < minimum) {
-    error("calibrate", "only " + std::to_string(dataset.size()) + " static samples; at least " +
-                           std::to_string(minimum) + " are needed to identify the parameters");
-    return kExitBadInput;
+  if (dataset->size() < minimum) {
+    return Error::input("only " + std::to_string(dataset->size()) + " static samples; at least " +
+                        std::to_string(minimum) + " are needed to identify the parameters");
   }
-  if (dataset.split(settings.train_fraction, settings.seed) != Status::ok || dataset.test().empty()) {
-    error("calibrate", "--split " + options.get("split") + " leaves no training or no test sample");
-    return kExitUsage;
+  if (dataset->split(settings.train_fraction, settings.seed) != Status::ok || dataset->test().empty()) {
+    return Error::usage("--split " + options.get("split") + " leaves no training or no test sample");
   }
-  std::vector<std::string> info = facts.info_lines;
-  info.push_back("samples: " + std::to_string(dataset.size()) + " (train " + std::to_string(dataset.train().size()) +
-                 ", test " + std::to_string(dataset.test().size()) + ")");
+  return Error{};
+}
 
+// --- run (the computation; the lib's calibration entry replaces its body) -------------------
+
+Error run(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset, bool from_controller,
+          Stage* uncalibrated_out, std::vector<Stage>* stages_out) {
+  const bool progress_on = settings.progress;
   // --- uncalibrated row
   Stage uncalibrated;
   uncalibrated.method = "uncalibrated";
-  uncalibrated.params = options.get("ur-calibration").empty() ? "nominal" : "controller";
+  uncalibrated.params = from_controller ? "controller" : "nominal";
   uncalibrated.model = start;
   Status status = fit_base_to_tracker(start, dataset.train(), &uncalibrated.base_to_tracker);
   if (status != Status::ok) {
-    error("calibrate", std::string("cannot fit the tracker frame: ") + status_message(status) +
-                           (status == Status::degenerate_geometry ? " (are all samples at one pose?)" : ""));
-    return kExitBadInput;
+    return Error::input(std::string("cannot fit the tracker frame: ") + status_message(status) +
+                        (status == Status::degenerate_geometry ? " (are all samples at one pose?)" : ""));
   }
 
   // --- solvers
   std::vector<Stage> stages;
-  auto fail = [&](const char* what, Status s) {
-    error("calibrate", std::string(what) + " failed: " + status_message(s));
-    return kExitFailure;
-  };
+  auto fail = [&](const char* what, Status s) { return Error::failure(std::string(what) + " failed: " + status_message(s)); };
   const std::string& method = settings.method;
   const bool run_gsa = method == "gsa" || method == "gsa+lm" || method == "all";
   const bool run_abc = method == "abc" || method == "abc+lm" || method == "all";
@@ -368,17 +432,47 @@ int calibrate_main(int argc, char** argv) {
     const Stage* seed_stage = hybrid ? &stages.back() : nullptr;
     Stage lm;
     status = run_lm(seed_stage ? seed_stage->model : start, seed_stage ? &seed_stage->base_to_tracker : nullptr,
-                    dataset.train(), settings.paper_params, options.given("robust"), progress_on, &lm);
+                    dataset.train(), settings.paper_params, settings.robust, progress_on, &lm);
     if (status != Status::ok) return fail("LM", status);
     if (hybrid) lm.method = seed_stage->method + "+LM";
     stages.push_back(lm);
   }
-  const Stage& final_stage = stages.back();
+  *uncalibrated_out = uncalibrated;
+  *stages_out = stages;
+  return Error{};
+}
 
-  // --- tables and facts
+// --- present ----------------------------------------------------------------------------------
+
+void write_input_facts(textio::JsonWriter& json, const streams::SessionFacts& facts) {
+  if (!facts.has_stream) return;
+  const ClockFit& clock = facts.run.clock;
+  json.key("clock").begin_object();
+  json.key("offset_at_reference_s").value(clock.offset_at_reference_us * 1e-6);
+  json.key("offset_sigma_s").value(clock.sigma_offset_at_reference_us * 1e-6);
+  json.key("drift").value(clock.drift);
+  json.key("drift_sigma").value(clock.sigma_drift);
+  json.end_object();
+  json.key("extraction").begin_object();
+  json.key("tracker_points").value(static_cast<long long>(facts.run.counts.tracker_points));
+  json.key("kept").value(static_cast<long long>(facts.run.counts.kept));
+  json.key("dropped").begin_object();
+  for (const auto& [reason, count] : facts.dropped) json.key(reason).value(static_cast<long long>(count));
+  json.end_object();
+  json.end_object();
+}
+
+/// Tables and figures of a run, and the text of the terminal.
+report::ReportData present(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset,
+                           const streams::SessionFacts& facts, const Stage& uncalibrated,
+                           const std::vector<Stage>& stages) {
+  const Stage& final_stage = stages.back();
   report::ReportData data;
   data.title = "hivecal calibration: " + std::string(robot_type_name(settings.robot));
-  data.info_lines = info;
+  data.info_lines = facts.info_lines;
+  data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
+                            std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
+                            ")");
   data.methods.push_back(method_row(uncalibrated, dataset));
   for (const Stage& stage : stages) data.methods.push_back(method_row(stage, dataset));
   data.uncalibrated = accuracy_report(uncalibrated.model, uncalibrated.base_to_tracker, dataset);
@@ -393,13 +487,19 @@ int calibrate_main(int argc, char** argv) {
     for (const std::string& line : identifiability_lines(final_stage.lm)) data.info_lines.push_back(line);
   }
   data.parameter_lines = parameter_lines(final_stage, start);
+  return data;
+}
 
-  for (const std::string& line : data.info_lines) std::printf("%s\n", line.c_str());
-  std::printf("\n%s", report::format_tables_text(data).c_str());
-  std::printf("\nCalibrated parameters (%s):\n", final_stage.method.c_str());
-  for (const std::string& line : data.parameter_lines) std::printf("  %s\n", line.c_str());
+/// The terminal text (on stdout, or on stderr when stdout carries the result).
+void print_tables(std::FILE* out, const report::ReportData& data, const Stage& final_stage) {
+  for (const std::string& line : data.info_lines) std::fprintf(out, "%s\n", line.c_str());
+  std::fprintf(out, "\n%s", report::format_tables_text(data).c_str());
+  std::fprintf(out, "\nCalibrated parameters (%s):\n", final_stage.method.c_str());
+  for (const std::string& line : data.parameter_lines) std::fprintf(out, "  %s\n", line.c_str());
+}
 
-  // --- outputs
+std::string result_json(const CalibrateSettings& settings, const report::ReportData& data,
+                        const streams::SessionFacts& facts, const Stage& final_stage) {
   textio::CalibrationFile file;
   file.robot = settings.robot;
   file.model = final_stage.model;
@@ -407,7 +507,7 @@ int calibrate_main(int argc, char** argv) {
   file.has_metrics = true;
   file.metrics = data.calibrated;
   const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
-  const std::string json = textio::format_calibration_json(file, [&](textio::JsonWriter& w) {
+  return textio::format_calibration_json(file, [&](textio::JsonWriter& w) {
     w.key("method").value(final_stage.method);
     w.key("params").value(settings.paper_params ? "paper" : "full");
     w.key("seed").value(static_cast<long long>(settings.seed));
@@ -423,27 +523,63 @@ int calibrate_main(int argc, char** argv) {
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
   });
-  std::string write_error;
-  if (!textio::write_file_atomically(options.get("out"), json, &write_error)) {
-    error("calibrate", write_error);
-    return kExitOutputError;
+}
+
+// --- write ------------------------------------------------------------------------------------
+
+/// Stages every output, then commits them together: all or nothing.
+Error write_outputs(const Options& options, const CalibrateSettings& settings, const report::ReportData& data,
+                    const streams::SessionFacts& facts, const Stage& final_stage, port::OutputSet* outputs,
+                    const OutputIds& ids) {
+  Error error = outputs->stage_text(ids.result, "", result_json(settings, data, facts, final_stage));
+  if (error.ok() && !options.get("ur-deltas").empty()) {
+    const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
+    error = outputs->stage_text(ids.ur_deltas, "", textio::format_ur_calibration_conf(deltas));
   }
-  std::printf("\nresult: %s\n", options.get("out").c_str());
-  if (!options.get("ur-deltas").empty()) {
-    if (!textio::write_file_atomically(options.get("ur-deltas"), textio::format_ur_calibration_conf(deltas), &write_error)) {
-      error("calibrate", write_error);
-      return kExitOutputError;
-    }
-    std::printf("UR deltas: %s\n", options.get("ur-deltas").c_str());
+  if (error.ok() && !options.get("report").empty()) {
+    error = outputs->stage_text(ids.report, "index.html", report::render_html(data));
   }
-  if (!options.get("report").empty()) {
-    if (!report::write_html_report(options.get("report"), data, &write_error)) {
-      error("calibrate", write_error);
-      return kExitOutputError;
-    }
-    std::printf("report: %s/index.html\n", options.get("report").c_str());
-  }
-  return kExitOk;
+  return error.ok() ? outputs->commit() : error;
+}
+
+Error calibrate(const Options& options) {
+  CalibrateSettings settings;
+  Error error = settings_from_options(options, &settings);
+  port::OutputSet outputs;
+  OutputIds ids;
+  if (error.ok()) error = declare_outputs(options, &outputs, &ids);
+  RobotModel start;
+  if (error.ok()) error = start_geometry(options, settings, &start);
+  static CliDataset dataset;  // static: 8192 samples; emptied for each call (tests run several in one process)
+  dataset.clear();
+  streams::SessionFacts facts;
+  if (error.ok()) error = load_dataset(options, settings, &dataset, &facts);
+  Stage uncalibrated;
+  std::vector<Stage> stages;
+  if (error.ok()) error = run(settings, start, dataset, !options.get("ur-calibration").empty(), &uncalibrated, &stages);
+  if (!error.ok()) return error;
+  const report::ReportData data = present(settings, start, dataset, facts, uncalibrated, stages);
+  const bool result_on_stdout = options.get("out") == "-";
+  std::FILE* terminal = result_on_stdout ? stderr : stdout;
+  print_tables(terminal, data, stages.back());
+  error = write_outputs(options, settings, data, facts, stages.back(), &outputs, ids);
+  if (!error.ok()) return error;
+  if (!result_on_stdout) std::fprintf(terminal, "\nresult: %s\n", options.get("out").c_str());
+  if (!options.get("ur-deltas").empty()) std::fprintf(terminal, "UR deltas: %s\n", options.get("ur-deltas").c_str());
+  if (!options.get("report").empty()) std::fprintf(terminal, "report: %s/index.html\n", options.get("report").c_str());
+  return Error{};
+}
+
+}  // namespace
+
+int calibrate_main(int argc, char** argv) {
+  Options options;
+  const int parsed = parse_options(kCommand,
+                                   "Estimates the robot geometry and the base -> tracker transform from tracker\n"
+                                   "measurements, prints the paper-style tables and writes the result.",
+                                   option_specs(), argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  return exit_with(kCommand, calibrate(options));
 }
 
 }  // namespace hivecal::cli
