@@ -164,6 +164,7 @@ expect 3 "comma.csv:2: column 'x': '1000,5' has a comma decimal separator" -- ca
 printf 'Zeit;Achse 1;Achse 2\n1;2;3\n' >"$work/other.csv"
 expect 3 "other.csv:1: not a robot joint log: expected t,q1..q6" -- calibrate --robot "$work/other.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
 no_file "$work/r9.json"
+expect 2 "--joint-names needs six comma-separated names" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b --out "$work/r9.json"
 
 # --- hostile and careless use (issue 13): one check per case -----------------------------------
 # pass/fail helpers for checks that are not one command's exit code

@@ -178,6 +178,8 @@ Error extract(const cli::Options& options) {
   config.speed_model.tool_m = tool;
   config.max_speed_m_s = max_speed_mm_s * 1e-3;
   config.window_s = window_s;
+  error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
+  if (!error.ok()) return error;
   const auto dataset = std::make_unique<Dataset<65536>>();
   SessionFacts facts;
   error = load_session({"", options.get("robot"), options.get("tracker")}, config, dataset.get(), &facts);
@@ -225,6 +227,7 @@ int extract_main(int argc, char** argv) {
   const std::vector<cli::OptionSpec> specs = {
       {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
       {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
+      {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"robot-model", "NAME", "ur3, ur5, ur10 or ur5e (nominal geometry for tool speeds)", "ur5"},
       {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
       {"max-speed-mm-s", "X", "quasi-static threshold on both sides [mm/s]", "2"},
