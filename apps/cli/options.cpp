@@ -118,7 +118,7 @@ Error vec3_option(const Options& options, const std::string& name, Vec3* value_m
 
 Error robot_model_option(const Options& options, const std::string& name, RobotType* type) {
   if (robot_type_from_name(options.get(name).c_str(), type) == Status::ok) return Error{};
-  return Error::usage("unknown robot model " + port::quoted(options.get(name)) + " (ur3, ur5, ur10, ur5e)");
+  return Error::usage("unknown robot model " + port::quoted(options.get(name)) + " (" + std::string(robot_type_names()) + ")");
 }
 
 }  // namespace hivecal::cli

@@ -65,7 +65,7 @@ bool progress_enabled(const Options& options);
 Error number_option(const Options& options, const std::string& name, double* value);
 /// --<name> as X,Y,Z in metres (e.g. --tool).
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
-/// --<name> as a robot model name (ur3, ur5, ur10, ur5e).
+/// --<name> as a robot model name (robot_type_names()).
 Error robot_model_option(const Options& options, const std::string& name, RobotType* type);
 
 }  // namespace hivecal::cli

@@ -88,6 +88,20 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
       format("clock: t_robot - t_tracker = %.6f s (sigma %.3f ms)", clock.offset_at_reference_us * 1e-6,
              clock.sigma_offset_at_reference_us * 1e-3) +
       format(", drift %.2f ppm (sigma %.2f ppm)", clock.drift * 1e6, clock.sigma_drift * 1e6));
+  const ClockProfileStats& profile = report.clock_stats;
+  if (profile.tracker_set_aside > 0) {
+    // Blunders (a jump no tool makes, then back): named by tracker timestamp so they can be found.
+    std::string when;
+    for (std::uint64_t k = 0; k < profile.tracker_set_aside && k < kClockSetAsideLog; ++k)
+    {
+      char stamp[32];
+      std::snprintf(stamp, sizeof stamp, k == 0 ? "%.3f" : ", %.3f", static_cast<double>(profile.set_aside_tracker_us[k]) * 1e-6);
+      when += stamp;
+    }
+    if (profile.tracker_set_aside > kClockSetAsideLog) when += ", ...";
+    facts->info_lines.push_back("clock: set aside " + std::to_string(profile.tracker_set_aside) +
+                                " tracker point(s) that jump faster than any tool moves, at t_tracker = " + when + " s");
+  }
   std::string dropped;
   for (int k = 0; k < kDropReasonCount; ++k) {
     const std::uint64_t n = report.counts.dropped[k];

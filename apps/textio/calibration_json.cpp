@@ -141,7 +141,7 @@ port::Error parse_calibration_json(const std::string& text, const std::string& s
   if (robot == nullptr || robot->kind != JsonValue::Kind::string ||
       robot_type_from_name(robot->string.c_str(), &parsed.robot) != Status::ok) {
     return fail(source_name, "unknown robot model" + (robot != nullptr && robot->kind == JsonValue::Kind::string
-                                                          ? " '" + robot->string + "' (ur3, ur5, ur10, ur5e)"
+                                                          ? " '" + robot->string + "' (" + robot_type_names() + ")"
                                                           : std::string(" (missing \"robot\")")));
   }
   const JsonValue* convention = root.find("convention");

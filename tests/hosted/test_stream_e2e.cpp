@@ -120,7 +120,7 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   EXPECT_LT(clock_error_us, 2000.0);
 
   // Pass 2 from the captures.
-  static Dataset<> dataset;
+  static Dataset<4096> dataset;
   dataset.clear();
   const auto extractor =
       std::make_unique<SampleExtractor<>>(make_extraction_config(session.truth().nominal), fit, &dataset);

@@ -283,7 +283,7 @@ const std::vector<OptionSpec>& option_specs() {
       {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"samples", "FILE", "paired static samples q1..q6,x,y,z (CSV; '-': stdin) instead of --robot/--tracker", ""},
       {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
-      {"robot-model", "ur5|ur3|ur10|ur5e", "nominal geometry", "ur5"},
+      {"robot-model", "NAME", std::string("nominal geometry: ") + robot_type_names(), "ur5"},
       {"tool", "X,Y,Z", "nominal retroreflector centre in the flange frame [m] (LM refines it)", "0,0,0.1695"},
       {"params", "full|paper", "full identifiable model, or the paper's six lengths", "full"},
       {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},

@@ -163,8 +163,8 @@ Error extract(const cli::Options& options) {
   if (error.ok()) error = cli::number_option(options, "max-speed-mm-s", &max_speed_mm_s);
   if (error.ok()) error = cli::number_option(options, "window-s", &window_s);
   if (!error.ok()) return error;
-  if (!(max_speed_mm_s > 0 && max_speed_mm_s < 1e6) || !(window_s > 0 && window_s < 1e3)) {
-    return Error::usage("--max-speed-mm-s and --window-s must be positive (see --help)");
+  if (!(max_speed_mm_s > 0 && max_speed_mm_s < 1e6) || !(window_s >= 0 && window_s <= 60)) {
+    return Error::usage("--max-speed-mm-s must be positive and --window-s in [0, 60] (see --help)");
   }
   port::OutputSet outputs;
   std::size_t samples_id = 0;
@@ -228,10 +228,10 @@ int extract_main(int argc, char** argv) {
       {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
       {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
       {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
-      {"robot-model", "NAME", "ur3, ur5, ur10 or ur5e (nominal geometry for tool speeds)", "ur5"},
+      {"robot-model", "NAME", std::string(robot_type_names()) + " (nominal geometry for tool speeds)", "ur5"},
       {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
-      {"max-speed-mm-s", "X", "quasi-static threshold on both sides [mm/s]", "2"},
-      {"window-s", "S", "width of the quasi-static window around each tracker instant [s]", "1"},
+      {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
+      {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
       {"samples", "FILE", "write the paired samples q1..q6,x,y,z (CSV) here; '-' for stdout; empty: none", ""},
   };
   cli::Options options;
