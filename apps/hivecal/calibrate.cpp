@@ -9,14 +9,10 @@
 #include "calibration_json.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
-#include "hivecal/abc.hpp"
-#include "hivecal/cost.hpp"
+#include "hivecal/calibration.hpp"
 #include "hivecal/dataset.hpp"
-#include "hivecal/gsa.hpp"
-#include "hivecal/hybrid.hpp"
 #include "hivecal/lm.hpp"
 #include "hivecal/metrics.hpp"
-#include "hivecal/paper6_cost.hpp"
 #include "hivecal/trace.hpp"
 #include "report.hpp"
 #include "text_util.hpp"
@@ -26,26 +22,23 @@ namespace hivecal::cli {
 namespace {
 
 constexpr std::size_t kTraceCapacity = 1024;
+/// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
+/// largest dataset (static: ~2.3 MB).
+using CliWorkspace = CalibrationWorkspace<kCliDatasetCapacity, double, 150, kTraceCapacity, kCliDatasetCapacity>;
 
-/// What one solver stage produced.
-struct Stage {
-  std::string method;                ///< "ABC", "GSA", "LM", ...
-  std::string params;                ///< "paper-6" or "full"
-  RobotModel model;                  ///< calibrated geometry
-  RigidTransform base_to_tracker;    ///< fitted or estimated base -> tracker
-  std::vector<double> trace_m;       ///< best cost per iteration [m]
-  double seconds = 0.0;              ///< wall time [s]
-  long long evaluations = 0;         ///< cost evaluations (LM: iterations)
-  bool is_lm = false;                ///< lm below is meaningful
-  LmResult lm;                       ///< LM details (identifiability, sigma)
-};
-
-/// Prints one progress line per iteration on stderr, overwritten in place.
-class Progress final : public ProgressObserver, public LmObserver {
+/// Times the stages (lib takes no time) and prints one progress line per iteration on
+/// stderr, overwritten in place.
+class JobObserver final : public CalibrationObserver {
  public:
-  Progress(bool enabled, std::string label) : enabled_(enabled), label_(std::move(label)) {}
-  ~Progress() {
-    if (enabled_ && printed_) std::fprintf(stderr, "\n");
+  explicit JobObserver(bool enabled) : enabled_(enabled) {}
+  ~JobObserver() { end_line(); }
+  void on_stage_begin(std::size_t, CalibrationSolver solver) override {
+    label_ = calibration_solver_name(solver);
+    start_ = std::chrono::steady_clock::now();
+  }
+  void on_stage_end(std::size_t index, const CalibrationStage&) override {
+    seconds[index] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    end_line();
   }
   void on_iteration(const SolverProgress& p) override {
     print("iteration %zu/%zu, best MAE %.2f um", p.iteration, p.iteration_count, p.best_cost * 1e6);
@@ -54,103 +47,61 @@ class Progress final : public ProgressObserver, public LmObserver {
     print("iteration %d, RMS %.2f um", info.iteration, info.rms_m * 1e6);
     return true;
   }
+  double seconds[kMaxCalibrationStages] = {};  ///< wall time per stage [s]
 
  private:
   template <typename... Args>
   void print(const char* format, Args... args) {
     if (!enabled_) return;
-    std::fprintf(stderr, "\r[%s] ", label_.c_str());
+    std::fprintf(stderr, "\r[%s] ", label_);
     std::fprintf(stderr, format, args...);
     std::fflush(stderr);
     printed_ = true;
   }
+  void end_line() {
+    if (enabled_ && printed_) std::fprintf(stderr, "\n");
+    printed_ = false;
+  }
   bool enabled_;
-  std::string label_;
+  const char* label_ = "";
   bool printed_ = false;
+  std::chrono::steady_clock::time_point start_;
 };
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-std::vector<double> trace_values(const TraceBase& trace) {
+std::vector<double> trace_values(Span<const double> trace) {
   std::vector<double> v;
-  for (double x : trace.values()) v.push_back(x);
+  for (double x : trace) v.push_back(x);
   return v;
 }
 
-/// ABC or GSA on the paper's six lengths, base refitted per candidate.
-Status run_population(bool use_abc, const RobotModel& start, Span<const Sample> train, std::uint64_t seed,
-                      bool progress_on, Stage* stage) {
-  static Paper6Cost<kCliDatasetCapacity> cost;
-  static AbcSolver<150, kPaper6Dimension> abc;
-  static GsaSolver<150, kPaper6Dimension> gsa;
-  static Trace<kTraceCapacity> trace;
-  trace.clear();
-  Paper6StageResult result;
-  Progress progress(progress_on, use_abc ? "ABC" : "GSA");
-  const auto start_time = std::chrono::steady_clock::now();
-  Status status = Status::ok;
-  if (use_abc) {
-    AbcOptions options;
-    options.seed = seed;
-    status = calibrate_paper6_abc(start, train, options, kPaper6DefaultHalfWidth_m, &cost, &abc, &result, &trace,
-                                  &progress);
-  } else {
-    GsaOptions options;
-    options.seed = seed;
-    status = calibrate_paper6_gsa(start, train, options, kPaper6DefaultHalfWidth_m, &cost, &gsa, &result, &trace,
-                                  &progress);
+CalibrationMethod method_from_name(const std::string& name) {
+  for (CalibrationMethod m : {CalibrationMethod::lm, CalibrationMethod::abc, CalibrationMethod::gsa,
+                              CalibrationMethod::abc_lm, CalibrationMethod::gsa_lm, CalibrationMethod::all}) {
+    if (name == calibration_method_name(m)) return m;
   }
-  if (status != Status::ok) return status;
-  stage->method = use_abc ? "ABC" : "GSA";
-  stage->params = "paper-6";
-  stage->seconds = seconds_since(start_time);
-  stage->evaluations = static_cast<long long>(result.evaluations);
-  stage->trace_m = trace_values(trace);
-  stage->model = result.model;
-  stage->base_to_tracker = result.base_to_tracker;
-  return Status::ok;
+  return CalibrationMethod::abc_lm;  // settings_from_options accepts only the names above
 }
 
-/// Levenberg-Marquardt from a starting geometry.
-Status run_lm(const RobotModel& start, const RigidTransform* start_base, Span<const Sample> train, bool paper_params,
-              bool robust, bool progress_on, Stage* stage) {
-  static LmWorkspace workspace;
-  static JointTrig joint_trig_storage[kCliDatasetCapacity];
-  workspace.joint_trig = joint_trig_storage;
-  static Trace<kTraceCapacity> trace;
-  trace.clear();
-  LmOptions options;
-  options.params = paper_params ? LmParamSet::paper6 : LmParamSet::full;
-  options.loss = robust ? LmLoss::huber : LmLoss::squared;
-  Progress progress(progress_on, "LM");
-  const auto start_time = std::chrono::steady_clock::now();
-  const Status status = calibrate_lm(start, start_base, train, options, &workspace, &stage->lm, &trace, &progress);
-  if (status != Status::ok && status != Status::not_converged) return status;
-  stage->method = "LM";
-  stage->params = paper_params ? "paper-6" : "full";
-  stage->is_lm = true;
-  stage->seconds = seconds_since(start_time);
-  stage->evaluations = stage->lm.iterations;
-  stage->trace_m = trace_values(trace);
-  stage->model = stage->lm.model;
-  stage->base_to_tracker = stage->lm.base_to_tracker;
-  return Status::ok;
-}
-
-report::MethodRow method_row(const Stage& stage, const DatasetBase& dataset) {
+report::MethodRow method_row(std::string method, std::string parameters, const ErrorStats& train,
+                             const ErrorStats& test, double seconds, long long evaluations) {
   report::MethodRow row;
-  row.method = stage.method;
-  row.parameters = stage.params;
-  if (stage.is_lm) {
-    row.parameters += " (" + std::to_string(stage.lm.identifiability.kept_count()) + " estimated)";
-  }
-  row.train = position_error_stats(stage.model, stage.base_to_tracker, dataset.train());
-  row.test = position_error_stats(stage.model, stage.base_to_tracker, dataset.test());
-  row.seconds = stage.seconds;
-  row.evaluations = stage.evaluations;
+  row.method = std::move(method);
+  row.parameters = std::move(parameters);
+  row.train = train;
+  row.test = test;
+  row.seconds = seconds;
+  row.evaluations = evaluations;
   return row;
+}
+
+report::MethodRow stage_row(const CalibrationResult& result, std::size_t k, double seconds) {
+  const CalibrationStage& stage = result.stages[k];
+  std::string params = stage.params == CalibrationParams::paper ? "paper-6" : "full";
+  if (stage.solver == CalibrationSolver::lm) {
+    params += " (" + std::to_string(result.lm.identifiability.kept_count()) + " estimated)";
+  }
+  return method_row(result.stage_name(k), params, stage.train, stage.test, seconds,
+                    static_cast<long long>(stage.evaluations));
 }
 
 std::vector<std::string> identifiability_lines(const LmResult& lm) {
@@ -176,20 +127,21 @@ std::vector<std::string> identifiability_lines(const LmResult& lm) {
   return lines;
 }
 
-std::vector<std::string> parameter_lines(const Stage& stage, const RobotModel& start) {
+/// `lm`: the LM details when `stage` is the LM stage, else null.
+std::vector<std::string> parameter_lines(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start) {
   std::vector<std::string> lines;
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
   char buf[160];
   for (int k = 0; k < kModelParamCount; ++k) {
-    const bool estimated = stage.is_lm && mask_has(stage.lm.identifiability.kept_mask, k);
+    const bool estimated = lm != nullptr && mask_has(lm->identifiability.kept_mask, k);
     const bool changed = after(k) != before(k);
     if (!estimated && !changed) continue;
     const bool angle = k < kDhParamCount && (k % kParamsPerJoint == 0 || k % kParamsPerJoint == 3);
     const double scale = angle ? 1e3 : 1e3;
     std::snprintf(buf, sizeof buf, "%-8s %+.9f %s  (change %+.4f %s%s)", full_param_name(k), after(k),
                   angle ? "rad" : "m", (after(k) - before(k)) * scale, angle ? "mrad" : "mm",
-                  estimated ? (", sigma " + std::to_string(stage.lm.sigma(k) * scale) + (angle ? " mrad" : " mm")).c_str()
+                  estimated ? (", sigma " + std::to_string(lm->sigma(k) * scale) + (angle ? " mrad" : " mm")).c_str()
                             : "");
     lines.push_back(buf);
   }
@@ -311,90 +263,74 @@ int calibrate_main(int argc, char** argv) {
   InputFacts facts;
   const int load = load_dataset(options, settings, progress_on, &dataset, &facts);
   if (load != kExitOk) return load;
-  const std::size_t minimum = settings.paper_params ? 12 : 24;
+  CalibrationOptions job;
+  job.method = method_from_name(settings.method);
+  job.params = settings.paper_params ? CalibrationParams::paper : CalibrationParams::full;
+  job.train_fraction = settings.train_fraction;
+  job.seed = settings.seed;
+  job.robust = options.given("robust");
+  const std::size_t minimum = calibration_minimum_samples(job.params);
   if (dataset.size() < minimum) {
     error("calibrate", "only " + std::to_string(dataset.size()) + " static samples; at least " +
                            std::to_string(minimum) + " are needed to identify the parameters");
     return kExitBadInput;
   }
-  if (dataset.split(settings.train_fraction, settings.seed) != Status::ok || dataset.test().empty()) {
+  const std::size_t train_count = dataset.train_count_for(settings.train_fraction);
+  if (train_count == 0 || train_count == dataset.size()) {
     error("calibrate", "--split " + options.get("split") + " leaves no training or no test sample");
     return kExitUsage;
   }
-  std::vector<std::string> info = facts.info_lines;
-  info.push_back("samples: " + std::to_string(dataset.size()) + " (train " + std::to_string(dataset.train().size()) +
-                 ", test " + std::to_string(dataset.test().size()) + ")");
 
-  // --- uncalibrated row
-  Stage uncalibrated;
-  uncalibrated.method = "uncalibrated";
-  uncalibrated.params = options.get("ur-calibration").empty() ? "nominal" : "controller";
-  uncalibrated.model = start;
-  Status status = fit_base_to_tracker(start, dataset.train(), &uncalibrated.base_to_tracker);
-  if (status != Status::ok) {
+  // --- the job: split, baseline, solvers (lib's calibrate())
+  static CliWorkspace workspace;
+  static CalibrationResult result;
+  JobObserver observer(progress_on);
+  const Status status = calibrate(start, &dataset, job, &workspace, &result, &observer);
+  if (result.step == CalibrationStep::baseline) {
     error("calibrate", std::string("cannot fit the tracker frame: ") + status_message(status) +
                            (status == Status::degenerate_geometry ? " (are all samples at one pose?)" : ""));
     return kExitBadInput;
   }
-
-  // --- solvers
-  std::vector<Stage> stages;
-  auto fail = [&](const char* what, Status s) {
-    error("calibrate", std::string(what) + " failed: " + status_message(s));
+  if (status != Status::ok) {
+    const CalibrationStep step = result.step;
+    const char* what = step == CalibrationStep::abc ? "ABC" : step == CalibrationStep::gsa ? "GSA"
+                       : step == CalibrationStep::lm ? "LM" : calibration_step_name(step);
+    error("calibrate", std::string(what) + " failed: " + status_message(status));
     return kExitFailure;
-  };
-  const std::string& method = settings.method;
-  const bool run_gsa = method == "gsa" || method == "gsa+lm" || method == "all";
-  const bool run_abc = method == "abc" || method == "abc+lm" || method == "all";
-  const bool run_lm_stage = method == "lm" || method == "abc+lm" || method == "gsa+lm" || method == "all";
-  if (run_gsa) {
-    Stage gsa;
-    status = run_population(false, start, dataset.train(), settings.seed, progress_on, &gsa);
-    if (status != Status::ok) return fail("GSA", status);
-    stages.push_back(gsa);
   }
-  if (run_abc) {
-    Stage abc;
-    status = run_population(true, start, dataset.train(), settings.seed, progress_on, &abc);
-    if (status != Status::ok) return fail("ABC", status);
-    stages.push_back(abc);
-  }
-  if (run_lm_stage) {
-    // Hybrid: start LM where the population solver ended ('all' starts from the nominal model
-    // so that its row stands on its own).
-    const bool hybrid = method == "abc+lm" || method == "gsa+lm";
-    const Stage* seed_stage = hybrid ? &stages.back() : nullptr;
-    Stage lm;
-    status = run_lm(seed_stage ? seed_stage->model : start, seed_stage ? &seed_stage->base_to_tracker : nullptr,
-                    dataset.train(), settings.paper_params, options.given("robust"), progress_on, &lm);
-    if (status != Status::ok) return fail("LM", status);
-    if (hybrid) lm.method = seed_stage->method + "+LM";
-    stages.push_back(lm);
-  }
-  const Stage& final_stage = stages.back();
+  std::vector<std::string> info = facts.info_lines;
+  info.push_back("samples: " + std::to_string(dataset.size()) + " (train " + std::to_string(dataset.train().size()) +
+                 ", test " + std::to_string(dataset.test().size()) + ")");
+  const CalibrationBaseline& uncalibrated = result.baseline;
+  const CalibrationStage& final_stage = result.stages[result.stage_count - 1];
+  const std::string final_method = result.stage_name(result.stage_count - 1);
+  const bool final_is_lm = final_stage.solver == CalibrationSolver::lm;
 
   // --- tables and facts
   report::ReportData data;
   data.title = "hivecal calibration: " + std::string(robot_type_name(settings.robot));
   data.info_lines = info;
-  data.methods.push_back(method_row(uncalibrated, dataset));
-  for (const Stage& stage : stages) data.methods.push_back(method_row(stage, dataset));
+  data.methods.push_back(method_row("uncalibrated", options.get("ur-calibration").empty() ? "nominal" : "controller",
+                                    uncalibrated.train, uncalibrated.test, 0.0, 0));
+  for (std::size_t k = 0; k < result.stage_count; ++k) data.methods.push_back(stage_row(result, k, observer.seconds[k]));
   data.uncalibrated = accuracy_report(uncalibrated.model, uncalibrated.base_to_tracker, dataset);
   data.calibrated = accuracy_report(final_stage.model, final_stage.base_to_tracker, dataset);
-  for (const Stage& stage : stages) data.convergence.push_back({stage.method, stage.trace_m});
+  for (std::size_t k = 0; k < result.stage_count; ++k) {
+    data.convergence.push_back({result.stage_name(k), trace_values(result.stages[k].trace_m)});
+  }
   for (const Sample& s : dataset.test()) {
     data.test_measured_m.push_back(s.point_m);
     data.test_uncalibrated_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
     data.test_calibrated_m.push_back(final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)));
   }
-  if (final_stage.is_lm) {
-    for (const std::string& line : identifiability_lines(final_stage.lm)) data.info_lines.push_back(line);
+  if (final_is_lm) {
+    for (const std::string& line : identifiability_lines(result.lm)) data.info_lines.push_back(line);
   }
-  data.parameter_lines = parameter_lines(final_stage, start);
+  data.parameter_lines = parameter_lines(final_stage, final_is_lm ? &result.lm : nullptr, start);
 
   for (const std::string& line : data.info_lines) std::printf("%s\n", line.c_str());
   std::printf("\n%s", report::format_tables_text(data).c_str());
-  std::printf("\nCalibrated parameters (%s):\n", final_stage.method.c_str());
+  std::printf("\nCalibrated parameters (%s):\n", final_method.c_str());
   for (const std::string& line : data.parameter_lines) std::printf("  %s\n", line.c_str());
 
   // --- outputs
@@ -406,7 +342,7 @@ int calibrate_main(int argc, char** argv) {
   file.metrics = data.calibrated;
   const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
   const std::string json = textio::format_calibration_json(file, [&](textio::JsonWriter& w) {
-    w.key("method").value(final_stage.method);
+    w.key("method").value(final_method);
     w.key("params").value(settings.paper_params ? "paper" : "full");
     w.key("seed").value(static_cast<long long>(settings.seed));
     w.key("split").value(settings.train_fraction);
@@ -417,7 +353,7 @@ int calibrate_main(int argc, char** argv) {
     textio::write_error_stats(w, data.uncalibrated.test);
     w.end_object();
     write_stage_list(w, data.methods);
-    if (final_stage.is_lm) write_lm_details(w, final_stage.lm);
+    if (final_is_lm) write_lm_details(w, result.lm);
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
   });
