@@ -1,8 +1,7 @@
-// The hybrid calibration (docs/solvers-abc-gsa.md, docs/solver-lm.md): a population solver
-// (ABC or GSA) on the paper's six lengths with the base refitted per candidate, then
-// Levenberg-Marquardt on the full model started from its geometry and base:
-//   calibrate_lm(stage.model, &stage.base_to_tracker, train, LmOptions{}, ...). One implementation for the
-// command-line tool and the firmware: no heap, every large object is the caller's.
+// The population stage (docs/solvers-abc-gsa.md): a population solver (ABC or GSA) on the
+// paper's six lengths with the base refitted per candidate. The calibration job
+// (calibration.hpp) runs it, and for the hybrid then Levenberg-Marquardt on the full model
+// from its geometry and base. No heap: every large object is the caller's.
 #pragma once
 
 #include <cstdint>

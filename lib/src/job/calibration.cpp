@@ -172,8 +172,9 @@ const char* calibration_method_name(CalibrationMethod method) {
 }
 
 std::size_t calibration_minimum_samples(CalibrationParams params) {
-  // About three equations per unknown with margin: 6 lengths + 6 base (paper), 27 + 6 (full)
-  // of which ~24 identifiable; LM itself only needs 3 N > free parameters.
+  // Three equations per sample: 12 samples give 36 for the paper's 6 lengths + 6 base
+  // parameters, 24 give 72 for the ~24 the full model identifies + 6 base. LM itself only
+  // refuses 3 N <= free parameters; below these a fit is mostly noise.
   return params == CalibrationParams::paper ? 12 : 24;
 }
 
