@@ -229,39 +229,36 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
 
   PopulationPhase open_abc() override {
     close();
-    AbcPhase* phase = new (arena_) AbcPhase();
-    open_ = Open::abc;
-    return PopulationPhase{&phase->cost, &phase->solver, nullptr};
+    abc_ = new (arena_) AbcPhase();
+    return PopulationPhase{&abc_->cost, &abc_->solver, nullptr};
   }
   PopulationPhase open_gsa() override {
     close();
-    GsaPhase* phase = new (arena_) GsaPhase();
-    open_ = Open::gsa;
-    return PopulationPhase{&phase->cost, nullptr, &phase->solver};
+    gsa_ = new (arena_) GsaPhase();
+    return PopulationPhase{&gsa_->cost, nullptr, &gsa_->solver};
   }
   LmWorkspace* open_lm() override {
     close();
-    LmPhase* phase = new (arena_) LmPhase();
-    open_ = Open::lm;
-    phase->lm.joint_trig = phase->joint_trig.view();
-    return &phase->lm;
+    lm_ = new (arena_) LmPhase();
+    lm_->lm.joint_trig = lm_->joint_trig.view();
+    return &lm_->lm;
   }
   void close() override {
-    switch (open_) {
-      case Open::abc: std::launder(reinterpret_cast<AbcPhase*>(arena_))->~AbcPhase(); break;
-      case Open::gsa: std::launder(reinterpret_cast<GsaPhase*>(arena_))->~GsaPhase(); break;
-      case Open::lm: std::launder(reinterpret_cast<LmPhase*>(arena_))->~LmPhase(); break;
-      case Open::none: break;
-    }
-    open_ = Open::none;
+    if (abc_ != nullptr) abc_->~AbcPhase();
+    if (gsa_ != nullptr) gsa_->~GsaPhase();
+    if (lm_ != nullptr) lm_->~LmPhase();
+    abc_ = nullptr;
+    gsa_ = nullptr;
+    lm_ = nullptr;
   }
   TraceBase& trace(std::size_t index) override { return traces_[index]; }
 
  private:
-  enum class Open : std::uint8_t { none, abc, gsa, lm };
   alignas(alignof(std::max_align_t)) unsigned char arena_[kArenaBytes];
   Trace<TraceCapacity> traces_[kMaxCalibrationStages];
-  Open open_ = Open::none;
+  AbcPhase* abc_ = nullptr;  // the open phase (at most one is set), built in arena_
+  GsaPhase* gsa_ = nullptr;
+  LmPhase* lm_ = nullptr;
 };
 
 /// Runs the job of `options` on `*dataset` from `start` (geometry and tool): splits the

@@ -84,25 +84,26 @@ class CaptureWorkspace final : public CaptureWorkspaceBase {
 
   ClockEstimatorBase* open_estimator(const ClockSyncConfig& config) override {
     close();
-    open_ = Open::estimator;
-    return new (arena_) Estimator(config);
+    estimator_ = new (arena_) Estimator(config);
+    return estimator_;
   }
   SampleExtractorBase* open_extractor(const ExtractionConfig& config, const ClockFit& clock,
                                       DatasetBase* dataset) override {
     close();
-    open_ = Open::extractor;
-    return new (arena_) Extractor(config, clock, dataset);
+    extractor_ = new (arena_) Extractor(config, clock, dataset);
+    return extractor_;
   }
   void close() override {
-    if (open_ == Open::estimator) std::launder(reinterpret_cast<Estimator*>(arena_))->~Estimator();
-    if (open_ == Open::extractor) std::launder(reinterpret_cast<Extractor*>(arena_))->~Extractor();
-    open_ = Open::none;
+    if (estimator_ != nullptr) estimator_->~Estimator();
+    if (extractor_ != nullptr) extractor_->~Extractor();
+    estimator_ = nullptr;
+    extractor_ = nullptr;
   }
 
  private:
-  enum class Open : std::uint8_t { none, estimator, extractor };
   alignas(alignof(std::max_align_t)) unsigned char arena_[kArenaBytes];
-  Open open_ = Open::none;
+  Estimator* estimator_ = nullptr;  // the open pass's object (at most one is set), built in arena_
+  Extractor* extractor_ = nullptr;
 };
 
 /// Pass 1: opens the captures and estimates the clock relation (speed limits of `nominal`)
