@@ -23,9 +23,9 @@
 #include <limits>
 #include <utility>
 
-#include "hivecal/abc.hpp"
-#include "hivecal/cost.hpp"
-#include "hivecal/paper6_cost.hpp"
+#include "hivecal/solve/abc.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/solve/paper6_cost.hpp"
 #include "paper6_data.hpp"
 
 namespace {

@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "hivecal/codec.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/wire/codec.hpp"
+#include "hivecal/core/random.hpp"
 
 namespace {
 

@@ -3,8 +3,8 @@
 #include <cstdio>
 
 #include "csv.hpp"
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/sample_extraction.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
 #include "stream_pipeline.hpp"
 #include "text_util.hpp"
 

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "cli.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/kinematics.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/kinematics.hpp"
 #include "json.hpp"
 
 namespace hivecal::cli {

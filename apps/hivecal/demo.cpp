@@ -5,11 +5,11 @@
 
 #include "cli.hpp"
 #include "commands.hpp"
-#include "hivecal/cost.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/metrics.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/core/random.hpp"
 
 namespace hivecal::cli {
 

@@ -7,7 +7,7 @@
 #include "calibration_json.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
 #include "text_util.hpp"
 #include "validation.hpp"
 

@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "hivecal/kinematics.hpp"
+#include "hivecal/model/kinematics.hpp"
 
 namespace hivecal::cli {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/metrics.hpp"
-#include "hivecal/types.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/core/types.hpp"
 
 namespace hivecal::report {
 

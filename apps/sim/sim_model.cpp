@@ -5,7 +5,8 @@
 #include <cstring>
 #include <limits>
 
-#include "hivecal/math.hpp"
+#include "hivecal/core/math.hpp"
+#include "hivecal/model/ur_deltas.hpp"
 
 namespace hivecal::sim {
 namespace {

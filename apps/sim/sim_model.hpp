@@ -11,9 +11,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "hivecal/kinematics.hpp"
-#include "hivecal/random.hpp"
-#include "hivecal/records.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/model/ur_deltas.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/wire/records.hpp"
 
 namespace hivecal::sim {
 

@@ -10,7 +10,7 @@
 
 #include "calibration_json.hpp"
 #include "csv.hpp"
-#include "hivecal/codec.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "json.hpp"
 #include "text_util.hpp"
 

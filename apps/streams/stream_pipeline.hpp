@@ -12,11 +12,11 @@
 #include <string>
 
 #include "csv.hpp"
-#include "hivecal/capture_pipeline.hpp"
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/codec.hpp"
+#include "hivecal/sync/capture_pipeline.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "hivecal/port/byte_source.hpp"
-#include "hivecal/sample_extraction.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
 
 namespace hivecal::streams {
 

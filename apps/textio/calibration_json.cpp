@@ -1,6 +1,6 @@
 #include "calibration_json.hpp"
 
-#include "hivecal/rigid_fit.hpp"
+#include "hivecal/model/rigid_fit.hpp"
 #include "text_util.hpp"
 
 namespace hivecal::textio {

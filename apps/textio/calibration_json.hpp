@@ -4,8 +4,8 @@
 #include <functional>
 #include <string>
 
-#include "hivecal/kinematics.hpp"
-#include "hivecal/metrics.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/model/metrics.hpp"
 #include "json.hpp"
 #include "ur_calibration_conf.hpp"  // ParseResult
 

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string_view>
 
-#include "hivecal/math.hpp"
+#include "hivecal/core/math.hpp"
 #include "text_util.hpp"
 
 namespace hivecal::textio {

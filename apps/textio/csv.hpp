@@ -10,8 +10,8 @@
 #include <string_view>
 #include <vector>
 
-#include "hivecal/dataset.hpp"
-#include "hivecal/types.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/core/types.hpp"
 #include "ur_calibration_conf.hpp"  // ParseResult
 
 namespace hivecal::textio {

@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "hivecal/math.hpp"
+#include "hivecal/core/math.hpp"
 #include "text_util.hpp"
 
 namespace hivecal::textio {

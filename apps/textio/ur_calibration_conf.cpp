@@ -2,7 +2,8 @@
 
 #include <string_view>
 
-#include "hivecal/math.hpp"
+#include "hivecal/core/math.hpp"
+#include "hivecal/model/ur_deltas.hpp"
 #include "text_util.hpp"
 
 namespace hivecal::textio {

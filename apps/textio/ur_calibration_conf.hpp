@@ -3,7 +3,8 @@
 
 #include <string>
 
-#include "hivecal/kinematics.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/model/ur_deltas.hpp"
 
 namespace hivecal::textio {
 

@@ -16,9 +16,9 @@
 #include <cstring>
 
 #include "baremetal/board.h"
-#include "hivecal/cost.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/metrics.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/model/metrics.hpp"
 #include "test_data.hpp"
 
 namespace hivecal {

@@ -11,7 +11,7 @@
 #include <type_traits>
 
 #include "check_log.hpp"
-#include "hivecal/status.hpp"
+#include "hivecal/core/status.hpp"
 
 namespace hivecal::fw {
 

@@ -4,9 +4,9 @@
 #include <limits>
 
 #include "harness.hpp"
-#include "hivecal/cost.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/metrics.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/metrics.hpp"
 #include "test_data.hpp"
 
 namespace hivecal {

@@ -2,7 +2,7 @@
 // central differences, on the MCU's FPU (or soft-float doubles on the M4). The shared checks
 // are tests/support/kinematics_checks.hpp (the host suite runs them with more poses).
 #include "harness.hpp"
-#include "hivecal/kinematics.hpp"
+#include "hivecal/model/kinematics.hpp"
 #include "kinematics_checks.hpp"
 
 namespace hivecal {

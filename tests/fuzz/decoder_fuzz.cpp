@@ -6,7 +6,7 @@
 #include <cstring>
 
 #include "codec_support.hpp"
-#include "hivecal/codec.hpp"
+#include "hivecal/wire/codec.hpp"
 
 namespace {
 

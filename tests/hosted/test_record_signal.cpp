@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/codec.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "hivecal/port/byte_source.hpp"
 #include "hivecal/port/pty.hpp"
 #include "sim_model.hpp"

@@ -13,12 +13,12 @@
 #include <thread>
 #include <vector>
 
-#include "hivecal/clock_sync.hpp"
+#include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/port/capture_file.hpp"
 #include "hivecal/port/pty.hpp"
 #include "hivecal/port/recorder.hpp"
 #include "hivecal/port/serial_port.hpp"
-#include "hivecal/sample_extraction.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
 #include "sim_model.hpp"
 #include "sim_server.hpp"
 #include "stream_pipeline.hpp"

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <limits>
 
-#include "hivecal/status.hpp"
+#include "hivecal/core/status.hpp"
 
 namespace hivecal::test {
 

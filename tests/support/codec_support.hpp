@@ -6,9 +6,9 @@
 #include <cstring>
 #include <type_traits>
 
-#include "hivecal/codec.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/wire/codec.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/core/random.hpp"
 
 namespace hivecal::test {
 

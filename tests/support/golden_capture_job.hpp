@@ -13,10 +13,10 @@
 #include <new>
 
 #include "hivecal/calibration.hpp"
-#include "hivecal/capture_dataset.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/kinematics.hpp"
+#include "hivecal/sync/capture_dataset.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/model/kinematics.hpp"
 
 namespace hivecal::test {
 

@@ -6,10 +6,10 @@
 
 #include <cstdint>
 
-#include "hivecal/cost.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/metrics.hpp"
-#include "hivecal/rigid_fit.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/model/rigid_fit.hpp"
 #include "test_data.hpp"
 
 namespace hivecal::test {

@@ -7,8 +7,9 @@
 #include <limits>
 
 #include "check_log.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/model/ur_deltas.hpp"
+#include "hivecal/core/random.hpp"
 #include "test_data.hpp"
 
 namespace hivecal::test {

@@ -5,7 +5,7 @@
 
 #include <Eigen/LU>
 
-#include "hivecal/full_model.hpp"
+#include "hivecal/solve/normal_equations.hpp"
 #include "test_data.hpp"
 
 namespace hivecal::test {

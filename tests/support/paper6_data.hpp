@@ -5,11 +5,11 @@
 
 #include <Eigen/Cholesky>
 
-#include "hivecal/cost.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/paper6_cost.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/solve/paper6_cost.hpp"
+#include "hivecal/core/random.hpp"
 #include "test_data.hpp"
 
 namespace hivecal::test {

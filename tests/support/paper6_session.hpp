@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "hivecal/paper6_cost.hpp"
+#include "hivecal/solve/paper6_cost.hpp"
 #include "paper6_data.hpp"
 
 namespace hivecal::test {

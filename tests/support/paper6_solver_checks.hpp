@@ -7,7 +7,7 @@
 #include <cstddef>
 
 #include "alloc_trap.hpp"
-#include "hivecal/objective.hpp"
+#include "hivecal/solve/objective.hpp"
 #include "paper6_session.hpp"
 
 namespace hivecal::test {

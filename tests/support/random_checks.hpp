@@ -5,7 +5,7 @@
 #include <cstdint>
 
 #include "check_log.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
 
 namespace hivecal::test {
 

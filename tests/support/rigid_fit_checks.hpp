@@ -7,8 +7,8 @@
 #include <limits>
 
 #include "check_log.hpp"
-#include "hivecal/random.hpp"
-#include "hivecal/rigid_fit.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/model/rigid_fit.hpp"
 #include "test_data.hpp"
 
 namespace hivecal::test {

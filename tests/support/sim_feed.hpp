@@ -2,8 +2,8 @@
 // the serial readers would: each stream in its own time order.
 #pragma once
 
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/sample_extraction.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
 #include "sim_model.hpp"
 
 namespace hivecal::test {

@@ -5,8 +5,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "hivecal/abc.hpp"
-#include "hivecal/gsa.hpp"
+#include "hivecal/solve/abc.hpp"
+#include "hivecal/solve/gsa.hpp"
 
 namespace hivecal::test {
 

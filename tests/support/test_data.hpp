@@ -1,9 +1,9 @@
 // Deterministic synthetic robot/tracker data for tests (own PRNG: same on every target).
 #pragma once
 
-#include "hivecal/dataset.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/core/random.hpp"
 
 namespace hivecal::test {
 

@@ -4,8 +4,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "hivecal/math.hpp"
-#include "hivecal/objective.hpp"
+#include "hivecal/core/math.hpp"
+#include "hivecal/solve/objective.hpp"
 
 namespace hivecal::test {
 

@@ -7,9 +7,9 @@
 #include <cstdio>
 
 #include "alloc_trap.hpp"
-#include "hivecal/abc.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/gsa.hpp"
+#include "hivecal/solve/abc.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/solve/gsa.hpp"
 #include "paper6_session.hpp"
 #include "test_objectives.hpp"
 

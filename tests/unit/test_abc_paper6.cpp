@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "alloc_trap.hpp"
-#include "hivecal/abc.hpp"
+#include "hivecal/solve/abc.hpp"
 #include "paper6_session.hpp"
 #include "paper6_solver_checks.hpp"
 #include "solver_fixture.hpp"

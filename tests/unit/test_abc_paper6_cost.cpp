@@ -6,11 +6,11 @@
 #include <limits>
 
 #include "alloc_trap.hpp"
-#include "hivecal/abc.hpp"
-#include "hivecal/cost.hpp"
-#include "hivecal/paper6_cost.hpp"
-#include "hivecal/rigid_fit.hpp"
-#include "hivecal/trace.hpp"
+#include "hivecal/solve/abc.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/solve/paper6_cost.hpp"
+#include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/core/trace.hpp"
 #include "paper6_data.hpp"
 
 namespace hivecal {

@@ -6,8 +6,8 @@
 #include <limits>
 
 #include "alloc_trap.hpp"
-#include "hivecal/abc.hpp"
-#include "hivecal/trace.hpp"
+#include "hivecal/solve/abc.hpp"
+#include "hivecal/core/trace.hpp"
 #include "solver_fixture.hpp"
 #include "test_objectives.hpp"
 

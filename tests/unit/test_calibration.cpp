@@ -8,8 +8,7 @@
 
 #include "alloc_trap.hpp"
 #include "hivecal/calibration.hpp"
-#include "hivecal/cost.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
 #include "test_data.hpp"
 
 namespace hivecal {

@@ -8,8 +8,8 @@
 
 #include "alloc_trap.hpp"
 #include "codec_support.hpp"
-#include "hivecal/codec.hpp"
-#include "hivecal/math.hpp"
+#include "hivecal/wire/codec.hpp"
+#include "hivecal/core/math.hpp"
 
 namespace hivecal {
 namespace {

@@ -9,7 +9,7 @@
 #include "alloc_trap.hpp"
 #include "codec_stream.hpp"
 #include "codec_support.hpp"
-#include "hivecal/codec.hpp"
+#include "hivecal/wire/codec.hpp"
 
 namespace hivecal {
 namespace {

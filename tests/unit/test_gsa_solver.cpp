@@ -6,8 +6,8 @@
 #include <limits>
 
 #include "alloc_trap.hpp"
-#include "hivecal/gsa.hpp"
-#include "hivecal/trace.hpp"
+#include "hivecal/solve/gsa.hpp"
+#include "hivecal/core/trace.hpp"
 #include "paper6_session.hpp"
 #include "paper6_solver_checks.hpp"
 #include "solver_fixture.hpp"

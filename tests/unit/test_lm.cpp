@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "alloc_trap.hpp"
-#include "hivecal/lm.hpp"
-#include "hivecal/metrics.hpp"
+#include "hivecal/solve/lm.hpp"
+#include "hivecal/model/metrics.hpp"
 #include "lm_test_data.hpp"
 
 namespace hivecal {

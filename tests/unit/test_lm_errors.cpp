@@ -4,7 +4,7 @@
 #include <limits>
 
 #include "alloc_trap.hpp"
-#include "hivecal/lm.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "lm_test_data.hpp"
 
 namespace hivecal {

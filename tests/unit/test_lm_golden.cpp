@@ -8,8 +8,8 @@
 #include <limits>
 
 #include "alloc_trap.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/lm.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "lm_test_data.hpp"
 
 namespace hivecal {

@@ -6,8 +6,8 @@
 #include <cmath>
 
 #include "alloc_trap.hpp"
-#include "hivecal/identifiability.hpp"
-#include "hivecal/lm.hpp"
+#include "hivecal/solve/identifiability.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "lm_test_data.hpp"
 
 namespace hivecal {

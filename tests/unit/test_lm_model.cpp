@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "alloc_trap.hpp"
-#include "hivecal/full_model.hpp"
+#include "hivecal/solve/normal_equations.hpp"
 #include "lm_test_data.hpp"
 
 namespace hivecal {

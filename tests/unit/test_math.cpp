@@ -6,8 +6,8 @@
 #include <limits>
 
 #include "check_log_gtest.hpp"
-#include "hivecal/math.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/math.hpp"
+#include "hivecal/core/random.hpp"
 #include "random_checks.hpp"
 
 namespace hivecal {

@@ -1,4 +1,4 @@
-// symmetric_eigen (tridiagonal QL on the fixed 33x33 NormalMatrix): a decomposition
+// symmetric_eigen (tridiagonal QL on the fixed 33x33 SymmetricMatrix): a decomposition
 // (reconstruction, orthonormal vectors, increasing eigenvalues) that agrees with Eigen's
 // SelfAdjointEigenSolver, used here as the host-only reference, and allocates nothing.
 #include <gtest/gtest.h>
@@ -11,8 +11,8 @@
 #include <limits>
 
 #include "alloc_trap.hpp"
-#include "hivecal/random.hpp"
-#include "hivecal/symmetric_eigen.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/linalg/symmetric_eigen.hpp"
 
 namespace hivecal {
 namespace {
@@ -24,8 +24,8 @@ constexpr double kTolerance = 200.0 * kEpsilon;
 constexpr double kOutside = 7.25;
 
 /// Matrix with `kOutside` everywhere and a random symmetric leading block.
-NormalMatrix random_symmetric(int size, Random* random) {
-  NormalMatrix a = NormalMatrix::Constant(kOutside);
+SymmetricMatrix random_symmetric(int size, Random* random) {
+  SymmetricMatrix a = SymmetricMatrix::Constant(kOutside);
   for (int c = 0; c < size; ++c) {
     for (int r = 0; r <= c; ++r) {
       a(r, c) = random->uniform(-1.0, 1.0);
@@ -45,25 +45,25 @@ Eigen::MatrixXd random_orthogonal(int size, Random* random) {
 }
 
 /// Leading block Q diag(values) Q^T, `kOutside` elsewhere.
-NormalMatrix with_spectrum(const Eigen::VectorXd& values, Random* random) {
+SymmetricMatrix with_spectrum(const Eigen::VectorXd& values, Random* random) {
   const int size = static_cast<int>(values.size());
   const Eigen::MatrixXd q = random_orthogonal(size, random);
   Eigen::MatrixXd block = q * values.asDiagonal() * q.transpose();
   block = 0.5 * (block + block.transpose()).eval();  // exactly symmetric
-  NormalMatrix a = NormalMatrix::Constant(kOutside);
+  SymmetricMatrix a = SymmetricMatrix::Constant(kOutside);
   a.topLeftCorner(size, size) = block;
   return a;
 }
 
 struct Decomposition {
-  FullParams values = FullParams::Zero();
-  NormalMatrix vectors = NormalMatrix::Zero();
-  NormalMatrix work = NormalMatrix::Zero();
+  SymmetricVector values = SymmetricVector::Zero();
+  SymmetricMatrix vectors = SymmetricMatrix::Zero();
+  SymmetricMatrix work = SymmetricMatrix::Zero();
   int iterations = 0;
   Status status = Status::ok;
 };
 
-Decomposition decompose(const NormalMatrix& a, int size) {
+Decomposition decompose(const SymmetricMatrix& a, int size) {
   Decomposition d;
   d.work = a;
   EXPECT_NO_HEAP(d.status = symmetric_eigen(&d.work, size, &d.values, &d.vectors, &d.iterations));
@@ -71,7 +71,7 @@ Decomposition decompose(const NormalMatrix& a, int size) {
 }
 
 /// Checks everything a decomposition of the leading size x size block of `a` must satisfy.
-void expect_valid(const NormalMatrix& a, int size, const Decomposition& d) {
+void expect_valid(const SymmetricMatrix& a, int size, const Decomposition& d) {
   ASSERT_EQ(d.status, Status::ok);
   const Eigen::MatrixXd block = a.topLeftCorner(size, size);
   const double norm = std::fmax(block.norm(), 1e-300);
@@ -84,8 +84,8 @@ void expect_valid(const NormalMatrix& a, int size, const Decomposition& d) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> reference(block, Eigen::EigenvaluesOnly);
   EXPECT_LE((reference.eigenvalues() - lambda).cwiseAbs().maxCoeff(), kTolerance * norm);
   // Outside the block: the input untouched, the vectors the identity.
-  for (int c = 0; c < kFullParamCount; ++c) {
-    for (int r = 0; r < kFullParamCount; ++r) {
+  for (int c = 0; c < kSymmetricCapacity; ++c) {
+    for (int r = 0; r < kSymmetricCapacity; ++r) {
       if (r < size && c < size) continue;
       EXPECT_EQ(d.work(r, c), kOutside);
       EXPECT_EQ(d.vectors(r, c), r == c ? 1.0 : 0.0);
@@ -98,7 +98,7 @@ TEST(SymmetricEigen, RandomMatricesOfSeveralSizes) {
   for (int size : {1, 2, 3, 5, 8, 13, 21, 32, 33}) {
     for (int trial = 0; trial < 4; ++trial) {
       SCOPED_TRACE(testing::Message() << "size " << size << " trial " << trial);
-      const NormalMatrix a = random_symmetric(size, &random);
+      const SymmetricMatrix a = random_symmetric(size, &random);
       const Decomposition d = decompose(a, size);
       expect_valid(a, size, d);
       EXPECT_LE(d.iterations, 3 * size);
@@ -115,7 +115,7 @@ TEST(SymmetricEigen, RankDeficientPositiveSemiDefinite) {
       for (int c = 0; c < rank; ++c) {
         for (int r = 0; r < size; ++r) b(r, c) = random.normal();
       }
-      NormalMatrix a = NormalMatrix::Constant(kOutside);
+      SymmetricMatrix a = SymmetricMatrix::Constant(kOutside);
       const Eigen::MatrixXd product = b * b.transpose();
       a.topLeftCorner(size, size) = 0.5 * (product + product.transpose());
       const Decomposition d = decompose(a, size);
@@ -133,7 +133,7 @@ TEST(SymmetricEigen, NearlyRepeatedEigenvalues) {
     Eigen::VectorXd values(size);
     for (int k = 0; k < size; ++k) values(k) = 1.0 + static_cast<double>(k % 3) * 1e-12 + static_cast<double>(k / 3);
     values(size - 1) = values(size - 2);  // one exact double eigenvalue too
-    const NormalMatrix a = with_spectrum(values, &random);
+    const SymmetricMatrix a = with_spectrum(values, &random);
     const Decomposition d = decompose(a, size);
     expect_valid(a, size, d);
     // Sorted, they are the constructed ones (to eps * |A|), clusters included.
@@ -149,12 +149,12 @@ TEST(SymmetricEigen, GradedSpectrumWithInactiveParameters) {
   constexpr int kActive = 25;
   Eigen::VectorXd values(kActive);
   for (int k = 0; k < kActive; ++k) values(k) = std::pow(10.0, -16.0 * static_cast<double>(k) / (kActive - 1));
-  const NormalMatrix block = with_spectrum(values, &random);
+  const SymmetricMatrix block = with_spectrum(values, &random);
   // Scatter the active block over every 4th-but-one parameter pattern, -1 on the rest.
-  NormalMatrix a = NormalMatrix::Zero();
-  int active[kFullParamCount] = {};
+  SymmetricMatrix a = SymmetricMatrix::Zero();
+  int active[kSymmetricCapacity] = {};
   int n = 0;
-  for (int i = 0; i < kFullParamCount; ++i) {
+  for (int i = 0; i < kSymmetricCapacity; ++i) {
     if (i % 4 == 3) {
       a(i, i) = -1.0;
     } else if (n < kActive) {
@@ -169,63 +169,63 @@ TEST(SymmetricEigen, GradedSpectrumWithInactiveParameters) {
   }
   Decomposition d;
   d.work = a;
-  EXPECT_NO_HEAP(d.status = symmetric_eigen(&d.work, kFullParamCount, &d.values, &d.vectors, &d.iterations));
+  EXPECT_NO_HEAP(d.status = symmetric_eigen(&d.work, kSymmetricCapacity, &d.values, &d.vectors, &d.iterations));
   ASSERT_EQ(d.status, Status::ok);
-  for (int k = 0; k < kFullParamCount - kActive; ++k) EXPECT_EQ(d.values(k), -1.0);
-  for (int k = 0; k < kFullParamCount - kActive; ++k) {
+  for (int k = 0; k < kSymmetricCapacity - kActive; ++k) EXPECT_EQ(d.values(k), -1.0);
+  for (int k = 0; k < kSymmetricCapacity - kActive; ++k) {
     // An inactive parameter's eigenvector is its unit vector, exactly.
     int ones = 0;
-    for (int r = 0; r < kFullParamCount; ++r) ones += std::fabs(d.vectors(r, k)) == 1.0 ? 1 : 0;
+    for (int r = 0; r < kSymmetricCapacity; ++r) ones += std::fabs(d.vectors(r, k)) == 1.0 ? 1 : 0;
     EXPECT_EQ(ones, 1);
   }
-  const Eigen::SelfAdjointEigenSolver<NormalMatrix> reference(a);
+  const Eigen::SelfAdjointEigenSolver<SymmetricMatrix> reference(a);
   EXPECT_LE((reference.eigenvalues() - d.values).cwiseAbs().maxCoeff(), kTolerance * 6.0);
   EXPECT_LE(d.iterations, 2 * kActive);
 }
 
 TEST(SymmetricEigen, EigenvaluesOnlyGiveTheSameBits) {
   Random random(15);
-  const NormalMatrix a = random_symmetric(kFullParamCount, &random);
-  const Decomposition full = decompose(a, kFullParamCount);
-  NormalMatrix work = a;
-  FullParams values = FullParams::Zero();
+  const SymmetricMatrix a = random_symmetric(kSymmetricCapacity, &random);
+  const Decomposition full = decompose(a, kSymmetricCapacity);
+  SymmetricMatrix work = a;
+  SymmetricVector values = SymmetricVector::Zero();
   int iterations = 0;
-  EXPECT_NO_HEAP(EXPECT_EQ(symmetric_eigen(&work, kFullParamCount, &values, nullptr, &iterations), Status::ok));
-  EXPECT_EQ(std::memcmp(values.data(), full.values.data(), sizeof(double) * kFullParamCount), 0);
+  EXPECT_NO_HEAP(EXPECT_EQ(symmetric_eigen(&work, kSymmetricCapacity, &values, nullptr, &iterations), Status::ok));
+  EXPECT_EQ(std::memcmp(values.data(), full.values.data(), sizeof(double) * kSymmetricCapacity), 0);
   EXPECT_EQ(iterations, full.iterations);
 }
 
 TEST(SymmetricEigen, DiagonalMatrixNeedsNoRotation) {
-  NormalMatrix a = NormalMatrix::Zero();
-  for (int i = 0; i < kFullParamCount; ++i) a(i, i) = static_cast<double>((i * 7) % kFullParamCount) - 3.0;
-  const Decomposition d = decompose(a, kFullParamCount);
+  SymmetricMatrix a = SymmetricMatrix::Zero();
+  for (int i = 0; i < kSymmetricCapacity; ++i) a(i, i) = static_cast<double>((i * 7) % kSymmetricCapacity) - 3.0;
+  const Decomposition d = decompose(a, kSymmetricCapacity);
   ASSERT_EQ(d.status, Status::ok);
   EXPECT_EQ(d.iterations, 0);
-  for (int k = 0; k < kFullParamCount; ++k) {
+  for (int k = 0; k < kSymmetricCapacity; ++k) {
     EXPECT_EQ(d.values(k), static_cast<double>(k) - 3.0);
-    const int source = (k * 19) % kFullParamCount;  // 7 * 19 = 133 = 1 mod 33
+    const int source = (k * 19) % kSymmetricCapacity;  // 7 * 19 = 133 = 1 mod 33
     EXPECT_EQ(d.vectors(source, k), 1.0);
   }
   // The zero matrix too: every eigenvalue 0, the identity.
-  const Decomposition zero = decompose(NormalMatrix::Zero(), 5);
+  const Decomposition zero = decompose(SymmetricMatrix::Zero(), 5);
   ASSERT_EQ(zero.status, Status::ok);
   EXPECT_TRUE(zero.values.head(5).isZero(0.0));
   EXPECT_TRUE(zero.vectors.isIdentity(0.0));
 }
 
 TEST(SymmetricEigen, RejectsBadSizeAndNonFiniteEntries) {
-  NormalMatrix a = NormalMatrix::Identity();
-  FullParams values = FullParams::Zero();
+  SymmetricMatrix a = SymmetricMatrix::Identity();
+  SymmetricVector values = SymmetricVector::Zero();
   EXPECT_EQ(symmetric_eigen(&a, 0, &values, nullptr), Status::invalid_argument);
-  EXPECT_EQ(symmetric_eigen(&a, kFullParamCount + 1, &values, nullptr), Status::invalid_argument);
+  EXPECT_EQ(symmetric_eigen(&a, kSymmetricCapacity + 1, &values, nullptr), Status::invalid_argument);
   a(2, 2) = 2.0 * kSymmetricEigenMaxMagnitude;  // would overflow when squared
-  EXPECT_EQ(symmetric_eigen(&a, kFullParamCount, &values, nullptr), Status::invalid_argument);
+  EXPECT_EQ(symmetric_eigen(&a, kSymmetricCapacity, &values, nullptr), Status::invalid_argument);
   a(2, 2) = kSymmetricEigenMaxMagnitude;  // the largest accepted
-  EXPECT_EQ(symmetric_eigen(&a, kFullParamCount, &values, nullptr), Status::ok);
-  EXPECT_EQ(values(kFullParamCount - 1), kSymmetricEigenMaxMagnitude);
-  a = NormalMatrix::Identity();
+  EXPECT_EQ(symmetric_eigen(&a, kSymmetricCapacity, &values, nullptr), Status::ok);
+  EXPECT_EQ(values(kSymmetricCapacity - 1), kSymmetricEigenMaxMagnitude);
+  a = SymmetricMatrix::Identity();
   a(3, 4) = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(symmetric_eigen(&a, kFullParamCount, &values, nullptr), Status::non_finite_input);
+  EXPECT_EQ(symmetric_eigen(&a, kSymmetricCapacity, &values, nullptr), Status::non_finite_input);
   EXPECT_EQ(symmetric_eigen(&a, 4, &values, nullptr), Status::ok);  // outside the block
 }
 
@@ -233,14 +233,14 @@ TEST(SymmetricEigen, RejectsBadSizeAndNonFiniteEntries) {
 // the tridiagonal form, back through the reflections) ----
 
 struct Lowest {
-  FullParams values = FullParams::Zero();
-  NormalMatrix vectors = NormalMatrix::Constant(kOutside);  // must be fully overwritten
-  NormalMatrix work = NormalMatrix::Zero();
+  SymmetricVector values = SymmetricVector::Zero();
+  SymmetricMatrix vectors = SymmetricMatrix::Constant(kOutside);  // must be fully overwritten
+  SymmetricMatrix work = SymmetricMatrix::Zero();
   int iterations = 0;
   Status status = Status::ok;
 };
 
-Lowest decompose_lowest(const NormalMatrix& a, int size, int count) {
+Lowest decompose_lowest(const SymmetricMatrix& a, int size, int count) {
   Lowest d;
   d.work = a;
   EXPECT_NO_HEAP(d.status = symmetric_eigen_lowest(&d.work, size, count, &d.values, &d.vectors, &d.iterations));
@@ -252,16 +252,16 @@ Lowest decompose_lowest(const NormalMatrix& a, int size, int count) {
 /// and for each j <= count, the first j vectors lie in the span of the full decomposition's
 /// first c >= j vectors, c the first index with a gap lambda_c - lambda_{c-1} above
 /// 1e-9 |A| (c = j: the same subspace), to eps |A| / gap.
-void expect_valid_lowest(const NormalMatrix& a, int size, int count, const Lowest& lowest) {
+void expect_valid_lowest(const SymmetricMatrix& a, int size, int count, const Lowest& lowest) {
   ASSERT_EQ(lowest.status, Status::ok);
   const Decomposition full = decompose(a, size);
   ASSERT_EQ(full.status, Status::ok);
-  EXPECT_EQ(std::memcmp(lowest.values.data(), full.values.data(), sizeof(double) * kFullParamCount), 0);
+  EXPECT_EQ(std::memcmp(lowest.values.data(), full.values.data(), sizeof(double) * kSymmetricCapacity), 0);
   EXPECT_EQ(lowest.iterations, full.iterations);
   const Eigen::MatrixXd block = a.topLeftCorner(size, size);
   const double norm = std::fmax(block.norm(), 1e-300);
-  for (int c = 0; c < kFullParamCount; ++c) {
-    for (int r = 0; r < kFullParamCount; ++r) {
+  for (int c = 0; c < kSymmetricCapacity; ++c) {
+    for (int r = 0; r < kSymmetricCapacity; ++r) {
       if (r < size && c < count) continue;
       ASSERT_EQ(lowest.vectors(r, c), 0.0) << "(" << r << ", " << c << ") outside the selected vectors";
     }
@@ -291,7 +291,7 @@ TEST(SymmetricEigenLowest, RandomMatricesOfSeveralSizes) {
   for (int size : {1, 2, 3, 5, 8, 13, 21, 32, 33}) {
     for (int count : {0, 1, size / 2, size}) {
       SCOPED_TRACE(testing::Message() << "size " << size << " count " << count);
-      const NormalMatrix a = random_symmetric(size, &random);
+      const SymmetricMatrix a = random_symmetric(size, &random);
       expect_valid_lowest(a, size, count, decompose_lowest(a, size, count));
     }
   }
@@ -303,15 +303,15 @@ TEST(SymmetricEigenLowest, TightClusterOfEightNearZero) {
   Random random(22);
   for (int trial = 0; trial < 6; ++trial) {
     SCOPED_TRACE(testing::Message() << "trial " << trial);
-    Eigen::VectorXd values(kFullParamCount);
-    for (int k = 0; k < kFullParamCount; ++k) {
+    Eigen::VectorXd values(kSymmetricCapacity);
+    for (int k = 0; k < kSymmetricCapacity; ++k) {
       values(k) = k < 8 ? random.uniform(-1.0, 1.0) * 1e-16 * static_cast<double>(trial % 3)
-                        : std::pow(10.0, -3.0 + 3.5 * static_cast<double>(k - 8) / (kFullParamCount - 9));
+                        : std::pow(10.0, -3.0 + 3.5 * static_cast<double>(k - 8) / (kSymmetricCapacity - 9));
     }
-    const NormalMatrix a = with_spectrum(values, &random);
+    const SymmetricMatrix a = with_spectrum(values, &random);
     for (int count : {3, 8, 10}) {
       SCOPED_TRACE(testing::Message() << "count " << count);
-      expect_valid_lowest(a, kFullParamCount, count, decompose_lowest(a, kFullParamCount, count));
+      expect_valid_lowest(a, kSymmetricCapacity, count, decompose_lowest(a, kSymmetricCapacity, count));
     }
   }
 }
@@ -319,14 +319,14 @@ TEST(SymmetricEigenLowest, TightClusterOfEightNearZero) {
 TEST(SymmetricEigenLowest, GradedSpectra) {
   Random random(23);
   for (double decades : {8.0, 16.0, 20.0}) {
-    Eigen::VectorXd values(kFullParamCount);
-    for (int k = 0; k < kFullParamCount; ++k) {
-      values(k) = std::pow(10.0, -decades * static_cast<double>(k) / (kFullParamCount - 1));
+    Eigen::VectorXd values(kSymmetricCapacity);
+    for (int k = 0; k < kSymmetricCapacity; ++k) {
+      values(k) = std::pow(10.0, -decades * static_cast<double>(k) / (kSymmetricCapacity - 1));
     }
-    const NormalMatrix a = with_spectrum(values, &random);
+    const SymmetricMatrix a = with_spectrum(values, &random);
     for (int count : {4, 8, 16}) {
       SCOPED_TRACE(testing::Message() << decades << " decades, count " << count);
-      expect_valid_lowest(a, kFullParamCount, count, decompose_lowest(a, kFullParamCount, count));
+      expect_valid_lowest(a, kSymmetricCapacity, count, decompose_lowest(a, kSymmetricCapacity, count));
     }
   }
 }
@@ -340,7 +340,7 @@ TEST(SymmetricEigenLowest, RankDeficientNullSpace) {
       for (int c = 0; c < rank; ++c) {
         for (int r = 0; r < size; ++r) b(r, c) = random.normal();
       }
-      NormalMatrix a = NormalMatrix::Constant(kOutside);
+      SymmetricMatrix a = SymmetricMatrix::Constant(kOutside);
       const Eigen::MatrixXd product = b * b.transpose();
       a.topLeftCorner(size, size) = 0.5 * (product + product.transpose());
       for (int count : {size - rank, std::min(size, size - rank + 2)}) {
@@ -357,13 +357,13 @@ TEST(SymmetricEigenLowest, RankDeficientNullSpace) {
 TEST(SymmetricEigenLowest, RepeatedEigenvaluesAndSplitTridiagonal) {
   Random random(25);
   // An exact 5-fold lowest eigenvalue.
-  Eigen::VectorXd values(kFullParamCount);
-  for (int k = 0; k < kFullParamCount; ++k) values(k) = k < 5 ? 0.5 : 1.0 + static_cast<double>(k);
-  const NormalMatrix a = with_spectrum(values, &random);
-  expect_valid_lowest(a, kFullParamCount, 5, decompose_lowest(a, kFullParamCount, 5));
+  Eigen::VectorXd values(kSymmetricCapacity);
+  for (int k = 0; k < kSymmetricCapacity; ++k) values(k) = k < 5 ? 0.5 : 1.0 + static_cast<double>(k);
+  const SymmetricMatrix a = with_spectrum(values, &random);
+  expect_valid_lowest(a, kSymmetricCapacity, 5, decompose_lowest(a, kSymmetricCapacity, 5));
   // Already tridiagonal and split in two identical halves: every eigenvalue twice, one in
   // each block of T; the vectors must still come out orthonormal.
-  NormalMatrix t = NormalMatrix::Zero();
+  SymmetricMatrix t = SymmetricMatrix::Zero();
   for (int half = 0; half < 2; ++half) {
     for (int i = 0; i < 6; ++i) {
       const int r = 6 * half + i;
@@ -378,7 +378,7 @@ TEST(SymmetricEigenLowest, RepeatedEigenvaluesAndSplitTridiagonal) {
 // here among the coupled ones, and the inactive -1 of the identifiability analysis first.
 TEST(SymmetricEigenLowest, DecoupledRowsGiveUnitVectors) {
   Random random(26);
-  NormalMatrix a = random_symmetric(kFullParamCount, &random);
+  SymmetricMatrix a = random_symmetric(kSymmetricCapacity, &random);
   const int decoupled[] = {0, 4, 17, 32};
   const double diagonal[] = {-1.0, -1.0, 0.01, -0.2};
   for (int n = 0; n < 4; ++n) {
@@ -387,17 +387,17 @@ TEST(SymmetricEigenLowest, DecoupledRowsGiveUnitVectors) {
     a.col(i).setZero();
     a(i, i) = diagonal[n];
   }
-  for (int count : {2, 9, kFullParamCount}) {
+  for (int count : {2, 9, kSymmetricCapacity}) {
     SCOPED_TRACE(testing::Message() << "count " << count);
-    const Lowest lowest = decompose_lowest(a, kFullParamCount, count);
-    expect_valid_lowest(a, kFullParamCount, count, lowest);
+    const Lowest lowest = decompose_lowest(a, kSymmetricCapacity, count);
+    expect_valid_lowest(a, kSymmetricCapacity, count, lowest);
     for (int k = 0; k < count; ++k) {
       for (int n = 0; n < 4; ++n) {
         const int i = decoupled[n];
         const double entry = lowest.vectors(i, k);
         if (lowest.values(k) == diagonal[n] && entry != 0.0) {
           EXPECT_EQ(entry, 1.0);
-          for (int r = 0; r < kFullParamCount; ++r) {
+          for (int r = 0; r < kSymmetricCapacity; ++r) {
             if (r != i) {
               EXPECT_EQ(lowest.vectors(r, k), 0.0);
             }
@@ -409,57 +409,57 @@ TEST(SymmetricEigenLowest, DecoupledRowsGiveUnitVectors) {
     }
   }
   // The inactive parameters first at -1, the rest coupled: as analyze_identifiability does it.
-  const NormalMatrix graded = [&] {
+  const SymmetricMatrix graded = [&] {
     Eigen::VectorXd values(25);
     for (int k = 0; k < 25; ++k) values(k) = k < 8 ? 1e-17 * static_cast<double>(k) : static_cast<double>(k) * 0.1;
-    const NormalMatrix block = with_spectrum(values, &random);
-    NormalMatrix m = NormalMatrix::Zero();
+    const SymmetricMatrix block = with_spectrum(values, &random);
+    SymmetricMatrix m = SymmetricMatrix::Zero();
     for (int c = 0; c < 25; ++c) {
       for (int r = 0; r < 25; ++r) m(r + (r >= 10 ? 8 : 0), c + (c >= 10 ? 8 : 0)) = block(r, c);
     }
     for (int i = 10; i < 18; ++i) m(i, i) = -1.0;
     return m;
   }();
-  const Lowest lowest = decompose_lowest(graded, kFullParamCount, 16);
-  expect_valid_lowest(graded, kFullParamCount, 16, lowest);
+  const Lowest lowest = decompose_lowest(graded, kSymmetricCapacity, 16);
+  expect_valid_lowest(graded, kSymmetricCapacity, 16, lowest);
   for (int k = 0; k < 8; ++k) EXPECT_EQ(lowest.vectors(10 + k, k), 1.0);
 }
 
 TEST(SymmetricEigenLowest, StagesAgreeWithTheOneCall) {
   Random random(27);
-  const NormalMatrix a = random_symmetric(kFullParamCount, &random);
-  const Lowest one_call = decompose_lowest(a, kFullParamCount, 7);
-  NormalMatrix work = a;
-  FullParams values = FullParams::Zero();
-  NormalMatrix vectors = NormalMatrix::Zero();
+  const SymmetricMatrix a = random_symmetric(kSymmetricCapacity, &random);
+  const Lowest one_call = decompose_lowest(a, kSymmetricCapacity, 7);
+  SymmetricMatrix work = a;
+  SymmetricVector values = SymmetricVector::Zero();
+  SymmetricMatrix vectors = SymmetricMatrix::Zero();
   SymmetricEigenReduction reduction;
   int iterations = 0;
   EXPECT_NO_HEAP({
-    EXPECT_EQ(symmetric_eigenvalues(&work, kFullParamCount, &values, &reduction, &iterations), Status::ok);
+    EXPECT_EQ(symmetric_eigenvalues(&work, kSymmetricCapacity, &values, &reduction, &iterations), Status::ok);
     EXPECT_EQ(symmetric_eigenvectors_lowest(work, reduction, values, 7, &vectors), Status::ok);
   });
-  EXPECT_EQ(std::memcmp(values.data(), one_call.values.data(), sizeof(double) * kFullParamCount), 0);
-  EXPECT_EQ(std::memcmp(vectors.data(), one_call.vectors.data(), sizeof(double) * kFullParamCount * kFullParamCount),
+  EXPECT_EQ(std::memcmp(values.data(), one_call.values.data(), sizeof(double) * kSymmetricCapacity), 0);
+  EXPECT_EQ(std::memcmp(vectors.data(), one_call.vectors.data(), sizeof(double) * kSymmetricCapacity * kSymmetricCapacity),
             0);
   EXPECT_EQ(iterations, one_call.iterations);
   // The vectors can be asked for again, more or fewer, from the same reduction.
-  NormalMatrix more = NormalMatrix::Zero();
+  SymmetricMatrix more = SymmetricMatrix::Zero();
   EXPECT_EQ(symmetric_eigenvectors_lowest(work, reduction, values, 9, &more), Status::ok);
-  EXPECT_EQ(std::memcmp(more.data(), vectors.data(), sizeof(double) * kFullParamCount * 7), 0);
+  EXPECT_EQ(std::memcmp(more.data(), vectors.data(), sizeof(double) * kSymmetricCapacity * 7), 0);
 }
 
 TEST(SymmetricEigenLowest, RejectsBadArguments) {
-  NormalMatrix a = NormalMatrix::Identity();
-  FullParams values = FullParams::Zero();
-  NormalMatrix vectors = NormalMatrix::Zero();
+  SymmetricMatrix a = SymmetricMatrix::Identity();
+  SymmetricVector values = SymmetricVector::Zero();
+  SymmetricMatrix vectors = SymmetricMatrix::Zero();
   EXPECT_EQ(symmetric_eigen_lowest(&a, 0, 0, &values, &vectors), Status::invalid_argument);
-  EXPECT_EQ(symmetric_eigen_lowest(&a, kFullParamCount + 1, 1, &values, &vectors), Status::invalid_argument);
+  EXPECT_EQ(symmetric_eigen_lowest(&a, kSymmetricCapacity + 1, 1, &values, &vectors), Status::invalid_argument);
   EXPECT_EQ(symmetric_eigen_lowest(&a, 5, -1, &values, &vectors), Status::invalid_argument);
   EXPECT_EQ(symmetric_eigen_lowest(&a, 5, 6, &values, &vectors), Status::invalid_argument);
   EXPECT_EQ(symmetric_eigen_lowest(&a, 5, 5, &values, &vectors), Status::ok);
   a(2, 2) = 2.0 * kSymmetricEigenMaxMagnitude;
   EXPECT_EQ(symmetric_eigen_lowest(&a, 5, 1, &values, &vectors), Status::invalid_argument);
-  a = NormalMatrix::Identity();
+  a = SymmetricMatrix::Identity();
   a(3, 4) = std::numeric_limits<double>::infinity();
   EXPECT_EQ(symmetric_eigen_lowest(&a, 5, 1, &values, &vectors), Status::non_finite_input);
   // No reduction (never made, or its decomposition refused): nothing to take vectors from.

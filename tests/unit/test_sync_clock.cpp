@@ -6,9 +6,9 @@
 #include <cstdio>
 
 #include "alloc_trap.hpp"
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/core/random.hpp"
 #include "sim_feed.hpp"
 #include "sim_model.hpp"
 

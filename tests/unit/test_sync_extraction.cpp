@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "alloc_trap.hpp"
-#include "hivecal/clock_sync.hpp"
-#include "hivecal/digest.hpp"
-#include "hivecal/random.hpp"
-#include "hivecal/sample_extraction.hpp"
+#include "hivecal/sync/clock_sync.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
 #include "sim_feed.hpp"
 #include "sim_model.hpp"
 

@@ -9,7 +9,7 @@
 
 #include "calibration_json.hpp"
 #include "csv.hpp"
-#include "hivecal/random.hpp"
+#include "hivecal/core/random.hpp"
 #include "test_data.hpp"
 #include "text_util.hpp"
 

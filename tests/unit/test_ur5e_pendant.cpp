@@ -8,7 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/kinematics.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/model/ur_deltas.hpp"
 #include "text_util.hpp"
 #include "ur_calibration_conf.hpp"
 

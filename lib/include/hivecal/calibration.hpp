@@ -11,18 +11,19 @@
 #include <cstdint>
 #include <new>
 
-#include "hivecal/abc.hpp"
-#include "hivecal/dataset.hpp"
-#include "hivecal/gsa.hpp"
-#include "hivecal/hybrid.hpp"
-#include "hivecal/kinematics.hpp"
-#include "hivecal/lm.hpp"
-#include "hivecal/metrics.hpp"
-#include "hivecal/objective.hpp"
-#include "hivecal/paper6_cost.hpp"
-#include "hivecal/status.hpp"
-#include "hivecal/trace.hpp"
-#include "hivecal/types.hpp"
+#include "hivecal/core/span.hpp"
+#include "hivecal/core/status.hpp"
+#include "hivecal/core/trace.hpp"
+#include "hivecal/core/types.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/solve/abc.hpp"
+#include "hivecal/solve/gsa.hpp"
+#include "hivecal/solve/lm.hpp"
+#include "hivecal/solve/objective.hpp"
+#include "hivecal/solve/paper6_cost.hpp"
+#include "hivecal/solve/population_stage.hpp"
 
 namespace hivecal {
 

@@ -2,7 +2,7 @@
 
 #include <new>
 
-#include "hivecal/cost.hpp"
+#include "hivecal/model/rigid_fit.hpp"
 
 namespace hivecal {
 namespace {

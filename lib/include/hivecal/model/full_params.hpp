@@ -1,0 +1,66 @@
+// The full calibration model's parameters: the 27 geometry parameters of kinematics.hpp plus
+// the robot base -> tracker transform, 33 in all; their indices, masks, names and how an
+// increment applies.
+//
+// The base is not stored as parameters: it is a RigidTransform, and its six parameters are
+// a local increment (rotation vector, translation) expressed in the robot base frame,
+//   base <- base * (Exp(rotation_increment), translation_increment),
+// so that base_rz and base_tz move the robot exactly as theta1 and d1 do.
+#pragma once
+
+#include <cstdint>
+
+#include <Eigen/Core>
+
+#include "hivecal/core/types.hpp"
+#include "hivecal/model/kinematics.hpp"
+
+namespace hivecal {
+
+inline constexpr int kBaseParamCount = 6;                                  ///< rotation (3) + translation (3)
+inline constexpr int kFullParamCount = kModelParamCount + kBaseParamCount;  ///< 33
+
+/// Index of the base rotation increment about base axis `axis` (0 = x, 1 = y, 2 = z).
+constexpr int base_rotation_param_index(int axis) { return kModelParamCount + axis; }
+/// Index of the base translation increment along base axis `axis` (0 = x, 1 = y, 2 = z).
+constexpr int base_translation_param_index(int axis) { return kModelParamCount + 3 + axis; }
+
+/// One value per full-model parameter (an increment, a sigma, ...) [m] or [rad].
+using FullParams = Eigen::Matrix<double, kFullParamCount, 1>;
+/// d(residual of one sample) / d(full parameters) [m/m] or [m/rad].
+using FullJacobian = Eigen::Matrix<double, 3, kFullParamCount>;
+
+/// A set of full-model parameters: bit i stands for parameter i.
+using ParamMask = std::uint64_t;
+/// The mask holding only parameter `index`.
+constexpr ParamMask param_bit(int index) { return ParamMask{1} << static_cast<unsigned>(index); }
+/// Every one of the 33 parameters.
+inline constexpr ParamMask kAllParamsMask = (ParamMask{1} << kFullParamCount) - 1U;
+/// True when parameter `index` is in `mask`.
+constexpr bool mask_has(ParamMask mask, int index) { return (mask & param_bit(index)) != 0; }
+/// Number of parameters in `mask`.
+int mask_count(ParamMask mask);
+/// The parameters of `mask` in increasing order into index[0 .. count-1]; returns count.
+int mask_indices(ParamMask mask, int (&index)[kFullParamCount]);
+
+/// Short name of a full-model parameter: "theta1", "d2", "a3", "alpha4", "tool_x",
+/// "base_rz", "base_tx", ...; "?" outside [0, kFullParamCount). Static storage.
+const char* full_param_name(int index);
+
+/// Cross-product matrix: skew(v) * x = v x x.
+inline Mat3 skew(const Vec3& v) {
+  Mat3 k;
+  k << 0.0, -v.z(), v.y(),
+       v.z(), 0.0, -v.x(),
+       -v.y(), v.x(), 0.0;
+  return k;
+}
+
+/// Rotation matrix of a rotation vector [rad] (Rodrigues' formula, own sincos).
+Mat3 rotation_from_vector(const Vec3& rotation_vector_rad);
+
+/// Adds a full-model increment: the 27 model entries add to the model, the base ones
+/// compose as base <- base * (Exp(rotation), translation).
+void apply_full_increment(const FullParams& increment, RobotModel* model, RigidTransform* base_to_tracker);
+
+}  // namespace hivecal

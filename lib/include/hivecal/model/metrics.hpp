@@ -1,0 +1,44 @@
+// Accuracy figures in the shape of the paper's Table 2: MAE and sigma per axis and 3D.
+#pragma once
+
+#include <cstddef>
+
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/core/types.hpp"
+
+namespace hivecal {
+
+/// Which error component a statistic is about.
+enum class ErrorAxis : int { x = 0, y = 1, z = 2, norm_3d = 3 };
+inline constexpr int kErrorAxisCount = 4;
+
+/// Statistics of e = predicted - measured over a set of samples, per component.
+/// For x, y, z the statistics are of |e_axis|; for norm_3d of |e|.
+struct ErrorStats {
+  std::size_t count = 0;                  ///< samples summarised
+  double mae_m[kErrorAxisCount] = {};     ///< mean absolute error [m]
+  double sigma_m[kErrorAxisCount] = {};   ///< sample standard deviation of the absolute error [m]
+  double max_m[kErrorAxisCount] = {};     ///< largest absolute error [m]
+
+  double mae(ErrorAxis axis) const { return mae_m[static_cast<int>(axis)]; }      ///< [m]
+  double sigma(ErrorAxis axis) const { return sigma_m[static_cast<int>(axis)]; }  ///< [m]
+  double max(ErrorAxis axis) const { return max_m[static_cast<int>(axis)]; }      ///< [m]
+};
+
+/// Train, test and overall statistics of one calibrated model (the paper's Table 2).
+struct AccuracyReport {
+  ErrorStats train;    ///< on the training samples
+  ErrorStats test;     ///< on the held-out samples
+  ErrorStats overall;  ///< on all samples
+};
+
+/// Error statistics of predictions base_to_tracker * FK(q) * tool against the measured points.
+ErrorStats position_error_stats(const RobotModel& model, const RigidTransform& base_to_tracker,
+                                Span<const Sample> samples);
+
+/// Statistics on the dataset's train, test and whole parts.
+AccuracyReport accuracy_report(const RobotModel& model, const RigidTransform& base_to_tracker,
+                               const DatasetBase& dataset);
+
+}  // namespace hivecal

@@ -1,0 +1,136 @@
+// Levenberg-Marquardt calibration of the full model (27 geometry parameters + base ->
+// tracker transform) from paired samples: streaming normal equations with column scaling,
+// automatic identifiability (identifiability.hpp), Nielsen damping, optional Huber loss by
+// IRLS, parameter standard deviations. No heap; the large matrices live in LmWorkspace.
+// Method and figures: docs/solver-lm.md.
+#pragma once
+
+#include <cstdint>
+
+
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/solve/normal_equations.hpp"
+#include "hivecal/solve/identifiability.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/core/status.hpp"
+#include "hivecal/core/trace.hpp"
+#include "hivecal/core/types.hpp"
+
+namespace hivecal {
+
+/// Which parameters the solver may move (before the identifiability analysis).
+enum class LmParamSet : std::uint8_t {
+  full,    ///< all 33; the analysis drops what the data cannot determine
+  paper6,  ///< d1, a2, a3, d4, d5, d6 and the base transform (the paper's parameter set)
+  custom,  ///< LmOptions::custom_mask
+};
+
+/// Loss applied to each sample's residual norm.
+enum class LmLoss : std::uint8_t {
+  squared,  ///< least squares
+  huber,    ///< quadratic up to LmOptions::huber_threshold_m, linear beyond (IRLS weights)
+};
+
+/// Why the iterations stopped.
+enum class LmTermination : std::uint8_t {
+  cost_change,     ///< an accepted step lowered the cost by less than cost_tolerance (relative)
+  step_size,       ///< the step moved the predicted points by less than step_tolerance_m (RMS)
+  gradient,        ///< every scaled gradient component below gradient_tolerance
+  no_progress,     ///< no step lowers the cost any more at machine precision (damping saturated)
+  max_iterations,  ///< iteration limit reached (Status::not_converged)
+  cancelled,       ///< the observer asked to stop (Status::solver_cancelled)
+};
+
+/// Lower-case name of a termination reason ("cost_change", ...).
+const char* lm_termination_name(LmTermination termination);
+
+/// Solver settings; the defaults suit tracker data in metres.
+struct LmOptions {
+  int max_iterations = 100;                   ///< LM iterations, rejected steps included [-]
+  double cost_tolerance = 1e-12;              ///< stop on relative cost decrease below this [-]
+  double step_tolerance_m = 1e-12;            ///< stop when the step moves predictions less (RMS) [m]
+  double gradient_tolerance = 1e-10;          ///< stop when every scaled column is this close to orthogonal to the residual (|cosine|) [-]
+  double initial_damping = 1e-6;              ///< lambda at start, relative to the scaled diagonal (1) [-]
+  LmLoss loss = LmLoss::squared;              ///< per-sample loss
+  double huber_threshold_m = 0.0;             ///< Huber k [m]; 0: 3 x noise sigma estimated from the median residual
+  double identifiability_threshold = kDefaultIdentifiabilityThreshold;  ///< sigma_k / sigma_max to drop [-]
+  LmParamSet params = LmParamSet::full;       ///< which parameters may move
+  ParamMask custom_mask = kAllParamsMask;     ///< free parameters when params == custom
+};
+
+/// The free-parameter mask of a parameter set (`custom` for LmParamSet::custom).
+ParamMask lm_param_mask(LmParamSet set, ParamMask custom);
+
+/// State after one iteration, for progress display and cancellation.
+struct LmIterationInfo {
+  int iteration = 0;        ///< 1-based iteration number
+  double rms_m = 0.0;       ///< RMS residual norm at the current point [m]
+  double loss_sum_m2 = 0.0; ///< sum of rho(|r_i|) at the current point [m^2]
+  double damping = 0.0;     ///< lambda used for the step [-]
+  bool accepted = false;    ///< whether the step was taken
+};
+
+/// Per-iteration callback (an interface, no std::function).
+class LmObserver {
+ public:
+  /// Called after every iteration; return false to stop (Status::solver_cancelled).
+  virtual bool on_iteration(const LmIterationInfo& info) = 0;
+
+ protected:
+  LmObserver() = default;
+  LmObserver(const LmObserver&) = default;
+  LmObserver& operator=(const LmObserver&) = default;
+  ~LmObserver() = default;
+};
+
+/// Everything the solver returns.
+struct LmResult {
+  RobotModel model;                        ///< calibrated geometry (dropped parameters at their start values)
+  RigidTransform base_to_tracker;          ///< calibrated robot base -> tracker transform
+  IdentifiabilityReport identifiability;   ///< what was estimated, what was dropped and why
+  FullParams sigma = FullParams::Zero();   ///< standard deviation per parameter [m] or [rad]; 0 when not estimated
+  double loss_sum_m2 = 0.0;                ///< final sum of rho(|r_i|) [m^2] (sum of squares for LmLoss::squared)
+  double rms_m = 0.0;                      ///< final RMS residual norm, unweighted [m]
+  double residual_sigma_m = 0.0;           ///< sqrt(sum w |r|^2 / (3N - p)): noise estimate per axis [m]
+  double huber_threshold_m = 0.0;          ///< Huber k used last [m]; 0 for least squares
+  int iterations = 0;                      ///< iterations run, rejected steps included
+  LmTermination termination = LmTermination::max_iterations;  ///< why it stopped
+};
+
+/// Cholesky factor of a symmetric positive definite matrix restricted to a parameter set:
+/// A(kept, kept) = U^T U, in compact order (position k holds parameter index[k]).
+struct KeptCholesky {
+  NormalMatrix upper;                 ///< U in the leading count x count block (upper triangle) [-]
+  int index[kFullParamCount] = {};    ///< parameter at compact position k
+  int count = 0;                      ///< parameters factored
+};
+
+/// Scratch memory of the solver (61 kB): give it static storage or put it in the
+/// caller's memory plan, not on a small stack.
+struct LmWorkspace {
+  NormalEquations normal;                     ///< normal equations at one point (current or trial)
+  NormalEquations trial;                      ///< the same at the other point
+  NormalMatrix system;                        ///< scaled, damped system matrix
+  KeptCholesky factorization;                 ///< its Cholesky factor over the kept parameters
+  IdentifiabilityWorkspace identifiability;   ///< scratch of the identifiability analysis
+  /// Optional storage for the joint trig of the samples, one entry per sample (no ownership):
+  /// with it the joint angles' sin/cos are computed once instead of in every pass (~10 %
+  /// faster). Too small or empty: computed in every pass. The same bits either way.
+  Span<JointTrig> joint_trig;
+};
+
+/// Calibrates `start_model` (and the base transform, from `*start_base_to_tracker` or, when
+/// null, from fit_base_to_tracker) on `samples`. Writes every field of *result unless it
+/// returns an input error. The optional `trace` receives the RMS residual [m] at the start
+/// and after each iteration; `observer` is called after each iteration.
+/// Errors: dataset_empty; too_few_samples (3 N <= number of free parameters);
+/// non_finite_input (start model, base or samples); invalid_argument (options);
+/// poses_not_distinct (all samples at one joint position); errors of fit_base_to_tracker;
+/// singular_system (no identifiable parameter or an unsolvable step);
+/// not_converged (iteration limit, *result holds the last point);
+/// solver_cancelled (observer, *result holds the last point).
+Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_base_to_tracker,
+                    Span<const Sample> samples, const LmOptions& options, LmWorkspace* workspace, LmResult* result,
+                    TraceBase* trace = nullptr, LmObserver* observer = nullptr);
+
+}  // namespace hivecal

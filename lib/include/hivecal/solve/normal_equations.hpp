@@ -1,0 +1,87 @@
+// The streaming normal equations of the full model's point residuals
+// r_i = base_to_tracker * FK(q_i) * tool - m_i (docs/solver-lm.md): per-sample residual and
+// Jacobian, column scaling, the Huber loss, and sums over samples that never store an N x 33
+// matrix. The parameters themselves (indices, masks, names, increments) are in
+// model/full_params.hpp.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include <Eigen/Core>
+
+#include "hivecal/linalg/symmetric_eigen.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/full_params.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/core/status.hpp"
+#include "hivecal/core/types.hpp"
+
+namespace hivecal {
+
+/// A 33x33 matrix such as J^T W J [m^2/unit^2]; 8.7 kB, keep it out of small stacks.
+using NormalMatrix = Eigen::Matrix<double, kFullParamCount, kFullParamCount>;
+static_assert(kFullParamCount == kSymmetricCapacity, "the eigen-solver is sized for the full model");
+
+/// Residual r = base_to_tracker * FK(q) * tool - point [m] of one sample and, into
+/// *jacobian, dr/d(full parameters): R [J_tool | -skew(p) | I], with R the base rotation,
+/// J_tool the 3x27 tool-point Jacobian and p the tool point in the base frame.
+Vec3 full_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                            FullJacobian* jacobian);
+
+/// The same in the robot base frame: returns R^T r [m] and [J_tool | -skew(p) | I] into
+/// *local_jacobian. R is orthonormal, so J^T J = J_local^T J_local and J^T r = J_local^T R^T r:
+/// the normal equations need no rotation of the 3x33 Jacobian.
+Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                             FullJacobian* local_jacobian);
+
+/// Column (Jacobi) scaling of normal equations: (*scale)_i = 1 / sqrt(jtwj_ii) for i in
+/// `mask` and 1 elsewhere; *scaled = S jtwj S on mask x mask (unit diagonal), with
+/// `outside_diagonal` on the other diagonal entries and 0 off the diagonal there.
+void scale_normal_matrix(const NormalMatrix& jtwj, ParamMask mask, double outside_diagonal, NormalMatrix* scaled,
+                         FullParams* scale);
+
+/// Loss of one sample as a function of its residual norm s = |r| [m].
+struct PointLoss {
+  double huber_threshold_m = 0.0;  ///< s beyond which the loss grows linearly [m]; <= 0: plain squares
+
+  /// rho(s) [m^2]: s^2, or 2 k s - k^2 beyond the Huber threshold k.
+  double rho(double norm_m) const;
+  /// IRLS weight rho'(s) / (2 s) [-]: 1, or k / s beyond k.
+  double weight(double norm_m) const;
+};
+
+/// Weighted normal equations of the point residuals, summed sample by sample (no N x 33
+/// matrix is ever stored).
+struct NormalEquations {
+  NormalMatrix jtwj;                 ///< sum w_i J_i^T J_i [m^2/unit^2]
+  FullParams jtwr;                   ///< sum w_i J_i^T r_i [m^2/unit]
+  double loss_sum_m2 = 0.0;          ///< sum rho(|r_i|) [m^2]
+  double weighted_squares_m2 = 0.0;  ///< sum w_i |r_i|^2 [m^2]
+  double squares_sum_m2 = 0.0;       ///< sum |r_i|^2, unweighted [m^2]
+  std::size_t count = 0;             ///< samples summed
+};
+
+/// Sums the normal equations over `samples`, for the parameters in `columns` only (the
+/// other rows and columns of jtwj and jtwr are 0; fewer columns, less work). `sample_trig`,
+/// if it holds an entry per sample (joint_trig of sample i at i), saves the joint trig of
+/// every sample; otherwise it is computed here. The same bits either way. Errors:
+/// dataset_empty, non_finite_input (a NaN or Inf residual or Jacobian).
+Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
+                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
+                                   ParamMask columns = kAllParamsMask, Span<const JointTrig> sample_trig = {});
+
+/// Loss sums only (no Jacobian, fk_tool_point), e.g. to compare candidate geometries: sum
+/// rho(|r_i|) and sum |r_i|^2 [m^2]. Agrees with accumulate_normal_equations to rounding.
+/// Errors: dataset_empty, non_finite_input.
+Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_to_tracker,
+                           Span<const Sample> samples, const PointLoss& loss, double* loss_sum_m2,
+                           double* squares_sum_m2);
+
+/// Median of the residual norms |r_i| [m] without storing them: a log-spaced histogram
+/// locates the median's bin, a second pass splits that bin linearly (relative resolution
+/// better than 1 %). Errors: dataset_empty, non_finite_input.
+Status median_residual_norm(const RobotModel& model, const RigidTransform& base_to_tracker,
+                            Span<const Sample> samples, double* median_m);
+
+}  // namespace hivecal

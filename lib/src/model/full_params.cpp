@@ -1,0 +1,64 @@
+#include "hivecal/model/full_params.hpp"
+
+#include <cmath>
+
+#include "hivecal/core/math.hpp"
+
+namespace hivecal {
+namespace {
+
+constexpr const char* kParamNames[kFullParamCount] = {
+    "theta1", "d1", "a1", "alpha1", "theta2", "d2", "a2", "alpha2", "theta3", "d3", "a3",
+    "alpha3", "theta4", "d4", "a4", "alpha4", "theta5", "d5", "a5", "alpha5", "theta6", "d6",
+    "a6", "alpha6", "tool_x", "tool_y", "tool_z", "base_rx", "base_ry", "base_rz", "base_tx", "base_ty",
+    "base_tz"};
+
+}  // namespace
+
+int mask_count(ParamMask mask) {
+  int count = 0;
+  for (int i = 0; i < kFullParamCount; ++i) count += mask_has(mask, i) ? 1 : 0;
+  return count;
+}
+
+int mask_indices(ParamMask mask, int (&index)[kFullParamCount]) {
+  int count = 0;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(mask, i)) index[count++] = i;
+  }
+  return count;
+}
+
+const char* full_param_name(int index) {
+  if (index < 0 || index >= kFullParamCount) return "?";
+  return kParamNames[index];
+}
+
+Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
+  const double angle2 = rotation_vector_rad.squaredNorm();
+  double sin_ratio = 1.0;      // sine of t over t (evaluated with math::sincos below)
+  double cos_ratio = 0.5;      // (1 - cosine of t) / t^2 (math::sincos, not libm)
+  if (angle2 < 1e-8) {         // t < 1e-4: Taylor terms beyond t^4 are below 1e-24
+    sin_ratio = 1.0 - angle2 / 6.0 + angle2 * angle2 / 120.0;
+    cos_ratio = 0.5 - angle2 / 24.0 + angle2 * angle2 / 720.0;
+  } else {
+    const double angle = std::sqrt(angle2);
+    double s = 0.0;
+    double c = 0.0;
+    math::sincos(angle, &s, &c);
+    sin_ratio = s / angle;
+    cos_ratio = (1.0 - c) / angle2;
+  }
+  const Mat3 k = skew(rotation_vector_rad);
+  return Mat3::Identity() + sin_ratio * k + cos_ratio * (k * k);
+}
+
+void apply_full_increment(const FullParams& increment, RobotModel* model, RigidTransform* base_to_tracker) {
+  *model = from_params(to_params(*model) + increment.head<kModelParamCount>());
+  const Vec3 rotation_rad = increment.segment<3>(base_rotation_param_index(0));
+  const Vec3 translation_m = increment.segment<3>(base_translation_param_index(0));
+  base_to_tracker->translation_m += base_to_tracker->rotation * translation_m;
+  base_to_tracker->rotation = base_to_tracker->rotation * rotation_from_vector(rotation_rad);
+}
+
+}  // namespace hivecal

@@ -1,0 +1,54 @@
+#include "hivecal/model/metrics.hpp"
+
+#include <cmath>
+
+namespace hivecal {
+namespace {
+
+/// Welford's running mean and variance: one pass, no stored samples.
+struct RunningStats {
+  std::size_t count = 0;
+  double mean = 0.0;
+  double m2 = 0.0;
+  double max = 0.0;
+
+  void add(double value) {
+    ++count;
+    const double delta = value - mean;
+    mean += delta / static_cast<double>(count);
+    m2 += delta * (value - mean);
+    if (value > max) max = value;
+  }
+  double sample_sigma() const { return count > 1 ? std::sqrt(m2 / static_cast<double>(count - 1)) : 0.0; }
+};
+
+}  // namespace
+
+ErrorStats position_error_stats(const RobotModel& model, const RigidTransform& base_to_tracker,
+                                Span<const Sample> samples) {
+  RunningStats axes[kErrorAxisCount];
+  for (const Sample& sample : samples) {
+    const Vec3 error_m = base_to_tracker.apply(fk_tool_point(model, sample.q_rad)) - sample.point_m;
+    for (int axis = 0; axis < 3; ++axis) axes[axis].add(std::fabs(error_m(axis)));
+    axes[static_cast<int>(ErrorAxis::norm_3d)].add(error_m.norm());
+  }
+  ErrorStats stats;
+  stats.count = samples.size();
+  for (int axis = 0; axis < kErrorAxisCount; ++axis) {
+    stats.mae_m[axis] = axes[axis].mean;
+    stats.sigma_m[axis] = axes[axis].sample_sigma();
+    stats.max_m[axis] = axes[axis].max;
+  }
+  return stats;
+}
+
+AccuracyReport accuracy_report(const RobotModel& model, const RigidTransform& base_to_tracker,
+                               const DatasetBase& dataset) {
+  AccuracyReport report;
+  report.train = position_error_stats(model, base_to_tracker, dataset.train());
+  report.test = position_error_stats(model, base_to_tracker, dataset.test());
+  report.overall = position_error_stats(model, base_to_tracker, dataset.samples());
+  return report;
+}
+
+}  // namespace hivecal

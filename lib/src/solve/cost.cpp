@@ -1,0 +1,34 @@
+#include "hivecal/solve/cost.hpp"
+
+#include <cmath>
+
+#include "hivecal/model/rigid_fit.hpp"
+
+namespace hivecal {
+
+Status evaluate_cost(const RobotModel& model, Span<const Sample> samples, CostKind kind, BaseFrame base_frame,
+                     RigidTransform* base_to_tracker, double* cost) {
+  if (samples.empty()) return Status::dataset_empty;
+  if (base_frame == BaseFrame::refit) {
+    const Status fit = fit_base_to_tracker(model, samples, base_to_tracker);
+    if (fit != Status::ok) return fit;
+  }
+  double sum = 0.0;
+  for (const Sample& sample : samples) {
+    const Vec3 residual_m = base_to_tracker->apply(fk_tool_point(model, sample.q_rad)) - sample.point_m;
+    const double squared = residual_m.squaredNorm();
+    sum += kind == CostKind::sum_squares ? squared : std::sqrt(squared);
+  }
+  const double value = kind == CostKind::sum_squares ? sum : sum / static_cast<double>(samples.size());
+  if (!math::is_finite(value)) return Status::non_finite_input;
+  *cost = value;
+  return Status::ok;
+}
+
+Status evaluate_cost(const ModelParams& params, Span<const Sample> samples, CostKind kind, BaseFrame base_frame,
+                     RigidTransform* base_to_tracker, double* cost) {
+  if (!all_finite(params)) return Status::non_finite_input;
+  return evaluate_cost(from_params(params), samples, kind, base_frame, base_to_tracker, cost);
+}
+
+}  // namespace hivecal

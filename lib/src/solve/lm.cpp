@@ -1,0 +1,442 @@
+#include "hivecal/solve/lm.hpp"
+
+#include <cmath>
+
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/core/math.hpp"
+
+namespace hivecal {
+namespace {
+
+// Median of |r| for an isotropic 3D Gaussian of unit sigma per axis (chi, 3 dof).
+constexpr double kMedianNormPerAxisSigma = 1.5381722;
+// Automatic Huber threshold: this many per-axis noise sigmas.
+constexpr double kHuberNoiseMultiple = 3.0;
+// Damping beyond which no step can lower the cost any more at double precision.
+constexpr double kMaxDamping = 1e16;
+// Joint positions closer than this count as the same pose [rad].
+constexpr double kSamePose_rad = 1e-9;
+
+bool options_valid(const LmOptions& o) {
+  const bool tolerances_ok = o.cost_tolerance >= 0.0 && o.step_tolerance_m >= 0.0 && o.gradient_tolerance >= 0.0;
+  const bool damping_ok = o.initial_damping > 0.0 && o.initial_damping < kMaxDamping;
+  const bool huber_ok = o.huber_threshold_m >= 0.0 && math::is_finite(o.huber_threshold_m);
+  const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
+  const bool mask_ok = o.params != LmParamSet::custom ||
+                       (o.custom_mask != 0 && (o.custom_mask & ~kAllParamsMask) == 0);
+  return o.max_iterations >= 1 && tolerances_ok && damping_ok && huber_ok && threshold_ok && mask_ok;
+}
+
+bool poses_distinct(Span<const Sample> samples) {
+  for (const Sample& sample : samples) {
+    if ((sample.q_rad - samples[0].q_rad).cwiseAbs().maxCoeff() > kSamePose_rad) return true;
+  }
+  return false;
+}
+
+bool transform_finite(const RigidTransform& t) { return all_finite(t.rotation) && all_finite(t.translation_m); }
+
+/// The point the solver is at, with its loss.
+struct Point {
+  RobotModel model;
+  RigidTransform base;
+  PointLoss loss;
+};
+
+/// The Huber threshold to use at `point`: fixed, or from the median residual norm.
+Status update_huber_threshold(const LmOptions& options, Span<const Sample> samples, Point* point) {
+  if (options.loss != LmLoss::huber) return Status::ok;
+  if (options.huber_threshold_m > 0.0) {
+    point->loss.huber_threshold_m = options.huber_threshold_m;
+    return Status::ok;
+  }
+  double median_m = 0.0;
+  const Status status = median_residual_norm(point->model, point->base, samples, &median_m);
+  point->loss.huber_threshold_m = kHuberNoiseMultiple * median_m / kMedianNormPerAxisSigma;
+  return status;
+}
+
+/// Largest |cos| between a scaled Jacobian column and the weighted residual.
+double gradient_cosine(const NormalEquations& eq, const FullParams& scale, ParamMask kept) {
+  if (!(eq.weighted_squares_m2 > 0.0)) return 0.0;
+  double largest = 0.0;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(kept, i)) largest = std::fmax(largest, std::fabs(eq.jtwr(i) * scale(i)));
+  }
+  return largest / std::sqrt(eq.weighted_squares_m2);
+}
+
+/// Factors a(kept, kept) = U^T U (plain Cholesky, column-oriented dot products over
+/// contiguous columns). False unless every pivot is positive and finite: the kept block of a
+/// scaled normal matrix is positive definite, damped or identifiable.
+bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f) {
+  f->count = mask_indices(kept, f->index);
+  NormalMatrix& u = f->upper;
+  for (int j = 0; j < f->count; ++j) {
+    const int pj = f->index[j];
+    for (int i = 0; i < j; ++i) {
+      double sum = a(f->index[i], pj);
+      for (int k = 0; k < i; ++k) sum -= u(k, i) * u(k, j);
+      u(i, j) = sum / u(i, i);
+    }
+    double pivot = a(pj, pj);
+    for (int k = 0; k < j; ++k) pivot -= u(k, j) * u(k, j);
+    if (!(pivot > 0.0) || !math::is_finite(pivot)) return false;
+    u(j, j) = std::sqrt(pivot);
+  }
+  return true;
+}
+
+/// x = A^-1 b over the factored parameters (U^T y = b, then U x = y); 0 elsewhere.
+void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x) {
+  const NormalMatrix& u = f.upper;
+  double y[kFullParamCount];
+  for (int i = 0; i < f.count; ++i) {
+    double sum = b(f.index[i]);
+    for (int k = 0; k < i; ++k) sum -= u(k, i) * y[k];
+    y[i] = sum / u(i, i);
+  }
+  x->setZero();
+  for (int i = f.count - 1; i >= 0; --i) {
+    double sum = y[i];
+    for (int k = i + 1; k < f.count; ++k) sum -= u(i, k) * y[k];
+    y[i] = sum / u(i, i);
+    (*x)(f.index[i]) = y[i];
+  }
+}
+
+/// diag(A^-1) over the factored parameters, 0 elsewhere: A^-1 = W W^T with W = U^-1 (upper),
+/// built in *scratch.
+void cholesky_inverse_diagonal(const KeptCholesky& f, NormalMatrix* scratch, FullParams* diagonal) {
+  const NormalMatrix& u = f.upper;
+  NormalMatrix& w = *scratch;
+  for (int j = 0; j < f.count; ++j) {
+    w(j, j) = 1.0 / u(j, j);
+    for (int i = 0; i < j; ++i) {
+      double sum = 0.0;
+      for (int k = i; k < j; ++k) sum += w(i, k) * u(k, j);
+      w(i, j) = -sum / u(j, j);
+    }
+  }
+  diagonal->setZero();
+  for (int i = 0; i < f.count; ++i) {
+    double sum = 0.0;
+    for (int k = i; k < f.count; ++k) sum += w(i, k) * w(i, k);
+    (*diagonal)(f.index[i]) = sum;
+  }
+}
+
+/// Solves (D H D + damping I) step_s = -D g over the kept parameters, with D H D already in
+/// ws->system (damped in place); returns the step in parameter units (D step_s), 0 outside
+/// `kept`. False when the system cannot be solved.
+bool solve_step(LmWorkspace* ws, const NormalEquations& eq, const FullParams& scale, ParamMask kept, double damping,
+                FullParams* step, FullParams* scaled_step) {
+  FullParams rhs = FullParams::Zero();
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (!mask_has(kept, i)) continue;
+    ws->system(i, i) += damping;
+    rhs(i) = -eq.jtwr(i) * scale(i);
+  }
+  if (!cholesky_factor(ws->system, kept, &ws->factorization)) return false;
+  cholesky_solve(ws->factorization, rhs, scaled_step);
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (!mask_has(kept, i)) (*scaled_step)(i) = 0.0;
+    (*step)(i) = (*scaled_step)(i) * scale(i);
+  }
+  return all_finite(*step);
+}
+
+/// x^T S x over the kept parameters, S the undamped scaled normal matrix.
+double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, ParamMask kept, const FullParams& x) {
+  int index[kFullParamCount];
+  const int count = mask_indices(kept, index);
+  double sum = 0.0;
+  for (int jb = 0; jb < count; ++jb) {
+    const int b = index[jb];
+    for (int ja = 0; ja < count; ++ja) {
+      const int a = index[ja];
+      sum += x(a) * jtwj(a, b) * scale(a) * scale(b) * x(b);
+    }
+  }
+  return sum;
+}
+
+/// sigma_p = sqrt(diag(H^-1) * sum w r^2 / (3N - p)) over the kept parameters, from the
+/// normal equations at the final point (Jacobi-scaled for conditioning).
+Status parameter_sigmas(LmWorkspace* ws, const NormalEquations& eq, ParamMask kept, LmResult* result) {
+  FullParams scale;
+  scale_normal_matrix(eq.jtwj, kept, 1.0, &ws->system, &scale);
+  if (!cholesky_factor(ws->system, kept, &ws->factorization)) return Status::singular_system;
+  const int dof = 3 * static_cast<int>(eq.count) - mask_count(kept);
+  const double variance_m2 = eq.weighted_squares_m2 / static_cast<double>(dof);
+  result->residual_sigma_m = std::sqrt(variance_m2);
+  FullParams inverse_diagonal;
+  cholesky_inverse_diagonal(ws->factorization, &ws->system, &inverse_diagonal);
+  result->sigma.setZero();
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(kept, i)) result->sigma(i) = std::sqrt(std::fmax(inverse_diagonal(i), 0.0) * variance_m2) * scale(i);
+  }
+  return all_finite(result->sigma) ? Status::ok : Status::singular_system;
+}
+
+/// Checks every input; fills *free_mask.
+Status validate_inputs(const RobotModel& start_model, const RigidTransform* start_base, Span<const Sample> samples,
+                       const LmOptions& options, ParamMask* free_mask) {
+  if (!options_valid(options)) return Status::invalid_argument;
+  if (samples.empty()) return Status::dataset_empty;
+  *free_mask = lm_param_mask(options.params, options.custom_mask);
+  if (3 * samples.size() <= static_cast<std::size_t>(mask_count(*free_mask))) return Status::too_few_samples;
+  if (!all_finite(to_params(start_model))) return Status::non_finite_input;
+  if (start_base != nullptr && !transform_finite(*start_base)) return Status::non_finite_input;
+  for (const Sample& sample : samples) {
+    if (!all_finite(sample.q_rad) || !all_finite(sample.point_m)) return Status::non_finite_input;
+  }
+  if (!poses_distinct(samples)) return Status::poses_not_distinct;
+  return Status::ok;
+}
+
+/// Fills `storage` with the joint trig of every sample and returns the filled part; empty
+/// when it cannot hold them all.
+Span<const JointTrig> store_joint_trig(Span<const Sample> samples, Span<JointTrig> storage) {
+  if (storage.size() < samples.size()) return {};
+  for (std::size_t i = 0; i < samples.size(); ++i) storage[i] = joint_trig(samples[i].q_rad);
+  return Span<const JointTrig>(storage.data(), samples.size());
+}
+
+double rms_of(double squares_sum_m2, std::size_t count) {
+  return std::sqrt(squares_sum_m2 / static_cast<double>(count));
+}
+
+/// Resets *result in place (`*result = LmResult{}` would build a 3.3 kB temporary on the stack).
+void clear_result(LmResult* result) {
+  result->model = RobotModel{};
+  result->base_to_tracker = RigidTransform{};
+  clear_report(&result->identifiability);
+  result->sigma.setZero();
+  result->loss_sum_m2 = 0.0;
+  result->rms_m = 0.0;
+  result->residual_sigma_m = 0.0;
+  result->huber_threshold_m = 0.0;
+  result->iterations = 0;
+  result->termination = LmTermination::max_iterations;
+}
+
+/// Everything one calibration works with.
+struct Run {
+  const LmOptions& options;
+  Span<const Sample> samples;
+  LmWorkspace* ws;
+  LmResult* result;
+  ParamMask free_mask;
+  ParamMask kept;
+  Point point;
+  Span<const JointTrig> sample_trig;  ///< joint trig of every sample, or empty
+  NormalEquations* current;  ///< normal equations at `point`
+  NormalEquations* trial;    ///< normal equations at the last trial point
+  double damping;
+  double growth;
+  bool reanalysed;  ///< the analysis has been repeated after the first accepted step
+};
+
+/// Normal equations of `at` into *out: over the kept parameters, or, while an analysis is
+/// ahead, over the free ones plus the base translation (the analysis's reference scale, see
+/// analyze_identifiability).
+Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
+  ParamMask columns = run.kept;
+  if (!run.reanalysed) {
+    columns = run.free_mask;
+    for (int axis = 0; axis < 3; ++axis) columns |= param_bit(base_translation_param_index(axis));
+  }
+  return accumulate_normal_equations(at.model, at.base, run.samples, at.loss, out, columns, run.sample_trig);
+}
+
+/// Identifiability analysis of the current normal equations; sets the kept set and the report.
+Status analyse(Run* run) {
+  const Status status =
+      analyze_identifiability(run->current->jtwj, run->free_mask, run->options.identifiability_threshold,
+                              &run->ws->identifiability, &run->result->identifiability);
+  run->kept = run->result->identifiability.kept_mask;
+  return status;
+}
+
+/// Moves to an accepted trial point whose normal equations are in run->trial. Identifiability
+/// is a property of the geometry, and a start on a special configuration (a tool point on the
+/// flange axis hides theta6 and couples joint 5 with it) has ranks the solution does not: so
+/// the analysis made at the start is repeated after the first accepted step, at a generic
+/// point, and that one is reported. Sets *kept_changed when it changed the kept set.
+Status move_to(Run* run, const Point& trial, bool* kept_changed) {
+  run->point = trial;
+  NormalEquations* swap = run->current;
+  run->current = run->trial;
+  run->trial = swap;
+  *kept_changed = false;
+  const double threshold_before_m = run->point.loss.huber_threshold_m;
+  Status status = update_huber_threshold(run->options, run->samples, &run->point);
+  if (status == Status::ok && run->point.loss.huber_threshold_m != threshold_before_m) {
+    status = accumulate(*run, run->point, run->current);  // IRLS weights for the updated scale
+  }
+  if (status != Status::ok || run->reanalysed) return status;
+  const ParamMask before = run->kept;
+  run->reanalysed = true;
+  status = analyse(run);
+  *kept_changed = run->kept != before;
+  return status;
+}
+
+/// One damped Gauss-Newton step from the current point. Accepts it when the loss drops and
+/// adapts the damping (Nielsen). Sets *stop, with the reason, when a convergence test fires
+/// or the accepted point cannot be prepared.
+bool try_step(Run* run, bool* stop, LmTermination* termination) {
+  LmWorkspace* ws = run->ws;
+  const LmOptions& options = run->options;
+  const NormalEquations& eq = *run->current;
+  FullParams scale;
+  FullParams step;
+  FullParams scaled_step;
+  scale_normal_matrix(eq.jtwj, run->kept, 1.0, &ws->system, &scale);
+  *stop = true;
+  if (gradient_cosine(eq, scale, run->kept) <= options.gradient_tolerance) {
+    *termination = LmTermination::gradient;
+    return false;
+  }
+  if (!solve_step(ws, eq, scale, run->kept, run->damping, &step, &scaled_step)) {
+    *stop = false;
+    return false;
+  }
+  const double model_decrease = scaled_quadratic(eq.jtwj, scale, run->kept, scaled_step);
+  if (std::sqrt(model_decrease / static_cast<double>(eq.count)) < options.step_tolerance_m) {
+    *termination = LmTermination::step_size;
+    return false;
+  }
+  *stop = false;
+  // The trial's normal equations are summed right away: steps are nearly always accepted,
+  // and then they are the next iteration's (a separate cost pass would be wasted).
+  Point trial = run->point;
+  apply_full_increment(step, &trial.model, &trial.base);
+  const Status status = accumulate(*run, trial, run->trial);
+  // Predicted decrease of sum w|r + J d|^2: d^T S d + 2 lambda |d_s|^2 (scaled units).
+  const double predicted = model_decrease + 2.0 * run->damping * scaled_step.squaredNorm();
+  const double actual = eq.loss_sum_m2 - run->trial->loss_sum_m2;
+  const double gain = status == Status::ok && predicted > 0.0 ? actual / predicted : -1.0;
+  if (!(gain > 0.0)) return false;
+  const double cube = 2.0 * gain - 1.0;
+  run->damping *= std::fmax(1.0 / 3.0, 1.0 - cube * cube * cube);
+  run->growth = 2.0;
+  const bool small_change = actual <= options.cost_tolerance * eq.loss_sum_m2;
+  bool kept_changed = false;
+  if (move_to(run, trial, &kept_changed) != Status::ok) {
+    *stop = true;  // cannot happen: the same point evaluated finite a moment ago
+    *termination = LmTermination::no_progress;
+  } else if (small_change && !kept_changed) {
+    *stop = true;
+    *termination = LmTermination::cost_change;
+  }
+  return true;
+}
+
+/// The Levenberg-Marquardt iterations until a test fires or the budget is spent. Every
+/// iteration that tried a step is traced and reported to the observer.
+LmTermination iterate(Run* run, TraceBase* trace, LmObserver* observer) {
+  LmResult* result = run->result;
+  while (result->iterations < run->options.max_iterations) {
+    const int iteration = ++result->iterations;
+    bool stop = false;
+    LmTermination termination = LmTermination::no_progress;
+    const double used_damping = run->damping;
+    const bool accepted = try_step(run, &stop, &termination);
+    if (stop && !accepted) return termination;  // converged before stepping: nothing to report
+    if (!accepted) {
+      run->damping *= run->growth;
+      run->growth *= 2.0;
+    }
+    const NormalEquations& eq = *run->current;
+    const double rms_m = rms_of(eq.squares_sum_m2, eq.count);
+    if (trace != nullptr) trace->push(rms_m);
+    const LmIterationInfo info{iteration, rms_m, eq.loss_sum_m2, used_damping, accepted};
+    if (observer != nullptr && !observer->on_iteration(info)) return LmTermination::cancelled;
+    if (stop) return termination;
+    if (run->damping > kMaxDamping) return LmTermination::no_progress;
+  }
+  return LmTermination::max_iterations;
+}
+
+/// Starts a run: base transform, Huber scale, normal equations and identifiability at the
+/// start point.
+Status start(const RigidTransform* start_base_to_tracker, Run* run) {
+  Point& point = run->point;
+  if (start_base_to_tracker != nullptr) {
+    point.base = *start_base_to_tracker;
+  } else {
+    const Status fit = fit_base_to_tracker(point.model, run->samples, &point.base);
+    if (fit != Status::ok) return fit;
+  }
+  Status status = update_huber_threshold(run->options, run->samples, &point);
+  if (status == Status::ok) status = accumulate(*run, point, run->current);
+  if (status != Status::ok) return status;
+  return analyse(run);
+}
+
+Status status_of(LmTermination termination) {
+  switch (termination) {
+    case LmTermination::max_iterations: return Status::not_converged;
+    case LmTermination::cancelled: return Status::solver_cancelled;
+    case LmTermination::cost_change:
+    case LmTermination::step_size:
+    case LmTermination::gradient:
+    case LmTermination::no_progress: break;
+  }
+  return Status::ok;
+}
+
+}  // namespace
+
+const char* lm_termination_name(LmTermination termination) {
+  switch (termination) {
+    case LmTermination::cost_change: return "cost_change";
+    case LmTermination::step_size: return "step_size";
+    case LmTermination::gradient: return "gradient";
+    case LmTermination::no_progress: return "no_progress";
+    case LmTermination::max_iterations: return "max_iterations";
+    case LmTermination::cancelled: break;
+  }
+  return "cancelled";
+}
+
+ParamMask lm_param_mask(LmParamSet set, ParamMask custom) {
+  switch (set) {
+    case LmParamSet::full: return kAllParamsMask;
+    case LmParamSet::custom: return custom & kAllParamsMask;
+    case LmParamSet::paper6: break;
+  }
+  ParamMask mask = param_bit(model_param_index(0, DhField::d)) | param_bit(model_param_index(1, DhField::a)) |
+                   param_bit(model_param_index(2, DhField::a)) | param_bit(model_param_index(3, DhField::d)) |
+                   param_bit(model_param_index(4, DhField::d)) | param_bit(model_param_index(5, DhField::d));
+  for (int i = 0; i < kBaseParamCount; ++i) mask |= param_bit(kModelParamCount + i);
+  return mask;
+}
+
+Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_base_to_tracker,
+                    Span<const Sample> samples, const LmOptions& options, LmWorkspace* workspace, LmResult* result,
+                    TraceBase* trace, LmObserver* observer) {
+  ParamMask free_mask = 0;
+  Status status = validate_inputs(start_model, start_base_to_tracker, samples, options, &free_mask);
+  if (status != Status::ok) return status;
+  clear_result(result);
+  Run run{options, samples, workspace, result, free_mask, 0, Point{start_model, RigidTransform{}, PointLoss{}},
+          store_joint_trig(samples, workspace->joint_trig), &workspace->normal, &workspace->trial,
+          options.initial_damping, 2.0, false};
+  status = start(start_base_to_tracker, &run);
+  if (status != Status::ok) return status;
+  if (trace != nullptr) trace->push(rms_of(run.current->squares_sum_m2, samples.size()));
+  result->termination = iterate(&run, trace, observer);
+  result->model = run.point.model;
+  result->base_to_tracker = run.point.base;
+  result->loss_sum_m2 = run.current->loss_sum_m2;
+  result->rms_m = rms_of(run.current->squares_sum_m2, samples.size());
+  result->huber_threshold_m = run.point.loss.huber_threshold_m;
+  status = parameter_sigmas(workspace, *run.current, run.kept, result);
+  if (status != Status::ok) return status;
+  return status_of(result->termination);
+}
+
+}  // namespace hivecal

@@ -1,0 +1,461 @@
+#include "hivecal/solve/normal_equations.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "hivecal/core/math.hpp"
+#include "model/kinematics_detail.hpp"
+#include "core/lanes.hpp"
+
+namespace hivecal {
+namespace {
+
+Vec3 point_residual(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
+                   const Sample& sample) {
+  return base_to_tracker.apply(fk_tool_point(model, trig, sample.q_rad)) - sample.point_m;
+}
+
+/// The parameters of a mask as a list of indices, increasing, and where each of the 33
+/// columns sits in a compact row: the listed ones at 0..count-1 in order, the others after
+/// them (scratch that the normal-equation update never reads).
+struct IndexList {
+  int index[kFullParamCount];
+  int slot[kFullParamCount];
+  int count = 0;
+};
+
+IndexList indices_of(ParamMask mask) {
+  IndexList list;
+  list.count = mask_indices(mask, list.index);
+  int unlisted = list.count;
+  for (int k = 0; k < list.count; ++k) list.slot[list.index[k]] = k;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (!mask_has(mask, i)) list.slot[i] = unlisted++;
+  }
+  return list;
+}
+
+/// Samples whose Jacobian rows are summed into the normal matrix together: each entry is
+/// then loaded and stored once per batch instead of once per sample (memory traffic, not
+/// arithmetic, bounds this update). 2 samples keep the scratch at 1.6 kB of stack.
+constexpr int kBatchSamples = 2;
+constexpr int kBatchRows = 3 * kBatchSamples;
+
+/// Samples whose Jacobian rows one kernel call writes (one per double lane).
+constexpr int kGroupSamples = detail::kJacobianLanes;
+#ifdef HIVECAL_WIDE_LANES
+constexpr int kWideGroupSamples = detail::kWideJacobianLanes;
+/// Samples the row buffer holds: a wide group, flushed as batches of kBatchSamples.
+constexpr int kHeldSamples = kWideGroupSamples;
+#else
+constexpr int kHeldSamples = kBatchSamples;
+#endif
+static_assert(kBatchSamples % kGroupSamples == 0 && kHeldSamples % kBatchSamples == 0,
+              "groups and batches tile the row buffer");
+
+/// Jacobian rows of a few samples over the listed columns, with their weights and residuals.
+struct RowBatch {
+  double rows[3 * kHeldSamples][kFullParamCount];  ///< local Jacobian rows, compact column order
+  double weight[3 * kHeldSamples] = {};            ///< IRLS weight of each row's sample
+  double residual_m[3 * kHeldSamples] = {};        ///< residual component of each row (base frame) [m]
+  int samples = 0;                                 ///< samples held
+};
+
+/// The Jacobian kernel for kWidth samples at once (detail::tool_point_jacobian_rows and its
+/// AVX2 form).
+template <std::size_t kWidth>
+void kernel_rows(const RobotModel& model, const ModelTrig& trig, const JointTrig* const (&lane_trig)[kWidth],
+                 const detail::JacobianRowsTarget (&target)[kWidth], Vec3 (&point_m)[kWidth]) {
+#ifdef HIVECAL_WIDE_LANES
+  if constexpr (kWidth == static_cast<std::size_t>(kWideGroupSamples)) {
+    detail::tool_point_jacobian_rows_wide(model, trig, lane_trig, target, point_m);
+    return;
+  }
+#endif
+  if constexpr (kWidth == static_cast<std::size_t>(kGroupSamples)) detail::tool_point_jacobian_rows(model, trig, lane_trig, target, point_m);
+}
+
+/// Writes the rows of the local Jacobian [J_tool | -skew(p) | I] of `count` samples (1 ..
+/// kWidth) at the columns' slots, sample k at rows 3k .. 3k+2, and their residuals rotated
+/// into the base frame, R^T r [m]. Lanes beyond `count` repeat the last sample into their
+/// rows (which must exist) as scratch.
+template <std::size_t kWidth>
+void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
+              const Sample* const* sample, const JointTrig* const* sample_trig, int count, const IndexList& columns,
+              double (*rows)[kFullParamCount], Vec3* residual_m) {
+  const JointTrig* lane_trig[kWidth];
+  detail::JacobianRowsTarget target[kWidth];
+  for (int k = 0; k < static_cast<int>(kWidth); ++k) {
+    lane_trig[k] = sample_trig[k < count ? k : count - 1];
+    double(*lane_rows)[kFullParamCount] = rows + 3 * k;
+    target[k] = {{lane_rows[0], lane_rows[1], lane_rows[2]}, columns.slot};
+  }
+  Vec3 point_m[kWidth];
+  kernel_rows<kWidth>(model, trig, lane_trig, target, point_m);
+  // d(Exp(w) p)/dw_k at w = 0 is e_k x p; the translation increment is along the base axes.
+  const int* rotation_slot = columns.slot + base_rotation_param_index(0);
+  const int* translation_slot = columns.slot + base_translation_param_index(0);
+  for (int k = 0; k < count; ++k) {
+    const Vec3& p = point_m[k];
+    const double moment[3][3] = {{0.0, -p.z(), p.y()}, {p.z(), 0.0, -p.x()}, {-p.y(), p.x(), 0.0}};  // e_a x p
+    for (int r = 0; r < 3; ++r) {
+      for (int a = 0; a < 3; ++a) {
+        rows[3 * k + r][rotation_slot[a]] = moment[a][r];
+        rows[3 * k + r][translation_slot[a]] = r == a ? 1.0 : 0.0;
+      }
+    }
+    residual_m[k] = base_to_tracker.rotation.transpose() * (base_to_tracker.apply(p) - sample[k]->point_m);
+  }
+}
+
+/// column[k] += sum_j rows[j][k] * weight[j] for k in [0, count): each sum takes the rows in
+/// order, sizeof(Lane)/8 entries at a time, then single ones (the same bits at any lane
+/// width). The sum starts from the first product, not from 0 + it: they differ only in the
+/// sign of a zero, and the column, which starts at +0, never becomes -0 under addition.
+/// The last full lane may run past `count` (up to kFullParamCount): the entries below the
+/// diagonal it writes are scratch, overwritten by expand_compact's mirror, and the rows it
+/// reads there are initialised (every kernel call writes all 33 slots of all its lanes' rows,
+/// and wider lanes come with kGroupSamples == kBatchSamples).
+template <class Lane, std::size_t kRows>
+__attribute__((always_inline)) inline void add_weighted_rows(const double* const (&rows)[kRows],
+                                                             const double (&weight)[kRows], int count,
+                                                             double* column) {
+  constexpr int kWidth = static_cast<int>(sizeof(Lane) / sizeof(double));
+  int k = 0;
+  for (; k < count && k + kWidth <= kFullParamCount; k += kWidth) {
+    Lane sum;
+    lanes::load_any(rows[0] + k, &sum);
+    sum *= weight[0];
+    for (std::size_t j = 1; j < kRows; ++j) {
+      Lane row;
+      lanes::load_any(rows[j] + k, &row);
+      sum += row * weight[j];
+    }
+    Lane total;
+    lanes::load_any(column + k, &total);
+    total += sum;
+    lanes::store_any(column + k, total);
+  }
+  for (; k < count; ++k) {
+    double sum = rows[0][k] * weight[0];
+    for (std::size_t j = 1; j < kRows; ++j) sum += rows[j][k] * weight[j];
+    column[k] += sum;
+  }
+}
+
+/// eq += sum over the batch of w J^T J and w J^T r, in compact coordinates (entry (k, l) for
+/// columns index[k], index[l]; upper triangle), one contiguous column at a time. Unused rows
+/// are zero, which adds exact zeros. The base-translation columns (the last ones of the list,
+/// identity blocks of J) are 1 on their axis' row and 0 elsewhere: their entries only take
+/// that row's products; the base-rotation columns e_k x p are exactly 0 on row k: their
+/// entries skip that row. The same sums without exact zeros, so the same bits.
+template <class Lane>
+__attribute__((always_inline)) inline void flush_batch_columns(RowBatch* batch, int first_sample,
+                                                               const IndexList& columns, NormalEquations* eq) {
+  const int count = columns.count;
+  const int held = std::min(kBatchSamples, batch->samples - first_sample);
+  double(*rows)[kFullParamCount] = batch->rows + 3 * first_sample;
+  double* weight = batch->weight + 3 * first_sample;
+  double* residual_m = batch->residual_m + 3 * first_sample;
+  for (int j = 3 * held; j < kBatchRows; ++j) {
+    for (int k = 0; k < count; ++k) rows[j][k] = 0.0;
+    weight[j] = 0.0;
+    residual_m[j] = 0.0;
+  }
+  const double* all_rows[kBatchRows];
+  for (int j = 0; j < kBatchRows; ++j) all_rows[j] = rows[j];
+  double* compact = eq->jtwj.data();
+  for (int l = 0; l < count; ++l) {
+    double w[kBatchRows];
+    double gradient = 0.0;
+    for (int j = 0; j < kBatchRows; ++j) {
+      w[j] = weight[j] * rows[j][l];
+      gradient += w[j] * residual_m[j];
+    }
+    eq->jtwr(l) += gradient;
+    double* column = compact + l * kFullParamCount;
+    const int parameter = columns.index[l];
+    if (parameter >= base_translation_param_index(0)) {  // e_axis: one row per sample
+      const int axis = parameter - base_translation_param_index(0);
+      const double* axis_rows[kBatchSamples];
+      double axis_weights[kBatchSamples];
+      for (int s = 0; s < kBatchSamples; ++s) {
+        axis_rows[s] = rows[3 * s + axis];
+        axis_weights[s] = w[3 * s + axis];
+      }
+      add_weighted_rows<Lane>(axis_rows, axis_weights, l + 1, column);
+    } else if (parameter >= base_rotation_param_index(0)) {  // e_axis x p: 0 on the axis' row
+      const int axis = parameter - base_rotation_param_index(0);
+      const double* other_rows[2 * kBatchSamples];
+      double other_weights[2 * kBatchSamples];
+      int n = 0;
+      for (int s = 0; s < kBatchSamples; ++s) {
+        for (int r = 0; r < 3; ++r) {
+          if (r == axis) continue;
+          other_rows[n] = rows[3 * s + r];
+          other_weights[n++] = w[3 * s + r];
+        }
+      }
+      add_weighted_rows<Lane>(other_rows, other_weights, l + 1, column);
+    } else {
+      add_weighted_rows<Lane>(all_rows, w, l + 1, column);
+    }
+  }
+}
+
+/// Flushes every sample held, kBatchSamples at a time in order (the sums are those of
+/// flushing each batch as it fills), and empties the buffer.
+template <class Lane>
+__attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const IndexList& columns,
+                                                         NormalEquations* eq) {
+  for (int first = 0; first < batch->samples; first += kBatchSamples) {
+    flush_batch_columns<Lane>(batch, first, columns, eq);
+  }
+  batch->samples = 0;
+}
+
+void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
+  flush_columns<lanes::Lane>(batch, columns, eq);
+}
+
+#ifdef HIVECAL_WIDE_LANES
+/// flush on 4-double lanes, for CPUs with AVX2 (lanes::wide_lanes_available).
+__attribute__((target("avx2"))) void flush_wide(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
+  flush_columns<lanes::WideLane>(batch, columns, eq);
+}
+#endif
+
+/// The flush this CPU runs fastest; all give the same bits.
+using FlushFunction = void (*)(RowBatch*, const IndexList&, NormalEquations*);
+FlushFunction fastest_flush() {
+#ifdef HIVECAL_WIDE_LANES
+  if (lanes::wide_lanes_available()) return flush_wide;
+#endif
+  return flush;
+}
+
+/// Moves the compact sums to their parameter positions and mirrors the upper triangle.
+/// In place: a compact entry (k, l) goes to (index[k], index[l]) with index[k] >= k, so
+/// walking down from the last one never overwrites an entry still to be moved.
+void expand_compact(const IndexList& columns, NormalEquations* eq) {
+  NormalMatrix& h = eq->jtwj;
+  for (int l = columns.count - 1; l >= 0; --l) {
+    const int b = columns.index[l];
+    eq->jtwr(b) = eq->jtwr(l);
+    if (b != l) eq->jtwr(l) = 0.0;
+    for (int k = l; k >= 0; --k) {
+      const int a = columns.index[k];
+      const double value = h(k, l);
+      h(k, l) = 0.0;
+      h(a, b) = value;
+    }
+  }
+  for (int b = 0; b < kFullParamCount; ++b)
+    for (int a = b + 1; a < kFullParamCount; ++a) h(a, b) = h(b, a);
+}
+
+// Log-spaced bins of the median histogram: 4 per decade from 1e-12 m to 100 m, plus an
+// underflow bin (index 0, norms below 1e-12 m, zero included) and an overflow bin.
+constexpr int kHistogramBins = 56;
+constexpr int kRefineBins = 64;
+constexpr double kHistogramFloor_m = 1e-12;
+constexpr double kLn10 = 2.302585092994045684;
+constexpr double kBinsPerLnUnit = 4.0 / kLn10;
+
+int histogram_bin(double norm_m) {
+  if (!(norm_m >= kHistogramFloor_m)) return 0;
+  const double position = math::log(norm_m / kHistogramFloor_m) * kBinsPerLnUnit;
+  if (position >= static_cast<double>(kHistogramBins)) return kHistogramBins + 1;
+  return 1 + static_cast<int>(position);
+}
+
+double histogram_bin_lower_m(int bin) {
+  return kHistogramFloor_m * math::exp(static_cast<double>(bin - 1) / kBinsPerLnUnit);
+}
+
+}  // namespace
+
+Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                             FullJacobian* local_jacobian) {
+  double rows[3 * kGroupSamples][kFullParamCount];
+  const Sample* const samples[1] = {&sample};
+  const JointTrig q_trig = joint_trig(sample.q_rad);
+  const JointTrig* const trig_of[1] = {&q_trig};
+  Vec3 local_residual_m;
+  add_rows<static_cast<std::size_t>(kGroupSamples)>(model, model_trig(model), base_to_tracker, samples, trig_of, 1, indices_of(kAllParamsMask),
+                          rows, &local_residual_m);
+  for (int c = 0; c < kFullParamCount; ++c)
+    for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
+  return local_residual_m;
+}
+
+Vec3 full_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                            FullJacobian* jacobian) {
+  FullJacobian local;
+  const Vec3 local_residual_m = local_residual_jacobian(model, base_to_tracker, sample, &local);
+  *jacobian = base_to_tracker.rotation * local;
+  return base_to_tracker.rotation * local_residual_m;
+}
+
+void scale_normal_matrix(const NormalMatrix& jtwj, ParamMask mask, double outside_diagonal, NormalMatrix* scaled,
+                         FullParams* scale) {
+  for (int i = 0; i < kFullParamCount; ++i) (*scale)(i) = mask_has(mask, i) ? 1.0 / std::sqrt(jtwj(i, i)) : 1.0;
+  scaled->setZero();
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (!mask_has(mask, i)) (*scaled)(i, i) = outside_diagonal;
+  }
+  int index[kFullParamCount];
+  const int count = mask_indices(mask, index);
+  for (int jb = 0; jb < count; ++jb) {
+    const int b = index[jb];
+    for (int ja = 0; ja < count; ++ja) {
+      const int a = index[ja];
+      (*scaled)(a, b) = jtwj(a, b) * (*scale)(a) * (*scale)(b);
+    }
+  }
+}
+
+double PointLoss::rho(double norm_m) const {
+  const double k = huber_threshold_m;
+  if (k <= 0.0 || norm_m <= k) return norm_m * norm_m;
+  return 2.0 * k * norm_m - k * k;
+}
+
+double PointLoss::weight(double norm_m) const {
+  const double k = huber_threshold_m;
+  if (k <= 0.0 || norm_m <= k) return 1.0;
+  return k / norm_m;
+}
+
+namespace {
+
+/// Appends samples [first, first + kWidth) (fewer at the end) to the row buffer, which has
+/// room for them, with their weights, and adds their losses to *eq in sample order.
+template <std::size_t kWidth>
+void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
+               Span<const Sample> samples, Span<const JointTrig> stored_trig, std::size_t first,
+               const PointLoss& loss, const IndexList& list, RowBatch* batch, NormalEquations* eq) {
+  const int count = static_cast<int>(std::min<std::size_t>(kWidth, samples.size() - first));
+  const Sample* group[kWidth];
+  JointTrig computed[kWidth];
+  const JointTrig* group_trig[kWidth];
+  for (int k = 0; k < count; ++k) {
+    const std::size_t i = first + static_cast<std::size_t>(k);
+    group[k] = &samples[i];
+    if (stored_trig.empty()) computed[k] = joint_trig(samples[i].q_rad);
+    group_trig[k] = stored_trig.empty() ? &computed[k] : &stored_trig[i];
+  }
+  Vec3 residual_m[kWidth];
+  add_rows<kWidth>(model, trig, base_to_tracker, group, group_trig, count, list, batch->rows + 3 * batch->samples,
+                   residual_m);
+  for (int k = 0; k < count; ++k) {
+    const double squared = residual_m[k].squaredNorm();
+    const double norm_m = std::sqrt(squared);
+    const double weight = loss.weight(norm_m);
+    const int first_row = 3 * batch->samples;
+    for (int r = 0; r < 3; ++r) {
+      batch->weight[first_row + r] = weight;
+      batch->residual_m[first_row + r] = residual_m[k](r);
+    }
+    ++batch->samples;
+    eq->loss_sum_m2 += loss.rho(norm_m);
+    eq->weighted_squares_m2 += weight * squared;
+    eq->squares_sum_m2 += squared;
+  }
+}
+
+}  // namespace
+
+Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
+                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
+                                   ParamMask columns, Span<const JointTrig> sample_trig) {
+  if (samples.empty()) return Status::dataset_empty;
+  NormalEquations& eq = *out;
+  eq.jtwj.setZero();
+  eq.jtwr.setZero();
+  eq.loss_sum_m2 = 0.0;
+  eq.weighted_squares_m2 = 0.0;
+  eq.squares_sum_m2 = 0.0;
+  eq.count = samples.size();
+  const IndexList list = indices_of(columns);
+  const ModelTrig trig = model_trig(model);
+  const FlushFunction flush_batch = fastest_flush();
+  RowBatch batch;
+  const Span<const JointTrig> stored = sample_trig.size() >= samples.size() ? sample_trig : Span<const JointTrig>{};
+  std::size_t first = 0;
+#ifdef HIVECAL_WIDE_LANES
+  if (lanes::wide_lanes_available()) {
+    for (; first < samples.size(); first += kWideGroupSamples) {
+      add_group<static_cast<std::size_t>(kWideGroupSamples)>(model, trig, base_to_tracker, samples, stored, first, loss, list, &batch, &eq);
+      if (batch.samples == kHeldSamples) flush_batch(&batch, list, &eq);
+    }
+  }
+#endif
+  for (; first < samples.size(); first += kGroupSamples) {
+    add_group<static_cast<std::size_t>(kGroupSamples)>(model, trig, base_to_tracker, samples, stored, first, loss, list, &batch, &eq);
+    if (batch.samples == kHeldSamples) flush_batch(&batch, list, &eq);
+  }
+  if (batch.samples > 0) flush_batch(&batch, list, &eq);
+  expand_compact(list, &eq);
+  // A NaN or Inf anywhere in J or r reaches the diagonal, the gradient or the loss.
+  if (!math::is_finite(eq.loss_sum_m2) || !all_finite(eq.jtwr) || !all_finite(eq.jtwj.diagonal())) {
+    return Status::non_finite_input;
+  }
+  return Status::ok;
+}
+
+Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_to_tracker,
+                           Span<const Sample> samples, const PointLoss& loss, double* loss_sum_m2,
+                           double* squares_sum_m2) {
+  if (samples.empty()) return Status::dataset_empty;
+  const ModelTrig trig = model_trig(model);
+  double loss_sum = 0.0;
+  double squares = 0.0;
+  for (const Sample& sample : samples) {
+    const double squared = point_residual(model, trig, base_to_tracker, sample).squaredNorm();
+    loss_sum += loss.rho(std::sqrt(squared));
+    squares += squared;
+  }
+  if (!math::is_finite(loss_sum) || !math::is_finite(squares)) return Status::non_finite_input;
+  *loss_sum_m2 = loss_sum;
+  *squares_sum_m2 = squares;
+  return Status::ok;
+}
+
+Status median_residual_norm(const RobotModel& model, const RigidTransform& base_to_tracker,
+                            Span<const Sample> samples, double* median_m) {
+  if (samples.empty()) return Status::dataset_empty;
+  const ModelTrig trig = model_trig(model);
+  std::size_t counts[kHistogramBins + 2] = {};
+  for (const Sample& sample : samples) {
+    const double norm_m = point_residual(model, trig, base_to_tracker, sample).norm();
+    if (!math::is_finite(norm_m)) return Status::non_finite_input;
+    ++counts[histogram_bin(norm_m)];
+  }
+  const std::size_t rank = (samples.size() - 1) / 2;  // lower median, 0-based
+  std::size_t below = 0;
+  int bin = 0;
+  while (below + counts[bin] <= rank) below += counts[bin++];
+  if (bin == 0) {  // at or below the floor: report the floor
+    *median_m = kHistogramFloor_m;
+    return Status::ok;
+  }
+  const double lower_m = histogram_bin_lower_m(bin);
+  // The overflow bin has no upper edge: split [100 m, 10 * 100 m) and clamp into it.
+  const double upper_m = bin <= kHistogramBins ? histogram_bin_lower_m(bin + 1) : 10.0 * lower_m;
+  std::size_t refined[kRefineBins] = {};
+  for (const Sample& sample : samples) {
+    const double norm_m = point_residual(model, trig, base_to_tracker, sample).norm();
+    if (histogram_bin(norm_m) != bin) continue;
+    const double position = (norm_m - lower_m) / (upper_m - lower_m) * kRefineBins;
+    int sub = position <= 0.0 ? 0 : static_cast<int>(position);
+    if (sub >= kRefineBins) sub = kRefineBins - 1;
+    ++refined[sub];
+  }
+  int sub = 0;
+  while (sub < kRefineBins - 1 && below + refined[sub] <= rank) below += refined[sub++];
+  *median_m = lower_m + (static_cast<double>(sub) + 0.5) / kRefineBins * (upper_m - lower_m);
+  return Status::ok;
+}
+
+}  // namespace hivecal

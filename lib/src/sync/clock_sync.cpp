@@ -1,0 +1,168 @@
+#include "hivecal/sync/clock_sync.hpp"
+
+#include <cmath>
+
+#include "sync/clock_detail.hpp"
+#include "sync/stream_util.hpp"
+
+namespace hivecal {
+
+ClockSyncConfig make_clock_sync_config(const RobotModel& speed_model) {
+  ClockSyncConfig config;
+  config.speed_model = speed_model;
+  return config;
+}
+
+ClockEstimatorBase::ClockEstimatorBase(const ClockSyncConfig& config, double* robot_knots_m,
+                                       std::size_t robot_capacity, ClockTrackerKnot* tracker_knots,
+                                       std::size_t tracker_capacity, double* scratch,
+                                       std::size_t scratch_capacity)
+    : config_(config),
+      robot_knots_m_(robot_knots_m),
+      robot_capacity_(robot_capacity),
+      tracker_knots_(tracker_knots),
+      tracker_capacity_(tracker_capacity),
+      scratch_(scratch),
+      scratch_capacity_(scratch_capacity) {}
+
+void ClockEstimatorBase::reset() {
+  stats_ = ClockProfileStats();
+  robot_started_ = false;
+  tracker_started_ = false;
+}
+
+void ClockEstimatorBase::reset(const ClockSyncConfig& config) {
+  reset();
+  config_ = config;
+}
+
+bool ClockEstimatorBase::config_ok() const {
+  const ClockSyncConfig& c = config_;
+  return c.knot_interval_us > 0 && c.coarse_step_us >= 2 * c.knot_interval_us &&
+         c.coarse_step_us % c.knot_interval_us == 0 && c.max_chord_interval_us > 0 && c.max_drift >= 0.0 &&
+         c.max_drift < 0.01 && c.min_correlation > 0.0 && c.min_correlation <= 1.0 &&
+         c.max_runner_up_ratio > 0.0 && c.max_iterations > 0 && c.chord_span_points > 0 &&
+         c.gain_block_us > 0;
+}
+
+void ClockEstimatorBase::push_robot(const JointStateRecord& record) {
+  ++stats_.robot_records;
+  const JointVector q = detail::joints_of(record);
+  if (!all_finite(q) || (robot_started_ && record.timestamp_us <= robot_last_us_)) {
+    ++stats_.robot_rejected;
+    return;
+  }
+  const Vec3 point = fk_tool_point(config_.speed_model, q);
+  if (!robot_started_) {
+    robot_started_ = true;
+    robot_t0_us_ = record.timestamp_us;
+    robot_last_s_m_ = 0.0;
+    if (robot_capacity_ > 0) robot_knots_m_[stats_.robot_knots++] = 0.0;
+  } else {
+    const std::uint64_t dt_us = record.timestamp_us - robot_last_us_;
+    const bool gap = dt_us > config_.max_robot_gap_us;
+    if (gap) ++stats_.robot_gaps;
+    const double s_m = robot_last_s_m_ + (point - robot_last_point_m_).norm();
+    // Knots falling in (last, now]: linear in time; unknown across a gap.
+    while (stats_.robot_knots < robot_capacity_) {
+      const std::uint64_t knot_us =
+          robot_t0_us_ + static_cast<std::uint64_t>(stats_.robot_knots) * config_.knot_interval_us;
+      if (knot_us > record.timestamp_us) break;
+      const double u = static_cast<double>(knot_us - robot_last_us_) / static_cast<double>(dt_us);
+      robot_knots_m_[stats_.robot_knots++] = gap ? detail::kUnknown : robot_last_s_m_ + u * (s_m - robot_last_s_m_);
+    }
+    if (stats_.robot_knots == robot_capacity_) ++stats_.robot_beyond_capacity;
+    robot_last_s_m_ = s_m;
+  }
+  robot_last_us_ = record.timestamp_us;
+  robot_last_point_m_ = point;
+}
+
+void ClockEstimatorBase::push_tracker(const TrackerPointRecord& record) {
+  ++stats_.tracker_records;
+  const Vec3 point = detail::point_of(record);
+  if (!record.is_valid() || !all_finite(point)) {
+    ++stats_.tracker_not_valid;
+    return;
+  }
+  if (tracker_started_ && record.timestamp_us <= tracker_last_us_) {
+    ++stats_.tracker_rejected;
+    return;
+  }
+  if (!tracker_started_) {
+    tracker_started_ = true;
+    tracker_t0_us_ = record.timestamp_us;
+    tracker_last_s_m_ = 0.0;
+  } else {
+    tracker_last_s_m_ += (point - tracker_last_point_m_).norm();
+  }
+  if (stats_.tracker_points < tracker_capacity_) {
+    tracker_knots_[stats_.tracker_points++] =
+        ClockTrackerKnot{static_cast<double>(record.timestamp_us - tracker_t0_us_), tracker_last_s_m_};
+  } else {
+    ++stats_.tracker_beyond_capacity;
+  }
+  tracker_last_us_ = record.timestamp_us;
+  tracker_last_point_m_ = point;
+}
+
+namespace {
+
+/// The public ClockFit of a fine fit, on the absolute clocks (robot_t0_us, tracker_t0_us: the
+/// first record of each profile).
+ClockFit to_clock_fit(const detail::FineFit& fine, const detail::CoarseLag& coarse, std::uint64_t robot_t0_us,
+                      std::uint64_t tracker_t0_us_abs) {
+  // Re-express the offset at the tracker time where it is uncorrelated with the drift.
+  const double shift_us = fine.var_drift > 0.0 ? -fine.cov_lag_drift_us / fine.var_drift : 0.0;
+  const double var_ref_us2 = fine.var_lag_us2 + fine.cov_lag_drift_us * shift_us;
+  const double reference_rel_us = fine.estimate.reference_us + shift_us;
+  const double tracker_t0_us = detail::us_to_double(tracker_t0_us_abs);
+  ClockFit fit;
+  fit.drift = fine.estimate.drift;
+  fit.reference_tracker_us = tracker_t0_us + reference_rel_us;
+  fit.offset_at_reference_us = detail::us_to_double(robot_t0_us) - tracker_t0_us +
+                               fine.estimate.robot_rel_us(reference_rel_us) - reference_rel_us;
+  fit.sigma_offset_at_reference_us = std::sqrt(var_ref_us2 > 0.0 ? var_ref_us2 : 0.0);
+  fit.sigma_drift = std::sqrt(fine.var_drift);
+  fit.offset_us = fit.offset_at_reference_us - fit.drift * fit.reference_tracker_us;
+  fit.sigma_offset_us = std::sqrt(fit.sigma_offset_at_reference_us * fit.sigma_offset_at_reference_us +
+                                  fit.reference_tracker_us * fit.reference_tracker_us * fine.var_drift);
+  fit.speed_gain = fine.gain;
+  fit.residual_rms_m = fine.residual_rms_m;
+  fit.coarse_correlation = coarse.correlation;
+  fit.runner_up_correlation = coarse.runner_up;
+  fit.chords_used = fine.chords;
+  fit.edge_chords = fine.edges;
+  fit.iterations = fine.iterations;
+  return fit;
+}
+
+}  // namespace
+
+Status ClockEstimatorBase::estimate(ClockFit* fit) {
+  if (!config_ok()) return Status::invalid_argument;
+  if (stats_.robot_knots < 4 || stats_.tracker_points < 4) return Status::clock_fit_failed;
+  detail::ClockProfiles view;
+  view.robot_s_m = robot_knots_m_;
+  view.robot_knots = stats_.robot_knots;
+  view.knot_us = static_cast<double>(config_.knot_interval_us);
+  view.tracker = tracker_knots_;
+  view.tracker_points = stats_.tracker_points;
+  view.max_chord_interval_us = static_cast<double>(config_.max_chord_interval_us);
+  view.chord_span = config_.chord_span_points;
+  detail::CoarseLag coarse;
+  const Status coarse_status = detail::coarse_lag(view, config_, scratch_, scratch_capacity_, &coarse);
+  if (coarse_status != Status::ok) return coarse_status;
+  const detail::LagDrift center{coarse.lag_us, 0.0, view.tracker_span_us() / 2.0};
+  detail::FineFit fine;
+  const Status fine_status = detail::fit_lag_drift(view, config_, detail::scan_lag_drift(view, config_, center), &fine);
+  if (fine_status != Status::ok) return fine_status;
+  if (fine.edges < config_.min_edge_chords || std::fabs(fine.estimate.drift) > config_.max_drift ||
+      !(fine.gain > 0.5 && fine.gain < 2.0))
+    return Status::clock_fit_failed;
+  *fit = to_clock_fit(fine, coarse, robot_t0_us_, tracker_t0_us_);
+  return Status::ok;
+}
+
+
+}  // namespace hivecal
