@@ -392,9 +392,9 @@ Revised budgets (issue 13: 64 KiB / 2e9 were below the arithmetic floor of ABC 1
   $(awk -v f="$(cat "$build/footprint-job-insns.txt")" 'BEGIN { printf "%.2f x the budget", f / 4e9 }').
 
 - Dataset<512>: $dataset_bytes bytes; core probe static RAM $((probe_data + probe_bss)) bytes
-  (including a $probe_stack-byte stack + guard) of 65536: $((65536 - probe_data - probe_bss)) bytes left.
+  (including a $probe_stack-byte stack + guard) of 131072: $((131072 - probe_data - probe_bss)) bytes left.
 - Core probe flash $((probe_text + probe_data)) bytes of 131072: $((131072 - probe_text - probe_data)) bytes left.
 - One cost evaluation on 358 training samples: $(cat "$build/footprint-cost358.txt") instructions;
-  2e9 instructions allow $((2000000000 / $(cat "$build/footprint-cost358.txt"))) such evaluations
+  4e9 instructions allow $((4000000000 / $(cat "$build/footprint-cost358.txt"))) such evaluations
   (ABC 150 x 300 = 45000 evaluations would need $((45000 * $(cat "$build/footprint-cost358.txt"))) instructions).
 EOF
