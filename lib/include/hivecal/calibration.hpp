@@ -120,7 +120,7 @@ struct CalibrationResult {
   Span<const CalibrationStage> stage_list() const { return Span<const CalibrationStage>(stages, stage_count); }
   /// The last stage (the job's answer); null when none ran.
   const CalibrationStage* final_stage() const { return stage_count == 0 ? nullptr : &stages[stage_count - 1]; }
-  /// Name of stage k (see calibration_stage_name).
+  /// Name of stage k < stage_count (see calibration_stage_name).
   const char* stage_name(std::size_t k) const {
     return calibration_stage_name(stages[k], k == 0 ? nullptr : &stages[k - 1]);
   }
