@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "hivecal/wire/codec.hpp"
 #include "hivecal/core/random.hpp"
+#include "hivecal/wire/codec.hpp"
 
 namespace {
 

@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "ceres_peer.hpp"
+#include "hivecal/model/metrics.hpp"
 #include "hivecal/solve/cost.hpp"
 #include "hivecal/solve/lm.hpp"
-#include "hivecal/model/metrics.hpp"
 #include "lm_test_data.hpp"
 
 namespace {

@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "hivecal/solve/lm.hpp"
 #include "hivecal/model/metrics.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "lm_test_data.hpp"
 
 namespace {

@@ -2,9 +2,10 @@
 #include <cstdio>
 #include <cstring>
 
-#include "commands.hpp"
-#include "simulate_cmd.hpp"
-#include "stream_commands.hpp"
+#include "hivecal/commands/commands.hpp"
+#include "hivecal/commands/simulate.hpp"
+#include "hivecal/commands/streams.hpp"
+#include "hivecal/port/output_files.hpp"
 
 namespace {
 
@@ -30,8 +31,8 @@ void print_usage(std::FILE* out) {
   std::fprintf(out, "usage: hivecal <command> [options]   (hivecal <command> --help for its options)\n\ncommands:\n");
   for (const Command& c : kCommands) std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
   std::fprintf(out,
-               "\nexit codes: 0 ok, 1 computation failed, 2 bad command line, 3 bad input file,\n"
-               "            4 output could not be written\n");
+               "\nexit codes (every command, docs/cli.md): 0 ok, 1 computation failed,\n"
+               "  2 bad command line or refused paths, 3 bad input, 4 output could not be written\n");
 }
 
 }  // namespace
@@ -40,10 +41,16 @@ int main(int argc, char** argv) {
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
       std::strcmp(argv[1], "help") == 0) {
     print_usage(argc < 2 ? stderr : stdout);
-    return argc < 2 ? hivecal::cli::kExitUsage : hivecal::cli::kExitOk;
+    if (argc < 2) return hivecal::cli::kExitUsage;
+    return hivecal::cli::exit_with("help", hivecal::port::finish_stdout());
   }
   for (const Command& c : kCommands) {
-    if (std::strcmp(argv[1], c.name) == 0) return c.run(argc - 2, argv + 2);
+    if (std::strcmp(argv[1], c.name) != 0) continue;
+    const int code = c.run(argc - 2, argv + 2);
+    // What was printed on stdout must have arrived (e.g. not on a full device).
+    const hivecal::port::Error flushed = hivecal::port::finish_stdout();
+    if (code == hivecal::cli::kExitOk && !flushed.ok()) return hivecal::cli::exit_with(c.name, flushed);
+    return code;
   }
   std::fprintf(stderr, "hivecal: unknown command '%s'\n\n", argv[1]);
   print_usage(stderr);

@@ -1,12 +1,12 @@
-#include "report.hpp"
+#include "report/report.hpp"
 
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 
-#include "svg.hpp"
-#include "text_util.hpp"
+#include "report/svg.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::report {
 namespace {
@@ -185,9 +185,5 @@ std::string render_html(const ReportData& data) {
   return s + "</body>\n</html>\n";
 }
 
-bool write_html_report(const std::string& dir, const ReportData& data, std::string* error) {
-  if (!textio::make_directories(dir, error)) return false;
-  return textio::write_file_atomically(dir + "/index.html", render_html(data), error);
-}
 
 }  // namespace hivecal::report

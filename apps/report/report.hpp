@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/model/metrics.hpp"
 #include "hivecal/core/types.hpp"
+#include "hivecal/model/metrics.hpp"
 
 namespace hivecal::report {
 
@@ -44,7 +44,5 @@ struct ReportData {
 std::string format_tables_text(const ReportData& data);
 /// The whole HTML page (inline SVG, no scripts, no external resources).
 std::string render_html(const ReportData& data);
-/// Creates `dir` if needed and writes dir/index.html atomically; false with a message on failure.
-bool write_html_report(const std::string& dir, const ReportData& data, std::string* error);
 
 }  // namespace hivecal::report

@@ -1,4 +1,4 @@
-#include "svg.hpp"
+#include "report/svg.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -27,7 +27,47 @@ struct Axis {
   double to_px(double v) const { return px_lo + (value(v) - lo) / (hi - lo) * (px_hi - px_lo); }
 };
 
-Axis make_axis(const std::vector<const std::vector<double>*>& data, bool log, double px_lo, double px_hi) {
+/// A "nice" step near `raw`: 1, 2, 2.5 or 5 times a power of ten.
+double nice_step(double raw) {
+  const double power = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
+    if (m * power >= raw * (1.0 - 1e-9)) return m * power;
+  return 10.0 * power;
+}
+
+/// Ticks in axis units (log10 units on a log axis) and the labels they carry.
+struct Ticks {
+  std::vector<double> at;            ///< tick positions in axis units
+  std::vector<std::string> labels;   ///< one label per tick
+  std::string offset;                ///< subtracted from the labels ("" when none), for the axis title
+};
+
+/// Significant digits of a plain decimal label ("231.25" -> 5, "1250" -> 3).
+int significant_digits(const std::string& label) {
+  std::string digits;
+  for (char c : label)
+    if (c >= '0' && c <= '9') digits += c;
+  const std::size_t first = digits.find_first_not_of('0');
+  if (first == std::string::npos) return 1;
+  std::size_t last = digits.size();
+  if (label.find('.') == std::string::npos) last = digits.find_last_not_of('0') + 1;
+  return static_cast<int>(last - first);
+}
+
+/// Label of a linear tick: as few decimals as the step needs, at most three significant digits.
+std::string linear_label(double v, double step) {
+  if (std::fabs(v) < 1e-9 * step) return "0";
+  const double magnitude = std::fabs(v);
+  if (magnitude >= 1e5 || magnitude < 1e-3) return fmt("%.3g", v);
+  const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)) +
+                                       (std::fabs(step / std::pow(10.0, std::floor(std::log10(step))) - 2.5) < 1e-9 ? 1 : 0));
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+Axis make_axis(const std::vector<const std::vector<double>*>& data, bool log, double px_lo, double px_hi,
+               bool from_zero = false) {
   Axis axis;
   axis.log = log;
   axis.px_lo = px_lo;
@@ -46,19 +86,52 @@ Axis make_axis(const std::vector<const std::vector<double>*>& data, bool log, do
     axis.lo = 0.0;
     axis.hi = 1.0;
   }
-  if (axis.hi - axis.lo < 1e-300) {
-    axis.lo -= 0.5;
-    axis.hi += 0.5;
+  if (from_zero && !log) {
+    axis.lo = std::min(axis.lo, 0.0);
+    axis.hi = std::max(axis.hi, 0.0);
   }
-  const double pad = 0.04 * (axis.hi - axis.lo);
-  axis.lo -= pad;
-  axis.hi += pad;
+  if (axis.hi - axis.lo < 1e-300) {
+    axis.lo -= log ? 0.5 : (axis.lo != 0.0 ? 0.1 * std::fabs(axis.lo) : 0.5);
+    axis.hi += log ? 0.5 : (axis.hi != 0.0 ? 0.1 * std::fabs(axis.hi) : 0.5);
+  }
+  if (log) {  // whole decades
+    axis.lo = std::floor(axis.lo + 1e-9);
+    axis.hi = std::ceil(axis.hi - 1e-9);
+    if (axis.hi <= axis.lo) axis.hi = axis.lo + 1.0;
+  } else {  // round ends, on the tick grid
+    const double step = nice_step((axis.hi - axis.lo) / 4.0);
+    axis.lo = std::floor(axis.lo / step + 1e-9) * step;
+    axis.hi = std::ceil(axis.hi / step - 1e-9) * step;
+  }
   return axis;
 }
 
-std::string tick_label(const Axis& axis, double m) {
-  const double v = axis.log ? std::pow(10.0, m) : m;
-  return fmt(std::fabs(v) >= 1e4 || (std::fabs(v) < 1e-2 && v != 0.0) ? "%.3g" : "%.4g", v);
+Ticks ticks_of(const Axis& axis) {
+  Ticks t;
+  if (axis.log) {
+    const int decades = static_cast<int>(std::lround(axis.hi - axis.lo));
+    const int every = std::max(1, decades / 6);
+    for (int d = 0; d <= decades; d += every) {
+      const double e = axis.lo + d;
+      t.at.push_back(e);
+      t.labels.push_back(fmt("%g", std::pow(10.0, e)));
+    }
+    return t;
+  }
+  const double step = nice_step((axis.hi - axis.lo) / 4.0);
+  const auto count = static_cast<int>(std::lround((axis.hi - axis.lo) / step));
+  bool too_long = false;
+  for (int i = 0; i <= count; ++i) {
+    const double v = axis.lo + step * i;
+    t.at.push_back(v);
+    t.labels.push_back(linear_label(v, step));
+    too_long = too_long || significant_digits(t.labels.back()) > 3;
+  }
+  if (too_long) {  // a narrow range far from 0: label the distance from the first tick
+    t.offset = fmt("%.10g", axis.lo);
+    for (int i = 0; i <= count; ++i) t.labels[static_cast<std::size_t>(i)] = linear_label(step * i, step);
+  }
+  return t;
 }
 
 std::string frame(const ChartSpec& spec, const Axis& x, const Axis& y) {
@@ -69,34 +142,42 @@ std::string frame(const ChartSpec& spec, const Axis& x, const Axis& y) {
   const double bottom = y.px_lo;
   s += "<rect x='" + fmt("%.1f", left) + "' y='" + fmt("%.1f", top) + "' width='" + fmt("%.1f", right - left) +
        "' height='" + fmt("%.1f", bottom - top) + "' fill='none' stroke='#444'/>\n";
-  for (int i = 0; i <= 4; ++i) {
-    const double mx = x.lo + (x.hi - x.lo) * i / 4.0;
-    const double px = left + (right - left) * i / 4.0;
-    s += "<text x='" + fmt("%.1f", px) + "' y='" + fmt("%.1f", bottom + 14) + "' text-anchor='middle'>" +
-         tick_label(x, mx) + "</text>\n";
-    const double my = y.lo + (y.hi - y.lo) * i / 4.0;
-    const double py = bottom + (top - bottom) * i / 4.0;
+  const Ticks xt = ticks_of(x);
+  for (std::size_t i = 0; i < xt.at.size(); ++i) {
+    const double px = left + (xt.at[i] - x.lo) / (x.hi - x.lo) * (right - left);
+    s += "<text class='tick' x='" + fmt("%.1f", px) + "' y='" + fmt("%.1f", bottom + 14) + "' text-anchor='middle'>" +
+         xt.labels[i] + "</text>\n";
+  }
+  const Ticks yt = ticks_of(y);
+  for (std::size_t i = 0; i < yt.at.size(); ++i) {
+    const double py = bottom + (yt.at[i] - y.lo) / (y.hi - y.lo) * (top - bottom);
     s += "<line x1='" + fmt("%.1f", left) + "' x2='" + fmt("%.1f", right) + "' y1='" + fmt("%.1f", py) + "' y2='" +
          fmt("%.1f", py) + "' stroke='#ddd'/>\n";
-    s += "<text x='" + fmt("%.1f", left - 4) + "' y='" + fmt("%.1f", py + 4) + "' text-anchor='end'>" +
-         tick_label(y, my) + "</text>\n";
+    s += "<text class='tick' x='" + fmt("%.1f", left - 4) + "' y='" + fmt("%.1f", py + 4) + "' text-anchor='end'>" +
+         yt.labels[i] + "</text>\n";
   }
   s += "<text x='" + fmt("%.1f", (left + right) / 2) + "' y='16' text-anchor='middle' font-weight='bold'>" +
        xml_escape(spec.title) + "</text>\n";
+  const std::string x_title = xt.offset.empty() ? spec.x_label : spec.x_label + " \u2212 " + xt.offset;
+  const std::string y_title = yt.offset.empty() ? spec.y_label : spec.y_label + " \u2212 " + yt.offset;
   s += "<text x='" + fmt("%.1f", (left + right) / 2) + "' y='" + fmt("%.1f", bottom + 30) +
-       "' text-anchor='middle'>" + xml_escape(spec.x_label) + "</text>\n";
+       "' text-anchor='middle'>" + xml_escape(x_title) + "</text>\n";
   s += "<text transform='translate(14," + fmt("%.1f", (top + bottom) / 2) + ") rotate(-90)' text-anchor='middle'>" +
-       xml_escape(spec.y_label) + "</text>\n";
+       xml_escape(y_title) + "</text>\n";
   return s;
 }
 
+/// Legend rows for the non-empty names, each in its series' colour.
 std::string legend(const std::vector<std::string>& names, double x, double y) {
   std::string s;
+  double row = y - 14.0;
   for (std::size_t i = 0; i < names.size(); ++i) {
-    const double row = y + 14.0 * static_cast<double>(i);
+    if (names[i].empty()) continue;
+    row += 14.0;
     s += "<rect x='" + fmt("%.1f", x) + "' y='" + fmt("%.1f", row - 8) + "' width='10' height='10' fill='" +
          kColours[i % 6] + "'/>\n";
-    s += "<text x='" + fmt("%.1f", x + 14) + "' y='" + fmt("%.1f", row + 1) + "'>" + xml_escape(names[i]) + "</text>\n";
+    s += "<text class='legend' x='" + fmt("%.1f", x + 14) + "' y='" + fmt("%.1f", row + 1) + "'>" + xml_escape(names[i]) +
+         "</text>\n";
   }
   return s;
 }
@@ -126,11 +207,10 @@ std::string xml_escape(const std::string& text) {
 std::string svg_chart(const ChartSpec& spec, const std::vector<Series>& series) {
   std::vector<const std::vector<double>*> xs;
   std::vector<const std::vector<double>*> ys;
-  std::vector<std::string> names;
+  std::vector<std::string> names;  // legend: only the series that drew something
   for (const Series& s : series) {
     xs.push_back(&s.x);
     ys.push_back(&s.y);
-    names.push_back(s.name);
   }
   const Axis x = make_axis(xs, false, 70.0, spec.width_px - 130.0);
   const Axis y = make_axis(ys, spec.log_y, spec.height_px - 45.0, 28.0);
@@ -139,8 +219,10 @@ std::string svg_chart(const ChartSpec& spec, const std::vector<Series>& series) 
     const Series& s = series[k];
     const char* colour = kColours[k % 6];
     std::string points;
+    bool drawn = false;
     for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
       if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]) || (spec.log_y && s.y[i] <= 0.0)) continue;
+      drawn = true;
       const double px = x.to_px(s.x[i]);
       const double py = y.to_px(s.y[i]);
       if (s.markers) {
@@ -153,6 +235,8 @@ std::string svg_chart(const ChartSpec& spec, const std::vector<Series>& series) 
     if (!s.markers && !points.empty()) {
       out += "<polyline fill='none' stroke='" + std::string(colour) + "' stroke-width='1.5' points='" + points + "'/>\n";
     }
+    if (drawn) names.push_back(s.name);
+    else names.push_back(std::string());  // keeps the colours of the others
   }
   out += legend(names, spec.width_px - 120.0, 40.0);
   return out + "</svg>\n";
@@ -178,8 +262,8 @@ std::string svg_histogram(const ChartSpec& spec, const std::vector<std::string>&
   }
   const std::vector<double> x_range = {0.0, max_value};
   const std::vector<double> y_range = {0.0, max_count};
-  const Axis x = make_axis({&x_range}, false, 70.0, spec.width_px - 130.0);
-  const Axis y = make_axis({&y_range}, false, spec.height_px - 45.0, 28.0);
+  const Axis x = make_axis({&x_range}, false, 70.0, spec.width_px - 130.0, true);
+  const Axis y = make_axis({&y_range}, false, spec.height_px - 45.0, 28.0, true);
   std::string out = open_svg(spec) + frame(spec, x, y);
   const double bin_width = max_value / bins;
   const double group = static_cast<double>(value_sets.size());

@@ -11,9 +11,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "hivecal/core/random.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/ur_deltas.hpp"
-#include "hivecal/core/random.hpp"
 #include "hivecal/wire/records.hpp"
 
 namespace hivecal::sim {

@@ -1,4 +1,4 @@
-#include "sim_outputs.hpp"
+#include "sim/sim_outputs.hpp"
 
 #include <unistd.h>
 
@@ -8,55 +8,17 @@
 #include <cstring>
 #include <functional>
 
-#include "calibration_json.hpp"
-#include "csv.hpp"
+#include "hivecal/port/output_files.hpp"
 #include "hivecal/wire/codec.hpp"
-#include "json.hpp"
-#include "text_util.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+#include "textio/json.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::sim {
 namespace {
 
 constexpr std::size_t kFlushBytes = 1 << 16;  // streamed files are written in 64 kB pieces
-
-/// A file written through a temporary beside it and renamed by commit().
-class StreamingFile {
- public:
-  StreamingFile(const std::string& path, std::string* error) : path_(path), temp_(path + ".tmp") {
-    file_ = std::fopen(temp_.c_str(), "wb");
-    if (file_ == nullptr) *error = path + ": cannot create a temporary file beside it: " + std::strerror(errno);
-  }
-  ~StreamingFile() {
-    if (file_ != nullptr) {
-      std::fclose(file_);
-      std::remove(temp_.c_str());
-    }
-  }
-  StreamingFile(const StreamingFile&) = delete;
-  StreamingFile& operator=(const StreamingFile&) = delete;
-
-  bool ok() const { return file_ != nullptr; }
-  void write(const void* bytes, std::size_t count) { failed_ = failed_ || std::fwrite(bytes, 1, count, file_) != count; }
-  void write(const std::string& text) { write(text.data(), text.size()); }
-  /// Flushes, fsyncs and renames onto the target.
-  bool commit(std::string* error) {
-    bool good = !failed_ && std::fflush(file_) == 0 && ::fsync(fileno(file_)) == 0;
-    good = std::fclose(file_) == 0 && good;
-    file_ = nullptr;
-    if (!good || std::rename(temp_.c_str(), path_.c_str()) != 0) {
-      *error = path_ + ": write failed: " + std::strerror(errno);
-      std::remove(temp_.c_str());
-      return false;
-    }
-    return true;
-  }
-
- private:
-  std::string path_;
-  std::string temp_;
-  std::FILE* file_ = nullptr;
-  bool failed_ = false;
-};
 
 template <typename Record, typename Encoder>
 bool append_with(const Record& record, Encoder encode, std::vector<std::uint8_t>* bytes) {
@@ -74,11 +36,9 @@ std::string seconds_text(std::uint64_t t_us) {
   return buffer;
 }
 
-/// Streams one device's frames into a capture file.
+/// Streams one device's frames into a capture file; false if a record cannot be encoded.
 template <typename Stream, typename Record>
-bool write_capture(const Session& session, const std::string& path, std::string* error) {
-  StreamingFile file(path, error);
-  if (!file.ok()) return false;
+bool write_capture(const Session& session, port::StagedFile& file) {
   Stream stream(session);
   std::vector<std::uint8_t> bytes;
   bool encoded = append_frame(stream.device_info(), &bytes);
@@ -91,23 +51,17 @@ bool write_capture(const Session& session, const std::string& path, std::string*
     }
   }
   file.write(bytes.data(), bytes.size());
-  if (!encoded) {
-    *error = path + ": a record could not be encoded";
-    return false;
-  }
-  return file.commit(error);
+  return encoded;
 }
 
 /// Streams rows produced by `row(record)` under `header` into a CSV file.
 template <typename Stream, typename Record, typename Row>
-bool write_csv(const Session& session, const std::string& path, const char* header, Row row, std::string* error) {
-  StreamingFile file(path, error);
-  if (!file.ok()) return false;
+bool write_csv(const Session& session, const char* header, Row row, port::StagedFile& file) {
   file.write(std::string(header) + "\n");
   Stream stream(session);
   Record record;
   while (stream.next(&record)) file.write(row(record));
-  return file.commit(error);
+  return true;
 }
 
 std::string robot_row(const JointStateRecord& r) {
@@ -184,31 +138,23 @@ void write_simulation_members(const Session& session, double truth_margin_s, tex
   json.end_object();
 }
 
-bool write_truth_json(const Session& session, const std::string& path, double truth_margin_s, std::string* error) {
+bool write_truth_json(const Session& session, double truth_margin_s, port::StagedFile& out) {
   textio::CalibrationFile file;
   file.robot = session.config().robot_type;
   file.model = session.truth().model;
   file.base_to_tracker = session.truth().base_to_tracker;
-  const std::string text = textio::format_calibration_json(
-      file, [&](textio::JsonWriter& json) { write_simulation_members(session, truth_margin_s, json); });
-  return textio::write_file_atomically(path, text, error);
+  out.write(textio::format_calibration_json(
+      file, [&](textio::JsonWriter& json) { write_simulation_members(session, truth_margin_s, json); }));
+  return true;
 }
 
-bool write_truth_samples(const Session& session, const std::string& path, double margin_s, std::string* error) {
-  StreamingFile file(path, error);
-  if (!file.ok()) return false;
+bool write_truth_samples(const Session& session, double margin_s, port::StagedFile& file) {
   file.write("waypoint,t_tracker,t_robot,q1,q2,q3,q4,q5,q6,x,y,z\n");
   for (const TruthSample& s : truth_samples(session, margin_s)) file.write(truth_sample_row(s));
-  return file.commit(error);
+  return true;
 }
 
 }  // namespace
-
-OutputPaths output_paths_in(const std::string& dir) {
-  const std::string prefix = dir.empty() || dir.back() == '/' ? dir : dir + "/";
-  return OutputPaths{prefix + "robot.cap",  prefix + "tracker.cap", prefix + "robot_joints.csv",
-                     prefix + "tracker.csv", prefix + "truth.json",  prefix + "truth_samples.csv"};
-}
 
 bool append_frame(const JointStateRecord& record, std::vector<std::uint8_t>* bytes) {
   return append_with(record, encode_joint_state, bytes);
@@ -222,21 +168,31 @@ bool append_frame(const DeviceInfoRecord& record, std::vector<std::uint8_t>* byt
   return append_with(record, encode_device_info, bytes);
 }
 
-bool write_outputs(const Session& session, const OutputPaths& paths, double truth_margin_s, std::string* error) {
-  const std::pair<const std::string*, std::function<bool()>> jobs[] = {
-      {&paths.robot_capture, [&] { return write_capture<RobotStream, JointStateRecord>(session, paths.robot_capture, error); }},
-      {&paths.tracker_capture,
-       [&] { return write_capture<TrackerStream, TrackerPointRecord>(session, paths.tracker_capture, error); }},
-      {&paths.robot_csv,
-       [&] { return write_csv<RobotStream, JointStateRecord>(session, paths.robot_csv, "t,q1,q2,q3,q4,q5,q6", robot_row, error); }},
-      {&paths.tracker_csv,
-       [&] { return write_csv<TrackerStream, TrackerPointRecord>(session, paths.tracker_csv, "t,x,y,z,status", tracker_row, error); }},
-      {&paths.truth_json, [&] { return write_truth_json(session, paths.truth_json, truth_margin_s, error); }},
-      {&paths.truth_samples_csv, [&] { return write_truth_samples(session, paths.truth_samples_csv, truth_margin_s, error); }},
+port::Error stage_outputs(const Session& session, bool with_captures, double truth_margin_s, port::OutputSet* outputs,
+                          std::size_t folder) {
+  using Writer = std::function<bool(port::StagedFile&)>;
+  const std::pair<const char*, Writer> jobs[] = {
+      {kRobotCaptureName, [&](port::StagedFile& f) { return write_capture<RobotStream, JointStateRecord>(session, f); }},
+      {kTrackerCaptureName,
+       [&](port::StagedFile& f) { return write_capture<TrackerStream, TrackerPointRecord>(session, f); }},
+      {"robot_joints.csv",
+       [&](port::StagedFile& f) { return write_csv<RobotStream, JointStateRecord>(session, "t,q1,q2,q3,q4,q5,q6", robot_row, f); }},
+      {"tracker.csv",
+       [&](port::StagedFile& f) { return write_csv<TrackerStream, TrackerPointRecord>(session, "t,x,y,z,status", tracker_row, f); }},
+      {"truth.json", [&](port::StagedFile& f) { return write_truth_json(session, truth_margin_s, f); }},
+      {"truth_samples.csv", [&](port::StagedFile& f) { return write_truth_samples(session, truth_margin_s, f); }},
   };
-  for (const auto& [path, job] : jobs)
-    if (!path->empty() && !job()) return false;
-  return true;
+  for (const auto& [name, job] : jobs) {
+    const bool capture = std::string(name) == kRobotCaptureName || std::string(name) == kTrackerCaptureName;
+    if (capture && !with_captures) continue;
+    port::StagedFile* file = nullptr;
+    port::Error error = outputs->stage(folder, name, &file);
+    if (!error.ok()) return error;
+    if (!job(*file)) return port::Error::failure(std::string(name) + ": a record could not be encoded");
+    error = file->finish();
+    if (!error.ok()) return error;
+  }
+  return port::Error{};
 }
 
 }  // namespace hivecal::sim

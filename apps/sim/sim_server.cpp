@@ -1,9 +1,9 @@
-#include "sim_server.hpp"
+#include "sim/sim_server.hpp"
 
 #include <vector>
 
 #include "hivecal/port/byte_source.hpp"
-#include "sim_outputs.hpp"
+#include "sim/sim_outputs.hpp"
 
 namespace hivecal::sim {
 namespace {
@@ -26,10 +26,8 @@ bool send(int fd, const std::vector<std::uint8_t>& frame, std::uint64_t* bytes, 
   return true;
 }
 
-}  // namespace
-
-bool serve_session(const Session& session, const port::PtyPair& robot, const port::PtyPair& tracker,
-                   const ServeOptions& options, const std::atomic<bool>* stop, ServeStats* stats, std::string* error) {
+bool serve_frames(const Session& session, const port::PtyPair& robot, const port::PtyPair& tracker,
+                  const ServeOptions& options, const std::atomic<bool>* stop, ServeStats* stats, std::string* error) {
   RobotStream robot_stream(session);
   TrackerStream tracker_stream(session);
   std::vector<std::uint8_t> frame;
@@ -58,6 +56,15 @@ bool serve_session(const Session& session, const port::PtyPair& robot, const por
     }
   }
   return ok;
+}
+
+}  // namespace
+
+port::Error serve_session(const Session& session, const port::PtyPair& robot, const port::PtyPair& tracker,
+                          const ServeOptions& options, const std::atomic<bool>* stop, ServeStats* stats) {
+  std::string error;
+  if (serve_frames(session, robot, tracker, options, stop, stats, &error)) return port::Error{};
+  return port::Error::output(error);
 }
 
 }  // namespace hivecal::sim

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "hivecal/port/pty.hpp"
-#include "sim_model.hpp"
+#include "sim/sim_model.hpp"
 
 namespace hivecal::sim {
 
@@ -25,9 +25,9 @@ struct ServeStats {
   std::uint64_t tracker_frames = 0; ///< frames (DEVICE_INFO included)
 };
 
-/// Writes the whole session into the two ptys' masters (or until *stop is set). False
-/// with a message if a write fails (e.g. the pty was closed).
-bool serve_session(const Session& session, const port::PtyPair& robot, const port::PtyPair& tracker,
-                   const ServeOptions& options, const std::atomic<bool>* stop, ServeStats* stats, std::string* error);
+/// Writes the whole session into the two ptys' masters (or until *stop is set).
+/// Fault::output if a write fails (e.g. the pty was closed).
+port::Error serve_session(const Session& session, const port::PtyPair& robot, const port::PtyPair& tracker,
+                          const ServeOptions& options, const std::atomic<bool>* stop, ServeStats* stats);
 
 }  // namespace hivecal::sim

@@ -1,7 +1,8 @@
-#include "calibration_json.hpp"
+#include "textio/calibration_json.hpp"
 
 #include "hivecal/model/rigid_fit.hpp"
-#include "text_util.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 namespace {
@@ -15,7 +16,7 @@ void write_axis_values(JsonWriter& json, const char* name, const double* values)
   json.end_object();
 }
 
-ParseResult fail(const std::string& source, const std::string& what) { return ParseResult{false, source + ": " + what}; }
+port::Error fail(const std::string& source, const std::string& what) { return port::Error::input(source + ": " + what); }
 
 bool read_number(const JsonValue* v, double* out) {
   if (v == nullptr || v->kind != JsonValue::Kind::number) return false;
@@ -32,7 +33,7 @@ bool read_numbers(const JsonValue* v, std::size_t n, double* out) {
   return true;
 }
 
-ParseResult parse_dh(const JsonValue& root, const std::string& source, RobotModel* model) {
+port::Error parse_dh(const JsonValue& root, const std::string& source, RobotModel* model) {
   const JsonValue* dh = root.find("dh");
   if (dh == nullptr || dh->kind != JsonValue::Kind::array || dh->array.size() != kJointCount) {
     return fail(source, "\"dh\" must be an array of 6 joint objects");
@@ -48,10 +49,10 @@ ParseResult parse_dh(const JsonValue& root, const std::string& source, RobotMode
   double tool[3];
   if (!read_numbers(root.find("tool"), 3, tool)) return fail(source, "\"tool\" must be [x, y, z] in metres");
   model->tool_m << tool[0], tool[1], tool[2];
-  return ParseResult{true, ""};
+  return port::Error{};
 }
 
-ParseResult parse_transform(const JsonValue& root, const std::string& source, RigidTransform* transform) {
+port::Error parse_transform(const JsonValue& root, const std::string& source, RigidTransform* transform) {
   const JsonValue* rows = root.find("base_to_tracker");
   if (rows == nullptr || rows->kind != JsonValue::Kind::array || rows->array.size() != 4) {
     return fail(source, "\"base_to_tracker\" must be a 4x4 array of rows");
@@ -70,7 +71,7 @@ ParseResult parse_transform(const JsonValue& root, const std::string& source, Ri
   }
   transform->rotation = rotation_from_cross_covariance(rotation.transpose());  // nearest rotation
   transform->translation_m = m.block<3, 1>(0, 3);
-  return ParseResult{true, ""};
+  return port::Error{};
 }
 
 }  // namespace
@@ -126,10 +127,10 @@ std::string format_calibration_json(const CalibrationFile& file, const std::func
   return json.text();
 }
 
-ParseResult parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file) {
+port::Error parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file) {
   JsonValue root;
-  std::string error;
-  if (!parse_json(text, &root, &error)) return fail(source_name, "malformed JSON: " + error);
+  const port::Error syntax = parse_json(text, &root);
+  if (!syntax.ok()) return fail(source_name, "malformed JSON: " + syntax.message);
   if (root.kind != JsonValue::Kind::object) return fail(source_name, "top level must be an object");
   const JsonValue* format = root.find("format");
   if (format == nullptr || format->kind != JsonValue::Kind::string || format->string != kFormat) {
@@ -140,26 +141,26 @@ ParseResult parse_calibration_json(const std::string& text, const std::string& s
   if (robot == nullptr || robot->kind != JsonValue::Kind::string ||
       robot_type_from_name(robot->string.c_str(), &parsed.robot) != Status::ok) {
     return fail(source_name, "unknown robot model" + (robot != nullptr && robot->kind == JsonValue::Kind::string
-                                                          ? " '" + robot->string + "' (ur3, ur5, ur10, ur5e)"
+                                                          ? " '" + robot->string + "' (" + robot_type_names() + ")"
                                                           : std::string(" (missing \"robot\")")));
   }
   const JsonValue* convention = root.find("convention");
   if (convention != nullptr && (convention->kind != JsonValue::Kind::string || convention->string != "standard-dh")) {
     return fail(source_name, "\"convention\" must be \"standard-dh\"");
   }
-  ParseResult r = parse_dh(root, source_name, &parsed.model);
-  if (!r.ok) return r;
+  port::Error r = parse_dh(root, source_name, &parsed.model);
+  if (!r.ok()) return r;
   r = parse_transform(root, source_name, &parsed.base_to_tracker);
-  if (!r.ok) return r;
+  if (!r.ok()) return r;
   *file = parsed;
-  return ParseResult{true, ""};
+  return port::Error{};
 }
 
-ParseResult read_calibration_json(const std::string& path, CalibrationFile* file) {
+port::Error read_calibration_json(const std::string& path, CalibrationFile* file) {
   std::string text;
-  std::string error;
-  if (!read_text_file(path, &text, &error)) return ParseResult{false, error};
-  if (trim(text).empty()) return ParseResult{false, path + ": empty file"};
+  const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
+  if (!read.ok()) return read;
+  if (trim(text).empty()) return port::Error::input(path + ": empty file");
   return parse_calibration_json(text, path, file);
 }
 

@@ -6,8 +6,8 @@
 
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/metrics.hpp"
-#include "json.hpp"
-#include "ur_calibration_conf.hpp"  // ParseResult
+#include "textio/json.hpp"
+#include "textio/ur_calibration_conf.hpp"  // port::Error
 
 namespace hivecal::textio {
 
@@ -25,9 +25,9 @@ std::string format_calibration_json(const CalibrationFile& file,
                                     const std::function<void(JsonWriter&)>& extra_members = {});
 /// Parses and validates a result document (six DH rows, finite numbers, a proper rigid
 /// 4x4 transform within 1e-5, re-orthonormalised); errors name the key at fault.
-ParseResult parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file);
+port::Error parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file);
 /// Reads and parses a result file.
-ParseResult read_calibration_json(const std::string& path, CalibrationFile* file);
+port::Error read_calibration_json(const std::string& path, CalibrationFile* file);
 
 /// Writes one ErrorStats as {"count", "mae_m": {x, y, z, 3d}, "sigma_m": {...}, "max_m": {...}}.
 void write_error_stats(JsonWriter& json, const ErrorStats& stats);

@@ -1,4 +1,4 @@
-#include "csv.hpp"
+#include "textio/csv.hpp"
 
 #include <cerrno>
 #include <cmath>
@@ -7,7 +7,8 @@
 #include <string_view>
 
 #include "hivecal/core/math.hpp"
-#include "text_util.hpp"
+#include "hivecal/port/error.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 namespace {
@@ -41,11 +42,10 @@ std::string where(const std::string& path, std::size_t line) { return path + ":"
 
 }  // namespace
 
-CsvReader::CsvReader(CsvSchema schema) : schema_(std::move(schema)) {}
+CsvReader::CsvReader(CsvSchema schema, std::uint64_t max_file_bytes)
+    : schema_(std::move(schema)), max_file_bytes_(max_file_bytes) {}
 
-CsvReader::~CsvReader() {
-  if (file_ != nullptr) std::fclose(file_);
-}
+CsvReader::~CsvReader() = default;
 
 std::string CsvReader::expected_header() const {
   std::string expected = (schema_.optional_leading.empty() ? "" : "[" + schema_.optional_leading + ",]") +
@@ -69,47 +69,77 @@ bool CsvReader::match_header(const std::vector<std::string_view>& header) {
   return true;
 }
 
-bool CsvReader::read_line(std::string* line) {
+bool CsvReader::read_line(std::string* line, port::Error* error) {
   line->clear();
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, file_) != nullptr) {
-    *line += buffer;
-    if (line->back() == '\n') break;  // else a line longer than the buffer: keep reading
+  for (;;) {
+    const std::size_t newline = buffer_.find('\n', buffer_at_);
+    if (newline != std::string::npos || (at_end_ && buffer_at_ < buffer_.size())) {
+      const std::size_t end = newline == std::string::npos ? buffer_.size() : newline;
+      line->assign(buffer_, buffer_at_, end - buffer_at_);
+      bytes_read_ += end - buffer_at_ + (newline == std::string::npos ? 0 : 1);
+      buffer_at_ = newline == std::string::npos ? buffer_.size() : newline + 1;
+      break;
+    }
+    if (at_end_) return false;
+    if (buffer_.size() - buffer_at_ > kMaxLineBytes) {
+      *error = port::Error::input(where(path_, line_number_ + 1) + "line longer than " +
+                                      std::to_string(kMaxLineBytes) + " bytes (not a CSV text file?)");
+      return false;
+    }
+    buffer_.erase(0, buffer_at_);
+    buffer_at_ = 0;
+    std::uint8_t chunk[16384];
+    std::size_t got = 0;
+    if (file_.read(chunk, sizeof chunk, &got) != Status::ok) {
+      *error = port::Error::input(file_.error().message);
+      return false;
+    }
+    at_end_ = got == 0;
+    buffer_.append(reinterpret_cast<const char*>(chunk), got);
   }
-  if (line->empty()) return false;
-  bytes_read_ += line->size();
   ++line_number_;
+  if (line->size() > kMaxLineBytes) {
+    *error = port::Error::input(where(path_, line_number_) + "line longer than " + std::to_string(kMaxLineBytes) +
+                                    " bytes (not a CSV text file?)");
+    return false;
+  }
+  if (line->find('\0') != std::string::npos) {
+    *error = port::Error::input(where(path_, line_number_) + "NUL byte in the line (binary data in a CSV file?)");
+    return false;
+  }
   if (line_number_ == 1 && line->compare(0, 3, "\xEF\xBB\xBF") == 0) line->erase(0, 3);  // BOM
   return true;
 }
 
-ParseResult CsvReader::open(const std::string& path) {
+port::Error CsvReader::open(const std::string& path) {
   path_ = path;
-  file_ = std::fopen(path.c_str(), "rb");
-  if (file_ == nullptr) return ParseResult{false, path + ": cannot open: " + std::strerror(errno)};
+  const port::Error opened = file_.open(path, max_file_bytes_);
+  if (!opened.ok()) return opened;
   std::string line;
-  while (read_line(&line)) {
+  port::Error error;
+  while (read_line(&line, &error)) {
     if (trim(line).empty()) continue;
     if (!match_header(split_fields(line))) {
-      return ParseResult{false, where(path, line_number_) + "unexpected header '" + std::string(trim(line)) +
-                                    "', expected " + expected_header()};
+      return port::Error::input(where(path, line_number_) + "unexpected header " + port::quoted(trim(line)) +
+                                    ", expected " + expected_header());
     }
-    return ParseResult{true, ""};
+    return port::Error{};
   }
-  if (std::ferror(file_) != 0) return ParseResult{false, path + ": read error"};
-  return ParseResult{false, path + ": empty file (expected header " + expected_header() + ")"};
+  if (!error.ok()) return error;
+  return port::Error::input(path + ": empty file (expected header " + expected_header() + ")");
 }
 
-ParseResult CsvReader::next(CsvRow* row, bool* got_row) {
+port::Error CsvReader::next(CsvRow* row, bool* got_row) {
   *got_row = false;
   std::string line;
-  while (read_line(&line)) {
+  port::Error error;
+  while (read_line(&line, &error)) {
     if (trim(line).empty()) continue;
     const std::vector<std::string_view> fields = split_fields(line);
     const std::size_t needed = offset_ + schema_.columns.size() + trailing_;
     if (fields.size() < needed) {
-      return ParseResult{false, where(path_, line_number_) + "expected at least " + std::to_string(needed) +
-                                    " columns, found " + std::to_string(fields.size())};
+      return port::Error::input(where(path_, line_number_) + "expected at least " + std::to_string(needed) +
+                                    " columns, found " + std::to_string(fields.size()));
     }
     row->line = line_number_;
     row->trailing_present = trailing_;
@@ -117,33 +147,33 @@ ParseResult CsvReader::next(CsvRow* row, bool* got_row) {
     for (std::size_t i = offset_; i < needed; ++i) {
       double v = 0.0;
       if (!parse_double(fields[i], &v)) {
-        return ParseResult{false, where(path_, line_number_) + "not a number: '" + std::string(fields[i]) + "'"};
+        return port::Error::input(where(path_, line_number_) + "not a number: " + port::quoted(fields[i]));
       }
       row->values.push_back(v);
     }
     ++rows_;
     *got_row = true;
-    return ParseResult{true, ""};
+    return port::Error{};
   }
-  if (std::ferror(file_) != 0) return ParseResult{false, path_ + ": read error"};
-  if (rows_ == 0) return ParseResult{false, path_ + ": no data rows"};
-  return ParseResult{true, ""};
+  if (!error.ok()) return error;
+  if (rows_ == 0) return port::Error::input(path_ + ": no data rows");
+  return port::Error{};
 }
 
-ParseResult CsvReader::reject(const std::string& problem) const {
-  return ParseResult{false, where(path_, line_number_) + problem};
+port::Error CsvReader::reject(const std::string& problem) const {
+  return port::Error::input(where(path_, line_number_) + problem);
 }
 
 namespace {
 
 /// Reads the whole file through `on_row`, which may reject a row by returning an error text.
-ParseResult read_csv(const std::string& path, const CsvSchema& schema,
+port::Error read_csv(const std::string& path, const CsvSchema& schema,
                      const std::function<std::string(const CsvRow&)>& on_row) {
   CsvReader reader(schema);
-  ParseResult result = reader.open(path);
+  port::Error result = reader.open(path);
   CsvRow row;
   bool got_row = false;
-  while (result.ok && (result = reader.next(&row, &got_row)).ok && got_row) {
+  while (result.ok() && (result = reader.next(&row, &got_row)).ok() && got_row) {
     const std::string rejection = on_row(row);
     if (!rejection.empty()) return reader.reject(rejection);
   }
@@ -227,9 +257,9 @@ template <typename Row>
 LogReader<Row>::LogReader() : csv_(schema_of(static_cast<const Row*>(nullptr))) {}
 
 template <typename Row>
-ParseResult LogReader<Row>::next(Row* row, bool* got_row) {
-  const ParseResult result = csv_.next(&raw_, got_row);
-  if (!result.ok || !*got_row) return result;
+port::Error LogReader<Row>::next(Row* row, bool* got_row) {
+  const port::Error result = csv_.next(&raw_, got_row);
+  if (!result.ok() || !*got_row) return result;
   std::string error = to_row(raw_, row);
   if (error.empty()) error = timestamps_.check(row->t_s);
   return error.empty() ? result : csv_.reject(error);
@@ -242,26 +272,26 @@ namespace {
 
 /// Streams every row of a log reader into `on_row`.
 template <typename Reader, typename Row>
-ParseResult read_log(const std::string& path, const std::function<void(const Row&)>& on_row) {
+port::Error read_log(const std::string& path, const std::function<void(const Row&)>& on_row) {
   Reader reader;
-  ParseResult result = reader.open(path);
+  port::Error result = reader.open(path);
   Row row;
   bool got_row = false;
-  while (result.ok && (result = reader.next(&row, &got_row)).ok && got_row) on_row(row);
+  while (result.ok() && (result = reader.next(&row, &got_row)).ok() && got_row) on_row(row);
   return result;
 }
 
 }  // namespace
 
-ParseResult read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row) {
+port::Error read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row) {
   return read_log<RobotLogReader>(path, on_row);
 }
 
-ParseResult read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row) {
+port::Error read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row) {
   return read_log<TrackerLogReader>(path, on_row);
 }
 
-ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset) {
   return read_csv(path, CsvSchema{with(kJointColumns, {"x", "y", "z"}), "", {}}, [&](const CsvRow& row) {
     const std::string error = check_finite(row.values, 0, 9);
     if (!error.empty()) return error;
@@ -275,7 +305,7 @@ ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset) {
   });
 }
 
-ParseResult read_joints_csv(const std::string& path, std::vector<JointVector>* poses) {
+port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses) {
   return read_csv(path, CsvSchema{kJointColumns, "t", {}}, [&](const CsvRow& row) {
     const std::string error = check_finite(row.values, 0, 6);
     if (!error.empty()) return error;
@@ -304,11 +334,12 @@ std::string format_samples_csv(Span<const Sample> samples) {
 }
 
 StreamFileKind detect_stream_file(const std::string& path) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) return StreamFileKind::capture;  // the capture reader reports the open error
-  unsigned char head[512];
-  const std::size_t got = std::fread(head, 1, sizeof head, file);
-  std::fclose(file);
+  port::InputFile file;
+  // Not a readable regular file: the capture reader reports the problem.
+  if (!file.open(path, port::kMaxStreamInputBytes).ok() || file.is_stdin()) return StreamFileKind::capture;
+  std::uint8_t head[512];
+  std::size_t got = 0;
+  if (file.read(head, sizeof head, &got) != Status::ok) return StreamFileKind::capture;
   std::size_t at = (got >= 3 && head[0] == 0xEF && head[1] == 0xBB && head[2] == 0xBF) ? 3 : 0;  // BOM
   bool comma = false;
   for (; at < got && head[at] != '\n'; ++at) {

@@ -10,9 +10,10 @@
 #include <string_view>
 #include <vector>
 
-#include "hivecal/model/dataset.hpp"
 #include "hivecal/core/types.hpp"
-#include "ur_calibration_conf.hpp"  // ParseResult
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "textio/ur_calibration_conf.hpp"  // port::Error
 
 namespace hivecal::textio {
 
@@ -45,31 +46,42 @@ struct CsvRow {
 };
 
 /// Pull reader of a CSV file: checks the header, then parses one numeric row per next().
-/// Memory is one line, whatever the file length. Every error names the file and line.
+/// Memory is one line (at most kMaxLineBytes), whatever the file length. Every error names
+/// the file and line; a NUL byte or an over-long line is an error, never a silent cut.
+/// The bytes come through port::InputFile (regular files or '-' only, size-checked).
 class CsvReader {
  public:
-  explicit CsvReader(CsvSchema schema);
+  /// Longest line accepted [bytes].
+  static constexpr std::size_t kMaxLineBytes = 64 * 1024;
+  /// A reader of `schema`; `max_file_bytes` bounds the file [bytes].
+  explicit CsvReader(CsvSchema schema, std::uint64_t max_file_bytes = port::kMaxStreamInputBytes);
   ~CsvReader();
   CsvReader(const CsvReader&) = delete;
   CsvReader& operator=(const CsvReader&) = delete;
   /// Opens `path` and reads its header (blank lines and a UTF-8 BOM are skipped).
-  ParseResult open(const std::string& path);
+  port::Error open(const std::string& path);
   /// Next data row into *row (*got_row true), or the end of the file (*got_row false; an
   /// error if the file had no data row), or an error.
-  ParseResult next(CsvRow* row, bool* got_row);
+  port::Error next(CsvRow* row, bool* got_row);
   /// An error at the current line: `problem` prefixed with file:line.
-  ParseResult reject(const std::string& problem) const;
+  port::Error reject(const std::string& problem) const;
   /// Bytes of the file read so far [bytes].
   std::uint64_t bytes_read() const { return bytes_read_; }
 
  private:
-  bool read_line(std::string* line);
+  /// Next line into *line (without its end); false at the end of the file or on an error
+  /// (then *error is set).
+  bool read_line(std::string* line, port::Error* error);
   bool match_header(const std::vector<std::string_view>& header);
   std::string expected_header() const;
 
   CsvSchema schema_;
   std::string path_;
-  std::FILE* file_ = nullptr;
+  std::uint64_t max_file_bytes_;
+  port::InputFile file_;
+  std::string buffer_;        ///< bytes read and not yet returned as lines
+  std::size_t buffer_at_ = 0;  ///< first unreturned byte of buffer_
+  bool at_end_ = false;       ///< the file has no more bytes
   std::size_t line_number_ = 0;
   std::size_t offset_ = 0;    ///< 1 when the optional leading column is present
   std::size_t trailing_ = 0;  ///< optional trailing columns present
@@ -91,10 +103,10 @@ template <typename Row>
 class LogReader {
  public:
   LogReader();
-  ParseResult open(const std::string& path) { return csv_.open(path); }  ///< opens, checks the header
+  port::Error open(const std::string& path) { return csv_.open(path); }  ///< opens, checks the header
   std::uint64_t bytes_read() const { return csv_.bytes_read(); }          ///< [bytes]
   /// Next row (*got_row true), or the end (*got_row false), or an error naming file:line.
-  ParseResult next(Row* row, bool* got_row);
+  port::Error next(Row* row, bool* got_row);
 
  private:
   CsvReader csv_;
@@ -105,13 +117,13 @@ using RobotLogReader = LogReader<RobotLogRow>;      ///< robot joint log reader
 using TrackerLogReader = LogReader<TrackerLogRow>;  ///< tracker log reader
 
 /// Streams a robot joint log (`t,q1..q6`, extra columns ignored); timestamps must increase.
-ParseResult read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row);
+port::Error read_robot_log(const std::string& path, const std::function<void(const RobotLogRow&)>& on_row);
 /// Streams a tracker log (`t,x,y,z[,status]`); timestamps must increase.
-ParseResult read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row);
+port::Error read_tracker_log(const std::string& path, const std::function<void(const TrackerLogRow&)>& on_row);
 /// Reads paired static samples (`q1..q6,x,y,z`) into a dataset; reports a full dataset as an error.
-ParseResult read_samples_csv(const std::string& path, DatasetBase* dataset);
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset);
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`).
-ParseResult read_joints_csv(const std::string& path, std::vector<JointVector>* poses);
+port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses);
 
 /// `x,y,z` rows with round-trip precision.
 std::string format_points_csv(const std::vector<Vec3>& points_m);

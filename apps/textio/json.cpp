@@ -1,9 +1,9 @@
-#include "json.hpp"
+#include "textio/json.hpp"
 
 #include <cstdio>
 
 #include "hivecal/core/math.hpp"
-#include "text_util.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 
@@ -226,9 +226,11 @@ std::string number_text(double x) { return math::is_finite(x) ? format_double(x)
 
 }  // namespace
 
-bool parse_json(const std::string& text, JsonValue* value, std::string* error) {
+port::Error parse_json(const std::string& text, JsonValue* value) {
   *value = JsonValue();
-  return JsonParser(text).parse_document(value, error);
+  std::string error;
+  if (JsonParser(text).parse_document(value, &error)) return port::Error{};
+  return port::Error::input(error);
 }
 
 void JsonWriter::newline() {

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "hivecal/port/error.hpp"
+
 namespace hivecal::textio {
 
 /// A parsed JSON value.
@@ -23,8 +25,8 @@ struct JsonValue {
   const JsonValue* find(const std::string& key) const;
 };
 
-/// Parses a whole JSON text; on failure returns false with "line:column: problem".
-bool parse_json(const std::string& text, JsonValue* value, std::string* error);
+/// Parses a whole JSON text; Fault::input with "line:column: problem" on failure.
+port::Error parse_json(const std::string& text, JsonValue* value);
 
 /// Streaming writer with two-space indentation; numbers as %.17g (NaN/Inf written as null).
 class JsonWriter {

@@ -1,10 +1,10 @@
-#include "ur_calibration_conf.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 #include <string_view>
 
 #include "hivecal/core/math.hpp"
-#include "hivecal/model/ur_deltas.hpp"
-#include "text_util.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::textio {
 namespace {
@@ -15,8 +15,8 @@ struct DeltaKey {
   bool seen;
 };
 
-ParseResult failure(const std::string& source, std::size_t line, const std::string& what) {
-  return ParseResult{false, source + ":" + std::to_string(line) + ": " + what};
+port::Error failure(const std::string& source, std::size_t line, const std::string& what) {
+  return port::Error::input(source + ":" + std::to_string(line) + ": " + what);
 }
 
 /// Parses "[ v1, v2, ..., v6 ]" into values; returns an error text or "".
@@ -42,7 +42,7 @@ std::string parse_six_values(std::string_view list, double* values) {
 
 }  // namespace
 
-ParseResult parse_ur_calibration_conf(const std::string& text, const std::string& source_name,
+port::Error parse_ur_calibration_conf(const std::string& text, const std::string& source_name,
                                       UrCalibrationDeltas* deltas) {
   UrCalibrationDeltas parsed;
   DeltaKey keys[] = {{"delta_theta", parsed.delta_theta_rad, false},
@@ -78,18 +78,18 @@ ParseResult parse_ur_calibration_conf(const std::string& text, const std::string
       entry.seen = true;
     }
   }
-  if (!saw_mounting) return ParseResult{false, source_name + ": no [mounting] section"};
+  if (!saw_mounting) return port::Error::input(source_name + ": no [mounting] section");
   for (const DeltaKey& entry : keys) {
-    if (!entry.seen) return ParseResult{false, source_name + ": [mounting] has no " + entry.name};
+    if (!entry.seen) return port::Error::input(source_name + ": [mounting] has no " + entry.name);
   }
   *deltas = parsed;
-  return ParseResult{true, ""};
+  return port::Error{};
 }
 
-ParseResult read_ur_calibration_conf(const std::string& path, UrCalibrationDeltas* deltas) {
+port::Error read_ur_calibration_conf(const std::string& path, UrCalibrationDeltas* deltas) {
   std::string text;
-  std::string error;
-  if (!read_text_file(path, &text, &error)) return ParseResult{false, error};
+  const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
+  if (!read.ok()) return read;
   return parse_ur_calibration_conf(text, path, deltas);
 }
 

@@ -5,22 +5,17 @@
 
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/ur_deltas.hpp"
+#include "hivecal/port/error.hpp"  // every parse returns a port::Error (Fault::input naming file and line)
 
 namespace hivecal::textio {
 
-/// Outcome of a text parse: ok, or a message naming the file, line and problem.
-struct ParseResult {
-  bool ok = false;       ///< true when the whole input was understood
-  std::string message;   ///< what was wrong (empty when ok)
-};
-
 /// Parses calibration.conf text; needs delta_theta, delta_a, delta_d and delta_alpha in
 /// [mounting], six finite numbers each. `source_name` prefixes error messages.
-ParseResult parse_ur_calibration_conf(const std::string& text, const std::string& source_name,
+port::Error parse_ur_calibration_conf(const std::string& text, const std::string& source_name,
                                       UrCalibrationDeltas* deltas);
 
 /// Reads and parses a calibration.conf file.
-ParseResult read_ur_calibration_conf(const std::string& path, UrCalibrationDeltas* deltas);
+port::Error read_ur_calibration_conf(const std::string& path, UrCalibrationDeltas* deltas);
 
 /// Writes deltas in calibration.conf's [mounting] syntax (%.17g).
 std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas);

@@ -78,7 +78,7 @@ no_file "$work/p5.csv"
 printf 'q1,q2,q3,q4,q5,q6\n0,0,inf,0,0,0\n' >"$work/infjoints.csv"
 expect 3 "NaN or Inf" -- predict --calibration "$work/result.json" --joints "$work/infjoints.csv" --out "$work/p6.csv"
 # --- output errors (exit 4)
-expect 4 "cannot create a temporary" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/no/dir/p.csv"
+expect 4 "does not exist" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/no/dir/p.csv"
 
 # --- record: usage errors
 expect 2 "give --robot-port and/or --tracker-port" -- record
@@ -156,6 +156,77 @@ printf 't,q1,q2,q3,q4,q5,q6\n-1,0,0,0,0,0,0\n' >"$work/negative.csv"
 expect 3 "outside 0 .. 1.8e13 s" -- calibrate --robot "$work/negative.csv" --tracker "$sim/tracker.csv" --out "$work/r7.json"
 printf 't,q1,q2,q3,q4,q5,q6\n' >"$work/header_only.csv"
 expect 3 "no data rows" -- calibrate --robot "$work/header_only.csv" --tracker "$sim/tracker.csv" --out "$work/r8.json"
+
+# --- hostile and careless use (issue 13): one check per case -----------------------------------
+# pass/fail helpers for checks that are not one command's exit code
+ok() { passed=$((passed + 1)); }
+ko() { failed=$((failed + 1)); echo "FAIL: $*"; }
+good_predict=(predict --calibration "$work/result.json" --joints "$work/joints.csv")
+# --out /dev/null is refused (it is a device), and /dev/null stays a device (as root too).
+expect 4 "is a character device; refusing to replace it" -- "${good_predict[@]}" --out /dev/null
+if [ -c /dev/null ]; then ok; else ko "/dev/null is no longer a character device"; fi
+# --out through a symlink: the target is replaced, the link is kept.
+echo old >"$work/target.csv"
+ln -s target.csv "$work/link.csv"
+if "${run[@]}" "${good_predict[@]}" --out "$work/link.csv" && [ -L "$work/link.csv" ] &&
+   [ "$(head -1 "$work/target.csv")" = "x,y,z" ]; then ok; else ko "--out through a symlink"; fi
+# --out onto a FIFO is refused at once (no blocking, no regular file put in its place).
+mkfifo "$work/fifo"
+err=$(timeout 10 "${run[@]}" "${good_predict[@]}" --out "$work/fifo" 2>&1); code=$?
+if [ "$code" -eq 4 ] && grep -q "is a FIFO" <<<"$err" && [ -p "$work/fifo" ]; then ok; else ko "FIFO: exit $code: $err"; fi
+# The mode of an existing output is kept.
+echo old >"$work/mode.csv"; chmod 640 "$work/mode.csv"
+if "${run[@]}" "${good_predict[@]}" --out "$work/mode.csv" && [ "$(stat -c %a "$work/mode.csv")" = 640 ]; then ok; else
+  ko "mode not kept: $(stat -c %a "$work/mode.csv")"; fi
+# An output that is an input of the run, or another output, is refused before anything is written.
+cp "$work/s.csv" "$work/s_copy.csv"
+expect 2 "is the same file as the input --samples" -- calibrate --samples "$work/s_copy.csv" --out "$work/s_copy.csv"
+if cmp -s "$work/s.csv" "$work/s_copy.csv"; then ok; else ko "--out == --samples changed the input"; fi
+expect 2 "is the same file as the input --joints" -- "${good_predict[@]}" --out "$work/./joints.csv"
+expect 2 "is the same file as the output --out" -- calibrate --samples "$work/s.csv" --out "$work/same.out" --ur-deltas "$work/same.out"
+no_file "$work/same.out"
+# stdout on a full device: a non-zero exit and a message, for the result and for printed tables.
+if [ -w /dev/full ]; then
+  err=$("${run[@]}" "${good_predict[@]}" 2>&1 >/dev/full); code=$?
+  if [ "$code" -eq 4 ] && grep -q "stdout: write failed" <<<"$err"; then ok; else ko "predict > /dev/full: exit $code: $err"; fi
+  err=$("${run[@]}" calibrate --help 2>&1 >/dev/full); code=$?
+  if [ "$code" -eq 4 ]; then ok; else ko "calibrate --help > /dev/full: exit $code"; fi
+fi
+# Inputs: only regular files (or '-'); /dev/zero is refused at once, not read forever.
+err=$(timeout 10 "${run[@]}" calibrate --robot /dev/zero --tracker "$sim/tracker.cap" --out "$work/z.json" 2>&1); code=$?
+if [ "$code" -eq 3 ] && grep -q "is a character device, not a regular file" <<<"$err"; then ok; else ko "--robot /dev/zero: exit $code: $err"; fi
+no_file "$work/z.json"
+expect 3 "is a folder" -- "${good_predict[@]}" --joints "$work" --out "$work/d.csv"
+# A NUL byte in a CSV row is an error naming file:line (never a dropped or merged row).
+{ head -3 "$work/s.csv"; printf '0,-1.5,1.5,-1.5\000,-1.5,0,1,2,3\n'; tail -n +4 "$work/s.csv"; } >"$work/nul.csv"
+expect 3 "nul.csv:4: NUL byte" -- calibrate --samples "$work/nul.csv" --out "$work/n.json"
+no_file "$work/n.json"
+# A huge field and binary junk are escaped and cut in messages.
+{ echo "q1,q2,q3,q4,q5,q6"; printf '0,0,0,0,0,%s\n' "$(head -c 50000 /dev/zero | tr '\0' 'a')"; } >"$work/huge.csv"
+err=$("${run[@]}" "${good_predict[@]/$work\/joints.csv/$work/huge.csv}" --out "$work/h.csv" 2>&1); code=$?
+if [ "$code" -eq 3 ] && [ "${#err}" -lt 600 ] && grep -q "\.\.\.\[50000 bytes\]" <<<"$err"; then ok; else
+  ko "huge field: exit $code, ${#err} bytes of message"; fi
+{ echo "q1,q2,q3,q4,q5,q6"; printf '0,0,0,0,0,\033[31m\001junk\n'; } >"$work/junk.csv"
+err=$("${run[@]}" "${good_predict[@]/$work\/joints.csv/$work/junk.csv}" --out "$work/j.csv" 2>&1); code=$?
+if [ "$code" -eq 3 ] && grep -qF '\x1b[31m\x01junk' <<<"$err" && ! grep -q $'\033' <<<"$err"; then ok; else
+  ko "binary junk not escaped: exit $code: $err"; fi
+printf 'q1,q2,q3,q4,q5,q6\n%s\n' "$(head -c 100000 /dev/zero | tr '\0' '1')" >"$work/longline.csv"
+expect 3 "longline.csv:2: line longer than" -- "${good_predict[@]/$work\/joints.csv/$work/longline.csv}" --out "$work/l.csv"
+# A run that fails while writing the report leaves no result.json (all outputs or none).
+mkdir -p "$work/rep/index.html"
+expect 4 "index.html': is a folder" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --method lm --out "$work/rep.json" --report "$work/rep"
+no_file "$work/rep.json"
+# record: never truncates an existing capture without --force; opens the ports before any file.
+printf 'precious' >"$work/old.cap"
+expect 4 "exists; refusing to overwrite a capture (--force replaces it)" -- record --robot-port "$work/no-such-port" --robot-out "$work/old.cap"
+expect 3 "no-such-port" -- record --robot-port "$work/no-such-port" --robot-out "$work/old.cap" --force
+if [ "$(cat "$work/old.cap")" = precious ]; then ok; else ko "record touched an existing capture"; fi
+expect 3 "no-such-port" -- record --robot-port "$work/no-such-port" --robot-out "$work/new.cap"
+no_file "$work/new.cap"
+expect 2 "is the same file as the output --robot-out" -- record --robot-port "$work/p1" --tracker-port "$work/p2" --robot-out "$work/both.cap" --tracker-out "$work/both.cap"
+expect 2 "is the same file as the input --robot-port" -- record --robot-port "$work/p1" --robot-out "$work/p1"
+expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s -1
+expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s nan
 
 # --- progress: on stderr when it is a terminal (script(1) gives one), never in a pipe or with --quiet
 if command -v script >/dev/null; then

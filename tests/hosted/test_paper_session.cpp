@@ -11,18 +11,19 @@
 #include <string>
 #include <vector>
 
-#include "calibration_json.hpp"
-#include "cli.hpp"
+#include "cli/options.hpp"
 #include "cli_run.hpp"
-#include "commands.hpp"
-#include "csv.hpp"
+#include "hivecal/commands/commands.hpp"
+#include "hivecal/commands/simulate.hpp"
+#include "hivecal/commands/validation.hpp"
 #include "hivecal/core/random.hpp"
+#include "hivecal/port/input_file.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
-#include "json.hpp"
-#include "sim_model.hpp"
-#include "simulate_cmd.hpp"
-#include "text_util.hpp"
-#include "validation.hpp"
+#include "sim/sim_model.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+#include "textio/json.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal {
 namespace {
@@ -52,10 +53,10 @@ class PaperSession : public ::testing::Test {
   static double validation_mae_m(const std::string& result_path) {
     textio::CalibrationFile result;
     textio::CalibrationFile truth;
-    const textio::ParseResult r1 = textio::read_calibration_json(result_path, &result);
-    const textio::ParseResult r2 = textio::read_calibration_json(path("truth.json"), &truth);
-    EXPECT_TRUE(r1.ok) << r1.message;
-    EXPECT_TRUE(r2.ok) << r2.message;
+    const port::Error r1 = textio::read_calibration_json(result_path, &result);
+    const port::Error r2 = textio::read_calibration_json(path("truth.json"), &truth);
+    EXPECT_TRUE(r1.ok()) << r1.message;
+    EXPECT_TRUE(r2.ok()) << r2.message;
     return cli::validate_on_fresh_poses(result.model, result.base_to_tracker, truth.model, truth.base_to_tracker,
                                         kValidationPoses, kValidationSeed)
         .mae_m;
@@ -68,11 +69,10 @@ std::string PaperSession::dir_;
 /// The "methods" rows of a calibrate result: method name -> test MAE [m].
 std::vector<std::pair<std::string, double>> test_mae_by_method(const std::string& result_path) {
   std::string text;
-  std::string error;
   std::vector<std::pair<std::string, double>> rows;
-  EXPECT_TRUE(textio::read_text_file(result_path, &text, &error)) << error;
+  EXPECT_TRUE(port::read_whole_file(result_path, port::kMaxTextInputBytes, &text).ok());
   textio::JsonValue root;
-  EXPECT_TRUE(textio::parse_json(text, &root, &error)) << error;
+  EXPECT_TRUE(textio::parse_json(text, &root).ok());
   const textio::JsonValue* methods = root.find("methods");
   if (methods == nullptr) return rows;
   for (const textio::JsonValue& m : methods->array) {
@@ -93,7 +93,7 @@ TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent)
   config.seed = 1;
   const sim::Session session(config);
   textio::CalibrationFile truth;
-  ASSERT_TRUE(textio::read_calibration_json(path("truth.json"), &truth).ok);
+  ASSERT_TRUE(textio::read_calibration_json(path("truth.json"), &truth).ok());
   ASSERT_EQ(truth.model.joints[1].a_m, session.truth().model.joints[1].a_m) << "not the simulated session";
 
   ASSERT_EQ(run(cli::calibrate_main, {"--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--out",
@@ -118,10 +118,9 @@ TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent)
       for (int axis = 0; axis < 3; ++axis) s.point_m(axis) += config.tracker_noise_m * noise.normal();
       ideal.push_back(s);
     }
-    std::string error;
-    ASSERT_TRUE(textio::write_file_atomically(
-        path("ideal_samples.csv"), textio::format_samples_csv(Span<const Sample>(ideal.data(), ideal.size())), &error))
-        << error;
+    const port::Error written = textio::write_text_file(
+        path("ideal_samples.csv"), textio::format_samples_csv(Span<const Sample>(ideal.data(), ideal.size())));
+    ASSERT_TRUE(written.ok()) << written.message;
     ASSERT_EQ(run(cli::calibrate_main, {"--samples", path("ideal_samples.csv"), "--out", path("ideal.json"), "--quiet"}),
               cli::kExitOk);
     const double draw_m = validation_mae_m(path("ideal.json"));

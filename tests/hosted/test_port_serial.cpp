@@ -52,9 +52,9 @@ std::string temp_path(const std::string& name) {
 TEST(SerialPort, DeliversEveryByteOfDribbledWrites) {
   PtyPair pty;
   std::string error;
-  ASSERT_TRUE(open_pty(&pty, &error)) << error;
+  ASSERT_TRUE(open_pty(&pty).ok()) << error;
   SerialPort port(SerialOptions{pty.slave_path, kRobotBaud});
-  ASSERT_TRUE(port.open(&error)) << error;
+  ASSERT_TRUE(port.open().ok()) << error;
   const std::vector<std::uint8_t> sent = pattern(20000, 7);
   std::thread writer([&] {
     std::size_t at = 0;
@@ -84,9 +84,9 @@ TEST(SerialPort, SignalsNeitherLoseBytesNorShortenTimeouts) {
   ASSERT_EQ(sigaction(SIGUSR1, &action, &previous), 0);
   PtyPair pty;
   std::string error;
-  ASSERT_TRUE(open_pty(&pty, &error)) << error;
+  ASSERT_TRUE(open_pty(&pty).ok()) << error;
   SerialPort port(SerialOptions{pty.slave_path, kTrackerBaud});
-  ASSERT_TRUE(port.open(&error)) << error;
+  ASSERT_TRUE(port.open().ok()) << error;
 
   const pthread_t reader = pthread_self();
   std::atomic<bool> running{true};
@@ -127,11 +127,11 @@ TEST(SerialPort, ReopensADeviceThatVanishesAndComesBack) {
   const std::string link = temp_path("link");
   PtyPair first;
   std::string error;
-  ASSERT_TRUE(open_pty(&first, &error)) << error;
+  ASSERT_TRUE(open_pty(&first).ok()) << error;
   ::unlink(link.c_str());
   ASSERT_EQ(::symlink(first.slave_path.c_str(), link.c_str()), 0);
   SerialPort port(SerialOptions{link, kRobotBaud, 10, 100});
-  ASSERT_TRUE(port.open(&error)) << error;
+  ASSERT_TRUE(port.open().ok()) << error;
   const std::vector<std::uint8_t> before = pattern(500, 1);
   ASSERT_TRUE(write_all(first.master_fd, before.data(), before.size()));
   EXPECT_EQ(read_bytes(&port, before.size(), 5000), before);
@@ -144,7 +144,7 @@ TEST(SerialPort, ReopensADeviceThatVanishesAndComesBack) {
   EXPECT_EQ(port.read(buffer, sizeof buffer, 50).status, ReadStatus::disconnected);  // link points nowhere useful
 
   PtyPair second;
-  ASSERT_TRUE(open_pty(&second, &error)) << error;
+  ASSERT_TRUE(open_pty(&second).ok()) << error;
   const std::string fresh = link + ".new";
   ASSERT_EQ(::symlink(second.slave_path.c_str(), fresh.c_str()), 0);
   ASSERT_EQ(::rename(fresh.c_str(), link.c_str()), 0);
@@ -162,19 +162,19 @@ TEST(CaptureFile, ReplaysExactlyAndPaces) {
   const std::vector<std::uint8_t> bytes = pattern(5000, 3);
   CaptureWriter writer;
   std::string error;
-  ASSERT_TRUE(writer.open(path, &error)) << error;
-  ASSERT_TRUE(writer.write(bytes.data(), bytes.size(), &error)) << error;
-  ASSERT_TRUE(writer.close(&error)) << error;
+  ASSERT_TRUE(writer.open(path, true).ok()) << error;
+  ASSERT_TRUE(writer.write(bytes.data(), bytes.size()).ok()) << error;
+  ASSERT_TRUE(writer.close().ok()) << error;
   EXPECT_EQ(writer.bytes_written(), bytes.size());
 
   CaptureFileSource fast(path);
-  ASSERT_TRUE(fast.open(&error)) << error;
+  ASSERT_TRUE(fast.open().ok()) << error;
   EXPECT_EQ(read_bytes(&fast, bytes.size() + 1, 2000), bytes);
   std::uint8_t buffer[16];
   EXPECT_EQ(fast.read(buffer, sizeof buffer, 0).status, ReadStatus::end_of_stream);
 
   CaptureFileSource paced(path, 20000.0);  // 5000 bytes at 20 kB/s: >= 250 ms
-  ASSERT_TRUE(paced.open(&error)) << error;
+  ASSERT_TRUE(paced.open().ok()) << error;
   const std::int64_t start_ms = monotonic_ms();
   EXPECT_EQ(read_bytes(&paced, bytes.size(), 5000), bytes);
   EXPECT_GE(monotonic_ms() - start_ms, 240);
@@ -185,16 +185,16 @@ TEST(Recorder, CopiesTwoPortsToCaptures) {
   PtyPair robot;
   PtyPair tracker;
   std::string error;
-  ASSERT_TRUE(open_pty(&robot, &error)) << error;
-  ASSERT_TRUE(open_pty(&tracker, &error)) << error;
+  ASSERT_TRUE(open_pty(&robot).ok()) << error;
+  ASSERT_TRUE(open_pty(&tracker).ok()) << error;
   SerialPort robot_port(SerialOptions{robot.slave_path, kRobotBaud});
   SerialPort tracker_port(SerialOptions{tracker.slave_path, kTrackerBaud});
-  ASSERT_TRUE(robot_port.open(&error) && tracker_port.open(&error)) << error;
+  ASSERT_TRUE(robot_port.open().ok() && tracker_port.open().ok()) << error;
   const std::string robot_path = temp_path("robot.cap");
   const std::string tracker_path = temp_path("tracker.cap");
   CaptureWriter robot_file;
   CaptureWriter tracker_file;
-  ASSERT_TRUE(robot_file.open(robot_path, &error) && tracker_file.open(tracker_path, &error)) << error;
+  ASSERT_TRUE(robot_file.open(robot_path, true).ok() && tracker_file.open(tracker_path, true).ok()) << error;
   const std::vector<std::uint8_t> robot_bytes = pattern(30000, 4);
   const std::vector<std::uint8_t> tracker_bytes = pattern(4000, 5);
   volatile std::sig_atomic_t stop = 0;
@@ -209,15 +209,14 @@ TEST(Recorder, CopiesTwoPortsToCaptures) {
   });
   RecordStats stats;
   EXPECT_TRUE(record_streams({&robot_port, &tracker_port}, {&robot_file, &tracker_file}, &stop, RecordOptions(),
-                             &stats, &error))
-      << error;
+                             &stats).ok());
   devices.join();
   EXPECT_TRUE(stats.ended_by_stop_flag);
   EXPECT_EQ(stats.bytes[0], robot_bytes.size());
   EXPECT_EQ(stats.bytes[1], tracker_bytes.size());
   CaptureFileSource robot_replay(robot_path);
   CaptureFileSource tracker_replay(tracker_path);
-  ASSERT_TRUE(robot_replay.open(&error) && tracker_replay.open(&error)) << error;
+  ASSERT_TRUE(robot_replay.open().ok() && tracker_replay.open().ok()) << error;
   EXPECT_EQ(read_bytes(&robot_replay, robot_bytes.size() + 1, 2000), robot_bytes);
   EXPECT_EQ(read_bytes(&tracker_replay, tracker_bytes.size() + 1, 2000), tracker_bytes);
   close_pty(&robot);

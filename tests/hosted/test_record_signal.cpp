@@ -10,12 +10,12 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/wire/codec.hpp"
+#include "hivecal/commands/streams.hpp"
 #include "hivecal/port/byte_source.hpp"
 #include "hivecal/port/pty.hpp"
-#include "sim_model.hpp"
-#include "sim_outputs.hpp"
-#include "stream_commands.hpp"
+#include "hivecal/wire/codec.hpp"
+#include "sim/sim_model.hpp"
+#include "sim/sim_outputs.hpp"
 
 namespace hivecal {
 namespace {
@@ -34,7 +34,7 @@ long long file_size(const std::string& path) {
 TEST(RecordCommand, SigtermKeepsEveryByteReadAndTheCaptureDecodesUpToTheCut) {
   port::PtyPair pty;
   std::string error;
-  ASSERT_TRUE(port::open_pty(&pty, &error)) << error;
+  ASSERT_TRUE(port::open_pty(&pty).ok()) << error;
   const std::string capture = "hivecal_sigterm_" + std::to_string(::getpid()) + ".cap";
 
   const pid_t child = ::fork();

@@ -10,16 +10,15 @@
 #include <string>
 #include <vector>
 
-#include "calibration_json.hpp"
+#include "cli/options.hpp"
 #include "cli_run.hpp"
-#include "cli.hpp"
-#include "csv.hpp"
+#include "hivecal/commands/simulate.hpp"
+#include "hivecal/commands/streams.hpp"
 #include "hivecal/model/dataset.hpp"
-#include "hivecal/model/ur_deltas.hpp"
-#include "sim_model.hpp"
-#include "simulate_cmd.hpp"
-#include "stream_commands.hpp"
-#include "ur_calibration_conf.hpp"
+#include "sim/sim_model.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal {
 namespace {
@@ -39,19 +38,19 @@ TEST(StreamCommands, SimulateWritesReadableOutputsAndExtractPairsThem) {
   config.duration_s = 150.0;
   const sim::Session session(config);
   textio::CalibrationFile truth;
-  const textio::ParseResult parsed = textio::read_calibration_json(dir + "/truth.json", &truth);
-  ASSERT_TRUE(parsed.ok) << parsed.message;
+  const port::Error parsed = textio::read_calibration_json(dir + "/truth.json", &truth);
+  ASSERT_TRUE(parsed.ok()) << parsed.message;
   EXPECT_NEAR(truth.model.joints[1].a_m, session.truth().model.joints[1].a_m, 1e-15);
   EXPECT_NEAR((truth.base_to_tracker.translation_m - session.truth().base_to_tracker.translation_m).norm(), 0.0, 1e-12);
 
   std::size_t robot_rows = 0;
   std::size_t tracker_rows = 0;
   std::size_t lost_rows = 0;
-  ASSERT_TRUE(textio::read_robot_log(dir + "/robot_joints.csv", [&](const textio::RobotLogRow&) { ++robot_rows; }).ok);
+  ASSERT_TRUE(textio::read_robot_log(dir + "/robot_joints.csv", [&](const textio::RobotLogRow&) { ++robot_rows; }).ok());
   ASSERT_TRUE(textio::read_tracker_log(dir + "/tracker.csv", [&](const textio::TrackerLogRow& row) {
                 ++tracker_rows;
                 lost_rows += row.status == 1 ? 1 : 0;
-              }).ok);
+              }).ok());
   EXPECT_GT(robot_rows, 18000u);
   EXPECT_GT(tracker_rows, 1450u);
   std::FILE* truth_samples = std::fopen((dir + "/truth_samples.csv").c_str(), "r");
@@ -63,8 +62,8 @@ TEST(StreamCommands, SimulateWritesReadableOutputsAndExtractPairsThem) {
             cli::kExitOk);
   static Dataset<4096> samples;
   samples.clear();
-  const textio::ParseResult read = textio::read_samples_csv(dir + "/samples.csv", &samples);
-  ASSERT_TRUE(read.ok) << read.message;
+  const port::Error read = textio::read_samples_csv(dir + "/samples.csv", &samples);
+  ASSERT_TRUE(read.ok()) << read.message;
   EXPECT_GT(samples.size(), 150u);
   for (const char* name : {"robot.cap", "tracker.cap", "robot_joints.csv", "tracker.csv", "truth.json",
                            "truth_samples.csv", "samples.csv"})
@@ -81,11 +80,11 @@ TEST(StreamCommands, SimulateTakesTheTrueGeometryFromACalibrationConf) {
                                      "--waypoints", "3", "--duration-s", "20"}),
             cli::kExitOk);
   UrCalibrationDeltas deltas;
-  ASSERT_TRUE(textio::read_ur_calibration_conf(conf, &deltas).ok);
+  ASSERT_TRUE(textio::read_ur_calibration_conf(conf, &deltas).ok());
   RobotModel expected;
   ASSERT_EQ(apply_ur_deltas(nominal_model(RobotType::ur5e), deltas, &expected), Status::ok);
   textio::CalibrationFile truth;
-  ASSERT_TRUE(textio::read_calibration_json(dir + "/truth.json", &truth).ok);
+  ASSERT_TRUE(textio::read_calibration_json(dir + "/truth.json", &truth).ok());
   EXPECT_EQ(truth.robot, RobotType::ur5e);
   for (int j = 0; j < kJointCount; ++j) {
     EXPECT_DOUBLE_EQ(truth.model.joints[j].a_m, expected.joints[j].a_m);

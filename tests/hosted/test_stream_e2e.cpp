@@ -13,15 +13,16 @@
 #include <thread>
 #include <vector>
 
-#include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/port/capture_file.hpp"
+#include "hivecal/port/input_file.hpp"
 #include "hivecal/port/pty.hpp"
 #include "hivecal/port/recorder.hpp"
 #include "hivecal/port/serial_port.hpp"
+#include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
-#include "sim_model.hpp"
-#include "sim_server.hpp"
-#include "stream_pipeline.hpp"
+#include "sim/sim_model.hpp"
+#include "sim/sim_server.hpp"
+#include "streams/stream_pipeline.hpp"
 
 namespace hivecal {
 namespace {
@@ -45,15 +46,15 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   port::PtyPair robot_pty;
   port::PtyPair tracker_pty;
   std::string error;
-  ASSERT_TRUE(port::open_pty(&robot_pty, &error) && port::open_pty(&tracker_pty, &error)) << error;
+  ASSERT_TRUE(port::open_pty(&robot_pty).ok() && port::open_pty(&tracker_pty).ok()) << error;
   port::SerialPort robot_port(port::SerialOptions{robot_pty.slave_path, port::kRobotBaud});
   port::SerialPort tracker_port(port::SerialOptions{tracker_pty.slave_path, port::kTrackerBaud});
-  ASSERT_TRUE(robot_port.open(&error) && tracker_port.open(&error)) << error;
+  ASSERT_TRUE(robot_port.open().ok() && tracker_port.open().ok()) << error;
   const std::string robot_path = temp_path("robot.cap");
   const std::string tracker_path = temp_path("tracker.cap");
   port::CaptureWriter robot_file;
   port::CaptureWriter tracker_file;
-  ASSERT_TRUE(robot_file.open(robot_path, &error) && tracker_file.open(tracker_path, &error)) << error;
+  ASSERT_TRUE(robot_file.open(robot_path, true).ok() && tracker_file.open(tracker_path, true).ok()) << error;
 
   // Pass 1 live: decode what the recorder writes and fold it into the clock profiles.
   const auto estimator = std::make_unique<ClockEstimator<>>(make_clock_sync_config(session.truth().nominal));
@@ -77,8 +78,10 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   std::string serve_error;
   bool serve_ok = false;
   std::thread devices([&] {
-    serve_ok = sim::serve_session(session, robot_pty, tracker_pty, sim::ServeOptions{0.0}, nullptr, &served,
-                                  &serve_error);
+    const port::Error served_error =
+        sim::serve_session(session, robot_pty, tracker_pty, sim::ServeOptions{0.0}, nullptr, &served);
+    serve_ok = served_error.ok();
+    serve_error = served_error.message;
     serving_done = true;
   });
   volatile std::sig_atomic_t stop = 0;
@@ -88,8 +91,7 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   });
   port::RecordStats recorded;
   EXPECT_TRUE(port::record_streams({&robot_port, &tracker_port}, {&robot_file, &tracker_file}, &stop,
-                                   record_options, &recorded, &error))
-      << error;
+                                   record_options, &recorded).ok());
   devices.join();
   watcher.join();
   ASSERT_TRUE(serve_ok) << serve_error;
@@ -118,17 +120,16 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   EXPECT_LT(clock_error_us, 2000.0);
 
   // Pass 2 from the captures.
-  static Dataset<> dataset;
+  static Dataset<4096> dataset;
   dataset.clear();
   const auto extractor =
       std::make_unique<SampleExtractor<>>(make_extraction_config(session.truth().nominal), fit, &dataset);
   Kept kept;
   extractor->set_observer(&kept);
-  port::CaptureFileSource robot_replay(robot_path);
-  port::CaptureFileSource tracker_replay(tracker_path);
-  ASSERT_TRUE(robot_replay.open(&error) && tracker_replay.open(&error)) << error;
-  streams::SourceReader robot_bytes(&robot_replay);
-  streams::SourceReader tracker_bytes(&tracker_replay);
+  port::InputFile robot_bytes;
+  port::InputFile tracker_bytes;
+  ASSERT_TRUE(robot_bytes.open(robot_path, port::kMaxStreamInputBytes).ok());
+  ASSERT_TRUE(tracker_bytes.open(tracker_path, port::kMaxStreamInputBytes).ok());
   streams::PassStats pass;
   EXPECT_EQ(extract_samples_from_streams(robot_bytes, tracker_bytes, extractor.get(), &pass), Status::ok)
       << error;

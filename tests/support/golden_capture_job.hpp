@@ -59,8 +59,8 @@ inline CaptureJobConfig golden_lm_job_config() {
 }
 
 /// The committed digests: every target must reproduce them.
-inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0x0f9ae249e569c085ULL;
-inline constexpr std::uint64_t kLmJobGoldenDigest = 0x38e75d3202f997ccULL;
+inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0xcbd8767022598f97ULL;
+inline constexpr std::uint64_t kLmJobGoldenDigest = 0x86e5715fb08b05efULL;
 
 /// Static storage of a job: the dataset, and one arena for the capture passes, then the job.
 struct CaptureJobWorkspace {

@@ -4,7 +4,7 @@
 
 #include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
-#include "sim_model.hpp"
+#include "sim/sim_model.hpp"
 
 namespace hivecal::test {
 

@@ -1,11 +1,12 @@
 // The HTML report must be well formed, self-contained, and show what it claims.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
-#include "report.hpp"
-#include "svg.hpp"
+#include "report/report.hpp"
+#include "report/svg.hpp"
 
 namespace hivecal {
 namespace {
@@ -105,3 +106,66 @@ TEST(Report, EmptyAndDegenerateSeriesStillRender) {
 
 }  // namespace
 }  // namespace hivecal
+
+namespace hivecal::report {
+namespace {
+
+/// The text of every element of `svg` with class `cls`.
+std::vector<std::string> texts_of_class(const std::string& svg, const std::string& cls) {
+  std::vector<std::string> out;
+  const std::string key = "class='" + cls + "'";
+  for (std::size_t at = svg.find(key); at != std::string::npos; at = svg.find(key, at + 1)) {
+    const std::size_t open = svg.find('>', at);
+    const std::size_t close = svg.find('<', open);
+    out.push_back(svg.substr(open + 1, close - open - 1));
+  }
+  return out;
+}
+
+/// Significant digits of a plain decimal label ("231.25" -> 5, "1250" -> 3, "0.025" -> 2).
+int significant_digits(const std::string& label) {
+  std::string digits;
+  for (char c : label)
+    if (c >= '0' && c <= '9') digits += c;
+  const std::size_t first = digits.find_first_not_of('0');
+  if (first == std::string::npos) return 1;
+  std::size_t last = digits.size();
+  if (label.find('.') == std::string::npos) last = digits.find_last_not_of('0') + 1;
+  return static_cast<int>(last - first);
+}
+
+TEST(Svg, TicksAreRoundNumbersWithAtMostThreeSignificantDigits) {
+  const std::vector<std::pair<double, double>> ranges = {
+      {-10.96, 231.2}, {-9.32, 269.3}, {0.0, 1.0}, {3.1e-6, 7.7e-6}, {12345.0, 12399.0}, {-0.004, 0.0031}, {42.0, 42.0}};
+  for (const auto& [lo, hi] : ranges) {
+    Series s{"data", {lo, hi}, {hi, lo}, false};
+    const std::string svg = svg_chart(ChartSpec{"t", "x", "y"}, {s});
+    const std::vector<std::string> ticks = texts_of_class(svg, "tick");
+    ASSERT_GE(ticks.size(), 6u) << lo << " " << hi;
+    for (const std::string& t : ticks) {
+      if (t.find('e') != std::string::npos) continue;  // %.3g form: three digits by construction
+      EXPECT_LE(significant_digits(t), 3) << "'" << t << "' for range " << lo << " .. " << hi;
+    }
+  }
+}
+
+TEST(Svg, LegendListsOnlySeriesThatDrewSomething) {
+  Series drawn{"calibrated", {0, 1, 2}, {1, 2, 3}, false};
+  Series empty{"measured", {}, {}, false};
+  Series all_nan{"nan", {0.0}, {std::nan("")}, true};
+  const std::string svg = svg_chart(ChartSpec{"t", "x", "y"}, {empty, drawn, all_nan});
+  const std::vector<std::string> legend = texts_of_class(svg, "legend");
+  ASSERT_EQ(legend.size(), 1u);
+  EXPECT_EQ(legend[0], "calibrated");
+}
+
+TEST(Svg, HistogramAxesStartAtZero) {
+  const std::string svg = svg_histogram(ChartSpec{"t", "error [um]", "count"}, {"a", "b"}, {{1.5, 2.5, 9.0}, {3.0, 4.0}}, 10);
+  const std::vector<std::string> ticks = texts_of_class(svg, "tick");
+  ASSERT_FALSE(ticks.empty());
+  EXPECT_EQ(ticks.front(), "0");
+  for (const std::string& t : ticks) EXPECT_GE(std::stod(t), 0.0) << t;
+}
+
+}  // namespace
+}  // namespace hivecal::report

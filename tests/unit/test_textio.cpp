@@ -7,11 +7,12 @@
 #include <unistd.h>
 #include <vector>
 
-#include "calibration_json.hpp"
-#include "csv.hpp"
 #include "hivecal/core/random.hpp"
+#include "hivecal/port/input_file.hpp"
 #include "test_data.hpp"
-#include "text_util.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal {
 namespace {
@@ -37,8 +38,8 @@ class TempDir {
 };
 
 std::string robot_log_error(const TempDir& dir, const std::string& content) {
-  const textio::ParseResult r = textio::read_robot_log(dir.write("robot.csv", content), [](const textio::RobotLogRow&) {});
-  return r.ok ? "" : r.message;
+  const port::Error r = textio::read_robot_log(dir.write("robot.csv", content), [](const textio::RobotLogRow&) {});
+  return r.ok() ? "" : r.message;
 }
 
 TEST(TextCsv, RobotLogReadsSpecExampleAndExtraColumns) {
@@ -48,8 +49,8 @@ TEST(TextCsv, RobotLogReadsSpecExampleAndExtraColumns) {
                                      "t,q1,q2,q3,q4,q5,q6,extra\r\n"
                                      "12.008,0.0,-1.5707963267948966,1.5707963267948966,-1.5707963267948966,-1.5707963267948966,0.0,7\r\n"
                                      "12.016,0.1,-1.5,1.5,-1.5,-1.5,0.2,8\r\n");
-  const textio::ParseResult r = textio::read_robot_log(path, [&](const textio::RobotLogRow& row) { rows.push_back(row); });
-  ASSERT_TRUE(r.ok) << r.message;
+  const port::Error r = textio::read_robot_log(path, [&](const textio::RobotLogRow& row) { rows.push_back(row); });
+  ASSERT_TRUE(r.ok()) << r.message;
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[0].t_s, 12.008);
   EXPECT_EQ(rows[0].q_rad(1), -1.5707963267948966);
@@ -78,7 +79,7 @@ TEST(TextCsv, BadRobotLogsAreNamed) {
     const std::string message = robot_log_error(dir, c.content);
     EXPECT_NE(message.find(c.expected), std::string::npos) << "got: " << message;
   }
-  const textio::ParseResult missing = textio::read_robot_log("/nonexistent/r.csv", [](const textio::RobotLogRow&) {});
+  const port::Error missing = textio::read_robot_log("/nonexistent/r.csv", [](const textio::RobotLogRow&) {});
   EXPECT_NE(missing.message.find("cannot open"), std::string::npos);
 }
 
@@ -86,28 +87,28 @@ TEST(TextCsv, TrackerLogStatusOptionalAndNaNOnlyWhenInvalid) {
   TempDir dir;
   std::vector<textio::TrackerLogRow> rows;
   auto collect = [&](const textio::TrackerLogRow& row) { rows.push_back(row); };
-  ASSERT_TRUE(textio::read_tracker_log(dir.write("a.csv", "t,x,y,z\n3.1,1.25,-0.5,0.75\n"), collect).ok);
+  ASSERT_TRUE(textio::read_tracker_log(dir.write("a.csv", "t,x,y,z\n3.1,1.25,-0.5,0.75\n"), collect).ok());
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].status, 0);
   EXPECT_EQ(rows[0].point_m, Vec3(1.25, -0.5, 0.75));
   rows.clear();
-  const textio::ParseResult r =
+  const port::Error r =
       textio::read_tracker_log(dir.write("b.csv", "t,x,y,z,status\n3.1,1.25,-0.5,0.75,0\n3.2,nan,nan,nan,1\n"), collect);
-  ASSERT_TRUE(r.ok) << r.message;
+  ASSERT_TRUE(r.ok()) << r.message;
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[1].status, 1);
-  EXPECT_FALSE(textio::read_tracker_log(dir.write("c.csv", "t,x,y,z,status\n3.1,nan,0,0,0\n"), collect).ok);
+  EXPECT_FALSE(textio::read_tracker_log(dir.write("c.csv", "t,x,y,z,status\n3.1,nan,0,0,0\n"), collect).ok());
   // Without the status column a row of three NaN is a lost beam, as on the wire; a partly
   // non-finite row is still refused.
   rows.clear();
-  ASSERT_TRUE(textio::read_tracker_log(dir.write("f.csv", "t,x,y,z\n3.1,1.25,-0.5,0.75\n3.2,nan,NaN,nan\n"), collect).ok);
+  ASSERT_TRUE(textio::read_tracker_log(dir.write("f.csv", "t,x,y,z\n3.1,1.25,-0.5,0.75\n3.2,nan,NaN,nan\n"), collect).ok());
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[0].status, 0);
   EXPECT_EQ(rows[1].status, 1);
-  EXPECT_FALSE(textio::read_tracker_log(dir.write("g.csv", "t,x,y,z\n3.1,nan,nan,0\n"), collect).ok);
-  EXPECT_FALSE(textio::read_tracker_log(dir.write("h.csv", "t,x,y,z\n3.1,inf,inf,inf\n"), collect).ok);
-  EXPECT_FALSE(textio::read_tracker_log(dir.write("d.csv", "t,x,y,z,status\n3.1,0,0,0,1.5\n"), collect).ok);
-  EXPECT_FALSE(textio::read_tracker_log(dir.write("e.csv", "t,x,y,z,status\n3.1,0,0,0,300\n"), collect).ok);
+  EXPECT_FALSE(textio::read_tracker_log(dir.write("g.csv", "t,x,y,z\n3.1,nan,nan,0\n"), collect).ok());
+  EXPECT_FALSE(textio::read_tracker_log(dir.write("h.csv", "t,x,y,z\n3.1,inf,inf,inf\n"), collect).ok());
+  EXPECT_FALSE(textio::read_tracker_log(dir.write("d.csv", "t,x,y,z,status\n3.1,0,0,0,1.5\n"), collect).ok());
+  EXPECT_FALSE(textio::read_tracker_log(dir.write("e.csv", "t,x,y,z,status\n3.1,0,0,0,300\n"), collect).ok());
 }
 
 TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
@@ -119,7 +120,7 @@ TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
   const std::string path = dir.write("s.csv", textio::format_samples_csv(written.samples()));
   static Dataset<16> read_back;
   read_back.clear();
-  ASSERT_TRUE(textio::read_samples_csv(path, &read_back).ok);
+  ASSERT_TRUE(textio::read_samples_csv(path, &read_back).ok());
   ASSERT_EQ(read_back.size(), 10u);
   for (std::size_t i = 0; i < 10; ++i) {
     EXPECT_EQ(read_back.samples()[i].q_rad, written.samples()[i].q_rad);  // bit-exact round trip
@@ -127,13 +128,13 @@ TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
   }
   static Dataset<4> small;
   small.clear();
-  const textio::ParseResult full = textio::read_samples_csv(path, &small);
-  EXPECT_FALSE(full.ok);
+  const port::Error full = textio::read_samples_csv(path, &small);
+  EXPECT_FALSE(full.ok());
   EXPECT_NE(full.message.find("dataset over capacity (4 samples max)"), std::string::npos) << full.message;
 
   std::vector<JointVector> poses;
-  ASSERT_TRUE(textio::read_joints_csv(dir.write("j.csv", "t,q1,q2,q3,q4,q5,q6\n0,1,2,3,4,5,6\n"), &poses).ok);
-  ASSERT_TRUE(textio::read_joints_csv(dir.write("k.csv", "q1,q2,q3,q4,q5,q6\n1,2,3,4,5,6\n"), &poses).ok);
+  ASSERT_TRUE(textio::read_joints_csv(dir.write("j.csv", "t,q1,q2,q3,q4,q5,q6\n0,1,2,3,4,5,6\n"), &poses).ok());
+  ASSERT_TRUE(textio::read_joints_csv(dir.write("k.csv", "q1,q2,q3,q4,q5,q6\n1,2,3,4,5,6\n"), &poses).ok());
   ASSERT_EQ(poses.size(), 2u);
   EXPECT_EQ(poses[0], poses[1]);
 }
@@ -161,22 +162,22 @@ TEST(TextCsv, StreamFileKindByContent) {
 TEST(TextCsv, PullReaderGivesRowsOneAtATime) {
   TempDir dir;
   textio::TrackerLogReader reader;
-  ASSERT_TRUE(reader.open(dir.write("t.csv", "t,x,y,z\n\n1,2,3,4\n2,5,6,7\n")).ok);
+  ASSERT_TRUE(reader.open(dir.write("t.csv", "t,x,y,z\n\n1,2,3,4\n2,5,6,7\n")).ok());
   textio::TrackerLogRow row;
   bool got = false;
-  ASSERT_TRUE(reader.next(&row, &got).ok);
+  ASSERT_TRUE(reader.next(&row, &got).ok());
   ASSERT_TRUE(got);
   EXPECT_EQ(row.t_s, 1.0);
   EXPECT_EQ(row.status, 0);
-  ASSERT_TRUE(reader.next(&row, &got).ok);
+  ASSERT_TRUE(reader.next(&row, &got).ok());
   ASSERT_TRUE(got);
   EXPECT_EQ(row.point_m, Vec3(5.0, 6.0, 7.0));
-  ASSERT_TRUE(reader.next(&row, &got).ok);
+  ASSERT_TRUE(reader.next(&row, &got).ok());
   EXPECT_FALSE(got);
   textio::RobotLogReader robot;
-  ASSERT_TRUE(robot.open(dir.write("r.csv", "t,q1,q2,q3,q4,q5,q6\n")).ok);
-  const textio::ParseResult none = robot.next(nullptr, &got);
-  EXPECT_FALSE(none.ok);
+  ASSERT_TRUE(robot.open(dir.write("r.csv", "t,q1,q2,q3,q4,q5,q6\n")).ok());
+  const port::Error none = robot.next(nullptr, &got);
+  EXPECT_FALSE(none.ok());
   EXPECT_NE(none.message.find("no data rows"), std::string::npos) << none.message;
 }
 
@@ -199,15 +200,14 @@ TEST(TextJson, CalibrationRoundTripsBitExactly) {
     json.key("method").value("lm");
   });
   textio::CalibrationFile back;
-  const textio::ParseResult r = textio::parse_calibration_json(text, "result.json", &back);
-  ASSERT_TRUE(r.ok) << r.message;
+  const port::Error r = textio::parse_calibration_json(text, "result.json", &back);
+  ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(back.robot, RobotType::ur10);
   EXPECT_EQ(to_params(back.model), to_params(file.model));
   EXPECT_LT((back.base_to_tracker.rotation - file.base_to_tracker.rotation).cwiseAbs().maxCoeff(), 1e-15);
   EXPECT_EQ(back.base_to_tracker.translation_m, file.base_to_tracker.translation_m);
   textio::JsonValue root;
-  std::string error;
-  ASSERT_TRUE(textio::parse_json(text, &root, &error)) << error;
+  ASSERT_TRUE(textio::parse_json(text, &root).ok());
   EXPECT_EQ(root.find("method")->string, "lm");
   EXPECT_EQ(root.find("metrics")->find("test")->find("mae_m")->find("3d")->number, 6.01e-5);
   EXPECT_EQ(root.find("convention")->string, "standard-dh");
@@ -237,8 +237,8 @@ TEST(TextJson, MalformedResultsAreNamed) {
   };
   for (const auto& c : cases) {
     textio::CalibrationFile file;
-    const textio::ParseResult r = textio::parse_calibration_json(c.text, "result.json", &file);
-    EXPECT_FALSE(r.ok);
+    const port::Error r = textio::parse_calibration_json(c.text, "result.json", &file);
+    EXPECT_FALSE(r.ok());
     EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message;
   }
 }
@@ -246,14 +246,14 @@ TEST(TextJson, MalformedResultsAreNamed) {
 TEST(TextFiles, AtomicWriteReplacesOrLeavesNothing) {
   TempDir dir;
   const std::string path = dir.path() + "/out.json";
-  std::string error;
-  ASSERT_TRUE(textio::write_file_atomically(path, "first", &error)) << error;
-  ASSERT_TRUE(textio::write_file_atomically(path, "second", &error)) << error;
+  ASSERT_TRUE(textio::write_text_file(path, "first").ok());
+  ASSERT_TRUE(textio::write_text_file(path, "second").ok());
   std::string text;
-  ASSERT_TRUE(textio::read_text_file(path, &text, &error));
+  ASSERT_TRUE(port::read_whole_file(path, port::kMaxTextInputBytes, &text).ok());
   EXPECT_EQ(text, "second");
-  EXPECT_FALSE(textio::write_file_atomically(dir.path() + "/no/such/dir/out.json", "x", &error));
-  EXPECT_NE(error.find("cannot create a temporary"), std::string::npos);
+  const port::Error error = textio::write_text_file(dir.path() + "/no/such/dir/out.json", "x");
+  EXPECT_EQ(error.fault, port::Fault::output);
+  EXPECT_NE(error.message.find("does not exist"), std::string::npos);
 }
 
 }  // namespace

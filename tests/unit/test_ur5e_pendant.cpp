@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "hivecal/model/kinematics.hpp"
-#include "hivecal/model/ur_deltas.hpp"
-#include "text_util.hpp"
-#include "ur_calibration_conf.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal {
 namespace {
@@ -25,8 +25,7 @@ struct PendantReading {
 
 std::vector<PendantReading> read_pendant_csv() {
   std::string text;
-  std::string error;
-  EXPECT_TRUE(textio::read_text_file(kDir + "joint-eef-data.csv", &text, &error)) << error;
+  EXPECT_TRUE(port::read_whole_file(kDir + "joint-eef-data.csv", port::kMaxTextInputBytes, &text).ok());
   std::vector<PendantReading> readings;
   std::istringstream lines(text);
   std::string line;
@@ -69,8 +68,8 @@ TEST(Ur5ePendant, CalibratedFkMatchesControllerNominalDoesNot) {
   const std::vector<PendantReading> readings = read_pendant_csv();
   ASSERT_EQ(readings.size(), 18u);
   UrCalibrationDeltas deltas;
-  const textio::ParseResult parsed = textio::read_ur_calibration_conf(kDir + "calibration.conf", &deltas);
-  ASSERT_TRUE(parsed.ok) << parsed.message;
+  const port::Error parsed = textio::read_ur_calibration_conf(kDir + "calibration.conf", &deltas);
+  ASSERT_TRUE(parsed.ok()) << parsed.message;
   EXPECT_NEAR(deltas.delta_d_m[1], -204.077105406530421, 1e-12);
 
   const RobotModel nominal = nominal_model(RobotType::ur5e);
@@ -87,7 +86,7 @@ TEST(Ur5ePendant, CalibratedFkMatchesControllerNominalDoesNot) {
 TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {
   // Why the library is double: the same chain in float is off by more than half the tracker noise.
   UrCalibrationDeltas deltas;
-  ASSERT_TRUE(textio::read_ur_calibration_conf(kDir + "calibration.conf", &deltas).ok);
+  ASSERT_TRUE(textio::read_ur_calibration_conf(kDir + "calibration.conf", &deltas).ok());
   RobotModel calibrated;
   ASSERT_EQ(apply_ur_deltas(nominal_model(RobotType::ur5e), deltas, &calibrated), Status::ok);
   double worst_m = 0.0;
@@ -113,7 +112,7 @@ TEST(UrCalibrationConf, MalformedInputsAreNamed) {
   UrCalibrationDeltas d;
   const std::string good_rows =
       "delta_theta = [0,0,0,0,0,0]\ndelta_a = [0,0,0,0,0,0]\ndelta_d = [0,0,0,0,0,0]\n";
-  EXPECT_TRUE(textio::parse_ur_calibration_conf("[mounting]\n" + good_rows + "delta_alpha = [0,0,0,0,0,0]\n", "x", &d).ok);
+  EXPECT_TRUE(textio::parse_ur_calibration_conf("[mounting]\n" + good_rows + "delta_alpha = [0,0,0,0,0,0]\n", "x", &d).ok());
   const struct {
     std::string text;
     std::string expected;
@@ -128,18 +127,18 @@ TEST(UrCalibrationConf, MalformedInputsAreNamed) {
       {"[mounting]\n" + good_rows + "delta_a = [0,0,0,0,0,0]\n", "given twice"},
   };
   for (const auto& c : cases) {
-    const textio::ParseResult r = textio::parse_ur_calibration_conf(c.text, "conf", &d);
-    EXPECT_FALSE(r.ok);
+    const port::Error r = textio::parse_ur_calibration_conf(c.text, "conf", &d);
+    EXPECT_FALSE(r.ok());
     EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message;
   }
-  EXPECT_FALSE(textio::read_ur_calibration_conf("/nonexistent/calibration.conf", &d).ok);
+  EXPECT_FALSE(textio::read_ur_calibration_conf("/nonexistent/calibration.conf", &d).ok());
 }
 
 TEST(UrCalibrationConf, FormatReadsBackToTheSameBits) {
   UrCalibrationDeltas d;
-  ASSERT_TRUE(textio::read_ur_calibration_conf(kDir + "calibration.conf", &d).ok);
+  ASSERT_TRUE(textio::read_ur_calibration_conf(kDir + "calibration.conf", &d).ok());
   UrCalibrationDeltas back;
-  ASSERT_TRUE(textio::parse_ur_calibration_conf(textio::format_ur_calibration_conf(d), "out", &back).ok);
+  ASSERT_TRUE(textio::parse_ur_calibration_conf(textio::format_ur_calibration_conf(d), "out", &back).ok());
   EXPECT_EQ(0, std::memcmp(&d, &back, sizeof d));
 }
 

@@ -21,6 +21,7 @@
 #include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
 #include "hivecal/model/dataset.hpp"
+#include "hivecal/model/dh_convention.hpp"
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/metrics.hpp"

@@ -37,7 +37,7 @@ struct NominalTable {
   double a_m[kJointCount];
 };
 
-// Datasheet values of Universal Robots (standard DH), alpha = [pi/2, 0, 0, pi/2, -pi/2, 0].
+// Universal Robots' published DH tables (standard DH, CB3 and e-Series), alpha = [pi/2, 0, 0, pi/2, -pi/2, 0].
 constexpr NominalTable kUr3 = {{0.1519, 0.0, 0.0, 0.11235, 0.08535, 0.0819},
                                {0.0, -0.24365, -0.21325, 0.0, 0.0, 0.0}};
 constexpr NominalTable kUr5 = {{0.089159, 0.0, 0.0, 0.10915, 0.09465, 0.0823},
@@ -46,6 +46,12 @@ constexpr NominalTable kUr10 = {{0.1273, 0.0, 0.0, 0.163941, 0.1157, 0.0922},
                                 {0.0, -0.612, -0.5723, 0.0, 0.0, 0.0}};
 constexpr NominalTable kUr5e = {{0.1625, 0.0, 0.0, 0.1333, 0.0997, 0.0996},
                                 {0.0, -0.425, -0.3922, 0.0, 0.0, 0.0}};
+constexpr NominalTable kUr3e = {{0.15185, 0.0, 0.0, 0.13105, 0.08535, 0.0921},
+                                {0.0, -0.24355, -0.2132, 0.0, 0.0, 0.0}};
+constexpr NominalTable kUr10e = {{0.1807, 0.0, 0.0, 0.17415, 0.11985, 0.11655},
+                                 {0.0, -0.6127, -0.57155, 0.0, 0.0, 0.0}};
+constexpr NominalTable kUr16e = {{0.1807, 0.0, 0.0, 0.17415, 0.11985, 0.11655},
+                                 {0.0, -0.4784, -0.36, 0.0, 0.0, 0.0}};
 constexpr double kUrAlpha_rad[kJointCount] = {math::kHalfPi, 0.0, 0.0, math::kHalfPi, -math::kHalfPi, 0.0};
 
 const NominalTable& table_of(RobotType type) {
@@ -53,6 +59,9 @@ const NominalTable& table_of(RobotType type) {
     case RobotType::ur3: return kUr3;
     case RobotType::ur10: return kUr10;
     case RobotType::ur5e: return kUr5e;
+    case RobotType::ur3e: return kUr3e;
+    case RobotType::ur10e: return kUr10e;
+    case RobotType::ur16e: return kUr16e;
     case RobotType::ur5: break;
   }
   return kUr5;
@@ -108,13 +117,19 @@ const char* robot_type_name(RobotType type) {
     case RobotType::ur3: return "ur3";
     case RobotType::ur10: return "ur10";
     case RobotType::ur5e: return "ur5e";
+    case RobotType::ur3e: return "ur3e";
+    case RobotType::ur10e: return "ur10e";
+    case RobotType::ur16e: return "ur16e";
     case RobotType::ur5: break;
   }
   return "ur5";
 }
 
+const char* robot_type_names() { return "ur3, ur5, ur10, ur3e, ur5e, ur10e, ur16e"; }
+
 Status robot_type_from_name(const char* name, RobotType* type) {
-  constexpr RobotType kAll[] = {RobotType::ur3, RobotType::ur5, RobotType::ur10, RobotType::ur5e};
+  constexpr RobotType kAll[] = {RobotType::ur3,  RobotType::ur5,   RobotType::ur10, RobotType::ur3e,
+                                RobotType::ur5e, RobotType::ur10e, RobotType::ur16e};
   if (name == nullptr) return Status::invalid_argument;
   for (RobotType candidate : kAll) {
     if (names_equal(name, robot_type_name(candidate))) {

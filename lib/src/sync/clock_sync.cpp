@@ -29,6 +29,7 @@ void ClockEstimatorBase::reset() {
   stats_ = ClockProfileStats();
   robot_started_ = false;
   tracker_started_ = false;
+  held_count_ = 0;
 }
 
 void ClockEstimatorBase::reset(const ClockSyncConfig& config) {
@@ -38,7 +39,8 @@ void ClockEstimatorBase::reset(const ClockSyncConfig& config) {
 
 bool ClockEstimatorBase::config_ok() const {
   const ClockSyncConfig& c = config_;
-  return c.knot_interval_us > 0 && c.coarse_step_us >= 2 * c.knot_interval_us &&
+  return c.knot_interval_us > 0 && c.coarse_step_us >= 2 * c.knot_interval_us && c.max_tool_speed_m_s > 0.0 &&
+         c.reanchor_points >= 2 && c.reanchor_points <= kMaxHeldTrackerPoints &&
          c.coarse_step_us % c.knot_interval_us == 0 && c.max_chord_interval_us > 0 && c.max_drift >= 0.0 &&
          c.max_drift < 0.01 && c.min_correlation > 0.0 && c.min_correlation <= 1.0 &&
          c.max_runner_up_ratio > 0.0 && c.max_iterations > 0 && c.chord_span_points > 0 &&
@@ -85,25 +87,66 @@ void ClockEstimatorBase::push_tracker(const TrackerPointRecord& record) {
     ++stats_.tracker_not_valid;
     return;
   }
-  if (tracker_started_ && record.timestamp_us <= tracker_last_us_) {
+  if (tracker_started_ && record.timestamp_us <= tracker_newest_us_) {
     ++stats_.tracker_rejected;
     return;
   }
+  tracker_newest_us_ = record.timestamp_us;
+  const bool fits_stored =
+      !tracker_started_ || plausible_move(tracker_last_us_, tracker_last_point_m_, record.timestamp_us, point);
+  if (held_count_ == 0 && fits_stored) {
+    store_tracker_point(record.timestamp_us, point);
+    return;
+  }
+  // A jump no tool makes is held until the following points judge it: the track resuming
+  // where it was sets the held points aside as blunders; a run of consistent points means
+  // the stored point before them was the odd one (the track moved on).
+  const bool fits_held = held_count_ > 0 && plausible_move(held_[held_count_ - 1].timestamp_us,
+                                                          held_[held_count_ - 1].point_m, record.timestamp_us, point);
+  if (!fits_held) {
+    set_aside_held();
+    if (fits_stored) {
+      store_tracker_point(record.timestamp_us, point);
+      return;
+    }
+  }
+  held_[held_count_++] = ClockHeldPoint{record.timestamp_us, point};
+  if (held_count_ >= config_.reanchor_points) {
+    for (std::uint32_t k = 0; k < held_count_; ++k) store_tracker_point(held_[k].timestamp_us, held_[k].point_m);
+    held_count_ = 0;
+  }
+}
+
+bool ClockEstimatorBase::plausible_move(std::uint64_t from_us, const Vec3& from_m, std::uint64_t to_us,
+                                        const Vec3& to_m) const {
+  const double dt_s = static_cast<double>(to_us - from_us) * 1e-6;
+  return (to_m - from_m).norm() <= config_.max_tool_speed_m_s * dt_s;
+}
+
+void ClockEstimatorBase::set_aside_held() {
+  for (std::uint32_t k = 0; k < held_count_; ++k) {
+    if (stats_.tracker_set_aside < kClockSetAsideLog) stats_.set_aside_tracker_us[stats_.tracker_set_aside] = held_[k].timestamp_us;
+    ++stats_.tracker_set_aside;
+  }
+  held_count_ = 0;
+}
+
+void ClockEstimatorBase::store_tracker_point(std::uint64_t timestamp_us, const Vec3& point_m) {
   if (!tracker_started_) {
     tracker_started_ = true;
-    tracker_t0_us_ = record.timestamp_us;
+    tracker_t0_us_ = timestamp_us;
     tracker_last_s_m_ = 0.0;
   } else {
-    tracker_last_s_m_ += (point - tracker_last_point_m_).norm();
+    tracker_last_s_m_ += (point_m - tracker_last_point_m_).norm();
   }
   if (stats_.tracker_points < tracker_capacity_) {
     tracker_knots_[stats_.tracker_points++] =
-        ClockTrackerKnot{static_cast<double>(record.timestamp_us - tracker_t0_us_), tracker_last_s_m_};
+        ClockTrackerKnot{static_cast<double>(timestamp_us - tracker_t0_us_), tracker_last_s_m_};
   } else {
     ++stats_.tracker_beyond_capacity;
   }
-  tracker_last_us_ = record.timestamp_us;
-  tracker_last_point_m_ = point;
+  tracker_last_us_ = timestamp_us;
+  tracker_last_point_m_ = point_m;
 }
 
 namespace {
@@ -141,6 +184,7 @@ ClockFit to_clock_fit(const detail::FineFit& fine, const detail::CoarseLag& coar
 
 Status ClockEstimatorBase::estimate(ClockFit* fit) {
   if (!config_ok()) return Status::invalid_argument;
+  set_aside_held();  // a jump that never came back nor went on: the last points were blunders
   if (stats_.robot_knots < 4 || stats_.tracker_points < 4) return Status::clock_fit_failed;
   detail::ClockProfiles view;
   view.robot_s_m = robot_knots_m_;

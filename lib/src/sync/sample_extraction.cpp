@@ -89,10 +89,15 @@ void SampleExtractorBase::reset(const ExtractionConfig& config, const ClockFit& 
   tracker_started_ = false;
 }
 
+double SampleExtractorBase::robot_half_span_us() const {
+  const std::uint32_t span_us = config_.window_us > config_.speed_baseline_us ? config_.window_us : config_.speed_baseline_us;
+  return 0.5 * static_cast<double>(span_us);
+}
+
 bool SampleExtractorBase::config_ok() const {
   return dataset_ != nullptr && robot_.capacity() >= 2 && tracker_.capacity() >= 2 &&
-         config_.max_speed_m_s > 0.0 && config_.window_us > 0 && config_.speed_baseline_us > 0 &&
-         config_.speed_baseline_us <= config_.window_us && config_.max_robot_gap_us > 0 &&
+         config_.max_speed_m_s > 0.0 && config_.speed_baseline_us > 0 &&
+         (config_.window_us == 0 || config_.speed_baseline_us <= config_.window_us) && config_.max_robot_gap_us > 0 &&
          config_.max_tracker_gap_us > 0 && math::is_finite(clock_.offset_at_reference_us) &&
          math::is_finite(clock_.drift) && math::is_finite(clock_.reference_tracker_us);
 }
@@ -159,7 +164,7 @@ Status SampleExtractorBase::finish() {
 }
 
 bool SampleExtractorBase::ready(const ExtractorTrackerEntry& entry) const {
-  const double half_us = 0.5 * static_cast<double>(config_.window_us);
+  const double half_us = robot_half_span_us();
   const bool tracker_done = tracker_latest_us_ >= entry.t_us + half_us;
   const bool robot_done = robot_started_ && robot_latest_us_ >= clock_.robot_us(entry.t_us) + half_us;
   return tracker_done && robot_done;
@@ -193,7 +198,9 @@ std::size_t SampleExtractorBase::robot_index_at_or_before(double t_us) const {
 }
 
 bool SampleExtractorBase::check_robot(double robot_us, Window* window, DropReason* reason) const {
-  const double half_us = 0.5 * static_cast<double>(config_.window_us);
+  // Without a window this is the central difference over the baseline at the instant: the
+  // only pairs of records at least a baseline apart bracket it.
+  const double half_us = robot_half_span_us();
   if (!robot_started_ || robot_us < robot_first_us_ || robot_us > robot_latest_us_) {
     *reason = DropReason::outside_robot_range;
   } else if (robot_us - half_us < robot_first_us_ || robot_latest_us_ < robot_us + half_us) {
@@ -211,9 +218,11 @@ bool SampleExtractorBase::check_robot(double robot_us, Window* window, DropReaso
         return false;
       }
     }
-    window->speed_m_s = max_baseline_speed(
-        window->first, window->last, static_cast<double>(config_.speed_baseline_us),
-        [this](std::size_t i) { return robot_[i].t_us; }, [this](std::size_t i) { return robot_[i].tool_m; });
+    window->speed_m_s = config_.window_us > 0 ? max_baseline_speed(
+                                                      window->first, window->last, static_cast<double>(config_.speed_baseline_us),
+                                                      [this](std::size_t i) { return robot_[i].t_us; },
+                                                      [this](std::size_t i) { return robot_[i].tool_m; })
+                                                : speed_at_instant(robot_us);
     if (!(window->speed_m_s <= config_.max_speed_m_s)) {
       *reason = window->speed_m_s < 0.0 ? DropReason::window_incomplete : DropReason::moving_robot;
       return false;
@@ -221,6 +230,33 @@ bool SampleExtractorBase::check_robot(double robot_us, Window* window, DropReaso
     return true;
   }
   return false;
+}
+
+SampleExtractorBase::RobotBracket SampleExtractorBase::bracket_at(double robot_us) const {
+  RobotBracket bracket;
+  bracket.before = robot_index_at_or_before(robot_us);
+  bracket.after = bracket.before + 1 < robot_.size() ? bracket.before + 1 : bracket.before;
+  const double t0_us = robot_[bracket.before].t_us;
+  const double t1_us = robot_[bracket.after].t_us;
+  bracket.fraction = t1_us > t0_us ? (robot_us - t0_us) / (t1_us - t0_us) : 0.0;
+  return bracket;
+}
+
+Vec3 SampleExtractorBase::tool_at(double robot_us) const {
+  const RobotBracket at = bracket_at(robot_us);
+  const Vec3& a = robot_[at.before].tool_m;
+  return a + at.fraction * (robot_[at.after].tool_m - a);
+}
+
+double SampleExtractorBase::speed_at_instant(double robot_us) const {
+  // The slower of the backward and the forward difference over half the baseline each: at
+  // the edge of a pause one side is still, as the tool is at that instant; in a move both
+  // sides see its speed.
+  const double half_us = 0.5 * static_cast<double>(config_.speed_baseline_us);
+  const Vec3 here_m = tool_at(robot_us);
+  const double backward_m = (here_m - tool_at(robot_us - half_us)).norm();
+  const double forward_m = (tool_at(robot_us + half_us) - here_m).norm();
+  return (backward_m < forward_m ? backward_m : forward_m) / half_us * kUsPerS;
 }
 
 bool SampleExtractorBase::check_tracker(const ExtractorTrackerEntry& entry, double* speed_m_s,
@@ -256,14 +292,16 @@ Status SampleExtractorBase::decide(const ExtractorTrackerEntry& entry) {
   Window window;
   double tracker_speed_m_s = 0.0;
   DropReason reason = DropReason::window_incomplete;
-  if (!check_robot(robot_us, &window, &reason) || !check_tracker(entry, &tracker_speed_m_s, &reason))
-    return drop(entry.t_us, reason);
+  if (!check_robot(robot_us, &window, &reason)) return drop(entry.t_us, reason);
+  // The tracker side is tested only over a stability window: at the instant alone a 10 Hz
+  // tracker has no second point, and its neighbours lie outside short pauses.
+  if (config_.window_us > 0 && !check_tracker(entry, &tracker_speed_m_s, &reason)) return drop(entry.t_us, reason);
 
   // Linear interpolation between the robot records bracketing the instant (gaps checked above).
-  const std::size_t i = robot_index_at_or_before(robot_us);
-  const ExtractorRobotEntry& a = robot_[i];
-  const ExtractorRobotEntry& b = robot_[i + 1 < robot_.size() ? i + 1 : i];
-  const double u = b.t_us > a.t_us ? (robot_us - a.t_us) / (b.t_us - a.t_us) : 0.0;
+  const RobotBracket at = bracket_at(robot_us);
+  const ExtractorRobotEntry& a = robot_[at.before];
+  const ExtractorRobotEntry& b = robot_[at.after];
+  const double u = at.fraction;
   ExtractedSample sample;
   sample.tracker_us = entry.t_us;
   sample.robot_us = robot_us;

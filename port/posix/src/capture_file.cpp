@@ -1,60 +1,62 @@
 #include "hivecal/port/capture_file.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
 #include <utility>
 
+#include "hivecal/port/error.hpp"
+
 namespace hivecal::port {
 
-CaptureWriter::~CaptureWriter() {
-  std::string ignored;
-  (void)close(&ignored);
-}
+CaptureWriter::~CaptureWriter() { (void)close(); }
 
-bool CaptureWriter::open(const std::string& path, std::string* error) {
+Error CaptureWriter::open(const std::string& path, bool replace) {
   path_ = path;
   bytes_written_ = 0;
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd_ < 0) {
-    *error = path + ": cannot create: " + std::strerror(errno);
-    return false;
+  struct stat info {};
+  if (replace && ::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) {
+    return Error::output(quoted(path, 200) + ": not a regular file; refusing to write a capture over it");
   }
-  return true;
+  const int mode = replace ? O_TRUNC : O_EXCL;  // never truncates an existing capture unasked
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | mode | O_CLOEXEC, 0666);
+  if (fd_ < 0) {
+    return Error::output(quoted(path, 200) + (errno == EEXIST ? ": exists; refusing to overwrite a capture (--force replaces it)"
+                                                              : ": cannot create: " + system_message(errno)));
+  }
+  return Error{};
 }
 
-bool CaptureWriter::write(const std::uint8_t* bytes, std::size_t count, std::string* error) {
+Error CaptureWriter::write(const std::uint8_t* bytes, std::size_t count) {
   while (count > 0) {
     const ssize_t put = ::write(fd_, bytes, count);
     if (put < 0) {
       if (errno == EINTR) continue;
-      *error = path_ + ": write failed: " + std::strerror(errno);
-      return false;
+      return Error::output(path_ + ": write failed: " + std::strerror(errno));
     }
     bytes += put;
     count -= static_cast<std::size_t>(put);
     bytes_written_ += static_cast<std::uint64_t>(put);
   }
-  return true;
+  return Error{};
 }
 
-bool CaptureWriter::sync(std::string* error) {
+Error CaptureWriter::sync() {
   if (fd_ >= 0 && ::fsync(fd_) != 0 && errno != EINVAL) {  // EINVAL: a pipe or tty, nothing to sync
-    *error = path_ + ": fsync failed: " + std::strerror(errno);
-    return false;
+    return Error::output(path_ + ": fsync failed: " + std::strerror(errno));
   }
-  return true;
+  return Error{};
 }
 
-bool CaptureWriter::close(std::string* error) {
-  if (fd_ < 0) return true;
-  const bool synced = sync(error);
-  const bool closed = ::close(fd_) == 0;
-  if (!closed && synced) *error = path_ + ": close failed: " + std::strerror(errno);
+Error CaptureWriter::close() {
+  if (fd_ < 0) return Error{};
+  Error error = sync();
+  if (::close(fd_) != 0 && error.ok()) error = Error::output(path_ + ": close failed: " + std::strerror(errno));
   fd_ = -1;
-  return synced && closed;
+  return error;
 }
 
 CaptureFileSource::CaptureFileSource(std::string path, double pace_bytes_per_s)
@@ -64,15 +66,14 @@ CaptureFileSource::~CaptureFileSource() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-bool CaptureFileSource::open(std::string* error) {
+Error CaptureFileSource::open() {
   fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) {
-    *error = path_ + ": cannot open: " + std::strerror(errno);
-    return false;
+    return Error::input(path_ + ": cannot open: " + std::strerror(errno));
   }
   bytes_read_ = 0;
   start_ms_ = monotonic_ms();
-  return true;
+  return Error{};
 }
 
 ReadResult CaptureFileSource::read(std::uint8_t* buffer, std::size_t capacity, int timeout_ms) {

@@ -10,31 +10,28 @@
 
 namespace hivecal::port {
 
-bool open_pty(PtyPair* pty, std::string* error) {
+Error open_pty(PtyPair* pty) {
   close_pty(pty);
   pty->master_fd = posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
   char name[128] = {};
   if (pty->master_fd < 0 || grantpt(pty->master_fd) != 0 || unlockpt(pty->master_fd) != 0 ||
       ptsname_r(pty->master_fd, name, sizeof name) != 0) {
-    *error = std::string("cannot open a pseudo-terminal: ") + std::strerror(errno);
     close_pty(pty);
-    return false;
+    return Error::failure(std::string("cannot open a pseudo-terminal: ") + std::strerror(errno));
   }
   pty->slave_path = name;
   pty->slave_fd = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
   termios tio{};
   if (pty->slave_fd < 0 || tcgetattr(pty->slave_fd, &tio) != 0) {
-    *error = pty->slave_path + ": cannot open: " + std::strerror(errno);
     close_pty(pty);
-    return false;
+    return Error::failure(pty->slave_path + ": cannot open: " + std::strerror(errno));
   }
   cfmakeraw(&tio);  // no echo back into the master, no line editing, 8-bit clean
   if (tcsetattr(pty->slave_fd, TCSANOW, &tio) != 0) {
-    *error = pty->slave_path + ": cannot configure: " + std::strerror(errno);
     close_pty(pty);
-    return false;
+    return Error::failure(pty->slave_path + ": cannot configure: " + std::strerror(errno));
   }
-  return true;
+  return Error{};
 }
 
 void close_pty(PtyPair* pty) {

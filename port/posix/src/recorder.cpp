@@ -34,9 +34,8 @@ void wait_for_input(const std::vector<ByteSource*>& sources, const std::vector<b
 
 }  // namespace
 
-bool record_streams(const std::vector<ByteSource*>& sources, const std::vector<CaptureWriter*>& writers,
-                    const volatile std::sig_atomic_t* stop, const RecordOptions& options, RecordStats* stats,
-                    std::string* error) {
+Error record_streams(const std::vector<ByteSource*>& sources, const std::vector<CaptureWriter*>& writers,
+                     const volatile std::sig_atomic_t* stop, const RecordOptions& options, RecordStats* stats) {
   stats->bytes.assign(sources.size(), 0);
   stats->disconnects.assign(sources.size(), 0);
   std::vector<bool> done(sources.size(), false);
@@ -44,9 +43,9 @@ bool record_streams(const std::vector<ByteSource*>& sources, const std::vector<C
   std::vector<std::uint8_t> chunk(kChunkBytes);
   const std::int64_t start_ms = monotonic_ms();
   std::int64_t last_sync_ms = start_ms;
-  bool ok = true;
+  Error error;
   std::size_t remaining = sources.size();
-  while (ok && remaining > 0) {
+  while (error.ok() && remaining > 0) {
     if (stop != nullptr && *stop != 0) {
       stats->ended_by_stop_flag = true;
       break;
@@ -54,38 +53,37 @@ bool record_streams(const std::vector<ByteSource*>& sources, const std::vector<C
     if (options.duration_s > 0.0 && static_cast<double>(monotonic_ms() - start_ms) >= options.duration_s * 1000.0)
       break;
     wait_for_input(sources, done, options.poll_timeout_ms);
-    for (std::size_t i = 0; ok && i < sources.size(); ++i) {
+    for (std::size_t i = 0; error.ok() && i < sources.size(); ++i) {
       if (done[i]) continue;
       const ReadResult got = sources[i]->read(chunk.data(), chunk.size(), 0);
       const bool was_lost = lost[i];
       lost[i] = got.status == ReadStatus::disconnected;
       if (got.status == ReadStatus::data) {
-        ok = writers[i]->write(chunk.data(), got.bytes, error);
+        error = writers[i]->write(chunk.data(), got.bytes);
         stats->bytes[i] += got.bytes;
-        if (ok && options.on_bytes) options.on_bytes(i, chunk.data(), got.bytes);
+        if (error.ok() && options.on_bytes) options.on_bytes(i, chunk.data(), got.bytes);
       } else if (got.status == ReadStatus::disconnected) {
         if (!was_lost) ++stats->disconnects[i];  // count each loss once, not each retry
       } else if (got.status == ReadStatus::end_of_stream) {
         done[i] = true;
         --remaining;
       } else if (got.status == ReadStatus::error) {
-        *error = sources[i]->name() + ": read failed: " + std::strerror(got.error_number);
-        ok = false;
+        error = Error::input(sources[i]->name() + ": read failed: " + std::strerror(got.error_number));
       }
     }
     if (monotonic_ms() - last_sync_ms >= options.sync_interval_ms) {
-      for (CaptureWriter* writer : writers) ok = writer->sync(error) && ok;
+      for (CaptureWriter* writer : writers) {
+        const Error synced = writer->sync();
+        if (error.ok()) error = synced;
+      }
       last_sync_ms = monotonic_ms();
     }
   }
   for (CaptureWriter* writer : writers) {
-    std::string close_error;
-    if (!writer->close(&close_error) && ok) {
-      *error = close_error;
-      ok = false;
-    }
+    const Error closed = writer->close();
+    if (error.ok()) error = closed;
   }
-  return ok;
+  return error;
 }
 
 }  // namespace hivecal::port

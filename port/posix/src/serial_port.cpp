@@ -48,33 +48,31 @@ void SerialPort::close() {
   fd_ = -1;
 }
 
-bool SerialPort::open(std::string* error) {
+Error SerialPort::open() {
   close();
   speed_t speed = 0;
   if (!baud_constant(options_.baud, &speed)) {
-    *error = options_.path + ": unsupported baud rate " + std::to_string(options_.baud);
-    return false;
+    return Error::input(options_.path + ": unsupported baud rate " + std::to_string(options_.baud));
   }
   fd_ = ::open(options_.path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) {
-    *error = options_.path + ": cannot open: " + std::strerror(errno);
-    return false;
+    return Error::input(options_.path + ": cannot open: " + std::strerror(errno));
   }
-  if (!configure(error)) {
+  Error configured = configure();
+  if (!configured.ok()) {
     close();
-    return false;
+    return configured;
   }
   ever_opened_ = true;
   backoff_ms_ = 0;
-  return true;
+  return Error{};
 }
 
 // Raw 8N1: no echo, no line discipline, no flow control, reads return at once (poll waits).
-bool SerialPort::configure(std::string* error) {
+Error SerialPort::configure() {
   termios tio{};
   if (tcgetattr(fd_, &tio) != 0) {
-    *error = options_.path + ": not a terminal: " + std::strerror(errno);
-    return false;
+    return Error::input(options_.path + ": not a terminal: " + std::strerror(errno));
   }
   cfmakeraw(&tio);
   tio.c_cflag |= CLOCAL | CREAD;
@@ -85,10 +83,9 @@ bool SerialPort::configure(std::string* error) {
   speed_t speed = 0;
   (void)baud_constant(options_.baud, &speed);
   if (cfsetispeed(&tio, speed) != 0 || cfsetospeed(&tio, speed) != 0 || tcsetattr(fd_, TCSANOW, &tio) != 0) {
-    *error = options_.path + ": cannot configure: " + std::strerror(errno);
-    return false;
+    return Error::input(options_.path + ": cannot configure: " + std::strerror(errno));
   }
-  return true;
+  return Error{};
 }
 
 void SerialPort::lose() {
@@ -100,8 +97,7 @@ void SerialPort::lose() {
 
 bool SerialPort::try_reopen(std::int64_t now_ms) {
   if (now_ms < next_reopen_ms_) return false;
-  std::string ignored;
-  if (open(&ignored)) {
+  if (open().ok()) {  // a failed retry is not an error: the backoff grows
     ++reconnects_;
     return true;
   }

@@ -52,13 +52,16 @@ ModelParams to_params(const RobotModel& model);
 RobotModel from_params(const ModelParams& params);
 
 /// Robot types with built-in nominal tables.
-enum class RobotType : int { ur3, ur5, ur10, ur5e };
+enum class RobotType : int { ur3, ur5, ur10, ur5e, ur3e, ur10e, ur16e };
 
 /// Nominal (datasheet) geometry of a robot type; the tool point is at the flange.
 RobotModel nominal_model(RobotType type);
+/// The names robot_type_from_name accepts, for messages: "ur3, ur5, ur10, ur3e, ur5e, ur10e, ur16e".
+const char* robot_type_names();
 /// Lower-case name of a robot type ("ur5").
 const char* robot_type_name(RobotType type);
-/// Parses "ur3", "ur5", "ur10" or "ur5e"; Status::invalid_argument otherwise.
+/// Parses "ur3", "ur5", "ur10" (CB3) or "ur3e", "ur5e", "ur10e", "ur16e" (e-Series);
+/// Status::invalid_argument otherwise.
 Status robot_type_from_name(const char* name, RobotType* type);
 
 /// Pose of the flange frame in the robot base frame.

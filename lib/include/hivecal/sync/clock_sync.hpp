@@ -47,6 +47,8 @@ struct ClockSyncConfig {
   double edge_speed_change_m_s = 0.005;         ///< speed change within a chord that makes it informative [m/s]
   std::uint32_t min_edge_chords = 10;           ///< informative chords needed [chords]
   std::uint32_t max_iterations = 30;            ///< Gauss-Newton iteration limit
+  double max_tool_speed_m_s = 5.0;              ///< a tracker point implying a faster tool is a blunder and set aside [m/s]
+  std::uint32_t reanchor_points = 5;            ///< this many consecutive consistent "blunders" mean the earlier point was the blunder [points]
 };
 
 /// A ClockSyncConfig with the given speed model and default options.
@@ -76,6 +78,9 @@ struct ClockFit {
 };
 
 /// What went into the profiles.
+/// Timestamps of set-aside tracker points kept for messages (the count has them all).
+inline constexpr std::size_t kClockSetAsideLog = 8;
+
 struct ClockProfileStats {
   std::uint64_t robot_records = 0;          ///< JointStateRecords pushed
   std::uint64_t robot_rejected = 0;         ///< of which out of time order or non-finite
@@ -85,8 +90,19 @@ struct ClockProfileStats {
   std::uint64_t tracker_not_valid = 0;      ///< of which status not valid or non-finite point
   std::uint64_t tracker_rejected = 0;       ///< of which out of time order
   std::uint64_t tracker_beyond_capacity = 0;///< of which after the profile was full
+  std::uint64_t tracker_set_aside = 0;      ///< of which valid but set aside as blunders (an implausible jump away and back)
+  std::uint64_t set_aside_tracker_us[kClockSetAsideLog] = {};  ///< tracker timestamps of the first set-aside points [us]
   std::size_t robot_knots = 0;              ///< robot profile knots stored
   std::size_t tracker_points = 0;           ///< tracker profile points stored
+};
+
+/// Most tracker points held back while a jump is judged (ClockSyncConfig::reanchor_points <= this).
+inline constexpr std::uint32_t kMaxHeldTrackerPoints = 8;
+
+/// A tracker point held back while the estimator judges a jump.
+struct ClockHeldPoint {
+  std::uint64_t timestamp_us = 0;  ///< tracker clock [us]
+  Vec3 point_m = Vec3::Zero();     ///< position [m]
 };
 
 /// One stored tracker point: time since the first stored point and cumulative chord length.
@@ -127,6 +143,9 @@ class ClockEstimatorBase {
 
  private:
   bool config_ok() const;
+  void store_tracker_point(std::uint64_t timestamp_us, const Vec3& point_m);
+  void set_aside_held();
+  bool plausible_move(std::uint64_t from_us, const Vec3& from_m, std::uint64_t to_us, const Vec3& to_m) const;
 
   ClockSyncConfig config_;
   double* robot_knots_m_;
@@ -142,7 +161,11 @@ class ClockEstimatorBase {
   Vec3 robot_last_point_m_ = Vec3::Zero();
   double robot_last_s_m_ = 0.0;
   bool robot_started_ = false;
-  // Tracker profile state.
+  // Tracker profile state. Points that jump implausibly far from the last stored one are
+  // held until the next points tell a blunder (set aside) from a new track (stored).
+  ClockHeldPoint held_[kMaxHeldTrackerPoints];
+  std::uint32_t held_count_ = 0;
+  std::uint64_t tracker_newest_us_ = 0;
   std::uint64_t tracker_t0_us_ = 0;
   std::uint64_t tracker_last_us_ = 0;
   Vec3 tracker_last_point_m_ = Vec3::Zero();

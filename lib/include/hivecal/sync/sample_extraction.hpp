@@ -1,7 +1,10 @@
 // Quasi-static sample extraction: pairs each valid tracker point with the robot joints
 // resampled at the same instant (through a ClockFit) and keeps the pair when the tool was
-// still on both sides over a window around that instant (the paper's rule: speed below
-// 2 mm/s). Streaming and bounded: the two streams are pushed as they come, each in its own
+// quasi-static at that instant: robot-side tool speed below 2 mm/s (the paper's rule), from
+// short one-sided differences of the resampled tool path, so a pause of 0.2 s yields its two
+// points.
+// A stricter stability window (both sides still over a longer span) is an option, off by
+// default: it costs the points of short pauses. Streaming and bounded: the two streams are pushed as they come, each in its own
 // time order, into fixed rings (capacities are template parameters); every tracker point
 // ends up either kept or dropped for exactly one DropReason.
 #pragma once
@@ -27,10 +30,10 @@ enum class DropReason : std::uint8_t {
   out_of_order,           ///< timestamp not after the previous tracker point's
   outside_robot_range,    ///< its robot-clock instant is before the first or after the last robot record
   robot_history_overrun,  ///< the robot records around it were already evicted (ring too small for the streams' lag)
-  robot_gap,              ///< a robot gap longer than max_robot_gap_us around the instant or inside the window
-  window_incomplete,      ///< the window is not covered by data (stream start/end, tracker dropouts)
-  moving_robot,           ///< robot-side tool speed above the threshold in the window
-  moving_tracker,         ///< tracker-side point speed above the threshold in the window
+  robot_gap,              ///< a robot gap longer than max_robot_gap_us inside the speed baseline (or window) around the instant
+  window_incomplete,      ///< the speed baseline (or window) around it is not covered by data (stream start/end, tracker dropouts)
+  moving_robot,           ///< robot-side tool speed above the threshold at the instant (or anywhere in the window)
+  moving_tracker,         ///< tracker-side point speed above the threshold in the window (only with a window)
   backlog_overrun,        ///< still undecided when the tracker ring overflowed (robot stream lagging)
   dataset_full,           ///< quasi-static but the dataset had no room
 };
@@ -39,12 +42,12 @@ inline constexpr int kDropReasonCount = 13;
 /// Lower-case name of a drop reason ("moving_robot").
 const char* drop_reason_name(DropReason reason);
 
-/// Options of the extraction; defaults follow the paper (2 mm/s over a 1 s window).
+/// Options of the extraction; defaults follow the paper (tool speed below 2 mm/s at the instant).
 struct ExtractionConfig {
   RobotModel speed_model;                    ///< geometry for robot-side tool speeds (nominal is enough)
-  double max_speed_m_s = 0.002;              ///< quasi-static threshold on both sides [m/s]
-  std::uint32_t window_us = 1000000;         ///< full width of the window centred on the instant [us]
-  std::uint32_t speed_baseline_us = 100000;  ///< shortest time base of a speed estimate (noise) [us]
+  double max_speed_m_s = 0.002;              ///< quasi-static threshold [m/s]
+  std::uint32_t speed_baseline_us = 24000;   ///< speed at the instant: the slower of the backward and forward differences over half of this each (3 periods at 125 Hz: encoder noise) [us]
+  std::uint32_t window_us = 0;               ///< optional stability window centred on the instant, both sides still over it; 0: off [us]
   std::uint32_t max_robot_gap_us = 40000;    ///< never interpolate across a longer robot gap [us]
   std::uint32_t max_tracker_gap_us = 250000; ///< longest spacing of valid tracker points inside a window [us]
 };
@@ -74,8 +77,8 @@ struct ExtractedSample {
   double robot_us = 0.0;             ///< the same instant on the robot clock [us]
   JointVector q_rad = JointVector::Zero();  ///< joints interpolated at robot_us [rad]
   Vec3 point_m = Vec3::Zero();       ///< tracker point [m]
-  double robot_speed_m_s = 0.0;      ///< largest robot-side tool speed in the window [m/s]
-  double tracker_speed_m_s = 0.0;    ///< largest tracker-side speed in the window [m/s]
+  double robot_speed_m_s = 0.0;      ///< robot-side tool speed at the instant (largest in the window, with one) [m/s]
+  double tracker_speed_m_s = 0.0;    ///< largest tracker-side speed in the window; 0 without a window [m/s]
 };
 
 /// Optional listener of every decision (logging, tests); defaults ignore them.
@@ -134,13 +137,23 @@ class SampleExtractorBase {
 
  private:
   struct Window;
+  /// The ring entries around a robot instant and its fraction between them.
+  struct RobotBracket {
+    std::size_t before = 0;  ///< last entry at or before the instant
+    std::size_t after = 0;   ///< the next one (= before at the newest entry)
+    double fraction = 0.0;   ///< (t - t_before) / (t_after - t_before) [-]
+  };
   bool config_ok() const;
+  double robot_half_span_us() const;
   Status drain(bool finishing);
   bool ready(const ExtractorTrackerEntry& entry) const;
   Status decide(const ExtractorTrackerEntry& entry);
   bool check_robot(double robot_us, Window* window, DropReason* reason) const;
   bool check_tracker(const ExtractorTrackerEntry& entry, double* speed_m_s, DropReason* reason) const;
   std::size_t robot_index_at_or_before(double t_us) const;
+  RobotBracket bracket_at(double robot_us) const;
+  Vec3 tool_at(double robot_us) const;
+  double speed_at_instant(double robot_us) const;
   Status drop(double tracker_us, DropReason reason);
 
   ExtractionConfig config_;

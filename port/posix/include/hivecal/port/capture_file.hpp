@@ -8,6 +8,7 @@
 #include <string>
 
 #include "hivecal/port/byte_source.hpp"
+#include "hivecal/port/error.hpp"
 
 namespace hivecal::port {
 
@@ -19,14 +20,15 @@ class CaptureWriter {
   CaptureWriter(const CaptureWriter&) = delete;
   CaptureWriter& operator=(const CaptureWriter&) = delete;
 
-  /// Creates (or truncates) `path`. False with a message on failure.
-  bool open(const std::string& path, std::string* error);
-  /// Writes all `count` bytes (retrying short writes and EINTR). False with a message on failure.
-  bool write(const std::uint8_t* bytes, std::size_t count, std::string* error);
+  /// Creates `path`; an existing file is an error unless `replace` (then a regular file is
+  /// truncated; a device, FIFO or folder is still refused). Fault::output on failure.
+  Error open(const std::string& path, bool replace);
+  /// Writes all `count` bytes (retrying short writes and EINTR). Fault::output on failure.
+  Error write(const std::uint8_t* bytes, std::size_t count);
   /// Forces the written bytes to storage (fsync).
-  bool sync(std::string* error);
-  /// sync() then close; false if either failed. Safe to call twice.
-  bool close(std::string* error);
+  Error sync();
+  /// sync() then close; the first failure of either. Safe to call twice.
+  Error close();
   std::uint64_t bytes_written() const { return bytes_written_; }  ///< bytes handed to the kernel
   const std::string& path() const { return path_; }                ///< the file
 
@@ -45,8 +47,8 @@ class CaptureFileSource final : public ByteSource {
   CaptureFileSource(const CaptureFileSource&) = delete;
   CaptureFileSource& operator=(const CaptureFileSource&) = delete;
 
-  /// Opens the file. False with a message on failure.
-  bool open(std::string* error);
+  /// Opens the file; Fault::input on failure.
+  Error open();
   /// Next bytes of the file; end_of_stream at its end (timeouts only ever come from pacing).
   ReadResult read(std::uint8_t* buffer, std::size_t capacity, int timeout_ms) override;
   int poll_fd() const override { return fd_; }

@@ -4,6 +4,8 @@
 
 #include <string>
 
+#include "hivecal/port/error.hpp"
+
 namespace hivecal::port {
 
 /// An open pseudo-terminal.
@@ -14,7 +16,7 @@ struct PtyPair {
 };
 
 /// Opens a pty pair with the slave in raw mode (no echo, no line editing, 8-bit clean).
-bool open_pty(PtyPair* pty, std::string* error);
+Error open_pty(PtyPair* pty);
 /// Closes both sides (the reader of the slave sees a hangup).
 void close_pty(PtyPair* pty);
 /// Writes all `count` bytes to `fd`, retrying short writes and EINTR. False on error.

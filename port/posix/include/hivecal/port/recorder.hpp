@@ -33,9 +33,8 @@ struct RecordStats {
 
 /// Copies sources[i] into writers[i] until *stop becomes nonzero, `duration_s` passes, or
 /// every source reports end_of_stream. Closes (fsync) every writer before returning.
-/// False with a message on a write error or a permanent read error.
-bool record_streams(const std::vector<ByteSource*>& sources, const std::vector<CaptureWriter*>& writers,
-                    const volatile std::sig_atomic_t* stop, const RecordOptions& options, RecordStats* stats,
-                    std::string* error);
+/// Fault::output on a write error, Fault::input on a permanent read error.
+Error record_streams(const std::vector<ByteSource*>& sources, const std::vector<CaptureWriter*>& writers,
+                     const volatile std::sig_atomic_t* stop, const RecordOptions& options, RecordStats* stats);
 
 }  // namespace hivecal::port

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "hivecal/port/byte_source.hpp"
+#include "hivecal/port/error.hpp"
 
 namespace hivecal::port {
 
@@ -35,9 +36,9 @@ class SerialPort final : public ByteSource {
   SerialPort(const SerialPort&) = delete;
   SerialPort& operator=(const SerialPort&) = delete;
 
-  /// Opens and configures the device (raw 8N1 at options.baud). False with a message if it
-  /// cannot be opened or configured now.
-  bool open(std::string* error);
+  /// Opens and configures the device (raw 8N1 at options.baud); Fault::input if it cannot be
+  /// opened or configured now.
+  Error open();
   /// Reads what is there (see ByteSource). On hangup or a vanished device the port is
   /// closed and `disconnected` returned; later reads reopen it when the backoff allows.
   ReadResult read(std::uint8_t* buffer, std::size_t capacity, int timeout_ms) override;
@@ -51,7 +52,7 @@ class SerialPort final : public ByteSource {
   std::uint64_t disconnects() const { return disconnects_; }  ///< losses seen
 
  private:
-  bool configure(std::string* error);
+  Error configure();
   void lose();
   bool try_reopen(std::int64_t now_ms);
 

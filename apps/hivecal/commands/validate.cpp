@@ -4,12 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
-#include "calibration_json.hpp"
-#include "cli.hpp"
-#include "commands.hpp"
+#include "cli/options.hpp"
+#include "hivecal/commands/commands.hpp"
+#include "hivecal/commands/validation.hpp"
 #include "hivecal/core/random.hpp"
-#include "text_util.hpp"
-#include "validation.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::cli {
 
@@ -48,24 +48,19 @@ int validate_main(int argc, char** argv) {
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
   if (options.get("calibration").empty() || options.get("truth").empty()) {
-    error("validate", "--calibration and --truth are required (see --help)");
-    return kExitUsage;
+    return exit_with("validate", Error::usage("--calibration and --truth are required (see --help)"));
   }
   double poses = 0.0;
   double seed = 0.0;
   if (!textio::parse_double(options.get("poses"), &poses) || poses < 1.0 || poses > 1e7 ||
       !textio::parse_double(options.get("seed"), &seed) || seed < 0.0) {
-    error("validate", "--poses must be 1..1e7 and --seed a non-negative integer");
-    return kExitUsage;
+    return exit_with("validate", Error::usage("--poses must be 1..1e7 and --seed a non-negative integer"));
   }
   textio::CalibrationFile calibration;
   textio::CalibrationFile truth;
   for (auto [path, file] : {std::pair{options.get("calibration"), &calibration}, std::pair{options.get("truth"), &truth}}) {
-    const textio::ParseResult r = textio::read_calibration_json(path, file);
-    if (!r.ok) {
-      error("validate", r.message);
-      return kExitBadInput;
-    }
+    const port::Error r = textio::read_calibration_json(path, file);
+    if (!r.ok()) return exit_with("validate", r);
   }
   const ValidationStats stats = validate_on_fresh_poses(calibration.model, calibration.base_to_tracker, truth.model,
                                                        truth.base_to_tracker, static_cast<long>(poses),

@@ -1,7 +1,7 @@
 // The hivecal subcommands; each takes argv after its own name and returns an exit code.
 #pragma once
 
-#include "cli.hpp"
+#include "cli/options.hpp"
 
 namespace hivecal::cli {
 

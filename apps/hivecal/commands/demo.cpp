@@ -3,13 +3,14 @@
 #include <cstdio>
 #include <utility>
 
-#include "cli.hpp"
-#include "commands.hpp"
-#include "hivecal/solve/cost.hpp"
+#include "cli/options.hpp"
+#include "hivecal/commands/commands.hpp"
+#include "hivecal/core/random.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/metrics.hpp"
-#include "hivecal/core/random.hpp"
+#include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/solve/cost.hpp"
 
 namespace hivecal::cli {
 
@@ -35,15 +36,14 @@ int demo_main(int argc, char** argv) {
         random.uniform(-2.8, -0.3), random.uniform(-3, 3);
     Vec3 noise;
     noise << random.normal(), random.normal(), random.normal();  // defined draw order
-    if (dataset.add(q, tracker_pose.apply(fk_tool_point(truth, q)) + 1e-5 * noise) != Status::ok) return kExitFailure;
+    if (dataset.add(q, tracker_pose.apply(fk_tool_point(truth, q)) + 1e-5 * noise) != Status::ok) {
+      return exit_with("demo", Error::failure("a simulated sample does not fit the dataset"));
+    }
   }
   for (const auto& [name, model] : {std::pair<const char*, RobotModel>{"nominal", nominal}, {"true", truth}}) {
     RigidTransform base;
     const Status fit = fit_base_to_tracker(model, dataset.samples(), &base);
-    if (fit != Status::ok) {
-      error("demo", std::string("base fit failed: ") + status_message(fit));
-      return kExitFailure;
-    }
+    if (fit != Status::ok) return exit_with("demo", Error::failure(std::string("base fit failed: ") + status_message(fit)));
     const ErrorStats stats = position_error_stats(model, base, dataset.samples());
     std::printf("%-8s geometry: MAE 3D %.1f um, sigma %.1f um over %zu samples\n", name,
                 stats.mae(ErrorAxis::norm_3d) * 1e6, stats.sigma(ErrorAxis::norm_3d) * 1e6, stats.count);

@@ -1,4 +1,4 @@
-#include "simulate_cmd.hpp"
+#include "hivecal/commands/simulate.hpp"
 
 #include <csignal>
 #include <cstdio>
@@ -7,23 +7,21 @@
 #include <tuple>
 #include <vector>
 
-#include "cli.hpp"
+#include "cli/options.hpp"
 #include "hivecal/port/byte_source.hpp"
+#include "hivecal/port/output_files.hpp"
 #include "hivecal/port/pty.hpp"
-#include "sim_model.hpp"
-#include "sim_outputs.hpp"
-#include "sim_server.hpp"
-#include "text_util.hpp"
-#include "ur_calibration_conf.hpp"
+#include "sim/sim_model.hpp"
+#include "sim/sim_outputs.hpp"
+#include "sim/sim_server.hpp"
+#include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal::sim {
 namespace {
 
-using cli::kExitBadInput;
-using cli::kExitFailure;
-using cli::kExitOk;
-using cli::kExitOutputError;
-using cli::kExitUsage;
+using port::Error;
+
 
 constexpr const char* kCommand = "simulate";
 
@@ -33,7 +31,7 @@ void request_stop(int) { g_stop = true; }
 const std::vector<cli::OptionSpec>& option_specs() {
   static const std::vector<cli::OptionSpec> specs = {
       {"out-dir", "DIR", "where robot.cap, tracker.cap, the CSV logs and the truth go", "."},
-      {"robot-model", "NAME", "ur3, ur5, ur10 or ur5e", "ur5"},
+      {"robot-model", "NAME", robot_type_names(), "ur5"},
       {"seed", "N", "seed of every random choice", "1"},
       {"waypoints", "N", "waypoints visited", "38"},
       {"duration-s", "S", "session length [s]", "600"},
@@ -56,30 +54,33 @@ const std::vector<cli::OptionSpec>& option_specs() {
 }
 
 /// Parses a number option; false (message printed) if malformed.
-bool number_option(const cli::Options& options, const char* name, double* value) {
-  if (textio::parse_double(options.get(name), value)) return true;
-  cli::error(kCommand, std::string("--") + name + ": not a number: '" + options.get(name) + "'");
-  return false;
-}
+/// Reads number options one after the other; the first bad one is kept in `error`.
+struct Numbers {
+  const cli::Options& options;  ///< the parsed command line
+  Error error;                  ///< the first failure
+  bool get(const char* name, double* value) {
+    if (error.ok()) error = cli::number_option(options, name, value);
+    return error.ok();
+  }
+};
 
-/// Builds the session configuration; returns an exit code, or -1 to go on.
-int configure(const cli::Options& options, SimConfig* config) {
+/// Builds the session configuration.
+Error configure(const cli::Options& options, SimConfig* config) {
+  Numbers numbers{options, Error{}};
   if (robot_type_from_name(options.get("robot-model").c_str(), &config->robot_type) != Status::ok) {
-    cli::error(kCommand, "--robot-model must be ur3, ur5, ur10 or ur5e, not '" + options.get("robot-model") + "'");
-    return kExitUsage;
+    return Error::usage("--robot-model must be one of " + std::string(robot_type_names()) + ", not '" + options.get("robot-model") + "'");
   }
   double seed = 0, waypoints = 0, drift_ppm = 0, robot_start = 0, tracker_start = 0, noise_um = 0, jitter_us = 0;
-  if (!number_option(options, "seed", &seed) || !number_option(options, "waypoints", &waypoints) ||
-      !number_option(options, "duration-s", &config->duration_s) ||
-      !number_option(options, "drift-ppm", &drift_ppm) ||
-      !number_option(options, "robot-clock-start-us", &robot_start) ||
-      !number_option(options, "tracker-clock-start-us", &tracker_start) ||
-      !number_option(options, "noise-um", &noise_um) || !number_option(options, "jitter-us", &jitter_us))
-    return kExitUsage;
+  if (!numbers.get("seed", &seed) || !numbers.get("waypoints", &waypoints) ||
+      !numbers.get("duration-s", &config->duration_s) ||
+      !numbers.get("drift-ppm", &drift_ppm) ||
+      !numbers.get("robot-clock-start-us", &robot_start) ||
+      !numbers.get("tracker-clock-start-us", &tracker_start) ||
+      !numbers.get("noise-um", &noise_um) || !numbers.get("jitter-us", &jitter_us))
+    return numbers.error;
   if (seed < 0 || waypoints < 2 || config->duration_s <= 0 || std::abs(drift_ppm) > 1000 || robot_start < 0 ||
       tracker_start < 0 || noise_um < 0 || jitter_us < 0) {
-    cli::error(kCommand, "out-of-range option (seed >= 0, waypoints >= 2, duration > 0, |drift| <= 1000 ppm)");
-    return kExitUsage;
+    return Error::usage("out-of-range option (seed >= 0, waypoints >= 2, duration > 0, |drift| <= 1000 ppm)");
   }
   config->seed = static_cast<std::uint64_t>(seed);
   config->waypoint_count = static_cast<int>(waypoints);
@@ -91,18 +92,16 @@ int configure(const cli::Options& options, SimConfig* config) {
   if (options.get("errors") == "large") {
     use_large_errors(config);
   } else if (options.get("errors") != "paper") {
-    cli::error(kCommand, "--errors must be paper or large, not '" + options.get("errors") + "'");
-    return kExitUsage;
+    return Error::usage("--errors must be paper or large, not '" + options.get("errors") + "'");
   }
   for (auto [name, target, scale] : {std::tuple{"length-sigma-um", &config->length_sigma_m, 1e-6},
                                      std::tuple{"angle-sigma-urad", &config->angle_sigma_rad, 1e-6},
                                      std::tuple{"tool-sigma-um", &config->tool_sigma_m, 1e-6}}) {
     if (!options.given(name)) continue;
     double value = 0.0;
-    if (!number_option(options, name, &value)) return kExitUsage;
+    if (!numbers.get(name, &value)) return numbers.error;
     if (value < 0.0) {
-      cli::error(kCommand, std::string("--") + name + " must not be negative");
-      return kExitUsage;
+      return Error::usage(std::string("--") + name + " must not be negative");
     }
     *target = value * scale;
   }
@@ -113,43 +112,40 @@ int configure(const cli::Options& options, SimConfig* config) {
     double j3 = 0.0;
     if (comma == std::string::npos || !textio::parse_double(text.substr(0, comma), &j2) ||
         !textio::parse_double(text.substr(comma + 1), &j3)) {
-      cli::error(kCommand, "--compliance-urad must be J2,J3 (e.g. 40,20), not '" + text + "'");
-      return kExitUsage;
+      return Error::usage("--compliance-urad must be J2,J3 (e.g. 40,20), not '" + text + "'");
     }
     config->compliance_j2_rad = j2 * 1e-6;
     config->compliance_j3_rad = j3 * 1e-6;
   }
   if (!options.get("calibration-conf").empty()) {
-    const textio::ParseResult read = textio::read_ur_calibration_conf(options.get("calibration-conf"), &config->deltas);
-    if (!read.ok) {
-      cli::error(kCommand, read.message);
-      return kExitBadInput;
+    const port::Error read = textio::read_ur_calibration_conf(options.get("calibration-conf"), &config->deltas);
+    if (!read.ok()) {
+      return Error::input(read.message);
     }
     config->use_deltas = true;
   }
-  return -1;
+  return Error{};
 }
 
 /// Serves the session on two ptys, printing their paths first.
-int serve(const Session& session, const cli::Options& options) {
+Error serve(const Session& session, const cli::Options& options) {
+  Numbers numbers{options, Error{}};
   double speed = 1.0;
   double delay_s = 0.0;
-  if (!number_option(options, "speed", &speed) || !number_option(options, "serve-delay-s", &delay_s) || speed < 0)
-    return kExitUsage;
+  if (!numbers.get("speed", &speed) || !numbers.get("serve-delay-s", &delay_s) || speed < 0)
+    return numbers.error;
   port::PtyPair robot;
   port::PtyPair tracker;
-  std::string error;
-  if (!port::open_pty(&robot, &error) || !port::open_pty(&tracker, &error)) {
-    cli::error(kCommand, error);
-    return kExitFailure;
-  }
+  Error error = port::open_pty(&robot);
+  if (error.ok()) error = port::open_pty(&tracker);
+  if (!error.ok()) return error;
   std::printf("robot   %s\ntracker %s\n", robot.slave_path.c_str(), tracker.slave_path.c_str());
   std::fflush(stdout);
   std::signal(SIGINT, request_stop);
   std::signal(SIGTERM, request_stop);
   port::sleep_ms(static_cast<std::int64_t>(delay_s * 1000.0));
   ServeStats stats;
-  const bool ok = serve_session(session, robot, tracker, ServeOptions{speed}, &g_stop, &stats, &error);
+  error = serve_session(session, robot, tracker, ServeOptions{speed}, &g_stop, &stats);
   port::sleep_ms(500);  // let readers drain the ptys before the hangup
   port::close_pty(&robot);
   port::close_pty(&tracker);
@@ -157,8 +153,7 @@ int serve(const Session& session, const cli::Options& options) {
               static_cast<unsigned long long>(stats.robot_frames), static_cast<unsigned long long>(stats.robot_bytes),
               static_cast<unsigned long long>(stats.tracker_frames),
               static_cast<unsigned long long>(stats.tracker_bytes));
-  if (!ok) cli::error(kCommand, error);
-  return ok ? kExitOk : kExitFailure;
+  return error;
 }
 
 }  // namespace
@@ -175,21 +170,19 @@ int simulate_main(int argc, char** argv) {
       option_specs(), argc, argv, &options);
   if (parsed >= 0) return parsed;
   SimConfig config;
-  const int configured = configure(options, &config);
-  if (configured >= 0) return configured;
+  Error error = configure(options, &config);
+  if (!error.ok()) return cli::exit_with(kCommand, error);
+  port::OutputSet outputs;
+  std::size_t folder = 0;
+  error = outputs.add_input(options.get("calibration-conf"), "--calibration-conf");
+  if (error.ok()) error = outputs.add_folder(options.get("out-dir"), "--out-dir", &folder);
+  if (!error.ok()) return cli::exit_with(kCommand, error);
   const Session session(config);
-  OutputPaths paths = output_paths_in(options.get("out-dir"));
-  if (options.given("serve")) {
-    paths.robot_capture.clear();  // `hivecal record` makes them from the ptys
-    paths.tracker_capture.clear();
-  }
-  std::string error;
-  if (!textio::make_directories(options.get("out-dir"), &error) ||
-      !write_outputs(session, paths, kTruthSampleMarginS, &error)) {
-    cli::error(kCommand, error);
-    return kExitOutputError;
-  }
-  return options.given("serve") ? serve(session, options) : kExitOk;
+  // With --serve, `hivecal record` makes the captures from the ptys.
+  error = stage_outputs(session, !options.given("serve"), kTruthSampleMarginS, &outputs, folder);
+  if (error.ok()) error = outputs.commit();
+  if (!error.ok()) return cli::exit_with(kCommand, error);
+  return cli::exit_with(kCommand, options.given("serve") ? serve(session, options) : Error{});
 }
 
 }  // namespace hivecal::sim

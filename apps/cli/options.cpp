@@ -1,7 +1,11 @@
-#include "cli.hpp"
+#include "cli/options.hpp"
+
+#include <string_view>
 
 #include <cstdio>
 #include <unistd.h>
+
+#include "textio/text_util.hpp"
 
 namespace hivecal::cli {
 
@@ -13,7 +17,13 @@ std::string Options::get(const std::string& name) const {
 }
 
 void error(const std::string& command, const std::string& message) {
-  std::fprintf(stderr, "hivecal %s: %s\n", command.c_str(), message.c_str());
+  // Messages quote foreign text already cut; this is the last guard for the terminal.
+  std::fprintf(stderr, "hivecal %s: %s\n", command.c_str(), port::printable(message, 4096).c_str());
+}
+
+int exit_with(const std::string& command, const Error& result) {
+  if (!result.ok()) error(command, result.message);
+  return result.exit_code();
 }
 
 namespace {
@@ -43,7 +53,7 @@ int parse_options(const std::string& command, const std::string& summary, const 
       return kExitOk;
     }
     if (arg.rfind("--", 0) != 0) {
-      error(command, "unexpected argument '" + arg + "' (see --help)");
+      error(command, "unexpected argument " + port::quoted(arg) + " (see --help)");
       return kExitUsage;
     }
     std::string name = arg.substr(2);
@@ -60,7 +70,7 @@ int parse_options(const std::string& command, const std::string& summary, const 
       if (candidate.name == name) spec = &candidate;
     }
     if (spec == nullptr) {
-      error(command, "unknown option '--" + name + "' (see --help)");
+      error(command, "unknown option " + port::quoted("--" + name) + " (see --help)");
       return kExitUsage;
     }
     if (spec->value_name.empty()) {
@@ -84,5 +94,31 @@ int parse_options(const std::string& command, const std::string& summary, const 
 }
 
 bool progress_enabled(const Options& options) { return !options.given("quiet") && isatty(STDERR_FILENO) != 0; }
+
+Error number_option(const Options& options, const std::string& name, double* value) {
+  if (textio::parse_double(options.get(name), value)) return Error{};
+  return Error::usage("--" + name + ": not a number: " + port::quoted(options.get(name)));
+}
+
+Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
+  const std::string text = options.get(name);
+  std::size_t start = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::size_t comma = text.find(',', start);
+    const bool last = axis == 2;
+    if (last != (comma == std::string::npos) ||
+        !textio::parse_double(std::string_view(text).substr(start, last ? std::string::npos : comma - start),
+                              &(*value_m)(axis))) {
+      return Error::usage("--" + name + " must be X,Y,Z in metres, not " + port::quoted(text));
+    }
+    start = comma + 1;
+  }
+  return Error{};
+}
+
+Error robot_model_option(const Options& options, const std::string& name, RobotType* type) {
+  if (robot_type_from_name(options.get(name).c_str(), type) == Status::ok) return Error{};
+  return Error::usage("unknown robot model " + port::quoted(options.get(name)) + " (" + std::string(robot_type_names()) + ")");
+}
 
 }  // namespace hivecal::cli

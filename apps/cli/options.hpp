@@ -1,0 +1,71 @@
+// Plumbing shared by every hivecal command: option parsing, --help, the shared option
+// helpers, exit codes and the one way an error reaches the user (docs/cli.md).
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "hivecal/core/types.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/port/error.hpp"
+
+namespace hivecal::cli {
+
+using port::Error;
+using port::Fault;
+
+/// Process exit codes of every command (docs/cli.md): the values of port::Fault.
+enum ExitCode : int {
+  kExitOk = static_cast<int>(Fault::none),           ///< success
+  kExitFailure = static_cast<int>(Fault::failure),   ///< the computation failed (e.g. no convergence)
+  kExitUsage = static_cast<int>(Fault::usage),       ///< bad command line, or refused paths
+  kExitBadInput = static_cast<int>(Fault::input),    ///< an input is missing, not a regular file, or malformed
+  kExitOutputError = static_cast<int>(Fault::output),  ///< an output cannot be created or written
+};
+
+/// One command-line option.
+struct OptionSpec {
+  std::string name;         ///< long name without dashes, e.g. "out"
+  std::string value_name;   ///< e.g. "FILE"; empty for a flag
+  std::string help;         ///< one line
+  std::string default_value;  ///< shown in --help and used when absent (empty: none)
+};
+
+/// Parsed options of one subcommand.
+class Options {
+ public:
+  /// Value of an option (or its default); empty when absent without default.
+  std::string get(const std::string& name) const;
+  /// True when a flag or valued option was given on the command line.
+  bool given(const std::string& name) const { return values_.count(name) != 0; }
+
+ private:
+  friend int parse_options(const std::string&, const std::string&, const std::vector<OptionSpec>&, int, char**, Options*);
+  std::map<std::string, std::string> values_;
+  std::map<std::string, std::string> defaults_;
+};
+
+/// Parses argv (after the subcommand name). Returns -1 when the command should run;
+/// otherwise the exit code to return at once: kExitOk after printing --help, kExitUsage
+/// after printing what was wrong.
+int parse_options(const std::string& command, const std::string& summary, const std::vector<OptionSpec>& specs,
+                  int argc, char** argv, Options* options);
+
+/// Prints "hivecal <command>: <message>" to stderr (control bytes escaped, cut when huge).
+void error(const std::string& command, const std::string& message);
+/// Prints a failed Error as error() does and returns its exit code (kExitOk when ok).
+int exit_with(const std::string& command, const Error& result);
+
+/// True when progress lines should go to stderr (a terminal and not --quiet).
+bool progress_enabled(const Options& options);
+
+// --- option helpers shared by the commands (one parser per kind of value)
+/// --<name> as a number; Fault::usage naming the option otherwise.
+Error number_option(const Options& options, const std::string& name, double* value);
+/// --<name> as X,Y,Z in metres (e.g. --tool).
+Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
+/// --<name> as a robot model name (robot_type_names()).
+Error robot_model_option(const Options& options, const std::string& name, RobotType* type);
+
+}  // namespace hivecal::cli

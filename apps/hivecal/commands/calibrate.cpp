@@ -1,0 +1,535 @@
+// hivecal calibrate: inputs (paired samples, serial captures or CSV logs) -> dataset ->
+// ABC / GSA / Levenberg-Marquardt -> tables, result JSON, UR deltas and HTML report.
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cli/options.hpp"
+#include "hivecal/calibration.hpp"
+#include "hivecal/commands/commands.hpp"
+#include "hivecal/core/trace.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/port/output_files.hpp"
+#include "hivecal/solve/lm.hpp"
+#include "report/report.hpp"
+#include "streams/session.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
+
+namespace hivecal::cli {
+namespace {
+
+constexpr const char* kCommand = "calibrate";
+constexpr std::size_t kTraceCapacity = 1024;
+
+/// Dataset capacity of the command-line tool (samples).
+constexpr std::size_t kCliDatasetCapacity = 8192;
+using CliDataset = Dataset<kCliDatasetCapacity>;
+
+/// Validated command-line settings.
+struct CalibrateSettings {
+  RobotType robot = RobotType::ur5;  ///< --robot-model
+  Vec3 tool_m = Vec3(0.0, 0.0, 0.1695);  ///< --tool: nominal tool point in the flange frame [m]
+  bool paper_params = false;         ///< --params paper
+  std::string method = "abc+lm";     ///< --method
+  std::uint64_t seed = 1;            ///< --seed
+  double train_fraction = 0.7;       ///< --split
+  bool robust = false;               ///< --robust
+  bool progress = false;             ///< progress lines on stderr
+};
+
+/// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
+/// largest dataset (static: ~2.3 MB).
+using CliWorkspace = CalibrationWorkspace<kCliDatasetCapacity, double, 150, kTraceCapacity, kCliDatasetCapacity>;
+
+/// Times the stages (lib takes no time) and prints one progress line per iteration on
+/// stderr, overwritten in place.
+class JobObserver final : public CalibrationObserver {
+ public:
+  explicit JobObserver(bool enabled) : enabled_(enabled) {}
+  ~JobObserver() { end_line(); }
+  void on_stage_begin(std::size_t, CalibrationSolver solver) override {
+    label_ = calibration_solver_name(solver);
+    start_ = std::chrono::steady_clock::now();
+  }
+  void on_stage_end(std::size_t index, const CalibrationStage&) override {
+    seconds[index] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    end_line();
+  }
+  void on_iteration(const SolverProgress& p) override {
+    print("iteration %zu/%zu, best MAE %.2f um", p.iteration, p.iteration_count, p.best_cost * 1e6);
+  }
+  bool on_iteration(const LmIterationInfo& info) override {
+    print("iteration %d, RMS %.2f um", info.iteration, info.rms_m * 1e6);
+    return true;
+  }
+  double seconds[kMaxCalibrationStages] = {};  ///< wall time per stage [s]
+
+ private:
+  template <typename... Args>
+  void print(const char* format, Args... args) {
+    if (!enabled_) return;
+    std::fprintf(stderr, "\r[%s] ", label_);
+    std::fprintf(stderr, format, args...);
+    std::fflush(stderr);
+    printed_ = true;
+  }
+  void end_line() {
+    if (enabled_ && printed_) std::fprintf(stderr, "\n");
+    printed_ = false;
+  }
+  bool enabled_;
+  const char* label_ = "";
+  bool printed_ = false;
+  std::chrono::steady_clock::time_point start_;
+};
+
+/// What the job produced, with the CLI's stage timings.
+struct Run {
+  CalibrationResult result;                     ///< lib's result (~5 KB)
+  double seconds[kMaxCalibrationStages] = {};   ///< wall time per stage [s]
+  bool from_controller = false;                 ///< the start geometry is the controller's
+  /// The job's answer (run() returns an error when no stage ran).
+  const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
+  /// Its name ("ABC+LM", ...).
+  std::string final_method() const { return result.stage_name(result.stage_count - 1); }
+  /// The LM details when the final stage is LM, else null.
+  const LmResult* final_lm() const {
+    return final_stage().solver == CalibrationSolver::lm ? &result.lm : nullptr;
+  }
+};
+
+std::vector<double> trace_values(Span<const double> trace) {
+  std::vector<double> v;
+  for (double x : trace) v.push_back(x);
+  return v;
+}
+
+CalibrationMethod method_from_name(const std::string& name) {
+  for (CalibrationMethod m : {CalibrationMethod::lm, CalibrationMethod::abc, CalibrationMethod::gsa,
+                              CalibrationMethod::abc_lm, CalibrationMethod::gsa_lm, CalibrationMethod::all}) {
+    if (name == calibration_method_name(m)) return m;
+  }
+  return CalibrationMethod::abc_lm;  // settings_from_options accepts only the names above
+}
+
+report::MethodRow method_row(std::string method, std::string parameters, const ErrorStats& train,
+                             const ErrorStats& test, double seconds, long long evaluations) {
+  report::MethodRow row;
+  row.method = std::move(method);
+  row.parameters = std::move(parameters);
+  row.train = train;
+  row.test = test;
+  row.seconds = seconds;
+  row.evaluations = evaluations;
+  return row;
+}
+
+report::MethodRow stage_row(const Run& run, std::size_t k) {
+  const CalibrationStage& stage = run.result.stages[k];
+  std::string params = stage.params == CalibrationParams::paper ? "paper-6" : "full";
+  if (stage.solver == CalibrationSolver::lm) {
+    params += " (" + std::to_string(run.result.lm.identifiability.kept_count()) + " estimated)";
+  }
+  return method_row(run.result.stage_name(k), params, stage.train, stage.test, run.seconds[k],
+                    static_cast<long long>(stage.evaluations));
+}
+
+std::vector<std::string> identifiability_lines(const LmResult& lm) {
+  std::vector<std::string> lines;
+  const IdentifiabilityReport& id = lm.identifiability;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "identifiability: %d of %d free parameters estimated, condition number %.3g -> %.3g",
+                id.kept_count(), mask_count(id.free_mask), id.condition_before, id.condition_after);
+  lines.push_back(buf);
+  for (int k = 0; k < id.dropped_count; ++k) {
+    const DroppedParam& d = id.dropped[k];
+    std::string combination;
+    for (int c = 0; c < kNullComponentCount; ++c) {
+      if (d.component_index[c] < 0) continue;
+      std::snprintf(buf, sizeof buf, "%s%+.3g*%s", combination.empty() ? "" : " ", d.component[c],
+                    full_param_name(d.component_index[c]));
+      combination += buf;
+    }
+    std::snprintf(buf, sizeof buf, "  dropped %-8s (%s, sigma ratio %.2g): %s", full_param_name(d.index),
+                  unidentifiable_reason_name(d.reason), d.singular_ratio, combination.c_str());
+    lines.push_back(buf);
+  }
+  return lines;
+}
+
+/// `lm`: the LM details when `stage` is the LM stage, else null.
+std::vector<std::string> parameter_lines(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start) {
+  std::vector<std::string> lines;
+  const ModelParams before = to_params(start);
+  const ModelParams after = to_params(stage.model);
+  char buf[160];
+  for (int k = 0; k < kModelParamCount; ++k) {
+    const bool estimated = lm != nullptr && mask_has(lm->identifiability.kept_mask, k);
+    const bool changed = after(k) != before(k);
+    if (!estimated && !changed) continue;
+    const bool angle = k < kDhParamCount && (k % kParamsPerJoint == 0 || k % kParamsPerJoint == 3);
+    const double scale = angle ? 1e3 : 1e3;
+    std::snprintf(buf, sizeof buf, "%-8s %+.9f %s  (change %+.4f %s%s)", full_param_name(k), after(k),
+                  angle ? "rad" : "m", (after(k) - before(k)) * scale, angle ? "mrad" : "mm",
+                  estimated ? (", sigma " + std::to_string(lm->sigma(k) * scale) + (angle ? " mrad" : " mm")).c_str()
+                            : "");
+    lines.push_back(buf);
+  }
+  return lines;
+}
+
+void write_stage_list(textio::JsonWriter& json, const std::vector<report::MethodRow>& rows) {
+  json.key("methods").begin_array();
+  for (const report::MethodRow& row : rows) {
+    json.begin_object();
+    json.key("method").value(row.method);
+    json.key("params").value(row.parameters);
+    json.key("train_mae_m").value(row.train.mae(ErrorAxis::norm_3d));
+    json.key("test_mae_m").value(row.test.mae(ErrorAxis::norm_3d));
+    json.key("seconds").value(row.seconds);
+    json.key("evaluations").value(row.evaluations);
+    json.end_object();
+  }
+  json.end_array();
+}
+
+void write_lm_details(textio::JsonWriter& json, const LmResult& lm) {
+  const IdentifiabilityReport& id = lm.identifiability;
+  json.key("identifiability").begin_object();
+  json.key("estimated").begin_array();
+  for (int k = 0; k < kFullParamCount; ++k)
+    if (mask_has(id.kept_mask, k)) json.value(full_param_name(k));
+  json.end_array();
+  json.key("dropped").begin_array();
+  for (int k = 0; k < id.dropped_count; ++k) {
+    const DroppedParam& d = id.dropped[k];
+    json.begin_object();
+    json.key("param").value(full_param_name(d.index));
+    json.key("reason").value(unidentifiable_reason_name(d.reason));
+    json.key("singular_ratio").value(d.singular_ratio);
+    json.key("combination").begin_object();
+    for (int c = 0; c < kNullComponentCount; ++c)
+      if (d.component_index[c] >= 0) json.key(full_param_name(d.component_index[c])).value(d.component[c]);
+    json.end_object();
+    json.end_object();
+  }
+  json.end_array();
+  json.key("singular_values").inline_array(id.singular_values_before, static_cast<std::size_t>(id.singular_count_before));
+  json.key("condition_before").value(id.condition_before);
+  json.key("condition_after").value(id.condition_after);
+  json.end_object();
+  json.key("sigma").begin_object();
+  for (int k = 0; k < kFullParamCount; ++k)
+    if (mask_has(id.kept_mask, k)) json.key(full_param_name(k)).value(lm.sigma(k));
+  json.end_object();
+  json.key("lm").begin_object();
+  json.key("iterations").value(static_cast<long long>(lm.iterations));
+  json.key("termination").value(lm_termination_name(lm.termination));
+  json.key("rms_m").value(lm.rms_m);
+  json.key("residual_sigma_m").value(lm.residual_sigma_m);
+  json.end_object();
+}
+
+void write_ur_deltas(textio::JsonWriter& json, const UrCalibrationDeltas& deltas) {
+  json.key("ur_deltas").begin_object();
+  json.key("delta_theta").inline_array(deltas.delta_theta_rad, kJointCount);
+  json.key("delta_a").inline_array(deltas.delta_a_m, kJointCount);
+  json.key("delta_d").inline_array(deltas.delta_d_m, kJointCount);
+  json.key("delta_alpha").inline_array(deltas.delta_alpha_rad, kJointCount);
+  json.end_object();
+}
+
+const std::vector<OptionSpec>& option_specs() {
+  static const std::vector<OptionSpec> specs = {
+      {"robot", "FILE", "robot joint stream: serial capture or CSV log t,q1..q6 (detected by content)", ""},
+      {"tracker", "FILE", "tracker stream: serial capture or CSV log t,x,y,z[,status]", ""},
+      {"samples", "FILE", "paired static samples q1..q6,x,y,z (CSV; '-': stdin) instead of --robot/--tracker", ""},
+      {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
+      {"robot-model", "NAME", std::string("nominal geometry: ") + robot_type_names(), "ur5"},
+      {"tool", "X,Y,Z", "nominal retroreflector centre in the flange frame [m] (LM refines it)", "0,0,0.1695"},
+      {"params", "full|paper", "full identifiable model, or the paper's six lengths", "full"},
+      {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
+      {"robust", "", "Huber loss in LM (a few bad tracker points do not drag the fit)", ""},
+      {"seed", "N", "seed of the train/test split and of ABC/GSA", "1"},
+      {"split", "FRACTION", "share of samples used for training", "0.7"},
+      {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
+      {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
+      {"report", "DIR", "write an HTML report with figures into DIR", ""},
+      {"quiet", "", "no progress on stderr", ""},
+  };
+  return specs;
+}
+
+// --- parse ------------------------------------------------------------------------------------
+
+Error settings_from_options(const Options& options, CalibrateSettings* settings) {
+  Error error = robot_model_option(options, "robot-model", &settings->robot);
+  if (error.ok()) error = vec3_option(options, "tool", &settings->tool_m);
+  if (!error.ok()) return error;
+  const std::string params = options.get("params");
+  if (params != "full" && params != "paper") return Error::usage("--params must be 'full' or 'paper', not " + port::quoted(params));
+  settings->paper_params = params == "paper";
+  settings->method = options.get("method");
+  const char* methods[] = {"abc+lm", "gsa+lm", "lm", "abc", "gsa", "all"};
+  bool known = false;
+  for (const char* m : methods) known = known || settings->method == m;
+  if (!known) {
+    return Error::usage("--method must be one of abc+lm, gsa+lm, lm, abc, gsa, all; not " + port::quoted(settings->method));
+  }
+  double seed = 0.0;
+  if (!textio::parse_double(options.get("seed"), &seed) || seed < 0.0 || seed > 9.007199254740992e15 ||
+      seed != static_cast<double>(static_cast<std::uint64_t>(seed))) {
+    return Error::usage("--seed must be a non-negative integer");
+  }
+  settings->seed = static_cast<std::uint64_t>(seed);
+  if (!textio::parse_double(options.get("split"), &settings->train_fraction) ||
+      !(settings->train_fraction > 0.0 && settings->train_fraction < 1.0)) {
+    return Error::usage("--split must be a fraction in (0, 1)");
+  }
+  const bool samples = !options.get("samples").empty();
+  const bool streams = !options.get("robot").empty() || !options.get("tracker").empty();
+  if (samples == streams) return Error::usage("give either --samples, or --robot and --tracker (see --help)");
+  if (streams && (options.get("robot").empty() || options.get("tracker").empty())) {
+    return Error::usage("--robot and --tracker go together");
+  }
+  settings->robust = options.given("robust");
+  settings->progress = progress_enabled(options);
+  return Error{};
+}
+
+/// Where the results go, declared (and checked) before the long work.
+struct OutputIds {
+  std::size_t result = 0;     ///< --out
+  std::size_t ur_deltas = 0;  ///< --ur-deltas, when given
+  std::size_t report = 0;     ///< --report, when given
+};
+
+Error declare_outputs(const Options& options, port::OutputSet* outputs, OutputIds* ids) {
+  for (const char* input : {"samples", "robot", "tracker", "ur-calibration"}) {
+    Error error = outputs->add_input(options.get(input), std::string("--") + input);
+    if (!error.ok()) return error;
+  }
+  Error error = outputs->add_file(options.get("out"), "--out", &ids->result);
+  if (error.ok() && !options.get("ur-deltas").empty()) {
+    error = outputs->add_file(options.get("ur-deltas"), "--ur-deltas", &ids->ur_deltas);
+  }
+  if (error.ok() && !options.get("report").empty()) {
+    error = outputs->add_folder(options.get("report"), "--report", &ids->report);
+  }
+  return error;
+}
+
+/// The start geometry: nominal, or the controller's calibration.conf.
+Error start_geometry(const Options& options, const CalibrateSettings& settings, RobotModel* start) {
+  *start = nominal_model(settings.robot);
+  start->tool_m = settings.tool_m;
+  if (options.get("ur-calibration").empty()) return Error{};
+  UrCalibrationDeltas deltas;
+  const port::Error r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
+  if (!r.ok()) return r;
+  (void)apply_ur_deltas(nominal_model(settings.robot), deltas, start);
+  start->tool_m = settings.tool_m;
+  return Error{};
+}
+
+/// The dataset, checked for size and split.
+Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
+                   streams::SessionFacts* facts) {
+  streams::SessionConfig config;
+  config.speed_model = nominal_model(settings.robot);
+  config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
+  config.progress = settings.progress;
+  Error error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
+                                      dataset, facts);
+  if (!error.ok()) return error;
+  const std::size_t minimum =
+      calibration_minimum_samples(settings.paper_params ? CalibrationParams::paper : CalibrationParams::full);
+  if (dataset->size() < minimum) {
+    return Error::input("only " + std::to_string(dataset->size()) + " static samples; at least " +
+                        std::to_string(minimum) + " are needed to identify the parameters");
+  }
+  const std::size_t train_count = dataset->train_count_for(settings.train_fraction);  // the job splits
+  if (train_count == 0 || train_count == dataset->size()) {
+    return Error::usage("--split " + options.get("split") + " leaves no training or no test sample");
+  }
+  return Error{};
+}
+
+// --- run (the computation: lib's calibrate()) ---------------------------------------------------
+
+Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset* dataset, Run* run) {
+  CalibrationOptions job;
+  job.method = method_from_name(settings.method);
+  job.params = settings.paper_params ? CalibrationParams::paper : CalibrationParams::full;
+  job.train_fraction = settings.train_fraction;
+  job.seed = settings.seed;
+  job.robust = settings.robust;
+  static CliWorkspace workspace;
+  JobObserver observer(settings.progress);
+  const Status status = hivecal::calibrate(start, dataset, job, &workspace, &run->result, &observer);
+  for (std::size_t k = 0; k < kMaxCalibrationStages; ++k) run->seconds[k] = observer.seconds[k];
+  const CalibrationStep step = run->result.step;
+  if (step == CalibrationStep::baseline) {
+    return Error::input(std::string("cannot fit the tracker frame: ") + status_message(status) +
+                        (status == Status::degenerate_geometry ? " (are all samples at one pose?)" : ""));
+  }
+  if (status != Status::ok) {
+    const char* what = step == CalibrationStep::abc   ? "ABC"
+                       : step == CalibrationStep::gsa ? "GSA"
+                       : step == CalibrationStep::lm  ? "LM"
+                                                      : calibration_step_name(step);
+    return Error::failure(std::string(what) + " failed: " + status_message(status));
+  }
+  return Error{};
+}
+
+// --- present ----------------------------------------------------------------------------------
+
+void write_input_facts(textio::JsonWriter& json, const streams::SessionFacts& facts) {
+  if (!facts.has_stream) return;
+  const ClockFit& clock = facts.run.clock;
+  json.key("clock").begin_object();
+  json.key("offset_at_reference_s").value(clock.offset_at_reference_us * 1e-6);
+  json.key("offset_sigma_s").value(clock.sigma_offset_at_reference_us * 1e-6);
+  json.key("drift").value(clock.drift);
+  json.key("drift_sigma").value(clock.sigma_drift);
+  json.end_object();
+  json.key("extraction").begin_object();
+  json.key("tracker_points").value(static_cast<long long>(facts.run.counts.tracker_points));
+  json.key("kept").value(static_cast<long long>(facts.run.counts.kept));
+  json.key("dropped").begin_object();
+  for (const auto& [reason, count] : facts.dropped) json.key(reason).value(static_cast<long long>(count));
+  json.end_object();
+  json.end_object();
+}
+
+/// Tables and figures of a run, and the text of the terminal.
+report::ReportData present(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset,
+                           const streams::SessionFacts& facts, const Run& run) {
+  const CalibrationBaseline& uncalibrated = run.result.baseline;
+  const CalibrationStage& final_stage = run.final_stage();
+  report::ReportData data;
+  data.title = "hivecal calibration: " + std::string(robot_type_name(settings.robot));
+  data.info_lines = facts.info_lines;
+  data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
+                            std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
+                            ")");
+  data.methods.push_back(method_row("uncalibrated", run.from_controller ? "controller" : "nominal",
+                                    uncalibrated.train, uncalibrated.test, 0.0, 0));
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) data.methods.push_back(stage_row(run, k));
+  data.uncalibrated = accuracy_report(uncalibrated.model, uncalibrated.base_to_tracker, dataset);
+  data.calibrated = accuracy_report(final_stage.model, final_stage.base_to_tracker, dataset);
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) {
+    data.convergence.push_back({run.result.stage_name(k), trace_values(run.result.stages[k].trace_m)});
+  }
+  for (const Sample& s : dataset.test()) {
+    data.test_measured_m.push_back(s.point_m);
+    data.test_uncalibrated_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
+    data.test_calibrated_m.push_back(final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)));
+  }
+  if (run.final_lm() != nullptr) {
+    for (const std::string& line : identifiability_lines(*run.final_lm())) data.info_lines.push_back(line);
+  }
+  data.parameter_lines = parameter_lines(final_stage, run.final_lm(), start);
+  return data;
+}
+
+/// The terminal text (on stdout, or on stderr when stdout carries the result).
+void print_tables(std::FILE* out, const report::ReportData& data, const Run& run) {
+  for (const std::string& line : data.info_lines) std::fprintf(out, "%s\n", line.c_str());
+  std::fprintf(out, "\n%s", report::format_tables_text(data).c_str());
+  std::fprintf(out, "\nCalibrated parameters (%s):\n", run.final_method().c_str());
+  for (const std::string& line : data.parameter_lines) std::fprintf(out, "  %s\n", line.c_str());
+}
+
+std::string result_json(const CalibrateSettings& settings, const report::ReportData& data,
+                        const streams::SessionFacts& facts, const Run& run) {
+  const CalibrationStage& final_stage = run.final_stage();
+  textio::CalibrationFile file;
+  file.robot = settings.robot;
+  file.model = final_stage.model;
+  file.base_to_tracker = final_stage.base_to_tracker;
+  file.has_metrics = true;
+  file.metrics = data.calibrated;
+  const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
+  return textio::format_calibration_json(file, [&](textio::JsonWriter& w) {
+    w.key("method").value(run.final_method());
+    w.key("params").value(settings.paper_params ? "paper" : "full");
+    w.key("seed").value(static_cast<long long>(settings.seed));
+    w.key("split").value(settings.train_fraction);
+    w.key("uncalibrated_metrics").begin_object();
+    w.key("train");
+    textio::write_error_stats(w, data.uncalibrated.train);
+    w.key("test");
+    textio::write_error_stats(w, data.uncalibrated.test);
+    w.end_object();
+    write_stage_list(w, data.methods);
+    if (run.final_lm() != nullptr) write_lm_details(w, *run.final_lm());
+    write_ur_deltas(w, deltas);
+    write_input_facts(w, facts);
+  });
+}
+
+// --- write ------------------------------------------------------------------------------------
+
+/// Stages every output, then commits them together: all or nothing.
+Error write_outputs(const Options& options, const CalibrateSettings& settings, const report::ReportData& data,
+                    const streams::SessionFacts& facts, const Run& run, port::OutputSet* outputs,
+                    const OutputIds& ids) {
+  const CalibrationStage& final_stage = run.final_stage();
+  Error error = outputs->stage_text(ids.result, "", result_json(settings, data, facts, run));
+  if (error.ok() && !options.get("ur-deltas").empty()) {
+    const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
+    error = outputs->stage_text(ids.ur_deltas, "", textio::format_ur_calibration_conf(deltas));
+  }
+  if (error.ok() && !options.get("report").empty()) {
+    error = outputs->stage_text(ids.report, "index.html", report::render_html(data));
+  }
+  return error.ok() ? outputs->commit() : error;
+}
+
+Error calibrate(const Options& options) {
+  CalibrateSettings settings;
+  Error error = settings_from_options(options, &settings);
+  port::OutputSet outputs;
+  OutputIds ids;
+  if (error.ok()) error = declare_outputs(options, &outputs, &ids);
+  RobotModel start;
+  if (error.ok()) error = start_geometry(options, settings, &start);
+  static CliDataset dataset;  // static: 8192 samples; emptied for each call (tests run several in one process)
+  dataset.clear();
+  streams::SessionFacts facts;
+  if (error.ok()) error = load_dataset(options, settings, &dataset, &facts);
+  static Run job;  // static: the CalibrationResult is ~5 KB
+  job.from_controller = !options.get("ur-calibration").empty();
+  if (error.ok()) error = run(settings, start, &dataset, &job);
+  if (!error.ok()) return error;
+  const report::ReportData data = present(settings, start, dataset, facts, job);
+  const bool result_on_stdout = options.get("out") == "-";
+  std::FILE* terminal = result_on_stdout ? stderr : stdout;
+  print_tables(terminal, data, job);
+  error = write_outputs(options, settings, data, facts, job, &outputs, ids);
+  if (!error.ok()) return error;
+  if (!result_on_stdout) std::fprintf(terminal, "\nresult: %s\n", options.get("out").c_str());
+  if (!options.get("ur-deltas").empty()) std::fprintf(terminal, "UR deltas: %s\n", options.get("ur-deltas").c_str());
+  if (!options.get("report").empty()) std::fprintf(terminal, "report: %s/index.html\n", options.get("report").c_str());
+  return Error{};
+}
+
+}  // namespace
+
+int calibrate_main(int argc, char** argv) {
+  Options options;
+  const int parsed = parse_options(kCommand,
+                                   "Estimates the robot geometry and the base -> tracker transform from tracker\n"
+                                   "measurements, prints the paper-style tables and writes the result.",
+                                   option_specs(), argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  return exit_with(kCommand, calibrate(options));
+}
+
+}  // namespace hivecal::cli

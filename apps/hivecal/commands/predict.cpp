@@ -1,0 +1,70 @@
+// hivecal predict: tool positions of joint poses through a calibration result.
+#include <cstdio>
+#include <vector>
+
+#include "cli/options.hpp"
+#include "hivecal/commands/commands.hpp"
+#include "hivecal/port/output_files.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+#include "textio/text_util.hpp"
+
+namespace hivecal::cli {
+
+namespace {
+
+constexpr const char* kCommand = "predict";
+
+Error predict(const Options& options) {
+  // parse
+  const std::string frame = options.get("frame");
+  if (options.get("calibration").empty() || options.get("joints").empty()) {
+    return Error::usage("--calibration and --joints are required (see --help)");
+  }
+  if (frame != "tracker" && frame != "base") {
+    return Error::usage("--frame must be 'tracker' or 'base', not " + port::quoted(frame));
+  }
+  port::OutputSet outputs;
+  std::size_t out_id = 0;
+  Error error = outputs.add_input(options.get("calibration"), "--calibration");
+  if (error.ok()) error = outputs.add_input(options.get("joints"), "--joints");
+  if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
+  if (!error.ok()) return error;
+  // load
+  textio::CalibrationFile calibration;
+  port::Error r = textio::read_calibration_json(options.get("calibration"), &calibration);
+  if (!r.ok()) return r;
+  std::vector<JointVector> poses;
+  r = textio::read_joints_csv(options.get("joints"), &poses);
+  if (!r.ok()) return r;
+  // run
+  std::vector<Vec3> points;
+  points.reserve(poses.size());
+  for (const JointVector& q : poses) {
+    const Vec3 base_point = fk_tool_point(calibration.model, q);
+    points.push_back(frame == "base" ? base_point : calibration.base_to_tracker.apply(base_point));
+  }
+  // write
+  error = outputs.stage_text(out_id, "", textio::format_points_csv(points));
+  return error.ok() ? outputs.commit() : error;
+}
+
+}  // namespace
+
+int predict_main(int argc, char** argv) {
+  const std::vector<OptionSpec> specs = {
+      {"calibration", "FILE", "calibration result (robot-calibration/1 JSON)", ""},
+      {"joints", "FILE", "poses to predict: CSV q1..q6 [rad], optional leading t column ('-': stdin)", ""},
+      {"frame", "tracker|base", "frame of the predicted positions", "tracker"},
+      {"out", "FILE", "predicted positions x,y,z [m] (CSV); '-' for stdout", "-"},
+  };
+  Options options;
+  const int parsed = parse_options(kCommand,
+                                   "Predicts the tool position of each joint pose with a calibrated model:\n"
+                                   "base_to_tracker * FK(q) * tool (or FK(q) * tool with --frame base).",
+                                   specs, argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  return exit_with(kCommand, predict(options));
+}
+
+}  // namespace hivecal::cli

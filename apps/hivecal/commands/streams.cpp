@@ -1,0 +1,245 @@
+#include "hivecal/commands/streams.hpp"
+
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cli/options.hpp"
+#include "hivecal/port/capture_file.hpp"
+#include "hivecal/port/output_files.hpp"
+#include "hivecal/port/recorder.hpp"
+#include "hivecal/port/serial_port.hpp"
+#include "streams/session.hpp"
+#include "textio/csv.hpp"
+#include "textio/text_util.hpp"
+
+namespace hivecal::streams {
+namespace {
+
+using port::Error;
+
+volatile std::sig_atomic_t g_stop = 0;
+void request_stop(int) { g_stop = 1; }
+
+/// SIGINT/SIGTERM end the recording cleanly (no SA_RESTART: poll() wakes up at once).
+void install_stop_handlers() {
+  struct sigaction action {};
+  action.sa_handler = request_stop;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+void print_clock(std::FILE* out, const ClockFit& fit) {
+  std::fprintf(out, "clock: t_robot = %.1f us + (1 %+.3f ppm) * t_tracker\n", fit.offset_us, fit.drift * 1e6);
+  std::fprintf(out, "       offset %.1f +- %.1f us at tracker time %.6f s; drift +- %.3f ppm\n",
+              fit.offset_at_reference_us, fit.sigma_offset_at_reference_us, fit.reference_tracker_us * 1e-6,
+              fit.sigma_drift * 1e6);
+  std::fprintf(out, "       correlation %.3f (runner-up %.3f), %u chords (%u on speed changes), rms %.1f um\n",
+              fit.coarse_correlation, fit.runner_up_correlation, fit.chords_used, fit.edge_chords,
+              fit.residual_rms_m * 1e6);
+}
+
+void print_counts(std::FILE* out, const ExtractionCounts& counts) {
+  std::fprintf(out, "tracker points %llu: kept %llu\n", static_cast<unsigned long long>(counts.tracker_points),
+              static_cast<unsigned long long>(counts.kept));
+  for (int r = 0; r < kDropReasonCount; ++r)
+    if (counts.dropped[r] != 0)
+      std::fprintf(out, "  dropped %-22s %llu\n", drop_reason_name(static_cast<DropReason>(r)),
+                  static_cast<unsigned long long>(counts.dropped[r]));
+}
+
+void print_input(std::FILE* out, const char* stream, const StreamInputCounts& in) {
+  if (in.is_log()) {
+    std::fprintf(out, "%s CSV log: %llu rows\n", stream, static_cast<unsigned long long>(in.log_rows));
+    return;
+  }
+  const DecoderStats& s = in.frames;
+  std::fprintf(out, "%s frames %llu ok, %llu rejected, %llu packets lost in %llu gaps\n", stream,
+              static_cast<unsigned long long>(s.frames_ok), static_cast<unsigned long long>(s.frames_rejected()),
+              static_cast<unsigned long long>(s.packets_lost), static_cast<unsigned long long>(s.sequence_gaps));
+}
+
+/// One recorded stream: its port and capture file options.
+struct StreamOptions {
+  const char* port;
+  const char* out;
+  const char* baud_option;
+};
+constexpr StreamOptions kStreams[] = {{"robot-port", "robot-out", "robot-baud"},
+                                      {"tracker-port", "tracker-out", "tracker-baud"}};
+
+/// Checks the command line of `record`: baud rates, duration, and the capture paths (each a
+/// regular file or new, distinct from the other and from the ports, not existing unless --force).
+Error check_record_options(const cli::Options& options, double* duration_s, int* bauds) {
+  if (options.get("robot-port").empty() && options.get("tracker-port").empty()) {
+    return Error::usage("give --robot-port and/or --tracker-port (see --help)");
+  }
+  Error error = cli::number_option(options, "duration-s", duration_s);
+  if (!error.ok()) return error;
+  if (!(*duration_s >= 0.0 && *duration_s <= 1e9)) {
+    return Error::usage("--duration-s must be 0 (until Ctrl-C / SIGTERM) or a positive number of seconds, not " +
+                        port::quoted(options.get("duration-s")));
+  }
+  port::OutputSet checks;  // used for its checks only: captures are written live, not staged
+  for (std::size_t k = 0; k < 2; ++k) {
+    const StreamOptions& s = kStreams[k];
+    if (options.get(s.port).empty()) continue;
+    double baud = 0.0;
+    error = cli::number_option(options, s.baud_option, &baud);
+    if (!error.ok()) return error;
+    bauds[k] = baud >= 1.0 && baud <= 1e7 ? static_cast<int>(baud) : 0;
+    if (!port::baud_supported(bauds[k])) {
+      return Error::usage(std::string("--") + s.baud_option + ": unsupported baud rate " + options.get(s.baud_option));
+    }
+    error = checks.add_input(options.get(s.port), std::string("--") + s.port);
+    if (!error.ok()) return error;
+  }
+  for (const StreamOptions& s : kStreams) {
+    if (options.get(s.port).empty()) continue;
+    const std::string out = options.get(s.out);
+    std::size_t id = 0;
+    if (out == "-") return Error::usage(std::string("--") + s.out + ": a capture goes to a file, not stdout");
+    error = checks.add_file(out, std::string("--") + s.out, &id);
+    if (!error.ok()) return error;
+    if (port::identify(out).exists && !options.given("force")) {
+      return Error::output(std::string("--") + s.out + " " + port::quoted(out, 200) +
+                           ": exists; refusing to overwrite a capture (--force replaces it)");
+    }
+  }
+  return Error{};
+}
+
+Error record(const cli::Options& options) {
+  double duration_s = 0.0;
+  int bauds[2] = {0, 0};
+  Error error = check_record_options(options, &duration_s, bauds);
+  if (!error.ok()) return error;
+  // Every port is opened before any file is created: a missing port leaves no empty capture.
+  std::vector<std::unique_ptr<port::SerialPort>> ports;
+  std::vector<const StreamOptions*> recorded;
+  for (std::size_t k = 0; k < 2; ++k) {
+    if (options.get(kStreams[k].port).empty()) continue;
+    ports.push_back(std::make_unique<port::SerialPort>(port::SerialOptions{options.get(kStreams[k].port), bauds[k]}));
+    recorded.push_back(&kStreams[k]);
+    error = ports.back()->open();
+    if (!error.ok()) return error;
+  }
+  std::vector<std::unique_ptr<port::CaptureWriter>> files;
+  for (const StreamOptions* s : recorded) {
+    files.push_back(std::make_unique<port::CaptureWriter>());
+    error = files.back()->open(options.get(s->out), options.given("force"));
+    if (!error.ok()) return error;
+  }
+  std::vector<port::ByteSource*> sources;
+  std::vector<port::CaptureWriter*> writers;
+  for (std::size_t i = 0; i < ports.size(); ++i) {
+    sources.push_back(ports[i].get());
+    writers.push_back(files[i].get());
+  }
+  install_stop_handlers();
+  port::RecordOptions record_options;
+  record_options.duration_s = duration_s;
+  port::RecordStats stats;
+  error = port::record_streams(sources, writers, &g_stop, record_options, &stats);
+  for (std::size_t i = 0; i < sources.size(); ++i)
+    std::printf("%s -> %s: %llu bytes, %llu disconnections\n", sources[i]->name().c_str(),
+                writers[i]->path().c_str(), static_cast<unsigned long long>(stats.bytes[i]),
+                static_cast<unsigned long long>(stats.disconnects[i]));
+  return error;
+}
+
+Error extract(const cli::Options& options) {
+  if (options.get("robot").empty() || options.get("tracker").empty()) {
+    return Error::usage("--robot and --tracker are required (see --help)");
+  }
+  RobotType type = RobotType::ur5;
+  Vec3 tool = Vec3::Zero();
+  double max_speed_mm_s = 0, window_s = 0;
+  Error error = cli::robot_model_option(options, "robot-model", &type);
+  if (error.ok()) error = cli::vec3_option(options, "tool", &tool);
+  if (error.ok()) error = cli::number_option(options, "max-speed-mm-s", &max_speed_mm_s);
+  if (error.ok()) error = cli::number_option(options, "window-s", &window_s);
+  if (!error.ok()) return error;
+  if (!(max_speed_mm_s > 0 && max_speed_mm_s < 1e6) || !(window_s >= 0 && window_s <= 60)) {
+    return Error::usage("--max-speed-mm-s must be positive and --window-s in [0, 60] (see --help)");
+  }
+  port::OutputSet outputs;
+  std::size_t samples_id = 0;
+  const std::string out = options.get("samples");
+  error = outputs.add_input(options.get("robot"), "--robot");
+  if (error.ok()) error = outputs.add_input(options.get("tracker"), "--tracker");
+  if (error.ok() && !out.empty()) error = outputs.add_file(out, "--samples", &samples_id);
+  if (!error.ok()) return error;
+  streams::SessionConfig config;
+  config.speed_model = nominal_model(type);
+  config.speed_model.tool_m = tool;
+  config.max_speed_m_s = max_speed_mm_s * 1e-3;
+  config.window_s = window_s;
+  const auto dataset = std::make_unique<Dataset<65536>>();
+  SessionFacts facts;
+  error = load_session({"", options.get("robot"), options.get("tracker")}, config, dataset.get(), &facts);
+  std::FILE* terminal = out == "-" ? stderr : stdout;  // stdout may carry the samples
+  const bool counted = facts.run.robot.records > 0 && facts.run.tracker.records > 0;
+  if (counted) {  // also when the clock fit failed: the counts tell why
+    print_input(terminal, "robot  ", facts.run.robot);
+    print_input(terminal, "tracker", facts.run.tracker);
+  }
+  if (!error.ok()) return error;
+  print_clock(terminal, facts.run.clock);
+  print_counts(terminal, facts.run.counts);
+  if (out.empty()) return Error{};
+  error = outputs.stage_text(samples_id, "", textio::format_samples_csv(dataset->samples()));
+  return error.ok() ? outputs.commit() : error;
+}
+
+}  // namespace
+
+int record_main(int argc, char** argv) {
+  const std::string command = "record";
+  const std::vector<cli::OptionSpec> specs = {
+      {"robot-port", "DEV", "serial port of the robot joint-state stream", ""},
+      {"tracker-port", "DEV", "serial port of the tracker stream", ""},
+      {"robot-out", "FILE", "capture file of the robot stream", "robot.cap"},
+      {"tracker-out", "FILE", "capture file of the tracker stream", "tracker.cap"},
+      {"robot-baud", "N", "robot line rate [bit/s]", std::to_string(port::kRobotBaud)},
+      {"tracker-baud", "N", "tracker line rate [bit/s]", std::to_string(port::kTrackerBaud)},
+      {"duration-s", "S", "stop after this long [s]; 0: until Ctrl-C / SIGTERM", "0"},
+      {"force", "", "replace existing capture files (never done without it)", ""},
+  };
+  cli::Options options;
+  const int parsed = cli::parse_options(
+      command,
+      "Records the raw bytes of the robot and/or tracker serial ports into capture files as they\n"
+      "come (fsync every second and on Ctrl-C/SIGTERM; a capture cut mid-frame stays usable).\n"
+      "A port that disappears is reopened with backoff.",
+      specs, argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  return cli::exit_with(command, record(options));
+}
+
+int extract_main(int argc, char** argv) {
+  const std::string command = "extract";
+  const std::vector<cli::OptionSpec> specs = {
+      {"robot", "FILE", "robot stream: capture (wire format) or CSV log t,q1..q6 (detected by content)", ""},
+      {"tracker", "FILE", "tracker stream: capture (wire format) or CSV log t,x,y,z[,status]", ""},
+      {"robot-model", "NAME", std::string(robot_type_names()) + " (nominal geometry for tool speeds)", "ur5"},
+      {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
+      {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
+      {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
+      {"samples", "FILE", "write the paired samples q1..q6,x,y,z (CSV) here; '-' for stdout; empty: none", ""},
+  };
+  cli::Options options;
+  const int parsed = cli::parse_options(
+      command,
+      "Relates the tracker clock to the robot clock from the motion itself (t_robot = offset +\n"
+      "(1 + drift) t_tracker), then pairs each valid tracker point with the joints at the same\n"
+      "instant and keeps the quasi-static ones. Prints the clock fit and the drop statistics.",
+      specs, argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  return cli::exit_with(command, extract(options));
+}
+
+}  // namespace hivecal::streams

@@ -1,0 +1,51 @@
+// The input layer of a calibration session: load_session() turns what the user gave
+// (paired samples, or a robot and a tracker stream, each a capture or a text log) into a
+// dataset and the facts about it. `calibrate` and `extract` both load through it, and
+// `record`'s captures are read back by it. Presentation (terminal lines, JSON) is the
+// caller's.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/port/error.hpp"
+#include "streams/stream_pipeline.hpp"
+
+namespace hivecal::streams {
+
+/// Where the data of a session is.
+struct SessionSources {
+  std::string samples;  ///< paired samples CSV q1..q6,x,y,z ('-': stdin), or "" for streams
+  std::string robot;    ///< robot stream: capture or CSV log t,q1..q6
+  std::string tracker;  ///< tracker stream: capture or CSV log t,x,y,z[,status]
+};
+
+/// How streams become samples.
+struct SessionConfig {
+  RobotModel speed_model;           ///< nominal geometry with the tool (for tool speeds only)
+  double max_speed_m_s = 0.0;       ///< quasi-static threshold [m/s]; 0: the library default
+  double window_s = 0.0;            ///< optional stability window [s]; 0: none (the paper's rule at the instant)
+  bool progress = false;            ///< "[decode] pass i/2" lines on stderr
+};
+
+/// What the input stage found (for the terminal, the report and the JSON).
+struct SessionFacts {
+  std::vector<std::string> info_lines;  ///< human-readable facts (inputs, clock, samples kept/dropped)
+  bool has_stream = false;              ///< the dataset came from two streams (run below is meaningful)
+  CaptureRunReport run;                 ///< frames / rows, clock fit, extraction counts
+  std::vector<std::pair<std::string, std::uint64_t>> dropped;  ///< drop reason -> count
+};
+
+/// Fills `dataset` from `sources`. Fault::input (with file and line where known) when a file
+/// is missing, not a regular file, too large or malformed, when a stream holds no record,
+/// when the clock relation cannot be found, or when the samples do not fit the dataset (a
+/// truncated dataset is never used silently). Fault::usage for an incomplete choice of
+/// sources. On a clock failure, facts->run already holds the frame counts.
+port::Error load_session(const SessionSources& sources, const SessionConfig& config, DatasetBase* dataset,
+                         SessionFacts* facts);
+
+}  // namespace hivecal::streams

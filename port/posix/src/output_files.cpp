@@ -1,0 +1,461 @@
+#include "hivecal/port/output_files.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+
+namespace hivecal::port {
+namespace {
+
+constexpr std::size_t kBufferBytes = 64 * 1024;
+
+std::string folder_of(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  if (slash == std::string::npos) return ".";
+  return slash == 0 ? "/" : path.substr(0, slash);
+}
+
+std::string name_of(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+std::string join(const std::string& folder, const std::string& name) {
+  return folder == "/" ? "/" + name : folder + "/" + name;
+}
+
+mode_t default_mode() {
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  return static_cast<mode_t>(0666 & ~mask);
+}
+
+std::string kind_of(mode_t mode) {
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISSOCK(mode)) return "a socket";
+  if (S_ISDIR(mode)) return "a folder";
+  return "not a regular file";
+}
+
+/// `label 'path'` for messages.
+std::string named(const std::string& label, const std::string& path) {
+  return (label.empty() ? "" : label + " ") + quoted(path, 200);
+}
+
+/// The folder exists and this process may create files in it.
+Error check_folder_writable(const std::string& folder, const std::string& who) {
+  struct stat info {};
+  if (::stat(folder.c_str(), &info) != 0) {
+    return Error::output(who + ": folder " + quoted(folder, 200) + " does not exist (" + system_message(errno) + ")");
+  }
+  if (!S_ISDIR(info.st_mode)) return Error::output(who + ": " + quoted(folder, 200) + " is not a folder");
+  if (::access(folder.c_str(), W_OK | X_OK) != 0) {
+    return Error::output(who + ": cannot create files in folder " + quoted(folder, 200) + " (" +
+                         system_message(errno) + ")");
+  }
+  return Error{};
+}
+
+/// Where a new file goes: an existing regular file keeps its mode and owner; anything else
+/// that exists is refused. The path given is already the final one (symlinks resolved).
+Error check_file_target(const std::string& target, const std::string& who, bool* existed, struct stat* info) {
+  *existed = ::stat(target.c_str(), info) == 0;
+  if (*existed && !S_ISREG(info->st_mode)) {
+    return Error::output(who + ": is " + kind_of(info->st_mode) +
+                         "; refusing to replace it (only regular files are written; '-' writes to stdout)");
+  }
+  return check_folder_writable(folder_of(target), who);
+}
+
+/// Follows a symlink at `path` to its final target; `path` itself otherwise.
+Error resolve_link(const std::string& path, const std::string& who, std::string* target) {
+  struct stat link {};
+  *target = path;
+  if (::lstat(path.c_str(), &link) != 0 || !S_ISLNK(link.st_mode)) return Error{};
+  char* resolved = ::realpath(path.c_str(), nullptr);
+  if (resolved == nullptr) {
+    return Error::output(who + ": is a symlink whose target cannot be resolved (" + system_message(errno) + ")");
+  }
+  *target = resolved;
+  std::free(resolved);
+  return Error{};
+}
+
+bool make_folders(const std::string& path) {
+  for (std::size_t slash = path.find('/', 1);; slash = path.find('/', slash + 1)) {
+    const std::string prefix = path.substr(0, slash);
+    if (!prefix.empty() && ::mkdir(prefix.c_str(), 0777) != 0 && errno != EEXIST) return false;
+    if (slash == std::string::npos) return true;
+  }
+}
+
+/// The deepest existing ancestor folder of `path` ("." for a relative path with none).
+std::string existing_ancestor(const std::string& path) {
+  std::string folder = folder_of(path);
+  struct stat info {};
+  while (::stat(folder.c_str(), &info) != 0 && folder != "." && folder != "/") folder = folder_of(folder);
+  return folder;
+}
+
+void sync_folder(const std::string& folder) {
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  (void)::fsync(fd);  // best effort: the renames are already visible
+  ::close(fd);
+}
+
+}  // namespace
+
+// --- StagedFile ----------------------------------------------------------------------------
+
+StagedFile::~StagedFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool StagedFile::flush() {
+  std::size_t done = 0;
+  while (done < buffer_.size()) {
+    const ssize_t put = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+    if (put < 0 && errno == EINTR) continue;
+    if (put <= 0) {
+      error_ = Error::output(quoted(shown_path_, 200) + ": write failed: " + system_message(put < 0 ? errno : EIO));
+      return false;
+    }
+    done += static_cast<std::size_t>(put);
+  }
+  buffer_.clear();
+  return true;
+}
+
+void StagedFile::write(const void* bytes, std::size_t count) {
+  if (!error_.ok() || finished_) return;
+  const char* data = static_cast<const char*>(bytes);
+  if (to_memory_) {
+    memory_.append(data, count);
+    return;
+  }
+  buffer_.insert(buffer_.end(), data, data + count);
+  if (buffer_.size() >= kBufferBytes) (void)flush();
+}
+
+Error StagedFile::finish() {
+  if (finished_ || to_memory_) {
+    finished_ = true;
+    return error_;
+  }
+  finished_ = true;
+  if (error_.ok() && flush()) {
+    const std::string where = quoted(shown_path_, 200);
+    if (::fchmod(fd_, mode_) != 0) {
+      error_ = Error::output(where + ": cannot set the mode: " + system_message(errno));
+    } else if (set_owner_ && ::fchown(fd_, owner_uid_, owner_gid_) != 0 && errno != EPERM) {
+      error_ = Error::output(where + ": cannot keep the owner: " + system_message(errno));
+    } else if (::fsync(fd_) != 0) {
+      error_ = Error::output(where + ": fsync failed: " + system_message(errno));
+    }
+  }
+  if (::close(fd_) != 0 && error_.ok()) {
+    error_ = Error::output(quoted(shown_path_, 200) + ": close failed: " + system_message(errno));
+  }
+  fd_ = -1;
+  return error_;
+}
+
+// --- OutputSet -----------------------------------------------------------------------------
+
+struct OutputSet::Output {
+  std::string label;                 ///< option name, for messages
+  std::string path;                  ///< as given
+  bool is_stdout = false;            ///< "-"
+  bool is_folder = false;            ///< a folder of files
+  std::string target;                ///< final path (a symlink resolved)
+  bool existed = false;              ///< the file / folder was there before the run
+  struct stat old {};                ///< its metadata when it existed (a file)
+  std::string temp_folder;           ///< a new folder is built here, then renamed
+  std::vector<std::unique_ptr<StagedFile>> files;  ///< staged content
+  std::vector<std::string> finals;   ///< where each staged file goes (inside temp_folder for a new folder)
+  std::vector<bool> moved;           ///< renamed into place already
+  bool folder_moved = false;
+};
+
+OutputSet::OutputSet() = default;
+OutputSet::~OutputSet() { abandon(); }
+
+Error OutputSet::check_distinct(const FileIdentity& identity, const std::string& label, const std::string& path) const {
+  for (const Input& input : inputs_) {
+    if (same_file(identity, input.identity)) {
+      return Error::usage(named(label, path) + " is the same file as the input " + named(input.label, input.path) +
+                          ": refusing to overwrite an input");
+    }
+  }
+  for (const auto& output : outputs_) {
+    if (output->is_stdout) continue;
+    if (same_file(identity, identify(output->target))) {
+      return Error::usage(named(label, path) + " is the same file as the output " +
+                          named(output->label, output->path) + ": each output needs its own path");
+    }
+  }
+  return Error{};
+}
+
+Error OutputSet::add_input(const std::string& path, const std::string& label) {
+  if (path.empty() || path == "-") return Error{};
+  Input input{label, path, identify(path)};
+  for (const auto& output : outputs_) {
+    if (!output->is_stdout && same_file(input.identity, identify(output->target))) {
+      return Error::usage(named(output->label, output->path) + " is the same file as the input " +
+                          named(label, path) + ": refusing to overwrite an input");
+    }
+  }
+  inputs_.push_back(std::move(input));
+  return Error{};
+}
+
+Error OutputSet::add_file(const std::string& path, const std::string& label, std::size_t* id) {
+  const std::string who = named(label, path);
+  if (path.empty()) return Error::usage(label + ": empty path");
+  auto output = std::make_unique<Output>();
+  output->label = label;
+  output->path = path;
+  if (path == "-") {
+    for (const auto& other : outputs_) {
+      if (other->is_stdout) return Error::usage(who + ": " + other->label + " already writes to stdout");
+    }
+    output->is_stdout = true;
+  } else {
+    Error error = resolve_link(path, who, &output->target);
+    if (error.ok()) error = check_file_target(output->target, who, &output->existed, &output->old);
+    if (error.ok()) error = check_distinct(identify(output->target), label, path);
+    if (!error.ok()) return error;
+  }
+  *id = outputs_.size();
+  outputs_.push_back(std::move(output));
+  return Error{};
+}
+
+Error OutputSet::add_folder(const std::string& path, const std::string& label, std::size_t* id) {
+  const std::string who = named(label, path);
+  if (path.empty() || path == "-") return Error::usage(label + ": a folder path is needed");
+  auto output = std::make_unique<Output>();
+  output->label = label;
+  output->path = path;
+  output->is_folder = true;
+  Error error = resolve_link(path, who, &output->target);
+  if (!error.ok()) return error;
+  struct stat info {};
+  output->existed = ::stat(output->target.c_str(), &info) == 0;
+  if (output->existed && !S_ISDIR(info.st_mode)) {
+    return Error::output(who + ": exists and is " + kind_of(info.st_mode) + ", not a folder");
+  }
+  error = check_folder_writable(output->existed ? output->target : existing_ancestor(output->target), who);
+  if (error.ok()) error = check_distinct(identify(output->target), label, path);
+  if (!error.ok()) return error;
+  *id = outputs_.size();
+  outputs_.push_back(std::move(output));
+  return Error{};
+}
+
+Error OutputSet::stage_in_folder(Output& folder, const std::string& name, StagedFile** file) {
+  const std::string who = named(folder.label, join(folder.path, name));
+  if (name.empty() || name.find('/') != std::string::npos) return Error::usage(who + ": bad file name");
+  std::string base;
+  if (folder.existed) {
+    base = folder.target;
+  } else {
+    if (folder.temp_folder.empty()) {
+      std::string pattern = join(existing_ancestor(folder.target), name_of(folder.target) + ".tmp.XXXXXX");
+      if (::mkdtemp(pattern.data()) == nullptr) {
+        return Error::output(who + ": cannot create a temporary folder: " + system_message(errno));
+      }
+      folder.temp_folder = pattern;
+    }
+    base = folder.temp_folder;
+  }
+  auto staged = std::make_unique<StagedFile>();
+  staged->shown_path_ = join(folder.path, name);
+  staged->mode_ = default_mode();
+  const std::string final_path = join(base, name);
+  struct stat old {};
+  bool existed = false;
+  if (folder.existed) {
+    Error error = check_file_target(final_path, who, &existed, &old);
+    if (!error.ok()) return error;
+    if (existed) {
+      staged->mode_ = old.st_mode & 07777;
+      staged->set_owner_ = true;
+      staged->owner_uid_ = old.st_uid;
+      staged->owner_gid_ = old.st_gid;
+    }
+  }
+  std::string pattern = final_path + ".tmp.XXXXXX";
+  staged->fd_ = ::mkostemp(pattern.data(), O_CLOEXEC);
+  if (staged->fd_ < 0) return Error::output(who + ": cannot create a temporary file beside it: " + system_message(errno));
+  staged->temp_path_ = pattern;
+  *file = staged.get();
+  folder.files.push_back(std::move(staged));
+  folder.finals.push_back(final_path);
+  folder.moved.push_back(false);
+  return Error{};
+}
+
+Error OutputSet::stage(std::size_t id, const std::string& name, StagedFile** file) {
+  if (id >= outputs_.size() || committed_) return Error::usage("internal: staging an undeclared output");
+  Output& output = *outputs_[id];
+  if (output.is_folder) return stage_in_folder(output, name, file);
+  const std::string who = named(output.label, output.path);
+  if (!output.files.empty()) return Error::usage(who + ": staged twice");
+  auto staged = std::make_unique<StagedFile>();
+  staged->shown_path_ = output.is_stdout ? "stdout" : output.path;
+  if (output.is_stdout) {
+    staged->to_memory_ = true;
+  } else {
+    staged->mode_ = output.existed ? (output.old.st_mode & 07777) : default_mode();
+    staged->set_owner_ = output.existed;
+    staged->owner_uid_ = output.old.st_uid;
+    staged->owner_gid_ = output.old.st_gid;
+    std::string pattern = output.target + ".tmp.XXXXXX";
+    staged->fd_ = ::mkostemp(pattern.data(), O_CLOEXEC);
+    if (staged->fd_ < 0) {
+      return Error::output(who + ": cannot create a temporary file beside it: " + system_message(errno));
+    }
+    staged->temp_path_ = pattern;
+  }
+  *file = staged.get();
+  output.files.push_back(std::move(staged));
+  output.finals.push_back(output.target);
+  output.moved.push_back(false);
+  return Error{};
+}
+
+Error OutputSet::stage_text(std::size_t id, const std::string& name, const std::string& content) {
+  StagedFile* file = nullptr;
+  Error error = stage(id, name, &file);
+  if (!error.ok()) return error;
+  file->write(content);
+  return file->finish();
+}
+
+Error OutputSet::commit() {
+  Error error;
+  for (auto& output : outputs_) {
+    for (auto& file : output->files) {
+      const Error finished = file->finish();
+      if (error.ok() && !finished.ok()) error = finished;
+    }
+  }
+  struct Moved {
+    std::string path;    ///< where a file or folder was moved
+    std::string backup;  ///< the old file's second name, "" when there was none
+    bool existed;        ///< an old file was replaced
+    Output* output;      ///< whose
+    std::size_t file;    ///< which staged file; files.size() for the folder itself
+  };
+  std::vector<Moved> done;
+  for (auto& output : outputs_) {  // what was checked at declaration may have changed since
+    for (std::size_t k = 0; k < output->files.size() && error.ok() && !output->is_stdout; ++k) {
+      struct stat now {};
+      if (::stat(output->finals[k].c_str(), &now) == 0 && !S_ISREG(now.st_mode)) {
+        error = Error::output(named(output->label, output->finals[k]) + ": became " + kind_of(now.st_mode) +
+                              " during the run; refusing to replace it");
+      }
+    }
+  }
+  for (auto& output : outputs_) {  // stdout first: it cannot be taken back
+    if (!error.ok() || !output->is_stdout || output->files.empty()) continue;
+    const std::string& bytes = output->files.front()->memory_;
+    if (std::fwrite(bytes.data(), 1, bytes.size(), stdout) != bytes.size()) {
+      error = Error::output("stdout: write failed: " + system_message(errno));
+    }
+    if (error.ok()) error = finish_stdout();
+  }
+  for (auto& output : outputs_) {
+    if (!error.ok()) break;
+    if (output->is_stdout) continue;
+    for (std::size_t k = 0; k < output->files.size() && error.ok(); ++k) {
+      const std::string& final_path = output->finals[k];
+      // The old file stays reachable under a second name until every output is in place.
+      std::string backup = final_path + ".old." + std::to_string(::getpid());
+      const bool existed = ::access(final_path.c_str(), F_OK) == 0;
+      if (!existed || ::link(final_path.c_str(), backup.c_str()) != 0) backup.clear();  // or no hard links here
+      if (std::rename(output->files[k]->temp_path_.c_str(), final_path.c_str()) != 0) {
+        error = Error::output(named(output->label, output->path) + ": cannot move the new file into place: " +
+                              system_message(errno));
+        if (!backup.empty()) ::unlink(backup.c_str());
+      } else {
+        output->moved[k] = true;
+        done.push_back(Moved{final_path, backup, existed, output.get(), k});
+        sync_folder(folder_of(final_path));
+      }
+    }
+    if (error.ok() && !output->temp_folder.empty()) {
+      const std::string parent = folder_of(output->target);
+      if (!make_folders(parent) || std::rename(output->temp_folder.c_str(), output->target.c_str()) != 0) {
+        error = Error::output(named(output->label, output->path) + ": cannot move the new folder into place: " +
+                              system_message(errno));
+      } else {
+        output->folder_moved = true;
+        done.push_back(Moved{output->target, "", false, output.get(), output->files.size()});
+        sync_folder(parent);
+      }
+    }
+  }
+  // All or nothing: after a failed move, what was moved goes back (old files restored).
+  for (auto it = done.rbegin(); it != done.rend(); ++it) {
+    if (error.ok()) {
+      if (!it->backup.empty()) ::unlink(it->backup.c_str());
+      continue;
+    }
+    Output& output = *it->output;
+    if (it->file == output.files.size()) {  // a new folder: back to its temporary name
+      if (std::rename(output.target.c_str(), output.temp_folder.c_str()) == 0) output.folder_moved = false;
+    } else if (!output.temp_folder.empty()) {
+      // inside a new folder's temporary: removed with it by abandon()
+    } else if (!it->backup.empty()) {
+      (void)std::rename(it->backup.c_str(), it->path.c_str());
+      output.moved[it->file] = false;
+    } else if (!it->existed) {
+      ::unlink(it->path.c_str());
+      output.moved[it->file] = false;
+    }  // else: an old file without a second name (no hard links) cannot come back
+  }
+  committed_ = true;
+  abandon();  // whatever is left (after a failure) goes
+  return error;
+}
+
+void OutputSet::abandon() {
+  for (auto& output : outputs_) {
+    for (std::size_t k = 0; k < output->files.size(); ++k) {
+      StagedFile& file = *output->files[k];
+      if (file.fd_ >= 0) {
+        ::close(file.fd_);
+        file.fd_ = -1;
+      }
+      if (!file.temp_path_.empty() && !output->moved[k]) ::unlink(file.temp_path_.c_str());
+      if (!output->temp_folder.empty() && !output->folder_moved && output->moved[k]) {
+        ::unlink(output->finals[k].c_str());  // moved inside the temporary folder only
+      }
+    }
+    if (!output->temp_folder.empty() && !output->folder_moved) ::rmdir(output->temp_folder.c_str());
+    output->files.clear();
+    output->finals.clear();
+    output->moved.clear();
+    output->temp_folder.clear();
+  }
+}
+
+Error finish_stdout() {
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  if (flushed && std::ferror(stdout) == 0) return Error{};
+  const int saved = errno;
+  return Error::output("stdout: write failed: " + (saved != 0 ? system_message(saved) : std::string("I/O error")));
+}
+
+}  // namespace hivecal::port
