@@ -254,14 +254,15 @@ instruction_table() {
   done
 }
 
-# The full calibration from captures: a simulated session of 36 waypoints (508 quasi-static
-# samples, 292 s) written by the host tool, then the capture job image stopped after each
-# stage: the differences are the stages' instructions.
-session=$build/fw-session-512
+# The full calibration from captures: a simulated session of 21 waypoints written by the host
+# tool (476 quasi-static samples with the extraction at the instant: the most that stays below
+# the image's 512-sample capacity), then the capture job image stopped after each stage: the
+# differences are the stages' instructions.
+session=$build/fw-session-w21
 make_session() {
   if [ ! -f "$session/robot.cap" ]; then
     mkdir -p "$session"
-    "$host_tool" simulate --out-dir "$session" --waypoints 36 --duration-s 1 --seed 1 >/dev/null
+    "$host_tool" simulate --out-dir "$session" --waypoints 21 --duration-s 1 --seed 1 >/dev/null
   fi
 }
 
