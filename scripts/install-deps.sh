@@ -5,7 +5,8 @@ set -euo pipefail
 
 packages=(
   cmake ninja-build g++ libeigen3-dev googletest          # host build and tests
-  clang libclang-rt-14-dev                                # libFuzzer target for the decoder
+  clang libclang-rt-14-dev                                # libFuzzer targets (decoder, log readers)
+  libsqlite3-dev                                          # ROS 2 bags (rosbag2 sqlite3 storage)
   qemu-user qemu-system-arm                               # running cross-built tests
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf            # Linux ARM edge controllers
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib  # Cortex-M

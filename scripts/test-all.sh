@@ -2,7 +2,7 @@
 # Runs every test on every target: host at -O3, -O0, -march=native and with ASan+UBSan,
 # aarch64 and armhf under qemu-user, then the bare-metal Cortex-M7 (hardware doubles) and
 # Cortex-M4F (soft-float doubles) firmware under qemu-system-arm, then the wire decoder
-# fuzzer for HIVECAL_FUZZ_SECONDS (default 60). Installs what it needs first.
+# fuzzer for HIVECAL_FUZZ_SECONDS (default 60) and the log-reader fuzzer for 30 s. Installs what it needs first.
 #   scripts/test-all.sh [preset ...]     (default: all of them)
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -22,7 +22,7 @@ for preset in "${presets[@]}"; do
   log="build/test-$preset.log"
   mkdir -p build
   if [ "$preset" = fuzz ]; then
-    # The decoder fuzz target for a bounded time (ASan + UBSan); one test, pass or fail.
+    # The decoder and log-reader fuzz targets for a bounded time (ASan + UBSan); one test, pass or fail.
     scripts/fuzz-decoder.sh "${HIVECAL_FUZZ_SECONDS:-60}" >"$log" 2>&1
     rc=$?
     tail -3 "$log"

@@ -5,6 +5,7 @@
 #include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
 #include "textio/csv.hpp"
+#include "textio/logs.hpp"
 
 namespace hivecal::streams {
 namespace {
@@ -43,10 +44,19 @@ std::string format(const char* fmt, double a, double b) {
 
 std::string input_line(const char* stream, const StreamInputCounts& in, const char* records) {
   std::string line = std::string(stream) + " stream: " + std::to_string(in.records) + " " + records;
-  if (in.is_log()) return line + " (CSV log rows)";
+  if (in.is_log()) return line + " (" + textio::describe_log(in.format, in.log) + ")";
   return line + ", " + std::to_string(in.frames.frames_rejected()) + " frames rejected, " +
          std::to_string(in.frames.packets_lost) + " packets lost";
 }
+
+}  // namespace
+
+port::Error joint_names_option(const std::string& value, textio::RobotLogOptions* log_options) {
+  if (value.empty() || textio::parse_joint_names(value, log_options)) return port::Error{};
+  return port::Error::usage("--joint-names needs six comma-separated names, joints 1..6 in order");
+}
+
+namespace {
 
 port::Error load_streams(const SessionSources& sources, const SessionConfig& config, DatasetBase* dataset,
                          SessionFacts* facts) {
@@ -57,7 +67,8 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
   DecodeProgress progress(config.progress);
   const port::Error read = extract_from_files(
       sources.robot, sources.tracker, make_clock_sync_config(config.speed_model), extraction, dataset, &report,
-      nullptr, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); });
+      nullptr, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); },
+      config.log_options);
   if (!read.ok()) return read;
   facts->has_stream = true;
   facts->info_lines.push_back(input_line("robot", report.robot, "joint states"));

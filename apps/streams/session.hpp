@@ -20,8 +20,8 @@ namespace hivecal::streams {
 /// Where the data of a session is.
 struct SessionSources {
   std::string samples;  ///< paired samples CSV q1..q6,x,y,z ('-': stdin), or "" for streams
-  std::string robot;    ///< robot stream: capture or CSV log t,q1..q6
-  std::string tracker;  ///< tracker stream: capture or CSV log t,x,y,z[,status]
+  std::string robot;    ///< robot stream: capture, or a log of any tool (textio/logs.hpp), or a ROS 2 bag
+  std::string tracker;  ///< tracker stream: capture, or hivecal's tracker log or a tracker export
 };
 
 /// How streams become samples.
@@ -30,7 +30,12 @@ struct SessionConfig {
   double max_speed_m_s = 0.0;       ///< quasi-static threshold [m/s]; 0: the library default
   double window_s = 0.0;            ///< optional stability window [s]; 0: none (the paper's rule at the instant)
   bool progress = false;            ///< "[decode] pass i/2" lines on stderr
+  textio::RobotLogOptions log_options;  ///< joint names of ROS robot logs (UR driver names by default)
 };
+
+/// The --joint-names value (six comma-separated names, or "" for the UR driver names) into
+/// *log_options; Fault::usage otherwise.
+port::Error joint_names_option(const std::string& value, textio::RobotLogOptions* log_options);
 
 /// What the input stage found (for the terminal, the report and the JSON).
 struct SessionFacts {

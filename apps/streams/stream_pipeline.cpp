@@ -9,16 +9,16 @@
 namespace hivecal::streams {
 namespace {
 
-constexpr double kMaxLogTime_s = 1.8e13;  // microseconds still fit a u64 (and a double's integers)
 constexpr std::uint64_t kProgressStepBytes = 256 * 1024;
 
 /// One input opened for one pass: a capture (bytes -> frames) or a CSV log (rows).
 class Input {
  public:
-  port::Error open(const std::string& path, bool is_log, LogKind kind) {
+  /// `loaded`: the log read before the passes, when the input is one.
+  port::Error open(const std::string& path, const LogRecordReader* loaded) {
     if (path == "-") return port::Error::input("'-': a stream is read twice (clock, then samples): give a file");
-    if (is_log) {
-      log_ = open_log_records(kind, path);
+    if (loaded != nullptr) {
+      log_ = loaded->replay();
       return port::Error{};
     }
     capture_ = std::make_unique<port::InputFile>();
@@ -58,9 +58,10 @@ class Pass {
   Pass(int number, const PassProgress& progress, std::uint64_t total_bytes)
       : number_(number), progress_(progress), total_(total_bytes), tick_([this] { tick(); }),
         robot_(&robot_input_, tick_), tracker_(&tracker_input_, tick_) {}
-  port::Error open(const std::string& robot_path, const std::string& tracker_path, const CaptureRunReport& kinds) {
-    port::Error error = robot_input_.open(robot_path, kinds.robot.is_log(), LogKind::robot);
-    if (error.ok()) error = tracker_input_.open(tracker_path, kinds.tracker.is_log(), LogKind::tracker);
+  port::Error open(const std::string& robot_path, const std::string& tracker_path, const LogRecordReader* robot_log,
+                   const LogRecordReader* tracker_log) {
+    port::Error error = robot_input_.open(robot_path, robot_log);
+    if (error.ok()) error = tracker_input_.open(tracker_path, tracker_log);
     return error;
   }
   const Input& robot_input() const { return robot_input_; }
@@ -99,60 +100,40 @@ class Pass {
 
 }  // namespace
 
-std::unique_ptr<LogRecords> open_log_records(LogKind kind, const std::string& path) {
-  return std::make_unique<LogRecordReader>(kind, path);
-}
+LogRecordReader::LogRecordReader(std::shared_ptr<const textio::RobotLog> log)
+    : joints_(std::move(log)), size_(joints_->records.size()), bytes_(joints_->bytes_read), format_(joints_->format),
+      log_counters_(joints_->counters), error_(joints_->ok ? "" : joints_->error) {}
 
-Status LogRecordReader::fail(const std::string& problem) {
-  error_ = problem;
-  return Status::read_failed;
-}
-
-bool LogRecordReader::to_microseconds(double t_s, std::uint64_t* t_us) {
-  if (!(t_s >= 0.0 && t_s <= kMaxLogTime_s)) {
-    error_ = path_ + ": timestamp " + textio::format_double(t_s) + " s outside 0 .. 1.8e13 s";
-    return false;
-  }
-  *t_us = static_cast<std::uint64_t>(t_s * 1e6 + 0.5);
-  if (rows_ > 0 && *t_us <= last_us_) {
-    error_ = path_ + ": timestamps " + textio::format_double(t_s) + " s and the previous one are less than 1 us apart";
-    return false;
-  }
-  last_us_ = *t_us;
-  return true;
-}
+LogRecordReader::LogRecordReader(std::shared_ptr<const textio::TrackerLog> log)
+    : points_(std::move(log)), size_(points_->records.size()), bytes_(points_->bytes_read), format_(points_->format),
+      log_counters_(points_->counters), error_(points_->ok ? "" : points_->error) {}
 
 Status LogRecordReader::next(StreamRecord* record) {
   record->kind = StreamRecord::Kind::end;
   if (!error_.empty()) return Status::read_failed;
-  if (!opened_) {
-    opened_ = true;
-    const port::Error r = kind_ == Kind::robot ? robot_.open(path_) : tracker_.open(path_);
-    if (!r.ok()) return fail(r.message);
-  }
-  bool got_row = false;
-  port::Error r;
-  if (kind_ == Kind::robot) {
-    textio::RobotLogRow row;
-    r = robot_.next(&row, &got_row);
-    if (r.ok() && got_row) {
-      if (!to_microseconds(row.t_s, &record->joint.timestamp_us)) return Status::read_failed;
-      for (int j = 0; j < kJointCount; ++j) record->joint.q_rad[j] = row.q_rad(j);
-      record->kind = StreamRecord::Kind::joint_state;
-    }
+  if (next_ == size_) return Status::ok;
+  if (joints_ != nullptr) {
+    record->kind = StreamRecord::Kind::joint_state;
+    record->joint = joints_->records[next_++];
   } else {
-    textio::TrackerLogRow row;
-    r = tracker_.next(&row, &got_row);
-    if (r.ok() && got_row) {
-      if (!to_microseconds(row.t_s, &record->point.timestamp_us)) return Status::read_failed;
-      for (int k = 0; k < 3; ++k) record->point.point_m[k] = row.point_m(k);
-      record->point.status = row.status;
-      record->kind = StreamRecord::Kind::tracker_point;
-    }
+    record->kind = StreamRecord::Kind::tracker_point;
+    record->point = points_->records[next_++];
   }
-  if (!r.ok()) return fail(r.message);
-  if (got_row) ++rows_;
   return Status::ok;
+}
+
+std::uint64_t LogRecordReader::bytes_read() const { return size_ == 0 ? bytes_ : bytes_ / size_ * next_; }
+
+std::unique_ptr<LogRecordReader> LogRecordReader::replay() const {
+  return joints_ != nullptr ? std::make_unique<LogRecordReader>(joints_) : std::make_unique<LogRecordReader>(points_);
+}
+
+std::unique_ptr<LogRecordReader> open_log_records(LogKind kind, const std::string& path,
+                                                  const textio::RobotLogOptions& options) {
+  if (kind == LogKind::robot) {
+    return std::make_unique<LogRecordReader>(std::make_shared<const textio::RobotLog>(textio::read_robot_log(path, options)));
+  }
+  return std::make_unique<LogRecordReader>(std::make_shared<const textio::TrackerLog>(textio::read_tracker_log(path)));
 }
 
 namespace {
@@ -164,10 +145,31 @@ std::uint64_t size_of(const std::string& path) {
 }
 
 /// The counts of one input after the first pass.
-void count_input(const Input& input, const DecoderStats& frames, bool robot, StreamInputCounts* counts) {
+void count_input(const Input& input, const DecoderStats& frames, bool robot, const LogRecordReader* log,
+                 StreamInputCounts* counts) {
   counts->frames = counts->is_log() ? DecoderStats{} : frames;
+  if (log != nullptr) {
+    counts->format = log->format();
+    counts->log = log->log_counters();
+  }
   counts->log_rows = input.log_rows();
   counts->records = counts->is_log() ? input.log_rows() : (robot ? frames.joint_states : frames.tracker_points);
+}
+
+/// A capture holding only the other stream's frames: the two files were swapped.
+port::Error check_not_swapped(const std::string& robot_path, const std::string& tracker_path,
+                              const CaptureRunReport& report) {
+  const DecoderStats& r = report.robot.frames;
+  const DecoderStats& t = report.tracker.frames;
+  if (!report.robot.is_log() && r.joint_states == 0 && r.tracker_points > 0) {
+    return port::Error::input(robot_path + ": contains tracker frames (" + std::to_string(r.tracker_points) +
+                              ") and no joint state: --robot and --tracker swapped?");
+  }
+  if (!report.tracker.is_log() && t.tracker_points == 0 && t.joint_states > 0) {
+    return port::Error::input(tracker_path + ": contains joint state frames (" + std::to_string(t.joint_states) +
+                              ") and no tracker point: --robot and --tracker swapped?");
+  }
+  return port::Error{};
 }
 
 }  // namespace
@@ -175,31 +177,41 @@ void count_input(const Input& input, const DecoderStats& frames, bool robot, Str
 port::Error extract_from_files(const std::string& robot_path, const std::string& tracker_path,
                                const ClockSyncConfig& clock_config, const ExtractionConfig& extraction_config,
                                DatasetBase* dataset, CaptureRunReport* report, ExtractionObserver* observer,
-                               const PassProgress& progress) {
-  // Each input's kind is read once here; both passes open it as that kind.
+                               const PassProgress& progress, const textio::RobotLogOptions& log_options) {
+  // Each input's kind is read once here; both passes open it as that kind, a log's records
+  // are read once here and replayed to both.
   report->robot.kind = textio::detect_stream_file(robot_path);
   report->tracker.kind = textio::detect_stream_file(tracker_path);
+  const std::unique_ptr<LogRecordReader> robot_log =
+      report->robot.is_log() ? open_log_records(LogKind::robot, robot_path, log_options) : nullptr;
+  const std::unique_ptr<LogRecordReader> tracker_log =
+      report->tracker.is_log() ? open_log_records(LogKind::tracker, tracker_path) : nullptr;
+  for (const LogRecordReader* log : {robot_log.get(), tracker_log.get()}) {
+    if (log != nullptr && !log->error().empty()) return port::Error::input(log->error());
+  }
   // Large fixed-size objects: on the heap of the app, once (bounded whatever the input length).
   const auto estimator = std::make_unique<ClockEstimator<>>(clock_config);
   const std::uint64_t total_bytes = size_of(robot_path) + size_of(tracker_path);
   std::string error;
   {
     Pass pass(1, progress, total_bytes);
-    port::Error opened = pass.open(robot_path, tracker_path, *report);
+    port::Error opened = pass.open(robot_path, tracker_path, robot_log.get(), tracker_log.get());
     if (!opened.ok()) return opened;
     PassStats decoding;
     report->clock_status = pass.finish(
         estimate_clock_from_streams(pass.robot(), pass.tracker(), estimator.get(), &report->clock, &decoding), &error);
-    count_input(pass.robot_input(), decoding.robot_decoder, true, &report->robot);
-    count_input(pass.tracker_input(), decoding.tracker_decoder, false, &report->tracker);
+    count_input(pass.robot_input(), decoding.robot_decoder, true, robot_log.get(), &report->robot);
+    count_input(pass.tracker_input(), decoding.tracker_decoder, false, tracker_log.get(), &report->tracker);
     report->clock_stats = estimator->stats();
     if (report->clock_status == Status::invalid_argument && !error.empty()) return port::Error::input(error);
+    const port::Error swapped = check_not_swapped(robot_path, tracker_path, *report);
+    if (!swapped.ok()) return swapped;
     if (report->clock_status != Status::ok) return port::Error{};
   }
   const auto extractor = std::make_unique<SampleExtractor<>>(extraction_config, report->clock, dataset);
   extractor->set_observer(observer);
   Pass pass(2, progress, total_bytes);
-  port::Error opened = pass.open(robot_path, tracker_path, *report);
+  port::Error opened = pass.open(robot_path, tracker_path, robot_log.get(), tracker_log.get());
   if (!opened.ok()) return opened;
   report->extraction_status =
       pass.finish(extract_samples_from_streams(pass.robot(), pass.tracker(), extractor.get(), nullptr), &error);

@@ -1,9 +1,9 @@
 // Wires port/ and the text formats to lib/ for the stream path: each input is a serial
 // capture (port::InputFile, a lib ByteReader -> FrameRecordReader) or a text log
-// (open_log_records -> LogRecordReader), then
+// or ROS 2 bag of any tool (open_log_records -> LogRecordReader, read once), then
 // the library's two passes (hivecal/capture_pipeline.hpp: ClockEstimator, then
-// SampleExtractor in robot-clock order) -> dataset. Memory stays bounded: records are read
-// a chunk or a row at a time.
+// SampleExtractor in robot-clock order) -> dataset. A capture's memory stays bounded (read a
+// chunk at a time); a log's records are held (~136 B a robot row: 41 MB for 10 min at 500 Hz).
 #pragma once
 
 #include <cstdint>
@@ -18,7 +18,7 @@
 #include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
 #include "hivecal/wire/codec.hpp"
-#include "textio/csv.hpp"
+#include "textio/logs.hpp"
 
 namespace hivecal::streams {
 
@@ -59,40 +59,43 @@ class LogRecords : public RecordReader {
   LogRecords& operator=(const LogRecords&) = default;
 };
 
-/// Records of a CSV log of io-formats.md (robot `t,q1..q6` or tracker `t,x,y,z[,status]`),
-/// one row per record. Seconds become whole microseconds; a log has no sequence numbers,
-/// velocities or currents (they stay 0, nothing downstream uses them).
+/// Records of a log read whole by textio (textio/logs.hpp: hivecal CSV, UR RTDE, rostopic,
+/// ROS 2 bag, tracker exports), served in order. A log has no sequence numbers, velocities
+/// or currents (they stay 0, nothing downstream uses them). A log that could not be read
+/// gives read_failed at the first next(), with error() naming file:line.
 class LogRecordReader final : public LogRecords {
  public:
-  using Kind = LogKind;  ///< which log the file holds
-  /// A reader of the log at `path`, opened by the first next().
-  LogRecordReader(Kind kind, std::string path) : kind_(kind), path_(std::move(path)) {}
+  /// Serves `log`'s records (shared: passes replay the same log).
+  explicit LogRecordReader(std::shared_ptr<const textio::RobotLog> log);
+  /// Serves `log`'s records (shared: passes replay the same log).
+  explicit LogRecordReader(std::shared_ptr<const textio::TrackerLog> log);
   Status next(StreamRecord* record) override;
   const DecoderStats& counters() const override { return no_frames_; }
-  std::uint64_t rows() const override { return rows_; }
+  std::uint64_t rows() const override { return next_; }
   const std::string& error() const override { return error_; }
-  std::uint64_t bytes_read() const override {
-    return kind_ == Kind::robot ? robot_.bytes_read() : tracker_.bytes_read();
-  }
+  /// The log's bytes in proportion to the records served so far [bytes].
+  std::uint64_t bytes_read() const override;
+  /// A reader of the same log from its start (no second read of the file).
+  std::unique_ptr<LogRecordReader> replay() const;
+  textio::LogFormat format() const { return format_; }               ///< what the log is
+  const textio::LogCounters& log_counters() const { return log_counters_; }  ///< the log's rows per reason
 
  private:
-  Status fail(const std::string& problem);
-  bool to_microseconds(double t_s, std::uint64_t* t_us);
-
-  Kind kind_;
-  std::string path_;
-  bool opened_ = false;
-  textio::RobotLogReader robot_;
-  textio::TrackerLogReader tracker_;
+  std::shared_ptr<const textio::RobotLog> joints_;
+  std::shared_ptr<const textio::TrackerLog> points_;
+  std::size_t size_ = 0;
+  std::uint64_t bytes_ = 0;
+  std::size_t next_ = 0;
+  textio::LogFormat format_ = textio::LogFormat::unknown;
+  textio::LogCounters log_counters_;
   DecoderStats no_frames_;
-  std::uint64_t rows_ = 0;
-  std::uint64_t last_us_ = 0;
   std::string error_;
 };
 
-/// The one place a log file becomes records: today the CSV logs of io-formats.md; the readers
-/// of other tools' logs (apps/textio/logs*) plug in here, chosen by content.
-std::unique_ptr<LogRecords> open_log_records(LogKind kind, const std::string& path);
+/// The one place a log file becomes records: any tool's log (textio::read_robot_log /
+/// read_tracker_log, chosen by content), read once, whole.
+std::unique_ptr<LogRecordReader> open_log_records(LogKind kind, const std::string& path,
+                                                  const textio::RobotLogOptions& options = {});
 
 /// Told how far a pass over the two inputs is: pass 1 (clock) or 2 (samples), bytes read of
 /// both inputs so far and in all (0 when unknown) [bytes]. Called about every 256 kB read, and
@@ -104,11 +107,13 @@ using PassStats = StreamPassStats;
 
 /// What one input of a two-pass run held.
 struct StreamInputCounts {
-  textio::StreamFileKind kind = textio::StreamFileKind::capture;  ///< capture or CSV log (by content)
+  textio::StreamFileKind kind = textio::StreamFileKind::capture;  ///< capture or log (by content)
+  textio::LogFormat format = textio::LogFormat::unknown;          ///< a log's format
+  textio::LogCounters log;                                        ///< a log's rows, dropped per reason
   DecoderStats frames;         ///< a capture's frame counters (first pass); zero for a log
   std::uint64_t log_rows = 0;  ///< a log's data rows (first pass); zero for a capture
   std::uint64_t records = 0;   ///< joint states (robot input) or tracker points (tracker input)
-  bool is_log() const { return kind == textio::StreamFileKind::csv_log; }  ///< a text log
+  bool is_log() const { return kind != textio::StreamFileKind::capture; }  ///< a log (text or bag)
 };
 
 /// Everything a two-pass run over two files reports.
@@ -122,12 +127,15 @@ struct CaptureRunReport {
   ExtractionCounts counts;                 ///< kept / dropped per reason
 };
 
-/// Both passes over two files into `dataset`; each is a serial capture or a CSV log
-/// (detected by content, so the two may differ). Fault::input when a file cannot be read or
-/// parsed; a failed clock fit is reported in *report (no extraction then).
+/// Both passes over two files into `dataset`; each is a serial capture or a log (detected by
+/// content, so the two may differ; a log is read once, whole, and replayed to both passes).
+/// Fault::input when a file cannot be read or parsed, or when a capture holds only the other
+/// stream's frames (swapped inputs); a failed clock fit is reported in *report (no
+/// extraction then). `log_options`: how to read a robot log (joint names of ROS logs).
 port::Error extract_from_files(const std::string& robot_path, const std::string& tracker_path,
                         const ClockSyncConfig& clock_config, const ExtractionConfig& extraction_config,
                         DatasetBase* dataset, CaptureRunReport* report,
-                        ExtractionObserver* observer = nullptr, const PassProgress& progress = {});
+                        ExtractionObserver* observer = nullptr, const PassProgress& progress = {},
+                        const textio::RobotLogOptions& log_options = {});
 
 }  // namespace hivecal::streams

@@ -126,7 +126,7 @@ calibrated() {  # calibrated NAME ROBOT TRACKER: result JSON without the run tim
     grep -v '"seconds"' "$work/$1.json" >"$work/$1.stable"
 }
 if calibrated cap "$sim/robot.cap" "$sim/tracker.cap" && calibrated csv "$sim/robot_joints.csv" "$sim/tracker.csv" &&
-   calibrated mixed "$sim/robot_joints.csv" "$sim/tracker.cap" && grep -q "(CSV log rows)" "$work/csv.out" &&
+   calibrated mixed "$sim/robot_joints.csv" "$sim/tracker.cap" && grep -q "(hivecal robot log: " "$work/csv.out" &&
    cmp -s "$work/cap.stable" "$work/csv.stable" && cmp -s "$work/cap.stable" "$work/mixed.stable"; then
   passed=$((passed + 1))
 else
@@ -147,7 +147,7 @@ else
 fi
 # A CSV log with a bad row is a clear error naming file and line, and no result.
 { head -5 "$sim/tracker.csv"; echo "5.9,1,2"; } >"$work/short_tracker.csv"
-expect 3 "short_tracker.csv:6: expected at least 5 columns" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/short_tracker.csv" --out "$work/r5.json"
+expect 3 "short_tracker.csv:6: 3 fields where the header has 5" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/short_tracker.csv" --out "$work/r5.json"
 no_file "$work/r5.json"
 { head -3 "$sim/robot_joints.csv"; head -2 "$sim/robot_joints.csv" | tail -1; } >"$work/backwards.csv"
 expect 3 "does not increase" -- calibrate --robot "$work/backwards.csv" --tracker "$sim/tracker.csv" --out "$work/r6.json"
@@ -156,6 +156,15 @@ printf 't,q1,q2,q3,q4,q5,q6\n-1,0,0,0,0,0,0\n' >"$work/negative.csv"
 expect 3 "outside 0 .. 1.8e13 s" -- calibrate --robot "$work/negative.csv" --tracker "$sim/tracker.csv" --out "$work/r7.json"
 printf 't,q1,q2,q3,q4,q5,q6\n' >"$work/header_only.csv"
 expect 3 "no data rows" -- calibrate --robot "$work/header_only.csv" --tracker "$sim/tracker.csv" --out "$work/r8.json"
+# Logs of other tools: a wrong file says what was expected and found; swapped inputs are named.
+expect 3 "tracker.cap: contains tracker frames (" -- calibrate --robot "$sim/tracker.cap" --tracker "$sim/robot.cap" --out "$work/r9.json"
+expect 3 "--robot and --tracker swapped?" -- calibrate --robot "$sim/tracker.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
+printf 'Time [ms];X [mm];Y [mm];Z [mm]\n1500;1000,5;2;3\n' >"$work/comma.csv"
+expect 3 "comma.csv:2: column 'x': '1000,5' has a comma decimal separator" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/comma.csv" --out "$work/r9.json"
+printf 'Zeit;Achse 1;Achse 2\n1;2;3\n' >"$work/other.csv"
+expect 3 "other.csv:1: not a robot joint log: expected t,q1..q6" -- calibrate --robot "$work/other.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
+no_file "$work/r9.json"
+expect 2 "--joint-names needs six comma-separated names" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b --out "$work/r9.json"
 
 # --- hostile and careless use (issue 13): one check per case -----------------------------------
 # pass/fail helpers for checks that are not one command's exit code
@@ -199,16 +208,16 @@ no_file "$work/z.json"
 expect 3 "is a folder" -- "${good_predict[@]}" --joints "$work" --out "$work/d.csv"
 # A NUL byte in a CSV row is an error naming file:line (never a dropped or merged row).
 { head -3 "$work/s.csv"; printf '0,-1.5,1.5,-1.5\000,-1.5,0,1,2,3\n'; tail -n +4 "$work/s.csv"; } >"$work/nul.csv"
-expect 3 "nul.csv:4: NUL byte" -- calibrate --samples "$work/nul.csv" --out "$work/n.json"
+expect 3 "nul.csv:4: binary byte 0x00" -- calibrate --samples "$work/nul.csv" --out "$work/n.json"
 no_file "$work/n.json"
-# A huge field and binary junk are escaped and cut in messages.
+# A huge field is cut in messages; binary junk is refused by its byte, never echoed raw.
 { echo "q1,q2,q3,q4,q5,q6"; printf '0,0,0,0,0,%s\n' "$(head -c 50000 /dev/zero | tr '\0' 'a')"; } >"$work/huge.csv"
 err=$("${run[@]}" "${good_predict[@]/$work\/joints.csv/$work/huge.csv}" --out "$work/h.csv" 2>&1); code=$?
 if [ "$code" -eq 3 ] && [ "${#err}" -lt 600 ] && grep -q "\.\.\.\[50000 bytes\]" <<<"$err"; then ok; else
   ko "huge field: exit $code, ${#err} bytes of message"; fi
 { echo "q1,q2,q3,q4,q5,q6"; printf '0,0,0,0,0,\033[31m\001junk\n'; } >"$work/junk.csv"
 err=$("${run[@]}" "${good_predict[@]/$work\/joints.csv/$work/junk.csv}" --out "$work/j.csv" 2>&1); code=$?
-if [ "$code" -eq 3 ] && grep -qF '\x1b[31m\x01junk' <<<"$err" && ! grep -q $'\033' <<<"$err"; then ok; else
+if [ "$code" -eq 3 ] && grep -qF 'junk.csv:2: binary byte 0x1b' <<<"$err" && ! grep -q $'\033' <<<"$err"; then ok; else
   ko "binary junk not escaped: exit $code: $err"; fi
 printf 'q1,q2,q3,q4,q5,q6\n%s\n' "$(head -c 100000 /dev/zero | tr '\0' '1')" >"$work/longline.csv"
 expect 3 "longline.csv:2: line longer than" -- "${good_predict[@]/$work\/joints.csv/$work/longline.csv}" --out "$work/l.csv"

@@ -18,6 +18,7 @@
 #include "sim/sim_model.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/csv.hpp"
+#include "textio/logs.hpp"
 #include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal {
@@ -43,16 +44,14 @@ TEST(StreamCommands, SimulateWritesReadableOutputsAndExtractPairsThem) {
   EXPECT_NEAR(truth.model.joints[1].a_m, session.truth().model.joints[1].a_m, 1e-15);
   EXPECT_NEAR((truth.base_to_tracker.translation_m - session.truth().base_to_tracker.translation_m).norm(), 0.0, 1e-12);
 
-  std::size_t robot_rows = 0;
-  std::size_t tracker_rows = 0;
-  std::size_t lost_rows = 0;
-  ASSERT_TRUE(textio::read_robot_log(dir + "/robot_joints.csv", [&](const textio::RobotLogRow&) { ++robot_rows; }).ok());
-  ASSERT_TRUE(textio::read_tracker_log(dir + "/tracker.csv", [&](const textio::TrackerLogRow& row) {
-                ++tracker_rows;
-                lost_rows += row.status == 1 ? 1 : 0;
-              }).ok());
-  EXPECT_GT(robot_rows, 18000u);
-  EXPECT_GT(tracker_rows, 1450u);
+  const textio::RobotLog robot = textio::read_robot_log(dir + "/robot_joints.csv");
+  ASSERT_TRUE(robot.ok) << robot.error;
+  const textio::TrackerLog tracker = textio::read_tracker_log(dir + "/tracker.csv");
+  ASSERT_TRUE(tracker.ok) << tracker.error;
+  EXPECT_EQ(robot.format, textio::LogFormat::hivecal_robot);
+  EXPECT_EQ(tracker.format, textio::LogFormat::hivecal_tracker);
+  EXPECT_GT(robot.records.size(), 18000u);
+  EXPECT_GT(tracker.records.size(), 1450u);
   std::FILE* truth_samples = std::fopen((dir + "/truth_samples.csv").c_str(), "r");
   ASSERT_NE(truth_samples, nullptr);
   std::fclose(truth_samples);

@@ -245,8 +245,9 @@ void write_ur_deltas(textio::JsonWriter& json, const UrCalibrationDeltas& deltas
 
 const std::vector<OptionSpec>& option_specs() {
   static const std::vector<OptionSpec> specs = {
-      {"robot", "FILE", "robot joint stream: serial capture or CSV log t,q1..q6 (detected by content)", ""},
-      {"tracker", "FILE", "tracker stream: serial capture or CSV log t,x,y,z[,status]", ""},
+      {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
+      {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
+      {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"samples", "FILE", "paired static samples q1..q6,x,y,z (CSV; '-': stdin) instead of --robot/--tracker", ""},
       {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
       {"robot-model", "NAME", std::string("nominal geometry: ") + robot_type_names(), "ur5"},
@@ -343,7 +344,9 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   config.speed_model = nominal_model(settings.robot);
   config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
   config.progress = settings.progress;
-  Error error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
+  Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
+  if (!error.ok()) return error;
+  error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
                                       dataset, facts);
   if (!error.ok()) return error;
   const std::size_t minimum =

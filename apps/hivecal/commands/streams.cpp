@@ -53,7 +53,7 @@ void print_counts(std::FILE* out, const ExtractionCounts& counts) {
 
 void print_input(std::FILE* out, const char* stream, const StreamInputCounts& in) {
   if (in.is_log()) {
-    std::fprintf(out, "%s CSV log: %llu rows\n", stream, static_cast<unsigned long long>(in.log_rows));
+    std::fprintf(out, "%s %s\n", stream, textio::describe_log(in.format, in.log).c_str());
     return;
   }
   const DecoderStats& s = in.frames;
@@ -178,6 +178,8 @@ Error extract(const cli::Options& options) {
   config.speed_model.tool_m = tool;
   config.max_speed_m_s = max_speed_mm_s * 1e-3;
   config.window_s = window_s;
+  error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
+  if (!error.ok()) return error;
   const auto dataset = std::make_unique<Dataset<65536>>();
   SessionFacts facts;
   error = load_session({"", options.get("robot"), options.get("tracker")}, config, dataset.get(), &facts);
@@ -223,8 +225,9 @@ int record_main(int argc, char** argv) {
 int extract_main(int argc, char** argv) {
   const std::string command = "extract";
   const std::vector<cli::OptionSpec> specs = {
-      {"robot", "FILE", "robot stream: capture (wire format) or CSV log t,q1..q6 (detected by content)", ""},
-      {"tracker", "FILE", "tracker stream: capture (wire format) or CSV log t,x,y,z[,status]", ""},
+      {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
+      {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
+      {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"robot-model", "NAME", std::string(robot_type_names()) + " (nominal geometry for tool speeds)", "ur5"},
       {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
       {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},

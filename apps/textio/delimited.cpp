@@ -1,0 +1,267 @@
+#include "textio/delimited.hpp"
+
+#include <charconv>
+#include <cstring>
+
+#include "hivecal/port/error.hpp"
+#include "textio/text_util.hpp"
+
+namespace hivecal::textio {
+namespace {
+
+constexpr std::size_t kBufferBytes = 16 * kMaxLineBytes;  // few freads, room for one whole line
+
+/// A field without the double quotes some exporters put around every value or name.
+std::string_view unquote(std::string_view s) {
+  s = trim(s);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = trim(s.substr(1, s.size() - 2));
+  return s;
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+  return out;
+}
+
+/// A header token into a column: "X [mm]" -> {"x", "mm"}.
+Column column_of(std::string_view token) {
+  token = unquote(token);
+  const std::size_t open = token.find('[');
+  if (open == std::string_view::npos || token.back() != ']') return Column{lower(token), ""};
+  return Column{lower(trim(token.substr(0, open))), lower(trim(token.substr(open + 1, token.size() - open - 2)))};
+}
+
+bool is_unit_token(std::string_view token) { return token.size() >= 2 && token.front() == '[' && token.back() == ']'; }
+
+/// The header's delimiter: the first of tab, semicolon, comma found in it, else spaces.
+Delimiter delimiter_of(std::string_view header) {
+  if (header.find('\t') != std::string_view::npos) return Delimiter::tab;
+  if (header.find(';') != std::string_view::npos) return Delimiter::semicolon;
+  if (header.find(',') != std::string_view::npos) return Delimiter::comma;
+  return Delimiter::spaces;
+}
+
+}  // namespace
+
+const char* delimiter_name(Delimiter d) {
+  switch (d) {
+    case Delimiter::comma: return "comma";
+    case Delimiter::semicolon: return "semicolon";
+    case Delimiter::tab: return "tab";
+    case Delimiter::spaces: return "space";
+  }
+  return "?";
+}
+
+bool si_scale(std::string_view unit, Quantity quantity, double* scale) {
+  struct Known {
+    const char* name;
+    Quantity quantity;
+    double scale;
+  };
+  static const Known kUnits[] = {
+      {"m", Quantity::length, 1.0},    {"mm", Quantity::length, 1e-3}, {"um", Quantity::length, 1e-6},
+      {"rad", Quantity::angle, 1.0},   {"deg", Quantity::angle, 0.017453292519943295},
+      {"s", Quantity::time, 1.0},      {"ms", Quantity::time, 1e-3},   {"us", Quantity::time, 1e-6},
+      {"ns", Quantity::time, 1e-9},
+  };
+  if (unit.empty()) {
+    *scale = 1.0;
+    return true;
+  }
+  for (const Known& k : kUnits) {
+    if (k.quantity == quantity && unit == k.name) {
+      *scale = k.scale;
+      return true;
+    }
+  }
+  return false;
+}
+
+LineReader::~LineReader() = default;
+
+bool LineReader::open(const std::string& path, std::uint64_t max_bytes) {
+  name_ = path;
+  const port::Error opened = file_.open(path, max_bytes);
+  if (!opened.ok()) return fail(opened.message);
+  from_file_ = true;
+  buffer_.resize(kBufferBytes);
+  data_ = buffer_.data();
+  return true;
+}
+
+void LineReader::open_memory(std::string_view text, std::string name) {
+  name_ = std::move(name);
+  data_ = text.data();
+  end_ = text.size();
+  eof_ = true;
+}
+
+bool LineReader::fail(const std::string& problem) {
+  error_ = problem;
+  return false;
+}
+
+std::string LineReader::where() const { return name_ + ":" + std::to_string(line_number_) + ": "; }
+
+bool LineReader::refill() {
+  if (!from_file_) return false;
+  std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
+  end_ -= begin_;
+  begin_ = 0;
+  std::size_t got = 0;
+  if (file_.read(reinterpret_cast<std::uint8_t*>(buffer_.data() + end_), buffer_.size() - end_, &got) != Status::ok) {
+    return fail(file_.error().message);
+  }
+  end_ += got;
+  eof_ = got == 0;
+  return true;
+}
+
+bool LineReader::next(std::string_view* line) {
+  if (!error_.empty() || data_ == nullptr) return false;
+  std::size_t length = 0;
+  bool ended = false;  // by a '\n'
+  for (;;) {
+    const void* nl = std::memchr(data_ + begin_, '\n', end_ - begin_);
+    if (nl != nullptr) {
+      length = static_cast<std::size_t>(static_cast<const char*>(nl) - (data_ + begin_));
+      ended = true;
+      break;
+    }
+    if (end_ - begin_ > kMaxLineBytes || eof_) {
+      length = end_ - begin_;
+      break;
+    }
+    if (!refill()) return false;
+  }
+  if (length == 0 && !ended) return false;  // the end
+  ++line_number_;
+  if (length > kMaxLineBytes) {
+    return fail(where() + "line longer than " + std::to_string(kMaxLineBytes) + " bytes: not a log of text rows");
+  }
+  std::string_view text(data_ + begin_, length);
+  begin_ += length + (ended ? 1 : 0);
+  bytes_read_ += length + (ended ? 1 : 0);
+  if (line_number_ == 1 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7f) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02x", c);
+      return fail(where() + "binary byte " + hex + " at byte " + std::to_string(i + 1) +
+                  " of the line: not a text log (a serial capture?)");
+    }
+  }
+  *line = text;
+  return true;
+}
+
+bool DelimitedReader::fail(const std::string& problem) {
+  if (error_.empty()) error_ = lines_.where() + problem;
+  return false;
+}
+
+bool DelimitedReader::read_header() {
+  std::string_view line;
+  while (lines_.next(&line)) {
+    if (trim(line).empty()) continue;
+    header_ = std::string(trim(line));
+    delimiter_ = delimiter_of(header_);
+    if (!split(header_)) return false;
+    columns_.clear();
+    for (const std::string_view token : fields_) {
+      // "Time [ms] X [mm]" with spaces between fields: a lone "[unit]" belongs to the name before it.
+      if (delimiter_ == Delimiter::spaces && is_unit_token(token) && !columns_.empty() && columns_.back().unit.empty()) {
+        columns_.back().unit = lower(trim(token.substr(1, token.size() - 2)));
+        continue;
+      }
+      columns_.push_back(column_of(token));
+    }
+    return true;
+  }
+  if (!lines_.error().empty()) return false;
+  error_ = lines_.name() + ": empty file (no header line)";
+  return false;
+}
+
+int DelimitedReader::find(std::string_view name) const {
+  for (std::size_t i = 0; i < columns_.size(); ++i) {
+    if (columns_[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+bool DelimitedReader::split(std::string_view line) {
+  fields_.clear();
+  if (delimiter_ == Delimiter::spaces) {
+    std::size_t at = 0;
+    for (;;) {
+      at = line.find_first_not_of(" \t\r", at);
+      if (at == std::string_view::npos) break;
+      const std::size_t stop = std::min(line.find_first_of(" \t\r", at), line.size());
+      fields_.push_back(unquote(line.substr(at, stop - at)));
+      at = stop;
+      if (fields_.size() > kMaxColumns) break;
+    }
+  } else {
+    const char d = static_cast<char>(delimiter_);
+    std::size_t start = 0;
+    for (;;) {
+      const std::size_t stop = line.find(d, start);
+      fields_.push_back(unquote(line.substr(start, stop == std::string_view::npos ? std::string_view::npos : stop - start)));
+      if (stop == std::string_view::npos || fields_.size() > kMaxColumns) break;
+      start = stop + 1;
+    }
+  }
+  if (fields_.size() > kMaxColumns) return fail("more than " + std::to_string(kMaxColumns) + " fields in a line");
+  return true;
+}
+
+bool DelimitedReader::next_row() {
+  std::string_view line;
+  while (lines_.next(&line)) {
+    if (trim(line).empty()) continue;
+    if (!split(line)) return false;
+    if (fields_.size() != columns_.size()) {
+      const bool decimal_comma = delimiter_ == Delimiter::comma && fields_.size() > columns_.size();
+      return fail(std::to_string(fields_.size()) + " fields where the header has " + std::to_string(columns_.size()) +
+                  " (" + delimiter_name(delimiter_) + "-separated)" +
+                  (decimal_comma ? ": a comma used as decimal separator? Export with a '.' decimal point" : ""));
+    }
+    return true;
+  }
+  return false;
+}
+
+bool DelimitedReader::number(std::size_t index, double scale, double* value) {
+  std::string_view field = fields_[index];
+  if (!field.empty() && field.front() == '+') field.remove_prefix(1);
+  const char* end = field.data() + field.size();
+  const auto parsed = std::from_chars(field.data(), end, *value);
+  if (!field.empty() && parsed.ec == std::errc() && parsed.ptr == end) {
+    *value *= scale;
+    return true;
+  }
+  const std::string column = port::quoted(columns_[index].name, 32);
+  if (field.find(',') != std::string_view::npos) {
+    std::string dotted(field);
+    for (char& c : dotted) c = c == ',' ? '.' : c;
+    double ignored = 0.0;
+    if (parse_double(dotted, &ignored)) {
+      return fail("column " + column + ": " + port::quoted(fields_[index]) +
+                  " has a comma decimal separator; export with a '.' decimal point (C locale)");
+    }
+  }
+  return fail("column " + column + ": not a number: " + port::quoted(fields_[index]));
+}
+
+bool DelimitedReader::whole_number(std::size_t index, std::uint64_t* value) const {
+  const std::string_view field = fields_[index];
+  const char* end = field.data() + field.size();
+  const auto parsed = std::from_chars(field.data(), end, *value);
+  return !field.empty() && parsed.ec == std::errc() && parsed.ptr == end;
+}
+
+}  // namespace hivecal::textio

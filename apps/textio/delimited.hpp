@@ -1,0 +1,127 @@
+// One reader for the delimited text logs other tools write (io-formats.md, "Logs written by
+// other tools"): the delimiter is taken from the header line (comma, semicolon, tab or runs
+// of spaces), columns are found by name, a unit in brackets after a name converts to SI.
+// Bounded: a line is at most kMaxLineBytes, read through a fixed buffer, whatever the file
+// length. Refused with file:line: binary bytes (NUL, control bytes), over-long lines, comma
+// decimal separators, rows whose field count differs from the header's. Messages quote the
+// file's text through port::quoted() (control bytes escaped, long text cut).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hivecal/port/input_file.hpp"
+
+namespace hivecal::textio {
+
+constexpr std::size_t kMaxLineBytes = 65536;  ///< longest line read [bytes]; longer is refused
+constexpr std::size_t kMaxColumns = 1024;     ///< most fields in a line; more is refused
+
+/// What a column measures: decides which bracket units it accepts.
+enum class Quantity { length, angle, time };
+
+/// Factor from `unit` (text between the brackets, "" for none) to SI for a `quantity`
+/// column: m, mm, um / rad, deg / s, ms, us, ns; "" is the SI unit itself. False when the
+/// unit is not one of those of its quantity.
+bool si_scale(std::string_view unit, Quantity quantity, double* scale);
+
+/// Lines of a text file or of text in memory, without their end (\n, \r\n). A UTF-8 BOM
+/// on line 1 is skipped. Stops with error() set at a binary byte, a line over
+/// kMaxLineBytes or a read error.
+class LineReader {
+ public:
+  LineReader() = default;
+  ~LineReader();
+  LineReader(const LineReader&) = delete;
+  LineReader& operator=(const LineReader&) = delete;
+  /// Reads the file at `path` (port::InputFile: a regular file of at most `max_bytes`, or
+  /// "-"); false with error() set when it cannot be opened.
+  bool open(const std::string& path, std::uint64_t max_bytes = port::kMaxStreamInputBytes);
+  /// Reads `text` (not copied: it must outlive the reader); `name` stands for it in messages.
+  void open_memory(std::string_view text, std::string name);
+  /// The next line into *line (valid until the next call); false at the end or on an error.
+  bool next(std::string_view* line);
+  const std::string& error() const { return error_; }  ///< why reading stopped, "" at a clean end
+  std::size_t line_number() const { return line_number_; }  ///< 1-based number of the last line read
+  std::uint64_t bytes_read() const { return bytes_read_; }  ///< [bytes]
+  const std::string& name() const { return name_; }         ///< the file name used in messages
+  /// "name:line: " for messages about the last line read.
+  std::string where() const;
+
+ private:
+  bool refill();
+  bool fail(const std::string& problem);
+
+  std::string name_;
+  port::InputFile file_;
+  bool from_file_ = false;
+  std::vector<char> buffer_;  ///< file mode: bytes read and not yet returned
+  const char* data_ = nullptr;
+  std::size_t begin_ = 0;
+  std::size_t end_ = 0;
+  bool eof_ = false;
+  std::size_t line_number_ = 0;
+  std::uint64_t bytes_read_ = 0;
+  std::string error_;
+};
+
+/// The field separator of a delimited file, chosen from its header line.
+enum class Delimiter : char { comma = ',', semicolon = ';', tab = '\t', spaces = ' ' };
+
+/// "comma", "semicolon", "tab" or "space", for messages.
+const char* delimiter_name(Delimiter delimiter);
+
+/// One header column: name in lower case without blanks, quotes and unit; unit text.
+struct Column {
+  std::string name;  ///< e.g. "x" for "X [mm]"
+  std::string unit;  ///< e.g. "mm"; "" when the header gives none
+};
+
+/// Delimited text, header first, then one row of fields per non-blank line.
+class DelimitedReader {
+ public:
+  /// Opens the file (as LineReader::open); false with error() set.
+  bool open(const std::string& path, std::uint64_t max_bytes = port::kMaxStreamInputBytes) {
+    return lines_.open(path, max_bytes);
+  }
+  /// Reads `text` in memory (it must outlive the reader); `name` stands for it in messages.
+  void open_memory(std::string_view text, std::string name) { lines_.open_memory(text, std::move(name)); }
+  /// Reads the header (first non-blank line): delimiter and columns. False with error() set
+  /// for an empty file or a binary one.
+  bool read_header();
+  const std::vector<Column>& columns() const { return columns_; }  ///< the header's columns
+  Delimiter delimiter() const { return delimiter_; }                ///< the header's delimiter
+  const std::string& header_line() const { return header_; }       ///< the header as read
+  /// Index of the first column named `name` (lower case), or -1.
+  int find(std::string_view name) const;
+  /// The next data row (blank lines skipped); false at the end or on an error (error() set).
+  bool next_row();
+  const std::vector<std::string_view>& fields() const { return fields_; }  ///< the row's fields, trimmed
+  /// Field `index` of the row as a number times `scale`; false with error() set naming the
+  /// line, the column and the text (a comma decimal separator is named as such).
+  bool number(std::size_t index, double scale, double* value);
+  /// Field `index` as an unsigned integer; false (no error set) when it is not all digits.
+  bool whole_number(std::size_t index, std::uint64_t* value) const;
+  /// Sets error() to "file:line: problem" and returns false.
+  bool fail(const std::string& problem);
+  const std::string& error() const { return error_.empty() ? lines_.error() : error_; }  ///< "" when none
+  std::size_t line_number() const { return lines_.line_number(); }  ///< 1-based line of the last row
+  std::uint64_t bytes_read() const { return lines_.bytes_read(); }  ///< [bytes]
+  const std::string& name() const { return lines_.name(); }         ///< file name in messages
+  /// "name:line: " for the last line read.
+  std::string where() const { return lines_.where(); }
+
+ private:
+  bool split(std::string_view line);
+
+  LineReader lines_;
+  Delimiter delimiter_ = Delimiter::comma;
+  std::vector<Column> columns_;
+  std::string header_;
+  std::vector<std::string_view> fields_;
+  std::string error_;
+};
+
+}  // namespace hivecal::textio
