@@ -6,9 +6,9 @@
 #   cmake --workflow --preset cortex-m7 && cmake --build --preset host --target hivecal_cli &&
 #   scripts/footprint.sh [build-dir] [qemu-machine]
 # Defaults: build/cortex-m7, mps2-an500. Everything it needs is in the repository (the QEMU
-# instruction-count plugin source: tools/qemu-insn-count/insn_count.c, built here with cc).
+# instruction-count plugin source: scripts/qemu-insn-count/insn_count.c, built here with cc).
 # Environment:
-#   HIVECAL_INSN_PLUGIN_SRC  plugin source (default tools/qemu-insn-count/insn_count.c)
+#   HIVECAL_INSN_PLUGIN_SRC  plugin source (default scripts/qemu-insn-count/insn_count.c)
 #   HIVECAL_FOOTPRINT_REPEATS repeats per workload for the instruction counts (default 10)
 #   HIVECAL_HOST_TOOL        host `hivecal` that simulates the 512-sample session
 #                            (default build/host/apps/hivecal/hivecal)
@@ -17,7 +17,7 @@ cd "$(dirname "$0")/.."
 
 build=${1:-build/cortex-m7}
 machine=${2:-mps2-an500}
-plugin_src=${HIVECAL_INSN_PLUGIN_SRC:-tools/qemu-insn-count/insn_count.c}
+plugin_src=${HIVECAL_INSN_PLUGIN_SRC:-scripts/qemu-insn-count/insn_count.c}
 repeats=${HIVECAL_FOOTPRINT_REPEATS:-10}
 probe=$build/tests/firmware/hivecal_firmware_core.elf
 tests_elf=$build/tests/firmware/hivecal_firmware_tests.elf
