@@ -5,8 +5,10 @@
 # calibration from captures (QEMU instruction-count plugin).
 #   cmake --workflow --preset cortex-m7 && cmake --build --preset host --target hivecal_cli &&
 #   scripts/footprint.sh [build-dir] [qemu-machine]
-# Defaults: build/cortex-m7, mps2-an500. Environment:
-#   HIVECAL_INSN_PLUGIN_SRC  plugin source (default /work/shared/tools/qemu-insn-count.c)
+# Defaults: build/cortex-m7, mps2-an500. Everything it needs is in the repository (the QEMU
+# instruction-count plugin source: scripts/qemu-insn-count/insn_count.c, built here with cc).
+# Environment:
+#   HIVECAL_INSN_PLUGIN_SRC  plugin source (default scripts/qemu-insn-count/insn_count.c)
 #   HIVECAL_FOOTPRINT_REPEATS repeats per workload for the instruction counts (default 10)
 #   HIVECAL_HOST_TOOL        host `hivecal` that simulates the 512-sample session
 #                            (default build/host/apps/hivecal/hivecal)
@@ -15,7 +17,7 @@ cd "$(dirname "$0")/.."
 
 build=${1:-build/cortex-m7}
 machine=${2:-mps2-an500}
-plugin_src=${HIVECAL_INSN_PLUGIN_SRC:-/work/shared/tools/qemu-insn-count.c}
+plugin_src=${HIVECAL_INSN_PLUGIN_SRC:-scripts/qemu-insn-count/insn_count.c}
 repeats=${HIVECAL_FOOTPRINT_REPEATS:-10}
 probe=$build/tests/firmware/hivecal_firmware_core.elf
 tests_elf=$build/tests/firmware/hivecal_firmware_tests.elf
@@ -217,7 +219,7 @@ plugin=$build/libinsncount.so
 build_plugin() {
   [ -f "$plugin_src" ] || { echo "footprint: plugin source $plugin_src missing (set HIVECAL_INSN_PLUGIN_SRC)" >&2; exit 1; }
   if [ ! -f "$plugin" ] || [ "$plugin_src" -nt "$plugin" ]; then
-    gcc -shared -fPIC -O2 "$plugin_src" -o "$plugin"
+    "${CC:-cc}" -shared -fPIC -O2 "$plugin_src" -o "$plugin"
   fi
 }
 
@@ -252,18 +254,19 @@ instruction_table() {
   done
 }
 
-# The full calibration from captures: a simulated session of 36 waypoints (508 quasi-static
-# samples, 292 s) written by the host tool, then the capture job image stopped after each
-# stage: the differences are the stages' instructions.
-session=$build/fw-session-512
+# The full calibration from captures: a simulated session of 21 waypoints written by the host
+# tool (476 quasi-static samples with the extraction at the instant: the most that stays below
+# the image's 512-sample capacity), then the capture job image stopped after each stage: the
+# differences are the stages' instructions.
+session=$build/fw-session-w21
 make_session() {
   if [ ! -f "$session/robot.cap" ]; then
     mkdir -p "$session"
-    "$host_tool" simulate --out-dir "$session" --waypoints 36 --duration-s 1 --seed 1 >/dev/null
+    "$host_tool" simulate --out-dir "$session" --waypoints 21 --duration-s 1 --seed 1 >/dev/null
   fi
 }
 
-job_run() {  # <SN> <cycles> [stop]: "<instructions> <stack> <samples> <evaluations> <digest>"
+job_run() {  # <SN> <cycles> [clock|extraction|abc|lm]: "<instructions> <stack> <samples> <evaluations> <digest>"
   local out insns stack samples evals digest
   out=$(HIVECAL_QEMU_EXTRA="-plugin $plugin -d plugin" "$runner" "$machine" "$job_elf" \
         "$PWD/$session/robot.cap" "$PWD/$session/tracker.cap" "$@" 2>&1)
@@ -283,6 +286,10 @@ job_table() {
   read -r e _ samples _ <<<"$(job_run 150 300 extraction)"
   read -r a1 _ _ x _ <<<"$(job_run 150 1 abc)"
   read -r a _ _ evals _ <<<"$(job_run 150 300 abc)"
+  local lm lm_stack lm_digest
+  read -r lm lm_stack _ _ lm_digest <<<"$(job_run 150 300 lm)"
+  local lm_mae
+  lm_mae=$(tr '\n' ';' <"$build/footprint-job-mae.txt" | sed 's/;$//; s/;/; /g')
   read -r full stack _ _ digest <<<"$(job_run 150 300)"
   local per_eval=$(((a - a1) / (evals - x)))
   echo "| stage (512-capacity image, $samples samples, ABC 150 x 300) | instructions | share |"
@@ -295,7 +302,12 @@ job_table() {
     printf "| **whole run** | **%.0f** | 100 %% |\n", f }'
   echo
   echo "Digest of this run: \`$digest\`; stack high-water $stack bytes; $(tr '\n' ';' <"$build/footprint-job-mae.txt" | sed 's/;$//; s/;/; /g') m."
+  echo
+  echo "LM-only job (the same passes, then LM on the full model from the nominal geometry): $lm instructions"
+  echo "(passes $e, LM + validation $((lm - e))); digest \`$lm_digest\`; stack high-water $lm_stack bytes; $lm_mae m."
   echo "$full" >"$build/footprint-job-insns.txt"
+  echo "$lm" >"$build/footprint-lm-job-insns.txt"
+  echo "$((stack > lm_stack ? stack : lm_stack))" >"$build/footprint-job-stack.txt"
   echo "$per_eval" >"$build/footprint-job-per-eval.txt"
 }
 
@@ -366,16 +378,24 @@ $(job_table)
 
 ### Budgets
 
-- Capture calibration image: flash $((job_text + job_data)) bytes of 131072 ($((131072 - job_text - job_data)) left);
-  static RAM $((job_data + job_bss)) bytes of 65536 (including a $job_stack-byte stack + guard).
-- One full calibration from captures (about 512 samples, ABC 150 x 300, LM):
-  $(cat "$build/footprint-job-insns.txt") instructions against 2e9:
-  $(awk -v f="$(cat "$build/footprint-job-insns.txt")" 'BEGIN { printf "%.2f x the budget", f / 2e9 }').
+Revised budgets (issue 13: 64 KiB / 2e9 were below the arithmetic floor of ABC 150 x 300):
+
+- Capture calibration image, 512-sample job: static RAM $((job_data + job_bss)) bytes of 131072
+  (128 KiB; including a $job_stack-byte stack + guard): $((131072 - job_data - job_bss)) bytes left;
+  flash $((job_text + job_data)) bytes of 131072 ($((131072 - job_text - job_data)) left).
+- Stack of the capture calibration image, measured (paint high-water, both jobs):
+  $(cat "$build/footprint-job-stack.txt") bytes of $job_stack.
+- LM-only job from captures (512-capacity image, LM on the full model):
+  $(cat "$build/footprint-lm-job-insns.txt") instructions against 0.6e9:
+  $(awk -v f="$(cat "$build/footprint-lm-job-insns.txt")" 'BEGIN { printf "%.2f x the budget", f / 0.6e9 }').
+- The paper's job from captures (about 512 samples, ABC 150 x 300, LM):
+  $(cat "$build/footprint-job-insns.txt") instructions against 4e9:
+  $(awk -v f="$(cat "$build/footprint-job-insns.txt")" 'BEGIN { printf "%.2f x the budget", f / 4e9 }').
 
 - Dataset<512>: $dataset_bytes bytes; core probe static RAM $((probe_data + probe_bss)) bytes
-  (including a $probe_stack-byte stack + guard) of 65536: $((65536 - probe_data - probe_bss)) bytes left.
+  (including a $probe_stack-byte stack + guard) of 131072: $((131072 - probe_data - probe_bss)) bytes left.
 - Core probe flash $((probe_text + probe_data)) bytes of 131072: $((131072 - probe_text - probe_data)) bytes left.
 - One cost evaluation on 358 training samples: $(cat "$build/footprint-cost358.txt") instructions;
-  2e9 instructions allow $((2000000000 / $(cat "$build/footprint-cost358.txt"))) such evaluations
+  4e9 instructions allow $((4000000000 / $(cat "$build/footprint-cost358.txt"))) such evaluations
   (ABC 150 x 300 = 45000 evaluations would need $((45000 * $(cat "$build/footprint-cost358.txt"))) instructions).
 EOF

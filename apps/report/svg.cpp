@@ -42,17 +42,6 @@ struct Ticks {
   std::string offset;                ///< subtracted from the labels ("" when none), for the axis title
 };
 
-/// Significant digits of a plain decimal label ("231.25" -> 5, "1250" -> 3).
-int significant_digits(const std::string& label) {
-  std::string digits;
-  for (char c : label)
-    if (c >= '0' && c <= '9') digits += c;
-  const std::size_t first = digits.find_first_not_of('0');
-  if (first == std::string::npos) return 1;
-  std::size_t last = digits.size();
-  if (label.find('.') == std::string::npos) last = digits.find_last_not_of('0') + 1;
-  return static_cast<int>(last - first);
-}
 
 /// Label of a linear tick: as few decimals as the step needs, at most three significant digits.
 std::string linear_label(double v, double step) {
@@ -188,6 +177,17 @@ std::string open_svg(const ChartSpec& spec) {
 }
 
 }  // namespace
+
+int significant_digits(const std::string& label) {
+  std::string digits;
+  for (char c : label)
+    if (c >= '0' && c <= '9') digits += c;
+  const std::size_t first = digits.find_first_not_of('0');
+  if (first == std::string::npos) return 1;
+  std::size_t last = digits.size();
+  if (label.find('.') == std::string::npos) last = digits.find_last_not_of('0') + 1;
+  return static_cast<int>(last - first);
+}
 
 std::string xml_escape(const std::string& text) {
   std::string out;

@@ -31,6 +31,9 @@ std::string svg_chart(const ChartSpec& spec, const std::vector<Series>& series);
 std::string svg_histogram(const ChartSpec& spec, const std::vector<std::string>& names,
                           const std::vector<std::vector<double>>& value_sets, int bins);
 
+/// Significant digits of a plain decimal tick label: "231.25" -> 5, "1250" -> 3, "0.025" -> 2.
+int significant_digits(const std::string& label);
+
 /// Text escaped for XML/HTML content and attributes.
 std::string xml_escape(const std::string& text);
 

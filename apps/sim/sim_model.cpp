@@ -30,24 +30,6 @@ Vec3 normal_vector(Random* random) {
 /// Nearest integer of a non-negative value.
 std::uint64_t round_us(double x_us) { return static_cast<std::uint64_t>(std::llround(x_us)); }
 
-Mat3 rotation_z(double angle_rad) {
-  double s = 0.0;
-  double c = 0.0;
-  math::sincos(angle_rad, &s, &c);
-  Mat3 r;
-  r << c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0;
-  return r;
-}
-
-Mat3 rotation_x(double angle_rad) {
-  double s = 0.0;
-  double c = 0.0;
-  math::sincos(angle_rad, &s, &c);
-  Mat3 r;
-  r << 1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c;
-  return r;
-}
-
 DeviceInfoRecord make_device_info(DeviceKind kind, float rate_hz, const char* name, std::uint16_t sequence,
                                   std::uint64_t t_us) {
   DeviceInfoRecord info;

@@ -122,16 +122,14 @@ std::vector<std::string> texts_of_class(const std::string& svg, const std::strin
   return out;
 }
 
-/// Significant digits of a plain decimal label ("231.25" -> 5, "1250" -> 3, "0.025" -> 2).
-int significant_digits(const std::string& label) {
-  std::string digits;
-  for (char c : label)
-    if (c >= '0' && c <= '9') digits += c;
-  const std::size_t first = digits.find_first_not_of('0');
-  if (first == std::string::npos) return 1;
-  std::size_t last = digits.size();
-  if (label.find('.') == std::string::npos) last = digits.find_last_not_of('0') + 1;
-  return static_cast<int>(last - first);
+
+TEST(Svg, SignificantDigitsOfLabels) {
+  EXPECT_EQ(significant_digits("231.25"), 5);
+  EXPECT_EQ(significant_digits("1250"), 3);
+  EXPECT_EQ(significant_digits("0.025"), 2);
+  EXPECT_EQ(significant_digits("-40"), 1);
+  EXPECT_EQ(significant_digits("0"), 1);
+  EXPECT_EQ(significant_digits("2.50"), 3);
 }
 
 TEST(Svg, TicksAreRoundNumbersWithAtMostThreeSignificantDigits) {

@@ -6,18 +6,13 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "hivecal/calibration.hpp"
 #include "hivecal/commands/commands.hpp"
 #include "hivecal/core/trace.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/model/metrics.hpp"
-#include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/port/output_files.hpp"
-#include "hivecal/solve/abc.hpp"
-#include "hivecal/solve/cost.hpp"
-#include "hivecal/solve/gsa.hpp"
 #include "hivecal/solve/lm.hpp"
-#include "hivecal/solve/paper6_cost.hpp"
-#include "hivecal/solve/population_stage.hpp"
 #include "report/report.hpp"
 #include "streams/session.hpp"
 #include "textio/calibration_json.hpp"
@@ -46,25 +41,23 @@ struct CalibrateSettings {
   bool progress = false;             ///< progress lines on stderr
 };
 
-/// What one solver stage produced.
-struct Stage {
-  std::string method;                ///< "ABC", "GSA", "LM", ...
-  std::string params;                ///< "paper-6" or "full"
-  RobotModel model;                  ///< calibrated geometry
-  RigidTransform base_to_tracker;    ///< fitted or estimated base -> tracker
-  std::vector<double> trace_m;       ///< best cost per iteration [m]
-  double seconds = 0.0;              ///< wall time [s]
-  long long evaluations = 0;         ///< cost evaluations (LM: iterations)
-  bool is_lm = false;                ///< lm below is meaningful
-  LmResult lm;                       ///< LM details (identifiability, sigma)
-};
+/// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
+/// largest dataset (static: ~2.3 MB).
+using CliWorkspace = CalibrationWorkspace<kCliDatasetCapacity, double, 150, kTraceCapacity, kCliDatasetCapacity>;
 
-/// Prints one progress line per iteration on stderr, overwritten in place.
-class Progress final : public ProgressObserver, public LmObserver {
+/// Times the stages (lib takes no time) and prints one progress line per iteration on
+/// stderr, overwritten in place.
+class JobObserver final : public CalibrationObserver {
  public:
-  Progress(bool enabled, std::string label) : enabled_(enabled), label_(std::move(label)) {}
-  ~Progress() {
-    if (enabled_ && printed_) std::fprintf(stderr, "\n");
+  explicit JobObserver(bool enabled) : enabled_(enabled) {}
+  ~JobObserver() { end_line(); }
+  void on_stage_begin(std::size_t, CalibrationSolver solver) override {
+    label_ = calibration_solver_name(solver);
+    start_ = std::chrono::steady_clock::now();
+  }
+  void on_stage_end(std::size_t index, const CalibrationStage&) override {
+    seconds[index] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    end_line();
   }
   void on_iteration(const SolverProgress& p) override {
     print("iteration %zu/%zu, best MAE %.2f um", p.iteration, p.iteration_count, p.best_cost * 1e6);
@@ -73,103 +66,76 @@ class Progress final : public ProgressObserver, public LmObserver {
     print("iteration %d, RMS %.2f um", info.iteration, info.rms_m * 1e6);
     return true;
   }
+  double seconds[kMaxCalibrationStages] = {};  ///< wall time per stage [s]
 
  private:
   template <typename... Args>
   void print(const char* format, Args... args) {
     if (!enabled_) return;
-    std::fprintf(stderr, "\r[%s] ", label_.c_str());
+    std::fprintf(stderr, "\r[%s] ", label_);
     std::fprintf(stderr, format, args...);
     std::fflush(stderr);
     printed_ = true;
   }
+  void end_line() {
+    if (enabled_ && printed_) std::fprintf(stderr, "\n");
+    printed_ = false;
+  }
   bool enabled_;
-  std::string label_;
+  const char* label_ = "";
   bool printed_ = false;
+  std::chrono::steady_clock::time_point start_;
 };
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+/// What the job produced, with the CLI's stage timings.
+struct Run {
+  CalibrationResult result;                     ///< lib's result (~5 KB)
+  double seconds[kMaxCalibrationStages] = {};   ///< wall time per stage [s]
+  bool from_controller = false;                 ///< the start geometry is the controller's
+  /// The job's answer (run() returns an error when no stage ran).
+  const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
+  /// Its name ("ABC+LM", ...).
+  std::string final_method() const { return result.stage_name(result.stage_count - 1); }
+  /// The LM details when the final stage is LM, else null.
+  const LmResult* final_lm() const {
+    return final_stage().solver == CalibrationSolver::lm ? &result.lm : nullptr;
+  }
+};
 
-std::vector<double> trace_values(const TraceBase& trace) {
+std::vector<double> trace_values(Span<const double> trace) {
   std::vector<double> v;
-  for (double x : trace.values()) v.push_back(x);
+  for (double x : trace) v.push_back(x);
   return v;
 }
 
-/// ABC or GSA on the paper's six lengths, base refitted per candidate.
-Status run_population(bool use_abc, const RobotModel& start, Span<const Sample> train, std::uint64_t seed,
-                      bool progress_on, Stage* stage) {
-  static Paper6Cost<kCliDatasetCapacity> cost;
-  static AbcSolver<150, kPaper6Dimension> abc;
-  static GsaSolver<150, kPaper6Dimension> gsa;
-  static Trace<kTraceCapacity> trace;
-  trace.clear();
-  Paper6StageResult result;
-  Progress progress(progress_on, use_abc ? "ABC" : "GSA");
-  const auto start_time = std::chrono::steady_clock::now();
-  Status status = Status::ok;
-  if (use_abc) {
-    AbcOptions options;
-    options.seed = seed;
-    status = calibrate_paper6_abc(start, train, options, kPaper6DefaultHalfWidth_m, &cost, &abc, &result, &trace,
-                                  &progress);
-  } else {
-    GsaOptions options;
-    options.seed = seed;
-    status = calibrate_paper6_gsa(start, train, options, kPaper6DefaultHalfWidth_m, &cost, &gsa, &result, &trace,
-                                  &progress);
+CalibrationMethod method_from_name(const std::string& name) {
+  for (CalibrationMethod m : {CalibrationMethod::lm, CalibrationMethod::abc, CalibrationMethod::gsa,
+                              CalibrationMethod::abc_lm, CalibrationMethod::gsa_lm, CalibrationMethod::all}) {
+    if (name == calibration_method_name(m)) return m;
   }
-  if (status != Status::ok) return status;
-  stage->method = use_abc ? "ABC" : "GSA";
-  stage->params = "paper-6";
-  stage->seconds = seconds_since(start_time);
-  stage->evaluations = static_cast<long long>(result.evaluations);
-  stage->trace_m = trace_values(trace);
-  stage->model = result.model;
-  stage->base_to_tracker = result.base_to_tracker;
-  return Status::ok;
+  return CalibrationMethod::abc_lm;  // settings_from_options accepts only the names above
 }
 
-/// Levenberg-Marquardt from a starting geometry.
-Status run_lm(const RobotModel& start, const RigidTransform* start_base, Span<const Sample> train, bool paper_params,
-              bool robust, bool progress_on, Stage* stage) {
-  static LmWorkspace workspace;
-  static JointTrig joint_trig_storage[kCliDatasetCapacity];
-  workspace.joint_trig = joint_trig_storage;
-  static Trace<kTraceCapacity> trace;
-  trace.clear();
-  LmOptions options;
-  options.params = paper_params ? LmParamSet::paper6 : LmParamSet::full;
-  options.loss = robust ? LmLoss::huber : LmLoss::squared;
-  Progress progress(progress_on, "LM");
-  const auto start_time = std::chrono::steady_clock::now();
-  const Status status = calibrate_lm(start, start_base, train, options, &workspace, &stage->lm, &trace, &progress);
-  if (status != Status::ok && status != Status::not_converged) return status;
-  stage->method = "LM";
-  stage->params = paper_params ? "paper-6" : "full";
-  stage->is_lm = true;
-  stage->seconds = seconds_since(start_time);
-  stage->evaluations = stage->lm.iterations;
-  stage->trace_m = trace_values(trace);
-  stage->model = stage->lm.model;
-  stage->base_to_tracker = stage->lm.base_to_tracker;
-  return Status::ok;
-}
-
-report::MethodRow method_row(const Stage& stage, const DatasetBase& dataset) {
+report::MethodRow method_row(std::string method, std::string parameters, const ErrorStats& train,
+                             const ErrorStats& test, double seconds, long long evaluations) {
   report::MethodRow row;
-  row.method = stage.method;
-  row.parameters = stage.params;
-  if (stage.is_lm) {
-    row.parameters += " (" + std::to_string(stage.lm.identifiability.kept_count()) + " estimated)";
-  }
-  row.train = position_error_stats(stage.model, stage.base_to_tracker, dataset.train());
-  row.test = position_error_stats(stage.model, stage.base_to_tracker, dataset.test());
-  row.seconds = stage.seconds;
-  row.evaluations = stage.evaluations;
+  row.method = std::move(method);
+  row.parameters = std::move(parameters);
+  row.train = train;
+  row.test = test;
+  row.seconds = seconds;
+  row.evaluations = evaluations;
   return row;
+}
+
+report::MethodRow stage_row(const Run& run, std::size_t k) {
+  const CalibrationStage& stage = run.result.stages[k];
+  std::string params = stage.params == CalibrationParams::paper ? "paper-6" : "full";
+  if (stage.solver == CalibrationSolver::lm) {
+    params += " (" + std::to_string(run.result.lm.identifiability.kept_count()) + " estimated)";
+  }
+  return method_row(run.result.stage_name(k), params, stage.train, stage.test, run.seconds[k],
+                    static_cast<long long>(stage.evaluations));
 }
 
 std::vector<std::string> identifiability_lines(const LmResult& lm) {
@@ -195,20 +161,21 @@ std::vector<std::string> identifiability_lines(const LmResult& lm) {
   return lines;
 }
 
-std::vector<std::string> parameter_lines(const Stage& stage, const RobotModel& start) {
+/// `lm`: the LM details when `stage` is the LM stage, else null.
+std::vector<std::string> parameter_lines(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start) {
   std::vector<std::string> lines;
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
   char buf[160];
   for (int k = 0; k < kModelParamCount; ++k) {
-    const bool estimated = stage.is_lm && mask_has(stage.lm.identifiability.kept_mask, k);
+    const bool estimated = lm != nullptr && mask_has(lm->identifiability.kept_mask, k);
     const bool changed = after(k) != before(k);
     if (!estimated && !changed) continue;
     const bool angle = k < kDhParamCount && (k % kParamsPerJoint == 0 || k % kParamsPerJoint == 3);
     const double scale = angle ? 1e3 : 1e3;
     std::snprintf(buf, sizeof buf, "%-8s %+.9f %s  (change %+.4f %s%s)", full_param_name(k), after(k),
                   angle ? "rad" : "m", (after(k) - before(k)) * scale, angle ? "mrad" : "mm",
-                  estimated ? (", sigma " + std::to_string(stage.lm.sigma(k) * scale) + (angle ? " mrad" : " mm")).c_str()
+                  estimated ? (", sigma " + std::to_string(lm->sigma(k) * scale) + (angle ? " mrad" : " mm")).c_str()
                             : "");
     lines.push_back(buf);
   }
@@ -382,66 +349,44 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
                                       dataset, facts);
   if (!error.ok()) return error;
-  const std::size_t minimum = settings.paper_params ? 12 : 24;
+  const std::size_t minimum =
+      calibration_minimum_samples(settings.paper_params ? CalibrationParams::paper : CalibrationParams::full);
   if (dataset->size() < minimum) {
     return Error::input("only " + std::to_string(dataset->size()) + " static samples; at least " +
                         std::to_string(minimum) + " are needed to identify the parameters");
   }
-  if (dataset->split(settings.train_fraction, settings.seed) != Status::ok || dataset->test().empty()) {
+  const std::size_t train_count = dataset->train_count_for(settings.train_fraction);  // the job splits
+  if (train_count == 0 || train_count == dataset->size()) {
     return Error::usage("--split " + options.get("split") + " leaves no training or no test sample");
   }
   return Error{};
 }
 
-// --- run (the computation; the lib's calibration entry replaces its body) -------------------
+// --- run (the computation: lib's calibrate()) ---------------------------------------------------
 
-Error run(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset, bool from_controller,
-          Stage* uncalibrated_out, std::vector<Stage>* stages_out) {
-  const bool progress_on = settings.progress;
-  // --- uncalibrated row
-  Stage uncalibrated;
-  uncalibrated.method = "uncalibrated";
-  uncalibrated.params = from_controller ? "controller" : "nominal";
-  uncalibrated.model = start;
-  Status status = fit_base_to_tracker(start, dataset.train(), &uncalibrated.base_to_tracker);
-  if (status != Status::ok) {
+Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset* dataset, Run* run) {
+  CalibrationOptions job;
+  job.method = method_from_name(settings.method);
+  job.params = settings.paper_params ? CalibrationParams::paper : CalibrationParams::full;
+  job.train_fraction = settings.train_fraction;
+  job.seed = settings.seed;
+  job.robust = settings.robust;
+  static CliWorkspace workspace;
+  JobObserver observer(settings.progress);
+  const Status status = hivecal::calibrate(start, dataset, job, &workspace, &run->result, &observer);
+  for (std::size_t k = 0; k < kMaxCalibrationStages; ++k) run->seconds[k] = observer.seconds[k];
+  const CalibrationStep step = run->result.step;
+  if (step == CalibrationStep::baseline) {
     return Error::input(std::string("cannot fit the tracker frame: ") + status_message(status) +
                         (status == Status::degenerate_geometry ? " (are all samples at one pose?)" : ""));
   }
-
-  // --- solvers
-  std::vector<Stage> stages;
-  auto fail = [&](const char* what, Status s) { return Error::failure(std::string(what) + " failed: " + status_message(s)); };
-  const std::string& method = settings.method;
-  const bool run_gsa = method == "gsa" || method == "gsa+lm" || method == "all";
-  const bool run_abc = method == "abc" || method == "abc+lm" || method == "all";
-  const bool run_lm_stage = method == "lm" || method == "abc+lm" || method == "gsa+lm" || method == "all";
-  if (run_gsa) {
-    Stage gsa;
-    status = run_population(false, start, dataset.train(), settings.seed, progress_on, &gsa);
-    if (status != Status::ok) return fail("GSA", status);
-    stages.push_back(gsa);
+  if (status != Status::ok) {
+    const char* what = step == CalibrationStep::abc   ? "ABC"
+                       : step == CalibrationStep::gsa ? "GSA"
+                       : step == CalibrationStep::lm  ? "LM"
+                                                      : calibration_step_name(step);
+    return Error::failure(std::string(what) + " failed: " + status_message(status));
   }
-  if (run_abc) {
-    Stage abc;
-    status = run_population(true, start, dataset.train(), settings.seed, progress_on, &abc);
-    if (status != Status::ok) return fail("ABC", status);
-    stages.push_back(abc);
-  }
-  if (run_lm_stage) {
-    // Hybrid: start LM where the population solver ended ('all' starts from the nominal model
-    // so that its row stands on its own).
-    const bool hybrid = method == "abc+lm" || method == "gsa+lm";
-    const Stage* seed_stage = hybrid ? &stages.back() : nullptr;
-    Stage lm;
-    status = run_lm(seed_stage ? seed_stage->model : start, seed_stage ? &seed_stage->base_to_tracker : nullptr,
-                    dataset.train(), settings.paper_params, settings.robust, progress_on, &lm);
-    if (status != Status::ok) return fail("LM", status);
-    if (hybrid) lm.method = seed_stage->method + "+LM";
-    stages.push_back(lm);
-  }
-  *uncalibrated_out = uncalibrated;
-  *stages_out = stages;
   return Error{};
 }
 
@@ -467,42 +412,46 @@ void write_input_facts(textio::JsonWriter& json, const streams::SessionFacts& fa
 
 /// Tables and figures of a run, and the text of the terminal.
 report::ReportData present(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset,
-                           const streams::SessionFacts& facts, const Stage& uncalibrated,
-                           const std::vector<Stage>& stages) {
-  const Stage& final_stage = stages.back();
+                           const streams::SessionFacts& facts, const Run& run) {
+  const CalibrationBaseline& uncalibrated = run.result.baseline;
+  const CalibrationStage& final_stage = run.final_stage();
   report::ReportData data;
   data.title = "hivecal calibration: " + std::string(robot_type_name(settings.robot));
   data.info_lines = facts.info_lines;
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
                             ")");
-  data.methods.push_back(method_row(uncalibrated, dataset));
-  for (const Stage& stage : stages) data.methods.push_back(method_row(stage, dataset));
+  data.methods.push_back(method_row("uncalibrated", run.from_controller ? "controller" : "nominal",
+                                    uncalibrated.train, uncalibrated.test, 0.0, 0));
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) data.methods.push_back(stage_row(run, k));
   data.uncalibrated = accuracy_report(uncalibrated.model, uncalibrated.base_to_tracker, dataset);
   data.calibrated = accuracy_report(final_stage.model, final_stage.base_to_tracker, dataset);
-  for (const Stage& stage : stages) data.convergence.push_back({stage.method, stage.trace_m});
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) {
+    data.convergence.push_back({run.result.stage_name(k), trace_values(run.result.stages[k].trace_m)});
+  }
   for (const Sample& s : dataset.test()) {
     data.test_measured_m.push_back(s.point_m);
     data.test_uncalibrated_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
     data.test_calibrated_m.push_back(final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)));
   }
-  if (final_stage.is_lm) {
-    for (const std::string& line : identifiability_lines(final_stage.lm)) data.info_lines.push_back(line);
+  if (run.final_lm() != nullptr) {
+    for (const std::string& line : identifiability_lines(*run.final_lm())) data.info_lines.push_back(line);
   }
-  data.parameter_lines = parameter_lines(final_stage, start);
+  data.parameter_lines = parameter_lines(final_stage, run.final_lm(), start);
   return data;
 }
 
 /// The terminal text (on stdout, or on stderr when stdout carries the result).
-void print_tables(std::FILE* out, const report::ReportData& data, const Stage& final_stage) {
+void print_tables(std::FILE* out, const report::ReportData& data, const Run& run) {
   for (const std::string& line : data.info_lines) std::fprintf(out, "%s\n", line.c_str());
   std::fprintf(out, "\n%s", report::format_tables_text(data).c_str());
-  std::fprintf(out, "\nCalibrated parameters (%s):\n", final_stage.method.c_str());
+  std::fprintf(out, "\nCalibrated parameters (%s):\n", run.final_method().c_str());
   for (const std::string& line : data.parameter_lines) std::fprintf(out, "  %s\n", line.c_str());
 }
 
 std::string result_json(const CalibrateSettings& settings, const report::ReportData& data,
-                        const streams::SessionFacts& facts, const Stage& final_stage) {
+                        const streams::SessionFacts& facts, const Run& run) {
+  const CalibrationStage& final_stage = run.final_stage();
   textio::CalibrationFile file;
   file.robot = settings.robot;
   file.model = final_stage.model;
@@ -511,7 +460,7 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
   file.metrics = data.calibrated;
   const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
   return textio::format_calibration_json(file, [&](textio::JsonWriter& w) {
-    w.key("method").value(final_stage.method);
+    w.key("method").value(run.final_method());
     w.key("params").value(settings.paper_params ? "paper" : "full");
     w.key("seed").value(static_cast<long long>(settings.seed));
     w.key("split").value(settings.train_fraction);
@@ -522,7 +471,7 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     textio::write_error_stats(w, data.uncalibrated.test);
     w.end_object();
     write_stage_list(w, data.methods);
-    if (final_stage.is_lm) write_lm_details(w, final_stage.lm);
+    if (run.final_lm() != nullptr) write_lm_details(w, *run.final_lm());
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
   });
@@ -532,9 +481,10 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
 
 /// Stages every output, then commits them together: all or nothing.
 Error write_outputs(const Options& options, const CalibrateSettings& settings, const report::ReportData& data,
-                    const streams::SessionFacts& facts, const Stage& final_stage, port::OutputSet* outputs,
+                    const streams::SessionFacts& facts, const Run& run, port::OutputSet* outputs,
                     const OutputIds& ids) {
-  Error error = outputs->stage_text(ids.result, "", result_json(settings, data, facts, final_stage));
+  const CalibrationStage& final_stage = run.final_stage();
+  Error error = outputs->stage_text(ids.result, "", result_json(settings, data, facts, run));
   if (error.ok() && !options.get("ur-deltas").empty()) {
     const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
     error = outputs->stage_text(ids.ur_deltas, "", textio::format_ur_calibration_conf(deltas));
@@ -557,15 +507,15 @@ Error calibrate(const Options& options) {
   dataset.clear();
   streams::SessionFacts facts;
   if (error.ok()) error = load_dataset(options, settings, &dataset, &facts);
-  Stage uncalibrated;
-  std::vector<Stage> stages;
-  if (error.ok()) error = run(settings, start, dataset, !options.get("ur-calibration").empty(), &uncalibrated, &stages);
+  static Run job;  // static: the CalibrationResult is ~5 KB
+  job.from_controller = !options.get("ur-calibration").empty();
+  if (error.ok()) error = run(settings, start, &dataset, &job);
   if (!error.ok()) return error;
-  const report::ReportData data = present(settings, start, dataset, facts, uncalibrated, stages);
+  const report::ReportData data = present(settings, start, dataset, facts, job);
   const bool result_on_stdout = options.get("out") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
-  print_tables(terminal, data, stages.back());
-  error = write_outputs(options, settings, data, facts, stages.back(), &outputs, ids);
+  print_tables(terminal, data, job);
+  error = write_outputs(options, settings, data, facts, job, &outputs, ids);
   if (!error.ok()) return error;
   if (!result_on_stdout) std::fprintf(terminal, "\nresult: %s\n", options.get("out").c_str());
   if (!options.get("ur-deltas").empty()) std::fprintf(terminal, "UR deltas: %s\n", options.get("ur-deltas").c_str());

@@ -16,6 +16,7 @@
 #include "hivecal/wire/codec.hpp"
 #include "hivecal/wire/crc32c.hpp"
 #include "hivecal/wire/records.hpp"
+#include "hivecal/sync/capture_dataset.hpp"
 #include "hivecal/sync/capture_pipeline.hpp"
 #include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
@@ -36,3 +37,4 @@
 #include "hivecal/solve/objective.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
 #include "hivecal/solve/population_stage.hpp"
+#include "hivecal/calibration.hpp"

@@ -19,10 +19,14 @@ void DatasetBase::clear() {
   train_count_ = 0;
 }
 
+std::size_t DatasetBase::train_count_for(double train_fraction) const {
+  if (!(train_fraction > 0.0 && train_fraction <= 1.0)) return 0;
+  return static_cast<std::size_t>(train_fraction * static_cast<double>(size_) + 0.5);
+}
+
 Status DatasetBase::split(double train_fraction, std::uint64_t seed) {
   if (size_ == 0) return Status::dataset_empty;
-  if (!(train_fraction > 0.0 && train_fraction <= 1.0)) return Status::invalid_argument;
-  const auto train_count = static_cast<std::size_t>(train_fraction * static_cast<double>(size_) + 0.5);
+  const std::size_t train_count = train_count_for(train_fraction);
   if (train_count == 0) return Status::invalid_argument;
   Random random(seed);
   for (std::size_t i = size_ - 1; i > 0; --i) {

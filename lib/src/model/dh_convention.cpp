@@ -3,20 +3,6 @@
 #include "hivecal/core/math.hpp"
 
 namespace hivecal {
-namespace {
-
-/// Rotation about x by an angle [rad] (own sincos).
-Mat3 rotation_x(double angle_rad) {
-  double s = 0.0;
-  double c = 0.0;
-  math::sincos(angle_rad, &s, &c);
-  Mat3 r;
-  r << 1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c;
-  return r;
-}
-
-}  // namespace
-
 RigidTransform ModifiedDhBase::transform() const {
   // Rx(alpha0) Tx(a0): the translation along x is unchanged by a rotation about x.
   return RigidTransform{rotation_x(alpha0_rad), Vec3(a0_m, 0.0, 0.0)};

@@ -33,6 +33,11 @@ struct RigidTransform {
   }
 };
 
+/// Rotation about the x axis by `angle_rad` [rad] (the library's own sincos).
+Mat3 rotation_x(double angle_rad);
+/// Rotation about the z axis by `angle_rad` [rad] (the library's own sincos).
+Mat3 rotation_z(double angle_rad);
+
 /// True when every coefficient of an Eigen object is finite.
 template <typename Derived>
 bool all_finite(const Eigen::MatrixBase<Derived>& m);

@@ -49,6 +49,9 @@ class DatasetBase {
   /// round(train_fraction * size) in the training part. Errors: dataset_empty,
   /// invalid_argument (fraction not in (0, 1] or leaving no training sample).
   Status split(double train_fraction, std::uint64_t seed);
+  /// Training samples split(train_fraction, ...) keeps: round(train_fraction * size), or 0 when
+  /// the fraction is not in (0, 1] (a caller can check a split before a long job) [-].
+  std::size_t train_count_for(double train_fraction) const;
 
  protected:
   DatasetBase(Sample* storage, std::size_t capacity) : storage_(storage), capacity_(capacity) {}

@@ -1,6 +1,7 @@
-// The firmware's capture calibration job (tests/support/capture_job.hpp) on the host: the
-// same code, the same committed capture bytes and seed as CTest firmware.capture_job runs on
-// Cortex-M7/M4 under QEMU, compared with the same committed digest.
+// The firmware's calibration jobs from captures (tests/testkit/golden_capture_job.hpp: the
+// capture passes of capture_dataset.hpp, then calibrate()) on the host: the same code, the
+// same committed capture bytes and seed as CTest firmware.capture_job[_lm] runs on
+// Cortex-M7/M4 under QEMU, compared with the same committed digests.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,9 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "alloc_trap.hpp"
-#include "capture_job.hpp"
-#include "golden_capture_job.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/golden_capture_job.hpp"
 
 namespace hivecal {
 namespace {
@@ -26,7 +26,7 @@ std::vector<std::uint8_t> read_file(const std::string& path) {
 }
 
 /// Both captures in memory, re-read from the start on every open().
-class MemoryCaptures final : public test::CaptureSource {
+class MemoryCaptures final : public CaptureSource {
  public:
   MemoryCaptures(const std::vector<std::uint8_t>& robot, const std::vector<std::uint8_t>& tracker)
       : robot_(Span<const std::uint8_t>(robot.data(), robot.size())),
@@ -63,26 +63,46 @@ TEST_F(CaptureJob, CalibratesTheCommittedSessionLikeTheFirmware) {
   MemoryCaptures captures(robot_, tracker_);
   Status status = Status::invalid_argument;
   EXPECT_NO_HEAP(status = test::run_capture_job(captures, test::golden_capture_job_config(), &workspace, &report));
-  ASSERT_EQ(status, Status::ok) << status_message(report.status) << " at stage " << static_cast<int>(report.stage);
-  EXPECT_EQ(report.stage, test::JobStage::done);
+  const CalibrationResult& c = report.calibration;
+  ASSERT_EQ(status, Status::ok) << status_message(c.status) << " at " << calibration_step_name(c.step);
+  EXPECT_EQ(c.step, CalibrationStep::done);
+  ASSERT_EQ(c.stage_count, 2u);
+  EXPECT_STREQ(c.stage_name(1), "ABC+LM");
   // What the digest stands for must be a real calibration, not just the same bits.
   EXPECT_GE(report.samples, 200u);
-  EXPECT_EQ(report.counts.kept, report.samples);
+  EXPECT_EQ(report.capture.counts.kept, report.samples);
   // The simulator's clocks (tests/data/fw-session/truth.json): t_robot = 994999800 us +
   // (1 + 40 ppm) t_tracker; tracker time runs from 5 s over ~160 s.
   for (const double tracker_us : {5e6, 165e6}) {
     const double truth_us = 994999800.0 + (1.0 + 40e-6) * tracker_us;
-    EXPECT_NEAR(report.clock.robot_us(tracker_us), truth_us, 2000.0) << tracker_us;
+    EXPECT_NEAR(report.capture.clock.robot_us(tracker_us), truth_us, 2000.0) << tracker_us;
   }
-  EXPECT_GE(report.lm.identifiability.kept_count(), 24);
-  const double before = report.uncalibrated_test.mae_m[static_cast<int>(ErrorAxis::norm_3d)];
-  const double after = report.calibrated_test.mae_m[static_cast<int>(ErrorAxis::norm_3d)];
+  EXPECT_GE(c.lm.identifiability.kept_count(), 24);
+  const double before = c.baseline.test.mae(ErrorAxis::norm_3d);
+  const double after = c.stages[c.stage_count - 1].test.mae(ErrorAxis::norm_3d);
   EXPECT_LT(after, 0.2 * before) << "nominal " << before << " m, calibrated " << after << " m";
   EXPECT_LT(after, 100e-6);
   std::printf("capture job: %zu samples, ABC best %.3g m, LM RMS %.3g m, test MAE %.3g -> %.3g m, digest 0x%016llx\n",
-              report.samples, report.abc.best_cost_m, report.lm.rms_m, before, after,
+              report.samples, c.stages[0].best_cost_m, c.lm.rms_m, before, after,
               static_cast<unsigned long long>(report.digest));
   EXPECT_EQ(report.digest, test::kCaptureJobGoldenDigest)
+      << std::hex << "0x" << report.digest << " (update golden_capture_job.hpp only for an intended change)";
+}
+
+TEST_F(CaptureJob, TheLmOnlyJobCalibratesBetterThanTheNominalModel) {
+  MemoryCaptures captures(robot_, tracker_);
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = test::run_capture_job(captures, test::golden_lm_job_config(), &workspace, &report));
+  const CalibrationResult& c = report.calibration;
+  ASSERT_EQ(status, Status::ok) << status_message(c.status) << " at " << calibration_step_name(c.step);
+  ASSERT_EQ(c.stage_count, 1u);
+  EXPECT_STREQ(c.stage_name(0), "LM");
+  const double before = c.baseline.test.mae(ErrorAxis::norm_3d);
+  const double after = c.stages[c.stage_count - 1].test.mae(ErrorAxis::norm_3d);
+  EXPECT_LT(after, 100e-6) << "nominal " << before << " m";
+  std::printf("LM job: test MAE %.3g -> %.3g m, digest 0x%016llx\n", before, after,
+              static_cast<unsigned long long>(report.digest));
+  EXPECT_EQ(report.digest, test::kLmJobGoldenDigest)
       << std::hex << "0x" << report.digest << " (update golden_capture_job.hpp only for an intended change)";
 }
 
@@ -116,8 +136,8 @@ class ChoppyReader final : public ByteReader {
 };
 
 TEST_F(CaptureJob, ClockPassDoesNotDependOnHowTheBytesArriveAndReportsReadErrors) {
-  static test::JobClockEstimator whole(make_clock_sync_config(nominal_model(RobotType::ur5)));
-  static test::JobClockEstimator choppy(make_clock_sync_config(nominal_model(RobotType::ur5)));
+  static test::JobCaptureWorkspace::Estimator whole(make_clock_sync_config(nominal_model(RobotType::ur5)));
+  static test::JobCaptureWorkspace::Estimator choppy(make_clock_sync_config(nominal_model(RobotType::ur5)));
   MemoryByteReader robot(Span<const std::uint8_t>(robot_.data(), robot_.size()));
   MemoryByteReader tracker(Span<const std::uint8_t>(tracker_.data(), tracker_.size()));
   ClockFit a;
