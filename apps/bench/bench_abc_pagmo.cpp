@@ -26,7 +26,7 @@
 #include "hivecal/solve/abc.hpp"
 #include "hivecal/solve/cost.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
-#include "paper6_data.hpp"
+#include "testkit/paper6_data.hpp"
 
 namespace {
 

@@ -16,7 +16,7 @@
 #include "hivecal/model/metrics.hpp"
 #include "hivecal/solve/cost.hpp"
 #include "hivecal/solve/lm.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 
 #include "hivecal/model/metrics.hpp"
 #include "hivecal/solve/lm.hpp"
-#include "lm_test_data.hpp"
+#include "testkit/lm_test_data.hpp"
 
 namespace {
 

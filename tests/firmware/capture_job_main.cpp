@@ -1,7 +1,7 @@
 // Capture calibration image: reads a robot and a tracker capture from the host through
 // semihosting (two passes: clock sync, sample extraction; lib's capture_dataset.hpp), runs
 // lib's calibration job on them (calibrate(): split, baseline, ABC on the paper-6 cost and/or
-// LM on the full model, validation; tests/support/golden_capture_job.hpp) and prints the
+// LM on the full model, validation; tests/testkit/golden_capture_job.hpp) and prints the
 // results and their digest.
 //
 //   capture_job <robot.cap> <tracker.cap> golden          the paper's job (ABC 20 x 30, LM);
@@ -19,8 +19,8 @@
 #include <cstring>
 
 #include "baremetal/board.h"
-#include "golden_capture_job.hpp"
 #include "harness.hpp"
+#include "testkit/golden_capture_job.hpp"
 
 namespace hivecal {
 namespace {

@@ -16,10 +16,10 @@
 #include <cstring>
 
 #include "baremetal/board.h"
-#include "hivecal/solve/cost.hpp"
 #include "hivecal/core/digest.hpp"
 #include "hivecal/model/metrics.hpp"
-#include "test_data.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal {
 namespace {

@@ -10,8 +10,8 @@
 #include <cstdint>
 #include <type_traits>
 
-#include "check_log.hpp"
 #include "hivecal/core/status.hpp"
+#include "testkit/check_log.hpp"
 
 namespace hivecal::fw {
 
@@ -84,7 +84,7 @@ bool compare(const A& a, const B& b, Compare holds, const char* expression, cons
 /// |a - b| <= tolerance (false for NaN).
 bool check_near(double a, double b, double tolerance, const char* expression, const char* file, int line);
 
-/// Counts a shared check body's checks (tests/support/check_log.hpp); on failure prints each
+/// Counts a shared check body's checks (tests/testkit/check_log.hpp); on failure prints each
 /// failed check with its numbers. Returns log.ok().
 bool check_log(const test::CheckLog& log, const char* expression, const char* file, int line);
 

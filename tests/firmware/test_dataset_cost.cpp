@@ -4,10 +4,10 @@
 #include <limits>
 
 #include "harness.hpp"
-#include "hivecal/solve/cost.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/model/metrics.hpp"
-#include "test_data.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "testkit/test_data.hpp"
 
 namespace hivecal {
 namespace {

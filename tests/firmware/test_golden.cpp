@@ -1,8 +1,8 @@
-// The core golden digest on the MCU: the same computation (tests/support/golden_core.hpp) and
+// The core golden digest on the MCU: the same computation (tests/testkit/golden_core.hpp) and
 // the same committed constant as the host suite. Equal bits here prove the determinism recipe
 // (docs/determinism.md) holds on Cortex-M with newlib and its FPU (or soft-float doubles).
-#include "golden_core.hpp"
 #include "harness.hpp"
+#include "testkit/golden_core.hpp"
 
 namespace hivecal {
 namespace {

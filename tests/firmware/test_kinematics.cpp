@@ -1,9 +1,9 @@
 // Forward kinematics at known poses, FK paths agreeing, and the analytic Jacobian against
 // central differences, on the MCU's FPU (or soft-float doubles on the M4). The shared checks
-// are tests/support/kinematics_checks.hpp (the host suite runs them with more poses).
+// are tests/testkit/kinematics_checks.hpp (the host suite runs them with more poses).
 #include "harness.hpp"
 #include "hivecal/model/kinematics.hpp"
-#include "kinematics_checks.hpp"
+#include "testkit/kinematics_checks.hpp"
 
 namespace hivecal {
 namespace {

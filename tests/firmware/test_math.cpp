@@ -8,7 +8,7 @@
 #include "harness.hpp"
 #include "hivecal/core/math.hpp"
 #include "hivecal/core/random.hpp"
-#include "random_checks.hpp"
+#include "testkit/random_checks.hpp"
 
 namespace hivecal {
 namespace {

@@ -1,8 +1,8 @@
 // Rigid fit (Kabsch) on the MCU: exact recovery, reflection guard, weights, and the
-// specific error of each degenerate input. The checks are tests/support/rigid_fit_checks.hpp,
+// specific error of each degenerate input. The checks are tests/testkit/rigid_fit_checks.hpp,
 // shared with the host suite; the MCU runs fewer random trials.
 #include "harness.hpp"
-#include "rigid_fit_checks.hpp"
+#include "testkit/rigid_fit_checks.hpp"
 
 namespace hivecal {
 namespace {

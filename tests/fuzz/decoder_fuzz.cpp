@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <cstring>
 
-#include "codec_support.hpp"
 #include "hivecal/wire/codec.hpp"
+#include "testkit/codec_support.hpp"
 
 namespace {
 

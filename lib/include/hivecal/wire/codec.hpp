@@ -1,5 +1,5 @@
 // Serial wire codec of the robot and tracker streams (docs/wire-format.md implements
-// /work/shared/spec/serial-protocol.md, version 1): encoders for whole frames and a
+// shared/spec/serial-protocol.md, version 1): encoders for whole frames and a
 // streaming decoder with a fixed buffer. No heap, no OS: usable in firmware as is.
 #pragma once
 

@@ -1,0 +1,144 @@
+// Text formats of io-formats.md: every bad input gets a clear message naming file and line.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "hivecal/core/random.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "testkit/test_data.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+#include "textio/text_util.hpp"
+
+namespace hivecal {
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    char pattern[] = "/tmp/hivecal-test-XXXXXX";
+    path_ = mkdtemp(pattern);
+  }
+  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
+  std::string write(const std::string& name, const std::string& content) const {
+    const std::string file = path_ + "/" + name;
+    std::FILE* f = std::fopen(file.c_str(), "wb");
+    std::fwrite(content.data(), 1, content.size(), f);
+    std::fclose(f);
+    return file;
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
+  TempDir dir;
+  Random random(5);
+  static Dataset<16> written;
+  written.clear();
+  test::fill_dataset(nominal_model(RobotType::ur5), test::example_base_to_tracker(), 10, 1e-5, &random, &written);
+  const std::string path = dir.write("s.csv", textio::format_samples_csv(written.samples()));
+  static Dataset<16> read_back;
+  read_back.clear();
+  ASSERT_TRUE(textio::read_samples_csv(path, &read_back).ok());
+  ASSERT_EQ(read_back.size(), 10u);
+  for (std::size_t i = 0; i < 10; ++i) {
+    EXPECT_EQ(read_back.samples()[i].q_rad, written.samples()[i].q_rad);  // bit-exact round trip
+    EXPECT_EQ(read_back.samples()[i].point_m, written.samples()[i].point_m);
+  }
+  static Dataset<4> small;
+  small.clear();
+  const port::Error full = textio::read_samples_csv(path, &small);
+  EXPECT_FALSE(full.ok());
+  EXPECT_NE(full.message.find("dataset over capacity (4 samples max)"), std::string::npos) << full.message;
+
+  std::vector<JointVector> poses;
+  ASSERT_TRUE(textio::read_joints_csv(dir.write("j.csv", "t,q1,q2,q3,q4,q5,q6\n0,1,2,3,4,5,6\n"), &poses).ok());
+  ASSERT_TRUE(textio::read_joints_csv(dir.write("k.csv", "q1,q2,q3,q4,q5,q6\n1,2,3,4,5,6\n"), &poses).ok());
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_EQ(poses[0], poses[1]);
+}
+
+textio::CalibrationFile example_calibration() {
+  Random random(8);
+  textio::CalibrationFile file;
+  file.robot = RobotType::ur10;
+  file.model = test::perturbed_model(nominal_model(RobotType::ur10), &random, 1e-3, 1e-3);
+  file.model.tool_m << 0.001, -0.002, 0.1695;
+  file.base_to_tracker = test::example_base_to_tracker();
+  file.has_metrics = true;
+  file.metrics.test.count = 12;
+  file.metrics.test.mae_m[3] = 6.01e-5;
+  return file;
+}
+
+TEST(TextJson, CalibrationRoundTripsBitExactly) {
+  const textio::CalibrationFile file = example_calibration();
+  const std::string text = textio::format_calibration_json(file, [](textio::JsonWriter& json) {
+    json.key("method").value("lm");
+  });
+  textio::CalibrationFile back;
+  const port::Error r = textio::parse_calibration_json(text, "result.json", &back);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(back.robot, RobotType::ur10);
+  EXPECT_EQ(to_params(back.model), to_params(file.model));
+  EXPECT_LT((back.base_to_tracker.rotation - file.base_to_tracker.rotation).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_EQ(back.base_to_tracker.translation_m, file.base_to_tracker.translation_m);
+  textio::JsonValue root;
+  ASSERT_TRUE(textio::parse_json(text, &root).ok());
+  EXPECT_EQ(root.find("method")->string, "lm");
+  EXPECT_EQ(root.find("metrics")->find("test")->find("mae_m")->find("3d")->number, 6.01e-5);
+  EXPECT_EQ(root.find("convention")->string, "standard-dh");
+}
+
+TEST(TextJson, MalformedResultsAreNamed) {
+  const std::string good = textio::format_calibration_json(example_calibration());
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    const std::size_t at = s.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return s.replace(at, from.size(), to);
+  };
+  const struct {
+    std::string text;
+    std::string expected;
+  } cases[] = {
+      {"", "malformed JSON"},
+      {"{", "malformed JSON"},
+      {"[1,2]", "top level must be an object"},
+      {replaced("robot-calibration/1", "other/2"), "\"format\""},
+      {replaced("\"ur10\"", "\"kuka\""), "unknown robot model 'kuka'"},
+      {replaced("\"theta_offset\"", "\"theta\""), "\"dh\"[0]"},
+      {replaced("\"tool\": [", "\"tool\": [1, "), "\"tool\""},
+      {replaced("[0, 0, 0, 1]", "[0, 0, 1, 1]"), "not a proper rigid transform"},
+      {good + "x", "unexpected text after the document"},
+  };
+  for (const auto& c : cases) {
+    textio::CalibrationFile file;
+    const port::Error r = textio::parse_calibration_json(c.text, "result.json", &file);
+    EXPECT_FALSE(r.ok());
+    EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message;
+  }
+}
+
+TEST(TextFiles, AtomicWriteReplacesOrLeavesNothing) {
+  TempDir dir;
+  const std::string path = dir.path() + "/out.json";
+  ASSERT_TRUE(textio::write_text_file(path, "first").ok());
+  ASSERT_TRUE(textio::write_text_file(path, "second").ok());
+  std::string text;
+  ASSERT_TRUE(port::read_whole_file(path, port::kMaxTextInputBytes, &text).ok());
+  EXPECT_EQ(text, "second");
+  const port::Error error = textio::write_text_file(dir.path() + "/no/such/dir/out.json", "x");
+  EXPECT_EQ(error.fault, port::Fault::output);
+  EXPECT_NE(error.message.find("does not exist"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hivecal

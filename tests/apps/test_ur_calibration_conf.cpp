@@ -1,0 +1,152 @@
+// Real-controller check: a UR5e's factory calibration and 18 pendant readings
+// (../shared/data/ur5e-pendant). Calibrated FK must match the pendant to its rounding;
+// nominal FK must not (so the test can fail). Skipped when that data is absent.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "testkit/shared_data.hpp"
+#include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
+
+namespace hivecal {
+namespace {
+
+const std::string kDir = std::string(HIVECAL_TEST_DATA_DIR) + "/ur5e-pendant/";
+
+struct PendantReading {
+  JointVector q_rad;
+  Vec3 tcp_m;
+};
+
+std::vector<PendantReading> read_pendant_csv() {
+  std::string text;
+  EXPECT_TRUE(port::read_whole_file(kDir + "joint-eef-data.csv", port::kMaxTextInputBytes, &text).ok());
+  std::vector<PendantReading> readings;
+  std::istringstream lines(text);
+  std::string line;
+  std::getline(lines, line);  // header
+  while (std::getline(lines, line)) {
+    if (textio::trim(line).empty()) continue;
+    std::vector<double> fields;
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) {
+      double v = 0.0;
+      EXPECT_TRUE(textio::parse_double(cell, &v)) << cell;
+      fields.push_back(v);
+    }
+    EXPECT_EQ(fields.size(), 12u);
+    PendantReading r;
+    for (int j = 0; j < 6; ++j) r.q_rad(j) = fields[j] * M_PI / 180.0;
+    r.tcp_m << fields[6] / 1000.0, fields[7] / 1000.0, fields[8] / 1000.0;
+    readings.push_back(r);
+  }
+  return readings;
+}
+
+struct ErrorSummary {
+  double mean_m = 0.0;
+  double max_m = 0.0;
+};
+
+ErrorSummary compare(const RobotModel& model, const std::vector<PendantReading>& readings) {
+  ErrorSummary s;
+  for (const PendantReading& r : readings) {
+    const double e = (fk_tool_point(model, r.q_rad) - r.tcp_m).norm();
+    s.mean_m += e / static_cast<double>(readings.size());
+    s.max_m = std::max(s.max_m, e);
+  }
+  return s;
+}
+
+TEST(Ur5ePendant, CalibratedFkMatchesControllerNominalDoesNot) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/calibration.conf");
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  const std::vector<PendantReading> readings = read_pendant_csv();
+  ASSERT_EQ(readings.size(), 18u);
+  UrCalibrationDeltas deltas;
+  const port::Error parsed = textio::read_ur_calibration_conf(kDir + "calibration.conf", &deltas);
+  ASSERT_TRUE(parsed.ok()) << parsed.message;
+  EXPECT_NEAR(deltas.delta_d_m[1], -204.077105406530421, 1e-12);
+
+  const RobotModel nominal = nominal_model(RobotType::ur5e);
+  RobotModel calibrated;
+  ASSERT_EQ(apply_ur_deltas(nominal, deltas, &calibrated), Status::ok);
+
+  const ErrorSummary with_calibration = compare(calibrated, readings);
+  const ErrorSummary without = compare(nominal, readings);
+  RecordProperty("calibrated_mean_um", static_cast<int>(with_calibration.mean_m * 1e6));
+  EXPECT_LT(with_calibration.max_m, 0.1e-3) << "mean " << with_calibration.mean_m;
+  EXPECT_GE(without.mean_m, 0.5e-3);
+}
+
+TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/calibration.conf");
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  // Why the library is double: the same chain in float is off by more than half the tracker noise.
+  UrCalibrationDeltas deltas;
+  ASSERT_TRUE(textio::read_ur_calibration_conf(kDir + "calibration.conf", &deltas).ok());
+  RobotModel calibrated;
+  ASSERT_EQ(apply_ur_deltas(nominal_model(RobotType::ur5e), deltas, &calibrated), Status::ok);
+  double worst_m = 0.0;
+  for (const PendantReading& r : read_pendant_csv()) {
+    Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();
+    for (int j = 0; j < 6; ++j) {
+      const DhJoint& dh = calibrated.joints[j];
+      const float t = static_cast<float>(r.q_rad(j) + dh.theta_offset_rad);
+      const float al = static_cast<float>(dh.alpha_rad);
+      Eigen::Matrix4f a;
+      a << std::cos(t), -std::sin(t) * std::cos(al), std::sin(t) * std::sin(al), static_cast<float>(dh.a_m) * std::cos(t),
+          std::sin(t), std::cos(t) * std::cos(al), -std::cos(t) * std::sin(al), static_cast<float>(dh.a_m) * std::sin(t),
+          0.f, std::sin(al), std::cos(al), static_cast<float>(dh.d_m), 0.f, 0.f, 0.f, 1.f;
+      pose = pose * a;
+    }
+    const Vec3 p = pose.block<3, 1>(0, 3).cast<double>();
+    worst_m = std::max(worst_m, (p - fk_tool_point(calibrated, r.q_rad)).norm());
+  }
+  EXPECT_GT(worst_m, 5e-6);  // half the tracker's noise: float is not a calibration-grade type
+}
+
+TEST(UrCalibrationConf, MalformedInputsAreNamed) {
+  UrCalibrationDeltas d;
+  const std::string good_rows =
+      "delta_theta = [0,0,0,0,0,0]\ndelta_a = [0,0,0,0,0,0]\ndelta_d = [0,0,0,0,0,0]\n";
+  EXPECT_TRUE(textio::parse_ur_calibration_conf("[mounting]\n" + good_rows + "delta_alpha = [0,0,0,0,0,0]\n", "x", &d).ok());
+  const struct {
+    std::string text;
+    std::string expected;
+  } cases[] = {
+      {"", "no [mounting] section"},
+      {"[mounting]\n" + good_rows, "no delta_alpha"},
+      {"[mounting]\n" + good_rows + "delta_alpha = [0,0,0,0,0]\n", "expected 6 values"},
+      {"[mounting]\n" + good_rows + "delta_alpha = [0,0,0,0,0,0,0]\n", "more than 6"},
+      {"[mounting]\n" + good_rows + "delta_alpha = [0,0,x,0,0,0]\n", "not a number: 'x'"},
+      {"[mounting]\n" + good_rows + "delta_alpha = [0,0,nan,0,0,0]\n", "NaN or Inf"},
+      {"[mounting]\n" + good_rows + "delta_alpha = 0,0,0,0,0,0\n", "expected [v1"},
+      {"[mounting]\n" + good_rows + "delta_a = [0,0,0,0,0,0]\n", "given twice"},
+  };
+  for (const auto& c : cases) {
+    const port::Error r = textio::parse_ur_calibration_conf(c.text, "conf", &d);
+    EXPECT_FALSE(r.ok());
+    EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message;
+  }
+  EXPECT_FALSE(textio::read_ur_calibration_conf("/nonexistent/calibration.conf", &d).ok());
+}
+
+TEST(UrCalibrationConf, FormatReadsBackToTheSameBits) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/calibration.conf");
+  UrCalibrationDeltas d;
+  ASSERT_TRUE(textio::read_ur_calibration_conf(kDir + "calibration.conf", &d).ok());
+  UrCalibrationDeltas back;
+  ASSERT_TRUE(textio::parse_ur_calibration_conf(textio::format_ur_calibration_conf(d), "out", &back).ok());
+  EXPECT_EQ(0, std::memcmp(&d, &back, sizeof d));
+}
+
+}  // namespace
+}  // namespace hivecal

@@ -1,0 +1,228 @@
+// The calibration job entry (calibration.hpp): every method on a simulated session, without
+// heap; one bad input per Status it returns, with the step that failed; training on every
+// sample; the same bits with and without LM's joint trig storage; and the same bits as the
+// stage functions called by hand.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "hivecal/calibration.hpp"
+#include "hivecal/core/random.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/test_data.hpp"
+
+namespace hivecal {
+namespace {
+
+constexpr std::size_t kSamples = 256;
+using SmallWorkspace = CalibrationWorkspace<kSamples, double, 40, 300>;
+using TrigWorkspace = CalibrationWorkspace<kSamples, double, 40, 300, kSamples>;
+
+SmallWorkspace workspace;
+TrigWorkspace trig_workspace;
+CalibrationResult result;
+CalibrationResult other;
+Dataset<kSamples> dataset;
+
+bool same_bits(const RobotModel& a, const RobotModel& b) {
+  const ModelParams pa = to_params(a);
+  const ModelParams pb = to_params(b);
+  return std::memcmp(pa.data(), pb.data(), sizeof(double) * kModelParamCount) == 0;
+}
+
+/// A perturbed UR5 seen by a tracker with 10 um noise.
+void fill(std::size_t count, DatasetBase* out) {
+  Random random(7);
+  const RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, 1e-3, 1e-3);
+  out->clear();
+  test::fill_dataset(truth, test::example_base_to_tracker(), count, 10e-6, &random, out);
+}
+
+/// Small populations so that the test stays quick.
+CalibrationOptions quick(CalibrationMethod method) {
+  CalibrationOptions options;
+  options.method = method;
+  options.abc_food_sources = 20;
+  options.abc_cycles = 20;
+  options.gsa_agents = 20;
+  options.gsa_iterations = 20;
+  return options;
+}
+
+/// The job's answer (the tests check stage_count first).
+const CalibrationStage& last(const CalibrationResult& r) { return r.stages[r.stage_count - 1]; }
+
+const RobotModel& start() {
+  static const RobotModel model = nominal_model(RobotType::ur5);
+  return model;
+}
+
+struct MethodCase {
+  CalibrationMethod method;
+  std::size_t stages;
+  const char* final_name;
+};
+
+TEST(CalibrationJob, EveryMethodRunsWithoutHeapAndImprovesOnTheBaseline) {
+  const MethodCase cases[] = {{CalibrationMethod::lm, 1, "LM"},         {CalibrationMethod::abc, 1, "ABC"},
+                              {CalibrationMethod::gsa, 1, "GSA"},       {CalibrationMethod::abc_lm, 2, "ABC+LM"},
+                              {CalibrationMethod::gsa_lm, 2, "GSA+LM"}, {CalibrationMethod::all, 3, "LM"}};
+  for (const MethodCase& c : cases) {
+    fill(120, &dataset);
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(start(), &dataset, quick(c.method), &workspace, &result));
+    ASSERT_EQ(status, Status::ok) << calibration_method_name(c.method) << ": " << calibration_step_name(result.step);
+    EXPECT_EQ(result.step, CalibrationStep::done);
+    EXPECT_EQ(result.train_count, 84u);
+    EXPECT_EQ(result.test_count, 36u);
+    ASSERT_EQ(result.stage_count, c.stages) << calibration_method_name(c.method);
+    EXPECT_STREQ(result.stage_name(c.stages - 1), c.final_name);
+    EXPECT_EQ(result.has_lm, std::strstr(c.final_name, "LM") != nullptr);
+    const double before = result.baseline.test.mae(ErrorAxis::norm_3d);
+    for (const CalibrationStage& stage : result.stage_list()) {
+      EXPECT_LT(stage.test.mae(ErrorAxis::norm_3d), before) << calibration_solver_name(stage.solver);
+      EXPECT_EQ(stage.test.count, 36u);
+      EXPECT_GT(stage.trace_m.size(), 0u);
+    }
+    if (result.has_lm) {
+      EXPECT_LT(last(result).test.mae(ErrorAxis::norm_3d), 50e-6);
+    }
+  }
+}
+
+TEST(CalibrationJob, AllIsTheTableOneOrderEachFromTheStart) {
+  fill(120, &dataset);
+  ASSERT_EQ(calibrate(start(), &dataset, quick(CalibrationMethod::all), &workspace, &result), Status::ok);
+  EXPECT_EQ(result.stages[0].solver, CalibrationSolver::gsa);
+  EXPECT_EQ(result.stages[1].solver, CalibrationSolver::abc);
+  EXPECT_EQ(result.stages[2].solver, CalibrationSolver::lm);
+  EXPECT_FALSE(result.stages[2].refines_previous);
+}
+
+TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
+  fill(120, &dataset);
+  ASSERT_EQ(calibrate(start(), &dataset, quick(CalibrationMethod::abc_lm), &workspace, &result), Status::ok);
+  fill(120, &dataset);
+  ASSERT_EQ(dataset.split(0.7, 1), Status::ok);
+  static Paper6Cost<kSamples> cost;
+  static AbcSolver<40, kPaper6Dimension> abc;
+  static LmWorkspace lm_workspace;
+  static LmResult lm;
+  AbcOptions abc_options;
+  abc_options.food_sources = 20;
+  abc_options.cycles = 20;
+  Paper6StageResult population;
+  ASSERT_EQ(calibrate_paper6_abc(start(), dataset.train(), abc_options, kPaper6DefaultHalfWidth_m, &cost, &abc,
+                                 &population),
+            Status::ok);
+  ASSERT_EQ(calibrate_lm(population.model, &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace,
+                         &lm),
+            Status::ok);
+  EXPECT_TRUE(same_bits(result.stages[0].model, population.model));
+  EXPECT_TRUE(same_bits(last(result).model, lm.model));
+  EXPECT_EQ(result.lm.rms_m, lm.rms_m);
+}
+
+TEST(CalibrationJob, TrainingOnEverySampleLeavesNoTestRows) {
+  fill(60, &dataset);
+  CalibrationOptions options = quick(CalibrationMethod::lm);
+  options.train_fraction = 1.0;
+  ASSERT_EQ(calibrate(start(), &dataset, options, &workspace, &result), Status::ok);
+  EXPECT_EQ(result.train_count, 60u);
+  EXPECT_EQ(result.test_count, 0u);
+  EXPECT_EQ(result.baseline.test.count, 0u);
+  EXPECT_EQ(last(result).test.count, 0u);
+  EXPECT_EQ(last(result).train.count, 60u);
+}
+
+TEST(CalibrationJob, JointTrigStorageChangesTimeNotBits) {
+  for (CalibrationMethod method : {CalibrationMethod::lm, CalibrationMethod::abc_lm}) {
+    fill(120, &dataset);
+    CalibrationOptions options = quick(method);
+    options.robust = true;
+    ASSERT_EQ(calibrate(start(), &dataset, options, &workspace, &result), Status::ok);
+    fill(120, &dataset);
+    ASSERT_EQ(calibrate(start(), &dataset, options, &trig_workspace, &other), Status::ok);
+    EXPECT_TRUE(same_bits(last(result).model, last(other).model));
+    EXPECT_EQ(result.lm.rms_m, other.lm.rms_m);
+    EXPECT_EQ(result.lm.iterations, other.lm.iterations);
+  }
+}
+
+/// Stops LM after its first iteration.
+class Cancel final : public CalibrationObserver {
+ public:
+  void on_stage_begin(std::size_t, CalibrationSolver) override { ++begun; }
+  void on_stage_end(std::size_t, const CalibrationStage&) override { ++ended; }
+  bool on_iteration(const LmIterationInfo&) override { return false; }
+  void on_iteration(const SolverProgress&) override { ++population_iterations; }
+  int begun = 0;
+  int ended = 0;
+  int population_iterations = 0;
+};
+
+void expect_failure(Status status, Status expected, CalibrationStep expected_step) {
+  EXPECT_EQ(status, expected) << status_message(status);
+  EXPECT_EQ(result.status, expected);
+  EXPECT_EQ(result.step, expected_step) << calibration_step_name(result.step);
+}
+
+TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
+  const CalibrationOptions options = quick(CalibrationMethod::abc_lm);
+  fill(120, &dataset);
+  EXPECT_EQ(calibrate(start(), &dataset, options, &workspace, nullptr), Status::invalid_argument);
+  expect_failure(calibrate(start(), nullptr, options, &workspace, &result), Status::invalid_argument,
+                 CalibrationStep::input);
+  expect_failure(calibrate(start(), &dataset, options, nullptr, &result), Status::invalid_argument,
+                 CalibrationStep::input);
+  CalibrationOptions unknown = options;
+  unknown.method = static_cast<CalibrationMethod>(42);
+  expect_failure(calibrate(start(), &dataset, unknown, &workspace, &result), Status::invalid_argument,
+                 CalibrationStep::input);
+
+  dataset.clear();
+  expect_failure(calibrate(start(), &dataset, options, &workspace, &result), Status::dataset_empty,
+                 CalibrationStep::input);
+  fill(calibration_minimum_samples(CalibrationParams::full) - 1, &dataset);
+  expect_failure(calibrate(start(), &dataset, options, &workspace, &result), Status::too_few_samples,
+                 CalibrationStep::input);
+
+  fill(120, &dataset);
+  CalibrationOptions no_training = options;
+  no_training.train_fraction = 0.0;
+  expect_failure(calibrate(start(), &dataset, no_training, &workspace, &result),
+                 Status::invalid_argument, CalibrationStep::split);
+
+  dataset.clear();
+  for (int i = 0; i < 40; ++i) ASSERT_EQ(dataset.add(JointVector::Zero(), Vec3(1.0, 2.0, 3.0)), Status::ok);
+  expect_failure(calibrate(start(), &dataset, options, &workspace, &result),
+                 Status::degenerate_geometry, CalibrationStep::baseline);
+
+  fill(120, &dataset);
+  CalibrationOptions crowd = options;
+  crowd.abc_food_sources = 41;  // the workspace holds 40
+  expect_failure(calibrate(start(), &dataset, crowd, &workspace, &result),
+                 Status::population_out_of_range, CalibrationStep::abc);
+  CalibrationOptions gsa_crowd = quick(CalibrationMethod::all);
+  gsa_crowd.gsa_agents = 41;
+  fill(120, &dataset);
+  expect_failure(calibrate(start(), &dataset, gsa_crowd, &workspace, &result),
+                 Status::population_out_of_range, CalibrationStep::gsa);
+
+  static CalibrationWorkspace<32, float, 40, 8> tiny;  // cost room for 32 training samples
+  fill(120, &dataset);
+  expect_failure(calibrate(start(), &dataset, options, &tiny, &result), Status::dataset_full,
+                 CalibrationStep::abc);
+
+  fill(120, &dataset);
+  Cancel cancel;
+  expect_failure(calibrate(start(), &dataset, options, &workspace, &result, &cancel),
+                 Status::solver_cancelled, CalibrationStep::lm);
+  EXPECT_EQ(cancel.begun, 2);
+  EXPECT_EQ(cancel.ended, 1);
+  EXPECT_EQ(cancel.population_iterations, 20);
+  EXPECT_EQ(result.stage_count, 1u);  // the ABC stage, kept
+}
+
+}  // namespace
+}  // namespace hivecal

@@ -1,0 +1,98 @@
+// Golden digest of the LM calibration: model, base, sigma, singular values, drops and trace
+// of a least-squares and a Huber run, hashed over their raw bits. The committed value must
+// come out on every preset (host -O0/-O3/-march=native, aarch64, armhf).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "hivecal/core/digest.hpp"
+#include "hivecal/solve/lm.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/lm_test_data.hpp"
+
+namespace hivecal {
+namespace {
+
+constexpr std::uint64_t kLmGoldenDigest = 0xe8eca2abfab7abcfULL;
+
+void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
+  digest->add_u64(static_cast<std::uint64_t>(status));
+  digest->add(to_params(r.model));
+  digest->add(r.base_to_tracker.rotation);
+  digest->add(r.base_to_tracker.translation_m);
+  digest->add(r.sigma);
+  digest->add(r.loss_sum_m2);
+  digest->add(r.rms_m);
+  digest->add(r.residual_sigma_m);
+  digest->add(r.huber_threshold_m);
+  digest->add_u64(static_cast<std::uint64_t>(r.iterations));
+  digest->add_u64(static_cast<std::uint64_t>(r.termination));
+  const IdentifiabilityReport& report = r.identifiability;
+  digest->add_u64(report.kept_mask);
+  for (int d = 0; d < report.dropped_count; ++d) {
+    const DroppedParam& entry = report.dropped[d];
+    digest->add_u64(static_cast<std::uint64_t>(entry.index));
+    digest->add(entry.singular_ratio);
+    for (double c : entry.component) digest->add(c);
+  }
+  for (int k = 0; k < report.singular_count_before; ++k) digest->add(report.singular_values_before[k]);
+  for (int k = 0; k < report.singular_count_after; ++k) digest->add(report.singular_values_after[k]);
+  digest->add(report.condition_after);
+  for (double v : trace.values()) digest->add(v);
+}
+
+/// `joint_trig_storage`: LmWorkspace::joint_trig (empty: recomputed in every pass).
+std::uint64_t lm_digest(Span<JointTrig> joint_trig_storage) {
+  Random random(20261123);
+  const RobotModel truth =
+      test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.002, -0.001, 0.1695));
+  static Dataset<150> clean;
+  static Dataset<150> dirty;
+  clean.clear();
+  test::fill_dataset(truth, test::example_base_to_tracker(), 150, 1e-5, &random, &clean);
+  test::copy_with_outliers(clean, 20, 3, 1e-3, 4e-3, &random, &dirty);
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = Vec3(0.0, 0.0, 0.17);
+  static LmWorkspace ws;
+  ws.joint_trig = joint_trig_storage;
+  static LmResult result;
+  static Trace<64> trace;
+  Digest digest;
+  LmOptions options;
+  trace.clear();
+  add_result(result, calibrate_lm(start, nullptr, clean.samples(), options, &ws, &result, &trace), trace,
+             &digest);  // the whole digest runs under EXPECT_NO_HEAP below
+  options.loss = LmLoss::huber;
+  trace.clear();
+  add_result(result, calibrate_lm(start, nullptr, dirty.samples(), options, &ws, &result, &trace), trace, &digest);
+  return digest.value();
+}
+
+TEST(LmGolden, DigestIsTheSameOnEveryTarget) {
+  std::uint64_t digest = 0;
+  EXPECT_NO_HEAP(digest = lm_digest({}));
+  std::printf("lm digest: 0x%016llx\n", static_cast<unsigned long long>(digest));
+  EXPECT_EQ(digest, kLmGoldenDigest);
+}
+
+// Stored joint trig saves work, not bits; storage smaller than the dataset is ignored.
+TEST(LmGolden, StoredJointTrigGivesTheSameBits) {
+  static JointTrig storage[150];
+  const auto poison = [] {
+    for (JointTrig& t : storage) t.sin_q[0] = std::numeric_limits<double>::quiet_NaN();
+  };
+  std::uint64_t stored = 0;
+  std::uint64_t too_small = 0;
+  poison();
+  EXPECT_NO_HEAP(too_small = lm_digest(Span<JointTrig>(storage, 149)));
+  EXPECT_TRUE(std::isnan(storage[0].sin_q[0])) << "storage too small for the samples: left alone";
+  EXPECT_NO_HEAP(stored = lm_digest(storage));
+  EXPECT_FALSE(std::isnan(storage[149].sin_q[0])) << "the solver filled and read the storage";
+  EXPECT_EQ(stored, kLmGoldenDigest);
+  EXPECT_EQ(too_small, kLmGoldenDigest);
+}
+
+}  // namespace
+}  // namespace hivecal

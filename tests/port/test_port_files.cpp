@@ -1,0 +1,219 @@
+// port/posix input and output files (issue 13, hostile and careless use): only regular files
+// are read or replaced, symlinks and modes are kept, an output may not be an input or another
+// output, and a run's outputs appear all together or not at all.
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <string>
+
+#include "hivecal/port/error.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "hivecal/port/output_files.hpp"
+#include "testkit/cli_run.hpp"
+
+namespace hivecal::port {
+namespace {
+
+struct Folder {
+  Folder() : path(test::make_temp_dir("hivecal_port_files")) {}
+  ~Folder() { (void)std::system(("rm -rf '" + path + "'").c_str()); }
+  std::string file(const std::string& name, const std::string& text) const {
+    const std::string p = path + "/" + name;
+    std::FILE* f = std::fopen(p.c_str(), "wb");
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+    return p;
+  }
+  std::string path;
+};
+
+std::string read(const std::string& path) {
+  std::string text;
+  return read_whole_file(path, kMaxTextInputBytes, &text).ok() ? text : "<unreadable>";
+}
+
+/// Writes `text` as the only output at `path`.
+Error write_one(const std::string& path, const std::string& text) {
+  OutputSet outputs;
+  std::size_t id = 0;
+  Error error = outputs.add_file(path, "--out", &id);
+  if (error.ok()) error = outputs.stage_text(id, "", text);
+  return error.ok() ? outputs.commit() : error;
+}
+
+TEST(OutputFiles, DevNullIsRefusedAndStaysADevice) {
+  if (::geteuid() != 0) GTEST_SKIP() << "only root could replace /dev/null";
+  const Error error = write_one("/dev/null", "x");
+  EXPECT_EQ(error.fault, Fault::output);
+  EXPECT_NE(error.message.find("character device"), std::string::npos) << error.message;
+  struct stat info {};
+  ASSERT_EQ(::stat("/dev/null", &info), 0);
+  EXPECT_TRUE(S_ISCHR(info.st_mode));
+}
+
+TEST(OutputFiles, SymlinkIsFollowedAndKept) {
+  Folder dir;
+  const std::string target = dir.file("target.json", "old");
+  const std::string link = dir.path + "/link.json";
+  ASSERT_EQ(::symlink("target.json", link.c_str()), 0);
+  ASSERT_TRUE(write_one(link, "new").ok());
+  struct stat info {};
+  ASSERT_EQ(::lstat(link.c_str(), &info), 0);
+  EXPECT_TRUE(S_ISLNK(info.st_mode));
+  EXPECT_EQ(read(target), "new");
+}
+
+TEST(OutputFiles, FifoIsRefusedAtOnce) {
+  Folder dir;
+  const std::string fifo = dir.path + "/fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const Error error = write_one(fifo, "x");
+  EXPECT_EQ(error.fault, Fault::output);
+  EXPECT_NE(error.message.find("FIFO"), std::string::npos) << error.message;
+  struct stat info {};
+  ASSERT_EQ(::stat(fifo.c_str(), &info), 0);
+  EXPECT_TRUE(S_ISFIFO(info.st_mode));
+}
+
+TEST(OutputFiles, ModeOfAnExistingFileIsKept) {
+  Folder dir;
+  const std::string path = dir.file("out.csv", "old");
+  ASSERT_EQ(::chmod(path.c_str(), 0640), 0);
+  ASSERT_TRUE(write_one(path, "new").ok());
+  struct stat info {};
+  ASSERT_EQ(::stat(path.c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 07777, 0640u);
+  EXPECT_EQ(read(path), "new");
+}
+
+TEST(OutputFiles, AnOutputThatIsAnInputIsRefused) {
+  Folder dir;
+  const std::string samples = dir.file("samples.csv", "data");
+  OutputSet outputs;
+  std::size_t id = 0;
+  ASSERT_TRUE(outputs.add_input(samples, "--samples").ok());
+  const Error error = outputs.add_file(dir.path + "/../" + dir.path.substr(dir.path.rfind('/') + 1) + "/samples.csv",
+                                       "--out", &id);
+  EXPECT_EQ(error.fault, Fault::usage);
+  EXPECT_NE(error.message.find("same file as the input --samples"), std::string::npos) << error.message;
+  const std::string link = dir.path + "/alias.csv";  // the same file under another name
+  ASSERT_EQ(::link(samples.c_str(), link.c_str()), 0);
+  EXPECT_EQ(outputs.add_file(link, "--out", &id).fault, Fault::usage);
+  EXPECT_EQ(read(samples), "data");
+}
+
+TEST(OutputFiles, TwoOutputsOnOnePathAreRefused) {
+  Folder dir;
+  OutputSet outputs;
+  std::size_t a = 0, b = 0;
+  ASSERT_TRUE(outputs.add_file(dir.path + "/r.json", "--out", &a).ok());
+  const Error error = outputs.add_file(dir.path + "/r.json", "--ur-deltas", &b);
+  EXPECT_EQ(error.fault, Fault::usage);
+  EXPECT_NE(error.message.find("same file as the output --out"), std::string::npos) << error.message;
+}
+
+TEST(OutputFiles, NothingAppearsUnlessEverythingIsCommitted) {
+  Folder dir;
+  {
+    OutputSet outputs;
+    std::size_t result = 0, report = 0;
+    ASSERT_TRUE(outputs.add_file(dir.path + "/result.json", "--out", &result).ok());
+    ASSERT_TRUE(outputs.add_folder(dir.path + "/report/deep", "--report", &report).ok());
+    ASSERT_TRUE(outputs.stage_text(result, "", "{}").ok());
+    ASSERT_TRUE(outputs.stage_text(report, "index.html", "<html>").ok());
+    // the run fails here: no commit
+  }
+  EXPECT_EQ(::access((dir.path + "/result.json").c_str(), F_OK), -1);
+  EXPECT_EQ(::access((dir.path + "/report").c_str(), F_OK), -1);
+  EXPECT_EQ(std::system(("test -z \"$(ls -A '" + dir.path + "')\"").c_str()), 0) << "temporaries left";
+  OutputSet outputs;
+  std::size_t result = 0, report = 0;
+  ASSERT_TRUE(outputs.add_file(dir.path + "/result.json", "--out", &result).ok());
+  ASSERT_TRUE(outputs.add_folder(dir.path + "/report/deep", "--report", &report).ok());
+  ASSERT_TRUE(outputs.stage_text(result, "", "{}").ok());
+  ASSERT_TRUE(outputs.stage_text(report, "index.html", "<html>").ok());
+  ASSERT_TRUE(outputs.commit().ok());
+  EXPECT_EQ(read(dir.path + "/result.json"), "{}");
+  EXPECT_EQ(read(dir.path + "/report/deep/index.html"), "<html>");
+}
+
+TEST(OutputFiles, ATargetThatBecomesAFifoDuringTheRunIsNotReplaced) {
+  Folder dir;
+  const std::string path = dir.path + "/out.csv";
+  OutputSet outputs;
+  std::size_t id = 0;
+  ASSERT_TRUE(outputs.add_file(path, "--out", &id).ok());
+  ASSERT_TRUE(outputs.stage_text(id, "", "x").ok());
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);  // appears while the run computes
+  EXPECT_EQ(outputs.commit().fault, Fault::output);
+  struct stat info {};
+  ASSERT_EQ(::stat(path.c_str(), &info), 0);
+  EXPECT_TRUE(S_ISFIFO(info.st_mode));
+}
+
+TEST(OutputFiles, AFailedMovePutsBackWhatWasMovedBefore) {
+  Folder dir;
+  const std::string first = dir.file("first.json", "old first");
+  ASSERT_EQ(::mkdir((dir.path + "/sub").c_str(), 0755), 0);
+  OutputSet outputs;
+  std::size_t a = 0, b = 0;
+  ASSERT_TRUE(outputs.add_file(first, "--out", &a).ok());
+  ASSERT_TRUE(outputs.add_file(dir.path + "/sub/second.conf", "--ur-deltas", &b).ok());
+  ASSERT_TRUE(outputs.stage_text(a, "", "new first").ok());
+  ASSERT_TRUE(outputs.stage_text(b, "", "new second").ok());
+  // The second temporary vanishes: its move fails after the first output was moved.
+  ASSERT_EQ(std::system(("rm -f '" + dir.path + "'/sub/second.conf.tmp.*").c_str()), 0);
+  EXPECT_EQ(outputs.commit().fault, Fault::output);
+  EXPECT_EQ(read(first), "old first");
+  EXPECT_EQ(std::system(("test \"$(ls -A '" + dir.path + "')\" = \"first.json\nsub\"").c_str()), 0)
+      << "backups or temporaries left";
+}
+
+TEST(OutputFiles, AMissingFolderIsFoundBeforeAnyWork) {
+  Folder dir;
+  OutputSet outputs;
+  std::size_t id = 0;
+  const Error error = outputs.add_file(dir.path + "/no/such/out.json", "--out", &id);
+  EXPECT_EQ(error.fault, Fault::output);
+  EXPECT_NE(error.message.find("does not exist"), std::string::npos) << error.message;
+}
+
+TEST(InputFiles, DevZeroIsRefusedAtOnce) {
+  InputFile file;
+  const Error error = file.open("/dev/zero", kMaxStreamInputBytes);
+  EXPECT_EQ(error.fault, Fault::input);
+  EXPECT_NE(error.message.find("character device, not a regular file"), std::string::npos) << error.message;
+}
+
+TEST(InputFiles, AFifoIsRefusedWithoutBlocking) {
+  Folder dir;
+  const std::string fifo = dir.path + "/fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  InputFile file;
+  EXPECT_EQ(file.open(fifo, kMaxStreamInputBytes).fault, Fault::input);
+}
+
+TEST(InputFiles, AFileOverTheLimitIsRefusedBeforeReading) {
+  Folder dir;
+  const std::string path = dir.file("big.json", std::string(2000, ' '));
+  InputFile file;
+  const Error error = file.open(path, 1000);
+  EXPECT_EQ(error.fault, Fault::input);
+  EXPECT_TRUE(file.open(path, 4000).ok());
+}
+
+TEST(Messages, HugeAndBinaryTextIsEscapedAndCut) {
+  const std::string huge(1 << 20, 'a');
+  const std::string shown = printable(huge);
+  EXPECT_LT(shown.size(), 120u);
+  EXPECT_NE(shown.find("...[1048576 bytes]"), std::string::npos);
+  EXPECT_EQ(printable(std::string("a\0b\x1b[31m\xff", 9)), "a\\x00b\\x1b[31m\\xff");
+  EXPECT_EQ(quoted("x\ny"), "'x\\x0ay'");
+}
+
+}  // namespace
+}  // namespace hivecal::port

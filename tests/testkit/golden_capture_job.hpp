@@ -1,0 +1,172 @@
+// The firmware's calibration job from captures, shared by the firmware image
+// (tests/firmware/capture_job_main.cpp, CTest firmware.capture_job[_lm]) and the host test
+// (tests/lib/job/test_capture_job.cpp), so that both run the same code on the same committed
+// capture pair tests/data/fw-session/{robot,tracker}.cap and compare the same digests:
+//   captures -> extract_dataset_from_captures (capture_dataset.hpp) -> calibrate()
+//   (calibration.hpp) -> a digest of every result bit.
+// Heap-free: the capture workspace and the calibration workspace are never alive together
+// and share one static arena (placement new).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <new>
+
+#include "hivecal/calibration.hpp"
+#include "hivecal/core/digest.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "hivecal/sync/capture_dataset.hpp"
+
+namespace hivecal::test {
+
+/// Samples the job can hold (the firmware budget: 512).
+inline constexpr std::size_t kJobSamples = 512;
+/// Clock profiles: 3072 knots x 20 ms = 61 s of robot data, 640 tracker points = 64 s; extractor
+/// rings: 256 robot records (2 s at 125 Hz: the 1 s window plus the merge lag), 64 tracker points.
+using JobCaptureWorkspace = CaptureWorkspace<3072, 640, 256, 64>;
+/// Float paper-6 terms (84 B per sample), the paper's 150 food sources, 300-cycle traces.
+using JobCalibrationWorkspace = CalibrationWorkspace<kJobSamples, float, 150, 300>;
+
+/// Where a run ends (earlier ends serve the per-stage instruction counts of scripts/footprint.sh).
+enum class JobStop : int { clock, extraction, done };
+
+/// Settings of one job run.
+struct CaptureJobConfig {
+  RobotType robot = RobotType::ur5;         ///< nominal geometry
+  Vec3 tool_m = Vec3(0.0, 0.0, 0.1695);     ///< nominal tool point in the flange frame [m]
+  CalibrationOptions calibration;           ///< the job (method, split, seed, ABC budget)
+  JobStop stop_after = JobStop::done;       ///< end after this pass
+};
+
+/// The paper's job with the budget reduced so that the Cortex-M4 run under QEMU stays short
+/// (the footprint report measures the paper's 150 x 300 separately): ABC 20 x 30 then LM.
+inline CaptureJobConfig golden_capture_job_config() {
+  CaptureJobConfig config;
+  config.calibration.method = CalibrationMethod::abc_lm;
+  config.calibration.seed = 1;
+  config.calibration.abc_food_sources = 20;
+  config.calibration.abc_cycles = 30;
+  return config;
+}
+
+/// The LM-only job (the better calibration for ~1 % of the instructions).
+inline CaptureJobConfig golden_lm_job_config() {
+  CaptureJobConfig config;
+  config.calibration.method = CalibrationMethod::lm;
+  config.calibration.seed = 1;
+  return config;
+}
+
+/// The committed digests: every target must reproduce them.
+inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0xcbd8767022598f97ULL;
+inline constexpr std::uint64_t kLmJobGoldenDigest = 0x86e5715fb08b05efULL;
+
+/// Static storage of a job: the dataset, and one arena for the capture passes, then the job.
+struct CaptureJobWorkspace {
+  static constexpr std::size_t kArenaBytes = sizeof(JobCaptureWorkspace) > sizeof(JobCalibrationWorkspace)
+                                                 ? sizeof(JobCaptureWorkspace)
+                                                 : sizeof(JobCalibrationWorkspace);
+  Dataset<kJobSamples> dataset;                                     ///< the samples of the captures
+  alignas(alignof(std::max_align_t)) unsigned char arena[kArenaBytes];  ///< capture, then calibration workspace
+};
+
+/// The results of a run (static storage: the CalibrationResult alone is ~5 KB).
+struct CaptureJobReport {
+  CaptureExtraction capture;       ///< the two passes
+  std::size_t samples = 0;         ///< samples extracted
+  CalibrationResult calibration;   ///< the job (default when the passes failed or stopped it)
+  std::uint64_t digest = 0;        ///< hash of every result bit above
+};
+
+/// The stage numbers of the digest: 0 clock, 1 extraction, 2 split, 3 ABC, 4 LM, 5 done
+/// (the numbering the golden digest was made with).
+inline std::uint64_t job_stage_code(const CaptureJobReport& r, bool calibrated) {
+  if (!calibrated) return r.capture.pass == CapturePass::clock ? 0 : 1;
+  switch (r.calibration.step) {
+    case CalibrationStep::input:
+    case CalibrationStep::split:
+    case CalibrationStep::baseline: return 2;
+    case CalibrationStep::gsa:
+    case CalibrationStep::abc: return 3;
+    case CalibrationStep::lm: return 4;
+    case CalibrationStep::done: return 5;
+  }
+  return 6;
+}
+
+/// The stage of `solver` in a result, or null.
+inline const CalibrationStage* find_stage(const CalibrationResult& r, CalibrationSolver solver) {
+  for (const CalibrationStage& s : r.stage_list())
+    if (s.solver == solver) return &s;
+  return nullptr;
+}
+
+/// Hashes every result bit of a report (what host and firmware must agree on).
+inline std::uint64_t capture_job_digest(const CaptureJobReport& r, bool calibrated) {
+  const CalibrationResult& c = r.calibration;
+  const CalibrationStage* final_stage = c.final_stage();
+  Digest d;
+  d.add_u64(job_stage_code(r, calibrated));
+  d.add_u64(static_cast<std::uint64_t>(!calibrated ? r.capture.status
+                                       : c.status != Status::ok || final_stage == nullptr ? c.status
+                                                                                          : final_stage->status));
+  d.add(r.capture.clock.offset_us);
+  d.add(r.capture.clock.drift);
+  d.add(r.capture.clock.offset_at_reference_us);
+  d.add(r.capture.clock.sigma_offset_at_reference_us);
+  d.add_u64(r.capture.counts.tracker_points);
+  d.add_u64(r.capture.counts.kept);
+  for (std::uint64_t n : r.capture.counts.dropped) d.add_u64(n);
+  d.add_u64(r.samples);
+  d.add_u64(c.train_count);
+  if (const CalibrationStage* abc = find_stage(c, CalibrationSolver::abc)) {
+    d.add(to_params(abc->model));
+    d.add(abc->base_to_tracker.rotation);
+    d.add(abc->base_to_tracker.translation_m);
+    d.add(abc->best_cost_m);
+    d.add_u64(abc->evaluations);
+  }
+  if (c.has_lm) {
+    d.add(to_params(c.lm.model));
+    d.add(c.lm.base_to_tracker.rotation);
+    d.add(c.lm.base_to_tracker.translation_m);
+    d.add(c.lm.sigma);
+    d.add(c.lm.rms_m);
+    d.add_u64(static_cast<std::uint64_t>(c.lm.iterations));
+    d.add_u64(c.lm.identifiability.kept_mask);
+  }
+  const ErrorStats none;
+  for (const ErrorStats* s : {&c.baseline.test, final_stage != nullptr ? &final_stage->test : &none}) {
+    d.add_u64(s->count);
+    for (double v : s->mae_m) d.add(v);
+  }
+  return d.value();
+}
+
+/// Runs the job: the capture passes, then calibrate(). *report gets every result and its
+/// digest. Returns the failing status, or ok.
+inline Status run_capture_job(CaptureSource& source, const CaptureJobConfig& config, CaptureJobWorkspace* ws,
+                              CaptureJobReport* report) {
+  report->~CaptureJobReport();
+  CaptureJobReport& r = *new (report) CaptureJobReport();  // in place: no 5 KB temporary on the stack
+  RobotModel nominal = nominal_model(config.robot);
+  nominal.tool_m = config.tool_m;
+  JobCaptureWorkspace* capture = new (ws->arena) JobCaptureWorkspace();
+  Status status = config.stop_after == JobStop::clock
+                      ? estimate_capture_clock(nominal, source, capture, &r.capture)
+                      : extract_dataset_from_captures(nominal, source, capture, &ws->dataset, &r.capture);
+  capture->~JobCaptureWorkspace();
+  r.samples = r.capture.pass == CapturePass::clock ? 0 : ws->dataset.size();
+  if (status != Status::ok || config.stop_after != JobStop::done) {
+    r.digest = capture_job_digest(r, false);
+    return status;
+  }
+  JobCalibrationWorkspace* calibration = new (ws->arena) JobCalibrationWorkspace();
+  status = calibrate(nominal, &ws->dataset, config.calibration, calibration, &r.calibration);
+  calibration->~JobCalibrationWorkspace();
+  r.digest = capture_job_digest(r, true);
+  return status;
+}
+
+}  // namespace hivecal::test
