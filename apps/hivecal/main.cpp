@@ -2,9 +2,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include "hivecal/commands/commands.hpp"
-#include "hivecal/commands/simulate.hpp"
-#include "hivecal/commands/streams.hpp"
+#include "commands/commands.hpp"
+#include "commands/simulate.hpp"
+#include "commands/streams.hpp"
 #include "hivecal/port/output_files.hpp"
 
 namespace {

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "hivecal/commands/streams.hpp"
+#include "commands/streams.hpp"
 #include "hivecal/port/byte_source.hpp"
 #include "hivecal/port/pty.hpp"
 #include "hivecal/wire/codec.hpp"

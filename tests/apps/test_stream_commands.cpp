@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "cli/options.hpp"
-#include "hivecal/commands/simulate.hpp"
-#include "hivecal/commands/streams.hpp"
+#include "commands/simulate.hpp"
+#include "commands/streams.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "sim/sim_model.hpp"
 #include "testkit/cli_run.hpp"

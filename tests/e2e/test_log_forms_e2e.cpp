@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "cli/options.hpp"
-#include "hivecal/commands/commands.hpp"
-#include "hivecal/commands/simulate.hpp"
+#include "commands/commands.hpp"
+#include "commands/simulate.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/log_forms.hpp"
 #include "textio/calibration_json.hpp"

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "cli/options.hpp"
-#include "hivecal/commands/commands.hpp"
-#include "hivecal/commands/validation.hpp"
+#include "commands/commands.hpp"
+#include "commands/validation.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/other_session.hpp"
 #include "textio/calibration_json.hpp"

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "cli/options.hpp"
-#include "hivecal/commands/commands.hpp"
-#include "hivecal/commands/simulate.hpp"
-#include "hivecal/commands/validation.hpp"
+#include "commands/commands.hpp"
+#include "commands/simulate.hpp"
+#include "commands/validation.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/sync/sample_extraction.hpp"

@@ -3,7 +3,7 @@
 // failures over semihosting, and run_all_tests() ends with the line "N passed, M failed".
 //
 //   FW_TEST(Suite, Name) { FW_CHECK_EQ(f(), 3); FW_ASSERT(ok); FW_CHECK_NEAR(x, 1.0, 1e-12); }
-//   FW_TEST(Suite, Shared) { FW_CHECK_LOG(test::some_shared_check_body(10)); }  // tests/support
+//   FW_TEST(Suite, Shared) { FW_CHECK_LOG(test::some_shared_check_body(10)); }  // tests/testkit
 #pragma once
 
 #include <cstddef>

@@ -7,7 +7,7 @@
 
 #include "cli/options.hpp"
 #include "hivecal/calibration.hpp"
-#include "hivecal/commands/commands.hpp"
+#include "commands/commands.hpp"
 #include "hivecal/core/trace.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/model/metrics.hpp"

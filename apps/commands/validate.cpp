@@ -5,8 +5,8 @@
 #include <cstdio>
 
 #include "cli/options.hpp"
-#include "hivecal/commands/commands.hpp"
-#include "hivecal/commands/validation.hpp"
+#include "commands/commands.hpp"
+#include "commands/validation.hpp"
 #include "hivecal/core/random.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/text_util.hpp"

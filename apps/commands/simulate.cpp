@@ -1,4 +1,4 @@
-#include "hivecal/commands/simulate.hpp"
+#include "commands/simulate.hpp"
 
 #include <csignal>
 #include <cstdio>

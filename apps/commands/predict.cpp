@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "cli/options.hpp"
-#include "hivecal/commands/commands.hpp"
+#include "commands/commands.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/csv.hpp"

@@ -1,4 +1,4 @@
-#include "hivecal/commands/streams.hpp"
+#include "commands/streams.hpp"
 
 #include <csignal>
 #include <cstdio>

@@ -4,7 +4,7 @@
 #include <utility>
 
 #include "cli/options.hpp"
-#include "hivecal/commands/commands.hpp"
+#include "commands/commands.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/model/kinematics.hpp"
