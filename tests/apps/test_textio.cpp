@@ -7,6 +7,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "testkit/temp_dir.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "testkit/test_data.hpp"
@@ -17,28 +18,9 @@
 namespace hivecal {
 namespace {
 
-class TempDir {
- public:
-  TempDir() {
-    char pattern[] = "/tmp/hivecal-test-XXXXXX";
-    path_ = mkdtemp(pattern);
-  }
-  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
-  std::string write(const std::string& name, const std::string& content) const {
-    const std::string file = path_ + "/" + name;
-    std::FILE* f = std::fopen(file.c_str(), "wb");
-    std::fwrite(content.data(), 1, content.size(), f);
-    std::fclose(f);
-    return file;
-  }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
 
 TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
-  TempDir dir;
+  const test::TempDir dir("hivecal_test");
   Random random(5);
   static Dataset<16> written;
   written.clear();
@@ -128,7 +110,7 @@ TEST(TextJson, MalformedResultsAreNamed) {
 }
 
 TEST(TextFiles, AtomicWriteReplacesOrLeavesNothing) {
-  TempDir dir;
+  const test::TempDir dir("hivecal_test");
   const std::string path = dir.path() + "/out.json";
   ASSERT_TRUE(textio::write_text_file(path, "first").ok());
   ASSERT_TRUE(textio::write_text_file(path, "second").ok());

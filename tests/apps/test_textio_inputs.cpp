@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "testkit/cli_run.hpp"
+#include "testkit/temp_dir.hpp"
 #include "textio/csv.hpp"
 #include "textio/delimited.hpp"
 #include "textio/logs.hpp"
@@ -18,24 +19,12 @@
 namespace hivecal::textio {
 namespace {
 
-struct Folder {
-  Folder() : path(test::make_temp_dir("hivecal_textio_inputs")) {}
-  ~Folder() { (void)std::system(("rm -rf '" + path + "'").c_str()); }
-  std::string file(const std::string& name, const std::string& text) const {
-    const std::string p = path + "/" + name;
-    std::FILE* f = std::fopen(p.c_str(), "wb");
-    std::fwrite(text.data(), 1, text.size(), f);
-    std::fclose(f);
-    return p;
-  }
-  std::string path;
-};
 
 const std::string kHeader = "q1,q2,q3,q4,q5,q6\n";
 
 TEST(TextInputs, NulByteInARowNamesFileAndLine) {
-  Folder dir;
-  const std::string path = dir.file("nul.csv", kHeader + "0,0,0,0,0,0\n" + std::string("0,0,0\0,0,0,0\n", 13) +
+  const test::TempDir dir("hivecal_textio_inputs");
+  const std::string path = dir.write("nul.csv", kHeader + "0,0,0,0,0,0\n" + std::string("0,0,0\0,0,0,0\n", 13) +
                                                    "0,0,0,0,0,0\n");
   std::vector<JointVector> poses;
   const port::Error error = read_joints_csv(path, &poses);
@@ -44,8 +33,8 @@ TEST(TextInputs, NulByteInARowNamesFileAndLine) {
 }
 
 TEST(TextInputs, OverLongLineIsAnErrorNotACut) {
-  Folder dir;
-  const std::string path = dir.file("long.csv", kHeader + std::string(kMaxLineBytes + 10, '1') + "\n");
+  const test::TempDir dir("hivecal_textio_inputs");
+  const std::string path = dir.write("long.csv", kHeader + std::string(kMaxLineBytes + 10, '1') + "\n");
   std::vector<JointVector> poses;
   const port::Error error = read_joints_csv(path, &poses);
   EXPECT_EQ(error.fault, port::Fault::input);
@@ -53,22 +42,22 @@ TEST(TextInputs, OverLongLineIsAnErrorNotACut) {
 }
 
 TEST(TextInputs, HugeAndBinaryFieldsAreEscapedAndCutInTheMessage) {
-  Folder dir;
-  const std::string path = dir.file("junk.csv", kHeader + "0,0,0,0,0," + std::string(50000, 'a') + "\xff\xfe\n");
+  const test::TempDir dir("hivecal_textio_inputs");
+  const std::string path = dir.write("junk.csv", kHeader + "0,0,0,0,0," + std::string(50000, 'a') + "\xff\xfe\n");
   std::vector<JointVector> poses;
   const port::Error error = read_joints_csv(path, &poses);
   EXPECT_EQ(error.fault, port::Fault::input);
   EXPECT_LT(error.message.size(), 300u) << error.message.substr(0, 300);
   EXPECT_NE(error.message.find("...[50002 bytes]"), std::string::npos) << error.message;
-  const std::string binary = dir.file("bin.csv", kHeader + "0,0,0,0,0,\x1b[31m\x01\n");
+  const std::string binary = dir.write("bin.csv", kHeader + "0,0,0,0,0,\x1b[31m\x01\n");
   EXPECT_NE(read_joints_csv(binary, &poses).message.find("bin.csv:2: binary byte 0x1b"), std::string::npos);
 }
 
 TEST(TextInputs, DevicesAndFifosAreRefusedAtOnce) {
-  Folder dir;
+  const test::TempDir dir("hivecal_textio_inputs");
   std::vector<JointVector> poses;
   EXPECT_EQ(read_joints_csv("/dev/zero", &poses).fault, port::Fault::input);
-  const std::string fifo = dir.path + "/fifo";
+  const std::string fifo = dir.path() + "/fifo";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   EXPECT_EQ(read_joints_csv(fifo, &poses).fault, port::Fault::input);  // no writer: would block if opened
   EXPECT_EQ(detect_stream_file(fifo), StreamFileKind::capture);        // and the capture reader refuses it

@@ -13,6 +13,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "testkit/temp_dir.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/port/error.hpp"
 #include "sim/sim_model.hpp"
@@ -51,25 +52,6 @@ const SessionRecords& session_records() {
   return records;
 }
 
-class TempDir {
- public:
-  TempDir() {
-    char pattern[] = "/tmp/hivecal-logs-XXXXXX";
-    path_ = mkdtemp(pattern);
-  }
-  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
-  std::string write(const std::string& name, const std::string& content) const {
-    const std::string file = path_ + "/" + name;
-    std::FILE* f = std::fopen(file.c_str(), "wb");
-    std::fwrite(content.data(), 1, content.size(), f);
-    std::fclose(f);
-    return file;
-  }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
 
 void expect_same_joints(const textio::RobotLog& log, const std::vector<JointStateRecord>& expected) {
   ASSERT_TRUE(log.ok) << log.error;
@@ -283,7 +265,7 @@ TEST(TextLogs, LinesAndFieldsAreBounded) {
   for (std::size_t k = 0; k < textio::kMaxColumns + 5; ++k) many += ",c" + std::to_string(k);
   EXPECT_NE(error_of(many + "\n", false).find("f.csv:1: more than 1024 fields in a line"), std::string::npos);
   // The file reader crosses its buffer boundary mid-line without losing a byte.
-  TempDir dir;
+  const test::TempDir dir("hivecal_logs");
   std::vector<JointStateRecord> joints = session_records().joints;
   const std::size_t once = joints.size();
   for (int copy = 1; copy < 3; ++copy) {  // ~2.7 MB: more than two buffer fills
@@ -300,7 +282,7 @@ TEST(TextLogs, LinesAndFieldsAreBounded) {
 }
 
 TEST(TextLogs, DetectionByContent) {
-  TempDir dir;
+  const test::TempDir dir("hivecal_logs");
   using textio::StreamFileKind;
   EXPECT_EQ(textio::detect_stream_file(dir.write("a.csv", "t,x,y,z\n1,2,3,4\n")), StreamFileKind::text_log);
   EXPECT_EQ(textio::detect_stream_file(dir.write("b.csv", "\xEF\xBB\xBFt,q1\r\n")), StreamFileKind::text_log);
@@ -340,7 +322,7 @@ TEST(TextLogs, CdrJointStateDecodesAndRefusesJunk) {
 
 #if HIVECAL_HAVE_SQLITE3
 TEST(TextLogs, Ros2BagGivesTheSameRecords) {
-  TempDir dir;
+  const test::TempDir dir("hivecal_logs");
   const std::vector<JointStateRecord>& joints = session_records().joints;
   ASSERT_TRUE(test::write_ros2_bag(dir.path(), joints));
   const textio::RobotLog bag = textio::read_robot_log(dir.path());
@@ -372,7 +354,7 @@ TEST(TextLogs, Ros2BagGivesTheSameRecords) {
   exec("DELETE FROM topics WHERE id = 2;");
   EXPECT_NE(textio::read_robot_log(dir.path()).error.find("bag_0.db3: no /joint_states topic (topics: /tf)"),
             std::string::npos);
-  TempDir empty;
+  const test::TempDir empty("hivecal_logs");
   EXPECT_NE(textio::read_robot_log(empty.path()).error.find("a folder without metadata.yaml: not a ROS 2 bag"),
             std::string::npos);
   empty.write("metadata.yaml", "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n");
@@ -392,7 +374,7 @@ TEST(TextLogs, TenMinuteRtdeLogParsesFast) {
     joints[i].timestamp_us = 1000000 + 2000 * i;
     for (int j = 0; j < kJointCount; ++j) joints[i].q_rad[j] = 0.1 * j + 1e-6 * static_cast<double>(i % 977);
   }
-  TempDir dir;
+  const test::TempDir dir("hivecal_logs");
   const std::string path = dir.write("rtde.csv", test::rtde_log(joints));
   const std::clock_t cpu_start = std::clock();
   const auto start = std::chrono::steady_clock::now();

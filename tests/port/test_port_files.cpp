@@ -14,22 +14,11 @@
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "testkit/cli_run.hpp"
+#include "testkit/temp_dir.hpp"
 
 namespace hivecal::port {
 namespace {
 
-struct Folder {
-  Folder() : path(test::make_temp_dir("hivecal_port_files")) {}
-  ~Folder() { (void)std::system(("rm -rf '" + path + "'").c_str()); }
-  std::string file(const std::string& name, const std::string& text) const {
-    const std::string p = path + "/" + name;
-    std::FILE* f = std::fopen(p.c_str(), "wb");
-    std::fwrite(text.data(), 1, text.size(), f);
-    std::fclose(f);
-    return p;
-  }
-  std::string path;
-};
 
 std::string read(const std::string& path) {
   std::string text;
@@ -56,9 +45,9 @@ TEST(OutputFiles, DevNullIsRefusedAndStaysADevice) {
 }
 
 TEST(OutputFiles, SymlinkIsFollowedAndKept) {
-  Folder dir;
-  const std::string target = dir.file("target.json", "old");
-  const std::string link = dir.path + "/link.json";
+  const test::TempDir dir("hivecal_port_files");
+  const std::string target = dir.write("target.json", "old");
+  const std::string link = dir.path() + "/link.json";
   ASSERT_EQ(::symlink("target.json", link.c_str()), 0);
   ASSERT_TRUE(write_one(link, "new").ok());
   struct stat info {};
@@ -68,8 +57,8 @@ TEST(OutputFiles, SymlinkIsFollowedAndKept) {
 }
 
 TEST(OutputFiles, FifoIsRefusedAtOnce) {
-  Folder dir;
-  const std::string fifo = dir.path + "/fifo";
+  const test::TempDir dir("hivecal_port_files");
+  const std::string fifo = dir.path() + "/fifo";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   const Error error = write_one(fifo, "x");
   EXPECT_EQ(error.fault, Fault::output);
@@ -80,8 +69,8 @@ TEST(OutputFiles, FifoIsRefusedAtOnce) {
 }
 
 TEST(OutputFiles, ModeOfAnExistingFileIsKept) {
-  Folder dir;
-  const std::string path = dir.file("out.csv", "old");
+  const test::TempDir dir("hivecal_port_files");
+  const std::string path = dir.write("out.csv", "old");
   ASSERT_EQ(::chmod(path.c_str(), 0640), 0);
   ASSERT_TRUE(write_one(path, "new").ok());
   struct stat info {};
@@ -91,59 +80,59 @@ TEST(OutputFiles, ModeOfAnExistingFileIsKept) {
 }
 
 TEST(OutputFiles, AnOutputThatIsAnInputIsRefused) {
-  Folder dir;
-  const std::string samples = dir.file("samples.csv", "data");
+  const test::TempDir dir("hivecal_port_files");
+  const std::string samples = dir.write("samples.csv", "data");
   OutputSet outputs;
   std::size_t id = 0;
   ASSERT_TRUE(outputs.add_input(samples, "--samples").ok());
-  const Error error = outputs.add_file(dir.path + "/../" + dir.path.substr(dir.path.rfind('/') + 1) + "/samples.csv",
+  const Error error = outputs.add_file(dir.path() + "/../" + dir.path().substr(dir.path().rfind('/') + 1) + "/samples.csv",
                                        "--out", &id);
   EXPECT_EQ(error.fault, Fault::usage);
   EXPECT_NE(error.message.find("same file as the input --samples"), std::string::npos) << error.message;
-  const std::string link = dir.path + "/alias.csv";  // the same file under another name
+  const std::string link = dir.path() + "/alias.csv";  // the same file under another name
   ASSERT_EQ(::link(samples.c_str(), link.c_str()), 0);
   EXPECT_EQ(outputs.add_file(link, "--out", &id).fault, Fault::usage);
   EXPECT_EQ(read(samples), "data");
 }
 
 TEST(OutputFiles, TwoOutputsOnOnePathAreRefused) {
-  Folder dir;
+  const test::TempDir dir("hivecal_port_files");
   OutputSet outputs;
   std::size_t a = 0, b = 0;
-  ASSERT_TRUE(outputs.add_file(dir.path + "/r.json", "--out", &a).ok());
-  const Error error = outputs.add_file(dir.path + "/r.json", "--ur-deltas", &b);
+  ASSERT_TRUE(outputs.add_file(dir.path() + "/r.json", "--out", &a).ok());
+  const Error error = outputs.add_file(dir.path() + "/r.json", "--ur-deltas", &b);
   EXPECT_EQ(error.fault, Fault::usage);
   EXPECT_NE(error.message.find("same file as the output --out"), std::string::npos) << error.message;
 }
 
 TEST(OutputFiles, NothingAppearsUnlessEverythingIsCommitted) {
-  Folder dir;
+  const test::TempDir dir("hivecal_port_files");
   {
     OutputSet outputs;
     std::size_t result = 0, report = 0;
-    ASSERT_TRUE(outputs.add_file(dir.path + "/result.json", "--out", &result).ok());
-    ASSERT_TRUE(outputs.add_folder(dir.path + "/report/deep", "--report", &report).ok());
+    ASSERT_TRUE(outputs.add_file(dir.path() + "/result.json", "--out", &result).ok());
+    ASSERT_TRUE(outputs.add_folder(dir.path() + "/report/deep", "--report", &report).ok());
     ASSERT_TRUE(outputs.stage_text(result, "", "{}").ok());
     ASSERT_TRUE(outputs.stage_text(report, "index.html", "<html>").ok());
     // the run fails here: no commit
   }
-  EXPECT_EQ(::access((dir.path + "/result.json").c_str(), F_OK), -1);
-  EXPECT_EQ(::access((dir.path + "/report").c_str(), F_OK), -1);
-  EXPECT_EQ(std::system(("test -z \"$(ls -A '" + dir.path + "')\"").c_str()), 0) << "temporaries left";
+  EXPECT_EQ(::access((dir.path() + "/result.json").c_str(), F_OK), -1);
+  EXPECT_EQ(::access((dir.path() + "/report").c_str(), F_OK), -1);
+  EXPECT_EQ(std::system(("test -z \"$(ls -A '" + dir.path() + "')\"").c_str()), 0) << "temporaries left";
   OutputSet outputs;
   std::size_t result = 0, report = 0;
-  ASSERT_TRUE(outputs.add_file(dir.path + "/result.json", "--out", &result).ok());
-  ASSERT_TRUE(outputs.add_folder(dir.path + "/report/deep", "--report", &report).ok());
+  ASSERT_TRUE(outputs.add_file(dir.path() + "/result.json", "--out", &result).ok());
+  ASSERT_TRUE(outputs.add_folder(dir.path() + "/report/deep", "--report", &report).ok());
   ASSERT_TRUE(outputs.stage_text(result, "", "{}").ok());
   ASSERT_TRUE(outputs.stage_text(report, "index.html", "<html>").ok());
   ASSERT_TRUE(outputs.commit().ok());
-  EXPECT_EQ(read(dir.path + "/result.json"), "{}");
-  EXPECT_EQ(read(dir.path + "/report/deep/index.html"), "<html>");
+  EXPECT_EQ(read(dir.path() + "/result.json"), "{}");
+  EXPECT_EQ(read(dir.path() + "/report/deep/index.html"), "<html>");
 }
 
 TEST(OutputFiles, ATargetThatBecomesAFifoDuringTheRunIsNotReplaced) {
-  Folder dir;
-  const std::string path = dir.path + "/out.csv";
+  const test::TempDir dir("hivecal_port_files");
+  const std::string path = dir.path() + "/out.csv";
   OutputSet outputs;
   std::size_t id = 0;
   ASSERT_TRUE(outputs.add_file(path, "--out", &id).ok());
@@ -156,28 +145,28 @@ TEST(OutputFiles, ATargetThatBecomesAFifoDuringTheRunIsNotReplaced) {
 }
 
 TEST(OutputFiles, AFailedMovePutsBackWhatWasMovedBefore) {
-  Folder dir;
-  const std::string first = dir.file("first.json", "old first");
-  ASSERT_EQ(::mkdir((dir.path + "/sub").c_str(), 0755), 0);
+  const test::TempDir dir("hivecal_port_files");
+  const std::string first = dir.write("first.json", "old first");
+  ASSERT_EQ(::mkdir((dir.path() + "/sub").c_str(), 0755), 0);
   OutputSet outputs;
   std::size_t a = 0, b = 0;
   ASSERT_TRUE(outputs.add_file(first, "--out", &a).ok());
-  ASSERT_TRUE(outputs.add_file(dir.path + "/sub/second.conf", "--ur-deltas", &b).ok());
+  ASSERT_TRUE(outputs.add_file(dir.path() + "/sub/second.conf", "--ur-deltas", &b).ok());
   ASSERT_TRUE(outputs.stage_text(a, "", "new first").ok());
   ASSERT_TRUE(outputs.stage_text(b, "", "new second").ok());
   // The second temporary vanishes: its move fails after the first output was moved.
-  ASSERT_EQ(std::system(("rm -f '" + dir.path + "'/sub/second.conf.tmp.*").c_str()), 0);
+  ASSERT_EQ(std::system(("rm -f '" + dir.path() + "'/sub/second.conf.tmp.*").c_str()), 0);
   EXPECT_EQ(outputs.commit().fault, Fault::output);
   EXPECT_EQ(read(first), "old first");
-  EXPECT_EQ(std::system(("test \"$(ls -A '" + dir.path + "')\" = \"first.json\nsub\"").c_str()), 0)
+  EXPECT_EQ(std::system(("test \"$(ls -A '" + dir.path() + "')\" = \"first.json\nsub\"").c_str()), 0)
       << "backups or temporaries left";
 }
 
 TEST(OutputFiles, AMissingFolderIsFoundBeforeAnyWork) {
-  Folder dir;
+  const test::TempDir dir("hivecal_port_files");
   OutputSet outputs;
   std::size_t id = 0;
-  const Error error = outputs.add_file(dir.path + "/no/such/out.json", "--out", &id);
+  const Error error = outputs.add_file(dir.path() + "/no/such/out.json", "--out", &id);
   EXPECT_EQ(error.fault, Fault::output);
   EXPECT_NE(error.message.find("does not exist"), std::string::npos) << error.message;
 }
@@ -190,16 +179,16 @@ TEST(InputFiles, DevZeroIsRefusedAtOnce) {
 }
 
 TEST(InputFiles, AFifoIsRefusedWithoutBlocking) {
-  Folder dir;
-  const std::string fifo = dir.path + "/fifo";
+  const test::TempDir dir("hivecal_port_files");
+  const std::string fifo = dir.path() + "/fifo";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   InputFile file;
   EXPECT_EQ(file.open(fifo, kMaxStreamInputBytes).fault, Fault::input);
 }
 
 TEST(InputFiles, AFileOverTheLimitIsRefusedBeforeReading) {
-  Folder dir;
-  const std::string path = dir.file("big.json", std::string(2000, ' '));
+  const test::TempDir dir("hivecal_port_files");
+  const std::string path = dir.write("big.json", std::string(2000, ' '));
   InputFile file;
   const Error error = file.open(path, 1000);
   EXPECT_EQ(error.fault, Fault::input);

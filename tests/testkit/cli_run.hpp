@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "testkit/temp_dir.hpp"
+
 namespace hivecal::test {
 
 /// Runs an entry point with the given arguments (after the command name).
@@ -16,10 +18,5 @@ int run(Main entry, std::vector<std::string> args) {
   return entry(static_cast<int>(argv.size()), argv.data());
 }
 
-/// A fresh folder for one test's files (in the working directory).
-inline std::string make_temp_dir(const char* prefix = "hivecal_cmd") {
-  std::string pattern = std::string(prefix) + "_XXXXXX";
-  return ::mkdtemp(pattern.data()) != nullptr ? pattern : std::string();
-}
 
 }  // namespace hivecal::test
