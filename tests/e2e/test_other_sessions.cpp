@@ -18,6 +18,8 @@
 #include "testkit/other_session.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/csv.hpp"
+#include "textio/json.hpp"
+#include "hivecal/port/input_file.hpp"
 #include "textio/text_util.hpp"
 
 namespace hivecal {
@@ -65,6 +67,21 @@ void expect_captures_near_oracle(const test::OtherSessionConfig& config, const c
                                       "--out", dir + "/oracle.json", "--quiet"}),
             cli::kExitOk)
       << label;
+  // Samples kept by the extraction against the speed rule on the truth: all but the points the
+  // tracker itself marks lost or unstable (the oracle keeps every status).
+  std::string text;
+  ASSERT_TRUE(port::read_whole_file(dir + "/captures.json", port::kMaxTextInputBytes, &text).ok());
+  textio::JsonValue root;
+  ASSERT_TRUE(textio::parse_json(text, &root).ok());
+  const textio::JsonValue* extraction = root.find("extraction");
+  ASSERT_NE(extraction, nullptr);
+  const textio::JsonValue* kept = extraction->find("kept");
+  ASSERT_NE(kept, nullptr);
+  const double usable = static_cast<double>(session.oracle.size()) *
+                        (1.0 - config.beam_lost_probability - config.unstable_probability);
+  std::printf("%-40s kept %.0f of the %zu instants the speed rule keeps on the truth (%.0f with a usable status)\n",
+              label, kept->number, session.oracle.size(), usable);
+  EXPECT_GE(kept->number, 0.9 * usable) << label;
   const double captures_m = validation_mae_m(dir + "/captures.json", session);
   const double oracle_m = validation_mae_m(dir + "/oracle.json", session);
   std::printf("%-40s %5.0f s, oracle samples %4zu: validation captures %.2f um, oracle %.2f um, ratio %.3f\n", label,
