@@ -139,6 +139,15 @@ if calibrated cap_again "$sim/robot.cap" "$sim/tracker.cap" && cmp -s "$work/cap
 else
   failed=$((failed + 1)); echo "FAIL: two identical calibrate runs must write byte-identical result files"
 fi
+# And the same bytes on every target (x86-64, aarch64 and armhf run this script): the digest of
+# the result of this simulated session (simulate --seed 5 --waypoints 12 --duration-s 150).
+# Update it only for an intended change of the computation or the format.
+result_sha256=f62acd5b9f13915392326f9d67042b278de9e5610fc7381b70116d6abe60fc55
+if [ "$(sha256sum <"$work/cap.json" | cut -d' ' -f1)" = "$result_sha256" ]; then
+  passed=$((passed + 1))
+else
+  failed=$((failed + 1)); echo "FAIL: result.json differs from the committed digest: $(sha256sum <"$work/cap.json")"
+fi
 # Predict the simulator's noise-free static points from their joints (truth_samples.csv:
 # waypoint,t_tracker,t_robot,q1..q6,x,y,z): the calibration must be far better than nominal.
 { echo "q1,q2,q3,q4,q5,q6"; tail -n +2 "$sim/truth_samples.csv" | cut -d, -f4-9; } >"$work/truth_joints.csv"
