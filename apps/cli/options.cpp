@@ -116,6 +116,27 @@ Error vec3_option(const Options& options, const std::string& name, Vec3* value_m
   return Error{};
 }
 
+std::vector<OptionSpec> input_unit_option_specs() {
+  return {
+      {"length-unit", "m|mm", "unit of lengths (x, y, z) in text inputs whose header names none (default: m)", ""},
+      {"angle-unit", "rad|deg", "unit of joint angles in text inputs whose header names none (default: rad)", ""},
+  };
+}
+
+Error input_units_option(const Options& options, textio::InputUnits* units) {
+  const std::string length = options.get("length-unit");
+  const std::string angle = options.get("angle-unit");
+  if (!length.empty() && length != "m" && length != "mm") {
+    return Error::usage("--length-unit must be 'm' or 'mm', not " + port::quoted(length));
+  }
+  if (!angle.empty() && angle != "rad" && angle != "deg") {
+    return Error::usage("--angle-unit must be 'rad' or 'deg', not " + port::quoted(angle));
+  }
+  units->length = length;
+  units->angle = angle;
+  return Error{};
+}
+
 Error robot_model_option(const Options& options, const std::string& name, RobotType* type) {
   if (robot_type_from_name(options.get(name).c_str(), type) == Status::ok) return Error{};
   return Error::usage("unknown robot model " + port::quoted(options.get(name)) + " (" + std::string(robot_type_names()) + ")");

@@ -9,6 +9,7 @@
 #include "hivecal/core/types.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/error.hpp"
+#include "textio/delimited.hpp"
 
 namespace hivecal::cli {
 
@@ -22,6 +23,7 @@ enum ExitCode : int {
   kExitUsage = static_cast<int>(Fault::usage),       ///< bad command line, or refused paths
   kExitBadInput = static_cast<int>(Fault::input),    ///< an input is missing, not a regular file, or malformed
   kExitOutputError = static_cast<int>(Fault::output),  ///< an output cannot be created or written
+  kExitWarnings = 5,  ///< calibrate: the result is written, but the fit looks implausible (warnings printed)
 };
 
 /// One command-line option.
@@ -65,6 +67,11 @@ bool progress_enabled(const Options& options);
 Error number_option(const Options& options, const std::string& name, double* value);
 /// --<name> as X,Y,Z in metres (e.g. --tool).
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
+/// The options of every command that reads text inputs: --length-unit, --angle-unit.
+std::vector<OptionSpec> input_unit_option_specs();
+/// --length-unit (m|mm) and --angle-unit (rad|deg) into *units ("" when not given: SI unless
+/// a header says otherwise); Fault::usage otherwise.
+Error input_units_option(const Options& options, textio::InputUnits* units);
 /// --<name> as a robot model name (robot_type_names()).
 Error robot_model_option(const Options& options, const std::string& name, RobotType* type);
 

@@ -8,6 +8,7 @@
 #include "cli/options.hpp"
 #include "hivecal/calibration.hpp"
 #include "commands/commands.hpp"
+#include "commands/fit_checks.hpp"
 #include "hivecal/core/trace.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/model/metrics.hpp"
@@ -39,6 +40,8 @@ struct CalibrateSettings {
   double train_fraction = 0.7;       ///< --split
   bool robust = false;               ///< --robust
   bool progress = false;             ///< progress lines on stderr
+  textio::InputUnits units;          ///< --length-unit, --angle-unit of text inputs
+  FitBounds bounds;                  ///< --max-change-mm, --max-change-deg
 };
 
 /// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
@@ -173,8 +176,8 @@ std::vector<std::string> parameter_lines(const CalibrationStage& stage, const Lm
     const bool estimated = lm != nullptr && mask_has(lm->identifiability.kept_mask, k);
     const bool changed = after(k) != before(k);
     if (!estimated && !changed) continue;
-    const bool angle = k < kDhParamCount && (k % kParamsPerJoint == 0 || k % kParamsPerJoint == 3);
-    const double scale = angle ? 1e3 : 1e3;
+    const bool angle = model_param_is_angle(k);
+    const double scale = 1e3;  // mm or mrad
     std::snprintf(buf, sizeof buf, "%-8s %+.9f %s  (change %+.4f %s%s)", full_param_name(k), after(k),
                   angle ? "rad" : "m", (after(k) - before(k)) * scale, angle ? "mrad" : "mm",
                   estimated ? (", sigma " + std::to_string(lm->sigma(k) * scale) + (angle ? " mrad" : " mm")).c_str()
@@ -245,7 +248,8 @@ void write_ur_deltas(textio::JsonWriter& json, const UrCalibrationDeltas& deltas
 }
 
 const std::vector<OptionSpec>& option_specs() {
-  static const std::vector<OptionSpec> specs = {
+  static const std::vector<OptionSpec> specs = [] {
+    std::vector<OptionSpec> list = {
       {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
       {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
       {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
@@ -261,8 +265,13 @@ const std::vector<OptionSpec>& option_specs() {
       {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
       {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
       {"report", "DIR", "write an HTML report with figures into DIR", ""},
+      {"max-change-mm", "X", "warn (exit 5) when a length moves more than this from the start geometry [mm]", "20"},
+      {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
       {"quiet", "", "no progress on stderr", ""},
-  };
+    };
+    for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
+    return list;
+  }();
   return specs;
 }
 
@@ -298,6 +307,18 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   if (streams && (options.get("robot").empty() || options.get("tracker").empty())) {
     return Error::usage("--robot and --tracker go together");
   }
+  error = input_units_option(options, &settings->units);
+  if (!error.ok()) return error;
+  double max_mm = 0.0;
+  double max_deg = 0.0;
+  error = number_option(options, "max-change-mm", &max_mm);
+  if (error.ok()) error = number_option(options, "max-change-deg", &max_deg);
+  if (!error.ok()) return error;
+  if (!(max_mm > 0.0 && max_mm < 1e9) || !(max_deg > 0.0 && max_deg <= 360.0)) {
+    return Error::usage("--max-change-mm must be positive and --max-change-deg in (0, 360]");
+  }
+  settings->bounds.max_length_change_m = max_mm * 1e-3;
+  settings->bounds.max_angle_change_rad = max_deg * 0.017453292519943295;
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
   return Error{};
@@ -331,7 +352,11 @@ Error start_geometry(const Options& options, const CalibrateSettings& settings, 
   start->tool_m = settings.tool_m;
   if (options.get("ur-calibration").empty()) return Error{};
   UrCalibrationDeltas deltas;
-  const port::Error r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
+  port::Error r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
+  if (r.ok()) {
+    r = textio::check_ur_deltas_plausible(nominal_model(settings.robot), deltas, options.get("ur-calibration"),
+                                          robot_type_name(settings.robot));
+  }
   if (!r.ok()) return r;
   (void)apply_ur_deltas(nominal_model(settings.robot), deltas, start);
   start->tool_m = settings.tool_m;
@@ -345,6 +370,7 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   config.speed_model = nominal_model(settings.robot);
   config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
   config.progress = settings.progress;
+  config.log_options.units = settings.units;
   Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (!error.ok()) return error;
   error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
@@ -450,8 +476,9 @@ void print_tables(std::FILE* out, const report::ReportData& data, const Run& run
   for (const std::string& line : data.parameter_lines) std::fprintf(out, "  %s\n", line.c_str());
 }
 
+/// `warnings`: the fit's plausibility warnings, a "warnings" array when there are any.
 std::string result_json(const CalibrateSettings& settings, const report::ReportData& data,
-                        const streams::SessionFacts& facts, const Run& run) {
+                        const streams::SessionFacts& facts, const Run& run, const std::vector<std::string>& warnings) {
   const CalibrationStage& final_stage = run.final_stage();
   textio::CalibrationFile file;
   file.robot = settings.robot;
@@ -475,6 +502,10 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     if (run.final_lm() != nullptr) write_lm_details(w, *run.final_lm());
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
+    if (warnings.empty()) return;
+    w.key("warnings").begin_array();
+    for (const std::string& warning : warnings) w.value(warning);
+    w.end_array();
   });
 }
 
@@ -482,10 +513,10 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
 
 /// Stages every output, then commits them together: all or nothing.
 Error write_outputs(const Options& options, const CalibrateSettings& settings, const report::ReportData& data,
-                    const streams::SessionFacts& facts, const Run& run, port::OutputSet* outputs,
-                    const OutputIds& ids) {
+                    const streams::SessionFacts& facts, const Run& run, const std::vector<std::string>& warnings,
+                    port::OutputSet* outputs, const OutputIds& ids) {
   const CalibrationStage& final_stage = run.final_stage();
-  Error error = outputs->stage_text(ids.result, "", result_json(settings, data, facts, run));
+  Error error = outputs->stage_text(ids.result, "", result_json(settings, data, facts, run, warnings));
   if (error.ok() && !options.get("ur-deltas").empty()) {
     const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
     error = outputs->stage_text(ids.ur_deltas, "", textio::format_ur_calibration_conf(deltas));
@@ -496,7 +527,9 @@ Error write_outputs(const Options& options, const CalibrateSettings& settings, c
   return error.ok() ? outputs->commit() : error;
 }
 
-Error calibrate(const Options& options) {
+/// `*warnings`: the fit's plausibility warnings (fit_checks.hpp), printed on stderr; the
+/// outputs are written all the same.
+Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   CalibrateSettings settings;
   Error error = settings_from_options(options, &settings);
   port::OutputSet outputs;
@@ -516,11 +549,13 @@ Error calibrate(const Options& options) {
   const bool result_on_stdout = options.get("out") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   print_tables(terminal, data, job);
-  error = write_outputs(options, settings, data, facts, job, &outputs, ids);
+  *warnings = fit_warnings(job.result, settings.bounds);
+  error = write_outputs(options, settings, data, facts, job, *warnings, &outputs, ids);
   if (!error.ok()) return error;
   if (!result_on_stdout) std::fprintf(terminal, "\nresult: %s\n", options.get("out").c_str());
   if (!options.get("ur-deltas").empty()) std::fprintf(terminal, "UR deltas: %s\n", options.get("ur-deltas").c_str());
   if (!options.get("report").empty()) std::fprintf(terminal, "report: %s/index.html\n", options.get("report").c_str());
+  for (const std::string& warning : *warnings) cli::error(kCommand, "warning: " + warning);
   return Error{};
 }
 
@@ -533,7 +568,9 @@ int calibrate_main(int argc, char** argv) {
                                    "measurements, prints the paper-style tables and writes the result.",
                                    option_specs(), argc, argv, &options);
   if (parsed >= 0) return parsed;
-  return exit_with(kCommand, calibrate(options));
+  std::vector<std::string> warnings;
+  const int code = exit_with(kCommand, calibrate(options, &warnings));
+  return code == kExitOk && !warnings.empty() ? kExitWarnings : code;
 }
 
 }  // namespace hivecal::cli

@@ -35,7 +35,10 @@ Error predict(const Options& options) {
   port::Error r = textio::read_calibration_json(options.get("calibration"), &calibration);
   if (!r.ok()) return r;
   std::vector<JointVector> poses;
-  r = textio::read_joints_csv(options.get("joints"), &poses);
+  textio::InputUnits units;
+  error = input_units_option(options, &units);
+  if (!error.ok()) return error;
+  r = textio::read_joints_csv(options.get("joints"), &poses, units);
   if (!r.ok()) return r;
   // run
   std::vector<Vec3> points;
@@ -52,12 +55,13 @@ Error predict(const Options& options) {
 }  // namespace
 
 int predict_main(int argc, char** argv) {
-  const std::vector<OptionSpec> specs = {
+  std::vector<OptionSpec> specs = {
       {"calibration", "FILE", "calibration result (robot-calibration/1 JSON)", ""},
       {"joints", "FILE", "poses to predict: CSV q1..q6 [rad], optional leading t column ('-': stdin)", ""},
       {"frame", "tracker|base", "frame of the predicted positions", "tracker"},
       {"out", "FILE", "predicted positions x,y,z [m] (CSV); '-' for stdout", "-"},
   };
+  specs.push_back(input_unit_option_specs()[1]);  // --angle-unit: the poses are joints only
   Options options;
   const int parsed = parse_options(kCommand,
                                    "Predicts the tool position of each joint pose with a calibrated model:\n"

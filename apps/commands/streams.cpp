@@ -179,6 +179,7 @@ Error extract(const cli::Options& options) {
   config.max_speed_m_s = max_speed_mm_s * 1e-3;
   config.window_s = window_s;
   error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
+  if (error.ok()) error = cli::input_units_option(options, &config.log_options.units);
   if (!error.ok()) return error;
   const auto dataset = std::make_unique<Dataset<65536>>();
   SessionFacts facts;
@@ -224,7 +225,7 @@ int record_main(int argc, char** argv) {
 
 int extract_main(int argc, char** argv) {
   const std::string command = "extract";
-  const std::vector<cli::OptionSpec> specs = {
+  std::vector<cli::OptionSpec> specs = {
       {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
       {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
       {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
@@ -234,6 +235,7 @@ int extract_main(int argc, char** argv) {
       {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
       {"samples", "FILE", "write the paired samples q1..q6,x,y,z (CSV) here; '-' for stdout; empty: none", ""},
   };
+  for (const cli::OptionSpec& spec : cli::input_unit_option_specs()) specs.push_back(spec);
   cli::Options options;
   const int parsed = cli::parse_options(
       command,

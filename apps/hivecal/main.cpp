@@ -32,7 +32,8 @@ void print_usage(std::FILE* out) {
   for (const Command& c : kCommands) std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
   std::fprintf(out,
                "\nexit codes (every command, docs/cli.md): 0 ok, 1 computation failed,\n"
-               "  2 bad command line or refused paths, 3 bad input, 4 output could not be written\n");
+               "  2 bad command line or refused paths, 3 bad input, 4 output could not be written,\n"
+               "  5 calibrated with warnings (result written; see the warnings on stderr)\n");
 }
 
 }  // namespace

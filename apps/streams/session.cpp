@@ -134,7 +134,7 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
     facts->info_lines.push_back("input: robot " + sources.robot + ", tracker " + sources.tracker);
     return load_streams(sources, config, dataset, facts);
   }
-  const port::Error r = textio::read_samples_csv(sources.samples, dataset);
+  const port::Error r = textio::read_samples_csv(sources.samples, dataset, config.log_options.units);
   if (!r.ok()) return r;
   facts->info_lines.push_back("input: " + sources.samples + " (" + std::to_string(dataset->size()) +
                               " paired samples)");

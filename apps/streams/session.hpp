@@ -30,7 +30,7 @@ struct SessionConfig {
   double max_speed_m_s = 0.0;       ///< quasi-static threshold [m/s]; 0: the library default
   double window_s = 0.0;            ///< optional stability window [s]; 0: none (the paper's rule at the instant)
   bool progress = false;            ///< "[decode] pass i/2" lines on stderr
-  textio::RobotLogOptions log_options;  ///< joint names of ROS robot logs (UR driver names by default)
+  textio::RobotLogOptions log_options;  ///< joint names of ROS robot logs (UR driver names by default), units of text inputs
 };
 
 /// The --joint-names value (six comma-separated names, or "" for the UR driver names) into

@@ -133,7 +133,7 @@ std::unique_ptr<LogRecordReader> open_log_records(LogKind kind, const std::strin
   if (kind == LogKind::robot) {
     return std::make_unique<LogRecordReader>(std::make_shared<const textio::RobotLog>(textio::read_robot_log(path, options)));
   }
-  return std::make_unique<LogRecordReader>(std::make_shared<const textio::TrackerLog>(textio::read_tracker_log(path)));
+  return std::make_unique<LogRecordReader>(std::make_shared<const textio::TrackerLog>(textio::read_tracker_log(path, options.units)));
 }
 
 namespace {

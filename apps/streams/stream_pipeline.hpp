@@ -93,7 +93,8 @@ class LogRecordReader final : public LogRecords {
 };
 
 /// The one place a log file becomes records: any tool's log (textio::read_robot_log /
-/// read_tracker_log, chosen by content), read once, whole.
+/// read_tracker_log, chosen by content), read once, whole. `options.units` apply to the
+/// columns without a bracket unit of either kind of log.
 std::unique_ptr<LogRecordReader> open_log_records(LogKind kind, const std::string& path,
                                                   const textio::RobotLogOptions& options = {});
 
@@ -131,7 +132,8 @@ struct CaptureRunReport {
 /// content, so the two may differ; a log is read once, whole, and replayed to both passes).
 /// Fault::input when a file cannot be read or parsed, or when a capture holds only the other
 /// stream's frames (swapped inputs); a failed clock fit is reported in *report (no
-/// extraction then). `log_options`: how to read a robot log (joint names of ROS logs).
+/// extraction then). `log_options`: how to read the logs (joint names of ROS logs, units of
+/// columns without a bracket unit).
 port::Error extract_from_files(const std::string& robot_path, const std::string& tracker_path,
                         const ClockSyncConfig& clock_config, const ExtractionConfig& extraction_config,
                         DatasetBase* dataset, CaptureRunReport* report,

@@ -16,6 +16,7 @@ namespace {
 /// (ignored); further columns after them are ignored.
 struct CsvSchema {
   std::vector<std::string> columns;  ///< required column names, lower case
+  std::vector<Quantity> quantities;  ///< what each measures (its units; joints and points are checked)
   std::string optional_leading;      ///< a column that may come first (ignored), or ""
 };
 
@@ -28,11 +29,12 @@ std::string join(const std::vector<std::string>& names) {
 /// Reads the whole file (through the one delimited-text reader, delimited.hpp) into
 /// `on_row`, given the values of the schema's columns in order; on_row may reject a row by
 /// returning an error text. Every error names the file and line.
-port::Error read_csv(const std::string& path, const CsvSchema& schema,
+port::Error read_csv(const std::string& path, const CsvSchema& schema, const InputUnits& units,
                      const std::function<std::string(const std::vector<double>&)>& on_row) {
   const std::string expected =
       (schema.optional_leading.empty() ? "" : "[" + schema.optional_leading + ",]") + join(schema.columns);
   DelimitedReader r;
+  r.set_units(units);
   if (!r.open(path, port::kMaxTextInputBytes)) return port::Error::input(r.error());
   if (!r.read_header()) return port::Error::input(r.error() + " (expected header " + expected + ")");
   const std::vector<Column>& header = r.columns();
@@ -40,15 +42,28 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema,
       (!schema.optional_leading.empty() && !header.empty() && header[0].name == schema.optional_leading) ? 1 : 0;
   bool match = header.size() >= offset + schema.columns.size();
   for (std::size_t i = 0; match && i < schema.columns.size(); ++i) {
-    match = header[offset + i].name == schema.columns[i] && header[offset + i].unit.empty();
+    match = header[offset + i].name == schema.columns[i];
   }
   if (!match) return port::Error::input(r.where() + "unexpected header " + port::quoted(r.header_line()) + ", expected " + expected);
+  std::vector<double> scales(schema.columns.size());
+  std::vector<std::size_t> lengths;  // the x, y, z columns, when the schema has them
+  for (std::size_t i = 0; i < scales.size(); ++i) {
+    if (!r.column_scale(offset + i, schema.quantities[i], &scales[i])) return port::Error::input(r.error());
+    if (schema.quantities[i] == Quantity::length) lengths.push_back(offset + i);
+  }
   std::vector<double> values(schema.columns.size());
   std::size_t rows = 0;
   while (r.next_row()) {
     ++rows;
+    int joint = 0;
     for (std::size_t i = 0; i < values.size(); ++i) {
-      if (!r.number(offset + i, 1.0, &values[i])) return port::Error::input(r.error());
+      if (!r.number(offset + i, scales[i], &values[i])) return port::Error::input(r.error());
+      if (schema.quantities[i] == Quantity::angle && !r.check_joint(++joint, offset + i, values[i])) {
+        return port::Error::input(r.error());
+      }
+    }
+    if (lengths.size() == 3 && !r.check_point(lengths.data(), &values[lengths[0] - offset])) {
+      return port::Error::input(r.error());
     }
     const std::string rejection = on_row(values);
     if (!rejection.empty()) {
@@ -70,15 +85,20 @@ std::string check_finite(const std::vector<double>& values, std::size_t first, s
 
 const std::vector<std::string> kJointColumns = {"q1", "q2", "q3", "q4", "q5", "q6"};
 
-std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
+template <typename T>
+std::vector<T> with(std::vector<T> a, const std::vector<T>& b) {
   a.insert(a.end(), b.begin(), b.end());
   return a;
 }
 
+const std::vector<Quantity> kJointQuantities(kJointCount, Quantity::angle);
+
 }  // namespace
 
-port::Error read_samples_csv(const std::string& path, DatasetBase* dataset) {
-  return read_csv(path, CsvSchema{with(kJointColumns, {"x", "y", "z"}), ""}, [&](const std::vector<double>& values) {
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units) {
+  const CsvSchema schema{with(kJointColumns, {"x", "y", "z"}),
+                         with(kJointQuantities, {Quantity::length, Quantity::length, Quantity::length}), ""};
+  return read_csv(path, schema, units, [&](const std::vector<double>& values) {
     const std::string error = check_finite(values, 0, 9);
     if (!error.empty()) return error;
     JointVector q;
@@ -91,8 +111,8 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset) {
   });
 }
 
-port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses) {
-  return read_csv(path, CsvSchema{kJointColumns, "t"}, [&](const std::vector<double>& values) {
+port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units) {
+  return read_csv(path, CsvSchema{kJointColumns, kJointQuantities, "t"}, units, [&](const std::vector<double>& values) {
     const std::string error = check_finite(values, 0, 6);
     if (!error.empty()) return error;
     JointVector q;

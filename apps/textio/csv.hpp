@@ -11,13 +11,16 @@
 #include "hivecal/core/types.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/port/error.hpp"
+#include "textio/delimited.hpp"
 
 namespace hivecal::textio {
 
-/// Reads paired static samples (`q1..q6,x,y,z`) into a dataset; reports a full dataset as an error.
-port::Error read_samples_csv(const std::string& path, DatasetBase* dataset);
-/// Reads poses to predict (`q1..q6`, optionally preceded by `t`).
-port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses);
+/// Reads paired static samples (`q1..q6,x,y,z`) into a dataset; reports a full dataset as an
+/// error. Columns without a bracket unit are in `units` (SI when not declared); joints beyond
+/// one turn and points beyond 100 m are refused with the likely cause (delimited.hpp).
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units = {});
+/// Reads poses to predict (`q1..q6`, optionally preceded by `t`), units and checks as above.
+port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units = {});
 
 /// `x,y,z` rows with round-trip precision.
 std::string format_points_csv(const std::vector<Vec3>& points_m);

@@ -1,6 +1,8 @@
 #include "textio/delimited.hpp"
 
 #include <charconv>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include "hivecal/port/error.hpp"
@@ -255,6 +257,61 @@ bool DelimitedReader::number(std::size_t index, double scale, double* value) {
     }
   }
   return fail("column " + column + ": not a number: " + port::quoted(fields_[index]));
+}
+
+bool DelimitedReader::unit_assumed(std::size_t index, Quantity quantity) const {
+  const std::string& declared = quantity == Quantity::length ? units_.length : units_.angle;
+  return columns_[index].unit.empty() && (quantity == Quantity::time || declared.empty());
+}
+
+bool DelimitedReader::column_scale(std::size_t index, Quantity quantity, double* scale) {
+  static const char* const kAccepted[] = {"[m], [mm], [um]", "[rad], [deg]", "[s], [ms], [us], [ns]"};
+  static const char* const kOption[] = {"--length-unit", "--angle-unit", ""};
+  const Column& c = columns_[index];
+  const int q = static_cast<int>(quantity);
+  const std::string none;
+  const std::string& declared = quantity == Quantity::length ? units_.length
+                                : quantity == Quantity::angle ? units_.angle
+                                                              : none;
+  if (!si_scale(c.unit, quantity, scale)) {
+    return fail("column " + port::quoted(c.name, 32) + ": unit " + port::quoted("[" + c.unit + "]", 16) +
+                " is not one of " + kAccepted[q]);
+  }
+  if (c.unit.empty()) {
+    if (si_scale(declared, quantity, scale)) return true;
+    return fail(std::string(kOption[q]) + " " + port::quoted(declared, 16) + " is not one of " + kAccepted[q]);
+  }
+  if (!declared.empty() && declared != c.unit) {
+    return fail("column " + port::quoted(c.name, 32) + " is in [" + c.unit + "] by its header, but " + kOption[q] + " " +
+                declared + " was given: the header unit and the option disagree");
+  }
+  return true;
+}
+
+bool DelimitedReader::check_joint(int joint, std::size_t index, double q_rad) {
+  if (!std::isfinite(q_rad) || std::fabs(q_rad) <= kMaxJointMagnitude_rad) return true;  // NaN: the caller's message
+  const std::string name = "q" + std::to_string(joint);
+  const std::string& column = columns_[index].name;
+  std::string what = "joint " + name + (column == name ? "" : " (column " + port::quoted(column, 32) + ")") + " = " +
+                     port::printable(fields_[index], 40);
+  if (unit_assumed(index, Quantity::angle)) return fail(what + " looks like degrees: use --angle-unit deg (joints are read in rad without it)");
+  return fail(what + " is more than one turn (|q| > 2 pi rad) in the unit " +
+              (columns_[index].unit.empty() ? "of --angle-unit" : "of its header") + ": not a joint position");
+}
+
+bool DelimitedReader::check_point(const std::size_t index[3], const double point_m[3]) {
+  const double distance_m = std::sqrt(point_m[0] * point_m[0] + point_m[1] * point_m[1] + point_m[2] * point_m[2]);
+  if (!std::isfinite(distance_m) || distance_m <= kMaxPointDistance_m) return true;  // NaN: the caller's message
+  char far[64];
+  std::snprintf(far, sizeof far, " is %.4g m from the origin (more than %.0f m)", distance_m, kMaxPointDistance_m);
+  std::string what = "point " + columns_[index[0]].name + "," + columns_[index[1]].name + "," + columns_[index[2]].name +
+                     " = " + port::printable(fields_[index[0]], 24) + ", " + port::printable(fields_[index[1]], 24) + ", " +
+                     port::printable(fields_[index[2]], 24) + far;
+  bool assumed = true;
+  for (int k = 0; k < 3; ++k) assumed = assumed && unit_assumed(index[k], Quantity::length);
+  if (assumed) return fail(what + ": looks like millimetres: use --length-unit mm (lengths are read in m without it)");
+  return fail(what + " in the unit of its " + (columns_[index[0]].unit.empty() ? "--length-unit" : "header") +
+              ": not a measured point");
 }
 
 bool DelimitedReader::whole_number(std::size_t index, std::uint64_t* value) const {

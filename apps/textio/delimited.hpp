@@ -4,7 +4,10 @@
 // Bounded: a line is at most kMaxLineBytes, read through a fixed buffer, whatever the file
 // length. Refused with file:line: binary bytes (NUL, control bytes), over-long lines, comma
 // decimal separators, rows whose field count differs from the header's. Messages quote the
-// file's text through port::quoted() (control bytes escaped, long text cut).
+// file's text through port::quoted() (control bytes escaped, long text cut). The units the
+// user declares for columns without a bracket unit (--length-unit, --angle-unit) and the
+// plausibility of joints and points read (degrees or millimetres taken for SI) are checked
+// here too, for every text input.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +29,19 @@ enum class Quantity { length, angle, time };
 /// column: m, mm, um / rad, deg / s, ms, us, ns; "" is the SI unit itself. False when the
 /// unit is not one of those of its quantity.
 bool si_scale(std::string_view unit, Quantity quantity, double* scale);
+
+/// Units the user declared for text columns whose header gives none (--length-unit,
+/// --angle-unit); "" for not declared: the format's SI unit. A bracket unit in a header
+/// wins; a declared unit that differs from it is an error.
+struct InputUnits {
+  std::string length;  ///< "m", "mm" or "" (lengths: x, y, z)
+  std::string angle;   ///< "rad", "deg" or "" (joints)
+};
+
+/// Largest |joint| read as plausible: one turn either way [rad].
+constexpr double kMaxJointMagnitude_rad = 6.283185307179586;
+/// Farthest point from the tracker (or base) origin read as plausible [m].
+constexpr double kMaxPointDistance_m = 100.0;
 
 /// Lines of a text file or of text in memory, without their end (\n, \r\n). A UTF-8 BOM
 /// on line 1 is skipped. Stops with error() set at a binary byte, a line over
@@ -88,6 +104,20 @@ class DelimitedReader {
   }
   /// Reads `text` in memory (it must outlive the reader); `name` stands for it in messages.
   void open_memory(std::string_view text, std::string name) { lines_.open_memory(text, std::move(name)); }
+  /// Units for columns without a bracket unit (default: SI); set before column_scale().
+  void set_units(const InputUnits& units) { units_ = units; }
+  /// Factor to SI of column `index` measuring `quantity`: its bracket unit, else the declared
+  /// one (set_units), else 1. False with error() set for a unit of another quantity, an
+  /// unknown one, or a bracket unit that differs from the declared one.
+  bool column_scale(std::size_t index, Quantity quantity, double* scale);
+  /// Checks joint `joint` (1-based), read from field `index` as `q_rad`: false with error()
+  /// set ("joint q3 = 95.2 looks like degrees: use --angle-unit deg") beyond
+  /// kMaxJointMagnitude_rad; true for NaN/Inf (refused by the caller with its own message).
+  bool check_joint(int joint, std::size_t index, double q_rad);
+  /// Checks a point read from fields `index[0..2]` as `point_m`: false with error() set
+  /// ("... looks like millimetres: use --length-unit mm") beyond kMaxPointDistance_m; true
+  /// for NaN/Inf (the caller's to refuse: a lost beam may carry NaN).
+  bool check_point(const std::size_t index[3], const double point_m[3]);
   /// Reads the header (first non-blank line): delimiter and columns. False with error() set
   /// for an empty file or a binary one.
   bool read_header();
@@ -116,7 +146,11 @@ class DelimitedReader {
  private:
   bool split(std::string_view line);
 
+  /// True when column `index` was read in SI because neither its header nor the user named a unit.
+  bool unit_assumed(std::size_t index, Quantity quantity) const;
+
   LineReader lines_;
+  InputUnits units_;
   Delimiter delimiter_ = Delimiter::comma;
   std::vector<Column> columns_;
   std::string header_;

@@ -54,12 +54,7 @@ bool looks_like_robot(const DelimitedReader& r) {
 
 /// Factor of column `index` to SI for `quantity`; false with the reader's error set.
 bool scale_of(DelimitedReader& r, int index, Quantity quantity, double* scale) {
-  const Column& c = r.columns()[static_cast<std::size_t>(index)];
-  if (si_scale(c.unit, quantity, scale)) return true;
-  static const char* const kAccepted[] = {"[m], [mm], [um]", "[rad], [deg]", "[s], [ms], [us], [ns]"};
-  r.fail("column " + port::quoted(c.name, 32) + ": unit " + port::quoted("[" + c.unit + "]", 16) + " is not one of " +
-         kAccepted[static_cast<int>(quantity)]);
-  return false;
+  return r.column_scale(static_cast<std::size_t>(index), quantity, scale);
 }
 
 /// The time column: field -> whole microseconds, checked to increase.
@@ -164,6 +159,7 @@ bool robot_layout(DelimitedReader& r, LogFormat* format, RobotLayout* layout) {
 /// Reads the rows of an opened robot log.
 RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
   RobotLog log;
+  r.set_units(options.units);
   RobotLayout layout;
   std::string first_names;  // rostopic: the names of the first row, for a message
   bool good = r.read_header() && robot_layout(r, &log.format, &layout);
@@ -171,7 +167,7 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
   while (good && r.next_row()) {
     ++log.counters.rows;
     JointStateRecord record;
-    int source[kJointCount];  // rostopic: which field.positionK holds joint j
+    int source[kJointCount] = {};  // rostopic: which field.positionK holds joint j
     if (!layout.names.empty()) {
       names.clear();
       for (const int k : layout.names) names.push_back(r.fields()[static_cast<std::size_t>(k)]);
@@ -193,6 +189,8 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
     }
     for (int j = 0; good && j < kJointCount; ++j) {
       if (!std::isfinite(record.q_rad[j])) good = r.fail("joint " + std::to_string(j + 1) + ": NaN or Inf");
+      const int column = layout.names.empty() ? layout.q[j] : layout.positions[static_cast<std::size_t>(source[j])];
+      good = good && r.check_joint(j + 1, static_cast<std::size_t>(column), record.q_rad[j]);
     }
     if (!good) break;
     if (repeated) {
@@ -265,11 +263,14 @@ bool tracker_point(DelimitedReader& r, const TrackerLayout& layout, TrackerPoint
   for (const double c : record->point_m) {
     if (!std::isfinite(c)) return r.fail("NaN or Inf in x, y or z of a valid point");
   }
-  return true;
+  const std::size_t xyz[3] = {static_cast<std::size_t>(layout.xyz[0]), static_cast<std::size_t>(layout.xyz[1]),
+                              static_cast<std::size_t>(layout.xyz[2])};
+  return r.check_point(xyz, record->point_m);
 }
 
-TrackerLog read_tracker_rows(DelimitedReader& r) {
+TrackerLog read_tracker_rows(DelimitedReader& r, const InputUnits& units) {
   TrackerLog log;
+  r.set_units(units);
   TrackerLayout layout;
   bool good = r.read_header() && tracker_layout(r, &log.format, &layout);
   while (good && r.next_row()) {
@@ -388,7 +389,7 @@ RobotLog read_robot_log(const std::string& path, const RobotLogOptions& options)
   return read_robot_rows(r, options);
 }
 
-TrackerLog read_tracker_log(const std::string& path) {
+TrackerLog read_tracker_log(const std::string& path, const InputUnits& units) {
   switch (detect_stream_file(path)) {
     case StreamFileKind::ros2_bag:
       return failed<TrackerLog>(path + ": a ROS 2 bag (robot joints), not a tracker log: --robot and --tracker swapped?");
@@ -398,7 +399,7 @@ TrackerLog read_tracker_log(const std::string& path) {
   }
   DelimitedReader r;
   if (!r.open(path)) return failed<TrackerLog>(r.error());
-  return read_tracker_rows(r);
+  return read_tracker_rows(r, units);
 }
 
 RobotLog parse_robot_log(std::string_view text, const std::string& name, const RobotLogOptions& options) {
@@ -407,10 +408,10 @@ RobotLog parse_robot_log(std::string_view text, const std::string& name, const R
   return read_robot_rows(r, options);
 }
 
-TrackerLog parse_tracker_log(std::string_view text, const std::string& name) {
+TrackerLog parse_tracker_log(std::string_view text, const std::string& name, const InputUnits& units) {
   DelimitedReader r;
   r.open_memory(text, name);
-  return read_tracker_rows(r);
+  return read_tracker_rows(r, units);
 }
 
 }  // namespace hivecal::textio

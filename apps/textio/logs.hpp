@@ -5,8 +5,10 @@
 //            `target_q`); ROS 1 `rostopic echo -p /joint_states` (`field.header.stamp` [ns],
 //            joints mapped by `field.nameK`); a ROS 2 bag folder (ros2_bag.hpp);
 //   tracker: hivecal `t,x,y,z[,status]`; exports with a time column and X, Y, Z in any unit.
-// Any delimiter and column order (delimited.hpp); units in brackets become SI; times become
-// whole microseconds and must increase.
+// Any delimiter and column order (delimited.hpp); units in brackets become SI, columns
+// without one are in the declared InputUnits (SI by default); joints beyond one turn and
+// points beyond 100 m are refused with the likely cause; times become whole microseconds and
+// must increase.
 #pragma once
 
 #include <array>
@@ -16,6 +18,7 @@
 #include <vector>
 
 #include "hivecal/wire/records.hpp"
+#include "textio/delimited.hpp"
 
 namespace hivecal::textio {
 
@@ -40,6 +43,8 @@ inline const std::array<std::string, kJointCount> kUrJointNames = {
 struct RobotLogOptions {
   /// Names of joints 1..6 in ROS logs (`field.nameK`, bag `name`), in the robot's order.
   std::array<std::string, kJointCount> joint_names = kUrJointNames;
+  /// Units of joint columns without a bracket unit (--angle-unit); a bag's are rad by definition.
+  InputUnits units;
 };
 
 /// Six comma-separated joint names into options->joint_names; false (options unchanged)
@@ -74,12 +79,12 @@ using TrackerLog = LogRead<TrackerPointRecord>;  ///< a tracker log's points
 
 /// Reads a robot log: a text file of any robot format above, or a ROS 2 bag (folder or .db3).
 RobotLog read_robot_log(const std::string& path, const RobotLogOptions& options = {});
-/// Reads a tracker log (text).
-TrackerLog read_tracker_log(const std::string& path);
+/// Reads a tracker log (text); columns without a bracket unit are in `units`.
+TrackerLog read_tracker_log(const std::string& path, const InputUnits& units = {});
 /// Reads a robot log from text in memory; `name` stands for the file in messages.
 RobotLog parse_robot_log(std::string_view text, const std::string& name, const RobotLogOptions& options = {});
 /// Reads a tracker log from text in memory; `name` stands for the file in messages.
-TrackerLog parse_tracker_log(std::string_view text, const std::string& name);
+TrackerLog parse_tracker_log(std::string_view text, const std::string& name, const InputUnits& units = {});
 
 /// What a --robot/--tracker path is.
 enum class StreamFileKind {

@@ -189,6 +189,10 @@ class BagFile {
       for (int j = 0; j < kJointCount; ++j) {
         record.q_rad[j] = message.positions_rad[static_cast<std::size_t>(source[j])];
         if (!std::isfinite(record.q_rad[j])) return fail_message(log, "joint " + std::to_string(j + 1) + ": NaN or Inf");
+        if (std::fabs(record.q_rad[j]) > kMaxJointMagnitude_rad) {
+          return fail_message(log, "joint q" + std::to_string(j + 1) + " = " + format_double(record.q_rad[j]) +
+                                       " rad is more than one turn: not a joint position (JointState is in rad)");
+        }
       }
       if (repeated) {
         ++log->counters.repeated_time;
@@ -252,6 +256,11 @@ class BagFile {
 RobotLog read_ros2_bag_joint_states(const std::string& path, const RobotLogOptions& options) {
   RobotLog log;
   log.format = LogFormat::ros2_bag;
+  if (!options.units.angle.empty() && options.units.angle != "rad") {
+    log.error = path + ": a ROS 2 bag's joint positions are in rad (sensor_msgs/JointState): --angle-unit " +
+                options.units.angle + " does not apply";
+    return log;
+  }
   std::vector<std::string> files;
   if (!bag_files(path, &files, &log.error)) return log;
   log.error.clear();

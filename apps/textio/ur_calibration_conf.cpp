@@ -1,8 +1,11 @@
 #include "textio/ur_calibration_conf.hpp"
 
+#include <cstdio>
+#include <limits>
 #include <string_view>
 
 #include "hivecal/core/math.hpp"
+#include "hivecal/core/random.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/text_util.hpp"
 
@@ -91,6 +94,32 @@ port::Error read_ur_calibration_conf(const std::string& path, UrCalibrationDelta
   const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
   if (!read.ok()) return read;
   return parse_ur_calibration_conf(text, path, deltas);
+}
+
+double ur_deltas_tool_shift_m(const RobotModel& nominal, const UrCalibrationDeltas& deltas) {
+  RobotModel calibrated = nominal;
+  if (apply_ur_deltas(nominal, deltas, &calibrated) != Status::ok) return std::numeric_limits<double>::infinity();
+  Random random(20260);  // fixed poses: the same verdict on every run
+  double worst_m = 0.0;
+  for (int i = 0; i < kUrDeltaTestPoses; ++i) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-math::kPi, math::kPi);
+    const double shift_m = (fk_tool_point(calibrated, q) - fk_tool_point(nominal, q)).norm();
+    worst_m = shift_m > worst_m || !math::is_finite(shift_m) ? shift_m : worst_m;
+  }
+  return worst_m;
+}
+
+port::Error check_ur_deltas_plausible(const RobotModel& nominal, const UrCalibrationDeltas& deltas,
+                                      const std::string& source_name, const std::string& model_name) {
+  const double shift_m = ur_deltas_tool_shift_m(nominal, deltas);
+  if (shift_m <= kMaxUrDeltaToolShift_m) return port::Error{};
+  char text[200];
+  std::snprintf(text, sizeof text,
+                ": its deltas move the tool of the nominal %s by up to %.1f mm over %d test poses (a controller "
+                "calibration corrects a few mm; limit %.0f mm): not a calibration of this robot model?",
+                model_name.c_str(), shift_m * 1e3, kUrDeltaTestPoses, kMaxUrDeltaToolShift_m * 1e3);
+  return port::Error::input(source_name + text);
 }
 
 std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas) {

@@ -17,6 +17,22 @@ port::Error parse_ur_calibration_conf(const std::string& text, const std::string
 /// Reads and parses a calibration.conf file.
 port::Error read_ur_calibration_conf(const std::string& path, UrCalibrationDeltas* deltas);
 
+/// Largest tool displacement a calibration.conf may cause against the nominal model [m]: a
+/// controller calibration corrects millimetres; more is another arm's file (or a broken one).
+constexpr double kMaxUrDeltaToolShift_m = 0.05;
+/// Test poses over which the displacement is measured (seeded, joints uniform in +-pi).
+constexpr int kUrDeltaTestPoses = 64;
+
+/// Largest distance between the tool point of `nominal` and of `nominal` + `deltas` over the
+/// test poses [m] (both with nominal's tool; FK in double: UR deltas cancel by metres).
+double ur_deltas_tool_shift_m(const RobotModel& nominal, const UrCalibrationDeltas& deltas);
+
+/// Fault::input naming `source_name` when the deltas move the tool by more than
+/// kMaxUrDeltaToolShift_m ("not a calibration of this robot model?"); `model_name` is named
+/// in the message.
+port::Error check_ur_deltas_plausible(const RobotModel& nominal, const UrCalibrationDeltas& deltas,
+                                      const std::string& source_name, const std::string& model_name);
+
 /// Writes deltas in calibration.conf's [mounting] syntax (%.17g).
 std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas);
 

@@ -1,0 +1,53 @@
+#include "commands/fit_checks.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "hivecal/model/full_params.hpp"
+
+namespace hivecal::cli {
+
+bool model_param_is_angle(int index) {
+  if (index < 0 || index >= kDhParamCount) return false;  // the tool point is a length
+  const int field = index % kParamsPerJoint;
+  return field == static_cast<int>(DhField::theta_offset) || field == static_cast<int>(DhField::alpha);
+}
+
+std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds) {
+  std::vector<std::string> warnings;
+  const CalibrationStage* final_stage = result.final_stage();
+  if (final_stage == nullptr) return warnings;
+  const ModelParams before = to_params(result.baseline.model);
+  const ModelParams after = to_params(final_stage->model);
+  constexpr double kDegPerRad = 57.29577951308232;
+  char line[256];
+  for (int k = 0; k < kModelParamCount; ++k) {
+    const double change = after(k) - before(k);
+    const bool angle = model_param_is_angle(k);
+    if (std::fabs(change) <= (angle ? bounds.max_angle_change_rad : bounds.max_length_change_m)) continue;
+    if (angle) {
+      std::snprintf(line, sizeof line,
+                    "%s moved %+.3f deg (%.6f -> %.6f rad), more than %.3g deg (--max-change-deg): wrong model, "
+                    "joint zero or units?",
+                    full_param_name(k), change * kDegPerRad, before(k), after(k), bounds.max_angle_change_rad * kDegPerRad);
+    } else {
+      std::snprintf(line, sizeof line,
+                    "%s moved %+.3f mm (%.6f -> %.6f m), more than %.3g mm (--max-change-mm): wrong model, tool "
+                    "guess or units?",
+                    full_param_name(k), change * 1e3, before(k), after(k), bounds.max_length_change_m * 1e3);
+    }
+    warnings.push_back(line);
+  }
+  const double baseline_mae_m = result.baseline.test.mae(ErrorAxis::norm_3d);
+  const double final_mae_m = final_stage->test.mae(ErrorAxis::norm_3d);
+  if (final_stage->test.count > 0 && result.baseline.test.count > 0 && final_mae_m > baseline_mae_m) {
+    std::snprintf(line, sizeof line,
+                  "test error %.4f mm (MAE 3D) is worse than the uncalibrated baseline's %.4f mm: the fit does not "
+                  "carry to held-out poses (too few samples, blunders, or a wrong model?)",
+                  final_mae_m * 1e3, baseline_mae_m * 1e3);
+    warnings.push_back(line);
+  }
+  return warnings;
+}
+
+}  // namespace hivecal::cli

@@ -1,0 +1,28 @@
+// Plausibility of a finished calibration (docs/cli.md, "Warnings"): parameters that moved more
+// than a bound from the uncalibrated geometry, or a test error worse than the baseline's. They
+// are warnings, not errors: the result is still written and `calibrate` exits with
+// kExitWarnings (5), so a script notices and a person can look.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "hivecal/calibration.hpp"
+
+namespace hivecal::cli {
+
+/// How far a calibration may move the geometry before it is questioned.
+struct FitBounds {
+  double max_length_change_m = 0.020;                 ///< d, a and the tool point (--max-change-mm) [m]
+  double max_angle_change_rad = 0.03490658503988659;  ///< theta offsets and alpha, 2 deg (--max-change-deg) [rad]
+};
+
+/// True when model parameter `index` (to_params order) is an angle (theta offset, alpha).
+bool model_param_is_angle(int index);
+
+/// The warnings about `result` (empty when none): one line per parameter of the final stage's
+/// model that moved beyond `bounds` from the baseline model (name, both values, the change),
+/// and one when the final stage's test MAE (3D) is above the baseline's (only with test samples).
+std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds);
+
+}  // namespace hivecal::cli
