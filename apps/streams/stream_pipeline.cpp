@@ -185,7 +185,7 @@ port::Error extract_from_files(const std::string& robot_path, const std::string&
   const std::unique_ptr<LogRecordReader> robot_log =
       report->robot.is_log() ? open_log_records(LogKind::robot, robot_path, log_options) : nullptr;
   const std::unique_ptr<LogRecordReader> tracker_log =
-      report->tracker.is_log() ? open_log_records(LogKind::tracker, tracker_path) : nullptr;
+      report->tracker.is_log() ? open_log_records(LogKind::tracker, tracker_path, log_options) : nullptr;
   for (const LogRecordReader* log : {robot_log.get(), tracker_log.get()}) {
     if (log != nullptr && !log->error().empty()) return port::Error::input(log->error());
   }
