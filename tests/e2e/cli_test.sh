@@ -181,10 +181,41 @@ expect 3 "other.csv:1: not a robot joint log: expected t,q1..q6" -- calibrate --
 no_file "$work/r9.json"
 expect 2 "--joint-names needs six comma-separated names" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b --out "$work/r9.json"
 
-# --- hostile and careless use (issue 13): one check per case -----------------------------------
 # pass/fail helpers for checks that are not one command's exit code
 ok() { passed=$((passed + 1)); }
 ko() { failed=$((failed + 1)); echo "FAIL: $*"; }
+# --- units and plausibility (issue 11): the session in degrees and millimetres, no unit in the headers
+awk -F, 'NR == 1 { print; next } { printf "%s", $1; for (i = 2; i <= 7; i++) printf ",%.17g", $i * 57.29577951308232; print "" }' \
+  "$sim/robot_joints.csv" >"$work/robot_deg.csv"
+awk -F, 'NR == 1 { print; next } { printf "%s,%.17g,%.17g,%.17g,%s\n", $1, $2 * 1e3, $3 * 1e3, $4 * 1e3, $5 }' \
+  "$sim/tracker.csv" >"$work/tracker_mm.csv"
+expect 3 "robot_deg.csv:2: joint q" -- calibrate --robot "$work/robot_deg.csv" --tracker "$sim/tracker.csv" --out "$work/u1.json"
+expect 3 "looks like degrees: use --angle-unit deg" -- calibrate --robot "$work/robot_deg.csv" --tracker "$sim/tracker.csv" --out "$work/u1.json"
+expect 3 "looks like millimetres: use --length-unit mm" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/tracker_mm.csv" --out "$work/u1.json"
+no_file "$work/u1.json"
+if "${run[@]}" calibrate --robot "$work/robot_deg.csv" --tracker "$work/tracker_mm.csv" --angle-unit deg --length-unit mm \
+     --out "$work/u2.json" >/dev/null 2>&1 && [ -s "$work/u2.json" ] &&
+   "${run[@]}" extract --robot "$work/robot_deg.csv" --tracker "$work/tracker_mm.csv" --angle-unit deg --length-unit mm \
+     --samples "$work/u_samples.csv" >/dev/null && [ "$(wc -l <"$work/u_samples.csv")" -gt 100 ]; then ok; else
+  ko "calibrate/extract with --angle-unit deg --length-unit mm"; fi
+awk -F, 'NR == 1 { print "t [s],x [mm],y [mm],z [mm],status"; next } { print }' "$work/tracker_mm.csv" >"$work/tracker_mm_header.csv"
+expect 3 "column 'x' is in [mm] by its header, but --length-unit m was given" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/tracker_mm_header.csv" --length-unit m --out "$work/u3.json"
+expect 2 "--length-unit must be 'm' or 'mm', not 'cm'" -- calibrate --samples "$work/s.csv" --length-unit cm
+expect 2 "--angle-unit must be 'rad' or 'deg'" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --angle-unit grad
+printf 'q1,q2,q3,q4,q5,q6\n0,-90,90,-90,-90,0\n' >"$work/joints_deg.csv"
+expect 3 "joints_deg.csv:2: joint q2 = -90 looks like degrees: use --angle-unit deg" -- predict --calibration "$work/result.json" --joints "$work/joints_deg.csv"
+if [ "$("${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints_deg.csv" --angle-unit deg)" = \
+     "$("${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv")" ]; then ok; else
+  ko "predict --angle-unit deg differs from the same pose in rad"; fi
+printf '[mounting]\ndelta_theta = [0, 0, 0, 0, 0, 0]\ndelta_a = [0, 0.2, -0.1, 0, 0, 0]\ndelta_d = [0, 0, 0, 0, 0, 0]\ndelta_alpha = [0, 0, 0, 0, 0, 0]\n' >"$work/other.conf"
+expect 3 "other.conf: its deltas move the tool of the nominal ur5 by up to" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --ur-calibration "$work/other.conf" --out "$work/u4.json"
+expect 3 "not a calibration of this robot model?" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --ur-calibration "$work/other.conf" --out "$work/u4.json"
+no_file "$work/u4.json"
+# A fit beyond the change bounds: warnings on stderr, the result written all the same, exit 5.
+expect 5 "warning: a3 moved" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --method lm --max-change-mm 0.001 --out "$work/u5.json"
+if [ -s "$work/u5.json" ] && grep -q '"warnings"' "$work/u5.json"; then ok; else ko "exit 5 without its result"; fi
+
+# --- hostile and careless use (issue 13): one check per case -----------------------------------
 good_predict=(predict --calibration "$work/result.json" --joints "$work/joints.csv")
 # --out /dev/null is refused (it is a device), and /dev/null stays a device (as root too).
 expect 4 "is a character device; refusing to replace it" -- "${good_predict[@]}" --out /dev/null
