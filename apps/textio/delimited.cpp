@@ -26,15 +26,25 @@ std::string lower(std::string_view s) {
   return out;
 }
 
-/// A header token into a column: "X [mm]" -> {"x", "mm"}.
-Column column_of(std::string_view token) {
-  token = unquote(token);
-  const std::size_t open = token.find('[');
-  if (open == std::string_view::npos || token.back() != ']') return Column{lower(token), ""};
-  return Column{lower(trim(token.substr(0, open))), lower(trim(token.substr(open + 1, token.size() - open - 2)))};
+/// A unit as written between brackets, lower case; the degree sign (UTF-8) is "deg".
+std::string unit_of(std::string_view text) {
+  const std::string unit = lower(trim(text));
+  return unit == "\xC2\xB0" ? "deg" : unit;
 }
 
-bool is_unit_token(std::string_view token) { return token.size() >= 2 && token.front() == '[' && token.back() == ']'; }
+/// A unit token "[mm]" or "(mm)" (pendants and some tracker exports write parentheses).
+bool is_unit_token(std::string_view token) {
+  return token.size() >= 2 && ((token.front() == '[' && token.back() == ']') || (token.front() == '(' && token.back() == ')'));
+}
+
+/// A header token into a column: "X [mm]" or "X (mm)" -> {"x", "mm"}.
+Column column_of(std::string_view token) {
+  token = unquote(token);
+  const char close = token.empty() ? '\0' : token.back();
+  const std::size_t open = close == ']' ? token.rfind('[') : close == ')' ? token.rfind('(') : std::string_view::npos;
+  if (open == std::string_view::npos) return Column{lower(token), ""};
+  return Column{lower(trim(token.substr(0, open))), unit_of(token.substr(open + 1, token.size() - open - 2))};
+}
 
 /// The header's delimiter: the first of tab, semicolon, comma found in it, else spaces.
 Delimiter delimiter_of(std::string_view header) {
@@ -176,7 +186,7 @@ bool DelimitedReader::read_header() {
     for (const std::string_view token : fields_) {
       // "Time [ms] X [mm]" with spaces between fields: a lone "[unit]" belongs to the name before it.
       if (delimiter_ == Delimiter::spaces && is_unit_token(token) && !columns_.empty() && columns_.back().unit.empty()) {
-        columns_.back().unit = lower(trim(token.substr(1, token.size() - 2)));
+        columns_.back().unit = unit_of(token.substr(1, token.size() - 2));
         continue;
       }
       columns_.push_back(column_of(token));

@@ -89,10 +89,11 @@ enum class Delimiter : char { comma = ',', semicolon = ';', tab = '\t', spaces =
 /// "comma", "semicolon", "tab" or "space", for messages.
 const char* delimiter_name(Delimiter delimiter);
 
-/// One header column: name in lower case without blanks, quotes and unit; unit text.
+/// One header column: name in lower case without blanks, quotes and unit; unit text (in
+/// brackets or parentheses after the name).
 struct Column {
   std::string name;  ///< e.g. "x" for "X [mm]"
-  std::string unit;  ///< e.g. "mm"; "" when the header gives none
+  std::string unit;  ///< e.g. "mm" from "[mm]" or "(mm)", "deg" from "(°)"; "" when the header gives none
 };
 
 /// Delimited text, header first, then one row of fields per non-blank line.

@@ -85,6 +85,10 @@ TEST(Units, SamplesInMillimetresAndDegreesReadAsSi) {
   expect_session(read, "header units");
   ASSERT_TRUE(read_samples(headed, kMmDeg, &read).ok());
   expect_session(read, "header units and the same options");
+  // Units in parentheses and the degree sign, as pendants write them.
+  const std::string pendant = "q1 (\xC2\xB0),q2 (\xC2\xB0),q3 (\xC2\xB0),q4 [\xC2\xB0],q5 (deg),q6 (DEG),x (mm),y (mm),z (mm)";
+  ASSERT_TRUE(read_samples(dir.write("pendant.csv", samples_text(pendant, 1.0 / kDegPerRad, 1e-3)), {}, &read).ok());
+  expect_session(read, "pendant-style header units");
   // One option alone.
   const std::string mm_only = dir.write("mm.csv", samples_text(kPlainHeader, 1.0, 1e-3));
   ASSERT_TRUE(read_samples(mm_only, {"mm", ""}, &read).ok());
@@ -232,6 +236,7 @@ TEST(Units, TrackerLogsInMillimetres) {
   expect_points(textio::parse_tracker_log(tracker_log("Time;X;Y;Z", ';', 1e3), "e.csv", {"mm", ""}), "export mm");
   expect_points(textio::parse_tracker_log(tracker_log("Time;X [mm];Y [mm];Z [mm]", ';', 1e3), "e.csv", {"mm", ""}),
                 "export [mm] + option mm");
+  expect_points(textio::parse_tracker_log(tracker_log("Time (s);X (mm);Y (mm);Z (mm)", ';', 1e3), "p.csv"), "export (mm)");
   const textio::TrackerLog conflict =
       textio::parse_tracker_log(tracker_log("Time;X [mm];Y [mm];Z [mm]", ';', 1e3), "e.csv", {"m", ""});
   EXPECT_FALSE(conflict.ok);
