@@ -24,6 +24,10 @@ Error predict(const Options& options) {
   if (frame != "tracker" && frame != "base") {
     return Error::usage("--frame must be 'tracker' or 'base', not " + port::quoted(frame));
   }
+  const std::string output_unit = options.get("output-length-unit");
+  if (output_unit != "m" && output_unit != "mm") {
+    return Error::usage("--output-length-unit must be 'm' or 'mm', not " + port::quoted(output_unit));
+  }
   port::OutputSet outputs;
   std::size_t out_id = 0;
   Error error = outputs.add_input(options.get("calibration"), "--calibration");
@@ -48,7 +52,7 @@ Error predict(const Options& options) {
     points.push_back(frame == "base" ? base_point : calibration.base_to_tracker.apply(base_point));
   }
   // write
-  error = outputs.stage_text(out_id, "", textio::format_points_csv(points));
+  error = outputs.stage_text(out_id, "", textio::format_points_csv(points, output_unit));
   return error.ok() ? outputs.commit() : error;
 }
 
@@ -60,6 +64,7 @@ int predict_main(int argc, char** argv) {
       {"joints", "FILE", "poses to predict: CSV q1..q6 [rad], optional leading t column ('-': stdin)", ""},
       {"frame", "tracker|base", "frame of the predicted positions", "tracker"},
       {"out", "FILE", "predicted positions x,y,z [m] (CSV); '-' for stdout", "-"},
+      {"output-length-unit", "m|mm", "unit of the predicted positions (mm: header x [mm],y [mm],z [mm])", "m"},
   };
   specs.push_back(input_unit_option_specs()[1]);  // --angle-unit: the poses are joints only
   Options options;

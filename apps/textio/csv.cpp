@@ -122,10 +122,12 @@ port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* p
   });
 }
 
-std::string format_points_csv(const std::vector<Vec3>& points_m) {
-  std::string out = "x,y,z\n";
+std::string format_points_csv(const std::vector<Vec3>& points_m, const std::string& length_unit) {
+  const bool mm = length_unit == "mm";
+  const double scale = mm ? 1e3 : 1.0;
+  std::string out = mm ? "x [mm],y [mm],z [mm]\n" : "x,y,z\n";
   for (const Vec3& p : points_m) {
-    out += format_double(p.x()) + "," + format_double(p.y()) + "," + format_double(p.z()) + "\n";
+    out += format_double(p.x() * scale) + "," + format_double(p.y() * scale) + "," + format_double(p.z() * scale) + "\n";
   }
   return out;
 }

@@ -22,8 +22,9 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`), units and checks as above.
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units = {});
 
-/// `x,y,z` rows with round-trip precision.
-std::string format_points_csv(const std::vector<Vec3>& points_m);
+/// `x,y,z` rows with round-trip precision, in metres; with `length_unit` "mm" the header is
+/// `x [mm],y [mm],z [mm]` and the values are in millimetres (read back by the same reader).
+std::string format_points_csv(const std::vector<Vec3>& points_m, const std::string& length_unit = "m");
 /// `q1..q6,x,y,z` rows with round-trip precision.
 std::string format_samples_csv(Span<const Sample> samples);
 

@@ -207,6 +207,14 @@ expect 3 "joints_deg.csv:2: joint q2 = -90 looks like degrees: use --angle-unit 
 if [ "$("${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints_deg.csv" --angle-unit deg)" = \
      "$("${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv")" ]; then ok; else
   ko "predict --angle-unit deg differs from the same pose in rad"; fi
+# Predicted positions in millimetres on request (metres otherwise).
+"${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/p_m.csv" &&
+  "${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv" --output-length-unit mm --out "$work/p_mm.csv"
+if [ "$(head -1 "$work/p_mm.csv")" = "x [mm],y [mm],z [mm]" ] &&
+   paste -d, <(tail -n +2 "$work/p_m.csv") <(tail -n +2 "$work/p_mm.csv") |
+     awk -F, '{ for (i = 1; i <= 3; i++) if ((d = $i * 1000 - $(i + 3)) > 1e-9 || d < -1e-9) bad = 1 } END { exit bad || NR != 1 }'; then ok; else
+  ko "predict --output-length-unit mm"; fi
+expect 2 "--output-length-unit must be 'm' or 'mm', not 'km'" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --output-length-unit km
 printf '[mounting]\ndelta_theta = [0, 0, 0, 0, 0, 0]\ndelta_a = [0, 0.2, -0.1, 0, 0, 0]\ndelta_d = [0, 0, 0, 0, 0, 0]\ndelta_alpha = [0, 0, 0, 0, 0, 0]\n' >"$work/other.conf"
 expect 3 "other.conf: its deltas move the tool of the nominal ur5 by up to" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --ur-calibration "$work/other.conf" --out "$work/u4.json"
 expect 3 "not a calibration of this robot model?" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --ur-calibration "$work/other.conf" --out "$work/u4.json"
