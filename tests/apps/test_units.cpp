@@ -177,6 +177,24 @@ TEST(Units, RobotLogsInDegrees) {
   expect_joints(textio::parse_robot_log(robot_log(hivecal_header, ',', kDegPerRad), "deg.csv", deg), "hivecal deg");
   const std::string rtde_header = "timestamp actual_q_0 actual_q_1 actual_q_2 actual_q_3 actual_q_4 actual_q_5";
   expect_joints(textio::parse_robot_log(robot_log(rtde_header, ' ', kDegPerRad), "rtde.csv", deg), "RTDE deg");
+  // rostopic echo -p /joint_states, joints named (here in the driver's order 3, 2, 1, 4, 5, 6).
+  std::string rostopic = "%time,field.header.seq,field.header.stamp,field.header.frame_id";
+  for (int k = 0; k < kJointCount; ++k) rostopic += ",field.name" + std::to_string(k);
+  for (int k = 0; k < kJointCount; ++k) rostopic += ",field.position" + std::to_string(k);
+  rostopic += "\n";
+  const int order[kJointCount] = {2, 1, 0, 3, 4, 5};
+  std::uint64_t stamp_ns = 1700000000000000000ULL;
+  for (const Sample& s : session().samples()) {
+    rostopic += std::to_string(stamp_ns) + ",0," + std::to_string(stamp_ns) + ",base";
+    for (const int j : order) rostopic += "," + textio::kUrJointNames[static_cast<std::size_t>(j)];
+    for (const int j : order) rostopic += "," + g17(s.q_rad(j) * kDegPerRad);
+    rostopic += "\n";
+    stamp_ns += 8000000;
+  }
+  expect_joints(textio::parse_robot_log(rostopic, "js.csv", deg), "rostopic deg");
+  const textio::RobotLog rostopic_hint = textio::parse_robot_log(rostopic, "js.csv");
+  EXPECT_NE(rostopic_hint.error.find("(column 'field.position"), std::string::npos) << rostopic_hint.error;
+  EXPECT_NE(rostopic_hint.error.find("looks like degrees: use --angle-unit deg"), std::string::npos) << rostopic_hint.error;
   // The header's unit and the option's agree: fine; disagree: an error.
   const std::string headed = "t;q1 [deg];q2 [deg];q3 [deg];q4 [deg];q5 [deg];q6 [deg]";
   expect_joints(textio::parse_robot_log(robot_log(headed, ';', kDegPerRad), "h.csv", deg), "header deg + option deg");
