@@ -116,9 +116,11 @@ Error vec3_option(const Options& options, const std::string& name, Vec3* value_m
   return Error{};
 }
 
-Error robot_model_option(const Options& options, const std::string& name, RobotType* type) {
-  if (robot_type_from_name(options.get(name).c_str(), type) == Status::ok) return Error{};
-  return Error::usage("unknown robot model " + port::quoted(options.get(name)) + " (" + std::string(robot_type_names()) + ")");
+Error robot_model_option(const Options& options, const std::string& name, textio::RobotDescription* description,
+                         bool* from_file) {
+  const Error error = textio::robot_description_from_value(options.get(name), description, from_file);
+  if (error.ok() || error.fault != port::Fault::usage) return error;
+  return Error::usage("--" + name + ": " + error.message);
 }
 
 }  // namespace hivecal::cli

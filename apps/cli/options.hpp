@@ -9,6 +9,7 @@
 #include "hivecal/core/types.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/error.hpp"
+#include "textio/calibration_json.hpp"
 
 namespace hivecal::cli {
 
@@ -65,7 +66,10 @@ bool progress_enabled(const Options& options);
 Error number_option(const Options& options, const std::string& name, double* value);
 /// --<name> as X,Y,Z in metres (e.g. --tool).
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
-/// --<name> as a robot model name (robot_type_names()).
-Error robot_model_option(const Options& options, const std::string& name, RobotType* type);
+/// --<name> as a robot model: a built-in name (robot_type_names()) or a robot description
+/// JSON file (an existing path, or a name ending in .json; textio::robot_description_from_value).
+/// *from_file (optional): whether it was a file.
+Error robot_model_option(const Options& options, const std::string& name, textio::RobotDescription* description,
+                         bool* from_file = nullptr);
 
 }  // namespace hivecal::cli
