@@ -38,6 +38,9 @@ DeviceInfoRecord make_device_info(DeviceKind kind, float rate_hz, const char* na
   info.device_kind = static_cast<std::uint8_t>(kind);
   info.nominal_rate_hz = rate_hz;
   std::strncpy(info.name, name, sizeof info.name - 1);
+  for (char& c : info.name) {
+    if (c != '\0' && (c < 0x20 || c > 0x7e)) c = '?';  // the wire takes printable ASCII only
+  }
   return info;
 }
 
@@ -58,7 +61,7 @@ Session::Session(const SimConfig& config) : config_(config) {
 }
 
 void Session::build_truth(Random* random) {
-  truth_.nominal = nominal_model(config_.robot_type);
+  truth_.nominal = config_.nominal;
   truth_.nominal.tool_m = config_.nominal_tool_m;
   if (config_.use_deltas) {
     (void)apply_ur_deltas(truth_.nominal, config_.deltas, &truth_.model);
@@ -198,7 +201,7 @@ RobotStream::RobotStream(const Session& session)
 
 DeviceInfoRecord RobotStream::device_info() {
   return make_device_info(DeviceKind::robot, static_cast<float>(1.0 / session_.config().robot_period_s),
-                          robot_type_name(session_.config().robot_type), sequence_++, next_us_);
+                          session_.config().robot_name.c_str(), sequence_++, next_us_);
 }
 
 bool RobotStream::next(JointStateRecord* record) {
