@@ -68,8 +68,10 @@ struct Numbers {
 Error configure(const cli::Options& options, SimConfig* config) {
   Numbers numbers{options, Error{}};
   textio::RobotDescription robot;
-  Error error = cli::robot_model_option(options, "robot-model", &robot);
+  bool from_file = false;
+  Error error = cli::robot_model_option(options, "robot-model", &robot, &from_file);
   if (!error.ok()) return error;
+  if (from_file) config->nominal_tool_m = robot.model.tool_m;
   config->robot_name = robot.robot;
   config->nominal = robot.model;
   config->convention = robot.convention;

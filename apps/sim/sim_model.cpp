@@ -97,8 +97,11 @@ void Session::build_truth(Random* random) {
 JointVector Session::random_waypoint(Random* random) const {
   // Tool roughly pointing down: q4 = -pi/2 - q2 - q3 and q5 = -pi/2 put the flange z axis
   // straight down on UR arms; +-0.35 rad around that. Reject poses too low or out of reach.
+  // Other arms (a description file whose upper arm and forearm are not UR's negative a2, a3)
+  // take poses spread over their joints, above the base plane.
   const RobotModel& model = truth_.nominal;
   const double reach_m = -(model.joints[1].a_m + model.joints[2].a_m);
+  if (!(reach_m > 0.2)) return general_waypoint(random);
   for (;;) {
     JointVector q;
     q(0) = random->uniform(-1.6, 1.6);
@@ -111,6 +114,21 @@ JointVector Session::random_waypoint(Random* random) const {
     const double radial_m = std::sqrt(p.x() * p.x() + p.y() * p.y());
     if (p.z() > 0.05 && p.z() < 0.8 && radial_m > 0.3 && radial_m < 0.9 * reach_m) return q;
   }
+}
+
+JointVector Session::general_waypoint(Random* random) const {
+  JointVector q = JointVector::Zero();
+  for (int attempt = 0; attempt < 1000; ++attempt) {
+    q(0) = random->uniform(-1.6, 1.6);
+    q(1) = random->uniform(-1.0, 1.0);
+    q(2) = random->uniform(-1.0, 1.0);
+    q(3) = random->uniform(-1.5, 1.5);
+    q(4) = random->uniform(0.3, 1.6);
+    q(5) = random->uniform(-1.5, 1.5);
+    if (random->uniform(0.0, 1.0) < 0.5) q(4) = -q(4);  // both wrist branches
+    if (fk_tool_point(truth_.nominal, q).z() > 0.05) break;
+  }
+  return q;
 }
 
 void Session::build_schedule(Random* random) {

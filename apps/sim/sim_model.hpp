@@ -122,6 +122,7 @@ class Session {
   void build_truth(Random* random);
   void build_schedule(Random* random);
   JointVector random_waypoint(Random* random) const;
+  JointVector general_waypoint(Random* random) const;  // any arm: joints spread, tool above the base plane
 
   SimConfig config_;
   SimTruth truth_;
