@@ -152,6 +152,57 @@ TEST(OtherArms, LmRecoversTheIdentifiableGeometryWithinNoise) {
   }
 }
 
+/// A modified-DH tool point from the definition (chain of Rx Tx Rz Tz), independent of
+/// dh_convention.hpp [m].
+Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kJointCount], const Vec3& tool_m, const JointVector& q) {
+  RigidTransform t;
+  for (int j = 0; j < kJointCount; ++j) {
+    t = t.then_after(RigidTransform{rotation_x(rows[j].alpha_prev_rad), Vec3(rows[j].a_prev_m, 0.0, 0.0)});
+    t = t.then_after(RigidTransform{rotation_z(q(j) + rows[j].theta_offset_rad), Vec3(0.0, 0.0, rows[j].d_m)});
+  }
+  return t.apply(tool_m);
+}
+
+// Arms described in modified DH, with a base offset (alpha_0, a_0) and the truth perturbed in
+// the modified rows: LM on the converted model reproduces the true points exactly.
+TEST(OtherArms, LmRecoversModifiedDhTruthsExactly) {
+  for (OtherArm arm : test::kOtherArms) {
+    ModifiedDhRow nominal[kJointCount];
+    Vec3 tool_m;
+    test::other_arm_modified(arm, ModifiedDhBase{0.02, -0.015}, nominal, &tool_m);
+    Random random(500 + static_cast<std::uint64_t>(arm));
+    ModifiedDhRow truth[kJointCount];
+    for (int j = 0; j < kJointCount; ++j) {
+      truth[j] = nominal[j];
+      truth[j].theta_offset_rad += 3e-4 * random.normal();
+      truth[j].d_m += 3e-4 * random.normal();
+      truth[j].a_prev_m += 3e-4 * random.normal();
+      if (nominal[j].alpha_prev_rad != 0.0) truth[j].alpha_prev_rad += 3e-4 * random.normal();  // parallel stays parallel
+    }
+    const Vec3 true_tool_m(0.009, 0.006, 0.097);
+    const RigidTransform base = test::example_base_to_tracker();
+    train_set().clear();
+    fresh_set().clear();
+    for (std::size_t i = 0; i < 320; ++i) {
+      const JointVector q = test::other_arm_joints(&random);
+      (void)(i < 120 ? train_set() : fresh_set()).add(q, base.apply(modified_chain_point(truth, true_tool_m, q)));
+    }
+    RobotModel start;
+    ModifiedDhBase start_base;
+    ASSERT_EQ(model_from_modified_dh(nominal, Vec3(0.0, 0.0, 0.1), &start, &start_base), Status::ok);
+    Status status = Status::ok;
+    EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()));
+    ASSERT_EQ(status, Status::ok) << test::other_arm_name(arm);
+    double worst_m = 0.0;
+    for (const Sample& s : fresh_set().samples()) {
+      const Vec3 predicted = result().base_to_tracker.apply(fk_tool_point(result().model, s.q_rad));
+      worst_m = std::fmax(worst_m, (predicted - s.point_m).norm());
+    }
+    std::printf("%s (modified DH, base offset): worst fresh error %.3g m\n", test::other_arm_name(arm), worst_m);
+    EXPECT_LE(worst_m, 1e-9) << test::other_arm_name(arm);
+  }
+}
+
 /// Whether the report dropped one of `a`, `b` with the other in its combination.
 bool trades(const IdentifiabilityReport& report, int a, int b) {
   for (int d = 0; d < report.dropped_count; ++d) {
