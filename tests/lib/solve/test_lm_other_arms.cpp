@@ -240,9 +240,9 @@ TEST(OtherArms, IdentifiabilityFindsTheParallelAxisCombination) {
 
 using OtherArmWorkspace = CalibrationWorkspace<300, double, 40, 300, 0, kMaxLinkLengths>;
 
-// ABC on the link lengths of a non-UR arm through the job: better than the start, and LM on
-// the link lengths moves nothing else.
-TEST(OtherArms, AbcOnTheLinkLengthsImprovesANonUrArm) {
+// GSA and ABC on the link lengths of a non-UR arm through the job (Table 1: GSA, ABC, LM):
+// both far better than the start, moving nothing but the link lengths.
+TEST(OtherArms, GsaAndAbcOnTheLinkLengthsImproveANonUrArm) {
   for (OtherArm arm : test::kOtherArms) {
     Random random(31 + static_cast<std::uint64_t>(arm));
     const RobotModel nominal = test::other_arm_model(arm);
@@ -253,30 +253,38 @@ TEST(OtherArms, AbcOnTheLinkLengthsImprovesANonUrArm) {
     train_set().clear();
     test::fill_other_arm(truth, test::example_base_to_tracker(), 200, 1e-5, &random, &train_set());
     CalibrationOptions options;
-    options.method = CalibrationMethod::abc_lm;
+    options.method = CalibrationMethod::all;
     options.params = CalibrationParams::paper;
     options.abc_food_sources = 40;
     options.abc_cycles = 150;
+    options.gsa_agents = 40;
+    options.gsa_iterations = 150;
     static OtherArmWorkspace ws;
     static CalibrationResult r;
     Status status = Status::ok;
     EXPECT_NO_HEAP(status = calibrate(nominal, &train_set(), options, &ws, &r));
     ASSERT_EQ(status, Status::ok) << test::other_arm_name(arm) << ": " << status_message(status);
-    ASSERT_EQ(r.stage_count, 2u);
+    ASSERT_EQ(r.stage_count, 3u);
+    ASSERT_EQ(r.stages[0].solver, CalibrationSolver::gsa);
+    ASSERT_EQ(r.stages[1].solver, CalibrationSolver::abc);
     const double baseline_m = r.baseline.test.mae(ErrorAxis::norm_3d);
-    const double abc_m = r.stages[0].test.mae(ErrorAxis::norm_3d);
-    const double lm_m = r.stages[1].test.mae(ErrorAxis::norm_3d);
-    std::printf("%s: %zu lengths, test MAE nominal %.1f um, ABC %.1f um, ABC+LM %.1f um\n", test::other_arm_name(arm),
-                set.count, baseline_m * 1e6, abc_m * 1e6, lm_m * 1e6);
-    EXPECT_LT(abc_m, 0.5 * baseline_m) << test::other_arm_name(arm);
+    const double gsa_m = r.stages[0].test.mae(ErrorAxis::norm_3d);
+    const double abc_m = r.stages[1].test.mae(ErrorAxis::norm_3d);
+    const double lm_m = r.stages[2].test.mae(ErrorAxis::norm_3d);
+    std::printf("%s: %zu lengths, test MAE nominal %.1f um, GSA %.1f um, ABC %.1f um, LM %.1f um\n",
+                test::other_arm_name(arm), set.count, baseline_m * 1e6, gsa_m * 1e6, abc_m * 1e6, lm_m * 1e6);
+    EXPECT_LT(gsa_m, 0.1 * baseline_m) << test::other_arm_name(arm);
+    EXPECT_LT(abc_m, 0.1 * baseline_m) << test::other_arm_name(arm);
     EXPECT_LT(lm_m, 3e-5) << test::other_arm_name(arm);
     const ModelParams before = to_params(nominal);
-    const ModelParams after = to_params(r.stages[0].model);
-    for (int i = 0; i < kModelParamCount; ++i) {
-      bool length = false;
-      for (std::size_t k = 0; k < set.count; ++k) length = length || set.param_index[k] == i;
-      if (!length) {
-        EXPECT_EQ(after(i), before(i)) << full_param_name(i);
+    for (int stage = 0; stage < 2; ++stage) {
+      const ModelParams after = to_params(r.stages[stage].model);
+      for (int i = 0; i < kModelParamCount; ++i) {
+        bool length = false;
+        for (std::size_t k = 0; k < set.count; ++k) length = length || set.param_index[k] == i;
+        if (!length) {
+          EXPECT_EQ(after(i), before(i)) << full_param_name(i);
+        }
       }
     }
   }
