@@ -233,19 +233,17 @@ lanes::Lane moved_row(const Scalar* d, const lanes::Lane* t, std::size_t column_
   return moved_row(d, t, column_stride, begin, half) + moved_row(d, t, column_stride, begin + half, count - half);
 }
 
-}  // namespace
-
-template <typename Scalar>
-double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m,
-                                         const double* tail_m) const {
+/// The residual pass over `size` samples stored `per_sample` values each with `stored`
+/// direction columns; kFive: the paper's five stored columns unrolled (UR arms), else generic.
+template <bool kFive, typename Scalar>
+double residual_pass(const Scalar* values, std::size_t size, std::size_t per_sample, int stored, const Mat3& rotation,
+                     const Vec3& shift_m, const double* tail_m) {
   // The hot loop, kLanes samples at a time: two where the target has double SIMD, each value
   // read at a fixed offset from one pointer (left to the auto-vectoriser, the loop kept 21
   // pointers in spilled registers); one without, where pairs would only double the live
   // registers and spill. A block's unused tail is zero-initialised storage, computed and
   // ignored; the norms are summed in sample order. The operation order is Eigen's (pairwise
-  // sums in products and norms), which the golden digest pins. The paper's six lengths (five
-  // stored columns) have their own unrolled expression; other arms take the generic one,
-  // which sums in the same order.
+  // sums in products and norms), which the golden digest pins; the generic column sum keeps it.
   static_assert(kPaper6BlockSamples % 2 == 0, "whole pairs per block");
   using lanes::Lane;
   using lanes::broadcast;
@@ -256,30 +254,30 @@ double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotat
   constexpr std::size_t kDirection = kDirectionValue * kPaper6BlockSamples;
   constexpr std::size_t kRow = kPaper6BlockSamples;         // next row of a value triple
   constexpr std::size_t kColumn = 3 * kPaper6BlockSamples;  // next direction column
-  const auto stored = static_cast<int>(stored_count_);
-  Lane t[kMaxLinkLengths];
+  Lane t[kMaxLinkLengths] = {};
   for (int k = 0; k < stored; ++k) t[k] = broadcast(tail_m[k]);
+  const Lane t0 = t[0], t1 = t[1], t2 = t[2], t3 = t[3], t4 = t[4];  // the paper's five (unused otherwise)
   const Lane e00 = broadcast(rotation(0, 0)), e01 = broadcast(rotation(0, 1)), e02 = broadcast(rotation(0, 2));
   const Lane e10 = broadcast(rotation(1, 0)), e11 = broadcast(rotation(1, 1)), e12 = broadcast(rotation(1, 2));
   const Lane e20 = broadcast(rotation(2, 0)), e21 = broadcast(rotation(2, 1)), e22 = broadcast(rotation(2, 2));
   const Lane sx = broadcast(shift_m(0)), sy = broadcast(shift_m(1)), sz = broadcast(shift_m(2));
   const Lane zero = broadcast(0.0);
-  const std::size_t block_values = values_per_sample_ * kPaper6BlockSamples;
+  const std::size_t block_values = per_sample * kPaper6BlockSamples;
   double sum_m = 0.0;
-  for (std::size_t start = 0; start < size_; start += kPaper6BlockSamples) {
+  for (std::size_t start = 0; start < size; start += kPaper6BlockSamples) {
     const Scalar* const block = values + start / kPaper6BlockSamples * block_values;
-    const std::size_t count = size_ - start < kPaper6BlockSamples ? size_ - start : kPaper6BlockSamples;
+    const std::size_t count = size - start < kPaper6BlockSamples ? size - start : kPaper6BlockSamples;
     for (std::size_t j = 0; j < count; j += kLanes) {
       const Scalar* const first = block + j;
       // D t of row r; for five columns (D0 t0 + D1 t1) + (D2 t2 + (D3 t3 + D4 t4)).
-      const auto moved = [first, &t, stored, &zero](std::size_t r) {
+      const auto moved = [&](std::size_t r) {
         const Scalar* const d = first + kDirection + r * kRow;
-        if (stored == 5) {
-          return (lanes::load(d) * t[0] + lanes::load(d + kColumn) * t[1]) +
-                 (lanes::load(d + 2 * kColumn) * t[2] +
-                  (lanes::load(d + 3 * kColumn) * t[3] + lanes::load(d + 4 * kColumn) * t[4]));
+        if constexpr (kFive) {
+          return (lanes::load(d) * t0 + lanes::load(d + kColumn) * t1) +
+                 (lanes::load(d + 2 * kColumn) * t2 + (lanes::load(d + 3 * kColumn) * t3 + lanes::load(d + 4 * kColumn) * t4));
+        } else {
+          return stored == 0 ? zero : moved_row(d, t, kColumn, 0, stored);
         }
-        return stored == 0 ? zero : moved_row(d, t, kColumn, 0, stored);
       };
       const Lane p0 = lanes::load(first + kPoint), p1 = lanes::load(first + kPoint + kRow),
                  p2 = lanes::load(first + kPoint + 2 * kRow);
@@ -293,6 +291,16 @@ double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotat
     }
   }
   return sum_m;
+}
+
+}  // namespace
+
+template <typename Scalar>
+double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m,
+                                         const double* tail_m) const {
+  const auto stored = static_cast<int>(stored_count_);
+  return stored == 5 ? residual_pass<true>(values, size_, values_per_sample_, stored, rotation, shift_m, tail_m)
+                     : residual_pass<false>(values, size_, values_per_sample_, stored, rotation, shift_m, tail_m);
 }
 
 double Paper6CostBase::mean_abs_error(const double* lengths_m, RigidTransform* base_to_tracker) const {
