@@ -8,6 +8,7 @@
 
 #include "hivecal/calibration.hpp"
 #include "hivecal/model/full_params.hpp"
+#include "hivecal/solve/cost.hpp"
 #include "hivecal/solve/lm.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
 #include "testkit/alloc_trap.hpp"
@@ -287,6 +288,50 @@ TEST(OtherArms, GsaAndAbcOnTheLinkLengthsImproveANonUrArm) {
         }
       }
     }
+  }
+}
+
+// The precomputed cost on other column layouts (IRB120: four stored columns, the generic
+// pass; d1 zero: every length stored; KR6: five, the unrolled pass) equals the generic
+// refit cost anywhere in the box, with the same base transform.
+TEST(OtherArms, LinkLengthCostEqualsTheGenericRefitCost) {
+  RobotModel no_d1 = test::other_arm_model(OtherArm::irb120);
+  no_d1.joints[0].d_m = 0.0;
+  const RobotModel arms[] = {test::other_arm_model(OtherArm::irb120), no_d1, test::other_arm_model(OtherArm::kr6_r900)};
+  static Paper6Cost<300, double, kMaxLinkLengths> cost;
+  Random random(606);
+  for (const RobotModel& nominal : arms) {
+    const RobotModel truth = test::perturbed_keeping_parallel(nominal, &random, 3e-4, 3e-4, Vec3(0.01, 0.0, 0.1));
+    train_set().clear();
+    test::fill_other_arm(truth, test::example_base_to_tracker(), 150, 1e-5, &random, &train_set());
+    Status status = Status::ok;
+    EXPECT_NO_HEAP(status = cost.build(nominal, train_set().samples()));
+    ASSERT_EQ(status, Status::ok);
+    ASSERT_EQ(cost.dimension(), link_length_set(nominal).count);
+    LinkLengthBox box;
+    ASSERT_EQ(link_length_box(nominal, 2e-3, &box), Status::ok);
+    for (int trial = 0; trial < 20; ++trial) {
+      LinkLengths lengths_m = link_lengths(nominal);
+      for (Eigen::Index k = 0; k < lengths_m.size() && trial > 0; ++k) {
+        lengths_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
+      }
+      double fast_m = 0.0;
+      RigidTransform fast_base;
+      EXPECT_NO_HEAP(status = cost.evaluate(lengths_m, &fast_m, &fast_base));
+      ASSERT_EQ(status, Status::ok);
+      double generic_m = 0.0;
+      RigidTransform generic_base;
+      ASSERT_EQ(evaluate_cost(cost.model_for(lengths_m.data()), train_set().samples(), CostKind::mean_abs_3d,
+                              BaseFrame::refit, &generic_base, &generic_m),
+                Status::ok);
+      EXPECT_NEAR(fast_m, generic_m, 1e-11 * generic_m) << "trial " << trial << ", " << cost.dimension() << " lengths";
+      EXPECT_LT((fast_base.rotation - generic_base.rotation).norm(), 1e-13);
+      EXPECT_LT((fast_base.translation_m - generic_base.translation_m).norm(), 1e-12);
+    }
+    LinkLengths wrong(static_cast<Eigen::Index>(cost.dimension() + 1));
+    wrong.setZero();
+    double mae_m = 0.0;
+    EXPECT_EQ(cost.evaluate(wrong, &mae_m, nullptr), Status::invalid_argument);
   }
 }
 
