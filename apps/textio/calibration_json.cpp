@@ -63,6 +63,7 @@ port::Error parse_dh_rows(const JsonValue& root, const std::string& source, doub
 
 port::Error parse_description(const JsonValue& root, const std::string& source, RobotDescription* description) {
   RobotDescription parsed;
+  parsed.robot.clear();  // no built-in default: a file names its own arm (or read_robot_description names it)
   const JsonValue* robot = root.find("robot");
   if (robot != nullptr) {
     if (robot->kind != JsonValue::Kind::string) return fail(source, "\"robot\" must be a string");
@@ -266,7 +267,14 @@ port::Error read_robot_description(const std::string& path, RobotDescription* de
   const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
   if (!read.ok()) return read;
   if (trim(text).empty()) return port::Error::input(path + ": empty file");
-  return parse_robot_description(text, path, description);
+  const port::Error parsed = parse_robot_description(text, path, description);
+  if (parsed.ok() && description->robot.empty()) {  // unnamed: the file's name without folder and .json
+    const std::size_t slash = path.find_last_of('/');
+    std::string stem = slash == std::string::npos ? path : path.substr(slash + 1);
+    if (stem.size() > 5 && stem.compare(stem.size() - 5, 5, ".json") == 0) stem.resize(stem.size() - 5);
+    description->robot = stem;
+  }
+  return parsed;
 }
 
 port::Error robot_description_from_value(const std::string& value, RobotDescription* description, bool* from_file) {

@@ -34,11 +34,12 @@ struct CalibrationFile : RobotDescription {
 
 /// The JSON name of a convention: "standard-dh" or "modified-dh".
 const char* dh_convention_name(DhConvention convention);
-/// Parses a robot description (format optional; "robot" optional, any name; "convention"
-/// optional, standard-dh by default); errors name the file and the key at fault.
+/// Parses a robot description (format optional; "robot" optional, any name, "" when absent;
+/// "convention" optional, standard-dh by default); errors name the file and the key at fault.
 port::Error parse_robot_description(const std::string& text, const std::string& source_name,
                                     RobotDescription* description);
-/// Reads and parses a robot description file.
+/// Reads and parses a robot description file; without "robot" the arm is named after the
+/// file ("irb120" for .../irb120.json).
 port::Error read_robot_description(const std::string& path, RobotDescription* description);
 /// `--robot-model VALUE`: a file (an existing path, or a name ending in .json) or a built-in
 /// table name (ur5, ...; tool at the flange). Usage-style errors name the value. *from_file

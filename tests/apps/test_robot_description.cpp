@@ -121,6 +121,12 @@ TEST(RobotDescription, RobotModelValueIsAFileOrABuiltInName) {
   EXPECT_FALSE(from_file);
   EXPECT_EQ(description.robot, "ur5e");
   EXPECT_EQ(to_params(description.model), to_params(nominal_model(RobotType::ur5e)));
+  const std::string unnamed = dir.write("lab-arm.json", "{\"dh\": " + std::string(R"([{"theta_offset": 0, "d": 0.3, "a": 0, "alpha": 0},
+      {"theta_offset": 0, "d": 0, "a": 0.2, "alpha": 0}, {"theta_offset": 0, "d": 0, "a": 0.2, "alpha": 0},
+      {"theta_offset": 0, "d": 0.1, "a": 0, "alpha": 0}, {"theta_offset": 0, "d": 0, "a": 0, "alpha": 0},
+      {"theta_offset": 0, "d": 0.05, "a": 0, "alpha": 0}])") + ", \"tool\": [0, 0, 0.1]}");
+  ASSERT_TRUE(textio::robot_description_from_value(unnamed, &description).ok());
+  EXPECT_EQ(description.robot, "lab-arm");  // no "robot": named after the file
   port::Error r = textio::robot_description_from_value("ur7", &description);
   EXPECT_EQ(r.fault, port::Fault::usage);
   EXPECT_NE(r.message.find("unknown robot model 'ur7'"), std::string::npos) << r.message;
