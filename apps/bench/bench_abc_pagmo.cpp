@@ -30,7 +30,7 @@
 
 namespace {
 
-using hivecal::Paper6Box;
+using hivecal::LinkLengthBox;
 using hivecal::Paper6CostBase;
 
 constexpr std::size_t kMaxPoses = 1024;
@@ -56,7 +56,7 @@ class GenericPaper6Cost final : public hivecal::Objective {
   double mae(const double* lengths_m) const {
     hivecal::RigidTransform base;
     double cost_m = std::numeric_limits<double>::infinity();
-    (void)hivecal::evaluate_cost(hivecal::with_paper6_lengths(nominal_, lengths_m), samples_,
+    (void)hivecal::evaluate_cost(hivecal::with_link_lengths(nominal_, link_length_set(nominal_), lengths_m), samples_,
                                  hivecal::CostKind::mean_abs_3d, hivecal::BaseFrame::refit, &base, &cost_m);
     return cost_m;
   }
@@ -70,7 +70,7 @@ class GenericPaper6Cost final : public hivecal::Objective {
 struct PagmoPaper6 {
   Paper6CostBase* precomputed = nullptr;      // used when set
   const GenericPaper6Cost* generic = nullptr;  // else this
-  Paper6Box box;
+  LinkLengthBox box;
 
   pagmo::vector_double fitness(const pagmo::vector_double& x) const {
     return {precomputed != nullptr ? precomputed->evaluate(x.data()) : generic->mae(x.data())};
@@ -101,7 +101,7 @@ RunFigures fastest_of(int repeat, Run run) {
   return figures;
 }
 
-RunFigures run_hivecal(hivecal::Objective& cost, const Paper6Box& box, const Settings& settings) {
+RunFigures run_hivecal(hivecal::Objective& cost, const LinkLengthBox& box, const Settings& settings) {
   static hivecal::AbcSolver<1000, hivecal::kPaper6Dimension> solver;
   hivecal::AbcOptions options;
   options.food_sources = settings.sources;
@@ -134,7 +134,7 @@ double median(double* values, std::size_t count) {
 }
 
 /// Final MAE of both optimisers over solver seeds 1..K (one repeat each), medians compared.
-void compare_quality(PagmoPaper6 udp, Paper6CostBase& precomputed, const Paper6Box& box, Settings settings) {
+void compare_quality(PagmoPaper6 udp, Paper6CostBase& precomputed, const LinkLengthBox& box, Settings settings) {
   double ours_m[kMaxSeeds];
   double pagmo_m[kMaxSeeds];
   std::size_t ours_better = 0;
@@ -197,15 +197,15 @@ int main(int argc, char** argv) {
   hivecal::Random random(settings.seed);
   const hivecal::test::Paper6Cell cell = hivecal::test::paper6_cell(&random, hivecal::test::Paper6Truth::paper_like);
   hivecal::test::fill_tool_down(cell, settings.poses, 1e-5, &random, &dataset);
-  Paper6Box box;
+  LinkLengthBox box;
   if (dataset.split(hivecal::kDefaultTrainFraction, settings.seed) != hivecal::Status::ok ||
       precomputed.build(cell.nominal, dataset.train()) != hivecal::Status::ok ||
-      hivecal::paper6_box(cell.nominal, hivecal::kPaper6DefaultHalfWidth_m, &box) != hivecal::Status::ok) {
+      hivecal::link_length_box(cell.nominal, hivecal::kPaper6DefaultHalfWidth_m, &box) != hivecal::Status::ok) {
     std::fprintf(stderr, "bench: simulated session could not be prepared\n");
     return 1;
   }
   GenericPaper6Cost generic(cell.nominal, dataset.train());
-  const hivecal::Paper6Lengths nominal_m = hivecal::paper6_lengths(cell.nominal);
+  const hivecal::LinkLengths nominal_m = hivecal::link_lengths(cell.nominal);
   std::printf("paper-6 ABC benchmark: %zu training poses, %zu food sources x %zu cycles, seed %llu\n",
               dataset.train().size(), settings.sources, settings.cycles,
               static_cast<unsigned long long>(settings.seed));

@@ -137,9 +137,11 @@ Error input_units_option(const Options& options, textio::InputUnits* units) {
   return Error{};
 }
 
-Error robot_model_option(const Options& options, const std::string& name, RobotType* type) {
-  if (robot_type_from_name(options.get(name).c_str(), type) == Status::ok) return Error{};
-  return Error::usage("unknown robot model " + port::quoted(options.get(name)) + " (" + std::string(robot_type_names()) + ")");
+Error robot_model_option(const Options& options, const std::string& name, textio::RobotDescription* description,
+                         bool* from_file) {
+  const Error error = textio::robot_description_from_value(options.get(name), description, from_file);
+  if (error.ok() || error.fault != port::Fault::usage) return error;
+  return Error::usage("--" + name + ": " + error.message);
 }
 
 }  // namespace hivecal::cli

@@ -10,6 +10,7 @@
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/error.hpp"
 #include "textio/delimited.hpp"
+#include "textio/calibration_json.hpp"
 
 namespace hivecal::cli {
 
@@ -72,7 +73,10 @@ std::vector<OptionSpec> input_unit_option_specs();
 /// --length-unit (m|mm) and --angle-unit (rad|deg) into *units ("" when not given: SI unless
 /// a header says otherwise); Fault::usage otherwise.
 Error input_units_option(const Options& options, textio::InputUnits* units);
-/// --<name> as a robot model name (robot_type_names()).
-Error robot_model_option(const Options& options, const std::string& name, RobotType* type);
+/// --<name> as a robot model: a built-in name (robot_type_names()) or a robot description
+/// JSON file (an existing path, or a name ending in .json; textio::robot_description_from_value).
+/// *from_file (optional): whether it was a file.
+Error robot_model_option(const Options& options, const std::string& name, textio::RobotDescription* description,
+                         bool* from_file = nullptr);
 
 }  // namespace hivecal::cli

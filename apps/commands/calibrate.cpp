@@ -32,8 +32,8 @@ using CliDataset = Dataset<kCliDatasetCapacity>;
 
 /// Validated command-line settings.
 struct CalibrateSettings {
-  RobotType robot = RobotType::ur5;  ///< --robot-model
-  Vec3 tool_m = Vec3(0.0, 0.0, 0.1695);  ///< --tool: nominal tool point in the flange frame [m]
+  textio::RobotDescription robot;    ///< --robot-model: built-in table or description file
+  Vec3 tool_m = Vec3(0.0, 0.0, 0.1695);  ///< --tool (or the description file's): nominal tool point in the flange frame [m]
   bool paper_params = false;         ///< --params paper
   std::string method = "abc+lm";     ///< --method
   std::uint64_t seed = 1;            ///< --seed
@@ -45,8 +45,9 @@ struct CalibrateSettings {
 };
 
 /// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
-/// largest dataset (static: ~2.3 MB).
-using CliWorkspace = CalibrationWorkspace<kCliDatasetCapacity, double, 150, kTraceCapacity, kCliDatasetCapacity>;
+/// largest dataset and any arm's link lengths (static: ~3 MB).
+using CliWorkspace =
+    CalibrationWorkspace<kCliDatasetCapacity, double, 150, kTraceCapacity, kCliDatasetCapacity, kMaxLinkLengths>;
 
 /// Times the stages (lib takes no time) and prints one progress line per iteration on
 /// stderr, overwritten in place.
@@ -95,6 +96,7 @@ struct Run {
   CalibrationResult result;                     ///< lib's result (~5 KB)
   double seconds[kMaxCalibrationStages] = {};   ///< wall time per stage [s]
   bool from_controller = false;                 ///< the start geometry is the controller's
+  std::size_t link_length_count = kPaper6Dimension;  ///< lengths the population stages search [-]
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).
@@ -133,7 +135,7 @@ report::MethodRow method_row(std::string method, std::string parameters, const E
 
 report::MethodRow stage_row(const Run& run, std::size_t k) {
   const CalibrationStage& stage = run.result.stages[k];
-  std::string params = stage.params == CalibrationParams::paper ? "paper-6" : "full";
+  std::string params = stage.params == CalibrationParams::paper ? "paper-" + std::to_string(run.link_length_count) : "full";
   if (stage.solver == CalibrationSolver::lm) {
     params += " (" + std::to_string(run.result.lm.identifiability.kept_count()) + " estimated)";
   }
@@ -255,9 +257,10 @@ const std::vector<OptionSpec>& option_specs() {
       {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"samples", "FILE", "paired static samples q1..q6,x,y,z (CSV; '-': stdin) instead of --robot/--tracker", ""},
       {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
-      {"robot-model", "NAME", std::string("nominal geometry: ") + robot_type_names(), "ur5"},
-      {"tool", "X,Y,Z", "nominal retroreflector centre in the flange frame [m] (LM refines it)", "0,0,0.1695"},
-      {"params", "full|paper", "full identifiable model, or the paper's six lengths", "full"},
+      {"robot-model", "NAME|FILE", std::string("nominal geometry: ") + robot_type_names() +
+                                       ", or a robot description .json (standard or modified DH; a result file works)", "ur5"},
+      {"tool", "X,Y,Z", "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)", "0,0,0.1695"},
+      {"params", "full|paper", "full identifiable model, or the link lengths (every non-zero d and a; for UR the paper's six)", "full"},
       {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
       {"robust", "", "Huber loss in LM (a few bad tracker points do not drag the fit)", ""},
       {"seed", "N", "seed of the train/test split and of ABC/GSA", "1"},
@@ -278,8 +281,10 @@ const std::vector<OptionSpec>& option_specs() {
 // --- parse ------------------------------------------------------------------------------------
 
 Error settings_from_options(const Options& options, CalibrateSettings* settings) {
-  Error error = robot_model_option(options, "robot-model", &settings->robot);
-  if (error.ok()) error = vec3_option(options, "tool", &settings->tool_m);
+  bool from_file = false;
+  Error error = robot_model_option(options, "robot-model", &settings->robot, &from_file);
+  if (error.ok() && from_file && !options.given("tool")) settings->tool_m = settings->robot.model.tool_m;
+  if (error.ok() && (!from_file || options.given("tool"))) error = vec3_option(options, "tool", &settings->tool_m);
   if (!error.ok()) return error;
   const std::string params = options.get("params");
   if (params != "full" && params != "paper") return Error::usage("--params must be 'full' or 'paper', not " + port::quoted(params));
@@ -348,17 +353,17 @@ Error declare_outputs(const Options& options, port::OutputSet* outputs, OutputId
 
 /// The start geometry: nominal, or the controller's calibration.conf.
 Error start_geometry(const Options& options, const CalibrateSettings& settings, RobotModel* start) {
-  *start = nominal_model(settings.robot);
+  *start = settings.robot.model;
   start->tool_m = settings.tool_m;
   if (options.get("ur-calibration").empty()) return Error{};
   UrCalibrationDeltas deltas;
   port::Error r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
   if (r.ok()) {
-    r = textio::check_ur_deltas_plausible(nominal_model(settings.robot), deltas, options.get("ur-calibration"),
-                                          robot_type_name(settings.robot));
+    r = textio::check_ur_deltas_plausible(settings.robot.model, deltas, options.get("ur-calibration"),
+                                          settings.robot.robot);
   }
   if (!r.ok()) return r;
-  (void)apply_ur_deltas(nominal_model(settings.robot), deltas, start);
+  (void)apply_ur_deltas(settings.robot.model, deltas, start);
   start->tool_m = settings.tool_m;
   return Error{};
 }
@@ -367,7 +372,7 @@ Error start_geometry(const Options& options, const CalibrateSettings& settings, 
 Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
                    streams::SessionFacts* facts) {
   streams::SessionConfig config;
-  config.speed_model = nominal_model(settings.robot);
+  config.speed_model = settings.robot.model;
   config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
   config.progress = settings.progress;
   config.log_options.units = settings.units;
@@ -443,7 +448,7 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   const CalibrationBaseline& uncalibrated = run.result.baseline;
   const CalibrationStage& final_stage = run.final_stage();
   report::ReportData data;
-  data.title = "hivecal calibration: " + std::string(robot_type_name(settings.robot));
+  data.title = "hivecal calibration: " + settings.robot.robot;
   data.info_lines = facts.info_lines;
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
@@ -481,12 +486,12 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
                         const streams::SessionFacts& facts, const Run& run, const std::vector<std::string>& warnings) {
   const CalibrationStage& final_stage = run.final_stage();
   textio::CalibrationFile file;
-  file.robot = settings.robot;
+  static_cast<textio::RobotDescription&>(file) = settings.robot;  // name and convention as given
   file.model = final_stage.model;
   file.base_to_tracker = final_stage.base_to_tracker;
   file.has_metrics = true;
   file.metrics = data.calibrated;
-  const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
+  const UrCalibrationDeltas deltas = ur_deltas_between(settings.robot.model, final_stage.model);
   return textio::format_calibration_json(file, [&](textio::JsonWriter& w) {
     w.key("method").value(run.final_method());
     w.key("params").value(settings.paper_params ? "paper" : "full");
@@ -518,7 +523,7 @@ Error write_outputs(const Options& options, const CalibrateSettings& settings, c
   const CalibrationStage& final_stage = run.final_stage();
   Error error = outputs->stage_text(ids.result, "", result_json(settings, data, facts, run, warnings));
   if (error.ok() && !options.get("ur-deltas").empty()) {
-    const UrCalibrationDeltas deltas = ur_deltas_between(nominal_model(settings.robot), final_stage.model);
+    const UrCalibrationDeltas deltas = ur_deltas_between(settings.robot.model, final_stage.model);
     error = outputs->stage_text(ids.ur_deltas, "", textio::format_ur_calibration_conf(deltas));
   }
   if (error.ok() && !options.get("report").empty()) {
@@ -543,6 +548,7 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   if (error.ok()) error = load_dataset(options, settings, &dataset, &facts);
   static Run job;  // static: the CalibrationResult is ~5 KB
   job.from_controller = !options.get("ur-calibration").empty();
+  job.link_length_count = link_length_set(start).count;
   if (error.ok()) error = run(settings, start, &dataset, &job);
   if (!error.ok()) return error;
   const report::ReportData data = present(settings, start, dataset, facts, job);

@@ -47,9 +47,13 @@ Error predict(const Options& options) {
   // run
   std::vector<Vec3> points;
   points.reserve(poses.size());
+  // The file's own base frame: for modified DH the frame before Rx(alpha_0) Tx(a_0).
+  const RigidTransform file_base = calibration.convention == DhConvention::modified
+                                       ? calibration.modified_base.transform()
+                                       : RigidTransform{};
   for (const JointVector& q : poses) {
-    const Vec3 base_point = fk_tool_point(calibration.model, q);
-    points.push_back(frame == "base" ? base_point : calibration.base_to_tracker.apply(base_point));
+    const Vec3 chain_point = fk_tool_point(calibration.model, q);
+    points.push_back(frame == "base" ? file_base.apply(chain_point) : calibration.base_to_tracker.apply(chain_point));
   }
   // write
   error = outputs.stage_text(out_id, "", textio::format_points_csv(points, output_unit));

@@ -31,7 +31,7 @@ void request_stop(int) { g_stop = true; }
 const std::vector<cli::OptionSpec>& option_specs() {
   static const std::vector<cli::OptionSpec> specs = {
       {"out-dir", "DIR", "where robot.cap, tracker.cap, the CSV logs and the truth go", "."},
-      {"robot-model", "NAME", robot_type_names(), "ur5"},
+      {"robot-model", "NAME|FILE", std::string(robot_type_names()) + ", or a robot description .json (docs/formats.md)", "ur5"},
       {"seed", "N", "seed of every random choice", "1"},
       {"waypoints", "N", "waypoints visited", "38"},
       {"duration-s", "S", "session length [s]", "600"},
@@ -67,9 +67,15 @@ struct Numbers {
 /// Builds the session configuration.
 Error configure(const cli::Options& options, SimConfig* config) {
   Numbers numbers{options, Error{}};
-  if (robot_type_from_name(options.get("robot-model").c_str(), &config->robot_type) != Status::ok) {
-    return Error::usage("--robot-model must be one of " + std::string(robot_type_names()) + ", not '" + options.get("robot-model") + "'");
-  }
+  textio::RobotDescription robot;
+  bool from_file = false;
+  Error error = cli::robot_model_option(options, "robot-model", &robot, &from_file);
+  if (!error.ok()) return error;
+  if (from_file) config->nominal_tool_m = robot.model.tool_m;
+  config->robot_name = robot.robot;
+  config->nominal = robot.model;
+  config->convention = robot.convention;
+  config->modified_base = robot.modified_base;
   double seed = 0, waypoints = 0, drift_ppm = 0, robot_start = 0, tracker_start = 0, noise_um = 0, jitter_us = 0;
   if (!numbers.get("seed", &seed) || !numbers.get("waypoints", &waypoints) ||
       !numbers.get("duration-s", &config->duration_s) ||

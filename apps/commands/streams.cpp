@@ -155,10 +155,10 @@ Error extract(const cli::Options& options) {
   if (options.get("robot").empty() || options.get("tracker").empty()) {
     return Error::usage("--robot and --tracker are required (see --help)");
   }
-  RobotType type = RobotType::ur5;
+  textio::RobotDescription robot;
   Vec3 tool = Vec3::Zero();
   double max_speed_mm_s = 0, window_s = 0;
-  Error error = cli::robot_model_option(options, "robot-model", &type);
+  Error error = cli::robot_model_option(options, "robot-model", &robot);
   if (error.ok()) error = cli::vec3_option(options, "tool", &tool);
   if (error.ok()) error = cli::number_option(options, "max-speed-mm-s", &max_speed_mm_s);
   if (error.ok()) error = cli::number_option(options, "window-s", &window_s);
@@ -174,7 +174,7 @@ Error extract(const cli::Options& options) {
   if (error.ok() && !out.empty()) error = outputs.add_file(out, "--samples", &samples_id);
   if (!error.ok()) return error;
   streams::SessionConfig config;
-  config.speed_model = nominal_model(type);
+  config.speed_model = robot.model;
   config.speed_model.tool_m = tool;
   config.max_speed_m_s = max_speed_mm_s * 1e-3;
   config.window_s = window_s;
@@ -229,7 +229,7 @@ int extract_main(int argc, char** argv) {
       {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
       {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
       {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
-      {"robot-model", "NAME", std::string(robot_type_names()) + " (nominal geometry for tool speeds)", "ur5"},
+      {"robot-model", "NAME|FILE", std::string(robot_type_names()) + " or a robot description .json (nominal geometry for tool speeds)", "ur5"},
       {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
       {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
       {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},

@@ -38,6 +38,9 @@ DeviceInfoRecord make_device_info(DeviceKind kind, float rate_hz, const char* na
   info.device_kind = static_cast<std::uint8_t>(kind);
   info.nominal_rate_hz = rate_hz;
   std::strncpy(info.name, name, sizeof info.name - 1);
+  for (char& c : info.name) {
+    if (c != '\0' && (c < 0x20 || c > 0x7e)) c = '?';  // the wire takes printable ASCII only
+  }
   return info;
 }
 
@@ -58,7 +61,7 @@ Session::Session(const SimConfig& config) : config_(config) {
 }
 
 void Session::build_truth(Random* random) {
-  truth_.nominal = nominal_model(config_.robot_type);
+  truth_.nominal = config_.nominal;
   truth_.nominal.tool_m = config_.nominal_tool_m;
   if (config_.use_deltas) {
     (void)apply_ur_deltas(truth_.nominal, config_.deltas, &truth_.model);
@@ -94,8 +97,11 @@ void Session::build_truth(Random* random) {
 JointVector Session::random_waypoint(Random* random) const {
   // Tool roughly pointing down: q4 = -pi/2 - q2 - q3 and q5 = -pi/2 put the flange z axis
   // straight down on UR arms; +-0.35 rad around that. Reject poses too low or out of reach.
+  // Other arms (a description file whose upper arm and forearm are not UR's negative a2, a3)
+  // take poses spread over their joints, above the base plane.
   const RobotModel& model = truth_.nominal;
   const double reach_m = -(model.joints[1].a_m + model.joints[2].a_m);
+  if (!(reach_m > 0.2)) return general_waypoint(random);
   for (;;) {
     JointVector q;
     q(0) = random->uniform(-1.6, 1.6);
@@ -108,6 +114,21 @@ JointVector Session::random_waypoint(Random* random) const {
     const double radial_m = std::sqrt(p.x() * p.x() + p.y() * p.y());
     if (p.z() > 0.05 && p.z() < 0.8 && radial_m > 0.3 && radial_m < 0.9 * reach_m) return q;
   }
+}
+
+JointVector Session::general_waypoint(Random* random) const {
+  JointVector q = JointVector::Zero();
+  for (int attempt = 0; attempt < 1000; ++attempt) {
+    q(0) = random->uniform(-1.6, 1.6);
+    q(1) = random->uniform(-1.0, 1.0);
+    q(2) = random->uniform(-1.0, 1.0);
+    q(3) = random->uniform(-1.5, 1.5);
+    q(4) = random->uniform(0.3, 1.6);
+    q(5) = random->uniform(-1.5, 1.5);
+    if (random->uniform(0.0, 1.0) < 0.5) q(4) = -q(4);  // both wrist branches
+    if (fk_tool_point(truth_.nominal, q).z() > 0.05) break;
+  }
+  return q;
 }
 
 void Session::build_schedule(Random* random) {
@@ -198,7 +219,7 @@ RobotStream::RobotStream(const Session& session)
 
 DeviceInfoRecord RobotStream::device_info() {
   return make_device_info(DeviceKind::robot, static_cast<float>(1.0 / session_.config().robot_period_s),
-                          robot_type_name(session_.config().robot_type), sequence_++, next_us_);
+                          session_.config().robot_name.c_str(), sequence_++, next_us_);
 }
 
 bool RobotStream::next(JointStateRecord* record) {

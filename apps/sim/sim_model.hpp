@@ -9,9 +9,11 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "hivecal/core/random.hpp"
+#include "hivecal/model/dh_convention.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/ur_deltas.hpp"
 #include "hivecal/wire/records.hpp"
@@ -20,7 +22,10 @@ namespace hivecal::sim {
 
 /// Everything that defines a simulated session; defaults give the paper-like UR5 session.
 struct SimConfig {
-  RobotType robot_type = RobotType::ur5;     ///< arm type (nominal geometry)
+  std::string robot_name = "ur5";             ///< arm name (device info, truth file)
+  RobotModel nominal = nominal_model(RobotType::ur5);  ///< nominal geometry (standard DH; the tool is nominal_tool_m)
+  DhConvention convention = DhConvention::standard;    ///< how the truth file writes the DH rows
+  ModifiedDhBase modified_base;               ///< modified DH: Rx(alpha_0) Tx(a_0) of the description
   std::uint64_t seed = 1;                     ///< seed of every random choice
   int waypoint_count = 38;                    ///< waypoints visited (>= 2)
   double duration_s = 600.0;                  ///< target session length [s] (moves are slowed down to fill it)
@@ -117,6 +122,7 @@ class Session {
   void build_truth(Random* random);
   void build_schedule(Random* random);
   JointVector random_waypoint(Random* random) const;
+  JointVector general_waypoint(Random* random) const;  // any arm: joints spread, tool above the base plane
 
   SimConfig config_;
   SimTruth truth_;

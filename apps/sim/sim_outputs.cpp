@@ -140,7 +140,9 @@ void write_simulation_members(const Session& session, double truth_margin_s, tex
 
 bool write_truth_json(const Session& session, double truth_margin_s, port::StagedFile& out) {
   textio::CalibrationFile file;
-  file.robot = session.config().robot_type;
+  file.robot = session.config().robot_name;
+  file.convention = session.config().convention;
+  file.modified_base = session.config().modified_base;
   file.model = session.truth().model;
   file.base_to_tracker = session.truth().base_to_tracker;
   out.write(textio::format_calibration_json(

@@ -33,23 +33,111 @@ bool read_numbers(const JsonValue* v, std::size_t n, double* out) {
   return true;
 }
 
-port::Error parse_dh(const JsonValue& root, const std::string& source, RobotModel* model) {
+/// Reads number `key` of DH row j into *out; the error names the row and key.
+port::Error row_number(const JsonValue& row, std::size_t j, const char* key, const std::string& source, double* out) {
+  const JsonValue* v = row.find(key);
+  if (v == nullptr) return fail(source, "\"dh\"[" + std::to_string(j) + "]: missing \"" + key + "\"");
+  if (!read_number(v, out)) return fail(source, "\"dh\"[" + std::to_string(j) + "]." + key + " must be a number");
+  return port::Error{};
+}
+
+/// The six rows as written: theta_offset, d, a, alpha (standard) or theta_offset, d, a_{i-1},
+/// alpha_{i-1} (modified); rows[j] = {theta_offset, d, a, alpha}.
+port::Error parse_dh_rows(const JsonValue& root, const std::string& source, double (&rows)[kJointCount][4]) {
   const JsonValue* dh = root.find("dh");
-  if (dh == nullptr || dh->kind != JsonValue::Kind::array || dh->array.size() != kJointCount) {
+  if (dh == nullptr) return fail(source, "missing \"dh\" (an array of 6 joint objects)");
+  if (dh->kind != JsonValue::Kind::array || dh->array.size() != kJointCount) {
     return fail(source, "\"dh\" must be an array of 6 joint objects");
   }
+  static const char* const kKeys[4] = {"theta_offset", "d", "a", "alpha"};
   for (std::size_t j = 0; j < static_cast<std::size_t>(kJointCount); ++j) {
     const JsonValue& row = dh->array[j];
-    DhJoint& joint = model->joints[j];
-    if (!read_number(row.find("theta_offset"), &joint.theta_offset_rad) || !read_number(row.find("d"), &joint.d_m) ||
-        !read_number(row.find("a"), &joint.a_m) || !read_number(row.find("alpha"), &joint.alpha_rad)) {
-      return fail(source, "\"dh\"[" + std::to_string(j) + "] needs numbers theta_offset, d, a, alpha");
+    if (row.kind != JsonValue::Kind::object) return fail(source, "\"dh\"[" + std::to_string(j) + "] must be an object");
+    for (std::size_t k = 0; k < 4; ++k) {
+      port::Error r = row_number(row, j, kKeys[k], source, &rows[j][k]);
+      if (!r.ok()) return r;
     }
   }
-  double tool[3];
-  if (!read_numbers(root.find("tool"), 3, tool)) return fail(source, "\"tool\" must be [x, y, z] in metres");
-  model->tool_m << tool[0], tool[1], tool[2];
   return port::Error{};
+}
+
+port::Error parse_description(const JsonValue& root, const std::string& source, RobotDescription* description) {
+  RobotDescription parsed;
+  parsed.robot.clear();  // no built-in default: a file names its own arm (or read_robot_description names it)
+  const JsonValue* robot = root.find("robot");
+  if (robot != nullptr) {
+    if (robot->kind != JsonValue::Kind::string) return fail(source, "\"robot\" must be a string");
+    parsed.robot = robot->string;
+  }
+  const JsonValue* convention = root.find("convention");
+  if (convention != nullptr) {
+    const bool standard = convention->kind == JsonValue::Kind::string && convention->string == "standard-dh";
+    const bool modified = convention->kind == JsonValue::Kind::string && convention->string == "modified-dh";
+    if (!standard && !modified) {
+      return fail(source, "unknown \"convention\"" +
+                              (convention->kind == JsonValue::Kind::string ? " '" + convention->string + "'" : std::string()) +
+                              ": \"standard-dh\" or \"modified-dh\"");
+    }
+    parsed.convention = modified ? DhConvention::modified : DhConvention::standard;
+  }
+  double rows[kJointCount][4];
+  port::Error r = parse_dh_rows(root, source, rows);
+  if (!r.ok()) return r;
+  double tool[3];
+  if (root.find("tool") == nullptr) return fail(source, "missing \"tool\" ([x, y, z] in metres)");
+  if (!read_numbers(root.find("tool"), 3, tool)) return fail(source, "\"tool\" must be [x, y, z] in metres");
+  const Vec3 tool_m(tool[0], tool[1], tool[2]);
+  if (parsed.convention == DhConvention::standard) {
+    for (int j = 0; j < kJointCount; ++j) parsed.model.joints[j] = DhJoint{rows[j][0], rows[j][1], rows[j][2], rows[j][3]};
+    parsed.model.tool_m = tool_m;
+  } else {
+    ModifiedDhRow modified[kJointCount];
+    for (int j = 0; j < kJointCount; ++j) modified[j] = ModifiedDhRow{rows[j][3], rows[j][2], rows[j][0], rows[j][1]};
+    if (model_from_modified_dh(modified, tool_m, &parsed.model, &parsed.modified_base) != Status::ok) {
+      return fail(source, "\"dh\" or \"tool\" holds a number that is not finite");
+    }
+  }
+  *description = parsed;
+  return port::Error{};
+}
+
+port::Error parse_root(const std::string& text, const std::string& source, JsonValue* root) {
+  const port::Error syntax = parse_json(text, root);
+  if (!syntax.ok()) return fail(source, "malformed JSON: " + syntax.message);
+  if (root->kind != JsonValue::Kind::object) return fail(source, "top level must be an object");
+  return port::Error{};
+}
+
+port::Error check_format(const JsonValue& root, const std::string& source, bool required) {
+  const JsonValue* format = root.find("format");
+  if (format == nullptr && !required) return port::Error{};
+  if (format == nullptr || format->kind != JsonValue::Kind::string || format->string != kFormat) {
+    return fail(source, std::string("\"format\" must be \"") + kFormat + "\"");
+  }
+  return port::Error{};
+}
+
+/// The DH rows of `description` in its own convention: {theta_offset, d, a, alpha} each, and the tool.
+void rows_as_written(const RobotDescription& description, double (&rows)[kJointCount][4], Vec3* tool_m) {
+  if (description.convention == DhConvention::standard) {
+    for (int j = 0; j < kJointCount; ++j) {
+      const DhJoint& joint = description.model.joints[j];
+      rows[j][0] = joint.theta_offset_rad;
+      rows[j][1] = joint.d_m;
+      rows[j][2] = joint.a_m;
+      rows[j][3] = joint.alpha_rad;
+    }
+    *tool_m = description.model.tool_m;
+    return;
+  }
+  ModifiedDhRow modified[kJointCount];
+  modified_dh_from_model(description.model, description.modified_base, modified, tool_m);
+  for (int j = 0; j < kJointCount; ++j) {
+    rows[j][0] = modified[j].theta_offset_rad;
+    rows[j][1] = modified[j].d_m;
+    rows[j][2] = modified[j].a_prev_m;
+    rows[j][3] = modified[j].alpha_prev_rad;
+  }
 }
 
 port::Error parse_transform(const JsonValue& root, const std::string& source, RigidTransform* transform) {
@@ -89,25 +177,32 @@ std::string format_calibration_json(const CalibrationFile& file, const std::func
   JsonWriter json;
   json.begin_object();
   json.key("format").value(kFormat);
-  json.key("robot").value(robot_type_name(file.robot));
-  json.key("convention").value("standard-dh");
+  json.key("robot").value(file.robot);
+  json.key("convention").value(dh_convention_name(file.convention));
+  double rows[kJointCount][4];
+  Vec3 tool_m;
+  rows_as_written(file, rows, &tool_m);
   json.key("dh").begin_array();
-  for (const DhJoint& joint : file.model.joints) {
+  for (const double (&values)[4] : rows) {
     json.begin_object();
-    json.key("theta_offset").value(joint.theta_offset_rad);
-    json.key("d").value(joint.d_m);
-    json.key("a").value(joint.a_m);
-    json.key("alpha").value(joint.alpha_rad);
+    json.key("theta_offset").value(values[0]);
+    json.key("d").value(values[1]);
+    json.key("a").value(values[2]);
+    json.key("alpha").value(values[3]);
     json.end_object();
   }
   json.end_array();
-  json.key("tool").inline_array(file.model.tool_m.data(), 3);
+  json.key("tool").inline_array(tool_m.data(), 3);
+  // A modified-DH file's base is the frame before Rx(alpha_0) Tx(a_0).
+  const RigidTransform base_to_tracker =
+      file.convention == DhConvention::modified ? file.base_to_tracker.then_after(file.modified_base.transform().inverse())
+                                                : file.base_to_tracker;
   json.key("base_to_tracker").begin_array();
   for (int r = 0; r < 4; ++r) {
     double row[4] = {0.0, 0.0, 0.0, 1.0};
     if (r < 3) {
-      for (int c = 0; c < 3; ++c) row[c] = file.base_to_tracker.rotation(r, c);
-      row[3] = file.base_to_tracker.translation_m(r);
+      for (int c = 0; c < 3; ++c) row[c] = base_to_tracker.rotation(r, c);
+      row[3] = base_to_tracker.translation_m(r);
     }
     json.inline_array(row, 4);
   }
@@ -127,31 +222,30 @@ std::string format_calibration_json(const CalibrationFile& file, const std::func
   return json.text();
 }
 
+const char* dh_convention_name(DhConvention convention) {
+  return convention == DhConvention::modified ? "modified-dh" : "standard-dh";
+}
+
+port::Error parse_robot_description(const std::string& text, const std::string& source_name,
+                                    RobotDescription* description) {
+  JsonValue root;
+  port::Error r = parse_root(text, source_name, &root);
+  if (r.ok()) r = check_format(root, source_name, false);
+  if (r.ok()) r = parse_description(root, source_name, description);
+  return r;
+}
+
 port::Error parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file) {
   JsonValue root;
-  const port::Error syntax = parse_json(text, &root);
-  if (!syntax.ok()) return fail(source_name, "malformed JSON: " + syntax.message);
-  if (root.kind != JsonValue::Kind::object) return fail(source_name, "top level must be an object");
-  const JsonValue* format = root.find("format");
-  if (format == nullptr || format->kind != JsonValue::Kind::string || format->string != kFormat) {
-    return fail(source_name, std::string("\"format\" must be \"") + kFormat + "\"");
-  }
+  port::Error r = parse_root(text, source_name, &root);
+  if (r.ok()) r = check_format(root, source_name, true);
   CalibrationFile parsed;
-  const JsonValue* robot = root.find("robot");
-  if (robot == nullptr || robot->kind != JsonValue::Kind::string ||
-      robot_type_from_name(robot->string.c_str(), &parsed.robot) != Status::ok) {
-    return fail(source_name, "unknown robot model" + (robot != nullptr && robot->kind == JsonValue::Kind::string
-                                                          ? " '" + robot->string + "' (" + robot_type_names() + ")"
-                                                          : std::string(" (missing \"robot\")")));
-  }
-  const JsonValue* convention = root.find("convention");
-  if (convention != nullptr && (convention->kind != JsonValue::Kind::string || convention->string != "standard-dh")) {
-    return fail(source_name, "\"convention\" must be \"standard-dh\"");
-  }
-  port::Error r = parse_dh(root, source_name, &parsed.model);
+  if (r.ok()) r = parse_description(root, source_name, &parsed);
+  if (r.ok()) r = parse_transform(root, source_name, &parsed.base_to_tracker);
   if (!r.ok()) return r;
-  r = parse_transform(root, source_name, &parsed.base_to_tracker);
-  if (!r.ok()) return r;
+  if (parsed.convention == DhConvention::modified) {
+    parsed.base_to_tracker = parsed.base_to_tracker.then_after(parsed.modified_base.transform());
+  }
   *file = parsed;
   return port::Error{};
 }
@@ -162,6 +256,42 @@ port::Error read_calibration_json(const std::string& path, CalibrationFile* file
   if (!read.ok()) return read;
   if (trim(text).empty()) return port::Error::input(path + ": empty file");
   return parse_calibration_json(text, path, file);
+}
+
+}  // namespace hivecal::textio
+
+namespace hivecal::textio {
+
+port::Error read_robot_description(const std::string& path, RobotDescription* description) {
+  std::string text;
+  const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
+  if (!read.ok()) return read;
+  if (trim(text).empty()) return port::Error::input(path + ": empty file");
+  const port::Error parsed = parse_robot_description(text, path, description);
+  if (parsed.ok() && description->robot.empty()) {  // unnamed: the file's name without folder and .json
+    const std::size_t slash = path.find_last_of('/');
+    std::string stem = slash == std::string::npos ? path : path.substr(slash + 1);
+    if (stem.size() > 5 && stem.compare(stem.size() - 5, 5, ".json") == 0) stem.resize(stem.size() - 5);
+    description->robot = stem;
+  }
+  return parsed;
+}
+
+port::Error robot_description_from_value(const std::string& value, RobotDescription* description, bool* from_file) {
+  const bool is_file = !value.empty() && port::identify(value).exists;
+  const bool json_name = value.size() >= 5 && value.compare(value.size() - 5, 5, ".json") == 0;
+  if (from_file != nullptr) *from_file = is_file || json_name;
+  if (is_file || json_name) return read_robot_description(value, description);
+  RobotType type = RobotType::ur5;
+  if (robot_type_from_name(value.c_str(), &type) != Status::ok) {
+    return port::Error::usage("unknown robot model " + port::quoted(value) + " (" + robot_type_names() +
+                              ", or a robot description .json file)");
+  }
+  RobotDescription builtin;
+  builtin.robot = robot_type_name(type);
+  builtin.model = nominal_model(type);
+  *description = builtin;
+  return port::Error{};
 }
 
 }  // namespace hivecal::textio

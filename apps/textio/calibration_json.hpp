@@ -1,9 +1,11 @@
-// The calibration result file, format "robot-calibration/1" (docs/formats.md).
+// The calibration result file, format "robot-calibration/1" (docs/formats.md), and the robot
+// description of any 6-axis arm in the same shape (a result is also a valid start model).
 #pragma once
 
 #include <functional>
 #include <string>
 
+#include "hivecal/model/dh_convention.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/metrics.hpp"
 #include "textio/json.hpp"
@@ -11,14 +13,39 @@
 
 namespace hivecal::textio {
 
+/// A robot description: the DH table and tool of a 6-axis arm, in either convention. The
+/// library works on the standard-DH `model`; a modified-DH file is converted exactly
+/// (model/dh_convention.hpp) and written back in its own convention.
+struct RobotDescription {
+  std::string robot = "ur5";                         ///< name ("ur5", "abb-irb120", ...; free text)
+  DhConvention convention = DhConvention::standard;  ///< how the file writes its rows
+  ModifiedDhBase modified_base;                      ///< modified DH: Rx(alpha_0) Tx(a_0) before joint 1
+  RobotModel model;                                  ///< the standard-DH table and tool point [m, rad]
+};
+
 /// What a result file must hold to predict positions, plus its accuracy figures.
-struct CalibrationFile {
-  RobotType robot = RobotType::ur5;  ///< robot type of the nominal model
-  RobotModel model;                  ///< calibrated DH table and tool point
-  RigidTransform base_to_tracker;    ///< robot base -> tracker frame
+struct CalibrationFile : RobotDescription {
+  /// Base of the standard-DH chain -> tracker frame: predicted = base_to_tracker * FK(model)
+  /// (for a modified-DH file, the file's own base -> tracker times modified_base).
+  RigidTransform base_to_tracker;
   bool has_metrics = false;          ///< metrics below were present / are to be written
   AccuracyReport metrics;            ///< train / test / overall error statistics [m]
 };
+
+/// The JSON name of a convention: "standard-dh" or "modified-dh".
+const char* dh_convention_name(DhConvention convention);
+/// Parses a robot description (format optional; "robot" optional, any name, "" when absent;
+/// "convention" optional, standard-dh by default); errors name the file and the key at fault.
+port::Error parse_robot_description(const std::string& text, const std::string& source_name,
+                                    RobotDescription* description);
+/// Reads and parses a robot description file; without "robot" the arm is named after the
+/// file ("irb120" for .../irb120.json).
+port::Error read_robot_description(const std::string& path, RobotDescription* description);
+/// `--robot-model VALUE`: a file (an existing path, or a name ending in .json) or a built-in
+/// table name (ur5, ...; tool at the flange). Usage-style errors name the value. *from_file
+/// (optional) says which it was.
+port::Error robot_description_from_value(const std::string& value, RobotDescription* description,
+                                         bool* from_file = nullptr);
 
 /// The JSON document; `extra_members` may add more keys to the top-level object.
 std::string format_calibration_json(const CalibrationFile& file,

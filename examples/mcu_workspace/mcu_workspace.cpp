@@ -54,7 +54,7 @@ int main() {
               sizeof g_dataset, sizeof g_joint_trig, sizeof g_workspace, sizeof g_result);
 
   LmOptions options;
-  options.params = LmParamSet::paper6;
+  options.params = LmParamSet::link_lengths;
   g_workspace.joint_trig = Span<JointTrig>(g_joint_trig);
   const RigidTransform at_base;  // the tracker sits at the robot base
   const Status status = calibrate_lm(nominal, &at_base, g_dataset.samples(), options, &g_workspace, &g_result);

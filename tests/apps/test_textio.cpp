@@ -50,7 +50,7 @@ TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
 textio::CalibrationFile example_calibration() {
   Random random(8);
   textio::CalibrationFile file;
-  file.robot = RobotType::ur10;
+  file.robot = "ur10";
   file.model = test::perturbed_model(nominal_model(RobotType::ur10), &random, 1e-3, 1e-3);
   file.model.tool_m << 0.001, -0.002, 0.1695;
   file.base_to_tracker = test::example_base_to_tracker();
@@ -68,7 +68,7 @@ TEST(TextJson, CalibrationRoundTripsBitExactly) {
   textio::CalibrationFile back;
   const port::Error r = textio::parse_calibration_json(text, "result.json", &back);
   ASSERT_TRUE(r.ok()) << r.message;
-  EXPECT_EQ(back.robot, RobotType::ur10);
+  EXPECT_EQ(back.robot, "ur10");
   EXPECT_EQ(to_params(back.model), to_params(file.model));
   EXPECT_LT((back.base_to_tracker.rotation - file.base_to_tracker.rotation).cwiseAbs().maxCoeff(), 1e-15);
   EXPECT_EQ(back.base_to_tracker.translation_m, file.base_to_tracker.translation_m);
@@ -95,7 +95,10 @@ TEST(TextJson, MalformedResultsAreNamed) {
       {"{", "malformed JSON"},
       {"[1,2]", "top level must be an object"},
       {replaced("robot-calibration/1", "other/2"), "\"format\""},
-      {replaced("\"ur10\"", "\"kuka\""), "unknown robot model 'kuka'"},
+      {replaced("\"standard-dh\"", "\"dh-2\""), "result.json: unknown \"convention\" 'dh-2'"},
+      {replaced("\"ur10\"", "7"), "\"robot\" must be a string"},
+      {replaced("\"dh\"", "\"dh_rows\""), "missing \"dh\""},
+      {replaced("\"d\": ", "\"d\": \"x\", \"e\": "), "\"dh\"[0].d must be a number"},
       {replaced("\"theta_offset\"", "\"theta\""), "\"dh\"[0]"},
       {replaced("\"tool\": [", "\"tool\": [1, "), "\"tool\""},
       {replaced("[0, 0, 0, 1]", "[0, 0, 1, 1]"), "not a proper rigid transform"},

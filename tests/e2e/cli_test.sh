@@ -67,8 +67,8 @@ no_file "$work/p1.csv"
 : >"$work/empty.json"
 expect 3 "empty file" -- predict --calibration "$work/empty.json" --joints "$work/joints.csv" --out "$work/p2.csv"
 no_file "$work/p2.csv"
-sed 's/"ur5"/"ur7"/' "$work/result.json" >"$work/ur7.json"
-expect 3 "unknown robot model 'ur7'" -- predict --calibration "$work/ur7.json" --joints "$work/joints.csv" --out "$work/p3.csv"
+sed 's/"standard-dh"/"craig"/' "$work/result.json" >"$work/craig.json"
+expect 3 "craig.json: unknown \"convention\" 'craig'" -- predict --calibration "$work/craig.json" --joints "$work/joints.csv" --out "$work/p3.csv"
 no_file "$work/p3.csv"
 head -c 200 "$work/result.json" >"$work/cut.json"
 expect 3 "malformed JSON" -- predict --calibration "$work/cut.json" --joints "$work/joints.csv" --out "$work/p4.csv"
@@ -88,6 +88,9 @@ expect 2 "--robot-baud: unsupported baud rate 1234" -- record --robot-port /dev/
 expect 2 "give either --samples, or --robot and --tracker" -- calibrate
 expect 2 "--robot and --tracker go together" -- calibrate --robot "$work/joints.csv"
 expect 2 "unknown robot model 'ur7'" -- calibrate --samples "$work/joints.csv" --robot-model ur7
+printf '{"convention": "modified-dh", "dh": []}\n' >"$work/arm.json"
+expect 3 "arm.json: \"dh\" must be an array of 6 joint objects" -- calibrate --samples "$work/joints.csv" --robot-model "$work/arm.json"
+expect 3 "no-such-arm.json': cannot open" -- calibrate --samples "$work/joints.csv" --robot-model "$work/no-such-arm.json"
 expect 2 "--method must be one of" -- calibrate --samples "$work/joints.csv" --method sgd
 expect 2 "--split must be a fraction" -- calibrate --samples "$work/joints.csv" --split 1.5
 expect 2 "--tool must be X,Y,Z" -- calibrate --samples "$work/joints.csv" --tool 1,2

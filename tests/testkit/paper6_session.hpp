@@ -17,7 +17,7 @@ struct Paper6Session {
   Dataset<kMaxSessionSamples> dataset;       ///< all poses, split 70/30
   Paper6Cost<kMaxSessionSamples> cost;       ///< on the training poses
   Paper6Cell cell;                           ///< nominal and true geometry
-  Paper6Box box;                             ///< nominal +/- 2 mm
+  LinkLengthBox box;                             ///< nominal +/- 2 mm
   double nominal_mae_m = 0.0;                ///< training MAE of the nominal lengths [m]
   double reference_mae_m = 0.0;              ///< training MAE of the least-squares lengths [m]
 
@@ -30,15 +30,15 @@ struct Paper6Session {
     fill_tool_down(cell, poses, 1e-5, &random, &dataset);
     if (dataset.size() != poses || dataset.split(kDefaultTrainFraction, seed) != Status::ok) return false;
     if (cost.build(cell.nominal, dataset.train()) != Status::ok) return false;
-    if (paper6_box(cell.nominal, kPaper6DefaultHalfWidth_m, &box) != Status::ok) return false;
-    nominal_mae_m = generic_mae(cell.nominal, paper6_lengths(cell.nominal), dataset.train());
+    if (link_length_box(cell.nominal, kPaper6DefaultHalfWidth_m, &box) != Status::ok) return false;
+    nominal_mae_m = generic_mae(cell.nominal, link_lengths(cell.nominal), dataset.train());
     reference_mae_m = generic_mae(cell.nominal, least_squares_lengths(cell.nominal, dataset.train()), dataset.train());
     return nominal_mae_m > 0.0 && reference_mae_m > 0.0;
   }
 
   /// Test-set MAE [m] of lengths_m (base refitted on the training poses, as in the paper).
   double test_mae(const double* lengths_m) const {
-    const RobotModel model = with_paper6_lengths(cell.nominal, lengths_m);
+    const RobotModel model = with_link_lengths(cell.nominal, link_length_set(cell.nominal), lengths_m);
     RigidTransform base;
     double mae_m = -1.0;
     if (fit_base_to_tracker(model, dataset.train(), &base) != Status::ok) return mae_m;

@@ -1,6 +1,6 @@
 // The calibration job, one entry for the command-line tool, the firmware and the tests:
 //   split -> baseline (start geometry, base fitted on the training samples) -> the solver
-//   stages of CalibrationOptions::method (ABC / GSA on the paper's six lengths, then or instead
+//   stages of CalibrationOptions::method (ABC / GSA on the link lengths, then or instead
 //   Levenberg-Marquardt on the full model) -> train/test errors of every stage.
 // Like ruckig's Ruckig / InputParameter / Result: options in, a caller-sized workspace, one
 // result struct out. No heap, no clock: a caller that wants stage timings takes them in its
@@ -30,17 +30,17 @@ namespace hivecal {
 /// Which solvers run, in order.
 enum class CalibrationMethod : std::uint8_t {
   lm,      ///< Levenberg-Marquardt from the start geometry
-  abc,     ///< ABC on the paper's six lengths
-  gsa,     ///< GSA on the paper's six lengths
+  abc,     ///< ABC on the link lengths (for UR the paper's six)
+  gsa,     ///< GSA on the link lengths (for UR the paper's six)
   abc_lm,  ///< ABC, then LM from its geometry and base (the hybrid)
   gsa_lm,  ///< GSA, then LM from its geometry and base
   all,     ///< the paper's Table 1: GSA, ABC and LM, each from the start geometry
 };
 
-/// What LM may move (ABC and GSA always search the paper's six lengths).
+/// What LM may move (ABC and GSA always search the link lengths: link_length_set(start)).
 enum class CalibrationParams : std::uint8_t {
   full,   ///< every parameter the data identifies (LmParamSet::full)
-  paper,  ///< the paper's six lengths and the base (LmParamSet::paper6)
+  paper,  ///< the link lengths (for UR the paper's six) and the base (LmParamSet::link_lengths)
 };
 
 /// One solver of a stage.
@@ -197,24 +197,25 @@ template <std::size_t A, std::size_t B>
 inline constexpr std::size_t max_of = A > B ? A : B;
 }  // namespace detail
 
-/// A workspace for jobs on up to `Samples` training samples: paper-6 cost with `CostScalar`
+/// A workspace for jobs on up to `Samples` training samples and up to `MaxLinkLengths` link
+/// lengths (6: UR arms, the firmware; kMaxLinkLengths: any arm): paper-6 cost with `CostScalar`
 /// terms (double: exact; float: half the memory, the firmware's choice), ABC and GSA with up to
 /// `Population` members, traces of `TraceCapacity` iterations per stage, and joint trig
 /// storage for LM when `JointTrigSamples` > 0 (faster, same bits). Big: give it static storage.
 template <std::size_t Samples, typename CostScalar = double, std::size_t Population = 150,
-          std::size_t TraceCapacity = 300, std::size_t JointTrigSamples = 0>
+          std::size_t TraceCapacity = 300, std::size_t JointTrigSamples = 0, std::size_t MaxLinkLengths = kPaper6Dimension>
 class CalibrationWorkspace final : public CalibrationWorkspaceBase {
  public:
-  using Cost = Paper6Cost<Samples, CostScalar>;  ///< the population stages' cost
+  using Cost = Paper6Cost<Samples, CostScalar, MaxLinkLengths>;  ///< the population stages' cost
   /// The ABC phase's objects.
   struct AbcPhase {
     Cost cost;
-    AbcSolver<Population, kPaper6Dimension> solver;
+    AbcSolver<Population, MaxLinkLengths> solver;
   };
   /// The GSA phase's objects.
   struct GsaPhase {
     Cost cost;
-    GsaSolver<Population, kPaper6Dimension> solver;
+    GsaSolver<Population, MaxLinkLengths> solver;
   };
   /// The LM phase's objects.
   struct LmPhase {

@@ -9,8 +9,8 @@ namespace {
 
 /// Which stages a method runs.
 struct StagePlan {
-  bool gsa = false;     ///< GSA on the paper's six lengths
-  bool abc = false;     ///< ABC on the paper's six lengths
+  bool gsa = false;     ///< GSA on the link lengths
+  bool abc = false;     ///< ABC on the link lengths
   bool lm = false;      ///< LM
   bool hybrid = false;  ///< LM starts from the population stage's result
 };
@@ -58,7 +58,7 @@ CalibrationStage& population_stage(Job& job, CalibrationSolver solver, const Pap
   return stage;
 }
 
-/// ABC or GSA on the paper's six lengths from the start geometry, in the workspace's arena.
+/// ABC or GSA on the link lengths from the start geometry, in the workspace's arena.
 Status run_population(Job& job, CalibrationSolver solver) {
   const CalibrationOptions& o = job.options;
   TraceBase& trace = job.workspace.trace(job.result.stage_count);
@@ -94,7 +94,7 @@ Status run_lm(Job& job, bool hybrid) {
   CalibrationResult& r = job.result;
   const CalibrationStage* previous = hybrid && r.stage_count > 0 ? &r.stages[r.stage_count - 1] : nullptr;
   LmOptions lm = o.lm;
-  lm.params = o.params == CalibrationParams::paper ? LmParamSet::paper6 : LmParamSet::full;
+  lm.params = o.params == CalibrationParams::paper ? LmParamSet::link_lengths : LmParamSet::full;
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
   TraceBase& trace = job.workspace.trace(r.stage_count);
   trace.clear();

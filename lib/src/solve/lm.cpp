@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "hivecal/solve/cost.hpp"
+#include "hivecal/solve/paper6_cost.hpp"
 #include "hivecal/core/math.hpp"
 
 namespace hivecal {
@@ -184,7 +185,7 @@ Status validate_inputs(const RobotModel& start_model, const RigidTransform* star
                        const LmOptions& options, ParamMask* free_mask) {
   if (!options_valid(options)) return Status::invalid_argument;
   if (samples.empty()) return Status::dataset_empty;
-  *free_mask = lm_param_mask(options.params, options.custom_mask);
+  *free_mask = lm_param_mask(options.params, options.custom_mask, start_model);
   if (3 * samples.size() <= static_cast<std::size_t>(mask_count(*free_mask))) return Status::too_few_samples;
   if (!all_finite(to_params(start_model))) return Status::non_finite_input;
   if (start_base != nullptr && !transform_finite(*start_base)) return Status::non_finite_input;
@@ -402,15 +403,15 @@ const char* lm_termination_name(LmTermination termination) {
   return "cancelled";
 }
 
-ParamMask lm_param_mask(LmParamSet set, ParamMask custom) {
+ParamMask lm_param_mask(LmParamSet set, ParamMask custom, const RobotModel& start) {
   switch (set) {
     case LmParamSet::full: return kAllParamsMask;
     case LmParamSet::custom: return custom & kAllParamsMask;
-    case LmParamSet::paper6: break;
+    case LmParamSet::link_lengths: break;
   }
-  ParamMask mask = param_bit(model_param_index(0, DhField::d)) | param_bit(model_param_index(1, DhField::a)) |
-                   param_bit(model_param_index(2, DhField::a)) | param_bit(model_param_index(3, DhField::d)) |
-                   param_bit(model_param_index(4, DhField::d)) | param_bit(model_param_index(5, DhField::d));
+  const LinkLengthSet lengths = link_length_set(start);
+  ParamMask mask = 0;
+  for (std::size_t k = 0; k < lengths.count; ++k) mask |= param_bit(lengths.param_index[k]);
   for (int i = 0; i < kBaseParamCount; ++i) mask |= param_bit(kModelParamCount + i);
   return mask;
 }

@@ -10,65 +10,91 @@
 namespace hivecal {
 namespace {
 
-constexpr int kTailCount = static_cast<int>(kPaper6Dimension) - 1;  // a2..d6: the lengths that move centred points
-using TailLengths = Eigen::Matrix<double, kTailCount, 1>;
-using TailDirections = Eigen::Matrix<double, 3, kTailCount>;
+constexpr int kMaxStored = static_cast<int>(kMaxLinkLengths);  // columns stored per sample, at most
+using StoredDirections = Eigen::Matrix<double, 3, kMaxStored>;
 
-// Positions of the stored values (kPaper6ValuesPerSample): point, error, directions.
+// Positions of the stored values: point, error, directions (values_per_sample_ in all).
 constexpr std::size_t kPointValue = 0;
 constexpr std::size_t kErrorValue = 3;
 constexpr std::size_t kDirectionValue = 6;
-static_assert(kDirectionValue + 3 * kTailCount == kPaper6ValuesPerSample, "value layout");
-constexpr std::size_t kBlockValues = kPaper6ValuesPerSample * kPaper6BlockSamples;
+static_assert(kDirectionValue + 3 * (kPaper6Dimension - 1) == kPaper6ValuesPerSample, "value layout");
 
-/// Position of value v of sample i in the block storage.
-constexpr std::size_t value_index(std::size_t v, std::size_t i) {
-  return i / kPaper6BlockSamples * kBlockValues + v * kPaper6BlockSamples + i % kPaper6BlockSamples;
+/// Position of value v of sample i in a block storage of `per_sample` values per sample.
+constexpr std::size_t value_index(std::size_t v, std::size_t i, std::size_t per_sample) {
+  return i / kPaper6BlockSamples * (per_sample * kPaper6BlockSamples) + v * kPaper6BlockSamples + i % kPaper6BlockSamples;
 }
 
 /// A stored sample widened to double (exact: float -> double loses nothing).
 struct WideTerm {
   Vec3 point_m;
   Vec3 measured_m;  // point + error: the measured point in the reference frame, relative
-  TailDirections directions;
+  StoredDirections directions;  // the first `stored` columns
 };
 
 /// Sample i of the block storage.
 template <typename Scalar>
-WideTerm widen(const Scalar* values, std::size_t i) {
-  const auto value = [&](std::size_t v) { return static_cast<double>(values[value_index(v, i)]); };
+WideTerm widen(const Scalar* values, std::size_t i, std::size_t per_sample, int stored) {
+  const auto value = [&](std::size_t v) { return static_cast<double>(values[value_index(v, i, per_sample)]); };
   WideTerm wide;
+  wide.directions.setZero();
   for (int r = 0; r < 3; ++r) {
     const auto row = static_cast<std::size_t>(r);
     wide.point_m(r) = value(kPointValue + row);
     wide.measured_m(r) = wide.point_m(r) + value(kErrorValue + row);
-    for (int k = 0; k < kTailCount; ++k) wide.directions(r, k) = value(kDirectionValue + 3 * static_cast<std::size_t>(k) + row);
+    for (int k = 0; k < stored; ++k) wide.directions(r, k) = value(kDirectionValue + 3 * static_cast<std::size_t>(k) + row);
   }
   return wide;
 }
 
+/// sum_k columns.col(begin + k) * t[begin + k] over `count` columns, summed in halves
+/// recursively: the order of Eigen's unrolled fixed-size products, so that the paper's six
+/// lengths keep the bits they had as fixed-size Eigen expressions (golden digests).
+Vec3 combine(const StoredDirections& columns, const double* t, int begin, int count) {
+  if (count == 0) return Vec3::Zero();
+  if (count == 1) return columns.col(begin) * t[begin];
+  const int half = count / 2;
+  return combine(columns, t, begin, half) + combine(columns, t, begin + half, count - half);
+}
+
 }  // namespace
 
-Paper6Lengths paper6_lengths(const RobotModel& model) {
+LinkLengthSet link_length_set(const RobotModel& nominal) {
+  const ModelParams params = to_params(nominal);
+  LinkLengthSet set;
+  for (int j = 0; j < kJointCount; ++j) {
+    for (DhField field : {DhField::d, DhField::a}) {
+      const int index = model_param_index(j, field);
+      if (params(index) != 0.0) set.param_index[set.count++] = index;
+    }
+  }
+  return set;
+}
+
+LinkLengths link_lengths(const RobotModel& model, const LinkLengthSet& set) {
   const ModelParams params = to_params(model);
-  Paper6Lengths lengths_m;
-  for (std::size_t k = 0; k < kPaper6Dimension; ++k) lengths_m(static_cast<int>(k)) = params(kPaper6ParamIndex[k]);
+  LinkLengths lengths_m(static_cast<Eigen::Index>(set.count));
+  for (std::size_t k = 0; k < set.count; ++k) lengths_m(static_cast<Eigen::Index>(k)) = params(set.param_index[k]);
   return lengths_m;
 }
 
-RobotModel with_paper6_lengths(const RobotModel& model, const double* lengths_m) {
+LinkLengths link_lengths(const RobotModel& model) { return link_lengths(model, link_length_set(model)); }
+
+RobotModel with_link_lengths(const RobotModel& model, const LinkLengthSet& set, const double* lengths_m) {
   ModelParams params = to_params(model);
-  for (std::size_t k = 0; k < kPaper6Dimension; ++k) params(kPaper6ParamIndex[k]) = lengths_m[k];
+  for (std::size_t k = 0; k < set.count; ++k) params(set.param_index[k]) = lengths_m[k];
   return from_params(params);
 }
 
-Status paper6_box(const RobotModel& nominal, double half_width_m, Paper6Box* box) {
+Status link_length_box(const RobotModel& nominal, double half_width_m, LinkLengthBox* box) {
   if (!(math::is_finite(half_width_m) && half_width_m > 0.0)) return Status::invalid_argument;
-  const Paper6Lengths lengths_m = paper6_lengths(nominal);
+  const LinkLengthSet set = link_length_set(nominal);
+  if (set.count == 0) return Status::invalid_argument;
+  const LinkLengths lengths_m = link_lengths(nominal, set);
   if (!all_finite(lengths_m)) return Status::non_finite_input;
-  for (std::size_t k = 0; k < kPaper6Dimension; ++k) {
-    box->lower_m[k] = lengths_m(static_cast<int>(k)) - half_width_m;
-    box->upper_m[k] = lengths_m(static_cast<int>(k)) + half_width_m;
+  box->count = set.count;
+  for (std::size_t k = 0; k < set.count; ++k) {
+    box->lower_m[k] = lengths_m(static_cast<Eigen::Index>(k)) - half_width_m;
+    box->upper_m[k] = lengths_m(static_cast<Eigen::Index>(k)) + half_width_m;
   }
   return Status::ok;
 }
@@ -78,9 +104,17 @@ Status Paper6CostBase::reset(const RobotModel& nominal, const RigidTransform& re
       !all_finite(reference_base_to_tracker.translation_m)) {
     return Status::non_finite_input;
   }
+  const LinkLengthSet set = link_length_set(nominal);
+  const std::size_t stored = set.has_d1() ? set.count - 1 : set.count;
+  const std::size_t per_sample = kDirectionValue + 3 * stored;
+  if (set.count == 0 || per_sample > max_values_per_sample_) return Status::dimension_out_of_range;
   nominal_ = nominal;
   reference_ = reference_base_to_tracker;
-  nominal_lengths_m_ = paper6_lengths(nominal);
+  set_ = set;
+  stored_count_ = stored;
+  values_per_sample_ = per_sample;
+  const LinkLengths lengths_m = link_lengths(nominal, set);
+  for (std::size_t k = 0; k < set.count; ++k) nominal_lengths_m_[k] = lengths_m(static_cast<Eigen::Index>(k));
   size_ = 0;
   ready_ = false;
   return Status::ok;
@@ -92,13 +126,14 @@ void Paper6CostBase::store(const Vec3& predicted_m, const Vec3& measured_m, cons
   const Vec3 measured_in_base_m = reference_.rotation.transpose() * (measured_m - reference_.translation_m);
   const Vec3 point_m = predicted_m - point_origin_m_;
   const Vec3 error_m = measured_in_base_m - predicted_m;
+  const std::size_t first = set_.count - stored_count_;  // d1 (not stored) comes first
   for (int r = 0; r < 3; ++r) {
     const auto row = static_cast<std::size_t>(r);
-    values[value_index(kPointValue + row, size_)] = static_cast<Scalar>(point_m(r));
-    values[value_index(kErrorValue + row, size_)] = static_cast<Scalar>(error_m(r));
-    for (std::size_t k = 1; k < kPaper6Dimension; ++k) {
-      values[value_index(kDirectionValue + 3 * (k - 1) + row, size_)] =
-          static_cast<Scalar>(jacobian(r, kPaper6ParamIndex[k]));
+    values[value_index(kPointValue + row, size_, values_per_sample_)] = static_cast<Scalar>(point_m(r));
+    values[value_index(kErrorValue + row, size_, values_per_sample_)] = static_cast<Scalar>(error_m(r));
+    for (std::size_t k = 0; k < stored_count_; ++k) {
+      values[value_index(kDirectionValue + 3 * k + row, size_, values_per_sample_)] =
+          static_cast<Scalar>(jacobian(r, set_.param_index[first + k]));
     }
   }
 }
@@ -125,18 +160,22 @@ Status Paper6CostBase::precompute(const Scalar* values) {
   const auto count = static_cast<double>(size_);
   Vec3 point_sum_m = Vec3::Zero();
   Vec3 measured_sum_m = Vec3::Zero();
-  TailDirections direction_sum = TailDirections::Zero();
+  const auto stored = static_cast<int>(stored_count_);
+  StoredDirections direction_sum = StoredDirections::Zero();
   for (std::size_t i = 0; i < size_; ++i) {
-    const WideTerm term = widen(values, i);
+    const WideTerm term = widen(values, i, values_per_sample_, stored);
     point_sum_m += term.point_m;
     measured_sum_m += term.measured_m;
     direction_sum += term.directions;
   }
   point_mean_m_ = point_sum_m / count;
   measured_mean_m_ = measured_sum_m / count;
-  const TailDirections tail_direction_mean = direction_sum / count;
-  direction_mean_.col(0) = Vec3::UnitZ();  // d1 slides along the base z axis for every pose
-  direction_mean_.rightCols<kTailCount>() = tail_direction_mean;
+  const StoredDirections stored_direction_mean = direction_sum / count;
+  // All K columns: d1 (when a link length) slides along the base z axis for every pose.
+  const int first = set_.has_d1() ? 1 : 0;
+  direction_mean_.setZero();
+  if (first == 1) direction_mean_.col(0) = Vec3::UnitZ();
+  for (int k = 0; k < stored; ++k) direction_mean_.col(first + k) = stored_direction_mean.col(k);
 
   // Second pass on centred values (the terms stay as they are, so add() may follow).
   Mat3 point_scatter_m2 = Mat3::Zero();
@@ -144,15 +183,15 @@ Status Paper6CostBase::precompute(const Scalar* values) {
   cross_nominal_m2_.setZero();
   for (Mat3& cross : cross_per_length_m_) cross.setZero();
   for (std::size_t i = 0; i < size_; ++i) {
-    const WideTerm term = widen(values, i);
+    const WideTerm term = widen(values, i, values_per_sample_, stored);
     const Vec3 point_m = term.point_m - point_mean_m_;
     const Vec3 measured_m = term.measured_m - measured_mean_m_;
-    const TailDirections directions = term.directions - tail_direction_mean;
     point_scatter_m2 += point_m * point_m.transpose();
     measured_scatter_m2 += measured_m * measured_m.transpose();
     cross_nominal_m2_ += point_m * measured_m.transpose();
-    for (int k = 0; k < kTailCount; ++k) {
-      cross_per_length_m_[k] += directions.col(k) * measured_m.transpose();
+    for (int k = 0; k < stored; ++k) {
+      const Vec3 direction = term.directions.col(k) - stored_direction_mean.col(k);
+      cross_per_length_m_[k] += direction * measured_m.transpose();
     }
   }
   if (!scatter_spans_plane(point_scatter_m2) || !scatter_spans_plane(measured_scatter_m2)) {
@@ -183,15 +222,28 @@ Status Paper6CostBase::build(const RobotModel& nominal, Span<const Sample> sampl
   return finalize();
 }
 
+namespace {
+
+/// D t of one row for the generic column count: columns [begin, begin + count) summed in
+/// halves recursively (the order of the five-column expression below).
 template <typename Scalar>
-double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m,
-                                         const double* tail_m) const {
+lanes::Lane moved_row(const Scalar* d, const lanes::Lane* t, std::size_t column_stride, int begin, int count) {
+  if (count == 1) return lanes::load(d + static_cast<std::size_t>(begin) * column_stride) * t[begin];
+  const int half = count / 2;
+  return moved_row(d, t, column_stride, begin, half) + moved_row(d, t, column_stride, begin + half, count - half);
+}
+
+/// The residual pass over `size` samples stored `per_sample` values each with `stored`
+/// direction columns; kFive: the paper's five stored columns unrolled (UR arms), else generic.
+template <bool kFive, typename Scalar>
+double residual_pass(const Scalar* values, std::size_t size, std::size_t per_sample, int stored, const Mat3& rotation,
+                     const Vec3& shift_m, const double* tail_m) {
   // The hot loop, kLanes samples at a time: two where the target has double SIMD, each value
   // read at a fixed offset from one pointer (left to the auto-vectoriser, the loop kept 21
   // pointers in spilled registers); one without, where pairs would only double the live
   // registers and spill. A block's unused tail is zero-initialised storage, computed and
   // ignored; the norms are summed in sample order. The operation order is Eigen's (pairwise
-  // sums in products and norms), which the golden digest pins.
+  // sums in products and norms), which the golden digest pins; the generic column sum keeps it.
   static_assert(kPaper6BlockSamples % 2 == 0, "whole pairs per block");
   using lanes::Lane;
   using lanes::broadcast;
@@ -202,23 +254,30 @@ double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotat
   constexpr std::size_t kDirection = kDirectionValue * kPaper6BlockSamples;
   constexpr std::size_t kRow = kPaper6BlockSamples;         // next row of a value triple
   constexpr std::size_t kColumn = 3 * kPaper6BlockSamples;  // next direction column
-  const Lane t0 = broadcast(tail_m[0]), t1 = broadcast(tail_m[1]), t2 = broadcast(tail_m[2]),
-             t3 = broadcast(tail_m[3]), t4 = broadcast(tail_m[4]);
+  Lane t[kMaxLinkLengths] = {};
+  for (int k = 0; k < stored; ++k) t[k] = broadcast(tail_m[k]);
+  const Lane t0 = t[0], t1 = t[1], t2 = t[2], t3 = t[3], t4 = t[4];  // the paper's five (unused otherwise)
   const Lane e00 = broadcast(rotation(0, 0)), e01 = broadcast(rotation(0, 1)), e02 = broadcast(rotation(0, 2));
   const Lane e10 = broadcast(rotation(1, 0)), e11 = broadcast(rotation(1, 1)), e12 = broadcast(rotation(1, 2));
   const Lane e20 = broadcast(rotation(2, 0)), e21 = broadcast(rotation(2, 1)), e22 = broadcast(rotation(2, 2));
   const Lane sx = broadcast(shift_m(0)), sy = broadcast(shift_m(1)), sz = broadcast(shift_m(2));
+  const Lane zero = broadcast(0.0);
+  const std::size_t block_values = per_sample * kPaper6BlockSamples;
   double sum_m = 0.0;
-  for (std::size_t start = 0; start < size_; start += kPaper6BlockSamples) {
-    const Scalar* const block = values + value_index(0, start);
-    const std::size_t count = size_ - start < kPaper6BlockSamples ? size_ - start : kPaper6BlockSamples;
+  for (std::size_t start = 0; start < size; start += kPaper6BlockSamples) {
+    const Scalar* const block = values + start / kPaper6BlockSamples * block_values;
+    const std::size_t count = size - start < kPaper6BlockSamples ? size - start : kPaper6BlockSamples;
     for (std::size_t j = 0; j < count; j += kLanes) {
       const Scalar* const first = block + j;
-      // D t of row r: (D0 t0 + D1 t1) + (D2 t2 + (D3 t3 + D4 t4)).
-      const auto moved = [first, &t0, &t1, &t2, &t3, &t4](std::size_t r) {
+      // D t of row r; for five columns (D0 t0 + D1 t1) + (D2 t2 + (D3 t3 + D4 t4)).
+      const auto moved = [&](std::size_t r) {
         const Scalar* const d = first + kDirection + r * kRow;
-        return (lanes::load(d) * t0 + lanes::load(d + kColumn) * t1) +
-               (lanes::load(d + 2 * kColumn) * t2 + (lanes::load(d + 3 * kColumn) * t3 + lanes::load(d + 4 * kColumn) * t4));
+        if constexpr (kFive) {
+          return (lanes::load(d) * t0 + lanes::load(d + kColumn) * t1) +
+                 (lanes::load(d + 2 * kColumn) * t2 + (lanes::load(d + 3 * kColumn) * t3 + lanes::load(d + 4 * kColumn) * t4));
+        } else {
+          return stored == 0 ? zero : moved_row(d, t, kColumn, 0, stored);
+        }
       };
       const Lane p0 = lanes::load(first + kPoint), p1 = lanes::load(first + kPoint + kRow),
                  p2 = lanes::load(first + kPoint + 2 * kRow);
@@ -234,37 +293,53 @@ double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotat
   return sum_m;
 }
 
+}  // namespace
+
+template <typename Scalar>
+double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m,
+                                         const double* tail_m) const {
+  const auto stored = static_cast<int>(stored_count_);
+  return stored == 5 ? residual_pass<true>(values, size_, values_per_sample_, stored, rotation, shift_m, tail_m)
+                     : residual_pass<false>(values, size_, values_per_sample_, stored, rotation, shift_m, tail_m);
+}
+
 double Paper6CostBase::mean_abs_error(const double* lengths_m, RigidTransform* base_to_tracker) const {
   if (!ready_) return std::numeric_limits<double>::quiet_NaN();
-  const Paper6Lengths offsets_m = Eigen::Map<const Paper6Lengths>(lengths_m) - nominal_lengths_m_;
-  const TailLengths tail_m = offsets_m.tail<kTailCount>();
+  const auto count = static_cast<int>(set_.count);
+  const auto stored = static_cast<int>(stored_count_);
+  const int first = count - stored;  // 1 when d1 is a link length (its column is not stored)
+  double offsets_m[kMaxLinkLengths] = {};
+  for (int k = 0; k < count; ++k) offsets_m[k] = lengths_m[k] - nominal_lengths_m_[k];
+  const double* const tail_m = offsets_m + first;
   // Kabsch in the reference frame on centred points: H(L) = sum p_c(L) m_c^T is affine in L.
-  // Entry by entry, each summed in registers in the order k = 0..4 (the same bits as five
+  // Entry by entry, each summed in registers in the order k = 0..K-1 (the same bits as K
   // matrix updates, without storing and reloading the matrix after each).
   Mat3 cross_m2;
   for (int e = 0; e < 9; ++e) {
     double entry_m2 = cross_nominal_m2_.data()[e];
-    for (int k = 0; k < kTailCount; ++k) entry_m2 += tail_m(k) * cross_per_length_m_[k].data()[e];
+    for (int k = 0; k < stored; ++k) entry_m2 += tail_m[k] * cross_per_length_m_[k].data()[e];
     cross_m2.data()[e] = entry_m2;
   }
   const Mat3 rotation = rotation_from_cross_covariance_qcp(cross_m2);
   // r_i = E (p_i(L) - mean p(L)) - (m_i - mean m): the fitted translation cancels; d1 only
   // shifts every p_i(L) alike and drops out.
-  const Vec3 shift_m = rotation * (point_mean_m_ + direction_mean_.rightCols<kTailCount>() * tail_m) - measured_mean_m_;
-  const double sum_m = values_ != nullptr ? sum_abs_residuals(values_, rotation, shift_m, tail_m.data())
-                                          : sum_abs_residuals(compact_values_, rotation, shift_m, tail_m.data());
+  StoredDirections stored_mean = StoredDirections::Zero();
+  for (int k = 0; k < stored; ++k) stored_mean.col(k) = direction_mean_.col(first + k);
+  const Vec3 shift_m = rotation * (point_mean_m_ + combine(stored_mean, tail_m, 0, stored)) - measured_mean_m_;
+  const double sum_m = values_ != nullptr ? sum_abs_residuals(values_, rotation, shift_m, tail_m)
+                                          : sum_abs_residuals(compact_values_, rotation, shift_m, tail_m);
   if (base_to_tracker != nullptr) {
     // In the reference frame m ~ E p + tau; in the tracker frame R = R_ref E, t = R_ref tau + t_ref.
     const Vec3 tau_m = (point_origin_m_ + measured_mean_m_) -
-                       rotation * (point_origin_m_ + point_mean_m_ + direction_mean_ * offsets_m);
+                       rotation * (point_origin_m_ + point_mean_m_ + combine(direction_mean_, offsets_m, 0, count));
     base_to_tracker->rotation = reference_.rotation * rotation;
     base_to_tracker->translation_m = reference_.rotation * tau_m + reference_.translation_m;
   }
   return sum_m / static_cast<double>(size_);
 }
 
-Status Paper6CostBase::evaluate(const Paper6Lengths& lengths_m, double* mae_m, RigidTransform* base_to_tracker) const {
-  if (!ready_) return Status::invalid_argument;
+Status Paper6CostBase::evaluate(const LinkLengths& lengths_m, double* mae_m, RigidTransform* base_to_tracker) const {
+  if (!ready_ || static_cast<std::size_t>(lengths_m.size()) != set_.count) return Status::invalid_argument;
   if (!all_finite(lengths_m)) return Status::non_finite_input;
   const double value_m = mean_abs_error(lengths_m.data(), base_to_tracker);
   if (!math::is_finite(value_m)) return Status::non_finite_input;

@@ -12,8 +12,8 @@ Status run_paper6_stage(const RobotModel& start, Span<const Sample> train, doubl
   if (cost == nullptr || result == nullptr) return Status::invalid_argument;
   Status status = cost->build(start, train);
   if (status != Status::ok) return status;
-  Paper6Box box;
-  status = paper6_box(start, half_width_m, &box);
+  LinkLengthBox box;
+  status = link_length_box(start, half_width_m, &box);
   if (status != Status::ok) return status;
   SolverResult solved;
   status = minimize(box.view(), &solved);

@@ -38,7 +38,7 @@ std::uint64_t solver_digest() {
   test::Paper6Session& session = test::shared_session();
   Digest digest;
   digest.add_u64(session.simulate(5, 38, test::Paper6Truth::paper_like) ? 1U : 0U);
-  const Paper6Lengths nominal_m = paper6_lengths(session.cell.nominal);
+  const LinkLengths nominal_m = link_lengths(session.cell.nominal);
   Digest setup;
   setup.add(session.cost.evaluate(nominal_m.data()));
   std::printf("  %-14s 0x%016llx\n", "cost setup", static_cast<unsigned long long>(setup.value()));

@@ -183,7 +183,7 @@ TEST(GsaPaper6, PaperConfigReachesTheLeastSquaresMaeOnPaperSizedSessions) {
     EXPECT_EQ(trace.size(), 200u);
     EXPECT_LE(result.best_cost, kWithinReference * session.reference_mae_m) << "seed " << seed;
     EXPECT_LT(result.best_cost, 0.75 * session.nominal_mae_m);
-    EXPECT_LT(session.test_mae(result.best_x.data()), session.test_mae(paper6_lengths(session.cell.nominal).data()));
+    EXPECT_LT(session.test_mae(result.best_x.data()), session.test_mae(link_lengths(session.cell.nominal).data()));
   }
 }
 

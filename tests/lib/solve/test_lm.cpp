@@ -176,14 +176,14 @@ TEST(Lm, SigmaMatchesMonteCarloSpread) {
 TEST(Lm, Paper6MovesOnlyItsParameters) {
   simulate(RobotType::ur5, 106, 100, 1e-5);
   LmOptions options;
-  options.params = LmParamSet::paper6;
+  options.params = LmParamSet::link_lengths;
   const RobotModel start = nominal_start(RobotType::ur5);
   Status status = Status::ok;
   EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train_set().samples(), options, &workspace(), &result()));
   ASSERT_EQ(status, Status::ok) << status_message(status);
   const IdentifiabilityReport& report = result().identifiability;
   ParamMask paper6 = 0;
-  EXPECT_NO_HEAP(paper6 = lm_param_mask(LmParamSet::paper6, 0));
+  EXPECT_NO_HEAP(paper6 = lm_param_mask(LmParamSet::link_lengths, 0, start));
   EXPECT_EQ(report.free_mask, paper6);
   EXPECT_EQ(mask_count(report.free_mask), 12);
   EXPECT_EQ(report.kept_count(), 11);  // d1 trades against the base height

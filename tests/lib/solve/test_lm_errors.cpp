@@ -45,7 +45,7 @@ TEST_F(LmErrors, EmptyOrTooFewSamplesForTheFreeParameters) {
   EXPECT_EQ(run(data().samples().subspan(0, 11)), Status::too_few_samples);  // 33 residuals, 33 parameters
   EXPECT_EQ(run(data().samples().subspan(0, 12)), Status::ok);
   LmOptions paper6;
-  paper6.params = LmParamSet::paper6;  // 12 free parameters
+  paper6.params = LmParamSet::link_lengths;  // 12 free parameters
   EXPECT_EQ(run(data().samples().subspan(0, 4), paper6), Status::too_few_samples);
   EXPECT_EQ(run(data().samples().subspan(0, 5), paper6), Status::ok);
 }

@@ -11,11 +11,14 @@
 #include "hivecal/solve/lm.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
+#include "testkit/other_arms.hpp"
 
 namespace hivecal {
 namespace {
 
 constexpr std::uint64_t kLmGoldenDigest = 0xe8eca2abfab7abcfULL;
+/// The same for a non-UR arm (IRB120-like, testkit/other_arms.hpp), least squares only.
+constexpr std::uint64_t kLmOtherArmGoldenDigest = 0x09bcafeaa5cedb13ULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));
@@ -68,6 +71,31 @@ std::uint64_t lm_digest(Span<JointTrig> joint_trig_storage) {
   trace.clear();
   add_result(result, calibrate_lm(start, nullptr, dirty.samples(), options, &ws, &result, &trace), trace, &digest);
   return digest.value();
+}
+
+/// An IRB120-like arm (joints 2-3 parallel, offsets) calibrated from its nominal table.
+std::uint64_t other_arm_digest() {
+  Random random(20261125);
+  const RobotModel truth = test::other_arm_truth(test::OtherArm::irb120, &random);
+  static Dataset<150> samples;
+  samples.clear();
+  test::fill_other_arm(truth, test::example_base_to_tracker(), 150, 1e-5, &random, &samples);
+  RobotModel start = test::other_arm_model(test::OtherArm::irb120);
+  start.tool_m = Vec3(0.0, 0.0, 0.1);
+  static LmWorkspace ws;
+  static LmResult result;
+  static Trace<64> trace;
+  trace.clear();
+  Digest digest;
+  add_result(result, calibrate_lm(start, nullptr, samples.samples(), LmOptions{}, &ws, &result, &trace), trace, &digest);
+  return digest.value();
+}
+
+TEST(LmGolden, NonUrArmDigestIsTheSameOnEveryTarget) {
+  std::uint64_t digest = 0;
+  EXPECT_NO_HEAP(digest = other_arm_digest());
+  std::printf("lm digest (IRB120-like arm): 0x%016llx\n", static_cast<unsigned long long>(digest));
+  EXPECT_EQ(digest, kLmOtherArmGoldenDigest);
 }
 
 TEST(LmGolden, DigestIsTheSameOnEveryTarget) {

@@ -42,12 +42,12 @@ struct Paper6CostTest : ::testing::Test {
 };
 
 TEST_F(Paper6CostTest, EqualsTheGenericRefitCostAnywhereInTheBox) {
-  Paper6Box box;
-  ASSERT_EQ(paper6_box(cell.nominal, kPaper6DefaultHalfWidth_m, &box), Status::ok);
+  LinkLengthBox box;
+  ASSERT_EQ(link_length_box(cell.nominal, kPaper6DefaultHalfWidth_m, &box), Status::ok);
   Random random(405);
   for (int trial = 0; trial < 60; ++trial) {
-    Paper6Lengths lengths_m = paper6_lengths(cell.nominal);
-    if (trial == 1) lengths_m = paper6_lengths(cell.truth);
+    LinkLengths lengths_m = link_lengths(cell.nominal);
+    if (trial == 1) lengths_m = link_lengths(cell.truth);
     for (int k = 0; k < 6 && trial > 1; ++k) lengths_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
     double fast_m = 0.0;
     RigidTransform fast_base;
@@ -67,7 +67,7 @@ TEST_F(Paper6CostTest, EqualsTheGenericRefitCostAnywhereInTheBox) {
 }
 
 TEST_F(Paper6CostTest, AtTheExpansionPointItIsTheNominalCost) {
-  const Paper6Lengths nominal_m = paper6_lengths(cell.nominal);
+  const LinkLengths nominal_m = link_lengths(cell.nominal);
   double generic_m = 0.0;
   RigidTransform base;
   ASSERT_EQ(evaluate_cost(cell.nominal, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::refit, &base,
@@ -79,7 +79,7 @@ TEST_F(Paper6CostTest, AtTheExpansionPointItIsTheNominalCost) {
 
 TEST_F(Paper6CostTest, D1IsAbsorbedByTheBaseTranslation) {
   // d1 moves every predicted point along the base z axis: the refitted base takes it up.
-  Paper6Lengths lengths_m = paper6_lengths(cell.truth);
+  LinkLengths lengths_m = link_lengths(cell.truth);
   const double before_m = cost().evaluate(lengths_m.data());
   RigidTransform base_before;
   double ignored_m = 0.0;
@@ -106,13 +106,13 @@ TEST_F(Paper6CostTest, StreamingEqualsBuildBitForBit) {
   ASSERT_EQ(s, Status::ok);
   EXPECT_TRUE(streamed.ready());
   EXPECT_EQ(streamed.size(), dataset().size());
-  const Paper6Lengths lengths_m = paper6_lengths(cell.truth);
+  const LinkLengths lengths_m = link_lengths(cell.truth);
   EXPECT_EQ(streamed.evaluate(lengths_m.data()), cost().evaluate(lengths_m.data()));
 }
 
 TEST_F(Paper6CostTest, TruthBeatsNominalByFarAndMatchesTheNoise) {
-  const Paper6Lengths truth_m = paper6_lengths(cell.truth);
-  const Paper6Lengths nominal_m = paper6_lengths(cell.nominal);
+  const LinkLengths truth_m = link_lengths(cell.truth);
+  const LinkLengths nominal_m = link_lengths(cell.nominal);
   const double truth_mae_m = cost().evaluate(truth_m.data());
   EXPECT_LT(truth_mae_m, 2.5e-5);  // mean |3D Gaussian| with sigma 10 um is 16 um
   EXPECT_GT(cost().evaluate(nominal_m.data()), 5.0 * truth_mae_m);
@@ -120,12 +120,12 @@ TEST_F(Paper6CostTest, TruthBeatsNominalByFarAndMatchesTheNoise) {
 
 /// Largest |cost - generic| / generic over the nominal, true and random lengths in the box.
 double worst_relative_error(Paper6CostBase& candidate, const test::Paper6Cell& cell, Span<const Sample> samples) {
-  Paper6Box box;
-  EXPECT_EQ(paper6_box(cell.nominal, kPaper6DefaultHalfWidth_m, &box), Status::ok);
+  LinkLengthBox box;
+  EXPECT_EQ(link_length_box(cell.nominal, kPaper6DefaultHalfWidth_m, &box), Status::ok);
   Random random(407);
   double worst = 0.0;
   for (int trial = 0; trial < 40; ++trial) {
-    Paper6Lengths lengths_m = trial == 0 ? paper6_lengths(cell.nominal) : paper6_lengths(cell.truth);
+    LinkLengths lengths_m = trial == 0 ? link_lengths(cell.nominal) : link_lengths(cell.truth);
     for (int k = 0; k < 6 && trial > 1; ++k) lengths_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
     const double generic_m = test::generic_mae(cell.nominal, lengths_m, samples);
     const double relative = std::fabs(candidate.evaluate(lengths_m.data()) - generic_m) / generic_m;
@@ -170,7 +170,7 @@ TEST_F(Paper6CostTest, ExactLayoutIsExactForAnyReference) {
     EXPECT_LT(worst_relative_error(streamed, cell, dataset().samples()), 2 * kRelativeTolerance);
     RigidTransform base;
     double mae_m = 0.0;
-    ASSERT_EQ(streamed.evaluate(paper6_lengths(cell.truth), &mae_m, &base), Status::ok);
+    ASSERT_EQ(streamed.evaluate(link_lengths(cell.truth), &mae_m, &base), Status::ok);
     EXPECT_LT((base.rotation - cell.base_to_tracker.rotation).norm(), 1e-5);  // the truth, to the noise
     EXPECT_LT((base.translation_m - cell.base_to_tracker.translation_m).norm(), 1e-5);
   }
@@ -192,9 +192,9 @@ TEST(Paper6Cost, ErrorsAreSpecific) {
   const RobotModel nominal = nominal_model(RobotType::ur5);
   EXPECT_EQ(small.build(nominal, Span<const Sample>()), Status::dataset_empty);
   EXPECT_FALSE(small.ready());
-  EXPECT_TRUE(std::isnan(small.evaluate(paper6_lengths(nominal).data())));
+  EXPECT_TRUE(std::isnan(small.evaluate(link_lengths(nominal).data())));
   double mae_m = 0.0;
-  EXPECT_EQ(small.evaluate(paper6_lengths(nominal), &mae_m, nullptr), Status::invalid_argument);
+  EXPECT_EQ(small.evaluate(link_lengths(nominal), &mae_m, nullptr), Status::invalid_argument);
 
   RobotModel broken = nominal;
   broken.joints[2].a_m = std::numeric_limits<double>::quiet_NaN();
@@ -218,7 +218,7 @@ TEST(Paper6Cost, ErrorsAreSpecific) {
   ASSERT_EQ(small.add(test::random_joints_tool_down(&random), Vec3(0, 1, 0)), Status::ok);
   EXPECT_EQ(small.add(test::random_joints_tool_down(&random), Vec3(0, 0, 1)), Status::dataset_full);
   EXPECT_EQ(small.finalize(), Status::ok);
-  Paper6Lengths lengths_m = paper6_lengths(nominal);
+  LinkLengths lengths_m = link_lengths(nominal);
   lengths_m(3) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(small.evaluate(lengths_m, &mae_m, nullptr), Status::non_finite_input);
   EXPECT_EQ(small.capacity(), 4u);
@@ -226,25 +226,33 @@ TEST(Paper6Cost, ErrorsAreSpecific) {
 
 TEST(Paper6Cost, LengthsRoundTripAndBoxIsNominalPlusMinusHalfWidth) {
   const RobotModel nominal = nominal_model(RobotType::ur5);
-  const Paper6Lengths lengths_m = paper6_lengths(nominal);
+  const LinkLengths lengths_m = link_lengths(nominal);
   const ModelParams params = to_params(nominal);
-  for (std::size_t k = 0; k < kPaper6Dimension; ++k) EXPECT_EQ(lengths_m(static_cast<int>(k)), params(kPaper6ParamIndex[k]));
+  const int paper6[kPaper6Dimension] = {model_param_index(0, DhField::d), model_param_index(1, DhField::a),
+                                       model_param_index(2, DhField::a), model_param_index(3, DhField::d),
+                                       model_param_index(4, DhField::d), model_param_index(5, DhField::d)};
+  const LinkLengthSet set = link_length_set(nominal);
+  ASSERT_EQ(set.count, kPaper6Dimension);  // a UR arm's link lengths are the paper's six, in order
+  for (std::size_t k = 0; k < kPaper6Dimension; ++k) {
+    EXPECT_EQ(set.param_index[k], paper6[k]);
+    EXPECT_EQ(lengths_m(static_cast<int>(k)), params(paper6[k]));
+  }
   EXPECT_EQ(lengths_m(1), -0.425);  // a2 of the UR5
   const double moved_m[6] = {0.1, -0.4, -0.4, 0.11, 0.095, 0.08};
-  const RobotModel moved = with_paper6_lengths(nominal, moved_m);
-  EXPECT_EQ(paper6_lengths(moved), Eigen::Map<const Paper6Lengths>(moved_m));
+  const RobotModel moved = with_link_lengths(nominal, link_length_set(nominal), moved_m);
+  EXPECT_EQ(link_lengths(moved), Eigen::Map<const LinkLengths>(moved_m, 6));
   EXPECT_EQ(moved.joints[1].alpha_rad, nominal.joints[1].alpha_rad);
 
-  Paper6Box box;
-  ASSERT_EQ(paper6_box(nominal, 1e-3, &box), Status::ok);
+  LinkLengthBox box;
+  ASSERT_EQ(link_length_box(nominal, 1e-3, &box), Status::ok);
   for (std::size_t k = 0; k < kPaper6Dimension; ++k) {
     EXPECT_DOUBLE_EQ(box.lower_m[k], lengths_m(static_cast<int>(k)) - 1e-3);
     EXPECT_DOUBLE_EQ(box.upper_m[k], lengths_m(static_cast<int>(k)) + 1e-3);
   }
   EXPECT_EQ(box.view().lower.size(), kPaper6Dimension);
   EXPECT_EQ(validate_search_box(box.view(), kPaper6Dimension, kPaper6Dimension), Status::ok);
-  EXPECT_EQ(paper6_box(nominal, 0.0, &box), Status::invalid_argument);
-  EXPECT_EQ(paper6_box(nominal, std::numeric_limits<double>::quiet_NaN(), &box), Status::invalid_argument);
+  EXPECT_EQ(link_length_box(nominal, 0.0, &box), Status::invalid_argument);
+  EXPECT_EQ(link_length_box(nominal, std::numeric_limits<double>::quiet_NaN(), &box), Status::invalid_argument);
 }
 
 TEST(QcpRotation, AgreesWithTheSvdRotation) {

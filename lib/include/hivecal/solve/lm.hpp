@@ -21,7 +21,7 @@ namespace hivecal {
 /// Which parameters the solver may move (before the identifiability analysis).
 enum class LmParamSet : std::uint8_t {
   full,    ///< all 33; the analysis drops what the data cannot determine
-  paper6,  ///< d1, a2, a3, d4, d5, d6 and the base transform (the paper's parameter set)
+  link_lengths,  ///< the start model's link lengths (link_length_set: for UR the paper's d1, a2, a3, d4, d5, d6) and the base transform
   custom,  ///< LmOptions::custom_mask
 };
 
@@ -58,8 +58,9 @@ struct LmOptions {
   ParamMask custom_mask = kAllParamsMask;     ///< free parameters when params == custom
 };
 
-/// The free-parameter mask of a parameter set (`custom` for LmParamSet::custom).
-ParamMask lm_param_mask(LmParamSet set, ParamMask custom);
+/// The free-parameter mask of a parameter set (`custom` for LmParamSet::custom; `start`
+/// gives the link lengths).
+ParamMask lm_param_mask(LmParamSet set, ParamMask custom, const RobotModel& start);
 
 /// State after one iteration, for progress display and cancellation.
 struct LmIterationInfo {

@@ -1,16 +1,18 @@
-// The paper's calibration cost over six lengths (d1, a2, a3, d4, d5, d6 of a UR arm, every
-// other parameter held at the given geometry): mean absolute 3D error with the robot base ->
-// tracker transform refitted (Kabsch) for each candidate, the same number as
+// The paper's calibration cost over the link lengths (every d and a that is non-zero in the
+// start geometry; for a UR arm the paper's six: d1, a2, a3, d4, d5, d6), every other parameter
+// held at the given geometry: mean absolute 3D error with the robot base -> tracker transform
+// refitted (Kabsch) for each candidate, the same number as
 // evaluate_cost(..., CostKind::mean_abs_3d, BaseFrame::refit, ...), but precomputed.
 //
 // With the joint angles fixed, the tool point is affine in these lengths:
-// p_i(L) = p_i(L0) + V_i (L - L0), V_i the Jacobian columns (z_0, x_2, x_3, z_3, z_4, z_5).
+// p_i(L) = p_i(L0) + V_i (L - L0), V_i the Jacobian columns (for UR z_0, x_2, x_3, z_3, z_4, z_5).
 // The Kabsch cross-covariance is then affine too, H(L) = H_0 + sum_k (L - L0)_k G_k, so a
 // candidate costs one 3x3 rotation fit plus one pass of ~50 flops per sample
 // (docs/solvers-abc-gsa.md). Everything is expressed in a reference base frame (the nominal
 // fit), where measured and predicted points nearly coincide: their differences are small, so
 // the terms keep their accuracy even stored as float (the firmware layout, 84 bytes/sample).
-// Terms live in Paper6Cost<Capacity, Scalar>; algorithms take the size-erased Paper6CostBase.
+// Terms live in Paper6Cost<Capacity, Scalar, MaxLengths>; algorithms take the size-erased
+// Paper6CostBase.
 #pragma once
 
 #include <cstddef>
@@ -24,51 +26,73 @@
 
 namespace hivecal {
 
-/// Number of lengths the paper calibrates.
+/// Number of lengths the paper calibrates (a UR arm's link lengths; the firmware's capacity).
 inline constexpr std::size_t kPaper6Dimension = 6;
-/// ModelParams indices of the six lengths, in parameter-vector order: d1, a2, a3, d4, d5, d6.
-inline constexpr int kPaper6ParamIndex[kPaper6Dimension] = {
-    model_param_index(0, DhField::d), model_param_index(1, DhField::a), model_param_index(2, DhField::a),
-    model_param_index(3, DhField::d), model_param_index(4, DhField::d), model_param_index(5, DhField::d)};
+/// Most link lengths a model can have: every d and a of the six joints.
+inline constexpr std::size_t kMaxLinkLengths = 2 * static_cast<std::size_t>(kJointCount);
 /// Default half-width of the search box around the nominal lengths [m].
 inline constexpr double kPaper6DefaultHalfWidth_m = 2e-3;
 
-/// The six lengths d1, a2, a3, d4, d5, d6 [m].
-using Paper6Lengths = Eigen::Matrix<double, static_cast<int>(kPaper6Dimension), 1>;
-
-/// The six lengths of a geometry [m].
-Paper6Lengths paper6_lengths(const RobotModel& model);
-/// `model` with its six lengths replaced by lengths_m[0..6) [m].
-RobotModel with_paper6_lengths(const RobotModel& model, const double* lengths_m);
-
-/// A search box nominal +/- half width for the six lengths, owning its bounds.
-struct Paper6Box {
-  double lower_m[kPaper6Dimension] = {};  ///< lower bounds [m]
-  double upper_m[kPaper6Dimension] = {};  ///< upper bounds [m]
-  /// The bounds as the solvers take them (views into this object).
-  SearchBox view() const { return SearchBox{Span<const double>(lower_m), Span<const double>(upper_m)}; }
+/// Which parameters are the link lengths of an arm.
+struct LinkLengthSet {
+  std::size_t count = 0;                 ///< number of link lengths K [-]
+  int param_index[kMaxLinkLengths] = {};  ///< their ModelParams indices, ascending [-]
+  /// Whether d1 is one of them (it slides every point along the base z axis alike).
+  bool has_d1() const { return count > 0 && param_index[0] == model_param_index(0, DhField::d); }
 };
 
-/// The box nominal +/- half_width_m around the six lengths of `nominal`.
-/// Errors: non_finite_input (NaN/Inf in the lengths), invalid_argument (half width not finite and > 0).
-Status paper6_box(const RobotModel& nominal, double half_width_m, Paper6Box* box);
+/// Every d and a that is non-zero in `nominal`, in parameter-vector order (for a UR arm the
+/// paper's six: d1, a2, a3, d4, d5, d6).
+LinkLengthSet link_length_set(const RobotModel& nominal);
+
+/// Up to kMaxLinkLengths lengths [m] (fixed capacity: no heap).
+using LinkLengths = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, static_cast<int>(kMaxLinkLengths), 1>;
+
+/// The lengths of `set` in `model` [m].
+LinkLengths link_lengths(const RobotModel& model, const LinkLengthSet& set);
+/// The lengths of `model`'s own link-length set [m] (link_length_set(model)).
+LinkLengths link_lengths(const RobotModel& model);
+/// `model` with the lengths of `set` replaced by lengths_m[0..set.count) [m].
+RobotModel with_link_lengths(const RobotModel& model, const LinkLengthSet& set, const double* lengths_m);
+
+/// A search box nominal +/- half width for the link lengths, owning its bounds.
+struct LinkLengthBox {
+  std::size_t count = 0;                   ///< number of lengths [-]
+  double lower_m[kMaxLinkLengths] = {};  ///< lower bounds [m]
+  double upper_m[kMaxLinkLengths] = {};  ///< upper bounds [m]
+  /// The bounds as the solvers take them (views into this object).
+  SearchBox view() const {
+    return SearchBox{Span<const double>(lower_m, count), Span<const double>(upper_m, count)};
+  }
+};
+
+/// The box nominal +/- half_width_m around the link lengths of `nominal`.
+/// Errors: non_finite_input (NaN/Inf in the lengths), invalid_argument (half width not finite
+/// and > 0, or no link length).
+Status link_length_box(const RobotModel& nominal, double half_width_m, LinkLengthBox* box);
 
 /// Values kept per sample, in a storage precision (docs/solvers-abc-gsa.md, memory):
 ///  [0, 3)  predicted tool point at the expansion point, minus the first sample's [m];
 ///  [3, 6)  measured point mapped into the reference base frame, minus the predicted point:
 ///          the nominal residual, small (sub-mm) when the reference is the nominal fit [m];
-///  [6, 21) Jacobian columns of a2..d6 in the base frame, column-major [m/m]; d1's column is
-///          the constant base z axis, which the refitted translation absorbs (d1 does not
-///          change the cost), so it is not stored.
+///  [6, ..) Jacobian columns of the lengths other than d1 in the base frame, column-major
+///          [m/m] (for UR a2..d6: 21 values); d1's column is the constant base z axis, which
+///          the refitted translation absorbs (d1 does not change the cost), so it is not stored.
 /// Stored in blocks of kPaper6BlockSamples samples, value-major inside a block (the block's
 /// value 0, then its value 1, ...): the per-candidate pass reads each value as a contiguous
 /// run at a fixed offset from one pointer, which the compiler turns into SIMD across samples.
+/// For the paper's six lengths (d1 and five stored columns): 21.
 inline constexpr std::size_t kPaper6ValuesPerSample = 21;
+/// Values per sample of `lengths` link lengths at most: 3 + 3 K (d1 not stored; without d1
+/// one length fewer fits).
+constexpr std::size_t link_length_values_per_sample(std::size_t lengths) { return 3 + 3 * lengths; }
 /// Samples per storage block; capacities are rounded up to a whole number of blocks.
 inline constexpr std::size_t kPaper6BlockSamples = 32;
 /// Values a cost with room for `capacity` samples stores (whole blocks).
-constexpr std::size_t paper6_storage_values(std::size_t capacity) {
-  return (capacity + kPaper6BlockSamples - 1) / kPaper6BlockSamples * kPaper6BlockSamples * kPaper6ValuesPerSample;
+/// Values a cost with room for `capacity` samples of up to `max_lengths` lengths stores (whole blocks).
+constexpr std::size_t paper6_storage_values(std::size_t capacity, std::size_t max_lengths = kPaper6Dimension) {
+  return (capacity + kPaper6BlockSamples - 1) / kPaper6BlockSamples * kPaper6BlockSamples *
+         link_length_values_per_sample(max_lengths);
 }
 
 /// The precomputed cost over caller-sized term storage (see Paper6Cost for the owning type).
@@ -78,11 +102,12 @@ class Paper6CostBase : public Objective {
   Paper6CostBase(const Paper6CostBase&) = delete;
   Paper6CostBase& operator=(const Paper6CostBase&) = delete;
 
-  /// Forgets every sample and sets the geometry: its six lengths are the expansion point,
-  /// everything else (angles, other lengths, tool) stays fixed. `reference_base_to_tracker` is
-  /// the frame the terms are kept in: any transform is exact with double terms; float terms
-  /// need it within ~1 cm and ~10 mrad of the truth (a previous calibration, or a fit of the
-  /// first poses). Errors: non_finite_input.
+  /// Forgets every sample and sets the geometry: its link lengths (link_length_set) are the
+  /// expansion point, everything else (angles, zero lengths, tool) stays fixed.
+  /// `reference_base_to_tracker` is the frame the terms are kept in: any transform is exact
+  /// with double terms; float terms need it within ~1 cm and ~10 mrad of the truth (a previous
+  /// calibration, or a fit of the first poses). Errors: non_finite_input,
+  /// dimension_out_of_range (no link length, or more than the storage holds).
   Status reset(const RobotModel& nominal, const RigidTransform& reference_base_to_tracker);
   /// Adds one sample (the cost is not usable until finalize()). Errors: non_finite_input,
   /// dataset_full (not stored).
@@ -94,32 +119,37 @@ class Paper6CostBase : public Objective {
   /// sample, finalize(). Errors: dataset_empty, and those of fit_base_to_tracker and the three.
   Status build(const RobotModel& nominal, Span<const Sample> samples);
 
-  /// kPaper6Dimension.
-  std::size_t dimension() const override { return kPaper6Dimension; }
-  /// MAE [m] at lengths_m[0..6) [m]; NaN when not finalised.
+  /// Number of link lengths K of the geometry given to reset().
+  std::size_t dimension() const override { return set_.count; }
+  /// MAE [m] at lengths_m[0..K) [m]; NaN when not finalised.
   double evaluate(const double* lengths_m) override { return mean_abs_error(lengths_m, nullptr); }
   /// Checked evaluation: the MAE [m] and, if base_to_tracker is not null, the refitted transform.
-  /// Errors: invalid_argument (not finalised), non_finite_input (NaN/Inf lengths or cost).
-  Status evaluate(const Paper6Lengths& lengths_m, double* mae_m, RigidTransform* base_to_tracker) const;
+  /// Errors: invalid_argument (not finalised, or not K lengths), non_finite_input (NaN/Inf
+  /// lengths or cost).
+  Status evaluate(const LinkLengths& lengths_m, double* mae_m, RigidTransform* base_to_tracker) const;
 
-  /// The geometry given to reset() (the six lengths at the expansion point).
+  /// The geometry given to reset() (the link lengths at the expansion point).
   const RobotModel& nominal() const { return nominal_; }
+  /// Its link lengths (which parameters the cost moves).
+  const LinkLengthSet& lengths() const { return set_; }
   /// The frame the terms are kept in (see reset()).
   const RigidTransform& reference() const { return reference_; }
-  /// The nominal geometry with lengths_m[0..6) [m] put in.
-  RobotModel model_for(const double* lengths_m) const { return with_paper6_lengths(nominal_, lengths_m); }
+  /// The nominal geometry with lengths_m[0..K) [m] put in.
+  RobotModel model_for(const double* lengths_m) const { return with_link_lengths(nominal_, set_, lengths_m); }
   std::size_t size() const { return size_; }          ///< samples added
   std::size_t capacity() const { return capacity_; }  ///< samples it can hold
   bool ready() const { return ready_; }               ///< finalize() succeeded since the last change
 
  protected:
-  /// `values`: paper6_storage_values(capacity) values, exact (double) or compact (float).
-  Paper6CostBase(double* values, std::size_t capacity) : values_(values), capacity_(capacity) {}
-  Paper6CostBase(float* values, std::size_t capacity) : compact_values_(values), capacity_(capacity) {}
+  /// `values`: paper6_storage_values(capacity, max_lengths) values, exact (double) or compact (float).
+  Paper6CostBase(double* values, std::size_t capacity, std::size_t max_lengths)
+      : values_(values), capacity_(capacity), max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
+  Paper6CostBase(float* values, std::size_t capacity, std::size_t max_lengths)
+      : compact_values_(values), capacity_(capacity), max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
   ~Paper6CostBase() = default;
 
  private:
-  using Directions = Eigen::Matrix<double, 3, static_cast<int>(kPaper6Dimension)>;
+  using Directions = Eigen::Matrix<double, 3, static_cast<int>(kMaxLinkLengths)>;
   template <typename Scalar>
   void store(const Vec3& predicted_m, const Vec3& measured_m, const ToolPointJacobian& jacobian, Scalar* values) const;
   template <typename Scalar>
@@ -131,31 +161,37 @@ class Paper6CostBase : public Objective {
   double* values_ = nullptr;         // exact layout, or
   float* compact_values_ = nullptr;  // compact layout (blocks, see kPaper6ValuesPerSample)
   std::size_t capacity_;
+  std::size_t max_values_per_sample_;  // what the storage holds per sample
+  std::size_t values_per_sample_ = kPaper6ValuesPerSample;  // what the geometry needs: 6 + 3 x stored columns
+  std::size_t stored_count_ = 0;       // lengths with a stored column (all but d1)
   std::size_t size_ = 0;
+  LinkLengthSet set_;
   bool ready_ = false;
   RobotModel nominal_;
   RigidTransform reference_;
-  Paper6Lengths nominal_lengths_m_ = Paper6Lengths::Zero();
+  double nominal_lengths_m_[kMaxLinkLengths] = {};
   Vec3 point_origin_m_ = Vec3::Zero();       // first sample's predicted point [m]
   Vec3 point_mean_m_ = Vec3::Zero();         // predicted centroid at the expansion point, relative [m]
   Vec3 measured_mean_m_ = Vec3::Zero();      // measured centroid in the reference frame, relative [m]
-  Directions direction_mean_ = Directions::Zero();  // mean Jacobian columns, all six [m/m]
+  Directions direction_mean_ = Directions::Zero();  // mean Jacobian columns, all K [m/m]
   Mat3 cross_nominal_m2_ = Mat3::Zero();     // H_0 = sum p_c m_c^T, reference frame [m^2]
-  Mat3 cross_per_length_m_[kPaper6Dimension - 1];  // G_k = sum v_c,k m_c^T for a2..d6 [m]
+  Mat3 cross_per_length_m_[kMaxLinkLengths] = {};  // G_k = sum v_c,k m_c^T for the stored columns [m]
 };
 
-/// A precomputed paper-6 cost owning room for `Capacity` samples, no heap: 168 bytes each
-/// with Scalar = double (exact), 84 with float (firmware: docs/solvers-abc-gsa.md, memory).
-template <std::size_t Capacity, typename Scalar = double>
+/// A precomputed link-length cost owning room for `Capacity` samples of up to `MaxLengths`
+/// lengths, no heap: for the paper's six 168 bytes each with Scalar = double (exact), 84 with
+/// float (firmware: docs/solvers-abc-gsa.md, memory); (3 + 3 MaxLengths) values in general.
+template <std::size_t Capacity, typename Scalar = double, std::size_t MaxLengths = kPaper6Dimension>
 class Paper6Cost final : public Paper6CostBase {
   static_assert(std::is_same<Scalar, double>::value || std::is_same<Scalar, float>::value, "double or float terms");
+  static_assert(MaxLengths >= 1 && MaxLengths <= kMaxLinkLengths, "1..kMaxLinkLengths lengths");
 
  public:
-  Paper6Cost() : Paper6CostBase(values_, Capacity) {}
+  Paper6Cost() : Paper6CostBase(values_, Capacity, MaxLengths) {}
 
  private:
   // Zero-initialised: the evaluation reads whole pairs of samples, past the last one too.
-  Scalar values_[paper6_storage_values(Capacity)] = {};
+  Scalar values_[paper6_storage_values(Capacity, MaxLengths)] = {};
 };
 
 }  // namespace hivecal

@@ -1,5 +1,5 @@
 // The population stage of the paper's calibration (docs/solvers-abc-gsa.md): ABC or GSA on
-// the six lengths over the precomputed paper-6 cost, the base refitted per candidate, then
+// the link lengths (for UR the paper's six) over the precomputed paper-6 cost, the base refitted per candidate, then
 // the best geometry's base fit. The calibration job (calibration.hpp) runs it alone or
 // before Levenberg-Marquardt. No heap: every large object is the caller's.
 #pragma once
@@ -19,9 +19,9 @@
 
 namespace hivecal {
 
-/// What the population stage on the paper's six lengths produced.
+/// What the population stage on the link lengths produced.
 struct Paper6StageResult {
-  RobotModel model;                  ///< the start geometry with the best six lengths
+  RobotModel model;                  ///< the start geometry with the best link lengths
   RigidTransform base_to_tracker;    ///< Kabsch fit of `model` on the training samples
   double best_cost_m = 0.0;          ///< training MAE at the best lengths, as the cost computed it [m]
   std::uint64_t evaluations = 0;     ///< cost evaluations made
@@ -30,8 +30,9 @@ struct Paper6StageResult {
 
 /// ABC on the paper-6 cost: cost->build(start, train), box = start's lengths +/- half_width_m,
 /// solver->minimize, then the best geometry and its base fit. `cost` and `solver` are scratch
-/// (static storage: Paper6Cost<N[, float]>, AbcSolver<SN, 6>). Errors: those of build,
-/// paper6_box, minimize and fit_base_to_tracker; *result is written only on success.
+/// (static storage: Paper6Cost<N[, float[, K]]>, AbcSolver<SN, K> for up to K link lengths:
+/// 6 for UR arms). Errors: those of build, link_length_box, minimize (dimension_out_of_range:
+/// more lengths than the solver holds) and fit_base_to_tracker; *result is written only on success.
 Status calibrate_paper6_abc(const RobotModel& start, Span<const Sample> train, const AbcOptions& options,
                             double half_width_m, Paper6CostBase* cost, AbcSolverBase* solver,
                             Paper6StageResult* result, TraceBase* trace = nullptr,
