@@ -14,6 +14,7 @@
 #include "hivecal/port/output_files.hpp"
 #include "hivecal/solve/lm.hpp"
 #include "report/report.hpp"
+#include "report/report_json.hpp"
 #include "streams/session.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/text_util.hpp"
@@ -140,6 +141,19 @@ report::MethodRow stage_row(const Run& run, std::size_t k) {
                     static_cast<long long>(stage.evaluations));
 }
 
+/// The non-separable combination of a dropped parameter, e.g. "+0.707*d2 -0.707*d4".
+std::string combination_text(const DroppedParam& d) {
+  std::string combination;
+  char buf[96];
+  for (int c = 0; c < kNullComponentCount; ++c) {
+    if (d.component_index[c] < 0) continue;
+    std::snprintf(buf, sizeof buf, "%s%+.3g*%s", combination.empty() ? "" : " ", d.component[c],
+                  full_param_name(d.component_index[c]));
+    combination += buf;
+  }
+  return combination;
+}
+
 std::vector<std::string> identifiability_lines(const LmResult& lm) {
   std::vector<std::string> lines;
   const IdentifiabilityReport& id = lm.identifiability;
@@ -149,39 +163,47 @@ std::vector<std::string> identifiability_lines(const LmResult& lm) {
   lines.push_back(buf);
   for (int k = 0; k < id.dropped_count; ++k) {
     const DroppedParam& d = id.dropped[k];
-    std::string combination;
-    for (int c = 0; c < kNullComponentCount; ++c) {
-      if (d.component_index[c] < 0) continue;
-      std::snprintf(buf, sizeof buf, "%s%+.3g*%s", combination.empty() ? "" : " ", d.component[c],
-                    full_param_name(d.component_index[c]));
-      combination += buf;
-    }
     std::snprintf(buf, sizeof buf, "  dropped %-8s (%s, sigma ratio %.2g): %s", full_param_name(d.index),
-                  unidentifiable_reason_name(d.reason), d.singular_ratio, combination.c_str());
+                  unidentifiable_reason_name(d.reason), d.singular_ratio, combination_text(d).c_str());
     lines.push_back(buf);
   }
   return lines;
 }
 
-/// `lm`: the LM details when `stage` is the LM stage, else null.
-std::vector<std::string> parameter_lines(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start) {
-  std::vector<std::string> lines;
+report::IdentifiabilityTable identifiability_table(const LmResult& lm) {
+  const IdentifiabilityReport& id = lm.identifiability;
+  report::IdentifiabilityTable table;
+  table.present = true;
+  table.free_count = mask_count(id.free_mask);
+  for (int k = 0; k < kFullParamCount; ++k)
+    if (mask_has(id.kept_mask, k)) table.estimated.push_back(full_param_name(k));
+  for (int k = 0; k < id.dropped_count; ++k) {
+    const DroppedParam& d = id.dropped[k];
+    table.dropped.push_back({full_param_name(d.index), unidentifiable_reason_name(d.reason), d.singular_ratio,
+                             combination_text(d)});
+  }
+  table.condition_before = id.condition_before;
+  table.condition_after = id.condition_after;
+  return table;
+}
+
+/// The estimated or changed parameters. `lm`: the LM details when `stage` is the LM stage, else null.
+std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start) {
+  std::vector<report::ParameterRow> rows;
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
-  char buf[160];
   for (int k = 0; k < kModelParamCount; ++k) {
     const bool estimated = lm != nullptr && mask_has(lm->identifiability.kept_mask, k);
-    const bool changed = after(k) != before(k);
-    if (!estimated && !changed) continue;
-    const bool angle = k < kDhParamCount && (k % kParamsPerJoint == 0 || k % kParamsPerJoint == 3);
-    const double scale = angle ? 1e3 : 1e3;
-    std::snprintf(buf, sizeof buf, "%-8s %+.9f %s  (change %+.4f %s%s)", full_param_name(k), after(k),
-                  angle ? "rad" : "m", (after(k) - before(k)) * scale, angle ? "mrad" : "mm",
-                  estimated ? (", sigma " + std::to_string(lm->sigma(k) * scale) + (angle ? " mrad" : " mm")).c_str()
-                            : "");
-    lines.push_back(buf);
+    if (!estimated && after(k) == before(k)) continue;
+    report::ParameterRow row;
+    row.name = full_param_name(k);
+    row.angle = k < kDhParamCount && (k % kParamsPerJoint == 0 || k % kParamsPerJoint == 3);
+    row.start = before(k);
+    row.value = after(k);
+    row.sigma = estimated ? lm->sigma(k) : 0.0;
+    rows.push_back(row);
   }
-  return lines;
+  return rows;
 }
 
 void write_stage_list(textio::JsonWriter& json, const std::vector<report::MethodRow>& rows) {
@@ -428,17 +450,37 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   data.uncalibrated = accuracy_report(uncalibrated.model, uncalibrated.base_to_tracker, dataset);
   data.calibrated = accuracy_report(final_stage.model, final_stage.base_to_tracker, dataset);
   for (std::size_t k = 0; k < run.result.stage_count; ++k) {
-    data.convergence.push_back({run.result.stage_name(k), trace_values(run.result.stages[k].trace_m)});
+    const CalibrationStage& stage = run.result.stages[k];
+    data.convergence.push_back(
+        {run.result.stage_name(k), stage.solver == CalibrationSolver::lm, trace_values(stage.trace_m)});
   }
-  for (const Sample& s : dataset.test()) {
-    data.test_measured_m.push_back(s.point_m);
-    data.test_uncalibrated_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
-    data.test_calibrated_m.push_back(final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)));
+  data.predictions.push_back({"uncalibrated", {}});
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) data.predictions.push_back({run.result.stage_name(k), {}});
+  for (const bool test : {false, true}) {
+    for (const Sample& s : test ? dataset.test() : dataset.train()) {
+      report::SampleRow row;
+      for (int j = 0; j < kJointCount; ++j) row.q_rad[j] = s.q_rad(j);
+      row.measured_m = s.point_m;
+      row.test = test;
+      data.samples.push_back(row);
+      data.predictions[0].points_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
+      for (std::size_t k = 0; k < run.result.stage_count; ++k) {
+        const CalibrationStage& stage = run.result.stages[k];
+        data.predictions[k + 1].points_m.push_back(stage.base_to_tracker.apply(fk_tool_point(stage.model, s.q_rad)));
+      }
+    }
   }
-  if (run.final_lm() != nullptr) {
-    for (const std::string& line : identifiability_lines(*run.final_lm())) data.info_lines.push_back(line);
+  if (const LmResult* lm = run.final_lm(); lm != nullptr) {
+    for (const std::string& line : identifiability_lines(*lm)) data.info_lines.push_back(line);
+    data.identifiability = identifiability_table(*lm);
+    data.noise_sigma_m = lm->residual_sigma_m;
   }
-  data.parameter_lines = parameter_lines(final_stage, run.final_lm(), start);
+  data.parameters = parameter_rows(final_stage, run.final_lm(), start);
+  data.has_stream = facts.has_stream;
+  if (facts.has_stream) {
+    data.drops.emplace_back("kept", facts.run.counts.kept);
+    for (const auto& drop : facts.dropped) data.drops.push_back(drop);
+  }
   return data;
 }
 
@@ -447,7 +489,7 @@ void print_tables(std::FILE* out, const report::ReportData& data, const Run& run
   for (const std::string& line : data.info_lines) std::fprintf(out, "%s\n", line.c_str());
   std::fprintf(out, "\n%s", report::format_tables_text(data).c_str());
   std::fprintf(out, "\nCalibrated parameters (%s):\n", run.final_method().c_str());
-  for (const std::string& line : data.parameter_lines) std::fprintf(out, "  %s\n", line.c_str());
+  for (const std::string& line : report::format_parameters_text(data)) std::fprintf(out, "  %s\n", line.c_str());
 }
 
 std::string result_json(const CalibrateSettings& settings, const report::ReportData& data,
@@ -475,6 +517,8 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     if (run.final_lm() != nullptr) write_lm_details(w, *run.final_lm());
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
+    w.key("report");  // what `hivecal report` draws the page from
+    report::write_report_data(w, data);
   });
 }
 

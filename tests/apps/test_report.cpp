@@ -58,14 +58,25 @@ report::ReportData example() {
   data.methods = {before, abc};
   data.uncalibrated.test.mae_m[0] = 40e-6;
   data.calibrated.test.mae_m[0] = 30e-6;
-  data.convergence = {{"ABC", {1e-4, 8e-5, 7e-5, 6.01e-5}}, {"GSA", {1e-4, 9e-5, 6.5e-5}}};
+  data.convergence = {{"ABC", false, {1e-4, 8e-5, 7e-5, 6.01e-5}}, {"GSA", false, {1e-4, 9e-5, 6.5e-5}},
+                      {"LM", true, {7e-5, 6e-5, 5.9e-5}}};
+  data.predictions = {{"uncalibrated", {}}, {"ABC", {}}};
   for (int i = 0; i < 12; ++i) {
     const Vec3 p(0.5 + 0.01 * i, -0.2 + 0.02 * i, 0.3);
-    data.test_measured_m.push_back(p);
-    data.test_uncalibrated_m.push_back(p + Vec3(7e-5, 0, 0));
-    data.test_calibrated_m.push_back(p + Vec3(0, 6e-5, 0));
+    report::SampleRow row;
+    for (int j = 0; j < 6; ++j) row.q_rad[j] = 0.1 * i - 0.2 * j;
+    row.measured_m = p;
+    row.test = i % 3 == 0;
+    data.samples.push_back(row);
+    data.predictions[0].points_m.push_back(p + Vec3(7e-5, 0, 0));
+    data.predictions[1].points_m.push_back(p + Vec3(0, 6e-5, 0));
   }
-  data.parameter_lines = {"d1 = 0.089159 m +- 1.2e-6"};
+  data.noise_sigma_m = 10e-6;
+  data.identifiability.present = true;
+  data.identifiability.free_count = 3;
+  data.identifiability.estimated = {"a2", "d1"};
+  data.identifiability.dropped = {{"d4", "not separable", 1e-9, "+0.707*d2 -0.707*d4"}};
+  data.parameters = {{"d1", false, 0.089159, 0.0891602, 1.2e-6}};
   return data;
 }
 
@@ -78,7 +89,12 @@ TEST(Report, HtmlIsWellFormedAndSelfContained) {
   EXPECT_NE(html.find("Calibration &lt;UR5&gt; &amp; tracker"), std::string::npos);
   std::size_t svgs = 0;
   for (std::size_t p = 0; (p = html.find("<svg", p)) != std::string::npos; ++p) ++svgs;
-  EXPECT_EQ(svgs, 1u + 3u + 2u + 1u);  // convergence, 3 axes, x-y and x-z, histogram
+  // sorted errors (3D, x, y, z), vectors x-y and x-z, CDF, histogram, convergence (global,
+  // LM), residual vs six joints; no stream figure for samples input.
+  EXPECT_EQ(svgs, 4u + 2u + 2u + 2u + 6u);
+  EXPECT_EQ(report::figure_ids(example()).size(), svgs);
+  EXPECT_NE(html.find("not separable"), std::string::npos);
+  EXPECT_NE(html.find("+0.707*d2 -0.707*d4"), std::string::npos);
   EXPECT_NE(html.find("-20.3 %"), std::string::npos);  // 75.4 -> 60.1 um
 }
 
@@ -99,7 +115,7 @@ TEST(Report, TextTablesShowBothTables) {
 TEST(Report, EmptyAndDegenerateSeriesStillRender) {
   report::ReportData data;
   data.title = "empty";
-  data.convergence = {{"flat", {1e-5, 1e-5}}, {"none", {}}};
+  data.convergence = {{"flat", false, {1e-5, 1e-5}}, {"none", true, {}}};
   EXPECT_EQ(check_well_formed(report::render_html(data)), "");
   EXPECT_EQ(check_well_formed(report::svg_histogram(report::ChartSpec{"h", "x", "y"}, {"a"}, {{}}, 10)), "");
 }
