@@ -440,7 +440,7 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   const CalibrationStage& final_stage = run.final_stage();
   report::ReportData data;
   data.title = "hivecal calibration: " + std::string(robot_type_name(settings.robot));
-  data.info_lines = facts.info_lines;
+  data.input_lines = facts.info_lines;
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
                             ")");
@@ -486,6 +486,7 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
 
 /// The terminal text (on stdout, or on stderr when stdout carries the result).
 void print_tables(std::FILE* out, const report::ReportData& data, const Run& run) {
+  for (const std::string& line : data.input_lines) std::fprintf(out, "%s\n", line.c_str());
   for (const std::string& line : data.info_lines) std::fprintf(out, "%s\n", line.c_str());
   std::fprintf(out, "\n%s", report::format_tables_text(data).c_str());
   std::fprintf(out, "\nCalibrated parameters (%s):\n", run.final_method().c_str());

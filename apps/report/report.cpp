@@ -436,6 +436,7 @@ std::string render_html(const ReportData& data) {
       "figcaption{font-size:12px;color:#444;max-width:560px}</style>\n"
       "</head>\n<body>\n<h1>" +
       xml_escape(data.title) + "</h1>\n<ul>\n";
+  for (const std::string& line : data.input_lines) s += "<li>" + xml_escape(line) + "</li>\n";
   for (const std::string& line : data.info_lines) s += "<li>" + xml_escape(line) + "</li>\n";
   s += "</ul>\n<h2>Table 1: accuracy per method</h2>\n" + html_table(table1_rows(data));
   if (!has_timings(data)) s += "<p>Stage times are not kept in result.json (it holds no wall-clock values).</p>\n";

@@ -1,7 +1,8 @@
 // What a calibration run reports: the paper-style tables (as text for the terminal and as
 // HTML) and a self-contained HTML page with SVG figures (docs/report.md lists them and the
 // question each answers). ReportData is all the page needs; it is kept in result.json
-// (report_json.hpp) so that `hivecal report` regenerates the page from a result alone.
+// (report_json.hpp, all but the input facts and stage times) so that `hivecal report`
+// regenerates the page from a result alone.
 #pragma once
 
 #include <cstdint>
@@ -74,7 +75,8 @@ struct ParameterRow {
 /// Everything the report shows.
 struct ReportData {
   std::string title;                          ///< page title
-  std::vector<std::string> info_lines;        ///< run facts: inputs, clock, samples...
+  std::vector<std::string> input_lines;       ///< inputs and stream facts (not in result.json: they name files and formats)
+  std::vector<std::string> info_lines;        ///< run facts from the result: samples, identifiability
   std::vector<MethodRow> methods;             ///< Table 1 rows, first the uncalibrated model
   AccuracyReport uncalibrated;                ///< Table 2, before
   AccuracyReport calibrated;                  ///< Table 2, after (the chosen method)

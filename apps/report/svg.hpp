@@ -22,12 +22,12 @@ struct ChartSpec {
   bool log_y = false;    ///< logarithmic y axis (values <= 0 are skipped)
   int width_px = 560;    ///< SVG width
   int height_px = 320;   ///< SVG height
-  std::string id;        ///< id attribute of the <svg> ("" for none)
+  std::string id{};      ///< id attribute of the <svg> ("" for none)
   bool fixed_y = false;  ///< use [y_lo, y_hi] (a scale shared with other panels) instead of the data's range
   double y_lo = 0.0;     ///< lower y limit when fixed_y (in data units)
   double y_hi = 1.0;     ///< upper y limit when fixed_y (in data units)
   double y_line = 0.0;   ///< a dashed horizontal reference line at this y (e.g. the noise level)
-  std::string y_line_label;  ///< its legend label; "" draws no line
+  std::string y_line_label{};  ///< its legend label; "" draws no line
 };
 
 /// Arrows from (x, y) to (x + dx, y + dy), in axis units, drawn in one colour.

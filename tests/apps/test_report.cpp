@@ -2,10 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "report/report.hpp"
+#include "report/report_json.hpp"
 #include "report/svg.hpp"
 
 namespace hivecal {
@@ -46,14 +48,17 @@ std::string check_well_formed(const std::string& html) {
 report::ReportData example() {
   report::ReportData data;
   data.title = "Calibration <UR5> & tracker";
+  data.input_lines = {"input: robot.cap, tracker.cap"};
   data.info_lines = {"samples kept: 38", "clock offset: 1.234 s"};
   report::MethodRow before;
   before.method = "uncalibrated";
   before.test.mae_m[3] = 75.4e-6;
+  before.test.count = 4;
   report::MethodRow abc;
   abc.method = "ABC";
   abc.parameters = "paper-6";
   abc.test.mae_m[3] = 60.1e-6;
+  abc.test.count = 4;
   abc.seconds = 0.05;
   data.methods = {before, abc};
   data.uncalibrated.test.mae_m[0] = 40e-6;
@@ -96,6 +101,61 @@ TEST(Report, HtmlIsWellFormedAndSelfContained) {
   EXPECT_NE(html.find("not separable"), std::string::npos);
   EXPECT_NE(html.find("+0.707*d2 -0.707*d4"), std::string::npos);
   EXPECT_NE(html.find("-20.3 %"), std::string::npos);  // 75.4 -> 60.1 um
+}
+
+TEST(Report, WithoutTestSetNoTestColumnsAndTrainingFigures) {
+  report::ReportData data = example();
+  for (report::MethodRow& m : data.methods) m.test = ErrorStats{};
+  for (report::SampleRow& s : data.samples) s.test = false;
+  const std::string html = report::render_html(data);
+  EXPECT_EQ(check_well_formed(html), "");
+  EXPECT_EQ(html.find("test MAE"), std::string::npos);
+  EXPECT_EQ(html.find("<td>test</td>"), std::string::npos);  // Table 2: training rows only
+  EXPECT_NE(html.find("3D error per training sample"), std::string::npos);
+  EXPECT_EQ(html.find("test sample"), std::string::npos);
+}
+
+TEST(Report, StageTimesOnlyWhenTimed) {
+  report::ReportData data = example();
+  EXPECT_NE(report::render_html(data).find("time [s]"), std::string::npos);
+  for (report::MethodRow& m : data.methods) m.seconds = 0.0;
+  const std::string html = report::render_html(data);
+  EXPECT_EQ(html.find("time [s]"), std::string::npos);
+  EXPECT_NE(html.find("not kept in result.json"), std::string::npos);
+}
+
+TEST(Report, DataRoundTripsThroughResultJson) {
+  report::ReportData data = example();
+  data.has_stream = true;
+  data.drops = {{"kept", 12}, {"beam_lost", 3}};
+  data.identifiability.condition_before = std::numeric_limits<double>::infinity();  // stored as null
+  textio::JsonWriter json;
+  report::write_report_data(json, data);
+  textio::JsonValue value;
+  ASSERT_TRUE(textio::parse_json(json.text(), &value).ok());
+  report::ReportData back;
+  const port::Error r = report::parse_report_data(value, "result.json", &back);
+  ASSERT_TRUE(r.ok()) << r.message;
+  for (report::MethodRow& m : data.methods) m.seconds = 0.0;  // never written
+  data.input_lines.clear();                                    // never written
+  EXPECT_EQ(report::render_html(back), report::render_html(data));
+  EXPECT_EQ(report::figure_ids(back).back(), "fig-drops");
+  // A damaged document is refused with the key at fault.
+  value.object["samples"].array[0].object.erase("q_rad");
+  const port::Error damaged = report::parse_report_data(value, "result.json", &back);
+  EXPECT_FALSE(damaged.ok());
+  EXPECT_NE(damaged.message.find("\"samples\""), std::string::npos) << damaged.message;
+}
+
+TEST(Report, ErrorVectorsCarryTheirScale) {
+  const std::string html = report::render_html(example());
+  // Largest error 70 um, workspace extent 220 mm: 1 mm of arrow must stand for a round number of um.
+  const std::size_t at = html.find("1 mm arrow = ");
+  ASSERT_NE(at, std::string::npos);
+  const double um_per_mm = std::stod(html.substr(at + 13));
+  EXPECT_DOUBLE_EQ(report::nice_step(um_per_mm), um_per_mm);
+  EXPECT_GE(70.0 / um_per_mm, 220.0 / 40.0);  // the longest arrow is visible: >= 1/40 of the extent
+  EXPECT_LE(70.0 / um_per_mm, 220.0 / 20.0);
 }
 
 TEST(Report, CheckerCatchesBrokenMarkup) {
