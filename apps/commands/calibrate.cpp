@@ -1,6 +1,7 @@
 // hivecal calibrate: inputs (paired samples, serial captures or CSV logs) -> dataset ->
 // ABC / GSA / Levenberg-Marquardt -> tables, result JSON, UR deltas and HTML report.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -13,6 +14,8 @@
 #include "hivecal/model/metrics.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "hivecal/solve/lm.hpp"
+#include "hivecal/solve/normal_equations.hpp"
+#include <Eigen/Cholesky>  // correlations of the estimated parameters
 #include "report/report.hpp"
 #include "report/report_json.hpp"
 #include "streams/session.hpp"
@@ -187,9 +190,38 @@ report::IdentifiabilityTable identifiability_table(const LmResult& lm) {
   return table;
 }
 
+/// Correlation matrix of the estimated parameters at the result, from the normal equations
+/// of the training samples (as LM's sigmas; lib reports the sigmas only). Entries of
+/// parameters not estimated are 0. False when the matrix is singular.
+bool parameter_correlations(const CalibrationStage& stage, const LmResult& lm, Span<const Sample> train,
+                            NormalMatrix* correlation) {
+  static NormalEquations eq;  // static: 9 kB
+  static NormalMatrix scaled;
+  const ParamMask kept = lm.identifiability.kept_mask;
+  if (accumulate_normal_equations(stage.model, stage.base_to_tracker, train, PointLoss{lm.huber_threshold_m}, &eq,
+                                  kept) != Status::ok) {
+    return false;
+  }
+  FullParams scale;
+  scale_normal_matrix(eq.jtwj, kept, 1.0, &scaled, &scale);  // unit diagonal; identity outside `kept`
+  const Eigen::LDLT<NormalMatrix> ldlt(scaled);
+  if (ldlt.info() != Eigen::Success) return false;
+  *correlation = ldlt.solve(NormalMatrix::Identity());
+  const FullParams variance = correlation->diagonal();
+  for (int i = 0; i < kFullParamCount; ++i)
+    for (int j = 0; j < kFullParamCount; ++j) {
+      const double d = std::sqrt(variance(i) * variance(j));
+      (*correlation)(i, j) = mask_has(kept, i) && mask_has(kept, j) && d > 0.0 ? (*correlation)(i, j) / d : 0.0;
+    }
+  return correlation->allFinite();
+}
+
 /// The estimated or changed parameters. `lm`: the LM details when `stage` is the LM stage, else null.
-std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start) {
+std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start,
+                                                 Span<const Sample> train) {
   std::vector<report::ParameterRow> rows;
+  static NormalMatrix correlation;
+  const bool correlated = lm != nullptr && parameter_correlations(stage, *lm, train, &correlation);
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
   for (int k = 0; k < kModelParamCount; ++k) {
@@ -201,6 +233,12 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
     row.start = before(k);
     row.value = after(k);
     row.sigma = estimated ? lm->sigma(k) : 0.0;
+    for (int other = 0; correlated && estimated && other < kFullParamCount; ++other) {
+      if (other != k && std::fabs(correlation(k, other)) > std::fabs(row.correlation)) {
+        row.correlation = correlation(k, other);
+        row.correlated_with = full_param_name(other);
+      }
+    }
     rows.push_back(row);
   }
   return rows;
@@ -475,7 +513,7 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
     data.identifiability = identifiability_table(*lm);
     data.noise_sigma_m = lm->residual_sigma_m;
   }
-  data.parameters = parameter_rows(final_stage, run.final_lm(), start);
+  data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
   data.has_stream = facts.has_stream;
   if (facts.has_stream) {
     data.drops.emplace_back("kept", facts.run.counts.kept);

@@ -132,10 +132,10 @@ void vector_figures(const ReportData& data, const std::vector<std::size_t>& show
       if (i < set->points_m.size()) largest_um = std::max(largest_um, (set->points_m[i] - data.samples[i].measured_m).norm() * 1e6);
   }
   if (shown.empty() || !(largest_um > 0.0)) return;
-  // The longest arrow about a twentieth of the workspace's extent: 1 mm of arrow stands for
+  // The longest arrow about a third of the workspace's extent: 1 mm of arrow stands for
   // um_per_mm (a round number), and a bar of bar_mm shows the scale.
   const double span_mm = std::max((hi - lo).maxCoeff(), 1.0);
-  const double um_per_mm = nice_step(largest_um / (span_mm / 20.0));
+  const double um_per_mm = nice_step(largest_um / (span_mm / 3.0));
   const double bar_mm = nice_step(span_mm / 12.0);
   char label[96];
   std::snprintf(label, sizeof label, "1 mm arrow = %g um|bar: %g um", um_per_mm, bar_mm * um_per_mm);
@@ -360,6 +360,12 @@ std::vector<std::vector<std::string>> parameter_rows(const ReportData& data) {
     std::string note;
     if (p.sigma <= 0.0) note = "not estimated";
     else if (std::fabs(change) < 2.0 * p.sigma * scale) note = "change within 2 sigma";
+    if (std::fabs(p.correlation) > kCorrelationWarning) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "%scorrelation %+.3f with %s", note.empty() ? "" : "; ", p.correlation,
+                    p.correlated_with.c_str());
+      note += buf;
+    }
     rows.push_back({p.name, unit, fixed(p.start * scale, 4), fixed(p.value * scale, 4), fixed(change, 4),
                     p.sigma > 0.0 ? general(p.sigma * scale) : "", note});
   }

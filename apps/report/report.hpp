@@ -70,7 +70,12 @@ struct ParameterRow {
   double start = 0.0;      ///< start value [rad] or [m]
   double value = 0.0;      ///< calibrated value [rad] or [m]
   double sigma = 0.0;      ///< standard deviation [rad] or [m]; 0: not estimated
+  std::string correlated_with{};  ///< the estimated parameter it is most correlated with ("" if none)
+  double correlation = 0.0;     ///< that correlation coefficient [-]
 };
+
+/// |correlation| above which Table 4 warns: the two are hard to tell apart in this data.
+constexpr double kCorrelationWarning = 0.9;
 
 /// Everything the report shows.
 struct ReportData {

@@ -213,7 +213,8 @@ bool get_parameters(const JsonValue* v, std::vector<ParameterRow>* out) {
     ParameterRow row;
     if (!get_string(p.find("name"), &row.name) || !get_bool(p.find("angle"), &row.angle) ||
         !get_number(p.find("start"), &row.start) || !get_number(p.find("value"), &row.value) ||
-        !get_number(p.find("sigma"), &row.sigma)) {
+        !get_number(p.find("sigma"), &row.sigma) || !get_string(p.find("correlated_with"), &row.correlated_with) ||
+        !get_number(p.find("correlation"), &row.correlation)) {
       return false;
     }
     out->push_back(row);
@@ -297,6 +298,8 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
     json.key("start").value(p.start);
     json.key("value").value(p.value);
     json.key("sigma").value(p.sigma);
+    json.key("correlated_with").value(p.correlated_with);
+    json.key("correlation").value(p.correlation);
     json.end_object();
   }
   json.end_array();

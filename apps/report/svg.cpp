@@ -345,7 +345,7 @@ std::string svg_arrows(const ChartSpec& spec, const std::vector<ArrowSet>& sets,
   out += "<defs>";
   for (std::size_t k = 0; k < sets.size(); ++k) {
     out += "<marker id='" + xml_escape(spec.id) + "-head" + std::to_string(k) +
-           "' markerWidth='6' markerHeight='6' refX='5' refY='3' orient='auto'><path d='M0,0 L6,3 L0,6 z' fill='" +
+           "' markerWidth='4' markerHeight='4' refX='3.5' refY='2' orient='auto'><path d='M0,0 L4,2 L0,4 z' fill='" +
            kColours[k % 6] + "'/></marker>";
   }
   out += "</defs>\n" + frame(spec, x, y);

@@ -81,7 +81,7 @@ report::ReportData example() {
   data.identifiability.free_count = 3;
   data.identifiability.estimated = {"a2", "d1"};
   data.identifiability.dropped = {{"d4", "not separable", 1e-9, "+0.707*d2 -0.707*d4"}};
-  data.parameters = {{"d1", false, 0.089159, 0.0891602, 1.2e-6}};
+  data.parameters = {{"d1", false, 0.089159, 0.0891602, 1.2e-6, "tool_z", -0.97}};
   return data;
 }
 
@@ -100,6 +100,7 @@ TEST(Report, HtmlIsWellFormedAndSelfContained) {
   EXPECT_EQ(report::figure_ids(example()).size(), svgs);
   EXPECT_NE(html.find("not separable"), std::string::npos);
   EXPECT_NE(html.find("+0.707*d2 -0.707*d4"), std::string::npos);
+  EXPECT_NE(html.find("correlation -0.970 with tool_z"), std::string::npos);
   EXPECT_NE(html.find("-20.3 %"), std::string::npos);  // 75.4 -> 60.1 um
 }
 
@@ -149,13 +150,13 @@ TEST(Report, DataRoundTripsThroughResultJson) {
 
 TEST(Report, ErrorVectorsCarryTheirScale) {
   const std::string html = report::render_html(example());
-  // Largest error 70 um, workspace extent 220 mm: 1 mm of arrow must stand for a round number of um.
+  // Largest error 70 um, extent of the test samples (i = 0, 3, 6, 9) 180 mm: 1 mm of arrow must stand for a round number of um.
   const std::size_t at = html.find("1 mm arrow = ");
   ASSERT_NE(at, std::string::npos);
   const double um_per_mm = std::stod(html.substr(at + 13));
   EXPECT_DOUBLE_EQ(report::nice_step(um_per_mm), um_per_mm);
-  EXPECT_GE(70.0 / um_per_mm, 220.0 / 40.0);  // the longest arrow is visible: >= 1/40 of the extent
-  EXPECT_LE(70.0 / um_per_mm, 220.0 / 20.0);
+  EXPECT_GE(70.0 / um_per_mm, 180.0 / 6.0);  // the longest arrow is visible: >= 1/6 of the extent
+  EXPECT_LE(70.0 / um_per_mm, 180.0 / 3.0);
 }
 
 TEST(Report, CheckerCatchesBrokenMarkup) {

@@ -107,6 +107,10 @@ if "$hivecal" calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --
        --hide-scrollbars --window-size=1300,2000 --screenshot="$work/shot.png" "file://$work/streams/index.html" \
        >/dev/null 2>&1 && [ "$(head -c 8 "$work/shot.png" | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ] &&
      [ "$(stat -c %s "$work/shot.png")" -gt 50000 ]; then ok; else fail "screenshot of the report"; fi
+  # Correlation coefficients of the parameter table are coefficients.
+  bad_rho=$(grep -o '"correlation": [^,}]*' "$work/streams.json" | awk '{ v = $2 + 0; if (v > 1 || v < -1) print v }')
+  rho_count=$(grep -c '"correlation": ' "$work/streams.json")
+  if [ "$rho_count" -gt 10 ] && [ -z "$bad_rho" ]; then ok; else fail "$rho_count correlations; outside [-1, 1]: $bad_rho"; fi
   # Drawn again from the result: the same figures, and the same bytes every time.
   if "$hivecal" report --calibration "$work/streams.json" --out "$work/again" >/dev/null &&
      "$hivecal" report --calibration "$work/streams.json" --out "$work/again2" >/dev/null &&
