@@ -471,6 +471,27 @@ void write_input_facts(textio::JsonWriter& json, const streams::SessionFacts& fa
   json.end_object();
 }
 
+/// Every sample (training first) and each model's prediction of it, for the figures.
+void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* data) {
+  const CalibrationBaseline& uncalibrated = run.result.baseline;
+  data->predictions.push_back({"uncalibrated", {}});
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) data->predictions.push_back({run.result.stage_name(k), {}});
+  for (const bool test : {false, true}) {
+    for (const Sample& s : test ? dataset.test() : dataset.train()) {
+      report::SampleRow row;
+      for (int j = 0; j < kJointCount; ++j) row.q_rad[j] = s.q_rad(j);
+      row.measured_m = s.point_m;
+      row.test = test;
+      data->samples.push_back(row);
+      data->predictions[0].points_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
+      for (std::size_t k = 0; k < run.result.stage_count; ++k) {
+        const CalibrationStage& stage = run.result.stages[k];
+        data->predictions[k + 1].points_m.push_back(stage.base_to_tracker.apply(fk_tool_point(stage.model, s.q_rad)));
+      }
+    }
+  }
+}
+
 /// Tables and figures of a run, and the text of the terminal.
 report::ReportData present(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset,
                            const streams::SessionFacts& facts, const Run& run) {
@@ -492,22 +513,7 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
     data.convergence.push_back(
         {run.result.stage_name(k), stage.solver == CalibrationSolver::lm, trace_values(stage.trace_m)});
   }
-  data.predictions.push_back({"uncalibrated", {}});
-  for (std::size_t k = 0; k < run.result.stage_count; ++k) data.predictions.push_back({run.result.stage_name(k), {}});
-  for (const bool test : {false, true}) {
-    for (const Sample& s : test ? dataset.test() : dataset.train()) {
-      report::SampleRow row;
-      for (int j = 0; j < kJointCount; ++j) row.q_rad[j] = s.q_rad(j);
-      row.measured_m = s.point_m;
-      row.test = test;
-      data.samples.push_back(row);
-      data.predictions[0].points_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
-      for (std::size_t k = 0; k < run.result.stage_count; ++k) {
-        const CalibrationStage& stage = run.result.stages[k];
-        data.predictions[k + 1].points_m.push_back(stage.base_to_tracker.apply(fk_tool_point(stage.model, s.q_rad)));
-      }
-    }
-  }
+  add_samples(dataset, run, &data);
   if (const LmResult* lm = run.final_lm(); lm != nullptr) {
     for (const std::string& line : identifiability_lines(*lm)) data.info_lines.push_back(line);
     data.identifiability = identifiability_table(*lm);

@@ -439,7 +439,7 @@ std::string render_html(const ReportData& data) {
       "</title>\n<style>body{font-family:sans-serif;max-width:1300px;margin:2em auto;padding:0 1em}"
       "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
       "th{background:#eee}svg{margin:4px;border:1px solid #eee}figure{display:inline-block;margin:4px;vertical-align:top}"
-      "figcaption{font-size:12px;color:#444;max-width:560px}</style>\n"
+      "figcaption{font-size:12px;color:#444;width:0;min-width:100%}</style>\n"
       "</head>\n<body>\n<h1>" +
       xml_escape(data.title) + "</h1>\n<ul>\n";
   for (const std::string& line : data.input_lines) s += "<li>" + xml_escape(line) + "</li>\n";

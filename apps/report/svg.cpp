@@ -391,7 +391,6 @@ std::string svg_bars(const ChartSpec& spec, const std::vector<std::string>& cate
   y.px_lo = spec.height_px - 45.0;
   y.px_hi = 28.0;
   std::string out = open_svg(spec);
-  ChartSpec frame_spec = spec;
   out += "<rect x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", y.px_hi) + "' width='" + fmt("%.1f", x.px_hi - x.px_lo) +
          "' height='" + fmt("%.1f", y.px_lo - y.px_hi) + "' fill='none' stroke='#444'/>\n";
   const Ticks xt = ticks_of(x);
@@ -400,7 +399,7 @@ std::string svg_bars(const ChartSpec& spec, const std::vector<std::string>& cate
            "' text-anchor='middle'>" + xt.labels[i] + "</text>\n";
   }
   out += "<text x='" + fmt("%.1f", (x.px_lo + x.px_hi) / 2) + "' y='16' text-anchor='middle' font-weight='bold'>" +
-         xml_escape(frame_spec.title) + "</text>\n";
+         xml_escape(spec.title) + "</text>\n";
   out += "<text x='" + fmt("%.1f", (x.px_lo + x.px_hi) / 2) + "' y='" + fmt("%.1f", y.px_lo + 30) +
          "' text-anchor='middle'>" + xml_escape(spec.x_label + (xt.offset.empty() ? "" : " \u2212 " + xt.offset)) +
          "</text>\n";
