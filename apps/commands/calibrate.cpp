@@ -473,9 +473,6 @@ void write_input_facts(textio::JsonWriter& json, const streams::SessionFacts& fa
 
 /// Every sample (training first) and each model's prediction of it, for the figures.
 void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* data) {
-  const CalibrationBaseline& uncalibrated = run.result.baseline;
-  data->predictions.push_back({"uncalibrated", {}});
-  for (std::size_t k = 0; k < run.result.stage_count; ++k) data->predictions.push_back({run.result.stage_name(k), {}});
   for (const bool test : {false, true}) {
     for (const Sample& s : test ? dataset.test() : dataset.train()) {
       report::SampleRow row;
@@ -483,12 +480,15 @@ void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* 
       row.measured_m = s.point_m;
       row.test = test;
       data->samples.push_back(row);
-      data->predictions[0].points_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
-      for (std::size_t k = 0; k < run.result.stage_count; ++k) {
-        const CalibrationStage& stage = run.result.stages[k];
-        data->predictions[k + 1].points_m.push_back(stage.base_to_tracker.apply(fk_tool_point(stage.model, s.q_rad)));
-      }
     }
+  }
+  const CalibrationBaseline& uncalibrated = run.result.baseline;
+  data->predictions.push_back(
+      report::predict_samples("uncalibrated", uncalibrated.model, uncalibrated.base_to_tracker, data->samples));
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) {
+    const CalibrationStage& stage = run.result.stages[k];
+    data->predictions.push_back(
+        report::predict_samples(run.result.stage_name(k), stage.model, stage.base_to_tracker, data->samples));
   }
 }
 

@@ -411,6 +411,17 @@ const char* caption(const std::string& id) {
 
 }  // namespace
 
+PredictionSet predict_samples(const std::string& method, const RobotModel& model, const RigidTransform& base_to_tracker,
+                              const std::vector<SampleRow>& samples) {
+  PredictionSet set{method, model, base_to_tracker, {}};
+  for (const SampleRow& s : samples) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q(j) = s.q_rad[j];
+    set.points_m.push_back(base_to_tracker.apply(fk_tool_point(model, q)));
+  }
+  return set;
+}
+
 std::string format_tables_text(const ReportData& data) {
   return "Table 1: accuracy per method (3D)\n" + text_table(table1_rows(data)) +
          "\nTable 2: accuracy per axis, uncalibrated vs calibrated\n" + text_table(table2_rows(data));

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hivecal/core/types.hpp"
+#include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/metrics.hpp"
 
 namespace hivecal::report {
@@ -39,10 +40,12 @@ struct SampleRow {
   bool test = false;     ///< held out (test set), else training
 };
 
-/// One model's predictions of every sample (same order as ReportData::samples).
+/// One model and its predictions of every sample (same order as ReportData::samples).
 struct PredictionSet {
-  std::string method;            ///< "uncalibrated", or a stage name ("ABC", "ABC+LM", ...)
-  std::vector<Vec3> points_m;    ///< predicted tracker points [m]
+  std::string method;                ///< "uncalibrated", or a stage name ("ABC", "ABC+LM", ...)
+  RobotModel model;                  ///< its geometry
+  RigidTransform base_to_tracker;    ///< its base -> tracker transform
+  std::vector<Vec3> points_m;        ///< base_to_tracker * FK(q) * tool per sample [m] (predict_samples)
 };
 
 /// A parameter set aside by the identifiability analysis.
@@ -94,6 +97,11 @@ struct ReportData {
   std::vector<std::pair<std::string, std::uint64_t>> drops;  ///< stream input: drop reason -> tracker points
   bool has_stream = false;                    ///< the samples came from two streams
 };
+
+/// A prediction set of `model` for every sample of `samples` (result.json keeps the model,
+/// not the points: both calibrate and `hivecal report` compute them here, the same bits).
+PredictionSet predict_samples(const std::string& method, const RobotModel& model, const RigidTransform& base_to_tracker,
+                              const std::vector<SampleRow>& samples);
 
 /// Table 1 and Table 2 as aligned plain text (micrometres).
 std::string format_tables_text(const ReportData& data);

@@ -24,10 +24,18 @@ void write_accuracy(JsonWriter& json, const AccuracyReport& r) {
   json.end_object();
 }
 
-void write_points(JsonWriter& json, const std::vector<Vec3>& points) {
-  json.begin_array();
-  for (const Vec3& p : points) json.inline_array(p.data(), 3);
+/// A model and transform: "params" (the 27 DH and tool values, kinematics.hpp order),
+/// "rotation" (3 rows) and "translation_m"; exact bits, no re-orthonormalisation.
+void write_model(JsonWriter& json, const PredictionSet& set) {
+  const ModelParams params = to_params(set.model);
+  json.key("params").inline_array(params.data(), kModelParamCount);
+  json.key("rotation").begin_array();
+  for (int r = 0; r < 3; ++r) {
+    const Vec3 row = set.base_to_tracker.rotation.row(r).transpose();
+    json.inline_array(row.data(), 3);
+  }
   json.end_array();
+  json.key("translation_m").inline_array(set.base_to_tracker.translation_m.data(), 3);
 }
 
 void write_identifiability(JsonWriter& json, const IdentifiabilityTable& id) {
@@ -112,14 +120,20 @@ bool get_accuracy(const JsonValue* v, AccuracyReport* out) {
          get_stats(v->find("overall"), &out->overall);
 }
 
-bool get_points(const JsonValue* v, std::vector<Vec3>* out) {
-  if (!is_array(v)) return false;
-  for (const JsonValue& p : v->array) {
-    double xyz[3];
-    if (!get_numbers(&p, 3, xyz)) return false;
-    out->push_back(Vec3(xyz[0], xyz[1], xyz[2]));
+bool get_model(const JsonValue& v, RobotModel* model, RigidTransform* transform) {
+  ModelParams params;
+  const JsonValue* rotation = v.find("rotation");
+  if (!get_numbers(v.find("params"), kModelParamCount, params.data()) || !is_array(rotation) ||
+      rotation->array.size() != 3 || !get_numbers(v.find("translation_m"), 3, transform->translation_m.data())) {
+    return false;
   }
-  return true;
+  for (std::size_t r = 0; r < 3; ++r) {
+    double row[3];
+    if (!get_numbers(&rotation->array[r], 3, row)) return false;
+    for (std::size_t c = 0; c < 3; ++c) transform->rotation(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
+  }
+  *model = from_params(params);
+  return params.allFinite() && transform->rotation.allFinite() && transform->translation_m.allFinite();
 }
 
 bool get_methods(const JsonValue* v, std::vector<MethodRow>* out) {
@@ -167,15 +181,14 @@ bool get_samples(const JsonValue* v, std::vector<SampleRow>* out) {
   return true;
 }
 
-bool get_predictions(const JsonValue* v, std::size_t sample_count, std::vector<PredictionSet>* out) {
+bool get_predictions(const JsonValue* v, const std::vector<SampleRow>& samples, std::vector<PredictionSet>* out) {
   if (!is_array(v)) return false;
   for (const JsonValue& p : v->array) {
-    PredictionSet set;
-    if (!get_string(p.find("method"), &set.method) || !get_points(p.find("points_m"), &set.points_m) ||
-        set.points_m.size() != sample_count) {
-      return false;
-    }
-    out->push_back(set);
+    std::string method;
+    RobotModel model;
+    RigidTransform transform;
+    if (!get_string(p.find("method"), &method) || !get_model(p, &model, &transform)) return false;
+    out->push_back(predict_samples(method, model, transform, samples));
   }
   return true;
 }
@@ -280,8 +293,7 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
   for (const PredictionSet& p : data.predictions) {
     json.begin_object();
     json.key("method").value(p.method);
-    json.key("points_m");
-    write_points(json, p.points_m);
+    write_model(json, p);
     json.end_object();
   }
   json.end_array();
@@ -331,7 +343,7 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   if (!get_accuracy(value.find("calibrated"), &parsed.calibrated)) return bad("calibrated");
   if (!get_convergence(value.find("convergence"), &parsed.convergence)) return bad("convergence");
   if (!get_samples(value.find("samples"), &parsed.samples)) return bad("samples");
-  if (!get_predictions(value.find("predictions"), parsed.samples.size(), &parsed.predictions)) return bad("predictions");
+  if (!get_predictions(value.find("predictions"), parsed.samples, &parsed.predictions)) return bad("predictions");
   if (!get_number(value.find("noise_sigma_m"), &parsed.noise_sigma_m)) return bad("noise_sigma_m");
   if (!get_identifiability(value.find("identifiability"), &parsed.identifiability)) return bad("identifiability");
   if (!get_parameters(value.find("parameters"), &parsed.parameters)) return bad("parameters");

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "hivecal/model/kinematics.hpp"
 #include "report/report.hpp"
 #include "report/report_json.hpp"
 #include "report/svg.hpp"
@@ -65,17 +66,21 @@ report::ReportData example() {
   data.calibrated.test.mae_m[0] = 30e-6;
   data.convergence = {{"ABC", false, {1e-4, 8e-5, 7e-5, 6.01e-5}}, {"GSA", false, {1e-4, 9e-5, 6.5e-5}},
                       {"LM", true, {7e-5, 6e-5, 5.9e-5}}};
-  data.predictions = {{"uncalibrated", {}}, {"ABC", {}}};
+  // The ABC model predicts every sample 60 um off in y, the uncalibrated one 70 um off in x.
+  const RobotModel model = nominal_model(RobotType::ur5);
   for (int i = 0; i < 12; ++i) {
-    const Vec3 p(0.5 + 0.01 * i, -0.2 + 0.02 * i, 0.3);
     report::SampleRow row;
     for (int j = 0; j < 6; ++j) row.q_rad[j] = 0.1 * i - 0.2 * j;
-    row.measured_m = p;
+    JointVector q;
+    for (int j = 0; j < 6; ++j) q(j) = row.q_rad[j];
+    row.measured_m = fk_tool_point(model, q) - Vec3(0, 6e-5, 0);
     row.test = i % 3 == 0;
     data.samples.push_back(row);
-    data.predictions[0].points_m.push_back(p + Vec3(7e-5, 0, 0));
-    data.predictions[1].points_m.push_back(p + Vec3(0, 6e-5, 0));
   }
+  RigidTransform shifted;
+  shifted.translation_m = Vec3(7e-5, -6e-5, 0);
+  data.predictions = {report::predict_samples("uncalibrated", model, shifted, data.samples),
+                      report::predict_samples("ABC", model, RigidTransform{}, data.samples)};
   data.noise_sigma_m = 10e-6;
   data.identifiability.present = true;
   data.identifiability.free_count = 3;
@@ -149,14 +154,32 @@ TEST(Report, DataRoundTripsThroughResultJson) {
 }
 
 TEST(Report, ErrorVectorsCarryTheirScale) {
-  const std::string html = report::render_html(example());
-  // Largest error 70 um, extent of the test samples (i = 0, 3, 6, 9) 180 mm: 1 mm of arrow must stand for a round number of um.
+  const report::ReportData data = example();
+  // Largest error 70 um; the extent of the test samples is their largest per-axis range.
+  Vec3 lo = Vec3::Constant(1e9);
+  Vec3 hi = -lo;
+  for (const report::SampleRow& s : data.samples) {
+    if (!s.test) continue;
+    lo = lo.cwiseMin(s.measured_m * 1e3);
+    hi = hi.cwiseMax(s.measured_m * 1e3);
+  }
+  const double extent_mm = (hi - lo).maxCoeff();
+  const std::string html = report::render_html(data);
   const std::size_t at = html.find("1 mm arrow = ");
   ASSERT_NE(at, std::string::npos);
-  const double um_per_mm = std::stod(html.substr(at + 13));
+  const double um_per_mm = std::stod(html.substr(at + 13));  // a round number of um
   EXPECT_DOUBLE_EQ(report::nice_step(um_per_mm), um_per_mm);
-  EXPECT_GE(70.0 / um_per_mm, 180.0 / 6.0);  // the longest arrow is visible: >= 1/6 of the extent
-  EXPECT_LE(70.0 / um_per_mm, 180.0 / 3.0);
+  EXPECT_GE(70.0 / um_per_mm, extent_mm / 6.0) << extent_mm;  // the longest arrow is visible
+  EXPECT_LE(70.0 / um_per_mm, extent_mm / 3.0) << extent_mm;
+}
+
+TEST(Report, PredictionsAreTheModelsOwn) {
+  const report::ReportData data = example();
+  ASSERT_EQ(data.predictions[0].points_m.size(), data.samples.size());
+  for (std::size_t i = 0; i < data.samples.size(); ++i) {
+    EXPECT_NEAR((data.predictions[0].points_m[i] - data.samples[i].measured_m - Vec3(7e-5, 0, 0)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((data.predictions[1].points_m[i] - data.samples[i].measured_m - Vec3(0, 6e-5, 0)).norm(), 0.0, 1e-12);
+  }
 }
 
 TEST(Report, CheckerCatchesBrokenMarkup) {
