@@ -1,10 +1,14 @@
 // hivecal calibrate: inputs (paired samples, serial captures or CSV logs) -> dataset ->
 // ABC / GSA / Levenberg-Marquardt -> tables, result JSON, UR deltas and HTML report.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include <Eigen/Cholesky>  // correlations of the estimated parameters
 
 #include "cli/options.hpp"
 #include "hivecal/calibration.hpp"
@@ -15,7 +19,7 @@
 #include "hivecal/port/output_files.hpp"
 #include "hivecal/solve/lm.hpp"
 #include "hivecal/solve/normal_equations.hpp"
-#include <Eigen/Cholesky>  // correlations of the estimated parameters
+#include "hivecal/sync/sample_extraction.hpp"
 #include "report/report.hpp"
 #include "report/report_json.hpp"
 #include "streams/session.hpp"
@@ -90,6 +94,46 @@ class JobObserver final : public CalibrationObserver {
   bool printed_ = false;
   std::chrono::steady_clock::time_point start_;
 };
+
+/// The fate of every tracker point in the extraction pass (kept, or its drop reason), for the
+/// report's timeline.
+class PointFates final : public ExtractionObserver {
+ public:
+  void on_sample(const ExtractedSample& sample) override { events.push_back({sample.tracker_us, -1}); }
+  void on_drop(std::uint64_t tracker_us, DropReason reason) override {
+    events.push_back({static_cast<double>(tracker_us), static_cast<int>(reason)});
+  }
+  /// In `bins` equal time bins: "kept", then the drop reasons that occurred (enum order).
+  report::PointTimeline timeline(std::size_t bins) const;
+  std::vector<std::pair<double, int>> events;  ///< tracker time [us], -1 (kept) or the DropReason
+};
+
+report::PointTimeline PointFates::timeline(std::size_t bins) const {
+  report::PointTimeline t;
+  if (events.empty()) return t;
+  double first = events.front().first;
+  double last = first;
+  for (const auto& e : events) {
+    first = std::min(first, e.first);
+    last = std::max(last, e.first);
+  }
+  t.duration_s = (last - first) * 1e-6;
+  std::vector<int> row_of(kDropReasonCount + 1, -1);  // index reason + 1 (kept: 0)
+  for (int reason = -1; reason < kDropReasonCount; ++reason) {
+    bool seen = false;
+    for (const auto& e : events) seen = seen || e.second == reason;
+    if (!seen) continue;
+    row_of[static_cast<std::size_t>(reason + 1)] = static_cast<int>(t.reasons.size());
+    t.reasons.push_back(reason < 0 ? "kept" : drop_reason_name(static_cast<DropReason>(reason)));
+    t.counts.emplace_back(bins, 0u);
+  }
+  for (const auto& e : events) {
+    const double at = last > first ? (e.first - first) / (last - first) : 0.0;
+    const std::size_t bin = std::min(bins - 1, static_cast<std::size_t>(at * static_cast<double>(bins)));
+    ++t.counts[static_cast<std::size_t>(row_of[static_cast<std::size_t>(e.second + 1)])][bin];
+  }
+  return t;
+}
 
 /// What the job produced, with the CLI's stage timings.
 struct Run {
@@ -400,8 +444,9 @@ Error start_geometry(const Options& options, const CalibrateSettings& settings, 
 
 /// The dataset, checked for size and split.
 Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
-                   streams::SessionFacts* facts) {
+                   streams::SessionFacts* facts, PointFates* fates) {
   streams::SessionConfig config;
+  config.observer = fates;
   config.speed_model = nominal_model(settings.robot);
   config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
   config.progress = settings.progress;
@@ -596,12 +641,14 @@ Error calibrate(const Options& options) {
   static CliDataset dataset;  // static: 8192 samples; emptied for each call (tests run several in one process)
   dataset.clear();
   streams::SessionFacts facts;
-  if (error.ok()) error = load_dataset(options, settings, &dataset, &facts);
+  PointFates fates;
+  if (error.ok()) error = load_dataset(options, settings, &dataset, &facts, &fates);
   static Run job;  // static: the CalibrationResult is ~5 KB
   job.from_controller = !options.get("ur-calibration").empty();
   if (error.ok()) error = run(settings, start, &dataset, &job);
   if (!error.ok()) return error;
-  const report::ReportData data = present(settings, start, dataset, facts, job);
+  report::ReportData data = present(settings, start, dataset, facts, job);
+  if (facts.has_stream) data.timeline = fates.timeline(120);
   const bool result_on_stdout = options.get("out") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   print_tables(terminal, data, job);

@@ -245,6 +245,13 @@ std::vector<Figure> all_figures(const ReportData& data) {
   }
   convergence_figures(data, &figures);
   if (!data.predictions.empty() && !data.samples.empty()) joint_figures(data, &figures);
+  if (data.has_stream && !data.timeline.reasons.empty()) {
+    ChartSpec spec = chart("fig-drop-timeline", "Tracker points over the session: kept, or why dropped",
+                           "tracker time [s]", "");
+    spec.height_px = 60 + 24 * static_cast<int>(data.timeline.reasons.size());
+    spec.width_px = 1100;
+    figures.push_back({spec.id, svg_strips(spec, data.timeline.reasons, data.timeline.counts, data.timeline.duration_s)});
+  }
   if (data.has_stream && !data.drops.empty()) {
     std::vector<std::string> reasons;
     std::vector<double> counts;
@@ -403,6 +410,7 @@ const char* caption(const std::string& id) {
       {"fig-convergence-lm", "Did Levenberg-Marquardt converge?"},
       {"fig-residual-q", "Does the residual depend on a joint angle (compliance, an unmodelled effect)?"},
       {"fig-drops", "How many tracker points became samples, and why were the others dropped?"},
+      {"fig-drop-timeline", "When in the session were points kept or dropped (beam losses, moves, a stream gap)? Shade: count in the bin relative to the row's busiest bin."},
   };
   for (const Caption& c : captions)
     if (id.compare(0, std::strlen(c.prefix), c.prefix) == 0) return c.text;

@@ -80,6 +80,13 @@ struct ParameterRow {
 /// |correlation| above which Table 4 warns: the two are hard to tell apart in this data.
 constexpr double kCorrelationWarning = 0.9;
 
+/// Stream input: what became of the tracker points over the session, in equal time bins.
+struct PointTimeline {
+  double duration_s = 0.0;                       ///< from the first to the last tracker point [s]
+  std::vector<std::string> reasons;              ///< "kept", then each drop reason that occurred
+  std::vector<std::vector<std::uint32_t>> counts;  ///< per reason, tracker points per time bin
+};
+
 /// Everything the report shows.
 struct ReportData {
   std::string title;                          ///< page title
@@ -96,6 +103,7 @@ struct ReportData {
   std::vector<ParameterRow> parameters;       ///< Table 4: estimated or changed parameters
   std::vector<std::pair<std::string, std::uint64_t>> drops;  ///< stream input: drop reason -> tracker points
   bool has_stream = false;                    ///< the samples came from two streams
+  PointTimeline timeline;                     ///< stream input: kept / drop reason per tracker point over time
 };
 
 /// A prediction set of `model` for every sample of `samples` (result.json keeps the model,

@@ -246,6 +246,27 @@ bool get_drops(const JsonValue* v, std::vector<std::pair<std::string, std::uint6
   return true;
 }
 
+bool get_timeline(const JsonValue* v, PointTimeline* out) {
+  if (v == nullptr) return true;  // not stream input
+  const JsonValue* reasons = v->find("reasons");
+  const JsonValue* counts = v->find("counts");
+  if (!get_number(v->find("duration_s"), &out->duration_s) || !is_array(reasons) || !is_array(counts) ||
+      counts->array.size() != reasons->array.size()) {
+    return false;
+  }
+  for (std::size_t r = 0; r < reasons->array.size(); ++r) {
+    out->reasons.emplace_back();
+    if (!get_string(&reasons->array[r], &out->reasons.back()) || !is_array(&counts->array[r])) return false;
+    out->counts.emplace_back();
+    for (const JsonValue& c : counts->array[r].array) {
+      long long n = 0;
+      if (!get_count(&c, &n) || n > 0xffffffffLL) return false;
+      out->counts.back().push_back(static_cast<std::uint32_t>(n));
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 void write_report_data(JsonWriter& json, const ReportData& data) {
@@ -324,6 +345,20 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
     json.end_object();
   }
   json.end_array();
+  if (!data.timeline.reasons.empty()) {
+    json.key("timeline").begin_object();
+    json.key("duration_s").value(data.timeline.duration_s);
+    json.key("reasons").begin_array();
+    for (const std::string& r : data.timeline.reasons) json.value(r);
+    json.end_array();
+    json.key("counts").begin_array();
+    for (const std::vector<std::uint32_t>& bins : data.timeline.counts) {
+      const std::vector<double> values(bins.begin(), bins.end());
+      json.inline_array(values.data(), values.size());
+    }
+    json.end_array();
+    json.end_object();
+  }
   json.end_object();
 }
 
@@ -349,6 +384,7 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   if (!get_parameters(value.find("parameters"), &parsed.parameters)) return bad("parameters");
   if (!get_bool(value.find("has_stream"), &parsed.has_stream)) return bad("has_stream");
   if (!get_drops(value.find("drops"), &parsed.drops)) return bad("drops");
+  if (!get_timeline(value.find("timeline"), &parsed.timeline)) return bad("timeline");
   *data = parsed;
   return port::Error{};
 }

@@ -417,4 +417,50 @@ std::string svg_bars(const ChartSpec& spec, const std::vector<std::string>& cate
   return out + "</svg>\n";
 }
 
+std::string svg_strips(const ChartSpec& spec, const std::vector<std::string>& categories,
+                       const std::vector<std::vector<std::uint32_t>>& counts, double duration) {
+  const std::vector<double> range = {0.0, duration > 0.0 ? duration : 1.0};
+  const Axis x = make_axis({&range}, false, 200.0, spec.width_px - 30.0, true);
+  const double top = 28.0;
+  const double bottom = spec.height_px - 45.0;
+  std::string out = open_svg(spec);
+  out += "<rect x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", top) + "' width='" + fmt("%.1f", x.px_hi - x.px_lo) +
+         "' height='" + fmt("%.1f", bottom - top) + "' fill='none' stroke='#444'/>\n";
+  const Ticks xt = ticks_of(x);
+  for (std::size_t i = 0; i < xt.at.size(); ++i) {
+    out += "<text class='tick' x='" + fmt("%.1f", x.to_px(xt.at[i])) + "' y='" + fmt("%.1f", bottom + 14) +
+           "' text-anchor='middle'>" + xt.labels[i] + "</text>\n";
+  }
+  out += "<text x='" + fmt("%.1f", (x.px_lo + x.px_hi) / 2) + "' y='16' text-anchor='middle' font-weight='bold'>" +
+         xml_escape(spec.title) + "</text>\n";
+  out += "<text x='" + fmt("%.1f", (x.px_lo + x.px_hi) / 2) + "' y='" + fmt("%.1f", bottom + 30) +
+         "' text-anchor='middle'>" + xml_escape(spec.x_label + (xt.offset.empty() ? "" : " \u2212 " + xt.offset)) +
+         "</text>\n";
+  const std::size_t rows = std::min(categories.size(), counts.size());
+  const double row = rows == 0 ? 0.0 : (bottom - top) / static_cast<double>(rows);
+  for (std::size_t r = 0; r < rows; ++r) {
+    const std::vector<std::uint32_t>& bins = counts[r];
+    std::uint64_t total = 0;
+    std::uint32_t largest = 0;
+    for (std::uint32_t c : bins) {
+      total += c;
+      largest = std::max(largest, c);
+    }
+    const double y0 = top + row * static_cast<double>(r);
+    out += "<text class='category' x='" + fmt("%.1f", x.px_lo - 6) + "' y='" + fmt("%.1f", y0 + row * 0.6) +
+           "' text-anchor='end'>" + xml_escape(categories[r]) + " (" + std::to_string(total) + ")</text>\n";
+    const double bin_s = range[1] / static_cast<double>(bins.empty() ? 1 : bins.size());
+    for (std::size_t b = 0; b < bins.size(); ++b) {
+      if (bins[b] == 0) continue;
+      const double x0 = x.to_px(bin_s * static_cast<double>(b));
+      const double x1 = x.to_px(bin_s * static_cast<double>(b + 1));
+      out += "<rect" + series_attr(categories[r]) + " x='" + fmt("%.1f", x0) + "' y='" + fmt("%.1f", y0 + row * 0.15) +
+             "' width='" + fmt("%.1f", x1 - x0) + "' height='" + fmt("%.1f", row * 0.7) + "' fill='" +
+             kColours[r % 6] + "' fill-opacity='" +
+             fmt("%.2f", 0.15 + 0.85 * static_cast<double>(bins[b]) / static_cast<double>(largest)) + "'/>\n";
+    }
+  }
+  return out + "</svg>\n";
+}
+
 }  // namespace hivecal::report

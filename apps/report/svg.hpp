@@ -1,6 +1,7 @@
 // Small SVG chart writer for the report: line charts, scatter plots and histograms.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,12 @@ std::string svg_arrows(const ChartSpec& spec, const std::vector<ArrowSet>& sets,
 /// Horizontal bars: one per category, length `counts[i]`, axis from 0.
 std::string svg_bars(const ChartSpec& spec, const std::vector<std::string>& categories,
                      const std::vector<double>& counts);
+
+/// Rows of time bins over a linear x axis [0, duration]: one row per category, each bin
+/// shaded by its count relative to the row's largest (a count of 0 draws nothing); the row
+/// label carries the row's total.
+std::string svg_strips(const ChartSpec& spec, const std::vector<std::string>& categories,
+                       const std::vector<std::vector<std::uint32_t>>& counts, double duration);
 
 /// A round value near `raw` (> 0): 1, 2, 2.5 or 5 times a power of ten, >= raw.
 double nice_step(double raw);

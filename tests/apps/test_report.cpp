@@ -134,6 +134,7 @@ TEST(Report, DataRoundTripsThroughResultJson) {
   report::ReportData data = example();
   data.has_stream = true;
   data.drops = {{"kept", 12}, {"beam_lost", 3}};
+  data.timeline = {14.5, {"kept", "beam_lost"}, {{4, 0, 8}, {0, 3, 0}}};
   data.identifiability.condition_before = std::numeric_limits<double>::infinity();  // stored as null
   textio::JsonWriter json;
   report::write_report_data(json, data);
@@ -145,7 +146,11 @@ TEST(Report, DataRoundTripsThroughResultJson) {
   for (report::MethodRow& m : data.methods) m.seconds = 0.0;  // never written
   data.input_lines.clear();                                    // never written
   EXPECT_EQ(report::render_html(back), report::render_html(data));
-  EXPECT_EQ(report::figure_ids(back).back(), "fig-drops");
+  const std::vector<std::string> ids = report::figure_ids(back);
+  ASSERT_GE(ids.size(), 2u);
+  EXPECT_EQ(ids[ids.size() - 2], "fig-drop-timeline");
+  EXPECT_EQ(ids.back(), "fig-drops");
+  EXPECT_NE(report::render_html(back).find("beam_lost (3)"), std::string::npos);
   // A damaged document is refused with the key at fault.
   value.object["samples"].array[0].object.erase("q_rad");
   const port::Error damaged = report::parse_report_data(value, "result.json", &back);

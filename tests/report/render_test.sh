@@ -102,7 +102,7 @@ common=(fig-error-3d fig-error-x fig-error-y fig-error-z fig-vectors-xy fig-vect
 # From the streams: every figure, the drop reasons too.
 if "$hivecal" calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --out "$work/streams.json" \
      --report "$work/streams" --quiet >/dev/null; then
-  check_report streams "$work/streams/index.html" "${common[@]}" fig-drops
+  check_report streams "$work/streams/index.html" "${common[@]}" fig-drop-timeline fig-drops
   if timeout 120 "$chromium_bin" --headless --disable-gpu --no-sandbox --no-first-run --user-data-dir="$work/profile" \
        --hide-scrollbars --window-size=1300,2000 --screenshot="$work/shot.png" "file://$work/streams/index.html" \
        >/dev/null 2>&1 && [ "$(head -c 8 "$work/shot.png" | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ] &&
@@ -115,7 +115,7 @@ if "$hivecal" calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --
   if "$hivecal" report --calibration "$work/streams.json" --out "$work/again" >/dev/null &&
      "$hivecal" report --calibration "$work/streams.json" --out "$work/again2" >/dev/null &&
      cmp -s "$work/again/index.html" "$work/again2/index.html"; then ok; else fail "report --calibration twice: different bytes"; fi
-  check_report regenerated "$work/again/index.html" "${common[@]}" fig-drops
+  check_report regenerated "$work/again/index.html" "${common[@]}" fig-drop-timeline fig-drops
   # From Table 2 on (Table 1 has no stage times then, and the input facts name files), the
   # page is calibrate's own.
   if cmp -s <(sed -n '/<h2>Table 2/,$p' "$work/streams/index.html") <(sed -n '/<h2>Table 2/,$p' "$work/again/index.html"); then
