@@ -12,6 +12,7 @@ packages=(
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib  # Cortex-M
   libpagmo-dev libceres-dev                               # benchmark peers only
   valgrind hyperfine                                      # instruction counts and timings
+  chromium                                                # the report test renders the HTML headless
 )
 
 missing=()

@@ -1,9 +1,14 @@
 // hivecal calibrate: inputs (paired samples, serial captures or CSV logs) -> dataset ->
 // ABC / GSA / Levenberg-Marquardt -> tables, result JSON, UR deltas and HTML report.
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include <Eigen/Cholesky>  // correlations of the estimated parameters
 
 #include "cli/options.hpp"
 #include "hivecal/calibration.hpp"
@@ -14,7 +19,10 @@
 #include "hivecal/model/metrics.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "hivecal/solve/lm.hpp"
+#include "hivecal/solve/normal_equations.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
 #include "report/report.hpp"
+#include "report/report_json.hpp"
 #include "streams/session.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/text_util.hpp"
@@ -91,6 +99,46 @@ class JobObserver final : public CalibrationObserver {
   std::chrono::steady_clock::time_point start_;
 };
 
+/// The fate of every tracker point in the extraction pass (kept, or its drop reason), for the
+/// report's timeline.
+class PointFates final : public ExtractionObserver {
+ public:
+  void on_sample(const ExtractedSample& sample) override { events.push_back({sample.tracker_us, -1}); }
+  void on_drop(std::uint64_t tracker_us, DropReason reason) override {
+    events.push_back({static_cast<double>(tracker_us), static_cast<int>(reason)});
+  }
+  /// In `bins` equal time bins: "kept", then the drop reasons that occurred (enum order).
+  report::PointTimeline timeline(std::size_t bins) const;
+  std::vector<std::pair<double, int>> events;  ///< tracker time [us], -1 (kept) or the DropReason
+};
+
+report::PointTimeline PointFates::timeline(std::size_t bins) const {
+  report::PointTimeline t;
+  if (events.empty()) return t;
+  double first = events.front().first;
+  double last = first;
+  for (const auto& e : events) {
+    first = std::min(first, e.first);
+    last = std::max(last, e.first);
+  }
+  t.duration_s = (last - first) * 1e-6;
+  std::vector<int> row_of(kDropReasonCount + 1, -1);  // index reason + 1 (kept: 0)
+  for (int reason = -1; reason < kDropReasonCount; ++reason) {
+    bool seen = false;
+    for (const auto& e : events) seen = seen || e.second == reason;
+    if (!seen) continue;
+    row_of[static_cast<std::size_t>(reason + 1)] = static_cast<int>(t.reasons.size());
+    t.reasons.push_back(reason < 0 ? "kept" : drop_reason_name(static_cast<DropReason>(reason)));
+    t.counts.emplace_back(bins, 0u);
+  }
+  for (const auto& e : events) {
+    const double at = last > first ? (e.first - first) / (last - first) : 0.0;
+    const std::size_t bin = std::min(bins - 1, static_cast<std::size_t>(at * static_cast<double>(bins)));
+    ++t.counts[static_cast<std::size_t>(row_of[static_cast<std::size_t>(e.second + 1)])][bin];
+  }
+  return t;
+}
+
 /// What the job produced, with the CLI's stage timings.
 struct Run {
   CalibrationResult result;                     ///< lib's result (~5 KB)
@@ -145,6 +193,19 @@ report::MethodRow stage_row(const Run& run, std::size_t k) {
                     static_cast<long long>(stage.evaluations));
 }
 
+/// The non-separable combination of a dropped parameter, e.g. "+0.707*d2 -0.707*d4".
+std::string combination_text(const DroppedParam& d) {
+  std::string combination;
+  char buf[96];
+  for (int c = 0; c < kNullComponentCount; ++c) {
+    if (d.component_index[c] < 0) continue;
+    std::snprintf(buf, sizeof buf, "%s%+.3g*%s", combination.empty() ? "" : " ", d.component[c],
+                  full_param_name(d.component_index[c]));
+    combination += buf;
+  }
+  return combination;
+}
+
 std::vector<std::string> identifiability_lines(const LmResult& lm) {
   std::vector<std::string> lines;
   const IdentifiabilityReport& id = lm.identifiability;
@@ -154,39 +215,82 @@ std::vector<std::string> identifiability_lines(const LmResult& lm) {
   lines.push_back(buf);
   for (int k = 0; k < id.dropped_count; ++k) {
     const DroppedParam& d = id.dropped[k];
-    std::string combination;
-    for (int c = 0; c < kNullComponentCount; ++c) {
-      if (d.component_index[c] < 0) continue;
-      std::snprintf(buf, sizeof buf, "%s%+.3g*%s", combination.empty() ? "" : " ", d.component[c],
-                    full_param_name(d.component_index[c]));
-      combination += buf;
-    }
     std::snprintf(buf, sizeof buf, "  dropped %-8s (%s, sigma ratio %.2g): %s", full_param_name(d.index),
-                  unidentifiable_reason_name(d.reason), d.singular_ratio, combination.c_str());
+                  unidentifiable_reason_name(d.reason), d.singular_ratio, combination_text(d).c_str());
     lines.push_back(buf);
   }
   return lines;
 }
 
-/// `lm`: the LM details when `stage` is the LM stage, else null.
-std::vector<std::string> parameter_lines(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start) {
-  std::vector<std::string> lines;
+report::IdentifiabilityTable identifiability_table(const LmResult& lm) {
+  const IdentifiabilityReport& id = lm.identifiability;
+  report::IdentifiabilityTable table;
+  table.present = true;
+  table.free_count = mask_count(id.free_mask);
+  for (int k = 0; k < kFullParamCount; ++k)
+    if (mask_has(id.kept_mask, k)) table.estimated.push_back(full_param_name(k));
+  for (int k = 0; k < id.dropped_count; ++k) {
+    const DroppedParam& d = id.dropped[k];
+    table.dropped.push_back({full_param_name(d.index), unidentifiable_reason_name(d.reason), d.singular_ratio,
+                             combination_text(d)});
+  }
+  table.condition_before = id.condition_before;
+  table.condition_after = id.condition_after;
+  return table;
+}
+
+/// Correlation matrix of the estimated parameters at the result, from the normal equations
+/// of the training samples (as LM's sigmas; lib reports the sigmas only). Entries of
+/// parameters not estimated are 0. False when the matrix is singular.
+bool parameter_correlations(const CalibrationStage& stage, const LmResult& lm, Span<const Sample> train,
+                            NormalMatrix* correlation) {
+  static NormalEquations eq;  // static: 9 kB
+  static NormalMatrix scaled;
+  const ParamMask kept = lm.identifiability.kept_mask;
+  if (accumulate_normal_equations(stage.model, stage.base_to_tracker, train, PointLoss{lm.huber_threshold_m}, &eq,
+                                  kept) != Status::ok) {
+    return false;
+  }
+  FullParams scale;
+  scale_normal_matrix(eq.jtwj, kept, 1.0, &scaled, &scale);  // unit diagonal; identity outside `kept`
+  const Eigen::LDLT<NormalMatrix> ldlt(scaled);
+  if (ldlt.info() != Eigen::Success) return false;
+  *correlation = ldlt.solve(NormalMatrix::Identity());
+  const FullParams variance = correlation->diagonal();
+  for (int i = 0; i < kFullParamCount; ++i)
+    for (int j = 0; j < kFullParamCount; ++j) {
+      const double d = std::sqrt(variance(i) * variance(j));
+      (*correlation)(i, j) = mask_has(kept, i) && mask_has(kept, j) && d > 0.0 ? (*correlation)(i, j) / d : 0.0;
+    }
+  return correlation->allFinite();
+}
+
+/// The estimated or changed parameters. `lm`: the LM details when `stage` is the LM stage, else null.
+std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start,
+                                                 Span<const Sample> train) {
+  std::vector<report::ParameterRow> rows;
+  static NormalMatrix correlation;
+  const bool correlated = lm != nullptr && parameter_correlations(stage, *lm, train, &correlation);
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
-  char buf[160];
   for (int k = 0; k < kModelParamCount; ++k) {
     const bool estimated = lm != nullptr && mask_has(lm->identifiability.kept_mask, k);
-    const bool changed = after(k) != before(k);
-    if (!estimated && !changed) continue;
-    const bool angle = model_param_is_angle(k);
-    const double scale = 1e3;  // mm or mrad
-    std::snprintf(buf, sizeof buf, "%-8s %+.9f %s  (change %+.4f %s%s)", full_param_name(k), after(k),
-                  angle ? "rad" : "m", (after(k) - before(k)) * scale, angle ? "mrad" : "mm",
-                  estimated ? (", sigma " + std::to_string(lm->sigma(k) * scale) + (angle ? " mrad" : " mm")).c_str()
-                            : "");
-    lines.push_back(buf);
+    if (!estimated && after(k) == before(k)) continue;
+    report::ParameterRow row;
+    row.name = full_param_name(k);
+    row.angle = model_param_is_angle(k);
+    row.start = before(k);
+    row.value = after(k);
+    row.sigma = estimated ? lm->sigma(k) : 0.0;
+    for (int other = 0; correlated && estimated && other < kFullParamCount; ++other) {
+      if (other != k && std::fabs(correlation(k, other)) > std::fabs(row.correlation)) {
+        row.correlation = correlation(k, other);
+        row.correlated_with = full_param_name(other);
+      }
+    }
+    rows.push_back(row);
   }
-  return lines;
+  return rows;
 }
 
 void write_stage_list(textio::JsonWriter& json, const std::vector<report::MethodRow>& rows) {
@@ -370,8 +474,9 @@ Error start_geometry(const Options& options, const CalibrateSettings& settings, 
 
 /// The dataset, checked for size and split.
 Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
-                   streams::SessionFacts* facts) {
+                   streams::SessionFacts* facts, PointFates* fates) {
   streams::SessionConfig config;
+  config.observer = fates;
   config.speed_model = settings.robot.model;
   config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
   config.progress = settings.progress;
@@ -442,6 +547,27 @@ void write_input_facts(textio::JsonWriter& json, const streams::SessionFacts& fa
   json.end_object();
 }
 
+/// Every sample (training first) and each model's prediction of it, for the figures.
+void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* data) {
+  for (const bool test : {false, true}) {
+    for (const Sample& s : test ? dataset.test() : dataset.train()) {
+      report::SampleRow row;
+      for (int j = 0; j < kJointCount; ++j) row.q_rad[j] = s.q_rad(j);
+      row.measured_m = s.point_m;
+      row.test = test;
+      data->samples.push_back(row);
+    }
+  }
+  const CalibrationBaseline& uncalibrated = run.result.baseline;
+  data->predictions.push_back(
+      report::predict_samples("uncalibrated", uncalibrated.model, uncalibrated.base_to_tracker, data->samples));
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) {
+    const CalibrationStage& stage = run.result.stages[k];
+    data->predictions.push_back(
+        report::predict_samples(run.result.stage_name(k), stage.model, stage.base_to_tracker, data->samples));
+  }
+}
+
 /// Tables and figures of a run, and the text of the terminal.
 report::ReportData present(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset,
                            const streams::SessionFacts& facts, const Run& run) {
@@ -449,7 +575,7 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   const CalibrationStage& final_stage = run.final_stage();
   report::ReportData data;
   data.title = "hivecal calibration: " + settings.robot.robot;
-  data.info_lines = facts.info_lines;
+  data.input_lines = facts.info_lines;
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
                             ")");
@@ -459,26 +585,32 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   data.uncalibrated = accuracy_report(uncalibrated.model, uncalibrated.base_to_tracker, dataset);
   data.calibrated = accuracy_report(final_stage.model, final_stage.base_to_tracker, dataset);
   for (std::size_t k = 0; k < run.result.stage_count; ++k) {
-    data.convergence.push_back({run.result.stage_name(k), trace_values(run.result.stages[k].trace_m)});
+    const CalibrationStage& stage = run.result.stages[k];
+    data.convergence.push_back(
+        {run.result.stage_name(k), stage.solver == CalibrationSolver::lm, trace_values(stage.trace_m)});
   }
-  for (const Sample& s : dataset.test()) {
-    data.test_measured_m.push_back(s.point_m);
-    data.test_uncalibrated_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
-    data.test_calibrated_m.push_back(final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)));
+  add_samples(dataset, run, &data);
+  if (const LmResult* lm = run.final_lm(); lm != nullptr) {
+    for (const std::string& line : identifiability_lines(*lm)) data.info_lines.push_back(line);
+    data.identifiability = identifiability_table(*lm);
+    data.noise_sigma_m = lm->residual_sigma_m;
   }
-  if (run.final_lm() != nullptr) {
-    for (const std::string& line : identifiability_lines(*run.final_lm())) data.info_lines.push_back(line);
+  data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
+  data.has_stream = facts.has_stream;
+  if (facts.has_stream) {
+    data.drops.emplace_back("kept", facts.run.counts.kept);
+    for (const auto& drop : facts.dropped) data.drops.push_back(drop);
   }
-  data.parameter_lines = parameter_lines(final_stage, run.final_lm(), start);
   return data;
 }
 
 /// The terminal text (on stdout, or on stderr when stdout carries the result).
 void print_tables(std::FILE* out, const report::ReportData& data, const Run& run) {
+  for (const std::string& line : data.input_lines) std::fprintf(out, "%s\n", line.c_str());
   for (const std::string& line : data.info_lines) std::fprintf(out, "%s\n", line.c_str());
   std::fprintf(out, "\n%s", report::format_tables_text(data).c_str());
   std::fprintf(out, "\nCalibrated parameters (%s):\n", run.final_method().c_str());
-  for (const std::string& line : data.parameter_lines) std::fprintf(out, "  %s\n", line.c_str());
+  for (const std::string& line : report::format_parameters_text(data)) std::fprintf(out, "  %s\n", line.c_str());
 }
 
 /// `warnings`: the fit's plausibility warnings, a "warnings" array when there are any.
@@ -507,10 +639,13 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     if (run.final_lm() != nullptr) write_lm_details(w, *run.final_lm());
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
-    if (warnings.empty()) return;
-    w.key("warnings").begin_array();
-    for (const std::string& warning : warnings) w.value(warning);
-    w.end_array();
+    if (!warnings.empty()) {
+      w.key("warnings").begin_array();
+      for (const std::string& warning : warnings) w.value(warning);
+      w.end_array();
+    }
+    w.key("report");  // what `hivecal report` draws the page from
+    report::write_report_data(w, data);
   });
 }
 
@@ -545,13 +680,15 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   static CliDataset dataset;  // static: 8192 samples; emptied for each call (tests run several in one process)
   dataset.clear();
   streams::SessionFacts facts;
-  if (error.ok()) error = load_dataset(options, settings, &dataset, &facts);
+  PointFates fates;
+  if (error.ok()) error = load_dataset(options, settings, &dataset, &facts, &fates);
   static Run job;  // static: the CalibrationResult is ~5 KB
   job.from_controller = !options.get("ur-calibration").empty();
   job.link_length_count = link_length_set(start).count;
   if (error.ok()) error = run(settings, start, &dataset, &job);
   if (!error.ok()) return error;
-  const report::ReportData data = present(settings, start, dataset, facts, job);
+  report::ReportData data = present(settings, start, dataset, facts, job);
+  if (facts.has_stream) data.timeline = fates.timeline(120);
   const bool result_on_stdout = options.get("out") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   print_tables(terminal, data, job);

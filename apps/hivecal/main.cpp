@@ -18,6 +18,7 @@ struct Command {
 const Command kCommands[] = {
     {"calibrate", "estimate the geometry from tracker data; paper-style tables, result JSON, report",
      hivecal::cli::calibrate_main},
+    {"report", "the HTML report of a calibration again, from its result.json", hivecal::cli::report_main},
     {"validate", "compare a calibration with a reference geometry (e.g. truth.json) on fresh poses",
      hivecal::cli::validate_main},
     {"predict", "tool positions of joint poses from a calibration result", hivecal::cli::predict_main},

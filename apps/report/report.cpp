@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <algorithm>
+#include <limits>
 
 #include "report/svg.hpp"
 #include "textio/text_util.hpp"
@@ -42,16 +44,226 @@ std::vector<double> index_axis(std::size_t n) {
   return x;
 }
 
-std::vector<double> component(const std::vector<Vec3>& points, int axis, double scale) {
+ChartSpec chart(const std::string& id, const std::string& title, const std::string& x_label, const std::string& y_label) {
+  ChartSpec spec;
+  spec.id = id;
+  spec.title = title;
+  spec.x_label = x_label;
+  spec.y_label = y_label;
+  return spec;
+}
+
+/// The samples the error figures show: the test set, or the training set when there is none.
+std::vector<std::size_t> shown_samples(const ReportData& data, bool* test) {
+  std::vector<std::size_t> shown;
+  *test = false;
+  for (const SampleRow& s : data.samples) *test = *test || s.test;
+  for (std::size_t i = 0; i < data.samples.size(); ++i)
+    if (data.samples[i].test == *test) shown.push_back(i);
+  return shown;
+}
+
+/// |error| of one prediction set on the given samples: an axis (0..2) or the 3D norm (3) [um].
+std::vector<double> errors_um(const ReportData& data, const PredictionSet& set, const std::vector<std::size_t>& which,
+                              int axis) {
   std::vector<double> v;
-  for (const Vec3& p : points) v.push_back(p(axis) * scale);
+  for (std::size_t i : which) {
+    if (i >= set.points_m.size()) continue;
+    const Vec3 e = set.points_m[i] - data.samples[i].measured_m;
+    v.push_back((axis < 3 ? std::fabs(e(axis)) : e.norm()) * 1e6);
+  }
   return v;
 }
 
-std::vector<double> error_norms_um(const std::vector<Vec3>& predicted, const std::vector<Vec3>& measured) {
-  std::vector<double> v;
-  for (std::size_t i = 0; i < predicted.size() && i < measured.size(); ++i) v.push_back((predicted[i] - measured[i]).norm() * 1e6);
+std::vector<double> sorted(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
   return v;
+}
+
+double max_of(const std::vector<double>& v) {
+  double m = 0.0;
+  for (double x : v) m = std::max(m, x);
+  return m;
+}
+
+using Figure = std::pair<std::string, std::string>;  // id, <h3> + <svg>
+
+/// Sorted error per sample before and after, 3D and per axis (shared scale), with the noise level.
+void error_figures(const ReportData& data, const std::vector<std::size_t>& shown, const std::string& set_name,
+                   std::vector<Figure>* out) {
+  const PredictionSet& before = data.predictions.front();
+  const PredictionSet& after = data.predictions.back();
+  // Mean |N(0, s)| per axis is s*sqrt(2/pi); the mean 3D norm of isotropic noise is s*sqrt(8/pi).
+  const double per_axis_um = data.noise_sigma_m * 1e6 * std::sqrt(2.0 / 3.141592653589793);
+  const double norm_um = data.noise_sigma_m * 1e6 * std::sqrt(8.0 / 3.141592653589793);
+  double shared_max = per_axis_um;
+  for (int axis = 0; axis < 3; ++axis) shared_max = std::max(shared_max, max_of(errors_um(data, before, shown, axis)));
+  const char* names[] = {"x", "y", "z", "3D"};
+  for (int axis : {3, 0, 1, 2}) {
+    std::vector<double> b = sorted(errors_um(data, before, shown, axis));
+    std::vector<double> a = sorted(errors_um(data, after, shown, axis));
+    ChartSpec spec = chart(std::string("fig-error-") + (axis == 3 ? "3d" : names[axis]),
+                           std::string(names[axis]) + " error per " + set_name + " sample, sorted",
+                           set_name + " samples, by rank", std::string("|error ") + names[axis] + "| [um]");
+    if (axis < 3) {
+      spec.fixed_y = true;
+      spec.y_lo = 0.0;
+      spec.y_hi = shared_max;
+    }
+    if (data.noise_sigma_m > 0.0) {
+      spec.y_line = axis == 3 ? norm_um : per_axis_um;
+      spec.y_line_label = "noise level (LM)";
+    }
+    const std::vector<double> ranks = index_axis(b.size());
+    out->push_back({spec.id, svg_chart(spec, {Series{before.method, ranks, b, false}, Series{after.method, ranks, a, false}})});
+  }
+}
+
+/// Error vectors on the x-y and x-z planes, magnified by a stated round factor.
+void vector_figures(const ReportData& data, const std::vector<std::size_t>& shown, std::vector<Figure>* out) {
+  const PredictionSet* sets[] = {&data.predictions.front(), &data.predictions.back()};
+  double largest_um = 0.0;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 hi = -lo;
+  for (std::size_t i : shown) {
+    lo = lo.cwiseMin(data.samples[i].measured_m * 1e3);
+    hi = hi.cwiseMax(data.samples[i].measured_m * 1e3);
+    for (const PredictionSet* set : sets)
+      if (i < set->points_m.size()) largest_um = std::max(largest_um, (set->points_m[i] - data.samples[i].measured_m).norm() * 1e6);
+  }
+  if (shown.empty() || !(largest_um > 0.0)) return;
+  // The longest arrow about a third of the workspace's extent: 1 mm of arrow stands for
+  // um_per_mm (a round number), and a bar of bar_mm shows the scale.
+  const double span_mm = std::max((hi - lo).maxCoeff(), 1.0);
+  const double um_per_mm = nice_step(largest_um / (span_mm / 3.0));
+  const double bar_mm = nice_step(span_mm / 12.0);
+  char label[96];
+  std::snprintf(label, sizeof label, "1 mm arrow = %g um|bar: %g um", um_per_mm, bar_mm * um_per_mm);
+  const char* names[] = {"x", "y", "z"};
+  for (int axis : {1, 2}) {
+    std::vector<ArrowSet> arrows;
+    for (const PredictionSet* set : sets) {
+      ArrowSet a;
+      a.name = set->method + " error";
+      for (std::size_t i : shown) {
+        if (i >= set->points_m.size()) continue;
+        const Vec3 e_um = (set->points_m[i] - data.samples[i].measured_m) * 1e6;
+        a.x.push_back(data.samples[i].measured_m(0) * 1e3);
+        a.y.push_back(data.samples[i].measured_m(axis) * 1e3);
+        a.dx.push_back(e_um(0) / um_per_mm);
+        a.dy.push_back(e_um(axis) / um_per_mm);
+      }
+      arrows.push_back(a);
+    }
+    ChartSpec spec = chart(std::string("fig-vectors-x") + names[axis],
+                           std::string("Error vectors, x-") + names[axis] + " plane (measured -> predicted)", "x [mm]",
+                           std::string(names[axis]) + " [mm]");
+    spec.height_px = 420;
+    out->push_back({spec.id, svg_arrows(spec, arrows, bar_mm, label)});
+  }
+}
+
+/// Empirical CDF of the 3D error per method, and the histogram before / after side by side.
+void distribution_figures(const ReportData& data, const std::vector<std::size_t>& shown, const std::string& set_name,
+                          std::vector<Figure>* out) {
+  std::vector<Series> cdf;
+  for (const PredictionSet& set : data.predictions) {
+    const std::vector<double> e = sorted(errors_um(data, set, shown, 3));
+    Series s{set.method, {}, {}, false};
+    for (std::size_t k = 0; k < e.size(); ++k) {  // a step function
+      const double below = static_cast<double>(k) / static_cast<double>(e.size());
+      const double at = static_cast<double>(k + 1) / static_cast<double>(e.size());
+      s.x.insert(s.x.end(), {e[k], e[k]});
+      s.y.insert(s.y.end(), {below, at});
+    }
+    cdf.push_back(s);
+  }
+  ChartSpec spec = chart("fig-cdf", "Empirical CDF of the 3D error (" + set_name + " samples)", "3D error [um]",
+                         "share of samples");
+  spec.fixed_y = true;
+  out->push_back({spec.id, svg_chart(spec, cdf)});
+  out->push_back({"fig-histogram",
+                  svg_histogram(chart("fig-histogram", "3D error histogram (" + set_name + " samples)", "3D error [um]", "samples"),
+                                {data.predictions.front().method, data.predictions.back().method},
+                                {errors_um(data, data.predictions.front(), shown, 3),
+                                 errors_um(data, data.predictions.back(), shown, 3)},
+                                20)});
+}
+
+void convergence_figures(const ReportData& data, std::vector<Figure>* out) {
+  for (bool lm : {false, true}) {
+    std::vector<Series> series;
+    for (const ConvergenceSeries& c : data.convergence) {
+      if (c.per_iteration != lm || c.best_cost_m.empty()) continue;
+      std::vector<double> y;
+      for (double v : c.best_cost_m) y.push_back(v * 1e6);
+      series.push_back(Series{c.method, index_axis(y.size()), y, lm});
+    }
+    if (series.empty()) continue;
+    ChartSpec spec = lm ? chart("fig-convergence-lm", "Levenberg-Marquardt: RMS residual per iteration", "iteration",
+                                "RMS residual [um]")
+                        : chart("fig-convergence-global", "Global search: best MAE per cycle", "cycle", "best MAE [um]");
+    spec.log_y = true;
+    out->push_back({spec.id, svg_chart(spec, series)});
+  }
+}
+
+/// Residual after calibration against each joint angle (unmodelled effects show as trends).
+void joint_figures(const ReportData& data, std::vector<Figure>* out) {
+  const PredictionSet& after = data.predictions.back();
+  std::vector<double> residual_um;
+  for (std::size_t i = 0; i < data.samples.size() && i < after.points_m.size(); ++i)
+    residual_um.push_back((after.points_m[i] - data.samples[i].measured_m).norm() * 1e6);
+  for (int j = 0; j < 6; ++j) {
+    Series train{"training", {}, {}, true};
+    Series test{"test", {}, {}, true};
+    for (std::size_t i = 0; i < residual_um.size(); ++i) {
+      Series& s = data.samples[i].test ? test : train;
+      s.x.push_back(data.samples[i].q_rad[j] * 180.0 / 3.141592653589793);
+      s.y.push_back(residual_um[i]);
+    }
+    ChartSpec spec = chart("fig-residual-q" + std::to_string(j + 1),
+                           "Residual after calibration vs joint " + std::to_string(j + 1),
+                           "q" + std::to_string(j + 1) + " [deg]", "3D residual [um]");
+    spec.width_px = 400;
+    spec.height_px = 260;
+    spec.fixed_y = true;
+    spec.y_hi = max_of(residual_um);
+    out->push_back({spec.id, svg_chart(spec, {train, test})});
+  }
+}
+
+std::vector<Figure> all_figures(const ReportData& data) {
+  std::vector<Figure> figures;
+  bool test = false;
+  const std::vector<std::size_t> shown = shown_samples(data, &test);
+  const std::string set_name = test ? "test" : "training";
+  if (!data.predictions.empty() && !shown.empty()) {
+    error_figures(data, shown, set_name, &figures);
+    vector_figures(data, shown, &figures);
+    distribution_figures(data, shown, set_name, &figures);
+  }
+  convergence_figures(data, &figures);
+  if (!data.predictions.empty() && !data.samples.empty()) joint_figures(data, &figures);
+  if (data.has_stream && !data.timeline.reasons.empty()) {
+    ChartSpec spec = chart("fig-drop-timeline", "Tracker points over the session: kept, or why dropped",
+                           "tracker time [s]", "");
+    spec.height_px = 60 + 24 * static_cast<int>(data.timeline.reasons.size());
+    spec.width_px = 1100;
+    figures.push_back({spec.id, svg_strips(spec, data.timeline.reasons, data.timeline.counts, data.timeline.duration_s)});
+  }
+  if (data.has_stream && !data.drops.empty()) {
+    std::vector<std::string> reasons;
+    std::vector<double> counts;
+    for (const auto& [reason, count] : data.drops) {
+      reasons.push_back(reason);
+      counts.push_back(static_cast<double>(count));
+    }
+    ChartSpec spec = chart("fig-drops", "Tracker points: kept and dropped, by reason", "tracker points", "");
+    spec.height_px = 60 + 22 * static_cast<int>(reasons.size());
+    figures.push_back({spec.id, svg_bars(spec, reasons, counts)});
+  }
+  return figures;
 }
 
 std::string html_table(const std::vector<std::vector<std::string>>& rows) {
@@ -64,18 +276,41 @@ std::string html_table(const std::vector<std::vector<std::string>>& rows) {
   return s + "</table>\n";
 }
 
+bool has_test(const ReportData& data) {
+  for (const MethodRow& m : data.methods)
+    if (m.test.count > 0) return true;
+  return data.calibrated.test.count > 0;
+}
+
+bool has_timings(const ReportData& data) {
+  for (const MethodRow& m : data.methods)
+    if (m.seconds > 0.0) return true;
+  return false;
+}
+
 std::vector<std::vector<std::string>> table1_rows(const ReportData& data) {
-  std::vector<std::vector<std::string>> rows = {
-      {"method", "parameters", "train MAE [um]", "train sigma [um]", "test MAE [um]", "test sigma [um]",
-       "test vs uncalibrated", "time [s]"}};
+  const bool test = has_test(data);
+  const bool timed = has_timings(data);
+  std::vector<std::string> header = {"method", "parameters", "train MAE [um]", "train sigma [um]"};
+  if (test) header.insert(header.end(), {"test MAE [um]", "test sigma [um]", "test vs uncalibrated"});
+  header.push_back("evaluations");
+  if (timed) header.push_back("time [s]");
+  std::vector<std::vector<std::string>> rows = {header};
   const double before = data.methods.empty() ? 0.0 : data.methods.front().test.mae(ErrorAxis::norm_3d);
   for (const MethodRow& m : data.methods) {
-    char seconds[32];
-    std::snprintf(seconds, sizeof seconds, "%.3f", m.seconds);
-    rows.push_back({m.method, m.parameters, um(m.train.mae(ErrorAxis::norm_3d)), um(m.train.sigma(ErrorAxis::norm_3d)),
-                    um(m.test.mae(ErrorAxis::norm_3d)), um(m.test.sigma(ErrorAxis::norm_3d)),
-                    &m == &data.methods.front() ? "" : improvement(before, m.test.mae(ErrorAxis::norm_3d)),
-                    m.seconds > 0.0 ? seconds : ""});
+    std::vector<std::string> row = {m.method, m.parameters, um(m.train.mae(ErrorAxis::norm_3d)),
+                                    um(m.train.sigma(ErrorAxis::norm_3d))};
+    if (test) {
+      row.insert(row.end(), {um(m.test.mae(ErrorAxis::norm_3d)), um(m.test.sigma(ErrorAxis::norm_3d)),
+                             &m == &data.methods.front() ? "" : improvement(before, m.test.mae(ErrorAxis::norm_3d))});
+    }
+    row.push_back(m.evaluations > 0 ? std::to_string(m.evaluations) : "");
+    if (timed) {
+      char seconds[32];
+      std::snprintf(seconds, sizeof seconds, "%.3f", m.seconds);
+      row.push_back(m.seconds > 0.0 ? seconds : "");
+    }
+    rows.push_back(row);
   }
   return rows;
 }
@@ -85,13 +320,61 @@ std::vector<std::vector<std::string>> table2_rows(const ReportData& data) {
                                                  "sigma after [um]", "change"}};
   const std::pair<const char*, const ErrorStats AccuracyReport::*> sets[] = {
       {"train", &AccuracyReport::train}, {"test", &AccuracyReport::test}, {"overall", &AccuracyReport::overall}};
+  const bool test = has_test(data);
   for (const auto& [name, member] : sets) {
+    if (!test && member != &AccuracyReport::train) continue;  // overall = train then
     const ErrorStats& before = data.uncalibrated.*member;
     const ErrorStats& after = data.calibrated.*member;
     for (int axis = 0; axis < kErrorAxisCount; ++axis) {
       rows.push_back({name, kAxisLabels[axis], um(before.mae_m[axis]), um(before.sigma_m[axis]), um(after.mae_m[axis]),
                       um(after.sigma_m[axis]), improvement(before.mae_m[axis], after.mae_m[axis])});
     }
+  }
+  return rows;
+}
+
+std::string general(double v) {
+  if (!std::isfinite(v)) return "inf";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+std::vector<std::vector<std::string>> identifiability_rows(const IdentifiabilityTable& id) {
+  std::vector<std::vector<std::string>> rows = {{"set aside", "why", "sigma ratio", "combination that is not separable"}};
+  for (const DroppedRow& d : id.dropped) rows.push_back({d.param, d.reason, general(d.singular_ratio), d.combination});
+  return rows;
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%+.*f", decimals, v);
+  return buf;
+}
+
+std::vector<std::vector<std::string>> parameter_rows(const ReportData& data) {
+  std::vector<std::vector<std::string>> rows = {{"parameter", "unit", "start", "calibrated", "change", "sigma", "note"}};
+  for (const ParameterRow& p : data.parameters) {
+    const double scale = 1e3;  // m -> mm, rad -> mrad
+    const std::string unit = p.angle ? "mrad" : "mm";
+    const double change = (p.value - p.start) * scale;
+    std::string note;
+    if (p.sigma <= 0.0) note = "not estimated";
+    else if (std::fabs(change) < 2.0 * p.sigma * scale) note = "change within 2 sigma";
+    if (std::fabs(p.correlation) > kCorrelationWarning) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "%scorrelation %+.3f with %s", note.empty() ? "" : "; ", p.correlation,
+                    p.correlated_with.c_str());
+      note += buf;
+    }
+    rows.push_back({p.name, unit, fixed(p.start * scale, 4), fixed(p.value * scale, 4), fixed(change, 4),
+                    p.sigma > 0.0 ? general(p.sigma * scale) : "", note});
   }
   return rows;
 }
@@ -111,79 +394,94 @@ std::string text_table(const std::vector<std::vector<std::string>>& rows) {
   return s;
 }
 
-std::string figures(const ReportData& data) {
-  std::string s;
-  if (!data.convergence.empty()) {
-    std::vector<Series> series;
-    for (const ConvergenceSeries& c : data.convergence) {
-      std::vector<double> y;
-      for (double v : c.best_cost_m) y.push_back(v * 1e6);
-      series.push_back(Series{c.method, index_axis(y.size()), y, false});
-    }
-    s += "<h2>Convergence (Figs 4-5)</h2>\n" +
-         svg_chart(ChartSpec{"Best cost per iteration", "iteration", "cost [um]", true}, series);
-  }
-  const std::size_t n = data.test_measured_m.size();
-  if (n > 0) {
-    // Positions differ by tens of micrometres on a metre scale: plot them relative to the
-    // measurement so that the three sets can be told apart.
-    s += "<h2>Test samples per axis: measured vs uncalibrated vs calibrated (Fig 6)</h2>\n";
-    const char* names[] = {"x", "y", "z"};
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::vector<double> measured = component(data.test_measured_m, axis, 1e6);
-      std::vector<double> uncalibrated = component(data.test_uncalibrated_m, axis, 1e6);
-      std::vector<double> calibrated = component(data.test_calibrated_m, axis, 1e6);
-      for (std::size_t i = 0; i < n; ++i) {
-        uncalibrated[i] -= measured[i];
-        calibrated[i] -= measured[i];
-      }
-      s += svg_chart(ChartSpec{std::string("Test samples: ") + names[axis] + " relative to the measurement", "sample",
-                               std::string("predicted - measured ") + names[axis] + " [um]"},
-                     {Series{"measured", index_axis(n), std::vector<double>(n, 0.0), false},
-                      Series{"uncalibrated", index_axis(n), uncalibrated, true},
-                      Series{"calibrated", index_axis(n), calibrated, true}});
-    }
-    s += "<h2>Validation in the x-y and x-z planes (Fig 7)</h2>\n";
-    for (int axis : {1, 2}) {
-      s += svg_chart(ChartSpec{std::string("x-") + names[axis] + " plane", "x [mm]", std::string(names[axis]) + " [mm]"},
-                     {Series{"measured", component(data.test_measured_m, 0, 1e3), component(data.test_measured_m, axis, 1e3), true},
-                      Series{"calibrated", component(data.test_calibrated_m, 0, 1e3),
-                             component(data.test_calibrated_m, axis, 1e3), true}});
-    }
-    s += "<h2>Error distribution on the test samples (Fig 8)</h2>\n" +
-         svg_histogram(ChartSpec{"3D error histogram", "error [um]", "samples"}, {"uncalibrated", "calibrated"},
-                       {error_norms_um(data.test_uncalibrated_m, data.test_measured_m),
-                        error_norms_um(data.test_calibrated_m, data.test_measured_m)},
-                       20);
-  }
-  return s;
+/// The question each figure answers (its caption), by id prefix.
+const char* caption(const std::string& id) {
+  struct Caption {
+    const char* prefix;
+    const char* text;
+  };
+  static const Caption captions[] = {
+      {"fig-error-3d", "Is each sample better after calibration, and how far above the tracker noise is it?"},
+      {"fig-error-", "Which axis gains? (the three axes share one scale)"},
+      {"fig-vectors-", "Where in the workspace are the errors, and do they point the same way (a frame or scale error)?"},
+      {"fig-cdf", "What share of the samples is within a given error, per method?"},
+      {"fig-histogram", "How are the errors distributed before and after?"},
+      {"fig-convergence-global", "Did ABC / GSA converge before their cycle budget ran out?"},
+      {"fig-convergence-lm", "Did Levenberg-Marquardt converge?"},
+      {"fig-residual-q", "Does the residual depend on a joint angle (compliance, an unmodelled effect)?"},
+      {"fig-drops", "How many tracker points became samples, and why were the others dropped?"},
+      {"fig-drop-timeline", "When in the session were points kept or dropped (beam losses, moves, a stream gap)? Shade: count in the bin relative to the row's busiest bin."},
+  };
+  for (const Caption& c : captions)
+    if (id.compare(0, std::strlen(c.prefix), c.prefix) == 0) return c.text;
+  return "";
 }
 
 }  // namespace
+
+PredictionSet predict_samples(const std::string& method, const RobotModel& model, const RigidTransform& base_to_tracker,
+                              const std::vector<SampleRow>& samples) {
+  PredictionSet set{method, model, base_to_tracker, {}};
+  for (const SampleRow& s : samples) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q(j) = s.q_rad[j];
+    set.points_m.push_back(base_to_tracker.apply(fk_tool_point(model, q)));
+  }
+  return set;
+}
 
 std::string format_tables_text(const ReportData& data) {
   return "Table 1: accuracy per method (3D)\n" + text_table(table1_rows(data)) +
          "\nTable 2: accuracy per axis, uncalibrated vs calibrated\n" + text_table(table2_rows(data));
 }
 
+std::vector<std::string> format_parameters_text(const ReportData& data) {
+  const std::string table = text_table(parameter_rows(data));
+  std::vector<std::string> lines;
+  for (std::size_t at = 0; at < table.size();) {
+    const std::size_t end = table.find('\n', at);
+    lines.push_back(table.substr(at, end - at));
+    at = end + 1;
+  }
+  return lines;
+}
+
+std::vector<std::string> figure_ids(const ReportData& data) {
+  std::vector<std::string> ids;
+  for (const auto& figure : all_figures(data)) ids.push_back(figure.first);
+  return ids;
+}
+
 std::string render_html(const ReportData& data) {
   std::string s =
       "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n<title>" + xml_escape(data.title) +
-      "</title>\n<style>body{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em}"
+      "</title>\n<style>body{font-family:sans-serif;max-width:1300px;margin:2em auto;padding:0 1em}"
       "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-      "th{background:#eee}svg{margin:4px;border:1px solid #eee}pre{background:#f6f6f6;padding:8px}</style>\n"
+      "th{background:#eee}svg{margin:4px;border:1px solid #eee}figure{display:inline-block;margin:4px;vertical-align:top}"
+      "figcaption{font-size:12px;color:#444;width:0;min-width:100%}</style>\n"
       "</head>\n<body>\n<h1>" +
       xml_escape(data.title) + "</h1>\n<ul>\n";
+  for (const std::string& line : data.input_lines) s += "<li>" + xml_escape(line) + "</li>\n";
   for (const std::string& line : data.info_lines) s += "<li>" + xml_escape(line) + "</li>\n";
-  s += "</ul>\n<h2>Table 1: accuracy per method</h2>\n" + html_table(table1_rows(data)) +
-       "<h2>Table 2: accuracy per axis</h2>\n" + html_table(table2_rows(data)) + figures(data);
-  if (!data.parameter_lines.empty()) {
-    s += "<h2>Calibrated parameters</h2>\n<pre>";
-    for (const std::string& line : data.parameter_lines) s += xml_escape(line) + "\n";
-    s += "</pre>\n";
+  s += "</ul>\n<h2>Table 1: accuracy per method</h2>\n" + html_table(table1_rows(data));
+  if (!has_timings(data)) s += "<p>Stage times are not kept in result.json (it holds no wall-clock values).</p>\n";
+  s += "<h2>Table 2: accuracy per axis</h2>\n" + html_table(table2_rows(data));
+  if (data.identifiability.present) {
+    const IdentifiabilityTable& id = data.identifiability;
+    s += "<h2>Table 3: identifiability</h2>\n<p>" + std::to_string(id.estimated.size()) + " of " +
+         std::to_string(id.free_count) + " free parameters estimated; condition number of the scaled Jacobian " +
+         general(id.condition_before) + " over the free parameters, " + general(id.condition_after) +
+         " over the estimated ones.</p>\n<p>Estimated: " + xml_escape(join(id.estimated)) + "</p>\n" +
+         (id.dropped.empty() ? std::string() : html_table(identifiability_rows(id)));
+  }
+  if (!data.parameters.empty()) {
+    s += "<h2>Table 4: parameters (start, calibrated, change, sigma)</h2>\n" + html_table(parameter_rows(data));
+  }
+  s += "<h2>Figures</h2>\n";
+  for (const auto& [id, svg] : all_figures(data)) {
+    s += "<figure>\n" + svg + "<figcaption>" + xml_escape(caption(id)) + "</figcaption>\n</figure>\n";
   }
   return s + "</body>\n</html>\n";
 }
-
 
 }  // namespace hivecal::report

@@ -1,11 +1,17 @@
 // What a calibration run reports: the paper-style tables (as text for the terminal and as
-// HTML) and a self-contained HTML page with SVG figures like the paper's Figs 4-8.
+// HTML) and a self-contained HTML page with SVG figures (docs/report.md lists them and the
+// question each answers). ReportData is all the page needs; it is kept in result.json
+// (report_json.hpp, all but the input facts and stage times) so that `hivecal report`
+// regenerates the page from a result alone.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hivecal/core/types.hpp"
+#include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/metrics.hpp"
 
 namespace hivecal::report {
@@ -13,36 +19,105 @@ namespace hivecal::report {
 /// One row of Table 1: a method's accuracy.
 struct MethodRow {
   std::string method;          ///< e.g. "uncalibrated", "ABC", "GSA", "LM"
-  std::string parameters;      ///< e.g. "paper-6", "full (31 of 33)"
+  std::string parameters;      ///< e.g. "paper-6", "full (31 estimated)"
   ErrorStats train;            ///< on the training samples [m]
   ErrorStats test;             ///< on the test samples [m]
-  double seconds = 0.0;        ///< solver wall time [s] (0: not timed)
+  double seconds = 0.0;        ///< stage wall time [s] (0: not timed; never in result.json)
   long long evaluations = 0;   ///< cost evaluations or LM iterations (0: n/a)
 };
 
-/// A solver's convergence: best cost per iteration.
+/// A solver's convergence: best cost per cycle (ABC, GSA) or per iteration (LM).
 struct ConvergenceSeries {
   std::string method;               ///< legend label
-  std::vector<double> best_cost_m;  ///< best MAE [m] (or RMS for LM) after each iteration
+  bool per_iteration = false;       ///< LM iterations (own panel), not global-search cycles
+  std::vector<double> best_cost_m;  ///< best MAE [m] (RMS for LM) after each cycle / iteration
+};
+
+/// One paired sample as the figures need it.
+struct SampleRow {
+  double q_rad[6] = {};  ///< joint angles [rad]
+  Vec3 measured_m = Vec3::Zero();  ///< tracker point [m]
+  bool test = false;     ///< held out (test set), else training
+};
+
+/// One model and its predictions of every sample (same order as ReportData::samples).
+struct PredictionSet {
+  std::string method;                ///< "uncalibrated", or a stage name ("ABC", "ABC+LM", ...)
+  RobotModel model;                  ///< its geometry
+  RigidTransform base_to_tracker;    ///< its base -> tracker transform
+  std::vector<Vec3> points_m;        ///< base_to_tracker * FK(q) * tool per sample [m] (predict_samples)
+};
+
+/// A parameter set aside by the identifiability analysis.
+struct DroppedRow {
+  std::string param;          ///< its name (e.g. "d4")
+  std::string reason;         ///< why (no effect / not separable)
+  double singular_ratio = 0;  ///< sigma_k / sigma_max of its direction [-]
+  std::string combination;    ///< the non-separable combination, e.g. "+0.71*d2 -0.71*d4"
+};
+
+/// What LM could estimate.
+struct IdentifiabilityTable {
+  bool present = false;              ///< an LM stage ran
+  int free_count = 0;                ///< parameters free by the options
+  std::vector<std::string> estimated;  ///< names of the estimated parameters
+  std::vector<DroppedRow> dropped;   ///< set aside, in the order they were dropped
+  double condition_before = 0.0;     ///< of the column-scaled Jacobian over the free parameters [-]
+  double condition_after = 0.0;      ///< over the estimated parameters [-]
+};
+
+/// One model parameter: start, calibrated value and uncertainty.
+struct ParameterRow {
+  std::string name;        ///< e.g. "a2", "alpha3", "tool_z"
+  bool angle = false;      ///< [rad] (shown in mrad), else [m] (shown in mm)
+  double start = 0.0;      ///< start value [rad] or [m]
+  double value = 0.0;      ///< calibrated value [rad] or [m]
+  double sigma = 0.0;      ///< standard deviation [rad] or [m]; 0: not estimated
+  std::string correlated_with{};  ///< the estimated parameter it is most correlated with ("" if none)
+  double correlation = 0.0;     ///< that correlation coefficient [-]
+};
+
+/// |correlation| above which Table 4 warns: the two are hard to tell apart in this data.
+constexpr double kCorrelationWarning = 0.9;
+
+/// Stream input: what became of the tracker points over the session, in equal time bins.
+struct PointTimeline {
+  double duration_s = 0.0;                       ///< from the first to the last tracker point [s]
+  std::vector<std::string> reasons;              ///< "kept", then each drop reason that occurred
+  std::vector<std::vector<std::uint32_t>> counts;  ///< per reason, tracker points per time bin
 };
 
 /// Everything the report shows.
 struct ReportData {
-  std::string title;                        ///< page title
-  std::vector<std::string> info_lines;      ///< run facts: inputs, clock, samples, dropped parameters...
-  std::vector<MethodRow> methods;           ///< Table 1 rows, first the uncalibrated model
-  AccuracyReport uncalibrated;              ///< Table 2, before
-  AccuracyReport calibrated;                ///< Table 2, after (the chosen method)
-  std::vector<ConvergenceSeries> convergence;  ///< Figs 4-5
-  std::vector<Vec3> test_measured_m;        ///< test samples: tracker points [m]
-  std::vector<Vec3> test_uncalibrated_m;    ///< test samples: nominal-model predictions [m]
-  std::vector<Vec3> test_calibrated_m;      ///< test samples: calibrated predictions [m]
-  std::vector<std::string> parameter_lines;  ///< calibrated parameters with sigma, one per line
+  std::string title;                          ///< page title
+  std::vector<std::string> input_lines;       ///< inputs and stream facts (not in result.json: they name files and formats)
+  std::vector<std::string> info_lines;        ///< run facts from the result: samples, identifiability
+  std::vector<MethodRow> methods;             ///< Table 1 rows, first the uncalibrated model
+  AccuracyReport uncalibrated;                ///< Table 2, before
+  AccuracyReport calibrated;                  ///< Table 2, after (the chosen method)
+  std::vector<ConvergenceSeries> convergence;  ///< one per stage
+  std::vector<SampleRow> samples;             ///< every sample (training and test)
+  std::vector<PredictionSet> predictions;     ///< first the uncalibrated model, last the result
+  double noise_sigma_m = 0.0;                 ///< tracker noise per axis estimated by LM [m]; 0: unknown
+  IdentifiabilityTable identifiability;       ///< Table 3
+  std::vector<ParameterRow> parameters;       ///< Table 4: estimated or changed parameters
+  std::vector<std::pair<std::string, std::uint64_t>> drops;  ///< stream input: drop reason -> tracker points
+  bool has_stream = false;                    ///< the samples came from two streams
+  PointTimeline timeline;                     ///< stream input: kept / drop reason per tracker point over time
 };
+
+/// A prediction set of `model` for every sample of `samples` (result.json keeps the model,
+/// not the points: both calibrate and `hivecal report` compute them here, the same bits).
+PredictionSet predict_samples(const std::string& method, const RobotModel& model, const RigidTransform& base_to_tracker,
+                              const std::vector<SampleRow>& samples);
 
 /// Table 1 and Table 2 as aligned plain text (micrometres).
 std::string format_tables_text(const ReportData& data);
+/// The parameter table as text lines (one per parameter).
+std::vector<std::string> format_parameters_text(const ReportData& data);
 /// The whole HTML page (inline SVG, no scripts, no external resources).
 std::string render_html(const ReportData& data);
+/// The ids of the figures render_html draws for `data`, in page order (for tests).
+std::vector<std::string> figure_ids(const ReportData& data);
 
 }  // namespace hivecal::report

@@ -27,13 +27,6 @@ struct Axis {
   double to_px(double v) const { return px_lo + (value(v) - lo) / (hi - lo) * (px_hi - px_lo); }
 };
 
-/// A "nice" step near `raw`: 1, 2, 2.5 or 5 times a power of ten.
-double nice_step(double raw) {
-  const double power = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
-    if (m * power >= raw * (1.0 - 1e-9)) return m * power;
-  return 10.0 * power;
-}
 
 /// Ticks in axis units (log10 units on a log axis) and the labels they carry.
 struct Ticks {
@@ -108,16 +101,19 @@ Ticks ticks_of(const Axis& axis) {
     return t;
   }
   const double step = nice_step((axis.hi - axis.lo) / 4.0);
-  const auto count = static_cast<int>(std::lround((axis.hi - axis.lo) / step));
+  // The first multiple of the step inside the axis (its ends are on the grid, except for a
+  // range widened to an equal aspect ratio).
+  const double first = std::ceil(axis.lo / step - 1e-9) * step;
+  const auto count = static_cast<int>(std::floor((axis.hi - first) / step + 1e-9));
   bool too_long = false;
   for (int i = 0; i <= count; ++i) {
-    const double v = axis.lo + step * i;
+    const double v = first + step * i;
     t.at.push_back(v);
     t.labels.push_back(linear_label(v, step));
     too_long = too_long || significant_digits(t.labels.back()) > 3;
   }
   if (too_long) {  // a narrow range far from 0: label the distance from the first tick
-    t.offset = fmt("%.10g", axis.lo);
+    t.offset = fmt("%.10g", first);
     for (int i = 0; i <= count; ++i) t.labels[static_cast<std::size_t>(i)] = linear_label(step * i, step);
   }
   return t;
@@ -156,27 +152,66 @@ std::string frame(const ChartSpec& spec, const Axis& x, const Axis& y) {
   return s;
 }
 
-/// Legend rows for the non-empty names, each in its series' colour.
-std::string legend(const std::vector<std::string>& names, double x, double y) {
+/// A legend entry: label and colour.
+struct LegendEntry {
+  std::string name;    ///< label ("" for none)
+  std::string colour;  ///< fill of its swatch
+};
+
+/// Legend rows for the non-empty names; each carries data-series so that a checker can find
+/// the element it stands for.
+std::string legend(const std::vector<LegendEntry>& entries, double x, double y) {
   std::string s;
   double row = y - 14.0;
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (names[i].empty()) continue;
+  for (const LegendEntry& e : entries) {
+    if (e.name.empty()) continue;
     row += 14.0;
-    s += "<rect x='" + fmt("%.1f", x) + "' y='" + fmt("%.1f", row - 8) + "' width='10' height='10' fill='" +
-         kColours[i % 6] + "'/>\n";
-    s += "<text class='legend' x='" + fmt("%.1f", x + 14) + "' y='" + fmt("%.1f", row + 1) + "'>" + xml_escape(names[i]) +
-         "</text>\n";
+    s += "<rect class='swatch' x='" + fmt("%.1f", x) + "' y='" + fmt("%.1f", row - 8) + "' width='10' height='10' fill='" +
+         e.colour + "'/>\n";
+    s += "<text class='legend' data-series='" + xml_escape(e.name) + "' x='" + fmt("%.1f", x + 14) + "' y='" +
+         fmt("%.1f", row + 1) + "'>" + xml_escape(e.name) + "</text>\n";
   }
   return s;
 }
 
 std::string open_svg(const ChartSpec& spec) {
-  return "<svg xmlns='http://www.w3.org/2000/svg' width='" + std::to_string(spec.width_px) + "' height='" +
-         std::to_string(spec.height_px) + "' font-family='sans-serif' font-size='11'>\n";
+  return "<svg xmlns='http://www.w3.org/2000/svg'" + (spec.id.empty() ? std::string() : " id='" + xml_escape(spec.id) + "'") +
+         " width='" + std::to_string(spec.width_px) + "' height='" + std::to_string(spec.height_px) +
+         "' font-family='sans-serif' font-size='11'>\n";
+}
+
+std::string series_attr(const std::string& name) { return " data-series='" + xml_escape(name) + "'"; }
+
+/// The dashed reference line of spec (when it has a label and lies inside the y axis).
+std::string reference_line(const ChartSpec& spec, const Axis& x, const Axis& y, std::vector<LegendEntry>* entries) {
+  if (spec.y_line_label.empty() || (y.log && spec.y_line <= 0.0)) return "";
+  const double py = y.to_px(spec.y_line);
+  entries->push_back({spec.y_line_label, "#555"});
+  return "<line" + series_attr(spec.y_line_label) + " x1='" + fmt("%.1f", x.px_lo) + "' x2='" + fmt("%.1f", x.px_hi) +
+         "' y1='" + fmt("%.1f", py) + "' y2='" + fmt("%.1f", py) + "' stroke='#555' stroke-dasharray='5,3'/>\n";
+}
+
+/// Widens one axis about its centre so that a unit is as many pixels on x as on y (arrows
+/// keep their direction).
+void equal_aspect(Axis* x, Axis* y) {
+  const double x_px_per_unit = std::fabs(x->px_hi - x->px_lo) / (x->hi - x->lo);
+  const double y_px_per_unit = std::fabs(y->px_hi - y->px_lo) / (y->hi - y->lo);
+  Axis* wider = x_px_per_unit > y_px_per_unit ? x : y;
+  const double px_per_unit = std::min(x_px_per_unit, y_px_per_unit);
+  const double half = std::fabs(wider->px_hi - wider->px_lo) / px_per_unit / 2.0;
+  const double centre = (wider->lo + wider->hi) / 2.0;
+  wider->lo = centre - half;
+  wider->hi = centre + half;
 }
 
 }  // namespace
+
+double nice_step(double raw) {
+  const double power = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
+    if (m * power >= raw * (1.0 - 1e-9)) return m * power;
+  return 10.0 * power;
+}
 
 int significant_digits(const std::string& label) {
   std::string digits;
@@ -207,14 +242,18 @@ std::string xml_escape(const std::string& text) {
 std::string svg_chart(const ChartSpec& spec, const std::vector<Series>& series) {
   std::vector<const std::vector<double>*> xs;
   std::vector<const std::vector<double>*> ys;
-  std::vector<std::string> names;  // legend: only the series that drew something
   for (const Series& s : series) {
     xs.push_back(&s.x);
     ys.push_back(&s.y);
   }
+  const std::vector<double> fixed = {spec.y_lo, spec.y_hi};
+  const std::vector<double> line = {spec.y_line};
+  if (spec.fixed_y) ys = {&fixed};
+  if (!spec.y_line_label.empty()) ys.push_back(&line);
   const Axis x = make_axis(xs, false, 70.0, spec.width_px - 130.0);
   const Axis y = make_axis(ys, spec.log_y, spec.height_px - 45.0, 28.0);
   std::string out = open_svg(spec) + frame(spec, x, y);
+  std::vector<LegendEntry> entries;  // only the series that drew something
   for (std::size_t k = 0; k < series.size(); ++k) {
     const Series& s = series[k];
     const char* colour = kColours[k % 6];
@@ -226,19 +265,20 @@ std::string svg_chart(const ChartSpec& spec, const std::vector<Series>& series) 
       const double px = x.to_px(s.x[i]);
       const double py = y.to_px(s.y[i]);
       if (s.markers) {
-        out += "<circle cx='" + fmt("%.1f", px) + "' cy='" + fmt("%.1f", py) + "' r='2.5' fill='none' stroke='" +
-               colour + "'/>\n";
+        out += "<circle" + series_attr(s.name) + " cx='" + fmt("%.1f", px) + "' cy='" + fmt("%.1f", py) +
+               "' r='2.5' fill='none' stroke='" + colour + "'/>\n";
       } else {
         points += fmt("%.1f", px) + "," + fmt("%.1f", py) + " ";
       }
     }
     if (!s.markers && !points.empty()) {
-      out += "<polyline fill='none' stroke='" + std::string(colour) + "' stroke-width='1.5' points='" + points + "'/>\n";
+      out += "<polyline" + series_attr(s.name) + " fill='none' stroke='" + std::string(colour) +
+             "' stroke-width='1.5' points='" + points + "'/>\n";
     }
-    if (drawn) names.push_back(s.name);
-    else names.push_back(std::string());  // keeps the colours of the others
+    entries.push_back({drawn ? s.name : std::string(), colour});
   }
-  out += legend(names, spec.width_px - 120.0, 40.0);
+  out += reference_line(spec, x, y, &entries);
+  out += legend(entries, spec.width_px - 120.0, 40.0);
   return out + "</svg>\n";
 }
 
@@ -267,17 +307,159 @@ std::string svg_histogram(const ChartSpec& spec, const std::vector<std::string>&
   std::string out = open_svg(spec) + frame(spec, x, y);
   const double bin_width = max_value / bins;
   const double group = static_cast<double>(value_sets.size());
+  std::vector<LegendEntry> entries;
   for (std::size_t k = 0; k < counts.size(); ++k) {
+    const std::string name = k < names.size() ? names[k] : std::string();
+    bool drawn = false;
     for (int b = 0; b < bins; ++b) {
+      if (counts[k][static_cast<std::size_t>(b)] <= 0.0) continue;
+      drawn = true;
       const double x0 = x.to_px(bin_width * (b + static_cast<double>(k) / group));
       const double x1 = x.to_px(bin_width * (b + (static_cast<double>(k) + 1.0) / group));
       const double top = y.to_px(counts[k][static_cast<std::size_t>(b)]);
       const double base = y.to_px(0.0);
-      out += "<rect x='" + fmt("%.1f", x0) + "' y='" + fmt("%.1f", top) + "' width='" + fmt("%.1f", x1 - x0) +
-             "' height='" + fmt("%.1f", base - top) + "' fill='" + kColours[k % 6] + "' fill-opacity='0.8'/>\n";
+      out += "<rect" + series_attr(name) + " x='" + fmt("%.1f", x0) + "' y='" + fmt("%.1f", top) + "' width='" +
+             fmt("%.1f", x1 - x0) + "' height='" + fmt("%.1f", base - top) + "' fill='" + kColours[k % 6] +
+             "' fill-opacity='0.8'/>\n";
+    }
+    entries.push_back({drawn ? name : std::string(), kColours[k % 6]});
+  }
+  out += legend(entries, spec.width_px - 120.0, 40.0);
+  return out + "</svg>\n";
+}
+
+std::string svg_arrows(const ChartSpec& spec, const std::vector<ArrowSet>& sets, double scale_length,
+                       const std::string& scale_label) {
+  std::vector<double> xs;
+  std::vector<double> ys;
+  for (const ArrowSet& a : sets) {
+    for (std::size_t i = 0; i < a.x.size() && i < a.y.size() && i < a.dx.size() && i < a.dy.size(); ++i) {
+      xs.insert(xs.end(), {a.x[i], a.x[i] + a.dx[i]});
+      ys.insert(ys.end(), {a.y[i], a.y[i] + a.dy[i]});
     }
   }
-  out += legend(names, spec.width_px - 120.0, 40.0);
+  Axis x = make_axis({&xs}, false, 70.0, spec.width_px - 130.0);
+  Axis y = make_axis({&ys}, false, spec.height_px - 45.0, 28.0);
+  equal_aspect(&x, &y);
+  std::string out = open_svg(spec);
+  out += "<defs>";
+  for (std::size_t k = 0; k < sets.size(); ++k) {
+    out += "<marker id='" + xml_escape(spec.id) + "-head" + std::to_string(k) +
+           "' markerWidth='4' markerHeight='4' refX='3.5' refY='2' orient='auto'><path d='M0,0 L4,2 L0,4 z' fill='" +
+           kColours[k % 6] + "'/></marker>";
+  }
+  out += "</defs>\n" + frame(spec, x, y);
+  std::vector<LegendEntry> entries;
+  for (std::size_t k = 0; k < sets.size(); ++k) {
+    const ArrowSet& a = sets[k];
+    bool drawn = false;
+    for (std::size_t i = 0; i < a.x.size() && i < a.y.size() && i < a.dx.size() && i < a.dy.size(); ++i) {
+      if (!std::isfinite(a.x[i] + a.y[i] + a.dx[i] + a.dy[i])) continue;
+      drawn = true;
+      out += "<line" + series_attr(a.name) + " x1='" + fmt("%.1f", x.to_px(a.x[i])) + "' y1='" + fmt("%.1f", y.to_px(a.y[i])) +
+             "' x2='" + fmt("%.1f", x.to_px(a.x[i] + a.dx[i])) + "' y2='" + fmt("%.1f", y.to_px(a.y[i] + a.dy[i])) +
+             "' stroke='" + kColours[k % 6] + "' stroke-width='1.2' marker-end='url(#" + xml_escape(spec.id) + "-head" +
+             std::to_string(k) + ")'/>\n";
+    }
+    entries.push_back({drawn ? a.name : std::string(), kColours[k % 6]});
+  }
+  // The reference arrow: its length in pixels is scale_length on the x axis.
+  const double left = spec.width_px - 120.0;
+  const double bottom = spec.height_px - 80.0;
+  const double length_px = std::fabs(x.to_px(x.lo + scale_length) - x.px_lo);
+  out += "<line class='scale' x1='" + fmt("%.1f", left) + "' y1='" + fmt("%.1f", bottom) + "' x2='" +
+         fmt("%.1f", left + length_px) + "' y2='" + fmt("%.1f", bottom) + "' stroke='#000' stroke-width='1.5'/>\n";
+  // The label's lines are separated by '|'.
+  double line_y = bottom + 16.0;
+  for (std::size_t at = 0; at <= scale_label.size();) {
+    const std::size_t end = std::min(scale_label.find('|', at), scale_label.size());
+    out += "<text class='scale-label' x='" + fmt("%.1f", left) + "' y='" + fmt("%.1f", line_y) + "'>" +
+           xml_escape(scale_label.substr(at, end - at)) + "</text>\n";
+    line_y += 14.0;
+    at = end + 1;
+  }
+  out += legend(entries, spec.width_px - 120.0, 40.0);
+  return out + "</svg>\n";
+}
+
+std::string svg_bars(const ChartSpec& spec, const std::vector<std::string>& categories, const std::vector<double>& counts) {
+  std::vector<double> range = {0.0};
+  for (double c : counts) range.push_back(c);
+  const double label_px = 200.0;
+  const Axis x = make_axis({&range}, false, label_px, spec.width_px - 30.0, true);
+  Axis y;  // categories: no numeric y axis
+  y.px_lo = spec.height_px - 45.0;
+  y.px_hi = 28.0;
+  std::string out = open_svg(spec);
+  out += "<rect x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", y.px_hi) + "' width='" + fmt("%.1f", x.px_hi - x.px_lo) +
+         "' height='" + fmt("%.1f", y.px_lo - y.px_hi) + "' fill='none' stroke='#444'/>\n";
+  const Ticks xt = ticks_of(x);
+  for (std::size_t i = 0; i < xt.at.size(); ++i) {
+    out += "<text class='tick' x='" + fmt("%.1f", x.to_px(xt.at[i])) + "' y='" + fmt("%.1f", y.px_lo + 14) +
+           "' text-anchor='middle'>" + xt.labels[i] + "</text>\n";
+  }
+  out += "<text x='" + fmt("%.1f", (x.px_lo + x.px_hi) / 2) + "' y='16' text-anchor='middle' font-weight='bold'>" +
+         xml_escape(spec.title) + "</text>\n";
+  out += "<text x='" + fmt("%.1f", (x.px_lo + x.px_hi) / 2) + "' y='" + fmt("%.1f", y.px_lo + 30) +
+         "' text-anchor='middle'>" + xml_escape(spec.x_label + (xt.offset.empty() ? "" : " \u2212 " + xt.offset)) +
+         "</text>\n";
+  const double row = counts.empty() ? 0.0 : (y.px_lo - y.px_hi) / static_cast<double>(counts.size());
+  for (std::size_t i = 0; i < counts.size() && i < categories.size(); ++i) {
+    const double top = y.px_hi + row * static_cast<double>(i) + row * 0.15;
+    out += "<text class='category' x='" + fmt("%.1f", x.px_lo - 6) + "' y='" + fmt("%.1f", top + row * 0.45) +
+           "' text-anchor='end'>" + xml_escape(categories[i]) + "</text>\n";
+    out += "<rect" + series_attr(categories[i]) + " x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", top) +
+           "' width='" + fmt("%.1f", x.to_px(counts[i]) - x.px_lo) + "' height='" + fmt("%.1f", row * 0.7) + "' fill='" +
+           kColours[0] + "'/>\n";
+    out += "<text class='value' x='" + fmt("%.1f", x.to_px(counts[i]) + 4) + "' y='" + fmt("%.1f", top + row * 0.45) +
+           "'>" + fmt("%.0f", counts[i]) + "</text>\n";
+  }
+  return out + "</svg>\n";
+}
+
+std::string svg_strips(const ChartSpec& spec, const std::vector<std::string>& categories,
+                       const std::vector<std::vector<std::uint32_t>>& counts, double duration) {
+  const std::vector<double> range = {0.0, duration > 0.0 ? duration : 1.0};
+  const Axis x = make_axis({&range}, false, 200.0, spec.width_px - 30.0, true);
+  const double top = 28.0;
+  const double bottom = spec.height_px - 45.0;
+  std::string out = open_svg(spec);
+  out += "<rect x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", top) + "' width='" + fmt("%.1f", x.px_hi - x.px_lo) +
+         "' height='" + fmt("%.1f", bottom - top) + "' fill='none' stroke='#444'/>\n";
+  const Ticks xt = ticks_of(x);
+  for (std::size_t i = 0; i < xt.at.size(); ++i) {
+    out += "<text class='tick' x='" + fmt("%.1f", x.to_px(xt.at[i])) + "' y='" + fmt("%.1f", bottom + 14) +
+           "' text-anchor='middle'>" + xt.labels[i] + "</text>\n";
+  }
+  out += "<text x='" + fmt("%.1f", (x.px_lo + x.px_hi) / 2) + "' y='16' text-anchor='middle' font-weight='bold'>" +
+         xml_escape(spec.title) + "</text>\n";
+  out += "<text x='" + fmt("%.1f", (x.px_lo + x.px_hi) / 2) + "' y='" + fmt("%.1f", bottom + 30) +
+         "' text-anchor='middle'>" + xml_escape(spec.x_label + (xt.offset.empty() ? "" : " \u2212 " + xt.offset)) +
+         "</text>\n";
+  const std::size_t rows = std::min(categories.size(), counts.size());
+  const double row = rows == 0 ? 0.0 : (bottom - top) / static_cast<double>(rows);
+  for (std::size_t r = 0; r < rows; ++r) {
+    const std::vector<std::uint32_t>& bins = counts[r];
+    std::uint64_t total = 0;
+    std::uint32_t largest = 0;
+    for (std::uint32_t c : bins) {
+      total += c;
+      largest = std::max(largest, c);
+    }
+    const double y0 = top + row * static_cast<double>(r);
+    out += "<text class='category' x='" + fmt("%.1f", x.px_lo - 6) + "' y='" + fmt("%.1f", y0 + row * 0.6) +
+           "' text-anchor='end'>" + xml_escape(categories[r]) + " (" + std::to_string(total) + ")</text>\n";
+    const double bin_s = range[1] / static_cast<double>(bins.empty() ? 1 : bins.size());
+    for (std::size_t b = 0; b < bins.size(); ++b) {
+      if (bins[b] == 0) continue;
+      const double x0 = x.to_px(bin_s * static_cast<double>(b));
+      const double x1 = x.to_px(bin_s * static_cast<double>(b + 1));
+      out += "<rect" + series_attr(categories[r]) + " x='" + fmt("%.1f", x0) + "' y='" + fmt("%.1f", y0 + row * 0.15) +
+             "' width='" + fmt("%.1f", x1 - x0) + "' height='" + fmt("%.1f", row * 0.7) + "' fill='" +
+             kColours[r % 6] + "' fill-opacity='" +
+             fmt("%.2f", 0.15 + 0.85 * static_cast<double>(bins[b]) / static_cast<double>(largest)) + "'/>\n";
+    }
+  }
   return out + "</svg>\n";
 }
 

@@ -67,7 +67,7 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
   DecodeProgress progress(config.progress);
   const port::Error read = extract_from_files(
       sources.robot, sources.tracker, make_clock_sync_config(config.speed_model), extraction, dataset, &report,
-      nullptr, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); },
+      config.observer, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); },
       config.log_options);
   if (!read.ok()) return read;
   facts->has_stream = true;

@@ -28,6 +28,7 @@ struct SessionSources {
 struct SessionConfig {
   RobotModel speed_model;           ///< nominal geometry with the tool (for tool speeds only)
   double max_speed_m_s = 0.0;       ///< quasi-static threshold [m/s]; 0: the library default
+  ExtractionObserver* observer = nullptr;  ///< sees each tracker point kept or dropped (extraction pass); may be null
   double window_s = 0.0;            ///< optional stability window [s]; 0: none (the paper's rule at the instant)
   bool progress = false;            ///< "[decode] pass i/2" lines on stderr
   textio::RobotLogOptions log_options;  ///< joint names of ROS robot logs (UR driver names by default), units of text inputs

@@ -2,10 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
+#include "hivecal/model/kinematics.hpp"
 #include "report/report.hpp"
+#include "report/report_json.hpp"
 #include "report/svg.hpp"
 
 namespace hivecal {
@@ -46,26 +49,44 @@ std::string check_well_formed(const std::string& html) {
 report::ReportData example() {
   report::ReportData data;
   data.title = "Calibration <UR5> & tracker";
+  data.input_lines = {"input: robot.cap, tracker.cap"};
   data.info_lines = {"samples kept: 38", "clock offset: 1.234 s"};
   report::MethodRow before;
   before.method = "uncalibrated";
   before.test.mae_m[3] = 75.4e-6;
+  before.test.count = 4;
   report::MethodRow abc;
   abc.method = "ABC";
   abc.parameters = "paper-6";
   abc.test.mae_m[3] = 60.1e-6;
+  abc.test.count = 4;
   abc.seconds = 0.05;
   data.methods = {before, abc};
   data.uncalibrated.test.mae_m[0] = 40e-6;
   data.calibrated.test.mae_m[0] = 30e-6;
-  data.convergence = {{"ABC", {1e-4, 8e-5, 7e-5, 6.01e-5}}, {"GSA", {1e-4, 9e-5, 6.5e-5}}};
+  data.convergence = {{"ABC", false, {1e-4, 8e-5, 7e-5, 6.01e-5}}, {"GSA", false, {1e-4, 9e-5, 6.5e-5}},
+                      {"LM", true, {7e-5, 6e-5, 5.9e-5}}};
+  // The ABC model predicts every sample 60 um off in y, the uncalibrated one 70 um off in x.
+  const RobotModel model = nominal_model(RobotType::ur5);
   for (int i = 0; i < 12; ++i) {
-    const Vec3 p(0.5 + 0.01 * i, -0.2 + 0.02 * i, 0.3);
-    data.test_measured_m.push_back(p);
-    data.test_uncalibrated_m.push_back(p + Vec3(7e-5, 0, 0));
-    data.test_calibrated_m.push_back(p + Vec3(0, 6e-5, 0));
+    report::SampleRow row;
+    for (int j = 0; j < 6; ++j) row.q_rad[j] = 0.1 * i - 0.2 * j;
+    JointVector q;
+    for (int j = 0; j < 6; ++j) q(j) = row.q_rad[j];
+    row.measured_m = fk_tool_point(model, q) - Vec3(0, 6e-5, 0);
+    row.test = i % 3 == 0;
+    data.samples.push_back(row);
   }
-  data.parameter_lines = {"d1 = 0.089159 m +- 1.2e-6"};
+  RigidTransform shifted;
+  shifted.translation_m = Vec3(7e-5, -6e-5, 0);
+  data.predictions = {report::predict_samples("uncalibrated", model, shifted, data.samples),
+                      report::predict_samples("ABC", model, RigidTransform{}, data.samples)};
+  data.noise_sigma_m = 10e-6;
+  data.identifiability.present = true;
+  data.identifiability.free_count = 3;
+  data.identifiability.estimated = {"a2", "d1"};
+  data.identifiability.dropped = {{"d4", "not separable", 1e-9, "+0.707*d2 -0.707*d4"}};
+  data.parameters = {{"d1", false, 0.089159, 0.0891602, 1.2e-6, "tool_z", -0.97}};
   return data;
 }
 
@@ -78,8 +99,92 @@ TEST(Report, HtmlIsWellFormedAndSelfContained) {
   EXPECT_NE(html.find("Calibration &lt;UR5&gt; &amp; tracker"), std::string::npos);
   std::size_t svgs = 0;
   for (std::size_t p = 0; (p = html.find("<svg", p)) != std::string::npos; ++p) ++svgs;
-  EXPECT_EQ(svgs, 1u + 3u + 2u + 1u);  // convergence, 3 axes, x-y and x-z, histogram
+  // sorted errors (3D, x, y, z), vectors x-y and x-z, CDF, histogram, convergence (global,
+  // LM), residual vs six joints; no stream figure for samples input.
+  EXPECT_EQ(svgs, 4u + 2u + 2u + 2u + 6u);
+  EXPECT_EQ(report::figure_ids(example()).size(), svgs);
+  EXPECT_NE(html.find("not separable"), std::string::npos);
+  EXPECT_NE(html.find("+0.707*d2 -0.707*d4"), std::string::npos);
+  EXPECT_NE(html.find("correlation -0.970 with tool_z"), std::string::npos);
   EXPECT_NE(html.find("-20.3 %"), std::string::npos);  // 75.4 -> 60.1 um
+}
+
+TEST(Report, WithoutTestSetNoTestColumnsAndTrainingFigures) {
+  report::ReportData data = example();
+  for (report::MethodRow& m : data.methods) m.test = ErrorStats{};
+  for (report::SampleRow& s : data.samples) s.test = false;
+  const std::string html = report::render_html(data);
+  EXPECT_EQ(check_well_formed(html), "");
+  EXPECT_EQ(html.find("test MAE"), std::string::npos);
+  EXPECT_EQ(html.find("<td>test</td>"), std::string::npos);  // Table 2: training rows only
+  EXPECT_NE(html.find("3D error per training sample"), std::string::npos);
+  EXPECT_EQ(html.find("test sample"), std::string::npos);
+}
+
+TEST(Report, StageTimesOnlyWhenTimed) {
+  report::ReportData data = example();
+  EXPECT_NE(report::render_html(data).find("time [s]"), std::string::npos);
+  for (report::MethodRow& m : data.methods) m.seconds = 0.0;
+  const std::string html = report::render_html(data);
+  EXPECT_EQ(html.find("time [s]"), std::string::npos);
+  EXPECT_NE(html.find("not kept in result.json"), std::string::npos);
+}
+
+TEST(Report, DataRoundTripsThroughResultJson) {
+  report::ReportData data = example();
+  data.has_stream = true;
+  data.drops = {{"kept", 12}, {"beam_lost", 3}};
+  data.timeline = {14.5, {"kept", "beam_lost"}, {{4, 0, 8}, {0, 3, 0}}};
+  data.identifiability.condition_before = std::numeric_limits<double>::infinity();  // stored as null
+  textio::JsonWriter json;
+  report::write_report_data(json, data);
+  textio::JsonValue value;
+  ASSERT_TRUE(textio::parse_json(json.text(), &value).ok());
+  report::ReportData back;
+  const port::Error r = report::parse_report_data(value, "result.json", &back);
+  ASSERT_TRUE(r.ok()) << r.message;
+  for (report::MethodRow& m : data.methods) m.seconds = 0.0;  // never written
+  data.input_lines.clear();                                    // never written
+  EXPECT_EQ(report::render_html(back), report::render_html(data));
+  const std::vector<std::string> ids = report::figure_ids(back);
+  ASSERT_GE(ids.size(), 2u);
+  EXPECT_EQ(ids[ids.size() - 2], "fig-drop-timeline");
+  EXPECT_EQ(ids.back(), "fig-drops");
+  EXPECT_NE(report::render_html(back).find("beam_lost (3)"), std::string::npos);
+  // A damaged document is refused with the key at fault.
+  value.object["samples"].array[0].object.erase("q_rad");
+  const port::Error damaged = report::parse_report_data(value, "result.json", &back);
+  EXPECT_FALSE(damaged.ok());
+  EXPECT_NE(damaged.message.find("\"samples\""), std::string::npos) << damaged.message;
+}
+
+TEST(Report, ErrorVectorsCarryTheirScale) {
+  const report::ReportData data = example();
+  // Largest error 70 um; the extent of the test samples is their largest per-axis range.
+  Vec3 lo = Vec3::Constant(1e9);
+  Vec3 hi = -lo;
+  for (const report::SampleRow& s : data.samples) {
+    if (!s.test) continue;
+    lo = lo.cwiseMin(s.measured_m * 1e3);
+    hi = hi.cwiseMax(s.measured_m * 1e3);
+  }
+  const double extent_mm = (hi - lo).maxCoeff();
+  const std::string html = report::render_html(data);
+  const std::size_t at = html.find("1 mm arrow = ");
+  ASSERT_NE(at, std::string::npos);
+  const double um_per_mm = std::stod(html.substr(at + 13));  // a round number of um
+  EXPECT_DOUBLE_EQ(report::nice_step(um_per_mm), um_per_mm);
+  EXPECT_GE(70.0 / um_per_mm, extent_mm / 6.0) << extent_mm;  // the longest arrow is visible
+  EXPECT_LE(70.0 / um_per_mm, extent_mm / 3.0) << extent_mm;
+}
+
+TEST(Report, PredictionsAreTheModelsOwn) {
+  const report::ReportData data = example();
+  ASSERT_EQ(data.predictions[0].points_m.size(), data.samples.size());
+  for (std::size_t i = 0; i < data.samples.size(); ++i) {
+    EXPECT_NEAR((data.predictions[0].points_m[i] - data.samples[i].measured_m - Vec3(7e-5, 0, 0)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((data.predictions[1].points_m[i] - data.samples[i].measured_m - Vec3(0, 6e-5, 0)).norm(), 0.0, 1e-12);
+  }
 }
 
 TEST(Report, CheckerCatchesBrokenMarkup) {
@@ -99,7 +204,7 @@ TEST(Report, TextTablesShowBothTables) {
 TEST(Report, EmptyAndDegenerateSeriesStillRender) {
   report::ReportData data;
   data.title = "empty";
-  data.convergence = {{"flat", {1e-5, 1e-5}}, {"none", {}}};
+  data.convergence = {{"flat", false, {1e-5, 1e-5}}, {"none", true, {}}};
   EXPECT_EQ(check_well_formed(report::render_html(data)), "");
   EXPECT_EQ(check_well_formed(report::svg_histogram(report::ChartSpec{"h", "x", "y"}, {"a"}, {{}}, 10)), "");
 }

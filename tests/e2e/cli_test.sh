@@ -145,12 +145,23 @@ fi
 # And the same bytes on every target (x86-64, aarch64 and armhf run this script): the digest of
 # the result of this simulated session (simulate --seed 5 --waypoints 12 --duration-s 150).
 # Update it only for an intended change of the computation or the format.
-result_sha256=f62acd5b9f13915392326f9d67042b278de9e5610fc7381b70116d6abe60fc55
+result_sha256=db8567a6584a546e055d03791fc1ac20c02aa4b3de21414d771f64661c1d969f
 if [ "$(sha256sum <"$work/cap.json" | cut -d' ' -f1)" = "$result_sha256" ]; then
   passed=$((passed + 1))
 else
   failed=$((failed + 1)); echo "FAIL: result.json differs from the committed digest: $(sha256sum <"$work/cap.json")"
 fi
+# `report` redraws the page from a result; a result without the report key, or with a damaged
+# one, is bad input naming the key.
+expect 2 "--calibration and --out are required" -- report --out "$work/redrawn"
+awk '/^  "report": /{exit} {lines[n++]=$0} END{for(i=0;i<n-1;i++)print lines[i]; l=lines[n-1]; sub(/,$/,"",l); print l; print "}"}' \
+  "$work/cap.json" >"$work/no_report.json"
+expect 3 'no "report" key' -- report --calibration "$work/no_report.json" --out "$work/redrawn"
+sed 's/"q_rad"/"q_deg"/' "$work/cap.json" >"$work/bad_report.json"
+expect 3 '"report"."samples" is malformed' -- report --calibration "$work/bad_report.json" --out "$work/redrawn"
+if "${run[@]}" report --calibration "$work/cap.json" --out "$work/redrawn" >/dev/null &&
+   grep -q "<svg" "$work/redrawn/index.html"; then passed=$((passed + 1)); else
+  failed=$((failed + 1)); echo "FAIL: report --calibration of a calibrate result"; fi
 # Predict the simulator's noise-free static points from their joints (truth_samples.csv:
 # waypoint,t_tracker,t_robot,q1..q6,x,y,z): the calibration must be far better than nominal.
 { echo "q1,q2,q3,q4,q5,q6"; tail -n +2 "$sim/truth_samples.csv" | cut -d, -f4-9; } >"$work/truth_joints.csv"
@@ -308,7 +319,7 @@ if command -v script >/dev/null; then
 fi
 
 # --- every command has --help
-for cmd in calibrate validate predict simulate record extract demo; do
+for cmd in calibrate validate predict simulate record extract demo report; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then passed=$((passed + 1)); else
     failed=$((failed + 1)); echo "FAIL: $cmd --help"; fi
 done

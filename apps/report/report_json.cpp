@@ -1,0 +1,392 @@
+#include "report/report_json.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "textio/calibration_json.hpp"
+
+namespace hivecal::report {
+namespace {
+
+using textio::JsonValue;
+using textio::JsonWriter;
+
+constexpr const char* kAxisNames[kErrorAxisCount] = {"x", "y", "z", "3d"};
+
+void write_accuracy(JsonWriter& json, const AccuracyReport& r) {
+  json.begin_object();
+  json.key("train");
+  textio::write_error_stats(json, r.train);
+  json.key("test");
+  textio::write_error_stats(json, r.test);
+  json.key("overall");
+  textio::write_error_stats(json, r.overall);
+  json.end_object();
+}
+
+/// A model and transform: "params" (the 27 DH and tool values, kinematics.hpp order),
+/// "rotation" (3 rows) and "translation_m"; exact bits, no re-orthonormalisation.
+void write_model(JsonWriter& json, const PredictionSet& set) {
+  const ModelParams params = to_params(set.model);
+  json.key("params").inline_array(params.data(), kModelParamCount);
+  json.key("rotation").begin_array();
+  for (int r = 0; r < 3; ++r) {
+    const Vec3 row = set.base_to_tracker.rotation.row(r).transpose();
+    json.inline_array(row.data(), 3);
+  }
+  json.end_array();
+  json.key("translation_m").inline_array(set.base_to_tracker.translation_m.data(), 3);
+}
+
+void write_identifiability(JsonWriter& json, const IdentifiabilityTable& id) {
+  json.begin_object();
+  json.key("free_count").value(static_cast<long long>(id.free_count));
+  json.key("estimated").begin_array();
+  for (const std::string& name : id.estimated) json.value(name);
+  json.end_array();
+  json.key("dropped").begin_array();
+  for (const DroppedRow& d : id.dropped) {
+    json.begin_object();
+    json.key("param").value(d.param);
+    json.key("reason").value(d.reason);
+    json.key("singular_ratio").value(d.singular_ratio);
+    json.key("combination").value(d.combination);
+    json.end_object();
+  }
+  json.end_array();
+  json.key("condition_before").value(id.condition_before);
+  json.key("condition_after").value(id.condition_after);
+  json.end_object();
+}
+
+// --- reading: each helper returns false on a wrong kind; the caller names the key ---------------
+
+/// A number; null (how the writer stores NaN / Inf) reads as +Inf.
+bool get_number(const JsonValue* v, double* out) {
+  if (v != nullptr && v->kind == JsonValue::Kind::null) {
+    *out = std::numeric_limits<double>::infinity();
+    return true;
+  }
+  if (v == nullptr || v->kind != JsonValue::Kind::number) return false;
+  *out = v->number;
+  return true;
+}
+
+bool get_string(const JsonValue* v, std::string* out) {
+  if (v == nullptr || v->kind != JsonValue::Kind::string) return false;
+  *out = v->string;
+  return true;
+}
+
+bool get_bool(const JsonValue* v, bool* out) {
+  if (v == nullptr || v->kind != JsonValue::Kind::boolean) return false;
+  *out = v->boolean;
+  return true;
+}
+
+bool get_count(const JsonValue* v, long long* out) {
+  double d = 0.0;
+  if (!get_number(v, &d) || !(d >= 0.0 && d < 9.007199254740992e15) || d != std::floor(d)) return false;
+  *out = static_cast<long long>(d);
+  return true;
+}
+
+bool is_array(const JsonValue* v) { return v != nullptr && v->kind == JsonValue::Kind::array; }
+
+bool get_numbers(const JsonValue* v, std::size_t n, double* out) {
+  if (!is_array(v) || v->array.size() != n) return false;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!get_number(&v->array[i], &out[i])) return false;
+  return true;
+}
+
+bool get_axes(const JsonValue* v, double* out) {
+  if (v == nullptr || v->kind != JsonValue::Kind::object) return false;
+  for (int axis = 0; axis < kErrorAxisCount; ++axis)
+    if (!get_number(v->find(kAxisNames[axis]), &out[axis])) return false;
+  return true;
+}
+
+bool get_stats(const JsonValue* v, ErrorStats* out) {
+  long long count = 0;
+  if (v == nullptr || !get_count(v->find("count"), &count)) return false;
+  out->count = static_cast<std::size_t>(count);
+  return get_axes(v->find("mae_m"), out->mae_m) && get_axes(v->find("sigma_m"), out->sigma_m) &&
+         get_axes(v->find("max_m"), out->max_m);
+}
+
+bool get_accuracy(const JsonValue* v, AccuracyReport* out) {
+  return v != nullptr && get_stats(v->find("train"), &out->train) && get_stats(v->find("test"), &out->test) &&
+         get_stats(v->find("overall"), &out->overall);
+}
+
+bool get_model(const JsonValue& v, RobotModel* model, RigidTransform* transform) {
+  ModelParams params;
+  const JsonValue* rotation = v.find("rotation");
+  if (!get_numbers(v.find("params"), kModelParamCount, params.data()) || !is_array(rotation) ||
+      rotation->array.size() != 3 || !get_numbers(v.find("translation_m"), 3, transform->translation_m.data())) {
+    return false;
+  }
+  for (std::size_t r = 0; r < 3; ++r) {
+    double row[3];
+    if (!get_numbers(&rotation->array[r], 3, row)) return false;
+    for (std::size_t c = 0; c < 3; ++c) transform->rotation(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
+  }
+  *model = from_params(params);
+  return params.allFinite() && transform->rotation.allFinite() && transform->translation_m.allFinite();
+}
+
+bool get_methods(const JsonValue* v, std::vector<MethodRow>* out) {
+  if (!is_array(v)) return false;
+  for (const JsonValue& m : v->array) {
+    MethodRow row;
+    if (!get_string(m.find("method"), &row.method) || !get_string(m.find("params"), &row.parameters) ||
+        !get_count(m.find("evaluations"), &row.evaluations) || !get_stats(m.find("train"), &row.train) ||
+        !get_stats(m.find("test"), &row.test)) {
+      return false;
+    }
+    out->push_back(row);
+  }
+  return true;
+}
+
+bool get_convergence(const JsonValue* v, std::vector<ConvergenceSeries>* out) {
+  if (!is_array(v)) return false;
+  for (const JsonValue& c : v->array) {
+    ConvergenceSeries series;
+    const JsonValue* costs = c.find("best_cost_m");
+    if (!get_string(c.find("method"), &series.method) || !get_bool(c.find("per_iteration"), &series.per_iteration) ||
+        !is_array(costs)) {
+      return false;
+    }
+    series.best_cost_m.resize(costs->array.size());
+    if (!get_numbers(costs, costs->array.size(), series.best_cost_m.data())) return false;
+    out->push_back(series);
+  }
+  return true;
+}
+
+bool get_samples(const JsonValue* v, std::vector<SampleRow>* out) {
+  if (!is_array(v)) return false;
+  for (const JsonValue& s : v->array) {
+    SampleRow row;
+    double xyz[3];
+    if (!get_numbers(s.find("q_rad"), 6, row.q_rad) || !get_numbers(s.find("measured_m"), 3, xyz) ||
+        !get_bool(s.find("test"), &row.test)) {
+      return false;
+    }
+    row.measured_m = Vec3(xyz[0], xyz[1], xyz[2]);
+    out->push_back(row);
+  }
+  return true;
+}
+
+bool get_predictions(const JsonValue* v, const std::vector<SampleRow>& samples, std::vector<PredictionSet>* out) {
+  if (!is_array(v)) return false;
+  for (const JsonValue& p : v->array) {
+    std::string method;
+    RobotModel model;
+    RigidTransform transform;
+    if (!get_string(p.find("method"), &method) || !get_model(p, &model, &transform)) return false;
+    out->push_back(predict_samples(method, model, transform, samples));
+  }
+  return true;
+}
+
+bool get_identifiability(const JsonValue* v, IdentifiabilityTable* out) {
+  if (v == nullptr) return true;  // no LM stage
+  long long free_count = 0;
+  const JsonValue* estimated = v->find("estimated");
+  const JsonValue* dropped = v->find("dropped");
+  if (!get_count(v->find("free_count"), &free_count) || !is_array(estimated) || !is_array(dropped) ||
+      !get_number(v->find("condition_before"), &out->condition_before) ||
+      !get_number(v->find("condition_after"), &out->condition_after)) {
+    return false;
+  }
+  out->present = true;
+  out->free_count = static_cast<int>(free_count);
+  for (const JsonValue& name : estimated->array) {
+    out->estimated.emplace_back();
+    if (!get_string(&name, &out->estimated.back())) return false;
+  }
+  for (const JsonValue& d : dropped->array) {
+    DroppedRow row;
+    if (!get_string(d.find("param"), &row.param) || !get_string(d.find("reason"), &row.reason) ||
+        !get_number(d.find("singular_ratio"), &row.singular_ratio) || !get_string(d.find("combination"), &row.combination)) {
+      return false;
+    }
+    out->dropped.push_back(row);
+  }
+  return true;
+}
+
+bool get_parameters(const JsonValue* v, std::vector<ParameterRow>* out) {
+  if (!is_array(v)) return false;
+  for (const JsonValue& p : v->array) {
+    ParameterRow row;
+    if (!get_string(p.find("name"), &row.name) || !get_bool(p.find("angle"), &row.angle) ||
+        !get_number(p.find("start"), &row.start) || !get_number(p.find("value"), &row.value) ||
+        !get_number(p.find("sigma"), &row.sigma) || !get_string(p.find("correlated_with"), &row.correlated_with) ||
+        !get_number(p.find("correlation"), &row.correlation)) {
+      return false;
+    }
+    out->push_back(row);
+  }
+  return true;
+}
+
+bool get_drops(const JsonValue* v, std::vector<std::pair<std::string, std::uint64_t>>* out) {
+  if (!is_array(v)) return false;
+  for (const JsonValue& d : v->array) {
+    std::string reason;
+    long long count = 0;
+    if (!get_string(d.find("reason"), &reason) || !get_count(d.find("count"), &count)) return false;
+    out->emplace_back(reason, static_cast<std::uint64_t>(count));
+  }
+  return true;
+}
+
+bool get_timeline(const JsonValue* v, PointTimeline* out) {
+  if (v == nullptr) return true;  // not stream input
+  const JsonValue* reasons = v->find("reasons");
+  const JsonValue* counts = v->find("counts");
+  if (!get_number(v->find("duration_s"), &out->duration_s) || !is_array(reasons) || !is_array(counts) ||
+      counts->array.size() != reasons->array.size()) {
+    return false;
+  }
+  for (std::size_t r = 0; r < reasons->array.size(); ++r) {
+    out->reasons.emplace_back();
+    if (!get_string(&reasons->array[r], &out->reasons.back()) || !is_array(&counts->array[r])) return false;
+    out->counts.emplace_back();
+    for (const JsonValue& c : counts->array[r].array) {
+      long long n = 0;
+      if (!get_count(&c, &n) || n > 0xffffffffLL) return false;
+      out->counts.back().push_back(static_cast<std::uint32_t>(n));
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+void write_report_data(JsonWriter& json, const ReportData& data) {
+  json.begin_object();
+  json.key("title").value(data.title);
+  json.key("info").begin_array();
+  for (const std::string& line : data.info_lines) json.value(line);
+  json.end_array();
+  json.key("methods").begin_array();
+  for (const MethodRow& row : data.methods) {
+    json.begin_object();
+    json.key("method").value(row.method);
+    json.key("params").value(row.parameters);
+    json.key("evaluations").value(row.evaluations);
+    json.key("train");
+    textio::write_error_stats(json, row.train);
+    json.key("test");
+    textio::write_error_stats(json, row.test);
+    json.end_object();
+  }
+  json.end_array();
+  json.key("uncalibrated");
+  write_accuracy(json, data.uncalibrated);
+  json.key("calibrated");
+  write_accuracy(json, data.calibrated);
+  json.key("convergence").begin_array();
+  for (const ConvergenceSeries& c : data.convergence) {
+    json.begin_object();
+    json.key("method").value(c.method);
+    json.key("per_iteration").value(c.per_iteration);
+    json.key("best_cost_m").inline_array(c.best_cost_m.data(), c.best_cost_m.size());
+    json.end_object();
+  }
+  json.end_array();
+  json.key("samples").begin_array();
+  for (const SampleRow& s : data.samples) {
+    json.begin_object();
+    json.key("q_rad").inline_array(s.q_rad, 6);
+    json.key("measured_m").inline_array(s.measured_m.data(), 3);
+    json.key("test").value(s.test);
+    json.end_object();
+  }
+  json.end_array();
+  json.key("predictions").begin_array();
+  for (const PredictionSet& p : data.predictions) {
+    json.begin_object();
+    json.key("method").value(p.method);
+    write_model(json, p);
+    json.end_object();
+  }
+  json.end_array();
+  json.key("noise_sigma_m").value(data.noise_sigma_m);
+  if (data.identifiability.present) {
+    json.key("identifiability");
+    write_identifiability(json, data.identifiability);
+  }
+  json.key("parameters").begin_array();
+  for (const ParameterRow& p : data.parameters) {
+    json.begin_object();
+    json.key("name").value(p.name);
+    json.key("angle").value(p.angle);
+    json.key("start").value(p.start);
+    json.key("value").value(p.value);
+    json.key("sigma").value(p.sigma);
+    json.key("correlated_with").value(p.correlated_with);
+    json.key("correlation").value(p.correlation);
+    json.end_object();
+  }
+  json.end_array();
+  json.key("has_stream").value(data.has_stream);
+  json.key("drops").begin_array();
+  for (const auto& [reason, count] : data.drops) {
+    json.begin_object();
+    json.key("reason").value(reason);
+    json.key("count").value(static_cast<long long>(count));
+    json.end_object();
+  }
+  json.end_array();
+  if (!data.timeline.reasons.empty()) {
+    json.key("timeline").begin_object();
+    json.key("duration_s").value(data.timeline.duration_s);
+    json.key("reasons").begin_array();
+    for (const std::string& r : data.timeline.reasons) json.value(r);
+    json.end_array();
+    json.key("counts").begin_array();
+    for (const std::vector<std::uint32_t>& bins : data.timeline.counts) {
+      const std::vector<double> values(bins.begin(), bins.end());
+      json.inline_array(values.data(), values.size());
+    }
+    json.end_array();
+    json.end_object();
+  }
+  json.end_object();
+}
+
+port::Error parse_report_data(const JsonValue& value, const std::string& source, ReportData* data) {
+  if (value.kind != JsonValue::Kind::object) return port::Error::input(source + ": \"report\" must be an object");
+  ReportData parsed;
+  const auto bad = [&](const char* key) { return port::Error::input(source + ": \"report\".\"" + key + "\" is malformed"); };
+  if (!get_string(value.find("title"), &parsed.title)) return bad("title");
+  const JsonValue* info = value.find("info");
+  if (!is_array(info)) return bad("info");
+  for (const JsonValue& line : info->array) {
+    parsed.info_lines.emplace_back();
+    if (!get_string(&line, &parsed.info_lines.back())) return bad("info");
+  }
+  if (!get_methods(value.find("methods"), &parsed.methods)) return bad("methods");
+  if (!get_accuracy(value.find("uncalibrated"), &parsed.uncalibrated)) return bad("uncalibrated");
+  if (!get_accuracy(value.find("calibrated"), &parsed.calibrated)) return bad("calibrated");
+  if (!get_convergence(value.find("convergence"), &parsed.convergence)) return bad("convergence");
+  if (!get_samples(value.find("samples"), &parsed.samples)) return bad("samples");
+  if (!get_predictions(value.find("predictions"), parsed.samples, &parsed.predictions)) return bad("predictions");
+  if (!get_number(value.find("noise_sigma_m"), &parsed.noise_sigma_m)) return bad("noise_sigma_m");
+  if (!get_identifiability(value.find("identifiability"), &parsed.identifiability)) return bad("identifiability");
+  if (!get_parameters(value.find("parameters"), &parsed.parameters)) return bad("parameters");
+  if (!get_bool(value.find("has_stream"), &parsed.has_stream)) return bad("has_stream");
+  if (!get_drops(value.find("drops"), &parsed.drops)) return bad("drops");
+  if (!get_timeline(value.find("timeline"), &parsed.timeline)) return bad("timeline");
+  *data = parsed;
+  return port::Error{};
+}
+
+}  // namespace hivecal::report

@@ -1,0 +1,18 @@
+// ReportData in result.json (key "report", docs/formats.md): calibrate writes it, `hivecal
+// report` reads it back and draws the same page. Numbers round-trip exactly (%.17g); stage
+// times are not written (result files hold no wall-clock values).
+#pragma once
+
+#include "hivecal/port/error.hpp"
+#include "report/report.hpp"
+#include "textio/json.hpp"
+
+namespace hivecal::report {
+
+/// Writes `data` as the value of the current key (an object), without MethodRow::seconds.
+void write_report_data(textio::JsonWriter& json, const ReportData& data);
+
+/// Reads the object written by write_report_data; Fault::input naming the key at fault.
+port::Error parse_report_data(const textio::JsonValue& value, const std::string& source, ReportData* data);
+
+}  // namespace hivecal::report

@@ -1,0 +1,137 @@
+#!/usr/bin/env bash
+# The HTML report as a browser shows it (ctest report.render): a simulated session is
+# calibrated from streams and from paired samples, each report is rendered by headless
+# Chromium (Debian's `chromium`, scripts/install-deps.sh) and its DOM is checked:
+#   - every figure the input calls for is there (and no stream figure for samples input);
+#   - no numeric tick label has more than three significant digits;
+#   - every legend entry has a drawn element of its series in the same figure;
+#   - `hivecal report --calibration` redraws the same figures, the same bytes twice.
+#   tests/report/render_test.sh HIVECAL
+set -uo pipefail
+hivecal=${1:?usage: render_test.sh HIVECAL}
+chromium_bin=${CHROMIUM:-chromium}
+if ! command -v "$chromium_bin" >/dev/null 2>&1; then
+  echo "FAIL: '$chromium_bin' not found: the report test needs headless Chromium (scripts/install-deps.sh installs Debian's chromium)"
+  exit 1
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0
+failed=0
+ok() { passed=$((passed + 1)); }
+fail() { failed=$((failed + 1)); echo "FAIL: $*"; }
+
+# DOM of an HTML file after Chromium parsed and laid it out.
+render() {  # render HTML DOM_OUT
+  timeout 120 "$chromium_bin" --headless --disable-gpu --no-sandbox --no-first-run --user-data-dir="$work/profile" \
+    --dump-dom "file://$1" >"$2" 2>"$work/chromium.err"
+}
+
+# One figure per line: "id<TAB>svg markup" (newlines inside a figure become spaces).
+figures_of() {  # figures_of DOM
+  tr '\n' ' ' <"$1" | sed 's|<svg |\n<svg |g' | grep '^<svg ' | sed 's|</svg>.*|</svg>|' |
+    sed -E 's|^<svg [^>]*id="([^"]*)"|\1\t&|'
+}
+
+# Significant digits of each numeric tick label above three, printed as "label".
+long_ticks() {  # long_ticks DOM
+  grep -o '<text class="tick"[^>]*>[^<]*</text>' "$1" | sed -E 's|<[^>]*>||g' | awk '
+    {
+      label = $0; mantissa = label; sub(/^[-+\xe2\x88\x92]*/, "", mantissa); sub(/[eE].*$/, "", mantissa)
+      if (mantissa !~ /^[0-9.]+$/) next                   # not a number
+      digits = mantissa; gsub(/\./, "", digits); sub(/^0+/, "", digits)
+      if (index(mantissa, ".") == 0) sub(/0+$/, "", digits)  # 1250: three significant digits
+      if (length(digits) > 3) print label
+    }'
+}
+
+# Legend entries (per figure) without an element of their series in that figure.
+orphan_legends() {  # orphan_legends DOM
+  figures_of "$1" | while IFS=$'\t' read -r id svg; do
+    grep -o '<text class="legend" data-series="[^"]*"' <<<"$svg" | sed -E 's|.*data-series="([^"]*)"|\1|' |
+      while read -r name; do
+        drawn=$(grep -o "<[a-z]* data-series=\"$name\"" <<<"$svg" | grep -vc '<text')
+        [ "$drawn" -gt 0 ] || echo "$id: '$name'"
+      done
+  done
+}
+
+check_report() {  # check_report NAME HTML EXPECTED_IDS...
+  local name=$1 html=$2
+  shift 2
+  local dom="$work/$name.dom"
+  if ! render "$html" "$dom" || ! grep -q '</html>' "$dom"; then
+    fail "$name: chromium could not render $html: $(tail -3 "$work/chromium.err")"
+    return
+  fi
+  local ids
+  ids=$(figures_of "$dom" | cut -f1 | tr '\n' ' ')
+  if [ "$ids" = "$* " ]; then ok; else fail "$name: figures [$ids], want [$* ]"; fi
+  local svgs
+  svgs=$(grep -o '<svg ' "$dom" | wc -l)
+  if [ "$svgs" -eq $# ]; then ok; else fail "$name: $svgs <svg> elements, want $#"; fi
+  local ticks long
+  ticks=$(grep -o '<text class="tick"' "$dom" | wc -l)
+  long=$(long_ticks "$dom")
+  if [ "$ticks" -gt 100 ] && [ -z "$long" ]; then ok; else
+    fail "$name: $ticks tick labels; with more than three significant digits: $(echo $long)"; fi
+  local legends orphans
+  legends=$(grep -o '<text class="legend"' "$dom" | wc -l)
+  orphans=$(orphan_legends "$dom")
+  if [ "$legends" -gt 10 ] && [ -z "$orphans" ]; then ok; else fail "$name: $legends legend entries; without a drawn element: $orphans"; fi
+  echo "$name: $svgs figures, $ticks tick labels, $legends legend entries checked"
+}
+
+# The checkers must be able to fail: a long label and an orphan legend entry are found.
+cat >"$work/bad.dom" <<'HTML'
+<svg id="fig-bad"><text class="tick">231.25</text><text class="tick">1250</text><text class="tick">−0.01255</text><text class="tick">−0.0125</text><text class="tick">1e-05</text>
+<text class="legend" data-series="measured">measured</text><rect class="swatch"></rect>
+<text class="legend" data-series="calibrated">calibrated</text><polyline data-series="calibrated"></polyline></svg>
+HTML
+if [ "$(long_ticks "$work/bad.dom" | tr '\n' ' ')" = "231.25 −0.01255 " ] &&
+   [ "$(orphan_legends "$work/bad.dom")" = "fig-bad: 'measured'" ]; then ok; else
+  fail "the checkers miss a long tick label or an orphan legend entry: $(long_ticks "$work/bad.dom") / $(orphan_legends "$work/bad.dom")"
+fi
+
+sim="$work/sim"
+"$hivecal" simulate --out-dir "$sim" --waypoints 12 --duration-s 150 --seed 5 >/dev/null || { echo "FAIL: simulate"; exit 1; }
+common=(fig-error-3d fig-error-x fig-error-y fig-error-z fig-vectors-xy fig-vectors-xz fig-cdf fig-histogram
+        fig-convergence-global fig-convergence-lm fig-residual-q1 fig-residual-q2 fig-residual-q3 fig-residual-q4
+        fig-residual-q5 fig-residual-q6)
+
+# From the streams: every figure, the drop reasons too.
+if "$hivecal" calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --out "$work/streams.json" \
+     --report "$work/streams" --quiet >/dev/null; then
+  check_report streams "$work/streams/index.html" "${common[@]}" fig-drop-timeline fig-drops
+  if timeout 120 "$chromium_bin" --headless --disable-gpu --no-sandbox --no-first-run --user-data-dir="$work/profile" \
+       --hide-scrollbars --window-size=1300,2000 --screenshot="$work/shot.png" "file://$work/streams/index.html" \
+       >/dev/null 2>&1 && [ "$(head -c 8 "$work/shot.png" | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ] &&
+     [ "$(stat -c %s "$work/shot.png")" -gt 50000 ]; then ok; else fail "screenshot of the report"; fi
+  # Correlation coefficients of the parameter table are coefficients.
+  bad_rho=$(grep -o '"correlation": [^,}]*' "$work/streams.json" | awk '{ v = $2 + 0; if (v > 1 || v < -1) print v }')
+  rho_count=$(grep -c '"correlation": ' "$work/streams.json")
+  if [ "$rho_count" -gt 10 ] && [ -z "$bad_rho" ]; then ok; else fail "$rho_count correlations; outside [-1, 1]: $bad_rho"; fi
+  # Drawn again from the result: the same figures, and the same bytes every time.
+  if "$hivecal" report --calibration "$work/streams.json" --out "$work/again" >/dev/null &&
+     "$hivecal" report --calibration "$work/streams.json" --out "$work/again2" >/dev/null &&
+     cmp -s "$work/again/index.html" "$work/again2/index.html"; then ok; else fail "report --calibration twice: different bytes"; fi
+  check_report regenerated "$work/again/index.html" "${common[@]}" fig-drop-timeline fig-drops
+  # From Table 2 on (Table 1 has no stage times then, and the input facts name files), the
+  # page is calibrate's own.
+  if cmp -s <(sed -n '/<h2>Table 2/,$p' "$work/streams/index.html") <(sed -n '/<h2>Table 2/,$p' "$work/again/index.html"); then
+    ok; else fail "report --calibration draws other tables or figures than calibrate --report"; fi
+else
+  fail "calibrate from streams"
+fi
+
+# From paired samples (the simulator's static truth): no stream figure.
+{ echo "q1,q2,q3,q4,q5,q6,x,y,z"; tail -n +2 "$sim/truth_samples.csv" | cut -d, -f4-12; } >"$work/samples.csv"
+if "$hivecal" calibrate --samples "$work/samples.csv" --method all --out "$work/samples.json" --report "$work/samples" \
+     --quiet >/dev/null; then
+  check_report samples "$work/samples/index.html" "${common[@]}"
+else
+  fail "calibrate from samples"
+fi
+
+echo "report.render: $passed passed, $failed failed"
+[ "$failed" -eq 0 ]
