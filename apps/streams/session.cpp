@@ -134,7 +134,9 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
     facts->info_lines.push_back("input: robot " + sources.robot + ", tracker " + sources.tracker);
     return load_streams(sources, config, dataset, facts);
   }
-  const port::Error r = textio::read_samples_csv(sources.samples, dataset);
+  std::vector<std::size_t> lines;
+  const port::Error r = textio::read_samples_csv(sources.samples, dataset, &lines);
+  for (std::size_t line : lines) facts->sample_sources.push_back(sources.samples + ":" + std::to_string(line));
   if (!r.ok()) return r;
   facts->info_lines.push_back("input: " + sources.samples + " (" + std::to_string(dataset->size()) +
                               " paired samples)");

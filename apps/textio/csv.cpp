@@ -29,7 +29,8 @@ std::string join(const std::vector<std::string>& names) {
 /// `on_row`, given the values of the schema's columns in order; on_row may reject a row by
 /// returning an error text. Every error names the file and line.
 port::Error read_csv(const std::string& path, const CsvSchema& schema,
-                     const std::function<std::string(const std::vector<double>&)>& on_row) {
+                     const std::function<std::string(const std::vector<double>&)>& on_row,
+                     std::vector<std::size_t>* row_lines = nullptr) {
   const std::string expected =
       (schema.optional_leading.empty() ? "" : "[" + schema.optional_leading + ",]") + join(schema.columns);
   DelimitedReader r;
@@ -55,6 +56,7 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema,
       r.fail(rejection);
       return port::Error::input(r.error());
     }
+    if (row_lines != nullptr) row_lines->push_back(r.line_number());
   }
   if (!r.error().empty()) return port::Error::input(r.error());
   if (rows == 0) return port::Error::input(path + ": no data rows");
@@ -77,7 +79,7 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 
 }  // namespace
 
-port::Error read_samples_csv(const std::string& path, DatasetBase* dataset) {
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, std::vector<std::size_t>* lines) {
   return read_csv(path, CsvSchema{with(kJointColumns, {"x", "y", "z"}), ""}, [&](const std::vector<double>& values) {
     const std::string error = check_finite(values, 0, 9);
     if (!error.empty()) return error;
@@ -88,7 +90,7 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset) {
       return "dataset over capacity (" + std::to_string(dataset->capacity()) + " samples max)";
     }
     return status == Status::ok ? std::string() : std::string(status_message(status));
-  });
+  }, lines);
 }
 
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses) {

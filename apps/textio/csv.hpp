@@ -15,7 +15,8 @@
 namespace hivecal::textio {
 
 /// Reads paired static samples (`q1..q6,x,y,z`) into a dataset; reports a full dataset as an error.
-port::Error read_samples_csv(const std::string& path, DatasetBase* dataset);
+/// `lines`, when given, receives the 1-based file line of each sample added, in order.
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, std::vector<std::size_t>* lines = nullptr);
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`).
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses);
 

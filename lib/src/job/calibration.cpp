@@ -1,7 +1,11 @@
 #include "hivecal/calibration.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <new>
 
+#include "hivecal/core/random.hpp"
+#include "hivecal/model/full_params.hpp"
 #include "hivecal/model/rigid_fit.hpp"
 
 namespace hivecal {
@@ -88,7 +92,25 @@ Status run_population(Job& job, CalibrationSolver solver) {
   return Status::ok;
 }
 
-/// LM from the start geometry, or (hybrid) from the previous stage's geometry and base.
+/// True when LM dropped a model parameter that `from` holds at another value than `start`:
+/// an earlier stage moved a parameter the data cannot determine. Such ones are put back to
+/// their start values in *from.
+bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report, RobotModel* from) {
+  const ModelParams start_params = to_params(start);
+  ModelParams params = to_params(*from);
+  bool changed = false;
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (mask_has(report.free_mask, i) && !mask_has(report.kept_mask, i) && params(i) != start_params(i)) {
+      params(i) = start_params(i);
+      changed = true;
+    }
+  }
+  if (changed) *from = from_params(params);
+  return changed;
+}
+
+/// LM from the start geometry, or (hybrid) from the previous stage's geometry and base; when
+/// it drops a parameter the previous stage moved, once more with that one at its start value.
 Status run_lm(Job& job, bool hybrid) {
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
@@ -97,13 +119,17 @@ Status run_lm(Job& job, bool hybrid) {
   lm.params = o.params == CalibrationParams::paper ? LmParamSet::paper6 : LmParamSet::full;
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
   TraceBase& trace = job.workspace.trace(r.stage_count);
-  trace.clear();
-  LmWorkspace* workspace = job.workspace.open_lm();
-  const Status status = calibrate_lm(previous != nullptr ? previous->model : job.start,
-                                     previous != nullptr ? &previous->base_to_tracker : nullptr, job.dataset.train(),
-                                     lm, workspace, &r.lm, &trace, job.observer);
-  job.workspace.close();
-  if (status != Status::ok && status != Status::not_converged) return status;
+  RobotModel from = previous != nullptr ? previous->model : job.start;
+  Status status = Status::ok;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    trace.clear();
+    LmWorkspace* workspace = job.workspace.open_lm();
+    status = calibrate_lm(from, previous != nullptr ? &previous->base_to_tracker : nullptr, job.dataset.train(), lm,
+                          workspace, &r.lm, &trace, job.observer);
+    job.workspace.close();
+    if (status != Status::ok && status != Status::not_converged) return status;
+    if (previous == nullptr || !reset_dropped(job.start, r.lm.identifiability, &from)) break;
+  }
   r.has_lm = true;
   CalibrationStage& stage = r.stages[r.stage_count];
   stage.solver = CalibrationSolver::lm;
@@ -137,24 +163,212 @@ Status run_stage(Job& job, CalibrationSolver solver, bool hybrid) {
   return Status::ok;
 }
 
-/// Input checks, split and baseline: everything before the first solver.
-Status prepare(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
-               CalibrationResult* r) {
-  if (!known(options)) return fail(r, CalibrationStep::input, Status::invalid_argument);
-  if (dataset->size() == 0) return fail(r, CalibrationStep::input, Status::dataset_empty);
-  if (dataset->size() < calibration_minimum_samples(options.params)) {
-    return fail(r, CalibrationStep::input, Status::too_few_samples);
+/// The tool point and the base fitted together with the nominal joints model (LM over
+/// {tool xyz, base 6}, least squares): the reflector offset is rarely known to the millimetre,
+/// and a baseline that keeps the guess is not a fair comparison. Below 4 samples (9
+/// parameters), the base alone.
+Status fit_baseline(const RobotModel& start, Span<const Sample> train, CalibrationWorkspaceBase& workspace,
+                    CalibrationResult* r) {
+  r->baseline.model = start;
+  Status status = fit_base_to_tracker(start, train, &r->baseline.base_to_tracker);
+  if (status != Status::ok || 3 * train.size() <= static_cast<std::size_t>(kToolParamCount + kBaseParamCount)) {
+    return status;
   }
-  Status status = dataset->split(options.train_fraction, options.seed);
-  if (status != Status::ok) return fail(r, CalibrationStep::split, status);
+  LmOptions lm;
+  lm.params = LmParamSet::custom;
+  lm.custom_mask = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    lm.custom_mask |= param_bit(tool_param_index(axis)) | param_bit(base_rotation_param_index(axis)) |
+                      param_bit(base_translation_param_index(axis));
+  }
+  LmWorkspace* lm_workspace = workspace.open_lm();
+  status = calibrate_lm(start, &r->baseline.base_to_tracker, train, lm, lm_workspace, &r->lm, nullptr, nullptr);
+  workspace.close();
+  if (status != Status::ok && status != Status::not_converged) return status;
+  r->baseline.model = r->lm.model;
+  r->baseline.base_to_tracker = r->lm.base_to_tracker;
+  r->baseline.tool_fitted = true;
+  return Status::ok;
+}
+
+/// Baseline and stages on a dataset already split (train / test).
+Status run_split(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+                 CalibrationWorkspaceBase* workspace, CalibrationResult* r, CalibrationObserver* observer) {
   r->train_count = dataset->train().size();
   r->test_count = dataset->test().size();
-  r->baseline.model = start;
-  status = fit_base_to_tracker(start, dataset->train(), &r->baseline.base_to_tracker);
+  Status status = fit_baseline(start, dataset->train(), *workspace, r);
   if (status != Status::ok) return fail(r, CalibrationStep::baseline, status);
-  r->baseline.train = position_error_stats(start, r->baseline.base_to_tracker, dataset->train());
-  r->baseline.test = position_error_stats(start, r->baseline.base_to_tracker, dataset->test());
+  r->baseline.train = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->train());
+  r->baseline.test = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->test());
+  Job job{start, *dataset, options, *workspace, *r, observer};
+  const StagePlan plan = plan_for(options.method);
+  if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, false)) != Status::ok) return status;
+  if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, false)) != Status::ok) return status;
+  if (plan.lm && (status = run_stage(job, CalibrationSolver::lm, plan.hybrid)) != Status::ok) return status;
+  r->step = CalibrationStep::done;
+  r->status = Status::ok;
   return Status::ok;
+}
+
+/// Resets *result in place (no 5 KB temporary on the stack).
+CalibrationResult& reset(CalibrationResult* result) {
+  result->~CalibrationResult();
+  return *new (result) CalibrationResult();
+}
+
+// --- blunders ------------------------------------------------------------------------------
+
+/// Per-axis sigma from the median of 3-D residual norms: for isotropic Gaussian noise the norm
+/// is Maxwell-distributed with median 1.5382 sigma (the MAD idea for norms).
+constexpr double kMaxwellMedian = 1.5382;
+
+/// The lower median of values[0 .. count) (reordered): the same value whatever the algorithm.
+double lower_median(Span<double> values, std::size_t count) {
+  double* begin = values.data();
+  double* middle = begin + (count - 1) / 2;
+  std::nth_element(begin, middle, begin + count);
+  return *middle;
+}
+
+/// The set-aside list being built: indices with residuals, at most kMaxCalibrationOutliers,
+/// the largest residuals kept when more are flagged (ties: the lower index).
+struct OutlierList {
+  CalibrationOutlier items[kMaxCalibrationOutliers];
+  std::uint32_t indices[kMaxCalibrationOutliers] = {};
+  std::size_t count = 0;
+  std::size_t limit = kMaxCalibrationOutliers;
+
+  void offer(std::uint32_t index, double residual_m) {
+    auto before = [](const CalibrationOutlier& a, const CalibrationOutlier& b) {
+      return a.residual_m > b.residual_m || (a.residual_m == b.residual_m && a.index < b.index);
+    };
+    const CalibrationOutlier item{index, residual_m};
+    if (count == limit && (limit == 0 || !before(item, items[count - 1]))) return;
+    std::size_t k = count < limit ? count++ : count - 1;
+    for (; k > 0 && before(item, items[k - 1]); --k) items[k] = items[k - 1];
+    items[k] = item;
+  }
+  /// Sorts by index and fills `indices`.
+  void finish() {
+    for (std::size_t i = 1; i < count; ++i) {
+      const CalibrationOutlier moving = items[i];
+      std::size_t k = i;
+      for (; k > 0 && items[k - 1].index > moving.index; --k) items[k] = items[k - 1];
+      items[k] = moving;
+    }
+    for (std::size_t i = 0; i < count; ++i) indices[i] = items[i].index;
+  }
+  Span<const std::uint32_t> index_span() const { return Span<const std::uint32_t>(indices, count); }
+  bool same_as(const OutlierList& other) const {
+    if (count != other.count) return false;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (indices[i] != other.indices[i]) return false;
+    }
+    return true;
+  }
+};
+
+/// At most this share of the samples is ever set aside: a blunder is a minority.
+std::size_t outlier_limit(std::size_t samples) {
+  const std::size_t half = samples / 2 > 0 ? samples / 2 - 1 : 0;  // strictly fewer than half
+  return half < kMaxCalibrationOutliers ? half : kMaxCalibrationOutliers;
+}
+
+/// Residual norms of `samples` under (model, base) into residual_m; the median over the first
+/// `median_count` of them (the kept samples) into *median_m. The scratch holds the residuals
+/// of its capacity only: samples beyond it are tested, but not part of the median.
+void residuals_of(const RobotModel& model, const RigidTransform& base, Span<const Sample> samples,
+                  std::size_t median_count, ResidualScratch scratch, double* median_m) {
+  const std::size_t n = std::min(median_count, scratch.residual_m.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    scratch.residual_m[i] = (base.apply(fk_tool_point(model, samples[i].q_rad)) - samples[i].point_m).norm();
+  }
+  *median_m = n > 0 ? lower_median(scratch.residual_m, n) : 0.0;
+}
+
+/// Flags every stored sample (kept and set aside) whose residual under (model, base) exceeds
+/// max(k sigma, floor), sigma from the median residual of the kept ones.
+void flag_outliers(const RobotModel& model, const RigidTransform& base, const DatasetBase& dataset,
+                   const CalibrationOptions& o, double floor_m, ResidualScratch scratch, OutlierList* list,
+                   double* threshold_m) {
+  double median_m = 0.0;
+  residuals_of(model, base, dataset.samples(), dataset.size(), scratch, &median_m);
+  *threshold_m = std::fmax(o.outlier_k * median_m / kMaxwellMedian, floor_m);
+  list->count = 0;
+  list->limit = outlier_limit(dataset.size() + dataset.set_aside().size());
+  for (Span<const Sample> part : {dataset.samples(), dataset.set_aside()}) {
+    for (const Sample& s : part) {
+      const double r = (base.apply(fk_tool_point(model, s.q_rad)) - s.point_m).norm();
+      if (r > *threshold_m) list->offer(s.index, r);
+    }
+  }
+  list->finish();
+}
+
+/// Consensus screen with the start geometry: the base fitted on random point triples (seeded,
+/// deterministic), the one with the least median residual over all samples kept (LMedS, robust
+/// to almost half the samples being wrong), and the samples far from it flagged. Errors:
+/// degenerate_geometry when no triple spans a plane (the base frame is not determined).
+Status screen(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& o,
+              CalibrationWorkspaceBase& workspace, OutlierList* list) {
+  dataset->set_aside(Span<const std::uint32_t>());
+  const Span<const Sample> samples = dataset->samples();
+  const std::size_t n = samples.size();
+  ResidualScratch scratch = workspace.open_residuals();
+  const std::size_t m = std::min(n, scratch.predicted_m.size());
+  for (std::size_t i = 0; i < m; ++i) scratch.predicted_m[i] = fk_tool_point(start, samples[i].q_rad);
+  Random random(o.seed ^ 0x6c6d656473ULL);  // its own stream: the split's draws stay as they were
+  double best_median_m = 0.0;
+  RigidTransform best;
+  bool found = false;
+  for (std::size_t trial = 0; m >= 3 && trial < o.consensus_trials; ++trial) {
+    const auto a = static_cast<std::size_t>(random.below(m));
+    const auto b = static_cast<std::size_t>(random.below(m));
+    const auto c = static_cast<std::size_t>(random.below(m));
+    if (a == b || b == c || a == c) continue;
+    RigidFitAccumulator fit;
+    for (std::size_t k : {a, b, c}) fit.add(scratch.predicted_m[k], samples[k].point_m);
+    RigidTransform base;
+    if (fit.solve(&base) != Status::ok) continue;
+    for (std::size_t i = 0; i < m; ++i) {
+      scratch.residual_m[i] = (base.apply(scratch.predicted_m[i]) - samples[i].point_m).norm();
+    }
+    const double median_m = lower_median(scratch.residual_m, m);
+    if (!found || median_m < best_median_m) {
+      best_median_m = median_m;
+      best = base;
+      found = true;
+    }
+  }
+  workspace.close();
+  if (!found) return n < 3 ? Status::too_few_samples : Status::degenerate_geometry;
+  double threshold_m = 0.0;
+  scratch = workspace.open_residuals();
+  flag_outliers(start, best, *dataset, o, o.screen_floor_m, scratch, list, &threshold_m);
+  workspace.close();
+  return Status::ok;
+}
+
+/// Input checks shared by calibrate() and cross_validate().
+Status check_inputs(DatasetBase* dataset, const CalibrationOptions& options, CalibrationWorkspaceBase* workspace,
+                    CalibrationResult* r) {
+  if (dataset == nullptr || workspace == nullptr || !known(options)) {
+    return fail(r, CalibrationStep::input, Status::invalid_argument);
+  }
+  dataset->set_aside(Span<const std::uint32_t>());
+  if (dataset->size() == 0) return fail(r, CalibrationStep::input, Status::dataset_empty);
+  return Status::ok;
+}
+
+/// One run of the job with `aside` set aside: split, baseline, stages.
+Status run_once(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+                CalibrationWorkspaceBase* workspace, CalibrationResult* result, CalibrationObserver* observer,
+                Span<const std::uint32_t> aside) {
+  CalibrationResult& r = reset(result);
+  dataset->set_aside(aside);
+  const Status status = dataset->split(options.train_fraction, options.seed);
+  if (status != Status::ok) return fail(&r, CalibrationStep::split, status);
+  return run_split(start, dataset, options, workspace, &r, observer);
 }
 
 }  // namespace
@@ -169,13 +383,6 @@ const char* calibration_method_name(CalibrationMethod method) {
     case CalibrationMethod::all: return "all";
   }
   return "unknown";
-}
-
-std::size_t calibration_minimum_samples(CalibrationParams params) {
-  // Three equations per sample: 12 samples give 36 for the paper's 6 lengths + 6 base
-  // parameters, 24 give 72 for the ~24 the full model identifies + 6 base. LM itself only
-  // refuses 3 N <= free parameters; below these a fit is mostly noise.
-  return params == CalibrationParams::paper ? 12 : 24;
 }
 
 const char* calibration_solver_name(CalibrationSolver solver) {
@@ -210,18 +417,81 @@ const char* calibration_step_name(CalibrationStep step) {
 Status calibrate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
                  CalibrationWorkspaceBase* workspace, CalibrationResult* result, CalibrationObserver* observer) {
   if (result == nullptr) return Status::invalid_argument;
-  result->~CalibrationResult();
-  CalibrationResult& r = *new (result) CalibrationResult();  // in place: no 5 KB temporary on the stack
-  if (dataset == nullptr || workspace == nullptr) return fail(&r, CalibrationStep::input, Status::invalid_argument);
-  Status status = prepare(start, dataset, options, &r);
+  Status status = check_inputs(dataset, options, workspace, &reset(result));
   if (status != Status::ok) return status;
-  Job job{start, *dataset, options, *workspace, r, observer};
-  const StagePlan plan = plan_for(options.method);
-  if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, false)) != Status::ok) return status;
-  if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, false)) != Status::ok) return status;
-  if (plan.lm && (status = run_stage(job, CalibrationSolver::lm, plan.hybrid)) != Status::ok) return status;
-  r.step = CalibrationStep::done;
-  r.status = Status::ok;
+  if (options.keep_outliers) return run_once(start, dataset, options, workspace, result, observer, {});
+  static_assert(sizeof(OutlierList) < 2048, "two lists live on the stack");
+  OutlierList aside;
+  status = screen(start, dataset, options, *workspace, &aside);
+  if (status != Status::ok) return fail(&reset(result), CalibrationStep::baseline, status);
+  // Rerun until the calibration's own residual test sets aside what the run left out: a
+  // sample the start geometry's screen flagged comes back when the calibration explains it.
+  constexpr std::size_t kMaxRounds = 4;
+  OutlierList tested;
+  double threshold_m = 0.0;
+  std::size_t round = 0;
+  while (true) {
+    status = run_once(start, dataset, options, workspace, result, observer, aside.index_span());
+    if (status != Status::ok) return status;
+    ++round;
+    const CalibrationStage& final_stage = result->stages[result->stage_count - 1];
+    const ResidualScratch scratch = workspace->open_residuals();
+    flag_outliers(final_stage.model, final_stage.base_to_tracker, *dataset, options, options.outlier_floor_m, scratch,
+                  &tested, &threshold_m);
+    workspace->close();
+    if (tested.same_as(aside) || round == kMaxRounds) break;
+    aside = tested;
+  }
+  // The residuals reported are the final calibration's (of the set the run left out).
+  CalibrationResult& r = *result;
+  r.outlier_count = 0;
+  const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
+  for (const Sample& s : dataset->set_aside()) {
+    r.outliers[r.outlier_count++] = CalibrationOutlier{
+        s.index, (final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)) - s.point_m).norm()};
+  }
+  r.outlier_rounds = round;
+  r.outlier_threshold_m = threshold_m;
+  return Status::ok;
+}
+
+Status cross_validate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+                      std::size_t folds, CalibrationWorkspaceBase* workspace, CalibrationResult* scratch,
+                      CrossValidationResult* cv, CalibrationObserver* observer) {
+  if (scratch == nullptr || cv == nullptr) return Status::invalid_argument;
+  cv->~CrossValidationResult();
+  new (cv) CrossValidationResult();
+  Status status = calibrate(start, dataset, options, workspace, scratch, observer);  // the blunders
+  if (status != Status::ok) return cv->status = status;
+  std::uint32_t aside[kMaxCalibrationOutliers] = {};
+  const std::size_t aside_count = scratch->outlier_count;
+  for (std::size_t i = 0; i < aside_count; ++i) aside[i] = scratch->outliers[i].index;
+  const Span<const std::uint32_t> aside_span(aside, aside_count);
+  dataset->set_aside(aside_span);
+  const std::size_t n = dataset->size();
+  const std::size_t k = folds == 0 ? n : folds;
+  if (k < 2 || k > n || k > kMaxCrossValidationFolds) return cv->status = Status::invalid_argument;
+  double abs_sum_m = 0.0;
+  for (std::size_t f = 0; f < k; ++f) {
+    CalibrationResult& r = reset(scratch);
+    dataset->set_aside(aside_span);
+    status = dataset->split_fold(f, k, options.seed);
+    if (status == Status::ok) status = run_split(start, dataset, options, workspace, &r, observer);
+    if (status != Status::ok) return cv->status = status;
+    CrossValidationFold& fold = cv->folds[f];
+    fold.train_count = r.train_count;
+    const CalibrationStage& final_stage = r.stages[r.stage_count - 1];  // a method runs one stage at least
+    fold.train = final_stage.train;
+    fold.test = final_stage.test;
+    const double mae_m = fold.test.mae(ErrorAxis::norm_3d);
+    abs_sum_m += mae_m * static_cast<double>(fold.test.count);
+    cv->fold_mae_3d_mean_m += mae_m / static_cast<double>(k);
+    cv->fold_mae_3d_max_m = std::fmax(cv->fold_mae_3d_max_m, mae_m);
+  }
+  cv->fold_count = k;
+  cv->sample_count = n;
+  cv->mae_3d_m = abs_sum_m / static_cast<double>(n);
+  cv->status = Status::ok;
   return Status::ok;
 }
 

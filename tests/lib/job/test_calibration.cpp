@@ -118,6 +118,25 @@ TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
   ASSERT_EQ(calibrate_lm(population.model, &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace,
                          &lm),
             Status::ok);
+  // What LM dropped goes back to its start value, and LM runs once more from there.
+  ModelParams from = to_params(population.model);
+  const ModelParams nominal = to_params(start());
+  bool reset = false;
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(lm.identifiability.kept_mask, i) && from(i) != nominal(i)) {
+      from(i) = nominal(i);
+      reset = true;
+    }
+  }
+  EXPECT_TRUE(reset) << "ABC moves d1, which the full model cannot separate from the base";
+  ASSERT_EQ(calibrate_lm(from_params(from), &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace,
+                         &lm),
+            Status::ok);
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(lm.identifiability.kept_mask, i)) {
+      EXPECT_EQ(to_params(last(result).model)(i), nominal(i)) << i;
+    }
+  }
   EXPECT_TRUE(same_bits(result.stages[0].model, population.model));
   EXPECT_TRUE(same_bits(last(result).model, lm.model));
   EXPECT_EQ(result.lm.rms_m, lm.rms_m);
@@ -183,9 +202,14 @@ TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
   dataset.clear();
   expect_failure(calibrate(start(), &dataset, options, &workspace, &result), Status::dataset_empty,
                  CalibrationStep::input);
-  fill(calibration_minimum_samples(CalibrationParams::full) - 1, &dataset);
+  fill(2, &dataset);  // not even the base frame
   expect_failure(calibrate(start(), &dataset, options, &workspace, &result), Status::too_few_samples,
-                 CalibrationStep::input);
+                 CalibrationStep::baseline);
+  fill(11, &dataset);  // LM's 33 free parameters need 3 N > 33
+  CalibrationOptions every = quick(CalibrationMethod::lm);
+  every.train_fraction = 1.0;
+  expect_failure(calibrate(start(), &dataset, every, &workspace, &result), Status::too_few_samples,
+                 CalibrationStep::lm);
 
   fill(120, &dataset);
   CalibrationOptions no_training = options;
