@@ -140,7 +140,7 @@ report::MethodRow stage_row(const Run& run, std::size_t k) {
   }
   // A refining stage's row (ABC+LM) is the whole chain: its time includes the stage it refined.
   const double seconds = run.seconds[k] + (stage.refines_previous && k > 0 ? run.seconds[k - 1] : 0.0);
-  if (stage.solver != CalibrationSolver::lm) params += ", tool as given";
+  if (stage.solver != CalibrationSolver::lm) params += run.result.baseline.tool_fitted ? ", tool fitted" : ", tool as given";
   return method_row(run.result.stage_name(k), params, stage.train, stage.test, seconds,
                     static_cast<long long>(stage.evaluations));
 }
@@ -196,7 +196,7 @@ void write_stage_list(textio::JsonWriter& json, const std::vector<report::Method
     json.key("method").value(row.method);
     json.key("params").value(row.parameters);
     json.key("train_mae_m").value(row.train.mae(ErrorAxis::norm_3d));
-    json.key("test_mae_m").value(row.test.mae(ErrorAxis::norm_3d));
+    if (row.test.count > 0) json.key("test_mae_m").value(row.test.mae(ErrorAxis::norm_3d));  // --split 1: none
     json.key("evaluations").value(row.evaluations);
     json.end_object();
   }

@@ -200,7 +200,9 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
   if (status != Status::ok) return fail(r, CalibrationStep::baseline, status);
   r->baseline.train = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->train());
   r->baseline.test = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->test());
-  Job job{start, *dataset, options, *workspace, *r, observer};
+  // The stages start from the baseline's geometry: the start joints with the fitted tool point
+  // (ABC / GSA move lengths only and would otherwise keep the tool guess's error).
+  Job job{r->baseline.model, *dataset, options, *workspace, *r, observer};
   const StagePlan plan = plan_for(options.method);
   if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, false)) != Status::ok) return status;
   if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, false)) != Status::ok) return status;

@@ -203,7 +203,7 @@ TEST(CalibrationRobust, WhatLmDropsStaysAtItsStartValue) {
   ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
   const ModelParams abc = to_params(result.stages[0].model);
   const ModelParams lm = to_params(result.stages[1].model);
-  const ModelParams from = to_params(start());
+  const ModelParams from = to_params(result.baseline.model);  // the start joints, the fitted tool
   const IdentifiabilityReport& id = result.lm.identifiability;
   int moved_by_abc = 0;
   for (int i = 0; i < kModelParamCount; ++i) {
