@@ -39,6 +39,7 @@ struct CalibrateSettings {
   double train_fraction = 0.7;       ///< --split
   bool robust = false;               ///< --robust
   bool keep_outliers = false;        ///< --keep-outliers
+  double significance_t = 2.0;       ///< --significance
   std::size_t cv_folds = 0;          ///< --cv K; 1: leave-one-out (lib's folds = 0); 0: no cross-validation
   bool progress = false;             ///< progress lines on stderr
 };
@@ -145,7 +146,7 @@ report::MethodRow stage_row(const Run& run, std::size_t k) {
                     static_cast<long long>(stage.evaluations));
 }
 
-std::vector<std::string> identifiability_lines(const LmResult& lm) {
+std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pruned, double significance_t) {
   std::vector<std::string> lines;
   const IdentifiabilityReport& id = lm.identifiability;
   char buf[256];
@@ -163,6 +164,12 @@ std::vector<std::string> identifiability_lines(const LmResult& lm) {
     }
     std::snprintf(buf, sizeof buf, "  dropped %-8s (%s, sigma ratio %.2g): %s", full_param_name(d.index),
                   unidentifiable_reason_name(d.reason), d.singular_ratio, combination.c_str());
+    lines.push_back(buf);
+  }
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (!mask_has(pruned, k)) continue;
+    std::snprintf(buf, sizeof buf, "  fixed   %-8s (not significant: change below %.3g sigma; kept at its start value)",
+                  full_param_name(k), significance_t);
     lines.push_back(buf);
   }
   return lines;
@@ -265,6 +272,7 @@ const std::vector<OptionSpec>& option_specs() {
       {"split", "FRACTION", "share of samples used for training (1: all, no test rows)", "0.7"},
       {"cv", "K|loo", "also cross-validate: K folds (or leave-one-out), held-out MAE per fold", ""},
       {"keep-outliers", "", "use every sample (no blunder search)", ""},
+      {"significance", "T", "LM fixes parameters whose change is below T sigma (0: off)", "2"},
       {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
       {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
       {"report", "DIR", "write an HTML report with figures into DIR", ""},
@@ -312,6 +320,10 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
     settings->cv_folds = static_cast<std::size_t>(folds);
   }
   settings->keep_outliers = options.given("keep-outliers");
+  if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
+      !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
+    return Error::usage("--significance must be a number in [0, 10]");
+  }
   const bool samples = !options.get("samples").empty();
   const bool streams = !options.get("robot").empty() || !options.get("tracker").empty();
   if (samples == streams) return Error::usage("give either --samples, or --robot and --tracker (see --help)");
@@ -394,6 +406,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.seed = settings.seed;
   job.robust = settings.robust;
   job.keep_outliers = settings.keep_outliers;
+  job.significance_t = settings.significance_t;
   static CliWorkspace workspace;
   run->has_cv = settings.cv_folds > 0;
   if (run->has_cv) {  // first: the job below leaves the dataset split as the tables show it
@@ -487,7 +500,10 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
     data.test_calibrated_m.push_back(final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)));
   }
   if (run.final_lm() != nullptr) {
-    for (const std::string& line : identifiability_lines(*run.final_lm())) data.info_lines.push_back(line);
+    for (const std::string& line :
+         identifiability_lines(*run.final_lm(), run.result.lm_pruned_mask, settings.significance_t)) {
+      data.info_lines.push_back(line);
+    }
   }
   data.parameter_lines = parameter_lines(final_stage, run.final_lm(), start);
   for (const CalibrationOutlier& o : run.result.outlier_list()) {
@@ -574,7 +590,13 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     textio::write_error_stats(w, data.uncalibrated.test);
     w.end_object();
     write_stage_list(w, data.methods);
-    if (run.final_lm() != nullptr) write_lm_details(w, *run.final_lm());
+    if (run.final_lm() != nullptr) {
+      write_lm_details(w, *run.final_lm());
+      w.key("not_significant").begin_array();
+      for (int k = 0; k < kFullParamCount; ++k)
+        if (mask_has(run.result.lm_pruned_mask, k)) w.value(full_param_name(k));
+      w.end_array();
+    }
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
     write_outliers(w, facts, run);

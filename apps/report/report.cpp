@@ -72,9 +72,10 @@ std::vector<std::vector<std::string>> table1_rows(const ReportData& data) {
   for (const MethodRow& m : data.methods) {
     char seconds[32];
     std::snprintf(seconds, sizeof seconds, "%.3f", m.seconds);
+    const bool tested = m.test.count > 0;  // --split 1: no test samples, no test cells
     rows.push_back({m.method, m.parameters, um(m.train.mae(ErrorAxis::norm_3d)), um(m.train.sigma(ErrorAxis::norm_3d)),
-                    um(m.test.mae(ErrorAxis::norm_3d)), um(m.test.sigma(ErrorAxis::norm_3d)),
-                    &m == &data.methods.front() ? "" : improvement(before, m.test.mae(ErrorAxis::norm_3d)),
+                    tested ? um(m.test.mae(ErrorAxis::norm_3d)) : "-", tested ? um(m.test.sigma(ErrorAxis::norm_3d)) : "-",
+                    &m == &data.methods.front() || !tested ? "" : improvement(before, m.test.mae(ErrorAxis::norm_3d)),
                     m.seconds > 0.0 ? seconds : ""});
   }
   return rows;
@@ -88,6 +89,7 @@ std::vector<std::vector<std::string>> table2_rows(const ReportData& data) {
   for (const auto& [name, member] : sets) {
     const ErrorStats& before = data.uncalibrated.*member;
     const ErrorStats& after = data.calibrated.*member;
+    if (before.count == 0 && after.count == 0) continue;  // no test samples (--split 1)
     for (int axis = 0; axis < kErrorAxisCount; ++axis) {
       rows.push_back({name, kAxisLabels[axis], um(before.mae_m[axis]), um(before.sigma_m[axis]), um(after.mae_m[axis]),
                       um(after.sigma_m[axis]), improvement(before.mae_m[axis], after.mae_m[axis])});

@@ -49,14 +49,18 @@ report::ReportData example() {
   data.info_lines = {"samples kept: 38", "clock offset: 1.234 s"};
   report::MethodRow before;
   before.method = "uncalibrated";
+  before.test.count = 12;  // a table without test samples (--split 1) shows no test cells
   before.test.mae_m[3] = 75.4e-6;
   report::MethodRow abc;
   abc.method = "ABC";
   abc.parameters = "paper-6";
+  abc.test.count = 12;
   abc.test.mae_m[3] = 60.1e-6;
   abc.seconds = 0.05;
   data.methods = {before, abc};
+  data.uncalibrated.test.count = 12;
   data.uncalibrated.test.mae_m[0] = 40e-6;
+  data.calibrated.test.count = 12;
   data.calibrated.test.mae_m[0] = 30e-6;
   data.convergence = {{"ABC", {1e-4, 8e-5, 7e-5, 6.01e-5}}, {"GSA", {1e-4, 9e-5, 6.5e-5}}};
   for (int i = 0; i < 12; ++i) {

@@ -120,10 +120,10 @@ TEST(Ur5ePendant, FitOnTwelvePosesPredictsTheOtherSix) {
   RecordProperty("predicted_mae_um", static_cast<int>(mae_m * 1e6));
   std::printf("UR5e pendant: 12 poses fitted, 6 predicted: MAE %.4f mm (baseline %.4f mm)\n", mae_m * 1e3,
               baseline_mae_m * 1e3);
-  // The issue asks for 0.08 mm (scipy: 0.066 mm); this job reaches 0.138 mm on this split
-  // (23 parameters + the base from 36 equations; see docs/robust.md, "Small sets"). The bound
-  // pins what it does so that a change for the worse fails; tighten it when the job improves.
-  EXPECT_LT(mae_m, 0.15e-3);
+  // The issue asks for 0.08 mm (scipy: 0.066 mm); this job reaches 0.116 mm on this split
+  // (0.138 mm without the significance test; 3-fold CV over 5 seeds on all 18: 0.083-0.106 mm,
+  // docs/robust.md). The bound pins what it does so that a change for the worse fails.
+  EXPECT_LT(mae_m, 0.12e-3);
   EXPECT_GT(baseline_mae_m, 0.5e-3);
 }
 

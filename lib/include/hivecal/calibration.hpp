@@ -62,6 +62,7 @@ struct CalibrationOptions {
   std::size_t gsa_iterations = 200;                      ///< GSA t_max [-]
   double paper6_half_width_m = kPaper6DefaultHalfWidth_m;  ///< ABC/GSA box: start lengths +/- this [m]
   LmOptions lm;                                          ///< LM settings; `params` and `robust` override its params and loss
+  double significance_t = 2.0;                           ///< LM fixes, one at a time, estimated parameters whose change is below t sigma (0: off) [-]
   bool keep_outliers = false;                            ///< true: no blunder search, every sample is used
   double outlier_k = 6.0;                                ///< a sample is set aside when |r| > max(k sigma_robust, floor) [-]
   double outlier_floor_m = 1e-3;                         ///< smallest residual set aside after the calibration [m]
@@ -131,6 +132,7 @@ struct CalibrationResult {
   std::size_t stage_count = 0;                  ///< entries of `stages` used [-]
   bool has_lm = false;                          ///< an LM stage ran: `lm` is meaningful
   LmResult lm;                                  ///< LM details: identifiability, sigma, rms, termination
+  ParamMask lm_pruned_mask = 0;                 ///< parameters LM fixed at their start values as not significant (significance_t)
   CalibrationOutlier outliers[kMaxCalibrationOutliers];  ///< samples set aside, by increasing index
   std::size_t outlier_count = 0;                ///< entries of `outliers` used [-]
   std::size_t outlier_rounds = 0;               ///< times the job ran until the set aside was stable (0: keep_outliers) [-]

@@ -109,26 +109,60 @@ bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report,
   return changed;
 }
 
-/// LM from the start geometry, or (hybrid) from the previous stage's geometry and base; when
-/// it drops a parameter the previous stage moved, once more with that one at its start value.
-Status run_lm(Job& job, bool hybrid) {
+/// The estimated model parameter whose change from `start` is least significant, below
+/// t standard deviations; -1 when none is (or t <= 0).
+int least_significant(const RobotModel& start, const LmResult& lm, double t) {
+  if (!(t > 0.0)) return -1;
+  const ModelParams change = to_params(lm.model) - to_params(start);
+  int weakest = -1;
+  double weakest_ratio = t;
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) continue;
+    const double ratio = std::fabs(change(i)) / lm.sigma(i);
+    if (ratio < weakest_ratio) {
+      weakest_ratio = ratio;
+      weakest = i;
+    }
+  }
+  return weakest;
+}
+
+/// LM from the start geometry, or (hybrid) from the previous stage's geometry and base. Runs
+/// again while (a) it drops a parameter the previous stage moved (put back to its start value)
+/// or (b) an estimated parameter's change is not significant (below significance_t sigma: fixed
+/// at its start value, one at a time, the least significant first; a small set then fits
+/// fewer parameters instead of its noise). *pruned receives the parameters (b) fixed.
+Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
   const CalibrationStage* previous = hybrid && r.stage_count > 0 ? &r.stages[r.stage_count - 1] : nullptr;
   LmOptions lm = o.lm;
   lm.params = o.params == CalibrationParams::paper ? LmParamSet::paper6 : LmParamSet::full;
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
+  const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask);
   TraceBase& trace = job.workspace.trace(r.stage_count);
   RobotModel from = previous != nullptr ? previous->model : job.start;
   Status status = Status::ok;
-  for (int attempt = 0; attempt < 2; ++attempt) {
+  *pruned = 0;
+  for (int attempt = 0; attempt < kModelParamCount + 2; ++attempt) {
     trace.clear();
     LmWorkspace* workspace = job.workspace.open_lm();
     status = calibrate_lm(from, previous != nullptr ? &previous->base_to_tracker : nullptr, job.dataset.train(), lm,
                           workspace, &r.lm, &trace, job.observer);
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
-    if (previous == nullptr || !reset_dropped(job.start, r.lm.identifiability, &from)) break;
+    bool again = previous != nullptr && reset_dropped(job.start, r.lm.identifiability, &from);
+    const int weakest = least_significant(job.start, r.lm, o.significance_t);
+    if (weakest >= 0) {
+      *pruned |= param_bit(weakest);
+      lm.params = LmParamSet::custom;
+      lm.custom_mask = free_mask & ~*pruned;
+      ModelParams params = to_params(from);
+      params(weakest) = to_params(job.start)(weakest);
+      from = from_params(params);
+      again = true;
+    }
+    if (!again) break;
   }
   r.has_lm = true;
   CalibrationStage& stage = r.stages[r.stage_count];
@@ -150,7 +184,8 @@ Status run_stage(Job& job, CalibrationSolver solver, bool hybrid) {
   CalibrationResult& r = job.result;
   const std::size_t index = r.stage_count;
   if (job.observer != nullptr) job.observer->on_stage_begin(index, solver);
-  const Status status = solver == CalibrationSolver::lm ? run_lm(job, hybrid) : run_population(job, solver);
+  const Status status =
+      solver == CalibrationSolver::lm ? run_lm(job, hybrid, &r.lm_pruned_mask) : run_population(job, solver);
   const CalibrationStep step = solver == CalibrationSolver::abc   ? CalibrationStep::abc
                                : solver == CalibrationSolver::gsa ? CalibrationStep::gsa
                                                                   : CalibrationStep::lm;

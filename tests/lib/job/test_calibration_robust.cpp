@@ -5,6 +5,7 @@
 // fits the tool point; what LM drops stays at its start value.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "hivecal/calibration.hpp"
@@ -182,6 +183,31 @@ TEST(CalibrationRobust, TwelveAndTwentyPosesRunWithFewerParametersNamed) {
   // structural 9 of a UR arm (3 N = 36 equations for 33 candidates).
   EXPECT_LE(kept[0], kept[1]);
   EXPECT_LT(kept[0] + kBaseParamCount, 3 * 12);
+}
+
+TEST(CalibrationRobust, ParametersWithoutSignificantChangeAreFixedAtTheirStartValues) {
+  fill(12, &dataset);
+  CalibrationOptions o = options(CalibrationMethod::lm);
+  o.significance_t = 0.0;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &other), Status::ok);
+  EXPECT_EQ(other.lm_pruned_mask, 0u);
+  fill(12, &dataset);
+  o.significance_t = 2.0;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  ASSERT_NE(result.lm_pruned_mask, 0u);
+  EXPECT_LT(result.lm.identifiability.kept_count(), other.lm.identifiability.kept_count());
+  const ModelParams fitted = to_params(result.stages[0].model);
+  const ModelParams from = to_params(result.baseline.model);
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(result.lm_pruned_mask, i)) continue;
+    EXPECT_EQ(fitted(i), from(i)) << full_param_name(i);
+    EXPECT_FALSE(mask_has(result.lm.identifiability.kept_mask, i));
+  }
+  // Every parameter still estimated moved by at least 2 sigma.
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(result.lm.identifiability.kept_mask, i)) continue;
+    EXPECT_GE(std::fabs(fitted(i) - from(i)), 2.0 * result.lm.sigma(i)) << full_param_name(i);
+  }
 }
 
 TEST(CalibrationRobust, TheBaselineFitsTheToolPoint) {
