@@ -58,6 +58,22 @@ port::Error joint_names_option(const std::string& value, textio::RobotLogOptions
 
 namespace {
 
+/// Names each kept sample by its tracker point (file and timestamp), in the order the
+/// extraction adds them to the dataset (Sample::index): a blunder is reported where it is.
+class SampleSources final : public ExtractionObserver {
+ public:
+  SampleSources(std::string tracker, std::vector<std::string>* out) : tracker_(std::move(tracker)), out_(out) {}
+  void on_sample(const ExtractedSample& sample) override {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, " tracker point at t = %.6f s", sample.tracker_us * 1e-6);
+    out_->push_back(tracker_ + buf);
+  }
+
+ private:
+  std::string tracker_;
+  std::vector<std::string>* out_;
+};
+
 port::Error load_streams(const SessionSources& sources, const SessionConfig& config, DatasetBase* dataset,
                          SessionFacts* facts) {
   ExtractionConfig extraction = make_extraction_config(config.speed_model);
@@ -65,9 +81,10 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
   if (config.window_s > 0.0) extraction.window_us = static_cast<std::uint32_t>(config.window_s * 1e6);
   CaptureRunReport& report = facts->run;
   DecodeProgress progress(config.progress);
+  SampleSources sample_sources(sources.tracker, &facts->sample_sources);
   const port::Error read = extract_from_files(
       sources.robot, sources.tracker, make_clock_sync_config(config.speed_model), extraction, dataset, &report,
-      nullptr, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); },
+      &sample_sources, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); },
       config.log_options);
   if (!read.ok()) return read;
   facts->has_stream = true;
