@@ -323,15 +323,32 @@ void residuals_of(const RobotModel& model, const RigidTransform& base, Span<cons
   *median_m = n > 0 ? lower_median(scratch.residual_m, n) : 0.0;
 }
 
+/// The factor that turns the median residual of a least-squares fit of `parameters`
+/// parameters into a noise estimate: the fit shrinks its own samples' residuals by about
+/// sqrt((3 N - p) / 3 N) (few samples, many parameters: far below the noise). 0 without
+/// redundancy (3 N <= p): such a fit cannot tell a blunder.
+double fit_sigma_factor(std::size_t samples, int parameters) {
+  const double equations = 3.0 * static_cast<double>(samples);
+  if (equations <= static_cast<double>(parameters)) return 0.0;
+  return std::sqrt(equations / (equations - static_cast<double>(parameters)));
+}
+
 /// Flags every stored sample (kept and set aside) whose residual under (model, base) exceeds
-/// max(k sigma, floor), sigma from the median residual of the kept ones.
-void flag_outliers(const RobotModel& model, const RigidTransform& base, const DatasetBase& dataset,
-                   const CalibrationOptions& o, double floor_m, ResidualScratch scratch, OutlierList* list,
-                   double* threshold_m) {
+/// max(k sigma, floor), sigma = factor * median residual of the kept ones / 1.5382. Returns
+/// false, with nothing flagged, when factor is 0 (no redundancy).
+bool flag_outliers(const RobotModel& model, const RigidTransform& base, const DatasetBase& dataset,
+                   const CalibrationOptions& o, double floor_m, double factor, ResidualScratch scratch,
+                   OutlierList* list, double* threshold_m) {
+  list->count = 0;
+  if (!(factor > 0.0)) {
+    *threshold_m = 0.0;
+    list->finish();
+    return false;
+  }
   double median_m = 0.0;
   residuals_of(model, base, dataset.samples(), dataset.size(), scratch, &median_m);
-  *threshold_m = std::fmax(o.outlier_k * median_m / kMaxwellMedian, floor_m);
-  list->count = 0;
+  const double sigma_m = factor * median_m / kMaxwellMedian;
+  *threshold_m = std::fmax(o.outlier_k * sigma_m, floor_m);
   list->limit = outlier_limit(dataset.size() + dataset.set_aside().size());
   for (Span<const Sample> part : {dataset.samples(), dataset.set_aside()}) {
     for (const Sample& s : part) {
@@ -340,6 +357,14 @@ void flag_outliers(const RobotModel& model, const RigidTransform& base, const Da
     }
   }
   list->finish();
+  return true;
+}
+
+/// Parameters the final stage fitted (with the base): LM's estimated ones, or the six lengths.
+int fitted_parameters(const CalibrationResult& r) {
+  const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
+  if (final_stage.solver == CalibrationSolver::lm) return r.lm.identifiability.kept_count();
+  return static_cast<int>(kPaper6Dimension) + kBaseParamCount;
 }
 
 /// Consensus screen with the start geometry: the base fitted on random point triples (seeded,
@@ -381,7 +406,22 @@ Status screen(const RobotModel& start, DatasetBase* dataset, const CalibrationOp
   if (!found) return n < 3 ? Status::too_few_samples : Status::degenerate_geometry;
   double threshold_m = 0.0;
   scratch = workspace.open_residuals();
-  flag_outliers(start, best, *dataset, o, o.screen_floor_m, scratch, list, &threshold_m);
+  // The consensus base fits its triple exactly, so on a small set the median leans towards
+  // those zeros: Rousseeuw and Leroy's finite-sample factor 1 + 5 / (n - 3) for LMedS, then a
+  // least-squares refit on the samples it accepts and the test again (reweighted LS).
+  const double lmeds_factor = n > 3 ? 1.0 + 5.0 / static_cast<double>(n - 3) : 0.0;
+  flag_outliers(start, best, *dataset, o, o.screen_floor_m, lmeds_factor, scratch, list, &threshold_m);
+  RigidFitAccumulator refit;
+  for (std::size_t i = 0; i < m; ++i) {
+    bool flagged = false;
+    for (std::uint32_t index : list->index_span()) flagged = flagged || samples[i].index == index;
+    if (!flagged) refit.add(scratch.predicted_m[i], samples[i].point_m);
+  }
+  RigidTransform refined;
+  if (refit.solve(&refined) == Status::ok) {
+    flag_outliers(start, refined, *dataset, o, o.screen_floor_m, fit_sigma_factor(n, kBaseParamCount), scratch, list,
+                  &threshold_m);
+  }
   workspace.close();
   return Status::ok;
 }
@@ -473,10 +513,13 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
     ++round;
     const CalibrationStage& final_stage = result->stages[result->stage_count - 1];
     const ResidualScratch scratch = workspace->open_residuals();
-    flag_outliers(final_stage.model, final_stage.base_to_tracker, *dataset, options, options.outlier_floor_m, scratch,
-                  &tested, &threshold_m);
+    const bool tested_any = flag_outliers(final_stage.model, final_stage.base_to_tracker, *dataset, options,
+                                          options.outlier_floor_m,
+                                          fit_sigma_factor(dataset->size(), fitted_parameters(*result)), scratch,
+                                          &tested, &threshold_m);
     workspace->close();
-    if (tested.same_as(aside) || round == kMaxRounds) break;
+    // Without redundancy the screen's verdict stands (a gross blunder still goes).
+    if (!tested_any || tested.same_as(aside) || round == kMaxRounds) break;
     aside = tested;
   }
   // The residuals reported are the final calibration's (of the set the run left out).

@@ -185,6 +185,21 @@ TEST(CalibrationRobust, TwelveAndTwentyPosesRunWithFewerParametersNamed) {
   EXPECT_LT(kept[0] + kBaseParamCount, 3 * 12);
 }
 
+TEST(CalibrationRobust, AbcOnTheSixLengthsRunsOnAHandfulOfPoses) {
+  // The paper's set (6 lengths + base) on 6 poses: the base fit is determined, so it runs.
+  for (CalibrationMethod method : {CalibrationMethod::abc, CalibrationMethod::abc_lm}) {
+    fill(6, &dataset);
+    CalibrationOptions o = options(method);
+    o.params = CalibrationParams::paper;
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(start(), &dataset, o, &workspace, &result));
+    ASSERT_EQ(status, Status::ok) << calibration_method_name(method) << ": " << calibration_step_name(result.step);
+    EXPECT_EQ(result.train_count, 6u);
+    EXPECT_EQ(result.outlier_count, 0u);  // 18 equations for 12 parameters: no sample looks like a blunder
+    EXPECT_LE(result.stages[0].train.mae(ErrorAxis::norm_3d), result.baseline.train.mae(ErrorAxis::norm_3d));
+  }
+}
+
 TEST(CalibrationRobust, ParametersWithoutSignificantChangeAreFixedAtTheirStartValues) {
   fill(12, &dataset);
   CalibrationOptions o = options(CalibrationMethod::lm);
