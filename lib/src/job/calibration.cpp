@@ -541,10 +541,16 @@ Status cross_validate(const RobotModel& start, DatasetBase* dataset, const Calib
   if (scratch == nullptr || cv == nullptr) return Status::invalid_argument;
   cv->~CrossValidationResult();
   new (cv) CrossValidationResult();
-  Status status = calibrate(start, dataset, options, workspace, scratch, observer);  // the blunders
-  if (status != Status::ok) return cv->status = status;
+  Status status = Status::ok;
+  std::size_t aside_count = 0;
+  if (!options.keep_outliers) {  // the blunders, found once on the whole set
+    status = calibrate(start, dataset, options, workspace, scratch, observer);
+    if (status != Status::ok) return cv->status = status;
+    aside_count = scratch->outlier_count;
+  } else if (dataset == nullptr || workspace == nullptr) {
+    return cv->status = Status::invalid_argument;
+  }
   std::uint32_t aside[kMaxCalibrationOutliers] = {};
-  const std::size_t aside_count = scratch->outlier_count;
   for (std::size_t i = 0; i < aside_count; ++i) aside[i] = scratch->outliers[i].index;
   const Span<const std::uint32_t> aside_span(aside, aside_count);
   dataset->set_aside(aside_span);

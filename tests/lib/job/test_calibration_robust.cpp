@@ -141,6 +141,36 @@ TEST(CalibrationRobust, ASmallBlunderTheScreenMissesIsFoundByTheCalibrationsTest
   EXPECT_TRUE(same_bits(result.stages[0].model, other.stages[0].model));
 }
 
+TEST(CalibrationRobust, ThreeBlundersOfEveryScaleAmong30PosesGiveTheBitsOfTheSetWithoutThem) {
+  Dataset<kSamples> clean;
+  fill(30, &clean);
+  const std::uint32_t bad[3] = {3, 17, 26};
+  const Vec3 offsets[3] = {Vec3(0.0, 0.6, 0.0), Vec3(0.03, -0.04, 0.0), Vec3(0.0, 0.0, 0.005)};  // 0.6 m, 50 mm, 5 mm
+  dataset.clear();
+  by_hand.clear();
+  for (const Sample& s : clean.samples()) {
+    Vec3 offset = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) offset += s.index == bad[k] ? offsets[k] : Vec3::Zero();
+    ASSERT_EQ(dataset.add(s.q_rad, s.point_m + offset), Status::ok);
+    if (offset.isZero()) {
+      ASSERT_EQ(by_hand.add(s.q_rad, s.point_m), Status::ok);
+    }
+  }
+  CalibrationOptions o = options(CalibrationMethod::abc_lm);
+  o.train_fraction = 0.7;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  ASSERT_EQ(result.outlier_count, 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(result.outliers[k].index, bad[k]);
+    EXPECT_NEAR(result.outliers[k].residual_m, offsets[k].norm(), 0.2 * offsets[k].norm());
+  }
+  ASSERT_EQ(calibrate(start(), &by_hand, o, &workspace, &other), Status::ok);
+  EXPECT_EQ(other.outlier_count, 0u);
+  EXPECT_TRUE(same_bits(result.stages[1].model, other.stages[1].model));
+  EXPECT_TRUE(same_bits(result.stages[1].base_to_tracker, other.stages[1].base_to_tracker));
+  EXPECT_EQ(result.stages[1].test.mae(ErrorAxis::norm_3d), other.stages[1].test.mae(ErrorAxis::norm_3d));
+}
+
 TEST(CalibrationRobust, KeepOutliersUsesTheBlunderAndIsDraggedByIt) {
   fill_with_blunder(18, 7, &dataset);
   CalibrationOptions o = options(CalibrationMethod::lm);
