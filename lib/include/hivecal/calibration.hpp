@@ -113,6 +113,15 @@ struct CalibrationOutlier {
 /// Blunders a job sets aside at most; a larger share of a set is not a blunder problem [-].
 inline constexpr std::size_t kMaxCalibrationOutliers = 64;
 
+/// One list of the blunder search (the set aside, the last test's flags): kept in the
+/// workspace beside the arena, as it lives across the job's runs.
+struct CalibrationOutlierList {
+  CalibrationOutlier items[kMaxCalibrationOutliers];   ///< flagged samples, by index once complete
+  std::uint32_t indices[kMaxCalibrationOutliers] = {};  ///< their Sample::index, increasing [-]
+  std::size_t count = 0;                                ///< entries used [-]
+  std::size_t limit = kMaxCalibrationOutliers;          ///< entries allowed (fewer than half the set) [-]
+};
+
 /// Short name of a stage ("ABC", "GSA", "LM", "ABC+LM", "GSA+LM"; the previous stage's name is
 /// taken from `refines_previous` and `previous`).
 const char* calibration_stage_name(const CalibrationStage& stage, const CalibrationStage* previous);
@@ -210,6 +219,8 @@ class CalibrationWorkspaceBase {
   /// Ends any open phase, builds the blunder search's scratch in the arena: one predicted
   /// point and one residual per sample, for up to the workspace's sample count.
   virtual ResidualScratch open_residuals() = 0;
+  /// The blunder search's lists: 0 the set aside, 1 the last test's.
+  virtual CalibrationOutlierList& outlier_list(std::size_t which) = 0;
 
  protected:
   CalibrationWorkspaceBase() = default;
@@ -299,10 +310,12 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
     residuals_ = nullptr;
   }
   TraceBase& trace(std::size_t index) override { return traces_[index]; }
+  CalibrationOutlierList& outlier_list(std::size_t which) override { return outlier_lists_[which]; }
 
  private:
   alignas(alignof(std::max_align_t)) unsigned char arena_[kArenaBytes];
   Trace<TraceCapacity> traces_[kMaxCalibrationStages];
+  CalibrationOutlierList outlier_lists_[2];
   AbcPhase* abc_ = nullptr;  // the open phase (at most one is set), built in arena_
   GsaPhase* gsa_ = nullptr;
   LmPhase* lm_ = nullptr;

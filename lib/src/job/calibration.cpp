@@ -267,43 +267,42 @@ double lower_median(Span<double> values, std::size_t count) {
   return *middle;
 }
 
-/// The set-aside list being built: indices with residuals, at most kMaxCalibrationOutliers,
-/// the largest residuals kept when more are flagged (ties: the lower index).
-struct OutlierList {
-  CalibrationOutlier items[kMaxCalibrationOutliers];
-  std::uint32_t indices[kMaxCalibrationOutliers] = {};
-  std::size_t count = 0;
-  std::size_t limit = kMaxCalibrationOutliers;
+/// Offers a flagged sample to the set-aside list being built: at most `limit`, the largest
+/// residuals kept when more are flagged (ties: the lower index); by decreasing residual.
+void offer(CalibrationOutlierList* list, std::uint32_t index, double residual_m) {
+  auto before = [](const CalibrationOutlier& a, const CalibrationOutlier& b) {
+    return a.residual_m > b.residual_m || (a.residual_m == b.residual_m && a.index < b.index);
+  };
+  const CalibrationOutlier item{index, residual_m};
+  CalibrationOutlier* items = list->items;
+  if (list->count == list->limit && (list->limit == 0 || !before(item, items[list->count - 1]))) return;
+  std::size_t k = list->count < list->limit ? list->count++ : list->count - 1;
+  for (; k > 0 && before(item, items[k - 1]); --k) items[k] = items[k - 1];
+  items[k] = item;
+}
 
-  void offer(std::uint32_t index, double residual_m) {
-    auto before = [](const CalibrationOutlier& a, const CalibrationOutlier& b) {
-      return a.residual_m > b.residual_m || (a.residual_m == b.residual_m && a.index < b.index);
-    };
-    const CalibrationOutlier item{index, residual_m};
-    if (count == limit && (limit == 0 || !before(item, items[count - 1]))) return;
-    std::size_t k = count < limit ? count++ : count - 1;
-    for (; k > 0 && before(item, items[k - 1]); --k) items[k] = items[k - 1];
-    items[k] = item;
+/// Sorts a built list by index and fills its `indices`.
+void finish(CalibrationOutlierList* list) {
+  for (std::size_t i = 1; i < list->count; ++i) {
+    const CalibrationOutlier moving = list->items[i];
+    std::size_t k = i;
+    for (; k > 0 && list->items[k - 1].index > moving.index; --k) list->items[k] = list->items[k - 1];
+    list->items[k] = moving;
   }
-  /// Sorts by index and fills `indices`.
-  void finish() {
-    for (std::size_t i = 1; i < count; ++i) {
-      const CalibrationOutlier moving = items[i];
-      std::size_t k = i;
-      for (; k > 0 && items[k - 1].index > moving.index; --k) items[k] = items[k - 1];
-      items[k] = moving;
-    }
-    for (std::size_t i = 0; i < count; ++i) indices[i] = items[i].index;
+  for (std::size_t i = 0; i < list->count; ++i) list->indices[i] = list->items[i].index;
+}
+
+Span<const std::uint32_t> index_span(const CalibrationOutlierList& list) {
+  return Span<const std::uint32_t>(list.indices, list.count);
+}
+
+bool same_indices(const CalibrationOutlierList& a, const CalibrationOutlierList& b) {
+  if (a.count != b.count) return false;
+  for (std::size_t i = 0; i < a.count; ++i) {
+    if (a.indices[i] != b.indices[i]) return false;
   }
-  Span<const std::uint32_t> index_span() const { return Span<const std::uint32_t>(indices, count); }
-  bool same_as(const OutlierList& other) const {
-    if (count != other.count) return false;
-    for (std::size_t i = 0; i < count; ++i) {
-      if (indices[i] != other.indices[i]) return false;
-    }
-    return true;
-  }
-};
+  return true;
+}
 
 /// At most this share of the samples is ever set aside: a blunder is a minority.
 std::size_t outlier_limit(std::size_t samples) {
@@ -338,11 +337,11 @@ double fit_sigma_factor(std::size_t samples, int parameters) {
 /// false, with nothing flagged, when factor is 0 (no redundancy).
 bool flag_outliers(const RobotModel& model, const RigidTransform& base, const DatasetBase& dataset,
                    const CalibrationOptions& o, double floor_m, double factor, ResidualScratch scratch,
-                   OutlierList* list, double* threshold_m) {
+                   CalibrationOutlierList* list, double* threshold_m) {
   list->count = 0;
   if (!(factor > 0.0)) {
     *threshold_m = 0.0;
-    list->finish();
+    finish(list);
     return false;
   }
   double median_m = 0.0;
@@ -353,10 +352,10 @@ bool flag_outliers(const RobotModel& model, const RigidTransform& base, const Da
   for (Span<const Sample> part : {dataset.samples(), dataset.set_aside()}) {
     for (const Sample& s : part) {
       const double r = (base.apply(fk_tool_point(model, s.q_rad)) - s.point_m).norm();
-      if (r > *threshold_m) list->offer(s.index, r);
+      if (r > *threshold_m) offer(list, s.index, r);
     }
   }
-  list->finish();
+  finish(list);
   return true;
 }
 
@@ -372,7 +371,7 @@ int fitted_parameters(const CalibrationResult& r) {
 /// to almost half the samples being wrong), and the samples far from it flagged. Errors:
 /// degenerate_geometry when no triple spans a plane (the base frame is not determined).
 Status screen(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& o,
-              CalibrationWorkspaceBase& workspace, OutlierList* list) {
+              CalibrationWorkspaceBase& workspace, CalibrationOutlierList* list) {
   dataset->set_aside(Span<const std::uint32_t>());
   const Span<const Sample> samples = dataset->samples();
   const std::size_t n = samples.size();
@@ -414,7 +413,7 @@ Status screen(const RobotModel& start, DatasetBase* dataset, const CalibrationOp
   RigidFitAccumulator refit;
   for (std::size_t i = 0; i < m; ++i) {
     bool flagged = false;
-    for (std::uint32_t index : list->index_span()) flagged = flagged || samples[i].index == index;
+    for (std::uint32_t index : index_span(*list)) flagged = flagged || samples[i].index == index;
     if (!flagged) refit.add(scratch.predicted_m[i], samples[i].point_m);
   }
   RigidTransform refined;
@@ -497,18 +496,18 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   Status status = check_inputs(dataset, options, workspace, &reset(result));
   if (status != Status::ok) return status;
   if (options.keep_outliers) return run_once(start, dataset, options, workspace, result, observer, {});
-  static_assert(sizeof(OutlierList) < 2048, "two lists live on the stack");
-  OutlierList aside;
+  // The two lists live in the workspace (2.6 kB: not on a small target's stack).
+  CalibrationOutlierList& aside = workspace->outlier_list(0);
+  CalibrationOutlierList& tested = workspace->outlier_list(1);
   status = screen(start, dataset, options, *workspace, &aside);
   if (status != Status::ok) return fail(&reset(result), CalibrationStep::baseline, status);
   // Rerun until the calibration's own residual test sets aside what the run left out: a
   // sample the start geometry's screen flagged comes back when the calibration explains it.
   constexpr std::size_t kMaxRounds = 4;
-  OutlierList tested;
   double threshold_m = 0.0;
   std::size_t round = 0;
   while (true) {
-    status = run_once(start, dataset, options, workspace, result, observer, aside.index_span());
+    status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
     if (status != Status::ok) return status;
     ++round;
     const CalibrationStage& final_stage = result->stages[result->stage_count - 1];
@@ -519,7 +518,7 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
                                           &tested, &threshold_m);
     workspace->close();
     // Without redundancy the screen's verdict stands (a gross blunder still goes).
-    if (!tested_any || tested.same_as(aside) || round == kMaxRounds) break;
+    if (!tested_any || same_indices(tested, aside) || round == kMaxRounds) break;
     aside = tested;
   }
   // The residuals reported are the final calibration's (of the set the run left out).
