@@ -48,6 +48,12 @@ struct CalibrateSettings {
 /// largest dataset (static: ~2.3 MB).
 using CliWorkspace = CalibrationWorkspace<kCliDatasetCapacity, double, 150, kTraceCapacity, kCliDatasetCapacity>;
 
+/// The job's workspace, shared by the job and --cv (static: ~2.3 MB).
+CliWorkspace& cli_workspace() {
+  static CliWorkspace workspace;
+  return workspace;
+}
+
 /// Times the stages (lib takes no time) and prints one progress line per iteration on
 /// stderr, overwritten in place.
 class JobObserver final : public CalibrationObserver {
@@ -398,6 +404,24 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
 
 // --- run (the computation: lib's calibrate()) ---------------------------------------------------
 
+/// --cv after the job (whose messages name the failing step), then the dataset put back as
+/// the job left it (the same set aside and seeded split) for the tables.
+Error cross_validation(const CalibrateSettings& settings, const RobotModel& start, const CalibrationOptions& job,
+                       CliDataset* dataset, Run* run) {
+  CliWorkspace& workspace = cli_workspace();
+  static CalibrationResult scratch;  // ~5 KB
+  JobObserver quiet(false);
+  const Status status = cross_validate(start, dataset, job, settings.cv_folds == 1 ? 0 : settings.cv_folds, &workspace,
+                                       &scratch, &run->cv, &quiet);
+  std::vector<std::uint32_t> aside;
+  for (const CalibrationOutlier& o : run->result.outlier_list()) aside.push_back(o.index);
+  dataset->set_aside(Span<const std::uint32_t>(aside.data(), aside.size()));
+  if (dataset->split(job.train_fraction, job.seed) != Status::ok || status != Status::ok) {
+    return Error::failure(std::string("cross-validation failed: ") + status_message(status));
+  }
+  return Error{};
+}
+
 Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset* dataset, Run* run) {
   CalibrationOptions job;
   job.method = method_from_name(settings.method);
@@ -407,16 +431,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.robust = settings.robust;
   job.keep_outliers = settings.keep_outliers;
   job.significance_t = settings.significance_t;
-  static CliWorkspace workspace;
-  run->has_cv = settings.cv_folds > 0;
-  if (run->has_cv) {  // first: the job below leaves the dataset split as the tables show it
-    JobObserver quiet(false);
-    const Status cv_status = cross_validate(start, dataset, job, settings.cv_folds == 1 ? 0 : settings.cv_folds,
-                                            &workspace, &run->result, &run->cv, &quiet);
-    if (cv_status != Status::ok) {
-      return Error::failure(std::string("cross-validation failed: ") + status_message(cv_status));
-    }
-  }
+  CliWorkspace& workspace = cli_workspace();
   JobObserver observer(settings.progress);
   const Status status = hivecal::calibrate(start, dataset, job, &workspace, &run->result, &observer);
   for (std::size_t k = 0; k < kMaxCalibrationStages; ++k) run->seconds[k] = observer.seconds[k];
@@ -439,7 +454,8 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
                                                       : calibration_step_name(step);
     return Error::failure(std::string(what) + " failed: " + status_message(status));
   }
-  return Error{};
+  run->has_cv = settings.cv_folds > 0;
+  return run->has_cv ? cross_validation(settings, start, job, dataset, run) : Error{};
 }
 
 // --- present ----------------------------------------------------------------------------------
