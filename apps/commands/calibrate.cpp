@@ -278,7 +278,7 @@ const std::vector<OptionSpec>& option_specs() {
       {"split", "FRACTION", "share of samples used for training (1: all, no test rows)", "0.7"},
       {"cv", "K|loo", "also cross-validate: K folds (or leave-one-out), held-out MAE per fold", ""},
       {"keep-outliers", "", "use every sample (no blunder search)", ""},
-      {"significance", "T", "LM fixes parameters whose change is below T sigma (0: off)", "2"},
+      {"significance", "T|auto", "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leave-one-out up to 64 training samples)", "2"},
       {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
       {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
       {"report", "DIR", "write an HTML report with figures into DIR", ""},
@@ -326,9 +326,11 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
     settings->cv_folds = static_cast<std::size_t>(folds);
   }
   settings->keep_outliers = options.given("keep-outliers");
-  if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
-      !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
-    return Error::usage("--significance must be a number in [0, 10]");
+  if (options.get("significance") == "auto") {
+    settings->significance_t = -1.0;  // lib: chosen by leave-one-out on small sets
+  } else if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
+             !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
+    return Error::usage("--significance must be 'auto' or a number in [0, 10]");
   }
   const bool samples = !options.get("samples").empty();
   const bool streams = !options.get("robot").empty() || !options.get("tracker").empty();
@@ -517,7 +519,7 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   }
   if (run.final_lm() != nullptr) {
     for (const std::string& line :
-         identifiability_lines(*run.final_lm(), run.result.lm_pruned_mask, settings.significance_t)) {
+         identifiability_lines(*run.final_lm(), run.result.lm_pruned_mask, run.result.significance_t)) {
       data.info_lines.push_back(line);
     }
   }
@@ -608,6 +610,7 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     write_stage_list(w, data.methods);
     if (run.final_lm() != nullptr) {
       write_lm_details(w, *run.final_lm());
+      w.key("significance_t").value(run.result.significance_t);
       w.key("not_significant").begin_array();
       for (int k = 0; k < kFullParamCount; ++k)
         if (mask_has(run.result.lm_pruned_mask, k)) w.value(full_param_name(k));

@@ -49,6 +49,11 @@ enum class CalibrationParams : std::uint8_t {
 /// One solver of a stage.
 enum class CalibrationSolver : std::uint8_t { abc, gsa, lm };
 
+/// Default level of LM's significance test: a parameter whose change is below 2 sigma is fixed [-].
+inline constexpr double kDefaultSignificance = 2.0;
+/// Largest training set on which a negative significance_t chooses the level by leave-one-out [-].
+inline constexpr std::size_t kAutoSignificanceMaxSamples = 64;
+
 /// Settings of one job; the defaults are the command-line tool's.
 struct CalibrationOptions {
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< solvers and their order
@@ -62,7 +67,7 @@ struct CalibrationOptions {
   std::size_t gsa_iterations = 200;                      ///< GSA t_max [-]
   double paper6_half_width_m = kPaper6DefaultHalfWidth_m;  ///< ABC/GSA box: start lengths +/- this [m]
   LmOptions lm;                                          ///< LM settings; `params` and `robust` override its params and loss
-  double significance_t = 2.0;                           ///< LM fixes, one at a time, estimated parameters whose change is below t sigma (0: off) [-]
+  double significance_t = kDefaultSignificance;          ///< LM fixes, one at a time, estimated parameters whose change is below t sigma (0: off; < 0: chosen by leave-one-out on small sets) [-]
   bool keep_outliers = false;                            ///< true: no blunder search, every sample is used
   double outlier_k = 6.0;                                ///< a sample is set aside when |r| > max(k sigma_robust, floor) [-]
   double outlier_floor_m = 1e-3;                         ///< smallest residual set aside after the calibration [m]
@@ -142,6 +147,7 @@ struct CalibrationResult {
   bool has_lm = false;                          ///< an LM stage ran: `lm` is meaningful
   LmResult lm;                                  ///< LM details: identifiability, sigma, rms, termination
   ParamMask lm_pruned_mask = 0;                 ///< parameters LM fixed at their start values as not significant (significance_t)
+  double significance_t = 0.0;                  ///< the significance level LM used (options', or the one chosen) [-]
   CalibrationOutlier outliers[kMaxCalibrationOutliers];  ///< samples set aside, by increasing index
   std::size_t outlier_count = 0;                ///< entries of `outliers` used [-]
   std::size_t outlier_rounds = 0;               ///< times the job ran until the set aside was stable (0: keep_outliers) [-]

@@ -36,7 +36,7 @@ bool known(const CalibrationOptions& options) {
 /// The job's state while it runs: the inputs and where the result goes.
 struct Job {
   const RobotModel& start;
-  const DatasetBase& dataset;
+  DatasetBase& dataset;
   const CalibrationOptions& options;
   CalibrationWorkspaceBase& workspace;
   CalibrationResult& result;
@@ -127,32 +127,29 @@ int least_significant(const RobotModel& start, const LmResult& lm, double t) {
   return weakest;
 }
 
-/// LM from the start geometry, or (hybrid) from the previous stage's geometry and base. Runs
-/// again while (a) it drops a parameter the previous stage moved (put back to its start value)
-/// or (b) an estimated parameter's change is not significant (below significance_t sigma: fixed
-/// at its start value, one at a time, the least significant first; a small set then fits
-/// fewer parameters instead of its noise). *pruned receives the parameters (b) fixed.
-Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
+/// LM on `samples` from `from` (and `base`, or a fitted one when null) into r.lm. Runs again
+/// while (a) it drops a parameter an earlier stage moved (put back to its start value) or (b)
+/// an estimated parameter's change is not significant (below t sigma: fixed at its start
+/// value, one at a time, the least significant first; a small set then fits fewer parameters
+/// instead of its noise). *pruned receives the parameters (b) fixed.
+Status fit_lm(Job& job, RobotModel from, const RigidTransform* base, bool reset, Span<const Sample> samples, double t,
+              TraceBase* trace, LmObserver* observer, ParamMask* pruned) {
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
-  const CalibrationStage* previous = hybrid && r.stage_count > 0 ? &r.stages[r.stage_count - 1] : nullptr;
   LmOptions lm = o.lm;
   lm.params = o.params == CalibrationParams::paper ? LmParamSet::paper6 : LmParamSet::full;
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
   const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask);
-  TraceBase& trace = job.workspace.trace(r.stage_count);
-  RobotModel from = previous != nullptr ? previous->model : job.start;
   Status status = Status::ok;
   *pruned = 0;
   for (int attempt = 0; attempt < kModelParamCount + 2; ++attempt) {
-    trace.clear();
+    if (trace != nullptr) trace->clear();
     LmWorkspace* workspace = job.workspace.open_lm();
-    status = calibrate_lm(from, previous != nullptr ? &previous->base_to_tracker : nullptr, job.dataset.train(), lm,
-                          workspace, &r.lm, &trace, job.observer);
+    status = calibrate_lm(from, base, samples, lm, workspace, &r.lm, trace, observer);
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
-    bool again = previous != nullptr && reset_dropped(job.start, r.lm.identifiability, &from);
-    const int weakest = least_significant(job.start, r.lm, o.significance_t);
+    bool again = reset && reset_dropped(job.start, r.lm.identifiability, &from);
+    const int weakest = least_significant(job.start, r.lm, t);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;
@@ -164,6 +161,62 @@ Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
     }
     if (!again) break;
   }
+  return status;
+}
+
+/// Candidate significance levels of the automatic choice, from the simplest model down [-].
+constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
+
+/// The significance level for this stage: options.significance_t, or (when negative and the
+/// training set is small) the one of kSignificanceGrid with the least leave-one-out 3-D MAE
+/// on the training samples (each left-out sample predicted by a fit of the others; ties go to
+/// the simpler model); a large set gets kDefaultSignificance.
+double choose_significance(Job& job, const RobotModel& from, const RigidTransform* base, bool reset) {
+  const double t = job.options.significance_t;
+  const std::size_t n = job.dataset.train().size();
+  if (t >= 0.0) return t;
+  if (n > kAutoSignificanceMaxSamples || n < 3) return kDefaultSignificance;
+  double best_t = kDefaultSignificance;
+  double best_mae_m = 0.0;
+  bool found = false;
+  for (double candidate : kSignificanceGrid) {
+    double sum_m = 0.0;
+    bool ok = true;
+    for (std::size_t i = 0; ok && i < n; ++i) {
+      job.dataset.swap_samples(i, n - 1);  // the left-out one last, the others in front
+      ParamMask pruned = 0;
+      const Span<const Sample> train = job.dataset.train();
+      const Status status = fit_lm(job, from, base, reset, train.subspan(0, n - 1), candidate, nullptr, nullptr, &pruned);
+      if (status == Status::ok || status == Status::not_converged) {
+        const Sample& out = train[n - 1];
+        sum_m += (job.result.lm.base_to_tracker.apply(fk_tool_point(job.result.lm.model, out.q_rad)) - out.point_m).norm();
+      } else {
+        ok = false;
+      }
+      job.dataset.swap_samples(i, n - 1);  // back: the final fit sees the split's order
+    }
+    if (ok && (!found || sum_m < best_mae_m)) {
+      best_mae_m = sum_m;
+      best_t = candidate;
+      found = true;
+    }
+  }
+  return best_t;
+}
+
+/// LM from the start geometry, or (hybrid) from the previous stage's geometry and base, with
+/// the significance test (fit_lm; level from choose_significance).
+Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
+  CalibrationResult& r = job.result;
+  const CalibrationStage* previous = hybrid && r.stage_count > 0 ? &r.stages[r.stage_count - 1] : nullptr;
+  TraceBase& trace = job.workspace.trace(r.stage_count);
+  const RobotModel from = previous != nullptr ? previous->model : job.start;
+  const RigidTransform* base = previous != nullptr ? &previous->base_to_tracker : nullptr;
+  r.significance_t = choose_significance(job, from, base, previous != nullptr);
+  const Status status =
+      fit_lm(job, from, base, previous != nullptr, job.dataset.train(), r.significance_t, &trace, job.observer, pruned);
+  if (status != Status::ok && status != Status::not_converged) return status;
+  const CalibrationOptions& o = job.options;
   r.has_lm = true;
   CalibrationStage& stage = r.stages[r.stage_count];
   stage.solver = CalibrationSolver::lm;

@@ -50,6 +50,13 @@ void DatasetBase::set_aside(Span<const std::uint32_t> indices) {
   train_count_ = size_;
 }
 
+void DatasetBase::swap_samples(std::size_t a, std::size_t b) {
+  if (a >= size_ || b >= size_ || a == b) return;
+  const Sample tmp = storage_[a];
+  storage_[a] = storage_[b];
+  storage_[b] = tmp;
+}
+
 void DatasetBase::shuffle(std::uint64_t seed) {
   Random random(seed);
   for (std::size_t i = size_ - 1; i > 0; --i) {

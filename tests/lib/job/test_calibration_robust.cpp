@@ -16,7 +16,7 @@
 namespace hivecal {
 namespace {
 
-constexpr std::size_t kSamples = 64;
+constexpr std::size_t kSamples = 96;
 using Workspace = CalibrationWorkspace<kSamples, double, 40, 300>;
 
 Workspace workspace;
@@ -253,6 +253,30 @@ TEST(CalibrationRobust, ParametersWithoutSignificantChangeAreFixedAtTheirStartVa
     if (!mask_has(result.lm.identifiability.kept_mask, i)) continue;
     EXPECT_GE(std::fabs(fitted(i) - from(i)), 2.0 * result.lm.sigma(i)) << full_param_name(i);
   }
+}
+
+TEST(CalibrationRobust, AnAutomaticSignificanceLevelIsOneOfTheGridAndGivesThatLevelsBits) {
+  for (std::size_t count : {12u, 20u}) {
+    fill(count, &dataset);
+    CalibrationOptions o = options(CalibrationMethod::abc_lm);
+    o.significance_t = -1.0;
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(start(), &dataset, o, &workspace, &result));
+    ASSERT_EQ(status, Status::ok);
+    const double chosen = result.significance_t;
+    EXPECT_TRUE(chosen == 0.0 || chosen == 1.0 || chosen == 2.0 || chosen == 3.0) << chosen;
+    // The leave-one-out fits swap samples back: the final fit is the one of the fixed level.
+    fill(count, &dataset);
+    o.significance_t = chosen;
+    ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &other), Status::ok);
+    EXPECT_TRUE(same_bits(result.stages[1].model, other.stages[1].model)) << count;
+    EXPECT_EQ(result.lm_pruned_mask, other.lm_pruned_mask);
+  }
+  fill(kAutoSignificanceMaxSamples + 1, &dataset);  // a large set: the default level, no search
+  CalibrationOptions o = options(CalibrationMethod::lm);
+  o.significance_t = -1.0;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  EXPECT_EQ(result.significance_t, kDefaultSignificance);
 }
 
 TEST(CalibrationRobust, TheBaselineFitsTheToolPoint) {

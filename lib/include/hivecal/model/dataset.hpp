@@ -41,6 +41,9 @@ class DatasetBase {
   /// others had never been added) and set_aside() lists the rest. An empty list restores every
   /// sample. Any earlier split is discarded.
   void set_aside(Span<const std::uint32_t> indices);
+  /// Exchanges the samples at positions a and b of samples() (a temporary reordering, as
+  /// leave-one-out does; swap back to restore). Out-of-range positions are ignored.
+  void swap_samples(std::size_t a, std::size_t b);
   /// The samples set aside by set_aside(), in the order of add().
   Span<const Sample> set_aside() const { return Span<const Sample>(storage_ + size_, stored_ - size_); }
   /// Fold `fold` of `folds` for cross-validation: the kept samples in the order of add(),
