@@ -95,7 +95,10 @@ Status run_population(Job& job, CalibrationSolver solver) {
 /// True when LM dropped a model parameter that `from` holds at another value than `start`:
 /// an earlier stage moved a parameter the data cannot determine. Such ones are put back to
 /// their start values in *from.
-bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report, RobotModel* from) {
+// Helpers marked [[gnu::noinline]] hold large temporaries (parameter vectors, fit
+// accumulators) while the LM solve below their caller does not need them: inlined, their
+// frames would stay live during LM and add ~3 kB to the firmware's 8 kB stack peak.
+[[gnu::noinline]] bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report, RobotModel* from) {
   const ModelParams start_params = to_params(start);
   ModelParams params = to_params(*from);
   bool changed = false;
@@ -109,9 +112,16 @@ bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report,
   return changed;
 }
 
+/// Puts model parameter `index` of *model back to its value in `start`.
+[[gnu::noinline]] void reset_param(const RobotModel& start, int index, RobotModel* model) {
+  ModelParams params = to_params(*model);
+  params(index) = to_params(start)(index);
+  *model = from_params(params);
+}
+
 /// The estimated model parameter whose change from `start` is least significant, below
 /// t standard deviations; -1 when none is (or t <= 0).
-int least_significant(const RobotModel& start, const LmResult& lm, double t) {
+[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t) {
   if (!(t > 0.0)) return -1;
   const ModelParams change = to_params(lm.model) - to_params(start);
   int weakest = -1;
@@ -132,8 +142,9 @@ int least_significant(const RobotModel& start, const LmResult& lm, double t) {
 /// an estimated parameter's change is not significant (below t sigma: fixed at its start
 /// value, one at a time, the least significant first; a small set then fits fewer parameters
 /// instead of its noise). *pruned receives the parameters (b) fixed.
-Status fit_lm(Job& job, RobotModel from, const RigidTransform* base, bool reset, Span<const Sample> samples, double t,
-              TraceBase* trace, LmObserver* observer, ParamMask* pruned) {
+Status fit_lm(Job& job, const RobotModel& start_model, const RigidTransform* base, bool reset, Span<const Sample> samples,
+              double t, TraceBase* trace, LmObserver* observer, ParamMask* pruned) {
+  RobotModel from = start_model;
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
   LmOptions lm = o.lm;
@@ -154,9 +165,7 @@ Status fit_lm(Job& job, RobotModel from, const RigidTransform* base, bool reset,
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;
       lm.custom_mask = free_mask & ~*pruned;
-      ModelParams params = to_params(from);
-      params(weakest) = to_params(job.start)(weakest);
-      from = from_params(params);
+      reset_param(job.start, weakest, &from);
       again = true;
     }
     if (!again) break;
@@ -171,7 +180,7 @@ constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
 /// training set is small) the one of kSignificanceGrid with the least leave-one-out 3-D MAE
 /// on the training samples (each left-out sample predicted by a fit of the others; ties go to
 /// the simpler model); a large set gets kDefaultSignificance.
-double choose_significance(Job& job, const RobotModel& from, const RigidTransform* base, bool reset) {
+[[gnu::noinline]] double choose_significance(Job& job, const RobotModel& from, const RigidTransform* base, bool reset) {
   const double t = job.options.significance_t;
   const std::size_t n = job.dataset.train().size();
   if (t >= 0.0) return t;
@@ -210,7 +219,7 @@ Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
   CalibrationResult& r = job.result;
   const CalibrationStage* previous = hybrid && r.stage_count > 0 ? &r.stages[r.stage_count - 1] : nullptr;
   TraceBase& trace = job.workspace.trace(r.stage_count);
-  const RobotModel from = previous != nullptr ? previous->model : job.start;
+  const RobotModel& from = previous != nullptr ? previous->model : job.start;
   const RigidTransform* base = previous != nullptr ? &previous->base_to_tracker : nullptr;
   r.significance_t = choose_significance(job, from, base, previous != nullptr);
   const Status status =
@@ -423,7 +432,7 @@ int fitted_parameters(const CalibrationResult& r) {
 /// deterministic), the one with the least median residual over all samples kept (LMedS, robust
 /// to almost half the samples being wrong), and the samples far from it flagged. Errors:
 /// degenerate_geometry when no triple spans a plane (the base frame is not determined).
-Status screen(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& o,
+[[gnu::noinline]] Status screen(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& o,
               CalibrationWorkspaceBase& workspace, CalibrationOutlierList* list) {
   dataset->set_aside(Span<const std::uint32_t>());
   const Span<const Sample> samples = dataset->samples();
