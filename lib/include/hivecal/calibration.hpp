@@ -135,7 +135,7 @@ const char* calibration_solver_name(CalibrationSolver solver);
 /// Name of a step ("input", "split", "baseline", "gsa", "abc", "lm", "done").
 const char* calibration_step_name(CalibrationStep step);
 
-/// Everything a job returns (~5 KB with the LmResult: static storage on a small target).
+/// Everything a job returns (~6 KB with the LmResult and the blunder list: static storage on a small target).
 struct CalibrationResult {
   Status status = Status::invalid_argument;     ///< ok, or why the job stopped at `step`
   CalibrationStep step = CalibrationStep::input;  ///< done on success, else the step that failed
@@ -343,7 +343,8 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
 ///  - baseline: too_few_samples / degenerate_geometry (fewer than 3 non-collinear points: not
 ///    even the base frame is determined), the errors of fit_base_to_tracker;
 ///  - gsa / abc / lm: the stage's own error (calibrate_paper6_gsa/abc, calibrate_lm), e.g.
-///    too_few_samples (LM: 3 N <= the free parameters), population_out_of_range (population
+///    too_few_samples (LM: not even with its weakest directions dropped do fewer parameters
+///    remain than 3 N equations), population_out_of_range (population
 ///    above the workspace's capacity), dataset_full (more training samples than the
 ///    workspace's cost holds), solver_cancelled (the observer stopped LM).
 /// Parameters LM finds unidentifiable keep their start values (a hybrid's LM reruns from the
