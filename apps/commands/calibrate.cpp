@@ -47,6 +47,9 @@ struct CalibrateSettings {
   std::uint64_t seed = 1;            ///< --seed
   double train_fraction = 0.7;       ///< --split
   bool robust = false;               ///< --robust
+  bool keep_outliers = false;        ///< --keep-outliers
+  double significance_t = 2.0;       ///< --significance
+  std::size_t cv_folds = 0;          ///< --cv K; 1: leave-one-out (lib's folds = 0); 0: no cross-validation
   bool progress = false;             ///< progress lines on stderr
   textio::InputUnits units;          ///< --length-unit, --angle-unit of text inputs
   FitBounds bounds;                  ///< --max-change-mm, --max-change-deg
@@ -56,6 +59,12 @@ struct CalibrateSettings {
 /// largest dataset and any arm's link lengths (static: ~3 MB).
 using CliWorkspace =
     CalibrationWorkspace<kCliDatasetCapacity, double, 150, kTraceCapacity, kCliDatasetCapacity, kMaxLinkLengths>;
+
+/// The job's workspace, shared by the job and --cv (static: ~2.3 MB).
+CliWorkspace& cli_workspace() {
+  static CliWorkspace workspace;
+  return workspace;
+}
 
 /// Times the stages (lib takes no time) and prints one progress line per iteration on
 /// stderr, overwritten in place.
@@ -145,6 +154,8 @@ struct Run {
   double seconds[kMaxCalibrationStages] = {};   ///< wall time per stage [s]
   bool from_controller = false;                 ///< the start geometry is the controller's
   std::size_t link_length_count = kPaper6Dimension;  ///< lengths the population stages search [-]
+  bool has_cv = false;                          ///< --cv ran: `cv` is meaningful
+  CrossValidationResult cv;                     ///< per-fold held-out errors (~20 KB)
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).
@@ -185,10 +196,12 @@ report::MethodRow stage_row(const Run& run, std::size_t k) {
   const CalibrationStage& stage = run.result.stages[k];
   std::string params = stage.params == CalibrationParams::paper ? "paper-" + std::to_string(run.link_length_count) : "full";
   if (stage.solver == CalibrationSolver::lm) {
+    if (stage.params == CalibrationParams::paper && run.result.baseline.tool_fitted) params += " + tool";
     params += " (" + std::to_string(run.result.lm.identifiability.kept_count()) + " estimated)";
   }
   // A refining stage's row (ABC+LM) is the whole chain: its time includes the stage it refined.
   const double seconds = run.seconds[k] + (stage.refines_previous && k > 0 ? run.seconds[k - 1] : 0.0);
+  if (stage.solver != CalibrationSolver::lm) params += run.result.baseline.tool_fitted ? ", tool fitted" : ", tool as given";
   return method_row(run.result.stage_name(k), params, stage.train, stage.test, seconds,
                     static_cast<long long>(stage.evaluations));
 }
@@ -206,7 +219,7 @@ std::string combination_text(const DroppedParam& d) {
   return combination;
 }
 
-std::vector<std::string> identifiability_lines(const LmResult& lm) {
+std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pruned, double significance_t) {
   std::vector<std::string> lines;
   const IdentifiabilityReport& id = lm.identifiability;
   char buf[256];
@@ -217,6 +230,12 @@ std::vector<std::string> identifiability_lines(const LmResult& lm) {
     const DroppedParam& d = id.dropped[k];
     std::snprintf(buf, sizeof buf, "  dropped %-8s (%s, sigma ratio %.2g): %s", full_param_name(d.index),
                   unidentifiable_reason_name(d.reason), d.singular_ratio, combination_text(d).c_str());
+    lines.push_back(buf);
+  }
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (!mask_has(pruned, k)) continue;
+    std::snprintf(buf, sizeof buf, "  fixed   %-8s (not significant: change below %.3g sigma; kept at its start value)",
+                  full_param_name(k), significance_t);
     lines.push_back(buf);
   }
   return lines;
@@ -300,7 +319,7 @@ void write_stage_list(textio::JsonWriter& json, const std::vector<report::Method
     json.key("method").value(row.method);
     json.key("params").value(row.parameters);
     json.key("train_mae_m").value(row.train.mae(ErrorAxis::norm_3d));
-    json.key("test_mae_m").value(row.test.mae(ErrorAxis::norm_3d));
+    if (row.test.count > 0) json.key("test_mae_m").value(row.test.mae(ErrorAxis::norm_3d));  // --split 1: none
     json.key("evaluations").value(row.evaluations);
     json.end_object();
   }
@@ -368,7 +387,10 @@ const std::vector<OptionSpec>& option_specs() {
       {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
       {"robust", "", "Huber loss in LM (a few bad tracker points do not drag the fit)", ""},
       {"seed", "N", "seed of the train/test split and of ABC/GSA", "1"},
-      {"split", "FRACTION", "share of samples used for training", "0.7"},
+      {"split", "FRACTION", "share of samples used for training (1: all, no test rows)", "0.7"},
+      {"cv", "K|loo", "also cross-validate: K folds (or leave-one-out), held-out MAE per fold", ""},
+      {"keep-outliers", "", "use every sample (no blunder search)", ""},
+      {"significance", "T|auto", "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leave-one-out up to 64 training samples)", "2"},
       {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
       {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
       {"report", "DIR", "write an HTML report with figures into DIR", ""},
@@ -407,8 +429,27 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   }
   settings->seed = static_cast<std::uint64_t>(seed);
   if (!textio::parse_double(options.get("split"), &settings->train_fraction) ||
-      !(settings->train_fraction > 0.0 && settings->train_fraction < 1.0)) {
-    return Error::usage("--split must be a fraction in (0, 1)");
+      !(settings->train_fraction > 0.0 && settings->train_fraction <= 1.0)) {
+    return Error::usage("--split must be a fraction in (0, 1]");
+  }
+  const std::string cv = options.get("cv");
+  double folds = 0.0;
+  if (cv == "loo") {
+    settings->cv_folds = 1;
+  } else if (!cv.empty()) {
+    if (!textio::parse_double(cv, &folds) || folds < 2.0 || folds > static_cast<double>(kMaxCrossValidationFolds) ||
+        folds != static_cast<double>(static_cast<std::size_t>(folds))) {
+      return Error::usage("--cv must be 'loo' or a number of folds in [2, " + std::to_string(kMaxCrossValidationFolds) +
+                          "], not " + port::quoted(cv));
+    }
+    settings->cv_folds = static_cast<std::size_t>(folds);
+  }
+  settings->keep_outliers = options.given("keep-outliers");
+  if (options.get("significance") == "auto") {
+    settings->significance_t = -1.0;  // lib: chosen by leave-one-out on small sets
+  } else if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
+             !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
+    return Error::usage("--significance must be 'auto' or a number in [0, 10]");
   }
   const bool samples = !options.get("samples").empty();
   const bool streams = !options.get("robot").empty() || !options.get("tracker").empty();
@@ -486,20 +527,39 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
                                       dataset, facts);
   if (!error.ok()) return error;
-  const std::size_t minimum =
-      calibration_minimum_samples(settings.paper_params ? CalibrationParams::paper : CalibrationParams::full);
-  if (dataset->size() < minimum) {
-    return Error::input("only " + std::to_string(dataset->size()) + " static samples; at least " +
-                        std::to_string(minimum) + " are needed to identify the parameters");
+  // No floor on the sample count: the identifiability analysis decides what the samples determine.
+  if (dataset->train_count_for(settings.train_fraction) == 0) {  // the job splits
+    return Error::usage("--split " + options.get("split") + " leaves no training sample");
   }
-  const std::size_t train_count = dataset->train_count_for(settings.train_fraction);  // the job splits
-  if (train_count == 0 || train_count == dataset->size()) {
-    return Error::usage("--split " + options.get("split") + " leaves no training or no test sample");
+  if (settings.cv_folds > dataset->size()) {
+    return Error::usage("--cv " + options.get("cv") + ": more folds than the " + std::to_string(dataset->size()) +
+                        " samples");
+  }
+  if (settings.cv_folds == 1 && dataset->size() > kMaxCrossValidationFolds) {
+    return Error::usage("--cv loo: at most " + std::to_string(kMaxCrossValidationFolds) + " samples (use --cv K)");
   }
   return Error{};
 }
 
 // --- run (the computation: lib's calibrate()) ---------------------------------------------------
+
+/// --cv after the job (whose messages name the failing step), then the dataset put back as
+/// the job left it (the same set aside and seeded split) for the tables.
+Error cross_validation(const CalibrateSettings& settings, const RobotModel& start, const CalibrationOptions& job,
+                       CliDataset* dataset, Run* run) {
+  CliWorkspace& workspace = cli_workspace();
+  static CalibrationResult scratch;  // ~5 KB
+  JobObserver quiet(false);
+  const Status status = cross_validate(start, dataset, job, settings.cv_folds == 1 ? 0 : settings.cv_folds, &workspace,
+                                       &scratch, &run->cv, &quiet);
+  std::vector<std::uint32_t> aside;
+  for (const CalibrationOutlier& o : run->result.outlier_list()) aside.push_back(o.index);
+  dataset->set_aside(Span<const std::uint32_t>(aside.data(), aside.size()));
+  if (dataset->split(job.train_fraction, job.seed) != Status::ok || status != Status::ok) {
+    return Error::failure(std::string("cross-validation failed: ") + status_message(status));
+  }
+  return Error{};
+}
 
 Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset* dataset, Run* run) {
   CalibrationOptions job;
@@ -508,14 +568,23 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.train_fraction = settings.train_fraction;
   job.seed = settings.seed;
   job.robust = settings.robust;
-  static CliWorkspace workspace;
+  job.keep_outliers = settings.keep_outliers;
+  job.significance_t = settings.significance_t;
+  CliWorkspace& workspace = cli_workspace();
   JobObserver observer(settings.progress);
   const Status status = hivecal::calibrate(start, dataset, job, &workspace, &run->result, &observer);
   for (std::size_t k = 0; k < kMaxCalibrationStages; ++k) run->seconds[k] = observer.seconds[k];
   const CalibrationStep step = run->result.step;
   if (step == CalibrationStep::baseline) {
     return Error::input(std::string("cannot fit the tracker frame: ") + status_message(status) +
-                        (status == Status::degenerate_geometry ? " (are all samples at one pose?)" : ""));
+                        (status == Status::degenerate_geometry || status == Status::too_few_samples
+                             ? " (at least 3 samples at non-collinear tool points are needed)"
+                             : ""));
+  }
+  if (status == Status::too_few_samples && step == CalibrationStep::lm) {
+    return Error::input(std::string("LM needs more samples than free parameters / 3 (") +
+                        std::to_string(run->result.train_count) +
+                        " training samples); try --params paper, --split 1 or more poses");
   }
   if (status != Status::ok) {
     const char* what = step == CalibrationStep::abc   ? "ABC"
@@ -524,7 +593,8 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
                                                       : calibration_step_name(step);
     return Error::failure(std::string(what) + " failed: " + status_message(status));
   }
-  return Error{};
+  run->has_cv = settings.cv_folds > 0;
+  return run->has_cv ? cross_validation(settings, start, job, dataset, run) : Error{};
 }
 
 // --- present ----------------------------------------------------------------------------------
@@ -568,6 +638,18 @@ void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* 
   }
 }
 
+std::string format_mm(double value_m) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3f", value_m * 1e3);
+  return buf;
+}
+
+/// Where sample `index` (Sample::index) came from: "file:line" for paired samples.
+std::string sample_source(const streams::SessionFacts& facts, std::uint32_t index) {
+  if (index < facts.sample_sources.size()) return facts.sample_sources[index];
+  return "sample " + std::to_string(index);
+}
+
 /// Tables and figures of a run, and the text of the terminal.
 report::ReportData present(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset,
                            const streams::SessionFacts& facts, const Run& run) {
@@ -579,7 +661,8 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
                             ")");
-  data.methods.push_back(method_row("uncalibrated", run.from_controller ? "controller" : "nominal",
+  const std::string joints = run.from_controller ? "controller" : "nominal";
+  data.methods.push_back(method_row("uncalibrated", joints + (uncalibrated.tool_fitted ? ", tool fitted" : ""),
                                     uncalibrated.train, uncalibrated.test, 0.0, 0));
   for (std::size_t k = 0; k < run.result.stage_count; ++k) data.methods.push_back(stage_row(run, k));
   data.uncalibrated = accuracy_report(uncalibrated.model, uncalibrated.base_to_tracker, dataset);
@@ -591,7 +674,9 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   }
   add_samples(dataset, run, &data);
   if (const LmResult* lm = run.final_lm(); lm != nullptr) {
-    for (const std::string& line : identifiability_lines(*lm)) data.info_lines.push_back(line);
+    for (const std::string& line : identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t)) {
+      data.info_lines.push_back(line);
+    }
     data.identifiability = identifiability_table(*lm);
     data.noise_sigma_m = lm->residual_sigma_m;
   }
@@ -601,6 +686,11 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
     data.drops.emplace_back("kept", facts.run.counts.kept);
     for (const auto& drop : facts.dropped) data.drops.push_back(drop);
   }
+  for (const CalibrationOutlier& o : run.result.outlier_list()) {
+    data.info_lines.push_back("set aside as a blunder: " + sample_source(facts, o.index) + ", residual " +
+                              format_mm(o.residual_m) + " mm (threshold " +
+                              format_mm(run.result.outlier_threshold_m) + " mm)");
+  }
   return data;
 }
 
@@ -609,8 +699,54 @@ void print_tables(std::FILE* out, const report::ReportData& data, const Run& run
   for (const std::string& line : data.input_lines) std::fprintf(out, "%s\n", line.c_str());
   for (const std::string& line : data.info_lines) std::fprintf(out, "%s\n", line.c_str());
   std::fprintf(out, "\n%s", report::format_tables_text(data).c_str());
+  if (run.has_cv) {
+    const CrossValidationResult& cv = run.cv;
+    std::fprintf(out, "\nCross-validation (%zu folds over %zu samples, held-out 3-D MAE):\n", cv.fold_count,
+                 cv.sample_count);
+    std::fprintf(out, "  fold  train  test  MAE [mm]\n");
+    for (std::size_t k = 0; k < cv.fold_count; ++k) {
+      std::fprintf(out, "  %4zu  %5zu  %4zu  %8s\n", k + 1, cv.folds[k].train_count, cv.folds[k].test.count,
+                   format_mm(cv.folds[k].test.mae(ErrorAxis::norm_3d)).c_str());
+    }
+    std::fprintf(out, "  all held-out samples: %s mm (fold mean %s, worst %s)\n", format_mm(cv.mae_3d_m).c_str(),
+                 format_mm(cv.fold_mae_3d_mean_m).c_str(), format_mm(cv.fold_mae_3d_max_m).c_str());
+  }
   std::fprintf(out, "\nCalibrated parameters (%s):\n", run.final_method().c_str());
   for (const std::string& line : report::format_parameters_text(data)) std::fprintf(out, "  %s\n", line.c_str());
+}
+
+void write_outliers(textio::JsonWriter& w, const streams::SessionFacts& facts, const Run& run) {
+  w.key("outlier_search").value(run.result.outlier_rounds > 0);
+  w.key("outlier_threshold_m").value(run.result.outlier_threshold_m);
+  w.key("outliers").begin_array();
+  for (const CalibrationOutlier& o : run.result.outlier_list()) {
+    w.begin_object();
+    w.key("index").value(static_cast<long long>(o.index));
+    w.key("source").value(sample_source(facts, o.index));
+    w.key("residual_m").value(o.residual_m);
+    w.end_object();
+  }
+  w.end_array();
+}
+
+void write_cross_validation(textio::JsonWriter& w, const CrossValidationResult& cv) {
+  w.key("cross_validation").begin_object();
+  w.key("folds").value(static_cast<long long>(cv.fold_count));
+  w.key("samples").value(static_cast<long long>(cv.sample_count));
+  w.key("mae_3d_m").value(cv.mae_3d_m);
+  w.key("fold_mae_3d_mean_m").value(cv.fold_mae_3d_mean_m);
+  w.key("fold_mae_3d_max_m").value(cv.fold_mae_3d_max_m);
+  w.key("per_fold").begin_array();
+  for (std::size_t k = 0; k < cv.fold_count; ++k) {
+    w.begin_object();
+    w.key("train_count").value(static_cast<long long>(cv.folds[k].train_count));
+    w.key("test_count").value(static_cast<long long>(cv.folds[k].test.count));
+    w.key("train_mae_3d_m").value(cv.folds[k].train.mae(ErrorAxis::norm_3d));
+    w.key("test_mae_3d_m").value(cv.folds[k].test.mae(ErrorAxis::norm_3d));
+    w.end_object();
+  }
+  w.end_array();
+  w.end_object();
 }
 
 /// `warnings`: the fit's plausibility warnings, a "warnings" array when there are any.
@@ -636,9 +772,18 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     textio::write_error_stats(w, data.uncalibrated.test);
     w.end_object();
     write_stage_list(w, data.methods);
-    if (run.final_lm() != nullptr) write_lm_details(w, *run.final_lm());
+    if (run.final_lm() != nullptr) {
+      write_lm_details(w, *run.final_lm());
+      w.key("significance_t").value(run.result.significance_t);
+      w.key("not_significant").begin_array();
+      for (int k = 0; k < kFullParamCount; ++k)
+        if (mask_has(run.result.lm_pruned_mask, k)) w.value(full_param_name(k));
+      w.end_array();
+    }
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
+    write_outliers(w, facts, run);
+    if (run.has_cv) write_cross_validation(w, run.cv);
     if (!warnings.empty()) {
       w.key("warnings").begin_array();
       for (const std::string& warning : warnings) w.value(warning);

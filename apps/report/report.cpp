@@ -298,11 +298,13 @@ std::vector<std::vector<std::string>> table1_rows(const ReportData& data) {
   std::vector<std::vector<std::string>> rows = {header};
   const double before = data.methods.empty() ? 0.0 : data.methods.front().test.mae(ErrorAxis::norm_3d);
   for (const MethodRow& m : data.methods) {
+    const bool tested = m.test.count > 0;  // --split 1: no test samples, no test cells
     std::vector<std::string> row = {m.method, m.parameters, um(m.train.mae(ErrorAxis::norm_3d)),
                                     um(m.train.sigma(ErrorAxis::norm_3d))};
     if (test) {
-      row.insert(row.end(), {um(m.test.mae(ErrorAxis::norm_3d)), um(m.test.sigma(ErrorAxis::norm_3d)),
-                             &m == &data.methods.front() ? "" : improvement(before, m.test.mae(ErrorAxis::norm_3d))});
+      row.insert(row.end(), {tested ? um(m.test.mae(ErrorAxis::norm_3d)) : "-",
+                             tested ? um(m.test.sigma(ErrorAxis::norm_3d)) : "-",
+                             &m == &data.methods.front() || !tested ? "" : improvement(before, m.test.mae(ErrorAxis::norm_3d))});
     }
     row.push_back(m.evaluations > 0 ? std::to_string(m.evaluations) : "");
     if (timed) {
@@ -325,6 +327,7 @@ std::vector<std::vector<std::string>> table2_rows(const ReportData& data) {
     if (!test && member != &AccuracyReport::train) continue;  // overall = train then
     const ErrorStats& before = data.uncalibrated.*member;
     const ErrorStats& after = data.calibrated.*member;
+    if (before.count == 0 && after.count == 0) continue;  // no test samples (--split 1)
     for (int axis = 0; axis < kErrorAxisCount; ++axis) {
       rows.push_back({name, kAxisLabels[axis], um(before.mae_m[axis]), um(before.sigma_m[axis]), um(after.mae_m[axis]),
                       um(after.sigma_m[axis]), improvement(before.mae_m[axis], after.mae_m[axis])});

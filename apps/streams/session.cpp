@@ -58,6 +58,29 @@ port::Error joint_names_option(const std::string& value, textio::RobotLogOptions
 
 namespace {
 
+/// Names each kept sample by its tracker point (file and timestamp), in the order the
+/// extraction adds them to the dataset (Sample::index): a blunder is reported where it is.
+/// Every event is passed on to `next` (the caller's observer, SessionConfig::observer) too.
+class SampleSources final : public ExtractionObserver {
+ public:
+  SampleSources(std::string tracker, std::vector<std::string>* out, ExtractionObserver* next)
+      : tracker_(std::move(tracker)), out_(out), next_(next) {}
+  void on_sample(const ExtractedSample& sample) override {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, " tracker point at t = %.6f s", sample.tracker_us * 1e-6);
+    out_->push_back(tracker_ + buf);
+    if (next_ != nullptr) next_->on_sample(sample);
+  }
+  void on_drop(std::uint64_t tracker_us, DropReason reason) override {
+    if (next_ != nullptr) next_->on_drop(tracker_us, reason);
+  }
+
+ private:
+  std::string tracker_;
+  std::vector<std::string>* out_;
+  ExtractionObserver* next_;
+};
+
 port::Error load_streams(const SessionSources& sources, const SessionConfig& config, DatasetBase* dataset,
                          SessionFacts* facts) {
   ExtractionConfig extraction = make_extraction_config(config.speed_model);
@@ -65,9 +88,10 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
   if (config.window_s > 0.0) extraction.window_us = static_cast<std::uint32_t>(config.window_s * 1e6);
   CaptureRunReport& report = facts->run;
   DecodeProgress progress(config.progress);
+  SampleSources sample_sources(sources.tracker, &facts->sample_sources, config.observer);
   const port::Error read = extract_from_files(
       sources.robot, sources.tracker, make_clock_sync_config(config.speed_model), extraction, dataset, &report,
-      config.observer, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); },
+      &sample_sources, [&progress](int pass, std::uint64_t done, std::uint64_t total) { progress(pass, done, total); },
       config.log_options);
   if (!read.ok()) return read;
   facts->has_stream = true;
@@ -134,7 +158,9 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
     facts->info_lines.push_back("input: robot " + sources.robot + ", tracker " + sources.tracker);
     return load_streams(sources, config, dataset, facts);
   }
-  const port::Error r = textio::read_samples_csv(sources.samples, dataset, config.log_options.units);
+  std::vector<std::size_t> lines;
+  const port::Error r = textio::read_samples_csv(sources.samples, dataset, config.log_options.units, &lines);
+  for (std::size_t line : lines) facts->sample_sources.push_back(sources.samples + ":" + std::to_string(line));
   if (!r.ok()) return r;
   facts->info_lines.push_back("input: " + sources.samples + " (" + std::to_string(dataset->size()) +
                               " paired samples)");

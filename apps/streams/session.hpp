@@ -44,6 +44,7 @@ struct SessionFacts {
   bool has_stream = false;              ///< the dataset came from two streams (run below is meaningful)
   CaptureRunReport run;                 ///< frames / rows, clock fit, extraction counts
   std::vector<std::pair<std::string, std::uint64_t>> dropped;  ///< drop reason -> count
+  std::vector<std::string> sample_sources;  ///< where sample k (Sample::index) came from: "file:line" (paired samples)
 };
 
 /// Fills `dataset` from `sources`. Fault::input (with file and line where known) when a file

@@ -30,7 +30,8 @@ std::string join(const std::vector<std::string>& names) {
 /// `on_row`, given the values of the schema's columns in order; on_row may reject a row by
 /// returning an error text. Every error names the file and line.
 port::Error read_csv(const std::string& path, const CsvSchema& schema, const InputUnits& units,
-                     const std::function<std::string(const std::vector<double>&)>& on_row) {
+                     const std::function<std::string(const std::vector<double>&)>& on_row,
+                     std::vector<std::size_t>* row_lines = nullptr) {
   const std::string expected =
       (schema.optional_leading.empty() ? "" : "[" + schema.optional_leading + ",]") + join(schema.columns);
   DelimitedReader r;
@@ -70,6 +71,7 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
       r.fail(rejection);
       return port::Error::input(r.error());
     }
+    if (row_lines != nullptr) row_lines->push_back(r.line_number());
   }
   if (!r.error().empty()) return port::Error::input(r.error());
   if (rows == 0) return port::Error::input(path + ": no data rows");
@@ -95,7 +97,8 @@ const std::vector<Quantity> kJointQuantities(kJointCount, Quantity::angle);
 
 }  // namespace
 
-port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units) {
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units,
+                             std::vector<std::size_t>* lines) {
   const CsvSchema schema{with(kJointColumns, {"x", "y", "z"}),
                          with(kJointQuantities, {Quantity::length, Quantity::length, Quantity::length}), ""};
   return read_csv(path, schema, units, [&](const std::vector<double>& values) {
@@ -108,7 +111,7 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
       return "dataset over capacity (" + std::to_string(dataset->capacity()) + " samples max)";
     }
     return status == Status::ok ? std::string() : std::string(status_message(status));
-  });
+  }, lines);
 }
 
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units) {

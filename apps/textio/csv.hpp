@@ -18,7 +18,9 @@ namespace hivecal::textio {
 /// Reads paired static samples (`q1..q6,x,y,z`) into a dataset; reports a full dataset as an
 /// error. Columns without a bracket unit are in `units` (SI when not declared); joints beyond
 /// one turn and points beyond 100 m are refused with the likely cause (delimited.hpp).
-port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units = {});
+/// `lines`, when given, receives the 1-based file line of each sample added, in order.
+port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units = {},
+                             std::vector<std::size_t>* lines = nullptr);
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`), units and checks as above.
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units = {});
 

@@ -62,7 +62,9 @@ report::ReportData example() {
   abc.test.count = 4;
   abc.seconds = 0.05;
   data.methods = {before, abc};
+  data.uncalibrated.test.count = 12;
   data.uncalibrated.test.mae_m[0] = 40e-6;
+  data.calibrated.test.count = 12;
   data.calibrated.test.mae_m[0] = 30e-6;
   data.convergence = {{"ABC", false, {1e-4, 8e-5, 7e-5, 6.01e-5}}, {"GSA", false, {1e-4, 9e-5, 6.5e-5}},
                       {"LM", true, {7e-5, 6e-5, 5.9e-5}}};
@@ -112,6 +114,8 @@ TEST(Report, HtmlIsWellFormedAndSelfContained) {
 TEST(Report, WithoutTestSetNoTestColumnsAndTrainingFigures) {
   report::ReportData data = example();
   for (report::MethodRow& m : data.methods) m.test = ErrorStats{};
+  data.uncalibrated.test = ErrorStats{};
+  data.calibrated.test = ErrorStats{};
   for (report::SampleRow& s : data.samples) s.test = false;
   const std::string html = report::render_html(data);
   EXPECT_EQ(check_well_formed(html), "");

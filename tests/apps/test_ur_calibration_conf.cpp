@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "hivecal/calibration.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "testkit/shared_data.hpp"
@@ -84,6 +86,45 @@ TEST(Ur5ePendant, CalibratedFkMatchesControllerNominalDoesNot) {
   RecordProperty("calibrated_mean_um", static_cast<int>(with_calibration.mean_m * 1e6));
   EXPECT_LT(with_calibration.max_m, 0.1e-3) << "mean " << with_calibration.mean_m;
   EXPECT_GE(without.mean_m, 0.5e-3);
+}
+
+TEST(Ur5ePendant, FitOnTwelvePosesPredictsTheOtherSix) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  // The issue's real small set: the first 12 readings train (--split 1), the last 6 are
+  // predicted. The pendant reports the TCP (= flange) in the base frame; the start is the
+  // nominal UR5e with the tool at the flange. scipy's full least-squares fit: 0.066 mm.
+  const std::vector<PendantReading> readings = read_pendant_csv();
+  ASSERT_EQ(readings.size(), 18u);
+  static Dataset<32> fit;
+  fit.clear();
+  for (std::size_t i = 0; i < 12; ++i) ASSERT_EQ(fit.add(readings[i].q_rad, readings[i].tcp_m), Status::ok);
+  static CalibrationWorkspace<32, double, 150, 300> workspace;
+  static CalibrationResult result;
+  CalibrationOptions options;  // the command line's defaults: ABC+LM, full model
+  options.train_fraction = 1.0;
+  const RobotModel start = nominal_model(RobotType::ur5e);
+  ASSERT_EQ(calibrate(start, &fit, options, &workspace, &result), Status::ok) << calibration_step_name(result.step);
+  EXPECT_EQ(result.train_count, 12u);
+  EXPECT_EQ(result.test_count, 0u);
+  EXPECT_EQ(result.outlier_count, 0u);
+  EXPECT_GT(result.lm.identifiability.dropped_count, 0);
+  const CalibrationStage& final_stage = result.stages[result.stage_count - 1];
+  double mae_m = 0.0;
+  double baseline_mae_m = 0.0;
+  for (std::size_t i = 12; i < 18; ++i) {
+    const Vec3 predicted = final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, readings[i].q_rad));
+    const Vec3 nominal = result.baseline.base_to_tracker.apply(fk_tool_point(result.baseline.model, readings[i].q_rad));
+    mae_m += (predicted - readings[i].tcp_m).norm() / 6.0;
+    baseline_mae_m += (nominal - readings[i].tcp_m).norm() / 6.0;
+  }
+  RecordProperty("predicted_mae_um", static_cast<int>(mae_m * 1e6));
+  std::printf("UR5e pendant: 12 poses fitted, 6 predicted: MAE %.4f mm (baseline %.4f mm)\n", mae_m * 1e3,
+              baseline_mae_m * 1e3);
+  // The issue asks for 0.08 mm (scipy: 0.066 mm); this job reaches 0.116 mm on this split
+  // (0.138 mm without the significance test; 3-fold CV over 5 seeds on all 18: 0.083-0.106 mm,
+  // docs/robust.md). The bound pins what it does so that a change for the worse fails.
+  EXPECT_LT(mae_m, 0.12e-3);
+  EXPECT_GT(baseline_mae_m, 0.5e-3);
 }
 
 TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {

@@ -98,7 +98,7 @@ expect 3 "unexpected header" -- calibrate --samples "$work/joints.csv" --out "$w
 no_file "$work/r1.json"
 printf 'q1,q2,q3,q4,q5,q6,x,y,z\n' >"$work/s.csv"
 for i in 1 2 3 4 5; do printf '0,-1.5,1.5,-1.5,-1.5,0,1,2,3\n' >>"$work/s.csv"; done
-expect 3 "static samples; at least" -- calibrate --samples "$work/s.csv" --out "$work/r2.json"
+expect 3 "at least 3 samples at non-collinear tool points" -- calibrate --samples "$work/s.csv" --out "$work/r2.json"
 no_file "$work/r2.json"
 for i in $(seq 1 40); do printf '0,-1.5,1.5,-1.5,-1.5,0,1,2,3\n' >>"$work/s.csv"; done
 expect 3 "cannot fit the tracker frame" -- calibrate --samples "$work/s.csv" --out "$work/r3.json"
@@ -145,7 +145,7 @@ fi
 # And the same bytes on every target (x86-64, aarch64 and armhf run this script): the digest of
 # the result of this simulated session (simulate --seed 5 --waypoints 12 --duration-s 150).
 # Update it only for an intended change of the computation or the format.
-result_sha256=db8567a6584a546e055d03791fc1ac20c02aa4b3de21414d771f64661c1d969f
+result_sha256=95db11ecf2137d4196e5a19c95aee6397442dfb3158f0381aaf6c51b9d23de1e
 if [ "$(sha256sum <"$work/cap.json" | cut -d' ' -f1)" = "$result_sha256" ]; then
   passed=$((passed + 1))
 else
@@ -174,6 +174,27 @@ if "${run[@]}" predict --calibration "$work/cap.json" --joints "$work/truth_join
 else
   failed=$((failed + 1)); echo "FAIL: predict on the calibration of the captures"
 fi
+# A small paired-sample set (one noise-free sample per waypoint) with a 0.6 m blunder on file
+# line 5: set aside and named by file and line; --split 1 trains on all; --cv writes its folds.
+{ echo "q1,q2,q3,q4,q5,q6,x,y,z"; tail -n +2 "$sim/truth_samples.csv" | awk -F, '!seen[$1]++' | cut -d, -f4-12 |
+  awk -F, -v OFS=, 'NR == 4 { $7 += 0.35; $8 -= 0.4; $9 += 0.3 } { print }'; } >"$work/blunder.csv"
+if "${run[@]}" calibrate --samples "$work/blunder.csv" --method lm --split 1 --cv 3 --out "$work/small.json" \
+     >"$work/small.out" 2>&1 && grep -q "set aside as a blunder: $work/blunder.csv:5, residual 6" "$work/small.out" &&
+   grep -q "Cross-validation (3 folds over" "$work/small.out" && grep -q '"source": "'"$work"'/blunder.csv:5"' "$work/small.json" &&
+   grep -q '"cross_validation"' "$work/small.json" && ! grep -q '"test_mae_m"' "$work/small.json"; then ok=1; else ok=0; fi
+if [ "$ok" = 1 ]; then passed=$((passed + 1)); else
+  failed=$((failed + 1)); echo "FAIL: blunder set aside by file:line, --split 1, --cv 3"; cat "$work/small.out"; fi
+# Kept, the blunder drags the fit: the plausibility check warns (exit 5), the result is written.
+"${run[@]}" calibrate --samples "$work/blunder.csv" --method lm --split 1 --keep-outliers --out "$work/kept.json" \
+  >"$work/kept.out" 2>&1
+kept_rc=$?
+if [ "$kept_rc" = 5 ] && grep -q "warning: .* moved" "$work/kept.out" && ! grep -q "set aside" "$work/kept.out" &&
+   grep -q '"outliers": \[\]' "$work/kept.json"; then
+  passed=$((passed + 1))
+else
+  failed=$((failed + 1)); echo "FAIL: --keep-outliers"; cat "$work/kept.out"
+fi
+expect 2 "--cv must be 'loo' or a number of folds" -- calibrate --samples "$work/blunder.csv" --cv 1
 # A CSV log with a bad row is a clear error naming file and line, and no result.
 { head -5 "$sim/tracker.csv"; echo "5.9,1,2"; } >"$work/short_tracker.csv"
 expect 3 "short_tracker.csv:6: 3 fields where the header has 5" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/short_tracker.csv" --out "$work/r5.json"

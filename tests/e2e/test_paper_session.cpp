@@ -133,11 +133,12 @@ TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent)
   EXPECT_LE(captures_m, 1.10 * ideal_m);
 }
 
-// Paper-6 + ABC on the captures: the paper gets 75.4 -> 60.1 um (-20.3 %). The band 15-25 %
-// is the paper's figure +-5 points: seed 1's geometry errors were drawn with magnitudes
-// chosen for a paper-like session (docs/streams.md), and over other seeds the share of the
-// error the six lengths can absorb varies far more (13-53 % over seeds 1-8), so this pins
-// the default session, not every draw. The uncalibrated MAE must be paper-like too.
+// Paper-6 + ABC on the captures: the paper gets 75.4 -> 60.1 um (-20.3 %) against a baseline
+// that keeps the tool guess. hivecal's baseline fits the tool point and the base with the
+// nominal joints (issue 11: the fair comparison) and ABC starts from that tool point, so both
+// rows move: 64.6 -> 34.3 um (-47 %) on the default session. The band 35-60 % pins that
+// default session (seed 1's geometry errors were drawn for a paper-like session,
+// docs/streams.md); the uncalibrated MAE must be paper-like too.
 TEST_F(PaperSession, Paper6AbcImprovesTheUncalibratedTestMaeAsInThePaper) {
   ASSERT_EQ(run(cli::calibrate_main, {"--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--params",
                                       "paper", "--method", "abc", "--out", path("paper.json"), "--quiet"}),
@@ -155,8 +156,8 @@ TEST_F(PaperSession, Paper6AbcImprovesTheUncalibratedTestMaeAsInThePaper) {
               abc_m * 1e6, improvement * 100.0);
   EXPECT_GT(uncalibrated_m, 55e-6);  // paper: 75.4 um
   EXPECT_LT(uncalibrated_m, 95e-6);
-  EXPECT_GE(improvement, 0.15);
-  EXPECT_LE(improvement, 0.25);
+  EXPECT_GE(improvement, 0.35);
+  EXPECT_LE(improvement, 0.60);
 }
 
 }  // namespace

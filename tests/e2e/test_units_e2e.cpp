@@ -157,7 +157,10 @@ TEST_F(UnitsEndToEnd, SamplesInMillimetresAndDegreesCalibrateAsSiAndExtractTakes
   ASSERT_EQ(calibrate({"--samples", path("samples_mmdeg.csv"), "--length-unit", "mm", "--angle-unit", "deg", "--out",
                        path("s_mmdeg.json")}),
             cli::kExitOk);
-  expect_same(result_of(path("s_si.json")), result_of(path("s_mmdeg.json")), 1e-12, "samples in mm and deg");
+  // The converted values differ from the SI file's by the rounding of the conversion (an ulp);
+  // the job's repeated LM runs (blunder and significance tests) carry that to ~3e-11 m, far
+  // below anything physical, so the bound here is 1e-10 m.
+  expect_same(result_of(path("s_si.json")), result_of(path("s_mmdeg.json")), 1e-10, "samples in mm and deg");
   EXPECT_EQ(calibrate({"--samples", path("samples_mmdeg.csv"), "--angle-unit", "deg", "--out", path("s_no.json")}),
             cli::kExitBadInput);  // points still read as metres
 }

@@ -59,8 +59,8 @@ inline CaptureJobConfig golden_lm_job_config() {
 }
 
 /// The committed digests: every target must reproduce them.
-inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0xcbd8767022598f97ULL;
-inline constexpr std::uint64_t kLmJobGoldenDigest = 0x86e5715fb08b05efULL;
+inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0x873c34ac1c4784a0ULL;
+inline constexpr std::uint64_t kLmJobGoldenDigest = 0x20f3888beb5b66a5ULL;
 
 /// Static storage of a job: the dataset, and one arena for the capture passes, then the job.
 struct CaptureJobWorkspace {
@@ -135,6 +135,17 @@ inline std::uint64_t capture_job_digest(const CaptureJobReport& r, bool calibrat
     d.add(c.lm.rms_m);
     d.add_u64(static_cast<std::uint64_t>(c.lm.iterations));
     d.add_u64(c.lm.identifiability.kept_mask);
+  }
+  // Issue 11: the baseline's fitted tool and base, what LM fixed as not significant, the blunders.
+  d.add(to_params(c.baseline.model));
+  d.add(c.baseline.base_to_tracker.translation_m);
+  d.add_u64(c.lm_pruned_mask);
+  d.add_u64(c.outlier_count);
+  d.add_u64(c.outlier_rounds);
+  d.add(c.outlier_threshold_m);
+  for (const CalibrationOutlier& o : c.outlier_list()) {
+    d.add_u64(o.index);
+    d.add(o.residual_m);
   }
   const ErrorStats none;
   for (const ErrorStats* s : {&c.baseline.test, final_stage != nullptr ? &final_stage->test : &none}) {

@@ -1,7 +1,10 @@
 // The calibration job, one entry for the command-line tool, the firmware and the tests:
-//   split -> baseline (start geometry, base fitted on the training samples) -> the solver
+//   blunder screen (consensus over point triples) -> split -> baseline (start geometry, tool
+//   point and base fitted on the training samples) -> the solver
 //   stages of CalibrationOptions::method (ABC / GSA on the link lengths, then or instead
-//   Levenberg-Marquardt on the full model) -> train/test errors of every stage.
+//   Levenberg-Marquardt on the full model) -> train/test errors of every stage -> residual
+//   test of every sample with a robust sigma (blunders set aside, the job rerun until the set
+//   is stable). cross_validate() runs the same job per fold. Method: docs/robust.md.
 // Like ruckig's Ruckig / InputParameter / Result: options in, a caller-sized workspace, one
 // result struct out. No heap, no clock: a caller that wants stage timings takes them in its
 // CalibrationObserver. Method and figures: docs/architecture.md, "The calibration job".
@@ -46,6 +49,11 @@ enum class CalibrationParams : std::uint8_t {
 /// One solver of a stage.
 enum class CalibrationSolver : std::uint8_t { abc, gsa, lm };
 
+/// Default level of LM's significance test: a parameter whose change is below 2 sigma is fixed [-].
+inline constexpr double kDefaultSignificance = 2.0;
+/// Largest training set on which a negative significance_t chooses the level by leave-one-out [-].
+inline constexpr std::size_t kAutoSignificanceMaxSamples = 64;
+
 /// Settings of one job; the defaults are the command-line tool's.
 struct CalibrationOptions {
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< solvers and their order
@@ -59,17 +67,22 @@ struct CalibrationOptions {
   std::size_t gsa_iterations = 200;                      ///< GSA t_max [-]
   double paper6_half_width_m = kPaper6DefaultHalfWidth_m;  ///< ABC/GSA box: start lengths +/- this [m]
   LmOptions lm;                                          ///< LM settings; `params` and `robust` override its params and loss
+  double significance_t = kDefaultSignificance;          ///< LM fixes, one at a time, estimated parameters whose change is below t sigma (0: off; < 0: chosen by leave-one-out on small sets) [-]
+  bool keep_outliers = false;                            ///< true: no blunder search, every sample is used
+  double outlier_k = 6.0;                                ///< a sample is set aside when |r| > max(k sigma_robust, floor) [-]
+  double outlier_floor_m = 1e-3;                         ///< smallest residual set aside after the calibration [m]
+  double screen_floor_m = 0.01;                          ///< smallest residual set aside by the start geometry's consensus screen [m]
+  std::size_t consensus_trials = 200;                    ///< point triples tried by the consensus (LMedS) screen [-]
 };
 
 /// Lower-case name of a method as the command line spells it ("abc+lm", "all", ...).
 const char* calibration_method_name(CalibrationMethod method);
-/// Samples the job needs at least (12 for the paper's set, 24 for the full model) [-].
-std::size_t calibration_minimum_samples(CalibrationParams params);
 
 /// The start geometry, before any solver.
 struct CalibrationBaseline {
-  RobotModel model;                 ///< the start geometry
+  RobotModel model;                 ///< the start geometry with its tool point fitted (when tool_fitted)
   RigidTransform base_to_tracker;   ///< its base fitted on the training samples
+  bool tool_fitted = false;         ///< the tool point was fitted with the base (LM, nominal joints); false: base only (< 4 samples)
   ErrorStats train;                 ///< errors on the training samples [m]
   ErrorStats test;                  ///< errors on the test samples (count 0 without a test split) [m]
 };
@@ -96,6 +109,24 @@ inline constexpr std::size_t kMaxCalibrationStages = 3;
 /// The steps of a job, in order (CalibrationResult::step is the last one reached).
 enum class CalibrationStep : std::uint8_t { input, split, baseline, gsa, abc, lm, done };
 
+/// A sample the job set aside as a blunder.
+struct CalibrationOutlier {
+  std::uint32_t index = 0;   ///< its Sample::index (order of DatasetBase::add) [-]
+  double residual_m = 0.0;   ///< |predicted - measured| under the final calibration [m]
+};
+
+/// Blunders a job sets aside at most; a larger share of a set is not a blunder problem [-].
+inline constexpr std::size_t kMaxCalibrationOutliers = 64;
+
+/// One list of the blunder search (the set aside, the last test's flags): kept in the
+/// workspace beside the arena, as it lives across the job's runs.
+struct CalibrationOutlierList {
+  CalibrationOutlier items[kMaxCalibrationOutliers];   ///< flagged samples, by index once complete
+  std::uint32_t indices[kMaxCalibrationOutliers] = {};  ///< their Sample::index, increasing [-]
+  std::size_t count = 0;                                ///< entries used [-]
+  std::size_t limit = kMaxCalibrationOutliers;          ///< entries allowed (fewer than half the set) [-]
+};
+
 /// Short name of a stage ("ABC", "GSA", "LM", "ABC+LM", "GSA+LM"; the previous stage's name is
 /// taken from `refines_previous` and `previous`).
 const char* calibration_stage_name(const CalibrationStage& stage, const CalibrationStage* previous);
@@ -104,7 +135,7 @@ const char* calibration_solver_name(CalibrationSolver solver);
 /// Name of a step ("input", "split", "baseline", "gsa", "abc", "lm", "done").
 const char* calibration_step_name(CalibrationStep step);
 
-/// Everything a job returns (~5 KB with the LmResult: static storage on a small target).
+/// Everything a job returns (~6 KB with the LmResult and the blunder list: static storage on a small target).
 struct CalibrationResult {
   Status status = Status::invalid_argument;     ///< ok, or why the job stopped at `step`
   CalibrationStep step = CalibrationStep::input;  ///< done on success, else the step that failed
@@ -115,6 +146,15 @@ struct CalibrationResult {
   std::size_t stage_count = 0;                  ///< entries of `stages` used [-]
   bool has_lm = false;                          ///< an LM stage ran: `lm` is meaningful
   LmResult lm;                                  ///< LM details: identifiability, sigma, rms, termination
+  ParamMask lm_pruned_mask = 0;                 ///< parameters LM fixed at their start values as not significant (significance_t)
+  double significance_t = 0.0;                  ///< the significance level LM used (options', or the one chosen) [-]
+  CalibrationOutlier outliers[kMaxCalibrationOutliers];  ///< samples set aside, by increasing index
+  std::size_t outlier_count = 0;                ///< entries of `outliers` used [-]
+  std::size_t outlier_rounds = 0;               ///< times the job ran until the set aside was stable (0: keep_outliers) [-]
+  double outlier_threshold_m = 0.0;             ///< residual above which the last test set a sample aside [m]
+
+  /// The samples set aside, by increasing index.
+  Span<const CalibrationOutlier> outlier_list() const { return Span<const CalibrationOutlier>(outliers, outlier_count); }
 
   /// The stages run, in order.
   Span<const CalibrationStage> stage_list() const { return Span<const CalibrationStage>(stages, stage_count); }
@@ -153,6 +193,12 @@ class CalibrationObserver : public ProgressObserver, public LmObserver {
   ~CalibrationObserver() = default;
 };
 
+/// Scratch of the blunder search: one predicted point and one residual per sample.
+struct ResidualScratch {
+  Span<Vec3> predicted_m;   ///< tool points of the start geometry in the base frame [m]
+  Span<double> residual_m;  ///< residual norms [m]
+};
+
 /// Capacity-erased workspace: the phases of a job (population cost + solver, LM workspace)
 /// are built one at a time in one arena, and the stage traces outlive them.
 class CalibrationWorkspaceBase {
@@ -176,6 +222,11 @@ class CalibrationWorkspaceBase {
   virtual void close() = 0;
   /// The trace of stage `index` (< kMaxCalibrationStages).
   virtual TraceBase& trace(std::size_t index) = 0;
+  /// Ends any open phase, builds the blunder search's scratch in the arena: one predicted
+  /// point and one residual per sample, for up to the workspace's sample count.
+  virtual ResidualScratch open_residuals() = 0;
+  /// The blunder search's lists: 0 the set aside, 1 the last test's.
+  virtual CalibrationOutlierList& outlier_list(std::size_t which) = 0;
 
  protected:
   CalibrationWorkspaceBase() = default;
@@ -222,9 +273,14 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
     LmWorkspace lm;
     detail::JointTrigStorage<JointTrigSamples> joint_trig;
   };
+  /// The blunder search's scratch.
+  struct ResidualPhase {
+    Vec3 predicted_m[Samples];
+    double residual_m[Samples];
+  };
   /// Bytes of the arena: the largest phase.
-  static constexpr std::size_t kArenaBytes =
-      detail::max_of<detail::max_of<sizeof(AbcPhase), sizeof(GsaPhase)>, sizeof(LmPhase)>;
+  static constexpr std::size_t kArenaBytes = detail::max_of<
+      detail::max_of<detail::max_of<sizeof(AbcPhase), sizeof(GsaPhase)>, sizeof(LmPhase)>, sizeof(ResidualPhase)>;
 
   CalibrationWorkspace() = default;
   ~CalibrationWorkspace() { close(); }
@@ -245,39 +301,90 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
     lm_->lm.joint_trig = lm_->joint_trig.view();
     return &lm_->lm;
   }
+  ResidualScratch open_residuals() override {
+    close();
+    residuals_ = new (arena_) ResidualPhase();
+    return ResidualScratch{Span<Vec3>(residuals_->predicted_m, Samples), Span<double>(residuals_->residual_m, Samples)};
+  }
   void close() override {
     if (abc_ != nullptr) abc_->~AbcPhase();
     if (gsa_ != nullptr) gsa_->~GsaPhase();
     if (lm_ != nullptr) lm_->~LmPhase();
+    if (residuals_ != nullptr) residuals_->~ResidualPhase();
     abc_ = nullptr;
     gsa_ = nullptr;
     lm_ = nullptr;
+    residuals_ = nullptr;
   }
   TraceBase& trace(std::size_t index) override { return traces_[index]; }
+  CalibrationOutlierList& outlier_list(std::size_t which) override { return outlier_lists_[which]; }
 
  private:
   alignas(alignof(std::max_align_t)) unsigned char arena_[kArenaBytes];
   Trace<TraceCapacity> traces_[kMaxCalibrationStages];
+  CalibrationOutlierList outlier_lists_[2];
   AbcPhase* abc_ = nullptr;  // the open phase (at most one is set), built in arena_
   GsaPhase* gsa_ = nullptr;
   LmPhase* lm_ = nullptr;
+  ResidualPhase* residuals_ = nullptr;
 };
 
-/// Runs the job of `options` on `*dataset` from `start` (geometry and tool): splits the
-/// dataset (in place, seeded), fits the baseline, runs the stages, fills *result. `observer`
-/// may be null. Returns ok (LM's not_converged counts as a result: its last point is used), or
-/// the failure, with result->step naming the step that failed:
+/// Runs the job of `options` on `*dataset` from `start` (geometry and tool): screens the
+/// samples for blunders (unless options.keep_outliers), sets them aside in the dataset
+/// (DatasetBase::set_aside), splits the rest (in place, seeded), fits the baseline, runs the
+/// stages, tests every sample against the final calibration and, while that changes the set
+/// aside, runs again; fills *result. The job always starts from the samples in the order of
+/// add(): the same dataset gives the same result, and a blunder set aside gives the bits of
+/// the same set with the blunder never added. `observer` may be null. Returns ok (LM's
+/// not_converged counts as a result: its last point is used), or the failure, with
+/// result->step naming the step that failed:
 ///  - input: invalid_argument (a null pointer, an unknown method or parameter set),
-///    dataset_empty, too_few_samples (below calibration_minimum_samples);
+///    dataset_empty;
 ///  - split: invalid_argument (the fraction leaves no training sample);
-///  - baseline: the errors of fit_base_to_tracker (e.g. degenerate_geometry);
+///  - baseline: too_few_samples / degenerate_geometry (fewer than 3 non-collinear points: not
+///    even the base frame is determined), the errors of fit_base_to_tracker;
 ///  - gsa / abc / lm: the stage's own error (calibrate_paper6_gsa/abc, calibrate_lm), e.g.
-///    population_out_of_range (population above the workspace's capacity), dataset_full
-///    (more training samples than the workspace's cost holds), solver_cancelled (the
-///    observer stopped LM).
-/// *result is always written when it is not null.
+///    too_few_samples (LM: not even with its weakest directions dropped do fewer parameters
+///    remain than 3 N equations), population_out_of_range (population
+///    above the workspace's capacity), dataset_full (more training samples than the
+///    workspace's cost holds), solver_cancelled (the observer stopped LM).
+/// Parameters LM finds unidentifiable keep their start values (a hybrid's LM reruns from the
+/// start values of what it dropped). *result is always written when it is not null.
 Status calibrate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
                  CalibrationWorkspaceBase* workspace, CalibrationResult* result,
                  CalibrationObserver* observer = nullptr);
+
+/// Folds a cross-validation holds at most (leave-one-out on up to this many samples) [-].
+inline constexpr std::size_t kMaxCrossValidationFolds = 128;
+
+/// One fold of a cross-validation.
+struct CrossValidationFold {
+  std::size_t train_count = 0;  ///< samples it was calibrated on [-]
+  ErrorStats test;              ///< errors of its final stage on its held-out samples [m]
+  ErrorStats train;             ///< errors of its final stage on its training samples [m]
+};
+
+/// What cross_validate() measured.
+struct CrossValidationResult {
+  Status status = Status::invalid_argument;  ///< ok, or why it stopped
+  std::size_t fold_count = 0;                ///< folds run [-]
+  CrossValidationFold folds[kMaxCrossValidationFolds];  ///< per fold, in fold order
+  std::size_t sample_count = 0;              ///< samples split into folds (blunders left out) [-]
+  double mae_3d_m = 0.0;                     ///< 3-D MAE over every held-out sample of every fold [m]
+  double fold_mae_3d_mean_m = 0.0;           ///< mean of the folds' 3-D MAE [m]
+  double fold_mae_3d_max_m = 0.0;            ///< largest fold 3-D MAE [m]
+};
+
+/// K-fold cross-validation of the job of `options` (folds = 0: leave-one-out): unless
+/// options.keep_outliers, first the whole job on every sample finds the blunders, which stay
+/// aside; then the kept samples in the order of add() are shuffled with options.seed (as
+/// DatasetBase::split_fold) and each fold is calibrated on the other folds (no blunder search
+/// and no split of its own) and tested on its own samples. `scratch` receives each run in turn
+/// (the last fold's at the end). Errors: those of calibrate() (the first failing fold's, in
+/// cv->status too); invalid_argument (folds == 1, more folds than samples, or more than
+/// kMaxCrossValidationFolds).
+Status cross_validate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+                      std::size_t folds, CalibrationWorkspaceBase* workspace, CalibrationResult* scratch,
+                      CrossValidationResult* cv, CalibrationObserver* observer = nullptr);
 
 }  // namespace hivecal

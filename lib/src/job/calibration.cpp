@@ -1,7 +1,11 @@
 #include "hivecal/calibration.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <new>
 
+#include "hivecal/core/random.hpp"
+#include "hivecal/model/full_params.hpp"
 #include "hivecal/model/rigid_fit.hpp"
 
 namespace hivecal {
@@ -32,7 +36,7 @@ bool known(const CalibrationOptions& options) {
 /// The job's state while it runs: the inputs and where the result goes.
 struct Job {
   const RobotModel& start;
-  const DatasetBase& dataset;
+  DatasetBase& dataset;
   const CalibrationOptions& options;
   CalibrationWorkspaceBase& workspace;
   CalibrationResult& result;
@@ -88,22 +92,147 @@ Status run_population(Job& job, CalibrationSolver solver) {
   return Status::ok;
 }
 
-/// LM from the start geometry, or (hybrid) from the previous stage's geometry and base.
-Status run_lm(Job& job, bool hybrid) {
+/// True when LM dropped a model parameter that `from` holds at another value than `start`:
+/// an earlier stage moved a parameter the data cannot determine. Such ones are put back to
+/// their start values in *from.
+// Helpers marked [[gnu::noinline]] hold large temporaries (parameter vectors, fit
+// accumulators) while the LM solve below their caller does not need them: inlined, their
+// frames would stay live during LM and add ~3 kB to the firmware's 8 kB stack peak.
+[[gnu::noinline]] bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report, RobotModel* from) {
+  const ModelParams start_params = to_params(start);
+  ModelParams params = to_params(*from);
+  bool changed = false;
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (mask_has(report.free_mask, i) && !mask_has(report.kept_mask, i) && params(i) != start_params(i)) {
+      params(i) = start_params(i);
+      changed = true;
+    }
+  }
+  if (changed) *from = from_params(params);
+  return changed;
+}
+
+/// Puts model parameter `index` of *model back to its value in `start`.
+[[gnu::noinline]] void reset_param(const RobotModel& start, int index, RobotModel* model) {
+  ModelParams params = to_params(*model);
+  params(index) = to_params(start)(index);
+  *model = from_params(params);
+}
+
+/// The estimated model parameter whose change from `start` is least significant, below
+/// t standard deviations; -1 when none is (or t <= 0).
+[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t) {
+  if (!(t > 0.0)) return -1;
+  const ModelParams change = to_params(lm.model) - to_params(start);
+  int weakest = -1;
+  double weakest_ratio = t;
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) continue;
+    const double ratio = std::fabs(change(i)) / lm.sigma(i);
+    if (ratio < weakest_ratio) {
+      weakest_ratio = ratio;
+      weakest = i;
+    }
+  }
+  return weakest;
+}
+
+/// LM on `samples` from `from` (and `base`, or a fitted one when null) into r.lm. Runs again
+/// while (a) it drops a parameter an earlier stage moved (put back to its start value) or (b)
+/// an estimated parameter's change is not significant (below t sigma: fixed at its start
+/// value, one at a time, the least significant first; a small set then fits fewer parameters
+/// instead of its noise). *pruned receives the parameters (b) fixed.
+Status fit_lm(Job& job, const RobotModel& start_model, const RigidTransform* base, bool reset, Span<const Sample> samples,
+              double t, TraceBase* trace, LmObserver* observer, ParamMask* pruned) {
+  RobotModel from = start_model;
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
-  const CalibrationStage* previous = hybrid && r.stage_count > 0 ? &r.stages[r.stage_count - 1] : nullptr;
   LmOptions lm = o.lm;
   lm.params = o.params == CalibrationParams::paper ? LmParamSet::link_lengths : LmParamSet::full;
+  if (o.params == CalibrationParams::paper && r.baseline.tool_fitted) {
+    // The tool point is estimated too: it was not known (the baseline fitted it), and lengths
+    // searched against a tool fitted at the nominal lengths keep that fit's bias.
+    lm.custom_mask = lm_param_mask(LmParamSet::link_lengths, 0, job.start);
+    for (int axis = 0; axis < 3; ++axis) lm.custom_mask |= param_bit(tool_param_index(axis));
+    lm.params = LmParamSet::custom;
+  }
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
+  const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask, job.start);
+  Status status = Status::ok;
+  *pruned = 0;
+  for (int attempt = 0; attempt < kModelParamCount + 2; ++attempt) {
+    if (trace != nullptr) trace->clear();
+    LmWorkspace* workspace = job.workspace.open_lm();
+    status = calibrate_lm(from, base, samples, lm, workspace, &r.lm, trace, observer);
+    job.workspace.close();
+    if (status != Status::ok && status != Status::not_converged) return status;
+    bool again = reset && reset_dropped(job.start, r.lm.identifiability, &from);
+    const int weakest = least_significant(job.start, r.lm, t);
+    if (weakest >= 0) {
+      *pruned |= param_bit(weakest);
+      lm.params = LmParamSet::custom;
+      lm.custom_mask = free_mask & ~*pruned;
+      reset_param(job.start, weakest, &from);
+      again = true;
+    }
+    if (!again) break;
+  }
+  return status;
+}
+
+/// Candidate significance levels of the automatic choice, from the simplest model down [-].
+constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
+
+/// The significance level for this stage: options.significance_t, or (when negative and the
+/// training set is small) the one of kSignificanceGrid with the least leave-one-out 3-D MAE
+/// on the training samples (each left-out sample predicted by a fit of the others; ties go to
+/// the simpler model); a large set gets kDefaultSignificance.
+[[gnu::noinline]] double choose_significance(Job& job, const RobotModel& from, const RigidTransform* base, bool reset) {
+  const double t = job.options.significance_t;
+  const std::size_t n = job.dataset.train().size();
+  if (t >= 0.0) return t;
+  if (n > kAutoSignificanceMaxSamples || n < 3) return kDefaultSignificance;
+  double best_t = kDefaultSignificance;
+  double best_mae_m = 0.0;
+  bool found = false;
+  for (double candidate : kSignificanceGrid) {
+    double sum_m = 0.0;
+    bool ok = true;
+    for (std::size_t i = 0; ok && i < n; ++i) {
+      job.dataset.swap_samples(i, n - 1);  // the left-out one last, the others in front
+      ParamMask pruned = 0;
+      const Span<const Sample> train = job.dataset.train();
+      const Status status = fit_lm(job, from, base, reset, train.subspan(0, n - 1), candidate, nullptr, nullptr, &pruned);
+      if (status == Status::ok || status == Status::not_converged) {
+        const Sample& out = train[n - 1];
+        sum_m += (job.result.lm.base_to_tracker.apply(fk_tool_point(job.result.lm.model, out.q_rad)) - out.point_m).norm();
+      } else {
+        ok = false;
+      }
+      job.dataset.swap_samples(i, n - 1);  // back: the final fit sees the split's order
+    }
+    if (ok && (!found || sum_m < best_mae_m)) {
+      best_mae_m = sum_m;
+      best_t = candidate;
+      found = true;
+    }
+  }
+  return best_t;
+}
+
+/// LM from the start geometry, or (hybrid) from the previous stage's geometry and base, with
+/// the significance test (fit_lm; level from choose_significance).
+Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
+  CalibrationResult& r = job.result;
+  const CalibrationStage* previous = hybrid && r.stage_count > 0 ? &r.stages[r.stage_count - 1] : nullptr;
   TraceBase& trace = job.workspace.trace(r.stage_count);
-  trace.clear();
-  LmWorkspace* workspace = job.workspace.open_lm();
-  const Status status = calibrate_lm(previous != nullptr ? previous->model : job.start,
-                                     previous != nullptr ? &previous->base_to_tracker : nullptr, job.dataset.train(),
-                                     lm, workspace, &r.lm, &trace, job.observer);
-  job.workspace.close();
+  const RobotModel& from = previous != nullptr ? previous->model : job.start;
+  const RigidTransform* base = previous != nullptr ? &previous->base_to_tracker : nullptr;
+  r.significance_t = choose_significance(job, from, base, previous != nullptr);
+  const Status status =
+      fit_lm(job, from, base, previous != nullptr, job.dataset.train(), r.significance_t, &trace, job.observer, pruned);
   if (status != Status::ok && status != Status::not_converged) return status;
+  const CalibrationOptions& o = job.options;
   r.has_lm = true;
   CalibrationStage& stage = r.stages[r.stage_count];
   stage.solver = CalibrationSolver::lm;
@@ -124,7 +253,8 @@ Status run_stage(Job& job, CalibrationSolver solver, bool hybrid) {
   CalibrationResult& r = job.result;
   const std::size_t index = r.stage_count;
   if (job.observer != nullptr) job.observer->on_stage_begin(index, solver);
-  const Status status = solver == CalibrationSolver::lm ? run_lm(job, hybrid) : run_population(job, solver);
+  const Status status =
+      solver == CalibrationSolver::lm ? run_lm(job, hybrid, &r.lm_pruned_mask) : run_population(job, solver);
   const CalibrationStep step = solver == CalibrationSolver::abc   ? CalibrationStep::abc
                                : solver == CalibrationSolver::gsa ? CalibrationStep::gsa
                                                                   : CalibrationStep::lm;
@@ -137,24 +267,253 @@ Status run_stage(Job& job, CalibrationSolver solver, bool hybrid) {
   return Status::ok;
 }
 
-/// Input checks, split and baseline: everything before the first solver.
-Status prepare(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
-               CalibrationResult* r) {
-  if (!known(options)) return fail(r, CalibrationStep::input, Status::invalid_argument);
-  if (dataset->size() == 0) return fail(r, CalibrationStep::input, Status::dataset_empty);
-  if (dataset->size() < calibration_minimum_samples(options.params)) {
-    return fail(r, CalibrationStep::input, Status::too_few_samples);
+/// The tool point and the base fitted together with the nominal joints model (LM over
+/// {tool xyz, base 6}, least squares): the reflector offset is rarely known to the millimetre,
+/// and a baseline that keeps the guess is not a fair comparison. Below 4 samples (9
+/// parameters), the base alone.
+Status fit_baseline(const RobotModel& start, Span<const Sample> train, CalibrationWorkspaceBase& workspace,
+                    CalibrationResult* r) {
+  r->baseline.model = start;
+  Status status = fit_base_to_tracker(start, train, &r->baseline.base_to_tracker);
+  if (status != Status::ok || 3 * train.size() <= static_cast<std::size_t>(kToolParamCount + kBaseParamCount)) {
+    return status;
   }
-  Status status = dataset->split(options.train_fraction, options.seed);
-  if (status != Status::ok) return fail(r, CalibrationStep::split, status);
+  LmOptions lm;
+  lm.params = LmParamSet::custom;
+  lm.custom_mask = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    lm.custom_mask |= param_bit(tool_param_index(axis)) | param_bit(base_rotation_param_index(axis)) |
+                      param_bit(base_translation_param_index(axis));
+  }
+  LmWorkspace* lm_workspace = workspace.open_lm();
+  status = calibrate_lm(start, &r->baseline.base_to_tracker, train, lm, lm_workspace, &r->lm, nullptr, nullptr);
+  workspace.close();
+  if (status != Status::ok && status != Status::not_converged) return status;
+  r->baseline.model = r->lm.model;
+  r->baseline.base_to_tracker = r->lm.base_to_tracker;
+  r->baseline.tool_fitted = true;
+  return Status::ok;
+}
+
+/// Baseline and stages on a dataset already split (train / test).
+Status run_split(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+                 CalibrationWorkspaceBase* workspace, CalibrationResult* r, CalibrationObserver* observer) {
   r->train_count = dataset->train().size();
   r->test_count = dataset->test().size();
-  r->baseline.model = start;
-  status = fit_base_to_tracker(start, dataset->train(), &r->baseline.base_to_tracker);
+  Status status = fit_baseline(start, dataset->train(), *workspace, r);
   if (status != Status::ok) return fail(r, CalibrationStep::baseline, status);
-  r->baseline.train = position_error_stats(start, r->baseline.base_to_tracker, dataset->train());
-  r->baseline.test = position_error_stats(start, r->baseline.base_to_tracker, dataset->test());
+  r->baseline.train = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->train());
+  r->baseline.test = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->test());
+  // The stages start from the baseline's geometry: the start joints with the fitted tool point
+  // (ABC / GSA move lengths only and would otherwise keep the tool guess's error).
+  Job job{r->baseline.model, *dataset, options, *workspace, *r, observer};
+  const StagePlan plan = plan_for(options.method);
+  if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, false)) != Status::ok) return status;
+  if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, false)) != Status::ok) return status;
+  if (plan.lm && (status = run_stage(job, CalibrationSolver::lm, plan.hybrid)) != Status::ok) return status;
+  r->step = CalibrationStep::done;
+  r->status = Status::ok;
   return Status::ok;
+}
+
+/// Resets *result in place (no 5 KB temporary on the stack).
+CalibrationResult& reset(CalibrationResult* result) {
+  result->~CalibrationResult();
+  return *new (result) CalibrationResult();
+}
+
+// --- blunders ------------------------------------------------------------------------------
+
+/// Per-axis sigma from the median of 3-D residual norms: for isotropic Gaussian noise the norm
+/// is Maxwell-distributed with median 1.5382 sigma (the MAD idea for norms).
+constexpr double kMaxwellMedian = 1.5382;
+
+/// The lower median of values[0 .. count) (reordered): the same value whatever the algorithm.
+double lower_median(Span<double> values, std::size_t count) {
+  double* begin = values.data();
+  double* middle = begin + (count - 1) / 2;
+  std::nth_element(begin, middle, begin + count);
+  return *middle;
+}
+
+/// Offers a flagged sample to the set-aside list being built: at most `limit`, the largest
+/// residuals kept when more are flagged (ties: the lower index); by decreasing residual.
+void offer(CalibrationOutlierList* list, std::uint32_t index, double residual_m) {
+  auto before = [](const CalibrationOutlier& a, const CalibrationOutlier& b) {
+    return a.residual_m > b.residual_m || (a.residual_m == b.residual_m && a.index < b.index);
+  };
+  const CalibrationOutlier item{index, residual_m};
+  CalibrationOutlier* items = list->items;
+  if (list->count == list->limit && (list->limit == 0 || !before(item, items[list->count - 1]))) return;
+  std::size_t k = list->count < list->limit ? list->count++ : list->count - 1;
+  for (; k > 0 && before(item, items[k - 1]); --k) items[k] = items[k - 1];
+  items[k] = item;
+}
+
+/// Sorts a built list by index and fills its `indices`.
+void finish(CalibrationOutlierList* list) {
+  for (std::size_t i = 1; i < list->count; ++i) {
+    const CalibrationOutlier moving = list->items[i];
+    std::size_t k = i;
+    for (; k > 0 && list->items[k - 1].index > moving.index; --k) list->items[k] = list->items[k - 1];
+    list->items[k] = moving;
+  }
+  for (std::size_t i = 0; i < list->count; ++i) list->indices[i] = list->items[i].index;
+}
+
+Span<const std::uint32_t> index_span(const CalibrationOutlierList& list) {
+  return Span<const std::uint32_t>(list.indices, list.count);
+}
+
+bool same_indices(const CalibrationOutlierList& a, const CalibrationOutlierList& b) {
+  if (a.count != b.count) return false;
+  for (std::size_t i = 0; i < a.count; ++i) {
+    if (a.indices[i] != b.indices[i]) return false;
+  }
+  return true;
+}
+
+/// At most this share of the samples is ever set aside: a blunder is a minority.
+std::size_t outlier_limit(std::size_t samples) {
+  const std::size_t half = samples / 2 > 0 ? samples / 2 - 1 : 0;  // strictly fewer than half
+  return half < kMaxCalibrationOutliers ? half : kMaxCalibrationOutliers;
+}
+
+/// Residual norms of `samples` under (model, base) into residual_m; the median over the first
+/// `median_count` of them (the kept samples) into *median_m. The scratch holds the residuals
+/// of its capacity only: samples beyond it are tested, but not part of the median.
+void residuals_of(const RobotModel& model, const RigidTransform& base, Span<const Sample> samples,
+                  std::size_t median_count, ResidualScratch scratch, double* median_m) {
+  const std::size_t n = std::min(median_count, scratch.residual_m.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    scratch.residual_m[i] = (base.apply(fk_tool_point(model, samples[i].q_rad)) - samples[i].point_m).norm();
+  }
+  *median_m = n > 0 ? lower_median(scratch.residual_m, n) : 0.0;
+}
+
+/// The factor that turns the median residual of a least-squares fit of `parameters`
+/// parameters into a noise estimate: the fit shrinks its own samples' residuals by about
+/// sqrt((3 N - p) / 3 N) (few samples, many parameters: far below the noise). 0 without
+/// redundancy (3 N <= p): such a fit cannot tell a blunder.
+double fit_sigma_factor(std::size_t samples, int parameters) {
+  const double equations = 3.0 * static_cast<double>(samples);
+  if (equations <= static_cast<double>(parameters)) return 0.0;
+  return std::sqrt(equations / (equations - static_cast<double>(parameters)));
+}
+
+/// Flags every stored sample (kept and set aside) whose residual under (model, base) exceeds
+/// max(k sigma, floor), sigma = factor * median residual of the kept ones / 1.5382. Returns
+/// false, with nothing flagged, when factor is 0 (no redundancy).
+bool flag_outliers(const RobotModel& model, const RigidTransform& base, const DatasetBase& dataset,
+                   const CalibrationOptions& o, double floor_m, double factor, ResidualScratch scratch,
+                   CalibrationOutlierList* list, double* threshold_m) {
+  list->count = 0;
+  if (!(factor > 0.0)) {
+    *threshold_m = 0.0;
+    finish(list);
+    return false;
+  }
+  double median_m = 0.0;
+  residuals_of(model, base, dataset.samples(), dataset.size(), scratch, &median_m);
+  const double sigma_m = factor * median_m / kMaxwellMedian;
+  *threshold_m = std::fmax(o.outlier_k * sigma_m, floor_m);
+  list->limit = outlier_limit(dataset.size() + dataset.set_aside().size());
+  for (Span<const Sample> part : {dataset.samples(), dataset.set_aside()}) {
+    for (const Sample& s : part) {
+      const double r = (base.apply(fk_tool_point(model, s.q_rad)) - s.point_m).norm();
+      if (r > *threshold_m) offer(list, s.index, r);
+    }
+  }
+  finish(list);
+  return true;
+}
+
+/// Parameters the final stage fitted (with the base): LM's estimated ones, or the six lengths.
+int fitted_parameters(const CalibrationResult& r) {
+  const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
+  if (final_stage.solver == CalibrationSolver::lm) return r.lm.identifiability.kept_count();
+  return static_cast<int>(kPaper6Dimension) + kBaseParamCount;
+}
+
+/// Consensus screen with the start geometry: the base fitted on random point triples (seeded,
+/// deterministic), the one with the least median residual over all samples kept (LMedS, robust
+/// to almost half the samples being wrong), and the samples far from it flagged. Errors:
+/// degenerate_geometry when no triple spans a plane (the base frame is not determined).
+[[gnu::noinline]] Status screen(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& o,
+              CalibrationWorkspaceBase& workspace, CalibrationOutlierList* list) {
+  dataset->set_aside(Span<const std::uint32_t>());
+  const Span<const Sample> samples = dataset->samples();
+  const std::size_t n = samples.size();
+  ResidualScratch scratch = workspace.open_residuals();
+  const std::size_t m = std::min(n, scratch.predicted_m.size());
+  for (std::size_t i = 0; i < m; ++i) scratch.predicted_m[i] = fk_tool_point(start, samples[i].q_rad);
+  Random random(o.seed ^ 0x6c6d656473ULL);  // its own stream: the split's draws stay as they were
+  double best_median_m = 0.0;
+  RigidTransform best;
+  bool found = false;
+  for (std::size_t trial = 0; m >= 3 && trial < o.consensus_trials; ++trial) {
+    const auto a = static_cast<std::size_t>(random.below(m));
+    const auto b = static_cast<std::size_t>(random.below(m));
+    const auto c = static_cast<std::size_t>(random.below(m));
+    if (a == b || b == c || a == c) continue;
+    RigidFitAccumulator fit;
+    for (std::size_t k : {a, b, c}) fit.add(scratch.predicted_m[k], samples[k].point_m);
+    RigidTransform base;
+    if (fit.solve(&base) != Status::ok) continue;
+    for (std::size_t i = 0; i < m; ++i) {
+      scratch.residual_m[i] = (base.apply(scratch.predicted_m[i]) - samples[i].point_m).norm();
+    }
+    const double median_m = lower_median(scratch.residual_m, m);
+    if (!found || median_m < best_median_m) {
+      best_median_m = median_m;
+      best = base;
+      found = true;
+    }
+  }
+  workspace.close();
+  if (!found) return n < 3 ? Status::too_few_samples : Status::degenerate_geometry;
+  double threshold_m = 0.0;
+  scratch = workspace.open_residuals();
+  // The consensus base fits its triple exactly, so on a small set the median leans towards
+  // those zeros: Rousseeuw and Leroy's finite-sample factor 1 + 5 / (n - 3) for LMedS, then a
+  // least-squares refit on the samples it accepts and the test again (reweighted LS).
+  const double lmeds_factor = n > 3 ? 1.0 + 5.0 / static_cast<double>(n - 3) : 0.0;
+  flag_outliers(start, best, *dataset, o, o.screen_floor_m, lmeds_factor, scratch, list, &threshold_m);
+  RigidFitAccumulator refit;
+  for (std::size_t i = 0; i < m; ++i) {
+    bool flagged = false;
+    for (std::uint32_t index : index_span(*list)) flagged = flagged || samples[i].index == index;
+    if (!flagged) refit.add(scratch.predicted_m[i], samples[i].point_m);
+  }
+  RigidTransform refined;
+  if (refit.solve(&refined) == Status::ok) {
+    flag_outliers(start, refined, *dataset, o, o.screen_floor_m, fit_sigma_factor(n, kBaseParamCount), scratch, list,
+                  &threshold_m);
+  }
+  workspace.close();
+  return Status::ok;
+}
+
+/// Input checks shared by calibrate() and cross_validate().
+Status check_inputs(DatasetBase* dataset, const CalibrationOptions& options, CalibrationWorkspaceBase* workspace,
+                    CalibrationResult* r) {
+  if (dataset == nullptr || workspace == nullptr || !known(options)) {
+    return fail(r, CalibrationStep::input, Status::invalid_argument);
+  }
+  dataset->set_aside(Span<const std::uint32_t>());
+  if (dataset->size() == 0) return fail(r, CalibrationStep::input, Status::dataset_empty);
+  return Status::ok;
+}
+
+/// One run of the job with `aside` set aside: split, baseline, stages.
+Status run_once(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+                CalibrationWorkspaceBase* workspace, CalibrationResult* result, CalibrationObserver* observer,
+                Span<const std::uint32_t> aside) {
+  CalibrationResult& r = reset(result);
+  dataset->set_aside(aside);
+  const Status status = dataset->split(options.train_fraction, options.seed);
+  if (status != Status::ok) return fail(&r, CalibrationStep::split, status);
+  return run_split(start, dataset, options, workspace, &r, observer);
 }
 
 }  // namespace
@@ -169,13 +528,6 @@ const char* calibration_method_name(CalibrationMethod method) {
     case CalibrationMethod::all: return "all";
   }
   return "unknown";
-}
-
-std::size_t calibration_minimum_samples(CalibrationParams params) {
-  // Three equations per sample: 12 samples give 36 for the paper's 6 lengths + 6 base
-  // parameters, 24 give 72 for the ~24 the full model identifies + 6 base. LM itself only
-  // refuses 3 N <= free parameters; below these a fit is mostly noise.
-  return params == CalibrationParams::paper ? 12 : 24;
 }
 
 const char* calibration_solver_name(CalibrationSolver solver) {
@@ -210,18 +562,90 @@ const char* calibration_step_name(CalibrationStep step) {
 Status calibrate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
                  CalibrationWorkspaceBase* workspace, CalibrationResult* result, CalibrationObserver* observer) {
   if (result == nullptr) return Status::invalid_argument;
-  result->~CalibrationResult();
-  CalibrationResult& r = *new (result) CalibrationResult();  // in place: no 5 KB temporary on the stack
-  if (dataset == nullptr || workspace == nullptr) return fail(&r, CalibrationStep::input, Status::invalid_argument);
-  Status status = prepare(start, dataset, options, &r);
+  Status status = check_inputs(dataset, options, workspace, &reset(result));
   if (status != Status::ok) return status;
-  Job job{start, *dataset, options, *workspace, r, observer};
-  const StagePlan plan = plan_for(options.method);
-  if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, false)) != Status::ok) return status;
-  if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, false)) != Status::ok) return status;
-  if (plan.lm && (status = run_stage(job, CalibrationSolver::lm, plan.hybrid)) != Status::ok) return status;
-  r.step = CalibrationStep::done;
-  r.status = Status::ok;
+  if (options.keep_outliers) return run_once(start, dataset, options, workspace, result, observer, {});
+  // The two lists live in the workspace (2.6 kB: not on a small target's stack).
+  CalibrationOutlierList& aside = workspace->outlier_list(0);
+  CalibrationOutlierList& tested = workspace->outlier_list(1);
+  status = screen(start, dataset, options, *workspace, &aside);
+  if (status != Status::ok) return fail(&reset(result), CalibrationStep::baseline, status);
+  // Rerun until the calibration's own residual test sets aside what the run left out: a
+  // sample the start geometry's screen flagged comes back when the calibration explains it.
+  constexpr std::size_t kMaxRounds = 4;
+  double threshold_m = 0.0;
+  std::size_t round = 0;
+  while (true) {
+    status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
+    if (status != Status::ok) return status;
+    ++round;
+    const CalibrationStage& final_stage = result->stages[result->stage_count - 1];
+    const ResidualScratch scratch = workspace->open_residuals();
+    const bool tested_any = flag_outliers(final_stage.model, final_stage.base_to_tracker, *dataset, options,
+                                          options.outlier_floor_m,
+                                          fit_sigma_factor(dataset->size(), fitted_parameters(*result)), scratch,
+                                          &tested, &threshold_m);
+    workspace->close();
+    // Without redundancy the screen's verdict stands (a gross blunder still goes).
+    if (!tested_any || same_indices(tested, aside) || round == kMaxRounds) break;
+    aside = tested;
+  }
+  // The residuals reported are the final calibration's (of the set the run left out).
+  CalibrationResult& r = *result;
+  r.outlier_count = 0;
+  const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
+  for (const Sample& s : dataset->set_aside()) {
+    r.outliers[r.outlier_count++] = CalibrationOutlier{
+        s.index, (final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)) - s.point_m).norm()};
+  }
+  r.outlier_rounds = round;
+  r.outlier_threshold_m = threshold_m;
+  return Status::ok;
+}
+
+Status cross_validate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+                      std::size_t folds, CalibrationWorkspaceBase* workspace, CalibrationResult* scratch,
+                      CrossValidationResult* cv, CalibrationObserver* observer) {
+  if (scratch == nullptr || cv == nullptr) return Status::invalid_argument;
+  cv->~CrossValidationResult();
+  new (cv) CrossValidationResult();
+  Status status = Status::ok;
+  std::size_t aside_count = 0;
+  if (!options.keep_outliers) {  // the blunders, found once on the whole set
+    status = calibrate(start, dataset, options, workspace, scratch, observer);
+    if (status != Status::ok) return cv->status = status;
+    aside_count = scratch->outlier_count;
+  } else if (dataset == nullptr || workspace == nullptr) {
+    return cv->status = Status::invalid_argument;
+  }
+  std::uint32_t aside[kMaxCalibrationOutliers] = {};
+  for (std::size_t i = 0; i < aside_count; ++i) aside[i] = scratch->outliers[i].index;
+  const Span<const std::uint32_t> aside_span(aside, aside_count);
+  dataset->set_aside(aside_span);
+  const std::size_t n = dataset->size();
+  const std::size_t k = folds == 0 ? n : folds;
+  if (k < 2 || k > n || k > kMaxCrossValidationFolds) return cv->status = Status::invalid_argument;
+  double abs_sum_m = 0.0;
+  for (std::size_t f = 0; f < k; ++f) {
+    CalibrationResult& r = reset(scratch);
+    dataset->set_aside(aside_span);
+    status = dataset->split_fold(f, k, options.seed);
+    if (status == Status::ok) status = run_split(start, dataset, options, workspace, &r, observer);
+    if (status != Status::ok) return cv->status = status;
+    CrossValidationFold& fold = cv->folds[f];
+    fold.train_count = r.train_count;
+    const CalibrationStage& final_stage = r.stages[r.stage_count - 1];  // a method runs one stage at least
+    fold.train = final_stage.train;
+    fold.test = final_stage.test;
+    const double mae_m = fold.test.mae(ErrorAxis::norm_3d);
+    abs_sum_m += mae_m * static_cast<double>(fold.test.count);
+    cv->fold_mae_3d_mean_m += mae_m / static_cast<double>(k);
+    cv->fold_mae_3d_max_m = std::fmax(cv->fold_mae_3d_max_m, mae_m);
+  }
+  cv->fold_count = k;
+  cv->sample_count = n;
+  cv->mae_3d_m = abs_sum_m / static_cast<double>(n);
+  cv->status = Status::ok;
   return Status::ok;
 }
 

@@ -6,17 +6,82 @@ namespace hivecal {
 
 Status DatasetBase::add(const JointVector& q_rad, const Vec3& point_m) {
   if (!all_finite(q_rad) || !all_finite(point_m)) return Status::non_finite_input;
+  if (stored_ != size_) set_aside(Span<const std::uint32_t>());  // a new sample joins every stored one
   if (full()) return Status::dataset_full;
   storage_[size_].q_rad = q_rad;
   storage_[size_].point_m = point_m;
+  storage_[size_].index = static_cast<std::uint32_t>(size_);  // unique: the order of add()
   ++size_;
+  stored_ = size_;
   train_count_ = size_;
   return Status::ok;
 }
 
 void DatasetBase::clear() {
   size_ = 0;
+  stored_ = 0;
   train_count_ = 0;
+}
+
+void DatasetBase::sort_by_index(std::size_t count) {
+  // Insertion sort on the unique Sample::index: in place, no heap, and the split leaves a
+  // random order whose cost (n^2 / 4 moves) is small beside one calibration.
+  for (std::size_t i = 1; i < count; ++i) {
+    const Sample moving = storage_[i];
+    std::size_t j = i;
+    for (; j > 0 && storage_[j - 1].index > moving.index; --j) storage_[j] = storage_[j - 1];
+    storage_[j] = moving;
+  }
+}
+
+void DatasetBase::set_aside(Span<const std::uint32_t> indices) {
+  sort_by_index(stored_);
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < stored_; ++i) {
+    bool aside = false;
+    for (std::uint32_t index : indices) aside = aside || storage_[i].index == index;
+    if (aside) continue;
+    // Stable partition by rotation: the kept sample moves down over the set-aside block.
+    const Sample moving = storage_[i];
+    for (std::size_t j = i; j > kept; --j) storage_[j] = storage_[j - 1];
+    storage_[kept++] = moving;
+  }
+  size_ = kept;
+  train_count_ = size_;
+}
+
+void DatasetBase::swap_samples(std::size_t a, std::size_t b) {
+  if (a >= size_ || b >= size_ || a == b) return;
+  const Sample tmp = storage_[a];
+  storage_[a] = storage_[b];
+  storage_[b] = tmp;
+}
+
+void DatasetBase::shuffle(std::uint64_t seed) {
+  Random random(seed);
+  for (std::size_t i = size_ - 1; i > 0; --i) {
+    const auto j = static_cast<std::size_t>(random.below(static_cast<std::uint64_t>(i) + 1U));
+    const Sample tmp = storage_[i];
+    storage_[i] = storage_[j];
+    storage_[j] = tmp;
+  }
+}
+
+Status DatasetBase::split_fold(std::size_t fold, std::size_t folds, std::uint64_t seed) {
+  if (size_ == 0) return Status::dataset_empty;
+  if (folds < 2 || folds > size_ || fold >= folds) return Status::invalid_argument;
+  sort_by_index(size_);  // the kept samples in the order of add(): the same folds whatever the order before
+  shuffle(seed);
+  const std::size_t begin = fold * size_ / folds;
+  const std::size_t end = (fold + 1) * size_ / folds;
+  // Rotate [begin, size_) left by (end - begin): the fold's block goes to the end, in order.
+  for (std::size_t r = 0; r < end - begin; ++r) {
+    const Sample first = storage_[begin];
+    for (std::size_t i = begin; i + 1 < size_; ++i) storage_[i] = storage_[i + 1];
+    storage_[size_ - 1] = first;
+  }
+  train_count_ = size_ - (end - begin);
+  return Status::ok;
 }
 
 std::size_t DatasetBase::train_count_for(double train_fraction) const {
@@ -28,13 +93,7 @@ Status DatasetBase::split(double train_fraction, std::uint64_t seed) {
   if (size_ == 0) return Status::dataset_empty;
   const std::size_t train_count = train_count_for(train_fraction);
   if (train_count == 0) return Status::invalid_argument;
-  Random random(seed);
-  for (std::size_t i = size_ - 1; i > 0; --i) {
-    const auto j = static_cast<std::size_t>(random.below(static_cast<std::uint64_t>(i) + 1U));
-    const Sample tmp = storage_[i];
-    storage_[i] = storage_[j];
-    storage_[j] = tmp;
-  }
+  shuffle(seed);
   train_count_ = train_count;
   return Status::ok;
 }

@@ -1,5 +1,6 @@
 #include "hivecal/solve/lm.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "hivecal/solve/cost.hpp"
@@ -186,7 +187,10 @@ Status validate_inputs(const RobotModel& start_model, const RigidTransform* star
   if (!options_valid(options)) return Status::invalid_argument;
   if (samples.empty()) return Status::dataset_empty;
   *free_mask = lm_param_mask(options.params, options.custom_mask, start_model);
-  if (3 * samples.size() <= static_cast<std::size_t>(mask_count(*free_mask))) return Status::too_few_samples;
+  // No floor beyond the base frame: with few samples the identifiability analysis keeps fewer
+  // parameters (analyse()); only a set that cannot determine even the base (6) is refused.
+  const int determinable = std::min(mask_count(*free_mask), kBaseParamCount);
+  if (3 * samples.size() <= static_cast<std::size_t>(determinable)) return Status::too_few_samples;
   if (!all_finite(to_params(start_model))) return Status::non_finite_input;
   if (start_base != nullptr && !transform_finite(*start_base)) return Status::non_finite_input;
   for (const Sample& sample : samples) {
@@ -252,12 +256,22 @@ Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
 }
 
 /// Identifiability analysis of the current normal equations; sets the kept set and the report.
+/// A small set can leave as many identifiable parameters as equations (no residual degree of
+/// freedom, no noise estimate, an exact fit of the noise): then the threshold is raised tenfold
+/// at a time, so the weakest directions go first, until fewer remain than 3 N, and the report
+/// names them; too_few_samples when even that does not get there.
 Status analyse(Run* run) {
-  const Status status =
-      analyze_identifiability(run->current->jtwj, run->free_mask, run->options.identifiability_threshold,
-                              &run->ws->identifiability, &run->result->identifiability);
-  run->kept = run->result->identifiability.kept_mask;
-  return status;
+  const int equations = 3 * static_cast<int>(run->samples.size());
+  double threshold = run->options.identifiability_threshold;
+  Status status = Status::ok;
+  while (true) {
+    status = analyze_identifiability(run->current->jtwj, run->free_mask, threshold, &run->ws->identifiability,
+                                     &run->result->identifiability);
+    run->kept = run->result->identifiability.kept_mask;
+    if (status != Status::ok || mask_count(run->kept) < equations) return status;
+    if (threshold * 10.0 >= 1.0) return Status::too_few_samples;
+    threshold *= 10.0;
+  }
 }
 
 /// Moves to an accepted trial point whose normal equations are in run->trial. Identifiability

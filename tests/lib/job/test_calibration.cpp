@@ -8,6 +8,7 @@
 
 #include "hivecal/calibration.hpp"
 #include "hivecal/core/random.hpp"
+#include "hivecal/model/rigid_fit.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
@@ -101,23 +102,57 @@ TEST(CalibrationJob, AllIsTheTableOneOrderEachFromTheStart) {
 
 TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
   fill(120, &dataset);
-  ASSERT_EQ(calibrate(start(), &dataset, quick(CalibrationMethod::abc_lm), &workspace, &result), Status::ok);
+  CalibrationOptions options = quick(CalibrationMethod::abc_lm);
+  options.significance_t = 0.0;  // every identifiable parameter, as one LM call by hand
+  ASSERT_EQ(calibrate(start(), &dataset, options, &workspace, &result), Status::ok);
   fill(120, &dataset);
   ASSERT_EQ(dataset.split(0.7, 1), Status::ok);
   static Paper6Cost<kSamples> cost;
   static AbcSolver<40, kPaper6Dimension> abc;
   static LmWorkspace lm_workspace;
   static LmResult lm;
+  // The baseline: tool point and base with the nominal joints; the stages start from it.
+  RigidTransform base;
+  ASSERT_EQ(fit_base_to_tracker(start(), dataset.train(), &base), Status::ok);
+  LmOptions baseline_options;
+  baseline_options.params = LmParamSet::custom;
+  baseline_options.custom_mask = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    baseline_options.custom_mask |= param_bit(tool_param_index(axis)) | param_bit(base_rotation_param_index(axis)) |
+                                    param_bit(base_translation_param_index(axis));
+  }
+  ASSERT_EQ(calibrate_lm(start(), &base, dataset.train(), baseline_options, &lm_workspace, &lm), Status::ok);
+  const RobotModel baseline = lm.model;
+  EXPECT_TRUE(same_bits(result.baseline.model, baseline));
   AbcOptions abc_options;
   abc_options.food_sources = 20;
   abc_options.cycles = 20;
   Paper6StageResult population;
-  ASSERT_EQ(calibrate_paper6_abc(start(), dataset.train(), abc_options, kPaper6DefaultHalfWidth_m, &cost, &abc,
+  ASSERT_EQ(calibrate_paper6_abc(baseline, dataset.train(), abc_options, kPaper6DefaultHalfWidth_m, &cost, &abc,
                                  &population),
             Status::ok);
   ASSERT_EQ(calibrate_lm(population.model, &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace,
                          &lm),
             Status::ok);
+  // What LM dropped goes back to its start value, and LM runs once more from there.
+  ModelParams from = to_params(population.model);
+  const ModelParams nominal = to_params(baseline);
+  bool reset = false;
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(lm.identifiability.kept_mask, i) && from(i) != nominal(i)) {
+      from(i) = nominal(i);
+      reset = true;
+    }
+  }
+  EXPECT_TRUE(reset) << "ABC moves d1, which the full model cannot separate from the base";
+  ASSERT_EQ(calibrate_lm(from_params(from), &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace,
+                         &lm),
+            Status::ok);
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(lm.identifiability.kept_mask, i)) {
+      EXPECT_EQ(to_params(last(result).model)(i), nominal(i)) << i;
+    }
+  }
   EXPECT_TRUE(same_bits(result.stages[0].model, population.model));
   EXPECT_TRUE(same_bits(last(result).model, lm.model));
   EXPECT_EQ(result.lm.rms_m, lm.rms_m);
@@ -183,9 +218,14 @@ TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
   dataset.clear();
   expect_failure(calibrate(start(), &dataset, options, &workspace, &result), Status::dataset_empty,
                  CalibrationStep::input);
-  fill(calibration_minimum_samples(CalibrationParams::full) - 1, &dataset);
+  fill(2, &dataset);  // not even the base frame
   expect_failure(calibrate(start(), &dataset, options, &workspace, &result), Status::too_few_samples,
-                 CalibrationStep::input);
+                 CalibrationStep::baseline);
+  fill(8, &dataset);  // no floor: 8 samples estimate fewer parameters
+  CalibrationOptions every = quick(CalibrationMethod::lm);
+  every.train_fraction = 1.0;
+  EXPECT_EQ(calibrate(start(), &dataset, every, &workspace, &result), Status::ok);
+  EXPECT_LT(result.lm.identifiability.kept_count(), 24);
 
   fill(120, &dataset);
   CalibrationOptions no_training = options;

@@ -42,12 +42,19 @@ struct LmErrors : ::testing::Test {
 
 TEST_F(LmErrors, EmptyOrTooFewSamplesForTheFreeParameters) {
   EXPECT_EQ(run({}), Status::dataset_empty);
-  EXPECT_EQ(run(data().samples().subspan(0, 11)), Status::too_few_samples);  // 33 residuals, 33 parameters
+  // No floor but the base frame's: 2 samples (6 residuals) cannot determine its 6 parameters.
+  EXPECT_EQ(run(data().samples().subspan(0, 2)), Status::too_few_samples);
+  // 8 samples, 24 residuals for 33 candidates: fewer are estimated, the rest named as dropped.
+  EXPECT_EQ(run(data().samples().subspan(0, 8)), Status::ok);
+  EXPECT_LT(result().identifiability.kept_count(), 24);
+  EXPECT_EQ(result().identifiability.dropped_count, 33 - result().identifiability.kept_count());
+  EXPECT_GT(result().residual_sigma_m, 0.0);
   EXPECT_EQ(run(data().samples().subspan(0, 12)), Status::ok);
   LmOptions paper6;
   paper6.params = LmParamSet::link_lengths;  // 12 free parameters
-  EXPECT_EQ(run(data().samples().subspan(0, 4), paper6), Status::too_few_samples);
-  EXPECT_EQ(run(data().samples().subspan(0, 5), paper6), Status::ok);
+  EXPECT_EQ(run(data().samples().subspan(0, 2), paper6), Status::too_few_samples);
+  EXPECT_EQ(run(data().samples().subspan(0, 4), paper6), Status::ok);  // 12 residuals: 11 or fewer kept
+  EXPECT_LT(result().identifiability.kept_count(), 12);
 }
 
 TEST_F(LmErrors, NonFiniteStartModelBaseOrSample) {

