@@ -411,6 +411,17 @@ Status generate_candidates(const RobotModel& model, const PlanOptions& options, 
   return found == options.candidate_count ? Status::ok : Status::too_few_samples;
 }
 
+Status pool_identifiability(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
+                            IdentifiabilityReport* report, std::size_t* attempts) {
+  Status status = generate_candidates(model, options, workspace, attempts);
+  if (status != Status::ok) return status;
+  const Span<const Sample> pool(workspace->candidates, options.candidate_count);
+  status = accumulate_normal_equations(model, kIdentity, pool, PointLoss{}, &workspace->normal);
+  if (status != Status::ok) return status;
+  return analyze_identifiability(workspace->normal.jtwj, options.free_mask, options.identifiability_threshold,
+                                 &workspace->identifiability, report);
+}
+
 Status evaluate_pose_set(const RobotModel& model, Span<const Sample> poses, const PlanOptions& options,
                          ParamMask objective_mask, const FullParams& scale, PlanWorkspace* workspace,
                          PoseSetQuality* quality) {
@@ -475,15 +486,9 @@ Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWor
     if (status != Status::ok) return status;
     workspace->pool_information = workspace->normal.jtwj;
   }
-  status = generate_candidates(model, options, workspace, &result->attempts);
+  status = pool_identifiability(model, options, workspace, &result->pool, &result->attempts);
   if (status != Status::ok) return status;
   result->candidate_count = options.candidate_count;
-  const Span<const Sample> pool(workspace->candidates, options.candidate_count);
-  status = accumulate_normal_equations(model, kIdentity, pool, PointLoss{}, &workspace->normal);
-  if (status != Status::ok) return status;
-  status = analyze_identifiability(workspace->normal.jtwj, options.free_mask, options.identifiability_threshold,
-                                   &workspace->identifiability, &result->pool);
-  if (status != Status::ok) return status;
   const ParamMask mask = result->pool.kept_mask;
   const FullParams scale = pool_scale(workspace->normal.jtwj, options.candidate_count, mask);
   if (options.criterion != PlanCriterion::i_optimal_workspace) workspace->pool_information = workspace->normal.jtwj;
@@ -500,7 +505,8 @@ Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWor
   status = exchange_passes(model, options, scale, mask, workspace, result);
   if (status != Status::ok) return status;
 
-  status = evaluate_pose_set(model, pool.subspan(0, options.pose_count), options, mask, scale, workspace,
+  const Span<const Sample> first_draws(workspace->candidates, options.pose_count);  // random, same constraints
+  status = evaluate_pose_set(model, first_draws, options, mask, scale, workspace,
                              &result->random);
   if (status != Status::ok) return status;
   status = evaluate_pose_set(model, selection, options, mask, scale, workspace, &result->planned);

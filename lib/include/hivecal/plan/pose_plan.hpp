@@ -134,6 +134,12 @@ bool pose_meets_constraints(const RobotModel& model, const PlanConstraints& cons
 Status generate_candidates(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
                            std::size_t* attempts);
 
+/// Draws the candidate pool (generate_candidates) and analyses what it can identify over
+/// options.free_mask: the parameters no pose set under these constraints can identify are
+/// the ones it drops; workspace->normal keeps the pool's J^T J. Errors of both steps.
+Status pool_identifiability(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
+                            IdentifiabilityReport* report, std::size_t* attempts);
+
 /// Quality of a pose set (J^T J over options.free_mask, identifiability, sigma at
 /// options.noise_m; log_det over `objective_mask` with columns multiplied by `scale`, the
 /// selection's scale). `poses` must not be workspace storage other than `selected`.
