@@ -19,6 +19,11 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset);
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`).
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses);
 
+/// Reads joint limits: header `lower,upper` [rad], exactly six rows (joint 1 .. 6), lower < upper.
+port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad);
+
+/// `q1..q6` rows with round-trip precision (the poses-to-predict format).
+std::string format_joints_csv(Span<const JointVector> poses_rad);
 /// `x,y,z` rows with round-trip precision.
 std::string format_points_csv(const std::vector<Vec3>& points_m);
 /// `q1..q6,x,y,z` rows with round-trip precision.
