@@ -232,7 +232,7 @@ TEST(PosePlan, PlannedSessionsCalibrateBetterThanRandomOnes) {
   make_validation_pools();
   // Measured (x86-64): D-optimal 0.815 on the measurable region, 0.871 on the whole cell;
   // I-optimal over the cell 0.729 there. The issue asked for 0.7: not reached, see
-  // docs/planning.md (a random set of 24 inflates the prediction variance by ~3N/(3N-p) ~ 1.5
+  // docs/planning.md (a random set of 24 inflates the prediction variance by ~3N/(3N-p-1) ~ 1.5
   // only, so no selection from this pool can halve it on the region it was drawn from).
   const Comparison d = compare_sessions(PlanCriterion::d_optimal, 24, 12);
   EXPECT_LE(d.planned[0], 0.9 * d.random[0]);
@@ -267,7 +267,8 @@ TEST(PosePlan, ToolDownLeavesParametersThatNoPoseSetIdentifies) {
   }
   std::printf("\n");
   // Three more null directions with the joint 6 axis always vertical (the dropping rule names
-  // one parameter of each): tool_z and d6 both move the point along it, as base_tz does.
+  // one parameter of each): d6 and tool_z move the point as base_tz does, a1 becomes a
+  // combination of theta4 and a4, d4 one of alpha4 (d2, d3 are lost either way).
   EXPECT_EQ(result.pool.kept_mask & ~facing.kept_mask, 0u);  // down identifies nothing more
   EXPECT_EQ(gained, param_bit(model_param_index(0, DhField::a)) | param_bit(model_param_index(3, DhField::d)) |
                         param_bit(tool_param_index(2)));
