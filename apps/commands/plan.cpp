@@ -10,6 +10,7 @@
 #include "hivecal/core/math.hpp"
 #include "hivecal/plan/pose_plan.hpp"
 #include "hivecal/port/output_files.hpp"
+#include "report/svg.hpp"
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
 
@@ -219,6 +220,36 @@ std::string urscript(const PlanOptions& o) {
   return out + "end\n";
 }
 
+/// Reflector positions of planned and random poses and the tracker, seen from above and from
+/// the side (distance from the base axis vs height): the report figure "planned vs random".
+std::string svg_figure(const PlanRequest& request) {
+  const auto series = [&](const std::string& name, const JointVector* poses, std::size_t stride, bool top) {
+    report::Series s{name, {}, {}, true};
+    for (std::size_t i = 0; i < result.pose_count; ++i) {
+      const Vec3 p = fk_tool_point(request.model, poses[i * stride]);
+      s.x.push_back(top ? p.x() : p.head<2>().norm());
+      s.y.push_back(top ? p.y() : p.z());
+    }
+    return s;
+  };
+  std::vector<JointVector> random;
+  for (std::size_t i = 0; i < result.pose_count; ++i) random.push_back(workspace.candidates[i].q_rad);
+  const Vec3 t = request.options.constraints.tracker_m;
+  std::string out = "<svg xmlns='http://www.w3.org/2000/svg' width='560' height='640'>\n";
+  for (const bool top : {true, false}) {
+    report::ChartSpec spec;
+    spec.title = top ? "Reflector positions, top view: planned vs random (same count, same constraints)"
+                     : "Side view: distance from the base axis vs height";
+    spec.x_label = top ? "x [m]" : "radius [m]";
+    spec.y_label = top ? "y [m]" : "z [m]";
+    report::Series tracker{"tracker", {top ? t.x() : t.head<2>().norm()}, {top ? t.y() : t.z()}, true};
+    const std::string chart = report::svg_chart(
+        spec, {series("random", random.data(), 1, top), series("planned", result.poses, 1, top), tracker});
+    out += top ? chart : "<g transform='translate(0,320)'>" + chart + "</g>\n";
+  }
+  return out + "</svg>\n";
+}
+
 Error plan(const Options& options) {
   PlanRequest request;
   Error error = parse_request(options, &request);
@@ -226,10 +257,13 @@ Error plan(const Options& options) {
   port::OutputSet outputs;
   std::size_t out_id = 0;
   std::size_t script_id = 0;
+  std::size_t svg_id = 0;
   const bool script = !options.get("urscript").empty();
+  const bool svg = !options.get("svg").empty();
   if (!options.get("joint-limits").empty()) error = outputs.add_input(options.get("joint-limits"), "--joint-limits");
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (error.ok() && script) error = outputs.add_file(options.get("urscript"), "--urscript", &script_id);
+  if (error.ok() && svg) error = outputs.add_file(options.get("svg"), "--svg", &svg_id);
   if (!error.ok()) return error;
 
   IdentifiabilityReport facing;
@@ -253,6 +287,7 @@ Error plan(const Options& options) {
   std::fputs(report_text(request, down ? &facing : nullptr).c_str(), options.get("out") == "-" ? stderr : stdout);
   error = outputs.stage_text(out_id, "", textio::format_joints_csv(Span<const JointVector>(result.poses, result.pose_count)));
   if (error.ok() && script) error = outputs.stage_text(script_id, "", urscript(request.options));
+  if (error.ok() && svg) error = outputs.stage_text(svg_id, "", svg_figure(request));
   return error.ok() ? outputs.commit() : error;
 }
 
@@ -279,6 +314,7 @@ int plan_main(int argc, char** argv) {
       {"dwell", "S", "wait at each pose (>= 0.3 s: the extraction needs the arm still at 10 Hz)", "1"},
       {"out", "FILE", "planned poses, CSV q1..q6 [rad] in visiting order ('-': stdout)", ""},
       {"urscript", "FILE", "URScript program: movej + sleep(dwell) per pose", ""},
+      {"svg", "FILE", "figure: reflector positions planned vs random (top and side views)", ""},
   };
   Options options;
   const int parsed = parse_options(kCommand,

@@ -89,7 +89,9 @@ JSON
   if "${run[@]}" predict --calibration "$work/result.json" --joints "$work/a.csv" --frame base --out "$work/p.csv" &&
      [ "$(awk -F, 'NR > 1 && $3 < 0.05' "$work/p.csv" | wc -l)" -eq 0 ] && [ "$(wc -l <"$work/p.csv")" -eq 31 ]; then pass; else
     fail "plan CSV through predict: a reflector below the floor or unreadable"; fi
-  "${run[@]}" plan "${cell[@]}" --count 30 --seed 8 --out "$work/c.csv" >/dev/null 2>&1
+  "${run[@]}" plan "${cell[@]}" --count 30 --seed 8 --out "$work/c.csv" --svg "$work/f.svg" >/dev/null 2>&1
+  if [ "$(head -c 4 "$work/f.svg")" = "<svg" ] && grep -q ">planned<" "$work/f.svg" && grep -q ">random<" "$work/f.svg" &&
+     [ "$(tail -1 "$work/f.svg")" = "</svg>" ]; then pass; else fail "plan --svg: figure"; fi
   if ! cmp -s "$work/a.csv" "$work/c.csv"; then pass; else fail "plan: another seed gave the same poses"; fi
 else
   fail "plan on good input: $(cat "$work/report.txt")"
