@@ -3,7 +3,8 @@
 // cell's constraints (joint limits, floor, keep-out cylinder, reflector facing the tracker);
 // the selection maximises the D-optimality criterion, log det of the column-scaled information
 // matrix J^T J of the tool-point residuals (normal_equations.hpp) over the parameters the pool
-// of candidates can identify (identifiability.hpp), by a greedy start and Fedorov exchanges;
+// of candidates can identify (identifiability.hpp), or on request an I-optimality criterion
+// (mean prediction variance), by a greedy start and Fedorov exchanges;
 // the chosen poses are ordered for a short movej path (nearest neighbour, then 2-opt).
 // No heap: the candidate pool lives in a caller-provided PlanWorkspace.
 #pragma once
@@ -110,7 +111,7 @@ struct PlanResult {
   double session_s = 0.0;                   ///< travel plus one dwell per pose [s]
 };
 
-/// Scratch memory of a plan (~190 kB): give it static storage.
+/// Scratch memory of a plan (~230 kB, most of it the candidate pool): give it static storage.
 struct PlanWorkspace {
   Sample candidates[kPlanCandidateCapacity];   ///< the pool (points: the nominal tool point)
   Sample selected[kPlanPoseCapacity];          ///< the current selection
