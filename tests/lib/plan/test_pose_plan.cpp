@@ -4,6 +4,7 @@
 // under the same constraints; the tool-down session's unidentifiable parameters.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 
 #include "hivecal/calibration.hpp"
