@@ -3,7 +3,8 @@
 # the stages below it, and nothing in lib/ includes the OS, the heap containers or I/O streams.
 #   core   <- (nothing)           wire <- core          model <- core, linalg
 #   linalg <- core                sync <- core, wire, model
-#   solve  <- core, linalg, model          job (hivecal/*.hpp, src/job) <- every stage
+#   solve  <- core, linalg, model          plan <- core, linalg, model, solve
+#   job (hivecal/*.hpp, src/job) <- every stage
 # Prints each violation as file:line and exits 1 if there is any.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -16,7 +17,8 @@ allowed() {  # allowed STAGE -> the stages it may include
     model) echo "core linalg model" ;;
     sync) echo "core wire model sync" ;;
     solve) echo "core linalg model solve" ;;
-    job) echo "core wire sync model linalg solve job" ;;
+    plan) echo "core linalg model solve plan" ;;
+    job) echo "core wire sync model linalg solve plan job" ;;
     *) echo "" ;;
   esac
 }

@@ -21,6 +21,7 @@ const Command kCommands[] = {
     {"report", "the HTML report of a calibration again, from its result.json", hivecal::cli::report_main},
     {"validate", "compare a calibration with a reference geometry (e.g. truth.json) on fresh poses",
      hivecal::cli::validate_main},
+    {"plan", "choose and order the poses of a tracker session; joints CSV and URScript", hivecal::cli::plan_main},
     {"predict", "tool positions of joint poses from a calibration result", hivecal::cli::predict_main},
     {"simulate", "simulated UR + tracker session: captures, CSV logs, ground truth, live ptys", hivecal::sim::simulate_main},
     {"record", "record serial ports (or ptys) to capture files, nothing lost on SIGINT/SIGTERM", hivecal::streams::record_main},

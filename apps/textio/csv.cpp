@@ -125,6 +125,35 @@ port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* p
   });
 }
 
+port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad) {
+  JointVector lower;
+  JointVector upper;
+  int rows = 0;
+  port::Error error = read_csv(path, CsvSchema{{"lower", "upper"}, {Quantity::angle, Quantity::angle}, ""}, InputUnits{}, [&](const std::vector<double>& values) {
+    const std::string bad = check_finite(values, 0, 2);
+    if (!bad.empty()) return bad;
+    if (rows == kJointCount) return std::string("more than six rows (one per joint)");
+    if (!(values[0] < values[1])) return std::string("lower limit not below the upper one");
+    lower(rows) = values[0];
+    upper(rows) = values[1];
+    ++rows;
+    return std::string();
+  });
+  if (!error.ok()) return error;
+  if (rows != kJointCount) return port::Error::input(path + ": " + std::to_string(rows) + " rows, expected six (one per joint)");
+  *lower_rad = lower;
+  *upper_rad = upper;
+  return error;
+}
+
+std::string format_joints_csv(Span<const JointVector> poses_rad) {
+  std::string out = "q1,q2,q3,q4,q5,q6\n";
+  for (const JointVector& q : poses_rad) {
+    for (int j = 0; j < kJointCount; ++j) out += format_double(q(j)) + (j + 1 < kJointCount ? "," : "\n");
+  }
+  return out;
+}
+
 std::string format_points_csv(const std::vector<Vec3>& points_m, const std::string& length_unit) {
   const bool mm = length_unit == "mm";
   const double scale = mm ? 1e3 : 1.0;

@@ -24,6 +24,11 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`), units and checks as above.
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units = {});
 
+/// Reads joint limits: header `lower,upper` [rad], exactly six rows (joint 1 .. 6), lower < upper.
+port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad);
+
+/// `q1..q6` rows with round-trip precision (the poses-to-predict format).
+std::string format_joints_csv(Span<const JointVector> poses_rad);
 /// `x,y,z` rows with round-trip precision, in metres; with `length_unit` "mm" the header is
 /// `x [mm],y [mm],z [mm]` and the values are in millimetres (read back by the same reader).
 std::string format_points_csv(const std::vector<Vec3>& points_m, const std::string& length_unit = "m");

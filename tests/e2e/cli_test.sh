@@ -340,7 +340,7 @@ if command -v script >/dev/null; then
 fi
 
 # --- every command has --help
-for cmd in calibrate validate predict simulate record extract demo report; do
+for cmd in calibrate validate predict plan simulate record extract demo report; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then passed=$((passed + 1)); else
     failed=$((failed + 1)); echo "FAIL: $cmd --help"; fi
 done

@@ -37,4 +37,5 @@
 #include "hivecal/solve/objective.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
 #include "hivecal/solve/population_stage.hpp"
+#include "hivecal/plan/pose_plan.hpp"
 #include "hivecal/calibration.hpp"

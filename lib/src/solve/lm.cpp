@@ -6,6 +6,7 @@
 #include "hivecal/solve/cost.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
 #include "hivecal/core/math.hpp"
+#include "solve/kept_cholesky.hpp"
 
 namespace hivecal {
 namespace {
@@ -66,66 +67,6 @@ double gradient_cosine(const NormalEquations& eq, const FullParams& scale, Param
     if (mask_has(kept, i)) largest = std::fmax(largest, std::fabs(eq.jtwr(i) * scale(i)));
   }
   return largest / std::sqrt(eq.weighted_squares_m2);
-}
-
-/// Factors a(kept, kept) = U^T U (plain Cholesky, column-oriented dot products over
-/// contiguous columns). False unless every pivot is positive and finite: the kept block of a
-/// scaled normal matrix is positive definite, damped or identifiable.
-bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f) {
-  f->count = mask_indices(kept, f->index);
-  NormalMatrix& u = f->upper;
-  for (int j = 0; j < f->count; ++j) {
-    const int pj = f->index[j];
-    for (int i = 0; i < j; ++i) {
-      double sum = a(f->index[i], pj);
-      for (int k = 0; k < i; ++k) sum -= u(k, i) * u(k, j);
-      u(i, j) = sum / u(i, i);
-    }
-    double pivot = a(pj, pj);
-    for (int k = 0; k < j; ++k) pivot -= u(k, j) * u(k, j);
-    if (!(pivot > 0.0) || !math::is_finite(pivot)) return false;
-    u(j, j) = std::sqrt(pivot);
-  }
-  return true;
-}
-
-/// x = A^-1 b over the factored parameters (U^T y = b, then U x = y); 0 elsewhere.
-void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x) {
-  const NormalMatrix& u = f.upper;
-  double y[kFullParamCount];
-  for (int i = 0; i < f.count; ++i) {
-    double sum = b(f.index[i]);
-    for (int k = 0; k < i; ++k) sum -= u(k, i) * y[k];
-    y[i] = sum / u(i, i);
-  }
-  x->setZero();
-  for (int i = f.count - 1; i >= 0; --i) {
-    double sum = y[i];
-    for (int k = i + 1; k < f.count; ++k) sum -= u(i, k) * y[k];
-    y[i] = sum / u(i, i);
-    (*x)(f.index[i]) = y[i];
-  }
-}
-
-/// diag(A^-1) over the factored parameters, 0 elsewhere: A^-1 = W W^T with W = U^-1 (upper),
-/// built in *scratch.
-void cholesky_inverse_diagonal(const KeptCholesky& f, NormalMatrix* scratch, FullParams* diagonal) {
-  const NormalMatrix& u = f.upper;
-  NormalMatrix& w = *scratch;
-  for (int j = 0; j < f.count; ++j) {
-    w(j, j) = 1.0 / u(j, j);
-    for (int i = 0; i < j; ++i) {
-      double sum = 0.0;
-      for (int k = i; k < j; ++k) sum += w(i, k) * u(k, j);
-      w(i, j) = -sum / u(j, j);
-    }
-  }
-  diagonal->setZero();
-  for (int i = 0; i < f.count; ++i) {
-    double sum = 0.0;
-    for (int k = i; k < f.count; ++k) sum += w(i, k) * w(i, k);
-    (*diagonal)(f.index[i]) = sum;
-  }
 }
 
 /// Solves (D H D + damping I) step_s = -D g over the kept parameters, with D H D already in

@@ -1,0 +1,335 @@
+// hivecal plan: which poses to measure, in which order, and the robot program that visits
+// them (docs/planning.md). The selection is the library's (hivecal/plan/pose_plan.hpp); this
+// file parses, prints the before/after report and writes the joints CSV and URScript.
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cli/options.hpp"
+#include "commands/commands.hpp"
+#include "hivecal/core/math.hpp"
+#include "hivecal/plan/pose_plan.hpp"
+#include "hivecal/port/output_files.hpp"
+#include "report/svg.hpp"
+#include "textio/csv.hpp"
+#include "textio/text_util.hpp"
+
+namespace hivecal::cli {
+
+namespace {
+
+constexpr const char* kCommand = "plan";
+// Shortest dwell: the extraction keeps a tracker point when the robot was still around it;
+// a 10 Hz tracker needs three points (the speed baseline on both sides) of stillness.
+constexpr double kMinDwell_s = 0.3;
+constexpr double kDegToRad = math::kPi / 180.0;
+
+PlanWorkspace workspace;  // ~230 kB: static, as the library asks
+PlanResult result;
+
+/// What the command line asked for beyond PlanOptions.
+struct PlanRequest {
+  RobotModel model;     ///< nominal geometry with the reflector
+  PlanOptions options;  ///< the library's settings
+};
+
+std::string text(double value, const char* format) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, format, value);
+  return buffer;
+}
+
+/// A number option that must be finite and within [lo, hi].
+Error bounded_option(const Options& options, const std::string& name, double lo, double hi, double* value) {
+  Error error = number_option(options, name, value);
+  if (!error.ok()) return error;
+  if (!(*value >= lo && *value <= hi)) {
+    return Error::usage("--" + name + " must be in [" + text(lo, "%g") + ", " + text(hi, "%g") +
+                        "], not " + port::quoted(options.get(name)));
+  }
+  return Error{};
+}
+
+Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi, std::size_t* value) {
+  double number = 0.0;
+  Error error = bounded_option(options, name, static_cast<double>(lo), static_cast<double>(hi), &number);
+  if (!error.ok()) return error;
+  if (number != static_cast<double>(static_cast<std::size_t>(number))) {
+    return Error::usage("--" + name + " must be a whole number, not " + port::quoted(options.get(name)));
+  }
+  *value = static_cast<std::size_t>(number);
+  return Error{};
+}
+
+/// The arm: a built-in name (its controller's joint limits) or a robot description FILE
+/// (limits +/-2 pi unless --joint-limits gives them).
+Error robot_option(const Options& options, RobotModel* model, JointLimits* limits) {
+  textio::RobotDescription description;
+  bool from_file = false;
+  const Error error = robot_model_option(options, "robot-model", &description, &from_file);
+  if (!error.ok()) return error;
+  *model = description.model;
+  RobotType type = RobotType::ur5;
+  *limits = !from_file && robot_type_from_name(description.robot.c_str(), &type) == Status::ok
+                ? default_joint_limits(type)
+                : JointLimits{};
+  return Error{};
+}
+
+/// --params: full, or the link lengths of `model` (and the base).
+Error params_option(const Options& options, const RobotModel& model, ParamMask* mask) {
+  const std::string params = options.get("params");
+  if (params != "full" && params != "paper") {
+    return Error::usage("--params must be 'full' or 'paper', not " + port::quoted(params));
+  }
+  *mask = lm_param_mask(params == "full" ? LmParamSet::full : LmParamSet::link_lengths, kAllParamsMask, model);
+  return Error{};
+}
+
+Error criterion_option(const Options& options, PlanCriterion* criterion) {
+  const std::string name = options.get("objective");
+  for (PlanCriterion c : {PlanCriterion::d_optimal, PlanCriterion::i_optimal, PlanCriterion::i_optimal_workspace}) {
+    if (name == plan_criterion_name(c)) {
+      *criterion = c;
+      return Error{};
+    }
+  }
+  return Error::usage("--objective must be d-optimal, i-optimal or i-optimal-workspace, not " + port::quoted(name));
+}
+
+/// The cell and the timing; --count, --tracker-position and --out are required.
+Error parse_request(const Options& options, PlanRequest* request) {
+  if (options.get("count").empty() || options.get("tracker-position").empty() || options.get("out").empty()) {
+    return Error::usage("--count, --tracker-position and --out are required (see --help)");
+  }
+  PlanOptions& o = request->options;
+  PlanConstraints& c = o.constraints;
+  Error error = robot_option(options, &request->model, &c.limits);
+  if (error.ok()) error = vec3_option(options, "tool", &request->model.tool_m);
+  if (error.ok()) error = vec3_option(options, "tracker-position", &c.tracker_m);
+  if (error.ok()) error = count_option(options, "count", 1, kPlanPoseCapacity, &o.pose_count);
+  if (error.ok()) error = count_option(options, "candidates", 1, kPlanCandidateCapacity, &o.candidate_count);
+  double acceptance_deg = 0.0;
+  if (error.ok()) error = bounded_option(options, "acceptance-deg", 1.0, 180.0, &acceptance_deg);
+  c.acceptance_rad = acceptance_deg * kDegToRad;
+  if (error.ok()) error = bounded_option(options, "floor-z", -10.0, 10.0, &c.floor_z_m);
+  if (error.ok()) error = bounded_option(options, "keep-out-radius", 0.0, 10.0, &c.keep_out_radius_m);
+  double seed = 0.0;
+  if (error.ok()) error = bounded_option(options, "seed", 0.0, 9007199254740992.0, &seed);
+  o.seed = static_cast<std::uint64_t>(seed);
+  if (error.ok()) error = params_option(options, request->model, &o.free_mask);
+  if (error.ok()) error = criterion_option(options, &o.criterion);
+  double noise_um = 0.0;
+  if (error.ok()) error = bounded_option(options, "noise-um", 1e-3, 1e4, &noise_um);
+  o.noise_m = noise_um * 1e-6;
+  if (error.ok()) error = bounded_option(options, "joint-speed", 1e-3, 10.0, &o.joint_speed_rad_s);
+  if (error.ok()) error = bounded_option(options, "joint-acceleration", 1e-3, 100.0, &o.joint_acceleration_rad_s2);
+  if (error.ok()) error = bounded_option(options, "dwell", kMinDwell_s, 3600.0, &o.dwell_s);
+  if (!error.ok()) return error;
+  if (!all_finite(c.tracker_m) || !all_finite(request->model.tool_m)) {
+    return Error::usage("--tracker-position and --tool must be finite");
+  }
+  if (o.candidate_count < o.pose_count) return Error::usage("--candidates must be at least --count");
+  if (options.given("tool-down")) c.orientation = PlanOrientation::tool_down;
+  if (!options.get("joint-limits").empty()) {
+    const Error r = textio::read_joint_limits_csv(options.get("joint-limits"), &c.limits.lower_rad, &c.limits.upper_rad);
+    if (!r.ok()) return r;
+  }
+  return Error{};
+}
+
+std::string names_of(ParamMask mask) {
+  std::string out;
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (mask_has(mask, k)) out += (out.empty() ? "" : " ") + std::string(full_param_name(k));
+  }
+  return out.empty() ? "-" : out;
+}
+
+bool is_angle(int index) {
+  const bool dh_angle = index < kDhParamCount && (index % kParamsPerJoint == static_cast<int>(DhField::theta_offset) ||
+                                                   index % kParamsPerJoint == static_cast<int>(DhField::alpha));
+  return dh_angle || (index >= base_rotation_param_index(0) && index <= base_rotation_param_index(2));
+}
+
+/// The dropped parameters of an analysis with the combination each one is redundant in.
+std::string dropped_lines(const IdentifiabilityReport& report) {
+  std::string out;
+  for (int i = 0; i < report.dropped_count; ++i) {
+    const DroppedParam& d = report.dropped[i];
+    out += "  " + std::string(full_param_name(d.index)) + ": " + unidentifiable_reason_name(d.reason);
+    if (d.reason == UnidentifiableReason::null_combination) {
+      out += " (with";
+      for (int k = 1; k < kNullComponentCount && d.component_index[k] >= 0; ++k) {
+        out += " " + std::string(full_param_name(d.component_index[k]));
+      }
+      out += ")";
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+std::string report_text(const PlanRequest& request, const IdentifiabilityReport* facing) {
+  const PlanOptions& o = request.options;
+  std::string out = "hivecal plan: " + std::to_string(result.pose_count) + " poses chosen (" +
+                    plan_criterion_name(o.criterion) + ", " + std::to_string(result.exchanges) + " exchanges in " +
+                    std::to_string(result.exchange_passes) + " passes) from " + std::to_string(result.candidate_count) +
+                    " candidates (" + std::to_string(result.attempts) + " random draws, seed " + std::to_string(o.seed) +
+                    ")\n";
+  out += "identifiable by the candidate pool: " + std::to_string(result.pool.kept_count()) + " of " +
+         std::to_string(mask_count(o.free_mask)) + " parameters; no pose set under these constraints identifies:\n";
+  out += dropped_lines(result.pool);
+  if (facing != nullptr) {
+    out += "freeing the orientation (flange z within " + text(o.constraints.acceptance_rad / kDegToRad, "%g") +
+           " deg of the tracker) makes identifiable: " + names_of(facing->kept_mask & ~result.pool.kept_mask) + "\n";
+  }
+  const PoseSetQuality& r = result.random;
+  const PoseSetQuality& p = result.planned;
+  out += "                                random    planned   (same count, same constraints)\n";
+  out += "  log det (D-criterion)      " + text(r.log_det, "%9.2f") + "  " + text(p.log_det, "%9.2f") + "\n";
+  out += "  mean prediction variance   " + text(r.prediction_variance, "%9.3f") + "  " +
+         text(p.prediction_variance, "%9.3f") + "   (per unit noise variance)\n";
+  out += "  condition number           " + text(r.condition, "%9.2f") + "  " + text(p.condition, "%9.2f") + "\n";
+  out += "  smallest singular value    " + text(r.smallest_singular, "%9.4f") + "  " +
+         text(p.smallest_singular, "%9.4f") + "   (column-scaled J)\n";
+  out += "  identifiable parameters    " + text(r.identifiability.kept_count(), "%9.0f") + "  " +
+         text(p.identifiability.kept_count(), "%9.0f") + "\n";
+  const ParamMask only_planned = p.identifiability.kept_mask & ~r.identifiability.kept_mask;
+  out += "  identifiable only when planned: " + names_of(only_planned) + "\n";
+  out += "predicted sigma at " + text(o.noise_m * 1e6, "%g") + " um tracker noise (um or urad):\n";
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (!mask_has(r.identifiability.kept_mask | p.identifiability.kept_mask, k)) continue;
+    const double unit = 1e6;  // m -> um, rad -> urad
+    const std::string name = full_param_name(k);
+    out += "  " + name + std::string(name.size() < 10 ? 10 - name.size() : 1, ' ') +
+           text(r.sigma(k) * unit, "%9.2f") + "  " + text(p.sigma(k) * unit, "%9.2f") + (is_angle(k) ? " urad" : " um") +
+           "\n";
+  }
+  out += "session: " + text(result.travel_s, "%.1f") + " s of movej (" + text(result.unordered_travel_s, "%.1f") +
+         " s unordered) + " + std::to_string(result.pose_count) + " x " + text(o.dwell_s, "%g") + " s dwell = " +
+         text(result.session_s, "%.1f") + " s (" + text(result.session_s / 60.0, "%.1f") + " min) at " +
+         text(o.joint_speed_rad_s, "%g") + " rad/s, " + text(o.joint_acceleration_rad_s2, "%g") + " rad/s^2\n";
+  return out;
+}
+
+/// URScript: movej to each pose, then a still dwell for the tracker.
+std::string urscript(const PlanOptions& o) {
+  std::string out = "# hivecal plan: " + std::to_string(result.pose_count) + " poses, seed " + std::to_string(o.seed) +
+                    ", about " + text(result.session_s, "%.0f") + " s\ndef hivecal_session():\n";
+  for (std::size_t i = 0; i < result.pose_count; ++i) {
+    out += "  movej([";
+    for (int j = 0; j < kJointCount; ++j) out += textio::format_double(result.poses[i](j)) + (j + 1 < kJointCount ? ", " : "");
+    out += "], a=" + text(o.joint_acceleration_rad_s2, "%.10g") + ", v=" + text(o.joint_speed_rad_s, "%.10g") +
+           ")\n  sleep(" + text(o.dwell_s, "%.10g") + ")\n";
+  }
+  return out + "end\n";
+}
+
+/// Reflector positions of planned and random poses and the tracker, seen from above and from
+/// the side (distance from the base axis vs height): the report figure "planned vs random".
+std::string svg_figure(const PlanRequest& request) {
+  const auto series = [&](const std::string& name, const JointVector* poses, std::size_t stride, bool top) {
+    report::Series s{name, {}, {}, true};
+    for (std::size_t i = 0; i < result.pose_count; ++i) {
+      const Vec3 p = fk_tool_point(request.model, poses[i * stride]);
+      s.x.push_back(top ? p.x() : p.head<2>().norm());
+      s.y.push_back(top ? p.y() : p.z());
+    }
+    return s;
+  };
+  std::vector<JointVector> random;
+  for (std::size_t i = 0; i < result.pose_count; ++i) random.push_back(workspace.candidates[i].q_rad);
+  const Vec3 t = request.options.constraints.tracker_m;
+  std::string out = "<svg xmlns='http://www.w3.org/2000/svg' width='560' height='640'>\n";
+  for (const bool top : {true, false}) {
+    report::ChartSpec spec;
+    spec.title = top ? "Reflector positions, top view: planned vs random (same count, same constraints)"
+                     : "Side view: distance from the base axis vs height";
+    spec.x_label = top ? "x [m]" : "radius [m]";
+    spec.y_label = top ? "y [m]" : "z [m]";
+    report::Series tracker{"tracker", {top ? t.x() : t.head<2>().norm()}, {top ? t.y() : t.z()}, true};
+    const std::string chart = report::svg_chart(
+        spec, {series("random", random.data(), 1, top), series("planned", result.poses, 1, top), tracker});
+    out += top ? chart : "<g transform='translate(0,320)'>" + chart + "</g>\n";
+  }
+  return out + "</svg>\n";
+}
+
+Error plan(const Options& options) {
+  PlanRequest request;
+  Error error = parse_request(options, &request);
+  if (!error.ok()) return error;
+  port::OutputSet outputs;
+  std::size_t out_id = 0;
+  std::size_t script_id = 0;
+  std::size_t svg_id = 0;
+  const bool script = !options.get("urscript").empty();
+  const bool svg = !options.get("svg").empty();
+  if (!options.get("joint-limits").empty()) error = outputs.add_input(options.get("joint-limits"), "--joint-limits");
+  if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
+  if (error.ok() && script) error = outputs.add_file(options.get("urscript"), "--urscript", &script_id);
+  if (error.ok() && svg) error = outputs.add_file(options.get("svg"), "--svg", &svg_id);
+  if (!error.ok()) return error;
+
+  IdentifiabilityReport facing;
+  const bool down = request.options.constraints.orientation == PlanOrientation::tool_down;
+  if (down) {  // what the same cell identifies with the reflector free to face the tracker
+    PlanOptions free_orientation = request.options;
+    free_orientation.constraints.orientation = PlanOrientation::facing_tracker;
+    std::size_t draws = 0;
+    const Status status = pool_identifiability(request.model, free_orientation, &workspace, &facing, &draws);
+    if (status != Status::ok) {
+      return Error::failure(std::string("no pool facing the tracker to compare with: ") + status_message(status));
+    }
+  }
+  const Status status = plan_session(request.model, request.options, &workspace, &result);
+  if (status == Status::too_few_samples) {
+    return Error::failure("too few poses meet the constraints (" + std::to_string(request.options.candidate_count) +
+                          " candidates wanted): move the tracker, widen --acceptance-deg or lower --floor-z");
+  }
+  if (status != Status::ok) return Error::failure(std::string("planning failed: ") + status_message(status));
+
+  std::fputs(report_text(request, down ? &facing : nullptr).c_str(), options.get("out") == "-" ? stderr : stdout);
+  error = outputs.stage_text(out_id, "", textio::format_joints_csv(Span<const JointVector>(result.poses, result.pose_count)));
+  if (error.ok() && script) error = outputs.stage_text(script_id, "", urscript(request.options));
+  if (error.ok() && svg) error = outputs.stage_text(svg_id, "", svg_figure(request));
+  return error.ok() ? outputs.commit() : error;
+}
+
+}  // namespace
+
+int plan_main(int argc, char** argv) {
+  const std::vector<OptionSpec> specs = {
+      {"robot-model", "NAME|FILE", std::string("nominal geometry (and joint limits of a built-in type): ") + robot_type_names() + ", or a robot description JSON", "ur5e"},
+      {"count", "N", "poses to measure (1 .. 128)", ""},
+      {"tracker-position", "X,Y,Z", "tracker position in the robot base frame [m]", ""},
+      {"tool", "X,Y,Z", "reflector in the flange frame [m] (one target)", "0,0,0"},
+      {"acceptance-deg", "DEG", "largest angle flange z - line to the tracker (red-ring reflector: 30)", "30"},
+      {"floor-z", "M", "reflector and flange above this base z [m]", "0.05"},
+      {"keep-out-radius", "M", "reflector and flange at least this far from the base z axis [m]", "0.15"},
+      {"tool-down", "", "the flange z axis points down in every pose (the paper's session)", ""},
+      {"joint-limits", "FILE", "CSV lower,upper [rad], one row per joint (default: the robot's)", ""},
+      {"params", "full|paper", "parameters the calibration will estimate", "full"},
+      {"objective", "NAME", "d-optimal | i-optimal | i-optimal-workspace (docs/planning.md)", "d-optimal"},
+      {"candidates", "N", "random candidate configurations to choose from (<= 2048)", "2048"},
+      {"seed", "S", "seed of the candidate draws", "1"},
+      {"noise-um", "UM", "tracker noise per axis for the predicted sigmas [um]", "10"},
+      {"joint-speed", "RAD/S", "movej joint speed", "1.05"},
+      {"joint-acceleration", "RAD/S2", "movej joint acceleration", "1.4"},
+      {"dwell", "S", "wait at each pose (>= 0.3 s: the extraction needs the arm still at 10 Hz)", "1"},
+      {"out", "FILE", "planned poses, CSV q1..q6 [rad] in visiting order ('-': stdout)", ""},
+      {"urscript", "FILE", "URScript program: movej + sleep(dwell) per pose", ""},
+      {"svg", "FILE", "figure: reflector positions planned vs random (top and side views)", ""},
+  };
+  Options options;
+  const int parsed = parse_options(kCommand,
+                                   "Chooses the poses of a tracker session (D-optimal by default, over the parameters\n"
+                                   "the calibration estimates), orders them for a short path and writes them as a\n"
+                                   "joints CSV and optionally a URScript program; prints random-vs-planned figures.",
+                                   specs, argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  return exit_with(kCommand, plan(options));
+}
+
+}  // namespace hivecal::cli

@@ -1,0 +1,523 @@
+#include "hivecal/plan/pose_plan.hpp"
+
+#include <cmath>
+
+#include "hivecal/core/math.hpp"
+#include "hivecal/core/random.hpp"
+#include "solve/kept_cholesky.hpp"
+
+namespace hivecal {
+namespace {
+
+// Ridge added to the scaled information matrix (one average candidate adds ~1 per diagonal
+// entry): keeps log det finite while the greedy start holds fewer equations than parameters.
+constexpr double kRidge = 1e-6;
+// An exchange must raise the D-criterion by more than this to be taken: no cycling on ties.
+constexpr double kExchangeGain = 1e-9;
+// 2-opt passes over the path at most (each pass is O(n^2); it usually settles in a few).
+constexpr int kMaxTwoOptPasses = 64;
+// A 2-opt reversal must save more than this [s].
+constexpr double kTwoOptGain_s = 1e-12;
+
+const RigidTransform kIdentity{};
+
+/// A point the flange or the reflector occupies: above the floor, outside the keep-out cylinder.
+bool point_allowed(const PlanConstraints& c, const Vec3& p_m) {
+  const double radial2 = p_m.x() * p_m.x() + p_m.y() * p_m.y();
+  return p_m.z() >= c.floor_z_m && radial2 >= c.keep_out_radius_m * c.keep_out_radius_m;
+}
+
+bool within_limits(const JointLimits& limits, const JointVector& q) {
+  for (int j = 0; j < kJointCount; ++j) {
+    if (!(q(j) >= limits.lower_rad(j) && q(j) <= limits.upper_rad(j))) return false;
+  }
+  return true;
+}
+
+bool limits_valid(const JointLimits& limits) {
+  if (!all_finite(limits.lower_rad) || !all_finite(limits.upper_rad)) return false;
+  for (int j = 0; j < kJointCount; ++j) {
+    if (!(limits.lower_rad(j) < limits.upper_rad(j))) return false;
+  }
+  return true;
+}
+
+bool options_valid(const PlanOptions& o) {
+  const PlanConstraints& c = o.constraints;
+  const bool cell_ok = limits_valid(c.limits) && all_finite(c.tracker_m) && c.acceptance_rad > 0.0 &&
+                       c.acceptance_rad <= math::kPi && math::is_finite(c.floor_z_m) &&
+                       c.keep_out_radius_m >= 0.0 && math::is_finite(c.keep_out_radius_m) &&
+                       c.tool_down_tolerance_rad > 0.0 && c.tool_down_tolerance_rad <= math::kPi;
+  const bool counts_ok = o.pose_count >= 1 && o.pose_count <= kPlanPoseCapacity &&
+                         o.candidate_count >= o.pose_count && o.candidate_count <= kPlanCandidateCapacity;
+  const bool mask_ok = o.free_mask != 0 && (o.free_mask & ~kAllParamsMask) == 0;
+  const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
+  const bool timing_ok = o.noise_m > 0.0 && math::is_finite(o.noise_m) && o.joint_speed_rad_s > 0.0 &&
+                         math::is_finite(o.joint_speed_rad_s) && o.joint_acceleration_rad_s2 > 0.0 &&
+                         math::is_finite(o.joint_acceleration_rad_s2) && o.dwell_s >= 0.0 &&
+                         math::is_finite(o.dwell_s);
+  return cell_ok && counts_ok && mask_ok && threshold_ok && timing_ok && o.max_exchange_passes >= 0;
+}
+
+/// Shifts q by whole turns into [lower, upper] when a turn fits (q4 of the tool-down wrist).
+double wrap_into(double q, double lower, double upper) {
+  const double turn = 2.0 * math::kPi;
+  while (q > upper && q - turn >= lower) q -= turn;
+  while (q < lower && q + turn <= upper) q += turn;
+  return q;
+}
+
+/// One seeded draw: every joint uniform within its limits; tool_down overrides q4 and q5.
+JointVector draw_joints(const PlanConstraints& c, std::size_t branch, Random* random) {
+  JointVector q;
+  for (int j = 0; j < kJointCount; ++j) q(j) = random->uniform(c.limits.lower_rad(j), c.limits.upper_rad(j));
+  if (c.orientation == PlanOrientation::tool_down) {
+    // A UR's joint 6 points down when q5 = -/+ pi/2 and q2 + q3 + q4 = q5 (joints 2-4 parallel).
+    const double q5 = branch % 2 == 0 ? -math::kHalfPi : math::kHalfPi;
+    q(4) = q5;
+    q(3) = wrap_into(q5 - q(1) - q(2), c.limits.lower_rad(3), c.limits.upper_rad(3));
+  }
+  return q;
+}
+
+/// Jacobian of one pose over the full parameters, columns multiplied by `scale` (0 outside
+/// `mask`), from the calibration's own residual Jacobian.
+void scaled_jacobian(const RobotModel& model, const Sample& pose, const FullParams& scale, ParamMask mask,
+                     FullJacobian* jacobian) {
+  (void)local_residual_jacobian(model, kIdentity, pose, jacobian);
+  for (int k = 0; k < kFullParamCount; ++k) {
+    const double s = mask_has(mask, k) ? scale(k) : 0.0;
+    for (int r = 0; r < 3; ++r) (*jacobian)(r, k) *= s;
+  }
+}
+
+/// *information = ridge I + sum of J^T J over `poses` except entry `skip` (mask x mask block).
+void build_information(const RobotModel& model, Span<const Sample> poses, std::size_t skip, const FullParams& scale,
+                       ParamMask mask, NormalMatrix* information) {
+  information->setZero();
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (mask_has(mask, k)) (*information)(k, k) = kRidge;
+  }
+  FullJacobian j;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    if (i == skip) continue;
+    scaled_jacobian(model, poses[i], scale, mask, &j);
+    for (int b = 0; b < kFullParamCount; ++b) {
+      if (!mask_has(mask, b)) continue;
+      for (int a = 0; a < kFullParamCount; ++a) {
+        if (mask_has(mask, a)) (*information)(a, b) += j(0, a) * j(0, b) + j(1, a) * j(1, b) + j(2, a) * j(2, b);
+      }
+    }
+  }
+}
+
+/// log det of the factored matrix: 2 sum log U_kk.
+double factor_log_det(const KeptCholesky& f) {
+  double sum = 0.0;
+  for (int k = 0; k < f.count; ++k) sum += math::log(f.upper(k, k));
+  return 2.0 * sum;
+}
+
+/// Z = U^-T J^T, column r into z[r] (forward substitution, compact order; M = U^T U).
+void forward_solve(const KeptCholesky& f, const FullJacobian& j, double (*z)[kFullParamCount]) {
+  for (int r = 0; r < 3; ++r) {
+    for (int i = 0; i < f.count; ++i) {
+      double sum = j(r, f.index[i]);
+      for (int k = 0; k < i; ++k) sum -= f.upper(k, i) * z[r][k];
+      z[r][i] = sum / f.upper(i, i);
+    }
+  }
+}
+
+/// Y = U^-1 Z in place (back substitution): Y = M^-1 J^T, compact order.
+void back_solve(const KeptCholesky& f, double (*y)[kFullParamCount]) {
+  for (int r = 0; r < 3; ++r) {
+    for (int i = f.count - 1; i >= 0; --i) {
+      double sum = y[r][i];
+      for (int k = i + 1; k < f.count; ++k) sum -= f.upper(i, k) * y[r][k];
+      y[r][i] = sum / f.upper(i, i);
+    }
+  }
+}
+
+/// a^T b of two compact columns.
+double dot(const double* a, const double* b, int count) {
+  double sum = 0.0;
+  for (int i = 0; i < count; ++i) sum += a[i] * b[i];
+  return sum;
+}
+
+double det3(const Mat3& g) {
+  return g(0, 0) * (g(1, 1) * g(2, 2) - g(1, 2) * g(2, 1)) - g(0, 1) * (g(1, 0) * g(2, 2) - g(1, 2) * g(2, 0)) +
+         g(0, 2) * (g(1, 0) * g(2, 1) - g(1, 1) * g(2, 0));
+}
+
+/// tr(G^-1 H) of 3x3 matrices by the adjugate (G = I + J M^-1 J^T is positive definite).
+double trace_inverse_times(const Mat3& g, const Mat3& h) {
+  Mat3 adjugate;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
+      adjugate(r, c) = g(r1, c1) * g(r2, c2) - g(r1, c2) * g(r2, c1);
+    }
+  }
+  double sum = 0.0;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) sum += adjugate(r, c) * h(c, r);
+  }
+  return sum / det3(g);
+}
+
+/// What adding `pose` to M = U^T U gains: D: log det(I + J M^-1 J^T), the rise of log det M;
+/// I: tr((I + J M^-1 J^T)^-1 J M^-1 A M^-1 J^T), the fall of tr(M^-1 A).
+double criterion_gain(const RobotModel& model, const Sample& pose, const FullParams& scale, ParamMask mask,
+                      const PlanWorkspace& ws, PlanCriterion criterion) {
+  const KeptCholesky& f = ws.factor;
+  FullJacobian j;
+  scaled_jacobian(model, pose, scale, mask, &j);
+  double y[3][kFullParamCount];
+  forward_solve(f, j, y);
+  Mat3 g = Mat3::Identity();
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) g(a, b) += dot(y[a], y[b], f.count);
+  }
+  if (criterion == PlanCriterion::d_optimal) return math::log(det3(g));
+  back_solve(f, y);
+  double ay[3][kFullParamCount];
+  for (int r = 0; r < 3; ++r) {
+    for (int i = 0; i < f.count; ++i) {
+      double sum = 0.0;
+      for (int k = 0; k < f.count; ++k) sum += ws.pool_information(f.index[i], f.index[k]) * y[r][k];
+      ay[r][i] = sum;
+    }
+  }
+  Mat3 h;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) h(a, b) = dot(y[a], ay[b], f.count);
+  }
+  return trace_inverse_times(g, h);
+}
+
+/// Factors ridge I + the information of the selection without entry `skip`.
+bool factor_selection(const RobotModel& model, PlanWorkspace* ws, std::size_t count, std::size_t skip,
+                      const FullParams& scale, ParamMask mask) {
+  build_information(model, Span<const Sample>(ws->selected, count), skip, scale, mask, &ws->information);
+  return cholesky_factor(ws->information, mask, &ws->factor);
+}
+
+/// The unselected candidate (or `keep`) with the largest gain; `*best_gain` gets the gain.
+std::size_t best_candidate(const RobotModel& model, const PlanWorkspace& ws, const PlanOptions& o, std::size_t keep,
+                           const FullParams& scale, ParamMask mask, double* best_gain) {
+  const std::size_t candidate_count = o.candidate_count;
+  std::size_t best = keep;
+  double gain_best =
+      keep < candidate_count ? criterion_gain(model, ws.candidates[keep], scale, mask, ws, o.criterion) : -1.0;
+  for (std::size_t i = 0; i < candidate_count; ++i) {
+    if (ws.in_selection[i]) continue;
+    const double gain = criterion_gain(model, ws.candidates[i], scale, mask, ws, o.criterion);
+    if (gain > gain_best + (keep < candidate_count ? kExchangeGain : 0.0)) {
+      gain_best = gain;
+      best = i;
+    }
+  }
+  *best_gain = gain_best;
+  return best;
+}
+
+void select_candidate(PlanWorkspace* ws, std::size_t slot, std::size_t candidate) {
+  ws->selected_index[slot] = candidate;
+  ws->selected[slot] = ws->candidates[candidate];
+  ws->in_selection[candidate] = true;
+}
+
+/// Greedy start: adds, pose by pose, the candidate that raises log det the most.
+Status greedy_start(const RobotModel& model, const PlanOptions& o, const FullParams& scale, ParamMask mask,
+                    PlanWorkspace* ws) {
+  for (std::size_t i = 0; i < o.candidate_count; ++i) ws->in_selection[i] = false;
+  for (std::size_t slot = 0; slot < o.pose_count; ++slot) {
+    if (!factor_selection(model, ws, slot, kPlanPoseCapacity, scale, mask)) return Status::singular_system;
+    double gain = 0.0;
+    const std::size_t best = best_candidate(model, *ws, o, kPlanCandidateCapacity, scale, mask, &gain);
+    if (best >= o.candidate_count) return Status::singular_system;
+    select_candidate(ws, slot, best);
+  }
+  return Status::ok;
+}
+
+/// Fedorov-style exchange (Cook & Nachtsheim's modified Fedorov): each selected pose in turn
+/// is replaced by the candidate that raises log det the most, when that beats keeping it.
+Status exchange_passes(const RobotModel& model, const PlanOptions& o, const FullParams& scale, ParamMask mask,
+                       PlanWorkspace* ws, PlanResult* result) {
+  for (int pass = 0; pass < o.max_exchange_passes; ++pass) {
+    int swaps = 0;
+    for (std::size_t slot = 0; slot < o.pose_count; ++slot) {
+      if (!factor_selection(model, ws, o.pose_count, slot, scale, mask)) return Status::singular_system;
+      double gain = 0.0;
+      const std::size_t current = ws->selected_index[slot];
+      const std::size_t best = best_candidate(model, *ws, o, current, scale, mask, &gain);
+      if (best == current) continue;
+      ws->in_selection[current] = false;
+      select_candidate(ws, slot, best);
+      ++swaps;
+    }
+    result->exchange_passes = pass + 1;
+    result->exchanges += swaps;
+    if (swaps == 0) break;
+  }
+  return Status::ok;
+}
+
+/// D- and I-criteria of a pose set over `mask` with the pool's scale (ridge included).
+bool pose_set_criteria(const RobotModel& model, Span<const Sample> poses, const FullParams& scale, ParamMask mask,
+                       PlanWorkspace* ws, double* log_det, double* prediction_variance) {
+  build_information(model, poses, kPlanPoseCapacity, scale, mask, &ws->information);
+  if (!cholesky_factor(ws->information, mask, &ws->factor)) return false;
+  *log_det = factor_log_det(ws->factor);
+  double trace = 0.0;  // tr(M^-1 A) = sum_k (M^-1 a_k)_k
+  FullParams column;
+  FullParams solved;
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (!mask_has(mask, k)) continue;
+    column = ws->pool_information.col(k);
+    cholesky_solve(ws->factor, column, &solved);
+    trace += solved(k);
+  }
+  *prediction_variance = trace;
+  return true;
+}
+
+/// Pool scale: 1 / RMS column norm per candidate, so one average candidate adds 1 per
+/// diagonal entry (D-optimality does not depend on it; the ridge and the numbers do).
+FullParams pool_scale(const NormalMatrix& jtj, std::size_t count, ParamMask mask) {
+  FullParams scale = FullParams::Ones();
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (mask_has(mask, k) && jtj(k, k) > 0.0) scale(k) = std::sqrt(static_cast<double>(count) / jtj(k, k));
+  }
+  return scale;
+}
+
+/// A = S (J^T J) S / count over mask x mask, 0 elsewhere: one average candidate's information.
+void mean_scaled_information(const NormalMatrix& jtj, std::size_t count, const FullParams& scale, ParamMask mask,
+                             NormalMatrix* mean) {
+  for (int b = 0; b < kFullParamCount; ++b) {  // element by element: jtj may be *mean
+    for (int a = 0; a < kFullParamCount; ++a) {
+      const bool inside = mask_has(mask, a) && mask_has(mask, b);
+      (*mean)(a, b) = inside ? scale(a) * jtj(a, b) * scale(b) / static_cast<double>(count) : 0.0;
+    }
+  }
+}
+
+double path_time_s(const JointVector* poses, std::size_t count, const PlanOptions& o) {
+  double sum = 0.0;
+  for (std::size_t i = 1; i < count; ++i) sum += movej_time_s(poses[i - 1], poses[i], o);
+  return sum;
+}
+
+void nearest_neighbour(JointVector* poses, std::size_t count, const PlanOptions& o) {
+  for (std::size_t i = 1; i < count; ++i) {
+    std::size_t best = i;
+    double best_s = movej_time_s(poses[i - 1], poses[i], o);
+    for (std::size_t k = i + 1; k < count; ++k) {
+      const double t = movej_time_s(poses[i - 1], poses[k], o);
+      if (t < best_s) {
+        best_s = t;
+        best = k;
+      }
+    }
+    const JointVector swap = poses[i];
+    poses[i] = poses[best];
+    poses[best] = swap;
+  }
+}
+
+void reverse_segment(JointVector* poses, std::size_t first, std::size_t last) {
+  while (first < last) {
+    const JointVector swap = poses[first];
+    poses[first] = poses[last];
+    poses[last] = swap;
+    ++first;
+    --last;
+  }
+}
+
+/// 2-opt on an open path with a fixed start: reverses poses[i..k] when that shortens it.
+void two_opt(JointVector* poses, std::size_t count, const PlanOptions& o) {
+  for (int pass = 0; pass < kMaxTwoOptPasses; ++pass) {
+    bool improved = false;
+    for (std::size_t i = 1; i + 1 < count; ++i) {
+      for (std::size_t k = i + 1; k < count; ++k) {
+        const bool has_next = k + 1 < count;
+        const double before = movej_time_s(poses[i - 1], poses[i], o) +
+                              (has_next ? movej_time_s(poses[k], poses[k + 1], o) : 0.0);
+        const double after = movej_time_s(poses[i - 1], poses[k], o) +
+                             (has_next ? movej_time_s(poses[i], poses[k + 1], o) : 0.0);
+        if (after < before - kTwoOptGain_s) {
+          reverse_segment(poses, i, k);
+          improved = true;
+        }
+      }
+    }
+    if (!improved) return;
+  }
+}
+
+}  // namespace
+
+const char* plan_criterion_name(PlanCriterion criterion) {
+  switch (criterion) {
+    case PlanCriterion::i_optimal: return "i-optimal";
+    case PlanCriterion::i_optimal_workspace: return "i-optimal-workspace";
+    case PlanCriterion::d_optimal: break;
+  }
+  return "d-optimal";
+}
+
+JointLimits default_joint_limits(RobotType type) {
+  (void)type;  // every built-in UR type has the same controller limits
+  JointLimits limits;
+  limits.lower_rad(2) = -math::kPi;
+  limits.upper_rad(2) = math::kPi;
+  return limits;
+}
+
+bool pose_meets_constraints(const RobotModel& model, const PlanConstraints& c, const JointVector& q_rad) {
+  if (!within_limits(c.limits, q_rad)) return false;
+  const RigidTransform flange = fk_flange(model, q_rad);
+  const Vec3 reflector = flange.apply(model.tool_m);
+  if (!point_allowed(c, reflector) || !point_allowed(c, flange.translation_m)) return false;
+  const Vec3 axis = flange.rotation.col(2);
+  if (c.orientation == PlanOrientation::tool_down) return -axis.z() >= math::cos(c.tool_down_tolerance_rad);
+  const Vec3 to_tracker = c.tracker_m - reflector;
+  const double distance_m = to_tracker.norm();
+  return distance_m > 0.0 && axis.dot(to_tracker) >= math::cos(c.acceptance_rad) * distance_m;
+}
+
+Status generate_candidates(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
+                           std::size_t* attempts) {
+  if (!options_valid(options)) return Status::invalid_argument;
+  Random random(options.seed);
+  const std::size_t limit = kPlanAttemptsPerCandidate * options.candidate_count;
+  std::size_t found = 0;
+  std::size_t draws = 0;
+  while (found < options.candidate_count && draws < limit) {
+    const JointVector q = draw_joints(options.constraints, draws, &random);
+    ++draws;
+    if (!pose_meets_constraints(model, options.constraints, q)) continue;
+    workspace->candidates[found].q_rad = q;
+    workspace->candidates[found].point_m = fk_tool_point(model, q);
+    ++found;
+  }
+  *attempts = draws;
+  return found == options.candidate_count ? Status::ok : Status::too_few_samples;
+}
+
+Status pool_identifiability(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
+                            IdentifiabilityReport* report, std::size_t* attempts) {
+  Status status = generate_candidates(model, options, workspace, attempts);
+  if (status != Status::ok) return status;
+  const Span<const Sample> pool(workspace->candidates, options.candidate_count);
+  status = accumulate_normal_equations(model, kIdentity, pool, PointLoss{}, &workspace->normal);
+  if (status != Status::ok) return status;
+  return analyze_identifiability(workspace->normal.jtwj, options.free_mask, options.identifiability_threshold,
+                                 &workspace->identifiability, report);
+}
+
+Status evaluate_pose_set(const RobotModel& model, Span<const Sample> poses, const PlanOptions& options,
+                         ParamMask objective_mask, const FullParams& scale, PlanWorkspace* workspace,
+                         PoseSetQuality* quality) {
+  Status status = accumulate_normal_equations(model, kIdentity, poses, PointLoss{}, &workspace->normal);
+  if (status != Status::ok) return status;
+  IdentifiabilityReport& report = quality->identifiability;
+  status = analyze_identifiability(workspace->normal.jtwj, options.free_mask, options.identifiability_threshold,
+                                   &workspace->identifiability, &report);
+  if (status != Status::ok) return status;
+  quality->condition = report.condition_after;
+  quality->smallest_singular = report.singular_values_after[report.singular_count_after - 1];
+  // sigma = noise sqrt(diag((J^T J)^-1)), factored Jacobi-scaled as the LM's sigmas are.
+  FullParams kept_scale;
+  scale_normal_matrix(workspace->normal.jtwj, report.kept_mask, 1.0, &workspace->information, &kept_scale);
+  if (!cholesky_factor(workspace->information, report.kept_mask, &workspace->factor)) return Status::singular_system;
+  FullParams inverse_diagonal;
+  cholesky_inverse_diagonal(workspace->factor, &workspace->scratch, &inverse_diagonal);
+  quality->sigma.setZero();
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (mask_has(report.kept_mask, k)) {
+      quality->sigma(k) = options.noise_m * std::sqrt(std::fmax(inverse_diagonal(k), 0.0)) * kept_scale(k);
+    }
+  }
+  return pose_set_criteria(model, poses, scale, objective_mask, workspace, &quality->log_det,
+                           &quality->prediction_variance)
+             ? Status::ok
+             : Status::singular_system;
+}
+
+double movej_time_s(const JointVector& from, const JointVector& to, const PlanOptions& options) {
+  const double distance_rad = (to - from).cwiseAbs().maxCoeff();
+  const double v = options.joint_speed_rad_s;
+  const double a = options.joint_acceleration_rad_s2;
+  if (distance_rad >= v * v / a) return distance_rad / v + v / a;  // trapezoid: cruise at v
+  return 2.0 * std::sqrt(distance_rad / a);                         // triangle: never reaches v
+}
+
+double order_poses(JointVector* poses, std::size_t count, const PlanOptions& options) {
+  if (count < 2) return 0.0;
+  nearest_neighbour(poses, count, options);
+  two_opt(poses, count, options);
+  return path_time_s(poses, count, options);
+}
+
+Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
+                    PlanResult* result) {
+  if (!options_valid(options)) return Status::invalid_argument;
+  if (!all_finite(to_params(model))) return Status::non_finite_input;
+  *result = PlanResult{};
+  Status status = Status::ok;
+  if (options.criterion == PlanCriterion::i_optimal_workspace) {
+    // The region the predictions should be good in: the same cell, any orientation.
+    PlanOptions anywhere = options;
+    anywhere.constraints.acceptance_rad = math::kPi;
+    anywhere.constraints.orientation = PlanOrientation::facing_tracker;
+    anywhere.seed = options.seed ^ 0x9e3779b97f4a7c15ULL;
+    std::size_t draws = 0;
+    status = generate_candidates(model, anywhere, workspace, &draws);
+    if (status != Status::ok) return status;
+    status = accumulate_normal_equations(model, kIdentity, Span<const Sample>(workspace->candidates, options.candidate_count),
+                                         PointLoss{}, &workspace->normal);
+    if (status != Status::ok) return status;
+    workspace->pool_information = workspace->normal.jtwj;
+  }
+  status = pool_identifiability(model, options, workspace, &result->pool, &result->attempts);
+  if (status != Status::ok) return status;
+  result->candidate_count = options.candidate_count;
+  const ParamMask mask = result->pool.kept_mask;
+  const FullParams scale = pool_scale(workspace->normal.jtwj, options.candidate_count, mask);
+  if (options.criterion != PlanCriterion::i_optimal_workspace) workspace->pool_information = workspace->normal.jtwj;
+  mean_scaled_information(workspace->pool_information, options.candidate_count, scale, mask,
+                          &workspace->pool_information);
+
+  status = greedy_start(model, options, scale, mask, workspace);
+  if (status != Status::ok) return status;
+  const Span<const Sample> selection(workspace->selected, options.pose_count);
+  if (!pose_set_criteria(model, selection, scale, mask, workspace, &result->greedy_log_det,
+                         &result->greedy_prediction_variance)) {
+    return Status::singular_system;
+  }
+  status = exchange_passes(model, options, scale, mask, workspace, result);
+  if (status != Status::ok) return status;
+
+  const Span<const Sample> first_draws(workspace->candidates, options.pose_count);  // random, same constraints
+  status = evaluate_pose_set(model, first_draws, options, mask, scale, workspace,
+                             &result->random);
+  if (status != Status::ok) return status;
+  status = evaluate_pose_set(model, selection, options, mask, scale, workspace, &result->planned);
+  if (status != Status::ok) return status;
+
+  result->pose_count = options.pose_count;
+  for (std::size_t i = 0; i < options.pose_count; ++i) result->poses[i] = workspace->selected[i].q_rad;
+  result->unordered_travel_s = path_time_s(result->poses, result->pose_count, options);
+  result->travel_s = order_poses(result->poses, result->pose_count, options);
+  result->session_s = result->travel_s + static_cast<double>(result->pose_count) * options.dwell_s;
+  return Status::ok;
+}
+
+}  // namespace hivecal

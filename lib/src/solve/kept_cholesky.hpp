@@ -1,0 +1,21 @@
+// Cholesky factorisation of a normal matrix restricted to a parameter mask (KeptCholesky,
+// solve/lm.hpp): shared by the LM solver (steps, parameter sigmas) and the pose planner
+// (D-optimal selection, predicted sigmas), so that there is one factorisation in the library.
+#pragma once
+
+#include "hivecal/solve/lm.hpp"
+
+namespace hivecal {
+
+/// Factors a(kept, kept) = U^T U (plain Cholesky, column-oriented dot products over
+/// contiguous columns). False unless every pivot is positive and finite.
+bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f);
+
+/// x = A^-1 b over the factored parameters (U^T y = b, then U x = y); 0 elsewhere.
+void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x);
+
+/// diag(A^-1) over the factored parameters, 0 elsewhere: A^-1 = W W^T with W = U^-1 (upper),
+/// built in *scratch.
+void cholesky_inverse_diagonal(const KeptCholesky& f, NormalMatrix* scratch, FullParams* diagonal);
+
+}  // namespace hivecal

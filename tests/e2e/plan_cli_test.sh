@@ -1,0 +1,108 @@
+#!/usr/bin/env bash
+# `hivecal plan` end to end: bad options and inputs give a clear message, the documented exit
+# code and no output file; a good run writes the joints CSV (readable by `predict`) and the
+# URScript, the same bytes for a seed; the tool-down report names what freeing the
+# orientation gains.
+#   plan_cli_test.sh <hivecal binary> [emulator words...]
+set -u
+bin=$1
+shift
+run=("$@" "$bin")
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0
+failed=0
+
+pass() { passed=$((passed + 1)); }
+fail() { failed=$((failed + 1)); echo "FAIL: $*"; }
+
+# expect CODE SUBSTRING -- ARGS...: runs hivecal plan ARGS, checks the exit code and stderr,
+# and that no output was left at $work/out.csv.
+expect() {
+  local code=$1 pattern=$2
+  shift 3
+  local err got
+  err=$("${run[@]}" plan "$@" 2>&1 >/dev/null)
+  got=$?
+  if [ "$got" -eq "$code" ] && grep -qF -- "$pattern" <<<"$err"; then pass; else
+    fail "hivecal plan $* -> exit $got (want $code), stderr: $err (want: $pattern)"; fi
+  if [ -e "$work/out.csv" ] || compgen -G "$work/out.csv.tmp.*" >/dev/null; then
+    fail "output left after: hivecal plan $*"; rm -f "$work/out.csv"; fi
+}
+
+cell=(--robot-model ur5e --tracker-position 2,0.5,0.6 --tool 0,0,0.05 --candidates 256)
+out=(--out "$work/out.csv")
+
+# --- usage errors (exit 2)
+expect 2 "--count, --tracker-position and --out are required" -- --count 10
+expect 2 "--count must be in [1, 128]" -- "${cell[@]}" "${out[@]}" --count 0
+expect 2 "--count must be a whole number" -- "${cell[@]}" "${out[@]}" --count 2.5
+expect 2 "--dwell must be in [0.3" -- "${cell[@]}" "${out[@]}" --count 10 --dwell 0.1
+expect 2 "--objective must be d-optimal" -- "${cell[@]}" "${out[@]}" --count 10 --objective a-optimal
+expect 2 "--params must be 'full' or 'paper'" -- "${cell[@]}" "${out[@]}" --count 10 --params all
+expect 2 "unknown robot model 'ur7'" -- "${cell[@]}" "${out[@]}" --count 10 --robot-model ur7
+expect 2 "--tracker-position must be X,Y,Z" -- "${cell[@]}" "${out[@]}" --count 10 --tracker-position 1,2
+expect 2 "--acceptance-deg: not a number" -- "${cell[@]}" "${out[@]}" --count 10 --acceptance-deg wide
+expect 2 "--candidates must be at least --count" -- "${cell[@]}" "${out[@]}" --count 20 --candidates 10
+# --- bad inputs (exit 3)
+expect 3 "cannot open" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/missing.csv"
+printf 'min,max\n-1,1\n' >"$work/badlimits.csv"
+expect 3 "unexpected header" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/badlimits.csv"
+printf 'lower,upper\n-1,1\n-1,1\n-1,1\n-1,1\n-1,1\n' >"$work/fivelimits.csv"
+expect 3 "expected six" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/fivelimits.csv"
+printf 'lower,upper\n-1,1\n-1,1\n1,-1\n-1,1\n-1,1\n-1,1\n' >"$work/swapped.csv"
+expect 3 "lower limit not below the upper one" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/swapped.csv"
+# --- nothing meets the constraints (exit 1), an output that cannot be written (exit 4)
+expect 1 "too few poses meet the constraints" -- "${cell[@]}" "${out[@]}" --count 10 --floor-z 5
+expect 4 "does not exist" -- "${cell[@]}" --count 10 --out "$work/no/dir/p.csv"
+
+# --- a good run: CSV + URScript, the same bytes for the same seed
+good=("${cell[@]}" --count 30 --seed 7 --urscript "$work/s.script")
+if "${run[@]}" plan "${good[@]}" --out "$work/a.csv" >"$work/report.txt" 2>&1 &&
+   "${run[@]}" plan "${good[@]}" --out "$work/b.csv" >/dev/null 2>&1; then
+  if [ "$(head -1 "$work/a.csv")" = "q1,q2,q3,q4,q5,q6" ] && [ "$(wc -l <"$work/a.csv")" -eq 31 ]; then pass; else
+    fail "plan CSV: header or row count"; fi
+  if cmp -s "$work/a.csv" "$work/b.csv"; then pass; else fail "plan: not the same bytes for one seed"; fi
+  if [ "$(grep -c '^  movej(\[' "$work/s.script")" -eq 30 ] && [ "$(grep -c '^  sleep(1)$' "$work/s.script")" -eq 30 ] &&
+     grep -q '^def hivecal_session():$' "$work/s.script" && [ "$(tail -1 "$work/s.script")" = "end" ]; then pass; else
+    fail "plan URScript: 30 movej + sleep(1) inside def ... end"; fi
+  if grep -q "log det (D-criterion)" "$work/report.txt" && grep -q "predicted sigma at 10 um" "$work/report.txt" &&
+     grep -q "^session: " "$work/report.txt"; then pass; else fail "plan report: $(cat "$work/report.txt")"; fi
+  cat >"$work/result.json" <<'JSON'
+{
+  "format": "robot-calibration/1",
+  "robot": "ur5e",
+  "convention": "standard-dh",
+  "dh": [
+    {"theta_offset": 0.0, "d": 0.1625, "a": 0.0, "alpha": 1.5707963267948966},
+    {"theta_offset": 0.0, "d": 0.0, "a": -0.425, "alpha": 0.0},
+    {"theta_offset": 0.0, "d": 0.0, "a": -0.3922, "alpha": 0.0},
+    {"theta_offset": 0.0, "d": 0.1333, "a": 0.0, "alpha": 1.5707963267948966},
+    {"theta_offset": 0.0, "d": 0.0997, "a": 0.0, "alpha": -1.5707963267948966},
+    {"theta_offset": 0.0, "d": 0.0996, "a": 0.0, "alpha": 0.0}
+  ],
+  "tool": [0.0, 0.0, 0.05],
+  "base_to_tracker": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+}
+JSON
+  # The CSV is the poses-to-predict format: every planned reflector above the 0.05 m floor.
+  if "${run[@]}" predict --calibration "$work/result.json" --joints "$work/a.csv" --frame base --out "$work/p.csv" &&
+     [ "$(awk -F, 'NR > 1 && $3 < 0.05' "$work/p.csv" | wc -l)" -eq 0 ] && [ "$(wc -l <"$work/p.csv")" -eq 31 ]; then pass; else
+    fail "plan CSV through predict: a reflector below the floor or unreadable"; fi
+  "${run[@]}" plan "${cell[@]}" --count 30 --seed 8 --out "$work/c.csv" --svg "$work/f.svg" >/dev/null 2>&1
+  if [ "$(head -c 4 "$work/f.svg")" = "<svg" ] && grep -q ">planned<" "$work/f.svg" && grep -q ">random<" "$work/f.svg" &&
+     [ "$(tail -1 "$work/f.svg")" = "</svg>" ]; then pass; else fail "plan --svg: figure"; fi
+  if ! cmp -s "$work/a.csv" "$work/c.csv"; then pass; else fail "plan: another seed gave the same poses"; fi
+else
+  fail "plan on good input: $(cat "$work/report.txt")"
+fi
+
+# --- the paper's situation: tool always down
+if "${run[@]}" plan "${cell[@]}" --count 30 --tool-down --out "$work/down.csv" >"$work/down.txt" 2>&1 &&
+   grep -q "makes identifiable: a1 d4 tool_z" "$work/down.txt" && grep -q "  d6: null_combination" "$work/down.txt"; then pass; else
+  fail "plan --tool-down report: $(cat "$work/down.txt")"; fi
+
+if "${run[@]}" plan --help | grep -q "usage: hivecal plan"; then pass; else fail "plan --help"; fi
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
