@@ -171,7 +171,7 @@ class ClockEstimatorBase {
 
  private:
   bool config_ok() const;
-  detail::ClockProfiles profiles() const;
+  detail::ClockProfiles profiles() const;  // the stored profiles as estimate() and match_profiles() read them
   void store_tracker_point(std::uint64_t timestamp_us, const Vec3& point_m);
   void set_aside_held();
   bool plausible_move(std::uint64_t from_us, const Vec3& from_m, std::uint64_t to_us, const Vec3& to_m) const;
