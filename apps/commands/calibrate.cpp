@@ -685,6 +685,7 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   if (facts.has_stream) {
     data.drops.emplace_back("kept", facts.run.counts.kept);
     for (const auto& drop : facts.dropped) data.drops.push_back(drop);
+    data.clock_match = report::clock_match_series(facts.run.clock_match, facts.run.clock.speed_gain);
   }
   for (const CalibrationOutlier& o : run.result.outlier_list()) {
     data.info_lines.push_back("set aside as a blunder: " + sample_source(facts, o.index) + ", residual " +

@@ -233,6 +233,31 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   }
 }
 
+/// Stream input: the speed profiles as the clock fit matched them, and what is left between
+/// them (two panels on the same time axis as the drop timeline).
+void clock_figures(const ReportData& data, std::vector<Figure>* out) {
+  const ClockMatchSeries& m = data.clock_match;
+  if (!data.has_stream || m.t_s.empty()) return;
+  std::vector<double> robot_mm_s, tracker_mm_s, residual_mm_s;
+  for (std::size_t k = 0; k < m.t_s.size(); ++k) {
+    robot_mm_s.push_back(m.speed_gain * m.robot_speed_m_s[k] * 1e3);
+    tracker_mm_s.push_back(m.tracker_speed_m_s[k] * 1e3);
+    residual_mm_s.push_back(m.residual_m_s[k] * 1e3);
+  }
+  char gain[48];
+  std::snprintf(gain, sizeof gain, "robot tool x %.4f", m.speed_gain);
+  ChartSpec speeds = chart("fig-clock-speeds", "Clock sync: tool speed seen by the robot (fitted clock) and by the tracker",
+                           "tracker time [s]", "speed [mm/s]");
+  speeds.width_px = 1100;
+  out->push_back({speeds.id, svg_chart(speeds, {Series{gain, m.t_s, robot_mm_s, false},
+                                                Series{"tracker", m.t_s, tracker_mm_s, false}})});
+  ChartSpec residual = chart("fig-clock-residual", "Clock sync: speed residual (tracker - robot x gain)",
+                             "tracker time [s]", "residual [mm/s]");
+  residual.width_px = 1100;
+  residual.height_px = 240;
+  out->push_back({residual.id, svg_chart(residual, {Series{"residual", m.t_s, residual_mm_s, false}})});
+}
+
 std::vector<Figure> all_figures(const ReportData& data) {
   std::vector<Figure> figures;
   bool test = false;
@@ -245,6 +270,7 @@ std::vector<Figure> all_figures(const ReportData& data) {
   }
   convergence_figures(data, &figures);
   if (!data.predictions.empty() && !data.samples.empty()) joint_figures(data, &figures);
+  clock_figures(data, &figures);
   if (data.has_stream && !data.timeline.reasons.empty()) {
     ChartSpec spec = chart("fig-drop-timeline", "Tracker points over the session: kept, or why dropped",
                            "tracker time [s]", "");
@@ -412,6 +438,8 @@ const char* caption(const std::string& id) {
       {"fig-convergence-global", "Did ABC / GSA converge before their cycle budget ran out?"},
       {"fig-convergence-lm", "Did Levenberg-Marquardt converge?"},
       {"fig-residual-q", "Does the residual depend on a joint angle (compliance, an unmodelled effect)?"},
+      {"fig-clock-speeds", "Did the clock fit line the two speed profiles up? Means per time bin over the fit's chords (each a few tracker points long); the robot speed is scaled by the fitted tracker/robot path-length gain."},
+      {"fig-clock-residual", "Is anything left between the matched profiles? Near zero while moving: aligned. A timing error shows as opposite spikes at each start and stop; a slow trend, a tool-model scale error (the fit's per-second gains absorb it). At rest it sits a little above zero: tracker noise alone makes a chord longer."},
       {"fig-drops", "How many tracker points became samples, and why were the others dropped?"},
       {"fig-drop-timeline", "When in the session were points kept or dropped (beam losses, moves, a stream gap)? Shade: count in the bin relative to the row's busiest bin."},
   };
@@ -421,6 +449,18 @@ const char* caption(const std::string& id) {
 }
 
 }  // namespace
+
+ClockMatchSeries clock_match_series(const std::vector<ClockMatchBin>& bins, double speed_gain) {
+  ClockMatchSeries series;
+  series.speed_gain = speed_gain;
+  for (const ClockMatchBin& bin : bins) {
+    series.t_s.push_back(bin.tracker_s);
+    series.robot_speed_m_s.push_back(bin.robot_speed_m_s);
+    series.tracker_speed_m_s.push_back(bin.tracker_speed_m_s);
+    series.residual_m_s.push_back(bin.residual_m_s);
+  }
+  return series;
+}
 
 PredictionSet predict_samples(const std::string& method, const RobotModel& model, const RigidTransform& base_to_tracker,
                               const std::vector<SampleRow>& samples) {

@@ -13,6 +13,7 @@
 #include "hivecal/core/types.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/metrics.hpp"
+#include "hivecal/sync/clock_sync.hpp"
 
 namespace hivecal::report {
 
@@ -87,6 +88,16 @@ struct PointTimeline {
   std::vector<std::vector<std::uint32_t>> counts;  ///< per reason, tracker points per time bin
 };
 
+/// Stream input: what the clock fit matched (ClockEstimatorBase::match_profiles), one
+/// entry per time bin; all four the same length.
+struct ClockMatchSeries {
+  double speed_gain = 1.0;                 ///< tracker/robot path-length ratio of the fit [-]
+  std::vector<double> t_s;                 ///< bin time since the first tracker point [s]
+  std::vector<double> robot_speed_m_s;     ///< robot tool speed at the fitted robot times [m/s]
+  std::vector<double> tracker_speed_m_s;   ///< tracker point speed [m/s]
+  std::vector<double> residual_m_s;        ///< tracker speed - speed_gain * robot speed [m/s]
+};
+
 /// Everything the report shows.
 struct ReportData {
   std::string title;                          ///< page title
@@ -104,12 +115,16 @@ struct ReportData {
   std::vector<std::pair<std::string, std::uint64_t>> drops;  ///< stream input: drop reason -> tracker points
   bool has_stream = false;                    ///< the samples came from two streams
   PointTimeline timeline;                     ///< stream input: kept / drop reason per tracker point over time
+  ClockMatchSeries clock_match;               ///< stream input: the clock fit's matched speed profiles
 };
 
 /// A prediction set of `model` for every sample of `samples` (result.json keeps the model,
 /// not the points: both calibrate and `hivecal report` compute them here, the same bits).
 PredictionSet predict_samples(const std::string& method, const RobotModel& model, const RigidTransform& base_to_tracker,
                               const std::vector<SampleRow>& samples);
+
+/// The report's copy of ClockEstimatorBase::match_profiles' bins and the fit's speed gain.
+ClockMatchSeries clock_match_series(const std::vector<ClockMatchBin>& bins, double speed_gain);
 
 /// Table 1 and Table 2 as aligned plain text (micrometres).
 std::string format_tables_text(const ReportData& data);

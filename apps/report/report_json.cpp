@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "textio/calibration_json.hpp"
 
@@ -267,6 +268,25 @@ bool get_timeline(const JsonValue* v, PointTimeline* out) {
   return true;
 }
 
+bool get_clock_match(const JsonValue* v, ClockMatchSeries* out) {
+  if (v == nullptr) return true;  // not stream input
+  if (!get_number(v->find("speed_gain"), &out->speed_gain)) return false;
+  const JsonValue* t = v->find("t_s");
+  if (!is_array(t)) return false;
+  const std::size_t n = t->array.size();
+  std::pair<const char*, std::vector<double>*> columns[] = {{"t_s", &out->t_s},
+                                                            {"robot_speed_m_s", &out->robot_speed_m_s},
+                                                            {"tracker_speed_m_s", &out->tracker_speed_m_s},
+                                                            {"residual_m_s", &out->residual_m_s}};
+  for (auto& [key, column] : columns) {
+    const JsonValue* c = v->find(key);
+    if (!is_array(c) || c->array.size() != n) return false;
+    column->resize(n);
+    if (!get_numbers(c, n, column->data())) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 void write_report_data(JsonWriter& json, const ReportData& data) {
@@ -359,6 +379,16 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
     json.end_array();
     json.end_object();
   }
+  const ClockMatchSeries& match = data.clock_match;
+  if (!match.t_s.empty()) {
+    json.key("clock_match").begin_object();
+    json.key("speed_gain").value(match.speed_gain);
+    json.key("t_s").inline_array(match.t_s.data(), match.t_s.size());
+    json.key("robot_speed_m_s").inline_array(match.robot_speed_m_s.data(), match.robot_speed_m_s.size());
+    json.key("tracker_speed_m_s").inline_array(match.tracker_speed_m_s.data(), match.tracker_speed_m_s.size());
+    json.key("residual_m_s").inline_array(match.residual_m_s.data(), match.residual_m_s.size());
+    json.end_object();
+  }
   json.end_object();
 }
 
@@ -385,6 +415,7 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   if (!get_bool(value.find("has_stream"), &parsed.has_stream)) return bad("has_stream");
   if (!get_drops(value.find("drops"), &parsed.drops)) return bad("drops");
   if (!get_timeline(value.find("timeline"), &parsed.timeline)) return bad("timeline");
+  if (!get_clock_match(value.find("clock_match"), &parsed.clock_match)) return bad("clock_match");
   *data = parsed;
   return port::Error{};
 }

@@ -172,6 +172,13 @@ port::Error check_not_swapped(const std::string& robot_path, const std::string& 
   return port::Error{};
 }
 
+/// What the clock fit matched, for the report (observation only; a failure leaves it empty).
+void record_clock_match(const ClockEstimatorBase& estimator, CaptureRunReport* report) {
+  const auto match = std::make_unique<ClockMatch>();
+  if (estimator.match_profiles(report->clock, kClockMatchBins, match.get()) != Status::ok) return;
+  report->clock_match.assign(match->bins, match->bins + match->count);
+}
+
 }  // namespace
 
 port::Error extract_from_files(const std::string& robot_path, const std::string& tracker_path,
@@ -203,6 +210,7 @@ port::Error extract_from_files(const std::string& robot_path, const std::string&
     count_input(pass.robot_input(), decoding.robot_decoder, true, robot_log.get(), &report->robot);
     count_input(pass.tracker_input(), decoding.tracker_decoder, false, tracker_log.get(), &report->tracker);
     report->clock_stats = estimator->stats();
+    if (report->clock_status == Status::ok) record_clock_match(*estimator, report);
     if (report->clock_status == Status::invalid_argument && !error.empty()) return port::Error::input(error);
     const port::Error swapped = check_not_swapped(robot_path, tracker_path, *report);
     if (!swapped.ok()) return swapped;

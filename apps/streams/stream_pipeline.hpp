@@ -11,6 +11,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "hivecal/port/error.hpp"
 #include "hivecal/port/input_file.hpp"
@@ -122,6 +123,7 @@ struct CaptureRunReport {
   Status clock_status = Status::ok;       ///< outcome of the clock estimation
   ClockFit clock;                          ///< the clock relation (when clock_status is ok)
   ClockProfileStats clock_stats;           ///< what went into the clock profiles
+  std::vector<ClockMatchBin> clock_match;  ///< the profiles the clock fit matched, <= kClockMatchBins time bins (clock ok)
   StreamInputCounts robot;                 ///< what the robot input held
   StreamInputCounts tracker;               ///< what the tracker input held
   Status extraction_status = Status::ok;  ///< ok or dataset_full

@@ -1,6 +1,7 @@
 // The HTML report must be well formed, self-contained, and show what it claims.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -139,6 +140,12 @@ TEST(Report, DataRoundTripsThroughResultJson) {
   data.has_stream = true;
   data.drops = {{"kept", 12}, {"beam_lost", 3}};
   data.timeline = {14.5, {"kept", "beam_lost"}, {{4, 0, 8}, {0, 3, 0}}};
+  const std::vector<std::string> without = report::figure_ids(data);  // no clock profiles: no clock figure
+  EXPECT_EQ(std::count(without.begin(), without.end(), "fig-clock-speeds"), 0);
+  const std::vector<ClockMatchBin> bins = {{0.05, 0.1 + 0.2, 1.0 / 3.0, 1e-5 / 3.0, 3},
+                                           {7.25, 0.0, 2e-4, 2e-4 - 1.0001 * 0.0, 5},
+                                           {14.45, 0.12, 0.119, -7e-4, 2}};
+  data.clock_match = report::clock_match_series(bins, 1.0001);
   data.identifiability.condition_before = std::numeric_limits<double>::infinity();  // stored as null
   textio::JsonWriter json;
   report::write_report_data(json, data);
@@ -150,10 +157,28 @@ TEST(Report, DataRoundTripsThroughResultJson) {
   for (report::MethodRow& m : data.methods) m.seconds = 0.0;  // never written
   data.input_lines.clear();                                    // never written
   EXPECT_EQ(report::render_html(back), report::render_html(data));
+  // The clock-sync profiles come back bit for bit.
+  EXPECT_EQ(back.clock_match.speed_gain, 1.0001);
+  ASSERT_EQ(back.clock_match.t_s.size(), bins.size());
+  for (std::size_t k = 0; k < bins.size(); ++k) {
+    EXPECT_EQ(back.clock_match.t_s[k], bins[k].tracker_s);
+    EXPECT_EQ(back.clock_match.robot_speed_m_s[k], bins[k].robot_speed_m_s);
+    EXPECT_EQ(back.clock_match.tracker_speed_m_s[k], bins[k].tracker_speed_m_s);
+    EXPECT_EQ(back.clock_match.residual_m_s[k], bins[k].residual_m_s);
+  }
   const std::vector<std::string> ids = report::figure_ids(back);
-  ASSERT_GE(ids.size(), 2u);
+  ASSERT_GE(ids.size(), 4u);
+  EXPECT_EQ(ids[ids.size() - 4], "fig-clock-speeds");
+  EXPECT_EQ(ids[ids.size() - 3], "fig-clock-residual");
   EXPECT_EQ(ids[ids.size() - 2], "fig-drop-timeline");
   EXPECT_EQ(ids.back(), "fig-drops");
+  EXPECT_NE(report::render_html(back).find("robot tool x 1.0001"), std::string::npos);
+  // A clock_match column of another length is refused.
+  textio::JsonValue short_column = value;
+  short_column.object["clock_match"].object["residual_m_s"].array.pop_back();
+  const port::Error uneven = report::parse_report_data(short_column, "result.json", &back);
+  EXPECT_FALSE(uneven.ok());
+  EXPECT_NE(uneven.message.find("\"clock_match\""), std::string::npos) << uneven.message;
   EXPECT_NE(report::render_html(back).find("beam_lost (3)"), std::string::npos);
   // A damaged document is refused with the key at fault.
   value.object["samples"].array[0].object.erase("q_rad");

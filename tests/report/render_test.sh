@@ -2,7 +2,8 @@
 # The HTML report as a browser shows it (ctest report.render): a simulated session is
 # calibrated from streams and from paired samples, each report is rendered by headless
 # Chromium (Debian's `chromium`, scripts/install-deps.sh) and its DOM is checked:
-#   - every figure the input calls for is there (and no stream figure for samples input);
+#   - every figure the input calls for is there (and no stream figure for samples input),
+#     the clock-sync profiles in result.json agree (residual well under the speeds);
 #   - no numeric tick label has more than three significant digits;
 #   - every legend entry has a drawn element of its series in the same figure;
 #   - `hivecal report --calibration` redraws the same figures, the same bytes twice.
@@ -102,7 +103,20 @@ common=(fig-error-3d fig-error-x fig-error-y fig-error-z fig-vectors-xy fig-vect
 # From the streams: every figure, the drop reasons too.
 if "$hivecal" calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --out "$work/streams.json" \
      --report "$work/streams" --quiet >/dev/null; then
-  check_report streams "$work/streams/index.html" "${common[@]}" fig-drop-timeline fig-drops
+  check_report streams "$work/streams/index.html" "${common[@]}" fig-clock-speeds fig-clock-residual fig-drop-timeline fig-drops
+  # The clock figure's data in result.json: the matched profiles agree (residual rms well
+  # under the tracker speed rms) and have as many bins in each column.
+  clock=$(tr -d ' \n' <"$work/streams.json" | grep -o '"clock_match":{[^}]*}' | awk -F'"' '
+    function values(key,   i, list) { for (i = 1; i < NF; i++) if ($i == key) { list = $(i + 1); break }
+      gsub(/^:\[|\].*$/, "", list); return list }
+    { n = split(values("tracker_speed_m_s"), v, ","); m = split(values("residual_m_s"), r, ",");
+      t = split(values("t_s"), ts, ","); b = split(values("robot_speed_m_s"), rb, ",");
+      for (i = 1; i <= n; i++) { sv += v[i] * v[i]; sr += r[i] * r[i] }
+      if (n > 100 && n == m && n == t && n == b) printf "%d %.3f %.3f", n, sqrt(sv / n) * 1e3, sqrt(sr / n) * 1e3 }')
+  read -r clock_bins speed_mm_s residual_mm_s <<<"${clock:-0 0 0}"
+  if [ "$clock_bins" -gt 100 ] && awk -v s="$speed_mm_s" -v r="$residual_mm_s" 'BEGIN { exit !(s > 5 && r < 0.1 * s) }'; then
+    ok; echo "streams: clock_match $clock_bins bins, rms tracker speed $speed_mm_s mm/s, rms residual $residual_mm_s mm/s"
+  else fail "clock_match in result.json: '$clock' (bins, rms speed, rms residual [mm/s])"; fi
   if timeout 120 "$chromium_bin" --headless --disable-gpu --no-sandbox --no-first-run --user-data-dir="$work/profile" \
        --hide-scrollbars --window-size=1300,2000 --screenshot="$work/shot.png" "file://$work/streams/index.html" \
        >/dev/null 2>&1 && [ "$(head -c 8 "$work/shot.png" | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ] &&
@@ -115,7 +129,7 @@ if "$hivecal" calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --
   if "$hivecal" report --calibration "$work/streams.json" --out "$work/again" >/dev/null &&
      "$hivecal" report --calibration "$work/streams.json" --out "$work/again2" >/dev/null &&
      cmp -s "$work/again/index.html" "$work/again2/index.html"; then ok; else fail "report --calibration twice: different bytes"; fi
-  check_report regenerated "$work/again/index.html" "${common[@]}" fig-drop-timeline fig-drops
+  check_report regenerated "$work/again/index.html" "${common[@]}" fig-clock-speeds fig-clock-residual fig-drop-timeline fig-drops
   # From Table 2 on (Table 1 has no stage times then, and the input facts name files), the
   # page is calibrate's own.
   if cmp -s <(sed -n '/<h2>Table 2/,$p' "$work/streams/index.html") <(sed -n '/<h2>Table 2/,$p' "$work/again/index.html"); then
@@ -129,6 +143,7 @@ fi
 if "$hivecal" calibrate --samples "$work/samples.csv" --method all --out "$work/samples.json" --report "$work/samples" \
      --quiet >/dev/null; then
   check_report samples "$work/samples/index.html" "${common[@]}"
+  if ! grep -q '"clock_match"' "$work/samples.json"; then ok; else fail "samples input: clock_match in result.json"; fi
 else
   fail "calibrate from samples"
 fi

@@ -182,10 +182,7 @@ ClockFit to_clock_fit(const detail::FineFit& fine, const detail::CoarseLag& coar
 
 }  // namespace
 
-Status ClockEstimatorBase::estimate(ClockFit* fit) {
-  if (!config_ok()) return Status::invalid_argument;
-  set_aside_held();  // a jump that never came back nor went on: the last points were blunders
-  if (stats_.robot_knots < 4 || stats_.tracker_points < 4) return Status::clock_fit_failed;
+detail::ClockProfiles ClockEstimatorBase::profiles() const {
   detail::ClockProfiles view;
   view.robot_s_m = robot_knots_m_;
   view.robot_knots = stats_.robot_knots;
@@ -194,6 +191,14 @@ Status ClockEstimatorBase::estimate(ClockFit* fit) {
   view.tracker_points = stats_.tracker_points;
   view.max_chord_interval_us = static_cast<double>(config_.max_chord_interval_us);
   view.chord_span = config_.chord_span_points;
+  return view;
+}
+
+Status ClockEstimatorBase::estimate(ClockFit* fit) {
+  if (!config_ok()) return Status::invalid_argument;
+  set_aside_held();  // a jump that never came back nor went on: the last points were blunders
+  if (stats_.robot_knots < 4 || stats_.tracker_points < 4) return Status::clock_fit_failed;
+  const detail::ClockProfiles view = profiles();
   detail::CoarseLag coarse;
   const Status coarse_status = detail::coarse_lag(view, config_, scratch_, scratch_capacity_, &coarse);
   if (coarse_status != Status::ok) return coarse_status;

@@ -3,7 +3,9 @@
 // motion is periodic; constant memory on long captures.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include "hivecal/core/random.hpp"
 #include "sim/sim_model.hpp"
@@ -239,6 +241,68 @@ TEST(ClockSync, RejectsBadConfiguration) {
   ClockEstimatorBase& estimator = estimator_with(config);
   ClockFit fit;
   EXPECT_EQ(estimator.estimate(&fit), Status::invalid_argument);
+}
+
+/// Rms of the bins' residuals and of their tracker speeds [m/s].
+void match_rms(const ClockMatch& match, double* residual_m_s, double* tracker_m_s) {
+  double r2 = 0.0, v2 = 0.0;
+  for (std::size_t k = 0; k < match.count; ++k) {
+    r2 += match.bins[k].residual_m_s * match.bins[k].residual_m_s;
+    v2 += match.bins[k].tracker_speed_m_s * match.bins[k].tracker_speed_m_s;
+  }
+  const double n = static_cast<double>(match.count);
+  *residual_m_s = std::sqrt(r2 / n);
+  *tracker_m_s = std::sqrt(v2 / n);
+}
+
+TEST(ClockSync, MatchedProfilesShowTheFitAndChangeNoResult) {
+  sim::SimConfig config;
+  sim::use_large_errors(&config);
+  config.seed = 1;
+  config.clock_drift = 40e-6;
+  const sim::Session session(config);
+  ClockEstimatorBase& estimator = estimator_with(config_for(session));
+  test::feed_clock(session, &estimator);
+  ClockFit fit;
+  ASSERT_EQ(estimator.estimate(&fit), Status::ok);
+  static ClockMatch match;
+  static ClockMatch shifted;
+  constexpr std::size_t kBins = 256;
+  Status status = Status::ok;
+  EXPECT_NO_HEAP(status = estimator.match_profiles(fit, kBins, &match));
+  ASSERT_EQ(status, Status::ok);
+  ASSERT_GT(match.count, kBins / 2);
+  ASSERT_LE(match.count, kBins);
+  std::uint64_t chords = 0;
+  for (std::size_t k = 0; k < match.count; ++k) {
+    chords += match.bins[k].chords;
+    if (k > 0) {
+      EXPECT_GT(match.bins[k].tracker_s, match.bins[k - 1].tracker_s) << k;
+    }
+  }
+  EXPECT_GE(match.bins[0].tracker_s, 0.0);
+  EXPECT_NEAR(static_cast<double>(chords), fit.chords_used, 0.05 * fit.chords_used);
+  // Observation only: estimating again gives the same bits.
+  ClockFit again;
+  ASSERT_EQ(estimator.estimate(&again), Status::ok);
+  EXPECT_EQ(std::memcmp(&again, &fit, sizeof fit), 0);
+  // A clock 0.3 s off leaves the profiles apart: the residual grows many times.
+  ClockFit off = fit;
+  off.offset_at_reference_us += 300000.0;
+  ASSERT_EQ(estimator.match_profiles(off, kBins, &shifted), Status::ok);
+  double residual = 0.0, speed = 0.0, residual_off = 0.0, speed_off = 0.0;
+  match_rms(match, &residual, &speed);
+  match_rms(shifted, &residual_off, &speed_off);
+  std::printf("matched profiles: %zu bins, %llu chords (fit %u), rms tracker speed %.1f mm/s, residual %.2f mm/s; "
+              "0.3 s off: %.2f mm/s\n",
+              match.count, static_cast<unsigned long long>(chords), fit.chords_used, speed * 1e3, residual * 1e3,
+              residual_off * 1e3);
+  EXPECT_GT(speed, 0.01);
+  EXPECT_LT(residual, 0.05 * speed);
+  EXPECT_GT(residual_off, 5.0 * residual);
+  EXPECT_EQ(estimator.match_profiles(fit, 0, &match), Status::invalid_argument);
+  EXPECT_EQ(estimator.match_profiles(fit, kClockMatchBins + 1, &match), Status::invalid_argument);
+  EXPECT_EQ(estimator.match_profiles(fit, kBins, nullptr), Status::invalid_argument);
 }
 
 TEST(ClockSync, ConstantMemoryOnAnHourLongCapture) {

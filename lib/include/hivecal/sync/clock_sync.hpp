@@ -111,6 +111,30 @@ struct ClockTrackerKnot {
   double s_m = 0.0;   ///< chord length accumulated up to this point [m]
 };
 
+/// Most bins of a ClockMatch (time-uniform over the tracker profile).
+inline constexpr std::size_t kClockMatchBins = 512;
+
+/// One time bin of the matched speed profiles: means over the fine-fit chords ending in it.
+struct ClockMatchBin {
+  double tracker_s = 0.0;             ///< mean chord mid-time, since the first stored tracker point [s]
+  double robot_speed_m_s = 0.0;       ///< robot tool speed at the fitted robot times of the chords [m/s]
+  double tracker_speed_m_s = 0.0;     ///< tracker point speed over the chords [m/s]
+  double residual_m_s = 0.0;          ///< tracker speed - speed_gain * robot speed [m/s]
+  std::uint32_t chords = 0;           ///< chords averaged
+};
+
+/// The two speed profiles aligned by a ClockFit, decimated for plotting (observation only:
+/// estimate() does not use it).
+struct ClockMatch {
+  double tracker_t0_us = 0.0;          ///< tracker clock of the first stored tracker point [us]
+  std::size_t count = 0;               ///< bins filled (empty bins are skipped)
+  ClockMatchBin bins[kClockMatchBins]; ///< in time order
+};
+
+namespace detail {
+struct ClockProfiles;
+}
+
 /// Capacity-erased clock estimator: push each stream in its own time order (the two
 /// streams may be interleaved in any way, or pushed one after the other), then estimate().
 class ClockEstimatorBase {
@@ -126,6 +150,10 @@ class ClockEstimatorBase {
   /// (config), clock_fit_failed (too little overlapping motion, weak or ambiguous
   /// correlation, fit outside max_drift). *fit is written only on success.
   Status estimate(ClockFit* fit);
+  /// What `fit` (from estimate() on the same records) matched: the chords of the fine fit
+  /// in at most `bins` (<= kClockMatchBins) time-uniform bins. Reads only; allocates nothing.
+  /// Errors: invalid_argument (null, bins out of range), clock_fit_failed (no chord covered).
+  Status match_profiles(const ClockFit& fit, std::size_t bins, ClockMatch* match) const;
   /// Forgets every record (keeps the configuration).
   void reset();
   /// Forgets every record and takes a new configuration.
@@ -143,6 +171,7 @@ class ClockEstimatorBase {
 
  private:
   bool config_ok() const;
+  detail::ClockProfiles profiles() const;  // the stored profiles as estimate() and match_profiles() read them
   void store_tracker_point(std::uint64_t timestamp_us, const Vec3& point_m);
   void set_aside_held();
   bool plausible_move(std::uint64_t from_us, const Vec3& from_m, std::uint64_t to_us, const Vec3& to_m) const;
