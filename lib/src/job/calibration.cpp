@@ -149,11 +149,11 @@ Status prepare(const RobotModel& start, DatasetBase* dataset, const CalibrationO
   if (status != Status::ok) return fail(r, CalibrationStep::split, status);
   r->train_count = dataset->train().size();
   r->test_count = dataset->test().size();
-  r->baseline.model = start;
-  status = fit_base_to_tracker(start, dataset->train(), &r->baseline.base_to_tracker);
+  r->baseline.model = start;  // with several targets, their tool points fitted (the stages start here)
+  status = fit_base_and_target_tools(dataset->train(), &r->baseline.model, &r->baseline.base_to_tracker);
   if (status != Status::ok) return fail(r, CalibrationStep::baseline, status);
-  r->baseline.train = position_error_stats(start, r->baseline.base_to_tracker, dataset->train());
-  r->baseline.test = position_error_stats(start, r->baseline.base_to_tracker, dataset->test());
+  r->baseline.train = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->train());
+  r->baseline.test = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->test());
   return Status::ok;
 }
 
@@ -215,7 +215,7 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   if (dataset == nullptr || workspace == nullptr) return fail(&r, CalibrationStep::input, Status::invalid_argument);
   Status status = prepare(start, dataset, options, &r);
   if (status != Status::ok) return status;
-  Job job{start, *dataset, options, *workspace, r, observer};
+  Job job{r.baseline.model, *dataset, options, *workspace, r, observer};
   const StagePlan plan = plan_for(options.method);
   if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, false)) != Status::ok) return status;
   if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, false)) != Status::ok) return status;

@@ -54,7 +54,9 @@ Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
 }
 
 void apply_full_increment(const FullParams& increment, RobotModel* model, RigidTransform* base_to_tracker) {
-  *model = from_params(to_params(*model) + increment.head<kModelParamCount>());
+  const RobotModel before = *model;
+  *model = from_params(to_params(before) + increment.head<kModelParamCount>());
+  for (int k = 0; k < kMaxTargets - 1; ++k) model->other_tools_m[k] = before.other_tools_m[k];  // not among the 33
   const Vec3 rotation_rad = increment.segment<3>(base_rotation_param_index(0));
   const Vec3 translation_m = increment.segment<3>(base_translation_param_index(0));
   base_to_tracker->translation_m += base_to_tracker->rotation * translation_m;

@@ -36,6 +36,9 @@ using ParamMask = std::uint64_t;
 constexpr ParamMask param_bit(int index) { return ParamMask{1} << static_cast<unsigned>(index); }
 /// Every one of the 33 parameters.
 inline constexpr ParamMask kAllParamsMask = (ParamMask{1} << kFullParamCount) - 1U;
+/// Not a parameter: in a mask of columns to sum (accumulate_normal_equations), the tool points
+/// of targets 2 .. kMaxTargets are estimated too (mask_count and mask_indices ignore it).
+inline constexpr ParamMask kOtherTargetTools = ParamMask{1} << kFullParamCount;
 /// True when parameter `index` is in `mask`.
 constexpr bool mask_has(ParamMask mask, int index) { return (mask & param_bit(index)) != 0; }
 /// Number of parameters in `mask`.
