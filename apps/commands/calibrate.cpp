@@ -97,6 +97,7 @@ struct Run {
   double seconds[kMaxCalibrationStages] = {};   ///< wall time per stage [s]
   bool from_controller = false;                 ///< the start geometry is the controller's
   std::size_t link_length_count = kPaper6Dimension;  ///< lengths the population stages search [-]
+  int target_count = 1;                         ///< targets (reflectors) in the samples: the result's "tools" [-]
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).
@@ -405,6 +406,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.robust = settings.robust;
   static CliWorkspace workspace;
   JobObserver observer(settings.progress);
+  run->target_count = target_count(dataset->samples());
   const Status status = hivecal::calibrate(start, dataset, job, &workspace, &run->result, &observer);
   for (std::size_t k = 0; k < kMaxCalibrationStages; ++k) run->seconds[k] = observer.seconds[k];
   const CalibrationStep step = run->result.step;
@@ -488,6 +490,7 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
   textio::CalibrationFile file;
   static_cast<textio::RobotDescription&>(file) = settings.robot;  // name and convention as given
   file.model = final_stage.model;
+  file.target_count = run.target_count;
   file.base_to_tracker = final_stage.base_to_tracker;
   file.has_metrics = true;
   file.metrics = data.calibrated;
