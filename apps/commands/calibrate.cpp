@@ -187,6 +187,15 @@ std::vector<std::string> parameter_lines(const CalibrationStage& stage, const Lm
                             : "");
     lines.push_back(buf);
   }
+  for (int target = 1; lm != nullptr && target < kMaxTargets; ++target) {  // estimated with several targets
+    const Vec3& sigma_m = lm->other_tools_sigma_m[target - 1];
+    if (sigma_m.isZero()) continue;
+    for (int axis = 0; axis < 3; ++axis) {
+      std::snprintf(buf, sizeof buf, "%-8s %+.9f m  (sigma %.6f mm)", other_tool_param_name(target, axis),
+                    target_tool(stage.model, target)(axis), sigma_m(axis) * 1e3);
+      lines.push_back(buf);
+    }
+  }
   return lines;
 }
 
@@ -210,6 +219,10 @@ void write_lm_details(textio::JsonWriter& json, const LmResult& lm) {
   json.key("estimated").begin_array();
   for (int k = 0; k < kFullParamCount; ++k)
     if (mask_has(id.kept_mask, k)) json.value(full_param_name(k));
+  for (int target = 1; target < kMaxTargets; ++target) {  // several targets: their tool points
+    if (lm.other_tools_sigma_m[target - 1].isZero()) continue;
+    for (int axis = 0; axis < 3; ++axis) json.value(other_tool_param_name(target, axis));
+  }
   json.end_array();
   json.key("dropped").begin_array();
   for (int k = 0; k < id.dropped_count; ++k) {
@@ -232,6 +245,11 @@ void write_lm_details(textio::JsonWriter& json, const LmResult& lm) {
   json.key("sigma").begin_object();
   for (int k = 0; k < kFullParamCount; ++k)
     if (mask_has(id.kept_mask, k)) json.key(full_param_name(k)).value(lm.sigma(k));
+  for (int target = 1; target < kMaxTargets; ++target) {
+    const Vec3& sigma_m = lm.other_tools_sigma_m[target - 1];
+    if (sigma_m.isZero()) continue;
+    for (int axis = 0; axis < 3; ++axis) json.key(other_tool_param_name(target, axis)).value(sigma_m(axis));
+  }
   json.end_object();
   json.key("lm").begin_object();
   json.key("iterations").value(static_cast<long long>(lm.iterations));

@@ -127,6 +127,7 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
   std::string text;
   ASSERT_TRUE(port::read_whole_file(result, port::kMaxTextInputBytes, &text).ok());
   EXPECT_NE(text.find("\"tools\""), std::string::npos);
+  EXPECT_NE(text.find("\"tool3_z\""), std::string::npos);  // estimated, with its sigma
   ASSERT_TRUE(textio::parse_calibration_json(text, result, &again).ok());
   EXPECT_EQ(again.model.other_tools_m[1], file.model.other_tools_m[1]);
   const std::string mismatch = dir.write("mismatch.json", text.substr(0, text.find("\"tools\"")) +

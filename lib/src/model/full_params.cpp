@@ -13,7 +13,16 @@ constexpr const char* kParamNames[kFullParamCount] = {
     "a6", "alpha6", "tool_x", "tool_y", "tool_z", "base_rx", "base_ry", "base_rz", "base_tx", "base_ty",
     "base_tz"};
 
+constexpr const char* kOtherToolNames[kMaxTargets - 1][3] = {
+    {"tool2_x", "tool2_y", "tool2_z"}, {"tool3_x", "tool3_y", "tool3_z"}, {"tool4_x", "tool4_y", "tool4_z"}};
+static_assert(kMaxTargets == 4, "one name row per target 2 ..");
+
 }  // namespace
+
+const char* other_tool_param_name(int target, int axis) {
+  if (target < 1 || target >= kMaxTargets || axis < 0 || axis >= 3) return "?";
+  return kOtherToolNames[target - 1][axis];
+}
 
 int mask_count(ParamMask mask) {
   int count = 0;

@@ -11,6 +11,8 @@
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/solve/identifiability.hpp"
 #include "hivecal/solve/lm.hpp"
+#include "hivecal/solve/cost.hpp"
+#include "hivecal/solve/paper6_cost.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/target_data.hpp"
 
@@ -210,6 +212,36 @@ TEST(SeveralTargets, SeveralTargetsIdentifyMoreOnTheSamePoses) {
   std::printf("40 tool-down poses: 1 target keeps %d (%s dropped), 3 targets keep %d\n", one.kept_count(),
               names_of(kAllParamsMask & ~one.kept_mask).c_str(), three.kept_count());
   EXPECT_EQ(three.kept_mask, one.kept_mask);
+}
+
+// ABC/GSA's precomputed link-length cost with each sample's own target tool (fixed in that
+// stage) equals the generic refit cost, and the other tool points survive model_for.
+TEST(SeveralTargets, LinkLengthCostUsesEachSamplesToolPoint) {
+  RigidTransform base;
+  const RobotModel truth = simulate(31, 40, 1e-5, &base);
+  static Paper6Cost<300> cost;
+  RobotModel start = nominal_model(RobotType::ur5);
+  for (int target = 0; target < 3; ++target) target_tool(&start, target) = target_tool(truth, target);
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = cost.build(start, train_set().samples()));
+  ASSERT_EQ(status, Status::ok);
+  Random random(32);
+  for (int trial = 0; trial < 20; ++trial) {
+    LinkLengths lengths_m = link_lengths(trial == 0 ? truth : start, link_length_set(start));
+    for (Eigen::Index k = 0; k < lengths_m.size() && trial > 1; ++k) lengths_m(k) += random.uniform(-2e-3, 2e-3);
+    double fast_m = 0.0;
+    RigidTransform fast_base;
+    EXPECT_NO_HEAP(status = cost.evaluate(lengths_m, &fast_m, &fast_base));
+    ASSERT_EQ(status, Status::ok);
+    const RobotModel model = cost.model_for(lengths_m.data());
+    EXPECT_EQ(model.other_tools_m[1], truth.other_tools_m[1]);
+    double generic_m = 0.0;
+    RigidTransform generic_base;
+    ASSERT_EQ(evaluate_cost(model, train_set().samples(), CostKind::mean_abs_3d, BaseFrame::refit, &generic_base,
+                            &generic_m),
+              Status::ok);
+    EXPECT_NEAR(fast_m, generic_m, 1e-11 * generic_m) << "trial " << trial;
+  }
 }
 
 }  // namespace

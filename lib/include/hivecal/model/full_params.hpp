@@ -50,6 +50,10 @@ int mask_indices(ParamMask mask, int (&index)[kFullParamCount]);
 /// "base_rz", "base_tx", ...; "?" outside [0, kFullParamCount). Static storage.
 const char* full_param_name(int index);
 
+/// Name of coordinate `axis` (0 = x) of the tool point of target `target` (0-based, 1 ..
+/// kMaxTargets - 1; the parameters after the 33): "tool2_x", ...; "?" outside. Static storage.
+const char* other_tool_param_name(int target, int axis);
+
 /// Cross-product matrix: skew(v) * x = v x x.
 inline Mat3 skew(const Vec3& v) {
   Mat3 k;
