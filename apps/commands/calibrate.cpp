@@ -483,8 +483,8 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   }
   for (const Sample& s : dataset.test()) {
     data.test_measured_m.push_back(s.point_m);
-    data.test_uncalibrated_m.push_back(uncalibrated.base_to_tracker.apply(fk_tool_point(uncalibrated.model, s.q_rad)));
-    data.test_calibrated_m.push_back(final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)));
+    data.test_uncalibrated_m.push_back(uncalibrated.base_to_tracker.apply(fk_sample_point(uncalibrated.model, s)));
+    data.test_calibrated_m.push_back(final_stage.base_to_tracker.apply(fk_sample_point(final_stage.model, s)));
   }
   if (run.final_lm() != nullptr) {
     for (const std::string& line : identifiability_lines(*run.final_lm())) data.info_lines.push_back(line);

@@ -14,8 +14,8 @@ constexpr const char* kParamNames[kFullParamCount] = {
     "base_tz"};
 
 constexpr const char* kOtherToolNames[kMaxTargets - 1][3] = {
-    {"tool2_x", "tool2_y", "tool2_z"}, {"tool3_x", "tool3_y", "tool3_z"}, {"tool4_x", "tool4_y", "tool4_z"}};
-static_assert(kMaxTargets == 4, "one name row per target 2 ..");
+    {"tool2_x", "tool2_y", "tool2_z"}, {"tool3_x", "tool3_y", "tool3_z"}};
+static_assert(kMaxTargets == 3, "one name row per target 2 ..");
 
 }  // namespace
 

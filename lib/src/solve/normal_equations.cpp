@@ -373,6 +373,7 @@ Status accumulate_several_targets(const RobotModel& model, const RigidTransform&
                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* eq,
                                   ParamMask columns) {
   const bool eliminate = (columns & kOtherTargetTools) != 0;
+  for (TargetBlock& block : eq->targets) block = TargetBlock{};
   for (const Sample& sample : samples) {
     RobotModel moved = model;
     moved.tool_m = target_tool(model, sample.target);
@@ -434,7 +435,7 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   eq.weighted_squares_m2 = 0.0;
   eq.squares_sum_m2 = 0.0;
   eq.count = samples.size();
-  for (TargetBlock& block : eq.targets) block = TargetBlock{};
+  for (TargetBlock& block : eq.targets) block.count = 0;  // the sums are reset where they are used
   if (target_count(samples) > 1) {
     return accumulate_several_targets(model, base_to_tracker, samples, loss, &eq, columns);
   }

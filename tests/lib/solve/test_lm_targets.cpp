@@ -128,7 +128,6 @@ TEST(SeveralTargets, LmRecoversEveryToolPointExactlyWithoutNoise) {
     for (int target = 0; target < 3; ++target) {
       EXPECT_LE(worst_tool_error_m(truth, result().model, target), 1e-9) << "seed " << seed << " target " << target + 1;
     }
-    EXPECT_EQ(result().other_tools_sigma_m[2], Vec3::Zero());  // target 4 has no samples
     if (seed == 1) {
       std::printf("3 targets x 40 poses: %d of 33 estimated + 6 tool coordinates, %d iterations, worst %.3g m\n",
                   result().identifiability.kept_count(), result().iterations, worst_m);

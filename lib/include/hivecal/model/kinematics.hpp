@@ -16,8 +16,9 @@ inline constexpr int kParamsPerJoint = 4;                                  ///< 
 inline constexpr int kDhParamCount = kJointCount * kParamsPerJoint;       ///< 24
 inline constexpr int kToolParamCount = 3;                                  ///< tool x, y, z
 inline constexpr int kModelParamCount = kDhParamCount + kToolParamCount;  ///< 27
-/// Reflectors (targets) one calibration can hold on the tool, each with its own tool point.
-inline constexpr int kMaxTargets = 4;
+/// Reflectors (targets) one calibration can hold on the tool, each with its own tool point
+/// (3: a fourth costs 1.8 kB of LmWorkspace, and the 512-sample firmware job has < 1 kB left).
+inline constexpr int kMaxTargets = 3;
 
 /// Position of a DH field inside a joint's four parameters.
 enum class DhField : int { theta_offset = 0, d = 1, a = 2, alpha = 3 };
@@ -42,9 +43,9 @@ struct RobotModel {
   DhJoint joints[kJointCount];  ///< joint 1 (base) .. joint 6 (wrist 3)
   Vec3 tool_m = Vec3::Zero();   ///< tool point of target 1 (retroreflector centre) in the flange frame [m]
   /// Tool points of targets 2 .. kMaxTargets in the flange frame [m]; not among the 27 parameters.
-  Vec3 other_tools_m[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  Vec3 other_tools_m[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
 };
-static_assert(kMaxTargets == 4, "other_tools_m's initialiser lists kMaxTargets - 1 points");
+static_assert(kMaxTargets == 3, "other_tools_m's initialiser lists kMaxTargets - 1 points");
 
 /// Tool point of target `target` (0-based, < kMaxTargets) in the flange frame [m].
 inline const Vec3& target_tool(const RobotModel& model, int target) {
