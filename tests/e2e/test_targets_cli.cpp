@@ -115,6 +115,19 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
     std::printf("target %d: worst fresh-pose error %.2f um\n", target, worst_m * 1e6);
     EXPECT_LT(worst_m, 5e-5) << "target " << target;
   }
+  // The default abc+lm: ABC on the link lengths with every sample's own tool point (fixed
+  // there, from the baseline's fit), then LM: the same accuracy.
+  const std::string paper = dir.path() + "/abc_lm.json";
+  ASSERT_EQ(run(cli::calibrate_main, {"--robot-model", "ur5", "--tool", "0,0,0.17", "--samples", csv, "--out", paper,
+                                      "--quiet"}),
+            cli::kExitOk);
+  for (int target = 1; target <= 3; ++target) {
+    const std::vector<Vec3> points = predict_target(dir, paper, joints_csv, target);
+    ASSERT_EQ(points.size(), poses.size());
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      EXPECT_LT((points[i] - base.apply(fk_target_point(truth, poses[i], target - 1))).norm(), 5e-5);
+    }
+  }
   // Target 4 is not in the result; 0 and text are no target numbers.
   for (const char* bad : {"4", "0", "two"}) {
     EXPECT_EQ(run(cli::predict_main, {"--calibration", result, "--joints", joints_csv, "--target", bad, "--out",
