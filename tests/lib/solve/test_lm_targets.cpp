@@ -161,6 +161,48 @@ TEST(SeveralTargets, LmRecoversEveryToolPointWithinNoise) {
   }
 }
 
+// The other targets' sigmas are what they claim: over 40 noise draws on the same poses (joint
+// 6 at its nominal values, so that the tool points themselves are the identifiable ones), the
+// RMS error of each tool coordinate is its mean sigma within the spread of 40 draws.
+TEST(SeveralTargets, ToolPointSigmasMatchTheirScatter) {
+  const double noise_m = 1e-5;
+  Random random(41);
+  RobotModel truth =
+      test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
+  truth.joints[5] = nominal_model(RobotType::ur5).joints[5];
+  const RigidTransform base = test::example_base_to_tracker();
+  JointVector poses[30];
+  for (JointVector& q : poses) q = test::random_joints(&random);
+  constexpr int kDraws = 40;
+  Vec3 squared_error_m2[2] = {Vec3::Zero(), Vec3::Zero()};
+  Vec3 sigma_sum_m[2] = {Vec3::Zero(), Vec3::Zero()};
+  for (int draw = 0; draw < kDraws; ++draw) {
+    Random noise(1000 + static_cast<std::uint64_t>(draw));
+    train_set().clear();
+    for (const JointVector& q : poses) {
+      for (int target = 0; target < 3; ++target) {
+        const Vec3 point_m = base.apply(fk_target_point(truth, q, target)) + noise_m * test::gaussian_vector(&noise);
+        ASSERT_EQ(train_set().add(q, point_m, target), Status::ok);
+      }
+    }
+    ASSERT_EQ(calibrate_lm(start_model(), nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()),
+              Status::ok);
+    for (int k = 0; k < 2; ++k) {
+      squared_error_m2[k] += (result().model.other_tools_m[k] - truth.other_tools_m[k]).cwiseAbs2();
+      sigma_sum_m[k] += result().other_tools_sigma_m[k];
+    }
+  }
+  for (int k = 0; k < 2; ++k) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const double rms_m = std::sqrt(squared_error_m2[k](axis) / kDraws);
+      const double sigma_m = sigma_sum_m[k](axis) / kDraws;
+      std::printf("%s: RMS error %.3g m, mean sigma %.3g m\n", other_tool_param_name(k + 1, axis), rms_m, sigma_m);
+      EXPECT_GT(rms_m, 0.6 * sigma_m) << other_tool_param_name(k + 1, axis);
+      EXPECT_LT(rms_m, 1.5 * sigma_m) << other_tool_param_name(k + 1, axis);
+    }
+  }
+}
+
 /// The identifiability report of `samples` at the truth, every parameter free.
 IdentifiabilityReport report_at(const RobotModel& truth, const RigidTransform& base, Span<const Sample> samples) {
   static NormalEquations eq;
