@@ -156,6 +156,7 @@ struct Run {
   std::size_t link_length_count = kPaper6Dimension;  ///< lengths the population stages search [-]
   bool has_cv = false;                          ///< --cv ran: `cv` is meaningful
   CrossValidationResult cv;                     ///< per-fold held-out errors (~20 KB)
+  int target_count = 1;                         ///< targets (reflectors) in the samples: the result's "tools" [-]
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).
@@ -309,6 +310,18 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
     }
     rows.push_back(row);
   }
+  for (int target = 1; lm != nullptr && target < kMaxTargets; ++target) {  // estimated with several targets
+    const Vec3& sigma_m = lm->other_tools_sigma_m[target - 1];
+    if (sigma_m.isZero()) continue;
+    for (int axis = 0; axis < 3; ++axis) {
+      report::ParameterRow row;
+      row.name = other_tool_param_name(target, axis);
+      row.start = target_tool(start, target)(axis);
+      row.value = target_tool(stage.model, target)(axis);
+      row.sigma = sigma_m(axis);
+      rows.push_back(row);
+    }
+  }
   return rows;
 }
 
@@ -332,6 +345,10 @@ void write_lm_details(textio::JsonWriter& json, const LmResult& lm) {
   json.key("estimated").begin_array();
   for (int k = 0; k < kFullParamCount; ++k)
     if (mask_has(id.kept_mask, k)) json.value(full_param_name(k));
+  for (int target = 1; target < kMaxTargets; ++target) {  // several targets: their tool points
+    if (lm.other_tools_sigma_m[target - 1].isZero()) continue;
+    for (int axis = 0; axis < 3; ++axis) json.value(other_tool_param_name(target, axis));
+  }
   json.end_array();
   json.key("dropped").begin_array();
   for (int k = 0; k < id.dropped_count; ++k) {
@@ -354,6 +371,11 @@ void write_lm_details(textio::JsonWriter& json, const LmResult& lm) {
   json.key("sigma").begin_object();
   for (int k = 0; k < kFullParamCount; ++k)
     if (mask_has(id.kept_mask, k)) json.key(full_param_name(k)).value(lm.sigma(k));
+  for (int target = 1; target < kMaxTargets; ++target) {
+    const Vec3& sigma_m = lm.other_tools_sigma_m[target - 1];
+    if (sigma_m.isZero()) continue;
+    for (int axis = 0; axis < 3; ++axis) json.key(other_tool_param_name(target, axis)).value(sigma_m(axis));
+  }
   json.end_object();
   json.key("lm").begin_object();
   json.key("iterations").value(static_cast<long long>(lm.iterations));
@@ -572,6 +594,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.significance_t = settings.significance_t;
   CliWorkspace& workspace = cli_workspace();
   JobObserver observer(settings.progress);
+  run->target_count = target_count(dataset->samples());
   const Status status = hivecal::calibrate(start, dataset, job, &workspace, &run->result, &observer);
   for (std::size_t k = 0; k < kMaxCalibrationStages; ++k) run->seconds[k] = observer.seconds[k];
   const CalibrationStep step = run->result.step;
@@ -625,6 +648,7 @@ void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* 
       for (int j = 0; j < kJointCount; ++j) row.q_rad[j] = s.q_rad(j);
       row.measured_m = s.point_m;
       row.test = test;
+      row.target = s.target;
       data->samples.push_back(row);
     }
   }
@@ -757,6 +781,7 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
   textio::CalibrationFile file;
   static_cast<textio::RobotDescription&>(file) = settings.robot;  // name and convention as given
   file.model = final_stage.model;
+  file.target_count = run.target_count;
   file.base_to_tracker = final_stage.base_to_tracker;
   file.has_metrics = true;
   file.metrics = data.calibrated;

@@ -28,6 +28,12 @@ Error predict(const Options& options) {
   if (output_unit != "m" && output_unit != "mm") {
     return Error::usage("--output-length-unit must be 'm' or 'mm', not " + port::quoted(output_unit));
   }
+  const std::string target_text = options.get("target");
+  int target = 0;  // 1-based as given, checked against the result below
+  for (const char c : target_text) target = c >= '0' && c <= '9' && target < 1000 ? 10 * target + (c - '0') : -1;
+  if (target_text.empty() || target < 1) {
+    return Error::usage("--target must be a target number 1, 2, ..., not " + port::quoted(target_text));
+  }
   port::OutputSet outputs;
   std::size_t out_id = 0;
   Error error = outputs.add_input(options.get("calibration"), "--calibration");
@@ -38,6 +44,11 @@ Error predict(const Options& options) {
   textio::CalibrationFile calibration;
   port::Error r = textio::read_calibration_json(options.get("calibration"), &calibration);
   if (!r.ok()) return r;
+  if (target > calibration.target_count) {
+    return Error::usage("--target " + target_text + ": " + options.get("calibration") + " holds " +
+                        std::to_string(calibration.target_count) + " target" +
+                        (calibration.target_count == 1 ? "" : "s"));
+  }
   std::vector<JointVector> poses;
   textio::InputUnits units;
   error = input_units_option(options, &units);
@@ -52,7 +63,7 @@ Error predict(const Options& options) {
                                        ? calibration.modified_base.transform()
                                        : RigidTransform{};
   for (const JointVector& q : poses) {
-    const Vec3 chain_point = fk_tool_point(calibration.model, q);
+    const Vec3 chain_point = fk_target_point(calibration.model, q, target - 1);
     points.push_back(frame == "base" ? file_base.apply(chain_point) : calibration.base_to_tracker.apply(chain_point));
   }
   // write
@@ -67,6 +78,7 @@ int predict_main(int argc, char** argv) {
       {"calibration", "FILE", "calibration result (robot-calibration/1 JSON)", ""},
       {"joints", "FILE", "poses to predict: CSV q1..q6 [rad], optional leading t column ('-': stdin)", ""},
       {"frame", "tracker|base", "frame of the predicted positions", "tracker"},
+      {"target", "K", "which target's (reflector's) positions: 1 .. the result's \"tools\" count", "1"},
       {"out", "FILE", "predicted positions x,y,z [m] (CSV); '-' for stdout", "-"},
       {"output-length-unit", "m|mm", "unit of the predicted positions (mm: header x [mm],y [mm],z [mm])", "m"},
   };
@@ -74,7 +86,8 @@ int predict_main(int argc, char** argv) {
   Options options;
   const int parsed = parse_options(kCommand,
                                    "Predicts the tool position of each joint pose with a calibrated model:\n"
-                                   "base_to_tracker * FK(q) * tool (or FK(q) * tool with --frame base).",
+                                   "base_to_tracker * FK(q) * tool (or FK(q) * tool with --frame base); --target K\n"
+                                   "uses target K's tool point.",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
   return exit_with(kCommand, predict(options));

@@ -468,7 +468,7 @@ PredictionSet predict_samples(const std::string& method, const RobotModel& model
   for (const SampleRow& s : samples) {
     JointVector q;
     for (int j = 0; j < kJointCount; ++j) q(j) = s.q_rad[j];
-    set.points_m.push_back(base_to_tracker.apply(fk_tool_point(model, q)));
+    set.points_m.push_back(base_to_tracker.apply(fk_target_point(model, q, s.target)));
   }
   return set;
 }

@@ -39,6 +39,7 @@ struct SampleRow {
   double q_rad[6] = {};  ///< joint angles [rad]
   Vec3 measured_m = Vec3::Zero();  ///< tracker point [m]
   bool test = false;     ///< held out (test set), else training
+  int target = 0;        ///< reflector measured, 0-based (several targets) [-]
 };
 
 /// One model and its predictions of every sample (same order as ReportData::samples).

@@ -37,6 +37,12 @@ void write_model(JsonWriter& json, const PredictionSet& set) {
   }
   json.end_array();
   json.key("translation_m").inline_array(set.base_to_tracker.translation_m.data(), 3);
+  bool several_targets = false;  // one reflector: the key is left out (the bytes stay as before)
+  for (const Vec3& tool_m : set.model.other_tools_m) several_targets = several_targets || !tool_m.isZero();
+  if (!several_targets) return;
+  json.key("other_tools_m").begin_array();
+  for (const Vec3& tool_m : set.model.other_tools_m) json.inline_array(tool_m.data(), 3);
+  json.end_array();
 }
 
 void write_identifiability(JsonWriter& json, const IdentifiabilityTable& id) {
@@ -134,6 +140,13 @@ bool get_model(const JsonValue& v, RobotModel* model, RigidTransform* transform)
     for (std::size_t c = 0; c < 3; ++c) transform->rotation(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
   }
   *model = from_params(params);
+  if (const JsonValue* others = v.find("other_tools_m"); others != nullptr) {  // several reflectors only
+    if (!is_array(others) || others->array.size() != static_cast<std::size_t>(kMaxTargets - 1)) return false;
+    for (std::size_t k = 0; k < others->array.size(); ++k) {
+      if (!get_numbers(&others->array[k], 3, model->other_tools_m[k].data())) return false;
+      if (!model->other_tools_m[k].allFinite()) return false;
+    }
+  }
   return params.allFinite() && transform->rotation.allFinite() && transform->translation_m.allFinite();
 }
 
@@ -177,6 +190,11 @@ bool get_samples(const JsonValue* v, std::vector<SampleRow>* out) {
       return false;
     }
     row.measured_m = Vec3(xyz[0], xyz[1], xyz[2]);
+    if (const JsonValue* target = s.find("target"); target != nullptr) {  // several reflectors only
+      long long k = 0;
+      if (!get_count(target, &k) || k >= kMaxTargets) return false;
+      row.target = static_cast<int>(k);
+    }
     out->push_back(row);
   }
   return true;
@@ -327,6 +345,7 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
     json.key("q_rad").inline_array(s.q_rad, 6);
     json.key("measured_m").inline_array(s.measured_m.data(), 3);
     json.key("test").value(s.test);
+    if (s.target != 0) json.key("target").value(static_cast<long long>(s.target));
     json.end_object();
   }
   json.end_array();

@@ -61,6 +61,28 @@ port::Error parse_dh_rows(const JsonValue& root, const std::string& source, doub
   return port::Error{};
 }
 
+/// "tools" (optional): every target's tool point, the first one equal to "tool". Both
+/// conventions keep a tool point as written (model_from_modified_dh), so the others are too.
+port::Error parse_other_tools(const JsonValue& root, const std::string& source, const double (&tool)[3],
+                              RobotDescription* description) {
+  const JsonValue* tools = root.find("tools");
+  if (tools == nullptr) return port::Error{};
+  const std::string shape = "\"tools\" must be 1 to " + std::to_string(kMaxTargets) + " points [x, y, z] in metres";
+  if (tools->kind != JsonValue::Kind::array || tools->array.empty() || tools->array.size() > kMaxTargets) {
+    return fail(source, shape);
+  }
+  for (std::size_t k = 0; k < tools->array.size(); ++k) {
+    double point[3];
+    if (!read_numbers(&tools->array[k], 3, point)) return fail(source, shape);
+    if (k == 0 && (point[0] != tool[0] || point[1] != tool[1] || point[2] != tool[2])) {
+      return fail(source, "\"tools\"[0] must equal \"tool\" (target 1)");
+    }
+    if (k > 0) target_tool(&description->model, static_cast<int>(k)) = Vec3(point[0], point[1], point[2]);
+  }
+  description->target_count = static_cast<int>(tools->array.size());
+  return port::Error{};
+}
+
 port::Error parse_description(const JsonValue& root, const std::string& source, RobotDescription* description) {
   RobotDescription parsed;
   parsed.robot.clear();  // no built-in default: a file names its own arm (or read_robot_description names it)
@@ -97,6 +119,8 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
       return fail(source, "\"dh\" or \"tool\" holds a number that is not finite");
     }
   }
+  r = parse_other_tools(root, source, tool, &parsed);
+  if (!r.ok()) return r;
   *description = parsed;
   return port::Error{};
 }
@@ -193,6 +217,17 @@ std::string format_calibration_json(const CalibrationFile& file, const std::func
   }
   json.end_array();
   json.key("tool").inline_array(tool_m.data(), 3);
+  if (file.target_count > 1) {  // every target, as written in the file's convention
+    json.key("tools").begin_array();
+    for (int k = 0; k < file.target_count; ++k) {
+      RobotDescription target = file;
+      target.model.tool_m = hivecal::target_tool(file.model, k);
+      Vec3 target_m;
+      rows_as_written(target, rows, &target_m);
+      json.inline_array(target_m.data(), 3);
+    }
+    json.end_array();
+  }
   // A modified-DH file's base is the frame before Rx(alpha_0) Tx(a_0).
   const RigidTransform base_to_tracker =
       file.convention == DhConvention::modified ? file.base_to_tracker.then_after(file.modified_base.transform().inverse())

@@ -21,6 +21,7 @@ struct RobotDescription {
   DhConvention convention = DhConvention::standard;  ///< how the file writes its rows
   ModifiedDhBase modified_base;                      ///< modified DH: Rx(alpha_0) Tx(a_0) before joint 1
   RobotModel model;                                  ///< the standard-DH table and tool point [m, rad]
+  int target_count = 1;  ///< targets whose tool points `model` holds, 1 .. kMaxTargets ("tools" when > 1) [-]
 };
 
 /// What a result file must hold to predict positions, plus its accuracy figures.

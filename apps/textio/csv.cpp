@@ -18,6 +18,7 @@ struct CsvSchema {
   std::vector<std::string> columns;  ///< required column names, lower case
   std::vector<Quantity> quantities;  ///< what each measures (its units; joints and points are checked)
   std::string optional_leading;      ///< a column that may come first (ignored), or ""
+  std::string optional_trailing;     ///< a unitless column that may follow them (its value appended), or ""
 };
 
 std::string join(const std::vector<std::string>& names) {
@@ -52,12 +53,16 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
     if (!r.column_scale(offset + i, schema.quantities[i], &scales[i])) return port::Error::input(r.error());
     if (schema.quantities[i] == Quantity::length) lengths.push_back(offset + i);
   }
-  std::vector<double> values(schema.columns.size());
+  const std::size_t trailing = offset + schema.columns.size();
+  const bool has_trailing = !schema.optional_trailing.empty() && header.size() > trailing &&
+                            header[trailing].name == schema.optional_trailing;
+  std::vector<double> values(schema.columns.size() + (has_trailing ? 1 : 0));
   std::size_t rows = 0;
   while (r.next_row()) {
     ++rows;
     int joint = 0;
-    for (std::size_t i = 0; i < values.size(); ++i) {
+    if (has_trailing && !r.number(trailing, 1.0, &values.back())) return port::Error::input(r.error());
+    for (std::size_t i = 0; i < schema.columns.size(); ++i) {
       if (!r.number(offset + i, scales[i], &values[i])) return port::Error::input(r.error());
       if (schema.quantities[i] == Quantity::angle && !r.check_joint(++joint, offset + i, values[i])) {
         return port::Error::input(r.error());
@@ -100,13 +105,22 @@ const std::vector<Quantity> kJointQuantities(kJointCount, Quantity::angle);
 port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units,
                              std::vector<std::size_t>* lines) {
   const CsvSchema schema{with(kJointColumns, {"x", "y", "z"}),
-                         with(kJointQuantities, {Quantity::length, Quantity::length, Quantity::length}), ""};
+                         with(kJointQuantities, {Quantity::length, Quantity::length, Quantity::length}), "",
+                         "target"};
   return read_csv(path, schema, units, [&](const std::vector<double>& values) {
     const std::string error = check_finite(values, 0, 9);
     if (!error.empty()) return error;
+    int target = 0;  // 0-based; no target column: every row is target 1
+    if (values.size() > 9) {
+      const double named = values[9];
+      if (!(named >= 1.0 && named <= kMaxTargets && named == std::floor(named))) {
+        return "target " + format_double(named) + " is not an integer from 1 to " + std::to_string(kMaxTargets);
+      }
+      target = static_cast<int>(named) - 1;
+    }
     JointVector q;
     for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
-    const Status status = dataset->add(q, Vec3(values[6], values[7], values[8]));
+    const Status status = dataset->add(q, Vec3(values[6], values[7], values[8]), target);
     if (status == Status::dataset_full) {
       return "dataset over capacity (" + std::to_string(dataset->capacity()) + " samples max)";
     }
@@ -115,7 +129,7 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
 }
 
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units) {
-  return read_csv(path, CsvSchema{kJointColumns, kJointQuantities, "t"}, units, [&](const std::vector<double>& values) {
+  return read_csv(path, CsvSchema{kJointColumns, kJointQuantities, "t", ""}, units, [&](const std::vector<double>& values) {
     const std::string error = check_finite(values, 0, 6);
     if (!error.empty()) return error;
     JointVector q;
@@ -129,7 +143,7 @@ port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_ra
   JointVector lower;
   JointVector upper;
   int rows = 0;
-  port::Error error = read_csv(path, CsvSchema{{"lower", "upper"}, {Quantity::angle, Quantity::angle}, ""}, InputUnits{}, [&](const std::vector<double>& values) {
+  port::Error error = read_csv(path, CsvSchema{{"lower", "upper"}, {Quantity::angle, Quantity::angle}, "", ""}, InputUnits{}, [&](const std::vector<double>& values) {
     const std::string bad = check_finite(values, 0, 2);
     if (!bad.empty()) return bad;
     if (rows == kJointCount) return std::string("more than six rows (one per joint)");
@@ -165,10 +179,12 @@ std::string format_points_csv(const std::vector<Vec3>& points_m, const std::stri
 }
 
 std::string format_samples_csv(Span<const Sample> samples) {
-  std::string out = "q1,q2,q3,q4,q5,q6,x,y,z\n";
+  const bool targets = target_count(samples) > 1;
+  std::string out = targets ? "q1,q2,q3,q4,q5,q6,x,y,z,target\n" : "q1,q2,q3,q4,q5,q6,x,y,z\n";
   for (const Sample& s : samples) {
     for (int j = 0; j < kJointCount; ++j) out += format_double(s.q_rad(j)) + ",";
-    out += format_double(s.point_m.x()) + "," + format_double(s.point_m.y()) + "," + format_double(s.point_m.z()) + "\n";
+    out += format_double(s.point_m.x()) + "," + format_double(s.point_m.y()) + "," + format_double(s.point_m.z());
+    out += targets ? "," + std::to_string(s.target + 1) + "\n" : "\n";
   }
   return out;
 }

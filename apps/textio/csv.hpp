@@ -15,8 +15,8 @@
 
 namespace hivecal::textio {
 
-/// Reads paired static samples (`q1..q6,x,y,z`) into a dataset; reports a full dataset as an
-/// error. Columns without a bracket unit are in `units` (SI when not declared); joints beyond
+/// Reads paired static samples (`q1..q6,x,y,z`, optionally `target` after z: the reflector,
+/// 1 .. kMaxTargets, 1 when absent) into a dataset; reports a full dataset as an error. Columns without a bracket unit are in `units` (SI when not declared); joints beyond
 /// one turn and points beyond 100 m are refused with the likely cause (delimited.hpp).
 /// `lines`, when given, receives the 1-based file line of each sample added, in order.
 port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units = {},
@@ -32,7 +32,7 @@ std::string format_joints_csv(Span<const JointVector> poses_rad);
 /// `x,y,z` rows with round-trip precision, in metres; with `length_unit` "mm" the header is
 /// `x [mm],y [mm],z [mm]` and the values are in millimetres (read back by the same reader).
 std::string format_points_csv(const std::vector<Vec3>& points_m, const std::string& length_unit = "m");
-/// `q1..q6,x,y,z` rows with round-trip precision.
+/// `q1..q6,x,y,z` rows with round-trip precision (`,target` 1-based when several targets).
 std::string format_samples_csv(Span<const Sample> samples);
 
 }  // namespace hivecal::textio

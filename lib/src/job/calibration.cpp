@@ -205,7 +205,7 @@ constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
       const Status status = fit_lm(job, from, base, reset, train.subspan(0, n - 1), candidate, nullptr, nullptr, &pruned);
       if (status == Status::ok || status == Status::not_converged) {
         const Sample& out = train[n - 1];
-        sum_m += (job.result.lm.base_to_tracker.apply(fk_tool_point(job.result.lm.model, out.q_rad)) - out.point_m).norm();
+        sum_m += (job.result.lm.base_to_tracker.apply(fk_sample_point(job.result.lm.model, out)) - out.point_m).norm();
       } else {
         ok = false;
       }
@@ -273,8 +273,8 @@ Status run_stage(Job& job, CalibrationSolver solver, bool hybrid) {
 /// parameters), the base alone.
 Status fit_baseline(const RobotModel& start, Span<const Sample> train, CalibrationWorkspaceBase& workspace,
                     CalibrationResult* r) {
-  r->baseline.model = start;
-  Status status = fit_base_to_tracker(start, train, &r->baseline.base_to_tracker);
+  r->baseline.model = start;  // with several targets, their tool points fitted with the base
+  Status status = fit_base_and_target_tools(train, &r->baseline.model, &r->baseline.base_to_tracker);
   if (status != Status::ok || 3 * train.size() <= static_cast<std::size_t>(kToolParamCount + kBaseParamCount)) {
     return status;
   }
@@ -286,7 +286,7 @@ Status fit_baseline(const RobotModel& start, Span<const Sample> train, Calibrati
                       param_bit(base_translation_param_index(axis));
   }
   LmWorkspace* lm_workspace = workspace.open_lm();
-  status = calibrate_lm(start, &r->baseline.base_to_tracker, train, lm, lm_workspace, &r->lm, nullptr, nullptr);
+  status = calibrate_lm(r->baseline.model, &r->baseline.base_to_tracker, train, lm, lm_workspace, &r->lm, nullptr, nullptr);
   workspace.close();
   if (status != Status::ok && status != Status::not_converged) return status;
   r->baseline.model = r->lm.model;
@@ -386,7 +386,7 @@ void residuals_of(const RobotModel& model, const RigidTransform& base, Span<cons
                   std::size_t median_count, ResidualScratch scratch, double* median_m) {
   const std::size_t n = std::min(median_count, scratch.residual_m.size());
   for (std::size_t i = 0; i < n; ++i) {
-    scratch.residual_m[i] = (base.apply(fk_tool_point(model, samples[i].q_rad)) - samples[i].point_m).norm();
+    scratch.residual_m[i] = (base.apply(fk_sample_point(model, samples[i])) - samples[i].point_m).norm();
   }
   *median_m = n > 0 ? lower_median(scratch.residual_m, n) : 0.0;
 }
@@ -420,7 +420,7 @@ bool flag_outliers(const RobotModel& model, const RigidTransform& base, const Da
   list->limit = outlier_limit(dataset.size() + dataset.set_aside().size());
   for (Span<const Sample> part : {dataset.samples(), dataset.set_aside()}) {
     for (const Sample& s : part) {
-      const double r = (base.apply(fk_tool_point(model, s.q_rad)) - s.point_m).norm();
+      const double r = (base.apply(fk_sample_point(model, s)) - s.point_m).norm();
       if (r > *threshold_m) offer(list, s.index, r);
     }
   }
@@ -444,6 +444,13 @@ int fitted_parameters(const CalibrationResult& r) {
   dataset->set_aside(Span<const std::uint32_t>());
   const Span<const Sample> samples = dataset->samples();
   const std::size_t n = samples.size();
+  // Several targets: the start model does not know the other reflectors' tool points, so the
+  // start geometry cannot predict their samples; the post-calibration residual test (which
+  // estimates them) is the only blunder search then.
+  if (target_count(samples) > 1) {
+    list->count = 0;
+    return n < 3 ? Status::too_few_samples : Status::ok;
+  }
   ResidualScratch scratch = workspace.open_residuals();
   const std::size_t m = std::min(n, scratch.predicted_m.size());
   for (std::size_t i = 0; i < m; ++i) scratch.predicted_m[i] = fk_tool_point(start, samples[i].q_rad);
@@ -596,7 +603,7 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
   for (const Sample& s : dataset->set_aside()) {
     r.outliers[r.outlier_count++] = CalibrationOutlier{
-        s.index, (final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, s.q_rad)) - s.point_m).norm()};
+        s.index, (final_stage.base_to_tracker.apply(fk_sample_point(final_stage.model, s)) - s.point_m).norm()};
   }
   r.outlier_rounds = round;
   r.outlier_threshold_m = threshold_m;

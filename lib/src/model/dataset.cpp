@@ -4,13 +4,21 @@
 
 namespace hivecal {
 
-Status DatasetBase::add(const JointVector& q_rad, const Vec3& point_m) {
+int target_count(Span<const Sample> samples) {
+  int count = 1;
+  for (const Sample& sample : samples) count = sample.target + 1 > count ? sample.target + 1 : count;
+  return count;
+}
+
+Status DatasetBase::add(const JointVector& q_rad, const Vec3& point_m, int target) {
   if (!all_finite(q_rad) || !all_finite(point_m)) return Status::non_finite_input;
+  if (target < 0 || target >= kMaxTargets) return Status::invalid_argument;
   if (stored_ != size_) set_aside(Span<const std::uint32_t>());  // a new sample joins every stored one
   if (full()) return Status::dataset_full;
   storage_[size_].q_rad = q_rad;
   storage_[size_].point_m = point_m;
   storage_[size_].index = static_cast<std::uint32_t>(size_);  // unique: the order of add()
+  storage_[size_].target = target;
   ++size_;
   stored_ = size_;
   train_count_ = size_;

@@ -13,7 +13,16 @@ constexpr const char* kParamNames[kFullParamCount] = {
     "a6", "alpha6", "tool_x", "tool_y", "tool_z", "base_rx", "base_ry", "base_rz", "base_tx", "base_ty",
     "base_tz"};
 
+constexpr const char* kOtherToolNames[kMaxTargets - 1][3] = {
+    {"tool2_x", "tool2_y", "tool2_z"}, {"tool3_x", "tool3_y", "tool3_z"}};
+static_assert(kMaxTargets == 3, "one name row per target 2 ..");
+
 }  // namespace
+
+const char* other_tool_param_name(int target, int axis) {
+  if (target < 1 || target >= kMaxTargets || axis < 0 || axis >= 3) return "?";
+  return kOtherToolNames[target - 1][axis];
+}
 
 int mask_count(ParamMask mask) {
   int count = 0;
@@ -54,7 +63,9 @@ Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
 }
 
 void apply_full_increment(const FullParams& increment, RobotModel* model, RigidTransform* base_to_tracker) {
-  *model = from_params(to_params(*model) + increment.head<kModelParamCount>());
+  const RobotModel before = *model;
+  *model = from_params(to_params(before) + increment.head<kModelParamCount>());
+  for (int k = 0; k < kMaxTargets - 1; ++k) model->other_tools_m[k] = before.other_tools_m[k];  // not among the 33
   const Vec3 rotation_rad = increment.segment<3>(base_rotation_param_index(0));
   const Vec3 translation_m = increment.segment<3>(base_translation_param_index(0));
   base_to_tracker->translation_m += base_to_tracker->rotation * translation_m;

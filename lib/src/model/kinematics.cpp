@@ -182,6 +182,13 @@ Vec3 fk_tool_point(const RobotModel& model, const JointVector& q_rad) {
   return fk_tool_point(model, twist_trig(model), q_rad);
 }
 
+Vec3 fk_target_point(const RobotModel& model, const JointVector& q_rad, int target) {
+  if (target == 0) return fk_tool_point(model, q_rad);
+  RobotModel moved = model;  // the same recursion with the target's tool point: the same bits
+  moved.tool_m = target_tool(model, target);
+  return fk_tool_point(moved, q_rad);
+}
+
 Vec3 fk_tool_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad) {
   // Innermost first: p <- R_j p + t_j needs only matrix-vector products.
   Vec3 point_m = model.tool_m;

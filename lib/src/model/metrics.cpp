@@ -28,7 +28,7 @@ ErrorStats position_error_stats(const RobotModel& model, const RigidTransform& b
                                 Span<const Sample> samples) {
   RunningStats axes[kErrorAxisCount];
   for (const Sample& sample : samples) {
-    const Vec3 error_m = base_to_tracker.apply(fk_tool_point(model, sample.q_rad)) - sample.point_m;
+    const Vec3 error_m = base_to_tracker.apply(fk_sample_point(model, sample)) - sample.point_m;
     for (int axis = 0; axis < 3; ++axis) axes[axis].add(std::fabs(error_m(axis)));
     axes[static_cast<int>(ErrorAxis::norm_3d)].add(error_m.norm());
   }

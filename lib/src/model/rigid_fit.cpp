@@ -187,8 +187,36 @@ Mat3 rotation_from_cross_covariance_qcp(const Mat3& cross_covariance) {
 
 Status fit_base_to_tracker(const RobotModel& model, Span<const Sample> samples, RigidTransform* base_to_tracker) {
   RigidFitAccumulator accumulator;
-  for (const Sample& sample : samples) accumulator.add(fk_tool_point(model, sample.q_rad), sample.point_m);
+  for (const Sample& sample : samples) accumulator.add(fk_sample_point(model, sample), sample.point_m);
   return accumulator.solve(base_to_tracker);
+}
+
+Status fit_base_and_target_tools(Span<const Sample> samples, RobotModel* model, RigidTransform* base_to_tracker) {
+  constexpr int kRounds = 3;  // from tools at the flange, 1 mm after two rounds on test data
+  Status status = fit_base_to_tracker(*model, samples, base_to_tracker);
+  if (status != Status::ok || target_count(samples) == 1) return status;
+  for (int round = 0; round < kRounds && status == Status::ok; ++round) {
+    fit_other_target_tools(*base_to_tracker, samples, model);
+    status = fit_base_to_tracker(*model, samples, base_to_tracker);
+  }
+  fit_other_target_tools(*base_to_tracker, samples, model);
+  return status;
+}
+
+void fit_other_target_tools(const RigidTransform& base_to_tracker, Span<const Sample> samples, RobotModel* model) {
+  Vec3 sum_m[kMaxTargets];
+  int count[kMaxTargets] = {};
+  for (Vec3& sum : sum_m) sum.setZero();
+  for (const Sample& sample : samples) {
+    if (sample.target == 0) continue;
+    const RigidTransform flange = fk_flange(*model, sample.q_rad);
+    const Vec3 in_base_m = base_to_tracker.inverse().apply(sample.point_m);
+    sum_m[sample.target] += flange.rotation.transpose() * (in_base_m - flange.translation_m);
+    ++count[sample.target];
+  }
+  for (int target = 1; target < kMaxTargets; ++target) {
+    if (count[target] > 0) target_tool(model, target) = sum_m[target] / static_cast<double>(count[target]);
+  }
 }
 
 }  // namespace hivecal

@@ -15,7 +15,7 @@ Status evaluate_cost(const RobotModel& model, Span<const Sample> samples, CostKi
   }
   double sum = 0.0;
   for (const Sample& sample : samples) {
-    const Vec3 residual_m = base_to_tracker->apply(fk_tool_point(model, sample.q_rad)) - sample.point_m;
+    const Vec3 residual_m = base_to_tracker->apply(fk_sample_point(model, sample)) - sample.point_m;
     const double squared = residual_m.squaredNorm();
     sum += kind == CostKind::sum_squares ? squared : std::sqrt(squared);
   }

@@ -104,13 +104,36 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
   return sum;
 }
 
+/// Standard deviations of the eliminated tool points: Cov(t_k) = s^2 (D^-1 + A H^-1 A^T) with
+/// A = D^-1 S (H the eliminated normal matrix over the kept parameters, factored in `f`).
+void other_tool_sigmas(const KeptCholesky& f, const NormalEquations& eq, const FullParams& scale, ParamMask kept,
+                       double variance_m2, LmResult* result) {
+  for (int k = 0; k < kMaxTargets - 1; ++k) {
+    const TargetBlock& block = eq.targets[k];
+    result->other_tools_sigma_m[k].setZero();
+    if (block.count == 0) continue;
+    const Mat3 inverse = block.tool_tool.inverse();
+    const Eigen::Matrix<double, 3, kFullParamCount> a = inverse * block.tool_model;
+    for (int axis = 0; axis < 3; ++axis) {
+      FullParams scaled_row = FullParams::Zero();
+      for (int i = 0; i < kFullParamCount; ++i) scaled_row(i) = mask_has(kept, i) ? a(axis, i) * scale(i) : 0.0;
+      FullParams solved;
+      cholesky_solve(f, scaled_row, &solved);
+      const double variance = inverse(axis, axis) + scaled_row.dot(solved);
+      result->other_tools_sigma_m[k](axis) = std::sqrt(std::fmax(variance, 0.0) * variance_m2);
+    }
+  }
+}
+
 /// sigma_p = sqrt(diag(H^-1) * sum w r^2 / (3N - p)) over the kept parameters, from the
 /// normal equations at the final point (Jacobi-scaled for conditioning).
 Status parameter_sigmas(LmWorkspace* ws, const NormalEquations& eq, ParamMask kept, LmResult* result) {
   FullParams scale;
   scale_normal_matrix(eq.jtwj, kept, 1.0, &ws->system, &scale);
   if (!cholesky_factor(ws->system, kept, &ws->factorization)) return Status::singular_system;
-  const int dof = 3 * static_cast<int>(eq.count) - mask_count(kept);
+  int eliminated = 0;  // the other targets' tool points, 3 parameters each
+  for (const TargetBlock& block : eq.targets) eliminated += block.count > 0 ? 3 : 0;
+  const int dof = 3 * static_cast<int>(eq.count) - mask_count(kept) - eliminated;
   const double variance_m2 = eq.weighted_squares_m2 / static_cast<double>(dof);
   result->residual_sigma_m = std::sqrt(variance_m2);
   FullParams inverse_diagonal;
@@ -119,6 +142,7 @@ Status parameter_sigmas(LmWorkspace* ws, const NormalEquations& eq, ParamMask ke
   for (int i = 0; i < kFullParamCount; ++i) {
     if (mask_has(kept, i)) result->sigma(i) = std::sqrt(std::fmax(inverse_diagonal(i), 0.0) * variance_m2) * scale(i);
   }
+  other_tool_sigmas(ws->factorization, eq, scale, kept, variance_m2, result);
   return all_finite(result->sigma) ? Status::ok : Status::singular_system;
 }
 
@@ -136,6 +160,7 @@ Status validate_inputs(const RobotModel& start_model, const RigidTransform* star
   if (start_base != nullptr && !transform_finite(*start_base)) return Status::non_finite_input;
   for (const Sample& sample : samples) {
     if (!all_finite(sample.q_rad) || !all_finite(sample.point_m)) return Status::non_finite_input;
+    if (sample.target < 0 || sample.target >= kMaxTargets) return Status::invalid_argument;
   }
   if (!poses_distinct(samples)) return Status::poses_not_distinct;
   return Status::ok;
@@ -159,6 +184,7 @@ void clear_result(LmResult* result) {
   result->base_to_tracker = RigidTransform{};
   clear_report(&result->identifiability);
   result->sigma.setZero();
+  for (Vec3& sigma : result->other_tools_sigma_m) sigma.setZero();
   result->loss_sum_m2 = 0.0;
   result->rms_m = 0.0;
   result->residual_sigma_m = 0.0;
@@ -193,6 +219,8 @@ Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
     columns = run.free_mask;
     for (int axis = 0; axis < 3; ++axis) columns |= param_bit(base_translation_param_index(axis));
   }
+  // The other targets' tool points are free with target 1's (not in the link-length set).
+  if (mask_has(run.free_mask, tool_param_index(0))) columns |= kOtherTargetTools;
   return accumulate_normal_equations(at.model, at.base, run.samples, at.loss, out, columns, run.sample_trig);
 }
 
@@ -269,6 +297,7 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   // and then they are the next iteration's (a separate cost pass would be wasted).
   Point trial = run->point;
   apply_full_increment(step, &trial.model, &trial.base);
+  apply_target_step(eq, step, &trial.model);
   const Status status = accumulate(*run, trial, run->trial);
   // Predicted decrease of sum w|r + J d|^2: d^T S d + 2 lambda |d_s|^2 (scaled units).
   const double predicted = model_decrease + 2.0 * run->damping * scaled_step.squaredNorm();
@@ -322,6 +351,10 @@ Status start(const RigidTransform* start_base_to_tracker, Run* run) {
   Point& point = run->point;
   if (start_base_to_tracker != nullptr) {
     point.base = *start_base_to_tracker;
+  } else if (mask_has(run->free_mask, tool_param_index(0))) {
+    // The other targets' tool points are rarely known: least squares for the start geometry.
+    const Status fit = fit_base_and_target_tools(run->samples, &point.model, &point.base);
+    if (fit != Status::ok) return fit;
   } else {
     const Status fit = fit_base_to_tracker(point.model, run->samples, &point.base);
     if (fit != Status::ok) return fit;

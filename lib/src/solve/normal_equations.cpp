@@ -12,7 +12,10 @@ namespace {
 
 Vec3 point_residual(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
                    const Sample& sample) {
-  return base_to_tracker.apply(fk_tool_point(model, trig, sample.q_rad)) - sample.point_m;
+  if (sample.target == 0) return base_to_tracker.apply(fk_tool_point(model, trig, sample.q_rad)) - sample.point_m;
+  RobotModel moved = model;  // the target's tool point: the tool does not enter the trig
+  moved.tool_m = target_tool(model, sample.target);
+  return base_to_tracker.apply(fk_tool_point(moved, trig, sample.q_rad)) - sample.point_m;
 }
 
 /// The parameters of a mask as a list of indices, increasing, and where each of the 33
@@ -364,7 +367,62 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
   }
 }
 
+/// accumulate_normal_equations for samples of several targets: sample by sample with each
+/// sample's tool point, the other targets' tool blocks summed and then eliminated.
+Status accumulate_several_targets(const RobotModel& model, const RigidTransform& base_to_tracker,
+                                  Span<const Sample> samples, const PointLoss& loss, NormalEquations* eq,
+                                  ParamMask columns) {
+  const bool eliminate = (columns & kOtherTargetTools) != 0;
+  for (TargetBlock& block : eq->targets) block = TargetBlock{};
+  for (const Sample& sample : samples) {
+    RobotModel moved = model;
+    moved.tool_m = target_tool(model, sample.target);
+    FullJacobian jacobian;
+    const Vec3 residual_m = local_residual_jacobian(moved, base_to_tracker, sample, &jacobian);
+    const Mat3 tool_jacobian = jacobian.block<3, 3>(0, tool_param_index(0));
+    if (sample.target != 0) jacobian.block<3, 3>(0, tool_param_index(0)).setZero();  // not target 1's tool
+    for (int c = 0; c < kFullParamCount; ++c) {
+      if (!mask_has(columns, c)) jacobian.col(c).setZero();
+    }
+    const double squared = residual_m.squaredNorm();
+    const double norm_m = std::sqrt(squared);
+    const double weight = loss.weight(norm_m);
+    eq->jtwj += weight * (jacobian.transpose() * jacobian);
+    eq->jtwr += weight * (jacobian.transpose() * residual_m);
+    eq->loss_sum_m2 += loss.rho(norm_m);
+    eq->weighted_squares_m2 += weight * squared;
+    eq->squares_sum_m2 += squared;
+    if (sample.target == 0 || !eliminate) continue;
+    TargetBlock& block = eq->targets[sample.target - 1];
+    block.tool_tool += weight * (tool_jacobian.transpose() * tool_jacobian);
+    block.tool_model += weight * (tool_jacobian.transpose() * jacobian);
+    block.tool_residual_m += weight * (tool_jacobian.transpose() * residual_m);
+    ++block.count;
+  }
+  for (const TargetBlock& block : eq->targets) {
+    if (block.count == 0) continue;
+    const Mat3 inverse = block.tool_tool.inverse();
+    const Eigen::Matrix<double, 3, kFullParamCount> solved = inverse * block.tool_model;
+    eq->jtwj -= block.tool_model.transpose() * solved;
+    eq->jtwr -= solved.transpose() * block.tool_residual_m;
+  }
+  for (int b = 0; b < kFullParamCount; ++b)  // exactly symmetric, as the fast path leaves it
+    for (int a = b + 1; a < kFullParamCount; ++a) eq->jtwj(a, b) = eq->jtwj(b, a);
+  if (!math::is_finite(eq->loss_sum_m2) || !all_finite(eq->jtwr) || !all_finite(eq->jtwj.diagonal())) {
+    return Status::non_finite_input;
+  }
+  return Status::ok;
+}
+
 }  // namespace
+
+void apply_target_step(const NormalEquations& eq, const FullParams& step, RobotModel* model) {
+  for (int k = 1; k < kMaxTargets; ++k) {
+    const TargetBlock& block = eq.targets[k - 1];
+    if (block.count == 0) continue;
+    target_tool(model, k) -= block.tool_tool.inverse() * (block.tool_residual_m + block.tool_model * step);
+  }
+}
 
 Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
                                    Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
@@ -377,6 +435,10 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   eq.weighted_squares_m2 = 0.0;
   eq.squares_sum_m2 = 0.0;
   eq.count = samples.size();
+  for (TargetBlock& block : eq.targets) block.count = 0;  // the sums are reset where they are used
+  if (target_count(samples) > 1) {
+    return accumulate_several_targets(model, base_to_tracker, samples, loss, &eq, columns);
+  }
   const IndexList list = indices_of(columns);
   const ModelTrig trig = model_trig(model);
   const FlushFunction flush_batch = fastest_flush();

@@ -82,7 +82,9 @@ LinkLengths link_lengths(const RobotModel& model) { return link_lengths(model, l
 RobotModel with_link_lengths(const RobotModel& model, const LinkLengthSet& set, const double* lengths_m) {
   ModelParams params = to_params(model);
   for (std::size_t k = 0; k < set.count; ++k) params(set.param_index[k]) = lengths_m[k];
-  return from_params(params);
+  RobotModel out = from_params(params);
+  for (int k = 0; k < kMaxTargets - 1; ++k) out.other_tools_m[k] = model.other_tools_m[k];  // not among the 27
+  return out;
 }
 
 Status link_length_box(const RobotModel& nominal, double half_width_m, LinkLengthBox* box) {
@@ -138,12 +140,16 @@ void Paper6CostBase::store(const Vec3& predicted_m, const Vec3& measured_m, cons
   }
 }
 
-Status Paper6CostBase::add(const JointVector& q_rad, const Vec3& point_m) {
+Status Paper6CostBase::add(const JointVector& q_rad, const Vec3& point_m, int target) {
   if (!all_finite(q_rad) || !all_finite(point_m)) return Status::non_finite_input;
+  if (target < 0 || target >= kMaxTargets) return Status::invalid_argument;
   if (size_ == capacity_) return Status::dataset_full;
+  // The point is affine in the link lengths for any tool point: the target's own one.
+  RobotModel target_model = nominal_;
+  target_model.tool_m = target_tool(nominal_, target);
   ToolPointJacobian jacobian;
-  (void)tool_point_jacobian(nominal_, q_rad, &jacobian);
-  const Vec3 predicted_m = fk_tool_point(nominal_, q_rad);  // as evaluate_cost computes it
+  (void)tool_point_jacobian(target_model, q_rad, &jacobian);
+  const Vec3 predicted_m = fk_tool_point(target_model, q_rad);  // as evaluate_cost computes it
   if (size_ == 0) point_origin_m_ = predicted_m;
   if (values_ != nullptr) {
     store(predicted_m, point_m, jacobian, values_);
@@ -216,7 +222,7 @@ Status Paper6CostBase::build(const RobotModel& nominal, Span<const Sample> sampl
   const Status reset_status = reset(nominal, reference);
   if (reset_status != Status::ok) return reset_status;
   for (const Sample& sample : samples) {
-    const Status added = add(sample.q_rad, sample.point_m);
+    const Status added = add(sample.q_rad, sample.point_m, sample.target);
     if (added != Status::ok) return added;
   }
   return finalize();

@@ -8,6 +8,7 @@
 
 #include "hivecal/core/status.hpp"
 #include "hivecal/core/types.hpp"
+#include "hivecal/model/kinematics.hpp"
 
 namespace hivecal {
 
@@ -21,7 +22,15 @@ struct Sample {
   JointVector q_rad = JointVector::Zero();  ///< joint positions [rad]
   Vec3 point_m = Vec3::Zero();              ///< measured tool point in the tracker frame [m]
   std::uint32_t index = 0;                  ///< position in the order of add() (maps to the caller's source row) [-]
+  int target = 0;                           ///< which reflector was measured, 0-based (< kMaxTargets) [-]
 };
+
+/// Number of distinct targets `samples` use: the largest target index + 1 (1 when empty) [-].
+int target_count(Span<const Sample> samples);
+/// Point of `sample`'s target predicted by `model` in the robot base frame [m].
+inline Vec3 fk_sample_point(const RobotModel& model, const Sample& sample) {
+  return fk_target_point(model, sample.q_rad, sample.target);
+}
 
 /// Capacity-erased dataset: the view every algorithm works on.
 class DatasetBase {
@@ -29,9 +38,10 @@ class DatasetBase {
   DatasetBase(const DatasetBase&) = delete;
   DatasetBase& operator=(const DatasetBase&) = delete;
 
-  /// Appends a sample. Errors: non_finite_input (NaN/Inf anywhere), dataset_full (not stored).
+  /// Appends a sample of target `target` (0-based). Errors: non_finite_input (NaN/Inf
+  /// anywhere), invalid_argument (target outside [0, kMaxTargets)), dataset_full (not stored).
   /// Any earlier split is discarded (all samples count as training again).
-  Status add(const JointVector& q_rad, const Vec3& point_m);
+  Status add(const JointVector& q_rad, const Vec3& point_m, int target = 0);
   /// Removes every sample.
   void clear();
 

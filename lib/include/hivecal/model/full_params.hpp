@@ -36,6 +36,9 @@ using ParamMask = std::uint64_t;
 constexpr ParamMask param_bit(int index) { return ParamMask{1} << static_cast<unsigned>(index); }
 /// Every one of the 33 parameters.
 inline constexpr ParamMask kAllParamsMask = (ParamMask{1} << kFullParamCount) - 1U;
+/// Not a parameter: in a mask of columns to sum (accumulate_normal_equations), the tool points
+/// of targets 2 .. kMaxTargets are estimated too (mask_count and mask_indices ignore it).
+inline constexpr ParamMask kOtherTargetTools = ParamMask{1} << kFullParamCount;
 /// True when parameter `index` is in `mask`.
 constexpr bool mask_has(ParamMask mask, int index) { return (mask & param_bit(index)) != 0; }
 /// Number of parameters in `mask`.
@@ -46,6 +49,10 @@ int mask_indices(ParamMask mask, int (&index)[kFullParamCount]);
 /// Short name of a full-model parameter: "theta1", "d2", "a3", "alpha4", "tool_x",
 /// "base_rz", "base_tx", ...; "?" outside [0, kFullParamCount). Static storage.
 const char* full_param_name(int index);
+
+/// Name of coordinate `axis` (0 = x) of the tool point of target `target` (0-based, 1 ..
+/// kMaxTargets - 1; the parameters after the 33): "tool2_x", ...; "?" outside. Static storage.
+const char* other_tool_param_name(int target, int axis);
 
 /// Cross-product matrix: skew(v) * x = v x x.
 inline Mat3 skew(const Vec3& v) {

@@ -16,6 +16,9 @@ inline constexpr int kParamsPerJoint = 4;                                  ///< 
 inline constexpr int kDhParamCount = kJointCount * kParamsPerJoint;       ///< 24
 inline constexpr int kToolParamCount = 3;                                  ///< tool x, y, z
 inline constexpr int kModelParamCount = kDhParamCount + kToolParamCount;  ///< 27
+/// Reflectors (targets) one calibration can hold on the tool, each with its own tool point
+/// (3: a fourth costs 1.8 kB of LmWorkspace, and the 512-sample firmware job has < 1 kB left).
+inline constexpr int kMaxTargets = 3;
 
 /// Position of a DH field inside a joint's four parameters.
 enum class DhField : int { theta_offset = 0, d = 1, a = 2, alpha = 3 };
@@ -35,11 +38,23 @@ struct DhJoint {
   double alpha_rad = 0.0;         ///< twist about x of the next frame [rad]
 };
 
-/// The geometry the calibration estimates: six DH joints and the tool point.
+/// The geometry the calibration estimates: six DH joints and the tool point of each target.
 struct RobotModel {
   DhJoint joints[kJointCount];  ///< joint 1 (base) .. joint 6 (wrist 3)
-  Vec3 tool_m = Vec3::Zero();   ///< tool point (retroreflector centre) in the flange frame [m]
+  Vec3 tool_m = Vec3::Zero();   ///< tool point of target 1 (retroreflector centre) in the flange frame [m]
+  /// Tool points of targets 2 .. kMaxTargets in the flange frame [m]; not among the 27 parameters.
+  Vec3 other_tools_m[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
 };
+static_assert(kMaxTargets == 3, "other_tools_m's initialiser lists kMaxTargets - 1 points");
+
+/// Tool point of target `target` (0-based, < kMaxTargets) in the flange frame [m].
+inline const Vec3& target_tool(const RobotModel& model, int target) {
+  return target == 0 ? model.tool_m : model.other_tools_m[target - 1];
+}
+/// The same, writable.
+inline Vec3& target_tool(RobotModel* model, int target) {
+  return target == 0 ? model->tool_m : model->other_tools_m[target - 1];
+}
 
 /// All 27 model parameters as one vector: joint-major DH fields, then the tool.
 using ModelParams = Eigen::Matrix<double, kModelParamCount, 1>;
@@ -48,7 +63,7 @@ using ToolPointJacobian = Eigen::Matrix<double, 3, kModelParamCount>;
 
 /// Flattens a model into its parameter vector.
 ModelParams to_params(const RobotModel& model);
-/// Rebuilds a model from its parameter vector.
+/// Rebuilds a model from its parameter vector (the tool points of targets 2.. at 0).
 RobotModel from_params(const ModelParams& params);
 
 /// Robot types with built-in nominal tables.
@@ -68,6 +83,8 @@ Status robot_type_from_name(const char* name, RobotType* type);
 RigidTransform fk_flange(const RobotModel& model, const JointVector& q_rad);
 /// Tool point in the robot base frame [m]; cheaper than fk_flange (vector recursion only).
 Vec3 fk_tool_point(const RobotModel& model, const JointVector& q_rad);
+/// Point of target `target` (0-based) in the robot base frame [m]; target 0 is fk_tool_point.
+Vec3 fk_target_point(const RobotModel& model, const JointVector& q_rad, int target);
 /// Tool point [m] and, into *jacobian, its analytic derivative w.r.t. all 27 parameters. The
 /// joint angles enter as sin/cos(q_j + offset_j) by the angle-sum formulas from JointTrig and
 /// ModelTrig (so that solvers can keep the JointTrig of their samples); the point agrees with

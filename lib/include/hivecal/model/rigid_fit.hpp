@@ -65,4 +65,15 @@ Status fit_rigid_transform(Span<const Vec3> source_m, Span<const Vec3> target_m,
 /// points onto the measured ones. Errors: those of RigidFitAccumulator::solve.
 Status fit_base_to_tracker(const RobotModel& model, Span<const Sample> samples, RigidTransform* base_to_tracker);
 
+/// Sets the tool point of every target 2.. that has samples to its least-squares value for
+/// the model's joints and `base_to_tracker`: the mean of the measured points in the flange
+/// frame (closed form, the flange rotation being orthonormal). Target 1 and targets without
+/// samples keep their values.
+void fit_other_target_tools(const RigidTransform& base_to_tracker, Span<const Sample> samples, RobotModel* model);
+
+/// fit_base_to_tracker, and with samples of several targets also their tool points 2..:
+/// alternated a few rounds (target 1's tool point anchors the base), tools fitted last.
+/// With one target exactly fit_base_to_tracker. Errors: those of fit_base_to_tracker.
+Status fit_base_and_target_tools(Span<const Sample> samples, RobotModel* model, RigidTransform* base_to_tracker);
+
 }  // namespace hivecal

@@ -90,6 +90,8 @@ struct LmResult {
   RigidTransform base_to_tracker;          ///< calibrated robot base -> tracker transform
   IdentifiabilityReport identifiability;   ///< what was estimated, what was dropped and why
   FullParams sigma = FullParams::Zero();   ///< standard deviation per parameter [m] or [rad]; 0 when not estimated
+  /// Standard deviation of the tool point of targets 2 .. kMaxTargets per axis [m]; 0 when not estimated.
+  Vec3 other_tools_sigma_m[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
   double loss_sum_m2 = 0.0;                ///< final sum of rho(|r_i|) [m^2] (sum of squares for LmLoss::squared)
   double rms_m = 0.0;                      ///< final RMS residual norm, unweighted [m]
   double residual_sigma_m = 0.0;           ///< sqrt(sum w |r|^2 / (3N - p)): noise estimate per axis [m]

@@ -51,6 +51,17 @@ struct PointLoss {
   double weight(double norm_m) const;
 };
 
+/// The tool point t of one target 2.. as a parameter block beside the 33 (docs/solver-lm.md,
+/// "Several targets"): with T = d r / d t (3x3), D = sum w T^T T, S = sum w T^T J (J the
+/// 33 columns) and c = sum w T^T r, the block is eliminated from the normal equations
+/// (Schur complement: H - S^T D^-1 S, g - S^T D^-1 c) and its step follows from the others'.
+struct TargetBlock {
+  Mat3 tool_tool = Mat3::Zero();                                                     ///< D [-]
+  Eigen::Matrix<double, 3, kFullParamCount> tool_model = Eigen::Matrix<double, 3, kFullParamCount>::Zero();  ///< S [m/unit]
+  Vec3 tool_residual_m = Vec3::Zero();                                              ///< c [m]
+  std::size_t count = 0;  ///< samples of this target summed; 0: the block is not eliminated
+};
+
 /// Weighted normal equations of the point residuals, summed sample by sample (no N x 33
 /// matrix is ever stored).
 struct NormalEquations {
@@ -60,16 +71,26 @@ struct NormalEquations {
   double weighted_squares_m2 = 0.0;  ///< sum w_i |r_i|^2 [m^2]
   double squares_sum_m2 = 0.0;       ///< sum |r_i|^2, unweighted [m^2]
   std::size_t count = 0;             ///< samples summed
+  /// Eliminated tool points of targets 2 .. kMaxTargets (entry k - 2 for target k); all
+  /// unused with one target.
+  TargetBlock targets[kMaxTargets - 1];
 };
 
+/// The step of the eliminated target tool points that goes with `step` of the 33:
+/// t_k += -D_k^-1 (c_k + S_k step), for every target block of `eq` with samples.
+void apply_target_step(const NormalEquations& eq, const FullParams& step, RobotModel* model);
+
 /// Sums the normal equations over `samples`, for the parameters in `columns` only (the
-/// other rows and columns of jtwj and jtwr are 0; fewer columns, less work). `sample_trig`,
+/// other rows and columns of jtwj and jtwr are 0; fewer columns, less work). Samples of
+/// targets 2.. use their own tool point; when `columns` holds kOtherTargetTools, those tool
+/// points are estimated too and eliminated into jtwj and jtwr (TargetBlock), else they stay fixed. One target takes the fast streaming path (the bits of one target). `sample_trig`,
 /// if it holds an entry per sample (joint_trig of sample i at i), saves the joint trig of
 /// every sample; otherwise it is computed here. The same bits either way. Errors:
 /// dataset_empty, non_finite_input (a NaN or Inf residual or Jacobian).
 Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
                                    Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
-                                   ParamMask columns = kAllParamsMask, Span<const JointTrig> sample_trig = {});
+                                   ParamMask columns = kAllParamsMask | kOtherTargetTools,
+                                   Span<const JointTrig> sample_trig = {});
 
 /// Loss sums only (no Jacobian, fk_tool_point), e.g. to compare candidate geometries: sum
 /// rho(|r_i|) and sum |r_i|^2 [m^2]. Agrees with accumulate_normal_equations to rounding.

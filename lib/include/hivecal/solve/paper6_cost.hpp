@@ -109,9 +109,10 @@ class Paper6CostBase : public Objective {
   /// calibration, or a fit of the first poses). Errors: non_finite_input,
   /// dimension_out_of_range (no link length, or more than the storage holds).
   Status reset(const RobotModel& nominal, const RigidTransform& reference_base_to_tracker);
-  /// Adds one sample (the cost is not usable until finalize()). Errors: non_finite_input,
-  /// dataset_full (not stored).
-  Status add(const JointVector& q_rad, const Vec3& point_m);
+  /// Adds one sample of target `target` (0-based; its tool point from the geometry of reset(),
+  /// fixed) (the cost is not usable until finalize()). Errors: non_finite_input,
+  /// invalid_argument (target outside [0, kMaxTargets)), dataset_full (not stored).
+  Status add(const JointVector& q_rad, const Vec3& point_m, int target = 0);
   /// Precomputes the centroids and base-fit matrices (again after more add()s). Errors:
   /// too_few_samples (< 3), degenerate_geometry (measured or predicted points collinear or coincident).
   Status finalize();
