@@ -265,6 +265,8 @@ report::IdentifiabilityTable identifiability_table(const LmResult& lm) {
 bool parameter_correlations(const CalibrationStage& stage, const LmResult& lm, Span<const Sample> train,
                             NormalMatrix* correlation) {
   static NormalEquations eq;  // static: 9 kB
+  static TargetBlock target_blocks[kMaxTargets - 1];
+  eq.targets = Span<TargetBlock>(target_blocks, kMaxTargets - 1);
   static NormalMatrix scaled;
   const ParamMask kept = lm.identifiability.kept_mask;
   if (accumulate_normal_equations(stage.model, stage.base_to_tracker, train, PointLoss{lm.huber_threshold_m}, &eq,

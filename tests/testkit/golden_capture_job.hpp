@@ -26,7 +26,7 @@ inline constexpr std::size_t kJobSamples = 512;
 /// rings: 256 robot records (2 s at 125 Hz: the 1 s window plus the merge lag), 64 tracker points.
 using JobCaptureWorkspace = CaptureWorkspace<3072, 640, 256, 64>;
 /// Float paper-6 terms (84 B per sample), the paper's 150 food sources, 300-cycle traces.
-using JobCalibrationWorkspace = CalibrationWorkspace<kJobSamples, float, 150, 300>;
+using JobCalibrationWorkspace = CalibrationWorkspace<kJobSamples, float, 150, 300, 0, kPaper6Dimension, 1>;  // one reflector
 
 /// Where a run ends (earlier ends serve the per-stage instruction counts of scripts/footprint.sh).
 enum class JobStop : int { clock, extraction, done };

@@ -244,6 +244,16 @@ template <>
 struct JointTrigStorage<0> {
   Span<JointTrig> view() { return Span<JointTrig>(); }
 };
+/// Target blocks for LM's normal equations (several targets), or none (Blocks = 0).
+template <std::size_t Blocks>
+struct TargetBlockStorage {
+  TargetBlock values[Blocks];
+  Span<TargetBlock> view() { return Span<TargetBlock>(values, Blocks); }
+};
+template <>
+struct TargetBlockStorage<0> {
+  Span<TargetBlock> view() { return Span<TargetBlock>(); }
+};
 template <std::size_t A, std::size_t B>
 inline constexpr std::size_t max_of = A > B ? A : B;
 }  // namespace detail
@@ -252,9 +262,12 @@ inline constexpr std::size_t max_of = A > B ? A : B;
 /// lengths (6: UR arms, the firmware; kMaxLinkLengths: any arm): paper-6 cost with `CostScalar`
 /// terms (double: exact; float: half the memory, the firmware's choice), ABC and GSA with up to
 /// `Population` members, traces of `TraceCapacity` iterations per stage, and joint trig
-/// storage for LM when `JointTrigSamples` > 0 (faster, same bits). Big: give it static storage.
+/// storage for LM when `JointTrigSamples` > 0 (faster, same bits), and LM's blocks for the
+/// tool points of up to `MaxTargets` reflectors (1: one reflector only, 3.6 kB less; the
+/// firmware's choice). Big: give it static storage.
 template <std::size_t Samples, typename CostScalar = double, std::size_t Population = 150,
-          std::size_t TraceCapacity = 300, std::size_t JointTrigSamples = 0, std::size_t MaxLinkLengths = kPaper6Dimension>
+          std::size_t TraceCapacity = 300, std::size_t JointTrigSamples = 0, std::size_t MaxLinkLengths = kPaper6Dimension,
+          std::size_t MaxTargets = kMaxTargets>
 class CalibrationWorkspace final : public CalibrationWorkspaceBase {
  public:
   using Cost = Paper6Cost<Samples, CostScalar, MaxLinkLengths>;  ///< the population stages' cost
@@ -272,6 +285,7 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
   struct LmPhase {
     LmWorkspace lm;
     detail::JointTrigStorage<JointTrigSamples> joint_trig;
+    detail::TargetBlockStorage<2 * (MaxTargets - 1)> target_blocks;
   };
   /// The blunder search's scratch.
   struct ResidualPhase {
@@ -299,6 +313,7 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
     close();
     lm_ = new (arena_) LmPhase();
     lm_->lm.joint_trig = lm_->joint_trig.view();
+    lm_->lm.target_blocks = lm_->target_blocks.view();
     return &lm_->lm;
   }
   ResidualScratch open_residuals() override {

@@ -109,8 +109,9 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
 void other_tool_sigmas(const KeptCholesky& f, const NormalEquations& eq, const FullParams& scale, ParamMask kept,
                        double variance_m2, LmResult* result) {
   for (int k = 0; k < kMaxTargets - 1; ++k) {
-    const TargetBlock& block = eq.targets[k];
     result->other_tools_sigma_m[k].setZero();
+    if (static_cast<std::size_t>(k) >= eq.targets.size()) continue;
+    const TargetBlock& block = eq.targets[static_cast<std::size_t>(k)];
     if (block.count == 0) continue;
     const Mat3 inverse = block.tool_tool.inverse();
     const Eigen::Matrix<double, 3, kFullParamCount> a = inverse * block.tool_model;
@@ -410,6 +411,12 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   ParamMask free_mask = 0;
   Status status = validate_inputs(start_model, start_base_to_tracker, samples, options, &free_mask);
   if (status != Status::ok) return status;
+  const std::size_t blocks = workspace->target_blocks.size() / 2;  // per NormalEquations
+  workspace->normal.targets = workspace->target_blocks.subspan(0, blocks);
+  workspace->trial.targets = workspace->target_blocks.subspan(blocks, blocks);
+  if (mask_has(free_mask, tool_param_index(0)) && static_cast<std::size_t>(target_count(samples) - 1) > blocks) {
+    return Status::dimension_out_of_range;  // the workspace has no room for these targets' tool points
+  }
   clear_result(result);
   Run run{options, samples, workspace, result, free_mask, 0, Point{start_model, RigidTransform{}, PointLoss{}},
           store_joint_trig(samples, workspace->joint_trig), &workspace->normal, &workspace->trial,

@@ -373,6 +373,9 @@ Status accumulate_several_targets(const RobotModel& model, const RigidTransform&
                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* eq,
                                   ParamMask columns) {
   const bool eliminate = (columns & kOtherTargetTools) != 0;
+  if (eliminate && static_cast<std::size_t>(target_count(samples) - 1) > eq->targets.size()) {
+    return Status::dimension_out_of_range;  // no storage for these targets' blocks
+  }
   for (TargetBlock& block : eq->targets) block = TargetBlock{};
   for (const Sample& sample : samples) {
     RobotModel moved = model;
@@ -393,7 +396,7 @@ Status accumulate_several_targets(const RobotModel& model, const RigidTransform&
     eq->weighted_squares_m2 += weight * squared;
     eq->squares_sum_m2 += squared;
     if (sample.target == 0 || !eliminate) continue;
-    TargetBlock& block = eq->targets[sample.target - 1];
+    TargetBlock& block = eq->targets[static_cast<std::size_t>(sample.target - 1)];
     block.tool_tool += weight * (tool_jacobian.transpose() * tool_jacobian);
     block.tool_model += weight * (tool_jacobian.transpose() * jacobian);
     block.tool_residual_m += weight * (tool_jacobian.transpose() * residual_m);
@@ -417,10 +420,10 @@ Status accumulate_several_targets(const RobotModel& model, const RigidTransform&
 }  // namespace
 
 void apply_target_step(const NormalEquations& eq, const FullParams& step, RobotModel* model) {
-  for (int k = 1; k < kMaxTargets; ++k) {
+  for (std::size_t k = 1; k <= eq.targets.size(); ++k) {
     const TargetBlock& block = eq.targets[k - 1];
     if (block.count == 0) continue;
-    target_tool(model, k) -= block.tool_tool.inverse() * (block.tool_residual_m + block.tool_model * step);
+    target_tool(model, static_cast<int>(k)) -= block.tool_tool.inverse() * (block.tool_residual_m + block.tool_model * step);
   }
 }
 

@@ -32,7 +32,7 @@ Dataset<600>& one_target_set() {
   return dataset;
 }
 LmWorkspace& workspace() {
-  static LmWorkspace ws;
+  static LmWorkspaceWithTargets ws;
   return ws;
 }
 LmResult& result() {
@@ -206,6 +206,8 @@ TEST(SeveralTargets, ToolPointSigmasMatchTheirScatter) {
 /// The identifiability report of `samples` at the truth, every parameter free.
 IdentifiabilityReport report_at(const RobotModel& truth, const RigidTransform& base, Span<const Sample> samples) {
   static NormalEquations eq;
+  static TargetBlock blocks[kMaxTargets - 1];
+  eq.targets = Span<TargetBlock>(blocks, kMaxTargets - 1);
   static IdentifiabilityWorkspace ws;
   IdentifiabilityReport report;
   EXPECT_EQ(accumulate_normal_equations(truth, base, samples, PointLoss{}, &eq), Status::ok);
@@ -286,4 +288,24 @@ TEST(SeveralTargets, LinkLengthCostUsesEachSamplesToolPoint) {
 }
 
 }  // namespace
+// A workspace without target blocks (the firmware's: one reflector) refuses a set of several
+// targets whose tool points are to be estimated, instead of writing past its storage; a
+// normal-equation sum without blocks refuses it too.
+TEST(LmTargets, AWorkspaceWithoutTargetBlocksRefusesSeveralTargets) {
+  RigidTransform base;
+  const RobotModel truth = simulate(77, 20, 0.0, &base);
+  static LmWorkspace bare;  // no target_blocks
+  const LmOptions options;
+  Status status = Status::ok;
+  EXPECT_NO_HEAP(status = calibrate_lm(start_model(), &base, train_set().samples(), options, &bare, &result()));
+  EXPECT_EQ(status, Status::dimension_out_of_range);
+  static NormalEquations eq;
+  eq.targets = Span<TargetBlock>();
+  EXPECT_NO_HEAP(status = accumulate_normal_equations(truth, base, train_set().samples(), PointLoss{}, &eq));
+  EXPECT_EQ(status, Status::dimension_out_of_range);
+  // With the blocks it runs.
+  EXPECT_NO_HEAP(status = calibrate_lm(start_model(), &base, train_set().samples(), options, &workspace(), &result()));
+  EXPECT_EQ(status, Status::ok);
+}
+
 }  // namespace hivecal

@@ -120,6 +120,21 @@ struct LmWorkspace {
   /// with it the joint angles' sin/cos are computed once instead of in every pass (~10 %
   /// faster). Too small or empty: computed in every pass. The same bits either way.
   Span<JointTrig> joint_trig;
+  /// Storage of the target blocks of `normal` and `trial` (no ownership), half each: for
+  /// samples of several targets, 2 (kMaxTargets - 1) blocks (~3.6 kB). Empty: one target only
+  /// (a set of several is refused with dimension_out_of_range), which small targets choose.
+  Span<TargetBlock> target_blocks;
+};
+
+/// An LmWorkspace that owns the target blocks: it calibrates sets of up to kMaxTargets targets.
+struct LmWorkspaceWithTargets : LmWorkspace {
+  LmWorkspaceWithTargets() { target_blocks = Span<TargetBlock>(blocks, kBlockCount); }
+  LmWorkspaceWithTargets(const LmWorkspaceWithTargets&) = delete;  // target_blocks views `blocks`
+  LmWorkspaceWithTargets& operator=(const LmWorkspaceWithTargets&) = delete;
+
+ private:
+  static constexpr std::size_t kBlockCount = 2 * (kMaxTargets - 1);
+  TargetBlock blocks[kBlockCount];
 };
 
 /// Calibrates `start_model` (and the base transform, from `*start_base_to_tracker` or, when

@@ -71,9 +71,11 @@ struct NormalEquations {
   double weighted_squares_m2 = 0.0;  ///< sum w_i |r_i|^2 [m^2]
   double squares_sum_m2 = 0.0;       ///< sum |r_i|^2, unweighted [m^2]
   std::size_t count = 0;             ///< samples summed
-  /// Eliminated tool points of targets 2 .. kMaxTargets (entry k - 2 for target k); all
-  /// unused with one target.
-  TargetBlock targets[kMaxTargets - 1];
+  /// Eliminated tool points of targets 2 .. (entry k - 2 for target k): caller storage, no
+  /// ownership (LmWorkspaceWithTargets, or a TargetBlock array). Empty: one target only; a
+  /// set with more targets than blocks is refused (dimension_out_of_range) when their tool
+  /// points are to be estimated.
+  Span<TargetBlock> targets;
 };
 
 /// The step of the eliminated target tool points that goes with `step` of the 33:
