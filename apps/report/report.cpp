@@ -274,7 +274,7 @@ void cross_validation_figure(const ReportData& data, std::vector<Figure>* out) {
   spec.fixed_y = true;
   spec.y_hi = std::max(max_of(test.y), max_of(train.y));
   spec.y_line = cv.mae_3d_m * 1e6;
-  spec.y_line_label = "all held-out samples";
+  spec.y_line_label = "overall held-out";
   out->push_back({spec.id, svg_chart(spec, {test, train})});
 }
 

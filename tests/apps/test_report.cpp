@@ -233,7 +233,7 @@ TEST(Report, BlundersAndCrossValidationAreShown) {
   const std::string folds = figure_svg(html, "fig-cv-folds");
   ASSERT_NE(folds, "");
   EXPECT_NE(folds.find("data-series='held-out MAE'"), std::string::npos);
-  EXPECT_NE(folds.find("data-series='all held-out samples'"), std::string::npos);
+  EXPECT_NE(folds.find("data-series='overall held-out'"), std::string::npos);
   // Table 3 lists the parameter the significance test fixed.
   EXPECT_NE(html.find("<td>alpha2</td><td>not significant (&lt; 2 sigma)</td>"), std::string::npos);
 }
