@@ -283,7 +283,8 @@ bool get_cross_validation(const JsonValue* v, CrossValidationTable* out) {
   if (v == nullptr) return true;  // no --cv
   long long samples = 0;
   const JsonValue* folds = v->find("folds");
-  if (!get_count(v->find("samples"), &samples) || !get_number(v->find("mae_3d_m"), &out->mae_3d_m) || !is_array(folds)) {
+  if (!get_count(v->find("samples"), &samples) || !get_number(v->find("mae_3d_m"), &out->mae_3d_m) ||
+      !is_array(folds)) {
     return false;
   }
   out->present = true;
@@ -292,7 +293,8 @@ bool get_cross_validation(const JsonValue* v, CrossValidationTable* out) {
     FoldRow row;
     long long train = 0, test = 0;
     if (!get_count(f.find("train_count"), &train) || !get_count(f.find("test_count"), &test) ||
-        !get_number(f.find("train_mae_3d_m"), &row.train_mae_m) || !get_number(f.find("test_mae_3d_m"), &row.test_mae_m)) {
+        !get_number(f.find("train_mae_3d_m"), &row.train_mae_m) ||
+        !get_number(f.find("test_mae_3d_m"), &row.test_mae_m)) {
       return false;
     }
     row.train_count = static_cast<std::size_t>(train);
