@@ -704,6 +704,9 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
       data.info_lines.push_back(line);
     }
     data.identifiability = identifiability_table(*lm);
+    for (int k = 0; k < kFullParamCount; ++k)
+      if (mask_has(run.result.lm_pruned_mask, k)) data.identifiability.fixed.push_back(full_param_name(k));
+    data.identifiability.significance_t = run.result.significance_t;
     data.noise_sigma_m = lm->residual_sigma_m;
   }
   data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
@@ -713,10 +716,23 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
     for (const auto& drop : facts.dropped) data.drops.push_back(drop);
     data.clock_match = report::clock_match_series(facts.run.clock_match, facts.run.clock.speed_gain);
   }
+  data.outliers.searched = run.result.outlier_rounds > 0;
+  data.outliers.threshold_m = run.result.outlier_threshold_m;
   for (const CalibrationOutlier& o : run.result.outlier_list()) {
     data.info_lines.push_back("set aside as a blunder: " + sample_source(facts, o.index) + ", residual " +
                               format_mm(o.residual_m) + " mm (threshold " +
                               format_mm(run.result.outlier_threshold_m) + " mm)");
+    data.outliers.rows.push_back({sample_source(facts, o.index), o.residual_m});
+  }
+  if (run.has_cv) {
+    data.cross_validation.present = true;
+    data.cross_validation.sample_count = run.cv.sample_count;
+    data.cross_validation.mae_3d_m = run.cv.mae_3d_m;
+    for (std::size_t k = 0; k < run.cv.fold_count; ++k) {
+      const CrossValidationFold& f = run.cv.folds[k];
+      data.cross_validation.folds.push_back(
+          {f.train_count, f.test.count, f.train.mae(ErrorAxis::norm_3d), f.test.mae(ErrorAxis::norm_3d)});
+    }
   }
   return data;
 }

@@ -233,6 +233,51 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   }
 }
 
+/// Every sample's 3-D residual under the final calibration, sorted, the set-aside ones
+/// marked, with the blunder threshold (log axis: blunders are mm, the rest um).
+void outlier_figure(const ReportData& data, std::vector<Figure>* out) {
+  if (!data.outliers.searched || data.predictions.empty()) return;
+  const PredictionSet& after = data.predictions.back();
+  std::vector<std::pair<double, bool>> residuals;  // [um], set aside
+  for (std::size_t i = 0; i < data.samples.size() && i < after.points_m.size(); ++i)
+    residuals.emplace_back((after.points_m[i] - data.samples[i].measured_m).norm() * 1e6, false);
+  for (const OutlierRow& o : data.outliers.rows) residuals.emplace_back(o.residual_m * 1e6, true);
+  std::sort(residuals.begin(), residuals.end());
+  Series kept{"kept", {}, {}, true};
+  Series aside{"set aside", {}, {}, true};
+  for (std::size_t k = 0; k < residuals.size(); ++k) {
+    Series& s = residuals[k].second ? aside : kept;
+    s.x.push_back(static_cast<double>(k + 1));
+    s.y.push_back(residuals[k].first);
+  }
+  ChartSpec spec = chart("fig-outliers", "3D residual per sample after calibration, sorted", "samples, by rank",
+                         "3D residual [um]");
+  spec.log_y = true;
+  if (data.outliers.threshold_m > 0.0) {
+    spec.y_line = data.outliers.threshold_m * 1e6;
+    spec.y_line_label = "blunder threshold";
+  }
+  out->push_back({spec.id, svg_chart(spec, {kept, aside})});
+}
+
+/// --cv: the held-out (and training) 3-D MAE of each fold, the overall held-out MAE as a line.
+void cross_validation_figure(const ReportData& data, std::vector<Figure>* out) {
+  const CrossValidationTable& cv = data.cross_validation;
+  if (!cv.present || cv.folds.empty()) return;
+  Series test{"held-out MAE", index_axis(cv.folds.size()), {}, true};
+  Series train{"training MAE", index_axis(cv.folds.size()), {}, true};
+  for (const FoldRow& f : cv.folds) {
+    test.y.push_back(f.test_mae_m * 1e6);
+    train.y.push_back(f.train_mae_m * 1e6);
+  }
+  ChartSpec spec = chart("fig-cv-folds", "Cross-validation: 3D MAE per fold", "fold", "3D MAE [um]");
+  spec.fixed_y = true;
+  spec.y_hi = std::max(max_of(test.y), max_of(train.y));
+  spec.y_line = cv.mae_3d_m * 1e6;
+  spec.y_line_label = "overall held-out";
+  out->push_back({spec.id, svg_chart(spec, {test, train})});
+}
+
 /// Stream input: the speed profiles as the clock fit matched them, and what is left between
 /// them (two panels on the same time axis as the drop timeline).
 void clock_figures(const ReportData& data, std::vector<Figure>* out) {
@@ -270,6 +315,8 @@ std::vector<Figure> all_figures(const ReportData& data) {
   }
   convergence_figures(data, &figures);
   if (!data.predictions.empty() && !data.samples.empty()) joint_figures(data, &figures);
+  outlier_figure(data, &figures);
+  cross_validation_figure(data, &figures);
   clock_figures(data, &figures);
   if (data.has_stream && !data.timeline.reasons.empty()) {
     ChartSpec spec = chart("fig-drop-timeline", "Tracker points over the session: kept, or why dropped",
@@ -372,6 +419,8 @@ std::string general(double v) {
 std::vector<std::vector<std::string>> identifiability_rows(const IdentifiabilityTable& id) {
   std::vector<std::vector<std::string>> rows = {{"set aside", "why", "sigma ratio", "combination that is not separable"}};
   for (const DroppedRow& d : id.dropped) rows.push_back({d.param, d.reason, general(d.singular_ratio), d.combination});
+  for (const std::string& name : id.fixed)
+    rows.push_back({name, "not significant (< " + general(id.significance_t) + " sigma)", "", ""});
   return rows;
 }
 
@@ -408,6 +457,34 @@ std::vector<std::vector<std::string>> parameter_rows(const ReportData& data) {
   return rows;
 }
 
+std::string mm(double metres) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", metres * 1e3);
+  return buf;
+}
+
+/// The blunder search: a table of the samples set aside, or a line saying why there is none.
+std::string outlier_html(const OutlierTable& o) {
+  if (!o.searched) return "<h2>Blunders</h2>\n<p>No blunder search ran (--keep-outliers): every sample was used.</p>\n";
+  std::string s = "<h2>Blunders</h2>\n<p>Blunder search: ";
+  if (o.rows.empty()) return s + "none set aside (threshold " + mm(o.threshold_m) + " mm).</p>\n";
+  s += std::to_string(o.rows.size()) + " sample(s) set aside.</p>\n";
+  std::vector<std::vector<std::string>> rows = {{"sample", "residual [mm]", "threshold [mm]"}};
+  for (const OutlierRow& r : o.rows) rows.push_back({r.source, mm(r.residual_m), mm(o.threshold_m)});
+  return s + html_table(rows);
+}
+
+std::vector<std::vector<std::string>> cross_validation_rows(const CrossValidationTable& cv) {
+  std::vector<std::vector<std::string>> rows = {
+      {"fold", "train samples", "test samples", "train MAE [um]", "held-out MAE [um]"}};
+  for (std::size_t k = 0; k < cv.folds.size(); ++k) {
+    const FoldRow& f = cv.folds[k];
+    rows.push_back({std::to_string(k + 1), std::to_string(f.train_count), std::to_string(f.test_count),
+                    um(f.train_mae_m), um(f.test_mae_m)});
+  }
+  return rows;
+}
+
 std::string text_table(const std::vector<std::vector<std::string>>& rows) {
   std::vector<std::size_t> widths;
   for (const auto& row : rows)
@@ -440,6 +517,8 @@ const char* caption(const std::string& id) {
       {"fig-residual-q", "Does the residual depend on a joint angle (compliance, an unmodelled effect)?"},
       {"fig-clock-speeds", "Did the clock fit line the two speed profiles up? Means per time bin over the fit's chords (each a few tracker points long); the robot speed is scaled by the fitted tracker/robot path-length gain."},
       {"fig-clock-residual", "Is anything left between the matched profiles? Near zero while moving: aligned. A timing error shows as opposite spikes at each start and stop; a slow trend, a tool-model scale error (the fit's per-second gains absorb it). At rest it sits a little above zero: tracker noise alone makes a chord longer."},
+      {"fig-outliers", "Which samples did the blunder search set aside, and how far above the rest and the threshold are they? (residuals under the final calibration; set-aside samples were not fitted)"},
+      {"fig-cv-folds", "Does the calibration predict samples it was not fitted to, fold after fold? (a fold far above the line: samples the others do not explain)"},
       {"fig-drops", "How many tracker points became samples, and why were the others dropped?"},
       {"fig-drop-timeline", "When in the session were points kept or dropped (beam losses, moves, a stream gap)? Shade: count in the bin relative to the row's busiest bin."},
   };
@@ -515,7 +594,14 @@ std::string render_html(const ReportData& data) {
          std::to_string(id.free_count) + " free parameters estimated; condition number of the scaled Jacobian " +
          general(id.condition_before) + " over the free parameters, " + general(id.condition_after) +
          " over the estimated ones.</p>\n<p>Estimated: " + xml_escape(join(id.estimated)) + "</p>\n" +
-         (id.dropped.empty() ? std::string() : html_table(identifiability_rows(id)));
+         (id.dropped.empty() && id.fixed.empty() ? std::string() : html_table(identifiability_rows(id)));
+  }
+  s += outlier_html(data.outliers);
+  if (data.cross_validation.present) {
+    const CrossValidationTable& cv = data.cross_validation;
+    s += "<h2>Cross-validation</h2>\n<p>" + std::to_string(cv.folds.size()) + " folds over " +
+         std::to_string(cv.sample_count) + " samples (blunders left out); 3D MAE over every held-out sample " +
+         um(cv.mae_3d_m) + " um.</p>\n" + html_table(cross_validation_rows(cv));
   }
   if (!data.parameters.empty()) {
     s += "<h2>Table 4: parameters (start, calibrated, change, sigma)</h2>\n" + html_table(parameter_rows(data));

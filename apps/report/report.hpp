@@ -5,6 +5,7 @@
 // regenerates the page from a result alone.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -66,6 +67,37 @@ struct IdentifiabilityTable {
   std::vector<DroppedRow> dropped;   ///< set aside, in the order they were dropped
   double condition_before = 0.0;     ///< of the column-scaled Jacobian over the free parameters [-]
   double condition_after = 0.0;      ///< over the estimated parameters [-]
+  std::vector<std::string> fixed{};  ///< fixed at their start values by LM's significance test
+  double significance_t = 0.0;       ///< that test's level: a change below t sigma is not significant [-]
+};
+
+/// A sample the calibration set aside as a blunder.
+struct OutlierRow {
+  std::string source;       ///< where it came from: "file:line", or "sample N"
+  double residual_m = 0.0;  ///< |predicted - measured| under the final calibration [m]
+};
+
+/// The blunder search: what it set aside and the threshold it used.
+struct OutlierTable {
+  bool searched = false;        ///< a blunder search ran (not --keep-outliers)
+  double threshold_m = 0.0;     ///< residual above which a sample was set aside [m]
+  std::vector<OutlierRow> rows;  ///< the samples set aside, by increasing sample index
+};
+
+/// One fold of a cross-validation.
+struct FoldRow {
+  std::size_t train_count = 0;  ///< samples it was calibrated on [-]
+  std::size_t test_count = 0;   ///< samples held out [-]
+  double train_mae_m = 0.0;     ///< 3-D MAE on its training samples [m]
+  double test_mae_m = 0.0;      ///< 3-D MAE on its held-out samples [m]
+};
+
+/// A cross-validation's folds (--cv).
+struct CrossValidationTable {
+  bool present = false;         ///< a cross-validation ran
+  std::size_t sample_count = 0;  ///< samples split into folds [-]
+  double mae_3d_m = 0.0;        ///< 3-D MAE over every held-out sample of every fold [m]
+  std::vector<FoldRow> folds;   ///< per fold, in fold order
 };
 
 /// One model parameter: start, calibrated value and uncertainty.
@@ -117,6 +149,8 @@ struct ReportData {
   bool has_stream = false;                    ///< the samples came from two streams
   PointTimeline timeline;                     ///< stream input: kept / drop reason per tracker point over time
   ClockMatchSeries clock_match;               ///< stream input: the clock fit's matched speed profiles
+  OutlierTable outliers;                      ///< blunders set aside (none when the search found none)
+  CrossValidationTable cross_validation;      ///< --cv: held-out errors per fold
 };
 
 /// A prediction set of `model` for every sample of `samples` (result.json keeps the model,

@@ -63,6 +63,42 @@ void write_identifiability(JsonWriter& json, const IdentifiabilityTable& id) {
   json.end_array();
   json.key("condition_before").value(id.condition_before);
   json.key("condition_after").value(id.condition_after);
+  json.key("fixed").begin_array();
+  for (const std::string& name : id.fixed) json.value(name);
+  json.end_array();
+  json.key("significance_t").value(id.significance_t);
+  json.end_object();
+}
+
+void write_outliers(JsonWriter& json, const OutlierTable& o) {
+  json.key("outliers").begin_object();
+  json.key("searched").value(o.searched);
+  json.key("threshold_m").value(o.threshold_m);
+  json.key("set_aside").begin_array();
+  for (const OutlierRow& r : o.rows) {
+    json.begin_object();
+    json.key("source").value(r.source);
+    json.key("residual_m").value(r.residual_m);
+    json.end_object();
+  }
+  json.end_array();
+  json.end_object();
+}
+
+void write_cross_validation(JsonWriter& json, const CrossValidationTable& cv) {
+  json.key("cross_validation").begin_object();
+  json.key("samples").value(static_cast<long long>(cv.sample_count));
+  json.key("mae_3d_m").value(cv.mae_3d_m);
+  json.key("folds").begin_array();
+  for (const FoldRow& f : cv.folds) {
+    json.begin_object();
+    json.key("train_count").value(static_cast<long long>(f.train_count));
+    json.key("test_count").value(static_cast<long long>(f.test_count));
+    json.key("train_mae_3d_m").value(f.train_mae_m);
+    json.key("test_mae_3d_m").value(f.test_mae_m);
+    json.end_object();
+  }
+  json.end_array();
   json.end_object();
 }
 
@@ -236,6 +272,53 @@ bool get_identifiability(const JsonValue* v, IdentifiabilityTable* out) {
     }
     out->dropped.push_back(row);
   }
+  const JsonValue* fixed = v->find("fixed");
+  if (fixed == nullptr) return true;  // written before the significance test was reported
+  if (!is_array(fixed) || !get_number(v->find("significance_t"), &out->significance_t)) return false;
+  for (const JsonValue& name : fixed->array) {
+    out->fixed.emplace_back();
+    if (!get_string(&name, &out->fixed.back())) return false;
+  }
+  return true;
+}
+
+bool get_outliers(const JsonValue* v, OutlierTable* out) {
+  if (v == nullptr) return true;  // written before blunders were reported: no search shown
+  const JsonValue* rows = v->find("set_aside");
+  if (!get_bool(v->find("searched"), &out->searched) || !get_number(v->find("threshold_m"), &out->threshold_m) ||
+      !is_array(rows)) {
+    return false;
+  }
+  for (const JsonValue& r : rows->array) {
+    OutlierRow row;
+    if (!get_string(r.find("source"), &row.source) || !get_number(r.find("residual_m"), &row.residual_m)) return false;
+    out->rows.push_back(row);
+  }
+  return true;
+}
+
+bool get_cross_validation(const JsonValue* v, CrossValidationTable* out) {
+  if (v == nullptr) return true;  // no --cv
+  long long samples = 0;
+  const JsonValue* folds = v->find("folds");
+  if (!get_count(v->find("samples"), &samples) || !get_number(v->find("mae_3d_m"), &out->mae_3d_m) ||
+      !is_array(folds)) {
+    return false;
+  }
+  out->present = true;
+  out->sample_count = static_cast<std::size_t>(samples);
+  for (const JsonValue& f : folds->array) {
+    FoldRow row;
+    long long train = 0, test = 0;
+    if (!get_count(f.find("train_count"), &train) || !get_count(f.find("test_count"), &test) ||
+        !get_number(f.find("train_mae_3d_m"), &row.train_mae_m) ||
+        !get_number(f.find("test_mae_3d_m"), &row.test_mae_m)) {
+      return false;
+    }
+    row.train_count = static_cast<std::size_t>(train);
+    row.test_count = static_cast<std::size_t>(test);
+    out->folds.push_back(row);
+  }
   return true;
 }
 
@@ -408,6 +491,8 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
     json.key("residual_m_s").inline_array(match.residual_m_s.data(), match.residual_m_s.size());
     json.end_object();
   }
+  write_outliers(json, data.outliers);
+  if (data.cross_validation.present) write_cross_validation(json, data.cross_validation);
   json.end_object();
 }
 
@@ -435,6 +520,8 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   if (!get_drops(value.find("drops"), &parsed.drops)) return bad("drops");
   if (!get_timeline(value.find("timeline"), &parsed.timeline)) return bad("timeline");
   if (!get_clock_match(value.find("clock_match"), &parsed.clock_match)) return bad("clock_match");
+  if (!get_outliers(value.find("outliers"), &parsed.outliers)) return bad("outliers");
+  if (!get_cross_validation(value.find("cross_validation"), &parsed.cross_validation)) return bad("cross_validation");
   *data = parsed;
   return port::Error{};
 }

@@ -187,6 +187,123 @@ TEST(Report, DataRoundTripsThroughResultJson) {
   EXPECT_NE(damaged.message.find("\"samples\""), std::string::npos) << damaged.message;
 }
 
+/// The <svg> of figure `id` in `html` ("" if absent).
+std::string figure_svg(const std::string& html, const std::string& id) {
+  const std::size_t at = html.find("<svg xmlns='http://www.w3.org/2000/svg' id='" + id + "'");
+  if (at == std::string::npos) return "";
+  return html.substr(at, html.find("</svg>", at) - at);
+}
+
+/// example() with a blunder set aside (4.2 mm, threshold 1 mm), a 3-fold cross-validation
+/// and a parameter fixed by the significance test.
+report::ReportData with_blunder_and_folds() {
+  report::ReportData data = example();
+  data.outliers.searched = true;
+  data.outliers.threshold_m = 1.0e-3;
+  data.outliers.rows = {{"samples.csv:7", 4.2e-3}};
+  data.cross_validation.present = true;
+  data.cross_validation.sample_count = 12;
+  data.cross_validation.mae_3d_m = 61.3e-6;
+  data.cross_validation.folds = {{8, 4, 50.5e-6, 58.0e-6}, {8, 4, 49.0e-6, 71.5e-6}, {8, 4, 51.0e-6, 54.25e-6}};
+  data.identifiability.fixed = {"alpha2"};
+  data.identifiability.significance_t = 2.0;
+  return data;
+}
+
+TEST(Report, BlundersAndCrossValidationAreShown) {
+  const report::ReportData data = with_blunder_and_folds();
+  const std::vector<std::string> ids = report::figure_ids(data);
+  const auto q6 = std::find(ids.begin(), ids.end(), "fig-residual-q6");
+  ASSERT_NE(q6, ids.end());
+  ASSERT_GE(ids.end() - q6, 3);
+  EXPECT_EQ(*(q6 + 1), "fig-outliers");
+  EXPECT_EQ(*(q6 + 2), "fig-cv-folds");
+  const std::string html = report::render_html(data);
+  EXPECT_EQ(check_well_formed(html), "");
+  // The outlier table and figure: the blunder by source, residual and threshold [mm].
+  EXPECT_NE(html.find("<td>samples.csv:7</td><td>4.200</td><td>1.000</td>"), std::string::npos);
+  const std::string outliers = figure_svg(html, "fig-outliers");
+  ASSERT_NE(outliers, "");
+  EXPECT_NE(outliers.find("data-series='set aside'"), std::string::npos);
+  EXPECT_NE(outliers.find("data-series='kept'"), std::string::npos);
+  EXPECT_NE(outliers.find("data-series='blunder threshold'"), std::string::npos);
+  // The folds: a row per fold and the overall held-out MAE as the figure's line.
+  EXPECT_NE(html.find("<td>2</td><td>8</td><td>4</td><td>49.0</td><td>71.5</td>"), std::string::npos);
+  EXPECT_NE(html.find("3D MAE over every held-out sample 61.3 um"), std::string::npos);
+  const std::string folds = figure_svg(html, "fig-cv-folds");
+  ASSERT_NE(folds, "");
+  EXPECT_NE(folds.find("data-series='held-out MAE'"), std::string::npos);
+  EXPECT_NE(folds.find("data-series='overall held-out'"), std::string::npos);
+  // Table 3 lists the parameter the significance test fixed.
+  EXPECT_NE(html.find("<td>alpha2</td><td>not significant (&lt; 2 sigma)</td>"), std::string::npos);
+}
+
+TEST(Report, BlunderSectionSaysWhatTheSearchDid) {
+  report::ReportData data = with_blunder_and_folds();
+  data.outliers.rows.clear();  // searched, none set aside: the figure without a "set aside" series
+  std::string html = report::render_html(data);
+  EXPECT_NE(html.find("none set aside (threshold 1.000 mm)"), std::string::npos);
+  const std::string outliers = figure_svg(html, "fig-outliers");
+  ASSERT_NE(outliers, "");
+  EXPECT_EQ(outliers.find("set aside"), std::string::npos);
+  data.outliers.searched = false;  // --keep-outliers: no figure, a line
+  data.cross_validation = report::CrossValidationTable{};  // no --cv: no figure, no table
+  html = report::render_html(data);
+  EXPECT_NE(html.find("No blunder search ran (--keep-outliers)"), std::string::npos);
+  EXPECT_EQ(figure_svg(html, "fig-outliers"), "");
+  EXPECT_EQ(figure_svg(html, "fig-cv-folds"), "");
+  EXPECT_EQ(html.find("Cross-validation"), std::string::npos);
+  const std::vector<std::string> ids = report::figure_ids(data);
+  EXPECT_EQ(std::count(ids.begin(), ids.end(), "fig-outliers") + std::count(ids.begin(), ids.end(), "fig-cv-folds"), 0);
+}
+
+TEST(Report, BlundersAndFoldsRoundTripThroughResultJson) {
+  const report::ReportData data = with_blunder_and_folds();
+  textio::JsonWriter json;
+  report::write_report_data(json, data);
+  textio::JsonValue value;
+  ASSERT_TRUE(textio::parse_json(json.text(), &value).ok());
+  report::ReportData back;
+  const port::Error r = report::parse_report_data(value, "result.json", &back);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_TRUE(back.outliers.searched);
+  EXPECT_EQ(back.outliers.threshold_m, 1.0e-3);
+  ASSERT_EQ(back.outliers.rows.size(), 1u);
+  EXPECT_EQ(back.outliers.rows[0].source, "samples.csv:7");
+  EXPECT_EQ(back.outliers.rows[0].residual_m, 4.2e-3);
+  ASSERT_TRUE(back.cross_validation.present);
+  EXPECT_EQ(back.cross_validation.sample_count, 12u);
+  EXPECT_EQ(back.cross_validation.mae_3d_m, 61.3e-6);
+  ASSERT_EQ(back.cross_validation.folds.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(back.cross_validation.folds[k].train_count, data.cross_validation.folds[k].train_count);
+    EXPECT_EQ(back.cross_validation.folds[k].test_count, data.cross_validation.folds[k].test_count);
+    EXPECT_EQ(back.cross_validation.folds[k].train_mae_m, data.cross_validation.folds[k].train_mae_m);
+    EXPECT_EQ(back.cross_validation.folds[k].test_mae_m, data.cross_validation.folds[k].test_mae_m);
+  }
+  EXPECT_EQ(back.identifiability.fixed, std::vector<std::string>{"alpha2"});
+  EXPECT_EQ(back.identifiability.significance_t, 2.0);
+  report::ReportData expected = data;
+  for (report::MethodRow& m : expected.methods) m.seconds = 0.0;  // never written
+  expected.input_lines.clear();                                    // never written
+  EXPECT_EQ(report::render_html(back), report::render_html(expected));
+  // Without --cv and without a search, the keys say so and come back absent.
+  report::ReportData plain = example();
+  textio::JsonWriter plain_json;
+  report::write_report_data(plain_json, plain);
+  EXPECT_EQ(plain_json.text().find("\"cross_validation\""), std::string::npos);
+  textio::JsonValue plain_value;
+  ASSERT_TRUE(textio::parse_json(plain_json.text(), &plain_value).ok());
+  ASSERT_TRUE(report::parse_report_data(plain_value, "result.json", &back).ok());
+  EXPECT_FALSE(back.outliers.searched);
+  EXPECT_FALSE(back.cross_validation.present);
+  // A damaged fold is refused with the key at fault.
+  value.object["cross_validation"].object["folds"].array[1].object.erase("test_mae_3d_m");
+  const port::Error damaged = report::parse_report_data(value, "result.json", &back);
+  EXPECT_FALSE(damaged.ok());
+  EXPECT_NE(damaged.message.find("\"cross_validation\""), std::string::npos) << damaged.message;
+}
+
 TEST(Report, ErrorVectorsCarryTheirScale) {
   const report::ReportData data = example();
   // Largest error 70 um; the extent of the test samples is their largest per-axis range.

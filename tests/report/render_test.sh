@@ -6,7 +6,8 @@
 #     the clock-sync profiles in result.json agree (residual well under the speeds);
 #   - no numeric tick label has more than three significant digits;
 #   - every legend entry has a drawn element of its series in the same figure;
-#   - `hivecal report --calibration` redraws the same figures, the same bytes twice.
+#   - `hivecal report --calibration` redraws the same figures, the same bytes twice;
+#   - a sample made a blunder is set aside and shown (table and figure), --cv draws its folds.
 #   tests/report/render_test.sh HIVECAL
 set -uo pipefail
 hivecal=${1:?usage: render_test.sh HIVECAL}
@@ -98,7 +99,7 @@ sim="$work/sim"
 "$hivecal" simulate --out-dir "$sim" --waypoints 12 --duration-s 150 --seed 5 >/dev/null || { echo "FAIL: simulate"; exit 1; }
 common=(fig-error-3d fig-error-x fig-error-y fig-error-z fig-vectors-xy fig-vectors-xz fig-cdf fig-histogram
         fig-convergence-global fig-convergence-lm fig-residual-q1 fig-residual-q2 fig-residual-q3 fig-residual-q4
-        fig-residual-q5 fig-residual-q6)
+        fig-residual-q5 fig-residual-q6 fig-outliers)
 
 # From the streams: every figure, the drop reasons too.
 if "$hivecal" calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --out "$work/streams.json" \
@@ -138,12 +139,22 @@ else
   fail "calibrate from streams"
 fi
 
-# From paired samples (the simulator's static truth): no stream figure.
-{ echo "q1,q2,q3,q4,q5,q6,x,y,z"; tail -n +2 "$sim/truth_samples.csv" | cut -d, -f4-12; } >"$work/samples.csv"
-if "$hivecal" calibrate --samples "$work/samples.csv" --method all --out "$work/samples.json" --report "$work/samples" \
-     --quiet >/dev/null; then
-  check_report samples "$work/samples/index.html" "${common[@]}"
+# From paired samples (the simulator's static truth) with a blunder (8 mm in x on line 11)
+# and --cv 4: no stream figure; the blunder set aside and named, the folds drawn.
+{ echo "q1,q2,q3,q4,q5,q6,x,y,z"; tail -n +2 "$sim/truth_samples.csv" | cut -d, -f4-12; } |
+  awk -F, -v OFS=, 'NR == 11 { $7 = $7 + 0.008 } { print }' >"$work/samples.csv"
+if "$hivecal" calibrate --samples "$work/samples.csv" --method all --cv 4 --out "$work/samples.json" \
+     --report "$work/samples" --quiet >/dev/null; then
+  check_report samples "$work/samples/index.html" "${common[@]}" fig-cv-folds
   if ! grep -q '"clock_match"' "$work/samples.json"; then ok; else fail "samples input: clock_match in result.json"; fi
+  if grep -q '<td>[^<]*/samples.csv:11</td><td>8.0[0-9][0-9]</td><td>1.000</td>' "$work/samples/index.html" &&
+     grep -q "data-series='set aside'" "$work/samples/index.html"; then ok; else
+    fail "the blunder on samples.csv:11 is not in the outlier table and figure"; fi
+  folds=$(grep -c '<tr><td>[1-4]</td><td>6[0-9]</td><td>2[0-9]</td>' "$work/samples/index.html")
+  if [ "$folds" -eq 4 ]; then ok; else fail "cross-validation table: $folds fold rows, want 4"; fi
+  if "$hivecal" report --calibration "$work/samples.json" --out "$work/samples-again" >/dev/null &&
+     cmp -s <(sed -n '/<h2>Table 2/,$p' "$work/samples/index.html") <(sed -n '/<h2>Table 2/,$p' "$work/samples-again/index.html")
+  then ok; else fail "report --calibration draws other blunder or fold tables or figures than calibrate --report"; fi
 else
   fail "calibrate from samples"
 fi
