@@ -12,6 +12,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 #include "testkit/other_arms.hpp"
+#include "testkit/target_data.hpp"
 
 namespace hivecal {
 namespace {
@@ -19,6 +20,9 @@ namespace {
 constexpr std::uint64_t kLmGoldenDigest = 0xe8eca2abfab7abcfULL;
 /// The same for a non-UR arm (IRB120-like, testkit/other_arms.hpp), least squares only.
 constexpr std::uint64_t kLmOtherArmGoldenDigest = 0x09bcafeaa5cedb13ULL;
+/// The same for three reflectors on a UR5 (testkit/target_data.hpp): the other targets' tool
+/// points eliminated from the normal equations and their sigmas.
+constexpr std::uint64_t kLmTargetsGoldenDigest = 0x0d428735892cee63ULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));
@@ -89,6 +93,36 @@ std::uint64_t other_arm_digest() {
   Digest digest;
   add_result(result, calibrate_lm(start, nullptr, samples.samples(), LmOptions{}, &ws, &result, &trace), trace, &digest);
   return digest.value();
+}
+
+/// A UR5 with three reflectors, 60 poses, calibrated from the nominal table with target 1 on
+/// the flange axis and the other two unknown.
+std::uint64_t targets_digest() {
+  Random random(20261126);
+  const Vec3 tool_m(0.012, -0.006, 0.17);
+  const RobotModel truth =
+      test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, tool_m), tool_m);
+  static Dataset<180> samples;
+  samples.clear();
+  test::fill_target_dataset(truth, test::example_base_to_tracker(), 60, 3, 1e-5, &random, &samples);
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = Vec3(0.0, 0.0, 0.17);
+  static LmWorkspaceWithTargets ws;
+  static LmResult result;
+  static Trace<64> trace;
+  trace.clear();
+  Digest digest;
+  add_result(result, calibrate_lm(start, nullptr, samples.samples(), LmOptions{}, &ws, &result, &trace), trace, &digest);
+  for (const Vec3& other_m : result.model.other_tools_m) digest.add(other_m);
+  for (const Vec3& sigma_m : result.other_tools_sigma_m) digest.add(sigma_m);
+  return digest.value();
+}
+
+TEST(LmGolden, SeveralTargetsDigestIsTheSameOnEveryTarget) {
+  std::uint64_t digest = 0;
+  EXPECT_NO_HEAP(digest = targets_digest());
+  std::printf("lm digest (three reflectors): 0x%016llx\n", static_cast<unsigned long long>(digest));
+  EXPECT_EQ(digest, kLmTargetsGoldenDigest);
 }
 
 TEST(LmGolden, NonUrArmDigestIsTheSameOnEveryTarget) {
