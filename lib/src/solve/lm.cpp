@@ -106,7 +106,9 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
 
 /// Standard deviations of the eliminated tool points: Cov(t_k) = s^2 (D^-1 + A H^-1 A^T) with
 /// A = D^-1 S (H the eliminated normal matrix over the kept parameters, factored in `f`).
-void other_tool_sigmas(const KeptCholesky& f, const NormalEquations& eq, const FullParams& scale, ParamMask kept,
+// Not inlined: its temporaries (several targets only) would sit in calibrate_lm's frame on
+// every call (the firmware's stack budget).
+[[gnu::noinline]] void other_tool_sigmas(const KeptCholesky& f, const NormalEquations& eq, const FullParams& scale, ParamMask kept,
                        double variance_m2, LmResult* result) {
   for (int k = 0; k < kMaxTargets - 1; ++k) {
     result->other_tools_sigma_m[k].setZero();

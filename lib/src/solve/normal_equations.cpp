@@ -369,7 +369,7 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
 
 /// accumulate_normal_equations for samples of several targets: sample by sample with each
 /// sample's tool point, the other targets' tool blocks summed and then eliminated.
-Status accumulate_several_targets(const RobotModel& model, const RigidTransform& base_to_tracker,
+[[gnu::noinline]] Status accumulate_several_targets(const RobotModel& model, const RigidTransform& base_to_tracker,
                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* eq,
                                   ParamMask columns) {
   const bool eliminate = (columns & kOtherTargetTools) != 0;
@@ -390,8 +390,11 @@ Status accumulate_several_targets(const RobotModel& model, const RigidTransform&
     const double squared = residual_m.squaredNorm();
     const double norm_m = std::sqrt(squared);
     const double weight = loss.weight(norm_m);
-    eq->jtwj += weight * (jacobian.transpose() * jacobian);
-    eq->jtwr += weight * (jacobian.transpose() * residual_m);
+    // Column by column: a 33 x 33 product temporary would be 8.7 kB of stack.
+    for (int a = 0; a < kFullParamCount; ++a) {
+      for (int b = 0; b < kFullParamCount; ++b) eq->jtwj(a, b) += weight * jacobian.col(a).dot(jacobian.col(b));
+      eq->jtwr(a) += weight * jacobian.col(a).dot(residual_m);
+    }
     eq->loss_sum_m2 += loss.rho(norm_m);
     eq->weighted_squares_m2 += weight * squared;
     eq->squares_sum_m2 += squared;
@@ -406,8 +409,10 @@ Status accumulate_several_targets(const RobotModel& model, const RigidTransform&
     if (block.count == 0) continue;
     const Mat3 inverse = block.tool_tool.inverse();
     const Eigen::Matrix<double, 3, kFullParamCount> solved = inverse * block.tool_model;
-    eq->jtwj -= block.tool_model.transpose() * solved;
-    eq->jtwr -= solved.transpose() * block.tool_residual_m;
+    for (int a = 0; a < kFullParamCount; ++a) {  // no 33 x 33 temporary (see above)
+      for (int b = 0; b < kFullParamCount; ++b) eq->jtwj(a, b) -= block.tool_model.col(a).dot(solved.col(b));
+      eq->jtwr(a) -= solved.col(a).dot(block.tool_residual_m);
+    }
   }
   for (int b = 0; b < kFullParamCount; ++b)  // exactly symmetric, as the fast path leaves it
     for (int a = b + 1; a < kFullParamCount; ++a) eq->jtwj(a, b) = eq->jtwj(b, a);
