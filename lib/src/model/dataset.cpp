@@ -13,7 +13,9 @@ int target_count(Span<const Sample> samples) {
 Status DatasetBase::add(const JointVector& q_rad, const Vec3& point_m, int target) {
   if (!all_finite(q_rad) || !all_finite(point_m)) return Status::non_finite_input;
   if (target < 0 || target >= kMaxTargets) return Status::invalid_argument;
-  if (stored_ != size_) set_aside(Span<const std::uint32_t>());  // a new sample joins every stored one
+  // A new sample joins every stored one. The empty Span is a null view (no storage, no heap):
+  // set_aside() with it only moves the set-aside samples back in place.
+  if (stored_ != size_) set_aside(Span<const std::uint32_t>());
   if (full()) return Status::dataset_full;
   storage_[size_].q_rad = q_rad;
   storage_[size_].point_m = point_m;

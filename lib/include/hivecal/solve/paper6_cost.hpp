@@ -45,7 +45,11 @@ struct LinkLengthSet {
 /// paper's six: d1, a2, a3, d4, d5, d6).
 LinkLengthSet link_length_set(const RobotModel& nominal);
 
-/// Up to kMaxLinkLengths lengths [m] (fixed capacity: no heap).
+/// Up to kMaxLinkLengths lengths [m]. Dynamic rows with a fixed MaxRows: Eigen keeps the
+/// storage inline (kMaxLinkLengths doubles) and never allocates; the count is the arm's (5 for
+/// an IRB120, 6 for UR), known only at run time. The allocation trap runs around every use
+/// (OtherArms.*, the paper-6 cost tests). A fixed 12-vector plus a count would meet the letter of
+/// "fixed-size only" at the price of a second size beside the vector.
 using LinkLengths = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, static_cast<int>(kMaxLinkLengths), 1>;
 
 /// The lengths of `set` in `model` [m].
