@@ -70,18 +70,18 @@ double gradient_cosine(const NormalEquations& eq, const FullParams& scale, Param
 }
 
 /// Solves (D H D + damping I) step_s = -D g over the kept parameters, with D H D already in
-/// ws->system (damped in place); returns the step in parameter units (D step_s), 0 outside
+/// s->system (damped in place); returns the step in parameter units (D step_s), 0 outside
 /// `kept`. False when the system cannot be solved.
-bool solve_step(LmWorkspace* ws, const NormalEquations& eq, const FullParams& scale, ParamMask kept, double damping,
+bool solve_step(LmStepScratch* s, const NormalEquations& eq, const FullParams& scale, ParamMask kept, double damping,
                 FullParams* step, FullParams* scaled_step) {
   FullParams rhs = FullParams::Zero();
   for (int i = 0; i < kFullParamCount; ++i) {
     if (!mask_has(kept, i)) continue;
-    ws->system(i, i) += damping;
+    s->system(i, i) += damping;
     rhs(i) = -eq.jtwr(i) * scale(i);
   }
-  if (!cholesky_factor(ws->system, kept, &ws->factorization)) return false;
-  cholesky_solve(ws->factorization, rhs, scaled_step);
+  if (!cholesky_factor(s->system, kept, &s->factorization)) return false;
+  cholesky_solve(s->factorization, rhs, scaled_step);
   for (int i = 0; i < kFullParamCount; ++i) {
     if (!mask_has(kept, i)) (*scaled_step)(i) = 0.0;
     (*step)(i) = (*scaled_step)(i) * scale(i);
@@ -131,21 +131,22 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
 /// sigma_p = sqrt(diag(H^-1) * sum w r^2 / (3N - p)) over the kept parameters, from the
 /// normal equations at the final point (Jacobi-scaled for conditioning).
 Status parameter_sigmas(LmWorkspace* ws, const NormalEquations& eq, ParamMask kept, LmResult* result) {
+  LmStepScratch* s = ws->scratch.open_step();
   FullParams scale;
-  scale_normal_matrix(eq.jtwj, kept, 1.0, &ws->system, &scale);
-  if (!cholesky_factor(ws->system, kept, &ws->factorization)) return Status::singular_system;
+  scale_normal_matrix(eq.jtwj, kept, 1.0, &s->system, &scale);
+  if (!cholesky_factor(s->system, kept, &s->factorization)) return Status::singular_system;
   int eliminated = 0;  // the other targets' tool points, 3 parameters each
   for (const TargetBlock& block : eq.targets) eliminated += block.count > 0 ? 3 : 0;
   const int dof = 3 * static_cast<int>(eq.count) - mask_count(kept) - eliminated;
   const double variance_m2 = eq.weighted_squares_m2 / static_cast<double>(dof);
   result->residual_sigma_m = std::sqrt(variance_m2);
   FullParams inverse_diagonal;
-  cholesky_inverse_diagonal(ws->factorization, &ws->system, &inverse_diagonal);
+  cholesky_inverse_diagonal(s->factorization, &s->system, &inverse_diagonal);
   result->sigma.setZero();
   for (int i = 0; i < kFullParamCount; ++i) {
     if (mask_has(kept, i)) result->sigma(i) = std::sqrt(std::fmax(inverse_diagonal(i), 0.0) * variance_m2) * scale(i);
   }
-  other_tool_sigmas(ws->factorization, eq, scale, kept, variance_m2, result);
+  other_tool_sigmas(s->factorization, eq, scale, kept, variance_m2, result);
   return all_finite(result->sigma) ? Status::ok : Status::singular_system;
 }
 
@@ -236,8 +237,9 @@ Status analyse(Run* run) {
   const int equations = 3 * static_cast<int>(run->samples.size());
   double threshold = run->options.identifiability_threshold;
   Status status = Status::ok;
+  IdentifiabilityWorkspace* scratch = run->ws->scratch.open_identifiability();  // ends the step's scratch
   while (true) {
-    status = analyze_identifiability(run->current->jtwj, run->free_mask, threshold, &run->ws->identifiability,
+    status = analyze_identifiability(run->current->jtwj, run->free_mask, threshold, scratch,
                                      &run->result->identifiability);
     run->kept = run->result->identifiability.kept_mask;
     if (status != Status::ok || mask_count(run->kept) < equations) return status;
@@ -274,19 +276,20 @@ Status move_to(Run* run, const Point& trial, bool* kept_changed) {
 /// adapts the damping (Nielsen). Sets *stop, with the reason, when a convergence test fires
 /// or the accepted point cannot be prepared.
 bool try_step(Run* run, bool* stop, LmTermination* termination) {
-  LmWorkspace* ws = run->ws;
+  // The system and its factor are dead once solve_step returns: move_to's analysis reuses their memory.
+  LmStepScratch* scratch = run->ws->scratch.open_step();
   const LmOptions& options = run->options;
   const NormalEquations& eq = *run->current;
   FullParams scale;
   FullParams step;
   FullParams scaled_step;
-  scale_normal_matrix(eq.jtwj, run->kept, 1.0, &ws->system, &scale);
+  scale_normal_matrix(eq.jtwj, run->kept, 1.0, &scratch->system, &scale);
   *stop = true;
   if (gradient_cosine(eq, scale, run->kept) <= options.gradient_tolerance) {
     *termination = LmTermination::gradient;
     return false;
   }
-  if (!solve_step(ws, eq, scale, run->kept, run->damping, &step, &scaled_step)) {
+  if (!solve_step(scratch, eq, scale, run->kept, run->damping, &step, &scaled_step)) {
     *stop = false;
     return false;
   }

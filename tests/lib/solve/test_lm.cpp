@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "hivecal/model/metrics.hpp"
 #include "hivecal/solve/lm.hpp"
@@ -282,6 +283,51 @@ TEST(Lm, IterationLimitReportsNotConvergedWithTheLastPoint) {
   const char* name = nullptr;
   EXPECT_NO_HEAP(name = lm_termination_name(LmTermination::max_iterations));
   EXPECT_STREQ(name, "max_iterations");
+}
+
+// The step's system and factor share one block with the identifiability scratch (never alive
+// together): LmWorkspace is the side-by-side layout it had before less one LmStepScratch
+// (17.6 kB at 33 parameters). The goldens (LmGolden, CaptureJob) show the same bits.
+TEST(Lm, WorkspaceSharesTheStepScratchWithTheIdentifiabilityScratch) {
+  struct SideBySide {  // LmWorkspace until session 7
+    NormalEquations normal;
+    NormalEquations trial;
+    LmStepScratch step;
+    IdentifiabilityWorkspace identifiability;
+    Span<JointTrig> joint_trig;
+    Span<TargetBlock> target_blocks;
+  };
+  EXPECT_GE(sizeof(IdentifiabilityWorkspace), sizeof(LmStepScratch));
+  EXPECT_EQ(sizeof(LmWorkspace), sizeof(SideBySide) - sizeof(LmStepScratch));
+}
+
+// Sharing is only sound if neither scratch set reads what the block held before: a block full
+// of NaN from an earlier use gives the same bits as a clean run.
+TEST(Lm, SharedScratchCarriesNothingBetweenUses) {
+  simulate(RobotType::ur5, 110, 120, 1e-5);
+  const RobotModel start = nominal_start(RobotType::ur5);
+  Status status = Status::ok;
+  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()));
+  ASSERT_EQ(status, Status::ok);
+  const LmResult first = result();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  IdentifiabilityWorkspace* poisoned = workspace().scratch.open_identifiability();
+  poisoned->scaled.setConstant(nan);
+  poisoned->rotated.setConstant(nan);
+  poisoned->null_basis.setConstant(nan);
+  poisoned->eigenvalues.setConstant(nan);
+  LmStepScratch* step = workspace().scratch.open_step();
+  step->system.setConstant(nan);
+  step->factorization.upper.setConstant(nan);
+  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()));
+  ASSERT_EQ(status, Status::ok);
+  EXPECT_EQ(first.identifiability.kept_mask, result().identifiability.kept_mask);
+  EXPECT_EQ(first.iterations, result().iterations);
+  EXPECT_EQ(first.rms_m, result().rms_m);
+  for (int i = 0; i < kModelParamCount; ++i) EXPECT_EQ(to_params(first.model)(i), to_params(result().model)(i));
+  for (int i = 0; i < kFullParamCount; ++i) EXPECT_EQ(first.sigma(i), result().sigma(i));
+  EXPECT_TRUE(first.base_to_tracker.translation_m == result().base_to_tracker.translation_m);
+  EXPECT_TRUE(first.base_to_tracker.rotation == result().base_to_tracker.rotation);
 }
 
 }  // namespace
