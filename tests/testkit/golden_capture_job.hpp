@@ -25,8 +25,13 @@ inline constexpr std::size_t kJobSamples = 512;
 /// Clock profiles: 3072 knots x 20 ms = 61 s of robot data, 640 tracker points = 64 s; extractor
 /// rings: 256 robot records (2 s at 125 Hz: the 1 s window plus the merge lag), 64 tracker points.
 using JobCaptureWorkspace = CaptureWorkspace<3072, 640, 256, 64>;
-/// Float paper-6 terms (84 B per sample), the paper's 150 food sources, 300-cycle traces.
-using JobCalibrationWorkspace = CalibrationWorkspace<kJobSamples, float, 150, 300, 0, kPaper6Dimension, 1>;  // one reflector
+/// Values per stage trace: the traces are views for reports (CalibrationStage::trace_m), no
+/// result depends on them and the firmware prints none, so each keeps its first value and
+/// counts the rest (TraceBase::dropped); 300 would cost 7.2 kB of static RAM.
+inline constexpr std::size_t kJobTraceCapacity = 1;
+/// Float paper-6 terms (84 B per sample), the paper's 150 food sources, one-value traces.
+using JobCalibrationWorkspace =
+    CalibrationWorkspace<kJobSamples, float, 150, kJobTraceCapacity, 0, kPaper6Dimension, 1>;  // one reflector
 
 /// Where a run ends (earlier ends serve the per-stage instruction counts of scripts/footprint.sh).
 enum class JobStop : int { clock, extraction, done };

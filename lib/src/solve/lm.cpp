@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 
 #include "hivecal/solve/cost.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
@@ -233,7 +234,9 @@ Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
 /// freedom, no noise estimate, an exact fit of the noise): then the threshold is raised tenfold
 /// at a time, so the weakest directions go first, until fewer remain than 3 N, and the report
 /// names them; too_few_samples when even that does not get there.
-Status analyse(Run* run) {
+// `inline`: called from start() and move_to(), it would otherwise get a frame of its own on
+// the firmware's deepest stack path (calibrate_lm -> analyze_identifiability -> eigenvectors).
+inline Status analyse(Run* run) {
   const int equations = 3 * static_cast<int>(run->samples.size());
   double threshold = run->options.identifiability_threshold;
   Status status = Status::ok;
@@ -384,6 +387,11 @@ Status status_of(LmTermination termination) {
 }
 
 }  // namespace
+
+// Out of line: one copy of the objects' construction (the reduction's zeroed arrays), not one
+// in every caller.
+LmStepScratch* LmSharedScratch::open_step() { return new (bytes_) LmStepScratch; }
+IdentifiabilityWorkspace* LmSharedScratch::open_identifiability() { return new (bytes_) IdentifiabilityWorkspace; }
 
 const char* lm_termination_name(LmTermination termination) {
   switch (termination) {

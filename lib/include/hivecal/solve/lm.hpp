@@ -7,7 +7,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <new>
 #include <type_traits>
 
 #include "hivecal/model/dataset.hpp"
@@ -125,9 +124,9 @@ struct LmStepScratch {
 class LmSharedScratch {
  public:
   /// Begins the step's scratch (system and factor unset) in the block.
-  LmStepScratch* open_step() { return new (bytes_) LmStepScratch; }
+  LmStepScratch* open_step();
   /// Begins the identifiability analysis's scratch in the block.
-  IdentifiabilityWorkspace* open_identifiability() { return new (bytes_) IdentifiabilityWorkspace; }
+  IdentifiabilityWorkspace* open_identifiability();
 
  private:
   static_assert(std::is_trivially_destructible<LmStepScratch>::value &&
