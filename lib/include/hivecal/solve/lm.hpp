@@ -138,7 +138,7 @@ class LmSharedScratch {
   alignas(LmStepScratch) alignas(IdentifiabilityWorkspace) unsigned char bytes_[kBytes];
 };
 
-/// Scratch memory of the solver (44 kB): give it static storage or put it in the
+/// Scratch memory of the solver (45 kB): give it static storage or put it in the
 /// caller's memory plan, not on a small stack.
 struct LmWorkspace {
   NormalEquations normal;   ///< normal equations at one point (current or trial)
