@@ -209,7 +209,8 @@ struct Run {
   Point point;
   Span<const JointTrig> sample_trig;  ///< joint trig of every sample, or empty
   NormalEquations* current;  ///< normal equations at `point`
-  NormalEquations* trial;    ///< normal equations at the last trial point
+  NormalEquations* trial;    ///< normal equations at the last trial point, in the shared scratch (or null)
+  Span<TargetBlock> trial_targets;  ///< the trial's target blocks
   double damping;
   double growth;
   bool reanalysed;  ///< the analysis has been repeated after the first accepted step
@@ -251,6 +252,16 @@ inline Status analyse(Run* run) {
   }
 }
 
+/// Copies the trial point's normal equations into *current, whose target blocks keep their
+/// storage: the trial's memory is the analysis's next.
+// Not inlined: its copies would widen calibrate_lm's frame, on the firmware's deepest path.
+[[gnu::noinline]] void adopt_trial(const NormalEquations& trial, NormalEquations* current) {
+  const Span<TargetBlock> blocks = current->targets;
+  *current = trial;
+  current->targets = blocks;
+  for (std::size_t k = 0; k < blocks.size(); ++k) blocks[k] = trial.targets[k];
+}
+
 /// Moves to an accepted trial point whose normal equations are in run->trial. Identifiability
 /// is a property of the geometry, and a start on a special configuration (a tool point on the
 /// flange axis hides theta6 and couples joint 5 with it) has ranks the solution does not: so
@@ -258,9 +269,8 @@ inline Status analyse(Run* run) {
 /// point, and that one is reported. Sets *kept_changed when it changed the kept set.
 Status move_to(Run* run, const Point& trial, bool* kept_changed) {
   run->point = trial;
-  NormalEquations* swap = run->current;
-  run->current = run->trial;
-  run->trial = swap;
+  adopt_trial(*run->trial, run->current);
+  run->trial = nullptr;
   *kept_changed = false;
   const double threshold_before_m = run->point.loss.huber_threshold_m;
   Status status = update_huber_threshold(run->options, run->samples, &run->point);
@@ -279,7 +289,8 @@ Status move_to(Run* run, const Point& trial, bool* kept_changed) {
 /// adapts the damping (Nielsen). Sets *stop, with the reason, when a convergence test fires
 /// or the accepted point cannot be prepared.
 bool try_step(Run* run, bool* stop, LmTermination* termination) {
-  // The system and its factor are dead once solve_step returns: move_to's analysis reuses their memory.
+  // The system and its factor are dead once solve_step returns: the trial's normal equations,
+  // then move_to's analysis, reuse their memory.
   LmStepScratch* scratch = run->ws->scratch.open_step();
   const LmOptions& options = run->options;
   const NormalEquations& eq = *run->current;
@@ -307,6 +318,7 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   Point trial = run->point;
   apply_full_increment(step, &trial.model, &trial.base);
   apply_target_step(eq, step, &trial.model);
+  run->trial = run->ws->scratch.open_trial(run->trial_targets);
   const Status status = accumulate(*run, trial, run->trial);
   // Predicted decrease of sum w|r + J d|^2: d^T S d + 2 lambda |d_s|^2 (scaled units).
   const double predicted = model_decrease + 2.0 * run->damping * scaled_step.squaredNorm();
@@ -392,6 +404,11 @@ Status status_of(LmTermination termination) {
 // in every caller.
 LmStepScratch* LmSharedScratch::open_step() { return new (bytes_) LmStepScratch; }
 IdentifiabilityWorkspace* LmSharedScratch::open_identifiability() { return new (bytes_) IdentifiabilityWorkspace; }
+NormalEquations* LmSharedScratch::open_trial(Span<TargetBlock> targets) {
+  NormalEquations* trial = new (bytes_) NormalEquations;
+  trial->targets = targets;
+  return trial;
+}
 
 const char* lm_termination_name(LmTermination termination) {
   switch (termination) {
@@ -426,13 +443,13 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   if (status != Status::ok) return status;
   const std::size_t blocks = workspace->target_blocks.size() / 2;  // per NormalEquations
   workspace->normal.targets = workspace->target_blocks.subspan(0, blocks);
-  workspace->trial.targets = workspace->target_blocks.subspan(blocks, blocks);
   if (mask_has(free_mask, tool_param_index(0)) && static_cast<std::size_t>(target_count(samples) - 1) > blocks) {
     return Status::dimension_out_of_range;  // the workspace has no room for these targets' tool points
   }
   clear_result(result);
   Run run{options, samples, workspace, result, free_mask, 0, Point{start_model, RigidTransform{}, PointLoss{}},
-          store_joint_trig(samples, workspace->joint_trig), &workspace->normal, &workspace->trial,
+          store_joint_trig(samples, workspace->joint_trig), &workspace->normal, nullptr,
+          workspace->target_blocks.subspan(blocks, blocks),
           options.initial_damping, 2.0, false};
   status = start(start_base_to_tracker, &run);
   if (status != Status::ok) return status;

@@ -5,6 +5,7 @@
 // Method and figures: docs/solver-lm.md.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
@@ -115,42 +116,45 @@ struct LmStepScratch {
   KeptCholesky factorization;  ///< its Cholesky factor over the kept parameters [-]
 };
 
-/// One block of memory for two scratch sets that are never alive together: the step's system
-/// and factor (each step, the final sigmas) and the identifiability analysis (at the start and
-/// after the first accepted step, between steps: it reads neither, and neither outlives its
-/// step). Opening one begins a new object in the block and ends the other (both are trivially
-/// destructible); a pointer stays valid until the other is opened. Neither reads what was in
-/// the block before, so the bits are those of separate storage, 17.6 kB smaller.
+/// One block of memory for three scratch sets that are never alive together: the step's
+/// system and factor (each step, the final sigmas), the normal equations at the trial point
+/// (from the step until the trial is accepted, copied to the current point, or rejected) and
+/// the identifiability analysis (at the start and after the first accepted step: it reads
+/// none of the others). Opening one begins a new object in the block and ends the others (all
+/// are trivially destructible); a pointer stays valid until another is opened. None reads
+/// what was in the block before, so the bits are those of separate storage, 26.6 kB smaller.
 class LmSharedScratch {
  public:
   /// Begins the step's scratch (system and factor unset) in the block.
   LmStepScratch* open_step();
+  /// Begins the trial point's normal equations (sums unset) over the target blocks `targets`.
+  NormalEquations* open_trial(Span<TargetBlock> targets);
   /// Begins the identifiability analysis's scratch in the block.
   IdentifiabilityWorkspace* open_identifiability();
 
  private:
   static_assert(std::is_trivially_destructible<LmStepScratch>::value &&
+                    std::is_trivially_destructible<NormalEquations>::value &&
                     std::is_trivially_destructible<IdentifiabilityWorkspace>::value,
-                "opening one scratch set ends the other without a destructor call");
-  static constexpr std::size_t kBytes = sizeof(LmStepScratch) > sizeof(IdentifiabilityWorkspace)
-                                            ? sizeof(LmStepScratch)
-                                            : sizeof(IdentifiabilityWorkspace);
-  alignas(LmStepScratch) alignas(IdentifiabilityWorkspace) unsigned char bytes_[kBytes];
+                "opening one scratch set ends the others without a destructor call");
+  static constexpr std::size_t kBytes =
+      std::max({sizeof(LmStepScratch), sizeof(NormalEquations), sizeof(IdentifiabilityWorkspace)});
+  alignas(LmStepScratch) alignas(NormalEquations) alignas(IdentifiabilityWorkspace) unsigned char bytes_[kBytes];
 };
 
-/// Scratch memory of the solver (45 kB): give it static storage or put it in the
+/// Scratch memory of the solver (37 kB): give it static storage or put it in the
 /// caller's memory plan, not on a small stack.
 struct LmWorkspace {
-  NormalEquations normal;   ///< normal equations at one point (current or trial)
-  NormalEquations trial;    ///< the same at the other point
-  LmSharedScratch scratch;  ///< the step's system and factor, or the identifiability analysis's scratch
+  NormalEquations normal;   ///< normal equations at the current point
+  LmSharedScratch scratch;  ///< the step's system and factor, the trial point's normal equations, or the identifiability analysis's scratch
   /// Optional storage for the joint trig of the samples, one entry per sample (no ownership):
   /// with it the joint angles' sin/cos are computed once instead of in every pass (~10 %
   /// faster). Too small or empty: computed in every pass. The same bits either way.
   Span<JointTrig> joint_trig;
-  /// Storage of the target blocks of `normal` and `trial` (no ownership), half each: for
-  /// samples of several targets, 2 (kMaxTargets - 1) blocks (~3.6 kB). Empty: one target only
-  /// (a set of several is refused with dimension_out_of_range), which small targets choose.
+  /// Storage of the target blocks of the current and the trial normal equations (no
+  /// ownership), half each: for samples of several targets, 2 (kMaxTargets - 1) blocks
+  /// (~3.6 kB). Empty: one target only (a set of several is refused with
+  /// dimension_out_of_range), which small targets choose.
   Span<TargetBlock> target_blocks;
 };
 
