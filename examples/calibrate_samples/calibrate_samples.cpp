@@ -57,7 +57,7 @@ int main() {
     return 1;
   }
 
-  static LmWorkspace workspace;  // 45 kB of scratch: never on a small stack
+  static LmWorkspace workspace;  // 37 kB of scratch: never on a small stack
   LmResult result;
   status = calibrate_lm(start, &start_base, dataset.train(), LmOptions(), &workspace, &result);
   if (status != Status::ok) {
