@@ -241,7 +241,7 @@ inline Status analyse(Run* run) {
   const int equations = 3 * static_cast<int>(run->samples.size());
   double threshold = run->options.identifiability_threshold;
   Status status = Status::ok;
-  IdentifiabilityWorkspace* scratch = run->ws->scratch.open_identifiability();  // ends the step's scratch
+  IdentifiabilityWorkspace* scratch = run->ws->scratch.open_identifiability();  // ends the step's and the trial's
   while (true) {
     status = analyze_identifiability(run->current->jtwj, run->free_mask, threshold, scratch,
                                      &run->result->identifiability);
