@@ -249,7 +249,7 @@ TEST(OtherArms, GsaAndAbcOnTheLinkLengthsImproveANonUrArm) {
     const RobotModel nominal = test::other_arm_model(arm);
     const LinkLengthSet set = link_length_set(nominal);
     LinkLengths lengths_m = link_lengths(nominal, set);
-    for (Eigen::Index k = 0; k < lengths_m.size(); ++k) lengths_m(k) += 6e-4 * random.normal();
+    for (std::size_t k = 0; k < lengths_m.count; ++k) lengths_m.values_m(k) += 6e-4 * random.normal();
     const RobotModel truth = with_link_lengths(nominal, set, lengths_m.data());
     train_set().clear();
     test::fill_other_arm(truth, test::example_base_to_tracker(), 200, 1e-5, &random, &train_set());
@@ -315,8 +315,8 @@ TEST(OtherArms, LinkLengthCostEqualsTheGenericRefitCost) {
     ASSERT_EQ(link_length_box(nominal, 2e-3, &box), Status::ok);
     for (int trial = 0; trial < 20; ++trial) {
       LinkLengths lengths_m = link_lengths(nominal);
-      for (Eigen::Index k = 0; k < lengths_m.size() && trial > 0; ++k) {
-        lengths_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
+      for (std::size_t k = 0; k < lengths_m.count && trial > 0; ++k) {
+        lengths_m.values_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
       }
       double fast_m = 0.0;
       RigidTransform fast_base;
@@ -331,8 +331,8 @@ TEST(OtherArms, LinkLengthCostEqualsTheGenericRefitCost) {
       EXPECT_LT((fast_base.rotation - generic_base.rotation).norm(), 1e-13);
       EXPECT_LT((fast_base.translation_m - generic_base.translation_m).norm(), 1e-12);
     }
-    LinkLengths wrong(static_cast<Eigen::Index>(cost.dimension() + 1));
-    wrong.setZero();
+    LinkLengths wrong;
+    wrong.count = cost.dimension() + 1;
     double mae_m = 0.0;
     EXPECT_EQ(cost.evaluate(wrong, &mae_m, nullptr), Status::invalid_argument);
   }

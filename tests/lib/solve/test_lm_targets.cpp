@@ -271,7 +271,7 @@ TEST(SeveralTargets, LinkLengthCostUsesEachSamplesToolPoint) {
   Random random(32);
   for (int trial = 0; trial < 20; ++trial) {
     LinkLengths lengths_m = link_lengths(trial == 0 ? truth : start, link_length_set(start));
-    for (Eigen::Index k = 0; k < lengths_m.size() && trial > 1; ++k) lengths_m(k) += random.uniform(-2e-3, 2e-3);
+    for (std::size_t k = 0; k < lengths_m.count && trial > 1; ++k) lengths_m.values_m(k) += random.uniform(-2e-3, 2e-3);
     double fast_m = 0.0;
     RigidTransform fast_base;
     EXPECT_NO_HEAP(status = cost.evaluate(lengths_m, &fast_m, &fast_base));
