@@ -93,16 +93,6 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
             cli::kExitBadInput);
 }
 
-/// A modified-DH tool point from the definition (Rx Tx Rz Tz per row) [m].
-Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kJointCount], const Vec3& tool_m, const JointVector& q) {
-  RigidTransform t;
-  for (int j = 0; j < kJointCount; ++j) {
-    t = t.then_after(RigidTransform{rotation_x(rows[j].alpha_prev_rad), Vec3(rows[j].a_prev_m, 0.0, 0.0)});
-    t = t.then_after(RigidTransform{rotation_z(q(j) + rows[j].theta_offset_rad), Vec3(0.0, 0.0, rows[j].d_m)});
-  }
-  return t.apply(tool_m);
-}
-
 // predict on a modified-DH result with a base offset (alpha_0, a_0): --frame base gives the
 // points in the file's own base frame, --frame tracker its base_to_tracker times those.
 TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
@@ -141,7 +131,7 @@ TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
       double x = 0, y = 0, z = 0;
       ASSERT_EQ(std::sscanf(text.c_str() + at, "%lf,%lf,%lf", &x, &y, &z), 3);
       at = text.find('\n', at) + 1;
-      const Vec3 in_base = modified_chain_point(rows, tool_m, q);
+      const Vec3 in_base = test::modified_chain_point(rows, tool_m, q);
       const Vec3 expected = std::string(frame) == "base" ? in_base : file_base_to_tracker.apply(in_base);
       EXPECT_LE((Vec3(x, y, z) - expected).norm(), 1e-12) << frame;
     }
