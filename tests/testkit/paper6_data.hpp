@@ -49,7 +49,7 @@ inline Paper6Cell paper6_cell(Random* random, Paper6Truth kind) {
     cell.truth = perturbed_model(cell.nominal, random, 5e-5, 5e-5);
   } else {
     LinkLengths lengths_m = link_lengths(cell.nominal);
-    for (std::size_t k = 0; k < lengths_m.count; ++k) lengths_m.values_m(k) += 3e-4 * random->normal();
+    for (std::size_t k = 0; k < lengths_m.count; ++k) lengths_m.data()[k] += 3e-4 * random->normal();
     cell.truth = with_link_lengths(cell.nominal, link_length_set(cell.nominal), lengths_m.data());
   }
   cell.base_to_tracker = example_base_to_tracker();
