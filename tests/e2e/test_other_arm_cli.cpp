@@ -110,16 +110,10 @@ TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
   file.base_to_tracker = file_base_to_tracker.then_after(file.modified_base.transform());
   const std::string result = dir.write("kr6.json", textio::format_calibration_json(file));
   Random random(4);
-  std::string joints = "q1,q2,q3,q4,q5,q6\n";
   std::vector<JointVector> poses;
-  char buf[256];
-  for (int i = 0; i < 20; ++i) {
-    poses.push_back(test::other_arm_joints(&random));
-    const JointVector& q = poses.back();
-    std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", q(0), q(1), q(2), q(3), q(4), q(5));
-    joints += buf;
-  }
-  const std::string joints_csv = dir.write("joints.csv", joints);
+  for (int i = 0; i < 20; ++i) poses.push_back(test::other_arm_joints(&random));
+  const std::string joints_csv =
+      dir.write("joints.csv", textio::format_joints_csv(Span<const JointVector>(poses.data(), poses.size())));
   for (const char* frame : {"base", "tracker"}) {
     const std::string out = dir.path() + "/" + frame + ".csv";
     ASSERT_EQ(run(cli::predict_main, {"--calibration", result, "--joints", joints_csv, "--frame", frame, "--out", out}),
