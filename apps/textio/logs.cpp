@@ -156,6 +156,28 @@ bool robot_layout(DelimitedReader& r, LogFormat* format, RobotLayout* layout) {
   return r.fail("not a robot joint log: expected " + std::string(kRobotFormats) + "; " + found(r));
 }
 
+/// Appends a row's record numbered in reading order, or counts it once more at a time
+/// already read (repeated_time) and drops it.
+template <typename Log, typename Record>
+void keep_record(Record record, bool repeated, Log* log) {
+  if (repeated) {
+    ++log->counters.repeated_time;
+    return;
+  }
+  record.sequence = static_cast<std::uint16_t>(log->records.size());
+  log->records.push_back(record);
+}
+
+/// After the last row: the record count, the bytes read, the reader's error, or "no data
+/// rows" for a log without any.
+template <typename Log>
+void finish_rows(DelimitedReader& r, Log* log) {
+  log->counters.records = log->records.size();
+  log->bytes_read = r.bytes_read();
+  log->error = r.error();
+  if (log->error.empty() && log->counters.rows == 0) log->error = r.name() + ": no data rows";
+}
+
 /// Reads the rows of an opened robot log.
 RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
   RobotLog log;
@@ -193,17 +215,9 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
       good = good && r.check_joint(j + 1, static_cast<std::size_t>(column), record.q_rad[j]);
     }
     if (!good) break;
-    if (repeated) {
-      ++log.counters.repeated_time;
-      continue;
-    }
-    record.sequence = static_cast<std::uint16_t>(log.records.size());
-    log.records.push_back(record);
+    keep_record(record, repeated, &log);
   }
-  log.counters.records = log.records.size();
-  log.bytes_read = r.bytes_read();
-  log.error = r.error();
-  if (log.error.empty() && log.counters.rows == 0) log.error = r.name() + ": no data rows";
+  finish_rows(r, &log);
   if (log.error.empty() && log.records.empty() && log.counters.missing_joints > 0) {
     log.error = missing_joints_message(r.name(), options.joint_names, first_names);
   }
@@ -279,18 +293,10 @@ TrackerLog read_tracker_rows(DelimitedReader& r, const InputUnits& units) {
     bool repeated = false;
     good = layout.time.read(r, &record.timestamp_us, &repeated) && tracker_point(r, layout, &record);
     if (!good) break;
-    if (repeated) {
-      ++log.counters.repeated_time;
-      continue;
-    }
-    log.counters.not_valid += record.is_valid() ? 0u : 1u;
-    record.sequence = static_cast<std::uint16_t>(log.records.size());
-    log.records.push_back(record);
+    if (!repeated) log.counters.not_valid += record.is_valid() ? 0u : 1u;
+    keep_record(record, repeated, &log);
   }
-  log.counters.records = log.records.size();
-  log.bytes_read = r.bytes_read();
-  log.error = r.error();
-  if (log.error.empty() && log.counters.rows == 0) log.error = r.name() + ": no data rows";
+  finish_rows(r, &log);
   log.ok = log.error.empty();
   return log;
 }

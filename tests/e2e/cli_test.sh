@@ -3,57 +3,11 @@
 # non-zero documented exit code, no crash and no output file; good inputs work end to end.
 #   cli_test.sh <hivecal binary> [emulator words...]
 set -u
-bin=$1
-shift
-run=("$@" "$bin")
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-passed=0
-failed=0
-
-# expect CODE SUBSTRING -- ARGS...: runs hivecal ARGS, checks the exit code and stderr.
-expect() {
-  local code=$1 pattern=$2
-  shift 3
-  local err
-  err=$("${run[@]}" "$@" 2>&1 >/dev/null)
-  local got=$?
-  if [ "$got" -eq "$code" ] && grep -qF -- "$pattern" <<<"$err"; then
-    passed=$((passed + 1))
-  else
-    failed=$((failed + 1))
-    echo "FAIL: hivecal $* -> exit $got (want $code), stderr: $err (want: $pattern)"
-  fi
-}
-
-# no_file PATH: the output must not exist after a failed run.
-no_file() {
-  if [ -e "$1" ] || compgen -G "$1.tmp.*" >/dev/null; then
-    failed=$((failed + 1))
-    echo "FAIL: partial output left at $1"
-  else
-    passed=$((passed + 1))
-  fi
-}
+source "$(dirname "$0")/cli_lib.sh" "$@"
 
 printf 'q1,q2,q3,q4,q5,q6\n0,-1.5707963267948966,1.5707963267948966,-1.5707963267948966,-1.5707963267948966,0\n' >"$work/joints.csv"
-cat >"$work/result.json" <<'JSON'
-{
-  "format": "robot-calibration/1",
-  "robot": "ur5",
-  "convention": "standard-dh",
-  "dh": [
-    {"theta_offset": 0.0, "d": 0.089159, "a": 0.0, "alpha": 1.5707963267948966},
-    {"theta_offset": 0.0, "d": 0.0, "a": -0.425, "alpha": 0.0},
-    {"theta_offset": 0.0, "d": 0.0, "a": -0.39225, "alpha": 0.0},
-    {"theta_offset": 0.0, "d": 0.10915, "a": 0.0, "alpha": 1.5707963267948966},
-    {"theta_offset": 0.0, "d": 0.09465, "a": 0.0, "alpha": -1.5707963267948966},
-    {"theta_offset": 0.0, "d": 0.0823, "a": 0.0, "alpha": 0.0}
-  ],
-  "tool": [0.0, 0.0, 0.0],
-  "base_to_tracker": [[1, 0, 0, 1], [0, 1, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]]
-}
-JSON
+ur_result_json ur5 0.089159 -0.425 -0.39225 0.10915 0.09465 0.0823 "0.0, 0.0, 0.0" \
+  "[[1, 0, 0, 1], [0, 1, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]]" >"$work/result.json"
 
 # --- usage errors (exit 2)
 expect 2 "unknown command 'frobnicate'" -- frobnicate
@@ -112,17 +66,16 @@ no_file "$work/r4.json"
 # --- a good prediction: UR5 at the zero-like pose through a pure translation
 if "${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/p.csv" &&
    [ "$(head -1 "$work/p.csv")" = "x,y,z" ] && [ "$(wc -l <"$work/p.csv")" -eq 2 ]; then
-  passed=$((passed + 1))
+  pass
 else
-  failed=$((failed + 1))
-  echo "FAIL: predict on good input"
+  fail "predict on good input"
 fi
 # --- end to end: simulated captures and CSV logs -> calibrate -> result.json -> predict
 sim="$work/sim/session"  # a folder that does not exist yet: simulate creates it
 if "${run[@]}" simulate --out-dir "$sim" --waypoints 12 --duration-s 150 --seed 5 >/dev/null; then
-  passed=$((passed + 1))
+  pass
 else
-  failed=$((failed + 1)); echo "FAIL: simulate --out-dir (new folder)"
+  fail "simulate --out-dir (new folder)"
 fi
 calibrated() {  # calibrated NAME ROBOT TRACKER: result JSON (no run times in it: the same bytes every run)
   "${run[@]}" calibrate --robot "$2" --tracker "$3" --out "$work/$1.json" >"$work/$1.out" 2>&1
@@ -130,26 +83,26 @@ calibrated() {  # calibrated NAME ROBOT TRACKER: result JSON (no run times in it
 if calibrated cap "$sim/robot.cap" "$sim/tracker.cap" && calibrated csv "$sim/robot_joints.csv" "$sim/tracker.csv" &&
    calibrated mixed "$sim/robot_joints.csv" "$sim/tracker.cap" && grep -q "(hivecal robot log: " "$work/csv.out" &&
    cmp -s "$work/cap.json" "$work/csv.json" && cmp -s "$work/cap.json" "$work/mixed.json"; then
-  passed=$((passed + 1))
+  pass
 else
-  failed=$((failed + 1)); echo "FAIL: captures, CSV logs and a mix must give the same calibration"
+  fail "captures, CSV logs and a mix must give the same calibration"
   cat "$work/csv.out" "$work/mixed.out"
 fi
 # The same command twice writes the same bytes (result files hold no wall-clock times).
 if calibrated cap_again "$sim/robot.cap" "$sim/tracker.cap" && cmp -s "$work/cap.json" "$work/cap_again.json" &&
    ! grep -q '"seconds"' "$work/cap.json"; then
-  passed=$((passed + 1))
+  pass
 else
-  failed=$((failed + 1)); echo "FAIL: two identical calibrate runs must write byte-identical result files"
+  fail "two identical calibrate runs must write byte-identical result files"
 fi
 # And the same bytes on every target (x86-64, aarch64 and armhf run this script): the digest of
 # the result of this simulated session (simulate --seed 5 --waypoints 12 --duration-s 150).
 # Update it only for an intended change of the computation or the format.
 result_sha256=92b5c58b29a92e8a08e252c45b11f847ec16b49a54551823daba7d94f0f0e02f
 if [ "$(sha256sum <"$work/cap.json" | cut -d' ' -f1)" = "$result_sha256" ]; then
-  passed=$((passed + 1))
+  pass
 else
-  failed=$((failed + 1)); echo "FAIL: result.json differs from the committed digest: $(sha256sum <"$work/cap.json")"
+  fail "result.json differs from the committed digest: $(sha256sum <"$work/cap.json")"
 fi
 # `report` redraws the page from a result; a result without the report key, or with a damaged
 # one, is bad input naming the key.
@@ -160,19 +113,19 @@ expect 3 'no "report" key' -- report --calibration "$work/no_report.json" --out 
 sed 's/"q_rad"/"q_deg"/' "$work/cap.json" >"$work/bad_report.json"
 expect 3 '"report"."samples" is malformed' -- report --calibration "$work/bad_report.json" --out "$work/redrawn"
 if "${run[@]}" report --calibration "$work/cap.json" --out "$work/redrawn" >/dev/null &&
-   grep -q "<svg" "$work/redrawn/index.html"; then passed=$((passed + 1)); else
-  failed=$((failed + 1)); echo "FAIL: report --calibration of a calibrate result"; fi
+   grep -q "<svg" "$work/redrawn/index.html"; then pass; else
+  fail "report --calibration of a calibrate result"; fi
 # Predict the simulator's noise-free static points from their joints (truth_samples.csv:
 # waypoint,t_tracker,t_robot,q1..q6,x,y,z): the calibration must be far better than nominal.
 { echo "q1,q2,q3,q4,q5,q6"; tail -n +2 "$sim/truth_samples.csv" | cut -d, -f4-9; } >"$work/truth_joints.csv"
 if "${run[@]}" predict --calibration "$work/cap.json" --joints "$work/truth_joints.csv" --out "$work/pred.csv"; then
   mean_um=$(paste -d, <(tail -n +2 "$sim/truth_samples.csv" | cut -d, -f10-12) <(tail -n +2 "$work/pred.csv") |
     awk -F, '{ d = sqrt(($1-$4)^2 + ($2-$5)^2 + ($3-$6)^2); s += d; n++ } END { if (n == 0) print 1e9; else printf "%.1f", 1e6 * s / n }')
-  if awk -v m="$mean_um" 'BEGIN { exit !(m < 60) }'; then passed=$((passed + 1)); else
-    failed=$((failed + 1)); echo "FAIL: predict vs truth: mean error $mean_um um (want < 60 um)"; fi
+  if awk -v m="$mean_um" 'BEGIN { exit !(m < 60) }'; then pass; else
+    fail "predict vs truth: mean error $mean_um um (want < 60 um)"; fi
   echo "predict vs noise-free truth: mean error $mean_um um"
 else
-  failed=$((failed + 1)); echo "FAIL: predict on the calibration of the captures"
+  fail "predict on the calibration of the captures"
 fi
 # A small paired-sample set (one noise-free sample per waypoint) with a 0.6 m blunder on file
 # line 5: set aside and named by file and line; --split 1 trains on all; --cv writes its folds.
@@ -182,17 +135,17 @@ if "${run[@]}" calibrate --samples "$work/blunder.csv" --method lm --split 1 --c
      >"$work/small.out" 2>&1 && grep -q "set aside as a blunder: $work/blunder.csv:5, residual 6" "$work/small.out" &&
    grep -q "Cross-validation (3 folds over" "$work/small.out" && grep -q '"source": "'"$work"'/blunder.csv:5"' "$work/small.json" &&
    grep -q '"cross_validation"' "$work/small.json" && ! grep -q '"test_mae_m"' "$work/small.json"; then ok=1; else ok=0; fi
-if [ "$ok" = 1 ]; then passed=$((passed + 1)); else
-  failed=$((failed + 1)); echo "FAIL: blunder set aside by file:line, --split 1, --cv 3"; cat "$work/small.out"; fi
+if [ "$ok" = 1 ]; then pass; else
+  fail "blunder set aside by file:line, --split 1, --cv 3"; cat "$work/small.out"; fi
 # Kept, the blunder drags the fit: the plausibility check warns (exit 5), the result is written.
 "${run[@]}" calibrate --samples "$work/blunder.csv" --method lm --split 1 --keep-outliers --out "$work/kept.json" \
   >"$work/kept.out" 2>&1
 kept_rc=$?
 if [ "$kept_rc" = 5 ] && grep -q "warning: .* moved" "$work/kept.out" && ! grep -q "set aside" "$work/kept.out" &&
    grep -q '"outliers": \[\]' "$work/kept.json"; then
-  passed=$((passed + 1))
+  pass
 else
-  failed=$((failed + 1)); echo "FAIL: --keep-outliers"; cat "$work/kept.out"
+  fail "--keep-outliers"; cat "$work/kept.out"
 fi
 expect 2 "--cv must be 'loo' or a number of folds" -- calibrate --samples "$work/blunder.csv" --cv 1
 # A CSV log with a bad row is a clear error naming file and line, and no result.
@@ -216,9 +169,6 @@ expect 3 "other.csv:1: not a robot joint log: expected t,q1..q6" -- calibrate --
 no_file "$work/r9.json"
 expect 2 "--joint-names needs six comma-separated names" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b --out "$work/r9.json"
 
-# pass/fail helpers for checks that are not one command's exit code
-ok() { passed=$((passed + 1)); }
-ko() { failed=$((failed + 1)); echo "FAIL: $*"; }
 # --- units and plausibility (issue 11): the session in degrees and millimetres, no unit in the headers
 awk -F, 'NR == 1 { print; next } { printf "%s", $1; for (i = 2; i <= 7; i++) printf ",%.17g", $i * 57.29577951308232; print "" }' \
   "$sim/robot_joints.csv" >"$work/robot_deg.csv"
@@ -231,8 +181,8 @@ no_file "$work/u1.json"
 if "${run[@]}" calibrate --robot "$work/robot_deg.csv" --tracker "$work/tracker_mm.csv" --angle-unit deg --length-unit mm \
      --out "$work/u2.json" >/dev/null 2>&1 && [ -s "$work/u2.json" ] &&
    "${run[@]}" extract --robot "$work/robot_deg.csv" --tracker "$work/tracker_mm.csv" --angle-unit deg --length-unit mm \
-     --samples "$work/u_samples.csv" >/dev/null && [ "$(wc -l <"$work/u_samples.csv")" -gt 100 ]; then ok; else
-  ko "calibrate/extract with --angle-unit deg --length-unit mm"; fi
+     --samples "$work/u_samples.csv" >/dev/null && [ "$(wc -l <"$work/u_samples.csv")" -gt 100 ]; then pass; else
+  fail "calibrate/extract with --angle-unit deg --length-unit mm"; fi
 awk -F, 'NR == 1 { print "t [s],x [mm],y [mm],z [mm],status"; next } { print }' "$work/tracker_mm.csv" >"$work/tracker_mm_header.csv"
 expect 3 "column 'x' is in [mm] by its header, but --length-unit m was given" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/tracker_mm_header.csv" --length-unit m --out "$work/u3.json"
 expect 2 "--length-unit must be 'm' or 'mm', not 'cm'" -- calibrate --samples "$work/s.csv" --length-unit cm
@@ -240,15 +190,15 @@ expect 2 "--angle-unit must be 'rad' or 'deg'" -- predict --calibration "$work/r
 printf 'q1,q2,q3,q4,q5,q6\n0,-90,90,-90,-90,0\n' >"$work/joints_deg.csv"
 expect 3 "joints_deg.csv:2: joint q2 = -90 looks like degrees: use --angle-unit deg" -- predict --calibration "$work/result.json" --joints "$work/joints_deg.csv"
 if [ "$("${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints_deg.csv" --angle-unit deg)" = \
-     "$("${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv")" ]; then ok; else
-  ko "predict --angle-unit deg differs from the same pose in rad"; fi
+     "$("${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv")" ]; then pass; else
+  fail "predict --angle-unit deg differs from the same pose in rad"; fi
 # Predicted positions in millimetres on request (metres otherwise).
 "${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "$work/p_m.csv" &&
   "${run[@]}" predict --calibration "$work/result.json" --joints "$work/joints.csv" --output-length-unit mm --out "$work/p_mm.csv"
 if [ "$(head -1 "$work/p_mm.csv")" = "x [mm],y [mm],z [mm]" ] &&
    paste -d, <(tail -n +2 "$work/p_m.csv") <(tail -n +2 "$work/p_mm.csv") |
-     awk -F, '{ for (i = 1; i <= 3; i++) if ((d = $i * 1000 - $(i + 3)) > 1e-9 || d < -1e-9) bad = 1 } END { exit bad || NR != 1 }'; then ok; else
-  ko "predict --output-length-unit mm"; fi
+     awk -F, '{ for (i = 1; i <= 3; i++) if ((d = $i * 1000 - $(i + 3)) > 1e-9 || d < -1e-9) bad = 1 } END { exit bad || NR != 1 }'; then pass; else
+  fail "predict --output-length-unit mm"; fi
 expect 2 "--output-length-unit must be 'm' or 'mm', not 'km'" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --output-length-unit km
 printf '[mounting]\ndelta_theta = [0, 0, 0, 0, 0, 0]\ndelta_a = [0, 0.2, -0.1, 0, 0, 0]\ndelta_d = [0, 0, 0, 0, 0, 0]\ndelta_alpha = [0, 0, 0, 0, 0, 0]\n' >"$work/other.conf"
 expect 3 "other.conf: its deltas move the tool of the nominal ur5 by up to" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --ur-calibration "$work/other.conf" --out "$work/u4.json"
@@ -256,43 +206,43 @@ expect 3 "not a calibration of this robot model?" -- calibrate --robot "$sim/rob
 no_file "$work/u4.json"
 # A fit beyond the change bounds: warnings on stderr, the result written all the same, exit 5.
 expect 5 "warning: a3 moved" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --method lm --max-change-mm 0.001 --out "$work/u5.json"
-if [ -s "$work/u5.json" ] && grep -q '"warnings"' "$work/u5.json"; then ok; else ko "exit 5 without its result"; fi
+if [ -s "$work/u5.json" ] && grep -q '"warnings"' "$work/u5.json"; then pass; else fail "exit 5 without its result"; fi
 
 # --- hostile and careless use (issue 13): one check per case -----------------------------------
 good_predict=(predict --calibration "$work/result.json" --joints "$work/joints.csv")
 # --out /dev/null is refused (it is a device), and /dev/null stays a device (as root too).
 expect 4 "is a character device; refusing to replace it" -- "${good_predict[@]}" --out /dev/null
-if [ -c /dev/null ]; then ok; else ko "/dev/null is no longer a character device"; fi
+if [ -c /dev/null ]; then pass; else fail "/dev/null is no longer a character device"; fi
 # --out through a symlink: the target is replaced, the link is kept.
 echo old >"$work/target.csv"
 ln -s target.csv "$work/link.csv"
 if "${run[@]}" "${good_predict[@]}" --out "$work/link.csv" && [ -L "$work/link.csv" ] &&
-   [ "$(head -1 "$work/target.csv")" = "x,y,z" ]; then ok; else ko "--out through a symlink"; fi
+   [ "$(head -1 "$work/target.csv")" = "x,y,z" ]; then pass; else fail "--out through a symlink"; fi
 # --out onto a FIFO is refused at once (no blocking, no regular file put in its place).
 mkfifo "$work/fifo"
 err=$(timeout 10 "${run[@]}" "${good_predict[@]}" --out "$work/fifo" 2>&1); code=$?
-if [ "$code" -eq 4 ] && grep -q "is a FIFO" <<<"$err" && [ -p "$work/fifo" ]; then ok; else ko "FIFO: exit $code: $err"; fi
+if [ "$code" -eq 4 ] && grep -q "is a FIFO" <<<"$err" && [ -p "$work/fifo" ]; then pass; else fail "FIFO: exit $code: $err"; fi
 # The mode of an existing output is kept.
 echo old >"$work/mode.csv"; chmod 640 "$work/mode.csv"
-if "${run[@]}" "${good_predict[@]}" --out "$work/mode.csv" && [ "$(stat -c %a "$work/mode.csv")" = 640 ]; then ok; else
-  ko "mode not kept: $(stat -c %a "$work/mode.csv")"; fi
+if "${run[@]}" "${good_predict[@]}" --out "$work/mode.csv" && [ "$(stat -c %a "$work/mode.csv")" = 640 ]; then pass; else
+  fail "mode not kept: $(stat -c %a "$work/mode.csv")"; fi
 # An output that is an input of the run, or another output, is refused before anything is written.
 cp "$work/s.csv" "$work/s_copy.csv"
 expect 2 "is the same file as the input --samples" -- calibrate --samples "$work/s_copy.csv" --out "$work/s_copy.csv"
-if cmp -s "$work/s.csv" "$work/s_copy.csv"; then ok; else ko "--out == --samples changed the input"; fi
+if cmp -s "$work/s.csv" "$work/s_copy.csv"; then pass; else fail "--out == --samples changed the input"; fi
 expect 2 "is the same file as the input --joints" -- "${good_predict[@]}" --out "$work/./joints.csv"
 expect 2 "is the same file as the output --out" -- calibrate --samples "$work/s.csv" --out "$work/same.out" --ur-deltas "$work/same.out"
 no_file "$work/same.out"
 # stdout on a full device: a non-zero exit and a message, for the result and for printed tables.
 if [ -w /dev/full ]; then
   err=$("${run[@]}" "${good_predict[@]}" 2>&1 >/dev/full); code=$?
-  if [ "$code" -eq 4 ] && grep -q "stdout: write failed" <<<"$err"; then ok; else ko "predict > /dev/full: exit $code: $err"; fi
+  if [ "$code" -eq 4 ] && grep -q "stdout: write failed" <<<"$err"; then pass; else fail "predict > /dev/full: exit $code: $err"; fi
   err=$("${run[@]}" calibrate --help 2>&1 >/dev/full); code=$?
-  if [ "$code" -eq 4 ]; then ok; else ko "calibrate --help > /dev/full: exit $code"; fi
+  if [ "$code" -eq 4 ]; then pass; else fail "calibrate --help > /dev/full: exit $code"; fi
 fi
 # Inputs: only regular files (or '-'); /dev/zero is refused at once, not read forever.
 err=$(timeout 10 "${run[@]}" calibrate --robot /dev/zero --tracker "$sim/tracker.cap" --out "$work/z.json" 2>&1); code=$?
-if [ "$code" -eq 3 ] && grep -q "is a character device, not a regular file" <<<"$err"; then ok; else ko "--robot /dev/zero: exit $code: $err"; fi
+if [ "$code" -eq 3 ] && grep -q "is a character device, not a regular file" <<<"$err"; then pass; else fail "--robot /dev/zero: exit $code: $err"; fi
 no_file "$work/z.json"
 expect 3 "is a folder" -- "${good_predict[@]}" --joints "$work" --out "$work/d.csv"
 # A NUL byte in a CSV row is an error naming file:line (never a dropped or merged row).
@@ -302,12 +252,12 @@ no_file "$work/n.json"
 # A huge field is cut in messages; binary junk is refused by its byte, never echoed raw.
 { echo "q1,q2,q3,q4,q5,q6"; printf '0,0,0,0,0,%s\n' "$(head -c 50000 /dev/zero | tr '\0' 'a')"; } >"$work/huge.csv"
 err=$("${run[@]}" "${good_predict[@]/$work\/joints.csv/$work/huge.csv}" --out "$work/h.csv" 2>&1); code=$?
-if [ "$code" -eq 3 ] && [ "${#err}" -lt 600 ] && grep -q "\.\.\.\[50000 bytes\]" <<<"$err"; then ok; else
-  ko "huge field: exit $code, ${#err} bytes of message"; fi
+if [ "$code" -eq 3 ] && [ "${#err}" -lt 600 ] && grep -q "\.\.\.\[50000 bytes\]" <<<"$err"; then pass; else
+  fail "huge field: exit $code, ${#err} bytes of message"; fi
 { echo "q1,q2,q3,q4,q5,q6"; printf '0,0,0,0,0,\033[31m\001junk\n'; } >"$work/junk.csv"
 err=$("${run[@]}" "${good_predict[@]/$work\/joints.csv/$work/junk.csv}" --out "$work/j.csv" 2>&1); code=$?
-if [ "$code" -eq 3 ] && grep -qF 'junk.csv:2: binary byte 0x1b' <<<"$err" && ! grep -q $'\033' <<<"$err"; then ok; else
-  ko "binary junk not escaped: exit $code: $err"; fi
+if [ "$code" -eq 3 ] && grep -qF 'junk.csv:2: binary byte 0x1b' <<<"$err" && ! grep -q $'\033' <<<"$err"; then pass; else
+  fail "binary junk not escaped: exit $code: $err"; fi
 printf 'q1,q2,q3,q4,q5,q6\n%s\n' "$(head -c 100000 /dev/zero | tr '\0' '1')" >"$work/longline.csv"
 expect 3 "longline.csv:2: line longer than" -- "${good_predict[@]/$work\/joints.csv/$work/longline.csv}" --out "$work/l.csv"
 # A run that fails while writing the report leaves no result.json (all outputs or none).
@@ -318,7 +268,7 @@ no_file "$work/rep.json"
 printf 'precious' >"$work/old.cap"
 expect 4 "exists; refusing to overwrite a capture (--force replaces it)" -- record --robot-port "$work/no-such-port" --robot-out "$work/old.cap"
 expect 3 "no-such-port" -- record --robot-port "$work/no-such-port" --robot-out "$work/old.cap" --force
-if [ "$(cat "$work/old.cap")" = precious ]; then ok; else ko "record touched an existing capture"; fi
+if [ "$(cat "$work/old.cap")" = precious ]; then pass; else fail "record touched an existing capture"; fi
 expect 3 "no-such-port" -- record --robot-port "$work/no-such-port" --robot-out "$work/new.cap"
 no_file "$work/new.cap"
 expect 2 "is the same file as the output --robot-out" -- record --robot-port "$work/p1" --tracker-port "$work/p2" --robot-out "$work/both.cap" --tracker-out "$work/both.cap"
@@ -333,17 +283,16 @@ if command -v script >/dev/null; then
   script -qec "$tty_cmd --quiet" /dev/null >"$work/tty_quiet.out" 2>&1
   if grep -q "decode\] pass 2/2 (samples): 100 %" "$work/tty.out" && grep -q "\[LM\] iteration" "$work/tty.out" &&
      ! grep -q "\[decode\]\|\[LM\]" "$work/tty_quiet.out" "$work/cap.out"; then
-    passed=$((passed + 1))
+    pass
   else
-    failed=$((failed + 1)); echo "FAIL: progress on a terminal only"
+    fail "progress on a terminal only"
   fi
 fi
 
 # --- every command has --help
 for cmd in calibrate validate predict plan simulate record extract demo report; do
-  if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then passed=$((passed + 1)); else
-    failed=$((failed + 1)); echo "FAIL: $cmd --help"; fi
+  if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then pass; else
+    fail "$cmd --help"; fi
 done
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

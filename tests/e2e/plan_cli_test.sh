@@ -5,56 +5,43 @@
 # orientation gains.
 #   plan_cli_test.sh <hivecal binary> [emulator words...]
 set -u
-bin=$1
-shift
-run=("$@" "$bin")
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-passed=0
-failed=0
+source "$(dirname "$0")/cli_lib.sh" "$@"
 
-pass() { passed=$((passed + 1)); }
-fail() { failed=$((failed + 1)); echo "FAIL: $*"; }
-
-# expect CODE SUBSTRING -- ARGS...: runs hivecal plan ARGS, checks the exit code and stderr,
-# and that no output was left at $work/out.csv.
-expect() {
+# expect_plan CODE SUBSTRING -- ARGS...: expect for `hivecal plan ARGS`, and no output left
+# at $work/out.csv (removed if there is one, so the next check starts clean).
+expect_plan() {
   local code=$1 pattern=$2
   shift 3
-  local err got
-  err=$("${run[@]}" plan "$@" 2>&1 >/dev/null)
-  got=$?
-  if [ "$got" -eq "$code" ] && grep -qF -- "$pattern" <<<"$err"; then pass; else
-    fail "hivecal plan $* -> exit $got (want $code), stderr: $err (want: $pattern)"; fi
-  if [ -e "$work/out.csv" ] || compgen -G "$work/out.csv.tmp.*" >/dev/null; then
-    fail "output left after: hivecal plan $*"; rm -f "$work/out.csv"; fi
+  expect "$code" "$pattern" -- plan "$@"
+  no_file "$work/out.csv"
+  rm -f "$work/out.csv"
 }
 
 cell=(--robot-model ur5e --tracker-position 2,0.5,0.6 --tool 0,0,0.05 --candidates 256)
 out=(--out "$work/out.csv")
 
 # --- usage errors (exit 2)
-expect 2 "--count, --tracker-position and --out are required" -- --count 10
-expect 2 "--count must be in [1, 128]" -- "${cell[@]}" "${out[@]}" --count 0
-expect 2 "--count must be a whole number" -- "${cell[@]}" "${out[@]}" --count 2.5
-expect 2 "--dwell must be in [0.3" -- "${cell[@]}" "${out[@]}" --count 10 --dwell 0.1
-expect 2 "--objective must be d-optimal" -- "${cell[@]}" "${out[@]}" --count 10 --objective a-optimal
-expect 2 "--params must be 'full' or 'paper'" -- "${cell[@]}" "${out[@]}" --count 10 --params all
-expect 2 "unknown robot model 'ur7'" -- "${cell[@]}" "${out[@]}" --count 10 --robot-model ur7
-expect 2 "--tracker-position must be X,Y,Z" -- "${cell[@]}" "${out[@]}" --count 10 --tracker-position 1,2
-expect 2 "--acceptance-deg: not a number" -- "${cell[@]}" "${out[@]}" --count 10 --acceptance-deg wide
-expect 2 "--candidates must be at least --count" -- "${cell[@]}" "${out[@]}" --count 20 --candidates 10
+expect_plan 2 "--count, --tracker-position and --out are required" -- --count 10
+expect_plan 2 "--count must be in [1, 128]" -- "${cell[@]}" "${out[@]}" --count 0
+expect_plan 2 "--count must be a whole number" -- "${cell[@]}" "${out[@]}" --count 2.5
+expect_plan 2 "--dwell must be in [0.3" -- "${cell[@]}" "${out[@]}" --count 10 --dwell 0.1
+expect_plan 2 "--objective must be d-optimal" -- "${cell[@]}" "${out[@]}" --count 10 --objective a-optimal
+expect_plan 2 "--params must be 'full' or 'paper'" -- "${cell[@]}" "${out[@]}" --count 10 --params all
+expect_plan 2 "unknown robot model 'ur7'" -- "${cell[@]}" "${out[@]}" --count 10 --robot-model ur7
+expect_plan 2 "--tracker-position must be X,Y,Z" -- "${cell[@]}" "${out[@]}" --count 10 --tracker-position 1,2
+expect_plan 2 "--acceptance-deg: not a number" -- "${cell[@]}" "${out[@]}" --count 10 --acceptance-deg wide
+expect_plan 2 "--candidates must be at least --count" -- "${cell[@]}" "${out[@]}" --count 20 --candidates 10
 # --- bad inputs (exit 3)
-expect 3 "cannot open" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/missing.csv"
+expect_plan 3 "cannot open" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/missing.csv"
 printf 'min,max\n-1,1\n' >"$work/badlimits.csv"
-expect 3 "unexpected header" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/badlimits.csv"
+expect_plan 3 "unexpected header" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/badlimits.csv"
 printf 'lower,upper\n-1,1\n-1,1\n-1,1\n-1,1\n-1,1\n' >"$work/fivelimits.csv"
-expect 3 "expected six" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/fivelimits.csv"
+expect_plan 3 "expected six" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/fivelimits.csv"
 printf 'lower,upper\n-1,1\n-1,1\n1,-1\n-1,1\n-1,1\n-1,1\n' >"$work/swapped.csv"
-expect 3 "lower limit not below the upper one" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/swapped.csv"
+expect_plan 3 "lower limit not below the upper one" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/swapped.csv"
 # --- nothing meets the constraints (exit 1), an output that cannot be written (exit 4)
-expect 1 "too few poses meet the constraints" -- "${cell[@]}" "${out[@]}" --count 10 --floor-z 5
-expect 4 "does not exist" -- "${cell[@]}" --count 10 --out "$work/no/dir/p.csv"
+expect_plan 1 "too few poses meet the constraints" -- "${cell[@]}" "${out[@]}" --count 10 --floor-z 5
+expect_plan 4 "does not exist" -- "${cell[@]}" --count 10 --out "$work/no/dir/p.csv"
 
 # --- a good run: CSV + URScript, the same bytes for the same seed
 good=("${cell[@]}" --count 30 --seed 7 --urscript "$work/s.script")
@@ -68,23 +55,8 @@ if "${run[@]}" plan "${good[@]}" --out "$work/a.csv" >"$work/report.txt" 2>&1 &&
     fail "plan URScript: 30 movej + sleep(1) inside def ... end"; fi
   if grep -q "log det (D-criterion)" "$work/report.txt" && grep -q "predicted sigma at 10 um" "$work/report.txt" &&
      grep -q "^session: " "$work/report.txt"; then pass; else fail "plan report: $(cat "$work/report.txt")"; fi
-  cat >"$work/result.json" <<'JSON'
-{
-  "format": "robot-calibration/1",
-  "robot": "ur5e",
-  "convention": "standard-dh",
-  "dh": [
-    {"theta_offset": 0.0, "d": 0.1625, "a": 0.0, "alpha": 1.5707963267948966},
-    {"theta_offset": 0.0, "d": 0.0, "a": -0.425, "alpha": 0.0},
-    {"theta_offset": 0.0, "d": 0.0, "a": -0.3922, "alpha": 0.0},
-    {"theta_offset": 0.0, "d": 0.1333, "a": 0.0, "alpha": 1.5707963267948966},
-    {"theta_offset": 0.0, "d": 0.0997, "a": 0.0, "alpha": -1.5707963267948966},
-    {"theta_offset": 0.0, "d": 0.0996, "a": 0.0, "alpha": 0.0}
-  ],
-  "tool": [0.0, 0.0, 0.05],
-  "base_to_tracker": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
-}
-JSON
+  ur_result_json ur5e 0.1625 -0.425 -0.3922 0.1333 0.0997 0.0996 "0.0, 0.0, 0.05" \
+    "[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]" >"$work/result.json"
   # The CSV is the poses-to-predict format: every planned reflector above the 0.05 m floor.
   if "${run[@]}" predict --calibration "$work/result.json" --joints "$work/a.csv" --frame base --out "$work/p.csv" &&
      [ "$(awk -F, 'NR > 1 && $3 < 0.05' "$work/p.csv" | wc -l)" -eq 0 ] && [ "$(wc -l <"$work/p.csv")" -eq 31 ]; then pass; else
@@ -104,5 +76,4 @@ if "${run[@]}" plan "${cell[@]}" --count 30 --tool-down --out "$work/down.csv" >
 
 if "${run[@]}" plan --help | grep -q "usage: hivecal plan"; then pass; else fail "plan --help"; fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

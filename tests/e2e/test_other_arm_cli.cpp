@@ -93,16 +93,6 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
             cli::kExitBadInput);
 }
 
-/// A modified-DH tool point from the definition (Rx Tx Rz Tz per row) [m].
-Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kJointCount], const Vec3& tool_m, const JointVector& q) {
-  RigidTransform t;
-  for (int j = 0; j < kJointCount; ++j) {
-    t = t.then_after(RigidTransform{rotation_x(rows[j].alpha_prev_rad), Vec3(rows[j].a_prev_m, 0.0, 0.0)});
-    t = t.then_after(RigidTransform{rotation_z(q(j) + rows[j].theta_offset_rad), Vec3(0.0, 0.0, rows[j].d_m)});
-  }
-  return t.apply(tool_m);
-}
-
 // predict on a modified-DH result with a base offset (alpha_0, a_0): --frame base gives the
 // points in the file's own base frame, --frame tracker its base_to_tracker times those.
 TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
@@ -120,16 +110,10 @@ TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
   file.base_to_tracker = file_base_to_tracker.then_after(file.modified_base.transform());
   const std::string result = dir.write("kr6.json", textio::format_calibration_json(file));
   Random random(4);
-  std::string joints = "q1,q2,q3,q4,q5,q6\n";
   std::vector<JointVector> poses;
-  char buf[256];
-  for (int i = 0; i < 20; ++i) {
-    poses.push_back(test::other_arm_joints(&random));
-    const JointVector& q = poses.back();
-    std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", q(0), q(1), q(2), q(3), q(4), q(5));
-    joints += buf;
-  }
-  const std::string joints_csv = dir.write("joints.csv", joints);
+  for (int i = 0; i < 20; ++i) poses.push_back(test::other_arm_joints(&random));
+  const std::string joints_csv =
+      dir.write("joints.csv", textio::format_joints_csv(Span<const JointVector>(poses.data(), poses.size())));
   for (const char* frame : {"base", "tracker"}) {
     const std::string out = dir.path() + "/" + frame + ".csv";
     ASSERT_EQ(run(cli::predict_main, {"--calibration", result, "--joints", joints_csv, "--frame", frame, "--out", out}),
@@ -141,7 +125,7 @@ TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
       double x = 0, y = 0, z = 0;
       ASSERT_EQ(std::sscanf(text.c_str() + at, "%lf,%lf,%lf", &x, &y, &z), 3);
       at = text.find('\n', at) + 1;
-      const Vec3 in_base = modified_chain_point(rows, tool_m, q);
+      const Vec3 in_base = test::modified_chain_point(rows, tool_m, q);
       const Vec3 expected = std::string(frame) == "base" ? in_base : file_base_to_tracker.apply(in_base);
       EXPECT_LE((Vec3(x, y, z) - expected).norm(), 1e-12) << frame;
     }

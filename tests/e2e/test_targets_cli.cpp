@@ -95,16 +95,10 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
   ASSERT_TRUE(parsed.ok()) << parsed.message;
   EXPECT_EQ(file.target_count, 3);
 
-  std::string joints = "q1,q2,q3,q4,q5,q6\n";
   std::vector<JointVector> poses;
-  char buf[256];
-  for (int i = 0; i < 30; ++i) {
-    poses.push_back(test::random_joints(&random));
-    const JointVector& q = poses.back();
-    std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", q(0), q(1), q(2), q(3), q(4), q(5));
-    joints += buf;
-  }
-  const std::string joints_csv = dir.write("joints.csv", joints);
+  for (int i = 0; i < 30; ++i) poses.push_back(test::random_joints(&random));
+  const std::string joints_csv =
+      dir.write("joints.csv", textio::format_joints_csv(Span<const JointVector>(poses.data(), poses.size())));
   for (int target = 1; target <= 3; ++target) {
     const std::vector<Vec3> points = predict_target(dir, result, joints_csv, target);
     ASSERT_EQ(points.size(), poses.size());

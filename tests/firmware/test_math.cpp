@@ -2,7 +2,6 @@
 // rounded in practice) within the host suite's ulp bounds, special arguments, and the
 // documented random stream.
 #include <cstdint>
-#include <cstring>
 #include <limits>
 
 #include "harness.hpp"
@@ -13,17 +12,8 @@
 namespace hivecal {
 namespace {
 
-std::uint64_t bits_of(double x) {
-  std::uint64_t u = 0;
-  std::memcpy(&u, &x, sizeof u);
-  return u;
-}
-
-double from_bits(std::uint64_t u) {
-  double x = 0.0;
-  std::memcpy(&x, &u, sizeof x);
-  return x;
-}
+using math::bits_of;
+using math::from_bits;
 
 /// Distance in units in the last place (monotonic integer mapping of the doubles).
 std::uint64_t ulp_distance(double a, double b) {

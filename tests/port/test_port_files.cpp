@@ -19,10 +19,16 @@
 namespace hivecal::port {
 namespace {
 
-
 std::string read(const std::string& path) {
   std::string text;
   return read_whole_file(path, kMaxTextInputBytes, &text).ok() ? text : "<unreadable>";
+}
+
+/// The st_mode of `path` (lstat: a link's own when `own_link`), 0 if it cannot be read.
+mode_t mode_of(const std::string& path, bool own_link = false) {
+  struct stat info {};
+  const int read_status = own_link ? ::lstat(path.c_str(), &info) : ::stat(path.c_str(), &info);
+  return read_status == 0 ? info.st_mode : 0;
 }
 
 /// Writes `text` as the only output at `path`.
@@ -39,9 +45,7 @@ TEST(OutputFiles, DevNullIsRefusedAndStaysADevice) {
   const Error error = write_one("/dev/null", "x");
   EXPECT_EQ(error.fault, Fault::output);
   EXPECT_NE(error.message.find("character device"), std::string::npos) << error.message;
-  struct stat info {};
-  ASSERT_EQ(::stat("/dev/null", &info), 0);
-  EXPECT_TRUE(S_ISCHR(info.st_mode));
+  EXPECT_TRUE(S_ISCHR(mode_of("/dev/null")));
 }
 
 TEST(OutputFiles, SymlinkIsFollowedAndKept) {
@@ -50,9 +54,7 @@ TEST(OutputFiles, SymlinkIsFollowedAndKept) {
   const std::string link = dir.path() + "/link.json";
   ASSERT_EQ(::symlink("target.json", link.c_str()), 0);
   ASSERT_TRUE(write_one(link, "new").ok());
-  struct stat info {};
-  ASSERT_EQ(::lstat(link.c_str(), &info), 0);
-  EXPECT_TRUE(S_ISLNK(info.st_mode));
+  EXPECT_TRUE(S_ISLNK(mode_of(link, true)));
   EXPECT_EQ(read(target), "new");
 }
 
@@ -63,9 +65,7 @@ TEST(OutputFiles, FifoIsRefusedAtOnce) {
   const Error error = write_one(fifo, "x");
   EXPECT_EQ(error.fault, Fault::output);
   EXPECT_NE(error.message.find("FIFO"), std::string::npos) << error.message;
-  struct stat info {};
-  ASSERT_EQ(::stat(fifo.c_str(), &info), 0);
-  EXPECT_TRUE(S_ISFIFO(info.st_mode));
+  EXPECT_TRUE(S_ISFIFO(mode_of(fifo)));
 }
 
 TEST(OutputFiles, ModeOfAnExistingFileIsKept) {
@@ -73,9 +73,7 @@ TEST(OutputFiles, ModeOfAnExistingFileIsKept) {
   const std::string path = dir.write("out.csv", "old");
   ASSERT_EQ(::chmod(path.c_str(), 0640), 0);
   ASSERT_TRUE(write_one(path, "new").ok());
-  struct stat info {};
-  ASSERT_EQ(::stat(path.c_str(), &info), 0);
-  EXPECT_EQ(info.st_mode & 07777, 0640u);
+  EXPECT_EQ(mode_of(path) & 07777, 0640u);
   EXPECT_EQ(read(path), "new");
 }
 
@@ -107,24 +105,23 @@ TEST(OutputFiles, TwoOutputsOnOnePathAreRefused) {
 
 TEST(OutputFiles, NothingAppearsUnlessEverythingIsCommitted) {
   const test::TempDir dir("hivecal_port_files");
+  // A result file and a report folder, both staged; false if any step fails.
+  const auto stage_result_and_report = [&dir](OutputSet* outputs) {
+    std::size_t result = 0, report = 0;
+    return outputs->add_file(dir.path() + "/result.json", "--out", &result).ok() &&
+           outputs->add_folder(dir.path() + "/report/deep", "--report", &report).ok() &&
+           outputs->stage_text(result, "", "{}").ok() && outputs->stage_text(report, "index.html", "<html>").ok();
+  };
   {
     OutputSet outputs;
-    std::size_t result = 0, report = 0;
-    ASSERT_TRUE(outputs.add_file(dir.path() + "/result.json", "--out", &result).ok());
-    ASSERT_TRUE(outputs.add_folder(dir.path() + "/report/deep", "--report", &report).ok());
-    ASSERT_TRUE(outputs.stage_text(result, "", "{}").ok());
-    ASSERT_TRUE(outputs.stage_text(report, "index.html", "<html>").ok());
+    ASSERT_TRUE(stage_result_and_report(&outputs));
     // the run fails here: no commit
   }
   EXPECT_EQ(::access((dir.path() + "/result.json").c_str(), F_OK), -1);
   EXPECT_EQ(::access((dir.path() + "/report").c_str(), F_OK), -1);
   EXPECT_EQ(std::system(("test -z \"$(ls -A '" + dir.path() + "')\"").c_str()), 0) << "temporaries left";
   OutputSet outputs;
-  std::size_t result = 0, report = 0;
-  ASSERT_TRUE(outputs.add_file(dir.path() + "/result.json", "--out", &result).ok());
-  ASSERT_TRUE(outputs.add_folder(dir.path() + "/report/deep", "--report", &report).ok());
-  ASSERT_TRUE(outputs.stage_text(result, "", "{}").ok());
-  ASSERT_TRUE(outputs.stage_text(report, "index.html", "<html>").ok());
+  ASSERT_TRUE(stage_result_and_report(&outputs));
   ASSERT_TRUE(outputs.commit().ok());
   EXPECT_EQ(read(dir.path() + "/result.json"), "{}");
   EXPECT_EQ(read(dir.path() + "/report/deep/index.html"), "<html>");
@@ -139,9 +136,7 @@ TEST(OutputFiles, ATargetThatBecomesAFifoDuringTheRunIsNotReplaced) {
   ASSERT_TRUE(outputs.stage_text(id, "", "x").ok());
   ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);  // appears while the run computes
   EXPECT_EQ(outputs.commit().fault, Fault::output);
-  struct stat info {};
-  ASSERT_EQ(::stat(path.c_str(), &info), 0);
-  EXPECT_TRUE(S_ISFIFO(info.st_mode));
+  EXPECT_TRUE(S_ISFIFO(mode_of(path)));
 }
 
 TEST(OutputFiles, AFailedMovePutsBackWhatWasMovedBefore) {

@@ -5,10 +5,23 @@
 
 #include <Eigen/LU>
 
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "hivecal/solve/normal_equations.hpp"
 #include "testkit/test_data.hpp"
 
 namespace hivecal::test {
+
+/// What an LM test file keeps in static storage (too large for a test's stack): a training
+/// and a fresh set of up to `Capacity` samples, the solver's workspace and its result. Each
+/// file holds one in a function-local static; each test clears what it fills.
+template <std::size_t Capacity, typename Workspace = LmWorkspace>
+struct LmTestStorage {
+  Dataset<Capacity> train;  ///< the samples a calibration is fitted on
+  Dataset<Capacity> fresh;  ///< poses the calibration is judged on
+  Workspace workspace;      ///< the solver's memory
+  LmResult result;          ///< the last calibration
+};
 
 /// Three standard normal deviates, drawn x, y, z in this order (constructor arguments would
 /// be evaluated in an unspecified order, so the data would differ between compilers/targets).

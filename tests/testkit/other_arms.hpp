@@ -34,36 +34,35 @@ inline const char* other_arm_name(OtherArm arm) {
   return "?";
 }
 
+/// What differs between the arms here: all have joints 2-3 parallel and a spherical wrist.
+struct OtherArmDimensions {
+  double d1_m;        ///< shoulder height [m]
+  double a1_m;        ///< shoulder offset [m]
+  double a2_m;        ///< upper arm [m]
+  double a3_m;        ///< elbow offset [m]
+  double d4_m;        ///< forearm [m]
+  double d6_m;        ///< flange [m]
+  double theta2_rad;  ///< joint 2's zero offset [rad]
+  double theta3_rad;  ///< joint 3's zero offset [rad]
+  double theta6_rad;  ///< joint 6's zero offset [rad]
+};
+
 /// Nominal standard-DH table of an arm, tool point 100 mm out on the flange axis.
 inline RobotModel other_arm_model(OtherArm arm) {
   constexpr double h = math::kHalfPi;
+  constexpr OtherArmDimensions kArms[] = {
+      {0.290, 0.0, 0.270, 0.070, 0.302, 0.072, -h, 0.0, math::kPi},  // irb120
+      {0.400, 0.025, 0.455, 0.035, 0.420, 0.080, 0.0, -h, 0.0},      // kr6_r900
+      {0.330, 0.050, 0.330, 0.035, 0.335, 0.080, -h, 0.0, 0.0},      // lrmate200id
+  };
+  const OtherArmDimensions& a = kArms[static_cast<int>(arm)];
   RobotModel m;
-  switch (arm) {
-    case OtherArm::irb120:
-      m.joints[0] = DhJoint{0.0, 0.290, 0.0, -h};
-      m.joints[1] = DhJoint{-h, 0.0, 0.270, 0.0};
-      m.joints[2] = DhJoint{0.0, 0.0, 0.070, -h};
-      m.joints[3] = DhJoint{0.0, 0.302, 0.0, h};
-      m.joints[4] = DhJoint{0.0, 0.0, 0.0, -h};
-      m.joints[5] = DhJoint{math::kPi, 0.072, 0.0, 0.0};
-      break;
-    case OtherArm::kr6_r900:
-      m.joints[0] = DhJoint{0.0, 0.400, 0.025, -h};
-      m.joints[1] = DhJoint{0.0, 0.0, 0.455, 0.0};
-      m.joints[2] = DhJoint{-h, 0.0, 0.035, -h};
-      m.joints[3] = DhJoint{0.0, 0.420, 0.0, h};
-      m.joints[4] = DhJoint{0.0, 0.0, 0.0, -h};
-      m.joints[5] = DhJoint{0.0, 0.080, 0.0, 0.0};
-      break;
-    case OtherArm::lrmate200id:
-      m.joints[0] = DhJoint{0.0, 0.330, 0.050, -h};
-      m.joints[1] = DhJoint{-h, 0.0, 0.330, 0.0};
-      m.joints[2] = DhJoint{0.0, 0.0, 0.035, -h};
-      m.joints[3] = DhJoint{0.0, 0.335, 0.0, h};
-      m.joints[4] = DhJoint{0.0, 0.0, 0.0, -h};
-      m.joints[5] = DhJoint{0.0, 0.080, 0.0, 0.0};
-      break;
-  }
+  m.joints[0] = DhJoint{0.0, a.d1_m, a.a1_m, -h};
+  m.joints[1] = DhJoint{a.theta2_rad, 0.0, a.a2_m, 0.0};
+  m.joints[2] = DhJoint{a.theta3_rad, 0.0, a.a3_m, -h};
+  m.joints[3] = DhJoint{0.0, a.d4_m, 0.0, h};
+  m.joints[4] = DhJoint{0.0, 0.0, 0.0, -h};
+  m.joints[5] = DhJoint{a.theta6_rad, a.d6_m, 0.0, 0.0};
   m.tool_m = Vec3(0.0, 0.0, 0.100);
   return m;
 }
@@ -73,6 +72,17 @@ inline RobotModel other_arm_model(OtherArm arm) {
 inline void other_arm_modified(OtherArm arm, const ModifiedDhBase& base, ModifiedDhRow (&rows)[kJointCount],
                                Vec3* tool_m) {
   modified_dh_from_model(other_arm_model(arm), base, rows, tool_m);
+}
+
+/// A modified-DH tool point from the definition (Rx(alpha_prev) Tx(a_prev) Rz(theta) Tz(d) per
+/// row), independent of dh_convention.hpp [m].
+inline Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kJointCount], const Vec3& tool_m, const JointVector& q_rad) {
+  RigidTransform t;
+  for (int j = 0; j < kJointCount; ++j) {
+    t = t.then_after(RigidTransform{rotation_x(rows[j].alpha_prev_rad), Vec3(rows[j].a_prev_m, 0.0, 0.0)});
+    t = t.then_after(RigidTransform{rotation_z(q_rad(j) + rows[j].theta_offset_rad), Vec3(0.0, 0.0, rows[j].d_m)});
+  }
+  return t.apply(tool_m);
 }
 
 /// `nominal` perturbed by length_sigma_m / angle_sigma_rad (Gaussian) with every twist that

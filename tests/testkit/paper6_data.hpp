@@ -49,7 +49,7 @@ inline Paper6Cell paper6_cell(Random* random, Paper6Truth kind) {
     cell.truth = perturbed_model(cell.nominal, random, 5e-5, 5e-5);
   } else {
     LinkLengths lengths_m = link_lengths(cell.nominal);
-    for (int k = 0; k < lengths_m.size(); ++k) lengths_m(k) += 3e-4 * random->normal();
+    for (std::size_t k = 0; k < lengths_m.count; ++k) lengths_m.data()[k] += 3e-4 * random->normal();
     cell.truth = with_link_lengths(cell.nominal, link_length_set(cell.nominal), lengths_m.data());
   }
   cell.base_to_tracker = example_base_to_tracker();
@@ -70,11 +70,13 @@ inline void fill_tool_down(const Paper6Cell& cell, std::size_t count, double noi
 /// Least-squares link lengths (link_length_set(nominal): for UR the paper's six), independent
 /// of Paper6Cost: alternate a Kabsch base fit with the exact linear least-squares step in the
 /// lengths (the tool point is affine in them).
+/// Fixed-size storage for every possible length; the unused rows and columns stay zero and
+/// the step is solved on the first K only.
 inline LinkLengths least_squares_lengths(const RobotModel& nominal, Span<const Sample> samples,
                                          int max_rounds = 500) {
   constexpr int kMax = static_cast<int>(kMaxLinkLengths);
-  using MatK = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMax, kMax>;
-  using Mat3K = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMax>;
+  using MatK = Eigen::Matrix<double, kMax, kMax>;
+  using Mat3K = Eigen::Matrix<double, 3, kMax>;
   const LinkLengthSet set = link_length_set(nominal);
   const auto count = static_cast<Eigen::Index>(set.count);
   LinkLengths lengths_m = link_lengths(nominal, set);
@@ -82,29 +84,30 @@ inline LinkLengths least_squares_lengths(const RobotModel& nominal, Span<const S
     const RobotModel model = with_link_lengths(nominal, set, lengths_m.data());
     RigidTransform base;
     if (fit_base_to_tracker(model, samples, &base) != Status::ok) break;
-    MatK normal = MatK::Zero(count, count);
-    LinkLengths rhs = LinkLengths::Zero(count);
+    MatK normal = MatK::Zero();
+    LinkLengths::Values rhs = LinkLengths::Values::Zero();
     for (const Sample& sample : samples) {
       ToolPointJacobian jacobian;
       const Vec3 point_m = tool_point_jacobian(model, sample.q_rad, &jacobian);
-      Mat3K columns(3, count);
+      Mat3K columns = Mat3K::Zero();
       for (Eigen::Index k = 0; k < count; ++k) columns.col(k) = jacobian.col(set.param_index[k]);
       const Vec3 residual_base_m = base.rotation.transpose() * (base.apply(point_m) - sample.point_m);
       normal += columns.transpose() * columns;
       rhs -= columns.transpose() * residual_base_m;
     }
-    const LinkLengths step_m = normal.ldlt().solve(rhs);
-    lengths_m += step_m;
+    LinkLengths::Values step_m = LinkLengths::Values::Zero();
+    step_m.head(count) = normal.topLeftCorner(count, count).ldlt().solve(rhs.head(count));
+    lengths_m.values_m += step_m;
     if (step_m.norm() < 1e-14) break;
   }
   return lengths_m;
 }
 
 /// MAE [m] of the six lengths through the generic cost (refit base, mean |r|).
-inline double generic_mae(const RobotModel& nominal, const LinkLengths& lengths_m, Span<const Sample> samples) {
+inline double generic_mae(const RobotModel& nominal, const double* lengths_m, Span<const Sample> samples) {
   RigidTransform base;
   double mae_m = -1.0;
-  (void)evaluate_cost(with_link_lengths(nominal, link_length_set(nominal), lengths_m.data()), samples, CostKind::mean_abs_3d,
+  (void)evaluate_cost(with_link_lengths(nominal, link_length_set(nominal), lengths_m), samples, CostKind::mean_abs_3d,
                       BaseFrame::refit, &base, &mae_m);
   return mae_m;
 }

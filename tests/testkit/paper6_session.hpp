@@ -31,8 +31,8 @@ struct Paper6Session {
     if (dataset.size() != poses || dataset.split(kDefaultTrainFraction, seed) != Status::ok) return false;
     if (cost.build(cell.nominal, dataset.train()) != Status::ok) return false;
     if (link_length_box(cell.nominal, kPaper6DefaultHalfWidth_m, &box) != Status::ok) return false;
-    nominal_mae_m = generic_mae(cell.nominal, link_lengths(cell.nominal), dataset.train());
-    reference_mae_m = generic_mae(cell.nominal, least_squares_lengths(cell.nominal, dataset.train()), dataset.train());
+    nominal_mae_m = generic_mae(cell.nominal, link_lengths(cell.nominal).data(), dataset.train());
+    reference_mae_m = generic_mae(cell.nominal, least_squares_lengths(cell.nominal, dataset.train()).data(), dataset.train());
     return nominal_mae_m > 0.0 && reference_mae_m > 0.0;
   }
 

@@ -1,12 +1,17 @@
-// Setup shared by the population-solver tests (ABC and GSA): one static solver per type and
-// options of a given population size, iteration count and seed.
+// Setup and checks shared by the population-solver tests (ABC and GSA, GoogleTest): one
+// static solver per type, options of a given population size, iteration count and seed, a
+// progress observer that records, and the checks both solvers must pass alike.
 #pragma once
+
+#include <gtest/gtest.h>
 
 #include <cstddef>
 #include <cstdint>
 
+#include "hivecal/core/math.hpp"
 #include "hivecal/solve/abc.hpp"
 #include "hivecal/solve/gsa.hpp"
+#include "testkit/test_objectives.hpp"
 
 namespace hivecal::test {
 
@@ -36,6 +41,30 @@ inline AbcOptions abc_options(std::size_t food_sources, std::size_t cycles, std:
 /// GSA options: N agents, t_max iterations, seed; the rest default.
 inline GsaOptions gsa_options(std::size_t agents, std::size_t iterations, std::uint64_t seed) {
   return sized_options<GsaOptions, &GsaOptions::agents, &GsaOptions::iterations>(agents, iterations, seed);
+}
+
+/// Records the progress reports: how many, the last one, and whether they came numbered 1, 2, ...
+struct RecordingObserver final : ProgressObserver {
+  std::size_t calls = 0;   ///< reports so far
+  SolverProgress last;     ///< the latest report
+  bool increasing = true;  ///< every report's iteration was calls + 1
+  void on_iteration(const SolverProgress& progress) override {
+    increasing = increasing && progress.iteration == calls + 1;
+    ++calls;
+    last = progress;
+  }
+};
+
+/// On an objective that is NaN almost everywhere (test::MostlyNan, 2-D box +/-3) the solver
+/// still ends on a finite cost below `max_cost`: NaN never wins a comparison.
+template <typename Solver, typename Options>
+void expect_nan_costs_ignored(Solver& solver, const Options& options, double max_cost) {
+  MostlyNan mostly_nan(2);
+  const CubeBox box(2, 3.0);
+  SolverResult result;
+  ASSERT_EQ(solver.minimize(mostly_nan, box.view(), options, &result), Status::ok);
+  EXPECT_TRUE(math::is_finite(result.best_cost));
+  EXPECT_LT(result.best_cost, max_cost);
 }
 
 }  // namespace hivecal::test

@@ -1,6 +1,6 @@
 #include "hivecal/core/digest.hpp"
 
-#include <cstring>
+#include "hivecal/core/math.hpp"
 
 namespace hivecal {
 
@@ -18,10 +18,6 @@ void Digest::add_u64(std::uint64_t value) {
   add_bytes(bytes, sizeof bytes);
 }
 
-void Digest::add(double value) {
-  std::uint64_t bits = 0;
-  std::memcpy(&bits, &value, sizeof bits);
-  add_u64(bits);
-}
+void Digest::add(double value) { add_u64(math::bits_of(value)); }
 
 }  // namespace hivecal

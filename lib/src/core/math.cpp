@@ -5,22 +5,9 @@
 #include "hivecal/core/math.hpp"
 
 #include <cstdint>
-#include <cstring>
 
 namespace hivecal::math {
 namespace {
-
-std::uint64_t bits_of(double x) {
-  std::uint64_t u = 0;
-  std::memcpy(&u, &x, sizeof u);
-  return u;
-}
-
-double from_bits(std::uint64_t u) {
-  double x = 0.0;
-  std::memcpy(&x, &u, sizeof x);
-  return x;
-}
 
 /// Biased exponent field of x (0..2047).
 int exponent_field(double x) { return static_cast<int>((bits_of(x) >> 52) & 0x7ffU); }

@@ -72,8 +72,9 @@ LinkLengthSet link_length_set(const RobotModel& nominal) {
 
 LinkLengths link_lengths(const RobotModel& model, const LinkLengthSet& set) {
   const ModelParams params = to_params(model);
-  LinkLengths lengths_m(static_cast<Eigen::Index>(set.count));
-  for (std::size_t k = 0; k < set.count; ++k) lengths_m(static_cast<Eigen::Index>(k)) = params(set.param_index[k]);
+  LinkLengths lengths_m;
+  lengths_m.count = set.count;
+  for (std::size_t k = 0; k < set.count; ++k) lengths_m.data()[k] = params(set.param_index[k]);
   return lengths_m;
 }
 
@@ -92,11 +93,11 @@ Status link_length_box(const RobotModel& nominal, double half_width_m, LinkLengt
   const LinkLengthSet set = link_length_set(nominal);
   if (set.count == 0) return Status::invalid_argument;
   const LinkLengths lengths_m = link_lengths(nominal, set);
-  if (!all_finite(lengths_m)) return Status::non_finite_input;
+  if (!all_finite(lengths_m.values_m)) return Status::non_finite_input;
   box->count = set.count;
   for (std::size_t k = 0; k < set.count; ++k) {
-    box->lower_m[k] = lengths_m(static_cast<Eigen::Index>(k)) - half_width_m;
-    box->upper_m[k] = lengths_m(static_cast<Eigen::Index>(k)) + half_width_m;
+    box->lower_m[k] = lengths_m.data()[k] - half_width_m;
+    box->upper_m[k] = lengths_m.data()[k] + half_width_m;
   }
   return Status::ok;
 }
@@ -116,7 +117,7 @@ Status Paper6CostBase::reset(const RobotModel& nominal, const RigidTransform& re
   stored_count_ = stored;
   values_per_sample_ = per_sample;
   const LinkLengths lengths_m = link_lengths(nominal, set);
-  for (std::size_t k = 0; k < set.count; ++k) nominal_lengths_m_[k] = lengths_m(static_cast<Eigen::Index>(k));
+  for (std::size_t k = 0; k < set.count; ++k) nominal_lengths_m_[k] = lengths_m.data()[k];
   size_ = 0;
   ready_ = false;
   return Status::ok;
@@ -345,8 +346,10 @@ double Paper6CostBase::mean_abs_error(const double* lengths_m, RigidTransform* b
 }
 
 Status Paper6CostBase::evaluate(const LinkLengths& lengths_m, double* mae_m, RigidTransform* base_to_tracker) const {
-  if (!ready_ || static_cast<std::size_t>(lengths_m.size()) != set_.count) return Status::invalid_argument;
-  if (!all_finite(lengths_m)) return Status::non_finite_input;
+  if (!ready_ || lengths_m.count != set_.count) return Status::invalid_argument;
+  for (std::size_t k = 0; k < set_.count; ++k) {
+    if (!math::is_finite(lengths_m.data()[k])) return Status::non_finite_input;
+  }
   const double value_m = mean_abs_error(lengths_m.data(), base_to_tracker);
   if (!math::is_finite(value_m)) return Status::non_finite_input;
   *mae_m = value_m;

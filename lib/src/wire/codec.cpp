@@ -6,6 +6,8 @@
 
 #include <cstring>
 
+#include "hivecal/core/math.hpp"
+
 namespace hivecal {
 namespace {
 
@@ -36,11 +38,7 @@ class PacketWriter {
     std::memcpy(&bits, &value, sizeof bits);  // bit copy: NaN payloads survive
     put(bits, 4);
   }
-  void f64(double value) {
-    std::uint64_t bits = 0;
-    std::memcpy(&bits, &value, sizeof bits);
-    put(bits, 8);
-  }
+  void f64(double value) { put(math::bits_of(value), 8); }
   void zeros(std::size_t count) {
     for (std::size_t i = 0; i < count; ++i) put(0, 1);
   }
@@ -87,10 +85,7 @@ class PacketReader {
     const auto bits = static_cast<std::uint32_t>(get(4));
     std::memcpy(&value, &bits, sizeof value);
   }
-  void f64(double& value) {
-    const std::uint64_t bits = get(8);
-    std::memcpy(&value, &bits, sizeof value);
-  }
+  void f64(double& value) { value = math::from_bits(get(8)); }
   void zeros(std::size_t count) {
     for (std::size_t i = 0; i < count; ++i)
       if (get(1) != 0) well_formed_ = false;

@@ -44,6 +44,23 @@ Eigen::MatrixXd random_orthogonal(int size, Random* random) {
   return Eigen::HouseholderQR<Eigen::MatrixXd>(g).householderQ();
 }
 
+/// A size x rank matrix of standard normal entries, drawn column by column.
+Eigen::MatrixXd random_factor(int size, int rank, Random* random) {
+  Eigen::MatrixXd b(size, rank);
+  for (int c = 0; c < rank; ++c) {
+    for (int r = 0; r < size; ++r) b(r, c) = random->normal();
+  }
+  return b;
+}
+
+/// Leading block B B^T (positive semi-definite, rank of B), `kOutside` elsewhere.
+SymmetricMatrix gram(const Eigen::MatrixXd& b) {
+  SymmetricMatrix a = SymmetricMatrix::Constant(kOutside);
+  const Eigen::MatrixXd product = b * b.transpose();
+  a.topLeftCorner(b.rows(), b.rows()) = 0.5 * (product + product.transpose());
+  return a;
+}
+
 /// Leading block Q diag(values) Q^T, `kOutside` elsewhere.
 SymmetricMatrix with_spectrum(const Eigen::VectorXd& values, Random* random) {
   const int size = static_cast<int>(values.size());
@@ -111,13 +128,8 @@ TEST(SymmetricEigen, RankDeficientPositiveSemiDefinite) {
   for (int size : {4, 12, 33}) {
     for (int rank : {1, size / 2, size - 1}) {
       SCOPED_TRACE(testing::Message() << "size " << size << " rank " << rank);
-      Eigen::MatrixXd b(size, rank);
-      for (int c = 0; c < rank; ++c) {
-        for (int r = 0; r < size; ++r) b(r, c) = random.normal();
-      }
-      SymmetricMatrix a = SymmetricMatrix::Constant(kOutside);
-      const Eigen::MatrixXd product = b * b.transpose();
-      a.topLeftCorner(size, size) = 0.5 * (product + product.transpose());
+      const Eigen::MatrixXd b = random_factor(size, rank, &random);
+      const SymmetricMatrix a = gram(b);
       const Decomposition d = decompose(a, size);
       expect_valid(a, size, d);
       const double norm = a.topLeftCorner(size, size).norm();
@@ -336,13 +348,8 @@ TEST(SymmetricEigenLowest, RankDeficientNullSpace) {
   for (int size : {4, 12, 33}) {
     for (int rank : {1, size / 2, size - 1}) {
       SCOPED_TRACE(testing::Message() << "size " << size << " rank " << rank);
-      Eigen::MatrixXd b(size, rank);
-      for (int c = 0; c < rank; ++c) {
-        for (int r = 0; r < size; ++r) b(r, c) = random.normal();
-      }
-      SymmetricMatrix a = SymmetricMatrix::Constant(kOutside);
-      const Eigen::MatrixXd product = b * b.transpose();
-      a.topLeftCorner(size, size) = 0.5 * (product + product.transpose());
+      const Eigen::MatrixXd b = random_factor(size, rank, &random);
+      const SymmetricMatrix a = gram(b);
       for (int count : {size - rank, std::min(size, size - rank + 2)}) {
         const Lowest lowest = decompose_lowest(a, size, count);
         expect_valid_lowest(a, size, count, lowest);

@@ -98,23 +98,12 @@ TEST(AbcSolver, StopsAtTheEvaluationBudget) {
   EXPECT_EQ(trace.size(), 5u);
 }
 
-struct RecordingObserver final : ProgressObserver {
-  std::size_t calls = 0;
-  SolverProgress last;
-  bool increasing = true;
-  void on_iteration(const SolverProgress& progress) override {
-    increasing = increasing && progress.iteration == calls + 1;
-    ++calls;
-    last = progress;
-  }
-};
-
 TEST(AbcSolver, TracesTheBestCostAndReportsProgressEachCycle) {
   test::Rastrigin rastrigin(2);
   const test::CubeBox box(2, 5.12);
   static Trace<64> trace;
   trace.clear();
-  RecordingObserver observer;
+  test::RecordingObserver observer;
   SolverResult result;
   Status s = Status::invalid_argument;
   EXPECT_NO_HEAP(s = solver().minimize(rastrigin, box.view(), test::abc_options(12, 50, 6), &result, &trace, &observer));
@@ -157,14 +146,7 @@ TEST(AbcSolver, SameSeedSameBitsOtherSeedOtherPath) {
   EXPECT_NE(second.values()[0], first.values()[0]);
 }
 
-TEST(AbcSolver, NanCostsCountAsWorst) {
-  test::MostlyNan mostly_nan(2);
-  const test::CubeBox box(2, 3.0);
-  SolverResult result;
-  ASSERT_EQ(solver().minimize(mostly_nan, box.view(), test::abc_options(20, 200, 8), &result), Status::ok);
-  EXPECT_TRUE(math::is_finite(result.best_cost));
-  EXPECT_LT(result.best_cost, 1e-6);
-}
+TEST(AbcSolver, NanCostsCountAsWorst) { test::expect_nan_costs_ignored(solver(), test::abc_options(20, 200, 8), 1e-6); }
 
 TEST(AbcSolver, StaysInsideTheBox) {
   // The sphere's minimum is outside this box: the best point sits on the nearest corner.

@@ -20,31 +20,20 @@ struct Session {
   RigidTransform base;
 };
 
-Dataset<400>& train_set() {
-  static Dataset<400> dataset;
-  return dataset;
-}
-Dataset<400>& fresh_set() {
-  static Dataset<400> dataset;
-  return dataset;
-}
-LmWorkspace& workspace() {
-  static LmWorkspace ws;
-  return ws;
-}
-LmResult& result() {
-  static LmResult r;
-  return r;
+/// This file's training and fresh sets, workspace and result.
+test::LmTestStorage<400>& lm() {
+  static test::LmTestStorage<400> storage;
+  return storage;
 }
 
 /// A perturbed arm, `train_count` samples with `noise_m`, 200 noise-free fresh poses.
 Session simulate(RobotType type, std::uint64_t seed, std::size_t train_count, double noise_m) {
   Random random(seed);
   Session s{test::perturbed_parallel_model(type, &random, 3e-4, 3e-4, kTrueTool_m), test::example_base_to_tracker()};
-  train_set().clear();
-  fresh_set().clear();
-  test::fill_dataset(s.truth, s.base, train_count, noise_m, &random, &train_set());
-  test::fill_dataset(s.truth, s.base, 200, 0.0, &random, &fresh_set());
+  lm().train.clear();
+  lm().fresh.clear();
+  test::fill_dataset(s.truth, s.base, train_count, noise_m, &random, &lm().train);
+  test::fill_dataset(s.truth, s.base, 200, 0.0, &random, &lm().fresh);
   return s;
 }
 
@@ -70,12 +59,12 @@ void expect_exact_recovery(RobotType type, std::uint64_t seed) {
   SCOPED_TRACE(robot_type_name(type));
   const Session s = simulate(type, seed, 150, 0.0);
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(type), nullptr, train_set().samples(), LmOptions{},
-                                       &workspace(), &result()));
+  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(type), nullptr, lm().train.samples(), LmOptions{},
+                                       &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok) << status_message(status);
-  const LmResult& r = result();
+  const LmResult& r = lm().result;
   EXPECT_EQ(r.identifiability.kept_count(), 25);
-  EXPECT_LE(test::max_prediction_gap(r.model, r.base_to_tracker, s.truth, s.base, fresh_set().samples()), 1e-9);
+  EXPECT_LE(test::max_prediction_gap(r.model, r.base_to_tracker, s.truth, s.base, lm().fresh.samples()), 1e-9);
   // Each parameter the data determines alone equals the truth.
   const ParamMask alone = r.identifiability.kept_mask & ~combination_members(r.identifiability);
   const ModelParams estimated = to_params(r.model);
@@ -106,14 +95,14 @@ TEST(Lm, WithNoiseRecoversWithinNoiseAndWithinSigma) {
   const double noise_m = 1e-5;
   const Session s = simulate(RobotType::ur5, 104, 300, noise_m);
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(RobotType::ur5), nullptr, train_set().samples(), LmOptions{},
-                                       &workspace(), &result()));
+  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(RobotType::ur5), nullptr, lm().train.samples(), LmOptions{},
+                                       &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok) << status_message(status);
-  const LmResult& r = result();
+  const LmResult& r = lm().result;
   // Predictions on fresh poses against the noise-free truth: noise-limited, i.e. about
   // noise * sqrt(p / N) per axis, far below the noise itself.
   ErrorStats validation;
-  EXPECT_NO_HEAP(validation = position_error_stats(r.model, r.base_to_tracker, fresh_set().samples()));
+  EXPECT_NO_HEAP(validation = position_error_stats(r.model, r.base_to_tracker, lm().fresh.samples()));
   EXPECT_LT(validation.mae(ErrorAxis::norm_3d), 0.5 * noise_m);
   EXPECT_LT(validation.max(ErrorAxis::norm_3d), 2.0 * noise_m);
   EXPECT_NEAR(r.residual_sigma_m, noise_m, 0.1 * noise_m);
@@ -157,13 +146,13 @@ TEST(Lm, SigmaMatchesMonteCarloSpread) {
       ASSERT_EQ(noisy.add(sample.q_rad, sample.point_m + noise_m * noise), Status::ok);
     }
     Status status = Status::ok;
-    EXPECT_NO_HEAP(status = calibrate_lm(truth, &base, noisy.samples(), LmOptions{}, &workspace(), &result()));
+    EXPECT_NO_HEAP(status = calibrate_lm(truth, &base, noisy.samples(), LmOptions{}, &lm().workspace, &lm().result));
     ASSERT_EQ(status, Status::ok);
-    const ModelParams p = to_params(result().model);
+    const ModelParams p = to_params(lm().result.model);
     for (int k = 0; k < 4; ++k) {
       sum[k] += p(watched[k]);
       sum2[k] += p(watched[k]) * p(watched[k]);
-      sigma_mean[k] += result().sigma(watched[k]) / kRuns;
+      sigma_mean[k] += lm().result.sigma(watched[k]) / kRuns;
     }
   }
   for (int k = 0; k < 4; ++k) {
@@ -180,9 +169,9 @@ TEST(Lm, Paper6MovesOnlyItsParameters) {
   options.params = LmParamSet::link_lengths;
   const RobotModel start = nominal_start(RobotType::ur5);
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train_set().samples(), options, &workspace(), &result()));
+  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, lm().train.samples(), options, &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok) << status_message(status);
-  const IdentifiabilityReport& report = result().identifiability;
+  const IdentifiabilityReport& report = lm().result.identifiability;
   ParamMask paper6 = 0;
   EXPECT_NO_HEAP(paper6 = lm_param_mask(LmParamSet::link_lengths, 0, start));
   EXPECT_EQ(report.free_mask, paper6);
@@ -191,7 +180,7 @@ TEST(Lm, Paper6MovesOnlyItsParameters) {
   EXPECT_FALSE(mask_has(report.kept_mask, model_param_index(0, DhField::d)) &&
                mask_has(report.kept_mask, base_translation_param_index(2)));
   const ModelParams before = to_params(start);
-  const ModelParams after = to_params(result().model);
+  const ModelParams after = to_params(lm().result.model);
   for (int i = 0; i < kModelParamCount; ++i) {
     if (!mask_has(report.kept_mask, i)) {
       EXPECT_EQ(after(i), before(i)) << full_param_name(i);
@@ -199,10 +188,10 @@ TEST(Lm, Paper6MovesOnlyItsParameters) {
   }
   EXPECT_NE(after(model_param_index(1, DhField::a)), before(model_param_index(1, DhField::a)));
   // Six lengths cannot explain angle errors: better than nominal, worse than full.
-  const double paper6_rms = result().rms_m;
-  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()));
+  const double paper6_rms = lm().result.rms_m;
+  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok);
-  EXPECT_GT(paper6_rms, 2.0 * result().rms_m);
+  EXPECT_GT(paper6_rms, 2.0 * lm().result.rms_m);
 }
 
 // Hybrid mode: a metaheuristic's result (here a geometry a few tenths of a millimetre off
@@ -218,13 +207,13 @@ TEST(Lm, HybridStartFromAnyModelAndBase) {
   EXPECT_NO_HEAP(tilt = rotation_from_vector(Vec3(0.002, -0.001, 0.003)));
   guess_base.rotation = guess_base.rotation * tilt;
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(guess, &guess_base, train_set().samples(), LmOptions{}, &workspace(),
-                                       &result()));
+  EXPECT_NO_HEAP(status = calibrate_lm(guess, &guess_base, lm().train.samples(), LmOptions{}, &lm().workspace,
+                                       &lm().result));
   ASSERT_EQ(status, Status::ok) << status_message(status);
-  EXPECT_LE(test::max_prediction_gap(result().model, result().base_to_tracker, s.truth, s.base,
-                                     fresh_set().samples()),
+  EXPECT_LE(test::max_prediction_gap(lm().result.model, lm().result.base_to_tracker, s.truth, s.base,
+                                     lm().fresh.samples()),
             1e-9);
-  EXPECT_NEAR(result().base_to_tracker.rotation.determinant(), 1.0, 1e-12);
+  EXPECT_NEAR(lm().result.base_to_tracker.rotation.determinant(), 1.0, 1e-12);
 }
 
 struct CountingObserver final : LmObserver {
@@ -247,25 +236,25 @@ TEST(Lm, TraceAndObserverFollowTheIterations) {
   trace.clear();
   CountingObserver observer;
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(RobotType::ur5), nullptr, train_set().samples(), LmOptions{},
-                                       &workspace(), &result(), &trace, &observer));
+  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(RobotType::ur5), nullptr, lm().train.samples(), LmOptions{},
+                                       &lm().workspace, &lm().result, &trace, &observer));
   ASSERT_EQ(status, Status::ok);
   // The start value, then one per iteration that tried a step (a convergence test that
   // fires before any step ends a phase without a value).
   EXPECT_EQ(static_cast<std::size_t>(observer.calls) + 1, trace.size());
-  EXPECT_LE(observer.calls, result().iterations);
-  EXPECT_GE(observer.calls, result().iterations - 4);
+  EXPECT_LE(observer.calls, lm().result.iterations);
+  EXPECT_GE(observer.calls, lm().result.iterations - 4);
   EXPECT_GT(trace.values()[0], 100.0 * trace.values()[trace.size() - 1]);
   for (std::size_t i = 1; i < trace.size(); ++i) EXPECT_LE(trace.values()[i], trace.values()[i - 1] * 1.01);
   EXPECT_DOUBLE_EQ(observer.last_rms_m, trace.values()[trace.size() - 1]);
 
   CountingObserver stopper;
   stopper.stop_after = 2;
-  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(RobotType::ur5), nullptr, train_set().samples(), LmOptions{},
-                                       &workspace(), &result(), nullptr, &stopper));
+  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(RobotType::ur5), nullptr, lm().train.samples(), LmOptions{},
+                                       &lm().workspace, &lm().result, nullptr, &stopper));
   EXPECT_EQ(status, Status::solver_cancelled);
-  EXPECT_EQ(result().termination, LmTermination::cancelled);
-  EXPECT_EQ(result().iterations, 2);
+  EXPECT_EQ(lm().result.termination, LmTermination::cancelled);
+  EXPECT_EQ(lm().result.iterations, 2);
 }
 
 TEST(Lm, IterationLimitReportsNotConvergedWithTheLastPoint) {
@@ -273,13 +262,13 @@ TEST(Lm, IterationLimitReportsNotConvergedWithTheLastPoint) {
   LmOptions options;
   options.max_iterations = 1;
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(RobotType::ur5), nullptr, train_set().samples(), options,
-                                       &workspace(), &result()));
+  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(RobotType::ur5), nullptr, lm().train.samples(), options,
+                                       &lm().workspace, &lm().result));
   EXPECT_EQ(status, Status::not_converged);
-  EXPECT_EQ(result().termination, LmTermination::max_iterations);
-  EXPECT_EQ(result().iterations, 1);
-  EXPECT_GT(result().rms_m, 0.0);
-  EXPECT_TRUE(all_finite(result().sigma));
+  EXPECT_EQ(lm().result.termination, LmTermination::max_iterations);
+  EXPECT_EQ(lm().result.iterations, 1);
+  EXPECT_GT(lm().result.rms_m, 0.0);
+  EXPECT_TRUE(all_finite(lm().result.sigma));
   const char* name = nullptr;
   EXPECT_NO_HEAP(name = lm_termination_name(LmTermination::max_iterations));
   EXPECT_STREQ(name, "max_iterations");

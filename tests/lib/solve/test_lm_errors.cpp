@@ -11,31 +11,24 @@ namespace hivecal {
 namespace {
 
 struct LmErrors : ::testing::Test {
-  static Dataset<64>& data() {
-    static Dataset<64> d;
-    return d;
-  }
-  static LmWorkspace& workspace() {
-    static LmWorkspace ws;
-    return ws;
-  }
-  static LmResult& result() {
-    static LmResult r;
-    return r;
+  /// The fixture's samples (train), workspace and result.
+  static test::LmTestStorage<64>& lm() {
+    static test::LmTestStorage<64> storage;
+    return storage;
   }
   RobotModel model = nominal_model(RobotType::ur5);
   RigidTransform base = test::example_base_to_tracker();
 
   void SetUp() override {
     Random random(501);
-    data().clear();
-    test::fill_dataset(model, base, 64, 1e-5, &random, &data());
+    lm().train.clear();
+    test::fill_dataset(model, base, 64, 1e-5, &random, &lm().train);
   }
   Status run(Span<const Sample> samples, const LmOptions& options = LmOptions{}, const RigidTransform* start = nullptr,
              const RobotModel* start_model = nullptr) {
     Status status = Status::ok;
     EXPECT_NO_HEAP(status = calibrate_lm(start_model != nullptr ? *start_model : model, start, samples, options,
-                                         &workspace(), &result()));
+                                         &lm().workspace, &lm().result));
     return status;
   }
 };
@@ -43,32 +36,32 @@ struct LmErrors : ::testing::Test {
 TEST_F(LmErrors, EmptyOrTooFewSamplesForTheFreeParameters) {
   EXPECT_EQ(run({}), Status::dataset_empty);
   // No floor but the base frame's: 2 samples (6 residuals) cannot determine its 6 parameters.
-  EXPECT_EQ(run(data().samples().subspan(0, 2)), Status::too_few_samples);
+  EXPECT_EQ(run(lm().train.samples().subspan(0, 2)), Status::too_few_samples);
   // 8 samples, 24 residuals for 33 candidates: fewer are estimated, the rest named as dropped.
-  EXPECT_EQ(run(data().samples().subspan(0, 8)), Status::ok);
-  EXPECT_LT(result().identifiability.kept_count(), 24);
-  EXPECT_EQ(result().identifiability.dropped_count, 33 - result().identifiability.kept_count());
-  EXPECT_GT(result().residual_sigma_m, 0.0);
-  EXPECT_EQ(run(data().samples().subspan(0, 12)), Status::ok);
+  EXPECT_EQ(run(lm().train.samples().subspan(0, 8)), Status::ok);
+  EXPECT_LT(lm().result.identifiability.kept_count(), 24);
+  EXPECT_EQ(lm().result.identifiability.dropped_count, 33 - lm().result.identifiability.kept_count());
+  EXPECT_GT(lm().result.residual_sigma_m, 0.0);
+  EXPECT_EQ(run(lm().train.samples().subspan(0, 12)), Status::ok);
   LmOptions paper6;
   paper6.params = LmParamSet::link_lengths;  // 12 free parameters
-  EXPECT_EQ(run(data().samples().subspan(0, 2), paper6), Status::too_few_samples);
-  EXPECT_EQ(run(data().samples().subspan(0, 4), paper6), Status::ok);  // 12 residuals: 11 or fewer kept
-  EXPECT_LT(result().identifiability.kept_count(), 12);
+  EXPECT_EQ(run(lm().train.samples().subspan(0, 2), paper6), Status::too_few_samples);
+  EXPECT_EQ(run(lm().train.samples().subspan(0, 4), paper6), Status::ok);  // 12 residuals: 11 or fewer kept
+  EXPECT_LT(lm().result.identifiability.kept_count(), 12);
 }
 
 TEST_F(LmErrors, NonFiniteStartModelBaseOrSample) {
   RobotModel bad_model = model;
   bad_model.joints[2].a_m = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(run(data().samples(), LmOptions{}, nullptr, &bad_model), Status::non_finite_input);
+  EXPECT_EQ(run(lm().train.samples(), LmOptions{}, nullptr, &bad_model), Status::non_finite_input);
   bad_model = model;
   bad_model.tool_m.z() = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(run(data().samples(), LmOptions{}, &base, &bad_model), Status::non_finite_input);
+  EXPECT_EQ(run(lm().train.samples(), LmOptions{}, &base, &bad_model), Status::non_finite_input);
   RigidTransform bad_base = base;
   bad_base.translation_m.x() = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(run(data().samples(), LmOptions{}, &bad_base), Status::non_finite_input);
+  EXPECT_EQ(run(lm().train.samples(), LmOptions{}, &bad_base), Status::non_finite_input);
   Sample samples[20];
-  for (int i = 0; i < 20; ++i) samples[i] = data().samples()[static_cast<std::size_t>(i)];
+  for (int i = 0; i < 20; ++i) samples[i] = lm().train.samples()[static_cast<std::size_t>(i)];
   samples[13].point_m.y() = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(run(samples), Status::non_finite_input);
 }
@@ -92,21 +85,21 @@ TEST_F(LmErrors, InvalidOptions) {
     change(&options);
     return options;
   };
-  EXPECT_EQ(run(data().samples(), with([](LmOptions* o) { o->max_iterations = 0; })), Status::invalid_argument);
-  EXPECT_EQ(run(data().samples(), with([](LmOptions* o) { o->cost_tolerance = -1.0; })), Status::invalid_argument);
-  EXPECT_EQ(run(data().samples(), with([](LmOptions* o) { o->initial_damping = 0.0; })), Status::invalid_argument);
-  EXPECT_EQ(run(data().samples(), with([](LmOptions* o) { o->huber_threshold_m = -1e-3; })),
+  EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) { o->max_iterations = 0; })), Status::invalid_argument);
+  EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) { o->cost_tolerance = -1.0; })), Status::invalid_argument);
+  EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) { o->initial_damping = 0.0; })), Status::invalid_argument);
+  EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) { o->huber_threshold_m = -1e-3; })),
             Status::invalid_argument);
-  EXPECT_EQ(run(data().samples(), with([](LmOptions* o) { o->identifiability_threshold = 0.0; })),
+  EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) { o->identifiability_threshold = 0.0; })),
             Status::invalid_argument);
-  EXPECT_EQ(run(data().samples(), with([](LmOptions* o) { o->identifiability_threshold = 1.0; })),
+  EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) { o->identifiability_threshold = 1.0; })),
             Status::invalid_argument);
-  EXPECT_EQ(run(data().samples(), with([](LmOptions* o) {
+  EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) {
               o->params = LmParamSet::custom;
               o->custom_mask = 0;
             })),
             Status::invalid_argument);
-  EXPECT_EQ(run(data().samples(), with([](LmOptions* o) {
+  EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) {
               o->params = LmParamSet::custom;
               o->custom_mask = param_bit(kFullParamCount);
             })),
@@ -120,7 +113,7 @@ TEST_F(LmErrors, CustomMaskOfParametersWithoutEffectIsSingular) {
   LmOptions options;
   options.params = LmParamSet::custom;
   options.custom_mask = param_bit(model_param_index(5, DhField::theta_offset));
-  EXPECT_EQ(run(data().samples(), options, &base, &on_axis), Status::singular_system);
+  EXPECT_EQ(run(lm().train.samples(), options, &base, &on_axis), Status::singular_system);
 }
 
 }  // namespace

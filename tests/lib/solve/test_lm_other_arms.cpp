@@ -19,21 +19,10 @@ namespace {
 
 using test::OtherArm;
 
-Dataset<300>& train_set() {
-  static Dataset<300> dataset;
-  return dataset;
-}
-Dataset<300>& fresh_set() {
-  static Dataset<300> dataset;
-  return dataset;
-}
-LmWorkspace& workspace() {
-  static LmWorkspace ws;
-  return ws;
-}
-LmResult& result() {
-  static LmResult r;
-  return r;
+/// This file's training and fresh sets, workspace and result.
+test::LmTestStorage<300>& lm() {
+  static test::LmTestStorage<300> storage;
+  return storage;
 }
 
 /// The nominal table with the reflector guessed on the flange axis.
@@ -47,7 +36,7 @@ RobotModel start_of(OtherArm arm) {
 /// both in the tracker frame (the identifiable part of the geometry is what predicts points).
 double worst_fresh_error_m(const RobotModel& truth, const RigidTransform& base, const LmResult& r) {
   double worst_m = 0.0;
-  for (const Sample& s : fresh_set().samples()) {
+  for (const Sample& s : lm().fresh.samples()) {
     const Vec3 predicted = r.base_to_tracker.apply(fk_tool_point(r.model, s.q_rad));
     worst_m = std::fmax(worst_m, (predicted - base.apply(fk_tool_point(truth, s.q_rad))).norm());
   }
@@ -56,11 +45,11 @@ double worst_fresh_error_m(const RobotModel& truth, const RigidTransform& base, 
 
 double rms_fresh_error_m(const RobotModel& truth, const RigidTransform& base, const LmResult& r) {
   double sum_m2 = 0.0;
-  for (const Sample& s : fresh_set().samples()) {
+  for (const Sample& s : lm().fresh.samples()) {
     const Vec3 predicted = r.base_to_tracker.apply(fk_tool_point(r.model, s.q_rad));
     sum_m2 += (predicted - base.apply(fk_tool_point(truth, s.q_rad))).squaredNorm();
   }
-  return std::sqrt(sum_m2 / static_cast<double>(fresh_set().size()));
+  return std::sqrt(sum_m2 / static_cast<double>(lm().fresh.size()));
 }
 
 /// A session of `arm`: truth, `count` training samples with noise_m, 200 noise-free fresh poses.
@@ -68,10 +57,10 @@ RobotModel simulate(OtherArm arm, std::uint64_t seed, std::size_t count, double 
   Random random(seed);
   const RobotModel truth = test::other_arm_truth(arm, &random);
   *base = test::example_base_to_tracker();
-  train_set().clear();
-  fresh_set().clear();
-  test::fill_other_arm(truth, *base, count, noise_m, &random, &train_set());
-  test::fill_other_arm(truth, *base, 200, 0.0, &random, &fresh_set());
+  lm().train.clear();
+  lm().fresh.clear();
+  test::fill_other_arm(truth, *base, count, noise_m, &random, &lm().train);
+  test::fill_other_arm(truth, *base, 200, 0.0, &random, &lm().fresh);
   return truth;
 }
 
@@ -116,14 +105,14 @@ TEST(OtherArms, LmRecoversTheTruthExactlyWithoutNoise) {
       RigidTransform base;
       const RobotModel truth = simulate(arm, 1000 * seed + static_cast<std::uint64_t>(arm), 120, 0.0, &base);
       Status status = Status::ok;
-      EXPECT_NO_HEAP(status = calibrate_lm(start_of(arm), nullptr, train_set().samples(), LmOptions{}, &workspace(),
-                                           &result()));
+      EXPECT_NO_HEAP(status = calibrate_lm(start_of(arm), nullptr, lm().train.samples(), LmOptions{}, &lm().workspace,
+                                           &lm().result));
       ASSERT_EQ(status, Status::ok) << test::other_arm_name(arm) << " seed " << seed << ": " << status_message(status);
-      const double worst_m = worst_fresh_error_m(truth, base, result());
+      const double worst_m = worst_fresh_error_m(truth, base, lm().result);
       EXPECT_LE(worst_m, 1e-9) << test::other_arm_name(arm) << " seed " << seed;
       if (seed == 1) {
         std::printf("%s: %d of %d estimated, worst fresh error %.3g m\n", test::other_arm_name(arm),
-                    result().identifiability.kept_count(), mask_count(result().identifiability.free_mask), worst_m);
+                    lm().result.identifiability.kept_count(), mask_count(lm().result.identifiability.free_mask), worst_m);
       }
     }
   }
@@ -136,32 +125,21 @@ TEST(OtherArms, LmRecoversTheIdentifiableGeometryWithinNoise) {
     for (std::uint64_t seed = 11; seed <= 14; ++seed) {
       RigidTransform base;
       const RobotModel truth = simulate(arm, 1000 * seed + static_cast<std::uint64_t>(arm), 200, noise_m, &base);
-      ASSERT_EQ(calibrate_lm(start_of(arm), nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()),
+      ASSERT_EQ(calibrate_lm(start_of(arm), nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result),
                 Status::ok);
-      const double rms_m = rms_fresh_error_m(truth, base, result());
+      const double rms_m = rms_fresh_error_m(truth, base, lm().result);
       EXPECT_LT(rms_m, noise_m) << test::other_arm_name(arm) << " seed " << seed;
       if (seed == 11) std::printf("%s: fresh-pose RMS error %.2f um (noise 10 um per axis)\n", test::other_arm_name(arm), rms_m * 1e6);
-      EXPECT_NEAR(result().residual_sigma_m, noise_m, 0.2 * noise_m) << test::other_arm_name(arm);
+      EXPECT_NEAR(lm().result.residual_sigma_m, noise_m, 0.2 * noise_m) << test::other_arm_name(arm);
       // and the start was far off: the fit did something
       RigidTransform nominal_base;
-      ASSERT_EQ(fit_base_to_tracker(start_of(arm), train_set().samples(), &nominal_base), Status::ok);
+      ASSERT_EQ(fit_base_to_tracker(start_of(arm), lm().train.samples(), &nominal_base), Status::ok);
       LmResult nominal;
       nominal.model = start_of(arm);
       nominal.base_to_tracker = nominal_base;
       EXPECT_GT(rms_fresh_error_m(truth, base, nominal), 50.0 * rms_m);
     }
   }
-}
-
-/// A modified-DH tool point from the definition (chain of Rx Tx Rz Tz), independent of
-/// dh_convention.hpp [m].
-Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kJointCount], const Vec3& tool_m, const JointVector& q) {
-  RigidTransform t;
-  for (int j = 0; j < kJointCount; ++j) {
-    t = t.then_after(RigidTransform{rotation_x(rows[j].alpha_prev_rad), Vec3(rows[j].a_prev_m, 0.0, 0.0)});
-    t = t.then_after(RigidTransform{rotation_z(q(j) + rows[j].theta_offset_rad), Vec3(0.0, 0.0, rows[j].d_m)});
-  }
-  return t.apply(tool_m);
 }
 
 // Arms described in modified DH, with a base offset (alpha_0, a_0) and the truth perturbed in
@@ -182,21 +160,21 @@ TEST(OtherArms, LmRecoversModifiedDhTruthsExactly) {
     }
     const Vec3 true_tool_m(0.009, 0.006, 0.097);
     const RigidTransform base = test::example_base_to_tracker();
-    train_set().clear();
-    fresh_set().clear();
+    lm().train.clear();
+    lm().fresh.clear();
     for (std::size_t i = 0; i < 320; ++i) {
       const JointVector q = test::other_arm_joints(&random);
-      (void)(i < 120 ? train_set() : fresh_set()).add(q, base.apply(modified_chain_point(truth, true_tool_m, q)));
+      (void)(i < 120 ? lm().train : lm().fresh).add(q, base.apply(test::modified_chain_point(truth, true_tool_m, q)));
     }
     RobotModel start;
     ModifiedDhBase start_base;
     ASSERT_EQ(model_from_modified_dh(nominal, Vec3(0.0, 0.0, 0.1), &start, &start_base), Status::ok);
     Status status = Status::ok;
-    EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()));
+    EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
     ASSERT_EQ(status, Status::ok) << test::other_arm_name(arm);
     double worst_m = 0.0;
-    for (const Sample& s : fresh_set().samples()) {
-      const Vec3 predicted = result().base_to_tracker.apply(fk_tool_point(result().model, s.q_rad));
+    for (const Sample& s : lm().fresh.samples()) {
+      const Vec3 predicted = lm().result.base_to_tracker.apply(fk_tool_point(lm().result.model, s.q_rad));
       worst_m = std::fmax(worst_m, (predicted - s.point_m).norm());
     }
     std::printf("%s (modified DH, base offset): worst fresh error %.3g m\n", test::other_arm_name(arm), worst_m);
@@ -223,9 +201,9 @@ TEST(OtherArms, IdentifiabilityFindsTheParallelAxisCombination) {
   for (OtherArm arm : test::kOtherArms) {
     RigidTransform base;
     (void)simulate(arm, 77, 200, 1e-5, &base);
-    ASSERT_EQ(calibrate_lm(start_of(arm), nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()),
+    ASSERT_EQ(calibrate_lm(start_of(arm), nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result),
               Status::ok);
-    const IdentifiabilityReport& report = result().identifiability;
+    const IdentifiabilityReport& report = lm().result.identifiability;
     const int d2 = model_param_index(1, DhField::d);
     const int d3 = model_param_index(2, DhField::d);
     EXPECT_TRUE(trades(report, d2, d3)) << test::other_arm_name(arm);
@@ -249,10 +227,10 @@ TEST(OtherArms, GsaAndAbcOnTheLinkLengthsImproveANonUrArm) {
     const RobotModel nominal = test::other_arm_model(arm);
     const LinkLengthSet set = link_length_set(nominal);
     LinkLengths lengths_m = link_lengths(nominal, set);
-    for (Eigen::Index k = 0; k < lengths_m.size(); ++k) lengths_m(k) += 6e-4 * random.normal();
+    for (std::size_t k = 0; k < lengths_m.count; ++k) lengths_m.values_m(k) += 6e-4 * random.normal();
     const RobotModel truth = with_link_lengths(nominal, set, lengths_m.data());
-    train_set().clear();
-    test::fill_other_arm(truth, test::example_base_to_tracker(), 200, 1e-5, &random, &train_set());
+    lm().train.clear();
+    test::fill_other_arm(truth, test::example_base_to_tracker(), 200, 1e-5, &random, &lm().train);
     CalibrationOptions options;
     options.method = CalibrationMethod::all;
     options.params = CalibrationParams::paper;
@@ -263,7 +241,7 @@ TEST(OtherArms, GsaAndAbcOnTheLinkLengthsImproveANonUrArm) {
     static OtherArmWorkspace ws;
     static CalibrationResult r;
     Status status = Status::ok;
-    EXPECT_NO_HEAP(status = calibrate(nominal, &train_set(), options, &ws, &r));
+    EXPECT_NO_HEAP(status = calibrate(nominal, &lm().train, options, &ws, &r));
     ASSERT_EQ(status, Status::ok) << test::other_arm_name(arm) << ": " << status_message(status);
     ASSERT_EQ(r.stage_count, 3u);
     ASSERT_EQ(r.stages[0].solver, CalibrationSolver::gsa);
@@ -305,18 +283,18 @@ TEST(OtherArms, LinkLengthCostEqualsTheGenericRefitCost) {
   Random random(606);
   for (const RobotModel& nominal : arms) {
     const RobotModel truth = test::perturbed_keeping_parallel(nominal, &random, 3e-4, 3e-4, Vec3(0.01, 0.0, 0.1));
-    train_set().clear();
-    test::fill_other_arm(truth, test::example_base_to_tracker(), 150, 1e-5, &random, &train_set());
+    lm().train.clear();
+    test::fill_other_arm(truth, test::example_base_to_tracker(), 150, 1e-5, &random, &lm().train);
     Status status = Status::ok;
-    EXPECT_NO_HEAP(status = cost.build(nominal, train_set().samples()));
+    EXPECT_NO_HEAP(status = cost.build(nominal, lm().train.samples()));
     ASSERT_EQ(status, Status::ok);
     ASSERT_EQ(cost.dimension(), link_length_set(nominal).count);
     LinkLengthBox box;
     ASSERT_EQ(link_length_box(nominal, 2e-3, &box), Status::ok);
     for (int trial = 0; trial < 20; ++trial) {
       LinkLengths lengths_m = link_lengths(nominal);
-      for (Eigen::Index k = 0; k < lengths_m.size() && trial > 0; ++k) {
-        lengths_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
+      for (std::size_t k = 0; k < lengths_m.count && trial > 0; ++k) {
+        lengths_m.values_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
       }
       double fast_m = 0.0;
       RigidTransform fast_base;
@@ -324,15 +302,15 @@ TEST(OtherArms, LinkLengthCostEqualsTheGenericRefitCost) {
       ASSERT_EQ(status, Status::ok);
       double generic_m = 0.0;
       RigidTransform generic_base;
-      ASSERT_EQ(evaluate_cost(cost.model_for(lengths_m.data()), train_set().samples(), CostKind::mean_abs_3d,
+      ASSERT_EQ(evaluate_cost(cost.model_for(lengths_m.data()), lm().train.samples(), CostKind::mean_abs_3d,
                               BaseFrame::refit, &generic_base, &generic_m),
                 Status::ok);
       EXPECT_NEAR(fast_m, generic_m, 1e-11 * generic_m) << "trial " << trial << ", " << cost.dimension() << " lengths";
       EXPECT_LT((fast_base.rotation - generic_base.rotation).norm(), 1e-13);
       EXPECT_LT((fast_base.translation_m - generic_base.translation_m).norm(), 1e-12);
     }
-    LinkLengths wrong(static_cast<Eigen::Index>(cost.dimension() + 1));
-    wrong.setZero();
+    LinkLengths wrong;
+    wrong.count = cost.dimension() + 1;
     double mae_m = 0.0;
     EXPECT_EQ(cost.evaluate(wrong, &mae_m, nullptr), Status::invalid_argument);
   }
@@ -344,14 +322,14 @@ TEST(OtherArms, SixLengthWorkspaceRefusesMoreLengths) {
   seven.joints[4].d_m = 0.01;  // a seventh non-zero length
   ASSERT_EQ(link_length_set(seven).count, 7u);
   Random random(5);
-  train_set().clear();
-  test::fill_other_arm(seven, test::example_base_to_tracker(), 60, 0.0, &random, &train_set());
+  lm().train.clear();
+  test::fill_other_arm(seven, test::example_base_to_tracker(), 60, 0.0, &random, &lm().train);
   static Paper6Cost<300> six;
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = six.build(seven, train_set().samples()));
+  EXPECT_NO_HEAP(status = six.build(seven, lm().train.samples()));
   EXPECT_EQ(status, Status::dimension_out_of_range);
   static Paper6Cost<300, double, kMaxLinkLengths> any;
-  EXPECT_EQ(any.build(seven, train_set().samples()), Status::ok);
+  EXPECT_EQ(any.build(seven, lm().train.samples()), Status::ok);
   EXPECT_EQ(any.dimension(), 7u);
 }
 

@@ -19,25 +19,14 @@
 namespace hivecal {
 namespace {
 
-Dataset<600>& train_set() {
-  static Dataset<600> dataset;
-  return dataset;
-}
-Dataset<600>& fresh_set() {
-  static Dataset<600> dataset;
-  return dataset;
+/// This file's training and fresh sets, workspace and result.
+test::LmTestStorage<600, LmWorkspaceWithTargets>& lm() {
+  static test::LmTestStorage<600, LmWorkspaceWithTargets> storage;
+  return storage;
 }
 Dataset<600>& one_target_set() {
   static Dataset<600> dataset;
   return dataset;
-}
-LmWorkspace& workspace() {
-  static LmWorkspaceWithTargets ws;
-  return ws;
-}
-LmResult& result() {
-  static LmResult r;
-  return r;
 }
 
 const Vec3 kTool_m(0.012, -0.006, 0.17);
@@ -48,10 +37,10 @@ RobotModel simulate(std::uint64_t seed, std::size_t pose_count, double noise_m, 
   const RobotModel truth =
       test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
   *base = test::example_base_to_tracker();
-  train_set().clear();
-  fresh_set().clear();
-  test::fill_target_dataset(truth, *base, pose_count, 3, noise_m, &random, &train_set());
-  test::fill_target_dataset(truth, *base, 100, 3, 0.0, &random, &fresh_set());
+  lm().train.clear();
+  lm().fresh.clear();
+  test::fill_target_dataset(truth, *base, pose_count, 3, noise_m, &random, &lm().train);
+  test::fill_target_dataset(truth, *base, 100, 3, 0.0, &random, &lm().fresh);
   return truth;
 }
 
@@ -65,7 +54,7 @@ RobotModel start_model() {
 /// Largest distance [m] between calibrated and true points over the fresh samples (every target).
 double worst_fresh_error_m(const RobotModel& truth, const RigidTransform& base, const LmResult& r) {
   double worst_m = 0.0;
-  for (const Sample& s : fresh_set().samples()) {
+  for (const Sample& s : lm().fresh.samples()) {
     const Vec3 predicted = r.base_to_tracker.apply(fk_sample_point(r.model, s));
     worst_m = std::fmax(worst_m, (predicted - base.apply(fk_sample_point(truth, s))).norm());
   }
@@ -120,17 +109,17 @@ TEST(SeveralTargets, LmRecoversEveryToolPointExactlyWithoutNoise) {
     RigidTransform base;
     const RobotModel truth = simulate(seed, 40, 0.0, &base);
     Status status = Status::ok;
-    EXPECT_NO_HEAP(status = calibrate_lm(start_model(), nullptr, train_set().samples(), LmOptions{}, &workspace(),
-                                         &result()));
+    EXPECT_NO_HEAP(status = calibrate_lm(start_model(), nullptr, lm().train.samples(), LmOptions{}, &lm().workspace,
+                                         &lm().result));
     ASSERT_EQ(status, Status::ok) << "seed " << seed << ": " << status_message(status);
-    const double worst_m = worst_fresh_error_m(truth, base, result());
+    const double worst_m = worst_fresh_error_m(truth, base, lm().result);
     EXPECT_LE(worst_m, 1e-9) << "seed " << seed;
     for (int target = 0; target < 3; ++target) {
-      EXPECT_LE(worst_tool_error_m(truth, result().model, target), 1e-9) << "seed " << seed << " target " << target + 1;
+      EXPECT_LE(worst_tool_error_m(truth, lm().result.model, target), 1e-9) << "seed " << seed << " target " << target + 1;
     }
     if (seed == 1) {
       std::printf("3 targets x 40 poses: %d of 33 estimated + 6 tool coordinates, %d iterations, worst %.3g m\n",
-                  result().identifiability.kept_count(), result().iterations, worst_m);
+                  lm().result.identifiability.kept_count(), lm().result.iterations, worst_m);
     }
   }
 }
@@ -142,21 +131,21 @@ TEST(SeveralTargets, LmRecoversEveryToolPointWithinNoise) {
   for (std::uint64_t seed = 11; seed <= 13; ++seed) {
     RigidTransform base;
     const RobotModel truth = simulate(seed, 80, noise_m, &base);
-    ASSERT_EQ(calibrate_lm(start_model(), nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()),
+    ASSERT_EQ(calibrate_lm(start_model(), nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result),
               Status::ok);
-    const double worst_m = worst_fresh_error_m(truth, base, result());
+    const double worst_m = worst_fresh_error_m(truth, base, lm().result);
     EXPECT_LE(worst_m, 3.0 * noise_m) << "seed " << seed;
-    EXPECT_NEAR(result().residual_sigma_m, noise_m, 0.15 * noise_m) << "seed " << seed;
+    EXPECT_NEAR(lm().result.residual_sigma_m, noise_m, 0.15 * noise_m) << "seed " << seed;
     for (int target = 1; target < 3; ++target) {
-      const Vec3& sigma = result().other_tools_sigma_m[target - 1];
+      const Vec3& sigma = lm().result.other_tools_sigma_m[target - 1];
       EXPECT_GT(sigma.minCoeff(), 0.0);
       EXPECT_LT(sigma.maxCoeff(), 10.0 * noise_m);
-      EXPECT_LE(worst_tool_error_m(truth, result().model, target), 5.0 * noise_m) << "seed " << seed;
+      EXPECT_LE(worst_tool_error_m(truth, lm().result.model, target), 5.0 * noise_m) << "seed " << seed;
     }
     if (seed == 11) {
       std::printf("noise 10 um: worst fresh %.3g m, sigma tool2 %.3g %.3g %.3g m\n", worst_m,
-                  result().other_tools_sigma_m[0].x(), result().other_tools_sigma_m[0].y(),
-                  result().other_tools_sigma_m[0].z());
+                  lm().result.other_tools_sigma_m[0].x(), lm().result.other_tools_sigma_m[0].y(),
+                  lm().result.other_tools_sigma_m[0].z());
     }
   }
 }
@@ -178,18 +167,18 @@ TEST(SeveralTargets, ToolPointSigmasMatchTheirScatter) {
   Vec3 sigma_sum_m[2] = {Vec3::Zero(), Vec3::Zero()};
   for (int draw = 0; draw < kDraws; ++draw) {
     Random noise(1000 + static_cast<std::uint64_t>(draw));
-    train_set().clear();
+    lm().train.clear();
     for (const JointVector& q : poses) {
       for (int target = 0; target < 3; ++target) {
         const Vec3 point_m = base.apply(fk_target_point(truth, q, target)) + noise_m * test::gaussian_vector(&noise);
-        ASSERT_EQ(train_set().add(q, point_m, target), Status::ok);
+        ASSERT_EQ(lm().train.add(q, point_m, target), Status::ok);
       }
     }
-    ASSERT_EQ(calibrate_lm(start_model(), nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()),
+    ASSERT_EQ(calibrate_lm(start_model(), nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result),
               Status::ok);
     for (int k = 0; k < 2; ++k) {
-      squared_error_m2[k] += (result().model.other_tools_m[k] - truth.other_tools_m[k]).cwiseAbs2();
-      sigma_sum_m[k] += result().other_tools_sigma_m[k];
+      squared_error_m2[k] += (lm().result.model.other_tools_m[k] - truth.other_tools_m[k]).cwiseAbs2();
+      sigma_sum_m[k] += lm().result.other_tools_sigma_m[k];
     }
   }
   for (int k = 0; k < 2; ++k) {
@@ -231,12 +220,12 @@ std::string names_of(ParamMask mask) {
 TEST(SeveralTargets, SeveralTargetsIdentifyMoreOnTheSamePoses) {
   RigidTransform base;
   const RobotModel truth = simulate(21, 7, 0.0, &base);
-  test::copy_target_one(train_set(), &one_target_set());
+  test::copy_target_one(lm().train, &one_target_set());
   ASSERT_EQ(one_target_set().size(), 7u);
   IdentifiabilityReport one;
   IdentifiabilityReport three;
   EXPECT_NO_HEAP(one = report_at(truth, base, one_target_set().samples()));
-  EXPECT_NO_HEAP(three = report_at(truth, base, train_set().samples()));
+  EXPECT_NO_HEAP(three = report_at(truth, base, lm().train.samples()));
   const ParamMask gained = three.kept_mask & ~one.kept_mask;
   std::printf("7 poses: 1 target keeps %d, 3 targets keep %d; gained: %s; lost: %s\n", one.kept_count(),
               three.kept_count(), names_of(gained).c_str(), names_of(one.kept_mask & ~three.kept_mask).c_str());
@@ -246,12 +235,12 @@ TEST(SeveralTargets, SeveralTargetsIdentifyMoreOnTheSamePoses) {
   EXPECT_EQ(names_of(gained), "a1 theta2 theta3 theta5");  // dropped for one target, estimated for three
   // Tool-down poses (joint 6 vertical) hide one more combination, for one target and for
   // three alike: free tool points absorb any flange rotation, so no orientation is gained there.
-  train_set().clear();
+  lm().train.clear();
   Random random(22);
-  test::fill_target_dataset(truth, base, 40, 3, 0.0, &random, &train_set(), true);
-  test::copy_target_one(train_set(), &one_target_set());
+  test::fill_target_dataset(truth, base, 40, 3, 0.0, &random, &lm().train, true);
+  test::copy_target_one(lm().train, &one_target_set());
   EXPECT_NO_HEAP(one = report_at(truth, base, one_target_set().samples()));
-  EXPECT_NO_HEAP(three = report_at(truth, base, train_set().samples()));
+  EXPECT_NO_HEAP(three = report_at(truth, base, lm().train.samples()));
   std::printf("40 tool-down poses: 1 target keeps %d (%s dropped), 3 targets keep %d\n", one.kept_count(),
               names_of(kAllParamsMask & ~one.kept_mask).c_str(), three.kept_count());
   EXPECT_EQ(three.kept_mask, one.kept_mask);
@@ -266,12 +255,12 @@ TEST(SeveralTargets, LinkLengthCostUsesEachSamplesToolPoint) {
   RobotModel start = nominal_model(RobotType::ur5);
   for (int target = 0; target < 3; ++target) target_tool(&start, target) = target_tool(truth, target);
   Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = cost.build(start, train_set().samples()));
+  EXPECT_NO_HEAP(status = cost.build(start, lm().train.samples()));
   ASSERT_EQ(status, Status::ok);
   Random random(32);
   for (int trial = 0; trial < 20; ++trial) {
     LinkLengths lengths_m = link_lengths(trial == 0 ? truth : start, link_length_set(start));
-    for (Eigen::Index k = 0; k < lengths_m.size() && trial > 1; ++k) lengths_m(k) += random.uniform(-2e-3, 2e-3);
+    for (std::size_t k = 0; k < lengths_m.count && trial > 1; ++k) lengths_m.values_m(k) += random.uniform(-2e-3, 2e-3);
     double fast_m = 0.0;
     RigidTransform fast_base;
     EXPECT_NO_HEAP(status = cost.evaluate(lengths_m, &fast_m, &fast_base));
@@ -280,7 +269,7 @@ TEST(SeveralTargets, LinkLengthCostUsesEachSamplesToolPoint) {
     EXPECT_EQ(model.other_tools_m[1], truth.other_tools_m[1]);
     double generic_m = 0.0;
     RigidTransform generic_base;
-    ASSERT_EQ(evaluate_cost(model, train_set().samples(), CostKind::mean_abs_3d, BaseFrame::refit, &generic_base,
+    ASSERT_EQ(evaluate_cost(model, lm().train.samples(), CostKind::mean_abs_3d, BaseFrame::refit, &generic_base,
                             &generic_m),
               Status::ok);
     EXPECT_NEAR(fast_m, generic_m, 1e-11 * generic_m) << "trial " << trial;
@@ -297,14 +286,14 @@ TEST(LmTargets, AWorkspaceWithoutTargetBlocksRefusesSeveralTargets) {
   static LmWorkspace bare;  // no target_blocks
   const LmOptions options;
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(start_model(), &base, train_set().samples(), options, &bare, &result()));
+  EXPECT_NO_HEAP(status = calibrate_lm(start_model(), &base, lm().train.samples(), options, &bare, &lm().result));
   EXPECT_EQ(status, Status::dimension_out_of_range);
   static NormalEquations eq;
   eq.targets = Span<TargetBlock>();
-  EXPECT_NO_HEAP(status = accumulate_normal_equations(truth, base, train_set().samples(), PointLoss{}, &eq));
+  EXPECT_NO_HEAP(status = accumulate_normal_equations(truth, base, lm().train.samples(), PointLoss{}, &eq));
   EXPECT_EQ(status, Status::dimension_out_of_range);
   // With the blocks it runs.
-  EXPECT_NO_HEAP(status = calibrate_lm(start_model(), &base, train_set().samples(), options, &workspace(), &result()));
+  EXPECT_NO_HEAP(status = calibrate_lm(start_model(), &base, lm().train.samples(), options, &lm().workspace, &lm().result));
   EXPECT_EQ(status, Status::ok);
 }
 

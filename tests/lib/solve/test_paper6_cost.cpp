@@ -48,7 +48,7 @@ TEST_F(Paper6CostTest, EqualsTheGenericRefitCostAnywhereInTheBox) {
   for (int trial = 0; trial < 60; ++trial) {
     LinkLengths lengths_m = link_lengths(cell.nominal);
     if (trial == 1) lengths_m = link_lengths(cell.truth);
-    for (int k = 0; k < 6 && trial > 1; ++k) lengths_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
+    for (int k = 0; k < 6 && trial > 1; ++k) lengths_m.values_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
     double fast_m = 0.0;
     RigidTransform fast_base;
     Status s = Status::invalid_argument;
@@ -84,7 +84,7 @@ TEST_F(Paper6CostTest, D1IsAbsorbedByTheBaseTranslation) {
   RigidTransform base_before;
   double ignored_m = 0.0;
   ASSERT_EQ(cost().evaluate(lengths_m, &ignored_m, &base_before), Status::ok);
-  lengths_m(0) += 1.5e-3;
+  lengths_m.values_m(0) += 1.5e-3;
   RigidTransform base_after;
   ASSERT_EQ(cost().evaluate(lengths_m, &ignored_m, &base_after), Status::ok);
   EXPECT_EQ(cost().evaluate(lengths_m.data()), before_m);
@@ -126,8 +126,8 @@ double worst_relative_error(Paper6CostBase& candidate, const test::Paper6Cell& c
   double worst = 0.0;
   for (int trial = 0; trial < 40; ++trial) {
     LinkLengths lengths_m = trial == 0 ? link_lengths(cell.nominal) : link_lengths(cell.truth);
-    for (int k = 0; k < 6 && trial > 1; ++k) lengths_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
-    const double generic_m = test::generic_mae(cell.nominal, lengths_m, samples);
+    for (int k = 0; k < 6 && trial > 1; ++k) lengths_m.values_m(k) = random.uniform(box.lower_m[k], box.upper_m[k]);
+    const double generic_m = test::generic_mae(cell.nominal, lengths_m.data(), samples);
     const double relative = std::fabs(candidate.evaluate(lengths_m.data()) - generic_m) / generic_m;
     if (relative > worst) worst = relative;
   }
@@ -219,7 +219,7 @@ TEST(Paper6Cost, ErrorsAreSpecific) {
   EXPECT_EQ(small.add(test::random_joints_tool_down(&random), Vec3(0, 0, 1)), Status::dataset_full);
   EXPECT_EQ(small.finalize(), Status::ok);
   LinkLengths lengths_m = link_lengths(nominal);
-  lengths_m(3) = std::numeric_limits<double>::quiet_NaN();
+  lengths_m.values_m(3) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(small.evaluate(lengths_m, &mae_m, nullptr), Status::non_finite_input);
   EXPECT_EQ(small.capacity(), 4u);
 }
@@ -235,19 +235,22 @@ TEST(Paper6Cost, LengthsRoundTripAndBoxIsNominalPlusMinusHalfWidth) {
   ASSERT_EQ(set.count, kPaper6Dimension);  // a UR arm's link lengths are the paper's six, in order
   for (std::size_t k = 0; k < kPaper6Dimension; ++k) {
     EXPECT_EQ(set.param_index[k], paper6[k]);
-    EXPECT_EQ(lengths_m(static_cast<int>(k)), params(paper6[k]));
+    EXPECT_EQ(lengths_m.values_m(static_cast<int>(k)), params(paper6[k]));
   }
-  EXPECT_EQ(lengths_m(1), -0.425);  // a2 of the UR5
+  EXPECT_EQ(lengths_m.values_m(1), -0.425);  // a2 of the UR5
   const double moved_m[6] = {0.1, -0.4, -0.4, 0.11, 0.095, 0.08};
   const RobotModel moved = with_link_lengths(nominal, link_length_set(nominal), moved_m);
-  EXPECT_EQ(link_lengths(moved), Eigen::Map<const LinkLengths>(moved_m, 6));
+  const LinkLengths moved_lengths_m = link_lengths(moved);
+  ASSERT_EQ(moved_lengths_m.count, 6u);
+  EXPECT_EQ(moved_lengths_m.values_m.head<6>(), (Eigen::Map<const Eigen::Matrix<double, 6, 1>>(moved_m)));
+  EXPECT_TRUE(moved_lengths_m.values_m.tail<6>().isZero(0.0));  // zeros after the count
   EXPECT_EQ(moved.joints[1].alpha_rad, nominal.joints[1].alpha_rad);
 
   LinkLengthBox box;
   ASSERT_EQ(link_length_box(nominal, 1e-3, &box), Status::ok);
   for (std::size_t k = 0; k < kPaper6Dimension; ++k) {
-    EXPECT_DOUBLE_EQ(box.lower_m[k], lengths_m(static_cast<int>(k)) - 1e-3);
-    EXPECT_DOUBLE_EQ(box.upper_m[k], lengths_m(static_cast<int>(k)) + 1e-3);
+    EXPECT_DOUBLE_EQ(box.lower_m[k], lengths_m.values_m(static_cast<int>(k)) - 1e-3);
+    EXPECT_DOUBLE_EQ(box.upper_m[k], lengths_m.values_m(static_cast<int>(k)) + 1e-3);
   }
   EXPECT_EQ(box.view().lower.size(), kPaper6Dimension);
   EXPECT_EQ(validate_search_box(box.view(), kPaper6Dimension, kPaper6Dimension), Status::ok);

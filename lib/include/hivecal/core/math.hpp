@@ -33,12 +33,20 @@ double log(double x);
 double atan2(double y, double x);  // the library's own, not libm's
 /// Arc cosine [rad] of x clamped to [-1, 1].
 double acos_clamped(double x);
-/// True when x is neither NaN nor Inf (exponent bit test: immune to -ffast-math). Inline:
-/// it guards every entry of the 33x33 matrices.
-inline bool is_finite(double x) {
+/// The IEEE-754 bits of x (copied, not converted: NaN payloads and signed zeros survive).
+inline std::uint64_t bits_of(double x) {
   std::uint64_t bits = 0;
   std::memcpy(&bits, &x, sizeof bits);
-  return ((bits >> 52) & 0x7ffU) != 0x7ffU;
+  return bits;
 }
+/// The double whose IEEE-754 bits are `bits`.
+inline double from_bits(std::uint64_t bits) {
+  double x = 0.0;
+  std::memcpy(&x, &bits, sizeof x);
+  return x;
+}
+/// True when x is neither NaN nor Inf (exponent bit test: immune to -ffast-math). Inline:
+/// it guards every entry of the 33x33 matrices.
+inline bool is_finite(double x) { return ((bits_of(x) >> 52) & 0x7ffU) != 0x7ffU; }
 
 }  // namespace hivecal::math

@@ -45,12 +45,18 @@ struct LinkLengthSet {
 /// paper's six: d1, a2, a3, d4, d5, d6).
 LinkLengthSet link_length_set(const RobotModel& nominal);
 
-/// Up to kMaxLinkLengths lengths [m]. Dynamic rows with a fixed MaxRows: Eigen keeps the
-/// storage inline (kMaxLinkLengths doubles) and never allocates; the count is the arm's (5 for
-/// an IRB120, 6 for UR), known only at run time. The allocation trap runs around every use
-/// (OtherArms.*, the paper-6 cost tests). A fixed 12-vector plus a count would meet the letter of
-/// "fixed-size only" at the price of a second size beside the vector.
-using LinkLengths = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, static_cast<int>(kMaxLinkLengths), 1>;
+/// The link lengths of one arm: the first `count` entries of `values_m`, zeros after them
+/// (fixed capacity kMaxLinkLengths; the count is the arm's: 5 for an IRB120, 6 for UR).
+struct LinkLengths {
+  /// Room for every d and a of the six joints [m].
+  using Values = Eigen::Matrix<double, static_cast<int>(kMaxLinkLengths), 1>;
+  std::size_t count = 0;             ///< number of lengths K [-]
+  Values values_m = Values::Zero();  ///< the lengths in [0, count), zero after [m]
+  /// The lengths as an array [m] (what with_link_lengths and the solvers take).
+  const double* data() const { return values_m.data(); }
+  /// The lengths as an array, for writing [m].
+  double* data() { return values_m.data(); }
+};
 
 /// The lengths of `set` in `model` [m].
 LinkLengths link_lengths(const RobotModel& model, const LinkLengthSet& set);
