@@ -298,31 +298,31 @@ TEST(Lm, SharedScratchCarriesNothingBetweenUses) {
   simulate(RobotType::ur5, 110, 120, 1e-5);
   const RobotModel start = nominal_start(RobotType::ur5);
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()));
+  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok);
-  const LmResult first = result();
+  const LmResult first = lm().result;
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  IdentifiabilityWorkspace* poisoned = workspace().scratch.open_identifiability();
+  IdentifiabilityWorkspace* poisoned = lm().workspace.scratch.open_identifiability();
   poisoned->scaled.setConstant(nan);
   poisoned->rotated.setConstant(nan);
   poisoned->null_basis.setConstant(nan);
   poisoned->eigenvalues.setConstant(nan);
-  LmStepScratch* step = workspace().scratch.open_step();
+  LmStepScratch* step = lm().workspace.scratch.open_step();
   step->system.setConstant(nan);
   step->factorization.upper.setConstant(nan);
-  NormalEquations* trial = workspace().scratch.open_trial(Span<TargetBlock>());
+  NormalEquations* trial = lm().workspace.scratch.open_trial(Span<TargetBlock>());
   trial->jtwj.setConstant(nan);
   trial->jtwr.setConstant(nan);
   trial->loss_sum_m2 = nan;
-  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train_set().samples(), LmOptions{}, &workspace(), &result()));
+  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok);
-  EXPECT_EQ(first.identifiability.kept_mask, result().identifiability.kept_mask);
-  EXPECT_EQ(first.iterations, result().iterations);
-  EXPECT_EQ(first.rms_m, result().rms_m);
-  for (int i = 0; i < kModelParamCount; ++i) EXPECT_EQ(to_params(first.model)(i), to_params(result().model)(i));
-  for (int i = 0; i < kFullParamCount; ++i) EXPECT_EQ(first.sigma(i), result().sigma(i));
-  EXPECT_TRUE(first.base_to_tracker.translation_m == result().base_to_tracker.translation_m);
-  EXPECT_TRUE(first.base_to_tracker.rotation == result().base_to_tracker.rotation);
+  EXPECT_EQ(first.identifiability.kept_mask, lm().result.identifiability.kept_mask);
+  EXPECT_EQ(first.iterations, lm().result.iterations);
+  EXPECT_EQ(first.rms_m, lm().result.rms_m);
+  for (int i = 0; i < kModelParamCount; ++i) EXPECT_EQ(to_params(first.model)(i), to_params(lm().result.model)(i));
+  for (int i = 0; i < kFullParamCount; ++i) EXPECT_EQ(first.sigma(i), lm().result.sigma(i));
+  EXPECT_TRUE(first.base_to_tracker.translation_m == lm().result.base_to_tracker.translation_m);
+  EXPECT_TRUE(first.base_to_tracker.rotation == lm().result.base_to_tracker.rotation);
 }
 
 }  // namespace
