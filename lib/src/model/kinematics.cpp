@@ -140,7 +140,28 @@ Status robot_type_from_name(const char* name, RobotType* type) {
   return Status::invalid_argument;
 }
 
-RigidTransform fk_flange(const RobotModel& model, const JointVector& q_rad) {
+namespace detail {
+
+void rigid_frames(const RobotModel& model, const JointVector& q_rad, RigidTransform (&frame)[kJointCount + 1]) {
+  frame[0] = RigidTransform{};
+  for (int j = 0; j < kJointCount; ++j) {
+    const Link link = dh_link(model.joints[j], q_rad(j));
+    frame[j + 1].translation_m = frame[j].rotation * link.translation_m + frame[j].translation_m;
+    frame[j + 1].rotation = frame[j].rotation * link.rotation;
+  }
+}
+
+}  // namespace detail
+
+namespace {
+
+/// The joint readings the rigid chain sees: q, plus the deflection when the model has terms.
+JointVector deflected(const RobotModel& model, const JointVector& q_rad) {
+  if (model.compliance.term_count == 0) return q_rad;
+  return q_rad + compliance_deflection(model, q_rad);
+}
+
+RigidTransform rigid_flange(const RobotModel& model, const JointVector& q_rad) {
   RigidTransform pose;
   for (int j = 0; j < kJointCount; ++j) {
     const Link link = dh_link(model.joints[j], q_rad(j));
@@ -148,6 +169,24 @@ RigidTransform fk_flange(const RobotModel& model, const JointVector& q_rad) {
     pose.rotation = pose.rotation * link.rotation;
   }
   return pose;
+}
+
+/// The rigid chain from the tool point `tool_m` inwards (twist trig from `trig`).
+Vec3 rigid_point(const RobotModel& model, const ModelTrig& trig, const Vec3& tool_m, const JointVector& q_rad) {
+  // Innermost first: p <- R_j p + t_j needs only matrix-vector products.
+  Vec3 point_m = tool_m;
+  for (int j = kJointCount - 1; j >= 0; --j) {
+    const Link link = dh_link(model.joints[j], trig.sin_alpha[j], trig.cos_alpha[j], q_rad(j));
+    point_m = link.rotation * point_m + link.translation_m;
+  }
+  return point_m;
+}
+
+}  // namespace
+
+RigidTransform fk_flange(const RobotModel& model, const JointVector& q_rad) {
+  if (model.compliance.term_count == 0) return rigid_flange(model, q_rad);
+  return rigid_flange(model, deflected(model, q_rad));
 }
 
 ModelTrig model_trig(const RobotModel& model) {
@@ -183,20 +222,20 @@ Vec3 fk_tool_point(const RobotModel& model, const JointVector& q_rad) {
 }
 
 Vec3 fk_target_point(const RobotModel& model, const JointVector& q_rad, int target) {
-  if (target == 0) return fk_tool_point(model, q_rad);
-  RobotModel moved = model;  // the same recursion with the target's tool point: the same bits
-  moved.tool_m = target_tool(model, target);
-  return fk_tool_point(moved, q_rad);
+  // The same recursion with the target's tool point (the same bits as fk_tool_point for
+  // target 0); the deflection is the model's, whatever the target.
+  if (model.compliance.term_count == 0) return rigid_point(model, twist_trig(model), target_tool(model, target), q_rad);
+  return rigid_point(model, twist_trig(model), target_tool(model, target), deflected(model, q_rad));
+}
+
+Vec3 fk_target_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad, int target) {
+  if (model.compliance.term_count == 0) return rigid_point(model, trig, target_tool(model, target), q_rad);
+  return rigid_point(model, trig, target_tool(model, target), deflected(model, q_rad));
 }
 
 Vec3 fk_tool_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad) {
-  // Innermost first: p <- R_j p + t_j needs only matrix-vector products.
-  Vec3 point_m = model.tool_m;
-  for (int j = kJointCount - 1; j >= 0; --j) {
-    const Link link = dh_link(model.joints[j], trig.sin_alpha[j], trig.cos_alpha[j], q_rad(j));
-    point_m = link.rotation * point_m + link.translation_m;
-  }
-  return point_m;
+  if (model.compliance.term_count == 0) return rigid_point(model, trig, model.tool_m, q_rad);
+  return rigid_point(model, trig, model.tool_m, deflected(model, q_rad));
 }
 
 namespace detail {
@@ -347,7 +386,7 @@ Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, Tool
   double rows[3][kModelParamCount];
   int slot[kModelParamCount];
   for (int c = 0; c < kModelParamCount; ++c) slot[c] = c;
-  const JointTrig q_trig = joint_trig(q_rad);
+  const JointTrig q_trig = joint_trig(deflected(model, q_rad));
   const JointTrig* const trig_of[1] = {&q_trig};
   const detail::JacobianRowsTarget target[1] = {{{rows[0], rows[1], rows[2]}, slot}};
   Vec3 point_m;

@@ -9,6 +9,10 @@
 
 namespace hivecal::detail {
 
+/// The rigid chain's frames at joint readings q (no compliance): frame[0] the base, frame[k]
+/// DH frame k (after joint k), frame[kJointCount] the flange, as fk_flange composes them.
+void rigid_frames(const RobotModel& model, const JointVector& q_rad, RigidTransform (&frame)[kJointCount + 1]);
+
 /// Where tool_point_jacobian_rows writes: column c of the 3 x 27 Jacobian goes to
 /// row[r][slot[c]], r = 0..2. Any permutation works; unwanted columns may point at scratch.
 struct JacobianRowsTarget {

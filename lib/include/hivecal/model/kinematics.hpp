@@ -9,6 +9,7 @@
 
 #include "hivecal/core/status.hpp"
 #include "hivecal/core/types.hpp"
+#include "hivecal/model/compliance.hpp"
 
 namespace hivecal {
 
@@ -38,12 +39,15 @@ struct DhJoint {
   double alpha_rad = 0.0;         ///< twist about x of the next frame [rad]
 };
 
-/// The geometry the calibration estimates: six DH joints and the tool point of each target.
+/// The geometry the calibration estimates: six DH joints, the tool point of each target and
+/// the joints' compliance (none by default: a rigid arm).
 struct RobotModel {
   DhJoint joints[kJointCount];  ///< joint 1 (base) .. joint 6 (wrist 3)
   Vec3 tool_m = Vec3::Zero();   ///< tool point of target 1 (retroreflector centre) in the flange frame [m]
   /// Tool points of targets 2 .. kMaxTargets in the flange frame [m]; not among the 27 parameters.
   Vec3 other_tools_m[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
+  /// Gravity deflection of the joints (model/compliance.hpp); not among the 27 parameters.
+  ComplianceModel compliance;
 };
 static_assert(kMaxTargets == 3, "other_tools_m's initialiser lists kMaxTargets - 1 points");
 
@@ -63,7 +67,7 @@ using ToolPointJacobian = Eigen::Matrix<double, 3, kModelParamCount>;
 
 /// Flattens a model into its parameter vector.
 ModelParams to_params(const RobotModel& model);
-/// Rebuilds a model from its parameter vector (the tool points of targets 2.. at 0).
+/// Rebuilds a model from its parameter vector (the tool points of targets 2.. at 0, rigid).
 RobotModel from_params(const ModelParams& params);
 
 /// Robot types with built-in nominal tables.
@@ -79,6 +83,10 @@ const char* robot_type_name(RobotType type);
 /// Status::invalid_argument otherwise.
 Status robot_type_from_name(const char* name, RobotType* type);
 
+/// The FK functions below apply the model's compliance when it has terms: the rigid chain at
+/// q + compliance_deflection(model, q), the same deflection for every target (its load is
+/// target 1's tool point). Without terms they are the rigid chain, bit for bit.
+
 /// Pose of the flange frame in the robot base frame.
 RigidTransform fk_flange(const RobotModel& model, const JointVector& q_rad);
 /// Tool point in the robot base frame [m]; cheaper than fk_flange (vector recursion only).
@@ -88,7 +96,7 @@ Vec3 fk_target_point(const RobotModel& model, const JointVector& q_rad, int targ
 /// Tool point [m] and, into *jacobian, its analytic derivative w.r.t. all 27 parameters. The
 /// joint angles enter as sin/cos(q_j + offset_j) by the angle-sum formulas from JointTrig and
 /// ModelTrig (so that solvers can keep the JointTrig of their samples); the point agrees with
-/// fk_tool_point to rounding.
+/// fk_tool_point to rounding. With compliance: the rigid derivative at the deflected pose.
 Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, ToolPointJacobian* jacobian);
 
 /// sin and cos of each joint's twist and offset: they do not depend on the pose, so loops
@@ -103,6 +111,8 @@ struct ModelTrig {
 ModelTrig model_trig(const RobotModel& model);
 /// fk_tool_point with the trig of `model` precomputed (same bits; reads the twist half only).
 Vec3 fk_tool_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad);
+/// fk_target_point with the trig of `model` precomputed (same bits).
+Vec3 fk_target_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad, int target);
 
 /// sin and cos of one pose's joint readings, without the offsets: they do not depend on the
 /// model, so a solver that visits the samples many times can compute them once per sample.

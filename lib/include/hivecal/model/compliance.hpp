@@ -1,0 +1,104 @@
+// Joint compliance: the joints that carry the arm's weight deflect under it (docs/compliance.md).
+//
+// Joint j deflects by dq_j = sum over the terms t of joint j of coefficient_t * basis_t(q),
+// where basis_t is a gravity torque about joint j's axis per unit g, computed from the model's
+// RIGID forward kinematics at the joint readings q:
+//   basis = sum over the term's point masses m at P of  z_j . ((P - o_j) x g_hat) * m
+// (z_j, o_j: axis and origin of DH frame j, the frame joint j turns about, 0-based joints;
+// g_hat: unit gravity direction in the robot base frame). The tool point is then the rigid FK at
+// q + dq: the deflection adds to the joint reading as theta_offset does. With no term the model
+// is rigid and every FK gives the bits of the rigid chain.
+#pragma once
+
+#include "hivecal/core/status.hpp"
+#include "hivecal/core/types.hpp"
+
+namespace hivecal {
+
+struct RobotModel;
+enum class RobotType : int;
+
+/// Most compliance terms one model holds (each is one more LM parameter).
+inline constexpr int kMaxComplianceTerms = 4;
+/// The frame number of a point load at the tool point (target 1's), after DH frames 1 .. 6.
+inline constexpr int kToolLoadFrame = kJointCount + 1;
+
+/// What the basis of a model's terms weighs.
+enum class ComplianceLoad : int {
+  /// A unit mass (1 kg) at one DH frame's origin or at the tool point: basis [m], coefficient
+  /// [rad/m]. The generic gravity-shaped basis for arms without dynamic data.
+  point = 0,
+  /// The links' masses at their centres of mass plus the payload (ArmMasses), all the mass the
+  /// joint carries: basis [kg m], coefficient [rad/(kg m)].
+  arm_masses = 1,
+};
+
+/// One compliance term: the joint that deflects and, for a point load, where the mass sits.
+struct ComplianceTerm {
+  int joint = 0;  ///< deflecting joint, 0-based (1 = a UR's shoulder) [-]
+  /// Point load: DH frame 1 .. 6 whose origin holds the unit mass, or kToolLoadFrame (7) for
+  /// the tool point; must lie beyond the joint (> joint). Unused (0) for arm masses [-].
+  int frame = 0;
+};
+
+/// Masses and centres of mass of the six links and the payload (ComplianceLoad::arm_masses).
+struct ArmMasses {
+  double link_mass_kg[kJointCount] = {};  ///< mass of link 1 .. 6 (moved by joint 1 .. 6) [kg]
+  /// Centre of mass of link j + 1 in DH frame j + 1 (the frame at the link's end) [m].
+  Vec3 link_com_m[kJointCount] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
+                                  Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  double payload_kg = 0.0;                 ///< payload (tool, reflector mount) mass [kg]
+  Vec3 payload_com_m = Vec3::Zero();       ///< payload centre of mass in the flange frame [m]
+};
+static_assert(kJointCount == 6, "link_com_m's initialiser lists six points");
+
+/// The compliance part of a RobotModel. term_count 0 = rigid. Laid out without padding (plain
+/// doubles, then ints in pairs) so that whole models compare byte for byte.
+struct ComplianceModel {
+  /// Compliance of each term: [rad/m] for point loads, [rad/(kg m)] for arm masses.
+  double coefficient[kMaxComplianceTerms] = {};
+  Vec3 gravity_direction = Vec3(0.0, 0.0, -1.0);  ///< unit gravity direction, robot base frame [-]
+  ArmMasses masses;                                ///< read by ComplianceLoad::arm_masses only
+  ComplianceTerm terms[kMaxComplianceTerms];       ///< the first term_count are used
+  int term_count = 0;                              ///< 0 .. kMaxComplianceTerms; 0 = rigid [-]
+  ComplianceLoad load = ComplianceLoad::point;     ///< what every term's basis weighs
+};
+
+/// Status::ok when `compliance` is usable: rigid (term_count 0, the rest unread), or
+/// term_count in [1, kMaxComplianceTerms], joints in
+/// [0, 6), point frames in (joint, kToolLoadFrame], finite coefficients, masses >= 0 and
+/// finite, and a finite gravity direction of unit length (within 1e-9); invalid_argument or
+/// non_finite_input otherwise.
+Status check_compliance(const ComplianceModel& compliance);
+
+/// The basis of each of the model's terms at joint readings q (rigid FK of `model`), into
+/// basis[0 .. term_count - 1]; the rest 0. [m] (point) or [kg m] (arm masses).
+void compliance_basis(const RobotModel& model, const JointVector& q_rad, double (&basis)[kMaxComplianceTerms]);
+
+/// The joints' deflection at readings q: dq_j = sum of coefficient_t * basis_t over the terms
+/// of joint j [rad]; zero when term_count is 0.
+JointVector compliance_deflection(const RobotModel& model, const JointVector& q_rad);
+/// The same, with the basis of each term (compliance_basis) into basis[].
+JointVector compliance_deflection(const RobotModel& model, const JointVector& q_rad,
+                                  double (&basis)[kMaxComplianceTerms]);
+
+/// The default terms of `load` for `model` (its nominal geometry) with gravity along
+/// `gravity_direction` (normalised here), into *compliance: terms, term_count, load, the unit
+/// gravity direction, zero coefficients; the masses are left as they are. The shoulder is the
+/// first joint whose axis is horizontal at q = 0 (|z . g_hat| < cos 45 deg), the elbow the
+/// next one. Point: (shoulder, its link's end = frame shoulder + 1), (shoulder, frame 4 =
+/// wrist), (elbow, frame 4), (elbow, tool). Arm masses: one term per horizontal joint among the
+/// first four. invalid_argument when gravity is zero or not finite, or no joint (point: no two
+/// joints) is horizontal. docs/compliance.md says why these.
+Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_direction, ComplianceLoad load,
+                                ComplianceModel* compliance);
+
+/// Universal Robots' published link masses and centres of mass of `type` into *masses (payload
+/// left as it is); invalid_argument for a type without a published table here.
+Status nominal_arm_masses(RobotType type, ArmMasses* masses);
+
+/// Short name of term t of `compliance` for tables: "c_j2_o2", "c_j2_o4", "c_j3_tool" (point:
+/// 1-based joint and frame), "c_j2_mass" (arm masses); "?" outside [0, term_count). Static storage.
+const char* compliance_term_name(const ComplianceModel& compliance, int t);
+
+}  // namespace hivecal
