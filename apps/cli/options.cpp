@@ -31,7 +31,8 @@ namespace {
 void print_help(const std::string& command, const std::string& summary, const std::vector<OptionSpec>& specs) {
   std::printf("usage: hivecal %s [options]\n\n%s\n\noptions:\n", command.c_str(), summary.c_str());
   for (const OptionSpec& spec : specs) {
-    std::string left = "  --" + spec.name + (spec.value_name.empty() ? "" : " " + spec.value_name);
+    const std::string value = spec.bare_value.empty() ? spec.value_name : "[" + spec.value_name + "]";
+    std::string left = "  --" + spec.name + (spec.value_name.empty() ? "" : " " + value);
     if (left.size() < 30) left.resize(30, ' ');
     std::printf("%s %s%s\n", left.c_str(), spec.help.c_str(),
                 spec.default_value.empty() ? "" : (" (default: " + spec.default_value + ")").c_str());
@@ -81,7 +82,10 @@ int parse_options(const std::string& command, const std::string& summary, const 
       options->values_[name] = "1";
       continue;
     }
-    if (!has_inline_value) {
+    const bool bare = !spec->bare_value.empty() && (i + 1 >= argc || std::string(argv[i + 1]).rfind("--", 0) == 0);
+    if (!has_inline_value && bare) {
+      value = spec->bare_value;
+    } else if (!has_inline_value) {
       if (i + 1 >= argc) {
         error(command, "option --" + name + " needs a value " + spec->value_name);
         return kExitUsage;

@@ -33,6 +33,9 @@ struct OptionSpec {
   std::string value_name;   ///< e.g. "FILE"; empty for a flag
   std::string help;         ///< one line
   std::string default_value;  ///< shown in --help and used when absent (empty: none)
+  /// Non-empty: the value may be left out (`--compliance` alone, followed by another option
+  /// or nothing) and is then this one.
+  std::string bare_value{};
 };
 
 /// Parsed options of one subcommand.

@@ -53,6 +53,10 @@ struct CalibrateSettings {
   bool progress = false;             ///< progress lines on stderr
   textio::InputUnits units;          ///< --length-unit, --angle-unit of text inputs
   FitBounds bounds;                  ///< --max-change-mm, --max-change-deg
+  bool compliance = false;           ///< --compliance: an LM+compliance stage after the rigid LM
+  /// --compliance basis|masses: the terms (default_compliance_terms), unit gravity direction
+  /// (--gravity) and, for masses, the arm's masses and the payload (--payload); zero coefficients.
+  ComplianceModel compliance_model;
 };
 
 /// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
@@ -420,6 +424,9 @@ const std::vector<OptionSpec>& option_specs() {
       {"report", "DIR", "write an HTML report with figures into DIR", ""},
       {"max-change-mm", "X", "warn (exit 5) when a length moves more than this from the start geometry [mm]", "20"},
       {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
+      {"compliance", "basis|masses", "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity basis, or the link masses (UR only)", "", "basis"},
+      {"gravity", "X,Y,Z", "with --compliance: gravity direction in the robot base frame (wall or ceiling mounts)", "0,0,-1"},
+      {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]", ""},
       {"quiet", "", "no progress on stderr", ""},
     };
     for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
@@ -429,6 +436,77 @@ const std::vector<OptionSpec>& option_specs() {
 }
 
 // --- parse ------------------------------------------------------------------------------------
+
+/// --payload KG@X,Y,Z into *masses.
+Error payload_option(const Options& options, ArmMasses* masses) {
+  const std::string text = options.get("payload");
+  const std::size_t at = text.find('@');
+  const Error bad = Error::usage("--payload must be KG@X,Y,Z: a mass in kg >= 0 and its centre in the flange frame "
+                                 "in metres (e.g. 1.2@0,0,0.05), not " + port::quoted(text));
+  double kg = 0.0;
+  if (at == std::string::npos || !textio::parse_double(text.substr(0, at), &kg) || !(kg >= 0.0 && kg < 1e4)) return bad;
+  Vec3 com_m = Vec3::Zero();
+  std::size_t start = at + 1;
+  for (int axis = 0; axis < 3; ++axis) {  // X,Y,Z: exactly three numbers
+    const std::size_t comma = axis < 2 ? text.find(',', start) : text.size();
+    if (comma == std::string::npos || !textio::parse_double(text.substr(start, comma - start), &com_m(axis)) ||
+        (axis == 2 && text.find(',', start) != std::string::npos)) {
+      return bad;
+    }
+    start = comma + 1;
+  }
+  if (!com_m.allFinite() || com_m.norm() > 10.0) return bad;
+  masses->payload_kg = kg;
+  masses->payload_com_m = com_m;
+  return Error{};
+}
+
+/// --compliance, --gravity, --payload into settings->compliance_model (the default terms of the
+/// start model's nominal geometry); refused: a kind other than basis|masses, masses for an arm
+/// without published masses, a zero or non-finite gravity, --gravity / --payload without the
+/// compliance they set.
+Error compliance_from_options(const Options& options, CalibrateSettings* settings) {
+  settings->compliance = options.given("compliance");
+  if (!settings->compliance) {
+    for (const char* name : {"gravity", "payload"})
+      if (options.given(name)) return Error::usage(std::string("--") + name + " needs --compliance (see --help)");
+    return Error{};
+  }
+  const std::string kind = options.get("compliance");
+  if (kind != "basis" && kind != "masses") {
+    return Error::usage("--compliance must be 'basis' or 'masses', not " + port::quoted(kind));
+  }
+  const ComplianceLoad load = kind == "masses" ? ComplianceLoad::arm_masses : ComplianceLoad::point;
+  if (options.given("payload") && load != ComplianceLoad::arm_masses) {
+    return Error::usage("--payload needs --compliance masses (the basis kind weighs unit masses, not the payload)");
+  }
+  Vec3 gravity = Vec3::Zero();
+  const Error parsed = vec3_option(options, "gravity", &gravity);
+  if (!parsed.ok() || !gravity.allFinite() || !(gravity.norm() > 1e-9)) {
+    return Error::usage("--gravity must be X,Y,Z: the direction of gravity in the robot base frame, not zero (e.g. "
+                        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), not " + port::quoted(options.get("gravity")));
+  }
+  ComplianceModel& model = settings->compliance_model;
+  if (load == ComplianceLoad::arm_masses) {
+    RobotType type = RobotType::ur5;
+    if (robot_type_from_name(settings->robot.robot.c_str(), &type) != Status::ok ||
+        nominal_arm_masses(type, &model.masses) != Status::ok) {
+      return Error::usage("--compliance masses needs the arm's link masses, which are known here for Universal Robots "
+                          "arms only (" + std::string(robot_type_names()) + "); " + port::quoted(settings->robot.robot) +
+                          " has none: use --compliance basis");
+    }
+    if (options.given("payload")) {
+      const Error payload = payload_option(options, &model.masses);
+      if (!payload.ok()) return payload;
+    }
+  }
+  if (default_compliance_terms(settings->robot.model, gravity, load, &model) != Status::ok) {
+    return Error::usage("--compliance: no joint of " + port::quoted(settings->robot.robot) +
+                        " has a horizontal axis at q = 0 under --gravity " + options.get("gravity") +
+                        " (the shoulder and elbow carry the deflection): check --gravity");
+  }
+  return Error{};
+}
 
 Error settings_from_options(const Options& options, CalibrateSettings* settings) {
   bool from_file = false;
@@ -495,7 +573,7 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   settings->bounds.max_angle_change_rad = max_deg * 0.017453292519943295;
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
-  return Error{};
+  return compliance_from_options(options, settings);
 }
 
 /// Where the results go, declared (and checked) before the long work.
