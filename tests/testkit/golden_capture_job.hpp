@@ -131,7 +131,8 @@ inline std::uint64_t capture_job_digest(const CaptureJobReport& r, bool calibrat
     d.add(to_params(c.lm.model));
     d.add(c.lm.base_to_tracker.rotation);
     d.add(c.lm.base_to_tracker.translation_m);
-    d.add(c.lm.sigma);
+    // The 33 rigid sigmas, then the model's compliance ones: a rigid result hashes as before.
+    d.add(c.lm.sigma.head(kRigidParamCount + c.lm.model.compliance.term_count));
     d.add(c.lm.rms_m);
     d.add_u64(static_cast<std::uint64_t>(c.lm.iterations));
     d.add_u64(c.lm.identifiability.kept_mask);

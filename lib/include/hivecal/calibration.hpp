@@ -49,6 +49,17 @@ enum class CalibrationParams : std::uint8_t {
 /// One solver of a stage.
 enum class CalibrationSolver : std::uint8_t { abc, gsa, lm };
 
+/// Joint compliance in the job (docs/compliance.md); off by default.
+struct CalibrationCompliance {
+  /// After the rigid LM stage, one more LM stage ("LM+compliance") from its geometry and base
+  /// that estimates the compliance terms with the geometry. Needs a method with LM.
+  bool enabled = false;
+  /// The terms, their load kind, the gravity direction, the masses and the start
+  /// coefficients; term_count 0: default_compliance_terms of the start geometry for `load`
+  /// and `gravity_direction`.
+  ComplianceModel model;
+};
+
 /// Default level of LM's significance test: a parameter whose change is below 2 sigma is fixed [-].
 inline constexpr double kDefaultSignificance = 2.0;
 /// Largest training set on which a negative significance_t chooses the level by leave-one-out [-].
@@ -73,6 +84,7 @@ struct CalibrationOptions {
   double outlier_floor_m = 1e-3;                         ///< smallest residual set aside after the calibration [m]
   double screen_floor_m = 0.01;                          ///< smallest residual set aside by the start geometry's consensus screen [m]
   std::size_t consensus_trials = 200;                    ///< point triples tried by the consensus (LMedS) screen [-]
+  CalibrationCompliance compliance;                      ///< joint compliance stage (off by default)
 };
 
 /// Lower-case name of a method as the command line spells it ("abc+lm", "all", ...).
@@ -91,6 +103,7 @@ struct CalibrationBaseline {
 struct CalibrationStage {
   CalibrationSolver solver = CalibrationSolver::lm;    ///< which solver ran
   bool refines_previous = false;                      ///< LM started from the previous stage's geometry and base
+  bool compliance = false;                            ///< LM estimated the model's compliance terms too ("LM+compliance")
   CalibrationParams params = CalibrationParams::paper;  ///< parameters it could move
   Status status = Status::ok;                         ///< ok, or not_converged (LM's last point kept)
   RobotModel model;                                   ///< calibrated geometry
@@ -103,8 +116,8 @@ struct CalibrationStage {
   Span<const double> trace_m;                         ///< best cost (ABC/GSA: MAE, LM: RMS) per iteration [m]; views the workspace
 };
 
-/// Stages a job runs at most ('all': GSA, ABC, LM).
-inline constexpr std::size_t kMaxCalibrationStages = 3;
+/// Stages a job runs at most ('all': GSA, ABC, LM, then LM+compliance when enabled).
+inline constexpr std::size_t kMaxCalibrationStages = 4;
 
 /// The steps of a job, in order (CalibrationResult::step is the last one reached).
 enum class CalibrationStep : std::uint8_t { input, split, baseline, gsa, abc, lm, done };
@@ -127,8 +140,8 @@ struct CalibrationOutlierList {
   std::size_t limit = kMaxCalibrationOutliers;          ///< entries allowed (fewer than half the set) [-]
 };
 
-/// Short name of a stage ("ABC", "GSA", "LM", "ABC+LM", "GSA+LM"; the previous stage's name is
-/// taken from `refines_previous` and `previous`).
+/// Short name of a stage ("ABC", "GSA", "LM", "ABC+LM", "GSA+LM", "LM+compliance"; the
+/// previous stage's name is taken from `refines_previous` and `previous`).
 const char* calibration_stage_name(const CalibrationStage& stage, const CalibrationStage* previous);
 /// Name of a solver ("ABC", "GSA", "LM").
 const char* calibration_solver_name(CalibrationSolver solver);
@@ -145,7 +158,7 @@ struct CalibrationResult {
   CalibrationStage stages[kMaxCalibrationStages];  ///< the stages run, in order
   std::size_t stage_count = 0;                  ///< entries of `stages` used [-]
   bool has_lm = false;                          ///< an LM stage ran: `lm` is meaningful
-  LmResult lm;                                  ///< LM details: identifiability, sigma, rms, termination
+  LmResult lm;                                  ///< the last LM stage's details (LM+compliance's when it ran): identifiability, sigma, rms, termination
   ParamMask lm_pruned_mask = 0;                 ///< parameters LM fixed at their start values as not significant (significance_t)
   double significance_t = 0.0;                  ///< the significance level LM used (options', or the one chosen) [-]
   CalibrationOutlier outliers[kMaxCalibrationOutliers];  ///< samples set aside, by increasing index
@@ -353,12 +366,13 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
 /// the same set with the blunder never added. `observer` may be null. Returns ok (LM's
 /// not_converged counts as a result: its last point is used), or the failure, with
 /// result->step naming the step that failed:
-///  - input: invalid_argument (a null pointer, an unknown method or parameter set),
-///    dataset_empty;
+///  - input: invalid_argument (a null pointer, an unknown method or parameter set, compliance
+///    enabled without an LM stage or with terms that default_compliance_terms or
+///    check_compliance refuse), dataset_empty;
 ///  - split: invalid_argument (the fraction leaves no training sample);
 ///  - baseline: too_few_samples / degenerate_geometry (fewer than 3 non-collinear points: not
 ///    even the base frame is determined), the errors of fit_base_to_tracker;
-///  - gsa / abc / lm: the stage's own error (calibrate_paper6_gsa/abc, calibrate_lm), e.g.
+///  - gsa / abc / lm (LM+compliance too): the stage's own error (calibrate_paper6_gsa/abc, calibrate_lm), e.g.
 ///    too_few_samples (LM: not even with its weakest directions dropped do fewer parameters
 ///    remain than 3 N equations), population_out_of_range (population
 ///    above the workspace's capacity), dataset_full (more training samples than the

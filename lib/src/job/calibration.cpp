@@ -33,6 +33,17 @@ bool known(const CalibrationOptions& options) {
   return options.method <= CalibrationMethod::all && options.params <= CalibrationParams::paper;
 }
 
+/// The compliance model the LM+compliance stage starts from: the options' terms, or the
+/// default ones of `start`'s geometry. invalid_argument when there are none or they are unusable.
+Status compliance_start(const RobotModel& start, const CalibrationCompliance& options, ComplianceModel* out) {
+  *out = options.model;
+  if (out->term_count == 0) {
+    const Status status = default_compliance_terms(start, options.model.gravity_direction, options.model.load, out);
+    if (status != Status::ok) return status;
+  }
+  return check_compliance(*out) == Status::ok ? Status::ok : Status::invalid_argument;
+}
+
 /// The job's state while it runs: the inputs and where the result goes.
 struct Job {
   const RobotModel& start;
@@ -108,27 +119,55 @@ Status run_population(Job& job, CalibrationSolver solver) {
       changed = true;
     }
   }
-  if (changed) *from = from_params(params);
-  return changed;
+  bool compliance_changed = false;
+  for (int t = 0; t < from->compliance.term_count; ++t) {  // the compliance coefficients likewise
+    const int i = compliance_param_index(t);
+    double& coefficient = from->compliance.coefficient[t];
+    if (mask_has(report.free_mask, i) && !mask_has(report.kept_mask, i) && coefficient != start.compliance.coefficient[t]) {
+      coefficient = start.compliance.coefficient[t];
+      compliance_changed = true;
+    }
+  }
+  if (changed) {  // from_params: the other targets' tool points restart at 0, as they always have
+    const ComplianceModel compliance = from->compliance;
+    *from = from_params(params);
+    from->compliance = compliance;
+  }
+  return changed || compliance_changed;
 }
 
-/// Puts model parameter `index` of *model back to its value in `start`.
+/// The value of full-model parameter `index` (geometry or compliance coefficient) in `model`.
+double model_value(const RobotModel& model, int index) {
+  if (index >= kRigidParamCount) return model.compliance.coefficient[index - kRigidParamCount];
+  return to_params(model)(index);
+}
+
+/// Puts parameter `index` (geometry or compliance) of *model back to its value in `start`.
 [[gnu::noinline]] void reset_param(const RobotModel& start, int index, RobotModel* model) {
+  if (index >= kRigidParamCount) {
+    model->compliance.coefficient[index - kRigidParamCount] = start.compliance.coefficient[index - kRigidParamCount];
+    return;
+  }
   ModelParams params = to_params(*model);
   params(index) = to_params(start)(index);
-  *model = from_params(params);
+  const ComplianceModel compliance = model->compliance;
+  *model = from_params(params);  // the other targets' tool points restart at 0, as they always have
+  model->compliance = compliance;
 }
 
-/// The estimated model parameter whose change from `start` is least significant, below
-/// t standard deviations; -1 when none is (or t <= 0).
+/// The estimated model parameter (geometry or compliance coefficient) whose change from
+/// `start` is least significant, below t standard deviations; -1 when none is (or t <= 0).
 [[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t) {
   if (!(t > 0.0)) return -1;
   const ModelParams change = to_params(lm.model) - to_params(start);
   int weakest = -1;
   double weakest_ratio = t;
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (i == kModelParamCount) i = kRigidParamCount;  // the base is not a model parameter
+    if (i >= kRigidParamCount && i - kRigidParamCount >= lm.model.compliance.term_count) break;
     if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) continue;
-    const double ratio = std::fabs(change(i)) / lm.sigma(i);
+    const double delta = i < kModelParamCount ? change(i) : model_value(lm.model, i) - model_value(start, i);
+    const double ratio = std::fabs(delta) / lm.sigma(i);
     if (ratio < weakest_ratio) {
       weakest_ratio = ratio;
       weakest = i;
@@ -141,38 +180,48 @@ Status run_population(Job& job, CalibrationSolver solver) {
 /// while (a) it drops a parameter an earlier stage moved (put back to its start value) or (b)
 /// an estimated parameter's change is not significant (below t sigma: fixed at its start
 /// value, one at a time, the least significant first; a small set then fits fewer parameters
-/// instead of its noise). *pruned receives the parameters (b) fixed.
-Status fit_lm(Job& job, const RobotModel& start_model, const RigidTransform* base, bool reset, Span<const Sample> samples,
-              double t, TraceBase* trace, LmObserver* observer, ParamMask* pruned) {
+/// instead of its noise). *pruned receives the parameters (b) fixed. `reference` holds the
+/// start values (job.start, with the compliance terms and their start coefficients for the
+/// LM+compliance stage); with `compliance` its terms' coefficients are free too.
+Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_model, const RigidTransform* base,
+              bool reset, bool compliance, Span<const Sample> samples, double t, TraceBase* trace,
+              LmObserver* observer, ParamMask* pruned) {
   RobotModel from = start_model;
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
   LmOptions lm = o.lm;
-  lm.params = o.params == CalibrationParams::paper ? LmParamSet::link_lengths : LmParamSet::full;
+  lm.params = o.params == CalibrationParams::paper ? LmParamSet::link_lengths
+              : compliance                         ? LmParamSet::full_compliance
+                                                   : LmParamSet::full;
   if (o.params == CalibrationParams::paper && r.baseline.tool_fitted) {
     // The tool point is estimated too: it was not known (the baseline fitted it), and lengths
     // searched against a tool fitted at the nominal lengths keep that fit's bias.
-    lm.custom_mask = lm_param_mask(LmParamSet::link_lengths, 0, job.start);
+    lm.custom_mask = lm_param_mask(LmParamSet::link_lengths, 0, reference);
     for (int axis = 0; axis < 3; ++axis) lm.custom_mask |= param_bit(tool_param_index(axis));
     lm.params = LmParamSet::custom;
   }
+  if (o.params == CalibrationParams::paper && compliance) {
+    lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) |
+                     compliance_params_mask(reference.compliance.term_count);
+    lm.params = LmParamSet::custom;
+  }
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
-  const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask, job.start);
+  const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask, reference);
   Status status = Status::ok;
   *pruned = 0;
-  for (int attempt = 0; attempt < kModelParamCount + 2; ++attempt) {
+  for (int attempt = 0; attempt < kModelParamCount + kMaxComplianceTerms + 2; ++attempt) {
     if (trace != nullptr) trace->clear();
     LmWorkspace* workspace = job.workspace.open_lm();
     status = calibrate_lm(from, base, samples, lm, workspace, &r.lm, trace, observer);
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
-    bool again = reset && reset_dropped(job.start, r.lm.identifiability, &from);
-    const int weakest = least_significant(job.start, r.lm, t);
+    bool again = reset && reset_dropped(reference, r.lm.identifiability, &from);
+    const int weakest = least_significant(reference, r.lm, t);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;
       lm.custom_mask = free_mask & ~*pruned;
-      reset_param(job.start, weakest, &from);
+      reset_param(reference, weakest, &from);
       again = true;
     }
     if (!again) break;
@@ -202,7 +251,8 @@ constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
       job.dataset.swap_samples(i, n - 1);  // the left-out one last, the others in front
       ParamMask pruned = 0;
       const Span<const Sample> train = job.dataset.train();
-      const Status status = fit_lm(job, from, base, reset, train.subspan(0, n - 1), candidate, nullptr, nullptr, &pruned);
+      const Status status =
+          fit_lm(job, job.start, from, base, reset, false, train.subspan(0, n - 1), candidate, nullptr, nullptr, &pruned);
       if (status == Status::ok || status == Status::not_converged) {
         const Sample& out = train[n - 1];
         sum_m += (job.result.lm.base_to_tracker.apply(fk_sample_point(job.result.lm.model, out)) - out.point_m).norm();
@@ -220,6 +270,25 @@ constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
   return best_t;
 }
 
+/// Fills the next stage slot from r.lm after an LM stage that ended with `status`.
+void lm_stage(Job& job, Status status, bool refines_previous, bool compliance, TraceBase& trace) {
+  CalibrationResult& r = job.result;
+  const CalibrationOptions& o = job.options;
+  r.has_lm = true;
+  CalibrationStage& stage = r.stages[r.stage_count];
+  stage.solver = CalibrationSolver::lm;
+  stage.refines_previous = refines_previous;
+  stage.compliance = compliance;
+  stage.params = o.params;
+  stage.status = status;
+  stage.model = r.lm.model;
+  stage.base_to_tracker = r.lm.base_to_tracker;
+  stage.evaluations = static_cast<std::uint64_t>(r.lm.iterations);
+  stage.iterations = static_cast<std::size_t>(r.lm.iterations);
+  stage.best_cost_m = r.lm.rms_m;
+  stage.trace_m = trace.values();
+}
+
 /// LM from the start geometry, or (hybrid) from the previous stage's geometry and base, with
 /// the significance test (fit_lm; level from choose_significance).
 Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
@@ -229,32 +298,41 @@ Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
   const RobotModel& from = previous != nullptr ? previous->model : job.start;
   const RigidTransform* base = previous != nullptr ? &previous->base_to_tracker : nullptr;
   r.significance_t = choose_significance(job, from, base, previous != nullptr);
-  const Status status =
-      fit_lm(job, from, base, previous != nullptr, job.dataset.train(), r.significance_t, &trace, job.observer, pruned);
+  const Status status = fit_lm(job, job.start, from, base, previous != nullptr, false, job.dataset.train(),
+                               r.significance_t, &trace, job.observer, pruned);
   if (status != Status::ok && status != Status::not_converged) return status;
-  const CalibrationOptions& o = job.options;
-  r.has_lm = true;
-  CalibrationStage& stage = r.stages[r.stage_count];
-  stage.solver = CalibrationSolver::lm;
-  stage.refines_previous = previous != nullptr;
-  stage.params = o.params;
-  stage.status = status;
-  stage.model = r.lm.model;
-  stage.base_to_tracker = r.lm.base_to_tracker;
-  stage.evaluations = static_cast<std::uint64_t>(r.lm.iterations);
-  stage.iterations = static_cast<std::size_t>(r.lm.iterations);
-  stage.best_cost_m = r.lm.rms_m;
-  stage.trace_m = trace.values();
+  lm_stage(job, status, previous != nullptr, false, trace);
+  return Status::ok;
+}
+
+/// LM+compliance: from the rigid LM stage's geometry and base (the last stage), the geometry
+/// and the compliance terms together, at the rigid stage's significance level. A parameter
+/// this fit cannot determine goes back to its start value, as in a hybrid.
+[[gnu::noinline]] Status run_compliance_lm(Job& job, ParamMask* pruned) {
+  CalibrationResult& r = job.result;
+  const CalibrationStage& rigid = r.stages[r.stage_count - 1];
+  RobotModel reference = job.start;
+  const Status terms = compliance_start(job.start, job.options.compliance, &reference.compliance);
+  if (terms != Status::ok) return terms;  // checked at the input step
+  RobotModel from = rigid.model;
+  from.compliance = reference.compliance;
+  TraceBase& trace = job.workspace.trace(r.stage_count);
+  const Status status = fit_lm(job, reference, from, &rigid.base_to_tracker, true, true, job.dataset.train(),
+                               r.significance_t, &trace, job.observer, pruned);
+  if (status != Status::ok && status != Status::not_converged) return status;
+  lm_stage(job, status, true, true, trace);
   return Status::ok;
 }
 
 /// Runs one stage with the observer's begin/end around it, then its train/test errors.
-Status run_stage(Job& job, CalibrationSolver solver, bool hybrid) {
+/// `compliance`: the LM+compliance stage (solver lm).
+Status run_stage(Job& job, CalibrationSolver solver, bool hybrid, bool compliance = false) {
   CalibrationResult& r = job.result;
   const std::size_t index = r.stage_count;
   if (job.observer != nullptr) job.observer->on_stage_begin(index, solver);
-  const Status status =
-      solver == CalibrationSolver::lm ? run_lm(job, hybrid, &r.lm_pruned_mask) : run_population(job, solver);
+  const Status status = compliance                       ? run_compliance_lm(job, &r.lm_pruned_mask)
+                        : solver == CalibrationSolver::lm ? run_lm(job, hybrid, &r.lm_pruned_mask)
+                                                          : run_population(job, solver);
   const CalibrationStep step = solver == CalibrationSolver::abc   ? CalibrationStep::abc
                                : solver == CalibrationSolver::gsa ? CalibrationStep::gsa
                                                                   : CalibrationStep::lm;
@@ -311,6 +389,10 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
   if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, false)) != Status::ok) return status;
   if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, false)) != Status::ok) return status;
   if (plan.lm && (status = run_stage(job, CalibrationSolver::lm, plan.hybrid)) != Status::ok) return status;
+  if (plan.lm && options.compliance.enabled &&
+      (status = run_stage(job, CalibrationSolver::lm, true, true)) != Status::ok) {
+    return status;
+  }
   r->step = CalibrationStep::done;
   r->status = Status::ok;
   return Status::ok;
@@ -501,10 +583,17 @@ int fitted_parameters(const CalibrationResult& r) {
   return Status::ok;
 }
 
+/// The compliance options are usable: off, or on with an LM stage and terms.
+bool compliance_usable(const RobotModel& start, const CalibrationOptions& options) {
+  if (!options.compliance.enabled) return true;
+  ComplianceModel model;
+  return plan_for(options.method).lm && compliance_start(start, options.compliance, &model) == Status::ok;
+}
+
 /// Input checks shared by calibrate() and cross_validate().
-Status check_inputs(DatasetBase* dataset, const CalibrationOptions& options, CalibrationWorkspaceBase* workspace,
-                    CalibrationResult* r) {
-  if (dataset == nullptr || workspace == nullptr || !known(options)) {
+Status check_inputs(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+                    CalibrationWorkspaceBase* workspace, CalibrationResult* r) {
+  if (dataset == nullptr || workspace == nullptr || !known(options) || !compliance_usable(start, options)) {
     return fail(r, CalibrationStep::input, Status::invalid_argument);
   }
   dataset->set_aside(Span<const std::uint32_t>());
@@ -547,6 +636,7 @@ const char* calibration_solver_name(CalibrationSolver solver) {
 }
 
 const char* calibration_stage_name(const CalibrationStage& stage, const CalibrationStage* previous) {
+  if (stage.compliance) return "LM+compliance";
   if (stage.solver != CalibrationSolver::lm || !stage.refines_previous || previous == nullptr) {
     return calibration_solver_name(stage.solver);
   }
@@ -569,7 +659,7 @@ const char* calibration_step_name(CalibrationStep step) {
 Status calibrate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
                  CalibrationWorkspaceBase* workspace, CalibrationResult* result, CalibrationObserver* observer) {
   if (result == nullptr) return Status::invalid_argument;
-  Status status = check_inputs(dataset, options, workspace, &reset(result));
+  Status status = check_inputs(start, dataset, options, workspace, &reset(result));
   if (status != Status::ok) return status;
   if (options.keep_outliers) return run_once(start, dataset, options, workspace, result, observer, {});
   // The two lists live in the workspace (2.6 kB: not on a small target's stack).
@@ -622,7 +712,7 @@ Status cross_validate(const RobotModel& start, DatasetBase* dataset, const Calib
     status = calibrate(start, dataset, options, workspace, scratch, observer);
     if (status != Status::ok) return cv->status = status;
     aside_count = scratch->outlier_count;
-  } else if (dataset == nullptr || workspace == nullptr) {
+  } else if (dataset == nullptr || workspace == nullptr || !known(options) || !compliance_usable(start, options)) {
     return cv->status = Status::invalid_argument;
   }
   std::uint32_t aside[kMaxCalibrationOutliers] = {};

@@ -104,8 +104,13 @@ void compliance_basis(const RobotModel& model, const JointVector& q_rad, double 
 }
 
 JointVector compliance_deflection(const RobotModel& model, const JointVector& q_rad) {
-  JointVector dq = JointVector::Zero();
   double basis[kMaxComplianceTerms];
+  return compliance_deflection(model, q_rad, basis);
+}
+
+JointVector compliance_deflection(const RobotModel& model, const JointVector& q_rad,
+                                  double (&basis)[kMaxComplianceTerms]) {
+  JointVector dq = JointVector::Zero();
   compliance_basis(model, q_rad, basis);
   const ComplianceModel& compliance = model.compliance;
   for (int t = 0; t < compliance.term_count; ++t) dq(compliance.terms[t].joint) += compliance.coefficient[t] * basis[t];

@@ -11,7 +11,8 @@ constexpr const char* kParamNames[kFullParamCount] = {
     "theta1", "d1", "a1", "alpha1", "theta2", "d2", "a2", "alpha2", "theta3", "d3", "a3",
     "alpha3", "theta4", "d4", "a4", "alpha4", "theta5", "d5", "a5", "alpha5", "theta6", "d6",
     "a6", "alpha6", "tool_x", "tool_y", "tool_z", "base_rx", "base_ry", "base_rz", "base_tx", "base_ty",
-    "base_tz"};
+    "base_tz", "compliance1", "compliance2", "compliance3", "compliance4"};
+static_assert(kMaxComplianceTerms == 4, "one name per compliance term");
 
 constexpr const char* kOtherToolNames[kMaxTargets - 1][3] = {
     {"tool2_x", "tool2_y", "tool2_z"}, {"tool3_x", "tool3_y", "tool3_z"}};
@@ -43,6 +44,11 @@ const char* full_param_name(int index) {
   return kParamNames[index];
 }
 
+const char* full_param_name(int index, const RobotModel& model) {
+  if (index < kRigidParamCount || index >= kFullParamCount) return full_param_name(index);
+  return compliance_term_name(model.compliance, index - kRigidParamCount);
+}
+
 Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
   const double angle2 = rotation_vector_rad.squaredNorm();
   double sin_ratio = 1.0;      // sine of t over t (evaluated with math::sincos below)
@@ -65,7 +71,11 @@ Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
 void apply_full_increment(const FullParams& increment, RobotModel* model, RigidTransform* base_to_tracker) {
   const RobotModel before = *model;
   *model = from_params(to_params(before) + increment.head<kModelParamCount>());
-  for (int k = 0; k < kMaxTargets - 1; ++k) model->other_tools_m[k] = before.other_tools_m[k];  // not among the 33
+  for (int k = 0; k < kMaxTargets - 1; ++k) model->other_tools_m[k] = before.other_tools_m[k];  // not parameters
+  model->compliance = before.compliance;
+  for (int t = 0; t < before.compliance.term_count; ++t) {
+    model->compliance.coefficient[t] += increment(compliance_param_index(t));
+  }
   const Vec3 rotation_rad = increment.segment<3>(base_rotation_param_index(0));
   const Vec3 translation_m = increment.segment<3>(base_translation_param_index(0));
   base_to_tracker->translation_m += base_to_tracker->rotation * translation_m;

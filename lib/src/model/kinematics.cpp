@@ -228,6 +228,11 @@ Vec3 fk_target_point(const RobotModel& model, const JointVector& q_rad, int targ
   return rigid_point(model, twist_trig(model), target_tool(model, target), deflected(model, q_rad));
 }
 
+Vec3 fk_target_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad, int target) {
+  if (model.compliance.term_count == 0) return rigid_point(model, trig, target_tool(model, target), q_rad);
+  return rigid_point(model, trig, target_tool(model, target), deflected(model, q_rad));
+}
+
 Vec3 fk_tool_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad) {
   if (model.compliance.term_count == 0) return rigid_point(model, trig, model.tool_m, q_rad);
   return rigid_point(model, trig, model.tool_m, deflected(model, q_rad));

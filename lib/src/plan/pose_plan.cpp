@@ -50,7 +50,7 @@ bool options_valid(const PlanOptions& o) {
                        c.tool_down_tolerance_rad > 0.0 && c.tool_down_tolerance_rad <= math::kPi;
   const bool counts_ok = o.pose_count >= 1 && o.pose_count <= kPlanPoseCapacity &&
                          o.candidate_count >= o.pose_count && o.candidate_count <= kPlanCandidateCapacity;
-  const bool mask_ok = o.free_mask != 0 && (o.free_mask & ~kAllParamsMask) == 0;
+  const bool mask_ok = o.free_mask != 0 && (o.free_mask & ~kValidParamsMask) == 0;
   const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
   const bool timing_ok = o.noise_m > 0.0 && math::is_finite(o.noise_m) && o.joint_speed_rad_s > 0.0 &&
                          math::is_finite(o.joint_speed_rad_s) && o.joint_acceleration_rad_s2 > 0.0 &&

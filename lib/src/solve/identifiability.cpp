@@ -188,7 +188,7 @@ ParamMask drop_no_effect(const NormalMatrix& jtwj, ParamMask free_mask, double t
 
 Status check_arguments(const NormalMatrix& jtwj, ParamMask free_mask, double threshold) {
   if (!(threshold > 0.0 && threshold < 1.0)) return Status::invalid_argument;
-  if (free_mask == 0 || (free_mask & ~kAllParamsMask) != 0) return Status::invalid_argument;
+  if (free_mask == 0 || (free_mask & ~kValidParamsMask) != 0) return Status::invalid_argument;
   if (!all_finite(jtwj)) return Status::non_finite_input;
   return Status::ok;
 }

@@ -26,7 +26,7 @@ bool options_valid(const LmOptions& o) {
   const bool huber_ok = o.huber_threshold_m >= 0.0 && math::is_finite(o.huber_threshold_m);
   const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
   const bool mask_ok = o.params != LmParamSet::custom ||
-                       (o.custom_mask != 0 && (o.custom_mask & ~kAllParamsMask) == 0);
+                       (o.custom_mask != 0 && (o.custom_mask & ~kValidParamsMask) == 0);
   return o.max_iterations >= 1 && tolerances_ok && damping_ok && huber_ok && threshold_ok && mask_ok;
 }
 
@@ -160,6 +160,8 @@ Status validate_inputs(const RobotModel& start_model, const RigidTransform* star
   const int determinable = std::min(mask_count(*free_mask), kBaseParamCount);
   if (3 * samples.size() <= static_cast<std::size_t>(determinable)) return Status::too_few_samples;
   if (!all_finite(to_params(start_model))) return Status::non_finite_input;
+  const Status compliance = check_compliance(start_model.compliance);
+  if (compliance != Status::ok) return compliance;
   if (start_base != nullptr && !transform_finite(*start_base)) return Status::non_finite_input;
   for (const Sample& sample : samples) {
     if (!all_finite(sample.q_rad) || !all_finite(sample.point_m)) return Status::non_finite_input;
@@ -397,7 +399,8 @@ const char* lm_termination_name(LmTermination termination) {
 ParamMask lm_param_mask(LmParamSet set, ParamMask custom, const RobotModel& start) {
   switch (set) {
     case LmParamSet::full: return kAllParamsMask;
-    case LmParamSet::custom: return custom & kAllParamsMask;
+    case LmParamSet::full_compliance: return kAllParamsMask | compliance_params_mask(start.compliance.term_count);
+    case LmParamSet::custom: return custom & kValidParamsMask;
     case LmParamSet::link_lengths: break;
   }
   const LinkLengthSet lengths = link_length_set(start);

@@ -201,9 +201,11 @@ TEST(SymmetricEigen, DiagonalMatrixNeedsNoRotation) {
   const Decomposition d = decompose(a, kSymmetricCapacity);
   ASSERT_EQ(d.status, Status::ok);
   EXPECT_EQ(d.iterations, 0);
+  int inverse7 = 1;  // 7 * inverse7 = 1 mod the capacity (a prime, or at least not a multiple of 7)
+  while ((7 * inverse7) % kSymmetricCapacity != 1) ++inverse7;
   for (int k = 0; k < kSymmetricCapacity; ++k) {
     EXPECT_EQ(d.values(k), static_cast<double>(k) - 3.0);
-    const int source = (k * 19) % kSymmetricCapacity;  // 7 * 19 = 133 = 1 mod 33
+    const int source = (k * inverse7) % kSymmetricCapacity;
     EXPECT_EQ(d.vectors(source, k), 1.0);
   }
   // The zero matrix too: every eigenvalue 0, the identity.

@@ -23,13 +23,17 @@ constexpr std::uint64_t kLmOtherArmGoldenDigest = 0x09bcafeaa5cedb13ULL;
 /// The same for three reflectors on a UR5 (testkit/target_data.hpp): the other targets' tool
 /// points eliminated from the normal equations and their sigmas.
 constexpr std::uint64_t kLmTargetsGoldenDigest = 0xb4e9be8f76e40505ULL;
+// Issue 16: the default point compliance terms estimated with the full model
+// (LmParamSet::full_compliance) on a session bent in another form.
+constexpr std::uint64_t kLmComplianceGoldenDigest = 0xa3ac49f712835071ULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));
   digest->add(to_params(r.model));
   digest->add(r.base_to_tracker.rotation);
   digest->add(r.base_to_tracker.translation_m);
-  digest->add(r.sigma);
+  // The 33 rigid sigmas, then the model's compliance ones: a rigid result hashes as before.
+  digest->add(r.sigma.head(kRigidParamCount + r.model.compliance.term_count));
   digest->add(r.loss_sum_m2);
   digest->add(r.rms_m);
   digest->add(r.residual_sigma_m);
@@ -116,6 +120,50 @@ std::uint64_t targets_digest() {
   for (const Vec3& other_m : result.model.other_tools_m) digest.add(other_m);
   for (const Vec3& sigma_m : result.other_tools_sigma_m) digest.add(sigma_m);
   return digest.value();
+}
+
+/// A UR5 whose shoulder and elbow bend under gravity in another form than the calibration's
+/// basis (other_session.hpp's, with the library's cos), 120 poses, calibrated with the
+/// default point compliance terms (LmParamSet::full_compliance) from the nominal table.
+std::uint64_t compliance_digest(Span<JointTrig> joint_trig_storage) {
+  Random random(20261127);
+  const RobotModel truth =
+      test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.015, -0.01, 0.15));
+  static Dataset<120> samples;
+  samples.clear();
+  for (int i = 0; i < 120; ++i) {
+    const JointVector q = test::random_joints(&random);
+    JointVector bent = q;
+    bent(1) += 45e-6 * math::cos(q(1)) + 20e-6 * math::cos(q(1) + q(2));
+    bent(2) += 25e-6 * math::cos(q(1) + q(2));
+    const Vec3 noise = test::gaussian_vector(&random);
+    (void)samples.add(q, test::example_base_to_tracker().apply(fk_tool_point(truth, bent)) + 1e-5 * noise);
+  }
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = Vec3(0.0, 0.0, 0.15);
+  (void)default_compliance_terms(start, Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &start.compliance);
+  static LmWorkspace ws;
+  ws.joint_trig = joint_trig_storage;
+  static LmResult result;
+  static Trace<64> trace;
+  trace.clear();
+  LmOptions options;
+  options.params = LmParamSet::full_compliance;
+  Digest digest;
+  add_result(result, calibrate_lm(start, nullptr, samples.samples(), options, &ws, &result, &trace), trace, &digest);
+  for (double c : result.model.compliance.coefficient) digest.add(c);
+  return digest.value();
+}
+
+TEST(LmGolden, ComplianceDigestIsTheSameOnEveryTarget) {
+  std::uint64_t digest = 0;
+  static JointTrig storage[120];
+  EXPECT_NO_HEAP(digest = compliance_digest({}));
+  std::printf("lm digest (full+compliance): 0x%016llx\n", static_cast<unsigned long long>(digest));
+  EXPECT_EQ(digest, kLmComplianceGoldenDigest);
+  std::uint64_t stored = 0;  // the stored trig is of the readings: a compliant model does not use it
+  EXPECT_NO_HEAP(stored = compliance_digest(storage));
+  EXPECT_EQ(stored, digest);
 }
 
 TEST(LmGolden, SeveralTargetsDigestIsTheSameOnEveryTarget) {

@@ -1,4 +1,4 @@
-// Eigen-decomposition of a symmetric matrix, written for the fixed 33x33 SymmetricMatrix so that
+// Eigen-decomposition of a symmetric matrix, written for the fixed 37x37 SymmetricMatrix so that
 // it needs no heap on any target (Eigen's SelfAdjointEigenSolver keeps a malloc branch on
 // bare metal, docs/firmware.md) and, with a fixed order of operations and only +, -, *, /
 // and sqrt, gives the same bits everywhere. Method: rows and columns with no off-diagonal
@@ -16,10 +16,10 @@
 
 namespace hivecal {
 
-/// Largest matrix the solver decomposes: the full calibration model's 33 parameters
-/// (normal_equations.hpp checks that the two agree).
-inline constexpr int kSymmetricCapacity = 33;
-/// The working matrix: the leading size x size block is decomposed (8.7 kB).
+/// Largest matrix the solver decomposes: the full calibration model's 37 parameters (33
+/// rigid + 4 compliance; normal_equations.hpp checks that the two agree).
+inline constexpr int kSymmetricCapacity = 37;
+/// The working matrix: the leading size x size block is decomposed (10.9 kB).
 using SymmetricMatrix = Eigen::Matrix<double, kSymmetricCapacity, kSymmetricCapacity>;
 /// Eigenvalues, or one column of eigenvectors, of that block.
 using SymmetricVector = Eigen::Matrix<double, kSymmetricCapacity, 1>;
@@ -54,7 +54,7 @@ struct SymmetricEigenReduction {
 /// off-diagonal entry gives its diagonal entry and unit vector exactly. The eigenvalues do
 /// not depend on whether eigenvectors are computed (same bits). If iterations is not null it
 /// receives the number of QL iterations made (0 for a diagonal block).
-/// Errors: invalid_argument (size not in 1..33, or an entry above kSymmetricEigenMaxMagnitude),
+/// Errors: invalid_argument (size not in 1..kSymmetricCapacity, or an entry above kSymmetricEigenMaxMagnitude),
 /// non_finite_input (NaN/Inf in the block),
 /// not_converged (an eigenvalue not isolated after kSymmetricEigenMaxIterations iterations).
 Status symmetric_eigen(SymmetricMatrix* matrix, int size, SymmetricVector* eigenvalues, SymmetricMatrix* eigenvectors,

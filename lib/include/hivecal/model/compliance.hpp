@@ -77,6 +77,9 @@ void compliance_basis(const RobotModel& model, const JointVector& q_rad, double 
 /// The joints' deflection at readings q: dq_j = sum of coefficient_t * basis_t over the terms
 /// of joint j [rad]; zero when term_count is 0.
 JointVector compliance_deflection(const RobotModel& model, const JointVector& q_rad);
+/// The same, with the basis of each term (compliance_basis) into basis[].
+JointVector compliance_deflection(const RobotModel& model, const JointVector& q_rad,
+                                  double (&basis)[kMaxComplianceTerms]);
 
 /// The default terms of `load` for `model` (its nominal geometry) with gravity along
 /// `gravity_direction` (normalised here), into *compliance: terms, term_count, load, the unit

@@ -111,6 +111,8 @@ struct ModelTrig {
 ModelTrig model_trig(const RobotModel& model);
 /// fk_tool_point with the trig of `model` precomputed (same bits; reads the twist half only).
 Vec3 fk_tool_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad);
+/// fk_target_point with the trig of `model` precomputed (same bits).
+Vec3 fk_target_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad, int target);
 
 /// sin and cos of one pose's joint readings, without the offsets: they do not depend on the
 /// model, so a solver that visits the samples many times can compute them once per sample.

@@ -20,9 +20,10 @@ namespace hivecal {
 
 /// Which parameters the solver may move (before the identifiability analysis).
 enum class LmParamSet : std::uint8_t {
-  full,    ///< all 33; the analysis drops what the data cannot determine
+  full,    ///< the rigid model's 33; the analysis drops what the data cannot determine
   link_lengths,  ///< the start model's link lengths (link_length_set: for UR the paper's d1, a2, a3, d4, d5, d6) and the base transform
   custom,  ///< LmOptions::custom_mask
+  full_compliance,  ///< full and the coefficients of the start model's compliance terms (model/compliance.hpp)
 };
 
 /// Loss applied to each sample's residual norm.
@@ -59,7 +60,7 @@ struct LmOptions {
 };
 
 /// The free-parameter mask of a parameter set (`custom` for LmParamSet::custom; `start`
-/// gives the link lengths).
+/// gives the link lengths and the compliance terms).
 ParamMask lm_param_mask(LmParamSet set, ParamMask custom, const RobotModel& start);
 
 /// State after one iteration, for progress display and cancellation.
@@ -142,7 +143,8 @@ struct LmWorkspaceWithTargets : LmWorkspace {
 /// returns an input error. The optional `trace` receives the RMS residual [m] at the start
 /// and after each iteration; `observer` is called after each iteration.
 /// Errors: dataset_empty; too_few_samples (3 N <= number of free parameters);
-/// non_finite_input (start model, base or samples); invalid_argument (options);
+/// non_finite_input (start model, base or samples); invalid_argument (options, or a start
+/// compliance that check_compliance refuses);
 /// poses_not_distinct (all samples at one joint position); errors of fit_base_to_tracker;
 /// singular_system (no identifiable parameter or an unsolvable step);
 /// not_converged (iteration limit, *result holds the last point);
