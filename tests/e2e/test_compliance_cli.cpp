@@ -233,6 +233,7 @@ TEST_F(ComplianceCli, BadGravityAndPayloadRefused) {
       {{"--compliance", "masses", "--payload", "2"}, "--payload must be KG@X,Y,Z"},
       {{"--compliance", "masses", "--payload", "2@0,0,0,1"}, "--payload must be KG@X,Y,Z"},
       {{"--compliance", "--payload", "2@0,0,0"}, "--payload needs --compliance masses"},
+      {{"--compliance", "--method", "abc"}, "--compliance needs a method with LM"},
   };
   for (const Case& c : cases) {
     std::vector<std::string> args = {"--samples", path("truth_samples.csv"), "--robot-model", "ur5e", "--out",
