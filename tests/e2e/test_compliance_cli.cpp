@@ -11,6 +11,7 @@
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
 #include "commands/simulate.hpp"
+#include "commands/validation.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/other_arms.hpp"
@@ -182,6 +183,39 @@ TEST_F(ComplianceCli, ResultHoldsTheCompliancePredictAppliesIt) {
   textio::CalibrationFile again;
   ASSERT_TRUE(textio::read_calibration_json(path("again.json"), &again).ok());
   EXPECT_EQ(again.model.compliance.term_count, 4);
+}
+
+// `hivecal validate` against where the simulated tool truly was (the simulator's own
+// compliance, another form than the calibration's basis): the compliant fit predicts fresh
+// poses better than the rigid one on the same split.
+TEST_F(ComplianceCli, ValidatesCloserToTheTrueBentPointsThanTheRigidFit) {
+  ASSERT_EQ(calibrate(path("v_rigid.json"), {"--method", "lm"}), cli::kExitOk);
+  ASSERT_EQ(calibrate(path("v_compliant.json"), {"--method", "lm", "--compliance"}), cli::kExitOk);
+  textio::CalibrationFile truth;
+  textio::CalibrationFile fits[2];
+  ASSERT_TRUE(textio::read_calibration_json(path("truth.json"), &truth).ok());
+  ASSERT_TRUE(textio::read_calibration_json(path("v_rigid.json"), &fits[0]).ok());
+  ASSERT_TRUE(textio::read_calibration_json(path("v_compliant.json"), &fits[1]).ok());
+  const cli::ReferenceCompliance bent{200e-6, 100e-6};  // simulate --compliance-urad 200,100
+  double mae_m[2];
+  for (int k = 0; k < 2; ++k) {
+    mae_m[k] = cli::validate_on_fresh_poses(fits[k].model, fits[k].base_to_tracker, truth.model,
+                                            truth.base_to_tracker, 1000, 7, bent)
+                   .mae_m;
+  }
+  std::printf("validation on 1000 fresh poses vs the true bent points: rigid %.2f um, LM+compliance %.2f um (%.2f)\n",
+              mae_m[0] * 1e6, mae_m[1] * 1e6, mae_m[1] / mae_m[0]);
+  EXPECT_LT(mae_m[1], 0.5 * mae_m[0]);
+  // `hivecal validate` prints that comparison for a simulator's truth.
+  ::testing::internal::CaptureStdout();
+  EXPECT_EQ(run(cli::validate_main, {"--calibration", path("v_compliant.json"), "--truth", path("truth.json")}),
+            cli::kExitOk);
+  const std::string printed = ::testing::internal::GetCapturedStdout();
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "MAE 3D %.2f um", mae_m[1] * 1e6);
+  EXPECT_NE(printed.find("vs the true tool points (the simulated compliance included): " + std::string(expected)),
+            std::string::npos)
+      << printed;
 }
 
 TEST_F(ComplianceCli, MassesOfAUrWithAPayload) {
