@@ -61,7 +61,7 @@ void prepare_ceres(const hivecal::RobotModel& start, const hivecal::RigidTransfo
 }
 
 CeresOutcome run_ceres(const hivecal::RigidTransform& start_base, const CeresInput& in) {
-  static_assert(ceres_peer::kParams == hivecal::kFullParamCount, "same parameter vector");
+  static_assert(ceres_peer::kParams == hivecal::kRigidParamCount, "same parameter vector (the rigid 33)");
   const ceres_peer::Outcome solved = ceres_peer::solve(in.problem, std::getenv("BENCH_VERBOSE") != nullptr);
   CeresOutcome out;
   out.usable = solved.usable;

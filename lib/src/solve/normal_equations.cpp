@@ -15,18 +15,13 @@ Vec3 point_residual(const RobotModel& model, const ModelTrig& trig, const RigidT
   return base_to_tracker.apply(fk_target_point(model, trig, sample.q_rad, sample.target)) - sample.point_m;
 }
 
-/// A sample of a model with compliance terms: the joint trig at its deflected pose (where the
-/// kernel differentiates) and the basis of each term at its readings.
-struct DeflectedPose {
-  JointTrig trig;                            ///< of q + dq
-  double basis[kMaxComplianceTerms] = {};    ///< compliance_basis at q [m] or [kg m]
-};
+/// The basis of each compliance term at a sample's readings [m] or [kg m].
+using TermBasis = double[kMaxComplianceTerms];
 
-DeflectedPose deflected_pose(const RobotModel& model, const JointVector& q_rad) {
-  DeflectedPose pose;
-  const JointVector dq_rad = compliance_deflection(model, q_rad, pose.basis);
-  pose.trig = joint_trig(q_rad + dq_rad);  // the bits of fk_tool_point's deflected readings
-  return pose;
+/// For a model with compliance terms: the joint trig of a sample's deflected pose (where the
+/// kernel differentiates; the bits of fk_tool_point's deflected readings) and its basis.
+JointTrig deflected_trig(const RobotModel& model, const JointVector& q_rad, TermBasis* basis) {
+  return joint_trig(q_rad + compliance_deflection(model, q_rad, *basis));
 }
 
 /// The parameters of a mask as a list of indices, increasing, and where each of the 33
@@ -92,39 +87,37 @@ void kernel_rows(const RobotModel& model, const ModelTrig& trig, const JointTrig
 /// The compliance columns of one sample's rows: term t's is d(point)/d(theta_offset of its
 /// joint), taken at the deflected pose, times the term's basis (the basis's own dependence on
 /// the geometry is second order and left out, docs/solver-lm.md); 0 for terms the model does
-/// not have, or for every term when `pose` is null (a rigid model).
-void write_compliance_columns(const ComplianceModel& compliance, const DeflectedPose* pose, const IndexList& columns,
+/// not have, or for every term when `basis` is null (a rigid model).
+void write_compliance_columns(const ComplianceModel& compliance, const TermBasis* basis, const IndexList& columns,
                               double (*rows)[kFullParamCount]) {
   for (int t = 0; t < kMaxComplianceTerms; ++t) {
     const int slot = columns.slot[compliance_param_index(t)];
-    const bool present = pose != nullptr && t < compliance.term_count;
+    const bool present = basis != nullptr && t < compliance.term_count;
     const int theta_slot = present ? columns.slot[model_param_index(compliance.terms[t].joint, DhField::theta_offset)] : 0;
-    for (int r = 0; r < 3; ++r) rows[r][slot] = present ? rows[r][theta_slot] * pose->basis[t] : 0.0;
+    for (int r = 0; r < 3; ++r) rows[r][slot] = present ? rows[r][theta_slot] * (*basis)[t] : 0.0;
   }
 }
 
 /// Writes the rows of the local Jacobian [J_tool | -skew(p) | I | J_compliance] of `count`
 /// samples (1 .. kWidth) at the columns' slots, sample k at rows 3k .. 3k+2, and their
 /// residuals rotated into the base frame, R^T r [m]. Lanes beyond `count` repeat the last
-/// sample into their rows (which must exist) as scratch. `deflected` (models with compliance
-/// terms; else null): each sample's DeflectedPose, whose trig replaces sample_trig.
+/// sample into their rows (which must exist) as scratch. `basis` (models with compliance
+/// terms; else null): each sample's TermBasis, and sample_trig is then of the deflected pose.
 template <std::size_t kWidth>
 void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
-              const Sample* const* sample, const JointTrig* const* sample_trig, const DeflectedPose* const* deflected,
-              int count, const IndexList& columns, double (*rows)[kFullParamCount], Vec3* residual_m) {
+              const Sample* const* sample, const JointTrig* const* sample_trig, const TermBasis* basis, int count,
+              const IndexList& columns, double (*rows)[kFullParamCount], Vec3* residual_m) {
   const JointTrig* lane_trig[kWidth];
   detail::JacobianRowsTarget target[kWidth];
   for (int k = 0; k < static_cast<int>(kWidth); ++k) {
-    const int source = k < count ? k : count - 1;
-    lane_trig[k] = deflected != nullptr ? &deflected[source]->trig : sample_trig[source];
+    lane_trig[k] = sample_trig[k < count ? k : count - 1];
     double(*lane_rows)[kFullParamCount] = rows + 3 * k;
     target[k] = {{lane_rows[0], lane_rows[1], lane_rows[2]}, columns.slot};
   }
   Vec3 point_m[kWidth];
   kernel_rows<kWidth>(model, trig, lane_trig, target, point_m);
   for (int k = 0; k < static_cast<int>(kWidth); ++k) {
-    const DeflectedPose* pose = deflected != nullptr && k < count ? deflected[k] : nullptr;
-    write_compliance_columns(model.compliance, pose, columns, rows + 3 * k);
+    write_compliance_columns(model.compliance, basis != nullptr && k < count ? &basis[k] : nullptr, columns, rows + 3 * k);
   }
   // d(Exp(w) p)/dw_k at w = 0 is e_k x p; the translation increment is along the base axes.
   const int* rotation_slot = columns.slot + base_rotation_param_index(0);
@@ -318,15 +311,14 @@ Vec3 local_target_residual_jacobian(const RobotModel& model, int target, const R
   double rows[3 * kGroupSamples][kFullParamCount];
   const Sample* const samples[1] = {&sample};
   const bool compliant = model.compliance.term_count > 0;
-  const JointTrig q_trig = compliant ? JointTrig{} : joint_trig(sample.q_rad);
+  TermBasis basis[1] = {};
+  const JointTrig q_trig = compliant ? deflected_trig(model, sample.q_rad, &basis[0]) : joint_trig(sample.q_rad);
   const JointTrig* const trig_of[1] = {&q_trig};
-  const DeflectedPose pose = compliant ? deflected_pose(model, sample.q_rad) : DeflectedPose{};
-  const DeflectedPose* const pose_of[1] = {&pose};
   RobotModel moved = model;  // the target's tool point: the tool does not enter the trig
   moved.tool_m = target_tool(model, target);
   Vec3 local_residual_m;
   add_rows<static_cast<std::size_t>(kGroupSamples)>(moved, model_trig(model), base_to_tracker, samples, trig_of,
-                                                    compliant ? pose_of : nullptr, 1,
+                                                    compliant ? basis : nullptr, 1,
                                                     indices_of(kAllParamsMask | kComplianceParamsMask), rows,
                                                     &local_residual_m);
   for (int c = 0; c < kFullParamCount; ++c)
@@ -392,22 +384,19 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
   JointTrig computed[kWidth];
   const JointTrig* group_trig[kWidth];
   const bool compliant = model.compliance.term_count > 0;
-  DeflectedPose pose[kWidth];  // the stored trig is of the readings, not of the deflected pose
-  const DeflectedPose* pose_of[kWidth];
+  TermBasis basis[kWidth];
   for (int k = 0; k < count; ++k) {
     const std::size_t i = first + static_cast<std::size_t>(k);
     group[k] = &samples[i];
-    if (compliant) {
-      pose[k] = deflected_pose(model, samples[i].q_rad);
-      pose_of[k] = &pose[k];
-      group_trig[k] = &pose[k].trig;
-      continue;
+    if (compliant) {  // the stored trig is of the readings, not of the deflected pose
+      computed[k] = deflected_trig(model, samples[i].q_rad, &basis[k]);
+    } else if (stored_trig.empty()) {
+      computed[k] = joint_trig(samples[i].q_rad);
     }
-    if (stored_trig.empty()) computed[k] = joint_trig(samples[i].q_rad);
-    group_trig[k] = stored_trig.empty() ? &computed[k] : &stored_trig[i];
+    group_trig[k] = compliant || stored_trig.empty() ? &computed[k] : &stored_trig[i];
   }
   Vec3 residual_m[kWidth];
-  add_rows<kWidth>(model, trig, base_to_tracker, group, group_trig, compliant ? pose_of : nullptr, count, list,
+  add_rows<kWidth>(model, trig, base_to_tracker, group, group_trig, compliant ? basis : nullptr, count, list,
                    batch->rows + 3 * batch->samples, residual_m);
   for (int k = 0; k < count; ++k) {
     const double squared = residual_m[k].squaredNorm();
