@@ -104,20 +104,24 @@ Error number_option(const Options& options, const std::string& name, double* val
   return Error::usage("--" + name + ": not a number: " + port::quoted(options.get(name)));
 }
 
-Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
-  const std::string text = options.get(name);
+bool parse_vec3(std::string_view text, Vec3* value) {
   std::size_t start = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const std::size_t comma = text.find(',', start);
     const bool last = axis == 2;
-    if (last != (comma == std::string::npos) ||
-        !textio::parse_double(std::string_view(text).substr(start, last ? std::string::npos : comma - start),
-                              &(*value_m)(axis))) {
-      return Error::usage("--" + name + " must be X,Y,Z in metres, not " + port::quoted(text));
+    if (last != (comma == std::string_view::npos) ||
+        !textio::parse_double(text.substr(start, last ? std::string_view::npos : comma - start), &(*value)(axis))) {
+      return false;
     }
     start = comma + 1;
   }
-  return Error{};
+  return true;
+}
+
+Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
+  const std::string text = options.get(name);
+  if (parse_vec3(text, value_m)) return Error{};
+  return Error::usage("--" + name + " must be X,Y,Z in metres, not " + port::quoted(text));
 }
 
 std::vector<OptionSpec> input_unit_option_specs() {

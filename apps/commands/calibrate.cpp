@@ -499,15 +499,7 @@ Error payload_option(const Options& options, ArmMasses* masses) {
   double kg = 0.0;
   if (at == std::string::npos || !textio::parse_double(text.substr(0, at), &kg) || !(kg >= 0.0 && kg < 1e4)) return bad;
   Vec3 com_m = Vec3::Zero();
-  std::size_t start = at + 1;
-  for (int axis = 0; axis < 3; ++axis) {  // X,Y,Z: exactly three numbers
-    const std::size_t comma = axis < 2 ? text.find(',', start) : text.size();
-    if (comma == std::string::npos || !textio::parse_double(text.substr(start, comma - start), &com_m(axis)) ||
-        (axis == 2 && text.find(',', start) != std::string::npos)) {
-      return bad;
-    }
-    start = comma + 1;
-  }
+  if (!parse_vec3(std::string_view(text).substr(at + 1), &com_m)) return bad;
   if (!com_m.allFinite() || com_m.norm() > 10.0) return bad;
   masses->payload_kg = kg;
   masses->payload_com_m = com_m;
@@ -538,8 +530,7 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
     return Error::usage("--payload needs --compliance masses (the basis kind weighs unit masses, not the payload)");
   }
   Vec3 gravity = Vec3::Zero();
-  const Error parsed = vec3_option(options, "gravity", &gravity);
-  if (!parsed.ok() || !gravity.allFinite() || !(gravity.norm() > 1e-9)) {
+  if (!parse_vec3(options.get("gravity"), &gravity) || !gravity.allFinite() || !(gravity.norm() > 1e-9)) {
     return Error::usage("--gravity must be X,Y,Z: the direction of gravity in the robot base frame, not zero (e.g. "
                         "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), not " + port::quoted(options.get("gravity")));
   }
