@@ -240,10 +240,17 @@ class CalibrationWorkspaceBase {
   virtual ResidualScratch open_residuals() = 0;
   /// The blunder search's lists: 0 the set aside, 1 the last test's.
   virtual CalibrationOutlierList& outlier_list(std::size_t which) = 0;
+  /// Where an LM stage keeps the geometry it starts from while it reruns (dropped or not
+  /// significant parameters put back): in the workspace, not on the stack under LM (a model
+  /// with its compliance is 584 B, and the firmware's stack peak is inside LM).
+  RobotModel& lm_start() { return lm_start_; }
 
  protected:
   CalibrationWorkspaceBase() = default;
   ~CalibrationWorkspaceBase() = default;
+
+ private:
+  RobotModel lm_start_;
 };
 
 namespace detail {

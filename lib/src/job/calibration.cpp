@@ -186,7 +186,8 @@ double model_value(const RobotModel& model, int index) {
 Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_model, const RigidTransform* base,
               bool reset, bool compliance, Span<const Sample> samples, double t, TraceBase* trace,
               LmObserver* observer, ParamMask* pruned) {
-  RobotModel from = start_model;
+  RobotModel& from = job.workspace.lm_start();  // start_model is never this one: a stage's or the job's model
+  from = start_model;
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
   LmOptions lm = o.lm;

@@ -48,7 +48,7 @@ std::uint64_t digest_of(const PlanResult& r) {
   Digest digest;
   for (std::size_t i = 0; i < r.pose_count; ++i) digest.add(r.poses[i]);
   digest.add(r.planned.log_det);
-  digest.add(r.planned.sigma);
+  digest.add(r.planned.sigma.head<kRigidParamCount>());  // the rigid 33, as before the compliance coefficients
   digest.add(r.travel_s);
   return digest.value();
 }

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "hivecal/calibration.hpp"
 #include "hivecal/core/digest.hpp"
 #include "hivecal/solve/lm.hpp"
 #include "testkit/alloc_trap.hpp"
@@ -26,6 +27,8 @@ constexpr std::uint64_t kLmTargetsGoldenDigest = 0xb4e9be8f76e40505ULL;
 // Issue 16: the default point compliance terms estimated with the full model
 // (LmParamSet::full_compliance) on a session bent in another form.
 constexpr std::uint64_t kLmComplianceGoldenDigest = 0xa3ac49f712835071ULL;
+// The calibration job with compliance enabled (LM, then LM+compliance).
+constexpr std::uint64_t kComplianceJobGoldenDigest = 0xa8225944972578ebULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));
@@ -153,6 +156,55 @@ std::uint64_t compliance_digest(Span<JointTrig> joint_trig_storage) {
   add_result(result, calibrate_lm(start, nullptr, samples.samples(), options, &ws, &result, &trace), trace, &digest);
   for (double c : result.model.compliance.coefficient) digest.add(c);
   return digest.value();
+}
+
+/// The job (calibration.hpp) with compliance enabled on the same kind of session: split,
+/// blunder test, rigid LM, then LM+compliance with the significance test.
+std::uint64_t compliance_job_digest() {
+  Random random(20261128);
+  const RobotModel truth =
+      test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.015, -0.01, 0.15));
+  static Dataset<120> samples;
+  samples.clear();
+  for (int i = 0; i < 120; ++i) {
+    const JointVector q = test::random_joints(&random);
+    JointVector bent = q;
+    bent(1) += 60e-6 * math::cos(q(1)) + 30e-6 * math::cos(q(1) + q(2));
+    bent(2) += 40e-6 * math::cos(q(1) + q(2));
+    const Vec3 noise = test::gaussian_vector(&random);
+    (void)samples.add(q, test::example_base_to_tracker().apply(fk_tool_point(truth, bent)) + 1e-5 * noise);
+  }
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = Vec3(0.0, 0.0, 0.15);
+  CalibrationOptions options;
+  options.method = CalibrationMethod::lm;
+  options.compliance.enabled = true;
+  static CalibrationWorkspace<120, double, 20, 64> ws;
+  static CalibrationResult result;
+  Digest digest;
+  const Status status = calibrate(start, &samples, options, &ws, &result);
+  EXPECT_EQ(status, Status::ok);
+  EXPECT_EQ(result.stage_count, 2u);  // LM, LM+compliance
+  digest.add_u64(static_cast<std::uint64_t>(status));
+  digest.add_u64(result.stage_count);
+  for (const CalibrationStage& stage : result.stage_list()) {
+    digest.add(to_params(stage.model));
+    for (double c : stage.model.compliance.coefficient) digest.add(c);
+    digest.add(stage.base_to_tracker.rotation);
+    digest.add(stage.base_to_tracker.translation_m);
+    digest.add(stage.test.mae(ErrorAxis::norm_3d));
+  }
+  digest.add_u64(result.lm.identifiability.kept_mask);
+  digest.add_u64(result.lm_pruned_mask);
+  digest.add_u64(result.outlier_count);
+  return digest.value();
+}
+
+TEST(LmGolden, ComplianceJobDigestIsTheSameOnEveryTarget) {
+  std::uint64_t digest = 0;
+  EXPECT_NO_HEAP(digest = compliance_job_digest());
+  std::printf("job digest (LM + LM+compliance): 0x%016llx\n", static_cast<unsigned long long>(digest));
+  EXPECT_EQ(digest, kComplianceJobGoldenDigest);
 }
 
 TEST(LmGolden, ComplianceDigestIsTheSameOnEveryTarget) {
