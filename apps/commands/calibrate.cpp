@@ -459,7 +459,7 @@ const std::vector<OptionSpec>& option_specs() {
       {"report", "DIR", "write an HTML report with figures into DIR", ""},
       {"max-change-mm", "X", "warn (exit 5) when a length moves more than this from the start geometry [mm]", "20"},
       {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
-      {"compliance", "basis|masses", "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity basis, or the link masses (UR only)", "", "basis"},
+      {"compliance", "basis|masses", "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity basis, or the link masses (UR3e, UR5e)", "", "basis"},
       {"gravity", "X,Y,Z", "with --compliance: gravity direction in the robot base frame (wall or ceiling mounts)", "0,0,-1"},
       {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]", ""},
       {"quiet", "", "no progress on stderr", ""},
