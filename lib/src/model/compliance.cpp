@@ -79,6 +79,7 @@ static_assert(kJointCount == 6 && kToolLoadFrame == 7, "one name row per joint, 
 
 Status check_compliance(const ComplianceModel& compliance) {
   if (compliance.term_count < 0 || compliance.term_count > kMaxComplianceTerms) return Status::invalid_argument;
+  if (compliance.term_count == 0) return Status::ok;  // rigid: the other fields are not read
   if (compliance.load != ComplianceLoad::point && compliance.load != ComplianceLoad::arm_masses) {
     return Status::invalid_argument;
   }

@@ -228,6 +228,9 @@ TEST(Compliance, CheckRejectsWhatTheModelCannotUse) {
   ComplianceModel c = compliant_ur5e(ComplianceLoad::point).compliance;
   EXPECT_EQ(check_compliance(c), Status::ok);
   EXPECT_EQ(check_compliance(ComplianceModel{}), Status::ok);
+  ComplianceModel rigid;
+  rigid.gravity_direction = Vec3::Zero();  // not read without terms
+  EXPECT_EQ(check_compliance(rigid), Status::ok);
   ComplianceModel bad = c;
   bad.term_count = 5;
   EXPECT_EQ(check_compliance(bad), Status::invalid_argument);

@@ -64,7 +64,8 @@ struct ComplianceModel {
   ComplianceLoad load = ComplianceLoad::point;     ///< what every term's basis weighs
 };
 
-/// Status::ok when `compliance` is usable: term_count in [0, kMaxComplianceTerms], joints in
+/// Status::ok when `compliance` is usable: rigid (term_count 0, the rest unread), or
+/// term_count in [1, kMaxComplianceTerms], joints in
 /// [0, 6), point frames in (joint, kToolLoadFrame], finite coefficients, masses >= 0 and
 /// finite, and a finite gravity direction of unit length (within 1e-9); invalid_argument or
 /// non_finite_input otherwise.
