@@ -31,7 +31,8 @@ namespace {
 void print_help(const std::string& command, const std::string& summary, const std::vector<OptionSpec>& specs) {
   std::printf("usage: hivecal %s [options]\n\n%s\n\noptions:\n", command.c_str(), summary.c_str());
   for (const OptionSpec& spec : specs) {
-    std::string left = "  --" + spec.name + (spec.value_name.empty() ? "" : " " + spec.value_name);
+    const std::string value = spec.bare_value.empty() ? spec.value_name : "[" + spec.value_name + "]";
+    std::string left = "  --" + spec.name + (spec.value_name.empty() ? "" : " " + value);
     if (left.size() < 30) left.resize(30, ' ');
     std::printf("%s %s%s\n", left.c_str(), spec.help.c_str(),
                 spec.default_value.empty() ? "" : (" (default: " + spec.default_value + ")").c_str());
@@ -81,7 +82,10 @@ int parse_options(const std::string& command, const std::string& summary, const 
       options->values_[name] = "1";
       continue;
     }
-    if (!has_inline_value) {
+    const bool bare = !spec->bare_value.empty() && (i + 1 >= argc || std::string(argv[i + 1]).rfind("--", 0) == 0);
+    if (!has_inline_value && bare) {
+      value = spec->bare_value;
+    } else if (!has_inline_value) {
       if (i + 1 >= argc) {
         error(command, "option --" + name + " needs a value " + spec->value_name);
         return kExitUsage;
@@ -100,20 +104,24 @@ Error number_option(const Options& options, const std::string& name, double* val
   return Error::usage("--" + name + ": not a number: " + port::quoted(options.get(name)));
 }
 
-Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
-  const std::string text = options.get(name);
+bool parse_vec3(std::string_view text, Vec3* value) {
   std::size_t start = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const std::size_t comma = text.find(',', start);
     const bool last = axis == 2;
-    if (last != (comma == std::string::npos) ||
-        !textio::parse_double(std::string_view(text).substr(start, last ? std::string::npos : comma - start),
-                              &(*value_m)(axis))) {
-      return Error::usage("--" + name + " must be X,Y,Z in metres, not " + port::quoted(text));
+    if (last != (comma == std::string_view::npos) ||
+        !textio::parse_double(text.substr(start, last ? std::string_view::npos : comma - start), &(*value)(axis))) {
+      return false;
     }
     start = comma + 1;
   }
-  return Error{};
+  return true;
+}
+
+Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
+  const std::string text = options.get(name);
+  if (parse_vec3(text, value_m)) return Error{};
+  return Error::usage("--" + name + " must be X,Y,Z in metres, not " + port::quoted(text));
 }
 
 std::vector<OptionSpec> input_unit_option_specs() {

@@ -4,6 +4,7 @@
 
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hivecal/core/types.hpp"
@@ -33,6 +34,9 @@ struct OptionSpec {
   std::string value_name;   ///< e.g. "FILE"; empty for a flag
   std::string help;         ///< one line
   std::string default_value;  ///< shown in --help and used when absent (empty: none)
+  /// Non-empty: the value may be left out (`--compliance` alone, followed by another option
+  /// or nothing) and is then this one.
+  std::string bare_value{};
 };
 
 /// Parsed options of one subcommand.
@@ -66,6 +70,8 @@ bool progress_enabled(const Options& options);
 // --- option helpers shared by the commands (one parser per kind of value)
 /// --<name> as a number; Fault::usage naming the option otherwise.
 Error number_option(const Options& options, const std::string& name, double* value);
+/// "X,Y,Z": exactly three numbers into *value; false otherwise.
+bool parse_vec3(std::string_view text, Vec3* value);
 /// --<name> as X,Y,Z in metres (e.g. --tool).
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
 /// The options of every command that reads text inputs: --length-unit, --angle-unit.

@@ -53,6 +53,10 @@ struct CalibrateSettings {
   bool progress = false;             ///< progress lines on stderr
   textio::InputUnits units;          ///< --length-unit, --angle-unit of text inputs
   FitBounds bounds;                  ///< --max-change-mm, --max-change-deg
+  bool compliance = false;           ///< --compliance: an LM+compliance stage after the rigid LM
+  /// --compliance basis|masses: the terms (default_compliance_terms), unit gravity direction
+  /// (--gravity) and, for masses, the arm's masses and the payload (--payload); zero coefficients.
+  ComplianceModel compliance_model;
 };
 
 /// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
@@ -198,7 +202,11 @@ report::MethodRow stage_row(const Run& run, std::size_t k) {
   std::string params = stage.params == CalibrationParams::paper ? "paper-" + std::to_string(run.link_length_count) : "full";
   if (stage.solver == CalibrationSolver::lm) {
     if (stage.params == CalibrationParams::paper && run.result.baseline.tool_fitted) params += " + tool";
-    params += " (" + std::to_string(run.result.lm.identifiability.kept_count()) + " estimated)";
+    if (stage.compliance) params += " + compliance";
+    bool last_lm = true;  // result.lm holds the last LM stage's analysis only
+    for (std::size_t later = k + 1; later < run.result.stage_count; ++later)
+      last_lm = last_lm && run.result.stages[later].solver != CalibrationSolver::lm;
+    if (last_lm) params += " (" + std::to_string(run.result.lm.identifiability.kept_count()) + " estimated)";
   }
   // A refining stage's row (ABC+LM) is the whole chain: its time includes the stage it refined.
   const double seconds = run.seconds[k] + (stage.refines_previous && k > 0 ? run.seconds[k - 1] : 0.0);
@@ -208,19 +216,20 @@ report::MethodRow stage_row(const Run& run, std::size_t k) {
 }
 
 /// The non-separable combination of a dropped parameter, e.g. "+0.707*d2 -0.707*d4".
-std::string combination_text(const DroppedParam& d) {
+std::string combination_text(const DroppedParam& d, const RobotModel& model) {
   std::string combination;
   char buf[96];
   for (int c = 0; c < kNullComponentCount; ++c) {
     if (d.component_index[c] < 0) continue;
     std::snprintf(buf, sizeof buf, "%s%+.3g*%s", combination.empty() ? "" : " ", d.component[c],
-                  full_param_name(d.component_index[c]));
+                  full_param_name(d.component_index[c], model));
     combination += buf;
   }
   return combination;
 }
 
-std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pruned, double significance_t) {
+std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pruned, double significance_t,
+                                               const RobotModel& model) {
   std::vector<std::string> lines;
   const IdentifiabilityReport& id = lm.identifiability;
   char buf[256];
@@ -229,34 +238,47 @@ std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pru
   lines.push_back(buf);
   for (int k = 0; k < id.dropped_count; ++k) {
     const DroppedParam& d = id.dropped[k];
-    std::snprintf(buf, sizeof buf, "  dropped %-8s (%s, sigma ratio %.2g): %s", full_param_name(d.index),
-                  unidentifiable_reason_name(d.reason), d.singular_ratio, combination_text(d).c_str());
+    std::snprintf(buf, sizeof buf, "  dropped %-8s (%s, sigma ratio %.2g): %s", full_param_name(d.index, model),
+                  unidentifiable_reason_name(d.reason), d.singular_ratio, combination_text(d, model).c_str());
     lines.push_back(buf);
   }
   for (int k = 0; k < kFullParamCount; ++k) {
     if (!mask_has(pruned, k)) continue;
     std::snprintf(buf, sizeof buf, "  fixed   %-8s (not significant: change below %.3g sigma; kept at its start value)",
-                  full_param_name(k), significance_t);
+                  full_param_name(k, model), significance_t);
     lines.push_back(buf);
   }
   return lines;
 }
 
-report::IdentifiabilityTable identifiability_table(const LmResult& lm) {
+report::IdentifiabilityTable identifiability_table(const LmResult& lm, const RobotModel& model) {
   const IdentifiabilityReport& id = lm.identifiability;
   report::IdentifiabilityTable table;
   table.present = true;
   table.free_count = mask_count(id.free_mask);
   for (int k = 0; k < kFullParamCount; ++k)
-    if (mask_has(id.kept_mask, k)) table.estimated.push_back(full_param_name(k));
+    if (mask_has(id.kept_mask, k)) table.estimated.push_back(full_param_name(k, model));
   for (int k = 0; k < id.dropped_count; ++k) {
     const DroppedParam& d = id.dropped[k];
-    table.dropped.push_back({full_param_name(d.index), unidentifiable_reason_name(d.reason), d.singular_ratio,
-                             combination_text(d)});
+    table.dropped.push_back({full_param_name(d.index, model), unidentifiable_reason_name(d.reason), d.singular_ratio,
+                             combination_text(d, model)});
   }
   table.condition_before = id.condition_before;
   table.condition_after = id.condition_after;
   return table;
+}
+
+/// The inverse of the leading N x N block of `scaled` into *inverse (zero elsewhere). A rigid
+/// model inverts only the 33 rigid parameters, as before the compliance coefficients existed:
+/// the same pivots, so the same bits in result.json.
+template <int N>
+bool invert_leading(const NormalMatrix& scaled, NormalMatrix* inverse) {
+  using Block = Eigen::Matrix<double, N, N>;
+  const Eigen::LDLT<Block> ldlt(scaled.template topLeftCorner<N, N>());
+  if (ldlt.info() != Eigen::Success) return false;
+  inverse->setZero();
+  inverse->template topLeftCorner<N, N>() = ldlt.solve(Block::Identity());
+  return true;
 }
 
 /// Correlation matrix of the estimated parameters at the result, from the normal equations
@@ -275,9 +297,9 @@ bool parameter_correlations(const CalibrationStage& stage, const LmResult& lm, S
   }
   FullParams scale;
   scale_normal_matrix(eq.jtwj, kept, 1.0, &scaled, &scale);  // unit diagonal; identity outside `kept`
-  const Eigen::LDLT<NormalMatrix> ldlt(scaled);
-  if (ldlt.info() != Eigen::Success) return false;
-  *correlation = ldlt.solve(NormalMatrix::Identity());
+  const bool inverted = stage.model.compliance.term_count > 0 ? invert_leading<kFullParamCount>(scaled, correlation)
+                                                              : invert_leading<kRigidParamCount>(scaled, correlation);
+  if (!inverted) return false;
   const FullParams variance = correlation->diagonal();
   for (int i = 0; i < kFullParamCount; ++i)
     for (int j = 0; j < kFullParamCount; ++j) {
@@ -307,7 +329,24 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
     for (int other = 0; correlated && estimated && other < kFullParamCount; ++other) {
       if (other != k && std::fabs(correlation(k, other)) > std::fabs(row.correlation)) {
         row.correlation = correlation(k, other);
-        row.correlated_with = full_param_name(other);
+        row.correlated_with = full_param_name(other, stage.model);
+      }
+    }
+    rows.push_back(row);
+  }
+  const ComplianceModel& compliance = stage.model.compliance;
+  for (int t = 0; t < compliance.term_count; ++t) {  // LM+compliance: the coefficients, in their own unit
+    const int k = compliance_param_index(t);
+    report::ParameterRow row;
+    row.name = compliance_term_name(compliance, t);
+    row.compliance_unit = textio::compliance_unit(compliance.load);
+    row.start = t < start.compliance.term_count ? start.compliance.coefficient[t] : 0.0;
+    row.value = compliance.coefficient[t];
+    row.sigma = lm != nullptr && mask_has(lm->identifiability.kept_mask, k) ? lm->sigma(k) : 0.0;
+    for (int other = 0; correlated && row.sigma > 0.0 && other < kFullParamCount; ++other) {
+      if (other != k && std::fabs(correlation(k, other)) > std::fabs(row.correlation)) {
+        row.correlation = correlation(k, other);
+        row.correlated_with = full_param_name(other, stage.model);
       }
     }
     rows.push_back(row);
@@ -341,12 +380,12 @@ void write_stage_list(textio::JsonWriter& json, const std::vector<report::Method
   json.end_array();
 }
 
-void write_lm_details(textio::JsonWriter& json, const LmResult& lm) {
+void write_lm_details(textio::JsonWriter& json, const LmResult& lm, const RobotModel& model) {
   const IdentifiabilityReport& id = lm.identifiability;
   json.key("identifiability").begin_object();
   json.key("estimated").begin_array();
   for (int k = 0; k < kFullParamCount; ++k)
-    if (mask_has(id.kept_mask, k)) json.value(full_param_name(k));
+    if (mask_has(id.kept_mask, k)) json.value(full_param_name(k, model));
   for (int target = 1; target < kMaxTargets; ++target) {  // several targets: their tool points
     if (lm.other_tools_sigma_m[target - 1].isZero()) continue;
     for (int axis = 0; axis < 3; ++axis) json.value(other_tool_param_name(target, axis));
@@ -356,12 +395,12 @@ void write_lm_details(textio::JsonWriter& json, const LmResult& lm) {
   for (int k = 0; k < id.dropped_count; ++k) {
     const DroppedParam& d = id.dropped[k];
     json.begin_object();
-    json.key("param").value(full_param_name(d.index));
+    json.key("param").value(full_param_name(d.index, model));
     json.key("reason").value(unidentifiable_reason_name(d.reason));
     json.key("singular_ratio").value(d.singular_ratio);
     json.key("combination").begin_object();
     for (int c = 0; c < kNullComponentCount; ++c)
-      if (d.component_index[c] >= 0) json.key(full_param_name(d.component_index[c])).value(d.component[c]);
+      if (d.component_index[c] >= 0) json.key(full_param_name(d.component_index[c], model)).value(d.component[c]);
     json.end_object();
     json.end_object();
   }
@@ -372,7 +411,7 @@ void write_lm_details(textio::JsonWriter& json, const LmResult& lm) {
   json.end_object();
   json.key("sigma").begin_object();
   for (int k = 0; k < kFullParamCount; ++k)
-    if (mask_has(id.kept_mask, k)) json.key(full_param_name(k)).value(lm.sigma(k));
+    if (mask_has(id.kept_mask, k)) json.key(full_param_name(k, model)).value(lm.sigma(k));
   for (int target = 1; target < kMaxTargets; ++target) {
     const Vec3& sigma_m = lm.other_tools_sigma_m[target - 1];
     if (sigma_m.isZero()) continue;
@@ -420,6 +459,9 @@ const std::vector<OptionSpec>& option_specs() {
       {"report", "DIR", "write an HTML report with figures into DIR", ""},
       {"max-change-mm", "X", "warn (exit 5) when a length moves more than this from the start geometry [mm]", "20"},
       {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
+      {"compliance", "basis|masses", "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity basis, or the link masses (UR3e, UR5e)", "", "basis"},
+      {"gravity", "X,Y,Z", "with --compliance: gravity direction in the robot base frame (wall or ceiling mounts)", "0,0,-1"},
+      {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]", ""},
       {"quiet", "", "no progress on stderr", ""},
     };
     for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
@@ -429,6 +471,90 @@ const std::vector<OptionSpec>& option_specs() {
 }
 
 // --- parse ------------------------------------------------------------------------------------
+
+/// The built-in types whose published link masses the library holds, e.g. "ur3e, ur5e".
+std::string arms_with_masses() {
+  std::string names;
+  const std::string all = robot_type_names();  // "ur3, ur5, ..."
+  for (std::size_t at = 0; at < all.size();) {
+    const std::size_t end = std::min(all.find(',', at), all.size());
+    const std::string name(textio::trim(std::string_view(all).substr(at, end - at)));
+    RobotType type = RobotType::ur5;
+    ArmMasses masses;
+    if (!name.empty() && robot_type_from_name(name.c_str(), &type) == Status::ok &&
+        nominal_arm_masses(type, &masses) == Status::ok) {
+      names += (names.empty() ? "" : ", ") + name;
+    }
+    at = end + 1;
+  }
+  return names;
+}
+
+/// --payload KG@X,Y,Z into *masses.
+Error payload_option(const Options& options, ArmMasses* masses) {
+  const std::string text = options.get("payload");
+  const std::size_t at = text.find('@');
+  const Error bad = Error::usage("--payload must be KG@X,Y,Z: a mass in kg >= 0 and its centre in the flange frame "
+                                 "in metres (e.g. 1.2@0,0,0.05), not " + port::quoted(text));
+  double kg = 0.0;
+  if (at == std::string::npos || !textio::parse_double(text.substr(0, at), &kg) || !(kg >= 0.0 && kg < 1e4)) return bad;
+  Vec3 com_m = Vec3::Zero();
+  if (!parse_vec3(std::string_view(text).substr(at + 1), &com_m)) return bad;
+  if (!com_m.allFinite() || com_m.norm() > 10.0) return bad;
+  masses->payload_kg = kg;
+  masses->payload_com_m = com_m;
+  return Error{};
+}
+
+/// --compliance, --gravity, --payload into settings->compliance_model (the default terms of the
+/// start model's nominal geometry); refused: a kind other than basis|masses, masses for an arm
+/// without published masses, a zero or non-finite gravity, --gravity / --payload without the
+/// compliance they set.
+Error compliance_from_options(const Options& options, CalibrateSettings* settings) {
+  settings->compliance = options.given("compliance");
+  if (!settings->compliance) {
+    for (const char* name : {"gravity", "payload"})
+      if (options.given(name)) return Error::usage(std::string("--") + name + " needs --compliance (see --help)");
+    return Error{};
+  }
+  const std::string method = options.get("method");
+  if (method == "abc" || method == "gsa") {
+    return Error::usage("--compliance needs a method with LM (abc+lm, gsa+lm, lm, all), not --method " + method);
+  }
+  const std::string kind = options.get("compliance");
+  if (kind != "basis" && kind != "masses") {
+    return Error::usage("--compliance must be 'basis' or 'masses', not " + port::quoted(kind));
+  }
+  const ComplianceLoad load = kind == "masses" ? ComplianceLoad::arm_masses : ComplianceLoad::point;
+  if (options.given("payload") && load != ComplianceLoad::arm_masses) {
+    return Error::usage("--payload needs --compliance masses (the basis kind weighs unit masses, not the payload)");
+  }
+  Vec3 gravity = Vec3::Zero();
+  if (!parse_vec3(options.get("gravity"), &gravity) || !gravity.allFinite() || !(gravity.norm() > 1e-9)) {
+    return Error::usage("--gravity must be X,Y,Z: the direction of gravity in the robot base frame, not zero (e.g. "
+                        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), not " + port::quoted(options.get("gravity")));
+  }
+  ComplianceModel& model = settings->compliance_model;
+  if (load == ComplianceLoad::arm_masses) {
+    RobotType type = RobotType::ur5;
+    if (robot_type_from_name(settings->robot.robot.c_str(), &type) != Status::ok ||
+        nominal_arm_masses(type, &model.masses) != Status::ok) {
+      return Error::usage("--compliance masses needs the arm's link masses, which are known here for " +
+                          arms_with_masses() + " only (by --robot-model's name); " +
+                          port::quoted(settings->robot.robot) + " has none: use --compliance basis");
+    }
+    if (options.given("payload")) {
+      const Error payload = payload_option(options, &model.masses);
+      if (!payload.ok()) return payload;
+    }
+  }
+  if (default_compliance_terms(settings->robot.model, gravity, load, &model) != Status::ok) {
+    return Error::usage("--compliance: no joint of " + port::quoted(settings->robot.robot) +
+                        " has a horizontal axis at q = 0 under --gravity " + options.get("gravity") +
+                        " (the shoulder and elbow carry the deflection): check --gravity");
+  }
+  return Error{};
+}
 
 Error settings_from_options(const Options& options, CalibrateSettings* settings) {
   bool from_file = false;
@@ -495,7 +621,7 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   settings->bounds.max_angle_change_rad = max_deg * 0.017453292519943295;
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
-  return Error{};
+  return compliance_from_options(options, settings);
 }
 
 /// Where the results go, declared (and checked) before the long work.
@@ -594,6 +720,8 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.robust = settings.robust;
   job.keep_outliers = settings.keep_outliers;
   job.significance_t = settings.significance_t;
+  job.compliance.enabled = settings.compliance;
+  if (settings.compliance) job.compliance.model = settings.compliance_model;
   CliWorkspace& workspace = cli_workspace();
   JobObserver observer(settings.progress);
   run->target_count = target_count(dataset->samples());
@@ -700,12 +828,13 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   }
   add_samples(dataset, run, &data);
   if (const LmResult* lm = run.final_lm(); lm != nullptr) {
-    for (const std::string& line : identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t)) {
+    for (const std::string& line : identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t,
+                                                          final_stage.model)) {
       data.info_lines.push_back(line);
     }
-    data.identifiability = identifiability_table(*lm);
+    data.identifiability = identifiability_table(*lm, final_stage.model);
     for (int k = 0; k < kFullParamCount; ++k)
-      if (mask_has(run.result.lm_pruned_mask, k)) data.identifiability.fixed.push_back(full_param_name(k));
+      if (mask_has(run.result.lm_pruned_mask, k)) data.identifiability.fixed.push_back(full_param_name(k, final_stage.model));
     data.identifiability.significance_t = run.result.significance_t;
     data.noise_sigma_m = lm->residual_sigma_m;
   }
@@ -803,6 +932,10 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
   file.base_to_tracker = final_stage.base_to_tracker;
   file.has_metrics = true;
   file.metrics = data.calibrated;
+  for (int t = 0; run.final_lm() != nullptr && t < final_stage.model.compliance.term_count; ++t) {
+    const int k = compliance_param_index(t);
+    if (mask_has(run.final_lm()->identifiability.kept_mask, k)) file.compliance_sigma[t] = run.final_lm()->sigma(k);
+  }
   const UrCalibrationDeltas deltas = ur_deltas_between(settings.robot.model, final_stage.model);
   return textio::format_calibration_json(file, [&](textio::JsonWriter& w) {
     w.key("method").value(run.final_method());
@@ -817,11 +950,11 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     w.end_object();
     write_stage_list(w, data.methods);
     if (run.final_lm() != nullptr) {
-      write_lm_details(w, *run.final_lm());
+      write_lm_details(w, *run.final_lm(), final_stage.model);
       w.key("significance_t").value(run.result.significance_t);
       w.key("not_significant").begin_array();
       for (int k = 0; k < kFullParamCount; ++k)
-        if (mask_has(run.result.lm_pruned_mask, k)) w.value(full_param_name(k));
+        if (mask_has(run.result.lm_pruned_mask, k)) w.value(full_param_name(k, final_stage.model));
       w.end_array();
     }
     write_ur_deltas(w, deltas);

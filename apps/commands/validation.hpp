@@ -15,10 +15,19 @@ struct ValidationStats {
   double max_m = 0.0;    ///< largest 3D distance [m]
 };
 
+/// The simulator's joint compliance of a reference (truth.json's "simulation"."compliance";
+/// sim::simulated_compliance): zero for a rigid reference.
+struct ReferenceCompliance {
+  double joint2_rad = 0.0;  ///< joint 2 deflection at full horizontal reach [rad]
+  double joint3_rad = 0.0;  ///< joint 3 deflection with the forearm horizontal [rad]
+};
+
 /// Draws `poses` random poses (seeded; the workspace the simulator and the paper use: shoulder
-/// up, tool down-ish) and compares the tool points predicted by both geometries.
+/// up, tool down-ish) and compares the tool points predicted by both geometries (each with
+/// its own compliance model, if any; the reference bent by `reference_compliance` too).
 ValidationStats validate_on_fresh_poses(const RobotModel& model, const RigidTransform& base_to_tracker,
                                         const RobotModel& reference, const RigidTransform& reference_base_to_tracker,
-                                        long poses, std::uint64_t seed);
+                                        long poses, std::uint64_t seed,
+                                        const ReferenceCompliance& reference_compliance = {});
 
 }  // namespace hivecal::cli

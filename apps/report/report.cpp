@@ -208,28 +208,67 @@ void convergence_figures(const ReportData& data, std::vector<Figure>* out) {
   }
 }
 
+/// With a compliant final model: the last rigid calibrated model before it (the rigid LM
+/// stage, the reference of the compliance figures); else null.
+const PredictionSet* rigid_reference(const ReportData& data) {
+  if (data.predictions.size() < 3 || data.predictions.back().model.compliance.term_count == 0) return nullptr;
+  for (std::size_t k = data.predictions.size() - 1; k-- > 1;)  // [0] is the uncalibrated model
+    if (data.predictions[k].model.compliance.term_count == 0) return &data.predictions[k];
+  return nullptr;
+}
+
+/// Whether a term of `model`'s compliance deflects joint j (0-based).
+bool compliant_joint(const RobotModel& model, int j) {
+  for (int t = 0; t < model.compliance.term_count; ++t)
+    if (model.compliance.terms[t].joint == j) return true;
+  return false;
+}
+
+std::vector<double> residuals_um(const ReportData& data, const PredictionSet& set) {
+  std::vector<double> residual_um;
+  for (std::size_t i = 0; i < data.samples.size() && i < set.points_m.size(); ++i)
+    residual_um.push_back((set.points_m[i] - data.samples[i].measured_m).norm() * 1e6);
+  return residual_um;
+}
+
 /// Residual after calibration against each joint angle (unmodelled effects show as trends).
+/// The joints a compliance term deflects show the rigid fit (before) and the compliant one
+/// (after) on every sample instead of training / test.
 void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   const PredictionSet& after = data.predictions.back();
-  std::vector<double> residual_um;
-  for (std::size_t i = 0; i < data.samples.size() && i < after.points_m.size(); ++i)
-    residual_um.push_back((after.points_m[i] - data.samples[i].measured_m).norm() * 1e6);
+  const PredictionSet* rigid = rigid_reference(data);
+  const std::vector<double> residual_um = residuals_um(data, after);
+  const std::vector<double> rigid_um = rigid != nullptr ? residuals_um(data, *rigid) : std::vector<double>{};
+  const double y_hi = std::max(max_of(residual_um), max_of(rigid_um));
   for (int j = 0; j < 6; ++j) {
-    Series train{"training", {}, {}, true};
-    Series test{"test", {}, {}, true};
-    for (std::size_t i = 0; i < residual_um.size(); ++i) {
-      Series& s = data.samples[i].test ? test : train;
-      s.x.push_back(data.samples[i].q_rad[j] * 180.0 / 3.141592653589793);
-      s.y.push_back(residual_um[i]);
+    const bool before_after = rigid != nullptr && compliant_joint(after.model, j);
+    const double deg = 180.0 / 3.141592653589793;
+    std::vector<Series> series;
+    if (before_after) {
+      series = {Series{rigid->method + " (rigid)", {}, {}, true}, Series{after.method, {}, {}, true}};
+      for (std::size_t i = 0; i < residual_um.size() && i < rigid_um.size(); ++i) {
+        for (Series* s : {&series[0], &series[1]}) s->x.push_back(data.samples[i].q_rad[j] * deg);
+        series[0].y.push_back(rigid_um[i]);
+        series[1].y.push_back(residual_um[i]);
+      }
+    } else {
+      series = {Series{"training", {}, {}, true}, Series{"test", {}, {}, true}};
+      for (std::size_t i = 0; i < residual_um.size(); ++i) {
+        Series& s = series[data.samples[i].test ? 1 : 0];
+        s.x.push_back(data.samples[i].q_rad[j] * deg);
+        s.y.push_back(residual_um[i]);
+      }
     }
-    ChartSpec spec = chart("fig-residual-q" + std::to_string(j + 1),
-                           "Residual after calibration vs joint " + std::to_string(j + 1),
-                           "q" + std::to_string(j + 1) + " [deg]", "3D residual [um]");
+    const std::string joint = std::to_string(j + 1);
+    ChartSpec spec = chart("fig-residual-q" + joint,
+                           before_after ? "Residual vs joint " + joint + ": rigid and compliant fit, every sample"
+                                        : "Residual after calibration vs joint " + joint,
+                           "q" + joint + " [deg]", "3D residual [um]");
     spec.width_px = 400;
     spec.height_px = 260;
     spec.fixed_y = true;
-    spec.y_hi = max_of(residual_um);
-    out->push_back({spec.id, svg_chart(spec, {train, test})});
+    spec.y_hi = y_hi;
+    out->push_back({spec.id, svg_chart(spec, series)});
   }
 }
 
@@ -439,8 +478,9 @@ std::string fixed(double v, int decimals) {
 std::vector<std::vector<std::string>> parameter_rows(const ReportData& data) {
   std::vector<std::vector<std::string>> rows = {{"parameter", "unit", "start", "calibrated", "change", "sigma", "note"}};
   for (const ParameterRow& p : data.parameters) {
-    const double scale = 1e3;  // m -> mm, rad -> mrad
-    const std::string unit = p.angle ? "mrad" : "mm";
+    const bool compliance = !p.compliance_unit.empty();
+    const double scale = compliance ? 1e6 : 1e3;  // m -> mm, rad -> mrad; rad/m -> urad/m
+    const std::string unit = compliance ? "u" + p.compliance_unit : p.angle ? "mrad" : "mm";
     const double change = (p.value - p.start) * scale;
     std::string note;
     if (p.sigma <= 0.0) note = "not estimated";

@@ -109,6 +109,9 @@ struct ParameterRow {
   double sigma = 0.0;      ///< standard deviation [rad] or [m]; 0: not estimated
   std::string correlated_with{};  ///< the estimated parameter it is most correlated with ("" if none)
   double correlation = 0.0;     ///< that correlation coefficient [-]
+  /// A compliance coefficient's unit, "rad/m" or "rad/(kg m)" (shown per urad); "" for a
+  /// length or angle (`angle`).
+  std::string compliance_unit{};
 };
 
 /// |correlation| above which Table 4 warns: the two are hard to tell apart in this data.

@@ -37,6 +37,10 @@ void write_model(JsonWriter& json, const PredictionSet& set) {
   }
   json.end_array();
   json.key("translation_m").inline_array(set.base_to_tracker.translation_m.data(), 3);
+  if (set.model.compliance.term_count > 0) {  // rigid models: the key is left out (the bytes stay as before)
+    json.key("compliance");
+    textio::write_compliance(json, set.model.compliance, Mat3::Identity());
+  }
   bool several_targets = false;  // one reflector: the key is left out (the bytes stay as before)
   for (const Vec3& tool_m : set.model.other_tools_m) several_targets = several_targets || !tool_m.isZero();
   if (!several_targets) return;
@@ -176,6 +180,10 @@ bool get_model(const JsonValue& v, RobotModel* model, RigidTransform* transform)
     for (std::size_t c = 0; c < 3; ++c) transform->rotation(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
   }
   *model = from_params(params);
+  if (const JsonValue* compliance = v.find("compliance"); compliance != nullptr) {  // compliant models only
+    std::string what;
+    if (!textio::read_compliance(*compliance, Mat3::Identity(), &model->compliance, &what)) return false;
+  }
   if (const JsonValue* others = v.find("other_tools_m"); others != nullptr) {  // several reflectors only
     if (!is_array(others) || others->array.size() != static_cast<std::size_t>(kMaxTargets - 1)) return false;
     for (std::size_t k = 0; k < others->array.size(); ++k) {
@@ -329,7 +337,8 @@ bool get_parameters(const JsonValue* v, std::vector<ParameterRow>* out) {
     if (!get_string(p.find("name"), &row.name) || !get_bool(p.find("angle"), &row.angle) ||
         !get_number(p.find("start"), &row.start) || !get_number(p.find("value"), &row.value) ||
         !get_number(p.find("sigma"), &row.sigma) || !get_string(p.find("correlated_with"), &row.correlated_with) ||
-        !get_number(p.find("correlation"), &row.correlation)) {
+        !get_number(p.find("correlation"), &row.correlation) ||
+        (p.find("unit") != nullptr && !get_string(p.find("unit"), &row.compliance_unit))) {
       return false;
     }
     out->push_back(row);
@@ -455,6 +464,7 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
     json.key("sigma").value(p.sigma);
     json.key("correlated_with").value(p.correlated_with);
     json.key("correlation").value(p.correlation);
+    if (!p.compliance_unit.empty()) json.key("unit").value(p.compliance_unit);  // compliance terms only
     json.end_object();
   }
   json.end_array();

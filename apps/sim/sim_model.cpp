@@ -181,15 +181,19 @@ JointVector Session::joint_speeds_at(double t_s) const {
   return (min_jerk_rate(u) / segment.duration_s) * (segment.to_rad - segment.from_rad);
 }
 
-JointVector Session::compliance(const JointVector& q_rad) const {
+JointVector simulated_compliance(const RobotModel& truth, double j2_rad, double j3_rad, const JointVector& q_rad) {
   // Gravity torque on joint 2 ~ horizontal reach of upper arm + forearm; on joint 3 ~ the forearm's.
-  const double a2_m = std::fabs(truth_.model.joints[1].a_m);
-  const double a3_m = std::fabs(truth_.model.joints[2].a_m);
+  const double a2_m = std::fabs(truth.joints[1].a_m);
+  const double a3_m = std::fabs(truth.joints[2].a_m);
   const double forearm = math::cos(q_rad(1) + q_rad(2));
   JointVector deflection = JointVector::Zero();
-  deflection(1) = config_.compliance_j2_rad * (a2_m * math::cos(q_rad(1)) + a3_m * forearm) / (a2_m + a3_m);
-  deflection(2) = config_.compliance_j3_rad * forearm;
+  deflection(1) = j2_rad * (a2_m * math::cos(q_rad(1)) + a3_m * forearm) / (a2_m + a3_m);
+  deflection(2) = j3_rad * forearm;
   return deflection;
+}
+
+JointVector Session::compliance(const JointVector& q_rad) const {
+  return simulated_compliance(truth_.model, config_.compliance_j2_rad, config_.compliance_j3_rad, q_rad);
 }
 
 Vec3 Session::true_point(const JointVector& q_rad) const {

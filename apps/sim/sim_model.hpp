@@ -68,6 +68,12 @@ struct SimConfig {
 /// ~2 mm). Kept for tests that want large, easily identified errors (`simulate --errors large`).
 void use_large_errors(SimConfig* config);
 
+/// The simulator's joint compliance (its own form, not the library's gravity basis): joint 2
+/// deflects by j2_rad x the horizontal reach of upper arm + forearm relative to full reach, joint
+/// 3 by j3_rad x the forearm's; a2, a3 from `truth`. Session::compliance and `hivecal validate`
+/// (true points of a truth.json) both use it [rad].
+JointVector simulated_compliance(const RobotModel& truth, double j2_rad, double j3_rad, const JointVector& q_rad);
+
 /// One leg of the schedule: a stop at a waypoint or a move between two.
 struct Segment {
   double start_s = 0.0;                       ///< true start time [s]

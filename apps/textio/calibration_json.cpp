@@ -121,6 +121,14 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
   }
   r = parse_other_tools(root, source, tool, &parsed);
   if (!r.ok()) return r;
+  if (const JsonValue* compliance = root.find("compliance"); compliance != nullptr) {  // optional
+    std::string what;
+    const Mat3 to_file_base =
+        parsed.convention == DhConvention::modified ? parsed.modified_base.transform().rotation : Mat3::Identity();
+    if (!read_compliance(*compliance, to_file_base, &parsed.model.compliance, &what)) {
+      return fail(source, "\"compliance\": " + what);
+    }
+  }
   *description = parsed;
   return port::Error{};
 }
@@ -186,7 +194,145 @@ port::Error parse_transform(const JsonValue& root, const std::string& source, Ri
   return port::Error{};
 }
 
+/// A term's load as written: "frame K" (point mass at DH frame K's origin), "tool", "arm masses".
+std::string load_name(const ComplianceModel& compliance, const ComplianceTerm& term) {
+  if (compliance.load == ComplianceLoad::arm_masses) return "arm masses";
+  if (term.frame == kToolLoadFrame) return "tool";
+  return "frame " + std::to_string(term.frame);
+}
+
+bool read_load(const std::string& text, ComplianceLoad load, ComplianceTerm* term) {
+  if (load == ComplianceLoad::arm_masses) return text == "arm masses";
+  if (text == "tool") {
+    term->frame = kToolLoadFrame;
+    return true;
+  }
+  for (int frame = 1; frame <= kJointCount; ++frame) {
+    if (text == "frame " + std::to_string(frame)) {
+      term->frame = frame;
+      return true;
+    }
+  }
+  return false;
+}
+
+/// Link centres of mass in the library's (standard) DH frames, the payload's in the flange frame.
+void write_masses(JsonWriter& json, const ArmMasses& masses) {
+  json.key("masses").begin_object();
+  json.key("link_mass_kg").inline_array(masses.link_mass_kg, kJointCount);
+  json.key("link_com_m").begin_array();
+  for (const Vec3& com_m : masses.link_com_m) json.inline_array(com_m.data(), 3);
+  json.end_array();
+  json.key("payload_kg").value(masses.payload_kg);
+  json.key("payload_com_m").inline_array(masses.payload_com_m.data(), 3);
+  json.end_object();
+}
+
+bool read_masses(const JsonValue* v, ArmMasses* masses, std::string* what) {
+  *what = "\"masses\" must hold link_mass_kg (6 numbers), link_com_m (6 x [x, y, z]), payload_kg and payload_com_m";
+  if (v == nullptr || v->kind != JsonValue::Kind::object) return false;
+  const JsonValue* coms = v->find("link_com_m");
+  if (!read_numbers(v->find("link_mass_kg"), kJointCount, masses->link_mass_kg) || coms == nullptr ||
+      coms->kind != JsonValue::Kind::array || coms->array.size() != static_cast<std::size_t>(kJointCount) ||
+      !read_number(v->find("payload_kg"), &masses->payload_kg) ||
+      !read_numbers(v->find("payload_com_m"), 3, masses->payload_com_m.data())) {
+    return false;
+  }
+  for (std::size_t j = 0; j < coms->array.size(); ++j)
+    if (!read_numbers(&coms->array[j], 3, masses->link_com_m[j].data())) return false;
+  return true;
+}
+
+/// One term of a "terms" array into term `t` of *compliance.
+bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::string* what) {
+  const std::string at = "\"terms\"[" + std::to_string(t) + "]";
+  double joint = 0.0;
+  const JsonValue* load = v.find("load");
+  const JsonValue* unit = v.find("unit");
+  ComplianceTerm& term = compliance->terms[t];
+  if (v.kind != JsonValue::Kind::object || !read_number(v.find("joint"), &joint) || joint < 1.0 ||
+      joint > static_cast<double>(kJointCount) || joint != static_cast<double>(static_cast<int>(joint))) {
+    *what = at + ".joint must be a joint number 1 .. 6";
+    return false;
+  }
+  term.joint = static_cast<int>(joint) - 1;
+  if (load == nullptr || load->kind != JsonValue::Kind::string || !read_load(load->string, compliance->load, &term)) {
+    *what = at + ".load must be " +
+            (compliance->load == ComplianceLoad::arm_masses ? "\"arm masses\"" : "\"frame K\" (K = 1 .. 6) or \"tool\"");
+    return false;
+  }
+  if (!read_number(v.find("coefficient"), &compliance->coefficient[t])) {
+    *what = at + ".coefficient must be a number";
+    return false;
+  }
+  if (unit != nullptr && (unit->kind != JsonValue::Kind::string || unit->string != compliance_unit(compliance->load))) {
+    *what = at + ".unit must be \"" + compliance_unit(compliance->load) + "\" for kind \"" +
+            compliance_kind_name(compliance->load) + "\"";
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+const char* compliance_unit(ComplianceLoad load) { return load == ComplianceLoad::arm_masses ? "rad/(kg m)" : "rad/m"; }
+
+const char* compliance_kind_name(ComplianceLoad load) { return load == ComplianceLoad::arm_masses ? "masses" : "basis"; }
+
+void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const Mat3& to_file_base, const double* sigma) {
+  json.begin_object();
+  json.key("kind").value(compliance_kind_name(compliance.load));
+  const Vec3 gravity = to_file_base * compliance.gravity_direction;
+  json.key("gravity_direction").inline_array(gravity.data(), 3);
+  json.key("terms").begin_array();
+  for (int t = 0; t < compliance.term_count; ++t) {
+    json.begin_object();
+    json.key("name").value(compliance_term_name(compliance, t));
+    json.key("joint").value(static_cast<long long>(compliance.terms[t].joint + 1));
+    json.key("load").value(load_name(compliance, compliance.terms[t]));
+    json.key("coefficient").value(compliance.coefficient[t]);
+    json.key("unit").value(compliance_unit(compliance.load));
+    if (sigma != nullptr && sigma[t] > 0.0) json.key("sigma").value(sigma[t]);
+    json.end_object();
+  }
+  json.end_array();
+  if (compliance.load == ComplianceLoad::arm_masses) write_masses(json, compliance.masses);
+  json.end_object();
+}
+
+bool read_compliance(const JsonValue& value, const Mat3& to_file_base, ComplianceModel* compliance, std::string* what) {
+  ComplianceModel parsed;
+  const JsonValue* kind = value.find("kind");
+  const JsonValue* terms = value.find("terms");
+  Vec3 gravity;
+  if (value.kind != JsonValue::Kind::object || kind == nullptr || kind->kind != JsonValue::Kind::string ||
+      (kind->string != "basis" && kind->string != "masses")) {
+    *what = "must be an object with \"kind\": \"basis\" or \"masses\"";
+    return false;
+  }
+  parsed.load = kind->string == "masses" ? ComplianceLoad::arm_masses : ComplianceLoad::point;
+  if (!read_numbers(value.find("gravity_direction"), 3, gravity.data())) {
+    *what = "\"gravity_direction\" must be [x, y, z] (a unit vector in the robot base frame)";
+    return false;
+  }
+  parsed.gravity_direction = to_file_base.transpose() * gravity;
+  if (terms == nullptr || terms->kind != JsonValue::Kind::array || terms->array.empty() ||
+      terms->array.size() > static_cast<std::size_t>(kMaxComplianceTerms)) {
+    *what = "\"terms\" must be an array of 1 to " + std::to_string(kMaxComplianceTerms) + " terms";
+    return false;
+  }
+  parsed.term_count = static_cast<int>(terms->array.size());
+  for (int t = 0; t < parsed.term_count; ++t)
+    if (!read_term(terms->array[static_cast<std::size_t>(t)], t, &parsed, what)) return false;
+  if (parsed.load == ComplianceLoad::arm_masses && !read_masses(value.find("masses"), &parsed.masses, what)) return false;
+  if (check_compliance(parsed) != Status::ok) {
+    *what = "not a usable compliance model (a term's load must lie beyond its joint, masses >= 0, every number finite, "
+            "gravity_direction of unit length)";
+    return false;
+  }
+  *compliance = parsed;
+  return true;
+}
 
 void write_error_stats(JsonWriter& json, const ErrorStats& stats) {
   json.begin_object();
@@ -227,6 +373,12 @@ std::string format_calibration_json(const CalibrationFile& file, const std::func
       json.inline_array(target_m.data(), 3);
     }
     json.end_array();
+  }
+  if (file.model.compliance.term_count > 0) {
+    json.key("compliance");
+    write_compliance(json, file.model.compliance,
+                     file.convention == DhConvention::modified ? file.modified_base.transform().rotation : Mat3::Identity(),
+                     file.compliance_sigma);
   }
   // A modified-DH file's base is the frame before Rx(alpha_0) Tx(a_0).
   const RigidTransform base_to_tracker =

@@ -20,7 +20,7 @@ struct RobotDescription {
   std::string robot = "ur5";                         ///< name ("ur5", "abb-irb120", ...; free text)
   DhConvention convention = DhConvention::standard;  ///< how the file writes its rows
   ModifiedDhBase modified_base;                      ///< modified DH: Rx(alpha_0) Tx(a_0) before joint 1
-  RobotModel model;                                  ///< the standard-DH table and tool point [m, rad]
+  RobotModel model;                                  ///< the standard-DH table, tool point and compliance [m, rad]
   int target_count = 1;  ///< targets whose tool points `model` holds, 1 .. kMaxTargets ("tools" when > 1) [-]
 };
 
@@ -31,6 +31,9 @@ struct CalibrationFile : RobotDescription {
   RigidTransform base_to_tracker;
   bool has_metrics = false;          ///< metrics below were present / are to be written
   AccuracyReport metrics;            ///< train / test / overall error statistics [m]
+  /// Standard deviation of each compliance coefficient (model.compliance's unit); 0: unknown,
+  /// not written.
+  double compliance_sigma[kMaxComplianceTerms] = {};
 };
 
 /// The JSON name of a convention: "standard-dh" or "modified-dh".
@@ -56,6 +59,20 @@ std::string format_calibration_json(const CalibrationFile& file,
 port::Error parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file);
 /// Reads and parses a result file.
 port::Error read_calibration_json(const std::string& path, CalibrationFile* file);
+
+/// The "compliance" object of a model with compliance terms (docs/formats.md): "kind"
+/// (basis | masses), "gravity_direction", "terms" (name, joint 1-based, load, coefficient,
+/// unit, sigma when `sigma` holds one > 0) and, for masses, "masses". `to_file_base` turns the
+/// library's base frame into the file's (modified DH: modified_base's rotation).
+void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const Mat3& to_file_base,
+                      const double* sigma = nullptr);
+/// Reads a "compliance" object written by write_compliance into *compliance (checked with
+/// check_compliance); false with *what naming the fault otherwise.
+bool read_compliance(const JsonValue& value, const Mat3& to_file_base, ComplianceModel* compliance, std::string* what);
+/// The unit of a compliance coefficient: "rad/m" (point loads) or "rad/(kg m)" (arm masses).
+const char* compliance_unit(ComplianceLoad load);
+/// The name of a load kind on the command line and in "kind": "basis" or "masses".
+const char* compliance_kind_name(ComplianceLoad load);
 
 /// Writes one ErrorStats as {"count", "mae_m": {x, y, z, 3d}, "sigma_m": {...}, "max_m": {...}}.
 void write_error_stats(JsonWriter& json, const ErrorStats& stats);

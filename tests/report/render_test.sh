@@ -159,5 +159,26 @@ else
   fail "calibrate from samples"
 fi
 
+# With --compliance (the same samples; the simulator bends joints 2 and 3): Table 1's
+# LM+compliance row, the compliance terms in Table 4, joints 2 and 3 drawn rigid vs compliant.
+if "$hivecal" calibrate --samples "$work/samples.csv" --compliance --out "$work/compliance.json" \
+     --report "$work/compliance" --quiet >/dev/null; then
+  check_report compliance "$work/compliance/index.html" "${common[@]}"
+  if grep -q '<tr><td>LM+compliance</td>' "$work/compliance/index.html" &&
+     grep -q '<tr><td>c_j2_o2</td><td>urad/m</td>' "$work/compliance/index.html" &&
+     grep -q '"compliance": {' "$work/compliance.json"; then ok; else
+    fail "compliance: no LM+compliance row in Table 1, no c_j2_o2 row in Table 4 or no compliance key"; fi
+  for q in 2 3; do  # the shoulder and the elbow: both fits drawn
+    if figures_of "$work/compliance.dom" | grep "^fig-residual-q$q" | grep -q 'data-series="ABC+LM (rigid)"'; then
+      ok; else fail "compliance: fig-residual-q$q does not show the rigid fit"; fi
+  done
+  if "$hivecal" report --calibration "$work/compliance.json" --out "$work/compliance-again" >/dev/null &&
+     cmp -s <(sed -n '/<h2>Table 2/,$p' "$work/compliance/index.html") \
+            <(sed -n '/<h2>Table 2/,$p' "$work/compliance-again/index.html")
+  then ok; else fail "report --calibration draws other compliance tables or figures than calibrate --report"; fi
+else
+  fail "calibrate --compliance from samples"
+fi
+
 echo "report.render: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]
