@@ -53,6 +53,7 @@ struct CalibrateSettings {
   bool progress = false;             ///< progress lines on stderr
   textio::InputUnits units;          ///< --length-unit, --angle-unit of text inputs
   FitBounds bounds;                  ///< --max-change-mm, --max-change-deg
+  textio::OrientationInput orientation;  ///< --position-sigma-m, --angle-sigma-rad, --orientation-lever-m
 };
 
 /// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
@@ -421,6 +422,9 @@ const std::vector<OptionSpec>& option_specs() {
       {"max-change-mm", "X", "warn (exit 5) when a length moves more than this from the start geometry [mm]", "20"},
       {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
       {"quiet", "", "no progress on stderr", ""},
+      {"position-sigma-m", "S", "stated noise of the measured positions; with --angle-sigma-rad it weighs a measured orientation (rx, ry, rz columns of --samples) [m]", "1e-05"},
+      {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
+      {"orientation-lever-m", "L", "a measured orientation adds two points at this lever along the tool frame's x and y axes (targets 2, 3; 0: rx, ry, rz not used) [m] (default: position / angle sigma)", ""},
     };
     for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
     return list;
@@ -429,6 +433,22 @@ const std::vector<OptionSpec>& option_specs() {
 }
 
 // --- parse ------------------------------------------------------------------------------------
+
+/// --position-sigma-m, --angle-sigma-rad, --orientation-lever-m (csv.hpp, OrientationInput).
+Error orientation_options(const Options& options, textio::OrientationInput* orientation) {
+  Error error = number_option(options, "position-sigma-m", &orientation->position_sigma_m);
+  if (error.ok()) error = number_option(options, "angle-sigma-rad", &orientation->angle_sigma_rad);
+  if (error.ok() && options.given("orientation-lever-m")) error = number_option(options, "orientation-lever-m", &orientation->lever_m);
+  if (!error.ok()) return error;
+  if (!(orientation->position_sigma_m > 0.0 && orientation->position_sigma_m < 1.0) ||
+      !(orientation->angle_sigma_rad > 0.0 && orientation->angle_sigma_rad < 1.0)) {
+    return Error::usage("--position-sigma-m and --angle-sigma-rad must be in (0, 1)");
+  }
+  if (options.given("orientation-lever-m") && !(orientation->lever_m >= 0.0 && orientation->lever_m <= 1.0)) {
+    return Error::usage("--orientation-lever-m must be in [0, 1] m");
+  }
+  return Error{};
+}
 
 Error settings_from_options(const Options& options, CalibrateSettings* settings) {
   bool from_file = false;
@@ -495,7 +515,7 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   settings->bounds.max_angle_change_rad = max_deg * 0.017453292519943295;
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
-  return Error{};
+  return orientation_options(options, &settings->orientation);
 }
 
 /// Where the results go, declared (and checked) before the long work.
@@ -546,6 +566,7 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
   config.progress = settings.progress;
   config.log_options.units = settings.units;
+  config.orientation = settings.orientation;
   Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (!error.ok()) return error;
   error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
@@ -826,6 +847,15 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     }
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
+    if (facts.orientation.poses > 0) {
+      w.key("orientation").begin_object();
+      w.key("poses").value(static_cast<long long>(facts.orientation.poses));
+      w.key("lever_m").value(facts.orientation.lever_m);
+      w.key("position_sigma_m").value(facts.orientation_input.position_sigma_m);
+      w.key("angle_sigma_rad").value(facts.orientation_input.angle_sigma_rad);
+      w.key("targets").value("2 and 3 are the measured point moved by lever_m along the measured x and y axes");
+      w.end_object();
+    }
     write_outliers(w, facts, run);
     if (run.has_cv) write_cross_validation(w, run.cv);
     if (!warnings.empty()) {
@@ -871,6 +901,7 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   streams::SessionFacts facts;
   PointFates fates;
   if (error.ok()) error = load_dataset(options, settings, &dataset, &facts, &fates);
+  if (error.ok()) textio::start_orientation_targets(facts.orientation, &start);
   static Run job;  // static: the CalibrationResult is ~5 KB
   job.from_controller = !options.get("ur-calibration").empty();
   job.link_length_count = link_length_set(start).count;
