@@ -13,6 +13,8 @@
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "testkit/shared_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "textio/csv.hpp"
 #include "textio/text_util.hpp"
 #include "textio/ur_calibration_conf.hpp"
 
@@ -125,6 +127,56 @@ TEST(Ur5ePendant, FitOnTwelvePosesPredictsTheOtherSix) {
   // docs/robust.md). The bound pins what it does so that a change for the worse fails.
   EXPECT_LT(mae_m, 0.12e-3);
   EXPECT_GT(baseline_mae_m, 0.5e-3);
+}
+
+TEST(Ur5ePendant, OrientationTooPredictsTheOtherSixBetter) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  // The same split, the pendant file read as it is (Base (°) .. RZ (rad)): each pose's rotation
+  // vector adds targets 2 and 3 at the lever of the stated noise, 0.01 mm / 0.001 rad = 10 mm
+  // (chosen from the pendant's rounding, not on the 6 held-out poses).
+  static Dataset<64> all;
+  all.clear();
+  textio::OrientationRead found;
+  const port::Error read = textio::read_samples_csv(kDir + "joint-eef-data.csv", &all, {}, nullptr, {}, &found);
+  ASSERT_TRUE(read.ok()) << read.message;
+  ASSERT_EQ(found.poses, 18u);
+  EXPECT_EQ(found.lever_m, 0.01);
+  ASSERT_EQ(all.size(), 54u);
+  const std::vector<PendantReading> readings = read_pendant_csv();
+  static Dataset<64> fit;
+  fit.clear();
+  for (std::size_t i = 0; i < 36; ++i) {  // the first 12 poses, three samples each
+    const Sample& s = all.samples()[i];
+    ASSERT_EQ(s.target, static_cast<int>(i % 3));
+    if (s.target == 0) {
+      ASSERT_LE((s.point_m - readings[i / 3].tcp_m).norm(), 1e-15);
+    }
+    ASSERT_EQ(fit.add(s.q_rad, s.point_m, s.target), Status::ok);
+  }
+  static CalibrationWorkspace<64, double, 150, 300> workspace;
+  static CalibrationResult result;
+  CalibrationOptions options;  // the command line's defaults: ABC+LM, full model
+  options.train_fraction = 1.0;
+  RobotModel start = nominal_model(RobotType::ur5e);
+  start.tool_m = Vec3::Zero();
+  textio::start_orientation_targets(found, &start);
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibrate(start, &fit, options, &workspace, &result));
+  ASSERT_EQ(status, Status::ok) << calibration_step_name(result.step);
+  EXPECT_EQ(result.train_count, 36u);
+  EXPECT_EQ(result.outlier_count, 0u);
+  const CalibrationStage& final_stage = result.stages[result.stage_count - 1];
+  double mae_m = 0.0;
+  for (std::size_t i = 12; i < 18; ++i) {
+    const Vec3 predicted = final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, readings[i].q_rad));
+    mae_m += (predicted - readings[i].tcp_m).norm() / 6.0;
+  }
+  RecordProperty("predicted_mae_um", static_cast<int>(mae_m * 1e6));
+  std::printf("UR5e pendant with orientation (lever 10 mm): 12 poses fitted, 6 predicted: MAE %.4f mm\n", mae_m * 1e3);
+  // Measured 0.0887 mm (positions only: 0.116 mm, the test above): better than every
+  // position-only scipy fit of this split (0.139-0.292 mm, docs/robust.md), short of the
+  // issue's 0.08 mm. Pinned so that a change for the worse fails.
+  EXPECT_LT(mae_m, 0.09e-3);
 }
 
 TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {
