@@ -120,14 +120,14 @@ Status run_population(Job& job, CalibrationSolver solver) {
 }
 
 /// The estimated model parameter whose change from `start` is least significant, below
-/// t standard deviations; -1 when none is (or t <= 0).
-[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t) {
+/// t standard deviations, none of `never`; -1 when none is (or t <= 0).
+[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t, ParamMask never) {
   if (!(t > 0.0)) return -1;
   const ModelParams change = to_params(lm.model) - to_params(start);
   int weakest = -1;
   double weakest_ratio = t;
   for (int i = 0; i < kModelParamCount; ++i) {
-    if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) continue;
+    if (!mask_has(lm.identifiability.kept_mask, i) || mask_has(never, i) || !(lm.sigma(i) > 0.0)) continue;
     const double ratio = std::fabs(change(i)) / lm.sigma(i);
     if (ratio < weakest_ratio) {
       weakest_ratio = ratio;
@@ -160,6 +160,7 @@ Status fit_lm(Job& job, const RobotModel& start_model, const RigidTransform* bas
   const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask, job.start);
   Status status = Status::ok;
   *pruned = 0;
+  const bool several = target_count(samples) > 1;
   for (int attempt = 0; attempt < kModelParamCount + 2; ++attempt) {
     if (trace != nullptr) trace->clear();
     LmWorkspace* workspace = job.workspace.open_lm();
@@ -167,7 +168,9 @@ Status fit_lm(Job& job, const RobotModel& start_model, const RigidTransform* bas
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
     bool again = reset && reset_dropped(job.start, r.lm.identifiability, &from);
-    const int weakest = least_significant(job.start, r.lm, t);
+    // LM estimates the other targets' tool points only while tool_x is free (lm.cpp): fixing
+    // it would freeze them at their start values (on the pendant split with orientation: 4-8 mm).
+    const int weakest = least_significant(job.start, r.lm, t, several ? param_bit(tool_param_index(0)) : 0);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;
