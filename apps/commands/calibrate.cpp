@@ -708,6 +708,8 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
                             ")");
+  const std::string orientation = streams::orientation_line(facts);
+  if (!orientation.empty()) data.info_lines.push_back(orientation);  // in the report's "info" too
   const std::string joints = run.from_controller ? "controller" : "nominal";
   data.methods.push_back(method_row("uncalibrated", joints + (uncalibrated.tool_fitted ? ", tool fitted" : ""),
                                     uncalibrated.train, uncalibrated.test, 0.0, 0));

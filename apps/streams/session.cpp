@@ -146,6 +146,22 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
 
 }  // namespace
 
+std::string orientation_line(const SessionFacts& facts) {
+  if (facts.orientation.poses == 0) return "";
+  const textio::OrientationInput& given = facts.orientation_input;
+  char why[96];
+  if (given.lever_m < 0.0) {
+    std::snprintf(why, sizeof why, "position sigma %.3g m / angle sigma %.3g rad", given.position_sigma_m,
+                  given.angle_sigma_rad);
+  } else {
+    std::snprintf(why, sizeof why, "as given");
+  }
+  char line[256];
+  std::snprintf(line, sizeof line, "orientation used: %zu poses with rx, ry, rz, each also as targets 2 and 3 at a "
+                "lever of %.6g m (%s)", facts.orientation.poses, facts.orientation.lever_m, why);
+  return line;
+}
+
 port::Error load_session(const SessionSources& sources, const SessionConfig& config, DatasetBase* dataset,
                          SessionFacts* facts) {
   const bool samples = !sources.samples.empty();
@@ -166,20 +182,6 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
   if (!r.ok()) return r;
   facts->info_lines.push_back("input: " + sources.samples + " (" + std::to_string(dataset->size()) +
                               " paired samples)");
-  if (facts->orientation.poses > 0) {
-    const textio::OrientationInput& given = config.orientation;
-    char why[96];
-    if (given.lever_m < 0.0) {
-      std::snprintf(why, sizeof why, "position sigma %.3g m / angle sigma %.3g rad", given.position_sigma_m,
-                    given.angle_sigma_rad);
-    } else {
-      std::snprintf(why, sizeof why, "as given");
-    }
-    char line[256];
-    std::snprintf(line, sizeof line, "orientation used: %zu poses with rx, ry, rz, each also as targets 2 and 3 at a "
-                  "lever of %.6g m (%s)", facts->orientation.poses, facts->orientation.lever_m, why);
-    facts->info_lines.push_back(line);
-  }
   return port::Error{};
 }
 

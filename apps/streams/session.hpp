@@ -51,6 +51,10 @@ struct SessionFacts {
   textio::OrientationInput orientation_input;  ///< the stated sigmas and lever the input was read with
 };
 
+/// "orientation used: N poses with rx, ry, rz, ..." for the console and the report; "" when
+/// no measured orientation was used.
+std::string orientation_line(const SessionFacts& facts);
+
 /// Fills `dataset` from `sources`. Fault::input (with file and line where known) when a file
 /// is missing, not a regular file, too large or malformed, when a stream holds no record,
 /// when the clock relation cannot be found, or when the samples do not fit the dataset (a
