@@ -57,6 +57,7 @@ struct CalibrateSettings {
   /// --compliance basis|masses: the terms (default_compliance_terms), unit gravity direction
   /// (--gravity) and, for masses, the arm's masses and the payload (--payload); zero coefficients.
   ComplianceModel compliance_model;
+  textio::OrientationInput orientation;  ///< --position-sigma-m, --angle-sigma-rad, --orientation-lever-m
 };
 
 /// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
@@ -441,7 +442,7 @@ const std::vector<OptionSpec>& option_specs() {
       {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
       {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
       {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
-      {"samples", "FILE", "paired static samples q1..q6,x,y,z (CSV; '-': stdin) instead of --robot/--tracker", ""},
+      {"samples", "FILE", "paired static samples q1..q6,x,y,z[,rx,ry,rz] (CSV; '-': stdin) instead of --robot/--tracker", ""},
       {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
       {"robot-model", "NAME|FILE", std::string("nominal geometry: ") + robot_type_names() +
                                        ", or a robot description .json (standard or modified DH; a result file works)", "ur5"},
@@ -463,6 +464,9 @@ const std::vector<OptionSpec>& option_specs() {
       {"gravity", "X,Y,Z", "with --compliance: gravity direction in the robot base frame (wall or ceiling mounts)", "0,0,-1"},
       {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]", ""},
       {"quiet", "", "no progress on stderr", ""},
+      {"position-sigma-m", "S", "stated noise of the measured positions; with --angle-sigma-rad it weighs a measured orientation (rx, ry, rz columns of --samples) [m]", "1e-05"},
+      {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
+      {"orientation-lever-m", "L", "a measured orientation adds two points at this lever along the tool frame's x and y axes (targets 2, 3; 0: rx, ry, rz not used) [m] (default: position / angle sigma)", ""},
     };
     for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
     return list;
@@ -556,6 +560,22 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
   return Error{};
 }
 
+/// --position-sigma-m, --angle-sigma-rad, --orientation-lever-m (csv.hpp, OrientationInput).
+Error orientation_options(const Options& options, textio::OrientationInput* orientation) {
+  Error error = number_option(options, "position-sigma-m", &orientation->position_sigma_m);
+  if (error.ok()) error = number_option(options, "angle-sigma-rad", &orientation->angle_sigma_rad);
+  if (error.ok() && options.given("orientation-lever-m")) error = number_option(options, "orientation-lever-m", &orientation->lever_m);
+  if (!error.ok()) return error;
+  if (!(orientation->position_sigma_m > 0.0 && orientation->position_sigma_m < 1.0) ||
+      !(orientation->angle_sigma_rad > 0.0 && orientation->angle_sigma_rad < 1.0)) {
+    return Error::usage("--position-sigma-m and --angle-sigma-rad must be in (0, 1)");
+  }
+  if (options.given("orientation-lever-m") && !(orientation->lever_m >= 0.0 && orientation->lever_m <= 1.0)) {
+    return Error::usage("--orientation-lever-m must be in [0, 1] m");
+  }
+  return Error{};
+}
+
 Error settings_from_options(const Options& options, CalibrateSettings* settings) {
   bool from_file = false;
   Error error = robot_model_option(options, "robot-model", &settings->robot, &from_file);
@@ -621,7 +641,9 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   settings->bounds.max_angle_change_rad = max_deg * 0.017453292519943295;
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
-  return compliance_from_options(options, settings);
+  const Error compliance = compliance_from_options(options, settings);
+  if (!compliance.ok()) return compliance;
+  return orientation_options(options, &settings->orientation);
 }
 
 /// Where the results go, declared (and checked) before the long work.
@@ -672,6 +694,7 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
   config.progress = settings.progress;
   config.log_options.units = settings.units;
+  config.orientation = settings.orientation;
   Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (!error.ok()) return error;
   error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
@@ -815,6 +838,8 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
                             ")");
+  const std::string orientation = streams::orientation_line(facts);
+  if (!orientation.empty()) data.info_lines.push_back(orientation);  // in the report's "info" too
   const std::string joints = run.from_controller ? "controller" : "nominal";
   data.methods.push_back(method_row("uncalibrated", joints + (uncalibrated.tool_fitted ? ", tool fitted" : ""),
                                     uncalibrated.train, uncalibrated.test, 0.0, 0));
@@ -959,6 +984,15 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
     }
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
+    if (facts.orientation.poses > 0) {
+      w.key("orientation").begin_object();
+      w.key("poses").value(static_cast<long long>(facts.orientation.poses));
+      w.key("lever_m").value(facts.orientation.lever_m);
+      w.key("position_sigma_m").value(facts.orientation_input.position_sigma_m);
+      w.key("angle_sigma_rad").value(facts.orientation_input.angle_sigma_rad);
+      w.key("targets").value("2 and 3 are the measured point moved by lever_m along the measured x and y axes");
+      w.end_object();
+    }
     write_outliers(w, facts, run);
     if (run.has_cv) write_cross_validation(w, run.cv);
     if (!warnings.empty()) {
@@ -1004,6 +1038,7 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   streams::SessionFacts facts;
   PointFates fates;
   if (error.ok()) error = load_dataset(options, settings, &dataset, &facts, &fates);
+  if (error.ok()) textio::start_orientation_targets(facts.orientation, &start);
   static Run job;  // static: the CalibrationResult is ~5 KB
   job.from_controller = !options.get("ur-calibration").empty();
   job.link_length_count = link_length_set(start).count;

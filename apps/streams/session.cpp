@@ -146,6 +146,22 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
 
 }  // namespace
 
+std::string orientation_line(const SessionFacts& facts) {
+  if (facts.orientation.poses == 0) return "";
+  const textio::OrientationInput& given = facts.orientation_input;
+  char why[96];
+  if (given.lever_m < 0.0) {
+    std::snprintf(why, sizeof why, "position sigma %.3g m / angle sigma %.3g rad", given.position_sigma_m,
+                  given.angle_sigma_rad);
+  } else {
+    std::snprintf(why, sizeof why, "as given");
+  }
+  char line[256];
+  std::snprintf(line, sizeof line, "orientation used: %zu poses with rx, ry, rz, each also as targets 2 and 3 at a "
+                "lever of %.6g m (%s)", facts.orientation.poses, facts.orientation.lever_m, why);
+  return line;
+}
+
 port::Error load_session(const SessionSources& sources, const SessionConfig& config, DatasetBase* dataset,
                          SessionFacts* facts) {
   const bool samples = !sources.samples.empty();
@@ -159,7 +175,9 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
     return load_streams(sources, config, dataset, facts);
   }
   std::vector<std::size_t> lines;
-  const port::Error r = textio::read_samples_csv(sources.samples, dataset, config.log_options.units, &lines);
+  facts->orientation_input = config.orientation;
+  const port::Error r = textio::read_samples_csv(sources.samples, dataset, config.log_options.units, &lines,
+                                                 config.orientation, &facts->orientation);
   for (std::size_t line : lines) facts->sample_sources.push_back(sources.samples + ":" + std::to_string(line));
   if (!r.ok()) return r;
   facts->info_lines.push_back("input: " + sources.samples + " (" + std::to_string(dataset->size()) +

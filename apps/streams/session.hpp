@@ -14,6 +14,7 @@
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/error.hpp"
 #include "streams/stream_pipeline.hpp"
+#include "textio/csv.hpp"
 
 namespace hivecal::streams {
 
@@ -32,6 +33,7 @@ struct SessionConfig {
   double window_s = 0.0;            ///< optional stability window [s]; 0: none (the paper's rule at the instant)
   bool progress = false;            ///< "[decode] pass i/2" lines on stderr
   textio::RobotLogOptions log_options;  ///< joint names of ROS robot logs (UR driver names by default), units of text inputs
+  textio::OrientationInput orientation;  ///< how measured orientations (rx, ry, rz of paired samples) become targets 2 and 3
 };
 
 /// The --joint-names value (six comma-separated names, or "" for the UR driver names) into
@@ -45,7 +47,13 @@ struct SessionFacts {
   CaptureRunReport run;                 ///< frames / rows, clock fit, extraction counts
   std::vector<std::pair<std::string, std::uint64_t>> dropped;  ///< drop reason -> count
   std::vector<std::string> sample_sources;  ///< where sample k (Sample::index) came from: "file:line" (paired samples)
+  textio::OrientationRead orientation;     ///< paired samples: the rows whose measured orientation was used, and the lever
+  textio::OrientationInput orientation_input;  ///< the stated sigmas and lever the input was read with
 };
+
+/// "orientation used: N poses with rx, ry, rz, ..." for the console and the report; "" when
+/// no measured orientation was used.
+std::string orientation_line(const SessionFacts& facts);
 
 /// Fills `dataset` from `sources`. Fault::input (with file and line where known) when a file
 /// is missing, not a regular file, too large or malformed, when a stream holds no record,

@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "hivecal/core/math.hpp"
+#include "hivecal/model/full_params.hpp"
 #include "hivecal/port/error.hpp"
 #include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
@@ -19,7 +20,26 @@ struct CsvSchema {
   std::vector<Quantity> quantities;  ///< what each measures (its units; joints and points are checked)
   std::string optional_leading;      ///< a column that may come first (ignored), or ""
   std::string optional_trailing;     ///< a unitless column that may follow them (its value appended), or ""
+  std::vector<std::string> optional_group;  ///< angle columns found by name after them, all or none (values appended last)
 };
+
+/// Which optional columns a file had.
+struct CsvFound {
+  bool trailing = false;  ///< CsvSchema::optional_trailing
+  bool group = false;     ///< every column of CsvSchema::optional_group
+};
+
+/// Joint names as a UR teach pendant's export writes them ("Base (°)", ..., "Wrist 3 (°)").
+const char* const kPendantJointNames[kJointCount] = {"base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3"};
+
+/// True when header column `name` is schema column `wanted`: equal, or the pendant's name of joint qN.
+bool column_matches(const std::string& name, const std::string& wanted) {
+  if (name == wanted) return true;
+  for (int j = 0; j < kJointCount; ++j) {
+    if (wanted == "q" + std::to_string(j + 1)) return name == kPendantJointNames[j];
+  }
+  return false;
+}
 
 std::string join(const std::vector<std::string>& names) {
   std::string out;
@@ -32,7 +52,7 @@ std::string join(const std::vector<std::string>& names) {
 /// returning an error text. Every error names the file and line.
 port::Error read_csv(const std::string& path, const CsvSchema& schema, const InputUnits& units,
                      const std::function<std::string(const std::vector<double>&)>& on_row,
-                     std::vector<std::size_t>* row_lines = nullptr) {
+                     std::vector<std::size_t>* row_lines = nullptr, CsvFound* found = nullptr) {
   const std::string expected =
       (schema.optional_leading.empty() ? "" : "[" + schema.optional_leading + ",]") + join(schema.columns);
   DelimitedReader r;
@@ -44,7 +64,7 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
       (!schema.optional_leading.empty() && !header.empty() && header[0].name == schema.optional_leading) ? 1 : 0;
   bool match = header.size() >= offset + schema.columns.size();
   for (std::size_t i = 0; match && i < schema.columns.size(); ++i) {
-    match = header[offset + i].name == schema.columns[i];
+    match = column_matches(header[offset + i].name, schema.columns[i]);
   }
   if (!match) return port::Error::input(r.where() + "unexpected header " + port::quoted(r.header_line()) + ", expected " + expected);
   std::vector<double> scales(schema.columns.size());
@@ -56,12 +76,31 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   const std::size_t trailing = offset + schema.columns.size();
   const bool has_trailing = !schema.optional_trailing.empty() && header.size() > trailing &&
                             header[trailing].name == schema.optional_trailing;
-  std::vector<double> values(schema.columns.size() + (has_trailing ? 1 : 0));
+  std::vector<std::size_t> group;  // the optional group's columns, when all are present
+  for (const std::string& name : schema.optional_group) {
+    const int at = r.find(name);
+    if (at >= 0 && static_cast<std::size_t>(at) >= trailing) group.push_back(static_cast<std::size_t>(at));
+  }
+  if (!group.empty() && group.size() != schema.optional_group.size()) {
+    return port::Error::input(r.where() + "header has " + std::to_string(group.size()) + " of the columns " +
+                              join(schema.optional_group) + ": give all of them or none");
+  }
+  std::vector<double> group_scales(group.size());
+  for (std::size_t k = 0; k < group.size(); ++k) {
+    if (!r.column_scale(group[k], Quantity::angle, &group_scales[k])) return port::Error::input(r.error());
+  }
+  if (found != nullptr) *found = CsvFound{has_trailing, !group.empty()};
+  const std::size_t group_at = schema.columns.size() + (has_trailing ? 1 : 0);
+  std::vector<double> values(group_at + group.size());
   std::size_t rows = 0;
   while (r.next_row()) {
     ++rows;
     int joint = 0;
-    if (has_trailing && !r.number(trailing, 1.0, &values.back())) return port::Error::input(r.error());
+    if (has_trailing && !r.number(trailing, 1.0, &values[schema.columns.size()])) return port::Error::input(r.error());
+    for (std::size_t k = 0; k < group.size(); ++k) {
+      if (!r.number(group[k], group_scales[k], &values[group_at + k])) return port::Error::input(r.error());
+    }
+    if (group.size() == 3 && !r.check_rotation(group.data(), &values[group_at])) return port::Error::input(r.error());
     for (std::size_t i = 0; i < schema.columns.size(); ++i) {
       if (!r.number(offset + i, scales[i], &values[i])) return port::Error::input(r.error());
       if (schema.quantities[i] == Quantity::angle && !r.check_joint(++joint, offset + i, values[i])) {
@@ -103,15 +142,32 @@ const std::vector<Quantity> kJointQuantities(kJointCount, Quantity::angle);
 }  // namespace
 
 port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units,
-                             std::vector<std::size_t>* lines) {
+                             std::vector<std::size_t>* lines, const OrientationInput& orientation,
+                             OrientationRead* found) {
   const CsvSchema schema{with(kJointColumns, {"x", "y", "z"}),
                          with(kJointQuantities, {Quantity::length, Quantity::length, Quantity::length}), "",
-                         "target"};
-  return read_csv(path, schema, units, [&](const std::vector<double>& values) {
+                         "target", {"rx", "ry", "rz"}};
+  const double lever_m = orientation.lever();
+  if (!(lever_m >= 0.0 && math::is_finite(lever_m))) {
+    return port::Error::usage("orientation lever " + format_double(lever_m) +
+                              " m: the stated sigmas must be positive and finite");
+  }
+  CsvFound columns;
+  std::vector<std::size_t> row_lines;
+  std::vector<std::size_t> samples_per_row;
+  OrientationRead read;
+  const port::Error result = read_csv(path, schema, units, [&](const std::vector<double>& values) {
     const std::string error = check_finite(values, 0, 9);
     if (!error.empty()) return error;
+    if (columns.group && !check_finite(values, values.size() - 3, 3).empty()) {
+      return std::string("NaN or Inf in the rotation vector rx, ry, rz");
+    }
+    if (columns.trailing && columns.group) {
+      return std::string("a measured orientation (rx, ry, rz) and a target column together: the orientation "
+                         "makes targets 2 and 3 itself; give one or the other");
+    }
     int target = 0;  // 0-based; no target column: every row is target 1
-    if (values.size() > 9) {
+    if (columns.trailing) {
       const double named = values[9];
       if (!(named >= 1.0 && named <= kMaxTargets && named == std::floor(named))) {
         return "target " + format_double(named) + " is not an integer from 1 to " + std::to_string(kMaxTargets);
@@ -120,16 +176,45 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
     }
     JointVector q;
     for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
-    const Status status = dataset->add(q, Vec3(values[6], values[7], values[8]), target);
-    if (status == Status::dataset_full) {
-      return "dataset over capacity (" + std::to_string(dataset->capacity()) + " samples max)";
+    const Vec3 point_m(values[6], values[7], values[8]);
+    Vec3 points_m[3] = {point_m, point_m, point_m};
+    int targets[3] = {target, 1, 2};
+    std::size_t count = 1;
+    if (columns.group && lever_m > 0.0) {  // the virtual reflectors along the measured x and y axes
+      const std::size_t at = values.size() - 3;
+      const Mat3 rotation = rotation_from_vector(Vec3(values[at], values[at + 1], values[at + 2]));
+      points_m[1] = point_m + lever_m * rotation.col(0);
+      points_m[2] = point_m + lever_m * rotation.col(1);
+      count = 3;
+      ++read.poses;
     }
-    return status == Status::ok ? std::string() : std::string(status_message(status));
-  }, lines);
+    for (std::size_t k = 0; k < count; ++k) {
+      const Status status = dataset->add(q, points_m[k], targets[k]);
+      if (status == Status::dataset_full) {
+        return "dataset over capacity (" + std::to_string(dataset->capacity()) + " samples max" +
+               (count > 1 ? "; a row with an orientation takes three)" : ")");
+      }
+      if (status != Status::ok) return std::string(status_message(status));
+    }
+    samples_per_row.push_back(count);
+    return std::string();
+  }, &row_lines, &columns);
+  for (std::size_t row = 0; lines != nullptr && row < row_lines.size(); ++row) {
+    lines->insert(lines->end(), samples_per_row[row], row_lines[row]);
+  }
+  read.lever_m = read.poses > 0 ? lever_m : 0.0;
+  if (found != nullptr) *found = read;
+  return result;
+}
+
+void start_orientation_targets(const OrientationRead& read, RobotModel* start) {
+  if (read.poses == 0) return;
+  start->other_tools_m[0] = start->tool_m + Vec3(read.lever_m, 0.0, 0.0);
+  start->other_tools_m[1] = start->tool_m + Vec3(0.0, read.lever_m, 0.0);
 }
 
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units) {
-  return read_csv(path, CsvSchema{kJointColumns, kJointQuantities, "t", ""}, units, [&](const std::vector<double>& values) {
+  return read_csv(path, CsvSchema{kJointColumns, kJointQuantities, "t", "", {}}, units, [&](const std::vector<double>& values) {
     const std::string error = check_finite(values, 0, 6);
     if (!error.empty()) return error;
     JointVector q;
@@ -143,7 +228,7 @@ port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_ra
   JointVector lower;
   JointVector upper;
   int rows = 0;
-  port::Error error = read_csv(path, CsvSchema{{"lower", "upper"}, {Quantity::angle, Quantity::angle}, "", ""}, InputUnits{}, [&](const std::vector<double>& values) {
+  port::Error error = read_csv(path, CsvSchema{{"lower", "upper"}, {Quantity::angle, Quantity::angle}, "", "", {}}, InputUnits{}, [&](const std::vector<double>& values) {
     const std::string bad = check_finite(values, 0, 2);
     if (!bad.empty()) return bad;
     if (rows == kJointCount) return std::string("more than six rows (one per joint)");

@@ -15,12 +15,48 @@
 
 namespace hivecal::textio {
 
+/// Stated noise of a pendant's TCP position: its 0.01 mm rounding [m].
+constexpr double kDefaultPositionSigma_m = 1e-5;
+/// Stated noise of a pendant's TCP rotation vector: its 0.001 rad rounding [rad].
+constexpr double kDefaultAngleSigma_rad = 1e-3;
+
+/// How a measured orientation (`rx,ry,rz` columns: the tool frame's rotation vector in the
+/// tracker frame) enters: each such row becomes three samples of its joints, target 1 the
+/// point, targets 2 and 3 the point moved by the lever along the measured frame's x and y
+/// axes (virtual reflectors whose tool points are estimated like real ones, docs/formats.md).
+/// The lever weighs orientation against position: a virtual point's noise from the angle is
+/// lever x angle sigma, equal to the position noise at lever = position / angle sigma.
+struct OrientationInput {
+  double position_sigma_m = kDefaultPositionSigma_m;  ///< stated noise of the measured positions [m]
+  double angle_sigma_rad = kDefaultAngleSigma_rad;    ///< stated noise of the measured orientations [rad]
+  double lever_m = -1.0;                              ///< lever [m]; < 0: position_sigma_m / angle_sigma_rad; 0: rx, ry, rz checked, not used
+  /// The lever the reader uses [m] (0: orientation not used).
+  double lever() const { return lever_m < 0.0 ? position_sigma_m / angle_sigma_rad : lever_m; }
+};
+
+/// What read_samples_csv found of the orientation columns.
+struct OrientationRead {
+  std::size_t poses = 0;  ///< rows whose orientation became targets 2 and 3 [-]
+  double lever_m = 0.0;   ///< the lever used [m] (0 when no row was used)
+};
+
 /// Reads paired static samples (`q1..q6,x,y,z`, optionally `target` after z: the reflector,
-/// 1 .. kMaxTargets, 1 when absent) into a dataset; reports a full dataset as an error. Columns without a bracket unit are in `units` (SI when not declared); joints beyond
-/// one turn and points beyond 100 m are refused with the likely cause (delimited.hpp).
-/// `lines`, when given, receives the 1-based file line of each sample added, in order.
+/// 1 .. kMaxTargets, 1 when absent; optionally `rx,ry,rz` after them: a measured orientation,
+/// see OrientationInput, not together with `target`) into a dataset; reports a full dataset as
+/// an error. The joints may be named as a UR pendant writes them (`Base`, `Shoulder`, `Elbow`,
+/// `Wrist 1..3`). Columns without a bracket unit are in `units` (SI when not declared); joints
+/// and rotation vectors beyond one turn and points beyond 100 m are refused with the likely
+/// cause (delimited.hpp). `lines`, when given, receives the 1-based file line of each sample
+/// added, in order (a row with an orientation: its line three times). `found`, when given,
+/// says how the orientation was used.
 port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units = {},
-                             std::vector<std::size_t>* lines = nullptr);
+                             std::vector<std::size_t>* lines = nullptr, const OrientationInput& orientation = {},
+                             OrientationRead* found = nullptr);
+/// Starts the tool points of targets 2 and 3 of `start` where `read`'s orientation put them if
+/// the tool frame were the flange frame (tool + lever along x, along y); nothing when no
+/// orientation was used. The job estimates them (any flange-to-tool rotation).
+void start_orientation_targets(const OrientationRead& read, RobotModel* start);
+
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`), units and checks as above.
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units = {});
 

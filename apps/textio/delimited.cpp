@@ -324,6 +324,20 @@ bool DelimitedReader::check_point(const std::size_t index[3], const double point
               ": not a measured point");
 }
 
+bool DelimitedReader::check_rotation(const std::size_t index[3], const double vector_rad[3]) {
+  const double angle_rad =
+      std::sqrt(vector_rad[0] * vector_rad[0] + vector_rad[1] * vector_rad[1] + vector_rad[2] * vector_rad[2]);
+  if (!std::isfinite(angle_rad) || angle_rad <= kMaxJointMagnitude_rad) return true;  // NaN: the caller's message
+  std::string what = "rotation vector " + columns_[index[0]].name + "," + columns_[index[1]].name + "," +
+                     columns_[index[2]].name + " = " + port::printable(fields_[index[0]], 24) + ", " +
+                     port::printable(fields_[index[1]], 24) + ", " + port::printable(fields_[index[2]], 24);
+  bool assumed = true;
+  for (int k = 0; k < 3; ++k) assumed = assumed && unit_assumed(index[k], Quantity::angle);
+  if (assumed) return fail(what + " looks like degrees: use --angle-unit deg (angles are read in rad without it)");
+  return fail(what + " turns more than once (|r| > 2 pi rad) in the unit of its " +
+              (columns_[index[0]].unit.empty() ? "--angle-unit" : "header") + ": not a rotation vector");
+}
+
 bool DelimitedReader::whole_number(std::size_t index, std::uint64_t* value) const {
   const std::string_view field = fields_[index];
   const char* end = field.data() + field.size();

@@ -119,6 +119,10 @@ class DelimitedReader {
   /// ("... looks like millimetres: use --length-unit mm") beyond kMaxPointDistance_m; true
   /// for NaN/Inf (the caller's to refuse: a lost beam may carry NaN).
   bool check_point(const std::size_t index[3], const double point_m[3]);
+  /// Checks a rotation vector read from fields `index[0..2]` as `vector_rad`: false with
+  /// error() set beyond one turn (|r| > 2 pi; "looks like degrees: use --angle-unit deg" when
+  /// no unit was named); true for NaN/Inf (the caller's to refuse).
+  bool check_rotation(const std::size_t index[3], const double vector_rad[3]);
   /// Reads the header (first non-blank line): delimiter and columns. False with error() set
   /// for an empty file or a binary one.
   bool read_header();

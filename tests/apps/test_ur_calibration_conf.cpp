@@ -13,6 +13,8 @@
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "testkit/shared_data.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "textio/csv.hpp"
 #include "textio/text_util.hpp"
 #include "textio/ur_calibration_conf.hpp"
 
@@ -125,6 +127,74 @@ TEST(Ur5ePendant, FitOnTwelvePosesPredictsTheOtherSix) {
   // docs/robust.md). The bound pins what it does so that a change for the worse fails.
   EXPECT_LT(mae_m, 0.12e-3);
   EXPECT_GT(baseline_mae_m, 0.5e-3);
+}
+
+/// Fits the pendant poses `train` (the file read as it is, Base (°) .. RZ (rad): each pose's
+/// rotation vector adds targets 2 and 3 at the lever of the stated noise, 0.01 mm / 0.001 rad
+/// = 10 mm, chosen from the pendant's rounding, not on held-out poses) with the command line's
+/// defaults and --split 1; returns the MAE [m] of predicting the poses `test`.
+double predict_with_orientation(const std::vector<std::size_t>& train, const std::vector<std::size_t>& test) {
+  static Dataset<64> all;
+  all.clear();
+  textio::OrientationRead found;
+  const port::Error read = textio::read_samples_csv(kDir + "joint-eef-data.csv", &all, {}, nullptr, {}, &found);
+  EXPECT_TRUE(read.ok()) << read.message;
+  EXPECT_EQ(found.poses, 18u);
+  EXPECT_EQ(found.lever_m, 0.01);
+  EXPECT_EQ(all.size(), 54u);
+  const std::vector<PendantReading> readings = read_pendant_csv();
+  static Dataset<64> fit;
+  fit.clear();
+  for (std::size_t pose : train) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      const Sample& s = all.samples()[3 * pose + k];
+      EXPECT_EQ(s.target, static_cast<int>(k));
+      if (k == 0) {
+        EXPECT_LE((s.point_m - readings[pose].tcp_m).norm(), 1e-15);
+      }
+      EXPECT_EQ(fit.add(s.q_rad, s.point_m, s.target), Status::ok);
+    }
+  }
+  static CalibrationWorkspace<64, double, 150, 300> workspace;
+  static CalibrationResult result;
+  CalibrationOptions options;  // the command line's defaults: ABC+LM, full model
+  options.train_fraction = 1.0;
+  RobotModel start = nominal_model(RobotType::ur5e);
+  start.tool_m = Vec3::Zero();
+  textio::start_orientation_targets(found, &start);
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibrate(start, &fit, options, &workspace, &result));
+  EXPECT_EQ(status, Status::ok) << calibration_step_name(result.step);
+  EXPECT_EQ(result.train_count, 3 * train.size());
+  EXPECT_EQ(result.outlier_count, 0u);
+  const CalibrationStage& final_stage = result.stages[result.stage_count - 1];
+  double mae_m = 0.0;
+  for (std::size_t pose : test) {
+    const Vec3 predicted = final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, readings[pose].q_rad));
+    mae_m += (predicted - readings[pose].tcp_m).norm() / static_cast<double>(test.size());
+  }
+  return mae_m;
+}
+
+TEST(Ur5ePendant, OrientationTooPredictsTheOtherSixBetter) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  const double mae_m = predict_with_orientation({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}, {12, 13, 14, 15, 16, 17});
+  RecordProperty("predicted_mae_um", static_cast<int>(mae_m * 1e6));
+  std::printf("UR5e pendant with orientation (lever 10 mm): 12 poses fitted, 6 predicted: MAE %.4f mm\n", mae_m * 1e3);
+  // Measured 0.0887 mm (positions only: 0.116 mm, the test above): better than every
+  // position-only scipy fit of this split (0.139-0.292 mm, docs/robust.md), short of the
+  // issue's 0.08 mm. Pinned so that a change for the worse fails.
+  EXPECT_LT(mae_m, 0.09e-3);
+}
+
+// A split on which the significance test fixed tool_x, and with it (LM estimates the other
+// targets' tool points only while tool_x is free) targets 2 and 3 at their start: 5.97 mm
+// before the job kept tool_x free with several targets; 0.078 mm now (positions only: 0.080).
+TEST(Ur5ePendant, OrientationSplitWhereTheSignificanceTestFroze2And3) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  const double mae_m = predict_with_orientation({4, 16, 5, 2, 3, 12, 17, 13, 11, 1, 0, 8}, {15, 10, 14, 9, 6, 7});
+  std::printf("UR5e pendant with orientation, another split: MAE %.4f mm\n", mae_m * 1e3);
+  EXPECT_LT(mae_m, 0.085e-3);
 }
 
 TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {

@@ -1,0 +1,119 @@
+// A measured orientation end to end: the UR5e pendant export as it is (Base (°) .. RZ (rad)),
+// first 12 poses calibrated with --split 1, the other 6 predicted by `predict` (target 1):
+// the result says the orientation was used, and the held-out error is the job's
+// (tests/apps/test_ur_calibration_conf.cpp). Skipped without ../shared/data/ur5e-pendant.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "commands/commands.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "testkit/cli_run.hpp"
+#include "testkit/shared_data.hpp"
+#include "testkit/temp_dir.hpp"
+#include "textio/csv.hpp"
+#include "textio/text_util.hpp"
+
+namespace hivecal {
+namespace {
+
+using test::run;
+
+std::string read_text(const std::string& path) {
+  std::string text;
+  EXPECT_TRUE(port::read_whole_file(path, port::kMaxTextInputBytes, &text).ok()) << path;
+  return text;
+}
+
+/// The first `count` comma-separated fields of `line`, joined by commas.
+std::string first_fields(const std::string& line, int count) {
+  std::size_t end = 0;
+  for (int k = 0; k < count && end != std::string::npos; ++k) end = line.find(',', end == 0 ? 0 : end + 1);
+  return line.substr(0, end);
+}
+
+TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  const std::string file = read_text(test::shared_data_path("ur5e-pendant/joint-eef-data.csv"));
+  std::vector<std::string> lines;
+  std::istringstream in(file);
+  for (std::string line; std::getline(in, line);) {
+    if (!textio::trim(line).empty()) lines.push_back(line);
+  }
+  ASSERT_EQ(lines.size(), 19u);
+  std::string train = lines[0] + "\n";
+  std::string held_out = first_fields(lines[0], 6) + "\n";  // the six joint columns
+  std::vector<Vec3> truth_m;
+  for (std::size_t i = 1; i <= 18; ++i) {
+    if (i <= 12) {
+      train += lines[i] + "\n";
+      continue;
+    }
+    std::vector<double> v;
+    std::istringstream cells(lines[i]);
+    for (std::string cell; std::getline(cells, cell, ',');) {
+      double x = 0.0;
+      ASSERT_TRUE(textio::parse_double(cell, &x)) << cell;
+      v.push_back(x);
+    }
+    ASSERT_EQ(v.size(), 12u);
+    held_out += first_fields(lines[i], 6) + "\n";
+    truth_m.push_back(Vec3(v[6], v[7], v[8]) * 1e-3);
+  }
+  const test::TempDir dir("hivecal_orientation");
+  ASSERT_FALSE(dir.path().empty());
+  const std::string samples = dir.write("train.csv", train);
+  const std::string joints = dir.write("held_out.csv", held_out);
+  const std::string result = dir.path() + "/result.json";
+  const std::string positions = dir.path() + "/result_positions.json";
+  const std::string predicted = dir.path() + "/predicted.csv";
+  const std::vector<std::string> common = {"--samples", samples, "--robot-model", "ur5e", "--tool", "0,0,0",
+                                           "--split", "1", "--quiet"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--out", result});
+  ASSERT_EQ(run(cli::calibrate_main, args), 0);
+  const std::string json = read_text(result);
+  EXPECT_NE(json.find("\"orientation\": {"), std::string::npos);
+  EXPECT_NE(json.find("\"poses\": 12"), std::string::npos);
+  EXPECT_NE(json.find("\"lever_m\": 0.01"), std::string::npos);
+  EXPECT_NE(json.find("orientation used: 12 poses with rx, ry, rz"), std::string::npos);  // the report's input lines
+  EXPECT_NE(json.find("\"tools\""), std::string::npos);
+
+  ASSERT_EQ(run(cli::predict_main, {"--calibration", result, "--joints", joints, "--out", predicted}), 0);
+  std::vector<Vec3> points;
+  std::istringstream rows(read_text(predicted));
+  std::string row;
+  std::getline(rows, row);  // x,y,z
+  while (std::getline(rows, row)) {
+    std::vector<double> v;
+    std::istringstream cells(row);
+    for (std::string cell; std::getline(cells, cell, ',');) {
+      double x = 0.0;
+      ASSERT_TRUE(textio::parse_double(cell, &x));
+      v.push_back(x);
+    }
+    ASSERT_EQ(v.size(), 3u);
+    points.emplace_back(v[0], v[1], v[2]);
+  }
+  ASSERT_EQ(points.size(), 6u);
+  double mae_m = 0.0;
+  for (std::size_t k = 0; k < 6; ++k) mae_m += (points[k] - truth_m[k]).norm() / 6.0;
+  std::printf("calibrate + predict on the pendant export, with orientation: held-out MAE %.4f mm\n", mae_m * 1e3);
+  EXPECT_LT(mae_m, 0.09e-3);  // the job's 0.0887 mm
+
+  // --orientation-lever-m 0: positions only (the job's 0.116 mm), nothing said of an orientation.
+  args = common;
+  args.insert(args.end(), {"--out", positions, "--orientation-lever-m", "0"});
+  ASSERT_EQ(run(cli::calibrate_main, args), 0);
+  EXPECT_EQ(read_text(positions).find("\"orientation\""), std::string::npos);
+  // Stated sigmas must be positive.
+  args = common;
+  args.insert(args.end(), {"--out", positions, "--angle-sigma-rad", "0"});
+  EXPECT_EQ(run(cli::calibrate_main, args), 2);
+}
+
+}  // namespace
+}  // namespace hivecal
