@@ -40,12 +40,8 @@ bool poses_distinct(Span<const Sample> samples) {
 
 bool transform_finite(const RigidTransform& t) { return all_finite(t.rotation) && all_finite(t.translation_m); }
 
-/// The point the solver is at, with its loss.
-struct Point {
-  RobotModel model;
-  RigidTransform base;
-  PointLoss loss;
-};
+/// The point the solver is at, with its loss (in the workspace).
+using Point = LmPoint;
 
 /// The Huber threshold to use at `point`: fixed, or from the median residual norm.
 Status update_huber_threshold(const LmOptions& options, Span<const Sample> samples, Point* point) {
@@ -208,7 +204,7 @@ struct Run {
   LmResult* result;
   ParamMask free_mask;
   ParamMask kept;
-  Point point;
+  Point& point;  ///< ws->point
   Span<const JointTrig> sample_trig;  ///< joint trig of every sample, or empty
   NormalEquations* current;  ///< normal equations at `point`
   NormalEquations* trial;    ///< normal equations at the last trial point, in the shared scratch (or null)
@@ -296,9 +292,9 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   LmStepScratch* scratch = run->ws->scratch.open_step();
   const LmOptions& options = run->options;
   const NormalEquations& eq = *run->current;
-  FullParams scale;
-  FullParams step;
-  FullParams scaled_step;
+  FullParams& scale = scratch->scale;
+  FullParams& step = scratch->step;
+  FullParams& scaled_step = scratch->scaled_step;
   scale_normal_matrix(eq.jtwj, run->kept, 1.0, &scratch->system, &scale);
   *stop = true;
   if (gradient_cosine(eq, scale, run->kept) <= options.gradient_tolerance) {
@@ -317,13 +313,15 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   *stop = false;
   // The trial's normal equations are summed right away: steps are nearly always accepted,
   // and then they are the next iteration's (a separate cost pass would be wasted).
-  Point trial = run->point;
+  Point& trial = run->ws->trial_point;
+  trial = run->point;
   apply_full_increment(step, &trial.model, &trial.base);
   apply_target_step(eq, step, &trial.model);
+  // Predicted decrease of sum w|r + J d|^2: d^T S d + 2 lambda |d_s|^2 (scaled units), before
+  // the trial's normal equations take the scratch that holds the step.
+  const double predicted = model_decrease + 2.0 * run->damping * scaled_step.squaredNorm();
   run->trial = run->ws->scratch.open_trial(run->trial_targets);
   const Status status = accumulate(*run, trial, run->trial);
-  // Predicted decrease of sum w|r + J d|^2: d^T S d + 2 lambda |d_s|^2 (scaled units).
-  const double predicted = model_decrease + 2.0 * run->damping * scaled_step.squaredNorm();
   const double actual = eq.loss_sum_m2 - run->trial->loss_sum_m2;
   const double gain = status == Status::ok && predicted > 0.0 ? actual / predicted : -1.0;
   if (!(gain > 0.0)) return false;
@@ -450,7 +448,8 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
     return Status::dimension_out_of_range;  // the workspace has no room for these targets' tool points
   }
   clear_result(result);
-  Run run{options, samples, workspace, result, free_mask, 0, Point{start_model, RigidTransform{}, PointLoss{}},
+  workspace->point = Point{start_model, RigidTransform{}, PointLoss{}};
+  Run run{options, samples, workspace, result, free_mask, 0, workspace->point,
           store_joint_trig(samples, workspace->joint_trig), &workspace->normal, nullptr,
           workspace->target_blocks.subspan(blocks, blocks),
           options.initial_damping, 2.0, false};

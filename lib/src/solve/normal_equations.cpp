@@ -380,9 +380,9 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
                Span<const Sample> samples, Span<const JointTrig> stored_trig, std::size_t first,
                const PointLoss& loss, const IndexList& list, RowBatch* batch, NormalEquations* eq) {
   const int count = static_cast<int>(std::min<std::size_t>(kWidth, samples.size() - first));
-  const Sample* group[kWidth];
+  const Sample* group[kWidth] = {};  // set up to count; initialised for arm-none-eabi-gcc's maybe-uninitialized
   JointTrig computed[kWidth];
-  const JointTrig* group_trig[kWidth];
+  const JointTrig* group_trig[kWidth] = {};
   const bool compliant = model.compliance.term_count > 0;
   TermBasis basis[kWidth];
   for (int k = 0; k < count; ++k) {

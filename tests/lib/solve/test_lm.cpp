@@ -279,8 +279,10 @@ TEST(Lm, IterationLimitReportsNotConvergedWithTheLastPoint) {
 // before less one LmStepScratch and one NormalEquations (26.6 kB at 33 parameters). The
 // goldens (LmGolden, CaptureJob) show the same bits.
 TEST(Lm, WorkspaceSharesOneBlockAmongStepTrialAndAnalysis) {
-  struct SideBySide {  // LmWorkspace until session 7
+  struct SideBySide {  // LmWorkspace until session 7, with the points it now also holds
     NormalEquations normal;
+    LmPoint point;
+    LmPoint trial_point;
     NormalEquations trial;
     LmStepScratch step;
     IdentifiabilityWorkspace identifiability;

@@ -115,6 +115,17 @@ struct KeptCholesky {
 struct LmStepScratch {
   NormalMatrix system;         ///< scaled, damped system matrix [-]
   KeptCholesky factorization;  ///< its Cholesky factor over the kept parameters [-]
+  FullParams scale;            ///< column scale of the system [unit/-]
+  FullParams step;             ///< the step in parameter units [m] or [rad]
+  FullParams scaled_step;      ///< the step in scaled units [-]
+};
+
+/// A point of the search: geometry, base and loss. The solver's current and trial points live
+/// in its workspace: a RobotModel (with its compliance) is ~0.6 kB, too much for a small stack.
+struct LmPoint {
+  RobotModel model;         ///< geometry at the point
+  RigidTransform base;      ///< base -> tracker transform at the point
+  PointLoss loss;           ///< the loss's scale at the point
 };
 
 /// One block of memory for three scratch sets that are never alive together: the step's
@@ -147,6 +158,8 @@ class LmSharedScratch {
 /// caller's memory plan, not on a small stack.
 struct LmWorkspace {
   NormalEquations normal;   ///< normal equations at the current point
+  LmPoint point;            ///< the current point
+  LmPoint trial_point;      ///< the point a step tries
   LmSharedScratch scratch;  ///< the step's system and factor, the trial point's normal equations, or the identifiability analysis's scratch
   /// Optional storage for the joint trig of the samples, one entry per sample (no ownership):
   /// with it the joint angles' sin/cos are computed once instead of in every pass (~10 %
