@@ -857,6 +857,13 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
                                                           final_stage.model)) {
       data.info_lines.push_back(line);
     }
+    if (final_stage.rigid_kept) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    "compliance: no term passed the %.3g sigma test (the data show no bending): the rigid fit is kept",
+                    std::fmax(run.result.significance_t, CalibrationCompliance{}.significance_t));
+      data.info_lines.push_back(buf);
+    }
     data.identifiability = identifiability_table(*lm, final_stage.model);
     for (int k = 0; k < kFullParamCount; ++k)
       if (mask_has(run.result.lm_pruned_mask, k)) data.identifiability.fixed.push_back(full_param_name(k, final_stage.model));

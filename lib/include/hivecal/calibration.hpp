@@ -58,6 +58,10 @@ struct CalibrationCompliance {
   /// coefficients; term_count 0: default_compliance_terms of the start geometry for `load`
   /// and `gravity_direction`.
   ComplianceModel model;
+  /// Level of the significance test for the compliance terms, when the test is on: a term is
+  /// a new model term, not a correction to a known one, so it must clear this (and at least
+  /// significance_t) to stay; below it the term is fixed at its start value [-].
+  double significance_t = 3.0;
 };
 
 /// Default level of LM's significance test: a parameter whose change is below 2 sigma is fixed [-].
@@ -104,6 +108,9 @@ struct CalibrationStage {
   CalibrationSolver solver = CalibrationSolver::lm;    ///< which solver ran
   bool refines_previous = false;                      ///< LM started from the previous stage's geometry and base
   bool compliance = false;                            ///< LM estimated the model's compliance terms too ("LM+compliance")
+  /// LM+compliance: no compliance term passed the significance test, so the stage holds the
+  /// rigid fit (the model's terms at their start values) and `lm` its details.
+  bool rigid_kept = false;
   CalibrationParams params = CalibrationParams::paper;  ///< parameters it could move
   Status status = Status::ok;                         ///< ok, or not_converged (LM's last point kept)
   RobotModel model;                                   ///< calibrated geometry

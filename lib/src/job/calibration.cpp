@@ -156,9 +156,11 @@ double model_value(const RobotModel& model, int index) {
 }
 
 /// The estimated model parameter (geometry or compliance coefficient) whose change from
-/// `start` is least significant, below t standard deviations, none of `never`; -1 when none
-/// is (or t <= 0).
-[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t, ParamMask never) {
+/// `start` is least significant, below t standard deviations (a compliance term: below
+/// compliance_t >= t, its ratio scaled by t / compliance_t to compare), none of `never`; -1
+/// when none is (or t <= 0).
+[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t, double compliance_t,
+                                        ParamMask never) {
   if (!(t > 0.0)) return -1;
   const ModelParams change = to_params(lm.model) - to_params(start);
   int weakest = -1;
@@ -168,7 +170,8 @@ double model_value(const RobotModel& model, int index) {
     if (i >= kRigidParamCount && i - kRigidParamCount >= lm.model.compliance.term_count) break;
     if (!mask_has(lm.identifiability.kept_mask, i) || mask_has(never, i) || !(lm.sigma(i) > 0.0)) continue;
     const double delta = i < kModelParamCount ? change(i) : model_value(lm.model, i) - model_value(start, i);
-    const double ratio = std::fabs(delta) / lm.sigma(i);
+    const double ratio = i < kRigidParamCount ? std::fabs(delta) / lm.sigma(i)
+                                              : std::fabs(delta) / lm.sigma(i) * (t / std::fmax(t, compliance_t));
     if (ratio < weakest_ratio) {
       weakest_ratio = ratio;
       weakest = i;
@@ -221,7 +224,8 @@ Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_mod
     bool again = reset && reset_dropped(reference, r.lm.identifiability, &from);
     // LM estimates the other targets' tool points only while tool_x is free (lm.cpp): fixing
     // it would freeze them at their start values (on the pendant split with orientation: 4-8 mm).
-    const int weakest = least_significant(reference, r.lm, t, several ? param_bit(tool_param_index(0)) : 0);
+    const int weakest = least_significant(reference, r.lm, t, job.options.compliance.significance_t,
+                                          several ? param_bit(tool_param_index(0)) : 0);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;
@@ -310,6 +314,30 @@ Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
   return Status::ok;
 }
 
+/// True when the LM run kept (estimated) one of the first `term_count` compliance terms.
+bool any_compliance_kept(ParamMask kept, int term_count) {
+  return (kept & compliance_params_mask(term_count)) != 0;
+}
+
+/// No compliance term is significant: the data do not show the arm bending, and the rigid fit
+/// is the answer (the compliant stage's own pruning of the geometry would differ from it).
+/// The rigid stage runs again (the same inputs, so the same bits) so that r.lm holds its
+/// details; the LM+compliance stage is its copy with the terms at their start values.
+[[gnu::noinline]] Status keep_rigid_fit(Job& job, const ComplianceModel& terms, ParamMask* pruned) {
+  CalibrationResult& r = job.result;
+  const std::size_t compliant_index = r.stage_count;
+  r.stage_count = compliant_index - 1;  // run_lm refills the rigid stage's slot and trace
+  const Status status = run_lm(job, r.stages[r.stage_count].refines_previous, pruned);
+  r.stage_count = compliant_index;
+  if (status != Status::ok) return status;
+  CalibrationStage& stage = r.stages[compliant_index];
+  stage = r.stages[compliant_index - 1];
+  stage.compliance = true;
+  stage.rigid_kept = true;
+  stage.model.compliance = terms;
+  return Status::ok;
+}
+
 /// LM+compliance: from the rigid LM stage's geometry and base (the last stage), the geometry
 /// and the compliance terms together, at the rigid stage's significance level. A parameter
 /// this fit cannot determine goes back to its start value, as in a hybrid.
@@ -325,8 +353,11 @@ Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
   const Status status = fit_lm(job, reference, from, &rigid.base_to_tracker, true, true, job.dataset.train(),
                                r.significance_t, &trace, job.observer, pruned);
   if (status != Status::ok && status != Status::not_converged) return status;
-  lm_stage(job, status, true, true, trace);
-  return Status::ok;
+  if (any_compliance_kept(r.lm.identifiability.kept_mask, reference.compliance.term_count)) {
+    lm_stage(job, status, true, true, trace);
+    return Status::ok;
+  }
+  return keep_rigid_fit(job, reference.compliance, pruned);
 }
 
 /// Runs one stage with the observer's begin/end around it, then its train/test errors.
