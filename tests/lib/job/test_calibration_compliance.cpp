@@ -174,7 +174,14 @@ TEST(CalibrationCompliance, AnArmThatDoesNotBendKeepsTheRigidFit) {
   const Validation v = validate(Bending::none);
   const ComplianceModel& c = result.stages[1].model.compliance;
   for (int t = 0; t < c.term_count; ++t) EXPECT_EQ(c.coefficient[t], 0.0) << compliance_term_name(c, t);
-  EXPECT_LE(v.compliant_m, 1.01 * v.rigid_m);
+  // No term passed: the stage is the rigid fit, bit for bit (the rigid stage was run again).
+  EXPECT_TRUE(result.stages[1].rigid_kept);
+  EXPECT_FALSE(result.stages[0].rigid_kept);
+  for (int i = 0; i < kModelParamCount; ++i) {
+    EXPECT_EQ(to_params(result.stages[1].model)(i), to_params(result.stages[0].model)(i)) << full_param_name(i);
+  }
+  EXPECT_TRUE(result.stages[1].base_to_tracker.translation_m == result.stages[0].base_to_tracker.translation_m);
+  EXPECT_EQ(v.compliant_m, v.rigid_m);
 }
 
 TEST(CalibrationCompliance, OffByDefaultAndRefusedWithoutLm) {
