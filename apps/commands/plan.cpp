@@ -311,7 +311,7 @@ int plan_main(int argc, char** argv) {
       {"tool-down", "", "the flange z axis points down in every pose (the paper's session)", ""},
       {"joint-limits", "FILE", "CSV lower,upper [rad], one row per joint (default: the robot's)", ""},
       {"params", "full|paper", "parameters the calibration will estimate", "full"},
-      {"objective", "NAME", "d-optimal | i-optimal | i-optimal-workspace (docs/planning.md)", "d-optimal"},
+      {"objective", "NAME", "i-optimal-workspace | i-optimal | d-optimal (docs/planning.md)", "i-optimal-workspace"},
       {"candidates", "N", "random candidate configurations to choose from (<= 2048)", "2048"},
       {"seed", "S", "seed of the candidate draws", "1"},
       {"noise-um", "UM", "tracker noise per axis for the predicted sigmas [um]", "10"},
@@ -324,8 +324,8 @@ int plan_main(int argc, char** argv) {
   };
   Options options;
   const int parsed = parse_options(kCommand,
-                                   "Chooses the poses of a tracker session (D-optimal by default, over the parameters\n"
-                                   "the calibration estimates), orders them for a short path and writes them as a\n"
+                                   "Chooses the poses of a tracker session (I-optimal over the cell by default, over\n"
+                                   "the parameters the calibration estimates), orders them for a short path and writes them as a\n"
                                    "joints CSV and optionally a URScript program; prints random-vs-planned figures.",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
