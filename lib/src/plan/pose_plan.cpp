@@ -12,7 +12,7 @@ namespace {
 // Ridge added to the scaled information matrix (one average candidate adds ~1 per diagonal
 // entry): keeps log det finite while the greedy start holds fewer equations than parameters.
 constexpr double kRidge = 1e-6;
-// An exchange must raise the D-criterion by more than this to be taken: no cycling on ties.
+// An exchange must improve the criterion by more than this to be taken: no cycling on ties.
 constexpr double kExchangeGain = 1e-9;
 // 2-opt passes over the path at most (each pass is O(n^2); it usually settles in a few).
 constexpr int kMaxTwoOptPasses = 64;
@@ -233,7 +233,7 @@ void select_candidate(PlanWorkspace* ws, std::size_t slot, std::size_t candidate
   ws->in_selection[candidate] = true;
 }
 
-/// Greedy start: adds, pose by pose, the candidate that raises log det the most.
+/// Greedy start: adds, pose by pose, the candidate that improves the criterion the most.
 Status greedy_start(const RobotModel& model, const PlanOptions& o, const FullParams& scale, ParamMask mask,
                     PlanWorkspace* ws) {
   for (std::size_t i = 0; i < o.candidate_count; ++i) ws->in_selection[i] = false;
@@ -248,7 +248,7 @@ Status greedy_start(const RobotModel& model, const PlanOptions& o, const FullPar
 }
 
 /// Fedorov-style exchange (Cook & Nachtsheim's modified Fedorov): each selected pose in turn
-/// is replaced by the candidate that raises log det the most, when that beats keeping it.
+/// is replaced by the candidate that improves the criterion the most, when that beats keeping it.
 Status exchange_passes(const RobotModel& model, const PlanOptions& o, const FullParams& scale, ParamMask mask,
                        PlanWorkspace* ws, int* passes, int* exchanges) {
   *passes = 0;
