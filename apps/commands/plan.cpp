@@ -122,6 +122,15 @@ Error parse_request(const Options& options, PlanRequest* request) {
   double noise_um = 0.0;
   if (error.ok()) error = bounded_option(options, "noise-um", 1e-3, 1e4, &noise_um);
   o.noise_m = noise_um * 1e-6;
+  double prior_mm = 0.0;
+  double prior_mrad = 0.0;
+  std::size_t restarts = 0;
+  if (error.ok()) error = bounded_option(options, "prior-mm", 0.0, 1e3, &prior_mm);
+  if (error.ok()) error = bounded_option(options, "prior-mrad", 0.0, 1e3, &prior_mrad);
+  if (error.ok()) error = count_option(options, "restarts", 1, 64, &restarts);
+  o.prior_length_m = prior_mm * 1e-3;
+  o.prior_angle_rad = prior_mrad * 1e-3;
+  o.restarts = static_cast<int>(restarts);
   if (error.ok()) error = bounded_option(options, "joint-speed", 1e-3, 10.0, &o.joint_speed_rad_s);
   if (error.ok()) error = bounded_option(options, "joint-acceleration", 1e-3, 100.0, &o.joint_acceleration_rad_s2);
   if (error.ok()) error = bounded_option(options, "dwell", kMinDwell_s, 3600.0, &o.dwell_s);
@@ -311,10 +320,13 @@ int plan_main(int argc, char** argv) {
       {"tool-down", "", "the flange z axis points down in every pose (the paper's session)", ""},
       {"joint-limits", "FILE", "CSV lower,upper [rad], one row per joint (default: the robot's)", ""},
       {"params", "full|paper", "parameters the calibration will estimate", "full"},
-      {"objective", "NAME", "d-optimal | i-optimal | i-optimal-workspace (docs/planning.md)", "d-optimal"},
+      {"objective", "NAME", "i-optimal-workspace | i-optimal | d-optimal (docs/planning.md)", "i-optimal-workspace"},
       {"candidates", "N", "random candidate configurations to choose from (<= 2048)", "2048"},
       {"seed", "S", "seed of the candidate draws", "1"},
       {"noise-um", "UM", "tracker noise per axis for the predicted sigmas [um]", "10"},
+      {"prior-mm", "MM", "prior sigma of the geometry's lengths and the tool in the objective (0: none)", "1"},
+      {"prior-mrad", "MRAD", "prior sigma of the geometry's angles in the objective (0: none)", "1"},
+      {"restarts", "N", "exchange runs: the greedy start, then seeded random starts (1 .. 64)", "4"},
       {"joint-speed", "RAD/S", "movej joint speed", "1.05"},
       {"joint-acceleration", "RAD/S2", "movej joint acceleration", "1.4"},
       {"dwell", "S", "wait at each pose (>= 0.3 s: the extraction needs the arm still at 10 Hz)", "1"},
@@ -324,8 +336,8 @@ int plan_main(int argc, char** argv) {
   };
   Options options;
   const int parsed = parse_options(kCommand,
-                                   "Chooses the poses of a tracker session (D-optimal by default, over the parameters\n"
-                                   "the calibration estimates), orders them for a short path and writes them as a\n"
+                                   "Chooses the poses of a tracker session (I-optimal over the cell by default, over\n"
+                                   "the parameters the calibration estimates), orders them for a short path and writes them as a\n"
                                    "joints CSV and optionally a URScript program; prints random-vs-planned figures.",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;

@@ -12,7 +12,7 @@ namespace {
 // Ridge added to the scaled information matrix (one average candidate adds ~1 per diagonal
 // entry): keeps log det finite while the greedy start holds fewer equations than parameters.
 constexpr double kRidge = 1e-6;
-// An exchange must raise the D-criterion by more than this to be taken: no cycling on ties.
+// An exchange must improve the criterion by more than this to be taken: no cycling on ties.
 constexpr double kExchangeGain = 1e-9;
 // 2-opt passes over the path at most (each pass is O(n^2); it usually settles in a few).
 constexpr int kMaxTwoOptPasses = 64;
@@ -56,7 +56,10 @@ bool options_valid(const PlanOptions& o) {
                          math::is_finite(o.joint_speed_rad_s) && o.joint_acceleration_rad_s2 > 0.0 &&
                          math::is_finite(o.joint_acceleration_rad_s2) && o.dwell_s >= 0.0 &&
                          math::is_finite(o.dwell_s);
-  return cell_ok && counts_ok && mask_ok && threshold_ok && timing_ok && o.max_exchange_passes >= 0;
+  const bool prior_ok = o.prior_length_m >= 0.0 && math::is_finite(o.prior_length_m) && o.prior_angle_rad >= 0.0 &&
+                        math::is_finite(o.prior_angle_rad);
+  return cell_ok && counts_ok && mask_ok && threshold_ok && timing_ok && prior_ok && o.max_exchange_passes >= 0 &&
+         o.restarts >= 1;
 }
 
 /// Shifts q by whole turns into [lower, upper] when a turn fits (q4 of the tool-down wrist).
@@ -93,10 +96,10 @@ void scaled_jacobian(const RobotModel& model, const Sample& pose, const FullPara
 
 /// *information = ridge I + sum of J^T J over `poses` except entry `skip` (mask x mask block).
 void build_information(const RobotModel& model, Span<const Sample> poses, std::size_t skip, const FullParams& scale,
-                       ParamMask mask, NormalMatrix* information) {
+                       ParamMask mask, const FullParams& ridge, NormalMatrix* information) {
   information->setZero();
   for (int k = 0; k < kFullParamCount; ++k) {
-    if (mask_has(mask, k)) (*information)(k, k) = kRidge;
+    if (mask_has(mask, k)) (*information)(k, k) = ridge(k);
   }
   FullJacobian j;
   for (std::size_t i = 0; i < poses.size(); ++i) {
@@ -201,7 +204,7 @@ double criterion_gain(const RobotModel& model, const Sample& pose, const FullPar
 /// Factors ridge I + the information of the selection without entry `skip`.
 bool factor_selection(const RobotModel& model, PlanWorkspace* ws, std::size_t count, std::size_t skip,
                       const FullParams& scale, ParamMask mask) {
-  build_information(model, Span<const Sample>(ws->selected, count), skip, scale, mask, &ws->information);
+  build_information(model, Span<const Sample>(ws->selected, count), skip, scale, mask, ws->ridge, &ws->information);
   return cholesky_factor(ws->information, mask, &ws->factor);
 }
 
@@ -230,7 +233,7 @@ void select_candidate(PlanWorkspace* ws, std::size_t slot, std::size_t candidate
   ws->in_selection[candidate] = true;
 }
 
-/// Greedy start: adds, pose by pose, the candidate that raises log det the most.
+/// Greedy start: adds, pose by pose, the candidate that improves the criterion the most.
 Status greedy_start(const RobotModel& model, const PlanOptions& o, const FullParams& scale, ParamMask mask,
                     PlanWorkspace* ws) {
   for (std::size_t i = 0; i < o.candidate_count; ++i) ws->in_selection[i] = false;
@@ -245,9 +248,11 @@ Status greedy_start(const RobotModel& model, const PlanOptions& o, const FullPar
 }
 
 /// Fedorov-style exchange (Cook & Nachtsheim's modified Fedorov): each selected pose in turn
-/// is replaced by the candidate that raises log det the most, when that beats keeping it.
+/// is replaced by the candidate that improves the criterion the most, when that beats keeping it.
 Status exchange_passes(const RobotModel& model, const PlanOptions& o, const FullParams& scale, ParamMask mask,
-                       PlanWorkspace* ws, PlanResult* result) {
+                       PlanWorkspace* ws, int* passes, int* exchanges) {
+  *passes = 0;
+  *exchanges = 0;
   for (int pass = 0; pass < o.max_exchange_passes; ++pass) {
     int swaps = 0;
     for (std::size_t slot = 0; slot < o.pose_count; ++slot) {
@@ -260,17 +265,28 @@ Status exchange_passes(const RobotModel& model, const PlanOptions& o, const Full
       select_candidate(ws, slot, best);
       ++swaps;
     }
-    result->exchange_passes = pass + 1;
-    result->exchanges += swaps;
+    *passes = pass + 1;
+    *exchanges += swaps;
     if (swaps == 0) break;
   }
   return Status::ok;
 }
 
+/// Seeded random start: pose_count distinct pool candidates (a restart of the exchange).
+void random_start(const PlanOptions& o, std::uint64_t restart, PlanWorkspace* ws) {
+  for (std::size_t i = 0; i < o.candidate_count; ++i) ws->in_selection[i] = false;
+  Random random(o.seed ^ (0xd1b54a32d192ed03ULL * restart));
+  for (std::size_t slot = 0; slot < o.pose_count; ++slot) {
+    std::size_t pick = static_cast<std::size_t>(random.below(o.candidate_count));
+    while (ws->in_selection[pick]) pick = pick + 1 < o.candidate_count ? pick + 1 : 0;
+    select_candidate(ws, slot, pick);
+  }
+}
+
 /// D- and I-criteria of a pose set over `mask` with the pool's scale (ridge included).
 bool pose_set_criteria(const RobotModel& model, Span<const Sample> poses, const FullParams& scale, ParamMask mask,
                        PlanWorkspace* ws, double* log_det, double* prediction_variance) {
-  build_information(model, poses, kPlanPoseCapacity, scale, mask, &ws->information);
+  build_information(model, poses, kPlanPoseCapacity, scale, mask, ws->ridge, &ws->information);
   if (!cholesky_factor(ws->information, mask, &ws->factor)) return false;
   *log_det = factor_log_det(ws->factor);
   double trace = 0.0;  // tr(M^-1 A) = sum_k (M^-1 a_k)_k
@@ -286,6 +302,50 @@ bool pose_set_criteria(const RobotModel& model, Span<const Sample> poses, const 
   return true;
 }
 
+/// The criterion a plan minimises: -log det (D) or tr(M^-1 A) (I) of the current selection.
+bool selection_cost(const RobotModel& model, const PlanOptions& o, const FullParams& scale, ParamMask mask,
+                    PlanWorkspace* ws, double* cost) {
+  double log_det = 0.0;
+  double variance = 0.0;
+  if (!pose_set_criteria(model, Span<const Sample>(ws->selected, o.pose_count), scale, mask, ws, &log_det, &variance)) {
+    return false;
+  }
+  *cost = o.criterion == PlanCriterion::d_optimal ? -log_det : variance;
+  return true;
+}
+
+/// Greedy start and exchanges, then options.restarts - 1 seeded random starts with their own
+/// exchanges; the selection with the best criterion (the first on ties) is left in ws.
+Status select_poses(const RobotModel& model, const PlanOptions& o, const FullParams& scale, ParamMask mask,
+                    PlanWorkspace* ws, PlanResult* result) {
+  Status status = greedy_start(model, o, scale, mask, ws);
+  if (status != Status::ok) return status;
+  if (!pose_set_criteria(model, Span<const Sample>(ws->selected, o.pose_count), scale, mask, ws,
+                         &result->greedy_log_det, &result->greedy_prediction_variance)) {
+    return Status::singular_system;
+  }
+  double best_cost = 0.0;
+  for (int restart = 0; restart < o.restarts; ++restart) {
+    if (restart > 0) random_start(o, static_cast<std::uint64_t>(restart), ws);
+    int passes = 0;
+    int exchanges = 0;
+    status = exchange_passes(model, o, scale, mask, ws, &passes, &exchanges);
+    if (status != Status::ok) return status;
+    double cost = 0.0;
+    if (!selection_cost(model, o, scale, mask, ws, &cost)) return Status::singular_system;
+    if (restart == 0 || cost < best_cost) {
+      best_cost = cost;
+      result->best_restart = restart;
+      result->exchange_passes = passes;
+      result->exchanges = exchanges;
+      for (std::size_t i = 0; i < o.pose_count; ++i) ws->best_index[i] = ws->selected_index[i];
+    }
+  }
+  for (std::size_t i = 0; i < o.candidate_count; ++i) ws->in_selection[i] = false;
+  for (std::size_t slot = 0; slot < o.pose_count; ++slot) select_candidate(ws, slot, ws->best_index[slot]);
+  return Status::ok;
+}
+
 /// Pool scale: 1 / RMS column norm per candidate, so one average candidate adds 1 per
 /// diagonal entry (D-optimality does not depend on it; the ridge and the numbers do).
 FullParams pool_scale(const NormalMatrix& jtj, std::size_t count, ParamMask mask) {
@@ -294,6 +354,23 @@ FullParams pool_scale(const NormalMatrix& jtj, std::size_t count, ParamMask mask
     if (mask_has(mask, k) && jtj(k, k) > 0.0) scale(k) = std::sqrt(static_cast<double>(count) / jtj(k, k));
   }
   return scale;
+}
+
+/// The diagonal added to the scaled information: the prior precision of each parameter
+/// (noise / prior sigma)^2 in the selection's scale, at least kRidge; the base has no prior.
+FullParams prior_ridge(const NormalMatrix& jtj, const FullParams& scale, const PlanOptions& o) {
+  FullParams ridge = FullParams::Constant(kRidge);
+  for (int k = 0; k < kModelParamCount; ++k) {
+    const bool is_angle = k < kJointCount * kParamsPerJoint &&
+                          (k % kParamsPerJoint == static_cast<int>(DhField::theta_offset) ||
+                           k % kParamsPerJoint == static_cast<int>(DhField::alpha));
+    const double prior = is_angle ? o.prior_angle_rad : o.prior_length_m;
+    if (prior > 0.0 && jtj(k, k) > 0.0) {
+      const double precision = (o.noise_m / prior) * (o.noise_m / prior);  // in units of the noise's
+      ridge(k) = std::fmax(kRidge, precision * scale(k) * scale(k));
+    }
+  }
+  return ridge;
 }
 
 /// A = S (J^T J) S / count over mask x mask, 0 elsewhere: one average candidate's information.
@@ -493,18 +570,13 @@ Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWor
   const ParamMask mask = result->pool.kept_mask;
   const FullParams scale = pool_scale(workspace->normal.jtwj, options.candidate_count, mask);
   if (options.criterion != PlanCriterion::i_optimal_workspace) workspace->pool_information = workspace->normal.jtwj;
+  workspace->ridge = prior_ridge(workspace->normal.jtwj, scale, options);
   mean_scaled_information(workspace->pool_information, options.candidate_count, scale, mask,
                           &workspace->pool_information);
 
-  status = greedy_start(model, options, scale, mask, workspace);
+  status = select_poses(model, options, scale, mask, workspace, result);
   if (status != Status::ok) return status;
   const Span<const Sample> selection(workspace->selected, options.pose_count);
-  if (!pose_set_criteria(model, selection, scale, mask, workspace, &result->greedy_log_det,
-                         &result->greedy_prediction_variance)) {
-    return Status::singular_system;
-  }
-  status = exchange_passes(model, options, scale, mask, workspace, result);
-  if (status != Status::ok) return status;
 
   const Span<const Sample> first_draws(workspace->candidates, options.pose_count);  // random, same constraints
   status = evaluate_pose_set(model, first_draws, options, mask, scale, workspace,

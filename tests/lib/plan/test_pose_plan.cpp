@@ -99,12 +99,14 @@ TEST(PosePlan, SameBitsForASeedAndOtherBitsForAnother) {
 // the planner's or the kinematics' numbers are meant to change.
 TEST(PosePlan, GoldenDigest) {
   ASSERT_EQ(plan_session(planning_model(), small_options(256, 20, 5), &workspace, &result), Status::ok);
-  EXPECT_EQ(digest_of(result), 0x8ca34f4cbdedca03ULL);
+  EXPECT_EQ(digest_of(result), 0xc7a4da29f8282707ULL);
 }
 
 TEST(PosePlan, ExchangeImprovesOnTheGreedyStartAndBothBeatRandom) {
   const RobotModel model = planning_model();
   PlanOptions options = small_options(512, 30, 11);
+  options.criterion = PlanCriterion::d_optimal;
+  options.restarts = 1;
   ASSERT_EQ(plan_session(model, options, &workspace, &result), Status::ok);
   EXPECT_GT(result.exchanges, 0);
   EXPECT_GT(result.planned.log_det, result.greedy_log_det);
@@ -120,6 +122,27 @@ TEST(PosePlan, ExchangeImprovesOnTheGreedyStartAndBothBeatRandom) {
   options.max_exchange_passes = 0;
   ASSERT_EQ(plan_session(model, options, &workspace, &other), Status::ok);
   EXPECT_EQ(other.planned.log_det, result.greedy_log_det);
+}
+
+// Restarts keep the best criterion: never worse than the greedy start's run alone, and here
+// (I-optimal over the cell, the default) better.
+TEST(PosePlan, RestartsKeepTheBestCriterion) {
+  const RobotModel model = planning_model();
+  PlanOptions options = small_options(512, 24, 11);
+  options.restarts = 1;
+  ASSERT_EQ(plan_session(model, options, &workspace, &other), Status::ok);
+  EXPECT_EQ(other.best_restart, 0);
+  options.restarts = 6;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = plan_session(model, options, &workspace, &result));
+  ASSERT_EQ(status, Status::ok);
+  EXPECT_LE(result.planned.prediction_variance, other.planned.prediction_variance);
+  EXPECT_LT(result.planned.prediction_variance, result.random.prediction_variance);
+  std::printf("[plan] mean prediction variance over the cell: random %.3f, one run %.3f, best of 6 %.3f (run %d)\n",
+              result.random.prediction_variance, other.planned.prediction_variance, result.planned.prediction_variance,
+              result.best_restart);
+  options.restarts = 0;
+  EXPECT_EQ(plan_session(model, options, &workspace, &result), Status::invalid_argument);
 }
 
 TEST(PosePlan, BadOptionsAreRejected) {
@@ -174,9 +197,11 @@ double validation_mae_m(const RobotModel& truth, const CalibrationStage& lm, Spa
   return sum / static_cast<double>(validation.size());
 }
 
-/// Calibrates `truth` from `poses` (10 um tracker noise) with the job (LM, full model) and
-/// adds its validation MAE [m] on the measurable region and on the whole cell to mae[0], mae[1].
-void add_session_mae(const RobotModel& truth, Span<const Sample> poses, Random* noise, double* mae) {
+/// Calibrates `truth` from `poses` (10 um tracker noise) with the job (LM, full model, its
+/// significance test at `significance_t`) and adds its validation MAE [m] on the measurable
+/// region and on the whole cell to mae[0], mae[1].
+void add_session_mae(const RobotModel& truth, Span<const Sample> poses, double significance_t, Random* noise,
+                     double* mae) {
   const RigidTransform base = tracker_base();
   session.clear();
   for (const Sample& pose : poses) {
@@ -187,6 +212,7 @@ void add_session_mae(const RobotModel& truth, Span<const Sample> poses, Random* 
   options.method = CalibrationMethod::lm;
   options.params = CalibrationParams::full;
   options.train_fraction = 1.0;
+  options.significance_t = significance_t;
   Status status = Status::invalid_argument;
   EXPECT_NO_HEAP(status = calibrate(planning_model(), &session, options, &job_workspace, &job_result));
   EXPECT_TRUE(status == Status::ok || status == Status::not_converged) << status_message(status);
@@ -201,7 +227,10 @@ struct Comparison {
   double random[2] = {};   ///< the pool's first draws: the same [m]
 };
 
-Comparison compare_sessions(PlanCriterion criterion, std::size_t poses, std::uint64_t arms) {
+/// Plans `poses` poses for each of `arms` perturbed UR5s with `plan` (pool of 1024, seed per
+/// arm) and calibrates both sets with the job at `significance_t`.
+Comparison compare_sessions(const PlanOptions& plan, std::size_t poses, std::uint64_t arms,
+                            double significance_t = kDefaultSignificance) {
   const double per_arm_um = 1e6 / static_cast<double>(arms);
   const RobotModel model = planning_model();
   Comparison c;
@@ -209,19 +238,25 @@ Comparison compare_sessions(PlanCriterion criterion, std::size_t poses, std::uin
     Random random(100 + arm);
     const Vec3 tool = kNominalTool + 2e-3 * test::gaussian_vector(&random);
     const RobotModel truth = test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, tool);
-    PlanOptions options = small_options(1024, poses, 20 + arm);
-    options.criterion = criterion;
+    PlanOptions options = plan;
+    const PlanOptions cell = small_options(1024, poses, 20 + arm);
+    options.constraints = cell.constraints;
+    options.candidate_count = cell.candidate_count;
+    options.pose_count = cell.pose_count;
+    options.seed = cell.seed;
     EXPECT_EQ(plan_session(model, options, &workspace, &result), Status::ok);
     Sample planned[kPlanPoseCapacity];
     for (std::size_t i = 0; i < poses; ++i) planned[i] = Sample{result.poses[i], Vec3::Zero()};
-    add_session_mae(truth, Span<const Sample>(planned, poses), &random, c.planned);
-    add_session_mae(truth, Span<const Sample>(workspace.candidates, poses), &random, c.random);
+    add_session_mae(truth, Span<const Sample>(planned, poses), significance_t, &random, c.planned);
+    add_session_mae(truth, Span<const Sample>(workspace.candidates, poses), significance_t, &random, c.random);
   }
-  std::printf("[plan] %s, %zu poses, %llu arms: validation MAE planned / random: measurable region %.3f"
-              " (%.2f / %.2f um), whole cell %.3f (%.2f / %.2f um)\n",
-              plan_criterion_name(criterion), poses, static_cast<unsigned long long>(arms),
-              c.planned[0] / c.random[0], c.planned[0] * per_arm_um, c.random[0] * per_arm_um,
-              c.planned[1] / c.random[1], c.planned[1] * per_arm_um, c.random[1] * per_arm_um);
+  std::printf("[plan] %s (prior %.1f mm / %.1f mrad, %d restarts), %zu poses, %llu arms, significance %.0f sigma:"
+              " validation MAE planned / random: measurable region %.3f (%.2f / %.2f um), whole cell %.3f"
+              " (%.2f / %.2f um)\n",
+              plan_criterion_name(plan.criterion), plan.prior_length_m * 1e3, plan.prior_angle_rad * 1e3, plan.restarts,
+              poses, static_cast<unsigned long long>(arms), significance_t, c.planned[0] / c.random[0],
+              c.planned[0] * per_arm_um, c.random[0] * per_arm_um, c.planned[1] / c.random[1],
+              c.planned[1] * per_arm_um, c.random[1] * per_arm_um);
   return c;
 }
 
@@ -235,19 +270,24 @@ void make_validation_pools() {
   ASSERT_EQ(generate_candidates(model, fresh, &workspace_pool, &draws), Status::ok);
 }
 
-// The job's smallest full-model session (24 poses) is where the choice matters most; the
-// random sets are the pool's first draws, i.e. random poses under the same constraints.
+// The random sets are the pool's first draws, i.e. random poses under the same constraints;
+// the planner and the job run with their defaults (I-optimal over the cell with the 1 mm /
+// 1 mrad prior and 4 restarts; LM, full model, significance test at 2 sigma).
 TEST(PosePlan, PlannedSessionsCalibrateBetterThanRandomOnes) {
   make_validation_pools();
-  // Measured (x86-64, session 6's job): D-optimal 0.848 on the measurable region, 0.938 on the
-  // whole cell; I-optimal over the cell 0.792 there. The issue asked for 0.7: not reached, see
-  // docs/planning.md (a random set of 24 inflates the prediction variance by ~3N/(3N-p-1) ~ 1.5
-  // only, so no selection from this pool can halve it on the region it was drawn from).
-  const Comparison d = compare_sessions(PlanCriterion::d_optimal, 24, 12);
-  EXPECT_LE(d.planned[0], 0.9 * d.random[0]);
-  EXPECT_LE(d.planned[1], 0.95 * d.random[1]);
-  const Comparison i = compare_sessions(PlanCriterion::i_optimal_workspace, 24, 12);
-  EXPECT_LE(i.planned[1], 0.8 * i.random[1]);
+  // Measured (x86-64, 24 arms): 24 poses 0.829 on the measurable region, 0.740 on the whole
+  // cell (session 6's D-optimal planner, 12 arms: 0.848 / 0.938; its I-optimal one 0.894 / 0.756);
+  // 16 poses 0.795 / 0.698 (from 2048 candidates: 24 poses 0.725, 16 0.744, 20 0.689). The
+  // issue's 0.7 is reached on the cell at 16 (here) and 20 poses (2048 candidates) only: see
+  // docs/planning.md (a random set of N inflates the prediction variance by ~3N/(3N-p-1),
+  // 1.5 at 24, so no selection can halve it on the region it was drawn from). The bounds
+  // leave ~0.02-0.03.
+  const PlanOptions defaults;
+  const Comparison n24 = compare_sessions(defaults, 24, 24);
+  EXPECT_LE(n24.planned[0], 0.86 * n24.random[0]);
+  EXPECT_LE(n24.planned[1], 0.77 * n24.random[1]);
+  const Comparison n16 = compare_sessions(defaults, 16, 24);
+  EXPECT_LE(n16.planned[1], 0.72 * n16.random[1]);
 }
 
 // ---- The paper's situation: the tool always pointing down ----------------------------------

@@ -1,10 +1,12 @@
 // Planning a measurement session before it happens: which joint configurations to measure and
 // in which order (docs/planning.md). Candidates are seeded random configurations that meet the
 // cell's constraints (joint limits, floor, keep-out cylinder, reflector facing the tracker);
-// the selection maximises the D-optimality criterion, log det of the column-scaled information
-// matrix J^T J of the tool-point residuals (normal_equations.hpp) over the parameters the pool
-// of candidates can identify (identifiability.hpp), or on request an I-optimality criterion
-// (mean prediction variance), by a greedy start and Fedorov exchanges;
+// the selection minimises by default the I-optimality criterion over the cell (the mean
+// prediction variance of the tool point anywhere in it), or on request the D-optimality one
+// (log det), of the column-scaled information matrix J^T J of the tool-point residuals
+// (normal_equations.hpp) plus the geometry's prior precision, over the parameters the pool of
+// candidates can identify (identifiability.hpp), by a greedy start and Fedorov exchanges with
+// seeded random restarts;
 // the chosen poses are ordered for a short movej path (nearest neighbour, then 2-opt).
 // No heap: the candidate pool lives in a caller-provided PlanWorkspace.
 #pragma once
@@ -73,10 +75,13 @@ struct PlanOptions {
   std::size_t candidate_count = kPlanCandidateCapacity;  ///< candidates drawn, <= kPlanCandidateCapacity [-]
   std::size_t pose_count = 40;                          ///< poses selected, 1 .. kPlanPoseCapacity and <= candidate_count [-]
   std::uint64_t seed = 1;                               ///< seed of the candidate draws [-]
-  PlanCriterion criterion = PlanCriterion::d_optimal;   ///< what the selection maximises
+  PlanCriterion criterion = PlanCriterion::i_optimal_workspace;  ///< what the selection maximises
   ParamMask free_mask = kAllParamsMask;                 ///< parameters the calibration may move (lm_param_mask) [-]
   double identifiability_threshold = kDefaultIdentifiabilityThreshold;  ///< as LmOptions [-]
   int max_exchange_passes = 8;                          ///< Fedorov exchange passes over the selection [-]
+  double prior_length_m = 1e-3;                         ///< prior sigma of the geometry's lengths and the tool (0: none) [m]
+  double prior_angle_rad = 1e-3;                        ///< prior sigma of the geometry's angles (0: none) [rad]
+  int restarts = 4;                                     ///< exchange runs: the greedy start, then seeded random starts; the best criterion wins [-]
   double noise_m = 10e-6;                               ///< tracker noise per axis for the predicted sigmas [m]
   double joint_speed_rad_s = 1.05;                      ///< movej joint speed (URScript default) [rad/s]
   double joint_acceleration_rad_s2 = 1.4;               ///< movej joint acceleration (URScript default) [rad/s^2]
@@ -102,8 +107,9 @@ struct PlanResult {
   JointVector poses[kPlanPoseCapacity];     ///< the planned poses, in visiting order [rad]
   double greedy_log_det = 0.0;              ///< D-criterion after the greedy start [-]
   double greedy_prediction_variance = 0.0;  ///< I-criterion after the greedy start [-]
-  int exchange_passes = 0;                  ///< exchange passes run [-]
-  int exchanges = 0;                        ///< swaps accepted [-]
+  int exchange_passes = 0;                  ///< exchange passes run [-] (of the winning run)
+  int exchanges = 0;                        ///< swaps accepted [-] (both of the winning run)
+  int best_restart = 0;                     ///< the run that won: 0 the greedy start, k the k-th random start [-]
   PoseSetQuality random;                    ///< the first pose_count candidates (random, same constraints)
   PoseSetQuality planned;                   ///< the planned poses
   double travel_s = 0.0;                    ///< movej time through the poses in order [s]
@@ -116,11 +122,13 @@ struct PlanWorkspace {
   Sample candidates[kPlanCandidateCapacity];   ///< the pool (points: the nominal tool point)
   Sample selected[kPlanPoseCapacity];          ///< the current selection
   std::size_t selected_index[kPlanPoseCapacity] = {};  ///< pool index of each selected pose
+  std::size_t best_index[kPlanPoseCapacity] = {};      ///< pool indices of the best selection of the restarts
   bool in_selection[kPlanCandidateCapacity] = {};      ///< pool entries selected
   NormalEquations normal;                      ///< J^T J of a pose set
   NormalMatrix information;                    ///< scaled information of the selection (+ ridge)
   NormalMatrix pool_information;               ///< A: mean scaled information of one pool candidate
   NormalMatrix scratch;                        ///< scratch of the inverse diagonal
+  FullParams ridge = FullParams::Constant(1e-6);  ///< diagonal added to the scaled information (prior precision) [-]
   KeptCholesky factor;                         ///< its Cholesky factor
   IdentifiabilityWorkspace identifiability;    ///< scratch of the identifiability analysis
 };
@@ -143,7 +151,8 @@ Status pool_identifiability(const RobotModel& model, const PlanOptions& options,
 
 /// Quality of a pose set (J^T J over options.free_mask, identifiability, sigma at
 /// options.noise_m; log_det over `objective_mask` with columns multiplied by `scale`, the
-/// selection's scale). `poses` must not be workspace storage other than `selected`.
+/// selection's scale, and workspace->ridge, the prior plan_session set). `poses` must not be
+/// workspace storage other than `selected`.
 /// Errors of accumulate_normal_equations and analyze_identifiability; singular_system.
 Status evaluate_pose_set(const RobotModel& model, Span<const Sample> poses, const PlanOptions& options,
                          ParamMask objective_mask, const FullParams& scale, PlanWorkspace* workspace,
@@ -157,7 +166,7 @@ double movej_time_s(const JointVector& from, const JointVector& to, const PlanOp
 /// (nearest neighbour, then 2-opt on movej times); returns the path time [s].
 double order_poses(JointVector* poses, std::size_t count, const PlanOptions& options);
 
-/// The whole plan: candidates, pool identifiability, greedy + exchange D-optimal selection,
+/// The whole plan: candidates, pool identifiability, greedy + exchange selection (restarts),
 /// order, qualities of the plan and of a random set of the same size, durations.
 /// Errors: invalid_argument (options), too_few_samples, singular_system (nothing identifiable),
 /// non_finite_input, errors of analyze_identifiability.
