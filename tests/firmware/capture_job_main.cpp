@@ -9,6 +9,9 @@
 //                                                          kCaptureJobGoldenDigest
 //   capture_job <robot.cap> <tracker.cap> lm              the LM-only job; exit 1 unless the
 //                                                          digest is kLmJobGoldenDigest
+//   capture_job <robot.cap> <tracker.cap> compliance      the LM-only job with compliance (LM, then
+//                                                          LM+compliance); exit 1 unless the
+//                                                          digest is kComplianceJobGoldenDigest
 //   capture_job <robot.cap> <tracker.cap> <SN> <cycles> [clock|extraction|abc|lm]
 //                                                          ABC + LM with any ABC budget, or
 //                                                          stopping after a pass, or ABC alone,
@@ -117,6 +120,11 @@ bool parse_config(char** words, int count, test::CaptureJobConfig* config, std::
     *golden = test::kLmJobGoldenDigest;
     return true;
   }
+  if (count == 3 && std::strcmp(words[2], "compliance") == 0) {
+    *config = test::golden_compliance_job_config();
+    *golden = test::kComplianceJobGoldenDigest;
+    return true;
+  }
   if (count != 4 && count != 5) return false;
   *config = test::golden_capture_job_config();
   config->calibration.abc_food_sources = parse_size(words[2]);
@@ -158,6 +166,9 @@ void print_results(const test::CaptureJobConfig& config, Status status) {
     line("LM RMS [m]: ", c.lm.rms_m);
   }
   line("test MAE nominal [m]: ", c.baseline.test.mae(ErrorAxis::norm_3d));
+  if (c.stage_count > 1 && final_stage->solver == CalibrationSolver::lm) {  // LM, then LM+compliance
+    line("test MAE LM [m]: ", c.stages[c.stage_count - 2].test.mae(ErrorAxis::norm_3d));
+  }
   if (final_stage != nullptr) line("test MAE calibrated [m]: ", final_stage->test.mae(ErrorAxis::norm_3d));
   print("capture pass: ");
   print_unsigned(static_cast<std::uint64_t>(report.capture.pass));
@@ -198,7 +209,7 @@ int main() {
   test::CaptureJobConfig config;
   std::uint64_t golden = 0;
   if (!parse_config(words, count, &config, &golden)) {
-    print("usage: capture_job <robot.cap> <tracker.cap> golden | lm | <food sources> <cycles> [clock|extraction|abc|lm]\n");
+    print("usage: capture_job <robot.cap> <tracker.cap> golden | lm | compliance | <food sources> <cycles> [clock|extraction|abc|lm]\n");
     return 1;
   }
   SemihostingCaptures captures(words[0], words[1]);
