@@ -166,7 +166,7 @@ void print_results(const test::CaptureJobConfig& config, Status status) {
     line("LM RMS [m]: ", c.lm.rms_m);
   }
   line("test MAE nominal [m]: ", c.baseline.test.mae(ErrorAxis::norm_3d));
-  if (c.stage_count > 1 && final_stage->solver == CalibrationSolver::lm) {  // LM, then LM+compliance
+  if (final_stage != nullptr && final_stage->compliance && c.stage_count > 1) {  // LM, then LM+compliance
     line("test MAE LM [m]: ", c.stages[c.stage_count - 2].test.mae(ErrorAxis::norm_3d));
   }
   if (final_stage != nullptr) line("test MAE calibrated [m]: ", final_stage->test.mae(ErrorAxis::norm_3d));
