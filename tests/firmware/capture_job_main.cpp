@@ -12,10 +12,11 @@
 //   capture_job <robot.cap> <tracker.cap> compliance      the LM-only job with compliance (LM, then
 //                                                          LM+compliance); exit 1 unless the
 //                                                          digest is kComplianceJobGoldenDigest
-//   capture_job <robot.cap> <tracker.cap> <SN> <cycles> [clock|extraction|abc|lm]
+//   capture_job <robot.cap> <tracker.cap> <SN> <cycles> [clock|extraction|abc|lm|compliance]
 //                                                          ABC + LM with any ABC budget, or
 //                                                          stopping after a pass, or ABC alone,
-//                                                          or LM alone; prints the digest
+//                                                          or LM alone, or LM then LM+compliance;
+//                                                          prints the digest
 //
 // Paths are as QEMU sees them (absolute, or relative to its working directory; no commas).
 #include <cstdint>
@@ -135,6 +136,10 @@ bool parse_config(char** words, int count, test::CaptureJobConfig* config, std::
     if (std::strcmp(stop, "extraction") == 0) config->stop_after = test::JobStop::extraction;
     if (std::strcmp(stop, "abc") == 0) config->calibration.method = CalibrationMethod::abc;
     if (std::strcmp(stop, "lm") == 0) config->calibration.method = CalibrationMethod::lm;
+    if (std::strcmp(stop, "compliance") == 0) {
+      config->calibration.method = CalibrationMethod::lm;
+      config->calibration.compliance.enabled = true;
+    }
   }
   return true;
 }
@@ -209,7 +214,7 @@ int main() {
   test::CaptureJobConfig config;
   std::uint64_t golden = 0;
   if (!parse_config(words, count, &config, &golden)) {
-    print("usage: capture_job <robot.cap> <tracker.cap> golden | lm | compliance | <food sources> <cycles> [clock|extraction|abc|lm]\n");
+    print("usage: capture_job <robot.cap> <tracker.cap> golden | lm | compliance | <food sources> <cycles> [clock|extraction|abc|lm|compliance]\n");
     return 1;
   }
   SemihostingCaptures captures(words[0], words[1]);
