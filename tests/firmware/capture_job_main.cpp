@@ -9,10 +9,14 @@
 //                                                          kCaptureJobGoldenDigest
 //   capture_job <robot.cap> <tracker.cap> lm              the LM-only job; exit 1 unless the
 //                                                          digest is kLmJobGoldenDigest
-//   capture_job <robot.cap> <tracker.cap> <SN> <cycles> [clock|extraction|abc|lm]
+//   capture_job <robot.cap> <tracker.cap> compliance      the LM-only job with compliance (LM, then
+//                                                          LM+compliance); exit 1 unless the
+//                                                          digest is kComplianceJobGoldenDigest
+//   capture_job <robot.cap> <tracker.cap> <SN> <cycles> [clock|extraction|abc|lm|compliance]
 //                                                          ABC + LM with any ABC budget, or
 //                                                          stopping after a pass, or ABC alone,
-//                                                          or LM alone; prints the digest
+//                                                          or LM alone, or LM then LM+compliance;
+//                                                          prints the digest
 //
 // Paths are as QEMU sees them (absolute, or relative to its working directory; no commas).
 #include <cstdint>
@@ -117,6 +121,11 @@ bool parse_config(char** words, int count, test::CaptureJobConfig* config, std::
     *golden = test::kLmJobGoldenDigest;
     return true;
   }
+  if (count == 3 && std::strcmp(words[2], "compliance") == 0) {
+    *config = test::golden_compliance_job_config();
+    *golden = test::kComplianceJobGoldenDigest;
+    return true;
+  }
   if (count != 4 && count != 5) return false;
   *config = test::golden_capture_job_config();
   config->calibration.abc_food_sources = parse_size(words[2]);
@@ -127,6 +136,10 @@ bool parse_config(char** words, int count, test::CaptureJobConfig* config, std::
     if (std::strcmp(stop, "extraction") == 0) config->stop_after = test::JobStop::extraction;
     if (std::strcmp(stop, "abc") == 0) config->calibration.method = CalibrationMethod::abc;
     if (std::strcmp(stop, "lm") == 0) config->calibration.method = CalibrationMethod::lm;
+    if (std::strcmp(stop, "compliance") == 0) {
+      config->calibration.method = CalibrationMethod::lm;
+      config->calibration.compliance.enabled = true;
+    }
   }
   return true;
 }
@@ -158,6 +171,9 @@ void print_results(const test::CaptureJobConfig& config, Status status) {
     line("LM RMS [m]: ", c.lm.rms_m);
   }
   line("test MAE nominal [m]: ", c.baseline.test.mae(ErrorAxis::norm_3d));
+  if (final_stage != nullptr && final_stage->compliance && c.stage_count > 1) {  // LM, then LM+compliance
+    line("test MAE LM [m]: ", c.stages[c.stage_count - 2].test.mae(ErrorAxis::norm_3d));
+  }
   if (final_stage != nullptr) line("test MAE calibrated [m]: ", final_stage->test.mae(ErrorAxis::norm_3d));
   print("capture pass: ");
   print_unsigned(static_cast<std::uint64_t>(report.capture.pass));
@@ -198,7 +214,7 @@ int main() {
   test::CaptureJobConfig config;
   std::uint64_t golden = 0;
   if (!parse_config(words, count, &config, &golden)) {
-    print("usage: capture_job <robot.cap> <tracker.cap> golden | lm | <food sources> <cycles> [clock|extraction|abc|lm]\n");
+    print("usage: capture_job <robot.cap> <tracker.cap> golden | lm | compliance | <food sources> <cycles> [clock|extraction|abc|lm|compliance]\n");
     return 1;
   }
   SemihostingCaptures captures(words[0], words[1]);

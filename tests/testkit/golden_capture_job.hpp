@@ -1,5 +1,5 @@
 // The firmware's calibration job from captures, shared by the firmware image
-// (tests/firmware/capture_job_main.cpp, CTest firmware.capture_job[_lm]) and the host test
+// (tests/firmware/capture_job_main.cpp, CTest firmware.capture_job[_lm|_compliance]) and the host test
 // (tests/lib/job/test_capture_job.cpp), so that both run the same code on the same committed
 // capture pair tests/data/fw-session/{robot,tracker}.cap and compare the same digests:
 //   captures -> extract_dataset_from_captures (capture_dataset.hpp) -> calibrate()
@@ -63,9 +63,18 @@ inline CaptureJobConfig golden_lm_job_config() {
   return config;
 }
 
+/// The LM-only job with joint compliance (issue 16): the rigid LM, then "LM+compliance" with
+/// default_compliance_terms (point loads, floor gravity); the session is simulated compliant.
+inline CaptureJobConfig golden_compliance_job_config() {
+  CaptureJobConfig config = golden_lm_job_config();
+  config.calibration.compliance.enabled = true;
+  return config;
+}
+
 /// The committed digests: every target must reproduce them.
 inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0x873c34ac1c4784a0ULL;
 inline constexpr std::uint64_t kLmJobGoldenDigest = 0x20f3888beb5b66a5ULL;
+inline constexpr std::uint64_t kComplianceJobGoldenDigest = 0x67ec4a0f5e9338fcULL;
 
 /// Static storage of a job: the dataset, and one arena for the capture passes, then the job.
 struct CaptureJobWorkspace {

@@ -186,12 +186,13 @@ double model_value(const RobotModel& model, int index) {
 /// value, one at a time, the least significant first; a small set then fits fewer parameters
 /// instead of its noise). *pruned receives the parameters (b) fixed. `reference` holds the
 /// start values (job.start, with the compliance terms and their start coefficients for the
-/// LM+compliance stage); with `compliance` its terms' coefficients are free too.
+/// LM+compliance stage); with `compliance` its terms are free too and LM starts from them on start_model.
 Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_model, const RigidTransform* base,
               bool reset, bool compliance, Span<const Sample> samples, double t, TraceBase* trace,
               LmObserver* observer, ParamMask* pruned) {
   RobotModel& from = job.workspace.lm_start();  // start_model is never this one: a stage's or the job's model
   from = start_model;
+  if (compliance) from.compliance = reference.compliance;  // LM+compliance: the start terms on the fitted geometry
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
   LmOptions lm = o.lm;
@@ -340,17 +341,18 @@ bool any_compliance_kept(ParamMask kept, int term_count) {
 
 /// LM+compliance: from the rigid LM stage's geometry and base (the last stage), the geometry
 /// and the compliance terms together, at the rigid stage's significance level. A parameter
-/// this fit cannot determine goes back to its start value, as in a hybrid.
+/// this fit cannot determine goes back to its start value, as in a hybrid. The start model
+/// with its terms is built in the new stage's slot (lm_stage fills it after the fit), not on
+/// the stack: two models here cost the firmware 1.2 kB above LM's peak.
 [[gnu::noinline]] Status run_compliance_lm(Job& job, ParamMask* pruned) {
   CalibrationResult& r = job.result;
   const CalibrationStage& rigid = r.stages[r.stage_count - 1];
-  RobotModel reference = job.start;
+  RobotModel& reference = r.stages[r.stage_count].model;
+  reference = job.start;
   const Status terms = compliance_start(job.start, job.options.compliance, &reference.compliance);
   if (terms != Status::ok) return terms;  // checked at the input step
-  RobotModel from = rigid.model;
-  from.compliance = reference.compliance;
   TraceBase& trace = job.workspace.trace(r.stage_count);
-  const Status status = fit_lm(job, reference, from, &rigid.base_to_tracker, true, true, job.dataset.train(),
+  const Status status = fit_lm(job, reference, rigid.model, &rigid.base_to_tracker, true, true, job.dataset.train(),
                                r.significance_t, &trace, job.observer, pruned);
   if (status != Status::ok && status != Status::not_converged) return status;
   if (any_compliance_kept(r.lm.identifiability.kept_mask, reference.compliance.term_count)) {

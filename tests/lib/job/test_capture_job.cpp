@@ -107,6 +107,29 @@ TEST_F(CaptureJob, TheLmOnlyJobCalibratesBetterThanTheNominalModel) {
       << std::hex << "0x" << report.digest << " (update golden_capture_job.hpp only for an intended change)";
 }
 
+TEST_F(CaptureJob, TheComplianceJobFitsTheSimulatedCompliance) {
+  MemoryCaptures captures(robot_, tracker_);
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = test::run_capture_job(captures, test::golden_compliance_job_config(), &workspace, &report));
+  const CalibrationResult& c = report.calibration;
+  ASSERT_EQ(status, Status::ok) << status_message(c.status) << " at " << calibration_step_name(c.step);
+  ASSERT_EQ(c.stage_count, 2u);
+  EXPECT_STREQ(c.stage_name(0), "LM");
+  EXPECT_STREQ(c.stage_name(1), "LM+compliance");
+  EXPECT_TRUE(c.stages[1].compliance);
+  EXPECT_GT(c.lm.model.compliance.term_count, 0);
+  const double before = c.baseline.test.mae(ErrorAxis::norm_3d);
+  const double rigid = c.stages[0].test.mae(ErrorAxis::norm_3d);
+  const double compliant = c.stages[1].test.mae(ErrorAxis::norm_3d);
+  EXPECT_LT(compliant, 100e-6) << "nominal " << before << " m";
+  // The session was simulated with joint 2 and 3 compliance (truth.json): modelling it must help.
+  EXPECT_LT(compliant, rigid);
+  std::printf("compliance job: test MAE nominal %.3g, LM %.3g, LM+compliance %.3g m, digest 0x%016llx\n", before,
+              rigid, compliant, static_cast<unsigned long long>(report.digest));
+  EXPECT_EQ(report.digest, test::kComplianceJobGoldenDigest)
+      << std::hex << "0x" << report.digest << " (update golden_capture_job.hpp only for an intended change)";
+}
+
 TEST_F(CaptureJob, ATruncatedTrackerCaptureChangesTheDigest) {
   tracker_.resize(tracker_.size() / 2);
   MemoryCaptures captures(robot_, tracker_);
