@@ -289,6 +289,7 @@ void lm_stage(Job& job, Status status, bool refines_previous, bool compliance, T
   stage.solver = CalibrationSolver::lm;
   stage.refines_previous = refines_previous;
   stage.compliance = compliance;
+  stage.rigid_kept = false;
   stage.params = o.params;
   stage.status = status;
   stage.model = r.lm.model;
@@ -324,18 +325,31 @@ bool any_compliance_kept(ParamMask kept, int term_count) {
 /// is the answer (the compliant stage's own pruning of the geometry would differ from it).
 /// The rigid stage runs again (the same inputs, so the same bits) so that r.lm holds its
 /// details; the LM+compliance stage is its copy with the terms at their start values.
-[[gnu::noinline]] Status keep_rigid_fit(Job& job, const ComplianceModel& terms, ParamMask* pruned) {
+[[gnu::noinline]] Status keep_rigid_fit(Job& job, ParamMask* pruned) {
   CalibrationResult& r = job.result;
   const std::size_t compliant_index = r.stage_count;
   r.stage_count = compliant_index - 1;  // run_lm refills the rigid stage's slot and trace
   const Status status = run_lm(job, r.stages[r.stage_count].refines_previous, pruned);
   r.stage_count = compliant_index;
   if (status != Status::ok) return status;
+  // The compliant slot's model holds the terms at their start values (run_compliance_lm's
+  // reference): keep them, take everything else from the rigid stage.
+  const CalibrationStage& rigid = r.stages[compliant_index - 1];
   CalibrationStage& stage = r.stages[compliant_index];
-  stage = r.stages[compliant_index - 1];
+  RobotModel& model = stage.model;
+  for (int j = 0; j < kJointCount; ++j) model.joints[j] = rigid.model.joints[j];
+  for (int t = 0; t < kMaxTargets; ++t) target_tool(&model, t) = target_tool(rigid.model, t);
+  stage.solver = rigid.solver;
+  stage.refines_previous = rigid.refines_previous;
   stage.compliance = true;
   stage.rigid_kept = true;
-  stage.model.compliance = terms;
+  stage.params = rigid.params;
+  stage.status = rigid.status;
+  stage.base_to_tracker = rigid.base_to_tracker;
+  stage.evaluations = rigid.evaluations;
+  stage.iterations = rigid.iterations;
+  stage.best_cost_m = rigid.best_cost_m;
+  stage.trace_m = rigid.trace_m;
   return Status::ok;
 }
 
@@ -359,7 +373,7 @@ bool any_compliance_kept(ParamMask kept, int term_count) {
     lm_stage(job, status, true, true, trace);
     return Status::ok;
   }
-  return keep_rigid_fit(job, reference.compliance, pruned);
+  return keep_rigid_fit(job, pruned);
 }
 
 /// Runs one stage with the observer's begin/end around it, then its train/test errors.
