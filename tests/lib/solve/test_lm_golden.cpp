@@ -125,25 +125,38 @@ std::uint64_t targets_digest() {
   return digest.value();
 }
 
+/// 120 poses of a perturbed UR5 (tool off the flange axis, 10 um noise) whose shoulder bends
+/// by upper cos q2 + fore cos(q2 + q3) and elbow by elbow cos(q2 + q3) [rad] (other_session.hpp's
+/// form, with the library's cos).
+void fill_bent_session(std::uint64_t seed, double upper_rad, double fore_rad, double elbow_rad, Dataset<120>* samples) {
+  Random random(seed);
+  const RobotModel truth =
+      test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.015, -0.01, 0.15));
+  samples->clear();
+  for (int i = 0; i < 120; ++i) {
+    const JointVector q = test::random_joints(&random);
+    JointVector bent = q;
+    bent(1) += upper_rad * math::cos(q(1)) + fore_rad * math::cos(q(1) + q(2));
+    bent(2) += elbow_rad * math::cos(q(1) + q(2));
+    const Vec3 noise = test::gaussian_vector(&random);
+    (void)samples->add(q, test::example_base_to_tracker().apply(fk_tool_point(truth, bent)) + 1e-5 * noise);
+  }
+}
+
+/// The nominal UR5 with the tool guessed on the flange axis: the bent sessions' start.
+RobotModel bent_session_start() {
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = Vec3(0.0, 0.0, 0.15);
+  return start;
+}
+
 /// A UR5 whose shoulder and elbow bend under gravity in another form than the calibration's
 /// basis (other_session.hpp's, with the library's cos), 120 poses, calibrated with the
 /// default point compliance terms (LmParamSet::full_compliance) from the nominal table.
 std::uint64_t compliance_digest(Span<JointTrig> joint_trig_storage) {
-  Random random(20261127);
-  const RobotModel truth =
-      test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.015, -0.01, 0.15));
   static Dataset<120> samples;
-  samples.clear();
-  for (int i = 0; i < 120; ++i) {
-    const JointVector q = test::random_joints(&random);
-    JointVector bent = q;
-    bent(1) += 45e-6 * math::cos(q(1)) + 20e-6 * math::cos(q(1) + q(2));
-    bent(2) += 25e-6 * math::cos(q(1) + q(2));
-    const Vec3 noise = test::gaussian_vector(&random);
-    (void)samples.add(q, test::example_base_to_tracker().apply(fk_tool_point(truth, bent)) + 1e-5 * noise);
-  }
-  RobotModel start = nominal_model(RobotType::ur5);
-  start.tool_m = Vec3(0.0, 0.0, 0.15);
+  fill_bent_session(20261127, 45e-6, 20e-6, 25e-6, &samples);
+  RobotModel start = bent_session_start();
   (void)default_compliance_terms(start, Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &start.compliance);
   static LmWorkspace ws;
   ws.joint_trig = joint_trig_storage;
@@ -161,21 +174,9 @@ std::uint64_t compliance_digest(Span<JointTrig> joint_trig_storage) {
 /// The job (calibration.hpp) with compliance enabled on the same kind of session: split,
 /// blunder test, rigid LM, then LM+compliance with the significance test.
 std::uint64_t compliance_job_digest() {
-  Random random(20261128);
-  const RobotModel truth =
-      test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.015, -0.01, 0.15));
   static Dataset<120> samples;
-  samples.clear();
-  for (int i = 0; i < 120; ++i) {
-    const JointVector q = test::random_joints(&random);
-    JointVector bent = q;
-    bent(1) += 60e-6 * math::cos(q(1)) + 30e-6 * math::cos(q(1) + q(2));
-    bent(2) += 40e-6 * math::cos(q(1) + q(2));
-    const Vec3 noise = test::gaussian_vector(&random);
-    (void)samples.add(q, test::example_base_to_tracker().apply(fk_tool_point(truth, bent)) + 1e-5 * noise);
-  }
-  RobotModel start = nominal_model(RobotType::ur5);
-  start.tool_m = Vec3(0.0, 0.0, 0.15);
+  fill_bent_session(20261128, 60e-6, 30e-6, 40e-6, &samples);
+  const RobotModel start = bent_session_start();
   CalibrationOptions options;
   options.method = CalibrationMethod::lm;
   options.compliance.enabled = true;
