@@ -30,6 +30,16 @@ RobotModel compliant_truth() {
   return truth;
 }
 
+/// The nominal UR5 with the truth's compliance terms at zero (and, when given, its tool): the
+/// start of the recovery tests.
+RobotModel zero_compliance_start(const RobotModel& truth, bool truth_tool) {
+  RobotModel start = nominal_model(RobotType::ur5);
+  if (truth_tool) start.tool_m = truth.tool_m;
+  start.compliance = truth.compliance;
+  for (double& c : start.compliance.coefficient) c = 0.0;
+  return start;
+}
+
 TEST(LmCompliance, CoefficientColumnsMatchCentralDifferences) {
   const RobotModel model = compliant_truth();
   const RigidTransform base = test::example_base_to_tracker();
@@ -79,9 +89,7 @@ TEST(LmCompliance, RecoversTheCoefficientsOfItsOwnFormWithoutNoise) {
   Random random(1604);
   dataset.clear();
   test::fill_dataset(truth, base, 120, 0.0, &random, &dataset);
-  RobotModel start = nominal_model(RobotType::ur5);
-  start.compliance = truth.compliance;
-  for (double& c : start.compliance.coefficient) c = 0.0;
+  const RobotModel start = zero_compliance_start(truth, false);
   LmOptions options;
   options.params = LmParamSet::full_compliance;
   Status status = Status::invalid_argument;
@@ -106,10 +114,7 @@ TEST(LmCompliance, ToolDownPosesDropWhatTheyCannotSeparate) {
   Random random(1605);
   dataset.clear();
   test::fill_tool_down_dataset(truth, base, 120, 10e-6, &random, &dataset);
-  RobotModel start = nominal_model(RobotType::ur5);
-  start.tool_m = truth.tool_m;
-  start.compliance = truth.compliance;
-  for (double& c : start.compliance.coefficient) c = 0.0;
+  const RobotModel start = zero_compliance_start(truth, true);
   LmOptions options;
   options.params = LmParamSet::full_compliance;
   Status status = Status::invalid_argument;
