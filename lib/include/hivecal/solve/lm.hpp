@@ -59,6 +59,9 @@ struct LmOptions {
   double identifiability_threshold = kDefaultIdentifiabilityThreshold;  ///< sigma_k / sigma_max to drop [-]
   LmParamSet params = LmParamSet::full;       ///< which parameters may move
   ParamMask custom_mask = kAllParamsMask;     ///< free parameters when params == custom
+  /// Estimate the other targets' tool points (targets 2..) even when the free set fixes target
+  /// 1's tool_x (e.g. a significance test fixed it); false: only while tool_x is free [-].
+  bool other_target_tools = false;
 };
 
 /// The free-parameter mask of a parameter set (`custom` for LmParamSet::custom; `start`
