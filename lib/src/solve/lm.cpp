@@ -28,7 +28,9 @@ bool options_valid(const LmOptions& o) {
   const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
   const bool mask_ok = o.params != LmParamSet::custom ||
                        (o.custom_mask != 0 && (o.custom_mask & ~kValidParamsMask) == 0);
-  return o.max_iterations >= 1 && tolerances_ok && damping_ok && huber_ok && threshold_ok && mask_ok;
+  const bool joint_noise_ok = o.joint_sigma_rad >= 0.0 && o.joint_sigma_rad < 1.0 &&
+                              (o.joint_sigma_rad == 0.0 || (o.position_sigma_m > 0.0 && o.position_sigma_m < 1.0));
+  return o.max_iterations >= 1 && tolerances_ok && damping_ok && huber_ok && threshold_ok && mask_ok && joint_noise_ok;
 }
 
 bool poses_distinct(Span<const Sample> samples) {
@@ -454,7 +456,8 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
     return Status::dimension_out_of_range;  // the workspace has no room for these targets' tool points
   }
   clear_result(result);
-  workspace->point = Point{start_model, RigidTransform{}, PointLoss{}};
+  const double joint_noise_ratio = options.joint_sigma_rad > 0.0 ? options.joint_sigma_rad / options.position_sigma_m : 0.0;
+  workspace->point = Point{start_model, RigidTransform{}, PointLoss{0.0, joint_noise_ratio}};
   Run run{options, samples, workspace, result, free_mask, 0, workspace->point,
           store_joint_trig(samples, workspace->joint_trig), &workspace->normal, nullptr,
           workspace->target_blocks.subspan(blocks, blocks),
