@@ -1006,6 +1006,10 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
       for (int k = 0; k < kFullParamCount; ++k)
         if (mask_has(run.result.lm_pruned_mask, k)) w.value(full_param_name(k, final_stage.model));
       w.end_array();
+      if (settings.joint_sigma_rad > 0.0) {  // only when given: the results of the default stay byte for byte
+        w.key("joint_sigma_rad").value(settings.joint_sigma_rad);
+        w.key("joint_sigma_position_sigma_m").value(settings.orientation.position_sigma_m);
+      }
     }
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);
