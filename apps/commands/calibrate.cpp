@@ -58,6 +58,7 @@ struct CalibrateSettings {
   /// (--gravity) and, for masses, the arm's masses and the payload (--payload); zero coefficients.
   ComplianceModel compliance_model;
   textio::OrientationInput orientation;  ///< --position-sigma-m, --angle-sigma-rad, --orientation-lever-m
+  double joint_sigma_rad = 0.0;      ///< --joint-sigma-rad / --joint-sigma-deg: joint reading noise (0: off) [rad]
 };
 
 /// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
@@ -466,6 +467,8 @@ const std::vector<OptionSpec>& option_specs() {
       {"quiet", "", "no progress on stderr", ""},
       {"position-sigma-m", "S", "stated noise of the measured positions; with --angle-sigma-rad it weighs a measured orientation (rx, ry, rz columns of --samples) [m]", "1e-05"},
       {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
+      {"joint-sigma-rad", "S", "noise of the joint readings, in the units of --position-sigma-m (e.g. the readings' rounding step): LM weighs each sample by its point covariance (errors in variables, docs/robust.md; 0: off) [rad]", "0"},
+      {"joint-sigma-deg", "S", "--joint-sigma-rad in degrees (a UR pendant export's rounding: 0.01) [deg]", ""},
       {"orientation-lever-m", "L", "a measured orientation adds two points at this lever along the tool frame's x and y axes (targets 2, 3; 0: rx, ry, rz not used) [m] (default: position / angle sigma)", ""},
     };
     for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
@@ -576,6 +579,17 @@ Error orientation_options(const Options& options, textio::OrientationInput* orie
   return Error{};
 }
 
+/// --joint-sigma-rad or --joint-sigma-deg (not both), in [0, 1) rad.
+Error joint_sigma_option(const Options& options, double* sigma_rad) {
+  const bool in_degrees = options.given("joint-sigma-deg");
+  if (in_degrees && options.given("joint-sigma-rad")) return Error::usage("give --joint-sigma-rad or --joint-sigma-deg, not both");
+  const Error error = number_option(options, in_degrees ? "joint-sigma-deg" : "joint-sigma-rad", sigma_rad);
+  if (!error.ok()) return error;
+  if (in_degrees) *sigma_rad *= 0.017453292519943295;
+  if (!(*sigma_rad >= 0.0 && *sigma_rad < 1.0)) return Error::usage("--joint-sigma-rad must be in [0, 1) rad");
+  return Error{};
+}
+
 Error settings_from_options(const Options& options, CalibrateSettings* settings) {
   bool from_file = false;
   Error error = robot_model_option(options, "robot-model", &settings->robot, &from_file);
@@ -643,7 +657,9 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   settings->progress = progress_enabled(options);
   const Error compliance = compliance_from_options(options, settings);
   if (!compliance.ok()) return compliance;
-  return orientation_options(options, &settings->orientation);
+  error = orientation_options(options, &settings->orientation);
+  if (error.ok()) error = joint_sigma_option(options, &settings->joint_sigma_rad);
+  return error;
 }
 
 /// Where the results go, declared (and checked) before the long work.
@@ -743,6 +759,8 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.robust = settings.robust;
   job.keep_outliers = settings.keep_outliers;
   job.significance_t = settings.significance_t;
+  job.lm.joint_sigma_rad = settings.joint_sigma_rad;
+  job.lm.position_sigma_m = settings.orientation.position_sigma_m;
   job.compliance.enabled = settings.compliance;
   if (settings.compliance) job.compliance.model = settings.compliance_model;
   CliWorkspace& workspace = cli_workspace();
@@ -988,6 +1006,10 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
       for (int k = 0; k < kFullParamCount; ++k)
         if (mask_has(run.result.lm_pruned_mask, k)) w.value(full_param_name(k, final_stage.model));
       w.end_array();
+      if (settings.joint_sigma_rad > 0.0) {  // only when given: the results of the default stay byte for byte
+        w.key("joint_sigma_rad").value(settings.joint_sigma_rad);
+        w.key("joint_sigma_position_sigma_m").value(settings.orientation.position_sigma_m);
+      }
     }
     write_ur_deltas(w, deltas);
     write_input_facts(w, facts);

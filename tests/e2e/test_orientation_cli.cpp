@@ -113,6 +113,24 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   args = common;
   args.insert(args.end(), {"--out", positions, "--angle-sigma-rad", "0"});
   EXPECT_EQ(run(cli::calibrate_main, args), 2);
+  EXPECT_EQ(json.find("\"joint_sigma_rad\""), std::string::npos);  // off unless given
+
+  // The joints' rounding as joint reading noise: a different fit (the job's 0.0935 mm), said so.
+  const std::string whitened = dir.path() + "/result_joint_noise.json";
+  args = common;
+  args.insert(args.end(), {"--out", whitened, "--joint-sigma-deg", "0.01"});
+  ASSERT_EQ(run(cli::calibrate_main, args), 0);
+  const std::string whitened_json = read_text(whitened);
+  EXPECT_NE(whitened_json.find("\"joint_sigma_rad\": 0.000174532925199"), std::string::npos);
+  EXPECT_NE(whitened_json, json);
+  for (const char* bad : {"-0.01", "60"}) {
+    args = common;
+    args.insert(args.end(), {"--out", whitened, "--joint-sigma-deg", bad});
+    EXPECT_EQ(run(cli::calibrate_main, args), 2) << bad;
+  }
+  args = common;
+  args.insert(args.end(), {"--out", whitened, "--joint-sigma-deg", "0.01", "--joint-sigma-rad", "1e-4"});
+  EXPECT_EQ(run(cli::calibrate_main, args), 2);
 }
 
 }  // namespace

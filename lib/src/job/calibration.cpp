@@ -157,10 +157,9 @@ double model_value(const RobotModel& model, int index) {
 
 /// The estimated model parameter (geometry or compliance coefficient) whose change from
 /// `start` is least significant, below t standard deviations (a compliance term: below
-/// compliance_t >= t, its ratio scaled by t / compliance_t to compare), none of `never`; -1
-/// when none is (or t <= 0).
-[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t, double compliance_t,
-                                        ParamMask never) {
+/// compliance_t >= t, its ratio scaled by t / compliance_t to compare); -1 when none is (or
+/// t <= 0).
+[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t, double compliance_t) {
   if (!(t > 0.0)) return -1;
   const ModelParams change = to_params(lm.model) - to_params(start);
   int weakest = -1;
@@ -168,7 +167,7 @@ double model_value(const RobotModel& model, int index) {
   for (int i = 0; i < kFullParamCount; ++i) {
     if (i == kModelParamCount) i = kRigidParamCount;  // the base is not a model parameter
     if (i >= kRigidParamCount && i - kRigidParamCount >= lm.model.compliance.term_count) break;
-    if (!mask_has(lm.identifiability.kept_mask, i) || mask_has(never, i) || !(lm.sigma(i) > 0.0)) continue;
+    if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) continue;
     const double delta = i < kModelParamCount ? change(i) : model_value(lm.model, i) - model_value(start, i);
     const double ratio = i < kRigidParamCount ? std::fabs(delta) / lm.sigma(i)
                                               : std::fabs(delta) / lm.sigma(i) * (t / std::fmax(t, compliance_t));
@@ -213,9 +212,11 @@ Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_mod
   }
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
   const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask, reference);
+  // The other targets' tool points are free whenever the stage estimates the tool point, also
+  // after the significance test fixed tool_x (else they would stay at their start values).
+  for (int axis = 0; axis < 3; ++axis) lm.other_target_tools |= mask_has(free_mask, tool_param_index(axis));
   Status status = Status::ok;
   *pruned = 0;
-  const bool several = target_count(samples) > 1;
   for (int attempt = 0; attempt < kModelParamCount + kMaxComplianceTerms + 2; ++attempt) {
     if (trace != nullptr) trace->clear();
     LmWorkspace* workspace = job.workspace.open_lm();
@@ -223,10 +224,7 @@ Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_mod
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
     bool again = reset && reset_dropped(reference, r.lm.identifiability, &from);
-    // LM estimates the other targets' tool points only while tool_x is free (lm.cpp): fixing
-    // it would freeze them at their start values (on the pendant split with orientation: 4-8 mm).
-    const int weakest = least_significant(reference, r.lm, t, job.options.compliance.significance_t,
-                                          several ? param_bit(tool_param_index(0)) : 0);
+    const int weakest = least_significant(reference, r.lm, t, job.options.compliance.significance_t);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;

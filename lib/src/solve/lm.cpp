@@ -28,7 +28,9 @@ bool options_valid(const LmOptions& o) {
   const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
   const bool mask_ok = o.params != LmParamSet::custom ||
                        (o.custom_mask != 0 && (o.custom_mask & ~kValidParamsMask) == 0);
-  return o.max_iterations >= 1 && tolerances_ok && damping_ok && huber_ok && threshold_ok && mask_ok;
+  const bool joint_noise_ok = o.joint_sigma_rad >= 0.0 && o.joint_sigma_rad < 1.0 &&
+                              (o.joint_sigma_rad == 0.0 || (o.position_sigma_m > 0.0 && o.position_sigma_m < 1.0));
+  return o.max_iterations >= 1 && tolerances_ok && damping_ok && huber_ok && threshold_ok && mask_ok && joint_noise_ok;
 }
 
 bool poses_distinct(Span<const Sample> samples) {
@@ -42,6 +44,12 @@ bool transform_finite(const RigidTransform& t) { return all_finite(t.rotation) &
 
 /// The point the solver is at, with its loss (in the workspace).
 using Point = LmPoint;
+
+/// Whether the run estimates the other targets' tool points: with target 1's tool_x, or
+/// when asked to (the job's stage estimates the tool point even after fixing tool_x).
+bool other_tools_free(const LmOptions& options, ParamMask free_mask) {
+  return options.other_target_tools || mask_has(free_mask, tool_param_index(0));
+}
 
 /// The Huber threshold to use at `point`: fixed, or from the median residual norm.
 Status update_huber_threshold(const LmOptions& options, Span<const Sample> samples, Point* point) {
@@ -224,7 +232,7 @@ Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
     for (int axis = 0; axis < 3; ++axis) columns |= param_bit(base_translation_param_index(axis));
   }
   // The other targets' tool points are free with target 1's (not in the link-length set).
-  if (mask_has(run.free_mask, tool_param_index(0))) columns |= kOtherTargetTools;
+  if (other_tools_free(run.options, run.free_mask)) columns |= kOtherTargetTools;
   return accumulate_normal_equations(at.model, at.base, run.samples, at.loss, out, columns, run.sample_trig);
 }
 
@@ -372,7 +380,7 @@ Status start(const RigidTransform* start_base_to_tracker, Run* run) {
   Point& point = run->point;
   if (start_base_to_tracker != nullptr) {
     point.base = *start_base_to_tracker;
-  } else if (mask_has(run->free_mask, tool_param_index(0))) {
+  } else if (other_tools_free(run->options, run->free_mask)) {
     // The other targets' tool points are rarely known: least squares for the start geometry.
     const Status fit = fit_base_and_target_tools(run->samples, &point.model, &point.base);
     if (fit != Status::ok) return fit;
@@ -444,11 +452,12 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   if (status != Status::ok) return status;
   const std::size_t blocks = workspace->target_blocks.size() / 2;  // per NormalEquations
   workspace->normal.targets = workspace->target_blocks.subspan(0, blocks);
-  if (mask_has(free_mask, tool_param_index(0)) && static_cast<std::size_t>(target_count(samples) - 1) > blocks) {
+  if (other_tools_free(options, free_mask) && static_cast<std::size_t>(target_count(samples) - 1) > blocks) {
     return Status::dimension_out_of_range;  // the workspace has no room for these targets' tool points
   }
   clear_result(result);
-  workspace->point = Point{start_model, RigidTransform{}, PointLoss{}};
+  const double joint_noise_ratio = options.joint_sigma_rad > 0.0 ? options.joint_sigma_rad / options.position_sigma_m : 0.0;
+  workspace->point = Point{start_model, RigidTransform{}, PointLoss{0.0, joint_noise_ratio}};
   Run run{options, samples, workspace, result, free_mask, 0, workspace->point,
           store_joint_trig(samples, workspace->joint_trig), &workspace->normal, nullptr,
           workspace->target_blocks.subspan(blocks, blocks),

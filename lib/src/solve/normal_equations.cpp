@@ -414,8 +414,38 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
   }
 }
 
-/// accumulate_normal_equations for samples of several targets: sample by sample with each
-/// sample's tool point, the other targets' tool blocks summed and then eliminated.
+/// Whitens one sample's residual, Jacobian and tool Jacobian in place by L^-1, L L^T = I +
+/// k^2 J_q J_q^T, with J_q the Jacobian's theta columns (d point / d q) and k = sigma_q / sigma_p:
+/// the covariance of a point from joints read with sigma_q, in units of the point noise. 3x3
+/// Cholesky by hand (the same operations on every target). Nothing to do when k is 0.
+void whiten_sample(double k, Vec3* residual_m, FullJacobian* jacobian, Mat3* tool_jacobian) {
+  if (!(k > 0.0)) return;
+  Mat3 c = Mat3::Identity();
+  for (int j = 0; j < kJointCount; ++j) {
+    const Vec3 column = k * jacobian->col(model_param_index(j, DhField::theta_offset));
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) c(a, b) += column(a) * column(b);
+  }
+  // c = L L^T, L lower triangular (c is I + a Gram matrix: positive definite, l_ii >= 1).
+  const double l00 = std::sqrt(c(0, 0));
+  const double l10 = c(1, 0) / l00;
+  const double l20 = c(2, 0) / l00;
+  const double l11 = std::sqrt(c(1, 1) - l10 * l10);
+  const double l21 = (c(2, 1) - l20 * l10) / l11;
+  const double l22 = std::sqrt(c(2, 2) - l20 * l20 - l21 * l21);
+  const auto solve = [&](auto& m) {  // rows of m := L^-1 m (forward substitution)
+    m.row(0) /= l00;
+    m.row(1) = (m.row(1) - l10 * m.row(0)) / l11;
+    m.row(2) = (m.row(2) - l20 * m.row(0) - l21 * m.row(1)) / l22;
+  };
+  solve(*residual_m);
+  solve(*jacobian);
+  solve(*tool_jacobian);
+}
+
+/// accumulate_normal_equations for samples of several targets (or whitened ones): sample by
+/// sample with each sample's tool point, the other targets' tool blocks summed and then
+/// eliminated.
 [[gnu::noinline]] Status accumulate_several_targets(const RobotModel& model, const RigidTransform& base_to_tracker,
                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* eq,
                                   ParamMask columns) {
@@ -426,8 +456,10 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
   for (TargetBlock& block : eq->targets) block = TargetBlock{};
   for (const Sample& sample : samples) {
     FullJacobian jacobian;
-    const Vec3 residual_m = local_target_residual_jacobian(model, sample.target, base_to_tracker, sample, &jacobian);
-    const Mat3 tool_jacobian = jacobian.block<3, 3>(0, tool_param_index(0));
+    Vec3 residual_m = local_target_residual_jacobian(model, sample.target, base_to_tracker, sample, &jacobian);
+    Mat3 tool_jacobian = jacobian.block<3, 3>(0, tool_param_index(0));
+    const double raw_squared_m2 = residual_m.squaredNorm();
+    whiten_sample(loss.joint_noise_ratio_rad_per_m, &residual_m, &jacobian, &tool_jacobian);
     if (sample.target != 0) jacobian.block<3, 3>(0, tool_param_index(0)).setZero();  // not target 1's tool
     for (int c = 0; c < kFullParamCount; ++c) {
       if (!mask_has(columns, c)) jacobian.col(c).setZero();
@@ -442,7 +474,7 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
     }
     eq->loss_sum_m2 += loss.rho(norm_m);
     eq->weighted_squares_m2 += weight * squared;
-    eq->squares_sum_m2 += squared;
+    eq->squares_sum_m2 += raw_squared_m2;
     if (sample.target == 0 || !eliminate) continue;
     TargetBlock& block = eq->targets[static_cast<std::size_t>(sample.target - 1)];
     block.tool_tool += weight * (tool_jacobian.transpose() * tool_jacobian);
@@ -489,7 +521,7 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   eq.squares_sum_m2 = 0.0;
   eq.count = samples.size();
   for (TargetBlock& block : eq.targets) block.count = 0;  // the sums are reset where they are used
-  if (target_count(samples) > 1) {
+  if (target_count(samples) > 1 || loss.joint_noise_ratio_rad_per_m > 0.0) {
     return accumulate_several_targets(model, base_to_tracker, samples, loss, &eq, columns);
   }
   const IndexList list = indices_of(columns);

@@ -59,6 +59,15 @@ struct LmOptions {
   double identifiability_threshold = kDefaultIdentifiabilityThreshold;  ///< sigma_k / sigma_max to drop [-]
   LmParamSet params = LmParamSet::full;       ///< which parameters may move
   ParamMask custom_mask = kAllParamsMask;     ///< free parameters when params == custom
+  /// Estimate the other targets' tool points (targets 2..) even when the free set fixes target
+  /// 1's tool_x (e.g. a significance test fixed it); false: only while tool_x is free [-].
+  bool other_target_tools = false;
+  /// Noise of the joint readings, in the measure position_sigma_m is in (both sigmas, or both
+  /// rounding steps: only the ratio counts); > 0 whitens each sample by its point covariance,
+  /// I + (joint_sigma_rad / position_sigma_m)^2 J_q J_q^T (errors in variables,
+  /// docs/robust.md); 0: off, ordinary least squares, the same bits [rad].
+  double joint_sigma_rad = 0.0;
+  double position_sigma_m = 1e-5;  ///< stated noise of the measured points, the unit joint_sigma_rad is weighed in [m]
 };
 
 /// The free-parameter mask of a parameter set (`custom` for LmParamSet::custom; `start`

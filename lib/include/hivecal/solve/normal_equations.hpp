@@ -44,6 +44,10 @@ void scale_normal_matrix(const NormalMatrix& jtwj, ParamMask mask, double outsid
 /// Loss of one sample as a function of its residual norm s = |r| [m].
 struct PointLoss {
   double huber_threshold_m = 0.0;  ///< s beyond which the loss grows linearly [m]; <= 0: plain squares
+  /// Joint-reading noise over point noise, sigma_q / sigma_p: > 0 whitens each sample's residual
+  /// and rows by L^-1, L L^T = I + k^2 J_q J_q^T (J_q = d point / d q, the theta columns), before
+  /// the loss sees them (errors in variables, docs/robust.md); 0: off [rad/m].
+  double joint_noise_ratio_rad_per_m = 0.0;
 
   /// rho(s) [m^2]: s^2, or 2 k s - k^2 beyond the Huber threshold k.
   double rho(double norm_m) const;
@@ -85,7 +89,7 @@ void apply_target_step(const NormalEquations& eq, const FullParams& step, RobotM
 /// Sums the normal equations over `samples`, for the parameters in `columns` only (the
 /// other rows and columns of jtwj and jtwr are 0; fewer columns, less work). Samples of
 /// targets 2.. use their own tool point; when `columns` holds kOtherTargetTools, those tool
-/// points are estimated too and eliminated into jtwj and jtwr (TargetBlock), else they stay fixed. One target takes the fast streaming path (the bits of one target). `sample_trig`,
+/// points are estimated too and eliminated into jtwj and jtwr (TargetBlock), else they stay fixed. One target takes the fast streaming path (the bits of one target), unless the loss whitens (joint_noise_ratio_rad_per_m > 0): then every sample goes the per-sample path, whitened; squares_sum_m2 stays of the raw residuals. `sample_trig`,
 /// if it holds an entry per sample (joint_trig of sample i at i), saves the joint trig of
 /// every sample; otherwise it is computed here. The same bits either way. Errors:
 /// dataset_empty, non_finite_input (a NaN or Inf residual or Jacobian).
