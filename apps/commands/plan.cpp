@@ -125,12 +125,15 @@ Error parse_request(const Options& options, PlanRequest* request) {
   double prior_mm = 0.0;
   double prior_mrad = 0.0;
   std::size_t restarts = 0;
+  std::size_t refine = 0;
   if (error.ok()) error = bounded_option(options, "prior-mm", 0.0, 1e3, &prior_mm);
   if (error.ok()) error = bounded_option(options, "prior-mrad", 0.0, 1e3, &prior_mrad);
   if (error.ok()) error = count_option(options, "restarts", 1, 64, &restarts);
+  if (error.ok()) error = count_option(options, "refine", 0, 16, &refine);
   o.prior_length_m = prior_mm * 1e-3;
   o.prior_angle_rad = prior_mrad * 1e-3;
   o.restarts = static_cast<int>(restarts);
+  o.refine_passes = static_cast<int>(refine);
   if (error.ok()) error = bounded_option(options, "joint-speed", 1e-3, 10.0, &o.joint_speed_rad_s);
   if (error.ok()) error = bounded_option(options, "joint-acceleration", 1e-3, 100.0, &o.joint_acceleration_rad_s2);
   if (error.ok()) error = bounded_option(options, "dwell", kMinDwell_s, 3600.0, &o.dwell_s);
@@ -327,6 +330,7 @@ int plan_main(int argc, char** argv) {
       {"prior-mm", "MM", "prior sigma of the geometry's lengths and the tool in the objective (0: none)", "1"},
       {"prior-mrad", "MRAD", "prior sigma of the geometry's angles in the objective (0: none)", "1"},
       {"restarts", "N", "exchange runs: the greedy start, then seeded random starts (1 .. 64)", "4"},
+      {"refine", "N", "passes moving each chosen pose in joint space within the constraints (0 .. 16)", "2"},
       {"joint-speed", "RAD/S", "movej joint speed", "1.05"},
       {"joint-acceleration", "RAD/S2", "movej joint acceleration", "1.4"},
       {"dwell", "S", "wait at each pose (>= 0.3 s: the extraction needs the arm still at 10 Hz)", "1"},
