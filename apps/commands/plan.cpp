@@ -192,6 +192,12 @@ std::string report_text(const PlanRequest& request, const IdentifiabilityReport*
   out += "identifiable by the candidate pool: " + std::to_string(result.pool.kept_count()) + " of " +
          std::to_string(mask_count(o.free_mask)) + " parameters; no pose set under these constraints identifies:\n";
   out += dropped_lines(result.pool);
+  out += "objective: " + std::to_string(result.objective.kept_count()) + " parameters, the tool " +
+         text(o.prior_length_m * 1e3, "%g") + " mm off the flange axis in x and y (its prior)" +
+         ((result.objective.kept_mask & ~result.pool.kept_mask) != 0
+              ? ": also " + names_of(result.objective.kept_mask & ~result.pool.kept_mask)
+              : std::string()) +
+         "\n";
   if (facing != nullptr) {
     out += "freeing the orientation (flange z within " + text(o.constraints.acceptance_rad / kDegToRad, "%g") +
            " deg of the tracker) makes identifiable: " + names_of(facing->kept_mask & ~result.pool.kept_mask) + "\n";
