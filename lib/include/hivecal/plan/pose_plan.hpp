@@ -120,7 +120,7 @@ struct PlanResult {
   double session_s = 0.0;                   ///< travel plus one dwell per pose [s]
 };
 
-/// Scratch memory of a plan (~230 kB, most of it the candidate pool): give it static storage.
+/// Scratch memory of a plan (~280 kB, most of it the candidate pool): give it static storage.
 struct PlanWorkspace {
   Sample candidates[kPlanCandidateCapacity];   ///< the pool (points: the nominal tool point)
   Sample selected[kPlanPoseCapacity];          ///< the current selection
