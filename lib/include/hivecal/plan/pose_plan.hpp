@@ -5,7 +5,8 @@
 // prediction variance of the tool point anywhere in it), or on request the D-optimality one
 // (log det), of the column-scaled information matrix J^T J of the tool-point residuals
 // (normal_equations.hpp) plus the geometry's prior precision, over the parameters the pool of
-// candidates can identify (identifiability.hpp), by a greedy start and Fedorov exchanges with
+// candidates can identify (identifiability.hpp) with the tool off the flange axis by its prior
+// (a real reflector is never on it), by a greedy start and Fedorov exchanges with
 // seeded random restarts, then a refinement of each chosen pose in joint space (off the pool,
 // within the constraints);
 // the chosen poses are ordered for a short movej path (nearest neighbour, then 2-opt).
@@ -93,7 +94,7 @@ struct PlanOptions {
 /// Quality of one pose set for the calibration.
 struct PoseSetQuality {
   IdentifiabilityReport identifiability;  ///< over options.free_mask: kept, dropped, singular values
-  double log_det = 0.0;                   ///< D-criterion over the pool's identifiable parameters [-]
+  double log_det = 0.0;                   ///< D-criterion over the objective's parameters (PlanResult::objective) [-]
   double prediction_variance = 0.0;       ///< I-criterion tr(M^-1 A): mean prediction variance over the pool per unit noise variance [-]
   double smallest_singular = 0.0;         ///< smallest singular value of the column-scaled J over the kept parameters [-]
   double condition = 0.0;                 ///< condition number over the kept parameters [-]
@@ -159,8 +160,8 @@ Status pool_identifiability(const RobotModel& model, const PlanOptions& options,
 /// storage other than `selected`.
 /// Errors of accumulate_normal_equations and analyze_identifiability; singular_system.
 Status evaluate_pose_set(const RobotModel& model, const RobotModel& objective, Span<const Sample> poses,
-                         const PlanOptions& options, ParamMask objective_mask, const FullParams& scale, PlanWorkspace* workspace,
-                         PoseSetQuality* quality);
+                         const PlanOptions& options, ParamMask objective_mask, const FullParams& scale,
+                         PlanWorkspace* workspace, PoseSetQuality* quality);
 
 /// movej time from `from` to `to` [s]: the largest joint move at options' speed and
 /// acceleration (trapezoid, or triangle for short moves).
