@@ -570,8 +570,8 @@ Status pool_identifiability(const RobotModel& model, const PlanOptions& options,
 }
 
 Status evaluate_pose_set(const RobotModel& model, const RobotModel& objective, Span<const Sample> poses,
-                         const PlanOptions& options, ParamMask objective_mask, const FullParams& scale, PlanWorkspace* workspace,
-                         PoseSetQuality* quality) {
+                         const PlanOptions& options, ParamMask objective_mask, const FullParams& scale,
+                         PlanWorkspace* workspace, PoseSetQuality* quality) {
   Status status = accumulate_normal_equations(model, kIdentity, poses, PointLoss{}, &workspace->normal);
   if (status != Status::ok) return status;
   IdentifiabilityReport& report = quality->identifiability;
