@@ -24,7 +24,7 @@ constexpr const char* kCommand = "plan";
 constexpr double kMinDwell_s = 0.3;
 constexpr double kDegToRad = math::kPi / 180.0;
 
-PlanWorkspace workspace;  // ~230 kB: static, as the library asks
+PlanWorkspace workspace;  // ~280 kB: static, as the library asks
 PlanResult result;
 
 /// What the command line asked for beyond PlanOptions.
@@ -125,12 +125,15 @@ Error parse_request(const Options& options, PlanRequest* request) {
   double prior_mm = 0.0;
   double prior_mrad = 0.0;
   std::size_t restarts = 0;
+  std::size_t refine = 0;
   if (error.ok()) error = bounded_option(options, "prior-mm", 0.0, 1e3, &prior_mm);
   if (error.ok()) error = bounded_option(options, "prior-mrad", 0.0, 1e3, &prior_mrad);
   if (error.ok()) error = count_option(options, "restarts", 1, 64, &restarts);
+  if (error.ok()) error = count_option(options, "refine", 0, 16, &refine);
   o.prior_length_m = prior_mm * 1e-3;
   o.prior_angle_rad = prior_mrad * 1e-3;
   o.restarts = static_cast<int>(restarts);
+  o.refine_passes = static_cast<int>(refine);
   if (error.ok()) error = bounded_option(options, "joint-speed", 1e-3, 10.0, &o.joint_speed_rad_s);
   if (error.ok()) error = bounded_option(options, "joint-acceleration", 1e-3, 100.0, &o.joint_acceleration_rad_s2);
   if (error.ok()) error = bounded_option(options, "dwell", kMinDwell_s, 3600.0, &o.dwell_s);
@@ -189,6 +192,12 @@ std::string report_text(const PlanRequest& request, const IdentifiabilityReport*
   out += "identifiable by the candidate pool: " + std::to_string(result.pool.kept_count()) + " of " +
          std::to_string(mask_count(o.free_mask)) + " parameters; no pose set under these constraints identifies:\n";
   out += dropped_lines(result.pool);
+  out += "objective: " + std::to_string(result.objective.kept_count()) + " parameters, the tool " +
+         text(o.prior_length_m * 1e3, "%g") + " mm off the flange axis in x and y (its prior)" +
+         ((result.objective.kept_mask & ~result.pool.kept_mask) != 0
+              ? ": also " + names_of(result.objective.kept_mask & ~result.pool.kept_mask)
+              : std::string()) +
+         "\n";
   if (facing != nullptr) {
     out += "freeing the orientation (flange z within " + text(o.constraints.acceptance_rad / kDegToRad, "%g") +
            " deg of the tracker) makes identifiable: " + names_of(facing->kept_mask & ~result.pool.kept_mask) + "\n";
@@ -327,6 +336,7 @@ int plan_main(int argc, char** argv) {
       {"prior-mm", "MM", "prior sigma of the geometry's lengths and the tool in the objective (0: none)", "1"},
       {"prior-mrad", "MRAD", "prior sigma of the geometry's angles in the objective (0: none)", "1"},
       {"restarts", "N", "exchange runs: the greedy start, then seeded random starts (1 .. 64)", "4"},
+      {"refine", "N", "passes moving each chosen pose in joint space within the constraints (0 .. 16)", "2"},
       {"joint-speed", "RAD/S", "movej joint speed", "1.05"},
       {"joint-acceleration", "RAD/S2", "movej joint acceleration", "1.4"},
       {"dwell", "S", "wait at each pose (>= 0.3 s: the extraction needs the arm still at 10 Hz)", "1"},

@@ -27,6 +27,7 @@ expect_plan 2 "--count must be a whole number" -- "${cell[@]}" "${out[@]}" --cou
 expect_plan 2 "--dwell must be in [0.3" -- "${cell[@]}" "${out[@]}" --count 10 --dwell 0.1
 expect_plan 2 "--objective must be d-optimal" -- "${cell[@]}" "${out[@]}" --count 10 --objective a-optimal
 expect_plan 2 "--restarts must be in [1, 64]" -- "${cell[@]}" "${out[@]}" --count 10 --restarts 0
+expect_plan 2 "--refine must be in [0, 16]" -- "${cell[@]}" "${out[@]}" --count 10 --refine 17
 expect_plan 2 "--prior-mm must be in [0, 1000]" -- "${cell[@]}" "${out[@]}" --count 10 --prior-mm -1
 expect_plan 2 "--params must be 'full' or 'paper'" -- "${cell[@]}" "${out[@]}" --count 10 --params all
 expect_plan 2 "unknown robot model 'ur7'" -- "${cell[@]}" "${out[@]}" --count 10 --robot-model ur7

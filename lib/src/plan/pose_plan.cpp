@@ -14,6 +14,9 @@ namespace {
 constexpr double kRidge = 1e-6;
 // An exchange must improve the criterion by more than this to be taken: no cycling on ties.
 constexpr double kExchangeGain = 1e-9;
+// Joint-space refinement: first and smallest coordinate step [rad].
+constexpr double kRefineStep_rad = 0.2;
+constexpr double kRefineMinStep_rad = 0.002;
 // 2-opt passes over the path at most (each pass is O(n^2); it usually settles in a few).
 constexpr int kMaxTwoOptPasses = 64;
 // A 2-opt reversal must save more than this [s].
@@ -59,7 +62,7 @@ bool options_valid(const PlanOptions& o) {
   const bool prior_ok = o.prior_length_m >= 0.0 && math::is_finite(o.prior_length_m) && o.prior_angle_rad >= 0.0 &&
                         math::is_finite(o.prior_angle_rad);
   return cell_ok && counts_ok && mask_ok && threshold_ok && timing_ok && prior_ok && o.max_exchange_passes >= 0 &&
-         o.restarts >= 1;
+         o.restarts >= 1 && o.refine_passes >= 0;
 }
 
 /// Shifts q by whole turns into [lower, upper] when a turn fits (q4 of the tool-down wrist).
@@ -70,15 +73,19 @@ double wrap_into(double q, double lower, double upper) {
   return q;
 }
 
+/// A UR's joint 6 points down when q5 = -/+ pi/2 and q2 + q3 + q4 = q5 (joints 2-4 parallel):
+/// sets q4 from q2, q3, q5.
+void point_wrist_down(const PlanConstraints& c, JointVector* q) {
+  (*q)(3) = wrap_into((*q)(4) - (*q)(1) - (*q)(2), c.limits.lower_rad(3), c.limits.upper_rad(3));
+}
+
 /// One seeded draw: every joint uniform within its limits; tool_down overrides q4 and q5.
 JointVector draw_joints(const PlanConstraints& c, std::size_t branch, Random* random) {
   JointVector q;
   for (int j = 0; j < kJointCount; ++j) q(j) = random->uniform(c.limits.lower_rad(j), c.limits.upper_rad(j));
   if (c.orientation == PlanOrientation::tool_down) {
-    // A UR's joint 6 points down when q5 = -/+ pi/2 and q2 + q3 + q4 = q5 (joints 2-4 parallel).
-    const double q5 = branch % 2 == 0 ? -math::kHalfPi : math::kHalfPi;
-    q(4) = q5;
-    q(3) = wrap_into(q5 - q(1) - q(2), c.limits.lower_rad(3), c.limits.upper_rad(3));
+    q(4) = branch % 2 == 0 ? -math::kHalfPi : math::kHalfPi;
+    point_wrist_down(c, &q);
   }
   return q;
 }
@@ -283,6 +290,55 @@ void random_start(const PlanOptions& o, std::uint64_t restart, PlanWorkspace* ws
   }
 }
 
+/// Moves one pose in joint space while its gain (of `objective`) against the factored rest of
+/// the selection rises: coordinate pattern search, steps halving from kRefineStep_rad to
+/// kRefineMinStep_rad, every trial within the constraints of `model`, the given tool
+/// (tool_down: q4 follows q2, q3 and q5 stays). Returns the pose's final gain.
+double refine_pose(const RobotModel& model, const RobotModel& objective, const PlanOptions& o,
+                   const FullParams& scale, ParamMask mask, const PlanWorkspace& ws, Sample* pose) {
+  const PlanConstraints& c = o.constraints;
+  const bool down = c.orientation == PlanOrientation::tool_down;
+  double gain = criterion_gain(objective, *pose, scale, mask, ws, o.criterion);
+  for (double step = kRefineStep_rad; step >= kRefineMinStep_rad; step *= 0.5) {
+    bool improved = true;
+    while (improved) {
+      improved = false;
+      for (int j = 0; j < kJointCount; ++j) {
+        if (down && (j == 3 || j == 4)) continue;
+        for (int sign = -1; sign <= 1; sign += 2) {
+          Sample trial = *pose;
+          trial.q_rad(j) += static_cast<double>(sign) * step;
+          if (down) point_wrist_down(c, &trial.q_rad);
+          if (!pose_meets_constraints(model, c, trial.q_rad)) continue;
+          trial.point_m = fk_tool_point(model, trial.q_rad);
+          const double g = criterion_gain(objective, trial, scale, mask, ws, o.criterion);
+          if (g > gain + kExchangeGain) {
+            gain = g;
+            *pose = trial;
+            improved = true;
+          }
+        }
+      }
+    }
+  }
+  return gain;
+}
+
+/// Continuous refinement beyond the finite pool: options.refine_passes passes of refine_pose
+/// over the selection, each pose against the rest as they stand.
+Status refine_selection(const RobotModel& model, const RobotModel& objective, const PlanOptions& o,
+                        const FullParams& scale, ParamMask mask, PlanWorkspace* ws) {
+  for (int pass = 0; pass < o.refine_passes; ++pass) {
+    for (std::size_t slot = 0; slot < o.pose_count; ++slot) {
+      if (!factor_selection(objective, ws, o.pose_count, slot, scale, mask)) return Status::singular_system;
+      Sample pose = ws->selected[slot];
+      (void)refine_pose(model, objective, o, scale, mask, *ws, &pose);
+      ws->selected[slot] = pose;
+    }
+  }
+  return Status::ok;
+}
+
 /// D- and I-criteria of a pose set over `mask` with the pool's scale (ridge included).
 bool pose_set_criteria(const RobotModel& model, Span<const Sample> poses, const FullParams& scale, ParamMask mask,
                        PlanWorkspace* ws, double* log_det, double* prediction_variance) {
@@ -315,9 +371,10 @@ bool selection_cost(const RobotModel& model, const PlanOptions& o, const FullPar
 }
 
 /// Greedy start and exchanges, then options.restarts - 1 seeded random starts with their own
-/// exchanges; the selection with the best criterion (the first on ties) is left in ws.
-Status select_poses(const RobotModel& model, const PlanOptions& o, const FullParams& scale, ParamMask mask,
-                    PlanWorkspace* ws, PlanResult* result) {
+/// exchanges; the selection with the best criterion (the first on ties), refined, is left in
+/// ws. `model` is the objective's, `constraint_model` the one the constraints hold for.
+Status select_poses(const RobotModel& constraint_model, const RobotModel& model, const PlanOptions& o,
+                    const FullParams& scale, ParamMask mask, PlanWorkspace* ws, PlanResult* result) {
   Status status = greedy_start(model, o, scale, mask, ws);
   if (status != Status::ok) return status;
   if (!pose_set_criteria(model, Span<const Sample>(ws->selected, o.pose_count), scale, mask, ws,
@@ -338,12 +395,22 @@ Status select_poses(const RobotModel& model, const PlanOptions& o, const FullPar
       result->best_restart = restart;
       result->exchange_passes = passes;
       result->exchanges = exchanges;
-      for (std::size_t i = 0; i < o.pose_count; ++i) ws->best_index[i] = ws->selected_index[i];
+      for (std::size_t i = 0; i < o.pose_count; ++i) ws->best[i] = ws->selected[i];
     }
   }
-  for (std::size_t i = 0; i < o.candidate_count; ++i) ws->in_selection[i] = false;
-  for (std::size_t slot = 0; slot < o.pose_count; ++slot) select_candidate(ws, slot, ws->best_index[slot]);
-  return Status::ok;
+  for (std::size_t i = 0; i < o.pose_count; ++i) ws->selected[i] = ws->best[i];
+  return refine_selection(constraint_model, model, o, scale, mask, ws);
+}
+
+/// The model the objective differentiates: the tool displaced across the flange axis by its
+/// prior sigma in x and in y (the RMS radius of a tool known to that sigma per axis). A real
+/// reflector is never exactly on the axis, and what an off-axis one makes identifiable (theta5,
+/// d5: the calibration estimates them) belongs in the objective. The constraints and the
+/// reported identifiability and sigmas keep the given tool.
+RobotModel objective_model(const RobotModel& model, const PlanOptions& o) {
+  RobotModel objective = model;
+  objective.tool_m += Vec3(o.prior_length_m, o.prior_length_m, 0.0);
+  return objective;
 }
 
 /// Pool scale: 1 / RMS column norm per candidate, so one average candidate adds 1 per
@@ -502,9 +569,9 @@ Status pool_identifiability(const RobotModel& model, const PlanOptions& options,
                                  &workspace->identifiability, report);
 }
 
-Status evaluate_pose_set(const RobotModel& model, Span<const Sample> poses, const PlanOptions& options,
-                         ParamMask objective_mask, const FullParams& scale, PlanWorkspace* workspace,
-                         PoseSetQuality* quality) {
+Status evaluate_pose_set(const RobotModel& model, const RobotModel& objective, Span<const Sample> poses,
+                         const PlanOptions& options, ParamMask objective_mask, const FullParams& scale,
+                         PlanWorkspace* workspace, PoseSetQuality* quality) {
   Status status = accumulate_normal_equations(model, kIdentity, poses, PointLoss{}, &workspace->normal);
   if (status != Status::ok) return status;
   IdentifiabilityReport& report = quality->identifiability;
@@ -525,7 +592,7 @@ Status evaluate_pose_set(const RobotModel& model, Span<const Sample> poses, cons
       quality->sigma(k) = options.noise_m * std::sqrt(std::fmax(inverse_diagonal(k), 0.0)) * kept_scale(k);
     }
   }
-  return pose_set_criteria(model, poses, scale, objective_mask, workspace, &quality->log_det,
+  return pose_set_criteria(objective, poses, scale, objective_mask, workspace, &quality->log_det,
                            &quality->prediction_variance)
              ? Status::ok
              : Status::singular_system;
@@ -552,6 +619,8 @@ Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWor
   if (!all_finite(to_params(model))) return Status::non_finite_input;
   *result = PlanResult{};
   Status status = Status::ok;
+  // The objective differentiates the model with the tool off the flange axis (objective_model).
+  const RobotModel objective = objective_model(model, options);
   if (options.criterion == PlanCriterion::i_optimal_workspace) {
     // The region the predictions should be good in: the same cell, any orientation.
     PlanOptions anywhere = options;
@@ -561,7 +630,8 @@ Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWor
     std::size_t draws = 0;
     status = generate_candidates(model, anywhere, workspace, &draws);
     if (status != Status::ok) return status;
-    status = accumulate_normal_equations(model, kIdentity, Span<const Sample>(workspace->candidates, options.candidate_count),
+    status = accumulate_normal_equations(objective, kIdentity,
+                                         Span<const Sample>(workspace->candidates, options.candidate_count),
                                          PointLoss{}, &workspace->normal);
     if (status != Status::ok) return status;
     workspace->pool_information = workspace->normal.jtwj;
@@ -569,22 +639,28 @@ Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWor
   status = pool_identifiability(model, options, workspace, &result->pool, &result->attempts);
   if (status != Status::ok) return status;
   result->candidate_count = options.candidate_count;
-  const ParamMask mask = result->pool.kept_mask;
+  // The objective's parameters: what the pool identifies with the objective's tool.
+  const Span<const Sample> pool(workspace->candidates, options.candidate_count);
+  status = accumulate_normal_equations(objective, kIdentity, pool, PointLoss{}, &workspace->normal);
+  if (status != Status::ok) return status;
+  status = analyze_identifiability(workspace->normal.jtwj, options.free_mask, options.identifiability_threshold,
+                                   &workspace->identifiability, &result->objective);
+  if (status != Status::ok) return status;
+  const ParamMask mask = result->objective.kept_mask;
   const FullParams scale = pool_scale(workspace->normal.jtwj, options.candidate_count, mask);
   if (options.criterion != PlanCriterion::i_optimal_workspace) workspace->pool_information = workspace->normal.jtwj;
   workspace->ridge = prior_ridge(workspace->normal.jtwj, scale, options);
   mean_scaled_information(workspace->pool_information, options.candidate_count, scale, mask,
                           &workspace->pool_information);
 
-  status = select_poses(model, options, scale, mask, workspace, result);
+  status = select_poses(model, objective, options, scale, mask, workspace, result);
   if (status != Status::ok) return status;
   const Span<const Sample> selection(workspace->selected, options.pose_count);
 
   const Span<const Sample> first_draws(workspace->candidates, options.pose_count);  // random, same constraints
-  status = evaluate_pose_set(model, first_draws, options, mask, scale, workspace,
-                             &result->random);
+  status = evaluate_pose_set(model, objective, first_draws, options, mask, scale, workspace, &result->random);
   if (status != Status::ok) return status;
-  status = evaluate_pose_set(model, selection, options, mask, scale, workspace, &result->planned);
+  status = evaluate_pose_set(model, objective, selection, options, mask, scale, workspace, &result->planned);
   if (status != Status::ok) return status;
 
   result->pose_count = options.pose_count;

@@ -5,8 +5,10 @@
 // prediction variance of the tool point anywhere in it), or on request the D-optimality one
 // (log det), of the column-scaled information matrix J^T J of the tool-point residuals
 // (normal_equations.hpp) plus the geometry's prior precision, over the parameters the pool of
-// candidates can identify (identifiability.hpp), by a greedy start and Fedorov exchanges with
-// seeded random restarts;
+// candidates can identify (identifiability.hpp) with the tool off the flange axis by its prior
+// (a real reflector is never on it), by a greedy start and Fedorov exchanges with
+// seeded random restarts, then a refinement of each chosen pose in joint space (off the pool,
+// within the constraints);
 // the chosen poses are ordered for a short movej path (nearest neighbour, then 2-opt).
 // No heap: the candidate pool lives in a caller-provided PlanWorkspace.
 #pragma once
@@ -82,6 +84,7 @@ struct PlanOptions {
   double prior_length_m = 1e-3;                         ///< prior sigma of the geometry's lengths and the tool (0: none) [m]
   double prior_angle_rad = 1e-3;                        ///< prior sigma of the geometry's angles (0: none) [rad]
   int restarts = 4;                                     ///< exchange runs: the greedy start, then seeded random starts; the best criterion wins [-]
+  int refine_passes = 2;                                ///< passes moving each selected pose in joint space within the constraints (0: pool poses only) [-]
   double noise_m = 10e-6;                               ///< tracker noise per axis for the predicted sigmas [m]
   double joint_speed_rad_s = 1.05;                      ///< movej joint speed (URScript default) [rad/s]
   double joint_acceleration_rad_s2 = 1.4;               ///< movej joint acceleration (URScript default) [rad/s^2]
@@ -91,7 +94,7 @@ struct PlanOptions {
 /// Quality of one pose set for the calibration.
 struct PoseSetQuality {
   IdentifiabilityReport identifiability;  ///< over options.free_mask: kept, dropped, singular values
-  double log_det = 0.0;                   ///< D-criterion over the pool's identifiable parameters [-]
+  double log_det = 0.0;                   ///< D-criterion over the objective's parameters (PlanResult::objective) [-]
   double prediction_variance = 0.0;       ///< I-criterion tr(M^-1 A): mean prediction variance over the pool per unit noise variance [-]
   double smallest_singular = 0.0;         ///< smallest singular value of the column-scaled J over the kept parameters [-]
   double condition = 0.0;                 ///< condition number over the kept parameters [-]
@@ -103,6 +106,7 @@ struct PlanResult {
   std::size_t candidate_count = 0;          ///< candidates in the pool [-]
   std::size_t attempts = 0;                 ///< random draws made to find them [-]
   IdentifiabilityReport pool;               ///< what the whole pool can identify: no pose set does better
+  IdentifiabilityReport objective;          ///< what the pool identifies with the tool off the flange axis by its prior: the objective's parameters
   std::size_t pose_count = 0;               ///< valid entries of `poses` [-]
   JointVector poses[kPlanPoseCapacity];     ///< the planned poses, in visiting order [rad]
   double greedy_log_det = 0.0;              ///< D-criterion after the greedy start [-]
@@ -117,12 +121,12 @@ struct PlanResult {
   double session_s = 0.0;                   ///< travel plus one dwell per pose [s]
 };
 
-/// Scratch memory of a plan (~230 kB, most of it the candidate pool): give it static storage.
+/// Scratch memory of a plan (~280 kB, most of it the candidate pool): give it static storage.
 struct PlanWorkspace {
   Sample candidates[kPlanCandidateCapacity];   ///< the pool (points: the nominal tool point)
   Sample selected[kPlanPoseCapacity];          ///< the current selection
   std::size_t selected_index[kPlanPoseCapacity] = {};  ///< pool index of each selected pose
-  std::size_t best_index[kPlanPoseCapacity] = {};      ///< pool indices of the best selection of the restarts
+  Sample best[kPlanPoseCapacity];              ///< the best selection of the restarts
   bool in_selection[kPlanCandidateCapacity] = {};      ///< pool entries selected
   NormalEquations normal;                      ///< J^T J of a pose set
   NormalMatrix information;                    ///< scaled information of the selection (+ ridge)
@@ -149,14 +153,15 @@ Status generate_candidates(const RobotModel& model, const PlanOptions& options, 
 Status pool_identifiability(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
                             IdentifiabilityReport* report, std::size_t* attempts);
 
-/// Quality of a pose set (J^T J over options.free_mask, identifiability, sigma at
-/// options.noise_m; log_det over `objective_mask` with columns multiplied by `scale`, the
-/// selection's scale, and workspace->ridge, the prior plan_session set). `poses` must not be
-/// workspace storage other than `selected`.
+/// Quality of a pose set (J^T J of `model` over options.free_mask, identifiability, sigma at
+/// options.noise_m; log_det and prediction_variance of `objective`, the model the selection
+/// differentiates, over `objective_mask` with columns multiplied by `scale`, the selection's
+/// scale, and workspace->ridge, the prior plan_session set). `poses` must not be workspace
+/// storage other than `selected`.
 /// Errors of accumulate_normal_equations and analyze_identifiability; singular_system.
-Status evaluate_pose_set(const RobotModel& model, Span<const Sample> poses, const PlanOptions& options,
-                         ParamMask objective_mask, const FullParams& scale, PlanWorkspace* workspace,
-                         PoseSetQuality* quality);
+Status evaluate_pose_set(const RobotModel& model, const RobotModel& objective, Span<const Sample> poses,
+                         const PlanOptions& options, ParamMask objective_mask, const FullParams& scale,
+                         PlanWorkspace* workspace, PoseSetQuality* quality);
 
 /// movej time from `from` to `to` [s]: the largest joint move at options' speed and
 /// acceleration (trapezoid, or triangle for short moves).
