@@ -321,7 +321,8 @@ TEST(PosePlan, PlannedSessionsCalibrateBetterThanRandomOnes) {
   // Measured (x86-64, 24 arms), planned / random validation MAE on the measurable region and
   // on the whole cell: 24 poses 0.828 / 0.656 (session 7's planner 0.829 / 0.740; the tool off
   // the axis alone 0.703, the refinement alone 0.712); 16 poses 0.803 / 0.756 (session 7's
-  // 0.795 / 0.698): see docs/planning.md. The bounds leave ~0.03-0.04.
+  // 0.795 / 0.698); 20 poses 0.807 / 0.701 (not asserted here: ~60 s more); see
+  // docs/planning.md. The bounds leave ~0.03-0.04.
   const PlanOptions defaults;
   const Comparison n24 = compare_sessions(defaults, 24, 24);
   EXPECT_LE(n24.planned[0], 0.86 * n24.random[0]);
