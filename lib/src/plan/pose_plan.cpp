@@ -530,12 +530,15 @@ bool pose_meets_constraints(const RobotModel& model, const PlanConstraints& c, c
   const Vec3 reflector = flange.apply(model.tool_m);
   if (!point_allowed(c, reflector) || !point_allowed(c, flange.translation_m)) return false;
   const Vec3 axis = flange.rotation.col(2);
-  // Both cosines below are math::cos, the library's own (core/math.hpp), not libm's: the
-  // same bits on every target, as the plan's golden digest checks.
-  if (c.orientation == PlanOrientation::tool_down) return -axis.z() >= math::cos(c.tool_down_tolerance_rad);
+  // Both cosines are math::cos, the library's own (core/math.hpp), not libm's: the same bits on
+  // every target, as the plan's golden digest checks.
+  if (c.orientation == PlanOrientation::tool_down) {
+    const double cos_tolerance = math::cos(c.tool_down_tolerance_rad);  // own cos (core/math.hpp), not libm
+    return -axis.z() >= cos_tolerance;
+  }
   const Vec3 to_tracker = c.tracker_m - reflector;
   const double distance_m = to_tracker.norm();
-  const double cos_acceptance = math::cos(c.acceptance_rad);  // the library's own cos, see above
+  const double cos_acceptance = math::cos(c.acceptance_rad);  // own cos (core/math.hpp), not libm
   return distance_m > 0.0 && axis.dot(to_tracker) >= cos_acceptance * distance_m;
 }
 
