@@ -59,6 +59,7 @@ struct CalibrateSettings {
   ComplianceModel compliance_model;
   textio::OrientationInput orientation;  ///< --position-sigma-m, --angle-sigma-rad, --orientation-lever-m
   double joint_sigma_rad = 0.0;      ///< --joint-sigma-rad / --joint-sigma-deg: joint reading noise (0: off) [rad]
+  bool controller_tcp = false;       ///< --controller-tcp: base (identity) and tool (--tool) known, not fitted
 };
 
 /// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
@@ -455,6 +456,7 @@ const std::vector<OptionSpec>& option_specs() {
       {"split", "FRACTION", "share of samples used for training (1: all, no test rows)", "0.7"},
       {"cv", "K|loo", "also cross-validate: K folds (or leave-one-out), held-out MAE per fold", ""},
       {"keep-outliers", "", "use every sample (no blunder search)", ""},
+      {"controller-tcp", "", "the points are the controller's own TCP readings (a pendant export, RTDE actual_TCP_pose): in the base frame, at the TCP offset --tool; neither is fitted, joint 1's parameters are estimated instead (LM only; implies --method lm)", ""},
       {"significance", "T|auto", "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leave-one-out up to 64 training samples)", "2"},
       {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
       {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
@@ -629,6 +631,14 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
     settings->cv_folds = static_cast<std::size_t>(folds);
   }
   settings->keep_outliers = options.given("keep-outliers");
+  settings->controller_tcp = options.given("controller-tcp");
+  if (settings->controller_tcp) {
+    if (options.given("method") && settings->method != "lm") {
+      return Error::usage("--controller-tcp works with --method lm only (ABC and GSA fit their own base), not " +
+                          port::quoted(settings->method));
+    }
+    settings->method = "lm";
+  }
   if (options.get("significance") == "auto") {
     settings->significance_t = -1.0;  // lib: chosen by leave-one-out on small sets
   } else if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
@@ -758,6 +768,8 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.seed = settings.seed;
   job.robust = settings.robust;
   job.keep_outliers = settings.keep_outliers;
+  job.base_known = settings.controller_tcp;  // known_base_to_tracker: the identity
+  job.tool_known = settings.controller_tcp;  // the start model's tool points: --tool and the orientation's lever
   job.significance_t = settings.significance_t;
   job.lm.joint_sigma_rad = settings.joint_sigma_rad;
   job.lm.position_sigma_m = settings.orientation.position_sigma_m;
@@ -1009,6 +1021,9 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
       if (settings.joint_sigma_rad > 0.0) {  // only when given: the results of the default stay byte for byte
         w.key("joint_sigma_rad").value(settings.joint_sigma_rad);
         w.key("joint_sigma_position_sigma_m").value(settings.orientation.position_sigma_m);
+      }
+      if (settings.controller_tcp) {  // only when given, likewise
+        w.key("known").value("base (identity) and tool points: the controller's TCP readings (--controller-tcp)");
       }
     }
     write_ur_deltas(w, deltas);

@@ -123,7 +123,8 @@ TEST(Ur5ePendant, FitOnTwelvePosesPredictsTheOtherSix) {
   RecordProperty("predicted_mae_um", static_cast<int>(mae_m * 1e6));
   std::printf("UR5e pendant: 12 poses fitted, 6 predicted: MAE %.4f mm (baseline %.4f mm)\n", mae_m * 1e3,
               baseline_mae_m * 1e3);
-  // The issue asks for 0.08 mm (scipy: 0.066 mm); this job reaches 0.116 mm on this split
+  // The issue asks for 0.08 mm (scipy: 0.066 mm); with base and tool fitted as for a tracker
+  // this job reaches 0.116 mm on this split (known, with orientation: 0.0745 mm, ControllerTcp* below)
   // (0.138 mm without the significance test; 3-fold CV over 5 seeds on all 18: 0.083-0.106 mm,
   // docs/robust.md). The bound pins what it does so that a change for the worse fails.
   EXPECT_LT(mae_m, 0.12e-3);
@@ -136,8 +137,9 @@ TEST(Ur5ePendant, FitOnTwelvePosesPredictsTheOtherSix) {
 /// defaults and --split 1; returns the MAE [m] of predicting the poses `test`.
 /// `joint_step_rad` > 0: the joints' rounding enters as joint reading noise (LmOptions::joint_sigma_rad
 /// in the same step units as the positions' 0.01 mm, textio::kDefaultPositionSigma_m).
+/// `controller_tcp`: as `--controller-tcp`, the base (identity) and the tool points are known, LM only.
 double predict_with_orientation(const std::vector<std::size_t>& train, const std::vector<std::size_t>& test,
-                                double joint_step_rad = 0.0) {
+                                double joint_step_rad = 0.0, bool controller_tcp = false) {
   static Dataset<64> all;
   all.clear();
   textio::OrientationRead found;
@@ -165,6 +167,11 @@ double predict_with_orientation(const std::vector<std::size_t>& train, const std
   options.train_fraction = 1.0;
   options.lm.joint_sigma_rad = joint_step_rad;
   options.lm.position_sigma_m = textio::kDefaultPositionSigma_m;
+  if (controller_tcp) {
+    options.method = CalibrationMethod::lm;
+    options.base_known = true;
+    options.tool_known = true;
+  }
   RobotModel start = nominal_model(RobotType::ur5e);
   start.tool_m = Vec3::Zero();
   textio::start_orientation_targets(found, &start);
@@ -174,6 +181,11 @@ double predict_with_orientation(const std::vector<std::size_t>& train, const std
   EXPECT_EQ(result.train_count, 3 * train.size());
   EXPECT_EQ(result.outlier_count, 0u);
   const CalibrationStage& final_stage = result.stages[result.stage_count - 1];
+  if (controller_tcp) {  // kept bit for bit
+    EXPECT_TRUE(final_stage.base_to_tracker.translation_m == Vec3::Zero());
+    EXPECT_TRUE(final_stage.base_to_tracker.rotation == Mat3::Identity());
+    for (int t = 0; t < kMaxTargets; ++t) EXPECT_TRUE(target_tool(final_stage.model, t) == target_tool(start, t));
+  }
   double mae_m = 0.0;
   for (std::size_t pose : test) {
     const Vec3 predicted = final_stage.base_to_tracker.apply(fk_tool_point(final_stage.model, readings[pose].q_rad));
@@ -236,12 +248,12 @@ struct SplitFigures {
 };
 
 /// predict_with_orientation over the 20 splits.
-SplitFigures twenty_splits(double joint_step_rad) {
+SplitFigures twenty_splits(double joint_step_rad, bool controller_tcp = false) {
   std::vector<double> mae_m;
   for (const auto& permutation : kTwentySplits) {
     const std::vector<std::size_t> train(permutation, permutation + 12);
     const std::vector<std::size_t> test(permutation + 12, permutation + 18);
-    mae_m.push_back(predict_with_orientation(train, test, joint_step_rad));
+    mae_m.push_back(predict_with_orientation(train, test, joint_step_rad, controller_tcp));
     std::printf(" %.4f", mae_m.back() * 1e3);
   }
   std::printf("\n");
@@ -280,6 +292,32 @@ TEST(Ur5ePendant, JointNoiseOnTheTwentySplits) {
   EXPECT_LT(f.median_m, 0.095e-3);
   EXPECT_LT(f.mean_m, 0.099e-3);
   EXPECT_LT(f.worst_m, 0.18e-3);
+}
+
+// The pendant's readings are the controller's own TCP: in the base frame, at the configured
+// TCP offset (here the flange). With both known (--controller-tcp) LM estimates joint 1
+// instead of a base. Measured: first-12 split 0.0745 mm (the issue's target 0.08 mm, scipy's
+// 0.066 mm); 0.0887 mm with base and tool fitted.
+TEST(Ur5ePendant, ControllerTcpMeetsTheIssuesTargetOnTheFirstTwelve) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  const double mae_m =
+      predict_with_orientation({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}, {12, 13, 14, 15, 16, 17}, 0.0, true);
+  RecordProperty("predicted_mae_um", static_cast<int>(mae_m * 1e6));
+  std::printf("UR5e pendant, controller TCP (base and tool known): 12 poses fitted, 6 predicted: MAE %.4f mm\n",
+              mae_m * 1e3);
+  EXPECT_LT(mae_m, 0.08e-3);
+}
+
+// Measured: median 0.0678 mm, mean 0.0709 mm, worst 0.145 mm (base and tool fitted: 0.0853 /
+// 0.0994 / 0.200 mm, OrientationTwentySplits).
+TEST(Ur5ePendant, ControllerTcpTwentySplits) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  const SplitFigures f = twenty_splits(0.0, true);
+  std::printf("UR5e pendant, controller TCP, 20 splits: median %.4f mm, mean %.4f mm, worst %.4f mm\n",
+              f.median_m * 1e3, f.mean_m * 1e3, f.worst_m * 1e3);
+  EXPECT_LT(f.median_m, 0.070e-3);
+  EXPECT_LT(f.mean_m, 0.075e-3);
+  EXPECT_LT(f.worst_m, 0.15e-3);
 }
 
 TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {

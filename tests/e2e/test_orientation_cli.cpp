@@ -35,6 +35,32 @@ std::string first_fields(const std::string& line, int count) {
   return line.substr(0, end);
 }
 
+/// MAE [m] of `predict`'s output (x,y,z rows after a header) against `truth_m`; 1 m when
+/// a row does not parse or the count differs.
+double held_out_mae_m(const std::string& csv, const std::vector<Vec3>& truth_m) {
+  std::vector<Vec3> points;
+  std::istringstream rows(csv);
+  std::string row;
+  std::getline(rows, row);  // x,y,z
+  while (std::getline(rows, row)) {
+    std::vector<double> v;
+    std::istringstream cells(row);
+    for (std::string cell; std::getline(cells, cell, ',');) {
+      double x = 0.0;
+      if (!textio::parse_double(cell, &x)) return 1.0;
+      v.push_back(x);
+    }
+    if (v.size() != 3u) return 1.0;
+    points.emplace_back(v[0], v[1], v[2]);
+  }
+  if (points.size() != truth_m.size() || points.empty()) return 1.0;
+  double mae_m = 0.0;
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    mae_m += (points[k] - truth_m[k]).norm() / static_cast<double>(points.size());
+  }
+  return mae_m;
+}
+
 TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
   const std::string file = read_text(test::shared_data_path("ur5e-pendant/joint-eef-data.csv"));
@@ -83,24 +109,7 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   EXPECT_NE(json.find("\"tools\""), std::string::npos);
 
   ASSERT_EQ(run(cli::predict_main, {"--calibration", result, "--joints", joints, "--out", predicted}), 0);
-  std::vector<Vec3> points;
-  std::istringstream rows(read_text(predicted));
-  std::string row;
-  std::getline(rows, row);  // x,y,z
-  while (std::getline(rows, row)) {
-    std::vector<double> v;
-    std::istringstream cells(row);
-    for (std::string cell; std::getline(cells, cell, ',');) {
-      double x = 0.0;
-      ASSERT_TRUE(textio::parse_double(cell, &x));
-      v.push_back(x);
-    }
-    ASSERT_EQ(v.size(), 3u);
-    points.emplace_back(v[0], v[1], v[2]);
-  }
-  ASSERT_EQ(points.size(), 6u);
-  double mae_m = 0.0;
-  for (std::size_t k = 0; k < 6; ++k) mae_m += (points[k] - truth_m[k]).norm() / 6.0;
+  const double mae_m = held_out_mae_m(read_text(predicted), truth_m);
   std::printf("calibrate + predict on the pendant export, with orientation: held-out MAE %.4f mm\n", mae_m * 1e3);
   EXPECT_LT(mae_m, 0.09e-3);  // the job's 0.0887 mm
 
@@ -131,6 +140,24 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   args = common;
   args.insert(args.end(), {"--out", whitened, "--joint-sigma-deg", "0.01", "--joint-sigma-rad", "1e-4"});
   EXPECT_EQ(run(cli::calibrate_main, args), 2);
+  EXPECT_EQ(json.find("\"known\""), std::string::npos);
+
+  // The controller's own TCP readings: base and tool known, LM only (the job's 0.0745 mm).
+  const std::string tcp = dir.path() + "/result_controller_tcp.json";
+  args = common;
+  args.insert(args.end(), {"--out", tcp, "--controller-tcp"});
+  ASSERT_EQ(run(cli::calibrate_main, args), 0);
+  const std::string tcp_json = read_text(tcp);
+  EXPECT_NE(tcp_json.find("\"known\": \"base (identity) and tool points"), std::string::npos);
+  ASSERT_EQ(run(cli::predict_main, {"--calibration", tcp, "--joints", joints, "--out", predicted}), 0);
+  const double tcp_mae_m = held_out_mae_m(read_text(predicted), truth_m);
+  std::printf("calibrate --controller-tcp + predict on the pendant export: held-out MAE %.4f mm\n", tcp_mae_m * 1e3);
+  EXPECT_LT(tcp_mae_m, 0.08e-3);
+  for (const char* method : {"abc+lm", "abc", "gsa+lm", "all"}) {
+    args = common;
+    args.insert(args.end(), {"--out", tcp, "--controller-tcp", "--method", method});
+    EXPECT_EQ(run(cli::calibrate_main, args), 2) << method;
+  }
 }
 
 }  // namespace

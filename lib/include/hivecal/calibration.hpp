@@ -89,6 +89,16 @@ struct CalibrationOptions {
   double screen_floor_m = 0.01;                          ///< smallest residual set aside by the start geometry's consensus screen [m]
   std::size_t consensus_trials = 200;                    ///< point triples tried by the consensus (LMedS) screen [-]
   CalibrationCompliance compliance;                      ///< joint compliance stage (off by default)
+  /// The base -> tracker transform is known and not estimated: the points were measured in
+  /// the robot's own frame (a teach pendant's or controller's TCP readings: the identity), or
+  /// the base was calibrated before. Joint 1's parameters, which a fitted base absorbs, become
+  /// estimable. Only with CalibrationMethod::lm (ABC/GSA fit their own base) [-].
+  bool base_known = false;
+  RigidTransform known_base_to_tracker;                  ///< with base_known: the fixed transform [m, rad]
+  /// Every target's tool point is known and not estimated (the start model's): a controller's
+  /// TCP readings are FK(q) * its configured TCP offset, exactly. Only with
+  /// CalibrationMethod::lm [-].
+  bool tool_known = false;
 };
 
 /// Lower-case name of a method as the command line spells it ("abc+lm", "all", ...).

@@ -30,7 +30,24 @@ StagePlan plan_for(CalibrationMethod method) {
 }
 
 bool known(const CalibrationOptions& options) {
-  return options.method <= CalibrationMethod::all && options.params <= CalibrationParams::paper;
+  return options.method <= CalibrationMethod::all && options.params <= CalibrationParams::paper &&
+         (!(options.base_known || options.tool_known) || options.method == CalibrationMethod::lm);  // ABC/GSA fit their own
+}
+
+/// The tool point's three bits.
+ParamMask tool_params_mask() {
+  ParamMask mask = 0;
+  for (int axis = 0; axis < 3; ++axis) mask |= param_bit(tool_param_index(axis));
+  return mask;
+}
+
+/// The six base parameters' bits.
+ParamMask base_params_mask() {
+  ParamMask mask = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    mask |= param_bit(base_rotation_param_index(axis)) | param_bit(base_translation_param_index(axis));
+  }
+  return mask;
 }
 
 /// The compliance model the LM+compliance stage starts from: the options' terms, or the
@@ -109,7 +126,18 @@ Status run_population(Job& job, CalibrationSolver solver) {
 // Helpers marked [[gnu::noinline]] hold large temporaries (parameter vectors, fit
 // accumulators) while the LM solve below their caller does not need them: inlined, their
 // frames would stay live during LM and add ~3 kB to the firmware's 8 kB stack peak.
-[[gnu::noinline]] bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report, RobotModel* from) {
+/// *model rebuilt from `params` with its compliance terms and (keep_other_tools: a known
+/// tool, which LM never moves) its other targets' tool points; else those restart at 0, as
+/// they always have (LM estimates them again).
+void set_params(const ModelParams& params, bool keep_other_tools, RobotModel* model) {
+  const RobotModel before = *model;
+  *model = from_params(params);
+  model->compliance = before.compliance;
+  for (int t = 1; keep_other_tools && t < kMaxTargets; ++t) target_tool(model, t) = target_tool(before, t);
+}
+
+[[gnu::noinline]] bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report, bool keep_other_tools,
+                                     RobotModel* from) {
   const ModelParams start_params = to_params(start);
   ModelParams params = to_params(*from);
   bool changed = false;
@@ -128,11 +156,7 @@ Status run_population(Job& job, CalibrationSolver solver) {
       compliance_changed = true;
     }
   }
-  if (changed) {  // from_params: the other targets' tool points restart at 0, as they always have
-    const ComplianceModel compliance = from->compliance;
-    *from = from_params(params);
-    from->compliance = compliance;
-  }
+  if (changed) set_params(params, keep_other_tools, from);
   return changed || compliance_changed;
 }
 
@@ -143,16 +167,14 @@ double model_value(const RobotModel& model, int index) {
 }
 
 /// Puts parameter `index` (geometry or compliance) of *model back to its value in `start`.
-[[gnu::noinline]] void reset_param(const RobotModel& start, int index, RobotModel* model) {
+[[gnu::noinline]] void reset_param(const RobotModel& start, int index, bool keep_other_tools, RobotModel* model) {
   if (index >= kRigidParamCount) {
     model->compliance.coefficient[index - kRigidParamCount] = start.compliance.coefficient[index - kRigidParamCount];
     return;
   }
   ModelParams params = to_params(*model);
   params(index) = to_params(start)(index);
-  const ComplianceModel compliance = model->compliance;
-  *model = from_params(params);  // the other targets' tool points restart at 0, as they always have
-  model->compliance = compliance;
+  set_params(params, keep_other_tools, model);
 }
 
 /// The estimated model parameter (geometry or compliance coefficient) whose change from
@@ -211,6 +233,12 @@ Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_mod
     lm.params = LmParamSet::custom;
   }
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
+  if (o.base_known || o.tool_known) {  // the base / the tool points stay where the options put them
+    if (o.base_known) base = &o.known_base_to_tracker;
+    lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) &
+                     ~((o.base_known ? base_params_mask() : 0) | (o.tool_known ? tool_params_mask() : 0));
+    lm.params = LmParamSet::custom;
+  }
   const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask, reference);
   // The other targets' tool points are free whenever the stage estimates the tool point, also
   // after the significance test fixed tool_x (else they would stay at their start values).
@@ -223,13 +251,13 @@ Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_mod
     status = calibrate_lm(from, base, samples, lm, workspace, &r.lm, trace, observer);
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
-    bool again = reset && reset_dropped(reference, r.lm.identifiability, &from);
+    bool again = reset && reset_dropped(reference, r.lm.identifiability, o.tool_known, &from);
     const int weakest = least_significant(reference, r.lm, t, job.options.compliance.significance_t);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;
       lm.custom_mask = free_mask & ~*pruned;
-      reset_param(reference, weakest, &from);
+      reset_param(reference, weakest, o.tool_known, &from);
       again = true;
     }
     if (!again) break;
@@ -399,20 +427,21 @@ Status run_stage(Job& job, CalibrationSolver solver, bool hybrid, bool complianc
 /// {tool xyz, base 6}, least squares): the reflector offset is rarely known to the millimetre,
 /// and a baseline that keeps the guess is not a fair comparison. Below 4 samples (9
 /// parameters), the base alone.
-Status fit_baseline(const RobotModel& start, Span<const Sample> train, CalibrationWorkspaceBase& workspace,
-                    CalibrationResult* r) {
+Status fit_baseline(const RobotModel& start, Span<const Sample> train, const CalibrationOptions& options,
+                    CalibrationWorkspaceBase& workspace, CalibrationResult* r) {
   r->baseline.model = start;  // with several targets, their tool points fitted with the base
-  Status status = fit_base_and_target_tools(train, &r->baseline.model, &r->baseline.base_to_tracker);
-  if (status != Status::ok || 3 * train.size() <= static_cast<std::size_t>(kToolParamCount + kBaseParamCount)) {
-    return status;
+  Status status = Status::ok;
+  const int fitted = (options.tool_known ? 0 : kToolParamCount) + (options.base_known ? 0 : kBaseParamCount);
+  if (options.base_known) {
+    r->baseline.base_to_tracker = options.known_base_to_tracker;
+    if (!options.tool_known) fit_other_target_tools(r->baseline.base_to_tracker, train, &r->baseline.model);
+  } else {
+    status = fit_base_and_target_tools(train, &r->baseline.model, &r->baseline.base_to_tracker);
   }
+  if (status != Status::ok || fitted == 0 || 3 * train.size() <= static_cast<std::size_t>(fitted)) return status;
   LmOptions lm;
   lm.params = LmParamSet::custom;
-  lm.custom_mask = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    lm.custom_mask |= param_bit(tool_param_index(axis)) | param_bit(base_rotation_param_index(axis)) |
-                      param_bit(base_translation_param_index(axis));
-  }
+  lm.custom_mask = (options.base_known ? 0 : base_params_mask()) | (options.tool_known ? 0 : tool_params_mask());
   LmWorkspace* lm_workspace = workspace.open_lm();
   status = calibrate_lm(r->baseline.model, &r->baseline.base_to_tracker, train, lm, lm_workspace, &r->lm, nullptr, nullptr);
   workspace.close();
@@ -428,7 +457,7 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
                  CalibrationWorkspaceBase* workspace, CalibrationResult* r, CalibrationObserver* observer) {
   r->train_count = dataset->train().size();
   r->test_count = dataset->test().size();
-  Status status = fit_baseline(start, dataset->train(), *workspace, r);
+  Status status = fit_baseline(start, dataset->train(), options, *workspace, r);
   if (status != Status::ok) return fail(r, CalibrationStep::baseline, status);
   r->baseline.train = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->train());
   r->baseline.test = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->test());
@@ -590,7 +619,11 @@ int fitted_parameters(const CalibrationResult& r) {
   double best_median_m = 0.0;
   RigidTransform best;
   bool found = false;
-  for (std::size_t trial = 0; m >= 3 && trial < o.consensus_trials; ++trial) {
+  if (o.base_known) {  // nothing to find by consensus: the base is given
+    best = o.known_base_to_tracker;
+    found = m >= 1;
+  }
+  for (std::size_t trial = 0; !o.base_known && m >= 3 && trial < o.consensus_trials; ++trial) {
     const auto a = static_cast<std::size_t>(random.below(m));
     const auto b = static_cast<std::size_t>(random.below(m));
     const auto c = static_cast<std::size_t>(random.below(m));
@@ -616,7 +649,7 @@ int fitted_parameters(const CalibrationResult& r) {
   // The consensus base fits its triple exactly, so on a small set the median leans towards
   // those zeros: Rousseeuw and Leroy's finite-sample factor 1 + 5 / (n - 3) for LMedS, then a
   // least-squares refit on the samples it accepts and the test again (reweighted LS).
-  const double lmeds_factor = n > 3 ? 1.0 + 5.0 / static_cast<double>(n - 3) : 0.0;
+  const double lmeds_factor = o.base_known ? 1.0 : n > 3 ? 1.0 + 5.0 / static_cast<double>(n - 3) : 0.0;
   flag_outliers(start, best, *dataset, o, o.screen_floor_m, lmeds_factor, scratch, list, &threshold_m);
   RigidFitAccumulator refit;
   for (std::size_t i = 0; i < m; ++i) {
@@ -625,7 +658,7 @@ int fitted_parameters(const CalibrationResult& r) {
     if (!flagged) refit.add(scratch.predicted_m[i], samples[i].point_m);
   }
   RigidTransform refined;
-  if (refit.solve(&refined) == Status::ok) {
+  if (!o.base_known && refit.solve(&refined) == Status::ok) {
     flag_outliers(start, refined, *dataset, o, o.screen_floor_m, fit_sigma_factor(n, kBaseParamCount), scratch, list,
                   &threshold_m);
   }
