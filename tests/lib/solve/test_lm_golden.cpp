@@ -29,6 +29,9 @@ constexpr std::uint64_t kLmTargetsGoldenDigest = 0xb4e9be8f76e40505ULL;
 constexpr std::uint64_t kLmComplianceGoldenDigest = 0xa3ac49f712835071ULL;
 // The calibration job with compliance enabled (LM, then LM+compliance).
 constexpr std::uint64_t kComplianceJobGoldenDigest = 0xa8225944972578ebULL;
+// The calibration job on a controller's own TCP readings: base and tool points known
+// (CalibrationOptions::base_known, tool_known), joint 1 estimated instead, three targets.
+constexpr std::uint64_t kKnownFramesJobGoldenDigest = 0xdd0861d6ccc03b78ULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));
@@ -206,6 +209,50 @@ TEST(LmGolden, ComplianceJobDigestIsTheSameOnEveryTarget) {
   EXPECT_NO_HEAP(digest = compliance_job_digest());
   std::printf("job digest (LM + LM+compliance): 0x%016llx\n", static_cast<unsigned long long>(digest));
   EXPECT_EQ(digest, kComplianceJobGoldenDigest);
+}
+
+/// A perturbed UR5 read as its controller reports the TCP (identity base, three points of the
+/// tool frame known), 40 poses with 10 um noise, the job with a 70/30 split and the
+/// significance test, base and tool known.
+std::uint64_t known_frames_job_digest() {
+  static Dataset<120> samples;
+  samples.clear();
+  Random random(20261126);
+  const Vec3 tool_m(0.0, 0.0, 0.05);
+  const RobotModel truth =
+      test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, tool_m), tool_m);
+  test::fill_target_dataset(truth, RigidTransform(), 40, 3, 1e-5, &random, &samples);
+  RobotModel start = nominal_model(RobotType::ur5);
+  for (int t = 0; t < kMaxTargets; ++t) target_tool(&start, t) = target_tool(truth, t);
+  CalibrationOptions options;
+  options.method = CalibrationMethod::lm;
+  options.base_known = true;
+  options.tool_known = true;
+  static CalibrationWorkspace<120, double, 20, 64> ws;
+  static CalibrationResult result;
+  Digest digest;
+  const Status status = calibrate(start, &samples, options, &ws, &result);
+  EXPECT_EQ(status, Status::ok);
+  digest.add_u64(static_cast<std::uint64_t>(status));
+  digest.add_u64(result.stage_count);
+  for (const CalibrationStage& stage : result.stage_list()) {
+    digest.add(to_params(stage.model));
+    digest.add(stage.base_to_tracker.rotation);
+    digest.add(stage.base_to_tracker.translation_m);
+    digest.add(stage.test.mae(ErrorAxis::norm_3d));
+  }
+  digest.add(result.lm.sigma.head(kRigidParamCount));
+  digest.add_u64(result.lm.identifiability.kept_mask);
+  digest.add_u64(result.lm_pruned_mask);
+  digest.add_u64(result.outlier_count);
+  return digest.value();
+}
+
+TEST(LmGolden, KnownFramesJobDigestIsTheSameOnEveryTarget) {
+  std::uint64_t digest = 0;
+  EXPECT_NO_HEAP(digest = known_frames_job_digest());
+  std::printf("job digest (base and tool known): 0x%016llx\n", static_cast<unsigned long long>(digest));
+  EXPECT_EQ(digest, kKnownFramesJobGoldenDigest);
 }
 
 TEST(LmGolden, ComplianceDigestIsTheSameOnEveryTarget) {
