@@ -730,12 +730,14 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   if (dataset->train_count_for(settings.train_fraction) == 0) {  // the job splits
     return Error::usage("--split " + options.get("split") + " leaves no training sample");
   }
-  if (settings.cv_folds > dataset->size()) {
-    return Error::usage("--cv " + options.get("cv") + ": more folds than the " + std::to_string(dataset->size()) +
-                        " samples");
+  // Folds hold out whole poses (with several reflectors, a pose's samples stay together).
+  const std::string units = dataset->pose_count() == dataset->size() ? " samples" : " poses";
+  if (settings.cv_folds > dataset->pose_count()) {
+    return Error::usage("--cv " + options.get("cv") + ": more folds than the " + std::to_string(dataset->pose_count()) +
+                        units);
   }
-  if (settings.cv_folds == 1 && dataset->size() > kMaxCrossValidationFolds) {
-    return Error::usage("--cv loo: at most " + std::to_string(kMaxCrossValidationFolds) + " samples (use --cv K)");
+  if (settings.cv_folds == 1 && dataset->pose_count() > kMaxCrossValidationFolds) {
+    return Error::usage("--cv loo: at most " + std::to_string(kMaxCrossValidationFolds) + units + " (use --cv K)");
   }
   return Error{};
 }

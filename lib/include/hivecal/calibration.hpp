@@ -433,9 +433,10 @@ struct CrossValidationResult {
 /// aside; then the kept samples in the order of add() are shuffled with options.seed (as
 /// DatasetBase::split_fold) and each fold is calibrated on the other folds (no blunder search
 /// and no split of its own) and tested on its own samples. `scratch` receives each run in turn
-/// (the last fold's at the end). Errors: those of calibrate() (the first failing fold's, in
-/// cv->status too); invalid_argument (folds == 1, more folds than samples, or more than
-/// kMaxCrossValidationFolds).
+/// (the last fold's at the end). Folds and leave-one-out are over poses
+/// (DatasetBase::pose_count: with several targets a pose's samples stay together). Errors:
+/// those of calibrate() (the first failing fold's, in cv->status too); invalid_argument
+/// (folds == 1, more folds than poses, or more than kMaxCrossValidationFolds).
 Status cross_validate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
                       std::size_t folds, CalibrationWorkspaceBase* workspace, CalibrationResult* scratch,
                       CrossValidationResult* cv, CalibrationObserver* observer = nullptr);

@@ -803,8 +803,9 @@ Status cross_validate(const RobotModel& start, DatasetBase* dataset, const Calib
   const Span<const std::uint32_t> aside_span(aside, aside_count);
   dataset->set_aside(aside_span);
   const std::size_t n = dataset->size();
-  const std::size_t k = folds == 0 ? n : folds;
-  if (k < 2 || k > n || k > kMaxCrossValidationFolds) return cv->status = Status::invalid_argument;
+  const std::size_t poses = dataset->pose_count();  // folds hold out whole poses
+  const std::size_t k = folds == 0 ? poses : folds;
+  if (k < 2 || k > poses || k > kMaxCrossValidationFolds) return cv->status = Status::invalid_argument;
   double abs_sum_m = 0.0;
   for (std::size_t f = 0; f < k; ++f) {
     CalibrationResult& r = reset(scratch);

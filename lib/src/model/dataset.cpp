@@ -77,13 +77,66 @@ void DatasetBase::shuffle(std::uint64_t seed) {
   }
 }
 
+bool DatasetBase::grouped() const {
+  return target_count(samples()) > 1;
+}
+
+std::size_t DatasetBase::pose_end(std::size_t begin) const {
+  std::size_t end = begin + 1;
+  while (end < size_ && storage_[end].q_rad == storage_[begin].q_rad) ++end;
+  return end;
+}
+
+std::size_t DatasetBase::pose_count() const {
+  if (!grouped()) return size_;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < size_; i = pose_end(i)) ++count;
+  return count;
+}
+
+std::size_t DatasetBase::pose_start(std::size_t pose) const {
+  if (!grouped()) return pose < size_ ? pose : size_;  // one target: every sample is its own pose
+  std::size_t i = 0;
+  for (std::size_t k = 0; k < pose && i < size_; ++k) i = pose_end(i);
+  return i;
+}
+
+void DatasetBase::rotate_to(std::size_t to, std::size_t begin, std::size_t end) {
+  for (std::size_t i = begin; i < end; ++i) {  // each sample of the block moves down over the gap
+    const Sample moving = storage_[i];
+    for (std::size_t j = i; j > to + (i - begin); --j) storage_[j] = storage_[j - 1];
+    storage_[to + (i - begin)] = moving;
+  }
+}
+
+void DatasetBase::shuffle_poses(std::uint64_t seed) {
+  // The kept samples in the order of add(), then each pose's run moved as a whole: slot p takes
+  // a uniformly drawn one of the poses not placed yet (they stay contiguous behind slot p).
+  sort_by_index(size_);
+  Random random(seed);
+  std::size_t remaining = pose_count();
+  for (std::size_t placed_end = 0; remaining > 1; --remaining) {
+    const auto pick = static_cast<std::size_t>(random.below(static_cast<std::uint64_t>(remaining)));
+    std::size_t begin = placed_end;
+    for (std::size_t k = 0; k < pick; ++k) begin = pose_end(begin);
+    const std::size_t end = pose_end(begin);
+    rotate_to(placed_end, begin, end);
+    placed_end += end - begin;
+  }
+}
+
 Status DatasetBase::split_fold(std::size_t fold, std::size_t folds, std::uint64_t seed) {
   if (size_ == 0) return Status::dataset_empty;
-  if (folds < 2 || folds > size_ || fold >= folds) return Status::invalid_argument;
+  const std::size_t poses = pose_count();
+  if (folds < 2 || folds > poses || fold >= folds) return Status::invalid_argument;
   sort_by_index(size_);  // the kept samples in the order of add(): the same folds whatever the order before
-  shuffle(seed);
-  const std::size_t begin = fold * size_ / folds;
-  const std::size_t end = (fold + 1) * size_ / folds;
+  if (poses == size_) {
+    shuffle(seed);
+  } else {
+    shuffle_poses(seed);
+  }
+  const std::size_t begin = pose_start(fold * poses / folds);
+  const std::size_t end = pose_start((fold + 1) * poses / folds);
   // Rotate [begin, size_) left by (end - begin): the fold's block goes to the end, in order.
   for (std::size_t r = 0; r < end - begin; ++r) {
     const Sample first = storage_[begin];
@@ -96,15 +149,21 @@ Status DatasetBase::split_fold(std::size_t fold, std::size_t folds, std::uint64_
 
 std::size_t DatasetBase::train_count_for(double train_fraction) const {
   if (!(train_fraction > 0.0 && train_fraction <= 1.0)) return 0;
-  return static_cast<std::size_t>(train_fraction * static_cast<double>(size_) + 0.5);
+  return static_cast<std::size_t>(train_fraction * static_cast<double>(pose_count()) + 0.5);
 }
 
 Status DatasetBase::split(double train_fraction, std::uint64_t seed) {
   if (size_ == 0) return Status::dataset_empty;
-  const std::size_t train_count = train_count_for(train_fraction);
-  if (train_count == 0) return Status::invalid_argument;
-  shuffle(seed);
-  train_count_ = train_count;
+  const std::size_t train_poses = train_count_for(train_fraction);
+  if (train_poses == 0) return Status::invalid_argument;
+  const std::size_t poses = pose_count();
+  if (poses == size_ || train_poses == poses) {  // one sample per pose, or no test: the draws as always
+    shuffle(seed);
+    train_count_ = train_poses == poses ? size_ : train_poses;
+    return Status::ok;
+  }
+  shuffle_poses(seed);
+  train_count_ = pose_start(train_poses);
   return Status::ok;
 }
 

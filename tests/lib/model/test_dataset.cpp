@@ -75,5 +75,100 @@ TEST(Dataset, SplitErrors) {
   EXPECT_EQ(dataset.split(1.0, 1), Status::ok);
 }
 
+/// `poses` poses of three reflectors each (targets 0, 1, 2 added one after another at the same
+/// joints), pose k at joints k and points 10 k + target.
+void fill_three_targets(int poses, DatasetBase* dataset) {
+  dataset->clear();
+  for (int k = 0; k < poses; ++k) {
+    for (int target = 0; target < 3; ++target) {
+      ASSERT_EQ(dataset->add(JointVector::Constant(k), Vec3::Constant(10.0 * k + target), target), Status::ok);
+    }
+  }
+}
+
+/// Pose of a sample of fill_three_targets.
+int pose_of(const Sample& s) { return static_cast<int>(s.q_rad(0)); }
+
+// Several reflectors at one pose: a split that put some of them in training and the others
+// in the test would test on what was trained (the same joints), so poses move whole.
+TEST(Dataset, SeveralTargetsSplitWholePoses) {
+  static Dataset<90> dataset;
+  fill_three_targets(30, &dataset);
+  EXPECT_EQ(dataset.pose_count(), 30u);
+  EXPECT_EQ(dataset.train_count_for(0.7), 21u);  // poses
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    Status s = Status::invalid_argument;
+    EXPECT_NO_HEAP(s = dataset.split(0.7, seed));
+    ASSERT_EQ(s, Status::ok);
+    ASSERT_EQ(dataset.train().size(), 63u);
+    ASSERT_EQ(dataset.test().size(), 27u);
+    std::set<int> train_poses;
+    std::set<int> test_poses;
+    std::set<double> seen;
+    for (const Sample& t : dataset.train()) train_poses.insert(pose_of(t));
+    for (const Sample& t : dataset.test()) test_poses.insert(pose_of(t));
+    for (const Sample& t : dataset.samples()) seen.insert(t.point_m.x());
+    EXPECT_EQ(train_poses.size(), 21u);
+    EXPECT_EQ(test_poses.size(), 9u);
+    for (int pose : test_poses) EXPECT_EQ(train_poses.count(pose), 0u) << "seed " << seed << " pose " << pose;
+    EXPECT_EQ(seen.size(), 90u);  // nothing lost or duplicated
+    for (std::size_t i = 0; i < 90; i += 3) {  // each pose's run stays in target order
+      for (std::size_t t = 0; t < 3; ++t) EXPECT_EQ(dataset.samples()[i + t].target, static_cast<int>(t));
+    }
+  }
+  // Seeded: the same seed gives the same order, another seed another.
+  ASSERT_EQ(dataset.split(0.7, 3), Status::ok);
+  const int first = pose_of(dataset.samples()[0]);
+  ASSERT_EQ(dataset.split(0.7, 4), Status::ok);
+  ASSERT_EQ(dataset.split(0.7, 3), Status::ok);
+  EXPECT_EQ(pose_of(dataset.samples()[0]), first);
+  bool differs = false;
+  for (std::uint64_t seed = 4; seed < 10 && !differs; ++seed) {
+    ASSERT_EQ(dataset.split(0.7, seed), Status::ok);
+    differs = pose_of(dataset.samples()[0]) != first;
+  }
+  EXPECT_TRUE(differs);
+  // No test part (--split 1): every sample trains.
+  ASSERT_EQ(dataset.split(1.0, 3), Status::ok);
+  EXPECT_EQ(dataset.train().size(), 90u);
+  EXPECT_EQ(dataset.test().size(), 0u);
+}
+
+TEST(Dataset, SeveralTargetsFoldsHoldOutWholePoses) {
+  static Dataset<90> dataset;
+  fill_three_targets(10, &dataset);
+  EXPECT_EQ(dataset.split_fold(0, 11, 1), Status::invalid_argument);  // more folds than poses
+  std::set<int> held_out;
+  for (std::size_t fold = 0; fold < 4; ++fold) {
+    ASSERT_EQ(dataset.split_fold(fold, 4, 7), Status::ok);
+    std::set<int> train_poses;
+    for (const Sample& t : dataset.train()) train_poses.insert(pose_of(t));
+    for (const Sample& t : dataset.test()) {
+      EXPECT_EQ(train_poses.count(pose_of(t)), 0u);
+      held_out.insert(pose_of(t));
+    }
+    EXPECT_EQ(dataset.test().size() % 3, 0u);
+    EXPECT_EQ(train_poses.size() + dataset.test().size() / 3, 10u);
+  }
+  EXPECT_EQ(held_out.size(), 10u);  // every pose held out once
+  ASSERT_EQ(dataset.split_fold(9, 10, 7), Status::ok);  // leave one pose out
+  EXPECT_EQ(dataset.test().size(), 3u);
+}
+
+// One target: every sample is its own pose and the draws are those of a plain Fisher-Yates
+// (the goldens of every job depend on them).
+TEST(Dataset, OneTargetSplitsSamples) {
+  static Dataset<30> dataset;
+  dataset.clear();
+  for (int i = 0; i < 30; ++i) ASSERT_EQ(dataset.add(JointVector::Constant(i / 3), Vec3::Constant(i)), Status::ok);
+  EXPECT_EQ(dataset.pose_count(), 30u);  // equal joints of one target are separate measurements
+  ASSERT_EQ(dataset.split(0.7, 5), Status::ok);
+  EXPECT_EQ(dataset.train().size(), 21u);
+  for (std::size_t fold = 0; fold < 4; ++fold) {  // folds of samples: [k n / 4, (k + 1) n / 4)
+    ASSERT_EQ(dataset.split_fold(fold, 4, 5), Status::ok);
+    EXPECT_EQ(dataset.test().size(), (fold + 1) * 30 / 4 - fold * 30 / 4);
+  }
+}
+
 }  // namespace
 }  // namespace hivecal

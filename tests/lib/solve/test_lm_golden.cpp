@@ -31,7 +31,7 @@ constexpr std::uint64_t kLmComplianceGoldenDigest = 0xa3ac49f712835071ULL;
 constexpr std::uint64_t kComplianceJobGoldenDigest = 0xa8225944972578ebULL;
 // The calibration job on a controller's own TCP readings: base and tool points known
 // (CalibrationOptions::base_known, tool_known), joint 1 estimated instead, three targets.
-constexpr std::uint64_t kKnownFramesJobGoldenDigest = 0xdd0861d6ccc03b78ULL;
+constexpr std::uint64_t kKnownFramesJobGoldenDigest = 0xcf0b27224dd6de4cULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));

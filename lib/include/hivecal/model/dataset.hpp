@@ -57,11 +57,16 @@ class DatasetBase {
   /// The samples set aside by set_aside(), in the order of add().
   Span<const Sample> set_aside() const { return Span<const Sample>(storage_ + size_, stored_ - size_); }
   /// Fold `fold` of `folds` for cross-validation: the kept samples in the order of add(),
-  /// shuffled as split() does with `seed`, then fold k is the contiguous block
-  /// [k n / folds, (k + 1) n / folds) of that order, moved behind the rest: train() is the other
-  /// folds, test() this one. Errors: dataset_empty, invalid_argument (folds < 2, folds > size(),
-  /// fold >= folds).
+  /// shuffled as split() does with `seed`, then fold k is the contiguous block of poses
+  /// [k P / folds, (k + 1) P / folds) of that order (P = pose_count()), moved behind the rest:
+  /// train() is the other folds, test() this one. Errors: dataset_empty, invalid_argument
+  /// (folds < 2, folds > pose_count(), fold >= folds).
   Status split_fold(std::size_t fold, std::size_t folds, std::uint64_t seed);
+  /// Poses that split() and split_fold() keep together: with several targets (a target > 0),
+  /// a run of samples at equal joints in the order of add() (the reflectors measured at one
+  /// pose), so that no pose is in the training and the test part at once; with one target,
+  /// every sample is its own [-].
+  std::size_t pose_count() const;
 
   std::size_t size() const { return size_; }            ///< samples stored and not set aside
   std::size_t capacity() const { return capacity_; }    ///< samples it can hold
@@ -75,10 +80,12 @@ class DatasetBase {
   Span<const Sample> test() const { return Span<const Sample>(storage_ + train_count_, size_ - train_count_); }
 
   /// Shuffles the samples with a seeded Fisher-Yates permutation and puts the first
-  /// round(train_fraction * size) in the training part. Errors: dataset_empty,
-  /// invalid_argument (fraction not in (0, 1] or leaving no training sample).
+  /// round(train_fraction * size) in the training part; with several targets and a test part
+  /// the poses (pose_count) are shuffled whole, from the order of add(), and the first
+  /// round(train_fraction * poses) train. Errors: dataset_empty, invalid_argument (fraction not
+  /// in (0, 1] or leaving no training sample).
   Status split(double train_fraction, std::uint64_t seed);
-  /// Training samples split(train_fraction, ...) keeps: round(train_fraction * size), or 0 when
+  /// Training poses split(train_fraction, ...) keeps: round(train_fraction * pose_count()), or 0 when
   /// the fraction is not in (0, 1] (a caller can check a split before a long job) [-].
   std::size_t train_count_for(double train_fraction) const;
 
@@ -95,6 +102,11 @@ class DatasetBase {
 
   void sort_by_index(std::size_t count);  // the first `count` samples in the order of add()
   void shuffle(std::uint64_t seed);
+  bool grouped() const;                               // several targets: split by pose
+  std::size_t pose_end(std::size_t begin) const;      // end of the run of equal joints at begin
+  std::size_t pose_start(std::size_t pose) const;     // first sample of run `pose` in the current order
+  void rotate_to(std::size_t to, std::size_t begin, std::size_t end);  // block [begin, end) moved to `to` <= begin
+  void shuffle_poses(std::uint64_t seed);             // add() order, then the runs shuffled whole
 };
 
 /// A dataset that owns storage for `Capacity` samples (80 bytes each), no heap.
