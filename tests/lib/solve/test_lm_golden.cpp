@@ -174,6 +174,24 @@ std::uint64_t compliance_digest(Span<JointTrig> joint_trig_storage) {
   return digest.value();
 }
 
+/// A job's status, stages (geometry, with `compliance` its coefficients, base, test MAE), with
+/// `sigma` LM's rigid sigmas, and its kept, pruned and outlier figures, into *digest.
+void add_job_result(Status status, const CalibrationResult& result, bool compliance, bool sigma, Digest* digest) {
+  digest->add_u64(static_cast<std::uint64_t>(status));
+  digest->add_u64(result.stage_count);
+  for (const CalibrationStage& stage : result.stage_list()) {
+    digest->add(to_params(stage.model));
+    for (int k = 0; compliance && k < kMaxComplianceTerms; ++k) digest->add(stage.model.compliance.coefficient[k]);
+    digest->add(stage.base_to_tracker.rotation);
+    digest->add(stage.base_to_tracker.translation_m);
+    digest->add(stage.test.mae(ErrorAxis::norm_3d));
+  }
+  if (sigma) digest->add(result.lm.sigma.head(kRigidParamCount));
+  digest->add_u64(result.lm.identifiability.kept_mask);
+  digest->add_u64(result.lm_pruned_mask);
+  digest->add_u64(result.outlier_count);
+}
+
 /// The job (calibration.hpp) with compliance enabled on the same kind of session: split,
 /// blunder test, rigid LM, then LM+compliance with the significance test.
 std::uint64_t compliance_job_digest() {
@@ -189,18 +207,7 @@ std::uint64_t compliance_job_digest() {
   const Status status = calibrate(start, &samples, options, &ws, &result);
   EXPECT_EQ(status, Status::ok);
   EXPECT_EQ(result.stage_count, 2u);  // LM, LM+compliance
-  digest.add_u64(static_cast<std::uint64_t>(status));
-  digest.add_u64(result.stage_count);
-  for (const CalibrationStage& stage : result.stage_list()) {
-    digest.add(to_params(stage.model));
-    for (double c : stage.model.compliance.coefficient) digest.add(c);
-    digest.add(stage.base_to_tracker.rotation);
-    digest.add(stage.base_to_tracker.translation_m);
-    digest.add(stage.test.mae(ErrorAxis::norm_3d));
-  }
-  digest.add_u64(result.lm.identifiability.kept_mask);
-  digest.add_u64(result.lm_pruned_mask);
-  digest.add_u64(result.outlier_count);
+  add_job_result(status, result, true, false, &digest);
   return digest.value();
 }
 
@@ -233,18 +240,7 @@ std::uint64_t known_frames_job_digest() {
   Digest digest;
   const Status status = calibrate(start, &samples, options, &ws, &result);
   EXPECT_EQ(status, Status::ok);
-  digest.add_u64(static_cast<std::uint64_t>(status));
-  digest.add_u64(result.stage_count);
-  for (const CalibrationStage& stage : result.stage_list()) {
-    digest.add(to_params(stage.model));
-    digest.add(stage.base_to_tracker.rotation);
-    digest.add(stage.base_to_tracker.translation_m);
-    digest.add(stage.test.mae(ErrorAxis::norm_3d));
-  }
-  digest.add(result.lm.sigma.head(kRigidParamCount));
-  digest.add_u64(result.lm.identifiability.kept_mask);
-  digest.add_u64(result.lm_pruned_mask);
-  digest.add_u64(result.outlier_count);
+  add_job_result(status, result, false, true, &digest);
   return digest.value();
 }
 
