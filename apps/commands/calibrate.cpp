@@ -872,6 +872,9 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
                             ")");
   const std::string orientation = streams::orientation_line(facts);
   if (!orientation.empty()) data.info_lines.push_back(orientation);  // in the report's "info" too
+  if (settings.controller_tcp) {
+    data.info_lines.push_back("known (--controller-tcp): the base (identity) and the tool points; not fitted, joint 1 estimated instead");
+  }
   const std::string joints = run.from_controller ? "controller" : "nominal";
   data.methods.push_back(method_row("uncalibrated", joints + (uncalibrated.tool_fitted ? ", tool fitted" : ""),
                                     uncalibrated.train, uncalibrated.test, 0.0, 0));

@@ -149,6 +149,7 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   ASSERT_EQ(run(cli::calibrate_main, args), 0);
   const std::string tcp_json = read_text(tcp);
   EXPECT_NE(tcp_json.find("\"known\": \"base (identity) and tool points"), std::string::npos);
+  EXPECT_NE(tcp_json.find("known (--controller-tcp): the base (identity)"), std::string::npos);  // the report's info lines
   ASSERT_EQ(run(cli::predict_main, {"--calibration", tcp, "--joints", joints, "--out", predicted}), 0);
   const double tcp_mae_m = held_out_mae_m(read_text(predicted), truth_m);
   std::printf("calibrate --controller-tcp + predict on the pendant export: held-out MAE %.4f mm\n", tcp_mae_m * 1e3);
