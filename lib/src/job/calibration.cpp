@@ -50,6 +50,11 @@ ParamMask base_params_mask() {
   return mask;
 }
 
+/// The base and tool bits the options hold fixed (base_known, tool_known).
+ParamMask known_params_mask(const CalibrationOptions& options) {
+  return (options.base_known ? base_params_mask() : 0) | (options.tool_known ? tool_params_mask() : 0);
+}
+
 /// The compliance model the LM+compliance stage starts from: the options' terms, or the
 /// default ones of `start`'s geometry. invalid_argument when there are none or they are unusable.
 Status compliance_start(const RobotModel& start, const CalibrationCompliance& options, ComplianceModel* out) {
@@ -130,10 +135,8 @@ Status run_population(Job& job, CalibrationSolver solver) {
 /// tool, which LM never moves) its other targets' tool points; else those restart at 0, as
 /// they always have (LM estimates them again).
 void set_params(const ModelParams& params, bool keep_other_tools, RobotModel* model) {
-  const RobotModel before = *model;
-  *model = from_params(params);
-  model->compliance = before.compliance;
-  for (int t = 1; keep_other_tools && t < kMaxTargets; ++t) target_tool(model, t) = target_tool(before, t);
+  set_model_params(params, model);
+  for (int t = 1; !keep_other_tools && t < kMaxTargets; ++t) target_tool(model, t) = Vec3::Zero();
 }
 
 [[gnu::noinline]] bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report, bool keep_other_tools,
@@ -223,8 +226,7 @@ Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_mod
   if (o.params == CalibrationParams::paper && r.baseline.tool_fitted) {
     // The tool point is estimated too: it was not known (the baseline fitted it), and lengths
     // searched against a tool fitted at the nominal lengths keep that fit's bias.
-    lm.custom_mask = lm_param_mask(LmParamSet::link_lengths, 0, reference);
-    for (int axis = 0; axis < 3; ++axis) lm.custom_mask |= param_bit(tool_param_index(axis));
+    lm.custom_mask = lm_param_mask(LmParamSet::link_lengths, 0, reference) | tool_params_mask();
     lm.params = LmParamSet::custom;
   }
   if (o.params == CalibrationParams::paper && compliance) {
@@ -235,8 +237,7 @@ Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_mod
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
   if (o.base_known || o.tool_known) {  // the base / the tool points stay where the options put them
     if (o.base_known) base = &o.known_base_to_tracker;
-    lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) &
-                     ~((o.base_known ? base_params_mask() : 0) | (o.tool_known ? tool_params_mask() : 0));
+    lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) & ~known_params_mask(o);
     lm.params = LmParamSet::custom;
   }
   const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask, reference);
@@ -431,7 +432,8 @@ Status fit_baseline(const RobotModel& start, Span<const Sample> train, const Cal
                     CalibrationWorkspaceBase& workspace, CalibrationResult* r) {
   r->baseline.model = start;  // with several targets, their tool points fitted with the base
   Status status = Status::ok;
-  const int fitted = (options.tool_known ? 0 : kToolParamCount) + (options.base_known ? 0 : kBaseParamCount);
+  const ParamMask fitted_mask = (base_params_mask() | tool_params_mask()) & ~known_params_mask(options);
+  const int fitted = mask_count(fitted_mask);
   if (options.base_known) {
     r->baseline.base_to_tracker = options.known_base_to_tracker;
     if (!options.tool_known) fit_other_target_tools(r->baseline.base_to_tracker, train, &r->baseline.model);
@@ -441,7 +443,7 @@ Status fit_baseline(const RobotModel& start, Span<const Sample> train, const Cal
   if (status != Status::ok || fitted == 0 || 3 * train.size() <= static_cast<std::size_t>(fitted)) return status;
   LmOptions lm;
   lm.params = LmParamSet::custom;
-  lm.custom_mask = (options.base_known ? 0 : base_params_mask()) | (options.tool_known ? 0 : tool_params_mask());
+  lm.custom_mask = fitted_mask;
   LmWorkspace* lm_workspace = workspace.open_lm();
   status = calibrate_lm(r->baseline.model, &r->baseline.base_to_tracker, train, lm, lm_workspace, &r->lm, nullptr, nullptr);
   workspace.close();

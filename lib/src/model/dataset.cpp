@@ -147,16 +147,20 @@ Status DatasetBase::split_fold(std::size_t fold, std::size_t folds, std::uint64_
   return Status::ok;
 }
 
-std::size_t DatasetBase::train_count_for(double train_fraction) const {
+std::size_t DatasetBase::train_poses_of(double train_fraction, std::size_t poses) {
   if (!(train_fraction > 0.0 && train_fraction <= 1.0)) return 0;
-  return static_cast<std::size_t>(train_fraction * static_cast<double>(pose_count()) + 0.5);
+  return static_cast<std::size_t>(train_fraction * static_cast<double>(poses) + 0.5);
+}
+
+std::size_t DatasetBase::train_count_for(double train_fraction) const {
+  return train_poses_of(train_fraction, pose_count());
 }
 
 Status DatasetBase::split(double train_fraction, std::uint64_t seed) {
   if (size_ == 0) return Status::dataset_empty;
-  const std::size_t train_poses = train_count_for(train_fraction);
-  if (train_poses == 0) return Status::invalid_argument;
   const std::size_t poses = pose_count();
+  const std::size_t train_poses = train_poses_of(train_fraction, poses);
+  if (train_poses == 0) return Status::invalid_argument;
   if (poses == size_ || train_poses == poses) {  // one sample per pose, or no test: the draws as always
     shuffle(seed);
     train_count_ = train_poses == poses ? size_ : train_poses;

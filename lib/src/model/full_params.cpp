@@ -69,11 +69,8 @@ Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
 }
 
 void apply_full_increment(const FullParams& increment, RobotModel* model, RigidTransform* base_to_tracker) {
-  const RobotModel before = *model;
-  *model = from_params(to_params(before) + increment.head<kModelParamCount>());
-  for (int k = 0; k < kMaxTargets - 1; ++k) model->other_tools_m[k] = before.other_tools_m[k];  // not parameters
-  model->compliance = before.compliance;
-  for (int t = 0; t < before.compliance.term_count; ++t) {
+  set_model_params(to_params(*model) + increment.head<kModelParamCount>(), model);
+  for (int t = 0; t < model->compliance.term_count; ++t) {
     model->compliance.coefficient[t] += increment(compliance_param_index(t));
   }
   const Vec3 rotation_rad = increment.segment<3>(base_rotation_param_index(0));

@@ -92,15 +92,19 @@ ModelParams to_params(const RobotModel& model) {
 
 RobotModel from_params(const ModelParams& p) {
   RobotModel model;
+  set_model_params(p, &model);
+  return model;
+}
+
+void set_model_params(const ModelParams& p, RobotModel* model) {
   for (int j = 0; j < kJointCount; ++j) {
-    DhJoint& joint = model.joints[j];
+    DhJoint& joint = model->joints[j];
     joint.theta_offset_rad = p(model_param_index(j, DhField::theta_offset));
     joint.d_m = p(model_param_index(j, DhField::d));
     joint.a_m = p(model_param_index(j, DhField::a));
     joint.alpha_rad = p(model_param_index(j, DhField::alpha));
   }
-  for (int axis = 0; axis < 3; ++axis) model.tool_m(axis) = p(tool_param_index(axis));
-  return model;
+  for (int axis = 0; axis < 3; ++axis) model->tool_m(axis) = p(tool_param_index(axis));
 }
 
 RobotModel nominal_model(RobotType type) {

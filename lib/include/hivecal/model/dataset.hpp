@@ -106,6 +106,7 @@ class DatasetBase {
   std::size_t pose_end(std::size_t begin) const;      // end of the run of equal joints at begin
   std::size_t pose_start(std::size_t pose) const;     // first sample of run `pose` in the current order
   void rotate_to(std::size_t to, std::size_t begin, std::size_t end);  // block [begin, end) moved to `to` <= begin
+  static std::size_t train_poses_of(double train_fraction, std::size_t poses);  // see train_count_for
   void shuffle_poses(std::uint64_t seed);             // add() order, then the runs shuffled whole
 };
 

@@ -69,6 +69,9 @@ using ToolPointJacobian = Eigen::Matrix<double, 3, kModelParamCount>;
 ModelParams to_params(const RobotModel& model);
 /// Rebuilds a model from its parameter vector (the tool points of targets 2.. at 0, rigid).
 RobotModel from_params(const ModelParams& params);
+/// Writes the 27 parameters into *model in place; its other targets' tool points and its
+/// compliance, which are not among them, stay as they are.
+void set_model_params(const ModelParams& params, RobotModel* model);
 
 /// Robot types with built-in nominal tables.
 enum class RobotType : int { ur3, ur5, ur10, ur5e, ur3e, ur10e, ur16e };
