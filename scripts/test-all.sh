@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Runs every test on every target: host at -O3, -O0, -march=native and with ASan+UBSan,
-# aarch64 and armhf under qemu-user, then the bare-metal Cortex-M7 (hardware doubles) and
+# Runs every test on every target: host at -O3 and with ASan+UBSan, aarch64 and armhf under
+# qemu-user, the golden digests at -O0 and -march=native (HIVECAL_TEST_SCOPE=golden: what those
+# flags can change is the bits), then the bare-metal Cortex-M7 (hardware doubles) and
 # Cortex-M4F (soft-float doubles) firmware under qemu-system-arm, then the wire decoder
 # fuzzer for HIVECAL_FUZZ_SECONDS (default 60) and the log-reader fuzzer for 30 s. Installs what it needs first.
 #   scripts/test-all.sh [preset ...]     (default: all of them)

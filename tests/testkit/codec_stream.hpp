@@ -3,6 +3,8 @@
 // Hosted test code (std::vector), deterministic on every target (hivecal::Random only).
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <vector>
@@ -171,6 +173,19 @@ inline void corrupt(const SentStream& sent, double byte_error_rate, Random* rand
       }
     }
     if (keep) out->bytes.push_back(byte);
+  }
+}
+
+/// Feeds `stream` in chunks of 1..max_chunk bytes (sizes from `chunk_seed`); max_chunk 0 = all at once.
+inline void feed_chunked(const std::vector<std::uint8_t>& stream, std::size_t max_chunk, std::uint64_t chunk_seed,
+                         StreamDecoder* decoder, FrameHandler& handler) {
+  Random random(chunk_seed);
+  std::size_t at = 0;
+  while (at < stream.size()) {
+    std::size_t chunk = max_chunk == 0 ? stream.size() : 1 + static_cast<std::size_t>(random.below(max_chunk));
+    if (chunk > stream.size() - at) chunk = stream.size() - at;
+    EXPECT_NO_HEAP(decoder->feed(stream.data() + at, chunk, handler));
+    at += chunk;
   }
 }
 

@@ -1,6 +1,6 @@
 // The firmware's calibration job from captures, shared by the firmware image
 // (tests/firmware/capture_job_main.cpp, CTest firmware.capture_job[_lm|_compliance]) and the host test
-// (tests/lib/job/test_capture_job.cpp), so that both run the same code on the same committed
+// (tests/lib/job/test_capture_job_golden.cpp), so that both run the same code on the same committed
 // capture pair tests/data/fw-session/{robot,tracker}.cap and compare the same digests:
 //   captures -> extract_dataset_from_captures (capture_dataset.hpp) -> calibrate()
 //   (calibration.hpp) -> a digest of every result bit.

@@ -8,6 +8,22 @@
 
 namespace hivecal::test {
 
+/// The simulator settings the extraction tests and their digest were set on: large errors.
+inline sim::SimConfig large_error_config(std::uint64_t seed) {
+  sim::SimConfig config;
+  sim::use_large_errors(&config);
+  config.seed = seed;
+  return config;
+}
+
+/// The same over `waypoint_count` waypoints in `duration_s`.
+inline sim::SimConfig large_error_config(std::uint64_t seed, int waypoint_count, double duration_s) {
+  sim::SimConfig config = large_error_config(seed);
+  config.waypoint_count = waypoint_count;
+  config.duration_s = duration_s;
+  return config;
+}
+
 /// Pushes the whole robot stream, then the whole tracker stream (allowed: the estimator
 /// keeps the two profiles apart).
 inline void feed_clock(const sim::Session& session, ClockEstimatorBase* estimator) {

@@ -1,5 +1,5 @@
 // The pose planner (plan/pose_plan.hpp): every planned pose meets every constraint, the same
-// bits for a seed, the exchange step improves on the greedy start, no heap; simulated
+// bits for a seed (the golden digest: test_plan_golden.cpp), the exchange step improves on the greedy start, no heap; simulated
 // sessions calibrated by the job are more accurate from planned poses than from random ones
 // under the same constraints; the tool-down session's unidentifiable parameters.
 #include <gtest/gtest.h>
@@ -13,6 +13,7 @@
 #include "hivecal/plan/pose_plan.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
+#include "testkit/plan_test_data.hpp"
 #include "testkit/test_data.hpp"
 
 namespace hivecal {
@@ -22,36 +23,12 @@ PlanWorkspace workspace;
 PlanResult result;
 PlanResult other;
 
-const Vec3 kNominalTool(0.0, 0.0, 0.05);
-
-RobotModel planning_model() {
-  RobotModel model = nominal_model(RobotType::ur5);
-  model.tool_m = kNominalTool;
-  return model;
-}
-
-/// The tracker of the simulated sessions, and its position in the robot base frame.
-RigidTransform tracker_base() { return test::example_base_to_tracker(); }
-Vec3 tracker_position() { return tracker_base().inverse().translation_m; }
-
-PlanOptions small_options(std::size_t candidates, std::size_t poses, std::uint64_t seed) {
-  PlanOptions options;
-  options.constraints.limits = default_joint_limits(RobotType::ur5);
-  options.constraints.tracker_m = tracker_position();
-  options.candidate_count = candidates;
-  options.pose_count = poses;
-  options.seed = seed;
-  return options;
-}
-
-std::uint64_t digest_of(const PlanResult& r) {
-  Digest digest;
-  for (std::size_t i = 0; i < r.pose_count; ++i) digest.add(r.poses[i]);
-  digest.add(r.planned.log_det);
-  digest.add(r.planned.sigma.head<kRigidParamCount>());  // the rigid 33, as before the compliance coefficients
-  digest.add(r.travel_s);
-  return digest.value();
-}
+using test::digest_of;
+using test::kNominalTool;
+using test::planning_model;
+using test::small_options;
+using test::tracker_base;
+using test::tracker_position;
 
 TEST(PosePlan, EveryPlannedPoseMeetsEveryConstraint) {
   const PlanOptions options = small_options(512, 30, 3);
@@ -92,14 +69,6 @@ TEST(PosePlan, SameBitsForASeedAndOtherBitsForAnother) {
   ASSERT_EQ(plan_session(model, small_options(256, 20, 6), &workspace, &other), Status::ok);
   EXPECT_NE(digest_of(result), digest_of(other));
   std::printf("[plan] digest seed 5: %016llx\n", static_cast<unsigned long long>(digest_of(result)));
-}
-
-// The same bits on every target (docs/determinism.md): the poses, the criterion, the sigmas
-// and the path time of one plan, against the value measured on x86-64. It changes only when
-// the planner's or the kinematics' numbers are meant to change.
-TEST(PosePlan, GoldenDigest) {
-  ASSERT_EQ(plan_session(planning_model(), small_options(256, 20, 5), &workspace, &result), Status::ok);
-  EXPECT_EQ(digest_of(result), 0x920a169975c2f7c1ULL);
 }
 
 TEST(PosePlan, ExchangeImprovesOnTheGreedyStartAndBothBeatRandom) {

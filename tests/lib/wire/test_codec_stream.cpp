@@ -1,5 +1,6 @@
 // Wire codec on whole streams: chunking invariance, round trips through a noisy channel
-// (bit flips, dropped and inserted bytes, garbage), the corruption sweep, the golden digest.
+// (bit flips, dropped and inserted bytes, garbage), the corruption sweep (the golden digest:
+// test_codec_golden.cpp).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -17,19 +18,7 @@ namespace {
 using test::Corrupted;
 using test::SentStream;
 using test::StreamShape;
-
-/// Feeds `stream` in chunks of 1..max_chunk bytes (sizes from `chunk_seed`); max_chunk 0 = all at once.
-void feed_chunked(const std::vector<std::uint8_t>& stream, std::size_t max_chunk, std::uint64_t chunk_seed,
-                  StreamDecoder* decoder, FrameHandler& handler) {
-  Random random(chunk_seed);
-  std::size_t at = 0;
-  while (at < stream.size()) {
-    std::size_t chunk = max_chunk == 0 ? stream.size() : 1 + static_cast<std::size_t>(random.below(max_chunk));
-    if (chunk > stream.size() - at) chunk = stream.size() - at;
-    EXPECT_NO_HEAP(decoder->feed(stream.data() + at, chunk, handler));
-    at += chunk;
-  }
-}
+using test::feed_chunked;
 
 /// Checks every delivered record against what was sent (looked up by sequence number: the
 /// stream numbers all its frames with one counter) and remembers which sent frames arrived,
@@ -265,37 +254,6 @@ TEST(CodecStream, CorruptionSweepHasNoFalseAccepts) {
     EXPECT_EQ(r.untouched_missed, 0u) << rate;
     EXPECT_EQ(r.stats.bad_versions + r.stats.bad_payloads, 0u) << rate;  // only intact packets reach these checks
   }
-}
-
-// Golden digest of the codec: encoded bytes of a seeded stream through a seeded channel,
-// every decoded record's bits and every counter. Same value on every target and -O level.
-constexpr std::uint64_t kCodecGoldenDigest = 0xad8406a5186fd209ULL;
-
-std::uint64_t codec_digest() {
-  StreamShape shape;
-  shape.frames = 4000;
-  static SentStream sent;
-  test::make_stream(20261122, shape, &sent);
-  EXPECT_EQ(sent.library_allocations, 0u);
-  Random channel(20261123);
-  static Corrupted received;
-  test::corrupt(sent, 2e-3, &channel, &received);
-  Digest digest;
-  digest.add_bytes(sent.bytes.data(), sent.bytes.size());
-  digest.add_bytes(received.bytes.data(), received.bytes.size());
-  StreamDecoder decoder;
-  test::DigestHandler handler;
-  feed_chunked(received.bytes, 200, 20261124, &decoder, handler);
-  digest.add_u64(handler.digest.value());
-  digest.add_u64(handler.count);
-  test::add_stats(&digest, decoder.stats());
-  return digest.value();
-}
-
-TEST(CodecGolden, DigestIsTheSameOnEveryTarget) {
-  const std::uint64_t digest = codec_digest();
-  std::printf("codec digest: 0x%016llx\n", static_cast<unsigned long long>(digest));
-  EXPECT_EQ(digest, kCodecGoldenDigest);
 }
 
 }  // namespace
