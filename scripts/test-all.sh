@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Runs every test on every target: host at -O3 and with ASan+UBSan, aarch64 and armhf under
-# qemu-user, the golden digests at -O0 and -march=native (HIVECAL_TEST_SCOPE=golden: what those
-# flags can change is the bits), then the bare-metal Cortex-M7 (hardware doubles) and
+# Runs every test on every target: host at -O3 and with ASan+UBSan, aarch64 under qemu-user,
+# the golden digests at -O0, -march=native and on armhf (HIVECAL_TEST_SCOPE=golden: what those
+# flags and that target can change is the bits), then the bare-metal Cortex-M7 (hardware doubles) and
 # Cortex-M4F (soft-float doubles) firmware under qemu-system-arm, then the wire decoder
 # fuzzer for HIVECAL_FUZZ_SECONDS (default 60) and the log-reader fuzzer for 30 s. Installs what it needs first.
 #   scripts/test-all.sh [preset ...]     (default: all of them)
@@ -20,6 +20,7 @@ failed=0
 failed_presets=()
 for preset in "${presets[@]}"; do
   echo "=== $preset ==="
+  started_s=$SECONDS
   log="build/test-$preset.log"
   mkdir -p build
   if [ "$preset" = fuzz ]; then
@@ -33,6 +34,7 @@ for preset in "${presets[@]}"; do
     rc=$?
   fi
   grep -E "[0-9]+% tests passed|The following tests FAILED|^\s+[0-9]+ - |error:|Failed" "$log" | head -40
+  echo "($preset: $((SECONDS - started_s)) s, build and tests)"
   result=$(grep -E "tests passed, [0-9]+ tests failed out of [0-9]+" "$log" | tail -1)
   if [ "$rc" -ne 0 ] || [ -z "$result" ] || ! grep -q " 0 tests failed" <<<"$result"; then
     failed_presets+=("$preset")
@@ -46,6 +48,7 @@ for preset in "${presets[@]}"; do
 done
 
 echo
+echo "test-all: ${SECONDS} s in all"
 if [ ${#failed_presets[@]} -ne 0 ]; then
   echo "test-all: FAILED presets: ${failed_presets[*]} (logs in build/test-<preset>.log)"
   [ "$failed" -eq 0 ] && failed=1
