@@ -467,6 +467,7 @@ const std::vector<OptionSpec>& option_specs() {
       {"gravity", "X,Y,Z", "with --compliance: gravity direction in the robot base frame (wall or ceiling mounts)", "0,0,-1"},
       {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]", ""},
       {"quiet", "", "no progress on stderr", ""},
+      {"tracker-sigma-um", "S", "stated noise of the tracker per axis: the blunder test's sigma when the fit leaves too little redundancy, and the report's measurement noise (the same as --position-sigma-m) [um]", "10"},
       {"position-sigma-m", "S", "stated noise of the measured positions; with --angle-sigma-rad it weighs a measured orientation (rx, ry, rz columns of --samples) [m]", "1e-05"},
       {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
       {"joint-sigma-rad", "S", "noise of the joint readings, in the units of --position-sigma-m (e.g. the readings' rounding step): LM weighs each sample by its point covariance (errors in variables, docs/robust.md; 0: off) [rad]", "0"},
@@ -567,7 +568,16 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
 
 /// --position-sigma-m, --angle-sigma-rad, --orientation-lever-m (csv.hpp, OrientationInput).
 Error orientation_options(const Options& options, textio::OrientationInput* orientation) {
+  if (options.given("position-sigma-m") && options.given("tracker-sigma-um")) {
+    return Error::usage("--tracker-sigma-um and --position-sigma-m say the same: give one");
+  }
   Error error = number_option(options, "position-sigma-m", &orientation->position_sigma_m);
+  if (error.ok() && options.given("tracker-sigma-um")) {
+    double sigma_um = 0.0;
+    error = number_option(options, "tracker-sigma-um", &sigma_um);
+    orientation->position_sigma_m = sigma_um * 1e-6;
+    if (error.ok() && !(sigma_um > 0.0 && sigma_um < 1e6)) return Error::usage("--tracker-sigma-um must be in (0, 1e6)");
+  }
   if (error.ok()) error = number_option(options, "angle-sigma-rad", &orientation->angle_sigma_rad);
   if (error.ok() && options.given("orientation-lever-m")) error = number_option(options, "orientation-lever-m", &orientation->lever_m);
   if (!error.ok()) return error;
@@ -775,6 +785,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.significance_t = settings.significance_t;
   job.lm.joint_sigma_rad = settings.joint_sigma_rad;
   job.lm.position_sigma_m = settings.orientation.position_sigma_m;
+  job.blunder_test.tracker_sigma_m = settings.orientation.position_sigma_m;
   job.compliance.enabled = settings.compliance;
   if (settings.compliance) job.compliance.model = settings.compliance_model;
   CliWorkspace& workspace = cli_workspace();
@@ -859,6 +870,82 @@ std::string sample_source(const streams::SessionFacts& facts, std::uint32_t inde
   return "sample " + std::to_string(index);
 }
 
+/// "noise: ..." — the fit's residual sigma against the tracker's stated noise, and what the ratio says.
+std::string noise_statement(double fit_sigma_m, double tracker_sigma_m) {
+  const double ratio = fit_sigma_m / tracker_sigma_m;
+  char line[300];
+  std::snprintf(line, sizeof line,
+                "noise: the fit's residual sigma %s mm per axis is %.1fx the tracker's stated %s mm (--tracker-sigma-um)%s",
+                format_mm(fit_sigma_m).c_str(), ratio, format_mm(tracker_sigma_m).c_str(),
+                ratio > 2.0 ? ": unmodelled effects (or a wrong stated noise) dominate the residuals, not the tracker"
+                            : ": the model explains the data to the measurement noise");
+  return line;
+}
+
+/// Collects each pose's test under the final calibration: the kept poses' w, the uncontrolled ones.
+class PoseTests final : public UnitTestVisitor {
+ public:
+  PoseTests(const streams::SessionFacts& facts, std::vector<std::uint32_t> aside, report::OutlierTable* table)
+      : facts_(facts), aside_(std::move(aside)), table_(table) {}
+  void on_unit(const UnitTest& t) override {
+    if (t.fitted && t.critical_w > 0.0) table_->critical_w = t.critical_w;
+    if (t.fitted && !t.controlled) {
+      table_->uncontrolled.push_back(sample_source(facts_, t.index));
+    } else if (t.controlled && std::find(aside_.begin(), aside_.end(), t.index) == aside_.end()) {
+      table_->kept_w.push_back(t.w);
+    }
+  }
+
+ private:
+  const streams::SessionFacts& facts_;
+  std::vector<std::uint32_t> aside_;
+  report::OutlierTable* table_;
+};
+
+/// The blunder search's table and console lines: the job's verdict and set-aside samples, and
+/// each pose's w under the final calibration (lib's test_for_blunders on the final fit).
+void blunder_report(const streams::SessionFacts& facts, const CliDataset& dataset, const Run& run,
+                    report::ReportData* data) {
+  report::OutlierTable& table = data->outliers;
+  const CalibrationResult& r = run.result;
+  table.searched = r.outlier_rounds > 0;
+  table.verdict = blunder_verdict_name(r.blunder_verdict);
+  table.alpha = CalibrationOptions{}.blunder_test.alpha;
+  table.sigma_source = sigma_source_name(r.blunder_test.sigma_source);
+  table.sigma_m = r.blunder_test.sigma_m;
+  const CalibrationStage* final_stage = r.final_stage();
+  if (table.searched && final_stage != nullptr) {
+    static ReliabilityWorkspace workspace;  // ~24 kB
+    const Span<const Sample> fitted = dataset.train();
+    const Span<const Sample> predicted(dataset.test().data(), dataset.test().size() + dataset.set_aside().size());
+    std::vector<std::uint32_t> aside;
+    for (const CalibrationOutlier& o : r.outlier_list()) aside.push_back(o.index);
+    PoseTests tests(facts, std::move(aside), &table);
+    BlunderTestOptions options;
+    options.tracker_sigma_m = data->noise_sigma_m > 0.0 ? data->noise_sigma_m : options.tracker_sigma_m;
+    BlunderTestSummary summary;
+    test_for_blunders(final_stage->model, final_stage->base_to_tracker, fitted, predicted,
+                      calibration_estimated_mask(r), PointLoss{}, options, &workspace, &tests, &summary);
+  }
+  for (const CalibrationOutlier& o : r.outlier_list()) {
+    char line[300];
+    std::snprintf(line, sizeof line, "set aside as a blunder: %s, residual %s mm, w %.2f > %.2f (alpha %.2g %% for the set)",
+                  sample_source(facts, o.index).c_str(), format_mm(o.residual_m).c_str(), o.w, o.critical_w,
+                  table.alpha * 100.0);
+    data->info_lines.push_back(line);
+    table.rows.push_back({sample_source(facts, o.index), o.residual_m, o.w});
+  }
+  if (r.blunder_verdict == BlunderVerdict::model_error) {
+    data->info_lines.push_back("blunder test: more than " + std::to_string(r.blunder_limit) +
+                               " training pose(s) fail the w-test: the model, not the data, is wrong (unmodelled "
+                               "effects); none removed by the test");
+  }
+  for (const std::string& source : table.uncontrolled) {
+    data->info_lines.push_back("uncontrolled pose (redundancy below 0.1: a blunder there cannot be told from the "
+                               "geometry; kept, not tested): " + source);
+  }
+}
+
 /// Tables and figures of a run, and the text of the terminal.
 report::ReportData present(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset,
                            const streams::SessionFacts& facts, const Run& run) {
@@ -903,8 +990,10 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
     for (int k = 0; k < kFullParamCount; ++k)
       if (mask_has(run.result.lm_pruned_mask, k)) data.identifiability.fixed.push_back(full_param_name(k, final_stage.model));
     data.identifiability.significance_t = run.result.significance_t;
-    data.noise_sigma_m = lm->residual_sigma_m;
+    data.fit_sigma_m = lm->residual_sigma_m;
   }
+  data.noise_sigma_m = settings.orientation.position_sigma_m;
+  if (data.fit_sigma_m > 0.0) data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m));
   data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
   data.has_stream = facts.has_stream;
   if (facts.has_stream) {
@@ -912,18 +1001,12 @@ report::ReportData present(const CalibrateSettings& settings, const RobotModel& 
     for (const auto& drop : facts.dropped) data.drops.push_back(drop);
     data.clock_match = report::clock_match_series(facts.run.clock_match, facts.run.clock.speed_gain);
   }
-  data.outliers.searched = run.result.outlier_rounds > 0;
-  data.outliers.threshold_m = run.result.outlier_threshold_m;
-  for (const CalibrationOutlier& o : run.result.outlier_list()) {
-    data.info_lines.push_back("set aside as a blunder: " + sample_source(facts, o.index) + ", residual " +
-                              format_mm(o.residual_m) + " mm (threshold " +
-                              format_mm(run.result.outlier_threshold_m) + " mm)");
-    data.outliers.rows.push_back({sample_source(facts, o.index), o.residual_m});
-  }
+  blunder_report(facts, dataset, run, &data);
   if (run.has_cv) {
     data.cross_validation.present = true;
     data.cross_validation.sample_count = run.cv.sample_count;
     data.cross_validation.mae_3d_m = run.cv.mae_3d_m;
+    data.cross_validation.baseline_mae_3d_m = run.cv.baseline_mae_3d_m;
     for (std::size_t k = 0; k < run.cv.fold_count; ++k) {
       const CrossValidationFold& f = run.cv.folds[k];
       data.cross_validation.folds.push_back(
@@ -947,8 +1030,9 @@ void print_tables(std::FILE* out, const report::ReportData& data, const Run& run
       std::fprintf(out, "  %4zu  %5zu  %4zu  %8s\n", k + 1, cv.folds[k].train_count, cv.folds[k].test.count,
                    format_mm(cv.folds[k].test.mae(ErrorAxis::norm_3d)).c_str());
     }
-    std::fprintf(out, "  all held-out samples: %s mm (fold mean %s, worst %s)\n", format_mm(cv.mae_3d_m).c_str(),
-                 format_mm(cv.fold_mae_3d_mean_m).c_str(), format_mm(cv.fold_mae_3d_max_m).c_str());
+    std::fprintf(out, "  all held-out samples: %s mm (fold mean %s, worst %s; uncalibrated %s mm)\n",
+                 format_mm(cv.mae_3d_m).c_str(), format_mm(cv.fold_mae_3d_mean_m).c_str(),
+                 format_mm(cv.fold_mae_3d_max_m).c_str(), format_mm(cv.baseline_mae_3d_m).c_str());
   }
   std::fprintf(out, "\nCalibrated parameters (%s):\n", run.final_method().c_str());
   for (const std::string& line : report::format_parameters_text(data)) std::fprintf(out, "  %s\n", line.c_str());
@@ -956,13 +1040,15 @@ void print_tables(std::FILE* out, const report::ReportData& data, const Run& run
 
 void write_outliers(textio::JsonWriter& w, const streams::SessionFacts& facts, const Run& run) {
   w.key("outlier_search").value(run.result.outlier_rounds > 0);
-  w.key("outlier_threshold_m").value(run.result.outlier_threshold_m);
+  w.key("blunder_verdict").value(blunder_verdict_name(run.result.blunder_verdict));
   w.key("outliers").begin_array();
   for (const CalibrationOutlier& o : run.result.outlier_list()) {
     w.begin_object();
     w.key("index").value(static_cast<long long>(o.index));
     w.key("source").value(sample_source(facts, o.index));
     w.key("residual_m").value(o.residual_m);
+    w.key("w").value(o.w);
+    w.key("critical_w").value(o.critical_w);
     w.end_object();
   }
   w.end_array();
@@ -973,6 +1059,7 @@ void write_cross_validation(textio::JsonWriter& w, const CrossValidationResult& 
   w.key("folds").value(static_cast<long long>(cv.fold_count));
   w.key("samples").value(static_cast<long long>(cv.sample_count));
   w.key("mae_3d_m").value(cv.mae_3d_m);
+  w.key("baseline_mae_3d_m").value(cv.baseline_mae_3d_m);
   w.key("fold_mae_3d_mean_m").value(cv.fold_mae_3d_mean_m);
   w.key("fold_mae_3d_max_m").value(cv.fold_mae_3d_max_m);
   w.key("per_fold").begin_array();
@@ -1098,7 +1185,7 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   const bool result_on_stdout = options.get("out") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   print_tables(terminal, data, job);
-  *warnings = fit_warnings(job.result, settings.bounds);
+  *warnings = fit_warnings(job.result, settings.bounds, data.parameters);
   error = write_outputs(options, settings, data, facts, job, *warnings, &outputs, ids);
   if (!error.ok()) return error;
   if (!result_on_stdout) std::fprintf(terminal, "\nresult: %s\n", options.get("out").c_str());

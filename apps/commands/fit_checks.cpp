@@ -13,7 +13,30 @@ bool model_param_is_angle(int index) {
   return field == static_cast<int>(DhField::theta_offset) || field == static_cast<int>(DhField::alpha);
 }
 
-std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds) {
+namespace {
+
+/// |correlation| above which a moved parameter's warning names the one it cannot be told from.
+constexpr double kStrongCorrelation = 0.95;
+
+/// "; strongly correlated with X (rho = ...): ..." for `name` in `parameters`, or "".
+std::string correlation_cause(const char* name, const std::vector<report::ParameterRow>& parameters) {
+  for (const report::ParameterRow& row : parameters) {
+    if (row.name != name || row.correlated_with.empty() || !(std::fabs(row.correlation) > kStrongCorrelation)) continue;
+    char text[300];
+    std::snprintf(text, sizeof text,
+                  "; it is strongly correlated with %s (rho = %.3f): the data cannot separate the two, so the move "
+                  "may be theirs together (more poses spread over the joints that couple them, the tool's "
+                  "orientation, or a second reflector would separate them)",
+                  row.correlated_with.c_str(), row.correlation);
+    return text;
+  }
+  return "";
+}
+
+}  // namespace
+
+std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
+                                      const std::vector<report::ParameterRow>& parameters) {
   std::vector<std::string> warnings;
   const CalibrationStage* final_stage = result.final_stage();
   if (final_stage == nullptr) return warnings;
@@ -36,7 +59,7 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
                     "guess or units?",
                     full_param_name(k), change * 1e3, before(k), after(k), bounds.max_length_change_m * 1e3);
     }
-    warnings.push_back(line);
+    warnings.push_back(line + correlation_cause(full_param_name(k), parameters));
   }
   const double baseline_mae_m = result.baseline.test.mae(ErrorAxis::norm_3d);
   const double final_mae_m = final_stage->test.mae(ErrorAxis::norm_3d);

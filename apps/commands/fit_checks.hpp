@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "hivecal/calibration.hpp"
+#include "report/report.hpp"
 
 namespace hivecal::cli {
 
@@ -23,6 +24,9 @@ bool model_param_is_angle(int index);
 /// The warnings about `result` (empty when none): one line per parameter of the final stage's
 /// model that moved beyond `bounds` from the baseline model (name, both values, the change),
 /// and one when the final stage's test MAE (3D) is above the baseline's (only with test samples).
-std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds);
+/// `parameters` (Table 4's rows, may be empty): a moved parameter with |correlation| > 0.95 to
+/// another says so and what would separate them.
+std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
+                                      const std::vector<report::ParameterRow>& parameters = {});
 
 }  // namespace hivecal::cli

@@ -112,7 +112,7 @@ void error_figures(const ReportData& data, const std::vector<std::size_t>& shown
     }
     if (data.noise_sigma_m > 0.0) {
       spec.y_line = axis == 3 ? norm_um : per_axis_um;
-      spec.y_line_label = "noise level (LM)";
+      spec.y_line_label = "tracker noise (stated)";
     }
     const std::vector<double> ranks = index_axis(b.size());
     out->push_back({spec.id, svg_chart(spec, {Series{before.method, ranks, b, false}, Series{after.method, ranks, a, false}})});
@@ -272,28 +272,26 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   }
 }
 
-/// Every sample's 3-D residual under the final calibration, sorted, the set-aside ones
-/// marked, with the blunder threshold (log axis: blunders are mm, the rest um).
+/// Every pose's normalised residual w under the final calibration, sorted, the set-aside ones
+/// marked, with the test's threshold: the same numbers as the console and the table.
 void outlier_figure(const ReportData& data, std::vector<Figure>* out) {
-  if (!data.outliers.searched || data.predictions.empty()) return;
-  const PredictionSet& after = data.predictions.back();
-  std::vector<std::pair<double, bool>> residuals;  // [um], set aside
-  for (std::size_t i = 0; i < data.samples.size() && i < after.points_m.size(); ++i)
-    residuals.emplace_back((after.points_m[i] - data.samples[i].measured_m).norm() * 1e6, false);
-  for (const OutlierRow& o : data.outliers.rows) residuals.emplace_back(o.residual_m * 1e6, true);
-  std::sort(residuals.begin(), residuals.end());
+  if (!data.outliers.searched || data.outliers.kept_w.empty()) return;
+  std::vector<std::pair<double, bool>> w;  // [-], set aside
+  for (double value : data.outliers.kept_w) w.emplace_back(value, false);
+  for (const OutlierRow& o : data.outliers.rows) w.emplace_back(o.w, true);
+  std::sort(w.begin(), w.end());
   Series kept{"kept", {}, {}, true};
   Series aside{"set aside", {}, {}, true};
-  for (std::size_t k = 0; k < residuals.size(); ++k) {
-    Series& s = residuals[k].second ? aside : kept;
+  for (std::size_t k = 0; k < w.size(); ++k) {
+    Series& s = w[k].second ? aside : kept;
     s.x.push_back(static_cast<double>(k + 1));
-    s.y.push_back(residuals[k].first);
+    s.y.push_back(w[k].first);
   }
-  ChartSpec spec = chart("fig-outliers", "3D residual per sample after calibration, sorted", "samples, by rank",
-                         "3D residual [um]");
+  ChartSpec spec = chart("fig-outliers", "Normalised residual w of each pose after calibration, sorted", "poses, by rank",
+                         "w [-]");
   spec.log_y = true;
-  if (data.outliers.threshold_m > 0.0) {
-    spec.y_line = data.outliers.threshold_m * 1e6;
+  if (data.outliers.critical_w > 0.0) {
+    spec.y_line = data.outliers.critical_w;
     spec.y_line_label = "blunder threshold";
   }
   out->push_back({spec.id, svg_chart(spec, {kept, aside})});
@@ -503,14 +501,32 @@ std::string mm(double metres) {
   return buf;
 }
 
-/// The blunder search: a table of the samples set aside, or a line saying why there is none.
+/// The blunder search: its test, the samples set aside and the uncontrolled poses.
 std::string outlier_html(const OutlierTable& o) {
   if (!o.searched) return "<h2>Blunders</h2>\n<p>No blunder search ran (--keep-outliers): every sample was used.</p>\n";
-  std::string s = "<h2>Blunders</h2>\n<p>Blunder search: ";
-  if (o.rows.empty()) return s + "none set aside (threshold " + mm(o.threshold_m) + " mm).</p>\n";
+  char test[200];
+  std::snprintf(test, sizeof test, "w-test of each pose at %.2g %% for the whole set, threshold w = %.2f, sigma %s mm (%s). ",
+                o.alpha * 100.0, o.critical_w, mm(o.sigma_m).c_str(),
+                o.sigma_source == "tracker" ? "the tracker's stated noise" : "from the fit's residuals");
+  std::string s = "<h2>Blunders</h2>\n<p>" + std::string(test);
+  if (o.verdict == "model_error") {
+    s += "More poses fail than a blunder explains: the model, not the data, is wrong (unmodelled effects); none removed. ";
+  }
+  if (!o.uncontrolled.empty()) {
+    s += std::to_string(o.uncontrolled.size()) + " pose(s) uncontrolled (redundancy below 0.1: a blunder there cannot be told from the geometry): ";
+    for (std::size_t k = 0; k < o.uncontrolled.size(); ++k) s += (k > 0 ? ", " : "") + o.uncontrolled[k];
+    s += ". ";
+  }
+  if (o.rows.empty()) return s + "None set aside.</p>\n";
   s += std::to_string(o.rows.size()) + " sample(s) set aside.</p>\n";
-  std::vector<std::vector<std::string>> rows = {{"sample", "residual [mm]", "threshold [mm]"}};
-  for (const OutlierRow& r : o.rows) rows.push_back({r.source, mm(r.residual_m), mm(o.threshold_m)});
+  std::vector<std::vector<std::string>> rows = {{"sample", "residual [mm]", "w", "threshold w"}};
+  char w[32];
+  char critical[32];
+  std::snprintf(critical, sizeof critical, "%.2f", o.critical_w);
+  for (const OutlierRow& r : o.rows) {
+    std::snprintf(w, sizeof w, "%.2f", r.w);
+    rows.push_back({r.source, mm(r.residual_m), w, critical});
+  }
   return s + html_table(rows);
 }
 
@@ -641,7 +657,7 @@ std::string render_html(const ReportData& data) {
     const CrossValidationTable& cv = data.cross_validation;
     s += "<h2>Cross-validation</h2>\n<p>" + std::to_string(cv.folds.size()) + " folds over " +
          std::to_string(cv.sample_count) + " samples (blunders left out); 3D MAE over every held-out sample " +
-         um(cv.mae_3d_m) + " um.</p>\n" + html_table(cross_validation_rows(cv));
+         um(cv.mae_3d_m) + " um (uncalibrated: " + um(cv.baseline_mae_3d_m) + " um).</p>\n" + html_table(cross_validation_rows(cv));
   }
   if (!data.parameters.empty()) {
     s += "<h2>Table 4: parameters (start, calibrated, change, sigma)</h2>\n" + html_table(parameter_rows(data));

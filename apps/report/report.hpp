@@ -75,13 +75,21 @@ struct IdentifiabilityTable {
 struct OutlierRow {
   std::string source;       ///< where it came from: "file:line", or "sample N"
   double residual_m = 0.0;  ///< |predicted - measured| under the final calibration [m]
+  double w = 0.0;           ///< its pose's normalised residual against the fit without it [-]
 };
 
-/// The blunder search: what it set aside and the threshold it used.
+/// The blunder search (the w-test of each pose, docs/robust.md): what it set aside, the
+/// threshold, which poses it cannot control.
 struct OutlierTable {
-  bool searched = false;        ///< a blunder search ran (not --keep-outliers)
-  double threshold_m = 0.0;     ///< residual above which a sample was set aside [m]
+  bool searched = false;         ///< a blunder search ran (not --keep-outliers)
+  std::string verdict;           ///< "clean", "removed", "model_error", "list_full", "not_searched"
+  double critical_w = 0.0;       ///< w above which a pose is a blunder (the training poses') [-]
+  double alpha = 0.0;            ///< the test's significance for the whole set [-]
+  std::string sigma_source;      ///< "data" (the fit's residuals) or "tracker" (the stated noise)
+  double sigma_m = 0.0;          ///< the test's sigma per axis [m]
   std::vector<OutlierRow> rows;  ///< the samples set aside, by increasing sample index
+  std::vector<std::string> uncontrolled;  ///< poses whose redundancy is below the floor: never tested, by source
+  std::vector<double> kept_w;    ///< w of every kept pose under the final calibration (the figure) [-]
 };
 
 /// One fold of a cross-validation.
@@ -97,6 +105,7 @@ struct CrossValidationTable {
   bool present = false;         ///< a cross-validation ran
   std::size_t sample_count = 0;  ///< samples split into folds [-]
   double mae_3d_m = 0.0;        ///< 3-D MAE over every held-out sample of every fold [m]
+  double baseline_mae_3d_m = 0.0;  ///< the same for each fold's uncalibrated baseline [m]
   std::vector<FoldRow> folds;   ///< per fold, in fold order
 };
 
@@ -145,7 +154,8 @@ struct ReportData {
   std::vector<ConvergenceSeries> convergence;  ///< one per stage
   std::vector<SampleRow> samples;             ///< every sample (training and test)
   std::vector<PredictionSet> predictions;     ///< first the uncalibrated model, last the result
-  double noise_sigma_m = 0.0;                 ///< tracker noise per axis estimated by LM [m]; 0: unknown
+  double noise_sigma_m = 0.0;                 ///< measurement noise per axis: the tracker's stated sigma [m]; 0: unknown
+  double fit_sigma_m = 0.0;                   ///< the final fit's residual sigma per axis, sqrt(SSR / dof) [m]; 0: unknown
   IdentifiabilityTable identifiability;       ///< Table 3
   std::vector<ParameterRow> parameters;       ///< Table 4: estimated or changed parameters
   std::vector<std::pair<std::string, std::uint64_t>> drops;  ///< stream input: drop reason -> tracker points

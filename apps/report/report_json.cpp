@@ -77,14 +77,25 @@ void write_identifiability(JsonWriter& json, const IdentifiabilityTable& id) {
 void write_outliers(JsonWriter& json, const OutlierTable& o) {
   json.key("outliers").begin_object();
   json.key("searched").value(o.searched);
-  json.key("threshold_m").value(o.threshold_m);
+  json.key("verdict").value(o.verdict);
+  json.key("critical_w").value(o.critical_w);
+  json.key("alpha").value(o.alpha);
+  json.key("sigma_source").value(o.sigma_source);
+  json.key("sigma_m").value(o.sigma_m);
   json.key("set_aside").begin_array();
   for (const OutlierRow& r : o.rows) {
     json.begin_object();
     json.key("source").value(r.source);
     json.key("residual_m").value(r.residual_m);
+    json.key("w").value(r.w);
     json.end_object();
   }
+  json.end_array();
+  json.key("uncontrolled").begin_array();
+  for (const std::string& source : o.uncontrolled) json.value(source);
+  json.end_array();
+  json.key("kept_w").begin_array();
+  for (double w : o.kept_w) json.value(w);
   json.end_array();
   json.end_object();
 }
@@ -93,6 +104,7 @@ void write_cross_validation(JsonWriter& json, const CrossValidationTable& cv) {
   json.key("cross_validation").begin_object();
   json.key("samples").value(static_cast<long long>(cv.sample_count));
   json.key("mae_3d_m").value(cv.mae_3d_m);
+  json.key("baseline_mae_3d_m").value(cv.baseline_mae_3d_m);
   json.key("folds").begin_array();
   for (const FoldRow& f : cv.folds) {
     json.begin_object();
@@ -293,14 +305,31 @@ bool get_identifiability(const JsonValue* v, IdentifiabilityTable* out) {
 bool get_outliers(const JsonValue* v, OutlierTable* out) {
   if (v == nullptr) return true;  // written before blunders were reported: no search shown
   const JsonValue* rows = v->find("set_aside");
-  if (!get_bool(v->find("searched"), &out->searched) || !get_number(v->find("threshold_m"), &out->threshold_m) ||
-      !is_array(rows)) {
+  const JsonValue* uncontrolled = v->find("uncontrolled");
+  const JsonValue* kept_w = v->find("kept_w");
+  if (!get_bool(v->find("searched"), &out->searched) || !get_string(v->find("verdict"), &out->verdict) ||
+      !get_number(v->find("critical_w"), &out->critical_w) || !get_number(v->find("alpha"), &out->alpha) ||
+      !get_string(v->find("sigma_source"), &out->sigma_source) || !get_number(v->find("sigma_m"), &out->sigma_m) ||
+      !is_array(rows) || !is_array(uncontrolled) || !is_array(kept_w)) {
     return false;
   }
   for (const JsonValue& r : rows->array) {
     OutlierRow row;
-    if (!get_string(r.find("source"), &row.source) || !get_number(r.find("residual_m"), &row.residual_m)) return false;
+    if (!get_string(r.find("source"), &row.source) || !get_number(r.find("residual_m"), &row.residual_m) ||
+        !get_number(r.find("w"), &row.w)) {
+      return false;
+    }
     out->rows.push_back(row);
+  }
+  for (const JsonValue& u : uncontrolled->array) {
+    std::string source;
+    if (!get_string(&u, &source)) return false;
+    out->uncontrolled.push_back(source);
+  }
+  for (const JsonValue& w : kept_w->array) {
+    double value = 0.0;
+    if (!get_number(&w, &value)) return false;
+    out->kept_w.push_back(value);
   }
   return true;
 }
@@ -310,6 +339,7 @@ bool get_cross_validation(const JsonValue* v, CrossValidationTable* out) {
   long long samples = 0;
   const JsonValue* folds = v->find("folds");
   if (!get_count(v->find("samples"), &samples) || !get_number(v->find("mae_3d_m"), &out->mae_3d_m) ||
+      !get_number(v->find("baseline_mae_3d_m"), &out->baseline_mae_3d_m) ||
       !is_array(folds)) {
     return false;
   }
@@ -450,6 +480,7 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
   }
   json.end_array();
   json.key("noise_sigma_m").value(data.noise_sigma_m);
+  json.key("fit_sigma_m").value(data.fit_sigma_m);
   if (data.identifiability.present) {
     json.key("identifiability");
     write_identifiability(json, data.identifiability);
@@ -524,6 +555,7 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   if (!get_samples(value.find("samples"), &parsed.samples)) return bad("samples");
   if (!get_predictions(value.find("predictions"), parsed.samples, &parsed.predictions)) return bad("predictions");
   if (!get_number(value.find("noise_sigma_m"), &parsed.noise_sigma_m)) return bad("noise_sigma_m");
+  if (!get_number(value.find("fit_sigma_m"), &parsed.fit_sigma_m)) return bad("fit_sigma_m");
   if (!get_identifiability(value.find("identifiability"), &parsed.identifiability)) return bad("identifiability");
   if (!get_parameters(value.find("parameters"), &parsed.parameters)) return bad("parameters");
   if (!get_bool(value.find("has_stream"), &parsed.has_stream)) return bad("has_stream");

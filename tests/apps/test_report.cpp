@@ -206,13 +206,20 @@ std::string figure_svg(const std::string& html, const std::string& id) {
   return html.substr(at, html.find("</svg>", at) - at);
 }
 
-/// example() with a blunder set aside (4.2 mm, threshold 1 mm), a 3-fold cross-validation
-/// and a parameter fixed by the significance test.
+/// example() with a blunder set aside (4.2 mm, w 31.5 against the threshold 4.56), an
+/// uncontrolled pose, a 3-fold cross-validation and a parameter fixed by the significance test.
 report::ReportData with_blunder_and_folds() {
   report::ReportData data = example();
   data.outliers.searched = true;
-  data.outliers.threshold_m = 1.0e-3;
-  data.outliers.rows = {{"samples.csv:7", 4.2e-3}};
+  data.outliers.verdict = "removed";
+  data.outliers.critical_w = 4.56;
+  data.outliers.alpha = 1e-3;
+  data.outliers.sigma_source = "data";
+  data.outliers.sigma_m = 0.05e-3;
+  data.outliers.rows = {{"samples.csv:7", 4.2e-3, 31.5}};
+  data.outliers.uncontrolled = {"samples.csv:3"};
+  data.outliers.kept_w = {0.5, 1.25, 2.0};
+  data.cross_validation.baseline_mae_3d_m = 512.0e-6;
   data.cross_validation.present = true;
   data.cross_validation.sample_count = 12;
   data.cross_validation.mae_3d_m = 61.3e-6;
@@ -232,8 +239,12 @@ TEST(Report, BlundersAndCrossValidationAreShown) {
   EXPECT_EQ(*(q6 + 2), "fig-cv-folds");
   const std::string html = report::render_html(data);
   EXPECT_EQ(check_well_formed(html), "");
-  // The outlier table and figure: the blunder by source, residual and threshold [mm].
-  EXPECT_NE(html.find("<td>samples.csv:7</td><td>4.200</td><td>1.000</td>"), std::string::npos);
+  // The outlier table and figure: the blunder by source, residual [mm], w and the threshold.
+  EXPECT_NE(html.find("<td>samples.csv:7</td><td>4.200</td><td>31.50</td><td>4.56</td>"), std::string::npos);
+  EXPECT_NE(html.find("threshold w = 4.56, sigma 0.050 mm (from the fit's residuals)"), std::string::npos)
+      << html.substr(html.find("<h2>Blunders"), 600);
+  EXPECT_NE(html.find("1 pose(s) uncontrolled"), std::string::npos);
+  EXPECT_NE(html.find("samples.csv:3"), std::string::npos);
   const std::string outliers = figure_svg(html, "fig-outliers");
   ASSERT_NE(outliers, "");
   EXPECT_NE(outliers.find("data-series='set aside'"), std::string::npos);
@@ -241,7 +252,7 @@ TEST(Report, BlundersAndCrossValidationAreShown) {
   EXPECT_NE(outliers.find("data-series='blunder threshold'"), std::string::npos);
   // The folds: a row per fold and the overall held-out MAE as the figure's line.
   EXPECT_NE(html.find("<td>2</td><td>8</td><td>4</td><td>49.0</td><td>71.5</td>"), std::string::npos);
-  EXPECT_NE(html.find("3D MAE over every held-out sample 61.3 um"), std::string::npos);
+  EXPECT_NE(html.find("3D MAE over every held-out sample 61.3 um (uncalibrated: 512.0 um)"), std::string::npos);
   const std::string folds = figure_svg(html, "fig-cv-folds");
   ASSERT_NE(folds, "");
   EXPECT_NE(folds.find("data-series='held-out MAE'"), std::string::npos);
@@ -254,7 +265,7 @@ TEST(Report, BlunderSectionSaysWhatTheSearchDid) {
   report::ReportData data = with_blunder_and_folds();
   data.outliers.rows.clear();  // searched, none set aside: the figure without a "set aside" series
   std::string html = report::render_html(data);
-  EXPECT_NE(html.find("none set aside (threshold 1.000 mm)"), std::string::npos);
+  EXPECT_NE(html.find("None set aside."), std::string::npos);
   const std::string outliers = figure_svg(html, "fig-outliers");
   ASSERT_NE(outliers, "");
   EXPECT_EQ(outliers.find("set aside"), std::string::npos);
@@ -276,10 +287,16 @@ TEST(Report, BlundersAndFoldsRoundTripThroughResultJson) {
   const port::Error r = report::parse_report_data(value, "result.json", &back);
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_TRUE(back.outliers.searched);
-  EXPECT_EQ(back.outliers.threshold_m, 1.0e-3);
+  EXPECT_EQ(back.outliers.critical_w, 4.56);
+  EXPECT_EQ(back.outliers.verdict, "removed");
+  EXPECT_EQ(back.outliers.sigma_source, "data");
+  EXPECT_EQ(back.outliers.kept_w, data.outliers.kept_w);
+  EXPECT_EQ(back.outliers.uncontrolled, data.outliers.uncontrolled);
   ASSERT_EQ(back.outliers.rows.size(), 1u);
   EXPECT_EQ(back.outliers.rows[0].source, "samples.csv:7");
   EXPECT_EQ(back.outliers.rows[0].residual_m, 4.2e-3);
+  EXPECT_EQ(back.outliers.rows[0].w, 31.5);
+  EXPECT_EQ(back.cross_validation.baseline_mae_3d_m, 512.0e-6);
   ASSERT_TRUE(back.cross_validation.present);
   EXPECT_EQ(back.cross_validation.sample_count, 12u);
   EXPECT_EQ(back.cross_validation.mae_3d_m, 61.3e-6);

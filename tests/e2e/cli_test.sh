@@ -98,7 +98,7 @@ fi
 # And the same bytes on every target (x86-64, aarch64 and armhf run this script): the digest of
 # the result of this simulated session (simulate --seed 5 --waypoints 12 --duration-s 150).
 # Update it only for an intended change of the computation or the format.
-result_sha256=92b5c58b29a92e8a08e252c45b11f847ec16b49a54551823daba7d94f0f0e02f
+result_sha256=7ab721cb8ed70ba44adc95371276b0350e6920436118434fe3ff893299c7e956
 if [ "$(sha256sum <"$work/cap.json" | cut -d' ' -f1)" = "$result_sha256" ]; then
   pass
 else

@@ -72,9 +72,9 @@ inline CaptureJobConfig golden_compliance_job_config() {
 }
 
 /// The committed digests: every target must reproduce them.
-inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0x873c34ac1c4784a0ULL;
-inline constexpr std::uint64_t kLmJobGoldenDigest = 0x20f3888beb5b66a5ULL;
-inline constexpr std::uint64_t kComplianceJobGoldenDigest = 0x67ec4a0f5e9338fcULL;
+inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0xd7c40c8c46d49acaULL;
+inline constexpr std::uint64_t kLmJobGoldenDigest = 0xf2ab53e4311bca73ULL;
+inline constexpr std::uint64_t kComplianceJobGoldenDigest = 0x6618be78fbb2dc97ULL;
 
 /// Static storage of a job: the dataset, and one arena for the capture passes, then the job.
 struct CaptureJobWorkspace {
@@ -157,7 +157,8 @@ inline std::uint64_t capture_job_digest(const CaptureJobReport& r, bool calibrat
   d.add_u64(c.lm_pruned_mask);
   d.add_u64(c.outlier_count);
   d.add_u64(c.outlier_rounds);
-  d.add(c.outlier_threshold_m);
+  d.add(c.blunder_test.sigma_m);
+  d.add_u64(static_cast<std::uint64_t>(c.blunder_verdict));
   for (const CalibrationOutlier& o : c.outlier_list()) {
     d.add_u64(o.index);
     d.add(o.residual_m);

@@ -27,6 +27,7 @@
 #include "hivecal/solve/objective.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
 #include "hivecal/solve/population_stage.hpp"
+#include "hivecal/solve/reliability.hpp"
 
 namespace hivecal {
 
@@ -84,8 +85,12 @@ struct CalibrationOptions {
   LmOptions lm;                                          ///< LM settings; `params` and `robust` override its params and loss
   double significance_t = kDefaultSignificance;          ///< LM fixes, one at a time, estimated parameters whose change is below t sigma (0: off; < 0: chosen by leave-one-out on small sets) [-]
   bool keep_outliers = false;                            ///< true: no blunder search, every sample is used
-  double outlier_k = 6.0;                                ///< a sample is set aside when |r| > max(k sigma_robust, floor) [-]
-  double outlier_floor_m = 1e-3;                         ///< smallest residual set aside after the calibration [m]
+  BlunderTestOptions blunder_test;                       ///< the w-test of the calibration's poses (significance, tracker sigma, redundancy floor)
+  /// Largest share of the training poses the w-test removes; more would go when the model,
+  /// not the data, is wrong (residuals of unmodelled effects): then none is removed and the
+  /// result says so (BlunderVerdict::model_error) [-].
+  double max_blunder_share = 0.05;
+  double outlier_k = 6.0;                                ///< the consensus screen sets a sample aside when |r| > max(k sigma_robust, screen_floor_m) [-]
   double screen_floor_m = 0.01;                          ///< smallest residual set aside by the start geometry's consensus screen [m]
   std::size_t consensus_trials = 200;                    ///< point triples tried by the consensus (LMedS) screen [-]
   CalibrationCompliance compliance;                      ///< joint compliance stage (off by default)
@@ -143,7 +148,21 @@ enum class CalibrationStep : std::uint8_t { input, split, baseline, gsa, abc, lm
 struct CalibrationOutlier {
   std::uint32_t index = 0;   ///< its Sample::index (order of DatasetBase::add) [-]
   double residual_m = 0.0;   ///< |predicted - measured| under the final calibration [m]
+  double w = 0.0;            ///< its pose's normalised residual against the fit without it (UnitTest::w) [-]
+  double critical_w = 0.0;   ///< the threshold it exceeded [-]
 };
+
+/// What the blunder search concluded.
+enum class BlunderVerdict : std::uint8_t {
+  not_searched,  ///< keep_outliers, or the fit left nothing to test
+  clean,         ///< no pose failed the test
+  removed,       ///< the poses in `outliers` failed it and were set aside
+  model_error,   ///< more than max_blunder_share of the poses failed: the model, not the data, is wrong; none removed by the test
+  list_full,     ///< more blunders than kMaxCalibrationOutliers: the largest are set aside
+};
+
+/// Lower-case name of a verdict ("not_searched", "clean", "removed", "model_error", "list_full").
+const char* blunder_verdict_name(BlunderVerdict verdict);
 
 /// Blunders a job sets aside at most; a larger share of a set is not a blunder problem [-].
 inline constexpr std::size_t kMaxCalibrationOutliers = 64;
@@ -181,7 +200,9 @@ struct CalibrationResult {
   CalibrationOutlier outliers[kMaxCalibrationOutliers];  ///< samples set aside, by increasing index
   std::size_t outlier_count = 0;                ///< entries of `outliers` used [-]
   std::size_t outlier_rounds = 0;               ///< times the job ran until the set aside was stable (0: keep_outliers) [-]
-  double outlier_threshold_m = 0.0;             ///< residual above which the last test set a sample aside [m]
+  BlunderVerdict blunder_verdict = BlunderVerdict::not_searched;  ///< what the search concluded
+  BlunderTestSummary blunder_test;              ///< the last w-test of the final fit on its training poses (sigma, dof, uncontrolled)
+  std::size_t blunder_limit = 0;                ///< training poses the w-test may remove (max_blunder_share) [-]
 
   /// The samples set aside, by increasing index.
   Span<const CalibrationOutlier> outlier_list() const { return Span<const CalibrationOutlier>(outliers, outlier_count); }
@@ -257,6 +278,10 @@ class CalibrationWorkspaceBase {
   virtual ResidualScratch open_residuals() = 0;
   /// The blunder search's lists: 0 the set aside, 1 the last test's.
   virtual CalibrationOutlierList& outlier_list(std::size_t which) = 0;
+  /// Ends any open phase, builds the w-test's scratch in the arena.
+  virtual ReliabilityWorkspace* open_reliability() = 0;
+  /// Where the w-test's removals are undone from: (position, end of the fitted part) per removed pose.
+  std::uint32_t (&snoop_moves())[kMaxCalibrationOutliers][2] { return snoop_moves_; }
   /// Where an LM stage keeps the geometry it starts from while it reruns (dropped or not
   /// significant parameters put back): in the workspace, not on the stack under LM (a model
   /// with its compliance is 584 B, and the firmware's stack peak is inside LM).
@@ -268,6 +293,7 @@ class CalibrationWorkspaceBase {
 
  private:
   RobotModel lm_start_;
+  std::uint32_t snoop_moves_[kMaxCalibrationOutliers][2] = {};
 };
 
 namespace detail {
@@ -331,7 +357,8 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
   };
   /// Bytes of the arena: the largest phase.
   static constexpr std::size_t kArenaBytes = detail::max_of<
-      detail::max_of<detail::max_of<sizeof(AbcPhase), sizeof(GsaPhase)>, sizeof(LmPhase)>, sizeof(ResidualPhase)>;
+      detail::max_of<detail::max_of<sizeof(AbcPhase), sizeof(GsaPhase)>, sizeof(LmPhase)>,
+      detail::max_of<sizeof(ResidualPhase), sizeof(ReliabilityWorkspace)>>;
 
   CalibrationWorkspace() = default;
   ~CalibrationWorkspace() { close(); }
@@ -358,7 +385,14 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
     residuals_ = new (arena_) ResidualPhase();
     return ResidualScratch{Span<Vec3>(residuals_->predicted_m, Samples), Span<double>(residuals_->residual_m, Samples)};
   }
+  ReliabilityWorkspace* open_reliability() override {
+    close();
+    reliability_ = new (arena_) ReliabilityWorkspace();
+    return reliability_;
+  }
   void close() override {
+    if (reliability_ != nullptr) reliability_->~ReliabilityWorkspace();
+    reliability_ = nullptr;
     if (abc_ != nullptr) abc_->~AbcPhase();
     if (gsa_ != nullptr) gsa_->~GsaPhase();
     if (lm_ != nullptr) lm_->~LmPhase();
@@ -379,6 +413,7 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
   GsaPhase* gsa_ = nullptr;
   LmPhase* lm_ = nullptr;
   ResidualPhase* residuals_ = nullptr;
+  ReliabilityWorkspace* reliability_ = nullptr;
 };
 
 /// Runs the job of `options` on `*dataset` from `start` (geometry and tool): screens the
@@ -407,6 +442,11 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
                  CalibrationWorkspaceBase* workspace, CalibrationResult* result,
                  CalibrationObserver* observer = nullptr);
 
+/// What the final stage of `result` estimated: LM's kept parameters (with kOtherTargetTools
+/// when it estimated the other targets' tool points), or a population stage's link lengths
+/// and base: the parameters test_for_blunders tests the fit with.
+ParamMask calibration_estimated_mask(const CalibrationResult& result);
+
 /// Folds a cross-validation holds at most (leave-one-out on up to this many samples) [-].
 inline constexpr std::size_t kMaxCrossValidationFolds = 128;
 
@@ -415,6 +455,7 @@ struct CrossValidationFold {
   std::size_t train_count = 0;  ///< samples it was calibrated on [-]
   ErrorStats test;              ///< errors of its final stage on its held-out samples [m]
   ErrorStats train;             ///< errors of its final stage on its training samples [m]
+  ErrorStats baseline_test;     ///< errors of its uncalibrated baseline on its held-out samples [m]
 };
 
 /// What cross_validate() measured.
@@ -424,6 +465,7 @@ struct CrossValidationResult {
   CrossValidationFold folds[kMaxCrossValidationFolds];  ///< per fold, in fold order
   std::size_t sample_count = 0;              ///< samples split into folds (blunders left out) [-]
   double mae_3d_m = 0.0;                     ///< 3-D MAE over every held-out sample of every fold [m]
+  double baseline_mae_3d_m = 0.0;            ///< the same for the uncalibrated baseline of each fold [m]
   double fold_mae_3d_mean_m = 0.0;           ///< mean of the folds' 3-D MAE [m]
   double fold_mae_3d_max_m = 0.0;            ///< largest fold 3-D MAE [m]
 };

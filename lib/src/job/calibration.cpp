@@ -591,13 +591,6 @@ bool flag_outliers(const RobotModel& model, const RigidTransform& base, const Da
   return true;
 }
 
-/// Parameters the final stage fitted (with the base): LM's estimated ones, or the six lengths.
-int fitted_parameters(const CalibrationResult& r) {
-  const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
-  if (final_stage.solver == CalibrationSolver::lm) return r.lm.identifiability.kept_count();
-  return static_cast<int>(kPaper6Dimension) + kBaseParamCount;
-}
-
 /// Consensus screen with the start geometry: the base fitted on random point triples (seeded,
 /// deterministic), the one with the least median residual over all samples kept (LMedS, robust
 /// to almost half the samples being wrong), and the samples far from it flagged. Errors:
@@ -668,6 +661,178 @@ int fitted_parameters(const CalibrationResult& r) {
   return Status::ok;
 }
 
+/// Training poses the w-test may remove: max_blunder_share of them, at least one.
+std::size_t blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o) {
+  const Span<const Sample> train = dataset.train();
+  const bool grouped = target_count(dataset.samples()) > 1;
+  std::size_t units = 0;
+  for (std::size_t i = 0; i < train.size(); i = unit_end(train, i, grouped)) ++units;
+  const auto share = static_cast<std::size_t>(o.max_blunder_share * static_cast<double>(units));
+  return std::min<std::size_t>(share > 0 ? share : 1, kMaxCalibrationOutliers);
+}
+
+/// Keeps the controlled fitted unit that exceeds its threshold most (w / critical_w), and
+/// offers every rejected predicted unit's samples to the list.
+class SnoopVisitor final : public UnitTestVisitor {
+ public:
+  SnoopVisitor(Span<const Sample> predicted, CalibrationOutlierList* list) : predicted_(predicted), list_(list) {}
+  void on_unit(const UnitTest& t) override {
+    if (!t.rejected()) return;
+    if (t.fitted) {
+      if (t.w / t.critical_w > worst_ratio_) {
+        worst_ratio_ = t.w / t.critical_w;
+        worst_ = t;
+      }
+      return;
+    }
+    for (std::uint32_t k = 0; k < t.samples; ++k) {
+      offer(list_, predicted_[t.position + k].index, t.residual_m);
+      CalibrationOutlier* added = find_item(list_, predicted_[t.position + k].index);
+      if (added != nullptr) {
+        added->w = t.w;
+        added->critical_w = t.critical_w;
+      }
+    }
+  }
+  bool has_worst() const { return worst_ratio_ > 1.0; }
+  const UnitTest& worst() const { return worst_; }
+
+ private:
+  static CalibrationOutlier* find_item(CalibrationOutlierList* list, std::uint32_t index) {
+    for (std::size_t i = 0; i < list->count; ++i) {
+      if (list->items[i].index == index) return &list->items[i];
+    }
+    return nullptr;
+  }
+  Span<const Sample> predicted_;
+  CalibrationOutlierList* list_;
+  UnitTest worst_;
+  double worst_ratio_ = 1.0;
+};
+
+}  // namespace
+
+ParamMask calibration_estimated_mask(const CalibrationResult& r) {
+  const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
+  if (final_stage.solver != CalibrationSolver::lm) return lm_param_mask(LmParamSet::link_lengths, 0, final_stage.model);
+  ParamMask mask = r.lm.identifiability.kept_mask;
+  for (const Vec3& sigma : r.lm.other_tools_sigma_m) {
+    if (sigma.squaredNorm() > 0.0) mask |= kOtherTargetTools;
+  }
+  return mask;
+}
+
+namespace {
+
+/// One w-test of the fit (model, base) on `fitted`, predicting `predicted`.
+Status run_blunder_test(CalibrationWorkspaceBase& workspace, const CalibrationOptions& o, const RobotModel& model,
+                        const RigidTransform& base, Span<const Sample> fitted, Span<const Sample> predicted,
+                        ParamMask estimated, UnitTestVisitor* visitor, BlunderTestSummary* summary) {
+  ReliabilityWorkspace* ws = workspace.open_reliability();
+  const PointLoss loss{0.0, o.lm.joint_sigma_rad > 0.0 ? o.lm.joint_sigma_rad / o.lm.position_sigma_m : 0.0};
+  const Status status =
+      test_for_blunders(model, base, fitted, predicted, estimated, loss, o.blunder_test, ws, visitor, summary);
+  workspace.close();
+  return status;
+}
+
+/// LM again on `fitted` from (workspace.lm_start(), *base) with the parameters of `estimated`,
+/// the result back into both; r.lm is the scratch (the job's rerun writes it again).
+[[gnu::noinline]] Status refit(CalibrationWorkspaceBase& workspace, const CalibrationOptions& o,
+                               Span<const Sample> fitted, ParamMask estimated, CalibrationResult& r,
+                               RigidTransform* base) {
+  LmOptions lm = o.lm;
+  lm.params = LmParamSet::custom;
+  lm.custom_mask = estimated & ~kOtherTargetTools;
+  lm.other_target_tools = (estimated & kOtherTargetTools) != 0;
+  lm.loss = LmLoss::squared;
+  const RigidTransform start_base = *base;
+  LmWorkspace* lm_workspace = workspace.open_lm();
+  const Status status = calibrate_lm(workspace.lm_start(), &start_base, fitted, lm, lm_workspace, &r.lm, nullptr, nullptr);
+  workspace.close();
+  if (status != Status::ok && status != Status::not_converged) return status;
+  workspace.lm_start() = r.lm.model;
+  *base = r.lm.base_to_tracker;
+  return Status::ok;
+}
+
+/// Moves the removed poses back where they were (latest first): the split as the run left it.
+void undo_removals(DatasetBase* dataset, const CalibrationWorkspaceBase& workspace, std::size_t removed,
+                   std::size_t fitted) {
+  const std::uint32_t(&moves)[kMaxCalibrationOutliers][2] =
+      const_cast<CalibrationWorkspaceBase&>(workspace).snoop_moves();
+  while (removed > 0) {
+    --removed;
+    const std::size_t position = moves[removed][0];
+    const std::size_t end = moves[removed][1];
+    const std::size_t count = end - fitted;
+    for (std::size_t k = 0; k < count; ++k) dataset->swap_samples(position + k, end - count + k);
+    fitted = end;
+  }
+}
+
+/// Data snooping on the final calibration: the training pose whose w exceeds its threshold
+/// most is moved behind the fitted samples and the fit repeated (LM, the same parameters), one
+/// pose at a time, until none does; then the removed, test and set-aside samples are tested
+/// as predictions of that fit and those that fail fill *found. More removals than
+/// blunder_limit: the model, not the data, is wrong; the removals are undone and only the
+/// samples set aside before (the screen's) are tested. *summary: the first test (the final
+/// calibration on its training poses).
+[[gnu::noinline]] BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o,
+                                                 CalibrationWorkspaceBase& workspace, CalibrationResult& r,
+                                                 CalibrationOutlierList* found, BlunderTestSummary* summary) {
+  found->count = 0;
+  found->limit = kMaxCalibrationOutliers;
+  const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
+  const ParamMask estimated = calibration_estimated_mask(r);
+  const std::size_t train = dataset->train().size();
+  const std::size_t stored = dataset->size() + dataset->set_aside().size();
+  const Span<const Sample> all(dataset->samples().data(), stored);
+  const std::size_t limit = blunder_limit(*dataset, o);
+  RobotModel& model = workspace.lm_start();  // the point of the search (not on the stack under LM)
+  model = final_stage.model;
+  RigidTransform base = final_stage.base_to_tracker;
+  std::size_t fitted = train;
+  std::size_t removed = 0;
+  bool model_error = false;
+  for (bool first = true;; first = false) {
+    SnoopVisitor visitor(Span<const Sample>(), found);
+    BlunderTestSummary pass;
+    const Status tested = run_blunder_test(workspace, o, model, base, all.subspan(0, fitted), Span<const Sample>(),
+                                           estimated, &visitor, &pass);
+    if (tested != Status::ok) {
+      if (first) return BlunderVerdict::not_searched;
+      break;
+    }
+    if (first) *summary = pass;
+    if (!visitor.has_worst()) break;
+    if (removed == limit) {
+      model_error = true;
+      break;
+    }
+    const UnitTest& worst = visitor.worst();
+    workspace.snoop_moves()[removed][0] = worst.position;
+    workspace.snoop_moves()[removed][1] = static_cast<std::uint32_t>(fitted);
+    for (std::uint32_t k = worst.samples; k > 0; --k) dataset->swap_samples(worst.position + k - 1, --fitted);
+    ++removed;
+    if (refit(workspace, o, all.subspan(0, fitted), estimated, r, &base) != Status::ok) break;
+  }
+  if (model_error) {
+    undo_removals(dataset, workspace, removed, fitted);
+    fitted = train;
+    model = final_stage.model;
+    base = final_stage.base_to_tracker;
+  }
+  const std::size_t predicted_from = model_error ? dataset->size() : fitted;
+  const Span<const Sample> predicted = all.subspan(predicted_from, stored - predicted_from);
+  SnoopVisitor visitor(predicted, found);
+  BlunderTestSummary pass;
+  run_blunder_test(workspace, o, model, base, all.subspan(0, fitted), predicted, estimated, &visitor, &pass);
+  finish(found);
+  if (model_error) return BlunderVerdict::model_error;
+  return found->count == kMaxCalibrationOutliers ? BlunderVerdict::list_full : BlunderVerdict::clean;
+}
+
 /// The compliance options are usable: off, or on with an LM stage and terms.
 bool compliance_usable(const RobotModel& start, const CalibrationOptions& options) {
   if (!options.compliance.enabled) return true;
@@ -707,6 +872,17 @@ const char* calibration_method_name(CalibrationMethod method) {
     case CalibrationMethod::abc_lm: return "abc+lm";
     case CalibrationMethod::gsa_lm: return "gsa+lm";
     case CalibrationMethod::all: return "all";
+  }
+  return "unknown";
+}
+
+const char* blunder_verdict_name(BlunderVerdict verdict) {
+  switch (verdict) {
+    case BlunderVerdict::not_searched: return "not_searched";
+    case BlunderVerdict::clean: return "clean";
+    case BlunderVerdict::removed: return "removed";
+    case BlunderVerdict::model_error: return "model_error";
+    case BlunderVerdict::list_full: return "list_full";
   }
   return "unknown";
 }
@@ -752,36 +928,39 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   CalibrationOutlierList& tested = workspace->outlier_list(1);
   status = screen(start, dataset, options, *workspace, &aside);
   if (status != Status::ok) return fail(&reset(result), CalibrationStep::baseline, status);
-  // Rerun until the calibration's own residual test sets aside what the run left out: a
-  // sample the start geometry's screen flagged comes back when the calibration explains it.
+  // Rerun until the w-test of the calibration sets aside what the run left out: a sample the
+  // start geometry's screen flagged comes back when the calibration explains it.
   constexpr std::size_t kMaxRounds = 4;
-  double threshold_m = 0.0;
+  BlunderVerdict verdict = BlunderVerdict::not_searched;
+  BlunderTestSummary summary;
   std::size_t round = 0;
   while (true) {
     status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
     if (status != Status::ok) return status;
     ++round;
-    const CalibrationStage& final_stage = result->stages[result->stage_count - 1];
-    const ResidualScratch scratch = workspace->open_residuals();
-    const bool tested_any = flag_outliers(final_stage.model, final_stage.base_to_tracker, *dataset, options,
-                                          options.outlier_floor_m,
-                                          fit_sigma_factor(dataset->size(), fitted_parameters(*result)), scratch,
-                                          &tested, &threshold_m);
-    workspace->close();
-    // Without redundancy the screen's verdict stands (a gross blunder still goes).
-    if (!tested_any || same_indices(tested, aside) || round == kMaxRounds) break;
+    verdict = search_blunders(dataset, options, *workspace, *result, &tested, &summary);
+    if (verdict == BlunderVerdict::not_searched || same_indices(tested, aside) || round == kMaxRounds) break;
     aside = tested;
   }
-  // The residuals reported are the final calibration's (of the set the run left out).
+  // The residuals reported are the final calibration's (of the set the run left out), the w
+  // the last test's.
   CalibrationResult& r = *result;
   r.outlier_count = 0;
   const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
   for (const Sample& s : dataset->set_aside()) {
-    r.outliers[r.outlier_count++] = CalibrationOutlier{
-        s.index, (final_stage.base_to_tracker.apply(fk_sample_point(final_stage.model, s)) - s.point_m).norm()};
+    CalibrationOutlier& o = r.outliers[r.outlier_count++];
+    o = CalibrationOutlier{s.index, (final_stage.base_to_tracker.apply(fk_sample_point(final_stage.model, s)) - s.point_m).norm()};
+    for (const CalibrationOutlier& t : Span<const CalibrationOutlier>(tested.items, tested.count)) {
+      if (t.index == s.index) {
+        o.w = t.w;
+        o.critical_w = t.critical_w;
+      }
+    }
   }
+  r.blunder_verdict = r.outlier_count > 0 && verdict == BlunderVerdict::clean ? BlunderVerdict::removed : verdict;
+  r.blunder_test = summary;
+  r.blunder_limit = blunder_limit(*dataset, options);
   r.outlier_rounds = round;
-  r.outlier_threshold_m = threshold_m;
   return Status::ok;
 }
 
@@ -809,6 +988,7 @@ Status cross_validate(const RobotModel& start, DatasetBase* dataset, const Calib
   const std::size_t k = folds == 0 ? poses : folds;
   if (k < 2 || k > poses || k > kMaxCrossValidationFolds) return cv->status = Status::invalid_argument;
   double abs_sum_m = 0.0;
+  double baseline_sum_m = 0.0;
   for (std::size_t f = 0; f < k; ++f) {
     CalibrationResult& r = reset(scratch);
     dataset->set_aside(aside_span);
@@ -820,14 +1000,17 @@ Status cross_validate(const RobotModel& start, DatasetBase* dataset, const Calib
     const CalibrationStage& final_stage = r.stages[r.stage_count - 1];  // a method runs one stage at least
     fold.train = final_stage.train;
     fold.test = final_stage.test;
+    fold.baseline_test = r.baseline.test;
     const double mae_m = fold.test.mae(ErrorAxis::norm_3d);
     abs_sum_m += mae_m * static_cast<double>(fold.test.count);
+    baseline_sum_m += fold.baseline_test.mae(ErrorAxis::norm_3d) * static_cast<double>(fold.baseline_test.count);
     cv->fold_mae_3d_mean_m += mae_m / static_cast<double>(k);
     cv->fold_mae_3d_max_m = std::fmax(cv->fold_mae_3d_max_m, mae_m);
   }
   cv->fold_count = k;
   cv->sample_count = n;
   cv->mae_3d_m = abs_sum_m / static_cast<double>(n);
+  cv->baseline_mae_3d_m = baseline_sum_m / static_cast<double>(n);
   cv->status = Status::ok;
   return Status::ok;
 }

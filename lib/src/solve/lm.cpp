@@ -394,6 +394,19 @@ Status start(const RigidTransform* start_base_to_tracker, Run* run) {
   return analyse(run);
 }
 
+/// The kept set was chosen at the start and after the first accepted step; on a small or
+/// degenerate set a direction can still turn null by the final point (the sigmas' factor
+/// fails). The analysis is made again there, it names what it drops, and the sigmas are those
+/// of what it keeps: the fit itself does not change (a null direction moves no residual).
+[[gnu::noinline]] Status reanalyse_at_end(Run* run) {
+  run->reanalysed = false;  // the analysis's columns: the free ones and the base translation
+  Status status = accumulate(*run, run->point, run->current);
+  if (status == Status::ok) status = analyse(run);
+  run->reanalysed = true;
+  if (status != Status::ok) return status;
+  return parameter_sigmas(run->ws, *run->current, run->kept, run->result);
+}
+
 Status status_of(LmTermination termination) {
   switch (termination) {
     case LmTermination::max_iterations: return Status::not_converged;
@@ -472,6 +485,7 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   result->rms_m = rms_of(run.current->squares_sum_m2, samples.size());
   result->huber_threshold_m = run.point.loss.huber_threshold_m;
   status = parameter_sigmas(workspace, *run.current, run.kept, result);
+  if (status == Status::singular_system) status = reanalyse_at_end(&run);
   if (status != Status::ok) return status;
   return status_of(result->termination);
 }

@@ -443,6 +443,24 @@ void whiten_sample(double k, Vec3* residual_m, FullJacobian* jacobian, Mat3* too
   solve(*tool_jacobian);
 }
 
+}  // namespace
+
+Vec3 sample_rows(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                 const PointLoss& loss, ParamMask columns, FullJacobian* jacobian, Mat3* tool_jacobian,
+                 double* raw_squared_m2) {
+  Vec3 residual_m = local_target_residual_jacobian(model, sample.target, base_to_tracker, sample, jacobian);
+  *tool_jacobian = jacobian->block<3, 3>(0, tool_param_index(0));
+  *raw_squared_m2 = residual_m.squaredNorm();
+  whiten_sample(loss.joint_noise_ratio_rad_per_m, &residual_m, jacobian, tool_jacobian);
+  if (sample.target != 0) jacobian->block<3, 3>(0, tool_param_index(0)).setZero();  // not target 1's tool
+  for (int c = 0; c < kFullParamCount; ++c) {
+    if (!mask_has(columns, c)) jacobian->col(c).setZero();
+  }
+  return residual_m;
+}
+
+namespace {
+
 /// accumulate_normal_equations for samples of several targets (or whitened ones): sample by
 /// sample with each sample's tool point, the other targets' tool blocks summed and then
 /// eliminated.
@@ -456,14 +474,10 @@ void whiten_sample(double k, Vec3* residual_m, FullJacobian* jacobian, Mat3* too
   for (TargetBlock& block : eq->targets) block = TargetBlock{};
   for (const Sample& sample : samples) {
     FullJacobian jacobian;
-    Vec3 residual_m = local_target_residual_jacobian(model, sample.target, base_to_tracker, sample, &jacobian);
-    Mat3 tool_jacobian = jacobian.block<3, 3>(0, tool_param_index(0));
-    const double raw_squared_m2 = residual_m.squaredNorm();
-    whiten_sample(loss.joint_noise_ratio_rad_per_m, &residual_m, &jacobian, &tool_jacobian);
-    if (sample.target != 0) jacobian.block<3, 3>(0, tool_param_index(0)).setZero();  // not target 1's tool
-    for (int c = 0; c < kFullParamCount; ++c) {
-      if (!mask_has(columns, c)) jacobian.col(c).setZero();
-    }
+    Mat3 tool_jacobian;
+    double raw_squared_m2 = 0.0;
+    const Vec3 residual_m =
+        sample_rows(model, base_to_tracker, sample, loss, columns, &jacobian, &tool_jacobian, &raw_squared_m2);
     const double squared = residual_m.squaredNorm();
     const double norm_m = std::sqrt(squared);
     const double weight = loss.weight(norm_m);

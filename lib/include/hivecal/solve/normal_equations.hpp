@@ -98,6 +98,15 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
                                    ParamMask columns = kAllParamsMask | kOtherTargetTools,
                                    Span<const JointTrig> sample_trig = {});
 
+/// One sample's rows as the normal equations sum them (the per-sample path): the residual in
+/// the base frame and dr/d(full parameters) into *jacobian, both whitened by `loss`'s joint
+/// noise; for a sample of a target k > 1 target 1's tool columns are zero and its own tool
+/// point's 3x3 Jacobian is in *tool_jacobian; columns outside `columns` zero. *raw_squared_m2
+/// is the unwhitened |r|^2 [m^2]. Returns the (whitened) residual [m].
+Vec3 sample_rows(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                 const PointLoss& loss, ParamMask columns, FullJacobian* jacobian, Mat3* tool_jacobian,
+                 double* raw_squared_m2);
+
 /// Loss sums only (no Jacobian, fk_tool_point), e.g. to compare candidate geometries: sum
 /// rho(|r_i|) and sum |r_i|^2 [m^2]. Agrees with accumulate_normal_equations to rounding.
 /// Errors: dataset_empty, non_finite_input.

@@ -1,0 +1,181 @@
+// The blunder test of a fit (solve/reliability.hpp): redundancy numbers that add up to the
+// fit's degrees of freedom, no rejection on clean sets, a blunder above its minimal
+// detectable bias found at the pose it was put on, and uncontrolled poses never removed by
+// the job.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "hivecal/calibration.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/solve/reliability.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/target_data.hpp"
+#include "testkit/test_data.hpp"
+
+namespace hivecal {
+namespace {
+
+constexpr std::size_t kCapacity = 128;
+LmWorkspaceWithTargets lm_workspace;
+LmResult fit;
+ReliabilityWorkspace reliability;
+Dataset<kCapacity> dataset;
+
+/// Every unit's test, in visiting order.
+class Collect final : public UnitTestVisitor {
+ public:
+  Collect() { units.reserve(kCapacity); }  // no allocation inside the library call
+  void on_unit(const UnitTest& t) override { units.push_back(t); }
+  std::vector<UnitTest> units;
+};
+
+RobotModel truth(std::uint64_t seed) {
+  Random random(seed);
+  return test::perturbed_model(nominal_model(RobotType::ur5), &random, 1e-3, 1e-3);
+}
+
+/// LM (full model) on the dataset's samples from the nominal UR5 with the truth's tool point.
+Status fit_all(const RobotModel& truth_model) {
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = truth_model.tool_m;
+  return calibrate_lm(start, nullptr, dataset.samples(), LmOptions{}, &lm_workspace, &fit);
+}
+
+/// The blunder test of `fit` on every sample of the dataset.
+BlunderTestSummary test_fit(Collect* collect, ParamMask extra = 0) {
+  BlunderTestSummary summary;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = test_for_blunders(fit.model, fit.base_to_tracker, dataset.samples(), Span<const Sample>(),
+                                            fit.identifiability.kept_mask | extra, PointLoss{}, BlunderTestOptions{},
+                                            &reliability, collect, &summary));
+  EXPECT_EQ(status, Status::ok);
+  return summary;
+}
+
+TEST(Reliability, RedundancyNumbersAddUpToTheDegreesOfFreedom) {
+  // trace(I - H) = 3 N - p: the sum of rows * r over the units is the fit's redundancy.
+  for (std::size_t count : {9u, 14u, 30u, 80u}) {
+    Random random(100 + count);
+    const RobotModel model = truth(count);
+    dataset.clear();
+    test::fill_dataset(model, test::example_base_to_tracker(), count, 10e-6, &random, &dataset);
+    ASSERT_EQ(fit_all(model), Status::ok) << count;
+    Collect collect;
+    const BlunderTestSummary summary = test_fit(&collect);
+    double sum = 0.0;
+    for (const UnitTest& t : collect.units) {
+      EXPECT_GE(t.redundancy, -1e-12);
+      EXPECT_LE(t.redundancy, 1.0 + 1e-12);
+      sum += 3.0 * t.redundancy;
+    }
+    EXPECT_EQ(collect.units.size(), count);
+    EXPECT_NEAR(sum, summary.dof, 1e-8 * static_cast<double>(count)) << count;
+    EXPECT_EQ(summary.dof, 3.0 * static_cast<double>(count) - fit.identifiability.kept_count());
+  }
+}
+
+TEST(Reliability, SeveralTargetsTestAPoseAsOneUnitAndStillAddUp) {
+  const RobotModel model = test::with_plate(truth(3), Vec3(0.01, 0.02, 0.1));
+  Random random(8);
+  dataset.clear();
+  test::fill_target_dataset(model, test::example_base_to_tracker(), 20, 3, 10e-6, &random, &dataset);
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = model.tool_m;
+  ASSERT_EQ(calibrate_lm(start, nullptr, dataset.samples(), LmOptions{}, &lm_workspace, &fit), Status::ok);
+  Collect collect;
+  const BlunderTestSummary summary = test_fit(&collect, kOtherTargetTools);
+  ASSERT_EQ(collect.units.size(), 20u);  // 60 samples, a unit per pose
+  double sum = 0.0;
+  for (const UnitTest& t : collect.units) {
+    EXPECT_EQ(t.samples, 3u);
+    sum += 9.0 * t.redundancy;
+  }
+  EXPECT_NEAR(sum, summary.dof, 1e-8 * 60.0);
+  EXPECT_EQ(summary.dof, 180.0 - fit.identifiability.kept_count() - 6.0);  // two eliminated tool points
+}
+
+TEST(Reliability, CleanSetsRejectNoPose) {
+  // Gaussian noise only: at alpha = 0.1 % for the whole set, 40 sets lose no pose (the chance
+  // of any rejection is about 4 %; these seeds are fixed).
+  std::size_t rejected = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    Random random(seed);
+    const std::size_t count = 10 + static_cast<std::size_t>(random.below(60));
+    const RobotModel model = truth(seed);
+    dataset.clear();
+    test::fill_dataset(model, test::example_base_to_tracker(), count, 10e-6, &random, &dataset);
+    ASSERT_EQ(fit_all(model), Status::ok);
+    Collect collect;
+    const BlunderTestSummary summary = test_fit(&collect);
+    rejected += summary.rejected;
+    EXPECT_EQ(summary.sigma_source, SigmaSource::data);
+    EXPECT_NEAR(summary.sigma_m, 10e-6, 5e-6) << seed;
+  }
+  EXPECT_EQ(rejected, 0u);
+}
+
+TEST(Reliability, ABlunderAboveItsDetectableBiasIsTheWorstPose) {
+  // A bias of twice the pose's MDB, in a random direction, on a controlled pose of a clean set.
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    Random random(50 + seed);
+    const RobotModel model = truth(seed);
+    dataset.clear();
+    test::fill_dataset(model, test::example_base_to_tracker(), 40, 10e-6, &random, &dataset);
+    ASSERT_EQ(fit_all(model), Status::ok);
+    Collect clean;
+    test_fit(&clean);
+    const std::size_t bad = static_cast<std::size_t>(random.below(40));
+    ASSERT_TRUE(clean.units[bad].controlled);
+    const double mdb_m = clean.units[bad].mdb_m;
+    EXPECT_GT(mdb_m, 10e-6);
+    EXPECT_LT(mdb_m, 0.5e-3);
+    Vec3 direction(random.normal(), random.normal(), random.normal());
+    Dataset<kCapacity> copy;
+    for (const Sample& s : dataset.samples()) {
+      const Vec3 offset = s.index == bad ? Vec3(2.0 * mdb_m * direction.normalized()) : Vec3(Vec3::Zero());
+      ASSERT_EQ(copy.add(s.q_rad, s.point_m + offset), Status::ok);
+    }
+    dataset.clear();
+    for (const Sample& s : copy.samples()) ASSERT_EQ(dataset.add(s.q_rad, s.point_m), Status::ok);
+    ASSERT_EQ(fit_all(model), Status::ok);
+    Collect blundered;
+    test_fit(&blundered);
+    std::size_t worst = 0;
+    for (std::size_t k = 0; k < blundered.units.size(); ++k) {
+      if (blundered.units[k].w > blundered.units[worst].w) worst = k;
+    }
+    EXPECT_EQ(worst, bad) << seed;
+    EXPECT_TRUE(blundered.units[bad].rejected()) << seed << ": w " << blundered.units[bad].w << " critical "
+                                                 << blundered.units[bad].critical_w;
+  }
+}
+
+TEST(Reliability, TooLittleRedundancyUsesTheTrackersSigma) {
+  Random random(3);
+  const RobotModel model = truth(3);
+  dataset.clear();
+  test::fill_dataset(model, test::example_base_to_tracker(), 8, 10e-6, &random, &dataset);  // 24 rows
+  ASSERT_EQ(fit_all(model), Status::ok);
+  Collect collect;
+  const BlunderTestSummary summary = test_fit(&collect);
+  ASSERT_LT(summary.dof, 4.0);
+  EXPECT_EQ(summary.sigma_source, SigmaSource::tracker);
+  EXPECT_EQ(summary.sigma_m, BlunderTestOptions{}.tracker_sigma_m);
+}
+
+TEST(Reliability, BadArgumentsAreRefused) {
+  BlunderTestSummary summary;
+  BlunderTestOptions options;
+  options.alpha = 0.0;
+  EXPECT_EQ(test_for_blunders(fit.model, fit.base_to_tracker, dataset.samples(), {}, kAllParamsMask, PointLoss{},
+                              options, &reliability, nullptr, &summary),
+            Status::invalid_argument);
+  EXPECT_EQ(test_for_blunders(fit.model, fit.base_to_tracker, Span<const Sample>(), {}, kAllParamsMask, PointLoss{},
+                              BlunderTestOptions{}, &reliability, nullptr, &summary),
+            Status::dataset_empty);
+}
+
+}  // namespace
+}  // namespace hivecal
