@@ -164,6 +164,7 @@ struct Run {
   bool has_cv = false;                          ///< --cv ran: `cv` is meaningful
   CrossValidationResult cv;                     ///< per-fold held-out errors (~20 KB)
   int target_count = 1;                         ///< targets (reflectors) in the samples: the result's "tools" [-]
+  CalibrationOptions options;                   ///< the job's options, as lib ran it
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).
@@ -791,6 +792,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   CliWorkspace& workspace = cli_workspace();
   JobObserver observer(settings.progress);
   run->target_count = target_count(dataset->samples());
+  run->options = job;
   const Status status = hivecal::calibrate(start, dataset, job, &workspace, &run->result, &observer);
   for (std::size_t k = 0; k < kMaxCalibrationStages; ++k) run->seconds[k] = observer.seconds[k];
   const CalibrationStep step = run->result.step;
@@ -910,22 +912,16 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
   const CalibrationResult& r = run.result;
   table.searched = r.outlier_rounds > 0;
   table.verdict = blunder_verdict_name(r.blunder_verdict);
-  table.alpha = CalibrationOptions{}.blunder_test.alpha;
+  table.alpha = run.options.blunder_test.alpha;
   table.sigma_source = sigma_source_name(r.blunder_test.sigma_source);
   table.sigma_m = r.blunder_test.sigma_m;
-  const CalibrationStage* final_stage = r.final_stage();
-  if (table.searched && final_stage != nullptr) {
-    static ReliabilityWorkspace workspace;  // ~24 kB
-    const Span<const Sample> fitted = dataset.train();
-    const Span<const Sample> predicted(dataset.test().data(), dataset.test().size() + dataset.set_aside().size());
+  if (table.searched && r.final_stage() != nullptr) {
+    static ReliabilityWorkspace workspace;  // ~26 kB
     std::vector<std::uint32_t> aside;
     for (const CalibrationOutlier& o : r.outlier_list()) aside.push_back(o.index);
     PoseTests tests(facts, std::move(aside), &table);
-    BlunderTestOptions options;
-    options.tracker_sigma_m = data->noise_sigma_m > 0.0 ? data->noise_sigma_m : options.tracker_sigma_m;
     BlunderTestSummary summary;
-    test_for_blunders(final_stage->model, final_stage->base_to_tracker, fitted, predicted,
-                      calibration_estimated_mask(r), PointLoss{}, options, &workspace, &tests, &summary);
+    test_final_calibration(r, dataset, run.options, &workspace, &tests, &summary);
   }
   for (const CalibrationOutlier& o : r.outlier_list()) {
     char line[300];

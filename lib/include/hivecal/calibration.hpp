@@ -2,9 +2,9 @@
 //   blunder screen (consensus over point triples) -> split -> baseline (start geometry, tool
 //   point and base fitted on the training samples) -> the solver
 //   stages of CalibrationOptions::method (ABC / GSA on the link lengths, then or instead
-//   Levenberg-Marquardt on the full model) -> train/test errors of every stage -> residual
-//   test of every sample with a robust sigma (blunders set aside, the job rerun until the set
-//   is stable). cross_validate() runs the same job per fold. Method: docs/robust.md.
+//   Levenberg-Marquardt on the full model) -> train/test errors of every stage -> the w-test
+//   of every pose (data snooping: blunders set aside one at a time, the job rerun until the
+//   set is stable; solve/reliability.hpp). cross_validate() runs the same job per fold. Method: docs/robust.md.
 // Like ruckig's Ruckig / InputParameter / Result: options in, a caller-sized workspace, one
 // result struct out. No heap, no clock: a caller that wants stage timings takes them in its
 // CalibrationObserver. Method and figures: docs/architecture.md, "The calibration job".
@@ -446,6 +446,14 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
 /// when it estimated the other targets' tool points), or a population stage's link lengths
 /// and base: the parameters test_for_blunders tests the fit with.
 ParamMask calibration_estimated_mask(const CalibrationResult& result);
+
+/// The w-test of the final calibration of `result` on `dataset` as the job left it (its training
+/// samples fitted, its test and set-aside samples predicted) with `options`' test settings: each
+/// pose to `visitor` (a report's per-pose w and uncontrolled poses). Errors: invalid_argument
+/// (no stage ran), those of test_for_blunders.
+Status test_final_calibration(const CalibrationResult& result, const DatasetBase& dataset,
+                              const CalibrationOptions& options, ReliabilityWorkspace* workspace,
+                              UnitTestVisitor* visitor, BlunderTestSummary* summary);
 
 /// Folds a cross-validation holds at most (leave-one-out on up to this many samples) [-].
 inline constexpr std::size_t kMaxCrossValidationFolds = 128;

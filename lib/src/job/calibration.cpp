@@ -501,11 +501,10 @@ double lower_median(Span<double> values, std::size_t count) {
 
 /// Offers a flagged sample to the set-aside list being built: at most `limit`, the largest
 /// residuals kept when more are flagged (ties: the lower index); by decreasing residual.
-void offer(CalibrationOutlierList* list, std::uint32_t index, double residual_m) {
+void offer(CalibrationOutlierList* list, const CalibrationOutlier& item) {
   auto before = [](const CalibrationOutlier& a, const CalibrationOutlier& b) {
     return a.residual_m > b.residual_m || (a.residual_m == b.residual_m && a.index < b.index);
   };
-  const CalibrationOutlier item{index, residual_m};
   CalibrationOutlier* items = list->items;
   if (list->count == list->limit && (list->limit == 0 || !before(item, items[list->count - 1]))) return;
   std::size_t k = list->count < list->limit ? list->count++ : list->count - 1;
@@ -584,7 +583,7 @@ bool flag_outliers(const RobotModel& model, const RigidTransform& base, const Da
   for (Span<const Sample> part : {dataset.samples(), dataset.set_aside()}) {
     for (const Sample& s : part) {
       const double r = (base.apply(fk_sample_point(model, s)) - s.point_m).norm();
-      if (r > *threshold_m) offer(list, s.index, r);
+      if (r > *threshold_m) offer(list, CalibrationOutlier{s.index, r});
     }
   }
   finish(list);
@@ -601,7 +600,7 @@ bool flag_outliers(const RobotModel& model, const RigidTransform& base, const Da
   const Span<const Sample> samples = dataset->samples();
   const std::size_t n = samples.size();
   // Several targets: the start model does not know the other reflectors' tool points, so the
-  // start geometry cannot predict their samples; the post-calibration residual test (which
+  // start geometry cannot predict their samples; the w-test of the calibration (which
   // estimates them) is the only blunder search then.
   if (target_count(samples) > 1) {
     list->count = 0;
@@ -686,24 +685,13 @@ class SnoopVisitor final : public UnitTestVisitor {
       return;
     }
     for (std::uint32_t k = 0; k < t.samples; ++k) {
-      offer(list_, predicted_[t.position + k].index, t.residual_m);
-      CalibrationOutlier* added = find_item(list_, predicted_[t.position + k].index);
-      if (added != nullptr) {
-        added->w = t.w;
-        added->critical_w = t.critical_w;
-      }
+      offer(list_, CalibrationOutlier{predicted_[t.position + k].index, t.residual_m, t.w, t.critical_w});
     }
   }
   bool has_worst() const { return worst_ratio_ > 1.0; }
   const UnitTest& worst() const { return worst_; }
 
  private:
-  static CalibrationOutlier* find_item(CalibrationOutlierList* list, std::uint32_t index) {
-    for (std::size_t i = 0; i < list->count; ++i) {
-      if (list->items[i].index == index) return &list->items[i];
-    }
-    return nullptr;
-  }
   Span<const Sample> predicted_;
   CalibrationOutlierList* list_;
   UnitTest worst_;
@@ -724,14 +712,18 @@ ParamMask calibration_estimated_mask(const CalibrationResult& r) {
 
 namespace {
 
+/// The loss the w-test whitens with: LM's joint noise, no Huber weights.
+PointLoss blunder_test_loss(const CalibrationOptions& o) {
+  return PointLoss{0.0, o.lm.joint_sigma_rad > 0.0 ? o.lm.joint_sigma_rad / o.lm.position_sigma_m : 0.0};
+}
+
 /// One w-test of the fit (model, base) on `fitted`, predicting `predicted`.
 Status run_blunder_test(CalibrationWorkspaceBase& workspace, const CalibrationOptions& o, const RobotModel& model,
                         const RigidTransform& base, Span<const Sample> fitted, Span<const Sample> predicted,
                         ParamMask estimated, UnitTestVisitor* visitor, BlunderTestSummary* summary) {
   ReliabilityWorkspace* ws = workspace.open_reliability();
-  const PointLoss loss{0.0, o.lm.joint_sigma_rad > 0.0 ? o.lm.joint_sigma_rad / o.lm.position_sigma_m : 0.0};
-  const Status status =
-      test_for_blunders(model, base, fitted, predicted, estimated, loss, o.blunder_test, ws, visitor, summary);
+  const Status status = test_for_blunders(model, base, fitted, predicted, estimated, blunder_test_loss(o),
+                                          o.blunder_test, ws, visitor, summary);
   workspace.close();
   return status;
 }
@@ -757,10 +749,9 @@ Status run_blunder_test(CalibrationWorkspaceBase& workspace, const CalibrationOp
 }
 
 /// Moves the removed poses back where they were (latest first): the split as the run left it.
-void undo_removals(DatasetBase* dataset, const CalibrationWorkspaceBase& workspace, std::size_t removed,
+void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, std::size_t removed,
                    std::size_t fitted) {
-  const std::uint32_t(&moves)[kMaxCalibrationOutliers][2] =
-      const_cast<CalibrationWorkspaceBase&>(workspace).snoop_moves();
+  const std::uint32_t(&moves)[kMaxCalibrationOutliers][2] = workspace.snoop_moves();
   while (removed > 0) {
     --removed;
     const std::size_t position = moves[removed][0];
@@ -962,6 +953,18 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   r.blunder_limit = blunder_limit(*dataset, options);
   r.outlier_rounds = round;
   return Status::ok;
+}
+
+Status test_final_calibration(const CalibrationResult& result, const DatasetBase& dataset,
+                              const CalibrationOptions& options, ReliabilityWorkspace* workspace,
+                              UnitTestVisitor* visitor, BlunderTestSummary* summary) {
+  const CalibrationStage* final_stage = result.final_stage();
+  if (final_stage == nullptr || workspace == nullptr || summary == nullptr) return Status::invalid_argument;
+  const Span<const Sample> test = dataset.test();
+  const Span<const Sample> predicted(test.data(), test.size() + dataset.set_aside().size());  // stored behind it
+  return test_for_blunders(final_stage->model, final_stage->base_to_tracker, dataset.train(), predicted,
+                           calibration_estimated_mask(result), blunder_test_loss(options), options.blunder_test,
+                           workspace, visitor, summary);
 }
 
 Status cross_validate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,

@@ -131,15 +131,22 @@ struct Scale {
   double dof = 0.0;         ///< its redundancy [-]
   double sigma_m = 0.0;     ///< sigma per axis [m]
   double unit_alpha = 0.0;  ///< each unit's significance [-]
+  /// Critical values by [fitted][rows], 0 until first needed: a quantile is a bisection of an
+  /// incomplete beta, too dear to repeat for each of 10^4 poses.
+  mutable double critical[2][kMaxUnitRows + 1] = {};
 };
 
 /// Critical value of e^T Q^-1 e / sigma^2 for a unit of `rows` rows (sigma from the data: the
 /// fitted unit's own residual left out of it, F(rows, dof - rows); a predicted one's against
 /// the whole fit, F(rows, dof); the tracker's sigma: chi-square).
 double critical_statistic(const Scale& scale, int rows, bool fitted) {
+  double& cached = scale.critical[fitted ? 1 : 0][rows];
+  if (cached > 0.0) return cached;
   const double m = static_cast<double>(rows);
-  if (scale.source == SigmaSource::tracker) return math::chi_square_upper_quantile(scale.unit_alpha, m);
-  return m * math::f_upper_quantile(scale.unit_alpha, m, fitted ? scale.dof - m : scale.dof);
+  cached = scale.source == SigmaSource::tracker
+               ? math::chi_square_upper_quantile(scale.unit_alpha, m)
+               : m * math::f_upper_quantile(scale.unit_alpha, m, fitted ? scale.dof - m : scale.dof);
+  return cached;
 }
 
 /// Tests one unit whose hat block and residual rows are in the workspace (the block is

@@ -413,6 +413,23 @@ TEST(CalibrationBlunders, A2mmBlunderAmong1000PosesIsFoundAndNamed) {
   EXPECT_EQ(result.blunder_verdict, BlunderVerdict::removed);
   EXPECT_EQ(result.blunder_test.sigma_source, SigmaSource::data);
   EXPECT_NEAR(result.blunder_test.sigma_m, 10e-6, 2e-6);
+  // The final calibration's test as a report sees it: every pose once, the blunder (set
+  // aside, predicted) the only one above its threshold.
+  struct Count final : UnitTestVisitor {
+    void on_unit(const UnitTest& t) override {
+      ++units;
+      if (t.rejected()) rejected_index = t.index, ++rejected;
+    }
+    std::size_t units = 0, rejected = 0;
+    std::uint32_t rejected_index = 0;
+  } count;
+  static ReliabilityWorkspace reliability;
+  BlunderTestSummary summary;
+  ASSERT_EQ(test_final_calibration(result, copy, o, &reliability, &count, &summary), Status::ok);
+  EXPECT_EQ(count.units, 1000u);
+  EXPECT_EQ(count.rejected, 1u);
+  EXPECT_EQ(count.rejected_index, 637u);
+  EXPECT_EQ(summary.sigma_m, result.blunder_test.sigma_m);
 }
 
 TEST(CalibrationBlunders, ManyFailingPosesAreTheModelNotBlundersAndNoneIsRemoved) {
