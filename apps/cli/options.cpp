@@ -2,9 +2,11 @@
 
 #include <string_view>
 
+#include <algorithm>
 #include <cstdio>
 #include <unistd.h>
 
+#include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
 
 namespace hivecal::cli {
@@ -128,7 +130,37 @@ std::vector<OptionSpec> input_unit_option_specs() {
   return {
       {"length-unit", "m|mm", "unit of lengths (x, y, z) in text inputs whose header names none (default: m)", ""},
       {"angle-unit", "rad|deg", "unit of joint angles in text inputs whose header names none (default: rad)", ""},
+      {"columns", "C=NAME,...", "read text inputs by column name: C (q1..q6, x, y, z) is the header's column NAME, e.g. x=measurement_x (ROS and pendant joint names are recognised without it)", ""},
   };
+}
+
+/// --columns C=NAME,... into units->columns: C one of the fixed formats' columns, each once.
+Error columns_option(const Options& options, textio::InputUnits* units) {
+  const std::string text = options.get("columns");
+  std::size_t begin = 0;
+  while (!text.empty() && begin <= text.size()) {
+    const std::size_t end = std::min(text.find(',', begin), text.size());
+    const std::string entry = text.substr(begin, end - begin);
+    const std::size_t equals = entry.find('=');
+    textio::ColumnAlias alias;
+    if (equals != std::string::npos) {
+      alias.column = textio::lower(textio::trim(entry.substr(0, equals)));
+      alias.header = textio::lower(textio::trim(entry.substr(equals + 1)));
+    }
+    static const char* const kNamed[] = {"q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "t"};
+    const bool known = std::find_if(std::begin(kNamed), std::end(kNamed),
+                                    [&](const char* n) { return alias.column == n; }) != std::end(kNamed);
+    if (!known || alias.header.empty()) {
+      return Error::usage("--columns: " + port::quoted(entry) +
+                          " is not C=NAME with C one of q1..q6, x, y, z, t (e.g. x=measurement_x)");
+    }
+    for (const textio::ColumnAlias& earlier : units->columns) {
+      if (earlier.column == alias.column) return Error::usage("--columns names " + alias.column + " twice");
+    }
+    units->columns.push_back(alias);
+    begin = end + 1;
+  }
+  return Error{};
 }
 
 Error input_units_option(const Options& options, textio::InputUnits* units) {
@@ -142,7 +174,7 @@ Error input_units_option(const Options& options, textio::InputUnits* units) {
   }
   units->length = length;
   units->angle = angle;
-  return Error{};
+  return columns_option(options, units);
 }
 
 Error robot_model_option(const Options& options, const std::string& name, textio::RobotDescription* description,

@@ -32,13 +32,54 @@ struct CsvFound {
 /// Joint names as a UR teach pendant's export writes them ("Base (°)", ..., "Wrist 3 (°)").
 const char* const kPendantJointNames[kJointCount] = {"base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3"};
 
-/// True when header column `name` is schema column `wanted`: equal, or the pendant's name of joint qN.
+/// Joint names as ROS (joint_states, the UR driver's URDF) writes them.
+const char* const kRosJointNames[kJointCount] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                                                  "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
+
+/// True when header column `name` is schema column `wanted`: equal, or the pendant's or ROS's
+/// name of joint qN.
 bool column_matches(const std::string& name, const std::string& wanted) {
   if (name == wanted) return true;
   for (int j = 0; j < kJointCount; ++j) {
-    if (wanted == "q" + std::to_string(j + 1)) return name == kPendantJointNames[j];
+    if (wanted == "q" + std::to_string(j + 1)) return name == kPendantJointNames[j] || name == kRosJointNames[j];
   }
   return false;
+}
+
+/// The header column the user mapped schema column `wanted` to (InputUnits::columns), or "".
+std::string mapped_name(const InputUnits& units, const std::string& wanted) {
+  for (const ColumnAlias& alias : units.columns) {
+    if (alias.column == wanted) return alias.header;
+  }
+  return "";
+}
+
+/// Where each schema column is in the header: in order from `offset` (the fixed format), or,
+/// when that does not match, found by name anywhere (a mapped name first, then its own, the
+/// pendant's and ROS's names). Empty with *missing set to the columns not found.
+std::vector<std::size_t> locate_columns(const DelimitedReader& r, const CsvSchema& schema, const InputUnits& units,
+                                        std::size_t offset, std::string* missing) {
+  const std::vector<Column>& header = r.columns();
+  std::vector<std::size_t> at;
+  bool in_order = units.columns.empty() && header.size() >= offset + schema.columns.size();
+  for (std::size_t i = 0; in_order && i < schema.columns.size(); ++i) {
+    in_order = column_matches(header[offset + i].name, schema.columns[i]);
+    at.push_back(offset + i);
+  }
+  if (in_order) return at;
+  at.clear();
+  missing->clear();
+  for (const std::string& wanted : schema.columns) {
+    const std::string mapped = mapped_name(units, wanted);
+    int found = -1;
+    for (std::size_t k = 0; found < 0 && k < header.size(); ++k) {
+      if (mapped.empty() ? column_matches(header[k].name, wanted) : header[k].name == mapped) found = static_cast<int>(k);
+    }
+    if (found < 0) *missing += (missing->empty() ? "" : ", ") + (mapped.empty() ? wanted : wanted + "=" + mapped);
+    at.push_back(static_cast<std::size_t>(found));
+  }
+  if (!missing->empty()) at.clear();
+  return at;
 }
 
 std::string join(const std::vector<std::string>& names) {
@@ -62,24 +103,33 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   const std::vector<Column>& header = r.columns();
   const std::size_t offset =
       (!schema.optional_leading.empty() && !header.empty() && header[0].name == schema.optional_leading) ? 1 : 0;
-  bool match = header.size() >= offset + schema.columns.size();
-  for (std::size_t i = 0; match && i < schema.columns.size(); ++i) {
-    match = column_matches(header[offset + i].name, schema.columns[i]);
+  std::string missing;
+  const std::vector<std::size_t> at = locate_columns(r, schema, units, offset, &missing);
+  if (at.empty()) {
+    return port::Error::input(r.where() + "unexpected header " + port::quoted(r.header_line()) + ", expected " +
+                              expected + " (or these columns by name anywhere; not found: " + missing +
+                              "; name them with --columns, e.g. x=measurement_x)");
   }
-  if (!match) return port::Error::input(r.where() + "unexpected header " + port::quoted(r.header_line()) + ", expected " + expected);
+  const bool in_order = at[0] == offset;  // the fixed format (a named header may happen to agree)
   std::vector<double> scales(schema.columns.size());
   std::vector<std::size_t> lengths;  // the x, y, z columns, when the schema has them
+  std::size_t first_length = 0;      // their first value's place in the row's values
   for (std::size_t i = 0; i < scales.size(); ++i) {
-    if (!r.column_scale(offset + i, schema.quantities[i], &scales[i])) return port::Error::input(r.error());
-    if (schema.quantities[i] == Quantity::length) lengths.push_back(offset + i);
+    if (!r.column_scale(at[i], schema.quantities[i], &scales[i])) return port::Error::input(r.error());
+    if (schema.quantities[i] == Quantity::length && lengths.empty()) first_length = i;
+    if (schema.quantities[i] == Quantity::length) lengths.push_back(at[i]);
   }
-  const std::size_t trailing = offset + schema.columns.size();
-  const bool has_trailing = !schema.optional_trailing.empty() && header.size() > trailing &&
-                            header[trailing].name == schema.optional_trailing;
+  // The optional columns: right after the fixed columns, or by name in a named header.
+  const std::size_t trailing_from = in_order ? offset + schema.columns.size() : 0;
+  const int named_trailing = schema.optional_trailing.empty() ? -1 : r.find(schema.optional_trailing);
+  const bool has_trailing = in_order ? (!schema.optional_trailing.empty() && header.size() > trailing_from &&
+                                        header[trailing_from].name == schema.optional_trailing)
+                                     : named_trailing >= 0;
+  const std::size_t trailing = in_order || named_trailing < 0 ? trailing_from : static_cast<std::size_t>(named_trailing);
   std::vector<std::size_t> group;  // the optional group's columns, when all are present
   for (const std::string& name : schema.optional_group) {
-    const int at = r.find(name);
-    if (at >= 0 && static_cast<std::size_t>(at) >= trailing) group.push_back(static_cast<std::size_t>(at));
+    const int found_at = r.find(name);
+    if (found_at >= 0 && static_cast<std::size_t>(found_at) >= trailing_from) group.push_back(static_cast<std::size_t>(found_at));
   }
   if (!group.empty() && group.size() != schema.optional_group.size()) {
     return port::Error::input(r.where() + "header has " + std::to_string(group.size()) + " of the columns " +
@@ -102,12 +152,12 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
     }
     if (group.size() == 3 && !r.check_rotation(group.data(), &values[group_at])) return port::Error::input(r.error());
     for (std::size_t i = 0; i < schema.columns.size(); ++i) {
-      if (!r.number(offset + i, scales[i], &values[i])) return port::Error::input(r.error());
-      if (schema.quantities[i] == Quantity::angle && !r.check_joint(++joint, offset + i, values[i])) {
+      if (!r.number(at[i], scales[i], &values[i])) return port::Error::input(r.error());
+      if (schema.quantities[i] == Quantity::angle && !r.check_joint(++joint, at[i], values[i])) {
         return port::Error::input(r.error());
       }
     }
-    if (lengths.size() == 3 && !r.check_point(lengths.data(), &values[lengths[0] - offset])) {
+    if (lengths.size() == 3 && !r.check_point(lengths.data(), &values[first_length])) {
       return port::Error::input(r.error());
     }
     const std::string rejection = on_row(values);

@@ -20,12 +20,6 @@ std::string_view unquote(std::string_view s) {
   return s;
 }
 
-std::string lower(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
-  return out;
-}
-
 /// A unit as written between brackets, lower case; the degree sign (UTF-8) is "deg".
 std::string unit_of(std::string_view text) {
   const std::string unit = lower(trim(text));
@@ -255,6 +249,19 @@ bool DelimitedReader::number(std::size_t index, double scale, double* value) {
   if (!field.empty() && parsed.ec == std::errc() && parsed.ptr == end) {
     *value *= scale;
     return true;
+  }
+  // A field separated by ';', a tab or spaces may use a decimal comma (as a lab's locale
+  // exports it): one comma and no point is read as the decimal separator.
+  const std::size_t comma = field.find(',');
+  if (delimiter_ != Delimiter::comma && comma != std::string_view::npos &&
+      field.find(',', comma + 1) == std::string_view::npos && field.find('.') == std::string_view::npos) {
+    std::string dotted(field);
+    dotted[comma] = '.';
+    const auto dotted_parsed = std::from_chars(dotted.data(), dotted.data() + dotted.size(), *value);
+    if (dotted_parsed.ec == std::errc() && dotted_parsed.ptr == dotted.data() + dotted.size()) {
+      *value *= scale;
+      return true;
+    }
   }
   const std::string column = port::quoted(columns_[index].name, 32);
   if (field.find(',') != std::string_view::npos) {

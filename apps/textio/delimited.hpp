@@ -3,7 +3,8 @@
 // of spaces), columns are found by name, a unit in brackets after a name converts to SI.
 // Bounded: a line is at most kMaxLineBytes, read through a fixed buffer, whatever the file
 // length. Refused with file:line: binary bytes (NUL, control bytes), over-long lines, comma
-// decimal separators, rows whose field count differs from the header's. Messages quote the
+// decimal separators in comma-separated files (a ';', tab or space separated file may use a
+// single decimal comma), rows whose field count differs from the header's. Messages quote the
 // file's text through port::quoted() (control bytes escaped, long text cut). The units the
 // user declares for columns without a bracket unit (--length-unit, --angle-unit) and the
 // plausibility of joints and points read (degrees or millimetres taken for SI) are checked
@@ -30,12 +31,22 @@ enum class Quantity { length, angle, time };
 /// unit is not one of those of its quantity.
 bool si_scale(std::string_view unit, Quantity quantity, double* scale);
 
+/// One --columns entry: the format's column and the header name it has in the file (both as
+/// Column::name: lower case, unit stripped).
+struct ColumnAlias {
+  std::string column;  ///< e.g. "x"
+  std::string header;  ///< e.g. "measurement_x"
+};
+
 /// Units the user declared for text columns whose header gives none (--length-unit,
 /// --angle-unit); "" for not declared: the format's SI unit. A bracket unit in a header
 /// wins; a declared unit that differs from it is an error.
 struct InputUnits {
   std::string length;  ///< "m", "mm" or "" (lengths: x, y, z)
   std::string angle;   ///< "rad", "deg" or "" (joints)
+  /// Columns the user named (--columns x=measurement_x,...): a fixed format's column (x, q1,
+  /// ...) found under another header name; the file is then read by name.
+  std::vector<ColumnAlias> columns{};
 };
 
 /// Largest |joint| read as plausible: one turn either way [rad].

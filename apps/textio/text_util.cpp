@@ -13,6 +13,12 @@
 
 namespace hivecal::textio {
 
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+  return out;
+}
+
 std::string_view trim(std::string_view s) {
   const char* blanks = " \t\r\n";
   const std::size_t first = s.find_first_not_of(blanks);

@@ -10,6 +10,8 @@ namespace hivecal::textio {
 
 /// s without leading and trailing blanks (space, tab, CR, LF).
 std::string_view trim(std::string_view s);
+/// s with ASCII letters in lower case (locale-independent).
+std::string lower(std::string_view s);
 /// Parses a whole field as a double (C locale, no trailing junk); false otherwise.
 bool parse_double(std::string_view field, double* value);
 /// Writes `content` to `path` as the only output of a port::OutputSet (temporary beside it,

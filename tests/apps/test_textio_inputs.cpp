@@ -65,3 +65,66 @@ TEST(TextInputs, DevicesAndFifosAreRefusedAtOnce) {
 
 }  // namespace
 }  // namespace hivecal::textio
+
+namespace hivecal::textio {
+namespace {
+
+// A lab's export as it is: ';' separated, decimal commas, named columns in another order,
+// extra columns (a spreadsheet-mangled timestamp among them), ROS joint names.
+const std::string kLabExport =
+    "Timestamp;Goal x;measurement_x;shoulder_pan_joint;shoulder_lift_joint;elbow_joint;wrist_1_joint;"
+    "wrist_2_joint;wrist_3_joint;measurement_y;measurement_z;measurement_std_x\n"
+    "2,02011E+13;0,4;383,76294;0,1;-1,5;1,2;-0,5;1,25;0;-3240,8734;201,93157;0,031\n"
+    "2,02011E+13;0,4;-0,50720828;-0,908775;-0,052173;-1,92746;-1,16213;-2,05921;-0,000837151;-3343,1516;-426,95;0,01\n";
+
+TEST(TextInputs, ALabExportReadsAsItIsWithNamedColumnsAndDecimalCommas) {
+  const test::TempDir dir("hivecal_textio_export");
+  const std::string path = dir.write("export.csv", kLabExport);
+  InputUnits units;
+  units.length = "mm";
+  units.columns = {{"x", "measurement_x"}, {"y", "measurement_y"}, {"z", "measurement_z"}};
+  Dataset<8> dataset;
+  std::vector<std::size_t> lines;
+  const port::Error error = read_samples_csv(path, &dataset, units, &lines);
+  ASSERT_TRUE(error.ok()) << error.message;
+  ASSERT_EQ(dataset.size(), 2u);
+  const Sample& second = dataset.samples()[1];
+  EXPECT_EQ(second.q_rad(0), -0.908775);
+  EXPECT_EQ(second.q_rad(5), -0.000837151);
+  EXPECT_EQ(second.point_m(0), -0.50720828 * 1e-3);
+  EXPECT_EQ(second.point_m(1), -3343.1516 * 1e-3);
+  EXPECT_EQ(second.point_m(2), -426.95 * 1e-3);
+  EXPECT_EQ(lines, (std::vector<std::size_t>{2, 3}));
+}
+
+TEST(TextInputs, AnExportWithoutItsColumnsNamedSaysWhichAreMissing) {
+  const test::TempDir dir("hivecal_textio_export");
+  const std::string path = dir.write("export.csv", kLabExport);
+  Dataset<8> dataset;
+  InputUnits units;
+  units.length = "mm";
+  port::Error error = read_samples_csv(path, &dataset, units);
+  EXPECT_EQ(error.fault, port::Fault::input);
+  EXPECT_NE(error.message.find("not found: x, y, z; name them with --columns"), std::string::npos) << error.message;
+  units.columns = {{"x", "measurement_x"}, {"y", "measurement_y"}, {"z", "no_such_column"}};
+  dataset.clear();
+  error = read_samples_csv(path, &dataset, units);
+  EXPECT_NE(error.message.find("not found: z=no_such_column"), std::string::npos) << error.message;
+  // Without a length unit the millimetres are refused with the hint, as for any text input.
+  units.length.clear();
+  units.columns.back().header = "measurement_z";
+  dataset.clear();
+  error = read_samples_csv(path, &dataset, units);
+  EXPECT_NE(error.message.find("--length-unit mm"), std::string::npos) << error.message;
+}
+
+TEST(TextInputs, ACommaSeparatedFileStillRefusesDecimalCommas) {
+  // With ',' as the separator a decimal comma cannot be told from a field boundary.
+  const test::TempDir dir("hivecal_textio_export");
+  const std::string path = dir.write("c.csv", "q1,q2,q3,q4,q5,q6,x,y,z\n0,0,0,0,0,0,\"1,5\",0,0\n");
+  Dataset<8> dataset;
+  EXPECT_FALSE(read_samples_csv(path, &dataset).ok());
+}
+
+}  // namespace
+}  // namespace hivecal::textio

@@ -162,8 +162,13 @@ expect 3 "no data rows" -- calibrate --robot "$work/header_only.csv" --tracker "
 # Logs of other tools: a wrong file says what was expected and found; swapped inputs are named.
 expect 3 "tracker.cap: contains tracker frames (" -- calibrate --robot "$sim/tracker.cap" --tracker "$sim/robot.cap" --out "$work/r9.json"
 expect 3 "--robot and --tracker swapped?" -- calibrate --robot "$sim/tracker.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
-printf 'Time [ms];X [mm];Y [mm];Z [mm]\n1500;1000,5;2;3\n' >"$work/comma.csv"
-expect 3 "comma.csv:2: column 'x': '1000,5' has a comma decimal separator" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/comma.csv" --out "$work/r9.json"
+# A ';' file may use decimal commas (read as they are); a comma-separated one may not, and a
+# number with a thousands point and a decimal comma is not guessed at.
+printf 'Time [ms];X [mm];Y [mm];Z [mm]\n1500;1.000,5;2;3\n' >"$work/comma.csv"
+expect 3 "comma.csv:2: column 'x': not a number: '1.000,5'" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/comma.csv" --out "$work/r9.json"
+printf 'Time [ms],X [mm],Y [mm],Z [mm]\n1500,1000,5,2,3\n' >"$work/comma2.csv"
+expect 3 "a comma used as decimal separator?" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/comma2.csv" --out "$work/r9.json"
+expect 2 "--columns: 'x:measurement_x' is not C=NAME" -- calibrate --samples "$work/comma.csv" --columns x:measurement_x --out "$work/r9.json"
 printf 'Zeit;Achse 1;Achse 2\n1;2;3\n' >"$work/other.csv"
 expect 3 "other.csv:1: not a robot joint log: expected t,q1..q6" -- calibrate --robot "$work/other.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
 no_file "$work/r9.json"
