@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "textio/delimited.hpp"
@@ -159,6 +160,17 @@ Error columns_option(const Options& options, textio::InputUnits* units) {
     }
     units->columns.push_back(alias);
     begin = end + 1;
+  }
+  return Error{};
+}
+
+Error declare_inputs(const Options& options, const std::vector<std::string>& output_names, port::OutputSet* outputs) {
+  for (const auto& [name, value] : options.given_values()) {
+    if (std::find(output_names.begin(), output_names.end(), name) != output_names.end()) continue;
+    struct stat info {};
+    if (value.empty() || value == "-" || ::stat(value.c_str(), &info) != 0 || !S_ISREG(info.st_mode)) continue;
+    const Error error = outputs->add_input(value, "--" + name);
+    if (!error.ok()) return error;
   }
   return Error{};
 }

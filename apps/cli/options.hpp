@@ -10,6 +10,7 @@
 #include "hivecal/core/types.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/port/error.hpp"
+#include "hivecal/port/output_files.hpp"
 #include "textio/delimited.hpp"
 #include "textio/calibration_json.hpp"
 
@@ -46,6 +47,8 @@ class Options {
   std::string get(const std::string& name) const;
   /// True when a flag or valued option was given on the command line.
   bool given(const std::string& name) const { return values_.count(name) != 0; }
+  /// Every option given on the command line, by name, with its value.
+  const std::map<std::string, std::string>& given_values() const { return values_; }
 
  private:
   friend int parse_options(const std::string&, const std::string&, const std::vector<OptionSpec>&, int, char**, Options*);
@@ -63,6 +66,13 @@ int parse_options(const std::string& command, const std::string& summary, const 
 void error(const std::string& command, const std::string& message);
 /// Prints a failed Error as error() does and returns its exit code (kExitOk when ok).
 int exit_with(const std::string& command, const Error& result);
+
+/// Declares as an input of `outputs` every given option, other than the run's outputs
+/// `output_names`, whose value names an existing regular file (a robot description, a
+/// calibration, joint limits, a log...): an input given as an output of the run (for example
+/// --robot-model FILE as --out, or inside an output folder under a name the run writes) is
+/// refused before anything is written, whichever option names it.
+Error declare_inputs(const Options& options, const std::vector<std::string>& output_names, port::OutputSet* outputs);
 
 /// True when progress lines should go to stderr (a terminal and not --quiet).
 bool progress_enabled(const Options& options);

@@ -691,11 +691,8 @@ struct OutputIds {
 };
 
 Error declare_outputs(const Options& options, port::OutputSet* outputs, OutputIds* ids) {
-  for (const char* input : {"samples", "robot", "tracker", "ur-calibration"}) {
-    Error error = outputs->add_input(options.get(input), std::string("--") + input);
-    if (!error.ok()) return error;
-  }
-  Error error = outputs->add_file(options.get("out"), "--out", &ids->result);
+  Error error = declare_inputs(options, {"out", "ur-deltas", "report"}, outputs);
+  if (error.ok()) error = outputs->add_file(options.get("out"), "--out", &ids->result);
   if (error.ok() && !options.get("ur-deltas").empty()) {
     error = outputs->add_file(options.get("ur-deltas"), "--ur-deltas", &ids->ur_deltas);
   }

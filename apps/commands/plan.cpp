@@ -284,7 +284,7 @@ Error plan(const Options& options) {
   std::size_t svg_id = 0;
   const bool script = !options.get("urscript").empty();
   const bool svg = !options.get("svg").empty();
-  if (!options.get("joint-limits").empty()) error = outputs.add_input(options.get("joint-limits"), "--joint-limits");
+  error = declare_inputs(options, {"out", "urscript", "svg"}, &outputs);
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (error.ok() && script) error = outputs.add_file(options.get("urscript"), "--urscript", &script_id);
   if (error.ok() && svg) error = outputs.add_file(options.get("svg"), "--svg", &svg_id);

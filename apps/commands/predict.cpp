@@ -36,8 +36,7 @@ Error predict(const Options& options) {
   }
   port::OutputSet outputs;
   std::size_t out_id = 0;
-  Error error = outputs.add_input(options.get("calibration"), "--calibration");
-  if (error.ok()) error = outputs.add_input(options.get("joints"), "--joints");
+  Error error = declare_inputs(options, {"out"}, &outputs);
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (!error.ok()) return error;
   // load

@@ -42,7 +42,7 @@ Error make_report(const Options& options) {
   }
   port::OutputSet outputs;
   std::size_t out_id = 0;
-  Error error = outputs.add_input(options.get("calibration"), "--calibration");
+  Error error = declare_inputs(options, {"out"}, &outputs);
   if (error.ok()) error = outputs.add_folder(options.get("out"), "--out", &out_id);
   if (!error.ok()) return error;
   report::ReportData data;

@@ -180,7 +180,7 @@ int simulate_main(int argc, char** argv) {
   if (!error.ok()) return cli::exit_with(kCommand, error);
   port::OutputSet outputs;
   std::size_t folder = 0;
-  error = outputs.add_input(options.get("calibration-conf"), "--calibration-conf");
+  error = declare_inputs(options, {"out-dir"}, &outputs);
   if (error.ok()) error = outputs.add_folder(options.get("out-dir"), "--out-dir", &folder);
   if (!error.ok()) return cli::exit_with(kCommand, error);
   const Session session(config);

@@ -169,8 +169,7 @@ Error extract(const cli::Options& options) {
   port::OutputSet outputs;
   std::size_t samples_id = 0;
   const std::string out = options.get("samples");
-  error = outputs.add_input(options.get("robot"), "--robot");
-  if (error.ok()) error = outputs.add_input(options.get("tracker"), "--tracker");
+  error = declare_inputs(options, {"samples"}, &outputs);
   if (error.ok() && !out.empty()) error = outputs.add_file(out, "--samples", &samples_id);
   if (!error.ok()) return error;
   streams::SessionConfig config;

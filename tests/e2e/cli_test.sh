@@ -294,6 +294,19 @@ if command -v script >/dev/null; then
   fi
 fi
 
+# --- an input is never an output, whichever option names it: refused, the input untouched
+ur_result_json ur5 0.089159 -0.425 -0.39225 0.10915 0.09465 0.0823 "0, 0, 0" \
+  "[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]" >"$work/model.json"
+cp "$work/model.json" "$work/model.orig"
+{ echo "q1,q2,q3,q4,q5,q6,x,y,z"; tail -n +2 "$sim/truth_samples.csv" | cut -d, -f4-12; } >"$work/paired.csv"
+expect 2 "is the same file as the input --robot-model" -- calibrate --samples "$work/paired.csv" --robot-model "$work/model.json" --out "$work/model.json"
+expect 2 "is the same file as the input --robot-model" -- plan --robot-model "$work/model.json" --count 12 --tracker-position 2,0.5,0.6 --out "$work/model.json"
+mkdir -p "$work/simdir"
+cp "$work/model.json" "$work/simdir/truth.json"
+expect 2 "is the same file as the input --robot-model" -- simulate --robot-model "$work/simdir/truth.json" --out-dir "$work/simdir" --waypoints 4 --duration-s 30
+if cmp -s "$work/model.json" "$work/model.orig" && cmp -s "$work/simdir/truth.json" "$work/model.orig"; then pass; else
+  fail "an input given as an output was overwritten"; fi
+
 # --- every command has --help
 for cmd in calibrate validate predict plan simulate record extract demo report; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then pass; else

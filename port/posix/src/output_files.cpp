@@ -285,6 +285,7 @@ Error OutputSet::stage_in_folder(Output& folder, const std::string& name, Staged
   bool existed = false;
   if (folder.existed) {
     Error error = check_file_target(final_path, who, &existed, &old);
+    if (error.ok() && existed) error = check_distinct(identify(final_path), folder.label, join(folder.path, name));
     if (!error.ok()) return error;
     if (existed) {
       staged->mode_ = old.st_mode & 07777;
