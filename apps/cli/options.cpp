@@ -3,6 +3,7 @@
 #include <string_view>
 
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -107,6 +108,40 @@ Error number_option(const Options& options, const std::string& name, double* val
   return Error::usage("--" + name + ": not a number: " + port::quoted(options.get(name)));
 }
 
+Error bounded_option(const Options& options, const std::string& name, double lo, double hi, double* value) {
+  Error error = number_option(options, name, value);
+  if (!error.ok()) return error;
+  if (!(*value >= lo && *value <= hi)) {
+    char range[80];
+    std::snprintf(range, sizeof range, "[%g, %g]", lo, hi);
+    return Error::usage("--" + name + " must be in " + range + ", not " + port::quoted(options.get(name)));
+  }
+  return Error{};
+}
+
+Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi, std::size_t* value) {
+  double number = 0.0;
+  Error error = bounded_option(options, name, static_cast<double>(lo), static_cast<double>(hi), &number);
+  if (!error.ok()) return error;
+  if (number != static_cast<double>(static_cast<std::size_t>(number))) {
+    return Error::usage("--" + name + " must be a whole number, not " + port::quoted(options.get(name)));
+  }
+  *value = static_cast<std::size_t>(number);
+  return Error{};
+}
+
+Error seed_option(const Options& options, const std::string& name, std::uint64_t* value) {
+  const std::string text = std::string(textio::trim(options.get(name)));
+  const char* end = text.data() + text.size();
+  const auto parsed = std::from_chars(text.data(), end, *value);
+  const bool digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+  if (!digits || parsed.ec != std::errc() || parsed.ptr != end) {
+    return Error::usage("--" + name + " must be a whole number from 0 to 18446744073709551615, not " +
+                        port::quoted(options.get(name)));
+  }
+  return Error{};
+}
+
 bool parse_vec3(std::string_view text, Vec3* value) {
   std::size_t start = 0;
   for (int axis = 0; axis < 3; ++axis) {
@@ -123,8 +158,8 @@ bool parse_vec3(std::string_view text, Vec3* value) {
 
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
   const std::string text = options.get(name);
-  if (parse_vec3(text, value_m)) return Error{};
-  return Error::usage("--" + name + " must be X,Y,Z in metres, not " + port::quoted(text));
+  if (parse_vec3(text, value_m) && value_m->allFinite()) return Error{};
+  return Error::usage("--" + name + " must be X,Y,Z in metres, each finite, not " + port::quoted(text));
 }
 
 std::vector<OptionSpec> input_unit_option_specs() {

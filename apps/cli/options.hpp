@@ -82,7 +82,13 @@ bool progress_enabled(const Options& options);
 Error number_option(const Options& options, const std::string& name, double* value);
 /// "X,Y,Z": exactly three numbers into *value; false otherwise.
 bool parse_vec3(std::string_view text, Vec3* value);
-/// --<name> as X,Y,Z in metres (e.g. --tool).
+/// --<name> as a finite number within [lo, hi]; the message names the option and the range.
+Error bounded_option(const Options& options, const std::string& name, double lo, double hi, double* value);
+/// --<name> as a whole number within [lo, hi].
+Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi, std::size_t* value);
+/// --<name> as a seed: decimal digits, 0 .. 2^64 - 1, exactly (no rounding through a double).
+Error seed_option(const Options& options, const std::string& name, std::uint64_t* value);
+/// --<name> as X,Y,Z in metres (e.g. --tool), each finite.
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
 /// The options of every command that reads text inputs: --length-unit, --angle-unit.
 std::vector<OptionSpec> input_unit_option_specs();

@@ -619,15 +619,11 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   if (!known) {
     return Error::usage("--method must be one of abc+lm, gsa+lm, lm, abc, gsa, all; not " + port::quoted(settings->method));
   }
-  double seed = 0.0;
-  if (!textio::parse_double(options.get("seed"), &seed) || seed < 0.0 || seed > 9.007199254740992e15 ||
-      seed != static_cast<double>(static_cast<std::uint64_t>(seed))) {
-    return Error::usage("--seed must be a non-negative integer");
-  }
-  settings->seed = static_cast<std::uint64_t>(seed);
+  Error seeded = seed_option(options, "seed", &settings->seed);
+  if (!seeded.ok()) return seeded;
   if (!textio::parse_double(options.get("split"), &settings->train_fraction) ||
       !(settings->train_fraction > 0.0 && settings->train_fraction <= 1.0)) {
-    return Error::usage("--split must be a fraction in (0, 1]");
+    return Error::usage("--split must be a fraction in (0, 1], not " + port::quoted(options.get("split")));
   }
   const std::string cv = options.get("cv");
   double folds = 0.0;
@@ -735,8 +731,11 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
                                       dataset, facts);
   if (!error.ok()) return error;
   // No floor on the sample count: the identifiability analysis decides what the samples determine.
-  if (dataset->train_count_for(settings.train_fraction) == 0) {  // the job splits
-    return Error::usage("--split " + options.get("split") + " leaves no training sample");
+  // The job splits; fewer than 3 training poses cannot even place the tracker frame.
+  const std::size_t train_poses = dataset->train_count_for(settings.train_fraction);
+  if (train_poses < 3 && train_poses < dataset->pose_count()) {
+    return Error::usage("--split " + options.get("split") + " leaves " + std::to_string(train_poses) + " training pose(s) of " +
+                        std::to_string(dataset->pose_count()) + "; the tracker frame needs at least 3");
   }
   // Folds hold out whole poses (with several reflectors, a pose's samples stay together).
   const std::string units = dataset->pose_count() == dataset->size() ? " samples" : " poses";
@@ -1087,7 +1086,7 @@ std::string result_json(const CalibrateSettings& settings, const report::ReportD
   return textio::format_calibration_json(file, [&](textio::JsonWriter& w) {
     w.key("method").value(run.final_method());
     w.key("params").value(settings.paper_params ? "paper" : "full");
-    w.key("seed").value(static_cast<long long>(settings.seed));
+    w.key("seed").value(static_cast<unsigned long long>(settings.seed));
     w.key("split").value(settings.train_fraction);
     w.key("uncalibrated_metrics").begin_object();
     w.key("train");

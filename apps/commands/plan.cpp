@@ -39,28 +39,6 @@ std::string text(double value, const char* format) {
   return buffer;
 }
 
-/// A number option that must be finite and within [lo, hi].
-Error bounded_option(const Options& options, const std::string& name, double lo, double hi, double* value) {
-  Error error = number_option(options, name, value);
-  if (!error.ok()) return error;
-  if (!(*value >= lo && *value <= hi)) {
-    return Error::usage("--" + name + " must be in [" + text(lo, "%g") + ", " + text(hi, "%g") +
-                        "], not " + port::quoted(options.get(name)));
-  }
-  return Error{};
-}
-
-Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi, std::size_t* value) {
-  double number = 0.0;
-  Error error = bounded_option(options, name, static_cast<double>(lo), static_cast<double>(hi), &number);
-  if (!error.ok()) return error;
-  if (number != static_cast<double>(static_cast<std::size_t>(number))) {
-    return Error::usage("--" + name + " must be a whole number, not " + port::quoted(options.get(name)));
-  }
-  *value = static_cast<std::size_t>(number);
-  return Error{};
-}
-
 /// The arm: a built-in name (its controller's joint limits) or a robot description FILE
 /// (limits +/-2 pi unless --joint-limits gives them).
 Error robot_option(const Options& options, RobotModel* model, JointLimits* limits) {
@@ -114,9 +92,7 @@ Error parse_request(const Options& options, PlanRequest* request) {
   c.acceptance_rad = acceptance_deg * kDegToRad;
   if (error.ok()) error = bounded_option(options, "floor-z", -10.0, 10.0, &c.floor_z_m);
   if (error.ok()) error = bounded_option(options, "keep-out-radius", 0.0, 10.0, &c.keep_out_radius_m);
-  double seed = 0.0;
-  if (error.ok()) error = bounded_option(options, "seed", 0.0, 9007199254740992.0, &seed);
-  o.seed = static_cast<std::uint64_t>(seed);
+  if (error.ok()) error = seed_option(options, "seed", &o.seed);
   if (error.ok()) error = params_option(options, request->model, &o.free_mask);
   if (error.ok()) error = criterion_option(options, &o.criterion);
   double noise_um = 0.0;

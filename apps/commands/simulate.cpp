@@ -64,6 +64,10 @@ struct Numbers {
   }
 };
 
+/// Largest session simulate writes: waypoints and seconds.
+constexpr std::size_t kMaxWaypoints = 2000;
+constexpr double kMaxDuration_s = 3600.0;
+
 /// Builds the session configuration.
 Error configure(const cli::Options& options, SimConfig* config) {
   Numbers numbers{options, Error{}};
@@ -76,19 +80,19 @@ Error configure(const cli::Options& options, SimConfig* config) {
   config->nominal = robot.model;
   config->convention = robot.convention;
   config->modified_base = robot.modified_base;
-  double seed = 0, waypoints = 0, drift_ppm = 0, robot_start = 0, tracker_start = 0, noise_um = 0, jitter_us = 0;
-  if (!numbers.get("seed", &seed) || !numbers.get("waypoints", &waypoints) ||
-      !numbers.get("duration-s", &config->duration_s) ||
-      !numbers.get("drift-ppm", &drift_ppm) ||
-      !numbers.get("robot-clock-start-us", &robot_start) ||
-      !numbers.get("tracker-clock-start-us", &tracker_start) ||
-      !numbers.get("noise-um", &noise_um) || !numbers.get("jitter-us", &jitter_us))
-    return numbers.error;
-  if (seed < 0 || waypoints < 2 || config->duration_s <= 0 || std::abs(drift_ppm) > 1000 || robot_start < 0 ||
-      tracker_start < 0 || noise_um < 0 || jitter_us < 0) {
-    return Error::usage("out-of-range option (seed >= 0, waypoints >= 2, duration > 0, |drift| <= 1000 ppm)");
-  }
-  config->seed = static_cast<std::uint64_t>(seed);
+  // Each bounded, with its name in the message: the generator's size is bounded too (an hour
+  // of session at most: ~40 MB of captures), and a NaN is never a value.
+  double drift_ppm = 0, robot_start = 0, tracker_start = 0, noise_um = 0, jitter_us = 0;
+  std::size_t waypoints = 0;
+  error = cli::seed_option(options, "seed", &config->seed);
+  if (error.ok()) error = cli::count_option(options, "waypoints", 2, kMaxWaypoints, &waypoints);
+  if (error.ok()) error = cli::bounded_option(options, "duration-s", 1e-3, kMaxDuration_s, &config->duration_s);
+  if (error.ok()) error = cli::bounded_option(options, "drift-ppm", -1000.0, 1000.0, &drift_ppm);
+  if (error.ok()) error = cli::bounded_option(options, "robot-clock-start-us", 0.0, 9.0e15, &robot_start);
+  if (error.ok()) error = cli::bounded_option(options, "tracker-clock-start-us", 0.0, 9.0e15, &tracker_start);
+  if (error.ok()) error = cli::bounded_option(options, "noise-um", 0.0, 1e6, &noise_um);
+  if (error.ok()) error = cli::bounded_option(options, "jitter-us", 0.0, 1e6, &jitter_us);
+  if (!error.ok()) return error;
   config->waypoint_count = static_cast<int>(waypoints);
   config->clock_drift = drift_ppm * 1e-6;
   config->robot_clock_start_us = static_cast<std::uint64_t>(robot_start);
@@ -106,8 +110,8 @@ Error configure(const cli::Options& options, SimConfig* config) {
     if (!options.given(name)) continue;
     double value = 0.0;
     if (!numbers.get(name, &value)) return numbers.error;
-    if (value < 0.0) {
-      return Error::usage(std::string("--") + name + " must not be negative");
+    if (!(value >= 0.0 && value < 1e9)) {
+      return Error::usage(std::string("--") + name + " must be a finite number, not negative");
     }
     *target = value * scale;
   }

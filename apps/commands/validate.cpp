@@ -92,12 +92,11 @@ int validate_main(int argc, char** argv) {
   if (options.get("calibration").empty() || options.get("truth").empty()) {
     return exit_with("validate", Error::usage("--calibration and --truth are required (see --help)"));
   }
-  double poses = 0.0;
-  double seed = 0.0;
-  if (!textio::parse_double(options.get("poses"), &poses) || poses < 1.0 || poses > 1e7 ||
-      !textio::parse_double(options.get("seed"), &seed) || seed < 0.0) {
-    return exit_with("validate", Error::usage("--poses must be 1..1e7 and --seed a non-negative integer"));
-  }
+  std::size_t poses = 0;
+  std::uint64_t seed = 0;
+  Error numbers = count_option(options, "poses", 1, 10000000, &poses);
+  if (numbers.ok()) numbers = seed_option(options, "seed", &seed);
+  if (!numbers.ok()) return exit_with("validate", numbers);
   textio::CalibrationFile calibration;
   textio::CalibrationFile truth;
   for (auto [path, file] : {std::pair{options.get("calibration"), &calibration}, std::pair{options.get("truth"), &truth}}) {

@@ -89,7 +89,7 @@ void write_simulation_members(const Session& session, double truth_margin_s, tex
   const SimTruth& truth = session.truth();
   json.key("simulation").begin_object();
   json.key("format").value("hivecal-sim-truth/1");
-  json.key("seed").value(static_cast<long long>(c.seed));
+  json.key("seed").value(static_cast<unsigned long long>(c.seed));
   json.key("duration_s").value(session.duration_s());
   json.key("clock").begin_object();
   json.key("relation").value("t_robot_us = offset_us + (1 + drift) * t_tracker_us");

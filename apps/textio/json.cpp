@@ -300,6 +300,12 @@ JsonWriter& JsonWriter::value(long long integer) {
   return *this;
 }
 
+JsonWriter& JsonWriter::value(unsigned long long integer) {
+  before_value();
+  out_ += std::to_string(integer);
+  return *this;
+}
+
 JsonWriter& JsonWriter::value(const std::string& text) {
   before_value();
   out_ += escape(text);

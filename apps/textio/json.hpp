@@ -38,6 +38,7 @@ class JsonWriter {
   JsonWriter& key(const std::string& name);       ///< `"name": ` inside an object
   JsonWriter& value(double number);               ///< a number
   JsonWriter& value(long long integer);           ///< an integer
+  JsonWriter& value(unsigned long long integer);  ///< an unsigned integer (a 64-bit seed, exactly)
   JsonWriter& value(const std::string& text);     ///< an escaped string
   JsonWriter& value(const char* text);            ///< an escaped string
   JsonWriter& value(bool flag);                   ///< true / false

@@ -307,6 +307,20 @@ expect 2 "is the same file as the input --robot-model" -- simulate --robot-model
 if cmp -s "$work/model.json" "$work/model.orig" && cmp -s "$work/simdir/truth.json" "$work/model.orig"; then pass; else
   fail "an input given as an output was overwritten"; fi
 
+# --- numbers: each option range-checked with its name, no silent rounding or truncation
+expect 2 "--seed must be a whole number" -- calibrate --samples "$work/paired.csv" --seed 1.5 --out "$work/n1.json"
+expect 2 "--seed must be a whole number" -- calibrate --samples "$work/paired.csv" --seed 18446744073709551616 --out "$work/n1.json"
+expect 2 "--seed must be a whole number" -- plan --robot-model ur5 --count 12 --tracker-position 2,0.5,0.6 --seed -1 --out "$work/n1.csv"
+expect 2 "--poses must be a whole number" -- validate --calibration "$work/model.json" --truth "$work/model.json" --poses 1.5
+expect 2 "--tool must be X,Y,Z in metres, each finite" -- calibrate --samples "$work/paired.csv" --tool 0,0,nan --out "$work/n1.json"
+expect 2 "training pose(s) of" -- calibrate --samples "$work/paired.csv" --split 0.01 --out "$work/n1.json"
+expect 2 "--split must be a fraction in (0, 1], not '0'" -- calibrate --samples "$work/paired.csv" --split 0 --out "$work/n1.json"
+expect 2 "--drift-ppm must be in [-1000, 1000], not 'nan'" -- simulate --out-dir "$work/n2" --drift-ppm nan
+expect 2 "--waypoints must be in [2, 2000]" -- simulate --out-dir "$work/n2" --waypoints 100000
+no_file "$work/n1.json"
+if "${run[@]}" calibrate --samples "$work/paired.csv" --method lm --split 1 --seed 9007199254740993 --out "$work/n3.json" >/dev/null 2>&1 &&
+   grep -q '"seed": 9007199254740993' "$work/n3.json"; then pass; else fail "--seed 2^53+1 not kept exactly in result.json"; fi
+
 # --- every command has --help
 for cmd in calibrate validate predict plan simulate record extract demo report; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then pass; else
