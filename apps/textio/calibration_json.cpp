@@ -1,5 +1,7 @@
 #include "textio/calibration_json.hpp"
 
+#include <cmath>
+
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/text_util.hpp"
@@ -33,11 +35,38 @@ bool read_numbers(const JsonValue* v, std::size_t n, double* out) {
   return true;
 }
 
-/// Reads number `key` of DH row j into *out; the error names the row and key.
+// What a model file may hold: anything beyond is not a robot and would predict NaN or
+// nonsense in silence. Lengths: real factory calibrations carry cancelling offsets of
+// hundreds of metres on UR's parallel joints (+/-204 m), so 1 km; angles: two turns; the tool
+// point: 10 m; a compliance coefficient: 0.01 rad/m or rad/(kg m) (real arms: 1e-6..1e-4).
+constexpr double kMaxModelLength_m = 1000.0;
+constexpr double kMaxModelAngle_rad = 4.0 * 3.141592653589793;
+constexpr double kMaxToolLength_m = 10.0;
+constexpr double kMaxComplianceCoefficient = 1e-2;
+
+/// Reads number `key` of DH row j into *out, within its bound; the error names the row and key.
 port::Error row_number(const JsonValue& row, std::size_t j, const char* key, const std::string& source, double* out) {
+  const std::string at = "\"dh\"[" + std::to_string(j) + "]." + key;
   const JsonValue* v = row.find(key);
   if (v == nullptr) return fail(source, "\"dh\"[" + std::to_string(j) + "]: missing \"" + key + "\"");
-  if (!read_number(v, out)) return fail(source, "\"dh\"[" + std::to_string(j) + "]." + key + " must be a number");
+  if (!read_number(v, out)) return fail(source, at + " must be a number");
+  const bool angle = std::string(key) == "theta_offset" || std::string(key) == "alpha";
+  const double bound = angle ? kMaxModelAngle_rad : kMaxModelLength_m;
+  if (!(std::fabs(*out) <= bound)) {
+    return fail(source, at + " = " + format_double(*out) + (angle ? " rad" : " m") + " is beyond " +
+                            format_double(bound) + (angle ? " rad (two turns): degrees?" : " m: not a robot"));
+  }
+  return port::Error{};
+}
+
+/// The tool point(s) within kMaxToolLength_m; `what` names the key in the message.
+port::Error check_tool(const double (&point)[3], const std::string& what, const std::string& source) {
+  for (double value : point) {
+    if (!(std::fabs(value) <= kMaxToolLength_m)) {
+      return fail(source, what + " holds " + format_double(value) + " m, beyond " + format_double(kMaxToolLength_m) +
+                              " m: millimetres?");
+    }
+  }
   return port::Error{};
 }
 
@@ -74,6 +103,8 @@ port::Error parse_other_tools(const JsonValue& root, const std::string& source, 
   for (std::size_t k = 0; k < tools->array.size(); ++k) {
     double point[3];
     if (!read_numbers(&tools->array[k], 3, point)) return fail(source, shape);
+    const port::Error bounded = check_tool(point, "\"tools\"[" + std::to_string(k) + "]", source);
+    if (!bounded.ok()) return bounded;
     if (k == 0 && (point[0] != tool[0] || point[1] != tool[1] || point[2] != tool[2])) {
       return fail(source, "\"tools\"[0] must equal \"tool\" (target 1)");
     }
@@ -108,6 +139,8 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
   double tool[3];
   if (root.find("tool") == nullptr) return fail(source, "missing \"tool\" ([x, y, z] in metres)");
   if (!read_numbers(root.find("tool"), 3, tool)) return fail(source, "\"tool\" must be [x, y, z] in metres");
+  r = check_tool(tool, "\"tool\"", source);
+  if (!r.ok()) return r;
   const Vec3 tool_m(tool[0], tool[1], tool[2]);
   if (parsed.convention == DhConvention::standard) {
     for (int j = 0; j < kJointCount; ++j) parsed.model.joints[j] = DhJoint{rows[j][0], rows[j][1], rows[j][2], rows[j][3]};
@@ -261,8 +294,10 @@ bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::stri
             (compliance->load == ComplianceLoad::arm_masses ? "\"arm masses\"" : "\"frame K\" (K = 1 .. 6) or \"tool\"");
     return false;
   }
-  if (!read_number(v.find("coefficient"), &compliance->coefficient[t])) {
-    *what = at + ".coefficient must be a number";
+  if (!read_number(v.find("coefficient"), &compliance->coefficient[t]) ||
+      !(std::fabs(compliance->coefficient[t]) <= kMaxComplianceCoefficient)) {
+    *what = at + ".coefficient must be a number within +/-" + format_double(kMaxComplianceCoefficient) +
+            " (rad/m or rad/(kg m); real arms: 1e-6..1e-4)";
     return false;
   }
   if (unit != nullptr && (unit->kind != JsonValue::Kind::string || unit->string != compliance_unit(compliance->load))) {

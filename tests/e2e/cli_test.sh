@@ -321,6 +321,14 @@ no_file "$work/n1.json"
 if "${run[@]}" calibrate --samples "$work/paired.csv" --method lm --split 1 --seed 9007199254740993 --out "$work/n3.json" >/dev/null 2>&1 &&
    grep -q '"seed": 9007199254740993' "$work/n3.json"; then pass; else fail "--seed 2^53+1 not kept exactly in result.json"; fi
 
+# --- model fields beyond any robot are refused by name, not predicted as NaN
+ur_result_json ur5 1e300 -0.425 -0.39225 0.10915 0.09465 0.0823 "0, 0, 0" \
+  "[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]" >"$work/huge_d.json"
+expect 3 'huge_d.json: "dh"[0].d = 1.0000000000000001e+300 m is beyond 1000 m: not a robot' -- predict --calibration "$work/huge_d.json" --joints "$work/joints.csv" --out "$work/n4.csv"
+sed 's/"theta_offset": 0.0, "d": 0.0, "a": -0.425/"theta_offset": 1e20, "d": 0.0, "a": -0.425/' "$work/model.json" >"$work/huge_theta.json"
+expect 3 '"dh"[1].theta_offset = 1e+20 rad is beyond' -- predict --calibration "$work/huge_theta.json" --joints "$work/joints.csv" --out "$work/n4.csv"
+no_file "$work/n4.csv"
+
 # --- every command has --help
 for cmd in calibrate validate predict plan simulate record extract demo report; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then pass; else
