@@ -1174,7 +1174,8 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   if (!error.ok()) return error;
   report::ReportData data = present(settings, start, dataset, facts, job);
   if (facts.has_stream) data.timeline = fates.timeline(120);
-  const bool result_on_stdout = options.get("out") == "-";
+  // Any output on stdout (the result, or --ur-deltas -) keeps the tables off it.
+  const bool result_on_stdout = options.get("out") == "-" || options.get("ur-deltas") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   print_tables(terminal, data, job);
   *warnings = fit_warnings(job.result, settings.bounds, data.parameters);

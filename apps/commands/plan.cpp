@@ -39,6 +39,11 @@ std::string text(double value, const char* format) {
   return buffer;
 }
 
+/// True when an output of the plan goes to stdout: the summary then goes to stderr.
+bool stdout_carries_output(const Options& options) {
+  return options.get("out") == "-" || options.get("urscript") == "-" || options.get("svg") == "-";
+}
+
 /// The arm: a built-in name (its controller's joint limits) or a robot description FILE
 /// (limits +/-2 pi unless --joint-limits gives them).
 Error robot_option(const Options& options, RobotModel* model, JointLimits* limits) {
@@ -284,7 +289,7 @@ Error plan(const Options& options) {
   }
   if (status != Status::ok) return Error::failure(std::string("planning failed: ") + status_message(status));
 
-  std::fputs(report_text(request, down ? &facing : nullptr).c_str(), options.get("out") == "-" ? stderr : stdout);
+  std::fputs(report_text(request, down ? &facing : nullptr).c_str(), stdout_carries_output(options) ? stderr : stdout);
   error = outputs.stage_text(out_id, "", textio::format_joints_csv(Span<const JointVector>(result.poses, result.pose_count)));
   if (error.ok() && script) error = outputs.stage_text(script_id, "", urscript(request.options));
   if (error.ok() && svg) error = outputs.stage_text(svg_id, "", svg_figure(request));

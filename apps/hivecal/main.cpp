@@ -1,4 +1,5 @@
 // hivecal: robot geometry calibration from laser-tracker data (docs/cli.md).
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 
@@ -41,6 +42,10 @@ void print_usage(std::FILE* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A reader that went away (`hivecal predict --out - | head -1`) is an output error, exit 4
+  // with a message: writes then fail with EPIPE, which every output checks, instead of the
+  // process dying silently of SIGPIPE.
+  std::signal(SIGPIPE, SIG_IGN);
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
       std::strcmp(argv[1], "help") == 0) {
     print_usage(argc < 2 ? stderr : stdout);

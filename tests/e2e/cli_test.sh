@@ -329,6 +329,16 @@ sed 's/"theta_offset": 0.0, "d": 0.0, "a": -0.425/"theta_offset": 1e20, "d": 0.0
 expect 3 '"dh"[1].theta_offset = 1e+20 rad is beyond' -- predict --calibration "$work/huge_theta.json" --joints "$work/joints.csv" --out "$work/n4.csv"
 no_file "$work/n4.csv"
 
+# --- stdout: a closed pipe is an output error (exit 4), and a file on stdout keeps the tables off it
+# (20,000 predictions: more than a pipe holds, so the writer meets the closed end every time)
+awk 'BEGIN { print "q1,q2,q3,q4,q5,q6"; for (i = 0; i < 20000; ++i) printf "%.6f,-1,1,0,0.5,%.6f\n", i * 1e-4, i * 2e-4 }' >"$work/many.csv"
+{ "${run[@]}" predict --calibration "$work/model.json" --joints "$work/many.csv" --out - 2>"$work/pipe.err"; echo $? >"$work/pipe.code"; } | true
+if [ "$(cat "$work/pipe.code")" = 4 ] && grep -q "hivecal predict:" "$work/pipe.err"; then pass; else
+  fail "predict into a closed pipe: exit $(cat "$work/pipe.code") ($(cat "$work/pipe.err")), want 4 with a message"; fi
+"${run[@]}" calibrate --samples "$work/paired.csv" --method lm --ur-deltas - --out "$work/n5.json" >"$work/deltas.out" 2>/dev/null
+if grep -q '^\[mounting\]' "$work/deltas.out" && ! grep -q "Table 1" "$work/deltas.out"; then pass; else
+  fail "--ur-deltas -: stdout holds more than the deltas"; fi
+
 # --- every command has --help
 for cmd in calibrate validate predict plan simulate record extract demo report; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then pass; else
