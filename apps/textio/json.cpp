@@ -229,7 +229,10 @@ std::string number_text(double x) { return math::is_finite(x) ? format_double(x)
 port::Error parse_json(const std::string& text, JsonValue* value) {
   *value = JsonValue();
   std::string error;
-  if (JsonParser(text).parse_document(value, &error)) return port::Error{};
+  // A UTF-8 byte order mark, as some editors write it, is not part of the document.
+  const bool bom = text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0;
+  const std::string without_bom = bom ? text.substr(3) : std::string();
+  if (JsonParser(bom ? without_bom : text).parse_document(value, &error)) return port::Error{};
   return port::Error::input(error);
 }
 

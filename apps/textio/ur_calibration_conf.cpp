@@ -56,6 +56,7 @@ port::Error parse_ur_calibration_conf(const std::string& text, const std::string
   bool saw_mounting = false;
   std::size_t line_number = 0;
   std::string_view rest(text);
+  if (rest.substr(0, 3) == "\xEF\xBB\xBF") rest.remove_prefix(3);  // a UTF-8 byte order mark
   while (!rest.empty()) {
     ++line_number;
     const std::size_t newline = rest.find('\n');
@@ -65,7 +66,7 @@ port::Error parse_ur_calibration_conf(const std::string& text, const std::string
     line = trim(line.substr(0, hash));
     if (line.empty()) continue;
     if (line.front() == '[' && line.find('=') == std::string_view::npos) {
-      in_mounting = line == "[mounting]";
+      in_mounting = lower(line) == "[mounting]";  // section names are not case-sensitive
       saw_mounting = saw_mounting || in_mounting;
       continue;
     }

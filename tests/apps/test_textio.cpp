@@ -79,6 +79,16 @@ TEST(TextJson, CalibrationRoundTripsBitExactly) {
   EXPECT_EQ(root.find("convention")->string, "standard-dh");
 }
 
+TEST(TextJson, AByteOrderMarkIsNotPartOfTheDocument) {
+  const std::string text = textio::format_calibration_json(example_calibration(), nullptr);
+  textio::CalibrationFile back;
+  const port::Error r = textio::parse_calibration_json("\xEF\xBB\xBF" + text, "result.json", &back);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(to_params(back.model), to_params(example_calibration().model));
+  textio::JsonValue root;
+  EXPECT_FALSE(textio::parse_json("\xEF\xBB" + text, &root).ok());  // half a mark is junk
+}
+
 TEST(TextJson, MalformedResultsAreNamed) {
   const std::string good = textio::format_calibration_json(example_calibration());
   auto replaced = [&](const std::string& from, const std::string& to) {

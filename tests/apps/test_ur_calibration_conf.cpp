@@ -373,6 +373,15 @@ TEST(UrCalibrationConf, MalformedInputsAreNamed) {
   EXPECT_FALSE(textio::read_ur_calibration_conf("/nonexistent/calibration.conf", &d).ok());
 }
 
+TEST(UrCalibrationConf, AByteOrderMarkAndASectionNameInCapitalsAreRead) {
+  UrCalibrationDeltas d;
+  const std::string rows = "delta_theta = [0,0,0,0,0,0]\ndelta_a = [0,0.5,0,0,0,0]\ndelta_d = [0,0,0,0,0,0]\n"
+                           "delta_alpha = [0,0,0,0,0,0]\n";
+  const port::Error r = textio::parse_ur_calibration_conf("\xEF\xBB\xBF[Mounting]\n" + rows, "conf", &d);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(d.delta_a_m[1], 0.5);
+}
+
 TEST(UrCalibrationConf, FormatReadsBackToTheSameBits) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/calibration.conf");
   UrCalibrationDeltas d;

@@ -127,6 +127,45 @@ TEST(OutputFiles, NothingAppearsUnlessEverythingIsCommitted) {
   EXPECT_EQ(read(dir.path() + "/report/deep/index.html"), "<html>");
 }
 
+TEST(OutputFiles, ALegalNameOf255BytesGetsItsTemporary) {
+  const test::TempDir dir("hivecal_port_files");
+  for (std::size_t length : {245u, 250u, 255u}) {
+    const std::string path = dir.path() + "/" + std::string(length - 5, 'r') + ".json";
+    const Error error = write_one(path, "{}");
+    ASSERT_TRUE(error.ok()) << length << ": " << error.message;
+    EXPECT_EQ(read(path), "{}");
+  }
+}
+
+TEST(OutputFiles, ANewReportFolderTakesTheUmask) {
+  // mkdtemp's 0700 must not survive into the folder the user gets.
+  const test::TempDir dir("hivecal_port_files");
+  const mode_t old_mask = ::umask(022);
+  {
+    OutputSet outputs;
+    std::size_t report = 0;
+    ASSERT_TRUE(outputs.add_folder(dir.path() + "/report", "--report", &report).ok());
+    ASSERT_TRUE(outputs.stage_text(report, "index.html", "<html>").ok());
+    ASSERT_TRUE(outputs.commit().ok());
+  }
+  ::umask(old_mask);
+  EXPECT_EQ(mode_of(dir.path() + "/report") & 0777, 0755u);
+}
+
+TEST(OutputFiles, AFileOfAnOutputFolderThatIsAnInputIsRefused) {
+  const test::TempDir dir("hivecal_port_files");
+  ASSERT_TRUE(write_one(dir.path() + "/truth.json", "input").ok());
+  OutputSet outputs;
+  std::size_t folder = 0;
+  ASSERT_TRUE(outputs.add_input(dir.path() + "/truth.json", "--robot-model").ok());
+  ASSERT_TRUE(outputs.add_folder(dir.path(), "--out-dir", &folder).ok());
+  const Error error = outputs.stage_text(folder, "truth.json", "output");
+  EXPECT_EQ(error.fault, Fault::usage);
+  EXPECT_NE(error.message.find("is the same file as the input --robot-model"), std::string::npos) << error.message;
+  outputs.abandon();
+  EXPECT_EQ(read(dir.path() + "/truth.json"), "input");
+}
+
 TEST(OutputFiles, ATargetThatBecomesAFifoDuringTheRunIsNotReplaced) {
   const test::TempDir dir("hivecal_port_files");
   const std::string path = dir.path() + "/out.csv";

@@ -28,11 +28,27 @@ std::string join(const std::string& folder, const std::string& name) {
   return folder == "/" ? "/" + name : folder + "/" + name;
 }
 
-mode_t default_mode() {
+/// The process's umask (read by setting it and putting it back).
+mode_t umask_bits() {
   const mode_t mask = ::umask(0);
   ::umask(mask);
-  return static_cast<mode_t>(0666 & ~mask);
+  return mask;
 }
+
+/// mkstemp's pattern for a temporary beside `path`: its name + ".tmp.XXXXXX", the name cut
+/// so that the whole stays within NAME_MAX (a legal 250-byte name still gets its temporary).
+std::string temp_pattern(const std::string& path) {
+  constexpr std::size_t kSuffix = sizeof(".tmp.XXXXXX") - 1;
+  constexpr std::size_t kNameMax = 255;
+  const std::size_t slash = path.rfind('/');
+  const std::size_t name_start = slash == std::string::npos ? 0 : slash + 1;
+  std::string pattern = path;
+  if (path.size() - name_start > kNameMax - kSuffix) pattern.resize(name_start + kNameMax - kSuffix);
+  return pattern + ".tmp.XXXXXX";
+}
+
+/// Mode of a new file: 0666 & ~umask, as open() would give it.
+mode_t default_mode() { return static_cast<mode_t>(0666 & ~umask_bits()); }
 
 std::string kind_of(mode_t mode) {
   if (S_ISCHR(mode)) return "a character device";
@@ -40,7 +56,8 @@ std::string kind_of(mode_t mode) {
   if (S_ISFIFO(mode)) return "a FIFO";
   if (S_ISSOCK(mode)) return "a socket";
   if (S_ISDIR(mode)) return "a folder";
-  return "not a regular file";
+  if (S_ISREG(mode)) return "a regular file";
+  return "a special file";
 }
 
 /// `label 'path'` for messages.
@@ -269,10 +286,12 @@ Error OutputSet::stage_in_folder(Output& folder, const std::string& name, Staged
     base = folder.target;
   } else {
     if (folder.temp_folder.empty()) {
-      std::string pattern = join(existing_ancestor(folder.target), name_of(folder.target) + ".tmp.XXXXXX");
+      std::string pattern = temp_pattern(join(existing_ancestor(folder.target), name_of(folder.target)));
       if (::mkdtemp(pattern.data()) == nullptr) {
         return Error::output(who + ": cannot create a temporary folder: " + system_message(errno));
       }
+      // mkdtemp makes it 0700; the folder it becomes gets what mkdir would give it.
+      (void)::chmod(pattern.c_str(), static_cast<mode_t>(0777 & ~umask_bits()));
       folder.temp_folder = pattern;
     }
     base = folder.temp_folder;
@@ -294,7 +313,7 @@ Error OutputSet::stage_in_folder(Output& folder, const std::string& name, Staged
       staged->owner_gid_ = old.st_gid;
     }
   }
-  std::string pattern = final_path + ".tmp.XXXXXX";
+  std::string pattern = temp_pattern(final_path);
   staged->fd_ = ::mkostemp(pattern.data(), O_CLOEXEC);
   if (staged->fd_ < 0) return Error::output(who + ": cannot create a temporary file beside it: " + system_message(errno));
   staged->temp_path_ = pattern;
@@ -320,7 +339,7 @@ Error OutputSet::stage(std::size_t id, const std::string& name, StagedFile** fil
     staged->set_owner_ = output.existed;
     staged->owner_uid_ = output.old.st_uid;
     staged->owner_gid_ = output.old.st_gid;
-    std::string pattern = output.target + ".tmp.XXXXXX";
+    std::string pattern = temp_pattern(output.target);
     staged->fd_ = ::mkostemp(pattern.data(), O_CLOEXEC);
     if (staged->fd_ < 0) {
       return Error::output(who + ": cannot create a temporary file beside it: " + system_message(errno));
