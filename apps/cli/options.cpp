@@ -200,8 +200,13 @@ Error columns_option(const Options& options, textio::InputUnits* units) {
 }
 
 Error declare_inputs(const Options& options, const std::vector<std::string>& output_names, port::OutputSet* outputs) {
+  std::string reads_stdin;  // the input option that reads stdin: one at most
   for (const auto& [name, value] : options.given_values()) {
     if (std::find(output_names.begin(), output_names.end(), name) != output_names.end()) continue;
+    if (value == "-" && !reads_stdin.empty()) {
+      return Error::usage("--" + reads_stdin + " and --" + name + " both read stdin ('-'): give one of them a file");
+    }
+    if (value == "-") reads_stdin = name;
     struct stat info {};
     if (value.empty() || value == "-" || ::stat(value.c_str(), &info) != 0 || !S_ISREG(info.st_mode)) continue;
     const Error error = outputs->add_input(value, "--" + name);

@@ -53,7 +53,7 @@ std::string input_line(const char* stream, const StreamInputCounts& in, const ch
 
 port::Error joint_names_option(const std::string& value, textio::RobotLogOptions* log_options) {
   if (value.empty() || textio::parse_joint_names(value, log_options)) return port::Error{};
-  return port::Error::usage("--joint-names needs six comma-separated names, joints 1..6 in order");
+  return port::Error::usage("--joint-names needs six different comma-separated names, joints 1..6 in order");
 }
 
 namespace {

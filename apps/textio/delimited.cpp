@@ -22,8 +22,13 @@ std::string_view unquote(std::string_view s) {
 
 /// A unit as written between brackets, lower case; the degree sign (UTF-8) is "deg".
 std::string unit_of(std::string_view text) {
-  const std::string unit = lower(trim(text));
-  return unit == "\xC2\xB0" ? "deg" : unit;
+  std::string unit = lower(trim(text));
+  if (unit == "\xC2\xB0") return "deg";
+  // The micro prefix as the micro sign (U+00B5) or the Greek mu (U+03BC): "um", "us".
+  for (const char* micro : {"\xC2\xB5", "\xCE\xBC"}) {
+    if (unit.size() > 2 && unit.compare(0, 2, micro) == 0) return "u" + unit.substr(2);
+  }
+  return unit;
 }
 
 /// A unit token "[mm]" or "(mm)" (pendants and some tracker exports write parentheses).

@@ -1,5 +1,6 @@
 #include "textio/logs.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -333,6 +334,10 @@ bool parse_joint_names(std::string_view text, RobotLogOptions* options) {
     const std::size_t comma = std::min(text.find(',', start), text.size());
     const std::string_view name = trim(text.substr(start, comma - start));
     if (name.empty() || count == names.size()) return false;
+    if (std::find(names.begin(), names.begin() + static_cast<std::ptrdiff_t>(count), name) !=
+        names.begin() + static_cast<std::ptrdiff_t>(count)) {
+      return false;  // a joint named twice: two columns would be read as one
+    }
     names[count++] = std::string(name);
     if (comma == text.size()) break;
     start = comma + 1;
@@ -374,6 +379,14 @@ StreamFileKind detect_stream_file(const std::string& path) {
   const std::size_t start = at;
   for (; at < got && head[at] != '\n'; ++at) {
     const unsigned char c = head[at];
+    // A header may carry a unit in UTF-8 ("(°)", "[µm]"): a whole multi-byte sequence is text.
+    const std::size_t continuation = c >= 0xC2 && c <= 0xDF ? 1 : c >= 0xE0 && c <= 0xEF ? 2 : c >= 0xF0 && c <= 0xF4 ? 3 : 0;
+    bool sequence = continuation > 0 && at + continuation < got;
+    for (std::size_t k = 1; sequence && k <= continuation; ++k) sequence = (head[at + k] & 0xC0) == 0x80;
+    if (sequence) {
+      at += continuation;
+      continue;
+    }
     // A capture's frames end in 0x00 and are mostly bytes outside printable ASCII.
     if (!((c >= 0x20 && c < 0x7f) || c == '\t' || c == '\r')) return StreamFileKind::capture;
     delimiter = delimiter || c == ',' || c == ';' || c == '\t' || c == ' ';

@@ -172,7 +172,12 @@ expect 2 "--columns: 'x:measurement_x' is not C=NAME" -- calibrate --samples "$w
 printf 'Zeit;Achse 1;Achse 2\n1;2;3\n' >"$work/other.csv"
 expect 3 "other.csv:1: not a robot joint log: expected t,q1..q6" -- calibrate --robot "$work/other.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
 no_file "$work/r9.json"
-expect 2 "--joint-names needs six comma-separated names" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b --out "$work/r9.json"
+expect 2 "--joint-names needs six different comma-separated names" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b --out "$work/r9.json"
+expect 2 "--joint-names needs six different comma-separated names" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b,c,d,e,a --out "$work/r9.json"
+# A unit in UTF-8 in a header ("[µs]", "(°)") is a text log, not a capture.
+{ printf 'time [\302\265s],X [mm],Y [mm],Z [mm]\n'; tail -n +2 "$sim/tracker.csv" | awk -F, -v OFS=, '{ print $1 * 1e6, $2 * 1e3, $3 * 1e3, $4 * 1e3 }'; } >"$work/tracker_us.csv"
+if "${run[@]}" calibrate --robot "$sim/robot_joints.csv" --tracker "$work/tracker_us.csv" --method lm --out "$work/r10.json" >/dev/null 2>"$work/r10.err"; then pass; else
+  fail "a tracker log with [µs] in its header: $(cat "$work/r10.err")"; fi
 
 # --- units and plausibility (issue 11): the session in degrees and millimetres, no unit in the headers
 awk -F, 'NR == 1 { print; next } { printf "%s", $1; for (i = 2; i <= 7; i++) printf ",%.17g", $i * 57.29577951308232; print "" }' \
@@ -328,6 +333,8 @@ expect 3 'huge_d.json: "dh"[0].d = 1.0000000000000001e+300 m is beyond 1000 m: n
 sed 's/"theta_offset": 0.0, "d": 0.0, "a": -0.425/"theta_offset": 1e20, "d": 0.0, "a": -0.425/' "$work/model.json" >"$work/huge_theta.json"
 expect 3 '"dh"[1].theta_offset = 1e+20 rad is beyond' -- predict --calibration "$work/huge_theta.json" --joints "$work/joints.csv" --out "$work/n4.csv"
 no_file "$work/n4.csv"
+
+expect 2 "--calibration and --joints both read stdin" -- predict --calibration - --joints - --out "$work/n6.csv"
 
 # --- stdout: a closed pipe is an output error (exit 4), and a file on stdout keeps the tables off it
 # (20,000 predictions: more than a pipe holds, so the writer meets the closed end every time)
