@@ -23,13 +23,15 @@ using port::Error;
 volatile std::sig_atomic_t g_stop = 0;
 void request_stop(int) { g_stop = 1; }
 
-/// SIGINT/SIGTERM end the recording cleanly (no SA_RESTART: poll() wakes up at once).
+/// SIGINT/SIGTERM/SIGHUP (a closed terminal) end the recording cleanly, stats printed (no
+/// SA_RESTART: poll() wakes up at once).
 void install_stop_handlers() {
   struct sigaction action {};
   action.sa_handler = request_stop;
   sigemptyset(&action.sa_mask);
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGHUP, &action, nullptr);
 }
 
 void print_clock(std::FILE* out, const ClockFit& fit) {
@@ -96,6 +98,12 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
     }
     error = checks.add_input(options.get(s.port), std::string("--") + s.port);
     if (!error.ok()) return error;
+  }
+  const std::string robot_port = options.get(kStreams[0].port);
+  const std::string tracker_port = options.get(kStreams[1].port);
+  if (!robot_port.empty() && !tracker_port.empty() && port::same_file(port::identify(robot_port), port::identify(tracker_port))) {
+    return Error::usage(std::string("--") + kStreams[0].port + " and --" + kStreams[1].port +
+                        " name the same port: each stream needs its own");
   }
   for (const StreamOptions& s : kStreams) {
     if (options.get(s.port).empty()) continue;

@@ -1,5 +1,5 @@
-// `hivecal record` killed by SIGTERM in the middle of a frame: the child exits cleanly and
-// its capture holds every byte it had read, decoding up to the cut.
+// `hivecal record` stopped by SIGTERM or SIGHUP (a closed terminal) in the middle of a frame:
+// the child exits cleanly and its capture holds every byte it had read, decoding up to the cut.
 #include <gtest/gtest.h>
 
 #include <sys/stat.h>
@@ -31,7 +31,8 @@ long long file_size(const std::string& path) {
   return ::stat(path.c_str(), &info) == 0 ? static_cast<long long>(info.st_size) : -1;
 }
 
-TEST(RecordCommand, SigtermKeepsEveryByteReadAndTheCaptureDecodesUpToTheCut) {
+/// Records a pty in a child, sends it 300.5 frames, stops it with `signal`, checks the capture.
+void record_and_stop(int signal) {
   port::PtyPair pty;
   std::string error;
   ASSERT_TRUE(port::open_pty(&pty).ok()) << error;
@@ -62,7 +63,7 @@ TEST(RecordCommand, SigtermKeepsEveryByteReadAndTheCaptureDecodesUpToTheCut) {
   ASSERT_TRUE(port::write_all(pty.master_fd, bytes.data(), sent));
   const std::int64_t give_up_ms = port::monotonic_ms() + 20000;
   while (file_size(capture) < static_cast<long long>(sent) && port::monotonic_ms() < give_up_ms) port::sleep_ms(10);
-  ASSERT_EQ(::kill(child, SIGTERM), 0);
+  ASSERT_EQ(::kill(child, signal), 0);
   int status = 0;
   ASSERT_EQ(::waitpid(child, &status, 0), child);
   EXPECT_TRUE(WIFEXITED(status));
@@ -84,6 +85,10 @@ TEST(RecordCommand, SigtermKeepsEveryByteReadAndTheCaptureDecodesUpToTheCut) {
   port::close_pty(&pty);
   ::unlink(capture.c_str());
 }
+
+TEST(RecordCommand, SigtermKeepsEveryByteReadAndTheCaptureDecodesUpToTheCut) { record_and_stop(SIGTERM); }
+
+TEST(RecordCommand, SighupEndsItAsCleanlyAsSigterm) { record_and_stop(SIGHUP); }
 
 }  // namespace
 }  // namespace hivecal

@@ -334,6 +334,7 @@ sed 's/"theta_offset": 0.0, "d": 0.0, "a": -0.425/"theta_offset": 1e20, "d": 0.0
 expect 3 '"dh"[1].theta_offset = 1e+20 rad is beyond' -- predict --calibration "$work/huge_theta.json" --joints "$work/joints.csv" --out "$work/n4.csv"
 no_file "$work/n4.csv"
 
+expect 2 "--robot-port and --tracker-port name the same port" -- record --robot-port "$work/model.json" --tracker-port "$work/model.json" --robot-out "$work/rec1.cap" --tracker-out "$work/rec2.cap"
 expect 2 "--calibration and --joints both read stdin" -- predict --calibration - --joints - --out "$work/n6.csv"
 
 # --- stdout: a closed pipe is an output error (exit 4), and a file on stdout keeps the tables off it

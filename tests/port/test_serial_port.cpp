@@ -73,6 +73,21 @@ TEST(SerialPort, DeliversEveryByteOfDribbledWrites) {
   close_pty(&pty);
 }
 
+TEST(SerialPort, ASecondReaderOfOnePortIsRefused) {
+  // Two recorders (or --robot-port P --tracker-port P) would split the bytes between them.
+  PtyPair pty;
+  ASSERT_TRUE(open_pty(&pty).ok());
+  SerialPort first(SerialOptions{pty.slave_path, kRobotBaud});
+  ASSERT_TRUE(first.open().ok());
+  SerialPort second(SerialOptions{pty.slave_path, kRobotBaud});
+  const Error error = second.open();
+  EXPECT_EQ(error.fault, Fault::input);
+  EXPECT_NE(error.message.find("in use by another reader"), std::string::npos) << error.message;
+  first.close();
+  EXPECT_TRUE(second.open().ok());  // free again once the first lets go
+  close_pty(&pty);
+}
+
 std::atomic<int> g_signals{0};
 void count_signal(int) { g_signals.fetch_add(1); }
 

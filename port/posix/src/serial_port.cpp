@@ -1,6 +1,7 @@
 #include "hivecal/port/serial_port.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <poll.h>
 #include <termios.h>
 #include <unistd.h>
@@ -57,6 +58,14 @@ Error SerialPort::open() {
   fd_ = ::open(options_.path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) {
     return Error::input(options_.path + ": cannot open: " + std::strerror(errno));
+  }
+  // One reader per port: a second recorder (or the same port given twice) would split the
+  // bytes between two unusable captures. An advisory lock, as serial tools take them.
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    close();
+    return Error::input(options_.path + ": in use by another reader (" +
+                        (error == EWOULDBLOCK ? std::string("locked") : std::string(std::strerror(error))) + ")");
   }
   Error configured = configure();
   if (!configured.ok()) {
