@@ -4,10 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
+#include <thread>
 #include <string>
 
 #include "hivecal/port/error.hpp"
@@ -164,6 +167,27 @@ TEST(OutputFiles, AFileOfAnOutputFolderThatIsAnInputIsRefused) {
   EXPECT_NE(error.message.find("is the same file as the input --robot-model"), std::string::npos) << error.message;
   outputs.abandon();
   EXPECT_EQ(read(dir.path() + "/truth.json"), "input");
+}
+
+TEST(OutputFiles, ACommitWaitsForAnotherRunsCommitInTheSameFolder) {
+  // Two runs on the same outputs: one set is replaced after the other, never interleaved. The
+  // other run's commit is stood in for by holding the folder's lock here.
+  const test::TempDir dir("hivecal_port_files");
+  const int folder = ::open(dir.path().c_str(), O_RDONLY | O_DIRECTORY);
+  ASSERT_GE(folder, 0);
+  ASSERT_EQ(::flock(folder, LOCK_EX), 0);
+  std::atomic<bool> done{false};
+  std::thread run([&] {
+    EXPECT_TRUE(write_one(dir.path() + "/result.json", "{}").ok());
+    done = true;
+  });
+  ::usleep(300000);
+  EXPECT_FALSE(done.load()) << "the commit did not wait for the folder's lock";
+  EXPECT_EQ(::access((dir.path() + "/result.json").c_str(), F_OK), -1);
+  ::close(folder);  // the other commit ends
+  run.join();
+  EXPECT_TRUE(done.load());
+  EXPECT_EQ(read(dir.path() + "/result.json"), "{}");
 }
 
 TEST(OutputFiles, ATargetThatBecomesAFifoDuringTheRunIsNotReplaced) {

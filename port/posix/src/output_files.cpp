@@ -1,9 +1,11 @@
 #include "hivecal/port/output_files.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -361,7 +363,42 @@ Error OutputSet::stage_text(std::size_t id, const std::string& name, const std::
   return file->finish();
 }
 
+namespace {
+
+/// Exclusive locks on the folders a commit writes into (flock on each folder itself: no lock
+/// file is left behind), taken in path order and released on destruction: concurrent runs
+/// on the same outputs replace them one set after the other, never interleaved.
+class FolderLocks {
+ public:
+  explicit FolderLocks(std::vector<std::string> folders) {
+    std::sort(folders.begin(), folders.end());
+    folders.erase(std::unique(folders.begin(), folders.end()), folders.end());
+    for (const std::string& folder : folders) {
+      const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+      if (fd < 0) continue;  // not there (yet): nothing to serialise on
+      while (::flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+      }
+      fds_.push_back(fd);
+    }
+  }
+  ~FolderLocks() {
+    for (int fd : fds_) ::close(fd);  // closing releases the lock
+  }
+  FolderLocks(const FolderLocks&) = delete;
+  FolderLocks& operator=(const FolderLocks&) = delete;
+
+ private:
+  std::vector<int> fds_;
+};
+
+}  // namespace
+
 Error OutputSet::commit() {
+  std::vector<std::string> folders;
+  for (const auto& output : outputs_) {
+    if (!output->is_stdout) folders.push_back(existing_ancestor(output->target));  // the folder it goes into
+  }
+  const FolderLocks locks(std::move(folders));
   Error error;
   for (auto& output : outputs_) {
     for (auto& file : output->files) {

@@ -6,8 +6,10 @@
 //  2. stage: each output is written to a temporary beside its target (a symlink is followed:
 //     the temporary goes beside the link's target, the link stays), every write, the fsync
 //     and the close checked; stdout's bytes are kept in memory;
-//  3. commit: stdout is written and flushed (a full device is an error), then every temporary
-//     is renamed onto its target with the old file's mode (and owner, when allowed).
+//  3. commit: the folders the outputs go into are locked (flock: concurrent runs commit one
+//     whole set after the other), stdout is written and flushed (a full device is an error),
+//     then every temporary is renamed onto its target with the old file's mode (and owner,
+//     when allowed).
 // A set destroyed without commit() removes its temporaries: a failed run leaves no output.
 #pragma once
 
