@@ -12,7 +12,7 @@ cmake --build --preset host -j"$(nproc)" --target hivecal_cli >/dev/null
 hivecal=build/host/apps/hivecal/hivecal
 out=build/bench-job
 mkdir -p "$out"
-"$hivecal" simulate --out-dir "$out" --seed 1 >/dev/null
+"$hivecal" simulate --out-dir "$out" --seed 1 --force >/dev/null
 echo "session: $(stat -c %s "$out/robot.cap") + $(stat -c %s "$out/tracker.cap") bytes of captures (600 s)"
 TIMEFORMAT='%R %U %S'
 walls=()

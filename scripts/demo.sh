@@ -15,7 +15,7 @@ out=build/demo
 mkdir -p "$out"
 
 echo "== simulate: UR5 + tracker session -> $out/robot.cap, $out/tracker.cap"
-"$hivecal" simulate --out-dir "$out" --seed 1
+"$hivecal" simulate --out-dir "$out" --seed 1 --force
 echo
 echo "== calibrate from the captures"
 "$hivecal" calibrate --robot "$out/robot.cap" --tracker "$out/tracker.cap" --robot-model ur5 \

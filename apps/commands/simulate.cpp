@@ -1,5 +1,7 @@
 #include "commands/simulate.hpp"
 
+#include <signal.h>
+
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -46,6 +48,7 @@ const std::vector<cli::OptionSpec>& option_specs() {
       {"tool-sigma-um", "X", "sigma of the true tool's error per axis [um] (default: from --errors)", ""},
       {"compliance-urad", "J2,J3", "joint 2 and 3 gravity deflection [urad] (default: from --errors)", ""},
       {"calibration-conf", "FILE", "true geometry = nominal + the [mounting] deltas of this UR calibration.conf", ""},
+      {"force", "", "replace the files of an earlier session in --out-dir (never done without it)", ""},
       {"serve", "", "serve the streams live on two pseudo-terminals instead of writing captures", ""},
       {"speed", "X", "with --serve: session seconds per second (0: as fast as read)", "1"},
       {"serve-delay-s", "S", "with --serve: wait before streaming, to start a reader", "3"},
@@ -81,7 +84,7 @@ Error configure(const cli::Options& options, SimConfig* config) {
   config->convention = robot.convention;
   config->modified_base = robot.modified_base;
   // Each bounded, with its name in the message: the generator's size is bounded too (an hour
-  // of session at most: ~40 MB of captures), and a NaN is never a value.
+  // of session at most: ~0.5 GB of captures, logs and truth), and a NaN is never a value.
   double drift_ppm = 0, robot_start = 0, tracker_start = 0, noise_um = 0, jitter_us = 0;
   std::size_t waypoints = 0;
   error = cli::seed_option(options, "seed", &config->seed);
@@ -137,6 +140,21 @@ Error configure(const cli::Options& options, SimConfig* config) {
   return Error{};
 }
 
+/// Refuses to overwrite the captures, logs or truth of an earlier session (they may be a real
+/// recording's) unless --force: the same rule as `record`.
+Error check_not_overwriting(const cli::Options& options) {
+  if (options.given("force")) return Error{};
+  const std::string folder = options.get("out-dir");
+  std::string found;
+  for (const std::string& name : output_names(!options.given("serve"))) {
+    if (!port::identify(folder + "/" + name).exists) continue;
+    found += (found.empty() ? "" : ", ") + name;
+  }
+  if (found.empty()) return Error{};
+  return Error::output("--out-dir " + port::quoted(folder, 200) + " already holds " + found +
+                       "; refusing to overwrite a session (--force replaces it)");
+}
+
 /// Serves the session on two ptys, printing their paths first.
 Error serve(const Session& session, const cli::Options& options) {
   Numbers numbers{options, Error{}};
@@ -151,8 +169,12 @@ Error serve(const Session& session, const cli::Options& options) {
   if (!error.ok()) return error;
   std::printf("robot   %s\ntracker %s\n", robot.slave_path.c_str(), tracker.slave_path.c_str());
   std::fflush(stdout);
-  std::signal(SIGINT, request_stop);
-  std::signal(SIGTERM, request_stop);
+  // SIGINT, SIGTERM and SIGHUP end the session cleanly (stats printed), even when a reader
+  // left and the writes wait for room that never comes (write_all polls the stop request).
+  struct sigaction action {};
+  action.sa_handler = request_stop;
+  sigemptyset(&action.sa_mask);
+  for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaction(s, &action, nullptr);
   port::sleep_ms(static_cast<std::int64_t>(delay_s * 1000.0));
   ServeStats stats;
   error = serve_session(session, robot, tracker, ServeOptions{speed}, &g_stop, &stats);
@@ -186,6 +208,7 @@ int simulate_main(int argc, char** argv) {
   std::size_t folder = 0;
   error = declare_inputs(options, {"out-dir"}, &outputs);
   if (error.ok()) error = outputs.add_folder(options.get("out-dir"), "--out-dir", &folder);
+  if (error.ok()) error = check_not_overwriting(options);
   if (!error.ok()) return cli::exit_with(kCommand, error);
   const Session session(config);
   // With --serve, `hivecal record` makes the captures from the ptys.

@@ -7,6 +7,7 @@
 #include "commands/simulate.hpp"
 #include "commands/streams.hpp"
 #include "hivecal/port/output_files.hpp"
+#include "hivecal/port/temporaries.hpp"
 
 namespace {
 
@@ -46,6 +47,8 @@ int main(int argc, char** argv) {
   // with a message: writes then fail with EPIPE, which every output checks, instead of the
   // process dying silently of SIGPIPE.
   std::signal(SIGPIPE, SIG_IGN);
+  // Ctrl-C, SIGTERM or a hangup in the middle of a run leaves no temporary behind.
+  hivecal::port::remove_temporaries_on_signals();
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
       std::strcmp(argv[1], "help") == 0) {
     print_usage(argc < 2 ? stderr : stdout);

@@ -170,6 +170,13 @@ bool append_frame(const DeviceInfoRecord& record, std::vector<std::uint8_t>* byt
   return append_with(record, encode_device_info, bytes);
 }
 
+std::vector<std::string> output_names(bool with_captures) {
+  std::vector<std::string> names;
+  if (with_captures) names = {kRobotCaptureName, kTrackerCaptureName};
+  for (const char* name : kLogAndTruthNames) names.push_back(name);
+  return names;
+}
+
 port::Error stage_outputs(const Session& session, bool with_captures, double truth_margin_s, port::OutputSet* outputs,
                           std::size_t folder) {
   using Writer = std::function<bool(port::StagedFile&)>;
@@ -177,12 +184,12 @@ port::Error stage_outputs(const Session& session, bool with_captures, double tru
       {kRobotCaptureName, [&](port::StagedFile& f) { return write_capture<RobotStream, JointStateRecord>(session, f); }},
       {kTrackerCaptureName,
        [&](port::StagedFile& f) { return write_capture<TrackerStream, TrackerPointRecord>(session, f); }},
-      {"robot_joints.csv",
+      {kLogAndTruthNames[0],
        [&](port::StagedFile& f) { return write_csv<RobotStream, JointStateRecord>(session, "t,q1,q2,q3,q4,q5,q6", robot_row, f); }},
-      {"tracker.csv",
+      {kLogAndTruthNames[1],
        [&](port::StagedFile& f) { return write_csv<TrackerStream, TrackerPointRecord>(session, "t,x,y,z,status", tracker_row, f); }},
-      {"truth.json", [&](port::StagedFile& f) { return write_truth_json(session, truth_margin_s, f); }},
-      {"truth_samples.csv", [&](port::StagedFile& f) { return write_truth_samples(session, truth_margin_s, f); }},
+      {kLogAndTruthNames[2], [&](port::StagedFile& f) { return write_truth_json(session, truth_margin_s, f); }},
+      {kLogAndTruthNames[3], [&](port::StagedFile& f) { return write_truth_samples(session, truth_margin_s, f); }},
   };
   for (const auto& [name, job] : jobs) {
     const bool capture = std::string(name) == kRobotCaptureName || std::string(name) == kTrackerCaptureName;

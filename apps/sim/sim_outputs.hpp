@@ -14,10 +14,15 @@
 
 namespace hivecal::sim {
 
-/// File names of the captures inside the output folder (the other outputs: robot_joints.csv,
-/// tracker.csv, truth.json, truth_samples.csv).
+/// File names of the captures inside the output folder.
 inline constexpr const char* kRobotCaptureName = "robot.cap";
 inline constexpr const char* kTrackerCaptureName = "tracker.cap";  ///< see kRobotCaptureName
+/// The other outputs, in this order: the two CSV logs, then the ground truth.
+inline constexpr const char* kLogAndTruthNames[] = {"robot_joints.csv", "tracker.csv", "truth.json",
+                                                    "truth_samples.csv"};
+
+/// Every file name stage_outputs() writes into its folder (the captures only `with_captures`).
+std::vector<std::string> output_names(bool with_captures);
 
 /// Encodes one record as a whole frame (COBS + delimiter) appended to *bytes.
 bool append_frame(const JointStateRecord& record, std::vector<std::uint8_t>* bytes);

@@ -15,10 +15,11 @@ void wait_until_due(double t_s, double speed, std::int64_t start_ms) {
   port::sleep_ms(due_ms - port::monotonic_ms());
 }
 
-bool send(int fd, const std::vector<std::uint8_t>& frame, std::uint64_t* bytes, std::uint64_t* frames,
-          std::string* error, const char* what) {
-  if (!port::write_all(fd, frame.data(), frame.size())) {
-    *error = std::string("cannot write to the ") + what + " pty";
+/// Writes one frame; false on failure (*error says it) or on a stop request (*error empty).
+bool send(int fd, const std::vector<std::uint8_t>& frame, const std::atomic<bool>* stop, std::uint64_t* bytes,
+          std::uint64_t* frames, std::string* error, const char* what) {
+  if (!port::write_all(fd, frame.data(), frame.size(), stop)) {
+    if (stop == nullptr || !stop->load()) *error = std::string("cannot write to the ") + what + " pty";
     return false;
   }
   *bytes += frame.size();
@@ -33,10 +34,10 @@ bool serve_frames(const Session& session, const port::PtyPair& robot, const port
   std::vector<std::uint8_t> frame;
   const std::int64_t start_ms = port::monotonic_ms();
   bool ok = append_frame(robot_stream.device_info(), &frame) &&
-            send(robot.master_fd, frame, &stats->robot_bytes, &stats->robot_frames, error, "robot");
+            send(robot.master_fd, frame, stop, &stats->robot_bytes, &stats->robot_frames, error, "robot");
   frame.clear();
   ok = ok && append_frame(tracker_stream.device_info(), &frame) &&
-       send(tracker.master_fd, frame, &stats->tracker_bytes, &stats->tracker_frames, error, "tracker");
+       send(tracker.master_fd, frame, stop, &stats->tracker_bytes, &stats->tracker_frames, error, "tracker");
   JointStateRecord joint;
   TrackerPointRecord point;
   bool has_joint = robot_stream.next(&joint);
@@ -46,12 +47,12 @@ bool serve_frames(const Session& session, const port::PtyPair& robot, const port
     if (has_point && (!has_joint || tracker_stream.last_true_time_s() < robot_stream.last_true_time_s())) {
       wait_until_due(tracker_stream.last_true_time_s(), options.speed, start_ms);
       ok = append_frame(point, &frame) &&
-           send(tracker.master_fd, frame, &stats->tracker_bytes, &stats->tracker_frames, error, "tracker");
+           send(tracker.master_fd, frame, stop, &stats->tracker_bytes, &stats->tracker_frames, error, "tracker");
       has_point = tracker_stream.next(&point);
     } else {
       wait_until_due(robot_stream.last_true_time_s(), options.speed, start_ms);
       ok = append_frame(joint, &frame) &&
-           send(robot.master_fd, frame, &stats->robot_bytes, &stats->robot_frames, error, "robot");
+           send(robot.master_fd, frame, stop, &stats->robot_bytes, &stats->robot_frames, error, "robot");
       has_joint = robot_stream.next(&joint);
     }
   }
@@ -63,7 +64,7 @@ bool serve_frames(const Session& session, const port::PtyPair& robot, const port
 port::Error serve_session(const Session& session, const port::PtyPair& robot, const port::PtyPair& tracker,
                           const ServeOptions& options, const std::atomic<bool>* stop, ServeStats* stats) {
   std::string error;
-  if (serve_frames(session, robot, tracker, options, stop, stats, &error)) return port::Error{};
+  if (serve_frames(session, robot, tracker, options, stop, stats, &error) || error.empty()) return port::Error{};
   return port::Error::output(error);
 }
 

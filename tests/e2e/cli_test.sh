@@ -308,7 +308,14 @@ expect 2 "is the same file as the input --robot-model" -- calibrate --samples "$
 expect 2 "is the same file as the input --robot-model" -- plan --robot-model "$work/model.json" --count 12 --tracker-position 2,0.5,0.6 --out "$work/model.json"
 mkdir -p "$work/simdir"
 cp "$work/model.json" "$work/simdir/truth.json"
-expect 2 "is the same file as the input --robot-model" -- simulate --robot-model "$work/simdir/truth.json" --out-dir "$work/simdir" --waypoints 4 --duration-s 30
+expect 2 "is the same file as the input --robot-model" -- simulate --robot-model "$work/simdir/truth.json" --out-dir "$work/simdir" --waypoints 4 --duration-s 30 --force
+# simulate never replaces an earlier session (a real recording may sit there) without --force.
+mkdir -p "$work/rec"
+printf 'recorded' >"$work/rec/robot.cap"
+expect 4 "already holds robot.cap; refusing to overwrite a session (--force replaces it)" -- simulate --out-dir "$work/rec" --waypoints 4 --duration-s 30
+if [ "$(cat "$work/rec/robot.cap")" = recorded ] && [ ! -e "$work/rec/truth.json" ]; then pass; else
+  fail "simulate overwrote a capture or wrote beside it without --force"; fi
+expect 0 "" -- simulate --out-dir "$work/rec" --waypoints 4 --duration-s 30 --force
 if cmp -s "$work/model.json" "$work/model.orig" && cmp -s "$work/simdir/truth.json" "$work/model.orig"; then pass; else
   fail "an input given as an output was overwritten"; fi
 
@@ -346,6 +353,42 @@ if [ "$(cat "$work/pipe.code")" = 4 ] && grep -q "hivecal predict:" "$work/pipe.
 "${run[@]}" calibrate --samples "$work/paired.csv" --method lm --ur-deltas - --out "$work/n5.json" >"$work/deltas.out" 2>/dev/null
 if grep -q '^\[mounting\]' "$work/deltas.out" && ! grep -q "Table 1" "$work/deltas.out"; then pass; else
   fail "--ur-deltas -: stdout holds more than the deltas"; fi
+
+# --- a signal ends a command cleanly: no temporary left, the shell sees the signal (128 + N)
+# (an hour of session at most: seconds of writing, so the signal comes while temporaries exist)
+"${run[@]}" simulate --out-dir "$work/sig/new" --waypoints 2000 --duration-s 3600 >/dev/null 2>&1 &
+pid=$!
+sleep 1
+kill -INT "$pid"
+wait "$pid"
+code=$?
+if [ "$code" = 130 ] && [ ! -e "$work/sig/new" ] && ! compgen -G "$work/sig/new.tmp.*" >/dev/null; then pass; else
+  fail "simulate after SIGINT: exit $code (want 130), left: $(ls -A "$work/sig" 2>&1)"; fi
+mkdir -p "$work/sig/old"
+"${run[@]}" simulate --out-dir "$work/sig/old" --waypoints 2000 --duration-s 3600 >/dev/null 2>&1 &
+pid=$!
+sleep 1
+kill -TERM "$pid"
+wait "$pid"
+code=$?
+if [ "$code" = 143 ] && [ -z "$(ls -A "$work/sig/old")" ]; then pass; else
+  fail "simulate after SIGTERM: exit $code (want 143), left: $(ls -A "$work/sig/old")"; fi
+# simulate --serve whose reader left (its writes wait for room that never comes): SIGTERM
+# still ends it within seconds, with its stats line.
+"${run[@]}" simulate --serve --speed 0 --serve-delay-s 0.5 --out-dir "$work/sig/serve" --waypoints 4 --duration-s 30 \
+  >"$work/serve.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 50); do grep -q '^tracker ' "$work/serve.log" 2>/dev/null && break; sleep 0.1; done
+robot_pty=$(awk '$1 == "robot" { print $2 }' "$work/serve.log")
+[ -n "$robot_pty" ] && timeout 5 head -c 100 "$robot_pty" >/dev/null
+sleep 1.5
+kill -TERM "$pid"
+for _ in $(seq 1 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+if kill -0 "$pid" 2>/dev/null; then
+  kill -KILL "$pid"
+  fail "simulate --serve ignored SIGTERM after its reader left"
+elif wait "$pid" && grep -q '^served ' "$work/serve.log"; then pass; else
+  fail "simulate --serve after SIGTERM: $(cat "$work/serve.log")"; fi
 
 # --- every command has --help
 for cmd in calibrate validate predict plan simulate record extract demo report; do

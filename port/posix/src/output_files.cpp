@@ -10,6 +10,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "hivecal/port/temporaries.hpp"
+
 namespace hivecal::port {
 namespace {
 
@@ -295,6 +297,7 @@ Error OutputSet::stage_in_folder(Output& folder, const std::string& name, Staged
       // mkdtemp makes it 0700; the folder it becomes gets what mkdir would give it.
       (void)::chmod(pattern.c_str(), static_cast<mode_t>(0777 & ~umask_bits()));
       folder.temp_folder = pattern;
+      register_temporary(pattern, true);
     }
     base = folder.temp_folder;
   }
@@ -319,6 +322,7 @@ Error OutputSet::stage_in_folder(Output& folder, const std::string& name, Staged
   staged->fd_ = ::mkostemp(pattern.data(), O_CLOEXEC);
   if (staged->fd_ < 0) return Error::output(who + ": cannot create a temporary file beside it: " + system_message(errno));
   staged->temp_path_ = pattern;
+  register_temporary(pattern, false);
   *file = staged.get();
   folder.files.push_back(std::move(staged));
   folder.finals.push_back(final_path);
@@ -347,6 +351,7 @@ Error OutputSet::stage(std::size_t id, const std::string& name, StagedFile** fil
       return Error::output(who + ": cannot create a temporary file beside it: " + system_message(errno));
     }
     staged->temp_path_ = pattern;
+    register_temporary(pattern, false);
   }
   *file = staged.get();
   output.files.push_back(std::move(staged));
@@ -399,6 +404,7 @@ Error OutputSet::commit() {
     if (!output->is_stdout) folders.push_back(existing_ancestor(output->target));  // the folder it goes into
   }
   const FolderLocks locks(std::move(folders));
+  const SignalsHeld held;  // the set is moved whole: a signal now is delivered after abandon()
   Error error;
   for (auto& output : outputs_) {
     for (auto& file : output->files) {
@@ -498,8 +504,10 @@ void OutputSet::abandon() {
       if (!output->temp_folder.empty() && !output->folder_moved && output->moved[k]) {
         ::unlink(output->finals[k].c_str());  // moved inside the temporary folder only
       }
+      unregister_temporary(file.temp_path_);
     }
     if (!output->temp_folder.empty() && !output->folder_moved) ::rmdir(output->temp_folder.c_str());
+    unregister_temporary(output->temp_folder);
     output->files.clear();
     output->finals.clear();
     output->moved.clear();

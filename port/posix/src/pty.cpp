@@ -1,6 +1,7 @@
 #include "hivecal/port/pty.hpp"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -41,12 +42,19 @@ void close_pty(PtyPair* pty) {
   pty->slave_fd = -1;
 }
 
-bool write_all(int fd, const void* bytes, std::size_t count) {
+bool write_all(int fd, const void* bytes, std::size_t count, const std::atomic<bool>* stop) {
   const auto* p = static_cast<const std::uint8_t*>(bytes);
   while (count > 0) {
+    if (stop != nullptr && stop->load()) return false;
+    // Wait for room in slices, so that a stop request is seen even when no reader drains
+    // the other side (a pty whose reader left blocks its writer forever).
+    pollfd room{fd, POLLOUT, 0};
+    const int ready = ::poll(&room, 1, stop != nullptr ? 100 : -1);
+    if (ready < 0 && errno != EINTR) return false;
+    if (ready <= 0) continue;
     const ssize_t put = ::write(fd, p, count);
     if (put < 0) {
-      if (errno == EINTR) continue;
+      if (errno == EINTR || errno == EAGAIN) continue;
       return false;
     }
     p += put;

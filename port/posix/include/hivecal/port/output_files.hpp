@@ -10,7 +10,8 @@
 //     whole set after the other), stdout is written and flushed (a full device is an error),
 //     then every temporary is renamed onto its target with the old file's mode (and owner,
 //     when allowed).
-// A set destroyed without commit() removes its temporaries: a failed run leaves no output.
+// A set destroyed without commit() removes its temporaries: a failed run leaves no output; a
+// signal removes them too (temporaries.hpp), and waits while the set is moved into place.
 #pragma once
 
 #include <sys/types.h>

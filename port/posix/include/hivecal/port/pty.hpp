@@ -2,6 +2,7 @@
 // master side, and a SerialPort reads them from the slave path like from a real tty.
 #pragma once
 
+#include <atomic>
 #include <string>
 
 #include "hivecal/port/error.hpp"
@@ -19,7 +20,8 @@ struct PtyPair {
 Error open_pty(PtyPair* pty);
 /// Closes both sides (the reader of the slave sees a hangup).
 void close_pty(PtyPair* pty);
-/// Writes all `count` bytes to `fd`, retrying short writes and EINTR. False on error.
-bool write_all(int fd, const void* bytes, std::size_t count);
+/// Writes all `count` bytes to `fd`, retrying short writes and EINTR. False on error, or
+/// as soon as *stop is set (checked at least every 100 ms while the writer waits for room).
+bool write_all(int fd, const void* bytes, std::size_t count, const std::atomic<bool>* stop = nullptr);
 
 }  // namespace hivecal::port
