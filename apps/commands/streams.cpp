@@ -152,10 +152,16 @@ Error record(const cli::Options& options) {
   record_options.duration_s = duration_s;
   port::RecordStats stats;
   error = port::record_streams(sources, writers, &g_stop, record_options, &stats);
-  for (std::size_t i = 0; i < sources.size(); ++i)
-    std::printf("%s -> %s: %llu bytes, %llu disconnections\n", sources[i]->name().c_str(),
-                writers[i]->path().c_str(), static_cast<unsigned long long>(stats.bytes[i]),
+  for (std::size_t i = 0; i < sources.size(); ++i) {
+    // What the capture holds; after a failed write (a full disk) also what was read and lost.
+    const std::string lost = stats.bytes_read[i] == stats.bytes[i]
+                                 ? std::string()
+                                 : " (" + std::to_string(stats.bytes_read[i]) + " read, " +
+                                       std::to_string(stats.bytes_read[i] - stats.bytes[i]) + " not written)";
+    std::printf("%s -> %s: %llu bytes%s, %llu disconnections\n", sources[i]->name().c_str(),
+                writers[i]->path().c_str(), static_cast<unsigned long long>(stats.bytes[i]), lost.c_str(),
                 static_cast<unsigned long long>(stats.disconnects[i]));
+  }
   return error;
 }
 

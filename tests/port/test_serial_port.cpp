@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <pthread.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -238,6 +240,53 @@ TEST(Recorder, CopiesTwoPortsToCaptures) {
   close_pty(&tracker);
   ::unlink(robot_path.c_str());
   ::unlink(tracker_path.c_str());
+}
+
+// A capture that cannot take every byte (a full disk; here the file size limit) is counted
+// as what it holds, and what was read but not written is counted apart: the stats line never
+// overstates the capture.
+TEST(Recorder, CountsWhatTheCaptureHoldsWhenTheDiskIsFull) {
+  const std::string source_path = temp_path("full-source.cap");
+  const std::string capture_path = temp_path("full-capture.cap");
+  const std::vector<std::uint8_t> bytes = pattern(5000, 7);
+  CaptureWriter source_writer;
+  ASSERT_TRUE(source_writer.open(source_path, true).ok());
+  ASSERT_TRUE(source_writer.write(bytes.data(), bytes.size()).ok());
+  ASSERT_TRUE(source_writer.close().ok());
+  int report[2];
+  ASSERT_EQ(::pipe(report), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // a limit of 1,000 bytes per file, in a child only
+    std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{1000, 1000};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    CaptureFileSource source(source_path);
+    CaptureWriter writer;
+    std::uint64_t out[3] = {0, 0, 0};
+    if (source.open().ok() && writer.open(capture_path, true).ok()) {
+      RecordStats stats;
+      out[0] = record_streams({&source}, {&writer}, nullptr, RecordOptions(), &stats).ok() ? 1 : 0;
+      out[1] = stats.bytes[0];
+      out[2] = stats.bytes_read[0];
+    }
+    (void)!::write(report[1], out, sizeof out);
+    ::_exit(0);
+  }
+  ::close(report[1]);
+  std::uint64_t got[3] = {9, 0, 0};
+  EXPECT_EQ(::read(report[0], got, sizeof got), static_cast<ssize_t>(sizeof got));
+  ::close(report[0]);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  EXPECT_EQ(got[0], 0u) << "the failed write is an error";
+  EXPECT_EQ(got[1], 1000u) << "bytes in the capture";
+  EXPECT_EQ(got[2], bytes.size()) << "bytes read";
+  CaptureFileSource replay(capture_path);
+  ASSERT_TRUE(replay.open().ok());
+  EXPECT_EQ(read_bytes(&replay, bytes.size(), 2000).size(), got[1]);
+  ::unlink(source_path.c_str());
+  ::unlink(capture_path.c_str());
 }
 
 }  // namespace

@@ -37,6 +37,7 @@ void wait_for_input(const std::vector<ByteSource*>& sources, const std::vector<b
 Error record_streams(const std::vector<ByteSource*>& sources, const std::vector<CaptureWriter*>& writers,
                      const volatile std::sig_atomic_t* stop, const RecordOptions& options, RecordStats* stats) {
   stats->bytes.assign(sources.size(), 0);
+  stats->bytes_read.assign(sources.size(), 0);
   stats->disconnects.assign(sources.size(), 0);
   std::vector<bool> done(sources.size(), false);
   std::vector<bool> lost(sources.size(), false);
@@ -59,8 +60,9 @@ Error record_streams(const std::vector<ByteSource*>& sources, const std::vector<
       const bool was_lost = lost[i];
       lost[i] = got.status == ReadStatus::disconnected;
       if (got.status == ReadStatus::data) {
+        stats->bytes_read[i] += got.bytes;
         error = writers[i]->write(chunk.data(), got.bytes);
-        stats->bytes[i] += got.bytes;
+        stats->bytes[i] = writers[i]->bytes_written();  // a full disk takes fewer than were read
         if (error.ok() && options.on_bytes) options.on_bytes(i, chunk.data(), got.bytes);
       } else if (got.status == ReadStatus::disconnected) {
         if (!was_lost) ++stats->disconnects[i];  // count each loss once, not each retry

@@ -26,7 +26,8 @@ struct RecordOptions {
 
 /// What was recorded per source.
 struct RecordStats {
-  std::vector<std::uint64_t> bytes;         ///< bytes written per source
+  std::vector<std::uint64_t> bytes;         ///< bytes written to each capture (what is in it)
+  std::vector<std::uint64_t> bytes_read;    ///< bytes read from each source (more after a failed write)
   std::vector<std::uint64_t> disconnects;   ///< device losses per source
   bool ended_by_stop_flag = false;          ///< the flag (a signal) ended the recording
 };
