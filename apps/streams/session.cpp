@@ -49,6 +49,63 @@ std::string input_line(const char* stream, const StreamInputCounts& in, const ch
          std::to_string(in.frames.packets_lost) + " packets lost";
 }
 
+/// Records per second of a stream that held `records` over [first_us, last_us]; 0 if unknown.
+double rate_hz(std::uint64_t records, std::uint64_t first_us, std::uint64_t last_us) {
+  if (records < 2 || last_us <= first_us) return 0.0;
+  return static_cast<double>(records - 1) / (static_cast<double>(last_us - first_us) * 1e-6);
+}
+
+/// Why a stream's times cannot be right, or "" when they look like a device's.
+std::string times_cause(const char* stream, const StreamInputCounts& input, std::uint64_t records,
+                        std::uint64_t rejected, std::uint64_t first_us, std::uint64_t last_us, double low_hz,
+                        double high_hz) {
+  const char* unit_hint =
+      input.is_log() ? "; is the time column in the unit its header names (seconds when it names none)?" : "";
+  const std::uint64_t repeated = input.is_log() ? input.log.repeated_time : 0;
+  if (input.is_log() && 2 * repeated > input.log.rows) {
+    return std::to_string(repeated) + " of the " + std::to_string(input.log.rows) + " " + stream +
+           " rows repeat the time of the row before (times finer than 1 us read as equal)" + unit_hint;
+  }
+  if (records > 0 && 2 * rejected > records) {
+    return std::to_string(rejected) + " of " + std::to_string(records) + " " + stream +
+           " records do not advance in time (repeated or going back)" + unit_hint;
+  }
+  const double hz = rate_hz(records - rejected, first_us, last_us);
+  if (hz > 0.0 && (hz < low_hz || hz > high_hz)) {
+    return std::string("the ") + stream + " records come " + format("%.3g s apart on average (%.3g Hz)", 1.0 / hz, hz) +
+           format(", where a device sends %g to %g Hz", low_hz, high_hz) + unit_hint;
+  }
+  return "";
+}
+
+/// What most likely made the clock relation fail, from what went into the profiles.
+std::string clock_failure_cause(const CaptureRunReport& report) {
+  const ClockProfileStats& s = report.clock_stats;
+  if (s.tracker_records > 0 && s.tracker_not_valid == s.tracker_records) {
+    return "every one of the " + std::to_string(s.tracker_records) +
+           " tracker points is marked invalid (beam lost or status != 0): there is no track to relate";
+  }
+  std::string cause = times_cause("robot", report.robot, s.robot_records, s.robot_rejected, s.robot_first_us,
+                                  s.robot_last_us, 5.0, 10000.0);
+  if (cause.empty()) {
+    const std::uint64_t valid = s.tracker_records - s.tracker_not_valid;
+    cause = times_cause("tracker", report.tracker, valid, s.tracker_rejected, s.tracker_first_us, s.tracker_last_us,
+                        0.5, 10000.0);
+  }
+  if (!cause.empty()) return cause;
+  if (s.robot_knots < 4 || s.tracker_points < 4) {
+    return "too few usable records (" + std::to_string(s.robot_knots) + " robot knots, " +
+           std::to_string(s.tracker_points) + " tracker points)";
+  }
+  if (s.robot_path_m < 0.01 || s.tracker_path_m < 0.01) {
+    return format("the tool hardly moves (robot path %.4f m, tracker path %.4f m): the clocks are related by the motion",
+                  s.robot_path_m, s.tracker_path_m);
+  }
+  return format("the robot's and the tracker's speed profiles do not match (robot path %.2f m, tracker path %.2f m):"
+                " do both streams cover the same motion?",
+                s.robot_path_m, s.tracker_path_m);
+}
+
 }  // namespace
 
 port::Error joint_names_option(const std::string& value, textio::RobotLogOptions* log_options) {
@@ -104,8 +161,7 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
                               (empty.is_log() ? " log" : " capture"));
   }
   if (report.clock_status != Status::ok) {
-    return port::Error::input(std::string("clock relation not found: ") + status_message(report.clock_status) +
-                              " (do both streams cover the same motion?)");
+    return port::Error::input(std::string("clock relation not found: ") + clock_failure_cause(report));
   }
   const ClockFit& clock = report.clock;
   facts->info_lines.push_back(

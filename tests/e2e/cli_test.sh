@@ -159,6 +159,15 @@ printf 't,q1,q2,q3,q4,q5,q6\n-1,0,0,0,0,0,0\n' >"$work/negative.csv"
 expect 3 "outside 0 .. 1.8e13 s" -- calibrate --robot "$work/negative.csv" --tracker "$sim/tracker.csv" --out "$work/r7.json"
 printf 't,q1,q2,q3,q4,q5,q6\n' >"$work/header_only.csv"
 expect 3 "no data rows" -- calibrate --robot "$work/header_only.csv" --tracker "$sim/tracker.csv" --out "$work/r8.json"
+# A clock relation that cannot be found says why: no valid tracker point, times in another
+# unit than the header says, rows closer than the 1 us the times are read to.
+awk -F, 'BEGIN { OFS = "," } NR > 1 { $5 = 2 } { print }' "$sim/tracker.csv" >"$work/beam_lost.csv"
+expect 3 "clock relation not found: every one of the 1500 tracker points is marked invalid" -- extract --robot "$sim/robot_joints.csv" --tracker "$work/beam_lost.csv"
+awk -F, 'BEGIN { OFS = "," } NR > 1 { $1 = sprintf("%.3f", $1 * 1000) } { print }' "$sim/robot_joints.csv" >"$work/robot_ms.csv"
+expect 3 "the robot records come 8.0" -- extract --robot "$work/robot_ms.csv" --tracker "$sim/tracker.csv"
+expect 3 "is the time column in the unit its header names" -- extract --robot "$work/robot_ms.csv" --tracker "$sim/tracker.csv"
+awk -F, 'BEGIN { OFS = "," } NR > 1 { $1 = sprintf("%.9f", NR * 1e-7) } { print }' "$sim/robot_joints.csv" >"$work/robot_fine.csv"
+expect 3 "robot rows repeat the time of the row before (times finer than 1 us read as equal)" -- extract --robot "$work/robot_fine.csv" --tracker "$sim/tracker.csv"
 # Logs of other tools: a wrong file says what was expected and found; swapped inputs are named.
 expect 3 "tracker.cap: contains tracker frames (" -- calibrate --robot "$sim/tracker.cap" --tracker "$sim/robot.cap" --out "$work/r9.json"
 expect 3 "--robot and --tracker swapped?" -- calibrate --robot "$sim/tracker.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"

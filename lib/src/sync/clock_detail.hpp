@@ -17,6 +17,7 @@ struct ClockProfiles {
   const ClockTrackerKnot* tracker = nullptr;  ///< valid tracker points, time since the first [us]
   std::size_t tracker_points = 0;             ///< points stored
   double max_chord_interval_us = 0.0;         ///< longer tracker intervals are not chords [us]
+  double max_tracker_speed_m_per_us = 0.0;   ///< faster tracker intervals are a blunder's, not chords [m/us]
 
   /// Robot path length at a robot-relative time [m]; NaN outside the profile or in a gap.
   double s_at(double robot_rel_us) const;
@@ -24,10 +25,15 @@ struct ClockProfiles {
   double speed_at(double robot_rel_us) const;
   std::size_t chord_span = 1;                 ///< tracker intervals per fine-fit chord (chords overlap: one ends at each point)
 
-  /// True when no interval between tracker points first..last is longer than max_chord_interval_us.
+  /// True when no interval between tracker points first..last is longer than
+  /// max_chord_interval_us or faster than max_tracker_speed_m_per_us (a wild point within the
+  /// jump limits would otherwise weigh more than the whole track in both stages' sums).
   bool chord_ok(std::size_t first, std::size_t last) const {
-    for (std::size_t k = first; k < last; ++k)
-      if (tracker[k + 1].t_us - tracker[k].t_us > max_chord_interval_us) return false;
+    for (std::size_t k = first; k < last; ++k) {
+      const double dt_us = tracker[k + 1].t_us - tracker[k].t_us;
+      if (dt_us > max_chord_interval_us) return false;
+      if (tracker[k + 1].s_m - tracker[k].s_m > max_tracker_speed_m_per_us * dt_us) return false;
+    }
     return true;
   }
   /// Tracker time span of the profile [us].

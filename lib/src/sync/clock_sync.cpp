@@ -78,6 +78,9 @@ void ClockEstimatorBase::push_robot(const JointStateRecord& record) {
   }
   robot_last_us_ = record.timestamp_us;
   robot_last_point_m_ = point;
+  stats_.robot_first_us = robot_t0_us_;
+  stats_.robot_last_us = robot_last_us_;
+  stats_.robot_path_m = robot_last_s_m_;
 }
 
 void ClockEstimatorBase::push_tracker(const TrackerPointRecord& record) {
@@ -100,21 +103,28 @@ void ClockEstimatorBase::push_tracker(const TrackerPointRecord& record) {
   }
   // A jump no tool makes is held until the following points judge it: the track resuming
   // where it was sets the held points aside as blunders; a run of consistent points means
-  // the stored point before them was the odd one (the track moved on).
-  const bool fits_held = held_count_ > 0 && plausible_move(held_[held_count_ - 1].timestamp_us,
-                                                          held_[held_count_ - 1].point_m, record.timestamp_us, point);
-  if (!fits_held) {
+  // the stored point before them was the odd one (the track moved on). After a gap (a beam
+  // loss) a point may be within reach of both: the one it is nearer to in speed goes on.
+  const ClockHeldPoint* held = held_count_ > 0 ? &held_[held_count_ - 1] : nullptr;
+  const bool fits_held =
+      held != nullptr && plausible_move(held->timestamp_us, held->point_m, record.timestamp_us, point);
+  const bool resumes = fits_stored && (!fits_held || speed_m_s(tracker_last_us_, tracker_last_point_m_, record.timestamp_us, point) <=
+                                                         speed_m_s(held->timestamp_us, held->point_m, record.timestamp_us, point));
+  if (resumes) {
     set_aside_held();
-    if (fits_stored) {
-      store_tracker_point(record.timestamp_us, point);
-      return;
-    }
+    store_tracker_point(record.timestamp_us, point);
+    return;
   }
+  if (!fits_held) set_aside_held();
   held_[held_count_++] = ClockHeldPoint{record.timestamp_us, point};
   if (held_count_ >= config_.reanchor_points) {
     for (std::uint32_t k = 0; k < held_count_; ++k) store_tracker_point(held_[k].timestamp_us, held_[k].point_m);
     held_count_ = 0;
   }
+}
+
+double ClockEstimatorBase::speed_m_s(std::uint64_t from_us, const Vec3& from_m, std::uint64_t to_us, const Vec3& to_m) {
+  return (to_m - from_m).norm() / (static_cast<double>(to_us - from_us) * 1e-6);
 }
 
 bool ClockEstimatorBase::plausible_move(std::uint64_t from_us, const Vec3& from_m, std::uint64_t to_us,
@@ -147,6 +157,9 @@ void ClockEstimatorBase::store_tracker_point(std::uint64_t timestamp_us, const V
   }
   tracker_last_us_ = timestamp_us;
   tracker_last_point_m_ = point_m;
+  stats_.tracker_first_us = tracker_t0_us_;
+  stats_.tracker_last_us = tracker_last_us_;
+  stats_.tracker_path_m = tracker_last_s_m_;
 }
 
 namespace {
@@ -190,6 +203,14 @@ detail::ClockProfiles ClockEstimatorBase::profiles() const {
   view.tracker = tracker_knots_;
   view.tracker_points = stats_.tracker_points;
   view.max_chord_interval_us = static_cast<double>(config_.max_chord_interval_us);
+  // The tracker sees the tool the robot moves: twice the robot's top speed (the speed model's
+  // tool may be off the true reflector) plus 0.1 m/s (noise at rest) bounds every interval.
+  double top_m_per_us = 0.0;
+  for (std::size_t j = 0; j + 1 < stats_.robot_knots; ++j) {
+    const double step_m = robot_knots_m_[j + 1] - robot_knots_m_[j];
+    if (step_m > top_m_per_us * view.knot_us) top_m_per_us = step_m / view.knot_us;  // NaN (a gap) compares false
+  }
+  view.max_tracker_speed_m_per_us = 2.0 * top_m_per_us + 0.1e-6;
   view.chord_span = config_.chord_span_points;
   return view;
 }

@@ -94,6 +94,13 @@ struct ClockProfileStats {
   std::uint64_t set_aside_tracker_us[kClockSetAsideLog] = {};  ///< tracker timestamps of the first set-aside points [us]
   std::size_t robot_knots = 0;              ///< robot profile knots stored
   std::size_t tracker_points = 0;           ///< tracker profile points stored
+  // What a failed estimate is explained with (times on each device's own clock):
+  std::uint64_t robot_first_us = 0;         ///< first accepted joint state [us]
+  std::uint64_t robot_last_us = 0;          ///< last accepted joint state [us]
+  std::uint64_t tracker_first_us = 0;       ///< first stored tracker point [us]
+  std::uint64_t tracker_last_us = 0;        ///< last stored tracker point [us]
+  double robot_path_m = 0.0;                ///< path length of the speed model's tool point [m]
+  double tracker_path_m = 0.0;              ///< path length of the stored tracker points [m]
 };
 
 /// Most tracker points held back while a jump is judged (ClockSyncConfig::reanchor_points <= this).
@@ -175,6 +182,8 @@ class ClockEstimatorBase {
   void store_tracker_point(std::uint64_t timestamp_us, const Vec3& point_m);
   void set_aside_held();
   bool plausible_move(std::uint64_t from_us, const Vec3& from_m, std::uint64_t to_us, const Vec3& to_m) const;
+  /// Speed implied by a move [m/s] (to_us > from_us).
+  static double speed_m_s(std::uint64_t from_us, const Vec3& from_m, std::uint64_t to_us, const Vec3& to_m);
 
   ClockSyncConfig config_;
   double* robot_knots_m_;
