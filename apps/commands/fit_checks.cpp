@@ -43,7 +43,7 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
   const ModelParams before = to_params(result.baseline.model);
   const ModelParams after = to_params(final_stage->model);
   constexpr double kDegPerRad = 57.29577951308232;
-  char line[256];
+  char line[512];
   for (int k = 0; k < kModelParamCount; ++k) {
     const double change = after(k) - before(k);
     const bool angle = model_param_is_angle(k);
@@ -60,6 +60,20 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
                     full_param_name(k), change * 1e3, before(k), after(k), bounds.max_length_change_m * 1e3);
     }
     warnings.push_back(line + correlation_cause(full_param_name(k), parameters));
+  }
+  // Many samples of a few stops determine no more than those stops: 3 coordinates per distinct
+  // point. No more of them than the parameters the fit determines (estimated, or fixed by the
+  // significance test; not the structural nulls the identifiability analysis drops) leaves no
+  // redundancy: the poses do not span the model, and test samples of the same stops do not show it.
+  const int determined = result.has_lm ? mask_count(result.lm.identifiability.kept_mask | result.lm_pruned_mask) : 0;
+  if (determined > 0 && 3 * result.train_points <= static_cast<std::size_t>(determined)) {
+    std::snprintf(line, sizeof line,
+                  "the %zu training samples stand at only %zu distinct poses (%zu coordinates) for the %d parameters "
+                  "the fit determines: the poses do not span the model, so the calibration holds near these poses "
+                  "only, and test samples at the same poses do not show it; measure more poses spread over every "
+                  "joint's range (hivecal plan)",
+                  result.train_count, result.train_points, 3 * result.train_points, determined);
+    warnings.push_back(line);
   }
   const double baseline_mae_m = result.baseline.test.mae(ErrorAxis::norm_3d);
   const double final_mae_m = final_stage->test.mae(ErrorAxis::norm_3d);

@@ -363,6 +363,13 @@ if [ "$(cat "$work/pipe.code")" = 4 ] && grep -q "hivecal predict:" "$work/pipe.
 if grep -q '^\[mounting\]' "$work/deltas.out" && ! grep -q "Table 1" "$work/deltas.out"; then pass; else
   fail "--ur-deltas -: stdout holds more than the deltas"; fi
 
+# --- a capture cut to its first stops calibrates, but the job says the poses do not span the
+# model (exit 5, the result written): its test samples stand at the training poses.
+head -c $(($(stat -c %s "$sim/robot.cap") * 30 / 100)) "$sim/robot.cap" >"$work/cut.cap"
+expect 5 "stand at only 2 distinct poses (6 coordinates) for the" -- calibrate --robot "$work/cut.cap" --tracker "$sim/tracker.cap" --out "$work/cut.json"
+expect 5 "the poses do not span the model" -- calibrate --robot "$work/cut.cap" --tracker "$sim/tracker.cap" --out "$work/cut.json"
+if [ -s "$work/cut.json" ]; then pass; else fail "no result written for the cut capture"; fi
+
 # --- a signal ends a command cleanly: no temporary left, the shell sees the signal (128 + N)
 # (an hour of session at most: seconds of writing, so the signal comes while temporaries exist)
 "${run[@]}" simulate --out-dir "$work/sig/new" --waypoints 2000 --duration-s 3600 >/dev/null 2>&1 &

@@ -190,6 +190,7 @@ struct CalibrationResult {
   CalibrationStep step = CalibrationStep::input;  ///< done on success, else the step that failed
   std::size_t train_count = 0;                  ///< training samples [-]
   std::size_t test_count = 0;                   ///< test samples [-]
+  std::size_t train_points = 0;                 ///< distinct points (pose x target) of the training samples, <= kDistinctPointLimit [-]
   CalibrationBaseline baseline;                 ///< the start geometry's fit
   CalibrationStage stages[kMaxCalibrationStages];  ///< the stages run, in order
   std::size_t stage_count = 0;                  ///< entries of `stages` used [-]

@@ -459,6 +459,7 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
                  CalibrationWorkspaceBase* workspace, CalibrationResult* r, CalibrationObserver* observer) {
   r->train_count = dataset->train().size();
   r->test_count = dataset->test().size();
+  r->train_points = distinct_points(dataset->train());
   Status status = fit_baseline(start, dataset->train(), options, *workspace, r);
   if (status != Status::ok) return fail(r, CalibrationStep::baseline, status);
   r->baseline.train = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->train());

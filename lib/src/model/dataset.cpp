@@ -10,6 +10,21 @@ int target_count(Span<const Sample> samples) {
   return count;
 }
 
+std::size_t distinct_points(Span<const Sample> samples) {
+  std::size_t first[kDistinctPointLimit];  // a sample of each point found
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < samples.size() && count < kDistinctPointLimit; ++i) {
+    bool seen = false;
+    for (std::size_t k = count; k-- > 0 && !seen;) {  // the latest first: a stop's samples are in a row
+      const Sample& other = samples[first[k]];
+      seen = other.target == samples[i].target &&
+             (other.q_rad - samples[i].q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad;
+    }
+    if (!seen) first[count++] = i;
+  }
+  return count;
+}
+
 Status DatasetBase::add(const JointVector& q_rad, const Vec3& point_m, int target) {
   if (!all_finite(q_rad) || !all_finite(point_m)) return Status::non_finite_input;
   if (target < 0 || target >= kMaxTargets) return Status::invalid_argument;

@@ -170,5 +170,32 @@ TEST(Dataset, OneTargetSplitsSamples) {
   }
 }
 
+// Samples of one stop of the robot (joints within encoder noise) are one point per target;
+// stops that come back later in the set are recognised; the count stops at its limit.
+TEST(Dataset, CountsDistinctPointsNotSamples) {
+  static Dataset<400> dataset;
+  dataset.clear();
+  const auto stop = [](int k) { return JointVector::Constant(0.1 * k); };
+  for (int repeat = 0; repeat < 3; ++repeat) {
+    for (int k = 0; k < 5; ++k) {
+      for (int i = 0; i < 10; ++i) {
+        const JointVector noise = JointVector::Constant((i % 3 - 1) * 2e-4);  // within 1e-3 rad
+        ASSERT_EQ(dataset.add(stop(k) + noise, Vec3::Zero(), 0), Status::ok);
+        ASSERT_EQ(dataset.add(stop(k) + noise, Vec3::Zero(), 1), Status::ok);  // a second reflector
+      }
+    }
+  }
+  std::size_t points = 0;
+  EXPECT_NO_HEAP(points = distinct_points(dataset.samples()));
+  EXPECT_EQ(points, 10u) << "5 stops x 2 targets, whatever the samples and repeats";
+  JointVector moved = stop(2);
+  moved(4) += 2e-3;  // beyond the tolerance in one joint: another pose
+  ASSERT_EQ(dataset.add(moved, Vec3::Zero(), 0), Status::ok);
+  EXPECT_EQ(distinct_points(dataset.samples()), 11u);
+  dataset.clear();
+  for (int k = 0; k < 100; ++k) ASSERT_EQ(dataset.add(stop(k), Vec3::Zero()), Status::ok);
+  EXPECT_EQ(distinct_points(dataset.samples()), kDistinctPointLimit);
+}
+
 }  // namespace
 }  // namespace hivecal

@@ -27,6 +27,17 @@ struct Sample {
 
 /// Number of distinct targets `samples` use: the largest target index + 1 (1 when empty) [-].
 int target_count(Span<const Sample> samples);
+/// Joints that agree this closely are one robot pose: the samples of one stop of the robot
+/// (encoder noise is ~1e-5 rad; two poses a user plans differ by degrees) [rad].
+inline constexpr double kSamePoseTolerance_rad = 1e-3;
+/// distinct_points() counts up to this many, then stops (more is plenty for any model).
+inline constexpr std::size_t kDistinctPointLimit = 64;
+
+/// Distinct measured points of `samples`: one per robot pose (joints within
+/// kSamePoseTolerance_rad) and target, each worth 3 coordinates whatever its sample count;
+/// at most kDistinctPointLimit. Many samples of one stop determine no more than one.
+std::size_t distinct_points(Span<const Sample> samples);
+
 /// Point of `sample`'s target predicted by `model` in the robot base frame [m].
 inline Vec3 fk_sample_point(const RobotModel& model, const Sample& sample) {
   return fk_target_point(model, sample.q_rad, sample.target);
