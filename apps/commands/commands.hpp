@@ -10,6 +10,7 @@ int calibrate_main(int argc, char** argv);  ///< geometry from tracker data: tab
 int report_main(int argc, char** argv);     ///< the HTML report again from a result file
 int validate_main(int argc, char** argv);   ///< a calibration against a reference geometry on fresh poses
 int plan_main(int argc, char** argv);      ///< which poses to measure, in which order, and a URScript program
+int export_main(int argc, char** argv);   ///< a calibration as URDF or a robot description
 int demo_main(int argc, char** argv);     ///< small simulated check of the core library
 
 }  // namespace hivecal::cli

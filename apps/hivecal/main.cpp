@@ -25,6 +25,7 @@ const Command kCommands[] = {
      hivecal::cli::validate_main},
     {"plan", "choose and order the poses of a tracker session; joints CSV and URScript", hivecal::cli::plan_main},
     {"predict", "tool positions of joint poses from a calibration result", hivecal::cli::predict_main},
+    {"export", "a calibration (or nominal arm) as URDF or a robot description JSON", hivecal::cli::export_main},
     {"simulate", "simulated UR + tracker session: captures, CSV logs, ground truth, live ptys", hivecal::sim::simulate_main},
     {"record", "record serial ports (or ptys) to capture files, nothing lost on SIGINT/SIGTERM", hivecal::streams::record_main},
     {"extract", "captures -> clock sync -> quasi-static paired samples (CSV) with drop statistics", hivecal::streams::extract_main},

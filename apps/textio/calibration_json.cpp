@@ -378,9 +378,11 @@ void write_error_stats(JsonWriter& json, const ErrorStats& stats) {
   json.end_object();
 }
 
-std::string format_calibration_json(const CalibrationFile& file, const std::function<void(JsonWriter&)>& extra_members) {
-  JsonWriter json;
-  json.begin_object();
+namespace {
+
+/// The members a robot description and a result share: format, robot, convention, dh, tool,
+/// tools (several targets), compliance (when it has terms).
+void write_description(JsonWriter& json, const RobotDescription& file, const double* compliance_sigma) {
   json.key("format").value(kFormat);
   json.key("robot").value(file.robot);
   json.key("convention").value(dh_convention_name(file.convention));
@@ -413,8 +415,24 @@ std::string format_calibration_json(const CalibrationFile& file, const std::func
     json.key("compliance");
     write_compliance(json, file.model.compliance,
                      file.convention == DhConvention::modified ? file.modified_base.transform().rotation : Mat3::Identity(),
-                     file.compliance_sigma);
+                     compliance_sigma);
   }
+}
+
+}  // namespace
+
+std::string format_robot_description(const RobotDescription& robot) {
+  JsonWriter json;
+  json.begin_object();
+  write_description(json, robot, nullptr);
+  json.end_object();
+  return json.text();
+}
+
+std::string format_calibration_json(const CalibrationFile& file, const std::function<void(JsonWriter&)>& extra_members) {
+  JsonWriter json;
+  json.begin_object();
+  write_description(json, file, file.compliance_sigma);
   // A modified-DH file's base is the frame before Rx(alpha_0) Tx(a_0).
   const RigidTransform base_to_tracker =
       file.convention == DhConvention::modified ? file.base_to_tracker.then_after(file.modified_base.transform().inverse())

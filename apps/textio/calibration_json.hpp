@@ -51,6 +51,9 @@ port::Error read_robot_description(const std::string& path, RobotDescription* de
 port::Error robot_description_from_value(const std::string& value, RobotDescription* description,
                                          bool* from_file = nullptr);
 
+/// A robot description document (what --robot-model reads): the result's shape without
+/// base_to_tracker and metrics.
+std::string format_robot_description(const RobotDescription& robot);
 /// The JSON document; `extra_members` may add more keys to the top-level object.
 std::string format_calibration_json(const CalibrationFile& file,
                                     const std::function<void(JsonWriter&)>& extra_members = {});

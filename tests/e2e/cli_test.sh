@@ -406,8 +406,21 @@ if kill -0 "$pid" 2>/dev/null; then
 elif wait "$pid" && grep -q '^served ' "$work/serve.log"; then pass; else
   fail "simulate --serve after SIGTERM: $(cat "$work/serve.log")"; fi
 
+# --- export: a result as URDF (a tcp and the tracker frame), a nominal arm as a robot
+# description that reads back; one source only (tests/apps/test_urdf_export.cpp checks the FK)
+if "${run[@]}" export --calibration "$work/model.json" --out "$work/arm.urdf" 2>/dev/null &&
+   grep -q '<joint name="joint_6" type="revolute">' "$work/arm.urdf" && grep -q '<link name="tracker"/>' "$work/arm.urdf"; then pass; else
+  fail "export --calibration --format urdf"; fi
+if "${run[@]}" export --robot-model ur10e --format robot-json --out "$work/ur10e.json" 2>/dev/null &&
+   "${run[@]}" export --robot-model "$work/ur10e.json" --out "$work/ur10e.urdf" 2>/dev/null &&
+   ! grep -q '<link name="tracker"/>' "$work/ur10e.urdf"; then pass; else
+  fail "export --format robot-json, read back by --robot-model"; fi
+expect 2 "give either --calibration (a result) or --robot-model" -- export --calibration "$work/model.json" --robot-model ur5
+expect 2 "--format must be urdf or robot-json, not 'sdf'" -- export --robot-model ur5 --format sdf
+expect 2 "is the same file as the input --calibration" -- export --calibration "$work/model.json" --out "$work/model.json"
+
 # --- every command has --help
-for cmd in calibrate validate predict plan simulate record extract demo report; do
+for cmd in calibrate validate predict plan simulate record extract demo report export; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then pass; else
     fail "$cmd --help"; fi
 done

@@ -178,6 +178,17 @@ TEST_F(ComplianceCli, ResultHoldsTheCompliancePredictAppliesIt) {
   EXPECT_GT(largest_m, 5e-6);
   EXPECT_GT(rigid_sum_m, sum_m);
 
+  // As URDF the compliance cannot be written: said, with what it costs on these training samples.
+  ::testing::internal::CaptureStderr();
+  ASSERT_EQ(run(cli::export_main, {"--calibration", out, "--out", path("compliant.urdf")}), cli::kExitOk);
+  const std::string note = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(note.find("4 compliance terms (joint deflection under gravity) cannot be written in URDF"), std::string::npos)
+      << note;
+  char costs[160];
+  std::snprintf(costs, sizeof costs, "training samples the MAE (3D) is %.2f um with the compliance and %.2f um", train_mae_m * 1e6,
+                rigid_sum_m / static_cast<double>(points.size()) * 1e6);
+  EXPECT_NE(note.find(costs), std::string::npos) << note << "\nwanted: " << costs;
+
   // The result is a start model again (--robot-model result.json), its compliance kept.
   ASSERT_EQ(calibrate(path("again.json"), {"--robot-model", out, "--method", "lm", "--compliance"}), cli::kExitOk);
   textio::CalibrationFile again;

@@ -1,0 +1,46 @@
+// A calibrated (or nominal) arm as a URDF serial chain (docs/formats.md "URDF export").
+//
+// Links: base_link (the description's own base frame) -> [dh_base: the modified-DH offset
+// Rx(alpha_0) Tx(a_0), identity for standard DH] -> link_1 .. link_6 (link_i: the DH frame of
+// joint i after its rotation q_i) -> flange (DH frame 6) -> tcp (target 1's tool point, no
+// rotation) [-> tcp_2, tcp_3 for further targets]; with a base -> tracker transform, a fixed
+// `tracker` link under base_link at the tracker's pose. Each revolute joint_i turns about z of
+// its origin frame: origin_1 = base offset * Rz(theta_1), origin_i = Tz(d) Tx(a) Rx(alpha) of
+// row i-1 * Rz(theta_i). URDF's rpy is R = Rz(yaw) Ry(pitch) Rx(roll) (fixed axes x, y, z).
+// What URDF cannot hold (compliance terms) is left out: the caller says so.
+#pragma once
+
+#include <string>
+
+#include "hivecal/core/types.hpp"
+#include "textio/calibration_json.hpp"
+
+namespace hivecal::textio {
+
+/// URDF's xyz + rpy of a rigid transform (roll, pitch, yaw [rad], with R = Rz(yaw) Ry(pitch)
+/// Rx(roll); at pitch = +-pi/2 roll is 0 and yaw carries the rest).
+struct UrdfOrigin {
+  Vec3 xyz_m = Vec3::Zero();   ///< translation [m]
+  Vec3 rpy_rad = Vec3::Zero(); ///< roll, pitch, yaw [rad]
+};
+
+/// The xyz/rpy of `transform`.
+UrdfOrigin urdf_origin(const RigidTransform& transform);
+/// The transform of an xyz/rpy pair (the inverse of urdf_origin up to rounding).
+RigidTransform urdf_transform(const UrdfOrigin& origin);
+
+/// Joint limits written into every revolute joint (a description holds none).
+struct UrdfLimits {
+  double lower_rad = -6.283185307179586;  ///< [rad] (UR arms: +-360 deg)
+  double upper_rad = 6.283185307179586;   ///< [rad]
+  double effort_nm = 150.0;               ///< [N m] (URDF requires a value)
+  double velocity_rad_s = 3.15;           ///< [rad/s] (URDF requires a value)
+};
+
+/// The URDF document of `robot` (its model, base offset and target tools); `base_to_tracker`
+/// (the library's chain base -> tracker, as CalibrationFile holds it) adds the tracker link
+/// when not null.
+std::string format_urdf(const RobotDescription& robot, const RigidTransform* base_to_tracker,
+                        const UrdfLimits& limits = UrdfLimits());
+
+}  // namespace hivecal::textio

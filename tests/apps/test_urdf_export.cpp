@@ -1,0 +1,202 @@
+// `hivecal export --format urdf`: the chain written is the model. The URDF is read back here
+// with a reader of its own (joint origins xyz/rpy composed as URDF defines them, revolute joints
+// turning about their axis) and must put every tcp where the library's FK puts it, to 1e-9 m,
+// on random poses: nominal arms, large random calibrations, modified DH, a real UR5e factory
+// calibration (its cancelling +-204 m offsets), and the tracker frame where the result has it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <string>
+
+#include "hivecal/core/random.hpp"
+#include "hivecal/model/dh_convention.hpp"
+#include "hivecal/model/ur_deltas.hpp"
+#include "testkit/shared_data.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/ur_calibration_conf.hpp"
+#include "textio/urdf.hpp"
+
+namespace hivecal {
+namespace {
+
+using math::kPi;
+
+/// One joint of a URDF document as written.
+struct ReadJoint {
+  std::string type, parent, child;
+  RigidTransform origin;
+  Vec3 axis = Vec3::UnitZ();
+};
+
+std::string attribute(const std::string& element, const std::string& name) {
+  const std::size_t at = element.find(" " + name + "=\"");
+  if (at == std::string::npos) return "";
+  const std::size_t begin = at + name.size() + 3;
+  return element.substr(begin, element.find('"', begin) - begin);
+}
+
+Vec3 triple(const std::string& text) {
+  char* end = nullptr;
+  const double x = std::strtod(text.c_str(), &end);
+  const double y = std::strtod(end, &end);
+  const double z = std::strtod(end, &end);
+  return Vec3(x, y, z);
+}
+
+/// The joints of `urdf` by child link name.
+std::map<std::string, ReadJoint> read_joints(const std::string& urdf) {
+  std::map<std::string, ReadJoint> joints;
+  for (std::size_t at = urdf.find("<joint "); at != std::string::npos; at = urdf.find("<joint ", at + 1)) {
+    const std::string block = urdf.substr(at, urdf.find("</joint>", at) - at);
+    ReadJoint joint;
+    joint.type = attribute(block, "type");
+    joint.parent = attribute(block.substr(block.find("<parent")), "link");
+    joint.child = attribute(block.substr(block.find("<child")), "link");
+    const std::string origin = block.substr(block.find("<origin"));
+    textio::UrdfOrigin xyz_rpy;
+    xyz_rpy.xyz_m = triple(attribute(origin, "xyz"));
+    xyz_rpy.rpy_rad = triple(attribute(origin, "rpy"));
+    joint.origin = textio::urdf_transform(xyz_rpy);
+    if (block.find("<axis") != std::string::npos) joint.axis = triple(attribute(block.substr(block.find("<axis")), "xyz"));
+    joints[joint.child] = joint;
+  }
+  return joints;
+}
+
+/// Rotation by `angle` about unit `axis` (Rodrigues).
+Mat3 about_axis(const Vec3& axis, double angle) {
+  Mat3 k;
+  k << 0, -axis.z(), axis.y(), axis.z(), 0, -axis.x(), -axis.y(), axis.x(), 0;
+  return Mat3::Identity() + std::sin(angle) * k + (1.0 - std::cos(angle)) * k * k;
+}
+
+/// Pose of `link` in base_link at joints q, composed from the URDF's joints.
+RigidTransform link_pose(const std::map<std::string, ReadJoint>& joints, const std::string& link, const JointVector& q) {
+  if (link == "base_link") return RigidTransform{};
+  const ReadJoint& joint = joints.at(link);
+  RigidTransform pose = link_pose(joints, joint.parent, q).then_after(joint.origin);
+  if (joint.type == "revolute") {
+    const int number = std::atoi(joint.child.substr(joint.child.find('_') + 1).c_str());
+    pose = pose.then_after(RigidTransform{about_axis(joint.axis, q(number - 1)), Vec3::Zero()});
+  }
+  return pose;
+}
+
+/// Every target's tcp from the URDF against the library's FK (in the description's base frame).
+void expect_chain_equals_model(const textio::RobotDescription& robot, const char* label) {
+  const std::map<std::string, ReadJoint> joints = read_joints(textio::format_urdf(robot, nullptr));
+  ASSERT_EQ(joints.size(), 7u + static_cast<std::size_t>(robot.target_count)) << label;
+  const RigidTransform file_base =
+      robot.convention == DhConvention::modified ? robot.modified_base.transform() : RigidTransform{};
+  Random random(17);
+  double worst_m = 0.0;
+  for (int pose = 0; pose < 200; ++pose) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    for (int k = 0; k < robot.target_count; ++k) {
+      const Vec3 expected = file_base.apply(fk_target_point(robot.model, q, k));
+      const Vec3 got = link_pose(joints, k == 0 ? "tcp" : "tcp_" + std::to_string(k + 1), q).translation_m;
+      worst_m = std::fmax(worst_m, (got - expected).norm());
+    }
+  }
+  EXPECT_LE(worst_m, 1e-9) << label;
+  std::printf("%-40s URDF vs FK worst %.2e m over 200 poses\n", label, worst_m);
+}
+
+TEST(UrdfExport, RpyIsRzRyRxAndSurvivesGimbalLock) {
+  Random random(3);
+  double worst = 0.0;
+  for (int k = 0; k < 2000; ++k) {
+    Mat3 r = rotation_z(random.uniform(-kPi, kPi)) * rotation_x(random.uniform(-kPi, kPi)) *
+             rotation_z(random.uniform(-kPi, kPi));
+    if (k % 4 == 0) r = rotation_z(random.uniform(-kPi, kPi)) * rotation_x(kPi / 2) * rotation_z(kPi / 2);  // pitch +-90 deg
+    const RigidTransform t{r, Vec3(1.0, -2.0, 3.0)};
+    const RigidTransform back = textio::urdf_transform(textio::urdf_origin(t));
+    worst = std::fmax(worst, (back.rotation - r).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst, 1e-12);
+  // URDF's convention itself: rpy (0.1, 0.2, 0.3) is Rz(0.3) Ry(0.2) Rx(0.1), fixed axes.
+  const textio::UrdfOrigin o{Vec3::Zero(), Vec3(0.1, 0.2, 0.3)};
+  const Mat3 ry = (Mat3() << std::cos(0.2), 0, std::sin(0.2), 0, 1, 0, -std::sin(0.2), 0, std::cos(0.2)).finished();
+  EXPECT_LT((textio::urdf_transform(o).rotation - rotation_z(0.3) * ry * rotation_x(0.1)).cwiseAbs().maxCoeff(), 1e-15);
+}
+
+TEST(UrdfExport, NominalAndCalibratedArmsAreTheirChains) {
+  for (RobotType type : {RobotType::ur5, RobotType::ur10e}) {
+    textio::RobotDescription robot;
+    robot.robot = robot_type_name(type);
+    robot.model = nominal_model(type);
+    robot.model.tool_m = Vec3(0.01, -0.02, 0.17);
+    expect_chain_equals_model(robot, robot_type_name(type));
+  }
+  // Large random calibrations: offsets up to +-pi (pitch +-90 deg origins), lengths +-5 cm,
+  // three targets.
+  Random random(5);
+  for (int trial = 0; trial < 5; ++trial) {
+    textio::RobotDescription robot;
+    robot.model = nominal_model(RobotType::ur5);
+    for (DhJoint& joint : robot.model.joints) {
+      joint.theta_offset_rad += trial == 0 ? kPi / 2 : random.uniform(-kPi, kPi);
+      joint.d_m += random.uniform(-0.05, 0.05);
+      joint.a_m += random.uniform(-0.05, 0.05);
+      joint.alpha_rad += random.uniform(-0.1, 0.1);
+    }
+    robot.target_count = 3;
+    robot.model.tool_m = Vec3(0.05, 0.0, 0.2);
+    robot.model.other_tools_m[0] = Vec3(-0.05, 0.03, 0.2);
+    robot.model.other_tools_m[1] = Vec3(0.0, -0.06, 0.25);
+    expect_chain_equals_model(robot, "random calibrated UR5, 3 targets");
+  }
+}
+
+TEST(UrdfExport, ModifiedDhArmIsItsChain) {
+  // An IRB120-like arm written in Craig's convention.
+  const ModifiedDhRow rows[kJointCount] = {{0.0, 0.0, 0.0, 0.29},          {-kPi / 2, 0.0, -kPi / 2, 0.0},
+                                           {0.0, 0.27, 0.0, 0.0},           {-kPi / 2, 0.07, 0.0, 0.302},
+                                           {kPi / 2, 0.0, 0.0, 0.0},        {-kPi / 2, 0.0, kPi, 0.072}};
+  textio::RobotDescription robot;
+  robot.convention = DhConvention::modified;
+  ASSERT_EQ(model_from_modified_dh(rows, Vec3(0.0, 0.0, 0.1), &robot.model, &robot.modified_base), Status::ok);
+  robot.modified_base.alpha0_rad = 0.01;  // a base offset that is not the identity
+  robot.modified_base.a0_m = 0.02;
+  expect_chain_equals_model(robot, "modified-DH IRB120-like");
+}
+
+TEST(UrdfExport, RealUr5eFactoryCalibrationIsItsChain) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/calibration.conf");
+  UrCalibrationDeltas deltas;
+  ASSERT_TRUE(textio::read_ur_calibration_conf(test::shared_data_path("ur5e-pendant/calibration.conf"), &deltas).ok());
+  textio::RobotDescription robot;
+  robot.robot = "ur5e";
+  ASSERT_EQ(apply_ur_deltas(nominal_model(RobotType::ur5e), deltas, &robot.model), Status::ok);
+  expect_chain_equals_model(robot, "UR5e factory calibration.conf");
+}
+
+TEST(UrdfExport, TrackerFrameIsWhereTheResultPutsIt) {
+  textio::RobotDescription robot;
+  robot.model = nominal_model(RobotType::ur5);
+  const RigidTransform base_to_tracker{rotation_z(0.7) * rotation_x(-0.2), Vec3(2.5, -0.4, 0.3)};
+  const std::map<std::string, ReadJoint> joints = read_joints(textio::format_urdf(robot, &base_to_tracker));
+  const RigidTransform tracker = link_pose(joints, "tracker", JointVector::Zero());
+  const JointVector q = (JointVector() << 0.3, -1.2, 1.4, -0.5, 0.9, 0.1).finished();
+  const Vec3 in_base = link_pose(joints, "tcp", q).translation_m;
+  EXPECT_LT((tracker.inverse().apply(in_base) - base_to_tracker.apply(fk_tool_point(robot.model, q))).norm(), 1e-9);
+}
+
+TEST(UrdfExport, RobotJsonReadsBackAsTheSameArm) {
+  textio::RobotDescription robot;
+  robot.robot = "calibrated-ur5";
+  robot.model = nominal_model(RobotType::ur5);
+  robot.model.joints[2].a_m += 3.1e-4;
+  robot.model.tool_m = Vec3(0.001, 0.002, 0.17);
+  textio::RobotDescription back;
+  ASSERT_TRUE(textio::parse_robot_description(textio::format_robot_description(robot), "r.json", &back).ok());
+  EXPECT_EQ(back.robot, robot.robot);
+  EXPECT_EQ(back.model.joints[2].a_m, robot.model.joints[2].a_m);
+  EXPECT_EQ(back.model.tool_m, robot.model.tool_m);
+}
+
+}  // namespace
+}  // namespace hivecal
