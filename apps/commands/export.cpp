@@ -1,10 +1,12 @@
 // hivecal export: a calibration (or a nominal arm) in the robot's own formats: URDF, or a
 // robot description JSON (what --robot-model reads).
+#include <cmath>
 #include <cstdio>
 #include <vector>
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
+#include "hivecal/core/digest.hpp"
 #include "hivecal/model/ur_deltas.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/port/output_files.hpp"
@@ -12,6 +14,7 @@
 #include "textio/calibration_json.hpp"
 #include "textio/json.hpp"
 #include "textio/ur_calibration_conf.hpp"
+#include "textio/ur_kinematics.hpp"
 #include "textio/urdf.hpp"
 
 namespace hivecal::cli {
@@ -76,12 +79,12 @@ double mae_m(const RobotModel& model, const RigidTransform& base_to_tracker, con
 /// What a format cannot hold is said, with what leaving it out costs on the result's own
 /// training samples, never dropped in silence.
 void say_what_is_left_out(const textio::CalibrationFile& arm, const std::string& format, const std::string& result_path) {
-  if (arm.model.compliance.term_count == 0 || format != "urdf") return;
+  if (arm.model.compliance.term_count == 0 || format == "robot-json") return;
   std::fprintf(stderr,
                "hivecal export: note: the model's %d compliance terms (joint deflection under gravity) cannot be "
-               "written in URDF: the chain is the rigid geometry only; predict with the result file for the full "
+               "written in %s: the chain is the rigid geometry only; predict with the result file for the full "
                "model\n",
-               arm.model.compliance.term_count);
+               arm.model.compliance.term_count, format == "urdf" ? "URDF" : "the UR kinematics YAML");
   const std::vector<report::SampleRow> train = result_path.empty() ? std::vector<report::SampleRow>() : training_samples(result_path);
   if (train.empty()) return;
   RobotModel rigid = arm.model;
@@ -90,14 +93,57 @@ void say_what_is_left_out(const textio::CalibrationFile& arm, const std::string&
   const double rigid_m = mae_m(rigid, arm.base_to_tracker, train);
   std::fprintf(stderr,
                "hivecal export: note: on the result's %zu training samples the MAE (3D) is %.2f um with the compliance "
-               "and %.2f um with the URDF's rigid chain (%+.2f um)\n",
+               "and %.2f um with the rigid chain (%+.2f um)\n",
                train.size(), full_m * 1e6, rigid_m * 1e6, (rigid_m - full_m) * 1e6);
+}
+
+/// The ROS UR kinematics YAML of `arm`, its hash the robot's (--ur-hash) or one of its own.
+Error ur_kinematics_yaml(const Options& options, const textio::CalibrationFile& arm, std::string* yaml) {
+  if (arm.convention != DhConvention::standard) {
+    return Error::input("--format ur-kinematics: the arm is described in modified DH: not a UR arm; use --format urdf");
+  }
+  textio::UrKinematics kinematics;
+  std::string why;
+  if (!textio::ur_kinematics_from_model(arm.model, &kinematics, &why)) return Error::input("--format ur-kinematics: " + why);
+  const Vec3 flange_offset = kinematics.flange.translation_m;
+  const double flange_twist_rad = std::acos(std::fmin(1.0, std::fmax(-1.0, kinematics.flange.rotation(1, 1))));
+  if (flange_offset.norm() > 0.0 || flange_twist_rad > 0.0) {
+    std::fprintf(stderr,
+                 "hivecal export: note: the YAML has no flange entry: a6 = %.4f mm and alpha6 = %.4f mrad are left "
+                 "out; they belong in the TCP set on the controller (Tx(a6) Rx(alpha6) before the tool point)\n",
+                 flange_offset.x() * 1e3, flange_twist_rad * 1e3);
+  }
+  std::string hash = options.get("ur-hash");
+  if (hash.empty()) {
+    // The driver compares this with the robot's own calibration hash and warns when they differ.
+    Digest digest;
+    for (const RigidTransform& frame : kinematics.joint_frames) {
+      digest.add(frame.rotation);
+      digest.add(frame.translation_m);
+    }
+    char text[48];
+    std::snprintf(text, sizeof text, "calib_hivecal_%016llx", static_cast<unsigned long long>(digest.value()));
+    hash = text;
+    std::fprintf(stderr,
+                 "hivecal export: note: hash %s is hivecal's: the UR driver warns that it is not the robot's own "
+                 "(--ur-hash passes the robot's through)\n",
+                 hash.c_str());
+  }
+  *yaml = textio::format_ur_kinematics_yaml(kinematics, hash);
+  return Error{};
 }
 
 Error export_arm(const Options& options) {
   const std::string format = options.get("format");
-  if (format != "urdf" && format != "robot-json") {
-    return Error::usage("--format must be urdf or robot-json, not " + port::quoted(format));
+  if (format != "urdf" && format != "robot-json" && format != "ur-kinematics") {
+    return Error::usage("--format must be urdf, ur-kinematics or robot-json, not " + port::quoted(format));
+  }
+  const std::string hash = options.get("ur-hash");
+  for (const char c : hash) {
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_')) {
+      return Error::usage("--ur-hash must be letters, digits and '_' (e.g. calib_12788084448423163542), not " +
+                          port::quoted(hash));
+    }
   }
   port::OutputSet outputs;
   std::size_t out_id = 0;
@@ -109,9 +155,15 @@ Error export_arm(const Options& options) {
   error = load_arm(options, &arm, &has_tracker);
   if (!error.ok()) return error;
   say_what_is_left_out(arm, format, options.get("calibration"));
-  const std::string text = format == "urdf" ? textio::format_urdf(arm, has_tracker ? &arm.base_to_tracker : nullptr)
-                                            : textio::format_robot_description(arm);
-  error = outputs.stage_text(out_id, "", text);
+  std::string text;
+  if (format == "urdf") {
+    text = textio::format_urdf(arm, has_tracker ? &arm.base_to_tracker : nullptr);
+  } else if (format == "ur-kinematics") {
+    error = ur_kinematics_yaml(options, arm, &text);
+  } else {
+    text = textio::format_robot_description(arm);
+  }
+  if (error.ok()) error = outputs.stage_text(out_id, "", text);
   return error.ok() ? outputs.commit() : error;
 }
 
@@ -122,7 +174,10 @@ int export_main(int argc, char** argv) {
       {"calibration", "FILE", "calibration result (robot-calibration/1 JSON) to export", ""},
       {"robot-model", "NAME|FILE", "or a nominal arm: built-in table name or robot description .json", ""},
       {"ur-calibration", "FILE", "with --robot-model: a UR calibration.conf applied to it", ""},
-      {"format", "urdf|robot-json", "URDF serial chain (tcp per target, tracker frame), or a robot description", "urdf"},
+      {"format", "urdf|ur-kinematics|robot-json",
+       "URDF serial chain (tcp per target, tracker frame), the ROS UR driver's kinematics YAML, or a robot description",
+       "urdf"},
+      {"ur-hash", "HASH", "with ur-kinematics: the robot's own calibration hash (e.g. calib_12788084448423163542)", ""},
       {"out", "FILE", "where the document goes; '-' for stdout", "-"},
   };
   Options options;
@@ -130,7 +185,9 @@ int export_main(int argc, char** argv) {
                                    "Writes a calibration (or a nominal arm, with a UR calibration.conf applied) in\n"
                                    "the robot's own formats: a URDF chain whose forward kinematics equal the\n"
                                    "model's (joints turn about z of each DH frame; links base_link, link_1..6,\n"
-                                   "flange, tcp per target, tracker), or a robot description JSON.",
+                                   "flange, tcp per target, tracker), the ROS UR driver's kinematics YAML (UR arms;\n"
+                                   "the parallel joints' frames moved along their axes as UR's converter does), or a\n"
+                                   "robot description JSON.",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
   return exit_with(kCommand, export_arm(options));

@@ -415,8 +415,13 @@ if "${run[@]}" export --robot-model ur10e --format robot-json --out "$work/ur10e
    "${run[@]}" export --robot-model "$work/ur10e.json" --out "$work/ur10e.urdf" 2>/dev/null &&
    ! grep -q '<link name="tracker"/>' "$work/ur10e.urdf"; then pass; else
   fail "export --format robot-json, read back by --robot-model"; fi
+if "${run[@]}" export --robot-model ur5e --format ur-kinematics --ur-hash calib_42 --out "$work/ur5e.yaml" 2>/dev/null &&
+   grep -q '^  wrist_3:$' "$work/ur5e.yaml" && grep -q '^  hash: calib_42$' "$work/ur5e.yaml"; then pass; else
+  fail "export --format ur-kinematics"; fi
+expect 0 "hash calib_hivecal_" -- export --robot-model ur5e --format ur-kinematics --out "$work/ur5e-own.yaml"
+expect 2 "--ur-hash must be letters, digits and '_'" -- export --robot-model ur5e --format ur-kinematics --ur-hash 'a b'
 expect 2 "give either --calibration (a result) or --robot-model" -- export --calibration "$work/model.json" --robot-model ur5
-expect 2 "--format must be urdf or robot-json, not 'sdf'" -- export --robot-model ur5 --format sdf
+expect 2 "--format must be urdf, ur-kinematics or robot-json, not 'sdf'" -- export --robot-model ur5 --format sdf
 expect 2 "is the same file as the input --calibration" -- export --calibration "$work/model.json" --out "$work/model.json"
 
 # --- every command has --help
