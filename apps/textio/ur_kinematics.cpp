@@ -28,7 +28,9 @@ void move_along_axis(int k, const double theta_k, const double alpha_k, RigidTra
 }
 
 std::string entry(const char* name, const RigidTransform& frame) {
-  const UrdfOrigin o = urdf_origin(frame);
+  UrdfOrigin o = urdf_origin(frame);
+  o.xyz_m += Vec3::Zero();  // -0 reads as 0
+  o.rpy_rad += Vec3::Zero();
   return std::string("  ") + name + ":\n    x: " + format_double(o.xyz_m.x()) + "\n    y: " + format_double(o.xyz_m.y()) +
          "\n    z: " + format_double(o.xyz_m.z()) + "\n    roll: " + format_double(o.rpy_rad.x()) +
          "\n    pitch: " + format_double(o.rpy_rad.y()) + "\n    yaw: " + format_double(o.rpy_rad.z()) + "\n";

@@ -24,7 +24,8 @@ RigidTransform row_after_joint(const DhJoint& joint) {
 }
 
 std::string triple(const Vec3& v) {
-  return format_double(v.x()) + " " + format_double(v.y()) + " " + format_double(v.z());
+  const Vec3 plain = v + Vec3::Zero();  // -0 reads as 0
+  return format_double(plain.x()) + " " + format_double(plain.y()) + " " + format_double(plain.z());
 }
 
 std::string origin_element(const RigidTransform& transform) {
