@@ -18,8 +18,12 @@ constexpr const char* kCommand = "predict";
 Error predict(const Options& options) {
   // parse
   const std::string frame = options.get("frame");
-  if (options.get("calibration").empty() || options.get("joints").empty()) {
-    return Error::usage("--calibration and --joints are required (see --help)");
+  const bool nominal = options.given("robot-model");
+  if ((options.get("calibration").empty() == !nominal) || options.get("joints").empty()) {
+    return Error::usage("--joints and either --calibration or --robot-model are required (see --help)");
+  }
+  if (nominal && options.given("frame") && frame != "base") {
+    return Error::usage("--robot-model has no tracker frame: it predicts in the base frame (--frame base)");
   }
   if (frame != "tracker" && frame != "base") {
     return Error::usage("--frame must be 'tracker' or 'base', not " + port::quoted(frame));
@@ -41,7 +45,8 @@ Error predict(const Options& options) {
   if (!error.ok()) return error;
   // load
   textio::CalibrationFile calibration;
-  port::Error r = textio::read_calibration_json(options.get("calibration"), &calibration);
+  port::Error r = nominal ? robot_model_option(options, "robot-model", &calibration)
+                          : textio::read_calibration_json(options.get("calibration"), &calibration);
   if (!r.ok()) return r;
   if (target > calibration.target_count) {
     return Error::usage("--target " + target_text + ": " + options.get("calibration") + " holds " +
@@ -63,7 +68,8 @@ Error predict(const Options& options) {
                                        : RigidTransform{};
   for (const JointVector& q : poses) {
     const Vec3 chain_point = fk_target_point(calibration.model, q, target - 1);
-    points.push_back(frame == "base" ? file_base.apply(chain_point) : calibration.base_to_tracker.apply(chain_point));
+    points.push_back(frame == "base" || nominal ? file_base.apply(chain_point)
+                                                : calibration.base_to_tracker.apply(chain_point));
   }
   // write
   error = outputs.stage_text(out_id, "", textio::format_points_csv(points, output_unit));
@@ -75,6 +81,7 @@ Error predict(const Options& options) {
 int predict_main(int argc, char** argv) {
   std::vector<OptionSpec> specs = {
       {"calibration", "FILE", "calibration result (robot-calibration/1 JSON)", ""},
+      {"robot-model", "NAME|FILE", "or a nominal arm (built-in name, description .json or .urdf): base frame; checks a robot file", ""},
       {"joints", "FILE", "poses to predict: CSV q1..q6 [rad], optional leading t column ('-': stdin)", ""},
       {"frame", "tracker|base", "frame of the predicted positions", "tracker"},
       {"target", "K", "which target's (reflector's) positions: 1 .. the result's \"tools\" count", "1"},

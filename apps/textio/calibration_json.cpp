@@ -5,6 +5,7 @@
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/text_util.hpp"
+#include "textio/urdf.hpp"
 
 namespace hivecal::textio {
 namespace {
@@ -507,11 +508,16 @@ port::Error read_robot_description(const std::string& path, RobotDescription* de
   const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
   if (!read.ok()) return read;
   if (trim(text).empty()) return port::Error::input(path + ": empty file");
-  const port::Error parsed = parse_robot_description(text, path, description);
+  // A URDF (XML) or the JSON description, by content.
+  const port::Error parsed = trim(text)[0] == '<' ? parse_urdf_description(text, path, description)
+                                                  : parse_robot_description(text, path, description);
   if (parsed.ok() && description->robot.empty()) {  // unnamed: the file's name without folder and .json
     const std::size_t slash = path.find_last_of('/');
     std::string stem = slash == std::string::npos ? path : path.substr(slash + 1);
-    if (stem.size() > 5 && stem.compare(stem.size() - 5, 5, ".json") == 0) stem.resize(stem.size() - 5);
+    for (const char* extension : {".json", ".urdf"}) {
+      const std::size_t n = std::string(extension).size();
+      if (stem.size() > n && stem.compare(stem.size() - n, n, extension) == 0) stem.resize(stem.size() - n);
+    }
     description->robot = stem;
   }
   return parsed;
@@ -519,13 +525,14 @@ port::Error read_robot_description(const std::string& path, RobotDescription* de
 
 port::Error robot_description_from_value(const std::string& value, RobotDescription* description, bool* from_file) {
   const bool is_file = !value.empty() && port::identify(value).exists;
-  const bool json_name = value.size() >= 5 && value.compare(value.size() - 5, 5, ".json") == 0;
+  const bool json_name = (value.size() >= 5 && value.compare(value.size() - 5, 5, ".json") == 0) ||
+                         (value.size() >= 5 && value.compare(value.size() - 5, 5, ".urdf") == 0);
   if (from_file != nullptr) *from_file = is_file || json_name;
   if (is_file || json_name) return read_robot_description(value, description);
   RobotType type = RobotType::ur5;
   if (robot_type_from_name(value.c_str(), &type) != Status::ok) {
     return port::Error::usage("unknown robot model " + port::quoted(value) + " (" + robot_type_names() +
-                              ", or a robot description .json file)");
+                              ", or a robot description .json or .urdf file)");
   }
   RobotDescription builtin;
   builtin.robot = robot_type_name(type);

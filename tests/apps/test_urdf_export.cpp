@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/dh_convention.hpp"
@@ -27,7 +28,7 @@ using math::kPi;
 struct ReadJoint {
   std::string type, parent, child;
   RigidTransform origin;
-  Vec3 axis = Vec3::UnitZ();
+  Vec3 axis = Vec3::UnitX();
 };
 
 std::string attribute(const std::string& element, const std::string& name) {
@@ -54,11 +55,14 @@ std::map<std::string, ReadJoint> read_joints(const std::string& urdf) {
     joint.type = attribute(block, "type");
     joint.parent = attribute(block.substr(block.find("<parent")), "link");
     joint.child = attribute(block.substr(block.find("<child")), "link");
-    const std::string origin = block.substr(block.find("<origin"));
-    textio::UrdfOrigin xyz_rpy;
-    xyz_rpy.xyz_m = triple(attribute(origin, "xyz"));
-    xyz_rpy.rpy_rad = triple(attribute(origin, "rpy"));
-    joint.origin = textio::urdf_transform(xyz_rpy);
+    if (block.find("<origin") != std::string::npos) {
+      const std::string origin = block.substr(block.find("<origin"));
+      textio::UrdfOrigin xyz_rpy;
+      xyz_rpy.xyz_m = triple(attribute(origin, "xyz"));
+      xyz_rpy.rpy_rad = triple(attribute(origin, "rpy"));
+      joint.origin = textio::urdf_transform(xyz_rpy);
+    }
+    joint.axis = Vec3::UnitX();  // URDF's default
     if (block.find("<axis") != std::string::npos) joint.axis = triple(attribute(block.substr(block.find("<axis")), "xyz"));
     joints[joint.child] = joint;
   }
@@ -72,15 +76,21 @@ Mat3 about_axis(const Vec3& axis, double angle) {
   return Mat3::Identity() + std::sin(angle) * k + (1.0 - std::cos(angle)) * k * k;
 }
 
-/// Pose of `link` in base_link at joints q, composed from the URDF's joints.
-RigidTransform link_pose(const std::map<std::string, ReadJoint>& joints, const std::string& link, const JointVector& q) {
-  if (link == "base_link") return RigidTransform{};
-  const ReadJoint& joint = joints.at(link);
-  RigidTransform pose = link_pose(joints, joint.parent, q).then_after(joint.origin);
-  if (joint.type == "revolute") {
-    const int number = std::atoi(joint.child.substr(joint.child.find('_') + 1).c_str());
-    pose = pose.then_after(RigidTransform{about_axis(joint.axis, q(number - 1)), Vec3::Zero()});
+/// Pose of `link` in the root at joints q (the movable joints in chain order), composed from
+/// the URDF's joints.
+RigidTransform link_pose(const std::map<std::string, ReadJoint>& joints, const std::string& link, const JointVector& q,
+                         int* movable_before = nullptr) {
+  int movable = 0;
+  RigidTransform pose;
+  if (joints.count(link) != 0) {
+    const ReadJoint& joint = joints.at(link);
+    pose = link_pose(joints, joint.parent, q, &movable).then_after(joint.origin);
+    if (joint.type == "revolute" || joint.type == "continuous") {
+      pose = pose.then_after(RigidTransform{about_axis(joint.axis.normalized(), q(movable)), Vec3::Zero()});
+      ++movable;
+    }
   }
+  if (movable_before != nullptr) *movable_before = movable;
   return pose;
 }
 
@@ -196,6 +206,135 @@ TEST(UrdfExport, RobotJsonReadsBackAsTheSameArm) {
   EXPECT_EQ(back.robot, robot.robot);
   EXPECT_EQ(back.model.joints[2].a_m, robot.model.joints[2].a_m);
   EXPECT_EQ(back.model.tool_m, robot.model.tool_m);
+}
+
+// --- URDF in: --robot-model FILE.urdf ------------------------------------------------------
+
+/// The arm `urdf` describes, read by hivecal; its tool points must be where the URDF (read by
+/// this file's own reader) puts the links `tools`, to 1e-9 m on random poses.
+textio::RobotDescription expect_read_exactly(const std::string& urdf, const std::vector<std::string>& tools,
+                                            const char* label) {
+  textio::RobotDescription robot;
+  const port::Error read = textio::parse_urdf_description(urdf, "arm.urdf", &robot);
+  EXPECT_TRUE(read.ok()) << label << ": " << read.message;
+  if (!read.ok()) return robot;
+  EXPECT_EQ(robot.target_count, static_cast<int>(tools.size())) << label;
+  const std::map<std::string, ReadJoint> joints = read_joints(urdf);
+  const RigidTransform file_base =
+      robot.convention == DhConvention::modified ? robot.modified_base.transform() : RigidTransform{};
+  Random random(23);
+  double worst_m = 0.0;
+  for (int pose = 0; pose < 200; ++pose) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    for (std::size_t k = 0; k < tools.size(); ++k) {
+      const Vec3 expected = link_pose(joints, tools[k], q).translation_m;
+      worst_m = std::fmax(worst_m, (file_base.apply(fk_target_point(robot.model, q, static_cast<int>(k))) - expected).norm());
+    }
+  }
+  EXPECT_LE(worst_m, 1e-9) << label;
+  std::printf("%-40s read back: DH vs URDF worst %.2e m\n", label, worst_m);
+  return robot;
+}
+
+TEST(UrdfImport, ExportedArmsReadBackAsTheSameModel) {
+  textio::RobotDescription ur5;
+  ur5.robot = "ur5";
+  ur5.model = nominal_model(RobotType::ur5);
+  ur5.model.tool_m = Vec3(0.0, 0.0, 0.1695);
+  const textio::RobotDescription back = expect_read_exactly(textio::format_urdf(ur5, nullptr), {"tcp"}, "UR5 URDF");
+  for (int i = 0; i < kJointCount; ++i) {  // the robot's own table, not an equivalent one turned by pi
+    EXPECT_NEAR(back.model.joints[i].a_m, ur5.model.joints[i].a_m, 1e-12) << i;
+    EXPECT_NEAR(back.model.joints[i].d_m, ur5.model.joints[i].d_m, 1e-12) << i;
+    EXPECT_NEAR(back.model.joints[i].alpha_rad, ur5.model.joints[i].alpha_rad, 1e-12) << i;
+    EXPECT_NEAR(back.model.joints[i].theta_offset_rad, ur5.model.joints[i].theta_offset_rad, 1e-12) << i;
+  }
+  Random random(8);
+  for (int trial = 0; trial < 10; ++trial) {
+    textio::RobotDescription robot;
+    robot.model = nominal_model(RobotType::ur10e);
+    for (DhJoint& joint : robot.model.joints) {
+      joint.theta_offset_rad += random.uniform(-0.5, 0.5);
+      joint.d_m += random.uniform(-0.05, 0.05);
+      joint.a_m += random.uniform(-0.05, 0.05);
+      joint.alpha_rad += random.uniform(-0.3, 0.3);  // no two axes parallel or meeting
+    }
+    robot.target_count = 2;
+    robot.model.tool_m = Vec3(0.05, 0.0, 0.2);
+    robot.model.other_tools_m[0] = Vec3(-0.05, 0.03, 0.2);
+    const RigidTransform base_to_tracker{rotation_z(0.3), Vec3(2.0, 0.0, 0.5)};  // a tracker link is no joint of the arm
+    expect_read_exactly(textio::format_urdf(robot, &base_to_tracker), {"tcp", "tcp_2"}, "random skew-axis arm, 2 tcps");
+  }
+}
+
+// A URDF written by hand the way robot vendors write them: joint frames not at the DH places,
+// axes along -z, y and -x, fixed joints between, a visual origin that must be ignored, a flange
+// and a tool0, comments; joint 1 about -z (a modified-DH base Rx(pi)).
+TEST(UrdfImport, AnyAxesAndFixedJointsBetween) {
+  const std::string urdf = R"(<?xml version="1.0"?>
+<!-- a 6R arm -->
+<robot name="vendor_arm">
+  <link name="base"><visual><origin xyz="9 9 9" rpy="1 2 3"/></visual></link>
+  <link name="l1"/><link name="l2"/><link name="l2b"/><link name="l3"/><link name="l4"/><link name="l5"/>
+  <link name="l6"/><link name="flange"/><link name="tool0"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.3" rpy="0 0 0.2"/><axis xyz="0 0 -1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.05 0.02 0.1" rpy="0.1 0 0"/><axis xyz="0 1 0"/></joint>
+  <joint name="j2_fixed" type="fixed"><parent link="l2"/><child link="l2b"/>
+    <origin xyz="0 0 0.4" rpy="0.05 -0.02 0.3"/></joint>
+  <joint name="j3" type="continuous"><parent link="l2b"/><child link="l3"/>
+    <origin xyz="0.01 0 0.02"/><axis xyz="0 1 0.01"/></joint>
+  <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/>
+    <origin xyz="0.35 0 0.03" rpy="0 0.1 0"/><axis xyz="-1 0 0"/></joint>
+  <joint name="j5" type="revolute"><parent link="l4"/><child link="l5"/>
+    <origin xyz="0.05 0 0" rpy="0 0 0"/><axis xyz="0 1 0"/></joint>
+  <joint name="j6" type="revolute"><parent link="l5"/><child link="l6"/>
+    <origin xyz="0.08 0 0"/><axis xyz="1 0 0"/></joint>
+  <joint name="j6_flange" type="fixed"><parent link="l6"/><child link="flange"/>
+    <origin xyz="0.02 0 0" rpy="0 1.5707963267948966 0"/></joint>
+  <joint name="flange_tool" type="fixed"><parent link="flange"/><child link="tool0"/>
+    <origin xyz="0.01 0.02 0.15"/></joint>
+</robot>
+)";
+  const textio::RobotDescription robot = expect_read_exactly(urdf, {"tool0"}, "vendor arm: any axes, fixed joints");
+  EXPECT_EQ(robot.robot, "vendor_arm");
+  EXPECT_EQ(robot.convention, DhConvention::modified);  // joint 1 about -z: base Rx(pi)
+}
+
+TEST(UrdfImport, WhatIsNoSixJointSerialArmIsRefusedByLine) {
+  textio::RobotDescription ur5;
+  ur5.model = nominal_model(RobotType::ur5);
+  const std::string good = textio::format_urdf(ur5, nullptr);
+  struct Case {
+    std::string urdf;
+    const char* message;
+  };
+  const auto replaced = [](std::string text, const std::string& from, const std::string& to) {
+    text.replace(text.find(from), from.size(), to);
+    return text;
+  };
+  const std::string prismatic = replaced(good, "type=\"revolute\"", "type=\"prismatic\"");
+  const std::string seven = replaced(good, "type=\"fixed\"", "type=\"revolute\"");  // the flange joint moves too
+  const std::string loop = replaced(good, "<child link=\"flange\"/>", "<child link=\"link_3\"/>");
+  const std::string skew_base = replaced(good, "<axis xyz=\"0 0 1\"/>", "<axis xyz=\"1 0 0\"/>");
+  const Case cases[] = {
+      {prismatic, "arm.urdf:13: joint 'joint_1' is 'prismatic': only revolute, continuous and fixed joints"},
+      {seven, "arm.urdf: 7 movable joints: hivecal models arms of exactly 6 revolute joints"},
+      {loop, "link 'link_3' already has a parent joint (a loop, or not a tree)"},
+      {skew_base, "joint 1's axis is not perpendicular to the root link's x axis"},
+      {"<robot name=\"x\">\n<joint name=\"a\" type=\"fixed\">\n</robot>", "arm.urdf:3: </robot> closes <joint> of line 2"},
+      {"{\"dh\": []}", ""},  // not XML: the JSON reader's business, not tried here
+      {"<robot><joint name=\"j\" type=\"revolute\"><origin xyz=\"1 2\"/></joint></robot>",
+       "arm.urdf:1: <origin xyz> must be three numbers, not '1 2'"},
+  };
+  for (const Case& c : cases) {
+    if (c.message[0] == '\0') continue;
+    textio::RobotDescription robot;
+    const port::Error read = textio::parse_urdf_description(c.urdf, "arm.urdf", &robot);
+    EXPECT_FALSE(read.ok()) << c.message;
+    EXPECT_NE(read.message.find(c.message), std::string::npos) << read.message << "\nwanted: " << c.message;
+  }
 }
 
 }  // namespace

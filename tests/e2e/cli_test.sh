@@ -12,7 +12,7 @@ ur_result_json ur5 0.089159 -0.425 -0.39225 0.10915 0.09465 0.0823 "0.0, 0.0, 0.
 # --- usage errors (exit 2)
 expect 2 "unknown command 'frobnicate'" -- frobnicate
 expect 2 "unknown option '--bogus'" -- predict --bogus
-expect 2 "--calibration and --joints are required" -- predict --joints "$work/joints.csv"
+expect 2 "--joints and either --calibration or --robot-model are required" -- predict --joints "$work/joints.csv"
 expect 2 "needs a value" -- predict --calibration
 expect 2 "--frame must be 'tracker' or 'base'" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --frame world
 # --- bad input files (exit 3), and no output left behind
@@ -420,6 +420,19 @@ if "${run[@]}" export --robot-model ur5e --format ur-kinematics --ur-hash calib_
   fail "export --format ur-kinematics"; fi
 expect 0 "hash calib_hivecal_" -- export --robot-model ur5e --format ur-kinematics --out "$work/ur5e-own.yaml"
 expect 2 "--ur-hash must be letters, digits and '_'" -- export --robot-model ur5e --format ur-kinematics --ur-hash 'a b'
+# A URDF is a robot model (--robot-model FILE.urdf): predict checks it against the built-in
+# table, calibrate starts from it.
+"${run[@]}" export --robot-model ur5 --out "$work/ur5.urdf" 2>/dev/null
+"${run[@]}" predict --robot-model "$work/ur5.urdf" --joints "$work/many.csv" --out "$work/from_urdf.csv" 2>/dev/null
+"${run[@]}" predict --robot-model ur5 --joints "$work/many.csv" --out "$work/from_table.csv" 2>/dev/null
+if [ -s "$work/from_urdf.csv" ] && paste -d, "$work/from_urdf.csv" "$work/from_table.csv" | awk -F, 'NR > 1 {
+     for (i = 1; i <= 3; ++i) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > 1e-9) bad = 1 } } END { exit bad }'; then pass; else
+  fail "predict --robot-model ur5.urdf differs from the built-in ur5"; fi
+expect 2 "--robot-model has no tracker frame" -- predict --robot-model ur5 --joints "$work/joints.csv" --frame tracker
+if "${run[@]}" calibrate --samples "$work/paired.csv" --robot-model "$work/ur5.urdf" --method lm --split 1 --out "$work/from_urdf.json" >/dev/null 2>&1 &&
+   grep -q '"robot": "ur5"' "$work/from_urdf.json"; then pass; else fail "calibrate --robot-model ur5.urdf"; fi
+printf '<robot name="r">\n<joint name="j" type="prismatic"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/slider.urdf"
+expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- predict --robot-model "$work/slider.urdf" --joints "$work/joints.csv"
 expect 2 "give either --calibration (a result) or --robot-model" -- export --calibration "$work/model.json" --robot-model ur5
 expect 2 "--format must be urdf, ur-kinematics or robot-json, not 'sdf'" -- export --robot-model ur5 --format sdf
 expect 2 "is the same file as the input --calibration" -- export --calibration "$work/model.json" --out "$work/model.json"
