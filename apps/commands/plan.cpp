@@ -44,18 +44,33 @@ bool stdout_carries_output(const Options& options) {
   return options.get("out") == "-" || options.get("urscript") == "-" || options.get("svg") == "-";
 }
 
-/// The arm: a built-in name (its controller's joint limits) or a robot description FILE
-/// (limits +/-2 pi unless --joint-limits gives them).
+/// The arm and its joint limits: --joint-limits, else the description's own ("joint_limits",
+/// URDF <limit>), else a built-in type's controller limits, else +-2 pi (said on stderr).
 Error robot_option(const Options& options, RobotModel* model, JointLimits* limits) {
   textio::RobotDescription description;
   bool from_file = false;
-  const Error error = robot_model_option(options, "robot-model", &description, &from_file);
+  Error error = robot_model_option(options, "robot-model", &description, &from_file);
   if (!error.ok()) return error;
   *model = description.model;
   RobotType type = RobotType::ur5;
-  *limits = !from_file && robot_type_from_name(description.robot.c_str(), &type) == Status::ok
-                ? default_joint_limits(type)
-                : JointLimits{};
+  if (!options.get("joint-limits").empty()) {
+    textio::InputUnits units;
+    error = input_units_option(options, &units);
+    if (!error.ok()) return error;
+    return textio::read_joint_limits_csv(options.get("joint-limits"), &limits->lower_rad, &limits->upper_rad, units);
+  }
+  if (description.has_joint_limits) {
+    limits->lower_rad = description.lower_rad;
+    limits->upper_rad = description.upper_rad;
+  } else if (!from_file && robot_type_from_name(description.robot.c_str(), &type) == Status::ok) {
+    *limits = default_joint_limits(type);
+  } else {
+    *limits = JointLimits{};
+    std::fprintf(stderr,
+                 "hivecal plan: %s gives no joint limits: assuming +-360 deg for every joint (--joint-limits FILE, or "
+                 "\"joint_limits\" in the description, sets them)\n",
+                 options.get("robot-model").c_str());
+  }
   return Error{};
 }
 
@@ -124,10 +139,6 @@ Error parse_request(const Options& options, PlanRequest* request) {
   }
   if (o.candidate_count < o.pose_count) return Error::usage("--candidates must be at least --count");
   if (options.given("tool-down")) c.orientation = PlanOrientation::tool_down;
-  if (!options.get("joint-limits").empty()) {
-    const Error r = textio::read_joint_limits_csv(options.get("joint-limits"), &c.limits.lower_rad, &c.limits.upper_rad);
-    if (!r.ok()) return r;
-  }
   return Error{};
 }
 
@@ -299,8 +310,8 @@ Error plan(const Options& options) {
 }  // namespace
 
 int plan_main(int argc, char** argv) {
-  const std::vector<OptionSpec> specs = {
-      {"robot-model", "NAME|FILE", std::string("nominal geometry (and joint limits of a built-in type): ") + robot_type_names() + ", or a robot description JSON", "ur5e"},
+  std::vector<OptionSpec> specs = {
+      {"robot-model", "NAME|FILE", std::string("nominal geometry and joint limits: ") + robot_type_names() + ", or a robot description .json or .urdf", "ur5e"},
       {"count", "N", "poses to measure (1 .. 128)", ""},
       {"tracker-position", "X,Y,Z", "tracker position in the robot base frame [m]", ""},
       {"tool", "X,Y,Z", "reflector in the flange frame [m] (one target)", "0,0,0"},
@@ -308,7 +319,7 @@ int plan_main(int argc, char** argv) {
       {"floor-z", "M", "reflector and flange above this base z [m]", "0.05"},
       {"keep-out-radius", "M", "reflector and flange at least this far from the base z axis [m]", "0.15"},
       {"tool-down", "", "the flange z axis points down in every pose (the paper's session)", ""},
-      {"joint-limits", "FILE", "CSV lower,upper [rad], one row per joint (default: the robot's)", ""},
+      {"joint-limits", "FILE", "CSV lower,upper (rad, the header's unit as in 'lower [deg]', or --angle-unit), one row per joint (default: the robot's)", ""},
       {"params", "full|paper", "parameters the calibration will estimate", "full"},
       {"objective", "NAME", "i-optimal-workspace | i-optimal | d-optimal (docs/planning.md)", "i-optimal-workspace"},
       {"candidates", "N", "random candidate configurations to choose from (<= 2048)", "2048"},
@@ -325,6 +336,7 @@ int plan_main(int argc, char** argv) {
       {"urscript", "FILE", "URScript program: movej + sleep(dwell) per pose", ""},
       {"svg", "FILE", "figure: reflector positions planned vs random (top and side views)", ""},
   };
+  specs.push_back(input_unit_option_specs()[1]);  // --angle-unit: of --joint-limits
   Options options;
   const int parsed = parse_options(kCommand,
                                    "Chooses the poses of a tracker session (I-optimal over the cell by default, over\n"

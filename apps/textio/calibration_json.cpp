@@ -4,6 +4,7 @@
 
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/port/input_file.hpp"
+#include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
 #include "textio/urdf.hpp"
 
@@ -115,6 +116,30 @@ port::Error parse_other_tools(const JsonValue& root, const std::string& source, 
   return port::Error{};
 }
 
+/// Optional "joint_limits": six [lower, upper] pairs [rad], lower < upper, within two turns.
+port::Error parse_joint_limits(const JsonValue& root, const std::string& source, RobotDescription* description) {
+  const JsonValue* limits = root.find("joint_limits");
+  if (limits == nullptr) return port::Error{};
+  if (limits->kind != JsonValue::Kind::array || limits->array.size() != static_cast<std::size_t>(kJointCount)) {
+    return fail(source, "\"joint_limits\" must be six [lower, upper] pairs in rad, joints 1 .. 6");
+  }
+  for (int j = 0; j < kJointCount; ++j) {
+    double pair[2];
+    const std::string at = "\"joint_limits\"[" + std::to_string(j) + "]";
+    if (!read_numbers(&limits->array[static_cast<std::size_t>(j)], 2, pair)) {
+      return fail(source, at + " must be [lower, upper] in rad");
+    }
+    if (!(pair[0] < pair[1]) || !(std::fabs(pair[0]) <= kMaxJointLimit_rad) || !(std::fabs(pair[1]) <= kMaxJointLimit_rad)) {
+      return fail(source, at + " = [" + format_double(pair[0]) + ", " + format_double(pair[1]) +
+                              "] rad: lower must be below upper, both within two turns (4 pi rad; degrees?)");
+    }
+    description->lower_rad(j) = pair[0];
+    description->upper_rad(j) = pair[1];
+  }
+  description->has_joint_limits = true;
+  return port::Error{};
+}
+
 port::Error parse_description(const JsonValue& root, const std::string& source, RobotDescription* description) {
   RobotDescription parsed;
   parsed.robot.clear();  // no built-in default: a file names its own arm (or read_robot_description names it)
@@ -154,6 +179,7 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
     }
   }
   r = parse_other_tools(root, source, tool, &parsed);
+  if (r.ok()) r = parse_joint_limits(root, source, &parsed);
   if (!r.ok()) return r;
   if (const JsonValue* compliance = root.find("compliance"); compliance != nullptr) {  // optional
     std::string what;
@@ -417,6 +443,14 @@ void write_description(JsonWriter& json, const RobotDescription& file, const dou
     write_compliance(json, file.model.compliance,
                      file.convention == DhConvention::modified ? file.modified_base.transform().rotation : Mat3::Identity(),
                      compliance_sigma);
+  }
+  if (file.has_joint_limits) {
+    json.key("joint_limits").begin_array();
+    for (int j = 0; j < kJointCount; ++j) {
+      const double pair[2] = {file.lower_rad(j), file.upper_rad(j)};
+      json.inline_array(pair, 2);
+    }
+    json.end_array();
   }
 }
 

@@ -22,6 +22,9 @@ struct RobotDescription {
   ModifiedDhBase modified_base;                      ///< modified DH: Rx(alpha_0) Tx(a_0) before joint 1
   RobotModel model;                                  ///< the standard-DH table, tool point and compliance [m, rad]
   int target_count = 1;  ///< targets whose tool points `model` holds, 1 .. kMaxTargets ("tools" when > 1) [-]
+  bool has_joint_limits = false;                          ///< the file gave "joint_limits" (URDF: <limit>)
+  JointVector lower_rad = JointVector::Constant(-2.0 * math::kPi);  ///< lowest joint positions [rad]
+  JointVector upper_rad = JointVector::Constant(2.0 * math::kPi);   ///< highest joint positions [rad]
 };
 
 /// What a result file must hold to predict positions, plus its accuracy figures.

@@ -21,6 +21,7 @@ struct CsvSchema {
   std::string optional_leading;      ///< a column that may come first (ignored), or ""
   std::string optional_trailing;     ///< a unitless column that may follow them (its value appended), or ""
   std::vector<std::string> optional_group;  ///< angle columns found by name after them, all or none (values appended last)
+  bool angles_are_joints = true;     ///< angle columns are joint positions (checked within one turn)
 };
 
 /// Which optional columns a file had.
@@ -153,7 +154,7 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
     if (group.size() == 3 && !r.check_rotation(group.data(), &values[group_at])) return port::Error::input(r.error());
     for (std::size_t i = 0; i < schema.columns.size(); ++i) {
       if (!r.number(at[i], scales[i], &values[i])) return port::Error::input(r.error());
-      if (schema.quantities[i] == Quantity::angle && !r.check_joint(++joint, at[i], values[i])) {
+      if (schema.quantities[i] == Quantity::angle && schema.angles_are_joints && !r.check_joint(++joint, at[i], values[i])) {
         return port::Error::input(r.error());
       }
     }
@@ -274,14 +275,21 @@ port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* p
   });
 }
 
-port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad) {
+port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad,
+                                  const InputUnits& units) {
   JointVector lower;
   JointVector upper;
   int rows = 0;
-  port::Error error = read_csv(path, CsvSchema{{"lower", "upper"}, {Quantity::angle, Quantity::angle}, "", "", {}}, InputUnits{}, [&](const std::vector<double>& values) {
+  CsvSchema schema{{"lower", "upper"}, {Quantity::angle, Quantity::angle}, "", "", {}};
+  schema.angles_are_joints = false;  // a limit may span two turns (J6 +-720 deg)
+  port::Error error = read_csv(path, schema, units, [&](const std::vector<double>& values) {
     const std::string bad = check_finite(values, 0, 2);
     if (!bad.empty()) return bad;
     if (rows == kJointCount) return std::string("more than six rows (one per joint)");
+    if (!(std::fabs(values[0]) <= kMaxJointLimit_rad) || !(std::fabs(values[1]) <= kMaxJointLimit_rad)) {
+      return std::string("a limit beyond two turns (4 pi rad): degrees? name the unit in the header (lower [deg]) "
+                         "or give --angle-unit deg");
+    }
     if (!(values[0] < values[1])) return std::string("lower limit not below the upper one");
     lower(rows) = values[0];
     upper(rows) = values[1];

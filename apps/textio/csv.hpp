@@ -60,8 +60,10 @@ void start_orientation_targets(const OrientationRead& read, RobotModel* start);
 /// Reads poses to predict (`q1..q6`, optionally preceded by `t`), units and checks as above.
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units = {});
 
-/// Reads joint limits: header `lower,upper` [rad], exactly six rows (joint 1 .. 6), lower < upper.
-port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad);
+/// Reads joint limits: header `lower,upper` (rad, or the unit in brackets, or `units`' angle
+/// unit), exactly six rows (joint 1 .. 6), lower < upper, each within two turns (4 pi rad).
+port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad,
+                                  const InputUnits& units = {});
 
 /// `q1..q6` rows with round-trip precision (the poses-to-predict format).
 std::string format_joints_csv(Span<const JointVector> poses_rad);

@@ -51,6 +51,8 @@ struct InputUnits {
 
 /// Largest |joint| read as plausible: one turn either way [rad].
 constexpr double kMaxJointMagnitude_rad = 6.283185307179586;
+/// Largest joint limit a file may give: two turns (a J6 of +-720 deg) [rad].
+constexpr double kMaxJointLimit_rad = 2.0 * kMaxJointMagnitude_rad;
 /// Farthest point from the tracker (or base) origin read as plausible [m].
 constexpr double kMaxPointDistance_m = 100.0;
 

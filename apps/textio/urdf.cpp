@@ -41,9 +41,13 @@ std::string fixed_joint(const std::string& name, const std::string& parent, cons
          child + "\"/>\n" + origin_element(origin) + "  </joint>\n";
 }
 
-std::string revolute_joint(int number, const std::string& parent, const RigidTransform& origin,
-                           const UrdfLimits& limits) {
+std::string revolute_joint(int number, const std::string& parent, const RigidTransform& origin, UrdfLimits limits,
+                           const RobotDescription& robot) {
   const std::string n = std::to_string(number);
+  if (robot.has_joint_limits) {  // the description's own
+    limits.lower_rad = robot.lower_rad(number - 1);
+    limits.upper_rad = robot.upper_rad(number - 1);
+  }
   return "  <joint name=\"joint_" + n + "\" type=\"revolute\">\n    <parent link=\"" + parent +
          "\"/>\n    <child link=\"link_" + n + "\"/>\n" + origin_element(origin) +
          "    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"" + format_double(limits.lower_rad) + "\" upper=\"" +
@@ -92,7 +96,9 @@ std::string format_urdf(const RobotDescription& robot, const RigidTransform* bas
   const RigidTransform base_offset = modified ? robot.modified_base.transform() : RigidTransform{};
   std::string s = "<?xml version=\"1.0\"?>\n<!-- Written by hivecal export: the " +
                   std::string(modified ? "modified" : "standard") +
-                  "-DH model as a serial chain; joint limits are placeholders (a robot description holds none). -->\n"
+                  "-DH model as a serial chain" +
+                  (robot.has_joint_limits ? std::string("") : std::string("; joint limits are placeholders (the description gives none)")) +
+                  ". -->\n"
                   "<robot name=\"" +
                   xml_name(robot.robot) + "\">\n" + link("base_link");
   for (int i = 1; i <= kJointCount; ++i) s += link("link_" + std::to_string(i));
@@ -103,7 +109,7 @@ std::string format_urdf(const RobotDescription& robot, const RigidTransform* bas
   for (int i = 0; i < kJointCount; ++i) {
     const DhJoint& joint = model.joints[i];
     s += revolute_joint(i + 1, parent, before_joint.then_after(rotation_only(rotation_z(joint.theta_offset_rad))),
-                        limits);
+                        limits, robot);
     before_joint = row_after_joint(joint);
     parent = "link_" + std::to_string(i + 1);
   }

@@ -29,7 +29,8 @@ UrdfOrigin urdf_origin(const RigidTransform& transform);
 /// The transform of an xyz/rpy pair (the inverse of urdf_origin up to rounding).
 RigidTransform urdf_transform(const UrdfOrigin& origin);
 
-/// Joint limits written into every revolute joint (a description holds none).
+/// Joint limits written into every revolute joint when the description gives none (effort and
+/// velocity always: URDF requires them, a description holds none).
 struct UrdfLimits {
   double lower_rad = -6.283185307179586;  ///< [rad] (UR arms: +-360 deg)
   double upper_rad = 6.283185307179586;   ///< [rad]

@@ -9,6 +9,7 @@
 
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/dh_convention.hpp"
+#include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
 #include "textio/urdf.hpp"
 
@@ -143,6 +144,8 @@ struct UrdfJoint {
   int line = 0;
   RigidTransform origin;          ///< parent link -> joint frame
   Vec3 axis = Vec3::UnitX();      ///< in the joint frame (URDF's default is x)
+  bool has_limit = false;         ///< <limit lower upper> given
+  double lower_rad = 0.0, upper_rad = 0.0;
   bool movable() const { return type == "revolute" || type == "continuous"; }
 };
 
@@ -186,6 +189,16 @@ bool read_tree(const std::vector<Tag>& tags, UrdfTree* tree, std::string* what) 
           return false;
         }
         joint.origin = urdf_transform(origin);
+      }
+      if (child.name == "limit" && joint.type == "revolute" && child.attrs.count("lower") && child.attrs.count("upper")) {
+        if (!parse_double(child.attrs.at("lower"), &joint.lower_rad) ||
+            !parse_double(child.attrs.at("upper"), &joint.upper_rad) || !(joint.lower_rad < joint.upper_rad) ||
+            !(std::fabs(joint.lower_rad) <= kMaxJointLimit_rad) || !(std::fabs(joint.upper_rad) <= kMaxJointLimit_rad)) {
+          return *what = std::to_string(child.line) + ": joint '" + joint.name +
+                         "' <limit>: lower below upper, both numbers within two turns (4 pi rad)",
+                 false;
+        }
+        joint.has_limit = true;
       }
       if (child.name == "axis") {
         if (!read_triple(child, "xyz", Vec3::UnitX(), &joint.axis, what)) return false;
@@ -415,6 +428,12 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
   const bool offset_base = base.alpha0_rad != 0.0 || base.a0_m != 0.0;
   out.convention = offset_base ? DhConvention::modified : DhConvention::standard;
   out.modified_base = base;
+  for (std::size_t k = 0; k < chain.size(); ++k) {  // a continuous joint (or one without <limit>) keeps +-2 pi
+    if (!chain[k]->has_limit) continue;
+    out.has_joint_limits = true;
+    out.lower_rad(static_cast<Eigen::Index>(k)) = chain[k]->lower_rad;
+    out.upper_rad(static_cast<Eigen::Index>(k)) = chain[k]->upper_rad;
+  }
   // Exact or refused: the model's FK against the URDF's own on random poses.
   Random random(1);
   double worst_m = 0.0;

@@ -201,8 +201,20 @@ TEST(UrdfExport, RobotJsonReadsBackAsTheSameArm) {
   robot.model = nominal_model(RobotType::ur5);
   robot.model.joints[2].a_m += 3.1e-4;
   robot.model.tool_m = Vec3(0.001, 0.002, 0.17);
+  robot.has_joint_limits = true;  // J6 beyond one turn, as real arms allow
+  robot.lower_rad << -6.28, -1.92, -2.6, -6.28, -6.28, -6.98;
+  robot.upper_rad << 6.28, 1.92, 2.6, 6.28, 6.28, 6.98;
   textio::RobotDescription back;
   ASSERT_TRUE(textio::parse_robot_description(textio::format_robot_description(robot), "r.json", &back).ok());
+  EXPECT_TRUE(back.has_joint_limits);
+  EXPECT_EQ(back.lower_rad, robot.lower_rad);
+  EXPECT_EQ(back.upper_rad, robot.upper_rad);
+  // And through URDF: the limits are the joints' <limit>.
+  textio::RobotDescription from_urdf;
+  ASSERT_TRUE(textio::parse_urdf_description(textio::format_urdf(robot, nullptr), "r.urdf", &from_urdf).ok());
+  EXPECT_TRUE(from_urdf.has_joint_limits);
+  EXPECT_EQ(from_urdf.lower_rad, robot.lower_rad);
+  EXPECT_EQ(from_urdf.upper_rad, robot.upper_rad);
   EXPECT_EQ(back.robot, robot.robot);
   EXPECT_EQ(back.model.joints[2].a_m, robot.model.joints[2].a_m);
   EXPECT_EQ(back.model.tool_m, robot.model.tool_m);

@@ -77,6 +77,31 @@ if "${run[@]}" plan "${cell[@]}" --count 30 --tool-down --out "$work/down.csv" >
    grep -q "makes identifiable: a1 d4 tool_z" "$work/down.txt" && grep -q "  d6: null_combination" "$work/down.txt"; then pass; else
   fail "plan --tool-down report: $(cat "$work/down.txt")"; fi
 
+# --- joint limits: a real arm's in degrees (J2 +-110 deg, J6 +-400 deg: more than one turn), from
+# --joint-limits (units in the header, or --angle-unit) or from the description itself; every
+# planned pose inside them. A description without limits: plan says what it assumes.
+printf 'lower [deg],upper [deg]\n-360,360\n-110,110\n-150,150\n-360,360\n-360,360\n-400,400\n' >"$work/deg.csv"
+inside_110() { awk -F, 'NR > 1 && ($2 < -1.9198621771937625 || $2 > 1.9198621771937625)' "$1" | wc -l; }
+if "${run[@]}" plan "${cell[@]}" --count 12 --joint-limits "$work/deg.csv" --out "$work/lim.csv" >/dev/null 2>&1 &&
+   [ "$(inside_110 "$work/lim.csv")" -eq 0 ] && [ "$(wc -l <"$work/lim.csv")" -eq 13 ]; then pass; else
+  fail "plan --joint-limits in [deg]: a pose outside J2 +-110 deg"; fi
+tail -n +2 "$work/deg.csv" >"$work/deg_plain.csv"
+sed -i '1i lower,upper' "$work/deg_plain.csv"
+expect_plan 3 "a limit beyond two turns (4 pi rad): degrees?" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/deg_plain.csv"
+if "${run[@]}" plan "${cell[@]}" --count 12 --joint-limits "$work/deg_plain.csv" --angle-unit deg --out "$work/lim2.csv" >/dev/null 2>&1 &&
+   cmp -s "$work/lim.csv" "$work/lim2.csv"; then pass; else fail "plan --joint-limits with --angle-unit deg"; fi
+"${run[@]}" export --robot-model ur5e --format robot-json --out "$work/ur5e.json" 2>/dev/null
+if "${run[@]}" plan "${cell[@]}" --robot-model "$work/ur5e.json" --count 12 --out "$work/nolim.csv" 2>"$work/nolim.err" >/dev/null &&
+   grep -q "gives no joint limits: assuming +-360 deg for every joint" "$work/nolim.err"; then pass; else
+  fail "plan with a description without limits: $(cat "$work/nolim.err")"; fi
+sed 's/^  "tool": /  "joint_limits": [[-6.28, 6.28], [-1.9198621771937625, 1.9198621771937625], [-2.6, 2.6], [-6.28, 6.28], [-6.28, 6.28], [-6.98, 6.98]],\n  "tool": /' \
+  "$work/ur5e.json" >"$work/ur5e_lim.json"
+if "${run[@]}" plan "${cell[@]}" --robot-model "$work/ur5e_lim.json" --count 12 --out "$work/desc.csv" 2>"$work/desc.err" >/dev/null &&
+   [ "$(inside_110 "$work/desc.csv")" -eq 0 ] && ! grep -q "gives no joint limits" "$work/desc.err"; then pass; else
+  fail "plan with the description's joint_limits: $(cat "$work/desc.err")"; fi
+sed 's/^  "tool": /  "joint_limits": [[1, -1], [-1, 1], [-1, 1], [-1, 1], [-1, 1], [-1, 1]],\n  "tool": /' "$work/ur5e.json" >"$work/ur5e_bad.json"
+expect_plan 3 '"joint_limits"[0] = [1, -1] rad: lower must be below upper' -- "${cell[@]}" "${out[@]}" --count 10 --robot-model "$work/ur5e_bad.json"
+
 if "${run[@]}" plan --help | grep -q "usage: hivecal plan"; then pass; else fail "plan --help"; fi
 
 finish
