@@ -11,6 +11,7 @@ int report_main(int argc, char** argv);     ///< the HTML report again from a re
 int validate_main(int argc, char** argv);   ///< a calibration against a reference geometry on fresh poses
 int plan_main(int argc, char** argv);      ///< which poses to measure, in which order, and a URScript program
 int export_main(int argc, char** argv);   ///< a calibration as URDF or a robot description
+int check_robot_main(int argc, char** argv);  ///< what hivecal reads from a robot file
 int demo_main(int argc, char** argv);     ///< small simulated check of the core library
 
 }  // namespace hivecal::cli

@@ -431,14 +431,23 @@ if [ -s "$work/from_urdf.csv" ] && paste -d, "$work/from_urdf.csv" "$work/from_t
 expect 2 "--robot-model has no tracker frame" -- predict --robot-model ur5 --joints "$work/joints.csv" --frame tracker
 if "${run[@]}" calibrate --samples "$work/paired.csv" --robot-model "$work/ur5.urdf" --method lm --split 1 --out "$work/from_urdf.json" >/dev/null 2>&1 &&
    grep -q '"robot": "ur5"' "$work/from_urdf.json"; then pass; else fail "calibrate --robot-model ur5.urdf"; fi
+# check-robot: the table, tools, limits and FK of a robot file (or a built-in table), or the
+# file refused by line.
+if "${run[@]}" check-robot "$work/ur5.urdf" >"$work/check.txt" 2>&1 && grep -q "^convention: standard-dh$" "$work/check.txt" &&
+   grep -q "2            0.000000         0.0000       -425.0000         0.000000" "$work/check.txt" &&
+   grep -q "FK at q = 0 (q \[deg\] 0.000 0.000 0.000 0.000 0.000 0.000): tool 1 at -817.2500, -191.4500, -5.4910 mm" "$work/check.txt"; then pass; else
+  fail "check-robot ur5.urdf: $(cat "$work/check.txt")"; fi
+if "${run[@]}" check-robot ur10e --joints "$work/joints.csv" | grep -q "^FK at pose 1 (q \[deg\] 0.000 -90.000 90.000 -90.000 -90.000 0.000)"; then pass; else
+  fail "check-robot --joints"; fi
 printf '<robot name="r">\n<joint name="j" type="prismatic"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/slider.urdf"
 expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- predict --robot-model "$work/slider.urdf" --joints "$work/joints.csv"
+expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- check-robot "$work/slider.urdf"
 expect 2 "give either --calibration (a result) or --robot-model" -- export --calibration "$work/model.json" --robot-model ur5
 expect 2 "--format must be urdf, ur-kinematics or robot-json, not 'sdf'" -- export --robot-model ur5 --format sdf
 expect 2 "is the same file as the input --calibration" -- export --calibration "$work/model.json" --out "$work/model.json"
 
 # --- every command has --help
-for cmd in calibrate validate predict plan simulate record extract demo report export; do
+for cmd in calibrate validate predict plan simulate record extract demo report export check-robot; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then pass; else
     fail "$cmd --help"; fi
 done

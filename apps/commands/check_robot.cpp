@@ -1,0 +1,121 @@
+// hivecal check-robot: what hivecal reads from a robot file (description JSON, URDF, result, or
+// a built-in name), printed so that a user can check it before calibrating.
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cli/options.hpp"
+#include "commands/commands.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+
+namespace hivecal::cli {
+
+namespace {
+
+constexpr const char* kCommand = "check-robot";
+constexpr double kDegPerRad = 57.29577951308232;
+
+std::string fmt(const char* format, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
+  char text[200];
+  std::snprintf(text, sizeof text, format, a, b, c, d);
+  return text;
+}
+
+/// The table as the file's convention writes it, in mm and degrees.
+std::string dh_table(const textio::RobotDescription& robot) {
+  std::string s = robot.convention == DhConvention::modified
+                      ? "joint  alpha(i-1) [deg]    a(i-1) [mm]   theta offset [deg]         d [mm]\n"
+                      : "joint  theta offset [deg]         d [mm]          a [mm]      alpha [deg]\n";
+  ModifiedDhRow rows[kJointCount];
+  Vec3 tool_m = robot.model.tool_m;
+  if (robot.convention == DhConvention::modified) modified_dh_from_model(robot.model, robot.modified_base, rows, &tool_m);
+  for (int j = 0; j < kJointCount; ++j) {
+    if (robot.convention == DhConvention::modified) {
+      const ModifiedDhRow& r = rows[j];
+      s += fmt("%5.0f", j + 1) + fmt("  %16.6f  %13.4f  %19.6f  %13.4f\n", r.alpha_prev_rad * kDegPerRad, r.a_prev_m * 1e3,
+                                     r.theta_offset_rad * kDegPerRad, r.d_m * 1e3);
+    } else {
+      const DhJoint& r = robot.model.joints[j];
+      s += fmt("%5.0f", j + 1) + fmt("  %18.6f  %13.4f  %14.4f  %15.6f\n", r.theta_offset_rad * kDegPerRad, r.d_m * 1e3,
+                                     r.a_m * 1e3, r.alpha_rad * kDegPerRad);
+    }
+  }
+  return s;
+}
+
+Error check_robot(const Options& options) {
+  textio::RobotDescription robot;
+  bool from_file = false;
+  Error error = robot_model_option(options, "robot-model", &robot, &from_file);
+  if (!error.ok()) return error;
+  std::vector<JointVector> poses;
+  if (!options.get("joints").empty()) {
+    textio::InputUnits units;
+    error = input_units_option(options, &units);
+    if (error.ok()) error = textio::read_joints_csv(options.get("joints"), &poses, units);
+    if (!error.ok()) return error;
+  }
+  std::string s = "robot: " + robot.robot + " (" + (from_file ? "file " + options.get("robot-model") : "built-in table") +
+                  ")\nconvention: " + textio::dh_convention_name(robot.convention) + "\n" + dh_table(robot);
+  if (robot.convention == DhConvention::modified) {
+    s += fmt("base offset: alpha_0 %.6f deg, a_0 %.4f mm (folded into the table above as row 1's)\n",
+             robot.modified_base.alpha0_rad * kDegPerRad, robot.modified_base.a0_m * 1e3);
+  }
+  for (int k = 0; k < robot.target_count; ++k) {
+    const Vec3& t = target_tool(robot.model, k);
+    s += fmt("tool point %.0f (flange frame): ", k + 1) + fmt("%.4f, %.4f, %.4f mm\n", t.x() * 1e3, t.y() * 1e3, t.z() * 1e3);
+  }
+  s += "compliance terms: " + std::to_string(robot.model.compliance.term_count) + "\n";
+  if (robot.has_joint_limits) {
+    s += "joint limits [deg]:";
+    for (int j = 0; j < kJointCount; ++j) s += fmt(" %.1f..%.1f", robot.lower_rad(j) * kDegPerRad, robot.upper_rad(j) * kDegPerRad);
+    s += "\n";
+  } else {
+    s += "joint limits: none given (plan assumes a built-in type's, else +-360 deg)\n";
+  }
+  // FK in the file's own base frame: at zero, then at each given pose.
+  const RigidTransform file_base =
+      robot.convention == DhConvention::modified ? robot.modified_base.transform() : RigidTransform{};
+  poses.insert(poses.begin(), JointVector::Zero());
+  for (std::size_t p = 0; p < poses.size(); ++p) {
+    const JointVector& q = poses[p];
+    s += p == 0 ? "FK at q = 0" : "FK at pose " + std::to_string(p);
+    s += fmt(" (q [deg] %.3f %.3f %.3f", q(0) * kDegPerRad, q(1) * kDegPerRad, q(2) * kDegPerRad) +
+         fmt(" %.3f %.3f %.3f):", q(3) * kDegPerRad, q(4) * kDegPerRad, q(5) * kDegPerRad);
+    for (int k = 0; k < robot.target_count; ++k) {
+      const Vec3 point = file_base.apply(fk_target_point(robot.model, q, k));
+      s += fmt(" tool %.0f at", k + 1) + fmt(" %.4f, %.4f, %.4f mm", point.x() * 1e3, point.y() * 1e3, point.z() * 1e3);
+    }
+    s += "\n";
+  }
+  std::fputs(s.c_str(), stdout);
+  return Error{};
+}
+
+}  // namespace
+
+int check_robot_main(int argc, char** argv) {
+  std::vector<OptionSpec> specs = {
+      {"robot-model", "NAME|FILE", "the robot file (description .json, .urdf or a result) or a built-in name; also the first argument", ""},
+      {"joints", "FILE", "poses whose tool points to print: CSV q1..q6", ""},
+  };
+  specs.push_back(input_unit_option_specs()[1]);  // --angle-unit of --joints
+  // `hivecal check-robot FILE` as well as `--robot-model FILE`.
+  std::vector<std::string> args(argv, argv + argc);
+  if (!args.empty() && !args[0].empty() && args[0][0] != '-') args.insert(args.begin(), "--robot-model");
+  std::vector<char*> pointers;
+  for (std::string& a : args) pointers.push_back(a.data());
+  Options options;
+  const int parsed = parse_options(kCommand,
+                                   "Prints what hivecal reads from a robot file: its convention, the DH table (mm,\n"
+                                   "degrees), tool points, compliance, joint limits, and the tool points at q = 0 and\n"
+                                   "at the poses of --joints, in the file's base frame. A file hivecal cannot use is\n"
+                                   "refused with its name and the line or key at fault.",
+                                   specs, static_cast<int>(pointers.size()), pointers.data(), &options);
+  if (parsed >= 0) return parsed;
+  if (options.get("robot-model").empty()) return exit_with(kCommand, Error::usage("a robot file is required (see --help)"));
+  return exit_with(kCommand, check_robot(options));
+}
+
+}  // namespace hivecal::cli
