@@ -182,13 +182,18 @@ Error columns_option(const Options& options, textio::InputUnits* units) {
     if (equals != std::string::npos) {
       alias.column = textio::lower(textio::trim(entry.substr(0, equals)));
       alias.header = textio::lower(textio::trim(entry.substr(equals + 1)));
+      const std::size_t bracket = alias.header.find('[');
+      if (bracket != std::string::npos && alias.header.back() == ']') {  // NAME[unit]
+        alias.unit = alias.header.substr(bracket + 1, alias.header.size() - bracket - 2);
+        alias.header = textio::lower(textio::trim(alias.header.substr(0, bracket)));
+      }
     }
-    static const char* const kNamed[] = {"q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "t"};
+    static const char* const kNamed[] = {"q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "t", "rx", "ry", "rz"};
     const bool known = std::find_if(std::begin(kNamed), std::end(kNamed),
                                     [&](const char* n) { return alias.column == n; }) != std::end(kNamed);
     if (!known || alias.header.empty()) {
       return Error::usage("--columns: " + port::quoted(entry) +
-                          " is not C=NAME with C one of q1..q6, x, y, z, t (e.g. x=measurement_x)");
+                          " is not C=NAME or C=NAME[unit] with C one of q1..q6, x, y, z, rx, ry, rz, t (e.g. x=measurement_x[mm])");
     }
     for (const textio::ColumnAlias& earlier : units->columns) {
       if (earlier.column == alias.column) return Error::usage("--columns names " + alias.column + " twice");

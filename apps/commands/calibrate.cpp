@@ -473,6 +473,7 @@ const std::vector<OptionSpec>& option_specs() {
       {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
       {"joint-sigma-rad", "S", "noise of the joint readings, in the units of --position-sigma-m (e.g. the readings' rounding step): LM weighs each sample by its point covariance (errors in variables, docs/robust.md; 0: off) [rad]", "0"},
       {"joint-sigma-deg", "S", "--joint-sigma-rad in degrees (a UR pendant export's rounding: 0.01) [deg]", ""},
+      {"orientation-form", "rotation-vector|euler-xyz", "what rx, ry, rz are: the tool frame's rotation vector, or intrinsic X-Y-Z Euler angles (R = Rx(rx) Ry(ry) Rz(rz), e.g. a Leica T-Mac export)", "rotation-vector"},
       {"orientation-lever-m", "L", "a measured orientation adds two points at this lever along the tool frame's x and y axes (targets 2, 3; 0: rx, ry, rz not used) [m] (default: position / angle sigma)", ""},
     };
     for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
@@ -588,6 +589,12 @@ Error orientation_options(const Options& options, textio::OrientationInput* orie
   }
   if (options.given("orientation-lever-m") && !(orientation->lever_m >= 0.0 && orientation->lever_m <= 1.0)) {
     return Error::usage("--orientation-lever-m must be in [0, 1] m");
+  }
+  const std::string form = options.get("orientation-form");
+  if (form == "euler-xyz") {
+    orientation->form = textio::OrientationForm::euler_xyz;
+  } else if (form != "rotation-vector") {
+    return Error::usage("--orientation-form must be rotation-vector or euler-xyz, not " + port::quoted(form));
   }
   return Error{};
 }

@@ -129,7 +129,8 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   const std::size_t trailing = in_order || named_trailing < 0 ? trailing_from : static_cast<std::size_t>(named_trailing);
   std::vector<std::size_t> group;  // the optional group's columns, when all are present
   for (const std::string& name : schema.optional_group) {
-    const int found_at = r.find(name);
+    const std::string mapped = mapped_name(units, name);
+    const int found_at = r.find(mapped.empty() ? name : mapped);
     if (found_at >= 0 && static_cast<std::size_t>(found_at) >= trailing_from) group.push_back(static_cast<std::size_t>(found_at));
   }
   if (!group.empty() && group.size() != schema.optional_group.size()) {
@@ -233,7 +234,10 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
     std::size_t count = 1;
     if (columns.group && lever_m > 0.0) {  // the virtual reflectors along the measured x and y axes
       const std::size_t at = values.size() - 3;
-      const Mat3 rotation = rotation_from_vector(Vec3(values[at], values[at + 1], values[at + 2]));
+      const Vec3 angles_rad(values[at], values[at + 1], values[at + 2]);
+      const Mat3 rotation = orientation.form == OrientationForm::euler_xyz
+                                ? Mat3(rotation_x(angles_rad.x()) * rotation_y(angles_rad.y()) * rotation_z(angles_rad.z()))
+                                : rotation_from_vector(angles_rad);
       points_m[1] = point_m + lever_m * rotation.col(0);
       points_m[2] = point_m + lever_m * rotation.col(1);
       count = 3;

@@ -26,10 +26,17 @@ constexpr double kDefaultAngleSigma_rad = 1e-3;
 /// axes (virtual reflectors whose tool points are estimated like real ones, docs/formats.md).
 /// The lever weighs orientation against position: a virtual point's noise from the angle is
 /// lever x angle sigma, equal to the position noise at lever = position / angle sigma.
+/// What the three orientation columns rx, ry, rz hold.
+enum class OrientationForm {
+  rotation_vector,  ///< axis x angle of the tool frame in the tracker frame (a UR pendant's)
+  euler_xyz,        ///< intrinsic X-Y-Z Euler angles: R = Rx(rx) Ry(ry) Rz(rz) (a Leica T-Mac export's)
+};
+
 struct OrientationInput {
   double position_sigma_m = kDefaultPositionSigma_m;  ///< stated noise of the measured positions [m]
   double angle_sigma_rad = kDefaultAngleSigma_rad;    ///< stated noise of the measured orientations [rad]
   double lever_m = -1.0;                              ///< lever [m]; < 0: position_sigma_m / angle_sigma_rad; 0: rx, ry, rz checked, not used
+  OrientationForm form = OrientationForm::rotation_vector;  ///< what rx, ry, rz hold
   /// The lever the reader uses [m] (0: orientation not used).
   double lever() const { return lever_m < 0.0 ? position_sigma_m / angle_sigma_rad : lever_m; }
 };

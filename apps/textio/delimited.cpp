@@ -190,6 +190,18 @@ bool DelimitedReader::read_header() {
       }
       columns_.push_back(column_of(token));
     }
+    // A unit given with a --columns name ("rx=measurement_rx[deg]") is that column's header unit.
+    for (const ColumnAlias& alias : units_.columns) {
+      if (alias.unit.empty()) continue;
+      for (Column& column : columns_) {
+        if (column.name != alias.header) continue;
+        if (!column.unit.empty() && column.unit != alias.unit) {
+          return fail("column " + port::quoted(column.name, 32) + " is in [" + column.unit + "] by its header, but --columns gives [" +
+                      alias.unit + "]");
+        }
+        column.unit = alias.unit;
+      }
+    }
     return true;
   }
   if (!lines_.error().empty()) return false;

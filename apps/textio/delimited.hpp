@@ -36,6 +36,7 @@ bool si_scale(std::string_view unit, Quantity quantity, double* scale);
 struct ColumnAlias {
   std::string column;  ///< e.g. "x"
   std::string header;  ///< e.g. "measurement_x"
+  std::string unit;    ///< e.g. "mm" from "measurement_x[mm]": the column's unit when its header gives none
 };
 
 /// Units the user declared for text columns whose header gives none (--length-unit,

@@ -7,15 +7,6 @@
 namespace hivecal::textio {
 namespace {
 
-/// Rotation about y [rad] (URDF's pitch).
-Mat3 rotation_y(double angle_rad) {
-  const double c = std::cos(angle_rad);
-  const double s = std::sin(angle_rad);
-  Mat3 r;
-  r << c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c;
-  return r;
-}
-
 RigidTransform rotation_only(const Mat3& rotation) { return RigidTransform{rotation, Vec3::Zero()}; }
 
 /// Tz(d) Tx(a) Rx(alpha): the fixed part of a standard-DH row after its joint.

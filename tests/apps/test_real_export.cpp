@@ -15,7 +15,7 @@
 namespace hivecal {
 namespace {
 
-constexpr std::size_t kCapacity = 2048;
+constexpr std::size_t kCapacity = 4608;  // the export with its orientation: 3 x 1,495 samples
 Dataset<kCapacity> dataset;
 CalibrationWorkspace<kCapacity, double, 150, 300, 0, kMaxLinkLengths> workspace;
 CalibrationResult result;
@@ -25,7 +25,7 @@ TEST(RealExport, TheUr10TrackerExportCalibratesAsItIsAndItsBlundersHaveTwins) {
   const std::string path = test::shared_data_path("ur10-tmac/measurements_joint_configurations.csv");
   textio::InputUnits units;
   units.length = "mm";
-  units.columns = {{"x", "measurement_x"}, {"y", "measurement_y"}, {"z", "measurement_z"}};
+  units.columns = {{"x", "measurement_x", ""}, {"y", "measurement_y", ""}, {"z", "measurement_z", ""}};
   std::vector<std::size_t> lines;
   const port::Error read = textio::read_samples_csv(path, &dataset, units, &lines);
   ASSERT_TRUE(read.ok()) << read.message;
@@ -59,6 +59,43 @@ TEST(RealExport, TheUr10TrackerExportCalibratesAsItIsAndItsBlundersHaveTwins) {
   std::printf("UR10 T-Mac export: %zu poses, set aside at lines %zu %zu %zu, test MAE %.4f mm (uncalibrated %.4f)\n",
               dataset.size() + dataset.set_aside().size(), aside_lines[0], aside_lines[1], aside_lines[2],
               final_stage.test.mae(ErrorAxis::norm_3d) * 1e3, result.baseline.test.mae(ErrorAxis::norm_3d) * 1e3);
+}
+
+// The same export's 6-DoF probe orientation (measurement_rx/ry/rz, degrees, intrinsic X-Y-Z
+// Euler angles by its README), read as it is: --columns names each column with its unit, and
+// --orientation-form says what the three angles are. Read as such, the orientation fits the
+// arm (each pose also as two virtual points 10 mm along the probe's x and y axes); read as a
+// rotation vector it does not: the form is the export's, not a guess that happens to pass.
+double tmac_orientation_test_mae_m(textio::OrientationForm form) {
+  const std::string path = test::shared_data_path("ur10-tmac/measurements_joint_configurations.csv");
+  textio::InputUnits units;
+  units.columns = {{"x", "measurement_x", "mm"},   {"y", "measurement_y", "mm"},   {"z", "measurement_z", "mm"},
+                   {"rx", "measurement_rx", "deg"}, {"ry", "measurement_ry", "deg"}, {"rz", "measurement_rz", "deg"}};
+  textio::OrientationInput orientation;
+  orientation.form = form;
+  textio::OrientationRead read;
+  dataset.clear();
+  const port::Error error = textio::read_samples_csv(path, &dataset, units, nullptr, orientation, &read);
+  EXPECT_TRUE(error.ok()) << error.message;
+  EXPECT_EQ(read.poses, 1495u);
+  EXPECT_EQ(dataset.size(), 3u * 1495u);
+  RobotModel start = nominal_model(RobotType::ur10);
+  start.tool_m = Vec3(0.0, 0.0, 0.109);
+  textio::start_orientation_targets(read, &start);
+  CalibrationOptions options;
+  options.method = CalibrationMethod::lm;
+  EXPECT_EQ(calibrate(start, &dataset, options, &workspace, &result), Status::ok) << calibration_step_name(result.step);
+  return result.final_stage() == nullptr ? 1.0 : result.final_stage()->test.mae(ErrorAxis::norm_3d);
+}
+
+TEST(RealExport, TheProbeOrientationReadsAsTheExportWritesIt) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur10-tmac/measurements_joint_configurations.csv");
+  const double euler_m = tmac_orientation_test_mae_m(textio::OrientationForm::euler_xyz);
+  const double vector_m = tmac_orientation_test_mae_m(textio::OrientationForm::rotation_vector);
+  std::printf("UR10 T-Mac with orientation: test MAE (3 points per pose) %.4f mm as X-Y-Z Euler angles, %.4f mm as a "
+              "rotation vector\n", euler_m * 1e3, vector_m * 1e3);
+  EXPECT_LT(euler_m, 0.42e-3);
+  EXPECT_GT(vector_m, 2.0 * euler_m);
 }
 
 }  // namespace

@@ -82,7 +82,7 @@ TEST(TextInputs, ALabExportReadsAsItIsWithNamedColumnsAndDecimalCommas) {
   const std::string path = dir.write("export.csv", kLabExport);
   InputUnits units;
   units.length = "mm";
-  units.columns = {{"x", "measurement_x"}, {"y", "measurement_y"}, {"z", "measurement_z"}};
+  units.columns = {{"x", "measurement_x", ""}, {"y", "measurement_y", ""}, {"z", "measurement_z", ""}};
   Dataset<8> dataset;
   std::vector<std::size_t> lines;
   const port::Error error = read_samples_csv(path, &dataset, units, &lines);
@@ -106,7 +106,7 @@ TEST(TextInputs, AnExportWithoutItsColumnsNamedSaysWhichAreMissing) {
   port::Error error = read_samples_csv(path, &dataset, units);
   EXPECT_EQ(error.fault, port::Fault::input);
   EXPECT_NE(error.message.find("not found: x, y, z; name them with --columns"), std::string::npos) << error.message;
-  units.columns = {{"x", "measurement_x"}, {"y", "measurement_y"}, {"z", "no_such_column"}};
+  units.columns = {{"x", "measurement_x", ""}, {"y", "measurement_y", ""}, {"z", "no_such_column", ""}};
   dataset.clear();
   error = read_samples_csv(path, &dataset, units);
   EXPECT_NE(error.message.find("not found: z=no_such_column"), std::string::npos) << error.message;

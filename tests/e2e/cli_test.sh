@@ -406,6 +406,11 @@ if kill -0 "$pid" 2>/dev/null; then
 elif wait "$pid" && grep -q '^served ' "$work/serve.log"; then pass; else
   fail "simulate --serve after SIGTERM: $(cat "$work/serve.log")"; fi
 
+expect 2 "--orientation-form must be rotation-vector or euler-xyz, not 'zyx'" -- calibrate --samples "$work/paired.csv" --orientation-form zyx --out "$work/o.json"
+expect 2 "is not C=NAME or C=NAME[unit] with C one of" -- calibrate --samples "$work/paired.csv" --columns "w=measurement_w" --out "$work/o.json"
+printf 'q1,q2,q3,q4,q5,q6,px [mm],y,z\n0,0,0,0,0,0,1,2,3\n' >"$work/conflict.csv"
+expect 3 "column 'px' is in [mm] by its header, but --columns gives [m]" -- calibrate --samples "$work/conflict.csv" --columns "x=px[m]" --out "$work/o.json"
+
 # --- export: a result as URDF (a tcp and the tracker frame), a nominal arm as a robot
 # description that reads back; one source only (tests/apps/test_urdf_export.cpp checks the FK)
 if "${run[@]}" export --calibration "$work/model.json" --out "$work/arm.urdf" 2>/dev/null &&

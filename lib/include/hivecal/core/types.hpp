@@ -35,6 +35,8 @@ struct RigidTransform {
 
 /// Rotation about the x axis by `angle_rad` [rad] (the library's own sincos).
 Mat3 rotation_x(double angle_rad);
+/// Rotation about the y axis by `angle_rad` [rad] (the library's own sincos).
+Mat3 rotation_y(double angle_rad);
 /// Rotation about the z axis by `angle_rad` [rad] (the library's own sincos).
 Mat3 rotation_z(double angle_rad);
 
