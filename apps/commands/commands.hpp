@@ -12,6 +12,7 @@ int validate_main(int argc, char** argv);   ///< a calibration against a referen
 int plan_main(int argc, char** argv);      ///< which poses to measure, in which order, and a URScript program
 int export_main(int argc, char** argv);   ///< a calibration as URDF or a robot description
 int check_robot_main(int argc, char** argv);  ///< what hivecal reads from a robot file
+int iso9283_main(int argc, char** argv);      ///< ISO 9283 pose accuracy and repeatability of measured reaches
 int demo_main(int argc, char** argv);     ///< small simulated check of the core library
 
 }  // namespace hivecal::cli

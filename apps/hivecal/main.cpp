@@ -26,6 +26,7 @@ const Command kCommands[] = {
     {"plan", "choose and order the poses of a tracker session; joints CSV and URScript", hivecal::cli::plan_main},
     {"predict", "tool positions of joint poses from a calibration result", hivecal::cli::predict_main},
     {"export", "a calibration (or nominal arm) as URDF, ROS UR kinematics YAML or robot JSON", hivecal::cli::export_main},
+    {"iso9283", "ISO 9283 pose accuracy AP and repeatability RP of measured reaches", hivecal::cli::iso9283_main},
     {"check-robot", "what hivecal reads from a robot file: table, tools, limits, FK", hivecal::cli::check_robot_main},
     {"simulate", "simulated UR + tracker session: captures, CSV logs, ground truth, live ptys", hivecal::sim::simulate_main},
     {"record", "record serial ports (or ptys) to capture files, nothing lost on SIGINT/SIGTERM", hivecal::streams::record_main},

@@ -411,6 +411,21 @@ expect 2 "is not C=NAME or C=NAME[unit] with C one of" -- calibrate --samples "$
 printf 'q1,q2,q3,q4,q5,q6,px [mm],y,z\n0,0,0,0,0,0,1,2,3\n' >"$work/conflict.csv"
 expect 3 "column 'px' is in [mm] by its header, but --columns gives [m]" -- calibrate --samples "$work/conflict.csv" --columns "x=px[m]" --out "$work/o.json"
 
+# --- iso9283: three poses reached four times each, on a 20 um square around the commanded point
+# shifted by (30, -40, 0) um: AP_P 0.0500 mm and RP_l = sqrt(2) 10 um = 0.0141 mm for each
+printf 'q1,q2,q3,q4,q5,q6\n0.1,-1.2,1.3,-0.4,0.8,0.2\n-0.5,-1.0,1.6,-0.9,1.2,0.4\n0.9,-1.7,1.1,0.3,0.5,-0.6\n' >"$work/iso_poses.csv"
+"${run[@]}" predict --calibration "$work/model.json" --joints "$work/iso_poses.csv" --out "$work/iso_cmd.csv" 2>/dev/null
+paste -d, "$work/iso_poses.csv" "$work/iso_cmd.csv" | awk -F, 'NR == 1 { print "q1,q2,q3,q4,q5,q6,x,y,z"; next }
+  { for (r = 0; r < 4; ++r) { dx = (r == 0 || r == 3) ? 10e-6 : -10e-6; dy = (r < 2) ? 10e-6 : -10e-6
+      printf "%s,%s,%s,%s,%s,%s,%.9f,%.9f,%.9f\n", $1, $2, $3, $4, $5, $6, $7 + 30e-6 + dx, $8 - 40e-6 + dy, $9 } }' >"$work/iso_reaches.csv"
+if "${run[@]}" iso9283 --samples "$work/iso_reaches.csv" --calibration "$work/model.json" --out "$work/iso.csv" >"$work/iso.txt" 2>&1 &&
+   [ "$(grep -c ',4,0.0500,0.0300,-0.0400,0.0000,0.0141$' "$work/iso.csv")" -eq 3 ] &&
+   grep -q "3 poses with repeated reaches (0 with one reach, left out); worst AP_P 0.0500 mm, worst RP_l 0.0141 mm" "$work/iso.txt"; then pass; else
+  fail "iso9283: $(cat "$work/iso.txt" "$work/iso.csv")"; fi
+paste -d, "$work/iso_poses.csv" "$work/iso_cmd.csv" | sed '1s/.*/q1,q2,q3,q4,q5,q6,x,y,z/' >"$work/iso_once.csv"
+expect 3 "no pose was reached twice" -- iso9283 --samples "$work/iso_once.csv" --calibration "$work/model.json"
+expect 2 "give --calibration or --robot-model, not both" -- iso9283 --samples "$work/iso_reaches.csv" --calibration "$work/model.json" --robot-model ur5
+
 # --- export: a result as URDF (a tcp and the tracker frame), a nominal arm as a robot
 # description that reads back; one source only (tests/apps/test_urdf_export.cpp checks the FK)
 if "${run[@]}" export --calibration "$work/model.json" --out "$work/arm.urdf" 2>/dev/null &&
@@ -452,7 +467,7 @@ expect 2 "--format must be urdf, ur-kinematics or robot-json, not 'sdf'" -- expo
 expect 2 "is the same file as the input --calibration" -- export --calibration "$work/model.json" --out "$work/model.json"
 
 # --- every command has --help
-for cmd in calibrate validate predict plan simulate record extract demo report export check-robot; do
+for cmd in calibrate validate predict plan simulate record extract demo report export check-robot iso9283; do
   if "${run[@]}" "$cmd" --help | grep -q "usage: hivecal $cmd"; then pass; else
     fail "$cmd --help"; fi
 done

@@ -1,0 +1,152 @@
+// hivecal iso9283: ISO 9283 pose accuracy AP and repeatability RP of measured reaches
+// (docs/iso9283.md). The samples are grouped into poses by their joints (within
+// kSamePoseTolerance_rad: every reach of one commanded pose); the commanded positions come from
+// a calibration result (its base -> tracker and model), or from a nominal model with the
+// base -> tracker fitted to the measurements.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cli/options.hpp"
+#include "commands/commands.hpp"
+#include "hivecal/model/iso9283.hpp"
+#include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/port/output_files.hpp"
+#include "textio/calibration_json.hpp"
+#include "textio/csv.hpp"
+#include "textio/text_util.hpp"
+
+namespace hivecal::cli {
+
+namespace {
+
+constexpr const char* kCommand = "iso9283";
+constexpr std::size_t kMaxSamples = 1u << 16;  // reaches read at most
+
+/// The reaches of one commanded pose.
+struct PoseReaches {
+  JointVector q_rad = JointVector::Zero();  ///< the first reach's joints (the command)
+  int target = 0;                            ///< reflector
+  std::size_t line = 0;                      ///< file line of the first reach
+  std::vector<Vec3> measured_m;              ///< every reach's measured point [m]
+};
+
+/// Samples grouped by pose and target, in the order of their first reach.
+std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::vector<std::size_t>& lines) {
+  std::vector<PoseReaches> poses;
+  for (const Sample& s : samples) {
+    PoseReaches* pose = nullptr;
+    for (PoseReaches& p : poses) {
+      if (p.target == s.target && (p.q_rad - s.q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad) pose = &p;
+    }
+    if (pose == nullptr) {
+      poses.push_back(PoseReaches{s.q_rad, s.target, s.index < lines.size() ? lines[s.index] : 0, {}});
+      pose = &poses.back();
+    }
+    pose->measured_m.push_back(s.point_m);
+  }
+  return poses;
+}
+
+/// The command frame: a result's model and base -> tracker, or a nominal model with the
+/// base -> tracker fitted to every reach. *how says which.
+Error command_frame(const Options& options, Span<const Sample> samples, textio::CalibrationFile* frame, std::string* how) {
+  if (!options.get("calibration").empty()) {
+    *how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
+    return textio::read_calibration_json(options.get("calibration"), frame);
+  }
+  Error error = robot_model_option(options, "robot-model", frame);
+  if (error.ok()) error = vec3_option(options, "tool", &frame->model.tool_m);
+  if (!error.ok()) return error;
+  if (fit_base_to_tracker(frame->model, samples, &frame->base_to_tracker) != Status::ok) {
+    return Error::input("cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
+  }
+  *how = "commanded positions from the nominal " + frame->robot + " (base -> tracker fitted to the reaches)";
+  return Error{};
+}
+
+std::string mm(double value_m) {
+  char text[32];
+  const double value_mm = std::fabs(value_m) < 0.5e-7 ? 0.0 : value_m * 1e3;  // no "-0.0000"
+  std::snprintf(text, sizeof text, "%.4f", value_mm);
+  return text;
+}
+
+Error iso9283(const Options& options) {
+  if (options.get("samples").empty()) return Error::usage("--samples is required (see --help)");
+  if (!options.get("calibration").empty() && options.given("robot-model")) {
+    return Error::usage("give --calibration or --robot-model, not both: the command frame is one of them");
+  }
+  port::OutputSet outputs;
+  std::size_t out_id = 0;
+  Error error = declare_inputs(options, {"out"}, &outputs);
+  if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
+  if (!error.ok()) return error;
+  static Dataset<kMaxSamples> dataset;
+  dataset.clear();
+  textio::InputUnits units;
+  error = input_units_option(options, &units);
+  std::vector<std::size_t> lines;
+  if (error.ok()) error = textio::read_samples_csv(options.get("samples"), &dataset, units, &lines);
+  if (!error.ok()) return error;
+  textio::CalibrationFile frame;
+  std::string how;
+  error = command_frame(options, dataset.samples(), &frame, &how);
+  if (!error.ok()) return error;
+  const std::vector<PoseReaches> poses = group_reaches(dataset.samples(), lines);
+  std::string table = "pose,line,target,cycles,AP_P [mm],AP_x [mm],AP_y [mm],AP_z [mm],RP_l [mm]\n";
+  std::size_t measured = 0;
+  std::size_t single = 0;
+  double worst_ap_m = 0.0;
+  double worst_rp_m = 0.0;
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const PoseReaches& p = poses[k];
+    PoseAccuracy accuracy;
+    const Vec3 commanded = frame.base_to_tracker.apply(fk_target_point(frame.model, p.q_rad, p.target));
+    if (pose_accuracy(Span<const Vec3>(p.measured_m.data(), p.measured_m.size()), commanded, &accuracy) != Status::ok) {
+      ++single;  // one reach: no repeatability
+      continue;
+    }
+    ++measured;
+    worst_ap_m = std::max(worst_ap_m, accuracy.accuracy_norm_m);
+    worst_rp_m = std::max(worst_rp_m, accuracy.repeatability_m);
+    table += std::to_string(k + 1) + "," + std::to_string(p.line) + "," + std::to_string(p.target + 1) + "," +
+             std::to_string(accuracy.cycles) + "," + mm(accuracy.accuracy_norm_m) + "," + mm(accuracy.accuracy_m.x()) +
+             "," + mm(accuracy.accuracy_m.y()) + "," + mm(accuracy.accuracy_m.z()) + "," + mm(accuracy.repeatability_m) + "\n";
+  }
+  if (measured == 0) {
+    return Error::input(options.get("samples") + ": no pose was reached twice (ISO 9283 needs the cycles of each pose; " +
+                        std::to_string(poses.size()) + " poses, one reach each)");
+  }
+  const bool table_on_stdout = options.get("out") == "-";
+  std::FILE* summary = table_on_stdout ? stderr : stdout;
+  std::fprintf(summary, "%s\n%zu poses with repeated reaches (%zu with one reach, left out); worst AP_P %s mm, worst RP_l %s mm\n",
+               how.c_str(), measured, single, mm(worst_ap_m).c_str(), mm(worst_rp_m).c_str());
+  error = outputs.stage_text(out_id, "", table);
+  return error.ok() ? outputs.commit() : error;
+}
+
+}  // namespace
+
+int iso9283_main(int argc, char** argv) {
+  std::vector<OptionSpec> specs = {
+      {"samples", "FILE", "measured reaches: paired samples q1..q6,x,y,z, every commanded pose reached several times", ""},
+      {"calibration", "FILE", "command frame: a calibration result (its model and base -> tracker)", ""},
+      {"robot-model", "NAME|FILE", "or the nominal model, its base -> tracker fitted to the reaches", "ur5"},
+      {"tool", "X,Y,Z", "with --robot-model: the reflector in the flange frame [m]", "0,0,0"},
+      {"out", "FILE", "per-pose table (CSV: AP_P, AP_x/y/z, RP_l in mm); '-' for stdout", "-"},
+  };
+  for (const OptionSpec& unit : input_unit_option_specs()) specs.push_back(unit);
+  Options options;
+  const int parsed = parse_options(kCommand,
+                                   "ISO 9283 pose accuracy (AP_P: barycentre of the reaches - commanded position) and\n"
+                                   "repeatability (RP_l = mean distance from the barycentre + 3 S_l) of each pose of\n"
+                                   "the measured reaches (samples at the same joints within 1e-3 rad are one pose).",
+                                   specs, argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  return exit_with(kCommand, iso9283(options));
+}
+
+}  // namespace hivecal::cli
