@@ -10,6 +10,7 @@
 #include "hivecal/port/capture_file.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "hivecal/port/recorder.hpp"
+#include "hivecal/port/rtde_client.hpp"
 #include "hivecal/port/serial_port.hpp"
 #include "streams/session.hpp"
 #include "textio/csv.hpp"
@@ -120,7 +121,63 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
   return Error{};
 }
 
+/// `record --rtde HOST[:PORT]`: the controller's joint states through RTDE into a robot log
+/// (the RTDE recorder's text format, which every reader takes), written as it comes.
+Error record_rtde(const cli::Options& options) {
+  if (!options.get("robot-port").empty() || !options.get("tracker-port").empty()) {
+    return Error::usage("--rtde records the robot alone: record the tracker's port in a second `hivecal record`");
+  }
+  std::string host = options.get("rtde");
+  int port_number = 30004;
+  const std::size_t colon = host.rfind(':');
+  if (colon != std::string::npos && host.find(']') == std::string::npos) {
+    double value = 0.0;
+    if (!textio::parse_double(host.substr(colon + 1), &value) || !(value >= 1.0 && value <= 65535.0) ||
+        value != static_cast<double>(static_cast<int>(value))) {
+      return Error::usage("--rtde must be HOST or HOST:PORT (PORT 1 .. 65535), not " + port::quoted(host));
+    }
+    port_number = static_cast<int>(value);
+    host.resize(colon);
+  }
+  if (host.empty()) return Error::usage("--rtde needs a host name or address");
+  port::RtdeRecordOptions rtde;
+  Error error = cli::bounded_option(options, "duration-s", 0.0, 1e9, &rtde.duration_s);
+  if (error.ok()) error = cli::bounded_option(options, "rtde-frequency", 1.0, 500.0, &rtde.frequency_hz);
+  if (!error.ok()) return error;
+  const std::string out = options.get("robot-out") == "robot.cap" && !options.given("robot-out") ? "robot_rtde.txt"
+                                                                                                  : options.get("robot-out");
+  port::OutputSet checks;
+  std::size_t id = 0;
+  error = checks.add_file(out, "--robot-out", &id);
+  if (error.ok() && port::identify(out).exists && !options.given("force")) {
+    error = Error::output("--robot-out " + port::quoted(out, 200) + ": exists; refusing to overwrite a recording (--force replaces it)");
+  }
+  if (!error.ok()) return error;
+  port::CaptureWriter file;  // rows are appended as they come: Ctrl-C loses nothing
+  bool opened = false;
+  rtde.on_text = [](const std::string& text) { std::fprintf(stderr, "hivecal record: controller says: %s\n", text.c_str()); };
+  install_stop_handlers();
+  port::RtdeStats stats;
+  error = port::record_rtde(host, port_number, rtde, &g_stop, [&](const std::string& row) {
+    if (!opened) {  // the file exists only once the controller has accepted the recipe
+      const Error created = file.open(out, options.given("force"));
+      if (!created.ok()) return created;
+      opened = true;
+    }
+    return file.write(reinterpret_cast<const std::uint8_t*>(row.data()), row.size());
+  }, &stats);
+  const Error closed = file.close();
+  if (error.ok()) error = closed;
+  std::printf("rtde %s:%d (URControl %u.%u.%u.%u) -> %s: %llu data packages, %llu rows, %llu text messages%s\n", host.c_str(),
+              port_number, stats.controller_version[0], stats.controller_version[1], stats.controller_version[2],
+              stats.controller_version[3], out.c_str(), static_cast<unsigned long long>(stats.data_packages),
+              static_cast<unsigned long long>(stats.rows_written), static_cast<unsigned long long>(stats.text_messages),
+              stats.ended_by_controller ? "; the controller closed the connection" : "");
+  return error;
+}
+
 Error record(const cli::Options& options) {
+  if (!options.get("rtde").empty()) return record_rtde(options);
   double duration_s = 0.0;
   int bauds[2] = {0, 0};
   Error error = check_record_options(options, &duration_s, bauds);
@@ -224,13 +281,16 @@ int record_main(int argc, char** argv) {
       {"tracker-baud", "N", "tracker line rate [bit/s]", std::to_string(port::kTrackerBaud)},
       {"duration-s", "S", "stop after this long [s]; 0: until Ctrl-C / SIGTERM", "0"},
       {"force", "", "replace existing capture files (never done without it)", ""},
+      {"rtde", "HOST[:PORT]", "record a UR controller's joint states over RTDE (port 30004) into --robot-out as a robot log", ""},
+      {"rtde-frequency", "HZ", "with --rtde: output rate (CB-series 125, e-Series up to 500) [Hz]", "125"},
   };
   cli::Options options;
   const int parsed = cli::parse_options(
       command,
       "Records the raw bytes of the robot and/or tracker serial ports into capture files as they\n"
       "come (fsync every second and on Ctrl-C/SIGTERM; a capture cut mid-frame stays usable).\n"
-      "A port that disappears is reopened with backoff.",
+      "A port that disappears is reopened with backoff. With --rtde, a UR controller's\n"
+      "timestamp, actual_q and actual_TCP_pose over RTDE into a robot log (default robot_rtde.txt).",
       specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
   return cli::exit_with(command, record(options));

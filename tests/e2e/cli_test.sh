@@ -292,6 +292,10 @@ expect 3 "no-such-port" -- record --robot-port "$work/no-such-port" --robot-out 
 no_file "$work/new.cap"
 expect 2 "is the same file as the output --robot-out" -- record --robot-port "$work/p1" --tracker-port "$work/p2" --robot-out "$work/both.cap" --tracker-out "$work/both.cap"
 expect 2 "is the same file as the input --robot-port" -- record --robot-port "$work/p1" --robot-out "$work/p1"
+expect 3 "--rtde '127.0.0.1:1': Connection refused" -- record --rtde 127.0.0.1:1 --robot-out "$work/rtde.txt"
+no_file "$work/rtde.txt"
+expect 2 "--rtde must be HOST or HOST:PORT (PORT 1 .. 65535), not 'ur5:99999'" -- record --rtde ur5:99999
+expect 2 "--rtde records the robot alone" -- record --rtde 127.0.0.1 --tracker-port "$work/p2"
 expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s -1
 expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s nan
 

@@ -1,0 +1,289 @@
+#include "hivecal/port/rtde_client.hpp"
+
+#include <fcntl.h>
+#include <netdb.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+#include "hivecal/port/byte_source.hpp"
+
+namespace hivecal::port {
+namespace {
+
+constexpr std::uint16_t kProtocolVersion = 2;
+constexpr std::size_t kHeaderBytes = 3;
+constexpr std::size_t kMaxPackageBytes = 4096;  // the controller's packages are far smaller
+
+/// The connection; closed on destruction.
+class Socket {
+ public:
+  ~Socket() {
+    if (fd >= 0) ::close(fd);
+  }
+  int fd = -1;
+};
+
+Error connect_to(const std::string& host, int port, int timeout_ms, Socket* socket) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* found = nullptr;
+  const std::string where = quoted(host + ":" + std::to_string(port), 120);
+  const int looked = ::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found);
+  if (looked != 0) return Error::input("--rtde " + where + ": " + ::gai_strerror(looked));
+  Error error = Error::input("--rtde " + where + ": no address");
+  for (addrinfo* a = found; a != nullptr; a = a->ai_next) {
+    const int fd = ::socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC | SOCK_NONBLOCK, a->ai_protocol);
+    if (fd < 0) continue;
+    int result = ::connect(fd, a->ai_addr, a->ai_addrlen);
+    if (result != 0 && errno == EINPROGRESS) {
+      pollfd wait{fd, POLLOUT, 0};
+      result = ::poll(&wait, 1, timeout_ms);
+      int problem = 0;
+      socklen_t size = sizeof problem;
+      if (result == 1 && ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &problem, &size) == 0 && problem == 0) {
+        result = 0;
+      } else {
+        error = Error::input("--rtde " + where + ": " +
+                             (result == 0 ? "no answer within " + std::to_string(timeout_ms) + " ms" : system_message(problem)));
+        result = -1;
+      }
+    } else if (result != 0) {
+      error = Error::input("--rtde " + where + ": " + system_message(errno));
+    }
+    if (result == 0) {
+      socket->fd = fd;
+      ::freeaddrinfo(found);
+      return Error{};
+    }
+    ::close(fd);
+  }
+  ::freeaddrinfo(found);
+  return error;
+}
+
+/// Sends one package.
+Error send_package(int fd, RtdePackage type, const std::vector<std::uint8_t>& payload) {
+  const auto size = static_cast<std::uint16_t>(kHeaderBytes + payload.size());
+  std::vector<std::uint8_t> bytes = {static_cast<std::uint8_t>(size >> 8), static_cast<std::uint8_t>(size & 0xff),
+                                     static_cast<std::uint8_t>(type)};
+  bytes.insert(bytes.end(), payload.begin(), payload.end());
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t put = ::send(fd, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
+    if (put < 0 && (errno == EINTR || errno == EAGAIN)) {
+      pollfd wait{fd, POLLOUT, 0};
+      (void)::poll(&wait, 1, 100);
+      continue;
+    }
+    if (put <= 0) return Error::input("--rtde: send failed: " + system_message(errno));
+    done += static_cast<std::size_t>(put);
+  }
+  return Error{};
+}
+
+/// Outcome of waiting for a package.
+enum class Received { package, timeout, closed, stopped };
+
+/// Reads exactly `count` bytes, waiting at most `timeout_ms` between arrivals.
+Received read_exact(int fd, std::uint8_t* out, std::size_t count, int timeout_ms, const volatile std::sig_atomic_t* stop) {
+  std::size_t done = 0;
+  std::int64_t waited_ms = 0;
+  while (done < count) {
+    if (stop != nullptr && *stop != 0) return Received::stopped;
+    pollfd wait{fd, POLLIN, 0};
+    const int ready = ::poll(&wait, 1, 100);
+    if (ready <= 0) {
+      waited_ms += 100;
+      if (timeout_ms >= 0 && waited_ms >= timeout_ms) return Received::timeout;
+      continue;
+    }
+    const ssize_t got = ::recv(fd, out + done, count - done, 0);
+    if (got == 0) return Received::closed;
+    if (got < 0) {
+      if (errno == EINTR || errno == EAGAIN) continue;
+      return Received::closed;
+    }
+    done += static_cast<std::size_t>(got);
+    waited_ms = 0;
+  }
+  return Received::package;
+}
+
+/// Reads one package: its type and payload.
+Received read_package(int fd, int timeout_ms, const volatile std::sig_atomic_t* stop, std::uint8_t* type,
+                      std::vector<std::uint8_t>* payload, Error* error) {
+  std::uint8_t header[kHeaderBytes];
+  Received r = read_exact(fd, header, kHeaderBytes, timeout_ms, stop);
+  if (r != Received::package) return r;
+  const std::size_t size = (static_cast<std::size_t>(header[0]) << 8) | header[1];
+  if (size < kHeaderBytes || size > kMaxPackageBytes) {
+    *error = Error::input("--rtde: a package of " + std::to_string(size) + " bytes: not the RTDE protocol");
+    return Received::closed;
+  }
+  *type = header[2];
+  payload->assign(size - kHeaderBytes, 0);
+  return payload->empty() ? Received::package : read_exact(fd, payload->data(), payload->size(), timeout_ms, stop);
+}
+
+std::uint32_t be32(const std::uint8_t* p) {
+  return (static_cast<std::uint32_t>(p[0]) << 24) | (static_cast<std::uint32_t>(p[1]) << 16) |
+         (static_cast<std::uint32_t>(p[2]) << 8) | p[3];
+}
+
+double be_double(const std::uint8_t* p) {
+  std::uint64_t bits = 0;
+  for (int k = 0; k < 8; ++k) bits = (bits << 8) | p[k];
+  double value = 0.0;
+  std::memcpy(&value, &bits, sizeof value);
+  return value;
+}
+
+/// A text message's words: "source: message" (warning level kept out).
+std::string text_of(const std::vector<std::uint8_t>& payload) {
+  if (payload.empty()) return "";
+  const std::size_t message_size = payload[0];
+  if (1 + message_size > payload.size()) return printable(std::string(payload.begin(), payload.end()), 200);
+  const std::string message(payload.begin() + 1, payload.begin() + 1 + static_cast<std::ptrdiff_t>(message_size));
+  std::string source;
+  if (2 + message_size <= payload.size()) {
+    const std::size_t source_size = payload[1 + message_size];
+    const std::size_t at = 2 + message_size;
+    if (at + source_size <= payload.size()) {
+      source.assign(payload.begin() + static_cast<std::ptrdiff_t>(at),
+                    payload.begin() + static_cast<std::ptrdiff_t>(at + source_size));
+    }
+  }
+  return printable(source.empty() ? message : source + ": " + message, 300);
+}
+
+/// Sends `type` with `payload` and waits for the reply of the same type (text messages on
+/// the way are passed on).
+Error request(int fd, RtdePackage type, const std::vector<std::uint8_t>& payload, const RtdeRecordOptions& options,
+              const volatile std::sig_atomic_t* stop, std::vector<std::uint8_t>* reply, RtdeStats* stats) {
+  Error error = send_package(fd, type, payload);
+  if (!error.ok()) return error;
+  const char name = static_cast<char>(type);
+  for (;;) {
+    std::uint8_t got = 0;
+    const Received r = read_package(fd, options.reply_timeout_ms, stop, &got, reply, &error);
+    if (!error.ok()) return error;
+    if (r == Received::timeout) {
+      return Error::input(std::string("--rtde: no reply to '") + name + "' within " +
+                          std::to_string(options.reply_timeout_ms) + " ms");
+    }
+    if (r == Received::closed) return Error::input(std::string("--rtde: the controller closed the connection after '") + name + "'");
+    if (r == Received::stopped) return Error::input("--rtde: stopped during the setup");
+    if (got == static_cast<std::uint8_t>(type)) return Error{};
+    if (got == static_cast<std::uint8_t>(RtdePackage::text_message)) {
+      ++stats->text_messages;
+      if (options.on_text) options.on_text(text_of(*reply));
+    }
+  }
+}
+
+std::string format_row(const std::vector<std::uint8_t>& payload, std::size_t values) {
+  std::string row;
+  char number[32];
+  for (std::size_t k = 0; k < values; ++k) {
+    std::snprintf(number, sizeof number, "%.17g", be_double(payload.data() + 1 + 8 * k));
+    row += (k == 0 ? "" : " ") + std::string(number);
+  }
+  return row + "\n";
+}
+
+}  // namespace
+
+const std::vector<std::string>& rtde_recorded_variables() {
+  static const std::vector<std::string> names = {"timestamp", "actual_q", "actual_TCP_pose"};
+  return names;
+}
+
+std::string rtde_log_header() {
+  std::string header = "timestamp";
+  for (const char* vector : {"actual_q", "actual_TCP_pose"})
+    for (int k = 0; k < 6; ++k) header += " " + std::string(vector) + "_" + std::to_string(k);
+  return header + "\n";
+}
+
+Error record_rtde(const std::string& host, int port, const RtdeRecordOptions& options,
+                  const volatile std::sig_atomic_t* stop, const std::function<Error(const std::string&)>& write_row,
+                  RtdeStats* stats) {
+  *stats = RtdeStats();
+  Socket socket;
+  Error error = connect_to(host, port, options.connect_timeout_ms, &socket);
+  if (!error.ok()) return error;
+  const int fd = socket.fd;
+  std::vector<std::uint8_t> reply;
+  error = request(fd, RtdePackage::protocol_version, {0, kProtocolVersion}, options, stop, &reply, stats);
+  if (error.ok() && (reply.size() != 1 || reply[0] != 1)) {
+    error = Error::input("--rtde: the controller refuses protocol version 2 (URControl 3.2 or later speaks it)");
+  }
+  if (error.ok()) error = request(fd, RtdePackage::controller_version, {}, options, stop, &reply, stats);
+  if (error.ok() && reply.size() >= 16) {
+    for (int k = 0; k < 4; ++k) stats->controller_version[k] = be32(reply.data() + 4 * k);
+  }
+  // The output recipe: frequency (double), then the variable names.
+  std::vector<std::uint8_t> setup(8);
+  std::uint64_t bits = 0;
+  std::memcpy(&bits, &options.frequency_hz, sizeof bits);
+  for (int k = 0; k < 8; ++k) setup[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(bits >> (56 - 8 * k));
+  std::string names;
+  for (const std::string& name : rtde_recorded_variables()) names += (names.empty() ? "" : ",") + name;
+  setup.insert(setup.end(), names.begin(), names.end());
+  if (error.ok()) error = request(fd, RtdePackage::setup_outputs, setup, options, stop, &reply, stats);
+  if (!error.ok()) return error;
+  const std::string types(reply.begin() + (reply.empty() ? 0 : 1), reply.end());
+  if (types.find("NOT_FOUND") != std::string::npos || types != "DOUBLE,VECTOR6D,VECTOR6D") {
+    std::string unknown;
+    std::size_t at = 0;
+    for (const std::string& name : rtde_recorded_variables()) {
+      const std::size_t end = std::min(types.find(',', at), types.size());
+      if (types.compare(at, end - at, "NOT_FOUND") == 0) unknown += (unknown.empty() ? "" : ", ") + name;
+      at = end + 1;
+    }
+    return Error::input("--rtde: the controller refuses the recipe (" + printable(types, 120) + ")" +
+                        (unknown.empty() ? "" : ": it does not know " + unknown));
+  }
+  const std::uint8_t recipe = reply[0];
+  error = request(fd, RtdePackage::start, {}, options, stop, &reply, stats);
+  if (error.ok() && (reply.size() != 1 || reply[0] != 1)) error = Error::input("--rtde: the controller refuses to start");
+  if (error.ok()) error = write_row(rtde_log_header());
+  constexpr std::size_t kValues = 13;  // timestamp + 6 + 6
+  const std::int64_t start_ms = monotonic_ms();
+  while (error.ok()) {
+    if (options.duration_s > 0.0 && static_cast<double>(monotonic_ms() - start_ms) >= options.duration_s * 1000.0) break;
+    std::uint8_t type = 0;
+    const Received r = read_package(fd, 200, stop, &type, &reply, &error);
+    if (!error.ok() || r == Received::stopped) break;
+    if (r == Received::timeout) continue;
+    if (r == Received::closed) {
+      stats->ended_by_controller = true;
+      break;
+    }
+    if (type == static_cast<std::uint8_t>(RtdePackage::text_message)) {
+      ++stats->text_messages;
+      if (options.on_text) options.on_text(text_of(reply));
+      continue;
+    }
+    if (type != static_cast<std::uint8_t>(RtdePackage::data)) continue;
+    if (reply.size() != 1 + 8 * kValues || reply[0] != recipe) {
+      error = Error::input("--rtde: a data package of " + std::to_string(reply.size()) + " bytes for recipe " +
+                           std::to_string(reply.empty() ? 0 : reply[0]) + ": not the recipe set up");
+      break;
+    }
+    ++stats->data_packages;
+    error = write_row(format_row(reply, kValues));
+    if (error.ok()) ++stats->rows_written;
+  }
+  if (!stats->ended_by_controller) (void)send_package(fd, RtdePackage::pause, {});  // best effort: we are leaving
+  return error;
+}
+
+}  // namespace hivecal::port
