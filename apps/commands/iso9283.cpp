@@ -11,6 +11,8 @@
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
+#include "commands/iso9283.hpp"
+#include "hivecal/model/full_params.hpp"
 #include "hivecal/model/iso9283.hpp"
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/port/output_files.hpp"
@@ -128,7 +130,101 @@ Error iso9283(const Options& options) {
   return error.ok() ? outputs.commit() : error;
 }
 
+/// The cube of `--iso9283 X,Y,Z,SIDE` [m]: false when malformed or not a positive side.
+bool parse_cube(const std::string& text, Vec3* centre_m, double* side_m) {
+  double values[4];
+  std::size_t begin = 0;
+  for (int k = 0; k < 4; ++k) {
+    const std::size_t end = k < 3 ? text.find(',', begin) : text.size();
+    if (end == std::string::npos || !textio::parse_double(text.substr(begin, end - begin), &values[k]) ||
+        !std::isfinite(values[k])) {
+      return false;
+    }
+    begin = end + 1;
+  }
+  *centre_m = Vec3(values[0], values[1], values[2]);
+  *side_m = values[3];
+  return *side_m > 0.0 && *side_m <= 10.0 && centre_m->norm() <= 10.0;
+}
+
+/// The rotation vector of the one tool orientation: flange z towards the tracker (or down).
+Vec3 tool_rotation_vector(const Vec3& from_m, const Vec3& tracker_m, bool tool_down) {
+  if (tool_down) return Vec3(0.0, 3.141592653589793, 0.0);  // z down, as a UR pendant writes it
+  const Vec3 z = (tracker_m - from_m).normalized();
+  const Vec3 axis = Vec3::UnitZ().cross(z);
+  const double angle = std::atan2(axis.norm(), z.z());
+  return axis.norm() > 1e-12 ? Vec3(axis.normalized() * angle) : Vec3(z.z() > 0.0 ? Vec3::Zero() : Vec3(3.141592653589793, 0, 0));
+}
+
+std::string pose_text(const Vec3& p, const Vec3& r) {
+  return textio::format_double(p.x()) + ", " + textio::format_double(p.y()) + ", " + textio::format_double(p.z()) + ", " +
+         textio::format_double(r.x()) + ", " + textio::format_double(r.y()) + ", " + textio::format_double(r.z());
+}
+
 }  // namespace
+
+Error plan_iso9283(const Options& options) {
+  Vec3 centre_m;
+  double side_m = 0.0;
+  if (!parse_cube(options.get("iso9283"), &centre_m, &side_m)) {
+    return Error::usage("--iso9283 must be X,Y,Z,SIDE: the cube's centre in the base frame and its side, metres "
+                        "(side in (0, 10]), not " + port::quoted(options.get("iso9283")));
+  }
+  Vec3 tracker_m;
+  std::size_t cycles = 0;
+  double dwell_s = 0.0;
+  double speed = 0.0;
+  double acceleration = 0.0;
+  Error error = vec3_option(options, "tracker-position", &tracker_m);
+  if (error.ok()) error = count_option(options, "cycles", 1, 1000, &cycles);
+  if (error.ok()) error = bounded_option(options, "dwell", 0.3, 3600.0, &dwell_s);
+  if (error.ok()) error = bounded_option(options, "tool-speed", 1e-3, 1.0, &speed);
+  if (error.ok()) error = bounded_option(options, "tool-acceleration", 1e-3, 10.0, &acceleration);
+  if (!error.ok()) return error;
+  if (options.get("out").empty()) return Error::usage("--out is required (see --help)");
+  port::OutputSet outputs;
+  std::size_t out_id = 0;
+  std::size_t script_id = 0;
+  const bool script = !options.get("urscript").empty();
+  error = declare_inputs(options, {"out", "urscript", "svg"}, &outputs);
+  if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
+  if (error.ok() && script) error = outputs.add_file(options.get("urscript"), "--urscript", &script_id);
+  if (!error.ok()) return error;
+  // The diagonal plane through the cube's x edges: its corners at (+-s/2, -s/2, -s/2) and
+  // (+-s/2, +s/2, +s/2); P2 .. P5 on its diagonals, 10 % of a diagonal from each corner.
+  const double h = side_m / 2.0;
+  const Vec3 corners[4] = {Vec3(-h, -h, -h), Vec3(h, -h, -h), Vec3(h, h, h), Vec3(-h, h, h)};
+  Vec3 positions[5] = {centre_m};
+  for (int k = 0; k < 4; ++k) positions[k + 1] = centre_m + 0.8 * corners[k];
+  const Vec3 rotation = tool_rotation_vector(centre_m, tracker_m, options.given("tool-down"));
+  std::string list = "pose,x,y,z,rx,ry,rz\n";
+  for (int k = 0; k < 5; ++k) {
+    list += "P" + std::to_string(k + 1) + "," + textio::format_double(positions[k].x()) + "," +
+            textio::format_double(positions[k].y()) + "," + textio::format_double(positions[k].z()) + "," +
+            textio::format_double(rotation.x()) + "," + textio::format_double(rotation.y()) + "," +
+            textio::format_double(rotation.z()) + "\n";
+  }
+  char head[400];
+  std::snprintf(head, sizeof head,
+                "# hivecal plan --iso9283: cube centre %.4f, %.4f, %.4f m, side %.4f m; P1 centre, P2..P5 at 10 %% of\n"
+                "# the diagonals from the corners of the plane through the cube's x edges; %zu cycles P1 P5 P4 P3 P2.\n"
+                "# Set the TCP to the reflector first: the positions are the reflector's, in the base frame.\n",
+                centre_m.x(), centre_m.y(), centre_m.z(), side_m, cycles);
+  std::string program = std::string(head) + "def hivecal_iso9283():\n";
+  for (int k = 0; k < 5; ++k) program += "  p" + std::to_string(k + 1) + " = p[" + pose_text(positions[k], rotation) + "]\n";
+  const std::string motion = ", a=" + textio::format_double(acceleration) + ", v=" + textio::format_double(speed) + ")\n";
+  const std::string wait = "    sleep(" + textio::format_double(dwell_s) + ")\n";
+  program += "  cycle = 0\n  while (cycle < " + std::to_string(cycles) + "):\n";
+  for (const int k : {1, 5, 4, 3, 2}) program += "    movel(p" + std::to_string(k) + motion + wait;
+  program += "    cycle = cycle + 1\n  end\nend\n";
+  error = outputs.stage_text(out_id, "", list);
+  if (error.ok() && script) error = outputs.stage_text(script_id, "", program);
+  if (!error.ok()) return error;
+  std::fprintf(options.get("out") == "-" || options.get("urscript") == "-" ? stderr : stdout,
+               "ISO 9283 test: 5 positions in a %.3f m cube around %.3f, %.3f, %.3f m, %zu cycles of %.0f s dwell each\n",
+               side_m, centre_m.x(), centre_m.y(), centre_m.z(), cycles, dwell_s);
+  return outputs.commit();
+}
 
 int iso9283_main(int argc, char** argv) {
   std::vector<OptionSpec> specs = {

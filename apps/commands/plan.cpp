@@ -7,6 +7,7 @@
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
+#include "commands/iso9283.hpp"
 #include "hivecal/core/math.hpp"
 #include "hivecal/plan/pose_plan.hpp"
 #include "hivecal/port/output_files.hpp"
@@ -267,6 +268,7 @@ std::string svg_figure(const PlanRequest& request) {
 }
 
 Error plan(const Options& options) {
+  if (options.given("iso9283")) return plan_iso9283(options);
   PlanRequest request;
   Error error = parse_request(options, &request);
   if (!error.ok()) return error;
@@ -335,6 +337,10 @@ int plan_main(int argc, char** argv) {
       {"out", "FILE", "planned poses, CSV q1..q6 [rad] in visiting order ('-': stdout)", ""},
       {"urscript", "FILE", "URScript program: movej + sleep(dwell) per pose", ""},
       {"svg", "FILE", "figure: reflector positions planned vs random (top and side views)", ""},
+      {"iso9283", "X,Y,Z,SIDE", "instead: the ISO 9283 test in this cube (centre and side, base frame) [m]: the 5 positions (--out: pose,x,y,z,rx,ry,rz) and a movel program (--urscript)", ""},
+      {"cycles", "N", "with --iso9283: cycles P1 P5 P4 P3 P2 (the standard: 30)", "30"},
+      {"tool-speed", "M/S", "with --iso9283: movel speed", "0.25"},
+      {"tool-acceleration", "M/S2", "with --iso9283: movel acceleration", "1.2"},
   };
   specs.push_back(input_unit_option_specs()[1]);  // --angle-unit: of --joint-limits
   Options options;

@@ -102,6 +102,16 @@ if "${run[@]}" plan "${cell[@]}" --robot-model "$work/ur5e_lim.json" --count 12 
 sed 's/^  "tool": /  "joint_limits": [[1, -1], [-1, 1], [-1, 1], [-1, 1], [-1, 1], [-1, 1]],\n  "tool": /' "$work/ur5e.json" >"$work/ur5e_bad.json"
 expect_plan 3 '"joint_limits"[0] = [1, -1] rad: lower must be below upper' -- "${cell[@]}" "${out[@]}" --count 10 --robot-model "$work/ur5e_bad.json"
 
+# --- the ISO 9283 test: the cube's five positions (P2..P5 on the diagonals, 10 % of a diagonal
+# from the corners: 0.8 x half a diagonal from P1) with one orientation, and the cycles program
+if "${run[@]}" plan --iso9283 0.4,-0.3,0.5,0.3 --tracker-position 2,0.5,0.6 --out "$work/iso.csv" --urscript "$work/iso.script" >/dev/null 2>&1 &&
+   [ "$(wc -l <"$work/iso.csv")" -eq 6 ] &&
+   awk -F, 'NR == 2 { x = $2; y = $3; z = $4; r = $5 "," $6 "," $7 } NR > 2 { d = sqrt(($2 - x)^2 + ($3 - y)^2 + ($4 - z)^2);
+     if (d < 0.2078 || d > 0.2079 || $5 "," $6 "," $7 != r) bad = 1 } END { exit bad }' "$work/iso.csv" &&
+   [ "$(grep -c '^    movel(p[1-5], a=1.2, v=0.25)$' "$work/iso.script")" -eq 5 ] && grep -q '^  while (cycle < 30):$' "$work/iso.script"; then pass; else
+  fail "plan --iso9283: $(cat "$work/iso.csv" "$work/iso.script")"; fi
+expect_plan 2 "--iso9283 must be X,Y,Z,SIDE" -- --iso9283 0.4,0.5,0.3 --tracker-position 2,0.5,0.6 "${out[@]}"
+
 if "${run[@]}" plan --help | grep -q "usage: hivecal plan"; then pass; else fail "plan --help"; fi
 
 finish
