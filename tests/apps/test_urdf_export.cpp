@@ -94,10 +94,10 @@ RigidTransform link_pose(const std::map<std::string, ReadJoint>& joints, const s
   return pose;
 }
 
-/// Every target's tcp from the URDF against the library's FK (in the description's base frame).
-void expect_chain_equals_model(const textio::RobotDescription& robot, const char* label) {
-  const std::map<std::string, ReadJoint> joints = read_joints(textio::format_urdf(robot, nullptr));
-  ASSERT_EQ(joints.size(), 7u + static_cast<std::size_t>(robot.target_count)) << label;
+/// Worst distance over 200 random poses between each target's point by the library's FK (in
+/// the description's base frame) and the URDF link `tools[k]` composed by this file's reader.
+double worst_tool_error_m(const textio::RobotDescription& robot, const std::map<std::string, ReadJoint>& joints,
+                          const std::vector<std::string>& tools) {
   const RigidTransform file_base =
       robot.convention == DhConvention::modified ? robot.modified_base.transform() : RigidTransform{};
   Random random(17);
@@ -105,12 +105,21 @@ void expect_chain_equals_model(const textio::RobotDescription& robot, const char
   for (int pose = 0; pose < 200; ++pose) {
     JointVector q;
     for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
-    for (int k = 0; k < robot.target_count; ++k) {
-      const Vec3 expected = file_base.apply(fk_target_point(robot.model, q, k));
-      const Vec3 got = link_pose(joints, k == 0 ? "tcp" : "tcp_" + std::to_string(k + 1), q).translation_m;
-      worst_m = std::fmax(worst_m, (got - expected).norm());
+    for (std::size_t k = 0; k < tools.size(); ++k) {
+      const Vec3 expected = file_base.apply(fk_target_point(robot.model, q, static_cast<int>(k)));
+      worst_m = std::fmax(worst_m, (link_pose(joints, tools[k], q).translation_m - expected).norm());
     }
   }
+  return worst_m;
+}
+
+/// Every target's tcp from the URDF against the library's FK (in the description's base frame).
+void expect_chain_equals_model(const textio::RobotDescription& robot, const char* label) {
+  const std::map<std::string, ReadJoint> joints = read_joints(textio::format_urdf(robot, nullptr));
+  ASSERT_EQ(joints.size(), 7u + static_cast<std::size_t>(robot.target_count)) << label;
+  std::vector<std::string> tools;
+  for (int k = 0; k < robot.target_count; ++k) tools.push_back(k == 0 ? "tcp" : "tcp_" + std::to_string(k + 1));
+  const double worst_m = worst_tool_error_m(robot, joints, tools);
   EXPECT_LE(worst_m, 1e-9) << label;
   std::printf("%-40s URDF vs FK worst %.2e m over 200 poses\n", label, worst_m);
 }
@@ -231,19 +240,7 @@ textio::RobotDescription expect_read_exactly(const std::string& urdf, const std:
   EXPECT_TRUE(read.ok()) << label << ": " << read.message;
   if (!read.ok()) return robot;
   EXPECT_EQ(robot.target_count, static_cast<int>(tools.size())) << label;
-  const std::map<std::string, ReadJoint> joints = read_joints(urdf);
-  const RigidTransform file_base =
-      robot.convention == DhConvention::modified ? robot.modified_base.transform() : RigidTransform{};
-  Random random(23);
-  double worst_m = 0.0;
-  for (int pose = 0; pose < 200; ++pose) {
-    JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
-    for (std::size_t k = 0; k < tools.size(); ++k) {
-      const Vec3 expected = link_pose(joints, tools[k], q).translation_m;
-      worst_m = std::fmax(worst_m, (file_base.apply(fk_target_point(robot.model, q, static_cast<int>(k))) - expected).norm());
-    }
-  }
+  const double worst_m = worst_tool_error_m(robot, read_joints(urdf), tools);
   EXPECT_LE(worst_m, 1e-9) << label;
   std::printf("%-40s read back: DH vs URDF worst %.2e m\n", label, worst_m);
   return robot;

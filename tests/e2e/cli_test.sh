@@ -376,20 +376,20 @@ if [ -s "$work/cut.json" ]; then pass; else fail "no result written for the cut 
 
 # --- a signal ends a command cleanly: no temporary left, the shell sees the signal (128 + N)
 # (an hour of session at most: seconds of writing, so the signal comes while temporaries exist)
-"${run[@]}" simulate --out-dir "$work/sig/new" --waypoints 2000 --duration-s 3600 >/dev/null 2>&1 &
-pid=$!
-sleep 1
-kill -INT "$pid"
-wait "$pid"
+# interrupted SIGNAL DIR: a long simulate into DIR, sent SIGNAL after a second; its exit code.
+interrupted() {
+  "${run[@]}" simulate --out-dir "$2" --waypoints 2000 --duration-s 3600 >/dev/null 2>&1 &
+  local pid=$!
+  sleep 1
+  kill "-$1" "$pid"
+  wait "$pid"
+}
+interrupted INT "$work/sig/new"
 code=$?
 if [ "$code" = 130 ] && [ ! -e "$work/sig/new" ] && ! compgen -G "$work/sig/new.tmp.*" >/dev/null; then pass; else
   fail "simulate after SIGINT: exit $code (want 130), left: $(ls -A "$work/sig" 2>&1)"; fi
 mkdir -p "$work/sig/old"
-"${run[@]}" simulate --out-dir "$work/sig/old" --waypoints 2000 --duration-s 3600 >/dev/null 2>&1 &
-pid=$!
-sleep 1
-kill -TERM "$pid"
-wait "$pid"
+interrupted TERM "$work/sig/old"
 code=$?
 if [ "$code" = 143 ] && [ -z "$(ls -A "$work/sig/old")" ]; then pass; else
   fail "simulate after SIGTERM: exit $code (want 143), left: $(ls -A "$work/sig/old")"; fi
