@@ -16,6 +16,8 @@
 #include "hivecal/model/iso9283.hpp"
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/port/output_files.hpp"
+#include "report/report.hpp"
+#include "report/svg.hpp"
 #include "textio/calibration_json.hpp"
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
@@ -26,6 +28,7 @@ namespace {
 
 constexpr const char* kCommand = "iso9283";
 constexpr std::size_t kMaxSamples = 1u << 16;  // reaches read at most
+constexpr std::size_t kNoReport = static_cast<std::size_t>(-1);
 
 /// The reaches of one commanded pose.
 struct PoseReaches {
@@ -83,8 +86,10 @@ Error iso9283(const Options& options) {
   }
   port::OutputSet outputs;
   std::size_t out_id = 0;
-  Error error = declare_inputs(options, {"out"}, &outputs);
+  std::size_t report_id = kNoReport;
+  Error error = declare_inputs(options, {"out", "report"}, &outputs);
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
+  if (error.ok() && !options.get("report").empty()) error = outputs.add_file(options.get("report"), "--report", &report_id);
   if (!error.ok()) return error;
   static Dataset<kMaxSamples> dataset;
   dataset.clear();
@@ -98,7 +103,8 @@ Error iso9283(const Options& options) {
   error = command_frame(options, dataset.samples(), &frame, &how);
   if (!error.ok()) return error;
   const std::vector<PoseReaches> poses = group_reaches(dataset.samples(), lines);
-  std::string table = "pose,line,target,cycles,AP_P [mm],AP_x [mm],AP_y [mm],AP_z [mm],RP_l [mm]\n";
+  std::vector<std::vector<std::string>> rows = {
+      {"pose", "line", "target", "cycles", "AP_P [mm]", "AP_x [mm]", "AP_y [mm]", "AP_z [mm]", "RP_l [mm]"}};
   std::size_t measured = 0;
   std::size_t single = 0;
   double worst_ap_m = 0.0;
@@ -114,19 +120,32 @@ Error iso9283(const Options& options) {
     ++measured;
     worst_ap_m = std::max(worst_ap_m, accuracy.accuracy_norm_m);
     worst_rp_m = std::max(worst_rp_m, accuracy.repeatability_m);
-    table += std::to_string(k + 1) + "," + std::to_string(p.line) + "," + std::to_string(p.target + 1) + "," +
-             std::to_string(accuracy.cycles) + "," + mm(accuracy.accuracy_norm_m) + "," + mm(accuracy.accuracy_m.x()) +
-             "," + mm(accuracy.accuracy_m.y()) + "," + mm(accuracy.accuracy_m.z()) + "," + mm(accuracy.repeatability_m) + "\n";
+    rows.push_back({std::to_string(k + 1), std::to_string(p.line), std::to_string(p.target + 1),
+                    std::to_string(accuracy.cycles), mm(accuracy.accuracy_norm_m), mm(accuracy.accuracy_m.x()),
+                    mm(accuracy.accuracy_m.y()), mm(accuracy.accuracy_m.z()), mm(accuracy.repeatability_m)});
   }
   if (measured == 0) {
     return Error::input(options.get("samples") + ": no pose was reached twice (ISO 9283 needs the cycles of each pose; " +
                         std::to_string(poses.size()) + " poses, one reach each)");
   }
-  const bool table_on_stdout = options.get("out") == "-";
-  std::FILE* summary = table_on_stdout ? stderr : stdout;
-  std::fprintf(summary, "%s\n%zu poses with repeated reaches (%zu with one reach, left out); worst AP_P %s mm, worst RP_l %s mm\n",
-               how.c_str(), measured, single, mm(worst_ap_m).c_str(), mm(worst_rp_m).c_str());
+  const std::string summary = std::to_string(measured) + " poses with repeated reaches (" + std::to_string(single) +
+                              " with one reach, left out); worst AP_P " + mm(worst_ap_m) + " mm, worst RP_l " +
+                              mm(worst_rp_m) + " mm";
+  std::fprintf(options.get("out") == "-" ? stderr : stdout, "%s\n%s\n", how.c_str(), summary.c_str());
+  std::string table;
+  for (const std::vector<std::string>& row : rows) {
+    for (std::size_t c = 0; c < row.size(); ++c) table += row[c] + (c + 1 < row.size() ? "," : "\n");
+  }
   error = outputs.stage_text(out_id, "", table);
+  if (error.ok() && report_id != kNoReport) {
+    error = outputs.stage_text(report_id, "",
+                               report::html_page_head("ISO 9283 pose accuracy and repeatability") + "<ul>\n<li>" +
+                                   report::xml_escape(how) + "</li>\n<li>" + report::xml_escape(summary) + "</li>\n</ul>\n" +
+                                   report::html_table(rows) +
+                                   "<p>AP_P: distance of the reaches' barycentre from the commanded position; RP_l = "
+                                   "mean distance of the reaches from their barycentre + 3 S_l (ISO 9283; docs/iso9283.md)."
+                                   "</p>\n</body>\n</html>\n");
+  }
   return error.ok() ? outputs.commit() : error;
 }
 
@@ -233,6 +252,7 @@ int iso9283_main(int argc, char** argv) {
       {"robot-model", "NAME|FILE", "or the nominal model, its base -> tracker fitted to the reaches", "ur5"},
       {"tool", "X,Y,Z", "with --robot-model: the reflector in the flange frame [m]", "0,0,0"},
       {"out", "FILE", "per-pose table (CSV: AP_P, AP_x/y/z, RP_l in mm); '-' for stdout", "-"},
+      {"report", "FILE", "the same as an HTML page in the calibration report's style", ""},
   };
   for (const OptionSpec& unit : input_unit_option_specs()) specs.push_back(unit);
   Options options;

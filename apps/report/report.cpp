@@ -376,16 +376,6 @@ std::vector<Figure> all_figures(const ReportData& data) {
   return figures;
 }
 
-std::string html_table(const std::vector<std::vector<std::string>>& rows) {
-  std::string s = "<table>\n";
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    s += "<tr>";
-    for (const std::string& cell : rows[r]) s += (r == 0 ? "<th>" : "<td>") + xml_escape(cell) + (r == 0 ? "</th>" : "</td>");
-    s += "</tr>\n";
-  }
-  return s + "</table>\n";
-}
-
 bool has_test(const ReportData& data) {
   for (const MethodRow& m : data.methods)
     if (m.test.count > 0) return true;
@@ -630,15 +620,28 @@ std::vector<std::string> figure_ids(const ReportData& data) {
   return ids;
 }
 
+std::string html_table(const std::vector<std::vector<std::string>>& rows) {
+  std::string s = "<table>\n";
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    s += "<tr>";
+    for (const std::string& cell : rows[r]) s += (r == 0 ? "<th>" : "<td>") + xml_escape(cell) + (r == 0 ? "</th>" : "</td>");
+    s += "</tr>\n";
+  }
+  return s + "</table>\n";
+}
+
+std::string html_page_head(const std::string& title) {
+  return "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n<title>" + xml_escape(title) +
+         "</title>\n<style>body{font-family:sans-serif;max-width:1300px;margin:2em auto;padding:0 1em}"
+         "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
+         "th{background:#eee}svg{margin:4px;border:1px solid #eee}figure{display:inline-block;margin:4px;vertical-align:top}"
+         "figcaption{font-size:12px;color:#444;width:0;min-width:100%}</style>\n"
+         "</head>\n<body>\n<h1>" +
+         xml_escape(title) + "</h1>\n";
+}
+
 std::string render_html(const ReportData& data) {
-  std::string s =
-      "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n<title>" + xml_escape(data.title) +
-      "</title>\n<style>body{font-family:sans-serif;max-width:1300px;margin:2em auto;padding:0 1em}"
-      "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-      "th{background:#eee}svg{margin:4px;border:1px solid #eee}figure{display:inline-block;margin:4px;vertical-align:top}"
-      "figcaption{font-size:12px;color:#444;width:0;min-width:100%}</style>\n"
-      "</head>\n<body>\n<h1>" +
-      xml_escape(data.title) + "</h1>\n<ul>\n";
+  std::string s = html_page_head(data.title) + "<ul>\n";
   for (const std::string& line : data.input_lines) s += "<li>" + xml_escape(line) + "</li>\n";
   for (const std::string& line : data.info_lines) s += "<li>" + xml_escape(line) + "</li>\n";
   s += "</ul>\n<h2>Table 1: accuracy per method</h2>\n" + html_table(table1_rows(data));

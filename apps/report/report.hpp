@@ -183,4 +183,10 @@ std::string render_html(const ReportData& data);
 /// The ids of the figures render_html draws for `data`, in page order (for tests).
 std::vector<std::string> figure_ids(const ReportData& data);
 
+/// An HTML table of text cells, the first row as the header (every cell escaped).
+std::string html_table(const std::vector<std::vector<std::string>>& rows);
+/// The start of a report page with the report's style, up to and including its <h1> title;
+/// the caller appends the body and "</body>\n</html>\n".
+std::string html_page_head(const std::string& title);
+
 }  // namespace hivecal::report

@@ -422,7 +422,8 @@ printf 'q1,q2,q3,q4,q5,q6\n0.1,-1.2,1.3,-0.4,0.8,0.2\n-0.5,-1.0,1.6,-0.9,1.2,0.4
 paste -d, "$work/iso_poses.csv" "$work/iso_cmd.csv" | awk -F, 'NR == 1 { print "q1,q2,q3,q4,q5,q6,x,y,z"; next }
   { for (r = 0; r < 4; ++r) { dx = (r == 0 || r == 3) ? 10e-6 : -10e-6; dy = (r < 2) ? 10e-6 : -10e-6
       printf "%s,%s,%s,%s,%s,%s,%.9f,%.9f,%.9f\n", $1, $2, $3, $4, $5, $6, $7 + 30e-6 + dx, $8 - 40e-6 + dy, $9 } }' >"$work/iso_reaches.csv"
-if "${run[@]}" iso9283 --samples "$work/iso_reaches.csv" --calibration "$work/model.json" --out "$work/iso.csv" >"$work/iso.txt" 2>&1 &&
+if "${run[@]}" iso9283 --samples "$work/iso_reaches.csv" --calibration "$work/model.json" --out "$work/iso.csv" --report "$work/iso.html" >"$work/iso.txt" 2>&1 &&
+   grep -q "<tr><td>2</td><td>6</td><td>1</td><td>4</td><td>0.0500</td>" "$work/iso.html" &&
    [ "$(grep -c ',4,0.0500,0.0300,-0.0400,0.0000,0.0141$' "$work/iso.csv")" -eq 3 ] &&
    grep -q "3 poses with repeated reaches (0 with one reach, left out); worst AP_P 0.0500 mm, worst RP_l 0.0141 mm" "$work/iso.txt"; then pass; else
   fail "iso9283: $(cat "$work/iso.txt" "$work/iso.csv")"; fi
