@@ -3,6 +3,7 @@
 // kSamePoseTolerance_rad: every reach of one commanded pose); the commanded positions come from
 // a calibration result (its base -> tracker and model), or from a nominal model with the
 // base -> tracker fitted to the measurements.
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +13,7 @@
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
 #include "commands/iso9283.hpp"
+#include "hivecal/core/random.hpp"
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/iso9283.hpp"
 #include "hivecal/model/rigid_fit.hpp"
@@ -175,6 +177,107 @@ Vec3 tool_rotation_vector(const Vec3& from_m, const Vec3& tracker_m, bool tool_d
   return axis.norm() > 1e-12 ? Vec3(axis.normalized() * angle) : Vec3(z.z() > 0.0 ? Vec3::Zero() : Vec3(3.141592653589793, 0, 0));
 }
 
+/// Joints that put the flange at `target` within `limits` (damped Gauss-Newton from seeded
+/// random starts, numeric Jacobian); false when none converges to 1 um / 1 urad.
+bool solve_ik(const RobotModel& model, const JointLimits& limits, const RigidTransform& target, Random* random,
+              JointVector* q_out) {
+  const auto error_of = [&](const JointVector& q) {
+    const RigidTransform at = fk_flange(model, q);
+    Eigen::Matrix<double, 6, 1> e;
+    e.head<3>() = target.translation_m - at.translation_m;
+    const Eigen::AngleAxisd turn(Mat3(target.rotation * at.rotation.transpose()));
+    e.tail<3>() = turn.angle() * turn.axis();
+    return e;
+  };
+  for (int start = 0; start < 12; ++start) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q(j) = random->uniform(limits.lower_rad(j), limits.upper_rad(j));
+    for (int iteration = 0; iteration < 60; ++iteration) {
+      const Eigen::Matrix<double, 6, 1> e = error_of(q);
+      if (e.head<3>().norm() < 1e-6 && e.tail<3>().norm() < 1e-6) {
+        bool inside = true;
+        for (int j = 0; j < kJointCount; ++j) {  // a turn more or less is the same pose
+          constexpr double kTurn = 6.283185307179586;
+          while (q(j) > limits.upper_rad(j) && q(j) - kTurn >= limits.lower_rad(j)) q(j) -= kTurn;
+          while (q(j) < limits.lower_rad(j) && q(j) + kTurn <= limits.upper_rad(j)) q(j) += kTurn;
+          inside = inside && q(j) >= limits.lower_rad(j) && q(j) <= limits.upper_rad(j);
+        }
+        if (inside) {
+          *q_out = q;
+          return true;
+        }
+        break;
+      }
+      Eigen::Matrix<double, 6, 6> jacobian;
+      for (int j = 0; j < kJointCount; ++j) {
+        JointVector moved = q;
+        moved(j) += 1e-7;
+        jacobian.col(j) = (e - error_of(moved)) / 1e-7;
+      }
+      const Eigen::Matrix<double, 6, 6> normal = jacobian.transpose() * jacobian + 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
+      q += normal.ldlt().solve(jacobian.transpose() * e);
+    }
+  }
+  return false;
+}
+
+/// The five ISO positions of the cube at `centre_m` with side `side_m` (P1 first).
+void iso_positions(const Vec3& centre_m, double side_m, Vec3 (&positions)[5]) {
+  // The diagonal plane through the cube's x edges: corners (+-s/2, -s/2, -s/2), (+-s/2, +s/2,
+  // +s/2); P2 .. P5 on its diagonals, 10 % of a diagonal from each corner.
+  const double h = side_m / 2.0;
+  const Vec3 corners[4] = {Vec3(-h, -h, -h), Vec3(h, -h, -h), Vec3(h, h, h), Vec3(-h, h, h)};
+  positions[0] = centre_m;
+  for (int k = 0; k < 4; ++k) positions[k + 1] = centre_m + 0.8 * corners[k];
+}
+
+/// Joints putting the reflector at `position` with the tool orientation `rotation` (a rotation
+/// vector of the flange); false when not reachable within the limits.
+bool reach(const RobotModel& model, const JointLimits& limits, const Vec3& position, const Vec3& rotation,
+           Random* random, JointVector* q) {
+  const Mat3 flange_rotation = rotation_from_vector(rotation);
+  return solve_ik(model, limits, RigidTransform{flange_rotation, position - flange_rotation * model.tool_m}, random, q);
+}
+
+/// Whether the arm reaches all five positions of the cube with the one orientation, above the
+/// floor and outside the keep-out cylinder.
+bool cube_reachable(const RobotModel& model, const JointLimits& limits, const Vec3& centre_m, double side_m,
+                    const Vec3& rotation, double floor_z_m, double keep_out_m, Random* random) {
+  Vec3 positions[5];
+  iso_positions(centre_m, side_m, positions);
+  for (const Vec3& p : positions) {
+    JointVector q;
+    if (p.z() < floor_z_m || p.head<2>().norm() < keep_out_m || !reach(model, limits, p, rotation, random, &q)) return false;
+  }
+  return true;
+}
+
+/// The largest cube found: centres at reflector positions of random configurations, each
+/// grown by bisection while its five positions stay reachable.
+bool largest_cube(const RobotModel& model, const JointLimits& limits, const Vec3& tracker_m, bool tool_down,
+                  double floor_z_m, double keep_out_m, Vec3* centre_m, double* side_m) {
+  Random random(9283);
+  *side_m = 0.0;
+  for (int candidate = 0; candidate < 40; ++candidate) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(limits.lower_rad(j), limits.upper_rad(j));
+    const Vec3 centre = fk_tool_point(model, q);
+    const Vec3 rotation = tool_rotation_vector(centre, tracker_m, tool_down);
+    if (!cube_reachable(model, limits, centre, std::max(*side_m, 0.02), rotation, floor_z_m, keep_out_m, &random)) continue;
+    double low = std::max(*side_m, 0.02);
+    double high = 2.0;
+    for (int step = 0; step < 8; ++step) {
+      const double mid = 0.5 * (low + high);
+      (cube_reachable(model, limits, centre, mid, rotation, floor_z_m, keep_out_m, &random) ? low : high) = mid;
+    }
+    if (low > *side_m) {
+      *side_m = low;
+      *centre_m = centre;
+    }
+  }
+  return *side_m > 0.0;
+}
+
 std::string pose_text(const Vec3& p, const Vec3& r) {
   return textio::format_double(p.x()) + ", " + textio::format_double(p.y()) + ", " + textio::format_double(p.z()) + ", " +
          textio::format_double(r.x()) + ", " + textio::format_double(r.y()) + ", " + textio::format_double(r.z());
@@ -182,12 +285,13 @@ std::string pose_text(const Vec3& p, const Vec3& r) {
 
 }  // namespace
 
-Error plan_iso9283(const Options& options) {
+Error plan_iso9283(const Options& options, const RobotModel& model, const JointLimits& limits) {
   Vec3 centre_m;
   double side_m = 0.0;
-  if (!parse_cube(options.get("iso9283"), &centre_m, &side_m)) {
-    return Error::usage("--iso9283 must be X,Y,Z,SIDE: the cube's centre in the base frame and its side, metres "
-                        "(side in (0, 10]), not " + port::quoted(options.get("iso9283")));
+  const bool automatic = options.get("iso9283") == "auto";
+  if (!automatic && !parse_cube(options.get("iso9283"), &centre_m, &side_m)) {
+    return Error::usage("--iso9283 must be X,Y,Z,SIDE (the cube's centre in the base frame and its side, metres; "
+                        "side in (0, 10]) or auto, not " + port::quoted(options.get("iso9283")));
   }
   Vec3 tracker_m;
   std::size_t cycles = 0;
@@ -200,7 +304,16 @@ Error plan_iso9283(const Options& options) {
   if (error.ok()) error = bounded_option(options, "tool-speed", 1e-3, 1.0, &speed);
   if (error.ok()) error = bounded_option(options, "tool-acceleration", 1e-3, 10.0, &acceleration);
   if (!error.ok()) return error;
+  double floor_z_m = 0.0;
+  double keep_out_m = 0.0;
+  if (error.ok()) error = bounded_option(options, "floor-z", -10.0, 10.0, &floor_z_m);
+  if (error.ok()) error = bounded_option(options, "keep-out-radius", 0.0, 10.0, &keep_out_m);
+  if (!error.ok()) return error;
   if (options.get("out").empty()) return Error::usage("--out is required (see --help)");
+  if (automatic && !largest_cube(model, limits, tracker_m, options.given("tool-down"), floor_z_m, keep_out_m, &centre_m, &side_m)) {
+    return Error::failure("--iso9283 auto: no cube whose five positions the arm reaches with one orientation (move the "
+                          "tracker, lower --floor-z or --keep-out-radius)");
+  }
   port::OutputSet outputs;
   std::size_t out_id = 0;
   std::size_t script_id = 0;
@@ -209,19 +322,25 @@ Error plan_iso9283(const Options& options) {
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (error.ok() && script) error = outputs.add_file(options.get("urscript"), "--urscript", &script_id);
   if (!error.ok()) return error;
-  // The diagonal plane through the cube's x edges: its corners at (+-s/2, -s/2, -s/2) and
-  // (+-s/2, +s/2, +s/2); P2 .. P5 on its diagonals, 10 % of a diagonal from each corner.
-  const double h = side_m / 2.0;
-  const Vec3 corners[4] = {Vec3(-h, -h, -h), Vec3(h, -h, -h), Vec3(h, h, h), Vec3(-h, h, h)};
-  Vec3 positions[5] = {centre_m};
-  for (int k = 0; k < 4; ++k) positions[k + 1] = centre_m + 0.8 * corners[k];
+  Vec3 positions[5];
+  iso_positions(centre_m, side_m, positions);
   const Vec3 rotation = tool_rotation_vector(centre_m, tracker_m, options.given("tool-down"));
-  std::string list = "pose,x,y,z,rx,ry,rz\n";
+  // Each position with a joint solution of the model (the controller's own IK moves the arm;
+  // these say that one exists within the limits, and let `predict` check the list).
+  std::string list = "pose,x,y,z,rx,ry,rz,q1,q2,q3,q4,q5,q6\n";
+  Random random(9283);
   for (int k = 0; k < 5; ++k) {
+    JointVector q;
+    const bool reachable = reach(model, limits, positions[k], rotation, &random, &q);
+    if (!reachable) {
+      std::fprintf(stderr, "hivecal plan: warning: P%d is not reachable with this orientation within the joint limits\n", k + 1);
+    }
     list += "P" + std::to_string(k + 1) + "," + textio::format_double(positions[k].x()) + "," +
             textio::format_double(positions[k].y()) + "," + textio::format_double(positions[k].z()) + "," +
             textio::format_double(rotation.x()) + "," + textio::format_double(rotation.y()) + "," +
-            textio::format_double(rotation.z()) + "\n";
+            textio::format_double(rotation.z());
+    for (int j = 0; j < kJointCount; ++j) list += "," + (reachable ? textio::format_double(q(j)) : std::string("nan"));
+    list += "\n";
   }
   char head[400];
   std::snprintf(head, sizeof head,

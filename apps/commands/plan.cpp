@@ -268,7 +268,13 @@ std::string svg_figure(const PlanRequest& request) {
 }
 
 Error plan(const Options& options) {
-  if (options.given("iso9283")) return plan_iso9283(options);
+  if (options.given("iso9283")) {
+    RobotModel model;
+    JointLimits limits;
+    Error error = robot_option(options, &model, &limits);
+    if (error.ok()) error = vec3_option(options, "tool", &model.tool_m);
+    return error.ok() ? plan_iso9283(options, model, limits) : error;
+  }
   PlanRequest request;
   Error error = parse_request(options, &request);
   if (!error.ok()) return error;
@@ -337,7 +343,7 @@ int plan_main(int argc, char** argv) {
       {"out", "FILE", "planned poses, CSV q1..q6 [rad] in visiting order ('-': stdout)", ""},
       {"urscript", "FILE", "URScript program: movej + sleep(dwell) per pose", ""},
       {"svg", "FILE", "figure: reflector positions planned vs random (top and side views)", ""},
-      {"iso9283", "X,Y,Z,SIDE", "instead: the ISO 9283 test in this cube (centre and side, base frame) [m]: the 5 positions (--out: pose,x,y,z,rx,ry,rz) and a movel program (--urscript)", ""},
+      {"iso9283", "X,Y,Z,SIDE", "instead: the ISO 9283 test in this cube (centre and side, base frame) [m], or 'auto' (the largest cube the arm reaches): the 5 positions (--out: pose,x,y,z,rx,ry,rz) and a movel program (--urscript)", ""},
       {"cycles", "N", "with --iso9283: cycles P1 P5 P4 P3 P2 (the standard: 30)", "30"},
       {"tool-speed", "M/S", "with --iso9283: movel speed", "0.25"},
       {"tool-acceleration", "M/S2", "with --iso9283: movel acceleration", "1.2"},

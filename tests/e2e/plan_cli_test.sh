@@ -111,6 +111,15 @@ if "${run[@]}" plan --iso9283 0.4,-0.3,0.5,0.3 --tracker-position 2,0.5,0.6 --ou
    [ "$(grep -c '^    movel(p[1-5], a=1.2, v=0.25)$' "$work/iso.script")" -eq 5 ] && grep -q '^  while (cycle < 30):$' "$work/iso.script"; then pass; else
   fail "plan --iso9283: $(cat "$work/iso.csv" "$work/iso.script")"; fi
 expect_plan 2 "--iso9283 must be X,Y,Z,SIDE" -- --iso9283 0.4,0.5,0.3 --tracker-position 2,0.5,0.6 "${out[@]}"
+# auto: the largest cube found whose five positions the arm reaches with the one orientation;
+# each listed joint solution puts the reflector there (checked through predict, the model's FK)
+if "${run[@]}" plan --iso9283 auto --robot-model ur5e --tracker-position 2,0.5,0.6 --out "$work/iso_auto.csv" >"$work/iso_auto.txt" 2>&1 &&
+   cut -d, -f8-13 "$work/iso_auto.csv" >"$work/iso_q.csv" &&
+   "${run[@]}" predict --robot-model ur5e --joints "$work/iso_q.csv" --out "$work/iso_fk.csv" 2>/dev/null &&
+   paste -d, "$work/iso_fk.csv" <(cut -d, -f2-4 "$work/iso_auto.csv") | awk -F, 'NR > 1 {
+     for (i = 1; i <= 3; ++i) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > 1e-6) bad = 1 } } END { exit bad }' &&
+   awk '{ for (i = 1; i <= NF; ++i) if ($i == "m" && $(i - 1) + 0 > 0.1 && $(i - 2) == "a") found = 1 } END { exit !found }' "$work/iso_auto.txt"; then pass; else
+  fail "plan --iso9283 auto: $(cat "$work/iso_auto.txt" "$work/iso_auto.csv")"; fi
 
 if "${run[@]}" plan --help | grep -q "usage: hivecal plan"; then pass; else fail "plan --help"; fi
 
