@@ -10,6 +10,7 @@
 
 #include <Eigen/Cholesky>  // correlations of the estimated parameters
 
+#include "hivecal/core/math.hpp"
 #include "cli/options.hpp"
 #include "hivecal/calibration.hpp"
 #include "commands/commands.hpp"
@@ -605,7 +606,7 @@ Error joint_sigma_option(const Options& options, double* sigma_rad) {
   if (in_degrees && options.given("joint-sigma-rad")) return Error::usage("give --joint-sigma-rad or --joint-sigma-deg, not both");
   const Error error = number_option(options, in_degrees ? "joint-sigma-deg" : "joint-sigma-rad", sigma_rad);
   if (!error.ok()) return error;
-  if (in_degrees) *sigma_rad *= 0.017453292519943295;
+  if (in_degrees) *sigma_rad *= math::kRadPerDeg;
   if (!(*sigma_rad >= 0.0 && *sigma_rad < 1.0)) return Error::usage("--joint-sigma-rad must be in [0, 1) rad");
   return Error{};
 }
@@ -676,7 +677,7 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
     return Error::usage("--max-change-mm must be positive and --max-change-deg in (0, 360]");
   }
   settings->bounds.max_length_change_m = max_mm * 1e-3;
-  settings->bounds.max_angle_change_rad = max_deg * 0.017453292519943295;
+  settings->bounds.max_angle_change_rad = max_deg * math::kRadPerDeg;
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
   const Error compliance = compliance_from_options(options, settings);

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "hivecal/core/math.hpp"
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
 #include "textio/calibration_json.hpp"
@@ -14,7 +15,7 @@ namespace hivecal::cli {
 namespace {
 
 constexpr const char* kCommand = "check-robot";
-constexpr double kDegPerRad = 57.29577951308232;
+using math::kDegPerRad;
 
 std::string fmt(const char* format, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
   char text[200];

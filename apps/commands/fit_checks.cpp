@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "hivecal/core/math.hpp"
 #include "hivecal/model/full_params.hpp"
 
 namespace hivecal::cli {
@@ -42,7 +43,6 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
   if (final_stage == nullptr) return warnings;
   const ModelParams before = to_params(result.baseline.model);
   const ModelParams after = to_params(final_stage->model);
-  constexpr double kDegPerRad = 57.29577951308232;
   char line[512];
   for (int k = 0; k < kModelParamCount; ++k) {
     const double change = after(k) - before(k);
@@ -52,7 +52,7 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
       std::snprintf(line, sizeof line,
                     "%s moved %+.3f deg (%.6f -> %.6f rad), more than %.3g deg (--max-change-deg): wrong model, "
                     "joint zero or units?",
-                    full_param_name(k), change * kDegPerRad, before(k), after(k), bounds.max_angle_change_rad * kDegPerRad);
+                    full_param_name(k), change * math::kDegPerRad, before(k), after(k), bounds.max_angle_change_rad * math::kDegPerRad);
     } else {
       std::snprintf(line, sizeof line,
                     "%s moved %+.3f mm (%.6f -> %.6f m), more than %.3g mm (--max-change-mm): wrong model, tool "

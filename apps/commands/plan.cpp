@@ -23,7 +23,6 @@ constexpr const char* kCommand = "plan";
 // Shortest dwell: the extraction keeps a tracker point when the robot was still around it;
 // a 10 Hz tracker needs three points (the speed baseline on both sides) of stillness.
 constexpr double kMinDwell_s = 0.3;
-constexpr double kDegToRad = math::kPi / 180.0;
 
 PlanWorkspace workspace;  // ~280 kB: static, as the library asks
 PlanResult result;
@@ -110,7 +109,7 @@ Error parse_request(const Options& options, PlanRequest* request) {
   if (error.ok()) error = count_option(options, "candidates", 1, kPlanCandidateCapacity, &o.candidate_count);
   double acceptance_deg = 0.0;
   if (error.ok()) error = bounded_option(options, "acceptance-deg", 1.0, 180.0, &acceptance_deg);
-  c.acceptance_rad = acceptance_deg * kDegToRad;
+  c.acceptance_rad = acceptance_deg * math::kRadPerDeg;
   if (error.ok()) error = bounded_option(options, "floor-z", -10.0, 10.0, &c.floor_z_m);
   if (error.ok()) error = bounded_option(options, "keep-out-radius", 0.0, 10.0, &c.keep_out_radius_m);
   if (error.ok()) error = seed_option(options, "seed", &o.seed);
@@ -192,7 +191,7 @@ std::string report_text(const PlanRequest& request, const IdentifiabilityReport*
               : std::string()) +
          "\n";
   if (facing != nullptr) {
-    out += "freeing the orientation (flange z within " + text(o.constraints.acceptance_rad / kDegToRad, "%g") +
+    out += "freeing the orientation (flange z within " + text(o.constraints.acceptance_rad * math::kDegPerRad, "%g") +
            " deg of the tracker) makes identifiable: " + names_of(facing->kept_mask & ~result.pool.kept_mask) + "\n";
   }
   const PoseSetQuality& r = result.random;

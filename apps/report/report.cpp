@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "hivecal/core/math.hpp"
 #include "report/svg.hpp"
 #include "textio/text_util.hpp"
 
@@ -242,7 +243,7 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   const double y_hi = std::max(max_of(residual_um), max_of(rigid_um));
   for (int j = 0; j < 6; ++j) {
     const bool before_after = rigid != nullptr && compliant_joint(after.model, j);
-    const double deg = 180.0 / 3.141592653589793;
+    const double deg = math::kDegPerRad;
     std::vector<Series> series;
     if (before_after) {
       series = {Series{rigid->method + " (rigid)", {}, {}, true}, Series{after.method, {}, {}, true}};

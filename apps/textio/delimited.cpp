@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "hivecal/core/math.hpp"
 #include "hivecal/port/error.hpp"
 #include "textio/text_util.hpp"
 
@@ -73,7 +74,7 @@ bool si_scale(std::string_view unit, Quantity quantity, double* scale) {
   };
   static const Known kUnits[] = {
       {"m", Quantity::length, 1.0},    {"mm", Quantity::length, 1e-3}, {"um", Quantity::length, 1e-6},
-      {"rad", Quantity::angle, 1.0},   {"deg", Quantity::angle, 0.017453292519943295},
+      {"rad", Quantity::angle, 1.0},   {"deg", Quantity::angle, math::kRadPerDeg},
       {"s", Quantity::time, 1.0},      {"ms", Quantity::time, 1e-3},   {"us", Quantity::time, 1e-6},
       {"ns", Quantity::time, 1e-9},
   };
