@@ -711,14 +711,9 @@ Error start_geometry(const Options& options, const CalibrateSettings& settings, 
   *start = settings.robot.model;
   start->tool_m = settings.tool_m;
   if (options.get("ur-calibration").empty()) return Error{};
-  UrCalibrationDeltas deltas;
-  port::Error r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
-  if (r.ok()) {
-    r = textio::check_ur_deltas_plausible(settings.robot.model, deltas, options.get("ur-calibration"),
-                                          settings.robot.robot);
-  }
+  const port::Error r = textio::read_ur_calibrated_model(options.get("ur-calibration"), settings.robot.model,
+                                                         settings.robot.robot, start);
   if (!r.ok()) return r;
-  (void)apply_ur_deltas(settings.robot.model, deltas, start);
   start->tool_m = settings.tool_m;
   return Error{};
 }

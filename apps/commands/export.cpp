@@ -7,7 +7,6 @@
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
 #include "hivecal/core/digest.hpp"
-#include "hivecal/model/ur_deltas.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "report/report_json.hpp"
@@ -23,9 +22,9 @@ namespace {
 
 constexpr const char* kCommand = "export";
 
-/// The arm to export: a result (with its base -> tracker), or --robot-model with
-/// --ur-calibration's deltas applied when given.
-Error load_arm(const Options& options, textio::CalibrationFile* arm, bool* has_tracker) {
+/// The arm to export: a result (with its base -> tracker; *result_text gets the file's text),
+/// or --robot-model with --ur-calibration's deltas applied when given.
+Error load_arm(const Options& options, textio::CalibrationFile* arm, bool* has_tracker, std::string* result_text) {
   const bool from_result = !options.get("calibration").empty();
   if (from_result == options.given("robot-model")) {
     return Error::usage("give either --calibration (a result) or --robot-model (see --help)");
@@ -34,29 +33,20 @@ Error load_arm(const Options& options, textio::CalibrationFile* arm, bool* has_t
     return Error::usage("--ur-calibration goes with --robot-model: a result is calibrated already");
   }
   *has_tracker = from_result;
-  if (from_result) return textio::read_calibration_json(options.get("calibration"), arm);
+  if (from_result) return textio::read_calibration_json(options.get("calibration"), arm, result_text);
   textio::RobotDescription& robot = *arm;
-  Error error = robot_model_option(options, "robot-model", &robot);
+  const Error error = robot_model_option(options, "robot-model", &robot);
   if (!error.ok() || options.get("ur-calibration").empty()) return error;
-  UrCalibrationDeltas deltas;
-  port::Error r = textio::read_ur_calibration_conf(options.get("ur-calibration"), &deltas);
-  if (r.ok()) r = textio::check_ur_deltas_plausible(robot.model, deltas, options.get("ur-calibration"), robot.robot);
-  if (!r.ok()) return r;
-  RobotModel calibrated;
-  (void)apply_ur_deltas(robot.model, deltas, &calibrated);
-  calibrated.tool_m = robot.model.tool_m;
-  robot.model = calibrated;
-  return Error{};
+  const RobotModel nominal = robot.model;
+  return textio::read_ur_calibrated_model(options.get("ur-calibration"), nominal, robot.robot, &robot.model);
 }
 
-/// The training samples a result keeps in its report (none when it has no report).
-std::vector<report::SampleRow> training_samples(const std::string& result_path) {
-  std::string text;
+/// The training samples a result (its text) keeps in its report (none when it has no report).
+std::vector<report::SampleRow> training_samples(const std::string& result_text, const std::string& result_path) {
   textio::JsonValue root;
   report::ReportData data;
   const textio::JsonValue* saved = nullptr;
-  if (!port::read_whole_file(result_path, port::kMaxTextInputBytes, &text).ok() ||
-      !textio::parse_json(text, &root).ok() || (saved = root.find("report")) == nullptr ||
+  if (!textio::parse_json(result_text, &root).ok() || (saved = root.find("report")) == nullptr ||
       !report::parse_report_data(*saved, result_path, &data).ok()) {
     return {};
   }
@@ -78,14 +68,16 @@ double mae_m(const RobotModel& model, const RigidTransform& base_to_tracker, con
 
 /// What a format cannot hold is said, with what leaving it out costs on the result's own
 /// training samples, never dropped in silence.
-void say_what_is_left_out(const textio::CalibrationFile& arm, const std::string& format, const std::string& result_path) {
+void say_what_is_left_out(const textio::CalibrationFile& arm, const std::string& format, const std::string& result_text,
+                          const std::string& result_path) {
   if (arm.model.compliance.term_count == 0 || format == "robot-json") return;
   std::fprintf(stderr,
                "hivecal export: note: the model's %d compliance terms (joint deflection under gravity) cannot be "
                "written in %s: the chain is the rigid geometry only; predict with the result file for the full "
                "model\n",
                arm.model.compliance.term_count, format == "urdf" ? "URDF" : "the UR kinematics YAML");
-  const std::vector<report::SampleRow> train = result_path.empty() ? std::vector<report::SampleRow>() : training_samples(result_path);
+  const std::vector<report::SampleRow> train =
+      result_text.empty() ? std::vector<report::SampleRow>() : training_samples(result_text, result_path);
   if (train.empty()) return;
   RobotModel rigid = arm.model;
   rigid.compliance = ComplianceModel{};
@@ -152,9 +144,10 @@ Error export_arm(const Options& options) {
   if (!error.ok()) return error;
   textio::CalibrationFile arm;
   bool has_tracker = false;
-  error = load_arm(options, &arm, &has_tracker);
+  std::string result_text;  // read once: the arm, and the training samples of its report
+  error = load_arm(options, &arm, &has_tracker, &result_text);
   if (!error.ok()) return error;
-  say_what_is_left_out(arm, format, options.get("calibration"));
+  say_what_is_left_out(arm, format, result_text, options.get("calibration"));
   std::string text;
   if (format == "urdf") {
     text = textio::format_urdf(arm, has_tracker ? &arm.base_to_tracker : nullptr);

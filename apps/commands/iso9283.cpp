@@ -34,10 +34,9 @@ constexpr std::size_t kNoReport = static_cast<std::size_t>(-1);
 
 /// The reaches of one commanded pose.
 struct PoseReaches {
-  JointVector q_rad = JointVector::Zero();  ///< the first reach's joints (the command)
-  int target = 0;                            ///< reflector
-  std::size_t line = 0;                      ///< file line of the first reach
-  std::vector<Vec3> measured_m;              ///< every reach's measured point [m]
+  Sample first;                  ///< the first reach (its joints: the command; its target)
+  std::size_t line = 0;          ///< file line of the first reach
+  std::vector<Vec3> measured_m;  ///< every reach's measured point [m]
 };
 
 /// Samples grouped by pose and target, in the order of their first reach.
@@ -46,10 +45,10 @@ std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::ve
   for (const Sample& s : samples) {
     PoseReaches* pose = nullptr;
     for (PoseReaches& p : poses) {
-      if (p.target == s.target && (p.q_rad - s.q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad) pose = &p;
+      if (same_point(p.first, s)) pose = &p;
     }
     if (pose == nullptr) {
-      poses.push_back(PoseReaches{s.q_rad, s.target, s.index < lines.size() ? lines[s.index] : 0, {}});
+      poses.push_back(PoseReaches{s, s.index < lines.size() ? lines[s.index] : 0, {}});
       pose = &poses.back();
     }
     pose->measured_m.push_back(s.point_m);
@@ -114,7 +113,7 @@ Error iso9283(const Options& options) {
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const PoseReaches& p = poses[k];
     PoseAccuracy accuracy;
-    const Vec3 commanded = frame.base_to_tracker.apply(fk_target_point(frame.model, p.q_rad, p.target));
+    const Vec3 commanded = frame.base_to_tracker.apply(fk_sample_point(frame.model, p.first));
     if (pose_accuracy(Span<const Vec3>(p.measured_m.data(), p.measured_m.size()), commanded, &accuracy) != Status::ok) {
       ++single;  // one reach: no repeatability
       continue;
@@ -122,7 +121,7 @@ Error iso9283(const Options& options) {
     ++measured;
     worst_ap_m = std::max(worst_ap_m, accuracy.accuracy_norm_m);
     worst_rp_m = std::max(worst_rp_m, accuracy.repeatability_m);
-    rows.push_back({std::to_string(k + 1), std::to_string(p.line), std::to_string(p.target + 1),
+    rows.push_back({std::to_string(k + 1), std::to_string(p.line), std::to_string(p.first.target + 1),
                     std::to_string(accuracy.cycles), mm(accuracy.accuracy_norm_m), mm(accuracy.accuracy_m.x()),
                     mm(accuracy.accuracy_m.y()), mm(accuracy.accuracy_m.z()), mm(accuracy.repeatability_m)});
   }

@@ -525,12 +525,13 @@ port::Error parse_calibration_json(const std::string& text, const std::string& s
   return port::Error{};
 }
 
-port::Error read_calibration_json(const std::string& path, CalibrationFile* file) {
-  std::string text;
-  const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
+port::Error read_calibration_json(const std::string& path, CalibrationFile* file, std::string* text) {
+  std::string own;
+  std::string& content = text != nullptr ? *text : own;
+  const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &content);
   if (!read.ok()) return read;
-  if (trim(text).empty()) return port::Error::input(path + ": empty file");
-  return parse_calibration_json(text, path, file);
+  if (trim(content).empty()) return port::Error::input(path + ": empty file");
+  return parse_calibration_json(content, path, file);
 }
 
 }  // namespace hivecal::textio

@@ -63,8 +63,9 @@ std::string format_calibration_json(const CalibrationFile& file,
 /// Parses and validates a result document (six DH rows, finite numbers, a proper rigid
 /// 4x4 transform within 1e-5, re-orthonormalised); errors name the key at fault.
 port::Error parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file);
-/// Reads and parses a result file.
-port::Error read_calibration_json(const std::string& path, CalibrationFile* file);
+/// Reads and parses a result file; `text` (optional) receives the file's text, for the keys
+/// the caller reads itself (e.g. "report").
+port::Error read_calibration_json(const std::string& path, CalibrationFile* file, std::string* text = nullptr);
 
 /// The "compliance" object of a model with compliance terms (docs/formats.md): "kind"
 /// (basis | masses), "gravity_direction", "terms" (name, joint 1-based, load, coefficient,

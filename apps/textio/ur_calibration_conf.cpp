@@ -144,4 +144,13 @@ std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas) {
   return out;
 }
 
+port::Error read_ur_calibrated_model(const std::string& path, const RobotModel& nominal, const std::string& model_name,
+                                     RobotModel* calibrated) {
+  UrCalibrationDeltas deltas;
+  port::Error r = read_ur_calibration_conf(path, &deltas);
+  if (r.ok()) r = check_ur_deltas_plausible(nominal, deltas, path, model_name);
+  if (r.ok()) (void)apply_ur_deltas(nominal, deltas, calibrated);  // finite: the reader refuses NaN
+  return r;
+}
+
 }  // namespace hivecal::textio

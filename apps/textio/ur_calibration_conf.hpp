@@ -33,6 +33,11 @@ double ur_deltas_tool_shift_m(const RobotModel& nominal, const UrCalibrationDelt
 port::Error check_ur_deltas_plausible(const RobotModel& nominal, const UrCalibrationDeltas& deltas,
                                       const std::string& source_name, const std::string& model_name);
 
+/// `nominal` with the deltas of the calibration.conf at `path` applied, after reading it and
+/// check_ur_deltas_plausible (messages name `path` and `model_name`).
+port::Error read_ur_calibrated_model(const std::string& path, const RobotModel& nominal, const std::string& model_name,
+                                     RobotModel* calibrated);
+
 /// Writes deltas in calibration.conf's [mounting] syntax (%.17g).
 std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas);
 

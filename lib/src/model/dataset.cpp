@@ -16,9 +16,7 @@ std::size_t distinct_points(Span<const Sample> samples) {
   for (std::size_t i = 0; i < samples.size() && count < kDistinctPointLimit; ++i) {
     bool seen = false;
     for (std::size_t k = count; k-- > 0 && !seen;) {  // the latest first: a stop's samples are in a row
-      const Sample& other = samples[first[k]];
-      seen = other.target == samples[i].target &&
-             (other.q_rad - samples[i].q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad;
+      seen = same_point(samples[first[k]], samples[i]);
     }
     if (!seen) first[count++] = i;
   }

@@ -33,6 +33,12 @@ inline constexpr double kSamePoseTolerance_rad = 1e-3;
 /// distinct_points() counts up to this many, then stops (more is plenty for any model).
 inline constexpr std::size_t kDistinctPointLimit = 64;
 
+/// Whether two samples measure one point: the same target at joints within
+/// kSamePoseTolerance_rad (one stop of the robot).
+inline bool same_point(const Sample& a, const Sample& b) {
+  return a.target == b.target && (a.q_rad - b.q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad;
+}
+
 /// Distinct measured points of `samples`: one per robot pose (joints within
 /// kSamePoseTolerance_rad) and target, each worth 3 coordinates whatever its sample count;
 /// at most kDistinctPointLimit. Many samples of one stop determine no more than one.
