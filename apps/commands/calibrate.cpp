@@ -50,6 +50,7 @@ struct CalibrateSettings {
   bool robust = false;               ///< --robust
   bool keep_outliers = false;        ///< --keep-outliers
   double significance_t = 2.0;       ///< --significance
+  std::size_t population_subset = kDefaultPopulationSubset;  ///< --population-subset: a hybrid's ABC/GSA samples (0: all) [-]
   std::size_t cv_folds = 0;          ///< --cv K; 1: leave-one-out (lib's folds = 0); 0: no cross-validation
   bool progress = false;             ///< progress lines on stderr
   textio::InputUnits units;          ///< --length-unit, --angle-unit of text inputs
@@ -215,7 +216,13 @@ report::MethodRow stage_row(const Run& run, std::size_t k) {
   }
   // A refining stage's row (ABC+LM) is the whole chain: its time includes the stage it refined.
   const double seconds = run.seconds[k] + (stage.refines_previous && k > 0 ? run.seconds[k - 1] : 0.0);
-  if (stage.solver != CalibrationSolver::lm) params += run.result.baseline.tool_fitted ? ", tool fitted" : ", tool as given";
+  if (stage.solver != CalibrationSolver::lm) {
+    params += run.result.baseline.tool_fitted ? ", tool fitted" : ", tool as given";
+    if (stage.searched_samples < run.result.train_count) {  // a hybrid's start on a spanning subset
+      params += ", searched on " + std::to_string(stage.searched_samples) + " of " +
+                std::to_string(run.result.train_count) + " samples";
+    }
+  }
   return method_row(run.result.stage_name(k), params, stage.train, stage.test, seconds,
                     static_cast<long long>(stage.evaluations));
 }
@@ -453,6 +460,7 @@ const std::vector<OptionSpec>& option_specs() {
       {"tool", "X,Y,Z", "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)", "0,0,0.1695"},
       {"params", "full|paper", "full identifiable model, or the link lengths (every non-zero d and a; for UR the paper's six)", "full"},
       {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
+      {"population-subset", "N", "hybrids (abc+lm, gsa+lm): ABC/GSA search on N training samples spread over the poses (farthest-point in joint space), LM refines on all; 0: every sample. --method abc, gsa and all always search on every sample", std::to_string(kDefaultPopulationSubset)},
       {"robust", "", "Huber loss in LM (a few bad tracker points do not drag the fit)", ""},
       {"seed", "N", "seed of the train/test split and of ABC/GSA", "1"},
       {"split", "FRACTION", "share of samples used for training (1: all, no test rows)", "0.7"},
@@ -628,6 +636,9 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
     return Error::usage("--method must be one of abc+lm, gsa+lm, lm, abc, gsa, all; not " + port::quoted(settings->method));
   }
   Error seeded = seed_option(options, "seed", &settings->seed);
+  if (seeded.ok()) {
+    seeded = count_option(options, "population-subset", 0, kDefaultPopulationSubset, &settings->population_subset);
+  }
   if (!seeded.ok()) return seeded;
   if (!textio::parse_double(options.get("split"), &settings->train_fraction) ||
       !(settings->train_fraction > 0.0 && settings->train_fraction <= 1.0)) {
@@ -783,6 +794,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.base_known = settings.controller_tcp;  // known_base_to_tracker: the identity
   job.tool_known = settings.controller_tcp;  // the start model's tool points: --tool and the orientation's lever
   job.significance_t = settings.significance_t;
+  job.population_subset = settings.population_subset;
   job.lm.joint_sigma_rad = settings.joint_sigma_rad;
   job.lm.position_sigma_m = settings.orientation.position_sigma_m;
   job.blunder_test.tracker_sigma_m = settings.orientation.position_sigma_m;

@@ -67,6 +67,10 @@ struct CalibrationCompliance {
 
 /// Default level of LM's significance test: a parameter whose change is below 2 sigma is fixed [-].
 inline constexpr double kDefaultSignificance = 2.0;
+/// Default size of the spanning subset a hybrid's population stage searches on [samples]:
+/// plenty for the link lengths and the base (a few hundred equations per unknown), and the
+/// stage's cost stops growing with the set (docs/solvers-abc-gsa.md).
+inline constexpr std::size_t kDefaultPopulationSubset = 256;
 /// Largest training set on which a negative significance_t chooses the level by leave-one-out [-].
 inline constexpr std::size_t kAutoSignificanceMaxSamples = 64;
 
@@ -82,6 +86,11 @@ struct CalibrationOptions {
   std::size_t gsa_agents = 150;                          ///< GSA N, <= the workspace's population capacity [-]
   std::size_t gsa_iterations = 200;                      ///< GSA t_max [-]
   double paper6_half_width_m = kPaper6DefaultHalfWidth_m;  ///< ABC/GSA box: start lengths +/- this [m]
+  /// Hybrids (abc+lm, gsa+lm): the population stage searches on at most this many training
+  /// samples, chosen to span the poses (spanning_subset; at most the workspace's
+  /// subset capacity), and LM refines on every sample; 0: on every sample. The paper's
+  /// methods (abc, gsa, all) always search on every sample [-].
+  std::size_t population_subset = kDefaultPopulationSubset;
   LmOptions lm;                                          ///< LM settings; `params` and `robust` override its params and loss
   double significance_t = kDefaultSignificance;          ///< LM fixes, one at a time, estimated parameters whose change is below t sigma (0: off; < 0: chosen by leave-one-out on small sets) [-]
   bool keep_outliers = false;                            ///< true: no blunder search, every sample is used
@@ -132,7 +141,8 @@ struct CalibrationStage {
   RigidTransform base_to_tracker;                     ///< its base -> tracker transform
   std::uint64_t evaluations = 0;                      ///< cost evaluations (LM: iterations) [-]
   std::size_t iterations = 0;                         ///< cycles / iterations run [-]
-  double best_cost_m = 0.0;                           ///< ABC/GSA: best training MAE as the cost computed it; LM: final RMS [m]
+  double best_cost_m = 0.0;                           ///< ABC/GSA: best MAE on the samples it searched on, as the cost computed it; LM: final RMS [m]
+  std::size_t searched_samples = 0;                   ///< ABC/GSA: training samples the cost held (a spanning subset in a hybrid); LM: 0 [-]
   ErrorStats train;                                   ///< errors on the training samples [m]
   ErrorStats test;                                    ///< errors on the test samples [m]
   Span<const double> trace_m;                         ///< best cost (ABC/GSA: MAE, LM: RMS) per iteration [m]; views the workspace
@@ -281,6 +291,9 @@ class CalibrationWorkspaceBase {
   virtual CalibrationOutlierList& outlier_list(std::size_t which) = 0;
   /// Ends any open phase, builds the w-test's scratch in the arena.
   virtual ReliabilityWorkspace* open_reliability() = 0;
+  /// Room for the positions of a hybrid's spanning subset (empty: the workspace holds too few
+  /// samples to need one).
+  virtual Span<std::uint32_t> subset_room() = 0;
   /// Where the w-test's removals are undone from: (position, end of the fitted part) per removed pose.
   std::uint32_t (&snoop_moves())[kMaxCalibrationOutliers][2] { return snoop_moves_; }
   /// Where an LM stage keeps the geometry it starts from while it reruns (dropped or not
@@ -320,6 +333,16 @@ struct TargetBlockStorage<0> {
 };
 template <std::size_t A, std::size_t B>
 inline constexpr std::size_t max_of = A > B ? A : B;
+/// Room for a spanning subset's positions, or none (Count = 0).
+template <std::size_t Count>
+struct SubsetStorage {
+  std::uint32_t values[Count];
+  Span<std::uint32_t> view() { return Span<std::uint32_t>(values, Count); }
+};
+template <>
+struct SubsetStorage<0> {
+  Span<std::uint32_t> view() { return Span<std::uint32_t>(); }
+};
 }  // namespace detail
 
 /// A workspace for jobs on up to `Samples` training samples and up to `MaxLinkLengths` link
@@ -405,11 +428,14 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
   }
   TraceBase& trace(std::size_t index) override { return traces_[index]; }
   CalibrationOutlierList& outlier_list(std::size_t which) override { return outlier_lists_[which]; }
+  Span<std::uint32_t> subset_room() override { return subset_.view(); }
 
  private:
   alignas(alignof(std::max_align_t)) unsigned char arena_[kArenaBytes];
   Trace<TraceCapacity> traces_[kMaxCalibrationStages];
   CalibrationOutlierList outlier_lists_[2];
+  // A subset is chosen only from more samples than the default subset holds.
+  detail::SubsetStorage<(Samples > kDefaultPopulationSubset ? kDefaultPopulationSubset : 0)> subset_;
   AbcPhase* abc_ = nullptr;  // the open phase (at most one is set), built in arena_
   GsaPhase* gsa_ = nullptr;
   LmPhase* lm_ = nullptr;

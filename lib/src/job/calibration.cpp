@@ -7,6 +7,7 @@
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/model/spanning_subset.hpp"
 
 namespace hivecal {
 namespace {
@@ -95,9 +96,25 @@ CalibrationStage& population_stage(Job& job, CalibrationSolver solver, const Pap
   return stage;
 }
 
-/// ABC or GSA on the link lengths from the start geometry, in the workspace's arena.
-Status run_population(Job& job, CalibrationSolver solver) {
+/// The positions in the training samples a hybrid's population stage searches on: a
+/// spanning subset when there are more than options.population_subset (and the workspace
+/// has room), else none (empty: every sample). Chosen in the residual phase's scratch.
+Span<const std::uint32_t> population_subset(Job& job) {
+  const Span<const Sample> train = job.dataset.train();
+  const Span<std::uint32_t> room = job.workspace.subset_room();
+  const std::size_t wanted = std::min(job.options.population_subset, room.size());
+  if (wanted == 0 || train.size() <= wanted) return Span<const std::uint32_t>();
+  const ResidualScratch scratch = job.workspace.open_residuals();
+  const std::size_t count = spanning_subset(train, scratch.residual_m, Span<std::uint32_t>(room.data(), wanted));
+  job.workspace.close();
+  return Span<const std::uint32_t>(room.data(), count);
+}
+
+/// ABC or GSA on the link lengths from the start geometry, in the workspace's arena; on a
+/// spanning subset of the training samples when it starts a hybrid.
+Status run_population(Job& job, CalibrationSolver solver, bool hybrid) {
   const CalibrationOptions& o = job.options;
+  const Span<const std::uint32_t> subset = hybrid ? population_subset(job) : Span<const std::uint32_t>();
   TraceBase& trace = job.workspace.trace(job.result.stage_count);
   trace.clear();
   Paper6StageResult solved;
@@ -108,7 +125,7 @@ Status run_population(Job& job, CalibrationSolver solver) {
     abc.cycles = o.abc_cycles;
     abc.seed = o.seed;
     const CalibrationWorkspaceBase::PopulationPhase phase = job.workspace.open_abc();
-    status = calibrate_paper6_abc(job.start, job.dataset.train(), abc, o.paper6_half_width_m, phase.cost, phase.abc,
+    status = calibrate_paper6_abc(job.start, job.dataset.train(), subset, abc, o.paper6_half_width_m, phase.cost, phase.abc,
                                   &solved, &trace, job.observer);
   } else {
     GsaOptions gsa;
@@ -116,12 +133,14 @@ Status run_population(Job& job, CalibrationSolver solver) {
     gsa.iterations = o.gsa_iterations;
     gsa.seed = o.seed;
     const CalibrationWorkspaceBase::PopulationPhase phase = job.workspace.open_gsa();
-    status = calibrate_paper6_gsa(job.start, job.dataset.train(), gsa, o.paper6_half_width_m, phase.cost, phase.gsa,
+    status = calibrate_paper6_gsa(job.start, job.dataset.train(), subset, gsa, o.paper6_half_width_m, phase.cost, phase.gsa,
                                   &solved, &trace, job.observer);
   }
   job.workspace.close();
   if (status != Status::ok) return status;
-  population_stage(job, solver, solved).trace_m = trace.values();
+  CalibrationStage& stage = population_stage(job, solver, solved);
+  stage.trace_m = trace.values();
+  stage.searched_samples = subset.empty() ? job.dataset.train().size() : subset.size();
   return Status::ok;
 }
 
@@ -404,14 +423,15 @@ bool any_compliance_kept(ParamMask kept, int term_count) {
 }
 
 /// Runs one stage with the observer's begin/end around it, then its train/test errors.
-/// `compliance`: the LM+compliance stage (solver lm).
+/// `hybrid`: the stage is a half of a hybrid (ABC/GSA: the start, on the spanning subset; LM:
+/// from the previous stage). `compliance`: the LM+compliance stage (solver lm).
 Status run_stage(Job& job, CalibrationSolver solver, bool hybrid, bool compliance = false) {
   CalibrationResult& r = job.result;
   const std::size_t index = r.stage_count;
   if (job.observer != nullptr) job.observer->on_stage_begin(index, solver);
   const Status status = compliance                       ? run_compliance_lm(job, &r.lm_pruned_mask)
                         : solver == CalibrationSolver::lm ? run_lm(job, hybrid, &r.lm_pruned_mask)
-                                                          : run_population(job, solver);
+                                                          : run_population(job, solver, hybrid);
   const CalibrationStep step = solver == CalibrationSolver::abc   ? CalibrationStep::abc
                                : solver == CalibrationSolver::gsa ? CalibrationStep::gsa
                                                                   : CalibrationStep::lm;
@@ -468,8 +488,8 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
   // (ABC / GSA move lengths only and would otherwise keep the tool guess's error).
   Job job{r->baseline.model, *dataset, options, *workspace, *r, observer};
   const StagePlan plan = plan_for(options.method);
-  if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, false)) != Status::ok) return status;
-  if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, false)) != Status::ok) return status;
+  if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, plan.hybrid)) != Status::ok) return status;
+  if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, plan.hybrid)) != Status::ok) return status;
   if (plan.lm && (status = run_stage(job, CalibrationSolver::lm, plan.hybrid)) != Status::ok) return status;
   if (plan.lm && options.compliance.enabled &&
       (status = run_stage(job, CalibrationSolver::lm, true, true)) != Status::ok) {

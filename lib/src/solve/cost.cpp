@@ -8,6 +8,7 @@ namespace hivecal {
 
 Status evaluate_cost(const RobotModel& model, Span<const Sample> samples, CostKind kind, BaseFrame base_frame,
                      RigidTransform* base_to_tracker, double* cost) {
+  if (base_to_tracker == nullptr || cost == nullptr) return Status::invalid_argument;
   if (samples.empty()) return Status::dataset_empty;
   if (base_frame == BaseFrame::refit) {
     const Status fit = fit_base_to_tracker(model, samples, base_to_tracker);

@@ -216,13 +216,23 @@ Status Paper6CostBase::finalize() {
 }
 
 Status Paper6CostBase::build(const RobotModel& nominal, Span<const Sample> samples) {
+  return build(nominal, samples, Span<const std::uint32_t>());
+}
+
+Status Paper6CostBase::build(const RobotModel& nominal, Span<const Sample> samples,
+                             Span<const std::uint32_t> selection) {
   if (samples.empty()) return Status::dataset_empty;
+  for (const std::uint32_t position : selection) {
+    if (position >= samples.size()) return Status::invalid_argument;
+  }
   RigidTransform reference;
   const Status fitted = fit_base_to_tracker(nominal, samples, &reference);
   if (fitted != Status::ok) return fitted;
   const Status reset_status = reset(nominal, reference);
   if (reset_status != Status::ok) return reset_status;
-  for (const Sample& sample : samples) {
+  const std::size_t count = selection.empty() ? samples.size() : selection.size();
+  for (std::size_t k = 0; k < count; ++k) {
+    const Sample& sample = samples[selection.empty() ? k : selection[k]];
     const Status added = add(sample.q_rad, sample.point_m, sample.target);
     if (added != Status::ok) return added;
   }

@@ -9,6 +9,7 @@
 #include "hivecal/calibration.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/model/spanning_subset.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
@@ -128,7 +129,7 @@ TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
   abc_options.food_sources = 20;
   abc_options.cycles = 20;
   Paper6StageResult population;
-  ASSERT_EQ(calibrate_paper6_abc(baseline, dataset.train(), abc_options, kPaper6DefaultHalfWidth_m, &cost, &abc,
+  ASSERT_EQ(calibrate_paper6_abc(baseline, dataset.train(), {}, abc_options, kPaper6DefaultHalfWidth_m, &cost, &abc,
                                  &population),
             Status::ok);
   ASSERT_EQ(calibrate_lm(population.model, &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace,
@@ -156,6 +157,54 @@ TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
   EXPECT_TRUE(same_bits(result.stages[0].model, population.model));
   EXPECT_TRUE(same_bits(last(result).model, lm.model));
   EXPECT_EQ(result.lm.rms_m, lm.rms_m);
+}
+
+// On more training samples than options.population_subset, a hybrid's population stage
+// searches on the spanning subset (the bits of the stage function called with it by hand) and
+// LM refines on every sample; the paper's methods and population_subset 0 search on all.
+TEST(CalibrationJob, HybridSearchesASpanningSubsetOfLargeSets) {
+  constexpr std::size_t kLarge = 500;
+  static CalibrationWorkspace<kLarge, double, 20, 300> large_workspace;
+  static Dataset<kLarge> large;
+  fill(kLarge, &large);
+  const CalibrationOptions options = quick(CalibrationMethod::abc_lm);
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibrate(start(), &large, options, &large_workspace, &result));
+  ASSERT_EQ(status, Status::ok);
+  ASSERT_EQ(result.stage_count, 2u);
+  EXPECT_EQ(result.train_count, 350u);
+  EXPECT_EQ(result.stages[0].searched_samples, kDefaultPopulationSubset);
+  EXPECT_EQ(result.stages[0].train.count, 350u);  // its errors are on every training sample
+  EXPECT_EQ(result.stages[1].searched_samples, 0u);
+  EXPECT_LT(last(result).test.mae(ErrorAxis::norm_3d), 0.2 * result.baseline.test.mae(ErrorAxis::norm_3d));
+
+  fill(kLarge, &large);
+  ASSERT_EQ(large.split(0.7, 1), Status::ok);
+  static double scratch[kLarge];
+  std::uint32_t subset[kDefaultPopulationSubset] = {};
+  ASSERT_EQ(spanning_subset(large.train(), Span<double>(scratch), Span<std::uint32_t>(subset)),
+            kDefaultPopulationSubset);
+  static Paper6Cost<kLarge> cost;
+  static AbcSolver<20, kPaper6Dimension> abc;
+  AbcOptions abc_options;
+  abc_options.food_sources = 20;
+  abc_options.cycles = 20;
+  Paper6StageResult population;
+  ASSERT_EQ(calibrate_paper6_abc(result.baseline.model, large.train(), Span<const std::uint32_t>(subset), abc_options,
+                                 kPaper6DefaultHalfWidth_m, &cost, &abc, &population),
+            Status::ok);
+  EXPECT_TRUE(same_bits(result.stages[0].model, population.model));
+
+  for (const CalibrationMethod method : {CalibrationMethod::abc_lm, CalibrationMethod::abc, CalibrationMethod::all}) {
+    CalibrationOptions every = quick(method);
+    if (method == CalibrationMethod::abc_lm) every.population_subset = 0;
+    ASSERT_EQ(calibrate(start(), &large, every, &large_workspace, &other), Status::ok);
+    for (std::size_t k = 0; k < other.stage_count; ++k) {
+      if (other.stages[k].solver != CalibrationSolver::lm) {
+        EXPECT_EQ(other.stages[k].searched_samples, 350u) << calibration_method_name(method);
+      }
+    }
+  }
 }
 
 TEST(CalibrationJob, TrainingOnEverySampleLeavesNoTestRows) {

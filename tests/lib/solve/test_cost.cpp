@@ -88,6 +88,10 @@ TEST_F(CostFixture, BadInputsGetSpecificErrors) {
   EXPECT_EQ(evaluate_cost(truth, dataset().samples().subspan(0, 2), CostKind::mean_abs_3d, BaseFrame::refit, &fitted,
                           &cost),
             Status::too_few_samples);
+  EXPECT_EQ(evaluate_cost(truth, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::refit, nullptr, &cost),
+            Status::invalid_argument);
+  EXPECT_EQ(evaluate_cost(truth, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::fixed, &fitted, nullptr),
+            Status::invalid_argument);
   ModelParams params = to_params(truth);
   params(5) = std::numeric_limits<double>::infinity();
   EXPECT_EQ(evaluate_cost(params, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::fixed, &fitted, &cost),

@@ -110,6 +110,35 @@ TEST_F(Paper6CostTest, StreamingEqualsBuildBitForBit) {
   EXPECT_EQ(streamed.evaluate(lengths_m.data()), cost().evaluate(lengths_m.data()));
 }
 
+// A selection holds just its samples: the cost equals the generic refit cost on a copy of
+// them (the reference, fitted on every sample, does not change an exact cost).
+TEST_F(Paper6CostTest, ASelectionCostsItsSamplesOnly) {
+  static Paper6Cost<256> selected;
+  static Dataset<256> copy;
+  copy.clear();
+  std::uint32_t positions[40] = {};
+  for (std::uint32_t k = 0; k < 40; ++k) {
+    positions[k] = 5 * k + 3;
+    const Sample& sample = dataset().samples()[positions[k]];
+    ASSERT_EQ(copy.add(sample.q_rad, sample.point_m), Status::ok);
+  }
+  Status s = Status::invalid_argument;
+  EXPECT_NO_HEAP(s = selected.build(cell.nominal, dataset().samples(), Span<const std::uint32_t>(positions)));
+  ASSERT_EQ(s, Status::ok);
+  EXPECT_EQ(selected.size(), 40u);
+  const LinkLengths lengths_m = link_lengths(cell.truth);
+  double generic_m = 0.0;
+  RigidTransform refitted;
+  ASSERT_EQ(evaluate_cost(selected.model_for(lengths_m.data()), copy.samples(), CostKind::mean_abs_3d,
+                          BaseFrame::refit, &refitted, &generic_m),
+            Status::ok);
+  EXPECT_NEAR(selected.evaluate(lengths_m.data()), generic_m, kRelativeTolerance * generic_m);
+  EXPECT_NE(selected.evaluate(lengths_m.data()), cost().evaluate(lengths_m.data()));
+  positions[39] = static_cast<std::uint32_t>(dataset().size());  // outside the samples
+  EXPECT_EQ(selected.build(cell.nominal, dataset().samples(), Span<const std::uint32_t>(positions)),
+            Status::invalid_argument);
+}
+
 TEST_F(Paper6CostTest, TruthBeatsNominalByFarAndMatchesTheNoise) {
   const LinkLengths truth_m = link_lengths(cell.truth);
   const LinkLengths nominal_m = link_lengths(cell.nominal);

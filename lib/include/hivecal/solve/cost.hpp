@@ -24,7 +24,8 @@ enum class BaseFrame : int {
 
 /// Cost of `model` on `samples`. With BaseFrame::refit the fitted transform is written
 /// to *base_to_tracker; with BaseFrame::fixed it is read from there.
-/// Errors: dataset_empty, non_finite_input (a NaN cost), and fit errors in refit mode.
+/// Errors: invalid_argument (a null pointer), dataset_empty, non_finite_input (a NaN cost), and fit
+/// errors in refit mode.
 Status evaluate_cost(const RobotModel& model, Span<const Sample> samples, CostKind kind, BaseFrame base_frame,
                      RigidTransform* base_to_tracker, double* cost);
 

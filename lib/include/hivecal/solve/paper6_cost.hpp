@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <type_traits>
 
 #include "hivecal/model/dataset.hpp"
@@ -129,6 +130,10 @@ class Paper6CostBase : public Objective {
   /// Fits the nominal base -> tracker transform as the reference, then reset(), add() of every
   /// sample, finalize(). Errors: dataset_empty, and those of fit_base_to_tracker and the three.
   Status build(const RobotModel& nominal, Span<const Sample> samples);
+  /// The same with only the samples at positions `selection` (ascending; empty: all) added;
+  /// the reference is still fitted on every sample. Errors: those of build(), and
+  /// invalid_argument (a position outside `samples`).
+  Status build(const RobotModel& nominal, Span<const Sample> samples, Span<const std::uint32_t> selection);
 
   /// Number of link lengths K of the geometry given to reset().
   std::size_t dimension() const override { return set_.count; }

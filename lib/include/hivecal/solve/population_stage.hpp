@@ -28,18 +28,22 @@ struct Paper6StageResult {
   std::size_t iterations = 0;        ///< solver iterations (cycles) run
 };
 
-/// ABC on the paper-6 cost: cost->build(start, train), box = start's lengths +/- half_width_m,
+/// ABC on the paper-6 cost: cost->build(start, train, subset) (the samples at the positions
+/// `subset` of `train`, ascending; empty: all of them), box = start's lengths +/- half_width_m,
 /// solver->minimize, then the best geometry and its base fit. `cost` and `solver` are scratch
 /// (static storage: Paper6Cost<N[, float[, K]]>, AbcSolver<SN, K> for up to K link lengths:
 /// 6 for UR arms). Errors: those of build, link_length_box, minimize (dimension_out_of_range:
-/// more lengths than the solver holds) and fit_base_to_tracker; *result is written only on success.
-Status calibrate_paper6_abc(const RobotModel& start, Span<const Sample> train, const AbcOptions& options,
+/// more lengths than the solver holds) and fit_base_to_tracker (on every training sample);
+/// *result is written only on success.
+Status calibrate_paper6_abc(const RobotModel& start, Span<const Sample> train, Span<const std::uint32_t> subset,
+                            const AbcOptions& options,
                             double half_width_m, Paper6CostBase* cost, AbcSolverBase* solver,
                             Paper6StageResult* result, TraceBase* trace = nullptr,
                             ProgressObserver* progress = nullptr);
 
 /// The same with GSA.
-Status calibrate_paper6_gsa(const RobotModel& start, Span<const Sample> train, const GsaOptions& options,
+Status calibrate_paper6_gsa(const RobotModel& start, Span<const Sample> train, Span<const std::uint32_t> subset,
+                            const GsaOptions& options,
                             double half_width_m, Paper6CostBase* cost, GsaSolverBase* solver,
                             Paper6StageResult* result, TraceBase* trace = nullptr,
                             ProgressObserver* progress = nullptr);
