@@ -31,7 +31,7 @@ using JobCaptureWorkspace = CaptureWorkspace<3072, 640, 256, 64>;
 inline constexpr std::size_t kJobTraceCapacity = 1;
 /// Float paper-6 terms (84 B per sample), the paper's 150 food sources, one-value traces.
 using JobCalibrationWorkspace =
-    CalibrationWorkspace<kJobSamples, float, 150, kJobTraceCapacity, 0, kPaper6Dimension, 1>;  // one reflector
+    CalibrationWorkspace<kJobSamples, float, 150, kJobTraceCapacity, 0, kPaper6Dimension, 1, 0>;  // one reflector, no subset room (RAM)
 
 /// Where a run ends (earlier ends serve the per-stage instruction counts of scripts/footprint.sh).
 enum class JobStop : int { clock, extraction, done };

@@ -291,8 +291,7 @@ class CalibrationWorkspaceBase {
   virtual CalibrationOutlierList& outlier_list(std::size_t which) = 0;
   /// Ends any open phase, builds the w-test's scratch in the arena.
   virtual ReliabilityWorkspace* open_reliability() = 0;
-  /// Room for the positions of a hybrid's spanning subset (empty: the workspace holds too few
-  /// samples to need one).
+  /// Room for the positions of a hybrid's spanning subset (empty: none, every sample is searched).
   virtual Span<std::uint32_t> subset_room() = 0;
   /// Where the w-test's removals are undone from: (position, end of the fitted part) per removed pose.
   std::uint32_t (&snoop_moves())[kMaxCalibrationOutliers][2] { return snoop_moves_; }
@@ -351,10 +350,13 @@ struct SubsetStorage<0> {
 /// `Population` members, traces of `TraceCapacity` iterations per stage, and joint trig
 /// storage for LM when `JointTrigSamples` > 0 (faster, same bits), and LM's blocks for the
 /// tool points of up to `MaxTargets` reflectors (1: one reflector only, 3.6 kB less; the
-/// firmware's choice). Big: give it static storage.
+/// firmware's choice), and room for a hybrid's spanning subset of `SubsetCapacity` samples
+/// (4 B each; 0: a hybrid's population stage searches on every sample, as the paper's methods
+/// do). Big: give it static storage.
 template <std::size_t Samples, typename CostScalar = double, std::size_t Population = 150,
           std::size_t TraceCapacity = 300, std::size_t JointTrigSamples = 0, std::size_t MaxLinkLengths = kPaper6Dimension,
-          std::size_t MaxTargets = kMaxTargets>
+          std::size_t MaxTargets = kMaxTargets,
+          std::size_t SubsetCapacity = (Samples > kDefaultPopulationSubset ? kDefaultPopulationSubset : 0)>
 class CalibrationWorkspace final : public CalibrationWorkspaceBase {
  public:
   using Cost = Paper6Cost<Samples, CostScalar, MaxLinkLengths>;  ///< the population stages' cost
@@ -434,8 +436,7 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
   alignas(alignof(std::max_align_t)) unsigned char arena_[kArenaBytes];
   Trace<TraceCapacity> traces_[kMaxCalibrationStages];
   CalibrationOutlierList outlier_lists_[2];
-  // A subset is chosen only from more samples than the default subset holds.
-  detail::SubsetStorage<(Samples > kDefaultPopulationSubset ? kDefaultPopulationSubset : 0)> subset_;
+  detail::SubsetStorage<SubsetCapacity> subset_;
   AbcPhase* abc_ = nullptr;  // the open phase (at most one is set), built in arena_
   GsaPhase* gsa_ = nullptr;
   LmPhase* lm_ = nullptr;
