@@ -15,6 +15,7 @@
 #include "hivecal/calibration.hpp"
 #include "commands/commands.hpp"
 #include "commands/fit_checks.hpp"
+#include "commands/host_storage.hpp"
 #include "hivecal/core/trace.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/model/metrics.hpp"
@@ -35,9 +36,8 @@ namespace {
 constexpr const char* kCommand = "calibrate";
 constexpr std::size_t kTraceCapacity = 1024;
 
-/// Dataset capacity of the command-line tool (samples).
-constexpr std::size_t kCliDatasetCapacity = 8192;
-using CliDataset = Dataset<kCliDatasetCapacity>;
+/// The command's dataset: as large as its input.
+using CliDataset = HostDataset;
 
 /// Validated command-line settings.
 struct CalibrateSettings {
@@ -64,15 +64,11 @@ struct CalibrateSettings {
   bool controller_tcp = false;       ///< --controller-tcp: base (identity) and tool (--tool) known, not fitted
 };
 
-/// The job's workspace: exact (double) paper-6 terms and joint trig storage for the CLI's
-/// largest dataset and any arm's link lengths (static: ~3 MB).
-using CliWorkspace =
-    CalibrationWorkspace<kCliDatasetCapacity, double, 150, kTraceCapacity, kCliDatasetCapacity, kMaxLinkLengths>;
-
-/// The job's workspace, shared by the job and --cv (static: ~2.3 MB).
-CliWorkspace& cli_workspace() {
-  static CliWorkspace workspace;
-  return workspace;
+/// The job's workspace for `samples` samples, shared by the job and --cv: exact (double)
+/// paper-6 terms for any arm's link lengths and joint trig storage (~450 B per sample).
+HostWorkspace<kTraceCapacity>::View& cli_workspace(std::size_t samples) {
+  static HostWorkspace<kTraceCapacity> workspace;
+  return workspace.for_samples(samples);
 }
 
 /// Times the stages (lib takes no time) and prints one progress line per iteration on
@@ -769,7 +765,7 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
 /// the job left it (the same set aside and seeded split) for the tables.
 Error cross_validation(const CalibrateSettings& settings, const RobotModel& start, const CalibrationOptions& job,
                        CliDataset* dataset, Run* run) {
-  CliWorkspace& workspace = cli_workspace();
+  auto& workspace = cli_workspace(dataset->size());
   static CalibrationResult scratch;  // ~5 KB
   JobObserver quiet(false);
   const Status status = cross_validate(start, dataset, job, settings.cv_folds == 1 ? 0 : settings.cv_folds, &workspace,
@@ -800,7 +796,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.blunder_test.tracker_sigma_m = settings.orientation.position_sigma_m;
   job.compliance.enabled = settings.compliance;
   if (settings.compliance) job.compliance.model = settings.compliance_model;
-  CliWorkspace& workspace = cli_workspace();
+  auto& workspace = cli_workspace(dataset->size());
   JobObserver observer(settings.progress);
   run->target_count = target_count(dataset->samples());
   run->options = job;
@@ -1176,7 +1172,7 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   if (error.ok()) error = declare_outputs(options, &outputs, &ids);
   RobotModel start;
   if (error.ok()) error = start_geometry(options, settings, &start);
-  static CliDataset dataset;  // static: 8192 samples; emptied for each call (tests run several in one process)
+  static CliDataset dataset;  // static: its storage is kept; emptied for each call (tests run several in one process)
   dataset.clear();
   streams::SessionFacts facts;
   PointFates fates;

@@ -12,6 +12,7 @@
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
+#include "commands/host_storage.hpp"
 #include "commands/iso9283.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/full_params.hpp"
@@ -29,7 +30,6 @@ namespace hivecal::cli {
 namespace {
 
 constexpr const char* kCommand = "iso9283";
-constexpr std::size_t kMaxSamples = 1u << 16;  // reaches read at most
 constexpr std::size_t kNoReport = static_cast<std::size_t>(-1);
 
 /// The reaches of one commanded pose.
@@ -92,7 +92,7 @@ Error iso9283(const Options& options) {
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (error.ok() && !options.get("report").empty()) error = outputs.add_file(options.get("report"), "--report", &report_id);
   if (!error.ok()) return error;
-  static Dataset<kMaxSamples> dataset;
+  static cli::HostDataset dataset;
   dataset.clear();
   textio::InputUnits units;
   error = input_units_option(options, &units);

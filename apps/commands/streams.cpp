@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "commands/host_storage.hpp"
 #include "hivecal/port/capture_file.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "hivecal/port/recorder.hpp"
@@ -251,7 +252,7 @@ Error extract(const cli::Options& options) {
   error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (error.ok()) error = cli::input_units_option(options, &config.log_options.units);
   if (!error.ok()) return error;
-  const auto dataset = std::make_unique<Dataset<65536>>();
+  const auto dataset = std::make_unique<cli::HostDataset>();  // as large as the captures' static samples
   SessionFacts facts;
   error = load_session({"", options.get("robot"), options.get("tracker")}, config, dataset.get(), &facts);
   std::FILE* terminal = out == "-" ? stderr : stdout;  // stdout may carry the samples

@@ -10,6 +10,7 @@
 // CalibrationObserver. Method and figures: docs/architecture.md, "The calibration job".
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <new>
@@ -441,6 +442,149 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
   GsaPhase* gsa_ = nullptr;
   LmPhase* lm_ = nullptr;
   ResidualPhase* residuals_ = nullptr;
+  ReliabilityWorkspace* reliability_ = nullptr;
+};
+
+namespace detail {
+/// `bytes` rounded up to a multiple of the arena's alignment.
+constexpr std::size_t arena_round(std::size_t bytes) {
+  return (bytes + alignof(std::max_align_t) - 1) / alignof(std::max_align_t) * alignof(std::max_align_t);
+}
+/// `count` value-initialised T built one by one at `at` (an array new may add a cookie).
+template <typename T>
+T* construct_array(unsigned char* at, std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) new (at + i * sizeof(T)) T();
+  return reinterpret_cast<T*>(at);
+}
+}  // namespace detail
+
+/// A workspace over the caller's arena for jobs on up to `samples` samples, a count chosen
+/// at run time (a host program's: any set that fits in memory; the arena is
+/// arena_bytes(samples), allocated where the caller likes). Otherwise the host's choices:
+/// exact (double) paper-6 terms for any arm's link lengths, ABC and GSA with up to
+/// `Population` members, traces of `TraceCapacity` iterations per stage, joint trig storage for
+/// LM, every target, room for a spanning subset. The same bits as CalibrationWorkspace<samples,
+/// double, Population, TraceCapacity, samples, kMaxLinkLengths>. Unusable until attach().
+template <std::size_t Population = 150, std::size_t TraceCapacity = 300>
+class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
+  using Abc = AbcSolver<Population, kMaxLinkLengths>;
+  using Gsa = GsaSolver<Population, kMaxLinkLengths>;
+  static constexpr std::size_t kTargetBlocks = 2 * (kMaxTargets - 1);
+  /// Most samples: every arena size below fits a std::size_t.
+  static constexpr std::size_t kMaxSamples = std::size_t{1} << (sizeof(std::size_t) >= 8 ? 32 : 22);
+
+  static constexpr std::size_t cost_values(std::size_t samples) {
+    return paper6_storage_values(samples, kMaxLinkLengths);
+  }
+  static constexpr std::size_t population_bytes(std::size_t samples, std::size_t solver_bytes) {
+    return detail::arena_round(solver_bytes) + detail::arena_round(sizeof(Paper6CostView)) +
+           cost_values(samples) * sizeof(double);
+  }
+  static constexpr std::size_t lm_bytes(std::size_t samples) {
+    return detail::arena_round(sizeof(LmWorkspace)) + detail::arena_round(sizeof(TargetBlock) * kTargetBlocks) +
+           sizeof(JointTrig) * samples;
+  }
+  static constexpr std::size_t residual_bytes(std::size_t samples) {
+    return detail::arena_round(sizeof(Vec3) * samples) + sizeof(double) * samples;
+  }
+
+ public:
+  /// Bytes of arena a workspace for `samples` samples needs (the largest phase) [B].
+  static constexpr std::size_t arena_bytes(std::size_t samples) {
+    return std::max(std::max(population_bytes(samples, sizeof(Abc)), population_bytes(samples, sizeof(Gsa))),
+                                          std::max(std::max(lm_bytes(samples), residual_bytes(samples)),
+                                                   sizeof(ReliabilityWorkspace)));
+  }
+
+  CalibrationWorkspaceView() = default;
+  ~CalibrationWorkspaceView() { close(); }
+
+  /// Works in `arena` (aligned to std::max_align_t, at least arena_bytes(samples) bytes, to
+  /// outlive the workspace or the next attach()) for up to `samples` samples. Errors:
+  /// invalid_argument (no samples, too many, arena too small or misaligned; nothing changed).
+  Status attach(Span<unsigned char> arena, std::size_t samples) {
+    const bool aligned = reinterpret_cast<std::uintptr_t>(arena.data()) % alignof(std::max_align_t) == 0;
+    if (samples == 0 || samples > kMaxSamples || !aligned || arena.size() < arena_bytes(samples)) {
+      return Status::invalid_argument;
+    }
+    close();
+    arena_ = arena.data();
+    samples_ = samples;
+    return Status::ok;
+  }
+  /// Samples the attached arena holds (0: not attached) [-].
+  std::size_t samples() const { return samples_; }
+
+  PopulationPhase open_abc() override {
+    close();
+    if (arena_ == nullptr) return PopulationPhase{};
+    abc_ = new (arena_) Abc();
+    return PopulationPhase{open_cost(sizeof(Abc)), abc_, nullptr};
+  }
+  PopulationPhase open_gsa() override {
+    close();
+    if (arena_ == nullptr) return PopulationPhase{};
+    gsa_ = new (arena_) Gsa();
+    return PopulationPhase{open_cost(sizeof(Gsa)), nullptr, gsa_};
+  }
+  LmWorkspace* open_lm() override {
+    close();
+    if (arena_ == nullptr) return nullptr;
+    lm_ = new (arena_) LmWorkspace();
+    unsigned char* at = arena_ + detail::arena_round(sizeof(LmWorkspace));
+    TargetBlock* blocks = detail::construct_array<TargetBlock>(at, kTargetBlocks);
+    lm_->target_blocks = Span<TargetBlock>(blocks, kTargetBlocks);
+    at += detail::arena_round(sizeof(TargetBlock) * kTargetBlocks);
+    lm_->joint_trig = Span<JointTrig>(detail::construct_array<JointTrig>(at, samples_), samples_);
+    return lm_;
+  }
+  ResidualScratch open_residuals() override {
+    close();
+    if (arena_ == nullptr) return ResidualScratch{};
+    Vec3* predicted = detail::construct_array<Vec3>(arena_, samples_);
+    double* residual = detail::construct_array<double>(arena_ + detail::arena_round(sizeof(Vec3) * samples_), samples_);
+    return ResidualScratch{Span<Vec3>(predicted, samples_), Span<double>(residual, samples_)};
+  }
+  ReliabilityWorkspace* open_reliability() override {
+    close();
+    if (arena_ == nullptr) return nullptr;
+    reliability_ = new (arena_) ReliabilityWorkspace();
+    return reliability_;
+  }
+  void close() override {
+    if (cost_ != nullptr) cost_->~Paper6CostView();
+    if (abc_ != nullptr) abc_->~Abc();
+    if (gsa_ != nullptr) gsa_->~Gsa();
+    if (lm_ != nullptr) lm_->~LmWorkspace();
+    if (reliability_ != nullptr) reliability_->~ReliabilityWorkspace();
+    cost_ = nullptr;
+    abc_ = nullptr;
+    gsa_ = nullptr;
+    lm_ = nullptr;
+    reliability_ = nullptr;
+  }
+  TraceBase& trace(std::size_t index) override { return traces_[index]; }
+  CalibrationOutlierList& outlier_list(std::size_t which) override { return outlier_lists_[which]; }
+  Span<std::uint32_t> subset_room() override { return Span<std::uint32_t>(subset_); }
+
+ private:
+  /// The population phase's cost after its solver of `solver_bytes`, over the rest of the phase.
+  Paper6CostBase* open_cost(std::size_t solver_bytes) {
+    unsigned char* at = arena_ + detail::arena_round(solver_bytes);
+    double* values = reinterpret_cast<double*>(at + detail::arena_round(sizeof(Paper6CostView)));
+    cost_ = new (at) Paper6CostView(Span<double>(values, cost_values(samples_)), kMaxLinkLengths);
+    return cost_;
+  }
+
+  unsigned char* arena_ = nullptr;  // the caller's
+  std::size_t samples_ = 0;
+  Trace<TraceCapacity> traces_[kMaxCalibrationStages];
+  CalibrationOutlierList outlier_lists_[2];
+  std::uint32_t subset_[kDefaultPopulationSubset] = {};
+  Paper6CostView* cost_ = nullptr;  // the open phase's objects, built in the arena
+  Abc* abc_ = nullptr;
+  Gsa* gsa_ = nullptr;
+  LmWorkspace* lm_ = nullptr;
   ReliabilityWorkspace* reliability_ = nullptr;
 };
 

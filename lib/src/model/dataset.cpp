@@ -23,13 +23,21 @@ std::size_t distinct_points(Span<const Sample> samples) {
   return count;
 }
 
+bool DatasetBase::move_to(Sample* storage, std::size_t capacity) {
+  if (storage == nullptr || capacity < stored_) return false;
+  for (std::size_t i = 0; i < stored_; ++i) storage[i] = storage_[i];
+  storage_ = storage;
+  capacity_ = capacity;
+  return true;
+}
+
 Status DatasetBase::add(const JointVector& q_rad, const Vec3& point_m, int target) {
   if (!all_finite(q_rad) || !all_finite(point_m)) return Status::non_finite_input;
   if (target < 0 || target >= kMaxTargets) return Status::invalid_argument;
   // A new sample joins every stored one. The empty Span is a null view (no storage, no heap):
   // set_aside() with it only moves the set-aside samples back in place.
   if (stored_ != size_) set_aside(Span<const std::uint32_t>());
-  if (full()) return Status::dataset_full;
+  if (full() && (!grow(stored_ + 1) || full())) return Status::dataset_full;
   storage_[size_].q_rad = q_rad;
   storage_[size_].point_m = point_m;
   storage_[size_].index = static_cast<std::uint32_t>(size_);  // unique: the order of add()

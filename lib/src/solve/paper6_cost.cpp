@@ -102,6 +102,11 @@ Status link_length_box(const RobotModel& nominal, double half_width_m, LinkLengt
   return Status::ok;
 }
 
+Paper6CostView::Paper6CostView(Span<double> values, std::size_t max_lengths)
+    : Paper6CostBase(values.data(), paper6_capacity_of(values.size(), max_lengths), max_lengths) {
+  for (double& value : values) value = 0.0;
+}
+
 Status Paper6CostBase::reset(const RobotModel& nominal, const RigidTransform& reference_base_to_tracker) {
   if (!all_finite(to_params(nominal)) || !all_finite(reference_base_to_tracker.rotation) ||
       !all_finite(reference_base_to_tracker.translation_m)) {

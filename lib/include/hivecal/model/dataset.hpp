@@ -109,6 +109,17 @@ class DatasetBase {
  protected:
   DatasetBase(Sample* storage, std::size_t capacity) : storage_(storage), capacity_(capacity) {}
   ~DatasetBase() = default;
+  /// Called by add() when the storage is full: a dataset that can grow (a host program's, over
+  /// storage it allocates) gives room for at least `needed` samples through move_to() and
+  /// returns true; the library's own fixed-capacity datasets cannot (false: dataset_full).
+  virtual bool grow(std::size_t needed) {
+    (void)needed;
+    return false;
+  }
+  /// Copies every stored sample (set-aside ones included) to `storage` of `capacity` samples
+  /// and works there from now on; false (nothing changed) when they do not fit. Spans taken
+  /// before view the old storage.
+  bool move_to(Sample* storage, std::size_t capacity);
 
  private:
   Sample* storage_;
@@ -125,6 +136,14 @@ class DatasetBase {
   void rotate_to(std::size_t to, std::size_t begin, std::size_t end);  // block [begin, end) moved to `to` <= begin
   static std::size_t train_poses_of(double train_fraction, std::size_t poses);  // see train_count_for
   void shuffle_poses(std::uint64_t seed);             // add() order, then the runs shuffled whole
+};
+
+/// A dataset over storage of the caller's (`capacity` samples at `storage`, which must
+/// outlive it), no heap: a size chosen at run time.
+class DatasetView final : public DatasetBase {
+ public:
+  /// Empty, with room for storage.size() samples.
+  explicit DatasetView(Span<Sample> storage) : DatasetBase(storage.data(), storage.size()) {}
 };
 
 /// A dataset that owns storage for `Capacity` samples (80 bytes each), no heap.

@@ -194,6 +194,20 @@ class Paper6CostBase : public Objective {
   Mat3 cross_per_length_m_[kMaxLinkLengths] = {};  // G_k = sum v_c,k m_c^T for the stored columns [m]
 };
 
+/// Samples a storage of `values` values holds for up to `max_lengths` lengths (whole blocks).
+constexpr std::size_t paper6_capacity_of(std::size_t values, std::size_t max_lengths) {
+  return values / (kPaper6BlockSamples * link_length_values_per_sample(max_lengths)) * kPaper6BlockSamples;
+}
+
+/// A precomputed link-length cost over the caller's storage of exact (double) terms, sized at
+/// run time: room for paper6_capacity_of(values.size(), max_lengths) samples of up to
+/// `max_lengths` (<= kMaxLinkLengths) lengths. The storage must outlive it; it is zeroed here
+/// (the evaluation reads whole blocks, past the last sample too).
+class Paper6CostView final : public Paper6CostBase {
+ public:
+  Paper6CostView(Span<double> values, std::size_t max_lengths);
+};
+
 /// A precomputed link-length cost owning room for `Capacity` samples of up to `MaxLengths`
 /// lengths, no heap: for the paper's six 168 bytes each with Scalar = double (exact), 84 with
 /// float (firmware: docs/solvers-abc-gsa.md, memory); (3 + 3 MaxLengths) values in general.
