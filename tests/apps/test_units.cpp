@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands/fit_checks.hpp"
+#include "report/report.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/ur_deltas.hpp"
 #include "testkit/shared_data.hpp"
@@ -379,6 +380,34 @@ TEST(FitWarnings, ParametersBeyondTheBoundsAndAWorseTestErrorAreNamed) {
   warnings = cli::fit_warnings(fitted(before, after, 1e-3, 1e-4), cli::FitBounds{});
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("tool_z moved +30.000 mm"), std::string::npos) << warnings[0];
+}
+
+// A moved parameter that the data cannot tell from another (|rho| > 0.95 in Table 4) says
+// so and what would separate them; a weaker correlation, or one of another parameter, does not.
+TEST(FitWarnings, AMoveOfAStronglyCorrelatedParameterNamesItsPartner) {
+  const RobotModel before = nominal_model(RobotType::ur5);
+  RobotModel after = before;
+  after.joints[4].theta_offset_rad += 2.3 / kDegPerRad;  // theta5
+  report::ParameterRow theta5;
+  theta5.name = "theta5";
+  theta5.angle = true;
+  theta5.correlated_with = "a5";
+  theta5.correlation = 0.997;
+  report::ParameterRow a3;
+  a3.name = "a3";
+  a3.correlated_with = "theta5";
+  a3.correlation = -0.999;
+  std::vector<std::string> warnings =
+      cli::fit_warnings(fitted(before, after, 1e-3, 1e-4), cli::FitBounds{}, {a3, theta5});
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("theta5 moved +2.300 deg"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("strongly correlated with a5 (rho = 0.997): the data cannot separate the two"),
+            std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("a second reflector would separate them"), std::string::npos) << warnings[0];
+  theta5.correlation = -0.93;  // below 0.95: the move is the warning's whole story
+  warnings = cli::fit_warnings(fitted(before, after, 1e-3, 1e-4), cli::FitBounds{}, {a3, theta5});
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].find("correlated"), std::string::npos) << warnings[0];
 }
 
 }  // namespace
