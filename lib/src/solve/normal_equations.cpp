@@ -472,6 +472,9 @@ namespace {
     return Status::dimension_out_of_range;  // no storage for these targets' blocks
   }
   for (TargetBlock& block : eq->targets) block = TargetBlock{};
+  // Only the estimated columns (the others are zero) and only the upper triangle (the lower one
+  // is mirrored below): a quarter of the full 37 x 37 products, the same bits.
+  const IndexList list = indices_of(columns);
   for (const Sample& sample : samples) {
     FullJacobian jacobian;
     Mat3 tool_jacobian;
@@ -481,9 +484,13 @@ namespace {
     const double squared = residual_m.squaredNorm();
     const double norm_m = std::sqrt(squared);
     const double weight = loss.weight(norm_m);
-    // Column by column: a 33 x 33 product temporary would be 8.7 kB of stack.
-    for (int a = 0; a < kFullParamCount; ++a) {
-      for (int b = 0; b < kFullParamCount; ++b) eq->jtwj(a, b) += weight * jacobian.col(a).dot(jacobian.col(b));
+    // Column by column: a 37 x 37 product temporary would be 11 kB of stack.
+    for (int i = 0; i < list.count; ++i) {
+      const int a = list.index[i];
+      for (int j = i; j < list.count; ++j) {
+        const int b = list.index[j];
+        eq->jtwj(a, b) += weight * jacobian.col(a).dot(jacobian.col(b));
+      }
       eq->jtwr(a) += weight * jacobian.col(a).dot(residual_m);
     }
     eq->loss_sum_m2 += loss.rho(norm_m);
