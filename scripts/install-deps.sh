@@ -11,7 +11,7 @@ packages=(
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf            # Linux ARM edge controllers
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib  # Cortex-M
   libpagmo-dev libceres-dev                               # benchmark peers only
-  valgrind hyperfine                                      # instruction counts and timings
+  valgrind hyperfine time                                 # instruction counts, timings, peak memory
   chromium                                                # the report test renders the HTML headless
 )
 
