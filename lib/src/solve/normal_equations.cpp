@@ -306,8 +306,20 @@ namespace {
 
 /// local_residual_jacobian with target `target`'s tool point (the deflection is the model's,
 /// whatever the target: its tool load is target 1's tool point).
-Vec3 local_target_residual_jacobian(const RobotModel& model, int target, const RigidTransform& base_to_tracker,
-                                    const Sample& sample, FullJacobian* local_jacobian) {
+/// What the per-sample rows need of the model whatever the sample: its trig and the list of
+/// every column (computed once per pass, not once per sample: the same values).
+struct PerSampleContext {
+  ModelTrig trig;
+  IndexList every_column;
+};
+
+PerSampleContext per_sample_context(const RobotModel& model) {
+  return PerSampleContext{model_trig(model), indices_of(kAllParamsMask | kComplianceParamsMask)};
+}
+
+Vec3 local_target_residual_jacobian(const RobotModel& model, const PerSampleContext& context, int target,
+                                    const RigidTransform& base_to_tracker, const Sample& sample,
+                                    FullJacobian* local_jacobian) {
   double rows[3 * kGroupSamples][kFullParamCount];
   const Sample* const samples[1] = {&sample};
   const bool compliant = model.compliance.term_count > 0;
@@ -317,9 +329,8 @@ Vec3 local_target_residual_jacobian(const RobotModel& model, int target, const R
   RobotModel moved = model;  // the target's tool point: the tool does not enter the trig
   moved.tool_m = target_tool(model, target);
   Vec3 local_residual_m;
-  add_rows<static_cast<std::size_t>(kGroupSamples)>(moved, model_trig(model), base_to_tracker, samples, trig_of,
-                                                    compliant ? basis : nullptr, 1,
-                                                    indices_of(kAllParamsMask | kComplianceParamsMask), rows,
+  add_rows<static_cast<std::size_t>(kGroupSamples)>(moved, context.trig, base_to_tracker, samples, trig_of,
+                                                    compliant ? basis : nullptr, 1, context.every_column, rows,
                                                     &local_residual_m);
   for (int c = 0; c < kFullParamCount; ++c)
     for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
@@ -330,7 +341,7 @@ Vec3 local_target_residual_jacobian(const RobotModel& model, int target, const R
 
 Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
                              FullJacobian* local_jacobian) {
-  return local_target_residual_jacobian(model, 0, base_to_tracker, sample, local_jacobian);
+  return local_target_residual_jacobian(model, per_sample_context(model), 0, base_to_tracker, sample, local_jacobian);
 }
 
 Vec3 full_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
@@ -445,10 +456,13 @@ void whiten_sample(double k, Vec3* residual_m, FullJacobian* jacobian, Mat3* too
 
 }  // namespace
 
-Vec3 sample_rows(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
-                 const PointLoss& loss, ParamMask columns, FullJacobian* jacobian, Mat3* tool_jacobian,
-                 double* raw_squared_m2) {
-  Vec3 residual_m = local_target_residual_jacobian(model, sample.target, base_to_tracker, sample, jacobian);
+namespace {
+
+/// sample_rows with the model's per-sample context given.
+Vec3 sample_rows_in(const RobotModel& model, const PerSampleContext& context, const RigidTransform& base_to_tracker,
+                    const Sample& sample, const PointLoss& loss, ParamMask columns, FullJacobian* jacobian,
+                    Mat3* tool_jacobian, double* raw_squared_m2) {
+  Vec3 residual_m = local_target_residual_jacobian(model, context, sample.target, base_to_tracker, sample, jacobian);
   *tool_jacobian = jacobian->block<3, 3>(0, tool_param_index(0));
   *raw_squared_m2 = residual_m.squaredNorm();
   whiten_sample(loss.joint_noise_ratio_rad_per_m, &residual_m, jacobian, tool_jacobian);
@@ -457,6 +471,15 @@ Vec3 sample_rows(const RobotModel& model, const RigidTransform& base_to_tracker,
     if (!mask_has(columns, c)) jacobian->col(c).setZero();
   }
   return residual_m;
+}
+
+}  // namespace
+
+Vec3 sample_rows(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
+                 const PointLoss& loss, ParamMask columns, FullJacobian* jacobian, Mat3* tool_jacobian,
+                 double* raw_squared_m2) {
+  return sample_rows_in(model, per_sample_context(model), base_to_tracker, sample, loss, columns, jacobian,
+                        tool_jacobian, raw_squared_m2);
 }
 
 namespace {
@@ -475,12 +498,13 @@ namespace {
   // Only the estimated columns (the others are zero) and only the upper triangle (the lower one
   // is mirrored below): a quarter of the full 37 x 37 products, the same bits.
   const IndexList list = indices_of(columns);
+  const PerSampleContext context = per_sample_context(model);
   for (const Sample& sample : samples) {
     FullJacobian jacobian;
     Mat3 tool_jacobian;
     double raw_squared_m2 = 0.0;
     const Vec3 residual_m =
-        sample_rows(model, base_to_tracker, sample, loss, columns, &jacobian, &tool_jacobian, &raw_squared_m2);
+        sample_rows_in(model, context, base_to_tracker, sample, loss, columns, &jacobian, &tool_jacobian, &raw_squared_m2);
     const double squared = residual_m.squaredNorm();
     const double norm_m = std::sqrt(squared);
     const double weight = loss.weight(norm_m);
