@@ -11,6 +11,7 @@
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/model/spanning_subset.hpp"
 #include "testkit/alloc_trap.hpp"
+#include "testkit/quick_job.hpp"
 #include "testkit/test_data.hpp"
 
 namespace hivecal {
@@ -40,16 +41,7 @@ void fill(std::size_t count, DatasetBase* out) {
   test::fill_dataset(truth, test::example_base_to_tracker(), count, 10e-6, &random, out);
 }
 
-/// Small populations so that the test stays quick.
-CalibrationOptions quick(CalibrationMethod method) {
-  CalibrationOptions options;
-  options.method = method;
-  options.abc_food_sources = 20;
-  options.abc_cycles = 20;
-  options.gsa_agents = 20;
-  options.gsa_iterations = 20;
-  return options;
-}
+using test::quick_options;
 
 /// The job's answer (the tests check stage_count first).
 const CalibrationStage& last(const CalibrationResult& r) { return r.stages[r.stage_count - 1]; }
@@ -72,7 +64,7 @@ TEST(CalibrationJob, EveryMethodRunsWithoutHeapAndImprovesOnTheBaseline) {
   for (const MethodCase& c : cases) {
     fill(120, &dataset);
     Status status = Status::invalid_argument;
-    EXPECT_NO_HEAP(status = calibrate(start(), &dataset, quick(c.method), &workspace, &result));
+    EXPECT_NO_HEAP(status = calibrate(start(), &dataset, quick_options(c.method), &workspace, &result));
     ASSERT_EQ(status, Status::ok) << calibration_method_name(c.method) << ": " << calibration_step_name(result.step);
     EXPECT_EQ(result.step, CalibrationStep::done);
     EXPECT_EQ(result.train_count, 84u);
@@ -94,7 +86,7 @@ TEST(CalibrationJob, EveryMethodRunsWithoutHeapAndImprovesOnTheBaseline) {
 
 TEST(CalibrationJob, AllIsTheTableOneOrderEachFromTheStart) {
   fill(120, &dataset);
-  ASSERT_EQ(calibrate(start(), &dataset, quick(CalibrationMethod::all), &workspace, &result), Status::ok);
+  ASSERT_EQ(calibrate(start(), &dataset, quick_options(CalibrationMethod::all), &workspace, &result), Status::ok);
   EXPECT_EQ(result.stages[0].solver, CalibrationSolver::gsa);
   EXPECT_EQ(result.stages[1].solver, CalibrationSolver::abc);
   EXPECT_EQ(result.stages[2].solver, CalibrationSolver::lm);
@@ -103,7 +95,7 @@ TEST(CalibrationJob, AllIsTheTableOneOrderEachFromTheStart) {
 
 TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
   fill(120, &dataset);
-  CalibrationOptions options = quick(CalibrationMethod::abc_lm);
+  CalibrationOptions options = quick_options(CalibrationMethod::abc_lm);
   options.significance_t = 0.0;  // every identifiable parameter, as one LM call by hand
   ASSERT_EQ(calibrate(start(), &dataset, options, &workspace, &result), Status::ok);
   fill(120, &dataset);
@@ -167,7 +159,7 @@ TEST(CalibrationJob, HybridSearchesASpanningSubsetOfLargeSets) {
   static CalibrationWorkspace<kLarge, double, 20, 300> large_workspace;
   static Dataset<kLarge> large;
   fill(kLarge, &large);
-  const CalibrationOptions options = quick(CalibrationMethod::abc_lm);
+  const CalibrationOptions options = quick_options(CalibrationMethod::abc_lm);
   Status status = Status::invalid_argument;
   EXPECT_NO_HEAP(status = calibrate(start(), &large, options, &large_workspace, &result));
   ASSERT_EQ(status, Status::ok);
@@ -196,7 +188,7 @@ TEST(CalibrationJob, HybridSearchesASpanningSubsetOfLargeSets) {
   EXPECT_TRUE(same_bits(result.stages[0].model, population.model));
 
   for (const CalibrationMethod method : {CalibrationMethod::abc_lm, CalibrationMethod::abc, CalibrationMethod::all}) {
-    CalibrationOptions every = quick(method);
+    CalibrationOptions every = quick_options(method);
     if (method == CalibrationMethod::abc_lm) every.population_subset = 0;
     ASSERT_EQ(calibrate(start(), &large, every, &large_workspace, &other), Status::ok);
     for (std::size_t k = 0; k < other.stage_count; ++k) {
@@ -209,7 +201,7 @@ TEST(CalibrationJob, HybridSearchesASpanningSubsetOfLargeSets) {
 
 TEST(CalibrationJob, TrainingOnEverySampleLeavesNoTestRows) {
   fill(60, &dataset);
-  CalibrationOptions options = quick(CalibrationMethod::lm);
+  CalibrationOptions options = quick_options(CalibrationMethod::lm);
   options.train_fraction = 1.0;
   ASSERT_EQ(calibrate(start(), &dataset, options, &workspace, &result), Status::ok);
   EXPECT_EQ(result.train_count, 60u);
@@ -222,7 +214,7 @@ TEST(CalibrationJob, TrainingOnEverySampleLeavesNoTestRows) {
 TEST(CalibrationJob, JointTrigStorageChangesTimeNotBits) {
   for (CalibrationMethod method : {CalibrationMethod::lm, CalibrationMethod::abc_lm}) {
     fill(120, &dataset);
-    CalibrationOptions options = quick(method);
+    CalibrationOptions options = quick_options(method);
     options.robust = true;
     ASSERT_EQ(calibrate(start(), &dataset, options, &workspace, &result), Status::ok);
     fill(120, &dataset);
@@ -252,7 +244,7 @@ void expect_failure(Status status, Status expected, CalibrationStep expected_ste
 }
 
 TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
-  const CalibrationOptions options = quick(CalibrationMethod::abc_lm);
+  const CalibrationOptions options = quick_options(CalibrationMethod::abc_lm);
   fill(120, &dataset);
   EXPECT_EQ(calibrate(start(), &dataset, options, &workspace, nullptr), Status::invalid_argument);
   expect_failure(calibrate(start(), nullptr, options, &workspace, &result), Status::invalid_argument,
@@ -271,7 +263,7 @@ TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
   expect_failure(calibrate(start(), &dataset, options, &workspace, &result), Status::too_few_samples,
                  CalibrationStep::baseline);
   fill(8, &dataset);  // no floor: 8 samples estimate fewer parameters
-  CalibrationOptions every = quick(CalibrationMethod::lm);
+  CalibrationOptions every = quick_options(CalibrationMethod::lm);
   every.train_fraction = 1.0;
   EXPECT_EQ(calibrate(start(), &dataset, every, &workspace, &result), Status::ok);
   EXPECT_LT(result.lm.identifiability.kept_count(), 24);
@@ -292,7 +284,7 @@ TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
   crowd.abc_food_sources = 41;  // the workspace holds 40
   expect_failure(calibrate(start(), &dataset, crowd, &workspace, &result),
                  Status::population_out_of_range, CalibrationStep::abc);
-  CalibrationOptions gsa_crowd = quick(CalibrationMethod::all);
+  CalibrationOptions gsa_crowd = quick_options(CalibrationMethod::all);
   gsa_crowd.gsa_agents = 41;
   fill(120, &dataset);
   expect_failure(calibrate(start(), &dataset, gsa_crowd, &workspace, &result),

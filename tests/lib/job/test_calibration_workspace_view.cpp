@@ -9,6 +9,7 @@
 #include "hivecal/calibration.hpp"
 #include "hivecal/core/random.hpp"
 #include "testkit/alloc_trap.hpp"
+#include "testkit/quick_job.hpp"
 #include "testkit/test_data.hpp"
 
 namespace hivecal {
@@ -47,6 +48,13 @@ void fill(std::size_t count, DatasetBase* out) {
   test::fill_dataset(truth, test::example_base_to_tracker(), count, 10e-6, &random, out);
 }
 
+/// `bytes` bytes aligned to std::max_align_t inside *storage (resized to hold them).
+unsigned char* aligned_room(std::vector<unsigned char>* storage, std::size_t bytes) {
+  storage->assign(bytes + alignof(std::max_align_t), 0);
+  const std::size_t misalignment = reinterpret_cast<std::uintptr_t>(storage->data()) % alignof(std::max_align_t);
+  return storage->data() + (misalignment == 0 ? 0 : alignof(std::max_align_t) - misalignment);
+}
+
 bool same_bits(const CalibrationResult& a, const CalibrationResult& b) {
   if (a.stage_count != b.stage_count) return false;
   for (std::size_t k = 0; k < a.stage_count; ++k) {
@@ -64,21 +72,14 @@ TEST(CalibrationWorkspaceView, HasTheBitsOfTheFixedWorkspaceWithoutHeap) {
   static View view;
   static CalibrationResult expected;
   static CalibrationResult result;
-  std::vector<unsigned char> bytes(View::arena_bytes(kSamples) + alignof(std::max_align_t));
-  unsigned char* aligned = bytes.data() + (alignof(std::max_align_t) -
-                                           reinterpret_cast<std::uintptr_t>(bytes.data()) % alignof(std::max_align_t)) %
-                                              alignof(std::max_align_t);
+  std::vector<unsigned char> bytes;
+  unsigned char* aligned = aligned_room(&bytes, View::arena_bytes(kSamples));
   Status status = Status::invalid_argument;
   EXPECT_NO_HEAP(status = view.attach(Span<unsigned char>(aligned, View::arena_bytes(kSamples)), kSamples));
   ASSERT_EQ(status, Status::ok);
   EXPECT_EQ(view.samples(), kSamples);
   for (const CalibrationMethod method : {CalibrationMethod::abc_lm, CalibrationMethod::all}) {
-    CalibrationOptions options;
-    options.method = method;
-    options.abc_food_sources = 20;
-    options.abc_cycles = 20;
-    options.gsa_agents = 20;
-    options.gsa_iterations = 20;
+    const CalibrationOptions options = test::quick_options(method);
     fill(kSamples, &dataset);  // 280 training samples: the hybrid searches on a subset
     ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &fixed, &expected), Status::ok);
     fill(kSamples, &dataset);
@@ -106,10 +107,8 @@ TEST(CalibrationWorkspaceView, RefusesABadArenaAndAnUnattachedOneFailsCleanly) {
   EXPECT_NE(calibrate(nominal_model(RobotType::ur5), &dataset, CalibrationOptions{}, &view, &result), Status::ok);
   // More samples than attached for: the population stage's cost says so instead of writing
   // past the arena (LM only computes the joint trig per pass and screens what fits).
-  std::vector<unsigned char> room(View::arena_bytes(16) + alignof(std::max_align_t));
-  unsigned char* aligned = room.data() + (alignof(std::max_align_t) -
-                                          reinterpret_cast<std::uintptr_t>(room.data()) % alignof(std::max_align_t)) %
-                                             alignof(std::max_align_t);
+  std::vector<unsigned char> room;
+  unsigned char* aligned = aligned_room(&room, View::arena_bytes(16));
   ASSERT_EQ(view.attach(Span<unsigned char>(aligned, View::arena_bytes(16)), 16), Status::ok);
   CalibrationOptions options;
   options.method = CalibrationMethod::abc;
