@@ -450,11 +450,16 @@ namespace detail {
 constexpr std::size_t arena_round(std::size_t bytes) {
   return (bytes + alignof(std::max_align_t) - 1) / alignof(std::max_align_t) * alignof(std::max_align_t);
 }
-/// `count` value-initialised T built one by one at `at` (an array new may add a cookie).
+/// `count` value-initialised T built one by one at `at` (an array new may add a cookie); the
+/// first of them (null when count is 0). `at` must be aligned for T.
 template <typename T>
 T* construct_array(unsigned char* at, std::size_t count) {
-  for (std::size_t i = 0; i < count; ++i) new (at + i * sizeof(T)) T();
-  return reinterpret_cast<T*>(at);
+  T* first = nullptr;
+  for (std::size_t i = 0; i < count; ++i) {
+    T* made = new (at + i * sizeof(T)) T();
+    if (i == 0) first = made;
+  }
+  return first;
 }
 }  // namespace detail
 
@@ -571,8 +576,9 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
   /// The population phase's cost after its solver of `solver_bytes`, over the rest of the phase.
   Paper6CostBase* open_cost(std::size_t solver_bytes) {
     unsigned char* at = arena_ + detail::arena_round(solver_bytes);
-    double* values = reinterpret_cast<double*>(at + detail::arena_round(sizeof(Paper6CostView)));
-    cost_ = new (at) Paper6CostView(Span<double>(values, cost_values(samples_)), kMaxLinkLengths);
+    const std::size_t count = cost_values(samples_);
+    double* values = detail::construct_array<double>(at + detail::arena_round(sizeof(Paper6CostView)), count);
+    cost_ = new (at) Paper6CostView(Span<double>(values, count), kMaxLinkLengths);
     return cost_;
   }
 
