@@ -577,7 +577,9 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
   Paper6CostBase* open_cost(std::size_t solver_bytes) {
     unsigned char* at = arena_ + detail::arena_round(solver_bytes);
     const std::size_t count = cost_values(samples_);
-    double* values = detail::construct_array<double>(at + detail::arena_round(sizeof(Paper6CostView)), count);
+    // Left uninitialised here: the cost zeroes its storage itself. (An array new of a type
+    // with a trivial destructor adds no cookie.)
+    double* values = new (at + detail::arena_round(sizeof(Paper6CostView))) double[count];
     cost_ = new (at) Paper6CostView(Span<double>(values, count), kMaxLinkLengths);
     return cost_;
   }
