@@ -1,6 +1,7 @@
 #include "hivecal/model/spanning_subset.hpp"
 
 #include <algorithm>
+#include <limits>
 
 #include "hivecal/core/math.hpp"
 
@@ -28,22 +29,21 @@ double pose_distance_sq(const Sample& a, const Sample& b) {
 std::size_t spanning_subset(Span<const Sample> samples, Span<double> scratch, Span<std::uint32_t> chosen) {
   const std::size_t count = std::min(samples.size(), chosen.size());
   if (count == 0 || scratch.size() < samples.size()) return 0;
+  constexpr double kChosen = -1.0;  // below every distance: never chosen again
+  for (std::size_t i = 0; i < samples.size(); ++i) scratch[i] = std::numeric_limits<double>::infinity();
   std::size_t latest = 0;  // the first sample starts the set
   chosen[0] = 0;
-  for (std::size_t i = 0; i < samples.size(); ++i) scratch[i] = pose_distance_sq(samples[i], samples[0]);
-  scratch[0] = -1.0;  // chosen: never again (distances are >= 0)
+  scratch[0] = kChosen;
   for (std::size_t k = 1; k < count; ++k) {
-    if (k > 1) {
-      for (std::size_t i = 0; i < samples.size(); ++i) {
-        scratch[i] = std::min(scratch[i], pose_distance_sq(samples[i], samples[latest]));
-      }
+    // One pass: each sample's distance to the set (now with `latest`) and the farthest of them.
+    std::size_t farthest = 0;
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      if (scratch[i] != kChosen) scratch[i] = std::min(scratch[i], pose_distance_sq(samples[i], samples[latest]));
+      if (scratch[i] > scratch[farthest]) farthest = i;  // strict: ties keep the lower position
     }
-    latest = 0;
-    for (std::size_t i = 1; i < samples.size(); ++i) {
-      if (scratch[i] > scratch[latest]) latest = i;  // strict: ties keep the lower position
-    }
-    chosen[k] = static_cast<std::uint32_t>(latest);
-    scratch[latest] = -1.0;  // chosen: never again (distances are >= 0)
+    chosen[k] = static_cast<std::uint32_t>(farthest);
+    scratch[farthest] = kChosen;
+    latest = farthest;
   }
   std::sort(chosen.data(), chosen.data() + count);
   return count;
