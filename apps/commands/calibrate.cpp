@@ -8,8 +8,6 @@
 #include <utility>
 #include <vector>
 
-#include <Eigen/Cholesky>  // correlations of the estimated parameters
-
 #include "hivecal/core/math.hpp"
 #include "cli/options.hpp"
 #include "hivecal/calibration.hpp"
@@ -22,6 +20,7 @@
 #include "hivecal/port/output_files.hpp"
 #include "hivecal/solve/lm.hpp"
 #include "hivecal/solve/normal_equations.hpp"
+#include "hivecal/solve/parameter_correlation.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
 #include "report/report.hpp"
 #include "report/report_json.hpp"
@@ -276,53 +275,23 @@ report::IdentifiabilityTable identifiability_table(const LmResult& lm, const Rob
   return table;
 }
 
-/// The inverse of the leading N x N block of `scaled` into *inverse (zero elsewhere). A rigid
-/// model inverts only the 33 rigid parameters, as before the compliance coefficients existed:
-/// the same pivots, so the same bits in result.json.
-template <int N>
-bool invert_leading(const NormalMatrix& scaled, NormalMatrix* inverse) {
-  using Block = Eigen::Matrix<double, N, N>;
-  const Eigen::LDLT<Block> ldlt(scaled.template topLeftCorner<N, N>());
-  if (ldlt.info() != Eigen::Success) return false;
-  inverse->setZero();
-  inverse->template topLeftCorner<N, N>() = ldlt.solve(Block::Identity());
-  return true;
-}
-
-/// Correlation matrix of the estimated parameters at the result, from the normal equations
-/// of the training samples (as LM's sigmas; lib reports the sigmas only). Entries of
-/// parameters not estimated are 0. False when the matrix is singular.
-bool parameter_correlations(const CalibrationStage& stage, const LmResult& lm, Span<const Sample> train,
-                            NormalMatrix* correlation) {
-  static NormalEquations eq;  // static: 9 kB
-  static TargetBlock target_blocks[kMaxTargets - 1];
-  eq.targets = Span<TargetBlock>(target_blocks, kMaxTargets - 1);
-  static NormalMatrix scaled;
-  const ParamMask kept = lm.identifiability.kept_mask;
-  if (accumulate_normal_equations(stage.model, stage.base_to_tracker, train, PointLoss{lm.huber_threshold_m}, &eq,
-                                  kept) != Status::ok) {
-    return false;
-  }
-  FullParams scale;
-  scale_normal_matrix(eq.jtwj, kept, 1.0, &scaled, &scale);  // unit diagonal; identity outside `kept`
-  const bool inverted = stage.model.compliance.term_count > 0 ? invert_leading<kFullParamCount>(scaled, correlation)
-                                                              : invert_leading<kRigidParamCount>(scaled, correlation);
-  if (!inverted) return false;
-  const FullParams variance = correlation->diagonal();
-  for (int i = 0; i < kFullParamCount; ++i)
-    for (int j = 0; j < kFullParamCount; ++j) {
-      const double d = std::sqrt(variance(i) * variance(j));
-      (*correlation)(i, j) = mask_has(kept, i) && mask_has(kept, j) && d > 0.0 ? (*correlation)(i, j) / d : 0.0;
-    }
-  return correlation->allFinite();
+/// Parameter k's strongest correlation into its table row (nothing when every one is 0).
+void set_partner(const NormalMatrix& correlation, int k, const RobotModel& model, report::ParameterRow* row) {
+  const CorrelationPartner partner = strongest_correlation(correlation, k);
+  if (partner.index < 0) return;
+  row->correlation = partner.correlation;
+  row->correlated_with = full_param_name(partner.index, model);
 }
 
 /// The estimated or changed parameters. `lm`: the LM details when `stage` is the LM stage, else null.
 std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start,
                                                  Span<const Sample> train) {
   std::vector<report::ParameterRow> rows;
+  static CorrelationScratch scratch;  // static: ~35 kB with the matrix
   static NormalMatrix correlation;
-  const bool correlated = lm != nullptr && parameter_correlations(stage, *lm, train, &correlation);
+  const bool correlated =
+      lm != nullptr && parameter_correlations(stage.model, stage.base_to_tracker, train, PointLoss{lm->huber_threshold_m},
+                                              lm->identifiability.kept_mask, &scratch, &correlation) == Status::ok;
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
   for (int k = 0; k < kModelParamCount; ++k) {
@@ -334,12 +303,7 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
     row.start = before(k);
     row.value = after(k);
     row.sigma = estimated ? lm->sigma(k) : 0.0;
-    for (int other = 0; correlated && estimated && other < kFullParamCount; ++other) {
-      if (other != k && std::fabs(correlation(k, other)) > std::fabs(row.correlation)) {
-        row.correlation = correlation(k, other);
-        row.correlated_with = full_param_name(other, stage.model);
-      }
-    }
+    if (correlated && estimated) set_partner(correlation, k, stage.model, &row);
     rows.push_back(row);
   }
   const ComplianceModel& compliance = stage.model.compliance;
@@ -351,12 +315,7 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
     row.start = t < start.compliance.term_count ? start.compliance.coefficient[t] : 0.0;
     row.value = compliance.coefficient[t];
     row.sigma = lm != nullptr && mask_has(lm->identifiability.kept_mask, k) ? lm->sigma(k) : 0.0;
-    for (int other = 0; correlated && row.sigma > 0.0 && other < kFullParamCount; ++other) {
-      if (other != k && std::fabs(correlation(k, other)) > std::fabs(row.correlation)) {
-        row.correlation = correlation(k, other);
-        row.correlated_with = full_param_name(other, stage.model);
-      }
-    }
+    if (correlated && row.sigma > 0.0) set_partner(correlation, k, stage.model, &row);
     rows.push_back(row);
   }
   for (int target = 1; lm != nullptr && target < kMaxTargets; ++target) {  // estimated with several targets
