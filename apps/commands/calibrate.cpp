@@ -43,7 +43,7 @@ struct CalibrateSettings {
   textio::RobotDescription robot;    ///< --robot-model: built-in table or description file
   Vec3 tool_m = Vec3(0.0, 0.0, 0.1695);  ///< --tool (or the description file's): nominal tool point in the flange frame [m]
   bool paper_params = false;         ///< --params paper
-  std::string method = "abc+lm";     ///< --method
+  CalibrationMethod method = CalibrationMethod::abc_lm;  ///< --method
   std::uint64_t seed = 1;            ///< --seed
   double train_fraction = 0.7;       ///< --split
   bool robust = false;               ///< --robust
@@ -176,14 +176,6 @@ std::vector<double> trace_values(Span<const double> trace) {
   std::vector<double> v;
   for (double x : trace) v.push_back(x);
   return v;
-}
-
-CalibrationMethod method_from_name(const std::string& name) {
-  for (CalibrationMethod m : {CalibrationMethod::lm, CalibrationMethod::abc, CalibrationMethod::gsa,
-                              CalibrationMethod::abc_lm, CalibrationMethod::gsa_lm, CalibrationMethod::all}) {
-    if (name == calibration_method_name(m)) return m;
-  }
-  return CalibrationMethod::abc_lm;  // settings_from_options accepts only the names above
 }
 
 report::MethodRow method_row(std::string method, std::string parameters, const ErrorStats& train,
@@ -493,9 +485,9 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
       if (options.given(name)) return Error::usage(std::string("--") + name + " needs --compliance (see --help)");
     return Error{};
   }
-  const std::string method = options.get("method");
-  if (method == "abc" || method == "gsa") {
-    return Error::usage("--compliance needs a method with LM (abc+lm, gsa+lm, lm, all), not --method " + method);
+  if (settings->method == CalibrationMethod::abc || settings->method == CalibrationMethod::gsa) {
+    return Error::usage(std::string("--compliance needs a method with LM (abc+lm, gsa+lm, lm, all), not --method ") +
+                        calibration_method_name(settings->method));
   }
   const std::string kind = options.get("compliance");
   if (kind != "basis" && kind != "masses") {
@@ -583,12 +575,9 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   const std::string params = options.get("params");
   if (params != "full" && params != "paper") return Error::usage("--params must be 'full' or 'paper', not " + port::quoted(params));
   settings->paper_params = params == "paper";
-  settings->method = options.get("method");
-  const char* methods[] = {"abc+lm", "gsa+lm", "lm", "abc", "gsa", "all"};
-  bool known = false;
-  for (const char* m : methods) known = known || settings->method == m;
-  if (!known) {
-    return Error::usage("--method must be one of abc+lm, gsa+lm, lm, abc, gsa, all; not " + port::quoted(settings->method));
+  if (calibration_method_from_name(options.get("method").c_str(), &settings->method) != Status::ok) {
+    return Error::usage(std::string("--method must be one of ") + calibration_method_names() + "; not " +
+                        port::quoted(options.get("method")));
   }
   Error seeded = seed_option(options, "seed", &settings->seed);
   if (seeded.ok()) {
@@ -614,11 +603,11 @@ Error settings_from_options(const Options& options, CalibrateSettings* settings)
   settings->keep_outliers = options.given("keep-outliers");
   settings->controller_tcp = options.given("controller-tcp");
   if (settings->controller_tcp) {
-    if (options.given("method") && settings->method != "lm") {
+    if (options.given("method") && settings->method != CalibrationMethod::lm) {
       return Error::usage("--controller-tcp works with --method lm only (ABC and GSA fit their own base), not " +
-                          port::quoted(settings->method));
+                          port::quoted(options.get("method")));
     }
-    settings->method = "lm";
+    settings->method = CalibrationMethod::lm;
   }
   if (options.get("significance") == "auto") {
     settings->significance_t = -1.0;  // lib: chosen by leave-one-out on small sets
@@ -740,7 +729,7 @@ Error cross_validation(const CalibrateSettings& settings, const RobotModel& star
 
 Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset* dataset, Run* run) {
   CalibrationOptions job;
-  job.method = method_from_name(settings.method);
+  job.method = settings.method;
   job.params = settings.paper_params ? CalibrationParams::paper : CalibrationParams::full;
   job.train_fraction = settings.train_fraction;
   job.seed = settings.seed;

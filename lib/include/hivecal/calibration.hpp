@@ -119,6 +119,14 @@ struct CalibrationOptions {
 /// Lower-case name of a method as the command line spells it ("abc+lm", "all", ...).
 const char* calibration_method_name(CalibrationMethod method);
 
+/// The names calibration_method_from_name accepts, for messages and help:
+/// "abc+lm, gsa+lm, lm, abc, gsa, all" (the default first).
+const char* calibration_method_names();
+
+/// The method a name spells (calibration_method_name's inverse). Errors: invalid_argument
+/// (null or unknown name; *method unchanged).
+Status calibration_method_from_name(const char* name, CalibrationMethod* method);
+
 /// The start geometry, before any solver.
 struct CalibrationBaseline {
   RobotModel model;                 ///< the start geometry with its tool point fitted (when tool_fitted)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <new>
 
 #include "hivecal/core/random.hpp"
@@ -876,16 +877,37 @@ Status run_once(const RobotModel& start, DatasetBase* dataset, const Calibration
 
 }  // namespace
 
+namespace {
+
+/// Every method and its name: the one table of both directions, in the order of the help.
+struct MethodName {
+  CalibrationMethod method;
+  const char* name;
+};
+constexpr MethodName kMethodNames[] = {
+    {CalibrationMethod::abc_lm, "abc+lm"}, {CalibrationMethod::gsa_lm, "gsa+lm"}, {CalibrationMethod::lm, "lm"},
+    {CalibrationMethod::abc, "abc"},       {CalibrationMethod::gsa, "gsa"},       {CalibrationMethod::all, "all"},
+};
+
+}  // namespace
+
 const char* calibration_method_name(CalibrationMethod method) {
-  switch (method) {
-    case CalibrationMethod::lm: return "lm";
-    case CalibrationMethod::abc: return "abc";
-    case CalibrationMethod::gsa: return "gsa";
-    case CalibrationMethod::abc_lm: return "abc+lm";
-    case CalibrationMethod::gsa_lm: return "gsa+lm";
-    case CalibrationMethod::all: return "all";
-  }
+  for (const MethodName& entry : kMethodNames)
+    if (entry.method == method) return entry.name;
   return "unknown";
+}
+
+const char* calibration_method_names() { return "abc+lm, gsa+lm, lm, abc, gsa, all"; }
+
+Status calibration_method_from_name(const char* name, CalibrationMethod* method) {
+  if (name == nullptr || method == nullptr) return Status::invalid_argument;
+  for (const MethodName& entry : kMethodNames) {
+    if (std::strcmp(entry.name, name) == 0) {
+      *method = entry.method;
+      return Status::ok;
+    }
+  }
+  return Status::invalid_argument;
 }
 
 const char* blunder_verdict_name(BlunderVerdict verdict) {
