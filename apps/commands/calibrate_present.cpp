@@ -1,0 +1,402 @@
+// hivecal calibrate: a run rendered as report data and console tables (calibrate_parts.hpp).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "hivecal/calibration.hpp"
+#include "commands/fit_checks.hpp"
+#include "hivecal/model/dataset.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/solve/lm.hpp"
+#include "hivecal/solve/normal_equations.hpp"
+#include "hivecal/solve/parameter_correlation.hpp"
+#include "hivecal/sync/sample_extraction.hpp"
+#include "report/report.hpp"
+#include "streams/session.hpp"
+#include "commands/calibrate_parts.hpp"
+
+namespace hivecal::cli {
+namespace {
+
+std::vector<double> trace_values(Span<const double> trace) {
+  std::vector<double> v;
+  for (double x : trace) v.push_back(x);
+  return v;
+}
+
+report::MethodRow method_row(std::string method, std::string parameters, const ErrorStats& train,
+                             const ErrorStats& test, double seconds, long long evaluations) {
+  report::MethodRow row;
+  row.method = std::move(method);
+  row.parameters = std::move(parameters);
+  row.train = train;
+  row.test = test;
+  row.seconds = seconds;
+  row.evaluations = evaluations;
+  return row;
+}
+
+report::MethodRow stage_row(const Run& run, std::size_t k) {
+  const CalibrationStage& stage = run.result.stages[k];
+  std::string params = stage.params == CalibrationParams::paper ? "paper-" + std::to_string(run.link_length_count) : "full";
+  if (stage.solver == CalibrationSolver::lm) {
+    if (stage.params == CalibrationParams::paper && run.result.baseline.tool_fitted) params += " + tool";
+    if (stage.compliance) params += " + compliance";
+    bool last_lm = true;  // result.lm holds the last LM stage's analysis only
+    for (std::size_t later = k + 1; later < run.result.stage_count; ++later)
+      last_lm = last_lm && run.result.stages[later].solver != CalibrationSolver::lm;
+    if (last_lm) params += " (" + std::to_string(run.result.lm.identifiability.kept_count()) + " estimated)";
+  }
+  // A refining stage's row (ABC+LM) is the whole chain: its time includes the stage it refined.
+  const double seconds = run.seconds[k] + (stage.refines_previous && k > 0 ? run.seconds[k - 1] : 0.0);
+  if (stage.solver != CalibrationSolver::lm) {
+    params += run.result.baseline.tool_fitted ? ", tool fitted" : ", tool as given";
+    if (stage.searched_samples < run.result.train_count) {  // a hybrid's start on a spanning subset
+      params += ", searched on " + std::to_string(stage.searched_samples) + " of " +
+                std::to_string(run.result.train_count) + " samples";
+    }
+  }
+  return method_row(run.result.stage_name(k), params, stage.train, stage.test, seconds,
+                    static_cast<long long>(stage.evaluations));
+}
+
+/// The non-separable combination of a dropped parameter, e.g. "+0.707*d2 -0.707*d4".
+std::string combination_text(const DroppedParam& d, const RobotModel& model) {
+  std::string combination;
+  char buf[96];
+  for (int c = 0; c < kNullComponentCount; ++c) {
+    if (d.component_index[c] < 0) continue;
+    std::snprintf(buf, sizeof buf, "%s%+.3g*%s", combination.empty() ? "" : " ", d.component[c],
+                  full_param_name(d.component_index[c], model));
+    combination += buf;
+  }
+  return combination;
+}
+
+std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pruned, double significance_t,
+                                               const RobotModel& model) {
+  std::vector<std::string> lines;
+  const IdentifiabilityReport& id = lm.identifiability;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "identifiability: %d of %d free parameters estimated, condition number %.3g -> %.3g",
+                id.kept_count(), mask_count(id.free_mask), id.condition_before, id.condition_after);
+  lines.push_back(buf);
+  for (int k = 0; k < id.dropped_count; ++k) {
+    const DroppedParam& d = id.dropped[k];
+    std::snprintf(buf, sizeof buf, "  dropped %-8s (%s, sigma ratio %.2g): %s", full_param_name(d.index, model),
+                  unidentifiable_reason_name(d.reason), d.singular_ratio, combination_text(d, model).c_str());
+    lines.push_back(buf);
+  }
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (!mask_has(pruned, k)) continue;
+    std::snprintf(buf, sizeof buf, "  fixed   %-8s (not significant: change below %.3g sigma; kept at its start value)",
+                  full_param_name(k, model), significance_t);
+    lines.push_back(buf);
+  }
+  return lines;
+}
+
+report::IdentifiabilityTable identifiability_table(const LmResult& lm, const RobotModel& model) {
+  const IdentifiabilityReport& id = lm.identifiability;
+  report::IdentifiabilityTable table;
+  table.present = true;
+  table.free_count = mask_count(id.free_mask);
+  for (int k = 0; k < kFullParamCount; ++k)
+    if (mask_has(id.kept_mask, k)) table.estimated.push_back(full_param_name(k, model));
+  for (int k = 0; k < id.dropped_count; ++k) {
+    const DroppedParam& d = id.dropped[k];
+    table.dropped.push_back({full_param_name(d.index, model), unidentifiable_reason_name(d.reason), d.singular_ratio,
+                             combination_text(d, model)});
+  }
+  table.condition_before = id.condition_before;
+  table.condition_after = id.condition_after;
+  return table;
+}
+
+/// Parameter k's strongest correlation into its table row (nothing when every one is 0).
+void set_partner(const NormalMatrix& correlation, int k, const RobotModel& model, report::ParameterRow* row) {
+  const CorrelationPartner partner = strongest_correlation(correlation, k);
+  if (partner.index < 0) return;
+  row->correlation = partner.correlation;
+  row->correlated_with = full_param_name(partner.index, model);
+}
+
+/// The estimated or changed parameters. `lm`: the LM details when `stage` is the LM stage, else null.
+std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start,
+                                                 Span<const Sample> train) {
+  std::vector<report::ParameterRow> rows;
+  static CorrelationScratch scratch;  // static: ~35 kB with the matrix
+  static NormalMatrix correlation;
+  const bool correlated =
+      lm != nullptr && parameter_correlations(stage.model, stage.base_to_tracker, train, PointLoss{lm->huber_threshold_m},
+                                              lm->identifiability.kept_mask, &scratch, &correlation) == Status::ok;
+  const ModelParams before = to_params(start);
+  const ModelParams after = to_params(stage.model);
+  for (int k = 0; k < kModelParamCount; ++k) {
+    const bool estimated = lm != nullptr && mask_has(lm->identifiability.kept_mask, k);
+    if (!estimated && after(k) == before(k)) continue;
+    report::ParameterRow row;
+    row.name = full_param_name(k);
+    row.angle = model_param_is_angle(k);
+    row.start = before(k);
+    row.value = after(k);
+    row.sigma = estimated ? lm->sigma(k) : 0.0;
+    if (correlated && estimated) set_partner(correlation, k, stage.model, &row);
+    rows.push_back(row);
+  }
+  const ComplianceModel& compliance = stage.model.compliance;
+  for (int t = 0; t < compliance.term_count; ++t) {  // LM+compliance: the coefficients, in their own unit
+    const int k = compliance_param_index(t);
+    report::ParameterRow row;
+    row.name = compliance_term_name(compliance, t);
+    row.compliance_unit = textio::compliance_unit(compliance.load);
+    row.start = t < start.compliance.term_count ? start.compliance.coefficient[t] : 0.0;
+    row.value = compliance.coefficient[t];
+    row.sigma = lm != nullptr && mask_has(lm->identifiability.kept_mask, k) ? lm->sigma(k) : 0.0;
+    if (correlated && row.sigma > 0.0) set_partner(correlation, k, stage.model, &row);
+    rows.push_back(row);
+  }
+  for (int target = 1; lm != nullptr && target < kMaxTargets; ++target) {  // estimated with several targets
+    const Vec3& sigma_m = lm->other_tools_sigma_m[target - 1];
+    if (sigma_m.isZero()) continue;
+    for (int axis = 0; axis < 3; ++axis) {
+      report::ParameterRow row;
+      row.name = other_tool_param_name(target, axis);
+      row.start = target_tool(start, target)(axis);
+      row.value = target_tool(stage.model, target)(axis);
+      row.sigma = sigma_m(axis);
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
+/// Every sample (training first) and each model's prediction of it, for the figures.
+void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* data) {
+  for (const bool test : {false, true}) {
+    for (const Sample& s : test ? dataset.test() : dataset.train()) {
+      report::SampleRow row;
+      for (int j = 0; j < kJointCount; ++j) row.q_rad[j] = s.q_rad(j);
+      row.measured_m = s.point_m;
+      row.test = test;
+      row.target = s.target;
+      data->samples.push_back(row);
+    }
+  }
+  const CalibrationBaseline& uncalibrated = run.result.baseline;
+  data->predictions.push_back(
+      report::predict_samples("uncalibrated", uncalibrated.model, uncalibrated.base_to_tracker, data->samples));
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) {
+    const CalibrationStage& stage = run.result.stages[k];
+    data->predictions.push_back(
+        report::predict_samples(run.result.stage_name(k), stage.model, stage.base_to_tracker, data->samples));
+  }
+}
+
+std::string format_mm(double value_m) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3f", value_m * 1e3);
+  return buf;
+}
+
+/// "noise: ..." — the fit's residual sigma against the tracker's stated noise, and what the ratio says.
+std::string noise_statement(double fit_sigma_m, double tracker_sigma_m) {
+  const double ratio = fit_sigma_m / tracker_sigma_m;
+  char line[300];
+  std::snprintf(line, sizeof line,
+                "noise: the fit's residual sigma %s mm per axis is %.1fx the tracker's stated %s mm (--tracker-sigma-um)%s",
+                format_mm(fit_sigma_m).c_str(), ratio, format_mm(tracker_sigma_m).c_str(),
+                ratio > 2.0 ? ": unmodelled effects (or a wrong stated noise) dominate the residuals, not the tracker"
+                            : ": the model explains the data to the measurement noise");
+  return line;
+}
+
+/// Collects each pose's test under the final calibration: the kept poses' w, the uncontrolled ones.
+class PoseTests final : public UnitTestVisitor {
+ public:
+  PoseTests(const streams::SessionFacts& facts, std::vector<std::uint32_t> aside, report::OutlierTable* table)
+      : facts_(facts), aside_(std::move(aside)), table_(table) {}
+  void on_unit(const UnitTest& t) override {
+    if (t.fitted && t.critical_w > 0.0) table_->critical_w = t.critical_w;
+    if (t.fitted && !t.controlled) {
+      table_->uncontrolled.push_back(sample_source(facts_, t.index));
+    } else if (t.controlled && std::find(aside_.begin(), aside_.end(), t.index) == aside_.end()) {
+      table_->kept_w.push_back(t.w);
+    }
+  }
+
+ private:
+  const streams::SessionFacts& facts_;
+  std::vector<std::uint32_t> aside_;
+  report::OutlierTable* table_;
+};
+
+/// The blunder search's table and console lines: the job's verdict and set-aside samples, and
+/// each pose's w under the final calibration (lib's test_for_blunders on the final fit).
+void blunder_report(const streams::SessionFacts& facts, const CliDataset& dataset, const Run& run,
+                    report::ReportData* data) {
+  report::OutlierTable& table = data->outliers;
+  const CalibrationResult& r = run.result;
+  table.searched = r.outlier_rounds > 0;
+  table.verdict = blunder_verdict_name(r.blunder_verdict);
+  table.alpha = run.options.blunder_test.alpha;
+  table.sigma_source = sigma_source_name(r.blunder_test.sigma_source);
+  table.sigma_m = r.blunder_test.sigma_m;
+  if (table.searched && r.final_stage() != nullptr) {
+    static ReliabilityWorkspace workspace;  // ~26 kB
+    std::vector<std::uint32_t> aside;
+    for (const CalibrationOutlier& o : r.outlier_list()) aside.push_back(o.index);
+    PoseTests tests(facts, std::move(aside), &table);
+    BlunderTestSummary summary;
+    test_final_calibration(r, dataset, run.options, &workspace, &tests, &summary);
+  }
+  for (const CalibrationOutlier& o : r.outlier_list()) {
+    char line[300];
+    std::snprintf(line, sizeof line, "set aside as a blunder: %s, residual %s mm, w %.2f > %.2f (alpha %.2g %% for the set)",
+                  sample_source(facts, o.index).c_str(), format_mm(o.residual_m).c_str(), o.w, o.critical_w,
+                  table.alpha * 100.0);
+    data->info_lines.push_back(line);
+    table.rows.push_back({sample_source(facts, o.index), o.residual_m, o.w});
+  }
+  if (r.blunder_verdict == BlunderVerdict::model_error) {
+    data->info_lines.push_back("blunder test: more than " + std::to_string(r.blunder_limit) +
+                               " training pose(s) fail the w-test: the model, not the data, is wrong (unmodelled "
+                               "effects); none removed by the test");
+  }
+  for (const std::string& source : table.uncontrolled) {
+    data->info_lines.push_back("uncontrolled pose (redundancy below 0.1: a blunder there cannot be told from the "
+                               "geometry; kept, not tested): " + source);
+  }
+}
+
+}  // namespace
+
+report::PointTimeline PointFates::timeline(std::size_t bins) const {
+  report::PointTimeline t;
+  if (events.empty()) return t;
+  double first = events.front().first;
+  double last = first;
+  for (const auto& e : events) {
+    first = std::min(first, e.first);
+    last = std::max(last, e.first);
+  }
+  t.duration_s = (last - first) * 1e-6;
+  std::vector<int> row_of(kDropReasonCount + 1, -1);  // index reason + 1 (kept: 0)
+  for (int reason = -1; reason < kDropReasonCount; ++reason) {
+    bool seen = false;
+    for (const auto& e : events) seen = seen || e.second == reason;
+    if (!seen) continue;
+    row_of[static_cast<std::size_t>(reason + 1)] = static_cast<int>(t.reasons.size());
+    t.reasons.push_back(reason < 0 ? "kept" : drop_reason_name(static_cast<DropReason>(reason)));
+    t.counts.emplace_back(bins, 0u);
+  }
+  for (const auto& e : events) {
+    const double at = last > first ? (e.first - first) / (last - first) : 0.0;
+    const std::size_t bin = std::min(bins - 1, static_cast<std::size_t>(at * static_cast<double>(bins)));
+    ++t.counts[static_cast<std::size_t>(row_of[static_cast<std::size_t>(e.second + 1)])][bin];
+  }
+  return t;
+}
+
+/// Where sample `index` (Sample::index) came from: "file:line" for paired samples.
+std::string sample_source(const streams::SessionFacts& facts, std::uint32_t index) {
+  if (index < facts.sample_sources.size()) return facts.sample_sources[index];
+  return "sample " + std::to_string(index);
+}
+
+/// Tables and figures of a run, and the text of the terminal.
+report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,
+                                       const CliDataset& dataset, const streams::SessionFacts& facts, const Run& run) {
+  const CalibrationBaseline& uncalibrated = run.result.baseline;
+  const CalibrationStage& final_stage = run.final_stage();
+  report::ReportData data;
+  data.title = "hivecal calibration: " + settings.robot.robot;
+  data.input_lines = facts.info_lines;
+  data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
+                            std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
+                            ")");
+  const std::string orientation = streams::orientation_line(facts);
+  if (!orientation.empty()) data.info_lines.push_back(orientation);  // in the report's "info" too
+  if (settings.controller_tcp) {
+    data.info_lines.push_back("known (--controller-tcp): the base (identity) and the tool points; not fitted, joint 1 estimated instead");
+  }
+  const std::string joints = run.from_controller ? "controller" : "nominal";
+  data.methods.push_back(method_row("uncalibrated", joints + (uncalibrated.tool_fitted ? ", tool fitted" : ""),
+                                    uncalibrated.train, uncalibrated.test, 0.0, 0));
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) data.methods.push_back(stage_row(run, k));
+  data.uncalibrated = accuracy_report(uncalibrated.model, uncalibrated.base_to_tracker, dataset);
+  data.calibrated = accuracy_report(final_stage.model, final_stage.base_to_tracker, dataset);
+  for (std::size_t k = 0; k < run.result.stage_count; ++k) {
+    const CalibrationStage& stage = run.result.stages[k];
+    data.convergence.push_back(
+        {run.result.stage_name(k), stage.solver == CalibrationSolver::lm, trace_values(stage.trace_m)});
+  }
+  add_samples(dataset, run, &data);
+  if (const LmResult* lm = run.final_lm(); lm != nullptr) {
+    for (const std::string& line : identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t,
+                                                          final_stage.model)) {
+      data.info_lines.push_back(line);
+    }
+    if (final_stage.rigid_kept) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    "compliance: no term passed the %.3g sigma test (the data show no bending): the rigid fit is kept",
+                    std::fmax(run.result.significance_t, CalibrationCompliance{}.significance_t));
+      data.info_lines.push_back(buf);
+    }
+    data.identifiability = identifiability_table(*lm, final_stage.model);
+    for (int k = 0; k < kFullParamCount; ++k)
+      if (mask_has(run.result.lm_pruned_mask, k)) data.identifiability.fixed.push_back(full_param_name(k, final_stage.model));
+    data.identifiability.significance_t = run.result.significance_t;
+    data.fit_sigma_m = lm->residual_sigma_m;
+  }
+  data.noise_sigma_m = settings.orientation.position_sigma_m;
+  if (data.fit_sigma_m > 0.0) data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m));
+  data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
+  data.has_stream = facts.has_stream;
+  if (facts.has_stream) {
+    data.drops.emplace_back("kept", facts.run.counts.kept);
+    for (const auto& drop : facts.dropped) data.drops.push_back(drop);
+    data.clock_match = report::clock_match_series(facts.run.clock_match, facts.run.clock.speed_gain);
+  }
+  blunder_report(facts, dataset, run, &data);
+  if (run.has_cv) {
+    data.cross_validation.present = true;
+    data.cross_validation.sample_count = run.cv.sample_count;
+    data.cross_validation.mae_3d_m = run.cv.mae_3d_m;
+    data.cross_validation.baseline_mae_3d_m = run.cv.baseline_mae_3d_m;
+    for (std::size_t k = 0; k < run.cv.fold_count; ++k) {
+      const CrossValidationFold& f = run.cv.folds[k];
+      data.cross_validation.folds.push_back(
+          {f.train_count, f.test.count, f.train.mae(ErrorAxis::norm_3d), f.test.mae(ErrorAxis::norm_3d)});
+    }
+  }
+  return data;
+}
+
+/// The terminal text (on stdout, or on stderr when stdout carries the result).
+void print_calibration_tables(std::FILE* out, const report::ReportData& data, const Run& run) {
+  for (const std::string& line : data.input_lines) std::fprintf(out, "%s\n", line.c_str());
+  for (const std::string& line : data.info_lines) std::fprintf(out, "%s\n", line.c_str());
+  std::fprintf(out, "\n%s", report::format_tables_text(data).c_str());
+  if (run.has_cv) {
+    const CrossValidationResult& cv = run.cv;
+    std::fprintf(out, "\nCross-validation (%zu folds over %zu samples, held-out 3-D MAE):\n", cv.fold_count,
+                 cv.sample_count);
+    std::fprintf(out, "  fold  train  test  MAE [mm]\n");
+    for (std::size_t k = 0; k < cv.fold_count; ++k) {
+      std::fprintf(out, "  %4zu  %5zu  %4zu  %8s\n", k + 1, cv.folds[k].train_count, cv.folds[k].test.count,
+                   format_mm(cv.folds[k].test.mae(ErrorAxis::norm_3d)).c_str());
+    }
+    std::fprintf(out, "  all held-out samples: %s mm (fold mean %s, worst %s; uncalibrated %s mm)\n",
+                 format_mm(cv.mae_3d_m).c_str(), format_mm(cv.fold_mae_3d_mean_m).c_str(),
+                 format_mm(cv.fold_mae_3d_max_m).c_str(), format_mm(cv.baseline_mae_3d_m).c_str());
+  }
+  std::fprintf(out, "\nCalibrated parameters (%s):\n", run.final_method().c_str());
+  for (const std::string& line : report::format_parameters_text(data)) std::fprintf(out, "  %s\n", line.c_str());
+}
+
+}  // namespace hivecal::cli
