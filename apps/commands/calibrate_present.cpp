@@ -128,7 +128,7 @@ void set_partner(const NormalMatrix& correlation, int k, const RobotModel& model
 std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start,
                                                  Span<const Sample> train) {
   std::vector<report::ParameterRow> rows;
-  static CorrelationScratch scratch;  // static: ~35 kB with the matrix
+  static CorrelationScratch scratch;  // static: ~54 kB with the matrix
   static NormalMatrix correlation;
   const bool correlated =
       lm != nullptr && parameter_correlations(stage.model, stage.base_to_tracker, train, PointLoss{lm->huber_threshold_m},

@@ -2,23 +2,22 @@
 // (solve/parameter_correlation.hpp).
 #include "hivecal/solve/parameter_correlation.hpp"
 
-#include <Eigen/Cholesky>
-
 #include <cmath>
 
 namespace hivecal {
 namespace {
 
-/// The inverse of the leading N x N block of `scaled` into *inverse (zero elsewhere). A rigid
-/// model inverts only the 33 rigid parameters: the same pivots with or without the room for
-/// compliance coefficients.
-template <int N>
-bool invert_leading(const NormalMatrix& scaled, NormalMatrix* inverse) {
+/// The inverse of the leading N x N block of `scaled` into *inverse (zero elsewhere), through
+/// *factor (in the caller's scratch: a 37 x 37 factor and its solve are ~33 kB of stack
+/// otherwise). A rigid model inverts only the 33 rigid parameters: the same pivots with or
+/// without the room for compliance coefficients.
+template <int N, typename Factor>
+bool invert_leading(const NormalMatrix& scaled, Factor* factor, NormalMatrix* inverse) {
   using Block = Eigen::Matrix<double, N, N>;
-  const Eigen::LDLT<Block> ldlt(scaled.template topLeftCorner<N, N>());
-  if (ldlt.info() != Eigen::Success) return false;
+  factor->compute(scaled.template topLeftCorner<N, N>());
+  if (factor->info() != Eigen::Success) return false;
   inverse->setZero();
-  inverse->template topLeftCorner<N, N>() = ldlt.solve(Block::Identity());
+  inverse->template topLeftCorner<N, N>() = factor->solve(Block::Identity());
   return true;
 }
 
@@ -35,8 +34,8 @@ Status parameter_correlations(const RobotModel& model, const RigidTransform& bas
   FullParams scale;
   scale_normal_matrix(eq.jtwj, kept, 1.0, &scratch->scaled, &scale);  // unit diagonal; identity outside `kept`
   const bool inverted = model.compliance.term_count > 0
-                            ? invert_leading<kFullParamCount>(scratch->scaled, correlation)
-                            : invert_leading<kRigidParamCount>(scratch->scaled, correlation);
+                            ? invert_leading<kFullParamCount>(scratch->scaled, &scratch->full_factor, correlation)
+                            : invert_leading<kRigidParamCount>(scratch->scaled, &scratch->rigid_factor, correlation);
   if (!inverted) return Status::singular_system;
   const FullParams variance = correlation->diagonal();
   for (int i = 0; i < kFullParamCount; ++i) {

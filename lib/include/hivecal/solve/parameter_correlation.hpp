@@ -1,9 +1,11 @@
 // Correlations of the estimated parameters of a least-squares fit: the normalised inverse of
 // its normal equations at the result. Which parameters the data cannot tell apart (|rho|
 // near 1) explains a large move or a dropped parameter (docs/solvers-lm.md, "Parameter
-// correlations"). Kept out of the job's result: the matrix and its scratch are ~35 kB, a
-// quarter of the firmware's RAM; a caller that wants it supplies the storage.
+// correlations"). Kept out of the job's result: the matrix and its scratch are ~54 kB, far
+// beyond the firmware's RAM; a caller that wants it supplies the storage.
 #pragma once
+
+#include <Eigen/Cholesky>
 
 #include "hivecal/core/status.hpp"
 #include "hivecal/model/dataset.hpp"
@@ -12,12 +14,15 @@
 
 namespace hivecal {
 
-/// Scratch of parameter_correlations (~22 kB): the normal equations, their eliminated target
-/// blocks and the scaled matrix.
+/// Scratch of parameter_correlations (~43 kB, none of it on the stack): the normal equations,
+/// their eliminated target blocks, the scaled matrix and its LDL^T factor (of the 33 rigid
+/// parameters, or of all 37 with compliance terms).
 struct CorrelationScratch {
   NormalEquations equations;                    ///< J^T W J at the result [m^2/unit^2]
   TargetBlock target_blocks[kMaxTargets - 1];   ///< targets 2.. eliminated as in LM
   NormalMatrix scaled;                          ///< unit-diagonal J^T W J [-]
+  Eigen::LDLT<Eigen::Matrix<double, kRigidParamCount, kRigidParamCount>> rigid_factor;  ///< of the 33 [-]
+  Eigen::LDLT<NormalMatrix> full_factor;        ///< of all 37 [-]
 };
 
 /// The correlation matrix of the parameters in `kept` (LmResult::identifiability.kept_mask)
