@@ -29,9 +29,10 @@ using JobCaptureWorkspace = CaptureWorkspace<3072, 640, 256, 64>;
 /// result depends on them and the firmware prints none, so each keeps its first value and
 /// counts the rest (TraceBase::dropped); 300 would cost 7.2 kB of static RAM.
 inline constexpr std::size_t kJobTraceCapacity = 1;
-/// Float paper-6 terms (84 B per sample), the paper's 150 food sources, one-value traces.
+/// Float paper-6 terms (84 B per sample), the paper's 150 food sources, one-value traces; no GSA
+/// phase (the firmware's jobs are ABC+LM and LM; GSA's solver would be the largest phase).
 using JobCalibrationWorkspace =
-    CalibrationWorkspace<kJobSamples, float, 150, kJobTraceCapacity, 0, kPaper6Dimension, 1, 0>;  // one reflector, no subset room (RAM)
+    CalibrationWorkspace<kJobSamples, float, 150, kJobTraceCapacity, 0, kPaper6Dimension, 1, 0, 0>;  // one reflector, no subset room, no GSA (RAM)
 
 /// Where a run ends (earlier ends serve the per-stage instruction counts of scripts/footprint.sh).
 enum class JobStop : int { clock, extraction, done };

@@ -285,7 +285,8 @@ class CalibrationWorkspaceBase {
   };
   /// Ends any open phase, builds a cost and an ABC solver in the arena.
   virtual PopulationPhase open_abc() = 0;
-  /// Ends any open phase, builds a cost and a GSA solver in the arena.
+  /// Ends any open phase, builds a cost and a GSA solver in the arena (both null: the workspace
+  /// has no room for GSA).
   virtual PopulationPhase open_gsa() = 0;
   /// Ends any open phase, builds an LM workspace (joint trig storage attached if the type has it).
   virtual LmWorkspace* open_lm() = 0;
@@ -342,6 +343,14 @@ struct TargetBlockStorage<0> {
 template <std::size_t A, std::size_t B>
 inline constexpr std::size_t max_of = A > B ? A : B;
 /// Room for a spanning subset's positions, or none (Count = 0).
+/// GSA's phase: the cost and a solver of `Population` agents, or nothing (Population = 0).
+template <typename Cost, std::size_t Population, std::size_t Lengths>
+struct GsaPhaseStorage {
+  Cost cost;
+  GsaSolver<Population, Lengths> solver;
+};
+template <typename Cost, std::size_t Lengths>
+struct GsaPhaseStorage<Cost, 0, Lengths> {};
 template <std::size_t Count>
 struct SubsetStorage {
   std::uint32_t values[Count];
@@ -361,11 +370,13 @@ struct SubsetStorage<0> {
 /// tool points of up to `MaxTargets` reflectors (1: one reflector only, 3.6 kB less; the
 /// firmware's choice), and room for a hybrid's spanning subset of `SubsetCapacity` samples
 /// (4 B each; 0: a hybrid's population stage searches on every sample, as the paper's methods
-/// do). Big: give it static storage.
+/// do), and GSA with up to `GsaPopulation` agents (0: no GSA phase, a job with GSA ends with
+/// population_out_of_range; the firmware's choice, 7.2 kB less). Big: give it static storage.
 template <std::size_t Samples, typename CostScalar = double, std::size_t Population = 150,
           std::size_t TraceCapacity = 300, std::size_t JointTrigSamples = 0, std::size_t MaxLinkLengths = kPaper6Dimension,
           std::size_t MaxTargets = kMaxTargets,
-          std::size_t SubsetCapacity = (Samples > kDefaultPopulationSubset ? kDefaultPopulationSubset : 0)>
+          std::size_t SubsetCapacity = (Samples > kDefaultPopulationSubset ? kDefaultPopulationSubset : 0),
+          std::size_t GsaPopulation = Population>
 class CalibrationWorkspace final : public CalibrationWorkspaceBase {
  public:
   using Cost = Paper6Cost<Samples, CostScalar, MaxLinkLengths>;  ///< the population stages' cost
@@ -374,11 +385,8 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
     Cost cost;
     AbcSolver<Population, MaxLinkLengths> solver;
   };
-  /// The GSA phase's objects.
-  struct GsaPhase {
-    Cost cost;
-    GsaSolver<Population, MaxLinkLengths> solver;
-  };
+  /// The GSA phase's objects (none when GsaPopulation is 0).
+  using GsaPhase = detail::GsaPhaseStorage<Cost, GsaPopulation, MaxLinkLengths>;
   /// The LM phase's objects.
   struct LmPhase {
     LmWorkspace lm;
@@ -405,8 +413,12 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
   }
   PopulationPhase open_gsa() override {
     close();
-    gsa_ = new (arena_) GsaPhase();
-    return PopulationPhase{&gsa_->cost, nullptr, &gsa_->solver};
+    if constexpr (GsaPopulation == 0) {
+      return PopulationPhase{};  // no room for GSA
+    } else {
+      gsa_ = new (arena_) GsaPhase();
+      return PopulationPhase{&gsa_->cost, nullptr, &gsa_->solver};
+    }
   }
   LmWorkspace* open_lm() override {
     close();

@@ -134,6 +134,7 @@ Status run_population(Job& job, CalibrationSolver solver, bool hybrid) {
     gsa.iterations = o.gsa_iterations;
     gsa.seed = o.seed;
     const CalibrationWorkspaceBase::PopulationPhase phase = job.workspace.open_gsa();
+    if (phase.gsa == nullptr) return Status::population_out_of_range;  // a workspace without GSA (firmware)
     status = calibrate_paper6_gsa(job.start, job.dataset.train(), subset, gsa, o.paper6_half_width_m, phase.cost, phase.gsa,
                                   &solved, &trace, job.observer);
   }

@@ -290,6 +290,14 @@ TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
   expect_failure(calibrate(start(), &dataset, gsa_crowd, &workspace, &result),
                  Status::population_out_of_range, CalibrationStep::gsa);
 
+  // A workspace without GSA (the firmware's): GSA refused as over capacity, ABC+LM runs.
+  static CalibrationWorkspace<kSamples, float, 40, 8, 0, kPaper6Dimension, 1, 0, 0> no_gsa;
+  fill(120, &dataset);
+  expect_failure(calibrate(start(), &dataset, quick_options(CalibrationMethod::gsa_lm), &no_gsa, &result),
+                 Status::population_out_of_range, CalibrationStep::gsa);
+  fill(120, &dataset);
+  EXPECT_EQ(calibrate(start(), &dataset, quick_options(CalibrationMethod::abc_lm), &no_gsa, &result), Status::ok);
+
   static CalibrationWorkspace<32, float, 40, 8> tiny;  // cost room for 32 training samples
   fill(120, &dataset);
   expect_failure(calibrate(start(), &dataset, options, &tiny, &result), Status::dataset_full,
