@@ -386,11 +386,11 @@ $(job_table)
 
 ### Budgets
 
-Revised budgets (issue 13: 64 KiB / 2e9 were below the arithmetic floor of ABC 150 x 300):
+The product budgets (docs/footprint.md, "Budgets"):
 
 - Capture calibration image, 512-sample job: static RAM $((job_data + job_bss)) bytes of 131072
   (128 KiB; including a $job_stack-byte stack + guard): $((131072 - job_data - job_bss)) bytes left;
-  flash $((job_text + job_data)) bytes of 131072 ($((131072 - job_text - job_data)) left).
+  flash $((job_text + job_data)) bytes of 139264 (136 KiB; $((139264 - job_text - job_data)) left).
 - Stack of the capture calibration image, measured (paint high-water, the three jobs):
   $(cat "$build/footprint-job-stack.txt") bytes of $job_stack.
 - LM-only job from captures (512-capacity image, LM on the full model):
