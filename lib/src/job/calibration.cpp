@@ -225,18 +225,39 @@ double model_value(const RobotModel& model, int index) {
   return weakest;
 }
 
-/// LM on `samples` from `from` (and `base`, or a fitted one when null) into r.lm. Runs again
-/// while (a) it drops a parameter an earlier stage moved (put back to its start value) or (b)
-/// an estimated parameter's change is not significant (below t sigma: fixed at its start
-/// value, one at a time, the least significant first; a small set then fits fewer parameters
-/// instead of its noise). *pruned receives the parameters (b) fixed. `reference` holds the
-/// start values (job.start, with the compliance terms and their start coefficients for the
-/// LM+compliance stage); with `compliance` its terms are free too and LM starts from them on start_model.
-Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_model, const RigidTransform* base,
-              bool reset, bool compliance, Span<const Sample> samples, double t, TraceBase* trace,
-              LmObserver* observer, ParamMask* pruned) {
+/// One LM fit of the job: what it starts from, what it may move, on which samples.
+struct LmFit {
+  /// The start values (job.start, with the compliance terms and their start coefficients for
+  /// the LM+compliance stage): what a dropped or insignificant parameter is put back to.
+  const RobotModel* reference = nullptr;
+  const RobotModel* start_model = nullptr;  ///< the geometry LM starts from (a stage's or the job's)
+  const RigidTransform* base = nullptr;     ///< base -> tracker to start from; null: fitted first
+  bool reset_moved = false;  ///< put back a parameter LM drops that an earlier stage moved
+  bool compliance = false;   ///< the reference's compliance terms are free too, starting on start_model
+  Span<const Sample> samples;     ///< the samples fitted
+  double significance_t = 0.0;    ///< a change below this many sigma is not significant [-]
+};
+
+/// Where a fit reports: its trace, its observer (both may be null), the parameters fixed as
+/// not significant.
+struct LmFitReport {
+  TraceBase* trace = nullptr;      ///< LM's RMS per iteration
+  LmObserver* observer = nullptr;  ///< progress
+  ParamMask* pruned = nullptr;     ///< receives the parameters fixed as not significant
+};
+
+/// LM for `fit` into r.lm. Runs again while (a) it drops a parameter an earlier stage moved
+/// (with reset_moved: put back to its start value) or (b) an estimated parameter's change is
+/// not significant (below significance_t sigma: fixed at its start value, one at a time, the
+/// least significant first; a small set then fits fewer parameters instead of its noise).
+Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
+  const RobotModel& reference = *fit.reference;
+  const bool compliance = fit.compliance;
+  const RigidTransform* base = fit.base;
+  TraceBase* trace = report.trace;
+  ParamMask* pruned = report.pruned;
   RobotModel& from = job.workspace.lm_start();  // start_model is never this one: a stage's or the job's model
-  from = start_model;
+  from = *fit.start_model;
   if (compliance) from.compliance = reference.compliance;  // LM+compliance: the start terms on the fitted geometry
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
@@ -270,11 +291,11 @@ Status fit_lm(Job& job, const RobotModel& reference, const RobotModel& start_mod
   for (int attempt = 0; attempt < kModelParamCount + kMaxComplianceTerms + 2; ++attempt) {
     if (trace != nullptr) trace->clear();
     LmWorkspace* workspace = job.workspace.open_lm();
-    status = calibrate_lm(from, base, samples, lm, workspace, &r.lm, trace, observer);
+    status = calibrate_lm(from, base, fit.samples, lm, workspace, &r.lm, trace, report.observer);
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
-    bool again = reset && reset_dropped(reference, r.lm.identifiability, o.tool_known, &from);
-    const int weakest = least_significant(reference, r.lm, t, job.options.compliance.significance_t);
+    bool again = fit.reset_moved && reset_dropped(reference, r.lm.identifiability, o.tool_known, &from);
+    const int weakest = least_significant(reference, r.lm, fit.significance_t, job.options.compliance.significance_t);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;
@@ -309,8 +330,16 @@ constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
       job.dataset.swap_samples(i, n - 1);  // the left-out one last, the others in front
       ParamMask pruned = 0;
       const Span<const Sample> train = job.dataset.train();
-      const Status status =
-          fit_lm(job, job.start, from, base, reset, false, train.subspan(0, n - 1), candidate, nullptr, nullptr, &pruned);
+      LmFit fit;
+      fit.reference = &job.start;
+      fit.start_model = &from;
+      fit.base = base;
+      fit.reset_moved = reset;
+      fit.samples = train.subspan(0, n - 1);
+      fit.significance_t = candidate;
+      LmFitReport report;
+      report.pruned = &pruned;
+      const Status status = fit_lm(job, fit, report);
       if (status == Status::ok || status == Status::not_converged) {
         const Sample& out = train[n - 1];
         sum_m += (job.result.lm.base_to_tracker.apply(fk_sample_point(job.result.lm.model, out)) - out.point_m).norm();
@@ -357,8 +386,14 @@ Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
   const RobotModel& from = previous != nullptr ? previous->model : job.start;
   const RigidTransform* base = previous != nullptr ? &previous->base_to_tracker : nullptr;
   r.significance_t = choose_significance(job, from, base, previous != nullptr);
-  const Status status = fit_lm(job, job.start, from, base, previous != nullptr, false, job.dataset.train(),
-                               r.significance_t, &trace, job.observer, pruned);
+  LmFit fit;
+  fit.reference = &job.start;
+  fit.start_model = &from;
+  fit.base = base;
+  fit.reset_moved = previous != nullptr;
+  fit.samples = job.dataset.train();
+  fit.significance_t = r.significance_t;
+  const Status status = fit_lm(job, fit, LmFitReport{&trace, job.observer, pruned});
   if (status != Status::ok && status != Status::not_converged) return status;
   lm_stage(job, status, previous != nullptr, false, trace);
   return Status::ok;
@@ -414,8 +449,15 @@ bool any_compliance_kept(ParamMask kept, int term_count) {
   const Status terms = compliance_start(job.start, job.options.compliance, &reference.compliance);
   if (terms != Status::ok) return terms;  // checked at the input step
   TraceBase& trace = job.workspace.trace(r.stage_count);
-  const Status status = fit_lm(job, reference, rigid.model, &rigid.base_to_tracker, true, true, job.dataset.train(),
-                               r.significance_t, &trace, job.observer, pruned);
+  LmFit fit;
+  fit.reference = &reference;
+  fit.start_model = &rigid.model;
+  fit.base = &rigid.base_to_tracker;
+  fit.reset_moved = true;
+  fit.compliance = true;
+  fit.samples = job.dataset.train();
+  fit.significance_t = r.significance_t;
+  const Status status = fit_lm(job, fit, LmFitReport{&trace, job.observer, pruned});
   if (status != Status::ok && status != Status::not_converged) return status;
   if (any_compliance_kept(r.lm.identifiability.kept_mask, reference.compliance.term_count)) {
     lm_stage(job, status, true, true, trace);
