@@ -240,8 +240,9 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   streams::SessionFacts facts;
   PointFates fates;
   if (error.ok()) error = load_dataset(options, settings, &dataset, &facts, &fates);
-  if (error.ok()) textio::start_orientation_targets(facts.orientation, &start);
   static Run job;  // static: the CalibrationResult is ~5 KB
+  job.repeated = repeated_reading_noise(dataset.samples());  // in the input's order: the job splits
+  if (error.ok()) textio::start_orientation_targets(facts.orientation, &start);
   job.from_controller = !options.get("ur-calibration").empty();
   job.link_length_count = link_length_set(start).count;
   if (error.ok()) error = run(settings, start, &dataset, &job);

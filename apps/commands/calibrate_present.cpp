@@ -202,16 +202,35 @@ std::string format_mm(double value_m) {
   return buf;
 }
 
-/// "noise: ..." — the fit's residual sigma against the tracker's stated noise, and what the ratio says.
-std::string noise_statement(double fit_sigma_m, double tracker_sigma_m) {
+/// "noise: ..." — the fit's residual sigma against the tracker's noise (stated, or measured by
+/// repeated readings), and what the ratio says.
+std::string noise_statement(double fit_sigma_m, double tracker_sigma_m, bool measured) {
   const double ratio = fit_sigma_m / tracker_sigma_m;
-  char line[300];
-  std::snprintf(line, sizeof line,
-                "noise: the fit's residual sigma %s mm per axis is %.1fx the tracker's stated %s mm (--tracker-sigma-um)%s",
-                format_mm(fit_sigma_m).c_str(), ratio, format_mm(tracker_sigma_m).c_str(),
-                ratio > 2.0 ? ": unmodelled effects (or a wrong stated noise) dominate the residuals, not the tracker"
+  char line[320];
+  std::snprintf(line, sizeof line, "noise: the fit's residual sigma %s mm per axis is %.1fx the tracker's %s %s mm%s%s",
+                format_mm(fit_sigma_m).c_str(), ratio, measured ? "measured" : "stated",
+                format_mm(tracker_sigma_m).c_str(), measured ? " (repeated readings)" : " (--tracker-sigma-um)",
+                ratio > 2.0 ? (measured ? ": unmodelled effects dominate the residuals, not the tracker"
+                                        : ": unmodelled effects (or a wrong stated noise) dominate the residuals, not the tracker")
                             : ": the model explains the data to the measurement noise");
   return line;
+}
+
+/// The measurement noise: what repeated readings show when the input has them (a line says
+/// so, beside the stated figure), else the stated sigma.
+void measurement_noise(const CalibrateSettings& settings, const RepeatedReadingNoise& repeated,
+                       report::ReportData* data) {
+  data->noise_sigma_m = settings.orientation.position_sigma_m;
+  if (repeated.groups == 0) return;
+  data->noise_sigma_m = repeated.sigma_m;
+  data->noise_source = "repeated readings";
+  char line[300];
+  std::snprintf(line, sizeof line,
+                "tracker noise: %zu readings of %zu repeated points scatter %s mm per axis (x %s, y %s, z %s; stated %s mm)",
+                repeated.readings, repeated.groups, format_mm(repeated.sigma_m).c_str(),
+                format_mm(repeated.sigma_axis_m[0]).c_str(), format_mm(repeated.sigma_axis_m[1]).c_str(),
+                format_mm(repeated.sigma_axis_m[2]).c_str(), format_mm(settings.orientation.position_sigma_m).c_str());
+  data->info_lines.push_back(line);
 }
 
 /// Collects each pose's test under the final calibration: the kept poses' w, the uncontrolled ones.
@@ -353,8 +372,10 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     data.identifiability.significance_t = run.result.significance_t;
     data.fit_sigma_m = lm->residual_sigma_m;
   }
-  data.noise_sigma_m = settings.orientation.position_sigma_m;
-  if (data.fit_sigma_m > 0.0) data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m));
+  measurement_noise(settings, run.repeated, &data);
+  if (data.fit_sigma_m > 0.0) {
+    data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m, data.noise_source != "stated"));
+  }
   data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
   data.has_stream = facts.has_stream;
   if (facts.has_stream) {

@@ -113,7 +113,7 @@ void error_figures(const ReportData& data, const std::vector<std::size_t>& shown
     }
     if (data.noise_sigma_m > 0.0) {
       spec.y_line = axis == 3 ? norm_um : per_axis_um;
-      spec.y_line_label = "tracker noise (stated)";
+      spec.y_line_label = "tracker noise (" + data.noise_source + ")";
     }
     const std::vector<double> ranks = index_axis(b.size());
     out->push_back({spec.id, svg_chart(spec, {Series{before.method, ranks, b, false}, Series{after.method, ranks, a, false}})});

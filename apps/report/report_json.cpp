@@ -480,6 +480,7 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
   }
   json.end_array();
   json.key("noise_sigma_m").value(data.noise_sigma_m);
+  if (data.noise_source != "stated") json.key("noise_source").value(data.noise_source);  // measured only
   json.key("fit_sigma_m").value(data.fit_sigma_m);
   if (data.identifiability.present) {
     json.key("identifiability");
@@ -555,6 +556,9 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   if (!get_samples(value.find("samples"), &parsed.samples)) return bad("samples");
   if (!get_predictions(value.find("predictions"), parsed.samples, &parsed.predictions)) return bad("predictions");
   if (!get_number(value.find("noise_sigma_m"), &parsed.noise_sigma_m)) return bad("noise_sigma_m");
+  if (const JsonValue* noise_source = value.find("noise_source"); noise_source != nullptr) {  // measured noise only
+    if (!get_string(noise_source, &parsed.noise_source)) return bad("noise_source");
+  }
   if (!get_number(value.find("fit_sigma_m"), &parsed.fit_sigma_m)) return bad("fit_sigma_m");
   if (!get_identifiability(value.find("identifiability"), &parsed.identifiability)) return bad("identifiability");
   if (!get_parameters(value.find("parameters"), &parsed.parameters)) return bad("parameters");

@@ -51,4 +51,37 @@ AccuracyReport accuracy_report(const RobotModel& model, const RigidTransform& ba
   return report;
 }
 
+RepeatedReadingNoise repeated_reading_noise(Span<const Sample> samples) {
+  RepeatedReadingNoise noise;
+  double squares_m2[3] = {};
+  for (std::size_t begin = 0; begin < samples.size();) {
+    std::size_t end = begin + 1;
+    while (end < samples.size() && samples[end].q_rad == samples[begin].q_rad) ++end;
+    for (int target = 0; target < kMaxTargets; ++target) {
+      Vec3 sum_m = Vec3::Zero();
+      std::size_t count = 0;
+      for (std::size_t i = begin; i < end; ++i) {
+        if (samples[i].target != target) continue;
+        sum_m += samples[i].point_m;
+        ++count;
+      }
+      if (count < 2) continue;
+      const Vec3 mean_m = sum_m / static_cast<double>(count);
+      for (std::size_t i = begin; i < end; ++i) {
+        if (samples[i].target != target) continue;
+        const Vec3 d_m = samples[i].point_m - mean_m;
+        for (int axis = 0; axis < 3; ++axis) squares_m2[axis] += d_m(axis) * d_m(axis);
+      }
+      ++noise.groups;
+      noise.readings += count;
+    }
+    begin = end;
+  }
+  if (noise.groups == 0) return noise;
+  const double dof = static_cast<double>(noise.readings - noise.groups);
+  for (int axis = 0; axis < 3; ++axis) noise.sigma_axis_m[axis] = std::sqrt(squares_m2[axis] / dof);
+  noise.sigma_m = std::sqrt((squares_m2[0] + squares_m2[1] + squares_m2[2]) / (3.0 * dof));
+  return noise;
+}
+
 }  // namespace hivecal

@@ -41,4 +41,24 @@ ErrorStats position_error_stats(const RobotModel& model, const RigidTransform& b
 AccuracyReport accuracy_report(const RobotModel& model, const RigidTransform& base_to_tracker,
                                const DatasetBase& dataset);
 
+/// The measurement noise that repeated readings show: a reflector read more than once at one
+/// pose (consecutive samples at equal joints with the same target; a pose as Dataset groups
+/// its samples) scatters by the tracker's noise alone, whatever the model's error. Joints
+/// that differ at all are not one reading: a robot creeping at a stop moves the point (1e-3 rad
+/// is a millimetre at a metre's reach), and that is not the tracker's noise.
+struct RepeatedReadingNoise {
+  std::size_t groups = 0;    ///< (pose, target) pairs read more than once [-]
+  std::size_t readings = 0;  ///< readings in those groups [-]
+  /// Pooled standard deviation per axis, sqrt(sum (p - mean)^2 / (readings - groups)) over
+  /// each group's readings [m]; 0 when there is no group.
+  double sigma_axis_m[3] = {};
+  /// The three axes pooled: sqrt(sum |p - mean|^2 / (3 (readings - groups))) [m]; 0 when
+  /// there is no group.
+  double sigma_m = 0.0;
+};
+
+/// The noise of repeated readings in `samples` (no model involved). A run of consecutive
+/// samples at equal joints is one pose; within a run, the samples of each target form a group.
+RepeatedReadingNoise repeated_reading_noise(Span<const Sample> samples);
+
 }  // namespace hivecal

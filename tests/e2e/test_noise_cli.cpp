@@ -1,0 +1,74 @@
+// The measurement noise a calibration reports: with repeated readings in the input, what they
+// scatter (not the stated figure) is the report's noise level and the residual's yardstick;
+// without, the stated --tracker-sigma-um.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+
+#include "cli/options.hpp"
+#include "commands/commands.hpp"
+#include "hivecal/core/random.hpp"
+#include "hivecal/port/input_file.hpp"
+#include "testkit/cli_run.hpp"
+#include "testkit/temp_dir.hpp"
+#include "testkit/test_data.hpp"
+#include "textio/csv.hpp"
+
+namespace hivecal {
+namespace {
+
+/// The number after `"key": ` in `text` (NaN when absent).
+double number_after(const std::string& text, const std::string& key) {
+  const std::size_t at = text.find("\"" + key + "\": ");
+  return at == std::string::npos ? std::nan("") : std::strtod(text.c_str() + at + key.size() + 4, nullptr);
+}
+
+/// `poses` random poses of a perturbed UR5, each read `repeats` times with `sigma_m` per axis.
+std::string write_set(const test::TempDir& dir, std::size_t poses, int repeats, double sigma_m) {
+  static Dataset<512> written;
+  written.clear();
+  Random random(31);
+  const RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, 3e-4, 3e-4);
+  for (std::size_t p = 0; p < poses; ++p) {
+    const JointVector q = test::random_joints(&random);
+    const Vec3 point_m = test::example_base_to_tracker().apply(fk_tool_point(truth, q));
+    for (int r = 0; r < repeats; ++r) {
+      (void)written.add(q, point_m + sigma_m * Vec3(random.normal(), random.normal(), random.normal()));
+    }
+  }
+  return dir.write("set.csv", textio::format_samples_csv(written.samples()));
+}
+
+std::string calibrate(const test::TempDir& dir, const std::string& samples) {
+  const std::string result = dir.path() + "/result.json";
+  const int code = test::run(cli::calibrate_main, {"--samples", samples, "--method", "lm", "--keep-outliers", "--out",
+                                                   result, "--quiet", "--tracker-sigma-um", "10"});
+  EXPECT_TRUE(code == cli::kExitOk || code == cli::kExitWarnings) << code;  // warnings: the tool moves far
+  std::string text;
+  EXPECT_TRUE(port::read_whole_file(result, port::kMaxTextInputBytes, &text).ok());
+  return text;
+}
+
+TEST(NoiseCli, RepeatedReadingsGiveTheMeasuredNoise) {
+  const test::TempDir dir("hivecal_noise");
+  ASSERT_FALSE(dir.path().empty());
+  const std::string text = calibrate(dir, write_set(dir, 60, 4, 30e-6));  // stated 10 um, true 30 um
+  EXPECT_NE(text.find("\"noise_source\": \"repeated readings\""), std::string::npos);
+  EXPECT_NE(text.find("240 readings of 60 repeated points scatter"), std::string::npos);
+  EXPECT_NE(text.find("the tracker's measured"), std::string::npos);
+  const double noise_m = number_after(text, "noise_sigma_m");
+  EXPECT_NEAR(noise_m, 30e-6, 0.12 * 30e-6);  // 180 degrees of freedom per axis
+}
+
+TEST(NoiseCli, WithoutRepeatsTheStatedNoise) {
+  const test::TempDir dir("hivecal_noise");
+  ASSERT_FALSE(dir.path().empty());
+  const std::string text = calibrate(dir, write_set(dir, 120, 1, 30e-6));
+  EXPECT_EQ(text.find("noise_source"), std::string::npos);
+  EXPECT_NE(text.find("the tracker's stated"), std::string::npos);
+  EXPECT_DOUBLE_EQ(number_after(text, "noise_sigma_m"), 10e-6);
+}
+
+}  // namespace
+}  // namespace hivecal
