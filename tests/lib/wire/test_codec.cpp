@@ -1,6 +1,6 @@
-// Wire codec: spec test vectors both ways, CRC-32C, COBS, every rejection path, name
-// padding, unknown types, one sequence counter per stream with wrap-around, streams that start
-// mid-frame.
+// Wire codec: spec test vectors both ways, every rejection path, name padding, unknown
+// types, one sequence counter per stream with wrap-around, streams that start mid-frame
+// (CRC-32C and COBS on their own: test_crc32c.cpp, test_cobs.cpp).
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -141,113 +141,6 @@ Bytes packet_of_frame(const Bytes& frame) {
             Status::ok);
   packet.resize(written - 4);
   return packet;
-}
-
-TEST(Crc32c, CheckValueAndEmptyInput) {
-  const auto* check = reinterpret_cast<const std::uint8_t*>("123456789");
-  std::uint32_t crc = 0;
-  EXPECT_NO_HEAP(crc = crc32c(check, 9));
-  EXPECT_EQ(crc, 0xE3069283u);
-  EXPECT_EQ(no_heap([&] { return crc32c(nullptr, 0); }), 0u);
-  EXPECT_EQ(no_heap([&] { return crc32c(check, 0); }), 0u);
-}
-
-TEST(Cobs, KnownEncodings) {
-  struct Case {
-    const char* packet;
-    const char* encoded;
-  };
-  // Cheshire & Baker examples (delimiter excluded).
-  const Case cases[] = {{"00", "0101"},
-                        {"0000", "010101"},
-                        {"11220033", "0311220233"},
-                        {"11223344", "0511223344"},
-                        {"11000000", "0211010101"},
-                        {"", "01"}};
-  for (const Case& c : cases) {
-    const Bytes packet = from_hex(c.packet);
-    Bytes out(cobs_max_encoded_bytes(packet.size()));
-    std::size_t written = 0;
-    Status status = Status::ok;
-    EXPECT_NO_HEAP(status = cobs_encode(Span<const std::uint8_t>(packet.data(), packet.size()),
-                                        Span<std::uint8_t>(out.data(), out.size()), &written));
-    ASSERT_EQ(status, Status::ok);
-    out.resize(written);
-    EXPECT_EQ(out, from_hex(c.encoded)) << c.packet;
-    Bytes back(out.size());
-    EXPECT_NO_HEAP(status = cobs_decode(Span<const std::uint8_t>(out.data(), out.size()),
-                                        Span<std::uint8_t>(back.data(), back.size()), &written));
-    ASSERT_EQ(status, Status::ok);
-    back.resize(written);
-    EXPECT_EQ(back, packet);
-  }
-}
-
-TEST(Cobs, LongRunsRoundTripInPlace) {
-  Random random(4);
-  for (std::size_t size = 0; size < 800; size += 1 + static_cast<std::size_t>(random.below(7))) {
-    Bytes packet(size);
-    const bool sparse_zeros = random.below(2) == 0;
-    for (auto& b : packet) b = static_cast<std::uint8_t>(sparse_zeros ? 1 + random.below(255) : random.below(3));
-    Bytes buffer(cobs_max_encoded_bytes(size));
-    std::size_t encoded = 0;
-    ASSERT_EQ(no_heap([&] {
-                return cobs_encode(Span<const std::uint8_t>(packet.data(), size),
-                                   Span<std::uint8_t>(buffer.data(), buffer.size()), &encoded);
-              }),
-              Status::ok);
-    EXPECT_EQ(std::count(buffer.begin(), buffer.begin() + static_cast<long>(encoded), 0), 0);
-    std::size_t decoded = 0;
-    ASSERT_EQ(no_heap([&] {
-                return cobs_decode(Span<const std::uint8_t>(buffer.data(), encoded),
-                                   Span<std::uint8_t>(buffer.data(), encoded), &decoded);
-              }),
-              Status::ok);  // in place
-    ASSERT_EQ(decoded, size);
-    EXPECT_TRUE(std::equal(packet.begin(), packet.end(), buffer.begin()));
-  }
-  // A full 254-byte run at the end decodes with or without the final empty run ("01").
-  Bytes full(255, 0xAB);
-  full[0] = 0xFF;
-  Bytes out(300);
-  std::size_t decoded = 0;
-  ASSERT_EQ(no_heap([&] {
-              return cobs_decode(Span<const std::uint8_t>(full.data(), full.size()),
-                                 Span<std::uint8_t>(out.data(), out.size()), &decoded);
-            }),
-            Status::ok);
-  EXPECT_EQ(decoded, 254u);
-}
-
-TEST(Cobs, RejectsMalformedFrames) {
-  Bytes out(64);
-  std::size_t written = 7;
-  const Span<std::uint8_t> o(out.data(), out.size());
-  const Bytes past_end = from_hex("051122");
-  EXPECT_EQ(
-      no_heap([&] { return cobs_decode(Span<const std::uint8_t>(past_end.data(), past_end.size()), o, &written); }),
-      Status::cobs_error);
-  EXPECT_EQ(written, 0u);
-  const Bytes inner_zero = from_hex("03110022");
-  EXPECT_EQ(
-      no_heap([&] { return cobs_decode(Span<const std::uint8_t>(inner_zero.data(), inner_zero.size()), o, &written); }),
-      Status::cobs_error);
-  const Bytes zero_code = from_hex("0211002233");
-  EXPECT_EQ(
-      no_heap([&] { return cobs_decode(Span<const std::uint8_t>(zero_code.data(), zero_code.size()), o, &written); }),
-      Status::cobs_error);
-  EXPECT_EQ(no_heap([&] { return cobs_decode(Span<const std::uint8_t>(), o, &written); }), Status::cobs_error);
-  const Bytes fine = from_hex("0311220233");
-  EXPECT_EQ(no_heap([&] {
-              return cobs_decode(Span<const std::uint8_t>(fine.data(), fine.size()), o.subspan(0, 3), &written);
-            }),
-            Status::buffer_too_small);
-  EXPECT_EQ(no_heap([&] {
-              return cobs_encode(Span<const std::uint8_t>(fine.data(), fine.size()), o.subspan(0, 5), &written);
-            }),
-            Status::buffer_too_small);
-  EXPECT_EQ(no_heap([&] { return cobs_encode(Span<const std::uint8_t>(fine.data(), fine.size()), o, nullptr); }),
-            Status::invalid_argument);
 }
 
 TEST(CodecVectors, DecodeToTheStatedValues) {
