@@ -1,0 +1,36 @@
+// The job's blunder search, internal to the job (blunder_search.cpp): what calibrate() calls.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "hivecal/calibration.hpp"
+
+namespace hivecal::detail {
+
+/// The positions of a finished outlier list (sorted), as a span.
+Span<const std::uint32_t> index_span(const CalibrationOutlierList& list);
+
+/// Whether two finished lists hold the same samples.
+bool same_indices(const CalibrationOutlierList& a, const CalibrationOutlierList& b);
+
+/// Consensus screen with the start geometry: the base fitted on random point triples (seeded,
+/// deterministic), the one with the least median residual over all samples kept (LMedS), and
+/// the samples far from it into *list. Errors: degenerate_geometry when no triple spans a
+/// plane (the base frame is not determined).
+Status screen(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& o,
+              CalibrationWorkspaceBase& workspace, CalibrationOutlierList* list);
+
+/// Training poses the w-test may remove: max_blunder_share of them, at least one [-].
+std::size_t blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o);
+
+/// The loss the w-test whitens with: LM's joint noise, no Huber weights.
+PointLoss blunder_test_loss(const CalibrationOptions& o);
+
+/// Data snooping on the final calibration of `r` (one pose at a time, refitting), then the
+/// removed, test and set-aside samples tested as predictions; those that fail into *found.
+/// *summary: the first test (the final calibration on its training poses).
+BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o, CalibrationWorkspaceBase& workspace,
+                               CalibrationResult& r, CalibrationOutlierList* found, BlunderTestSummary* summary);
+
+}  // namespace hivecal::detail
