@@ -68,9 +68,14 @@ class Pass {
   const Input& tracker_input() const { return tracker_input_; }
   RecordReader& robot() { return robot_; }
   RecordReader& tracker() { return tracker_; }
-  /// read_failed becomes invalid_argument with the reader's message.
+  /// The pass's last progress line (once).
+  void end() {
+    if (progress_ && !ended_) progress_(number_, bytes_done(), total_);
+    ended_ = true;
+  }
+  /// Ends the pass; read_failed becomes invalid_argument with the reader's message.
   Status finish(Status status, std::string* error) {
-    if (progress_) progress_(number_, bytes_done(), total_);
+    end();
     if (status != Status::read_failed) return status;
     *error = robot_input_.error().empty() ? tracker_input_.error() : robot_input_.error();
     return Status::invalid_argument;
@@ -91,6 +96,7 @@ class Pass {
   std::uint64_t total_;
   std::uint64_t calls_ = 0;
   std::uint64_t next_report_ = 0;
+  bool ended_ = false;
   std::function<void()> tick_;
   Input robot_input_;
   Input tracker_input_;
@@ -172,12 +178,55 @@ port::Error check_not_swapped(const std::string& robot_path, const std::string& 
   return port::Error{};
 }
 
+/// The two files as lib's RecordSource: each open() is the next pass (1: clock, 2: samples),
+/// whose readers report progress; both passes' inputs stay for the counts and the messages.
+class FileRecordSource final : public RecordSource {
+ public:
+  FileRecordSource(const std::string& robot_path, const std::string& tracker_path, const LogRecordReader* robot_log,
+                   const LogRecordReader* tracker_log, const PassProgress& progress, std::uint64_t total_bytes)
+      : robot_path_(robot_path), tracker_path_(tracker_path), robot_log_(robot_log), tracker_log_(tracker_log),
+        progress_(progress), total_(total_bytes) {}
+  Status open(RecordReader** robot, RecordReader** tracker) override {
+    if (opened_ == 2) return Status::read_failed;
+    if (opened_ == 1) passes_[0]->end();  // pass 1 is over: its last progress line before pass 2's
+    std::unique_ptr<Pass>& pass = passes_[opened_];
+    pass = std::make_unique<Pass>(opened_ + 1, progress_, total_);
+    ++opened_;
+    open_error_ = pass->open(robot_path_, tracker_path_, robot_log_, tracker_log_);
+    if (!open_error_.ok()) return Status::read_failed;
+    *robot = &pass->robot();
+    *tracker = &pass->tracker();
+    return Status::ok;
+  }
+  int opened() const { return opened_; }                      ///< passes opened [-]
+  Pass& pass(int number) { return *passes_[number - 1]; }     ///< pass 1 or 2 (opened)
+  const port::Error& open_error() const { return open_error_; }  ///< why the last open failed
+
+ private:
+  std::string robot_path_;
+  std::string tracker_path_;
+  const LogRecordReader* robot_log_;
+  const LogRecordReader* tracker_log_;
+  const PassProgress& progress_;
+  std::uint64_t total_;
+  int opened_ = 0;
+  std::unique_ptr<Pass> passes_[2];
+  port::Error open_error_;
+};
+
 /// What the clock fit matched, for the report (observation only; a failure leaves it empty).
-void record_clock_match(const ClockEstimatorBase& estimator, CaptureRunReport* report) {
-  const auto match = std::make_unique<ClockMatch>();
-  if (estimator.match_profiles(report->clock, kClockMatchBins, match.get()) != Status::ok) return;
-  report->clock_match.assign(match->bins, match->bins + match->count);
-}
+class ClockMatchRecorder final : public ClockPassObserver {
+ public:
+  void on_clock_pass(const ClockEstimatorBase& estimator, Status status, const ClockFit& fit) override {
+    const auto match = std::make_unique<ClockMatch>();  // ~25 kB: not on the stack
+    if (status != Status::ok || estimator.match_profiles(fit, kClockMatchBins, match.get()) != Status::ok) return;
+    bins.assign(match->bins, match->bins + match->count);
+  }
+  std::vector<ClockMatchBin> bins;  ///< time bins, in order
+};
+
+/// The front's workspace at the host's capacities (ClockEstimator<>, SampleExtractor<>).
+using HostCaptureWorkspace = CaptureWorkspace<kDefaultClockRobotKnots, kDefaultClockTrackerPoints, 1024, 64>;
 
 }  // namespace
 
@@ -196,34 +245,36 @@ port::Error extract_from_files(const std::string& robot_path, const std::string&
   for (const LogRecordReader* log : {robot_log.get(), tracker_log.get()}) {
     if (log != nullptr && !log->error().empty()) return port::Error::input(log->error());
   }
-  // Large fixed-size objects: on the heap of the app, once (bounded whatever the input length).
-  const auto estimator = std::make_unique<ClockEstimator<>>(clock_config);
-  const std::uint64_t total_bytes = size_of(robot_path) + size_of(tracker_path);
+  // Both passes in lib's capture front; the large fixed-size objects on the app's heap, once
+  // (bounded whatever the input length).
+  const auto workspace = std::make_unique<HostCaptureWorkspace>();
+  CaptureOptions options;
+  options.clock = clock_config;
+  options.extraction = extraction_config;
+  options.observer = observer;
+  ClockMatchRecorder match;
+  options.clock_observer = &match;
+  FileRecordSource source(robot_path, tracker_path, robot_log.get(), tracker_log.get(), progress,
+                          size_of(robot_path) + size_of(tracker_path));
+  CaptureExtraction result;
+  const Status status = extract_dataset_from_captures(source, options, workspace.get(), dataset, &result);
+  if (!source.open_error().ok()) return source.open_error();
+  // Pass 1: the clock.
   std::string error;
-  {
-    Pass pass(1, progress, total_bytes);
-    port::Error opened = pass.open(robot_path, tracker_path, robot_log.get(), tracker_log.get());
-    if (!opened.ok()) return opened;
-    PassStats decoding;
-    report->clock_status = pass.finish(
-        estimate_clock_from_streams(pass.robot(), pass.tracker(), estimator.get(), &report->clock, &decoding), &error);
-    count_input(pass.robot_input(), decoding.robot_decoder, true, robot_log.get(), &report->robot);
-    count_input(pass.tracker_input(), decoding.tracker_decoder, false, tracker_log.get(), &report->tracker);
-    report->clock_stats = estimator->stats();
-    if (report->clock_status == Status::ok) record_clock_match(*estimator, report);
-    if (report->clock_status == Status::invalid_argument && !error.empty()) return port::Error::input(error);
-    const port::Error swapped = check_not_swapped(robot_path, tracker_path, *report);
-    if (!swapped.ok()) return swapped;
-    if (report->clock_status != Status::ok) return port::Error{};
-  }
-  const auto extractor = std::make_unique<SampleExtractor<>>(extraction_config, report->clock, dataset);
-  extractor->set_observer(observer);
-  Pass pass(2, progress, total_bytes);
-  port::Error opened = pass.open(robot_path, tracker_path, robot_log.get(), tracker_log.get());
-  if (!opened.ok()) return opened;
-  report->extraction_status =
-      pass.finish(extract_samples_from_streams(pass.robot(), pass.tracker(), extractor.get(), nullptr), &error);
-  report->counts = extractor->counts();
+  report->clock = result.clock;
+  report->clock_status = source.pass(1).finish(result.pass == CapturePass::clock ? status : Status::ok, &error);
+  count_input(source.pass(1).robot_input(), result.decoding.robot_decoder, true, robot_log.get(), &report->robot);
+  count_input(source.pass(1).tracker_input(), result.decoding.tracker_decoder, false, tracker_log.get(),
+              &report->tracker);
+  report->clock_stats = result.clock_stats;
+  if (report->clock_status == Status::ok) report->clock_match = std::move(match.bins);
+  if (report->clock_status == Status::invalid_argument && !error.empty()) return port::Error::input(error);
+  const port::Error swapped = check_not_swapped(robot_path, tracker_path, *report);
+  if (!swapped.ok()) return swapped;
+  if (report->clock_status != Status::ok || source.opened() < 2) return port::Error{};
+  // Pass 2: the samples.
+  report->extraction_status = source.pass(2).finish(status, &error);
+  report->counts = result.counts;
   if (report->extraction_status == Status::invalid_argument && !error.empty()) return port::Error::input(error);
   return port::Error{};
 }

@@ -1,8 +1,8 @@
 // Wires port/ and the text formats to lib/ for the stream path: each input is a serial
 // capture (port::InputFile, a lib ByteReader -> FrameRecordReader) or a text log
 // or ROS 2 bag of any tool (open_log_records -> LogRecordReader, read once), then
-// the library's two passes (hivecal/capture_pipeline.hpp: ClockEstimator, then
-// SampleExtractor in robot-clock order) -> dataset. A capture's memory stays bounded (read a
+// the library's capture front (hivecal/sync/capture_dataset.hpp: its two passes, ClockEstimator,
+// then SampleExtractor in robot-clock order) -> dataset; this file only supplies the readers. A capture's memory stays bounded (read a
 // chunk at a time); a log's records are held (~136 B a robot row: 41 MB for 10 min at 500 Hz).
 #pragma once
 
@@ -15,6 +15,7 @@
 
 #include "hivecal/port/error.hpp"
 #include "hivecal/port/input_file.hpp"
+#include "hivecal/sync/capture_dataset.hpp"
 #include "hivecal/sync/capture_pipeline.hpp"
 #include "hivecal/sync/clock_sync.hpp"
 #include "hivecal/sync/sample_extraction.hpp"

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include "hivecal/core/random.hpp"
@@ -472,6 +473,65 @@ TEST(CaptureDataset, AFullDatasetIsReportedAtTheExtractionPass) {
   EXPECT_EQ(result.counts.kept, 10u);
   EXPECT_GT(result.counts.dropped_by(DropReason::dataset_full), 50u);
   EXPECT_EQ(result.counts.pending(), 0u);
+}
+
+/// The captures as records, decoded here by the test's own FrameRecordReaders (a host's source
+/// of records: logs, or captures with progress).
+class MemoryRecords final : public RecordSource {
+ public:
+  MemoryRecords(const Bytes& robot, const Bytes& tracker)
+      : robot_bytes_(Span<const std::uint8_t>(robot.data(), robot.size())),
+        tracker_bytes_(Span<const std::uint8_t>(tracker.data(), tracker.size())) {}
+  Status open(RecordReader** robot, RecordReader** tracker) override {
+    ++opens;
+    robot_bytes_.rewind();
+    tracker_bytes_.rewind();
+    robot_ = std::make_unique<FrameRecordReader>(&robot_bytes_);
+    tracker_ = std::make_unique<FrameRecordReader>(&tracker_bytes_);
+    *robot = robot_.get();
+    *tracker = tracker_.get();
+    return Status::ok;
+  }
+  int opens = 0;
+
+ private:
+  MemoryByteReader robot_bytes_;
+  MemoryByteReader tracker_bytes_;
+  std::unique_ptr<FrameRecordReader> robot_;
+  std::unique_ptr<FrameRecordReader> tracker_;
+};
+
+TEST(CaptureDataset, RecordsFrontHasTheBitsOfTheByteFrontAndDescribesTheClockMatch) {
+  const SimCapture& c = capture();
+  const RobotModel model = nominal();
+  MemoryCaptures bytes(c.robot_bytes, c.tracker_bytes);
+  CaptureExtraction from_bytes;
+  ASSERT_EQ(extract_dataset_from_captures(model, bytes, &workspace, &dataset_a, &from_bytes), Status::ok);
+  MemoryRecords records(c.robot_bytes, c.tracker_bytes);
+  static ClockMatch match;
+  struct MatchAtTheEndOfPassOne final : ClockPassObserver {
+    void on_clock_pass(const ClockEstimatorBase& estimator, Status status, const ClockFit& fit) override {
+      ++calls;
+      EXPECT_EQ(status, Status::ok);
+      EXPECT_EQ(estimator.match_profiles(fit, 64, &match), Status::ok);  // the profiles are still there
+    }
+    int calls = 0;
+  } clock_observer;
+  Recorder recorder;
+  CaptureOptions options = make_capture_options(model);
+  options.observer = &recorder;
+  options.clock_observer = &clock_observer;
+  CaptureExtraction from_records;
+  ASSERT_EQ(extract_dataset_from_captures(records, options, &workspace, &dataset_b, &from_records), Status::ok);
+  EXPECT_EQ(records.opens, 2);
+  EXPECT_TRUE(same_extraction(from_bytes, from_records));
+  EXPECT_TRUE(same_samples(dataset_a, dataset_b));
+  EXPECT_EQ(recorder.samples.size(), from_records.counts.kept);
+  EXPECT_EQ(clock_observer.calls, 1);
+  EXPECT_GT(match.count, 0u);
+  EXPECT_LE(match.count, 64u);
+  EXPECT_EQ(from_records.clock_stats.robot_records, c.joints);  // every joint state went into pass 1's profile
+  EXPECT_EQ(from_bytes.clock_stats.robot_records, c.joints);
 }
 
 }  // namespace
