@@ -1,6 +1,8 @@
 // Counts heap allocations made while a trap is armed (see tests/CMakeLists.txt).
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cstddef>
 
 namespace hivecal::test {
@@ -28,3 +30,16 @@ std::size_t count_allocations(F&& f) {
     const std::size_t hivecal_allocs_ = ::hivecal::test::count_allocations([&] { statement; }); \
     EXPECT_EQ(hivecal_allocs_, 0u) << "heap allocation inside: " #statement;               \
   } while (0)
+
+namespace hivecal::test {
+
+/// Runs a library call under the allocation trap (failing the test if it allocated) and
+/// returns its result.
+template <typename Call>
+auto no_heap(Call&& call) {
+  decltype(call()) result{};
+  EXPECT_NO_HEAP(result = call());
+  return result;
+}
+
+}  // namespace hivecal::test

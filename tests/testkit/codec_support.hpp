@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 #include <type_traits>
+#include <vector>
 
 #include "hivecal/wire/codec.hpp"
 #include "hivecal/core/digest.hpp"
@@ -15,6 +16,16 @@ namespace hivecal::test {
 // Counters are compared and hashed as an array of u64: no padding may hide in the struct.
 static_assert(std::has_unique_object_representations_v<DecoderStats>, "DecoderStats is plain u64 fields");
 inline constexpr std::size_t kStatsWords = sizeof(DecoderStats) / sizeof(std::uint64_t);
+
+/// The bytes a lower-case hex string spells ("0a1b..."), as the spec's test vectors are written.
+inline std::vector<std::uint8_t> from_hex(const char* hex) {
+  std::vector<std::uint8_t> bytes;
+  for (std::size_t i = 0; hex[i] != '\0' && hex[i + 1] != '\0'; i += 2) {
+    auto nibble = [](char c) { return static_cast<std::uint8_t>(c <= '9' ? c - '0' : c - 'a' + 10); };
+    bytes.push_back(static_cast<std::uint8_t>(nibble(hex[i]) << 4 | nibble(hex[i + 1])));
+  }
+  return bytes;
+}
 
 /// Every counter equal.
 inline bool same_stats(const DecoderStats& a, const DecoderStats& b) { return std::memcmp(&a, &b, sizeof a) == 0; }

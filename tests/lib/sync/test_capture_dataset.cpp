@@ -15,55 +15,18 @@
 #include "sim/sim_model.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/codec_support.hpp"
+#include "testkit/sync_checks.hpp"
+#include "testkit/sim_capture.hpp"
 #include "testkit/sim_feed.hpp"
 
 namespace hivecal {
 namespace {
 
-using Bytes = std::vector<std::uint8_t>;
+using test::Bytes;
 
-// ---------------------------------------------------------------------------------------
-// A simulated capture pair, as the devices put it on the wire.
-
-template <typename Record>
-void append_frame(const Record& record, Status (*encoder)(const Record&, Span<std::uint8_t>, std::size_t*),
-                  Bytes* out) {
-  std::uint8_t frame[kMaxFrameBytes];
-  std::size_t size = 0;
-  Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = encoder(record, Span<std::uint8_t>(frame, sizeof frame), &size));
-  EXPECT_EQ(status, Status::ok);
-  out->insert(out->end(), frame, frame + size);
-}
-
-struct SimCapture {
-  std::size_t joints = 0;  ///< JOINT_STATE frames in robot_bytes
-  std::size_t points = 0;  ///< TRACKER_POINT frames in tracker_bytes
-  Bytes robot_bytes;       ///< DEVICE_INFO, then every joint state, framed
-  Bytes tracker_bytes;     ///< DEVICE_INFO, then every tracker point, framed
-};
-
-/// 6 waypoints in 40 s, large geometry errors (the 1 mm tool the clock tests use).
-const sim::Session& session() {
-  static const sim::Session s(test::large_error_config(25, 6, 40.0));
-  return s;
-}
-
-const SimCapture& capture() {
-  static const SimCapture c = [] {
-    SimCapture built;
-    sim::RobotStream robot(session());
-    append_frame(robot.device_info(), encode_device_info, &built.robot_bytes);
-    for (JointStateRecord joint; robot.next(&joint); ++built.joints)
-      append_frame(joint, encode_joint_state, &built.robot_bytes);
-    sim::TrackerStream tracker(session());
-    append_frame(tracker.device_info(), encode_device_info, &built.tracker_bytes);
-    for (TrackerPointRecord point; tracker.next(&point); ++built.points)
-      append_frame(point, encode_tracker_point, &built.tracker_bytes);
-    return built;
-  }();
-  return c;
-}
+/// The simulated session and its capture pair (testkit/sim_capture.hpp).
+const sim::Session& session() { return test::capture_session(); }
+const test::SimCapture& capture() { return test::sim_capture(); }
 
 /// A ByteReader that always fails.
 class BrokenReader final : public ByteReader {
@@ -162,30 +125,8 @@ static Dataset<1024> dataset_b;
 
 RobotModel nominal() { return session().truth().nominal; }
 
-bool same_fit(const ClockFit& a, const ClockFit& b) {
-  const double av[] = {a.offset_us, a.drift, a.reference_tracker_us, a.offset_at_reference_us,
-                       a.sigma_offset_at_reference_us, a.sigma_drift, a.sigma_offset_us, a.speed_gain,
-                       a.residual_rms_m, a.coarse_correlation, a.runner_up_correlation};
-  const double bv[] = {b.offset_us, b.drift, b.reference_tracker_us, b.offset_at_reference_us,
-                       b.sigma_offset_at_reference_us, b.sigma_drift, b.sigma_offset_us, b.speed_gain,
-                       b.residual_rms_m, b.coarse_correlation, b.runner_up_correlation};
-  return std::memcmp(av, bv, sizeof av) == 0 && a.chords_used == b.chords_used && a.edge_chords == b.edge_chords &&
-         a.iterations == b.iterations;
-}
-
-bool same_samples(const DatasetBase& a, const DatasetBase& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const Sample& x = a.samples()[i];
-    const Sample& y = b.samples()[i];
-    if (std::memcmp(x.q_rad.data(), y.q_rad.data(), sizeof(double) * kJointCount) != 0) return false;
-    if (std::memcmp(x.point_m.data(), y.point_m.data(), sizeof(double) * 3) != 0) return false;
-  }
-  return true;
-}
-
 bool same_extraction(const CaptureExtraction& a, const CaptureExtraction& b) {
-  return a.status == b.status && a.pass == b.pass && same_fit(a.clock, b.clock) &&
+  return a.status == b.status && a.pass == b.pass && test::same_fit(a.clock, b.clock) &&
          test::same_stats(a.decoding.robot_decoder, b.decoding.robot_decoder) &&
          test::same_stats(a.decoding.tracker_decoder, b.decoding.tracker_decoder) &&
          a.counts.tracker_points == b.counts.tracker_points && a.counts.kept == b.counts.kept &&
@@ -261,7 +202,7 @@ TEST(CaptureWorkspace, BuildsOnePassObjectAtATimeInItsArena) {
 }
 
 TEST(CaptureDataset, ASimulatedCaptureGivesTheTrueClockAndTheSimulatedJoints) {
-  const SimCapture& c = capture();
+  const test::SimCapture& c = capture();
   MemoryCaptures source(c.robot_bytes, c.tracker_bytes);
   Recorder recorder;
   spy.forget();
@@ -277,14 +218,14 @@ TEST(CaptureDataset, ASimulatedCaptureGivesTheTrueClockAndTheSimulatedJoints) {
   EXPECT_EQ(source.opens, 2);
   EXPECT_STREQ(spy.events, "ECXC");
   EXPECT_EQ(spy.dataset_given, &dataset_a);
-  EXPECT_TRUE(same_fit(spy.clock_given, result.clock));  // pass 2 runs through pass 1's clock
+  EXPECT_TRUE(test::same_fit(spy.clock_given, result.clock));  // pass 2 runs through pass 1's clock
   EXPECT_TRUE(spy.clock_config.speed_model.tool_m == nominal().tool_m);
   EXPECT_EQ(spy.extraction_config.max_speed_m_s, make_extraction_config(nominal()).max_speed_m_s);
   // Pass 1's decoder counters: every frame of both captures, nothing rejected.
-  EXPECT_EQ(result.decoding.robot_decoder.joint_states, c.joints);
+  EXPECT_EQ(result.decoding.robot_decoder.joint_states, c.joints.size());
   EXPECT_EQ(result.decoding.robot_decoder.device_infos, 1u);
   EXPECT_EQ(result.decoding.robot_decoder.frames_rejected(), 0u);
-  EXPECT_EQ(result.decoding.tracker_decoder.tracker_points, c.points);
+  EXPECT_EQ(result.decoding.tracker_decoder.tracker_points, c.points.size());
   EXPECT_EQ(result.decoding.tracker_decoder.frames_rejected(), 0u);
   EXPECT_EQ(result.decoding.tracker_decoder.bytes_total, c.tracker_bytes.size());
   // The simulator's clocks: t_robot = offset + (1 + drift) t_tracker, over the whole session.
@@ -297,7 +238,7 @@ TEST(CaptureDataset, ASimulatedCaptureGivesTheTrueClockAndTheSimulatedJoints) {
   }
   // Pass 2: the dataset was emptied first and holds the kept samples, at the simulated joints
   // of their instants and near the true points.
-  EXPECT_EQ(result.counts.tracker_points, c.points);
+  EXPECT_EQ(result.counts.tracker_points, c.points.size());
   EXPECT_EQ(result.counts.pending(), 0u);
   EXPECT_GT(result.counts.kept, 100u);
   ASSERT_EQ(dataset_a.size(), result.counts.kept);
@@ -318,7 +259,7 @@ TEST(CaptureDataset, ASimulatedCaptureGivesTheTrueClockAndTheSimulatedJoints) {
 }
 
 TEST(CaptureDataset, ReRunsAndSeparatePassesGiveTheSameBits) {
-  const SimCapture& c = capture();
+  const test::SimCapture& c = capture();
   MemoryCaptures source(c.robot_bytes, c.tracker_bytes);
   CaptureExtraction first;
   Status status = Status::invalid_argument;
@@ -330,25 +271,25 @@ TEST(CaptureDataset, ReRunsAndSeparatePassesGiveTheSameBits) {
   EXPECT_NO_HEAP(status = extract_dataset_from_captures(nominal(), source, &workspace, &dataset_b, &second));
   ASSERT_EQ(status, Status::ok);
   EXPECT_TRUE(same_extraction(second, first));
-  EXPECT_TRUE(same_samples(dataset_b, dataset_a));
+  EXPECT_TRUE(test::same_samples(dataset_b, dataset_a));
   // The two passes called one by one: each leaves its own pass in the result.
   CaptureExtraction separate;
   fill_with_junk(&dataset_b, 3);
   EXPECT_NO_HEAP(status = estimate_capture_clock(nominal(), source, &workspace, &separate));
   ASSERT_EQ(status, Status::ok);
   EXPECT_EQ(separate.pass, CapturePass::clock);
-  EXPECT_TRUE(same_fit(separate.clock, first.clock));
+  EXPECT_TRUE(test::same_fit(separate.clock, first.clock));
   EXPECT_NO_HEAP(status = extract_capture_samples(nominal(), source, &workspace, &dataset_b, &separate));
   ASSERT_EQ(status, Status::ok);
   EXPECT_EQ(separate.pass, CapturePass::extraction);
   separate.pass = CapturePass::done;
   EXPECT_TRUE(same_extraction(separate, first));
-  EXPECT_TRUE(same_samples(dataset_b, dataset_a));
+  EXPECT_TRUE(test::same_samples(dataset_b, dataset_a));
   EXPECT_EQ(source.opens, 6);
 }
 
 TEST(CaptureDataset, NullArgumentsAreRefusedBeforeOpening) {
-  const SimCapture& c = capture();
+  const test::SimCapture& c = capture();
   MemoryCaptures source(c.robot_bytes, c.tracker_bytes);
   CaptureExtraction result = stale_result();
   fill_with_junk(&dataset_a, 4);
@@ -375,7 +316,7 @@ TEST(CaptureDataset, NullArgumentsAreRefusedBeforeOpening) {
 }
 
 TEST(CaptureDataset, OpenAndReadFailuresNameThePass) {
-  const SimCapture& c = capture();
+  const test::SimCapture& c = capture();
   Status status = Status::ok;
   {  // The first open fails: nothing done, and *result was reset first.
     MemoryCaptures source(c.robot_bytes, c.tracker_bytes);
@@ -400,7 +341,7 @@ TEST(CaptureDataset, OpenAndReadFailuresNameThePass) {
     EXPECT_NO_HEAP(status = extract_dataset_from_captures(nominal(), source, &spy, &dataset_a, &result));
     EXPECT_EQ(status, Status::read_failed);
     EXPECT_EQ(result.pass, CapturePass::extraction);
-    EXPECT_EQ(result.decoding.robot_decoder.joint_states, c.joints);
+    EXPECT_EQ(result.decoding.robot_decoder.joint_states, c.joints.size());
     EXPECT_GT(result.clock.chords_used, 0u);
     EXPECT_STREQ(spy.events, "EC");
     EXPECT_EQ(source.opens, 2);
@@ -460,7 +401,7 @@ TEST(CaptureDataset, EmptyOrGarbageCapturesFailTheClockPass) {
 }
 
 TEST(CaptureDataset, AFullDatasetIsReportedAtTheExtractionPass) {
-  const SimCapture& c = capture();
+  const test::SimCapture& c = capture();
   MemoryCaptures source(c.robot_bytes, c.tracker_bytes);
   static Dataset<10> small;
   CaptureExtraction result;
@@ -502,7 +443,7 @@ class MemoryRecords final : public RecordSource {
 };
 
 TEST(CaptureDataset, RecordsFrontHasTheBitsOfTheByteFrontAndDescribesTheClockMatch) {
-  const SimCapture& c = capture();
+  const test::SimCapture& c = capture();
   const RobotModel model = nominal();
   MemoryCaptures bytes(c.robot_bytes, c.tracker_bytes);
   CaptureExtraction from_bytes;
@@ -525,13 +466,13 @@ TEST(CaptureDataset, RecordsFrontHasTheBitsOfTheByteFrontAndDescribesTheClockMat
   ASSERT_EQ(extract_dataset_from_captures(records, options, &workspace, &dataset_b, &from_records), Status::ok);
   EXPECT_EQ(records.opens, 2);
   EXPECT_TRUE(same_extraction(from_bytes, from_records));
-  EXPECT_TRUE(same_samples(dataset_a, dataset_b));
+  EXPECT_TRUE(test::same_samples(dataset_a, dataset_b));
   EXPECT_EQ(recorder.samples.size(), from_records.counts.kept);
   EXPECT_EQ(clock_observer.calls, 1);
   EXPECT_GT(match.count, 0u);
   EXPECT_LE(match.count, 64u);
-  EXPECT_EQ(from_records.clock_stats.robot_records, c.joints);  // every joint state went into pass 1's profile
-  EXPECT_EQ(from_bytes.clock_stats.robot_records, c.joints);
+  EXPECT_EQ(from_records.clock_stats.robot_records, c.joints.size());  // every joint state went into pass 1's profile
+  EXPECT_EQ(from_bytes.clock_stats.robot_records, c.joints.size());
 }
 
 }  // namespace

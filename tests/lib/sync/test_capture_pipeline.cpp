@@ -16,12 +16,15 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/codec_stream.hpp"
 #include "testkit/codec_support.hpp"
+#include "testkit/sync_checks.hpp"
+#include "testkit/sim_capture.hpp"
 #include "testkit/sim_feed.hpp"
 
 namespace hivecal {
 namespace {
 
-using Bytes = std::vector<std::uint8_t>;
+using test::append_frame;
+using test::Bytes;
 using Records = std::vector<StreamRecord>;
 
 // ---------------------------------------------------------------------------------------
@@ -147,53 +150,22 @@ DecoderStats decoder_stats_of(const Bytes& bytes) {
 }
 
 // ---------------------------------------------------------------------------------------
-// A simulated capture: the session's records and their wire bytes.
+// A simulated capture: the session's records and their wire bytes (testkit/sim_capture.hpp),
+// with the records as StreamRecords.
 
-template <typename Record>
-void append_frame(const Record& record, Status (*encoder)(const Record&, Span<std::uint8_t>, std::size_t*),
-                  Bytes* out) {
-  std::uint8_t frame[kMaxFrameBytes];
-  std::size_t size = 0;
-  Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = encoder(record, Span<std::uint8_t>(frame, sizeof frame), &size));
-  EXPECT_EQ(status, Status::ok);
-  out->insert(out->end(), frame, frame + size);
-}
-
-struct SimCapture {
-  std::vector<JointStateRecord> joints;
-  std::vector<TrackerPointRecord> points;
+struct SimCapture : test::SimCapture {
   Records robot_records;    ///< joints as StreamRecords
   Records tracker_records;  ///< points as StreamRecords
-  Bytes robot_bytes;        ///< DEVICE_INFO, then every joint state, framed
-  Bytes tracker_bytes;      ///< DEVICE_INFO, then every tracker point, framed
 };
 
-/// 6 waypoints in 40 s, large geometry errors (the 1 mm tool the clock tests use).
-const sim::Session& session() {
-  static const sim::Session s(test::large_error_config(25, 6, 40.0));
-  return s;
-}
+const sim::Session& session() { return test::capture_session(); }
 
 const SimCapture& capture() {
   static const SimCapture c = [] {
     SimCapture built;
-    sim::RobotStream robot(session());
-    append_frame(robot.device_info(), encode_device_info, &built.robot_bytes);
-    JointStateRecord joint;
-    while (robot.next(&joint)) {
-      built.joints.push_back(joint);
-      built.robot_records.push_back(joint_record(joint));
-      append_frame(joint, encode_joint_state, &built.robot_bytes);
-    }
-    sim::TrackerStream tracker(session());
-    append_frame(tracker.device_info(), encode_device_info, &built.tracker_bytes);
-    TrackerPointRecord point;
-    while (tracker.next(&point)) {
-      built.points.push_back(point);
-      built.tracker_records.push_back(point_record(point));
-      append_frame(point, encode_tracker_point, &built.tracker_bytes);
-    }
+    static_cast<test::SimCapture&>(built) = test::sim_capture();
+    for (const JointStateRecord& joint : built.joints) built.robot_records.push_back(joint_record(joint));
+    for (const TrackerPointRecord& point : built.points) built.tracker_records.push_back(point_record(point));
     return built;
   }();
   return c;
@@ -224,28 +196,6 @@ ClockFit true_clock() {
   fit.offset_at_reference_us = fit.offset_us;
   fit.drift = session().truth().clock_drift;
   return fit;
-}
-
-bool same_fit(const ClockFit& a, const ClockFit& b) {
-  const double av[] = {a.offset_us, a.drift, a.reference_tracker_us, a.offset_at_reference_us,
-                       a.sigma_offset_at_reference_us, a.sigma_drift, a.sigma_offset_us, a.speed_gain,
-                       a.residual_rms_m, a.coarse_correlation, a.runner_up_correlation};
-  const double bv[] = {b.offset_us, b.drift, b.reference_tracker_us, b.offset_at_reference_us,
-                       b.sigma_offset_at_reference_us, b.sigma_drift, b.sigma_offset_us, b.speed_gain,
-                       b.residual_rms_m, b.coarse_correlation, b.runner_up_correlation};
-  return std::memcmp(av, bv, sizeof av) == 0 && a.chords_used == b.chords_used && a.edge_chords == b.edge_chords &&
-         a.iterations == b.iterations;
-}
-
-bool same_samples(const DatasetBase& a, const DatasetBase& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const Sample& x = a.samples()[i];
-    const Sample& y = b.samples()[i];
-    if (std::memcmp(x.q_rad.data(), y.q_rad.data(), sizeof(double) * kJointCount) != 0) return false;
-    if (std::memcmp(x.point_m.data(), y.point_m.data(), sizeof(double) * 3) != 0) return false;
-  }
-  return true;
 }
 
 bool same_counts(const ExtractionCounts& a, const ExtractionCounts& b) {
@@ -425,7 +375,7 @@ TEST(CaptureClockPass, BothOverloadsGiveTheFitOfDirectFeedingAndTheTrueClock) {
   StreamPassStats stats;
   EXPECT_NO_HEAP(status = estimate_clock_from_streams(robot, tracker, &estimator(), &from_bytes, &stats));
   ASSERT_EQ(status, Status::ok);
-  EXPECT_TRUE(same_fit(from_bytes, reference));
+  EXPECT_TRUE(test::same_fit(from_bytes, reference));
   EXPECT_EQ(stats.robot_decoder.joint_states, c.joints.size());
   EXPECT_EQ(stats.robot_decoder.device_infos, 1u);
   EXPECT_EQ(stats.robot_decoder.frames_rejected(), 0u);
@@ -441,7 +391,7 @@ TEST(CaptureClockPass, BothOverloadsGiveTheFitOfDirectFeedingAndTheTrueClock) {
   EXPECT_NO_HEAP(status = estimate_clock_from_streams(robot_records, tracker_records, &estimator(), &from_records,
                                                       nullptr));
   ASSERT_EQ(status, Status::ok);
-  EXPECT_TRUE(same_fit(from_records, reference));
+  EXPECT_TRUE(test::same_fit(from_records, reference));
 
   // And the simulator's true clock (t_robot = offset + (1 + drift) t_tracker) at both ends.
   const sim::SimTruth& truth = session().truth();
@@ -569,7 +519,7 @@ TEST(CaptureExtractionPass, ForeignRecordsAreIgnoredAndEveryRunGivesTheSameBits)
   EXPECT_NO_HEAP(status = extract_samples_from_streams(robot, tracker, &again, nullptr));
   ASSERT_EQ(status, Status::ok);
   EXPECT_TRUE(same_counts(again.counts(), from_bytes));
-  EXPECT_TRUE(same_samples(dataset_b, dataset_a));
+  EXPECT_TRUE(test::same_samples(dataset_b, dataset_a));
 
   // The same records from RecordReaders, with a tracker point after every 9th joint state in
   // the robot stream and a joint state before every 7th tracker point in the tracker stream:
@@ -592,7 +542,7 @@ TEST(CaptureExtractionPass, ForeignRecordsAreIgnoredAndEveryRunGivesTheSameBits)
   EXPECT_NO_HEAP(status = extract_samples_from_streams(robot_records, tracker_records, &second, &stats));
   ASSERT_EQ(status, Status::ok);
   EXPECT_TRUE(same_counts(second.counts(), from_bytes));
-  EXPECT_TRUE(same_samples(dataset_b, dataset_a));
+  EXPECT_TRUE(test::same_samples(dataset_b, dataset_a));
   EXPECT_EQ(stats.robot_decoder.frames_ok, robot_mixed.size());  // read, then ignored
   EXPECT_EQ(stats.tracker_decoder.frames_ok, tracker_mixed.size());
 }

@@ -10,38 +10,22 @@
 #include "hivecal/core/random.hpp"
 #include "hivecal/wire/cobs.hpp"
 #include "testkit/alloc_trap.hpp"
+#include "testkit/codec_support.hpp"
 
 namespace hivecal {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 
-Bytes from_hex(const char* hex) {
-  Bytes bytes;
-  for (std::size_t i = 0; hex[i] != '\0' && hex[i + 1] != '\0'; i += 2) {
-    auto nibble = [](char c) { return static_cast<std::uint8_t>(c <= '9' ? c - '0' : c - 'a' + 10); };
-    bytes.push_back(static_cast<std::uint8_t>(nibble(hex[i]) << 4 | nibble(hex[i + 1])));
-  }
-  return bytes;
-}
-
-/// Runs a library call under the allocation trap and returns its result.
-template <typename Call>
-auto no_heap(Call&& call) {
-  decltype(call()) result{};
-  EXPECT_NO_HEAP(result = call());
-  return result;
-}
-
 Status encode(const Bytes& packet, Bytes* out, std::size_t* written) {
-  return no_heap([&] {
+  return test::no_heap([&] {
     return cobs_encode(Span<const std::uint8_t>(packet.data(), packet.size()),
                        Span<std::uint8_t>(out->data(), out->size()), written);
   });
 }
 
 Status decode(const Bytes& encoded, Bytes* out, std::size_t* written) {
-  return no_heap([&] {
+  return test::no_heap([&] {
     return cobs_decode(Span<const std::uint8_t>(encoded.data(), encoded.size()),
                        Span<std::uint8_t>(out->data(), out->size()), written);
   });
@@ -101,7 +85,7 @@ TEST(Cobs, KnownEncodings) {
                         {"11000000", "0211010101"},
                         {"", "01"}};
   for (const Case& c : cases) {
-    const Bytes packet = from_hex(c.packet);
+    const Bytes packet = test::from_hex(c.packet);
     Bytes out(cobs_max_encoded_bytes(packet.size()));
     std::size_t written = 0;
     Status status = Status::ok;
@@ -109,7 +93,7 @@ TEST(Cobs, KnownEncodings) {
                                         Span<std::uint8_t>(out.data(), out.size()), &written));
     ASSERT_EQ(status, Status::ok);
     out.resize(written);
-    EXPECT_EQ(out, from_hex(c.encoded)) << c.packet;
+    EXPECT_EQ(out, test::from_hex(c.encoded)) << c.packet;
     Bytes back(out.size());
     EXPECT_NO_HEAP(status = cobs_decode(Span<const std::uint8_t>(out.data(), out.size()),
                                         Span<std::uint8_t>(back.data(), back.size()), &written));
@@ -127,14 +111,14 @@ TEST(Cobs, LongRunsRoundTripInPlace) {
     for (auto& b : packet) b = static_cast<std::uint8_t>(sparse_zeros ? 1 + random.below(255) : random.below(3));
     Bytes buffer(cobs_max_encoded_bytes(size));
     std::size_t encoded = 0;
-    ASSERT_EQ(no_heap([&] {
+    ASSERT_EQ(test::no_heap([&] {
                 return cobs_encode(Span<const std::uint8_t>(packet.data(), size),
                                    Span<std::uint8_t>(buffer.data(), buffer.size()), &encoded);
               }),
               Status::ok);
     EXPECT_EQ(std::count(buffer.begin(), buffer.begin() + static_cast<long>(encoded), 0), 0);
     std::size_t decoded = 0;
-    ASSERT_EQ(no_heap([&] {
+    ASSERT_EQ(test::no_heap([&] {
                 return cobs_decode(Span<const std::uint8_t>(buffer.data(), encoded),
                                    Span<std::uint8_t>(buffer.data(), encoded), &decoded);
               }),
@@ -147,7 +131,7 @@ TEST(Cobs, LongRunsRoundTripInPlace) {
   full[0] = 0xFF;
   Bytes out(300);
   std::size_t decoded = 0;
-  ASSERT_EQ(no_heap([&] {
+  ASSERT_EQ(test::no_heap([&] {
               return cobs_decode(Span<const std::uint8_t>(full.data(), full.size()),
                                  Span<std::uint8_t>(out.data(), out.size()), &decoded);
             }),
@@ -159,30 +143,30 @@ TEST(Cobs, RejectsMalformedFrames) {
   Bytes out(64);
   std::size_t written = 7;
   const Span<std::uint8_t> o(out.data(), out.size());
-  const Bytes past_end = from_hex("051122");
+  const Bytes past_end = test::from_hex("051122");
   EXPECT_EQ(
-      no_heap([&] { return cobs_decode(Span<const std::uint8_t>(past_end.data(), past_end.size()), o, &written); }),
+      test::no_heap([&] { return cobs_decode(Span<const std::uint8_t>(past_end.data(), past_end.size()), o, &written); }),
       Status::cobs_error);
   EXPECT_EQ(written, 0u);
-  const Bytes inner_zero = from_hex("03110022");
+  const Bytes inner_zero = test::from_hex("03110022");
   EXPECT_EQ(
-      no_heap([&] { return cobs_decode(Span<const std::uint8_t>(inner_zero.data(), inner_zero.size()), o, &written); }),
+      test::no_heap([&] { return cobs_decode(Span<const std::uint8_t>(inner_zero.data(), inner_zero.size()), o, &written); }),
       Status::cobs_error);
-  const Bytes zero_code = from_hex("0211002233");
+  const Bytes zero_code = test::from_hex("0211002233");
   EXPECT_EQ(
-      no_heap([&] { return cobs_decode(Span<const std::uint8_t>(zero_code.data(), zero_code.size()), o, &written); }),
+      test::no_heap([&] { return cobs_decode(Span<const std::uint8_t>(zero_code.data(), zero_code.size()), o, &written); }),
       Status::cobs_error);
-  EXPECT_EQ(no_heap([&] { return cobs_decode(Span<const std::uint8_t>(), o, &written); }), Status::cobs_error);
-  const Bytes fine = from_hex("0311220233");
-  EXPECT_EQ(no_heap([&] {
+  EXPECT_EQ(test::no_heap([&] { return cobs_decode(Span<const std::uint8_t>(), o, &written); }), Status::cobs_error);
+  const Bytes fine = test::from_hex("0311220233");
+  EXPECT_EQ(test::no_heap([&] {
               return cobs_decode(Span<const std::uint8_t>(fine.data(), fine.size()), o.subspan(0, 3), &written);
             }),
             Status::buffer_too_small);
-  EXPECT_EQ(no_heap([&] {
+  EXPECT_EQ(test::no_heap([&] {
               return cobs_encode(Span<const std::uint8_t>(fine.data(), fine.size()), o.subspan(0, 5), &written);
             }),
             Status::buffer_too_small);
-  EXPECT_EQ(no_heap([&] { return cobs_encode(Span<const std::uint8_t>(fine.data(), fine.size()), o, nullptr); }),
+  EXPECT_EQ(test::no_heap([&] { return cobs_encode(Span<const std::uint8_t>(fine.data(), fine.size()), o, nullptr); }),
             Status::invalid_argument);
 }
 
@@ -258,7 +242,7 @@ TEST(Cobs, ShortOutputBuffersAreRefusedWithoutWritingPastThem) {
     encoded.resize(written);
     Bytes guarded(size + 8, 0xA5);  // the decoder gets the first size - 1 bytes
     std::size_t decoded = 77;
-    EXPECT_EQ(no_heap([&] {
+    EXPECT_EQ(test::no_heap([&] {
                 return cobs_decode(Span<const std::uint8_t>(encoded.data(), encoded.size()),
                                    Span<std::uint8_t>(guarded.data(), size - 1), &decoded);
               }),
@@ -268,8 +252,8 @@ TEST(Cobs, ShortOutputBuffersAreRefusedWithoutWritingPastThem) {
     EXPECT_EQ(std::count(guarded.begin() + static_cast<long>(size - 1), guarded.end(), 0xA5), 9) << size;
   }
   Bytes out(4);
-  const Bytes fine = from_hex("0311220233");
-  EXPECT_EQ(no_heap([&] {
+  const Bytes fine = test::from_hex("0311220233");
+  EXPECT_EQ(test::no_heap([&] {
               return cobs_decode(Span<const std::uint8_t>(fine.data(), fine.size()),
                                  Span<std::uint8_t>(out.data(), out.size()), nullptr);
             }),

@@ -26,23 +26,6 @@ constexpr const char* kTrackerPointVector =
 constexpr const char* kDeviceInfoVector =
     "0301030101010101010101010202010101010e2041747261636b65722d73696d01010101010101010101010105540a210a00";
 
-Bytes from_hex(const char* hex) {
-  Bytes bytes;
-  for (std::size_t i = 0; hex[i] != '\0' && hex[i + 1] != '\0'; i += 2) {
-    auto nibble = [](char c) { return static_cast<std::uint8_t>(c <= '9' ? c - '0' : c - 'a' + 10); };
-    bytes.push_back(static_cast<std::uint8_t>(nibble(hex[i]) << 4 | nibble(hex[i + 1])));
-  }
-  return bytes;
-}
-
-/// Runs a library call under the allocation trap and returns its result.
-template <typename Call>
-auto no_heap(Call&& call) {
-  decltype(call()) result{};
-  EXPECT_NO_HEAP(result = call());
-  return result;
-}
-
 /// A copy of `base` with one byte replaced.
 Bytes patched(const Bytes& base, std::size_t offset, std::uint8_t value) {
   Bytes copy = base;
@@ -134,7 +117,7 @@ Bytes frame_of_packet(Bytes packet) {
 Bytes packet_of_frame(const Bytes& frame) {
   Bytes packet(frame.size());
   std::size_t written = 0;
-  EXPECT_EQ(no_heap([&] {
+  EXPECT_EQ(test::no_heap([&] {
               return cobs_decode(Span<const std::uint8_t>(frame.data(), frame.size() - 1),
                                  Span<std::uint8_t>(packet.data(), packet.size()), &written);
             }),
@@ -146,7 +129,7 @@ Bytes packet_of_frame(const Bytes& frame) {
 TEST(CodecVectors, DecodeToTheStatedValues) {
   LastRecordHandler handler;
   const Bytes stream =
-      concat({from_hex(kJointStateVector), from_hex(kTrackerPointVector), from_hex(kDeviceInfoVector)});
+      concat({test::from_hex(kJointStateVector), test::from_hex(kTrackerPointVector), test::from_hex(kDeviceInfoVector)});
   const DecoderStats stats = decode_all(stream, handler);
   ASSERT_EQ(handler.joints, 1);
   ASSERT_EQ(handler.trackers, 1);
@@ -193,14 +176,14 @@ Bytes encode(const Record& record, Status (*encoder)(const Record&, Span<std::ui
 }
 
 TEST(CodecVectors, EncodeToTheExactBytes) {
-  EXPECT_EQ(encode(vector1_record(), encode_joint_state), from_hex(kJointStateVector));
-  EXPECT_EQ(encode(vector2_record(), encode_tracker_point), from_hex(kTrackerPointVector));
-  EXPECT_EQ(encode(vector3_record(), encode_device_info), from_hex(kDeviceInfoVector));
-  EXPECT_EQ(from_hex(kJointStateVector).size(), kMaxFrameBytes);
+  EXPECT_EQ(encode(vector1_record(), encode_joint_state), test::from_hex(kJointStateVector));
+  EXPECT_EQ(encode(vector2_record(), encode_tracker_point), test::from_hex(kTrackerPointVector));
+  EXPECT_EQ(encode(vector3_record(), encode_device_info), test::from_hex(kDeviceInfoVector));
+  EXPECT_EQ(test::from_hex(kJointStateVector).size(), kMaxFrameBytes);
 }
 
 TEST(CodecEncode, RefusesShortBuffersAndNullOutput) {
-  const Bytes expected = from_hex(kTrackerPointVector);
+  const Bytes expected = test::from_hex(kTrackerPointVector);
   Bytes out(expected.size() - 1, 0x5A);
   std::size_t written = 99;
   Status status = Status::ok;
@@ -209,16 +192,16 @@ TEST(CodecEncode, RefusesShortBuffersAndNullOutput) {
   EXPECT_EQ(written, 0u);
   EXPECT_EQ(std::count(out.begin(), out.end(), 0x5A), static_cast<long>(out.size()));  // untouched
   out.resize(expected.size());
-  EXPECT_EQ(no_heap([&] {
+  EXPECT_EQ(test::no_heap([&] {
               return encode_tracker_point(vector2_record(), Span<std::uint8_t>(out.data(), out.size()), &written);
             }),
             Status::ok);
   EXPECT_EQ(out, expected);
-  EXPECT_EQ(no_heap([&] {
+  EXPECT_EQ(test::no_heap([&] {
               return encode_tracker_point(vector2_record(), Span<std::uint8_t>(out.data(), out.size()), nullptr);
             }),
             Status::invalid_argument);
-  EXPECT_EQ(no_heap([&] {
+  EXPECT_EQ(test::no_heap([&] {
               return encode_joint_state(vector1_record(), Span<std::uint8_t>(out.data(), out.size()), &written);
             }),
             Status::buffer_too_small);
@@ -228,7 +211,7 @@ TEST(CodecDeviceInfo, NamePaddingBothWays) {
   // Encoding pads with 0x00 whatever follows the terminator in the record.
   DeviceInfoRecord record = vector3_record();
   std::memset(record.name + 12, 'x', 10);  // garbage after the NUL at [11]
-  EXPECT_EQ(encode(record, encode_device_info), from_hex(kDeviceInfoVector));
+  EXPECT_EQ(encode(record, encode_device_info), test::from_hex(kDeviceInfoVector));
 
   // A 24-character name fills the field and comes back terminated.
   std::strcpy(record.name, "ABCDEFGHIJKLMNOPQRSTUVWX");
@@ -248,18 +231,18 @@ TEST(CodecDeviceInfo, NamePaddingBothWays) {
   Bytes out(kMaxFrameBytes);
   std::size_t written = 0;
   std::memset(record.name, 'A', sizeof record.name);
-  EXPECT_EQ(no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
+  EXPECT_EQ(test::no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
             Status::invalid_argument);
   std::strcpy(record.name, "bad\x1b[2Jname");
-  EXPECT_EQ(no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
+  EXPECT_EQ(test::no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
             Status::invalid_argument);
   std::strcpy(record.name, "caf\xc3\xa9");
-  EXPECT_EQ(no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
+  EXPECT_EQ(test::no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
             Status::invalid_argument);
 }
 
 TEST(CodecDeviceInfo, RejectsBadPaddingWithValidCrc) {
-  const Bytes packet = packet_of_frame(from_hex(kDeviceInfoVector));
+  const Bytes packet = packet_of_frame(test::from_hex(kDeviceInfoVector));
   struct Damage {
     std::size_t offset;
     std::uint8_t value;
@@ -291,7 +274,7 @@ TEST(CodecTrackerPoint, BeamLostNanAndPaddingRules) {
   EXPECT_TRUE(test::same_bits(handler.tracker, record));
   EXPECT_FALSE(handler.tracker.is_valid());
 
-  Bytes packet = packet_of_frame(from_hex(kTrackerPointVector));
+  Bytes packet = packet_of_frame(test::from_hex(kTrackerPointVector));
   packet[12 + 25] = 1;  // padding byte after status
   EXPECT_EQ(decode_all(frame_of_packet(packet), handler).bad_payloads, 1u);
   packet[12 + 25] = 0;
@@ -302,7 +285,7 @@ TEST(CodecTrackerPoint, BeamLostNanAndPaddingRules) {
 }
 
 TEST(CodecDecode, CountsEveryRejectionAndResynchronises) {
-  const Bytes good = from_hex(kTrackerPointVector);
+  const Bytes good = test::from_hex(kTrackerPointVector);
   const Bytes packet = packet_of_frame(good);
   const Bytes flipped = patched(good, 20, static_cast<std::uint8_t>(good[20] ^ 0x10));  // CRC failure
   const Bytes bad_version = patched(packet, 0, 2);
@@ -345,7 +328,7 @@ TEST(CodecDecode, CountsEveryRejectionAndResynchronises) {
 }
 
 TEST(CodecDecode, UnknownTypesAreSkippedAndCounted) {
-  const Bytes tracker = from_hex(kTrackerPointVector);
+  const Bytes tracker = test::from_hex(kTrackerPointVector);
   Bytes stream;
   std::size_t unknown_bytes = 0;
   const std::uint8_t unknown_types[] = {0x00, 0x04, 0x7F, 0xFF};
@@ -369,8 +352,8 @@ TEST(CodecDecode, UnknownTypesAreSkippedAndCounted) {
 }
 
 TEST(CodecDecode, StreamStartingMidFrameIsNotAnError) {
-  const Bytes joint = from_hex(kJointStateVector);
-  const Bytes tracker = from_hex(kTrackerPointVector);
+  const Bytes joint = test::from_hex(kJointStateVector);
+  const Bytes tracker = test::from_hex(kTrackerPointVector);
   for (std::size_t cut = 1; cut < joint.size(); ++cut) {
     const Bytes stream = concat({Bytes(joint.begin() + static_cast<long>(cut), joint.end()), tracker});
     LastRecordHandler handler;
@@ -398,7 +381,7 @@ TEST(CodecDecode, StreamStartingMidFrameIsNotAnError) {
 }
 
 TEST(CodecDecode, UnfinishedFrameStaysPendingAndResetForgetsIt) {
-  const Bytes tracker = from_hex(kTrackerPointVector);
+  const Bytes tracker = test::from_hex(kTrackerPointVector);
   StreamDecoder decoder;
   LastRecordHandler handler;
   EXPECT_NO_HEAP(decoder.feed(tracker.data(), tracker.size() - 1, handler));

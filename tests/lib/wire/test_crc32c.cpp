@@ -15,16 +15,8 @@ namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 
-/// Runs a library call under the allocation trap and returns its result.
-template <typename Call>
-auto no_heap(Call&& call) {
-  decltype(call()) result{};
-  EXPECT_NO_HEAP(result = call());
-  return result;
-}
-
 std::uint32_t crc_of(const Bytes& bytes) {
-  return no_heap([&] { return crc32c(bytes.data(), bytes.size()); });
+  return test::no_heap([&] { return crc32c(bytes.data(), bytes.size()); });
 }
 
 /// The textbook bit-at-a-time CRC-32C (reflected polynomial 0x82F63B78, init and final xor
@@ -49,8 +41,8 @@ TEST(Crc32c, CheckValueAndEmptyInput) {
   std::uint32_t crc = 0;
   EXPECT_NO_HEAP(crc = crc32c(check, 9));
   EXPECT_EQ(crc, 0xE3069283u);
-  EXPECT_EQ(no_heap([&] { return crc32c(nullptr, 0); }), 0u);
-  EXPECT_EQ(no_heap([&] { return crc32c(check, 0); }), 0u);
+  EXPECT_EQ(test::no_heap([&] { return crc32c(nullptr, 0); }), 0u);
+  EXPECT_EQ(test::no_heap([&] { return crc32c(check, 0); }), 0u);
 }
 
 TEST(Crc32c, Rfc3720TestVectors) {
@@ -79,7 +71,7 @@ TEST(Crc32c, MatchesABitwiseReferenceOnRandomBuffersAtAnyAlignment) {
     const auto offset = static_cast<std::size_t>(random.below(8));  // unaligned starts too
     const auto size = static_cast<std::size_t>(random.below(600));
     const std::uint8_t* data = pool.data() + offset;
-    EXPECT_EQ(no_heap([&] { return crc32c(data, size); }), bitwise_crc32c(data, size))
+    EXPECT_EQ(test::no_heap([&] { return crc32c(data, size); }), bitwise_crc32c(data, size))
         << "offset " << offset << " size " << size;
   }
   EXPECT_EQ(bitwise_crc32c(reinterpret_cast<const std::uint8_t*>("123456789"), 9), 0xE3069283u);  // the oracle itself
