@@ -102,11 +102,13 @@ bool DatasetBase::grouped() const {
   return target_count(samples()) > 1;
 }
 
-std::size_t DatasetBase::pose_end(std::size_t begin) const {
+std::size_t pose_run_end(Span<const Sample> samples, std::size_t begin) {
   std::size_t end = begin + 1;
-  while (end < size_ && storage_[end].q_rad == storage_[begin].q_rad) ++end;
+  while (end < samples.size() && samples[end].q_rad == samples[begin].q_rad) ++end;
   return end;
 }
+
+std::size_t DatasetBase::pose_end(std::size_t begin) const { return pose_run_end(samples(), begin); }
 
 std::size_t DatasetBase::pose_count() const {
   if (!grouped()) return size_;

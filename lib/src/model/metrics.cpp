@@ -55,8 +55,7 @@ RepeatedReadingNoise repeated_reading_noise(Span<const Sample> samples) {
   RepeatedReadingNoise noise;
   double squares_m2[3] = {};
   for (std::size_t begin = 0; begin < samples.size();) {
-    std::size_t end = begin + 1;
-    while (end < samples.size() && samples[end].q_rad == samples[begin].q_rad) ++end;
+    const std::size_t end = pose_run_end(samples, begin);
     for (int target = 0; target < kMaxTargets; ++target) {
       Vec3 sum_m = Vec3::Zero();
       std::size_t count = 0;

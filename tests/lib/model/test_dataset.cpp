@@ -199,3 +199,21 @@ TEST(Dataset, CountsDistinctPointsNotSamples) {
 
 }  // namespace
 }  // namespace hivecal
+
+namespace hivecal {
+namespace {
+
+TEST(PoseRunEnd, ARunOfEqualJointsIsOnePoseAnyDifferenceEndsIt) {
+  Sample s[5];
+  for (Sample& x : s) x.q_rad << 0.1, -1.0, 1.2, -0.4, 1.5, 0.3;
+  s[1].target = 1;             // another reflector at the same joints: the same pose
+  s[3].q_rad(5) += 1e-12;      // the least difference: a new pose
+  const Span<const Sample> all(s, 5);
+  EXPECT_EQ(pose_run_end(all, 0), 3u);
+  EXPECT_EQ(pose_run_end(all, 1), 3u);
+  EXPECT_EQ(pose_run_end(all, 3), 4u);  // s[4] has s[0]'s joints, not s[3]'s
+  EXPECT_EQ(pose_run_end(all, 4), 5u);
+}
+
+}  // namespace
+}  // namespace hivecal

@@ -44,6 +44,10 @@ inline bool same_point(const Sample& a, const Sample& b) {
 /// at most kDistinctPointLimit. Many samples of one stop determine no more than one.
 std::size_t distinct_points(Span<const Sample> samples);
 
+/// End of the pose that starts at `begin`: the run of consecutive samples at joints equal to
+/// samples[begin]'s (its reflectors, its repeated readings) [-].
+std::size_t pose_run_end(Span<const Sample> samples, std::size_t begin);
+
 /// Point of `sample`'s target predicted by `model` in the robot base frame [m].
 inline Vec3 fk_sample_point(const RobotModel& model, const Sample& sample) {
   return fk_target_point(model, sample.q_rad, sample.target);
