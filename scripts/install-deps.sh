@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   cmake ninja-build g++ libeigen3-dev googletest          # host build and tests
   clang libclang-rt-14-dev                                # libFuzzer targets (decoder, log readers)
+  clang-format                                            # the code's style, checked in CTest (code.format)
   libsqlite3-dev                                          # ROS 2 bags (rosbag2 sqlite3 storage)
   qemu-user qemu-system-arm                               # running cross-built tests
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf            # Linux ARM edge controllers
