@@ -3,8 +3,10 @@
 // without, the stated --tracker-sigma-um.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
@@ -24,8 +26,10 @@ double number_after(const std::string& text, const std::string& key) {
   return at == std::string::npos ? std::nan("") : std::strtod(text.c_str() + at + key.size() + 4, nullptr);
 }
 
-/// `poses` random poses of a perturbed UR5, each read `repeats` times with `sigma_m` per axis.
-std::string write_set(const test::TempDir& dir, std::size_t poses, int repeats, double sigma_m) {
+/// `poses` random poses of a perturbed UR5, each read `repeats` times with `sigma_m` per axis;
+/// the reading `blunder_index` (if any) `blunder_m` off in x.
+std::string write_set(const test::TempDir& dir, std::size_t poses, int repeats, double sigma_m,
+                      std::size_t blunder_index = SIZE_MAX, double blunder_m = 0.0) {
   static Dataset<512> written;
   written.clear();
   Random random(31);
@@ -34,16 +38,20 @@ std::string write_set(const test::TempDir& dir, std::size_t poses, int repeats, 
     const JointVector q = test::random_joints(&random);
     const Vec3 point_m = test::example_base_to_tracker().apply(fk_tool_point(truth, q));
     for (int r = 0; r < repeats; ++r) {
-      (void)written.add(q, point_m + sigma_m * Vec3(random.normal(), random.normal(), random.normal()));
+      Vec3 measured_m = point_m + sigma_m * Vec3(random.normal(), random.normal(), random.normal());
+      if (written.size() == blunder_index) measured_m.x() += blunder_m;
+      (void)written.add(q, measured_m);
     }
   }
   return dir.write("set.csv", textio::format_samples_csv(written.samples()));
 }
 
-std::string calibrate(const test::TempDir& dir, const std::string& samples) {
+std::string calibrate(const test::TempDir& dir, const std::string& samples, bool keep_outliers = true) {
   const std::string result = dir.path() + "/result.json";
-  const int code = test::run(cli::calibrate_main, {"--samples", samples, "--method", "lm", "--keep-outliers", "--out",
-                                                   result, "--quiet", "--tracker-sigma-um", "10"});
+  std::vector<std::string> args = {"--samples", samples, "--method", "lm", "--out", result, "--quiet",
+                                   "--tracker-sigma-um", "10"};
+  if (keep_outliers) args.push_back("--keep-outliers");
+  const int code = test::run(cli::calibrate_main, args);
   EXPECT_TRUE(code == cli::kExitOk || code == cli::kExitWarnings) << code;  // warnings: the tool moves far
   std::string text;
   EXPECT_TRUE(port::read_whole_file(result, port::kMaxTextInputBytes, &text).ok());
@@ -59,6 +67,16 @@ TEST(NoiseCli, RepeatedReadingsGiveTheMeasuredNoise) {
   EXPECT_NE(text.find("the tracker's measured"), std::string::npos);
   const double noise_m = number_after(text, "noise_sigma_m");
   EXPECT_NEAR(noise_m, 30e-6, 0.12 * 30e-6);  // 180 degrees of freedom per axis
+}
+
+// A blunder among the readings is not noise: what the blunder search sets aside does not count.
+TEST(NoiseCli, ABlunderSetAsideIsNotNoise) {
+  const test::TempDir dir("hivecal_noise");
+  ASSERT_FALSE(dir.path().empty());
+  const std::string text = calibrate(dir, write_set(dir, 60, 4, 30e-6, 101, 5e-3), false);  // 5 mm on one reading
+  EXPECT_NE(text.find("\"blunder_verdict\": \"removed\""), std::string::npos);
+  EXPECT_NE(text.find("\"noise_source\": \"repeated readings\""), std::string::npos);
+  EXPECT_NEAR(number_after(text, "noise_sigma_m"), 30e-6, 0.12 * 30e-6);  // 5 mm would make it ~0.3 mm
 }
 
 TEST(NoiseCli, WithoutRepeatsTheStatedNoise) {
