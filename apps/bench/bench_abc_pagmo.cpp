@@ -37,13 +37,13 @@ constexpr std::size_t kMaxPoses = 1024;
 constexpr std::size_t kMaxSeeds = 101;
 
 struct Settings {
-  std::size_t poses = 38;      // the paper's session: 38 poses, 27 for training
-  std::uint64_t seed = 1;      // simulation and solver seed
-  std::size_t sources = 150;   // the paper's ABC: 150 food sources
-  std::size_t cycles = 300;    // and 300 cycles
-  int repeat = 3;              // timings keep the fastest of these runs
-  std::size_t seeds = 11;      // solver seeds of the final-MAE comparison
-  bool ours_only = false;      // just hivecal + precomputed (for callgrind)
+  std::size_t poses = 38;     // the paper's session: 38 poses, 27 for training
+  std::uint64_t seed = 1;     // simulation and solver seed
+  std::size_t sources = 150;  // the paper's ABC: 150 food sources
+  std::size_t cycles = 300;   // and 300 cycles
+  int repeat = 3;             // timings keep the fastest of these runs
+  std::size_t seeds = 11;     // solver seeds of the final-MAE comparison
+  bool ours_only = false;     // just hivecal + precomputed (for callgrind)
 };
 
 /// The generic cost as an Objective: FK and a Kabsch fit over every sample per candidate.
@@ -68,7 +68,7 @@ class GenericPaper6Cost final : public hivecal::Objective {
 
 /// pagmo user-defined problem over one of the two costs (pointers: pagmo copies UDPs).
 struct PagmoPaper6 {
-  Paper6CostBase* precomputed = nullptr;      // used when set
+  Paper6CostBase* precomputed = nullptr;       // used when set
   const GenericPaper6Cost* generic = nullptr;  // else this
   LinkLengthBox box;
 
@@ -83,8 +83,8 @@ struct PagmoPaper6 {
 
 struct RunFigures {
   double seconds = std::numeric_limits<double>::infinity();  // fastest run [s]
-  double best_mae_m = 0.0;                                     // final best cost [m]
-  unsigned long long evaluations = 0;                          // cost evaluations per run
+  double best_mae_m = 0.0;                                   // final best cost [m]
+  unsigned long long evaluations = 0;                        // cost evaluations per run
 };
 
 template <typename Run>
@@ -177,9 +177,8 @@ bool parse(int argc, char** argv, Settings* settings) {
       return false;
     }
   }
-  return settings->poses >= 5 && settings->poses <= kMaxPoses && settings->sources >= 2 &&
-         settings->sources <= 1000 && settings->cycles >= 1 && settings->repeat >= 1 && settings->seeds >= 1 &&
-         settings->seeds <= kMaxSeeds;
+  return settings->poses >= 5 && settings->poses <= kMaxPoses && settings->sources >= 2 && settings->sources <= 1000 &&
+         settings->cycles >= 1 && settings->repeat >= 1 && settings->seeds >= 1 && settings->seeds <= kMaxSeeds;
 }
 
 }  // namespace

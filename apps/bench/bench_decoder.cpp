@@ -45,7 +45,9 @@ DeviceInfoRecord device_info(DeviceKind kind, float rate_hz, const char* name, s
 }
 
 /// Every packet of a capture takes the stream's next sequence number, whatever its type.
-std::uint16_t next_sequence(const Capture& capture) { return static_cast<std::uint16_t>(capture.frames); }
+std::uint16_t next_sequence(const Capture& capture) {
+  return static_cast<std::uint16_t>(capture.frames);
+}
 
 /// 125 Hz joint states with a DEVICE_INFO once a second.
 void make_robot_capture(Capture* capture) {
@@ -53,7 +55,8 @@ void make_robot_capture(Capture* capture) {
   JointStateRecord record;
   for (std::size_t i = 0; capture->frames < kCaptureFrames; ++i) {
     if (i % 125 == 0)
-      append(capture, encode_device_info, device_info(DeviceKind::robot, 125.0f, "ur5-sim", next_sequence(*capture), 8000 * i));
+      append(capture, encode_device_info,
+             device_info(DeviceKind::robot, 125.0f, "ur5-sim", next_sequence(*capture), 8000 * i));
     record.sequence = next_sequence(*capture);
     record.timestamp_us = 8000 * i;
     for (int j = 0; j < kJointCount; ++j) {

@@ -71,8 +71,10 @@ CeresOutcome run_ceres(const hivecal::RigidTransform& start_base, const CeresInp
   out.model = hivecal::from_params(params);
   const double* rotation = solved.params + hivecal::base_rotation_param_index(0);
   const double* translation = solved.params + hivecal::base_translation_param_index(0);
-  out.base.rotation = start_base.rotation * hivecal::rotation_from_vector(hivecal::Vec3(rotation[0], rotation[1], rotation[2]));
-  out.base.translation_m = start_base.translation_m + start_base.rotation * hivecal::Vec3(translation[0], translation[1], translation[2]);
+  out.base.rotation =
+      start_base.rotation * hivecal::rotation_from_vector(hivecal::Vec3(rotation[0], rotation[1], rotation[2]));
+  out.base.translation_m =
+      start_base.translation_m + start_base.rotation * hivecal::Vec3(translation[0], translation[1], translation[2]);
   return out;
 }
 
@@ -100,7 +102,8 @@ int main(int argc, char** argv) {
   // The session: a perturbed UR5 (joints 2-4 parallel), tracker 3 m away, noisy train
   // poses, fresh noisy validation poses and their noise-free points.
   Random random(20261124);
-  const RobotModel truth = test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.012, -0.018, 0.15));
+  const RobotModel truth =
+      test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.012, -0.018, 0.15));
   const RigidTransform tracker = test::example_base_to_tracker();
   static Dataset<2000> train;
   static Dataset<500> fresh;
@@ -151,8 +154,8 @@ int main(int argc, char** argv) {
   };
   const double our_mae = mae(ours.model, ours.base_to_tracker, fresh);
   const double ceres_mae = mae(theirs.model, theirs.base, fresh);
-  std::printf("UR5, %zu samples, noise %.1f um/axis, %d free parameters of 33 (%d dropped by identifiability)\n",
-              count, noise_m * 1e6, ours.identifiability.kept_count(), ours.identifiability.dropped_count);
+  std::printf("UR5, %zu samples, noise %.1f um/axis, %d free parameters of 33 (%d dropped by identifiability)\n", count,
+              noise_m * 1e6, ours.identifiability.kept_count(), ours.identifiability.dropped_count);
   std::printf("%-22s %14s %14s %10s %20s %20s\n", "solver", "min time [ms]", "median [ms]", "iterations",
               "valid. MAE [um]", "vs noise-free [um]");
   std::printf("%-22s %14.3f %14.3f %10d %20.4f %20.4f\n", "hivecal LM", our_time * 1e3, median(our_times) * 1e3,
@@ -160,11 +163,12 @@ int main(int argc, char** argv) {
   std::printf("%-22s %14.3f %14.3f %10d %20.4f %20.4f\n", "Ceres LM (DENSE_QR)", ceres_time * 1e3,
               median(ceres_times) * 1e3, theirs.iterations, ceres_mae * 1e6,
               mae(theirs.model, theirs.base, fresh_exact) * 1e6);
-  std::printf("speed-up: %.1fx on the minimum, %.1fx on the median (target >= 20x); MAE difference: %.3f %% "
-              "(target <= 1 %%)\n",
-              ceres_time / our_time, median(ceres_times) / median(our_times), 100.0 * (our_mae - ceres_mae) / ceres_mae);
-  std::printf("max prediction gap between the two calibrations: %.3g um\n",
-              test::max_prediction_gap(ours.model, ours.base_to_tracker, theirs.model, theirs.base,
-                                       fresh.samples()) * 1e6);
+  std::printf(
+      "speed-up: %.1fx on the minimum, %.1fx on the median (target >= 20x); MAE difference: %.3f %% "
+      "(target <= 1 %%)\n",
+      ceres_time / our_time, median(ceres_times) / median(our_times), 100.0 * (our_mae - ceres_mae) / ceres_mae);
+  std::printf(
+      "max prediction gap between the two calibrations: %.3g um\n",
+      test::max_prediction_gap(ours.model, ours.base_to_tracker, theirs.model, theirs.base, fresh.samples()) * 1e6);
   return 0;
 }

@@ -10,18 +10,18 @@
 namespace ceres_peer {
 
 constexpr int kJoints = 6;
-constexpr int kDhParams = 24;      ///< theta_offset, d, a, alpha per joint [rad, m, m, rad]
-constexpr int kParams = 33;        ///< dh (24), tool (3), base rotation vector (3), base translation (3)
+constexpr int kDhParams = 24;  ///< theta_offset, d, a, alpha per joint [rad, m, m, rad]
+constexpr int kParams = 33;    ///< dh (24), tool (3), base rotation vector (3), base translation (3)
 
 /// One calibration problem in the full model's parameterisation (docs/solver-lm.md).
 struct Problem {
-  const double* q_rad = nullptr;           ///< joint angles, kJoints per sample [rad]
-  const double* point_m = nullptr;         ///< tracker points, 3 per sample [m]
-  std::size_t count = 0;                   ///< samples
-  double base_rotation[9] = {};            ///< start base -> tracker rotation, row-major [-]
-  double base_translation_m[3] = {};       ///< start base -> tracker translation [m]
-  double start[kParams] = {};              ///< start values; the base increments are 0 [m, rad]
-  bool fixed[kParams] = {};                ///< parameters held at their start value
+  const double* q_rad = nullptr;      ///< joint angles, kJoints per sample [rad]
+  const double* point_m = nullptr;    ///< tracker points, 3 per sample [m]
+  std::size_t count = 0;              ///< samples
+  double base_rotation[9] = {};       ///< start base -> tracker rotation, row-major [-]
+  double base_translation_m[3] = {};  ///< start base -> tracker translation [m]
+  double start[kParams] = {};         ///< start values; the base increments are 0 [m, rad]
+  bool fixed[kParams] = {};           ///< parameters held at their start value
 };
 
 /// What Ceres returned.

@@ -101,7 +101,9 @@ int parse_options(const std::string& command, const std::string& summary, const 
   return -1;
 }
 
-bool progress_enabled(const Options& options) { return !options.given("quiet") && isatty(STDERR_FILENO) != 0; }
+bool progress_enabled(const Options& options) {
+  return !options.given("quiet") && isatty(STDERR_FILENO) != 0;
+}
 
 Error number_option(const Options& options, const std::string& name, double* value) {
   if (textio::parse_double(options.get(name), value)) return Error{};
@@ -119,7 +121,8 @@ Error bounded_option(const Options& options, const std::string& name, double lo,
   return Error{};
 }
 
-Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi, std::size_t* value) {
+Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi,
+                   std::size_t* value) {
   double number = 0.0;
   Error error = bounded_option(options, name, static_cast<double>(lo), static_cast<double>(hi), &number);
   if (!error.ok()) return error;
@@ -134,7 +137,8 @@ Error seed_option(const Options& options, const std::string& name, std::uint64_t
   const std::string text = std::string(textio::trim(options.get(name)));
   const char* end = text.data() + text.size();
   const auto parsed = std::from_chars(text.data(), end, *value);
-  const bool digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+  const bool digits =
+      !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
   if (!digits || parsed.ec != std::errc() || parsed.ptr != end) {
     return Error::usage("--" + name + " must be a whole number from 0 to 18446744073709551615, not " +
                         port::quoted(options.get(name)));
@@ -166,7 +170,10 @@ std::vector<OptionSpec> input_unit_option_specs() {
   return {
       {"length-unit", "m|mm", "unit of lengths (x, y, z) in text inputs whose header names none (default: m)", ""},
       {"angle-unit", "rad|deg", "unit of joint angles in text inputs whose header names none (default: rad)", ""},
-      {"columns", "C=NAME,...", "read text inputs by column name: C (q1..q6, x, y, z) is the header's column NAME, e.g. x=measurement_x (ROS and pendant joint names are recognised without it)", ""},
+      {"columns", "C=NAME,...",
+       "read text inputs by column name: C (q1..q6, x, y, z) is the header's column NAME, e.g. x=measurement_x (ROS "
+       "and pendant joint names are recognised without it)",
+       ""},
   };
 }
 
@@ -192,8 +199,9 @@ Error columns_option(const Options& options, textio::InputUnits* units) {
     const bool known = std::find_if(std::begin(kNamed), std::end(kNamed),
                                     [&](const char* n) { return alias.column == n; }) != std::end(kNamed);
     if (!known || alias.header.empty()) {
-      return Error::usage("--columns: " + port::quoted(entry) +
-                          " is not C=NAME or C=NAME[unit] with C one of q1..q6, x, y, z, rx, ry, rz, t (e.g. x=measurement_x[mm])");
+      return Error::usage(
+          "--columns: " + port::quoted(entry) +
+          " is not C=NAME or C=NAME[unit] with C one of q1..q6, x, y, z, rx, ry, rz, t (e.g. x=measurement_x[mm])");
     }
     for (const textio::ColumnAlias& earlier : units->columns) {
       if (earlier.column == alias.column) return Error::usage("--columns names " + alias.column + " twice");

@@ -21,19 +21,19 @@ using port::Fault;
 
 /// Process exit codes of every command (docs/cli.md): the values of port::Fault.
 enum ExitCode : int {
-  kExitOk = static_cast<int>(Fault::none),           ///< success
-  kExitFailure = static_cast<int>(Fault::failure),   ///< the computation failed (e.g. no convergence)
-  kExitUsage = static_cast<int>(Fault::usage),       ///< bad command line, or refused paths
-  kExitBadInput = static_cast<int>(Fault::input),    ///< an input is missing, not a regular file, or malformed
+  kExitOk = static_cast<int>(Fault::none),             ///< success
+  kExitFailure = static_cast<int>(Fault::failure),     ///< the computation failed (e.g. no convergence)
+  kExitUsage = static_cast<int>(Fault::usage),         ///< bad command line, or refused paths
+  kExitBadInput = static_cast<int>(Fault::input),      ///< an input is missing, not a regular file, or malformed
   kExitOutputError = static_cast<int>(Fault::output),  ///< an output cannot be created or written
   kExitWarnings = 5,  ///< calibrate: the result is written, but the fit looks implausible (warnings printed)
 };
 
 /// One command-line option.
 struct OptionSpec {
-  std::string name;         ///< long name without dashes, e.g. "out"
-  std::string value_name;   ///< e.g. "FILE"; empty for a flag
-  std::string help;         ///< one line
+  std::string name;           ///< long name without dashes, e.g. "out"
+  std::string value_name;     ///< e.g. "FILE"; empty for a flag
+  std::string help;           ///< one line
   std::string default_value;  ///< shown in --help and used when absent (empty: none)
   /// Non-empty: the value may be left out (`--compliance` alone, followed by another option
   /// or nothing) and is then this one.
@@ -51,7 +51,8 @@ class Options {
   const std::map<std::string, std::string>& given_values() const { return values_; }
 
  private:
-  friend int parse_options(const std::string&, const std::string&, const std::vector<OptionSpec>&, int, char**, Options*);
+  friend int parse_options(const std::string&, const std::string&, const std::vector<OptionSpec>&, int, char**,
+                           Options*);
   std::map<std::string, std::string> values_;
   std::map<std::string, std::string> defaults_;
 };

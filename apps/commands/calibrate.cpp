@@ -129,15 +129,16 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   config.orientation = settings.orientation;
   Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (!error.ok()) return error;
-  error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config,
-                                      dataset, facts);
+  error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config, dataset,
+                                facts);
   if (!error.ok()) return error;
   // No floor on the sample count: the identifiability analysis decides what the samples determine.
   // The job splits; fewer than 3 training poses cannot even place the tracker frame.
   const std::size_t train_poses = dataset->train_count_for(settings.train_fraction);
   if (train_poses < 3 && train_poses < dataset->pose_count()) {
-    return Error::usage("--split " + options.get("split") + " leaves " + std::to_string(train_poses) + " training pose(s) of " +
-                        std::to_string(dataset->pose_count()) + "; the tracker frame needs at least 3");
+    return Error::usage("--split " + options.get("split") + " leaves " + std::to_string(train_poses) +
+                        " training pose(s) of " + std::to_string(dataset->pose_count()) +
+                        "; the tracker frame needs at least 3");
   }
   // Folds hold out whole poses (with several reflectors, a pose's samples stay together).
   const std::string units = dataset->pose_count() == dataset->size() ? " samples" : " poses";

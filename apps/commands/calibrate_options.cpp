@@ -38,8 +38,10 @@ std::string arms_with_masses() {
 Error payload_option(const Options& options, ArmMasses* masses) {
   const std::string text = options.get("payload");
   const std::size_t at = text.find('@');
-  const Error bad = Error::usage("--payload must be KG@X,Y,Z: a mass in kg >= 0 and its centre in the flange frame "
-                                 "in metres (e.g. 1.2@0,0,0.05), not " + port::quoted(text));
+  const Error bad = Error::usage(
+      "--payload must be KG@X,Y,Z: a mass in kg >= 0 and its centre in the flange frame "
+      "in metres (e.g. 1.2@0,0,0.05), not " +
+      port::quoted(text));
   double kg = 0.0;
   if (at == std::string::npos || !textio::parse_double(text.substr(0, at), &kg) || !(kg >= 0.0 && kg < 1e4)) return bad;
   Vec3 com_m = Vec3::Zero();
@@ -75,8 +77,10 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
   }
   Vec3 gravity = Vec3::Zero();
   if (!parse_vec3(options.get("gravity"), &gravity) || !gravity.allFinite() || !(gravity.norm() > 1e-9)) {
-    return Error::usage("--gravity must be X,Y,Z: the direction of gravity in the robot base frame, not zero (e.g. "
-                        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), not " + port::quoted(options.get("gravity")));
+    return Error::usage(
+        "--gravity must be X,Y,Z: the direction of gravity in the robot base frame, not zero (e.g. "
+        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), not " +
+        port::quoted(options.get("gravity")));
   }
   ComplianceModel& model = settings->compliance_model;
   if (load == ComplianceLoad::arm_masses) {
@@ -110,10 +114,12 @@ Error orientation_options(const Options& options, textio::OrientationInput* orie
     double sigma_um = 0.0;
     error = number_option(options, "tracker-sigma-um", &sigma_um);
     orientation->position_sigma_m = sigma_um * 1e-6;
-    if (error.ok() && !(sigma_um > 0.0 && sigma_um < 1e6)) return Error::usage("--tracker-sigma-um must be in (0, 1e6)");
+    if (error.ok() && !(sigma_um > 0.0 && sigma_um < 1e6))
+      return Error::usage("--tracker-sigma-um must be in (0, 1e6)");
   }
   if (error.ok()) error = number_option(options, "angle-sigma-rad", &orientation->angle_sigma_rad);
-  if (error.ok() && options.given("orientation-lever-m")) error = number_option(options, "orientation-lever-m", &orientation->lever_m);
+  if (error.ok() && options.given("orientation-lever-m"))
+    error = number_option(options, "orientation-lever-m", &orientation->lever_m);
   if (!error.ok()) return error;
   if (!(orientation->position_sigma_m > 0.0 && orientation->position_sigma_m < 1.0) ||
       !(orientation->angle_sigma_rad > 0.0 && orientation->angle_sigma_rad < 1.0)) {
@@ -134,7 +140,8 @@ Error orientation_options(const Options& options, textio::OrientationInput* orie
 /// --joint-sigma-rad or --joint-sigma-deg (not both), in [0, 1) rad.
 Error joint_sigma_option(const Options& options, double* sigma_rad) {
   const bool in_degrees = options.given("joint-sigma-deg");
-  if (in_degrees && options.given("joint-sigma-rad")) return Error::usage("give --joint-sigma-rad or --joint-sigma-deg, not both");
+  if (in_degrees && options.given("joint-sigma-rad"))
+    return Error::usage("give --joint-sigma-rad or --joint-sigma-deg, not both");
   const Error error = number_option(options, in_degrees ? "joint-sigma-deg" : "joint-sigma-rad", sigma_rad);
   if (!error.ok()) return error;
   if (in_degrees) *sigma_rad *= math::kRadPerDeg;
@@ -147,40 +154,78 @@ Error joint_sigma_option(const Options& options, double* sigma_rad) {
 const std::vector<OptionSpec>& calibrate_option_specs() {
   static const std::vector<OptionSpec> specs = [] {
     std::vector<OptionSpec> list = {
-      {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
-      {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
-      {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
-      {"samples", "FILE", "paired static samples q1..q6,x,y,z[,rx,ry,rz] (CSV; '-': stdin) instead of --robot/--tracker", ""},
-      {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
-      {"robot-model", "NAME|FILE", std::string("nominal geometry: ") + robot_type_names() +
-                                       ", or a robot description .json (standard or modified DH; a result file works)", "ur5"},
-      {"tool", "X,Y,Z", "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)", "0,0,0.1695"},
-      {"params", "full|paper", "full identifiable model, or the link lengths (every non-zero d and a; for UR the paper's six)", "full"},
-      {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
-      {"population-subset", "N", "hybrids (abc+lm, gsa+lm): ABC/GSA search on N training samples spread over the poses (farthest-point in joint space), LM refines on all; 0: every sample. --method abc, gsa and all always search on every sample", std::to_string(kDefaultPopulationSubset)},
-      {"robust", "", "Huber loss in LM (a few bad tracker points do not drag the fit)", ""},
-      {"seed", "N", "seed of the train/test split and of ABC/GSA", "1"},
-      {"split", "FRACTION", "share of samples used for training (1: all, no test rows)", "0.7"},
-      {"cv", "K|loo", "also cross-validate: K folds (or leave-one-out), held-out MAE per fold", ""},
-      {"keep-outliers", "", "use every sample (no blunder search)", ""},
-      {"controller-tcp", "", "the points are the controller's own TCP readings (a pendant export, RTDE actual_TCP_pose): in the base frame, at the TCP offset --tool; neither is fitted, joint 1's parameters are estimated instead (LM only; implies --method lm)", ""},
-      {"significance", "T|auto", "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leave-one-out up to 64 training samples)", "2"},
-      {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
-      {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
-      {"report", "DIR", "write an HTML report with figures into DIR", ""},
-      {"max-change-mm", "X", "warn (exit 5) when a length moves more than this from the start geometry [mm]", "20"},
-      {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
-      {"compliance", "basis|masses", "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity basis, or the link masses (UR3e, UR5e)", "", "basis"},
-      {"gravity", "X,Y,Z", "with --compliance: gravity direction in the robot base frame (wall or ceiling mounts)", "0,0,-1"},
-      {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]", ""},
-      {"quiet", "", "no progress on stderr", ""},
-      {"tracker-sigma-um", "S", "stated noise of the tracker per axis: the blunder test's sigma when the fit leaves too little redundancy, and the report's measurement noise (the same as --position-sigma-m) [um]", "10"},
-      {"position-sigma-m", "S", "stated noise of the measured positions; with --angle-sigma-rad it weighs a measured orientation (rx, ry, rz columns of --samples) [m]", "1e-05"},
-      {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
-      {"joint-sigma-rad", "S", "noise of the joint readings, in the units of --position-sigma-m (e.g. the readings' rounding step): LM weighs each sample by its point covariance (errors in variables, docs/robust.md; 0: off) [rad]", "0"},
-      {"joint-sigma-deg", "S", "--joint-sigma-rad in degrees (a UR pendant export's rounding: 0.01) [deg]", ""},
-      {"orientation-form", "rotation-vector|euler-xyz", "what rx, ry, rz are: the tool frame's rotation vector, or intrinsic X-Y-Z Euler angles (R = Rx(rx) Ry(ry) Rz(rz), e.g. a Leica T-Mac export)", "rotation-vector"},
-      {"orientation-lever-m", "L", "a measured orientation adds two points at this lever along the tool frame's x and y axes (targets 2, 3; 0: rx, ry, rz not used) [m] (default: position / angle sigma)", ""},
+        {"robot", "FILE|BAG",
+         "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
+        {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
+        {"joint-names", "N1,..,N6",
+         "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
+        {"samples", "FILE",
+         "paired static samples q1..q6,x,y,z[,rx,ry,rz] (CSV; '-': stdin) instead of --robot/--tracker", ""},
+        {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
+        {"robot-model", "NAME|FILE",
+         std::string("nominal geometry: ") + robot_type_names() +
+             ", or a robot description .json (standard or modified DH; a result file works)",
+         "ur5"},
+        {"tool", "X,Y,Z",
+         "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)",
+         "0,0,0.1695"},
+        {"params", "full|paper",
+         "full identifiable model, or the link lengths (every non-zero d and a; for UR the paper's six)", "full"},
+        {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
+        {"population-subset", "N",
+         "hybrids (abc+lm, gsa+lm): ABC/GSA search on N training samples spread over the poses (farthest-point in "
+         "joint space), LM refines on all; 0: every sample. --method abc, gsa and all always search on every sample",
+         std::to_string(kDefaultPopulationSubset)},
+        {"robust", "", "Huber loss in LM (a few bad tracker points do not drag the fit)", ""},
+        {"seed", "N", "seed of the train/test split and of ABC/GSA", "1"},
+        {"split", "FRACTION", "share of samples used for training (1: all, no test rows)", "0.7"},
+        {"cv", "K|loo", "also cross-validate: K folds (or leave-one-out), held-out MAE per fold", ""},
+        {"keep-outliers", "", "use every sample (no blunder search)", ""},
+        {"controller-tcp", "",
+         "the points are the controller's own TCP readings (a pendant export, RTDE actual_TCP_pose): in the base "
+         "frame, at the TCP offset --tool; neither is fitted, joint 1's parameters are estimated instead (LM only; "
+         "implies --method lm)",
+         ""},
+        {"significance", "T|auto",
+         "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leave-one-out up to 64 training "
+         "samples)",
+         "2"},
+        {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
+        {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
+        {"report", "DIR", "write an HTML report with figures into DIR", ""},
+        {"max-change-mm", "X", "warn (exit 5) when a length moves more than this from the start geometry [mm]", "20"},
+        {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
+        {"compliance", "basis|masses",
+         "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity "
+         "basis, or the link masses (UR3e, UR5e)",
+         "", "basis"},
+        {"gravity", "X,Y,Z", "with --compliance: gravity direction in the robot base frame (wall or ceiling mounts)",
+         "0,0,-1"},
+        {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]",
+         ""},
+        {"quiet", "", "no progress on stderr", ""},
+        {"tracker-sigma-um", "S",
+         "stated noise of the tracker per axis: the blunder test's sigma when the fit leaves too little redundancy, "
+         "and the report's measurement noise (the same as --position-sigma-m) [um]",
+         "10"},
+        {"position-sigma-m", "S",
+         "stated noise of the measured positions; with --angle-sigma-rad it weighs a measured orientation (rx, ry, rz "
+         "columns of --samples) [m]",
+         "1e-05"},
+        {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
+        {"joint-sigma-rad", "S",
+         "noise of the joint readings, in the units of --position-sigma-m (e.g. the readings' rounding step): LM "
+         "weighs each sample by its point covariance (errors in variables, docs/robust.md; 0: off) [rad]",
+         "0"},
+        {"joint-sigma-deg", "S", "--joint-sigma-rad in degrees (a UR pendant export's rounding: 0.01) [deg]", ""},
+        {"orientation-form", "rotation-vector|euler-xyz",
+         "what rx, ry, rz are: the tool frame's rotation vector, or intrinsic X-Y-Z Euler angles (R = Rx(rx) Ry(ry) "
+         "Rz(rz), e.g. a Leica T-Mac export)",
+         "rotation-vector"},
+        {"orientation-lever-m", "L",
+         "a measured orientation adds two points at this lever along the tool frame's x and y axes (targets 2, 3; 0: "
+         "rx, ry, rz not used) [m] (default: position / angle sigma)",
+         ""},
     };
     for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
     return list;
@@ -195,7 +240,8 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   if (error.ok() && (!from_file || options.given("tool"))) error = vec3_option(options, "tool", &settings->tool_m);
   if (!error.ok()) return error;
   const std::string params = options.get("params");
-  if (params != "full" && params != "paper") return Error::usage("--params must be 'full' or 'paper', not " + port::quoted(params));
+  if (params != "full" && params != "paper")
+    return Error::usage("--params must be 'full' or 'paper', not " + port::quoted(params));
   settings->paper_params = params == "paper";
   if (calibration_method_from_name(options.get("method").c_str(), &settings->method) != Status::ok) {
     return Error::usage(std::string("--method must be one of ") + calibration_method_names() + "; not " +

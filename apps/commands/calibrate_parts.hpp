@@ -27,27 +27,29 @@ using CliDataset = HostDataset;
 
 /// Validated command-line settings.
 struct CalibrateSettings {
-  textio::RobotDescription robot;    ///< --robot-model: built-in table or description file
-  Vec3 tool_m = Vec3(0.0, 0.0, 0.1695);  ///< --tool (or the description file's): nominal tool point in the flange frame [m]
-  bool paper_params = false;         ///< --params paper
+  textio::RobotDescription robot;  ///< --robot-model: built-in table or description file
+  Vec3 tool_m =
+      Vec3(0.0, 0.0, 0.1695);  ///< --tool (or the description file's): nominal tool point in the flange frame [m]
+  bool paper_params = false;   ///< --params paper
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< --method
-  std::uint64_t seed = 1;            ///< --seed
-  double train_fraction = 0.7;       ///< --split
-  bool robust = false;               ///< --robust
-  bool keep_outliers = false;        ///< --keep-outliers
-  double significance_t = 2.0;       ///< --significance
-  std::size_t population_subset = kDefaultPopulationSubset;  ///< --population-subset: a hybrid's ABC/GSA samples (0: all) [-]
-  std::size_t cv_folds = 0;          ///< --cv K; 1: leave-one-out (lib's folds = 0); 0: no cross-validation
-  bool progress = false;             ///< progress lines on stderr
-  textio::InputUnits units;          ///< --length-unit, --angle-unit of text inputs
-  FitBounds bounds;                  ///< --max-change-mm, --max-change-deg
-  bool compliance = false;           ///< --compliance: an LM+compliance stage after the rigid LM
+  std::uint64_t seed = 1;                                ///< --seed
+  double train_fraction = 0.7;                           ///< --split
+  bool robust = false;                                   ///< --robust
+  bool keep_outliers = false;                            ///< --keep-outliers
+  double significance_t = 2.0;                           ///< --significance
+  std::size_t population_subset =
+      kDefaultPopulationSubset;  ///< --population-subset: a hybrid's ABC/GSA samples (0: all) [-]
+  std::size_t cv_folds = 0;      ///< --cv K; 1: leave-one-out (lib's folds = 0); 0: no cross-validation
+  bool progress = false;         ///< progress lines on stderr
+  textio::InputUnits units;      ///< --length-unit, --angle-unit of text inputs
+  FitBounds bounds;              ///< --max-change-mm, --max-change-deg
+  bool compliance = false;       ///< --compliance: an LM+compliance stage after the rigid LM
   /// --compliance basis|masses: the terms (default_compliance_terms), unit gravity direction
   /// (--gravity) and, for masses, the arm's masses and the payload (--payload); zero coefficients.
   ComplianceModel compliance_model;
   textio::OrientationInput orientation;  ///< --position-sigma-m, --angle-sigma-rad, --orientation-lever-m
-  double joint_sigma_rad = 0.0;      ///< --joint-sigma-rad / --joint-sigma-deg: joint reading noise (0: off) [rad]
-  bool controller_tcp = false;       ///< --controller-tcp: base (identity) and tool (--tool) known, not fitted
+  double joint_sigma_rad = 0.0;          ///< --joint-sigma-rad / --joint-sigma-deg: joint reading noise (0: off) [rad]
+  bool controller_tcp = false;           ///< --controller-tcp: base (identity) and tool (--tool) known, not fitted
 };
 
 /// The fate of every tracker point in the extraction pass (kept, or its drop reason), for the
@@ -65,23 +67,21 @@ class PointFates final : public ExtractionObserver {
 
 /// What the job produced, with the CLI's stage timings.
 struct Run {
-  CalibrationResult result;                     ///< lib's result (~5 KB)
-  double seconds[kMaxCalibrationStages] = {};   ///< wall time per stage [s]
-  bool from_controller = false;                 ///< the start geometry is the controller's
+  CalibrationResult result;                          ///< lib's result (~5 KB)
+  double seconds[kMaxCalibrationStages] = {};        ///< wall time per stage [s]
+  bool from_controller = false;                      ///< the start geometry is the controller's
   std::size_t link_length_count = kPaper6Dimension;  ///< lengths the population stages search [-]
-  bool has_cv = false;                          ///< --cv ran: `cv` is meaningful
-  CrossValidationResult cv;                     ///< per-fold held-out errors (~20 KB)
-  int target_count = 1;                         ///< targets (reflectors) in the samples: the result's "tools" [-]
-  CalibrationOptions options;                   ///< the job's options, as lib ran it
-  RepeatedReadingNoise repeated;                ///< the kept samples' repeated readings (blunders set aside excluded)
+  bool has_cv = false;                               ///< --cv ran: `cv` is meaningful
+  CrossValidationResult cv;                          ///< per-fold held-out errors (~20 KB)
+  int target_count = 1;                              ///< targets (reflectors) in the samples: the result's "tools" [-]
+  CalibrationOptions options;                        ///< the job's options, as lib ran it
+  RepeatedReadingNoise repeated;  ///< the kept samples' repeated readings (blunders set aside excluded)
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).
   std::string final_method() const { return result.stage_name(result.stage_count - 1); }
   /// The LM details when the final stage is LM, else null.
-  const LmResult* final_lm() const {
-    return final_stage().solver == CalibrationSolver::lm ? &result.lm : nullptr;
-  }
+  const LmResult* final_lm() const { return final_stage().solver == CalibrationSolver::lm ? &result.lm : nullptr; }
 };
 
 /// The options of `hivecal calibrate` (for --help and the parser).

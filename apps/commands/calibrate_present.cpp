@@ -41,7 +41,8 @@ report::MethodRow method_row(std::string method, std::string parameters, const E
 
 report::MethodRow stage_row(const Run& run, std::size_t k) {
   const CalibrationStage& stage = run.result.stages[k];
-  std::string params = stage.params == CalibrationParams::paper ? "paper-" + std::to_string(run.link_length_count) : "full";
+  std::string params =
+      stage.params == CalibrationParams::paper ? "paper-" + std::to_string(run.link_length_count) : "full";
   if (stage.solver == CalibrationSolver::lm) {
     if (stage.params == CalibrationParams::paper && run.result.baseline.tool_fitted) params += " + tool";
     if (stage.compliance) params += " + compliance";
@@ -125,14 +126,15 @@ void set_partner(const NormalMatrix& correlation, int k, const RobotModel& model
 }
 
 /// The estimated or changed parameters. `lm`: the LM details when `stage` is the LM stage, else null.
-std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm, const RobotModel& start,
-                                                 Span<const Sample> train) {
+std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm,
+                                                 const RobotModel& start, Span<const Sample> train) {
   std::vector<report::ParameterRow> rows;
   static CorrelationScratch scratch;  // static: ~54 kB with the matrix
   static NormalMatrix correlation;
   const bool correlated =
-      lm != nullptr && parameter_correlations(stage.model, stage.base_to_tracker, train, PointLoss{lm->huber_threshold_m},
-                                              lm->identifiability.kept_mask, &scratch, &correlation) == Status::ok;
+      lm != nullptr &&
+      parameter_correlations(stage.model, stage.base_to_tracker, train, PointLoss{lm->huber_threshold_m},
+                             lm->identifiability.kept_mask, &scratch, &correlation) == Status::ok;
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
   for (int k = 0; k < kModelParamCount; ++k) {
@@ -207,12 +209,14 @@ std::string format_mm(double value_m) {
 std::string noise_statement(double fit_sigma_m, double tracker_sigma_m, bool measured) {
   const double ratio = fit_sigma_m / tracker_sigma_m;
   char line[320];
-  std::snprintf(line, sizeof line, "noise: the fit's residual sigma %s mm per axis is %.1fx the tracker's %s %s mm%s%s",
-                format_mm(fit_sigma_m).c_str(), ratio, measured ? "measured" : "stated",
-                format_mm(tracker_sigma_m).c_str(), measured ? " (repeated readings)" : " (--tracker-sigma-um)",
-                ratio > 2.0 ? (measured ? ": unmodelled effects dominate the residuals, not the tracker"
-                                        : ": unmodelled effects (or a wrong stated noise) dominate the residuals, not the tracker")
-                            : ": the model explains the data to the measurement noise");
+  std::snprintf(
+      line, sizeof line, "noise: the fit's residual sigma %s mm per axis is %.1fx the tracker's %s %s mm%s%s",
+      format_mm(fit_sigma_m).c_str(), ratio, measured ? "measured" : "stated", format_mm(tracker_sigma_m).c_str(),
+      measured ? " (repeated readings)" : " (--tracker-sigma-um)",
+      ratio > 2.0
+          ? (measured ? ": unmodelled effects dominate the residuals, not the tracker"
+                      : ": unmodelled effects (or a wrong stated noise) dominate the residuals, not the tracker")
+          : ": the model explains the data to the measurement noise");
   return line;
 }
 
@@ -225,11 +229,12 @@ void measurement_noise(const CalibrateSettings& settings, const RepeatedReadingN
   data->noise_sigma_m = repeated.sigma_m;
   data->noise_source = "repeated readings";
   char line[300];
-  std::snprintf(line, sizeof line,
-                "tracker noise: %zu readings of %zu repeated points scatter %s mm per axis (x %s, y %s, z %s; stated %s mm)",
-                repeated.readings, repeated.groups, format_mm(repeated.sigma_m).c_str(),
-                format_mm(repeated.sigma_axis_m[0]).c_str(), format_mm(repeated.sigma_axis_m[1]).c_str(),
-                format_mm(repeated.sigma_axis_m[2]).c_str(), format_mm(settings.orientation.position_sigma_m).c_str());
+  std::snprintf(
+      line, sizeof line,
+      "tracker noise: %zu readings of %zu repeated points scatter %s mm per axis (x %s, y %s, z %s; stated %s mm)",
+      repeated.readings, repeated.groups, format_mm(repeated.sigma_m).c_str(),
+      format_mm(repeated.sigma_axis_m[0]).c_str(), format_mm(repeated.sigma_axis_m[1]).c_str(),
+      format_mm(repeated.sigma_axis_m[2]).c_str(), format_mm(settings.orientation.position_sigma_m).c_str());
   data->info_lines.push_back(line);
 }
 
@@ -274,9 +279,9 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
   }
   for (const CalibrationOutlier& o : r.outlier_list()) {
     char line[300];
-    std::snprintf(line, sizeof line, "set aside as a blunder: %s, residual %s mm, w %.2f > %.2f (alpha %.2g %% for the set)",
-                  sample_source(facts, o.index).c_str(), format_mm(o.residual_m).c_str(), o.w, o.critical_w,
-                  table.alpha * 100.0);
+    std::snprintf(
+        line, sizeof line, "set aside as a blunder: %s, residual %s mm, w %.2f > %.2f (alpha %.2g %% for the set)",
+        sample_source(facts, o.index).c_str(), format_mm(o.residual_m).c_str(), o.w, o.critical_w, table.alpha * 100.0);
     data->info_lines.push_back(line);
     table.rows.push_back({sample_source(facts, o.index), o.residual_m, o.w});
   }
@@ -286,8 +291,10 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
                                "effects); none removed by the test");
   }
   for (const std::string& source : table.uncontrolled) {
-    data->info_lines.push_back("uncontrolled pose (redundancy below 0.1: a blunder there cannot be told from the "
-                               "geometry; kept, not tested): " + source);
+    data->info_lines.push_back(
+        "uncontrolled pose (redundancy below 0.1: a blunder there cannot be told from the "
+        "geometry; kept, not tested): " +
+        source);
   }
 }
 
@@ -340,7 +347,8 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
   const std::string orientation = streams::orientation_line(facts);
   if (!orientation.empty()) data.info_lines.push_back(orientation);  // in the report's "info" too
   if (settings.controller_tcp) {
-    data.info_lines.push_back("known (--controller-tcp): the base (identity) and the tool points; not fitted, joint 1 estimated instead");
+    data.info_lines.push_back(
+        "known (--controller-tcp): the base (identity) and the tool points; not fitted, joint 1 estimated instead");
   }
   const std::string joints = run.from_controller ? "controller" : "nominal";
   data.methods.push_back(method_row("uncalibrated", joints + (uncalibrated.tool_fitted ? ", tool fitted" : ""),
@@ -355,8 +363,8 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
   }
   add_samples(dataset, run, &data);
   if (const LmResult* lm = run.final_lm(); lm != nullptr) {
-    for (const std::string& line : identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t,
-                                                          final_stage.model)) {
+    for (const std::string& line :
+         identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t, final_stage.model)) {
       data.info_lines.push_back(line);
     }
     if (final_stage.rigid_kept) {
@@ -368,7 +376,8 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     }
     data.identifiability = identifiability_table(*lm, final_stage.model);
     for (int k = 0; k < kFullParamCount; ++k)
-      if (mask_has(run.result.lm_pruned_mask, k)) data.identifiability.fixed.push_back(full_param_name(k, final_stage.model));
+      if (mask_has(run.result.lm_pruned_mask, k))
+        data.identifiability.fixed.push_back(full_param_name(k, final_stage.model));
     data.identifiability.significance_t = run.result.significance_t;
     data.fit_sigma_m = lm->residual_sigma_m;
   }

@@ -53,7 +53,8 @@ void write_lm_details(textio::JsonWriter& json, const LmResult& lm, const RobotM
     json.end_object();
   }
   json.end_array();
-  json.key("singular_values").inline_array(id.singular_values_before, static_cast<std::size_t>(id.singular_count_before));
+  json.key("singular_values")
+      .inline_array(id.singular_values_before, static_cast<std::size_t>(id.singular_count_before));
   json.key("condition_before").value(id.condition_before);
   json.key("condition_after").value(id.condition_after);
   json.end_object();

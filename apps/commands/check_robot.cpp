@@ -30,12 +30,13 @@ std::string dh_table(const textio::RobotDescription& robot) {
                       : "joint  theta offset [deg]         d [mm]          a [mm]      alpha [deg]\n";
   ModifiedDhRow rows[kJointCount];
   Vec3 tool_m = robot.model.tool_m;
-  if (robot.convention == DhConvention::modified) modified_dh_from_model(robot.model, robot.modified_base, rows, &tool_m);
+  if (robot.convention == DhConvention::modified)
+    modified_dh_from_model(robot.model, robot.modified_base, rows, &tool_m);
   for (int j = 0; j < kJointCount; ++j) {
     if (robot.convention == DhConvention::modified) {
       const ModifiedDhRow& r = rows[j];
-      s += fmt("%5.0f", j + 1) + fmt("  %16.6f  %13.4f  %19.6f  %13.4f\n", r.alpha_prev_rad * kDegPerRad, r.a_prev_m * 1e3,
-                                     r.theta_offset_rad * kDegPerRad, r.d_m * 1e3);
+      s += fmt("%5.0f", j + 1) + fmt("  %16.6f  %13.4f  %19.6f  %13.4f\n", r.alpha_prev_rad * kDegPerRad,
+                                     r.a_prev_m * 1e3, r.theta_offset_rad * kDegPerRad, r.d_m * 1e3);
     } else {
       const DhJoint& r = robot.model.joints[j];
       s += fmt("%5.0f", j + 1) + fmt("  %18.6f  %13.4f  %14.4f  %15.6f\n", r.theta_offset_rad * kDegPerRad, r.d_m * 1e3,
@@ -57,7 +58,8 @@ Error check_robot(const Options& options) {
     if (error.ok()) error = textio::read_joints_csv(options.get("joints"), &poses, units);
     if (!error.ok()) return error;
   }
-  std::string s = "robot: " + robot.robot + " (" + (from_file ? "file " + options.get("robot-model") : "built-in table") +
+  std::string s = "robot: " + robot.robot + " (" +
+                  (from_file ? "file " + options.get("robot-model") : "built-in table") +
                   ")\nconvention: " + textio::dh_convention_name(robot.convention) + "\n" + dh_table(robot);
   if (robot.convention == DhConvention::modified) {
     s += fmt("base offset: alpha_0 %.6f deg, a_0 %.4f mm (folded into the table above as row 1's)\n",
@@ -65,12 +67,14 @@ Error check_robot(const Options& options) {
   }
   for (int k = 0; k < robot.target_count; ++k) {
     const Vec3& t = target_tool(robot.model, k);
-    s += fmt("tool point %.0f (flange frame): ", k + 1) + fmt("%.4f, %.4f, %.4f mm\n", t.x() * 1e3, t.y() * 1e3, t.z() * 1e3);
+    s += fmt("tool point %.0f (flange frame): ", k + 1) +
+         fmt("%.4f, %.4f, %.4f mm\n", t.x() * 1e3, t.y() * 1e3, t.z() * 1e3);
   }
   s += "compliance terms: " + std::to_string(robot.model.compliance.term_count) + "\n";
   if (robot.has_joint_limits) {
     s += "joint limits [deg]:";
-    for (int j = 0; j < kJointCount; ++j) s += fmt(" %.1f..%.1f", robot.lower_rad(j) * kDegPerRad, robot.upper_rad(j) * kDegPerRad);
+    for (int j = 0; j < kJointCount; ++j)
+      s += fmt(" %.1f..%.1f", robot.lower_rad(j) * kDegPerRad, robot.upper_rad(j) * kDegPerRad);
     s += "\n";
   } else {
     s += "joint limits: none given (plan assumes a built-in type's, else +-360 deg)\n";
@@ -98,7 +102,8 @@ Error check_robot(const Options& options) {
 
 int check_robot_main(int argc, char** argv) {
   std::vector<OptionSpec> specs = {
-      {"robot-model", "NAME|FILE", "the robot file (description .json, .urdf or a result) or a built-in name; also the first argument", ""},
+      {"robot-model", "NAME|FILE",
+       "the robot file (description .json, .urdf or a result) or a built-in name; also the first argument", ""},
       {"joints", "FILE", "poses whose tool points to print: CSV q1..q6", ""},
   };
   specs.push_back(input_unit_option_specs()[1]);  // --angle-unit of --joints
@@ -115,7 +120,8 @@ int check_robot_main(int argc, char** argv) {
                                    "refused with its name and the line or key at fault.",
                                    specs, static_cast<int>(pointers.size()), pointers.data(), &options);
   if (parsed >= 0) return parsed;
-  if (options.get("robot-model").empty()) return exit_with(kCommand, Error::usage("a robot file is required (see --help)"));
+  if (options.get("robot-model").empty())
+    return exit_with(kCommand, Error::usage("a robot file is required (see --help)"));
   return exit_with(kCommand, check_robot(options));
 }
 

@@ -16,8 +16,9 @@ namespace hivecal::cli {
 
 int demo_main(int argc, char** argv) {
   Options options;
-  const int parsed = parse_options("demo", "Simulates 38 poses of a perturbed UR5 and compares the fit of the\n"
-                                           "nominal and the true geometry.",
+  const int parsed = parse_options("demo",
+                                   "Simulates 38 poses of a perturbed UR5 and compares the fit of the\n"
+                                   "nominal and the true geometry.",
                                    {}, argc, argv, &options);
   if (parsed >= 0) return parsed;
   Random random(1);
@@ -43,7 +44,8 @@ int demo_main(int argc, char** argv) {
   for (const auto& [name, model] : {std::pair<const char*, RobotModel>{"nominal", nominal}, {"true", truth}}) {
     RigidTransform base;
     const Status fit = fit_base_to_tracker(model, dataset.samples(), &base);
-    if (fit != Status::ok) return exit_with("demo", Error::failure(std::string("base fit failed: ") + status_message(fit)));
+    if (fit != Status::ok)
+      return exit_with("demo", Error::failure(std::string("base fit failed: ") + status_message(fit)));
     const ErrorStats stats = position_error_stats(model, base, dataset.samples());
     std::printf("%-8s geometry: MAE 3D %.1f um, sigma %.1f um over %zu samples\n", name,
                 stats.mae(ErrorAxis::norm_3d) * 1e6, stats.sigma(ErrorAxis::norm_3d) * 1e6, stats.count);

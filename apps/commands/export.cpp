@@ -57,7 +57,8 @@ std::vector<report::SampleRow> training_samples(const std::string& result_text, 
 }
 
 /// Mean 3D distance of `model`'s predictions from the samples' tracker points [m].
-double mae_m(const RobotModel& model, const RigidTransform& base_to_tracker, const std::vector<report::SampleRow>& samples) {
+double mae_m(const RobotModel& model, const RigidTransform& base_to_tracker,
+             const std::vector<report::SampleRow>& samples) {
   double sum_m = 0.0;
   for (const report::SampleRow& s : samples) {
     const JointVector q = Eigen::Map<const JointVector>(s.q_rad);
@@ -96,7 +97,8 @@ Error ur_kinematics_yaml(const Options& options, const textio::CalibrationFile& 
   }
   textio::UrKinematics kinematics;
   std::string why;
-  if (!textio::ur_kinematics_from_model(arm.model, &kinematics, &why)) return Error::input("--format ur-kinematics: " + why);
+  if (!textio::ur_kinematics_from_model(arm.model, &kinematics, &why))
+    return Error::input("--format ur-kinematics: " + why);
   const Vec3 flange_offset = kinematics.flange.translation_m;
   const double flange_twist_rad = std::acos(std::fmin(1.0, std::fmax(-1.0, kinematics.flange.rotation(1, 1))));
   if (flange_offset.norm() > 0.0 || flange_twist_rad > 0.0) {

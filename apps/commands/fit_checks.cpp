@@ -52,7 +52,8 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
       std::snprintf(line, sizeof line,
                     "%s moved %+.3f deg (%.6f -> %.6f rad), more than %.3g deg (--max-change-deg): wrong model, "
                     "joint zero or units?",
-                    full_param_name(k), change * math::kDegPerRad, before(k), after(k), bounds.max_angle_change_rad * math::kDegPerRad);
+                    full_param_name(k), change * math::kDegPerRad, before(k), after(k),
+                    bounds.max_angle_change_rad * math::kDegPerRad);
     } else {
       std::snprintf(line, sizeof line,
                     "%s moved %+.3f mm (%.6f -> %.6f m), more than %.3g mm (--max-change-mm): wrong model, tool "

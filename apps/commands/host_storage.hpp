@@ -43,7 +43,8 @@ class HostWorkspace {
     if (arena_.size() * sizeof(std::max_align_t) < bytes) {
       arena_.assign((bytes + sizeof(std::max_align_t) - 1) / sizeof(std::max_align_t), std::max_align_t{});
     }
-    const Span<unsigned char> room(reinterpret_cast<unsigned char*>(arena_.data()), arena_.size() * sizeof(std::max_align_t));
+    const Span<unsigned char> room(reinterpret_cast<unsigned char*>(arena_.data()),
+                                   arena_.size() * sizeof(std::max_align_t));
     (void)view_.attach(room, samples);  // cannot fail: aligned, large enough, samples > 0
     return view_;
   }

@@ -58,7 +58,8 @@ std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::ve
 
 /// The command frame: a result's model and base -> tracker, or a nominal model with the
 /// base -> tracker fitted to every reach. *how says which.
-Error command_frame(const Options& options, Span<const Sample> samples, textio::CalibrationFile* frame, std::string* how) {
+Error command_frame(const Options& options, Span<const Sample> samples, textio::CalibrationFile* frame,
+                    std::string* how) {
   if (!options.get("calibration").empty()) {
     *how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
     return textio::read_calibration_json(options.get("calibration"), frame);
@@ -67,7 +68,8 @@ Error command_frame(const Options& options, Span<const Sample> samples, textio::
   if (error.ok()) error = vec3_option(options, "tool", &frame->model.tool_m);
   if (!error.ok()) return error;
   if (fit_base_to_tracker(frame->model, samples, &frame->base_to_tracker) != Status::ok) {
-    return Error::input("cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
+    return Error::input(
+        "cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
   }
   *how = "commanded positions from the nominal " + frame->robot + " (base -> tracker fitted to the reaches)";
   return Error{};
@@ -90,7 +92,8 @@ Error iso9283(const Options& options) {
   std::size_t report_id = kNoReport;
   Error error = declare_inputs(options, {"out", "report"}, &outputs);
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
-  if (error.ok() && !options.get("report").empty()) error = outputs.add_file(options.get("report"), "--report", &report_id);
+  if (error.ok() && !options.get("report").empty())
+    error = outputs.add_file(options.get("report"), "--report", &report_id);
   if (!error.ok()) return error;
   static cli::HostDataset dataset;
   dataset.clear();
@@ -126,7 +129,8 @@ Error iso9283(const Options& options) {
                     mm(accuracy.accuracy_m.y()), mm(accuracy.accuracy_m.z()), mm(accuracy.repeatability_m)});
   }
   if (measured == 0) {
-    return Error::input(options.get("samples") + ": no pose was reached twice (ISO 9283 needs the cycles of each pose; " +
+    return Error::input(options.get("samples") +
+                        ": no pose was reached twice (ISO 9283 needs the cycles of each pose; " +
                         std::to_string(poses.size()) + " poses, one reach each)");
   }
   const std::string summary = std::to_string(measured) + " poses with repeated reaches (" + std::to_string(single) +
@@ -139,13 +143,13 @@ Error iso9283(const Options& options) {
   }
   error = outputs.stage_text(out_id, "", table);
   if (error.ok() && report_id != kNoReport) {
-    error = outputs.stage_text(report_id, "",
-                               report::html_page_head("ISO 9283 pose accuracy and repeatability") + "<ul>\n<li>" +
-                                   report::xml_escape(how) + "</li>\n<li>" + report::xml_escape(summary) + "</li>\n</ul>\n" +
-                                   report::html_table(rows) +
-                                   "<p>AP_P: distance of the reaches' barycentre from the commanded position; RP_l = "
-                                   "mean distance of the reaches from their barycentre + 3 S_l (ISO 9283; docs/iso9283.md)."
-                                   "</p>\n</body>\n</html>\n");
+    error = outputs.stage_text(
+        report_id, "",
+        report::html_page_head("ISO 9283 pose accuracy and repeatability") + "<ul>\n<li>" + report::xml_escape(how) +
+            "</li>\n<li>" + report::xml_escape(summary) + "</li>\n</ul>\n" + report::html_table(rows) +
+            "<p>AP_P: distance of the reaches' barycentre from the commanded position; RP_l = "
+            "mean distance of the reaches from their barycentre + 3 S_l (ISO 9283; docs/iso9283.md)."
+            "</p>\n</body>\n</html>\n");
   }
   return error.ok() ? outputs.commit() : error;
 }
@@ -173,7 +177,8 @@ Vec3 tool_rotation_vector(const Vec3& from_m, const Vec3& tracker_m, bool tool_d
   const Vec3 z = (tracker_m - from_m).normalized();
   const Vec3 axis = Vec3::UnitZ().cross(z);
   const double angle = std::atan2(axis.norm(), z.z());
-  return axis.norm() > 1e-12 ? Vec3(axis.normalized() * angle) : Vec3(z.z() > 0.0 ? Vec3::Zero() : Vec3(3.141592653589793, 0, 0));
+  return axis.norm() > 1e-12 ? Vec3(axis.normalized() * angle)
+                             : Vec3(z.z() > 0.0 ? Vec3::Zero() : Vec3(3.141592653589793, 0, 0));
 }
 
 /// Joints that put the flange at `target` within `limits` (damped Gauss-Newton from seeded
@@ -213,7 +218,8 @@ bool solve_ik(const RobotModel& model, const JointLimits& limits, const RigidTra
         moved(j) += 1e-7;
         jacobian.col(j) = (e - error_of(moved)) / 1e-7;
       }
-      const Eigen::Matrix<double, 6, 6> normal = jacobian.transpose() * jacobian + 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
+      const Eigen::Matrix<double, 6, 6> normal =
+          jacobian.transpose() * jacobian + 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
       q += normal.ldlt().solve(jacobian.transpose() * e);
     }
   }
@@ -246,7 +252,8 @@ bool cube_reachable(const RobotModel& model, const JointLimits& limits, const Ve
   iso_positions(centre_m, side_m, positions);
   for (const Vec3& p : positions) {
     JointVector q;
-    if (p.z() < floor_z_m || p.head<2>().norm() < keep_out_m || !reach(model, limits, p, rotation, random, &q)) return false;
+    if (p.z() < floor_z_m || p.head<2>().norm() < keep_out_m || !reach(model, limits, p, rotation, random, &q))
+      return false;
   }
   return true;
 }
@@ -262,7 +269,8 @@ bool largest_cube(const RobotModel& model, const JointLimits& limits, const Vec3
     for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(limits.lower_rad(j), limits.upper_rad(j));
     const Vec3 centre = fk_tool_point(model, q);
     const Vec3 rotation = tool_rotation_vector(centre, tracker_m, tool_down);
-    if (!cube_reachable(model, limits, centre, std::max(*side_m, 0.02), rotation, floor_z_m, keep_out_m, &random)) continue;
+    if (!cube_reachable(model, limits, centre, std::max(*side_m, 0.02), rotation, floor_z_m, keep_out_m, &random))
+      continue;
     double low = std::max(*side_m, 0.02);
     double high = 2.0;
     for (int step = 0; step < 8; ++step) {
@@ -278,8 +286,9 @@ bool largest_cube(const RobotModel& model, const JointLimits& limits, const Vec3
 }
 
 std::string pose_text(const Vec3& p, const Vec3& r) {
-  return textio::format_double(p.x()) + ", " + textio::format_double(p.y()) + ", " + textio::format_double(p.z()) + ", " +
-         textio::format_double(r.x()) + ", " + textio::format_double(r.y()) + ", " + textio::format_double(r.z());
+  return textio::format_double(p.x()) + ", " + textio::format_double(p.y()) + ", " + textio::format_double(p.z()) +
+         ", " + textio::format_double(r.x()) + ", " + textio::format_double(r.y()) + ", " +
+         textio::format_double(r.z());
 }
 
 }  // namespace
@@ -289,8 +298,10 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   double side_m = 0.0;
   const bool automatic = options.get("iso9283") == "auto";
   if (!automatic && !parse_cube(options.get("iso9283"), &centre_m, &side_m)) {
-    return Error::usage("--iso9283 must be X,Y,Z,SIDE (the cube's centre in the base frame and its side, metres; "
-                        "side in (0, 10]) or auto, not " + port::quoted(options.get("iso9283")));
+    return Error::usage(
+        "--iso9283 must be X,Y,Z,SIDE (the cube's centre in the base frame and its side, metres; "
+        "side in (0, 10]) or auto, not " +
+        port::quoted(options.get("iso9283")));
   }
   Vec3 tracker_m;
   std::size_t cycles = 0;
@@ -309,9 +320,11 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   if (error.ok()) error = bounded_option(options, "keep-out-radius", 0.0, 10.0, &keep_out_m);
   if (!error.ok()) return error;
   if (options.get("out").empty()) return Error::usage("--out is required (see --help)");
-  if (automatic && !largest_cube(model, limits, tracker_m, options.given("tool-down"), floor_z_m, keep_out_m, &centre_m, &side_m)) {
-    return Error::failure("--iso9283 auto: no cube whose five positions the arm reaches with one orientation (move the "
-                          "tracker, lower --floor-z or --keep-out-radius)");
+  if (automatic &&
+      !largest_cube(model, limits, tracker_m, options.given("tool-down"), floor_z_m, keep_out_m, &centre_m, &side_m)) {
+    return Error::failure(
+        "--iso9283 auto: no cube whose five positions the arm reaches with one orientation (move the "
+        "tracker, lower --floor-z or --keep-out-radius)");
   }
   port::OutputSet outputs;
   std::size_t out_id = 0;
@@ -332,7 +345,8 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
     JointVector q;
     const bool reachable = reach(model, limits, positions[k], rotation, &random, &q);
     if (!reachable) {
-      std::fprintf(stderr, "hivecal plan: warning: P%d is not reachable with this orientation within the joint limits\n", k + 1);
+      std::fprintf(
+          stderr, "hivecal plan: warning: P%d is not reachable with this orientation within the joint limits\n", k + 1);
     }
     list += "P" + std::to_string(k + 1) + "," + textio::format_double(positions[k].x()) + "," +
             textio::format_double(positions[k].y()) + "," + textio::format_double(positions[k].z()) + "," +
@@ -348,8 +362,10 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
                 "# Set the TCP to the reflector first: the positions are the reflector's, in the base frame.\n",
                 centre_m.x(), centre_m.y(), centre_m.z(), side_m, cycles);
   std::string program = std::string(head) + "def hivecal_iso9283():\n";
-  for (int k = 0; k < 5; ++k) program += "  p" + std::to_string(k + 1) + " = p[" + pose_text(positions[k], rotation) + "]\n";
-  const std::string motion = ", a=" + textio::format_double(acceleration) + ", v=" + textio::format_double(speed) + ")\n";
+  for (int k = 0; k < 5; ++k)
+    program += "  p" + std::to_string(k + 1) + " = p[" + pose_text(positions[k], rotation) + "]\n";
+  const std::string motion =
+      ", a=" + textio::format_double(acceleration) + ", v=" + textio::format_double(speed) + ")\n";
   const std::string wait = "    sleep(" + textio::format_double(dwell_s) + ")\n";
   program += "  cycle = 0\n  while (cycle < " + std::to_string(cycles) + "):\n";
   for (const int k : {1, 5, 4, 3, 2}) program += "    movel(p" + std::to_string(k) + motion + wait;
@@ -357,15 +373,17 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   error = outputs.stage_text(out_id, "", list);
   if (error.ok() && script) error = outputs.stage_text(script_id, "", program);
   if (!error.ok()) return error;
-  std::fprintf(options.get("out") == "-" || options.get("urscript") == "-" ? stderr : stdout,
-               "ISO 9283 test: 5 positions in a %.3f m cube around %.3f, %.3f, %.3f m, %zu cycles of %.0f s dwell each\n",
-               side_m, centre_m.x(), centre_m.y(), centre_m.z(), cycles, dwell_s);
+  std::fprintf(
+      options.get("out") == "-" || options.get("urscript") == "-" ? stderr : stdout,
+      "ISO 9283 test: 5 positions in a %.3f m cube around %.3f, %.3f, %.3f m, %zu cycles of %.0f s dwell each\n",
+      side_m, centre_m.x(), centre_m.y(), centre_m.z(), cycles, dwell_s);
   return outputs.commit();
 }
 
 int iso9283_main(int argc, char** argv) {
   std::vector<OptionSpec> specs = {
-      {"samples", "FILE", "measured reaches: paired samples q1..q6,x,y,z, every commanded pose reached several times", ""},
+      {"samples", "FILE", "measured reaches: paired samples q1..q6,x,y,z, every commanded pose reached several times",
+       ""},
       {"calibration", "FILE", "command frame: a calibration result (its model and base -> tracker)", ""},
       {"robot-model", "NAME|FILE", "or the nominal model, its base -> tracker fitted to the reaches", "ur5"},
       {"tool", "X,Y,Z", "with --robot-model: the reflector in the flange frame [m]", "0,0,0"},

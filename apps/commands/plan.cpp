@@ -152,7 +152,7 @@ std::string names_of(ParamMask mask) {
 
 bool is_angle(int index) {
   const bool dh_angle = index < kDhParamCount && (index % kParamsPerJoint == static_cast<int>(DhField::theta_offset) ||
-                                                   index % kParamsPerJoint == static_cast<int>(DhField::alpha));
+                                                  index % kParamsPerJoint == static_cast<int>(DhField::alpha));
   return dh_angle || (index >= base_rotation_param_index(0) && index <= base_rotation_param_index(2));
 }
 
@@ -179,8 +179,8 @@ std::string report_text(const PlanRequest& request, const IdentifiabilityReport*
   std::string out = "hivecal plan: " + std::to_string(result.pose_count) + " poses chosen (" +
                     plan_criterion_name(o.criterion) + ", " + std::to_string(result.exchanges) + " exchanges in " +
                     std::to_string(result.exchange_passes) + " passes) from " + std::to_string(result.candidate_count) +
-                    " candidates (" + std::to_string(result.attempts) + " random draws, seed " + std::to_string(o.seed) +
-                    ")\n";
+                    " candidates (" + std::to_string(result.attempts) + " random draws, seed " +
+                    std::to_string(o.seed) + ")\n";
   out += "identifiable by the candidate pool: " + std::to_string(result.pool.kept_count()) + " of " +
          std::to_string(mask_count(o.free_mask)) + " parameters; no pose set under these constraints identifies:\n";
   out += dropped_lines(result.pool);
@@ -212,13 +212,12 @@ std::string report_text(const PlanRequest& request, const IdentifiabilityReport*
     if (!mask_has(r.identifiability.kept_mask | p.identifiability.kept_mask, k)) continue;
     const double unit = 1e6;  // m -> um, rad -> urad
     const std::string name = full_param_name(k);
-    out += "  " + name + std::string(name.size() < 10 ? 10 - name.size() : 1, ' ') +
-           text(r.sigma(k) * unit, "%9.2f") + "  " + text(p.sigma(k) * unit, "%9.2f") + (is_angle(k) ? " urad" : " um") +
-           "\n";
+    out += "  " + name + std::string(name.size() < 10 ? 10 - name.size() : 1, ' ') + text(r.sigma(k) * unit, "%9.2f") +
+           "  " + text(p.sigma(k) * unit, "%9.2f") + (is_angle(k) ? " urad" : " um") + "\n";
   }
   out += "session: " + text(result.travel_s, "%.1f") + " s of movej (" + text(result.unordered_travel_s, "%.1f") +
-         " s unordered) + " + std::to_string(result.pose_count) + " x " + text(o.dwell_s, "%g") + " s dwell = " +
-         text(result.session_s, "%.1f") + " s (" + text(result.session_s / 60.0, "%.1f") + " min) at " +
+         " s unordered) + " + std::to_string(result.pose_count) + " x " + text(o.dwell_s, "%g") +
+         " s dwell = " + text(result.session_s, "%.1f") + " s (" + text(result.session_s / 60.0, "%.1f") + " min) at " +
          text(o.joint_speed_rad_s, "%g") + " rad/s, " + text(o.joint_acceleration_rad_s2, "%g") + " rad/s^2\n";
   return out;
 }
@@ -229,7 +228,8 @@ std::string urscript(const PlanOptions& o) {
                     ", about " + text(result.session_s, "%.0f") + " s\ndef hivecal_session():\n";
   for (std::size_t i = 0; i < result.pose_count; ++i) {
     out += "  movej([";
-    for (int j = 0; j < kJointCount; ++j) out += textio::format_double(result.poses[i](j)) + (j + 1 < kJointCount ? ", " : "");
+    for (int j = 0; j < kJointCount; ++j)
+      out += textio::format_double(result.poses[i](j)) + (j + 1 < kJointCount ? ", " : "");
     out += "], a=" + text(o.joint_acceleration_rad_s2, "%.10g") + ", v=" + text(o.joint_speed_rad_s, "%.10g") +
            ")\n  sleep(" + text(o.dwell_s, "%.10g") + ")\n";
   }
@@ -308,7 +308,8 @@ Error plan(const Options& options) {
   if (status != Status::ok) return Error::failure(std::string("planning failed: ") + status_message(status));
 
   std::fputs(report_text(request, down ? &facing : nullptr).c_str(), stdout_carries_output(options) ? stderr : stdout);
-  error = outputs.stage_text(out_id, "", textio::format_joints_csv(Span<const JointVector>(result.poses, result.pose_count)));
+  error = outputs.stage_text(out_id, "",
+                             textio::format_joints_csv(Span<const JointVector>(result.poses, result.pose_count)));
   if (error.ok() && script) error = outputs.stage_text(script_id, "", urscript(request.options));
   if (error.ok() && svg) error = outputs.stage_text(svg_id, "", svg_figure(request));
   return error.ok() ? outputs.commit() : error;
@@ -318,7 +319,10 @@ Error plan(const Options& options) {
 
 int plan_main(int argc, char** argv) {
   std::vector<OptionSpec> specs = {
-      {"robot-model", "NAME|FILE", std::string("nominal geometry and joint limits: ") + robot_type_names() + ", or a robot description .json or .urdf", "ur5e"},
+      {"robot-model", "NAME|FILE",
+       std::string("nominal geometry and joint limits: ") + robot_type_names() +
+           ", or a robot description .json or .urdf",
+       "ur5e"},
       {"count", "N", "poses to measure (1 .. 128)", ""},
       {"tracker-position", "X,Y,Z", "tracker position in the robot base frame [m]", ""},
       {"tool", "X,Y,Z", "reflector in the flange frame [m] (one target)", "0,0,0"},
@@ -326,7 +330,10 @@ int plan_main(int argc, char** argv) {
       {"floor-z", "M", "reflector and flange above this base z [m]", "0.05"},
       {"keep-out-radius", "M", "reflector and flange at least this far from the base z axis [m]", "0.15"},
       {"tool-down", "", "the flange z axis points down in every pose (the paper's session)", ""},
-      {"joint-limits", "FILE", "CSV lower,upper (rad, the header's unit as in 'lower [deg]', or --angle-unit), one row per joint (default: the robot's)", ""},
+      {"joint-limits", "FILE",
+       "CSV lower,upper (rad, the header's unit as in 'lower [deg]', or --angle-unit), one row per joint (default: the "
+       "robot's)",
+       ""},
       {"params", "full|paper", "parameters the calibration will estimate", "full"},
       {"objective", "NAME", "i-optimal-workspace | i-optimal | d-optimal (docs/planning.md)", "i-optimal-workspace"},
       {"candidates", "N", "random candidate configurations to choose from (<= 2048)", "2048"},
@@ -342,18 +349,22 @@ int plan_main(int argc, char** argv) {
       {"out", "FILE", "planned poses, CSV q1..q6 [rad] in visiting order ('-': stdout)", ""},
       {"urscript", "FILE", "URScript program: movej + sleep(dwell) per pose", ""},
       {"svg", "FILE", "figure: reflector positions planned vs random (top and side views)", ""},
-      {"iso9283", "X,Y,Z,SIDE", "instead: the ISO 9283 test in this cube (centre and side, base frame) [m], or 'auto' (the largest cube the arm reaches): the 5 positions (--out: pose,x,y,z,rx,ry,rz) and a movel program (--urscript)", ""},
+      {"iso9283", "X,Y,Z,SIDE",
+       "instead: the ISO 9283 test in this cube (centre and side, base frame) [m], or 'auto' (the largest cube the arm "
+       "reaches): the 5 positions (--out: pose,x,y,z,rx,ry,rz) and a movel program (--urscript)",
+       ""},
       {"cycles", "N", "with --iso9283: cycles P1 P5 P4 P3 P2 (the standard: 30)", "30"},
       {"tool-speed", "M/S", "with --iso9283: movel speed", "0.25"},
       {"tool-acceleration", "M/S2", "with --iso9283: movel acceleration", "1.2"},
   };
   specs.push_back(input_unit_option_specs()[1]);  // --angle-unit: of --joint-limits
   Options options;
-  const int parsed = parse_options(kCommand,
-                                   "Chooses the poses of a tracker session (I-optimal over the cell by default, over\n"
-                                   "the parameters the calibration estimates), orders them for a short path and writes them as a\n"
-                                   "joints CSV and optionally a URScript program; prints random-vs-planned figures.",
-                                   specs, argc, argv, &options);
+  const int parsed =
+      parse_options(kCommand,
+                    "Chooses the poses of a tracker session (I-optimal over the cell by default, over\n"
+                    "the parameters the calibration estimates), orders them for a short path and writes them as a\n"
+                    "joints CSV and optionally a URScript program; prints random-vs-planned figures.",
+                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
   return exit_with(kCommand, plan(options));
 }

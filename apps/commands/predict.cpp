@@ -63,9 +63,8 @@ Error predict(const Options& options) {
   std::vector<Vec3> points;
   points.reserve(poses.size());
   // The file's own base frame: for modified DH the frame before Rx(alpha_0) Tx(a_0).
-  const RigidTransform file_base = calibration.convention == DhConvention::modified
-                                       ? calibration.modified_base.transform()
-                                       : RigidTransform{};
+  const RigidTransform file_base =
+      calibration.convention == DhConvention::modified ? calibration.modified_base.transform() : RigidTransform{};
   for (const JointVector& q : poses) {
     const Vec3 chain_point = fk_target_point(calibration.model, q, target - 1);
     points.push_back(frame == "base" || nominal ? file_base.apply(chain_point)
@@ -81,7 +80,8 @@ Error predict(const Options& options) {
 int predict_main(int argc, char** argv) {
   std::vector<OptionSpec> specs = {
       {"calibration", "FILE", "calibration result (robot-calibration/1 JSON)", ""},
-      {"robot-model", "NAME|FILE", "or a nominal arm (built-in name, description .json or .urdf): base frame; checks a robot file", ""},
+      {"robot-model", "NAME|FILE",
+       "or a nominal arm (built-in name, description .json or .urdf): base frame; checks a robot file", ""},
       {"joints", "FILE", "poses to predict: CSV q1..q6 [rad], optional leading t column ('-': stdin)", ""},
       {"frame", "tracker|base", "frame of the predicted positions", "tracker"},
       {"target", "K", "which target's (reflector's) positions: 1 .. the result's \"tools\" count", "1"},

@@ -31,7 +31,8 @@ Error load_report_data(const std::string& path, report::ReportData* data) {
   if (!r.ok()) return r;
   const textio::JsonValue* value = root.find("report");
   if (value == nullptr) {
-    return Error::input(path + ": no \"report\" key (written by hivecal calibrate since session 6; run calibrate again)");
+    return Error::input(path +
+                        ": no \"report\" key (written by hivecal calibrate since session 6; run calibrate again)");
   }
   return report::parse_report_data(*value, path, data);
 }

@@ -24,16 +24,18 @@ namespace {
 
 using port::Error;
 
-
 constexpr const char* kCommand = "simulate";
 
 std::atomic<bool> g_stop{false};
-void request_stop(int) { g_stop = true; }
+void request_stop(int) {
+  g_stop = true;
+}
 
 const std::vector<cli::OptionSpec>& option_specs() {
   static const std::vector<cli::OptionSpec> specs = {
       {"out-dir", "DIR", "where robot.cap, tracker.cap, the CSV logs and the truth go", "."},
-      {"robot-model", "NAME|FILE", std::string(robot_type_names()) + ", or a robot description .json (docs/formats.md)", "ur5"},
+      {"robot-model", "NAME|FILE", std::string(robot_type_names()) + ", or a robot description .json (docs/formats.md)",
+       "ur5"},
       {"seed", "N", "seed of every random choice", "1"},
       {"waypoints", "N", "waypoints visited", "38"},
       {"duration-s", "S", "session length [s]", "600"},
@@ -42,7 +44,8 @@ const std::vector<cli::OptionSpec>& option_specs() {
       {"tracker-clock-start-us", "T", "tracker clock at the start of the session [us]", "5000000"},
       {"noise-um", "X", "tracker noise per axis, 1 sigma [um]", "10"},
       {"jitter-us", "X", "robot period jitter, 1 sigma [us]", "400"},
-      {"errors", "paper|large", "geometry errors: paper-like (tens of um/urad) or the large ones (0.3 mm/mrad)", "paper"},
+      {"errors", "paper|large", "geometry errors: paper-like (tens of um/urad) or the large ones (0.3 mm/mrad)",
+       "paper"},
       {"length-sigma-um", "X", "sigma of the true d and a errors [um] (default: from --errors)", ""},
       {"angle-sigma-urad", "X", "sigma of the true theta and alpha errors [urad] (default: from --errors)", ""},
       {"tool-sigma-um", "X", "sigma of the true tool's error per axis [um] (default: from --errors)", ""},
@@ -160,8 +163,7 @@ Error serve(const Session& session, const cli::Options& options) {
   Numbers numbers{options, Error{}};
   double speed = 1.0;
   double delay_s = 0.0;
-  if (!numbers.get("speed", &speed) || !numbers.get("serve-delay-s", &delay_s) || speed < 0)
-    return numbers.error;
+  if (!numbers.get("speed", &speed) || !numbers.get("serve-delay-s", &delay_s) || speed < 0) return numbers.error;
   port::PtyPair robot;
   port::PtyPair tracker;
   Error error = port::open_pty(&robot);
@@ -192,14 +194,14 @@ Error serve(const Session& session, const cli::Options& options) {
 
 int simulate_main(int argc, char** argv) {
   cli::Options options;
-  const int parsed = cli::parse_options(
-      kCommand,
-      "Simulates a UR arm visiting waypoints, seen by its joint-state publisher (125 Hz) and a\n"
-      "laser tracker (10 Hz) on their own clocks. Writes robot.cap and tracker.cap (wire format),\n"
-      "robot_joints.csv and tracker.csv (io-formats), truth.json (true model, base->tracker,\n"
-      "clocks: robot-calibration/1 + \"simulation\") and truth_samples.csv (ideal static pairs);\n"
-      "or, with --serve, streams live on two pseudo-terminals (truth files still written).",
-      option_specs(), argc, argv, &options);
+  const int parsed =
+      cli::parse_options(kCommand,
+                         "Simulates a UR arm visiting waypoints, seen by its joint-state publisher (125 Hz) and a\n"
+                         "laser tracker (10 Hz) on their own clocks. Writes robot.cap and tracker.cap (wire format),\n"
+                         "robot_joints.csv and tracker.csv (io-formats), truth.json (true model, base->tracker,\n"
+                         "clocks: robot-calibration/1 + \"simulation\") and truth_samples.csv (ideal static pairs);\n"
+                         "or, with --serve, streams live on two pseudo-terminals (truth files still written).",
+                         option_specs(), argc, argv, &options);
   if (parsed >= 0) return parsed;
   SimConfig config;
   Error error = configure(options, &config);

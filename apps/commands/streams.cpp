@@ -23,7 +23,9 @@ namespace {
 using port::Error;
 
 volatile std::sig_atomic_t g_stop = 0;
-void request_stop(int) { g_stop = 1; }
+void request_stop(int) {
+  g_stop = 1;
+}
 
 /// SIGINT/SIGTERM/SIGHUP (a closed terminal) end the recording cleanly, stats printed (no
 /// SA_RESTART: poll() wakes up at once).
@@ -39,20 +41,20 @@ void install_stop_handlers() {
 void print_clock(std::FILE* out, const ClockFit& fit) {
   std::fprintf(out, "clock: t_robot = %.1f us + (1 %+.3f ppm) * t_tracker\n", fit.offset_us, fit.drift * 1e6);
   std::fprintf(out, "       offset %.1f +- %.1f us at tracker time %.6f s; drift +- %.3f ppm\n",
-              fit.offset_at_reference_us, fit.sigma_offset_at_reference_us, fit.reference_tracker_us * 1e-6,
-              fit.sigma_drift * 1e6);
+               fit.offset_at_reference_us, fit.sigma_offset_at_reference_us, fit.reference_tracker_us * 1e-6,
+               fit.sigma_drift * 1e6);
   std::fprintf(out, "       correlation %.3f (runner-up %.3f), %u chords (%u on speed changes), rms %.1f um\n",
-              fit.coarse_correlation, fit.runner_up_correlation, fit.chords_used, fit.edge_chords,
-              fit.residual_rms_m * 1e6);
+               fit.coarse_correlation, fit.runner_up_correlation, fit.chords_used, fit.edge_chords,
+               fit.residual_rms_m * 1e6);
 }
 
 void print_counts(std::FILE* out, const ExtractionCounts& counts) {
   std::fprintf(out, "tracker points %llu: kept %llu\n", static_cast<unsigned long long>(counts.tracker_points),
-              static_cast<unsigned long long>(counts.kept));
+               static_cast<unsigned long long>(counts.kept));
   for (int r = 0; r < kDropReasonCount; ++r)
     if (counts.dropped[r] != 0)
       std::fprintf(out, "  dropped %-22s %llu\n", drop_reason_name(static_cast<DropReason>(r)),
-                  static_cast<unsigned long long>(counts.dropped[r]));
+                   static_cast<unsigned long long>(counts.dropped[r]));
 }
 
 void print_input(std::FILE* out, const char* stream, const StreamInputCounts& in) {
@@ -62,8 +64,8 @@ void print_input(std::FILE* out, const char* stream, const StreamInputCounts& in
   }
   const DecoderStats& s = in.frames;
   std::fprintf(out, "%s frames %llu ok, %llu rejected, %llu packets lost in %llu gaps\n", stream,
-              static_cast<unsigned long long>(s.frames_ok), static_cast<unsigned long long>(s.frames_rejected()),
-              static_cast<unsigned long long>(s.packets_lost), static_cast<unsigned long long>(s.sequence_gaps));
+               static_cast<unsigned long long>(s.frames_ok), static_cast<unsigned long long>(s.frames_rejected()),
+               static_cast<unsigned long long>(s.packets_lost), static_cast<unsigned long long>(s.sequence_gaps));
 }
 
 /// One recorded stream: its port and capture file options.
@@ -103,7 +105,8 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
   }
   const std::string robot_port = options.get(kStreams[0].port);
   const std::string tracker_port = options.get(kStreams[1].port);
-  if (!robot_port.empty() && !tracker_port.empty() && port::same_file(port::identify(robot_port), port::identify(tracker_port))) {
+  if (!robot_port.empty() && !tracker_port.empty() &&
+      port::same_file(port::identify(robot_port), port::identify(tracker_port))) {
     return Error::usage(std::string("--") + kStreams[0].port + " and --" + kStreams[1].port +
                         " name the same port: each stream needs its own");
   }
@@ -145,34 +148,42 @@ Error record_rtde(const cli::Options& options) {
   Error error = cli::bounded_option(options, "duration-s", 0.0, 1e9, &rtde.duration_s);
   if (error.ok()) error = cli::bounded_option(options, "rtde-frequency", 1.0, 500.0, &rtde.frequency_hz);
   if (!error.ok()) return error;
-  const std::string out = options.get("robot-out") == "robot.cap" && !options.given("robot-out") ? "robot_rtde.txt"
-                                                                                                  : options.get("robot-out");
+  const std::string out = options.get("robot-out") == "robot.cap" && !options.given("robot-out")
+                              ? "robot_rtde.txt"
+                              : options.get("robot-out");
   port::OutputSet checks;
   std::size_t id = 0;
   error = checks.add_file(out, "--robot-out", &id);
   if (error.ok() && port::identify(out).exists && !options.given("force")) {
-    error = Error::output("--robot-out " + port::quoted(out, 200) + ": exists; refusing to overwrite a recording (--force replaces it)");
+    error = Error::output("--robot-out " + port::quoted(out, 200) +
+                          ": exists; refusing to overwrite a recording (--force replaces it)");
   }
   if (!error.ok()) return error;
   port::CaptureWriter file;  // rows are appended as they come: Ctrl-C loses nothing
   bool opened = false;
-  rtde.on_text = [](const std::string& text) { std::fprintf(stderr, "hivecal record: controller says: %s\n", text.c_str()); };
+  rtde.on_text = [](const std::string& text) {
+    std::fprintf(stderr, "hivecal record: controller says: %s\n", text.c_str());
+  };
   install_stop_handlers();
   port::RtdeStats stats;
-  error = port::record_rtde(host, port_number, rtde, &g_stop, [&](const std::string& row) {
-    if (!opened) {  // the file exists only once the controller has accepted the recipe
-      const Error created = file.open(out, options.given("force"));
-      if (!created.ok()) return created;
-      opened = true;
-    }
-    return file.write(reinterpret_cast<const std::uint8_t*>(row.data()), row.size());
-  }, &stats);
+  error = port::record_rtde(
+      host, port_number, rtde, &g_stop,
+      [&](const std::string& row) {
+        if (!opened) {  // the file exists only once the controller has accepted the recipe
+          const Error created = file.open(out, options.given("force"));
+          if (!created.ok()) return created;
+          opened = true;
+        }
+        return file.write(reinterpret_cast<const std::uint8_t*>(row.data()), row.size());
+      },
+      &stats);
   const Error closed = file.close();
   if (error.ok()) error = closed;
-  std::printf("rtde %s:%d (URControl %u.%u.%u.%u) -> %s: %llu data packages, %llu rows, %llu text messages%s\n", host.c_str(),
-              port_number, stats.controller_version[0], stats.controller_version[1], stats.controller_version[2],
-              stats.controller_version[3], out.c_str(), static_cast<unsigned long long>(stats.data_packages),
-              static_cast<unsigned long long>(stats.rows_written), static_cast<unsigned long long>(stats.text_messages),
+  std::printf("rtde %s:%d (URControl %u.%u.%u.%u) -> %s: %llu data packages, %llu rows, %llu text messages%s\n",
+              host.c_str(), port_number, stats.controller_version[0], stats.controller_version[1],
+              stats.controller_version[2], stats.controller_version[3], out.c_str(),
+              static_cast<unsigned long long>(stats.data_packages), static_cast<unsigned long long>(stats.rows_written),
+              static_cast<unsigned long long>(stats.text_messages),
               stats.ended_by_controller ? "; the controller closed the connection" : "");
   return error;
 }
@@ -216,8 +227,8 @@ Error record(const cli::Options& options) {
                                  ? std::string()
                                  : " (" + std::to_string(stats.bytes_read[i]) + " read, " +
                                        std::to_string(stats.bytes_read[i] - stats.bytes[i]) + " not written)";
-    std::printf("%s -> %s: %llu bytes%s, %llu disconnections\n", sources[i]->name().c_str(),
-                writers[i]->path().c_str(), static_cast<unsigned long long>(stats.bytes[i]), lost.c_str(),
+    std::printf("%s -> %s: %llu bytes%s, %llu disconnections\n", sources[i]->name().c_str(), writers[i]->path().c_str(),
+                static_cast<unsigned long long>(stats.bytes[i]), lost.c_str(),
                 static_cast<unsigned long long>(stats.disconnects[i]));
   }
   return error;
@@ -282,17 +293,18 @@ int record_main(int argc, char** argv) {
       {"tracker-baud", "N", "tracker line rate [bit/s]", std::to_string(port::kTrackerBaud)},
       {"duration-s", "S", "stop after this long [s]; 0: until Ctrl-C / SIGTERM", "0"},
       {"force", "", "replace existing capture files (never done without it)", ""},
-      {"rtde", "HOST[:PORT]", "record a UR controller's joint states over RTDE (port 30004) into --robot-out as a robot log", ""},
+      {"rtde", "HOST[:PORT]",
+       "record a UR controller's joint states over RTDE (port 30004) into --robot-out as a robot log", ""},
       {"rtde-frequency", "HZ", "with --rtde: output rate (CB-series 125, e-Series up to 500) [Hz]", "125"},
   };
   cli::Options options;
-  const int parsed = cli::parse_options(
-      command,
-      "Records the raw bytes of the robot and/or tracker serial ports into capture files as they\n"
-      "come (fsync every second and on Ctrl-C/SIGTERM; a capture cut mid-frame stays usable).\n"
-      "A port that disappears is reopened with backoff. With --rtde, a UR controller's\n"
-      "timestamp, actual_q and actual_TCP_pose over RTDE into a robot log (default robot_rtde.txt).",
-      specs, argc, argv, &options);
+  const int parsed =
+      cli::parse_options(command,
+                         "Records the raw bytes of the robot and/or tracker serial ports into capture files as they\n"
+                         "come (fsync every second and on Ctrl-C/SIGTERM; a capture cut mid-frame stays usable).\n"
+                         "A port that disappears is reopened with backoff. With --rtde, a UR controller's\n"
+                         "timestamp, actual_q and actual_TCP_pose over RTDE into a robot log (default robot_rtde.txt).",
+                         specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
   return cli::exit_with(command, record(options));
 }
@@ -300,10 +312,13 @@ int record_main(int argc, char** argv) {
 int extract_main(int argc, char** argv) {
   const std::string command = "extract";
   std::vector<cli::OptionSpec> specs = {
-      {"robot", "FILE|BAG", "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
+      {"robot", "FILE|BAG",
+       "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
       {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
-      {"joint-names", "N1,..,N6", "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
-      {"robot-model", "NAME|FILE", std::string(robot_type_names()) + " or a robot description .json (nominal geometry for tool speeds)", "ur5"},
+      {"joint-names", "N1,..,N6",
+       "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
+      {"robot-model", "NAME|FILE",
+       std::string(robot_type_names()) + " or a robot description .json (nominal geometry for tool speeds)", "ur5"},
       {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
       {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
       {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
@@ -311,12 +326,12 @@ int extract_main(int argc, char** argv) {
   };
   for (const cli::OptionSpec& spec : cli::input_unit_option_specs()) specs.push_back(spec);
   cli::Options options;
-  const int parsed = cli::parse_options(
-      command,
-      "Relates the tracker clock to the robot clock from the motion itself (t_robot = offset +\n"
-      "(1 + drift) t_tracker), then pairs each valid tracker point with the joints at the same\n"
-      "instant and keeps the quasi-static ones. Prints the clock fit and the drop statistics.",
-      specs, argc, argv, &options);
+  const int parsed =
+      cli::parse_options(command,
+                         "Relates the tracker clock to the robot clock from the motion itself (t_robot = offset +\n"
+                         "(1 + drift) t_tracker), then pairs each valid tracker point with the joints at the same\n"
+                         "instant and keeps the quasi-static ones. Prints the clock fit and the drop statistics.",
+                         specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
   return cli::exit_with(command, extract(options));
 }

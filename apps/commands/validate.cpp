@@ -99,7 +99,8 @@ int validate_main(int argc, char** argv) {
   if (!numbers.ok()) return exit_with("validate", numbers);
   textio::CalibrationFile calibration;
   textio::CalibrationFile truth;
-  for (auto [path, file] : {std::pair{options.get("calibration"), &calibration}, std::pair{options.get("truth"), &truth}}) {
+  for (auto [path, file] :
+       {std::pair{options.get("calibration"), &calibration}, std::pair{options.get("truth"), &truth}}) {
     const port::Error r = textio::read_calibration_json(path, file);
     if (!r.ok()) return exit_with("validate", r);
   }
@@ -119,9 +120,10 @@ int validate_main(int argc, char** argv) {
   if (simulated) {  // where the simulated tool truly was: the truth bent by the simulator's compliance
     const ValidationStats points = validate_on_fresh_poses(calibration.model, calibration.base_to_tracker, truth.model,
                                                            truth.base_to_tracker, n, s, bent);
-    std::printf("validation on %ld fresh poses vs the true tool points (the simulated compliance included): "
-                "MAE 3D %.2f um, max %.2f um\n",
-                points.poses, points.mae_m * 1e6, points.max_m * 1e6);
+    std::printf(
+        "validation on %ld fresh poses vs the true tool points (the simulated compliance included): "
+        "MAE 3D %.2f um, max %.2f um\n",
+        points.poses, points.mae_m * 1e6, points.max_m * 1e6);
   }
   return kExitOk;
 }

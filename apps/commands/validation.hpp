@@ -10,9 +10,9 @@ namespace hivecal::cli {
 
 /// How far two geometries (each with its own base -> tracker transform) predict the tool apart.
 struct ValidationStats {
-  long poses = 0;        ///< fresh poses drawn
-  double mae_m = 0.0;    ///< mean 3D distance [m]
-  double max_m = 0.0;    ///< largest 3D distance [m]
+  long poses = 0;      ///< fresh poses drawn
+  double mae_m = 0.0;  ///< mean 3D distance [m]
+  double max_m = 0.0;  ///< largest 3D distance [m]
 };
 
 /// The simulator's joint compliance of a reference (truth.json's "simulation"."compliance";

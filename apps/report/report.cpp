@@ -45,7 +45,8 @@ std::vector<double> index_axis(std::size_t n) {
   return x;
 }
 
-ChartSpec chart(const std::string& id, const std::string& title, const std::string& x_label, const std::string& y_label) {
+ChartSpec chart(const std::string& id, const std::string& title, const std::string& x_label,
+                const std::string& y_label) {
   ChartSpec spec;
   spec.id = id;
   spec.title = title;
@@ -116,7 +117,8 @@ void error_figures(const ReportData& data, const std::vector<std::size_t>& shown
       spec.y_line_label = "tracker noise (" + data.noise_source + ")";
     }
     const std::vector<double> ranks = index_axis(b.size());
-    out->push_back({spec.id, svg_chart(spec, {Series{before.method, ranks, b, false}, Series{after.method, ranks, a, false}})});
+    out->push_back(
+        {spec.id, svg_chart(spec, {Series{before.method, ranks, b, false}, Series{after.method, ranks, a, false}})});
   }
 }
 
@@ -130,7 +132,8 @@ void vector_figures(const ReportData& data, const std::vector<std::size_t>& show
     lo = lo.cwiseMin(data.samples[i].measured_m * 1e3);
     hi = hi.cwiseMax(data.samples[i].measured_m * 1e3);
     for (const PredictionSet* set : sets)
-      if (i < set->points_m.size()) largest_um = std::max(largest_um, (set->points_m[i] - data.samples[i].measured_m).norm() * 1e6);
+      if (i < set->points_m.size())
+        largest_um = std::max(largest_um, (set->points_m[i] - data.samples[i].measured_m).norm() * 1e6);
   }
   if (shown.empty() || !(largest_um > 0.0)) return;
   // The longest arrow about a third of the workspace's extent: 1 mm of arrow stands for
@@ -179,16 +182,16 @@ void distribution_figures(const ReportData& data, const std::vector<std::size_t>
     }
     cdf.push_back(s);
   }
-  ChartSpec spec = chart("fig-cdf", "Empirical CDF of the 3D error (" + set_name + " samples)", "3D error [um]",
-                         "share of samples");
+  ChartSpec spec =
+      chart("fig-cdf", "Empirical CDF of the 3D error (" + set_name + " samples)", "3D error [um]", "share of samples");
   spec.fixed_y = true;
   out->push_back({spec.id, svg_chart(spec, cdf)});
-  out->push_back({"fig-histogram",
-                  svg_histogram(chart("fig-histogram", "3D error histogram (" + set_name + " samples)", "3D error [um]", "samples"),
-                                {data.predictions.front().method, data.predictions.back().method},
-                                {errors_um(data, data.predictions.front(), shown, 3),
-                                 errors_um(data, data.predictions.back(), shown, 3)},
-                                20)});
+  out->push_back({"fig-histogram", svg_histogram(chart("fig-histogram", "3D error histogram (" + set_name + " samples)",
+                                                       "3D error [um]", "samples"),
+                                                 {data.predictions.front().method, data.predictions.back().method},
+                                                 {errors_um(data, data.predictions.front(), shown, 3),
+                                                  errors_um(data, data.predictions.back(), shown, 3)},
+                                                 20)});
 }
 
 void convergence_figures(const ReportData& data, std::vector<Figure>* out) {
@@ -201,9 +204,10 @@ void convergence_figures(const ReportData& data, std::vector<Figure>* out) {
       series.push_back(Series{c.method, index_axis(y.size()), y, lm});
     }
     if (series.empty()) continue;
-    ChartSpec spec = lm ? chart("fig-convergence-lm", "Levenberg-Marquardt: RMS residual per iteration", "iteration",
-                                "RMS residual [um]")
-                        : chart("fig-convergence-global", "Global search: best MAE per cycle", "cycle", "best MAE [um]");
+    ChartSpec spec =
+        lm ? chart("fig-convergence-lm", "Levenberg-Marquardt: RMS residual per iteration", "iteration",
+                   "RMS residual [um]")
+           : chart("fig-convergence-global", "Global search: best MAE per cycle", "cycle", "best MAE [um]");
     spec.log_y = true;
     out->push_back({spec.id, svg_chart(spec, series)});
   }
@@ -288,8 +292,8 @@ void outlier_figure(const ReportData& data, std::vector<Figure>* out) {
     s.x.push_back(static_cast<double>(k + 1));
     s.y.push_back(w[k].first);
   }
-  ChartSpec spec = chart("fig-outliers", "Normalised residual w of each pose after calibration, sorted", "poses, by rank",
-                         "w [-]");
+  ChartSpec spec =
+      chart("fig-outliers", "Normalised residual w of each pose after calibration, sorted", "poses, by rank", "w [-]");
   spec.log_y = true;
   if (data.outliers.critical_w > 0.0) {
     spec.y_line = data.outliers.critical_w;
@@ -329,8 +333,9 @@ void clock_figures(const ReportData& data, std::vector<Figure>* out) {
   }
   char gain[48];
   std::snprintf(gain, sizeof gain, "robot tool x %.4f", m.speed_gain);
-  ChartSpec speeds = chart("fig-clock-speeds", "Clock sync: tool speed seen by the robot (fitted clock) and by the tracker",
-                           "tracker time [s]", "speed [mm/s]");
+  ChartSpec speeds =
+      chart("fig-clock-speeds", "Clock sync: tool speed seen by the robot (fitted clock) and by the tracker",
+            "tracker time [s]", "speed [mm/s]");
   speeds.width_px = 1100;
   out->push_back({speeds.id, svg_chart(speeds, {Series{gain, m.t_s, robot_mm_s, false},
                                                 Series{"tracker", m.t_s, tracker_mm_s, false}})});
@@ -357,11 +362,12 @@ std::vector<Figure> all_figures(const ReportData& data) {
   cross_validation_figure(data, &figures);
   clock_figures(data, &figures);
   if (data.has_stream && !data.timeline.reasons.empty()) {
-    ChartSpec spec = chart("fig-drop-timeline", "Tracker points over the session: kept, or why dropped",
-                           "tracker time [s]", "");
+    ChartSpec spec =
+        chart("fig-drop-timeline", "Tracker points over the session: kept, or why dropped", "tracker time [s]", "");
     spec.height_px = 60 + 24 * static_cast<int>(data.timeline.reasons.size());
     spec.width_px = 1100;
-    figures.push_back({spec.id, svg_strips(spec, data.timeline.reasons, data.timeline.counts, data.timeline.duration_s)});
+    figures.push_back(
+        {spec.id, svg_strips(spec, data.timeline.reasons, data.timeline.counts, data.timeline.duration_s)});
   }
   if (data.has_stream && !data.drops.empty()) {
     std::vector<std::string> reasons;
@@ -403,9 +409,10 @@ std::vector<std::vector<std::string>> table1_rows(const ReportData& data) {
     std::vector<std::string> row = {m.method, m.parameters, um(m.train.mae(ErrorAxis::norm_3d)),
                                     um(m.train.sigma(ErrorAxis::norm_3d))};
     if (test) {
-      row.insert(row.end(), {tested ? um(m.test.mae(ErrorAxis::norm_3d)) : "-",
-                             tested ? um(m.test.sigma(ErrorAxis::norm_3d)) : "-",
-                             &m == &data.methods.front() || !tested ? "" : improvement(before, m.test.mae(ErrorAxis::norm_3d))});
+      row.insert(
+          row.end(),
+          {tested ? um(m.test.mae(ErrorAxis::norm_3d)) : "-", tested ? um(m.test.sigma(ErrorAxis::norm_3d)) : "-",
+           &m == &data.methods.front() || !tested ? "" : improvement(before, m.test.mae(ErrorAxis::norm_3d))});
     }
     row.push_back(m.evaluations > 0 ? std::to_string(m.evaluations) : "");
     if (timed) {
@@ -419,8 +426,8 @@ std::vector<std::vector<std::string>> table1_rows(const ReportData& data) {
 }
 
 std::vector<std::vector<std::string>> table2_rows(const ReportData& data) {
-  std::vector<std::vector<std::string>> rows = {{"set", "axis", "MAE before [um]", "sigma before [um]", "MAE after [um]",
-                                                 "sigma after [um]", "change"}};
+  std::vector<std::vector<std::string>> rows = {
+      {"set", "axis", "MAE before [um]", "sigma before [um]", "MAE after [um]", "sigma after [um]", "change"}};
   const std::pair<const char*, const ErrorStats AccuracyReport::*> sets[] = {
       {"train", &AccuracyReport::train}, {"test", &AccuracyReport::test}, {"overall", &AccuracyReport::overall}};
   const bool test = has_test(data);
@@ -445,7 +452,8 @@ std::string general(double v) {
 }
 
 std::vector<std::vector<std::string>> identifiability_rows(const IdentifiabilityTable& id) {
-  std::vector<std::vector<std::string>> rows = {{"set aside", "why", "sigma ratio", "combination that is not separable"}};
+  std::vector<std::vector<std::string>> rows = {
+      {"set aside", "why", "sigma ratio", "combination that is not separable"}};
   for (const DroppedRow& d : id.dropped) rows.push_back({d.param, d.reason, general(d.singular_ratio), d.combination});
   for (const std::string& name : id.fixed)
     rows.push_back({name, "not significant (< " + general(id.significance_t) + " sigma)", "", ""});
@@ -465,15 +473,18 @@ std::string fixed(double v, int decimals) {
 }
 
 std::vector<std::vector<std::string>> parameter_rows(const ReportData& data) {
-  std::vector<std::vector<std::string>> rows = {{"parameter", "unit", "start", "calibrated", "change", "sigma", "note"}};
+  std::vector<std::vector<std::string>> rows = {
+      {"parameter", "unit", "start", "calibrated", "change", "sigma", "note"}};
   for (const ParameterRow& p : data.parameters) {
     const bool compliance = !p.compliance_unit.empty();
     const double scale = compliance ? 1e6 : 1e3;  // m -> mm, rad -> mrad; rad/m -> urad/m
     const std::string unit = compliance ? "u" + p.compliance_unit : p.angle ? "mrad" : "mm";
     const double change = (p.value - p.start) * scale;
     std::string note;
-    if (p.sigma <= 0.0) note = "not estimated";
-    else if (std::fabs(change) < 2.0 * p.sigma * scale) note = "change within 2 sigma";
+    if (p.sigma <= 0.0)
+      note = "not estimated";
+    else if (std::fabs(change) < 2.0 * p.sigma * scale)
+      note = "change within 2 sigma";
     if (std::fabs(p.correlation) > kCorrelationWarning) {
       char buf[96];
       std::snprintf(buf, sizeof buf, "%scorrelation %+.3f with %s", note.empty() ? "" : "; ", p.correlation,
@@ -496,15 +507,18 @@ std::string mm(double metres) {
 std::string outlier_html(const OutlierTable& o) {
   if (!o.searched) return "<h2>Blunders</h2>\n<p>No blunder search ran (--keep-outliers): every sample was used.</p>\n";
   char test[200];
-  std::snprintf(test, sizeof test, "w-test of each pose at %.2g %% for the whole set, threshold w = %.2f, sigma %s mm (%s). ",
+  std::snprintf(test, sizeof test,
+                "w-test of each pose at %.2g %% for the whole set, threshold w = %.2f, sigma %s mm (%s). ",
                 o.alpha * 100.0, o.critical_w, mm(o.sigma_m).c_str(),
                 o.sigma_source == "tracker" ? "the tracker's stated noise" : "from the fit's residuals");
   std::string s = "<h2>Blunders</h2>\n<p>" + std::string(test);
   if (o.verdict == "model_error") {
-    s += "More poses fail than a blunder explains: the model, not the data, is wrong (unmodelled effects); none removed. ";
+    s += "More poses fail than a blunder explains: the model, not the data, is wrong (unmodelled effects); none "
+         "removed. ";
   }
   if (!o.uncontrolled.empty()) {
-    s += std::to_string(o.uncontrolled.size()) + " pose(s) uncontrolled (redundancy below 0.1: a blunder there cannot be told from the geometry): ";
+    s += std::to_string(o.uncontrolled.size()) +
+         " pose(s) uncontrolled (redundancy below 0.1: a blunder there cannot be told from the geometry): ";
     for (std::size_t k = 0; k < o.uncontrolled.size(); ++k) s += (k > 0 ? ", " : "") + o.uncontrolled[k];
     s += ". ";
   }
@@ -541,7 +555,8 @@ std::string text_table(const std::vector<std::vector<std::string>>& rows) {
     }
   std::string s;
   for (const auto& row : rows) {
-    for (std::size_t c = 0; c < row.size(); ++c) s += (c == 0 ? pad_right(row[c], widths[c]) : "  " + pad(row[c], widths[c]));
+    for (std::size_t c = 0; c < row.size(); ++c)
+      s += (c == 0 ? pad_right(row[c], widths[c]) : "  " + pad(row[c], widths[c]));
     s += "\n";
   }
   return s;
@@ -556,18 +571,30 @@ const char* caption(const std::string& id) {
   static const Caption captions[] = {
       {"fig-error-3d", "Is each sample better after calibration, and how far above the tracker noise is it?"},
       {"fig-error-", "Which axis gains? (the three axes share one scale)"},
-      {"fig-vectors-", "Where in the workspace are the errors, and do they point the same way (a frame or scale error)?"},
+      {"fig-vectors-",
+       "Where in the workspace are the errors, and do they point the same way (a frame or scale error)?"},
       {"fig-cdf", "What share of the samples is within a given error, per method?"},
       {"fig-histogram", "How are the errors distributed before and after?"},
       {"fig-convergence-global", "Did ABC / GSA converge before their cycle budget ran out?"},
       {"fig-convergence-lm", "Did Levenberg-Marquardt converge?"},
       {"fig-residual-q", "Does the residual depend on a joint angle (compliance, an unmodelled effect)?"},
-      {"fig-clock-speeds", "Did the clock fit line the two speed profiles up? Means per time bin over the fit's chords (each a few tracker points long); the robot speed is scaled by the fitted tracker/robot path-length gain."},
-      {"fig-clock-residual", "Is anything left between the matched profiles? Near zero while moving: aligned. A timing error shows as opposite spikes at each start and stop; a slow trend, a tool-model scale error (the fit's per-second gains absorb it). At rest it sits a little above zero: tracker noise alone makes a chord longer."},
-      {"fig-outliers", "Which samples did the blunder search set aside, and how far above the rest and the threshold are they? (residuals under the final calibration; set-aside samples were not fitted)"},
-      {"fig-cv-folds", "Does the calibration predict samples it was not fitted to, fold after fold? (a fold far above the line: samples the others do not explain)"},
+      {"fig-clock-speeds",
+       "Did the clock fit line the two speed profiles up? Means per time bin over the fit's chords (each a few tracker "
+       "points long); the robot speed is scaled by the fitted tracker/robot path-length gain."},
+      {"fig-clock-residual",
+       "Is anything left between the matched profiles? Near zero while moving: aligned. A timing error shows as "
+       "opposite spikes at each start and stop; a slow trend, a tool-model scale error (the fit's per-second gains "
+       "absorb it). At rest it sits a little above zero: tracker noise alone makes a chord longer."},
+      {"fig-outliers",
+       "Which samples did the blunder search set aside, and how far above the rest and the threshold are they? "
+       "(residuals under the final calibration; set-aside samples were not fitted)"},
+      {"fig-cv-folds",
+       "Does the calibration predict samples it was not fitted to, fold after fold? (a fold far above the line: "
+       "samples the others do not explain)"},
       {"fig-drops", "How many tracker points became samples, and why were the others dropped?"},
-      {"fig-drop-timeline", "When in the session were points kept or dropped (beam losses, moves, a stream gap)? Shade: count in the bin relative to the row's busiest bin."},
+      {"fig-drop-timeline",
+       "When in the session were points kept or dropped (beam losses, moves, a stream gap)? Shade: count in the bin "
+       "relative to the row's busiest bin."},
   };
   for (const Caption& c : captions)
     if (id.compare(0, std::strlen(c.prefix), c.prefix) == 0) return c.text;
@@ -625,7 +652,8 @@ std::string html_table(const std::vector<std::vector<std::string>>& rows) {
   std::string s = "<table>\n";
   for (std::size_t r = 0; r < rows.size(); ++r) {
     s += "<tr>";
-    for (const std::string& cell : rows[r]) s += (r == 0 ? "<th>" : "<td>") + xml_escape(cell) + (r == 0 ? "</th>" : "</td>");
+    for (const std::string& cell : rows[r])
+      s += (r == 0 ? "<th>" : "<td>") + xml_escape(cell) + (r == 0 ? "</th>" : "</td>");
     s += "</tr>\n";
   }
   return s + "</table>\n";
@@ -635,7 +663,8 @@ std::string html_page_head(const std::string& title) {
   return "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n<title>" + xml_escape(title) +
          "</title>\n<style>body{font-family:sans-serif;max-width:1300px;margin:2em auto;padding:0 1em}"
          "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-         "th{background:#eee}svg{margin:4px;border:1px solid #eee}figure{display:inline-block;margin:4px;vertical-align:top}"
+         "th{background:#eee}svg{margin:4px;border:1px solid "
+         "#eee}figure{display:inline-block;margin:4px;vertical-align:top}"
          "figcaption{font-size:12px;color:#444;width:0;min-width:100%}</style>\n"
          "</head>\n<body>\n<h1>" +
          xml_escape(title) + "</h1>\n";
@@ -661,7 +690,8 @@ std::string render_html(const ReportData& data) {
     const CrossValidationTable& cv = data.cross_validation;
     s += "<h2>Cross-validation</h2>\n<p>" + std::to_string(cv.folds.size()) + " folds over " +
          std::to_string(cv.sample_count) + " samples (blunders left out); 3D MAE over every held-out sample " +
-         um(cv.mae_3d_m) + " um (uncalibrated: " + um(cv.baseline_mae_3d_m) + " um).</p>\n" + html_table(cross_validation_rows(cv));
+         um(cv.mae_3d_m) + " um (uncalibrated: " + um(cv.baseline_mae_3d_m) + " um).</p>\n" +
+         html_table(cross_validation_rows(cv));
   }
   if (!data.parameters.empty()) {
     s += "<h2>Table 4: parameters (start, calibrated, change, sigma)</h2>\n" + html_table(parameter_rows(data));

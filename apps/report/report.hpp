@@ -20,12 +20,12 @@ namespace hivecal::report {
 
 /// One row of Table 1: a method's accuracy.
 struct MethodRow {
-  std::string method;          ///< e.g. "uncalibrated", "ABC", "GSA", "LM"
-  std::string parameters;      ///< e.g. "paper-6", "full (31 estimated)"
-  ErrorStats train;            ///< on the training samples [m]
-  ErrorStats test;             ///< on the test samples [m]
-  double seconds = 0.0;        ///< stage wall time [s] (0: not timed; never in result.json)
-  long long evaluations = 0;   ///< cost evaluations or LM iterations (0: n/a)
+  std::string method;         ///< e.g. "uncalibrated", "ABC", "GSA", "LM"
+  std::string parameters;     ///< e.g. "paper-6", "full (31 estimated)"
+  ErrorStats train;           ///< on the training samples [m]
+  ErrorStats test;            ///< on the test samples [m]
+  double seconds = 0.0;       ///< stage wall time [s] (0: not timed; never in result.json)
+  long long evaluations = 0;  ///< cost evaluations or LM iterations (0: n/a)
 };
 
 /// A solver's convergence: best cost per cycle (ABC, GSA) or per iteration (LM).
@@ -37,18 +37,18 @@ struct ConvergenceSeries {
 
 /// One paired sample as the figures need it.
 struct SampleRow {
-  double q_rad[6] = {};  ///< joint angles [rad]
+  double q_rad[6] = {};            ///< joint angles [rad]
   Vec3 measured_m = Vec3::Zero();  ///< tracker point [m]
-  bool test = false;     ///< held out (test set), else training
-  int target = 0;        ///< reflector measured, 0-based (several targets) [-]
+  bool test = false;               ///< held out (test set), else training
+  int target = 0;                  ///< reflector measured, 0-based (several targets) [-]
 };
 
 /// One model and its predictions of every sample (same order as ReportData::samples).
 struct PredictionSet {
-  std::string method;                ///< "uncalibrated", or a stage name ("ABC", "ABC+LM", ...)
-  RobotModel model;                  ///< its geometry
-  RigidTransform base_to_tracker;    ///< its base -> tracker transform
-  std::vector<Vec3> points_m;        ///< base_to_tracker * FK(q) * tool per sample [m] (predict_samples)
+  std::string method;              ///< "uncalibrated", or a stage name ("ABC", "ABC+LM", ...)
+  RobotModel model;                ///< its geometry
+  RigidTransform base_to_tracker;  ///< its base -> tracker transform
+  std::vector<Vec3> points_m;      ///< base_to_tracker * FK(q) * tool per sample [m] (predict_samples)
 };
 
 /// A parameter set aside by the identifiability analysis.
@@ -61,14 +61,14 @@ struct DroppedRow {
 
 /// What LM could estimate.
 struct IdentifiabilityTable {
-  bool present = false;              ///< an LM stage ran
-  int free_count = 0;                ///< parameters free by the options
+  bool present = false;                ///< an LM stage ran
+  int free_count = 0;                  ///< parameters free by the options
   std::vector<std::string> estimated;  ///< names of the estimated parameters
-  std::vector<DroppedRow> dropped;   ///< set aside, in the order they were dropped
-  double condition_before = 0.0;     ///< of the column-scaled Jacobian over the free parameters [-]
-  double condition_after = 0.0;      ///< over the estimated parameters [-]
-  std::vector<std::string> fixed{};  ///< fixed at their start values by LM's significance test
-  double significance_t = 0.0;       ///< that test's level: a change below t sigma is not significant [-]
+  std::vector<DroppedRow> dropped;     ///< set aside, in the order they were dropped
+  double condition_before = 0.0;       ///< of the column-scaled Jacobian over the free parameters [-]
+  double condition_after = 0.0;        ///< over the estimated parameters [-]
+  std::vector<std::string> fixed{};    ///< fixed at their start values by LM's significance test
+  double significance_t = 0.0;         ///< that test's level: a change below t sigma is not significant [-]
 };
 
 /// A sample the calibration set aside as a blunder.
@@ -81,15 +81,15 @@ struct OutlierRow {
 /// The blunder search (the w-test of each pose, docs/robust.md): what it set aside, the
 /// threshold, which poses it cannot control.
 struct OutlierTable {
-  bool searched = false;         ///< a blunder search ran (not --keep-outliers)
-  std::string verdict;           ///< "clean", "removed", "model_error", "list_full", "not_searched"
-  double critical_w = 0.0;       ///< w above which a pose is a blunder (the training poses') [-]
-  double alpha = 0.0;            ///< the test's significance for the whole set [-]
-  std::string sigma_source;      ///< "data" (the fit's residuals) or "tracker" (the stated noise)
-  double sigma_m = 0.0;          ///< the test's sigma per axis [m]
-  std::vector<OutlierRow> rows;  ///< the samples set aside, by increasing sample index
+  bool searched = false;                  ///< a blunder search ran (not --keep-outliers)
+  std::string verdict;                    ///< "clean", "removed", "model_error", "list_full", "not_searched"
+  double critical_w = 0.0;                ///< w above which a pose is a blunder (the training poses') [-]
+  double alpha = 0.0;                     ///< the test's significance for the whole set [-]
+  std::string sigma_source;               ///< "data" (the fit's residuals) or "tracker" (the stated noise)
+  double sigma_m = 0.0;                   ///< the test's sigma per axis [m]
+  std::vector<OutlierRow> rows;           ///< the samples set aside, by increasing sample index
   std::vector<std::string> uncontrolled;  ///< poses whose redundancy is below the floor: never tested, by source
-  std::vector<double> kept_w;    ///< w of every kept pose under the final calibration (the figure) [-]
+  std::vector<double> kept_w;             ///< w of every kept pose under the final calibration (the figure) [-]
 };
 
 /// One fold of a cross-validation.
@@ -102,22 +102,22 @@ struct FoldRow {
 
 /// A cross-validation's folds (--cv).
 struct CrossValidationTable {
-  bool present = false;         ///< a cross-validation ran
-  std::size_t sample_count = 0;  ///< samples split into folds [-]
-  double mae_3d_m = 0.0;        ///< 3-D MAE over every held-out sample of every fold [m]
+  bool present = false;            ///< a cross-validation ran
+  std::size_t sample_count = 0;    ///< samples split into folds [-]
+  double mae_3d_m = 0.0;           ///< 3-D MAE over every held-out sample of every fold [m]
   double baseline_mae_3d_m = 0.0;  ///< the same for each fold's uncalibrated baseline [m]
-  std::vector<FoldRow> folds;   ///< per fold, in fold order
+  std::vector<FoldRow> folds;      ///< per fold, in fold order
 };
 
 /// One model parameter: start, calibrated value and uncertainty.
 struct ParameterRow {
-  std::string name;        ///< e.g. "a2", "alpha3", "tool_z"
-  bool angle = false;      ///< [rad] (shown in mrad), else [m] (shown in mm)
-  double start = 0.0;      ///< start value [rad] or [m]
-  double value = 0.0;      ///< calibrated value [rad] or [m]
-  double sigma = 0.0;      ///< standard deviation [rad] or [m]; 0: not estimated
+  std::string name;               ///< e.g. "a2", "alpha3", "tool_z"
+  bool angle = false;             ///< [rad] (shown in mrad), else [m] (shown in mm)
+  double start = 0.0;             ///< start value [rad] or [m]
+  double value = 0.0;             ///< calibrated value [rad] or [m]
+  double sigma = 0.0;             ///< standard deviation [rad] or [m]; 0: not estimated
   std::string correlated_with{};  ///< the estimated parameter it is most correlated with ("" if none)
-  double correlation = 0.0;     ///< that correlation coefficient [-]
+  double correlation = 0.0;       ///< that correlation coefficient [-]
   /// A compliance coefficient's unit, "rad/m" or "rad/(kg m)" (shown per urad); "" for a
   /// length or angle (`angle`).
   std::string compliance_unit{};
@@ -128,43 +128,45 @@ constexpr double kCorrelationWarning = 0.9;
 
 /// Stream input: what became of the tracker points over the session, in equal time bins.
 struct PointTimeline {
-  double duration_s = 0.0;                       ///< from the first to the last tracker point [s]
-  std::vector<std::string> reasons;              ///< "kept", then each drop reason that occurred
+  double duration_s = 0.0;                         ///< from the first to the last tracker point [s]
+  std::vector<std::string> reasons;                ///< "kept", then each drop reason that occurred
   std::vector<std::vector<std::uint32_t>> counts;  ///< per reason, tracker points per time bin
 };
 
 /// Stream input: what the clock fit matched (ClockEstimatorBase::match_profiles), one
 /// entry per time bin; all four the same length.
 struct ClockMatchSeries {
-  double speed_gain = 1.0;                 ///< tracker/robot path-length ratio of the fit [-]
-  std::vector<double> t_s;                 ///< bin time since the first tracker point [s]
-  std::vector<double> robot_speed_m_s;     ///< robot tool speed at the fitted robot times [m/s]
-  std::vector<double> tracker_speed_m_s;   ///< tracker point speed [m/s]
-  std::vector<double> residual_m_s;        ///< tracker speed - speed_gain * robot speed [m/s]
+  double speed_gain = 1.0;                ///< tracker/robot path-length ratio of the fit [-]
+  std::vector<double> t_s;                ///< bin time since the first tracker point [s]
+  std::vector<double> robot_speed_m_s;    ///< robot tool speed at the fitted robot times [m/s]
+  std::vector<double> tracker_speed_m_s;  ///< tracker point speed [m/s]
+  std::vector<double> residual_m_s;       ///< tracker speed - speed_gain * robot speed [m/s]
 };
 
 /// Everything the report shows.
 struct ReportData {
-  std::string title;                          ///< page title
-  std::vector<std::string> input_lines;       ///< inputs and stream facts (not in result.json: they name files and formats)
-  std::vector<std::string> info_lines;        ///< run facts from the result: samples, identifiability
-  std::vector<MethodRow> methods;             ///< Table 1 rows, first the uncalibrated model
-  AccuracyReport uncalibrated;                ///< Table 2, before
-  AccuracyReport calibrated;                  ///< Table 2, after (the chosen method)
+  std::string title;                     ///< page title
+  std::vector<std::string> input_lines;  ///< inputs and stream facts (not in result.json: they name files and formats)
+  std::vector<std::string> info_lines;   ///< run facts from the result: samples, identifiability
+  std::vector<MethodRow> methods;        ///< Table 1 rows, first the uncalibrated model
+  AccuracyReport uncalibrated;           ///< Table 2, before
+  AccuracyReport calibrated;             ///< Table 2, after (the chosen method)
   std::vector<ConvergenceSeries> convergence;  ///< one per stage
-  std::vector<SampleRow> samples;             ///< every sample (training and test)
-  std::vector<PredictionSet> predictions;     ///< first the uncalibrated model, last the result
-  double noise_sigma_m = 0.0;                 ///< measurement noise per axis: the tracker's stated sigma, or what repeated readings show [m]; 0: unknown
-  std::string noise_source = "stated";        ///< where noise_sigma_m comes from: "stated" (--tracker-sigma-um) or "repeated readings"
-  double fit_sigma_m = 0.0;                   ///< the final fit's residual sigma per axis, sqrt(SSR / dof) [m]; 0: unknown
-  IdentifiabilityTable identifiability;       ///< Table 3
-  std::vector<ParameterRow> parameters;       ///< Table 4: estimated or changed parameters
+  std::vector<SampleRow> samples;              ///< every sample (training and test)
+  std::vector<PredictionSet> predictions;      ///< first the uncalibrated model, last the result
+  double noise_sigma_m =
+      0.0;  ///< measurement noise per axis: the tracker's stated sigma, or what repeated readings show [m]; 0: unknown
+  std::string noise_source =
+      "stated";              ///< where noise_sigma_m comes from: "stated" (--tracker-sigma-um) or "repeated readings"
+  double fit_sigma_m = 0.0;  ///< the final fit's residual sigma per axis, sqrt(SSR / dof) [m]; 0: unknown
+  IdentifiabilityTable identifiability;                      ///< Table 3
+  std::vector<ParameterRow> parameters;                      ///< Table 4: estimated or changed parameters
   std::vector<std::pair<std::string, std::uint64_t>> drops;  ///< stream input: drop reason -> tracker points
-  bool has_stream = false;                    ///< the samples came from two streams
-  PointTimeline timeline;                     ///< stream input: kept / drop reason per tracker point over time
-  ClockMatchSeries clock_match;               ///< stream input: the clock fit's matched speed profiles
-  OutlierTable outliers;                      ///< blunders set aside (none when the search found none)
-  CrossValidationTable cross_validation;      ///< --cv: held-out errors per fold
+  bool has_stream = false;                                   ///< the samples came from two streams
+  PointTimeline timeline;                 ///< stream input: kept / drop reason per tracker point over time
+  ClockMatchSeries clock_match;           ///< stream input: the clock fit's matched speed profiles
+  OutlierTable outliers;                  ///< blunders set aside (none when the search found none)
+  CrossValidationTable cross_validation;  ///< --cv: held-out errors per fold
 };
 
 /// A prediction set of `model` for every sample of `samples` (result.json keeps the model,

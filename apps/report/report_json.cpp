@@ -150,7 +150,9 @@ bool get_count(const JsonValue* v, long long* out) {
   return true;
 }
 
-bool is_array(const JsonValue* v) { return v != nullptr && v->kind == JsonValue::Kind::array; }
+bool is_array(const JsonValue* v) {
+  return v != nullptr && v->kind == JsonValue::Kind::array;
+}
 
 bool get_numbers(const JsonValue* v, std::size_t n, double* out) {
   if (!is_array(v) || v->array.size() != n) return false;
@@ -189,7 +191,8 @@ bool get_model(const JsonValue& v, RobotModel* model, RigidTransform* transform)
   for (std::size_t r = 0; r < 3; ++r) {
     double row[3];
     if (!get_numbers(&rotation->array[r], 3, row)) return false;
-    for (std::size_t c = 0; c < 3; ++c) transform->rotation(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
+    for (std::size_t c = 0; c < 3; ++c)
+      transform->rotation(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
   }
   *model = from_params(params);
   if (const JsonValue* compliance = v.find("compliance"); compliance != nullptr) {  // compliant models only
@@ -287,7 +290,8 @@ bool get_identifiability(const JsonValue* v, IdentifiabilityTable* out) {
   for (const JsonValue& d : dropped->array) {
     DroppedRow row;
     if (!get_string(d.find("param"), &row.param) || !get_string(d.find("reason"), &row.reason) ||
-        !get_number(d.find("singular_ratio"), &row.singular_ratio) || !get_string(d.find("combination"), &row.combination)) {
+        !get_number(d.find("singular_ratio"), &row.singular_ratio) ||
+        !get_string(d.find("combination"), &row.combination)) {
       return false;
     }
     out->dropped.push_back(row);
@@ -339,8 +343,7 @@ bool get_cross_validation(const JsonValue* v, CrossValidationTable* out) {
   long long samples = 0;
   const JsonValue* folds = v->find("folds");
   if (!get_count(v->find("samples"), &samples) || !get_number(v->find("mae_3d_m"), &out->mae_3d_m) ||
-      !get_number(v->find("baseline_mae_3d_m"), &out->baseline_mae_3d_m) ||
-      !is_array(folds)) {
+      !get_number(v->find("baseline_mae_3d_m"), &out->baseline_mae_3d_m) || !is_array(folds)) {
     return false;
   }
   out->present = true;
@@ -541,7 +544,9 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
 port::Error parse_report_data(const JsonValue& value, const std::string& source, ReportData* data) {
   if (value.kind != JsonValue::Kind::object) return port::Error::input(source + ": \"report\" must be an object");
   ReportData parsed;
-  const auto bad = [&](const char* key) { return port::Error::input(source + ": \"report\".\"" + key + "\" is malformed"); };
+  const auto bad = [&](const char* key) {
+    return port::Error::input(source + ": \"report\".\"" + key + "\" is malformed");
+  };
   if (!get_string(value.find("title"), &parsed.title)) return bad("title");
   const JsonValue* info = value.find("info");
   if (!is_array(info)) return bad("info");

@@ -27,22 +27,21 @@ struct Axis {
   double to_px(double v) const { return px_lo + (value(v) - lo) / (hi - lo) * (px_hi - px_lo); }
 };
 
-
 /// Ticks in axis units (log10 units on a log axis) and the labels they carry.
 struct Ticks {
-  std::vector<double> at;            ///< tick positions in axis units
-  std::vector<std::string> labels;   ///< one label per tick
-  std::string offset;                ///< subtracted from the labels ("" when none), for the axis title
+  std::vector<double> at;           ///< tick positions in axis units
+  std::vector<std::string> labels;  ///< one label per tick
+  std::string offset;               ///< subtracted from the labels ("" when none), for the axis title
 };
-
 
 /// Label of a linear tick: as few decimals as the step needs, at most three significant digits.
 std::string linear_label(double v, double step) {
   if (std::fabs(v) < 1e-9 * step) return "0";
   const double magnitude = std::fabs(v);
   if (magnitude >= 1e5 || magnitude < 1e-3) return fmt("%.3g", v);
-  const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)) +
-                                       (std::fabs(step / std::pow(10.0, std::floor(std::log10(step))) - 2.5) < 1e-9 ? 1 : 0));
+  const int decimals =
+      std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)) +
+                      (std::fabs(step / std::pow(10.0, std::floor(std::log10(step))) - 2.5) < 1e-9 ? 1 : 0));
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
   return buf;
@@ -145,8 +144,8 @@ std::string frame(const ChartSpec& spec, const Axis& x, const Axis& y) {
        xml_escape(spec.title) + "</text>\n";
   const std::string x_title = xt.offset.empty() ? spec.x_label : spec.x_label + " \u2212 " + xt.offset;
   const std::string y_title = yt.offset.empty() ? spec.y_label : spec.y_label + " \u2212 " + yt.offset;
-  s += "<text x='" + fmt("%.1f", (left + right) / 2) + "' y='" + fmt("%.1f", bottom + 30) +
-       "' text-anchor='middle'>" + xml_escape(x_title) + "</text>\n";
+  s += "<text x='" + fmt("%.1f", (left + right) / 2) + "' y='" + fmt("%.1f", bottom + 30) + "' text-anchor='middle'>" +
+       xml_escape(x_title) + "</text>\n";
   s += "<text transform='translate(14," + fmt("%.1f", (top + bottom) / 2) + ") rotate(-90)' text-anchor='middle'>" +
        xml_escape(y_title) + "</text>\n";
   return s;
@@ -166,8 +165,8 @@ std::string legend(const std::vector<LegendEntry>& entries, double x, double y) 
   for (const LegendEntry& e : entries) {
     if (e.name.empty()) continue;
     row += 14.0;
-    s += "<rect class='swatch' x='" + fmt("%.1f", x) + "' y='" + fmt("%.1f", row - 8) + "' width='10' height='10' fill='" +
-         e.colour + "'/>\n";
+    s += "<rect class='swatch' x='" + fmt("%.1f", x) + "' y='" + fmt("%.1f", row - 8) +
+         "' width='10' height='10' fill='" + e.colour + "'/>\n";
     s += "<text class='legend' data-series='" + xml_escape(e.name) + "' x='" + fmt("%.1f", x + 14) + "' y='" +
          fmt("%.1f", row + 1) + "'>" + xml_escape(e.name) + "</text>\n";
   }
@@ -175,12 +174,15 @@ std::string legend(const std::vector<LegendEntry>& entries, double x, double y) 
 }
 
 std::string open_svg(const ChartSpec& spec) {
-  return "<svg xmlns='http://www.w3.org/2000/svg'" + (spec.id.empty() ? std::string() : " id='" + xml_escape(spec.id) + "'") +
-         " width='" + std::to_string(spec.width_px) + "' height='" + std::to_string(spec.height_px) +
+  return "<svg xmlns='http://www.w3.org/2000/svg'" +
+         (spec.id.empty() ? std::string() : " id='" + xml_escape(spec.id) + "'") + " width='" +
+         std::to_string(spec.width_px) + "' height='" + std::to_string(spec.height_px) +
          "' font-family='sans-serif' font-size='11'>\n";
 }
 
-std::string series_attr(const std::string& name) { return " data-series='" + xml_escape(name) + "'"; }
+std::string series_attr(const std::string& name) {
+  return " data-series='" + xml_escape(name) + "'";
+}
 
 /// The dashed reference line of spec (when it has a label and lies inside the y axis).
 std::string reference_line(const ChartSpec& spec, const Axis& x, const Axis& y, std::vector<LegendEntry>* entries) {
@@ -356,10 +358,10 @@ std::string svg_arrows(const ChartSpec& spec, const std::vector<ArrowSet>& sets,
     for (std::size_t i = 0; i < a.x.size() && i < a.y.size() && i < a.dx.size() && i < a.dy.size(); ++i) {
       if (!std::isfinite(a.x[i] + a.y[i] + a.dx[i] + a.dy[i])) continue;
       drawn = true;
-      out += "<line" + series_attr(a.name) + " x1='" + fmt("%.1f", x.to_px(a.x[i])) + "' y1='" + fmt("%.1f", y.to_px(a.y[i])) +
-             "' x2='" + fmt("%.1f", x.to_px(a.x[i] + a.dx[i])) + "' y2='" + fmt("%.1f", y.to_px(a.y[i] + a.dy[i])) +
-             "' stroke='" + kColours[k % 6] + "' stroke-width='1.2' marker-end='url(#" + xml_escape(spec.id) + "-head" +
-             std::to_string(k) + ")'/>\n";
+      out += "<line" + series_attr(a.name) + " x1='" + fmt("%.1f", x.to_px(a.x[i])) + "' y1='" +
+             fmt("%.1f", y.to_px(a.y[i])) + "' x2='" + fmt("%.1f", x.to_px(a.x[i] + a.dx[i])) + "' y2='" +
+             fmt("%.1f", y.to_px(a.y[i] + a.dy[i])) + "' stroke='" + kColours[k % 6] +
+             "' stroke-width='1.2' marker-end='url(#" + xml_escape(spec.id) + "-head" + std::to_string(k) + ")'/>\n";
     }
     entries.push_back({drawn ? a.name : std::string(), kColours[k % 6]});
   }
@@ -382,7 +384,8 @@ std::string svg_arrows(const ChartSpec& spec, const std::vector<ArrowSet>& sets,
   return out + "</svg>\n";
 }
 
-std::string svg_bars(const ChartSpec& spec, const std::vector<std::string>& categories, const std::vector<double>& counts) {
+std::string svg_bars(const ChartSpec& spec, const std::vector<std::string>& categories,
+                     const std::vector<double>& counts) {
   std::vector<double> range = {0.0};
   for (double c : counts) range.push_back(c);
   const double label_px = 200.0;
@@ -391,8 +394,9 @@ std::string svg_bars(const ChartSpec& spec, const std::vector<std::string>& cate
   y.px_lo = spec.height_px - 45.0;
   y.px_hi = 28.0;
   std::string out = open_svg(spec);
-  out += "<rect x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", y.px_hi) + "' width='" + fmt("%.1f", x.px_hi - x.px_lo) +
-         "' height='" + fmt("%.1f", y.px_lo - y.px_hi) + "' fill='none' stroke='#444'/>\n";
+  out += "<rect x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", y.px_hi) + "' width='" +
+         fmt("%.1f", x.px_hi - x.px_lo) + "' height='" + fmt("%.1f", y.px_lo - y.px_hi) +
+         "' fill='none' stroke='#444'/>\n";
   const Ticks xt = ticks_of(x);
   for (std::size_t i = 0; i < xt.at.size(); ++i) {
     out += "<text class='tick' x='" + fmt("%.1f", x.to_px(xt.at[i])) + "' y='" + fmt("%.1f", y.px_lo + 14) +
@@ -409,8 +413,8 @@ std::string svg_bars(const ChartSpec& spec, const std::vector<std::string>& cate
     out += "<text class='category' x='" + fmt("%.1f", x.px_lo - 6) + "' y='" + fmt("%.1f", top + row * 0.45) +
            "' text-anchor='end'>" + xml_escape(categories[i]) + "</text>\n";
     out += "<rect" + series_attr(categories[i]) + " x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", top) +
-           "' width='" + fmt("%.1f", x.to_px(counts[i]) - x.px_lo) + "' height='" + fmt("%.1f", row * 0.7) + "' fill='" +
-           kColours[0] + "'/>\n";
+           "' width='" + fmt("%.1f", x.to_px(counts[i]) - x.px_lo) + "' height='" + fmt("%.1f", row * 0.7) +
+           "' fill='" + kColours[0] + "'/>\n";
     out += "<text class='value' x='" + fmt("%.1f", x.to_px(counts[i]) + 4) + "' y='" + fmt("%.1f", top + row * 0.45) +
            "'>" + fmt("%.0f", counts[i]) + "</text>\n";
   }
@@ -424,8 +428,8 @@ std::string svg_strips(const ChartSpec& spec, const std::vector<std::string>& ca
   const double top = 28.0;
   const double bottom = spec.height_px - 45.0;
   std::string out = open_svg(spec);
-  out += "<rect x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", top) + "' width='" + fmt("%.1f", x.px_hi - x.px_lo) +
-         "' height='" + fmt("%.1f", bottom - top) + "' fill='none' stroke='#444'/>\n";
+  out += "<rect x='" + fmt("%.1f", x.px_lo) + "' y='" + fmt("%.1f", top) + "' width='" +
+         fmt("%.1f", x.px_hi - x.px_lo) + "' height='" + fmt("%.1f", bottom - top) + "' fill='none' stroke='#444'/>\n";
   const Ticks xt = ticks_of(x);
   for (std::size_t i = 0; i < xt.at.size(); ++i) {
     out += "<text class='tick' x='" + fmt("%.1f", x.to_px(xt.at[i])) + "' y='" + fmt("%.1f", bottom + 14) +
@@ -455,8 +459,8 @@ std::string svg_strips(const ChartSpec& spec, const std::vector<std::string>& ca
       const double x0 = x.to_px(bin_s * static_cast<double>(b));
       const double x1 = x.to_px(bin_s * static_cast<double>(b + 1));
       out += "<rect" + series_attr(categories[r]) + " x='" + fmt("%.1f", x0) + "' y='" + fmt("%.1f", y0 + row * 0.15) +
-             "' width='" + fmt("%.1f", x1 - x0) + "' height='" + fmt("%.1f", row * 0.7) + "' fill='" +
-             kColours[r % 6] + "' fill-opacity='" +
+             "' width='" + fmt("%.1f", x1 - x0) + "' height='" + fmt("%.1f", row * 0.7) + "' fill='" + kColours[r % 6] +
+             "' fill-opacity='" +
              fmt("%.2f", 0.15 + 0.85 * static_cast<double>(bins[b]) / static_cast<double>(largest)) + "'/>\n";
     }
   }

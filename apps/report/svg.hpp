@@ -9,25 +9,25 @@ namespace hivecal::report {
 
 /// One named series of (x, y) points drawn in one colour.
 struct Series {
-  std::string name;        ///< legend label
-  std::vector<double> x;   ///< abscissae
-  std::vector<double> y;   ///< ordinates (same count as x)
-  bool markers = false;    ///< draw points instead of a line
+  std::string name;       ///< legend label
+  std::vector<double> x;  ///< abscissae
+  std::vector<double> y;  ///< ordinates (same count as x)
+  bool markers = false;   ///< draw points instead of a line
 };
 
 /// Chart frame and labels.
 struct ChartSpec {
-  std::string title;     ///< above the plot
-  std::string x_label;   ///< under the x axis
-  std::string y_label;   ///< beside the y axis
-  bool log_y = false;    ///< logarithmic y axis (values <= 0 are skipped)
-  int width_px = 560;    ///< SVG width
-  int height_px = 320;   ///< SVG height
-  std::string id{};      ///< id attribute of the <svg> ("" for none)
-  bool fixed_y = false;  ///< use [y_lo, y_hi] (a scale shared with other panels) instead of the data's range
-  double y_lo = 0.0;     ///< lower y limit when fixed_y (in data units)
-  double y_hi = 1.0;     ///< upper y limit when fixed_y (in data units)
-  double y_line = 0.0;   ///< a dashed horizontal reference line at this y (e.g. the noise level)
+  std::string title;           ///< above the plot
+  std::string x_label;         ///< under the x axis
+  std::string y_label;         ///< beside the y axis
+  bool log_y = false;          ///< logarithmic y axis (values <= 0 are skipped)
+  int width_px = 560;          ///< SVG width
+  int height_px = 320;         ///< SVG height
+  std::string id{};            ///< id attribute of the <svg> ("" for none)
+  bool fixed_y = false;        ///< use [y_lo, y_hi] (a scale shared with other panels) instead of the data's range
+  double y_lo = 0.0;           ///< lower y limit when fixed_y (in data units)
+  double y_hi = 1.0;           ///< upper y limit when fixed_y (in data units)
+  double y_line = 0.0;         ///< a dashed horizontal reference line at this y (e.g. the noise level)
   std::string y_line_label{};  ///< its legend label; "" draws no line
 };
 

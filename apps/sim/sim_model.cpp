@@ -15,9 +15,13 @@ constexpr double kUsPerS = 1e6;
 constexpr double kMinJerkPeak = 1.875;  // peak of d/du (10u^3 - 15u^4 + 6u^5)
 
 /// Minimum-jerk progress s(u) in [0, 1] for u in [0, 1].
-double min_jerk(double u) { return u * u * u * (10.0 + u * (-15.0 + 6.0 * u)); }
+double min_jerk(double u) {
+  return u * u * u * (10.0 + u * (-15.0 + 6.0 * u));
+}
 /// ds/du of min_jerk.
-double min_jerk_rate(double u) { return 30.0 * u * u * (1.0 - u) * (1.0 - u); }
+double min_jerk_rate(double u) {
+  return 30.0 * u * u * (1.0 - u) * (1.0 - u);
+}
 
 /// Three standard normal deviates drawn x, y, z in this order (the order of a
 /// constructor's arguments is unspecified and differs between targets).
@@ -28,7 +32,9 @@ Vec3 normal_vector(Random* random) {
 }
 
 /// Nearest integer of a non-negative value.
-std::uint64_t round_us(double x_us) { return static_cast<std::uint64_t>(std::llround(x_us)); }
+std::uint64_t round_us(double x_us) {
+  return static_cast<std::uint64_t>(std::llround(x_us));
+}
 
 DeviceInfoRecord make_device_info(DeviceKind kind, float rate_hz, const char* name, std::uint16_t sequence,
                                   std::uint64_t t_us) {
@@ -161,7 +167,9 @@ void Session::build_schedule(Random* random) {
   }
 }
 
-double Session::duration_s() const { return schedule_.back().start_s + schedule_.back().duration_s; }
+double Session::duration_s() const {
+  return schedule_.back().start_s + schedule_.back().duration_s;
+}
 
 const Segment& Session::segment_at(double t_s) const {
   const auto after = std::upper_bound(schedule_.begin(), schedule_.end(), t_s,
@@ -273,7 +281,8 @@ bool TrackerStream::next(TrackerPointRecord* record) {
   Vec3 point = session_.true_point(session_.joints_at(t_s)) + config.tracker_noise_m * noise;
   std::uint8_t status = static_cast<std::uint8_t>(TrackerStatus::valid);
   if (burst_left_ == 0 && random_.uniform01() < config.beam_lost_probability)
-    burst_left_ = 1 + static_cast<int>(random_.below(static_cast<std::uint64_t>(std::max(1, config.beam_lost_max_points))));
+    burst_left_ =
+        1 + static_cast<int>(random_.below(static_cast<std::uint64_t>(std::max(1, config.beam_lost_max_points))));
   if (burst_left_ > 0) {
     --burst_left_;
     status = static_cast<std::uint8_t>(TrackerStatus::beam_lost);

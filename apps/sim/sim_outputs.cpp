@@ -77,8 +77,8 @@ std::string tracker_row(const TrackerPointRecord& r) {
 }
 
 std::string truth_sample_row(const TruthSample& s) {
-  std::string line = std::to_string(s.waypoint) + "," + seconds_text(s.tracker_us) + "," +
-                     textio::format_double(s.robot_us * 1e-6);
+  std::string line =
+      std::to_string(s.waypoint) + "," + seconds_text(s.tracker_us) + "," + textio::format_double(s.robot_us * 1e-6);
   for (int j = 0; j < kJointCount; ++j) line += "," + textio::format_double(s.q_rad(j));
   for (int a = 0; a < 3; ++a) line += "," + textio::format_double(s.point_m(a));
   return line + "\n";
@@ -181,13 +181,18 @@ port::Error stage_outputs(const Session& session, bool with_captures, double tru
                           std::size_t folder) {
   using Writer = std::function<bool(port::StagedFile&)>;
   const std::pair<const char*, Writer> jobs[] = {
-      {kRobotCaptureName, [&](port::StagedFile& f) { return write_capture<RobotStream, JointStateRecord>(session, f); }},
+      {kRobotCaptureName,
+       [&](port::StagedFile& f) { return write_capture<RobotStream, JointStateRecord>(session, f); }},
       {kTrackerCaptureName,
        [&](port::StagedFile& f) { return write_capture<TrackerStream, TrackerPointRecord>(session, f); }},
       {kLogAndTruthNames[0],
-       [&](port::StagedFile& f) { return write_csv<RobotStream, JointStateRecord>(session, "t,q1,q2,q3,q4,q5,q6", robot_row, f); }},
+       [&](port::StagedFile& f) {
+         return write_csv<RobotStream, JointStateRecord>(session, "t,q1,q2,q3,q4,q5,q6", robot_row, f);
+       }},
       {kLogAndTruthNames[1],
-       [&](port::StagedFile& f) { return write_csv<TrackerStream, TrackerPointRecord>(session, "t,x,y,z,status", tracker_row, f); }},
+       [&](port::StagedFile& f) {
+         return write_csv<TrackerStream, TrackerPointRecord>(session, "t,x,y,z,status", tracker_row, f);
+       }},
       {kLogAndTruthNames[2], [&](port::StagedFile& f) { return write_truth_json(session, truth_margin_s, f); }},
       {kLogAndTruthNames[3], [&](port::StagedFile& f) { return write_truth_samples(session, truth_margin_s, f); }},
   };

@@ -14,15 +14,15 @@ namespace hivecal::sim {
 
 /// Pacing of a live session.
 struct ServeOptions {
-  double speed = 1.0;      ///< session seconds per wall-clock second; 0: no pacing
+  double speed = 1.0;  ///< session seconds per wall-clock second; 0: no pacing
 };
 
 /// What was served.
 struct ServeStats {
-  std::uint64_t robot_bytes = 0;    ///< bytes written to the robot pty
-  std::uint64_t tracker_bytes = 0;  ///< bytes written to the tracker pty
-  std::uint64_t robot_frames = 0;   ///< frames (DEVICE_INFO included)
-  std::uint64_t tracker_frames = 0; ///< frames (DEVICE_INFO included)
+  std::uint64_t robot_bytes = 0;     ///< bytes written to the robot pty
+  std::uint64_t tracker_bytes = 0;   ///< bytes written to the tracker pty
+  std::uint64_t robot_frames = 0;    ///< frames (DEVICE_INFO included)
+  std::uint64_t tracker_frames = 0;  ///< frames (DEVICE_INFO included)
 };
 
 /// Writes the whole session into the two ptys' masters (or until *stop is set).

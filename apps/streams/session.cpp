@@ -98,12 +98,14 @@ std::string clock_failure_cause(const CaptureRunReport& report) {
            std::to_string(s.tracker_points) + " tracker points)";
   }
   if (s.robot_path_m < 0.01 || s.tracker_path_m < 0.01) {
-    return format("the tool hardly moves (robot path %.4f m, tracker path %.4f m): the clocks are related by the motion",
-                  s.robot_path_m, s.tracker_path_m);
+    return format(
+        "the tool hardly moves (robot path %.4f m, tracker path %.4f m): the clocks are related by the motion",
+        s.robot_path_m, s.tracker_path_m);
   }
-  return format("the robot's and the tracker's speed profiles do not match (robot path %.2f m, tracker path %.2f m):"
-                " do both streams cover the same motion?",
-                s.robot_path_m, s.tracker_path_m);
+  return format(
+      "the robot's and the tracker's speed profiles do not match (robot path %.2f m, tracker path %.2f m):"
+      " do both streams cover the same motion?",
+      s.robot_path_m, s.tracker_path_m);
 }
 
 }  // namespace
@@ -164,23 +166,23 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
     return port::Error::input(std::string("clock relation not found: ") + clock_failure_cause(report));
   }
   const ClockFit& clock = report.clock;
-  facts->info_lines.push_back(
-      format("clock: t_robot - t_tracker = %.6f s (sigma %.3f ms)", clock.offset_at_reference_us * 1e-6,
-             clock.sigma_offset_at_reference_us * 1e-3) +
-      format(", drift %.2f ppm (sigma %.2f ppm)", clock.drift * 1e6, clock.sigma_drift * 1e6));
+  facts->info_lines.push_back(format("clock: t_robot - t_tracker = %.6f s (sigma %.3f ms)",
+                                     clock.offset_at_reference_us * 1e-6, clock.sigma_offset_at_reference_us * 1e-3) +
+                              format(", drift %.2f ppm (sigma %.2f ppm)", clock.drift * 1e6, clock.sigma_drift * 1e6));
   const ClockProfileStats& profile = report.clock_stats;
   if (profile.tracker_set_aside > 0) {
     // Blunders (a jump no tool makes, then back): named by tracker timestamp so they can be found.
     std::string when;
-    for (std::uint64_t k = 0; k < profile.tracker_set_aside && k < kClockSetAsideLog; ++k)
-    {
+    for (std::uint64_t k = 0; k < profile.tracker_set_aside && k < kClockSetAsideLog; ++k) {
       char stamp[32];
-      std::snprintf(stamp, sizeof stamp, k == 0 ? "%.3f" : ", %.3f", static_cast<double>(profile.set_aside_tracker_us[k]) * 1e-6);
+      std::snprintf(stamp, sizeof stamp, k == 0 ? "%.3f" : ", %.3f",
+                    static_cast<double>(profile.set_aside_tracker_us[k]) * 1e-6);
       when += stamp;
     }
     if (profile.tracker_set_aside > kClockSetAsideLog) when += ", ...";
     facts->info_lines.push_back("clock: set aside " + std::to_string(profile.tracker_set_aside) +
-                                " tracker point(s) that jump faster than any tool moves, at t_tracker = " + when + " s");
+                                " tracker point(s) that jump faster than any tool moves, at t_tracker = " + when +
+                                " s");
   }
   std::string dropped;
   for (int k = 0; k < kDropReasonCount; ++k) {
@@ -191,8 +193,8 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
     dropped += (dropped.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(n);
   }
   facts->info_lines.push_back("static samples: kept " + std::to_string(report.counts.kept) + " of " +
-                              std::to_string(report.counts.tracker_points) + " tracker points; dropped: " +
-                              (dropped.empty() ? "none" : dropped));
+                              std::to_string(report.counts.tracker_points) +
+                              " tracker points; dropped: " + (dropped.empty() ? "none" : dropped));
   if (report.extraction_status == Status::dataset_full) {
     return port::Error::input("more static samples than the dataset holds (" + std::to_string(dataset->capacity()) +
                               " samples max): split the session");
@@ -213,8 +215,10 @@ std::string orientation_line(const SessionFacts& facts) {
     std::snprintf(why, sizeof why, "as given");
   }
   char line[256];
-  std::snprintf(line, sizeof line, "orientation used: %zu poses with rx, ry, rz, each also as targets 2 and 3 at a "
-                "lever of %.6g m (%s)", facts.orientation.poses, facts.orientation.lever_m, why);
+  std::snprintf(line, sizeof line,
+                "orientation used: %zu poses with rx, ry, rz, each also as targets 2 and 3 at a "
+                "lever of %.6g m (%s)",
+                facts.orientation.poses, facts.orientation.lever_m, why);
   return line;
 }
 

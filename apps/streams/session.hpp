@@ -27,13 +27,15 @@ struct SessionSources {
 
 /// How streams become samples.
 struct SessionConfig {
-  RobotModel speed_model;           ///< nominal geometry with the tool (for tool speeds only)
-  double max_speed_m_s = 0.0;       ///< quasi-static threshold [m/s]; 0: the library default
+  RobotModel speed_model;                  ///< nominal geometry with the tool (for tool speeds only)
+  double max_speed_m_s = 0.0;              ///< quasi-static threshold [m/s]; 0: the library default
   ExtractionObserver* observer = nullptr;  ///< sees each tracker point kept or dropped (extraction pass); may be null
-  double window_s = 0.0;            ///< optional stability window [s]; 0: none (the paper's rule at the instant)
-  bool progress = false;            ///< "[decode] pass i/2" lines on stderr
-  textio::RobotLogOptions log_options;  ///< joint names of ROS robot logs (UR driver names by default), units of text inputs
-  textio::OrientationInput orientation;  ///< how measured orientations (rx, ry, rz of paired samples) become targets 2 and 3
+  double window_s = 0.0;                   ///< optional stability window [s]; 0: none (the paper's rule at the instant)
+  bool progress = false;                   ///< "[decode] pass i/2" lines on stderr
+  textio::RobotLogOptions
+      log_options;  ///< joint names of ROS robot logs (UR driver names by default), units of text inputs
+  textio::OrientationInput
+      orientation;  ///< how measured orientations (rx, ry, rz of paired samples) become targets 2 and 3
 };
 
 /// The --joint-names value (six comma-separated names, or "" for the UR driver names) into
@@ -47,7 +49,7 @@ struct SessionFacts {
   CaptureRunReport run;                 ///< frames / rows, clock fit, extraction counts
   std::vector<std::pair<std::string, std::uint64_t>> dropped;  ///< drop reason -> count
   std::vector<std::string> sample_sources;  ///< where sample k (Sample::index) came from: "file:line" (paired samples)
-  textio::OrientationRead orientation;     ///< paired samples: the rows whose measured orientation was used, and the lever
+  textio::OrientationRead orientation;  ///< paired samples: the rows whose measured orientation was used, and the lever
   textio::OrientationInput orientation_input;  ///< the stated sigmas and lever the input was read with
 };
 

@@ -56,8 +56,12 @@ class ProgressReader final : public RecordReader {
 class Pass {
  public:
   Pass(int number, const PassProgress& progress, std::uint64_t total_bytes)
-      : number_(number), progress_(progress), total_(total_bytes), tick_([this] { tick(); }),
-        robot_(&robot_input_, tick_), tracker_(&tracker_input_, tick_) {}
+      : number_(number),
+        progress_(progress),
+        total_(total_bytes),
+        tick_([this] { tick(); }),
+        robot_(&robot_input_, tick_),
+        tracker_(&tracker_input_, tick_) {}
   port::Error open(const std::string& robot_path, const std::string& tracker_path, const LogRecordReader* robot_log,
                    const LogRecordReader* tracker_log) {
     port::Error error = robot_input_.open(robot_path, robot_log);
@@ -107,12 +111,20 @@ class Pass {
 }  // namespace
 
 LogRecordReader::LogRecordReader(std::shared_ptr<const textio::RobotLog> log)
-    : joints_(std::move(log)), size_(joints_->records.size()), bytes_(joints_->bytes_read), format_(joints_->format),
-      log_counters_(joints_->counters), error_(joints_->ok ? "" : joints_->error) {}
+    : joints_(std::move(log)),
+      size_(joints_->records.size()),
+      bytes_(joints_->bytes_read),
+      format_(joints_->format),
+      log_counters_(joints_->counters),
+      error_(joints_->ok ? "" : joints_->error) {}
 
 LogRecordReader::LogRecordReader(std::shared_ptr<const textio::TrackerLog> log)
-    : points_(std::move(log)), size_(points_->records.size()), bytes_(points_->bytes_read), format_(points_->format),
-      log_counters_(points_->counters), error_(points_->ok ? "" : points_->error) {}
+    : points_(std::move(log)),
+      size_(points_->records.size()),
+      bytes_(points_->bytes_read),
+      format_(points_->format),
+      log_counters_(points_->counters),
+      error_(points_->ok ? "" : points_->error) {}
 
 Status LogRecordReader::next(StreamRecord* record) {
   record->kind = StreamRecord::Kind::end;
@@ -128,7 +140,9 @@ Status LogRecordReader::next(StreamRecord* record) {
   return Status::ok;
 }
 
-std::uint64_t LogRecordReader::bytes_read() const { return size_ == 0 ? bytes_ : bytes_ / size_ * next_; }
+std::uint64_t LogRecordReader::bytes_read() const {
+  return size_ == 0 ? bytes_ : bytes_ / size_ * next_;
+}
 
 std::unique_ptr<LogRecordReader> LogRecordReader::replay() const {
   return joints_ != nullptr ? std::make_unique<LogRecordReader>(joints_) : std::make_unique<LogRecordReader>(points_);
@@ -137,9 +151,11 @@ std::unique_ptr<LogRecordReader> LogRecordReader::replay() const {
 std::unique_ptr<LogRecordReader> open_log_records(LogKind kind, const std::string& path,
                                                   const textio::RobotLogOptions& options) {
   if (kind == LogKind::robot) {
-    return std::make_unique<LogRecordReader>(std::make_shared<const textio::RobotLog>(textio::read_robot_log(path, options)));
+    return std::make_unique<LogRecordReader>(
+        std::make_shared<const textio::RobotLog>(textio::read_robot_log(path, options)));
   }
-  return std::make_unique<LogRecordReader>(std::make_shared<const textio::TrackerLog>(textio::read_tracker_log(path, options.units)));
+  return std::make_unique<LogRecordReader>(
+      std::make_shared<const textio::TrackerLog>(textio::read_tracker_log(path, options.units)));
 }
 
 namespace {
@@ -184,8 +200,12 @@ class FileRecordSource final : public RecordSource {
  public:
   FileRecordSource(const std::string& robot_path, const std::string& tracker_path, const LogRecordReader* robot_log,
                    const LogRecordReader* tracker_log, const PassProgress& progress, std::uint64_t total_bytes)
-      : robot_path_(robot_path), tracker_path_(tracker_path), robot_log_(robot_log), tracker_log_(tracker_log),
-        progress_(progress), total_(total_bytes) {}
+      : robot_path_(robot_path),
+        tracker_path_(tracker_path),
+        robot_log_(robot_log),
+        tracker_log_(tracker_log),
+        progress_(progress),
+        total_(total_bytes) {}
   Status open(RecordReader** robot, RecordReader** tracker) override {
     if (opened_ == 2) return Status::read_failed;
     if (opened_ == 1) passes_[0]->end();  // pass 1 is over: its last progress line before pass 2's
@@ -198,8 +218,8 @@ class FileRecordSource final : public RecordSource {
     *tracker = &pass->tracker();
     return Status::ok;
   }
-  int opened() const { return opened_; }                      ///< passes opened [-]
-  Pass& pass(int number) { return *passes_[number - 1]; }     ///< pass 1 or 2 (opened)
+  int opened() const { return opened_; }                         ///< passes opened [-]
+  Pass& pass(int number) { return *passes_[number - 1]; }        ///< pass 1 or 2 (opened)
   const port::Error& open_error() const { return open_error_; }  ///< why the last open failed
 
  private:

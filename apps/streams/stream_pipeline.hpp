@@ -2,8 +2,8 @@
 // capture (port::InputFile, a lib ByteReader -> FrameRecordReader) or a text log
 // or ROS 2 bag of any tool (open_log_records -> LogRecordReader, read once), then
 // the library's capture front (hivecal/sync/capture_dataset.hpp: its two passes, ClockEstimator,
-// then SampleExtractor in robot-clock order) -> dataset; this file only supplies the readers. A capture's memory stays bounded (read a
-// chunk at a time); a log's records are held (~136 B a robot row: 41 MB for 10 min at 500 Hz).
+// then SampleExtractor in robot-clock order) -> dataset; this file only supplies the readers. A capture's memory stays
+// bounded (read a chunk at a time); a log's records are held (~136 B a robot row: 41 MB for 10 min at 500 Hz).
 #pragma once
 
 #include <cstdint>
@@ -27,8 +27,8 @@ namespace hivecal::streams {
 /// Decodes bytes obtained elsewhere (e.g. a recorder's tap) into queues of records.
 class RecordQueue final : public FrameHandler {
  public:
-  std::deque<JointStateRecord>& joints() { return joints_; }      ///< decoded robot records
-  std::deque<TrackerPointRecord>& points() { return points_; }    ///< decoded tracker records
+  std::deque<JointStateRecord>& joints() { return joints_; }              ///< decoded robot records
+  std::deque<TrackerPointRecord>& points() { return points_; }            ///< decoded tracker records
   const DecoderStats& decoder_stats() const { return decoder_.stats(); }  ///< frame counters
   /// Decodes `count` bytes into the queues.
   void feed(const std::uint8_t* bytes, std::size_t count) { decoder_.feed(bytes, count, *this); }
@@ -51,9 +51,9 @@ enum class LogKind { robot, tracker };
 class LogRecords : public RecordReader {
  public:
   virtual ~LogRecords() = default;
-  virtual std::uint64_t rows() const = 0;         ///< data rows turned into records
-  virtual const std::string& error() const = 0;   ///< what failed (file:line: what), if anything
-  virtual std::uint64_t bytes_read() const = 0;   ///< [bytes]
+  virtual std::uint64_t rows() const = 0;        ///< data rows turned into records
+  virtual const std::string& error() const = 0;  ///< what failed (file:line: what), if anything
+  virtual std::uint64_t bytes_read() const = 0;  ///< [bytes]
 
  protected:
   LogRecords() = default;
@@ -79,7 +79,7 @@ class LogRecordReader final : public LogRecords {
   std::uint64_t bytes_read() const override;
   /// A reader of the same log from its start (no second read of the file).
   std::unique_ptr<LogRecordReader> replay() const;
-  textio::LogFormat format() const { return format_; }               ///< what the log is
+  textio::LogFormat format() const { return format_; }                       ///< what the log is
   const textio::LogCounters& log_counters() const { return log_counters_; }  ///< the log's rows per reason
 
  private:
@@ -121,14 +121,15 @@ struct StreamInputCounts {
 
 /// Everything a two-pass run over two files reports.
 struct CaptureRunReport {
-  Status clock_status = Status::ok;       ///< outcome of the clock estimation
-  ClockFit clock;                          ///< the clock relation (when clock_status is ok)
-  ClockProfileStats clock_stats;           ///< what went into the clock profiles
-  std::vector<ClockMatchBin> clock_match;  ///< the profiles the clock fit matched, <= kClockMatchBins time bins (clock ok)
-  StreamInputCounts robot;                 ///< what the robot input held
-  StreamInputCounts tracker;               ///< what the tracker input held
+  Status clock_status = Status::ok;  ///< outcome of the clock estimation
+  ClockFit clock;                    ///< the clock relation (when clock_status is ok)
+  ClockProfileStats clock_stats;     ///< what went into the clock profiles
+  std::vector<ClockMatchBin>
+      clock_match;            ///< the profiles the clock fit matched, <= kClockMatchBins time bins (clock ok)
+  StreamInputCounts robot;    ///< what the robot input held
+  StreamInputCounts tracker;  ///< what the tracker input held
   Status extraction_status = Status::ok;  ///< ok or dataset_full
-  ExtractionCounts counts;                 ///< kept / dropped per reason
+  ExtractionCounts counts;                ///< kept / dropped per reason
 };
 
 /// Both passes over two files into `dataset`; each is a serial capture or a log (detected by
@@ -138,9 +139,8 @@ struct CaptureRunReport {
 /// extraction then). `log_options`: how to read the logs (joint names of ROS logs, units of
 /// columns without a bracket unit).
 port::Error extract_from_files(const std::string& robot_path, const std::string& tracker_path,
-                        const ClockSyncConfig& clock_config, const ExtractionConfig& extraction_config,
-                        DatasetBase* dataset, CaptureRunReport* report,
-                        ExtractionObserver* observer = nullptr, const PassProgress& progress = {},
-                        const textio::RobotLogOptions& log_options = {});
+                               const ClockSyncConfig& clock_config, const ExtractionConfig& extraction_config,
+                               DatasetBase* dataset, CaptureRunReport* report, ExtractionObserver* observer = nullptr,
+                               const PassProgress& progress = {}, const textio::RobotLogOptions& log_options = {});
 
 }  // namespace hivecal::streams

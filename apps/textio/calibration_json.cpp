@@ -20,7 +20,9 @@ void write_axis_values(JsonWriter& json, const char* name, const double* values)
   json.end_object();
 }
 
-port::Error fail(const std::string& source, const std::string& what) { return port::Error::input(source + ": " + what); }
+port::Error fail(const std::string& source, const std::string& what) {
+  return port::Error::input(source + ": " + what);
+}
 
 bool read_number(const JsonValue* v, double* out) {
   if (v == nullptr || v->kind != JsonValue::Kind::number) return false;
@@ -129,7 +131,8 @@ port::Error parse_joint_limits(const JsonValue& root, const std::string& source,
     if (!read_numbers(&limits->array[static_cast<std::size_t>(j)], 2, pair)) {
       return fail(source, at + " must be [lower, upper] in rad");
     }
-    if (!(pair[0] < pair[1]) || !(std::fabs(pair[0]) <= kMaxJointLimit_rad) || !(std::fabs(pair[1]) <= kMaxJointLimit_rad)) {
+    if (!(pair[0] < pair[1]) || !(std::fabs(pair[0]) <= kMaxJointLimit_rad) ||
+        !(std::fabs(pair[1]) <= kMaxJointLimit_rad)) {
       return fail(source, at + " = [" + format_double(pair[0]) + ", " + format_double(pair[1]) +
                               "] rad: lower must be below upper, both within two turns (4 pi rad; degrees?)");
     }
@@ -153,9 +156,10 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
     const bool standard = convention->kind == JsonValue::Kind::string && convention->string == "standard-dh";
     const bool modified = convention->kind == JsonValue::Kind::string && convention->string == "modified-dh";
     if (!standard && !modified) {
-      return fail(source, "unknown \"convention\"" +
-                              (convention->kind == JsonValue::Kind::string ? " '" + convention->string + "'" : std::string()) +
-                              ": \"standard-dh\" or \"modified-dh\"");
+      return fail(source,
+                  "unknown \"convention\"" +
+                      (convention->kind == JsonValue::Kind::string ? " '" + convention->string + "'" : std::string()) +
+                      ": \"standard-dh\" or \"modified-dh\"");
     }
     parsed.convention = modified ? DhConvention::modified : DhConvention::standard;
   }
@@ -169,7 +173,8 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
   if (!r.ok()) return r;
   const Vec3 tool_m(tool[0], tool[1], tool[2]);
   if (parsed.convention == DhConvention::standard) {
-    for (int j = 0; j < kJointCount; ++j) parsed.model.joints[j] = DhJoint{rows[j][0], rows[j][1], rows[j][2], rows[j][3]};
+    for (int j = 0; j < kJointCount; ++j)
+      parsed.model.joints[j] = DhJoint{rows[j][0], rows[j][1], rows[j][2], rows[j][3]};
     parsed.model.tool_m = tool_m;
   } else {
     ModifiedDhRow modified[kJointCount];
@@ -240,7 +245,8 @@ port::Error parse_transform(const JsonValue& root, const std::string& source, Ri
   Eigen::Matrix4d m;
   for (std::size_t r = 0; r < 4; ++r) {
     double row[4];
-    if (!read_numbers(&rows->array[r], 4, row)) return fail(source, "\"base_to_tracker\" row " + std::to_string(r) + " must hold 4 numbers");
+    if (!read_numbers(&rows->array[r], 4, row))
+      return fail(source, "\"base_to_tracker\" row " + std::to_string(r) + " must hold 4 numbers");
     for (std::size_t c = 0; c < 4; ++c) m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
   }
   const Mat3 rotation = m.block<3, 3>(0, 0);
@@ -317,8 +323,9 @@ bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::stri
   }
   term.joint = static_cast<int>(joint) - 1;
   if (load == nullptr || load->kind != JsonValue::Kind::string || !read_load(load->string, compliance->load, &term)) {
-    *what = at + ".load must be " +
-            (compliance->load == ComplianceLoad::arm_masses ? "\"arm masses\"" : "\"frame K\" (K = 1 .. 6) or \"tool\"");
+    *what =
+        at + ".load must be " +
+        (compliance->load == ComplianceLoad::arm_masses ? "\"arm masses\"" : "\"frame K\" (K = 1 .. 6) or \"tool\"");
     return false;
   }
   if (!read_number(v.find("coefficient"), &compliance->coefficient[t]) ||
@@ -337,11 +344,16 @@ bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::stri
 
 }  // namespace
 
-const char* compliance_unit(ComplianceLoad load) { return load == ComplianceLoad::arm_masses ? "rad/(kg m)" : "rad/m"; }
+const char* compliance_unit(ComplianceLoad load) {
+  return load == ComplianceLoad::arm_masses ? "rad/(kg m)" : "rad/m";
+}
 
-const char* compliance_kind_name(ComplianceLoad load) { return load == ComplianceLoad::arm_masses ? "masses" : "basis"; }
+const char* compliance_kind_name(ComplianceLoad load) {
+  return load == ComplianceLoad::arm_masses ? "masses" : "basis";
+}
 
-void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const Mat3& to_file_base, const double* sigma) {
+void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const Mat3& to_file_base,
+                      const double* sigma) {
   json.begin_object();
   json.key("kind").value(compliance_kind_name(compliance.load));
   const Vec3 gravity = to_file_base * compliance.gravity_direction;
@@ -386,10 +398,12 @@ bool read_compliance(const JsonValue& value, const Mat3& to_file_base, Complianc
   parsed.term_count = static_cast<int>(terms->array.size());
   for (int t = 0; t < parsed.term_count; ++t)
     if (!read_term(terms->array[static_cast<std::size_t>(t)], t, &parsed, what)) return false;
-  if (parsed.load == ComplianceLoad::arm_masses && !read_masses(value.find("masses"), &parsed.masses, what)) return false;
+  if (parsed.load == ComplianceLoad::arm_masses && !read_masses(value.find("masses"), &parsed.masses, what))
+    return false;
   if (check_compliance(parsed) != Status::ok) {
-    *what = "not a usable compliance model (a term's load must lie beyond its joint, masses >= 0, every number finite, "
-            "gravity_direction of unit length)";
+    *what =
+        "not a usable compliance model (a term's load must lie beyond its joint, masses >= 0, every number finite, "
+        "gravity_direction of unit length)";
     return false;
   }
   *compliance = parsed;
@@ -417,7 +431,7 @@ void write_description(JsonWriter& json, const RobotDescription& file, const dou
   Vec3 tool_m;
   rows_as_written(file, rows, &tool_m);
   json.key("dh").begin_array();
-  for (const double (&values)[4] : rows) {
+  for (const double(&values)[4] : rows) {
     json.begin_object();
     json.key("theta_offset").value(values[0]);
     json.key("d").value(values[1]);
@@ -440,9 +454,10 @@ void write_description(JsonWriter& json, const RobotDescription& file, const dou
   }
   if (file.model.compliance.term_count > 0) {
     json.key("compliance");
-    write_compliance(json, file.model.compliance,
-                     file.convention == DhConvention::modified ? file.modified_base.transform().rotation : Mat3::Identity(),
-                     compliance_sigma);
+    write_compliance(
+        json, file.model.compliance,
+        file.convention == DhConvention::modified ? file.modified_base.transform().rotation : Mat3::Identity(),
+        compliance_sigma);
   }
   if (file.has_joint_limits) {
     json.key("joint_limits").begin_array();
@@ -464,14 +479,15 @@ std::string format_robot_description(const RobotDescription& robot) {
   return json.text();
 }
 
-std::string format_calibration_json(const CalibrationFile& file, const std::function<void(JsonWriter&)>& extra_members) {
+std::string format_calibration_json(const CalibrationFile& file,
+                                    const std::function<void(JsonWriter&)>& extra_members) {
   JsonWriter json;
   json.begin_object();
   write_description(json, file, file.compliance_sigma);
   // A modified-DH file's base is the frame before Rx(alpha_0) Tx(a_0).
-  const RigidTransform base_to_tracker =
-      file.convention == DhConvention::modified ? file.base_to_tracker.then_after(file.modified_base.transform().inverse())
-                                                : file.base_to_tracker;
+  const RigidTransform base_to_tracker = file.convention == DhConvention::modified
+                                             ? file.base_to_tracker.then_after(file.modified_base.transform().inverse())
+                                             : file.base_to_tracker;
   json.key("base_to_tracker").begin_array();
   for (int r = 0; r < 4; ++r) {
     double row[4] = {0.0, 0.0, 0.0, 1.0};

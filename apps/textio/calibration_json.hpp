@@ -21,8 +21,8 @@ struct RobotDescription {
   DhConvention convention = DhConvention::standard;  ///< how the file writes its rows
   ModifiedDhBase modified_base;                      ///< modified DH: Rx(alpha_0) Tx(a_0) before joint 1
   RobotModel model;                                  ///< the standard-DH table, tool point and compliance [m, rad]
-  int target_count = 1;  ///< targets whose tool points `model` holds, 1 .. kMaxTargets ("tools" when > 1) [-]
-  bool has_joint_limits = false;                          ///< the file gave "joint_limits" (URDF: <limit>)
+  int target_count = 1;           ///< targets whose tool points `model` holds, 1 .. kMaxTargets ("tools" when > 1) [-]
+  bool has_joint_limits = false;  ///< the file gave "joint_limits" (URDF: <limit>)
   JointVector lower_rad = JointVector::Constant(-2.0 * math::kPi);  ///< lowest joint positions [rad]
   JointVector upper_rad = JointVector::Constant(2.0 * math::kPi);   ///< highest joint positions [rad]
 };
@@ -32,8 +32,8 @@ struct CalibrationFile : RobotDescription {
   /// Base of the standard-DH chain -> tracker frame: predicted = base_to_tracker * FK(model)
   /// (for a modified-DH file, the file's own base -> tracker times modified_base).
   RigidTransform base_to_tracker;
-  bool has_metrics = false;          ///< metrics below were present / are to be written
-  AccuracyReport metrics;            ///< train / test / overall error statistics [m]
+  bool has_metrics = false;  ///< metrics below were present / are to be written
+  AccuracyReport metrics;    ///< train / test / overall error statistics [m]
   /// Standard deviation of each compliance coefficient (model.compliance's unit); 0: unknown,
   /// not written.
   double compliance_sigma[kMaxComplianceTerms] = {};

@@ -20,8 +20,9 @@ struct CsvSchema {
   std::vector<Quantity> quantities;  ///< what each measures (its units; joints and points are checked)
   std::string optional_leading;      ///< a column that may come first (ignored), or ""
   std::string optional_trailing;     ///< a unitless column that may follow them (its value appended), or ""
-  std::vector<std::string> optional_group;  ///< angle columns found by name after them, all or none (values appended last)
-  bool angles_are_joints = true;     ///< angle columns are joint positions (checked within one turn)
+  std::vector<std::string>
+      optional_group;             ///< angle columns found by name after them, all or none (values appended last)
+  bool angles_are_joints = true;  ///< angle columns are joint positions (checked within one turn)
 };
 
 /// Which optional columns a file had.
@@ -35,7 +36,7 @@ const char* const kPendantJointNames[kJointCount] = {"base", "shoulder", "elbow"
 
 /// Joint names as ROS (joint_states, the UR driver's URDF) writes them.
 const char* const kRosJointNames[kJointCount] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
-                                                  "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
+                                                 "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
 
 /// True when header column `name` is schema column `wanted`: equal, or the pendant's or ROS's
 /// name of joint qN.
@@ -74,7 +75,8 @@ std::vector<std::size_t> locate_columns(const DelimitedReader& r, const CsvSchem
     const std::string mapped = mapped_name(units, wanted);
     int found = -1;
     for (std::size_t k = 0; found < 0 && k < header.size(); ++k) {
-      if (mapped.empty() ? column_matches(header[k].name, wanted) : header[k].name == mapped) found = static_cast<int>(k);
+      if (mapped.empty() ? column_matches(header[k].name, wanted) : header[k].name == mapped)
+        found = static_cast<int>(k);
     }
     if (found < 0) *missing += (missing->empty() ? "" : ", ") + (mapped.empty() ? wanted : wanted + "=" + mapped);
     at.push_back(static_cast<std::size_t>(found));
@@ -126,12 +128,14 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   const bool has_trailing = in_order ? (!schema.optional_trailing.empty() && header.size() > trailing_from &&
                                         header[trailing_from].name == schema.optional_trailing)
                                      : named_trailing >= 0;
-  const std::size_t trailing = in_order || named_trailing < 0 ? trailing_from : static_cast<std::size_t>(named_trailing);
+  const std::size_t trailing =
+      in_order || named_trailing < 0 ? trailing_from : static_cast<std::size_t>(named_trailing);
   std::vector<std::size_t> group;  // the optional group's columns, when all are present
   for (const std::string& name : schema.optional_group) {
     const std::string mapped = mapped_name(units, name);
     const int found_at = r.find(mapped.empty() ? name : mapped);
-    if (found_at >= 0 && static_cast<std::size_t>(found_at) >= trailing_from) group.push_back(static_cast<std::size_t>(found_at));
+    if (found_at >= 0 && static_cast<std::size_t>(found_at) >= trailing_from)
+      group.push_back(static_cast<std::size_t>(found_at));
   }
   if (!group.empty() && group.size() != schema.optional_group.size()) {
     return port::Error::input(r.where() + "header has " + std::to_string(group.size()) + " of the columns " +
@@ -155,7 +159,8 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
     if (group.size() == 3 && !r.check_rotation(group.data(), &values[group_at])) return port::Error::input(r.error());
     for (std::size_t i = 0; i < schema.columns.size(); ++i) {
       if (!r.number(at[i], scales[i], &values[i])) return port::Error::input(r.error());
-      if (schema.quantities[i] == Quantity::angle && schema.angles_are_joints && !r.check_joint(++joint, at[i], values[i])) {
+      if (schema.quantities[i] == Quantity::angle && schema.angles_are_joints &&
+          !r.check_joint(++joint, at[i], values[i])) {
         return port::Error::input(r.error());
       }
     }
@@ -197,8 +202,10 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
                              std::vector<std::size_t>* lines, const OrientationInput& orientation,
                              OrientationRead* found) {
   const CsvSchema schema{with(kJointColumns, {"x", "y", "z"}),
-                         with(kJointQuantities, {Quantity::length, Quantity::length, Quantity::length}), "",
-                         "target", {"rx", "ry", "rz"}};
+                         with(kJointQuantities, {Quantity::length, Quantity::length, Quantity::length}),
+                         "",
+                         "target",
+                         {"rx", "ry", "rz"}};
   const double lever_m = orientation.lever();
   if (!(lever_m >= 0.0 && math::is_finite(lever_m))) {
     return port::Error::usage("orientation lever " + format_double(lever_m) +
@@ -208,52 +215,57 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
   std::vector<std::size_t> row_lines;
   std::vector<std::size_t> samples_per_row;
   OrientationRead read;
-  const port::Error result = read_csv(path, schema, units, [&](const std::vector<double>& values) {
-    const std::string error = check_finite(values, 0, 9);
-    if (!error.empty()) return error;
-    if (columns.group && !check_finite(values, values.size() - 3, 3).empty()) {
-      return std::string("NaN or Inf in the rotation vector rx, ry, rz");
-    }
-    if (columns.trailing && columns.group) {
-      return std::string("a measured orientation (rx, ry, rz) and a target column together: the orientation "
-                         "makes targets 2 and 3 itself; give one or the other");
-    }
-    int target = 0;  // 0-based; no target column: every row is target 1
-    if (columns.trailing) {
-      const double named = values[9];
-      if (!(named >= 1.0 && named <= kMaxTargets && named == std::floor(named))) {
-        return "target " + format_double(named) + " is not an integer from 1 to " + std::to_string(kMaxTargets);
-      }
-      target = static_cast<int>(named) - 1;
-    }
-    JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
-    const Vec3 point_m(values[6], values[7], values[8]);
-    Vec3 points_m[3] = {point_m, point_m, point_m};
-    int targets[3] = {target, 1, 2};
-    std::size_t count = 1;
-    if (columns.group && lever_m > 0.0) {  // the virtual reflectors along the measured x and y axes
-      const std::size_t at = values.size() - 3;
-      const Vec3 angles_rad(values[at], values[at + 1], values[at + 2]);
-      const Mat3 rotation = orientation.form == OrientationForm::euler_xyz
-                                ? Mat3(rotation_x(angles_rad.x()) * rotation_y(angles_rad.y()) * rotation_z(angles_rad.z()))
-                                : rotation_from_vector(angles_rad);
-      points_m[1] = point_m + lever_m * rotation.col(0);
-      points_m[2] = point_m + lever_m * rotation.col(1);
-      count = 3;
-      ++read.poses;
-    }
-    for (std::size_t k = 0; k < count; ++k) {
-      const Status status = dataset->add(q, points_m[k], targets[k]);
-      if (status == Status::dataset_full) {
-        return "dataset over capacity (" + std::to_string(dataset->capacity()) + " samples max" +
-               (count > 1 ? "; a row with an orientation takes three)" : ")");
-      }
-      if (status != Status::ok) return std::string(status_message(status));
-    }
-    samples_per_row.push_back(count);
-    return std::string();
-  }, &row_lines, &columns);
+  const port::Error result = read_csv(
+      path, schema, units,
+      [&](const std::vector<double>& values) {
+        const std::string error = check_finite(values, 0, 9);
+        if (!error.empty()) return error;
+        if (columns.group && !check_finite(values, values.size() - 3, 3).empty()) {
+          return std::string("NaN or Inf in the rotation vector rx, ry, rz");
+        }
+        if (columns.trailing && columns.group) {
+          return std::string(
+              "a measured orientation (rx, ry, rz) and a target column together: the orientation "
+              "makes targets 2 and 3 itself; give one or the other");
+        }
+        int target = 0;  // 0-based; no target column: every row is target 1
+        if (columns.trailing) {
+          const double named = values[9];
+          if (!(named >= 1.0 && named <= kMaxTargets && named == std::floor(named))) {
+            return "target " + format_double(named) + " is not an integer from 1 to " + std::to_string(kMaxTargets);
+          }
+          target = static_cast<int>(named) - 1;
+        }
+        JointVector q;
+        for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
+        const Vec3 point_m(values[6], values[7], values[8]);
+        Vec3 points_m[3] = {point_m, point_m, point_m};
+        int targets[3] = {target, 1, 2};
+        std::size_t count = 1;
+        if (columns.group && lever_m > 0.0) {  // the virtual reflectors along the measured x and y axes
+          const std::size_t at = values.size() - 3;
+          const Vec3 angles_rad(values[at], values[at + 1], values[at + 2]);
+          const Mat3 rotation =
+              orientation.form == OrientationForm::euler_xyz
+                  ? Mat3(rotation_x(angles_rad.x()) * rotation_y(angles_rad.y()) * rotation_z(angles_rad.z()))
+                  : rotation_from_vector(angles_rad);
+          points_m[1] = point_m + lever_m * rotation.col(0);
+          points_m[2] = point_m + lever_m * rotation.col(1);
+          count = 3;
+          ++read.poses;
+        }
+        for (std::size_t k = 0; k < count; ++k) {
+          const Status status = dataset->add(q, points_m[k], targets[k]);
+          if (status == Status::dataset_full) {
+            return "dataset over capacity (" + std::to_string(dataset->capacity()) + " samples max" +
+                   (count > 1 ? "; a row with an orientation takes three)" : ")");
+          }
+          if (status != Status::ok) return std::string(status_message(status));
+        }
+        samples_per_row.push_back(count);
+        return std::string();
+      },
+      &row_lines, &columns);
   for (std::size_t row = 0; lines != nullptr && row < row_lines.size(); ++row) {
     lines->insert(lines->end(), samples_per_row[row], row_lines[row]);
   }
@@ -269,14 +281,15 @@ void start_orientation_targets(const OrientationRead& read, RobotModel* start) {
 }
 
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units) {
-  return read_csv(path, CsvSchema{kJointColumns, kJointQuantities, "t", "", {}}, units, [&](const std::vector<double>& values) {
-    const std::string error = check_finite(values, 0, 6);
-    if (!error.empty()) return error;
-    JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
-    poses->push_back(q);
-    return std::string();
-  });
+  return read_csv(path, CsvSchema{kJointColumns, kJointQuantities, "t", "", {}}, units,
+                  [&](const std::vector<double>& values) {
+                    const std::string error = check_finite(values, 0, 6);
+                    if (!error.empty()) return error;
+                    JointVector q;
+                    for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
+                    poses->push_back(q);
+                    return std::string();
+                  });
 }
 
 port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad,
@@ -291,8 +304,9 @@ port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_ra
     if (!bad.empty()) return bad;
     if (rows == kJointCount) return std::string("more than six rows (one per joint)");
     if (!(std::fabs(values[0]) <= kMaxJointLimit_rad) || !(std::fabs(values[1]) <= kMaxJointLimit_rad)) {
-      return std::string("a limit beyond two turns (4 pi rad): degrees? name the unit in the header (lower [deg]) "
-                         "or give --angle-unit deg");
+      return std::string(
+          "a limit beyond two turns (4 pi rad): degrees? name the unit in the header (lower [deg]) "
+          "or give --angle-unit deg");
     }
     if (!(values[0] < values[1])) return std::string("lower limit not below the upper one");
     lower(rows) = values[0];
@@ -301,7 +315,8 @@ port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_ra
     return std::string();
   });
   if (!error.ok()) return error;
-  if (rows != kJointCount) return port::Error::input(path + ": " + std::to_string(rows) + " rows, expected six (one per joint)");
+  if (rows != kJointCount)
+    return port::Error::input(path + ": " + std::to_string(rows) + " rows, expected six (one per joint)");
   *lower_rad = lower;
   *upper_rad = upper;
   return error;
@@ -320,7 +335,8 @@ std::string format_points_csv(const std::vector<Vec3>& points_m, const std::stri
   const double scale = mm ? 1e3 : 1.0;
   std::string out = mm ? "x [mm],y [mm],z [mm]\n" : "x,y,z\n";
   for (const Vec3& p : points_m) {
-    out += format_double(p.x() * scale) + "," + format_double(p.y() * scale) + "," + format_double(p.z() * scale) + "\n";
+    out +=
+        format_double(p.x() * scale) + "," + format_double(p.y() * scale) + "," + format_double(p.z() * scale) + "\n";
   }
   return out;
 }

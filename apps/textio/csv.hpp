@@ -35,7 +35,7 @@ enum class OrientationForm {
 struct OrientationInput {
   double position_sigma_m = kDefaultPositionSigma_m;  ///< stated noise of the measured positions [m]
   double angle_sigma_rad = kDefaultAngleSigma_rad;    ///< stated noise of the measured orientations [rad]
-  double lever_m = -1.0;                              ///< lever [m]; < 0: position_sigma_m / angle_sigma_rad; 0: rx, ry, rz checked, not used
+  double lever_m = -1.0;  ///< lever [m]; < 0: position_sigma_m / angle_sigma_rad; 0: rx, ry, rz checked, not used
   OrientationForm form = OrientationForm::rotation_vector;  ///< what rx, ry, rz hold
   /// The lever the reader uses [m] (0: orientation not used).
   double lever() const { return lever_m < 0.0 ? position_sigma_m / angle_sigma_rad : lever_m; }

@@ -34,7 +34,8 @@ std::string unit_of(std::string_view text) {
 
 /// A unit token "[mm]" or "(mm)" (pendants and some tracker exports write parentheses).
 bool is_unit_token(std::string_view token) {
-  return token.size() >= 2 && ((token.front() == '[' && token.back() == ']') || (token.front() == '(' && token.back() == ')'));
+  return token.size() >= 2 &&
+         ((token.front() == '[' && token.back() == ']') || (token.front() == '(' && token.back() == ')'));
 }
 
 /// A header token into a column: "X [mm]" or "X (mm)" -> {"x", "mm"}.
@@ -73,9 +74,14 @@ bool si_scale(std::string_view unit, Quantity quantity, double* scale) {
     double scale;
   };
   static const Known kUnits[] = {
-      {"m", Quantity::length, 1.0},    {"mm", Quantity::length, 1e-3}, {"um", Quantity::length, 1e-6},
-      {"rad", Quantity::angle, 1.0},   {"deg", Quantity::angle, math::kRadPerDeg},
-      {"s", Quantity::time, 1.0},      {"ms", Quantity::time, 1e-3},   {"us", Quantity::time, 1e-6},
+      {"m", Quantity::length, 1.0},
+      {"mm", Quantity::length, 1e-3},
+      {"um", Quantity::length, 1e-6},
+      {"rad", Quantity::angle, 1.0},
+      {"deg", Quantity::angle, math::kRadPerDeg},
+      {"s", Quantity::time, 1.0},
+      {"ms", Quantity::time, 1e-3},
+      {"us", Quantity::time, 1e-6},
       {"ns", Quantity::time, 1e-9},
   };
   if (unit.empty()) {
@@ -115,7 +121,9 @@ bool LineReader::fail(const std::string& problem) {
   return false;
 }
 
-std::string LineReader::where() const { return name_ + ":" + std::to_string(line_number_) + ": "; }
+std::string LineReader::where() const {
+  return name_ + ":" + std::to_string(line_number_) + ": ";
+}
 
 bool LineReader::refill() {
   if (!from_file_) return false;
@@ -185,7 +193,8 @@ bool DelimitedReader::read_header() {
     columns_.clear();
     for (const std::string_view token : fields_) {
       // "Time [ms] X [mm]" with spaces between fields: a lone "[unit]" belongs to the name before it.
-      if (delimiter_ == Delimiter::spaces && is_unit_token(token) && !columns_.empty() && columns_.back().unit.empty()) {
+      if (delimiter_ == Delimiter::spaces && is_unit_token(token) && !columns_.empty() &&
+          columns_.back().unit.empty()) {
         columns_.back().unit = unit_of(token.substr(1, token.size() - 2));
         continue;
       }
@@ -197,8 +206,8 @@ bool DelimitedReader::read_header() {
       for (Column& column : columns_) {
         if (column.name != alias.header) continue;
         if (!column.unit.empty() && column.unit != alias.unit) {
-          return fail("column " + port::quoted(column.name, 32) + " is in [" + column.unit + "] by its header, but --columns gives [" +
-                      alias.unit + "]");
+          return fail("column " + port::quoted(column.name, 32) + " is in [" + column.unit +
+                      "] by its header, but --columns gives [" + alias.unit + "]");
         }
         column.unit = alias.unit;
       }
@@ -234,7 +243,8 @@ bool DelimitedReader::split(std::string_view line) {
     std::size_t start = 0;
     for (;;) {
       const std::size_t stop = line.find(d, start);
-      fields_.push_back(unquote(line.substr(start, stop == std::string_view::npos ? std::string_view::npos : stop - start)));
+      fields_.push_back(
+          unquote(line.substr(start, stop == std::string_view::npos ? std::string_view::npos : stop - start)));
       if (stop == std::string_view::npos || fields_.size() > kMaxColumns) break;
       start = stop + 1;
     }
@@ -305,7 +315,7 @@ bool DelimitedReader::column_scale(std::size_t index, Quantity quantity, double*
   const Column& c = columns_[index];
   const int q = static_cast<int>(quantity);
   const std::string none;
-  const std::string& declared = quantity == Quantity::length ? units_.length
+  const std::string& declared = quantity == Quantity::length  ? units_.length
                                 : quantity == Quantity::angle ? units_.angle
                                                               : none;
   if (!si_scale(c.unit, quantity, scale)) {
@@ -317,8 +327,8 @@ bool DelimitedReader::column_scale(std::size_t index, Quantity quantity, double*
     return fail(std::string(kOption[q]) + " " + port::quoted(declared, 16) + " is not one of " + kAccepted[q]);
   }
   if (!declared.empty() && declared != c.unit) {
-    return fail("column " + port::quoted(c.name, 32) + " is in [" + c.unit + "] by its header, but " + kOption[q] + " " +
-                declared + " was given: the header unit and the option disagree");
+    return fail("column " + port::quoted(c.name, 32) + " is in [" + c.unit + "] by its header, but " + kOption[q] +
+                " " + declared + " was given: the header unit and the option disagree");
   }
   return true;
 }
@@ -329,7 +339,8 @@ bool DelimitedReader::check_joint(int joint, std::size_t index, double q_rad) {
   const std::string& column = columns_[index].name;
   std::string what = "joint " + name + (column == name ? "" : " (column " + port::quoted(column, 32) + ")") + " = " +
                      port::printable(fields_[index], 40);
-  if (unit_assumed(index, Quantity::angle)) return fail(what + " looks like degrees: use --angle-unit deg (joints are read in rad without it)");
+  if (unit_assumed(index, Quantity::angle))
+    return fail(what + " looks like degrees: use --angle-unit deg (joints are read in rad without it)");
   return fail(what + " is more than one turn (|q| > 2 pi rad) in the unit " +
               (columns_[index].unit.empty() ? "of --angle-unit" : "of its header") + ": not a joint position");
 }
@@ -339,9 +350,9 @@ bool DelimitedReader::check_point(const std::size_t index[3], const double point
   if (!std::isfinite(distance_m) || distance_m <= kMaxPointDistance_m) return true;  // NaN: the caller's message
   char far[64];
   std::snprintf(far, sizeof far, " is %.4g m from the origin (more than %.0f m)", distance_m, kMaxPointDistance_m);
-  std::string what = "point " + columns_[index[0]].name + "," + columns_[index[1]].name + "," + columns_[index[2]].name +
-                     " = " + port::printable(fields_[index[0]], 24) + ", " + port::printable(fields_[index[1]], 24) + ", " +
-                     port::printable(fields_[index[2]], 24) + far;
+  std::string what = "point " + columns_[index[0]].name + "," + columns_[index[1]].name + "," +
+                     columns_[index[2]].name + " = " + port::printable(fields_[index[0]], 24) + ", " +
+                     port::printable(fields_[index[1]], 24) + ", " + port::printable(fields_[index[2]], 24) + far;
   bool assumed = true;
   for (int k = 0; k < 3; ++k) assumed = assumed && unit_assumed(index[k], Quantity::length);
   if (assumed) return fail(what + ": looks like millimetres: use --length-unit mm (lengths are read in m without it)");

@@ -73,7 +73,7 @@ class LineReader {
   void open_memory(std::string_view text, std::string name);
   /// The next line into *line (valid until the next call); false at the end or on an error.
   bool next(std::string_view* line);
-  const std::string& error() const { return error_; }  ///< why reading stopped, "" at a clean end
+  const std::string& error() const { return error_; }       ///< why reading stopped, "" at a clean end
   std::size_t line_number() const { return line_number_; }  ///< 1-based number of the last line read
   std::uint64_t bytes_read() const { return bytes_read_; }  ///< [bytes]
   const std::string& name() const { return name_; }         ///< the file name used in messages
@@ -141,7 +141,7 @@ class DelimitedReader {
   /// for an empty file or a binary one.
   bool read_header();
   const std::vector<Column>& columns() const { return columns_; }  ///< the header's columns
-  Delimiter delimiter() const { return delimiter_; }                ///< the header's delimiter
+  Delimiter delimiter() const { return delimiter_; }               ///< the header's delimiter
   const std::string& header_line() const { return header_; }       ///< the header as read
   /// Index of the first column named `name` (lower case), or -1.
   int find(std::string_view name) const;

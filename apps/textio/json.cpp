@@ -52,7 +52,9 @@ class JsonParser {
     return false;
   }
   void skip_blanks() {
-    while (pos_ < text_.size() && (text_[pos_] == ' ' || text_[pos_] == '\t' || text_[pos_] == '\n' || text_[pos_] == '\r')) ++pos_;
+    while (pos_ < text_.size() &&
+           (text_[pos_] == ' ' || text_[pos_] == '\t' || text_[pos_] == '\n' || text_[pos_] == '\r'))
+      ++pos_;
   }
   bool consume(const char* word) {
     std::size_t n = 0;
@@ -92,8 +94,7 @@ class JsonParser {
     const std::size_t start = pos_;
     while (pos_ < text_.size() && std::string("+-0123456789.eE").find(text_[pos_]) != std::string::npos) ++pos_;
     if (start == pos_) return fail("expected a value");
-    if (!parse_double(std::string_view(text_).substr(start, pos_ - start), &v->number) ||
-        !math::is_finite(v->number)) {
+    if (!parse_double(std::string_view(text_).substr(start, pos_ - start), &v->number) || !math::is_finite(v->number)) {
       pos_ = start;
       return fail("malformed number");
     }
@@ -128,10 +129,14 @@ class JsonParser {
           for (int i = 0; i < 4; ++i) {
             const char h = text_[pos_++];
             code <<= 4U;
-            if (h >= '0' && h <= '9') code |= static_cast<unsigned>(h - '0');
-            else if (h >= 'a' && h <= 'f') code |= static_cast<unsigned>(h - 'a' + 10);
-            else if (h >= 'A' && h <= 'F') code |= static_cast<unsigned>(h - 'A' + 10);
-            else return fail("bad \\u escape");
+            if (h >= '0' && h <= '9')
+              code |= static_cast<unsigned>(h - '0');
+            else if (h >= 'a' && h <= 'f')
+              code |= static_cast<unsigned>(h - 'a' + 10);
+            else if (h >= 'A' && h <= 'F')
+              code |= static_cast<unsigned>(h - 'A' + 10);
+            else
+              return fail("bad \\u escape");
           }
           out->push_back(code < 0x80 ? static_cast<char>(code) : '?');  // names here are ASCII
           break;
@@ -222,7 +227,9 @@ std::string escape(const std::string& s) {
   return out + "\"";
 }
 
-std::string number_text(double x) { return math::is_finite(x) ? format_double(x) : "null"; }
+std::string number_text(double x) {
+  return math::is_finite(x) ? format_double(x) : "null";
+}
 
 }  // namespace
 
@@ -315,7 +322,9 @@ JsonWriter& JsonWriter::value(const std::string& text) {
   return *this;
 }
 
-JsonWriter& JsonWriter::value(const char* text) { return value(std::string(text)); }
+JsonWriter& JsonWriter::value(const char* text) {
+  return value(std::string(text));
+}
 
 JsonWriter& JsonWriter::value(bool flag) {
   before_value();

@@ -14,12 +14,12 @@ namespace hivecal::textio {
 /// A parsed JSON value.
 struct JsonValue {
   enum class Kind { null, boolean, number, string, array, object };
-  Kind kind = Kind::null;                  ///< which member is meaningful
-  bool boolean = false;                    ///< for Kind::boolean
-  double number = 0.0;                     ///< for Kind::number
-  std::string string;                      ///< for Kind::string
-  std::vector<JsonValue> array;            ///< for Kind::array
-  std::map<std::string, JsonValue> object; ///< for Kind::object
+  Kind kind = Kind::null;                   ///< which member is meaningful
+  bool boolean = false;                     ///< for Kind::boolean
+  double number = 0.0;                      ///< for Kind::number
+  std::string string;                       ///< for Kind::string
+  std::vector<JsonValue> array;             ///< for Kind::array
+  std::map<std::string, JsonValue> object;  ///< for Kind::object
 
   /// Member `key` of an object, or nullptr.
   const JsonValue* find(const std::string& key) const;
@@ -31,19 +31,19 @@ port::Error parse_json(const std::string& text, JsonValue* value);
 /// Streaming writer with two-space indentation; numbers as %.17g (NaN/Inf written as null).
 class JsonWriter {
  public:
-  JsonWriter& begin_object();                     ///< `{`
-  JsonWriter& end_object();                       ///< `}`
-  JsonWriter& begin_array();                      ///< `[`
-  JsonWriter& end_array();                        ///< `]`
-  JsonWriter& key(const std::string& name);       ///< `"name": ` inside an object
-  JsonWriter& value(double number);               ///< a number
-  JsonWriter& value(long long integer);           ///< an integer
-  JsonWriter& value(unsigned long long integer);  ///< an unsigned integer (a 64-bit seed, exactly)
-  JsonWriter& value(const std::string& text);     ///< an escaped string
-  JsonWriter& value(const char* text);            ///< an escaped string
-  JsonWriter& value(bool flag);                   ///< true / false
+  JsonWriter& begin_object();                                         ///< `{`
+  JsonWriter& end_object();                                           ///< `}`
+  JsonWriter& begin_array();                                          ///< `[`
+  JsonWriter& end_array();                                            ///< `]`
+  JsonWriter& key(const std::string& name);                           ///< `"name": ` inside an object
+  JsonWriter& value(double number);                                   ///< a number
+  JsonWriter& value(long long integer);                               ///< an integer
+  JsonWriter& value(unsigned long long integer);                      ///< an unsigned integer (a 64-bit seed, exactly)
+  JsonWriter& value(const std::string& text);                         ///< an escaped string
+  JsonWriter& value(const char* text);                                ///< an escaped string
+  JsonWriter& value(bool flag);                                       ///< true / false
   JsonWriter& inline_array(const double* values, std::size_t count);  ///< `[a, b, c]` on one line
-  const std::string& text() const { return out_; }  ///< the document so far
+  const std::string& text() const { return out_; }                    ///< the document so far
 
  private:
   void before_value();

@@ -25,7 +25,9 @@ const char* const kRobotFormats =
     "field.nameK + field.positionK (rostopic echo -p /joint_states)";
 const char* const kTrackerFormats = "a time column (t, time or timestamp) and x, y, z, units in brackets allowed";
 
-std::string column_name(const char* prefix, int k) { return prefix + std::to_string(k); }
+std::string column_name(const char* prefix, int k) {
+  return prefix + std::to_string(k);
+}
 
 /// "found 'header' (semicolon-separated, 4 columns)" for messages.
 std::string found(const DelimitedReader& r) {
@@ -48,9 +50,12 @@ bool has_all(const DelimitedReader& r, const char* prefix, int first) {
   return true;
 }
 
-bool looks_like_tracker(const DelimitedReader& r) { return find_time(r) >= 0 && r.find("x") >= 0 && r.find("y") >= 0 && r.find("z") >= 0; }
+bool looks_like_tracker(const DelimitedReader& r) {
+  return find_time(r) >= 0 && r.find("x") >= 0 && r.find("y") >= 0 && r.find("z") >= 0;
+}
 bool looks_like_robot(const DelimitedReader& r) {
-  return has_all(r, "q", 1) || has_all(r, "actual_q_", 0) || has_all(r, "target_q_", 0) || r.find("field.header.stamp") >= 0;
+  return has_all(r, "q", 1) || has_all(r, "actual_q_", 0) || has_all(r, "target_q_", 0) ||
+         r.find("field.header.stamp") >= 0;
 }
 
 /// Factor of column `index` to SI for `quantity`; false with the reader's error set.
@@ -66,7 +71,8 @@ class TimeColumn {
     index_ = static_cast<std::size_t>(index);
     const Column& c = r.columns()[index_];
     double scale_s = 1.0;
-    if (!si_scale(c.unit.empty() ? default_unit : c.unit, Quantity::time, &scale_s)) return scale_of(r, index, Quantity::time, &scale_s);
+    if (!si_scale(c.unit.empty() ? default_unit : c.unit, Quantity::time, &scale_s))
+      return scale_of(r, index, Quantity::time, &scale_s);
     nanoseconds_ = scale_s == 1e-9;
     scale_us_ = scale_s * 1e6;
     return true;
@@ -148,8 +154,9 @@ bool robot_layout(DelimitedReader& r, LogFormat* format, RobotLayout* layout) {
     return fixed_joints(r, "q", 1, layout) && layout->time.init(r, time, "s");
   }
   if (has_all(r, "target_q_", 0)) {
-    return r.fail("UR RTDE log without timestamp and actual_q_0..actual_q_5: target_q_k are the commanded "
-                  "positions, not the measured ones; record timestamp and actual_q");
+    return r.fail(
+        "UR RTDE log without timestamp and actual_q_0..actual_q_5: target_q_k are the commanded "
+        "positions, not the measured ones; record timestamp and actual_q");
   }
   if (looks_like_tracker(r)) {
     return r.fail("a tracker log (time, x, y, z), not a robot joint log: --robot and --tracker swapped?");
@@ -207,7 +214,8 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
         good = good && r.number(static_cast<std::size_t>(layout.q[j]), layout.q_scale[j], &record.q_rad[j]);
       } else {
         const auto k = static_cast<std::size_t>(source[j]);
-        good = good && r.number(static_cast<std::size_t>(layout.positions[k]), layout.position_scale[k], &record.q_rad[j]);
+        good =
+            good && r.number(static_cast<std::size_t>(layout.positions[k]), layout.position_scale[k], &record.q_rad[j]);
       }
     }
     for (int j = 0; good && j < kJointCount; ++j) {
@@ -259,7 +267,8 @@ bool tracker_point(DelimitedReader& r, const TrackerLayout& layout, TrackerPoint
   if (layout.status >= 0) {
     double status = 0.0;
     if (!r.number(static_cast<std::size_t>(layout.status), 1.0, &status)) return false;
-    if (!(status >= 0.0 && status <= 255.0) || status != std::floor(status)) return r.fail("status must be an integer 0..255");
+    if (!(status >= 0.0 && status <= 255.0) || status != std::floor(status))
+      return r.fail("status must be an integer 0..255");
     record->status = static_cast<std::uint8_t>(status);
   }
   if (all_empty) {  // an export's lost beam: no coordinates
@@ -330,7 +339,7 @@ const char* log_format_name(LogFormat format) {
 bool parse_joint_names(std::string_view text, RobotLogOptions* options) {
   std::array<std::string, kJointCount> names;
   std::size_t count = 0;
-  for (std::size_t start = 0;; ) {
+  for (std::size_t start = 0;;) {
     const std::size_t comma = std::min(text.find(',', start), text.size());
     const std::string_view name = trim(text.substr(start, comma - start));
     if (name.empty() || count == names.size()) return false;
@@ -380,7 +389,10 @@ StreamFileKind detect_stream_file(const std::string& path) {
   for (; at < got && head[at] != '\n'; ++at) {
     const unsigned char c = head[at];
     // A header may carry a unit in UTF-8 ("(°)", "[µm]"): a whole multi-byte sequence is text.
-    const std::size_t continuation = c >= 0xC2 && c <= 0xDF ? 1 : c >= 0xE0 && c <= 0xEF ? 2 : c >= 0xF0 && c <= 0xF4 ? 3 : 0;
+    const std::size_t continuation = c >= 0xC2 && c <= 0xDF   ? 1
+                                     : c >= 0xE0 && c <= 0xEF ? 2
+                                     : c >= 0xF0 && c <= 0xF4 ? 3
+                                                              : 0;
     bool sequence = continuation > 0 && at + continuation < got;
     for (std::size_t k = 1; sequence && k <= continuation; ++k) sequence = (head[at + k] & 0xC0) == 0x80;
     if (sequence) {
@@ -411,7 +423,8 @@ RobotLog read_robot_log(const std::string& path, const RobotLogOptions& options)
 TrackerLog read_tracker_log(const std::string& path, const InputUnits& units) {
   switch (detect_stream_file(path)) {
     case StreamFileKind::ros2_bag:
-      return failed<TrackerLog>(path + ": a ROS 2 bag (robot joints), not a tracker log: --robot and --tracker swapped?");
+      return failed<TrackerLog>(path +
+                                ": a ROS 2 bag (robot joints), not a tracker log: --robot and --tracker swapped?");
     case StreamFileKind::mcap: return failed<TrackerLog>(path + ": " + kMcapRefusal);
     case StreamFileKind::capture:
     case StreamFileKind::text_log: break;

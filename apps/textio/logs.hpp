@@ -67,12 +67,12 @@ std::string describe_log(LogFormat format, const LogCounters& counters);
 /// Outcome of reading one log.
 template <typename Record>
 struct LogRead {
-  bool ok = false;                         ///< the whole log was understood
-  std::string error;                       ///< "file[:line]: what" when not ok
-  LogFormat format = LogFormat::unknown;   ///< what the log is
-  std::vector<Record> records;             ///< in time order, timestamps strictly increasing
-  LogCounters counters;                    ///< rows read, dropped per reason
-  std::uint64_t bytes_read = 0;            ///< [bytes]
+  bool ok = false;                        ///< the whole log was understood
+  std::string error;                      ///< "file[:line]: what" when not ok
+  LogFormat format = LogFormat::unknown;  ///< what the log is
+  std::vector<Record> records;            ///< in time order, timestamps strictly increasing
+  LogCounters counters;                   ///< rows read, dropped per reason
+  std::uint64_t bytes_read = 0;           ///< [bytes]
 };
 using RobotLog = LogRead<JointStateRecord>;      ///< a robot log's joint states
 using TrackerLog = LogRead<TrackerPointRecord>;  ///< a tracker log's points

@@ -17,7 +17,7 @@
 namespace hivecal::textio {
 namespace {
 
-constexpr std::uint32_t kMaxNames = 256;          // joints in one message
+constexpr std::uint32_t kMaxNames = 256;         // joints in one message
 constexpr std::uint32_t kMaxStringBytes = 4096;  // one name or frame_id
 
 /// CDR reader: alignment counts from the end of the 4-byte encapsulation header.
@@ -115,7 +115,8 @@ bool bag_files(const std::string& path, std::vector<std::string>* files, std::st
 
 }  // namespace
 
-bool decode_joint_state_cdr(const std::uint8_t* data, std::size_t size, JointStateMessage* message, std::string* error) {
+bool decode_joint_state_cdr(const std::uint8_t* data, std::size_t size, JointStateMessage* message,
+                            std::string* error) {
   Cdr cdr(data, size);
   std::uint32_t sec = 0, nanosec = 0, names = 0, positions = 0;
   std::string_view frame_id;
@@ -188,7 +189,8 @@ class BagFile {
       if (!order->accept(record.timestamp_us, &repeated, &problem)) return fail_message(log, problem);
       for (int j = 0; j < kJointCount; ++j) {
         record.q_rad[j] = message.positions_rad[static_cast<std::size_t>(source[j])];
-        if (!std::isfinite(record.q_rad[j])) return fail_message(log, "joint " + std::to_string(j + 1) + ": NaN or Inf");
+        if (!std::isfinite(record.q_rad[j]))
+          return fail_message(log, "joint " + std::to_string(j + 1) + ": NaN or Inf");
         if (std::fabs(record.q_rad[j]) > kMaxJointMagnitude_rad) {
           return fail_message(log, "joint q" + std::to_string(j + 1) + " = " + format_double(record.q_rad[j]) +
                                        " rad is more than one turn: not a joint position (JointState is in rad)");
@@ -277,7 +279,8 @@ RobotLog read_ros2_bag_joint_states(const std::string& path, const RobotLogOptio
   }
   log.counters.records = log.records.size();
   if (log.counters.rows == 0) log.error = path + ": no /joint_states message";
-  if (log.error.empty() && log.records.empty()) log.error = missing_joints_message(path, options.joint_names, first_names);
+  if (log.error.empty() && log.records.empty())
+    log.error = missing_joints_message(path, options.joint_names, first_names);
   log.ok = log.error.empty();
   return log;
 }

@@ -18,7 +18,7 @@ void move_along_axis(int k, const double theta_k, const double alpha_k, RigidTra
   const RigidTransform to_next = joint[k].then_after(link[k]);
   const Vec3 next_axis = to_next.rotation * Vec3::UnitZ();
   const double along_m = -to_next.translation_m.z() / next_axis.z();  // checked non-parallel by the caller
-  const Vec3 meet = to_next.translation_m + along_m * next_axis;   // z = 0: in joint k's x-y plane
+  const Vec3 meet = to_next.translation_m + along_m * next_axis;      // z = 0: in joint k's x-y plane
   // UR's arm links point along -x (negative a): the same sign here, exact in every quadrant.
   const double heading_rad = std::atan2(-meet.y(), -meet.x());
   const double length_m = -std::hypot(meet.x(), meet.y());
@@ -31,9 +31,10 @@ std::string entry(const char* name, const RigidTransform& frame) {
   UrdfOrigin o = urdf_origin(frame);
   o.xyz_m += Vec3::Zero();  // -0 reads as 0
   o.rpy_rad += Vec3::Zero();
-  return std::string("  ") + name + ":\n    x: " + format_double(o.xyz_m.x()) + "\n    y: " + format_double(o.xyz_m.y()) +
-         "\n    z: " + format_double(o.xyz_m.z()) + "\n    roll: " + format_double(o.rpy_rad.x()) +
-         "\n    pitch: " + format_double(o.rpy_rad.y()) + "\n    yaw: " + format_double(o.rpy_rad.z()) + "\n";
+  return std::string("  ") + name + ":\n    x: " + format_double(o.xyz_m.x()) +
+         "\n    y: " + format_double(o.xyz_m.y()) + "\n    z: " + format_double(o.xyz_m.z()) +
+         "\n    roll: " + format_double(o.rpy_rad.x()) + "\n    pitch: " + format_double(o.rpy_rad.y()) +
+         "\n    yaw: " + format_double(o.rpy_rad.z()) + "\n";
 }
 
 }  // namespace
@@ -43,8 +44,9 @@ bool ur_kinematics_from_model(const RobotModel& model, UrKinematics* kinematics,
   const DhJoint* j = model.joints;
   if (!(std::fabs(std::cos(j[0].alpha_rad)) < kAxisTolerance && std::fabs(std::sin(j[1].alpha_rad)) < kAxisTolerance &&
         std::fabs(std::sin(j[2].alpha_rad)) < kAxisTolerance)) {
-    *why = "not a UR-shaped arm (joint 2 perpendicular to joint 1, joints 2, 3 and 4 parallel): the UR kinematics "
-           "YAML describes UR arms only; use --format urdf";
+    *why =
+        "not a UR-shaped arm (joint 2 perpendicular to joint 1, joints 2, 3 and 4 parallel): the UR kinematics "
+        "YAML describes UR arms only; use --format urdf";
     return false;
   }
   RigidTransform joint[kJointCount];

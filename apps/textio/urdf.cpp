@@ -7,7 +7,9 @@
 namespace hivecal::textio {
 namespace {
 
-RigidTransform rotation_only(const Mat3& rotation) { return RigidTransform{rotation, Vec3::Zero()}; }
+RigidTransform rotation_only(const Mat3& rotation) {
+  return RigidTransform{rotation, Vec3::Zero()};
+}
 
 /// Tz(d) Tx(a) Rx(alpha): the fixed part of a standard-DH row after its joint.
 RigidTransform row_after_joint(const DhJoint& joint) {
@@ -24,7 +26,9 @@ std::string origin_element(const RigidTransform& transform) {
   return "    <origin xyz=\"" + triple(origin.xyz_m) + "\" rpy=\"" + triple(origin.rpy_rad) + "\"/>\n";
 }
 
-std::string link(const std::string& name) { return "  <link name=\"" + name + "\"/>\n"; }
+std::string link(const std::string& name) {
+  return "  <link name=\"" + name + "\"/>\n";
+}
 
 std::string fixed_joint(const std::string& name, const std::string& parent, const std::string& child,
                         const RigidTransform& origin) {
@@ -50,8 +54,8 @@ std::string revolute_joint(int number, const std::string& parent, const RigidTra
 std::string xml_name(const std::string& text) {
   std::string out;
   for (const char c : text) {
-    const bool plain = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
-                       c == '-' || c == '.';
+    const bool plain =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-' || c == '.';
     out += plain ? c : '_';
   }
   return out.empty() ? std::string("robot") : out;
@@ -85,13 +89,14 @@ std::string format_urdf(const RobotDescription& robot, const RigidTransform* bas
   const RobotModel& model = robot.model;
   const bool modified = robot.convention == DhConvention::modified;
   const RigidTransform base_offset = modified ? robot.modified_base.transform() : RigidTransform{};
-  std::string s = "<?xml version=\"1.0\"?>\n<!-- Written by hivecal export: the " +
-                  std::string(modified ? "modified" : "standard") +
-                  "-DH model as a serial chain" +
-                  (robot.has_joint_limits ? std::string("") : std::string("; joint limits are placeholders (the description gives none)")) +
-                  ". -->\n"
-                  "<robot name=\"" +
-                  xml_name(robot.robot) + "\">\n" + link("base_link");
+  std::string s =
+      "<?xml version=\"1.0\"?>\n<!-- Written by hivecal export: the " +
+      std::string(modified ? "modified" : "standard") + "-DH model as a serial chain" +
+      (robot.has_joint_limits ? std::string("")
+                              : std::string("; joint limits are placeholders (the description gives none)")) +
+      ". -->\n"
+      "<robot name=\"" +
+      xml_name(robot.robot) + "\">\n" + link("base_link");
   for (int i = 1; i <= kJointCount; ++i) s += link("link_" + std::to_string(i));
   s += link("flange");
   for (int k = 0; k < robot.target_count; ++k) s += link(k == 0 ? "tcp" : "tcp_" + std::to_string(k + 1));
@@ -112,8 +117,8 @@ std::string format_urdf(const RobotDescription& robot, const RigidTransform* bas
   }
   if (base_to_tracker != nullptr) {
     // The tracker's pose in base_link: (file base -> chain base) * (chain base -> tracker)^-1.
-    s += link("tracker") + fixed_joint("tracker_joint", "base_link", "tracker",
-                                       base_offset.then_after(base_to_tracker->inverse()));
+    s += link("tracker") +
+         fixed_joint("tracker_joint", "base_link", "tracker", base_offset.then_after(base_to_tracker->inverse()));
   }
   return s + "</robot>\n";
 }

@@ -20,8 +20,8 @@ namespace hivecal::textio {
 /// URDF's xyz + rpy of a rigid transform (roll, pitch, yaw [rad], with R = Rz(yaw) Ry(pitch)
 /// Rx(roll); at pitch = +-pi/2 roll is 0 and yaw carries the rest).
 struct UrdfOrigin {
-  Vec3 xyz_m = Vec3::Zero();   ///< translation [m]
-  Vec3 rpy_rad = Vec3::Zero(); ///< roll, pitch, yaw [rad]
+  Vec3 xyz_m = Vec3::Zero();    ///< translation [m]
+  Vec3 rpy_rad = Vec3::Zero();  ///< roll, pitch, yaw [rad]
 };
 
 /// The xyz/rpy of `transform`.

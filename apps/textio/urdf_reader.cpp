@@ -19,11 +19,11 @@ namespace {
 // --- a small XML tag reader: what a URDF's joints and links need -------------------------
 
 struct Tag {
-  std::string name;                           ///< element name ("joint", "origin", ...)
-  std::map<std::string, std::string> attrs;   ///< attributes as written
-  int line = 0;                               ///< 1-based line of the '<'
-  int depth = 0;                              ///< nesting depth of the element (robot: 0)
-  bool closing = false;                       ///< </name>
+  std::string name;                          ///< element name ("joint", "origin", ...)
+  std::map<std::string, std::string> attrs;  ///< attributes as written
+  int line = 0;                              ///< 1-based line of the '<'
+  int depth = 0;                             ///< nesting depth of the element (robot: 0)
+  bool closing = false;                      ///< </name>
 };
 
 /// The opening (and self-closing) tags of `text` with their depths; false with *what on
@@ -33,7 +33,10 @@ bool read_tags(const std::string& text, std::vector<Tag>* tags, std::string* wha
   int depth = 0;
   std::vector<std::pair<std::string, int>> open_tags;  // name and line of each open element
   std::size_t at = 0;
-  auto count_lines = [&](std::size_t from, std::size_t to) { line += static_cast<int>(std::count(text.begin() + static_cast<std::ptrdiff_t>(from), text.begin() + static_cast<std::ptrdiff_t>(to), '\n')); };
+  auto count_lines = [&](std::size_t from, std::size_t to) {
+    line += static_cast<int>(std::count(text.begin() + static_cast<std::ptrdiff_t>(from),
+                                        text.begin() + static_cast<std::ptrdiff_t>(to), '\n'));
+  };
   while (true) {
     const std::size_t open = text.find('<', at);
     if (open == std::string::npos) break;
@@ -42,7 +45,8 @@ bool read_tags(const std::string& text, std::vector<Tag>* tags, std::string* wha
     if (text.compare(open, 4, "<!--") == 0 || text.compare(open, 2, "<?") == 0 || text.compare(open, 2, "<!") == 0) {
       const char* end_mark = text.compare(open, 4, "<!--") == 0 ? "-->" : ">";
       const std::size_t end = text.find(end_mark, open);
-      if (end == std::string::npos) return *what = std::to_string(tag_line) + ": unterminated comment or declaration", false;
+      if (end == std::string::npos)
+        return *what = std::to_string(tag_line) + ": unterminated comment or declaration", false;
       count_lines(open, end);
       at = end + std::string(end_mark).size();
       continue;
@@ -77,7 +81,8 @@ bool read_tags(const std::string& text, std::vector<Tag>* tags, std::string* wha
       std::string key;
       while (i < body.size() && body[i] != '=' && !std::isspace(static_cast<unsigned char>(body[i]))) key += body[i++];
       while (i < body.size() && std::isspace(static_cast<unsigned char>(body[i]))) ++i;
-      if (i >= body.size() || body[i] != '=') return *what = std::to_string(tag_line) + ": attribute '" + key + "' without a value", false;
+      if (i >= body.size() || body[i] != '=')
+        return *what = std::to_string(tag_line) + ": attribute '" + key + "' without a value", false;
       ++i;
       while (i < body.size() && std::isspace(static_cast<unsigned char>(body[i]))) ++i;
       if (i >= body.size() || (body[i] != '"' && body[i] != '\'')) {
@@ -91,8 +96,9 @@ bool read_tags(const std::string& text, std::vector<Tag>* tags, std::string* wha
     if (tag.closing) {
       if (open_tags.empty() || open_tags.back().first != tag.name) {
         return *what = std::to_string(tag_line) + ": </" + tag.name + "> closes " +
-                       (open_tags.empty() ? std::string("nothing")
-                                          : "<" + open_tags.back().first + "> of line " + std::to_string(open_tags.back().second)),
+                       (open_tags.empty()
+                            ? std::string("nothing")
+                            : "<" + open_tags.back().first + "> of line " + std::to_string(open_tags.back().second)),
                false;
       }
       open_tags.pop_back();
@@ -107,7 +113,8 @@ bool read_tags(const std::string& text, std::vector<Tag>* tags, std::string* wha
     }
   }
   if (!open_tags.empty()) {
-    return *what = std::to_string(open_tags.back().second) + ": <" + open_tags.back().first + "> is never closed", false;
+    return *what = std::to_string(open_tags.back().second) + ": <" + open_tags.back().first + "> is never closed",
+           false;
   }
   return true;
 }
@@ -131,7 +138,8 @@ bool read_triple(const Tag& tag, const char* key, const Vec3& fallback, Vec3* va
   }
   if (fields.size() != 3 || !parse_double(fields[0], &(*value)(0)) || !parse_double(fields[1], &(*value)(1)) ||
       !parse_double(fields[2], &(*value)(2)) || !std::isfinite(value->sum())) {
-    *what = std::to_string(tag.line) + ": <" + tag.name + " " + key + "> must be three numbers, not '" + found->second + "'";
+    *what = std::to_string(tag.line) + ": <" + tag.name + " " + key + "> must be three numbers, not '" + found->second +
+            "'";
     return false;
   }
   return true;
@@ -142,17 +150,17 @@ bool read_triple(const Tag& tag, const char* key, const Vec3& fallback, Vec3* va
 struct UrdfJoint {
   std::string name, type, parent, child;
   int line = 0;
-  RigidTransform origin;          ///< parent link -> joint frame
-  Vec3 axis = Vec3::UnitX();      ///< in the joint frame (URDF's default is x)
-  bool has_limit = false;         ///< <limit lower upper> given
+  RigidTransform origin;      ///< parent link -> joint frame
+  Vec3 axis = Vec3::UnitX();  ///< in the joint frame (URDF's default is x)
+  bool has_limit = false;     ///< <limit lower upper> given
   double lower_rad = 0.0, upper_rad = 0.0;
   bool movable() const { return type == "revolute" || type == "continuous"; }
 };
 
 struct UrdfTree {
   std::string robot_name;
-  std::vector<UrdfJoint> joints;              ///< in file order
-  std::vector<std::string> links;             ///< in file order
+  std::vector<UrdfJoint> joints;                    ///< in file order
+  std::vector<std::string> links;                   ///< in file order
   std::map<std::string, std::size_t> parent_joint;  ///< child link -> index in joints
 };
 
@@ -190,10 +198,12 @@ bool read_tree(const std::vector<Tag>& tags, UrdfTree* tree, std::string* what) 
         }
         joint.origin = urdf_transform(origin);
       }
-      if (child.name == "limit" && joint.type == "revolute" && child.attrs.count("lower") && child.attrs.count("upper")) {
+      if (child.name == "limit" && joint.type == "revolute" && child.attrs.count("lower") &&
+          child.attrs.count("upper")) {
         if (!parse_double(child.attrs.at("lower"), &joint.lower_rad) ||
             !parse_double(child.attrs.at("upper"), &joint.upper_rad) || !(joint.lower_rad < joint.upper_rad) ||
-            !(std::fabs(joint.lower_rad) <= kMaxJointLimit_rad) || !(std::fabs(joint.upper_rad) <= kMaxJointLimit_rad)) {
+            !(std::fabs(joint.lower_rad) <= kMaxJointLimit_rad) ||
+            !(std::fabs(joint.upper_rad) <= kMaxJointLimit_rad)) {
           return *what = std::to_string(child.line) + ": joint '" + joint.name +
                          "' <limit>: lower below upper, both numbers within two turns (4 pi rad)",
                  false;
@@ -304,8 +314,9 @@ DhJoint dh_row(const Frame& previous, const Vec3& next_point, const Vec3& next_a
 bool base_frame(const Vec3& point, const Vec3& axis, ModifiedDhBase* base, Frame* frame0, std::string* what) {
   constexpr double kTolerance = 1e-12;
   if (std::fabs(axis.x()) > kTolerance) {
-    *what = "joint 1's axis is not perpendicular to the root link's x axis: a DH model has no general base "
-            "transform (the tracker frame fit absorbs it; give the root a frame whose z or y-z plane holds joint 1)";
+    *what =
+        "joint 1's axis is not perpendicular to the root link's x axis: a DH model has no general base "
+        "transform (the tracker frame fit absorbs it; give the root a frame whose z or y-z plane holds joint 1)";
     return false;
   }
   const double along = std::fabs(axis.z()) >= std::fabs(axis.y()) ? -point.z() / axis.z() : -point.y() / axis.y();
@@ -370,7 +381,8 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
   for (const UrdfJoint& joint : tree.joints)
     if (joint.movable()) movable.push_back(&joint);
   if (movable.size() != static_cast<std::size_t>(kJointCount)) {
-    return refuse(" " + std::to_string(movable.size()) + " movable joints: hivecal models arms of exactly 6 revolute joints");
+    return refuse(" " + std::to_string(movable.size()) +
+                  " movable joints: hivecal models arms of exactly 6 revolute joints");
   }
   std::vector<const UrdfJoint*> chain;
   for (const UrdfJoint* joint : path_to(tree, movable.back()->child))
@@ -387,7 +399,8 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
   ModifiedDhBase base;
   Frame frame;
   const RigidTransform joint1 = pose_at_zero(tree, chain[0]->parent).then_after(chain[0]->origin);
-  if (!base_frame(joint1.translation_m, joint1.rotation * chain[0]->axis, &base, &frame, &what)) return refuse(" " + what);
+  if (!base_frame(joint1.translation_m, joint1.rotation * chain[0]->axis, &base, &frame, &what))
+    return refuse(" " + what);
   RobotModel model;
   for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
     const RigidTransform next = pose_at_zero(tree, chain[i + 1]->parent).then_after(chain[i + 1]->origin);
@@ -396,7 +409,8 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
     frame = following;
   }
   // Frame 6 (the flange): at the 'flange' link when there is one, else the last joint's child.
-  const std::string flange = contains(leaves, "flange") || tree.parent_joint.count("flange") ? "flange" : chain.back()->child;
+  const std::string flange =
+      contains(leaves, "flange") || tree.parent_joint.count("flange") ? "flange" : chain.back()->child;
   const RigidTransform flange_pose = pose_at_zero(tree, flange);
   Frame frame6;
   frame6.z = frame.z;

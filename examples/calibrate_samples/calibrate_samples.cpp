@@ -68,8 +68,8 @@ int main() {
   const ErrorStats before = position_error_stats(start, start_base, dataset.test());
   const ErrorStats after = position_error_stats(result.model, result.base_to_tracker, dataset.test());
   std::printf("%zu train / %zu test samples, %d LM iterations (%s), %d of %d parameters estimated\n",
-              dataset.train().size(), dataset.test().size(), result.iterations,
-              lm_termination_name(result.termination), result.identifiability.kept_count(), kFullParamCount);
+              dataset.train().size(), dataset.test().size(), result.iterations, lm_termination_name(result.termination),
+              result.identifiability.kept_count(), kFullParamCount);
   std::printf("test MAE: nominal %.1f um -> calibrated %.1f um\n", before.mae(ErrorAxis::norm_3d) * 1e6,
               after.mae(ErrorAxis::norm_3d) * 1e6);
   // The calibration must at least halve the error on samples it never saw.

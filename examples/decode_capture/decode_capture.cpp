@@ -23,8 +23,7 @@ class Summary final : public FrameHandler {
   void print() const {
     print_span("joint states", robot_);
     print_span("tracker points", tracker_);
-    std::printf("tracker points without a valid measurement: %llu\n",
-                static_cast<unsigned long long>(invalid_points_));
+    std::printf("tracker points without a valid measurement: %llu\n", static_cast<unsigned long long>(invalid_points_));
   }
 
  private:
@@ -94,7 +93,8 @@ int main(int argc, char** argv) {
   summary.print();
   const DecoderStats& stats = decoder.stats();
   std::printf("frames: %llu ok, %llu rejected (%llu CRC failures), %llu packets lost in sequence gaps\n",
-              static_cast<unsigned long long>(stats.frames_ok), static_cast<unsigned long long>(stats.frames_rejected()),
+              static_cast<unsigned long long>(stats.frames_ok),
+              static_cast<unsigned long long>(stats.frames_rejected()),
               static_cast<unsigned long long>(stats.crc_failures), static_cast<unsigned long long>(stats.packets_lost));
   return stats.frames_ok > 0 ? 0 : 1;
 }

@@ -10,8 +10,12 @@
 #include "hivecal/hivecal.hpp"  // the whole library; single headers build faster
 
 // A firmware build links no allocator; here any C++ allocation would stop the program.
-void* operator new(std::size_t) { std::abort(); }
-void* operator new[](std::size_t) { std::abort(); }
+void* operator new(std::size_t) {
+  std::abort();
+}
+void* operator new[](std::size_t) {
+  std::abort();
+}
 void operator delete(void*) noexcept {}
 void operator delete[](void*) noexcept {}
 void operator delete(void*, std::size_t) noexcept {}
@@ -24,10 +28,10 @@ using namespace hivecal;
 constexpr std::size_t kSampleCount = 64;
 
 // The whole memory plan: fixed at link time, reported by the linker map on a target.
-Dataset<kSampleCount> g_dataset;        ///< paired samples
-JointTrig g_joint_trig[kSampleCount];   ///< per-sample sin/cos, computed once (optional)
-LmWorkspace g_workspace;                ///< normal equations, factorisation, identifiability
-LmResult g_result;                      ///< calibrated model, sigmas, identifiability report
+Dataset<kSampleCount> g_dataset;       ///< paired samples
+JointTrig g_joint_trig[kSampleCount];  ///< per-sample sin/cos, computed once (optional)
+LmWorkspace g_workspace;               ///< normal equations, factorisation, identifiability
+LmResult g_result;                     ///< calibrated model, sigmas, identifiability report
 
 /// Tool points of `truth` at a deterministic spread of poses, seen from a tracker at the base.
 void measure(const RobotModel& truth) {
@@ -46,12 +50,12 @@ int main() {
   RobotModel nominal = nominal_model(RobotType::ur5);
   nominal.tool_m << 0.0, 0.0, 0.1;
   RobotModel truth = nominal;
-  truth.joints[1].a_m += 5e-4;   // upper arm 0.5 mm longer
-  truth.joints[2].a_m -= 3e-4;   // forearm 0.3 mm shorter
+  truth.joints[1].a_m += 5e-4;  // upper arm 0.5 mm longer
+  truth.joints[2].a_m -= 3e-4;  // forearm 0.3 mm shorter
   measure(truth);
 
-  std::printf("static memory: dataset %zu B, joint trig %zu B, workspace %zu B, result %zu B\n",
-              sizeof g_dataset, sizeof g_joint_trig, sizeof g_workspace, sizeof g_result);
+  std::printf("static memory: dataset %zu B, joint trig %zu B, workspace %zu B, result %zu B\n", sizeof g_dataset,
+              sizeof g_joint_trig, sizeof g_workspace, sizeof g_result);
 
   LmOptions options;
   options.params = LmParamSet::link_lengths;

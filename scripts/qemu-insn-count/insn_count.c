@@ -28,15 +28,15 @@ struct qemu_plugin_tb;                  /* a translation block being translated 
 /* Inline operations QEMU can insert into translated code; only the add is used. */
 enum qemu_plugin_op { QEMU_PLUGIN_INLINE_ADD_U64 = 0 };
 
-typedef void (*qemu_plugin_vcpu_tb_trans_cb_t)(qemu_plugin_id_t id, struct qemu_plugin_tb *tb);
-typedef void (*qemu_plugin_udata_cb_t)(qemu_plugin_id_t id, void *userdata);
+typedef void (*qemu_plugin_vcpu_tb_trans_cb_t)(qemu_plugin_id_t id, struct qemu_plugin_tb* tb);
+typedef void (*qemu_plugin_udata_cb_t)(qemu_plugin_id_t id, void* userdata);
 
 void qemu_plugin_register_vcpu_tb_trans_cb(qemu_plugin_id_t id, qemu_plugin_vcpu_tb_trans_cb_t cb);
-size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb *tb);
-void qemu_plugin_register_vcpu_tb_exec_inline(struct qemu_plugin_tb *tb, enum qemu_plugin_op op, void *ptr,
+size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb* tb);
+void qemu_plugin_register_vcpu_tb_exec_inline(struct qemu_plugin_tb* tb, enum qemu_plugin_op op, void* ptr,
                                               uint64_t imm);
-void qemu_plugin_register_atexit_cb(qemu_plugin_id_t id, qemu_plugin_udata_cb_t cb, void *userdata);
-void qemu_plugin_outs(const char *string);
+void qemu_plugin_register_atexit_cb(qemu_plugin_id_t id, qemu_plugin_udata_cb_t cb, void* userdata);
+void qemu_plugin_outs(const char* string);
 
 #define PLUGIN_EXPORT __attribute__((visibility("default")))
 
@@ -47,13 +47,13 @@ PLUGIN_EXPORT int qemu_plugin_version = 1;
 static uint64_t executed_insns;
 
 /* Every execution of the block adds its instruction count to the counter. */
-static void count_block(qemu_plugin_id_t id, struct qemu_plugin_tb *tb) {
+static void count_block(qemu_plugin_id_t id, struct qemu_plugin_tb* tb) {
   (void)id;
   const uint64_t insns = (uint64_t)qemu_plugin_tb_n_insns(tb);
   qemu_plugin_register_vcpu_tb_exec_inline(tb, QEMU_PLUGIN_INLINE_ADD_U64, &executed_insns, insns);
 }
 
-static void report(qemu_plugin_id_t id, void *userdata) {
+static void report(qemu_plugin_id_t id, void* userdata) {
   (void)id;
   (void)userdata;
   char text[48];
@@ -61,7 +61,7 @@ static void report(qemu_plugin_id_t id, void *userdata) {
   qemu_plugin_outs(text);
 }
 
-PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_t *info, int argc, char **argv) {
+PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_t* info, int argc, char** argv) {
   (void)info;
   (void)argv;
   if (argc != 0) {

@@ -116,7 +116,8 @@ TEST(ComplianceJson, UnusableKeysAreRefusedByName) {
       {"\"gravity_direction\": [0, 0, -1]", "\"gravity_direction\": [0, -1]", "\"gravity_direction\" must be"},
       {"\"coefficient\": ", "\"coefficient\": \"x\", \"was\": ", "\"terms\"[0].coefficient must be a number"},
       // A coefficient no joint has (1e10 rad/m) predicted nonsense with exit 0 before:
-      {"\"coefficient\": ", "\"coefficient\": 1e10, \"was\": ", "\"terms\"[0].coefficient must be a number within +/-0.01"},
+      {"\"coefficient\": ", "\"coefficient\": 1e10, \"was\": ",
+       "\"terms\"[0].coefficient must be a number within +/-0.01"},
   };
   for (const Case& c : cases) {
     std::string text = good;

@@ -51,8 +51,8 @@ const char* const kRadHeader = "q1,q2,q3,q4,q5,q6,x,y,z,rx,ry,rz\n";
 
 TEST(OrientationInput, RowBecomesThreeTargetsAtTheLever) {
   test::TempDir dir;
-  const std::string path = dir.write("s.csv", std::string(kRadHeader) + row(kQ, kPoint_m, kRotation_rad) +
-                                                  row(kQ, kPoint_m, Vec3::Zero()));
+  const std::string path =
+      dir.write("s.csv", std::string(kRadHeader) + row(kQ, kPoint_m, kRotation_rad) + row(kQ, kPoint_m, Vec3::Zero()));
   Dataset<8> samples;
   std::vector<std::size_t> lines;
   textio::OrientationRead found;
@@ -130,11 +130,19 @@ TEST(OrientationInput, BadOrientationsAreRefusedWithFileAndLine) {
   } cases[] = {
       {"q1,q2,q3,q4,q5,q6,x,y,z,rx,ry\n0,0,0,0,0,0,1,2,3,0,0\n", {}, "bad.csv:1: header has 2 of the columns rx,ry,rz"},
       {std::string(kRadHeader) + good + "0,0,0,0,0,0,1,2,3,0,abc,0\n", {}, "bad.csv:3: column 'ry': not a number"},
-      {std::string(kRadHeader) + good + "0,0,0,0,0,0,1,2,3,0,nan,0\n", {}, "bad.csv:3: NaN or Inf in the rotation vector"},
-      {std::string(kRadHeader) + "0,0,0,0,0,0,1,2,3,0,180,0\n", {}, "bad.csv:2: rotation vector rx,ry,rz = 0, 180, 0 looks like degrees: use --angle-unit deg"},
+      {std::string(kRadHeader) + good + "0,0,0,0,0,0,1,2,3,0,nan,0\n",
+       {},
+       "bad.csv:3: NaN or Inf in the rotation vector"},
+      {std::string(kRadHeader) + "0,0,0,0,0,0,1,2,3,0,180,0\n",
+       {},
+       "bad.csv:2: rotation vector rx,ry,rz = 0, 180, 0 looks like degrees: use --angle-unit deg"},
       {std::string(kRadHeader) + "0,0,0,0,0,0,1,2,3,0,180,0\n", {"", "rad"}, "turns more than once"},
-      {"q1,q2,q3,q4,q5,q6,x,y,z,rx [m],ry,rz\n" + good, {}, "bad.csv:1: column 'rx': unit '[m]' is not one of [rad], [deg]"},
-      {"q1,q2,q3,q4,q5,q6,x,y,z,target,rx,ry,rz\n0,0,0,0,0,0,1,2,3,1,0,0,0\n", {}, "bad.csv:2: a measured orientation (rx, ry, rz) and a target column together"},
+      {"q1,q2,q3,q4,q5,q6,x,y,z,rx [m],ry,rz\n" + good,
+       {},
+       "bad.csv:1: column 'rx': unit '[m]' is not one of [rad], [deg]"},
+      {"q1,q2,q3,q4,q5,q6,x,y,z,target,rx,ry,rz\n0,0,0,0,0,0,1,2,3,1,0,0,0\n",
+       {},
+       "bad.csv:2: a measured orientation (rx, ry, rz) and a target column together"},
   };
   for (const auto& c : cases) {
     Dataset<8> samples;
@@ -145,7 +153,8 @@ TEST(OrientationInput, BadOrientationsAreRefusedWithFileAndLine) {
   textio::OrientationInput bad;
   bad.angle_sigma_rad = 0.0;
   Dataset<8> samples;
-  EXPECT_FALSE(textio::read_samples_csv(dir.write("ok.csv", std::string(kRadHeader) + good), &samples, {}, nullptr, bad).ok());
+  EXPECT_FALSE(
+      textio::read_samples_csv(dir.write("ok.csv", std::string(kRadHeader) + good), &samples, {}, nullptr, bad).ok());
 }
 
 std::string names_of(ParamMask mask) {
@@ -171,8 +180,8 @@ TEST(OrientationInput, OrientationIdentifiesWhatPositionsAloneCannot) {
   for (int pose = 0; pose < 7; ++pose) {
     const JointVector q = test::random_joints(&random);
     const RigidTransform flange = fk_flange(truth, q);
-    text += row(q, base.apply(flange.apply(tool_m)),
-                rotation_vector_of(base.rotation * flange.rotation * tool_rotation));
+    text +=
+        row(q, base.apply(flange.apply(tool_m)), rotation_vector_of(base.rotation * flange.rotation * tool_rotation));
   }
   test::TempDir dir;
   const std::string path = dir.write("six_dof.csv", text);

@@ -51,7 +51,8 @@ TEST(RealExport, TheUr10TrackerExportCalibratesAsItIsAndItsBlundersHaveTwins) {
       if ((s.q_rad.head<5>() - aside.q_rad.head<5>()).norm() < 1e-3) twin = &s;
     }
     ASSERT_NE(twin, nullptr) << "line " << lines[o.index];
-    const double twin_m = (final_stage.base_to_tracker.apply(fk_sample_point(final_stage.model, *twin)) - twin->point_m).norm();
+    const double twin_m =
+        (final_stage.base_to_tracker.apply(fk_sample_point(final_stage.model, *twin)) - twin->point_m).norm();
     EXPECT_LT(twin_m, 0.5e-3) << "line " << lines[o.index];
   }
   // The held-out error of a careful rigid fit of this arm (its README: ~0.4 mm).
@@ -69,7 +70,7 @@ TEST(RealExport, TheUr10TrackerExportCalibratesAsItIsAndItsBlundersHaveTwins) {
 double tmac_orientation_test_mae_m(textio::OrientationForm form) {
   const std::string path = test::shared_data_path("ur10-tmac/measurements_joint_configurations.csv");
   textio::InputUnits units;
-  units.columns = {{"x", "measurement_x", "mm"},   {"y", "measurement_y", "mm"},   {"z", "measurement_z", "mm"},
+  units.columns = {{"x", "measurement_x", "mm"},    {"y", "measurement_y", "mm"},    {"z", "measurement_z", "mm"},
                    {"rx", "measurement_rx", "deg"}, {"ry", "measurement_ry", "deg"}, {"rz", "measurement_rz", "deg"}};
   textio::OrientationInput orientation;
   orientation.form = form;
@@ -93,8 +94,10 @@ TEST(RealExport, TheProbeOrientationReadsAsTheExportWritesIt) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur10-tmac/measurements_joint_configurations.csv");
   const double euler_m = tmac_orientation_test_mae_m(textio::OrientationForm::euler_xyz);
   const double vector_m = tmac_orientation_test_mae_m(textio::OrientationForm::rotation_vector);
-  std::printf("UR10 T-Mac with orientation: test MAE (3 points per pose) %.4f mm as X-Y-Z Euler angles, %.4f mm as a "
-              "rotation vector\n", euler_m * 1e3, vector_m * 1e3);
+  std::printf(
+      "UR10 T-Mac with orientation: test MAE (3 points per pose) %.4f mm as X-Y-Z Euler angles, %.4f mm as a "
+      "rotation vector\n",
+      euler_m * 1e3, vector_m * 1e3);
   EXPECT_LT(euler_m, 0.42e-3);
   EXPECT_GT(vector_m, 2.0 * euler_m);
 }

@@ -86,9 +86,13 @@ void record_and_stop(int signal) {
   ::unlink(capture.c_str());
 }
 
-TEST(RecordCommand, SigtermKeepsEveryByteReadAndTheCaptureDecodesUpToTheCut) { record_and_stop(SIGTERM); }
+TEST(RecordCommand, SigtermKeepsEveryByteReadAndTheCaptureDecodesUpToTheCut) {
+  record_and_stop(SIGTERM);
+}
 
-TEST(RecordCommand, SighupEndsItAsCleanlyAsSigterm) { record_and_stop(SIGHUP); }
+TEST(RecordCommand, SighupEndsItAsCleanlyAsSigterm) {
+  record_and_stop(SIGHUP);
+}
 
 }  // namespace
 }  // namespace hivecal

@@ -40,7 +40,8 @@ std::string check_well_formed(const std::string& html) {
     if (!closing) {
       open.push_back(name);
     } else {
-      if (open.empty() || open.back() != name) return "</" + name + "> closes <" + (open.empty() ? "" : open.back()) + ">";
+      if (open.empty() || open.back() != name)
+        return "</" + name + "> closes <" + (open.empty() ? "" : open.back()) + ">";
       open.pop_back();
     }
   }
@@ -67,7 +68,8 @@ report::ReportData example() {
   data.uncalibrated.test.mae_m[0] = 40e-6;
   data.calibrated.test.count = 12;
   data.calibrated.test.mae_m[0] = 30e-6;
-  data.convergence = {{"ABC", false, {1e-4, 8e-5, 7e-5, 6.01e-5}}, {"GSA", false, {1e-4, 9e-5, 6.5e-5}},
+  data.convergence = {{"ABC", false, {1e-4, 8e-5, 7e-5, 6.01e-5}},
+                      {"GSA", false, {1e-4, 9e-5, 6.5e-5}},
                       {"LM", true, {7e-5, 6e-5, 5.9e-5}}};
   // The ABC model predicts every sample 60 um off in y, the uncalibrated one 70 um off in x.
   const RobotModel model = nominal_model(RobotType::ur5);
@@ -269,7 +271,7 @@ TEST(Report, BlunderSectionSaysWhatTheSearchDid) {
   const std::string outliers = figure_svg(html, "fig-outliers");
   ASSERT_NE(outliers, "");
   EXPECT_EQ(outliers.find("set aside"), std::string::npos);
-  data.outliers.searched = false;  // --keep-outliers: no figure, a line
+  data.outliers.searched = false;                          // --keep-outliers: no figure, a line
   data.cross_validation = report::CrossValidationTable{};  // no --cv: no figure, no table
   html = report::render_html(data);
   EXPECT_NE(html.find("No blunder search ran (--keep-outliers)"), std::string::npos);
@@ -396,7 +398,6 @@ std::vector<std::string> texts_of_class(const std::string& svg, const std::strin
   return out;
 }
 
-
 TEST(Svg, SignificantDigitsOfLabels) {
   EXPECT_EQ(significant_digits("231.25"), 5);
   EXPECT_EQ(significant_digits("1250"), 3);
@@ -407,8 +408,9 @@ TEST(Svg, SignificantDigitsOfLabels) {
 }
 
 TEST(Svg, TicksAreRoundNumbersWithAtMostThreeSignificantDigits) {
-  const std::vector<std::pair<double, double>> ranges = {
-      {-10.96, 231.2}, {-9.32, 269.3}, {0.0, 1.0}, {3.1e-6, 7.7e-6}, {12345.0, 12399.0}, {-0.004, 0.0031}, {42.0, 42.0}};
+  const std::vector<std::pair<double, double>> ranges = {{-10.96, 231.2},  {-9.32, 269.3},     {0.0, 1.0},
+                                                         {3.1e-6, 7.7e-6}, {12345.0, 12399.0}, {-0.004, 0.0031},
+                                                         {42.0, 42.0}};
   for (const auto& [lo, hi] : ranges) {
     Series s{"data", {lo, hi}, {hi, lo}, false};
     const std::string svg = svg_chart(ChartSpec{"t", "x", "y"}, {s});
@@ -432,7 +434,8 @@ TEST(Svg, LegendListsOnlySeriesThatDrewSomething) {
 }
 
 TEST(Svg, HistogramAxesStartAtZero) {
-  const std::string svg = svg_histogram(ChartSpec{"t", "error [um]", "count"}, {"a", "b"}, {{1.5, 2.5, 9.0}, {3.0, 4.0}}, 10);
+  const std::string svg =
+      svg_histogram(ChartSpec{"t", "error [um]", "count"}, {"a", "b"}, {{1.5, 2.5, 9.0}, {3.0, 4.0}}, 10);
   const std::vector<std::string> ticks = texts_of_class(svg, "tick");
   ASSERT_FALSE(ticks.empty());
   EXPECT_EQ(ticks.front(), "0");

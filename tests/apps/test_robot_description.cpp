@@ -58,7 +58,8 @@ TEST(RobotDescription, ResultsRoundTripInTheirOwnConvention) {
       ASSERT_TRUE(textio::parse_calibration_json(textio::format_calibration_json(back), "r2.json", &again).ok());
       EXPECT_EQ(to_params(again.model), to_params(back.model)) << test::other_arm_name(arm);
       EXPECT_LT((again.base_to_tracker.rotation - back.base_to_tracker.rotation).cwiseAbs().maxCoeff(), 1e-15);
-      EXPECT_LT((again.base_to_tracker.translation_m - back.base_to_tracker.translation_m).cwiseAbs().maxCoeff(), 1e-15);
+      EXPECT_LT((again.base_to_tracker.translation_m - back.base_to_tracker.translation_m).cwiseAbs().maxCoeff(),
+                1e-15);
       EXPECT_LE(worst_point_difference_m(file, back), 1e-12) << test::other_arm_name(arm);
       if (convention == DhConvention::standard) {
         EXPECT_EQ(to_params(back.model), to_params(file.model));
@@ -75,12 +76,14 @@ TEST(RobotDescription, ModifiedDhResultPredictsWhatTheStandardOneDoes) {
     ModifiedDhRow rows[kJointCount];
     Vec3 tool_m;
     test::other_arm_modified(arm, ModifiedDhBase{}, rows, &tool_m);
-    std::string text = "{\"robot\": \"" + std::string(test::other_arm_name(arm)) +
-                       "\", \"convention\": \"modified-dh\", \"vendor\": {\"note\": \"extra keys are allowed\"}, \"dh\": [";
+    std::string text =
+        "{\"robot\": \"" + std::string(test::other_arm_name(arm)) +
+        "\", \"convention\": \"modified-dh\", \"vendor\": {\"note\": \"extra keys are allowed\"}, \"dh\": [";
     char buf[256];
     for (int j = 0; j < kJointCount; ++j) {
       std::snprintf(buf, sizeof buf, "%s{\"alpha\": %.17g, \"a\": %.17g, \"theta_offset\": %.17g, \"d\": %.17g}",
-                    j == 0 ? "" : ", ", rows[j].alpha_prev_rad, rows[j].a_prev_m, rows[j].theta_offset_rad, rows[j].d_m);
+                    j == 0 ? "" : ", ", rows[j].alpha_prev_rad, rows[j].a_prev_m, rows[j].theta_offset_rad,
+                    rows[j].d_m);
       text += buf;
     }
     std::snprintf(buf, sizeof buf, "], \"tool\": [%.17g, %.17g, %.17g]}", tool_m.x(), tool_m.y(), tool_m.z());
@@ -101,8 +104,10 @@ TEST(RobotDescription, ModifiedDhResultPredictsWhatTheStandardOneDoes) {
     as_standard.convention = DhConvention::standard;
     textio::CalibrationFile back_modified;
     textio::CalibrationFile back_standard;
-    ASSERT_TRUE(textio::parse_calibration_json(textio::format_calibration_json(as_modified), "m.json", &back_modified).ok());
-    ASSERT_TRUE(textio::parse_calibration_json(textio::format_calibration_json(as_standard), "s.json", &back_standard).ok());
+    ASSERT_TRUE(
+        textio::parse_calibration_json(textio::format_calibration_json(as_modified), "m.json", &back_modified).ok());
+    ASSERT_TRUE(
+        textio::parse_calibration_json(textio::format_calibration_json(as_standard), "s.json", &back_standard).ok());
     EXPECT_LE(worst_point_difference_m(back_modified, back_standard), 1e-12) << test::other_arm_name(arm);
   }
 }
@@ -110,8 +115,7 @@ TEST(RobotDescription, ModifiedDhResultPredictsWhatTheStandardOneDoes) {
 TEST(RobotDescription, RobotModelValueIsAFileOrABuiltInName) {
   const test::TempDir dir("hivecal_test");
   const std::string path = dir.write(
-      "irb120.json",
-      textio::format_calibration_json(arm_result(OtherArm::irb120, DhConvention::standard, 1)));
+      "irb120.json", textio::format_calibration_json(arm_result(OtherArm::irb120, DhConvention::standard, 1)));
   textio::RobotDescription description;
   bool from_file = false;
   ASSERT_TRUE(textio::robot_description_from_value(path, &description, &from_file).ok());
@@ -121,10 +125,12 @@ TEST(RobotDescription, RobotModelValueIsAFileOrABuiltInName) {
   EXPECT_FALSE(from_file);
   EXPECT_EQ(description.robot, "ur5e");
   EXPECT_EQ(to_params(description.model), to_params(nominal_model(RobotType::ur5e)));
-  const std::string unnamed = dir.write("lab-arm.json", "{\"dh\": " + std::string(R"([{"theta_offset": 0, "d": 0.3, "a": 0, "alpha": 0},
+  const std::string unnamed =
+      dir.write("lab-arm.json", "{\"dh\": " + std::string(R"([{"theta_offset": 0, "d": 0.3, "a": 0, "alpha": 0},
       {"theta_offset": 0, "d": 0, "a": 0.2, "alpha": 0}, {"theta_offset": 0, "d": 0, "a": 0.2, "alpha": 0},
       {"theta_offset": 0, "d": 0.1, "a": 0, "alpha": 0}, {"theta_offset": 0, "d": 0, "a": 0, "alpha": 0},
-      {"theta_offset": 0, "d": 0.05, "a": 0, "alpha": 0}])") + ", \"tool\": [0, 0, 0.1]}");
+      {"theta_offset": 0, "d": 0.05, "a": 0, "alpha": 0}])") +
+                                    ", \"tool\": [0, 0, 0.1]}");
   ASSERT_TRUE(textio::robot_description_from_value(unnamed, &description).ok());
   EXPECT_EQ(description.robot, "lab-arm");  // no "robot": named after the file
   port::Error r = textio::robot_description_from_value("ur7", &description);
@@ -164,9 +170,11 @@ TEST(RobotDescription, BadDescriptionsNameFileAndKey) {
   std::string bad = rows;
   bad.replace(bad.find("0.302"), 5, "null");
   textio::RobotDescription description;
-  const port::Error r = textio::parse_robot_description("{\"dh\": " + bad + ", \"tool\": [0, 0, 0.1]}", "arm.json", &description);
+  const port::Error r =
+      textio::parse_robot_description("{\"dh\": " + bad + ", \"tool\": [0, 0, 0.1]}", "arm.json", &description);
   EXPECT_NE(r.message.find("arm.json: \"dh\"[3].d must be a number"), std::string::npos) << r.message;
-  EXPECT_TRUE(textio::parse_robot_description("{\"dh\": " + rows + ", \"tool\": [0, 0, 0.1]}", "arm.json", &description).ok());
+  EXPECT_TRUE(
+      textio::parse_robot_description("{\"dh\": " + rows + ", \"tool\": [0, 0, 0.1]}", "arm.json", &description).ok());
   EXPECT_EQ(description.convention, DhConvention::standard);
 }
 

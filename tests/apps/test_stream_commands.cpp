@@ -57,8 +57,8 @@ TEST(StreamCommands, SimulateWritesReadableOutputsAndExtractPairsThem) {
   ASSERT_NE(truth_samples, nullptr);
   std::fclose(truth_samples);
 
-  ASSERT_EQ(run(streams::extract_main, {"--robot", dir + "/robot.cap", "--tracker", dir + "/tracker.cap", "--samples",
-                                        dir + "/samples.csv"}),
+  ASSERT_EQ(run(streams::extract_main,
+                {"--robot", dir + "/robot.cap", "--tracker", dir + "/tracker.cap", "--samples", dir + "/samples.csv"}),
             cli::kExitOk);
   static Dataset<4096> samples;
   samples.clear();
@@ -93,8 +93,8 @@ TEST(StreamCommands, SimulateTakesTheTrueGeometryFromACalibrationConf) {
     EXPECT_DOUBLE_EQ(truth.model.joints[j].theta_offset_rad, expected.joints[j].theta_offset_rad);
     EXPECT_DOUBLE_EQ(truth.model.joints[j].alpha_rad, expected.joints[j].alpha_rad);
   }
-  for (const char* name : {"robot.cap", "tracker.cap", "robot_joints.csv", "tracker.csv", "truth.json",
-                           "truth_samples.csv"})
+  for (const char* name :
+       {"robot.cap", "tracker.cap", "robot_joints.csv", "tracker.csv", "truth.json", "truth_samples.csv"})
     std::remove((dir + "/" + name).c_str());
   ::rmdir(dir.c_str());
 }

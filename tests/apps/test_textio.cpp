@@ -18,7 +18,6 @@
 namespace hivecal {
 namespace {
 
-
 TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
   const test::TempDir dir("hivecal_test");
   Random random(5);
@@ -62,9 +61,8 @@ textio::CalibrationFile example_calibration() {
 
 TEST(TextJson, CalibrationRoundTripsBitExactly) {
   const textio::CalibrationFile file = example_calibration();
-  const std::string text = textio::format_calibration_json(file, [](textio::JsonWriter& json) {
-    json.key("method").value("lm");
-  });
+  const std::string text =
+      textio::format_calibration_json(file, [](textio::JsonWriter& json) { json.key("method").value("lm"); });
   textio::CalibrationFile back;
   const port::Error r = textio::parse_calibration_json(text, "result.json", &back);
   ASSERT_TRUE(r.ok()) << r.message;

@@ -19,13 +19,12 @@
 namespace hivecal::textio {
 namespace {
 
-
 const std::string kHeader = "q1,q2,q3,q4,q5,q6\n";
 
 TEST(TextInputs, NulByteInARowNamesFileAndLine) {
   const test::TempDir dir("hivecal_textio_inputs");
-  const std::string path = dir.write("nul.csv", kHeader + "0,0,0,0,0,0\n" + std::string("0,0,0\0,0,0,0\n", 13) +
-                                                   "0,0,0,0,0,0\n");
+  const std::string path =
+      dir.write("nul.csv", kHeader + "0,0,0,0,0,0\n" + std::string("0,0,0\0,0,0,0\n", 13) + "0,0,0,0,0,0\n");
   std::vector<JointVector> poses;
   const port::Error error = read_joints_csv(path, &poses);
   EXPECT_EQ(error.fault, port::Fault::input);

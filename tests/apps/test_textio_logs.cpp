@@ -52,7 +52,6 @@ const SessionRecords& session_records() {
   return records;
 }
 
-
 void expect_same_joints(const textio::RobotLog& log, const std::vector<JointStateRecord>& expected) {
   ASSERT_TRUE(log.ok) << log.error;
   ASSERT_EQ(log.records.size(), expected.size());
@@ -180,8 +179,8 @@ TEST(TextLogs, DelimitersUnitsAndColumnOrder) {
 }
 
 TEST(TextLogs, TrackerStatusAndLostBeams) {
-  const textio::TrackerLog log = textio::parse_tracker_log(
-      "t,x,y,z,status\n1,1,2,3,0\n2,nan,nan,nan,1\n3,1,2,3,2\n", "s.csv");
+  const textio::TrackerLog log =
+      textio::parse_tracker_log("t,x,y,z,status\n1,1,2,3,0\n2,nan,nan,nan,1\n3,1,2,3,2\n", "s.csv");
   ASSERT_TRUE(log.ok) << log.error;
   ASSERT_EQ(log.records.size(), 3u);
   EXPECT_EQ(log.records[1].status, 1);
@@ -193,7 +192,8 @@ TEST(TextLogs, TrackerStatusAndLostBeams) {
   ASSERT_TRUE(lost.ok) << lost.error;
   EXPECT_EQ(lost.records[1].status, 1);
   EXPECT_EQ(lost.records[2].status, 1);  // empty coordinates: lost beam
-  const textio::TrackerLog repeated = textio::parse_tracker_log("t,x,y,z\n1,1,2,3\n1.0000001,1,2,3\n2,1,2,3\n", "r.csv");
+  const textio::TrackerLog repeated =
+      textio::parse_tracker_log("t,x,y,z\n1,1,2,3\n1.0000001,1,2,3\n2,1,2,3\n", "r.csv");
   ASSERT_TRUE(repeated.ok) << repeated.error;
   EXPECT_EQ(repeated.records.size(), 2u);
   EXPECT_EQ(repeated.counters.repeated_time, 1u);
@@ -221,8 +221,10 @@ TEST(TextLogs, EveryRefusalIsNamed) {
       {q + "2,0,0,0,0,0,0\n1,0,0,0,0,0,0\n", true, "f.csv:3: timestamp 1 s does not increase (previous 2 s)"},
       {q + "-1,0,0,0,0,0,0\n", true, "f.csv:2: timestamp -1 s outside 0 .. 1.8e13 s"},
       {"Time [ms];X [mm];Y [mm];Z [mm]\n1500;1.000,5;2;3\n", false, "f.csv:2: column 'x': not a number: '1.000,5'"},
-      {"t,x,y,z\n1,1,2,3\n2,1,5,2,3\n", false, "f.csv:3: 5 fields where the header has 4 (comma-separated): a comma used as decimal separator?"},
-      {std::string("t,x,y,z\n1,1,2,3\n2,1,\0,3\n", 24), false, "f.csv:3: binary byte 0x00 at byte 5 of the line: not a text log"},
+      {"t,x,y,z\n1,1,2,3\n2,1,5,2,3\n", false,
+       "f.csv:3: 5 fields where the header has 4 (comma-separated): a comma used as decimal separator?"},
+      {std::string("t,x,y,z\n1,1,2,3\n2,1,\0,3\n", 24), false,
+       "f.csv:3: binary byte 0x00 at byte 5 of the line: not a text log"},
       {"t,x,y,z\n1,1,2\x01,3\n", false, "f.csv:2: binary byte 0x01"},
       {"t,x,y,z,status\n1,nan,0,0,0\n", false, "f.csv:2: NaN or Inf in x, y or z of a valid point"},
       {"t,x,y,z,status\n1,0,0,0,1.5\n", false, "f.csv:2: status must be an integer 0..255"},
@@ -292,7 +294,8 @@ TEST(TextLogs, DetectionByContent) {
   EXPECT_EQ(textio::detect_stream_file(dir.write("e.bin", "")), StreamFileKind::capture);
   EXPECT_EQ(textio::detect_stream_file(dir.path() + "/missing"), StreamFileKind::capture);
   EXPECT_EQ(textio::detect_stream_file(dir.path()), StreamFileKind::ros2_bag);
-  EXPECT_EQ(textio::detect_stream_file(dir.write("m.mcap", std::string("\x89MCAP0\r\n\x01\x02", 10))), StreamFileKind::mcap);
+  EXPECT_EQ(textio::detect_stream_file(dir.write("m.mcap", std::string("\x89MCAP0\r\n\x01\x02", 10))),
+            StreamFileKind::mcap);
   const textio::RobotLog mcap = textio::read_robot_log(dir.path() + "/m.mcap");
   EXPECT_NE(mcap.error.find("MCAP storage is not read (no Debian package reads it)"), std::string::npos) << mcap.error;
   // Random bytes without any 0x00 (the worst case for a capture) are never taken for text.
@@ -305,8 +308,7 @@ TEST(TextLogs, DetectionByContent) {
 }
 
 TEST(TextLogs, CdrJointStateDecodesAndRefusesJunk) {
-  const std::vector<std::uint8_t> cdr =
-      test::joint_state_cdr(1234567890123456u, {"a", "bb", "ccc"}, {1.0, 2.0, 3.0});
+  const std::vector<std::uint8_t> cdr = test::joint_state_cdr(1234567890123456u, {"a", "bb", "ccc"}, {1.0, 2.0, 3.0});
   textio::JointStateMessage message;
   std::string error;
   ASSERT_TRUE(textio::decode_joint_state_cdr(cdr.data(), cdr.size(), &message, &error)) << error;
@@ -341,14 +343,15 @@ TEST(TextLogs, Ros2BagGivesTheSameRecords) {
     sqlite3_close(db);
   };
   exec("INSERT INTO messages(topic_id, timestamp, data) VALUES(2, 99999999999999, x'00010000ffff');");
-  EXPECT_NE(textio::read_robot_log(dir.path()).error.find(
-                "bag_0.db3: /joint_states message " + std::to_string(joints.size() + 1) +
-                ": not a CDR sensor_msgs/msg/JointState (truncated or malformed)"),
+  EXPECT_NE(textio::read_robot_log(dir.path())
+                .error.find("bag_0.db3: /joint_states message " + std::to_string(joints.size() + 1) +
+                            ": not a CDR sensor_msgs/msg/JointState (truncated or malformed)"),
             std::string::npos)
       << textio::read_robot_log(dir.path()).error;
   exec("UPDATE topics SET type = 'std_msgs/msg/String' WHERE id = 2;");
-  EXPECT_NE(textio::read_robot_log(dir.path()).error.find(
-                "bag_0.db3: /joint_states is std_msgs/msg/String (cdr), expected sensor_msgs/msg/JointState (cdr)"),
+  EXPECT_NE(textio::read_robot_log(dir.path())
+                .error.find(
+                    "bag_0.db3: /joint_states is std_msgs/msg/String (cdr), expected sensor_msgs/msg/JointState (cdr)"),
             std::string::npos);
   exec("DELETE FROM topics WHERE id = 2;");
   EXPECT_NE(textio::read_robot_log(dir.path()).error.find("bag_0.db3: no /joint_states topic (topics: /tf)"),

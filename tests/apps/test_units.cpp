@@ -87,7 +87,8 @@ TEST(Units, SamplesInMillimetresAndDegreesReadAsSi) {
   ASSERT_TRUE(read_samples(headed, kMmDeg, &read).ok());
   expect_session(read, "header units and the same options");
   // Units in parentheses and the degree sign, as pendants write them.
-  const std::string pendant = "q1 (\xC2\xB0),q2 (\xC2\xB0),q3 (\xC2\xB0),q4 [\xC2\xB0],q5 (deg),q6 (DEG),x (mm),y (mm),z (mm)";
+  const std::string pendant =
+      "q1 (\xC2\xB0),q2 (\xC2\xB0),q3 (\xC2\xB0),q4 [\xC2\xB0],q5 (deg),q6 (DEG),x (mm),y (mm),z (mm)";
   ASSERT_TRUE(read_samples(dir.write("pendant.csv", samples_text(pendant, 1.0 / kDegPerRad, 1e-3)), {}, &read).ok());
   expect_session(read, "pendant-style header units");
   // One option alone.
@@ -107,7 +108,8 @@ TEST(Units, HeaderUnitAndADisagreeingOptionAreAnError) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.fault, port::Fault::input);
   EXPECT_NE(r.message.find("h.csv:1: column 'x' is in [mm] by its header, but --length-unit m was given"),
-            std::string::npos) << r.message;
+            std::string::npos)
+      << r.message;
   const std::string deg_header = "q1 [deg],q2,q3,q4,q5,q6,x,y,z";
   r = read_samples(dir.write("d.csv", samples_text(deg_header, 1.0, 1.0)), {"", "rad"}, &read);
   EXPECT_NE(r.message.find("column 'q1' is in [deg] by its header, but --angle-unit rad was given"), std::string::npos)
@@ -195,7 +197,8 @@ TEST(Units, RobotLogsInDegrees) {
   expect_joints(textio::parse_robot_log(rostopic, "js.csv", deg), "rostopic deg");
   const textio::RobotLog rostopic_hint = textio::parse_robot_log(rostopic, "js.csv");
   EXPECT_NE(rostopic_hint.error.find("(column 'field.position"), std::string::npos) << rostopic_hint.error;
-  EXPECT_NE(rostopic_hint.error.find("looks like degrees: use --angle-unit deg"), std::string::npos) << rostopic_hint.error;
+  EXPECT_NE(rostopic_hint.error.find("looks like degrees: use --angle-unit deg"), std::string::npos)
+      << rostopic_hint.error;
   // The header's unit and the option's agree: fine; disagree: an error.
   const std::string headed = "t;q1 [deg];q2 [deg];q3 [deg];q4 [deg];q5 [deg];q6 [deg]";
   expect_joints(textio::parse_robot_log(robot_log(headed, ';', kDegPerRad), "h.csv", deg), "header deg + option deg");
@@ -204,7 +207,8 @@ TEST(Units, RobotLogsInDegrees) {
   const textio::RobotLog conflict = textio::parse_robot_log(robot_log(headed, ';', kDegPerRad), "h.csv", rad);
   EXPECT_FALSE(conflict.ok);
   EXPECT_NE(conflict.error.find("h.csv:1: column 'q1' is in [deg] by its header, but --angle-unit rad was given"),
-            std::string::npos) << conflict.error;
+            std::string::npos)
+      << conflict.error;
   // Degrees read as rad: refused with the hint, naming the column of an RTDE log.
   const textio::RobotLog hint = textio::parse_robot_log(robot_log(rtde_header, ' ', kDegPerRad), "rtde.csv");
   EXPECT_FALSE(hint.ok);
@@ -216,14 +220,15 @@ TEST(Units, RobotLogsInDegrees) {
 TEST(Units, JointOfMoreThanOneTurnInDegreesIsNotAJoint) {
   textio::RobotLogOptions deg;
   deg.units.angle = "deg";
-  const textio::RobotLog log = textio::parse_robot_log("t,q1,q2,q3,q4,q5,q6\n1,0,0,0,0,0,0\n2,0,0,400.5,0,0,0\n", "x.csv", deg);
+  const textio::RobotLog log =
+      textio::parse_robot_log("t,q1,q2,q3,q4,q5,q6\n1,0,0,0,0,0,0\n2,0,0,400.5,0,0,0\n", "x.csv", deg);
   EXPECT_FALSE(log.ok);
   EXPECT_NE(log.error.find("x.csv:3: joint q3 = 400.5 is more than one turn"), std::string::npos) << log.error;
   // Exactly one turn either way is a joint position (UR joints span +-2 pi).
   const textio::RobotLog edge = textio::parse_robot_log("t,q1,q2,q3,q4,q5,q6\n1,360,-360,0,0,0,0\n", "e.csv", deg);
   EXPECT_TRUE(edge.ok) << edge.error;
-  const textio::RobotLog in_rad =
-      textio::parse_robot_log("t,q1,q2,q3,q4,q5,q6\n1,6.283185307179586,-6.283185307179586,0,0,0,0\n2,0,0,95.2,0,0,0\n", "r.csv");
+  const textio::RobotLog in_rad = textio::parse_robot_log(
+      "t,q1,q2,q3,q4,q5,q6\n1,6.283185307179586,-6.283185307179586,0,0,0,0\n2,0,0,95.2,0,0,0\n", "r.csv");
   EXPECT_FALSE(in_rad.ok);
   EXPECT_NE(in_rad.error.find("r.csv:3: joint q3 = 95.2 looks like degrees: use --angle-unit deg"), std::string::npos)
       << in_rad.error;
@@ -245,7 +250,8 @@ void expect_points(const textio::TrackerLog& log, const char* what) {
   ASSERT_TRUE(log.ok) << what << ": " << log.error;
   ASSERT_EQ(log.records.size(), session().size()) << what;
   for (std::size_t i = 0; i < log.records.size(); ++i) {
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(log.records[i].point_m[k], session().samples()[i].point_m(k), kSame) << what;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(log.records[i].point_m[k], session().samples()[i].point_m(k), kSame) << what;
   }
 }
 
@@ -255,19 +261,22 @@ TEST(Units, TrackerLogsInMillimetres) {
   expect_points(textio::parse_tracker_log(tracker_log("Time;X;Y;Z", ';', 1e3), "e.csv", {"mm", ""}), "export mm");
   expect_points(textio::parse_tracker_log(tracker_log("Time;X [mm];Y [mm];Z [mm]", ';', 1e3), "e.csv", {"mm", ""}),
                 "export [mm] + option mm");
-  expect_points(textio::parse_tracker_log(tracker_log("Time (s);X (mm);Y (mm);Z (mm)", ';', 1e3), "p.csv"), "export (mm)");
+  expect_points(textio::parse_tracker_log(tracker_log("Time (s);X (mm);Y (mm);Z (mm)", ';', 1e3), "p.csv"),
+                "export (mm)");
   const textio::TrackerLog conflict =
       textio::parse_tracker_log(tracker_log("Time;X [mm];Y [mm];Z [mm]", ';', 1e3), "e.csv", {"m", ""});
   EXPECT_FALSE(conflict.ok);
   EXPECT_NE(conflict.error.find("e.csv:1: column 'x' is in [mm] by its header, but --length-unit m was given"),
-            std::string::npos) << conflict.error;
+            std::string::npos)
+      << conflict.error;
   // Millimetres read as metres: the hint.
   const textio::TrackerLog hint = textio::parse_tracker_log(tracker_log("t,x,y,z", ',', 1e3), "mm.csv");
   EXPECT_FALSE(hint.ok);
   EXPECT_NE(hint.error.find("mm.csv:2: point x,y,z = "), std::string::npos) << hint.error;
   EXPECT_NE(hint.error.find("looks like millimetres: use --length-unit mm"), std::string::npos) << hint.error;
   // A point over 100 m in a declared unit is no measurement; a lost beam's NaN is still fine.
-  const textio::TrackerLog far = textio::parse_tracker_log("t,x [mm],y [mm],z [mm]\n1,1,2,3\n2,150000,0,0\n", "far.csv");
+  const textio::TrackerLog far =
+      textio::parse_tracker_log("t,x [mm],y [mm],z [mm]\n1,1,2,3\n2,150000,0,0\n", "far.csv");
   EXPECT_FALSE(far.ok);
   EXPECT_NE(far.error.find("far.csv:3: point x,y,z = 150000, 0, 0 is 150 m from the origin"), std::string::npos)
       << far.error;
@@ -283,7 +292,8 @@ TEST(Units, SamplePointsInMillimetresGetTheHint) {
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.message.find("mm.csv:2: point x,y,z = "), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("looks like millimetres: use --length-unit mm"), std::string::npos) << r.message;
-  const port::Error deg = read_samples(dir.write("deg.csv", samples_text(kPlainHeader, 1.0 / kDegPerRad, 1.0)), {}, &read);
+  const port::Error deg =
+      read_samples(dir.write("deg.csv", samples_text(kPlainHeader, 1.0 / kDegPerRad, 1.0)), {}, &read);
   ASSERT_FALSE(deg.ok());
   EXPECT_NE(deg.message.find("looks like degrees: use --angle-unit deg"), std::string::npos) << deg.message;
 }
@@ -346,10 +356,10 @@ CalibrationResult fitted(const RobotModel& before, const RobotModel& after, doub
 TEST(FitWarnings, ParametersBeyondTheBoundsAndAWorseTestErrorAreNamed) {
   const RobotModel before = nominal_model(RobotType::ur5);
   RobotModel after = before;
-  after.joints[2].a_m += 0.005;              // within 20 mm
+  after.joints[2].a_m += 0.005;                   // within 20 mm
   after.joints[1].alpha_rad += 1.0 / kDegPerRad;  // within 2 deg
   EXPECT_TRUE(cli::fit_warnings(fitted(before, after, 1e-3, 1e-4), cli::FitBounds{}).empty());
-  after.joints[2].a_m += 0.020;  // 25 mm in all
+  after.joints[2].a_m += 0.020;                   // 25 mm in all
   after.joints[1].alpha_rad += 2.0 / kDegPerRad;  // 3 deg in all
   std::vector<std::string> warnings = cli::fit_warnings(fitted(before, after, 1e-3, 1e-4), cli::FitBounds{});
   ASSERT_EQ(warnings.size(), 2u);
@@ -368,7 +378,8 @@ TEST(FitWarnings, ParametersBeyondTheBoundsAndAWorseTestErrorAreNamed) {
   warnings = cli::fit_warnings(fitted(before, before, 1e-3, 1.5e-3), cli::FitBounds{});
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("test error 1.5000 mm (MAE 3D) is worse than the uncalibrated baseline's 1.0000 mm"),
-            std::string::npos) << warnings[0];
+            std::string::npos)
+      << warnings[0];
   // Without test samples (--split 1) there is nothing to compare.
   CalibrationResult no_test = fitted(before, before, 0.0, 0.0);
   no_test.baseline.test.count = 0;
@@ -402,7 +413,8 @@ TEST(FitWarnings, AMoveOfAStronglyCorrelatedParameterNamesItsPartner) {
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("theta5 moved +2.300 deg"), std::string::npos) << warnings[0];
   EXPECT_NE(warnings[0].find("strongly correlated with a5 (rho = 0.997): the data cannot separate the two"),
-            std::string::npos) << warnings[0];
+            std::string::npos)
+      << warnings[0];
   EXPECT_NE(warnings[0].find("a second reflector would separate them"), std::string::npos) << warnings[0];
   theta5.correlation = -0.93;  // below 0.95: the move is the warning's whole story
   warnings = cli::fit_warnings(fitted(before, after, 1e-3, 1e-4), cli::FitBounds{}, {a3, theta5});

@@ -239,7 +239,7 @@ const std::size_t kTwentySplits[20][18] = {
     {9, 4, 8, 16, 17, 6, 11, 5, 14, 7, 15, 1, 2, 13, 12, 10, 0, 3},
     {11, 16, 13, 3, 7, 0, 8, 15, 5, 17, 9, 12, 10, 1, 4, 14, 6, 2},
     {6, 4, 3, 7, 2, 16, 10, 9, 8, 17, 5, 15, 11, 12, 1, 0, 14, 13},
-  };
+};
 
 struct SplitFigures {
   double median_m = 0.0;  ///< median held-out MAE over the 20 splits [m]
@@ -286,8 +286,10 @@ TEST(Ur5ePendant, JointNoiseOnTheTwentySplits) {
   const double first12_m =
       predict_with_orientation({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}, {12, 13, 14, 15, 16, 17}, step_rad);
   const SplitFigures f = twenty_splits(step_rad);
-  std::printf("UR5e pendant with orientation and joint noise 0.01 deg: first 12 %.4f mm; 20 splits: median %.4f mm, "
-              "mean %.4f mm, worst %.4f mm\n", first12_m * 1e3, f.median_m * 1e3, f.mean_m * 1e3, f.worst_m * 1e3);
+  std::printf(
+      "UR5e pendant with orientation and joint noise 0.01 deg: first 12 %.4f mm; 20 splits: median %.4f mm, "
+      "mean %.4f mm, worst %.4f mm\n",
+      first12_m * 1e3, f.median_m * 1e3, f.mean_m * 1e3, f.worst_m * 1e3);
   EXPECT_LT(first12_m, 0.095e-3);
   EXPECT_LT(f.median_m, 0.095e-3);
   EXPECT_LT(f.mean_m, 0.099e-3);
@@ -336,9 +338,10 @@ TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {
       const float t = static_cast<float>(r.q_rad(j) + dh.theta_offset_rad);
       const float al = static_cast<float>(dh.alpha_rad);
       Eigen::Matrix4f a;
-      a << std::cos(t), -std::sin(t) * std::cos(al), std::sin(t) * std::sin(al), static_cast<float>(dh.a_m) * std::cos(t),
-          std::sin(t), std::cos(t) * std::cos(al), -std::cos(t) * std::sin(al), static_cast<float>(dh.a_m) * std::sin(t),
-          0.f, std::sin(al), std::cos(al), static_cast<float>(dh.d_m), 0.f, 0.f, 0.f, 1.f;
+      a << std::cos(t), -std::sin(t) * std::cos(al), std::sin(t) * std::sin(al),
+          static_cast<float>(dh.a_m) * std::cos(t), std::sin(t), std::cos(t) * std::cos(al),
+          -std::cos(t) * std::sin(al), static_cast<float>(dh.a_m) * std::sin(t), 0.f, std::sin(al), std::cos(al),
+          static_cast<float>(dh.d_m), 0.f, 0.f, 0.f, 1.f;
       pose = pose * a;
     }
     const Vec3 p = pose.block<3, 1>(0, 3).cast<double>();
@@ -349,9 +352,9 @@ TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {
 
 TEST(UrCalibrationConf, MalformedInputsAreNamed) {
   UrCalibrationDeltas d;
-  const std::string good_rows =
-      "delta_theta = [0,0,0,0,0,0]\ndelta_a = [0,0,0,0,0,0]\ndelta_d = [0,0,0,0,0,0]\n";
-  EXPECT_TRUE(textio::parse_ur_calibration_conf("[mounting]\n" + good_rows + "delta_alpha = [0,0,0,0,0,0]\n", "x", &d).ok());
+  const std::string good_rows = "delta_theta = [0,0,0,0,0,0]\ndelta_a = [0,0,0,0,0,0]\ndelta_d = [0,0,0,0,0,0]\n";
+  EXPECT_TRUE(
+      textio::parse_ur_calibration_conf("[mounting]\n" + good_rows + "delta_alpha = [0,0,0,0,0,0]\n", "x", &d).ok());
   const struct {
     std::string text;
     std::string expected;
@@ -375,8 +378,9 @@ TEST(UrCalibrationConf, MalformedInputsAreNamed) {
 
 TEST(UrCalibrationConf, AByteOrderMarkAndASectionNameInCapitalsAreRead) {
   UrCalibrationDeltas d;
-  const std::string rows = "delta_theta = [0,0,0,0,0,0]\ndelta_a = [0,0.5,0,0,0,0]\ndelta_d = [0,0,0,0,0,0]\n"
-                           "delta_alpha = [0,0,0,0,0,0]\n";
+  const std::string rows =
+      "delta_theta = [0,0,0,0,0,0]\ndelta_a = [0,0.5,0,0,0,0]\ndelta_d = [0,0,0,0,0,0]\n"
+      "delta_alpha = [0,0,0,0,0,0]\n";
   const port::Error r = textio::parse_ur_calibration_conf("\xEF\xBB\xBF[Mounting]\n" + rows, "conf", &d);
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(d.delta_a_m[1], 0.5);

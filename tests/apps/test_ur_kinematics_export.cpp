@@ -45,14 +45,15 @@ TEST(UrKinematicsExport, NominalUr5eGivesThePublishedFrames) {
   RobotModel model = nominal_model(RobotType::ur5e);
   textio::UrKinematics k;
   EXPECT_LE(worst_chain_error_m(model, &k), 1e-9);
-  EXPECT_NEAR(k.joint_frames[0].translation_m.z(), 0.1625, 1e-12);  // shoulder
-  EXPECT_NEAR(k.joint_frames[2].translation_m.x(), -0.425, 1e-12);  // forearm
+  EXPECT_NEAR(k.joint_frames[0].translation_m.z(), 0.1625, 1e-12);   // shoulder
+  EXPECT_NEAR(k.joint_frames[2].translation_m.x(), -0.425, 1e-12);   // forearm
   EXPECT_NEAR(k.joint_frames[3].translation_m.x(), -0.3922, 1e-12);  // wrist_1
   EXPECT_NEAR(k.joint_frames[3].translation_m.z(), 0.1333, 1e-12);
   EXPECT_NEAR(k.joint_frames[4].translation_m.y(), -0.0997, 1e-12);  // wrist_2
   EXPECT_NEAR(k.joint_frames[5].translation_m.y(), 0.0996, 1e-12);   // wrist_3
   const std::string yaml = textio::format_ur_kinematics_yaml(k, "calib_1");
-  EXPECT_NE(yaml.find("kinematics:\n  shoulder:\n    x: 0\n    y: 0\n    z: 0.16250000000000001\n"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("kinematics:\n  shoulder:\n    x: 0\n    y: 0\n    z: 0.16250000000000001\n"), std::string::npos)
+      << yaml;
   EXPECT_NE(yaml.find("  hash: calib_1\n"), std::string::npos);
 }
 
@@ -91,7 +92,8 @@ TEST(UrKinematicsExport, RealUr5eFactoryCalibrationLosesItsOffsets) {
   const double worst_m = worst_chain_error_m(model, &k);
   EXPECT_LE(worst_m, 1e-9);
   double largest_frame_m = 0.0;
-  for (const RigidTransform& frame : k.joint_frames) largest_frame_m = std::fmax(largest_frame_m, frame.translation_m.norm());
+  for (const RigidTransform& frame : k.joint_frames)
+    largest_frame_m = std::fmax(largest_frame_m, frame.translation_m.norm());
   EXPECT_LT(largest_frame_m, 0.5);
   std::printf("UR5e factory calibration: largest |d| %.1f m in DH, largest YAML frame %.4f m, chain error %.1e m\n",
               largest_d_m, largest_frame_m, worst_m);

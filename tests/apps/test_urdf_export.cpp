@@ -63,7 +63,8 @@ std::map<std::string, ReadJoint> read_joints(const std::string& urdf) {
       joint.origin = textio::urdf_transform(xyz_rpy);
     }
     joint.axis = Vec3::UnitX();  // URDF's default
-    if (block.find("<axis") != std::string::npos) joint.axis = triple(attribute(block.substr(block.find("<axis")), "xyz"));
+    if (block.find("<axis") != std::string::npos)
+      joint.axis = triple(attribute(block.substr(block.find("<axis")), "xyz"));
     joints[joint.child] = joint;
   }
   return joints;
@@ -130,7 +131,8 @@ TEST(UrdfExport, RpyIsRzRyRxAndSurvivesGimbalLock) {
   for (int k = 0; k < 2000; ++k) {
     Mat3 r = rotation_z(random.uniform(-kPi, kPi)) * rotation_x(random.uniform(-kPi, kPi)) *
              rotation_z(random.uniform(-kPi, kPi));
-    if (k % 4 == 0) r = rotation_z(random.uniform(-kPi, kPi)) * rotation_x(kPi / 2) * rotation_z(kPi / 2);  // pitch +-90 deg
+    if (k % 4 == 0)
+      r = rotation_z(random.uniform(-kPi, kPi)) * rotation_x(kPi / 2) * rotation_z(kPi / 2);  // pitch +-90 deg
     const RigidTransform t{r, Vec3(1.0, -2.0, 3.0)};
     const RigidTransform back = textio::urdf_transform(textio::urdf_origin(t));
     worst = std::fmax(worst, (back.rotation - r).cwiseAbs().maxCoeff());
@@ -172,9 +174,9 @@ TEST(UrdfExport, NominalAndCalibratedArmsAreTheirChains) {
 
 TEST(UrdfExport, ModifiedDhArmIsItsChain) {
   // An IRB120-like arm written in Craig's convention.
-  const ModifiedDhRow rows[kJointCount] = {{0.0, 0.0, 0.0, 0.29},          {-kPi / 2, 0.0, -kPi / 2, 0.0},
-                                           {0.0, 0.27, 0.0, 0.0},           {-kPi / 2, 0.07, 0.0, 0.302},
-                                           {kPi / 2, 0.0, 0.0, 0.0},        {-kPi / 2, 0.0, kPi, 0.072}};
+  const ModifiedDhRow rows[kJointCount] = {{0.0, 0.0, 0.0, 0.29},    {-kPi / 2, 0.0, -kPi / 2, 0.0},
+                                           {0.0, 0.27, 0.0, 0.0},    {-kPi / 2, 0.07, 0.0, 0.302},
+                                           {kPi / 2, 0.0, 0.0, 0.0}, {-kPi / 2, 0.0, kPi, 0.072}};
   textio::RobotDescription robot;
   robot.convention = DhConvention::modified;
   ASSERT_EQ(model_from_modified_dh(rows, Vec3(0.0, 0.0, 0.1), &robot.model, &robot.modified_base), Status::ok);
@@ -234,7 +236,7 @@ TEST(UrdfExport, RobotJsonReadsBackAsTheSameArm) {
 /// The arm `urdf` describes, read by hivecal; its tool points must be where the URDF (read by
 /// this file's own reader) puts the links `tools`, to 1e-9 m on random poses.
 textio::RobotDescription expect_read_exactly(const std::string& urdf, const std::vector<std::string>& tools,
-                                            const char* label) {
+                                             const char* label) {
   textio::RobotDescription robot;
   const port::Error read = textio::parse_urdf_description(urdf, "arm.urdf", &robot);
   EXPECT_TRUE(read.ok()) << label << ": " << read.message;
@@ -271,7 +273,8 @@ TEST(UrdfImport, ExportedArmsReadBackAsTheSameModel) {
     robot.target_count = 2;
     robot.model.tool_m = Vec3(0.05, 0.0, 0.2);
     robot.model.other_tools_m[0] = Vec3(-0.05, 0.03, 0.2);
-    const RigidTransform base_to_tracker{rotation_z(0.3), Vec3(2.0, 0.0, 0.5)};  // a tracker link is no joint of the arm
+    const RigidTransform base_to_tracker{rotation_z(0.3),
+                                         Vec3(2.0, 0.0, 0.5)};  // a tracker link is no joint of the arm
     expect_read_exactly(textio::format_urdf(robot, &base_to_tracker), {"tcp", "tcp_2"}, "random skew-axis arm, 2 tcps");
   }
 }
@@ -332,7 +335,8 @@ TEST(UrdfImport, WhatIsNoSixJointSerialArmIsRefusedByLine) {
       {seven, "arm.urdf: 7 movable joints: hivecal models arms of exactly 6 revolute joints"},
       {loop, "link 'link_3' already has a parent joint (a loop, or not a tree)"},
       {skew_base, "joint 1's axis is not perpendicular to the root link's x axis"},
-      {"<robot name=\"x\">\n<joint name=\"a\" type=\"fixed\">\n</robot>", "arm.urdf:3: </robot> closes <joint> of line 2"},
+      {"<robot name=\"x\">\n<joint name=\"a\" type=\"fixed\">\n</robot>",
+       "arm.urdf:3: </robot> closes <joint> of line 2"},
       {"{\"dh\": []}", ""},  // not XML: the JSON reader's business, not tried here
       {"<robot><joint name=\"j\" type=\"revolute\"><origin xyz=\"1 2\"/></joint></robot>",
        "arm.urdf:1: <origin xyz> must be three numbers, not '1 2'"},

@@ -42,9 +42,9 @@ class ComplianceCli : public ::testing::Test {
   static std::string path(const std::string& name) { return dir_->path() + "/" + name; }
   /// calibrate on the session's captures with `extra` options; the exit code.
   static int calibrate(const std::string& out, std::vector<std::string> extra) {
-    std::vector<std::string> args = {"--robot",       path("robot.cap"), "--tracker", path("tracker.cap"),
-                                     "--robot-model", "ur5e",           "--out",     out,
-                                     "--quiet"};
+    std::vector<std::string> args = {
+        "--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--robot-model", "ur5e", "--out",
+        out,       "--quiet"};
     args.insert(args.end(), extra.begin(), extra.end());
     return run(cli::calibrate_main, args);
   }
@@ -112,7 +112,8 @@ TEST_F(ComplianceCli, ResultHoldsTheCompliancePredictAppliesIt) {
     const double joint = term.find("joint")->number;
     EXPECT_TRUE(joint == 2.0 || joint == 3.0) << joint;  // a UR's shoulder and elbow
     bool was_estimated = false;
-    for (const textio::JsonValue& name : estimated->array) was_estimated = was_estimated || name.string == term.find("name")->string;
+    for (const textio::JsonValue& name : estimated->array)
+      was_estimated = was_estimated || name.string == term.find("name")->string;
     estimated_terms += was_estimated ? 1 : 0;
     const textio::JsonValue* sigma = term.find("sigma");
     EXPECT_EQ(sigma != nullptr, was_estimated) << term.find("name")->string;
@@ -182,11 +183,12 @@ TEST_F(ComplianceCli, ResultHoldsTheCompliancePredictAppliesIt) {
   ::testing::internal::CaptureStderr();
   ASSERT_EQ(run(cli::export_main, {"--calibration", out, "--out", path("compliant.urdf")}), cli::kExitOk);
   const std::string note = ::testing::internal::GetCapturedStderr();
-  EXPECT_NE(note.find("4 compliance terms (joint deflection under gravity) cannot be written in URDF"), std::string::npos)
+  EXPECT_NE(note.find("4 compliance terms (joint deflection under gravity) cannot be written in URDF"),
+            std::string::npos)
       << note;
   char costs[160];
-  std::snprintf(costs, sizeof costs, "training samples the MAE (3D) is %.2f um with the compliance and %.2f um", train_mae_m * 1e6,
-                rigid_sum_m / static_cast<double>(points.size()) * 1e6);
+  std::snprintf(costs, sizeof costs, "training samples the MAE (3D) is %.2f um with the compliance and %.2f um",
+                train_mae_m * 1e6, rigid_sum_m / static_cast<double>(points.size()) * 1e6);
   EXPECT_NE(note.find(costs), std::string::npos) << note << "\nwanted: " << costs;
 
   // The result is a start model again (--robot-model result.json), its compliance kept.
@@ -210,8 +212,8 @@ TEST_F(ComplianceCli, ValidatesCloserToTheTrueBentPointsThanTheRigidFit) {
   const cli::ReferenceCompliance bent{200e-6, 100e-6};  // simulate --compliance-urad 200,100
   double mae_m[2];
   for (int k = 0; k < 2; ++k) {
-    mae_m[k] = cli::validate_on_fresh_poses(fits[k].model, fits[k].base_to_tracker, truth.model,
-                                            truth.base_to_tracker, 1000, 7, bent)
+    mae_m[k] = cli::validate_on_fresh_poses(fits[k].model, fits[k].base_to_tracker, truth.model, truth.base_to_tracker,
+                                            1000, 7, bent)
                    .mae_m;
   }
   std::printf("validation on 1000 fresh poses vs the true bent points: rigid %.2f um, LM+compliance %.2f um (%.2f)\n",
@@ -237,9 +239,11 @@ TEST(ComplianceCliUnbent, AnArmThatDoesNotBendKeepsTheRigidFit) {
   test::TempDir dir("hivecal_compliance_unbent");
   ASSERT_FALSE(dir.path().empty());
   const std::string at = dir.path() + "/";
-  ASSERT_EQ(run(sim::simulate_main, {"--out-dir", dir.path(), "--seed", "1", "--compliance-urad", "0,0"}), cli::kExitOk);
-  const std::vector<std::string> common = {"--robot", at + "robot.cap", "--tracker", at + "tracker.cap",
-                                           "--robot-model", "ur5", "--method", "lm", "--quiet"};
+  ASSERT_EQ(run(sim::simulate_main, {"--out-dir", dir.path(), "--seed", "1", "--compliance-urad", "0,0"}),
+            cli::kExitOk);
+  const std::vector<std::string> common = {
+      "--robot", at + "robot.cap", "--tracker", at + "tracker.cap", "--robot-model",
+      "ur5",     "--method",       "lm",        "--quiet"};
   std::vector<std::string> rigid = common;
   rigid.insert(rigid.end(), {"--out", at + "rigid.json"});
   std::vector<std::string> compliant = common;
@@ -255,8 +259,8 @@ TEST(ComplianceCliUnbent, AnArmThatDoesNotBendKeepsTheRigidFit) {
   for (int t = 0; t < c.term_count; ++t) EXPECT_EQ(c.coefficient[t], 0.0) << compliance_term_name(c, t);
   double mae_m[2];
   for (int k = 0; k < 2; ++k) {
-    mae_m[k] = cli::validate_on_fresh_poses(fits[k].model, fits[k].base_to_tracker, truth.model,
-                                            truth.base_to_tracker, 1000, 7, cli::ReferenceCompliance{})
+    mae_m[k] = cli::validate_on_fresh_poses(fits[k].model, fits[k].base_to_tracker, truth.model, truth.base_to_tracker,
+                                            1000, 7, cli::ReferenceCompliance{})
                    .mae_m;
   }
   std::printf("unbent demo session, 1000 fresh poses: rigid %.2f um, --compliance %.2f um\n", mae_m[0] * 1e6,
@@ -327,8 +331,8 @@ TEST_F(ComplianceCli, BadGravityAndPayloadRefused) {
       {{"--compliance", "--method", "abc"}, "--compliance needs a method with LM"},
   };
   for (const Case& c : cases) {
-    std::vector<std::string> args = {"--samples", path("truth_samples.csv"), "--robot-model", "ur5e", "--out",
-                                     path("bad.json")};
+    std::vector<std::string> args = {"--samples", path("truth_samples.csv"), "--robot-model", "ur5e",
+                                     "--out",     path("bad.json")};
     args.insert(args.end(), c.options.begin(), c.options.end());
     std::string err;
     const int code = calibrate_stderr(args, &err);

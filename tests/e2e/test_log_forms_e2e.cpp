@@ -32,7 +32,8 @@ bool write(const std::string& path, const std::string& text) {
 textio::CalibrationFile calibrate(const std::string& dir, const std::string& name, const std::string& robot,
                                   const std::string& tracker) {
   const std::string out = dir + "/" + name + ".json";
-  EXPECT_EQ(test::run(cli::calibrate_main, {"--robot", robot, "--tracker", tracker, "--out", out, "--quiet"}), cli::kExitOk)
+  EXPECT_EQ(test::run(cli::calibrate_main, {"--robot", robot, "--tracker", tracker, "--out", out, "--quiet"}),
+            cli::kExitOk)
       << name;
   textio::CalibrationFile file;
   const port::Error read = textio::read_calibration_json(out, &file);
@@ -56,9 +57,9 @@ void expect_same(const textio::CalibrationFile& a, const textio::CalibrationFile
 TEST(LogFormsEndToEnd, EveryFormOfOneSessionCalibratesTheSame) {
   const std::string dir = test::make_temp_dir("hivecal_forms");
   ASSERT_FALSE(dir.empty());
-  ASSERT_EQ(test::run(sim::simulate_main,
-                      {"--out-dir", dir, "--waypoints", "12", "--duration-s", "150", "--seed", "5"}),
-            cli::kExitOk);
+  ASSERT_EQ(
+      test::run(sim::simulate_main, {"--out-dir", dir, "--waypoints", "12", "--duration-s", "150", "--seed", "5"}),
+      cli::kExitOk);
   const textio::RobotLog robot = textio::read_robot_log(dir + "/robot_joints.csv");
   const textio::TrackerLog tracker = textio::read_tracker_log(dir + "/tracker.csv");
   ASSERT_TRUE(robot.ok && tracker.ok) << robot.error << tracker.error;
@@ -74,7 +75,7 @@ TEST(LogFormsEndToEnd, EveryFormOfOneSessionCalibratesTheSame) {
   const textio::CalibrationFile ros = calibrate(dir, "ros", dir + "/joint_states.csv", dir + "/export.csv");
   expect_same(captures, ros, 1e-9, "rostopic + export");
   EXPECT_EQ(test::run(cli::calibrate_main, {"--robot", dir + "/tracker.cap", "--tracker", dir + "/robot.cap", "--out",
-                                       dir + "/swapped.json", "--quiet"}),
+                                            dir + "/swapped.json", "--quiet"}),
             cli::kExitBadInput);
 #if HIVECAL_HAVE_SQLITE3
   const std::string bag = dir + "/bag";

@@ -48,8 +48,8 @@ std::string write_set(const test::TempDir& dir, std::size_t poses, int repeats, 
 
 std::string calibrate(const test::TempDir& dir, const std::string& samples, bool keep_outliers = true) {
   const std::string result = dir.path() + "/result.json";
-  std::vector<std::string> args = {"--samples", samples, "--method", "lm", "--out", result, "--quiet",
-                                   "--tracker-sigma-um", "10"};
+  std::vector<std::string> args = {"--samples", samples,   "--method",           "lm", "--out",
+                                   result,      "--quiet", "--tracker-sigma-um", "10"};
   if (keep_outliers) args.push_back("--keep-outliers");
   const int code = test::run(cli::calibrate_main, args);
   EXPECT_TRUE(code == cli::kExitOk || code == cli::kExitWarnings) << code;  // warnings: the tool moves far

@@ -97,7 +97,7 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   const std::string positions = dir.path() + "/result_positions.json";
   const std::string predicted = dir.path() + "/predicted.csv";
   const std::vector<std::string> common = {"--samples", samples, "--robot-model", "ur5e", "--tool", "0,0,0",
-                                           "--split", "1", "--quiet"};
+                                           "--split",   "1",     "--quiet"};
   std::vector<std::string> args = common;
   args.insert(args.end(), {"--out", result});
   ASSERT_EQ(run(cli::calibrate_main, args), 0);
@@ -149,7 +149,8 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   ASSERT_EQ(run(cli::calibrate_main, args), 0);
   const std::string tcp_json = read_text(tcp);
   EXPECT_NE(tcp_json.find("\"known\": \"base (identity) and tool points"), std::string::npos);
-  EXPECT_NE(tcp_json.find("known (--controller-tcp): the base (identity)"), std::string::npos);  // the report's info lines
+  EXPECT_NE(tcp_json.find("known (--controller-tcp): the base (identity)"),
+            std::string::npos);  // the report's info lines
   ASSERT_EQ(run(cli::predict_main, {"--calibration", tcp, "--joints", joints, "--out", predicted}), 0);
   const double tcp_mae_m = held_out_mae_m(read_text(predicted), truth_m);
   std::printf("calibrate --controller-tcp + predict on the pendant export: held-out MAE %.4f mm\n", tcp_mae_m * 1e3);

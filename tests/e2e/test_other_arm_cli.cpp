@@ -74,8 +74,8 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
     std::printf("%s: fresh-pose MAE %.2f um\n", models[k].c_str(), mae_m * 1e6);
     EXPECT_LT(mae_m, 1e-5);
     // the result is a valid start model again
-    ASSERT_EQ(run(cli::calibrate_main,
-                  {"--robot-model", out, "--samples", csv, "--method", "lm", "--out", dir.path() + "/again.json", "--quiet"}),
+    ASSERT_EQ(run(cli::calibrate_main, {"--robot-model", out, "--samples", csv, "--method", "lm", "--out",
+                                        dir.path() + "/again.json", "--quiet"}),
               cli::kExitOk);
   }
   // The same start (modified rows convert exactly), so the same calibration: the two files
@@ -89,8 +89,9 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
   }
   // A bad description is named.
   const std::string bad = dir.write("bad.json", "{\"convention\": \"modified-dh\", \"dh\": [], \"tool\": [0, 0, 0]}");
-  EXPECT_EQ(run(cli::calibrate_main, {"--robot-model", bad, "--samples", csv, "--out", dir.path() + "/x.json", "--quiet"}),
-            cli::kExitBadInput);
+  EXPECT_EQ(
+      run(cli::calibrate_main, {"--robot-model", bad, "--samples", csv, "--out", dir.path() + "/x.json", "--quiet"}),
+      cli::kExitBadInput);
 }
 
 // predict on a modified-DH result with a base offset (alpha_0, a_0): --frame base gives the
@@ -162,8 +163,9 @@ TEST(OtherArmCli, SimulatesAndCalibratesAModifiedDhIrb120FromCaptures) {
   // Fresh poses spread wider than the session's waypoints, and the simulator's joint
   // compliance is not in the model: the generalisation error is larger than the test error.
   const double fresh_m = fresh_mae_m(result, truth.model, truth.base_to_tracker);
-  std::printf("simulated IRB120 (modified DH) from captures: test MAE %.1f um (uncalibrated %.1f um), fresh-pose MAE %.1f um\n",
-              test_mae_m * 1e6, uncalibrated_m * 1e6, fresh_m * 1e6);
+  std::printf(
+      "simulated IRB120 (modified DH) from captures: test MAE %.1f um (uncalibrated %.1f um), fresh-pose MAE %.1f um\n",
+      test_mae_m * 1e6, uncalibrated_m * 1e6, fresh_m * 1e6);
   EXPECT_LT(test_mae_m, 5e-5);
   EXPECT_LT(test_mae_m, 0.05 * uncalibrated_m);
   EXPECT_LT(fresh_m, 3e-4);

@@ -77,8 +77,8 @@ void expect_captures_near_oracle(const test::OtherSessionConfig& config, const c
   ASSERT_NE(extraction, nullptr);
   const textio::JsonValue* kept = extraction->find("kept");
   ASSERT_NE(kept, nullptr);
-  const double usable = static_cast<double>(session.oracle.size()) *
-                        (1.0 - config.beam_lost_probability - config.unstable_probability);
+  const double usable =
+      static_cast<double>(session.oracle.size()) * (1.0 - config.beam_lost_probability - config.unstable_probability);
   std::printf("%-40s kept %.0f of the %zu instants the speed rule keeps on the truth (%.0f with a usable status)\n",
               label, kept->number, session.oracle.size(), usable);
   EXPECT_GE(kept->number, 0.9 * usable) << label;

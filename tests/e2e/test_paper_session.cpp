@@ -30,7 +30,7 @@ namespace {
 
 using test::run;
 
-constexpr long kValidationPoses = 1000;       // `hivecal validate` defaults
+constexpr long kValidationPoses = 1000;  // `hivecal validate` defaults
 constexpr std::uint64_t kValidationSeed = 7;
 
 /// The default session, simulated once for the whole suite.
@@ -121,8 +121,9 @@ TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent)
     const port::Error written = textio::write_text_file(
         path("ideal_samples.csv"), textio::format_samples_csv(Span<const Sample>(ideal.data(), ideal.size())));
     ASSERT_TRUE(written.ok()) << written.message;
-    ASSERT_EQ(run(cli::calibrate_main, {"--samples", path("ideal_samples.csv"), "--out", path("ideal.json"), "--quiet"}),
-              cli::kExitOk);
+    ASSERT_EQ(
+        run(cli::calibrate_main, {"--samples", path("ideal_samples.csv"), "--out", path("ideal.json"), "--quiet"}),
+        cli::kExitOk);
     const double draw_m = validation_mae_m(path("ideal.json"));
     std::printf("ideal samples (%zu), noise draw %d: validation MAE %.2f um\n", ideal.size(), draw, draw_m * 1e6);
     ideal_m += draw_m / kDraws;

@@ -90,8 +90,9 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
     stop = 1;
   });
   port::RecordStats recorded;
-  EXPECT_TRUE(port::record_streams({&robot_port, &tracker_port}, {&robot_file, &tracker_file}, &stop,
-                                   record_options, &recorded).ok());
+  EXPECT_TRUE(
+      port::record_streams({&robot_port, &tracker_port}, {&robot_file, &tracker_file}, &stop, record_options, &recorded)
+          .ok());
   devices.join();
   watcher.join();
   ASSERT_TRUE(serve_ok) << serve_error;
@@ -131,8 +132,7 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
   ASSERT_TRUE(robot_bytes.open(robot_path, port::kMaxStreamInputBytes).ok());
   ASSERT_TRUE(tracker_bytes.open(tracker_path, port::kMaxStreamInputBytes).ok());
   streams::PassStats pass;
-  EXPECT_EQ(extract_samples_from_streams(robot_bytes, tracker_bytes, extractor.get(), &pass), Status::ok)
-      << error;
+  EXPECT_EQ(extract_samples_from_streams(robot_bytes, tracker_bytes, extractor.get(), &pass), Status::ok) << error;
   const ExtractionCounts& counts = extractor->counts();
   EXPECT_EQ(counts.pending(), 0u);
   ASSERT_GT(counts.kept, 200u);

@@ -41,12 +41,14 @@ TEST(TargetsCsv, TargetColumnIsReadAndABadOneRefusedWithItsLine) {
   }
   // Without the column every row is target 1.
   read_back.clear();
-  ASSERT_TRUE(textio::read_samples_csv(dir.write("one.csv", "q1,q2,q3,q4,q5,q6,x,y,z\n0,0,0,0,0,0,1,2,3\n"), &read_back).ok());
+  ASSERT_TRUE(
+      textio::read_samples_csv(dir.write("one.csv", "q1,q2,q3,q4,q5,q6,x,y,z\n0,0,0,0,0,0,1,2,3\n"), &read_back).ok());
   EXPECT_EQ(read_back.samples()[0].target, 0);
   for (const char* bad : {"0", "4", "1.5", "-1"}) {
     read_back.clear();
     const std::string path = dir.write("bad.csv", std::string("q1,q2,q3,q4,q5,q6,x,y,z,target\n0,0,0,0,0,0,1,2,3,1\n"
-                                                              "0,0,0,0,0,0,1,2,3,") + bad + "\n");
+                                                              "0,0,0,0,0,0,1,2,3,") +
+                                                      bad + "\n");
     const port::Error error = textio::read_samples_csv(path, &read_back);
     EXPECT_FALSE(error.ok()) << bad;
     EXPECT_NE(error.message.find("bad.csv:3:"), std::string::npos) << error.message;
@@ -58,8 +60,8 @@ TEST(TargetsCsv, TargetColumnIsReadAndABadOneRefusedWithItsLine) {
 std::vector<Vec3> predict_target(const test::TempDir& dir, const std::string& result, const std::string& joints_csv,
                                  int target) {
   const std::string out = dir.path() + "/predicted" + std::to_string(target) + ".csv";
-  EXPECT_EQ(run(cli::predict_main, {"--calibration", result, "--joints", joints_csv, "--target",
-                                    std::to_string(target), "--out", out}),
+  EXPECT_EQ(run(cli::predict_main,
+                {"--calibration", result, "--joints", joints_csv, "--target", std::to_string(target), "--out", out}),
             cli::kExitOk);
   std::string text;
   EXPECT_TRUE(port::read_whole_file(out, port::kMaxTextInputBytes, &text).ok());
@@ -87,8 +89,8 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
   test::fill_target_dataset(truth, base, 80, 3, 1e-5, &random, &samples);
   const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples()));
   const std::string result = dir.path() + "/result.json";
-  ASSERT_EQ(run(cli::calibrate_main, {"--robot-model", "ur5", "--tool", "0,0,0.17", "--samples", csv, "--method",
-                                      "lm", "--out", result, "--quiet"}),
+  ASSERT_EQ(run(cli::calibrate_main, {"--robot-model", "ur5", "--tool", "0,0,0.17", "--samples", csv, "--method", "lm",
+                                      "--out", result, "--quiet"}),
             cli::kExitOk);
   textio::CalibrationFile file;
   const port::Error parsed = textio::read_calibration_json(result, &file);
@@ -112,8 +114,8 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
   // The default abc+lm: ABC on the link lengths with every sample's own tool point (fixed
   // there, from the baseline's fit), then LM: the same accuracy.
   const std::string paper = dir.path() + "/abc_lm.json";
-  ASSERT_EQ(run(cli::calibrate_main, {"--robot-model", "ur5", "--tool", "0,0,0.17", "--samples", csv, "--out", paper,
-                                      "--quiet"}),
+  ASSERT_EQ(run(cli::calibrate_main,
+                {"--robot-model", "ur5", "--tool", "0,0,0.17", "--samples", csv, "--out", paper, "--quiet"}),
             cli::kExitOk);
   for (int target = 1; target <= 3; ++target) {
     const std::vector<Vec3> points = predict_target(dir, paper, joints_csv, target);
@@ -124,8 +126,8 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
   }
   // Target 4 is not in the result; 0 and text are no target numbers.
   for (const char* bad : {"4", "0", "two"}) {
-    EXPECT_EQ(run(cli::predict_main, {"--calibration", result, "--joints", joints_csv, "--target", bad, "--out",
-                                      dir.path() + "/x.csv"}),
+    EXPECT_EQ(run(cli::predict_main,
+                  {"--calibration", result, "--joints", joints_csv, "--target", bad, "--out", dir.path() + "/x.csv"}),
               cli::kExitUsage)
         << bad;
   }
@@ -137,9 +139,9 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
   EXPECT_NE(text.find("\"tool3_z\""), std::string::npos);  // estimated, with its sigma
   ASSERT_TRUE(textio::parse_calibration_json(text, result, &again).ok());
   EXPECT_EQ(again.model.other_tools_m[1], file.model.other_tools_m[1]);
-  const std::string mismatch = dir.write("mismatch.json", text.substr(0, text.find("\"tools\"")) +
-                                                              "\"tools\": [[9, 9, 9]]," +
-                                                              text.substr(text.find("\"base_to_tracker\"")));
+  const std::string mismatch =
+      dir.write("mismatch.json", text.substr(0, text.find("\"tools\"")) + "\"tools\": [[9, 9, 9]]," +
+                                     text.substr(text.find("\"base_to_tracker\"")));
   EXPECT_FALSE(textio::read_calibration_json(mismatch, &again).ok());
 }
 

@@ -86,11 +86,13 @@ textio::CalibrationFile result_of(const std::string& path) {
   return file;
 }
 
-void expect_same(const textio::CalibrationFile& a, const textio::CalibrationFile& b, double tolerance, const char* what) {
+void expect_same(const textio::CalibrationFile& a, const textio::CalibrationFile& b, double tolerance,
+                 const char* what) {
   const ModelParams pa = to_params(a.model);
   const ModelParams pb = to_params(b.model);
   EXPECT_LE((pa - pb).cwiseAbs().maxCoeff(), tolerance) << what;
-  EXPECT_LE((a.base_to_tracker.translation_m - b.base_to_tracker.translation_m).cwiseAbs().maxCoeff(), tolerance) << what;
+  EXPECT_LE((a.base_to_tracker.translation_m - b.base_to_tracker.translation_m).cwiseAbs().maxCoeff(), tolerance)
+      << what;
   EXPECT_NEAR(a.metrics.test.mae_m[3], b.metrics.test.mae_m[3], tolerance) << what;
   EXPECT_EQ(a.metrics.test.count, b.metrics.test.count) << what;
 }
@@ -99,8 +101,9 @@ class UnitsEndToEnd : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new std::string(test::make_temp_dir("hivecal_units"));
-    ASSERT_EQ(test::run(sim::simulate_main, {"--out-dir", *dir_, "--waypoints", "12", "--duration-s", "150", "--seed", "5"}),
-              cli::kExitOk);
+    ASSERT_EQ(
+        test::run(sim::simulate_main, {"--out-dir", *dir_, "--waypoints", "12", "--duration-s", "150", "--seed", "5"}),
+        cli::kExitOk);
     // The same session with joints in degrees and points in millimetres, no unit in the headers.
     ASSERT_TRUE(write(*dir_ + "/robot_deg.csv", scaled_csv(read_text(*dir_ + "/robot_joints.csv"), 1, 6, kDegPerRad)));
     ASSERT_TRUE(write(*dir_ + "/tracker_mm.csv", scaled_csv(read_text(*dir_ + "/tracker.csv"), 1, 3, 1e3)));
@@ -119,8 +122,9 @@ class UnitsEndToEnd : public ::testing::Test {
 std::string* UnitsEndToEnd::dir_ = nullptr;
 
 TEST_F(UnitsEndToEnd, LogsInMillimetresAndDegreesCalibrateAsSi) {
-  ASSERT_EQ(calibrate({"--robot", path("robot_joints.csv"), "--tracker", path("tracker.csv"), "--out", path("si.json")}),
-            cli::kExitOk);
+  ASSERT_EQ(
+      calibrate({"--robot", path("robot_joints.csv"), "--tracker", path("tracker.csv"), "--out", path("si.json")}),
+      cli::kExitOk);
   ASSERT_EQ(calibrate({"--robot", path("robot_deg.csv"), "--tracker", path("tracker_mm.csv"), "--length-unit", "mm",
                        "--angle-unit", "deg", "--out", path("mmdeg.json")}),
             cli::kExitOk);
@@ -128,13 +132,15 @@ TEST_F(UnitsEndToEnd, LogsInMillimetresAndDegreesCalibrateAsSi) {
   // Without the options: refused with the hint, no result.
   EXPECT_EQ(calibrate({"--robot", path("robot_deg.csv"), "--tracker", path("tracker.csv"), "--out", path("no1.json")}),
             cli::kExitBadInput);
-  EXPECT_EQ(calibrate({"--robot", path("robot_joints.csv"), "--tracker", path("tracker_mm.csv"), "--out", path("no2.json")}),
-            cli::kExitBadInput);
+  EXPECT_EQ(
+      calibrate({"--robot", path("robot_joints.csv"), "--tracker", path("tracker_mm.csv"), "--out", path("no2.json")}),
+      cli::kExitBadInput);
   struct stat info {};
   EXPECT_NE(::stat(path("no1.json").c_str(), &info), 0);
   EXPECT_NE(::stat(path("no2.json").c_str(), &info), 0);
   EXPECT_EQ(calibrate({"--samples", path("x.csv"), "--length-unit", "cm", "--out", path("no3.json")}), cli::kExitUsage);
-  EXPECT_EQ(calibrate({"--samples", path("x.csv"), "--angle-unit", "grad", "--out", path("no3.json")}), cli::kExitUsage);
+  EXPECT_EQ(calibrate({"--samples", path("x.csv"), "--angle-unit", "grad", "--out", path("no3.json")}),
+            cli::kExitUsage);
 }
 
 TEST_F(UnitsEndToEnd, SamplesInMillimetresAndDegreesCalibrateAsSiAndExtractTakesTheUnits) {
@@ -142,9 +148,9 @@ TEST_F(UnitsEndToEnd, SamplesInMillimetresAndDegreesCalibrateAsSiAndExtractTakes
   ASSERT_EQ(test::run(streams::extract_main, {"--robot", path("robot_joints.csv"), "--tracker", path("tracker.csv"),
                                               "--samples", path("samples.csv")}),
             cli::kExitOk);
-  ASSERT_EQ(test::run(streams::extract_main, {"--robot", path("robot_deg.csv"), "--tracker", path("tracker_mm.csv"),
-                                              "--angle-unit", "deg", "--length-unit", "mm", "--samples",
-                                              path("samples_from_mmdeg.csv")}),
+  ASSERT_EQ(test::run(streams::extract_main,
+                      {"--robot", path("robot_deg.csv"), "--tracker", path("tracker_mm.csv"), "--angle-unit", "deg",
+                       "--length-unit", "mm", "--samples", path("samples_from_mmdeg.csv")}),
             cli::kExitOk);
   const std::string si = read_text(path("samples.csv"));
   const std::string from_mmdeg = read_text(path("samples_from_mmdeg.csv"));
@@ -174,8 +180,8 @@ TEST_F(UnitsEndToEnd, PredictTakesJointsInDegrees) {
   for (int line = 0; line < 11; ++line) cut = robot.find('\n', cut) + 1;
   ASSERT_TRUE(write(path("poses.csv"), robot.substr(0, cut)));
   ASSERT_TRUE(write(path("poses_deg.csv"), scaled_csv(robot.substr(0, cut), 1, 6, kDegPerRad)));
-  ASSERT_EQ(test::run(cli::predict_main, {"--calibration", path("p.json"), "--joints", path("poses.csv"), "--out",
-                                          path("pred_si.csv")}),
+  ASSERT_EQ(test::run(cli::predict_main,
+                      {"--calibration", path("p.json"), "--joints", path("poses.csv"), "--out", path("pred_si.csv")}),
             cli::kExitOk);
   ASSERT_EQ(test::run(cli::predict_main, {"--calibration", path("p.json"), "--joints", path("poses_deg.csv"),
                                           "--angle-unit", "deg", "--out", path("pred_deg.csv")}),
@@ -240,7 +246,8 @@ TEST_F(UnitsEndToEnd, BagJointsAreRadians) {
   const textio::RobotLog refused = textio::read_robot_log(bag, deg);
   EXPECT_FALSE(refused.ok);
   EXPECT_NE(refused.error.find("joint positions are in rad (sensor_msgs/JointState): --angle-unit deg does not apply"),
-            std::string::npos) << refused.error;
+            std::string::npos)
+      << refused.error;
   textio::RobotLogOptions rad;
   rad.units.angle = "rad";
   EXPECT_TRUE(textio::read_robot_log(bag, rad).ok);

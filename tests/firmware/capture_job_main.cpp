@@ -194,7 +194,8 @@ void print_memory() {
   line("  calibration workspace [bytes]: ", static_cast<std::uint64_t>(sizeof(test::JobCalibrationWorkspace)));
   line("    ABC phase: Paper6Cost<512, float> + AbcSolver<150, 6> [bytes]: ",
        static_cast<std::uint64_t>(sizeof(test::JobCalibrationWorkspace::AbcPhase)));
-  line("    LM phase: LmWorkspace [bytes]: ", static_cast<std::uint64_t>(sizeof(test::JobCalibrationWorkspace::LmPhase)));
+  line("    LM phase: LmWorkspace [bytes]: ",
+       static_cast<std::uint64_t>(sizeof(test::JobCalibrationWorkspace::LmPhase)));
   line("static: report incl. CalibrationResult [bytes]: ", static_cast<std::uint64_t>(sizeof report));
   print("stack high-water: ");
   print_unsigned(board_stack_used_bytes());
@@ -214,7 +215,9 @@ int main() {
   test::CaptureJobConfig config;
   std::uint64_t golden = 0;
   if (!parse_config(words, count, &config, &golden)) {
-    print("usage: capture_job <robot.cap> <tracker.cap> golden | lm | compliance | <food sources> <cycles> [clock|extraction|abc|lm|compliance]\n");
+    print(
+        "usage: capture_job <robot.cap> <tracker.cap> golden | lm | compliance | <food sources> <cycles> "
+        "[clock|extraction|abc|lm|compliance]\n");
     return 1;
   }
   SemihostingCaptures captures(words[0], words[1]);

@@ -113,15 +113,12 @@ bool run_workload(const char* name, unsigned repeats, const Scene& scene) {
   if (all || is("sincos")) run_sincos(repeats);
   if (all || is("fk")) run_fk(scene, repeats);
   if (all || is("jacobian")) run_jacobian(scene, repeats);
-  if (all || is("cost"))
-    run_cost(scene, repeats, g_dataset.samples(), CostKind::mean_abs_3d, BaseFrame::refit);
-  if (all || is("cost_fixed"))
-    run_cost(scene, repeats, g_dataset.samples(), CostKind::sum_squares, BaseFrame::fixed);
-  if (all || is("cost_358"))
-    run_cost(scene, repeats, training_samples(), CostKind::mean_abs_3d, BaseFrame::refit);
+  if (all || is("cost")) run_cost(scene, repeats, g_dataset.samples(), CostKind::mean_abs_3d, BaseFrame::refit);
+  if (all || is("cost_fixed")) run_cost(scene, repeats, g_dataset.samples(), CostKind::sum_squares, BaseFrame::fixed);
+  if (all || is("cost_358")) run_cost(scene, repeats, training_samples(), CostKind::mean_abs_3d, BaseFrame::refit);
   if (all || is("metrics")) run_metrics(scene, repeats);
-  return all || is("fill") || is("sincos") || is("fk") || is("jacobian") || is("cost") || is("cost_fixed") || is("cost_358") ||
-         is("metrics");
+  return all || is("fill") || is("sincos") || is("fk") || is("jacobian") || is("cost") || is("cost_fixed") ||
+         is("cost_358") || is("metrics");
 }
 
 void print_unsigned(std::uint64_t value) {

@@ -51,7 +51,9 @@ Registrar::Registrar(TestCase* test) {
   g_last = test;
 }
 
-void print(const char* text) { board_write(text); }
+void print(const char* text) {
+  board_write(text);
+}
 
 void print_unsigned(std::uint64_t value) {
   char buffer[24];

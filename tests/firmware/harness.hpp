@@ -90,16 +90,16 @@ bool check_log(const test::CheckLog& log, const char* expression, const char* fi
 
 }  // namespace hivecal::fw
 
-#define FW_TEST(suite, name)                                                                   \
-  static void fw_test_##suite##_##name();                                                      \
+#define FW_TEST(suite, name)                                                                                  \
+  static void fw_test_##suite##_##name();                                                                     \
   static ::hivecal::fw::TestCase fw_case_##suite##_##name{#suite, #name, &fw_test_##suite##_##name, nullptr}; \
-  static const ::hivecal::fw::Registrar fw_registrar_##suite##_##name(&fw_case_##suite##_##name); \
+  static const ::hivecal::fw::Registrar fw_registrar_##suite##_##name(&fw_case_##suite##_##name);             \
   static void fw_test_##suite##_##name()
 
 #define FW_CHECK(condition) ::hivecal::fw::record(static_cast<bool>(condition), #condition, __FILE__, __LINE__)
-#define FW_CHECK_OP(a, b, op)                                                                  \
-  ::hivecal::fw::compare((a), (b), [](const auto& x, const auto& y) { return x op y; }, #a " " #op " " #b, \
-                         __FILE__, __LINE__)
+#define FW_CHECK_OP(a, b, op)                                                                                        \
+  ::hivecal::fw::compare((a), (b), [](const auto& x, const auto& y) { return x op y; }, #a " " #op " " #b, __FILE__, \
+                         __LINE__)
 #define FW_CHECK_EQ(a, b) FW_CHECK_OP(a, b, ==)
 #define FW_CHECK_NE(a, b) FW_CHECK_OP(a, b, !=)
 #define FW_CHECK_LT(a, b) FW_CHECK_OP(a, b, <)
@@ -110,8 +110,8 @@ bool check_log(const test::CheckLog& log, const char* expression, const char* fi
   ::hivecal::fw::check_near((a), (b), (tolerance), #a " ~ " #b " within " #tolerance, __FILE__, __LINE__)
 #define FW_CHECK_LOG(log) ::hivecal::fw::check_log((log), #log, __FILE__, __LINE__)
 /// Stops the current test when the check fails (later checks would read garbage).
-#define FW_ASSERT(condition) \
-  do {                       \
+#define FW_ASSERT(condition)          \
+  do {                                \
     if (!FW_CHECK(condition)) return; \
   } while (0)
 #define FW_ASSERT_EQ(a, b)          \

@@ -59,7 +59,7 @@ FW_TEST(Dataset, SplitIsSeededPermutationWithRequestedShare) {
   }
   std::size_t distinct = 0;
   for (bool s : seen) distinct += s ? 1u : 0u;
-  FW_CHECK(same_order);        // same seed, same order
+  FW_CHECK(same_order);         // same seed, same order
   FW_CHECK_EQ(distinct, 100u);  // a permutation: nothing lost or duplicated
   FW_CHECK(moved);
   FW_ASSERT_EQ(b.split(kDefaultTrainFraction, 6), Status::ok);
@@ -101,9 +101,9 @@ FW_TEST(Cost, TrueModelHasZeroCostAndRefitFindsTheTracker) {
   CostScene scene;
   double mae = 1.0;
   RigidTransform fitted;
-  FW_ASSERT_EQ(evaluate_cost(scene.truth, scene.dataset.samples(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted,
-                             &mae),
-               Status::ok);
+  FW_ASSERT_EQ(
+      evaluate_cost(scene.truth, scene.dataset.samples(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &mae),
+      Status::ok);
   FW_CHECK_LT(mae, 1e-12);
   FW_CHECK_LT((fitted.rotation - scene.base_to_tracker.rotation).norm(), 1e-12);
   FW_CHECK_LT((fitted.translation_m - scene.base_to_tracker.translation_m).norm(), 1e-12);
@@ -120,14 +120,12 @@ FW_TEST(Cost, NominalModelCostsWhatTheMetricsSay) {
   nominal.tool_m = scene.truth.tool_m;
   RigidTransform fitted;
   double mae = 0.0;
-  FW_ASSERT_EQ(
-      evaluate_cost(nominal, scene.dataset.samples(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &mae),
-      Status::ok);
+  FW_ASSERT_EQ(evaluate_cost(nominal, scene.dataset.samples(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &mae),
+               Status::ok);
   FW_CHECK_GT(mae, 1e-4);
   double sos = 0.0;
-  FW_ASSERT_EQ(
-      evaluate_cost(nominal, scene.dataset.samples(), CostKind::sum_squares, BaseFrame::fixed, &fitted, &sos),
-      Status::ok);
+  FW_ASSERT_EQ(evaluate_cost(nominal, scene.dataset.samples(), CostKind::sum_squares, BaseFrame::fixed, &fitted, &sos),
+               Status::ok);
   const ErrorStats stats = position_error_stats(nominal, fitted, scene.dataset.samples());
   FW_CHECK_EQ(stats.count, 200u);
   FW_CHECK_NEAR(stats.mae(ErrorAxis::norm_3d), mae, 1e-15);
@@ -156,8 +154,8 @@ FW_TEST(Cost, BadInputsGetSpecificErrors) {
   double cost = 0.0;
   FW_CHECK_EQ(evaluate_cost(scene.truth, Span<const Sample>(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &cost),
               Status::dataset_empty);
-  FW_CHECK_EQ(evaluate_cost(scene.truth, scene.dataset.samples().subspan(0, 2), CostKind::mean_abs_3d,
-                            BaseFrame::refit, &fitted, &cost),
+  FW_CHECK_EQ(evaluate_cost(scene.truth, scene.dataset.samples().subspan(0, 2), CostKind::mean_abs_3d, BaseFrame::refit,
+                            &fitted, &cost),
               Status::too_few_samples);
   ModelParams params = to_params(scene.truth);
   params(5) = std::numeric_limits<double>::infinity();

@@ -8,7 +8,9 @@
 namespace hivecal {
 namespace {
 
-FW_TEST(Kinematics, Ur5ZeroPoseIsTheDatasheetPoint) { FW_CHECK_LOG(test::ur5_zero_pose_is_the_datasheet_point()); }
+FW_TEST(Kinematics, Ur5ZeroPoseIsTheDatasheetPoint) {
+  FW_CHECK_LOG(test::ur5_zero_pose_is_the_datasheet_point());
+}
 
 FW_TEST(Kinematics, Ur5ElbowUpPoseIsTheDatasheetPoint) {
   // q2 = -pi/2 raises upper arm and forearm straight up: z = d1 + |a2| + |a3|, and the wrist
@@ -25,13 +27,21 @@ FW_TEST(Kinematics, ToolPointFastPathAgreesWithPoseChain) {
   FW_CHECK_LOG(test::tool_point_fast_path_agrees_with_pose_chain(20));
 }
 
-FW_TEST(Kinematics, JacobianMatchesCentralDifferences) { FW_CHECK_LOG(test::jacobian_matches_central_differences(10)); }
+FW_TEST(Kinematics, JacobianMatchesCentralDifferences) {
+  FW_CHECK_LOG(test::jacobian_matches_central_differences(10));
+}
 
-FW_TEST(Kinematics, ParamsRoundTrip) { FW_CHECK_LOG(test::params_round_trip()); }
+FW_TEST(Kinematics, ParamsRoundTrip) {
+  FW_CHECK_LOG(test::params_round_trip());
+}
 
-FW_TEST(Kinematics, RobotTypeNames) { FW_CHECK_LOG(test::robot_type_names()); }
+FW_TEST(Kinematics, RobotTypeNames) {
+  FW_CHECK_LOG(test::robot_type_names());
+}
 
-FW_TEST(Kinematics, UrDeltasRoundTripAndRejectNaN) { FW_CHECK_LOG(test::ur_deltas_round_trip_and_reject_nan()); }
+FW_TEST(Kinematics, UrDeltasRoundTripAndRejectNaN) {
+  FW_CHECK_LOG(test::ur_deltas_round_trip_and_reject_nan());
+}
 
 }  // namespace
 }  // namespace hivecal

@@ -82,11 +82,13 @@ FW_TEST(OwnExpLog, ReferenceValuesWithinOneUlp) {
     double x;
     std::uint64_t bits;
   };
-  constexpr Reference kExp[] = {{1.0, 0x4005bf0a8b145769ULL},  {-1.0, 0x3fd78b56362cef38ULL},
-                                {0.5, 0x3ffa61298e1e069cULL},  {10.0, 0x40d5829dcf950560ULL},
+  constexpr Reference kExp[] = {{1.0, 0x4005bf0a8b145769ULL},   {-1.0, 0x3fd78b56362cef38ULL},
+                                {0.5, 0x3ffa61298e1e069cULL},   {10.0, 0x40d5829dcf950560ULL},
                                 {-20.0, 0x3e21b48655f37267ULL}, {700.0, 0x7f0d945df4f8ec8eULL}};
-  constexpr Reference kLog[] = {{2.0, 0x3fe62e42fefa39efULL},    {0.5, 0xbfe62e42fefa39efULL},
-                                {10.0, 0x40026bb1bbb55516ULL},   {1e-300, 0xc085963447f87fb5ULL},
+  constexpr Reference kLog[] = {{2.0, 0x3fe62e42fefa39efULL},
+                                {0.5, 0xbfe62e42fefa39efULL},
+                                {10.0, 0x40026bb1bbb55516ULL},
+                                {1e-300, 0xc085963447f87fb5ULL},
                                 {123456.789, 0x40277281cad8a844ULL}};
   for (const Reference& ref : kExp) FW_CHECK_LE(ulp_distance(math::exp(ref.x), from_bits(ref.bits)), 1u);
   for (const Reference& ref : kLog) FW_CHECK_LE(ulp_distance(math::log(ref.x), from_bits(ref.bits)), 1u);
@@ -117,7 +119,9 @@ FW_TEST(OwnAtan2, ReferenceValuesWithinTwoUlp) {
   FW_CHECK_EQ(math::acos_clamped(1.5), 0.0);
 }
 
-FW_TEST(OwnRandom, StreamIsTheDocumentedOne) { FW_CHECK_LOG(test::random_stream_is_the_documented_one()); }
+FW_TEST(OwnRandom, StreamIsTheDocumentedOne) {
+  FW_CHECK_LOG(test::random_stream_is_the_documented_one());
+}
 
 FW_TEST(OwnRandom, DistributionsHaveTheirMoments) {
   Random random(7);

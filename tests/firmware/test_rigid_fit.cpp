@@ -7,9 +7,13 @@
 namespace hivecal {
 namespace {
 
-FW_TEST(RigidFit, RecoversRandomTransformsExactly) { FW_CHECK_LOG(test::rigid_fit_recovers_random_transforms(50)); }
+FW_TEST(RigidFit, RecoversRandomTransformsExactly) {
+  FW_CHECK_LOG(test::rigid_fit_recovers_random_transforms(50));
+}
 
-FW_TEST(RigidFit, NeverReturnsAReflection) { FW_CHECK_LOG(test::rigid_fit_never_returns_a_reflection()); }
+FW_TEST(RigidFit, NeverReturnsAReflection) {
+  FW_CHECK_LOG(test::rigid_fit_never_returns_a_reflection());
+}
 
 FW_TEST(RigidFit, WeightsSelectThePairsThatCount) {
   FW_CHECK_LOG(test::rigid_fit_weights_select_the_pairs_that_count());
@@ -19,7 +23,9 @@ FW_TEST(RigidFit, DegenerateInputsGetSpecificErrors) {
   FW_CHECK_LOG(test::rigid_fit_degenerate_inputs_get_specific_errors());
 }
 
-FW_TEST(RigidFit, FarFromOriginStaysAccurate) { FW_CHECK_LOG(test::rigid_fit_far_from_origin_stays_accurate()); }
+FW_TEST(RigidFit, FarFromOriginStaysAccurate) {
+  FW_CHECK_LOG(test::rigid_fit_far_from_origin_stays_accurate());
+}
 
 }  // namespace
 }  // namespace hivecal

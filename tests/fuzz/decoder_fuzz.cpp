@@ -45,10 +45,9 @@ class ReencodingHandler : public test::DigestHandler {
     require(cobs_decode(Span<const std::uint8_t>(frame, frame_bytes - 1), packet, &packet_bytes) == Status::ok);
     require(packet_bytes >= kPacketHeaderBytes + kPacketCrcBytes);
     const std::size_t covered = packet_bytes - kPacketCrcBytes;
-    const std::uint32_t sent_crc = static_cast<std::uint32_t>(packet[covered]) |
-                                   static_cast<std::uint32_t>(packet[covered + 1]) << 8 |
-                                   static_cast<std::uint32_t>(packet[covered + 2]) << 16 |
-                                   static_cast<std::uint32_t>(packet[covered + 3]) << 24;
+    const std::uint32_t sent_crc =
+        static_cast<std::uint32_t>(packet[covered]) | static_cast<std::uint32_t>(packet[covered + 1]) << 8 |
+        static_cast<std::uint32_t>(packet[covered + 2]) << 16 | static_cast<std::uint32_t>(packet[covered + 3]) << 24;
     require(crc32c(packet, covered) == sent_crc);
     require(found_in_wire(frame, frame_bytes));
   }

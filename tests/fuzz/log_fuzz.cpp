@@ -56,7 +56,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       break;
     case 1:
       check_log(textio::parse_tracker_log(text, "fuzz.csv"), [](const TrackerPointRecord& r) {
-        return !r.is_valid() || (std::isfinite(r.point_m[0]) && std::isfinite(r.point_m[1]) && std::isfinite(r.point_m[2]));
+        return !r.is_valid() ||
+               (std::isfinite(r.point_m[0]) && std::isfinite(r.point_m[1]) && std::isfinite(r.point_m[2]));
       });
       break;
     default: {

@@ -86,8 +86,8 @@ TEST(OutputFiles, AnOutputThatIsAnInputIsRefused) {
   OutputSet outputs;
   std::size_t id = 0;
   ASSERT_TRUE(outputs.add_input(samples, "--samples").ok());
-  const Error error = outputs.add_file(dir.path() + "/../" + dir.path().substr(dir.path().rfind('/') + 1) + "/samples.csv",
-                                       "--out", &id);
+  const Error error = outputs.add_file(
+      dir.path() + "/../" + dir.path().substr(dir.path().rfind('/') + 1) + "/samples.csv", "--out", &id);
   EXPECT_EQ(error.fault, Fault::usage);
   EXPECT_NE(error.message.find("same file as the input --samples"), std::string::npos) << error.message;
   const std::string link = dir.path() + "/alias.csv";  // the same file under another name

@@ -25,14 +25,16 @@ namespace {
 
 /// How the stand-in controller behaves.
 struct ControllerScript {
-  int data_packages = 500;           ///< sent after start
-  bool accept_version = true;        ///< answer V with 1
-  std::string unknown_variable;      ///< answered NOT_FOUND
-  bool close_mid_stream = false;     ///< close after the data instead of waiting for P
-  bool answer = true;                ///< false: never read or answer anything
+  int data_packages = 500;        ///< sent after start
+  bool accept_version = true;     ///< answer V with 1
+  std::string unknown_variable;   ///< answered NOT_FOUND
+  bool close_mid_stream = false;  ///< close after the data instead of waiting for P
+  bool answer = true;             ///< false: never read or answer anything
 };
 
-double value_of(int package, int k) { return k == 0 ? 1000.0 + package * 0.008 : package * 1e-3 + k * 0.1 + 1.0 / 3.0; }
+double value_of(int package, int k) {
+  return k == 0 ? 1000.0 + package * 0.008 : package * 1e-3 + k * 0.1 + 1.0 / 3.0;
+}
 
 void put_be_double(std::vector<std::uint8_t>* out, double value) {
   std::uint64_t bits = 0;
@@ -54,7 +56,8 @@ bool receive_package(int fd, char* type, std::vector<std::uint8_t>* payload) {
   const std::size_t size = (static_cast<std::size_t>(header[0]) << 8) | header[1];
   *type = static_cast<char>(header[2]);
   payload->assign(size - 3, 0);
-  return payload->empty() || ::recv(fd, payload->data(), payload->size(), MSG_WAITALL) == static_cast<ssize_t>(payload->size());
+  return payload->empty() ||
+         ::recv(fd, payload->data(), payload->size(), MSG_WAITALL) == static_cast<ssize_t>(payload->size());
 }
 
 /// A listening loopback socket and the controller thread serving one client.
@@ -151,10 +154,13 @@ TEST(RtdeClient, EveryPackageArrivesAsSent) {
   options.frequency_hz = 500.0;
   options.on_text = [&](const std::string& t) { texts.push_back(t); };
   RtdeStats stats;
-  const Error error = record_rtde("127.0.0.1", controller.port(), options, nullptr, [&](const std::string& row) {
-    rows.push_back(row);
-    return Error{};
-  }, &stats);
+  const Error error = record_rtde(
+      "127.0.0.1", controller.port(), options, nullptr,
+      [&](const std::string& row) {
+        rows.push_back(row);
+        return Error{};
+      },
+      &stats);
   ASSERT_TRUE(error.ok()) << error.message;
   EXPECT_TRUE(stats.ended_by_controller);
   EXPECT_EQ(controller.requested_frequency(), 500.0);
@@ -183,10 +189,13 @@ TEST(RtdeClient, AVariableTheControllerDoesNotKnowIsNamed) {
   StandInController controller(script);
   RtdeStats stats;
   bool wrote = false;
-  const Error error = record_rtde("127.0.0.1", controller.port(), RtdeRecordOptions(), nullptr, [&](const std::string&) {
-    wrote = true;
-    return Error{};
-  }, &stats);
+  const Error error = record_rtde(
+      "127.0.0.1", controller.port(), RtdeRecordOptions(), nullptr,
+      [&](const std::string&) {
+        wrote = true;
+        return Error{};
+      },
+      &stats);
   EXPECT_EQ(error.fault, Fault::input);
   EXPECT_NE(error.message.find("it does not know actual_TCP_pose"), std::string::npos) << error.message;
   EXPECT_FALSE(wrote) << "nothing written before the controller accepted the recipe";

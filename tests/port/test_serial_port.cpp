@@ -91,7 +91,9 @@ TEST(SerialPort, ASecondReaderOfOnePortIsRefused) {
 }
 
 std::atomic<int> g_signals{0};
-void count_signal(int) { g_signals.fetch_add(1); }
+void count_signal(int) {
+  g_signals.fetch_add(1);
+}
 
 TEST(SerialPort, SignalsNeitherLoseBytesNorShortenTimeouts) {
   struct sigaction action {};
@@ -225,8 +227,8 @@ TEST(Recorder, CopiesTwoPortsToCaptures) {
     stop = 1;
   });
   RecordStats stats;
-  EXPECT_TRUE(record_streams({&robot_port, &tracker_port}, {&robot_file, &tracker_file}, &stop, RecordOptions(),
-                             &stats).ok());
+  EXPECT_TRUE(
+      record_streams({&robot_port, &tracker_port}, {&robot_file, &tracker_file}, &stop, RecordOptions(), &stats).ok());
   devices.join();
   EXPECT_TRUE(stats.ended_by_stop_flag);
   EXPECT_EQ(stats.bytes[0], robot_bytes.size());

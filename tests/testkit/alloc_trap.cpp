@@ -24,7 +24,9 @@ void note_allocation() {
 }  // namespace
 
 namespace hivecal::test {
-std::size_t armed_allocation_count() { return g_count.load(); }
+std::size_t armed_allocation_count() {
+  return g_count.load();
+}
 void arm_allocation_trap() {
   g_count.store(0);
   g_armed.store(true);
@@ -48,7 +50,9 @@ void* __wrap_realloc(void* ptr, std::size_t size) {
   note_allocation();
   return __real_realloc(ptr, size);
 }
-void __wrap_free(void* ptr) { __real_free(ptr); }
+void __wrap_free(void* ptr) {
+  __real_free(ptr);
+}
 void* __wrap_aligned_alloc(std::size_t alignment, std::size_t size) {
   note_allocation();
   return __real_aligned_alloc(alignment, size);
@@ -69,13 +73,25 @@ void* operator new(std::size_t size) {
   if (void* p = __real_malloc(size == 0 ? 1 : size)) return p;
   throw std::bad_alloc();
 }
-void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new[](std::size_t size) {
+  return operator new(size);
+}
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
   note_allocation();
   return __real_malloc(size == 0 ? 1 : size);
 }
-void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept { return operator new(size, tag); }
-void operator delete(void* p) noexcept { __real_free(p); }
-void operator delete[](void* p) noexcept { __real_free(p); }
-void operator delete(void* p, std::size_t) noexcept { __real_free(p); }
-void operator delete[](void* p, std::size_t) noexcept { __real_free(p); }
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+  return operator new(size, tag);
+}
+void operator delete(void* p) noexcept {
+  __real_free(p);
+}
+void operator delete[](void* p) noexcept {
+  __real_free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  __real_free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  __real_free(p);
+}

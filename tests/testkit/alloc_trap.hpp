@@ -25,10 +25,10 @@ std::size_t count_allocations(F&& f) {
 }  // namespace hivecal::test
 
 /// Runs a statement under the allocation trap and fails the test if it allocated.
-#define EXPECT_NO_HEAP(statement)                                                          \
-  do {                                                                                     \
+#define EXPECT_NO_HEAP(statement)                                                               \
+  do {                                                                                          \
     const std::size_t hivecal_allocs_ = ::hivecal::test::count_allocations([&] { statement; }); \
-    EXPECT_EQ(hivecal_allocs_, 0u) << "heap allocation inside: " #statement;               \
+    EXPECT_EQ(hivecal_allocs_, 0u) << "heap allocation inside: " #statement;                    \
   } while (0)
 
 namespace hivecal::test {

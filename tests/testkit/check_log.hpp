@@ -41,7 +41,9 @@ class CheckLog {
     return check(distance <= tolerance, what, value, expected);
   }
   /// Exact equality of two numbers (bits need not match for +0/-0).
-  bool equal(double value, double expected, const char* what) { return check(value == expected, what, value, expected); }
+  bool equal(double value, double expected, const char* what) {
+    return check(value == expected, what, value, expected);
+  }
   /// The status a call returned against the one it should have.
   bool status(Status actual, Status expected, const char* what) {
     return check(actual == expected, what, static_cast<double>(actual), static_cast<double>(expected));
@@ -51,9 +53,9 @@ class CheckLog {
     return check(actual != nullptr && expected != nullptr && std::strcmp(actual, expected) == 0, what);
   }
 
-  bool ok() const { return failures_ == 0; }                 ///< no check failed
-  std::size_t checks() const { return checks_; }            ///< checks made
-  std::size_t failures() const { return failures_; }        ///< checks failed
+  bool ok() const { return failures_ == 0; }          ///< no check failed
+  std::size_t checks() const { return checks_; }      ///< checks made
+  std::size_t failures() const { return failures_; }  ///< checks failed
   /// Failures kept (the first kMaxKept).
   std::size_t kept() const { return failures_ < kMaxKept ? failures_ : kMaxKept; }
   const CheckFailure& failure(std::size_t i) const { return kept_[i]; }  ///< i < kept()

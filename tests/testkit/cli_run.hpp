@@ -18,5 +18,4 @@ int run(Main entry, std::vector<std::string> args) {
   return entry(static_cast<int>(argv.size()), argv.data());
 }
 
-
 }  // namespace hivecal::test

@@ -19,32 +19,32 @@ inline constexpr std::uint8_t kUnknownTypeMarker = 0;
 
 /// One frame put on the wire by make_stream; each takes the stream's next sequence number.
 struct SentFrame {
-  std::uint8_t type = 0;     ///< packet type byte 1..3, or kUnknownTypeMarker
-  std::size_t begin = 0;     ///< first byte in SentStream::bytes
-  std::size_t end = 0;       ///< one past its delimiter
-  std::size_t index = 0;     ///< index into the per-type record array (known types)
+  std::uint8_t type = 0;  ///< packet type byte 1..3, or kUnknownTypeMarker
+  std::size_t begin = 0;  ///< first byte in SentStream::bytes
+  std::size_t end = 0;    ///< one past its delimiter
+  std::size_t index = 0;  ///< index into the per-type record array (known types)
 };
 
 /// What make_stream produced.
 struct SentStream {
-  std::vector<std::uint8_t> bytes;                  ///< the wire
-  std::vector<JointStateRecord> joint_states;       ///< sent in this order
-  std::vector<TrackerPointRecord> tracker_points;   ///< sent in this order
-  std::vector<DeviceInfoRecord> device_infos;       ///< sent in this order
-  std::vector<SentFrame> frames;                    ///< valid and unknown-type frames, in order
-  std::uint16_t first_sequence = 0;                 ///< sequence of frames[0]; frames[k] has first_sequence + k
-  std::size_t unknown_frames = 0;                   ///< CRC-valid frames of unknown type
-  std::size_t garbage_fragments = 0;                ///< non-empty garbage pieces between 0x00s
-  std::size_t library_allocations = 0;              ///< heap allocations inside codec calls (must be 0)
+  std::vector<std::uint8_t> bytes;                 ///< the wire
+  std::vector<JointStateRecord> joint_states;      ///< sent in this order
+  std::vector<TrackerPointRecord> tracker_points;  ///< sent in this order
+  std::vector<DeviceInfoRecord> device_infos;      ///< sent in this order
+  std::vector<SentFrame> frames;                   ///< valid and unknown-type frames, in order
+  std::uint16_t first_sequence = 0;                ///< sequence of frames[0]; frames[k] has first_sequence + k
+  std::size_t unknown_frames = 0;                  ///< CRC-valid frames of unknown type
+  std::size_t garbage_fragments = 0;               ///< non-empty garbage pieces between 0x00s
+  std::size_t library_allocations = 0;             ///< heap allocations inside codec calls (must be 0)
   std::size_t valid_frames() const { return joint_states.size() + tracker_points.size() + device_infos.size(); }
 };
 
 /// Mix of the stream.
 struct StreamShape {
-  std::size_t frames = 1000;        ///< valid + unknown frames
-  double unknown_chance = 0.03;     ///< share of unknown-type frames
-  double garbage_chance = 0.05;     ///< chance of a garbage burst (ended by 0x00) after a frame
-  double idle_chance = 0.1;         ///< chance of 1..3 extra 0x00 after a frame
+  std::size_t frames = 1000;     ///< valid + unknown frames
+  double unknown_chance = 0.03;  ///< share of unknown-type frames
+  double garbage_chance = 0.05;  ///< chance of a garbage burst (ended by 0x00) after a frame
+  double idle_chance = 0.1;      ///< chance of 1..3 extra 0x00 after a frame
 };
 
 inline void append_frame(const std::uint8_t* frame, std::size_t size, std::uint8_t type, std::size_t index,
@@ -63,13 +63,15 @@ inline void append_frame(const std::uint8_t* frame, std::size_t size, std::uint8
 inline std::size_t make_unknown_frame(Random* random, std::uint16_t sequence, std::uint64_t timestamp_us,
                                       std::uint8_t* frame) {
   std::uint8_t packet[kMaxPacketBytes];
-  const std::size_t size = kPacketHeaderBytes + kPacketCrcBytes + static_cast<std::size_t>(random->below(kMaxPacketBytes - 15));
+  const std::size_t size =
+      kPacketHeaderBytes + kPacketCrcBytes + static_cast<std::size_t>(random->below(kMaxPacketBytes - 15));
   packet[0] = kProtocolVersion;
   const std::uint64_t pick = random->below(253);
   packet[1] = static_cast<std::uint8_t>(pick == 0 ? 0 : pick + 3);  // 0x00 or 0x04..0xFF
   for (std::size_t i = 0; i < 2; ++i) packet[2 + i] = static_cast<std::uint8_t>(sequence >> (8 * i));
   for (std::size_t i = 0; i < 8; ++i) packet[4 + i] = static_cast<std::uint8_t>(timestamp_us >> (8 * i));
-  for (std::size_t i = kPacketHeaderBytes; i < size - kPacketCrcBytes; ++i) packet[i] = static_cast<std::uint8_t>(random->next());
+  for (std::size_t i = kPacketHeaderBytes; i < size - kPacketCrcBytes; ++i)
+    packet[i] = static_cast<std::uint8_t>(random->next());
   const std::uint32_t crc = crc32c(packet, size - kPacketCrcBytes);
   for (std::size_t i = 0; i < kPacketCrcBytes; ++i)
     packet[size - kPacketCrcBytes + i] = static_cast<std::uint8_t>(crc >> (8 * i));
@@ -120,7 +122,8 @@ inline void make_stream(std::uint64_t seed, const StreamShape& shape, SentStream
       }
       if (status != Status::ok) out->bytes.clear();  // makes every caller's checks fail loudly
     }
-    if (random.uniform01() < shape.idle_chance) out->bytes.insert(out->bytes.end(), 1 + static_cast<std::size_t>(random.below(3)), 0);
+    if (random.uniform01() < shape.idle_chance)
+      out->bytes.insert(out->bytes.end(), 1 + static_cast<std::size_t>(random.below(3)), 0);
     if (random.uniform01() < shape.garbage_chance) {
       const std::uint64_t length = 1 + random.below(300);
       std::size_t run = 0;
@@ -140,9 +143,9 @@ inline void make_stream(std::uint64_t seed, const StreamShape& shape, SentStream
 
 /// Channel errors applied to a stream.
 struct Corrupted {
-  std::vector<std::uint8_t> bytes;   ///< what the reader receives
-  std::vector<char> frame_touched;   ///< per SentStream::frames: an error hit it or its leading delimiter
-  std::size_t errors = 0;            ///< bit flips + drops + insertions
+  std::vector<std::uint8_t> bytes;  ///< what the reader receives
+  std::vector<char> frame_touched;  ///< per SentStream::frames: an error hit it or its leading delimiter
+  std::size_t errors = 0;           ///< bit flips + drops + insertions
 };
 
 /// round(rate * size) errors at uniform positions, each a bit flip, a dropped byte or an inserted random byte.

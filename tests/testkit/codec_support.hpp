@@ -28,7 +28,9 @@ inline std::vector<std::uint8_t> from_hex(const char* hex) {
 }
 
 /// Every counter equal.
-inline bool same_stats(const DecoderStats& a, const DecoderStats& b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+inline bool same_stats(const DecoderStats& a, const DecoderStats& b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
 
 /// Hashes every counter in declaration order.
 inline void add_stats(Digest* digest, const DecoderStats& stats) {
@@ -87,8 +89,8 @@ class DigestHandler : public FrameHandler {
   void on_tracker_point(const TrackerPointRecord& r) override { note(PacketType::tracker_point, r); }
   void on_device_info(const DeviceInfoRecord& r) override { note(PacketType::device_info, r); }
 
-  Digest digest;             ///< over (type, record bits) of every record
-  std::uint64_t count = 0;   ///< records delivered
+  Digest digest;            ///< over (type, record bits) of every record
+  std::uint64_t count = 0;  ///< records delivered
 
  private:
   template <typename Record>

@@ -31,18 +31,18 @@ using JobCaptureWorkspace = CaptureWorkspace<3072, 640, 256, 64>;
 inline constexpr std::size_t kJobTraceCapacity = 1;
 /// Float paper-6 terms (84 B per sample), the paper's 150 food sources, one-value traces; no GSA
 /// phase (the firmware's jobs are ABC+LM and LM; GSA's solver would be the largest phase).
-using JobCalibrationWorkspace =
-    CalibrationWorkspace<kJobSamples, float, 150, kJobTraceCapacity, 0, kPaper6Dimension, 1, 0, 0>;  // one reflector, no subset room, no GSA (RAM)
+using JobCalibrationWorkspace = CalibrationWorkspace<kJobSamples, float, 150, kJobTraceCapacity, 0, kPaper6Dimension, 1,
+                                                     0, 0>;  // one reflector, no subset room, no GSA (RAM)
 
 /// Where a run ends (earlier ends serve the per-stage instruction counts of scripts/footprint.sh).
 enum class JobStop : int { clock, extraction, done };
 
 /// Settings of one job run.
 struct CaptureJobConfig {
-  RobotType robot = RobotType::ur5;         ///< nominal geometry
-  Vec3 tool_m = Vec3(0.0, 0.0, 0.1695);     ///< nominal tool point in the flange frame [m]
-  CalibrationOptions calibration;           ///< the job (method, split, seed, ABC budget)
-  JobStop stop_after = JobStop::done;       ///< end after this pass
+  RobotType robot = RobotType::ur5;      ///< nominal geometry
+  Vec3 tool_m = Vec3(0.0, 0.0, 0.1695);  ///< nominal tool point in the flange frame [m]
+  CalibrationOptions calibration;        ///< the job (method, split, seed, ABC budget)
+  JobStop stop_after = JobStop::done;    ///< end after this pass
 };
 
 /// The paper's job with the budget reduced so that the Cortex-M4 run under QEMU stays short
@@ -82,16 +82,16 @@ struct CaptureJobWorkspace {
   static constexpr std::size_t kArenaBytes = sizeof(JobCaptureWorkspace) > sizeof(JobCalibrationWorkspace)
                                                  ? sizeof(JobCaptureWorkspace)
                                                  : sizeof(JobCalibrationWorkspace);
-  Dataset<kJobSamples> dataset;                                     ///< the samples of the captures
+  Dataset<kJobSamples> dataset;                                         ///< the samples of the captures
   alignas(alignof(std::max_align_t)) unsigned char arena[kArenaBytes];  ///< capture, then calibration workspace
 };
 
 /// The results of a run (static storage: the CalibrationResult alone is ~5 KB).
 struct CaptureJobReport {
-  CaptureExtraction capture;       ///< the two passes
-  std::size_t samples = 0;         ///< samples extracted
-  CalibrationResult calibration;   ///< the job (default when the passes failed or stopped it)
-  std::uint64_t digest = 0;        ///< hash of every result bit above
+  CaptureExtraction capture;      ///< the two passes
+  std::size_t samples = 0;        ///< samples extracted
+  CalibrationResult calibration;  ///< the job (default when the passes failed or stopped it)
+  std::uint64_t digest = 0;       ///< hash of every result bit above
 };
 
 /// The stage numbers of the digest: 0 clock, 1 extraction, 2 split, 3 ABC, 4 LM, 5 done
@@ -123,7 +123,7 @@ inline std::uint64_t capture_job_digest(const CaptureJobReport& r, bool calibrat
   const CalibrationStage* final_stage = c.final_stage();
   Digest d;
   d.add_u64(job_stage_code(r, calibrated));
-  d.add_u64(static_cast<std::uint64_t>(!calibrated ? r.capture.status
+  d.add_u64(static_cast<std::uint64_t>(!calibrated                                        ? r.capture.status
                                        : c.status != Status::ok || final_stage == nullptr ? c.status
                                                                                           : final_stage->status));
   d.add(r.capture.clock.offset_us);

@@ -45,8 +45,8 @@ inline std::uint64_t core_golden_digest() {
   for (CostKind kind : {CostKind::mean_abs_3d, CostKind::sum_squares}) {
     double cost = 0.0;
     RigidTransform refit;
-    digest.add_u64(static_cast<std::uint64_t>(
-        evaluate_cost(nominal, dataset.samples(), kind, BaseFrame::refit, &refit, &cost)));
+    digest.add_u64(
+        static_cast<std::uint64_t>(evaluate_cost(nominal, dataset.samples(), kind, BaseFrame::refit, &refit, &cost)));
     digest.add(cost);
   }
   digest.add_u64(static_cast<std::uint64_t>(dataset.split(0.7, 3)));

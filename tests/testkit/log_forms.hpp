@@ -20,7 +20,7 @@ namespace hivecal::test {
 
 /// The UR drivers' joint names, joints 1..6.
 inline const char* const kUrJoints[kJointCount] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
-                                                    "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
+                                                   "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
 /// The order ur_robot_driver publishes them in (alphabetical): joint indices 0-based.
 inline const int kDriverOrder[kJointCount] = {2, 1, 0, 3, 4, 5};
 
@@ -66,7 +66,8 @@ inline std::string rtde_log(const std::vector<JointStateRecord>& records, char s
 }
 
 /// `rostopic echo -p /joint_states`: ns times, joints in `order` (indices of joints 1..6).
-inline std::string rostopic_log(const std::vector<JointStateRecord>& records, const int order[kJointCount] = kDriverOrder) {
+inline std::string rostopic_log(const std::vector<JointStateRecord>& records,
+                                const int order[kJointCount] = kDriverOrder) {
   std::string out = "%time,field.header.seq,field.header.stamp,field.header.frame_id";
   for (const char* field : {"name", "position", "velocity", "effort"}) {
     for (int k = 0; k < kJointCount; ++k) out += ",field." + std::string(field) + std::to_string(k);
@@ -88,8 +89,8 @@ inline std::string rostopic_log(const std::vector<JointStateRecord>& records, co
 inline std::string hivecal_tracker_csv(const std::vector<TrackerPointRecord>& records) {
   std::string out = "t,x,y,z,status\n";
   for (const TrackerPointRecord& r : records) {
-    out += seconds(r.timestamp_us) + "," + g17(r.point_m[0]) + "," + g17(r.point_m[1]) + "," + g17(r.point_m[2]) +
-           "," + std::to_string(r.status) + "\n";
+    out += seconds(r.timestamp_us) + "," + g17(r.point_m[0]) + "," + g17(r.point_m[1]) + "," + g17(r.point_m[2]) + "," +
+           std::to_string(r.status) + "\n";
   }
   return out;
 }
@@ -150,8 +151,10 @@ inline bool write_ros2_bag(const std::string& dir, const std::vector<JointStateR
                            const int order[kJointCount] = kDriverOrder) {
   std::FILE* yaml = std::fopen((dir + "/metadata.yaml").c_str(), "w");
   if (yaml == nullptr) return false;
-  std::fputs("rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n"
-             "  relative_file_paths:\n    - bag_0.db3\n", yaml);
+  std::fputs(
+      "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n"
+      "  relative_file_paths:\n    - bag_0.db3\n",
+      yaml);
   std::fclose(yaml);
   sqlite3* db = nullptr;
   if (sqlite3_open((dir + "/bag_0.db3").c_str(), &db) != SQLITE_OK) return false;

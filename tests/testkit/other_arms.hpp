@@ -76,7 +76,8 @@ inline void other_arm_modified(OtherArm arm, const ModifiedDhBase& base, Modifie
 
 /// A modified-DH tool point from the definition (Rx(alpha_prev) Tx(a_prev) Rz(theta) Tz(d) per
 /// row), independent of dh_convention.hpp [m].
-inline Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kJointCount], const Vec3& tool_m, const JointVector& q_rad) {
+inline Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kJointCount], const Vec3& tool_m,
+                                 const JointVector& q_rad) {
   RigidTransform t;
   for (int j = 0; j < kJointCount; ++j) {
     t = t.then_after(RigidTransform{rotation_x(rows[j].alpha_prev_rad), Vec3(rows[j].a_prev_m, 0.0, 0.0)});
@@ -101,8 +102,8 @@ inline RobotModel perturbed_keeping_parallel(const RobotModel& nominal, Random* 
 /// Joint positions over a general 6-axis arm's workspace, away from the wrist singularity [rad].
 inline JointVector other_arm_joints(Random* random) {
   JointVector q;
-  q << random->uniform(-2.5, 2.5), random->uniform(-1.2, 1.2), random->uniform(-1.2, 1.2),
-      random->uniform(-2.5, 2.5), random->uniform(0.3, 1.8), random->uniform(-2.5, 2.5);
+  q << random->uniform(-2.5, 2.5), random->uniform(-1.2, 1.2), random->uniform(-1.2, 1.2), random->uniform(-2.5, 2.5),
+      random->uniform(0.3, 1.8), random->uniform(-2.5, 2.5);
   if (random->uniform(0.0, 1.0) < 0.5) q(4) = -q(4);
   return q;
 }

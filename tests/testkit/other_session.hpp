@@ -22,19 +22,19 @@ namespace hivecal::test {
 
 /// The habits of one generated session.
 struct OtherSessionConfig {
-  RobotType robot = RobotType::ur5;           ///< nominal geometry
-  std::uint64_t seed = 1;                     ///< every draw
-  int waypoints = 40;                         ///< poses visited
-  double min_dwell_s = 0.2;                   ///< shortest stop at a pose [s]
-  double max_dwell_s = 0.2;                   ///< longest stop [s]
-  double joint_speed_rad_s = 0.8;             ///< trapezoid cruise speed of the leading joint [rad/s]
-  double joint_accel_rad_s2 = 2.0;            ///< trapezoid acceleration [rad/s^2]
-  double drift = 250e-6;                      ///< tracker clock rate error [-]
-  double robot_jitter_s = 0.002;              ///< robot period jitter, uniform +- [s]
-  double tracker_noise_m = 15e-6;             ///< per axis [m]
-  double beam_lost_probability = 0.05;        ///< per tracker point [-]
-  double unstable_probability = 0.03;         ///< per tracker point [-]
-  double byte_error_probability = 2e-5;       ///< per byte on both links [-]
+  RobotType robot = RobotType::ur5;      ///< nominal geometry
+  std::uint64_t seed = 1;                ///< every draw
+  int waypoints = 40;                    ///< poses visited
+  double min_dwell_s = 0.2;              ///< shortest stop at a pose [s]
+  double max_dwell_s = 0.2;              ///< longest stop [s]
+  double joint_speed_rad_s = 0.8;        ///< trapezoid cruise speed of the leading joint [rad/s]
+  double joint_accel_rad_s2 = 2.0;       ///< trapezoid acceleration [rad/s^2]
+  double drift = 250e-6;                 ///< tracker clock rate error [-]
+  double robot_jitter_s = 0.002;         ///< robot period jitter, uniform +- [s]
+  double tracker_noise_m = 15e-6;        ///< per axis [m]
+  double beam_lost_probability = 0.05;   ///< per tracker point [-]
+  double unstable_probability = 0.03;    ///< per tracker point [-]
+  double byte_error_probability = 2e-5;  ///< per byte on both links [-]
 };
 
 /// A generated session: captures, truth and the oracle's samples.
@@ -165,7 +165,8 @@ inline OtherSession make_other_session(const OtherSessionConfig& config) {
   std::snprintf(robot_info.name, sizeof robot_info.name, "%s", "OTHER-LAB ARM");
   append_frame(encode_device_info, robot_info, &s.robot_capture);
   std::uint16_t sequence = 1;
-  for (double time_s = 0.0; time_s < s.duration_s; time_s += 0.008 + random.uniform(-1.0, 1.0) * config.robot_jitter_s) {
+  for (double time_s = 0.0; time_s < s.duration_s;
+       time_s += 0.008 + random.uniform(-1.0, 1.0) * config.robot_jitter_s) {
     if (random.uniform01() < 0.003) continue;  // never sent
     JointStateRecord record;
     record.sequence = sequence++;
@@ -199,7 +200,8 @@ inline OtherSession make_other_session(const OtherSessionConfig& config) {
     Vec3 measured = exact;
     for (int a = 0; a < 3; ++a) measured(a) += config.tracker_noise_m * random.normal();
     const double speed_m_s =
-        (fk_tool_point(s.truth, joints_at(time_s + 1e-4)) - fk_tool_point(s.truth, joints_at(time_s - 1e-4))).norm() / 2e-4;
+        (fk_tool_point(s.truth, joints_at(time_s + 1e-4)) - fk_tool_point(s.truth, joints_at(time_s - 1e-4))).norm() /
+        2e-4;
     if (speed_m_s < 0.002) {
       Sample oracle;
       oracle.q_rad = q;
@@ -210,7 +212,8 @@ inline OtherSession make_other_session(const OtherSessionConfig& config) {
     TrackerPointRecord record;
     record.sequence = sequence++;
     record.timestamp_us = static_cast<std::uint64_t>(std::llround(tracker_us));
-    if (lost_run == 0 && random.uniform01() < config.beam_lost_probability / 3.0) lost_run = 1 + static_cast<int>(random.below(5));
+    if (lost_run == 0 && random.uniform01() < config.beam_lost_probability / 3.0)
+      lost_run = 1 + static_cast<int>(random.below(5));
     if (lost_run > 0) {
       --lost_run;
       record.status = static_cast<std::uint8_t>(TrackerStatus::beam_lost);

@@ -72,8 +72,7 @@ inline void fill_tool_down(const Paper6Cell& cell, std::size_t count, double noi
 /// lengths (the tool point is affine in them).
 /// Fixed-size storage for every possible length; the unused rows and columns stay zero and
 /// the step is solved on the first K only.
-inline LinkLengths least_squares_lengths(const RobotModel& nominal, Span<const Sample> samples,
-                                         int max_rounds = 500) {
+inline LinkLengths least_squares_lengths(const RobotModel& nominal, Span<const Sample> samples, int max_rounds = 500) {
   constexpr int kMax = static_cast<int>(kMaxLinkLengths);
   using MatK = Eigen::Matrix<double, kMax, kMax>;
   using Mat3K = Eigen::Matrix<double, 3, kMax>;

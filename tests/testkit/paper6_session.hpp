@@ -14,12 +14,12 @@ namespace hivecal::test {
 inline constexpr std::size_t kMaxSessionSamples = 400;
 
 struct Paper6Session {
-  Dataset<kMaxSessionSamples> dataset;       ///< all poses, split 70/30
-  Paper6Cost<kMaxSessionSamples> cost;       ///< on the training poses
-  Paper6Cell cell;                           ///< nominal and true geometry
-  LinkLengthBox box;                             ///< nominal +/- 2 mm
-  double nominal_mae_m = 0.0;                ///< training MAE of the nominal lengths [m]
-  double reference_mae_m = 0.0;              ///< training MAE of the least-squares lengths [m]
+  Dataset<kMaxSessionSamples> dataset;  ///< all poses, split 70/30
+  Paper6Cost<kMaxSessionSamples> cost;  ///< on the training poses
+  Paper6Cell cell;                      ///< nominal and true geometry
+  LinkLengthBox box;                    ///< nominal +/- 2 mm
+  double nominal_mae_m = 0.0;           ///< training MAE of the nominal lengths [m]
+  double reference_mae_m = 0.0;         ///< training MAE of the least-squares lengths [m]
 
   /// Simulates `poses` tool-down poses (10 um noise) of an arm off as `kind` says.
   /// Returns false if any step failed.
@@ -32,7 +32,8 @@ struct Paper6Session {
     if (cost.build(cell.nominal, dataset.train()) != Status::ok) return false;
     if (link_length_box(cell.nominal, kPaper6DefaultHalfWidth_m, &box) != Status::ok) return false;
     nominal_mae_m = generic_mae(cell.nominal, link_lengths(cell.nominal).data(), dataset.train());
-    reference_mae_m = generic_mae(cell.nominal, least_squares_lengths(cell.nominal, dataset.train()).data(), dataset.train());
+    reference_mae_m =
+        generic_mae(cell.nominal, least_squares_lengths(cell.nominal, dataset.train()).data(), dataset.train());
     return nominal_mae_m > 0.0 && reference_mae_m > 0.0;
   }
 

@@ -29,7 +29,8 @@ void expect_least_squares_mae_on_a_few_hundred_poses(Solver& solver, const Optio
   EXPECT_LE(result.best_cost, kWithinReference * session.reference_mae_m);
   EXPECT_LT(result.best_cost, 0.2 * session.nominal_mae_m);
   const LinkLengths truth_m = link_lengths(session.cell.truth);
-  for (int k = 1; k < 6; ++k) EXPECT_NEAR(result.best_x[static_cast<std::size_t>(k)], truth_m.values_m(k), 2e-5) << "length " << k;
+  for (int k = 1; k < 6; ++k)
+    EXPECT_NEAR(result.best_x[static_cast<std::size_t>(k)], truth_m.values_m(k), 2e-5) << "length " << k;
 }
 
 }  // namespace hivecal::test

@@ -21,8 +21,12 @@ inline RobotModel planning_model() {
 }
 
 /// The tracker of the simulated sessions, and its position in the robot base frame.
-inline RigidTransform tracker_base() { return test::example_base_to_tracker(); }
-inline Vec3 tracker_position() { return tracker_base().inverse().translation_m; }
+inline RigidTransform tracker_base() {
+  return test::example_base_to_tracker();
+}
+inline Vec3 tracker_position() {
+  return tracker_base().inverse().translation_m;
+}
 
 /// UR5 limits, the tracker above, `candidates` drawn poses [-], `poses` planned [-], `seed`.
 inline PlanOptions small_options(std::size_t candidates, std::size_t poses, std::uint64_t seed) {

@@ -102,8 +102,7 @@ inline CheckLog rigid_fit_degenerate_inputs_get_specific_errors() {
   log.status(fit_rigid_transform(good, good, negative, &fit), Status::invalid_argument, "negative weight");
   double short_weights[2] = {1.0, 1.0};
   log.status(fit_rigid_transform(good, good, short_weights, &fit), Status::invalid_argument, "short weights");
-  log.status(fit_rigid_transform(good, Span<const Vec3>(good, 2), {}, &fit), Status::invalid_argument,
-             "short target");
+  log.status(fit_rigid_transform(good, Span<const Vec3>(good, 2), {}, &fit), Status::invalid_argument, "short target");
   log.status(fit_rigid_transform(good, good, {}, &fit), Status::ok, "three good pairs");
   return log;
 }

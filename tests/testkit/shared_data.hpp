@@ -24,9 +24,8 @@ inline bool path_exists(const std::string& path) {
 }  // namespace hivecal::test
 
 /// Skips the current test (it does not fail) unless `relative` exists under the reference data.
-#define HIVECAL_SKIP_WITHOUT_SHARED_DATA(relative)                                        \
-  do {                                                                                    \
-    const std::string hivecal_needed_ = ::hivecal::test::shared_data_path(relative);      \
-    if (!::hivecal::test::path_exists(hivecal_needed_))                                   \
-      GTEST_SKIP() << "needs " << hivecal_needed_ << ": absent";                          \
+#define HIVECAL_SKIP_WITHOUT_SHARED_DATA(relative)                                                                 \
+  do {                                                                                                             \
+    const std::string hivecal_needed_ = ::hivecal::test::shared_data_path(relative);                               \
+    if (!::hivecal::test::path_exists(hivecal_needed_)) GTEST_SKIP() << "needs " << hivecal_needed_ << ": absent"; \
   } while (0)

@@ -57,8 +57,10 @@ FeedResult feed_extractor(const sim::Session& session, SampleExtractorBase* extr
                           AroundPush around_push = AroundPush()) {
   FeedResult result;
   auto note = [&result](Status s) {
-    if (s == Status::dataset_full) ++result.dataset_full_returns;
-    else if (s != Status::ok) ++result.other_errors;
+    if (s == Status::dataset_full)
+      ++result.dataset_full_returns;
+    else if (s != Status::ok)
+      ++result.other_errors;
   };
   sim::RobotStream robot(session);
   sim::TrackerStream tracker(session);

@@ -24,7 +24,8 @@ TEST(AllocTrap, CatchesMallocNewAndDynamicEigen) {
   EXPECT_EQ(test::count_allocations([] {
               auto p = std::make_unique<int>(3);
               g_sink = p.get();
-            }), 1u);
+            }),
+            1u);
   EXPECT_GE(test::count_allocations([] {
               Eigen::MatrixXd m(7, 7);
               m.setZero();

@@ -34,8 +34,8 @@ inline Mat3 random_rotation(Random* random) {
 /// Joint positions spread over a UR's useful workspace [rad].
 inline JointVector random_joints(Random* random) {
   JointVector q;
-  q << random->uniform(-3.0, 3.0), random->uniform(-2.6, -0.5), random->uniform(-2.4, 2.4),
-      random->uniform(-3.0, 0.0), random->uniform(-2.8, -0.3), random->uniform(-3.0, 3.0);
+  q << random->uniform(-3.0, 3.0), random->uniform(-2.6, -0.5), random->uniform(-2.4, 2.4), random->uniform(-3.0, 0.0),
+      random->uniform(-2.8, -0.3), random->uniform(-3.0, 3.0);
   return q;
 }
 

@@ -34,7 +34,9 @@ inline double rastrigin_value(const double* x, std::size_t dimension) {
 }
 
 /// The same value everywhere: no move ever improves (exercises trial counters and scouts).
-inline double flat_value(const double*, std::size_t) { return 1.0; }
+inline double flat_value(const double*, std::size_t) {
+  return 1.0;
+}
 
 /// NaN everywhere except near the origin, where it is the sphere.
 inline double mostly_nan_value(const double* x, std::size_t dimension) {
@@ -77,7 +79,9 @@ struct CubeBox {
       upper[d] = half_width;
     }
   }
-  SearchBox view() const { return SearchBox{Span<const double>(lower, dimension), Span<const double>(upper, dimension)}; }
+  SearchBox view() const {
+    return SearchBox{Span<const double>(lower, dimension), Span<const double>(upper, dimension)};
+  }
 };
 
 }  // namespace hivecal::test

@@ -79,37 +79,41 @@ inline constexpr std::size_t kAutoSignificanceMaxSamples = 64;
 struct CalibrationOptions {
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< solvers and their order
   CalibrationParams params = CalibrationParams::full;    ///< what LM may move
-  double train_fraction = kDefaultTrainFraction;         ///< share of samples for training, in (0, 1]; 1: no test samples [-]
-  std::uint64_t seed = 1;                                ///< seed of the split and of ABC/GSA [-]
-  bool robust = false;                                   ///< Huber loss in LM (sets lm.loss)
-  std::size_t abc_food_sources = 150;                    ///< ABC SN, <= the workspace's population capacity [-]
-  std::size_t abc_cycles = 300;                          ///< ABC MCN [-]
-  std::size_t gsa_agents = 150;                          ///< GSA N, <= the workspace's population capacity [-]
-  std::size_t gsa_iterations = 200;                      ///< GSA t_max [-]
+  double train_fraction = kDefaultTrainFraction;  ///< share of samples for training, in (0, 1]; 1: no test samples [-]
+  std::uint64_t seed = 1;                         ///< seed of the split and of ABC/GSA [-]
+  bool robust = false;                            ///< Huber loss in LM (sets lm.loss)
+  std::size_t abc_food_sources = 150;             ///< ABC SN, <= the workspace's population capacity [-]
+  std::size_t abc_cycles = 300;                   ///< ABC MCN [-]
+  std::size_t gsa_agents = 150;                   ///< GSA N, <= the workspace's population capacity [-]
+  std::size_t gsa_iterations = 200;               ///< GSA t_max [-]
   double paper6_half_width_m = kPaper6DefaultHalfWidth_m;  ///< ABC/GSA box: start lengths +/- this [m]
   /// Hybrids (abc+lm, gsa+lm): the population stage searches on at most this many training
   /// samples, chosen to span the poses (spanning_subset; at most the workspace's
   /// subset capacity), and LM refines on every sample; 0: on every sample. The paper's
   /// methods (abc, gsa, all) always search on every sample [-].
   std::size_t population_subset = kDefaultPopulationSubset;
-  LmOptions lm;                                          ///< LM settings; `params` and `robust` override its params and loss
-  double significance_t = kDefaultSignificance;          ///< LM fixes, one at a time, estimated parameters whose change is below t sigma (0: off; < 0: chosen by leave-one-out on small sets) [-]
-  bool keep_outliers = false;                            ///< true: no blunder search, every sample is used
-  BlunderTestOptions blunder_test;                       ///< the w-test of the calibration's poses (significance, tracker sigma, redundancy floor)
+  LmOptions lm;  ///< LM settings; `params` and `robust` override its params and loss
+  double significance_t =
+      kDefaultSignificance;  ///< LM fixes, one at a time, estimated parameters whose change is below t sigma (0: off; <
+                             ///< 0: chosen by leave-one-out on small sets) [-]
+  bool keep_outliers = false;  ///< true: no blunder search, every sample is used
+  BlunderTestOptions
+      blunder_test;  ///< the w-test of the calibration's poses (significance, tracker sigma, redundancy floor)
   /// Largest share of the training poses the w-test removes; more would go when the model,
   /// not the data, is wrong (residuals of unmodelled effects): then none is removed and the
   /// result says so (BlunderVerdict::model_error) [-].
   double max_blunder_share = 0.05;
-  double outlier_k = 6.0;                                ///< the consensus screen sets a sample aside when |r| > max(k sigma_robust, screen_floor_m) [-]
-  double screen_floor_m = 0.01;                          ///< smallest residual set aside by the start geometry's consensus screen [m]
-  std::size_t consensus_trials = 200;                    ///< point triples tried by the consensus (LMedS) screen [-]
-  CalibrationCompliance compliance;                      ///< joint compliance stage (off by default)
+  double outlier_k =
+      6.0;  ///< the consensus screen sets a sample aside when |r| > max(k sigma_robust, screen_floor_m) [-]
+  double screen_floor_m = 0.01;        ///< smallest residual set aside by the start geometry's consensus screen [m]
+  std::size_t consensus_trials = 200;  ///< point triples tried by the consensus (LMedS) screen [-]
+  CalibrationCompliance compliance;    ///< joint compliance stage (off by default)
   /// The base -> tracker transform is known and not estimated: the points were measured in
   /// the robot's own frame (a teach pendant's or controller's TCP readings: the identity), or
   /// the base was calibrated before. Joint 1's parameters, which a fitted base absorbs, become
   /// estimable. Only with CalibrationMethod::lm (ABC/GSA fit their own base) [-].
   bool base_known = false;
-  RigidTransform known_base_to_tracker;                  ///< with base_known: the fixed transform [m, rad]
+  RigidTransform known_base_to_tracker;  ///< with base_known: the fixed transform [m, rad]
   /// Every target's tool point is known and not estimated (the start model's): a controller's
   /// TCP readings are FK(q) * its configured TCP offset, exactly. Only with
   /// CalibrationMethod::lm [-].
@@ -129,32 +133,35 @@ Status calibration_method_from_name(const char* name, CalibrationMethod* method)
 
 /// The start geometry, before any solver.
 struct CalibrationBaseline {
-  RobotModel model;                 ///< the start geometry with its tool point fitted (when tool_fitted)
-  RigidTransform base_to_tracker;   ///< its base fitted on the training samples
-  bool tool_fitted = false;         ///< the tool point was fitted with the base (LM, nominal joints); false: base only (< 4 samples)
-  ErrorStats train;                 ///< errors on the training samples [m]
-  ErrorStats test;                  ///< errors on the test samples (count 0 without a test split) [m]
+  RobotModel model;                ///< the start geometry with its tool point fitted (when tool_fitted)
+  RigidTransform base_to_tracker;  ///< its base fitted on the training samples
+  bool tool_fitted =
+      false;         ///< the tool point was fitted with the base (LM, nominal joints); false: base only (< 4 samples)
+  ErrorStats train;  ///< errors on the training samples [m]
+  ErrorStats test;   ///< errors on the test samples (count 0 without a test split) [m]
 };
 
 /// What one solver stage produced.
 struct CalibrationStage {
-  CalibrationSolver solver = CalibrationSolver::lm;    ///< which solver ran
-  bool refines_previous = false;                      ///< LM started from the previous stage's geometry and base
-  bool compliance = false;                            ///< LM estimated the model's compliance terms too ("LM+compliance")
+  CalibrationSolver solver = CalibrationSolver::lm;  ///< which solver ran
+  bool refines_previous = false;                     ///< LM started from the previous stage's geometry and base
+  bool compliance = false;  ///< LM estimated the model's compliance terms too ("LM+compliance")
   /// LM+compliance: no compliance term passed the significance test, so the stage holds the
   /// rigid fit (the model's terms at their start values) and `lm` its details.
   bool rigid_kept = false;
   CalibrationParams params = CalibrationParams::paper;  ///< parameters it could move
-  Status status = Status::ok;                         ///< ok, or not_converged (LM's last point kept)
-  RobotModel model;                                   ///< calibrated geometry
-  RigidTransform base_to_tracker;                     ///< its base -> tracker transform
-  std::uint64_t evaluations = 0;                      ///< cost evaluations (LM: iterations) [-]
-  std::size_t iterations = 0;                         ///< cycles / iterations run [-]
-  double best_cost_m = 0.0;                           ///< ABC/GSA: best MAE on the samples it searched on, as the cost computed it; LM: final RMS [m]
-  std::size_t searched_samples = 0;                   ///< ABC/GSA: training samples the cost held (a spanning subset in a hybrid); LM: 0 [-]
-  ErrorStats train;                                   ///< errors on the training samples [m]
-  ErrorStats test;                                    ///< errors on the test samples [m]
-  Span<const double> trace_m;                         ///< best cost (ABC/GSA: MAE, LM: RMS) per iteration [m]; views the workspace
+  Status status = Status::ok;                           ///< ok, or not_converged (LM's last point kept)
+  RobotModel model;                                     ///< calibrated geometry
+  RigidTransform base_to_tracker;                       ///< its base -> tracker transform
+  std::uint64_t evaluations = 0;                        ///< cost evaluations (LM: iterations) [-]
+  std::size_t iterations = 0;                           ///< cycles / iterations run [-]
+  double best_cost_m =
+      0.0;  ///< ABC/GSA: best MAE on the samples it searched on, as the cost computed it; LM: final RMS [m]
+  std::size_t searched_samples =
+      0;                       ///< ABC/GSA: training samples the cost held (a spanning subset in a hybrid); LM: 0 [-]
+  ErrorStats train;            ///< errors on the training samples [m]
+  ErrorStats test;             ///< errors on the test samples [m]
+  Span<const double> trace_m;  ///< best cost (ABC/GSA: MAE, LM: RMS) per iteration [m]; views the workspace
 };
 
 /// Stages a job runs at most ('all': GSA, ABC, LM, then LM+compliance when enabled).
@@ -165,10 +172,10 @@ enum class CalibrationStep : std::uint8_t { input, split, baseline, gsa, abc, lm
 
 /// A sample the job set aside as a blunder.
 struct CalibrationOutlier {
-  std::uint32_t index = 0;   ///< its Sample::index (order of DatasetBase::add) [-]
-  double residual_m = 0.0;   ///< |predicted - measured| under the final calibration [m]
-  double w = 0.0;            ///< its pose's normalised residual against the fit without it (UnitTest::w) [-]
-  double critical_w = 0.0;   ///< the threshold it exceeded [-]
+  std::uint32_t index = 0;  ///< its Sample::index (order of DatasetBase::add) [-]
+  double residual_m = 0.0;  ///< |predicted - measured| under the final calibration [m]
+  double w = 0.0;           ///< its pose's normalised residual against the fit without it (UnitTest::w) [-]
+  double critical_w = 0.0;  ///< the threshold it exceeded [-]
 };
 
 /// What the blunder search concluded.
@@ -176,8 +183,9 @@ enum class BlunderVerdict : std::uint8_t {
   not_searched,  ///< keep_outliers, or the fit left nothing to test
   clean,         ///< no pose failed the test
   removed,       ///< the poses in `outliers` failed it and were set aside
-  model_error,   ///< more than max_blunder_share of the poses failed: the model, not the data, is wrong; none removed by the test
-  list_full,     ///< more blunders than kMaxCalibrationOutliers: the largest are set aside
+  model_error,  ///< more than max_blunder_share of the poses failed: the model, not the data, is wrong; none removed by
+                ///< the test
+  list_full,    ///< more blunders than kMaxCalibrationOutliers: the largest are set aside
 };
 
 /// Lower-case name of a verdict ("not_searched", "clean", "removed", "model_error", "list_full").
@@ -189,7 +197,7 @@ inline constexpr std::size_t kMaxCalibrationOutliers = 64;
 /// One list of the blunder search (the set aside, the last test's flags): kept in the
 /// workspace beside the arena, as it lives across the job's runs.
 struct CalibrationOutlierList {
-  CalibrationOutlier items[kMaxCalibrationOutliers];   ///< flagged samples, by index once complete
+  CalibrationOutlier items[kMaxCalibrationOutliers];    ///< flagged samples, by index once complete
   std::uint32_t indices[kMaxCalibrationOutliers] = {};  ///< their Sample::index, increasing [-]
   std::size_t count = 0;                                ///< entries used [-]
   std::size_t limit = kMaxCalibrationOutliers;          ///< entries allowed (fewer than half the set) [-]
@@ -205,27 +213,31 @@ const char* calibration_step_name(CalibrationStep step);
 
 /// Everything a job returns (~6 KB with the LmResult and the blunder list: static storage on a small target).
 struct CalibrationResult {
-  Status status = Status::invalid_argument;     ///< ok, or why the job stopped at `step`
+  Status status = Status::invalid_argument;       ///< ok, or why the job stopped at `step`
   CalibrationStep step = CalibrationStep::input;  ///< done on success, else the step that failed
-  std::size_t train_count = 0;                  ///< training samples [-]
-  std::size_t test_count = 0;                   ///< test samples [-]
-  std::size_t train_points = 0;                 ///< distinct points (pose x target) of the training samples, <= kDistinctPointLimit [-]
-  CalibrationBaseline baseline;                 ///< the start geometry's fit
+  std::size_t train_count = 0;                    ///< training samples [-]
+  std::size_t test_count = 0;                     ///< test samples [-]
+  std::size_t train_points =
+      0;  ///< distinct points (pose x target) of the training samples, <= kDistinctPointLimit [-]
+  CalibrationBaseline baseline;                    ///< the start geometry's fit
   CalibrationStage stages[kMaxCalibrationStages];  ///< the stages run, in order
-  std::size_t stage_count = 0;                  ///< entries of `stages` used [-]
-  bool has_lm = false;                          ///< an LM stage ran: `lm` is meaningful
-  LmResult lm;                                  ///< the last LM stage's details (LM+compliance's when it ran): identifiability, sigma, rms, termination
-  ParamMask lm_pruned_mask = 0;                 ///< parameters LM fixed at their start values as not significant (significance_t)
-  double significance_t = 0.0;                  ///< the significance level LM used (options', or the one chosen) [-]
+  std::size_t stage_count = 0;                     ///< entries of `stages` used [-]
+  bool has_lm = false;                             ///< an LM stage ran: `lm` is meaningful
+  LmResult lm;  ///< the last LM stage's details (LM+compliance's when it ran): identifiability, sigma, rms, termination
+  ParamMask lm_pruned_mask = 0;  ///< parameters LM fixed at their start values as not significant (significance_t)
+  double significance_t = 0.0;   ///< the significance level LM used (options', or the one chosen) [-]
   CalibrationOutlier outliers[kMaxCalibrationOutliers];  ///< samples set aside, by increasing index
-  std::size_t outlier_count = 0;                ///< entries of `outliers` used [-]
-  std::size_t outlier_rounds = 0;               ///< times the job ran until the set aside was stable (0: keep_outliers) [-]
+  std::size_t outlier_count = 0;                         ///< entries of `outliers` used [-]
+  std::size_t outlier_rounds = 0;  ///< times the job ran until the set aside was stable (0: keep_outliers) [-]
   BlunderVerdict blunder_verdict = BlunderVerdict::not_searched;  ///< what the search concluded
-  BlunderTestSummary blunder_test;              ///< the last w-test of the final fit on its training poses (sigma, dof, uncontrolled)
-  std::size_t blunder_limit = 0;                ///< training poses the w-test may remove (max_blunder_share) [-]
+  BlunderTestSummary
+      blunder_test;               ///< the last w-test of the final fit on its training poses (sigma, dof, uncontrolled)
+  std::size_t blunder_limit = 0;  ///< training poses the w-test may remove (max_blunder_share) [-]
 
   /// The samples set aside, by increasing index.
-  Span<const CalibrationOutlier> outlier_list() const { return Span<const CalibrationOutlier>(outliers, outlier_count); }
+  Span<const CalibrationOutlier> outlier_list() const {
+    return Span<const CalibrationOutlier>(outliers, outlier_count);
+  }
 
   /// The stages run, in order.
   Span<const CalibrationStage> stage_list() const { return Span<const CalibrationStage>(stages, stage_count); }
@@ -373,8 +385,8 @@ struct SubsetStorage<0> {
 /// do), and GSA with up to `GsaPopulation` agents (0: no GSA phase, a job with GSA ends with
 /// population_out_of_range; the firmware's choice, 7.2 kB less). Big: give it static storage.
 template <std::size_t Samples, typename CostScalar = double, std::size_t Population = 150,
-          std::size_t TraceCapacity = 300, std::size_t JointTrigSamples = 0, std::size_t MaxLinkLengths = kPaper6Dimension,
-          std::size_t MaxTargets = kMaxTargets,
+          std::size_t TraceCapacity = 300, std::size_t JointTrigSamples = 0,
+          std::size_t MaxLinkLengths = kPaper6Dimension, std::size_t MaxTargets = kMaxTargets,
           std::size_t SubsetCapacity = (Samples > kDefaultPopulationSubset ? kDefaultPopulationSubset : 0),
           std::size_t GsaPopulation = Population>
 class CalibrationWorkspace final : public CalibrationWorkspaceBase {
@@ -399,9 +411,9 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
     double residual_m[Samples];
   };
   /// Bytes of the arena: the largest phase.
-  static constexpr std::size_t kArenaBytes = detail::max_of<
-      detail::max_of<detail::max_of<sizeof(AbcPhase), sizeof(GsaPhase)>, sizeof(LmPhase)>,
-      detail::max_of<sizeof(ResidualPhase), sizeof(ReliabilityWorkspace)>>;
+  static constexpr std::size_t kArenaBytes =
+      detail::max_of<detail::max_of<detail::max_of<sizeof(AbcPhase), sizeof(GsaPhase)>, sizeof(LmPhase)>,
+                     detail::max_of<sizeof(ResidualPhase), sizeof(ReliabilityWorkspace)>>;
 
   CalibrationWorkspace() = default;
   ~CalibrationWorkspace() { close(); }
@@ -517,8 +529,7 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
   /// Bytes of arena a workspace for `samples` samples needs (the largest phase) [B].
   static constexpr std::size_t arena_bytes(std::size_t samples) {
     return std::max(std::max(population_bytes(samples, sizeof(Abc)), population_bytes(samples, sizeof(Gsa))),
-                                          std::max(std::max(lm_bytes(samples), residual_bytes(samples)),
-                                                   sizeof(ReliabilityWorkspace)));
+                    std::max(std::max(lm_bytes(samples), residual_bytes(samples)), sizeof(ReliabilityWorkspace)));
   }
 
   CalibrationWorkspaceView() = default;
@@ -668,14 +679,14 @@ struct CrossValidationFold {
 
 /// What cross_validate() measured.
 struct CrossValidationResult {
-  Status status = Status::invalid_argument;  ///< ok, or why it stopped
-  std::size_t fold_count = 0;                ///< folds run [-]
+  Status status = Status::invalid_argument;             ///< ok, or why it stopped
+  std::size_t fold_count = 0;                           ///< folds run [-]
   CrossValidationFold folds[kMaxCrossValidationFolds];  ///< per fold, in fold order
-  std::size_t sample_count = 0;              ///< samples split into folds (blunders left out) [-]
-  double mae_3d_m = 0.0;                     ///< 3-D MAE over every held-out sample of every fold [m]
-  double baseline_mae_3d_m = 0.0;            ///< the same for the uncalibrated baseline of each fold [m]
-  double fold_mae_3d_mean_m = 0.0;           ///< mean of the folds' 3-D MAE [m]
-  double fold_mae_3d_max_m = 0.0;            ///< largest fold 3-D MAE [m]
+  std::size_t sample_count = 0;                         ///< samples split into folds (blunders left out) [-]
+  double mae_3d_m = 0.0;                                ///< 3-D MAE over every held-out sample of every fold [m]
+  double baseline_mae_3d_m = 0.0;                       ///< the same for the uncalibrated baseline of each fold [m]
+  double fold_mae_3d_mean_m = 0.0;                      ///< mean of the folds' 3-D MAE [m]
+  double fold_mae_3d_max_m = 0.0;                       ///< largest fold 3-D MAE [m]
 };
 
 /// K-fold cross-validation of the job of `options` (folds = 0: leave-one-out): unless

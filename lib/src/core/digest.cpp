@@ -18,6 +18,8 @@ void Digest::add_u64(std::uint64_t value) {
   add_bytes(bytes, sizeof bytes);
 }
 
-void Digest::add(double value) { add_u64(math::bits_of(value)); }
+void Digest::add(double value) {
+  add_u64(math::bits_of(value));
+}
 
 }  // namespace hivecal

@@ -9,10 +9,10 @@ namespace hivecal::math {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kTiny = 1e-300;           // Lentz's guard against a zero denominator
-constexpr double kSeriesEpsilon = 1e-16;   // relative size of the last term kept [-]
+constexpr double kTiny = 1e-300;          // Lentz's guard against a zero denominator
+constexpr double kSeriesEpsilon = 1e-16;  // relative size of the last term kept [-]
 constexpr int kMaxSeriesTerms = 1000;
-constexpr int kBisectionSteps = 200;       // halves a bracket below one ulp
+constexpr int kBisectionSteps = 200;  // halves a bracket below one ulp
 
 /// Lentz's continued fraction of the incomplete beta (Numerical Recipes' betacf).
 double beta_fraction(double x, double a, double b) {

@@ -29,19 +29,35 @@ inline Lane load(const float* value) {
   return __builtin_convertvector(lane, Lane);
 }
 /// Writes the lanes to kLanes consecutive doubles at `value`.
-inline void store(double* value, const Lane& lane) { std::memcpy(value, &lane, sizeof lane); }
+inline void store(double* value, const Lane& lane) {
+  std::memcpy(value, &lane, sizeof lane);
+}
 /// Every lane set to x.
-inline Lane broadcast(double x) { return Lane{x, x}; }
+inline Lane broadcast(double x) {
+  return Lane{x, x};
+}
 /// Lane k of a value.
-inline double lane_value(const Lane& v, int k) { return v[k]; }
+inline double lane_value(const Lane& v, int k) {
+  return v[k];
+}
 #else
 constexpr int kLanes = 1;
 using Lane = double;
-inline Lane load(const double* value) { return *value; }
-inline Lane load(const float* value) { return static_cast<double>(*value); }
-inline void store(double* value, const Lane& lane) { *value = lane; }
-inline Lane broadcast(double x) { return x; }
-inline double lane_value(const Lane& v, int) { return v; }
+inline Lane load(const double* value) {
+  return *value;
+}
+inline Lane load(const float* value) {
+  return static_cast<double>(*value);
+}
+inline void store(double* value, const Lane& lane) {
+  *value = lane;
+}
+inline Lane broadcast(double x) {
+  return x;
+}
+inline double lane_value(const Lane& v, int) {
+  return v;
+}
 #endif
 
 /// Consecutive doubles from `value` into a lane of any width (a plain double, a GCC vector).
@@ -67,7 +83,9 @@ inline void store_any(double* value, const AnyLane& lane) {
 constexpr int kWideLanes = 4;
 using WideLane = double __attribute__((vector_size(kWideLanes * sizeof(double))));
 /// True when this CPU runs the target("avx2") instances.
-inline bool wide_lanes_available() { return __builtin_cpu_supports("avx2") != 0; }
+inline bool wide_lanes_available() {
+  return __builtin_cpu_supports("avx2") != 0;
+}
 #endif
 
 }  // namespace lanes

@@ -10,11 +10,17 @@ namespace hivecal::math {
 namespace {
 
 /// Biased exponent field of x (0..2047).
-int exponent_field(double x) { return static_cast<int>((bits_of(x) >> 52) & 0x7ffU); }
+int exponent_field(double x) {
+  return static_cast<int>((bits_of(x) >> 52) & 0x7ffU);
+}
 
-double quiet_nan() { return from_bits(0x7ff8000000000000ULL); }
+double quiet_nan() {
+  return from_bits(0x7ff8000000000000ULL);
+}
 
-double abs_value(double x) { return from_bits(bits_of(x) & 0x7fffffffffffffffULL); }
+double abs_value(double x) {
+  return from_bits(bits_of(x) & 0x7fffffffffffffffULL);
+}
 
 /// Round to nearest integer, ties away from zero, for |x| < 2^31.
 std::int32_t round_to_int(double x) {
@@ -109,23 +115,25 @@ Reduced reduce_half_pi(double x) {
   return Reduced{n, head, (r - head) - w};
 }
 
-bool trig_argument_ok(double x) { return abs_value(x) <= kTrigMaxArgument_rad; }
-bool within_quarter_pi(double x) { return abs_value(x) <= 7.85398163397448278999e-01; }
+bool trig_argument_ok(double x) {
+  return abs_value(x) <= kTrigMaxArgument_rad;
+}
+bool within_quarter_pi(double x) {
+  return abs_value(x) <= 7.85398163397448278999e-01;
+}
 
 // --- atan ------------------------------------------------------------------------
 
 /// atan(x) for finite x.
 double atan(double x) {
-  constexpr double kAtanHi[] = {4.63647609000806093515e-01, 7.85398163397448278999e-01,
-                                9.82793723247329054082e-01, 1.57079632679489655800e+00};
-  constexpr double kAtanLo[] = {2.26987774529616870924e-17, 3.06161699786838301793e-17,
-                                1.39033110312309984516e-17, 6.12323399573676603587e-17};
-  constexpr double kAT[] = {3.33333333333329318027e-01,  -1.99999999998764832476e-01,
-                            1.42857142725034663711e-01,  -1.11111104054623557880e-01,
-                            9.09088713343650656196e-02,  -7.69187620504482999495e-02,
-                            6.66107313738753120669e-02,  -5.83357013379057348645e-02,
-                            4.97687799461593236017e-02,  -3.65315727442169155270e-02,
-                            1.62858201153657823623e-02};
+  constexpr double kAtanHi[] = {4.63647609000806093515e-01, 7.85398163397448278999e-01, 9.82793723247329054082e-01,
+                                1.57079632679489655800e+00};
+  constexpr double kAtanLo[] = {2.26987774529616870924e-17, 3.06161699786838301793e-17, 1.39033110312309984516e-17,
+                                6.12323399573676603587e-17};
+  constexpr double kAT[] = {3.33333333333329318027e-01,  -1.99999999998764832476e-01, 1.42857142725034663711e-01,
+                            -1.11111104054623557880e-01, 9.09088713343650656196e-02,  -7.69187620504482999495e-02,
+                            6.66107313738753120669e-02,  -5.83357013379057348645e-02, 4.97687799461593236017e-02,
+                            -3.65315727442169155270e-02, 1.62858201153657823623e-02};
   const bool negative = x < 0.0;
   double a = abs_value(x);
   if (a >= 7.378697629483821e19) {  // 2^66: atan is pi/2 to double precision
@@ -178,10 +186,22 @@ void sincos(double x, double* sin_out, double* cos_out) {
   const double s = kernel_sin(red.head, red.tail, true);
   const double c = kernel_cos(red.head, red.tail);
   switch (red.quadrant & 3) {
-    case 0: *sin_out = s; *cos_out = c; break;
-    case 1: *sin_out = c; *cos_out = -s; break;
-    case 2: *sin_out = -s; *cos_out = -c; break;
-    default: *sin_out = -c; *cos_out = s; break;
+    case 0:
+      *sin_out = s;
+      *cos_out = c;
+      break;
+    case 1:
+      *sin_out = c;
+      *cos_out = -s;
+      break;
+    case 2:
+      *sin_out = -s;
+      *cos_out = -c;
+      break;
+    default:
+      *sin_out = -c;
+      *cos_out = s;
+      break;
   }
 }
 
@@ -246,7 +266,7 @@ double log(double x) {
   k += static_cast<int>((u >> 52) & 0x7ffU) - 1023;
   u &= 0x000fffffffffffffULL;
   double m = from_bits(u | 0x3ff0000000000000ULL);  // m in [1, 2)
-  if (m > 1.4142135623730951) {                       // keep m in (sqrt(2)/2, sqrt(2)]
+  if (m > 1.4142135623730951) {                     // keep m in (sqrt(2)/2, sqrt(2)]
     m *= 0.5;
     k += 1;
   }
@@ -276,9 +296,12 @@ double atan2(double y, double x) {  // hivecal::math::atan2, the library's own, 
     const double ay = is_finite(y) ? 0.0 : 1.0;
     const double ax = is_finite(x) ? 0.0 : 1.0;
     double z = 0.0;
-    if (ay > 0.0 && ax > 0.0) z = x_negative ? 3.0 * kPi / 4.0 : kPi / 4.0;
-    else if (ay > 0.0) z = kHalfPi;
-    else z = x_negative ? kPi : 0.0;
+    if (ay > 0.0 && ax > 0.0)
+      z = x_negative ? 3.0 * kPi / 4.0 : kPi / 4.0;
+    else if (ay > 0.0)
+      z = kHalfPi;
+    else
+      z = x_negative ? kPi : 0.0;
     return y_negative ? -z : z;
   }
   const int exponent_gap = exponent_field(y) - exponent_field(x);

@@ -6,7 +6,9 @@
 
 namespace hivecal {
 namespace {
-std::uint64_t rotate_left(std::uint64_t x, unsigned k) { return (x << k) | (x >> (64U - k)); }
+std::uint64_t rotate_left(std::uint64_t x, unsigned k) {
+  return (x << k) | (x >> (64U - k));
+}
 }  // namespace
 
 std::uint64_t splitmix64_next(std::uint64_t* state) {
@@ -37,7 +39,9 @@ double Random::uniform01() {
   return static_cast<double>(next() >> 11U) * 1.1102230246251565404236316680908203125e-16;
 }
 
-double Random::uniform(double lo, double hi) { return lo + (hi - lo) * uniform01(); }
+double Random::uniform(double lo, double hi) {
+  return lo + (hi - lo) * uniform01();
+}
 
 std::uint64_t Random::below(std::uint64_t n) {
   if (n == 0) return 0;

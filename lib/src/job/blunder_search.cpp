@@ -11,7 +11,6 @@
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/model/spanning_subset.hpp"
 
-
 #include "job/blunder_search.hpp"
 
 namespace hivecal::detail {
@@ -58,7 +57,6 @@ void finish(CalibrationOutlierList* list) {
 Span<const std::uint32_t> index_span(const CalibrationOutlierList& list) {
   return Span<const std::uint32_t>(list.indices, list.count);
 }
-
 
 bool same_indices(const CalibrationOutlierList& a, const CalibrationOutlierList& b) {
   if (a.count != b.count) return false;
@@ -197,7 +195,6 @@ bool flag_outliers(const RobotModel& model, const RigidTransform& base, const Da
   return Status::ok;
 }
 
-
 /// Training poses the w-test may remove: max_blunder_share of them, at least one.
 std::size_t blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o) {
   const Span<const Sample> train = dataset.train();
@@ -238,7 +235,6 @@ class SnoopVisitor final : public UnitTestVisitor {
   double worst_ratio_ = 1.0;
 };
 
-
 }  // namespace
 
 /// The loss the w-test whitens with: LM's joint noise, no Huber weights.
@@ -271,7 +267,8 @@ Status run_blunder_test(CalibrationWorkspaceBase& workspace, const CalibrationOp
   lm.loss = LmLoss::squared;
   const RigidTransform start_base = *base;
   LmWorkspace* lm_workspace = workspace.open_lm();
-  const Status status = calibrate_lm(workspace.lm_start(), &start_base, fitted, lm, lm_workspace, &r.lm, nullptr, nullptr);
+  const Status status =
+      calibrate_lm(workspace.lm_start(), &start_base, fitted, lm, lm_workspace, &r.lm, nullptr, nullptr);
   workspace.close();
   if (status != Status::ok && status != Status::not_converged) return status;
   workspace.lm_start() = r.lm.model;
@@ -280,8 +277,7 @@ Status run_blunder_test(CalibrationWorkspaceBase& workspace, const CalibrationOp
 }
 
 /// Moves the removed poses back where they were (latest first): the split as the run left it.
-void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, std::size_t removed,
-                   std::size_t fitted) {
+void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, std::size_t removed, std::size_t fitted) {
   const std::uint32_t(&moves)[kMaxCalibrationOutliers][2] = workspace.snoop_moves();
   while (removed > 0) {
     --removed;

@@ -31,8 +31,10 @@ struct StagePlan {
 
 StagePlan plan_for(CalibrationMethod method) {
   StagePlan plan;
-  plan.gsa = method == CalibrationMethod::gsa || method == CalibrationMethod::gsa_lm || method == CalibrationMethod::all;
-  plan.abc = method == CalibrationMethod::abc || method == CalibrationMethod::abc_lm || method == CalibrationMethod::all;
+  plan.gsa =
+      method == CalibrationMethod::gsa || method == CalibrationMethod::gsa_lm || method == CalibrationMethod::all;
+  plan.abc =
+      method == CalibrationMethod::abc || method == CalibrationMethod::abc_lm || method == CalibrationMethod::all;
   plan.lm = method == CalibrationMethod::lm || method == CalibrationMethod::abc_lm ||
             method == CalibrationMethod::gsa_lm || method == CalibrationMethod::all;
   plan.hybrid = method == CalibrationMethod::abc_lm || method == CalibrationMethod::gsa_lm;
@@ -41,7 +43,8 @@ StagePlan plan_for(CalibrationMethod method) {
 
 bool known(const CalibrationOptions& options) {
   return options.method <= CalibrationMethod::all && options.params <= CalibrationParams::paper &&
-         (!(options.base_known || options.tool_known) || options.method == CalibrationMethod::lm);  // ABC/GSA fit their own
+         (!(options.base_known || options.tool_known) ||
+          options.method == CalibrationMethod::lm);  // ABC/GSA fit their own
 }
 
 /// The tool point's three bits.
@@ -134,8 +137,8 @@ Status run_population(Job& job, CalibrationSolver solver, bool hybrid) {
     abc.cycles = o.abc_cycles;
     abc.seed = o.seed;
     const CalibrationWorkspaceBase::PopulationPhase phase = job.workspace.open_abc();
-    status = calibrate_paper6_abc(job.start, job.dataset.train(), subset, abc, o.paper6_half_width_m, phase.cost, phase.abc,
-                                  &solved, &trace, job.observer);
+    status = calibrate_paper6_abc(job.start, job.dataset.train(), subset, abc, o.paper6_half_width_m, phase.cost,
+                                  phase.abc, &solved, &trace, job.observer);
   } else {
     GsaOptions gsa;
     gsa.agents = o.gsa_agents;
@@ -143,8 +146,8 @@ Status run_population(Job& job, CalibrationSolver solver, bool hybrid) {
     gsa.seed = o.seed;
     const CalibrationWorkspaceBase::PopulationPhase phase = job.workspace.open_gsa();
     if (phase.gsa == nullptr) return Status::population_out_of_range;  // a workspace without GSA (firmware)
-    status = calibrate_paper6_gsa(job.start, job.dataset.train(), subset, gsa, o.paper6_half_width_m, phase.cost, phase.gsa,
-                                  &solved, &trace, job.observer);
+    status = calibrate_paper6_gsa(job.start, job.dataset.train(), subset, gsa, o.paper6_half_width_m, phase.cost,
+                                  phase.gsa, &solved, &trace, job.observer);
   }
   job.workspace.close();
   if (status != Status::ok) return status;
@@ -168,8 +171,8 @@ void set_params(const ModelParams& params, bool keep_other_tools, RobotModel* mo
   for (int t = 1; !keep_other_tools && t < kMaxTargets; ++t) target_tool(model, t) = Vec3::Zero();
 }
 
-[[gnu::noinline]] bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report, bool keep_other_tools,
-                                     RobotModel* from) {
+[[gnu::noinline]] bool reset_dropped(const RobotModel& start, const IdentifiabilityReport& report,
+                                     bool keep_other_tools, RobotModel* from) {
   const ModelParams start_params = to_params(start);
   ModelParams params = to_params(*from);
   bool changed = false;
@@ -183,7 +186,8 @@ void set_params(const ModelParams& params, bool keep_other_tools, RobotModel* mo
   for (int t = 0; t < from->compliance.term_count; ++t) {  // the compliance coefficients likewise
     const int i = compliance_param_index(t);
     double& coefficient = from->compliance.coefficient[t];
-    if (mask_has(report.free_mask, i) && !mask_has(report.kept_mask, i) && coefficient != start.compliance.coefficient[t]) {
+    if (mask_has(report.free_mask, i) && !mask_has(report.kept_mask, i) &&
+        coefficient != start.compliance.coefficient[t]) {
       coefficient = start.compliance.coefficient[t];
       compliance_changed = true;
     }
@@ -240,10 +244,10 @@ struct LmFit {
   const RobotModel* reference = nullptr;
   const RobotModel* start_model = nullptr;  ///< the geometry LM starts from (a stage's or the job's)
   const RigidTransform* base = nullptr;     ///< base -> tracker to start from; null: fitted first
-  bool reset_moved = false;  ///< put back a parameter LM drops that an earlier stage moved
-  bool compliance = false;   ///< the reference's compliance terms are free too, starting on start_model
-  Span<const Sample> samples;     ///< the samples fitted
-  double significance_t = 0.0;    ///< a change below this many sigma is not significant [-]
+  bool reset_moved = false;                 ///< put back a parameter LM drops that an earlier stage moved
+  bool compliance = false;                  ///< the reference's compliance terms are free too, starting on start_model
+  Span<const Sample> samples;               ///< the samples fitted
+  double significance_t = 0.0;              ///< a change below this many sigma is not significant [-]
 };
 
 /// Where a fit reports: its trace, its observer (both may be null), the parameters fixed as
@@ -280,8 +284,8 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     lm.params = LmParamSet::custom;
   }
   if (o.params == CalibrationParams::paper && compliance) {
-    lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) |
-                     compliance_params_mask(reference.compliance.term_count);
+    lm.custom_mask =
+        lm_param_mask(lm.params, lm.custom_mask, reference) | compliance_params_mask(reference.compliance.term_count);
     lm.params = LmParamSet::custom;
   }
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
@@ -481,7 +485,7 @@ Status run_stage(Job& job, CalibrationSolver solver, bool hybrid, bool complianc
   CalibrationResult& r = job.result;
   const std::size_t index = r.stage_count;
   if (job.observer != nullptr) job.observer->on_stage_begin(index, solver);
-  const Status status = compliance                       ? run_compliance_lm(job, &r.lm_pruned_mask)
+  const Status status = compliance                        ? run_compliance_lm(job, &r.lm_pruned_mask)
                         : solver == CalibrationSolver::lm ? run_lm(job, hybrid, &r.lm_pruned_mask)
                                                           : run_population(job, solver, hybrid);
   const CalibrationStep step = solver == CalibrationSolver::abc   ? CalibrationStep::abc
@@ -517,7 +521,8 @@ Status fit_baseline(const RobotModel& start, Span<const Sample> train, const Cal
   lm.params = LmParamSet::custom;
   lm.custom_mask = fitted_mask;
   LmWorkspace* lm_workspace = workspace.open_lm();
-  status = calibrate_lm(r->baseline.model, &r->baseline.base_to_tracker, train, lm, lm_workspace, &r->lm, nullptr, nullptr);
+  status =
+      calibrate_lm(r->baseline.model, &r->baseline.base_to_tracker, train, lm, lm_workspace, &r->lm, nullptr, nullptr);
   workspace.close();
   if (status != Status::ok && status != Status::not_converged) return status;
   r->baseline.model = r->lm.model;
@@ -622,7 +627,9 @@ const char* calibration_method_name(CalibrationMethod method) {
   return "unknown";
 }
 
-const char* calibration_method_names() { return "abc+lm, gsa+lm, lm, abc, gsa, all"; }
+const char* calibration_method_names() {
+  return "abc+lm, gsa+lm, lm, abc, gsa, all";
+}
 
 Status calibration_method_from_name(const char* name, CalibrationMethod* method) {
   if (name == nullptr || method == nullptr) return Status::invalid_argument;
@@ -708,7 +715,8 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
   for (const Sample& s : dataset->set_aside()) {
     CalibrationOutlier& o = r.outliers[r.outlier_count++];
-    o = CalibrationOutlier{s.index, (final_stage.base_to_tracker.apply(fk_sample_point(final_stage.model, s)) - s.point_m).norm()};
+    o = CalibrationOutlier{
+        s.index, (final_stage.base_to_tracker.apply(fk_sample_point(final_stage.model, s)) - s.point_m).norm()};
     for (const CalibrationOutlier& t : Span<const CalibrationOutlier>(tested.items, tested.count)) {
       if (t.index == s.index) {
         o.w = t.w;

@@ -37,7 +37,7 @@ bool block_finite(const SymmetricMatrix& a, int size) {
 /// of squares is safely normal (a term that underflowed there is below its last bit): one
 /// division less in the QL rotation's dependency chain, the solver's critical path.
 double hypotenuse(double a, double b) {
-  constexpr double kSafeLow = 0x1p-960;   // squares below 2^-1022 lose bits only under 2^-1012
+  constexpr double kSafeLow = 0x1p-960;    // squares below 2^-1022 lose bits only under 2^-1012
   constexpr double kSafeHigh = 0x1p+1000;  // an overflowed square gives +Inf and fails the test
   const double squares = a * a + b * b;
   if (squares > kSafeLow && squares < kSafeHigh) return std::sqrt(squares);
@@ -374,9 +374,9 @@ double largest_entry(const double* x, int n) {
 
 /// Where the wanted vectors of the current unreduced block of T stand, for the next one.
 struct BlockState {
-  int computed = 0;             ///< vectors of this block computed so far
-  int cluster_first = 0;        ///< first of them in the current cluster
-  double previous_shift = 0.0;  ///< shift of the last one
+  int computed = 0;                ///< vectors of this block computed so far
+  int cluster_first = 0;           ///< first of them in the current cluster
+  double previous_shift = 0.0;     ///< shift of the last one
   int column[kSymmetricCapacity];  ///< their columns of *v, in order
 };
 
@@ -493,7 +493,8 @@ Status symmetric_eigenvalues(SymmetricMatrix* matrix, int size, SymmetricVector*
 }
 
 Status symmetric_eigenvectors_lowest(const SymmetricMatrix& matrix, const SymmetricEigenReduction& reduction,
-                                     const SymmetricVector& eigenvalues, int vector_count, SymmetricMatrix* eigenvectors) {
+                                     const SymmetricVector& eigenvalues, int vector_count,
+                                     SymmetricMatrix* eigenvectors) {
   const SymmetricEigenReduction& r = reduction;
   const int size = r.size;
   if (size < 1 || size > kSymmetricCapacity || vector_count < 0 || vector_count > size) return Status::invalid_argument;

@@ -25,7 +25,8 @@ double term_basis(const ComplianceModel& compliance, const ComplianceTerm& term,
   const Vec3& origin_m = frame[term.joint].translation_m;
   const Vec3& g = compliance.gravity_direction;
   if (compliance.load == ComplianceLoad::point) {
-    const Vec3 point_m = term.frame == kToolLoadFrame ? frame[kJointCount].apply(tool_m) : frame[term.frame].translation_m;
+    const Vec3 point_m =
+        term.frame == kToolLoadFrame ? frame[kJointCount].apply(tool_m) : frame[term.frame].translation_m;
     return lever_m(z, origin_m, point_m, g);
   }
   // Every mass joint j carries: the links it moves (j + 1 .. 6), then the payload.
@@ -37,11 +38,14 @@ double term_basis(const ComplianceModel& compliance, const ComplianceTerm& term,
   return sum + masses.payload_kg * lever_m(z, origin_m, frame[kJointCount].apply(masses.payload_com_m), g);
 }
 
-bool finite_vec(const Vec3& v) { return math::is_finite(v.x()) && math::is_finite(v.y()) && math::is_finite(v.z()); }
+bool finite_vec(const Vec3& v) {
+  return math::is_finite(v.x()) && math::is_finite(v.y()) && math::is_finite(v.z());
+}
 
 Status check_masses(const ArmMasses& masses) {
   for (int link = 0; link < kJointCount; ++link) {
-    if (!math::is_finite(masses.link_mass_kg[link]) || !finite_vec(masses.link_com_m[link])) return Status::non_finite_input;
+    if (!math::is_finite(masses.link_mass_kg[link]) || !finite_vec(masses.link_com_m[link]))
+      return Status::non_finite_input;
     if (masses.link_mass_kg[link] < 0.0) return Status::invalid_argument;
   }
   if (!math::is_finite(masses.payload_kg) || !finite_vec(masses.payload_com_m)) return Status::non_finite_input;
@@ -59,12 +63,11 @@ Status check_term(const ComplianceModel& compliance, const ComplianceTerm& term)
 // link mass [kg] and centre of mass [m] in the link's DH frame. Only the e-Series models whose
 // whole table could be checked there are kept (CB3 and UR10e/UR16e: not verified, left out).
 constexpr double kUr3eMass_kg[kJointCount] = {1.98, 3.4445, 1.437, 0.871, 0.805, 0.261};
-constexpr double kUr3eCom_m[kJointCount][3] = {{0.0, -0.02, 0.0},  {0.13, 0.0, 0.1157}, {0.05, 0.0, 0.0238},
-                                               {0.0, 0.0, 0.01},   {0.0, 0.0, 0.01},    {0.0, 0.0, -0.02}};
+constexpr double kUr3eCom_m[kJointCount][3] = {{0.0, -0.02, 0.0}, {0.13, 0.0, 0.1157}, {0.05, 0.0, 0.0238},
+                                               {0.0, 0.0, 0.01},  {0.0, 0.0, 0.01},    {0.0, 0.0, -0.02}};
 constexpr double kUr5eMass_kg[kJointCount] = {3.761, 8.058, 2.846, 1.37, 1.3, 0.365};
-constexpr double kUr5eCom_m[kJointCount][3] = {{0.0, -0.02561, 0.00193}, {0.2125, 0.0, 0.11336},
-                                               {0.15, 0.0, 0.0265},      {0.0, -0.0018, 0.01634},
-                                               {0.0, 0.0018, 0.01634},   {0.0, 0.0, -0.001159}};
+constexpr double kUr5eCom_m[kJointCount][3] = {{0.0, -0.02561, 0.00193}, {0.2125, 0.0, 0.11336}, {0.15, 0.0, 0.0265},
+                                               {0.0, -0.0018, 0.01634},  {0.0, 0.0018, 0.01634}, {0.0, 0.0, -0.001159}};
 
 constexpr const char* kTermNames[kJointCount][kToolLoadFrame + 1] = {
     {"c_j1_o1", "c_j1_o2", "c_j1_o3", "c_j1_o4", "c_j1_o5", "c_j1_o6", "c_j1_tool", "c_j1_mass"},

@@ -108,7 +108,9 @@ std::size_t pose_run_end(Span<const Sample> samples, std::size_t begin) {
   return end;
 }
 
-std::size_t DatasetBase::pose_end(std::size_t begin) const { return pose_run_end(samples(), begin); }
+std::size_t DatasetBase::pose_end(std::size_t begin) const {
+  return pose_run_end(samples(), begin);
+}
 
 std::size_t DatasetBase::pose_count() const {
   if (!grouped()) return size_;

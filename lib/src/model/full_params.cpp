@@ -8,14 +8,15 @@ namespace hivecal {
 namespace {
 
 constexpr const char* kParamNames[kFullParamCount] = {
-    "theta1", "d1", "a1", "alpha1", "theta2", "d2", "a2", "alpha2", "theta3", "d3", "a3",
-    "alpha3", "theta4", "d4", "a4", "alpha4", "theta5", "d5", "a5", "alpha5", "theta6", "d6",
-    "a6", "alpha6", "tool_x", "tool_y", "tool_z", "base_rx", "base_ry", "base_rz", "base_tx", "base_ty",
+    "theta1",  "d1",          "a1",          "alpha1",      "theta2",     "d2",      "a2",      "alpha2",
+    "theta3",  "d3",          "a3",          "alpha3",      "theta4",     "d4",      "a4",      "alpha4",
+    "theta5",  "d5",          "a5",          "alpha5",      "theta6",     "d6",      "a6",      "alpha6",
+    "tool_x",  "tool_y",      "tool_z",      "base_rx",     "base_ry",    "base_rz", "base_tx", "base_ty",
     "base_tz", "compliance1", "compliance2", "compliance3", "compliance4"};
 static_assert(kMaxComplianceTerms == 4, "one name per compliance term");
 
-constexpr const char* kOtherToolNames[kMaxTargets - 1][3] = {
-    {"tool2_x", "tool2_y", "tool2_z"}, {"tool3_x", "tool3_y", "tool3_z"}};
+constexpr const char* kOtherToolNames[kMaxTargets - 1][3] = {{"tool2_x", "tool2_y", "tool2_z"},
+                                                             {"tool3_x", "tool3_y", "tool3_z"}};
 static_assert(kMaxTargets == 3, "one name row per target 2 ..");
 
 }  // namespace
@@ -51,9 +52,9 @@ const char* full_param_name(int index, const RobotModel& model) {
 
 Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
   const double angle2 = rotation_vector_rad.squaredNorm();
-  double sin_ratio = 1.0;      // sine of t over t (evaluated with math::sincos below)
-  double cos_ratio = 0.5;      // (1 - cosine of t) / t^2 (math::sincos, not libm)
-  if (angle2 < 1e-8) {         // t < 1e-4: Taylor terms beyond t^4 are below 1e-24
+  double sin_ratio = 1.0;  // sine of t over t (evaluated with math::sincos below)
+  double cos_ratio = 0.5;  // (1 - cosine of t) / t^2 (math::sincos, not libm)
+  if (angle2 < 1e-8) {     // t < 1e-4: Taylor terms beyond t^4 are below 1e-24
     sin_ratio = 1.0 - angle2 / 6.0 + angle2 * angle2 / 120.0;
     cos_ratio = 0.5 - angle2 / 24.0 + angle2 * angle2 / 720.0;
   } else {

@@ -18,9 +18,7 @@ Link dh_link(const DhJoint& joint, double sa, double ca, double q_rad) {
   double ct = 0.0;
   math::sincos(q_rad + joint.theta_offset_rad, &st, &ct);
   Link link;
-  link.rotation << ct, -st * ca, st * sa,
-                   st, ct * ca, -ct * sa,
-                   0.0, sa, ca;
+  link.rotation << ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca;
   link.translation_m << joint.a_m * ct, joint.a_m * st, joint.d_m;
   return link;
 }
@@ -38,20 +36,14 @@ struct NominalTable {
 };
 
 // Universal Robots' published DH tables (standard DH, CB3 and e-Series), alpha = [pi/2, 0, 0, pi/2, -pi/2, 0].
-constexpr NominalTable kUr3 = {{0.1519, 0.0, 0.0, 0.11235, 0.08535, 0.0819},
-                               {0.0, -0.24365, -0.21325, 0.0, 0.0, 0.0}};
-constexpr NominalTable kUr5 = {{0.089159, 0.0, 0.0, 0.10915, 0.09465, 0.0823},
-                               {0.0, -0.425, -0.39225, 0.0, 0.0, 0.0}};
-constexpr NominalTable kUr10 = {{0.1273, 0.0, 0.0, 0.163941, 0.1157, 0.0922},
-                                {0.0, -0.612, -0.5723, 0.0, 0.0, 0.0}};
-constexpr NominalTable kUr5e = {{0.1625, 0.0, 0.0, 0.1333, 0.0997, 0.0996},
-                                {0.0, -0.425, -0.3922, 0.0, 0.0, 0.0}};
-constexpr NominalTable kUr3e = {{0.15185, 0.0, 0.0, 0.13105, 0.08535, 0.0921},
-                                {0.0, -0.24355, -0.2132, 0.0, 0.0, 0.0}};
+constexpr NominalTable kUr3 = {{0.1519, 0.0, 0.0, 0.11235, 0.08535, 0.0819}, {0.0, -0.24365, -0.21325, 0.0, 0.0, 0.0}};
+constexpr NominalTable kUr5 = {{0.089159, 0.0, 0.0, 0.10915, 0.09465, 0.0823}, {0.0, -0.425, -0.39225, 0.0, 0.0, 0.0}};
+constexpr NominalTable kUr10 = {{0.1273, 0.0, 0.0, 0.163941, 0.1157, 0.0922}, {0.0, -0.612, -0.5723, 0.0, 0.0, 0.0}};
+constexpr NominalTable kUr5e = {{0.1625, 0.0, 0.0, 0.1333, 0.0997, 0.0996}, {0.0, -0.425, -0.3922, 0.0, 0.0, 0.0}};
+constexpr NominalTable kUr3e = {{0.15185, 0.0, 0.0, 0.13105, 0.08535, 0.0921}, {0.0, -0.24355, -0.2132, 0.0, 0.0, 0.0}};
 constexpr NominalTable kUr10e = {{0.1807, 0.0, 0.0, 0.17415, 0.11985, 0.11655},
                                  {0.0, -0.6127, -0.57155, 0.0, 0.0, 0.0}};
-constexpr NominalTable kUr16e = {{0.1807, 0.0, 0.0, 0.17415, 0.11985, 0.11655},
-                                 {0.0, -0.4784, -0.36, 0.0, 0.0, 0.0}};
+constexpr NominalTable kUr16e = {{0.1807, 0.0, 0.0, 0.17415, 0.11985, 0.11655}, {0.0, -0.4784, -0.36, 0.0, 0.0, 0.0}};
 constexpr double kUrAlpha_rad[kJointCount] = {math::kHalfPi, 0.0, 0.0, math::kHalfPi, -math::kHalfPi, 0.0};
 
 const NominalTable& table_of(RobotType type) {
@@ -129,7 +121,9 @@ const char* robot_type_name(RobotType type) {
   return "ur5";
 }
 
-const char* robot_type_names() { return "ur3, ur5, ur10, ur3e, ur5e, ur10e, ur16e"; }
+const char* robot_type_names() {
+  return "ur3, ur5, ur10, ur3e, ur5e, ur10e, ur16e";
+}
 
 Status robot_type_from_name(const char* name, RobotType* type) {
   constexpr RobotType kAll[] = {RobotType::ur3,  RobotType::ur5,   RobotType::ur10, RobotType::ur3e,
@@ -246,12 +240,18 @@ namespace detail {
 namespace {
 
 /// Lane k of a value (a plain double has one).
-inline double lane_at(double v, int) { return v; }
+inline double lane_at(double v, int) {
+  return v;
+}
 #if defined(HIVECAL_LANES_ARE_VECTORS)
-inline double lane_at(const lanes::Lane& v, int k) { return lanes::lane_value(v, k); }
+inline double lane_at(const lanes::Lane& v, int k) {
+  return lanes::lane_value(v, k);
+}
 #endif
 #ifdef HIVECAL_WIDE_LANES
-inline double lane_at(const lanes::WideLane& v, int k) { return v[k]; }
+inline double lane_at(const lanes::WideLane& v, int k) {
+  return v[k];
+}
 #endif
 
 /// Entry j of `field` of each lane's JointTrig, one per lane, built in registers (a store of
@@ -273,7 +273,8 @@ __attribute__((always_inline)) inline void gather(const JointTrig* const* trig,
 /// a * u + b * v, per component (the x and y axes after a rotation about z, or y and z after
 /// one about x).
 template <class Lane>
-__attribute__((always_inline)) inline void combine(const Lane& a, const Lane* u, const Lane& b, const Lane* v, Lane* out) {
+__attribute__((always_inline)) inline void combine(const Lane& a, const Lane* u, const Lane& b, const Lane* v,
+                                                   Lane* out) {
   for (int r = 0; r < 3; ++r) out[r] = a * u[r] + b * v[r];
 }
 
@@ -290,7 +291,8 @@ struct LaneTargets {
 
 /// u x (p - o) into column c (the screw of a rotation about u through o).
 template <class Lane, int kWidth>
-__attribute__((always_inline)) inline void write_moment(const Lane* u, const Lane* p, const Lane* o, int c, const LaneTargets<kWidth>& out) {
+__attribute__((always_inline)) inline void write_moment(const Lane* u, const Lane* p, const Lane* o, int c,
+                                                        const LaneTargets<kWidth>& out) {
   const Lane dx = p[0] - o[0];
   const Lane dy = p[1] - o[1];
   const Lane dz = p[2] - o[2];
@@ -310,8 +312,9 @@ __attribute__((always_inline)) inline void write_vector(const Lane* u, int c, co
 /// after); then alpha_j turns y, z about the new x through the new origin. Plain column
 /// rotations: 48 flops per joint instead of two 3x3 products.
 template <class Lane, int kWidth>
-__attribute__((always_inline)) inline void jacobian_lanes(const RobotModel& model, const ModelTrig& model_trig, const JointTrig* const* joint_trig,
-                    const LaneTargets<kWidth>& out, Vec3* point_out_m) {
+__attribute__((always_inline)) inline void jacobian_lanes(const RobotModel& model, const ModelTrig& model_trig,
+                                                          const JointTrig* const* joint_trig,
+                                                          const LaneTargets<kWidth>& out, Vec3* point_out_m) {
   const Lane zero = Lane{};
   const Lane one = zero + 1.0;
   Lane x[3] = {one, zero, zero};

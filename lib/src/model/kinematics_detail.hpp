@@ -16,8 +16,8 @@ void rigid_frames(const RobotModel& model, const JointVector& q_rad, RigidTransf
 /// Where tool_point_jacobian_rows writes: column c of the 3 x 27 Jacobian goes to
 /// row[r][slot[c]], r = 0..2. Any permutation works; unwanted columns may point at scratch.
 struct JacobianRowsTarget {
-  double* row[3];                 ///< start of the x, y and z rows
-  const int* slot;                ///< position of each of the 27 model columns in the rows
+  double* row[3];   ///< start of the x, y and z rows
+  const int* slot;  ///< position of each of the 27 model columns in the rows
 };
 
 /// Width of the batched kernel: one sample per lane (lanes::kLanes).

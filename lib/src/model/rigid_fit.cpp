@@ -62,8 +62,7 @@ Status RigidFitAccumulator::solve(RigidTransform* source_to_target) const {
   const Mat3 rotation = rotation_from_cross_covariance(cross);
   if (!all_finite(rotation)) return Status::degenerate_geometry;
   source_to_target->rotation = rotation;
-  source_to_target->translation_m =
-      (target_mean + target_origin_m_) - rotation * (source_mean + source_origin_m_);
+  source_to_target->translation_m = (target_mean + target_origin_m_) - rotation * (source_mean + source_origin_m_);
   return Status::ok;
 }
 
@@ -91,10 +90,8 @@ Mat4 horn_key_matrix(const Mat3& s) {
   const double syx = s(1, 0), syy = s(1, 1), syz = s(1, 2);
   const double szx = s(2, 0), szy = s(2, 1), szz = s(2, 2);
   Mat4 n;
-  n << sxx + syy + szz, syz - szy, szx - sxz, sxy - syx,
-       syz - szy, sxx - syy - szz, sxy + syx, szx + sxz,
-       szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy,
-       sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz;
+  n << sxx + syy + szz, syz - szy, szx - sxz, sxy - syx, syz - szy, sxx - syy - szz, sxy + syx, szx + sxz, szx - sxz,
+      sxy + syx, -sxx + syy - szz, syz + szy, sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz;
   return n;
 }
 
@@ -140,9 +137,9 @@ double largest_quartic_root(double c2, double c1, double c0, double upper_bound)
 Mat3 rotation_of_quaternion(const Eigen::Matrix<double, 4, 1>& q) {
   const double w = q(0), x = q(1), y = q(2), z = q(3);
   Mat3 r;
-  r << w * w + x * x - y * y - z * z, 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
-       2.0 * (x * y + w * z), w * w - x * x + y * y - z * z, 2.0 * (y * z - w * x),
-       2.0 * (x * z - w * y), 2.0 * (y * z + w * x), w * w - x * x - y * y + z * z;
+  r << w * w + x * x - y * y - z * z, 2.0 * (x * y - w * z), 2.0 * (x * z + w * y), 2.0 * (x * y + w * z),
+      w * w - x * x + y * y - z * z, 2.0 * (y * z - w * x), 2.0 * (x * z - w * y), 2.0 * (y * z + w * x),
+      w * w - x * x - y * y + z * z;
   return r;
 }
 

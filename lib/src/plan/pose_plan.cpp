@@ -48,17 +48,16 @@ bool limits_valid(const JointLimits& limits) {
 bool options_valid(const PlanOptions& o) {
   const PlanConstraints& c = o.constraints;
   const bool cell_ok = limits_valid(c.limits) && all_finite(c.tracker_m) && c.acceptance_rad > 0.0 &&
-                       c.acceptance_rad <= math::kPi && math::is_finite(c.floor_z_m) &&
-                       c.keep_out_radius_m >= 0.0 && math::is_finite(c.keep_out_radius_m) &&
-                       c.tool_down_tolerance_rad > 0.0 && c.tool_down_tolerance_rad <= math::kPi;
-  const bool counts_ok = o.pose_count >= 1 && o.pose_count <= kPlanPoseCapacity &&
-                         o.candidate_count >= o.pose_count && o.candidate_count <= kPlanCandidateCapacity;
+                       c.acceptance_rad <= math::kPi && math::is_finite(c.floor_z_m) && c.keep_out_radius_m >= 0.0 &&
+                       math::is_finite(c.keep_out_radius_m) && c.tool_down_tolerance_rad > 0.0 &&
+                       c.tool_down_tolerance_rad <= math::kPi;
+  const bool counts_ok = o.pose_count >= 1 && o.pose_count <= kPlanPoseCapacity && o.candidate_count >= o.pose_count &&
+                         o.candidate_count <= kPlanCandidateCapacity;
   const bool mask_ok = o.free_mask != 0 && (o.free_mask & ~kValidParamsMask) == 0;
   const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
   const bool timing_ok = o.noise_m > 0.0 && math::is_finite(o.noise_m) && o.joint_speed_rad_s > 0.0 &&
                          math::is_finite(o.joint_speed_rad_s) && o.joint_acceleration_rad_s2 > 0.0 &&
-                         math::is_finite(o.joint_acceleration_rad_s2) && o.dwell_s >= 0.0 &&
-                         math::is_finite(o.dwell_s);
+                         math::is_finite(o.joint_acceleration_rad_s2) && o.dwell_s >= 0.0 && math::is_finite(o.dwell_s);
   const bool prior_ok = o.prior_length_m >= 0.0 && math::is_finite(o.prior_length_m) && o.prior_angle_rad >= 0.0 &&
                         math::is_finite(o.prior_angle_rad);
   return cell_ok && counts_ok && mask_ok && threshold_ok && timing_ok && prior_ok && o.max_exchange_passes >= 0 &&
@@ -294,8 +293,8 @@ void random_start(const PlanOptions& o, std::uint64_t restart, PlanWorkspace* ws
 /// the selection rises: coordinate pattern search, steps halving from kRefineStep_rad to
 /// kRefineMinStep_rad, every trial within the constraints of `model`, the given tool
 /// (tool_down: q4 follows q2, q3 and q5 stays). Returns the pose's final gain.
-double refine_pose(const RobotModel& model, const RobotModel& objective, const PlanOptions& o,
-                   const FullParams& scale, ParamMask mask, const PlanWorkspace& ws, Sample* pose) {
+double refine_pose(const RobotModel& model, const RobotModel& objective, const PlanOptions& o, const FullParams& scale,
+                   ParamMask mask, const PlanWorkspace& ws, Sample* pose) {
   const PlanConstraints& c = o.constraints;
   const bool down = c.orientation == PlanOrientation::tool_down;
   double gain = criterion_gain(objective, *pose, scale, mask, ws, o.criterion);
@@ -428,9 +427,9 @@ FullParams pool_scale(const NormalMatrix& jtj, std::size_t count, ParamMask mask
 FullParams prior_ridge(const NormalMatrix& jtj, const FullParams& scale, const PlanOptions& o) {
   FullParams ridge = FullParams::Constant(kRidge);
   for (int k = 0; k < kModelParamCount; ++k) {
-    const bool is_angle = k < kJointCount * kParamsPerJoint &&
-                          (k % kParamsPerJoint == static_cast<int>(DhField::theta_offset) ||
-                           k % kParamsPerJoint == static_cast<int>(DhField::alpha));
+    const bool is_angle =
+        k < kJointCount * kParamsPerJoint && (k % kParamsPerJoint == static_cast<int>(DhField::theta_offset) ||
+                                              k % kParamsPerJoint == static_cast<int>(DhField::alpha));
     const double prior = is_angle ? o.prior_angle_rad : o.prior_length_m;
     if (prior > 0.0 && jtj(k, k) > 0.0) {
       const double precision = (o.noise_m / prior) * (o.noise_m / prior);  // in units of the noise's
@@ -491,10 +490,10 @@ void two_opt(JointVector* poses, std::size_t count, const PlanOptions& o) {
     for (std::size_t i = 1; i + 1 < count; ++i) {
       for (std::size_t k = i + 1; k < count; ++k) {
         const bool has_next = k + 1 < count;
-        const double before = movej_time_s(poses[i - 1], poses[i], o) +
-                              (has_next ? movej_time_s(poses[k], poses[k + 1], o) : 0.0);
-        const double after = movej_time_s(poses[i - 1], poses[k], o) +
-                             (has_next ? movej_time_s(poses[i], poses[k + 1], o) : 0.0);
+        const double before =
+            movej_time_s(poses[i - 1], poses[i], o) + (has_next ? movej_time_s(poses[k], poses[k + 1], o) : 0.0);
+        const double after =
+            movej_time_s(poses[i - 1], poses[k], o) + (has_next ? movej_time_s(poses[i], poses[k + 1], o) : 0.0);
         if (after < before - kTwoOptGain_s) {
           reverse_segment(poses, i, k);
           improved = true;
@@ -606,7 +605,7 @@ double movej_time_s(const JointVector& from, const JointVector& to, const PlanOp
   const double v = options.joint_speed_rad_s;
   const double a = options.joint_acceleration_rad_s2;
   if (distance_rad >= v * v / a) return distance_rad / v + v / a;  // trapezoid: cruise at v
-  return 2.0 * std::sqrt(distance_rad / a);                         // triangle: never reaches v
+  return 2.0 * std::sqrt(distance_rad / a);                        // triangle: never reaches v
 }
 
 double order_poses(JointVector* poses, std::size_t count, const PlanOptions& options) {
@@ -616,8 +615,7 @@ double order_poses(JointVector* poses, std::size_t count, const PlanOptions& opt
   return path_time_s(poses, count, options);
 }
 
-Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
-                    PlanResult* result) {
+Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace, PlanResult* result) {
   if (!options_valid(options)) return Status::invalid_argument;
   if (!all_finite(to_params(model))) return Status::non_finite_input;
   *result = PlanResult{};

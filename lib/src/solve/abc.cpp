@@ -7,7 +7,9 @@ namespace hivecal {
 namespace {
 
 /// Canonical ABC fitness: 1 / (1 + f) for f >= 0, 1 + |f| below; 0 for an infinite cost.
-double canonical_fitness(double cost) { return cost >= 0.0 ? 1.0 / (1.0 + cost) : 1.0 - cost; }
+double canonical_fitness(double cost) {
+  return cost >= 0.0 ? 1.0 / (1.0 + cost) : 1.0 - cost;
+}
 
 /// One minimisation: the colony, its random stream and its evaluation budget.
 class AbcRun {

@@ -135,7 +135,8 @@ class GsaRun {
       const double* xj = position(j);
       double distance_squared = 0.0;
       for (std::size_t d = 0; d < dimension_; ++d) distance_squared += (xj[d] - xi[d]) * (xj[d] - xi[d]);
-      const double pull = random_.uniform01() * gravity * s_.masses[j] / (std::sqrt(distance_squared) + options_.epsilon);
+      const double pull =
+          random_.uniform01() * gravity * s_.masses[j] / (std::sqrt(distance_squared) + options_.epsilon);
       for (std::size_t d = 0; d < dimension_; ++d) vi[d] += pull * (xj[d] - xi[d]);
     }
   }
@@ -163,12 +164,14 @@ class GsaRun {
   detail::BestSoFar best_;
 };
 
-bool finite_at_least(double value, double minimum) { return math::is_finite(value) && value >= minimum; }
+bool finite_at_least(double value, double minimum) {
+  return math::is_finite(value) && value >= minimum;
+}
 
 Status validate(const GsaOptions& options, const SearchBox& box, std::size_t dimension, std::size_t max_agents,
                 std::size_t max_dimension) {
-  const Status common = detail::validate_population_and_box(options.agents, max_agents, options.max_evaluations,
-                                                            box, dimension, max_dimension);
+  const Status common = detail::validate_population_and_box(options.agents, max_agents, options.max_evaluations, box,
+                                                            dimension, max_dimension);
   if (common != Status::ok) return common;
   if (options.iterations == 0 || !finite_at_least(options.g0, 0.0) || !finite_at_least(options.beta, 0.0)) {
     return Status::invalid_argument;
@@ -184,8 +187,8 @@ Status GsaSolverBase::minimize(Objective& objective, const SearchBox& box, const
                                SolverResult* result, TraceBase* trace, ProgressObserver* progress) {
   const std::size_t dimension = objective.dimension();
   const Status valid = validate(options, box, dimension, storage_.max_agents, storage_.max_dimension);
-  return detail::run_population<GsaRun>(valid, objective, box, dimension, storage_, options, options.iterations,
-                                        result, trace, progress);
+  return detail::run_population<GsaRun>(valid, objective, box, dimension, storage_, options, options.iterations, result,
+                                        trace, progress);
 }
 
 }  // namespace hivecal

@@ -29,7 +29,9 @@ constexpr double kReportedComponentFloor = 1e-3;
 constexpr double kNullBasisAngle = 1e-4;
 constexpr double kNullBasisOrthogonality = 1e-9;
 
-double singular_from_eigen(double eigenvalue) { return std::sqrt(eigenvalue > 0.0 ? eigenvalue : 0.0); }
+double singular_from_eigen(double eigenvalue) {
+  return std::sqrt(eigenvalue > 0.0 ? eigenvalue : 0.0);
+}
 
 /// Writes the singular values of the analysed block (decreasing) and its condition number.
 void fill_spectrum(const FullParams& eigenvalues, int count, double* values, int* value_count, double* condition) {

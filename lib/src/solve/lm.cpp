@@ -26,8 +26,8 @@ bool options_valid(const LmOptions& o) {
   const bool damping_ok = o.initial_damping > 0.0 && o.initial_damping < kMaxDamping;
   const bool huber_ok = o.huber_threshold_m >= 0.0 && math::is_finite(o.huber_threshold_m);
   const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
-  const bool mask_ok = o.params != LmParamSet::custom ||
-                       (o.custom_mask != 0 && (o.custom_mask & ~kValidParamsMask) == 0);
+  const bool mask_ok =
+      o.params != LmParamSet::custom || (o.custom_mask != 0 && (o.custom_mask & ~kValidParamsMask) == 0);
   const bool joint_noise_ok = o.joint_sigma_rad >= 0.0 && o.joint_sigma_rad < 1.0 &&
                               (o.joint_sigma_rad == 0.0 || (o.position_sigma_m > 0.0 && o.position_sigma_m < 1.0));
   return o.max_iterations >= 1 && tolerances_ok && damping_ok && huber_ok && threshold_ok && mask_ok && joint_noise_ok;
@@ -40,7 +40,9 @@ bool poses_distinct(Span<const Sample> samples) {
   return false;
 }
 
-bool transform_finite(const RigidTransform& t) { return all_finite(t.rotation) && all_finite(t.translation_m); }
+bool transform_finite(const RigidTransform& t) {
+  return all_finite(t.rotation) && all_finite(t.translation_m);
+}
 
 /// The point the solver is at, with its loss (in the workspace).
 using Point = LmPoint;
@@ -89,7 +91,7 @@ bool solve_step(LmStepScratch* s, const NormalEquations& eq, const FullParams& s
   cholesky_solve(s->factorization, rhs, scaled_step);
   for (int i = 0; i < kFullParamCount; ++i) {
     if (!mask_has(kept, i)) (*scaled_step)(i) = 0.0;
-    (*step)(i) = (*scaled_step)(i) * scale(i);
+    (*step)(i) = (*scaled_step)(i)*scale(i);
   }
   return all_finite(*step);
 }
@@ -113,8 +115,8 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
 /// A = D^-1 S (H the eliminated normal matrix over the kept parameters, factored in `f`).
 // Not inlined: its temporaries (several targets only) would sit in calibrate_lm's frame on
 // every call (the firmware's stack budget).
-[[gnu::noinline]] void other_tool_sigmas(const KeptCholesky& f, const NormalEquations& eq, const FullParams& scale, ParamMask kept,
-                       double variance_m2, LmResult* result) {
+[[gnu::noinline]] void other_tool_sigmas(const KeptCholesky& f, const NormalEquations& eq, const FullParams& scale,
+                                         ParamMask kept, double variance_m2, LmResult* result) {
   for (int k = 0; k < kMaxTargets - 1; ++k) {
     result->other_tools_sigma_m[k].setZero();
     if (static_cast<std::size_t>(k) >= eq.targets.size()) continue;
@@ -212,11 +214,11 @@ struct Run {
   LmResult* result;
   ParamMask free_mask;
   ParamMask kept;
-  Point& point;  ///< ws->point
+  Point& point;                       ///< ws->point
   Span<const JointTrig> sample_trig;  ///< joint trig of every sample, or empty
-  NormalEquations* current;  ///< normal equations at `point`
-  NormalEquations* trial;    ///< normal equations at the last trial point, in the shared scratch (or null)
-  Span<TargetBlock> trial_targets;  ///< the trial's target blocks
+  NormalEquations* current;           ///< normal equations at `point`
+  NormalEquations* trial;             ///< normal equations at the last trial point, in the shared scratch (or null)
+  Span<TargetBlock> trial_targets;    ///< the trial's target blocks
   double damping;
   double growth;
   bool reanalysed;  ///< the analysis has been repeated after the first accepted step
@@ -249,8 +251,8 @@ inline Status analyse(Run* run) {
   Status status = Status::ok;
   IdentifiabilityWorkspace* scratch = run->ws->scratch.open_identifiability();  // ends the step's and the trial's
   while (true) {
-    status = analyze_identifiability(run->current->jtwj, run->free_mask, threshold, scratch,
-                                     &run->result->identifiability);
+    status =
+        analyze_identifiability(run->current->jtwj, run->free_mask, threshold, scratch, &run->result->identifiability);
     run->kept = run->result->identifiability.kept_mask;
     if (status != Status::ok || mask_count(run->kept) < equations) return status;
     if (threshold * 10.0 >= 1.0) return Status::too_few_samples;
@@ -423,8 +425,12 @@ Status status_of(LmTermination termination) {
 
 // Out of line: one copy of the objects' construction (the reduction's zeroed arrays), not one
 // in every caller.
-LmStepScratch* LmSharedScratch::open_step() { return new (bytes_) LmStepScratch; }
-IdentifiabilityWorkspace* LmSharedScratch::open_identifiability() { return new (bytes_) IdentifiabilityWorkspace; }
+LmStepScratch* LmSharedScratch::open_step() {
+  return new (bytes_) LmStepScratch;
+}
+IdentifiabilityWorkspace* LmSharedScratch::open_identifiability() {
+  return new (bytes_) IdentifiabilityWorkspace;
+}
 NormalEquations* LmSharedScratch::open_trial(Span<TargetBlock> targets) {
   NormalEquations* trial = new (bytes_) NormalEquations;
   trial->targets = targets;
@@ -469,12 +475,23 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
     return Status::dimension_out_of_range;  // the workspace has no room for these targets' tool points
   }
   clear_result(result);
-  const double joint_noise_ratio = options.joint_sigma_rad > 0.0 ? options.joint_sigma_rad / options.position_sigma_m : 0.0;
+  const double joint_noise_ratio =
+      options.joint_sigma_rad > 0.0 ? options.joint_sigma_rad / options.position_sigma_m : 0.0;
   workspace->point = Point{start_model, RigidTransform{}, PointLoss{0.0, joint_noise_ratio}};
-  Run run{options, samples, workspace, result, free_mask, 0, workspace->point,
-          store_joint_trig(samples, workspace->joint_trig), &workspace->normal, nullptr,
+  Run run{options,
+          samples,
+          workspace,
+          result,
+          free_mask,
+          0,
+          workspace->point,
+          store_joint_trig(samples, workspace->joint_trig),
+          &workspace->normal,
+          nullptr,
           workspace->target_blocks.subspan(blocks, blocks),
-          options.initial_damping, 2.0, false};
+          options.initial_damping,
+          2.0,
+          false};
   status = start(start_base_to_tracker, &run);
   if (status != Status::ok) return status;
   if (trace != nullptr) trace->push(rms_of(run.current->squares_sum_m2, samples.size()));

@@ -11,7 +11,7 @@ namespace hivecal {
 namespace {
 
 Vec3 point_residual(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
-                   const Sample& sample) {
+                    const Sample& sample) {
   return base_to_tracker.apply(fk_target_point(model, trig, sample.q_rad, sample.target)) - sample.point_m;
 }
 
@@ -81,7 +81,8 @@ void kernel_rows(const RobotModel& model, const ModelTrig& trig, const JointTrig
     return;
   }
 #endif
-  if constexpr (kWidth == static_cast<std::size_t>(kGroupSamples)) detail::tool_point_jacobian_rows(model, trig, lane_trig, target, point_m);
+  if constexpr (kWidth == static_cast<std::size_t>(kGroupSamples))
+    detail::tool_point_jacobian_rows(model, trig, lane_trig, target, point_m);
 }
 
 /// The compliance columns of one sample's rows: term t's is d(point)/d(theta_offset of its
@@ -93,7 +94,8 @@ void write_compliance_columns(const ComplianceModel& compliance, const TermBasis
   for (int t = 0; t < kMaxComplianceTerms; ++t) {
     const int slot = columns.slot[compliance_param_index(t)];
     const bool present = basis != nullptr && t < compliance.term_count;
-    const int theta_slot = present ? columns.slot[model_param_index(compliance.terms[t].joint, DhField::theta_offset)] : 0;
+    const int theta_slot =
+        present ? columns.slot[model_param_index(compliance.terms[t].joint, DhField::theta_offset)] : 0;
     for (int r = 0; r < 3; ++r) rows[r][slot] = present ? rows[r][theta_slot] * (*basis)[t] : 0.0;
   }
 }
@@ -117,7 +119,8 @@ void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransfo
   Vec3 point_m[kWidth];
   kernel_rows<kWidth>(model, trig, lane_trig, target, point_m);
   for (int k = 0; k < static_cast<int>(kWidth); ++k) {
-    write_compliance_columns(model.compliance, basis != nullptr && k < count ? &basis[k] : nullptr, columns, rows + 3 * k);
+    write_compliance_columns(model.compliance, basis != nullptr && k < count ? &basis[k] : nullptr, columns,
+                             rows + 3 * k);
   }
   // d(Exp(w) p)/dw_k at w = 0 is e_k x p; the translation increment is along the base axes.
   const int* rotation_slot = columns.slot + base_rotation_param_index(0);
@@ -145,8 +148,7 @@ void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransfo
 /// and wider lanes come with kGroupSamples == kBatchSamples).
 template <class Lane, std::size_t kRows>
 __attribute__((always_inline)) inline void add_weighted_rows(const double* const (&rows)[kRows],
-                                                             const double (&weight)[kRows], int count,
-                                                             double* column) {
+                                                             const double (&weight)[kRows], int count, double* column) {
   constexpr int kWidth = static_cast<int>(sizeof(Lane) / sizeof(double));
   int k = 0;
   for (; k < count && k + kWidth <= kFullParamCount; k += kWidth) {
@@ -211,7 +213,8 @@ __attribute__((always_inline)) inline void flush_batch_columns(RowBatch* batch, 
         axis_weights[s] = w[3 * s + axis];
       }
       add_weighted_rows<Lane>(axis_rows, axis_weights, l + 1, column);
-    } else if (parameter >= base_rotation_param_index(0) && parameter < base_translation_param_index(0)) {  // e_axis x p: 0 on the axis' row
+    } else if (parameter >= base_rotation_param_index(0) &&
+               parameter < base_translation_param_index(0)) {  // e_axis x p: 0 on the axis' row
       const int axis = parameter - base_rotation_param_index(0);
       const double* other_rows[2 * kBatchSamples];
       double other_weights[2 * kBatchSamples];
@@ -388,8 +391,8 @@ namespace {
 /// room for them, with their weights, and adds their losses to *eq in sample order.
 template <std::size_t kWidth>
 void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransform& base_to_tracker,
-               Span<const Sample> samples, Span<const JointTrig> stored_trig, std::size_t first,
-               const PointLoss& loss, const IndexList& list, RowBatch* batch, NormalEquations* eq) {
+               Span<const Sample> samples, Span<const JointTrig> stored_trig, std::size_t first, const PointLoss& loss,
+               const IndexList& list, RowBatch* batch, NormalEquations* eq) {
   const int count = static_cast<int>(std::min<std::size_t>(kWidth, samples.size() - first));
   const Sample* group[kWidth] = {};  // set up to count; initialised for arm-none-eabi-gcc's maybe-uninitialized
   JointTrig computed[kWidth];
@@ -488,8 +491,8 @@ namespace {
 /// sample with each sample's tool point, the other targets' tool blocks summed and then
 /// eliminated.
 [[gnu::noinline]] Status accumulate_several_targets(const RobotModel& model, const RigidTransform& base_to_tracker,
-                                  Span<const Sample> samples, const PointLoss& loss, NormalEquations* eq,
-                                  ParamMask columns) {
+                                                    Span<const Sample> samples, const PointLoss& loss,
+                                                    NormalEquations* eq, ParamMask columns) {
   const bool eliminate = (columns & kOtherTargetTools) != 0;
   if (eliminate && static_cast<std::size_t>(target_count(samples) - 1) > eq->targets.size()) {
     return Status::dimension_out_of_range;  // no storage for these targets' blocks
@@ -503,8 +506,8 @@ namespace {
     FullJacobian jacobian;
     Mat3 tool_jacobian;
     double raw_squared_m2 = 0.0;
-    const Vec3 residual_m =
-        sample_rows_in(model, context, base_to_tracker, sample, loss, columns, &jacobian, &tool_jacobian, &raw_squared_m2);
+    const Vec3 residual_m = sample_rows_in(model, context, base_to_tracker, sample, loss, columns, &jacobian,
+                                           &tool_jacobian, &raw_squared_m2);
     const double squared = residual_m.squaredNorm();
     const double norm_m = std::sqrt(squared);
     const double weight = loss.weight(norm_m);
@@ -550,7 +553,8 @@ void apply_target_step(const NormalEquations& eq, const FullParams& step, RobotM
   for (std::size_t k = 1; k <= eq.targets.size(); ++k) {
     const TargetBlock& block = eq.targets[k - 1];
     if (block.count == 0) continue;
-    target_tool(model, static_cast<int>(k)) -= block.tool_tool.inverse() * (block.tool_residual_m + block.tool_model * step);
+    target_tool(model, static_cast<int>(k)) -=
+        block.tool_tool.inverse() * (block.tool_residual_m + block.tool_model * step);
   }
 }
 
@@ -578,13 +582,15 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
 #ifdef HIVECAL_WIDE_LANES
   if (lanes::wide_lanes_available()) {
     for (; first < samples.size(); first += kWideGroupSamples) {
-      add_group<static_cast<std::size_t>(kWideGroupSamples)>(model, trig, base_to_tracker, samples, stored, first, loss, list, &batch, &eq);
+      add_group<static_cast<std::size_t>(kWideGroupSamples)>(model, trig, base_to_tracker, samples, stored, first, loss,
+                                                             list, &batch, &eq);
       if (batch.samples == kHeldSamples) flush_batch(&batch, list, &eq);
     }
   }
 #endif
   for (; first < samples.size(); first += kGroupSamples) {
-    add_group<static_cast<std::size_t>(kGroupSamples)>(model, trig, base_to_tracker, samples, stored, first, loss, list, &batch, &eq);
+    add_group<static_cast<std::size_t>(kGroupSamples)>(model, trig, base_to_tracker, samples, stored, first, loss, list,
+                                                       &batch, &eq);
     if (batch.samples == kHeldSamples) flush_batch(&batch, list, &eq);
   }
   if (batch.samples > 0) flush_batch(&batch, list, &eq);
@@ -596,9 +602,8 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   return Status::ok;
 }
 
-Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_to_tracker,
-                           Span<const Sample> samples, const PointLoss& loss, double* loss_sum_m2,
-                           double* squares_sum_m2) {
+Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
+                           const PointLoss& loss, double* loss_sum_m2, double* squares_sum_m2) {
   if (samples.empty()) return Status::dataset_empty;
   const ModelTrig trig = model_trig(model);
   double loss_sum = 0.0;
@@ -614,8 +619,8 @@ Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_t
   return Status::ok;
 }
 
-Status median_residual_norm(const RobotModel& model, const RigidTransform& base_to_tracker,
-                            Span<const Sample> samples, double* median_m) {
+Status median_residual_norm(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
+                            double* median_m) {
   if (samples.empty()) return Status::dataset_empty;
   const ModelTrig trig = model_trig(model);
   std::size_t counts[kHistogramBins + 2] = {};

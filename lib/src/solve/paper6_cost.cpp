@@ -21,13 +21,14 @@ static_assert(kDirectionValue + 3 * (kPaper6Dimension - 1) == kPaper6ValuesPerSa
 
 /// Position of value v of sample i in a block storage of `per_sample` values per sample.
 constexpr std::size_t value_index(std::size_t v, std::size_t i, std::size_t per_sample) {
-  return i / kPaper6BlockSamples * (per_sample * kPaper6BlockSamples) + v * kPaper6BlockSamples + i % kPaper6BlockSamples;
+  return i / kPaper6BlockSamples * (per_sample * kPaper6BlockSamples) + v * kPaper6BlockSamples +
+         i % kPaper6BlockSamples;
 }
 
 /// A stored sample widened to double (exact: float -> double loses nothing).
 struct WideTerm {
   Vec3 point_m;
-  Vec3 measured_m;  // point + error: the measured point in the reference frame, relative
+  Vec3 measured_m;              // point + error: the measured point in the reference frame, relative
   StoredDirections directions;  // the first `stored` columns
 };
 
@@ -41,7 +42,8 @@ WideTerm widen(const Scalar* values, std::size_t i, std::size_t per_sample, int 
     const auto row = static_cast<std::size_t>(r);
     wide.point_m(r) = value(kPointValue + row);
     wide.measured_m(r) = wide.point_m(r) + value(kErrorValue + row);
-    for (int k = 0; k < stored; ++k) wide.directions(r, k) = value(kDirectionValue + 3 * static_cast<std::size_t>(k) + row);
+    for (int k = 0; k < stored; ++k)
+      wide.directions(r, k) = value(kDirectionValue + 3 * static_cast<std::size_t>(k) + row);
   }
   return wide;
 }
@@ -78,7 +80,9 @@ LinkLengths link_lengths(const RobotModel& model, const LinkLengthSet& set) {
   return lengths_m;
 }
 
-LinkLengths link_lengths(const RobotModel& model) { return link_lengths(model, link_length_set(model)); }
+LinkLengths link_lengths(const RobotModel& model) {
+  return link_lengths(model, link_length_set(model));
+}
 
 RobotModel with_link_lengths(const RobotModel& model, const LinkLengthSet& set, const double* lengths_m) {
   ModelParams params = to_params(model);
@@ -267,8 +271,8 @@ double residual_pass(const Scalar* values, std::size_t size, std::size_t per_sam
   // ignored; the norms are summed in sample order. The operation order is Eigen's (pairwise
   // sums in products and norms), which the golden digest pins; the generic column sum keeps it.
   static_assert(kPaper6BlockSamples % 2 == 0, "whole pairs per block");
-  using lanes::Lane;
   using lanes::broadcast;
+  using lanes::Lane;
   using lanes::lane_value;
   constexpr auto kLanes = static_cast<std::size_t>(lanes::kLanes);
   constexpr std::size_t kPoint = kPointValue * kPaper6BlockSamples;
@@ -296,7 +300,8 @@ double residual_pass(const Scalar* values, std::size_t size, std::size_t per_sam
         const Scalar* const d = first + kDirection + r * kRow;
         if constexpr (kFive) {
           return (lanes::load(d) * t0 + lanes::load(d + kColumn) * t1) +
-                 (lanes::load(d + 2 * kColumn) * t2 + (lanes::load(d + 3 * kColumn) * t3 + lanes::load(d + 4 * kColumn) * t4));
+                 (lanes::load(d + 2 * kColumn) * t2 +
+                  (lanes::load(d + 3 * kColumn) * t3 + lanes::load(d + 4 * kColumn) * t4));
         } else {
           return stored == 0 ? zero : moved_row(d, t, kColumn, 0, stored);
         }
@@ -309,7 +314,8 @@ double residual_pass(const Scalar* values, std::size_t size, std::size_t per_sam
       const Lane r1 = ((e10 * q0 + (e11 * q1 + e12 * q2)) - (p1 + lanes::load(first + kError + kRow))) - sy;
       const Lane r2 = ((e20 * q0 + (e21 * q1 + e22 * q2)) - (p2 + lanes::load(first + kError + 2 * kRow))) - sz;
       const Lane squared = r0 * r0 + (r1 * r1 + r2 * r2);
-      for (std::size_t k = 0; k < kLanes && j + k < count; ++k) sum_m += std::sqrt(lane_value(squared, static_cast<int>(k)));
+      for (std::size_t k = 0; k < kLanes && j + k < count; ++k)
+        sum_m += std::sqrt(lane_value(squared, static_cast<int>(k)));
     }
   }
   return sum_m;

@@ -59,16 +59,16 @@ struct Fit {
   const RobotModel& model;
   const RigidTransform& base;
   const PointLoss& loss;
-  ParamMask kept;     ///< estimated parameters (without kOtherTargetTools)
-  bool other_tools;   ///< the other targets' tool points were estimated (eliminated blocks)
-  FullParams scale;   ///< column scale of the factored normal matrix
-  bool grouped;       ///< several targets: units are runs at equal joints
+  ParamMask kept;    ///< estimated parameters (without kOtherTargetTools)
+  bool other_tools;  ///< the other targets' tool points were estimated (eliminated blocks)
+  FullParams scale;  ///< column scale of the factored normal matrix
+  bool grouped;      ///< several targets: units are runs at equal joints
 };
 
 /// One unit's rows and hat block (in the workspace).
 struct UnitRows {
-  int count = 0;             ///< rows [-]
-  double largest_m = 0.0;    ///< largest raw 3-D residual of its samples [m]
+  int count = 0;           ///< rows [-]
+  double largest_m = 0.0;  ///< largest raw 3-D residual of its samples [m]
 };
 
 /// The hat-matrix block H_uu of samples[begin, end) into ws->hat: with b_i row i of the
@@ -201,7 +201,9 @@ void visit_units(const Fit& fit, const Scale& scale, const BlunderTestOptions& o
 
 }  // namespace
 
-const char* sigma_source_name(SigmaSource source) { return source == SigmaSource::tracker ? "tracker" : "data"; }
+const char* sigma_source_name(SigmaSource source) {
+  return source == SigmaSource::tracker ? "tracker" : "data";
+}
 
 std::size_t unit_end(Span<const Sample> samples, std::size_t begin, bool grouped) {
   std::size_t end = begin + 1;
@@ -226,7 +228,12 @@ Status test_for_blunders(const RobotModel& model, const RigidTransform& base, Sp
   Status status = accumulate_normal_equations(model, base, fitted, PointLoss{0.0, loss.joint_noise_ratio_rad_per_m},
                                               &ws.normal, estimated);
   if (status != Status::ok) return status;
-  Fit fit{model, base, loss, kept, (estimated & kOtherTargetTools) != 0, FullParams::Ones(),
+  Fit fit{model,
+          base,
+          loss,
+          kept,
+          (estimated & kOtherTargetTools) != 0,
+          FullParams::Ones(),
           target_count(fitted) > 1 || target_count(predicted) > 1};
   scale_normal_matrix(ws.normal.jtwj, kept, 1.0, &ws.scaled, &fit.scale);
   if (!cholesky_factor(ws.scaled, kept, &ws.factor)) return Status::singular_system;

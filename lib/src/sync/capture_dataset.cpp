@@ -62,7 +62,8 @@ Status estimate_capture_clock(RecordSource& source, const CaptureOptions& option
   ClockEstimatorBase* estimator = workspace->open_estimator(options.clock);
   result->status = estimate_clock_from_streams(*robot, *tracker, estimator, &result->clock, &result->decoding);
   result->clock_stats = estimator->stats();
-  if (options.clock_observer != nullptr) options.clock_observer->on_clock_pass(*estimator, result->status, result->clock);
+  if (options.clock_observer != nullptr)
+    options.clock_observer->on_clock_pass(*estimator, result->status, result->clock);
   workspace->close();
   return result->status;
 }
@@ -108,9 +109,8 @@ Status extract_capture_samples(const RobotModel& nominal, CaptureSource& source,
   return extract_capture_samples(records, make_capture_options(nominal), workspace, dataset, result);
 }
 
-Status extract_dataset_from_captures(const RobotModel& nominal, CaptureSource& source,
-                                     CaptureWorkspaceBase* workspace, DatasetBase* dataset,
-                                     CaptureExtraction* result) {
+Status extract_dataset_from_captures(const RobotModel& nominal, CaptureSource& source, CaptureWorkspaceBase* workspace,
+                                     DatasetBase* dataset, CaptureExtraction* result) {
   FrameRecordSource records(source);
   return extract_dataset_from_captures(records, make_capture_options(nominal), workspace, dataset, result);
 }

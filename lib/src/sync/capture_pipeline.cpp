@@ -7,8 +7,8 @@ namespace {
 
 // A delivered frame is at least kMinFrameBytes long (TRACKER_POINT, the shortest packet), so a
 // slice completes at most kSliceBytes / kMinFrameBytes + 1 records: the queue never overflows.
-constexpr std::size_t kMinFrameBytes = cobs_max_encoded_bytes(kPacketHeaderBytes + kTrackerPointPayloadBytes +
-                                                              kPacketCrcBytes) + 1;
+constexpr std::size_t kMinFrameBytes =
+    cobs_max_encoded_bytes(kPacketHeaderBytes + kTrackerPointPayloadBytes + kPacketCrcBytes) + 1;
 static_assert(FrameRecordReader::kSliceBytes / kMinFrameBytes + 1 <= FrameRecordReader::kQueueRecords,
               "a slice must not overflow the record queue");
 
@@ -33,7 +33,6 @@ bool next_of_kind(RecordReader& reader, StreamRecord::Kind kind, StreamRecord* r
 }
 
 }  // namespace
-
 
 void FrameRecordReader::push(const StreamRecord& record) {
   // kQueueRecords bounds what one slice can complete (static_assert above).
@@ -105,8 +104,8 @@ Status estimate_clock_from_streams(RecordReader& robot, RecordReader& tracker, C
   return estimator->estimate(fit);
 }
 
-Status estimate_clock_from_streams(ByteReader& robot, ByteReader& tracker, ClockEstimatorBase* estimator,
-                                   ClockFit* fit, StreamPassStats* stats) {
+Status estimate_clock_from_streams(ByteReader& robot, ByteReader& tracker, ClockEstimatorBase* estimator, ClockFit* fit,
+                                   StreamPassStats* stats) {
   FrameRecordReader robot_records(&robot);
   FrameRecordReader tracker_records(&tracker);
   return estimate_clock_from_streams(robot_records, tracker_records, estimator, fit, stats);

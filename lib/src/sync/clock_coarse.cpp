@@ -68,8 +68,8 @@ void remember_peak(Peak* peaks, const Peak& candidate) {
 
 /// The best lag in [first, last] and the best other local maximum outside its
 /// half-height lobe (a second, similar peak means the alignment is ambiguous).
-CoarseLag search_lags(const SpeedProfiles& speeds, std::ptrdiff_t first, std::ptrdiff_t last,
-                      std::ptrdiff_t min_pairs, Peak* best) {
+CoarseLag search_lags(const SpeedProfiles& speeds, std::ptrdiff_t first, std::ptrdiff_t last, std::ptrdiff_t min_pairs,
+                      Peak* best) {
   Peak peaks[kPeakCandidates];
   double r_before = -2.0;
   double r_here = -2.0;
@@ -153,8 +153,7 @@ Status coarse_lag(const ClockProfiles& profiles, const ClockSyncConfig& config, 
   const double step_us = static_cast<double>(config.coarse_step_us);
   const std::size_t knots_per_step = config.coarse_step_us / config.knot_interval_us;
   const std::size_t n_robot = robot_speeds(profiles, knots_per_step, step_us * 1e-6, scratch, scratch_capacity);
-  const std::size_t n_tracker =
-      tracker_speeds(profiles, step_us, scratch + n_robot, scratch_capacity - n_robot);
+  const std::size_t n_tracker = tracker_speeds(profiles, step_us, scratch + n_robot, scratch_capacity - n_robot);
 
   // Global search on the decimated profiles (in place at the front of scratch).
   const std::size_t d_robot = decimate(scratch, n_robot, kDecimation, scratch);
@@ -167,8 +166,8 @@ Status coarse_lag(const ClockProfiles& profiles, const ClockSyncConfig& config, 
   if (min_overlap > shorter / 2) min_overlap = shorter / 2;
   if (min_overlap < 10) return Status::clock_fit_failed;
   Peak global;
-  *result = search_lags(coarse, min_overlap - coarse.tracker_count, coarse.robot_count - min_overlap,
-                        min_overlap / 2, &global);
+  *result = search_lags(coarse, min_overlap - coarse.tracker_count, coarse.robot_count - min_overlap, min_overlap / 2,
+                        &global);
   if (result->correlation < config.min_correlation ||
       result->runner_up > config.max_runner_up_ratio * result->correlation)
     return Status::clock_fit_failed;

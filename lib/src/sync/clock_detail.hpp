@@ -17,13 +17,13 @@ struct ClockProfiles {
   const ClockTrackerKnot* tracker = nullptr;  ///< valid tracker points, time since the first [us]
   std::size_t tracker_points = 0;             ///< points stored
   double max_chord_interval_us = 0.0;         ///< longer tracker intervals are not chords [us]
-  double max_tracker_speed_m_per_us = 0.0;   ///< faster tracker intervals are a blunder's, not chords [m/us]
+  double max_tracker_speed_m_per_us = 0.0;    ///< faster tracker intervals are a blunder's, not chords [m/us]
 
   /// Robot path length at a robot-relative time [m]; NaN outside the profile or in a gap.
   double s_at(double robot_rel_us) const;
   /// Robot tool speed at a robot-relative time (central difference over two knots) [m/us].
   double speed_at(double robot_rel_us) const;
-  std::size_t chord_span = 1;                 ///< tracker intervals per fine-fit chord (chords overlap: one ends at each point)
+  std::size_t chord_span = 1;  ///< tracker intervals per fine-fit chord (chords overlap: one ends at each point)
 
   /// True when no interval between tracker points first..last is longer than
   /// max_chord_interval_us or faster than max_tracker_speed_m_per_us (a wild point within the
@@ -70,15 +70,15 @@ LagDrift scan_lag_drift(const ClockProfiles& profiles, const ClockSyncConfig& co
 
 /// Outcome of the fine fit.
 struct FineFit {
-  LagDrift estimate;               ///< fitted relation
-  double var_lag_us2 = 0.0;        ///< variance of lag_us [us^2]
-  double var_drift = 0.0;          ///< variance of drift [-]
-  double cov_lag_drift_us = 0.0;   ///< their covariance [us]
-  double gain = 1.0;               ///< overall tracker/robot path-length ratio [-]
-  double residual_rms_m = 0.0;     ///< rms chord residual [m]
-  std::uint32_t chords = 0;        ///< chords used
-  std::uint32_t edges = 0;         ///< informative chords
-  std::uint32_t iterations = 0;    ///< Gauss-Newton iterations
+  LagDrift estimate;              ///< fitted relation
+  double var_lag_us2 = 0.0;       ///< variance of lag_us [us^2]
+  double var_drift = 0.0;         ///< variance of drift [-]
+  double cov_lag_drift_us = 0.0;  ///< their covariance [us]
+  double gain = 1.0;              ///< overall tracker/robot path-length ratio [-]
+  double residual_rms_m = 0.0;    ///< rms chord residual [m]
+  std::uint32_t chords = 0;       ///< chords used
+  std::uint32_t edges = 0;        ///< informative chords
+  std::uint32_t iterations = 0;   ///< Gauss-Newton iterations
 };
 
 /// Gauss-Newton on lag and drift with a free speed gain per block of chords (so that a

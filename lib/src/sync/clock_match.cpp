@@ -30,8 +30,7 @@ struct BinSums {
 Status ClockEstimatorBase::match_profiles(const ClockFit& fit, std::size_t bins, ClockMatch* match) const {
   if (match == nullptr || bins == 0 || bins > kClockMatchBins) return Status::invalid_argument;
   const detail::ClockProfiles view = profiles();
-  if (!tracker_started_ || !robot_started_ || view.tracker_points <= view.chord_span ||
-      !(view.tracker_span_us() > 0.0))
+  if (!tracker_started_ || !robot_started_ || view.tracker_points <= view.chord_span || !(view.tracker_span_us() > 0.0))
     return Status::clock_fit_failed;
   match->count = 0;
   match->tracker_t0_us = static_cast<double>(tracker_t0_us_);

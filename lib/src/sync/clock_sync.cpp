@@ -13,9 +13,8 @@ ClockSyncConfig make_clock_sync_config(const RobotModel& speed_model) {
   return config;
 }
 
-ClockEstimatorBase::ClockEstimatorBase(const ClockSyncConfig& config, double* robot_knots_m,
-                                       std::size_t robot_capacity, ClockTrackerKnot* tracker_knots,
-                                       std::size_t tracker_capacity, double* scratch,
+ClockEstimatorBase::ClockEstimatorBase(const ClockSyncConfig& config, double* robot_knots_m, std::size_t robot_capacity,
+                                       ClockTrackerKnot* tracker_knots, std::size_t tracker_capacity, double* scratch,
                                        std::size_t scratch_capacity)
     : config_(config),
       robot_knots_m_(robot_knots_m),
@@ -42,9 +41,8 @@ bool ClockEstimatorBase::config_ok() const {
   return c.knot_interval_us > 0 && c.coarse_step_us >= 2 * c.knot_interval_us && c.max_tool_speed_m_s > 0.0 &&
          c.reanchor_points >= 2 && c.reanchor_points <= kMaxHeldTrackerPoints &&
          c.coarse_step_us % c.knot_interval_us == 0 && c.max_chord_interval_us > 0 && c.max_drift >= 0.0 &&
-         c.max_drift < 0.01 && c.min_correlation > 0.0 && c.min_correlation <= 1.0 &&
-         c.max_runner_up_ratio > 0.0 && c.max_iterations > 0 && c.chord_span_points > 0 &&
-         c.gain_block_us > 0;
+         c.max_drift < 0.01 && c.min_correlation > 0.0 && c.min_correlation <= 1.0 && c.max_runner_up_ratio > 0.0 &&
+         c.max_iterations > 0 && c.chord_span_points > 0 && c.gain_block_us > 0;
 }
 
 void ClockEstimatorBase::push_robot(const JointStateRecord& record) {
@@ -108,8 +106,9 @@ void ClockEstimatorBase::push_tracker(const TrackerPointRecord& record) {
   const ClockHeldPoint* held = held_count_ > 0 ? &held_[held_count_ - 1] : nullptr;
   const bool fits_held =
       held != nullptr && plausible_move(held->timestamp_us, held->point_m, record.timestamp_us, point);
-  const bool resumes = fits_stored && (!fits_held || speed_m_s(tracker_last_us_, tracker_last_point_m_, record.timestamp_us, point) <=
-                                                         speed_m_s(held->timestamp_us, held->point_m, record.timestamp_us, point));
+  const bool resumes =
+      fits_stored && (!fits_held || speed_m_s(tracker_last_us_, tracker_last_point_m_, record.timestamp_us, point) <=
+                                        speed_m_s(held->timestamp_us, held->point_m, record.timestamp_us, point));
   if (resumes) {
     set_aside_held();
     store_tracker_point(record.timestamp_us, point);
@@ -135,7 +134,8 @@ bool ClockEstimatorBase::plausible_move(std::uint64_t from_us, const Vec3& from_
 
 void ClockEstimatorBase::set_aside_held() {
   for (std::uint32_t k = 0; k < held_count_; ++k) {
-    if (stats_.tracker_set_aside < kClockSetAsideLog) stats_.set_aside_tracker_us[stats_.tracker_set_aside] = held_[k].timestamp_us;
+    if (stats_.tracker_set_aside < kClockSetAsideLog)
+      stats_.set_aside_tracker_us[stats_.tracker_set_aside] = held_[k].timestamp_us;
     ++stats_.tracker_set_aside;
   }
   held_count_ = 0;
@@ -233,6 +233,5 @@ Status ClockEstimatorBase::estimate(ClockFit* fit) {
   *fit = to_clock_fit(fine, coarse, robot_t0_us_, tracker_t0_us_);
   return Status::ok;
 }
-
 
 }  // namespace hivecal

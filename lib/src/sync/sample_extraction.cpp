@@ -12,8 +12,7 @@ constexpr double kUsPerS = 1e6;
 /// apart (each pair as short as possible); -1 when no pair spans the baseline.
 /// `time_us(i)` and `point_m(i)` read sample i.
 template <typename TimeAt, typename PointAt>
-double max_baseline_speed(std::size_t first, std::size_t last, double baseline_us, TimeAt time_us,
-                          PointAt point_m) {
+double max_baseline_speed(std::size_t first, std::size_t last, double baseline_us, TimeAt time_us, PointAt point_m) {
   double fastest = -1.0;
   std::size_t j = first;
   for (std::size_t i = first; i <= last; ++i) {
@@ -66,10 +65,9 @@ std::uint64_t ExtractionCounts::dropped_total() const {
   return total;
 }
 
-SampleExtractorBase::SampleExtractorBase(const ExtractionConfig& config, const ClockFit& clock,
-                                         DatasetBase* dataset, ExtractorRobotEntry* robot_storage,
-                                         std::size_t robot_capacity, ExtractorTrackerEntry* tracker_storage,
-                                         std::size_t tracker_capacity)
+SampleExtractorBase::SampleExtractorBase(const ExtractionConfig& config, const ClockFit& clock, DatasetBase* dataset,
+                                         ExtractorRobotEntry* robot_storage, std::size_t robot_capacity,
+                                         ExtractorTrackerEntry* tracker_storage, std::size_t tracker_capacity)
     : config_(config),
       clock_(clock),
       dataset_(dataset),
@@ -90,16 +88,17 @@ void SampleExtractorBase::reset(const ExtractionConfig& config, const ClockFit& 
 }
 
 double SampleExtractorBase::robot_half_span_us() const {
-  const std::uint32_t span_us = config_.window_us > config_.speed_baseline_us ? config_.window_us : config_.speed_baseline_us;
+  const std::uint32_t span_us =
+      config_.window_us > config_.speed_baseline_us ? config_.window_us : config_.speed_baseline_us;
   return 0.5 * static_cast<double>(span_us);
 }
 
 bool SampleExtractorBase::config_ok() const {
-  return dataset_ != nullptr && robot_.capacity() >= 2 && tracker_.capacity() >= 2 &&
-         config_.max_speed_m_s > 0.0 && config_.speed_baseline_us > 0 &&
-         (config_.window_us == 0 || config_.speed_baseline_us <= config_.window_us) && config_.max_robot_gap_us > 0 &&
-         config_.max_tracker_gap_us > 0 && math::is_finite(clock_.offset_at_reference_us) &&
-         math::is_finite(clock_.drift) && math::is_finite(clock_.reference_tracker_us);
+  return dataset_ != nullptr && robot_.capacity() >= 2 && tracker_.capacity() >= 2 && config_.max_speed_m_s > 0.0 &&
+         config_.speed_baseline_us > 0 && (config_.window_us == 0 || config_.speed_baseline_us <= config_.window_us) &&
+         config_.max_robot_gap_us > 0 && config_.max_tracker_gap_us > 0 &&
+         math::is_finite(clock_.offset_at_reference_us) && math::is_finite(clock_.drift) &&
+         math::is_finite(clock_.reference_tracker_us);
 }
 
 Status SampleExtractorBase::drop(double tracker_us, DropReason reason) {
@@ -122,7 +121,8 @@ Status SampleExtractorBase::push_robot(const JointStateRecord& record) {
     robot_first_us_ = t_us;
   }
   robot_latest_us_ = t_us;
-  robot_.push(ExtractorRobotEntry{t_us, q, fk_tool_point(config_.speed_model, q)});  // the oldest may go: see check_robot
+  robot_.push(
+      ExtractorRobotEntry{t_us, q, fk_tool_point(config_.speed_model, q)});  // the oldest may go: see check_robot
   return drain(false);
 }
 
@@ -218,11 +218,12 @@ bool SampleExtractorBase::check_robot(double robot_us, Window* window, DropReaso
         return false;
       }
     }
-    window->speed_m_s = config_.window_us > 0 ? max_baseline_speed(
-                                                      window->first, window->last, static_cast<double>(config_.speed_baseline_us),
-                                                      [this](std::size_t i) { return robot_[i].t_us; },
-                                                      [this](std::size_t i) { return robot_[i].tool_m; })
-                                                : speed_at_instant(robot_us);
+    window->speed_m_s =
+        config_.window_us > 0
+            ? max_baseline_speed(
+                  window->first, window->last, static_cast<double>(config_.speed_baseline_us),
+                  [this](std::size_t i) { return robot_[i].t_us; }, [this](std::size_t i) { return robot_[i].tool_m; })
+            : speed_at_instant(robot_us);
     if (!(window->speed_m_s <= config_.max_speed_m_s)) {
       *reason = window->speed_m_s < 0.0 ? DropReason::window_incomplete : DropReason::moving_robot;
       return false;
@@ -273,8 +274,8 @@ bool SampleExtractorBase::check_tracker(const ExtractorTrackerEntry& entry, doub
   for (std::size_t i = first; covered && i < last; ++i) covered = tracker_[i + 1].t_us - tracker_[i].t_us <= max_gap_us;
   if (covered) {
     *speed_m_s = max_baseline_speed(
-        first, last, static_cast<double>(config_.speed_baseline_us),
-        [this](std::size_t i) { return tracker_[i].t_us; }, [this](std::size_t i) { return tracker_[i].point_m; });
+        first, last, static_cast<double>(config_.speed_baseline_us), [this](std::size_t i) { return tracker_[i].t_us; },
+        [this](std::size_t i) { return tracker_[i].point_m; });
   }
   if (!covered || !(*speed_m_s >= 0.0)) {
     *reason = DropReason::window_incomplete;

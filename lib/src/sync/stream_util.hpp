@@ -25,6 +25,8 @@ inline Vec3 point_of(const TrackerPointRecord& record) {
 }
 
 /// A timestamp [us] as a double (exact below 2^53 us, i.e. 285 years).
-inline double us_to_double(std::uint64_t t_us) { return static_cast<double>(t_us); }
+inline double us_to_double(std::uint64_t t_us) {
+  return static_cast<double>(t_us);
+}
 
 }  // namespace hivecal::detail

@@ -22,7 +22,9 @@ std::uint64_t load_le(const std::uint8_t* data, std::size_t bytes) {
 }
 
 /// DEVICE_INFO names are printable ASCII: no control bytes can reach a log or terminal.
-bool is_name_char(std::uint8_t c) { return c >= 0x20 && c <= 0x7E; }
+bool is_name_char(std::uint8_t c) {
+  return c >= 0x20 && c <= 0x7E;
+}
 
 /// Serialises fields in order; ok() turns false instead of writing past the buffer.
 class PacketWriter {
@@ -54,8 +56,8 @@ class PacketWriter {
     }
   }
 
-  bool ok() const { return ok_; }                   ///< every field fitted and was valid
-  std::size_t size() const { return size_; }        ///< bytes written [bytes]
+  bool ok() const { return ok_; }             ///< every field fitted and was valid
+  std::size_t size() const { return size_; }  ///< bytes written [bytes]
 
  private:
   void put(std::uint64_t value, std::size_t bytes) {
@@ -151,9 +153,8 @@ struct WireTraits {
 };
 
 template <>
-struct Wire<JointStateRecord>
-    : WireTraits<JointStateRecord, PacketType::joint_state, kJointStatePayloadBytes,
-                 &DecoderStats::joint_states, &FrameHandler::on_joint_state> {
+struct Wire<JointStateRecord> : WireTraits<JointStateRecord, PacketType::joint_state, kJointStatePayloadBytes,
+                                           &DecoderStats::joint_states, &FrameHandler::on_joint_state> {
   template <typename Io, typename Record>
   static void payload(Io& io, Record& record) {
     for (auto& q : record.q_rad) io.f64(q);
@@ -163,9 +164,8 @@ struct Wire<JointStateRecord>
 };
 
 template <>
-struct Wire<TrackerPointRecord>
-    : WireTraits<TrackerPointRecord, PacketType::tracker_point, kTrackerPointPayloadBytes,
-                 &DecoderStats::tracker_points, &FrameHandler::on_tracker_point> {
+struct Wire<TrackerPointRecord> : WireTraits<TrackerPointRecord, PacketType::tracker_point, kTrackerPointPayloadBytes,
+                                             &DecoderStats::tracker_points, &FrameHandler::on_tracker_point> {
   template <typename Io, typename Record>
   static void payload(Io& io, Record& record) {
     for (auto& coordinate : record.point_m) io.f64(coordinate);
@@ -175,9 +175,8 @@ struct Wire<TrackerPointRecord>
 };
 
 template <>
-struct Wire<DeviceInfoRecord>
-    : WireTraits<DeviceInfoRecord, PacketType::device_info, kDeviceInfoPayloadBytes,
-                 &DecoderStats::device_infos, &FrameHandler::on_device_info> {
+struct Wire<DeviceInfoRecord> : WireTraits<DeviceInfoRecord, PacketType::device_info, kDeviceInfoPayloadBytes,
+                                           &DecoderStats::device_infos, &FrameHandler::on_device_info> {
   template <typename Io, typename Record>
   static void payload(Io& io, Record& record) {
     io.u8(record.device_kind);
@@ -237,7 +236,9 @@ Status encode_device_info(const DeviceInfoRecord& record, Span<std::uint8_t> out
   return encode_record(record, out, written);
 }
 
-void StreamDecoder::reset() { *this = StreamDecoder(); }
+void StreamDecoder::reset() {
+  *this = StreamDecoder();
+}
 
 void StreamDecoder::feed(const std::uint8_t* bytes, std::size_t count, FrameHandler& handler) {
   if (bytes == nullptr) return;
@@ -335,7 +336,7 @@ Status StreamDecoder::deliver(const std::uint8_t* packet, std::size_t packet_byt
 void StreamDecoder::track_sequence(std::uint16_t sequence, std::uint64_t timestamp_us) {
   SequenceState& last = sequence_;  // the one counter of the stream, whatever the packet type
   if (last.seen) {
-    const auto expected = static_cast<std::uint16_t>(last.sequence + 1u);    // 65535 + 1 -> 0: no gap
+    const auto expected = static_cast<std::uint16_t>(last.sequence + 1u);  // 65535 + 1 -> 0: no gap
     const auto skipped = static_cast<std::uint16_t>(sequence - expected);  // modulo 2^16
     if (timestamp_us < last.timestamp_us || skipped >= kRestartJump) {
       ++stats_.sequence_resets;

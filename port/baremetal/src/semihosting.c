@@ -17,9 +17,13 @@ intptr_t semihosting_call(uint32_t op, const void* arg) {
   return result;
 }
 
-void board_write(const char* text) { (void)semihosting_call(SEMIHOSTING_SYS_WRITE0, text); }
+void board_write(const char* text) {
+  (void)semihosting_call(SEMIHOSTING_SYS_WRITE0, text);
+}
 
-void board_write_char(char c) { (void)semihosting_call(SEMIHOSTING_SYS_WRITEC, &c); }
+void board_write_char(char c) {
+  (void)semihosting_call(SEMIHOSTING_SYS_WRITEC, &c);
+}
 
 _Noreturn void board_exit(int status) {
   /* SYS_EXIT_EXTENDED carries the status; plain SYS_EXIT on AArch32 could only say 0 or 1. */

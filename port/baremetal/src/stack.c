@@ -49,7 +49,9 @@ void stack_paint(void) {
   for (volatile uint32_t* word = __stack_limit; word < stack_pointer; ++word) *word = STACK_PAINT_WORD;
 }
 
-size_t board_stack_size_bytes(void) { return (size_t)((uintptr_t)__stack_top - (uintptr_t)__stack_limit); }
+size_t board_stack_size_bytes(void) {
+  return (size_t)((uintptr_t)__stack_top - (uintptr_t)__stack_limit);
+}
 
 size_t board_stack_used_bytes(void) {
   const uint32_t* word = __stack_limit;

@@ -73,22 +73,34 @@ static _Noreturn void fault(const char* name) {
 
 /* Fault entries first move SP back to the top of the stack: after an overflow into the guard
  * the old stack is unusable, and the report only needs a fresh frame (the run ends anyway). */
-#define FAULT_ENTRY(entry, report)                     \
-  __attribute__((naked)) static void entry(void) {     \
-    __asm__ volatile(                                  \
-        "movw r0, #:lower16:__stack_top\n\t"           \
-        "movt r0, #:upper16:__stack_top\n\t"           \
-        "mov sp, r0\n\t"                                \
-        "b " #report);                                 \
+#define FAULT_ENTRY(entry, report)                 \
+  __attribute__((naked)) static void entry(void) { \
+    __asm__ volatile(                              \
+        "movw r0, #:lower16:__stack_top\n\t"       \
+        "movt r0, #:upper16:__stack_top\n\t"       \
+        "mov sp, r0\n\t"                           \
+        "b " #report);                             \
   }
 
-__attribute__((used)) static void report_nmi(void) { fault("NMI"); }
-__attribute__((used)) static void report_hard_fault(void) { fault("HardFault"); }
+__attribute__((used)) static void report_nmi(void) {
+  fault("NMI");
+}
+__attribute__((used)) static void report_hard_fault(void) {
+  fault("HardFault");
+}
 /* MemManage is what a stack overflow into the MPU guard region raises (stack.c). */
-__attribute__((used)) static void report_mem_manage(void) { fault("MemManage (stack overflow?)"); }
-__attribute__((used)) static void report_bus_fault(void) { fault("BusFault"); }
-__attribute__((used)) static void report_usage_fault(void) { fault("UsageFault"); }
-__attribute__((used)) static void report_unexpected(void) { fault("unexpected exception"); }
+__attribute__((used)) static void report_mem_manage(void) {
+  fault("MemManage (stack overflow?)");
+}
+__attribute__((used)) static void report_bus_fault(void) {
+  fault("BusFault");
+}
+__attribute__((used)) static void report_usage_fault(void) {
+  fault("UsageFault");
+}
+__attribute__((used)) static void report_unexpected(void) {
+  fault("unexpected exception");
+}
 
 FAULT_ENTRY(nmi_handler, report_nmi)
 FAULT_ENTRY(hard_fault_handler, report_hard_fault)
@@ -108,17 +120,12 @@ struct VectorTable {
 __attribute__((section(".isr_vector"), used)) const struct VectorTable hivecal_vector_table = {
     __stack_top,
     {
-        Reset_Handler,
-        nmi_handler,
-        hard_fault_handler,
-        mem_manage_handler,
-        bus_fault_handler,
-        usage_fault_handler,
-        0, 0, 0, 0,          /* reserved */
-        unexpected_handler,  /* SVCall */
-        unexpected_handler,  /* DebugMonitor */
-        0,                   /* reserved */
-        unexpected_handler,  /* PendSV */
-        unexpected_handler,  /* SysTick */
+        Reset_Handler, nmi_handler, hard_fault_handler, mem_manage_handler, bus_fault_handler, usage_fault_handler, 0,
+        0, 0, 0,            /* reserved */
+        unexpected_handler, /* SVCall */
+        unexpected_handler, /* DebugMonitor */
+        0,                  /* reserved */
+        unexpected_handler, /* PendSV */
+        unexpected_handler, /* SysTick */
     },
 };

@@ -20,7 +20,9 @@ int _kill(int pid, int signal);
 int _getpid(void);
 _Noreturn void __assert_func(const char* file, int line, const char* function, const char* expression);
 
-_Noreturn void _exit(int status) { board_exit(status); }
+_Noreturn void _exit(int status) {
+  board_exit(status);
+}
 
 /* stdout/stderr go to the semihosting console, character by character (no buffer to own). */
 int _write(int file, const char* data, int length) {
@@ -58,7 +60,9 @@ int _fstat(int file, struct stat* status) {
   return 0;
 }
 
-int _isatty(int file) { return file >= 0 && file <= 2; }
+int _isatty(int file) {
+  return file >= 0 && file <= 2;
+}
 
 /* abort() -> raise() -> _kill(): stop the run as a fault. */
 int _kill(int pid, int signal) {
@@ -68,7 +72,9 @@ int _kill(int pid, int signal) {
   board_exit(BOARD_EXIT_FAULT);
 }
 
-int _getpid(void) { return 1; }
+int _getpid(void) {
+  return 1;
+}
 
 /* Replaces newlib's, which formats with fiprintf (stdio buffers -> malloc). Reached only by
  * assert() in builds without NDEBUG (e.g. Eigen's range checks in a Debug firmware). */

@@ -12,7 +12,9 @@
 
 namespace hivecal::port {
 
-CaptureWriter::~CaptureWriter() { (void)close(); }
+CaptureWriter::~CaptureWriter() {
+  (void)close();
+}
 
 Error CaptureWriter::open(const std::string& path, bool replace) {
   path_ = path;
@@ -24,8 +26,9 @@ Error CaptureWriter::open(const std::string& path, bool replace) {
   const int mode = replace ? O_TRUNC : O_EXCL;  // never truncates an existing capture unasked
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | mode | O_CLOEXEC, 0666);
   if (fd_ < 0) {
-    return Error::output(quoted(path, 200) + (errno == EEXIST ? ": exists; refusing to overwrite a capture (--force replaces it)"
-                                                              : ": cannot create: " + system_message(errno)));
+    return Error::output(quoted(path, 200) + (errno == EEXIST
+                                                  ? ": exists; refusing to overwrite a capture (--force replaces it)"
+                                                  : ": cannot create: " + system_message(errno)));
   }
   return Error{};
 }

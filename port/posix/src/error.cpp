@@ -25,8 +25,12 @@ std::string printable(std::string_view text, std::size_t max_bytes) {
   return out;
 }
 
-std::string quoted(std::string_view text, std::size_t max_bytes) { return "'" + printable(text, max_bytes) + "'"; }
+std::string quoted(std::string_view text, std::size_t max_bytes) {
+  return "'" + printable(text, max_bytes) + "'";
+}
 
-std::string system_message(int errno_value) { return std::strerror(errno_value); }
+std::string system_message(int errno_value) {
+  return std::strerror(errno_value);
+}
 
 }  // namespace hivecal::port

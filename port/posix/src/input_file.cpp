@@ -30,7 +30,9 @@ std::string describe_type(mode_t mode) {
   return "a special file";
 }
 
-std::string mib(std::uint64_t bytes) { return std::to_string(bytes >> 20) + " MiB"; }
+std::string mib(std::uint64_t bytes) {
+  return std::to_string(bytes >> 20) + " MiB";
+}
 
 }  // namespace
 
@@ -57,7 +59,9 @@ bool same_file(const FileIdentity& a, const FileIdentity& b) {
   return !a.canonical.empty() && a.canonical == b.canonical;
 }
 
-InputFile::~InputFile() { close(); }
+InputFile::~InputFile() {
+  close();
+}
 
 void InputFile::close() {
   if (fd_ >= 0 && !is_stdin_) ::close(fd_);

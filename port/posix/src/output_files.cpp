@@ -52,7 +52,9 @@ std::string temp_pattern(const std::string& path) {
 }
 
 /// Mode of a new file: 0666 & ~umask, as open() would give it.
-mode_t default_mode() { return static_cast<mode_t>(0666 & ~umask_bits()); }
+mode_t default_mode() {
+  return static_cast<mode_t>(0666 & ~umask_bits());
+}
 
 std::string kind_of(mode_t mode) {
   if (S_ISCHR(mode)) return "a character device";
@@ -77,8 +79,8 @@ Error check_folder_writable(const std::string& folder, const std::string& who) {
   }
   if (!S_ISDIR(info.st_mode)) return Error::output(who + ": " + quoted(folder, 200) + " is not a folder");
   if (::access(folder.c_str(), W_OK | X_OK) != 0) {
-    return Error::output(who + ": cannot create files in folder " + quoted(folder, 200) + " (" +
-                         system_message(errno) + ")");
+    return Error::output(who + ": cannot create files in folder " + quoted(folder, 200) + " (" + system_message(errno) +
+                         ")");
   }
   return Error{};
 }
@@ -191,22 +193,24 @@ Error StagedFile::finish() {
 // --- OutputSet -----------------------------------------------------------------------------
 
 struct OutputSet::Output {
-  std::string label;                 ///< option name, for messages
-  std::string path;                  ///< as given
-  bool is_stdout = false;            ///< "-"
-  bool is_folder = false;            ///< a folder of files
-  std::string target;                ///< final path (a symlink resolved)
-  bool existed = false;              ///< the file / folder was there before the run
-  struct stat old {};                ///< its metadata when it existed (a file)
-  std::string temp_folder;           ///< a new folder is built here, then renamed
+  std::string label;                               ///< option name, for messages
+  std::string path;                                ///< as given
+  bool is_stdout = false;                          ///< "-"
+  bool is_folder = false;                          ///< a folder of files
+  std::string target;                              ///< final path (a symlink resolved)
+  bool existed = false;                            ///< the file / folder was there before the run
+  struct stat old {};                              ///< its metadata when it existed (a file)
+  std::string temp_folder;                         ///< a new folder is built here, then renamed
   std::vector<std::unique_ptr<StagedFile>> files;  ///< staged content
-  std::vector<std::string> finals;   ///< where each staged file goes (inside temp_folder for a new folder)
-  std::vector<bool> moved;           ///< renamed into place already
+  std::vector<std::string> finals;  ///< where each staged file goes (inside temp_folder for a new folder)
+  std::vector<bool> moved;          ///< renamed into place already
   bool folder_moved = false;
 };
 
 OutputSet::OutputSet() = default;
-OutputSet::~OutputSet() { abandon(); }
+OutputSet::~OutputSet() {
+  abandon();
+}
 
 Error OutputSet::check_distinct(const FileIdentity& identity, const std::string& label, const std::string& path) const {
   for (const Input& input : inputs_) {
@@ -218,8 +222,8 @@ Error OutputSet::check_distinct(const FileIdentity& identity, const std::string&
   for (const auto& output : outputs_) {
     if (output->is_stdout) continue;
     if (same_file(identity, identify(output->target))) {
-      return Error::usage(named(label, path) + " is the same file as the output " +
-                          named(output->label, output->path) + ": each output needs its own path");
+      return Error::usage(named(label, path) + " is the same file as the output " + named(output->label, output->path) +
+                          ": each output needs its own path");
     }
   }
   return Error{};
@@ -230,8 +234,8 @@ Error OutputSet::add_input(const std::string& path, const std::string& label) {
   Input input{label, path, identify(path)};
   for (const auto& output : outputs_) {
     if (!output->is_stdout && same_file(input.identity, identify(output->target))) {
-      return Error::usage(named(output->label, output->path) + " is the same file as the input " +
-                          named(label, path) + ": refusing to overwrite an input");
+      return Error::usage(named(output->label, output->path) + " is the same file as the input " + named(label, path) +
+                          ": refusing to overwrite an input");
     }
   }
   inputs_.push_back(std::move(input));
@@ -320,7 +324,8 @@ Error OutputSet::stage_in_folder(Output& folder, const std::string& name, Staged
   }
   std::string pattern = temp_pattern(final_path);
   staged->fd_ = ::mkostemp(pattern.data(), O_CLOEXEC);
-  if (staged->fd_ < 0) return Error::output(who + ": cannot create a temporary file beside it: " + system_message(errno));
+  if (staged->fd_ < 0)
+    return Error::output(who + ": cannot create a temporary file beside it: " + system_message(errno));
   staged->temp_path_ = pattern;
   register_temporary(pattern, false);
   *file = staged.get();
@@ -447,8 +452,8 @@ Error OutputSet::commit() {
       const bool existed = ::access(final_path.c_str(), F_OK) == 0;
       if (!existed || ::link(final_path.c_str(), backup.c_str()) != 0) backup.clear();  // or no hard links here
       if (std::rename(output->files[k]->temp_path_.c_str(), final_path.c_str()) != 0) {
-        error = Error::output(named(output->label, output->path) + ": cannot move the new file into place: " +
-                              system_message(errno));
+        error = Error::output(named(output->label, output->path) +
+                              ": cannot move the new file into place: " + system_message(errno));
         if (!backup.empty()) ::unlink(backup.c_str());
       } else {
         output->moved[k] = true;
@@ -459,8 +464,8 @@ Error OutputSet::commit() {
     if (error.ok() && !output->temp_folder.empty()) {
       const std::string parent = folder_of(output->target);
       if (!make_folders(parent) || std::rename(output->temp_folder.c_str(), output->target.c_str()) != 0) {
-        error = Error::output(named(output->label, output->path) + ": cannot move the new folder into place: " +
-                              system_message(errno));
+        error = Error::output(named(output->label, output->path) +
+                              ": cannot move the new folder into place: " + system_message(errno));
       } else {
         output->folder_moved = true;
         done.push_back(Moved{output->target, "", false, output.get(), output->files.size()});

@@ -50,8 +50,9 @@ Error connect_to(const std::string& host, int port, int timeout_ms, Socket* sock
       if (result == 1 && ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &problem, &size) == 0 && problem == 0) {
         result = 0;
       } else {
-        error = Error::input("--rtde " + where + ": " +
-                             (result == 0 ? "no answer within " + std::to_string(timeout_ms) + " ms" : system_message(problem)));
+        error = Error::input(
+            "--rtde " + where + ": " +
+            (result == 0 ? "no answer within " + std::to_string(timeout_ms) + " ms" : system_message(problem)));
         result = -1;
       }
     } else if (result != 0) {
@@ -92,7 +93,8 @@ Error send_package(int fd, RtdePackage type, const std::vector<std::uint8_t>& pa
 enum class Received { package, timeout, closed, stopped };
 
 /// Reads exactly `count` bytes, waiting at most `timeout_ms` between arrivals.
-Received read_exact(int fd, std::uint8_t* out, std::size_t count, int timeout_ms, const volatile std::sig_atomic_t* stop) {
+Received read_exact(int fd, std::uint8_t* out, std::size_t count, int timeout_ms,
+                    const volatile std::sig_atomic_t* stop) {
   std::size_t done = 0;
   std::int64_t waited_ms = 0;
   while (done < count) {
@@ -178,7 +180,8 @@ Error request(int fd, RtdePackage type, const std::vector<std::uint8_t>& payload
       return Error::input(std::string("--rtde: no reply to '") + name + "' within " +
                           std::to_string(options.reply_timeout_ms) + " ms");
     }
-    if (r == Received::closed) return Error::input(std::string("--rtde: the controller closed the connection after '") + name + "'");
+    if (r == Received::closed)
+      return Error::input(std::string("--rtde: the controller closed the connection after '") + name + "'");
     if (r == Received::stopped) return Error::input("--rtde: stopped during the setup");
     if (got == static_cast<std::uint8_t>(type)) return Error{};
     if (got == static_cast<std::uint8_t>(RtdePackage::text_message)) {
@@ -253,12 +256,14 @@ Error record_rtde(const std::string& host, int port, const RtdeRecordOptions& op
   }
   const std::uint8_t recipe = reply[0];
   error = request(fd, RtdePackage::start, {}, options, stop, &reply, stats);
-  if (error.ok() && (reply.size() != 1 || reply[0] != 1)) error = Error::input("--rtde: the controller refuses to start");
+  if (error.ok() && (reply.size() != 1 || reply[0] != 1))
+    error = Error::input("--rtde: the controller refuses to start");
   if (error.ok()) error = write_row(rtde_log_header());
   constexpr std::size_t kValues = 13;  // timestamp + 6 + 6
   const std::int64_t start_ms = monotonic_ms();
   while (error.ok()) {
-    if (options.duration_s > 0.0 && static_cast<double>(monotonic_ms() - start_ms) >= options.duration_s * 1000.0) break;
+    if (options.duration_s > 0.0 && static_cast<double>(monotonic_ms() - start_ms) >= options.duration_s * 1000.0)
+      break;
     std::uint8_t type = 0;
     const Received r = read_package(fd, 200, stop, &type, &reply, &error);
     if (!error.ok() || r == Received::stopped) break;

@@ -42,7 +42,9 @@ bool baud_supported(int baud) {
 
 SerialPort::SerialPort(SerialOptions options) : options_(std::move(options)) {}
 
-SerialPort::~SerialPort() { close(); }
+SerialPort::~SerialPort() {
+  close();
+}
 
 void SerialPort::close() {
   if (fd_ >= 0) ::close(fd_);

@@ -28,7 +28,9 @@ TEST(Joints, CountsTheSixAxesOfTheModelledArms) {
   EXPECT_TRUE((std::is_same<decltype(kJointCount), const int>::value));
 }
 
-TEST(Joints, HeaderDoesNotBringInEigen) { EXPECT_FALSE(kJointsHeaderPullsEigen); }
+TEST(Joints, HeaderDoesNotBringInEigen) {
+  EXPECT_FALSE(kJointsHeaderPullsEigen);
+}
 
 TEST(Joints, SizesTheJointVectorTheWireRecordAndTheModel) {
   EXPECT_EQ(JointVector::RowsAtCompileTime, kJointCount);

@@ -9,7 +9,9 @@
 namespace hivecal {
 namespace {
 
-TEST(OwnRandom, StreamIsTheDocumentedOne) { EXPECT_CHECKS(test::random_stream_is_the_documented_one()); }
+TEST(OwnRandom, StreamIsTheDocumentedOne) {
+  EXPECT_CHECKS(test::random_stream_is_the_documented_one());
+}
 
 TEST(OwnRandom, DistributionsHaveTheirMoments) {
   Random random(7);

@@ -145,7 +145,9 @@ TEST(Span, SubspanHoldsExactlyTheRequestedElementsOverRandomCases) {
   }
 }
 
-TEST(Span, HeaderDoesNotBringInEigen) { EXPECT_FALSE(kSpanHeaderPullsEigen); }
+TEST(Span, HeaderDoesNotBringInEigen) {
+  EXPECT_FALSE(kSpanHeaderPullsEigen);
+}
 
 }  // namespace
 }  // namespace hivecal

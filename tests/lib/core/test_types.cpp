@@ -186,7 +186,7 @@ TEST(Types, AllFiniteChecksEveryCoefficient) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
   Mat3 m;
-  m << 1.0, -0.0, std::numeric_limits<double>::max(),  //
+  m << 1.0, -0.0, std::numeric_limits<double>::max(),                                          //
       -std::numeric_limits<double>::max(), std::numeric_limits<double>::denorm_min(), 1e-300,  //
       3.0, 4.0, 5.0;
   bool finite = false;

@@ -44,7 +44,9 @@ void fill(std::size_t count, DatasetBase* out) {
 using test::quick_options;
 
 /// The job's answer (the tests check stage_count first).
-const CalibrationStage& last(const CalibrationResult& r) { return r.stages[r.stage_count - 1]; }
+const CalibrationStage& last(const CalibrationResult& r) {
+  return r.stages[r.stage_count - 1];
+}
 
 const RobotModel& start() {
   static const RobotModel model = nominal_model(RobotType::ur5);
@@ -124,9 +126,9 @@ TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
   ASSERT_EQ(calibrate_paper6_abc(baseline, dataset.train(), {}, abc_options, kPaper6DefaultHalfWidth_m, &cost, &abc,
                                  &population),
             Status::ok);
-  ASSERT_EQ(calibrate_lm(population.model, &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace,
-                         &lm),
-            Status::ok);
+  ASSERT_EQ(
+      calibrate_lm(population.model, &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace, &lm),
+      Status::ok);
   // What LM dropped goes back to its start value, and LM runs once more from there.
   ModelParams from = to_params(population.model);
   const ModelParams nominal = to_params(baseline);
@@ -138,9 +140,9 @@ TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
     }
   }
   EXPECT_TRUE(reset) << "ABC moves d1, which the full model cannot separate from the base";
-  ASSERT_EQ(calibrate_lm(from_params(from), &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace,
-                         &lm),
-            Status::ok);
+  ASSERT_EQ(
+      calibrate_lm(from_params(from), &population.base_to_tracker, dataset.train(), LmOptions{}, &lm_workspace, &lm),
+      Status::ok);
   for (int i = 0; i < kModelParamCount; ++i) {
     if (!mask_has(lm.identifiability.kept_mask, i)) {
       EXPECT_EQ(to_params(last(result).model)(i), nominal(i)) << i;
@@ -271,24 +273,24 @@ TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
   fill(120, &dataset);
   CalibrationOptions no_training = options;
   no_training.train_fraction = 0.0;
-  expect_failure(calibrate(start(), &dataset, no_training, &workspace, &result),
-                 Status::invalid_argument, CalibrationStep::split);
+  expect_failure(calibrate(start(), &dataset, no_training, &workspace, &result), Status::invalid_argument,
+                 CalibrationStep::split);
 
   dataset.clear();
   for (int i = 0; i < 40; ++i) ASSERT_EQ(dataset.add(JointVector::Zero(), Vec3(1.0, 2.0, 3.0)), Status::ok);
-  expect_failure(calibrate(start(), &dataset, options, &workspace, &result),
-                 Status::degenerate_geometry, CalibrationStep::baseline);
+  expect_failure(calibrate(start(), &dataset, options, &workspace, &result), Status::degenerate_geometry,
+                 CalibrationStep::baseline);
 
   fill(120, &dataset);
   CalibrationOptions crowd = options;
   crowd.abc_food_sources = 41;  // the workspace holds 40
-  expect_failure(calibrate(start(), &dataset, crowd, &workspace, &result),
-                 Status::population_out_of_range, CalibrationStep::abc);
+  expect_failure(calibrate(start(), &dataset, crowd, &workspace, &result), Status::population_out_of_range,
+                 CalibrationStep::abc);
   CalibrationOptions gsa_crowd = quick_options(CalibrationMethod::all);
   gsa_crowd.gsa_agents = 41;
   fill(120, &dataset);
-  expect_failure(calibrate(start(), &dataset, gsa_crowd, &workspace, &result),
-                 Status::population_out_of_range, CalibrationStep::gsa);
+  expect_failure(calibrate(start(), &dataset, gsa_crowd, &workspace, &result), Status::population_out_of_range,
+                 CalibrationStep::gsa);
 
   // A workspace without GSA (the firmware's): GSA refused as over capacity, ABC+LM runs.
   static CalibrationWorkspace<kSamples, float, 40, 8, 0, kPaper6Dimension, 1, 0, 0> no_gsa;
@@ -300,13 +302,12 @@ TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
 
   static CalibrationWorkspace<32, float, 40, 8> tiny;  // cost room for 32 training samples
   fill(120, &dataset);
-  expect_failure(calibrate(start(), &dataset, options, &tiny, &result), Status::dataset_full,
-                 CalibrationStep::abc);
+  expect_failure(calibrate(start(), &dataset, options, &tiny, &result), Status::dataset_full, CalibrationStep::abc);
 
   fill(120, &dataset);
   Cancel cancel;
-  expect_failure(calibrate(start(), &dataset, options, &workspace, &result, &cancel),
-                 Status::solver_cancelled, CalibrationStep::lm);
+  expect_failure(calibrate(start(), &dataset, options, &workspace, &result, &cancel), Status::solver_cancelled,
+                 CalibrationStep::lm);
   EXPECT_EQ(cancel.begun, 2);
   EXPECT_EQ(cancel.ended, 1);
   EXPECT_EQ(cancel.population_iterations, 20);

@@ -113,7 +113,8 @@ Validation validate(Bending bending) {
   fill(bending, 11, 120, &dataset);
   fill(bending, 12, 300, &fresh);
   Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = calibrate(nominal_model(RobotType::ur5), &dataset, compliance_options(), &workspace, &result));
+  EXPECT_NO_HEAP(status =
+                     calibrate(nominal_model(RobotType::ur5), &dataset, compliance_options(), &workspace, &result));
   EXPECT_EQ(status, Status::ok);
   EXPECT_EQ(result.stage_count, 2u);
   if (result.stage_count != 2) return {};
@@ -124,11 +125,12 @@ Validation validate(Bending bending) {
   Validation v;
   for (int k = 0; k < 2; ++k) {
     const CalibrationStage& stage = result.stages[k];
-    const double mae_m = position_error_stats(stage.model, stage.base_to_tracker, fresh.samples()).mae(ErrorAxis::norm_3d);
+    const double mae_m =
+        position_error_stats(stage.model, stage.base_to_tracker, fresh.samples()).mae(ErrorAxis::norm_3d);
     (k == 0 ? v.rigid_m : v.compliant_m) = mae_m;
   }
-  std::printf("  test MAE rigid %.2f um, LM+compliance %.2f um; coefficients", 1e6 * result.stages[0].test.mae(ErrorAxis::norm_3d),
-              1e6 * result.stages[1].test.mae(ErrorAxis::norm_3d));
+  std::printf("  test MAE rigid %.2f um, LM+compliance %.2f um; coefficients",
+              1e6 * result.stages[0].test.mae(ErrorAxis::norm_3d), 1e6 * result.stages[1].test.mae(ErrorAxis::norm_3d));
   const ComplianceModel& c = result.stages[1].model.compliance;
   for (int t = 0; t < c.term_count; ++t) std::printf(" %s %.3g", compliance_term_name(c, t), c.coefficient[t]);
   std::printf("\n  fresh-pose MAE rigid %.2f um, LM+compliance %.2f um (ratio %.3f)\n", 1e6 * v.rigid_m,
@@ -142,14 +144,15 @@ double noise_floor_m() {
   fill(Bending::none, 12, 300, &fresh);
   EXPECT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, compliance_options(), &workspace, &result), Status::ok);
   const CalibrationStage& stage = result.stages[0];
-  const double floor_m = position_error_stats(stage.model, stage.base_to_tracker, fresh.samples()).mae(ErrorAxis::norm_3d);
+  const double floor_m =
+      position_error_stats(stage.model, stage.base_to_tracker, fresh.samples()).mae(ErrorAxis::norm_3d);
   std::printf("  noise floor (no bending, rigid full LM) %.2f um\n", 1e6 * floor_m);
   return floor_m;
 }
 
 // Measured (x86-64): noise floor 24.95 um; rigid 30.38 um, LM+compliance 25.29 um (0.833 x,
-// 6 % of the rigid fit's excess over the floor left; c_j3_tool fixed by the 3-sigma test). The bending is small against the noise
-// here, so the floor itself is 0.82 x the rigid fit: the ratio's bar is 0.85, the excess's 0.2.
+// 6 % of the rigid fit's excess over the floor left; c_j3_tool fixed by the 3-sigma test). The bending is small against
+// the noise here, so the floor itself is 0.82 x the rigid fit: the ratio's bar is 0.85, the excess's 0.2.
 TEST(CalibrationCompliance, OtherSessionDeflectionValidatesAtTheNoiseFloor) {
   const double floor_m = noise_floor_m();
   const Validation v = validate(Bending::other_session);

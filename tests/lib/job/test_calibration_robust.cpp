@@ -311,8 +311,7 @@ TEST(CalibrationRobust, WhatLmDropsStaysAtItsStartValue) {
 
 TEST(CalibrationRobust, SetsThatDetermineNothingAreRefused) {
   fill(2, &dataset);
-  EXPECT_EQ(calibrate(start(), &dataset, options(CalibrationMethod::lm), &workspace, &result),
-            Status::too_few_samples);
+  EXPECT_EQ(calibrate(start(), &dataset, options(CalibrationMethod::lm), &workspace, &result), Status::too_few_samples);
   EXPECT_EQ(result.step, CalibrationStep::baseline);
   dataset.clear();
   for (int i = 0; i < 6; ++i) {  // one joint position, six readings: one point
@@ -370,8 +369,7 @@ TEST(CalibrationRobust, CrossValidationFoldsPartitionTheSetAndMatchAManualRun) {
 
 TEST(CalibrationRobust, LeaveOneOutLeavesTheBlunderOut) {
   fill_with_blunder(18, 4, &dataset);
-  ASSERT_EQ(cross_validate(start(), &dataset, options(CalibrationMethod::lm), 0, &workspace, &result, &cv),
-            Status::ok);
+  ASSERT_EQ(cross_validate(start(), &dataset, options(CalibrationMethod::lm), 0, &workspace, &result, &cv), Status::ok);
   EXPECT_EQ(cv.fold_count, 17u);
   EXPECT_EQ(cv.sample_count, 17u);
   for (std::size_t f = 0; f < cv.fold_count; ++f) EXPECT_EQ(cv.folds[f].test.count, 1u);
@@ -440,7 +438,8 @@ TEST(CalibrationBlunders, ManyFailingPosesAreTheModelNotBlundersAndNoneIsRemoved
   fill(90, &clean);
   dataset.clear();
   for (const Sample& s : clean.samples()) {
-    const Vec3 extra = s.index % 5 == 0 ? Vec3(300e-6 * Vec3(random.normal(), random.normal(), random.normal())) : Vec3(Vec3::Zero());
+    const Vec3 extra =
+        s.index % 5 == 0 ? Vec3(300e-6 * Vec3(random.normal(), random.normal(), random.normal())) : Vec3(Vec3::Zero());
     ASSERT_EQ(dataset.add(s.q_rad, s.point_m + extra), Status::ok);
   }
   CalibrationOptions o = options(CalibrationMethod::lm);
@@ -469,7 +468,8 @@ TEST(CalibrationBlunders, SmallAndDegenerateSetsFinishAndDropNothingSilently) {
     CalibrationOptions o = options(CalibrationMethod::abc_lm);
     const Status status = calibrate(start(), &dataset, o, &workspace, &result);
     EXPECT_TRUE(status == Status::ok || result.step == CalibrationStep::baseline)
-        << seed << " (" << count << " poses): " << status_message(status) << " at " << calibration_step_name(result.step);
+        << seed << " (" << count << " poses): " << status_message(status) << " at "
+        << calibration_step_name(result.step);
     if (status == Status::ok) {
       EXPECT_EQ(result.train_count + result.outlier_count, count) << seed;
       // Leave-one-out on the same set finishes too from 8 poses on (a fold of 4 samples can

@@ -93,11 +93,11 @@ TEST(CalibrationWorkspaceView, HasTheBitsOfTheFixedWorkspaceWithoutHeap) {
 TEST(CalibrationWorkspaceView, RefusesABadArenaAndAnUnattachedOneFailsCleanly) {
   static View view;
   alignas(std::max_align_t) static unsigned char small[64];
-  EXPECT_EQ(view.attach(Span<unsigned char>(small), 10), Status::invalid_argument);   // too small
+  EXPECT_EQ(view.attach(Span<unsigned char>(small), 10), Status::invalid_argument);  // too small
   std::vector<unsigned char> bytes(View::arena_bytes(10) + 32);
   unsigned char* odd = bytes.data() + (reinterpret_cast<std::uintptr_t>(bytes.data()) % 2 == 0 ? 1 : 0);
   EXPECT_EQ(view.attach(Span<unsigned char>(odd, View::arena_bytes(10)), 10), Status::invalid_argument);  // misaligned
-  EXPECT_EQ(view.attach(Span<unsigned char>(small), 0), Status::invalid_argument);    // no samples
+  EXPECT_EQ(view.attach(Span<unsigned char>(small), 0), Status::invalid_argument);                        // no samples
   EXPECT_EQ(view.samples(), 0u);
   EXPECT_EQ(view.open_abc().cost, nullptr);
   EXPECT_EQ(view.open_lm(), nullptr);

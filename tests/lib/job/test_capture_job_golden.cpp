@@ -124,8 +124,8 @@ TEST_F(CaptureJob, TheComplianceJobFitsTheSimulatedCompliance) {
   EXPECT_LT(compliant, 100e-6) << "nominal " << before << " m";
   // The session was simulated with joint 2 and 3 compliance (truth.json): modelling it must help.
   EXPECT_LT(compliant, rigid);
-  std::printf("compliance job: test MAE nominal %.3g, LM %.3g, LM+compliance %.3g m, digest 0x%016llx\n", before,
-              rigid, compliant, static_cast<unsigned long long>(report.digest));
+  std::printf("compliance job: test MAE nominal %.3g, LM %.3g, LM+compliance %.3g m, digest 0x%016llx\n", before, rigid,
+              compliant, static_cast<unsigned long long>(report.digest));
   EXPECT_EQ(report.digest, test::kComplianceJobGoldenDigest)
       << std::hex << "0x" << report.digest << " (update golden_capture_job.hpp only for an intended change)";
 }

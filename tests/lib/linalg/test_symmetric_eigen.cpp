@@ -448,8 +448,9 @@ TEST(SymmetricEigenLowest, StagesAgreeWithTheOneCall) {
     EXPECT_EQ(symmetric_eigenvectors_lowest(work, reduction, values, 7, &vectors), Status::ok);
   });
   EXPECT_EQ(std::memcmp(values.data(), one_call.values.data(), sizeof(double) * kSymmetricCapacity), 0);
-  EXPECT_EQ(std::memcmp(vectors.data(), one_call.vectors.data(), sizeof(double) * kSymmetricCapacity * kSymmetricCapacity),
-            0);
+  EXPECT_EQ(
+      std::memcmp(vectors.data(), one_call.vectors.data(), sizeof(double) * kSymmetricCapacity * kSymmetricCapacity),
+      0);
   EXPECT_EQ(iterations, one_call.iterations);
   // The vectors can be asked for again, more or fewer, from the same reduction.
   SymmetricMatrix more = SymmetricMatrix::Zero();

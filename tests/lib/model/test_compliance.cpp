@@ -16,7 +16,9 @@
 namespace hivecal {
 namespace {
 
-bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
+bool same_bits(const Vec3& a, const Vec3& b) {
+  return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0;
+}
 
 RobotModel compliant_ur5e(ComplianceLoad load) {
   RobotModel model = nominal_model(RobotType::ur5e);
@@ -95,7 +97,8 @@ TEST(Compliance, DeflectionIsTheRigidChainAtQPlusDqComputedByHand) {
         const Vec3 o = frame[term.joint].translation_m;
         double basis = 0.0;
         if (load == ComplianceLoad::point) {
-          const Vec3 p = term.frame == kToolLoadFrame ? frame[kJointCount].apply(model.tool_m) : frame[term.frame].translation_m;
+          const Vec3 p =
+              term.frame == kToolLoadFrame ? frame[kJointCount].apply(model.tool_m) : frame[term.frame].translation_m;
           basis = z.dot((p - o).cross(g));
         } else {
           for (int link = term.joint; link < kJointCount; ++link) {

@@ -87,7 +87,9 @@ void fill_three_targets(int poses, DatasetBase* dataset) {
 }
 
 /// Pose of a sample of fill_three_targets.
-int pose_of(const Sample& s) { return static_cast<int>(s.q_rad(0)); }
+int pose_of(const Sample& s) {
+  return static_cast<int>(s.q_rad(0));
+}
 
 // Several reflectors at one pose: a split that put some of them in training and the others
 // in the test would test on what was trained (the same joints), so poses move whole.
@@ -111,7 +113,7 @@ TEST(Dataset, SeveralTargetsSplitWholePoses) {
     EXPECT_EQ(train_poses.size(), 21u);
     EXPECT_EQ(test_poses.size(), 9u);
     for (int pose : test_poses) EXPECT_EQ(train_poses.count(pose), 0u) << "seed " << seed << " pose " << pose;
-    EXPECT_EQ(seen.size(), 90u);  // nothing lost or duplicated
+    EXPECT_EQ(seen.size(), 90u);               // nothing lost or duplicated
     for (std::size_t i = 0; i < 90; i += 3) {  // each pose's run stays in target order
       for (std::size_t t = 0; t < 3; ++t) EXPECT_EQ(dataset.samples()[i + t].target, static_cast<int>(t));
     }
@@ -150,7 +152,7 @@ TEST(Dataset, SeveralTargetsFoldsHoldOutWholePoses) {
     EXPECT_EQ(dataset.test().size() % 3, 0u);
     EXPECT_EQ(train_poses.size() + dataset.test().size() / 3, 10u);
   }
-  EXPECT_EQ(held_out.size(), 10u);  // every pose held out once
+  EXPECT_EQ(held_out.size(), 10u);                      // every pose held out once
   ASSERT_EQ(dataset.split_fold(9, 10, 7), Status::ok);  // leave one pose out
   EXPECT_EQ(dataset.test().size(), 3u);
 }
@@ -206,8 +208,8 @@ namespace {
 TEST(PoseRunEnd, ARunOfEqualJointsIsOnePoseAnyDifferenceEndsIt) {
   Sample s[5];
   for (Sample& x : s) x.q_rad << 0.1, -1.0, 1.2, -0.4, 1.5, 0.3;
-  s[1].target = 1;             // another reflector at the same joints: the same pose
-  s[3].q_rad(5) += 1e-12;      // the least difference: a new pose
+  s[1].target = 1;         // another reflector at the same joints: the same pose
+  s[3].q_rad(5) += 1e-12;  // the least difference: a new pose
   const Span<const Sample> all(s, 5);
   EXPECT_EQ(pose_run_end(all, 0), 3u);
   EXPECT_EQ(pose_run_end(all, 1), 3u);

@@ -97,9 +97,10 @@ TEST(DhConvention, RowsComeBackAsTheyWereAndCalibratedWristLinksFoldIntoTheTool)
     ASSERT_EQ(model_from_modified_dh(back, back_tool, &again, &again_base), Status::ok);
     for (int pose = 0; pose < 10; ++pose) {
       const JointVector q = random_joints(&random);
-      EXPECT_LT((again_base.transform().apply(fk_tool_point(again, q)) - base.transform().apply(fk_tool_point(model, q)))
-                    .norm(),
-                1e-12);
+      EXPECT_LT(
+          (again_base.transform().apply(fk_tool_point(again, q)) - base.transform().apply(fk_tool_point(model, q)))
+              .norm(),
+          1e-12);
     }
   }
 }

@@ -108,10 +108,10 @@ TEST(FullParams, MaskCountAndIndicesAgreeWithABitLoopOnRandomMasks) {
 
 TEST(FullParams, EveryParameterHasItsName) {
   static const char* const kExpected[kFullParamCount] = {
-      "theta1", "d1",     "a1",      "alpha1",  "theta2",  "d2",      "a2",     "alpha2",
-      "theta3", "d3",     "a3",      "alpha3",  "theta4",  "d4",      "a4",     "alpha4",
-      "theta5", "d5",     "a5",      "alpha5",  "theta6",  "d6",      "a6",     "alpha6",
-      "tool_x", "tool_y", "tool_z",  "base_rx", "base_ry", "base_rz", "base_tx", "base_ty",
+      "theta1",  "d1",          "a1",          "alpha1",      "theta2",     "d2",      "a2",      "alpha2",
+      "theta3",  "d3",          "a3",          "alpha3",      "theta4",     "d4",      "a4",      "alpha4",
+      "theta5",  "d5",          "a5",          "alpha5",      "theta6",     "d6",      "a6",      "alpha6",
+      "tool_x",  "tool_y",      "tool_z",      "base_rx",     "base_ry",    "base_rz", "base_tx", "base_ty",
       "base_tz", "compliance1", "compliance2", "compliance3", "compliance4"};
   const char* names[kFullParamCount] = {};
   EXPECT_NO_HEAP(for (int i = 0; i < kFullParamCount; ++i) names[i] = full_param_name(i));
@@ -211,7 +211,8 @@ TEST(ApplyFullIncrement, AddsToTheModelAndToTheUsedComplianceTermsOnly) {
     EXPECT_EQ(model.joints[1].a_m, before.joints[1].a_m + increment(model_param_index(1, DhField::a)));
     EXPECT_EQ(model.tool_m.z(), before.tool_m.z() + increment(tool_param_index(2)));
     for (int t = 0; t < 2; ++t) {
-      EXPECT_EQ(model.compliance.coefficient[t], before.compliance.coefficient[t] + increment(compliance_param_index(t)));
+      EXPECT_EQ(model.compliance.coefficient[t],
+                before.compliance.coefficient[t] + increment(compliance_param_index(t)));
     }
     // Terms 3 and 4 are not in use (term_count 2): their coefficients stay.
     EXPECT_EQ(model.compliance.coefficient[2], before.compliance.coefficient[2]);

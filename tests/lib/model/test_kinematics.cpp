@@ -27,11 +27,17 @@ TEST(Kinematics, JacobianMatchesCentralDifferences) {
   EXPECT_CHECKS(log);
 }
 
-TEST(Kinematics, ParamsRoundTrip) { EXPECT_CHECKS(test::params_round_trip()); }
+TEST(Kinematics, ParamsRoundTrip) {
+  EXPECT_CHECKS(test::params_round_trip());
+}
 
-TEST(Kinematics, RobotTypeNames) { EXPECT_CHECKS(test::robot_type_names()); }
+TEST(Kinematics, RobotTypeNames) {
+  EXPECT_CHECKS(test::robot_type_names());
+}
 
-TEST(Kinematics, UrDeltasRoundTripAndRejectNaN) { EXPECT_CHECKS(test::ur_deltas_round_trip_and_reject_nan()); }
+TEST(Kinematics, UrDeltasRoundTripAndRejectNaN) {
+  EXPECT_CHECKS(test::ur_deltas_round_trip_and_reject_nan());
+}
 
 }  // namespace
 }  // namespace hivecal

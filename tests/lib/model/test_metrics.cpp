@@ -241,9 +241,9 @@ TEST(RepeatedReadingNoise, HandComputedGroupsAndPooledSigma) {
   // Pose A read twice by target 0 (x differs by 2 um) and once by target 1; pose B (joint 1 a
   // tenth of a radian away) read twice by target 0 (z differs by 4 um); pose C read once.
   const Sample samples[] = {
-      reading(0.0, Vec3(1.0, 0.0, 0.0)),         reading(0.0, Vec3(0.3, 0.0, 0.0), 1),
-      reading(0.0, Vec3(1.0 + 2e-6, 0.0, 0.0)),  reading(0.1, Vec3(0.0, 0.0, 1.0)),
-      reading(0.1, Vec3(0.0, 0.0, 1.0 + 4e-6)),  reading(0.2, Vec3(5.0, 5.0, 5.0)),
+      reading(0.0, Vec3(1.0, 0.0, 0.0)),        reading(0.0, Vec3(0.3, 0.0, 0.0), 1),
+      reading(0.0, Vec3(1.0 + 2e-6, 0.0, 0.0)), reading(0.1, Vec3(0.0, 0.0, 1.0)),
+      reading(0.1, Vec3(0.0, 0.0, 1.0 + 4e-6)), reading(0.2, Vec3(5.0, 5.0, 5.0)),
   };
   RepeatedReadingNoise noise;
   EXPECT_NO_HEAP(noise = repeated_reading_noise(Span<const Sample>(samples, 6)));

@@ -15,15 +15,21 @@ TEST(RigidFit, RecoversRandomTransformsExactly) {
   EXPECT_CHECKS(log);
 }
 
-TEST(RigidFit, NeverReturnsAReflection) { EXPECT_CHECKS(test::rigid_fit_never_returns_a_reflection()); }
+TEST(RigidFit, NeverReturnsAReflection) {
+  EXPECT_CHECKS(test::rigid_fit_never_returns_a_reflection());
+}
 
-TEST(RigidFit, WeightsSelectThePairsThatCount) { EXPECT_CHECKS(test::rigid_fit_weights_select_the_pairs_that_count()); }
+TEST(RigidFit, WeightsSelectThePairsThatCount) {
+  EXPECT_CHECKS(test::rigid_fit_weights_select_the_pairs_that_count());
+}
 
 TEST(RigidFit, DegenerateInputsGetSpecificErrors) {
   EXPECT_CHECKS(test::rigid_fit_degenerate_inputs_get_specific_errors());
 }
 
-TEST(RigidFit, FarFromOriginStaysAccurate) { EXPECT_CHECKS(test::rigid_fit_far_from_origin_stays_accurate()); }
+TEST(RigidFit, FarFromOriginStaysAccurate) {
+  EXPECT_CHECKS(test::rigid_fit_far_from_origin_stays_accurate());
+}
 
 }  // namespace
 }  // namespace hivecal

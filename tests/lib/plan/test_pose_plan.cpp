@@ -1,7 +1,7 @@
 // The pose planner (plan/pose_plan.hpp): every planned pose meets every constraint, the same
-// bits for a seed (the golden digest: test_plan_golden.cpp), the exchange step improves on the greedy start, no heap; simulated
-// sessions calibrated by the job are more accurate from planned poses than from random ones
-// under the same constraints; the tool-down session's unidentifiable parameters.
+// bits for a seed (the golden digest: test_plan_golden.cpp), the exchange step improves on the greedy start, no heap;
+// simulated sessions calibrated by the job are more accurate from planned poses than from random ones under the same
+// constraints; the tool-down session's unidentifiable parameters.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -83,11 +83,12 @@ TEST(PosePlan, ExchangeImprovesOnTheGreedyStartAndBothBeatRandom) {
   EXPECT_GT(result.greedy_log_det, result.random.log_det);
   EXPECT_GT(result.planned.smallest_singular, result.random.smallest_singular);
   EXPECT_LT(result.planned.condition, result.random.condition);
-  std::printf("[plan] log det random %.2f greedy %.2f exchange %.2f (%d swaps, %d passes); cond %.1f -> %.1f;"
-              " sigma_min %.4f -> %.4f\n",
-              result.random.log_det, result.greedy_log_det, result.planned.log_det, result.exchanges,
-              result.exchange_passes, result.random.condition, result.planned.condition,
-              result.random.smallest_singular, result.planned.smallest_singular);
+  std::printf(
+      "[plan] log det random %.2f greedy %.2f exchange %.2f (%d swaps, %d passes); cond %.1f -> %.1f;"
+      " sigma_min %.4f -> %.4f\n",
+      result.random.log_det, result.greedy_log_det, result.planned.log_det, result.exchanges, result.exchange_passes,
+      result.random.condition, result.planned.condition, result.random.smallest_singular,
+      result.planned.smallest_singular);
   // Without exchange passes the result is the greedy start.
   options.max_exchange_passes = 0;
   ASSERT_EQ(plan_session(model, options, &workspace, &other), Status::ok);
@@ -139,13 +140,15 @@ TEST(PosePlan, RefinementLowersTheCriterionWithinTheConstraints) {
     for (std::size_t i = 0; i < result.pose_count; ++i) {
       EXPECT_TRUE(pose_meets_constraints(model, options.constraints, result.poses[i])) << i;
       bool in_pool = false;
-      for (std::size_t k = 0; k < options.candidate_count; ++k) in_pool = in_pool || workspace.candidates[k].q_rad == result.poses[i];
+      for (std::size_t k = 0; k < options.candidate_count; ++k)
+        in_pool = in_pool || workspace.candidates[k].q_rad == result.poses[i];
       off_pool += in_pool ? 0 : 1;
     }
     EXPECT_GT(off_pool, 0u);
-    std::printf("[plan] %s refinement: log det %.3f -> %.3f, mean prediction variance %.4f -> %.4f; %zu of %zu poses moved\n",
-                plan_criterion_name(criterion), other.planned.log_det, result.planned.log_det,
-                other.planned.prediction_variance, result.planned.prediction_variance, off_pool, result.pose_count);
+    std::printf(
+        "[plan] %s refinement: log det %.3f -> %.3f, mean prediction variance %.4f -> %.4f; %zu of %zu poses moved\n",
+        plan_criterion_name(criterion), other.planned.log_det, result.planned.log_det,
+        other.planned.prediction_variance, result.planned.prediction_variance, off_pool, result.pose_count);
   }
   PlanOptions options = small_options(64, 20, 1);
   options.refine_passes = -1;
@@ -261,13 +264,13 @@ Comparison compare_sessions(const PlanOptions& plan, std::size_t poses, std::uin
     add_session_mae(truth, Span<const Sample>(planned, poses), significance_t, &random, c.planned);
     add_session_mae(truth, Span<const Sample>(workspace.candidates, poses), significance_t, &random, c.random);
   }
-  std::printf("[plan] %s (prior %.1f mm / %.1f mrad, %d restarts), %zu poses, %llu arms, significance %.0f sigma:"
-              " validation MAE planned / random: measurable region %.3f (%.2f / %.2f um), whole cell %.3f"
-              " (%.2f / %.2f um)\n",
-              plan_criterion_name(plan.criterion), plan.prior_length_m * 1e3, plan.prior_angle_rad * 1e3, plan.restarts,
-              poses, static_cast<unsigned long long>(arms), significance_t, c.planned[0] / c.random[0],
-              c.planned[0] * per_arm_um, c.random[0] * per_arm_um, c.planned[1] / c.random[1],
-              c.planned[1] * per_arm_um, c.random[1] * per_arm_um);
+  std::printf(
+      "[plan] %s (prior %.1f mm / %.1f mrad, %d restarts), %zu poses, %llu arms, significance %.0f sigma:"
+      " validation MAE planned / random: measurable region %.3f (%.2f / %.2f um), whole cell %.3f"
+      " (%.2f / %.2f um)\n",
+      plan_criterion_name(plan.criterion), plan.prior_length_m * 1e3, plan.prior_angle_rad * 1e3, plan.restarts, poses,
+      static_cast<unsigned long long>(arms), significance_t, c.planned[0] / c.random[0], c.planned[0] * per_arm_um,
+      c.random[0] * per_arm_um, c.planned[1] / c.random[1], c.planned[1] * per_arm_um, c.random[1] * per_arm_um);
   return c;
 }
 

@@ -16,7 +16,9 @@ namespace {
 
 using Solver = AbcSolver<40, 8>;
 
-Solver& solver() { return test::shared_solver<Solver>(); }
+Solver& solver() {
+  return test::shared_solver<Solver>();
+}
 
 TEST(AbcSolver, FindsTheSphereMinimum) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
@@ -106,7 +108,8 @@ TEST(AbcSolver, TracesTheBestCostAndReportsProgressEachCycle) {
   test::RecordingObserver observer;
   SolverResult result;
   Status s = Status::invalid_argument;
-  EXPECT_NO_HEAP(s = solver().minimize(rastrigin, box.view(), test::abc_options(12, 50, 6), &result, &trace, &observer));
+  EXPECT_NO_HEAP(
+      s = solver().minimize(rastrigin, box.view(), test::abc_options(12, 50, 6), &result, &trace, &observer));
   ASSERT_EQ(s, Status::ok);
   ASSERT_EQ(trace.size(), 50u);
   for (std::size_t i = 1; i < trace.size(); ++i) EXPECT_LE(trace.values()[i], trace.values()[i - 1]);
@@ -146,7 +149,9 @@ TEST(AbcSolver, SameSeedSameBitsOtherSeedOtherPath) {
   EXPECT_NE(second.values()[0], first.values()[0]);
 }
 
-TEST(AbcSolver, NanCostsCountAsWorst) { test::expect_nan_costs_ignored(solver(), test::abc_options(20, 200, 8), 1e-6); }
+TEST(AbcSolver, NanCostsCountAsWorst) {
+  test::expect_nan_costs_ignored(solver(), test::abc_options(20, 200, 8), 1e-6);
+}
 
 TEST(AbcSolver, StaysInsideTheBox) {
   // The sphere's minimum is outside this box: the best point sits on the nearest corner.

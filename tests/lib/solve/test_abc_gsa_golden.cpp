@@ -1,7 +1,7 @@
 // Golden digest of the population solvers: ABC (canonical and the paper's variant) and GSA on
 // a simulated paper-6 session (exact and float term layouts), and ABC on Rosenbrock, hashed
-// over the raw bits of the traces, best parameters, best costs and counts. The committed value must come out on every target
-// and optimisation level (host -O0/-O3/-march=native, aarch64, armhf).
+// over the raw bits of the traces, best parameters, best costs and counts. The committed value must come out on every
+// target and optimisation level (host -O0/-O3/-march=native, aarch64, armhf).
 #include <gtest/gtest.h>
 
 #include <cstdio>

@@ -15,7 +15,9 @@ namespace {
 
 using Solver = AbcSolver<150, kPaper6Dimension>;
 
-Solver& solver() { return test::shared_solver<Solver>(); }
+Solver& solver() {
+  return test::shared_solver<Solver>();
+}
 
 using test::kWithinReference;
 
@@ -36,8 +38,7 @@ TEST(AbcPaper6, PaperConfigReachesTheLeastSquaresMaeOnPaperSizedSessions) {
     EXPECT_LE(result.best_cost, kWithinReference * session.reference_mae_m) << "seed " << seed;
     EXPECT_LT(result.best_cost, 0.75 * session.nominal_mae_m);
     // The cost really is the paper's: the generic path gives the same MAE at the optimum.
-    const double generic_m = test::generic_mae(session.cell.nominal, result.best_x.data(),
-                                               session.dataset.train());
+    const double generic_m = test::generic_mae(session.cell.nominal, result.best_x.data(), session.dataset.train());
     EXPECT_NEAR(result.best_cost, generic_m, 1e-11 * generic_m);
     // And it generalises: the held-out poses improve too.
     EXPECT_LT(session.test_mae(result.best_x.data()), session.test_mae(link_lengths(session.cell.nominal).data()));
@@ -55,8 +56,7 @@ TEST(AbcPaper6, FirmwareFloatLayoutReachesTheSameMae) {
   EXPECT_NO_HEAP((void)solver().minimize(compact, session.box.view(), options, &result));
   ASSERT_EQ(result.status, Status::ok);
   EXPECT_LE(result.best_cost, kWithinReference * session.reference_mae_m);
-  const double generic_m = test::generic_mae(session.cell.nominal, result.best_x.data(),
-                                             session.dataset.train());
+  const double generic_m = test::generic_mae(session.cell.nominal, result.best_x.data(), session.dataset.train());
   EXPECT_NEAR(result.best_cost, generic_m, 1e-6 * generic_m);
 }
 

@@ -85,9 +85,9 @@ TEST_F(CostFixture, BadInputsGetSpecificErrors) {
   double cost = 0.0;
   EXPECT_EQ(evaluate_cost(truth, Span<const Sample>(), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &cost),
             Status::dataset_empty);
-  EXPECT_EQ(evaluate_cost(truth, dataset().samples().subspan(0, 2), CostKind::mean_abs_3d, BaseFrame::refit, &fitted,
-                          &cost),
-            Status::too_few_samples);
+  EXPECT_EQ(
+      evaluate_cost(truth, dataset().samples().subspan(0, 2), CostKind::mean_abs_3d, BaseFrame::refit, &fitted, &cost),
+      Status::too_few_samples);
   EXPECT_EQ(evaluate_cost(truth, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::refit, nullptr, &cost),
             Status::invalid_argument);
   EXPECT_EQ(evaluate_cost(truth, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::fixed, &fitted, nullptr),

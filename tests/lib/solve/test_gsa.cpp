@@ -18,7 +18,9 @@ namespace {
 
 using Solver = GsaSolver<150, 8>;
 
-Solver& solver() { return test::shared_solver<Solver>(); }
+Solver& solver() {
+  return test::shared_solver<Solver>();
+}
 
 using test::kWithinReference;
 
@@ -66,7 +68,8 @@ TEST(GsaSolver, ReportsProgressOncePerIteration) {
   const test::CubeBox box(2, 2.048);
   test::RecordingObserver observer;
   SolverResult result;
-  EXPECT_NO_HEAP((void)solver().minimize(rosenbrock, box.view(), test::gsa_options(20, 40, 4), &result, nullptr, &observer));
+  EXPECT_NO_HEAP(
+      (void)solver().minimize(rosenbrock, box.view(), test::gsa_options(20, 40, 4), &result, nullptr, &observer));
   EXPECT_EQ(observer.calls, 40u);
   EXPECT_TRUE(observer.increasing);
   EXPECT_EQ(observer.last.iteration, 40u);
@@ -92,7 +95,9 @@ TEST(GsaSolver, SameSeedSameBits) {
   }
 }
 
-TEST(GsaSolver, NanCostsWeighNothing) { test::expect_nan_costs_ignored(solver(), test::gsa_options(40, 100, 5), 1e-3); }
+TEST(GsaSolver, NanCostsWeighNothing) {
+  test::expect_nan_costs_ignored(solver(), test::gsa_options(40, 100, 5), 1e-3);
+}
 
 TEST(GsaSolver, AllEqualCostsGiveEqualMassesAndStayInTheBox) {
   // best == worst: the guard gives every agent the same mass; walls stop the agents.
@@ -150,7 +155,9 @@ TEST(GsaSolver, RejectsBadOptionsWithoutEvaluating) {
 
 using Paper6Solver = GsaSolver<150, kPaper6Dimension>;
 
-Paper6Solver& paper6_solver() { return test::shared_solver<Paper6Solver>(); }
+Paper6Solver& paper6_solver() {
+  return test::shared_solver<Paper6Solver>();
+}
 
 TEST(GsaPaper6, PaperConfigReachesTheLeastSquaresMaeOnPaperSizedSessions) {
   test::Paper6Session& session = test::shared_session();

@@ -64,8 +64,7 @@ IdentifiabilityReport analyse(const NormalEquations& eq, ParamMask free_mask) {
   static IdentifiabilityWorkspace ws;
   static IdentifiabilityReport report;
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = analyze_identifiability(eq.jtwj, free_mask, kDefaultIdentifiabilityThreshold, &ws,
-                                                  &report));
+  EXPECT_NO_HEAP(status = analyze_identifiability(eq.jtwj, free_mask, kDefaultIdentifiabilityThreshold, &ws, &report));
   EXPECT_EQ(status, Status::ok);
   return report;
 }
@@ -74,10 +73,10 @@ IdentifiabilityReport analyse(const NormalEquations& eq, ParamMask free_mask) {
 void expect_generic_ur_structure(const IdentifiabilityReport& report) {
   EXPECT_EQ(report.kept_count(), 25);
   EXPECT_EQ(report.dropped_count, 8);
-  EXPECT_EQ(dropped_in(report, mask_of({kTheta1, kBaseRz})), 1);   // base rotation about z absorbs theta1
-  EXPECT_EQ(dropped_in(report, mask_of({kD1, kBaseTz})), 1);       // base height absorbs d1
-  EXPECT_EQ(dropped_in(report, mask_of({kD2, kD3, kD4})), 2);      // only d2 + d3 + d4 on parallel axes
-  EXPECT_EQ(dropped_in(report, wrist_and_tool()), 4);              // tool point in frame 5: 3 of 7
+  EXPECT_EQ(dropped_in(report, mask_of({kTheta1, kBaseRz})), 1);  // base rotation about z absorbs theta1
+  EXPECT_EQ(dropped_in(report, mask_of({kD1, kBaseTz})), 1);      // base height absorbs d1
+  EXPECT_EQ(dropped_in(report, mask_of({kD2, kD3, kD4})), 2);     // only d2 + d3 + d4 on parallel axes
+  EXPECT_EQ(dropped_in(report, wrist_and_tool()), 4);             // tool point in frame 5: 3 of 7
   for (int d = 0; d < report.dropped_count; ++d) {
     const DroppedParam& entry = report.dropped[d];
     EXPECT_EQ(entry.reason, UnidentifiableReason::null_combination);
@@ -124,8 +123,7 @@ TEST(Identifiability, GenericPosesDropExactlyTheUrRedundancies) {
 
 TEST(Identifiability, ToolAlwaysDownDropsTheToolHeightAgainstTheBaseHeight) {
   Random random(203);
-  const RobotModel truth =
-      test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.01, -0.02, 0.15));
+  const RobotModel truth = test::perturbed_parallel_model(RobotType::ur5, &random, 3e-4, 3e-4, Vec3(0.01, -0.02, 0.15));
   const RigidTransform base = test::example_base_to_tracker();
   static Dataset<100> generic;
   static Dataset<100> down;
@@ -149,7 +147,8 @@ TEST(Identifiability, ToolAlwaysDownDropsTheToolHeightAgainstTheBaseHeight) {
   EXPECT_EQ(down_report.dropped_count, generic_report.dropped_count + 1);
   int generic_couplings = 0;
   int down_couplings = 0;
-  for (int d = 0; d < generic_report.dropped_count; ++d) generic_couplings += couples_heights(generic_report.dropped[d]);
+  for (int d = 0; d < generic_report.dropped_count; ++d)
+    generic_couplings += couples_heights(generic_report.dropped[d]);
   for (int d = 0; d < down_report.dropped_count; ++d) down_couplings += couples_heights(down_report.dropped[d]);
   EXPECT_EQ(generic_couplings, 0);
   EXPECT_GE(down_couplings, 1);

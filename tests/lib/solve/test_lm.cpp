@@ -59,8 +59,8 @@ void expect_exact_recovery(RobotType type, std::uint64_t seed) {
   SCOPED_TRACE(robot_type_name(type));
   const Session s = simulate(type, seed, 150, 0.0);
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(type), nullptr, lm().train.samples(), LmOptions{},
-                                       &lm().workspace, &lm().result));
+  EXPECT_NO_HEAP(status = calibrate_lm(nominal_start(type), nullptr, lm().train.samples(), LmOptions{}, &lm().workspace,
+                                       &lm().result));
   ASSERT_EQ(status, Status::ok) << status_message(status);
   const LmResult& r = lm().result;
   EXPECT_EQ(r.identifiability.kept_count(), 25);
@@ -87,9 +87,15 @@ void expect_exact_recovery(RobotType type, std::uint64_t seed) {
   }
 }
 
-TEST(Lm, RecoversIdentifiableParametersExactlyWithoutNoiseUr5) { expect_exact_recovery(RobotType::ur5, 101); }
-TEST(Lm, RecoversIdentifiableParametersExactlyWithoutNoiseUr10) { expect_exact_recovery(RobotType::ur10, 102); }
-TEST(Lm, RecoversIdentifiableParametersExactlyWithoutNoiseUr5e) { expect_exact_recovery(RobotType::ur5e, 103); }
+TEST(Lm, RecoversIdentifiableParametersExactlyWithoutNoiseUr5) {
+  expect_exact_recovery(RobotType::ur5, 101);
+}
+TEST(Lm, RecoversIdentifiableParametersExactlyWithoutNoiseUr10) {
+  expect_exact_recovery(RobotType::ur10, 102);
+}
+TEST(Lm, RecoversIdentifiableParametersExactlyWithoutNoiseUr5e) {
+  expect_exact_recovery(RobotType::ur5e, 103);
+}
 
 TEST(Lm, WithNoiseRecoversWithinNoiseAndWithinSigma) {
   const double noise_m = 1e-5;
@@ -189,7 +195,8 @@ TEST(Lm, Paper6MovesOnlyItsParameters) {
   EXPECT_NE(after(model_param_index(1, DhField::a)), before(model_param_index(1, DhField::a)));
   // Six lengths cannot explain angle errors: better than nominal, worse than full.
   const double paper6_rms = lm().result.rms_m;
-  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
+  EXPECT_NO_HEAP(status =
+                     calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok);
   EXPECT_GT(paper6_rms, 2.0 * lm().result.rms_m);
 }
@@ -207,12 +214,12 @@ TEST(Lm, HybridStartFromAnyModelAndBase) {
   EXPECT_NO_HEAP(tilt = rotation_from_vector(Vec3(0.002, -0.001, 0.003)));
   guess_base.rotation = guess_base.rotation * tilt;
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(guess, &guess_base, lm().train.samples(), LmOptions{}, &lm().workspace,
-                                       &lm().result));
+  EXPECT_NO_HEAP(
+      status = calibrate_lm(guess, &guess_base, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok) << status_message(status);
-  EXPECT_LE(test::max_prediction_gap(lm().result.model, lm().result.base_to_tracker, s.truth, s.base,
-                                     lm().fresh.samples()),
-            1e-9);
+  EXPECT_LE(
+      test::max_prediction_gap(lm().result.model, lm().result.base_to_tracker, s.truth, s.base, lm().fresh.samples()),
+      1e-9);
   EXPECT_NEAR(lm().result.base_to_tracker.rotation.determinant(), 1.0, 1e-12);
 }
 
@@ -300,7 +307,8 @@ TEST(Lm, SharedScratchCarriesNothingBetweenUses) {
   simulate(RobotType::ur5, 110, 120, 1e-5);
   const RobotModel start = nominal_start(RobotType::ur5);
   Status status = Status::ok;
-  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
+  EXPECT_NO_HEAP(status =
+                     calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok);
   const LmResult first = lm().result;
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -316,7 +324,8 @@ TEST(Lm, SharedScratchCarriesNothingBetweenUses) {
   trial->jtwj.setConstant(nan);
   trial->jtwr.setConstant(nan);
   trial->loss_sum_m2 = nan;
-  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
+  EXPECT_NO_HEAP(status =
+                     calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
   ASSERT_EQ(status, Status::ok);
   EXPECT_EQ(first.identifiability.kept_mask, lm().result.identifiability.kept_mask);
   EXPECT_EQ(first.iterations, lm().result.iterations);

@@ -24,7 +24,8 @@ RobotModel compliant_truth() {
   Random random(1602);
   RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, 1e-3, 1e-3);
   truth.tool_m << 0.02, -0.015, 0.12;
-  EXPECT_EQ(default_compliance_terms(truth, Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &truth.compliance), Status::ok);
+  EXPECT_EQ(default_compliance_terms(truth, Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &truth.compliance),
+            Status::ok);
   const double coefficient[kMaxComplianceTerms] = {80e-6, 40e-6, 60e-6, 30e-6};
   for (int t = 0; t < kMaxComplianceTerms; ++t) truth.compliance.coefficient[t] = coefficient[t];
   return truth;
@@ -58,9 +59,11 @@ TEST(LmCompliance, CoefficientColumnsMatchCentralDifferences) {
       RobotModel minus = model;
       plus.compliance.coefficient[t] += h;
       minus.compliance.coefficient[t] -= h;
-      const Vec3 numeric = base.rotation * (fk_tool_point(plus, sample.q_rad) - fk_tool_point(minus, sample.q_rad)) / (2 * h);
+      const Vec3 numeric =
+          base.rotation * (fk_tool_point(plus, sample.q_rad) - fk_tool_point(minus, sample.q_rad)) / (2 * h);
       const Vec3 analytic = jacobian.col(compliance_param_index(t));
-      EXPECT_LT((numeric - analytic).norm(), 1e-6 * (1.0 + analytic.norm())) << compliance_term_name(model.compliance, t);
+      EXPECT_LT((numeric - analytic).norm(), 1e-6 * (1.0 + analytic.norm()))
+          << compliance_term_name(model.compliance, t);
       EXPECT_GT(analytic.norm(), 1e-3);
     }
   }
@@ -125,7 +128,8 @@ TEST(LmCompliance, ToolDownPosesDropWhatTheyCannotSeparate) {
   int compliance_dropped = 0;
   for (int k = 0; k < report.dropped_count; ++k) {
     const int index = report.dropped[k].index;
-    dropped += std::string(" ") + full_param_name(index, start) + "(" + unidentifiable_reason_name(report.dropped[k].reason) + ")";
+    dropped += std::string(" ") + full_param_name(index, start) + "(" +
+               unidentifiable_reason_name(report.dropped[k].reason) + ")";
     if (index >= kRigidParamCount) {
       ++compliance_dropped;
       EXPECT_EQ(result.model.compliance.coefficient[index - kRigidParamCount], 0.0);  // held at its start

@@ -95,14 +95,14 @@ TEST_F(LmErrors, InvalidOptions) {
   EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) { o->identifiability_threshold = 1.0; })),
             Status::invalid_argument);
   EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) {
-              o->params = LmParamSet::custom;
-              o->custom_mask = 0;
-            })),
+                  o->params = LmParamSet::custom;
+                  o->custom_mask = 0;
+                })),
             Status::invalid_argument);
   EXPECT_EQ(run(lm().train.samples(), with([](LmOptions* o) {
-              o->params = LmParamSet::custom;
-              o->custom_mask = param_bit(kFullParamCount);
-            })),
+                  o->params = LmParamSet::custom;
+                  o->custom_mask = param_bit(kFullParamCount);
+                })),
             Status::invalid_argument);
 }
 

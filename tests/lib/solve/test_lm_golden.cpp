@@ -101,7 +101,8 @@ std::uint64_t other_arm_digest() {
   static Trace<64> trace;
   trace.clear();
   Digest digest;
-  add_result(result, calibrate_lm(start, nullptr, samples.samples(), LmOptions{}, &ws, &result, &trace), trace, &digest);
+  add_result(result, calibrate_lm(start, nullptr, samples.samples(), LmOptions{}, &ws, &result, &trace), trace,
+             &digest);
   return digest.value();
 }
 
@@ -122,7 +123,8 @@ std::uint64_t targets_digest() {
   static Trace<64> trace;
   trace.clear();
   Digest digest;
-  add_result(result, calibrate_lm(start, nullptr, samples.samples(), LmOptions{}, &ws, &result, &trace), trace, &digest);
+  add_result(result, calibrate_lm(start, nullptr, samples.samples(), LmOptions{}, &ws, &result, &trace), trace,
+             &digest);
   for (const Vec3& other_m : result.model.other_tools_m) digest.add(other_m);
   for (const Vec3& sigma_m : result.other_tools_sigma_m) digest.add(sigma_m);
   return digest.value();

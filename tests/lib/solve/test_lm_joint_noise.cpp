@@ -17,7 +17,7 @@
 namespace hivecal {
 namespace {
 
-constexpr double kStep_rad = 0.01 * M_PI / 180.0;          // the pendant's joint rounding
+constexpr double kStep_rad = 0.01 * M_PI / 180.0;            // the pendant's joint rounding
 const double kJointSigma_rad = kStep_rad / std::sqrt(12.0);  // its standard deviation
 constexpr double kPointNoise_m = 3e-6;
 
@@ -96,8 +96,10 @@ TEST(LmJointNoise, WhiteningPredictsFreshPosesBetterWithRoundedJoints) {
     double whitened_m = 0.0;
     int better = 0;
     compare(targets, &plain_m, &whitened_m, &better);
-    std::printf("%d target(s), joints rounded to 0.01 deg: fresh mean error %.2f um plain, %.2f um whitened "
-                "(better on %d of 6)\n", targets, plain_m * 1e6, whitened_m * 1e6, better);
+    std::printf(
+        "%d target(s), joints rounded to 0.01 deg: fresh mean error %.2f um plain, %.2f um whitened "
+        "(better on %d of 6)\n",
+        targets, plain_m * 1e6, whitened_m * 1e6, better);
     // Measured: 28.6 -> 16.8 um (one target), 21.5 -> 15.9 um (three), better on 6 of 6 each.
     EXPECT_LT(whitened_m, 0.8 * plain_m) << targets << " target(s)";
     EXPECT_GE(better, 5) << targets << " target(s)";

@@ -71,13 +71,16 @@ TEST(OtherArms, LinkLengthSetIsEveryNonZeroDAndA) {
     int index[kMaxLinkLengths];
   };
   const Case cases[] = {
-      {OtherArm::irb120, 5,
+      {OtherArm::irb120,
+       5,
        {model_param_index(0, DhField::d), model_param_index(1, DhField::a), model_param_index(2, DhField::a),
         model_param_index(3, DhField::d), model_param_index(5, DhField::d)}},
-      {OtherArm::kr6_r900, 6,
+      {OtherArm::kr6_r900,
+       6,
        {model_param_index(0, DhField::d), model_param_index(0, DhField::a), model_param_index(1, DhField::a),
         model_param_index(2, DhField::a), model_param_index(3, DhField::d), model_param_index(5, DhField::d)}},
-      {OtherArm::lrmate200id, 6,
+      {OtherArm::lrmate200id,
+       6,
        {model_param_index(0, DhField::d), model_param_index(0, DhField::a), model_param_index(1, DhField::a),
         model_param_index(2, DhField::a), model_param_index(3, DhField::d), model_param_index(5, DhField::d)}},
   };
@@ -112,7 +115,8 @@ TEST(OtherArms, LmRecoversTheTruthExactlyWithoutNoise) {
       EXPECT_LE(worst_m, 1e-9) << test::other_arm_name(arm) << " seed " << seed;
       if (seed == 1) {
         std::printf("%s: %d of %d estimated, worst fresh error %.3g m\n", test::other_arm_name(arm),
-                    lm().result.identifiability.kept_count(), mask_count(lm().result.identifiability.free_mask), worst_m);
+                    lm().result.identifiability.kept_count(), mask_count(lm().result.identifiability.free_mask),
+                    worst_m);
       }
     }
   }
@@ -129,7 +133,9 @@ TEST(OtherArms, LmRecoversTheIdentifiableGeometryWithinNoise) {
                 Status::ok);
       const double rms_m = rms_fresh_error_m(truth, base, lm().result);
       EXPECT_LT(rms_m, noise_m) << test::other_arm_name(arm) << " seed " << seed;
-      if (seed == 11) std::printf("%s: fresh-pose RMS error %.2f um (noise 10 um per axis)\n", test::other_arm_name(arm), rms_m * 1e6);
+      if (seed == 11)
+        std::printf("%s: fresh-pose RMS error %.2f um (noise 10 um per axis)\n", test::other_arm_name(arm),
+                    rms_m * 1e6);
       EXPECT_NEAR(lm().result.residual_sigma_m, noise_m, 0.2 * noise_m) << test::other_arm_name(arm);
       // and the start was far off: the fit did something
       RigidTransform nominal_base;
@@ -156,7 +162,8 @@ TEST(OtherArms, LmRecoversModifiedDhTruthsExactly) {
       truth[j].theta_offset_rad += 3e-4 * random.normal();
       truth[j].d_m += 3e-4 * random.normal();
       truth[j].a_prev_m += 3e-4 * random.normal();
-      if (nominal[j].alpha_prev_rad != 0.0) truth[j].alpha_prev_rad += 3e-4 * random.normal();  // parallel stays parallel
+      if (nominal[j].alpha_prev_rad != 0.0)
+        truth[j].alpha_prev_rad += 3e-4 * random.normal();  // parallel stays parallel
     }
     const Vec3 true_tool_m(0.009, 0.006, 0.097);
     const RigidTransform base = test::example_base_to_tracker();
@@ -170,7 +177,8 @@ TEST(OtherArms, LmRecoversModifiedDhTruthsExactly) {
     ModifiedDhBase start_base;
     ASSERT_EQ(model_from_modified_dh(nominal, Vec3(0.0, 0.0, 0.1), &start, &start_base), Status::ok);
     Status status = Status::ok;
-    EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
+    EXPECT_NO_HEAP(status =
+                       calibrate_lm(start, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result));
     ASSERT_EQ(status, Status::ok) << test::other_arm_name(arm);
     double worst_m = 0.0;
     for (const Sample& s : lm().fresh.samples()) {

@@ -115,7 +115,8 @@ TEST(SeveralTargets, LmRecoversEveryToolPointExactlyWithoutNoise) {
     const double worst_m = worst_fresh_error_m(truth, base, lm().result);
     EXPECT_LE(worst_m, 1e-9) << "seed " << seed;
     for (int target = 0; target < 3; ++target) {
-      EXPECT_LE(worst_tool_error_m(truth, lm().result.model, target), 1e-9) << "seed " << seed << " target " << target + 1;
+      EXPECT_LE(worst_tool_error_m(truth, lm().result.model, target), 1e-9)
+          << "seed " << seed << " target " << target + 1;
     }
     if (seed == 1) {
       std::printf("3 targets x 40 poses: %d of 33 estimated + 6 tool coordinates, %d iterations, worst %.3g m\n",
@@ -269,9 +270,9 @@ TEST(SeveralTargets, LinkLengthCostUsesEachSamplesToolPoint) {
     EXPECT_EQ(model.other_tools_m[1], truth.other_tools_m[1]);
     double generic_m = 0.0;
     RigidTransform generic_base;
-    ASSERT_EQ(evaluate_cost(model, lm().train.samples(), CostKind::mean_abs_3d, BaseFrame::refit, &generic_base,
-                            &generic_m),
-              Status::ok);
+    ASSERT_EQ(
+        evaluate_cost(model, lm().train.samples(), CostKind::mean_abs_3d, BaseFrame::refit, &generic_base, &generic_m),
+        Status::ok);
     EXPECT_NEAR(fast_m, generic_m, 1e-11 * generic_m) << "trial " << trial;
   }
 }
@@ -293,7 +294,8 @@ TEST(LmTargets, AWorkspaceWithoutTargetBlocksRefusesSeveralTargets) {
   EXPECT_NO_HEAP(status = accumulate_normal_equations(truth, base, lm().train.samples(), PointLoss{}, &eq));
   EXPECT_EQ(status, Status::dimension_out_of_range);
   // With the blocks it runs.
-  EXPECT_NO_HEAP(status = calibrate_lm(start_model(), &base, lm().train.samples(), options, &lm().workspace, &lm().result));
+  EXPECT_NO_HEAP(status =
+                     calibrate_lm(start_model(), &base, lm().train.samples(), options, &lm().workspace, &lm().result));
   EXPECT_EQ(status, Status::ok);
 }
 

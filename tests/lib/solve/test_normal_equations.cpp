@@ -70,7 +70,8 @@ TEST(FullModel, ResidualJacobianMatchesCentralDifferences) {
       EXPECT_NO_HEAP(apply_full_increment(step, &plus_model, &plus_base));
       EXPECT_NO_HEAP(apply_full_increment(-step, &minus_model, &minus_base));
       const Vec3 numeric = (plus_base.apply(fk_tool_point(plus_model, sample.q_rad)) -
-                            minus_base.apply(fk_tool_point(minus_model, sample.q_rad))) / (2.0 * h);
+                            minus_base.apply(fk_tool_point(minus_model, sample.q_rad))) /
+                           (2.0 * h);
       EXPECT_LT((numeric - jacobian.col(k)).norm(), 1e-8) << full_param_name(k) << " trial " << trial;
     }
   }

@@ -70,9 +70,9 @@ TEST_F(Paper6CostTest, AtTheExpansionPointItIsTheNominalCost) {
   const LinkLengths nominal_m = link_lengths(cell.nominal);
   double generic_m = 0.0;
   RigidTransform base;
-  ASSERT_EQ(evaluate_cost(cell.nominal, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::refit, &base,
-                          &generic_m),
-            Status::ok);
+  ASSERT_EQ(
+      evaluate_cost(cell.nominal, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::refit, &base, &generic_m),
+      Status::ok);
   EXPECT_NEAR(cost().evaluate(nominal_m.data()), generic_m, kRelativeTolerance * generic_m);
   EXPECT_GT(generic_m, 1e-4);  // the perturbation is visible
 }
@@ -129,8 +129,8 @@ TEST_F(Paper6CostTest, ASelectionCostsItsSamplesOnly) {
   const LinkLengths lengths_m = link_lengths(cell.truth);
   double generic_m = 0.0;
   RigidTransform refitted;
-  ASSERT_EQ(evaluate_cost(selected.model_for(lengths_m.data()), copy.samples(), CostKind::mean_abs_3d,
-                          BaseFrame::refit, &refitted, &generic_m),
+  ASSERT_EQ(evaluate_cost(selected.model_for(lengths_m.data()), copy.samples(), CostKind::mean_abs_3d, BaseFrame::refit,
+                          &refitted, &generic_m),
             Status::ok);
   EXPECT_NEAR(selected.evaluate(lengths_m.data()), generic_m, kRelativeTolerance * generic_m);
   EXPECT_NE(selected.evaluate(lengths_m.data()), cost().evaluate(lengths_m.data()));
@@ -209,7 +209,8 @@ TEST(Paper6Cost, FirmwareLayoutFitsIn64KiB) {
   // 512 poses, the paper's ABC (150 x 6) and its 300-cycle trace in static RAM.
   EXPECT_EQ(kPaper6ValuesPerSample * sizeof(double), 168u);
   EXPECT_EQ(kPaper6ValuesPerSample * sizeof(float), 84u);
-  const std::size_t total = sizeof(Paper6Cost<512, float>) + sizeof(AbcSolver<150, kPaper6Dimension>) + sizeof(Trace<300>);
+  const std::size_t total =
+      sizeof(Paper6Cost<512, float>) + sizeof(AbcSolver<150, kPaper6Dimension>) + sizeof(Trace<300>);
   std::printf("firmware static RAM: cost %zu + ABC %zu + trace %zu = %zu bytes\n", sizeof(Paper6Cost<512, float>),
               sizeof(AbcSolver<150, kPaper6Dimension>), sizeof(Trace<300>), total);
   EXPECT_LE(total, 64u * 1024u);
@@ -258,8 +259,8 @@ TEST(Paper6Cost, LengthsRoundTripAndBoxIsNominalPlusMinusHalfWidth) {
   const LinkLengths lengths_m = link_lengths(nominal);
   const ModelParams params = to_params(nominal);
   const int paper6[kPaper6Dimension] = {model_param_index(0, DhField::d), model_param_index(1, DhField::a),
-                                       model_param_index(2, DhField::a), model_param_index(3, DhField::d),
-                                       model_param_index(4, DhField::d), model_param_index(5, DhField::d)};
+                                        model_param_index(2, DhField::a), model_param_index(3, DhField::d),
+                                        model_param_index(4, DhField::d), model_param_index(5, DhField::d)};
   const LinkLengthSet set = link_length_set(nominal);
   ASSERT_EQ(set.count, kPaper6Dimension);  // a UR arm's link lengths are the paper's six, in order
   for (std::size_t k = 0; k < kPaper6Dimension; ++k) {

@@ -33,7 +33,8 @@ struct Lengths {
   double v[6];
 };
 Lengths lengths_of(const RobotModel& m) {
-  return Lengths{{m.joints[0].d_m, m.joints[1].a_m, m.joints[2].a_m, m.joints[3].d_m, m.joints[4].d_m, m.joints[5].d_m}};
+  return Lengths{
+      {m.joints[0].d_m, m.joints[1].a_m, m.joints[2].a_m, m.joints[3].d_m, m.joints[4].d_m, m.joints[5].d_m}};
 }
 /// Their ModelParams indices, in the same order.
 const int kLengthIndex[6] = {model_param_index(0, DhField::d), model_param_index(1, DhField::a),
@@ -200,8 +201,8 @@ TEST(PopulationStage, ASubsetIsSearchedButTheBaseFitsEveryTrainingSample) {
   }
   const Span<const Sample> picked(subset_samples, kSamples / 3);
   Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = calibrate_paper6_abc(start(), dataset.train(), Span<const std::uint32_t>(subset),
-                                               tiny_abc(4), kPaper6DefaultHalfWidth_m, &cost, &abc, &result));
+  EXPECT_NO_HEAP(status = calibrate_paper6_abc(start(), dataset.train(), Span<const std::uint32_t>(subset), tiny_abc(4),
+                                               kPaper6DefaultHalfWidth_m, &cost, &abc, &result));
   ASSERT_EQ(status, Status::ok);
   // The cost is the MAE on the subset with the base refitted on the subset ...
   RigidTransform subset_base;
@@ -243,15 +244,15 @@ TEST(PopulationStage, ForwardsTraceAndProgressAndRepeatsItsBits) {
   EXPECT_EQ(counter.last.iteration, 15u);
   EXPECT_EQ(counter.last.evaluations, result.evaluations);
   // Same inputs, same bits (the hooks only watch); another seed, another answer.
-  ASSERT_EQ(calibrate_paper6_abc(start(), dataset.train(), {}, tiny_abc(5), kPaper6DefaultHalfWidth_m, &cost, &abc,
-                                 &other),
-            Status::ok);
+  ASSERT_EQ(
+      calibrate_paper6_abc(start(), dataset.train(), {}, tiny_abc(5), kPaper6DefaultHalfWidth_m, &cost, &abc, &other),
+      Status::ok);
   EXPECT_EQ(to_params(other.model), to_params(result.model));
   EXPECT_EQ(other.best_cost_m, result.best_cost_m);
   EXPECT_EQ(other.base_to_tracker.translation_m, result.base_to_tracker.translation_m);
-  ASSERT_EQ(calibrate_paper6_abc(start(), dataset.train(), {}, tiny_abc(6), kPaper6DefaultHalfWidth_m, &cost, &abc,
-                                 &other),
-            Status::ok);
+  ASSERT_EQ(
+      calibrate_paper6_abc(start(), dataset.train(), {}, tiny_abc(6), kPaper6DefaultHalfWidth_m, &cost, &abc, &other),
+      Status::ok);
   EXPECT_NE(other.best_cost_m, result.best_cost_m);
 
   trace.clear();
@@ -293,9 +294,11 @@ TEST(PopulationStage, ErrorsLeaveTheResultAlone) {
   result = sentinel;
   EXPECT_EQ(calibrate_paper6_abc(start(), train, {}, tiny_abc(1), h, nullptr, &abc, &result), Status::invalid_argument);
   unchanged("null cost");
-  EXPECT_EQ(calibrate_paper6_abc(start(), train, {}, tiny_abc(1), h, &cost, nullptr, &result), Status::invalid_argument);
+  EXPECT_EQ(calibrate_paper6_abc(start(), train, {}, tiny_abc(1), h, &cost, nullptr, &result),
+            Status::invalid_argument);
   unchanged("null ABC solver");
-  EXPECT_EQ(calibrate_paper6_gsa(start(), train, {}, tiny_gsa(1), h, &cost, nullptr, &result), Status::invalid_argument);
+  EXPECT_EQ(calibrate_paper6_gsa(start(), train, {}, tiny_gsa(1), h, &cost, nullptr, &result),
+            Status::invalid_argument);
   unchanged("null GSA solver");
   EXPECT_EQ(calibrate_paper6_abc(start(), train, {}, tiny_abc(1), h, &cost, &abc, nullptr), Status::invalid_argument);
   EXPECT_EQ(calibrate_paper6_gsa(start(), train, {}, tiny_gsa(1), h, &cost, &gsa, nullptr), Status::invalid_argument);

@@ -147,8 +147,8 @@ TEST(Reliability, ABlunderAboveItsDetectableBiasIsTheWorstPose) {
       if (blundered.units[k].w > blundered.units[worst].w) worst = k;
     }
     EXPECT_EQ(worst, bad) << seed;
-    EXPECT_TRUE(blundered.units[bad].rejected()) << seed << ": w " << blundered.units[bad].w << " critical "
-                                                 << blundered.units[bad].critical_w;
+    EXPECT_TRUE(blundered.units[bad].rejected())
+        << seed << ": w " << blundered.units[bad].w << " critical " << blundered.units[bad].critical_w;
   }
 }
 

@@ -25,8 +25,12 @@ namespace {
 using test::Bytes;
 
 /// The simulated session and its capture pair (testkit/sim_capture.hpp).
-const sim::Session& session() { return test::capture_session(); }
-const test::SimCapture& capture() { return test::sim_capture(); }
+const sim::Session& session() {
+  return test::capture_session();
+}
+const test::SimCapture& capture() {
+  return test::sim_capture();
+}
 
 /// A ByteReader that always fails.
 class BrokenReader final : public ByteReader {
@@ -123,7 +127,9 @@ static Workspace workspace;
 static Dataset<1024> dataset_a;
 static Dataset<1024> dataset_b;
 
-RobotModel nominal() { return session().truth().nominal; }
+RobotModel nominal() {
+  return session().truth().nominal;
+}
 
 bool same_extraction(const CaptureExtraction& a, const CaptureExtraction& b) {
   return a.status == b.status && a.pass == b.pass && test::same_fit(a.clock, b.clock) &&

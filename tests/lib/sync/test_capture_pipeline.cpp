@@ -158,7 +158,9 @@ struct SimCapture : test::SimCapture {
   Records tracker_records;  ///< points as StreamRecords
 };
 
-const sim::Session& session() { return test::capture_session(); }
+const sim::Session& session() {
+  return test::capture_session();
+}
 
 const SimCapture& capture() {
   static const SimCapture c = [] {
@@ -388,8 +390,8 @@ TEST(CaptureClockPass, BothOverloadsGiveTheFitOfDirectFeedingAndTheTrueClock) {
   VectorRecordReader robot_records(c.robot_records);
   VectorRecordReader tracker_records(c.tracker_records);
   ClockFit from_records;
-  EXPECT_NO_HEAP(status = estimate_clock_from_streams(robot_records, tracker_records, &estimator(), &from_records,
-                                                      nullptr));
+  EXPECT_NO_HEAP(status =
+                     estimate_clock_from_streams(robot_records, tracker_records, &estimator(), &from_records, nullptr));
   ASSERT_EQ(status, Status::ok);
   EXPECT_TRUE(test::same_fit(from_records, reference));
 
@@ -587,8 +589,8 @@ TEST(CaptureExtractionPass, ReadFailureAndAFullDatasetAreReported) {
   // The tracker bytes fail at once.
   MemoryByteReader robot_bytes(Span<const std::uint8_t>(c.robot_bytes.data(), c.robot_bytes.size()));
   ChoppyReader tracker_bytes(c.tracker_bytes, 64, 3, 0);
-  EXPECT_NO_HEAP(status = extract_samples_from_streams(robot_bytes, tracker_bytes, &extractor(clock, &dataset_a),
-                                                       nullptr));
+  EXPECT_NO_HEAP(status =
+                     extract_samples_from_streams(robot_bytes, tracker_bytes, &extractor(clock, &dataset_a), nullptr));
   EXPECT_EQ(status, Status::read_failed);
   // Room for 10 samples only: dataset_full, the first ten kept, the rest counted.
   static Dataset<10> small;

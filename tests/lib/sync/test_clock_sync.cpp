@@ -17,7 +17,9 @@ namespace {
 
 constexpr double kTargetUs = 2000.0;  // the required offset accuracy [us]
 
-ClockSyncConfig config_for(const sim::Session& session) { return make_clock_sync_config(session.truth().nominal); }
+ClockSyncConfig config_for(const sim::Session& session) {
+  return make_clock_sync_config(session.truth().nominal);
+}
 
 /// One shared default-size estimator (1.2 MB: static, not on the stack).
 ClockEstimatorBase& estimator_with(const ClockSyncConfig& config) {
@@ -50,8 +52,8 @@ ClockFit expect_recovered(const sim::SimConfig& config, const char* label) {
   EXPECT_NO_HEAP(status = estimator.estimate(&fit));
   EXPECT_EQ(status, Status::ok) << label;
   const double error_us = max_clock_error_us(fit, session);
-  const double true_at_reference_us = session.truth().clock_offset_us +
-                                      session.truth().clock_drift * fit.reference_tracker_us;
+  const double true_at_reference_us =
+      session.truth().clock_offset_us + session.truth().clock_drift * fit.reference_tracker_us;
   std::printf("%-28s offset err %7.1f us (sigma %6.1f), drift err %6.2f ppm (sigma %5.2f), max err %7.1f us\n", label,
               fit.offset_at_reference_us - true_at_reference_us, fit.sigma_offset_at_reference_us,
               (fit.drift - session.truth().clock_drift) * 1e6, fit.sigma_drift * 1e6, error_us);
@@ -332,10 +334,11 @@ TEST(ClockSync, MatchedProfilesShowTheFitAndChangeNoResult) {
   double residual = 0.0, speed = 0.0, residual_off = 0.0, speed_off = 0.0;
   match_rms(match, &residual, &speed);
   match_rms(shifted, &residual_off, &speed_off);
-  std::printf("matched profiles: %zu bins, %llu chords (fit %u), rms tracker speed %.1f mm/s, residual %.2f mm/s; "
-              "0.3 s off: %.2f mm/s\n",
-              match.count, static_cast<unsigned long long>(chords), fit.chords_used, speed * 1e3, residual * 1e3,
-              residual_off * 1e3);
+  std::printf(
+      "matched profiles: %zu bins, %llu chords (fit %u), rms tracker speed %.1f mm/s, residual %.2f mm/s; "
+      "0.3 s off: %.2f mm/s\n",
+      match.count, static_cast<unsigned long long>(chords), fit.chords_used, speed * 1e3, residual * 1e3,
+      residual_off * 1e3);
   EXPECT_GT(speed, 0.01);
   EXPECT_LT(residual, 0.05 * speed);
   EXPECT_GT(residual_off, 5.0 * residual);

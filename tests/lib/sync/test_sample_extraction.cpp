@@ -50,7 +50,8 @@ std::string describe(const ExtractionCounts& counts) {
   std::string text = "kept " + std::to_string(counts.kept) + " of " + std::to_string(counts.tracker_points);
   for (int r = 0; r < kDropReasonCount; ++r)
     if (counts.dropped[r] != 0)
-      text += std::string(", ") + drop_reason_name(static_cast<DropReason>(r)) + " " + std::to_string(counts.dropped[r]);
+      text +=
+          std::string(", ") + drop_reason_name(static_cast<DropReason>(r)) + " " + std::to_string(counts.dropped[r]);
   return text;
 }
 
@@ -185,8 +186,8 @@ TEST(Extraction, DropsEveryStatusButValid) {
   const Vec3 p = fk_tool_point(kUr5, home_pose());
   const std::uint8_t statuses[] = {0, 1, 0, 2, 0, 7, 0, 255};
   feed_synthetic(
-      &extractor, known_clock(-1e6, 0.0), 20.0, [](double) { return home_pose(); },
-      [&](double) { return p; }, [&](int i) { return statuses[i % 8]; });
+      &extractor, known_clock(-1e6, 0.0), 20.0, [](double) { return home_pose(); }, [&](double) { return p; },
+      [&](int i) { return statuses[i % 8]; });
   const ExtractionCounts& counts = extractor.counts();
   expect_accounted(counts);
   EXPECT_EQ(counts.tracker_points, 200u);
@@ -320,8 +321,7 @@ TEST(Extraction, QuasiStaticRuleOnBothSides) {
       return q;
     };
     feed_synthetic(
-        &extractor, clock, 20.0, joints_at,
-        [&](double t_s) { return Vec3(1.0 + c.tracker_speed_m_s * t_s, 2.0, 0.5); },
+        &extractor, clock, 20.0, joints_at, [&](double t_s) { return Vec3(1.0 + c.tracker_speed_m_s * t_s, 2.0, 0.5); },
         [](int) { return std::uint8_t{0}; });
     const ExtractionCounts& counts = extractor.counts();
     expect_accounted(counts);
@@ -457,8 +457,8 @@ TEST(Extraction, ConstantMemoryOverHours) {
   const ClockFit clock = known_clock(session.truth().clock_offset_us, session.truth().clock_drift);
   static SampleExtractor<> extractor(make_extraction_config(session.truth().nominal), clock, &dataset);
   extractor.reset(make_extraction_config(session.truth().nominal), clock, &dataset);
-  EXPECT_EQ(sizeof(extractor), sizeof(SampleExtractorBase) + 1024 * sizeof(ExtractorRobotEntry) +
-                                   64 * sizeof(ExtractorTrackerEntry));
+  EXPECT_EQ(sizeof(extractor),
+            sizeof(SampleExtractorBase) + 1024 * sizeof(ExtractorRobotEntry) + 64 * sizeof(ExtractorTrackerEntry));
   std::size_t allocations = 0;
   (void)test::feed_extractor(session, &extractor, 0.0, [&](auto push) {
     Status status = Status::ok;

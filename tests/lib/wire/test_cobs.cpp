@@ -144,18 +144,19 @@ TEST(Cobs, RejectsMalformedFrames) {
   std::size_t written = 7;
   const Span<std::uint8_t> o(out.data(), out.size());
   const Bytes past_end = test::from_hex("051122");
-  EXPECT_EQ(
-      test::no_heap([&] { return cobs_decode(Span<const std::uint8_t>(past_end.data(), past_end.size()), o, &written); }),
-      Status::cobs_error);
+  EXPECT_EQ(test::no_heap(
+                [&] { return cobs_decode(Span<const std::uint8_t>(past_end.data(), past_end.size()), o, &written); }),
+            Status::cobs_error);
   EXPECT_EQ(written, 0u);
   const Bytes inner_zero = test::from_hex("03110022");
-  EXPECT_EQ(
-      test::no_heap([&] { return cobs_decode(Span<const std::uint8_t>(inner_zero.data(), inner_zero.size()), o, &written); }),
-      Status::cobs_error);
+  EXPECT_EQ(test::no_heap([&] {
+              return cobs_decode(Span<const std::uint8_t>(inner_zero.data(), inner_zero.size()), o, &written);
+            }),
+            Status::cobs_error);
   const Bytes zero_code = test::from_hex("0211002233");
-  EXPECT_EQ(
-      test::no_heap([&] { return cobs_decode(Span<const std::uint8_t>(zero_code.data(), zero_code.size()), o, &written); }),
-      Status::cobs_error);
+  EXPECT_EQ(test::no_heap(
+                [&] { return cobs_decode(Span<const std::uint8_t>(zero_code.data(), zero_code.size()), o, &written); }),
+            Status::cobs_error);
   EXPECT_EQ(test::no_heap([&] { return cobs_decode(Span<const std::uint8_t>(), o, &written); }), Status::cobs_error);
   const Bytes fine = test::from_hex("0311220233");
   EXPECT_EQ(test::no_heap([&] {

@@ -128,8 +128,8 @@ Bytes packet_of_frame(const Bytes& frame) {
 
 TEST(CodecVectors, DecodeToTheStatedValues) {
   LastRecordHandler handler;
-  const Bytes stream =
-      concat({test::from_hex(kJointStateVector), test::from_hex(kTrackerPointVector), test::from_hex(kDeviceInfoVector)});
+  const Bytes stream = concat(
+      {test::from_hex(kJointStateVector), test::from_hex(kTrackerPointVector), test::from_hex(kDeviceInfoVector)});
   const DecoderStats stats = decode_all(stream, handler);
   ASSERT_EQ(handler.joints, 1);
   ASSERT_EQ(handler.trackers, 1);
@@ -231,14 +231,17 @@ TEST(CodecDeviceInfo, NamePaddingBothWays) {
   Bytes out(kMaxFrameBytes);
   std::size_t written = 0;
   std::memset(record.name, 'A', sizeof record.name);
-  EXPECT_EQ(test::no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
-            Status::invalid_argument);
+  EXPECT_EQ(
+      test::no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
+      Status::invalid_argument);
   std::strcpy(record.name, "bad\x1b[2Jname");
-  EXPECT_EQ(test::no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
-            Status::invalid_argument);
+  EXPECT_EQ(
+      test::no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
+      Status::invalid_argument);
   std::strcpy(record.name, "caf\xc3\xa9");
-  EXPECT_EQ(test::no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
-            Status::invalid_argument);
+  EXPECT_EQ(
+      test::no_heap([&] { return encode_device_info(record, Span<std::uint8_t>(out.data(), out.size()), &written); }),
+      Status::invalid_argument);
 }
 
 TEST(CodecDeviceInfo, RejectsBadPaddingWithValidCrc) {
@@ -420,13 +423,15 @@ Bytes frame_of(const Packet& p) {
     case Kind::joint: return encode(joint, encode_joint_state);
     case Kind::tracker: return encode(tracker, encode_tracker_point);
     case Kind::info: return encode(info, encode_device_info);
-    case Kind::unknown_type: return frame_of_packet(patched(packet_of_frame(encode(tracker, encode_tracker_point)), 1, 0x04));
+    case Kind::unknown_type:
+      return frame_of_packet(patched(packet_of_frame(encode(tracker, encode_tracker_point)), 1, 0x04));
     case Kind::wrong_length: {
       Bytes packet = packet_of_frame(encode(tracker, encode_tracker_point));
       packet.push_back(0);
       return frame_of_packet(packet);
     }
-    case Kind::bad_version: return frame_of_packet(patched(packet_of_frame(encode(tracker, encode_tracker_point)), 0, 2));
+    case Kind::bad_version:
+      return frame_of_packet(patched(packet_of_frame(encode(tracker, encode_tracker_point)), 0, 2));
     case Kind::bad_crc: {
       const Bytes frame = encode(tracker, encode_tracker_point);
       return patched(frame, 20, static_cast<std::uint8_t>(frame[20] ^ 0x10));
@@ -458,10 +463,17 @@ TEST(CodecSequence, OneCounterPerStreamWithWrapAround) {
   // One stream, one counter: wrap 65535 -> 0 is no gap; 1 -> 5 loses 3; 5 -> 65534 is a jump
   // backwards in sequence space (a restart), not 65528 lost packets.
   LastRecordHandler handler;
-  const DecoderStats single =
-      decode_all(tracker_frames({{65533, 10}, {65534, 20}, {65535, 30}, {0, 40}, {1, 50}, {5, 90}, {6, 100},
-                                 {65534, 110}, {65535, 120}, {2, 130}}),
-                 handler);
+  const DecoderStats single = decode_all(tracker_frames({{65533, 10},
+                                                         {65534, 20},
+                                                         {65535, 30},
+                                                         {0, 40},
+                                                         {1, 50},
+                                                         {5, 90},
+                                                         {6, 100},
+                                                         {65534, 110},
+                                                         {65535, 120},
+                                                         {2, 130}}),
+                                         handler);
   EXPECT_EQ(single.frames_ok, 10u);
   EXPECT_EQ(single.sequence_gaps, 2u);  // 1->5, 65535->2
   EXPECT_EQ(single.packets_lost, 3u + 2u);
@@ -469,11 +481,16 @@ TEST(CodecSequence, OneCounterPerStreamWithWrapAround) {
 
   // The types share the counter: a decoder tracking each type on its own would see gaps in
   // every type here (joint 65534 -> 0 -> 2, tracker 65535 -> 1 -> 5, ...).
-  const DecoderStats mixed = decode_all(
-      frames_of({{Kind::info, 65533, 10}, {Kind::joint, 65534, 20}, {Kind::tracker, 65535, 30},
-                 {Kind::joint, 0, 40}, {Kind::tracker, 1, 50}, {Kind::joint, 2, 60}, {Kind::joint, 3, 70},
-                 {Kind::info, 4, 80}, {Kind::tracker, 5, 90}}),
-      handler);
+  const DecoderStats mixed = decode_all(frames_of({{Kind::info, 65533, 10},
+                                                   {Kind::joint, 65534, 20},
+                                                   {Kind::tracker, 65535, 30},
+                                                   {Kind::joint, 0, 40},
+                                                   {Kind::tracker, 1, 50},
+                                                   {Kind::joint, 2, 60},
+                                                   {Kind::joint, 3, 70},
+                                                   {Kind::info, 4, 80},
+                                                   {Kind::tracker, 5, 90}}),
+                                        handler);
   EXPECT_EQ(mixed.frames_ok, 9u);
   EXPECT_EQ(mixed.joint_states, 4u);
   EXPECT_EQ(mixed.sequence_gaps + mixed.packets_lost + mixed.sequence_resets, 0u);
@@ -490,12 +507,17 @@ TEST(CodecSequence, SkippedIntactPacketsAreNotLost) {
   // was sent and took its number: skipping it is not a loss. A packet damaged in transit or
   // of another version has no header we can trust, so its number shows as lost.
   LastRecordHandler handler;
-  const DecoderStats stats =
-      decode_all(frames_of({{Kind::joint, 100, 10}, {Kind::unknown_type, 101, 20}, {Kind::joint, 102, 30},
-                            {Kind::wrong_length, 103, 40}, {Kind::unknown_type, 104, 50}, {Kind::tracker, 105, 60},
-                            {Kind::bad_crc, 106, 70}, {Kind::joint, 107, 80}, {Kind::bad_version, 108, 90},
-                            {Kind::info, 109, 100}}),
-                 handler);
+  const DecoderStats stats = decode_all(frames_of({{Kind::joint, 100, 10},
+                                                   {Kind::unknown_type, 101, 20},
+                                                   {Kind::joint, 102, 30},
+                                                   {Kind::wrong_length, 103, 40},
+                                                   {Kind::unknown_type, 104, 50},
+                                                   {Kind::tracker, 105, 60},
+                                                   {Kind::bad_crc, 106, 70},
+                                                   {Kind::joint, 107, 80},
+                                                   {Kind::bad_version, 108, 90},
+                                                   {Kind::info, 109, 100}}),
+                                        handler);
   EXPECT_EQ(stats.frames_ok, 5u);
   EXPECT_EQ(stats.unknown_types, 2u);
   EXPECT_EQ(stats.bad_lengths, 1u);
@@ -507,10 +529,12 @@ TEST(CodecSequence, SkippedIntactPacketsAreNotLost) {
 
   // Skipped packets are also the base of the next comparison: an unknown-type packet after a
   // gap carries the gap, and its restart is a restart.
-  const DecoderStats skipped_base =
-      decode_all(frames_of({{Kind::joint, 1, 10}, {Kind::unknown_type, 4, 20}, {Kind::joint, 5, 30},
-                            {Kind::unknown_type, 0, 5}, {Kind::joint, 1, 15}}),
-                 handler);
+  const DecoderStats skipped_base = decode_all(frames_of({{Kind::joint, 1, 10},
+                                                          {Kind::unknown_type, 4, 20},
+                                                          {Kind::joint, 5, 30},
+                                                          {Kind::unknown_type, 0, 5},
+                                                          {Kind::joint, 1, 15}}),
+                                               handler);
   EXPECT_EQ(skipped_base.frames_ok, 3u);
   EXPECT_EQ(skipped_base.sequence_gaps, 1u);  // 1 -> 4
   EXPECT_EQ(skipped_base.packets_lost, 2u);
@@ -525,8 +549,8 @@ TEST(CodecSequence, RestartsAreNotLoss) {
   EXPECT_EQ(restart.sequence_gaps, 0u);
   EXPECT_EQ(restart.packets_lost, 0u);
   EXPECT_EQ(restart.sequence_resets, 1u);
-  const DecoderStats across = decode_all(frames_of({{Kind::joint, 100, 5000}, {Kind::info, 0, 0}, {Kind::joint, 1, 8}}),
-                                         handler);
+  const DecoderStats across =
+      decode_all(frames_of({{Kind::joint, 100, 5000}, {Kind::info, 0, 0}, {Kind::joint, 1, 8}}), handler);
   EXPECT_EQ(across.sequence_resets, 1u);  // DEVICE_INFO of a restarted sender
   EXPECT_EQ(across.sequence_gaps + across.packets_lost, 0u);
 

@@ -12,9 +12,9 @@ namespace hivecal {
 namespace {
 
 using test::Corrupted;
+using test::feed_chunked;
 using test::SentStream;
 using test::StreamShape;
-using test::feed_chunked;
 
 // Golden digest of the codec: encoded bytes of a seeded stream through a seeded channel,
 // every decoded record's bits and every counter. Same value on every target and -O level.

@@ -16,9 +16,9 @@ namespace hivecal {
 namespace {
 
 using test::Corrupted;
+using test::feed_chunked;
 using test::SentStream;
 using test::StreamShape;
-using test::feed_chunked;
 
 /// Checks every delivered record against what was sent (looked up by sequence number: the
 /// stream numbers all its frames with one counter) and remembers which sent frames arrived,
@@ -124,9 +124,9 @@ struct ChannelResult {
   std::size_t sent_valid = 0;
   std::size_t errors = 0;
   std::uint64_t false_accepts = 0;
-  std::size_t sent_numbered = 0;     ///< valid + unknown-type frames: each took a sequence number
-  std::size_t untouched_missed = 0;  ///< undamaged frames that did not arrive intact
-  std::size_t garbage_fragments = 0; ///< deliberate garbage pieces in the sent stream
+  std::size_t sent_numbered = 0;      ///< valid + unknown-type frames: each took a sequence number
+  std::size_t untouched_missed = 0;   ///< undamaged frames that did not arrive intact
+  std::size_t garbage_fragments = 0;  ///< deliberate garbage pieces in the sent stream
 };
 
 ChannelResult run_channel(std::uint64_t seed, std::size_t frames, double byte_error_rate, std::size_t max_chunk) {
@@ -152,8 +152,10 @@ ChannelResult run_channel(std::uint64_t seed, std::size_t frames, double byte_er
   std::vector<std::size_t> known_arrivals;
   std::uint64_t unknown_arrivals = 0;
   for (std::size_t k : arrivals) {
-    if (sent.frames[k].type == test::kUnknownTypeMarker) ++unknown_arrivals;
-    else known_arrivals.push_back(k);
+    if (sent.frames[k].type == test::kUnknownTypeMarker)
+      ++unknown_arrivals;
+    else
+      known_arrivals.push_back(k);
   }
   EXPECT_TRUE(handler.accepted == known_arrivals);
   EXPECT_EQ(s.unknown_types, unknown_arrivals);
@@ -235,21 +237,21 @@ TEST(CodecStream, NoisyChannelRoundTripProperty) {
 
 TEST(CodecStream, CorruptionSweepHasNoFalseAccepts) {
   constexpr std::size_t kFrames = 20000;
-  std::printf("  byte error rate | errors | frames sent (valid) | accepted | lost (gaps)    | garbage | crc  | cobs | "
-              "length | oversized | false accepts\n");
+  std::printf(
+      "  byte error rate | errors | frames sent (valid) | accepted | lost (gaps)    | garbage | crc  | cobs | "
+      "length | oversized | false accepts\n");
   for (double rate : {1e-5, 1e-4, 1e-3, 1e-2}) {
     const ChannelResult r = run_channel(2026, kFrames, rate, 4096);
     // accepted: of the valid frames; lost: of all frames, as unknown-type ones take numbers too.
-    std::printf("  %15.0e | %6zu | %11zu (%5zu) | %7.3f%% | %7.3f%% (%4llu) | %7zu | %4llu | %4llu | %6llu | %9llu | %llu\n",
-                rate, r.errors, r.sent_numbered, r.sent_valid,
-                100.0 * static_cast<double>(r.stats.frames_ok) / static_cast<double>(r.sent_valid),
-                100.0 * static_cast<double>(r.stats.packets_lost) / static_cast<double>(r.sent_numbered),
-                static_cast<unsigned long long>(r.stats.sequence_gaps), r.garbage_fragments,
-                static_cast<unsigned long long>(r.stats.crc_failures),
-                static_cast<unsigned long long>(r.stats.cobs_errors),
-                static_cast<unsigned long long>(r.stats.bad_lengths),
-                static_cast<unsigned long long>(r.stats.oversized_frames),
-                static_cast<unsigned long long>(r.false_accepts));
+    std::printf(
+        "  %15.0e | %6zu | %11zu (%5zu) | %7.3f%% | %7.3f%% (%4llu) | %7zu | %4llu | %4llu | %6llu | %9llu | %llu\n",
+        rate, r.errors, r.sent_numbered, r.sent_valid,
+        100.0 * static_cast<double>(r.stats.frames_ok) / static_cast<double>(r.sent_valid),
+        100.0 * static_cast<double>(r.stats.packets_lost) / static_cast<double>(r.sent_numbered),
+        static_cast<unsigned long long>(r.stats.sequence_gaps), r.garbage_fragments,
+        static_cast<unsigned long long>(r.stats.crc_failures), static_cast<unsigned long long>(r.stats.cobs_errors),
+        static_cast<unsigned long long>(r.stats.bad_lengths), static_cast<unsigned long long>(r.stats.oversized_frames),
+        static_cast<unsigned long long>(r.false_accepts));
     EXPECT_EQ(r.false_accepts, 0u) << rate;
     EXPECT_EQ(r.untouched_missed, 0u) << rate;
     EXPECT_EQ(r.stats.bad_versions + r.stats.bad_payloads, 0u) << rate;  // only intact packets reach these checks

@@ -49,6 +49,8 @@ inline double from_bits(std::uint64_t bits) {
 }
 /// True when x is neither NaN nor Inf (exponent bit test: immune to -ffast-math). Inline:
 /// it guards every entry of the 33x33 matrices.
-inline bool is_finite(double x) { return ((bits_of(x) >> 52) & 0x7ffU) != 0x7ffU; }
+inline bool is_finite(double x) {
+  return ((bits_of(x) >> 52) & 0x7ffU) != 0x7ffU;
+}
 
 }  // namespace hivecal::math

@@ -47,7 +47,7 @@ class RingView {
   const T& operator[](std::size_t i) const { return storage_[slot(i)]; }
   /// The i-th oldest element (0 = oldest); unchecked.
   T& operator[](std::size_t i) { return storage_[slot(i)]; }
-  const T& front() const { return (*this)[0]; }          ///< oldest element; unchecked
+  const T& front() const { return (*this)[0]; }         ///< oldest element; unchecked
   const T& back() const { return (*this)[size_ - 1]; }  ///< newest element; unchecked
 
  private:

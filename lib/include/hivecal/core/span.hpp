@@ -20,12 +20,12 @@ class Span {
   template <typename U>
   constexpr Span(const Span<U>& other) : data_(other.data()), size_(other.size()) {}  // NOLINT
 
-  constexpr T* data() const { return data_; }                 ///< first element
-  constexpr std::size_t size() const { return size_; }        ///< element count
-  constexpr bool empty() const { return size_ == 0; }         ///< no elements
+  constexpr T* data() const { return data_; }                        ///< first element
+  constexpr std::size_t size() const { return size_; }               ///< element count
+  constexpr bool empty() const { return size_ == 0; }                ///< no elements
   constexpr T& operator[](std::size_t i) const { return data_[i]; }  ///< unchecked access
-  constexpr T* begin() const { return data_; }                ///< range-for support
-  constexpr T* end() const { return data_ + size_; }          ///< range-for support
+  constexpr T* begin() const { return data_; }                       ///< range-for support
+  constexpr T* end() const { return data_ + size_; }                 ///< range-for support
   /// Elements [offset, offset + count), clamped to the view.
   constexpr Span subspan(std::size_t offset, std::size_t count) const {
     if (offset > size_) offset = size_;

@@ -27,9 +27,9 @@ class TraceBase {
     size_ = 0;
     dropped_ = 0;
   }
-  std::size_t size() const { return size_; }          ///< values stored
-  std::size_t capacity() const { return capacity_; }  ///< values it can hold
-  std::size_t dropped() const { return dropped_; }    ///< values pushed past capacity
+  std::size_t size() const { return size_; }                                        ///< values stored
+  std::size_t capacity() const { return capacity_; }                                ///< values it can hold
+  std::size_t dropped() const { return dropped_; }                                  ///< values pushed past capacity
   Span<const double> values() const { return Span<const double>(values_, size_); }  ///< stored values
 
  protected:

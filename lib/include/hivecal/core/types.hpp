@@ -11,14 +11,14 @@
 
 namespace hivecal {
 
-using Vec3 = Eigen::Matrix<double, 3, 1>;               ///< a point or direction [m] or [-]
-using Mat3 = Eigen::Matrix<double, 3, 3>;               ///< a rotation or 3x3 moment
+using Vec3 = Eigen::Matrix<double, 3, 1>;                   ///< a point or direction [m] or [-]
+using Mat3 = Eigen::Matrix<double, 3, 3>;                   ///< a rotation or 3x3 moment
 using JointVector = Eigen::Matrix<double, kJointCount, 1>;  ///< joint positions [rad]
 
 /// Proper rigid motion y = rotation * x + translation_m.
 struct RigidTransform {
-  Mat3 rotation = Mat3::Identity();         ///< orthonormal, det = +1
-  Vec3 translation_m = Vec3::Zero();        ///< [m]
+  Mat3 rotation = Mat3::Identity();   ///< orthonormal, det = +1
+  Vec3 translation_m = Vec3::Zero();  ///< [m]
 
   /// Applies the transform to a point [m].
   Vec3 apply(const Vec3& point_m) const { return rotation * point_m + translation_m; }

@@ -35,14 +35,15 @@ inline constexpr int kInverseIterationMaxSteps = 5;
 /// What symmetric_eigenvalues keeps for symmetric_eigenvectors_lowest (1.1 kB); the
 /// Householder vectors themselves stay in the working matrix, below its subdiagonal.
 struct SymmetricEigenReduction {
-  int size = 0;                                  ///< decomposed block size [-] (0: none, or the decomposition failed)
-  int coupled_count = 0;                         ///< block indices with an off-diagonal entry, reduced to T [-]
-  int coupled[kSymmetricCapacity] = {};             ///< those indices, increasing: row i of T is coupled[i] [-]
-  int source[kSymmetricCapacity] = {};              ///< block index whose eigenvalue sorted to position k [-]
-  double diagonal[kSymmetricCapacity] = {};         ///< diagonal of the tridiagonal T [matrix unit]
-  double subdiagonal[kSymmetricCapacity] = {};      ///< entry k couples rows k and k + 1 of T, the last 0 [matrix unit]
-  double reflector_scale[kSymmetricCapacity] = {};  ///< v^T v / 2 of reflection k (acts on k+1..), 0: none [matrix unit^2]
-  double negligible = 0.0;                       ///< couplings of T at or below this count as zero: eps * largest entry [matrix unit]
+  int size = 0;                                 ///< decomposed block size [-] (0: none, or the decomposition failed)
+  int coupled_count = 0;                        ///< block indices with an off-diagonal entry, reduced to T [-]
+  int coupled[kSymmetricCapacity] = {};         ///< those indices, increasing: row i of T is coupled[i] [-]
+  int source[kSymmetricCapacity] = {};          ///< block index whose eigenvalue sorted to position k [-]
+  double diagonal[kSymmetricCapacity] = {};     ///< diagonal of the tridiagonal T [matrix unit]
+  double subdiagonal[kSymmetricCapacity] = {};  ///< entry k couples rows k and k + 1 of T, the last 0 [matrix unit]
+  double reflector_scale[kSymmetricCapacity] =
+      {};                   ///< v^T v / 2 of reflection k (acts on k+1..), 0: none [matrix unit^2]
+  double negligible = 0.0;  ///< couplings of T at or below this count as zero: eps * largest entry [matrix unit]
 };
 
 /// Decomposes the symmetric leading size x size block of *matrix (upper and lower triangle
@@ -77,7 +78,8 @@ Status symmetric_eigenvalues(SymmetricMatrix* matrix, int size, SymmetricVector*
 /// (a vector whose residual |(T - shift) x| stayed above n^1.5 sqrt(10) eps |T|_1 |x| after
 /// kInverseIterationMaxSteps steps; it is still written).
 Status symmetric_eigenvectors_lowest(const SymmetricMatrix& matrix, const SymmetricEigenReduction& reduction,
-                                     const SymmetricVector& eigenvalues, int vector_count, SymmetricMatrix* eigenvectors);
+                                     const SymmetricVector& eigenvalues, int vector_count,
+                                     SymmetricMatrix* eigenvectors);
 
 /// symmetric_eigenvalues then symmetric_eigenvectors_lowest: every eigenvalue, and the
 /// eigenvectors of the vector_count smallest (columns 0 .. vector_count-1). Errors of both.

@@ -45,10 +45,9 @@ struct ComplianceTerm {
 struct ArmMasses {
   double link_mass_kg[kJointCount] = {};  ///< mass of link 1 .. 6 (moved by joint 1 .. 6) [kg]
   /// Centre of mass of link j + 1 in DH frame j + 1 (the frame at the link's end) [m].
-  Vec3 link_com_m[kJointCount] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
-                                  Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
-  double payload_kg = 0.0;                 ///< payload (tool, reflector mount) mass [kg]
-  Vec3 payload_com_m = Vec3::Zero();       ///< payload centre of mass in the flange frame [m]
+  Vec3 link_com_m[kJointCount] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  double payload_kg = 0.0;            ///< payload (tool, reflector mount) mass [kg]
+  Vec3 payload_com_m = Vec3::Zero();  ///< payload centre of mass in the flange frame [m]
 };
 static_assert(kJointCount == 6, "link_com_m's initialiser lists six points");
 
@@ -58,10 +57,10 @@ struct ComplianceModel {
   /// Compliance of each term: [rad/m] for point loads, [rad/(kg m)] for arm masses.
   double coefficient[kMaxComplianceTerms] = {};
   Vec3 gravity_direction = Vec3(0.0, 0.0, -1.0);  ///< unit gravity direction, robot base frame [-]
-  ArmMasses masses;                                ///< read by ComplianceLoad::arm_masses only
-  ComplianceTerm terms[kMaxComplianceTerms];       ///< the first term_count are used
-  int term_count = 0;                              ///< 0 .. kMaxComplianceTerms; 0 = rigid [-]
-  ComplianceLoad load = ComplianceLoad::point;     ///< what every term's basis weighs
+  ArmMasses masses;                               ///< read by ComplianceLoad::arm_masses only
+  ComplianceTerm terms[kMaxComplianceTerms];      ///< the first term_count are used
+  int term_count = 0;                             ///< 0 .. kMaxComplianceTerms; 0 = rigid [-]
+  ComplianceLoad load = ComplianceLoad::point;    ///< what every term's basis weighs
 };
 
 /// Status::ok when `compliance` is usable: rigid (term_count 0, the rest unread), or

@@ -89,9 +89,9 @@ class DatasetBase {
   /// every sample is its own [-].
   std::size_t pose_count() const;
 
-  std::size_t size() const { return size_; }            ///< samples stored and not set aside
-  std::size_t capacity() const { return capacity_; }    ///< samples it can hold
-  bool full() const { return stored_ == capacity_; }      ///< no room for another sample
+  std::size_t size() const { return size_; }          ///< samples stored and not set aside
+  std::size_t capacity() const { return capacity_; }  ///< samples it can hold
+  bool full() const { return stored_ == capacity_; }  ///< no room for another sample
 
   /// All samples, training ones first after split().
   Span<const Sample> samples() const { return Span<const Sample>(storage_, size_); }
@@ -128,18 +128,18 @@ class DatasetBase {
  private:
   Sample* storage_;
   std::size_t capacity_;
-  std::size_t size_ = 0;         // kept samples (the set-aside ones follow them)
-  std::size_t stored_ = 0;       // kept + set aside
+  std::size_t size_ = 0;    // kept samples (the set-aside ones follow them)
+  std::size_t stored_ = 0;  // kept + set aside
   std::size_t train_count_ = 0;
 
   void sort_by_index(std::size_t count);  // the first `count` samples in the order of add()
   void shuffle(std::uint64_t seed);
-  bool grouped() const;                               // several targets: split by pose
-  std::size_t pose_end(std::size_t begin) const;      // end of the run of equal joints at begin
-  std::size_t pose_start(std::size_t pose) const;     // first sample of run `pose` in the current order
+  bool grouped() const;                            // several targets: split by pose
+  std::size_t pose_end(std::size_t begin) const;   // end of the run of equal joints at begin
+  std::size_t pose_start(std::size_t pose) const;  // first sample of run `pose` in the current order
   void rotate_to(std::size_t to, std::size_t begin, std::size_t end);  // block [begin, end) moved to `to` <= begin
   static std::size_t train_poses_of(double train_fraction, std::size_t poses);  // see train_count_for
-  void shuffle_poses(std::uint64_t seed);             // add() order, then the runs shuffled whole
+  void shuffle_poses(std::uint64_t seed);  // add() order, then the runs shuffled whole
 };
 
 /// A dataset over storage of the caller's (`capacity` samples at `storage`, which must

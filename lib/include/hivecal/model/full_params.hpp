@@ -18,16 +18,22 @@
 
 namespace hivecal {
 
-inline constexpr int kBaseParamCount = 6;                                  ///< rotation (3) + translation (3)
-inline constexpr int kRigidParamCount = kModelParamCount + kBaseParamCount;  ///< 33: geometry and base
+inline constexpr int kBaseParamCount = 6;                                       ///< rotation (3) + translation (3)
+inline constexpr int kRigidParamCount = kModelParamCount + kBaseParamCount;     ///< 33: geometry and base
 inline constexpr int kFullParamCount = kRigidParamCount + kMaxComplianceTerms;  ///< 37: and the compliance
 
 /// Index of the base rotation increment about base axis `axis` (0 = x, 1 = y, 2 = z).
-constexpr int base_rotation_param_index(int axis) { return kModelParamCount + axis; }
+constexpr int base_rotation_param_index(int axis) {
+  return kModelParamCount + axis;
+}
 /// Index of the base translation increment along base axis `axis` (0 = x, 1 = y, 2 = z).
-constexpr int base_translation_param_index(int axis) { return kModelParamCount + 3 + axis; }
+constexpr int base_translation_param_index(int axis) {
+  return kModelParamCount + 3 + axis;
+}
 /// Index of the coefficient of compliance term `term` (0 .. kMaxComplianceTerms - 1).
-constexpr int compliance_param_index(int term) { return kRigidParamCount + term; }
+constexpr int compliance_param_index(int term) {
+  return kRigidParamCount + term;
+}
 
 /// One value per full-model parameter (an increment, a sigma, ...) [m] or [rad].
 using FullParams = Eigen::Matrix<double, kFullParamCount, 1>;
@@ -37,7 +43,9 @@ using FullJacobian = Eigen::Matrix<double, 3, kFullParamCount>;
 /// A set of full-model parameters: bit i stands for parameter i.
 using ParamMask = std::uint64_t;
 /// The mask holding only parameter `index`.
-constexpr ParamMask param_bit(int index) { return ParamMask{1} << static_cast<unsigned>(index); }
+constexpr ParamMask param_bit(int index) {
+  return ParamMask{1} << static_cast<unsigned>(index);
+}
 /// Every parameter of the rigid model (the 33 geometry and base parameters); LmParamSet::full.
 inline constexpr ParamMask kAllParamsMask = (ParamMask{1} << kRigidParamCount) - 1U;
 /// The coefficients of the kMaxComplianceTerms compliance terms (which exist: term_count).
@@ -50,7 +58,9 @@ constexpr ParamMask compliance_params_mask(int term_count) {
 /// of targets 2 .. kMaxTargets are estimated too (mask_count and mask_indices ignore it).
 inline constexpr ParamMask kOtherTargetTools = ParamMask{1} << kFullParamCount;
 /// True when parameter `index` is in `mask`.
-constexpr bool mask_has(ParamMask mask, int index) { return (mask & param_bit(index)) != 0; }
+constexpr bool mask_has(ParamMask mask, int index) {
+  return (mask & param_bit(index)) != 0;
+}
 /// Every valid parameter bit: the rigid ones and the compliance coefficients.
 inline constexpr ParamMask kValidParamsMask = kAllParamsMask | kComplianceParamsMask;
 /// Number of parameters in `mask`.
@@ -73,9 +83,7 @@ const char* other_tool_param_name(int target, int axis);
 /// Cross-product matrix: skew(v) * x = v x x.
 inline Mat3 skew(const Vec3& v) {
   Mat3 k;
-  k << 0.0, -v.z(), v.y(),
-       v.z(), 0.0, -v.x(),
-       -v.y(), v.x(), 0.0;
+  k << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
   return k;
 }
 

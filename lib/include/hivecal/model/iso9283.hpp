@@ -16,13 +16,13 @@ namespace hivecal {
 
 /// Accuracy and repeatability of one pose.
 struct PoseAccuracy {
-  std::size_t cycles = 0;                  ///< measured reaches n [-]
-  Vec3 barycentre_m = Vec3::Zero();        ///< mean measured position [m]
-  Vec3 accuracy_m = Vec3::Zero();          ///< AP_x, AP_y, AP_z: barycentre - commanded [m]
-  double accuracy_norm_m = 0.0;            ///< AP_P [m]
-  double mean_distance_m = 0.0;            ///< lb: mean distance of a reach from the barycentre [m]
-  double distance_sigma_m = 0.0;           ///< S_l [m]
-  double repeatability_m = 0.0;            ///< RP_l = lb + 3 S_l [m]
+  std::size_t cycles = 0;            ///< measured reaches n [-]
+  Vec3 barycentre_m = Vec3::Zero();  ///< mean measured position [m]
+  Vec3 accuracy_m = Vec3::Zero();    ///< AP_x, AP_y, AP_z: barycentre - commanded [m]
+  double accuracy_norm_m = 0.0;      ///< AP_P [m]
+  double mean_distance_m = 0.0;      ///< lb: mean distance of a reach from the barycentre [m]
+  double distance_sigma_m = 0.0;     ///< S_l [m]
+  double repeatability_m = 0.0;      ///< RP_l = lb + 3 S_l [m]
 };
 
 /// AP and RP of the `measured_m` reaches of one pose commanded at `commanded_m` (same frame).

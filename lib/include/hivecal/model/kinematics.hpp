@@ -13,9 +13,9 @@
 
 namespace hivecal {
 
-inline constexpr int kParamsPerJoint = 4;                                  ///< theta_offset, d, a, alpha
+inline constexpr int kParamsPerJoint = 4;                                 ///< theta_offset, d, a, alpha
 inline constexpr int kDhParamCount = kJointCount * kParamsPerJoint;       ///< 24
-inline constexpr int kToolParamCount = 3;                                  ///< tool x, y, z
+inline constexpr int kToolParamCount = 3;                                 ///< tool x, y, z
 inline constexpr int kModelParamCount = kDhParamCount + kToolParamCount;  ///< 27
 /// Reflectors (targets) one calibration can hold on the tool, each with its own tool point
 /// (3: a fourth costs 1.8 kB of LmWorkspace, and the 512-sample firmware job has < 1 kB left).
@@ -29,7 +29,9 @@ constexpr int model_param_index(int joint, DhField field) {
   return joint * kParamsPerJoint + static_cast<int>(field);
 }
 /// Index of tool coordinate `axis` (0 = x, 1 = y, 2 = z) in a ModelParams vector.
-constexpr int tool_param_index(int axis) { return kDhParamCount + axis; }
+constexpr int tool_param_index(int axis) {
+  return kDhParamCount + axis;
+}
 
 /// One joint's standard DH parameters.
 struct DhJoint {

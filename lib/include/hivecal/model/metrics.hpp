@@ -16,10 +16,10 @@ inline constexpr int kErrorAxisCount = 4;
 /// Statistics of e = predicted - measured over a set of samples, per component.
 /// For x, y, z the statistics are of |e_axis|; for norm_3d of |e|.
 struct ErrorStats {
-  std::size_t count = 0;                  ///< samples summarised
-  double mae_m[kErrorAxisCount] = {};     ///< mean absolute error [m]
-  double sigma_m[kErrorAxisCount] = {};   ///< sample standard deviation of the absolute error [m]
-  double max_m[kErrorAxisCount] = {};     ///< largest absolute error [m]
+  std::size_t count = 0;                 ///< samples summarised
+  double mae_m[kErrorAxisCount] = {};    ///< mean absolute error [m]
+  double sigma_m[kErrorAxisCount] = {};  ///< sample standard deviation of the absolute error [m]
+  double max_m[kErrorAxisCount] = {};    ///< largest absolute error [m]
 
   double mae(ErrorAxis axis) const { return mae_m[static_cast<int>(axis)]; }      ///< [m]
   double sigma(ErrorAxis axis) const { return sigma_m[static_cast<int>(axis)]; }  ///< [m]

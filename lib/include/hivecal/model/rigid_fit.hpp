@@ -35,7 +35,7 @@ class RigidFitAccumulator {
   double weight_sum_ = 0.0;
   Vec3 source_sum_m_ = Vec3::Zero();
   Vec3 target_sum_m_ = Vec3::Zero();
-  Mat3 cross_sum_m2_ = Mat3::Zero();   // sum w s t^T (shifted)
+  Mat3 cross_sum_m2_ = Mat3::Zero();      // sum w s t^T (shifted)
   Mat3 source_moment_m2_ = Mat3::Zero();  // sum w s s^T (shifted)
   Mat3 target_moment_m2_ = Mat3::Zero();  // sum w t t^T (shifted)
   std::size_t count_ = 0;

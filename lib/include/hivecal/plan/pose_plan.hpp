@@ -52,8 +52,8 @@ enum class PlanOrientation : std::uint8_t {
 
 /// What the selection maximises.
 enum class PlanCriterion : std::uint8_t {
-  d_optimal,  ///< log det of the scaled information: the smallest confidence volume of the parameters
-  i_optimal,  ///< minus the average prediction variance over the candidate pool, tr(M^-1 A)
+  d_optimal,            ///< log det of the scaled information: the smallest confidence volume of the parameters
+  i_optimal,            ///< minus the average prediction variance over the candidate pool, tr(M^-1 A)
   i_optimal_workspace,  ///< the same with A over the cell in any orientation: accuracy where the arm works
 };
 
@@ -62,52 +62,56 @@ const char* plan_criterion_name(PlanCriterion criterion);
 
 /// The cell: where poses may be.
 struct PlanConstraints {
-  JointLimits limits;                                   ///< joint position limits [rad]
-  Vec3 tracker_m = Vec3(2.0, 0.0, 0.5);                 ///< tracker position in the robot base frame [m]
-  double acceptance_rad = 30.0 * math::kPi / 180.0;     ///< largest angle flange z - line to the tracker [rad]
-  double floor_z_m = 0.05;                              ///< reflector and flange above this base z [m]
-  double keep_out_radius_m = 0.15;                      ///< reflector and flange at least this far from the base z axis [m]
+  JointLimits limits;                                ///< joint position limits [rad]
+  Vec3 tracker_m = Vec3(2.0, 0.0, 0.5);              ///< tracker position in the robot base frame [m]
+  double acceptance_rad = 30.0 * math::kPi / 180.0;  ///< largest angle flange z - line to the tracker [rad]
+  double floor_z_m = 0.05;                           ///< reflector and flange above this base z [m]
+  double keep_out_radius_m = 0.15;  ///< reflector and flange at least this far from the base z axis [m]
   PlanOrientation orientation = PlanOrientation::facing_tracker;  ///< which way the reflector faces
-  double tool_down_tolerance_rad = 1e-6;                ///< tool_down: largest angle flange z - (-z) [rad]
+  double tool_down_tolerance_rad = 1e-6;                          ///< tool_down: largest angle flange z - (-z) [rad]
 };
 
 /// Settings of one plan.
 struct PlanOptions {
-  PlanConstraints constraints;                          ///< where poses may be
+  PlanConstraints constraints;                           ///< where poses may be
   std::size_t candidate_count = kPlanCandidateCapacity;  ///< candidates drawn, <= kPlanCandidateCapacity [-]
-  std::size_t pose_count = 40;                          ///< poses selected, 1 .. kPlanPoseCapacity and <= candidate_count [-]
-  std::uint64_t seed = 1;                               ///< seed of the candidate draws [-]
+  std::size_t pose_count = 40;  ///< poses selected, 1 .. kPlanPoseCapacity and <= candidate_count [-]
+  std::uint64_t seed = 1;       ///< seed of the candidate draws [-]
   PlanCriterion criterion = PlanCriterion::i_optimal_workspace;  ///< what the selection maximises
-  ParamMask free_mask = kAllParamsMask;                 ///< parameters the calibration may move (lm_param_mask) [-]
+  ParamMask free_mask = kAllParamsMask;  ///< parameters the calibration may move (lm_param_mask) [-]
   double identifiability_threshold = kDefaultIdentifiabilityThreshold;  ///< as LmOptions [-]
-  int max_exchange_passes = 8;                          ///< Fedorov exchange passes over the selection [-]
-  double prior_length_m = 1e-3;                         ///< prior sigma of the geometry's lengths and the tool (0: none) [m]
-  double prior_angle_rad = 1e-3;                        ///< prior sigma of the geometry's angles (0: none) [rad]
-  int restarts = 4;                                     ///< exchange runs: the greedy start, then seeded random starts; the best criterion wins [-]
-  int refine_passes = 2;                                ///< passes moving each selected pose in joint space within the constraints (0: pool poses only) [-]
-  double noise_m = 10e-6;                               ///< tracker noise per axis for the predicted sigmas [m]
-  double joint_speed_rad_s = 1.05;                      ///< movej joint speed (URScript default) [rad/s]
-  double joint_acceleration_rad_s2 = 1.4;               ///< movej joint acceleration (URScript default) [rad/s^2]
-  double dwell_s = 1.0;                                 ///< wait at each pose for the tracker [s]
+  int max_exchange_passes = 8;    ///< Fedorov exchange passes over the selection [-]
+  double prior_length_m = 1e-3;   ///< prior sigma of the geometry's lengths and the tool (0: none) [m]
+  double prior_angle_rad = 1e-3;  ///< prior sigma of the geometry's angles (0: none) [rad]
+  int restarts = 4;  ///< exchange runs: the greedy start, then seeded random starts; the best criterion wins [-]
+  int refine_passes =
+      2;  ///< passes moving each selected pose in joint space within the constraints (0: pool poses only) [-]
+  double noise_m = 10e-6;                  ///< tracker noise per axis for the predicted sigmas [m]
+  double joint_speed_rad_s = 1.05;         ///< movej joint speed (URScript default) [rad/s]
+  double joint_acceleration_rad_s2 = 1.4;  ///< movej joint acceleration (URScript default) [rad/s^2]
+  double dwell_s = 1.0;                    ///< wait at each pose for the tracker [s]
 };
 
 /// Quality of one pose set for the calibration.
 struct PoseSetQuality {
   IdentifiabilityReport identifiability;  ///< over options.free_mask: kept, dropped, singular values
   double log_det = 0.0;                   ///< D-criterion over the objective's parameters (PlanResult::objective) [-]
-  double prediction_variance = 0.0;       ///< I-criterion tr(M^-1 A): mean prediction variance over the pool per unit noise variance [-]
-  double smallest_singular = 0.0;         ///< smallest singular value of the column-scaled J over the kept parameters [-]
-  double condition = 0.0;                 ///< condition number over the kept parameters [-]
-  FullParams sigma = FullParams::Zero();  ///< predicted standard deviation at options.noise_m, 0 if not kept [m] or [rad]
+  double prediction_variance =
+      0.0;  ///< I-criterion tr(M^-1 A): mean prediction variance over the pool per unit noise variance [-]
+  double smallest_singular = 0.0;  ///< smallest singular value of the column-scaled J over the kept parameters [-]
+  double condition = 0.0;          ///< condition number over the kept parameters [-]
+  FullParams sigma =
+      FullParams::Zero();  ///< predicted standard deviation at options.noise_m, 0 if not kept [m] or [rad]
 };
 
 /// What a plan produced.
 struct PlanResult {
-  std::size_t candidate_count = 0;          ///< candidates in the pool [-]
-  std::size_t attempts = 0;                 ///< random draws made to find them [-]
-  IdentifiabilityReport pool;               ///< what the whole pool can identify: no pose set does better
-  IdentifiabilityReport objective;          ///< what the pool identifies with the tool off the flange axis by its prior: the objective's parameters
-  std::size_t pose_count = 0;               ///< valid entries of `poses` [-]
+  std::size_t candidate_count = 0;  ///< candidates in the pool [-]
+  std::size_t attempts = 0;         ///< random draws made to find them [-]
+  IdentifiabilityReport pool;       ///< what the whole pool can identify: no pose set does better
+  IdentifiabilityReport objective;  ///< what the pool identifies with the tool off the flange axis by its prior: the
+                                    ///< objective's parameters
+  std::size_t pose_count = 0;       ///< valid entries of `poses` [-]
   JointVector poses[kPlanPoseCapacity];     ///< the planned poses, in visiting order [rad]
   double greedy_log_det = 0.0;              ///< D-criterion after the greedy start [-]
   double greedy_prediction_variance = 0.0;  ///< I-criterion after the greedy start [-]
@@ -123,18 +127,18 @@ struct PlanResult {
 
 /// Scratch memory of a plan (~280 kB, most of it the candidate pool): give it static storage.
 struct PlanWorkspace {
-  Sample candidates[kPlanCandidateCapacity];   ///< the pool (points: the nominal tool point)
-  Sample selected[kPlanPoseCapacity];          ///< the current selection
+  Sample candidates[kPlanCandidateCapacity];           ///< the pool (points: the nominal tool point)
+  Sample selected[kPlanPoseCapacity];                  ///< the current selection
   std::size_t selected_index[kPlanPoseCapacity] = {};  ///< pool index of each selected pose
-  Sample best[kPlanPoseCapacity];              ///< the best selection of the restarts
+  Sample best[kPlanPoseCapacity];                      ///< the best selection of the restarts
   bool in_selection[kPlanCandidateCapacity] = {};      ///< pool entries selected
-  NormalEquations normal;                      ///< J^T J of a pose set
-  NormalMatrix information;                    ///< scaled information of the selection (+ ridge)
-  NormalMatrix pool_information;               ///< A: mean scaled information of one pool candidate
-  NormalMatrix scratch;                        ///< scratch of the inverse diagonal
+  NormalEquations normal;                              ///< J^T J of a pose set
+  NormalMatrix information;                            ///< scaled information of the selection (+ ridge)
+  NormalMatrix pool_information;                       ///< A: mean scaled information of one pool candidate
+  NormalMatrix scratch;                                ///< scratch of the inverse diagonal
   FullParams ridge = FullParams::Constant(1e-6);  ///< diagonal added to the scaled information (prior precision) [-]
-  KeptCholesky factor;                         ///< its Cholesky factor
-  IdentifiabilityWorkspace identifiability;    ///< scratch of the identifiability analysis
+  KeptCholesky factor;                            ///< its Cholesky factor
+  IdentifiabilityWorkspace identifiability;       ///< scratch of the identifiability analysis
 };
 
 /// True when `q_rad` meets every constraint for `model` (the tool point is the reflector).
@@ -175,7 +179,6 @@ double order_poses(JointVector* poses, std::size_t count, const PlanOptions& opt
 /// order, qualities of the plan and of a random set of the same size, durations.
 /// Errors: invalid_argument (options), too_few_samples, singular_system (nothing identifiable),
 /// non_finite_input, errors of analyze_identifiability.
-Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
-                    PlanResult* result);
+Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace, PlanResult* result);
 
 }  // namespace hivecal

@@ -21,11 +21,11 @@ enum class AbcVariant : int {
 
 /// ABC settings; the defaults are the paper's configuration (150 food sources, 300 cycles).
 struct AbcOptions {
-  std::size_t food_sources = 150;      ///< SN: food sources = employed bees = onlooker bees, >= 2 [-]
-  std::size_t cycles = 300;            ///< MCN: iterations of employed, onlooker and scout phases, >= 1 [-]
-  std::size_t limit = 0;               ///< failed trials before a source is abandoned; 0 means SN * D [-]
-  std::uint64_t max_evaluations = 0;   ///< stop once this many costs were evaluated; 0 = no cap, else >= SN [-]
-  std::uint64_t seed = 1;              ///< seed of the hivecal::Random stream [-]
+  std::size_t food_sources = 150;              ///< SN: food sources = employed bees = onlooker bees, >= 2 [-]
+  std::size_t cycles = 300;                    ///< MCN: iterations of employed, onlooker and scout phases, >= 1 [-]
+  std::size_t limit = 0;                       ///< failed trials before a source is abandoned; 0 means SN * D [-]
+  std::uint64_t max_evaluations = 0;           ///< stop once this many costs were evaluated; 0 = no cap, else >= SN [-]
+  std::uint64_t seed = 1;                      ///< seed of the hivecal::Random stream [-]
   AbcVariant variant = AbcVariant::canonical;  ///< rule set
 };
 
@@ -47,12 +47,12 @@ class AbcSolverBase {
 
   /// Arrays sized by the owning class: positions [SN x D], and one entry per source or dimension.
   struct Storage {
-    double* positions;        ///< food source positions, source-major [objective's units]
-    double* costs;            ///< cost of each source
-    double* roulette;         ///< cumulative selection weights of the onlooker phase
-    std::size_t* trials;      ///< failed improvement trials per source
-    double* candidate;        ///< neighbour being evaluated [objective's units]
-    double* best;             ///< best position so far [objective's units]
+    double* positions;             ///< food source positions, source-major [objective's units]
+    double* costs;                 ///< cost of each source
+    double* roulette;              ///< cumulative selection weights of the onlooker phase
+    std::size_t* trials;           ///< failed improvement trials per source
+    double* candidate;             ///< neighbour being evaluated [objective's units]
+    double* best;                  ///< best position so far [objective's units]
     std::size_t max_food_sources;  ///< capacity of the per-source arrays
     std::size_t max_dimension;     ///< capacity of the per-dimension arrays
   };
@@ -74,8 +74,8 @@ class AbcSolver final : public AbcSolverBase {
 
  public:
   AbcSolver()
-      : AbcSolverBase(Storage{positions_, costs_, roulette_, trials_, candidate_, best_, MaxFoodSources,
-                              MaxDimension}) {}
+      : AbcSolverBase(
+            Storage{positions_, costs_, roulette_, trials_, candidate_, best_, MaxFoodSources, MaxDimension}) {}
 
  private:
   double positions_[MaxFoodSources * MaxDimension] = {};

@@ -18,14 +18,14 @@ namespace hivecal {
 /// widths works on the six-length problem where Rashedi's 100 on a 200-wide box (0.5) stalls
 /// (docs/solvers-abc-gsa.md).
 struct GsaOptions {
-  std::size_t agents = 150;            ///< N: agents, >= 2 [-]
-  std::size_t iterations = 200;        ///< t_max: iterations, each evaluates every agent once, >= 1 [-]
-  double g0 = 5.0;                     ///< G0: initial gravitational constant [box widths / iteration^2]
-  double beta = 20.0;                  ///< decay of G(t) = G0 exp(-beta t / t_max) [-]
-  double epsilon = 2.22e-16;           ///< added to agent distances [box widths]
-  std::size_t final_attractors = 1;    ///< k_best at t_max; k_best falls linearly from N, >= 1 [-]
-  std::uint64_t max_evaluations = 0;   ///< stop once this many costs were evaluated; 0 = no cap, else >= N [-]
-  std::uint64_t seed = 1;              ///< seed of the hivecal::Random stream [-]
+  std::size_t agents = 150;           ///< N: agents, >= 2 [-]
+  std::size_t iterations = 200;       ///< t_max: iterations, each evaluates every agent once, >= 1 [-]
+  double g0 = 5.0;                    ///< G0: initial gravitational constant [box widths / iteration^2]
+  double beta = 20.0;                 ///< decay of G(t) = G0 exp(-beta t / t_max) [-]
+  double epsilon = 2.22e-16;          ///< added to agent distances [box widths]
+  std::size_t final_attractors = 1;   ///< k_best at t_max; k_best falls linearly from N, >= 1 [-]
+  std::uint64_t max_evaluations = 0;  ///< stop once this many costs were evaluated; 0 = no cap, else >= N [-]
+  std::uint64_t seed = 1;             ///< seed of the hivecal::Random stream [-]
 };
 
 /// The GSA algorithm over caller-sized storage (see GsaSolver for the owning type).
@@ -47,13 +47,13 @@ class GsaSolverBase {
 
   /// Arrays sized by the owning class: positions and velocities [N x D], one entry per agent or dimension.
   struct Storage {
-    double* positions;        ///< agent positions, agent-major [box widths, in 0..1]
-    double* velocities;       ///< agent velocities, agent-major [box widths / iteration]
-    double* costs;            ///< cost of each agent at its current position
-    double* masses;           ///< normalised inertial masses M_i, summing to 1 [-]
-    std::size_t* order;       ///< agent indices by increasing cost (k_best are the first)
-    double* point;            ///< position being evaluated [objective's units]
-    double* best;             ///< best position so far [objective's units]
+    double* positions;          ///< agent positions, agent-major [box widths, in 0..1]
+    double* velocities;         ///< agent velocities, agent-major [box widths / iteration]
+    double* costs;              ///< cost of each agent at its current position
+    double* masses;             ///< normalised inertial masses M_i, summing to 1 [-]
+    std::size_t* order;         ///< agent indices by increasing cost (k_best are the first)
+    double* point;              ///< position being evaluated [objective's units]
+    double* best;               ///< best position so far [objective's units]
     std::size_t max_agents;     ///< capacity of the per-agent arrays
     std::size_t max_dimension;  ///< capacity of the per-dimension arrays
   };
@@ -75,8 +75,8 @@ class GsaSolver final : public GsaSolverBase {
 
  public:
   GsaSolver()
-      : GsaSolverBase(Storage{positions_, velocities_, costs_, masses_, order_, point_, best_, MaxAgents,
-                              MaxDimension}) {}
+      : GsaSolverBase(
+            Storage{positions_, velocities_, costs_, masses_, order_, point_, best_, MaxAgents, MaxDimension}) {}
 
  private:
   double positions_[MaxAgents * MaxDimension] = {};

@@ -32,25 +32,26 @@ const char* unidentifiable_reason_name(UnidentifiableReason reason);
 
 /// One dropped parameter and the combination that made it redundant.
 struct DroppedParam {
-  int index = -1;                                          ///< the parameter (full_param_name)
-  UnidentifiableReason reason = UnidentifiableReason::no_effect;               ///< why it was dropped
-  double singular_ratio = 0.0;                             ///< sigma of its direction / sigma_max [-]
-  int component_index[kNullComponentCount] = {-1, -1, -1, -1};  ///< largest components, dropped one first; -1 unused
-  double component[kNullComponentCount] = {};              ///< their coefficients (column-scaled units), dropped one = 1 [-]
+  int index = -1;                                                 ///< the parameter (full_param_name)
+  UnidentifiableReason reason = UnidentifiableReason::no_effect;  ///< why it was dropped
+  double singular_ratio = 0.0;                                    ///< sigma of its direction / sigma_max [-]
+  int component_index[kNullComponentCount] = {-1, -1, -1, -1};    ///< largest components, dropped one first; -1 unused
+  double component[kNullComponentCount] = {};  ///< their coefficients (column-scaled units), dropped one = 1 [-]
 };
 
 /// Fixed-size result of the identifiability analysis.
 struct IdentifiabilityReport {
-  ParamMask free_mask = 0;                         ///< parameters free by the options
-  ParamMask kept_mask = 0;                         ///< free and identifiable: the ones estimated
-  int dropped_count = 0;                           ///< valid entries in dropped[]
-  DroppedParam dropped[kFullParamCount];           ///< in the order they were dropped
-  int singular_count_before = 0;                   ///< valid entries of singular_values_before
-  double singular_values_before[kFullParamCount] = {};  ///< column-scaled J over the free parameters that have an effect, decreasing [-]
-  int singular_count_after = 0;                    ///< valid entries of singular_values_after
-  double singular_values_after[kFullParamCount] = {};   ///< column-scaled J over the kept parameters, decreasing [-]
-  double condition_before = 0.0;                   ///< sigma_max / sigma_min before dropping [-] (Inf if sigma_min = 0)
-  double condition_after = 0.0;                    ///< sigma_max / sigma_min over the kept parameters [-]
+  ParamMask free_mask = 0;                ///< parameters free by the options
+  ParamMask kept_mask = 0;                ///< free and identifiable: the ones estimated
+  int dropped_count = 0;                  ///< valid entries in dropped[]
+  DroppedParam dropped[kFullParamCount];  ///< in the order they were dropped
+  int singular_count_before = 0;          ///< valid entries of singular_values_before
+  double singular_values_before[kFullParamCount] =
+      {};                        ///< column-scaled J over the free parameters that have an effect, decreasing [-]
+  int singular_count_after = 0;  ///< valid entries of singular_values_after
+  double singular_values_after[kFullParamCount] = {};  ///< column-scaled J over the kept parameters, decreasing [-]
+  double condition_before = 0.0;  ///< sigma_max / sigma_min before dropping [-] (Inf if sigma_min = 0)
+  double condition_after = 0.0;   ///< sigma_max / sigma_min over the kept parameters [-]
 
   int kept_count() const { return mask_count(kept_mask); }  ///< parameters estimated
 };

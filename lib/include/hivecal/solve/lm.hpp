@@ -22,9 +22,10 @@ namespace hivecal {
 
 /// Which parameters the solver may move (before the identifiability analysis).
 enum class LmParamSet : std::uint8_t {
-  full,    ///< the rigid model's 33; the analysis drops what the data cannot determine
-  link_lengths,  ///< the start model's link lengths (link_length_set: for UR the paper's d1, a2, a3, d4, d5, d6) and the base transform
-  custom,  ///< LmOptions::custom_mask
+  full,             ///< the rigid model's 33; the analysis drops what the data cannot determine
+  link_lengths,     ///< the start model's link lengths (link_length_set: for UR the paper's d1, a2, a3, d4, d5, d6) and
+                    ///< the base transform
+  custom,           ///< LmOptions::custom_mask
   full_compliance,  ///< full and the coefficients of the start model's compliance terms (model/compliance.hpp)
 };
 
@@ -49,16 +50,17 @@ const char* lm_termination_name(LmTermination termination);
 
 /// Solver settings; the defaults suit tracker data in metres.
 struct LmOptions {
-  int max_iterations = 100;                   ///< LM iterations, rejected steps included [-]
-  double cost_tolerance = 1e-12;              ///< stop on relative cost decrease below this [-]
-  double step_tolerance_m = 1e-12;            ///< stop when the step moves predictions less (RMS) [m]
-  double gradient_tolerance = 1e-10;          ///< stop when every scaled column is this close to orthogonal to the residual (|cosine|) [-]
-  double initial_damping = 1e-6;              ///< lambda at start, relative to the scaled diagonal (1) [-]
-  LmLoss loss = LmLoss::squared;              ///< per-sample loss
-  double huber_threshold_m = 0.0;             ///< Huber k [m]; 0: 3 x noise sigma estimated from the median residual
+  int max_iterations = 100;         ///< LM iterations, rejected steps included [-]
+  double cost_tolerance = 1e-12;    ///< stop on relative cost decrease below this [-]
+  double step_tolerance_m = 1e-12;  ///< stop when the step moves predictions less (RMS) [m]
+  double gradient_tolerance =
+      1e-10;  ///< stop when every scaled column is this close to orthogonal to the residual (|cosine|) [-]
+  double initial_damping = 1e-6;   ///< lambda at start, relative to the scaled diagonal (1) [-]
+  LmLoss loss = LmLoss::squared;   ///< per-sample loss
+  double huber_threshold_m = 0.0;  ///< Huber k [m]; 0: 3 x noise sigma estimated from the median residual
   double identifiability_threshold = kDefaultIdentifiabilityThreshold;  ///< sigma_k / sigma_max to drop [-]
-  LmParamSet params = LmParamSet::full;       ///< which parameters may move
-  ParamMask custom_mask = kAllParamsMask;     ///< free parameters when params == custom
+  LmParamSet params = LmParamSet::full;                                 ///< which parameters may move
+  ParamMask custom_mask = kAllParamsMask;                               ///< free parameters when params == custom
   /// Estimate the other targets' tool points (targets 2..) even when the free set fixes target
   /// 1's tool_x (e.g. a significance test fixed it); false: only while tool_x is free [-].
   bool other_target_tools = false;
@@ -76,11 +78,11 @@ ParamMask lm_param_mask(LmParamSet set, ParamMask custom, const RobotModel& star
 
 /// State after one iteration, for progress display and cancellation.
 struct LmIterationInfo {
-  int iteration = 0;        ///< 1-based iteration number
-  double rms_m = 0.0;       ///< RMS residual norm at the current point [m]
-  double loss_sum_m2 = 0.0; ///< sum of rho(|r_i|) at the current point [m^2]
-  double damping = 0.0;     ///< lambda used for the step [-]
-  bool accepted = false;    ///< whether the step was taken
+  int iteration = 0;         ///< 1-based iteration number
+  double rms_m = 0.0;        ///< RMS residual norm at the current point [m]
+  double loss_sum_m2 = 0.0;  ///< sum of rho(|r_i|) at the current point [m^2]
+  double damping = 0.0;      ///< lambda used for the step [-]
+  bool accepted = false;     ///< whether the step was taken
 };
 
 /// Per-iteration callback (an interface, no std::function).
@@ -98,26 +100,26 @@ class LmObserver {
 
 /// Everything the solver returns.
 struct LmResult {
-  RobotModel model;                        ///< calibrated geometry (dropped parameters at their start values)
-  RigidTransform base_to_tracker;          ///< calibrated robot base -> tracker transform
-  IdentifiabilityReport identifiability;   ///< what was estimated, what was dropped and why
-  FullParams sigma = FullParams::Zero();   ///< standard deviation per parameter [m] or [rad]; 0 when not estimated
+  RobotModel model;                       ///< calibrated geometry (dropped parameters at their start values)
+  RigidTransform base_to_tracker;         ///< calibrated robot base -> tracker transform
+  IdentifiabilityReport identifiability;  ///< what was estimated, what was dropped and why
+  FullParams sigma = FullParams::Zero();  ///< standard deviation per parameter [m] or [rad]; 0 when not estimated
   /// Standard deviation of the tool point of targets 2 .. kMaxTargets per axis [m]; 0 when not estimated.
   Vec3 other_tools_sigma_m[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
-  double loss_sum_m2 = 0.0;                ///< final sum of rho(|r_i|) [m^2] (sum of squares for LmLoss::squared)
-  double rms_m = 0.0;                      ///< final RMS residual norm, unweighted [m]
-  double residual_sigma_m = 0.0;           ///< sqrt(sum w |r|^2 / (3N - p)): noise estimate per axis [m]
-  double huber_threshold_m = 0.0;          ///< Huber k used last [m]; 0 for least squares
-  int iterations = 0;                      ///< iterations run, rejected steps included
+  double loss_sum_m2 = 0.0;        ///< final sum of rho(|r_i|) [m^2] (sum of squares for LmLoss::squared)
+  double rms_m = 0.0;              ///< final RMS residual norm, unweighted [m]
+  double residual_sigma_m = 0.0;   ///< sqrt(sum w |r|^2 / (3N - p)): noise estimate per axis [m]
+  double huber_threshold_m = 0.0;  ///< Huber k used last [m]; 0 for least squares
+  int iterations = 0;              ///< iterations run, rejected steps included
   LmTermination termination = LmTermination::max_iterations;  ///< why it stopped
 };
 
 /// Cholesky factor of a symmetric positive definite matrix restricted to a parameter set:
 /// A(kept, kept) = U^T U, in compact order (position k holds parameter index[k]).
 struct KeptCholesky {
-  NormalMatrix upper;                 ///< U in the leading count x count block (upper triangle) [-]
-  int index[kFullParamCount] = {};    ///< parameter at compact position k
-  int count = 0;                      ///< parameters factored
+  NormalMatrix upper;               ///< U in the leading count x count block (upper triangle) [-]
+  int index[kFullParamCount] = {};  ///< parameter at compact position k
+  int count = 0;                    ///< parameters factored
 };
 
 /// The damped system of one step (or of the final sigmas) and its Cholesky factor.
@@ -132,9 +134,9 @@ struct LmStepScratch {
 /// A point of the search: geometry, base and loss. The solver's current and trial points live
 /// in its workspace: a RobotModel (with its compliance) is ~0.6 kB, too much for a small stack.
 struct LmPoint {
-  RobotModel model;         ///< geometry at the point
-  RigidTransform base;      ///< base -> tracker transform at the point
-  PointLoss loss;           ///< the loss's scale at the point
+  RobotModel model;     ///< geometry at the point
+  RigidTransform base;  ///< base -> tracker transform at the point
+  PointLoss loss;       ///< the loss's scale at the point
 };
 
 /// One block of memory for three scratch sets that are never alive together: the step's
@@ -169,7 +171,8 @@ struct LmWorkspace {
   NormalEquations normal;   ///< normal equations at the current point
   LmPoint point;            ///< the current point
   LmPoint trial_point;      ///< the point a step tries
-  LmSharedScratch scratch;  ///< the step's system and factor, the trial point's normal equations, or the identifiability analysis's scratch
+  LmSharedScratch scratch;  ///< the step's system and factor, the trial point's normal equations, or the
+                            ///< identifiability analysis's scratch
   /// Optional storage for the joint trig of the samples, one entry per sample (no ownership):
   /// with it the joint angles' sin/cos are computed once instead of in every pass (~10 %
   /// faster). Too small or empty: computed in every pass. The same bits either way.

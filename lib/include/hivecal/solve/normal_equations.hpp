@@ -60,9 +60,10 @@ struct PointLoss {
 /// 33 columns) and c = sum w T^T r, the block is eliminated from the normal equations
 /// (Schur complement: H - S^T D^-1 S, g - S^T D^-1 c) and its step follows from the others'.
 struct TargetBlock {
-  Mat3 tool_tool = Mat3::Zero();                                                     ///< D [-]
-  Eigen::Matrix<double, 3, kFullParamCount> tool_model = Eigen::Matrix<double, 3, kFullParamCount>::Zero();  ///< S [m/unit]
-  Vec3 tool_residual_m = Vec3::Zero();                                              ///< c [m]
+  Mat3 tool_tool = Mat3::Zero();  ///< D [-]
+  Eigen::Matrix<double, 3, kFullParamCount> tool_model =
+      Eigen::Matrix<double, 3, kFullParamCount>::Zero();  ///< S [m/unit]
+  Vec3 tool_residual_m = Vec3::Zero();                    ///< c [m]
   std::size_t count = 0;  ///< samples of this target summed; 0: the block is not eliminated
 };
 
@@ -89,10 +90,11 @@ void apply_target_step(const NormalEquations& eq, const FullParams& step, RobotM
 /// Sums the normal equations over `samples`, for the parameters in `columns` only (the
 /// other rows and columns of jtwj and jtwr are 0; fewer columns, less work). Samples of
 /// targets 2.. use their own tool point; when `columns` holds kOtherTargetTools, those tool
-/// points are estimated too and eliminated into jtwj and jtwr (TargetBlock), else they stay fixed. One target takes the fast streaming path (the bits of one target), unless the loss whitens (joint_noise_ratio_rad_per_m > 0): then every sample goes the per-sample path, whitened; squares_sum_m2 stays of the raw residuals. `sample_trig`,
-/// if it holds an entry per sample (joint_trig of sample i at i), saves the joint trig of
-/// every sample; otherwise it is computed here. The same bits either way. Errors:
-/// dataset_empty, non_finite_input (a NaN or Inf residual or Jacobian).
+/// points are estimated too and eliminated into jtwj and jtwr (TargetBlock), else they stay fixed. One target takes the
+/// fast streaming path (the bits of one target), unless the loss whitens (joint_noise_ratio_rad_per_m > 0): then every
+/// sample goes the per-sample path, whitened; squares_sum_m2 stays of the raw residuals. `sample_trig`, if it holds an
+/// entry per sample (joint_trig of sample i at i), saves the joint trig of every sample; otherwise it is computed here.
+/// The same bits either way. Errors: dataset_empty, non_finite_input (a NaN or Inf residual or Jacobian).
 Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
                                    Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
                                    ParamMask columns = kAllParamsMask | kOtherTargetTools,
@@ -110,14 +112,13 @@ Vec3 sample_rows(const RobotModel& model, const RigidTransform& base_to_tracker,
 /// Loss sums only (no Jacobian, fk_tool_point), e.g. to compare candidate geometries: sum
 /// rho(|r_i|) and sum |r_i|^2 [m^2]. Agrees with accumulate_normal_equations to rounding.
 /// Errors: dataset_empty, non_finite_input.
-Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_to_tracker,
-                           Span<const Sample> samples, const PointLoss& loss, double* loss_sum_m2,
-                           double* squares_sum_m2);
+Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
+                           const PointLoss& loss, double* loss_sum_m2, double* squares_sum_m2);
 
 /// Median of the residual norms |r_i| [m] without storing them: a log-spaced histogram
 /// locates the median's bin, a second pass splits that bin linearly (relative resolution
 /// better than 1 %). Errors: dataset_empty, non_finite_input.
-Status median_residual_norm(const RobotModel& model, const RigidTransform& base_to_tracker,
-                            Span<const Sample> samples, double* median_m);
+Status median_residual_norm(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
+                            double* median_m);
 
 }  // namespace hivecal

@@ -36,7 +36,7 @@ inline constexpr double kPaper6DefaultHalfWidth_m = 2e-3;
 
 /// Which parameters are the link lengths of an arm.
 struct LinkLengthSet {
-  std::size_t count = 0;                 ///< number of link lengths K [-]
+  std::size_t count = 0;                  ///< number of link lengths K [-]
   int param_index[kMaxLinkLengths] = {};  ///< their ModelParams indices, ascending [-]
   /// Whether d1 is one of them (it slides every point along the base z axis alike).
   bool has_d1() const { return count > 0 && param_index[0] == model_param_index(0, DhField::d); }
@@ -68,13 +68,11 @@ RobotModel with_link_lengths(const RobotModel& model, const LinkLengthSet& set, 
 
 /// A search box nominal +/- half width for the link lengths, owning its bounds.
 struct LinkLengthBox {
-  std::size_t count = 0;                   ///< number of lengths [-]
+  std::size_t count = 0;                 ///< number of lengths [-]
   double lower_m[kMaxLinkLengths] = {};  ///< lower bounds [m]
   double upper_m[kMaxLinkLengths] = {};  ///< upper bounds [m]
   /// The bounds as the solvers take them (views into this object).
-  SearchBox view() const {
-    return SearchBox{Span<const double>(lower_m, count), Span<const double>(upper_m, count)};
-  }
+  SearchBox view() const { return SearchBox{Span<const double>(lower_m, count), Span<const double>(upper_m, count)}; }
 };
 
 /// The box nominal +/- half_width_m around the link lengths of `nominal`.
@@ -96,7 +94,9 @@ Status link_length_box(const RobotModel& nominal, double half_width_m, LinkLengt
 inline constexpr std::size_t kPaper6ValuesPerSample = 21;
 /// Values per sample of `lengths` link lengths at most: 3 + 3 K (d1 not stored; without d1
 /// one length fewer fits).
-constexpr std::size_t link_length_values_per_sample(std::size_t lengths) { return 3 + 3 * lengths; }
+constexpr std::size_t link_length_values_per_sample(std::size_t lengths) {
+  return 3 + 3 * lengths;
+}
 /// Samples per storage block; capacities are rounded up to a whole number of blocks.
 inline constexpr std::size_t kPaper6BlockSamples = 32;
 /// Values a cost with room for `capacity` samples stores (whole blocks).
@@ -161,7 +161,9 @@ class Paper6CostBase : public Objective {
   Paper6CostBase(double* values, std::size_t capacity, std::size_t max_lengths)
       : values_(values), capacity_(capacity), max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
   Paper6CostBase(float* values, std::size_t capacity, std::size_t max_lengths)
-      : compact_values_(values), capacity_(capacity), max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
+      : compact_values_(values),
+        capacity_(capacity),
+        max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
   ~Paper6CostBase() = default;
 
  private:
@@ -177,21 +179,21 @@ class Paper6CostBase : public Objective {
   double* values_ = nullptr;         // exact layout, or
   float* compact_values_ = nullptr;  // compact layout (blocks, see kPaper6ValuesPerSample)
   std::size_t capacity_;
-  std::size_t max_values_per_sample_;  // what the storage holds per sample
+  std::size_t max_values_per_sample_;                       // what the storage holds per sample
   std::size_t values_per_sample_ = kPaper6ValuesPerSample;  // what the geometry needs: 6 + 3 x stored columns
-  std::size_t stored_count_ = 0;       // lengths with a stored column (all but d1)
+  std::size_t stored_count_ = 0;                            // lengths with a stored column (all but d1)
   std::size_t size_ = 0;
   LinkLengthSet set_;
   bool ready_ = false;
   RobotModel nominal_;
   RigidTransform reference_;
   double nominal_lengths_m_[kMaxLinkLengths] = {};
-  Vec3 point_origin_m_ = Vec3::Zero();       // first sample's predicted point [m]
-  Vec3 point_mean_m_ = Vec3::Zero();         // predicted centroid at the expansion point, relative [m]
-  Vec3 measured_mean_m_ = Vec3::Zero();      // measured centroid in the reference frame, relative [m]
+  Vec3 point_origin_m_ = Vec3::Zero();              // first sample's predicted point [m]
+  Vec3 point_mean_m_ = Vec3::Zero();                // predicted centroid at the expansion point, relative [m]
+  Vec3 measured_mean_m_ = Vec3::Zero();             // measured centroid in the reference frame, relative [m]
   Directions direction_mean_ = Directions::Zero();  // mean Jacobian columns, all K [m/m]
-  Mat3 cross_nominal_m2_ = Mat3::Zero();     // H_0 = sum p_c m_c^T, reference frame [m^2]
-  Mat3 cross_per_length_m_[kMaxLinkLengths] = {};  // G_k = sum v_c,k m_c^T for the stored columns [m]
+  Mat3 cross_nominal_m2_ = Mat3::Zero();            // H_0 = sum p_c m_c^T, reference frame [m^2]
+  Mat3 cross_per_length_m_[kMaxLinkLengths] = {};   // G_k = sum v_c,k m_c^T for the stored columns [m]
 };
 
 /// Samples a storage of `values` values holds for up to `max_lengths` lengths (whole blocks).

@@ -18,11 +18,11 @@ namespace hivecal {
 /// their eliminated target blocks, the scaled matrix and its LDL^T factor (of the 33 rigid
 /// parameters, or of all 37 with compliance terms).
 struct CorrelationScratch {
-  NormalEquations equations;                    ///< J^T W J at the result [m^2/unit^2]
-  TargetBlock target_blocks[kMaxTargets - 1];   ///< targets 2.. eliminated as in LM
-  NormalMatrix scaled;                          ///< unit-diagonal J^T W J [-]
+  NormalEquations equations;                   ///< J^T W J at the result [m^2/unit^2]
+  TargetBlock target_blocks[kMaxTargets - 1];  ///< targets 2.. eliminated as in LM
+  NormalMatrix scaled;                         ///< unit-diagonal J^T W J [-]
   Eigen::LDLT<Eigen::Matrix<double, kRigidParamCount, kRigidParamCount>> rigid_factor;  ///< of the 33 [-]
-  Eigen::LDLT<NormalMatrix> full_factor;        ///< of all 37 [-]
+  Eigen::LDLT<NormalMatrix> full_factor;                                                ///< of all 37 [-]
 };
 
 /// The correlation matrix of the parameters in `kept` (LmResult::identifiability.kept_mask)
@@ -38,8 +38,8 @@ Status parameter_correlations(const RobotModel& model, const RigidTransform& bas
 /// The parameter most correlated with parameter k among the kept ones (k itself excluded),
 /// and that correlation [-]. -1 and 0 when none is kept or every correlation is 0.
 struct CorrelationPartner {
-  int index = -1;           ///< full parameter index of the partner; -1: none
-  double correlation = 0.0; ///< rho between parameter k and the partner [-]
+  int index = -1;            ///< full parameter index of the partner; -1: none
+  double correlation = 0.0;  ///< rho between parameter k and the partner [-]
 };
 CorrelationPartner strongest_correlation(const NormalMatrix& correlation, int k);
 

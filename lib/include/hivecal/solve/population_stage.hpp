@@ -21,11 +21,11 @@ namespace hivecal {
 
 /// What the population stage on the link lengths produced.
 struct Paper6StageResult {
-  RobotModel model;                  ///< the start geometry with the best link lengths
-  RigidTransform base_to_tracker;    ///< Kabsch fit of `model` on the training samples
-  double best_cost_m = 0.0;          ///< training MAE at the best lengths, as the cost computed it [m]
-  std::uint64_t evaluations = 0;     ///< cost evaluations made
-  std::size_t iterations = 0;        ///< solver iterations (cycles) run
+  RobotModel model;                ///< the start geometry with the best link lengths
+  RigidTransform base_to_tracker;  ///< Kabsch fit of `model` on the training samples
+  double best_cost_m = 0.0;        ///< training MAE at the best lengths, as the cost computed it [m]
+  std::uint64_t evaluations = 0;   ///< cost evaluations made
+  std::size_t iterations = 0;      ///< solver iterations (cycles) run
 };
 
 /// ABC on the paper-6 cost: cost->build(start, train, subset) (the samples at the positions
@@ -36,15 +36,13 @@ struct Paper6StageResult {
 /// more lengths than the solver holds) and fit_base_to_tracker (on every training sample);
 /// *result is written only on success.
 Status calibrate_paper6_abc(const RobotModel& start, Span<const Sample> train, Span<const std::uint32_t> subset,
-                            const AbcOptions& options,
-                            double half_width_m, Paper6CostBase* cost, AbcSolverBase* solver,
+                            const AbcOptions& options, double half_width_m, Paper6CostBase* cost, AbcSolverBase* solver,
                             Paper6StageResult* result, TraceBase* trace = nullptr,
                             ProgressObserver* progress = nullptr);
 
 /// The same with GSA.
 Status calibrate_paper6_gsa(const RobotModel& start, Span<const Sample> train, Span<const std::uint32_t> subset,
-                            const GsaOptions& options,
-                            double half_width_m, Paper6CostBase* cost, GsaSolverBase* solver,
+                            const GsaOptions& options, double half_width_m, Paper6CostBase* cost, GsaSolverBase* solver,
                             Paper6StageResult* result, TraceBase* trace = nullptr,
                             ProgressObserver* progress = nullptr);
 

@@ -50,11 +50,12 @@ struct UnitTest {
   std::uint32_t samples = 0;   ///< samples in the unit [-]
   bool fitted = false;         ///< in the fit (w-test on its redundancy), else predicted by it
   bool controlled = false;     ///< tested: predicted, or fitted with redundancy >= min_redundancy
-  double redundancy = 0.0;     ///< r = 1 - trace(H_uu) / rows: the share of a blunder its residual shows (predicted: 1) [-]
-  double w = 0.0;              ///< sqrt(e^T Q^-1 e) / sigma, Q = I - H_uu (fitted) or I + H_uu (predicted) [-]
-  double critical_w = 0.0;     ///< w above which the unit is a blunder at the stated significance [-]
-  double residual_m = 0.0;     ///< largest 3-D residual of its samples [m]
-  double mdb_m = 0.0;          ///< minimal detectable bias (power 80 %): sigma sqrt(lambda0 / r); 0 when uncontrolled [m]
+  double redundancy =
+      0.0;         ///< r = 1 - trace(H_uu) / rows: the share of a blunder its residual shows (predicted: 1) [-]
+  double w = 0.0;  ///< sqrt(e^T Q^-1 e) / sigma, Q = I - H_uu (fitted) or I + H_uu (predicted) [-]
+  double critical_w = 0.0;  ///< w above which the unit is a blunder at the stated significance [-]
+  double residual_m = 0.0;  ///< largest 3-D residual of its samples [m]
+  double mdb_m = 0.0;       ///< minimal detectable bias (power 80 %): sigma sqrt(lambda0 / r); 0 when uncontrolled [m]
 
   bool rejected() const { return controlled && w > critical_w; }  ///< a blunder by the test
 };
@@ -74,21 +75,21 @@ class UnitTestVisitor {
 /// What the whole test found.
 struct BlunderTestSummary {
   SigmaSource sigma_source = SigmaSource::data;  ///< where sigma came from
-  double sigma_m = 0.0;             ///< sigma per axis the test used [m]
-  double fit_sigma_m = 0.0;         ///< the fit's own residual sigma per axis, sqrt(SSR / dof) (0 without dof) [m]
-  double dof = 0.0;                 ///< the fit's redundancy 3 N - p [-]
-  std::size_t units = 0;            ///< units tested (fitted and predicted) [-]
-  std::size_t fitted_units = 0;     ///< units in the fit [-]
-  std::size_t uncontrolled = 0;     ///< fitted units below min_redundancy [-]
-  std::size_t rejected = 0;         ///< controlled units above their critical w [-]
+  double sigma_m = 0.0;                          ///< sigma per axis the test used [m]
+  double fit_sigma_m = 0.0;      ///< the fit's own residual sigma per axis, sqrt(SSR / dof) (0 without dof) [m]
+  double dof = 0.0;              ///< the fit's redundancy 3 N - p [-]
+  std::size_t units = 0;         ///< units tested (fitted and predicted) [-]
+  std::size_t fitted_units = 0;  ///< units in the fit [-]
+  std::size_t uncontrolled = 0;  ///< fitted units below min_redundancy [-]
+  std::size_t rejected = 0;      ///< controlled units above their critical w [-]
 };
 
 /// Scratch of the test (~24 kB): in the caller's memory plan, not on a small stack.
 struct ReliabilityWorkspace {
-  NormalEquations normal;                            ///< the fit's normal equations at its point
-  NormalMatrix scaled;                               ///< their column-scaled matrix, then unused
-  KeptCholesky factor;                               ///< its Cholesky factor over the estimated parameters
-  TargetBlock blocks[kMaxTargets - 1];               ///< the other targets' eliminated tool points
+  NormalEquations normal;                                       ///< the fit's normal equations at its point
+  NormalMatrix scaled;                                          ///< their column-scaled matrix, then unused
+  KeptCholesky factor;                                          ///< its Cholesky factor over the estimated parameters
+  TargetBlock blocks[kMaxTargets - 1];                          ///< the other targets' eliminated tool points
   Eigen::Matrix<double, kMaxUnitRows, kFullParamCount> rows;    ///< a unit's scaled rows, Schur-reduced
   Eigen::Matrix<double, kMaxUnitRows, kFullParamCount> solved;  ///< the same through the inverse normal matrix
   Eigen::Matrix<double, kMaxUnitRows, kMaxUnitRows> hat;        ///< the unit's hat block H_uu, then I -+ H_uu factored

@@ -67,9 +67,10 @@ class ClockPassObserver {
 
 /// How the passes run.
 struct CaptureOptions {
-  ClockSyncConfig clock;                     ///< pass 1's settings (make_clock_sync_config)
-  ExtractionConfig extraction;               ///< pass 2's settings (make_extraction_config)
-  ExtractionObserver* observer = nullptr;    ///< told each kept sample and each drop of pass 2; null: none (or one the workspace installs)
+  ClockSyncConfig clock;        ///< pass 1's settings (make_clock_sync_config)
+  ExtractionConfig extraction;  ///< pass 2's settings (make_extraction_config)
+  ExtractionObserver* observer =
+      nullptr;  ///< told each kept sample and each drop of pass 2; null: none (or one the workspace installs)
   ClockPassObserver* clock_observer = nullptr;  ///< told the end of pass 1; null: none
 };
 
@@ -81,12 +82,12 @@ enum class CapturePass : std::uint8_t { clock, extraction, done };
 
 /// What the passes found.
 struct CaptureExtraction {
-  Status status = Status::ok;          ///< ok, or why `pass` failed
+  Status status = Status::ok;             ///< ok, or why `pass` failed
   CapturePass pass = CapturePass::clock;  ///< done after both passes, else the pass that failed
-  StreamPassStats decoding;            ///< decoder counters of pass 1
-  ClockFit clock;                      ///< the clock relation of pass 1
-  ClockProfileStats clock_stats;       ///< what went into pass 1's profiles (a failed fit's explanation)
-  ExtractionCounts counts;             ///< what pass 2 kept and dropped
+  StreamPassStats decoding;               ///< decoder counters of pass 1
+  ClockFit clock;                         ///< the clock relation of pass 1
+  ClockProfileStats clock_stats;          ///< what went into pass 1's profiles (a failed fit's explanation)
+  ExtractionCounts counts;                ///< what pass 2 kept and dropped
 };
 
 /// Capacity-erased workspace: builds the estimator or the extractor in its arena.
@@ -117,7 +118,7 @@ template <std::size_t ClockRobotKnots, std::size_t ClockTrackerPoints, std::size
 class CaptureWorkspace final : public CaptureWorkspaceBase {
  public:
   using Estimator = ClockEstimator<ClockRobotKnots, ClockTrackerPoints>;  ///< pass 1 object
-  using Extractor = SampleExtractor<RobotHistory, TrackerHistory>;       ///< pass 2 object
+  using Extractor = SampleExtractor<RobotHistory, TrackerHistory>;        ///< pass 2 object
   /// Bytes of the arena: the larger of the two.
   static constexpr std::size_t kArenaBytes = sizeof(Estimator) > sizeof(Extractor) ? sizeof(Estimator)
                                                                                    : sizeof(Extractor);
@@ -173,8 +174,7 @@ Status estimate_capture_clock(const RobotModel& nominal, CaptureSource& source, 
                               CaptureExtraction* result);
 Status extract_capture_samples(const RobotModel& nominal, CaptureSource& source, CaptureWorkspaceBase* workspace,
                                DatasetBase* dataset, CaptureExtraction* result);
-Status extract_dataset_from_captures(const RobotModel& nominal, CaptureSource& source,
-                                     CaptureWorkspaceBase* workspace, DatasetBase* dataset,
-                                     CaptureExtraction* result);
+Status extract_dataset_from_captures(const RobotModel& nominal, CaptureSource& source, CaptureWorkspaceBase* workspace,
+                                     DatasetBase* dataset, CaptureExtraction* result);
 
 }  // namespace hivecal

@@ -26,9 +26,9 @@ struct StreamRecord {
     joint_state,    ///< `joint` is set
     tracker_point,  ///< `point` is set
   };
-  Kind kind = Kind::end;          ///< which member is set
-  JointStateRecord joint;         ///< when kind is joint_state
-  TrackerPointRecord point;       ///< when kind is tracker_point
+  Kind kind = Kind::end;     ///< which member is set
+  JointStateRecord joint;    ///< when kind is joint_state
+  TrackerPointRecord point;  ///< when kind is tracker_point
 };
 
 /// A stream of records read from its start to its end: frames decoded from bytes
@@ -87,8 +87,8 @@ struct StreamPassStats {
 Status estimate_clock_from_streams(RecordReader& robot, RecordReader& tracker, ClockEstimatorBase* estimator,
                                    ClockFit* fit, StreamPassStats* stats);
 /// Pass 1 over two byte streams (decoded with FrameRecordReader).
-Status estimate_clock_from_streams(ByteReader& robot, ByteReader& tracker, ClockEstimatorBase* estimator,
-                                   ClockFit* fit, StreamPassStats* stats);
+Status estimate_clock_from_streams(ByteReader& robot, ByteReader& tracker, ClockEstimatorBase* estimator, ClockFit* fit,
+                                   StreamPassStats* stats);
 
 /// Pass 2: both streams merged in robot-clock order (through extractor->clock()) into
 /// `extractor`, then finish(). Tracker records in the robot stream and robot records in the

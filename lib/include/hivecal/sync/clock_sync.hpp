@@ -33,22 +33,25 @@ inline constexpr std::size_t kDefaultClockTrackerPoints = 16384;
 
 /// Options of the clock estimation; the defaults suit 125 Hz / 10 Hz UR + tracker sessions.
 struct ClockSyncConfig {
-  RobotModel speed_model;                       ///< geometry for tool speeds (nominal + nominal tool is enough)
-  std::uint32_t knot_interval_us = 20000;       ///< robot profile resolution [us]
-  std::uint32_t coarse_step_us = 100000;        ///< lag grid of the coarse correlation, a multiple >= 2 of knot_interval_us [us]
-  std::uint32_t max_robot_gap_us = 50000;       ///< robot profile is unknown across longer gaps [us]
-  std::uint32_t max_chord_interval_us = 350000; ///< longest tracker interval used as a chord [us]
-  std::uint64_t min_overlap_us = 60000000;      ///< least overlap of the profiles for a coarse lag [us] (halved for short data)
-  double max_drift = 5e-4;                      ///< largest |drift| searched and accepted [-]
-  double min_correlation = 0.5;                 ///< weakest acceptable coarse correlation peak [-]
-  double max_runner_up_ratio = 0.9;             ///< ambiguous when another peak reaches this share of the best [-]
-  std::uint32_t chord_span_points = 3;          ///< tracker intervals spanned by one chord of the fine fit (one per point)
-  std::uint32_t gain_block_us = 1000000;        ///< chords sharing one free speed gain in the fine fit [us]
-  double edge_speed_change_m_s = 0.005;         ///< speed change within a chord that makes it informative [m/s]
-  std::uint32_t min_edge_chords = 10;           ///< informative chords needed [chords]
-  std::uint32_t max_iterations = 30;            ///< Gauss-Newton iteration limit
-  double max_tool_speed_m_s = 5.0;              ///< a tracker point implying a faster tool is a blunder and set aside [m/s]
-  std::uint32_t reanchor_points = 5;            ///< this many consecutive consistent "blunders" mean the earlier point was the blunder [points]
+  RobotModel speed_model;                  ///< geometry for tool speeds (nominal + nominal tool is enough)
+  std::uint32_t knot_interval_us = 20000;  ///< robot profile resolution [us]
+  std::uint32_t coarse_step_us =
+      100000;  ///< lag grid of the coarse correlation, a multiple >= 2 of knot_interval_us [us]
+  std::uint32_t max_robot_gap_us = 50000;        ///< robot profile is unknown across longer gaps [us]
+  std::uint32_t max_chord_interval_us = 350000;  ///< longest tracker interval used as a chord [us]
+  std::uint64_t min_overlap_us =
+      60000000;                         ///< least overlap of the profiles for a coarse lag [us] (halved for short data)
+  double max_drift = 5e-4;              ///< largest |drift| searched and accepted [-]
+  double min_correlation = 0.5;         ///< weakest acceptable coarse correlation peak [-]
+  double max_runner_up_ratio = 0.9;     ///< ambiguous when another peak reaches this share of the best [-]
+  std::uint32_t chord_span_points = 3;  ///< tracker intervals spanned by one chord of the fine fit (one per point)
+  std::uint32_t gain_block_us = 1000000;  ///< chords sharing one free speed gain in the fine fit [us]
+  double edge_speed_change_m_s = 0.005;   ///< speed change within a chord that makes it informative [m/s]
+  std::uint32_t min_edge_chords = 10;     ///< informative chords needed [chords]
+  std::uint32_t max_iterations = 30;      ///< Gauss-Newton iteration limit
+  double max_tool_speed_m_s = 5.0;        ///< a tracker point implying a faster tool is a blunder and set aside [m/s]
+  std::uint32_t reanchor_points =
+      5;  ///< this many consecutive consistent "blunders" mean the earlier point was the blunder [points]
 };
 
 /// A ClockSyncConfig with the given speed model and default options.
@@ -56,10 +59,10 @@ ClockSyncConfig make_clock_sync_config(const RobotModel& speed_model);
 
 /// The estimated clock relation and its quality. Times are absolute device-clock values.
 struct ClockFit {
-  double offset_us = 0.0;                     ///< t_robot = offset_us + (1 + drift) * t_tracker [us]
-  double drift = 0.0;                         ///< relative rate of the robot clock w.r.t. the tracker's [-] (1e-6 = 1 ppm)
-  double reference_tracker_us = 0.0;          ///< tracker time where offset and drift are uncorrelated [us]
-  double offset_at_reference_us = 0.0;        ///< t_robot - t_tracker at reference_tracker_us [us]
+  double offset_us = 0.0;               ///< t_robot = offset_us + (1 + drift) * t_tracker [us]
+  double drift = 0.0;                   ///< relative rate of the robot clock w.r.t. the tracker's [-] (1e-6 = 1 ppm)
+  double reference_tracker_us = 0.0;    ///< tracker time where offset and drift are uncorrelated [us]
+  double offset_at_reference_us = 0.0;  ///< t_robot - t_tracker at reference_tracker_us [us]
   double sigma_offset_at_reference_us = 0.0;  ///< 1-sigma of offset_at_reference_us [us]
   double sigma_drift = 0.0;                   ///< 1-sigma of drift [-]
   double sigma_offset_us = 0.0;               ///< 1-sigma of offset_us (extrapolated to t_tracker = 0) [us]
@@ -82,25 +85,27 @@ struct ClockFit {
 inline constexpr std::size_t kClockSetAsideLog = 8;
 
 struct ClockProfileStats {
-  std::uint64_t robot_records = 0;          ///< JointStateRecords pushed
-  std::uint64_t robot_rejected = 0;         ///< of which out of time order or non-finite
-  std::uint64_t robot_beyond_capacity = 0;  ///< of which after the profile was full
-  std::uint64_t robot_gaps = 0;             ///< robot gaps longer than max_robot_gap_us
-  std::uint64_t tracker_records = 0;        ///< TrackerPointRecords pushed
-  std::uint64_t tracker_not_valid = 0;      ///< of which status not valid or non-finite point
-  std::uint64_t tracker_rejected = 0;       ///< of which out of time order
-  std::uint64_t tracker_beyond_capacity = 0;///< of which after the profile was full
-  std::uint64_t tracker_set_aside = 0;      ///< of which valid but set aside as blunders (an implausible jump away and back)
-  std::uint64_t set_aside_tracker_us[kClockSetAsideLog] = {};  ///< tracker timestamps of the first set-aside points [us]
-  std::size_t robot_knots = 0;              ///< robot profile knots stored
-  std::size_t tracker_points = 0;           ///< tracker profile points stored
+  std::uint64_t robot_records = 0;            ///< JointStateRecords pushed
+  std::uint64_t robot_rejected = 0;           ///< of which out of time order or non-finite
+  std::uint64_t robot_beyond_capacity = 0;    ///< of which after the profile was full
+  std::uint64_t robot_gaps = 0;               ///< robot gaps longer than max_robot_gap_us
+  std::uint64_t tracker_records = 0;          ///< TrackerPointRecords pushed
+  std::uint64_t tracker_not_valid = 0;        ///< of which status not valid or non-finite point
+  std::uint64_t tracker_rejected = 0;         ///< of which out of time order
+  std::uint64_t tracker_beyond_capacity = 0;  ///< of which after the profile was full
+  std::uint64_t tracker_set_aside =
+      0;  ///< of which valid but set aside as blunders (an implausible jump away and back)
+  std::uint64_t set_aside_tracker_us[kClockSetAsideLog] =
+      {};                          ///< tracker timestamps of the first set-aside points [us]
+  std::size_t robot_knots = 0;     ///< robot profile knots stored
+  std::size_t tracker_points = 0;  ///< tracker profile points stored
   // What a failed estimate is explained with (times on each device's own clock):
-  std::uint64_t robot_first_us = 0;         ///< first accepted joint state [us]
-  std::uint64_t robot_last_us = 0;          ///< last accepted joint state [us]
-  std::uint64_t tracker_first_us = 0;       ///< first stored tracker point [us]
-  std::uint64_t tracker_last_us = 0;        ///< last stored tracker point [us]
-  double robot_path_m = 0.0;                ///< path length of the speed model's tool point [m]
-  double tracker_path_m = 0.0;              ///< path length of the stored tracker points [m]
+  std::uint64_t robot_first_us = 0;    ///< first accepted joint state [us]
+  std::uint64_t robot_last_us = 0;     ///< last accepted joint state [us]
+  std::uint64_t tracker_first_us = 0;  ///< first stored tracker point [us]
+  std::uint64_t tracker_last_us = 0;   ///< last stored tracker point [us]
+  double robot_path_m = 0.0;           ///< path length of the speed model's tool point [m]
+  double tracker_path_m = 0.0;         ///< path length of the stored tracker points [m]
 };
 
 /// Most tracker points held back while a jump is judged (ClockSyncConfig::reanchor_points <= this).
@@ -123,19 +128,19 @@ inline constexpr std::size_t kClockMatchBins = 512;
 
 /// One time bin of the matched speed profiles: means over the fine-fit chords ending in it.
 struct ClockMatchBin {
-  double tracker_s = 0.0;             ///< mean chord mid-time, since the first stored tracker point [s]
-  double robot_speed_m_s = 0.0;       ///< robot tool speed at the fitted robot times of the chords [m/s]
-  double tracker_speed_m_s = 0.0;     ///< tracker point speed over the chords [m/s]
-  double residual_m_s = 0.0;          ///< tracker speed - speed_gain * robot speed [m/s]
-  std::uint32_t chords = 0;           ///< chords averaged
+  double tracker_s = 0.0;          ///< mean chord mid-time, since the first stored tracker point [s]
+  double robot_speed_m_s = 0.0;    ///< robot tool speed at the fitted robot times of the chords [m/s]
+  double tracker_speed_m_s = 0.0;  ///< tracker point speed over the chords [m/s]
+  double residual_m_s = 0.0;       ///< tracker speed - speed_gain * robot speed [m/s]
+  std::uint32_t chords = 0;        ///< chords averaged
 };
 
 /// The two speed profiles aligned by a ClockFit, decimated for plotting (observation only:
 /// estimate() does not use it).
 struct ClockMatch {
-  double tracker_t0_us = 0.0;          ///< tracker clock of the first stored tracker point [us]
-  std::size_t count = 0;               ///< bins filled (empty bins are skipped)
-  ClockMatchBin bins[kClockMatchBins]; ///< in time order
+  double tracker_t0_us = 0.0;           ///< tracker clock of the first stored tracker point [us]
+  std::size_t count = 0;                ///< bins filled (empty bins are skipped)
+  ClockMatchBin bins[kClockMatchBins];  ///< in time order
 };
 
 namespace detail {
@@ -218,8 +223,7 @@ class ClockEstimator final : public ClockEstimatorBase {
  public:
   /// An empty estimator using `config`.
   explicit ClockEstimator(const ClockSyncConfig& config)
-      : ClockEstimatorBase(config, robot_knots_m_, RobotKnots, tracker_knots_, TrackerPoints, scratch_,
-                           kScratch) {}
+      : ClockEstimatorBase(config, robot_knots_m_, RobotKnots, tracker_knots_, TrackerPoints, scratch_, kScratch) {}
 
  private:
   static constexpr std::size_t kScratch = TrackerPoints + RobotKnots / 2;

@@ -4,9 +4,9 @@
 // short one-sided differences of the resampled tool path, so a pause of 0.2 s yields its two
 // points.
 // A stricter stability window (both sides still over a longer span) is an option, off by
-// default: it costs the points of short pauses. Streaming and bounded: the two streams are pushed as they come, each in its own
-// time order, into fixed rings (capacities are template parameters); every tracker point
-// ends up either kept or dropped for exactly one DropReason.
+// default: it costs the points of short pauses. Streaming and bounded: the two streams are pushed as they come, each in
+// its own time order, into fixed rings (capacities are template parameters); every tracker point ends up either kept or
+// dropped for exactly one DropReason.
 #pragma once
 
 #include <cstddef>
@@ -30,12 +30,13 @@ enum class DropReason : std::uint8_t {
   out_of_order,           ///< timestamp not after the previous tracker point's
   outside_robot_range,    ///< its robot-clock instant is before the first or after the last robot record
   robot_history_overrun,  ///< the robot records around it were already evicted (ring too small for the streams' lag)
-  robot_gap,              ///< a robot gap longer than max_robot_gap_us inside the speed baseline (or window) around the instant
-  window_incomplete,      ///< the speed baseline (or window) around it is not covered by data (stream start/end, tracker dropouts)
-  moving_robot,           ///< robot-side tool speed above the threshold at the instant (or anywhere in the window)
-  moving_tracker,         ///< tracker-side point speed above the threshold in the window (only with a window)
-  backlog_overrun,        ///< still undecided when the tracker ring overflowed (robot stream lagging)
-  dataset_full,           ///< quasi-static but the dataset had no room
+  robot_gap,  ///< a robot gap longer than max_robot_gap_us inside the speed baseline (or window) around the instant
+  window_incomplete,  ///< the speed baseline (or window) around it is not covered by data (stream start/end, tracker
+                      ///< dropouts)
+  moving_robot,       ///< robot-side tool speed above the threshold at the instant (or anywhere in the window)
+  moving_tracker,     ///< tracker-side point speed above the threshold in the window (only with a window)
+  backlog_overrun,    ///< still undecided when the tracker ring overflowed (robot stream lagging)
+  dataset_full,       ///< quasi-static but the dataset had no room
 };
 /// Number of DropReason values.
 inline constexpr int kDropReasonCount = 13;
@@ -44,12 +45,15 @@ const char* drop_reason_name(DropReason reason);
 
 /// Options of the extraction; defaults follow the paper (tool speed below 2 mm/s at the instant).
 struct ExtractionConfig {
-  RobotModel speed_model;                    ///< geometry for robot-side tool speeds (nominal is enough)
-  double max_speed_m_s = 0.002;              ///< quasi-static threshold [m/s]
-  std::uint32_t speed_baseline_us = 24000;   ///< speed at the instant: the slower of the backward and forward differences over half of this each (3 periods at 125 Hz: encoder noise) [us]
-  std::uint32_t window_us = 0;               ///< optional stability window centred on the instant, both sides still over it; 0: off [us]
-  std::uint32_t max_robot_gap_us = 40000;    ///< never interpolate across a longer robot gap [us]
-  std::uint32_t max_tracker_gap_us = 250000; ///< longest spacing of valid tracker points inside a window [us]
+  RobotModel speed_model;        ///< geometry for robot-side tool speeds (nominal is enough)
+  double max_speed_m_s = 0.002;  ///< quasi-static threshold [m/s]
+  std::uint32_t speed_baseline_us =
+      24000;  ///< speed at the instant: the slower of the backward and forward differences over half of this each (3
+              ///< periods at 125 Hz: encoder noise) [us]
+  std::uint32_t window_us =
+      0;  ///< optional stability window centred on the instant, both sides still over it; 0: off [us]
+  std::uint32_t max_robot_gap_us = 40000;     ///< never interpolate across a longer robot gap [us]
+  std::uint32_t max_tracker_gap_us = 250000;  ///< longest spacing of valid tracker points inside a window [us]
 };
 
 /// An ExtractionConfig with the given speed model and default options.
@@ -57,11 +61,11 @@ ExtractionConfig make_extraction_config(const RobotModel& speed_model);
 
 /// What happened to the pushed records.
 struct ExtractionCounts {
-  std::uint64_t tracker_points = 0;                ///< tracker records pushed
-  std::uint64_t kept = 0;                          ///< samples added to the dataset
-  std::uint64_t dropped[kDropReasonCount] = {};    ///< per DropReason
-  std::uint64_t robot_records = 0;                 ///< robot records pushed
-  std::uint64_t robot_rejected = 0;                ///< of which out of time order or non-finite (not used)
+  std::uint64_t tracker_points = 0;              ///< tracker records pushed
+  std::uint64_t kept = 0;                        ///< samples added to the dataset
+  std::uint64_t dropped[kDropReasonCount] = {};  ///< per DropReason
+  std::uint64_t robot_records = 0;               ///< robot records pushed
+  std::uint64_t robot_rejected = 0;              ///< of which out of time order or non-finite (not used)
 
   /// Tracker points dropped for `reason`.
   std::uint64_t dropped_by(DropReason reason) const { return dropped[static_cast<int>(reason)]; }
@@ -73,12 +77,12 @@ struct ExtractionCounts {
 
 /// A kept sample with its timing and the speeds that qualified it.
 struct ExtractedSample {
-  double tracker_us = 0.0;           ///< tracker timestamp [us]
-  double robot_us = 0.0;             ///< the same instant on the robot clock [us]
+  double tracker_us = 0.0;                  ///< tracker timestamp [us]
+  double robot_us = 0.0;                    ///< the same instant on the robot clock [us]
   JointVector q_rad = JointVector::Zero();  ///< joints interpolated at robot_us [rad]
-  Vec3 point_m = Vec3::Zero();       ///< tracker point [m]
-  double robot_speed_m_s = 0.0;      ///< robot-side tool speed at the instant (largest in the window, with one) [m/s]
-  double tracker_speed_m_s = 0.0;    ///< largest tracker-side speed in the window; 0 without a window [m/s]
+  Vec3 point_m = Vec3::Zero();              ///< tracker point [m]
+  double robot_speed_m_s = 0.0;    ///< robot-side tool speed at the instant (largest in the window, with one) [m/s]
+  double tracker_speed_m_s = 0.0;  ///< largest tracker-side speed in the window; 0 without a window [m/s]
 };
 
 /// Optional listener of every decision (logging, tests); defaults ignore them.
@@ -95,9 +99,9 @@ class ExtractionObserver {
 
 /// One robot record in the extractor's ring.
 struct ExtractorRobotEntry {
-  double t_us = 0.0;                      ///< robot timestamp [us]
+  double t_us = 0.0;                        ///< robot timestamp [us]
   JointVector q_rad = JointVector::Zero();  ///< joint positions [rad]
-  Vec3 tool_m = Vec3::Zero();             ///< speed-model tool point in the base frame [m]
+  Vec3 tool_m = Vec3::Zero();               ///< speed-model tool point in the base frame [m]
 };
 
 /// One valid tracker point in the extractor's ring.
@@ -179,8 +183,7 @@ class SampleExtractor final : public SampleExtractorBase {
  public:
   /// An extractor writing into `dataset` (not owned) through the clock relation `clock`.
   SampleExtractor(const ExtractionConfig& config, const ClockFit& clock, DatasetBase* dataset)
-      : SampleExtractorBase(config, clock, dataset, robot_storage_, RobotHistory, tracker_storage_,
-                            TrackerHistory) {}
+      : SampleExtractorBase(config, clock, dataset, robot_storage_, RobotHistory, tracker_storage_, TrackerHistory) {}
 
  private:
   ExtractorRobotEntry robot_storage_[RobotHistory];

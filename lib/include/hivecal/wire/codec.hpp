@@ -79,14 +79,15 @@ struct DecoderStats {
   std::uint64_t cobs_errors = 0;        ///< malformed COBS [frames]
   std::uint64_t oversized_frames = 0;   ///< longer than kMaxFrameBytes before a delimiter [frames]
   std::uint64_t leading_fragments = 0;  ///< unusable bytes before the first delimiter (stream began mid-frame) [frames]
-  std::uint64_t sequence_gaps = 0;      ///< jumps forward in the stream's sequence numbers (every CRC-valid v1 packet) [events]
-  std::uint64_t packets_lost = 0;       ///< packets missing in those jumps [packets]
-  std::uint64_t sequence_resets = 0;    ///< sequence or timestamp went backwards (restart): no loss counted [events]
+  std::uint64_t sequence_gaps =
+      0;  ///< jumps forward in the stream's sequence numbers (every CRC-valid v1 packet) [events]
+  std::uint64_t packets_lost = 0;     ///< packets missing in those jumps [packets]
+  std::uint64_t sequence_resets = 0;  ///< sequence or timestamp went backwards (restart): no loss counted [events]
 
   /// Frames closed without delivery: the sum of the eight rejection counters [frames].
   std::uint64_t frames_rejected() const {
-    return crc_failures + bad_lengths + bad_versions + unknown_types + bad_payloads + cobs_errors +
-           oversized_frames + leading_fragments;
+    return crc_failures + bad_lengths + bad_versions + unknown_types + bad_payloads + cobs_errors + oversized_frames +
+           leading_fragments;
   }
 };
 
@@ -118,11 +119,11 @@ class StreamDecoder {
   void count_rejection(Status status);
 
   std::uint8_t frame_[kMaxFrameBytes - 1] = {};  ///< encoded frame so far, delimiter excluded
-  std::size_t frame_bytes_ = 0;                 ///< bytes used in frame_ [bytes]
-  bool discarding_ = false;                     ///< dropping an oversized frame up to the next delimiter
-  bool synchronised_ = false;                   ///< a delimiter has been seen since reset
-  SequenceState sequence_;                      ///< one per stream: every type shares the counter
-  DecoderStats stats_;                          ///< counters
+  std::size_t frame_bytes_ = 0;                  ///< bytes used in frame_ [bytes]
+  bool discarding_ = false;                      ///< dropping an oversized frame up to the next delimiter
+  bool synchronised_ = false;                    ///< a delimiter has been seen since reset
+  SequenceState sequence_;                       ///< one per stream: every type shares the counter
+  DecoderStats stats_;                           ///< counters
 };
 
 }  // namespace hivecal

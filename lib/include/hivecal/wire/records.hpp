@@ -10,11 +10,11 @@ namespace hivecal {
 
 /// One JOINT_STATE packet of the robot stream (125 Hz nominal).
 struct JointStateRecord {
-  std::uint16_t sequence = 0;      ///< +1 per packet, wraps 65535 -> 0
-  std::uint64_t timestamp_us = 0;  ///< robot clock [us]
-  double q_rad[kJointCount] = {};       ///< joint positions [rad]
-  double qd_rad_s[kJointCount] = {};    ///< joint velocities [rad/s]
-  float current_a[kJointCount] = {};    ///< motor currents [A]
+  std::uint16_t sequence = 0;         ///< +1 per packet, wraps 65535 -> 0
+  std::uint64_t timestamp_us = 0;     ///< robot clock [us]
+  double q_rad[kJointCount] = {};     ///< joint positions [rad]
+  double qd_rad_s[kJointCount] = {};  ///< joint velocities [rad/s]
+  float current_a[kJointCount] = {};  ///< motor currents [A]
 };
 
 /// TRACKER_POINT status byte (serial-protocol.md); any other value is not valid either.

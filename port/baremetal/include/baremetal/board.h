@@ -13,9 +13,9 @@ extern "C" {
 /* Exit statuses seen by the host (qemu-system-arm returns them; scripts/run-qemu-mps2.sh too).
  * main's return value is passed through as is; the images return 0 or 1. */
 enum {
-  BOARD_EXIT_OK = 0,        /* main returned 0 */
-  BOARD_EXIT_FAILED = 1,    /* main of the images returns this for failed checks */
-  BOARD_EXIT_FAULT = 2,     /* a fault handler, assert() or abort() ended the run */
+  BOARD_EXIT_OK = 0,     /* main returned 0 */
+  BOARD_EXIT_FAILED = 1, /* main of the images returns this for failed checks */
+  BOARD_EXIT_FAULT = 2,  /* a fault handler, assert() or abort() ended the run */
 };
 
 /* Writes a NUL-terminated string to the host console (SYS_WRITE0). */

@@ -30,7 +30,7 @@ class CaptureWriter {
   /// sync() then close; the first failure of either. Safe to call twice.
   Error close();
   std::uint64_t bytes_written() const { return bytes_written_; }  ///< bytes handed to the kernel
-  const std::string& path() const { return path_; }                ///< the file
+  const std::string& path() const { return path_; }               ///< the file
 
  private:
   int fd_ = -1;

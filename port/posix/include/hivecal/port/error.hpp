@@ -22,7 +22,7 @@ struct Error {
   Fault fault = Fault::none;  ///< none when ok
   std::string message;        ///< what went wrong, naming the file (and line) at fault
 
-  bool ok() const { return fault == Fault::none; }  ///< nothing went wrong
+  bool ok() const { return fault == Fault::none; }           ///< nothing went wrong
   int exit_code() const { return static_cast<int>(fault); }  ///< process exit code
 
   static Error failure(std::string m) { return Error{Fault::failure, std::move(m)}; }  ///< computation failed

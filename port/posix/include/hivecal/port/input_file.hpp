@@ -49,11 +49,11 @@ class InputFile final : public ByteReader {
   /// Closes the file (also done by the destructor).
   void close();
 
-  const std::string& path() const { return path_; }          ///< as given
-  std::uint64_t size_bytes() const { return size_bytes_; }    ///< file size [bytes]; 0 for stdin
-  std::uint64_t bytes_read() const { return bytes_read_; }    ///< delivered so far [bytes]
-  const Error& error() const { return error_; }               ///< why read() failed
-  bool is_stdin() const { return is_stdin_; }                 ///< opened as "-"
+  const std::string& path() const { return path_; }         ///< as given
+  std::uint64_t size_bytes() const { return size_bytes_; }  ///< file size [bytes]; 0 for stdin
+  std::uint64_t bytes_read() const { return bytes_read_; }  ///< delivered so far [bytes]
+  const Error& error() const { return error_; }             ///< why read() failed
+  bool is_stdin() const { return is_stdin_; }               ///< opened as "-"
 
  private:
   int fd_ = -1;

@@ -11,9 +11,9 @@ namespace hivecal::port {
 
 /// An open pseudo-terminal.
 struct PtyPair {
-  int master_fd = -1;        ///< written by the simulated device
-  int slave_fd = -1;         ///< kept open so the slave stays configured (raw) between readers
-  std::string slave_path;    ///< e.g. /dev/pts/3: what the reader opens
+  int master_fd = -1;      ///< written by the simulated device
+  int slave_fd = -1;       ///< kept open so the slave stays configured (raw) between readers
+  std::string slave_path;  ///< e.g. /dev/pts/3: what the reader opens
 };
 
 /// Opens a pty pair with the slave in raw mode (no echo, no line editing, 8-bit clean).

@@ -16,9 +16,9 @@ namespace hivecal::port {
 
 /// How long and how safely to record.
 struct RecordOptions {
-  int poll_timeout_ms = 100;     ///< longest wait before checking the stop flag [ms]
-  int sync_interval_ms = 1000;   ///< fsync period [ms]
-  double duration_s = 0.0;       ///< stop after this long [s]; 0: until stopped
+  int poll_timeout_ms = 100;    ///< longest wait before checking the stop flag [ms]
+  int sync_interval_ms = 1000;  ///< fsync period [ms]
+  double duration_s = 0.0;      ///< stop after this long [s]; 0: until stopped
   /// Optional tap: called with (source index, bytes, count) after each chunk is written,
   /// e.g. to decode the live streams while they are recorded.
   std::function<void(std::size_t, const std::uint8_t*, std::size_t)> on_bytes;
@@ -26,10 +26,10 @@ struct RecordOptions {
 
 /// What was recorded per source.
 struct RecordStats {
-  std::vector<std::uint64_t> bytes;         ///< bytes written to each capture (what is in it)
-  std::vector<std::uint64_t> bytes_read;    ///< bytes read from each source (more after a failed write)
-  std::vector<std::uint64_t> disconnects;   ///< device losses per source
-  bool ended_by_stop_flag = false;          ///< the flag (a signal) ended the recording
+  std::vector<std::uint64_t> bytes;        ///< bytes written to each capture (what is in it)
+  std::vector<std::uint64_t> bytes_read;   ///< bytes read from each source (more after a failed write)
+  std::vector<std::uint64_t> disconnects;  ///< device losses per source
+  bool ended_by_stop_flag = false;         ///< the flag (a signal) ended the recording
 };
 
 /// Copies sources[i] into writers[i] until *stop becomes nonzero, `duration_s` passes, or

@@ -23,13 +23,13 @@ namespace hivecal::port {
 
 /// Package types of the protocol.
 enum class RtdePackage : std::uint8_t {
-  protocol_version = 86,   ///< 'V'
-  controller_version = 118,///< 'v'
-  text_message = 77,       ///< 'M'
-  data = 85,               ///< 'U'
-  setup_outputs = 79,      ///< 'O'
-  start = 83,              ///< 'S'
-  pause = 80,              ///< 'P'
+  protocol_version = 86,     ///< 'V'
+  controller_version = 118,  ///< 'v'
+  text_message = 77,         ///< 'M'
+  data = 85,                 ///< 'U'
+  setup_outputs = 79,        ///< 'O'
+  start = 83,                ///< 'S'
+  pause = 80,                ///< 'P'
 };
 
 /// What a recording received.
@@ -43,10 +43,10 @@ struct RtdeStats {
 
 /// How to record.
 struct RtdeRecordOptions {
-  double frequency_hz = 125.0;          ///< requested output rate (CB-series: 125, e-Series: up to 500) [Hz]
-  double duration_s = 0.0;              ///< stop after this long [s]; 0: until stopped or closed
-  int connect_timeout_ms = 5000;        ///< a host that never answers fails after this [ms]
-  int reply_timeout_ms = 5000;          ///< each setup reply must come within this [ms]
+  double frequency_hz = 125.0;    ///< requested output rate (CB-series: 125, e-Series: up to 500) [Hz]
+  double duration_s = 0.0;        ///< stop after this long [s]; 0: until stopped or closed
+  int connect_timeout_ms = 5000;  ///< a host that never answers fails after this [ms]
+  int reply_timeout_ms = 5000;    ///< each setup reply must come within this [ms]
   std::function<void(const std::string&)> on_text;  ///< controller text messages (optional)
 };
 

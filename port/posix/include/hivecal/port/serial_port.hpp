@@ -18,10 +18,10 @@ inline constexpr int kTrackerBaud = 115200;
 
 /// How to open and keep a serial port.
 struct SerialOptions {
-  std::string path;             ///< device path (a symlink such as /dev/serial/by-id/... is followed at each open)
-  int baud = kRobotBaud;        ///< line rate [bit/s]; 8N1, no flow control
-  int reopen_min_ms = 50;       ///< first wait before reopening a lost device [ms]
-  int reopen_max_ms = 2000;     ///< longest wait between reopen attempts [ms]
+  std::string path;          ///< device path (a symlink such as /dev/serial/by-id/... is followed at each open)
+  int baud = kRobotBaud;     ///< line rate [bit/s]; 8N1, no flow control
+  int reopen_min_ms = 50;    ///< first wait before reopening a lost device [ms]
+  int reopen_max_ms = 2000;  ///< longest wait between reopen attempts [ms]
 };
 
 /// True for the baud rates termios can set here (9600 .. 921600).
@@ -47,8 +47,8 @@ class SerialPort final : public ByteSource {
   /// Closes the device (reads will try to reopen it).
   void close();
 
-  bool is_open() const { return fd_ >= 0; }            ///< a descriptor is open
-  std::uint64_t reconnects() const { return reconnects_; }  ///< successful reopens after a loss
+  bool is_open() const { return fd_ >= 0; }                   ///< a descriptor is open
+  std::uint64_t reconnects() const { return reconnects_; }    ///< successful reopens after a loss
   std::uint64_t disconnects() const { return disconnects_; }  ///< losses seen
 
  private:
