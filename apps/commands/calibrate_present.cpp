@@ -220,15 +220,27 @@ std::string noise_statement(double fit_sigma_m, double tracker_sigma_m, bool mea
   return line;
 }
 
+/// Repeated readings that scatter less than this are identical: rounded by the exporting tool or
+/// simulated without noise. No tracker resolves 1 nm, so they say nothing of its noise [m].
+constexpr double kIdenticalReadingsSigma_m = 1e-9;
+
 /// The measurement noise: what repeated readings show when the input has them (a line says
 /// so, beside the stated figure), else the stated sigma.
 void measurement_noise(const CalibrateSettings& settings, const RepeatedReadingNoise& repeated,
                        report::ReportData* data) {
   data->noise_sigma_m = settings.orientation.position_sigma_m;
   if (repeated.groups == 0) return;
+  char line[300];
+  if (repeated.sigma_m < kIdenticalReadingsSigma_m) {
+    std::snprintf(line, sizeof line,
+                  "tracker noise: %zu readings of %zu repeated points are identical (rounded, or simulated without "
+                  "noise): the stated %s mm is the noise",
+                  repeated.readings, repeated.groups, format_mm(settings.orientation.position_sigma_m).c_str());
+    data->info_lines.push_back(line);
+    return;
+  }
   data->noise_sigma_m = repeated.sigma_m;
   data->noise_source = "repeated readings";
-  char line[300];
   std::snprintf(
       line, sizeof line,
       "tracker noise: %zu readings of %zu repeated points scatter %s mm per axis (x %s, y %s, z %s; stated %s mm)",

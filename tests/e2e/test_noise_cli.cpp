@@ -79,6 +79,17 @@ TEST(NoiseCli, ABlunderSetAsideIsNotNoise) {
   EXPECT_NEAR(number_after(text, "noise_sigma_m"), 30e-6, 0.12 * 30e-6);  // 5 mm would make it ~0.3 mm
 }
 
+// Identical repeated readings (rounded, or simulated without noise) say nothing of the tracker:
+// the stated noise, and a line that says why.
+TEST(NoiseCli, IdenticalRepeatsGiveTheStatedNoise) {
+  const test::TempDir dir("hivecal_noise");
+  ASSERT_FALSE(dir.path().empty());
+  const std::string text = calibrate(dir, write_set(dir, 60, 4, 0.0));
+  EXPECT_EQ(text.find("noise_source"), std::string::npos);
+  EXPECT_NE(text.find("240 readings of 60 repeated points are identical"), std::string::npos);
+  EXPECT_DOUBLE_EQ(number_after(text, "noise_sigma_m"), 10e-6);
+}
+
 TEST(NoiseCli, WithoutRepeatsTheStatedNoise) {
   const test::TempDir dir("hivecal_noise");
   ASSERT_FALSE(dir.path().empty());
