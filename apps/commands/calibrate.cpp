@@ -1,7 +1,6 @@
 // hivecal calibrate: inputs (paired samples, serial captures or CSV logs) -> dataset ->
 // lib's calibrate() (ABC / GSA / Levenberg-Marquardt) -> tables, result JSON, UR deltas and
 // HTML report. The settings, the renderers and the result file are in calibrate_*.cpp.
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -24,15 +23,6 @@
 
 namespace hivecal::cli {
 namespace {
-
-/// The tracker's scatter over repeated readings of the kept samples: a blunder the job set aside
-/// is not noise. In the input's order, as the runs of equal joints were read (the job leaves the
-/// dataset in its split's order).
-RepeatedReadingNoise kept_reading_noise(const DatasetBase& dataset) {
-  std::vector<Sample> kept(dataset.samples().begin(), dataset.samples().end());
-  std::sort(kept.begin(), kept.end(), [](const Sample& a, const Sample& b) { return a.index < b.index; });
-  return repeated_reading_noise(Span<const Sample>(kept.data(), kept.size()));
-}
 
 constexpr const char* kCommand = "calibrate";
 constexpr std::size_t kTraceCapacity = 1024;
@@ -257,7 +247,6 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   job.link_length_count = link_length_set(start).count;
   if (error.ok()) error = run(settings, start, &dataset, &job);
   if (!error.ok()) return error;
-  job.repeated = kept_reading_noise(dataset);
   report::ReportData data = present_calibration(settings, start, dataset, facts, job);
   if (facts.has_stream) data.timeline = fates.timeline(120);
   // Any output on stdout (the result, or --ur-deltas -) keeps the tables off it.

@@ -75,7 +75,6 @@ struct Run {
   CrossValidationResult cv;                          ///< per-fold held-out errors (~20 KB)
   int target_count = 1;                              ///< targets (reflectors) in the samples: the result's "tools" [-]
   CalibrationOptions options;                        ///< the job's options, as lib ran it
-  RepeatedReadingNoise repeated;  ///< the kept samples' repeated readings (blunders set aside excluded)
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).

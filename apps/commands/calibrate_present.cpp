@@ -393,7 +393,7 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     data.identifiability.significance_t = run.result.significance_t;
     data.fit_sigma_m = lm->residual_sigma_m;
   }
-  measurement_noise(settings, run.repeated, &data);
+  measurement_noise(settings, run.result.reading_noise, &data);
   if (data.fit_sigma_m > 0.0) {
     data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m, data.noise_source != "stated"));
   }

@@ -233,6 +233,9 @@ struct CalibrationResult {
   BlunderTestSummary
       blunder_test;               ///< the last w-test of the final fit on its training poses (sigma, dof, uncontrolled)
   std::size_t blunder_limit = 0;  ///< training poses the w-test may remove (max_blunder_share) [-]
+  /// The tracker's scatter over repeated readings of the kept samples (a blunder set aside is
+  /// not noise); groups == 0 when the input repeats no reading.
+  RepeatedReadingNoise reading_noise;
 
   /// The samples set aside, by increasing index.
   Span<const CalibrationOutlier> outlier_list() const {

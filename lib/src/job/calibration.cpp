@@ -600,6 +600,7 @@ Status run_once(const RobotModel& start, DatasetBase* dataset, const Calibration
                 Span<const std::uint32_t> aside) {
   CalibrationResult& r = reset(result);
   dataset->set_aside(aside);
+  r.reading_noise = repeated_reading_noise(dataset->samples());  // in the order of add(), before the split reorders
   const Status status = dataset->split(options.train_fraction, options.seed);
   if (status != Status::ok) return fail(&r, CalibrationStep::split, status);
   return run_split(start, dataset, options, workspace, &r, observer);

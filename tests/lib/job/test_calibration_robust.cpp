@@ -127,6 +127,55 @@ TEST(CalibrationRobust, ABlunderAmong18PosesGivesTheBitsOfTheSetWithoutIt) {
   }
 }
 
+/// `poses` poses of fill() each read twice (the second reading 10 um of noise off the first),
+/// reading `bad` (a position in add() order) moved by 0.6 m unless it is past the end.
+void fill_read_twice(std::size_t poses, std::size_t bad, DatasetBase* out) {
+  Dataset<kSamples> clean;
+  fill(poses, &clean);
+  Random random(17);
+  out->clear();
+  for (const Sample& s : clean.samples()) {
+    const Vec3 second_m = s.point_m + 10e-6 * Vec3(random.normal(), random.normal(), random.normal());
+    for (const Vec3& reading_m : {s.point_m, second_m}) {
+      const Vec3 offset = out->size() == bad ? Vec3(0.35, -0.4, 0.3) : Vec3::Zero();
+      ASSERT_EQ(out->add(s.q_rad, reading_m + offset), Status::ok);
+    }
+  }
+}
+
+TEST(CalibrationRobust, TheReadingNoiseIsTheKeptSamplesScatterNotTheBlunders) {
+  // 20 poses read twice, one reading 0.6 m off: the job sets it aside and its pose's other
+  // reading stands alone, so the noise pools 19 pairs, exactly those of the set without it.
+  fill_read_twice(20, 9, &dataset);
+  CalibrationOptions o = options(CalibrationMethod::lm);
+  o.train_fraction = 0.7;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibrate(start(), &dataset, o, &workspace, &result));
+  ASSERT_EQ(status, Status::ok) << calibration_step_name(result.step);
+  ASSERT_EQ(result.outlier_count, 1u);
+  EXPECT_EQ(result.outliers[0].index, 9u);
+  EXPECT_EQ(result.reading_noise.groups, 19u);
+  EXPECT_EQ(result.reading_noise.readings, 38u);
+  EXPECT_GT(result.reading_noise.sigma_m, 3e-6);
+  EXPECT_LT(result.reading_noise.sigma_m, 15e-6);
+
+  fill_read_twice(20, 2 * 20, &by_hand);  // no blunder
+  Dataset<kSamples> kept;
+  for (const Sample& s : by_hand.samples()) {
+    if (s.index != 9) {
+      ASSERT_EQ(kept.add(s.q_rad, s.point_m), Status::ok);
+    }
+  }
+  const RepeatedReadingNoise expected = repeated_reading_noise(kept.samples());
+  EXPECT_EQ(std::memcmp(&result.reading_noise.sigma_m, &expected.sigma_m, sizeof(double)), 0);
+
+  o.keep_outliers = true;  // kept, the blunder is counted as noise: it is the user's choice
+  fill_read_twice(20, 9, &dataset);
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok);
+  EXPECT_EQ(result.reading_noise.groups, 20u);
+  EXPECT_GT(result.reading_noise.sigma_m, 0.05);
+}
+
 TEST(CalibrationRobust, ASmallBlunderTheScreenMissesIsFoundByTheCalibrationsTest) {
   // 6 mm: below the start geometry's screen floor (10 mm), far above the calibrated residuals.
   fill_with_blunder(18, 11, &dataset, Vec3(0.004, 0.004, -0.002));
