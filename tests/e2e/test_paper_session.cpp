@@ -87,7 +87,10 @@ std::vector<std::pair<std::string, double>> test_mae_by_method(const std::string
 // every tracker instant that is truly quasi-static by the extraction's rule (true tool speed,
 // whatever the point's status: nothing dropped), paired with the true joints at that instant
 // (true clock), the noise-free point plus the tracker's noise (same sigma, own draws).
-// Claim (issue 5): the captures' validation MAE is within 10 % of the ideal one.
+// Both fit every sample (--split 1): a split keeps a stop's repeated readings together, and the
+// robot's reported joints hold still at a stop while the ideal samples' true joints still creep
+// at the end of a move, so a split would train the two on different shares of the stops.
+// Claim: the captures' validation MAE is within 10 % of the ideal one.
 TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent) {
   sim::SimConfig config;  // what `simulate --seed 1` built
   config.seed = 1;
@@ -97,7 +100,7 @@ TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent)
   ASSERT_EQ(truth.model.joints[1].a_m, session.truth().model.joints[1].a_m) << "not the simulated session";
 
   ASSERT_EQ(run(cli::calibrate_main, {"--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--out",
-                                      path("captures.json"), "--quiet"}),
+                                      path("captures.json"), "--split", "1", "--quiet"}),
             cli::kExitOk);
   const double captures_m = validation_mae_m(path("captures.json"));
 
@@ -121,9 +124,9 @@ TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent)
     const port::Error written = textio::write_text_file(
         path("ideal_samples.csv"), textio::format_samples_csv(Span<const Sample>(ideal.data(), ideal.size())));
     ASSERT_TRUE(written.ok()) << written.message;
-    ASSERT_EQ(
-        run(cli::calibrate_main, {"--samples", path("ideal_samples.csv"), "--out", path("ideal.json"), "--quiet"}),
-        cli::kExitOk);
+    ASSERT_EQ(run(cli::calibrate_main,
+                  {"--samples", path("ideal_samples.csv"), "--out", path("ideal.json"), "--split", "1", "--quiet"}),
+              cli::kExitOk);
     const double draw_m = validation_mae_m(path("ideal.json"));
     std::printf("ideal samples (%zu), noise draw %d: validation MAE %.2f um\n", ideal.size(), draw, draw_m * 1e6);
     ideal_m += draw_m / kDraws;

@@ -73,9 +73,9 @@ inline CaptureJobConfig golden_compliance_job_config() {
 }
 
 /// The committed digests: every target must reproduce them.
-inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0xd7c40c8c46d49acaULL;
-inline constexpr std::uint64_t kLmJobGoldenDigest = 0xf2ab53e4311bca73ULL;
-inline constexpr std::uint64_t kComplianceJobGoldenDigest = 0x6618be78fbb2dc97ULL;
+inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0x758f57becc41a535ULL;
+inline constexpr std::uint64_t kLmJobGoldenDigest = 0x6cfa7d9ef1ba6453ULL;
+inline constexpr std::uint64_t kComplianceJobGoldenDigest = 0x3a9505269d624c8eULL;
 
 /// Static storage of a job: the dataset, and one arena for the capture passes, then the job.
 struct CaptureJobWorkspace {

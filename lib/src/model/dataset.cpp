@@ -98,10 +98,6 @@ void DatasetBase::shuffle(std::uint64_t seed) {
   }
 }
 
-bool DatasetBase::grouped() const {
-  return target_count(samples()) > 1;
-}
-
 std::size_t pose_run_end(Span<const Sample> samples, std::size_t begin) {
   std::size_t end = begin + 1;
   while (end < samples.size() && samples[end].q_rad == samples[begin].q_rad) ++end;
@@ -113,14 +109,12 @@ std::size_t DatasetBase::pose_end(std::size_t begin) const {
 }
 
 std::size_t DatasetBase::pose_count() const {
-  if (!grouped()) return size_;
   std::size_t count = 0;
   for (std::size_t i = 0; i < size_; i = pose_end(i)) ++count;
   return count;
 }
 
 std::size_t DatasetBase::pose_start(std::size_t pose) const {
-  if (!grouped()) return pose < size_ ? pose : size_;  // one target: every sample is its own pose
   std::size_t i = 0;
   for (std::size_t k = 0; k < pose && i < size_; ++k) i = pose_end(i);
   return i;

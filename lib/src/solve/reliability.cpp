@@ -244,12 +244,14 @@ Status test_for_blunders(const RobotModel& model, const RigidTransform& base, Sp
   scale.dof = 3.0 * static_cast<double>(fitted.size()) - mask_count(kept) - eliminated;
   const std::size_t units = count_units(fitted, fit.grouped) + count_units(predicted, fit.grouped);
   scale.unit_alpha = options.alpha / static_cast<double>(units);
-  // The data's sigma needs a unit's rows left out and one degree of freedom beyond them.
+  // The data's sigma needs a unit's rows left out and one degree of freedom beyond them, and
+  // is never below the tracker's stated noise: residuals finer than the instrument (a fit
+  // through noise-free or rounded readings) say nothing of a blunder.
   const double unit_rows = fit.grouped ? static_cast<double>(kMaxUnitRows) : 3.0;
-  const bool from_data = scale.dof >= unit_rows + 1.0;
-  scale.source = from_data ? SigmaSource::data : SigmaSource::tracker;
   summary->dof = scale.dof;
   summary->fit_sigma_m = scale.dof > 0.0 ? std::sqrt(scale.ssr_m2 / scale.dof) : 0.0;
+  const bool from_data = scale.dof >= unit_rows + 1.0 && summary->fit_sigma_m >= options.tracker_sigma_m;
+  scale.source = from_data ? SigmaSource::data : SigmaSource::tracker;
   scale.sigma_m = from_data ? summary->fit_sigma_m : options.tracker_sigma_m;
   summary->sigma_source = scale.source;
   summary->sigma_m = scale.sigma_m;

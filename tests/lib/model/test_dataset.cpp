@@ -157,19 +157,41 @@ TEST(Dataset, SeveralTargetsFoldsHoldOutWholePoses) {
   EXPECT_EQ(dataset.test().size(), 3u);
 }
 
-// One target: every sample is its own pose and the draws are those of a plain Fisher-Yates
-// (the goldens of every job depend on them).
+// One target, joints that differ from one sample to the next: every sample is its own pose and
+// the draws are those of a plain Fisher-Yates (the goldens of every job depend on them).
 TEST(Dataset, OneTargetSplitsSamples) {
   static Dataset<30> dataset;
   dataset.clear();
-  for (int i = 0; i < 30; ++i) ASSERT_EQ(dataset.add(JointVector::Constant(i / 3), Vec3::Constant(i)), Status::ok);
-  EXPECT_EQ(dataset.pose_count(), 30u);  // equal joints of one target are separate measurements
+  for (int i = 0; i < 30; ++i) ASSERT_EQ(dataset.add(JointVector::Constant(0.01 * i), Vec3::Constant(i)), Status::ok);
+  EXPECT_EQ(dataset.pose_count(), 30u);
   ASSERT_EQ(dataset.split(0.7, 5), Status::ok);
   EXPECT_EQ(dataset.train().size(), 21u);
   for (std::size_t fold = 0; fold < 4; ++fold) {  // folds of samples: [k n / 4, (k + 1) n / 4)
     ASSERT_EQ(dataset.split_fold(fold, 4, 5), Status::ok);
     EXPECT_EQ(dataset.test().size(), (fold + 1) * 30 / 4 - fold * 30 / 4);
   }
+}
+
+// One target read three times at each stop (equal joints, consecutive): the readings of a stop
+// are one pose, never split between training and test (they would test the fit on its own data).
+TEST(Dataset, RepeatedReadingsOfOneTargetStayTogether) {
+  static Dataset<30> dataset;
+  dataset.clear();
+  const auto pose_of = [](const Sample& s) { return static_cast<int>(s.q_rad[0] * 100.0 + 0.5); };
+  for (int i = 0; i < 30; ++i)
+    ASSERT_EQ(dataset.add(JointVector::Constant(0.01 * (i / 3)), Vec3::Constant(i)), Status::ok);
+  EXPECT_EQ(dataset.pose_count(), 10u);
+  ASSERT_EQ(dataset.split(0.7, 5), Status::ok);
+  EXPECT_EQ(dataset.train().size(), 21u);  // 7 of 10 poses, 3 readings each
+  std::set<int> train_poses;
+  for (const Sample& t : dataset.train()) train_poses.insert(pose_of(t));
+  for (const Sample& t : dataset.test()) EXPECT_EQ(train_poses.count(pose_of(t)), 0u);
+  EXPECT_EQ(train_poses.size(), 7u);
+  for (std::size_t fold = 0; fold < 5; ++fold) {  // 5 folds of 2 poses
+    ASSERT_EQ(dataset.split_fold(fold, 5, 5), Status::ok);
+    EXPECT_EQ(dataset.test().size(), 6u);
+  }
+  EXPECT_EQ(dataset.split_fold(0, 11, 5), Status::invalid_argument);  // more folds than poses
 }
 
 // Samples of one stop of the robot (joints within encoder noise) are one point per target;

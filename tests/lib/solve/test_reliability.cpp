@@ -110,10 +110,30 @@ TEST(Reliability, CleanSetsRejectNoPose) {
     Collect collect;
     const BlunderTestSummary summary = test_fit(&collect);
     rejected += summary.rejected;
-    EXPECT_EQ(summary.sigma_source, SigmaSource::data);
-    EXPECT_NEAR(summary.sigma_m, 10e-6, 5e-6) << seed;
+    // The data's sigma, never below the stated 10 um: a fit finer than the tracker tests
+    // against the tracker.
+    const bool finer = summary.fit_sigma_m < 10e-6;
+    EXPECT_EQ(summary.sigma_source, finer ? SigmaSource::tracker : SigmaSource::data) << seed;
+    EXPECT_EQ(summary.sigma_m, finer ? 10e-6 : summary.fit_sigma_m) << seed;
+    EXPECT_NEAR(summary.fit_sigma_m, 10e-6, 5e-6) << seed;
   }
   EXPECT_EQ(rejected, 0u);
+}
+
+TEST(Reliability, AFitFinerThanTheTrackerIsTestedAgainstTheTracker) {
+  // Noise-free readings: the fit's residuals are rounding (sigma ~1e-12 m); against them every
+  // pose would be a blunder. The stated 10 um is the floor: no pose is rejected.
+  Random random(3);
+  const RobotModel model = truth(3);
+  dataset.clear();
+  test::fill_dataset(model, test::example_base_to_tracker(), 40, 0.0, &random, &dataset);
+  ASSERT_EQ(fit_all(model), Status::ok);
+  Collect collect;
+  const BlunderTestSummary summary = test_fit(&collect);
+  EXPECT_LT(summary.fit_sigma_m, 1e-9);
+  EXPECT_EQ(summary.sigma_source, SigmaSource::tracker);
+  EXPECT_EQ(summary.sigma_m, BlunderTestOptions{}.tracker_sigma_m);
+  EXPECT_EQ(summary.rejected, 0u);
 }
 
 TEST(Reliability, ABlunderAboveItsDetectableBiasIsTheWorstPose) {

@@ -83,10 +83,10 @@ class DatasetBase {
   /// train() is the other folds, test() this one. Errors: dataset_empty, invalid_argument
   /// (folds < 2, folds > pose_count(), fold >= folds).
   Status split_fold(std::size_t fold, std::size_t folds, std::uint64_t seed);
-  /// Poses that split() and split_fold() keep together: with several targets (a target > 0),
-  /// a run of samples at equal joints in the order of add() (the reflectors measured at one
-  /// pose), so that no pose is in the training and the test part at once; with one target,
-  /// every sample is its own [-].
+  /// Poses that split() and split_fold() keep together: a run of consecutive samples at equal
+  /// joints in the order of add() (the reflectors measured at one pose, the tracker's repeated
+  /// readings of one stop), so that no pose is in the training and the test part at once; a
+  /// set without such runs has one pose per sample [-].
   std::size_t pose_count() const;
 
   std::size_t size() const { return size_; }          ///< samples stored and not set aside
@@ -101,10 +101,10 @@ class DatasetBase {
   Span<const Sample> test() const { return Span<const Sample>(storage_ + train_count_, size_ - train_count_); }
 
   /// Shuffles the samples with a seeded Fisher-Yates permutation and puts the first
-  /// round(train_fraction * size) in the training part; with several targets and a test part
-  /// the poses (pose_count) are shuffled whole, from the order of add(), and the first
-  /// round(train_fraction * poses) train. Errors: dataset_empty, invalid_argument (fraction not
-  /// in (0, 1] or leaving no training sample).
+  /// round(train_fraction * size) in the training part; when a pose holds several samples
+  /// (pose_count() < size) and there is a test part, the poses are shuffled whole, from the order of add(), and the
+  /// first round(train_fraction * poses) train. Errors: dataset_empty, invalid_argument (fraction not in (0, 1] or
+  /// leaving no training sample).
   Status split(double train_fraction, std::uint64_t seed);
   /// Training poses split(train_fraction, ...) keeps: round(train_fraction * pose_count()), or 0 when
   /// the fraction is not in (0, 1] (a caller can check a split before a long job) [-].
@@ -134,7 +134,6 @@ class DatasetBase {
 
   void sort_by_index(std::size_t count);  // the first `count` samples in the order of add()
   void shuffle(std::uint64_t seed);
-  bool grouped() const;                            // several targets: split by pose
   std::size_t pose_end(std::size_t begin) const;   // end of the run of equal joints at begin
   std::size_t pose_start(std::size_t pose) const;  // first sample of run `pose` in the current order
   void rotate_to(std::size_t to, std::size_t begin, std::size_t end);  // block [begin, end) moved to `to` <= begin

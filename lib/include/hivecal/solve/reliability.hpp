@@ -27,7 +27,8 @@ struct BlunderTestOptions {
   /// Each of the n units is tested at alpha / n (Bonferroni) [-].
   double alpha = 1e-3;
   /// Stated noise of the measured points per axis (Leica AT960-class at a few metres): the
-  /// test's sigma when the fit leaves too little redundancy to estimate it [m].
+  /// test's sigma when the fit leaves too little redundancy to estimate it, or when the fit's
+  /// own sigma is below it (noise-free or rounded readings) [m].
   double tracker_sigma_m = 1e-5;
   /// Units with a redundancy number below this are uncontrolled: a blunder there moves the
   /// fit instead of showing in the residual, so they are reported and never removed [-].
@@ -37,7 +38,7 @@ struct BlunderTestOptions {
 /// Where the test's sigma came from.
 enum class SigmaSource : std::uint8_t {
   data,     ///< the fit's residuals: each fitted unit against the others' (studentized), F distribution
-  tracker,  ///< BlunderTestOptions::tracker_sigma_m (too little redundancy), chi-square distribution
+  tracker,  ///< BlunderTestOptions::tracker_sigma_m (too little redundancy, or a fit finer than it), chi-square
 };
 
 /// Lower-case name of a sigma source ("data", "tracker").
