@@ -18,6 +18,7 @@
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/iso9283.hpp"
 #include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/plan/inverse_kinematics.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "report/report.hpp"
 #include "report/svg.hpp"
@@ -181,51 +182,6 @@ Vec3 tool_rotation_vector(const Vec3& from_m, const Vec3& tracker_m, bool tool_d
                              : Vec3(z.z() > 0.0 ? Vec3::Zero() : Vec3(3.141592653589793, 0, 0));
 }
 
-/// Joints that put the flange at `target` within `limits` (damped Gauss-Newton from seeded
-/// random starts, numeric Jacobian); false when none converges to 1 um / 1 urad.
-bool solve_ik(const RobotModel& model, const JointLimits& limits, const RigidTransform& target, Random* random,
-              JointVector* q_out) {
-  const auto error_of = [&](const JointVector& q) {
-    const RigidTransform at = fk_flange(model, q);
-    Eigen::Matrix<double, 6, 1> e;
-    e.head<3>() = target.translation_m - at.translation_m;
-    const Eigen::AngleAxisd turn(Mat3(target.rotation * at.rotation.transpose()));
-    e.tail<3>() = turn.angle() * turn.axis();
-    return e;
-  };
-  for (int start = 0; start < 12; ++start) {
-    JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random->uniform(limits.lower_rad(j), limits.upper_rad(j));
-    for (int iteration = 0; iteration < 60; ++iteration) {
-      const Eigen::Matrix<double, 6, 1> e = error_of(q);
-      if (e.head<3>().norm() < 1e-6 && e.tail<3>().norm() < 1e-6) {
-        bool inside = true;
-        for (int j = 0; j < kJointCount; ++j) {  // a turn more or less is the same pose
-          constexpr double kTurn = 6.283185307179586;
-          while (q(j) > limits.upper_rad(j) && q(j) - kTurn >= limits.lower_rad(j)) q(j) -= kTurn;
-          while (q(j) < limits.lower_rad(j) && q(j) + kTurn <= limits.upper_rad(j)) q(j) += kTurn;
-          inside = inside && q(j) >= limits.lower_rad(j) && q(j) <= limits.upper_rad(j);
-        }
-        if (inside) {
-          *q_out = q;
-          return true;
-        }
-        break;
-      }
-      Eigen::Matrix<double, 6, 6> jacobian;
-      for (int j = 0; j < kJointCount; ++j) {
-        JointVector moved = q;
-        moved(j) += 1e-7;
-        jacobian.col(j) = (e - error_of(moved)) / 1e-7;
-      }
-      const Eigen::Matrix<double, 6, 6> normal =
-          jacobian.transpose() * jacobian + 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
-      q += normal.ldlt().solve(jacobian.transpose() * e);
-    }
-  }
-  return false;
-}
-
 /// The five ISO positions of the cube at `centre_m` with side `side_m` (P1 first).
 void iso_positions(const Vec3& centre_m, double side_m, Vec3 (&positions)[5]) {
   // The diagonal plane through the cube's x edges: corners (+-s/2, -s/2, -s/2), (+-s/2, +s/2,
@@ -241,7 +197,8 @@ void iso_positions(const Vec3& centre_m, double side_m, Vec3 (&positions)[5]) {
 bool reach(const RobotModel& model, const JointLimits& limits, const Vec3& position, const Vec3& rotation,
            Random* random, JointVector* q) {
   const Mat3 flange_rotation = rotation_from_vector(rotation);
-  return solve_ik(model, limits, RigidTransform{flange_rotation, position - flange_rotation * model.tool_m}, random, q);
+  const RigidTransform flange{flange_rotation, position - flange_rotation * model.tool_m};
+  return solve_flange_pose(model, limits, flange, InverseKinematicsOptions{}, random, q) == Status::ok;
 }
 
 /// Whether the arm reaches all five positions of the cube with the one orientation, above the
