@@ -3,6 +3,7 @@
 // HTML report. The settings, the renderers and the result file are in calibrate_*.cpp.
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,12 +28,15 @@ namespace {
 constexpr const char* kCommand = "calibrate";
 constexpr std::size_t kTraceCapacity = 1024;
 
-/// The job's workspace for `samples` samples, shared by the job and --cv: exact (double)
-/// paper-6 terms for any arm's link lengths and joint trig storage (~450 B per sample).
-HostWorkspace<kTraceCapacity>::View& cli_workspace(std::size_t samples) {
-  static HostWorkspace<kTraceCapacity> workspace;
-  return workspace.for_samples(samples);
-}
+/// One run's storage on the heap (nothing kept between runs; tests run several in one process):
+/// the dataset, lib's result (~5 KB) and the job's workspace, shared by the job and --cv (exact
+/// double paper-6 terms for any arm's link lengths and joint trig storage, ~450 B per sample).
+struct JobMemory {
+  CliDataset dataset;
+  Run job;
+  HostWorkspace<kTraceCapacity> workspace;
+  CalibrationResult cv_scratch;  ///< each fold's result
+};
 
 /// Times the stages (lib takes no time) and prints one progress line per iteration on
 /// stderr, overwritten in place.
@@ -147,12 +151,13 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
 /// --cv after the job (whose messages name the failing step), then the dataset put back as
 /// the job left it (the same set aside and seeded split) for the tables.
 Error cross_validation(const CalibrateSettings& settings, const RobotModel& start, const CalibrationOptions& job,
-                       CliDataset* dataset, Run* run) {
-  auto& workspace = cli_workspace(dataset->size());
-  static CalibrationResult scratch;  // ~5 KB
+                       JobMemory* memory) {
+  CliDataset* dataset = &memory->dataset;
+  Run* run = &memory->job;
+  auto& workspace = memory->workspace.for_samples(dataset->size());
   JobObserver quiet(false);
   const Status status = cross_validate(start, dataset, job, settings.cv_folds == 1 ? 0 : settings.cv_folds, &workspace,
-                                       &scratch, &run->cv, &quiet);
+                                       &memory->cv_scratch, &run->cv, &quiet);
   std::vector<std::uint32_t> aside;
   for (const CalibrationOutlier& o : run->result.outlier_list()) aside.push_back(o.index);
   dataset->set_aside(Span<const std::uint32_t>(aside.data(), aside.size()));
@@ -162,7 +167,9 @@ Error cross_validation(const CalibrateSettings& settings, const RobotModel& star
   return Error{};
 }
 
-Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset* dataset, Run* run) {
+Error run(const CalibrateSettings& settings, const RobotModel& start, JobMemory* memory) {
+  CliDataset* dataset = &memory->dataset;
+  Run* run = &memory->job;
   CalibrationOptions job;
   job.method = settings.method;
   job.params = settings.paper_params ? CalibrationParams::paper : CalibrationParams::full;
@@ -179,7 +186,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
   job.blunder_test.tracker_sigma_m = settings.orientation.position_sigma_m;
   job.compliance.enabled = settings.compliance;
   if (settings.compliance) job.compliance.model = settings.compliance_model;
-  auto& workspace = cli_workspace(dataset->size());
+  auto& workspace = memory->workspace.for_samples(dataset->size());
   JobObserver observer(settings.progress);
   run->target_count = target_count(dataset->samples());
   run->options = job;
@@ -205,7 +212,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, CliDataset
     return Error::failure(std::string(what) + " failed: " + status_message(status));
   }
   run->has_cv = settings.cv_folds > 0;
-  return run->has_cv ? cross_validation(settings, start, job, dataset, run) : Error{};
+  return run->has_cv ? cross_validation(settings, start, job, memory) : Error{};
 }
 
 // --- write ------------------------------------------------------------------------------------
@@ -236,16 +243,16 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   if (error.ok()) error = declare_outputs(options, &outputs, &ids);
   RobotModel start;
   if (error.ok()) error = start_geometry(options, settings, &start);
-  static CliDataset dataset;  // static: its storage is kept; emptied for each call (tests run several in one process)
-  dataset.clear();
+  const auto memory = std::make_unique<JobMemory>();
+  CliDataset& dataset = memory->dataset;
+  Run& job = memory->job;
   streams::SessionFacts facts;
   PointFates fates;
   if (error.ok()) error = load_dataset(options, settings, &dataset, &facts, &fates);
-  static Run job;  // static: the CalibrationResult is ~5 KB
   if (error.ok()) textio::start_orientation_targets(facts.orientation, &start);
   job.from_controller = !options.get("ur-calibration").empty();
   job.link_length_count = link_length_set(start).count;
-  if (error.ok()) error = run(settings, start, &dataset, &job);
+  if (error.ok()) error = run(settings, start, memory.get());
   if (!error.ok()) return error;
   report::ReportData data = present_calibration(settings, start, dataset, facts, job);
   if (facts.has_stream) data.timeline = fates.timeline(120);

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -129,12 +130,12 @@ void set_partner(const NormalMatrix& correlation, int k, const RobotModel& model
 std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, const LmResult* lm,
                                                  const RobotModel& start, Span<const Sample> train) {
   std::vector<report::ParameterRow> rows;
-  static CorrelationScratch scratch;  // static: ~54 kB with the matrix
-  static NormalMatrix correlation;
+  const auto scratch = std::make_unique<CorrelationScratch>();  // ~54 kB with the matrix: not on the stack
+  const auto correlation = std::make_unique<NormalMatrix>();
   const bool correlated =
       lm != nullptr &&
       parameter_correlations(stage.model, stage.base_to_tracker, train, PointLoss{lm->huber_threshold_m},
-                             lm->identifiability.kept_mask, &scratch, &correlation) == Status::ok;
+                             lm->identifiability.kept_mask, scratch.get(), correlation.get()) == Status::ok;
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
   for (int k = 0; k < kModelParamCount; ++k) {
@@ -146,7 +147,7 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
     row.start = before(k);
     row.value = after(k);
     row.sigma = estimated ? lm->sigma(k) : 0.0;
-    if (correlated && estimated) set_partner(correlation, k, stage.model, &row);
+    if (correlated && estimated) set_partner(*correlation, k, stage.model, &row);
     rows.push_back(row);
   }
   const ComplianceModel& compliance = stage.model.compliance;
@@ -158,7 +159,7 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
     row.start = t < start.compliance.term_count ? start.compliance.coefficient[t] : 0.0;
     row.value = compliance.coefficient[t];
     row.sigma = lm != nullptr && mask_has(lm->identifiability.kept_mask, k) ? lm->sigma(k) : 0.0;
-    if (correlated && row.sigma > 0.0) set_partner(correlation, k, stage.model, &row);
+    if (correlated && row.sigma > 0.0) set_partner(*correlation, k, stage.model, &row);
     rows.push_back(row);
   }
   for (int target = 1; lm != nullptr && target < kMaxTargets; ++target) {  // estimated with several targets
@@ -282,12 +283,12 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
   table.sigma_source = sigma_source_name(r.blunder_test.sigma_source);
   table.sigma_m = r.blunder_test.sigma_m;
   if (table.searched && r.final_stage() != nullptr) {
-    static ReliabilityWorkspace workspace;  // ~26 kB
+    const auto workspace = std::make_unique<ReliabilityWorkspace>();  // ~26 kB: not on the stack
     std::vector<std::uint32_t> aside;
     for (const CalibrationOutlier& o : r.outlier_list()) aside.push_back(o.index);
     PoseTests tests(facts, std::move(aside), &table);
     BlunderTestSummary summary;
-    test_final_calibration(r, dataset, run.options, &workspace, &tests, &summary);
+    test_final_calibration(r, dataset, run.options, workspace.get(), &tests, &summary);
   }
   for (const CalibrationOutlier& o : r.outlier_list()) {
     char line[300];

@@ -1,6 +1,7 @@
 // hivecal demo: a small simulated check of the core library (nominal vs true geometry
 // seen through a fitted tracker transform). The full session is `hivecal session`.
 #include <cstdio>
+#include <memory>
 #include <utility>
 
 #include "cli/options.hpp"
@@ -30,7 +31,8 @@ int demo_main(int argc, char** argv) {
   }
   RigidTransform tracker_pose;
   tracker_pose.translation_m << 2.5, -1.0, 0.3;
-  static Dataset<> dataset;
+  const auto storage = std::make_unique<Dataset<>>();  // a fresh set for each run, off the stack
+  Dataset<>& dataset = *storage;
   for (int i = 0; i < 38; ++i) {
     JointVector q;
     q << random.uniform(-3, 3), random.uniform(-2.5, -0.6), random.uniform(-2.2, 2.2), random.uniform(-3, 0),

@@ -96,8 +96,7 @@ Error iso9283(const Options& options) {
   if (error.ok() && !options.get("report").empty())
     error = outputs.add_file(options.get("report"), "--report", &report_id);
   if (!error.ok()) return error;
-  static cli::HostDataset dataset;
-  dataset.clear();
+  cli::HostDataset dataset;
   textio::InputUnits units;
   error = input_units_option(options, &units);
   std::vector<std::size_t> lines;
