@@ -14,6 +14,7 @@
 #include "commands/commands.hpp"
 #include "commands/host_storage.hpp"
 #include "commands/iso9283.hpp"
+#include "hivecal/core/math.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/iso9283.hpp"
@@ -173,12 +174,12 @@ bool parse_cube(const std::string& text, Vec3* centre_m, double* side_m) {
 
 /// The rotation vector of the one tool orientation: flange z towards the tracker (or down).
 Vec3 tool_rotation_vector(const Vec3& from_m, const Vec3& tracker_m, bool tool_down) {
-  if (tool_down) return Vec3(0.0, 3.141592653589793, 0.0);  // z down, as a UR pendant writes it
+  if (tool_down) return Vec3(0.0, math::kPi, 0.0);  // z down, as a UR pendant writes it
   const Vec3 z = (tracker_m - from_m).normalized();
   const Vec3 axis = Vec3::UnitZ().cross(z);
   const double angle = std::atan2(axis.norm(), z.z());
   return axis.norm() > 1e-12 ? Vec3(axis.normalized() * angle)
-                             : Vec3(z.z() > 0.0 ? Vec3::Zero() : Vec3(3.141592653589793, 0, 0));
+                             : Vec3(z.z() > 0.0 ? Vec3::Zero() : Vec3(math::kPi, 0, 0));
 }
 
 /// The five ISO positions of the cube at `centre_m` with side `side_m` (P1 first).

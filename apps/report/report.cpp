@@ -96,8 +96,8 @@ void error_figures(const ReportData& data, const std::vector<std::size_t>& shown
   const PredictionSet& before = data.predictions.front();
   const PredictionSet& after = data.predictions.back();
   // Mean |N(0, s)| per axis is s*sqrt(2/pi); the mean 3D norm of isotropic noise is s*sqrt(8/pi).
-  const double per_axis_um = data.noise_sigma_m * 1e6 * std::sqrt(2.0 / 3.141592653589793);
-  const double norm_um = data.noise_sigma_m * 1e6 * std::sqrt(8.0 / 3.141592653589793);
+  const double per_axis_um = data.noise_sigma_m * 1e6 * std::sqrt(2.0 / math::kPi);
+  const double norm_um = data.noise_sigma_m * 1e6 * std::sqrt(8.0 / math::kPi);
   double shared_max = per_axis_um;
   for (int axis = 0; axis < 3; ++axis) shared_max = std::max(shared_max, max_of(errors_um(data, before, shown, axis)));
   const char* names[] = {"x", "y", "z", "3D"};

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "hivecal/core/math.hpp"
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/delimited.hpp"
@@ -44,7 +45,7 @@ bool read_numbers(const JsonValue* v, std::size_t n, double* out) {
 // hundreds of metres on UR's parallel joints (+/-204 m), so 1 km; angles: two turns; the tool
 // point: 10 m; a compliance coefficient: 0.01 rad/m or rad/(kg m) (real arms: 1e-6..1e-4).
 constexpr double kMaxModelLength_m = 1000.0;
-constexpr double kMaxModelAngle_rad = 4.0 * 3.141592653589793;
+constexpr double kMaxModelAngle_rad = 4.0 * math::kPi;
 constexpr double kMaxToolLength_m = 10.0;
 constexpr double kMaxComplianceCoefficient = 1e-2;
 
