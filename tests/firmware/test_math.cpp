@@ -119,6 +119,16 @@ FW_TEST(OwnAtan2, ReferenceValuesWithinTwoUlp) {
   FW_CHECK_EQ(math::acos_clamped(1.5), 0.0);
 }
 
+// Binary64 sums rounded to nearest on this core: exponents 33 apart with a result one
+// binade lower, where libgcc's ARM soft-float addition (used on a core without a double FPU
+// unless the port replaces it: port/baremetal/src/soft_double.h) is one ulp off.
+FW_TEST(Arithmetic, SumsAcrossThirtyThreeBinadesAreRoundedToNearest) {
+  volatile double one = 1.0;
+  volatile double small = from_bits(0x3de81adc4a7df110ULL);  // 0x1.81adc4a7df110p-33
+  FW_CHECK_EQ(bits_of(one - small), 0x3fefffffffe7e524ULL);
+  FW_CHECK_EQ(bits_of(-small + one), 0x3fefffffffe7e524ULL);
+}
+
 FW_TEST(OwnRandom, StreamIsTheDocumentedOne) {
   FW_CHECK_LOG(test::random_stream_is_the_documented_one());
 }
