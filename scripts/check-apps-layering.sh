@@ -2,7 +2,9 @@
 # Enforces the layering of apps/ and port/ (docs/architecture.md, "Layers"), as check-includes.sh
 # does for lib/: each folder may include only the folders below it.
 #   port/     <- its own headers and lib's byte-reader interface only (no math)
-#   textio    <- lib, port                 report, sim, streams <- lib, port, textio
+#   textio    <- lib, port                 report, streams <- lib, port, textio
+#   record    <- lib, port, textio, report, streams (the result file)
+#   sim       <- lib, port, textio, record (its truth file has the result's shape)
 #   cli       <- lib, port, textio         commands <- every apps folder but bench and hivecal
 #   hivecal   <- port, commands            bench    <- lib, textio, testkit (and its own peer)
 # "lib" is "hivecal/<stage>/..." or "hivecal/<name>.hpp"; "port" is "hivecal/port/...".
@@ -13,9 +15,11 @@ cd "$(dirname "$0")/.."
 allowed() {  # allowed FOLDER -> the include roots it may use
   case "$1" in
     textio) echo "lib port textio" ;;
-    report | sim | streams) echo "lib port textio $1" ;;
+    report | streams) echo "lib port textio $1" ;;
+    record) echo "lib port textio report streams record" ;;
+    sim) echo "lib port textio record sim" ;;
     cli) echo "lib port textio cli" ;;
-    commands) echo "lib port textio report sim streams cli commands" ;;
+    commands) echo "lib port textio report streams record sim cli commands" ;;
     hivecal) echo "port commands" ;;
     bench) echo "lib textio testkit bench" ;;
     *) echo "" ;;

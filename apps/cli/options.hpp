@@ -12,7 +12,7 @@
 #include "hivecal/port/error.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "textio/delimited.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 
 namespace hivecal::cli {
 

@@ -7,7 +7,7 @@
 #include "cli/options.hpp"
 #include "hivecal/calibration.hpp"
 #include "commands/commands.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/text_util.hpp"
 #include "commands/calibrate_parts.hpp"
 

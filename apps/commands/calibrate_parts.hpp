@@ -17,7 +17,7 @@
 #include "report/report.hpp"
 #include "streams/session.hpp"
 #include "textio/csv.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/delimited.hpp"
 
 namespace hivecal::cli {
@@ -88,9 +88,6 @@ const std::vector<OptionSpec>& calibrate_option_specs();
 
 /// The command line into *settings; a usage error names the option and what it must be.
 Error calibrate_settings_from_options(const Options& options, CalibrateSettings* settings);
-
-/// Where sample `index` (Sample::index) came from: "file:line" for paired samples.
-std::string sample_source(const streams::SessionFacts& facts, std::uint32_t index);
 
 /// Tables and figures of a run, and the text of the terminal.
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,

@@ -259,7 +259,7 @@ class PoseTests final : public UnitTestVisitor {
   void on_unit(const UnitTest& t) override {
     if (t.fitted && t.critical_w > 0.0) table_->critical_w = t.critical_w;
     if (t.fitted && !t.controlled) {
-      table_->uncontrolled.push_back(sample_source(facts_, t.index));
+      table_->uncontrolled.push_back(streams::sample_source(facts_, t.index));
     } else if (t.controlled && std::find(aside_.begin(), aside_.end(), t.index) == aside_.end()) {
       table_->kept_w.push_back(t.w);
     }
@@ -292,11 +292,12 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
   }
   for (const CalibrationOutlier& o : r.outlier_list()) {
     char line[300];
-    std::snprintf(
-        line, sizeof line, "set aside as a blunder: %s, residual %s mm, w %.2f > %.2f (alpha %.2g %% for the set)",
-        sample_source(facts, o.index).c_str(), format_mm(o.residual_m).c_str(), o.w, o.critical_w, table.alpha * 100.0);
+    std::snprintf(line, sizeof line,
+                  "set aside as a blunder: %s, residual %s mm, w %.2f > %.2f (alpha %.2g %% for the set)",
+                  streams::sample_source(facts, o.index).c_str(), format_mm(o.residual_m).c_str(), o.w, o.critical_w,
+                  table.alpha * 100.0);
     data->info_lines.push_back(line);
-    table.rows.push_back({sample_source(facts, o.index), o.residual_m, o.w});
+    table.rows.push_back({streams::sample_source(facts, o.index), o.residual_m, o.w});
   }
   if (r.blunder_verdict == BlunderVerdict::model_error) {
     data->info_lines.push_back("blunder test: more than " + std::to_string(r.blunder_limit) +
@@ -341,11 +342,6 @@ report::PointTimeline PointFates::timeline(std::size_t bins) const {
 }
 
 /// Where sample `index` (Sample::index) came from: "file:line" for paired samples.
-std::string sample_source(const streams::SessionFacts& facts, std::uint32_t index) {
-  if (index < facts.sample_sources.size()) return facts.sample_sources[index];
-  return "sample " + std::to_string(index);
-}
-
 /// Tables and figures of a run, and the text of the terminal.
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,
                                        const CliDataset& dataset, const streams::SessionFacts& facts, const Run& run) {

@@ -7,7 +7,7 @@
 #include "hivecal/core/math.hpp"
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 
 namespace hivecal::cli {

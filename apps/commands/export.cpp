@@ -9,12 +9,13 @@
 #include "hivecal/core/digest.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/port/output_files.hpp"
-#include "report/report_json.hpp"
-#include "textio/calibration_json.hpp"
+#include "record/report_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/json.hpp"
 #include "textio/ur_calibration_conf.hpp"
 #include "textio/ur_kinematics.hpp"
 #include "textio/urdf.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal::cli {
 
@@ -24,7 +25,7 @@ constexpr const char* kCommand = "export";
 
 /// The arm to export: a result (with its base -> tracker; *result_text gets the file's text),
 /// or --robot-model with --ur-calibration's deltas applied when given.
-Error load_arm(const Options& options, textio::CalibrationFile* arm, bool* has_tracker, std::string* result_text) {
+Error load_arm(const Options& options, record::CalibrationFile* arm, bool* has_tracker, std::string* result_text) {
   const bool from_result = !options.get("calibration").empty();
   if (from_result == options.given("robot-model")) {
     return Error::usage("give either --calibration (a result) or --robot-model (see --help)");
@@ -33,7 +34,7 @@ Error load_arm(const Options& options, textio::CalibrationFile* arm, bool* has_t
     return Error::usage("--ur-calibration goes with --robot-model: a result is calibrated already");
   }
   *has_tracker = from_result;
-  if (from_result) return textio::read_calibration_json(options.get("calibration"), arm, result_text);
+  if (from_result) return record::read_calibration_json(options.get("calibration"), arm, result_text);
   textio::RobotDescription& robot = *arm;
   const Error error = robot_model_option(options, "robot-model", &robot);
   if (!error.ok() || options.get("ur-calibration").empty()) return error;
@@ -47,7 +48,7 @@ std::vector<report::SampleRow> training_samples(const std::string& result_text, 
   report::ReportData data;
   const textio::JsonValue* saved = nullptr;
   if (!textio::parse_json(result_text, &root).ok() || (saved = root.find("report")) == nullptr ||
-      !report::parse_report_data(*saved, result_path, &data).ok()) {
+      !record::parse_report_data(*saved, result_path, &data).ok()) {
     return {};
   }
   std::vector<report::SampleRow> train;
@@ -69,7 +70,7 @@ double mae_m(const RobotModel& model, const RigidTransform& base_to_tracker,
 
 /// What a format cannot hold is said, with what leaving it out costs on the result's own
 /// training samples, never dropped in silence.
-void say_what_is_left_out(const textio::CalibrationFile& arm, const std::string& format, const std::string& result_text,
+void say_what_is_left_out(const record::CalibrationFile& arm, const std::string& format, const std::string& result_text,
                           const std::string& result_path) {
   if (arm.model.compliance.term_count == 0 || format == "robot-json") return;
   std::fprintf(stderr,
@@ -91,7 +92,7 @@ void say_what_is_left_out(const textio::CalibrationFile& arm, const std::string&
 }
 
 /// The ROS UR kinematics YAML of `arm`, its hash the robot's (--ur-hash) or one of its own.
-Error ur_kinematics_yaml(const Options& options, const textio::CalibrationFile& arm, std::string* yaml) {
+Error ur_kinematics_yaml(const Options& options, const record::CalibrationFile& arm, std::string* yaml) {
   if (arm.convention != DhConvention::standard) {
     return Error::input("--format ur-kinematics: the arm is described in modified DH: not a UR arm; use --format urdf");
   }
@@ -144,7 +145,7 @@ Error export_arm(const Options& options) {
   Error error = declare_inputs(options, {"out"}, &outputs);
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (!error.ok()) return error;
-  textio::CalibrationFile arm;
+  record::CalibrationFile arm;
   bool has_tracker = false;
   std::string result_text;  // read once: the arm, and the training samples of its report
   error = load_arm(options, &arm, &has_tracker, &result_text);

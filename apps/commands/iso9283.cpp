@@ -23,9 +23,10 @@
 #include "hivecal/port/output_files.hpp"
 #include "report/report.hpp"
 #include "report/svg.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal::cli {
 
@@ -60,11 +61,11 @@ std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::ve
 
 /// The command frame: a result's model and base -> tracker, or a nominal model with the
 /// base -> tracker fitted to every reach. *how says which.
-Error command_frame(const Options& options, Span<const Sample> samples, textio::CalibrationFile* frame,
+Error command_frame(const Options& options, Span<const Sample> samples, record::CalibrationFile* frame,
                     std::string* how) {
   if (!options.get("calibration").empty()) {
     *how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
-    return textio::read_calibration_json(options.get("calibration"), frame);
+    return record::read_calibration_json(options.get("calibration"), frame);
   }
   Error error = robot_model_option(options, "robot-model", frame);
   if (error.ok()) error = vec3_option(options, "tool", &frame->model.tool_m);
@@ -103,7 +104,7 @@ Error iso9283(const Options& options) {
   std::vector<std::size_t> lines;
   if (error.ok()) error = textio::read_samples_csv(options.get("samples"), &dataset, units, &lines);
   if (!error.ok()) return error;
-  textio::CalibrationFile frame;
+  record::CalibrationFile frame;
   std::string how;
   error = command_frame(options, dataset.samples(), &frame, &how);
   if (!error.ok()) return error;

@@ -5,9 +5,10 @@
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
 #include "hivecal/port/output_files.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal::cli {
 
@@ -44,9 +45,9 @@ Error predict(const Options& options) {
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (!error.ok()) return error;
   // load
-  textio::CalibrationFile calibration;
+  record::CalibrationFile calibration;
   port::Error r = nominal ? robot_model_option(options, "robot-model", &calibration)
-                          : textio::read_calibration_json(options.get("calibration"), &calibration);
+                          : record::read_calibration_json(options.get("calibration"), &calibration);
   if (!r.ok()) return r;
   if (target > calibration.target_count) {
     return Error::usage("--target " + target_text + ": " + options.get("calibration") + " holds " +

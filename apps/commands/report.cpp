@@ -8,9 +8,10 @@
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "report/report.hpp"
-#include "report/report_json.hpp"
-#include "textio/calibration_json.hpp"
+#include "record/report_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/json.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal::cli {
 
@@ -23,8 +24,8 @@ Error load_report_data(const std::string& path, report::ReportData* data) {
   std::string text;
   port::Error r = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
   if (!r.ok()) return r;
-  textio::CalibrationFile calibration;
-  r = textio::parse_calibration_json(text, path, &calibration);
+  record::CalibrationFile calibration;
+  r = record::parse_calibration_json(text, path, &calibration);
   if (!r.ok()) return r;
   textio::JsonValue root;
   r = textio::parse_json(text, &root);  // parse_calibration_json accepted it: cannot fail
@@ -34,7 +35,7 @@ Error load_report_data(const std::string& path, report::ReportData* data) {
     return Error::input(path +
                         ": no \"report\" key (written by hivecal calibrate since session 6; run calibrate again)");
   }
-  return report::parse_report_data(*value, path, data);
+  return record::parse_report_data(*value, path, data);
 }
 
 Error make_report(const Options& options) {

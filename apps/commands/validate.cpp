@@ -10,9 +10,10 @@
 #include "hivecal/core/random.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "sim/sim_model.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/json.hpp"
 #include "textio/text_util.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal::cli {
 
@@ -97,11 +98,11 @@ int validate_main(int argc, char** argv) {
   Error numbers = count_option(options, "poses", 1, 10000000, &poses);
   if (numbers.ok()) numbers = seed_option(options, "seed", &seed);
   if (!numbers.ok()) return exit_with("validate", numbers);
-  textio::CalibrationFile calibration;
-  textio::CalibrationFile truth;
+  record::CalibrationFile calibration;
+  record::CalibrationFile truth;
   for (auto [path, file] :
        {std::pair{options.get("calibration"), &calibration}, std::pair{options.get("truth"), &truth}}) {
-    const port::Error r = textio::read_calibration_json(path, file);
+    const port::Error r = record::read_calibration_json(path, file);
     if (!r.ok()) return exit_with("validate", r);
   }
   ReferenceCompliance bent;

@@ -1,7 +1,7 @@
 // What a calibration run reports: the paper-style tables (as text for the terminal and as
 // HTML) and a self-contained HTML page with SVG figures (docs/report.md lists them and the
 // question each answers). ReportData is all the page needs; it is kept in result.json
-// (report_json.hpp, all but the input facts and stage times) so that `hivecal report`
+// (record/report_json.hpp, all but the input facts and stage times) so that `hivecal report`
 // regenerates the page from a result alone.
 #pragma once
 

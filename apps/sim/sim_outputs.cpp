@@ -10,10 +10,11 @@
 
 #include "hivecal/port/output_files.hpp"
 #include "hivecal/wire/codec.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/json.hpp"
 #include "textio/text_util.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal::sim {
 namespace {
@@ -139,13 +140,13 @@ void write_simulation_members(const Session& session, double truth_margin_s, tex
 }
 
 bool write_truth_json(const Session& session, double truth_margin_s, port::StagedFile& out) {
-  textio::CalibrationFile file;
+  record::CalibrationFile file;
   file.robot = session.config().robot_name;
   file.convention = session.config().convention;
   file.modified_base = session.config().modified_base;
   file.model = session.truth().model;
   file.base_to_tracker = session.truth().base_to_tracker;
-  out.write(textio::format_calibration_json(
+  out.write(record::format_calibration_json(
       file, [&](textio::JsonWriter& json) { write_simulation_members(session, truth_margin_s, json); }));
   return true;
 }

@@ -204,6 +204,11 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
 
 }  // namespace
 
+std::string sample_source(const SessionFacts& facts, std::uint32_t index) {
+  if (index < facts.sample_sources.size()) return facts.sample_sources[index];
+  return "sample " + std::to_string(index);
+}
+
 std::string orientation_line(const SessionFacts& facts) {
   if (facts.orientation.poses == 0) return "";
   const textio::OrientationInput& given = facts.orientation_input;

@@ -53,6 +53,10 @@ struct SessionFacts {
   textio::OrientationInput orientation_input;  ///< the stated sigmas and lever the input was read with
 };
 
+/// Where sample `index` (Sample::index) came from: "file:line" for paired samples, else
+/// "sample N".
+std::string sample_source(const SessionFacts& facts, std::uint32_t index);
+
 /// "orientation used: N poses with rx, ry, rz, ..." for the console and the report; "" when
 /// no measured orientation was used.
 std::string orientation_line(const SessionFacts& facts);

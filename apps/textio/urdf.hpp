@@ -13,7 +13,7 @@
 #include <string>
 
 #include "hivecal/core/types.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 
 namespace hivecal::textio {
 

@@ -1,4 +1,4 @@
-// The "compliance" key of a result / robot description (textio/calibration_json.hpp,
+// The "compliance" key of a result / robot description (textio/robot_description.hpp,
 // docs/formats.md): written only for a model with terms, read back to the same bits in either
 // DH convention, and refused with the key named when it cannot be used.
 #include <gtest/gtest.h>
@@ -7,14 +7,15 @@
 #include <string>
 
 #include "testkit/other_arms.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
 
 /// A UR5e result whose joints 2 and 3 bend: the default terms of `load`, made-up coefficients.
-textio::CalibrationFile compliant_ur5e(ComplianceLoad load, const Vec3& gravity) {
-  textio::CalibrationFile file;
+record::CalibrationFile compliant_ur5e(ComplianceLoad load, const Vec3& gravity) {
+  record::CalibrationFile file;
   file.robot = "ur5e";
   file.model = nominal_model(RobotType::ur5e);
   file.model.tool_m << 0.001, -0.002, 0.17;
@@ -47,16 +48,16 @@ double worst_point_difference_m(const RobotModel& a, const RobotModel& b) {
 TEST(ComplianceJson, RoundTripsToTheSameBits) {
   for (ComplianceLoad load : {ComplianceLoad::point, ComplianceLoad::arm_masses}) {
     for (const Vec3& gravity : {Vec3(0.0, 0.0, -1.0), Vec3(0.6, 0.0, -0.8)}) {
-      const textio::CalibrationFile file = compliant_ur5e(load, gravity);
+      const record::CalibrationFile file = compliant_ur5e(load, gravity);
       ASSERT_GT(file.model.compliance.term_count, 0);
-      const std::string text = textio::format_calibration_json(file);
+      const std::string text = record::format_calibration_json(file);
       EXPECT_NE(text.find(load == ComplianceLoad::point ? "\"kind\": \"basis\"" : "\"kind\": \"masses\""),
                 std::string::npos);
       EXPECT_NE(text.find(load == ComplianceLoad::point ? "\"unit\": \"rad/m\"" : "\"unit\": \"rad/(kg m)\""),
                 std::string::npos);
       EXPECT_NE(text.find("\"sigma\": 9.9999999999999995e-07"), std::string::npos);  // term 1's sigma, 1e-6
-      textio::CalibrationFile back;
-      const port::Error r = textio::parse_calibration_json(text, "r.json", &back);
+      record::CalibrationFile back;
+      const port::Error r = record::parse_calibration_json(text, "r.json", &back);
       ASSERT_TRUE(r.ok()) << r.message;
       // ComplianceModel has no padding: the bytes are the model.
       EXPECT_EQ(std::memcmp(&back.model.compliance, &file.model.compliance, sizeof(ComplianceModel)), 0)
@@ -70,18 +71,18 @@ TEST(ComplianceJson, RoundTripsToTheSameBits) {
 }
 
 TEST(ComplianceJson, RigidModelsHaveNoKey) {
-  textio::CalibrationFile file = compliant_ur5e(ComplianceLoad::point, Vec3(0.0, 0.0, -1.0));
+  record::CalibrationFile file = compliant_ur5e(ComplianceLoad::point, Vec3(0.0, 0.0, -1.0));
   file.model.compliance = ComplianceModel{};
-  const std::string text = textio::format_calibration_json(file);
+  const std::string text = record::format_calibration_json(file);
   EXPECT_EQ(text.find("compliance"), std::string::npos);
-  textio::CalibrationFile back;
-  ASSERT_TRUE(textio::parse_calibration_json(text, "r.json", &back).ok());
+  record::CalibrationFile back;
+  ASSERT_TRUE(record::parse_calibration_json(text, "r.json", &back).ok());
   EXPECT_EQ(back.model.compliance.term_count, 0);
 }
 
 // A modified-DH file writes gravity in its own base frame (alpha_0 tilts it) and reads it back.
 TEST(ComplianceJson, ModifiedDhFileKeepsGravityInItsOwnBase) {
-  textio::CalibrationFile file;
+  record::CalibrationFile file;
   file.robot = "abb-irb120";
   file.convention = DhConvention::modified;
   file.modified_base = ModifiedDhBase{0.2, 0.01};
@@ -90,9 +91,9 @@ TEST(ComplianceJson, ModifiedDhFileKeepsGravityInItsOwnBase) {
   ASSERT_EQ(default_compliance_terms(file.model, Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &file.model.compliance),
             Status::ok);
   for (int t = 0; t < file.model.compliance.term_count; ++t) file.model.compliance.coefficient[t] = 5e-5;
-  const std::string text = textio::format_calibration_json(file);
-  textio::CalibrationFile back;
-  const port::Error r = textio::parse_calibration_json(text, "m.json", &back);
+  const std::string text = record::format_calibration_json(file);
+  record::CalibrationFile back;
+  const port::Error r = record::parse_calibration_json(text, "m.json", &back);
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(text.find("\"gravity_direction\": [0, 0, -1]"), std::string::npos);  // tilted by alpha_0
   EXPECT_LT((back.model.compliance.gravity_direction - file.model.compliance.gravity_direction).norm(), 1e-15);
@@ -100,7 +101,7 @@ TEST(ComplianceJson, ModifiedDhFileKeepsGravityInItsOwnBase) {
 }
 
 TEST(ComplianceJson, UnusableKeysAreRefusedByName) {
-  const std::string good = textio::format_calibration_json(compliant_ur5e(ComplianceLoad::point, Vec3(0.0, 0.0, -1.0)));
+  const std::string good = record::format_calibration_json(compliant_ur5e(ComplianceLoad::point, Vec3(0.0, 0.0, -1.0)));
   struct Case {
     const char* from;
     const char* to;
@@ -124,8 +125,8 @@ TEST(ComplianceJson, UnusableKeysAreRefusedByName) {
     const std::size_t at = text.find(c.from);
     ASSERT_NE(at, std::string::npos) << c.from;
     text.replace(at, std::strlen(c.from), c.to);
-    textio::CalibrationFile back;
-    const port::Error r = textio::parse_calibration_json(text, "r.json", &back);
+    record::CalibrationFile back;
+    const port::Error r = record::parse_calibration_json(text, "r.json", &back);
     EXPECT_FALSE(r.ok()) << c.to;
     EXPECT_NE(r.message.find("r.json: \"compliance\": "), std::string::npos) << r.message;
     EXPECT_NE(r.message.find(c.message), std::string::npos) << r.message;

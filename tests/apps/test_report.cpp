@@ -9,7 +9,7 @@
 
 #include "hivecal/model/kinematics.hpp"
 #include "report/report.hpp"
-#include "report/report_json.hpp"
+#include "record/report_json.hpp"
 #include "report/svg.hpp"
 
 namespace hivecal {
@@ -140,7 +140,7 @@ TEST(Report, StageTimesOnlyWhenTimed) {
 /// `data` as result.json holds it ("report"), parsed back into a JSON value.
 textio::JsonValue written_report(const report::ReportData& data) {
   textio::JsonWriter json;
-  report::write_report_data(json, data);
+  record::write_report_data(json, data);
   textio::JsonValue value;
   EXPECT_TRUE(textio::parse_json(json.text(), &value).ok());
   return value;
@@ -168,7 +168,7 @@ TEST(Report, DataRoundTripsThroughResultJson) {
   data.identifiability.condition_before = std::numeric_limits<double>::infinity();  // stored as null
   textio::JsonValue value = written_report(data);
   report::ReportData back;
-  const port::Error r = report::parse_report_data(value, "result.json", &back);
+  const port::Error r = record::parse_report_data(value, "result.json", &back);
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(report::render_html(back), report::render_html(as_written(data)));
   // The clock-sync profiles come back bit for bit.
@@ -190,13 +190,13 @@ TEST(Report, DataRoundTripsThroughResultJson) {
   // A clock_match column of another length is refused.
   textio::JsonValue short_column = value;
   short_column.object["clock_match"].object["residual_m_s"].array.pop_back();
-  const port::Error uneven = report::parse_report_data(short_column, "result.json", &back);
+  const port::Error uneven = record::parse_report_data(short_column, "result.json", &back);
   EXPECT_FALSE(uneven.ok());
   EXPECT_NE(uneven.message.find("\"clock_match\""), std::string::npos) << uneven.message;
   EXPECT_NE(report::render_html(back).find("beam_lost (3)"), std::string::npos);
   // A damaged document is refused with the key at fault.
   value.object["samples"].array[0].object.erase("q_rad");
-  const port::Error damaged = report::parse_report_data(value, "result.json", &back);
+  const port::Error damaged = record::parse_report_data(value, "result.json", &back);
   EXPECT_FALSE(damaged.ok());
   EXPECT_NE(damaged.message.find("\"samples\""), std::string::npos) << damaged.message;
 }
@@ -286,7 +286,7 @@ TEST(Report, BlundersAndFoldsRoundTripThroughResultJson) {
   const report::ReportData data = with_blunder_and_folds();
   textio::JsonValue value = written_report(data);
   report::ReportData back;
-  const port::Error r = report::parse_report_data(value, "result.json", &back);
+  const port::Error r = record::parse_report_data(value, "result.json", &back);
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_TRUE(back.outliers.searched);
   EXPECT_EQ(back.outliers.critical_w, 4.56);
@@ -315,16 +315,16 @@ TEST(Report, BlundersAndFoldsRoundTripThroughResultJson) {
   // Without --cv and without a search, the keys say so and come back absent.
   report::ReportData plain = example();
   textio::JsonWriter plain_json;
-  report::write_report_data(plain_json, plain);
+  record::write_report_data(plain_json, plain);
   EXPECT_EQ(plain_json.text().find("\"cross_validation\""), std::string::npos);
   textio::JsonValue plain_value;
   ASSERT_TRUE(textio::parse_json(plain_json.text(), &plain_value).ok());
-  ASSERT_TRUE(report::parse_report_data(plain_value, "result.json", &back).ok());
+  ASSERT_TRUE(record::parse_report_data(plain_value, "result.json", &back).ok());
   EXPECT_FALSE(back.outliers.searched);
   EXPECT_FALSE(back.cross_validation.present);
   // A damaged fold is refused with the key at fault.
   value.object["cross_validation"].object["folds"].array[1].object.erase("test_mae_3d_m");
-  const port::Error damaged = report::parse_report_data(value, "result.json", &back);
+  const port::Error damaged = record::parse_report_data(value, "result.json", &back);
   EXPECT_FALSE(damaged.ok());
   EXPECT_NE(damaged.message.find("\"cross_validation\""), std::string::npos) << damaged.message;
 }

@@ -1,4 +1,4 @@
-// Robot descriptions of any 6-axis arm (textio/calibration_json.hpp): both conventions read
+// Robot descriptions of any 6-axis arm (textio/robot_description.hpp): both conventions read
 // and written, round trips, the modified-DH result predicting what the standard one does,
 // the --robot-model value (file or built-in name) and errors naming file and key.
 #include <gtest/gtest.h>
@@ -7,7 +7,8 @@
 
 #include "testkit/other_arms.hpp"
 #include "testkit/temp_dir.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -15,9 +16,9 @@ namespace {
 using test::OtherArm;
 
 /// A calibrated-looking result of `arm` in `convention`, base offset (alpha_0, a_0) for modified DH.
-textio::CalibrationFile arm_result(OtherArm arm, DhConvention convention, std::uint64_t seed) {
+record::CalibrationFile arm_result(OtherArm arm, DhConvention convention, std::uint64_t seed) {
   Random random(seed);
-  textio::CalibrationFile file;
+  record::CalibrationFile file;
   file.robot = test::other_arm_name(arm);
   file.convention = convention;
   if (convention == DhConvention::modified) file.modified_base = ModifiedDhBase{0.013, -0.021};
@@ -28,7 +29,7 @@ textio::CalibrationFile arm_result(OtherArm arm, DhConvention convention, std::u
 }
 
 /// Largest distance [m] between the tracker-frame points of two results over random poses.
-double worst_point_difference_m(const textio::CalibrationFile& a, const textio::CalibrationFile& b) {
+double worst_point_difference_m(const record::CalibrationFile& a, const record::CalibrationFile& b) {
   Random random(3);
   double worst_m = 0.0;
   for (int i = 0; i < 200; ++i) {
@@ -43,10 +44,10 @@ double worst_point_difference_m(const textio::CalibrationFile& a, const textio::
 TEST(RobotDescription, ResultsRoundTripInTheirOwnConvention) {
   for (OtherArm arm : test::kOtherArms) {
     for (DhConvention convention : {DhConvention::standard, DhConvention::modified}) {
-      const textio::CalibrationFile file = arm_result(arm, convention, 40 + static_cast<std::uint64_t>(arm));
-      const std::string text = textio::format_calibration_json(file);
-      textio::CalibrationFile back;
-      const port::Error r = textio::parse_calibration_json(text, "r.json", &back);
+      const record::CalibrationFile file = arm_result(arm, convention, 40 + static_cast<std::uint64_t>(arm));
+      const std::string text = record::format_calibration_json(file);
+      record::CalibrationFile back;
+      const port::Error r = record::parse_calibration_json(text, "r.json", &back);
       ASSERT_TRUE(r.ok()) << r.message;
       EXPECT_EQ(back.robot, file.robot);
       EXPECT_EQ(back.convention, convention);
@@ -54,8 +55,8 @@ TEST(RobotDescription, ResultsRoundTripInTheirOwnConvention) {
                 std::string::npos);
       // read -> write -> read: the same model bits (a6/alpha6 were folded into the tool on the
       // first modified-DH write) and the same base to rounding
-      textio::CalibrationFile again;
-      ASSERT_TRUE(textio::parse_calibration_json(textio::format_calibration_json(back), "r2.json", &again).ok());
+      record::CalibrationFile again;
+      ASSERT_TRUE(record::parse_calibration_json(record::format_calibration_json(back), "r2.json", &again).ok());
       EXPECT_EQ(to_params(again.model), to_params(back.model)) << test::other_arm_name(arm);
       EXPECT_LT((again.base_to_tracker.rotation - back.base_to_tracker.rotation).cwiseAbs().maxCoeff(), 1e-15);
       EXPECT_LT((again.base_to_tracker.translation_m - back.base_to_tracker.translation_m).cwiseAbs().maxCoeff(),
@@ -99,15 +100,15 @@ TEST(RobotDescription, ModifiedDhResultPredictsWhatTheStandardOneDoes) {
       EXPECT_LE((fk_tool_point(modified.model, q) - fk_tool_point(standard, q)).norm(), 1e-12);
     }
     // the same calibrated geometry written both ways
-    textio::CalibrationFile as_modified = arm_result(arm, DhConvention::modified, 7);
-    textio::CalibrationFile as_standard = as_modified;
+    record::CalibrationFile as_modified = arm_result(arm, DhConvention::modified, 7);
+    record::CalibrationFile as_standard = as_modified;
     as_standard.convention = DhConvention::standard;
-    textio::CalibrationFile back_modified;
-    textio::CalibrationFile back_standard;
+    record::CalibrationFile back_modified;
+    record::CalibrationFile back_standard;
     ASSERT_TRUE(
-        textio::parse_calibration_json(textio::format_calibration_json(as_modified), "m.json", &back_modified).ok());
+        record::parse_calibration_json(record::format_calibration_json(as_modified), "m.json", &back_modified).ok());
     ASSERT_TRUE(
-        textio::parse_calibration_json(textio::format_calibration_json(as_standard), "s.json", &back_standard).ok());
+        record::parse_calibration_json(record::format_calibration_json(as_standard), "s.json", &back_standard).ok());
     EXPECT_LE(worst_point_difference_m(back_modified, back_standard), 1e-12) << test::other_arm_name(arm);
   }
 }
@@ -115,7 +116,7 @@ TEST(RobotDescription, ModifiedDhResultPredictsWhatTheStandardOneDoes) {
 TEST(RobotDescription, RobotModelValueIsAFileOrABuiltInName) {
   const test::TempDir dir("hivecal_test");
   const std::string path = dir.write(
-      "irb120.json", textio::format_calibration_json(arm_result(OtherArm::irb120, DhConvention::standard, 1)));
+      "irb120.json", record::format_calibration_json(arm_result(OtherArm::irb120, DhConvention::standard, 1)));
   textio::RobotDescription description;
   bool from_file = false;
   ASSERT_TRUE(textio::robot_description_from_value(path, &description, &from_file).ok());

@@ -17,10 +17,11 @@
 #include "sim/sim_model.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/shared_data.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/logs.hpp"
 #include "textio/ur_calibration_conf.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -39,8 +40,8 @@ TEST(StreamCommands, SimulateWritesReadableOutputsAndExtractPairsThem) {
   config.waypoint_count = 12;
   config.duration_s = 150.0;
   const sim::Session session(config);
-  textio::CalibrationFile truth;
-  const port::Error parsed = textio::read_calibration_json(dir + "/truth.json", &truth);
+  record::CalibrationFile truth;
+  const port::Error parsed = record::read_calibration_json(dir + "/truth.json", &truth);
   ASSERT_TRUE(parsed.ok()) << parsed.message;
   EXPECT_NEAR(truth.model.joints[1].a_m, session.truth().model.joints[1].a_m, 1e-15);
   EXPECT_NEAR((truth.base_to_tracker.translation_m - session.truth().base_to_tracker.translation_m).norm(), 0.0, 1e-12);
@@ -84,8 +85,8 @@ TEST(StreamCommands, SimulateTakesTheTrueGeometryFromACalibrationConf) {
   ASSERT_TRUE(textio::read_ur_calibration_conf(conf, &deltas).ok());
   RobotModel expected;
   ASSERT_EQ(apply_ur_deltas(nominal_model(RobotType::ur5e), deltas, &expected), Status::ok);
-  textio::CalibrationFile truth;
-  ASSERT_TRUE(textio::read_calibration_json(dir + "/truth.json", &truth).ok());
+  record::CalibrationFile truth;
+  ASSERT_TRUE(record::read_calibration_json(dir + "/truth.json", &truth).ok());
   EXPECT_EQ(truth.robot, "ur5e");
   for (int j = 0; j < kJointCount; ++j) {
     EXPECT_DOUBLE_EQ(truth.model.joints[j].a_m, expected.joints[j].a_m);

@@ -11,9 +11,10 @@
 #include "hivecal/core/random.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "testkit/test_data.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -46,9 +47,9 @@ TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
   EXPECT_EQ(poses[0], poses[1]);
 }
 
-textio::CalibrationFile example_calibration() {
+record::CalibrationFile example_calibration() {
   Random random(8);
-  textio::CalibrationFile file;
+  record::CalibrationFile file;
   file.robot = "ur10";
   file.model = test::perturbed_model(nominal_model(RobotType::ur10), &random, 1e-3, 1e-3);
   file.model.tool_m << 0.001, -0.002, 0.1695;
@@ -60,11 +61,11 @@ textio::CalibrationFile example_calibration() {
 }
 
 TEST(TextJson, CalibrationRoundTripsBitExactly) {
-  const textio::CalibrationFile file = example_calibration();
+  const record::CalibrationFile file = example_calibration();
   const std::string text =
-      textio::format_calibration_json(file, [](textio::JsonWriter& json) { json.key("method").value("lm"); });
-  textio::CalibrationFile back;
-  const port::Error r = textio::parse_calibration_json(text, "result.json", &back);
+      record::format_calibration_json(file, [](textio::JsonWriter& json) { json.key("method").value("lm"); });
+  record::CalibrationFile back;
+  const port::Error r = record::parse_calibration_json(text, "result.json", &back);
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(back.robot, "ur10");
   EXPECT_EQ(to_params(back.model), to_params(file.model));
@@ -78,9 +79,9 @@ TEST(TextJson, CalibrationRoundTripsBitExactly) {
 }
 
 TEST(TextJson, AByteOrderMarkIsNotPartOfTheDocument) {
-  const std::string text = textio::format_calibration_json(example_calibration(), nullptr);
-  textio::CalibrationFile back;
-  const port::Error r = textio::parse_calibration_json("\xEF\xBB\xBF" + text, "result.json", &back);
+  const std::string text = record::format_calibration_json(example_calibration(), nullptr);
+  record::CalibrationFile back;
+  const port::Error r = record::parse_calibration_json("\xEF\xBB\xBF" + text, "result.json", &back);
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_EQ(to_params(back.model), to_params(example_calibration().model));
   textio::JsonValue root;
@@ -88,7 +89,7 @@ TEST(TextJson, AByteOrderMarkIsNotPartOfTheDocument) {
 }
 
 TEST(TextJson, MalformedResultsAreNamed) {
-  const std::string good = textio::format_calibration_json(example_calibration());
+  const std::string good = record::format_calibration_json(example_calibration());
   auto replaced = [&](const std::string& from, const std::string& to) {
     std::string s = good;
     const std::size_t at = s.find(from);
@@ -113,8 +114,8 @@ TEST(TextJson, MalformedResultsAreNamed) {
       {good + "x", "unexpected text after the document"},
   };
   for (const auto& c : cases) {
-    textio::CalibrationFile file;
-    const port::Error r = textio::parse_calibration_json(c.text, "result.json", &file);
+    record::CalibrationFile file;
+    const port::Error r = record::parse_calibration_json(c.text, "result.json", &file);
     EXPECT_FALSE(r.ok());
     EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message;
   }

@@ -15,7 +15,7 @@
 #include "hivecal/model/dh_convention.hpp"
 #include "hivecal/model/ur_deltas.hpp"
 #include "testkit/shared_data.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/ur_calibration_conf.hpp"
 #include "textio/urdf.hpp"
 

@@ -15,10 +15,11 @@
 #include "hivecal/port/input_file.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/other_arms.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/json.hpp"
 #include "textio/text_util.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -159,11 +160,11 @@ TEST_F(ComplianceCli, ResultHoldsTheCompliancePredictAppliesIt) {
   EXPECT_NEAR(predicted_mae_m, train_mae_m, 1e-12);
 
   // The same file without its compliance predicts other points, farther from the measured.
-  textio::CalibrationFile rigid;
-  ASSERT_TRUE(textio::read_calibration_json(out, &rigid).ok());
+  record::CalibrationFile rigid;
+  ASSERT_TRUE(record::read_calibration_json(out, &rigid).ok());
   ASSERT_EQ(rigid.model.compliance.term_count, 4);
   rigid.model.compliance = ComplianceModel{};
-  const std::string rigid_json = dir_->write("rigid-copy.json", textio::format_calibration_json(rigid));
+  const std::string rigid_json = dir_->write("rigid-copy.json", record::format_calibration_json(rigid));
   ASSERT_EQ(run(cli::predict_main, {"--calibration", rigid_json, "--joints", joints_csv, "--out", path("rigid.csv")}),
             cli::kExitOk);
   const std::vector<Vec3> rigid_points = read_points(path("rigid.csv"));
@@ -193,8 +194,8 @@ TEST_F(ComplianceCli, ResultHoldsTheCompliancePredictAppliesIt) {
 
   // The result is a start model again (--robot-model result.json), its compliance kept.
   ASSERT_EQ(calibrate(path("again.json"), {"--robot-model", out, "--method", "lm", "--compliance"}), cli::kExitOk);
-  textio::CalibrationFile again;
-  ASSERT_TRUE(textio::read_calibration_json(path("again.json"), &again).ok());
+  record::CalibrationFile again;
+  ASSERT_TRUE(record::read_calibration_json(path("again.json"), &again).ok());
   EXPECT_EQ(again.model.compliance.term_count, 4);
 }
 
@@ -204,11 +205,11 @@ TEST_F(ComplianceCli, ResultHoldsTheCompliancePredictAppliesIt) {
 TEST_F(ComplianceCli, ValidatesCloserToTheTrueBentPointsThanTheRigidFit) {
   ASSERT_EQ(calibrate(path("v_rigid.json"), {"--method", "lm"}), cli::kExitOk);
   ASSERT_EQ(calibrate(path("v_compliant.json"), {"--method", "lm", "--compliance"}), cli::kExitOk);
-  textio::CalibrationFile truth;
-  textio::CalibrationFile fits[2];
-  ASSERT_TRUE(textio::read_calibration_json(path("truth.json"), &truth).ok());
-  ASSERT_TRUE(textio::read_calibration_json(path("v_rigid.json"), &fits[0]).ok());
-  ASSERT_TRUE(textio::read_calibration_json(path("v_compliant.json"), &fits[1]).ok());
+  record::CalibrationFile truth;
+  record::CalibrationFile fits[2];
+  ASSERT_TRUE(record::read_calibration_json(path("truth.json"), &truth).ok());
+  ASSERT_TRUE(record::read_calibration_json(path("v_rigid.json"), &fits[0]).ok());
+  ASSERT_TRUE(record::read_calibration_json(path("v_compliant.json"), &fits[1]).ok());
   const cli::ReferenceCompliance bent{200e-6, 100e-6};  // simulate --compliance-urad 200,100
   double mae_m[2];
   for (int k = 0; k < 2; ++k) {
@@ -250,11 +251,11 @@ TEST(ComplianceCliUnbent, AnArmThatDoesNotBendKeepsTheRigidFit) {
   compliant.insert(compliant.end(), {"--out", at + "compliant.json", "--compliance"});
   ASSERT_EQ(run(cli::calibrate_main, rigid), cli::kExitOk);
   ASSERT_EQ(run(cli::calibrate_main, compliant), cli::kExitOk);
-  textio::CalibrationFile truth;
-  textio::CalibrationFile fits[2];
-  ASSERT_TRUE(textio::read_calibration_json(at + "truth.json", &truth).ok());
-  ASSERT_TRUE(textio::read_calibration_json(at + "rigid.json", &fits[0]).ok());
-  ASSERT_TRUE(textio::read_calibration_json(at + "compliant.json", &fits[1]).ok());
+  record::CalibrationFile truth;
+  record::CalibrationFile fits[2];
+  ASSERT_TRUE(record::read_calibration_json(at + "truth.json", &truth).ok());
+  ASSERT_TRUE(record::read_calibration_json(at + "rigid.json", &fits[0]).ok());
+  ASSERT_TRUE(record::read_calibration_json(at + "compliant.json", &fits[1]).ok());
   const ComplianceModel& c = fits[1].model.compliance;
   for (int t = 0; t < c.term_count; ++t) EXPECT_EQ(c.coefficient[t], 0.0) << compliance_term_name(c, t);
   double mae_m[2];
@@ -284,18 +285,18 @@ TEST_F(ComplianceCli, MassesOfAUrWithAPayload) {
     EXPECT_EQ(term.find("unit")->string, "rad/(kg m)");
     EXPECT_EQ(term.find("load")->string, "arm masses");
   }
-  textio::CalibrationFile file;
-  const port::Error read = textio::read_calibration_json(out, &file);
+  record::CalibrationFile file;
+  const port::Error read = record::read_calibration_json(out, &file);
   ASSERT_TRUE(read.ok()) << read.message;
   EXPECT_EQ(file.model.compliance.load, ComplianceLoad::arm_masses);
   EXPECT_EQ(file.model.compliance.masses.payload_kg, 1.5);
 }
 
 TEST_F(ComplianceCli, MassesRefusedForAnArmWithoutMassData) {
-  textio::CalibrationFile irb;
+  record::CalibrationFile irb;
   irb.robot = "abb-irb120";
   irb.model = test::other_arm_model(test::OtherArm::irb120);
-  const std::string description = dir_->write("irb120.json", textio::format_calibration_json(irb));
+  const std::string description = dir_->write("irb120.json", record::format_calibration_json(irb));
   std::string err;
   EXPECT_EQ(calibrate_stderr({"--robot-model", description, "--samples", path("truth_samples.csv"), "--compliance",
                               "masses", "--out", path("irb.json")},

@@ -13,8 +13,9 @@
 #include "testkit/cli_run.hpp"
 #include "testkit/temp_dir.hpp"
 #include "testkit/test_data.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -34,8 +35,8 @@ TEST(LargeSetCli, NineThousandPosesCalibrateWithTheDefaultJob) {
   std::string text;
   ASSERT_TRUE(port::read_whole_file(result, port::kMaxTextInputBytes, &text).ok());
   EXPECT_NE(text.find("searched on 256 of 6300 samples"), std::string::npos);
-  textio::CalibrationFile file;
-  ASSERT_TRUE(textio::parse_calibration_json(text, result, &file).ok());
+  record::CalibrationFile file;
+  ASSERT_TRUE(record::parse_calibration_json(text, result, &file).ok());
   const std::size_t hybrid = text.find("\"method\": \"ABC+LM\"", text.find("\"methods\""));  // Table 1's row
   const std::size_t test_mae = text.find("\"test_mae_m\": ", hybrid);
   ASSERT_NE(test_mae, std::string::npos);

@@ -15,8 +15,9 @@
 #include "commands/simulate.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/log_forms.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/logs.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -29,19 +30,19 @@ bool write(const std::string& path, const std::string& text) {
 }
 
 /// Calibrates from `robot` and `tracker` into dir/name.json; the result or a failure.
-textio::CalibrationFile calibrate(const std::string& dir, const std::string& name, const std::string& robot,
+record::CalibrationFile calibrate(const std::string& dir, const std::string& name, const std::string& robot,
                                   const std::string& tracker) {
   const std::string out = dir + "/" + name + ".json";
   EXPECT_EQ(test::run(cli::calibrate_main, {"--robot", robot, "--tracker", tracker, "--out", out, "--quiet"}),
             cli::kExitOk)
       << name;
-  textio::CalibrationFile file;
-  const port::Error read = textio::read_calibration_json(out, &file);
+  record::CalibrationFile file;
+  const port::Error read = record::read_calibration_json(out, &file);
   EXPECT_TRUE(read.ok()) << name << ": " << read.message;
   return file;
 }
 
-void expect_same(const textio::CalibrationFile& a, const textio::CalibrationFile& b, double tolerance,
+void expect_same(const record::CalibrationFile& a, const record::CalibrationFile& b, double tolerance,
                  const char* what) {
   for (int j = 0; j < kJointCount; ++j) {
     EXPECT_NEAR(a.model.joints[j].a_m, b.model.joints[j].a_m, tolerance) << what << " joint " << j;
@@ -67,12 +68,12 @@ TEST(LogFormsEndToEnd, EveryFormOfOneSessionCalibratesTheSame) {
   ASSERT_TRUE(write(dir + "/joint_states.csv", test::rostopic_log(robot.records)));
   ASSERT_TRUE(write(dir + "/export.csv", test::tracker_export(tracker.records)));
 
-  const textio::CalibrationFile captures = calibrate(dir, "captures", dir + "/robot.cap", dir + "/tracker.cap");
-  const textio::CalibrationFile csv = calibrate(dir, "csv", dir + "/robot_joints.csv", dir + "/tracker.csv");
+  const record::CalibrationFile captures = calibrate(dir, "captures", dir + "/robot.cap", dir + "/tracker.cap");
+  const record::CalibrationFile csv = calibrate(dir, "csv", dir + "/robot_joints.csv", dir + "/tracker.csv");
   expect_same(captures, csv, 0.0, "hivecal CSV");  // the same records, bit for bit
-  const textio::CalibrationFile rtde = calibrate(dir, "rtde", dir + "/rtde.csv", dir + "/export.csv");
+  const record::CalibrationFile rtde = calibrate(dir, "rtde", dir + "/rtde.csv", dir + "/export.csv");
   expect_same(captures, rtde, 1e-9, "RTDE + export");
-  const textio::CalibrationFile ros = calibrate(dir, "ros", dir + "/joint_states.csv", dir + "/export.csv");
+  const record::CalibrationFile ros = calibrate(dir, "ros", dir + "/joint_states.csv", dir + "/export.csv");
   expect_same(captures, ros, 1e-9, "rostopic + export");
   EXPECT_EQ(test::run(cli::calibrate_main, {"--robot", dir + "/tracker.cap", "--tracker", dir + "/robot.cap", "--out",
                                             dir + "/swapped.json", "--quiet"}),
@@ -81,7 +82,7 @@ TEST(LogFormsEndToEnd, EveryFormOfOneSessionCalibratesTheSame) {
   const std::string bag = dir + "/bag";
   ASSERT_EQ(::mkdir(bag.c_str(), 0755), 0);
   ASSERT_TRUE(test::write_ros2_bag(bag, robot.records));
-  const textio::CalibrationFile ros2 = calibrate(dir, "ros2", bag, dir + "/export.csv");
+  const record::CalibrationFile ros2 = calibrate(dir, "ros2", bag, dir + "/export.csv");
   expect_same(captures, ros2, 1e-9, "ROS 2 bag + export");
 #endif
   std::system(("rm -rf '" + dir + "'").c_str());

@@ -11,11 +11,12 @@
 #include "commands/simulate.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/other_arms.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/json.hpp"
 #include "textio/text_util.hpp"
 #include "hivecal/port/input_file.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -25,16 +26,16 @@ using test::run;
 
 /// The description file of the IRB120-like arm in `convention` (tool guessed on the flange axis).
 std::string description_text(DhConvention convention) {
-  textio::CalibrationFile file;
+  record::CalibrationFile file;
   file.robot = "abb-irb120";
   file.convention = convention;
   file.model = test::other_arm_model(OtherArm::irb120);
   file.model.tool_m = Vec3(0.0, 0.0, 0.1);
-  return textio::format_calibration_json(file);  // a result-shaped file: also a valid model
+  return record::format_calibration_json(file);  // a result-shaped file: also a valid model
 }
 
 /// Mean distance [m] between a result's and the truth's tracker-frame points on fresh poses.
-double fresh_mae_m(const textio::CalibrationFile& r, const RobotModel& truth, const RigidTransform& base) {
+double fresh_mae_m(const record::CalibrationFile& r, const RobotModel& truth, const RigidTransform& base) {
   Random random(99);
   double sum_m = 0.0;
   for (int i = 0; i < 500; ++i) {
@@ -57,7 +58,7 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
   const std::string standard = dir.write("irb120.json", description_text(DhConvention::standard));
   const std::string modified = dir.write("irb120-craig.json", description_text(DhConvention::modified));
 
-  textio::CalibrationFile results[2];
+  record::CalibrationFile results[2];
   const std::string models[2] = {standard, modified};
   for (int k = 0; k < 2; ++k) {
     const std::string out = dir.path() + "/result" + std::to_string(k) + ".json";
@@ -68,7 +69,7 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
     EXPECT_NE(text.find(k == 0 ? "\"standard-dh\"" : "\"modified-dh\""), std::string::npos);
     EXPECT_NE(text.find("\"abb-irb120\""), std::string::npos);
     EXPECT_NE(text.find("\"paper-5, tool fitted\""), std::string::npos);  // ABC on the IRB120's five link lengths
-    const port::Error parsed = textio::parse_calibration_json(text, out, &results[k]);
+    const port::Error parsed = record::parse_calibration_json(text, out, &results[k]);
     ASSERT_TRUE(parsed.ok()) << parsed.message;
     const double mae_m = fresh_mae_m(results[k], truth, base);
     std::printf("%s: fresh-pose MAE %.2f um\n", models[k].c_str(), mae_m * 1e6);
@@ -103,13 +104,13 @@ TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
   Vec3 tool_m;
   const ModifiedDhBase offset{0.02, -0.015};
   test::other_arm_modified(OtherArm::kr6_r900, offset, rows, &tool_m);
-  textio::CalibrationFile file;
+  record::CalibrationFile file;
   file.robot = "kuka-kr6-r900";
   file.convention = DhConvention::modified;
   ASSERT_EQ(model_from_modified_dh(rows, tool_m, &file.model, &file.modified_base), Status::ok);
   const RigidTransform file_base_to_tracker = test::example_base_to_tracker();  // what the file will hold
   file.base_to_tracker = file_base_to_tracker.then_after(file.modified_base.transform());
-  const std::string result = dir.write("kr6.json", textio::format_calibration_json(file));
+  const std::string result = dir.write("kr6.json", record::format_calibration_json(file));
   Random random(4);
   std::vector<JointVector> poses;
   for (int i = 0; i < 20; ++i) poses.push_back(test::other_arm_joints(&random));
@@ -142,8 +143,8 @@ TEST(OtherArmCli, SimulatesAndCalibratesAModifiedDhIrb120FromCaptures) {
   ASSERT_EQ(run(sim::simulate_main, {"--robot-model", model, "--out-dir", dir.path(), "--waypoints", "40",
                                      "--duration-s", "240", "--errors", "large"}),
             cli::kExitOk);
-  textio::CalibrationFile truth;
-  const port::Error read = textio::read_calibration_json(dir.path() + "/truth.json", &truth);
+  record::CalibrationFile truth;
+  const port::Error read = record::read_calibration_json(dir.path() + "/truth.json", &truth);
   ASSERT_TRUE(read.ok()) << read.message;
   EXPECT_EQ(truth.robot, "abb-irb120");
   EXPECT_EQ(truth.convention, DhConvention::modified);
@@ -153,8 +154,8 @@ TEST(OtherArmCli, SimulatesAndCalibratesAModifiedDhIrb120FromCaptures) {
             cli::kExitOk);
   std::string text;
   ASSERT_TRUE(port::read_whole_file(out, port::kMaxTextInputBytes, &text).ok());
-  textio::CalibrationFile result;
-  ASSERT_TRUE(textio::parse_calibration_json(text, out, &result).ok());
+  record::CalibrationFile result;
+  ASSERT_TRUE(record::parse_calibration_json(text, out, &result).ok());
   EXPECT_EQ(result.convention, DhConvention::modified);
   textio::JsonValue root;
   ASSERT_TRUE(textio::parse_json(text, &root).ok());

@@ -16,11 +16,12 @@
 #include "commands/validation.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/other_session.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/json.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/text_util.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -29,8 +30,8 @@ using test::run;
 
 /// Validation MAE [m] of a result file against the session's truth on 1000 fresh poses.
 double validation_mae_m(const std::string& result_path, const test::OtherSession& session) {
-  textio::CalibrationFile result;
-  const port::Error parsed = textio::read_calibration_json(result_path, &result);
+  record::CalibrationFile result;
+  const port::Error parsed = record::read_calibration_json(result_path, &result);
   EXPECT_TRUE(parsed.ok()) << parsed.message;
   return cli::validate_on_fresh_poses(result.model, result.base_to_tracker, session.truth, session.base_to_tracker,
                                       1000, 7)

@@ -20,10 +20,11 @@
 #include "hivecal/sync/sample_extraction.hpp"
 #include "sim/sim_model.hpp"
 #include "testkit/cli_run.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/json.hpp"
 #include "textio/text_util.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -51,10 +52,10 @@ class PaperSession : public ::testing::Test {
 
   /// Validation MAE of a result file against the simulator's truth.json [m].
   static double validation_mae_m(const std::string& result_path) {
-    textio::CalibrationFile result;
-    textio::CalibrationFile truth;
-    const port::Error r1 = textio::read_calibration_json(result_path, &result);
-    const port::Error r2 = textio::read_calibration_json(path("truth.json"), &truth);
+    record::CalibrationFile result;
+    record::CalibrationFile truth;
+    const port::Error r1 = record::read_calibration_json(result_path, &result);
+    const port::Error r2 = record::read_calibration_json(path("truth.json"), &truth);
     EXPECT_TRUE(r1.ok()) << r1.message;
     EXPECT_TRUE(r2.ok()) << r2.message;
     return cli::validate_on_fresh_poses(result.model, result.base_to_tracker, truth.model, truth.base_to_tracker,
@@ -95,8 +96,8 @@ TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent)
   sim::SimConfig config;  // what `simulate --seed 1` built
   config.seed = 1;
   const sim::Session session(config);
-  textio::CalibrationFile truth;
-  ASSERT_TRUE(textio::read_calibration_json(path("truth.json"), &truth).ok());
+  record::CalibrationFile truth;
+  ASSERT_TRUE(record::read_calibration_json(path("truth.json"), &truth).ok());
   ASSERT_EQ(truth.model.joints[1].a_m, session.truth().model.joints[1].a_m) << "not the simulated session";
 
   ASSERT_EQ(run(cli::calibrate_main, {"--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--out",

@@ -13,8 +13,9 @@
 #include "testkit/cli_run.hpp"
 #include "testkit/target_data.hpp"
 #include "testkit/temp_dir.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -92,8 +93,8 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
   ASSERT_EQ(run(cli::calibrate_main, {"--robot-model", "ur5", "--tool", "0,0,0.17", "--samples", csv, "--method", "lm",
                                       "--out", result, "--quiet"}),
             cli::kExitOk);
-  textio::CalibrationFile file;
-  const port::Error parsed = textio::read_calibration_json(result, &file);
+  record::CalibrationFile file;
+  const port::Error parsed = record::read_calibration_json(result, &file);
   ASSERT_TRUE(parsed.ok()) << parsed.message;
   EXPECT_EQ(file.target_count, 3);
 
@@ -132,17 +133,17 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
         << bad;
   }
   // The result is a valid start model again, with its tool points.
-  textio::CalibrationFile again;
+  record::CalibrationFile again;
   std::string text;
   ASSERT_TRUE(port::read_whole_file(result, port::kMaxTextInputBytes, &text).ok());
   EXPECT_NE(text.find("\"tools\""), std::string::npos);
   EXPECT_NE(text.find("\"tool3_z\""), std::string::npos);  // estimated, with its sigma
-  ASSERT_TRUE(textio::parse_calibration_json(text, result, &again).ok());
+  ASSERT_TRUE(record::parse_calibration_json(text, result, &again).ok());
   EXPECT_EQ(again.model.other_tools_m[1], file.model.other_tools_m[1]);
   const std::string mismatch =
       dir.write("mismatch.json", text.substr(0, text.find("\"tools\"")) + "\"tools\": [[9, 9, 9]]," +
                                      text.substr(text.find("\"base_to_tracker\"")));
-  EXPECT_FALSE(textio::read_calibration_json(mismatch, &again).ok());
+  EXPECT_FALSE(record::read_calibration_json(mismatch, &again).ok());
 }
 
 }  // namespace

@@ -20,8 +20,9 @@
 #include "hivecal/port/input_file.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/log_forms.hpp"
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 #include "textio/logs.hpp"
+#include "record/result_json.hpp"
 
 namespace hivecal {
 namespace {
@@ -79,14 +80,14 @@ bool write(const std::string& path, const std::string& text) {
   return std::fclose(f) == 0 && ok;
 }
 
-textio::CalibrationFile result_of(const std::string& path) {
-  textio::CalibrationFile file;
-  const port::Error read = textio::read_calibration_json(path, &file);
+record::CalibrationFile result_of(const std::string& path) {
+  record::CalibrationFile file;
+  const port::Error read = record::read_calibration_json(path, &file);
   EXPECT_TRUE(read.ok()) << path << ": " << read.message;
   return file;
 }
 
-void expect_same(const textio::CalibrationFile& a, const textio::CalibrationFile& b, double tolerance,
+void expect_same(const record::CalibrationFile& a, const record::CalibrationFile& b, double tolerance,
                  const char* what) {
   const ModelParams pa = to_params(a.model);
   const ModelParams pb = to_params(b.model);

@@ -135,8 +135,9 @@ TEST(SoftDouble, SubnormalsZerosInfinitiesAndNaNsMatchTheFpu) {
 
 TEST(SoftDouble, IntegersConvertLikeTheFpu) {
   Operands operands;
-  const std::uint64_t edges[] = {0ULL, 1ULL, (1ULL << 53) - 1, 1ULL << 53, (1ULL << 53) + 1, (1ULL << 54) + 2,
-                                 (1ULL << 63) - 1, 1ULL << 63, ~0ULL};
+  const std::uint64_t edges[] = {
+      0ULL,       1ULL, (1ULL << 53) - 1, 1ULL << 53, (1ULL << 53) + 1, (1ULL << 54) + 2, (1ULL << 63) - 1,
+      1ULL << 63, ~0ULL};
   for (std::uint64_t value : edges) {
     EXPECT_EQ(bits_of(static_cast<double>(value)), soft_double_from_u64(value)) << value;
     const auto signed_value = static_cast<std::int64_t>(value);

@@ -1,13 +1,12 @@
-// The calibration result file, format "robot-calibration/1" (docs/formats.md), and the robot
-// description of any 6-axis arm in the same shape (a result is also a valid start model).
+// The robot description of any 6-axis arm, format "robot-calibration/1" (docs/formats.md): the
+// DH table, tool points, compliance and joint limits. A result file (record/result_json.hpp) is a
+// description with the fit's members added, so a result is also a valid start model.
 #pragma once
 
-#include <functional>
 #include <string>
 
 #include "hivecal/model/dh_convention.hpp"
 #include "hivecal/model/kinematics.hpp"
-#include "hivecal/model/metrics.hpp"
 #include "textio/json.hpp"
 #include "textio/ur_calibration_conf.hpp"  // port::Error
 
@@ -25,18 +24,6 @@ struct RobotDescription {
   bool has_joint_limits = false;  ///< the file gave "joint_limits" (URDF: <limit>)
   JointVector lower_rad = JointVector::Constant(-2.0 * math::kPi);  ///< lowest joint positions [rad]
   JointVector upper_rad = JointVector::Constant(2.0 * math::kPi);   ///< highest joint positions [rad]
-};
-
-/// What a result file must hold to predict positions, plus its accuracy figures.
-struct CalibrationFile : RobotDescription {
-  /// Base of the standard-DH chain -> tracker frame: predicted = base_to_tracker * FK(model)
-  /// (for a modified-DH file, the file's own base -> tracker times modified_base).
-  RigidTransform base_to_tracker;
-  bool has_metrics = false;  ///< metrics below were present / are to be written
-  AccuracyReport metrics;    ///< train / test / overall error statistics [m]
-  /// Standard deviation of each compliance coefficient (model.compliance's unit); 0: unknown,
-  /// not written.
-  double compliance_sigma[kMaxComplianceTerms] = {};
 };
 
 /// The JSON name of a convention: "standard-dh" or "modified-dh".
@@ -57,15 +44,16 @@ port::Error robot_description_from_value(const std::string& value, RobotDescript
 /// A robot description document (what --robot-model reads): the result's shape without
 /// base_to_tracker and metrics.
 std::string format_robot_description(const RobotDescription& robot);
-/// The JSON document; `extra_members` may add more keys to the top-level object.
-std::string format_calibration_json(const CalibrationFile& file,
-                                    const std::function<void(JsonWriter&)>& extra_members = {});
-/// Parses and validates a result document (six DH rows, finite numbers, a proper rigid
-/// 4x4 transform within 1e-5, re-orthonormalised); errors name the key at fault.
-port::Error parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file);
-/// Reads and parses a result file; `text` (optional) receives the file's text, for the keys
-/// the caller reads itself (e.g. "report").
-port::Error read_calibration_json(const std::string& path, CalibrationFile* file, std::string* text = nullptr);
+/// Writes the members every robot-calibration/1 document holds (format, robot, convention, dh,
+/// tool, tools with several targets, compliance with terms, joint_limits when given) into the
+/// open top-level object. `compliance_sigma` (optional): each coefficient's sigma, written when > 0.
+void write_description_members(JsonWriter& json, const RobotDescription& description,
+                               const double* compliance_sigma = nullptr);
+/// Parses a robot-calibration/1 document's description members; `format_required`: "format"
+/// must be present (a result) rather than optional (a description). *root receives the parsed
+/// document for the caller's own members. Errors name the file and the key at fault.
+port::Error parse_description_document(const std::string& text, const std::string& source_name, bool format_required,
+                                       RobotDescription* description, JsonValue* root);
 
 /// The "compliance" object of a model with compliance terms (docs/formats.md): "kind"
 /// (basis | masses), "gravity_direction", "terms" (name, joint 1-based, load, coefficient,
@@ -80,8 +68,5 @@ bool read_compliance(const JsonValue& value, const Mat3& to_file_base, Complianc
 const char* compliance_unit(ComplianceLoad load);
 /// The name of a load kind on the command line and in "kind": "basis" or "masses".
 const char* compliance_kind_name(ComplianceLoad load);
-
-/// Writes one ErrorStats as {"count", "mae_m": {x, y, z, 3d}, "sigma_m": {...}, "max_m": {...}}.
-void write_error_stats(JsonWriter& json, const ErrorStats& stats);
 
 }  // namespace hivecal::textio

@@ -1,13 +1,16 @@
-#include "report/report_json.hpp"
+#include "record/report_json.hpp"
 
 #include <cmath>
 #include <limits>
 #include <utility>
 
-#include "textio/calibration_json.hpp"
+#include "record/result_json.hpp"
 
-namespace hivecal::report {
+namespace hivecal::record {
 namespace {
+
+// The report's tables and figures (report/report.hpp).
+using namespace report;  // NOLINT(google-build-using-namespace)
 
 using textio::JsonValue;
 using textio::JsonWriter;
@@ -17,11 +20,11 @@ constexpr const char* kAxisNames[kErrorAxisCount] = {"x", "y", "z", "3d"};
 void write_accuracy(JsonWriter& json, const AccuracyReport& r) {
   json.begin_object();
   json.key("train");
-  textio::write_error_stats(json, r.train);
+  write_error_stats(json, r.train);
   json.key("test");
-  textio::write_error_stats(json, r.test);
+  write_error_stats(json, r.test);
   json.key("overall");
-  textio::write_error_stats(json, r.overall);
+  write_error_stats(json, r.overall);
   json.end_object();
 }
 
@@ -445,9 +448,9 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
     json.key("params").value(row.parameters);
     json.key("evaluations").value(row.evaluations);
     json.key("train");
-    textio::write_error_stats(json, row.train);
+    write_error_stats(json, row.train);
     json.key("test");
-    textio::write_error_stats(json, row.test);
+    write_error_stats(json, row.test);
     json.end_object();
   }
   json.end_array();
@@ -577,4 +580,4 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   return port::Error{};
 }
 
-}  // namespace hivecal::report
+}  // namespace hivecal::record

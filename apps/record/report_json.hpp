@@ -7,12 +7,12 @@
 #include "report/report.hpp"
 #include "textio/json.hpp"
 
-namespace hivecal::report {
+namespace hivecal::record {
 
 /// Writes `data` as the value of the current key (an object), without MethodRow::seconds.
-void write_report_data(textio::JsonWriter& json, const ReportData& data);
+void write_report_data(textio::JsonWriter& json, const report::ReportData& data);
 
 /// Reads the object written by write_report_data; Fault::input naming the key at fault.
-port::Error parse_report_data(const textio::JsonValue& value, const std::string& source, ReportData* data);
+port::Error parse_report_data(const textio::JsonValue& value, const std::string& source, report::ReportData* data);
 
-}  // namespace hivecal::report
+}  // namespace hivecal::record

@@ -1,9 +1,8 @@
-#include "textio/calibration_json.hpp"
+#include "textio/robot_description.hpp"
 
 #include <cmath>
 
 #include "hivecal/core/math.hpp"
-#include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
@@ -13,14 +12,6 @@ namespace hivecal::textio {
 namespace {
 
 constexpr const char* kFormat = "robot-calibration/1";
-constexpr const char* kAxisNames[kErrorAxisCount] = {"x", "y", "z", "3d"};
-
-void write_axis_values(JsonWriter& json, const char* name, const double* values) {
-  json.key(name).begin_object();
-  for (int axis = 0; axis < kErrorAxisCount; ++axis) json.key(kAxisNames[axis]).value(values[axis]);
-  json.end_object();
-}
-
 port::Error fail(const std::string& source, const std::string& what) {
   return port::Error::input(source + ": " + what);
 }
@@ -238,29 +229,6 @@ void rows_as_written(const RobotDescription& description, double (&rows)[kJointC
   }
 }
 
-port::Error parse_transform(const JsonValue& root, const std::string& source, RigidTransform* transform) {
-  const JsonValue* rows = root.find("base_to_tracker");
-  if (rows == nullptr || rows->kind != JsonValue::Kind::array || rows->array.size() != 4) {
-    return fail(source, "\"base_to_tracker\" must be a 4x4 array of rows");
-  }
-  Eigen::Matrix4d m;
-  for (std::size_t r = 0; r < 4; ++r) {
-    double row[4];
-    if (!read_numbers(&rows->array[r], 4, row))
-      return fail(source, "\"base_to_tracker\" row " + std::to_string(r) + " must hold 4 numbers");
-    for (std::size_t c = 0; c < 4; ++c) m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
-  }
-  const Mat3 rotation = m.block<3, 3>(0, 0);
-  const bool last_row_ok = m(3, 0) == 0.0 && m(3, 1) == 0.0 && m(3, 2) == 0.0 && m(3, 3) == 1.0;
-  const double orthonormality = (rotation.transpose() * rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
-  if (!last_row_ok || orthonormality > 1e-5 || rotation.determinant() <= 0.0) {
-    return fail(source, "\"base_to_tracker\" is not a proper rigid transform");
-  }
-  transform->rotation = rotation_from_cross_covariance(rotation.transpose());  // nearest rotation
-  transform->translation_m = m.block<3, 1>(0, 3);
-  return port::Error{};
-}
-
 /// A term's load as written: "frame K" (point mass at DH frame K's origin), "tool", "arm masses".
 std::string load_name(const ComplianceModel& compliance, const ComplianceTerm& term) {
   if (compliance.load == ComplianceLoad::arm_masses) return "arm masses";
@@ -411,20 +379,7 @@ bool read_compliance(const JsonValue& value, const Mat3& to_file_base, Complianc
   return true;
 }
 
-void write_error_stats(JsonWriter& json, const ErrorStats& stats) {
-  json.begin_object();
-  json.key("count").value(static_cast<long long>(stats.count));
-  write_axis_values(json, "mae_m", stats.mae_m);
-  write_axis_values(json, "sigma_m", stats.sigma_m);
-  write_axis_values(json, "max_m", stats.max_m);
-  json.end_object();
-}
-
-namespace {
-
-/// The members a robot description and a result share: format, robot, convention, dh, tool,
-/// tools (several targets), compliance (when it has terms).
-void write_description(JsonWriter& json, const RobotDescription& file, const double* compliance_sigma) {
+void write_description_members(JsonWriter& json, const RobotDescription& file, const double* compliance_sigma) {
   json.key("format").value(kFormat);
   json.key("robot").value(file.robot);
   json.key("convention").value(dh_convention_name(file.convention));
@@ -470,46 +425,10 @@ void write_description(JsonWriter& json, const RobotDescription& file, const dou
   }
 }
 
-}  // namespace
-
 std::string format_robot_description(const RobotDescription& robot) {
   JsonWriter json;
   json.begin_object();
-  write_description(json, robot, nullptr);
-  json.end_object();
-  return json.text();
-}
-
-std::string format_calibration_json(const CalibrationFile& file,
-                                    const std::function<void(JsonWriter&)>& extra_members) {
-  JsonWriter json;
-  json.begin_object();
-  write_description(json, file, file.compliance_sigma);
-  // A modified-DH file's base is the frame before Rx(alpha_0) Tx(a_0).
-  const RigidTransform base_to_tracker = file.convention == DhConvention::modified
-                                             ? file.base_to_tracker.then_after(file.modified_base.transform().inverse())
-                                             : file.base_to_tracker;
-  json.key("base_to_tracker").begin_array();
-  for (int r = 0; r < 4; ++r) {
-    double row[4] = {0.0, 0.0, 0.0, 1.0};
-    if (r < 3) {
-      for (int c = 0; c < 3; ++c) row[c] = base_to_tracker.rotation(r, c);
-      row[3] = base_to_tracker.translation_m(r);
-    }
-    json.inline_array(row, 4);
-  }
-  json.end_array();
-  if (file.has_metrics) {
-    json.key("metrics").begin_object();
-    json.key("train");
-    write_error_stats(json, file.metrics.train);
-    json.key("test");
-    write_error_stats(json, file.metrics.test);
-    json.key("overall");
-    write_error_stats(json, file.metrics.overall);
-    json.end_object();
-  }
-  if (extra_members) extra_members(json);
+  write_description_members(json, robot, nullptr);
   json.end_object();
   return json.text();
 }
@@ -521,34 +440,15 @@ const char* dh_convention_name(DhConvention convention) {
 port::Error parse_robot_description(const std::string& text, const std::string& source_name,
                                     RobotDescription* description) {
   JsonValue root;
-  port::Error r = parse_root(text, source_name, &root);
-  if (r.ok()) r = check_format(root, source_name, false);
-  if (r.ok()) r = parse_description(root, source_name, description);
+  return parse_description_document(text, source_name, false, description, &root);
+}
+
+port::Error parse_description_document(const std::string& text, const std::string& source_name, bool format_required,
+                                       RobotDescription* description, JsonValue* root) {
+  port::Error r = parse_root(text, source_name, root);
+  if (r.ok()) r = check_format(*root, source_name, format_required);
+  if (r.ok()) r = parse_description(*root, source_name, description);
   return r;
-}
-
-port::Error parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file) {
-  JsonValue root;
-  port::Error r = parse_root(text, source_name, &root);
-  if (r.ok()) r = check_format(root, source_name, true);
-  CalibrationFile parsed;
-  if (r.ok()) r = parse_description(root, source_name, &parsed);
-  if (r.ok()) r = parse_transform(root, source_name, &parsed.base_to_tracker);
-  if (!r.ok()) return r;
-  if (parsed.convention == DhConvention::modified) {
-    parsed.base_to_tracker = parsed.base_to_tracker.then_after(parsed.modified_base.transform());
-  }
-  *file = parsed;
-  return port::Error{};
-}
-
-port::Error read_calibration_json(const std::string& path, CalibrationFile* file, std::string* text) {
-  std::string own;
-  std::string& content = text != nullptr ? *text : own;
-  const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &content);
-  if (!read.ok()) return read;
-  if (trim(content).empty()) return port::Error::input(path + ": empty file");
-  return parse_calibration_json(content, path, file);
 }
 
 }  // namespace hivecal::textio

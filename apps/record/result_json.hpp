@@ -1,0 +1,74 @@
+// The calibration result file, format "robot-calibration/1" (docs/formats.md): a robot
+// description (textio/robot_description.hpp) with the fit's members. Every key a result adds
+// to the description is spelled in this folder: here, and in report_json.cpp for the "report"
+// member that `hivecal report` draws its page from.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "hivecal/calibration.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/model/ur_deltas.hpp"
+#include "report/report.hpp"
+#include "streams/session.hpp"
+#include "textio/json.hpp"
+#include "textio/robot_description.hpp"
+
+namespace hivecal::record {
+
+/// What a result file must hold to predict positions, plus its accuracy figures.
+struct CalibrationFile : textio::RobotDescription {
+  /// Base of the standard-DH chain -> tracker frame: predicted = base_to_tracker * FK(model)
+  /// (for a modified-DH file, the file's own base -> tracker times modified_base).
+  RigidTransform base_to_tracker;
+  bool has_metrics = false;  ///< metrics below were present / are to be written
+  AccuracyReport metrics;    ///< train / test / overall error statistics [m]
+  /// Standard deviation of each compliance coefficient (model.compliance's unit); 0: unknown,
+  /// not written.
+  double compliance_sigma[kMaxComplianceTerms] = {};
+};
+
+/// A calibration run as result.json records it: the calibrated model and the facts of the run.
+/// The pointers are the run's own results (not copied: the CalibrationResult is ~5 KB, the
+/// cross-validation ~20 KB) and must outlive the record.
+struct CalibrationRecord {
+  CalibrationFile file;                     ///< calibrated model, base -> tracker, train/test metrics
+  std::string method;                       ///< the final stage's name ("ABC+LM", "LM+compliance", ...)
+  std::string params;                       ///< "paper" (the paper's six lengths) or "full"
+  std::uint64_t seed = 1;                   ///< the job's seed [-]
+  double split = 0.7;                       ///< share of the samples in training [-]
+  AccuracyReport uncalibrated;              ///< the start model's errors on the same samples [m]
+  const CalibrationResult* result = nullptr;  ///< lib's result: outliers, significance, LM details
+  const LmResult* final_lm = nullptr;       ///< the LM details when the final stage is LM, else null
+  double joint_sigma_rad = 0.0;             ///< --joint-sigma: joint reading noise, 0 when not given [rad]
+  double joint_sigma_position_sigma_m = 0.0;  ///< the position sigma it was weighed against [m]
+  bool controller_tcp = false;              ///< base and tool known (the controller's TCP readings)
+  UrCalibrationDeltas ur_deltas;            ///< the model as UR calibration.conf deltas from the start
+  const streams::SessionFacts* facts = nullptr;  ///< input facts: clock, extraction, orientation, sources
+  const CrossValidationResult* cv = nullptr;     ///< --cv's folds, else null
+  std::vector<std::string> warnings;             ///< the fit's plausibility warnings
+  const report::ReportData* report = nullptr;    ///< the tables and figures (key "report"), else not written
+};
+
+/// Writes one ErrorStats as {"count", "mae_m": {x, y, z, 3d}, "sigma_m": {...}, "max_m": {...}}.
+void write_error_stats(textio::JsonWriter& json, const ErrorStats& stats);
+
+/// The document of `file` (description, base_to_tracker, metrics when has_metrics);
+/// `extra_members` may add keys to the top-level object (the simulator's truth file does).
+std::string format_calibration_json(const CalibrationFile& file,
+                                    const std::function<void(textio::JsonWriter&)>& extra_members = {});
+
+/// result.json of a run: format_calibration_json of record.file and every member of the record.
+std::string format_result_json(const CalibrationRecord& record);
+
+/// Parses and validates a result document (six DH rows, finite numbers, a proper rigid
+/// 4x4 transform within 1e-5, re-orthonormalised); errors name the key at fault.
+port::Error parse_calibration_json(const std::string& text, const std::string& source_name, CalibrationFile* file);
+/// Reads and parses a result file; `text` (optional) receives the file's text, for the keys
+/// the caller reads itself (e.g. "report").
+port::Error read_calibration_json(const std::string& path, CalibrationFile* file, std::string* text = nullptr);
+
+}  // namespace hivecal::record
