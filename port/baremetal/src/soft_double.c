@@ -108,8 +108,7 @@ uint64_t soft_double_from_u64(uint64_t value) {
   const int top_bit = 63 - leading_zeros(value);
   /* Place the top bit at WORK_HIDDEN_BIT (bit 55), the bits below bit 0 folded into sticky. */
   const int shift = top_bit - 55;
-  const uint64_t significand =
-      shift > 0 ? shift_right_sticky(value, (unsigned)shift) : value << (unsigned)(-shift);
+  const uint64_t significand = shift > 0 ? shift_right_sticky(value, (unsigned)shift) : value << (unsigned)(-shift);
   return round_and_pack(0, 1023 + top_bit, significand);
 }
 
