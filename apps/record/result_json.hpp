@@ -35,18 +35,18 @@ struct CalibrationFile : textio::RobotDescription {
 /// The pointers are the run's own results (not copied: the CalibrationResult is ~5 KB, the
 /// cross-validation ~20 KB) and must outlive the record.
 struct CalibrationRecord {
-  CalibrationFile file;                     ///< calibrated model, base -> tracker, train/test metrics
-  std::string method;                       ///< the final stage's name ("ABC+LM", "LM+compliance", ...)
-  std::string params;                       ///< "paper" (the paper's six lengths) or "full"
-  std::uint64_t seed = 1;                   ///< the job's seed [-]
-  double split = 0.7;                       ///< share of the samples in training [-]
-  AccuracyReport uncalibrated;              ///< the start model's errors on the same samples [m]
-  const CalibrationResult* result = nullptr;  ///< lib's result: outliers, significance, LM details
-  const LmResult* final_lm = nullptr;       ///< the LM details when the final stage is LM, else null
-  double joint_sigma_rad = 0.0;             ///< --joint-sigma: joint reading noise, 0 when not given [rad]
-  double joint_sigma_position_sigma_m = 0.0;  ///< the position sigma it was weighed against [m]
-  bool controller_tcp = false;              ///< base and tool known (the controller's TCP readings)
-  UrCalibrationDeltas ur_deltas;            ///< the model as UR calibration.conf deltas from the start
+  CalibrationFile file;                          ///< calibrated model, base -> tracker, train/test metrics
+  std::string method;                            ///< the final stage's name ("ABC+LM", "LM+compliance", ...)
+  std::string params;                            ///< "paper" (the paper's six lengths) or "full"
+  std::uint64_t seed = 1;                        ///< the job's seed [-]
+  double split = 0.7;                            ///< share of the samples in training [-]
+  AccuracyReport uncalibrated;                   ///< the start model's errors on the same samples [m]
+  const CalibrationResult* result = nullptr;     ///< lib's result: outliers, significance, LM details
+  const LmResult* final_lm = nullptr;            ///< the LM details when the final stage is LM, else null
+  double joint_sigma_rad = 0.0;                  ///< --joint-sigma: joint reading noise, 0 when not given [rad]
+  double joint_sigma_position_sigma_m = 0.0;     ///< the position sigma it was weighed against [m]
+  bool controller_tcp = false;                   ///< base and tool known (the controller's TCP readings)
+  UrCalibrationDeltas ur_deltas;                 ///< the model as UR calibration.conf deltas from the start
   const streams::SessionFacts* facts = nullptr;  ///< input facts: clock, extraction, orientation, sources
   const CrossValidationResult* cv = nullptr;     ///< --cv's folds, else null
   std::vector<std::string> warnings;             ///< the fit's plausibility warnings
