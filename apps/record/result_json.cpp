@@ -26,16 +26,6 @@ port::Error fail(const std::string& source, const std::string& what) {
   return port::Error::input(source + ": " + what);
 }
 
-/// Reads an array of exactly n numbers.
-bool read_numbers(const JsonValue* v, std::size_t n, double* out) {
-  if (v == nullptr || v->kind != JsonValue::Kind::array || v->array.size() != n) return false;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (v->array[i].kind != JsonValue::Kind::number) return false;
-    out[i] = v->array[i].number;
-  }
-  return true;
-}
-
 port::Error parse_transform(const JsonValue& root, const std::string& source, RigidTransform* transform) {
   const JsonValue* rows = root.find("base_to_tracker");
   if (rows == nullptr || rows->kind != JsonValue::Kind::array || rows->array.size() != 4) {
@@ -44,7 +34,7 @@ port::Error parse_transform(const JsonValue& root, const std::string& source, Ri
   Eigen::Matrix4d m;
   for (std::size_t r = 0; r < 4; ++r) {
     double row[4];
-    if (!read_numbers(&rows->array[r], 4, row))
+    if (!read_json_numbers(&rows->array[r], 4, row))
       return fail(source, "\"base_to_tracker\" row " + std::to_string(r) + " must hold 4 numbers");
     for (std::size_t c = 0; c < 4; ++c) m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
   }

@@ -233,6 +233,15 @@ std::string number_text(double x) {
 
 }  // namespace
 
+bool read_json_numbers(const JsonValue* value, std::size_t count, double* out) {
+  if (value == nullptr || value->kind != JsonValue::Kind::array || value->array.size() != count) return false;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (value->array[i].kind != JsonValue::Kind::number) return false;
+    out[i] = value->array[i].number;
+  }
+  return true;
+}
+
 port::Error parse_json(const std::string& text, JsonValue* value) {
   *value = JsonValue();
   std::string error;

@@ -28,6 +28,10 @@ struct JsonValue {
 /// Parses a whole JSON text; Fault::input with "line:column: problem" on failure.
 port::Error parse_json(const std::string& text, JsonValue* value);
 
+/// Reads an array of exactly `count` numbers into out[]; false for anything else (out[] then
+/// partly written).
+bool read_json_numbers(const JsonValue* value, std::size_t count, double* out);
+
 /// Streaming writer with two-space indentation; numbers as %.17g (NaN/Inf written as null).
 class JsonWriter {
  public:

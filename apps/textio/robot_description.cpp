@@ -12,6 +12,7 @@ namespace hivecal::textio {
 namespace {
 
 constexpr const char* kFormat = "robot-calibration/1";
+
 port::Error fail(const std::string& source, const std::string& what) {
   return port::Error::input(source + ": " + what);
 }
@@ -19,15 +20,6 @@ port::Error fail(const std::string& source, const std::string& what) {
 bool read_number(const JsonValue* v, double* out) {
   if (v == nullptr || v->kind != JsonValue::Kind::number) return false;
   *out = v->number;
-  return true;
-}
-
-/// Reads an array of exactly n numbers.
-bool read_numbers(const JsonValue* v, std::size_t n, double* out) {
-  if (v == nullptr || v->kind != JsonValue::Kind::array || v->array.size() != n) return false;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!read_number(&v->array[i], &out[i])) return false;
-  }
   return true;
 }
 
@@ -98,7 +90,7 @@ port::Error parse_other_tools(const JsonValue& root, const std::string& source, 
   }
   for (std::size_t k = 0; k < tools->array.size(); ++k) {
     double point[3];
-    if (!read_numbers(&tools->array[k], 3, point)) return fail(source, shape);
+    if (!read_json_numbers(&tools->array[k], 3, point)) return fail(source, shape);
     const port::Error bounded = check_tool(point, "\"tools\"[" + std::to_string(k) + "]", source);
     if (!bounded.ok()) return bounded;
     if (k == 0 && (point[0] != tool[0] || point[1] != tool[1] || point[2] != tool[2])) {
@@ -120,7 +112,7 @@ port::Error parse_joint_limits(const JsonValue& root, const std::string& source,
   for (int j = 0; j < kJointCount; ++j) {
     double pair[2];
     const std::string at = "\"joint_limits\"[" + std::to_string(j) + "]";
-    if (!read_numbers(&limits->array[static_cast<std::size_t>(j)], 2, pair)) {
+    if (!read_json_numbers(&limits->array[static_cast<std::size_t>(j)], 2, pair)) {
       return fail(source, at + " must be [lower, upper] in rad");
     }
     if (!(pair[0] < pair[1]) || !(std::fabs(pair[0]) <= kMaxJointLimit_rad) ||
@@ -160,7 +152,7 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
   if (!r.ok()) return r;
   double tool[3];
   if (root.find("tool") == nullptr) return fail(source, "missing \"tool\" ([x, y, z] in metres)");
-  if (!read_numbers(root.find("tool"), 3, tool)) return fail(source, "\"tool\" must be [x, y, z] in metres");
+  if (!read_json_numbers(root.find("tool"), 3, tool)) return fail(source, "\"tool\" must be [x, y, z] in metres");
   r = check_tool(tool, "\"tool\"", source);
   if (!r.ok()) return r;
   const Vec3 tool_m(tool[0], tool[1], tool[2]);
@@ -267,14 +259,14 @@ bool read_masses(const JsonValue* v, ArmMasses* masses, std::string* what) {
   *what = "\"masses\" must hold link_mass_kg (6 numbers), link_com_m (6 x [x, y, z]), payload_kg and payload_com_m";
   if (v == nullptr || v->kind != JsonValue::Kind::object) return false;
   const JsonValue* coms = v->find("link_com_m");
-  if (!read_numbers(v->find("link_mass_kg"), kJointCount, masses->link_mass_kg) || coms == nullptr ||
+  if (!read_json_numbers(v->find("link_mass_kg"), kJointCount, masses->link_mass_kg) || coms == nullptr ||
       coms->kind != JsonValue::Kind::array || coms->array.size() != static_cast<std::size_t>(kJointCount) ||
       !read_number(v->find("payload_kg"), &masses->payload_kg) ||
-      !read_numbers(v->find("payload_com_m"), 3, masses->payload_com_m.data())) {
+      !read_json_numbers(v->find("payload_com_m"), 3, masses->payload_com_m.data())) {
     return false;
   }
   for (std::size_t j = 0; j < coms->array.size(); ++j)
-    if (!read_numbers(&coms->array[j], 3, masses->link_com_m[j].data())) return false;
+    if (!read_json_numbers(&coms->array[j], 3, masses->link_com_m[j].data())) return false;
   return true;
 }
 
@@ -354,7 +346,7 @@ bool read_compliance(const JsonValue& value, const Mat3& to_file_base, Complianc
     return false;
   }
   parsed.load = kind->string == "masses" ? ComplianceLoad::arm_masses : ComplianceLoad::point;
-  if (!read_numbers(value.find("gravity_direction"), 3, gravity.data())) {
+  if (!read_json_numbers(value.find("gravity_direction"), 3, gravity.data())) {
     *what = "\"gravity_direction\" must be [x, y, z] (a unit vector in the robot base frame)";
     return false;
   }

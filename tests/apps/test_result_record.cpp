@@ -39,8 +39,8 @@ TEST(ResultRecord, OptionalMembersAppearOnlyWhenTheRecordHoldsThem) {
   for (const char* key : {"format", "dh", "tool", "base_to_tracker", "method", "params", "seed", "split",
                           "uncalibrated_metrics", "ur_deltas"})
     EXPECT_NE(root.find(key), nullptr) << key;
-  for (const char* key : {"metrics", "methods", "identifiability", "outliers", "cross_validation", "warnings",
-                          "report", "clock", "orientation", "joint_sigma_rad", "known"})
+  for (const char* key : {"metrics", "methods", "identifiability", "outliers", "cross_validation", "warnings", "report",
+                          "clock", "orientation", "joint_sigma_rad", "known"})
     EXPECT_EQ(root.find(key), nullptr) << key;
   EXPECT_EQ(root.find("method")->string, "LM");
   EXPECT_EQ(root.find("seed")->number, 7.0);
