@@ -25,7 +25,7 @@
 namespace hivecal::cli {
 namespace {
 
-constexpr const char* kCommand = "calibrate";
+constexpr const char* kCalibrateCommand = "calibrate";
 constexpr std::size_t kTraceCapacity = 1024;
 
 /// One run's storage on the heap (nothing kept between runs; tests run several in one process):
@@ -266,7 +266,7 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   if (!result_on_stdout) std::fprintf(terminal, "\nresult: %s\n", options.get("out").c_str());
   if (!options.get("ur-deltas").empty()) std::fprintf(terminal, "UR deltas: %s\n", options.get("ur-deltas").c_str());
   if (!options.get("report").empty()) std::fprintf(terminal, "report: %s/index.html\n", options.get("report").c_str());
-  for (const std::string& warning : *warnings) cli::error(kCommand, "warning: " + warning);
+  for (const std::string& warning : *warnings) cli::error(kCalibrateCommand, "warning: " + warning);
   return Error{};
 }
 
@@ -274,13 +274,13 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
 
 int calibrate_main(int argc, char** argv) {
   Options options;
-  const int parsed = parse_options(kCommand,
+  const int parsed = parse_options(kCalibrateCommand,
                                    "Estimates the robot geometry and the base -> tracker transform from tracker\n"
                                    "measurements, prints the paper-style tables and writes the result.",
                                    calibrate_option_specs(), argc, argv, &options);
   if (parsed >= 0) return parsed;
   std::vector<std::string> warnings;
-  const int code = exit_with(kCommand, calibrate(options, &warnings));
+  const int code = exit_with(kCalibrateCommand, calibrate(options, &warnings));
   return code == kExitOk && !warnings.empty() ? kExitWarnings : code;
 }
 

@@ -14,7 +14,7 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kCommand = "check-robot";
+constexpr const char* kCheckRobotCommand = "check-robot";
 using math::kDegPerRad;
 
 std::string fmt(const char* format, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
@@ -113,7 +113,7 @@ int check_robot_main(int argc, char** argv) {
   std::vector<char*> pointers;
   for (std::string& a : args) pointers.push_back(a.data());
   Options options;
-  const int parsed = parse_options(kCommand,
+  const int parsed = parse_options(kCheckRobotCommand,
                                    "Prints what hivecal reads from a robot file: its convention, the DH table (mm,\n"
                                    "degrees), tool points, compliance, joint limits, and the tool points at q = 0 and\n"
                                    "at the poses of --joints, in the file's base frame. A file hivecal cannot use is\n"
@@ -121,8 +121,8 @@ int check_robot_main(int argc, char** argv) {
                                    specs, static_cast<int>(pointers.size()), pointers.data(), &options);
   if (parsed >= 0) return parsed;
   if (options.get("robot-model").empty())
-    return exit_with(kCommand, Error::usage("a robot file is required (see --help)"));
-  return exit_with(kCommand, check_robot(options));
+    return exit_with(kCheckRobotCommand, Error::usage("a robot file is required (see --help)"));
+  return exit_with(kCheckRobotCommand, check_robot(options));
 }
 
 }  // namespace hivecal::cli

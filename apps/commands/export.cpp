@@ -21,7 +21,7 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kCommand = "export";
+constexpr const char* kExportCommand = "export";
 
 /// The arm to export: a result (with its base -> tracker; *result_text gets the file's text),
 /// or --robot-model with --ur-calibration's deltas applied when given.
@@ -177,7 +177,7 @@ int export_main(int argc, char** argv) {
       {"out", "FILE", "where the document goes; '-' for stdout", "-"},
   };
   Options options;
-  const int parsed = parse_options(kCommand,
+  const int parsed = parse_options(kExportCommand,
                                    "Writes a calibration (or a nominal arm, with a UR calibration.conf applied) in\n"
                                    "the robot's own formats: a URDF chain whose forward kinematics equal the\n"
                                    "model's (joints turn about z of each DH frame; links base_link, link_1..6,\n"
@@ -186,7 +186,7 @@ int export_main(int argc, char** argv) {
                                    "robot description JSON.",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
-  return exit_with(kCommand, export_arm(options));
+  return exit_with(kExportCommand, export_arm(options));
 }
 
 }  // namespace hivecal::cli

@@ -32,7 +32,7 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kCommand = "iso9283";
+constexpr const char* kIso9283Command = "iso9283";
 constexpr std::size_t kNoReport = static_cast<std::size_t>(-1);
 
 /// The reaches of one commanded pose.
@@ -350,13 +350,13 @@ int iso9283_main(int argc, char** argv) {
   };
   for (const OptionSpec& unit : input_unit_option_specs()) specs.push_back(unit);
   Options options;
-  const int parsed = parse_options(kCommand,
+  const int parsed = parse_options(kIso9283Command,
                                    "ISO 9283 pose accuracy (AP_P: barycentre of the reaches - commanded position) and\n"
                                    "repeatability (RP_l = mean distance from the barycentre + 3 S_l) of each pose of\n"
                                    "the measured reaches (samples at the same joints within 1e-3 rad are one pose).",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
-  return exit_with(kCommand, iso9283(options));
+  return exit_with(kIso9283Command, iso9283(options));
 }
 
 }  // namespace hivecal::cli

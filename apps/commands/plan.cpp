@@ -19,7 +19,7 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kCommand = "plan";
+constexpr const char* kPlanCommand = "plan";
 // Shortest dwell: the extraction keeps a tracker point when the robot was still around it;
 // a 10 Hz tracker needs three points (the speed baseline on both sides) of stillness.
 constexpr double kMinDwell_s = 0.3;
@@ -360,13 +360,13 @@ int plan_main(int argc, char** argv) {
   specs.push_back(input_unit_option_specs()[1]);  // --angle-unit: of --joint-limits
   Options options;
   const int parsed =
-      parse_options(kCommand,
+      parse_options(kPlanCommand,
                     "Chooses the poses of a tracker session (I-optimal over the cell by default, over\n"
                     "the parameters the calibration estimates), orders them for a short path and writes them as a\n"
                     "joints CSV and optionally a URScript program; prints random-vs-planned figures.",
                     specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
-  return exit_with(kCommand, plan(options));
+  return exit_with(kPlanCommand, plan(options));
 }
 
 }  // namespace hivecal::cli

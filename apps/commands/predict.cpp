@@ -14,7 +14,7 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kCommand = "predict";
+constexpr const char* kPredictCommand = "predict";
 
 Error predict(const Options& options) {
   // parse
@@ -91,13 +91,13 @@ int predict_main(int argc, char** argv) {
   };
   specs.push_back(input_unit_option_specs()[1]);  // --angle-unit: the poses are joints only
   Options options;
-  const int parsed = parse_options(kCommand,
+  const int parsed = parse_options(kPredictCommand,
                                    "Predicts the tool position of each joint pose with a calibrated model:\n"
                                    "base_to_tracker * FK(q) * tool (or FK(q) * tool with --frame base); --target K\n"
                                    "uses target K's tool point.",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
-  return exit_with(kCommand, predict(options));
+  return exit_with(kPredictCommand, predict(options));
 }
 
 }  // namespace hivecal::cli

@@ -17,7 +17,7 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kCommand = "report";
+constexpr const char* kReportCommand = "report";
 
 /// The report data kept in a result file (which must be a valid robot-calibration/1 document).
 Error load_report_data(const std::string& path, report::ReportData* data) {
@@ -64,13 +64,13 @@ int report_main(int argc, char** argv) {
       {"out", "DIR", "folder for index.html", ""},
   };
   Options options;
-  const int parsed = parse_options(kCommand,
+  const int parsed = parse_options(kReportCommand,
                                    "Draws the HTML report of a calibration again from its result file: the same\n"
                                    "tables and figures as calibrate --report, without stage times (result files\n"
                                    "hold no wall-clock values), the same bytes for the same result.",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
-  return exit_with(kCommand, make_report(options));
+  return exit_with(kReportCommand, make_report(options));
 }
 
 }  // namespace hivecal::cli

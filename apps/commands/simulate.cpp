@@ -24,7 +24,7 @@ namespace {
 
 using port::Error;
 
-constexpr const char* kCommand = "simulate";
+constexpr const char* kSimulateCommand = "simulate";
 
 std::atomic<bool> g_stop{false};
 void request_stop(int) {
@@ -195,7 +195,7 @@ Error serve(const Session& session, const cli::Options& options) {
 int simulate_main(int argc, char** argv) {
   cli::Options options;
   const int parsed =
-      cli::parse_options(kCommand,
+      cli::parse_options(kSimulateCommand,
                          "Simulates a UR arm visiting waypoints, seen by its joint-state publisher (125 Hz) and a\n"
                          "laser tracker (10 Hz) on their own clocks. Writes robot.cap and tracker.cap (wire format),\n"
                          "robot_joints.csv and tracker.csv (io-formats), truth.json (true model, base->tracker,\n"
@@ -205,19 +205,19 @@ int simulate_main(int argc, char** argv) {
   if (parsed >= 0) return parsed;
   SimConfig config;
   Error error = configure(options, &config);
-  if (!error.ok()) return cli::exit_with(kCommand, error);
+  if (!error.ok()) return cli::exit_with(kSimulateCommand, error);
   port::OutputSet outputs;
   std::size_t folder = 0;
   error = declare_inputs(options, {"out-dir"}, &outputs);
   if (error.ok()) error = outputs.add_folder(options.get("out-dir"), "--out-dir", &folder);
   if (error.ok()) error = check_not_overwriting(options);
-  if (!error.ok()) return cli::exit_with(kCommand, error);
+  if (!error.ok()) return cli::exit_with(kSimulateCommand, error);
   const Session session(config);
   // With --serve, `hivecal record` makes the captures from the ptys.
   error = stage_outputs(session, !options.given("serve"), kTruthSampleMarginS, &outputs, folder);
   if (error.ok()) error = outputs.commit();
-  if (!error.ok()) return cli::exit_with(kCommand, error);
-  return cli::exit_with(kCommand, options.given("serve") ? serve(session, options) : Error{});
+  if (!error.ok()) return cli::exit_with(kSimulateCommand, error);
+  return cli::exit_with(kSimulateCommand, options.given("serve") ? serve(session, options) : Error{});
 }
 
 }  // namespace hivecal::sim

@@ -15,8 +15,6 @@ using namespace report;  // NOLINT(google-build-using-namespace)
 using textio::JsonValue;
 using textio::JsonWriter;
 
-constexpr const char* kAxisNames[kErrorAxisCount] = {"x", "y", "z", "3d"};
-
 void write_accuracy(JsonWriter& json, const AccuracyReport& r) {
   json.begin_object();
   json.key("train");
@@ -167,7 +165,7 @@ bool get_numbers(const JsonValue* v, std::size_t n, double* out) {
 bool get_axes(const JsonValue* v, double* out) {
   if (v == nullptr || v->kind != JsonValue::Kind::object) return false;
   for (int axis = 0; axis < kErrorAxisCount; ++axis)
-    if (!get_number(v->find(kAxisNames[axis]), &out[axis])) return false;
+    if (!get_number(v->find(kErrorAxisKeys[axis]), &out[axis])) return false;
   return true;
 }
 

@@ -14,11 +14,9 @@ namespace {
 using textio::JsonValue;
 using textio::JsonWriter;
 
-constexpr const char* kAxisNames[kErrorAxisCount] = {"x", "y", "z", "3d"};
-
 void write_axis_values(JsonWriter& json, const char* name, const double* values) {
   json.key(name).begin_object();
-  for (int axis = 0; axis < kErrorAxisCount; ++axis) json.key(kAxisNames[axis]).value(values[axis]);
+  for (int axis = 0; axis < kErrorAxisCount; ++axis) json.key(kErrorAxisKeys[axis]).value(values[axis]);
   json.end_object();
 }
 

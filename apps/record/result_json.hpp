@@ -53,6 +53,9 @@ struct CalibrationRecord {
   const report::ReportData* report = nullptr;    ///< the tables and figures (key "report"), else not written
 };
 
+/// The keys of an ErrorStats' axes in result.json, in ErrorStats' axis order.
+inline constexpr const char* kErrorAxisKeys[kErrorAxisCount] = {"x", "y", "z", "3d"};
+
 /// Writes one ErrorStats as {"count", "mae_m": {x, y, z, 3d}, "sigma_m": {...}, "max_m": {...}}.
 void write_error_stats(textio::JsonWriter& json, const ErrorStats& stats);
 

@@ -11,7 +11,6 @@
 namespace hivecal::sim {
 namespace {
 
-constexpr double kUsPerS = 1e6;
 constexpr double kMinJerkPeak = 1.875;  // peak of d/du (10u^3 - 15u^4 + 6u^5)
 
 /// Minimum-jerk progress s(u) in [0, 1] for u in [0, 1].
@@ -209,19 +208,19 @@ Vec3 Session::true_point(const JointVector& q_rad) const {
 }
 
 std::uint64_t Session::robot_clock_us(double t_s) const {
-  return config_.robot_clock_start_us + round_us(t_s * kUsPerS);
+  return config_.robot_clock_start_us + round_us(t_s * math::kUsPerS);
 }
 
 double Session::true_time_of_robot_us(std::uint64_t t_us) const {
-  return static_cast<double>(t_us - config_.robot_clock_start_us) / kUsPerS;
+  return static_cast<double>(t_us - config_.robot_clock_start_us) / math::kUsPerS;
 }
 
 std::uint64_t Session::tracker_clock_us(double t_s) const {
-  return config_.tracker_clock_start_us + round_us(t_s * kUsPerS / (1.0 + config_.clock_drift));
+  return config_.tracker_clock_start_us + round_us(t_s * math::kUsPerS / (1.0 + config_.clock_drift));
 }
 
 double Session::true_time_of_tracker_us(std::uint64_t t_us) const {
-  return static_cast<double>(t_us - config_.tracker_clock_start_us) * (1.0 + config_.clock_drift) / kUsPerS;
+  return static_cast<double>(t_us - config_.tracker_clock_start_us) * (1.0 + config_.clock_drift) / math::kUsPerS;
 }
 
 RobotStream::RobotStream(const Session& session)
@@ -236,10 +235,11 @@ DeviceInfoRecord RobotStream::device_info() {
 
 bool RobotStream::next(JointStateRecord* record) {
   const SimConfig& config = session_.config();
-  const double period_us = config.robot_period_s * kUsPerS;
+  const double period_us = config.robot_period_s * math::kUsPerS;
   for (;;) {
     const std::uint64_t t_us = next_us_;
-    const double step_us = std::max(0.25 * period_us, period_us + config.robot_jitter_s * kUsPerS * random_.normal());
+    const double step_us =
+        std::max(0.25 * period_us, period_us + config.robot_jitter_s * math::kUsPerS * random_.normal());
     next_us_ += round_us(step_us);
     const double t_s = session_.true_time_of_robot_us(t_us);
     if (t_s > session_.duration_s()) return false;
@@ -271,8 +271,8 @@ DeviceInfoRecord TrackerStream::device_info() {
 
 bool TrackerStream::next(TrackerPointRecord* record) {
   const SimConfig& config = session_.config();
-  const double nominal_us = static_cast<double>(index_) * config.tracker_period_s * kUsPerS;
-  const double jitter_us = config.tracker_jitter_s * kUsPerS * random_.normal();
+  const double nominal_us = static_cast<double>(index_) * config.tracker_period_s * math::kUsPerS;
+  const double jitter_us = config.tracker_jitter_s * math::kUsPerS * random_.normal();
   const std::uint64_t t_us = first_us_ + round_us(std::max(0.0, nominal_us + jitter_us));
   const double t_s = session_.true_time_of_tracker_us(t_us);
   if (t_s > session_.duration_s()) return false;

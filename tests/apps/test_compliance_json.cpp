@@ -10,7 +10,7 @@
 #include "textio/robot_description.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::compliance_json_test {
 namespace {
 
 /// A UR5e result whose joints 2 and 3 bend: the default terms of `load`, made-up coefficients.
@@ -134,4 +134,4 @@ TEST(ComplianceJson, UnusableKeysAreRefusedByName) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::compliance_json_test

@@ -19,7 +19,7 @@
 #include "testkit/temp_dir.hpp"
 #include "textio/csv.hpp"
 
-namespace hivecal {
+namespace hivecal::orientation_input_test {
 namespace {
 
 std::string number(double v) {
@@ -239,4 +239,4 @@ TEST(OrientationInput, OrientationIdentifiesWhatPositionsAloneCannot) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::orientation_input_test

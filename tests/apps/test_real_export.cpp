@@ -12,7 +12,7 @@
 #include "testkit/shared_data.hpp"
 #include "textio/csv.hpp"
 
-namespace hivecal {
+namespace hivecal::real_export_test {
 namespace {
 
 constexpr std::size_t kCapacity = 4608;  // the export with its orientation: 3 x 1,495 samples
@@ -103,4 +103,4 @@ TEST(RealExport, TheProbeOrientationReadsAsTheExportWritesIt) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::real_export_test

@@ -17,7 +17,7 @@
 #include "sim/sim_model.hpp"
 #include "sim/sim_outputs.hpp"
 
-namespace hivecal {
+namespace hivecal::record_signal_test {
 namespace {
 
 /// Counts what a decoder delivers.
@@ -95,4 +95,4 @@ TEST(RecordCommand, SighupEndsItAsCleanlyAsSigterm) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::record_signal_test

@@ -12,7 +12,7 @@
 #include "record/report_json.hpp"
 #include "report/svg.hpp"
 
-namespace hivecal {
+namespace hivecal::report_test {
 namespace {
 
 /// Checks tag balance of an HTML document with inline SVG; returns "" or the first problem.
@@ -381,9 +381,9 @@ TEST(Report, EmptyAndDegenerateSeriesStillRender) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::report_test
 
-namespace hivecal::report {
+namespace hivecal::report::report_test {
 namespace {
 
 /// The text of every element of `svg` with class `cls`.
@@ -443,4 +443,4 @@ TEST(Svg, HistogramAxesStartAtZero) {
 }
 
 }  // namespace
-}  // namespace hivecal::report
+}  // namespace hivecal::report::report_test

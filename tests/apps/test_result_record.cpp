@@ -10,7 +10,7 @@
 #include "record/result_json.hpp"
 #include "textio/json.hpp"
 
-namespace hivecal {
+namespace hivecal::result_record_test {
 namespace {
 
 record::CalibrationRecord minimal_record() {
@@ -88,4 +88,4 @@ TEST(ResultRecord, TheModelReadsBackWithTheSameBits) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::result_record_test

@@ -10,7 +10,7 @@
 #include "textio/robot_description.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::robot_description_test {
 namespace {
 
 using test::OtherArm;
@@ -180,4 +180,4 @@ TEST(RobotDescription, BadDescriptionsNameFileAndKey) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::robot_description_test

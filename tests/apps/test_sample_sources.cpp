@@ -9,7 +9,7 @@
 #include "streams/session.hpp"
 #include "testkit/temp_dir.hpp"
 
-namespace hivecal {
+namespace hivecal::sample_sources_test {
 namespace {
 
 TEST(SampleSources, PairedSamplesAreNamedByFileAndLine) {
@@ -52,4 +52,4 @@ TEST(SampleSources, StreamSamplesAreNamedByTheirTrackerInstant) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::sample_sources_test

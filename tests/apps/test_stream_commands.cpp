@@ -23,7 +23,7 @@
 #include "textio/ur_calibration_conf.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::stream_commands_test {
 namespace {
 
 using test::make_temp_dir;
@@ -113,4 +113,4 @@ TEST(StreamCommands, HelpAndUsageErrors) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::stream_commands_test

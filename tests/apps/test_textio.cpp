@@ -16,7 +16,7 @@
 #include "textio/text_util.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::textio_test {
 namespace {
 
 TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
@@ -135,4 +135,4 @@ TEST(TextFiles, AtomicWriteReplacesOrLeavesNothing) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::textio_test

@@ -16,7 +16,7 @@
 #include "textio/delimited.hpp"
 #include "textio/logs.hpp"
 
-namespace hivecal::textio {
+namespace hivecal::textio::textio_inputs_test {
 namespace {
 
 const std::string kHeader = "q1,q2,q3,q4,q5,q6\n";
@@ -63,9 +63,9 @@ TEST(TextInputs, DevicesAndFifosAreRefusedAtOnce) {
 }
 
 }  // namespace
-}  // namespace hivecal::textio
+}  // namespace hivecal::textio::textio_inputs_test
 
-namespace hivecal::textio {
+namespace hivecal::textio::textio_inputs_test {
 namespace {
 
 // A lab's export as it is: ';' separated, decimal commas, named columns in another order,
@@ -126,4 +126,4 @@ TEST(TextInputs, ACommaSeparatedFileStillRefusesDecimalCommas) {
 }
 
 }  // namespace
-}  // namespace hivecal::textio
+}  // namespace hivecal::textio::textio_inputs_test

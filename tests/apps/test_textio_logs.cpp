@@ -22,7 +22,7 @@
 #include "textio/logs.hpp"
 #include "textio/ros2_bag.hpp"
 
-namespace hivecal {
+namespace hivecal::textio_logs_test {
 namespace {
 
 using textio::LogFormat;
@@ -389,4 +389,4 @@ TEST(TextLogs, TenMinuteRtdeLogParsesFast) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::textio_logs_test

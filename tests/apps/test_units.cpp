@@ -20,7 +20,7 @@
 #include "textio/logs.hpp"
 #include "textio/ur_calibration_conf.hpp"
 
-namespace hivecal {
+namespace hivecal::units_test {
 namespace {
 
 constexpr double kDegPerRad = 57.29577951308232;
@@ -425,4 +425,4 @@ TEST(FitWarnings, AMoveOfAStronglyCorrelatedParameterNamesItsPartner) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::units_test

@@ -19,7 +19,7 @@
 #include "textio/text_util.hpp"
 #include "textio/ur_calibration_conf.hpp"
 
-namespace hivecal {
+namespace hivecal::ur_calibration_conf_test {
 namespace {
 
 const std::string kDir = std::string(HIVECAL_TEST_DATA_DIR) + "/ur5e-pendant/";
@@ -396,4 +396,4 @@ TEST(UrCalibrationConf, FormatReadsBackToTheSameBits) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::ur_calibration_conf_test

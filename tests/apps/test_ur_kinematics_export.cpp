@@ -13,7 +13,7 @@
 #include "textio/ur_kinematics.hpp"
 #include "textio/urdf.hpp"
 
-namespace hivecal {
+namespace hivecal::ur_kinematics_export_test {
 namespace {
 
 using math::kPi;
@@ -109,4 +109,4 @@ TEST(UrKinematicsExport, OtherArmsAreRefused) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::ur_kinematics_export_test

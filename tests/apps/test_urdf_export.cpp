@@ -19,7 +19,7 @@
 #include "textio/ur_calibration_conf.hpp"
 #include "textio/urdf.hpp"
 
-namespace hivecal {
+namespace hivecal::urdf_export_test {
 namespace {
 
 using math::kPi;
@@ -351,4 +351,4 @@ TEST(UrdfImport, WhatIsNoSixJointSerialArmIsRefusedByLine) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::urdf_export_test

@@ -21,7 +21,7 @@
 #include "textio/text_util.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::compliance_cli_test {
 namespace {
 
 using test::run;
@@ -345,4 +345,4 @@ TEST_F(ComplianceCli, BadGravityAndPayloadRefused) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::compliance_cli_test

@@ -17,7 +17,7 @@
 #include "textio/csv.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::large_set_cli_test {
 namespace {
 
 TEST(LargeSetCli, NineThousandPosesCalibrateWithTheDefaultJob) {
@@ -46,4 +46,4 @@ TEST(LargeSetCli, NineThousandPosesCalibrateWithTheDefaultJob) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::large_set_cli_test

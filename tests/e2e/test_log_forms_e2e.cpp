@@ -19,7 +19,7 @@
 #include "textio/logs.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::log_forms_e2e_test {
 namespace {
 
 bool write(const std::string& path, const std::string& text) {
@@ -89,4 +89,4 @@ TEST(LogFormsEndToEnd, EveryFormOfOneSessionCalibratesTheSame) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::log_forms_e2e_test

@@ -17,7 +17,7 @@
 #include "testkit/test_data.hpp"
 #include "textio/csv.hpp"
 
-namespace hivecal {
+namespace hivecal::noise_cli_test {
 namespace {
 
 /// The number after `"key": ` in `text` (NaN when absent).
@@ -100,4 +100,4 @@ TEST(NoiseCli, WithoutRepeatsTheStatedNoise) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::noise_cli_test

@@ -17,7 +17,7 @@
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
 
-namespace hivecal {
+namespace hivecal::orientation_cli_test {
 namespace {
 
 using test::run;
@@ -163,4 +163,4 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::orientation_cli_test

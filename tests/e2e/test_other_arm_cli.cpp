@@ -18,7 +18,7 @@
 #include "hivecal/port/input_file.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::other_arm_cli_test {
 namespace {
 
 using test::OtherArm;
@@ -173,4 +173,4 @@ TEST(OtherArmCli, SimulatesAndCalibratesAModifiedDhIrb120FromCaptures) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::other_arm_cli_test

@@ -23,7 +23,7 @@
 #include "textio/text_util.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::other_sessions_test {
 namespace {
 
 using test::run;
@@ -132,4 +132,4 @@ TEST(OtherSessions, PaperLikeStopsOtherMoves) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::other_sessions_test

@@ -26,7 +26,7 @@
 #include "textio/text_util.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::paper_session_test {
 namespace {
 
 using test::run;
@@ -166,4 +166,4 @@ TEST_F(PaperSession, Paper6AbcImprovesTheUncalibratedTestMaeAsInThePaper) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::paper_session_test

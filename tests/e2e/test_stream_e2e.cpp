@@ -24,7 +24,7 @@
 #include "sim/sim_server.hpp"
 #include "streams/stream_pipeline.hpp"
 
-namespace hivecal {
+namespace hivecal::stream_e2e_test {
 namespace {
 
 /// Collects the kept samples.
@@ -155,4 +155,4 @@ TEST(StreamEndToEnd, SimulatedDevicesOnPtysToSamplesMatchingTheTruth) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::stream_e2e_test

@@ -17,7 +17,7 @@
 #include "textio/csv.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::targets_cli_test {
 namespace {
 
 using test::run;
@@ -147,4 +147,4 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::targets_cli_test

@@ -24,7 +24,7 @@
 #include "textio/logs.hpp"
 #include "record/result_json.hpp"
 
-namespace hivecal {
+namespace hivecal::units_e2e_test {
 namespace {
 
 constexpr double kDegPerRad = 57.29577951308232;
@@ -256,4 +256,4 @@ TEST_F(UnitsEndToEnd, BagJointsAreRadians) {
 #endif
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::units_e2e_test

@@ -19,7 +19,7 @@
 #include "testkit/cli_run.hpp"
 #include "testkit/temp_dir.hpp"
 
-namespace hivecal::port {
+namespace hivecal::port::port_files_test {
 namespace {
 
 std::string read(const std::string& path) {
@@ -263,4 +263,4 @@ TEST(Messages, HugeAndBinaryTextIsEscapedAndCut) {
 }
 
 }  // namespace
-}  // namespace hivecal::port
+}  // namespace hivecal::port::port_files_test

@@ -20,7 +20,7 @@
 
 #include "hivecal/port/rtde_client.hpp"
 
-namespace hivecal::port {
+namespace hivecal::port::rtde_client_test {
 namespace {
 
 /// How the stand-in controller behaves.
@@ -219,4 +219,4 @@ TEST(RtdeClient, ARefusedVersionAndASilentHostEndWithAReason) {
 }
 
 }  // namespace
-}  // namespace hivecal::port
+}  // namespace hivecal::port::rtde_client_test

@@ -19,7 +19,7 @@
 #include "hivecal/port/recorder.hpp"
 #include "hivecal/port/serial_port.hpp"
 
-namespace hivecal::port {
+namespace hivecal::port::serial_port_test {
 namespace {
 
 /// A deterministic byte pattern with every value, zeros included.
@@ -292,4 +292,4 @@ TEST(Recorder, CountsWhatTheCaptureHoldsWhenTheDiskIsFull) {
 }
 
 }  // namespace
-}  // namespace hivecal::port
+}  // namespace hivecal::port::serial_port_test

@@ -11,6 +11,7 @@
 
 #include "soft_double.h"
 
+namespace soft_double_test {
 namespace {
 
 std::uint64_t bits_of(double value) {
@@ -175,3 +176,4 @@ TEST(SoftDouble, FloatsWidenExactly) {
 }
 
 }  // namespace
+}  // namespace soft_double_test

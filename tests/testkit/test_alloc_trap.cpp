@@ -8,7 +8,7 @@
 
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::alloc_trap_test {
 namespace {
 
 // The compiler may elide a malloc/free or new/delete pair it can see; an escaping
@@ -50,4 +50,4 @@ TEST(AllocTrap, WorksWithNdebugToo) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::alloc_trap_test

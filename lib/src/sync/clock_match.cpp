@@ -8,8 +8,6 @@
 namespace hivecal {
 namespace {
 
-constexpr double kUsPerS = 1e6;
-
 /// Running sums of the chords of one bin.
 struct BinSums {
   double t_us = 0.0, robot = 0.0, tracker = 0.0, residual = 0.0;
@@ -19,7 +17,8 @@ struct BinSums {
   void flush(ClockMatch* match) {
     if (chords > 0) {
       const double n = static_cast<double>(chords);
-      match->bins[match->count++] = ClockMatchBin{t_us / n / kUsPerS, robot / n, tracker / n, residual / n, chords};
+      match->bins[match->count++] =
+          ClockMatchBin{t_us / n / math::kUsPerS, robot / n, tracker / n, residual / n, chords};
     }
     *this = BinSums();
   }
@@ -50,7 +49,7 @@ Status ClockEstimatorBase::match_profiles(const ClockFit& fit, std::size_t bins,
     if (bin >= bins) bin = bins - 1;
     if (bin != current) sums.flush(match);
     current = bin;
-    const double per_s = kUsPerS / (b.t_us - a.t_us);
+    const double per_s = math::kUsPerS / (b.t_us - a.t_us);
     const double robot = c_m * per_s;
     const double tracker = (b.s_m - a.s_m) * per_s;
     sums.t_us += mid_us;

@@ -6,8 +6,6 @@
 namespace hivecal {
 namespace {
 
-constexpr double kUsPerS = 1e6;
-
 /// Largest speed [m/s] over pairs of samples first..last that are at least `baseline_us`
 /// apart (each pair as short as possible); -1 when no pair spans the baseline.
 /// `time_us(i)` and `point_m(i)` read sample i.
@@ -19,7 +17,7 @@ double max_baseline_speed(std::size_t first, std::size_t last, double baseline_u
     if (j <= i) j = i + 1;
     while (j <= last && time_us(j) - time_us(i) < baseline_us) ++j;
     if (j > last) break;
-    const double speed = (point_m(j) - point_m(i)).norm() / (time_us(j) - time_us(i)) * kUsPerS;
+    const double speed = (point_m(j) - point_m(i)).norm() / (time_us(j) - time_us(i)) * math::kUsPerS;
     if (speed > fastest) fastest = speed;
   }
   return fastest;
@@ -257,7 +255,7 @@ double SampleExtractorBase::speed_at_instant(double robot_us) const {
   const Vec3 here_m = tool_at(robot_us);
   const double backward_m = (here_m - tool_at(robot_us - half_us)).norm();
   const double forward_m = (tool_at(robot_us + half_us) - here_m).norm();
-  return (backward_m < forward_m ? backward_m : forward_m) / half_us * kUsPerS;
+  return (backward_m < forward_m ? backward_m : forward_m) / half_us * math::kUsPerS;
 }
 
 bool SampleExtractorBase::check_tracker(const ExtractorTrackerEntry& entry, double* speed_m_s,

@@ -11,7 +11,7 @@
 #include "hivecal/core/random.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::digest_test {
 namespace {
 
 /// Digest of a byte array, hashed in one call.
@@ -133,4 +133,4 @@ TEST(Digest, DoesNotDependOnHowTheBytesAreSplit) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::digest_test

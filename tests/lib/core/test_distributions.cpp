@@ -6,7 +6,7 @@
 
 #include "hivecal/core/distributions.hpp"
 
-namespace hivecal {
+namespace hivecal::distributions_test {
 namespace {
 
 TEST(Distributions, LogGammaMatchesLibm) {
@@ -49,4 +49,4 @@ TEST(Distributions, DetectableNoncentralityIsBaardasLambda0) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::distributions_test

@@ -16,7 +16,7 @@ constexpr bool kJointsHeaderPullsEigen = false;
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/wire/records.hpp"
 
-namespace hivecal {
+namespace hivecal::joints_test {
 namespace {
 
 // A constant expression: arrays can be sized with it.
@@ -44,4 +44,4 @@ TEST(Joints, SizesTheJointVectorTheWireRecordAndTheModel) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::joints_test

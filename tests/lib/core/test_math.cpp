@@ -9,7 +9,7 @@
 #include "hivecal/core/math.hpp"
 #include "hivecal/core/random.hpp"
 
-namespace hivecal {
+namespace hivecal::math_test {
 namespace {
 
 /// Distance in units in the last place between two doubles of the same sign region.
@@ -100,4 +100,4 @@ TEST(OwnAtan2, WithinTwoUlpOfLibmAllQuadrants) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::math_test

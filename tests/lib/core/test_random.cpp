@@ -6,7 +6,7 @@
 #include "testkit/check_log_gtest.hpp"
 #include "testkit/random_checks.hpp"
 
-namespace hivecal {
+namespace hivecal::random_test {
 namespace {
 
 TEST(OwnRandom, StreamIsTheDocumentedOne) {
@@ -29,4 +29,4 @@ TEST(OwnRandom, DistributionsHaveTheirMoments) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::random_test

@@ -11,7 +11,7 @@
 #include "hivecal/core/ring.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::ring_test {
 namespace {
 
 static_assert(!std::is_copy_constructible<RingView<int>>::value, "a view over owned storage is not copied");
@@ -216,4 +216,4 @@ TEST(Ring, MatchesAModelOfEverythingPushedOverRandomOperations) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::ring_test

@@ -19,7 +19,7 @@ constexpr bool kSpanHeaderPullsEigen = false;
 #include "hivecal/core/random.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::span_test {
 namespace {
 
 static_assert(std::is_convertible<Span<int>, Span<const int>>::value, "mutable converts to const");
@@ -150,4 +150,4 @@ TEST(Span, HeaderDoesNotBringInEigen) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::span_test

@@ -3,7 +3,7 @@
 
 #include "hivecal/core/status.hpp"
 
-namespace hivecal {
+namespace hivecal::status_test {
 namespace {
 
 TEST(Status, EveryCodeHasAMessage) {
@@ -14,4 +14,4 @@ TEST(Status, EveryCodeHasAMessage) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::status_test

@@ -12,7 +12,7 @@
 #include "hivecal/core/trace.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::trace_test {
 namespace {
 
 static_assert(!std::is_copy_constructible<Trace<4>>::value, "a trace is not copied");
@@ -123,4 +123,4 @@ TEST(Trace, SizeAndDropCountOverRandomLengths) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::trace_test

@@ -11,7 +11,7 @@
 #include "hivecal/core/types.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::types_test {
 namespace {
 
 /// Largest absolute coefficient difference.
@@ -216,4 +216,4 @@ TEST(Types, AllFiniteChecksEveryCoefficient) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::types_test

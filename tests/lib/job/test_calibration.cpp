@@ -14,7 +14,7 @@
 #include "testkit/quick_job.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::calibration_test {
 namespace {
 
 constexpr std::size_t kSamples = 256;
@@ -315,9 +315,9 @@ TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::calibration_test
 
-namespace hivecal {
+namespace hivecal::calibration_test {
 namespace {
 
 TEST(CalibrationMethodNames, EveryNameReadsBackAndTheListHoldsEachOnce) {
@@ -339,4 +339,4 @@ TEST(CalibrationMethodNames, EveryNameReadsBackAndTheListHoldsEachOnce) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::calibration_test

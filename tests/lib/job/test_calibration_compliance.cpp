@@ -17,7 +17,7 @@
 #include "testkit/other_session.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::calibration_compliance_test {
 namespace {
 
 constexpr std::size_t kSamples = 256;
@@ -232,4 +232,4 @@ TEST(CalibrationCompliance, ArmMassesBasisAlsoBeatsTheRigidFit) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::calibration_compliance_test

@@ -12,7 +12,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/target_data.hpp"
 
-namespace hivecal {
+namespace hivecal::calibration_known_frames_test {
 namespace {
 
 constexpr std::size_t kSamples = 90;
@@ -107,4 +107,4 @@ TEST(CalibrationKnownFrames, PopulationMethodsRefuseAKnownFrame) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::calibration_known_frames_test

@@ -11,7 +11,7 @@
 #include "hivecal/plan/pose_plan.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::calibration_null_cluster_test {
 namespace {
 
 // q1..q6 [rad], x, y, z [m]: the session in the order the planner's test added it (17 digits, exact).
@@ -85,4 +85,4 @@ TEST(CalibrationNullCluster, ARefitWithTwoExactNullDirectionsCompletes) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::calibration_null_cluster_test

@@ -13,7 +13,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::calibration_robust_test {
 namespace {
 
 constexpr std::size_t kSamples = 96;
@@ -428,9 +428,9 @@ TEST(CalibrationRobust, LeaveOneOutLeavesTheBlunderOut) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::calibration_robust_test
 
-namespace hivecal {
+namespace hivecal::calibration_robust_test {
 namespace {
 
 constexpr std::size_t kLargeSamples = 1024;
@@ -531,4 +531,4 @@ TEST(CalibrationBlunders, SmallAndDegenerateSetsFinishAndDropNothingSilently) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::calibration_robust_test

@@ -11,7 +11,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/target_data.hpp"
 
-namespace hivecal {
+namespace hivecal::calibration_targets_test {
 namespace {
 
 constexpr std::size_t kSamples = 120;
@@ -66,4 +66,4 @@ TEST(CalibrationTargets, TargetsTwoAndThreeAreEstimatedWhenTheSignificanceTestFi
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::calibration_targets_test

@@ -12,7 +12,7 @@
 #include "testkit/quick_job.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::calibration_workspace_view_test {
 namespace {
 
 constexpr std::size_t kSamples = 400;
@@ -147,4 +147,4 @@ TEST(DatasetGrowth, ADatasetThatGrowsKeepsEverySampleAndItsSetAsideOnes) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::calibration_workspace_view_test

@@ -12,7 +12,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/golden_capture_job.hpp"
 
-namespace hivecal {
+namespace hivecal::capture_job_golden_test {
 namespace {
 
 std::vector<std::uint8_t> read_file(const std::string& path) {
@@ -185,4 +185,4 @@ TEST_F(CaptureJob, ClockPassDoesNotDependOnHowTheBytesArriveAndReportsReadErrors
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::capture_job_golden_test

@@ -14,7 +14,7 @@
 #include "hivecal/linalg/symmetric_eigen.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::symmetric_eigen_test {
 namespace {
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
@@ -481,4 +481,4 @@ TEST(SymmetricEigenLowest, RejectsBadArguments) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::symmetric_eigen_test

@@ -13,7 +13,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::compliance_test {
 namespace {
 
 bool same_bits(const Vec3& a, const Vec3& b) {
@@ -255,4 +255,4 @@ TEST(Compliance, CheckRejectsWhatTheModelCannotUse) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::compliance_test

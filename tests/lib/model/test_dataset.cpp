@@ -8,7 +8,7 @@
 #include "hivecal/model/dataset.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::dataset_test {
 namespace {
 
 TEST(Dataset, ReportsFullInsteadOfDropping) {
@@ -222,9 +222,9 @@ TEST(Dataset, CountsDistinctPointsNotSamples) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::dataset_test
 
-namespace hivecal {
+namespace hivecal::dataset_test {
 namespace {
 
 TEST(PoseRunEnd, ARunOfEqualJointsIsOnePoseAnyDifferenceEndsIt) {
@@ -240,4 +240,4 @@ TEST(PoseRunEnd, ARunOfEqualJointsIsOnePoseAnyDifferenceEndsIt) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::dataset_test

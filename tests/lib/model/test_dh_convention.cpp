@@ -12,7 +12,7 @@
 #include "hivecal/model/kinematics.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::dh_convention_test {
 namespace {
 
 using Mat4 = Eigen::Matrix4d;
@@ -148,4 +148,4 @@ TEST(RobotTables, EverySeriesByNameWithUniversalRobotsLengths) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::dh_convention_test

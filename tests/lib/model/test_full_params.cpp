@@ -13,7 +13,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::full_params_test {
 namespace {
 
 /// Bits set in the low kFullParamCount bits of `mask`, by clearing the lowest one at a time.
@@ -292,4 +292,4 @@ TEST(ApplyFullIncrement, BaseRzAndTzMoveTheRobotLikeTheta1AndD1) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::full_params_test

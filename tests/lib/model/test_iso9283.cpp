@@ -10,7 +10,7 @@
 #include "hivecal/model/iso9283.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::iso9283_test {
 namespace {
 
 TEST(Iso9283, HandWorkedPose) {
@@ -63,4 +63,4 @@ TEST(Iso9283, RefusesTooFewOrNonFiniteReaches) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::iso9283_test

@@ -6,7 +6,7 @@
 #include "testkit/check_log_gtest.hpp"
 #include "testkit/kinematics_checks.hpp"
 
-namespace hivecal {
+namespace hivecal::kinematics_test {
 namespace {
 
 TEST(Kinematics, Ur5ZeroPoseIsTheDatasheetPoint) {
@@ -40,4 +40,4 @@ TEST(Kinematics, UrDeltasRoundTripAndRejectNaN) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::kinematics_test

@@ -12,7 +12,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::metrics_test {
 namespace {
 
 Dataset<64> dataset;
@@ -296,4 +296,4 @@ TEST(RepeatedReadingNoise, RecoversTheTrackerSigmaWhateverTheModelError) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::metrics_test

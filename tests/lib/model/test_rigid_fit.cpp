@@ -6,7 +6,7 @@
 #include "testkit/check_log_gtest.hpp"
 #include "testkit/rigid_fit_checks.hpp"
 
-namespace hivecal {
+namespace hivecal::rigid_fit_test {
 namespace {
 
 TEST(RigidFit, RecoversRandomTransformsExactly) {
@@ -32,4 +32,4 @@ TEST(RigidFit, FarFromOriginStaysAccurate) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::rigid_fit_test

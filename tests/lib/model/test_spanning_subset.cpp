@@ -12,7 +12,7 @@
 #include "hivecal/model/spanning_subset.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::spanning_subset_test {
 namespace {
 
 Sample sample_at(const JointVector& q_rad, int target = 0) {
@@ -102,4 +102,4 @@ TEST(SpanningSubset, IsDeterministicAndBoundedByTheRoom) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::spanning_subset_test

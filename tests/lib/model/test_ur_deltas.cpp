@@ -13,7 +13,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::ur_deltas_test {
 namespace {
 
 /// Random deltas of the given sizes [m], [rad].
@@ -191,4 +191,4 @@ TEST(UrDeltas, AnyNonFiniteDeltaIsRefusedAndTheOutputLeftAlone) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::ur_deltas_test

@@ -11,7 +11,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::inverse_kinematics_test {
 namespace {
 
 TEST(InverseKinematics, RotationVectorsRoundTripAtEveryAngle) {
@@ -74,4 +74,4 @@ TEST(InverseKinematics, AnUnreachablePoseAndBadArgumentsAreRefused) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::inverse_kinematics_test

@@ -5,7 +5,7 @@
 #include "hivecal/plan/pose_plan.hpp"
 #include "testkit/plan_test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::plan_golden_test {
 namespace {
 
 PlanWorkspace workspace;
@@ -24,4 +24,4 @@ TEST(PosePlan, GoldenDigest) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::plan_golden_test

@@ -16,7 +16,7 @@
 #include "testkit/plan_test_data.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::pose_plan_test {
 namespace {
 
 PlanWorkspace workspace;
@@ -342,4 +342,4 @@ TEST(PosePlan, ToolDownLeavesParametersThatNoPoseSetIdentifies) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::pose_plan_test

@@ -11,7 +11,7 @@
 #include "testkit/solver_fixture.hpp"
 #include "testkit/test_objectives.hpp"
 
-namespace hivecal {
+namespace hivecal::abc_test {
 namespace {
 
 using Solver = AbcSolver<40, 8>;
@@ -214,4 +214,4 @@ TEST(SolverStatus, NewCodesHaveMessages) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::abc_test

@@ -13,7 +13,7 @@
 #include "testkit/paper6_session.hpp"
 #include "testkit/test_objectives.hpp"
 
-namespace hivecal {
+namespace hivecal::abc_gsa_golden_test {
 namespace {
 
 constexpr std::uint64_t kSolverGoldenDigest = 0xe2806b9f86ac933fULL;
@@ -94,4 +94,4 @@ TEST(Golden, SolverDigestIsTheSameOnEveryTarget) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::abc_gsa_golden_test

@@ -10,7 +10,7 @@
 #include "testkit/solver_fixture.hpp"
 #include "testkit/test_objectives.hpp"
 
-namespace hivecal {
+namespace hivecal::abc_paper6_test {
 namespace {
 
 using Solver = AbcSolver<150, kPaper6Dimension>;
@@ -113,4 +113,4 @@ TEST(AbcPaper6, PaperVariantAsWrittenCannotContractOnTheSphere) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::abc_paper6_test

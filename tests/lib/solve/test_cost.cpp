@@ -9,7 +9,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::cost_test {
 namespace {
 
 struct CostFixture : ::testing::Test {
@@ -105,4 +105,4 @@ TEST_F(CostFixture, BadInputsGetSpecificErrors) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::cost_test

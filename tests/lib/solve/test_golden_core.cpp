@@ -9,7 +9,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/golden_core.hpp"
 
-namespace hivecal {
+namespace hivecal::golden_core_test {
 namespace {
 
 TEST(Golden, CoreDigestIsTheSameOnEveryTarget) {
@@ -20,4 +20,4 @@ TEST(Golden, CoreDigestIsTheSameOnEveryTarget) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::golden_core_test

@@ -13,7 +13,7 @@
 #include "testkit/solver_fixture.hpp"
 #include "testkit/test_objectives.hpp"
 
-namespace hivecal {
+namespace hivecal::gsa_test {
 namespace {
 
 using Solver = GsaSolver<150, 8>;
@@ -184,4 +184,4 @@ TEST(GsaPaper6, ReachesTheLeastSquaresMaeOnAFewHundredPoses) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::gsa_test

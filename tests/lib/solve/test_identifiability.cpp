@@ -10,7 +10,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::identifiability_test {
 namespace {
 
 constexpr int kTheta1 = model_param_index(0, DhField::theta_offset);
@@ -256,4 +256,4 @@ TEST(Identifiability, ParameterNames) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::identifiability_test

@@ -11,7 +11,7 @@
 #include "hivecal/solve/identifiability.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::identifiability_cluster_test {
 namespace {
 
 // J^T W J of that LM solve, 37 x 37, 17 significant digits (exact).
@@ -75,4 +75,4 @@ TEST(IdentifiabilityCluster, EightExactNullDirectionsBelowAWeakOneAreFound) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::identifiability_cluster_test

@@ -10,7 +10,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::lm_test {
 namespace {
 
 const Vec3 kTrueTool_m(0.012, -0.018, 0.15);
@@ -337,4 +337,4 @@ TEST(Lm, SharedScratchCarriesNothingBetweenUses) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::lm_test

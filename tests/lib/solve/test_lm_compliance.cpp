@@ -12,7 +12,7 @@
 #include "testkit/lm_test_data.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::lm_compliance_test {
 namespace {
 
 LmWorkspace workspace;
@@ -147,4 +147,4 @@ TEST(LmCompliance, ToolDownPosesDropWhatTheyCannotSeparate) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::lm_compliance_test

@@ -7,7 +7,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::lm_errors_test {
 namespace {
 
 struct LmErrors : ::testing::Test {
@@ -117,4 +117,4 @@ TEST_F(LmErrors, CustomMaskOfParametersWithoutEffectIsSingular) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::lm_errors_test

@@ -15,7 +15,7 @@
 #include "testkit/other_arms.hpp"
 #include "testkit/target_data.hpp"
 
-namespace hivecal {
+namespace hivecal::lm_golden_test {
 namespace {
 
 constexpr std::uint64_t kLmGoldenDigest = 0xe8eca2abfab7abcfULL;
@@ -303,4 +303,4 @@ TEST(LmGolden, StoredJointTrigGivesTheSameBits) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::lm_golden_test

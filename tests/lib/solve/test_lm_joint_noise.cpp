@@ -14,7 +14,7 @@
 #include "testkit/target_data.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::lm_joint_noise_test {
 namespace {
 
 constexpr double kStep_rad = 0.01 * M_PI / 180.0;            // the pendant's joint rounding
@@ -125,4 +125,4 @@ TEST(LmJointNoise, RefusesANegativeSigmaOrAJointSigmaWithoutAPositionSigma) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::lm_joint_noise_test

@@ -14,7 +14,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/other_arms.hpp"
 
-namespace hivecal {
+namespace hivecal::lm_other_arms_test {
 namespace {
 
 using test::OtherArm;
@@ -342,4 +342,4 @@ TEST(OtherArms, SixLengthWorkspaceRefusesMoreLengths) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::lm_other_arms_test

@@ -6,7 +6,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::lm_robust_test {
 namespace {
 
 struct RobustFixture : ::testing::Test {
@@ -78,4 +78,4 @@ TEST_F(RobustFixture, HuberOnCleanDataCostsLittle) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::lm_robust_test

@@ -16,7 +16,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/target_data.hpp"
 
-namespace hivecal {
+namespace hivecal::lm_targets_test {
 namespace {
 
 /// This file's training and fresh sets, workspace and result.
@@ -299,4 +299,4 @@ TEST(LmTargets, AWorkspaceWithoutTargetBlocksRefusesSeveralTargets) {
   EXPECT_EQ(status, Status::ok);
 }
 
-}  // namespace hivecal
+}  // namespace hivecal::lm_targets_test

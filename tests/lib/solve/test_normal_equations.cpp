@@ -9,7 +9,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::normal_equations_test {
 namespace {
 
 TEST(FullModel, RotationFromVectorIsRodrigues) {
@@ -170,4 +170,4 @@ TEST(FullModel, HistogramMedianIsWithinOnePercent) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::normal_equations_test

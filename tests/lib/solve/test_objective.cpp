@@ -15,7 +15,7 @@
 #include "hivecal/solve/objective.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::objective_test {
 namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
@@ -281,4 +281,4 @@ TEST(ProgressObserver, ReportsEachIterationAfterTheTrace) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::objective_test

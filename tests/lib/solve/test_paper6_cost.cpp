@@ -13,7 +13,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/paper6_data.hpp"
 
-namespace hivecal {
+namespace hivecal::paper6_cost_test {
 namespace {
 
 // The generic path itself rounds at ~1e-16 m per predicted point, i.e. a few 1e-12 of a
@@ -316,4 +316,4 @@ TEST(QcpRotation, DegenerateInputsFallBackToTheSvd) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::paper6_cost_test

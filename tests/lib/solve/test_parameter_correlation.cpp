@@ -11,7 +11,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::parameter_correlation_test {
 namespace {
 
 Dataset<64> dataset;
@@ -103,4 +103,4 @@ TEST(ParameterCorrelation, RefusesWhatItCannotInvert) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::parameter_correlation_test

@@ -14,7 +14,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::population_stage_test {
 namespace {
 
 constexpr std::size_t kSamples = 60;
@@ -344,4 +344,4 @@ TEST(PopulationStage, ErrorsLeaveTheResultAlone) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::population_stage_test

@@ -14,7 +14,7 @@
 #include "testkit/target_data.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal {
+namespace hivecal::reliability_test {
 namespace {
 
 constexpr std::size_t kCapacity = 128;
@@ -198,4 +198,4 @@ TEST(Reliability, BadArgumentsAreRefused) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::reliability_test

@@ -19,7 +19,7 @@
 #include "testkit/sim_capture.hpp"
 #include "testkit/sim_feed.hpp"
 
-namespace hivecal {
+namespace hivecal::capture_dataset_test {
 namespace {
 
 using test::Bytes;
@@ -482,4 +482,4 @@ TEST(CaptureDataset, RecordsFrontHasTheBitsOfTheByteFrontAndDescribesTheClockMat
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::capture_dataset_test

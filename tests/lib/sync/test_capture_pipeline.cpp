@@ -20,7 +20,7 @@
 #include "testkit/sim_capture.hpp"
 #include "testkit/sim_feed.hpp"
 
-namespace hivecal {
+namespace hivecal::capture_pipeline_test {
 namespace {
 
 using test::append_frame;
@@ -607,4 +607,4 @@ TEST(CaptureExtractionPass, ReadFailureAndAFullDatasetAreReported) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::capture_pipeline_test

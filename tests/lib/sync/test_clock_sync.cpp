@@ -12,7 +12,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/sim_feed.hpp"
 
-namespace hivecal {
+namespace hivecal::clock_sync_test {
 namespace {
 
 constexpr double kTargetUs = 2000.0;  // the required offset accuracy [us]
@@ -375,4 +375,4 @@ TEST(ClockSync, ConstantMemoryOnAnHourLongCapture) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::clock_sync_test

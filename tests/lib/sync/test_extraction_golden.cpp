@@ -10,7 +10,7 @@
 #include "sim/sim_model.hpp"
 #include "testkit/sim_feed.hpp"
 
-namespace hivecal {
+namespace hivecal::extraction_golden_test {
 namespace {
 
 using test::large_error_config;
@@ -51,4 +51,4 @@ TEST(Golden, ExtractionDigestIsTheSameOnEveryTarget) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::extraction_golden_test

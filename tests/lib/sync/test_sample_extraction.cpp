@@ -20,7 +20,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/sim_feed.hpp"
 
-namespace hivecal {
+namespace hivecal::sample_extraction_test {
 namespace {
 
 using test::large_error_config;
@@ -474,4 +474,4 @@ TEST(Extraction, ConstantMemoryOverHours) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::sample_extraction_test

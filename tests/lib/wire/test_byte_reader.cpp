@@ -12,7 +12,7 @@
 #include "hivecal/wire/byte_reader.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::byte_reader_test {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
@@ -175,4 +175,4 @@ TEST(MemoryByteReader, IndependentReadersOverOneBufferKeepTheirOwnPositions) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::byte_reader_test

@@ -12,7 +12,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/codec_support.hpp"
 
-namespace hivecal {
+namespace hivecal::cobs_test {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
@@ -296,4 +296,4 @@ TEST(Cobs, DamagedEncodingsAreRejected) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::cobs_test

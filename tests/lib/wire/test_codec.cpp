@@ -11,7 +11,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/codec_support.hpp"
 
-namespace hivecal {
+namespace hivecal::codec_test {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
@@ -569,4 +569,4 @@ TEST(CodecStatus, NewCodeHasAMessage) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::codec_test

@@ -8,7 +8,7 @@
 #include "testkit/codec_stream.hpp"
 #include "testkit/codec_support.hpp"
 
-namespace hivecal {
+namespace hivecal::codec_golden_test {
 namespace {
 
 using test::Corrupted;
@@ -48,4 +48,4 @@ TEST(CodecGolden, DigestIsTheSameOnEveryTarget) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::codec_golden_test

@@ -12,7 +12,7 @@
 #include "testkit/codec_stream.hpp"
 #include "testkit/codec_support.hpp"
 
-namespace hivecal {
+namespace hivecal::codec_stream_test {
 namespace {
 
 using test::Corrupted;
@@ -259,4 +259,4 @@ TEST(CodecStream, CorruptionSweepHasNoFalseAccepts) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::codec_stream_test

@@ -10,7 +10,7 @@
 #include "hivecal/wire/crc32c.hpp"
 #include "testkit/alloc_trap.hpp"
 
-namespace hivecal {
+namespace hivecal::crc32c_test {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
@@ -141,4 +141,4 @@ TEST(Crc32c, EverySingleBitFlipAndShortBurstIsDetected) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::crc32c_test

@@ -14,7 +14,7 @@
 #include "testkit/alloc_trap.hpp"
 #include "testkit/codec_support.hpp"
 
-namespace hivecal {
+namespace hivecal::records_test {
 namespace {
 
 /// True when every element of `values` equals zero.
@@ -189,4 +189,4 @@ TEST(Records, CopiesArePlainAndKeepEveryBit) {
 }
 
 }  // namespace
-}  // namespace hivecal
+}  // namespace hivecal::records_test

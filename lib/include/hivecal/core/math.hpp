@@ -16,6 +16,7 @@ namespace hivecal::math {
 inline constexpr double kPi = 3.14159265358979311600;
 inline constexpr double kRadPerDeg = kPi / 180.0;  ///< degrees -> radians [rad/deg]
 inline constexpr double kDegPerRad = 180.0 / kPi;  ///< radians -> degrees [deg/rad]
+inline constexpr double kUsPerS = 1e6;             ///< seconds -> microseconds [us/s]
 /// pi/2 to double precision.
 inline constexpr double kHalfPi = 1.57079632679489655800;
 /// Largest |x| [rad] for which sin/cos reduce the argument accurately; beyond it they return NaN.
