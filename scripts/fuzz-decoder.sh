@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets (clang, ASan + UBSan; `fuzz` preset) and runs each for a
-# bounded time on a seed corpus: the StreamDecoder (seeds: the spec's test vectors), then the
+# Builds the libFuzzer targets (clang, ASan + UBSan; `fuzz` preset) and runs both at once, each
+# for a bounded time on a seed corpus: the StreamDecoder (seeds: the spec's test vectors) and the
 # log readers of apps/textio (seeds: the logs of io-formats.md and a CDR JointState).
 #   scripts/fuzz-decoder.sh [decoder-seconds] [log-seconds]      (default 60 and 30)
 # Exits non-zero if a build fails or a fuzzer finds a crash, a sanitizer report or a
@@ -29,22 +29,19 @@ seed all_three "1003$v3$v1$v2$v2"
 seed mid_frame "0004${v1:40}$v2"
 seed idle_and_noise "2005000000${v2}41424300$v3"
 
-# run NAME SECONDS MAX_LEN: runs build/fuzz/tests/fuzz/NAME on $work/NAME/corpus; exits on a finding.
+# run NAME SECONDS MAX_LEN: runs build/fuzz/tests/fuzz/NAME on $work/NAME/corpus and prints
+# its summary; returns libFuzzer's exit code (non-zero on a finding).
 run() {
-  local log="$work/$1.log" rc
-  set +e
+  local log="$work/$1.log" rc=0
   "build/fuzz/tests/fuzz/$1" -max_total_time="$2" -max_len="$3" -print_final_stats=1 \
-    -artifact_prefix="$work/$1-" "$work/$1/corpus" >"$log" 2>&1
-  rc=$?
-  set -e
+    -artifact_prefix="$work/$1-" "$work/$1/corpus" >"$log" 2>&1 || rc=$?
   grep -E "^(INFO: seed corpus|#[0-9]+[[:space:]]+DONE)|stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY|runtime error" "$log" || true
   if [ "$rc" -ne 0 ]; then
     echo "fuzz-decoder: $1 FAILED (exit $rc); log: $log, crash input: $work/$1-crash-*" >&2
-    exit "$rc"
+    return "$rc"
   fi
   echo "fuzz-decoder: $1: no crash, no sanitizer report in ${2}s (log: $log)"
 }
-run decoder_fuzz "$seconds" 4096
 
 # Log seeds: byte 0 = reader (0 robot log, 1 tracker log, 2 CDR JointState), then the file.
 corpus="$work/log_fuzz/corpus"
@@ -57,4 +54,13 @@ text hivecal_tracker $'1t,x,y,z,status\n3.100,1.2500,-0.5000,0.7500,0\n3.2,nan,n
 text export $'1\xef\xbb\xbfTime [ms];X [mm];Y [mm];Z [mm]\r\n1500;1000.5;2;3\r\n1600;1000,5;2;3\r\n'
 text spaces $'1Time [s] X [um] Y [um] Z [um]\n1.5 1000000 2 3\n'
 seed cdr_joint_state "0200010000702c426715cd5b070a000000626173655f6c696e6b000000020000000200000061000000030000006262000002000000000000000000f03f00000000000000400000000000000000"
-run log_fuzz "$log_seconds" 8192
+
+# Both fuzzers at once (one core each: libFuzzer runs one process), each summary printed whole.
+run decoder_fuzz "$seconds" 4096 >"$work/decoder_fuzz.summary" 2>&1 &
+decoder_pid=$!
+log_rc=0
+run log_fuzz "$log_seconds" 8192 >"$work/log_fuzz.summary" 2>&1 || log_rc=$?
+decoder_rc=0
+wait "$decoder_pid" || decoder_rc=$?
+cat "$work/decoder_fuzz.summary" "$work/log_fuzz.summary"
+[ "$decoder_rc" -eq 0 ] && [ "$log_rc" -eq 0 ]

@@ -3,7 +3,7 @@
 # the golden digests at -O0, -march=native and on armhf (HIVECAL_TEST_SCOPE=golden: what those
 # flags and that target can change is the bits), then the bare-metal Cortex-M7 (hardware doubles) and
 # Cortex-M4F (soft-float doubles) firmware under qemu-system-arm, then the wire decoder
-# fuzzer for HIVECAL_FUZZ_SECONDS (default 60) and the log-reader fuzzer for 30 s. Installs what it needs first.
+# fuzzer for HIVECAL_FUZZ_SECONDS (default 60) beside the log-reader fuzzer for 30 s. Installs what it needs first.
 #   scripts/test-all.sh [preset ...]     (default: all of them)
 set -uo pipefail
 cd "$(dirname "$0")/.."
