@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The GoogleTest files are compiled eight to a translation unit (tests/CMakeLists.txt,
-# HIVECAL_TEST_UNITY), so each keeps its names in a namespace of its own: every namespace a
+# HIVECAL_UNITY_BUILD), so each keeps its names in a namespace of its own: every namespace a
 # file tests/<suite>/test_<name>.cpp opens at the top level ends in <name>_test
 # (hivecal::<name>_test, hivecal::port::<name>_test, ...), and an anonymous one only inside it.
 # Two files of one batch then cannot define the same helper. Lists every file that breaks the
