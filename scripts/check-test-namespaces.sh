@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The GoogleTest files are compiled eight to a translation unit (tests/CMakeLists.txt,
+# The GoogleTest files are compiled eight to a translation unit (CMakeLists.txt,
 # HIVECAL_UNITY_BUILD), so each keeps its names in a namespace of its own: every namespace a
 # file tests/<suite>/test_<name>.cpp opens at the top level ends in <name>_test
 # (hivecal::<name>_test, hivecal::port::<name>_test, ...), and an anonymous one only inside it.
