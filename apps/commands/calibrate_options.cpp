@@ -54,19 +54,8 @@ Error payload_option(const Options& options, ArmMasses* masses) {
 
 /// --compliance, --gravity, --payload into settings->compliance_model (the default terms of the
 /// start model's nominal geometry); refused: a kind other than basis|masses, masses for an arm
-/// without published masses, a zero or non-finite gravity, --gravity / --payload without the
-/// compliance they set.
-Error compliance_from_options(const Options& options, CalibrateSettings* settings) {
-  settings->compliance = options.given("compliance");
-  if (!settings->compliance) {
-    for (const char* name : {"gravity", "payload"})
-      if (options.given(name)) return Error::usage(std::string("--") + name + " needs --compliance (see --help)");
-    return Error{};
-  }
-  if (settings->method == CalibrationMethod::abc || settings->method == CalibrationMethod::gsa) {
-    return Error::usage(std::string("--compliance needs a method with LM (abc+lm, gsa+lm, lm, all), not --method ") +
-                        calibration_method_name(settings->method));
-  }
+/// without published masses, a zero or non-finite gravity.
+Error gravity_terms_from_options(const Options& options, CalibrateSettings* settings) {
   const std::string kind = options.get("compliance");
   if (kind != "basis" && kind != "masses") {
     return Error::usage("--compliance must be 'basis' or 'masses', not " + port::quoted(kind));
@@ -102,6 +91,46 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
                         " (the shoulder and elbow carry the deflection): check --gravity");
   }
   return Error{};
+}
+
+/// --harmonics K: the joint-angle harmonics of orders 1 .. K of every joint appended to
+/// settings->compliance_model; refused beyond the build's capacity for joint terms.
+Error harmonic_terms_from_options(const Options& options, CalibrateSettings* settings) {
+  std::size_t orders = 0;
+  const Error error = count_option(options, "harmonics", 1, static_cast<std::size_t>(kMaxHarmonicOrder), &orders);
+  if (!error.ok()) return error;
+  ComplianceModel& model = settings->compliance_model;
+  const int needed = model.term_count + 2 * kJointCount * static_cast<int>(orders);
+  if (append_harmonic_terms(static_cast<int>(orders), &model) != Status::ok) {
+    return Error::usage("--harmonics " + options.get("harmonics") + " needs " + std::to_string(needed) +
+                        " joint terms with the others; this build holds " + std::to_string(kMaxComplianceTerms) +
+                        " (HIVECAL_MAX_JOINT_TERMS): use fewer orders");
+  }
+  return Error{};
+}
+
+/// --compliance and --harmonics: the joint terms of the LM+compliance stage; refused with a
+/// method without LM, and --gravity / --payload without the compliance they set.
+Error compliance_from_options(const Options& options, CalibrateSettings* settings) {
+  const bool gravity_terms = options.given("compliance");
+  const bool harmonics = options.given("harmonics");
+  settings->compliance = gravity_terms || harmonics;
+  settings->compliance_model = ComplianceModel{};
+  if (!gravity_terms) {
+    for (const char* name : {"gravity", "payload"})
+      if (options.given(name)) return Error::usage(std::string("--") + name + " needs --compliance (see --help)");
+  }
+  if (!settings->compliance) return Error{};
+  if (settings->method == CalibrationMethod::abc || settings->method == CalibrationMethod::gsa) {
+    return Error::usage(std::string(gravity_terms ? "--compliance" : "--harmonics") +
+                        " needs a method with LM (abc+lm, gsa+lm, lm, all), not --method " +
+                        calibration_method_name(settings->method));
+  }
+  if (gravity_terms) {
+    const Error error = gravity_terms_from_options(options, settings);
+    if (!error.ok()) return error;
+  }
+  return harmonics ? harmonic_terms_from_options(options, settings) : Error{};
 }
 
 /// --position-sigma-m, --angle-sigma-rad, --orientation-lever-m (csv.hpp, OrientationInput).
@@ -199,6 +228,10 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity "
          "basis, or the link masses (UR3e, UR5e)",
          "", "basis"},
+        {"harmonics", "K",
+         "also fit harmonics of orders 1 .. K of each joint's reading (encoder eccentricity, transmission error; "
+         "LM+compliance stage, docs/compliance.md), each kept only when significant",
+         ""},
         {"gravity", "X,Y,Z", "with --compliance: gravity direction in the robot base frame (wall or ceiling mounts)",
          "0,0,-1"},
         {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]",

@@ -155,7 +155,7 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
     const int k = compliance_param_index(t);
     report::ParameterRow row;
     row.name = compliance_term_name(compliance, t);
-    row.compliance_unit = textio::compliance_unit(compliance.load);
+    row.compliance_unit = textio::term_unit(compliance, t);
     row.start = t < start.compliance.term_count ? start.compliance.coefficient[t] : 0.0;
     row.value = compliance.coefficient[t];
     row.sigma = lm != nullptr && mask_has(lm->identifiability.kept_mask, k) ? lm->sigma(k) : 0.0;

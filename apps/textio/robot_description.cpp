@@ -270,11 +270,46 @@ bool read_masses(const JsonValue* v, ArmMasses* masses, std::string* what) {
   return true;
 }
 
+/// A harmonic term's function and order as written: "sin 1", "cos 2".
+std::string harmonic_name(const ComplianceTerm& term) {
+  return (term.kind == JointTermKind::harmonic_sin ? "sin " : "cos ") + std::to_string(term.order);
+}
+
+bool read_harmonic(const std::string& text, ComplianceTerm* term) {
+  for (int order = 1; order <= kMaxHarmonicOrder; ++order) {
+    for (const JointTermKind kind : {JointTermKind::harmonic_sin, JointTermKind::harmonic_cos}) {
+      const ComplianceTerm candidate{term->joint, 0, kind, order};
+      if (text == harmonic_name(candidate)) {
+        *term = candidate;
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+/// A term's basis: "harmonic" ("sin K" / "cos K") or "load" (gravity), into *term.
+bool read_basis(const JsonValue& v, const std::string& at, const ComplianceModel& compliance, ComplianceTerm* term,
+                std::string* what) {
+  if (const JsonValue* harmonic = v.find("harmonic"); harmonic != nullptr) {
+    if (harmonic->kind == JsonValue::Kind::string && read_harmonic(harmonic->string, term)) return true;
+    *what = at + ".harmonic must be \"sin K\" or \"cos K\" (K = 1 .. " + std::to_string(kMaxHarmonicOrder) + ")";
+    return false;
+  }
+  const JsonValue* load = v.find("load");
+  if (load != nullptr && load->kind == JsonValue::Kind::string && read_load(load->string, compliance.load, term)) {
+    return true;
+  }
+  *what = at + ".load must be " +
+          (compliance.load == ComplianceLoad::arm_masses ? "\"arm masses\"" : "\"frame K\" (K = 1 .. 6) or \"tool\"") +
+          ", or the term a \"harmonic\"";
+  return false;
+}
+
 /// One term of a "terms" array into term `t` of *compliance.
 bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::string* what) {
   const std::string at = "\"terms\"[" + std::to_string(t) + "]";
   double joint = 0.0;
-  const JsonValue* load = v.find("load");
   const JsonValue* unit = v.find("unit");
   ComplianceTerm& term = compliance->terms[t];
   if (v.kind != JsonValue::Kind::object || !read_number(v.find("joint"), &joint) || joint < 1.0 ||
@@ -282,22 +317,19 @@ bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::stri
     *what = at + ".joint must be a joint number 1 .. 6";
     return false;
   }
-  term.joint = static_cast<int>(joint) - 1;
-  if (load == nullptr || load->kind != JsonValue::Kind::string || !read_load(load->string, compliance->load, &term)) {
-    *what =
-        at + ".load must be " +
-        (compliance->load == ComplianceLoad::arm_masses ? "\"arm masses\"" : "\"frame K\" (K = 1 .. 6) or \"tool\"");
-    return false;
-  }
+  term = ComplianceTerm{static_cast<int>(joint) - 1, 0, JointTermKind::gravity, 0};
+  if (!read_basis(v, at, *compliance, &term, what)) return false;
   if (!read_number(v.find("coefficient"), &compliance->coefficient[t]) ||
       !(std::fabs(compliance->coefficient[t]) <= kMaxComplianceCoefficient)) {
     *what = at + ".coefficient must be a number within +/-" + format_double(kMaxComplianceCoefficient) +
-            " (rad/m or rad/(kg m); real arms: 1e-6..1e-4)";
+            " (rad/m or rad/(kg m); real arms: 1e-6..1e-4; rad for a harmonic)";
     return false;
   }
-  if (unit != nullptr && (unit->kind != JsonValue::Kind::string || unit->string != compliance_unit(compliance->load))) {
-    *what = at + ".unit must be \"" + compliance_unit(compliance->load) + "\" for kind \"" +
-            compliance_kind_name(compliance->load) + "\"";
+  const std::string expected_unit = is_harmonic(term) ? "rad" : compliance_unit(compliance->load);
+  if (unit != nullptr && (unit->kind != JsonValue::Kind::string || unit->string != expected_unit)) {
+    *what = at + ".unit must be \"" + expected_unit + "\"" +
+            (is_harmonic(term) ? std::string(" for a harmonic")
+                               : " for kind \"" + std::string(compliance_kind_name(compliance->load)) + "\"");
     return false;
   }
   return true;
@@ -307,6 +339,10 @@ bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::stri
 
 const char* compliance_unit(ComplianceLoad load) {
   return load == ComplianceLoad::arm_masses ? "rad/(kg m)" : "rad/m";
+}
+
+const char* term_unit(const ComplianceModel& compliance, int t) {
+  return is_harmonic(compliance.terms[t]) ? "rad" : compliance_unit(compliance.load);
 }
 
 const char* compliance_kind_name(ComplianceLoad load) {
@@ -324,9 +360,14 @@ void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const
     json.begin_object();
     json.key("name").value(compliance_term_name(compliance, t));
     json.key("joint").value(static_cast<long long>(compliance.terms[t].joint + 1));
-    json.key("load").value(load_name(compliance, compliance.terms[t]));
+    const ComplianceTerm& term = compliance.terms[t];
+    if (is_harmonic(term)) {
+      json.key("harmonic").value(harmonic_name(term));
+    } else {
+      json.key("load").value(load_name(compliance, term));
+    }
     json.key("coefficient").value(compliance.coefficient[t]);
-    json.key("unit").value(compliance_unit(compliance.load));
+    json.key("unit").value(term_unit(compliance, t));
     if (sigma != nullptr && sigma[t] > 0.0) json.key("sigma").value(sigma[t]);
     json.end_object();
   }

@@ -66,6 +66,8 @@ void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const
 bool read_compliance(const JsonValue& value, const Mat3& to_file_base, ComplianceModel* compliance, std::string* what);
 /// The unit of a compliance coefficient: "rad/m" (point loads) or "rad/(kg m)" (arm masses).
 const char* compliance_unit(ComplianceLoad load);
+/// The unit of term t's coefficient: its load's (compliance_unit), or "rad" for a harmonic.
+const char* term_unit(const ComplianceModel& compliance, int t);
 /// The name of a load kind on the command line and in "kind": "basis" or "masses".
 const char* compliance_kind_name(ComplianceLoad load);
 

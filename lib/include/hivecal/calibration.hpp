@@ -203,7 +203,8 @@ struct CalibrationOutlierList {
   std::size_t limit = kMaxCalibrationOutliers;          ///< entries allowed (fewer than half the set) [-]
 };
 
-/// Short name of a stage ("ABC", "GSA", "LM", "ABC+LM", "GSA+LM", "LM+compliance"; the
+/// Short name of a stage ("ABC", "GSA", "LM", "ABC+LM", "GSA+LM", "LM+compliance",
+/// "LM+harmonics", "LM+compliance+harmonics" after the joint terms of its model; the
 /// previous stage's name is taken from `refines_previous` and `previous`).
 const char* calibration_stage_name(const CalibrationStage& stage, const CalibrationStage* previous);
 /// Name of a solver ("ABC", "GSA", "LM").

@@ -2,6 +2,7 @@
 // core -> wire -> sync -> model -> linalg -> solve. Include single headers to build faster.
 #pragma once
 
+#include "hivecal/core/capacity.hpp"
 #include "hivecal/core/digest.hpp"
 #include "hivecal/core/joints.hpp"
 #include "hivecal/core/math.hpp"

@@ -664,7 +664,13 @@ const char* calibration_solver_name(CalibrationSolver solver) {
 }
 
 const char* calibration_stage_name(const CalibrationStage& stage, const CalibrationStage* previous) {
-  if (stage.compliance) return "LM+compliance";
+  if (stage.compliance) {
+    const ComplianceModel& terms = stage.model.compliance;
+    int harmonics = 0;
+    for (int t = 0; t < terms.term_count; ++t) harmonics += is_harmonic(terms.terms[t]) ? 1 : 0;
+    if (harmonics == 0) return "LM+compliance";
+    return harmonics == terms.term_count ? "LM+harmonics" : "LM+compliance+harmonics";
+  }
   if (stage.solver != CalibrationSolver::lm || !stage.refines_previous || previous == nullptr) {
     return calibration_solver_name(stage.solver);
   }

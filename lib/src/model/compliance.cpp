@@ -18,9 +18,17 @@ double lever_m(const Vec3& z, const Vec3& origin_m, const Vec3& point_m, const V
   return z.dot((point_m - origin_m).cross(gravity));
 }
 
-/// The basis of one term over the rigid frames at the pose.
-double term_basis(const ComplianceModel& compliance, const ComplianceTerm& term, const Vec3& tool_m,
-                  const RigidTransform (&frame)[kJointCount + 1]) {
+/// The basis of a harmonic term at joint readings q: sin or cos of order * q_j [-].
+double harmonic_basis(const ComplianceTerm& term, const JointVector& q_rad) {
+  double sin_kq = 0.0;
+  double cos_kq = 1.0;
+  math::sincos(static_cast<double>(term.order) * q_rad(term.joint), &sin_kq, &cos_kq);
+  return term.kind == JointTermKind::harmonic_sin ? sin_kq : cos_kq;
+}
+
+/// The basis of one gravity term over the rigid frames at the pose.
+double gravity_basis(const ComplianceModel& compliance, const ComplianceTerm& term, const Vec3& tool_m,
+                     const RigidTransform (&frame)[kJointCount + 1]) {
   const Vec3 z = frame[term.joint].rotation.col(2);
   const Vec3& origin_m = frame[term.joint].translation_m;
   const Vec3& g = compliance.gravity_direction;
@@ -54,6 +62,10 @@ Status check_masses(const ArmMasses& masses) {
 
 Status check_term(const ComplianceModel& compliance, const ComplianceTerm& term) {
   if (term.joint < 0 || term.joint >= kJointCount) return Status::invalid_argument;
+  if (term.kind == JointTermKind::harmonic_sin || term.kind == JointTermKind::harmonic_cos) {
+    return term.order >= 1 && term.order <= kMaxHarmonicOrder ? Status::ok : Status::invalid_argument;
+  }
+  if (term.kind != JointTermKind::gravity) return Status::invalid_argument;
   if (compliance.load == ComplianceLoad::arm_masses) return Status::ok;
   return term.frame > term.joint && term.frame <= kToolLoadFrame ? Status::ok : Status::invalid_argument;
 }
@@ -78,6 +90,23 @@ constexpr const char* kTermNames[kJointCount][kToolLoadFrame + 1] = {
     {"c_j6_o1", "c_j6_o2", "c_j6_o3", "c_j6_o4", "c_j6_o5", "c_j6_o6", "c_j6_tool", "c_j6_mass"}};
 static_assert(kJointCount == 6 && kToolLoadFrame == 7, "one name row per joint, one column per frame + mass");
 
+constexpr const char* kHarmonicNames[kJointCount][2][kMaxHarmonicOrder] = {
+    {{"h_j1_sin1", "h_j1_sin2", "h_j1_sin3"}, {"h_j1_cos1", "h_j1_cos2", "h_j1_cos3"}},
+    {{"h_j2_sin1", "h_j2_sin2", "h_j2_sin3"}, {"h_j2_cos1", "h_j2_cos2", "h_j2_cos3"}},
+    {{"h_j3_sin1", "h_j3_sin2", "h_j3_sin3"}, {"h_j3_cos1", "h_j3_cos2", "h_j3_cos3"}},
+    {{"h_j4_sin1", "h_j4_sin2", "h_j4_sin3"}, {"h_j4_cos1", "h_j4_cos2", "h_j4_cos3"}},
+    {{"h_j5_sin1", "h_j5_sin2", "h_j5_sin3"}, {"h_j5_cos1", "h_j5_cos2", "h_j5_cos3"}},
+    {{"h_j6_sin1", "h_j6_sin2", "h_j6_sin3"}, {"h_j6_cos1", "h_j6_cos2", "h_j6_cos3"}}};
+static_assert(kMaxHarmonicOrder == 3, "one name per joint, function and order");
+
+/// True when any of the model's terms is a gravity term (its basis needs the rigid frames).
+bool has_gravity_term(const ComplianceModel& compliance) {
+  for (int t = 0; t < compliance.term_count; ++t) {
+    if (!is_harmonic(compliance.terms[t])) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 Status check_compliance(const ComplianceModel& compliance) {
@@ -101,9 +130,10 @@ void compliance_basis(const RobotModel& model, const JointVector& q_rad, double 
   const ComplianceModel& compliance = model.compliance;
   if (compliance.term_count == 0) return;
   RigidTransform frame[kJointCount + 1];
-  detail::rigid_frames(model, q_rad, frame);
+  if (has_gravity_term(compliance)) detail::rigid_frames(model, q_rad, frame);
   for (int t = 0; t < compliance.term_count; ++t) {
-    basis[t] = term_basis(compliance, compliance.terms[t], model.tool_m, frame);
+    const ComplianceTerm& term = compliance.terms[t];
+    basis[t] = is_harmonic(term) ? harmonic_basis(term, q_rad) : gravity_basis(compliance, term, model.tool_m, frame);
   }
 }
 
@@ -146,15 +176,32 @@ Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_dir
     const int elbow = horizontal[1];
     // The wrist is DH frame 4 (a UR's), or the elbow's link end when the elbow comes later.
     const int wrist = elbow + 1 > 4 ? elbow + 1 : 4;
-    const ComplianceTerm terms[kMaxComplianceTerms] = {
+    constexpr int kPointTermCount = 4;
+    const ComplianceTerm terms[kPointTermCount] = {
         {shoulder, shoulder + 1}, {shoulder, wrist}, {elbow, wrist}, {elbow, kToolLoadFrame}};
-    for (int t = 0; t < kMaxComplianceTerms; ++t) out.terms[t] = terms[t];
-    out.term_count = kMaxComplianceTerms;
+    for (int t = 0; t < kPointTermCount; ++t) out.terms[t] = terms[t];
+    out.term_count = kPointTermCount;
   } else {
     for (int k = 0; k < count && horizontal[k] < 4; ++k) out.terms[out.term_count++] = ComplianceTerm{horizontal[k], 0};
     if (out.term_count == 0) return Status::invalid_argument;
   }
   *compliance = out;
+  return Status::ok;
+}
+
+Status append_harmonic_terms(int orders, ComplianceModel* compliance) {
+  if (orders < 1 || orders > kMaxHarmonicOrder) return Status::invalid_argument;
+  const int added = kJointCount * orders * 2;
+  if (compliance->term_count < 0 || compliance->term_count + added > kMaxComplianceTerms)
+    return Status::invalid_argument;
+  for (int j = 0; j < kJointCount; ++j) {
+    for (int k = 1; k <= orders; ++k) {
+      for (const JointTermKind kind : {JointTermKind::harmonic_sin, JointTermKind::harmonic_cos}) {
+        compliance->terms[compliance->term_count] = ComplianceTerm{j, 0, kind, k};
+        compliance->coefficient[compliance->term_count++] = 0.0;
+      }
+    }
+  }
   return Status::ok;
 }
 
@@ -181,6 +228,10 @@ const char* compliance_term_name(const ComplianceModel& compliance, int t) {
   if (t < 0 || t >= compliance.term_count) return "?";
   const ComplianceTerm& term = compliance.terms[t];
   if (term.joint < 0 || term.joint >= kJointCount) return "?";
+  if (is_harmonic(term)) {
+    if (term.order < 1 || term.order > kMaxHarmonicOrder) return "?";
+    return kHarmonicNames[term.joint][term.kind == JointTermKind::harmonic_sin ? 0 : 1][term.order - 1];
+  }
   if (compliance.load == ComplianceLoad::arm_masses) return kTermNames[term.joint][kToolLoadFrame];
   if (term.frame < 1 || term.frame > kToolLoadFrame) return "?";
   return kTermNames[term.joint][term.frame - 1];

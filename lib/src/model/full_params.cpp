@@ -7,13 +7,18 @@
 namespace hivecal {
 namespace {
 
-constexpr const char* kParamNames[kFullParamCount] = {
-    "theta1",  "d1",          "a1",          "alpha1",      "theta2",     "d2",      "a2",      "alpha2",
-    "theta3",  "d3",          "a3",          "alpha3",      "theta4",     "d4",      "a4",      "alpha4",
-    "theta5",  "d5",          "a5",          "alpha5",      "theta6",     "d6",      "a6",      "alpha6",
-    "tool_x",  "tool_y",      "tool_z",      "base_rx",     "base_ry",    "base_rz", "base_tx", "base_ty",
-    "base_tz", "compliance1", "compliance2", "compliance3", "compliance4"};
-static_assert(kMaxComplianceTerms == 4, "one name per compliance term");
+/// The rigid model's parameters, then the joint terms' generic names up to the largest capacity.
+constexpr const char* kParamNames[kRigidParamCount + 30] = {
+    "theta1",       "d1",           "a1",           "alpha1",       "theta2",       "d2",           "a2",
+    "alpha2",       "theta3",       "d3",           "a3",           "alpha3",       "theta4",       "d4",
+    "a4",           "alpha4",       "theta5",       "d5",           "a5",           "alpha5",       "theta6",
+    "d6",           "a6",           "alpha6",       "tool_x",       "tool_y",       "tool_z",       "base_rx",
+    "base_ry",      "base_rz",      "base_tx",      "base_ty",      "base_tz",      "compliance1",  "compliance2",
+    "compliance3",  "compliance4",  "compliance5",  "compliance6",  "compliance7",  "compliance8",  "compliance9",
+    "compliance10", "compliance11", "compliance12", "compliance13", "compliance14", "compliance15", "compliance16",
+    "compliance17", "compliance18", "compliance19", "compliance20", "compliance21", "compliance22", "compliance23",
+    "compliance24", "compliance25", "compliance26", "compliance27", "compliance28", "compliance29", "compliance30"};
+static_assert(kMaxComplianceTerms <= 30, "one name per joint term");
 
 constexpr const char* kOtherToolNames[kMaxTargets - 1][3] = {{"tool2_x", "tool2_y", "tool2_z"},
                                                              {"tool3_x", "tool3_y", "tool3_z"}};
@@ -38,6 +43,14 @@ int mask_indices(ParamMask mask, int (&index)[kFullParamCount]) {
     if (mask_has(mask, i)) index[count++] = i;
   }
   return count;
+}
+
+ParamMask harmonic_params_mask(const RobotModel& model) {
+  ParamMask mask = 0;
+  for (int t = 0; t < model.compliance.term_count; ++t) {
+    if (is_harmonic(model.compliance.terms[t])) mask |= param_bit(compliance_param_index(t));
+  }
+  return mask;
 }
 
 const char* full_param_name(int index) {

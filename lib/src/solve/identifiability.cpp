@@ -172,19 +172,23 @@ void express_in_kept(NormalMatrix* basis, const int* dropped, int first, int n) 
 /// one with a substantial share of the null space (leverage |P_null e_i| >= kMinDropLeverage)
 /// is dropped and its direction removed from the null space. The leverages of an
 /// orthonormal basis square-sum to its dimension, so the scan always empties it.
-void drop_null_directions(IdentifiabilityWorkspace* ws, int null_count, double sigma_max, ParamMask* mask,
-                          IdentifiabilityReport* report) {
+void drop_null_directions(IdentifiabilityWorkspace* ws, int null_count, double sigma_max, ParamMask drop_first,
+                          ParamMask* mask, IdentifiabilityReport* report) {
   NormalMatrix& basis = ws->null_basis;
   const ParamMask analysed = *mask;
   int dropped[kFullParamCount] = {};
   int count = null_count;
-  for (int i = 0; i < kFullParamCount && count > 0; ++i) {
-    if (!mask_has(analysed, i)) continue;
-    if (basis.row(i).head(count).norm() < kMinDropLeverage) continue;
-    concentrate_row(&basis, count, i);
-    dropped[null_count - count] = i;
-    --count;
-    *mask &= ~param_bit(i);
+  // Two passes: the parameters of drop_first, then the others (each in index order).
+  for (int pass = 0; pass < 2; ++pass) {
+    const ParamMask candidates = analysed & (pass == 0 ? drop_first : ~drop_first);
+    for (int i = 0; i < kFullParamCount && count > 0; ++i) {
+      if (!mask_has(candidates, i)) continue;
+      if (basis.row(i).head(count).norm() < kMinDropLeverage) continue;
+      concentrate_row(&basis, count, i);
+      dropped[null_count - count] = i;
+      --count;
+      *mask &= ~param_bit(i);
+    }
   }
   // Direction of drop k sits in column null_count - 1 - k; reorder to drop order.
   const int n = null_count - count;
@@ -258,7 +262,8 @@ const char* unidentifiable_reason_name(UnidentifiableReason reason) {
 }
 
 Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
-                               IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report) {
+                               IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report,
+                               ParamMask drop_first) {
   const Status status = check_arguments(jtwj, free_mask, threshold);
   if (status != Status::ok) return status;
   clear_report(report);
@@ -291,7 +296,7 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
     }
     if (!null_vectors(workspace, kFullParamCount - count, null_count)) return Status::singular_system;
     const ParamMask before_drop = mask;
-    drop_null_directions(workspace, null_count, sigma_max, &mask, report);
+    drop_null_directions(workspace, null_count, sigma_max, drop_first, &mask, report);
     if (mask == before_drop) return Status::singular_system;
   }
   return Status::singular_system;

@@ -251,8 +251,8 @@ inline Status analyse(Run* run) {
   Status status = Status::ok;
   IdentifiabilityWorkspace* scratch = run->ws->scratch.open_identifiability();  // ends the step's and the trial's
   while (true) {
-    status =
-        analyze_identifiability(run->current->jtwj, run->free_mask, threshold, scratch, &run->result->identifiability);
+    status = analyze_identifiability(run->current->jtwj, run->free_mask, threshold, scratch,
+                                     &run->result->identifiability, harmonic_params_mask(run->point.model));
     run->kept = run->result->identifiability.kept_mask;
     if (status != Status::ok || mask_count(run->kept) < equations) return status;
     if (threshold * 10.0 >= 1.0) return Status::too_few_samples;

@@ -3,6 +3,7 @@
 // horizontal lever arm of a unit mass, and it vanishes about a vertical axis.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <limits>
 
@@ -235,7 +236,10 @@ TEST(Compliance, CheckRejectsWhatTheModelCannotUse) {
   rigid.gravity_direction = Vec3::Zero();  // not read without terms
   EXPECT_EQ(check_compliance(rigid), Status::ok);
   ComplianceModel bad = c;
-  bad.term_count = 5;
+  bad.term_count = kMaxComplianceTerms + 1;
+  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  bad = c;
+  bad.term_count = 5;  // a term left at its defaults: a point load at frame 0, not beyond joint 1
   EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
   bad = c;
   bad.terms[1].frame = 1;  // not beyond joint 1 (0-based)
@@ -252,6 +256,70 @@ TEST(Compliance, CheckRejectsWhatTheModelCannotUse) {
   bad = compliant_ur5e(ComplianceLoad::arm_masses).compliance;
   bad.masses.link_mass_kg[2] = -1.0;
   EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  bad = c;
+  bad.terms[0] = ComplianceTerm{1, 0, JointTermKind::harmonic_sin, 0};  // order 0: a constant
+  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  bad.terms[0].order = kMaxHarmonicOrder + 1;
+  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  bad.terms[0].order = kMaxHarmonicOrder;
+  EXPECT_EQ(check_compliance(bad), Status::ok);  // a harmonic needs no frame
+  bad.terms[0].kind = static_cast<JointTermKind>(3);
+  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+}
+
+/// A UR5e with only harmonic terms: orders 1 .. `orders` of every joint, given coefficients.
+RobotModel harmonic_ur5e(int orders, Random* random) {
+  RobotModel model = nominal_model(RobotType::ur5e);
+  model.tool_m << 0.01, -0.02, 0.15;
+  EXPECT_EQ(append_harmonic_terms(orders, &model.compliance), Status::ok);
+  for (int t = 0; t < model.compliance.term_count; ++t) model.compliance.coefficient[t] = random->uniform(-2e-4, 2e-4);
+  return model;
+}
+
+TEST(Compliance, HarmonicsDeflectTheirJointBySinAndCosOfItsOwnReading) {
+  Random random(2501);
+  const RobotModel model = harmonic_ur5e(1, &random);
+  ASSERT_EQ(model.compliance.term_count, 12);
+  EXPECT_EQ(check_compliance(model.compliance), Status::ok);
+  for (int i = 0; i < 50; ++i) {
+    const JointVector q = test::random_joints(&random);
+    JointVector dq;
+    EXPECT_NO_HEAP(dq = compliance_deflection(model, q));
+    for (int j = 0; j < kJointCount; ++j) {
+      // Terms 2j, 2j + 1: the sine and the cosine of joint j (append_harmonic_terms' order).
+      const double expected = model.compliance.coefficient[2 * j] * std::sin(q(j)) +
+                              model.compliance.coefficient[2 * j + 1] * std::cos(q(j));
+      EXPECT_NEAR(dq(j), expected, 1e-18) << j;
+    }
+    RobotModel rigid = model;
+    rigid.compliance.term_count = 0;
+    EXPECT_TRUE(same_bits(fk_tool_point(model, q), fk_tool_point(rigid, q + dq)));
+  }
+}
+
+TEST(Compliance, HarmonicsAppendAfterTheGravityTermsUpToTheBuildsCapacity) {
+  ComplianceModel c = compliant_ur5e(ComplianceLoad::point).compliance;
+  ASSERT_EQ(c.term_count, 4);
+  EXPECT_EQ(append_harmonic_terms(0, &c), Status::invalid_argument);
+  EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder + 1, &c), Status::invalid_argument);
+  EXPECT_EQ(c.term_count, 4);  // a refusal leaves the model as it was
+  const int needed = 4 + 2 * kJointCount * 2;
+  if (needed > kMaxComplianceTerms) {  // the bare-metal capacity holds the gravity terms only
+    EXPECT_EQ(append_harmonic_terms(2, &c), Status::invalid_argument);
+    EXPECT_EQ(c.term_count, 4);
+    return;
+  }
+  ASSERT_EQ(append_harmonic_terms(2, &c), Status::ok);
+  EXPECT_EQ(c.term_count, needed);
+  EXPECT_EQ(check_compliance(c), Status::ok);
+  EXPECT_STREQ(compliance_term_name(c, 3), "c_j3_tool");
+  EXPECT_STREQ(compliance_term_name(c, 4), "h_j1_sin1");
+  EXPECT_STREQ(compliance_term_name(c, 5), "h_j1_cos1");
+  EXPECT_STREQ(compliance_term_name(c, 6), "h_j1_sin2");
+  EXPECT_STREQ(compliance_term_name(c, 7), "h_j1_cos2");
+  EXPECT_STREQ(compliance_term_name(c, 8), "h_j2_sin1");
+  EXPECT_STREQ(compliance_term_name(c, needed - 1), "h_j6_cos2");
+  EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder, &c), Status::invalid_argument);  // over capacity
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdint>
+#include <string>
 
 #include "hivecal/core/math.hpp"
 #include "hivecal/core/random.hpp"
@@ -49,7 +50,7 @@ RobotModel compliant_model(Random* random) {
 TEST(FullParams, LayoutIsGeometryThenBaseThenCompliance) {
   EXPECT_EQ(kBaseParamCount, 6);
   EXPECT_EQ(kRigidParamCount, 33);
-  EXPECT_EQ(kFullParamCount, 37);
+  EXPECT_EQ(kFullParamCount, kRigidParamCount + kMaxJointTerms);  // 37 or 61: the build's capacity
   EXPECT_EQ(base_rotation_param_index(0), 27);
   EXPECT_EQ(base_rotation_param_index(2), 29);
   EXPECT_EQ(base_translation_param_index(0), 30);
@@ -58,13 +59,14 @@ TEST(FullParams, LayoutIsGeometryThenBaseThenCompliance) {
   EXPECT_EQ(compliance_param_index(3), 36);
   EXPECT_EQ(param_bit(0), ParamMask{1});
   EXPECT_EQ(param_bit(36), ParamMask{0x1000000000});
-  EXPECT_EQ(kAllParamsMask, ParamMask{0x1FFFFFFFF});          // bits 0 .. 32
-  EXPECT_EQ(kComplianceParamsMask, ParamMask{0x1E00000000});  // bits 33 .. 36
-  EXPECT_EQ(kValidParamsMask, ParamMask{0x1FFFFFFFFF});       // bits 0 .. 36
-  EXPECT_EQ(kOtherTargetTools, ParamMask{0x2000000000});      // bit 37, past every parameter
+  EXPECT_EQ(kAllParamsMask, ParamMask{0x1FFFFFFFF});                                             // bits 0 .. 32
+  EXPECT_EQ(kComplianceParamsMask, ((ParamMask{1} << kFullParamCount) - 1U) & ~kAllParamsMask);  // 33 ..
+  EXPECT_EQ(kValidParamsMask, (ParamMask{1} << kFullParamCount) - 1U);                           // every parameter
+  EXPECT_EQ(kOtherTargetTools, param_bit(kFullParamCount));                                      // past every parameter
   EXPECT_EQ(compliance_params_mask(0), ParamMask{0});
   EXPECT_EQ(compliance_params_mask(1), ParamMask{0x200000000});
   EXPECT_EQ(compliance_params_mask(2), ParamMask{0x600000000});
+  EXPECT_EQ(compliance_params_mask(4), ParamMask{0x1E00000000});  // bits 33 .. 36
   EXPECT_EQ(compliance_params_mask(kMaxComplianceTerms), kComplianceParamsMask);
   EXPECT_TRUE(mask_has(kAllParamsMask, 32));
   EXPECT_FALSE(mask_has(kAllParamsMask, 33));
@@ -107,7 +109,7 @@ TEST(FullParams, MaskCountAndIndicesAgreeWithABitLoopOnRandomMasks) {
 }
 
 TEST(FullParams, EveryParameterHasItsName) {
-  static const char* const kExpected[kFullParamCount] = {
+  static const char* const kExpected[kRigidParamCount + 4] = {
       "theta1",  "d1",          "a1",          "alpha1",      "theta2",     "d2",      "a2",      "alpha2",
       "theta3",  "d3",          "a3",          "alpha3",      "theta4",     "d4",      "a4",      "alpha4",
       "theta5",  "d5",          "a5",          "alpha5",      "theta6",     "d6",      "a6",      "alpha6",
@@ -115,7 +117,10 @@ TEST(FullParams, EveryParameterHasItsName) {
       "base_tz", "compliance1", "compliance2", "compliance3", "compliance4"};
   const char* names[kFullParamCount] = {};
   EXPECT_NO_HEAP(for (int i = 0; i < kFullParamCount; ++i) names[i] = full_param_name(i));
-  for (int i = 0; i < kFullParamCount; ++i) EXPECT_STREQ(names[i], kExpected[i]) << i;
+  for (int i = 0; i < kRigidParamCount + 4; ++i) EXPECT_STREQ(names[i], kExpected[i]) << i;
+  for (int i = kRigidParamCount + 4; i < kFullParamCount; ++i) {  // a larger capacity: the same pattern
+    EXPECT_EQ(std::string(names[i]), "compliance" + std::to_string(i - kRigidParamCount + 1)) << i;
+  }
   EXPECT_STREQ(full_param_name(model_param_index(4, DhField::d)), "d5");
   EXPECT_STREQ(full_param_name(base_translation_param_index(1)), "base_ty");
   EXPECT_STREQ(full_param_name(compliance_param_index(1)), "compliance2");
@@ -126,7 +131,7 @@ TEST(FullParams, EveryParameterHasItsName) {
 TEST(FullParams, ComplianceNamesFollowTheModelsTerms) {
   Random random(502);
   RobotModel model = compliant_model(&random);
-  model.compliance.term_count = kMaxComplianceTerms;
+  model.compliance.term_count = 4;  // the default point terms
   const char* names[kFullParamCount + 2] = {};
   EXPECT_NO_HEAP(for (int i = -1; i <= kFullParamCount; ++i) names[i + 1] = full_param_name(i, model));
   const auto name = [&](int index) { return names[index + 1]; };

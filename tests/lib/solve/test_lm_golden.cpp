@@ -172,7 +172,7 @@ std::uint64_t compliance_digest(Span<JointTrig> joint_trig_storage) {
   options.params = LmParamSet::full_compliance;
   Digest digest;
   add_result(result, calibrate_lm(start, nullptr, samples.samples(), options, &ws, &result, &trace), trace, &digest);
-  for (double c : result.model.compliance.coefficient) digest.add(c);
+  for (int t = 0; t < result.model.compliance.term_count; ++t) digest.add(result.model.compliance.coefficient[t]);
   return digest.value();
 }
 
@@ -183,7 +183,8 @@ void add_job_result(Status status, const CalibrationResult& result, bool complia
   digest->add_u64(result.stage_count);
   for (const CalibrationStage& stage : result.stage_list()) {
     digest->add(to_params(stage.model));
-    for (int k = 0; compliance && k < kMaxComplianceTerms; ++k) digest->add(stage.model.compliance.coefficient[k]);
+    // The four default point terms' slots (zero in a rigid stage), whatever the build's capacity.
+    for (int k = 0; compliance && k < 4; ++k) digest->add(stage.model.compliance.coefficient[k]);
     digest->add(stage.base_to_tracker.rotation);
     digest->add(stage.base_to_tracker.translation_m);
     digest->add(stage.test.mae(ErrorAxis::norm_3d));

@@ -12,14 +12,15 @@
 
 #include <Eigen/Core>
 
+#include "hivecal/core/capacity.hpp"
 #include "hivecal/core/status.hpp"
 
 namespace hivecal {
 
-/// Largest matrix the solver decomposes: the full calibration model's 37 parameters (33
-/// rigid + 4 compliance; normal_equations.hpp checks that the two agree).
-inline constexpr int kSymmetricCapacity = 37;
-/// The working matrix: the leading size x size block is decomposed (10.9 kB).
+/// Largest matrix the solver decomposes: the full calibration model's parameters, 33 rigid +
+/// the build's joint terms (37 or 61; normal_equations.hpp checks that the two agree).
+inline constexpr int kSymmetricCapacity = 33 + kMaxJointTerms;
+/// The working matrix: the leading size x size block is decomposed (10.9 kB at 37, 29.1 kB at 61).
 using SymmetricMatrix = Eigen::Matrix<double, kSymmetricCapacity, kSymmetricCapacity>;
 /// Eigenvalues, or one column of eigenvectors, of that block.
 using SymmetricVector = Eigen::Matrix<double, kSymmetricCapacity, 1>;

@@ -8,8 +8,13 @@
 // g_hat: unit gravity direction in the robot base frame). The tool point is then the rigid FK at
 // q + dq: the deflection adds to the joint reading as theta_offset does. With no term the model
 // is rigid and every FK gives the bits of the rigid chain.
+//
+// A term may instead be a harmonic of its joint's reading, basis sin(k q_j) or cos(k q_j)
+// (k = 1 .. kMaxHarmonicOrder): the classic model of encoder eccentricity (k = 1) and gear
+// transmission error. It deflects the joint the same way, so the solver treats both alike.
 #pragma once
 
+#include "hivecal/core/capacity.hpp"
 #include "hivecal/core/status.hpp"
 #include "hivecal/core/types.hpp"
 
@@ -18,8 +23,9 @@ namespace hivecal {
 struct RobotModel;
 enum class RobotType : int;
 
-/// Most compliance terms one model holds (each is one more LM parameter).
-inline constexpr int kMaxComplianceTerms = 4;
+/// Most compliance terms one model holds (each is one more LM parameter): the build's
+/// capacity for joint terms (core/capacity.hpp).
+inline constexpr int kMaxComplianceTerms = kMaxJointTerms;
 /// The frame number of a point load at the tool point (target 1's), after DH frames 1 .. 6.
 inline constexpr int kToolLoadFrame = kJointCount + 1;
 
@@ -33,13 +39,33 @@ enum class ComplianceLoad : int {
   arm_masses = 1,
 };
 
-/// One compliance term: the joint that deflects and, for a point load, where the mass sits.
+/// What a term's basis is.
+enum class JointTermKind : int {
+  gravity = 0,       ///< a gravity torque of the model's load (ComplianceLoad)
+  harmonic_sin = 1,  ///< sin(order * q_j) of the joint's own reading: coefficient [rad]
+  harmonic_cos = 2,  ///< cos(order * q_j): coefficient [rad]
+};
+
+/// Highest order of a joint-angle harmonic (one or two per turn of the joint: encoder
+/// eccentricity; higher: gear transmission error) [-].
+inline constexpr int kMaxHarmonicOrder = 3;
+
+/// One compliance term: the joint that deflects and, for a point load, where the mass sits;
+/// or a harmonic of the joint's reading (encoder eccentricity, transmission error).
 struct ComplianceTerm {
   int joint = 0;  ///< deflecting joint, 0-based (1 = a UR's shoulder) [-]
   /// Point load: DH frame 1 .. 6 whose origin holds the unit mass, or kToolLoadFrame (7) for
-  /// the tool point; must lie beyond the joint (> joint). Unused (0) for arm masses [-].
+  /// the tool point; must lie beyond the joint (> joint). Unused (0) for arm masses and
+  /// harmonics [-].
   int frame = 0;
+  JointTermKind kind = JointTermKind::gravity;  ///< gravity torque or harmonic
+  int order = 0;  ///< harmonic: 1 .. kMaxHarmonicOrder (periods per joint turn); gravity: 0 [-]
 };
+
+/// True when `term` is a joint-angle harmonic, not a gravity term.
+constexpr bool is_harmonic(const ComplianceTerm& term) {
+  return term.kind != JointTermKind::gravity;
+}
 
 /// Masses and centres of mass of the six links and the payload (ComplianceLoad::arm_masses).
 struct ArmMasses {
@@ -51,27 +77,29 @@ struct ArmMasses {
 };
 static_assert(kJointCount == 6, "link_com_m's initialiser lists six points");
 
-/// The compliance part of a RobotModel. term_count 0 = rigid. Laid out without padding (plain
-/// doubles, then ints in pairs) so that whole models compare byte for byte.
+/// The joints' errors beyond the rigid chain in a RobotModel: gravity compliance terms and
+/// joint-angle harmonics, each deflecting its joint by coefficient * basis. term_count 0 = rigid. Laid out without
+/// padding (plain doubles, then ints in pairs) so that whole models compare byte for byte.
 struct ComplianceModel {
-  /// Compliance of each term: [rad/m] for point loads, [rad/(kg m)] for arm masses.
+  /// Coefficient of each term: [rad/m] for point loads, [rad/(kg m)] for arm masses, [rad]
+  /// for harmonics.
   double coefficient[kMaxComplianceTerms] = {};
   Vec3 gravity_direction = Vec3(0.0, 0.0, -1.0);  ///< unit gravity direction, robot base frame [-]
   ArmMasses masses;                               ///< read by ComplianceLoad::arm_masses only
   ComplianceTerm terms[kMaxComplianceTerms];      ///< the first term_count are used
   int term_count = 0;                             ///< 0 .. kMaxComplianceTerms; 0 = rigid [-]
-  ComplianceLoad load = ComplianceLoad::point;    ///< what every term's basis weighs
+  ComplianceLoad load = ComplianceLoad::point;    ///< what every gravity term's basis weighs
 };
 
 /// Status::ok when `compliance` is usable: rigid (term_count 0, the rest unread), or
-/// term_count in [1, kMaxComplianceTerms], joints in
-/// [0, 6), point frames in (joint, kToolLoadFrame], finite coefficients, masses >= 0 and
+/// term_count in [1, kMaxComplianceTerms], joints in [0, 6), point frames in (joint,
+/// kToolLoadFrame], harmonic orders in [1, kMaxHarmonicOrder], finite coefficients, masses >= 0 and
 /// finite, and a finite gravity direction of unit length (within 1e-9); invalid_argument or
 /// non_finite_input otherwise.
 Status check_compliance(const ComplianceModel& compliance);
 
 /// The basis of each of the model's terms at joint readings q (rigid FK of `model`), into
-/// basis[0 .. term_count - 1]; the rest 0. [m] (point) or [kg m] (arm masses).
+/// basis[0 .. term_count - 1]; the rest 0. [m] (point), [kg m] (arm masses) or [-] (harmonics).
 void compliance_basis(const RobotModel& model, const JointVector& q_rad, double (&basis)[kMaxComplianceTerms]);
 
 /// The joints' deflection at readings q: dq_j = sum of coefficient_t * basis_t over the terms
@@ -92,12 +120,19 @@ JointVector compliance_deflection(const RobotModel& model, const JointVector& q_
 Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_direction, ComplianceLoad load,
                                 ComplianceModel* compliance);
 
+/// Appends the harmonics of orders 1 .. `orders` of every joint's reading to *compliance:
+/// per joint and order a sine and a cosine term with zero coefficients. invalid_argument when
+/// `orders` is outside [1, kMaxHarmonicOrder] or the terms would not fit in
+/// kMaxComplianceTerms (the build's capacity: 28 holds the 4 gravity terms and orders 1 .. 2).
+Status append_harmonic_terms(int orders, ComplianceModel* compliance);
+
 /// Universal Robots' published link masses and centres of mass of `type` into *masses (payload
 /// left as it is); invalid_argument for a type without a published table here.
 Status nominal_arm_masses(RobotType type, ArmMasses* masses);
 
 /// Short name of term t of `compliance` for tables: "c_j2_o2", "c_j2_o4", "c_j3_tool" (point:
-/// 1-based joint and frame), "c_j2_mass" (arm masses); "?" outside [0, term_count). Static storage.
+/// 1-based joint and frame), "c_j2_mass" (arm masses), "h_j2_sin1", "h_j2_cos2" (harmonics:
+/// 1-based joint, function and order); "?" outside [0, term_count). Static storage.
 const char* compliance_term_name(const ComplianceModel& compliance, int t);
 
 }  // namespace hivecal

@@ -1,6 +1,7 @@
 // The full calibration model's parameters: the 27 geometry parameters of kinematics.hpp, the
 // robot base -> tracker transform (33: the rigid model) and the coefficients of the model's
-// compliance terms (model/compliance.hpp), 37 in all; their indices, masks, names and how an
+// joint terms (model/compliance.hpp: gravity compliance and joint-angle harmonics, as many as
+// the build's capacity holds: 37 or 61 in all); their indices, masks, names and how an
 // increment applies.
 //
 // The base is not stored as parameters: it is a RigidTransform, and its six parameters are
@@ -20,7 +21,7 @@ namespace hivecal {
 
 inline constexpr int kBaseParamCount = 6;                                       ///< rotation (3) + translation (3)
 inline constexpr int kRigidParamCount = kModelParamCount + kBaseParamCount;     ///< 33: geometry and base
-inline constexpr int kFullParamCount = kRigidParamCount + kMaxComplianceTerms;  ///< 37: and the compliance
+inline constexpr int kFullParamCount = kRigidParamCount + kMaxComplianceTerms;  ///< 37 or 61: and the joint terms
 
 /// Index of the base rotation increment about base axis `axis` (0 = x, 1 = y, 2 = z).
 constexpr int base_rotation_param_index(int axis) {
@@ -54,6 +55,8 @@ inline constexpr ParamMask kComplianceParamsMask = ((ParamMask{1} << kFullParamC
 constexpr ParamMask compliance_params_mask(int term_count) {
   return ((ParamMask{1} << static_cast<unsigned>(kRigidParamCount + term_count)) - 1U) & ~kAllParamsMask;
 }
+/// The coefficients of `model`'s harmonic terms (compliance.hpp), among its first term_count.
+ParamMask harmonic_params_mask(const RobotModel& model);
 /// Not a parameter: in a mask of columns to sum (accumulate_normal_equations), the tool points
 /// of targets 2 .. kMaxTargets are estimated too (mask_count and mask_indices ignore it).
 inline constexpr ParamMask kOtherTargetTools = ParamMask{1} << kFullParamCount;

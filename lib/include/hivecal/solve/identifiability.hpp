@@ -73,9 +73,13 @@ struct IdentifiabilityWorkspace {
 /// entry of all 33: accumulate the base translation columns too, whose norm sqrt(sum w) is
 /// the physical reference), then null directions (sigma_k / sigma_max of the column-scaled
 /// Jacobian below threshold), and fills *report.
+/// A null direction drops the parameter with the largest component among those in
+/// `drop_first` (the joint harmonics: generic terms, dropped before the physical ones they
+/// mirror, e.g. a shoulder's gravity term), then among the rest in index order.
 /// Errors: invalid_argument (threshold not in (0, 1), empty or out-of-range mask),
 /// non_finite_input, singular_system (no parameter left).
 Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
-                               IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report);
+                               IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report,
+                               ParamMask drop_first = 0);
 
 }  // namespace hivecal

@@ -1,0 +1,19 @@
+// Capacities that are build parameters: the build sets them once for the whole library
+// (CMakeLists.txt, as INTERFACE definitions of the library target, so that every consumer sees
+// the same sizes). Results do not depend on them (docs/determinism.md).
+#pragma once
+
+#ifndef HIVECAL_MAX_JOINT_TERMS
+#define HIVECAL_MAX_JOINT_TERMS 4  // the gravity terms alone (the bare-metal default)
+#endif
+
+namespace hivecal {
+
+/// Most joint terms (gravity compliance and joint-angle harmonics, model/compliance.hpp) one
+/// model holds, each one more parameter: 28 in hosted builds (the 4 gravity terms and two
+/// harmonics per joint), 4 on bare metal (docs/footprint.md says what each costs) [-].
+inline constexpr int kMaxJointTerms = HIVECAL_MAX_JOINT_TERMS;
+static_assert(kMaxJointTerms >= 4 && kMaxJointTerms <= 30,
+              "the four default gravity terms; every parameter plus one flag bit in a 64-bit mask");
+
+}  // namespace hivecal

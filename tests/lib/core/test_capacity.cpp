@@ -1,0 +1,32 @@
+// The build's capacities agree with each other: the full model, the eigen-solver and the
+// parameter masks are all sized from the one joint-term capacity.
+#include <gtest/gtest.h>
+
+#include "hivecal/core/capacity.hpp"
+#include "hivecal/linalg/symmetric_eigen.hpp"
+#include "hivecal/model/compliance.hpp"
+#include "hivecal/model/full_params.hpp"
+
+namespace hivecal::capacity_test {
+namespace {
+
+TEST(Capacity, OneJointTermCapacitySizesTheModelTheSolverAndTheMasks) {
+  EXPECT_EQ(kMaxComplianceTerms, kMaxJointTerms);
+  EXPECT_EQ(kFullParamCount, kRigidParamCount + kMaxJointTerms);
+  EXPECT_EQ(kSymmetricCapacity, kFullParamCount);
+  // Every parameter and the "other targets' tools" flag fit in one 64-bit mask.
+  EXPECT_LT(kFullParamCount, 64);
+  EXPECT_EQ(mask_count(kValidParamsMask), kFullParamCount);
+  EXPECT_EQ(kValidParamsMask & kOtherTargetTools, 0U);
+}
+
+TEST(Capacity, EveryParameterHasADistinctName) {
+  for (int i = 0; i < kFullParamCount; ++i) {
+    ASSERT_STRNE(full_param_name(i), "?") << i;
+    for (int k = 0; k < i; ++k) EXPECT_STRNE(full_param_name(i), full_param_name(k)) << i << " " << k;
+  }
+  EXPECT_STREQ(full_param_name(kFullParamCount), "?");
+}
+
+}  // namespace
+}  // namespace hivecal::capacity_test
