@@ -78,6 +78,35 @@ std::string combination_text(const DroppedParam& d, const RobotModel& model) {
   return combination;
 }
 
+/// No joint term of `model` passed its significance test: which levels they had to clear.
+std::string rigid_kept_line(double significance_t, const RobotModel& model) {
+  const ComplianceModel& terms = model.compliance;
+  double gravity_t = 0.0;
+  double harmonic_t = 0.0;
+  for (int t = 0; t < terms.term_count; ++t) {
+    const double level = parameter_significance_level(model, compliance_param_index(t), significance_t,
+                                                      CalibrationCompliance{}.significance_t);
+    (is_harmonic(terms.terms[t]) ? harmonic_t : gravity_t) = level;
+  }
+  char buf[240];
+  if (harmonic_t == 0.0) {
+    std::snprintf(buf, sizeof buf,
+                  "compliance: no term passed the %.3g sigma test (the data show no bending): the rigid fit is kept",
+                  gravity_t);
+  } else if (gravity_t == 0.0) {
+    std::snprintf(buf, sizeof buf,
+                  "harmonics: no term passed the %.3g sigma test (the joints show no harmonic error): the rigid fit "
+                  "is kept",
+                  harmonic_t);
+  } else {
+    std::snprintf(buf, sizeof buf,
+                  "compliance and harmonics: no term passed its test (gravity %.3g sigma, harmonics %.3g sigma): the "
+                  "rigid fit is kept",
+                  gravity_t, harmonic_t);
+  }
+  return buf;
+}
+
 std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pruned, double significance_t,
                                                const RobotModel& model) {
   std::vector<std::string> lines;
@@ -94,8 +123,9 @@ std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pru
   }
   for (int k = 0; k < kFullParamCount; ++k) {
     if (!mask_has(pruned, k)) continue;
+    const double level = parameter_significance_level(model, k, significance_t, CalibrationCompliance{}.significance_t);
     std::snprintf(buf, sizeof buf, "  fixed   %-8s (not significant: change below %.3g sigma; kept at its start value)",
-                  full_param_name(k, model), significance_t);
+                  full_param_name(k, model), level);
     lines.push_back(buf);
   }
   return lines;
@@ -376,13 +406,8 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
          identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t, final_stage.model)) {
       data.info_lines.push_back(line);
     }
-    if (final_stage.rigid_kept) {
-      char buf[200];
-      std::snprintf(buf, sizeof buf,
-                    "compliance: no term passed the %.3g sigma test (the data show no bending): the rigid fit is kept",
-                    std::fmax(run.result.significance_t, CalibrationCompliance{}.significance_t));
-      data.info_lines.push_back(buf);
-    }
+    if (final_stage.rigid_kept)
+      data.info_lines.push_back(rigid_kept_line(run.result.significance_t, final_stage.model));
     data.identifiability = identifiability_table(*lm, final_stage.model);
     for (int k = 0; k < kFullParamCount; ++k)
       if (mask_has(run.result.lm_pruned_mask, k))

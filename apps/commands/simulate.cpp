@@ -2,6 +2,8 @@
 
 #include <signal.h>
 
+#include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -50,6 +52,10 @@ const std::vector<cli::OptionSpec>& option_specs() {
       {"angle-sigma-urad", "X", "sigma of the true theta and alpha errors [urad] (default: from --errors)", ""},
       {"tool-sigma-um", "X", "sigma of the true tool's error per axis [um] (default: from --errors)", ""},
       {"compliance-urad", "J2,J3", "joint 2 and 3 gravity deflection [urad] (default: from --errors)", ""},
+      {"harmonic-urad", "J,K,S,C",
+       "joint J (1-6) turns by S sin(K q) + C cos(K q) [urad] more than it reads: an eccentric encoder (K = 1) or "
+       "a gear's transmission error",
+       ""},
       {"calibration-conf", "FILE", "true geometry = nominal + the [mounting] deltas of this UR calibration.conf", ""},
       {"force", "", "replace the files of an earlier session in --out-dir (never done without it)", ""},
       {"serve", "", "serve the streams live on two pseudo-terminals instead of writing captures", ""},
@@ -69,6 +75,31 @@ struct Numbers {
     return error.ok();
   }
 };
+
+/// --harmonic-urad J,K,S,C into config's harmonic_*.
+Error harmonic_option(const std::string& text, sim::SimConfig* config) {
+  double v[4] = {};
+  std::size_t start = 0;
+  int count = 0;
+  for (; count < 4 && start <= text.size(); ++count) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    if (!textio::parse_double(text.substr(start, comma - start), &v[count])) break;
+    start = comma + 1;
+  }
+  const bool whole = count == 4 && start == text.size() + 1;
+  if (!whole || v[0] < 1.0 || v[0] > 6.0 || v[0] != std::floor(v[0]) || v[1] < 1.0 || v[1] > 3.0 ||
+      v[1] != std::floor(v[1]) || std::fabs(v[2]) > 1e4 || std::fabs(v[3]) > 1e4) {
+    return Error::usage(
+        "--harmonic-urad must be J,K,S,C: joint 1-6, order 1-3, sine and cosine amplitudes within "
+        "+-10000 urad (e.g. 3,1,60,50), not '" +
+        text + "'");
+  }
+  config->harmonic_joint = static_cast<int>(v[0]) - 1;
+  config->harmonic_order = static_cast<int>(v[1]);
+  config->harmonic_sin_rad = v[2] * 1e-6;
+  config->harmonic_cos_rad = v[3] * 1e-6;
+  return Error{};
+}
 
 /// Largest session simulate writes: waypoints and seconds.
 constexpr std::size_t kMaxWaypoints = 2000;
@@ -132,6 +163,10 @@ Error configure(const cli::Options& options, SimConfig* config) {
     }
     config->compliance_j2_rad = j2 * 1e-6;
     config->compliance_j3_rad = j3 * 1e-6;
+  }
+  if (options.given("harmonic-urad")) {
+    const Error harmonic = harmonic_option(options.get("harmonic-urad"), config);
+    if (!harmonic.ok()) return harmonic;
   }
   if (!options.get("calibration-conf").empty()) {
     const port::Error read = textio::read_ur_calibration_conf(options.get("calibration-conf"), &config->deltas);

@@ -200,7 +200,13 @@ JointVector simulated_compliance(const RobotModel& truth, double j2_rad, double 
 }
 
 JointVector Session::compliance(const JointVector& q_rad) const {
-  return simulated_compliance(truth_.model, config_.compliance_j2_rad, config_.compliance_j3_rad, q_rad);
+  JointVector dq = simulated_compliance(truth_.model, config_.compliance_j2_rad, config_.compliance_j3_rad, q_rad);
+  const int j = config_.harmonic_joint;
+  if (j >= 0 && j < kJointCount) {
+    const double angle = static_cast<double>(config_.harmonic_order) * q_rad(j);
+    dq(j) += config_.harmonic_sin_rad * math::sin(angle) + config_.harmonic_cos_rad * math::cos(angle);
+  }
+  return dq;
 }
 
 Vec3 Session::true_point(const JointVector& q_rad) const {

@@ -44,7 +44,13 @@ struct SimConfig {
   double tool_sigma_m = 25e-6;                   ///< sigma of the true tool's deviation from nominal [m]
   double compliance_j2_rad = 60e-6;              ///< gravity deflection of joint 2 at full horizontal reach [rad]
   double compliance_j3_rad = 30e-6;              ///< gravity deflection of joint 3 with the forearm horizontal [rad]
-  double tracker_distance_m = 3.0;               ///< tracker distance from the robot base [m]
+  /// An eccentric encoder or a gear's transmission error: joint harmonic_joint (0-based; -1:
+  /// none) turns by sin_rad sin(order q) + cos_rad cos(order q) more than it reads.
+  int harmonic_joint = -1;
+  int harmonic_order = 1;           ///< periods per joint turn [-]
+  double harmonic_sin_rad = 0.0;    ///< amplitude of sin(order q) [rad]
+  double harmonic_cos_rad = 0.0;    ///< amplitude of cos(order q) [rad]
+  double tracker_distance_m = 3.0;  ///< tracker distance from the robot base [m]
   // Robot stream (the robot clock is the reference: true time + its start value).
   std::uint64_t robot_clock_start_us = 1000000000;  ///< robot clock at true time 0 [us]
   double robot_period_s = 0.008;                    ///< nominal joint-state period [s]

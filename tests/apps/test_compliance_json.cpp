@@ -133,5 +133,62 @@ TEST(ComplianceJson, UnusableKeysAreRefusedByName) {
   }
 }
 
+/// The point terms of compliant_ur5e followed by the harmonics of orders 1 .. 2 of every joint.
+record::CalibrationFile harmonic_ur5e() {
+  record::CalibrationFile file = compliant_ur5e(ComplianceLoad::point, Vec3(0.0, 0.0, -1.0));
+  ComplianceModel& c = file.model.compliance;
+  EXPECT_EQ(append_harmonic_terms(2, &c), Status::ok);
+  for (int t = 4; t < c.term_count; ++t) {
+    c.coefficient[t] = 3e-5 * (t % 2 == 0 ? 1.0 : -0.7) / (t - 3);
+    file.compliance_sigma[t] = 2e-6;
+  }
+  return file;
+}
+
+TEST(ComplianceJson, HarmonicTermsRoundTripToTheSameBits) {
+  if (4 + 4 * kJointCount > kMaxComplianceTerms) GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " terms";
+  const record::CalibrationFile file = harmonic_ur5e();
+  const std::string text = record::format_calibration_json(file);
+  const std::size_t term = text.find("\"name\": \"h_j3_cos2\"");
+  ASSERT_NE(term, std::string::npos) << text;
+  EXPECT_LT(text.find("\"harmonic\": \"cos 2\"", term), text.find('}', term));
+  EXPECT_LT(text.find("\"unit\": \"rad\"", term), text.find('}', term));
+  EXPECT_NE(text.find("\"load\": \"frame 2\""), std::string::npos);  // the gravity terms keep theirs
+  record::CalibrationFile back;
+  const port::Error r = record::parse_calibration_json(text, "r.json", &back);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(std::memcmp(&back.model.compliance, &file.model.compliance, sizeof(ComplianceModel)), 0);
+  EXPECT_EQ(worst_point_difference_m(back.model, file.model), 0.0);
+  record::CalibrationFile gravity_only = file;
+  gravity_only.model.compliance.term_count = 4;
+  EXPECT_GT(worst_point_difference_m(back.model, gravity_only.model), 1e-6);  // the harmonics are not a no-op
+}
+
+TEST(ComplianceJson, UnusableHarmonicsAreRefusedByName) {
+  if (4 + 4 * kJointCount > kMaxComplianceTerms) GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " terms";
+  const std::string good = record::format_calibration_json(harmonic_ur5e());
+  struct Case {
+    const char* from;  ///< replaced at its first place after the first harmonic term (terms[4])
+    const char* to;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"\"harmonic\": \"sin 1\"", "\"harmonic\": \"tan 1\"", "\"terms\"[4].harmonic must be \"sin K\" or \"cos K\""},
+      {"\"harmonic\": \"sin 1\"", "\"harmonic\": \"sin 4\"", "\"terms\"[4].harmonic must be"},
+      {"\"harmonic\": \"sin 1\"", "\"harmonic\": 1", "\"terms\"[4].harmonic must be"},
+      {"\"unit\": \"rad\"", "\"unit\": \"rad/m\"", "\"terms\"[4].unit must be \"rad\" for a harmonic"},
+  };
+  for (const Case& c : cases) {
+    std::string text = good;
+    const std::size_t at = text.find(c.from, text.find("\"name\": \"h_j1_sin1\""));
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, std::strlen(c.from), c.to);
+    record::CalibrationFile back;
+    const port::Error r = record::parse_calibration_json(text, "r.json", &back);
+    EXPECT_FALSE(r.ok()) << c.to;
+    EXPECT_NE(r.message.find(c.message), std::string::npos) << r.message;
+  }
+}
+
 }  // namespace
 }  // namespace hivecal::compliance_json_test

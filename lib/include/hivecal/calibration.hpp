@@ -62,9 +62,15 @@ struct CalibrationCompliance {
   ComplianceModel model;
   /// Level of the significance test for the compliance terms, when the test is on: a term is
   /// a new model term, not a correction to a known one, so it must clear this (and at least
-  /// significance_t) to stay; below it the term is fixed at its start value [-].
+  /// significance_t) to stay; below it the term is fixed at its start value. The harmonics,
+  /// many generic terms, clear a level raised so that an arm without harmonics keeps one by
+  /// chance at most kHarmonicFamilyAlpha of the time (24 terms: 3.53) [-].
   double significance_t = 3.0;
 };
+
+/// Chance that a stage keeps any of its harmonic terms on an arm without harmonics
+/// (Bonferroni over the terms; CalibrationCompliance::significance_t) [-].
+inline constexpr double kHarmonicFamilyAlpha = 0.01;
 
 /// Default level of LM's significance test: a parameter whose change is below 2 sigma is fixed [-].
 inline constexpr double kDefaultSignificance = 2.0;
@@ -207,6 +213,12 @@ struct CalibrationOutlierList {
 /// "LM+harmonics", "LM+compliance+harmonics" after the joint terms of its model; the
 /// previous stage's name is taken from `refines_previous` and `previous`).
 const char* calibration_stage_name(const CalibrationStage& stage, const CalibrationStage* previous);
+/// The level full-model parameter `index` of `model` must clear in the significance test of a
+/// stage at level `significance_t` (CalibrationResult::significance_t): that level for the
+/// geometry; at least `compliance_t` (CalibrationCompliance::significance_t) for a gravity
+/// term; for a harmonic, the level raised for the model's harmonics as a family
+/// (kHarmonicFamilyAlpha) [-].
+double parameter_significance_level(const RobotModel& model, int index, double significance_t, double compliance_t);
 /// Name of a solver ("ABC", "GSA", "LM").
 const char* calibration_solver_name(CalibrationSolver solver);
 /// Name of a step ("input", "split", "baseline", "gsa", "abc", "lm", "done").

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <new>
 
+#include "hivecal/core/distributions.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/rigid_fit.hpp"
@@ -213,11 +214,36 @@ double model_value(const RobotModel& model, int index) {
   set_params(params, keep_other_tools, model);
 }
 
-/// The estimated model parameter (geometry or compliance coefficient) whose change from
-/// `start` is least significant, below t standard deviations (a compliance term: below
-/// compliance_t >= t, its ratio scaled by t / compliance_t to compare); -1 when none is (or
-/// t <= 0).
-[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t, double compliance_t) {
+/// The levels the joint terms of a stage must clear [-].
+struct JointTermLevels {
+  double gravity_t = 0.0;   ///< a gravity term: CalibrationCompliance::significance_t
+  double harmonic_t = 0.0;  ///< a harmonic: that, raised for the whole family (harmonic_level)
+  ParamMask harmonics = 0;  ///< the harmonic terms' parameters
+};
+
+/// The level a family of `count` harmonic terms must clear: `significance_t`, raised so that an
+/// arm without any of them keeps one by chance at most kHarmonicFamilyAlpha of the time
+/// (Bonferroni: each term two-sided at alpha / count). 24 harmonics: z = 3.53 [-].
+double harmonic_level(double significance_t, int count) {
+  if (count <= 0) return significance_t;
+  const double per_term_tail = kHarmonicFamilyAlpha / static_cast<double>(count);
+  return std::fmax(significance_t, std::sqrt(math::chi_square_upper_quantile(per_term_tail, 1.0)));
+}
+
+/// `compliance_t`: CalibrationCompliance::significance_t.
+JointTermLevels joint_term_levels(const RobotModel& reference, double compliance_t) {
+  JointTermLevels levels;
+  levels.gravity_t = compliance_t;
+  levels.harmonics = harmonic_params_mask(reference);
+  levels.harmonic_t = harmonic_level(compliance_t, mask_count(levels.harmonics));
+  return levels;
+}
+
+/// The estimated model parameter (geometry or joint-term coefficient) whose change from
+/// `start` is least significant, below t standard deviations (a joint term: below its level
+/// >= t, its ratio scaled by t / level to compare); -1 when none is (or t <= 0).
+[[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t,
+                                        const JointTermLevels& levels) {
   if (!(t > 0.0)) return -1;
   const ModelParams change = to_params(lm.model) - to_params(start);
   int weakest = -1;
@@ -227,8 +253,9 @@ double model_value(const RobotModel& model, int index) {
     if (i >= kRigidParamCount && i - kRigidParamCount >= lm.model.compliance.term_count) break;
     if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) continue;
     const double delta = i < kModelParamCount ? change(i) : model_value(lm.model, i) - model_value(start, i);
+    const double level = mask_has(levels.harmonics, i) ? levels.harmonic_t : levels.gravity_t;
     const double ratio = i < kRigidParamCount ? std::fabs(delta) / lm.sigma(i)
-                                              : std::fabs(delta) / lm.sigma(i) * (t / std::fmax(t, compliance_t));
+                                              : std::fabs(delta) / lm.sigma(i) * (t / std::fmax(t, level));
     if (ratio < weakest_ratio) {
       weakest_ratio = ratio;
       weakest = i;
@@ -300,14 +327,18 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   for (int axis = 0; axis < 3; ++axis) lm.other_target_tools |= mask_has(free_mask, tool_param_index(axis));
   Status status = Status::ok;
   *pruned = 0;
-  for (int attempt = 0; attempt < kModelParamCount + kMaxComplianceTerms + 2; ++attempt) {
+  // Each attempt fixes one parameter at most: the geometry and the model's joint terms (not the
+  // capacity's: the same attempts on every build).
+  const int attempts = kModelParamCount + reference.compliance.term_count + 2;
+  const JointTermLevels levels = joint_term_levels(reference, job.options.compliance.significance_t);
+  for (int attempt = 0; attempt < attempts; ++attempt) {
     if (trace != nullptr) trace->clear();
     LmWorkspace* workspace = job.workspace.open_lm();
     status = calibrate_lm(from, base, fit.samples, lm, workspace, &r.lm, trace, report.observer);
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
     bool again = fit.reset_moved && reset_dropped(reference, r.lm.identifiability, o.tool_known, &from);
-    const int weakest = least_significant(reference, r.lm, fit.significance_t, job.options.compliance.significance_t);
+    const int weakest = least_significant(reference, r.lm, fit.significance_t, levels);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;
@@ -652,6 +683,12 @@ const char* blunder_verdict_name(BlunderVerdict verdict) {
     case BlunderVerdict::list_full: return "list_full";
   }
   return "unknown";
+}
+
+double parameter_significance_level(const RobotModel& model, int index, double significance_t, double compliance_t) {
+  if (index < kRigidParamCount) return significance_t;
+  const JointTermLevels levels = joint_term_levels(model, compliance_t);
+  return std::fmax(significance_t, mask_has(levels.harmonics, index) ? levels.harmonic_t : levels.gravity_t);
 }
 
 const char* calibration_solver_name(CalibrationSolver solver) {
