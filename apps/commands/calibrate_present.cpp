@@ -46,7 +46,14 @@ report::MethodRow stage_row(const Run& run, std::size_t k) {
       stage.params == CalibrationParams::paper ? "paper-" + std::to_string(run.link_length_count) : "full";
   if (stage.solver == CalibrationSolver::lm) {
     if (stage.params == CalibrationParams::paper && run.result.baseline.tool_fitted) params += " + tool";
-    if (stage.compliance) params += " + compliance";
+    if (stage.compliance) {  // the joint terms, as the stage's name lists them ("LM+compliance+harmonics")
+      const std::string name = run.result.stage_name(k);
+      for (std::size_t at = name.find('+'); at != std::string::npos;) {
+        const std::size_t next = name.find('+', at + 1);
+        params += " + " + name.substr(at + 1, next == std::string::npos ? std::string::npos : next - at - 1);
+        at = next;
+      }
+    }
     bool last_lm = true;  // result.lm holds the last LM stage's analysis only
     for (std::size_t later = k + 1; later < run.result.stage_count; ++later)
       last_lm = last_lm && run.result.stages[later].solver != CalibrationSolver::lm;

@@ -222,10 +222,12 @@ const PredictionSet* rigid_reference(const ReportData& data) {
   return nullptr;
 }
 
-/// Whether a term of `model`'s compliance deflects joint j (0-based).
-bool compliant_joint(const RobotModel& model, int j) {
-  for (int t = 0; t < model.compliance.term_count; ++t)
-    if (model.compliance.terms[t].joint == j) return true;
+/// Whether a joint term of `model` deflects joint j (0-based): a gravity term of the joint, or
+/// a harmonic of it that was fitted (the ones the significance test fixed at 0 are not drawn).
+bool deflected_joint(const RobotModel& model, int j) {
+  const ComplianceModel& c = model.compliance;
+  for (int t = 0; t < c.term_count; ++t)
+    if (c.terms[t].joint == j && (!is_harmonic(c.terms[t]) || c.coefficient[t] != 0.0)) return true;
   return false;
 }
 
@@ -237,8 +239,8 @@ std::vector<double> residuals_um(const ReportData& data, const PredictionSet& se
 }
 
 /// Residual after calibration against each joint angle (unmodelled effects show as trends).
-/// The joints a compliance term deflects show the rigid fit (before) and the compliant one
-/// (after) on every sample instead of training / test.
+/// The joints a joint term deflects show the rigid fit (before) and the final one (after) on
+/// every sample instead of training / test: a fitted harmonic shows as the wave it took out.
 void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   const PredictionSet& after = data.predictions.back();
   const PredictionSet* rigid = rigid_reference(data);
@@ -246,7 +248,7 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   const std::vector<double> rigid_um = rigid != nullptr ? residuals_um(data, *rigid) : std::vector<double>{};
   const double y_hi = std::max(max_of(residual_um), max_of(rigid_um));
   for (int j = 0; j < 6; ++j) {
-    const bool before_after = rigid != nullptr && compliant_joint(after.model, j);
+    const bool before_after = rigid != nullptr && deflected_joint(after.model, j);
     const double deg = math::kDegPerRad;
     std::vector<Series> series;
     if (before_after) {
@@ -265,10 +267,11 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
       }
     }
     const std::string joint = std::to_string(j + 1);
-    ChartSpec spec = chart("fig-residual-q" + joint,
-                           before_after ? "Residual vs joint " + joint + ": rigid and compliant fit, every sample"
-                                        : "Residual after calibration vs joint " + joint,
-                           "q" + joint + " [deg]", "3D residual [um]");
+    ChartSpec spec =
+        chart("fig-residual-q" + joint,
+              before_after ? "Residual vs joint " + joint + ": rigid fit and " + after.method + ", every sample"
+                           : "Residual after calibration vs joint " + joint,
+              "q" + joint + " [deg]", "3D residual [um]");
     spec.width_px = 400;
     spec.height_px = 260;
     spec.fixed_y = true;
