@@ -85,8 +85,9 @@ std::string combination_text(const DroppedParam& d, const RobotModel& model) {
   return combination;
 }
 
-/// No joint term of `model` passed its significance test: which levels they had to clear.
-std::string rigid_kept_line(double significance_t, const RobotModel& model) {
+/// No new joint term of `model` passed its significance test: which levels they had to clear,
+/// and which fit is kept (the rigid one, or LM+compliance when `after_compliance`).
+std::string rigid_kept_line(double significance_t, const RobotModel& model, bool after_compliance) {
   const ComplianceModel& terms = model.compliance;
   double gravity_t = 0.0;
   double harmonic_t = 0.0;
@@ -96,7 +97,12 @@ std::string rigid_kept_line(double significance_t, const RobotModel& model) {
     (is_harmonic(terms.terms[t]) ? harmonic_t : gravity_t) = level;
   }
   char buf[240];
-  if (harmonic_t == 0.0) {
+  if (after_compliance) {
+    std::snprintf(buf, sizeof buf,
+                  "harmonics: no term passed the %.3g sigma test (the joints show no harmonic error): the "
+                  "LM+compliance fit is kept",
+                  harmonic_t);
+  } else if (harmonic_t == 0.0) {
     std::snprintf(buf, sizeof buf,
                   "compliance: no term passed the %.3g sigma test (the data show no bending): the rigid fit is kept",
                   gravity_t);
@@ -413,8 +419,11 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
          identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t, final_stage.model)) {
       data.info_lines.push_back(line);
     }
-    if (final_stage.rigid_kept)
-      data.info_lines.push_back(rigid_kept_line(run.result.significance_t, final_stage.model));
+    if (final_stage.rigid_kept) {
+      const std::size_t last = run.result.stage_count - 1;
+      const bool after_compliance = last > 0 && run.result.stages[last - 1].compliance;
+      data.info_lines.push_back(rigid_kept_line(run.result.significance_t, final_stage.model, after_compliance));
+    }
     data.identifiability = identifiability_table(*lm, final_stage.model);
     for (int k = 0; k < kFullParamCount; ++k)
       if (mask_has(run.result.lm_pruned_mask, k))

@@ -151,9 +151,10 @@ struct CalibrationBaseline {
 struct CalibrationStage {
   CalibrationSolver solver = CalibrationSolver::lm;  ///< which solver ran
   bool refines_previous = false;                     ///< LM started from the previous stage's geometry and base
-  bool compliance = false;  ///< LM estimated the model's compliance terms too ("LM+compliance")
-  /// LM+compliance: no compliance term passed the significance test, so the stage holds the
-  /// rigid fit (the model's terms at their start values) and `lm` its details.
+  bool compliance = false;  ///< LM estimated the model's joint terms too ("LM+compliance", "LM+harmonics", ...)
+  /// A joint-term stage none of whose new terms passed the significance test: the stage holds
+  /// the previous fit (the rigid one, or LM+compliance before LM+compliance+harmonics) with the
+  /// new terms at their start values, and `lm` its details.
   bool rigid_kept = false;
   CalibrationParams params = CalibrationParams::paper;  ///< parameters it could move
   Status status = Status::ok;                           ///< ok, or not_converged (LM's last point kept)
@@ -170,8 +171,10 @@ struct CalibrationStage {
   Span<const double> trace_m;  ///< best cost (ABC/GSA: MAE, LM: RMS) per iteration [m]; views the workspace
 };
 
-/// Stages a job runs at most ('all': GSA, ABC, LM, then LM+compliance when enabled).
-inline constexpr std::size_t kMaxCalibrationStages = 4;
+/// Stages a job runs at most ('all': GSA, ABC, LM, then LM+compliance when enabled, and
+/// LM+compliance+harmonics after it when the terms hold both families: a capacity that holds
+/// the harmonics, core/capacity.hpp).
+inline constexpr std::size_t kMaxCalibrationStages = kMaxJointTerms >= 4 + 2 * kJointCount ? 5 : 4;
 
 /// The steps of a job, in order (CalibrationResult::step is the last one reached).
 enum class CalibrationStep : std::uint8_t { input, split, baseline, gsa, abc, lm, done };

@@ -70,14 +70,40 @@ ParamMask known_params_mask(const CalibrationOptions& options) {
 }
 
 /// The compliance model the LM+compliance stage starts from: the options' terms, or the
-/// default ones of `start`'s geometry. invalid_argument when there are none or they are unusable.
-Status compliance_start(const RobotModel& start, const CalibrationCompliance& options, ComplianceModel* out) {
+/// default ones of `start`'s geometry; `gravity_only`: without the harmonics. invalid_argument
+/// when there are none or they are unusable.
+Status compliance_start(const RobotModel& start, const CalibrationCompliance& options, bool gravity_only,
+                        ComplianceModel* out) {
   *out = options.model;
   if (out->term_count == 0) {
     const Status status = default_compliance_terms(start, options.model.gravity_direction, options.model.load, out);
     if (status != Status::ok) return status;
   }
+  if (gravity_only) {  // the gravity terms in their order, the harmonics' slots back to their defaults
+    int kept = 0;
+    for (int t = 0; t < out->term_count; ++t) {
+      if (is_harmonic(out->terms[t])) continue;
+      out->terms[kept] = out->terms[t];
+      out->coefficient[kept++] = out->coefficient[t];
+    }
+    for (int t = kept; t < out->term_count; ++t) {
+      out->terms[t] = ComplianceTerm{};
+      out->coefficient[t] = 0.0;
+    }
+    out->term_count = kept;
+  }
   return check_compliance(*out) == Status::ok ? Status::ok : Status::invalid_argument;
+}
+
+/// The options' joint terms hold both gravity terms and harmonics: the job then runs
+/// LM+compliance (the gravity terms) before LM+compliance+harmonics, so that Table 1 shows what
+/// each family bought. Not inlined: its model would stay on the firmware's stack otherwise.
+[[gnu::noinline]] bool gravity_stage_first(const RobotModel& start, const CalibrationCompliance& options) {
+  ComplianceModel terms;
+  if (compliance_start(start, options, false, &terms) != Status::ok) return false;
+  int harmonics = 0;
+  for (int t = 0; t < terms.term_count; ++t) harmonics += is_harmonic(terms.terms[t]) ? 1 : 0;
+  return harmonics > 0 && harmonics < terms.term_count;
 }
 
 /// The job's state while it runs: the inputs and where the result goes.
@@ -275,6 +301,9 @@ struct LmFit {
   bool compliance = false;                  ///< the reference's compliance terms are free too, starting on start_model
   Span<const Sample> samples;               ///< the samples fitted
   double significance_t = 0.0;              ///< a change below this many sigma is not significant [-]
+  /// Joint terms held at their start values: after LM+compliance, the gravity terms it did not
+  /// keep (the harmonics' stage adds harmonics to that model, it does not reopen its choice).
+  ParamMask fixed_terms = 0;
 };
 
 /// Where a fit reports: its trace, its observer (both may be null), the parameters fixed as
@@ -319,6 +348,10 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   if (o.base_known || o.tool_known) {  // the base / the tool points stay where the options put them
     if (o.base_known) base = &o.known_base_to_tracker;
     lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) & ~known_params_mask(o);
+    lm.params = LmParamSet::custom;
+  }
+  if (fit.fixed_terms != 0) {
+    lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) & ~fit.fixed_terms;
     lm.params = LmParamSet::custom;
   }
   const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask, reference);
@@ -442,54 +475,66 @@ Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
   return Status::ok;
 }
 
-/// True when the LM run kept (estimated) one of the first `term_count` compliance terms.
-bool any_compliance_kept(ParamMask kept, int term_count) {
-  return (kept & compliance_params_mask(term_count)) != 0;
-}
+Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
 
-/// No compliance term is significant: the data do not show the arm bending, and the rigid fit
-/// is the answer (the compliant stage's own pruning of the geometry would differ from it).
-/// The rigid stage runs again (the same inputs, so the same bits) so that r.lm holds its
-/// details; the LM+compliance stage is its copy with the terms at their start values.
-[[gnu::noinline]] Status keep_rigid_fit(Job& job, ParamMask* pruned) {
+/// No new joint term is significant: the data show neither bending nor (after LM+compliance)
+/// a harmonic, and the previous fit (the rigid one, or LM+compliance) is the answer (this
+/// stage's own pruning of the geometry would differ from it). The previous stage runs again (the
+/// same inputs, so the same bits) so that r.lm holds its details; this stage is its copy with
+/// the new terms at their start values.
+[[gnu::noinline]] Status keep_previous_fit(Job& job, ParamMask* pruned) {
   CalibrationResult& r = job.result;
-  const std::size_t compliant_index = r.stage_count;
-  r.stage_count = compliant_index - 1;  // run_lm refills the rigid stage's slot and trace
-  const Status status = run_lm(job, r.stages[r.stage_count].refines_previous, pruned);
-  r.stage_count = compliant_index;
+  const std::size_t index = r.stage_count;
+  r.stage_count = index - 1;  // the previous stage refills its own slot and trace
+  const CalibrationStage& previous = r.stages[r.stage_count];
+  const Status status =
+      previous.compliance ? run_compliance_lm(job, pruned, true) : run_lm(job, previous.refines_previous, pruned);
+  r.stage_count = index;
   if (status != Status::ok) return status;
-  // The compliant slot's model holds the terms at their start values (run_compliance_lm's
-  // reference): keep them, take everything else from the rigid stage.
-  const CalibrationStage& rigid = r.stages[compliant_index - 1];
-  CalibrationStage& stage = r.stages[compliant_index];
+  // This slot's model holds the stage's terms at their start values (run_compliance_lm's
+  // reference): the previous fit's coefficients go into its terms (a prefix of these), the
+  // rest comes from the previous stage.
+  CalibrationStage& stage = r.stages[index];
   RobotModel& model = stage.model;
-  for (int j = 0; j < kJointCount; ++j) model.joints[j] = rigid.model.joints[j];
-  for (int t = 0; t < kMaxTargets; ++t) target_tool(&model, t) = target_tool(rigid.model, t);
-  stage.solver = rigid.solver;
-  stage.refines_previous = rigid.refines_previous;
+  for (int j = 0; j < kJointCount; ++j) model.joints[j] = previous.model.joints[j];
+  for (int t = 0; t < kMaxTargets; ++t) target_tool(&model, t) = target_tool(previous.model, t);
+  for (int t = 0; t < previous.model.compliance.term_count; ++t) {
+    model.compliance.coefficient[t] = previous.model.compliance.coefficient[t];
+  }
+  stage.solver = previous.solver;
+  stage.refines_previous = previous.refines_previous;
   stage.compliance = true;
   stage.rigid_kept = true;
-  stage.params = rigid.params;
-  stage.status = rigid.status;
-  stage.base_to_tracker = rigid.base_to_tracker;
-  stage.evaluations = rigid.evaluations;
-  stage.iterations = rigid.iterations;
-  stage.best_cost_m = rigid.best_cost_m;
-  stage.trace_m = rigid.trace_m;
+  stage.params = previous.params;
+  stage.status = previous.status;
+  stage.base_to_tracker = previous.base_to_tracker;
+  stage.evaluations = previous.evaluations;
+  stage.iterations = previous.iterations;
+  stage.best_cost_m = previous.best_cost_m;
+  stage.trace_m = previous.trace_m;
   return Status::ok;
 }
 
-/// LM+compliance: from the rigid LM stage's geometry and base (the last stage), the geometry
-/// and the compliance terms together, at the rigid stage's significance level. A parameter
-/// this fit cannot determine goes back to its start value, as in a hybrid. The start model
-/// with its terms is built in the new stage's slot (lm_stage fills it after the fit), not on
-/// the stack: two models here cost the firmware 1.2 kB above LM's peak.
-[[gnu::noinline]] Status run_compliance_lm(Job& job, ParamMask* pruned) {
+/// The last rigid LM stage before slot r.stage_count: what every joint-term stage starts from.
+const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
+  std::size_t k = r.stage_count - 1;
+  while (k > 0 && r.stages[k].compliance) --k;
+  return r.stages[k];
+}
+
+/// LM+compliance: from the rigid LM stage's geometry and base, the geometry and the joint terms
+/// (`gravity_only`: the gravity terms alone, before the harmonics' stage) together, at the
+/// rigid stage's significance level. A parameter this fit cannot determine goes back to its
+/// start value, as in a hybrid. The start model with its terms is built in the new stage's slot
+/// (lm_stage fills it after the fit), not on the stack: two models here cost the firmware 1.2 kB
+/// above LM's peak.
+[[gnu::noinline]] Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only) {
   CalibrationResult& r = job.result;
-  const CalibrationStage& rigid = r.stages[r.stage_count - 1];
+  const CalibrationStage& rigid = rigid_lm_stage(r);
+  const bool after_compliance = r.stages[r.stage_count - 1].compliance;
   RobotModel& reference = r.stages[r.stage_count].model;
   reference = job.start;
-  const Status terms = compliance_start(job.start, job.options.compliance, &reference.compliance);
+  const Status terms = compliance_start(job.start, job.options.compliance, gravity_only, &reference.compliance);
   if (terms != Status::ok) return terms;  // checked at the input step
   TraceBase& trace = job.workspace.trace(r.stage_count);
   LmFit fit;
@@ -500,23 +545,30 @@ bool any_compliance_kept(ParamMask kept, int term_count) {
   fit.compliance = true;
   fit.samples = job.dataset.train();
   fit.significance_t = r.significance_t;
+  if (after_compliance) {  // r.lm is LM+compliance's: its gravity terms (this model's first ones)
+    const int gravity_terms = r.stages[r.stage_count - 1].model.compliance.term_count;
+    fit.fixed_terms = compliance_params_mask(gravity_terms) & ~r.lm.identifiability.kept_mask;
+  }
   const Status status = fit_lm(job, fit, LmFitReport{&trace, job.observer, pruned});
   if (status != Status::ok && status != Status::not_converged) return status;
-  if (any_compliance_kept(r.lm.identifiability.kept_mask, reference.compliance.term_count)) {
+  // The terms this stage adds: every one after the rigid fit, the harmonics after LM+compliance.
+  const ParamMask new_terms =
+      after_compliance ? harmonic_params_mask(reference) : compliance_params_mask(reference.compliance.term_count);
+  if ((r.lm.identifiability.kept_mask & new_terms) != 0) {
     lm_stage(job, status, true, true, trace);
     return Status::ok;
   }
-  return keep_rigid_fit(job, pruned);
+  return keep_previous_fit(job, pruned);
 }
 
 /// Runs one stage with the observer's begin/end around it, then its train/test errors.
 /// `hybrid`: the stage is a half of a hybrid (ABC/GSA: the start, on the spanning subset; LM:
 /// from the previous stage). `compliance`: the LM+compliance stage (solver lm).
-Status run_stage(Job& job, CalibrationSolver solver, bool hybrid, bool compliance = false) {
+Status run_stage(Job& job, CalibrationSolver solver, bool hybrid, bool compliance = false, bool gravity_only = false) {
   CalibrationResult& r = job.result;
   const std::size_t index = r.stage_count;
   if (job.observer != nullptr) job.observer->on_stage_begin(index, solver);
-  const Status status = compliance                        ? run_compliance_lm(job, &r.lm_pruned_mask)
+  const Status status = compliance                        ? run_compliance_lm(job, &r.lm_pruned_mask, gravity_only)
                         : solver == CalibrationSolver::lm ? run_lm(job, hybrid, &r.lm_pruned_mask)
                                                           : run_population(job, solver, hybrid);
   const CalibrationStep step = solver == CalibrationSolver::abc   ? CalibrationStep::abc
@@ -579,9 +631,12 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
   if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, plan.hybrid)) != Status::ok) return status;
   if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, plan.hybrid)) != Status::ok) return status;
   if (plan.lm && (status = run_stage(job, CalibrationSolver::lm, plan.hybrid)) != Status::ok) return status;
-  if (plan.lm && options.compliance.enabled &&
-      (status = run_stage(job, CalibrationSolver::lm, true, true)) != Status::ok) {
-    return status;
+  if (plan.lm && options.compliance.enabled) {
+    if (gravity_stage_first(job.start, options.compliance) &&
+        (status = run_stage(job, CalibrationSolver::lm, true, true, true)) != Status::ok) {
+      return status;
+    }
+    if ((status = run_stage(job, CalibrationSolver::lm, true, true)) != Status::ok) return status;
   }
   r->step = CalibrationStep::done;
   r->status = Status::ok;
@@ -611,7 +666,7 @@ namespace {
 bool compliance_usable(const RobotModel& start, const CalibrationOptions& options) {
   if (!options.compliance.enabled) return true;
   ComplianceModel model;
-  return plan_for(options.method).lm && compliance_start(start, options.compliance, &model) == Status::ok;
+  return plan_for(options.method).lm && compliance_start(start, options.compliance, false, &model) == Status::ok;
 }
 
 /// Input checks shared by calibrate() and cross_validate().
