@@ -63,10 +63,7 @@ textio::JsonValue read_json(const std::string& file) {
 
 /// Exit code and stderr of calibrate with `args`.
 int calibrate_stderr(const std::vector<std::string>& args, std::string* err) {
-  ::testing::internal::CaptureStderr();
-  const int code = run(cli::calibrate_main, args);
-  *err = ::testing::internal::GetCapturedStderr();
-  return code;
+  return test::run_capturing_stderr(cli::calibrate_main, args, err);
 }
 
 /// Points of a predict output (x,y,z CSV in metres).

@@ -112,9 +112,8 @@ TEST_F(HarmonicsCli, RefusedWithoutLmOrBeyondTheOrdersAndTheCapacity) {
     std::vector<std::string> args = inputs();
     args.insert(args.end(), {"--out", path("bad.json")});
     args.insert(args.end(), c.options.begin(), c.options.end());
-    ::testing::internal::CaptureStderr();
-    const int code = run(cli::calibrate_main, args);
-    const std::string err = ::testing::internal::GetCapturedStderr();
+    std::string err;
+    const int code = test::run_capturing_stderr(cli::calibrate_main, args, &err);
     std::string shown;
     for (const std::string& o : c.options) shown += o + " ";
     EXPECT_EQ(code, cli::kExitUsage) << shown;

@@ -88,27 +88,34 @@ TEST(LmCompliance, RigidModelHasZeroCoefficientColumnsAndTheRigidParamSet) {
   EXPECT_STREQ(full_param_name(3, rigid), "alpha1");
 }
 
-TEST(LmCompliance, RecoversTheCoefficientsOfItsOwnFormWithoutNoise) {
-  const RobotModel truth = compliant_truth();
-  const RigidTransform base = test::example_base_to_tracker();
-  Random random(1604);
+/// `poses` noise-free samples of `truth`, fitted from the nominal UR5 with its terms at zero
+/// (LmParamSet::full_compliance) into `result`; the status.
+Status fit_without_noise(const RobotModel& truth, std::size_t poses, Random* random) {
   dataset.clear();
-  test::fill_dataset(truth, base, 120, 0.0, &random, &dataset);
-  const RobotModel start = zero_compliance_start(truth, false);
+  test::fill_dataset(truth, test::example_base_to_tracker(), poses, 0.0, random, &dataset);
   LmOptions options;
   options.params = LmParamSet::full_compliance;
   Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, dataset.samples(), options, &workspace, &result));
-  ASSERT_EQ(status, Status::ok);
+  EXPECT_NO_HEAP(status = calibrate_lm(zero_compliance_start(truth, false), nullptr, dataset.samples(), options,
+                                       &workspace, &result));
+  return status;
+}
+
+TEST(LmCompliance, RecoversTheCoefficientsOfItsOwnFormWithoutNoise) {
+  const RobotModel truth = compliant_truth();
+  Random random(1604);
+  ASSERT_EQ(fit_without_noise(truth, 120, &random), Status::ok);
   EXPECT_LT(result.rms_m, 1e-9);
+  const RobotModel start = zero_compliance_start(truth, false);
   for (int t = 0; t < truth.compliance.term_count; ++t) {
     EXPECT_TRUE(mask_has(result.identifiability.kept_mask, compliance_param_index(t)));
     EXPECT_NEAR(result.model.compliance.coefficient[t], truth.compliance.coefficient[t], 1e-9);
     EXPECT_GT(result.sigma(compliance_param_index(t)), 0.0);
   }
   // Without the compliance set, the same start keeps its (zero) coefficients and fits worse.
-  options.params = LmParamSet::full;
-  ASSERT_EQ(calibrate_lm(start, nullptr, dataset.samples(), options, &workspace, &result), Status::ok);
+  LmOptions rigid;
+  rigid.params = LmParamSet::full;
+  ASSERT_EQ(calibrate_lm(start, nullptr, dataset.samples(), rigid, &workspace, &result), Status::ok);
   for (int t = 0; t < kMaxComplianceTerms; ++t) EXPECT_EQ(result.model.compliance.coefficient[t], 0.0);
   EXPECT_GT(result.rms_m, 1e-6);
 }
@@ -160,16 +167,9 @@ TEST(LmCompliance, RecoversJointHarmonicsWithTheGravityTermsWithoutNoise) {
   for (int t = gravity_terms; t < truth.compliance.term_count; ++t) {
     truth.compliance.coefficient[t] = random.uniform(-100e-6, 100e-6);  // 0.1 mrad: an eccentric encoder
   }
-  const RigidTransform base = test::example_base_to_tracker();
-  dataset.clear();
-  test::fill_dataset(truth, base, 200, 0.0, &random, &dataset);
-  const RobotModel start = zero_compliance_start(truth, false);
-  LmOptions options;
-  options.params = LmParamSet::full_compliance;
-  Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, dataset.samples(), options, &workspace, &result));
-  ASSERT_EQ(status, Status::ok);
+  ASSERT_EQ(fit_without_noise(truth, 200, &random), Status::ok);
   EXPECT_LT(result.rms_m, 1e-9);
+  const RobotModel start = zero_compliance_start(truth, false);
   // On a floor mount the shoulder's own link end swings on a circle about the shoulder: its
   // gravity term c_j2_o2 is a first harmonic of q2. The analysis drops the generic harmonic
   // (named), keeps the physical term, and the kept cosine is what the two leave over.
