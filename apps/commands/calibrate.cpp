@@ -25,7 +25,6 @@
 namespace hivecal::cli {
 namespace {
 
-constexpr const char* kCalibrateCommand = "calibrate";
 constexpr std::size_t kTraceCapacity = 1024;
 
 /// One run's storage on the heap (nothing kept between runs; tests run several in one process):

@@ -14,7 +14,6 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kCheckRobotCommand = "check-robot";
 using math::kDegPerRad;
 
 std::string fmt(const char* format, double a, double b = 0.0, double c = 0.0, double d = 0.0) {

@@ -5,6 +5,17 @@
 
 namespace hivecal::cli {
 
+// Each subcommand's name, as typed after `hivecal` and shown in its messages.
+inline constexpr const char* kPredictCommand = "predict";
+inline constexpr const char* kCalibrateCommand = "calibrate";
+inline constexpr const char* kReportCommand = "report";
+inline constexpr const char* kValidateCommand = "validate";
+inline constexpr const char* kPlanCommand = "plan";
+inline constexpr const char* kExportCommand = "export";
+inline constexpr const char* kCheckRobotCommand = "check-robot";
+inline constexpr const char* kIso9283Command = "iso9283";
+inline constexpr const char* kDemoCommand = "demo";
+
 int predict_main(int argc, char** argv);      ///< positions of poses from a calibration result
 int calibrate_main(int argc, char** argv);    ///< geometry from tracker data: tables, result, report
 int report_main(int argc, char** argv);       ///< the HTML report again from a result file

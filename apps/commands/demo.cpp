@@ -17,7 +17,7 @@ namespace hivecal::cli {
 
 int demo_main(int argc, char** argv) {
   Options options;
-  const int parsed = parse_options("demo",
+  const int parsed = parse_options(kDemoCommand,
                                    "Simulates 38 poses of a perturbed UR5 and compares the fit of the\n"
                                    "nominal and the true geometry.",
                                    {}, argc, argv, &options);
@@ -40,14 +40,14 @@ int demo_main(int argc, char** argv) {
     Vec3 noise;
     noise << random.normal(), random.normal(), random.normal();  // defined draw order
     if (dataset.add(q, tracker_pose.apply(fk_tool_point(truth, q)) + 1e-5 * noise) != Status::ok) {
-      return exit_with("demo", Error::failure("a simulated sample does not fit the dataset"));
+      return exit_with(kDemoCommand, Error::failure("a simulated sample does not fit the dataset"));
     }
   }
   for (const auto& [name, model] : {std::pair<const char*, RobotModel>{"nominal", nominal}, {"true", truth}}) {
     RigidTransform base;
     const Status fit = fit_base_to_tracker(model, dataset.samples(), &base);
     if (fit != Status::ok)
-      return exit_with("demo", Error::failure(std::string("base fit failed: ") + status_message(fit)));
+      return exit_with(kDemoCommand, Error::failure(std::string("base fit failed: ") + status_message(fit)));
     const ErrorStats stats = position_error_stats(model, base, dataset.samples());
     std::printf("%-8s geometry: MAE 3D %.1f um, sigma %.1f um over %zu samples\n", name,
                 stats.mae(ErrorAxis::norm_3d) * 1e6, stats.sigma(ErrorAxis::norm_3d) * 1e6, stats.count);

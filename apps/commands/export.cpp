@@ -21,8 +21,6 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kExportCommand = "export";
-
 /// The arm to export: a result (with its base -> tracker; *result_text gets the file's text),
 /// or --robot-model with --ur-calibration's deltas applied when given.
 Error load_arm(const Options& options, record::CalibrationFile* arm, bool* has_tracker, std::string* result_text) {

@@ -32,7 +32,6 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kIso9283Command = "iso9283";
 constexpr std::size_t kNoReport = static_cast<std::size_t>(-1);
 
 /// The reaches of one commanded pose.

@@ -19,7 +19,6 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kPlanCommand = "plan";
 // Shortest dwell: the extraction keeps a tracker point when the robot was still around it;
 // a 10 Hz tracker needs three points (the speed baseline on both sides) of stillness.
 constexpr double kMinDwell_s = 0.3;

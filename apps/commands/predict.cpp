@@ -14,8 +14,6 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kPredictCommand = "predict";
-
 Error predict(const Options& options) {
   // parse
   const std::string frame = options.get("frame");

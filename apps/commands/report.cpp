@@ -17,8 +17,6 @@ namespace hivecal::cli {
 
 namespace {
 
-constexpr const char* kReportCommand = "report";
-
 /// The report data kept in a result file (which must be a valid robot-calibration/1 document).
 Error load_report_data(const std::string& path, report::ReportData* data) {
   std::string text;

@@ -26,8 +26,6 @@ namespace {
 
 using port::Error;
 
-constexpr const char* kSimulateCommand = "simulate";
-
 std::atomic<bool> g_stop{false};
 void request_stop(int) {
   g_stop = true;

@@ -5,6 +5,7 @@
 namespace hivecal::sim {
 
 /// Entry point of `hivecal simulate` (argv after the command name); returns the exit code.
+inline constexpr const char* kSimulateCommand = "simulate";  ///< the subcommand's name
 int simulate_main(int argc, char** argv);
 
 }  // namespace hivecal::sim

@@ -283,7 +283,7 @@ Error extract(const cli::Options& options) {
 }  // namespace
 
 int record_main(int argc, char** argv) {
-  const std::string command = "record";
+  const std::string command = kRecordCommand;
   const std::vector<cli::OptionSpec> specs = {
       {"robot-port", "DEV", "serial port of the robot joint-state stream", ""},
       {"tracker-port", "DEV", "serial port of the tracker stream", ""},
@@ -310,7 +310,7 @@ int record_main(int argc, char** argv) {
 }
 
 int extract_main(int argc, char** argv) {
-  const std::string command = "extract";
+  const std::string command = kExtractCommand;
   std::vector<cli::OptionSpec> specs = {
       {"robot", "FILE|BAG",
        "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},

@@ -85,30 +85,30 @@ int validate_main(int argc, char** argv) {
       {"seed", "N", "seed of the poses", "7"},
   };
   Options options;
-  const int parsed = parse_options("validate",
+  const int parsed = parse_options(kValidateCommand,
                                    "Predicts the tool point of fresh random poses with both geometries (each with its\n"
                                    "own base -> tracker transform) and reports how far apart they are.",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
   if (options.get("calibration").empty() || options.get("truth").empty()) {
-    return exit_with("validate", Error::usage("--calibration and --truth are required (see --help)"));
+    return exit_with(kValidateCommand, Error::usage("--calibration and --truth are required (see --help)"));
   }
   std::size_t poses = 0;
   std::uint64_t seed = 0;
   Error numbers = count_option(options, "poses", 1, 10000000, &poses);
   if (numbers.ok()) numbers = seed_option(options, "seed", &seed);
-  if (!numbers.ok()) return exit_with("validate", numbers);
+  if (!numbers.ok()) return exit_with(kValidateCommand, numbers);
   record::CalibrationFile calibration;
   record::CalibrationFile truth;
   for (auto [path, file] :
        {std::pair{options.get("calibration"), &calibration}, std::pair{options.get("truth"), &truth}}) {
     const port::Error r = record::read_calibration_json(path, file);
-    if (!r.ok()) return exit_with("validate", r);
+    if (!r.ok()) return exit_with(kValidateCommand, r);
   }
   ReferenceCompliance bent;
   bool simulated = false;
   const port::Error r = simulated_compliance_of(options.get("truth"), &bent, &simulated);
-  if (!r.ok()) return exit_with("validate", r);
+  if (!r.ok()) return exit_with(kValidateCommand, r);
   const long n = static_cast<long>(poses);
   const std::uint64_t s = static_cast<std::uint64_t>(seed);
   // The geometries alone (DH, tool, base; any compliance model left out): how well the
