@@ -171,10 +171,11 @@ bool get_axes(const JsonValue* v, double* out) {
 
 bool get_stats(const JsonValue* v, ErrorStats* out) {
   long long count = 0;
-  if (v == nullptr || !get_count(v->find("count"), &count)) return false;
+  if (v == nullptr || !get_count(v->find(kErrorCountKey), &count)) return false;
   out->count = static_cast<std::size_t>(count);
-  return get_axes(v->find("mae_m"), out->mae_m) && get_axes(v->find("sigma_m"), out->sigma_m) &&
-         get_axes(v->find("max_m"), out->max_m);
+  for (const ErrorStatsField& field : kErrorStatsFields)
+    if (!get_axes(v->find(field.key), out->*field.values)) return false;
+  return true;
 }
 
 bool get_accuracy(const JsonValue* v, AccuracyReport* out) {

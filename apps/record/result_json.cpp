@@ -178,10 +178,8 @@ void write_cross_validation(JsonWriter& w, const CrossValidationResult& cv) {
 
 void write_error_stats(JsonWriter& json, const ErrorStats& stats) {
   json.begin_object();
-  json.key("count").value(static_cast<long long>(stats.count));
-  write_axis_values(json, "mae_m", stats.mae_m);
-  write_axis_values(json, "sigma_m", stats.sigma_m);
-  write_axis_values(json, "max_m", stats.max_m);
+  json.key(kErrorCountKey).value(static_cast<long long>(stats.count));
+  for (const ErrorStatsField& field : kErrorStatsFields) write_axis_values(json, field.key, stats.*field.values);
   json.end_object();
 }
 

@@ -56,6 +56,17 @@ struct CalibrationRecord {
 /// The keys of an ErrorStats' axes in result.json, in ErrorStats' axis order.
 inline constexpr const char* kErrorAxisKeys[kErrorAxisCount] = {"x", "y", "z", "3d"};
 
+/// The key of an ErrorStats' sample count in result.json.
+inline constexpr const char* kErrorCountKey = "count";
+/// One per-axis statistic of an ErrorStats and its key in result.json.
+struct ErrorStatsField {
+  const char* key;                                ///< "mae_m", ...
+  double (ErrorStats::*values)[kErrorAxisCount];  ///< its values, one per axis
+};
+/// The per-axis statistics of an ErrorStats in result.json, in the order they are written.
+inline constexpr ErrorStatsField kErrorStatsFields[] = {
+    {"mae_m", &ErrorStats::mae_m}, {"sigma_m", &ErrorStats::sigma_m}, {"max_m", &ErrorStats::max_m}};
+
 /// Writes one ErrorStats as {"count", "mae_m": {x, y, z, 3d}, "sigma_m": {...}, "max_m": {...}}.
 void write_error_stats(textio::JsonWriter& json, const ErrorStats& stats);
 
