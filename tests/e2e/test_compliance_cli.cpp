@@ -310,35 +310,22 @@ TEST_F(ComplianceCli, MassesRefusedForAnArmWithoutMassData) {
 }
 
 TEST_F(ComplianceCli, BadGravityAndPayloadRefused) {
-  struct Case {
-    std::vector<std::string> options;
-    const char* message;
-  };
-  const Case cases[] = {
-      {{"--compliance", "--gravity", "0,0,0"}, "--gravity must be X,Y,Z: the direction of gravity"},
-      {{"--compliance", "--gravity", "0,-1"}, "--gravity must be X,Y,Z"},
-      {{"--compliance", "--gravity", "down"}, "--gravity must be X,Y,Z"},
-      {{"--compliance", "--gravity", "nan,0,-1"}, "--gravity must be X,Y,Z"},
-      {{"--gravity", "0,0,-1"}, "--gravity needs --compliance"},
-      {{"--compliance", "stiff"}, "--compliance must be 'basis' or 'masses', not 'stiff'"},
-      {{"--compliance", "masses", "--payload", "2@0,0"}, "--payload must be KG@X,Y,Z"},
-      {{"--compliance", "masses", "--payload", "-1@0,0,0"}, "--payload must be KG@X,Y,Z"},
-      {{"--compliance", "masses", "--payload", "2"}, "--payload must be KG@X,Y,Z"},
-      {{"--compliance", "masses", "--payload", "2@0,0,0,1"}, "--payload must be KG@X,Y,Z"},
-      {{"--compliance", "--payload", "2@0,0,0"}, "--payload needs --compliance masses"},
-      {{"--compliance", "--method", "abc"}, "--compliance needs a method with LM"},
-  };
-  for (const Case& c : cases) {
-    std::vector<std::string> args = {"--samples", path("truth_samples.csv"), "--robot-model", "ur5e",
-                                     "--out",     path("bad.json")};
-    args.insert(args.end(), c.options.begin(), c.options.end());
-    std::string err;
-    const int code = calibrate_stderr(args, &err);
-    std::string shown;
-    for (const std::string& o : c.options) shown += o + " ";
-    EXPECT_EQ(code, cli::kExitUsage) << shown;
-    EXPECT_NE(err.find(c.message), std::string::npos) << shown << ": " << err;
-  }
+  test::expect_refusals(
+      cli::calibrate_main, {"--samples", path("truth_samples.csv"), "--robot-model", "ur5e", "--out", path("bad.json")},
+      {
+          {{"--compliance", "--gravity", "0,0,0"}, "--gravity must be X,Y,Z: the direction of gravity"},
+          {{"--compliance", "--gravity", "0,-1"}, "--gravity must be X,Y,Z"},
+          {{"--compliance", "--gravity", "down"}, "--gravity must be X,Y,Z"},
+          {{"--compliance", "--gravity", "nan,0,-1"}, "--gravity must be X,Y,Z"},
+          {{"--gravity", "0,0,-1"}, "--gravity needs --compliance"},
+          {{"--compliance", "stiff"}, "--compliance must be 'basis' or 'masses', not 'stiff'"},
+          {{"--compliance", "masses", "--payload", "2@0,0"}, "--payload must be KG@X,Y,Z"},
+          {{"--compliance", "masses", "--payload", "-1@0,0,0"}, "--payload must be KG@X,Y,Z"},
+          {{"--compliance", "masses", "--payload", "2"}, "--payload must be KG@X,Y,Z"},
+          {{"--compliance", "masses", "--payload", "2@0,0,0,1"}, "--payload must be KG@X,Y,Z"},
+          {{"--compliance", "--payload", "2@0,0,0"}, "--payload needs --compliance masses"},
+          {{"--compliance", "--method", "abc"}, "--compliance needs a method with LM"},
+      });
 }
 
 }  // namespace

@@ -95,30 +95,18 @@ TEST_F(HarmonicsCli, TheStageFindsTheElbowsHarmonicAndTheResultReadsBack) {
 }
 
 TEST_F(HarmonicsCli, RefusedWithoutLmOrBeyondTheOrdersAndTheCapacity) {
-  struct Case {
-    std::vector<std::string> options;
-    std::string message;
-  };
-  std::vector<Case> cases = {
-      {{"--harmonics", "4"}, "--harmonics"},
-      {{"--harmonics", "0"}, "--harmonics"},
-      {{"--harmonics", "one"}, "--harmonics"},
-      {{"--harmonics", "1", "--method", "abc"}, "--harmonics needs a method with LM"},
-      {{"--harmonics", "1", "--gravity", "0,0,-1"}, "--gravity needs --compliance"},
-  };
-  // Three orders of six joints with the four gravity terms: 40 terms, beyond this build's.
-  cases.push_back({{"--harmonics", "3", "--compliance"}, "joint terms with the others; this build holds"});
-  for (const Case& c : cases) {
-    std::vector<std::string> args = inputs();
-    args.insert(args.end(), {"--out", path("bad.json")});
-    args.insert(args.end(), c.options.begin(), c.options.end());
-    std::string err;
-    const int code = test::run_capturing_stderr(cli::calibrate_main, args, &err);
-    std::string shown;
-    for (const std::string& o : c.options) shown += o + " ";
-    EXPECT_EQ(code, cli::kExitUsage) << shown;
-    EXPECT_NE(err.find(c.message), std::string::npos) << shown << ": " << err;
-  }
+  std::vector<std::string> common = inputs();
+  common.insert(common.end(), {"--out", path("bad.json")});
+  test::expect_refusals(cli::calibrate_main, common,
+                        {
+                            {{"--harmonics", "4"}, "--harmonics"},
+                            {{"--harmonics", "0"}, "--harmonics"},
+                            {{"--harmonics", "one"}, "--harmonics"},
+                            {{"--harmonics", "1", "--method", "abc"}, "--harmonics needs a method with LM"},
+                            {{"--harmonics", "1", "--gravity", "0,0,-1"}, "--gravity needs --compliance"},
+                            // Three orders of six joints and the four gravity terms: 40, beyond the build's.
+                            {{"--harmonics", "3", "--compliance"}, "joint terms with the others; this build holds"},
+                        });
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli/options.hpp"
 #include "testkit/temp_dir.hpp"
 
 namespace hivecal::test {
@@ -20,6 +21,17 @@ int run(Main entry, std::vector<std::string> args) {
   return entry(static_cast<int>(argv.size()), argv.data());
 }
 
+/// A command line the entry point must refuse: the options added and a part of its message.
+struct Refusal {
+  std::vector<std::string> options;  ///< added to the common arguments
+  std::string message;               ///< what stderr must contain
+};
+
+/// Runs `entry` with `common` + each refusal's options: each must exit with the usage code and
+/// print its message (a gtest failure names the options otherwise).
+template <typename Main>
+void expect_refusals(Main entry, const std::vector<std::string>& common, const std::vector<Refusal>& refusals);
+
 /// The same, with what the entry point wrote to stderr into *err.
 template <typename Main>
 int run_capturing_stderr(Main entry, std::vector<std::string> args, std::string* err) {
@@ -27,6 +39,20 @@ int run_capturing_stderr(Main entry, std::vector<std::string> args, std::string*
   const int code = run(entry, std::move(args));
   *err = ::testing::internal::GetCapturedStderr();
   return code;
+}
+
+template <typename Main>
+void expect_refusals(Main entry, const std::vector<std::string>& common, const std::vector<Refusal>& refusals) {
+  for (const Refusal& refusal : refusals) {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), refusal.options.begin(), refusal.options.end());
+    std::string err;
+    const int code = run_capturing_stderr(entry, args, &err);
+    std::string shown;
+    for (const std::string& o : refusal.options) shown += o + " ";
+    EXPECT_EQ(code, cli::kExitUsage) << shown;
+    EXPECT_NE(err.find(refusal.message), std::string::npos) << shown << ": " << err;
+  }
 }
 
 }  // namespace hivecal::test
