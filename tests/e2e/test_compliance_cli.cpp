@@ -53,14 +53,6 @@ class ComplianceCli : public ::testing::Test {
 };
 test::TempDir* ComplianceCli::dir_ = nullptr;
 
-textio::JsonValue read_json(const std::string& file) {
-  std::string text;
-  textio::JsonValue root;
-  EXPECT_TRUE(port::read_whole_file(file, port::kMaxTextInputBytes, &text).ok());
-  EXPECT_TRUE(textio::parse_json(text, &root).ok()) << file;
-  return root;
-}
-
 /// Exit code and stderr of calibrate with `args`.
 int calibrate_stderr(const std::vector<std::string>& args, std::string* err) {
   return test::run_capturing_stderr(cli::calibrate_main, args, err);
@@ -92,7 +84,7 @@ TEST_F(ComplianceCli, ResultHoldsTheCompliancePredictAppliesIt) {
   const std::string out = path("compliant.json");
   ASSERT_EQ(calibrate(out, {"--method", "lm", "--compliance"}), cli::kExitOk);
   // The key: kind, gravity, four terms with joint, load, coefficient, unit and sigma.
-  const textio::JsonValue root = read_json(out);
+  const textio::JsonValue root = test::read_json_file(out);
   const textio::JsonValue* compliance = root.find("compliance");
   ASSERT_NE(compliance, nullptr);
   EXPECT_EQ(compliance->find("kind")->string, "basis");
@@ -269,7 +261,7 @@ TEST(ComplianceCliUnbent, AnArmThatDoesNotBendKeepsTheRigidFit) {
 TEST_F(ComplianceCli, MassesOfAUrWithAPayload) {
   const std::string out = path("masses.json");
   ASSERT_EQ(calibrate(out, {"--method", "lm", "--compliance", "masses", "--payload", "1.5@0,0,0.05"}), cli::kExitOk);
-  const textio::JsonValue root = read_json(out);
+  const textio::JsonValue root = test::read_json_file(out);
   const textio::JsonValue* compliance = root.find("compliance");
   ASSERT_NE(compliance, nullptr);
   EXPECT_EQ(compliance->find("kind")->string, "masses");

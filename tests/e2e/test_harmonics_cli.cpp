@@ -20,14 +20,6 @@ namespace {
 
 using test::run;
 
-textio::JsonValue read_json(const std::string& file) {
-  std::string text;
-  textio::JsonValue root;
-  EXPECT_TRUE(port::read_whole_file(file, port::kMaxTextInputBytes, &text).ok());
-  EXPECT_TRUE(textio::parse_json(text, &root).ok()) << file;
-  return root;
-}
-
 /// The elbow turns 150 urad sin(q3) + 100 urad cos(q3) more than it reads (60 um at the tool).
 class HarmonicsCli : public ::testing::Test {
  protected:
@@ -56,7 +48,7 @@ TEST_F(HarmonicsCli, TheStageFindsTheElbowsHarmonicAndTheResultReadsBack) {
   std::vector<std::string> args = inputs();
   args.insert(args.end(), {"--method", "lm", "--harmonics", "2", "--out", path("h.json")});
   ASSERT_EQ(run(cli::calibrate_main, args), cli::kExitOk);
-  const textio::JsonValue root = read_json(path("h.json"));
+  const textio::JsonValue root = test::read_json_file(path("h.json"));
   const textio::JsonValue* methods = root.find("methods");
   ASSERT_NE(methods, nullptr);
   ASSERT_GE(methods->array.size(), 3u);  // uncalibrated, LM, LM+harmonics

@@ -9,7 +9,9 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "hivecal/port/input_file.hpp"
 #include "testkit/temp_dir.hpp"
+#include "textio/json.hpp"
 
 namespace hivecal::test {
 
@@ -19,6 +21,15 @@ int run(Main entry, std::vector<std::string> args) {
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   return entry(static_cast<int>(argv.size()), argv.data());
+}
+
+/// A JSON file a command wrote (a result, a report's data), parsed; a gtest failure otherwise.
+inline textio::JsonValue read_json_file(const std::string& file) {
+  std::string text;
+  textio::JsonValue root;
+  EXPECT_TRUE(port::read_whole_file(file, port::kMaxTextInputBytes, &text).ok()) << file;
+  EXPECT_TRUE(textio::parse_json(text, &root).ok()) << file;
+  return root;
 }
 
 /// A command line the entry point must refuse: the options added and a part of its message.
