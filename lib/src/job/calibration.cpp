@@ -95,15 +95,19 @@ Status compliance_start(const RobotModel& start, const CalibrationCompliance& op
   return check_compliance(*out) == Status::ok ? Status::ok : Status::invalid_argument;
 }
 
-/// The options' joint terms hold both gravity terms and harmonics: the job then runs
-/// LM+compliance (the gravity terms) before LM+compliance+harmonics, so that Table 1 shows what
-/// each family bought. Not inlined: its model would stay on the firmware's stack otherwise.
+/// The options' joint terms are gravity terms followed by harmonics (both families, in that
+/// order, as the command line builds them): the job then runs LM+compliance (the gravity terms)
+/// before LM+compliance+harmonics, so that Table 1 shows what each family bought; the second
+/// stage's model extends the first's. Any other mix runs as one stage. Not inlined: its model
+/// would stay on the firmware's stack otherwise.
 [[gnu::noinline]] bool gravity_stage_first(const RobotModel& start, const CalibrationCompliance& options) {
   ComplianceModel terms;
   if (compliance_start(start, options, false, &terms) != Status::ok) return false;
-  int harmonics = 0;
-  for (int t = 0; t < terms.term_count; ++t) harmonics += is_harmonic(terms.terms[t]) ? 1 : 0;
-  return harmonics > 0 && harmonics < terms.term_count;
+  int gravity = 0;  // the leading gravity terms
+  while (gravity < terms.term_count && !is_harmonic(terms.terms[gravity])) ++gravity;
+  for (int t = gravity; t < terms.term_count; ++t)
+    if (!is_harmonic(terms.terms[t])) return false;
+  return gravity > 0 && gravity < terms.term_count;
 }
 
 /// The job's state while it runs: the inputs and where the result goes.

@@ -191,5 +191,24 @@ TEST(CalibrationHarmonics, WithGravityTermsTheHarmonicsStageTakesWhatTheGravityS
   EXPECT_LT(result.stages[2].test.mae(ErrorAxis::norm_3d), 0.9 * result.stages[1].test.mae(ErrorAxis::norm_3d));
 }
 
+TEST(CalibrationHarmonics, HarmonicsBeforeGravityTermsRunAsOneStage) {
+  if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
+  fill(true, 41, kSamples, &dataset, true);
+  CalibrationOptions options;
+  options.method = CalibrationMethod::lm;
+  options.compliance.enabled = true;
+  ComplianceModel gravity;
+  ASSERT_EQ(
+      default_compliance_terms(nominal_model(RobotType::ur5), Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &gravity),
+      Status::ok);
+  ComplianceModel& terms = options.compliance.model;  // the harmonics first: no model extends another
+  ASSERT_EQ(append_harmonic_terms(1, &terms), Status::ok);
+  for (int t = 0; t < gravity.term_count; ++t) terms.terms[terms.term_count++] = gravity.terms[t];
+  ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);
+  ASSERT_EQ(result.stage_count, 2u);
+  EXPECT_STREQ(result.stage_name(1), "LM+compliance+harmonics");
+  EXPECT_EQ(result.stages[1].model.compliance.term_count, 16);
+}
+
 }  // namespace
 }  // namespace hivecal::calibration_harmonics_test
