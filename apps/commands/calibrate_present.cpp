@@ -87,13 +87,13 @@ std::string combination_text(const DroppedParam& d, const RobotModel& model) {
 
 /// No new joint term of `model` passed its significance test: which levels they had to clear,
 /// and which fit is kept (the rigid one, or LM+compliance when `after_compliance`).
-std::string rigid_kept_line(double significance_t, const RobotModel& model, bool after_compliance) {
+std::string rigid_kept_line(double significance_t, const RobotModel& model, bool after_compliance, int dof) {
   const ComplianceModel& terms = model.compliance;
   double gravity_t = 0.0;
   double harmonic_t = 0.0;
   for (int t = 0; t < terms.term_count; ++t) {
     const double level = parameter_significance_level(model, compliance_param_index(t), significance_t,
-                                                      CalibrationCompliance{}.significance_t);
+                                                      CalibrationCompliance{}.significance_t, dof);
     (is_harmonic(terms.terms[t]) ? harmonic_t : gravity_t) = level;
   }
   char buf[240];
@@ -136,9 +136,16 @@ std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pru
   }
   for (int k = 0; k < kFullParamCount; ++k) {
     if (!mask_has(pruned, k)) continue;
-    const double level = parameter_significance_level(model, k, significance_t, CalibrationCompliance{}.significance_t);
-    std::snprintf(buf, sizeof buf, "  fixed   %-8s (not significant: change below %.3g sigma; kept at its start value)",
-                  full_param_name(k, model), level);
+    const double level =
+        parameter_significance_level(model, k, significance_t, CalibrationCompliance{}.significance_t, lm.residual_dof);
+    if (std::isinf(level)) {
+      std::snprintf(buf, sizeof buf, "  fixed   %-8s (not testable: the fit leaves %d residual degrees of freedom)",
+                    full_param_name(k, model), lm.residual_dof);
+    } else {
+      std::snprintf(buf, sizeof buf,
+                    "  fixed   %-8s (not significant: change below %.3g sigma; kept at its start value)",
+                    full_param_name(k, model), level);
+    }
     lines.push_back(buf);
   }
   return lines;
@@ -422,7 +429,8 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     if (final_stage.rigid_kept) {
       const std::size_t last = run.result.stage_count - 1;
       const bool after_compliance = last > 0 && run.result.stages[last - 1].compliance;
-      data.info_lines.push_back(rigid_kept_line(run.result.significance_t, final_stage.model, after_compliance));
+      data.info_lines.push_back(
+          rigid_kept_line(run.result.significance_t, final_stage.model, after_compliance, lm->residual_dof));
     }
     data.identifiability = identifiability_table(*lm, final_stage.model);
     for (int k = 0; k < kFullParamCount; ++k)

@@ -220,8 +220,10 @@ const char* calibration_stage_name(const CalibrationStage& stage, const Calibrat
 /// stage at level `significance_t` (CalibrationResult::significance_t): that level for the
 /// geometry; at least `compliance_t` (CalibrationCompliance::significance_t) for a gravity
 /// term; for a harmonic, the level raised for the model's harmonics as a family
-/// (kHarmonicFamilyAlpha) [-].
-double parameter_significance_level(const RobotModel& model, int index, double significance_t, double compliance_t);
+/// (kHarmonicFamilyAlpha, Student's t with the fit's `dof` residual degrees of freedom; infinite
+/// below 1: a fit without redundancy keeps no harmonic) [-].
+double parameter_significance_level(const RobotModel& model, int index, double significance_t, double compliance_t,
+                                    int dof);
 /// Name of a solver ("ABC", "GSA", "LM").
 const char* calibration_solver_name(CalibrationSolver solver);
 /// Name of a step ("input", "split", "baseline", "gsa", "abc", "lm", "done").

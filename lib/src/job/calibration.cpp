@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <new>
 
 #include "hivecal/core/distributions.hpp"
+#include "hivecal/core/math.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/rigid_fit.hpp"
@@ -251,21 +253,27 @@ struct JointTermLevels {
   ParamMask harmonics = 0;  ///< the harmonic terms' parameters
 };
 
-/// The level a family of `count` harmonic terms must clear: `significance_t`, raised so that an
-/// arm without any of them keeps one by chance at most kHarmonicFamilyAlpha of the time
-/// (Bonferroni: each term two-sided at alpha / count). 24 harmonics: z = 3.53 [-].
-double harmonic_level(double significance_t, int count) {
+/// The level a family of `count` harmonic terms must clear with `dof` residual degrees of
+/// freedom: `significance_t`, raised so that an arm without any of them keeps one by chance at
+/// most kHarmonicFamilyAlpha of the time (Bonferroni: each term two-sided at alpha / count, from
+/// Student's t with the fit's dof, as its sigma is estimated from the residuals: 24 harmonics,
+/// many samples: 3.53; a fit that leaves no redundancy cannot test a term: infinite) [-].
+double harmonic_level(double significance_t, int count, int dof) {
   if (count <= 0) return significance_t;
+  if (dof < 1) return std::numeric_limits<double>::infinity();
   const double per_term_tail = kHarmonicFamilyAlpha / static_cast<double>(count);
-  return std::fmax(significance_t, std::sqrt(math::chi_square_upper_quantile(per_term_tail, 1.0)));
+  const double t_squared = math::f_upper_quantile(per_term_tail, 1.0, static_cast<double>(dof));
+  return math::is_finite(t_squared) ? std::fmax(significance_t, std::sqrt(t_squared))
+                                    : std::numeric_limits<double>::infinity();
 }
 
-/// `compliance_t`: CalibrationCompliance::significance_t.
-JointTermLevels joint_term_levels(const RobotModel& reference, double compliance_t) {
+/// `compliance_t`: CalibrationCompliance::significance_t; `dof`: the fit's residual degrees of
+/// freedom.
+JointTermLevels joint_term_levels(const RobotModel& reference, double compliance_t, int dof) {
   JointTermLevels levels;
   levels.gravity_t = compliance_t;
   levels.harmonics = harmonic_params_mask(reference);
-  levels.harmonic_t = harmonic_level(compliance_t, mask_count(levels.harmonics));
+  levels.harmonic_t = harmonic_level(compliance_t, mask_count(levels.harmonics), dof);
   return levels;
 }
 
@@ -367,7 +375,6 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   // Each attempt fixes one parameter at most: the geometry and the model's joint terms (not the
   // capacity's: the same attempts on every build).
   const int attempts = kModelParamCount + reference.compliance.term_count + 2;
-  const JointTermLevels levels = joint_term_levels(reference, job.options.compliance.significance_t);
   for (int attempt = 0; attempt < attempts; ++attempt) {
     if (trace != nullptr) trace->clear();
     LmWorkspace* workspace = job.workspace.open_lm();
@@ -375,6 +382,8 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
     bool again = fit.reset_moved && reset_dropped(reference, r.lm.identifiability, o.tool_known, &from);
+    const JointTermLevels levels =
+        joint_term_levels(reference, job.options.compliance.significance_t, r.lm.residual_dof);
     const int weakest = least_significant(reference, r.lm, fit.significance_t, levels);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
@@ -744,9 +753,10 @@ const char* blunder_verdict_name(BlunderVerdict verdict) {
   return "unknown";
 }
 
-double parameter_significance_level(const RobotModel& model, int index, double significance_t, double compliance_t) {
+double parameter_significance_level(const RobotModel& model, int index, double significance_t, double compliance_t,
+                                    int dof) {
   if (index < kRigidParamCount) return significance_t;
-  const JointTermLevels levels = joint_term_levels(model, compliance_t);
+  const JointTermLevels levels = joint_term_levels(model, compliance_t, dof);
   return std::fmax(significance_t, mask_has(levels.harmonics, index) ? levels.harmonic_t : levels.gravity_t);
 }
 

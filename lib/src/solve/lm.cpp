@@ -138,13 +138,14 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
 /// sigma_p = sqrt(diag(H^-1) * sum w r^2 / (3N - p)) over the kept parameters, from the
 /// normal equations at the final point (Jacobi-scaled for conditioning).
 Status parameter_sigmas(LmWorkspace* ws, const NormalEquations& eq, ParamMask kept, LmResult* result) {
+  int eliminated = 0;  // the other targets' tool points, 3 parameters each
+  for (const TargetBlock& block : eq.targets) eliminated += block.count > 0 ? 3 : 0;
+  const int dof = 3 * static_cast<int>(eq.count) - mask_count(kept) - eliminated;
+  result->residual_dof = dof;
   LmStepScratch* s = ws->scratch.open_step();
   FullParams scale;
   scale_normal_matrix(eq.jtwj, kept, 1.0, &s->system, &scale);
   if (!cholesky_factor(s->system, kept, &s->factorization)) return Status::singular_system;
-  int eliminated = 0;  // the other targets' tool points, 3 parameters each
-  for (const TargetBlock& block : eq.targets) eliminated += block.count > 0 ? 3 : 0;
-  const int dof = 3 * static_cast<int>(eq.count) - mask_count(kept) - eliminated;
   const double variance_m2 = eq.weighted_squares_m2 / static_cast<double>(dof);
   result->residual_sigma_m = std::sqrt(variance_m2);
   FullParams inverse_diagonal;

@@ -111,6 +111,7 @@ struct LmResult {
   double residual_sigma_m = 0.0;   ///< sqrt(sum w |r|^2 / (3N - p)): noise estimate per axis [m]
   double huber_threshold_m = 0.0;  ///< Huber k used last [m]; 0 for least squares
   int iterations = 0;              ///< iterations run, rejected steps included
+  int residual_dof = 0;  ///< 3N - p - the other targets' tool points: residual_sigma_m's degrees of freedom [-]
   LmTermination termination = LmTermination::max_iterations;  ///< why it stopped
 };
 
