@@ -39,7 +39,9 @@ enum class ComplianceLoad : int {
   arm_masses = 1,
 };
 
-/// What a term's basis is.
+/// What a term's basis is. sin and cos below name the basis functions; they are evaluated with
+/// the library's own math::sincos (compliance.cpp), never libm's, so the bits are the same on
+/// every target.
 enum class JointTermKind : int {
   gravity = 0,       ///< a gravity torque of the model's load (ComplianceLoad)
   harmonic_sin = 1,  ///< sin(order * q_j) of the joint's own reading: coefficient [rad]
