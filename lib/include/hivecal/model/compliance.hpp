@@ -39,13 +39,13 @@ enum class ComplianceLoad : int {
   arm_masses = 1,
 };
 
-/// What a term's basis is. sin and cos below name the basis functions; they are evaluated with
+/// What a term's basis is. The sine and cosine below are evaluated with
 /// the library's own math::sincos (compliance.cpp), never libm's, so the bits are the same on
 /// every target.
 enum class JointTermKind : int {
   gravity = 0,       ///< a gravity torque of the model's load (ComplianceLoad)
-  harmonic_sin = 1,  ///< sin(order * q_j) of the joint's own reading: coefficient [rad]
-  harmonic_cos = 2,  ///< cos(order * q_j): coefficient [rad]
+  harmonic_sin = 1,  ///< the sine of order * q_j, the joint's own reading: coefficient [rad]
+  harmonic_cos = 2,  ///< the cosine of order * q_j: coefficient [rad]
 };
 
 /// Highest order of a joint-angle harmonic (one or two per turn of the joint: encoder
