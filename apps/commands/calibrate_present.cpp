@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <utility>
@@ -116,6 +117,37 @@ std::string rigid_kept_line(double significance_t, const RobotModel& model, bool
                   "compliance and harmonics: no term passed its test (gravity %.3g sigma, harmonics %.3g sigma): the "
                   "rigid fit is kept",
                   gravity_t, harmonic_t);
+  }
+  return buf;
+}
+
+/// A joint-term stage's check on left-out poses (JointTermHoldout), when it ran: what the
+/// stage's new terms (`family`: "compliance", "harmonics", ...) predicted, and what was kept.
+std::string holdout_line(const char* family, const JointTermHoldout& holdout, bool after_compliance) {
+  const char* previous = after_compliance ? "LM+compliance" : "rigid";
+  char buf[360];
+  if (holdout.poses < 2) {
+    std::snprintf(buf, sizeof buf,
+                  "%s: the terms that passed the significance test could not be checked on left-out poses (too few "
+                  "poses to fit without one): the %s fit is kept",
+                  family, previous);
+    return buf;
+  }
+  char numbers[160];
+  std::snprintf(numbers, sizeof numbers,
+                "leave-one-pose-out MAE %.4f mm with them, %.4f mm without, improvement %+.4f +/- %.4f mm, %zu poses",
+                holdout.with_terms_mae_m * 1e3, holdout.without_terms_mae_m * 1e3,
+                (holdout.without_terms_mae_m - holdout.with_terms_mae_m) * 1e3, holdout.improvement_se_m * 1e3,
+                holdout.poses);
+  if (holdout.passed) {
+    std::snprintf(buf, sizeof buf,
+                  "%s: the terms that passed the significance test also predict left-out poses better (%s)", family,
+                  numbers);
+  } else {
+    std::snprintf(buf, sizeof buf,
+                  "%s: the terms that passed the significance test do not predict left-out poses better by %.3g "
+                  "standard errors (%s; a small set): the %s fit is kept",
+                  family, kHoldoutImprovementT, numbers, previous);
   }
   return buf;
 }
@@ -426,11 +458,17 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
          identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t, final_stage.model)) {
       data.info_lines.push_back(line);
     }
-    if (final_stage.rigid_kept) {
-      const std::size_t last = run.result.stage_count - 1;
-      const bool after_compliance = last > 0 && run.result.stages[last - 1].compliance;
-      data.info_lines.push_back(
-          rigid_kept_line(run.result.significance_t, final_stage.model, after_compliance, lm->residual_dof));
+    for (std::size_t k = 0; k < run.result.stage_count; ++k) {
+      const CalibrationStage& stage = run.result.stages[k];
+      const bool after_compliance = k > 0 && run.result.stages[k - 1].compliance;
+      if (stage.holdout.checked) {
+        const char* name = run.result.stage_name(k);  // "LM+compliance", "LM+harmonics", ...
+        const char* family = after_compliance ? "harmonics" : name + (std::strncmp(name, "LM+", 3) == 0 ? 3 : 0);
+        data.info_lines.push_back(holdout_line(family, stage.holdout, after_compliance));
+      } else if (stage.rigid_kept && k + 1 == run.result.stage_count) {
+        data.info_lines.push_back(
+            rigid_kept_line(run.result.significance_t, final_stage.model, after_compliance, lm->residual_dof));
+      }
     }
     data.identifiability = identifiability_table(*lm, final_stage.model);
     for (int k = 0; k < kFullParamCount; ++k)

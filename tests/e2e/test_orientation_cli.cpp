@@ -1,7 +1,8 @@
 // A measured orientation end to end: the UR5e pendant export as it is (Base (°) .. RZ (rad)),
 // first 12 poses calibrated with --split 1, the other 6 predicted by `predict` (target 1):
 // the result says the orientation was used, and the held-out error is the job's
-// (tests/apps/test_ur_calibration_conf.cpp). Skipped without ../shared/data/ur5e-pendant.
+// (tests/apps/test_ur_calibration_conf.cpp); compliance and harmonics on those 12 poses are
+// rejected on left-out poses. Skipped without ../shared/data/ur5e-pendant.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "commands/commands.hpp"
+#include "hivecal/model/compliance.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/shared_data.hpp"
@@ -61,8 +63,15 @@ double held_out_mae_m(const std::string& csv, const std::vector<Vec3>& truth_m) 
   return mae_m;
 }
 
-TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
-  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+/// The pendant export split as the tests use it: the first 12 poses to calibrate on (the
+/// export's header and rows as they are), the other 6 poses' joints to predict, their positions.
+struct PendantSplit {
+  std::string train;          ///< CSV: the header and the first 12 rows
+  std::string held_out;       ///< CSV: the six joint columns of the other 6 rows
+  std::vector<Vec3> truth_m;  ///< their measured positions [m]
+};
+
+void split_pendant_export(PendantSplit* split) {
   const std::string file = read_text(test::shared_data_path("ur5e-pendant/joint-eef-data.csv"));
   std::vector<std::string> lines;
   std::istringstream in(file);
@@ -70,12 +79,11 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
     if (!textio::trim(line).empty()) lines.push_back(line);
   }
   ASSERT_EQ(lines.size(), 19u);
-  std::string train = lines[0] + "\n";
-  std::string held_out = first_fields(lines[0], 6) + "\n";  // the six joint columns
-  std::vector<Vec3> truth_m;
+  split->train = lines[0] + "\n";
+  split->held_out = first_fields(lines[0], 6) + "\n";  // the six joint columns
   for (std::size_t i = 1; i <= 18; ++i) {
     if (i <= 12) {
-      train += lines[i] + "\n";
+      split->train += lines[i] + "\n";
       continue;
     }
     std::vector<double> v;
@@ -86,13 +94,20 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
       v.push_back(x);
     }
     ASSERT_EQ(v.size(), 12u);
-    held_out += first_fields(lines[i], 6) + "\n";
-    truth_m.push_back(Vec3(v[6], v[7], v[8]) * 1e-3);
+    split->held_out += first_fields(lines[i], 6) + "\n";
+    split->truth_m.push_back(Vec3(v[6], v[7], v[8]) * 1e-3);
   }
+}
+
+TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  PendantSplit split;
+  ASSERT_NO_FATAL_FAILURE(split_pendant_export(&split));
+  const std::vector<Vec3>& truth_m = split.truth_m;
   const test::TempDir dir("hivecal_orientation");
   ASSERT_FALSE(dir.path().empty());
-  const std::string samples = dir.write("train.csv", train);
-  const std::string joints = dir.write("held_out.csv", held_out);
+  const std::string samples = dir.write("train.csv", split.train);
+  const std::string joints = dir.write("held_out.csv", split.held_out);
   const std::string result = dir.path() + "/result.json";
   const std::string positions = dir.path() + "/result_positions.json";
   const std::string predicted = dir.path() + "/predicted.csv";
@@ -159,6 +174,57 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
     args = common;
     args.insert(args.end(), {"--out", tcp, "--controller-tcp", "--method", method});
     EXPECT_EQ(run(cli::calibrate_main, args), 2) << method;
+  }
+}
+
+// Compliance and harmonics on 12 poses of an arm whose readings are its controller's rigid FK:
+// the significance test keeps terms that fit the pendant's rounding, and the check on left-out
+// poses rejects every one; the result predicts as the rigid fit does, to the byte.
+TEST(OrientationCli, PendantExportRejectsEveryJointTermOnLeftOutPoses) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
+  if (4 * kJointCount > kMaxComplianceTerms)
+    GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " joint terms";
+  PendantSplit split;
+  ASSERT_NO_FATAL_FAILURE(split_pendant_export(&split));
+  const test::TempDir dir("hivecal_pendant_terms");
+  ASSERT_FALSE(dir.path().empty());
+  const std::string samples = dir.write("train.csv", split.train);
+  const std::string joints = dir.write("held_out.csv", split.held_out);
+  const std::vector<std::string> common = {"--samples", samples, "--robot-model", "ur5e", "--tool", "0,0,0",
+                                           "--split",   "1",     "--quiet"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--out", dir.path() + "/rigid.json"});
+  ASSERT_EQ(run(cli::calibrate_main, args), 0);
+  args = common;
+  args.insert(args.end(), {"--out", dir.path() + "/terms.json", "--compliance", "--harmonics", "2"});
+  ASSERT_EQ(run(cli::calibrate_main, args), 0);
+  const std::string json = read_text(dir.path() + "/terms.json");
+  EXPECT_NE(json.find("compliance: the terms that passed the significance test do not predict left-out poses"),
+            std::string::npos);
+  EXPECT_NE(json.find("harmonics: the terms that passed the significance test do not predict left-out poses"),
+            std::string::npos);
+  const textio::JsonValue root = test::read_json_file(dir.path() + "/terms.json");
+  const textio::JsonValue* terms =
+      root.find("compliance") != nullptr ? root.find("compliance")->find("terms") : nullptr;
+  ASSERT_NE(terms, nullptr);
+  EXPECT_EQ(terms->array.size(), 28u);  // 4 gravity terms, 24 harmonics
+  for (const textio::JsonValue& term : terms->array) {
+    EXPECT_EQ(term.find("coefficient")->number, 0.0) << term.find("name")->string;
+  }
+  std::string rigid_points;
+  for (const char* name : {"rigid", "terms"}) {
+    const std::string predicted = dir.path() + "/" + name + ".csv";
+    ASSERT_EQ(run(cli::predict_main,
+                  {"--calibration", dir.path() + "/" + name + ".json", "--joints", joints, "--out", predicted}),
+              0);
+    const std::string points = read_text(predicted);
+    if (rigid_points.empty()) {
+      rigid_points = points;
+      std::printf("pendant export, 12 poses, rigid: held-out MAE %.4f mm\n",
+                  held_out_mae_m(points, split.truth_m) * 1e3);
+    } else {
+      EXPECT_EQ(points, rigid_points);
+    }
   }
 }
 

@@ -80,6 +80,10 @@ inline constexpr double kDefaultSignificance = 2.0;
 inline constexpr std::size_t kDefaultPopulationSubset = 256;
 /// Largest training set on which a negative significance_t chooses the level by leave-one-out [-].
 inline constexpr std::size_t kAutoSignificanceMaxSamples = 64;
+/// Largest training set on which a joint-term stage's kept terms are checked on left-out poses
+/// (JointTermHoldout): where the significance test, which trusts the residuals' sigma, is weakest,
+/// and where a refit per pose is cheap [-].
+inline constexpr std::size_t kJointTermHoldoutMaxSamples = kAutoSignificanceMaxSamples;
 
 /// Settings of one job; the defaults are the command-line tool's.
 struct CalibrationOptions {
@@ -147,15 +151,36 @@ struct CalibrationBaseline {
   ErrorStats test;   ///< errors on the test samples (count 0 without a test split) [m]
 };
 
+/// How many standard errors the mean improvement on left-out poses must exceed for a
+/// small set's new joint terms to stay (JointTermHoldout; one-sided, about 2.5 % by chance) [-].
+inline constexpr double kHoldoutImprovementT = 2.0;
+
+/// A joint-term stage's new terms checked on poses the fit did not see (training sets of at
+/// most kJointTermHoldoutMaxSamples samples): each training pose (its samples of every target)
+/// is left out in turn and predicted by two fits of the others, with the terms the significance
+/// test kept and without the stage's new terms. The terms stay only if they predict clearly
+/// better: the mean of the poses' improvements exceeds kHoldoutImprovementT standard errors.
+struct JointTermHoldout {
+  bool checked = false;           ///< the check ran (a small set, and the significance test kept a new term)
+  std::size_t poses = 0;          ///< poses left out and predicted [-]
+  double with_terms_mae_m = 0.0;  ///< mean over the left-out poses of their 3-D error, fitted with the kept terms [m]
+  double without_terms_mae_m = 0.0;  ///< the same, fitted without the stage's new terms [m]
+  double improvement_se_m = 0.0;     ///< standard error of without_terms_mae_m - with_terms_mae_m over the poses [m]
+  bool passed = false;  ///< every fit finished and the improvement exceeds kHoldoutImprovementT improvement_se_m
+};
+
 /// What one solver stage produced.
 struct CalibrationStage {
   CalibrationSolver solver = CalibrationSolver::lm;  ///< which solver ran
   bool refines_previous = false;                     ///< LM started from the previous stage's geometry and base
   bool compliance = false;  ///< LM estimated the model's joint terms too ("LM+compliance", "LM+harmonics", ...)
-  /// A joint-term stage none of whose new terms passed the significance test: the stage holds
+  /// A joint-term stage none of whose new terms passed the significance test (or, on a small
+  /// set, whose kept terms failed `holdout`): the stage holds
   /// the previous fit (the rigid one, or LM+compliance before LM+compliance+harmonics) with the
   /// new terms at their start values, and `lm` its details.
   bool rigid_kept = false;
+  JointTermHoldout
+      holdout;  ///< a joint-term stage on a small set: its terms on left-out poses (rigid_kept when failed)
   CalibrationParams params = CalibrationParams::paper;  ///< parameters it could move
   Status status = Status::ok;                           ///< ok, or not_converged (LM's last point kept)
   RobotModel model;                                     ///< calibrated geometry

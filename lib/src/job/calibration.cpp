@@ -456,6 +456,7 @@ void lm_stage(Job& job, Status status, bool refines_previous, bool compliance, T
   stage.refines_previous = refines_previous;
   stage.compliance = compliance;
   stage.rigid_kept = false;
+  stage.holdout = JointTermHoldout{};
   stage.params = o.params;
   stage.status = status;
   stage.model = r.lm.model;
@@ -518,6 +519,7 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   stage.refines_previous = previous.refines_previous;
   stage.compliance = true;
   stage.rigid_kept = true;
+  stage.holdout = JointTermHoldout{};  // run_compliance_lm says when a failed check brought it here
   stage.params = previous.params;
   stage.status = previous.status;
   stage.base_to_tracker = previous.base_to_tracker;
@@ -526,6 +528,93 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   stage.best_cost_m = previous.best_cost_m;
   stage.trace_m = previous.trace_m;
   return Status::ok;
+}
+
+/// Whether training sample i is the first of its pose (joints within kSamePoseTolerance_rad).
+bool first_of_its_pose(Span<const Sample> train, std::size_t i) {
+  for (std::size_t j = 0; j < i; ++j) {
+    if ((train[j].q_rad - train[i].q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad) return false;
+  }
+  return true;
+}
+
+/// Moves the first n samples' ones at joints `q` (one pose, every target) to the end of the n,
+/// each with one exchange; moved[m] receives the position the m-th exchange took it from, so that
+/// put_pose_back restores the order. Returns how many moved [-].
+std::size_t move_pose_to_end(DatasetBase& dataset, std::size_t n, const JointVector& q, std::uint8_t* moved) {
+  std::size_t count = 0;
+  for (std::size_t i = n; i-- > 0;) {  // from the end: a moved sample is never visited again
+    if ((dataset.samples()[i].q_rad - q).cwiseAbs().maxCoeff() > kSamePoseTolerance_rad) continue;
+    dataset.swap_samples(i, n - 1 - count);
+    moved[count++] = static_cast<std::uint8_t>(i);
+  }
+  return count;
+}
+
+/// Undoes move_pose_to_end: the exchanges in reverse order.
+void put_pose_back(DatasetBase& dataset, std::size_t n, const std::uint8_t* moved, std::size_t count) {
+  while (count-- > 0) dataset.swap_samples(moved[count], n - 1 - count);
+}
+
+/// Mean 3-D error of `samples` (not empty) under r.lm's fit [m].
+double left_out_error_m(const LmResult& lm, Span<const Sample> samples) {
+  double sum_m = 0.0;
+  for (const Sample& s : samples) sum_m += (lm.base_to_tracker.apply(fk_sample_point(lm.model, s)) - s.point_m).norm();
+  return sum_m / static_cast<double>(samples.size());
+}
+
+/// JointTermHoldout for a joint-term stage `stage_fit` that kept some of `new_terms` with the
+/// parameters `pruned` fixed: each training pose left out in turn, the others fitted twice with
+/// the stage's choice of parameters (no significance test of their own), with and without the
+/// new terms. Overwrites r.lm; the dataset's order is restored.
+[[gnu::noinline]] JointTermHoldout check_on_left_out_poses(Job& job, const LmFit& stage_fit, ParamMask pruned,
+                                                           ParamMask new_terms) {
+  JointTermHoldout holdout;
+  const std::size_t n = job.dataset.train().size();
+  if (n > kJointTermHoldoutMaxSamples) return holdout;
+  holdout.checked = true;
+  static_assert(kJointTermHoldoutMaxSamples <= 256, "move_pose_to_end records positions in a byte");
+  std::uint8_t moved[kJointTermHoldoutMaxSamples];
+  double error_m[2] = {0.0, 0.0};  // the pose's error: [0] without the new terms, [1] with them
+  double with_sum_m = 0.0;
+  double without_sum_m = 0.0;
+  double improvement_squares_m2 = 0.0;
+  bool finished = true;
+  for (std::size_t i = 0; finished && i < n; ++i) {
+    if (!first_of_its_pose(job.dataset.train(), i)) continue;
+    const JointVector q = job.dataset.train()[i].q_rad;
+    const std::size_t count = move_pose_to_end(job.dataset, n, q, moved);
+    finished = count < n;  // a single pose cannot be left out
+    for (int with_terms = 1; finished && with_terms >= 0; --with_terms) {
+      LmFit fit = stage_fit;
+      fit.samples = job.dataset.train().subspan(0, n - count);
+      fit.significance_t = 0.0;
+      fit.fixed_terms |= pruned | (with_terms == 1 ? ParamMask{0} : new_terms);
+      ParamMask fold_pruned = 0;
+      LmFitReport report;
+      report.pruned = &fold_pruned;
+      const Status status = fit_lm(job, fit, report);
+      finished = status == Status::ok || status == Status::not_converged;
+      error_m[with_terms] = left_out_error_m(job.result.lm, job.dataset.train().subspan(n - count, count));
+    }
+    put_pose_back(job.dataset, n, moved, count);
+    if (!finished) break;
+    with_sum_m += error_m[1];
+    without_sum_m += error_m[0];
+    improvement_squares_m2 += (error_m[0] - error_m[1]) * (error_m[0] - error_m[1]);
+    ++holdout.poses;
+  }
+  if (holdout.poses == 0) return holdout;
+  const double poses = static_cast<double>(holdout.poses);
+  holdout.with_terms_mae_m = with_sum_m / poses;
+  holdout.without_terms_mae_m = without_sum_m / poses;
+  const double improvement_m = holdout.without_terms_mae_m - holdout.with_terms_mae_m;
+  const double variance_m2 =
+      holdout.poses > 1 ? std::fmax(0.0, improvement_squares_m2 - poses * improvement_m * improvement_m) / (poses - 1.0)
+                        : 0.0;
+  holdout.improvement_se_m = std::sqrt(variance_m2 / poses);
+  holdout.passed = finished && holdout.poses > 1 && improvement_m > kHoldoutImprovementT * holdout.improvement_se_m;
+  return holdout;
 }
 
 /// The last rigid LM stage before slot r.stage_count: what every joint-term stage starts from.
@@ -567,11 +656,23 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
   // The terms this stage adds: every one after the rigid fit, the harmonics after LM+compliance.
   const ParamMask new_terms =
       after_compliance ? harmonic_params_mask(reference) : compliance_params_mask(reference.compliance.term_count);
-  if ((r.lm.identifiability.kept_mask & new_terms) != 0) {
+  if ((r.lm.identifiability.kept_mask & new_terms) == 0) return keep_previous_fit(job, pruned);
+  const std::size_t index = r.stage_count;
+  const JointTermHoldout holdout = check_on_left_out_poses(job, fit, *pruned, new_terms);
+  if (!holdout.checked) {  // a larger set: the significance test decides
     lm_stage(job, status, true, true, trace);
     return Status::ok;
   }
-  return keep_previous_fit(job, pruned);
+  Status again = Status::ok;
+  if (holdout.passed) {  // the check overwrote r.lm: the same fit again (the same bits)
+    again = fit_lm(job, fit, LmFitReport{&trace, nullptr, pruned});
+    if (again == Status::ok || again == Status::not_converged) lm_stage(job, again, true, true, trace);
+    again = again == Status::not_converged ? Status::ok : again;
+  } else {
+    again = keep_previous_fit(job, pruned);
+  }
+  r.stages[index].holdout = holdout;
+  return again;
 }
 
 /// Runs one stage with the observer's begin/end around it, then its train/test errors.

@@ -55,8 +55,10 @@ JointVector true_joints(bool harmonics, const JointVector& q, bool bends = false
   return turned;
 }
 
-/// `count` samples of a perturbed UR5 at random poses with 15 um tracker noise.
-void fill(bool harmonics, std::uint64_t seed, std::size_t count, DatasetBase* out, bool bends = false) {
+/// `count` samples of a perturbed UR5 at random poses with 15 um tracker noise (`noise_m`);
+/// `reading_step_rad` > 0: the joint readings rounded to that step, as a pendant shows them.
+void fill(bool harmonics, std::uint64_t seed, std::size_t count, DatasetBase* out, bool bends = false,
+          double reading_step_rad = 0.0, double noise_m = 15e-6) {
   Random model_random(2503);
   RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &model_random, 1e-3, 1e-3);
   truth.tool_m << 0.02, -0.015, 0.12;
@@ -65,8 +67,12 @@ void fill(bool harmonics, std::uint64_t seed, std::size_t count, DatasetBase* ou
   out->clear();
   for (std::size_t i = 0; i < count; ++i) {
     const JointVector q = test::random_joints(&random);
-    (void)out->add(
-        q, base.apply(fk_tool_point(truth, true_joints(harmonics, q, bends))) + 15e-6 * test::gaussian_vector(&random));
+    JointVector reading = q;
+    if (reading_step_rad > 0.0) {
+      for (int j = 0; j < kJointCount; ++j) reading(j) = reading_step_rad * std::round(q(j) / reading_step_rad);
+    }
+    (void)out->add(reading, base.apply(fk_tool_point(truth, true_joints(harmonics, q, bends))) +
+                                noise_m * test::gaussian_vector(&random));
   }
 }
 
@@ -137,6 +143,81 @@ TEST(CalibrationHarmonics, AnArmWithoutHarmonicsRejectsEveryTermOnAtLeast95Perce
     clean += kept == 0 && result.stages[1].rigid_kept ? 1 : 0;
   }
   EXPECT_GE(clean, 38);
+}
+
+// A small set whose joint readings are rounded to 0.01 degree (a pendant's export) and whose
+// tracker noise is far below what the rounding leaves (1 um): per-pose joint errors of up to
+// 87 urad, which the significance test, trusting the residuals' sigma, takes for harmonics. On
+// left-out poses those terms predict worse, and the job keeps the rigid fit, bit for bit.
+TEST(CalibrationHarmonics, OnASmallSetTermsThatDoNotPredictLeftOutPosesAreRejected) {
+  if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
+  const double step_rad = 0.01 * 3.14159265358979323846 / 180.0;
+  fill(false, 61, 20, &dataset, false, step_rad, 1e-6);
+  CalibrationOptions options = harmonic_options();
+  options.train_fraction = 1.0;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result));
+  ASSERT_EQ(status, Status::ok);
+  ASSERT_EQ(result.stage_count, 2u);
+  const CalibrationStage harmonics = result.stages[1];
+  const JointTermHoldout& holdout = harmonics.holdout;
+  std::printf("  left-out poses: MAE %.2f um with the kept terms, %.2f um without (+- %.2f um), %zu poses\n",
+              1e6 * holdout.with_terms_mae_m, 1e6 * holdout.without_terms_mae_m, 1e6 * holdout.improvement_se_m,
+              holdout.poses);
+  ASSERT_TRUE(holdout.checked);  // the significance test kept terms: what this test is about
+  EXPECT_EQ(holdout.poses, 20u);
+  EXPECT_FALSE(holdout.passed);
+  EXPECT_GT(holdout.with_terms_mae_m, holdout.without_terms_mae_m);
+  EXPECT_TRUE(harmonics.rigid_kept);
+  for (int t = 0; t < harmonics.model.compliance.term_count; ++t) {
+    EXPECT_EQ(harmonics.model.compliance.coefficient[t], 0.0) << compliance_term_name(harmonics.model.compliance, t);
+  }
+  // The rigid fit of the job without harmonics, bit for bit: the check left the samples' order as it was.
+  options.compliance.enabled = false;
+  ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);
+  ASSERT_EQ(result.stage_count, 1u);
+  for (int i = 0; i < kModelParamCount; ++i) {
+    EXPECT_EQ(to_params(harmonics.model)(i), to_params(result.stages[0].model)(i)) << full_param_name(i);
+  }
+  EXPECT_TRUE(harmonics.base_to_tracker.translation_m == result.stages[0].base_to_tracker.translation_m);
+}
+
+// The same small set without rounding, its elbow carrying a large eccentricity (500 / -400 urad,
+// ~0.3 mm at the tool) and 5 um tracker noise: the kept terms predict left-out poses clearly
+// better, and they stay.
+TEST(CalibrationHarmonics, OnASmallSetTermsThatPredictLeftOutPosesStay) {
+  if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
+  Random model_random(2503);
+  RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &model_random, 1e-3, 1e-3);
+  truth.tool_m << 0.02, -0.015, 0.12;
+  const RigidTransform base = test::example_base_to_tracker();
+  Random random(62);
+  dataset.clear();
+  for (std::size_t i = 0; i < 30; ++i) {
+    const JointVector q = test::random_joints(&random);
+    JointVector turned = q;
+    turned(2) += 500e-6 * std::sin(q(2)) - 400e-6 * std::cos(q(2));
+    (void)dataset.add(q, base.apply(fk_tool_point(truth, turned)) + 5e-6 * test::gaussian_vector(&random));
+  }
+  CalibrationOptions options = harmonic_options();
+  options.train_fraction = 1.0;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result));
+  ASSERT_EQ(status, Status::ok);
+  ASSERT_EQ(result.stage_count, 2u);
+  const CalibrationStage& harmonics = result.stages[1];
+  const JointTermHoldout& holdout = harmonics.holdout;
+  std::printf("  left-out poses: MAE %.2f um with the kept terms, %.2f um without (+- %.2f um), %zu poses\n",
+              1e6 * holdout.with_terms_mae_m, 1e6 * holdout.without_terms_mae_m, 1e6 * holdout.improvement_se_m,
+              holdout.poses);
+  ASSERT_TRUE(holdout.checked);
+  EXPECT_EQ(holdout.poses, 30u);
+  EXPECT_TRUE(holdout.passed);
+  EXPECT_FALSE(harmonics.rigid_kept);
+  const ComplianceModel& c = harmonics.model.compliance;
+  const int elbow_sin1 = 2 * 4;  // append_harmonic_terms' order: joint, order, sine then cosine
+  EXPECT_NEAR(c.coefficient[elbow_sin1], 500e-6, 3.0 * result.lm.sigma(compliance_param_index(elbow_sin1)));
+  EXPECT_NEAR(c.coefficient[elbow_sin1 + 1], -400e-6, 3.0 * result.lm.sigma(compliance_param_index(elbow_sin1 + 1)));
 }
 
 /// The job with the default gravity terms and the harmonics: LM, LM+compliance,
