@@ -26,11 +26,10 @@ bool read_number(const JsonValue* v, double* out) {
 // What a model file may hold: anything beyond is not a robot and would predict NaN or
 // nonsense in silence. Lengths: real factory calibrations carry cancelling offsets of
 // hundreds of metres on UR's parallel joints (+/-204 m), so 1 km; angles: two turns; the tool
-// point: 10 m; a compliance coefficient: 0.01 rad/m or rad/(kg m) (real arms: 1e-6..1e-4).
+// point: 10 m; a joint term's coefficient: kMaxJointTermCoefficient.
 constexpr double kMaxModelLength_m = 1000.0;
 constexpr double kMaxModelAngle_rad = 4.0 * math::kPi;
 constexpr double kMaxToolLength_m = 10.0;
-constexpr double kMaxComplianceCoefficient = 1e-2;
 
 /// Reads number `key` of DH row j into *out, within its bound; the error names the row and key.
 port::Error row_number(const JsonValue& row, std::size_t j, const char* key, const std::string& source, double* out) {
@@ -320,8 +319,8 @@ bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::stri
   term = ComplianceTerm{static_cast<int>(joint) - 1, 0, JointTermKind::gravity, 0};
   if (!read_basis(v, at, *compliance, &term, what)) return false;
   if (!read_number(v.find("coefficient"), &compliance->coefficient[t]) ||
-      !(std::fabs(compliance->coefficient[t]) <= kMaxComplianceCoefficient)) {
-    *what = at + ".coefficient must be a number within +/-" + format_double(kMaxComplianceCoefficient) +
+      !(std::fabs(compliance->coefficient[t]) <= kMaxJointTermCoefficient)) {
+    *what = at + ".coefficient must be a number within +/-" + format_double(kMaxJointTermCoefficient) +
             " (rad/m or rad/(kg m); real arms: 1e-6..1e-4; rad for a harmonic)";
     return false;
   }

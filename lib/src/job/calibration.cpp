@@ -302,6 +302,21 @@ JointTermLevels joint_term_levels(const RobotModel& reference, double compliance
   return weakest;
 }
 
+/// The estimated joint term of r.lm's fit whose coefficient is largest beyond
+/// kMaxJointTermCoefficient (not a robot's: the terms took up something else); -1 when none is.
+int implausible_joint_term(const LmResult& lm) {
+  int worst = -1;
+  double worst_abs = kMaxJointTermCoefficient;
+  for (int t = 0; t < lm.model.compliance.term_count; ++t) {
+    const int index = compliance_param_index(t);
+    const double magnitude = std::fabs(lm.model.compliance.coefficient[t]);
+    if (!mask_has(lm.identifiability.kept_mask, index) || magnitude <= worst_abs) continue;  // NaN: picked
+    worst_abs = magnitude;
+    worst = index;
+  }
+  return worst;
+}
+
 /// One LM fit of the job: what it starts from, what it may move, on which samples.
 struct LmFit {
   /// The start values (job.start, with the compliance terms and their start coefficients for
@@ -327,9 +342,11 @@ struct LmFitReport {
 };
 
 /// LM for `fit` into r.lm. Runs again while (a) it drops a parameter an earlier stage moved
-/// (with reset_moved: put back to its start value) or (b) an estimated parameter's change is
-/// not significant (below significance_t sigma: fixed at its start value, one at a time, the
-/// least significant first; a small set then fits fewer parameters instead of its noise).
+/// (with reset_moved: put back to its start value) or (b) a joint term's coefficient is not
+/// plausible (implausible_joint_term, whatever the significance level: fixed at its start value,
+/// so that every result reads back) or (c) an estimated parameter's change is not significant
+/// (below significance_t sigma: fixed at its start value, one at a time, the least significant
+/// first; a small set then fits fewer parameters instead of its noise).
 Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   const RobotModel& reference = *fit.reference;
   const bool compliance = fit.compliance;
@@ -384,7 +401,8 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     bool again = fit.reset_moved && reset_dropped(reference, r.lm.identifiability, o.tool_known, &from);
     const JointTermLevels levels =
         joint_term_levels(reference, job.options.compliance.significance_t, r.lm.residual_dof);
-    const int weakest = least_significant(reference, r.lm, fit.significance_t, levels);
+    int weakest = implausible_joint_term(r.lm);
+    if (weakest < 0) weakest = least_significant(reference, r.lm, fit.significance_t, levels);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;

@@ -220,6 +220,36 @@ TEST(CalibrationHarmonics, OnASmallSetTermsThatPredictLeftOutPosesStay) {
   EXPECT_NEAR(c.coefficient[elbow_sin1 + 1], -400e-6, 3.0 * result.lm.sigma(compliance_param_index(elbow_sin1 + 1)));
 }
 
+// A coefficient no robot has (a 20 mrad eccentric elbow: a file in the wrong unit, or terms that
+// took up something else) is fixed at its start value whatever its significance, so that every
+// result the job writes reads back (the readers refuse beyond kMaxJointTermCoefficient).
+TEST(CalibrationHarmonics, ACoefficientBeyondWhatARobotHasIsFixed) {
+  if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
+  Random model_random(2503);
+  RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &model_random, 1e-3, 1e-3);
+  const RigidTransform base = test::example_base_to_tracker();
+  Random random(63);
+  dataset.clear();
+  for (std::size_t i = 0; i < 100; ++i) {
+    const JointVector q = test::random_joints(&random);
+    JointVector turned = q;
+    turned(2) += 2.0 * kMaxJointTermCoefficient * std::cos(q(2));
+    (void)dataset.add(q, base.apply(fk_tool_point(truth, turned)) + 15e-6 * test::gaussian_vector(&random));
+  }
+  CalibrationOptions options = harmonic_options();
+  options.significance_t = 0.0;  // no significance test: the bound holds by itself
+  ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);
+  const CalibrationStage& final_stage = *result.final_stage();
+  const ComplianceModel& c = final_stage.model.compliance;
+  ASSERT_EQ(c.term_count, 24);
+  for (int t = 0; t < c.term_count; ++t) {
+    EXPECT_LE(std::fabs(c.coefficient[t]), kMaxJointTermCoefficient) << compliance_term_name(c, t);
+  }
+  const int elbow_cos1 = 2 * 4 + 1;  // append_harmonic_terms' order: joint, order, sine then cosine
+  EXPECT_TRUE(mask_has(result.lm_pruned_mask, compliance_param_index(elbow_cos1)));
+  EXPECT_EQ(c.coefficient[elbow_cos1], 0.0);
+}
+
 /// The job with the default gravity terms and the harmonics: LM, LM+compliance,
 /// LM+compliance+harmonics, so that Table 1 shows what each family bought.
 void calibrate_both_families(bool harmonics) {

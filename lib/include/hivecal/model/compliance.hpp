@@ -52,6 +52,12 @@ enum class JointTermKind : int {
 /// eccentricity; higher: gear transmission error) [-].
 inline constexpr int kMaxHarmonicOrder = 3;
 
+/// Largest magnitude of a plausible joint-term coefficient (a gravity term's rad/m or
+/// rad/(kg m), a harmonic's rad): real arms have 1e-6 .. 1e-4. Beyond it a value is not a
+/// robot's: a unit error in a model file (which the readers refuse), or a fit's terms taking
+/// up something else (which the job fixes) [-].
+inline constexpr double kMaxJointTermCoefficient = 1e-2;
+
 /// One compliance term: the joint that deflects and, for a point load, where the mass sits;
 /// or a harmonic of the joint's reading (encoder eccentricity, transmission error).
 struct ComplianceTerm {

@@ -1,0 +1,174 @@
+// Building, checking and naming a model's joint terms: the setup of a job, run once (compiled
+// for size on bare metal, lib/CMakeLists.txt); their evaluation at a pose is compliance.cpp.
+#include "hivecal/model/compliance.hpp"
+
+#include <cmath>
+
+#include "hivecal/core/math.hpp"
+#include "hivecal/model/kinematics.hpp"
+#include "model/kinematics_detail.hpp"
+
+namespace hivecal {
+namespace {
+
+/// cos 45 deg: an axis is horizontal when it is closer to the horizontal plane than to gravity.
+constexpr double kHorizontalCos = 0.70710678118654752440;
+
+bool finite_vec(const Vec3& v) {
+  return math::is_finite(v.x()) && math::is_finite(v.y()) && math::is_finite(v.z());
+}
+
+Status check_masses(const ArmMasses& masses) {
+  for (int link = 0; link < kJointCount; ++link) {
+    if (!math::is_finite(masses.link_mass_kg[link]) || !finite_vec(masses.link_com_m[link]))
+      return Status::non_finite_input;
+    if (masses.link_mass_kg[link] < 0.0) return Status::invalid_argument;
+  }
+  if (!math::is_finite(masses.payload_kg) || !finite_vec(masses.payload_com_m)) return Status::non_finite_input;
+  return masses.payload_kg < 0.0 ? Status::invalid_argument : Status::ok;
+}
+
+Status check_term(const ComplianceModel& compliance, const ComplianceTerm& term) {
+  if (term.joint < 0 || term.joint >= kJointCount) return Status::invalid_argument;
+  if (term.kind == JointTermKind::harmonic_sin || term.kind == JointTermKind::harmonic_cos) {
+    return term.order >= 1 && term.order <= kMaxHarmonicOrder ? Status::ok : Status::invalid_argument;
+  }
+  if (term.kind != JointTermKind::gravity) return Status::invalid_argument;
+  if (compliance.load == ComplianceLoad::arm_masses) return Status::ok;
+  return term.frame > term.joint && term.frame <= kToolLoadFrame ? Status::ok : Status::invalid_argument;
+}
+
+// Universal Robots, "DH Parameters for calculations of kinematics and dynamics"
+// (universal-robots.com/articles/ur/application-installation/dh-parameters-for-calculations-of-kinematics-and-dynamics):
+// link mass [kg] and centre of mass [m] in the link's DH frame. Only the e-Series models whose
+// whole table could be checked there are kept (CB3 and UR10e/UR16e: not verified, left out).
+constexpr double kUr3eMass_kg[kJointCount] = {1.98, 3.4445, 1.437, 0.871, 0.805, 0.261};
+constexpr double kUr3eCom_m[kJointCount][3] = {{0.0, -0.02, 0.0}, {0.13, 0.0, 0.1157}, {0.05, 0.0, 0.0238},
+                                               {0.0, 0.0, 0.01},  {0.0, 0.0, 0.01},    {0.0, 0.0, -0.02}};
+constexpr double kUr5eMass_kg[kJointCount] = {3.761, 8.058, 2.846, 1.37, 1.3, 0.365};
+constexpr double kUr5eCom_m[kJointCount][3] = {{0.0, -0.02561, 0.00193}, {0.2125, 0.0, 0.11336}, {0.15, 0.0, 0.0265},
+                                               {0.0, -0.0018, 0.01634},  {0.0, 0.0018, 0.01634}, {0.0, 0.0, -0.001159}};
+
+constexpr const char* kTermNames[kJointCount][kToolLoadFrame + 1] = {
+    {"c_j1_o1", "c_j1_o2", "c_j1_o3", "c_j1_o4", "c_j1_o5", "c_j1_o6", "c_j1_tool", "c_j1_mass"},
+    {"c_j2_o1", "c_j2_o2", "c_j2_o3", "c_j2_o4", "c_j2_o5", "c_j2_o6", "c_j2_tool", "c_j2_mass"},
+    {"c_j3_o1", "c_j3_o2", "c_j3_o3", "c_j3_o4", "c_j3_o5", "c_j3_o6", "c_j3_tool", "c_j3_mass"},
+    {"c_j4_o1", "c_j4_o2", "c_j4_o3", "c_j4_o4", "c_j4_o5", "c_j4_o6", "c_j4_tool", "c_j4_mass"},
+    {"c_j5_o1", "c_j5_o2", "c_j5_o3", "c_j5_o4", "c_j5_o5", "c_j5_o6", "c_j5_tool", "c_j5_mass"},
+    {"c_j6_o1", "c_j6_o2", "c_j6_o3", "c_j6_o4", "c_j6_o5", "c_j6_o6", "c_j6_tool", "c_j6_mass"}};
+static_assert(kJointCount == 6 && kToolLoadFrame == 7, "one name row per joint, one column per frame + mass");
+
+constexpr const char* kHarmonicNames[kJointCount][2][kMaxHarmonicOrder] = {
+    {{"h_j1_sin1", "h_j1_sin2", "h_j1_sin3"}, {"h_j1_cos1", "h_j1_cos2", "h_j1_cos3"}},
+    {{"h_j2_sin1", "h_j2_sin2", "h_j2_sin3"}, {"h_j2_cos1", "h_j2_cos2", "h_j2_cos3"}},
+    {{"h_j3_sin1", "h_j3_sin2", "h_j3_sin3"}, {"h_j3_cos1", "h_j3_cos2", "h_j3_cos3"}},
+    {{"h_j4_sin1", "h_j4_sin2", "h_j4_sin3"}, {"h_j4_cos1", "h_j4_cos2", "h_j4_cos3"}},
+    {{"h_j5_sin1", "h_j5_sin2", "h_j5_sin3"}, {"h_j5_cos1", "h_j5_cos2", "h_j5_cos3"}},
+    {{"h_j6_sin1", "h_j6_sin2", "h_j6_sin3"}, {"h_j6_cos1", "h_j6_cos2", "h_j6_cos3"}}};
+static_assert(kMaxHarmonicOrder == 3, "one name per joint, function and order");
+
+}  // namespace
+
+Status check_compliance(const ComplianceModel& compliance) {
+  if (compliance.term_count < 0 || compliance.term_count > kMaxComplianceTerms) return Status::invalid_argument;
+  if (compliance.term_count == 0) return Status::ok;  // rigid: the other fields are not read
+  if (compliance.load != ComplianceLoad::point && compliance.load != ComplianceLoad::arm_masses) {
+    return Status::invalid_argument;
+  }
+  if (!finite_vec(compliance.gravity_direction)) return Status::non_finite_input;
+  if (std::fabs(compliance.gravity_direction.norm() - 1.0) > 1e-9) return Status::invalid_argument;
+  for (int t = 0; t < compliance.term_count; ++t) {
+    if (!math::is_finite(compliance.coefficient[t])) return Status::non_finite_input;
+    const Status term = check_term(compliance, compliance.terms[t]);
+    if (term != Status::ok) return term;
+  }
+  return compliance.load == ComplianceLoad::arm_masses ? check_masses(compliance.masses) : Status::ok;
+}
+
+Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_direction, ComplianceLoad load,
+                                ComplianceModel* compliance) {
+  if (!finite_vec(gravity_direction)) return Status::invalid_argument;
+  const double norm = gravity_direction.norm();
+  if (!(norm > 0.0)) return Status::invalid_argument;
+  const Vec3 g = gravity_direction / norm;
+  RigidTransform frame[kJointCount + 1];
+  detail::rigid_frames(model, JointVector::Zero(), frame);
+  int horizontal[kJointCount];
+  int count = 0;
+  for (int j = 0; j < kJointCount; ++j) {
+    if (std::fabs(frame[j].rotation.col(2).dot(g)) < kHorizontalCos) horizontal[count++] = j;
+  }
+  ComplianceModel out = *compliance;
+  for (double& c : out.coefficient) c = 0.0;
+  for (ComplianceTerm& term : out.terms) term = ComplianceTerm{};
+  out.gravity_direction = g;
+  out.load = load;
+  out.term_count = 0;
+  if (load == ComplianceLoad::point) {
+    if (count < 2) return Status::invalid_argument;
+    const int shoulder = horizontal[0];
+    const int elbow = horizontal[1];
+    // The wrist is DH frame 4 (a UR's), or the elbow's link end when the elbow comes later.
+    const int wrist = elbow + 1 > 4 ? elbow + 1 : 4;
+    constexpr int kPointTermCount = 4;
+    const ComplianceTerm terms[kPointTermCount] = {
+        {shoulder, shoulder + 1}, {shoulder, wrist}, {elbow, wrist}, {elbow, kToolLoadFrame}};
+    for (int t = 0; t < kPointTermCount; ++t) out.terms[t] = terms[t];
+    out.term_count = kPointTermCount;
+  } else {
+    for (int k = 0; k < count && horizontal[k] < 4; ++k) out.terms[out.term_count++] = ComplianceTerm{horizontal[k], 0};
+    if (out.term_count == 0) return Status::invalid_argument;
+  }
+  *compliance = out;
+  return Status::ok;
+}
+
+Status append_harmonic_terms(int orders, ComplianceModel* compliance) {
+  if (orders < 1 || orders > kMaxHarmonicOrder) return Status::invalid_argument;
+  const int added = kJointCount * orders * 2;
+  if (compliance->term_count < 0 || compliance->term_count + added > kMaxComplianceTerms)
+    return Status::invalid_argument;
+  for (int j = 0; j < kJointCount; ++j) {
+    for (int k = 1; k <= orders; ++k) {
+      for (const JointTermKind kind : {JointTermKind::harmonic_sin, JointTermKind::harmonic_cos}) {
+        compliance->terms[compliance->term_count] = ComplianceTerm{j, 0, kind, k};
+        compliance->coefficient[compliance->term_count++] = 0.0;
+      }
+    }
+  }
+  return Status::ok;
+}
+
+Status nominal_arm_masses(RobotType type, ArmMasses* masses) {
+  const double* mass_kg = nullptr;
+  const double(*com_m)[3] = nullptr;
+  if (type == RobotType::ur5e) {
+    mass_kg = kUr5eMass_kg;
+    com_m = kUr5eCom_m;
+  } else if (type == RobotType::ur3e) {
+    mass_kg = kUr3eMass_kg;
+    com_m = kUr3eCom_m;
+  } else {
+    return Status::invalid_argument;
+  }
+  for (int link = 0; link < kJointCount; ++link) {
+    masses->link_mass_kg[link] = mass_kg[link];
+    masses->link_com_m[link] = Vec3(com_m[link][0], com_m[link][1], com_m[link][2]);
+  }
+  return Status::ok;
+}
+
+const char* compliance_term_name(const ComplianceModel& compliance, int t) {
+  if (t < 0 || t >= compliance.term_count) return "?";
+  const ComplianceTerm& term = compliance.terms[t];
+  if (term.joint < 0 || term.joint >= kJointCount) return "?";
+  if (is_harmonic(term)) {
+    if (term.order < 1 || term.order > kMaxHarmonicOrder) return "?";
+    return kHarmonicNames[term.joint][term.kind == JointTermKind::harmonic_sin ? 0 : 1][term.order - 1];
+  }
+  if (compliance.load == ComplianceLoad::arm_masses) return kTermNames[term.joint][kToolLoadFrame];
+  if (term.frame < 1 || term.frame > kToolLoadFrame) return "?";
+  return kTermNames[term.joint][term.frame - 1];
+}
+
+}  // namespace hivecal
