@@ -73,9 +73,9 @@ inline CaptureJobConfig golden_compliance_job_config() {
 }
 
 /// The committed digests: every target must reproduce them.
-inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0x758f57becc41a535ULL;
-inline constexpr std::uint64_t kLmJobGoldenDigest = 0x6cfa7d9ef1ba6453ULL;
-inline constexpr std::uint64_t kComplianceJobGoldenDigest = 0x3a9505269d624c8eULL;
+inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0xd9f123129716bc89ULL;
+inline constexpr std::uint64_t kLmJobGoldenDigest = 0xf38fcea5d163e0c6ULL;
+inline constexpr std::uint64_t kComplianceJobGoldenDigest = 0x29edbf41aa60d03aULL;
 
 /// Static storage of a job: the dataset, and one arena for the capture passes, then the job.
 struct CaptureJobWorkspace {

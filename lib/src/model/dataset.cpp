@@ -186,8 +186,30 @@ Status DatasetBase::split(double train_fraction, std::uint64_t seed) {
     return Status::ok;
   }
   shuffle_poses(seed);
-  train_count_ = pose_start(train_poses);
+  train_count_ = train_count_of_poses(train_fraction, train_poses);
   return Status::ok;
+}
+
+std::size_t DatasetBase::train_count_of_poses(double train_fraction, std::size_t train_poses) const {
+  // Poses differ in their sample counts (a stop's repeated readings, a slow approach's single
+  // ones): round(train_fraction * poses) poses could hold anywhere from half to nearly all the
+  // samples. So the cut is the pose boundary nearest round(train_fraction * size) samples (a tie:
+  // the later one), with at least min(3, train_poses) poses (what the tracker frame needs, and
+  // what train_count_for promised) and at least one pose for the test.
+  const auto target = static_cast<std::size_t>(train_fraction * static_cast<double>(size_) + 0.5);
+  const std::size_t least_poses = train_poses < 3 ? train_poses : 3;
+  std::size_t best = 0;
+  std::size_t end = 0;
+  for (std::size_t pose = 1; end < size_; ++pose) {
+    end = pose_end(end);
+    if (end >= size_) break;  // the last pose stays for the test
+    if (pose < least_poses) continue;
+    const std::size_t distance = end > target ? end - target : target - end;
+    const std::size_t best_distance = best > target ? best - target : target - best;
+    if (best == 0 || distance <= best_distance) best = end;
+    if (end > target) break;  // later boundaries are only farther
+  }
+  return best == 0 ? pose_start(train_poses) : best;
 }
 
 }  // namespace hivecal

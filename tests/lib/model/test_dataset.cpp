@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <cstdlib>
 #include <set>
 
 #include "hivecal/model/dataset.hpp"
@@ -89,6 +90,33 @@ void fill_three_targets(int poses, DatasetBase* dataset) {
 /// Pose of a sample of fill_three_targets.
 int pose_of(const Sample& s) {
   return static_cast<int>(s.q_rad(0));
+}
+
+// Poses of very different sample counts (a stop's repeated readings beside a slow approach's
+// single readings): the split keeps poses whole and its training part holds the fraction of the
+// samples, to within half the largest pose, whatever the seed (round(0.7 * poses) whole poses
+// held from half to nearly all of such a set's samples).
+TEST(Dataset, UnequalPosesSplitNearTheFractionOfTheSamples) {
+  static Dataset<256> dataset;
+  dataset.clear();
+  for (int k = 0; k < 30; ++k) {
+    const int readings = k % 3 == 0 ? 20 : 1;  // 10 stops of 20 readings, 20 single readings
+    for (int r = 0; r < readings; ++r) {
+      ASSERT_EQ(dataset.add(JointVector::Constant(k), Vec3::Constant(k)), Status::ok);
+    }
+  }
+  ASSERT_EQ(dataset.size(), 220u);
+  for (std::uint64_t seed = 1; seed <= 50; ++seed) {
+    Status s = Status::invalid_argument;
+    EXPECT_NO_HEAP(s = dataset.split(0.7, seed));
+    ASSERT_EQ(s, Status::ok);
+    const long train = static_cast<long>(dataset.train().size());
+    EXPECT_LE(std::labs(train - 154), 10) << "seed " << seed;  // 0.7 * 220; half of a 20-reading stop
+    std::set<double> train_poses;
+    for (const Sample& t : dataset.train()) train_poses.insert(t.point_m.x());
+    for (const Sample& t : dataset.test()) EXPECT_EQ(train_poses.count(t.point_m.x()), 0u) << "seed " << seed;
+    EXPECT_GE(train_poses.size(), 3u);
+  }
 }
 
 // Several reflectors at one pose: a split that put some of them in training and the others

@@ -103,11 +103,13 @@ class DatasetBase {
   /// Shuffles the samples with a seeded Fisher-Yates permutation and puts the first
   /// round(train_fraction * size) in the training part; when a pose holds several samples
   /// (pose_count() < size) and there is a test part, the poses are shuffled whole, from the order of add(), and the
-  /// first round(train_fraction * poses) train. Errors: dataset_empty, invalid_argument (fraction not in (0, 1] or
-  /// leaving no training sample).
+  /// training part ends at the pose boundary nearest round(train_fraction * size) samples (at
+  /// least min(3, train_count_for(train_fraction)) poses, at least one pose for the test).
+  /// Errors: dataset_empty, invalid_argument (fraction not in (0, 1] or leaving no training sample).
   Status split(double train_fraction, std::uint64_t seed);
-  /// Training poses split(train_fraction, ...) keeps: round(train_fraction * pose_count()), or 0 when
-  /// the fraction is not in (0, 1] (a caller can check a split before a long job) [-].
+  /// Nominal training poses of split(train_fraction, ...): round(train_fraction * pose_count()), or
+  /// 0 when the fraction is not in (0, 1]; the split keeps at least min(3, this) (a caller can
+  /// check a split before a long job) [-].
   std::size_t train_count_for(double train_fraction) const;
 
  protected:
@@ -138,6 +140,8 @@ class DatasetBase {
   std::size_t pose_start(std::size_t pose) const;  // first sample of run `pose` in the current order
   void rotate_to(std::size_t to, std::size_t begin, std::size_t end);  // block [begin, end) moved to `to` <= begin
   static std::size_t train_poses_of(double train_fraction, std::size_t poses);  // see train_count_for
+  // split()'s training samples after shuffle_poses: whole poses nearest the fraction of the samples
+  std::size_t train_count_of_poses(double train_fraction, std::size_t train_poses) const;
   void shuffle_poses(std::uint64_t seed);  // add() order, then the runs shuffled whole
 };
 
