@@ -55,10 +55,12 @@ JointVector true_joints(bool harmonics, const JointVector& q, bool bends = false
   return turned;
 }
 
-/// `count` samples of a perturbed UR5 at random poses with 15 um tracker noise (`noise_m`);
-/// `reading_step_rad` > 0: the joint readings rounded to that step, as a pendant shows them.
-void fill(bool harmonics, std::uint64_t seed, std::size_t count, DatasetBase* out, bool bends = false,
-          double reading_step_rad = 0.0, double noise_m = 15e-6) {
+/// `count` samples of a perturbed UR5 at random poses with `noise_m` tracker noise: the arm turns
+/// to turned(q) when its joints read q; `reading_step_rad` > 0: the readings rounded to that
+/// step, as a pendant shows them.
+template <typename Turned>
+void fill_turned(std::uint64_t seed, std::size_t count, double noise_m, Turned turned, DatasetBase* out,
+                 double reading_step_rad = 0.0) {
   Random model_random(2503);
   RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &model_random, 1e-3, 1e-3);
   truth.tool_m << 0.02, -0.015, 0.12;
@@ -71,9 +73,23 @@ void fill(bool harmonics, std::uint64_t seed, std::size_t count, DatasetBase* ou
     if (reading_step_rad > 0.0) {
       for (int j = 0; j < kJointCount; ++j) reading(j) = reading_step_rad * std::round(q(j) / reading_step_rad);
     }
-    (void)out->add(reading, base.apply(fk_tool_point(truth, true_joints(harmonics, q, bends))) +
-                                noise_m * test::gaussian_vector(&random));
+    (void)out->add(reading, base.apply(fk_tool_point(truth, turned(q))) + noise_m * test::gaussian_vector(&random));
   }
+}
+
+/// The elbow turns sin_rad sin(q3) + cos_rad cos(q3) more than it reads (an eccentric encoder).
+auto eccentric_elbow(double sin_rad, double cos_rad) {
+  return [=](const JointVector& q) {
+    JointVector turned = q;
+    turned(2) += sin_rad * std::sin(q(2)) + cos_rad * std::cos(q(2));
+    return turned;
+  };
+}
+
+/// `count` samples of the arm of true_joints with 15 um tracker noise.
+void fill(bool harmonics, std::uint64_t seed, std::size_t count, DatasetBase* out, bool bends = false) {
+  fill_turned(
+      seed, count, 15e-6, [&](const JointVector& q) { return true_joints(harmonics, q, bends); }, out);
 }
 
 /// The LM job with the harmonics of orders 1 .. 2 of every joint (24 terms) as its joint terms.
@@ -145,6 +161,22 @@ TEST(CalibrationHarmonics, AnArmWithoutHarmonicsRejectsEveryTermOnAtLeast95Perce
   EXPECT_GE(clean, 38);
 }
 
+/// The harmonics job on every sample of `dataset` (no test part): LM, then LM+harmonics, whose
+/// check on left-out poses it prints.
+const CalibrationStage& calibrate_small_set() {
+  CalibrationOptions options = harmonic_options();
+  options.train_fraction = 1.0;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result));
+  EXPECT_EQ(status, Status::ok);
+  EXPECT_EQ(result.stage_count, 2u);
+  const JointTermHoldout& holdout = result.stages[1].holdout;
+  std::printf("  left-out poses: MAE %.2f um with the kept terms, %.2f um without (+- %.2f um), %zu poses\n",
+              1e6 * holdout.with_terms_mae_m, 1e6 * holdout.without_terms_mae_m, 1e6 * holdout.improvement_se_m,
+              holdout.poses);
+  return result.stages[1];
+}
+
 // A small set whose joint readings are rounded to 0.01 degree (a pendant's export) and whose
 // tracker noise is far below what the rounding leaves (1 um): per-pose joint errors of up to
 // 87 urad, which the significance test, trusting the residuals' sigma, takes for harmonics. On
@@ -152,18 +184,10 @@ TEST(CalibrationHarmonics, AnArmWithoutHarmonicsRejectsEveryTermOnAtLeast95Perce
 TEST(CalibrationHarmonics, OnASmallSetTermsThatDoNotPredictLeftOutPosesAreRejected) {
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
   const double step_rad = 0.01 * 3.14159265358979323846 / 180.0;
-  fill(false, 61, 20, &dataset, false, step_rad, 1e-6);
-  CalibrationOptions options = harmonic_options();
-  options.train_fraction = 1.0;
-  Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result));
-  ASSERT_EQ(status, Status::ok);
-  ASSERT_EQ(result.stage_count, 2u);
-  const CalibrationStage harmonics = result.stages[1];
+  fill_turned(
+      61, 20, 1e-6, [](const JointVector& q) { return q; }, &dataset, step_rad);
+  const CalibrationStage harmonics = calibrate_small_set();
   const JointTermHoldout& holdout = harmonics.holdout;
-  std::printf("  left-out poses: MAE %.2f um with the kept terms, %.2f um without (+- %.2f um), %zu poses\n",
-              1e6 * holdout.with_terms_mae_m, 1e6 * holdout.without_terms_mae_m, 1e6 * holdout.improvement_se_m,
-              holdout.poses);
   ASSERT_TRUE(holdout.checked);  // the significance test kept terms: what this test is about
   EXPECT_EQ(holdout.poses, 20u);
   EXPECT_FALSE(holdout.passed);
@@ -173,6 +197,8 @@ TEST(CalibrationHarmonics, OnASmallSetTermsThatDoNotPredictLeftOutPosesAreReject
     EXPECT_EQ(harmonics.model.compliance.coefficient[t], 0.0) << compliance_term_name(harmonics.model.compliance, t);
   }
   // The rigid fit of the job without harmonics, bit for bit: the check left the samples' order as it was.
+  CalibrationOptions options = harmonic_options();
+  options.train_fraction = 1.0;
   options.compliance.enabled = false;
   ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);
   ASSERT_EQ(result.stage_count, 1u);
@@ -187,29 +213,9 @@ TEST(CalibrationHarmonics, OnASmallSetTermsThatDoNotPredictLeftOutPosesAreReject
 // better, and they stay.
 TEST(CalibrationHarmonics, OnASmallSetTermsThatPredictLeftOutPosesStay) {
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
-  Random model_random(2503);
-  RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &model_random, 1e-3, 1e-3);
-  truth.tool_m << 0.02, -0.015, 0.12;
-  const RigidTransform base = test::example_base_to_tracker();
-  Random random(62);
-  dataset.clear();
-  for (std::size_t i = 0; i < 30; ++i) {
-    const JointVector q = test::random_joints(&random);
-    JointVector turned = q;
-    turned(2) += 500e-6 * std::sin(q(2)) - 400e-6 * std::cos(q(2));
-    (void)dataset.add(q, base.apply(fk_tool_point(truth, turned)) + 5e-6 * test::gaussian_vector(&random));
-  }
-  CalibrationOptions options = harmonic_options();
-  options.train_fraction = 1.0;
-  Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result));
-  ASSERT_EQ(status, Status::ok);
-  ASSERT_EQ(result.stage_count, 2u);
-  const CalibrationStage& harmonics = result.stages[1];
+  fill_turned(62, 30, 5e-6, eccentric_elbow(500e-6, -400e-6), &dataset);
+  const CalibrationStage& harmonics = calibrate_small_set();
   const JointTermHoldout& holdout = harmonics.holdout;
-  std::printf("  left-out poses: MAE %.2f um with the kept terms, %.2f um without (+- %.2f um), %zu poses\n",
-              1e6 * holdout.with_terms_mae_m, 1e6 * holdout.without_terms_mae_m, 1e6 * holdout.improvement_se_m,
-              holdout.poses);
   ASSERT_TRUE(holdout.checked);
   EXPECT_EQ(holdout.poses, 30u);
   EXPECT_TRUE(holdout.passed);
@@ -225,17 +231,7 @@ TEST(CalibrationHarmonics, OnASmallSetTermsThatPredictLeftOutPosesStay) {
 // result the job writes reads back (the readers refuse beyond kMaxJointTermCoefficient).
 TEST(CalibrationHarmonics, ACoefficientBeyondWhatARobotHasIsFixed) {
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
-  Random model_random(2503);
-  RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &model_random, 1e-3, 1e-3);
-  const RigidTransform base = test::example_base_to_tracker();
-  Random random(63);
-  dataset.clear();
-  for (std::size_t i = 0; i < 100; ++i) {
-    const JointVector q = test::random_joints(&random);
-    JointVector turned = q;
-    turned(2) += 2.0 * kMaxJointTermCoefficient * std::cos(q(2));
-    (void)dataset.add(q, base.apply(fk_tool_point(truth, turned)) + 15e-6 * test::gaussian_vector(&random));
-  }
+  fill_turned(63, 100, 15e-6, eccentric_elbow(0.0, 2.0 * kMaxJointTermCoefficient), &dataset);
   CalibrationOptions options = harmonic_options();
   options.significance_t = 0.0;  // no significance test: the bound holds by itself
   ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);
