@@ -216,8 +216,9 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "implies --method lm)",
          ""},
         {"significance", "T|auto",
-         "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leave-one-out up to 64 training "
-         "samples)",
+         "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leaving one pose out at a time, "
+         "up "
+         "to 64 training samples)",
          "2"},
         {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
         {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
@@ -311,7 +312,7 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
     settings->method = CalibrationMethod::lm;
   }
   if (options.get("significance") == "auto") {
-    settings->significance_t = -1.0;  // lib: chosen by leave-one-out on small sets
+    settings->significance_t = -1.0;  // lib: chosen by leaving one pose out at a time on small sets
   } else if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
              !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
     return Error::usage("--significance must be 'auto' or a number in [0, 10]");

@@ -78,7 +78,7 @@ inline constexpr double kDefaultSignificance = 2.0;
 /// plenty for the link lengths and the base (a few hundred equations per unknown), and the
 /// stage's cost stops growing with the set (docs/solvers-abc-gsa.md).
 inline constexpr std::size_t kDefaultPopulationSubset = 256;
-/// Largest training set on which a negative significance_t chooses the level by leave-one-out [-].
+/// Largest training set on which a negative significance_t chooses the level by leaving one pose out at a time [-].
 inline constexpr std::size_t kAutoSignificanceMaxSamples = 64;
 /// Largest training set on which a joint-term stage's kept terms are checked on left-out poses
 /// (JointTermHoldout): where the significance test, which trusts the residuals' sigma, is weakest,
@@ -105,7 +105,7 @@ struct CalibrationOptions {
   LmOptions lm;  ///< LM settings; `params` and `robust` override its params and loss
   double significance_t =
       kDefaultSignificance;  ///< LM fixes, one at a time, estimated parameters whose change is below t sigma (0: off; <
-                             ///< 0: chosen by leave-one-out on small sets) [-]
+                             ///< 0: chosen by leaving one pose out at a time on small sets) [-]
   bool keep_outliers = false;  ///< true: no blunder search, every sample is used
   BlunderTestOptions
       blunder_test;  ///< the w-test of the calibration's poses (significance, tracker sigma, redundancy floor)

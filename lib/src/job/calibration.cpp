@@ -415,18 +415,54 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   return status;
 }
 
+/// Whether training sample i is the first of its pose (joints within kSamePoseTolerance_rad).
+bool first_of_its_pose(Span<const Sample> train, std::size_t i) {
+  for (std::size_t j = 0; j < i; ++j) {
+    if ((train[j].q_rad - train[i].q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad) return false;
+  }
+  return true;
+}
+
+/// Moves the first n samples' ones at joints `q` (one pose, every target) to the end of the n,
+/// each with one exchange; moved[m] receives the position the m-th exchange took it from, so that
+/// put_pose_back restores the order. Returns how many moved [-].
+std::size_t move_pose_to_end(DatasetBase& dataset, std::size_t n, const JointVector& q, std::uint8_t* moved) {
+  std::size_t count = 0;
+  for (std::size_t i = n; i-- > 0;) {  // from the end: a moved sample is never visited again
+    if ((dataset.samples()[i].q_rad - q).cwiseAbs().maxCoeff() > kSamePoseTolerance_rad) continue;
+    dataset.swap_samples(i, n - 1 - count);
+    moved[count++] = static_cast<std::uint8_t>(i);
+  }
+  return count;
+}
+
+/// Undoes move_pose_to_end: the exchanges in reverse order.
+void put_pose_back(DatasetBase& dataset, std::size_t n, const std::uint8_t* moved, std::size_t count) {
+  while (count-- > 0) dataset.swap_samples(moved[count], n - 1 - count);
+}
+
+/// Sum of the 3-D errors of `samples` under r.lm's fit [m].
+double left_out_error_sum_m(const LmResult& lm, Span<const Sample> samples) {
+  double sum_m = 0.0;
+  for (const Sample& s : samples) sum_m += (lm.base_to_tracker.apply(fk_sample_point(lm.model, s)) - s.point_m).norm();
+  return sum_m;
+}
+
 /// Candidate significance levels of the automatic choice, from the simplest model down [-].
 constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
 
 /// The significance level for this stage: options.significance_t, or (when negative and the
 /// training set is small) the one of kSignificanceGrid with the least leave-one-out 3-D MAE
-/// on the training samples (each left-out sample predicted by a fit of the others; ties go to
-/// the simpler model); a large set gets kDefaultSignificance.
+/// on the training samples (each pose, with the samples of all its targets, left out and
+/// predicted by a fit of the others; ties go to the simpler model); a large set gets
+/// kDefaultSignificance.
 [[gnu::noinline]] double choose_significance(Job& job, const RobotModel& from, const RigidTransform* base, bool reset) {
   const double t = job.options.significance_t;
   const std::size_t n = job.dataset.train().size();
   if (t >= 0.0) return t;
   if (n > kAutoSignificanceMaxSamples || n < 3) return kDefaultSignificance;
+  static_assert(kAutoSignificanceMaxSamples <= 256, "move_pose_to_end records positions in a byte");
+  std::uint8_t moved[kAutoSignificanceMaxSamples];
   double best_t = kDefaultSignificance;
   double best_mae_m = 0.0;
   bool found = false;
@@ -434,26 +470,26 @@ constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
     double sum_m = 0.0;
     bool ok = true;
     for (std::size_t i = 0; ok && i < n; ++i) {
-      job.dataset.swap_samples(i, n - 1);  // the left-out one last, the others in front
-      ParamMask pruned = 0;
-      const Span<const Sample> train = job.dataset.train();
-      LmFit fit;
-      fit.reference = &job.start;
-      fit.start_model = &from;
-      fit.base = base;
-      fit.reset_moved = reset;
-      fit.samples = train.subspan(0, n - 1);
-      fit.significance_t = candidate;
-      LmFitReport report;
-      report.pruned = &pruned;
-      const Status status = fit_lm(job, fit, report);
-      if (status == Status::ok || status == Status::not_converged) {
-        const Sample& out = train[n - 1];
-        sum_m += (job.result.lm.base_to_tracker.apply(fk_sample_point(job.result.lm.model, out)) - out.point_m).norm();
-      } else {
-        ok = false;
+      if (!first_of_its_pose(job.dataset.train(), i)) continue;
+      const JointVector q = job.dataset.train()[i].q_rad;
+      const std::size_t count = move_pose_to_end(job.dataset, n, q, moved);  // the left-out pose last
+      ok = count < n;
+      if (ok) {
+        ParamMask pruned = 0;
+        LmFit fit;
+        fit.reference = &job.start;
+        fit.start_model = &from;
+        fit.base = base;
+        fit.reset_moved = reset;
+        fit.samples = job.dataset.train().subspan(0, n - count);
+        fit.significance_t = candidate;
+        LmFitReport report;
+        report.pruned = &pruned;
+        const Status status = fit_lm(job, fit, report);
+        ok = status == Status::ok || status == Status::not_converged;
+        if (ok) sum_m += left_out_error_sum_m(job.result.lm, job.dataset.train().subspan(n - count, count));
       }
-      job.dataset.swap_samples(i, n - 1);  // back: the final fit sees the split's order
+      put_pose_back(job.dataset, n, moved, count);  // back: the final fit sees the split's order
     }
     if (ok && (!found || sum_m < best_mae_m)) {
       best_mae_m = sum_m;
@@ -548,39 +584,6 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   return Status::ok;
 }
 
-/// Whether training sample i is the first of its pose (joints within kSamePoseTolerance_rad).
-bool first_of_its_pose(Span<const Sample> train, std::size_t i) {
-  for (std::size_t j = 0; j < i; ++j) {
-    if ((train[j].q_rad - train[i].q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad) return false;
-  }
-  return true;
-}
-
-/// Moves the first n samples' ones at joints `q` (one pose, every target) to the end of the n,
-/// each with one exchange; moved[m] receives the position the m-th exchange took it from, so that
-/// put_pose_back restores the order. Returns how many moved [-].
-std::size_t move_pose_to_end(DatasetBase& dataset, std::size_t n, const JointVector& q, std::uint8_t* moved) {
-  std::size_t count = 0;
-  for (std::size_t i = n; i-- > 0;) {  // from the end: a moved sample is never visited again
-    if ((dataset.samples()[i].q_rad - q).cwiseAbs().maxCoeff() > kSamePoseTolerance_rad) continue;
-    dataset.swap_samples(i, n - 1 - count);
-    moved[count++] = static_cast<std::uint8_t>(i);
-  }
-  return count;
-}
-
-/// Undoes move_pose_to_end: the exchanges in reverse order.
-void put_pose_back(DatasetBase& dataset, std::size_t n, const std::uint8_t* moved, std::size_t count) {
-  while (count-- > 0) dataset.swap_samples(moved[count], n - 1 - count);
-}
-
-/// Mean 3-D error of `samples` (not empty) under r.lm's fit [m].
-double left_out_error_m(const LmResult& lm, Span<const Sample> samples) {
-  double sum_m = 0.0;
-  for (const Sample& s : samples) sum_m += (lm.base_to_tracker.apply(fk_sample_point(lm.model, s)) - s.point_m).norm();
-  return sum_m / static_cast<double>(samples.size());
-}
-
 /// JointTermHoldout for a joint-term stage `stage_fit` that kept some of `new_terms` with the
 /// parameters `pruned` fixed: each training pose left out in turn, the others fitted twice with
 /// the stage's choice of parameters (no significance test of their own), with and without the
@@ -613,7 +616,8 @@ double left_out_error_m(const LmResult& lm, Span<const Sample> samples) {
       report.pruned = &fold_pruned;
       const Status status = fit_lm(job, fit, report);
       finished = status == Status::ok || status == Status::not_converged;
-      error_m[with_terms] = left_out_error_m(job.result.lm, job.dataset.train().subspan(n - count, count));
+      error_m[with_terms] = left_out_error_sum_m(job.result.lm, job.dataset.train().subspan(n - count, count)) /
+                            static_cast<double>(count);
     }
     put_pose_back(job.dataset, n, moved, count);
     if (!finished) break;

@@ -11,6 +11,7 @@
 #include "hivecal/calibration.hpp"
 #include "hivecal/core/random.hpp"
 #include "testkit/alloc_trap.hpp"
+#include "testkit/target_data.hpp"
 #include "testkit/test_data.hpp"
 
 namespace hivecal::calibration_robust_test {
@@ -321,6 +322,22 @@ TEST(CalibrationRobust, AnAutomaticSignificanceLevelIsOneOfTheGridAndGivesThatLe
     EXPECT_TRUE(same_bits(result.stages[1].model, other.stages[1].model)) << count;
     EXPECT_EQ(result.lm_pruned_mask, other.lm_pruned_mask);
   }
+  // Three reflectors per pose: the search leaves each pose out with all its targets (a target
+  // left out beside its twins would be predicted by a fit of its own pose); every pose comes
+  // back to its place, so the final fit is the fixed level's, bit for bit.
+  Random random(9);
+  dataset.clear();
+  test::fill_target_dataset(test::with_plate(truth(), truth().tool_m), test::example_base_to_tracker(), 10, 3, 10e-6,
+                            &random, &dataset);
+  CalibrationOptions three = options(CalibrationMethod::lm);
+  three.significance_t = -1.0;
+  ASSERT_EQ(calibrate(start(), &dataset, three, &workspace, &result), Status::ok);
+  const double chosen = result.significance_t;
+  EXPECT_TRUE(chosen == 0.0 || chosen == 1.0 || chosen == 2.0 || chosen == 3.0) << chosen;
+  three.significance_t = chosen;
+  ASSERT_EQ(calibrate(start(), &dataset, three, &workspace, &other), Status::ok);
+  EXPECT_TRUE(same_bits(result.stages[0].model, other.stages[0].model));
+  EXPECT_EQ(result.lm_pruned_mask, other.lm_pruned_mask);
   fill(kAutoSignificanceMaxSamples + 1, &dataset);  // a large set: the default level, no search
   CalibrationOptions o = options(CalibrationMethod::lm);
   o.significance_t = -1.0;
