@@ -152,19 +152,19 @@ struct CalibrationBaseline {
 };
 
 /// How many standard errors the mean improvement on left-out poses must exceed for a
-/// small set's new joint terms to stay (JointTermHoldout; one-sided, about 2.5 % by chance) [-].
+/// small set's added joint terms to stay (JointTermHoldout; one-sided, about 2.5 % by chance) [-].
 inline constexpr double kHoldoutImprovementT = 2.0;
 
-/// A joint-term stage's new terms checked on poses the fit did not see (training sets of at
+/// A joint-term stage's added terms checked on poses the fit did not see (training sets of at
 /// most kJointTermHoldoutMaxSamples samples): each training pose (its samples of every target)
 /// is left out in turn and predicted by two fits of the others, with the terms the significance
-/// test kept and without the stage's new terms. The terms stay only if they predict clearly
+/// test kept and without the stage's added terms. The terms stay only if they predict clearly
 /// better: the mean of the poses' improvements exceeds kHoldoutImprovementT standard errors.
 struct JointTermHoldout {
-  bool checked = false;           ///< the check ran (a small set, and the significance test kept a new term)
+  bool checked = false;           ///< the check ran (a small set, and the significance test kept an added term)
   std::size_t poses = 0;          ///< poses left out and predicted [-]
   double with_terms_mae_m = 0.0;  ///< mean over the left-out poses of their 3-D error, fitted with the kept terms [m]
-  double without_terms_mae_m = 0.0;  ///< the same, fitted without the stage's new terms [m]
+  double without_terms_mae_m = 0.0;  ///< the same, fitted without the stage's added terms [m]
   double improvement_se_m = 0.0;     ///< standard error of without_terms_mae_m - with_terms_mae_m over the poses [m]
   bool passed = false;  ///< every fit finished and the improvement exceeds kHoldoutImprovementT improvement_se_m
 };
@@ -174,7 +174,7 @@ struct CalibrationStage {
   CalibrationSolver solver = CalibrationSolver::lm;  ///< which solver ran
   bool refines_previous = false;                     ///< LM started from the previous stage's geometry and base
   bool compliance = false;  ///< LM estimated the model's joint terms too ("LM+compliance", "LM+harmonics", ...)
-  /// A joint-term stage none of whose new terms passed the significance test (or, on a small
+  /// A joint-term stage none of whose added terms passed the significance test (or, on a small
   /// set, whose kept terms failed `holdout`): the stage holds
   /// the previous fit (the rigid one, or LM+compliance before LM+compliance+harmonics) with the
   /// new terms at their start values, and `lm` its details.

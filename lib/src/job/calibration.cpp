@@ -587,7 +587,7 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
 /// JointTermHoldout for a joint-term stage `stage_fit` that kept some of `new_terms` with the
 /// parameters `pruned` fixed: each training pose left out in turn, the others fitted twice with
 /// the stage's choice of parameters (no significance test of their own), with and without the
-/// new terms. Overwrites r.lm; the dataset's order is restored.
+/// `new_terms`. Overwrites r.lm; the dataset's order is restored.
 [[gnu::noinline]] JointTermHoldout check_on_left_out_poses(Job& job, const LmFit& stage_fit, ParamMask pruned,
                                                            ParamMask new_terms) {
   JointTermHoldout holdout;
@@ -596,7 +596,7 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   holdout.checked = true;
   static_assert(kJointTermHoldoutMaxSamples <= 256, "move_pose_to_end records positions in a byte");
   std::uint8_t moved[kJointTermHoldoutMaxSamples];
-  double error_m[2] = {0.0, 0.0};  // the pose's error: [0] without the new terms, [1] with them
+  double error_m[2] = {0.0, 0.0};  // the pose's error: [0] without the added terms, [1] with them
   double with_sum_m = 0.0;
   double without_sum_m = 0.0;
   double improvement_squares_m2 = 0.0;

@@ -11,7 +11,7 @@
 namespace hivecal {
 namespace {
 
-/// cos 45 deg: an axis is horizontal when it is closer to the horizontal plane than to gravity.
+/// The cosine of 45 degrees: an axis is horizontal when it is closer to the horizontal plane than to gravity.
 constexpr double kHorizontalCos = 0.70710678118654752440;
 
 bool finite_vec(const Vec3& v) {
