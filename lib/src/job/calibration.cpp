@@ -415,21 +415,21 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   return status;
 }
 
-/// Whether training sample i is the first of its pose (joints within kSamePoseTolerance_rad).
+/// Whether training sample i is the first of its pose (same_pose).
 bool first_of_its_pose(Span<const Sample> train, std::size_t i) {
   for (std::size_t j = 0; j < i; ++j) {
-    if ((train[j].q_rad - train[i].q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad) return false;
+    if (same_pose(train[j], train[i])) return false;
   }
   return true;
 }
 
-/// Moves the first n samples' ones at joints `q` (one pose, every target) to the end of the n,
-/// each with one exchange; moved[m] receives the position the m-th exchange took it from, so that
-/// put_pose_back restores the order. Returns how many moved [-].
-std::size_t move_pose_to_end(DatasetBase& dataset, std::size_t n, const JointVector& q, std::uint8_t* moved) {
+/// Moves the first n samples' ones at the pose of `pose` (same_pose: every target) to the end of
+/// the n, each with one exchange; moved[m] receives the position the m-th exchange took it from,
+/// so that put_pose_back restores the order. Returns how many moved [-].
+std::size_t move_pose_to_end(DatasetBase& dataset, std::size_t n, const Sample& pose, std::uint8_t* moved) {
   std::size_t count = 0;
   for (std::size_t i = n; i-- > 0;) {  // from the end: a moved sample is never visited again
-    if ((dataset.samples()[i].q_rad - q).cwiseAbs().maxCoeff() > kSamePoseTolerance_rad) continue;
+    if (!same_pose(dataset.samples()[i], pose)) continue;
     dataset.swap_samples(i, n - 1 - count);
     moved[count++] = static_cast<std::uint8_t>(i);
   }
@@ -471,8 +471,8 @@ constexpr double kSignificanceGrid[] = {3.0, 2.0, 1.0, 0.0};
     bool ok = true;
     for (std::size_t i = 0; ok && i < n; ++i) {
       if (!first_of_its_pose(job.dataset.train(), i)) continue;
-      const JointVector q = job.dataset.train()[i].q_rad;
-      const std::size_t count = move_pose_to_end(job.dataset, n, q, moved);  // the left-out pose last
+      const Sample pose = job.dataset.train()[i];                               // a copy: the move reorders the samples
+      const std::size_t count = move_pose_to_end(job.dataset, n, pose, moved);  // the left-out pose last
       ok = count < n;
       if (ok) {
         ParamMask pruned = 0;
@@ -603,8 +603,8 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   bool finished = true;
   for (std::size_t i = 0; finished && i < n; ++i) {
     if (!first_of_its_pose(job.dataset.train(), i)) continue;
-    const JointVector q = job.dataset.train()[i].q_rad;
-    const std::size_t count = move_pose_to_end(job.dataset, n, q, moved);
+    const Sample pose = job.dataset.train()[i];  // a copy: the move reorders the samples
+    const std::size_t count = move_pose_to_end(job.dataset, n, pose, moved);
     finished = count < n;  // a single pose cannot be left out
     for (int with_terms = 1; finished && with_terms >= 0; --with_terms) {
       LmFit fit = stage_fit;

@@ -33,10 +33,15 @@ inline constexpr double kSamePoseTolerance_rad = 1e-3;
 /// distinct_points() counts up to this many, then stops (more is plenty for any model).
 inline constexpr std::size_t kDistinctPointLimit = 64;
 
-/// Whether two samples measure one point: the same target at joints within
-/// kSamePoseTolerance_rad (one stop of the robot).
+/// Whether two samples were taken at one robot pose: joints within kSamePoseTolerance_rad
+/// (one stop of the robot; any targets).
+inline bool same_pose(const Sample& a, const Sample& b) {
+  return (a.q_rad - b.q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad;
+}
+
+/// Whether two samples measure one point: the same target at one pose (same_pose).
 inline bool same_point(const Sample& a, const Sample& b) {
-  return a.target == b.target && (a.q_rad - b.q_rad).cwiseAbs().maxCoeff() <= kSamePoseTolerance_rad;
+  return a.target == b.target && same_pose(a, b);
 }
 
 /// Distinct measured points of `samples`: one per robot pose (joints within
