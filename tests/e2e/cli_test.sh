@@ -93,15 +93,10 @@ else
   fail "captures, CSV logs and a mix must give the same calibration"
   cat "$work/csv.out" "$work/mixed.out"
 fi
-# The same command twice writes the same bytes (result files hold no wall-clock times).
-if calibrated cap_again "$sim/robot.cap" "$sim/tracker.cap" && cmp -s "$work/cap.json" "$work/cap_again.json" &&
-   ! grep -q '"seconds"' "$work/cap.json"; then
-  pass
-else
-  fail "two identical calibrate runs must write byte-identical result files"
-fi
-# And the same bytes on every target (x86-64, aarch64 and armhf run this script): the digest of
-# the result of this simulated session (simulate --seed 5 --waypoints 12 --duration-s 150).
+# The same command writes the same bytes at every run and on every target (x86-64, aarch64 and
+# armhf run this script): result files hold no wall-clock times, and the digest of the result of
+# this simulated session (simulate --seed 5 --waypoints 12 --duration-s 150) is committed.
+if ! grep -q '"seconds"' "$work/cap.json"; then pass; else fail "a result file holds run times"; fi
 # Update it only for an intended change of the computation or the format.
 result_sha256=2425ce3fdc3c6a0557bdafeb1a12ce37fa456ce0ec18c96508c89dcd17d4963f
 if [ "$(sha256sum <"$work/cap.json" | cut -d' ' -f1)" = "$result_sha256" ]; then
@@ -206,7 +201,7 @@ expect 3 "robot_deg.csv:2: joint q" -- calibrate --robot "$work/robot_deg.csv" -
 expect 3 "looks like degrees: use --angle-unit deg" -- calibrate --robot "$work/robot_deg.csv" --tracker "$sim/tracker.csv" --out "$work/u1.json"
 expect 3 "looks like millimetres: use --length-unit mm" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/tracker_mm.csv" --out "$work/u1.json"
 no_file "$work/u1.json"
-if "${run[@]}" calibrate --robot "$work/robot_deg.csv" --tracker "$work/tracker_mm.csv" --angle-unit deg --length-unit mm \
+if "${run[@]}" calibrate --robot "$work/robot_deg.csv" --tracker "$work/tracker_mm.csv" --method lm --angle-unit deg --length-unit mm \
      --out "$work/u2.json" >/dev/null 2>&1 && [ -s "$work/u2.json" ] &&
    "${run[@]}" extract --robot "$work/robot_deg.csv" --tracker "$work/tracker_mm.csv" --angle-unit deg --length-unit mm \
      --samples "$work/u_samples.csv" >/dev/null && [ "$(wc -l <"$work/u_samples.csv")" -gt 100 ]; then pass; else
