@@ -20,7 +20,8 @@ expect_plan() {
 cell=(--robot-model ur5e --tracker-position 2,0.5,0.6 --tool 0,0,0.05 --candidates 256)
 out=(--out "$work/out.csv")
 # One exchange run and no refinement where a check reads the report or the constraints, not the
-# plan's quality (the defaults run in the seed checks; lib/plan tests the method): a third of the time.
+# plan's quality (the defaults run in the seed checks; lib/plan tests the method): each such run
+# takes a third of the time.
 quick=(--restarts 1 --refine 0)
 
 # --- usage errors (exit 2)

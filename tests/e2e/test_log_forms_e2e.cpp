@@ -30,8 +30,8 @@ bool write(const std::string& path, const std::string& text) {
 }
 
 /// Calibrates from `robot` and `tracker` into dir/name.json; the result or a failure. LM alone:
-/// what differs between the forms is the reading, and the job's population stage would add a
-/// minute under qemu without reading anything else.
+/// what differs between the forms is the reading, and the job's population stage would add
+/// ~20 s under qemu without reading anything else.
 record::CalibrationFile calibrate(const std::string& dir, const std::string& name, const std::string& robot,
                                   const std::string& tracker) {
   const std::string out = dir + "/" + name + ".json";
