@@ -217,8 +217,7 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          ""},
         {"significance", "T|auto",
          "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leaving one pose out at a time, "
-         "up "
-         "to 64 training samples)",
+         "up to 64 training samples)",
          "2"},
         {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
         {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
