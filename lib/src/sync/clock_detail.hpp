@@ -30,11 +30,14 @@ struct ClockProfiles {
   /// jump limits would otherwise weigh more than the whole track in both stages' sums).
   bool chord_ok(std::size_t first, std::size_t last) const {
     for (std::size_t k = first; k < last; ++k) {
-      const double dt_us = tracker[k + 1].t_us - tracker[k].t_us;
-      if (dt_us > max_chord_interval_us) return false;
-      if (tracker[k + 1].s_m - tracker[k].s_m > max_tracker_speed_m_per_us * dt_us) return false;
+      if (!interval_ok(k)) return false;
     }
     return true;
+  }
+  /// Whether tracker interval k (points k, k + 1) may be part of a chord (chord_ok).
+  bool interval_ok(std::size_t k) const {
+    const double dt_us = tracker[k + 1].t_us - tracker[k].t_us;
+    return dt_us <= max_chord_interval_us && tracker[k + 1].s_m - tracker[k].s_m <= max_tracker_speed_m_per_us * dt_us;
   }
   /// Tracker time span of the profile [us].
   double tracker_span_us() const { return tracker_points > 0 ? tracker[tracker_points - 1].t_us : 0.0; }

@@ -164,14 +164,23 @@ bool invert_spd(const Mat2& m, Mat2* inverse) {
   return true;
 }
 
-/// Mean squared residual with one best gain: the score of the lag x drift scan.
+/// Mean squared residual with one best gain: the score of the lag x drift scan. One pass over
+/// the points: each point's robot path length is computed once (it ends one chord and starts
+/// another, chord_span points later: a ring of the last chord_span + 1) and each interval is
+/// checked once (chord_ok, through the last bad interval), the sums in chord order.
 double chord_cost(const ClockProfiles& profiles, const LagDrift& map) {
+  const std::size_t span = profiles.chord_span;  // <= kMaxChordSpanPoints (config_ok)
+  double path_m[kMaxChordSpanPoints + 1];        // path length of point i at i % (span + 1)
+  std::size_t bad_end = 0;                       // one past the last bad interval; 0: none yet
   double sdc = 0.0, scc = 0.0, sdd = 0.0, n = 0.0;
-  for (std::size_t k = profiles.chord_span; k < profiles.tracker_points; ++k) {
-    const std::size_t first = k - profiles.chord_span;
-    if (!profiles.chord_ok(first, k)) continue;
-    const double c = profiles.s_at(map.robot_rel_us(profiles.tracker[k].t_us)) -
-                     profiles.s_at(map.robot_rel_us(profiles.tracker[first].t_us));
+  std::size_t slot = span;  // k % (span + 1), kept without a division
+  for (std::size_t k = 0; k < profiles.tracker_points; ++k) {
+    slot = slot == span ? 0 : slot + 1;
+    path_m[slot] = profiles.s_at(map.robot_rel_us(profiles.tracker[k].t_us));
+    if (k > 0 && !profiles.interval_ok(k - 1)) bad_end = k;
+    if (k < span || bad_end + span > k) continue;  // no chord ends here, or one of its intervals is bad
+    const std::size_t first = k - span;            // at slot + 1 (mod span + 1)
+    const double c = path_m[slot] - path_m[slot == span ? 0 : slot + 1];
     if (!math::is_finite(c)) continue;
     const double d = profiles.tracker[k].s_m - profiles.tracker[first].s_m;
     sdc += d * c;

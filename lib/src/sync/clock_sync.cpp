@@ -42,7 +42,8 @@ bool ClockEstimatorBase::config_ok() const {
          c.reanchor_points >= 2 && c.reanchor_points <= kMaxHeldTrackerPoints &&
          c.coarse_step_us % c.knot_interval_us == 0 && c.max_chord_interval_us > 0 && c.max_drift >= 0.0 &&
          c.max_drift < 0.01 && c.min_correlation > 0.0 && c.min_correlation <= 1.0 && c.max_runner_up_ratio > 0.0 &&
-         c.max_iterations > 0 && c.chord_span_points > 0 && c.gain_block_us > 0;
+         c.max_iterations > 0 && c.chord_span_points > 0 && c.chord_span_points <= kMaxChordSpanPoints &&
+         c.gain_block_us > 0;
 }
 
 void ClockEstimatorBase::push_robot(const JointStateRecord& record) {

@@ -42,10 +42,14 @@ double max_clock_error_us(const ClockFit& fit, const sim::Session& session) {
   return worst;
 }
 
-/// Estimates the clock of a session; expects success within the target.
-ClockFit expect_recovered(const sim::SimConfig& config, const char* label) {
+/// Estimates the clock of a session (chords of `chord_span_points` intervals); expects success
+/// within the target.
+ClockFit expect_recovered(const sim::SimConfig& config, const char* label,
+                          std::uint32_t chord_span_points = ClockSyncConfig{}.chord_span_points) {
   const sim::Session session(config);
-  ClockEstimatorBase& estimator = estimator_with(config_for(session));
+  ClockSyncConfig clock_config = config_for(session);
+  clock_config.chord_span_points = chord_span_points;
+  ClockEstimatorBase& estimator = estimator_with(clock_config);
   ClockFit fit;
   Status status = Status::ok;
   EXPECT_NO_HEAP(test::feed_clock(session, &estimator));
@@ -90,6 +94,16 @@ TEST(ClockSync, RecoversOffsetAndDriftOfSimulatedSessions) {
     config.tracker_clock_start_us = c.tracker_clock_start_us;
     expect_recovered(config, c.label);
   }
+}
+
+// The scan keeps the path lengths of one chord's points in a ring of kMaxChordSpanPoints + 1:
+// the longest chord it allows recovers the clock as the default does.
+TEST(ClockSync, TheLongestChordsRecoverTheClock) {
+  sim::SimConfig config;
+  sim::use_large_errors(&config);
+  config.seed = 1;
+  config.clock_drift = 40e-6;
+  expect_recovered(config, "chords of the most intervals", kMaxChordSpanPoints);
 }
 
 TEST(ClockSync, StreamsStartingMidMotionAndAtDifferentTimes) {
@@ -282,6 +296,9 @@ TEST(ClockSync, RejectsBadConfiguration) {
   ClockEstimatorBase& estimator = estimator_with(config);
   ClockFit fit;
   EXPECT_EQ(estimator.estimate(&fit), Status::invalid_argument);
+  config = make_clock_sync_config(nominal_model(RobotType::ur5));
+  config.chord_span_points = kMaxChordSpanPoints + 1;  // longer than the scan's ring
+  EXPECT_EQ(estimator_with(config).estimate(&fit), Status::invalid_argument);
 }
 
 /// Rms of the bins' residuals and of their tracker speeds [m/s].

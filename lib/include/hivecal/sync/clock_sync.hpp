@@ -40,11 +40,12 @@ struct ClockSyncConfig {
   std::uint32_t max_robot_gap_us = 50000;        ///< robot profile is unknown across longer gaps [us]
   std::uint32_t max_chord_interval_us = 350000;  ///< longest tracker interval used as a chord [us]
   std::uint64_t min_overlap_us =
-      60000000;                         ///< least overlap of the profiles for a coarse lag [us] (halved for short data)
-  double max_drift = 5e-4;              ///< largest |drift| searched and accepted [-]
-  double min_correlation = 0.5;         ///< weakest acceptable coarse correlation peak [-]
-  double max_runner_up_ratio = 0.9;     ///< ambiguous when another peak reaches this share of the best [-]
-  std::uint32_t chord_span_points = 3;  ///< tracker intervals spanned by one chord of the fine fit (one per point)
+      60000000;                      ///< least overlap of the profiles for a coarse lag [us] (halved for short data)
+  double max_drift = 5e-4;           ///< largest |drift| searched and accepted [-]
+  double min_correlation = 0.5;      ///< weakest acceptable coarse correlation peak [-]
+  double max_runner_up_ratio = 0.9;  ///< ambiguous when another peak reaches this share of the best [-]
+  std::uint32_t chord_span_points =
+      3;  ///< tracker intervals spanned by one chord of the fine fit (one per point; 1 .. kMaxChordSpanPoints)
   std::uint32_t gain_block_us = 1000000;  ///< chords sharing one free speed gain in the fine fit [us]
   double edge_speed_change_m_s = 0.005;   ///< speed change within a chord that makes it informative [m/s]
   std::uint32_t min_edge_chords = 10;     ///< informative chords needed [chords]
@@ -110,6 +111,10 @@ struct ClockProfileStats {
 
 /// Most tracker points held back while a jump is judged (ClockSyncConfig::reanchor_points <= this).
 inline constexpr std::uint32_t kMaxHeldTrackerPoints = 8;
+
+/// Most tracker intervals one chord of the fine fit spans (ClockSyncConfig::chord_span_points <= this):
+/// the lag x drift scan keeps the path lengths of the points of one chord on the stack.
+inline constexpr std::uint32_t kMaxChordSpanPoints = 16;
 
 /// A tracker point held back while the estimator judges a jump.
 struct ClockHeldPoint {
