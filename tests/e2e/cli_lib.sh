@@ -14,15 +14,25 @@ failed=0
 pass() { passed=$((passed + 1)); }
 fail() { failed=$((failed + 1)); echo "FAIL: $*"; }
 
-# expect CODE SUBSTRING -- ARGS...: runs hivecal ARGS, checks the exit code and stderr.
+# expect CODE SUBSTRING... -- ARGS...: runs hivecal ARGS once, checks the exit code and that
+# stderr holds every SUBSTRING.
 expect() {
-  local code=$1 pattern=$2
-  shift 3
-  local err got
+  local code=$1
+  shift
+  local patterns=()
+  while [ "$1" != "--" ]; do
+    patterns+=("$1")
+    shift
+  done
+  shift
+  local err got pattern missing=""
   err=$("${run[@]}" "$@" 2>&1 >/dev/null)
   got=$?
-  if [ "$got" -eq "$code" ] && grep -qF -- "$pattern" <<<"$err"; then pass; else
-    fail "hivecal $* -> exit $got (want $code), stderr: $err (want: $pattern)"; fi
+  for pattern in "${patterns[@]}"; do
+    grep -qF -- "$pattern" <<<"$err" || missing+=" '$pattern'"
+  done
+  if [ "$got" -eq "$code" ] && [ -z "$missing" ]; then pass; else
+    fail "hivecal $* -> exit $got (want $code), stderr: $err (missing:$missing)"; fi
 }
 
 # no_file PATH: the output must not exist (nor a temporary of it) after a failed run.

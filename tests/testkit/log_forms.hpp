@@ -4,6 +4,7 @@
 // bag (sqlite3 storage, CDR JointState). Written as the tools write them, from records.
 #pragma once
 
+#include <charconv>
 #include <cinttypes>
 #include <cstdio>
 #include <cstring>
@@ -24,10 +25,12 @@ inline const char* const kUrJoints[kJointCount] = {"shoulder_pan_joint", "should
 /// The order ur_robot_driver publishes them in (alphabetical): joint indices 0-based.
 inline const int kDriverOrder[kJointCount] = {2, 1, 0, 3, 4, 5};
 
+/// "%.17g", as the tools print (std::to_chars with a precision is printf's %.*g, several
+/// times faster: the ten-minute log test writes 3.6 million of them).
 inline std::string g17(double v) {
   char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
+  const std::to_chars_result end = std::to_chars(b, b + sizeof b, v, std::chars_format::general, 17);
+  return std::string(b, end.ptr);
 }
 
 inline std::string seconds(std::uint64_t t_us) {
@@ -55,11 +58,12 @@ inline std::string rtde_log(const std::vector<JointStateRecord>& records, char s
     for (int k = 0; k < kJointCount; ++k) out += separator + std::string(field) + std::to_string(k);
   }
   out += "\n";
+  out.reserve(out.size() + records.size() * 256);  // ~250 bytes a row: one allocation, not ~30
   for (const JointStateRecord& r : records) {
     out += seconds(r.timestamp_us);
-    for (const double q : r.q_rad) out += separator + g17(q + 0.01);
-    for (const double q : r.q_rad) out += separator + g17(q);
-    for (int k = 0; k < kJointCount; ++k) out += separator + std::string("0.5");
+    for (const double q : r.q_rad) (out += separator) += g17(q + 0.01);
+    for (const double q : r.q_rad) (out += separator) += g17(q);
+    for (int k = 0; k < kJointCount; ++k) (out += separator) += "0.5";
     out += "\n";
   }
   return out;
