@@ -127,33 +127,63 @@ double factor_log_det(const KeptCholesky& f) {
   return 2.0 * sum;
 }
 
+// The planner scores every candidate of the pool at every exchange step, so these loops are
+// its time. Each one carries the three rows of a pose's Jacobian (or the nine products of
+// two 3-row sets) side by side: independent sums that the CPU overlaps, where one sum at a
+// time waits on each addition. Every sum keeps its own terms in its own order: the bits are
+// those of one row at a time.
+
 /// Z = U^-T J^T, column r into z[r] (forward substitution, compact order; M = U^T U).
 void forward_solve(const KeptCholesky& f, const FullJacobian& j, double (*z)[kFullParamCount]) {
-  for (int r = 0; r < 3; ++r) {
-    for (int i = 0; i < f.count; ++i) {
-      double sum = j(r, f.index[i]);
-      for (int k = 0; k < i; ++k) sum -= f.upper(k, i) * z[r][k];
-      z[r][i] = sum / f.upper(i, i);
+  for (int i = 0; i < f.count; ++i) {
+    const int column = f.index[i];
+    double sum0 = j(0, column), sum1 = j(1, column), sum2 = j(2, column);
+    for (int k = 0; k < i; ++k) {
+      const double u = f.upper(k, i);
+      sum0 -= u * z[0][k];
+      sum1 -= u * z[1][k];
+      sum2 -= u * z[2][k];
     }
+    const double diagonal = f.upper(i, i);
+    z[0][i] = sum0 / diagonal;
+    z[1][i] = sum1 / diagonal;
+    z[2][i] = sum2 / diagonal;
   }
 }
 
 /// Y = U^-1 Z in place (back substitution): Y = M^-1 J^T, compact order.
 void back_solve(const KeptCholesky& f, double (*y)[kFullParamCount]) {
-  for (int r = 0; r < 3; ++r) {
-    for (int i = f.count - 1; i >= 0; --i) {
-      double sum = y[r][i];
-      for (int k = i + 1; k < f.count; ++k) sum -= f.upper(i, k) * y[r][k];
-      y[r][i] = sum / f.upper(i, i);
+  for (int i = f.count - 1; i >= 0; --i) {
+    double sum0 = y[0][i], sum1 = y[1][i], sum2 = y[2][i];
+    for (int k = i + 1; k < f.count; ++k) {
+      const double u = f.upper(i, k);
+      sum0 -= u * y[0][k];
+      sum1 -= u * y[1][k];
+      sum2 -= u * y[2][k];
     }
+    const double diagonal = f.upper(i, i);
+    y[0][i] = sum0 / diagonal;
+    y[1][i] = sum1 / diagonal;
+    y[2][i] = sum2 / diagonal;
   }
 }
 
-/// a^T b of two compact columns.
-double dot(const double* a, const double* b, int count) {
-  double sum = 0.0;
-  for (int i = 0; i < count; ++i) sum += a[i] * b[i];
-  return sum;
+/// out(a, b) = initial(a, b) + a[a]^T b[b] over `count` entries, the nine sums in one pass.
+Mat3 products3(const double (*a)[kFullParamCount], const double (*b)[kFullParamCount], int count, const Mat3& initial) {
+  double sum[3][3];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) sum[r][c] = 0.0;
+  }
+  for (int i = 0; i < count; ++i) {
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) sum[r][c] += a[r][i] * b[c][i];
+    }
+  }
+  Mat3 out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out(r, c) = initial(r, c) + sum[r][c];
+  }
+  return out;
 }
 
 double det3(const Mat3& g) {
@@ -186,24 +216,35 @@ double criterion_gain(const RobotModel& model, const Sample& pose, const FullPar
   scaled_jacobian(model, pose, scale, mask, &j);
   double y[3][kFullParamCount];
   forward_solve(f, j, y);
-  Mat3 g = Mat3::Identity();
-  for (int a = 0; a < 3; ++a) {
-    for (int b = 0; b < 3; ++b) g(a, b) += dot(y[a], y[b], f.count);
-  }
+  const Mat3 g = products3(y, y, f.count, Mat3::Identity());
   if (criterion == PlanCriterion::d_optimal) return math::log(det3(g));
   back_solve(f, y);
   double ay[3][kFullParamCount];
-  for (int r = 0; r < 3; ++r) {
-    for (int i = 0; i < f.count; ++i) {
-      double sum = 0.0;
-      for (int k = 0; k < f.count; ++k) sum += ws.pool_information(f.index[i], f.index[k]) * y[r][k];
-      ay[r][i] = sum;
+  for (int i = 0; i < f.count; i += 2) {  // two rows of A at a time: six sums side by side
+    const int row = f.index[i];
+    const int next_row = f.index[i + 1 < f.count ? i + 1 : i];
+    double sum0 = 0.0, sum1 = 0.0, sum2 = 0.0, next0 = 0.0, next1 = 0.0, next2 = 0.0;
+    for (int k = 0; k < f.count; ++k) {
+      const int column = f.index[k];
+      const double a = ws.pool_information(row, column);
+      const double next_a = ws.pool_information(next_row, column);
+      sum0 += a * y[0][k];
+      sum1 += a * y[1][k];
+      sum2 += a * y[2][k];
+      next0 += next_a * y[0][k];
+      next1 += next_a * y[1][k];
+      next2 += next_a * y[2][k];
+    }
+    ay[0][i] = sum0;
+    ay[1][i] = sum1;
+    ay[2][i] = sum2;
+    if (i + 1 < f.count) {
+      ay[0][i + 1] = next0;
+      ay[1][i + 1] = next1;
+      ay[2][i + 1] = next2;
     }
   }
-  Mat3 h;
-  for (int a = 0; a < 3; ++a) {
-    for (int b = 0; b < 3; ++b) h(a, b) = dot(y[a], ay[b], f.count);
-  }
+  const Mat3 h = products3(y, ay, f.count, Mat3::Zero());
   return trace_inverse_times(g, h);
 }
 
