@@ -133,38 +133,34 @@ double factor_log_det(const KeptCholesky& f) {
 // time waits on each addition. Every sum keeps its own terms in its own order: the bits are
 // those of one row at a time.
 
+/// One step of a triangular solve for the three rows: z[r][i] = (z[r][i] - sum over k in
+/// [begin, end) of u(k) z[r][k]) / diagonal, where u(k) walks U's column i or row i.
+template <typename Entry>
+void triangular_step(const Entry& u, int begin, int end, double diagonal, int i, double (*z)[kFullParamCount]) {
+  double sum0 = z[0][i], sum1 = z[1][i], sum2 = z[2][i];
+  for (int k = begin; k < end; ++k) {
+    const double entry = u(k);
+    sum0 -= entry * z[0][k];
+    sum1 -= entry * z[1][k];
+    sum2 -= entry * z[2][k];
+  }
+  z[0][i] = sum0 / diagonal;
+  z[1][i] = sum1 / diagonal;
+  z[2][i] = sum2 / diagonal;
+}
+
 /// Z = U^-T J^T, column r into z[r] (forward substitution, compact order; M = U^T U).
 void forward_solve(const KeptCholesky& f, const FullJacobian& j, double (*z)[kFullParamCount]) {
   for (int i = 0; i < f.count; ++i) {
-    const int column = f.index[i];
-    double sum0 = j(0, column), sum1 = j(1, column), sum2 = j(2, column);
-    for (int k = 0; k < i; ++k) {
-      const double u = f.upper(k, i);
-      sum0 -= u * z[0][k];
-      sum1 -= u * z[1][k];
-      sum2 -= u * z[2][k];
-    }
-    const double diagonal = f.upper(i, i);
-    z[0][i] = sum0 / diagonal;
-    z[1][i] = sum1 / diagonal;
-    z[2][i] = sum2 / diagonal;
+    for (int r = 0; r < 3; ++r) z[r][i] = j(r, f.index[i]);
+    triangular_step([&](int k) { return f.upper(k, i); }, 0, i, f.upper(i, i), i, z);
   }
 }
 
 /// Y = U^-1 Z in place (back substitution): Y = M^-1 J^T, compact order.
 void back_solve(const KeptCholesky& f, double (*y)[kFullParamCount]) {
   for (int i = f.count - 1; i >= 0; --i) {
-    double sum0 = y[0][i], sum1 = y[1][i], sum2 = y[2][i];
-    for (int k = i + 1; k < f.count; ++k) {
-      const double u = f.upper(i, k);
-      sum0 -= u * y[0][k];
-      sum1 -= u * y[1][k];
-      sum2 -= u * y[2][k];
-    }
-    const double diagonal = f.upper(i, i);
-    y[0][i] = sum0 / diagonal;
-    y[1][i] = sum1 / diagonal;
-    y[2][i] = sum2 / diagonal;
+    triangular_step([&](int k) { return f.upper(i, k); }, i + 1, f.count, f.upper(i, i), i, y);
   }
 }
 
