@@ -164,7 +164,7 @@ void back_solve(const KeptCholesky& f, double (*y)[kFullParamCount]) {
   }
 }
 
-/// out(a, b) = initial(a, b) + a[a]^T b[b] over `count` entries, the nine sums in one pass.
+/// out(r, c) = initial(r, c) + sum over i < count of a[r][i] b[c][i]: the nine sums in one pass.
 Mat3 products3(const double (*a)[kFullParamCount], const double (*b)[kFullParamCount], int count, const Mat3& initial) {
   double sum[3][3];
   for (int r = 0; r < 3; ++r) {
