@@ -16,7 +16,7 @@ namespace {
 
 // --- parse ------------------------------------------------------------------------------------
 
-/// The built-in types whose published link masses the library holds, e.g. "ur3e, ur5e".
+/// The built-in types whose published link masses the library holds, e.g. "ur5, ur10, ur3e, ur5e".
 std::string arms_with_masses() {
   std::string names;
   const std::string all = robot_type_names();  // "ur3, ur5, ..."
@@ -226,7 +226,7 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
         {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
         {"compliance", "basis|masses",
          "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity "
-         "basis, or the link masses (UR3e, UR5e)",
+         "basis, or the link masses (UR5, UR10, UR3e, UR5e)",
          "", "basis"},
         {"harmonics", "K",
          "also fit harmonics of orders 1 .. K of each joint's reading (encoder eccentricity, transmission error; "

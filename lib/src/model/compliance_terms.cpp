@@ -40,14 +40,25 @@ Status check_term(const ComplianceModel& compliance, const ComplianceTerm& term)
 
 // Universal Robots, "DH Parameters for calculations of kinematics and dynamics"
 // (universal-robots.com/articles/ur/application-installation/dh-parameters-for-calculations-of-kinematics-and-dynamics):
-// link mass [kg] and centre of mass [m] in the link's DH frame. Only the e-Series models whose
-// whole table could be checked there are kept (CB3 and UR10e/UR16e: not verified, left out).
+// link mass [kg] and centre of mass [m] in the link's DH frame (the frame at the link's end). The
+// e-Series tables are that page's. The CB-series UR5 and UR10 are Universal Robots' own ROS 2
+// description (github.com/UniversalRobots/Universal_Robots_ROS2_Description,
+// config/ur5|ur10/physical_parameters.yaml), whose comments map each centre back to the page's
+// frame (e.g. "x: model.x - upper_arm_length"); the page's UR10e rows (links 1 to 5) have the same
+// centres as the UR10's. UR3 (CB), UR10e and UR16e: not verified in full, left out.
 constexpr double kUr3eMass_kg[kJointCount] = {1.98, 3.4445, 1.437, 0.871, 0.805, 0.261};
 constexpr double kUr3eCom_m[kJointCount][3] = {{0.0, -0.02, 0.0}, {0.13, 0.0, 0.1157}, {0.05, 0.0, 0.0238},
                                                {0.0, 0.0, 0.01},  {0.0, 0.0, 0.01},    {0.0, 0.0, -0.02}};
 constexpr double kUr5eMass_kg[kJointCount] = {3.761, 8.058, 2.846, 1.37, 1.3, 0.365};
 constexpr double kUr5eCom_m[kJointCount][3] = {{0.0, -0.02561, 0.00193}, {0.2125, 0.0, 0.11336}, {0.15, 0.0, 0.0265},
                                                {0.0, -0.0018, 0.01634},  {0.0, 0.0018, 0.01634}, {0.0, 0.0, -0.001159}};
+
+constexpr double kUr5Mass_kg[kJointCount] = {3.7, 8.393, 2.33, 1.219, 1.219, 0.1879};
+constexpr double kUr5Com_m[kJointCount][3] = {{0.0, -0.02561, 0.00193}, {0.2125, 0.0, 0.11336}, {0.15, 0.0, 0.0265},
+                                              {0.0, -0.0018, 0.01634},  {0.0, 0.0018, 0.01634}, {0.0, 0.0, -0.001159}};
+constexpr double kUr10Mass_kg[kJointCount] = {7.1, 12.7, 4.27, 2.0, 2.0, 0.365};
+constexpr double kUr10Com_m[kJointCount][3] = {{0.021, 0.0, 0.027}, {0.38, 0.0, 0.158},  {0.24, 0.0, 0.068},
+                                               {0.0, 0.007, 0.018}, {0.0, 0.007, 0.018}, {0.0, 0.0, -0.026}};
 
 constexpr const char* kTermNames[kJointCount][kToolLoadFrame + 1] = {
     {"c_j1_o1", "c_j1_o2", "c_j1_o3", "c_j1_o4", "c_j1_o5", "c_j1_o6", "c_j1_tool", "c_j1_mass"},
@@ -148,6 +159,12 @@ Status nominal_arm_masses(RobotType type, ArmMasses* masses) {
   } else if (type == RobotType::ur3e) {
     mass_kg = kUr3eMass_kg;
     com_m = kUr3eCom_m;
+  } else if (type == RobotType::ur5) {
+    mass_kg = kUr5Mass_kg;
+    com_m = kUr5Com_m;
+  } else if (type == RobotType::ur10) {
+    mass_kg = kUr10Mass_kg;
+    com_m = kUr10Com_m;
   } else {
     return Status::invalid_argument;
   }

@@ -193,9 +193,38 @@ TEST(Compliance, DefaultTermsOfAUrArmAndTheirNames) {
   EXPECT_EQ(wall.compliance.terms[0].joint, 0);
   EXPECT_EQ(wall.compliance.terms[2].joint, 1);
   ArmMasses unknown;
-  EXPECT_EQ(nominal_arm_masses(RobotType::ur5, &unknown), Status::invalid_argument);
+  EXPECT_EQ(nominal_arm_masses(RobotType::ur16e, &unknown), Status::invalid_argument);
   EXPECT_EQ(default_compliance_terms(wall, Vec3::Zero(), ComplianceLoad::point, &wall.compliance),
             Status::invalid_argument);
+}
+
+// The tables are typed in from Universal Robots' publications: each must be its arm's (a digit
+// dropped or a row of another arm shows here). The links weigh 75-100 % of the arm's datasheet
+// weight (the base's housing is not a link), and the upper arm's and forearm's centres of mass lie
+// along their links: in the frame at the link's end, between that end (x = 0) and the link's
+// other joint (x = -a, the DH a being negative on a UR).
+TEST(Compliance, PublishedMassTablesMatchTheirArms) {
+  struct Arm {
+    RobotType type;
+    double datasheet_kg;
+  };
+  const Arm arms[] = {
+      {RobotType::ur5, 18.4}, {RobotType::ur10, 28.9}, {RobotType::ur3e, 11.2}, {RobotType::ur5e, 20.6}};
+  for (const Arm& arm : arms) {
+    SCOPED_TRACE(robot_type_name(arm.type));
+    ArmMasses masses;
+    ASSERT_EQ(nominal_arm_masses(arm.type, &masses), Status::ok);
+    double sum_kg = 0.0;
+    for (const double m : masses.link_mass_kg) sum_kg += m;
+    EXPECT_GE(sum_kg, 0.75 * arm.datasheet_kg);
+    EXPECT_LE(sum_kg, arm.datasheet_kg);
+    const RobotModel model = nominal_model(arm.type);
+    for (const int link : {1, 2}) {
+      EXPECT_GT(masses.link_com_m[link].x(), 0.0) << "link " << link + 1;
+      EXPECT_LT(masses.link_com_m[link].x(), -model.joints[link].a_m) << "link " << link + 1;
+    }
+    EXPECT_EQ(masses.payload_kg, 0.0);
+  }
 }
 
 TEST(Compliance, MassesBasisIsTheWeightedSumOfPointBases) {
