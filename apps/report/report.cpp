@@ -475,6 +475,16 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
+/// The note of a parameter without a sigma. Only an LM fit (Table 3 present) gives sigmas: after
+/// ABC or GSA every row is an estimate without one. After LM, the parameter
+/// was not estimated; when it moved all the same, a step before LM moved it (the tool point, fitted
+/// with the start geometry for the uncalibrated row) and LM kept that value.
+std::string note_without_sigma(const ReportData& data, const ParameterRow& p) {
+  if (!data.identifiability.present) return "no sigma (not an LM fit)";
+  if (p.value != p.start) return "not estimated by LM: kept at the value fitted before it";
+  return "not estimated";
+}
+
 std::vector<std::vector<std::string>> parameter_rows(const ReportData& data) {
   std::vector<std::vector<std::string>> rows = {
       {"parameter", "unit", "start", "calibrated", "change", "sigma", "note"}};
@@ -485,7 +495,7 @@ std::vector<std::vector<std::string>> parameter_rows(const ReportData& data) {
     const double change = (p.value - p.start) * scale;
     std::string note;
     if (p.sigma <= 0.0)
-      note = "not estimated";
+      note = note_without_sigma(data, p);
     else if (std::fabs(change) < 2.0 * p.sigma * scale)
       note = "change within 2 sigma";
     if (std::fabs(p.correlation) > kCorrelationWarning) {

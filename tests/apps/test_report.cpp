@@ -372,6 +372,35 @@ TEST(Report, TextTablesShowBothTables) {
   EXPECT_NE(text.find("60.1"), std::string::npos);
 }
 
+// A row without a sigma says why: after LM, a parameter that was not estimated either kept its
+// start or kept what a stage before LM made of it (the tool point fitted with the start geometry,
+// ABC's lengths); after a method without sigmas (ABC, GSA) every row is an estimate.
+TEST(Report, ParameterNotesSayWhereAValueWithoutSigmaComesFrom) {
+  report::ReportData data = example();
+  data.parameters = {{"a4", false, 0.0, 0.0, 0.0, "", 0.0},
+                     {"tool_z", false, 0.109, 0.0931202, 0.0, "", 0.0},
+                     {"a2", false, -0.425, -0.4251, 1e-6, "", 0.0}};
+  const auto line_of = [](const std::vector<std::string>& lines, const std::string& name) {
+    for (const std::string& line : lines) {
+      const std::size_t first = line.find_first_not_of(' ');
+      if (first != std::string::npos && line.compare(first, name.size() + 1, name + " ") == 0) return line;
+    }
+    return std::string("(no line for " + name + ")");
+  };
+  const std::vector<std::string> after_lm = report::format_parameters_text(data);
+  EXPECT_NE(line_of(after_lm, "a4").find("not estimated"), std::string::npos);
+  EXPECT_EQ(line_of(after_lm, "a4").find("before LM"), std::string::npos);
+  EXPECT_NE(line_of(after_lm, "tool_z").find("not estimated by LM: kept at the value fitted before it"),
+            std::string::npos);
+  EXPECT_EQ(line_of(after_lm, "a2").find("estimated"), std::string::npos);
+  data.identifiability = report::IdentifiabilityTable{};  // the parameters of an ABC or GSA result
+  const std::vector<std::string> after_abc = report::format_parameters_text(data);
+  for (const char* name : {"a4", "tool_z"}) {
+    EXPECT_NE(line_of(after_abc, name).find("no sigma (not an LM fit)"), std::string::npos) << name;
+    EXPECT_EQ(line_of(after_abc, name).find("not estimated"), std::string::npos) << name;
+  }
+}
+
 TEST(Report, EmptyAndDegenerateSeriesStillRender) {
   report::ReportData data;
   data.title = "empty";
