@@ -150,12 +150,12 @@ inline std::uint64_t capture_job_digest(const CaptureJobReport& r, bool calibrat
     d.add(c.lm.sigma.head(kRigidParamCount + c.lm.model.compliance.term_count));
     d.add(c.lm.rms_m);
     d.add_u64(static_cast<std::uint64_t>(c.lm.iterations));
-    d.add_u64(c.lm.identifiability.kept_mask);
+    d.add_mask(c.lm.identifiability.kept_mask);
   }
   // Issue 11: the baseline's fitted tool and base, what LM fixed as not significant, the blunders.
   d.add(to_params(c.baseline.model));
   d.add(c.baseline.base_to_tracker.translation_m);
-  d.add_u64(c.lm_pruned_mask);
+  d.add_mask(c.lm_pruned_mask);
   d.add_u64(c.outlier_count);
   d.add_u64(c.outlier_rounds);
   d.add(c.blunder_test.sigma_m);

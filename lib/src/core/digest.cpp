@@ -18,6 +18,11 @@ void Digest::add_u64(std::uint64_t value) {
   add_bytes(bytes, sizeof bytes);
 }
 
+void Digest::add_mask(const WideMask& mask) {
+  add_u64(mask.low_word());
+  if (mask.high_word() != 0) add_u64(mask.high_word());
+}
+
 void Digest::add(double value) {
   add_u64(math::bits_of(value));
 }

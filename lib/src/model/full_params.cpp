@@ -8,7 +8,7 @@ namespace hivecal {
 namespace {
 
 /// The rigid model's parameters, then the joint terms' generic names up to the largest capacity.
-constexpr const char* kParamNames[kRigidParamCount + 30] = {
+constexpr const char* kParamNames[kRigidParamCount + 40] = {
     "theta1",       "d1",           "a1",           "alpha1",       "theta2",       "d2",           "a2",
     "alpha2",       "theta3",       "d3",           "a3",           "alpha3",       "theta4",       "d4",
     "a4",           "alpha4",       "theta5",       "d5",           "a5",           "alpha5",       "theta6",
@@ -17,8 +17,10 @@ constexpr const char* kParamNames[kRigidParamCount + 30] = {
     "compliance3",  "compliance4",  "compliance5",  "compliance6",  "compliance7",  "compliance8",  "compliance9",
     "compliance10", "compliance11", "compliance12", "compliance13", "compliance14", "compliance15", "compliance16",
     "compliance17", "compliance18", "compliance19", "compliance20", "compliance21", "compliance22", "compliance23",
-    "compliance24", "compliance25", "compliance26", "compliance27", "compliance28", "compliance29", "compliance30"};
-static_assert(kMaxComplianceTerms <= 30, "one name per joint term");
+    "compliance24", "compliance25", "compliance26", "compliance27", "compliance28", "compliance29", "compliance30",
+    "compliance31", "compliance32", "compliance33", "compliance34", "compliance35", "compliance36", "compliance37",
+    "compliance38", "compliance39", "compliance40"};
+static_assert(kMaxComplianceTerms <= 40, "one name per joint term");
 
 constexpr const char* kOtherToolNames[kMaxTargets - 1][3] = {{"tool2_x", "tool2_y", "tool2_z"},
                                                              {"tool3_x", "tool3_y", "tool3_z"}};

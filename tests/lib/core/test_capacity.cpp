@@ -14,10 +14,12 @@ TEST(Capacity, OneJointTermCapacitySizesTheModelTheSolverAndTheMasks) {
   EXPECT_EQ(kMaxComplianceTerms, kMaxJointTerms);
   EXPECT_EQ(kFullParamCount, kRigidParamCount + kMaxJointTerms);
   EXPECT_EQ(kSymmetricCapacity, kFullParamCount);
-  // Every parameter and the "other targets' tools" flag fit in one 64-bit mask.
-  EXPECT_LT(kFullParamCount, 64);
+  // Every parameter and the "other targets' tools" flag fit in the mask: one word up to 30 joint
+  // terms (63 parameters), two beyond.
+  EXPECT_EQ(sizeof(ParamMask), kFullParamCount < 64 ? 8U : 16U);
   EXPECT_EQ(mask_count(kValidParamsMask), kFullParamCount);
-  EXPECT_EQ(kValidParamsMask & kOtherTargetTools, 0U);
+  EXPECT_EQ(kValidParamsMask & kOtherTargetTools, ParamMask{0});
+  EXPECT_NE(kOtherTargetTools, ParamMask{0});
 }
 
 TEST(Capacity, EveryParameterHasADistinctName) {

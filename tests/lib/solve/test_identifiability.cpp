@@ -232,7 +232,7 @@ TEST(Identifiability, BadArguments) {
   check(kAllParamsMask, 0.0, Status::invalid_argument);
   check(kAllParamsMask, 1.0, Status::invalid_argument);
   check(0, 1e-4, Status::invalid_argument);
-  check(kValidParamsMask + 1, 1e-4, Status::invalid_argument);  // beyond the compliance coefficients
+  check(param_bit(kFullParamCount), 1e-4, Status::invalid_argument);  // beyond the compliance coefficients
   jtj(3, 3) = std::nan("");
   check(kAllParamsMask, 1e-4, Status::non_finite_input);
   jtj.setZero();

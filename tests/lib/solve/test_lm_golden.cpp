@@ -47,7 +47,7 @@ void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest
   digest->add_u64(static_cast<std::uint64_t>(r.iterations));
   digest->add_u64(static_cast<std::uint64_t>(r.termination));
   const IdentifiabilityReport& report = r.identifiability;
-  digest->add_u64(report.kept_mask);
+  digest->add_mask(report.kept_mask);
   for (int d = 0; d < report.dropped_count; ++d) {
     const DroppedParam& entry = report.dropped[d];
     digest->add_u64(static_cast<std::uint64_t>(entry.index));
@@ -190,8 +190,8 @@ void add_job_result(Status status, const CalibrationResult& result, bool complia
     digest->add(stage.test.mae(ErrorAxis::norm_3d));
   }
   if (sigma) digest->add(result.lm.sigma.head(kRigidParamCount));
-  digest->add_u64(result.lm.identifiability.kept_mask);
-  digest->add_u64(result.lm_pruned_mask);
+  digest->add_mask(result.lm.identifiability.kept_mask);
+  digest->add_mask(result.lm_pruned_mask);
   digest->add_u64(result.outlier_count);
 }
 

@@ -13,7 +13,7 @@ namespace hivecal {
 /// model holds, each one more parameter: 28 in hosted builds (the 4 gravity terms and two
 /// harmonics per joint), 4 on bare metal (docs/footprint.md says what each costs) [-].
 inline constexpr int kMaxJointTerms = HIVECAL_MAX_JOINT_TERMS;
-static_assert(kMaxJointTerms >= 4 && kMaxJointTerms <= 30,
-              "the four default gravity terms; every parameter plus one flag bit in a 64-bit mask");
+static_assert(kMaxJointTerms >= 4 && kMaxJointTerms <= 40,
+              "the four default gravity terms; at most those and three harmonic orders of six joints");
 
 }  // namespace hivecal

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "hivecal/core/types.hpp"
+#include "hivecal/core/wide_mask.hpp"
 
 namespace hivecal {
 
@@ -16,6 +17,12 @@ class Digest {
   void add_bytes(const void* data, std::size_t count);
   /// Hashes a 64-bit integer (little-endian bytes).
   void add_u64(std::uint64_t value);
+  /// Hashes a parameter mask of one word (add_u64).
+  void add_mask(std::uint64_t mask) { add_u64(mask); }
+  /// Hashes a two-word mask: its low word, then its high word when that is not zero. A mask
+  /// that fits in one word hashes as in a build whose masks are one word: results do not depend
+  /// on the capacity, nor do their digests.
+  void add_mask(const WideMask& mask);
   /// Hashes the bits of a double.
   void add(double value);
   /// Hashes every coefficient of an Eigen object, column-major.

@@ -11,10 +11,12 @@
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 
 #include <Eigen/Core>
 
 #include "hivecal/core/types.hpp"
+#include "hivecal/core/wide_mask.hpp"
 #include "hivecal/model/kinematics.hpp"
 
 namespace hivecal {
@@ -41,8 +43,11 @@ using FullParams = Eigen::Matrix<double, kFullParamCount, 1>;
 /// d(residual of one sample) / d(full parameters) [m/m] or [m/rad].
 using FullJacobian = Eigen::Matrix<double, 3, kFullParamCount>;
 
-/// A set of full-model parameters: bit i stands for parameter i.
-using ParamMask = std::uint64_t;
+/// A set of full-model parameters: bit i stands for parameter i, and one bit more
+/// (kOtherTargetTools). One word while the parameters and that bit fit in 64 bits (every build
+/// up to 30 joint terms, the bare-metal one included), two words beyond (the harmonics of
+/// order 3).
+using ParamMask = std::conditional_t<kFullParamCount + 1 <= 64, std::uint64_t, WideMask>;
 /// The mask holding only parameter `index`.
 constexpr ParamMask param_bit(int index) {
   return ParamMask{1} << static_cast<unsigned>(index);
