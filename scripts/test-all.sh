@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs every test on every target: host at -O3 and with ASan+UBSan, aarch64 under qemu-user,
-# the golden digests at -O0, -march=native and on armhf (HIVECAL_TEST_SCOPE=golden: what those
+# the golden digests at -O0, -march=native (with 28 joint terms) and on armhf (HIVECAL_TEST_SCOPE=golden: what those
 # flags and that target can change is the bits), then the bare-metal Cortex-M7 (hardware doubles) and
 # Cortex-M4F (soft-float doubles) firmware under qemu-system-arm, then the wire decoder
 # fuzzer for HIVECAL_FUZZ_SECONDS (default 60) beside the log-reader fuzzer for 30 s. Installs what it needs first.

@@ -279,17 +279,19 @@ JointTermLevels joint_term_levels(const RobotModel& reference, double compliance
 
 /// The estimated model parameter (geometry or joint-term coefficient) whose change from
 /// `start` is least significant, below t standard deviations (a joint term: below its level
-/// >= t, its ratio scaled by t / level to compare); -1 when none is (or t <= 0).
+/// >= t, its ratio scaled by t / level to compare); -1 when none is (or t <= 0). The joint terms
+/// are tried first, the geometry only when every estimated term clears its level: a new term
+/// must earn its place, never take a geometry parameter's. (Tried together, a joint's offset,
+/// whose sigma a free harmonic sum inflates, would go first, and the sum of sin q, cos 2q and
+/// sin 3q, flat over a joint's turn of +-1 rad, would take the offset's place at 20 sigma.)
 [[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t,
                                         const JointTermLevels& levels) {
   if (!(t > 0.0)) return -1;
   const ModelParams change = to_params(lm.model) - to_params(start);
   int weakest = -1;
   double weakest_ratio = t;
-  for (int i = 0; i < kFullParamCount; ++i) {
-    if (i == kModelParamCount) i = kRigidParamCount;  // the base is not a model parameter
-    if (i >= kRigidParamCount && i - kRigidParamCount >= lm.model.compliance.term_count) break;
-    if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) continue;
+  const auto consider = [&](int i) {
+    if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) return;
     const double delta = i < kModelParamCount ? change(i) : model_value(lm.model, i) - model_value(start, i);
     const double level = mask_has(levels.harmonics, i) ? levels.harmonic_t : levels.gravity_t;
     const double ratio = i < kRigidParamCount ? std::fabs(delta) / lm.sigma(i)
@@ -298,7 +300,10 @@ JointTermLevels joint_term_levels(const RobotModel& reference, double compliance
       weakest_ratio = ratio;
       weakest = i;
     }
-  }
+  };
+  for (int i = kRigidParamCount; i < kRigidParamCount + lm.model.compliance.term_count; ++i) consider(i);
+  if (weakest >= 0) return weakest;
+  for (int i = 0; i < kModelParamCount; ++i) consider(i);  // the base is not a model parameter
   return weakest;
 }
 

@@ -53,9 +53,8 @@ constexpr double kUr5eMass_kg[kJointCount] = {3.761, 8.058, 2.846, 1.37, 1.3, 0.
 constexpr double kUr5eCom_m[kJointCount][3] = {{0.0, -0.02561, 0.00193}, {0.2125, 0.0, 0.11336}, {0.15, 0.0, 0.0265},
                                                {0.0, -0.0018, 0.01634},  {0.0, 0.0018, 0.01634}, {0.0, 0.0, -0.001159}};
 
+// The UR5's centres of mass are the UR5e's (both sources give the same numbers): its masses only.
 constexpr double kUr5Mass_kg[kJointCount] = {3.7, 8.393, 2.33, 1.219, 1.219, 0.1879};
-constexpr double kUr5Com_m[kJointCount][3] = {{0.0, -0.02561, 0.00193}, {0.2125, 0.0, 0.11336}, {0.15, 0.0, 0.0265},
-                                              {0.0, -0.0018, 0.01634},  {0.0, 0.0018, 0.01634}, {0.0, 0.0, -0.001159}};
 constexpr double kUr10Mass_kg[kJointCount] = {7.1, 12.7, 4.27, 2.0, 2.0, 0.365};
 constexpr double kUr10Com_m[kJointCount][3] = {{0.021, 0.0, 0.027}, {0.38, 0.0, 0.158},  {0.24, 0.0, 0.068},
                                                {0.0, 0.007, 0.018}, {0.0, 0.007, 0.018}, {0.0, 0.0, -0.026}};
@@ -161,7 +160,7 @@ Status nominal_arm_masses(RobotType type, ArmMasses* masses) {
     com_m = kUr3eCom_m;
   } else if (type == RobotType::ur5) {
     mass_kg = kUr5Mass_kg;
-    com_m = kUr5Com_m;
+    com_m = kUr5eCom_m;
   } else if (type == RobotType::ur10) {
     mass_kg = kUr10Mass_kg;
     com_m = kUr10Com_m;

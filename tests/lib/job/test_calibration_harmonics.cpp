@@ -92,12 +92,13 @@ void fill(bool harmonics, std::uint64_t seed, std::size_t count, DatasetBase* ou
       seed, count, 15e-6, [&](const JointVector& q) { return true_joints(harmonics, q, bends); }, out);
 }
 
-/// The LM job with the harmonics of orders 1 .. 2 of every joint (24 terms) as its joint terms.
-CalibrationOptions harmonic_options() {
+/// The LM job with the harmonics of orders 1 .. `orders` of every joint (24 or 36 terms) as its
+/// joint terms.
+CalibrationOptions harmonic_options(int orders = 2) {
   CalibrationOptions options;
   options.method = CalibrationMethod::lm;
   options.compliance.enabled = true;
-  EXPECT_EQ(append_harmonic_terms(2, &options.compliance.model), Status::ok);
+  EXPECT_EQ(append_harmonic_terms(orders, &options.compliance.model), Status::ok);
   return options;
 }
 
@@ -143,22 +144,30 @@ TEST(CalibrationHarmonics, TrueHarmonicsAreRecoveredWithinTheirSigma) {
   EXPECT_LT(harmonic_m, 0.8 * rigid_m);
 }
 
-// Measured (x86-64): 39 of 40 seeds keep no term; seed 20 keeps h_j6_cos1 (-509 urad, 3.8
-// sigma: joint 6 moves the tool point, 25 mm off its axis, by 13 um).
+// Measured (x86-64), orders 1 .. 2 and 1 .. 3 alike: 39 of 40 seeds keep no term; seed 20 keeps
+// h_j6_cos1 (3.8 sigma: joint 6 moves the tool point, 25 mm off its axis, by 13 um).
 TEST(CalibrationHarmonics, AnArmWithoutHarmonicsRejectsEveryTermOnAtLeast95PercentOfSeeds) {
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
-  int clean = 0;
-  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
-    fill(false, 100 + seed, 120, &dataset);
-    ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, harmonic_options(), &workspace, &result), Status::ok);
-    ASSERT_EQ(result.stage_count, 2u);
-    const ComplianceModel& c = result.stages[1].model.compliance;
-    int kept = 0;
-    for (int t = 0; t < c.term_count; ++t) kept += c.coefficient[t] != 0.0 ? 1 : 0;
-    if (kept > 0) std::printf("  seed %llu: %d term(s) kept\n", static_cast<unsigned long long>(seed), kept);
-    clean += kept == 0 && result.stages[1].rigid_kept ? 1 : 0;
+  for (const int orders : {2, kMaxHarmonicOrder}) {
+    if (orders * kJointCount * 2 > kMaxComplianceTerms) continue;  // beyond this build
+    int clean = 0;
+    for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+      fill(false, 100 + seed, 120, &dataset);
+      ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, harmonic_options(orders), &workspace, &result),
+                Status::ok);
+      ASSERT_EQ(result.stage_count, 2u);
+      const ComplianceModel& c = result.stages[1].model.compliance;
+      ASSERT_EQ(c.term_count, orders * kJointCount * 2);
+      int kept = 0;
+      for (int t = 0; t < c.term_count; ++t) kept += c.coefficient[t] != 0.0 ? 1 : 0;
+      if (kept > 0) {
+        std::printf("  orders 1 .. %d, seed %llu: %d term(s) kept\n", orders, static_cast<unsigned long long>(seed),
+                    kept);
+      }
+      clean += kept == 0 && result.stages[1].rigid_kept ? 1 : 0;
+    }
+    EXPECT_GE(clean, 38) << "orders 1 .. " << orders;
   }
-  EXPECT_GE(clean, 38);
 }
 
 /// The harmonics job on every sample of `dataset` (no test part): LM, then LM+harmonics, whose
@@ -179,19 +188,20 @@ const CalibrationStage& calibrate_small_set() {
 
 // A small set whose joint readings are rounded to 0.01 degree (a pendant's export) and whose
 // tracker noise is far below what the rounding leaves (1 um): per-pose joint errors of up to
-// 87 urad, which the significance test, trusting the residuals' sigma, takes for harmonics. On
-// left-out poses those terms predict worse, and the job keeps the rigid fit, bit for bit.
+// 87 urad, which the significance test, trusting the residuals' sigma, may take for harmonics
+// (on this seed's set; on most such sets the test itself rejects them). On left-out poses those
+// terms do not predict better by 2 standard errors, and the job keeps the rigid fit, bit for bit.
 TEST(CalibrationHarmonics, OnASmallSetTermsThatDoNotPredictLeftOutPosesAreRejected) {
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
   const double step_rad = 0.01 * 3.14159265358979323846 / 180.0;
   fill_turned(
-      61, 20, 1e-6, [](const JointVector& q) { return q; }, &dataset, step_rad);
+      76, 20, 1e-6, [](const JointVector& q) { return q; }, &dataset, step_rad);
   const CalibrationStage harmonics = calibrate_small_set();
   const JointTermHoldout& holdout = harmonics.holdout;
   ASSERT_TRUE(holdout.checked);  // the significance test kept terms: what this test is about
   EXPECT_EQ(holdout.poses, 20u);
   EXPECT_FALSE(holdout.passed);
-  EXPECT_GT(holdout.with_terms_mae_m, holdout.without_terms_mae_m);
+  EXPECT_LT(holdout.without_terms_mae_m - holdout.with_terms_mae_m, kHoldoutImprovementT * holdout.improvement_se_m);
   EXPECT_TRUE(harmonics.rigid_kept);
   for (int t = 0; t < harmonics.model.compliance.term_count; ++t) {
     EXPECT_EQ(harmonics.model.compliance.coefficient[t], 0.0) << compliance_term_name(harmonics.model.compliance, t);

@@ -349,6 +349,19 @@ TEST(Compliance, HarmonicsAppendAfterTheGravityTermsUpToTheBuildsCapacity) {
   EXPECT_STREQ(compliance_term_name(c, 8), "h_j2_sin1");
   EXPECT_STREQ(compliance_term_name(c, needed - 1), "h_j6_cos2");
   EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder, &c), Status::invalid_argument);  // over capacity
+  // Three orders of six joints with the gravity terms: the hosted builds' 40.
+  ComplianceModel third = compliant_ur5e(ComplianceLoad::point).compliance;
+  const int needed_third = 4 + kMaxHarmonicOrder * kJointCount * 2;
+  if (needed_third > kMaxComplianceTerms) {
+    EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder, &third), Status::invalid_argument);
+    return;
+  }
+  ASSERT_EQ(append_harmonic_terms(kMaxHarmonicOrder, &third), Status::ok);
+  EXPECT_EQ(third.term_count, needed_third);
+  EXPECT_EQ(check_compliance(third), Status::ok);
+  EXPECT_STREQ(compliance_term_name(third, 8), "h_j1_sin3");
+  EXPECT_STREQ(compliance_term_name(third, 9), "h_j1_cos3");
+  EXPECT_STREQ(compliance_term_name(third, needed_third - 1), "h_j6_cos3");
 }
 
 }  // namespace

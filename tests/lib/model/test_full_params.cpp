@@ -19,7 +19,7 @@ namespace hivecal::full_params_test {
 namespace {
 
 /// A second random word for two-word masks (builds with the harmonics of order 3); one-word
-/// masks have none, so their draws are the same as before.
+/// masks have none.
 [[maybe_unused]] void add_high_word(std::uint64_t* /*mask*/, Random* /*random*/) {}
 [[maybe_unused]] void add_high_word(WideMask* mask, Random* random) {
   *mask |= WideMask{random->next()} << 64U;
@@ -75,7 +75,7 @@ RobotModel compliant_model(Random* random) {
 TEST(FullParams, LayoutIsGeometryThenBaseThenCompliance) {
   EXPECT_EQ(kBaseParamCount, 6);
   EXPECT_EQ(kRigidParamCount, 33);
-  EXPECT_EQ(kFullParamCount, kRigidParamCount + kMaxJointTerms);  // 37 or 61: the build's capacity
+  EXPECT_EQ(kFullParamCount, kRigidParamCount + kMaxJointTerms);  // 37, 61 or 73: the build's capacity
   EXPECT_EQ(base_rotation_param_index(0), 27);
   EXPECT_EQ(base_rotation_param_index(2), 29);
   EXPECT_EQ(base_translation_param_index(0), 30);

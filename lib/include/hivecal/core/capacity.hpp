@@ -10,8 +10,8 @@
 namespace hivecal {
 
 /// Most joint terms (gravity compliance and joint-angle harmonics, model/compliance.hpp) one
-/// model holds, each one more parameter: 28 in hosted builds (the 4 gravity terms and two
-/// harmonics per joint), 4 on bare metal (docs/footprint.md says what each costs) [-].
+/// model holds, each one more parameter: 40 in hosted builds (the 4 gravity terms and three
+/// harmonic orders per joint), 4 on bare metal (docs/footprint.md says what each costs) [-].
 inline constexpr int kMaxJointTerms = HIVECAL_MAX_JOINT_TERMS;
 static_assert(kMaxJointTerms >= 4 && kMaxJointTerms <= 40,
               "the four default gravity terms; at most those and three harmonic orders of six joints");

@@ -18,9 +18,9 @@
 namespace hivecal {
 
 /// Largest matrix the solver decomposes: the full calibration model's parameters, 33 rigid +
-/// the build's joint terms (37 or 61; normal_equations.hpp checks that the two agree).
+/// the build's joint terms (37 or 73; normal_equations.hpp checks that the two agree).
 inline constexpr int kSymmetricCapacity = 33 + kMaxJointTerms;
-/// The working matrix: the leading size x size block is decomposed (10.9 kB at 37, 29.1 kB at 61).
+/// The working matrix: the leading size x size block is decomposed (10.9 kB at 37, 29.1 kB at 61, 41.6 kB at 73).
 using SymmetricMatrix = Eigen::Matrix<double, kSymmetricCapacity, kSymmetricCapacity>;
 /// Eigenvalues, or one column of eigenvectors, of that block.
 using SymmetricVector = Eigen::Matrix<double, kSymmetricCapacity, 1>;

@@ -131,7 +131,8 @@ Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_dir
 /// Appends the harmonics of orders 1 .. `orders` of every joint's reading to *compliance:
 /// per joint and order a sine and a cosine term with zero coefficients. invalid_argument when
 /// `orders` is outside [1, kMaxHarmonicOrder] or the terms would not fit in
-/// kMaxComplianceTerms (the build's capacity: 28 holds the 4 gravity terms and orders 1 .. 2).
+/// kMaxComplianceTerms (the build's capacity: 28 holds the 4 gravity terms and orders 1 .. 2,
+/// 40 orders 1 .. 3).
 Status append_harmonic_terms(int orders, ComplianceModel* compliance);
 
 /// Universal Robots' published link masses and centres of mass of `type` into *masses (payload

@@ -1,7 +1,7 @@
 // The full calibration model's parameters: the 27 geometry parameters of kinematics.hpp, the
 // robot base -> tracker transform (33: the rigid model) and the coefficients of the model's
 // joint terms (model/compliance.hpp: gravity compliance and joint-angle harmonics, as many as
-// the build's capacity holds: 37 or 61 in all); their indices, masks, names and how an
+// the build's capacity holds: 37 or 73 in all); their indices, masks, names and how an
 // increment applies.
 //
 // The base is not stored as parameters: it is a RigidTransform, and its six parameters are
@@ -23,7 +23,7 @@ namespace hivecal {
 
 inline constexpr int kBaseParamCount = 6;                                       ///< rotation (3) + translation (3)
 inline constexpr int kRigidParamCount = kModelParamCount + kBaseParamCount;     ///< 33: geometry and base
-inline constexpr int kFullParamCount = kRigidParamCount + kMaxComplianceTerms;  ///< 37 or 61: and the joint terms
+inline constexpr int kFullParamCount = kRigidParamCount + kMaxComplianceTerms;  ///< 37 or 73: and the joint terms
 
 /// Index of the base rotation increment about base axis `axis` (0 = x, 1 = y, 2 = z).
 constexpr int base_rotation_param_index(int axis) {
@@ -44,9 +44,8 @@ using FullParams = Eigen::Matrix<double, kFullParamCount, 1>;
 using FullJacobian = Eigen::Matrix<double, 3, kFullParamCount>;
 
 /// A set of full-model parameters: bit i stands for parameter i, and one bit more
-/// (kOtherTargetTools). One word while the parameters and that bit fit in 64 bits (every build
-/// up to 30 joint terms, the bare-metal one included), two words beyond (the harmonics of
-/// order 3).
+/// (kOtherTargetTools). One word while the parameters and that bit fit in 64 bits (up to 30
+/// joint terms: the bare-metal build), two words beyond (the hosted builds' 40).
 using ParamMask = std::conditional_t<kFullParamCount + 1 <= 64, std::uint64_t, WideMask>;
 /// The mask holding only parameter `index`.
 constexpr ParamMask param_bit(int index) {
