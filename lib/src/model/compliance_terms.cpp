@@ -59,6 +59,17 @@ constexpr double kUr10Mass_kg[kJointCount] = {7.1, 12.7, 4.27, 2.0, 2.0, 0.365};
 constexpr double kUr10Com_m[kJointCount][3] = {{0.021, 0.0, 0.027}, {0.38, 0.0, 0.158},  {0.24, 0.0, 0.068},
                                                {0.0, 0.007, 0.018}, {0.0, 0.007, 0.018}, {0.0, 0.0, -0.026}};
 
+/// One arm's published table: its link masses [kg] and centres of mass [m].
+struct PublishedArm {
+  RobotType type;
+  const double* mass_kg;
+  const double (*com_m)[3];
+};
+constexpr PublishedArm kPublishedArms[] = {{RobotType::ur5e, kUr5eMass_kg, kUr5eCom_m},
+                                           {RobotType::ur3e, kUr3eMass_kg, kUr3eCom_m},
+                                           {RobotType::ur5, kUr5Mass_kg, kUr5eCom_m},
+                                           {RobotType::ur10, kUr10Mass_kg, kUr10Com_m}};
+
 constexpr const char* kTermNames[kJointCount][kToolLoadFrame + 1] = {
     {"c_j1_o1", "c_j1_o2", "c_j1_o3", "c_j1_o4", "c_j1_o5", "c_j1_o6", "c_j1_tool", "c_j1_mass"},
     {"c_j2_o1", "c_j2_o2", "c_j2_o3", "c_j2_o4", "c_j2_o5", "c_j2_o6", "c_j2_tool", "c_j2_mass"},
@@ -150,28 +161,15 @@ Status append_harmonic_terms(int orders, ComplianceModel* compliance) {
 }
 
 Status nominal_arm_masses(RobotType type, ArmMasses* masses) {
-  const double* mass_kg = nullptr;
-  const double(*com_m)[3] = nullptr;
-  if (type == RobotType::ur5e) {
-    mass_kg = kUr5eMass_kg;
-    com_m = kUr5eCom_m;
-  } else if (type == RobotType::ur3e) {
-    mass_kg = kUr3eMass_kg;
-    com_m = kUr3eCom_m;
-  } else if (type == RobotType::ur5) {
-    mass_kg = kUr5Mass_kg;
-    com_m = kUr5eCom_m;
-  } else if (type == RobotType::ur10) {
-    mass_kg = kUr10Mass_kg;
-    com_m = kUr10Com_m;
-  } else {
-    return Status::invalid_argument;
+  for (const PublishedArm& arm : kPublishedArms) {
+    if (arm.type != type) continue;
+    for (int link = 0; link < kJointCount; ++link) {
+      masses->link_mass_kg[link] = arm.mass_kg[link];
+      masses->link_com_m[link] = Vec3(arm.com_m[link][0], arm.com_m[link][1], arm.com_m[link][2]);
+    }
+    return Status::ok;
   }
-  for (int link = 0; link < kJointCount; ++link) {
-    masses->link_mass_kg[link] = mass_kg[link];
-    masses->link_com_m[link] = Vec3(com_m[link][0], com_m[link][1], com_m[link][2]);
-  }
-  return Status::ok;
+  return Status::invalid_argument;
 }
 
 const char* compliance_term_name(const ComplianceModel& compliance, int t) {

@@ -37,8 +37,6 @@ TEST(WideMask, ShiftsCarryAcrossTheWordsAndSubtractionBorrows) {
   EXPECT_EQ(m, make(5, 10));
   m &= make(4, 2);
   EXPECT_EQ(m, make(4, 2));
-  m ^= make(4, 0);
-  EXPECT_EQ(m, WideMask{2});
 }
 
 TEST(WideMask, AOneWordMaskDigestsAsItsWord) {
@@ -69,7 +67,6 @@ TEST(WideMask, EveryOperatorMatches128BitIntegersOnRandomValues) {
     const U128 y = as_u128(b);
     ASSERT_TRUE(as_u128(a | b) == (x | y));
     ASSERT_TRUE(as_u128(a & b) == (x & y));
-    ASSERT_TRUE(as_u128(a ^ b) == (x ^ y));
     ASSERT_TRUE(as_u128(~a) == static_cast<U128>(~x));
     const unsigned shift = static_cast<unsigned>(trial % 128);
     ASSERT_TRUE(as_u128(a << shift) == static_cast<U128>(x << shift)) << shift;

@@ -8,7 +8,7 @@
 namespace hivecal {
 
 /// 128 flags, bit i for parameter i, with the operators the masks use on std::uint64_t:
-/// | & ^ ~, shifts left, subtracting a small count (for "the low n bits": (1 << n) - 1) and
+/// | & ~, shifts left, subtracting a small count (for "the low n bits": (1 << n) - 1) and
 /// comparison. Built from an integer (the low word), so `mask != 0` and `WideMask{1} << n` read
 /// as they do for a word.
 class WideMask {
@@ -19,7 +19,6 @@ class WideMask {
 
   constexpr WideMask operator|(WideMask other) const { return {low_ | other.low_, high_ | other.high_}; }
   constexpr WideMask operator&(WideMask other) const { return {low_ & other.low_, high_ & other.high_}; }
-  constexpr WideMask operator^(WideMask other) const { return {low_ ^ other.low_, high_ ^ other.high_}; }
   constexpr WideMask operator~() const { return {~low_, ~high_}; }
   /// Shifted left by `count` bits (0 .. 127; larger gives 0).
   constexpr WideMask operator<<(unsigned count) const {
@@ -32,7 +31,6 @@ class WideMask {
   constexpr WideMask operator-(std::uint64_t count) const { return {low_ - count, high_ - (low_ < count ? 1U : 0U)}; }
   constexpr WideMask& operator|=(WideMask other) { return *this = *this | other; }
   constexpr WideMask& operator&=(WideMask other) { return *this = *this & other; }
-  constexpr WideMask& operator^=(WideMask other) { return *this = *this ^ other; }
   friend constexpr bool operator==(WideMask a, WideMask b) { return a.low_ == b.low_ && a.high_ == b.high_; }
   friend constexpr bool operator!=(WideMask a, WideMask b) { return !(a == b); }
 
