@@ -254,25 +254,43 @@ void unpack_vectors(const SymmetricEigenReduction& r, const bool* is_coupled, in
   }
 }
 
-/// Selection sort, increasing; ties keep their order, so the result is the same everywhere.
-/// source[k] (initially k) and the eigenvector columns, if given, follow their eigenvalues.
+/// Column k of the size x size block becomes the column source[k] was: each cycle of the
+/// permutation is followed with one column held aside.
+void permute_columns(const int* source, int size, SymmetricMatrix* matrix) {
+  SymmetricMatrix& v = *matrix;
+  bool placed[kSymmetricCapacity] = {};
+  for (int start = 0; start < size; ++start) {
+    if (placed[start] || source[start] == start) continue;
+    const SymmetricVector held = v.col(start);
+    int k = start;
+    while (source[k] != start) {
+      v.col(k).head(size) = v.col(source[k]).head(size);
+      placed[k] = true;
+      k = source[k];
+    }
+    v.col(k).head(size) = held.head(size);
+    placed[k] = true;
+  }
+}
+
+/// Stable sort, increasing (insertion): ties keep their index order, so the order of the
+/// eigenvalues of a block does not depend on how many uncoupled entries come before or after
+/// them (the identifiability analysis passes only the block its parameters reach).
+/// source[k] is the index whose eigenvalue sorted to position k; the eigenvector columns, if
+/// given, follow their eigenvalues.
 void sort_increasing(SymmetricVector* eigenvalues, int size, SymmetricMatrix* eigenvectors, int* source) {
   SymmetricVector& values = *eigenvalues;
-  for (int k = 0; k < size; ++k) source[k] = k;
-  for (int k = 0; k + 1 < size; ++k) {
-    int smallest = k;
-    for (int j = k + 1; j < size; ++j) {
-      if (values(j) < values(smallest)) smallest = j;
-    }
-    if (smallest == k) continue;
+  for (int k = 0; k < size; ++k) {
     const double value = values(k);
-    values(k) = values(smallest);
-    values(smallest) = value;
-    const int index = source[k];
-    source[k] = source[smallest];
-    source[smallest] = index;
-    if (eigenvectors != nullptr) eigenvectors->col(k).swap(eigenvectors->col(smallest));
+    int j = k;
+    for (; j > 0 && value < values(j - 1); --j) {
+      values(j) = values(j - 1);
+      source[j] = source[j - 1];
+    }
+    values(j) = value;
+    source[j] = k;
   }
+  if (eigenvectors != nullptr) permute_columns(source, size, eigenvectors);
 }
 
 /// Checks the block, writes the diagonal to eigenvalues (final for the uncoupled indices),

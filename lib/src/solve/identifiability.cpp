@@ -33,9 +33,24 @@ double singular_from_eigen(double eigenvalue) {
   return std::sqrt(eigenvalue > 0.0 ? eigenvalue : 0.0);
 }
 
+/// Rows and columns the analysis of `mask` decomposes: up to one past its last parameter, so
+/// that one inactive entry (|kInactiveEigenvalue| = 1) stays in the block whenever the
+/// parameter space goes further, as it did when the whole capacity was analysed: the
+/// eigen-solver's rounding floor (relative to the block's largest entry) is then the same, and
+/// the stable sort puts the eigenvalues of the analysed parameters in the same order. The
+/// joint terms a build holds room for and a model does not use cost nothing.
+int analysed_size(ParamMask mask) {
+  int last = -1;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(mask, i)) last = i;
+  }
+  return last + 2 < kFullParamCount ? last + 2 : kFullParamCount;
+}
+
 /// Writes the singular values of the analysed block (decreasing) and its condition number.
-void fill_spectrum(const FullParams& eigenvalues, int count, double* values, int* value_count, double* condition) {
-  for (int k = 0; k < count; ++k) values[k] = singular_from_eigen(eigenvalues(kFullParamCount - 1 - k));
+void fill_spectrum(const FullParams& eigenvalues, int size, int count, double* values, int* value_count,
+                   double* condition) {
+  for (int k = 0; k < count; ++k) values[k] = singular_from_eigen(eigenvalues(size - 1 - k));
   *value_count = count;
   const double smallest = values[count - 1];
   *condition = smallest > 0.0 ? values[0] / smallest : std::numeric_limits<double>::infinity();
@@ -43,9 +58,9 @@ void fill_spectrum(const FullParams& eigenvalues, int count, double* values, int
 
 /// Eigenvalues of ws->scaled (increasing), its reduction kept in ws->rotated and
 /// ws->reduction for null_vectors. False if the QL iterations did not converge.
-bool decompose(IdentifiabilityWorkspace* ws) {
-  ws->rotated = ws->scaled;
-  return symmetric_eigenvalues(&ws->rotated, kFullParamCount, &ws->eigenvalues, &ws->reduction) == Status::ok;
+bool decompose(IdentifiabilityWorkspace* ws, int size) {
+  ws->rotated.topLeftCorner(size, size) = ws->scaled.topLeftCorner(size, size);
+  return symmetric_eigenvalues(&ws->rotated, size, &ws->eigenvalues, &ws->reduction) == Status::ok;
 }
 
 /// Whether the vectors in columns first_null..first_null+null_count-1 of ws->null_basis, which
@@ -55,8 +70,9 @@ bool decompose(IdentifiabilityWorkspace* ws) {
 /// test: its shift cannot be separated from the first's, and the Gram-Schmidt step leaves
 /// rounding noise of that size, which is far below any null threshold.
 [[gnu::noinline]] bool close_to_null_space(const IdentifiabilityWorkspace& ws, int first_null, int null_count) {
+  const int size = ws.reduction.size;
   const int next = first_null + null_count;
-  if (next >= kFullParamCount) return false;
+  if (next >= size) return false;
   const double gap = ws.eigenvalues(next) - ws.eigenvalues(next - 1);
   if (!(gap > 0.0)) return false;
   for (int j = first_null; j < next; ++j) {
@@ -275,26 +291,27 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
   for (bool first_round = true; mask != 0; first_round = false) {
     FullParams scale;
     scale_normal_matrix(jtwj, mask, kInactiveEigenvalue, &workspace->scaled, &scale);
-    if (!decompose(workspace)) return Status::singular_system;
+    const int size = analysed_size(mask);
+    if (!decompose(workspace, size)) return Status::singular_system;
     const FullParams& eigenvalues = workspace->eigenvalues;
     const int count = mask_count(mask);
-    const double sigma_max = singular_from_eigen(eigenvalues(kFullParamCount - 1));
+    const double sigma_max = singular_from_eigen(eigenvalues(size - 1));
     if (first_round) {
-      fill_spectrum(eigenvalues, count, report->singular_values_before, &report->singular_count_before,
+      fill_spectrum(eigenvalues, size, count, report->singular_values_before, &report->singular_count_before,
                     &report->condition_before);
     }
     int null_count = 0;
-    for (int k = kFullParamCount - count; k < kFullParamCount; ++k) {
+    for (int k = size - count; k < size; ++k) {
       if (singular_from_eigen(eigenvalues(k)) >= threshold * sigma_max) break;
       ++null_count;
     }
     if (null_count == 0) {
-      fill_spectrum(eigenvalues, count, report->singular_values_after, &report->singular_count_after,
+      fill_spectrum(eigenvalues, size, count, report->singular_values_after, &report->singular_count_after,
                     &report->condition_after);
       report->kept_mask = mask;
       return Status::ok;
     }
-    if (!null_vectors(workspace, kFullParamCount - count, null_count)) return Status::singular_system;
+    if (!null_vectors(workspace, size - count, null_count)) return Status::singular_system;
     const ParamMask before_drop = mask;
     drop_null_directions(workspace, null_count, sigma_max, drop_first, &mask, report);
     if (mask == before_drop) return Status::singular_system;

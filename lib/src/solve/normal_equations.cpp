@@ -53,10 +53,12 @@ constexpr int kBatchRows = 3 * kBatchSamples;
 /// Samples whose Jacobian rows one kernel call writes (one per double lane).
 constexpr int kGroupSamples = detail::kJacobianLanes;
 #ifdef HIVECAL_WIDE_LANES
+using WidestLane = lanes::WideLane;
 constexpr int kWideGroupSamples = detail::kWideJacobianLanes;
 /// Samples the row buffer holds: a wide group, flushed as batches of kBatchSamples.
 constexpr int kHeldSamples = kWideGroupSamples;
 #else
+using WidestLane = lanes::Lane;
 constexpr int kHeldSamples = kBatchSamples;
 #endif
 static_assert(kBatchSamples % kGroupSamples == 0 && kHeldSamples % kBatchSamples == 0,
@@ -64,10 +66,10 @@ static_assert(kBatchSamples % kGroupSamples == 0 && kHeldSamples % kBatchSamples
 
 /// Jacobian rows of a few samples over the listed columns, with their weights and residuals.
 struct RowBatch {
-  double rows[3 * kHeldSamples][kFullParamCount];  ///< local Jacobian rows, compact column order
-  double weight[3 * kHeldSamples] = {};            ///< IRLS weight of each row's sample
-  double residual_m[3 * kHeldSamples] = {};        ///< residual component of each row (base frame) [m]
-  int samples = 0;                                 ///< samples held
+  double rows[3 * kHeldSamples][kFullParamCount] = {};  ///< local Jacobian rows, compact column order
+  double weight[3 * kHeldSamples] = {};                 ///< IRLS weight of each row's sample
+  double residual_m[3 * kHeldSamples] = {};             ///< residual component of each row (base frame) [m]
+  int samples = 0;                                      ///< samples held
 };
 
 /// The Jacobian kernel for kWidth samples at once (detail::tool_point_jacobian_rows and its
@@ -85,18 +87,19 @@ void kernel_rows(const RobotModel& model, const ModelTrig& trig, const JointTrig
     detail::tool_point_jacobian_rows(model, trig, lane_trig, target, point_m);
 }
 
-/// The compliance columns of one sample's rows: term t's is d(point)/d(theta_offset of its
-/// joint), taken at the deflected pose, times the term's basis (the basis's own dependence on
-/// the geometry is second order and left out, docs/solver-lm.md); 0 for terms the model does
-/// not have, or for every term when `basis` is null (a rigid model).
+/// The compliance columns of one sample's rows for the terms the model has: term t's is
+/// d(point)/d(theta_offset of its joint), taken at the deflected pose, times the term's basis
+/// (the basis's own dependence on the geometry is second order and left out,
+/// docs/solver-lm.md); 0 for every term when `basis` is null (a rigid model). The slots of the
+/// terms a model does not have are never written: the row buffers start zeroed, which keeps
+/// them 0 (a build holds room for 40 terms; writing 40 zeros per sample cost the update a
+/// tenth of its time).
 void write_compliance_columns(const ComplianceModel& compliance, const TermBasis* basis, const IndexList& columns,
                               double (*rows)[kFullParamCount]) {
-  for (int t = 0; t < kMaxComplianceTerms; ++t) {
+  for (int t = 0; t < compliance.term_count; ++t) {
     const int slot = columns.slot[compliance_param_index(t)];
-    const bool present = basis != nullptr && t < compliance.term_count;
-    const int theta_slot =
-        present ? columns.slot[model_param_index(compliance.terms[t].joint, DhField::theta_offset)] : 0;
-    for (int r = 0; r < 3; ++r) rows[r][slot] = present ? rows[r][theta_slot] * (*basis)[t] : 0.0;
+    const int theta_slot = columns.slot[model_param_index(compliance.terms[t].joint, DhField::theta_offset)];
+    for (int r = 0; r < 3; ++r) rows[r][slot] = basis != nullptr ? rows[r][theta_slot] * (*basis)[t] : 0.0;
   }
 }
 
@@ -150,8 +153,11 @@ template <class Lane, std::size_t kRows>
 __attribute__((always_inline)) inline void add_weighted_rows(const double* const (&rows)[kRows],
                                                              const double (&weight)[kRows], int count, double* column) {
   constexpr int kWidth = static_cast<int>(sizeof(Lane) / sizeof(double));
+  // One bound for the lane loop (the lanes that start below `count` and end inside the
+  // column): a second test per lane cost the loop a fifth of its instructions.
+  const int lane_end = std::min(count, kFullParamCount - kWidth + 1);
   int k = 0;
-  for (; k < count && k + kWidth <= kFullParamCount; k += kWidth) {
+  for (; k < lane_end; k += kWidth) {
     Lane sum;
     lanes::load_any(rows[0] + k, &sum);
     sum *= weight[0];
@@ -264,9 +270,17 @@ FlushFunction fastest_flush() {
   return flush;
 }
 
+/// Rows below the diagonal that add_weighted_rows's last lane of a column may write: a lane of
+/// the widest kind, less the one entry on or above the diagonal.
+constexpr int kLaneScratchRows = static_cast<int>(sizeof(WidestLane) / sizeof(double)) - 1;
+
 /// Moves the compact sums to their parameter positions and mirrors the upper triangle.
 /// In place: a compact entry (k, l) goes to (index[k], index[l]) with index[k] >= k, so
-/// walking down from the last one never overwrites an entry still to be moved.
+/// walking down from the last one never overwrites an entry still to be moved. The mirror
+/// covers the listed parameters' columns (b below `extent`, one past the last listed index)
+/// down to the lanes' scratch (rows below count + kLaneScratchRows <= extent +
+/// kLaneScratchRows): every other entry below the diagonal is the zero it was set to, and its
+/// mirror image is 0 too, so the full mirror would write the same zeros over 73 x 73.
 void expand_compact(const IndexList& columns, NormalEquations* eq) {
   NormalMatrix& h = eq->jtwj;
   for (int l = columns.count - 1; l >= 0; --l) {
@@ -280,8 +294,10 @@ void expand_compact(const IndexList& columns, NormalEquations* eq) {
       h(a, b) = value;
     }
   }
-  for (int b = 0; b < kFullParamCount; ++b)
-    for (int a = b + 1; a < kFullParamCount; ++a) h(a, b) = h(b, a);
+  const int extent = columns.count > 0 ? columns.index[columns.count - 1] + 1 : 0;
+  const int rows = std::min(kFullParamCount, extent + kLaneScratchRows);
+  for (int b = 0; b < extent; ++b)
+    for (int a = b + 1; a < rows; ++a) h(a, b) = h(b, a);
 }
 
 // Log-spaced bins of the median histogram: 4 per decade from 1e-12 m to 100 m, plus an
@@ -323,7 +339,7 @@ PerSampleContext per_sample_context(const RobotModel& model) {
 Vec3 local_target_residual_jacobian(const RobotModel& model, const PerSampleContext& context, int target,
                                     const RigidTransform& base_to_tracker, const Sample& sample,
                                     FullJacobian* local_jacobian) {
-  double rows[3 * kGroupSamples][kFullParamCount];
+  double rows[3 * kGroupSamples][kFullParamCount] = {};  // see write_compliance_columns
   const Sample* const samples[1] = {&sample};
   const bool compliant = model.compliance.term_count > 0;
   TermBasis basis[1] = {};
