@@ -204,6 +204,56 @@ TEST(SymmetricEigen, GradedSpectrumWithInactiveParameters) {
   EXPECT_LE(d.iterations, 2 * kActive);
 }
 
+// The identifiability analysis decomposes only the block its parameters reach (one inactive
+// entry past the last): the eigenvalues, their order (ties included) and the vectors of the
+// active entries must be those of the whole capacity, whatever the inactive entries after it.
+TEST(SymmetricEigen, InactiveEntriesAfterTheBlockChangeNoBitsOfIt) {
+  Random random(16);
+  constexpr int kPrefix = 20;  // 17 coupled and 2 uncoupled active entries, 1 inactive
+  SymmetricMatrix a = SymmetricMatrix::Zero();
+  for (int i = 0; i < kSymmetricCapacity; ++i) a(i, i) = -1.0;
+  const SymmetricMatrix coupled = random_symmetric(17, &random);
+  const int coupled_at[17] = {1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13, 14, 15, 16, 17, 18};
+  for (int c = 0; c < 17; ++c) {
+    for (int r = 0; r < 17; ++r) a(coupled_at[r], coupled_at[c]) = coupled(r, c) + (r == c ? 6.0 : 0.0);
+  }
+  a(0, 0) = 0.5;  // two uncoupled entries with the same value: a tie, kept in index order
+  a(9, 9) = 0.5;
+  ASSERT_EQ(a(kPrefix - 1, kPrefix - 1), -1.0);  // the block's eigenvalues lie above -1, as a scaled
+                                                 // normal matrix's do
+  SymmetricVector values_prefix = SymmetricVector::Zero();
+  SymmetricVector values_all = SymmetricVector::Zero();
+  SymmetricEigenReduction prefix;
+  SymmetricEigenReduction all;
+  SymmetricMatrix work_prefix = a;
+  SymmetricMatrix work_all = a;
+  ASSERT_EQ(symmetric_eigenvalues(&work_prefix, kPrefix, &values_prefix, &prefix), Status::ok);
+  ASSERT_EQ(symmetric_eigenvalues(&work_all, kSymmetricCapacity, &values_all, &all), Status::ok);
+  const int skipped = kSymmetricCapacity - kPrefix;  // the -1s the whole capacity sorts first
+  for (int k = 1; k < kPrefix; ++k) {
+    EXPECT_EQ(std::memcmp(&values_prefix(k), &values_all(k + skipped), sizeof(double)), 0) << k;
+    EXPECT_EQ(prefix.source[k], all.source[k + skipped]) << k;
+  }
+  int tie = -1;
+  for (int k = 0; k + 1 < kPrefix; ++k) {
+    if (values_prefix(k) == 0.5 && values_prefix(k + 1) == 0.5) tie = k;
+  }
+  ASSERT_GE(tie, 0) << "0.5 is not an eigenvalue of the coupled block";
+  EXPECT_EQ(prefix.source[tie], 0);
+  EXPECT_EQ(prefix.source[tie + 1], 9);
+  // The lowest vectors, from the stored reductions.
+  constexpr int kWanted = 6;  // the -1 and the five smallest of the block
+  SymmetricMatrix vectors_prefix;
+  SymmetricMatrix vectors_all;
+  ASSERT_EQ(symmetric_eigenvectors_lowest(work_prefix, prefix, values_prefix, kWanted, &vectors_prefix), Status::ok);
+  ASSERT_EQ(symmetric_eigenvectors_lowest(work_all, all, values_all, kWanted + skipped, &vectors_all), Status::ok);
+  for (int k = 1; k < kWanted; ++k) {
+    for (int r = 0; r < kSymmetricCapacity; ++r) {
+      EXPECT_EQ(std::memcmp(&vectors_prefix(r, k), &vectors_all(r, k + skipped), sizeof(double)), 0) << r << ", " << k;
+    }
+  }
+}
+
 TEST(SymmetricEigen, EigenvaluesOnlyGiveTheSameBits) {
   Random random(15);
   const SymmetricMatrix a = random_symmetric(kSymmetricCapacity, &random);
