@@ -16,24 +16,6 @@ namespace {
 
 // --- parse ------------------------------------------------------------------------------------
 
-/// The built-in types whose published link masses the library holds, e.g. "ur5, ur10, ur3e, ur5e".
-std::string arms_with_masses() {
-  std::string names;
-  const std::string all = robot_type_names();  // "ur3, ur5, ..."
-  for (std::size_t at = 0; at < all.size();) {
-    const std::size_t end = std::min(all.find(',', at), all.size());
-    const std::string name(textio::trim(std::string_view(all).substr(at, end - at)));
-    RobotType type = RobotType::ur5;
-    ArmMasses masses;
-    if (!name.empty() && robot_type_from_name(name.c_str(), &type) == Status::ok &&
-        nominal_arm_masses(type, &masses) == Status::ok) {
-      names += (names.empty() ? "" : ", ") + name;
-    }
-    at = end + 1;
-  }
-  return names;
-}
-
 /// --payload KG@X,Y,Z into *masses.
 Error payload_option(const Options& options, ArmMasses* masses) {
   const std::string text = options.get("payload");
@@ -76,9 +58,10 @@ Error gravity_terms_from_options(const Options& options, CalibrateSettings* sett
     RobotType type = RobotType::ur5;
     if (robot_type_from_name(settings->robot.robot.c_str(), &type) != Status::ok ||
         nominal_arm_masses(type, &model.masses) != Status::ok) {
-      return Error::usage("--compliance masses needs the arm's link masses, which are known here for " +
-                          arms_with_masses() + " only (by --robot-model's name); " +
-                          port::quoted(settings->robot.robot) + " has none: use --compliance basis");
+      return Error::usage(
+          "--compliance masses needs the arm's link masses, which are known here for the built-in types (" +
+          std::string(robot_type_names()) + ") only (by --robot-model's name); " + port::quoted(settings->robot.robot) +
+          " has none: use --compliance basis");
     }
     if (options.given("payload")) {
       const Error payload = payload_option(options, &model.masses);

@@ -41,11 +41,12 @@ Status check_term(const ComplianceModel& compliance, const ComplianceTerm& term)
 // Universal Robots, "DH Parameters for calculations of kinematics and dynamics"
 // (universal-robots.com/articles/ur/application-installation/dh-parameters-for-calculations-of-kinematics-and-dynamics):
 // link mass [kg] and centre of mass [m] in the link's DH frame (the frame at the link's end). The
-// e-Series tables are that page's. The CB-series UR5 and UR10 are Universal Robots' own ROS 2
-// description (github.com/UniversalRobots/Universal_Robots_ROS2_Description,
-// config/ur5|ur10/physical_parameters.yaml), whose comments map each centre back to the page's
-// frame (e.g. "x: model.x - upper_arm_length"); the page's UR10e rows (links 1 to 5) have the same
-// centres as the UR10's. UR3 (CB), UR10e and UR16e: not verified in full, left out.
+// UR3e and UR5e tables are that page's. The others are Universal Robots' own ROS 2 description
+// (github.com/UniversalRobots/Universal_Robots_ROS2_Description, config/<arm>/physical_parameters.yaml),
+// whose comments map each centre back to the page's frame (e.g. "x: model.x - upper_arm_length"):
+// mapped back, its UR5e file gives the page's UR5e table to the digit, and its UR10e file the page's
+// UR10e rows (links 1 to 5; link 6 is the file's). The UR10e's centres are the UR10's, the UR3's
+// the UR3e's.
 constexpr double kUr3eMass_kg[kJointCount] = {1.98, 3.4445, 1.437, 0.871, 0.805, 0.261};
 constexpr double kUr3eCom_m[kJointCount][3] = {{0.0, -0.02, 0.0}, {0.13, 0.0, 0.1157}, {0.05, 0.0, 0.0238},
                                                {0.0, 0.0, 0.01},  {0.0, 0.0, 0.01},    {0.0, 0.0, -0.02}};
@@ -58,6 +59,11 @@ constexpr double kUr5Mass_kg[kJointCount] = {3.7, 8.393, 2.33, 1.219, 1.219, 0.1
 constexpr double kUr10Mass_kg[kJointCount] = {7.1, 12.7, 4.27, 2.0, 2.0, 0.365};
 constexpr double kUr10Com_m[kJointCount][3] = {{0.021, 0.0, 0.027}, {0.38, 0.0, 0.158},  {0.24, 0.0, 0.068},
                                                {0.0, 0.007, 0.018}, {0.0, 0.007, 0.018}, {0.0, 0.0, -0.026}};
+constexpr double kUr3Mass_kg[kJointCount] = {2.0, 3.42, 1.26, 0.8, 0.8, 0.35};
+constexpr double kUr10eMass_kg[kJointCount] = {7.369, 13.051, 3.989, 2.1, 1.98, 0.615};
+constexpr double kUr16eMass_kg[kJointCount] = {7.369, 10.45, 4.321, 2.18, 2.033, 0.907};
+constexpr double kUr16eCom_m[kJointCount][3] = {{0.0, -0.016, 0.03},  {0.302, 0.0, 0.16},  {0.194, 0.0, 0.065},
+                                                {0.0, -0.009, 0.011}, {0.0, 0.018, 0.012}, {0.0, 0.0, -0.044}};
 
 /// One arm's published table: its link masses [kg] and centres of mass [m].
 struct PublishedArm {
@@ -65,10 +71,11 @@ struct PublishedArm {
   const double* mass_kg;
   const double (*com_m)[3];
 };
-constexpr PublishedArm kPublishedArms[] = {{RobotType::ur5e, kUr5eMass_kg, kUr5eCom_m},
-                                           {RobotType::ur3e, kUr3eMass_kg, kUr3eCom_m},
-                                           {RobotType::ur5, kUr5Mass_kg, kUr5eCom_m},
-                                           {RobotType::ur10, kUr10Mass_kg, kUr10Com_m}};
+constexpr PublishedArm kPublishedArms[] = {
+    {RobotType::ur5e, kUr5eMass_kg, kUr5eCom_m},   {RobotType::ur3e, kUr3eMass_kg, kUr3eCom_m},
+    {RobotType::ur5, kUr5Mass_kg, kUr5eCom_m},     {RobotType::ur10, kUr10Mass_kg, kUr10Com_m},
+    {RobotType::ur3, kUr3Mass_kg, kUr3eCom_m},     {RobotType::ur10e, kUr10eMass_kg, kUr10Com_m},
+    {RobotType::ur16e, kUr16eMass_kg, kUr16eCom_m}};
 
 constexpr const char* kTermNames[kJointCount][kToolLoadFrame + 1] = {
     {"c_j1_o1", "c_j1_o2", "c_j1_o3", "c_j1_o4", "c_j1_o5", "c_j1_o6", "c_j1_tool", "c_j1_mass"},

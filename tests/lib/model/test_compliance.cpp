@@ -193,7 +193,7 @@ TEST(Compliance, DefaultTermsOfAUrArmAndTheirNames) {
   EXPECT_EQ(wall.compliance.terms[0].joint, 0);
   EXPECT_EQ(wall.compliance.terms[2].joint, 1);
   ArmMasses unknown;
-  EXPECT_EQ(nominal_arm_masses(RobotType::ur16e, &unknown), Status::invalid_argument);
+  EXPECT_EQ(nominal_arm_masses(static_cast<RobotType>(-1), &unknown), Status::invalid_argument);
   EXPECT_EQ(default_compliance_terms(wall, Vec3::Zero(), ComplianceLoad::point, &wall.compliance),
             Status::invalid_argument);
 }
@@ -208,8 +208,9 @@ TEST(Compliance, PublishedMassTablesMatchTheirArms) {
     RobotType type;
     double datasheet_kg;
   };
-  const Arm arms[] = {
-      {RobotType::ur5, 18.4}, {RobotType::ur10, 28.9}, {RobotType::ur3e, 11.2}, {RobotType::ur5e, 20.6}};
+  const Arm arms[] = {{RobotType::ur3, 11.0},  {RobotType::ur5, 18.4},  {RobotType::ur10, 28.9},
+                      {RobotType::ur3e, 11.2}, {RobotType::ur5e, 20.6}, {RobotType::ur10e, 33.5},
+                      {RobotType::ur16e, 33.1}};
   for (const Arm& arm : arms) {
     SCOPED_TRACE(robot_type_name(arm.type));
     ArmMasses masses;

@@ -136,7 +136,8 @@ Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_dir
 Status append_harmonic_terms(int orders, ComplianceModel* compliance);
 
 /// Universal Robots' published link masses and centres of mass of `type` into *masses (payload
-/// left as it is): UR3e, UR5e, UR5 and UR10; invalid_argument for a type without a table here.
+/// left as it is): every RobotType (the CB-series UR3, UR5, UR10 and the e-Series UR3e, UR5e,
+/// UR10e, UR16e); invalid_argument for any other value.
 Status nominal_arm_masses(RobotType type, ArmMasses* masses);
 
 /// Short name of term t of `compliance` for tables: "c_j2_o2", "c_j2_o4", "c_j3_tool" (point:
