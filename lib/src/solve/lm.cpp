@@ -144,7 +144,7 @@ Status parameter_sigmas(LmWorkspace* ws, const NormalEquations& eq, ParamMask ke
   result->residual_dof = dof;
   LmStepScratch* s = ws->scratch.open_step();
   FullParams scale;
-  scale_normal_matrix(eq.jtwj, kept, 1.0, &s->system, &scale);
+  scale_kept_block(eq.jtwj, kept, &s->system, &scale);
   if (!cholesky_factor(s->system, kept, &s->factorization)) return Status::singular_system;
   const double variance_m2 = eq.weighted_squares_m2 / static_cast<double>(dof);
   result->residual_sigma_m = std::sqrt(variance_m2);
@@ -306,7 +306,7 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   FullParams& scale = scratch->scale;
   FullParams& step = scratch->step;
   FullParams& scaled_step = scratch->scaled_step;
-  scale_normal_matrix(eq.jtwj, run->kept, 1.0, &scratch->system, &scale);
+  scale_kept_block(eq.jtwj, run->kept, &scratch->system, &scale);
   *stop = true;
   if (gradient_cosine(eq, scale, run->kept) <= options.gradient_tolerance) {
     *termination = LmTermination::gradient;

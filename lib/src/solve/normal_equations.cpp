@@ -373,11 +373,15 @@ Vec3 full_residual_jacobian(const RobotModel& model, const RigidTransform& base_
 
 void scale_normal_matrix(const NormalMatrix& jtwj, ParamMask mask, double outside_diagonal, NormalMatrix* scaled,
                          FullParams* scale) {
-  for (int i = 0; i < kFullParamCount; ++i) (*scale)(i) = mask_has(mask, i) ? 1.0 / std::sqrt(jtwj(i, i)) : 1.0;
   scaled->setZero();
   for (int i = 0; i < kFullParamCount; ++i) {
     if (!mask_has(mask, i)) (*scaled)(i, i) = outside_diagonal;
   }
+  scale_kept_block(jtwj, mask, scaled, scale);
+}
+
+void scale_kept_block(const NormalMatrix& jtwj, ParamMask mask, NormalMatrix* scaled, FullParams* scale) {
+  for (int i = 0; i < kFullParamCount; ++i) (*scale)(i) = mask_has(mask, i) ? 1.0 / std::sqrt(jtwj(i, i)) : 1.0;
   int index[kFullParamCount];
   const int count = mask_indices(mask, index);
   for (int jb = 0; jb < count; ++jb) {

@@ -235,7 +235,7 @@ Status test_for_blunders(const RobotModel& model, const RigidTransform& base, Sp
           (estimated & kOtherTargetTools) != 0,
           FullParams::Ones(),
           target_count(fitted) > 1 || target_count(predicted) > 1};
-  scale_normal_matrix(ws.normal.jtwj, kept, 1.0, &ws.scaled, &fit.scale);
+  scale_kept_block(ws.normal.jtwj, kept, &ws.scaled, &fit.scale);
   if (!cholesky_factor(ws.scaled, kept, &ws.factor)) return Status::singular_system;
   int eliminated = 0;
   for (const TargetBlock& block : ws.normal.targets) eliminated += fit.other_tools && block.count > 0 ? 3 : 0;

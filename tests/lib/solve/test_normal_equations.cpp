@@ -169,5 +169,34 @@ TEST(FullModel, HistogramMedianIsWithinOnePercent) {
   EXPECT_EQ(status, Status::dataset_empty);
 }
 
+// The LM's steps scale only the kept block (scale_kept_block): its entries and the scale are
+// scale_normal_matrix's to the bit, and every other entry is left as it was.
+TEST(FullModel, ScalingTheKeptBlockWritesItAndNothingElse) {
+  Random random(90);
+  NormalMatrix jtwj = NormalMatrix::Zero();
+  for (int b = 0; b < kFullParamCount; ++b) {
+    for (int a = 0; a <= b; ++a) jtwj(a, b) = jtwj(b, a) = random.uniform(-1.0, 1.0);
+    jtwj(b, b) = 2.0 + random.uniform(0.0, 100.0);
+  }
+  ParamMask mask = 0;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (random.uniform(0.0, 1.0) < 0.6) mask |= param_bit(i);
+  }
+  NormalMatrix full;
+  FullParams full_scale;
+  scale_normal_matrix(jtwj, mask, -1.0, &full, &full_scale);
+  const double sentinel = 123.25;
+  NormalMatrix block = NormalMatrix::Constant(sentinel);
+  FullParams block_scale = FullParams::Constant(sentinel);
+  EXPECT_NO_HEAP(scale_kept_block(jtwj, mask, &block, &block_scale));
+  for (int b = 0; b < kFullParamCount; ++b) {
+    EXPECT_EQ(block_scale(b), full_scale(b)) << b;
+    for (int a = 0; a < kFullParamCount; ++a) {
+      const bool kept = mask_has(mask, a) && mask_has(mask, b);
+      EXPECT_EQ(block(a, b), kept ? full(a, b) : sentinel) << a << ", " << b;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace hivecal::normal_equations_test

@@ -125,7 +125,7 @@ struct KeptCholesky {
 
 /// The damped system of one step (or of the final sigmas) and its Cholesky factor.
 struct LmStepScratch {
-  NormalMatrix system;         ///< scaled, damped system matrix [-]
+  NormalMatrix system;         ///< scaled, damped system matrix over the kept parameters (the rest unset) [-]
   KeptCholesky factorization;  ///< its Cholesky factor over the kept parameters [-]
   FullParams scale;            ///< column scale of the system [unit/-]
   FullParams step;             ///< the step in parameter units [m] or [rad]

@@ -87,11 +87,11 @@ struct BlunderTestSummary {
 
 /// Scratch of the test (~24 kB): in the caller's memory plan, not on a small stack.
 struct ReliabilityWorkspace {
-  NormalEquations normal;                                       ///< the fit's normal equations at its point
-  NormalMatrix scaled;                                          ///< their column-scaled matrix, then unused
-  KeptCholesky factor;                                          ///< its Cholesky factor over the estimated parameters
-  TargetBlock blocks[kMaxTargets - 1];                          ///< the other targets' eliminated tool points
-  Eigen::Matrix<double, kMaxUnitRows, kFullParamCount> rows;    ///< a unit's scaled rows, Schur-reduced
+  NormalEquations normal;                                     ///< the fit's normal equations at its point
+  NormalMatrix scaled;                                        ///< their column-scaled matrix (kept block), then unused
+  KeptCholesky factor;                                        ///< its Cholesky factor over the estimated parameters
+  TargetBlock blocks[kMaxTargets - 1];                        ///< the other targets' eliminated tool points
+  Eigen::Matrix<double, kMaxUnitRows, kFullParamCount> rows;  ///< a unit's scaled rows, Schur-reduced
   Eigen::Matrix<double, kMaxUnitRows, kFullParamCount> solved;  ///< the same through the inverse normal matrix
   Eigen::Matrix<double, kMaxUnitRows, kMaxUnitRows> hat;        ///< the unit's hat block H_uu, then I -+ H_uu factored
   Eigen::Matrix<double, kMaxUnitRows, 3> tool_rows;             ///< its rows' own tool Jacobian t (other targets)
