@@ -147,8 +147,7 @@ void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransfo
 /// sign of a zero, and the column, which starts at +0, never becomes -0 under addition.
 /// The last full lane may run past `count` (up to kFullParamCount): the entries below the
 /// diagonal it writes are scratch, overwritten by expand_compact's mirror, and the rows it
-/// reads there are initialised (every kernel call writes all 33 slots of all its lanes' rows,
-/// and wider lanes come with kGroupSamples == kBatchSamples).
+/// reads there are initialised (the row buffers start zeroed).
 template <class Lane, std::size_t kRows>
 __attribute__((always_inline)) inline void add_weighted_rows(const double* const (&rows)[kRows],
                                                              const double (&weight)[kRows], int count, double* column) {
