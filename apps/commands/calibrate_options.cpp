@@ -1,5 +1,4 @@
 // hivecal calibrate: its options and their checks (calibrate_parts.hpp).
-#include <algorithm>
 #include <string>
 #include <vector>
 
