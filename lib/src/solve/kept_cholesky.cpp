@@ -45,11 +45,12 @@ void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x) {
   }
 }
 
-/// diag(A^-1) over the factored parameters, 0 elsewhere: A^-1 = W W^T with W = U^-1 (upper),
-/// built in *scratch.
-void cholesky_inverse_diagonal(const KeptCholesky& f, NormalMatrix* scratch, FullParams* diagonal) {
+namespace {
+
+/// W = U^-1 (upper) in the leading count x count block of *w.
+void invert_factor(const KeptCholesky& f, NormalMatrix* w_out) {
   const NormalMatrix& u = f.upper;
-  NormalMatrix& w = *scratch;
+  NormalMatrix& w = *w_out;
   for (int j = 0; j < f.count; ++j) {
     w(j, j) = 1.0 / u(j, j);
     for (int i = 0; i < j; ++i) {
@@ -58,11 +59,34 @@ void cholesky_inverse_diagonal(const KeptCholesky& f, NormalMatrix* scratch, Ful
       w(i, j) = -sum / u(j, j);
     }
   }
+}
+
+/// (W W^T)(i, j) for compact positions i <= j: the rows of the upper W from j on.
+double inverse_entry(const KeptCholesky& f, const NormalMatrix& w, int i, int j) {
+  double sum = 0.0;
+  for (int k = j; k < f.count; ++k) sum += w(i, k) * w(j, k);
+  return sum;
+}
+
+}  // namespace
+
+/// diag(A^-1) over the factored parameters, 0 elsewhere: A^-1 = W W^T with W = U^-1 (upper),
+/// built in *scratch.
+void cholesky_inverse_diagonal(const KeptCholesky& f, NormalMatrix* scratch, FullParams* diagonal) {
+  invert_factor(f, scratch);
   diagonal->setZero();
+  for (int i = 0; i < f.count; ++i) (*diagonal)(f.index[i]) = inverse_entry(f, *scratch, i, i);
+}
+
+void cholesky_inverse(const KeptCholesky& f, NormalMatrix* scratch, NormalMatrix* inverse) {
+  invert_factor(f, scratch);
+  inverse->setZero();
   for (int i = 0; i < f.count; ++i) {
-    double sum = 0.0;
-    for (int k = i; k < f.count; ++k) sum += w(i, k) * w(i, k);
-    (*diagonal)(f.index[i]) = sum;
+    for (int j = i; j < f.count; ++j) {
+      const double entry = inverse_entry(f, *scratch, i, j);
+      (*inverse)(f.index[i], f.index[j]) = entry;
+      (*inverse)(f.index[j], f.index[i]) = entry;
+    }
   }
 }
 

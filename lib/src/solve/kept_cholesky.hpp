@@ -18,4 +18,7 @@ void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x);
 /// built in *scratch.
 void cholesky_inverse_diagonal(const KeptCholesky& f, NormalMatrix* scratch, FullParams* diagonal);
 
+/// A^-1 over the factored parameters (symmetric), 0 elsewhere; W = U^-1 built in *scratch.
+void cholesky_inverse(const KeptCholesky& f, NormalMatrix* scratch, NormalMatrix* inverse);
+
 }  // namespace hivecal

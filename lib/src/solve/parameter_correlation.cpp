@@ -4,24 +4,9 @@
 
 #include <cmath>
 
+#include "solve/kept_cholesky.hpp"
+
 namespace hivecal {
-namespace {
-
-/// The inverse of the leading N x N block of `scaled` into *inverse (zero elsewhere), through
-/// *factor (in the caller's scratch: a 37 x 37 factor and its solve are ~33 kB of stack
-/// otherwise). A rigid model inverts only the 33 rigid parameters: the same pivots with or
-/// without the room for compliance coefficients.
-template <int N, typename Factor>
-bool invert_leading(const NormalMatrix& scaled, Factor* factor, NormalMatrix* inverse) {
-  using Block = Eigen::Matrix<double, N, N>;
-  factor->compute(scaled.template topLeftCorner<N, N>());
-  if (factor->info() != Eigen::Success) return false;
-  inverse->setZero();
-  inverse->template topLeftCorner<N, N>() = factor->solve(Block::Identity());
-  return true;
-}
-
-}  // namespace
 
 Status parameter_correlations(const RobotModel& model, const RigidTransform& base_to_tracker,
                               Span<const Sample> samples, const PointLoss& loss, ParamMask kept,
@@ -31,12 +16,13 @@ Status parameter_correlations(const RobotModel& model, const RigidTransform& bas
   eq.targets = Span<TargetBlock>(scratch->target_blocks, kMaxTargets - 1);
   const Status accumulated = accumulate_normal_equations(model, base_to_tracker, samples, loss, &eq, kept);
   if (accumulated != Status::ok) return accumulated;
+  // Unit diagonal over `kept` (the inverse's scale is divided out below; the factor is better
+  // conditioned), factored over the kept parameters only: the same pivots whatever the build's
+  // capacity for joint terms.
   FullParams scale;
-  scale_normal_matrix(eq.jtwj, kept, 1.0, &scratch->scaled, &scale);  // unit diagonal; identity outside `kept`
-  const bool inverted = model.compliance.term_count > 0
-                            ? invert_leading<kFullParamCount>(scratch->scaled, &scratch->full_factor, correlation)
-                            : invert_leading<kRigidParamCount>(scratch->scaled, &scratch->rigid_factor, correlation);
-  if (!inverted) return Status::singular_system;
+  scale_normal_matrix(eq.jtwj, kept, 1.0, &scratch->scaled, &scale);
+  if (!cholesky_factor(scratch->scaled, kept, &scratch->factor)) return Status::singular_system;
+  cholesky_inverse(scratch->factor, &scratch->inverse_factor, correlation);
   const FullParams variance = correlation->diagonal();
   for (int i = 0; i < kFullParamCount; ++i) {
     for (int j = 0; j < kFullParamCount; ++j) {
