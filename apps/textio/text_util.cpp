@@ -5,7 +5,6 @@
 
 #include <cerrno>
 #include <charconv>
-#include <cstdio>
 #include <cstring>
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -45,9 +44,13 @@ port::Error write_text_file(const std::string& path, const std::string& content)
 }
 
 std::string format_double(double value) {
+  // The characters of printf's "%.17g" in the C locale (the standard defines to_chars with a
+  // precision so), about five times faster than snprintf: result.json writes every sample's
+  // residuals with it.
   char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
-  return buffer;
+  const std::to_chars_result written =
+      std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::general, 17);
+  return std::string(buffer, written.ptr);
 }
 
 }  // namespace hivecal::textio

@@ -17,7 +17,7 @@ bool parse_double(std::string_view field, double* value);
 /// Writes `content` to `path` as the only output of a port::OutputSet (temporary beside it,
 /// rename; special files refused, symlink and mode kept). On failure an older file stays.
 port::Error write_text_file(const std::string& path, const std::string& content);
-/// Formats a double so that it reads back to the same bits (%.17g).
+/// Formats a double so that it reads back to the same bits: printf's "%.17g", C locale.
 std::string format_double(double value);
 
 }  // namespace hivecal::textio
