@@ -12,71 +12,13 @@
 #include <cstdlib>
 #include <vector>
 
-#include "ceres_peer.hpp"
+#include "ceres_fit.hpp"
 #include "hivecal/model/metrics.hpp"
 #include "hivecal/solve/cost.hpp"
 #include "hivecal/solve/lm.hpp"
 #include "testkit/lm_test_data.hpp"
 
 namespace {
-
-using hivecal::kJointCount;
-
-static_assert(ceres_peer::kJoints == kJointCount && ceres_peer::kDhParams == hivecal::kDhParamCount,
-              "ceres_peer mirrors the model layout");
-
-struct CeresOutcome {
-  hivecal::RobotModel model;
-  hivecal::RigidTransform base;
-  int iterations = 0;
-  bool usable = false;
-};
-
-/// The session in ceres_peer's plain arrays (built once, outside the timed runs).
-struct CeresInput {
-  std::vector<double> q_rad;
-  std::vector<double> point_m;
-  ceres_peer::Problem problem;
-};
-
-/// The same parameterisation as ours: dh (24), tool (3), base rotation vector and translation
-/// increments (3 + 3) around the start base; the parameters our analysis dropped held fixed.
-void prepare_ceres(const hivecal::RobotModel& start, const hivecal::RigidTransform& start_base,
-                   hivecal::Span<const hivecal::Sample> samples, hivecal::ParamMask kept, CeresInput* in) {
-  for (const hivecal::Sample& s : samples) {
-    for (int j = 0; j < kJointCount; ++j) in->q_rad.push_back(s.q_rad(j));
-    for (int i = 0; i < 3; ++i) in->point_m.push_back(s.point_m(i));
-  }
-  ceres_peer::Problem& p = in->problem;
-  p.q_rad = in->q_rad.data();
-  p.point_m = in->point_m.data();
-  p.count = samples.size();
-  for (int i = 0; i < 3; ++i) {
-    p.base_translation_m[i] = start_base.translation_m(i);
-    for (int k = 0; k < 3; ++k) p.base_rotation[3 * i + k] = start_base.rotation(i, k);
-  }
-  const hivecal::ModelParams start_params = hivecal::to_params(start);
-  for (int i = 0; i < hivecal::kModelParamCount; ++i) p.start[i] = start_params(i);
-  for (int i = 0; i < ceres_peer::kParams; ++i) p.fixed[i] = !hivecal::mask_has(kept, i);
-}
-
-CeresOutcome run_ceres(const hivecal::RigidTransform& start_base, const CeresInput& in) {
-  static_assert(ceres_peer::kParams == hivecal::kRigidParamCount, "same parameter vector (the rigid 33)");
-  const ceres_peer::Outcome solved = ceres_peer::solve(in.problem, std::getenv("BENCH_VERBOSE") != nullptr);
-  CeresOutcome out;
-  out.usable = solved.usable;
-  out.iterations = solved.iterations;
-  hivecal::ModelParams params;
-  for (int i = 0; i < hivecal::kModelParamCount; ++i) params(i) = solved.params[i];
-  out.model = hivecal::from_params(params);
-  const double* rotation = solved.params + hivecal::base_rotation_param_index(0);
-  const double* translation = solved.params + hivecal::base_translation_param_index(0);
-  out.base.rotation =
-      start_base.rotation * hivecal::rotation_from_vector(hivecal::Vec3(rotation[0], rotation[1], rotation[2]));
-  out.base.translation_m =
-      start_base.translation_m + start_base.rotation * hivecal::Vec3(translation[0], translation[1], translation[2]);
-  return out;
-}
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -128,9 +70,10 @@ int main(int argc, char** argv) {
     return 1;
   }
   const ParamMask kept = ours.identifiability.kept_mask;
-  CeresInput ceres_input;
-  prepare_ceres(start, start_base, train.samples(), kept, &ceres_input);
-  CeresOutcome theirs = run_ceres(start_base, ceres_input);
+  const bool verbose = std::getenv("BENCH_VERBOSE") != nullptr;
+  ceres_fit::Input ceres_input;
+  ceres_fit::prepare(start, start_base, train.samples(), kept, &ceres_input);
+  ceres_fit::Outcome theirs = ceres_fit::solve(start_base, ceres_input, verbose);
   if (!theirs.usable) {
     std::fprintf(stderr, "Ceres found no usable solution\n");
     return 1;
@@ -144,7 +87,7 @@ int main(int argc, char** argv) {
     (void)calibrate_lm(start, &start_base, train.samples(), LmOptions{}, &workspace, &ours);
     our_times.push_back(seconds_since(t0));
     t0 = std::chrono::steady_clock::now();
-    theirs = run_ceres(start_base, ceres_input);
+    theirs = ceres_fit::solve(start_base, ceres_input, verbose);
     ceres_times.push_back(seconds_since(t0));
   }
   const double our_time = *std::min_element(our_times.begin(), our_times.end());
