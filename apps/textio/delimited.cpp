@@ -104,8 +104,8 @@ bool LineReader::open(const std::string& path, std::uint64_t max_bytes) {
   const port::Error opened = file_.open(path, max_bytes);
   if (!opened.ok()) return fail(opened.message);
   from_file_ = true;
-  buffer_.resize(kBufferBytes);
-  data_ = buffer_.data();
+  buffer_.reset(new char[kBufferBytes]);
+  data_ = buffer_.get();
   return true;
 }
 
@@ -127,11 +127,11 @@ std::string LineReader::where() const {
 
 bool LineReader::refill() {
   if (!from_file_) return false;
-  std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
+  std::memmove(buffer_.get(), buffer_.get() + begin_, end_ - begin_);
   end_ -= begin_;
   begin_ = 0;
   std::size_t got = 0;
-  if (file_.read(reinterpret_cast<std::uint8_t*>(buffer_.data() + end_), buffer_.size() - end_, &got) != Status::ok) {
+  if (file_.read(reinterpret_cast<std::uint8_t*>(buffer_.get() + end_), kBufferBytes - end_, &got) != Status::ok) {
     return fail(file_.error().message);
   }
   end_ += got;
