@@ -120,6 +120,7 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   config.progress = settings.progress;
   config.log_options.units = settings.units;
   config.orientation = settings.orientation;
+  config.orientation.joint_sigma_rad = settings.joint_sigma_rad;  // 0: the joint columns' written resolution
   Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (!error.ok()) return error;
   error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config, dataset,

@@ -230,7 +230,8 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
         {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
         {"joint-sigma-rad", "S",
          "noise of the joint readings, in the units of --position-sigma-m (e.g. the readings' rounding step): LM "
-         "weighs each sample by its point covariance (errors in variables, docs/robust.md; 0: off) [rad]",
+         "weighs each sample by its point covariance (errors in variables, docs/robust.md; 0: off), and a measured "
+         "orientation's lever takes it in [rad]",
          "0"},
         {"joint-sigma-deg", "S", "--joint-sigma-rad in degrees (a UR pendant export's rounding: 0.01) [deg]", ""},
         {"orientation-form", "rotation-vector|euler-xyz",
@@ -239,7 +240,8 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "rotation-vector"},
         {"orientation-lever-m", "L",
          "a measured orientation adds two points at this lever along the tool frame's x and y axes (targets 2, 3; 0: "
-         "rx, ry, rz not used) [m] (default: position / angle sigma)",
+         "rx, ry, rz not used) [m] (default: from the noise: position and angle sigma, and the joints' (--joint-sigma-"
+         "rad, else their written resolution) through the arm)",
          ""},
     };
     for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);

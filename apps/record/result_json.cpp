@@ -255,6 +255,9 @@ std::string format_result_json(const CalibrationRecord& record) {
         w.key("lever_m").value(facts.orientation.lever_m);
         w.key("position_sigma_m").value(facts.orientation_input.position_sigma_m);
         w.key("angle_sigma_rad").value(facts.orientation_input.angle_sigma_rad);
+        if (facts.orientation.joint_sigma_rad > 0.0) {  // the joints' reading noise the lever took in
+          w.key("lever_joint_sigma_rad").value(facts.orientation.joint_sigma_rad);
+        }
         w.key("targets").value("2 and 3 are the measured point moved by lever_m along the measured x and y axes");
         w.end_object();
       }

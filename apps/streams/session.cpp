@@ -212,14 +212,19 @@ std::string sample_source(const SessionFacts& facts, std::uint32_t index) {
 std::string orientation_line(const SessionFacts& facts) {
   if (facts.orientation.poses == 0) return "";
   const textio::OrientationInput& given = facts.orientation_input;
-  char why[96];
-  if (given.lever_m < 0.0) {
+  char why[160];
+  if (given.lever_m < 0.0 && facts.orientation.joint_sigma_rad > 0.0) {
+    std::snprintf(why, sizeof why,
+                  "from the noise: position sigma %.3g m, angle sigma %.3g rad, joints read to %.3g rad through the "
+                  "arm",
+                  given.position_sigma_m, given.angle_sigma_rad, facts.orientation.joint_sigma_rad);
+  } else if (given.lever_m < 0.0) {
     std::snprintf(why, sizeof why, "position sigma %.3g m / angle sigma %.3g rad", given.position_sigma_m,
                   given.angle_sigma_rad);
   } else {
     std::snprintf(why, sizeof why, "as given");
   }
-  char line[256];
+  char line[384];
   std::snprintf(line, sizeof line,
                 "orientation used: %zu poses with rx, ry, rz, each also as targets 2 and 3 at a "
                 "lever of %.6g m (%s)",
@@ -241,8 +246,10 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
   }
   std::vector<std::size_t> lines;
   facts->orientation_input = config.orientation;
+  facts->orientation_input.arm = &config.speed_model;  // whose joints' reading noise the lever takes in
   const port::Error r = textio::read_samples_csv(sources.samples, dataset, config.log_options.units, &lines,
-                                                 config.orientation, &facts->orientation);
+                                                 facts->orientation_input, &facts->orientation);
+  facts->orientation_input.arm = nullptr;  // config's, not the facts' to keep
   for (std::size_t line : lines) facts->sample_sources.push_back(sources.samples + ":" + std::to_string(line));
   if (!r.ok()) return r;
   facts->info_lines.push_back("input: " + sources.samples + " (" + std::to_string(dataset->size()) +

@@ -27,7 +27,8 @@ struct SessionSources {
 
 /// How streams become samples.
 struct SessionConfig {
-  RobotModel speed_model;                  ///< nominal geometry with the tool (for tool speeds only)
+  RobotModel
+      speed_model;  ///< nominal geometry with the tool (tool speeds; the joints' noise in an orientation's lever)
   double max_speed_m_s = 0.0;              ///< quasi-static threshold [m/s]; 0: the library default
   ExtractionObserver* observer = nullptr;  ///< sees each tracker point kept or dropped (extraction pass); may be null
   double window_s = 0.0;                   ///< optional stability window [s]; 0: none (the paper's rule at the instant)

@@ -1,7 +1,9 @@
 #include "textio/csv.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <string_view>
 
 #include "hivecal/core/math.hpp"
@@ -29,6 +31,11 @@ struct CsvSchema {
 struct CsvFound {
   bool trailing = false;  ///< CsvSchema::optional_trailing
   bool group = false;     ///< every column of CsvSchema::optional_group
+  /// The resolution the joint columns are written in: the finest place value of a last written
+  /// digit among their fields (a trailing zero left off, "104.5" among "20.72", or a round
+  /// value does not coarsen it), in the first joint column's unit converted to rad; 0 when not
+  /// known [rad].
+  double joint_resolution_rad = 0.0;
 };
 
 /// Joint names as a UR teach pendant's export writes them ("Base (°)", ..., "Wrist 3 (°)").
@@ -148,6 +155,8 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   if (found != nullptr) *found = CsvFound{has_trailing, !group.empty()};
   const std::size_t group_at = schema.columns.size() + (has_trailing ? 1 : 0);
   std::vector<double> values(group_at + group.size());
+  int finest_joint_exponent = std::numeric_limits<int>::max();  // of the joints' written resolution
+  double joint_scale = 0.0;                                     // the first joint column's unit [rad per unit]
   std::size_t rows = 0;
   while (r.next_row()) {
     ++rows;
@@ -159,9 +168,12 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
     if (group.size() == 3 && !r.check_rotation(group.data(), &values[group_at])) return port::Error::input(r.error());
     for (std::size_t i = 0; i < schema.columns.size(); ++i) {
       if (!r.number(at[i], scales[i], &values[i])) return port::Error::input(r.error());
-      if (schema.quantities[i] == Quantity::angle && schema.angles_are_joints &&
-          !r.check_joint(++joint, at[i], values[i])) {
-        return port::Error::input(r.error());
+      if (schema.quantities[i] == Quantity::angle && schema.angles_are_joints) {
+        if (!r.check_joint(++joint, at[i], values[i])) return port::Error::input(r.error());
+        int exponent = 0;
+        if (written_resolution_exponent(r.fields()[at[i]], &exponent))
+          finest_joint_exponent = std::min(finest_joint_exponent, exponent);
+        if (joint_scale == 0.0) joint_scale = scales[i];
       }
     }
     if (lengths.size() == 3 && !r.check_point(lengths.data(), &values[first_length])) {
@@ -176,6 +188,9 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   }
   if (!r.error().empty()) return port::Error::input(r.error());
   if (rows == 0) return port::Error::input(path + ": no data rows");
+  if (found != nullptr && finest_joint_exponent != std::numeric_limits<int>::max()) {
+    found->joint_resolution_rad = std::pow(10.0, finest_joint_exponent) * joint_scale;
+  }
   return port::Error{};
 }
 
@@ -198,6 +213,59 @@ const std::vector<Quantity> kJointQuantities(kJointCount, Quantity::angle);
 
 }  // namespace
 
+namespace {
+
+/// A row whose orientation makes targets 2 and 3: added once the file is read, when the lever
+/// (which may depend on the joints' written resolution) is known.
+struct OrientedRow {
+  JointVector q_rad;
+  Vec3 point_m;
+  Vec3 x_axis;  ///< the measured tool frame's x axis in the tracker frame [-]
+  Vec3 y_axis;  ///< its y axis [-]
+};
+
+std::string over_capacity(const DatasetBase& dataset, bool oriented) {
+  return "dataset over capacity (" + std::to_string(dataset.capacity()) + " samples max" +
+         (oriented ? "; a row with an orientation takes three)" : ")");
+}
+
+/// The lever of `orientation` for the rows read: as given, or from the noise (with the joints'
+/// noise when the input names the arm: given, else the joint columns' written resolution).
+double lever_for(const OrientationInput& orientation, double joint_resolution_rad, const std::vector<OrientedRow>& rows,
+                 double* joint_sigma_rad) {
+  *joint_sigma_rad = 0.0;
+  if (orientation.lever_m >= 0.0 || orientation.arm == nullptr) return orientation.lever();
+  *joint_sigma_rad = orientation.joint_sigma_rad > 0.0 ? orientation.joint_sigma_rad : joint_resolution_rad;
+  std::vector<JointVector> poses;
+  poses.reserve(rows.size());
+  for (const OrientedRow& row : rows) poses.push_back(row.q_rad);
+  return noise_lever_m(orientation.position_sigma_m, orientation.angle_sigma_rad, *joint_sigma_rad, *orientation.arm,
+                       Span<const JointVector>(poses.data(), poses.size()));
+}
+
+}  // namespace
+
+double noise_lever_m(double position_sigma_m, double angle_sigma_rad, double joint_sigma_rad, const RobotModel& arm,
+                     Span<const JointVector> poses) {
+  if (!(joint_sigma_rad > 0.0) || poses.empty()) return position_sigma_m / angle_sigma_rad;
+  constexpr double kStep_rad = 1e-6;  // central differences: the error is ~1e-12 of |J|
+  double jacobian_norm2_m2 = 0.0;     // sum over the poses of |d point / d q|_F^2
+  for (const JointVector& q_rad : poses) {
+    for (int j = 0; j < kJointCount; ++j) {
+      JointVector ahead = q_rad;
+      JointVector behind = q_rad;
+      ahead(j) += kStep_rad;
+      behind(j) -= kStep_rad;
+      jacobian_norm2_m2 += ((fk_tool_point(arm, ahead) - fk_tool_point(arm, behind)) / (2.0 * kStep_rad)).squaredNorm();
+    }
+  }
+  const double q2 = joint_sigma_rad * joint_sigma_rad;
+  const double mean_norm2_m2 = jacobian_norm2_m2 / static_cast<double>(poses.size());
+  const double position2 = position_sigma_m * position_sigma_m + q2 * mean_norm2_m2 / 3.0;
+  const double angle2 = angle_sigma_rad * angle_sigma_rad + 2.0 * q2;
+  return std::sqrt(position2 / angle2);
+}
+
 port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units,
                              std::vector<std::size_t>* lines, const OrientationInput& orientation,
                              OrientationRead* found) {
@@ -206,16 +274,17 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
                          "",
                          "target",
                          {"rx", "ry", "rz"}};
-  const double lever_m = orientation.lever();
-  if (!(lever_m >= 0.0 && math::is_finite(lever_m))) {
-    return port::Error::usage("orientation lever " + format_double(lever_m) +
+  const double given_lever_m = orientation.lever();
+  if (!(given_lever_m >= 0.0 && math::is_finite(given_lever_m))) {
+    return port::Error::usage("orientation lever " + format_double(given_lever_m) +
                               " m: the stated sigmas must be positive and finite");
   }
   CsvFound columns;
   std::vector<std::size_t> row_lines;
   std::vector<std::size_t> samples_per_row;
+  std::vector<OrientedRow> oriented;
   OrientationRead read;
-  const port::Error result = read_csv(
+  port::Error result = read_csv(
       path, schema, units,
       [&](const std::vector<double>& values) {
         const std::string error = check_finite(values, 0, 9);
@@ -239,37 +308,42 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
         JointVector q;
         for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
         const Vec3 point_m(values[6], values[7], values[8]);
-        Vec3 points_m[3] = {point_m, point_m, point_m};
-        int targets[3] = {target, 1, 2};
-        std::size_t count = 1;
-        if (columns.group && lever_m > 0.0) {  // the virtual reflectors along the measured x and y axes
+        if (columns.group && given_lever_m > 0.0) {  // targets 2 and 3 once the lever is known
           const std::size_t at = values.size() - 3;
           const Vec3 angles_rad(values[at], values[at + 1], values[at + 2]);
           const Mat3 rotation =
               orientation.form == OrientationForm::euler_xyz
                   ? Mat3(rotation_x(angles_rad.x()) * rotation_y(angles_rad.y()) * rotation_z(angles_rad.z()))
                   : rotation_from_vector(angles_rad);
-          points_m[1] = point_m + lever_m * rotation.col(0);
-          points_m[2] = point_m + lever_m * rotation.col(1);
-          count = 3;
-          ++read.poses;
+          oriented.push_back(OrientedRow{q, point_m, rotation.col(0), rotation.col(1)});
+          samples_per_row.push_back(3);
+          return std::string();
         }
-        for (std::size_t k = 0; k < count; ++k) {
-          const Status status = dataset->add(q, points_m[k], targets[k]);
-          if (status == Status::dataset_full) {
-            return "dataset over capacity (" + std::to_string(dataset->capacity()) + " samples max" +
-                   (count > 1 ? "; a row with an orientation takes three)" : ")");
-          }
-          if (status != Status::ok) return std::string(status_message(status));
-        }
-        samples_per_row.push_back(count);
+        const Status status = dataset->add(q, point_m, target);
+        if (status == Status::dataset_full) return over_capacity(*dataset, false);
+        if (status != Status::ok) return std::string(status_message(status));
+        samples_per_row.push_back(1);
         return std::string();
       },
       &row_lines, &columns);
+  if (result.ok() && !oriented.empty()) {  // the virtual reflectors along the measured x and y axes
+    read.lever_m = lever_for(orientation, columns.joint_resolution_rad, oriented, &read.joint_sigma_rad);
+    read.poses = oriented.size();
+    for (std::size_t row = 0; row < oriented.size() && result.ok(); ++row) {
+      const OrientedRow& o = oriented[row];
+      const Vec3 points_m[3] = {o.point_m, o.point_m + read.lever_m * o.x_axis, o.point_m + read.lever_m * o.y_axis};
+      for (int k = 0; k < 3 && result.ok(); ++k) {
+        const Status status = dataset->add(o.q_rad, points_m[k], k);
+        if (status == Status::ok) continue;
+        const std::string problem =
+            status == Status::dataset_full ? over_capacity(*dataset, true) : std::string(status_message(status));
+        result = port::Error::input(path + ":" + std::to_string(row_lines[row]) + ": " + problem);
+      }
+    }
+  }
   for (std::size_t row = 0; lines != nullptr && row < row_lines.size(); ++row) {
     lines->insert(lines->end(), samples_per_row[row], row_lines[row]);
   }
-  read.lever_m = read.poses > 0 ? lever_m : 0.0;
   if (found != nullptr) *found = read;
   return result;
 }

@@ -20,32 +20,50 @@ constexpr double kDefaultPositionSigma_m = 1e-5;
 /// Stated noise of a pendant's TCP rotation vector: its 0.001 rad rounding [rad].
 constexpr double kDefaultAngleSigma_rad = 1e-3;
 
-/// How a measured orientation (`rx,ry,rz` columns: the tool frame's rotation vector in the
-/// tracker frame) enters: each such row becomes three samples of its joints, target 1 the
-/// point, targets 2 and 3 the point moved by the lever along the measured frame's x and y
-/// axes (virtual reflectors whose tool points are estimated like real ones, docs/formats.md).
-/// The lever weighs orientation against position: a virtual point's noise from the angle is
-/// lever x angle sigma, equal to the position noise at lever = position / angle sigma.
 /// What the three orientation columns rx, ry, rz hold.
 enum class OrientationForm {
   rotation_vector,  ///< axis x angle of the tool frame in the tracker frame (a UR pendant's)
   euler_xyz,        ///< intrinsic X-Y-Z Euler angles: R = Rx(rx) Ry(ry) Rz(rz) (a Leica T-Mac export's)
 };
 
+/// How a measured orientation (`rx,ry,rz` columns: the tool frame's rotation vector in the
+/// tracker frame) enters: each such row becomes three samples of its joints, target 1 the
+/// point, targets 2 and 3 the point moved by the lever along the measured frame's x and y
+/// axes (virtual reflectors whose tool points are estimated like real ones, docs/formats.md).
+/// The lever weighs orientation against position: a virtual point's noise from the angle is
+/// lever x angle noise, equal to the position noise at lever = position / angle noise
+/// (noise_lever_m: with the joints' reading noise, which moves the point far more than it
+/// turns the tool).
 struct OrientationInput {
   double position_sigma_m = kDefaultPositionSigma_m;  ///< stated noise of the measured positions [m]
   double angle_sigma_rad = kDefaultAngleSigma_rad;    ///< stated noise of the measured orientations [rad]
-  double lever_m = -1.0;  ///< lever [m]; < 0: position_sigma_m / angle_sigma_rad; 0: rx, ry, rz checked, not used
+  double lever_m = -1.0;  ///< lever [m]; < 0: from the noise (noise_lever_m); 0: rx, ry, rz checked, not used
   OrientationForm form = OrientationForm::rotation_vector;  ///< what rx, ry, rz hold
-  /// The lever the reader uses [m] (0: orientation not used).
+  /// The arm whose joint-reading noise the lever from the noise takes in (its nominal geometry
+  /// and tool point suffice); null: position_sigma_m / angle_sigma_rad alone.
+  const RobotModel* arm = nullptr;
+  /// Noise of the joint readings, in the same step units as the two sigmas [rad]; 0: the
+  /// resolution the joint columns are written in (a UR pendant's 0.01 deg; a log's full digits: ~0).
+  double joint_sigma_rad = 0.0;
+  /// The lever before the joints' noise [m] (0: orientation not used).
   double lever() const { return lever_m < 0.0 ? position_sigma_m / angle_sigma_rad : lever_m; }
 };
 
 /// What read_samples_csv found of the orientation columns.
 struct OrientationRead {
-  std::size_t poses = 0;  ///< rows whose orientation became targets 2 and 3 [-]
-  double lever_m = 0.0;   ///< the lever used [m] (0 when no row was used)
+  std::size_t poses = 0;         ///< rows whose orientation became targets 2 and 3 [-]
+  double lever_m = 0.0;          ///< the lever used [m] (0 when no row was used)
+  double joint_sigma_rad = 0.0;  ///< the joint-reading noise the lever took in [rad] (0: none)
 };
+
+/// The lever [m] at which a virtual point's noise from the measured orientation equals its
+/// position noise, the joints' reading noise sigma_q propagated through `arm` at `poses`: per
+/// axis, the position's sigma_p^2 + sigma_q^2 |J|^2 / 3 (J = d tool point / d q, |J|^2 its squared
+/// Frobenius norm averaged over the poses) against the angle's sigma_a^2 + 2 sigma_q^2 (each
+/// joint turns the tool about its unit axis: 6 sigma_q^2 over three axes). sigma_q = 0 or no
+/// pose: sigma_p / sigma_a.
+double noise_lever_m(double position_sigma_m, double angle_sigma_rad, double joint_sigma_rad, const RobotModel& arm,
+                     Span<const JointVector> poses);
 
 /// Reads paired static samples (`q1..q6,x,y,z`, optionally `target` after z: the reflector,
 /// 1 .. kMaxTargets, 1 when absent; optionally `rx,ry,rz` after them: a measured orientation,

@@ -99,6 +99,36 @@ bool si_scale(std::string_view unit, Quantity quantity, double* scale) {
 
 LineReader::~LineReader() = default;
 
+bool written_resolution_exponent(std::string_view field, int* exponent) {
+  int power = 0;
+  const std::size_t e = field.find_first_of("eE");
+  if (e != std::string_view::npos) {
+    std::string_view digits = field.substr(e + 1);
+    if (!digits.empty() && digits.front() == '+') digits.remove_prefix(1);
+    const auto parsed = std::from_chars(digits.data(), digits.data() + digits.size(), power);
+    if (parsed.ec != std::errc() || parsed.ptr != digits.data() + digits.size()) return false;
+    field = field.substr(0, e);
+  }
+  if (!field.empty() && (field.front() == '+' || field.front() == '-')) field.remove_prefix(1);
+  int decimals = 0;
+  bool separator = false;
+  bool digit = false;
+  for (const char c : field) {
+    if (c == '.' || c == ',') {
+      if (separator) return false;
+      separator = true;
+    } else if (c >= '0' && c <= '9') {
+      digit = true;
+      decimals += separator ? 1 : 0;
+    } else {
+      return false;
+    }
+  }
+  if (!digit) return false;
+  *exponent = power - decimals;
+  return true;
+}
+
 bool LineReader::open(const std::string& path, std::uint64_t max_bytes) {
   name_ = path;
   const port::Error opened = file_.open(path, max_bytes);

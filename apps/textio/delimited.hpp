@@ -58,6 +58,11 @@ constexpr double kMaxJointLimit_rad = 2.0 * kMaxJointMagnitude_rad;
 /// Farthest point from the tracker (or base) origin read as plausible [m].
 constexpr double kMaxPointDistance_m = 100.0;
 
+/// The place value of the last digit a number is written to, as a power of ten: "20.72" and
+/// "20,72" give -2, "-115" gives 0, "1.5e-3" gives -4, "2,02011E+13" gives 8. False for a field
+/// that is not a plain decimal number (nan, inf, hexadecimal, empty).
+bool written_resolution_exponent(std::string_view field, int* exponent);
+
 /// Lines of a text file or of text in memory, without their end (\n, \r\n). A UTF-8 BOM
 /// on line 1 is skipped. Stops with error() set at a binary byte, a line over
 /// kMaxLineBytes or a read error.

@@ -88,6 +88,101 @@ TEST(OrientationInput, RowBecomesThreeTargetsAtTheLever) {
   EXPECT_NEAR((samples.samples()[4].point_m - kPoint_m).norm(), 0.1, 1e-15);
 }
 
+TEST(OrientationInput, WrittenResolutionOfANumber) {
+  const struct {
+    const char* field;
+    int exponent;
+  } cases[] = {{"20.72", -2}, {"-115", 0},    {"+0.5", -1},       {"104.5", -1},
+               {"20,72", -2}, {"1.5e-3", -4}, {"2,02011E+13", 8}, {"-1.5707963267948966", -16},
+               {"7e2", 2},    {".25", -2}};
+  for (const auto& c : cases) {
+    int exponent = 99;
+    EXPECT_TRUE(textio::written_resolution_exponent(c.field, &exponent)) << c.field;
+    EXPECT_EQ(exponent, c.exponent) << c.field;
+  }
+  for (const char* bad : {"", "nan", "inf", "-", "1.2.3", "0x1p3", "1e", "e5", "1.5e-3x"}) {
+    int exponent = 99;
+    EXPECT_FALSE(textio::written_resolution_exponent(bad, &exponent)) << bad;
+  }
+}
+
+// The lever from the noise: the joints' reading noise moves the point by J dq, |J| ~ the reach,
+// and turns the tool by dq about each axis; with sigma_q = 0 it is the sigmas' ratio.
+TEST(OrientationInput, TheLeverFromTheNoiseTakesTheJointsIn) {
+  const RobotModel arm = nominal_model(RobotType::ur5e);
+  const JointVector poses[2] = {kQ, (JointVector() << 0.3, -1.2, 1.4, -1.0, -1.57, 0.2).finished()};
+  const Span<const JointVector> both(poses, 2);
+  EXPECT_EQ(textio::noise_lever_m(1e-5, 1e-3, 0.0, arm, both), 0.01);
+  EXPECT_EQ(textio::noise_lever_m(1e-5, 1e-3, 1e-4, arm, Span<const JointVector>()), 0.01);
+  // Reference: the Jacobian's columns z_j x (p - o_j) from the joint frames, not differences.
+  double norm2 = 0.0;
+  for (const JointVector& q : poses) {
+    const Vec3 p = fk_tool_point(arm, q);
+    RigidTransform frame;  // base frame of joint 1: its axis is z, its origin 0
+    for (int j = 0; j < kJointCount; ++j) {
+      norm2 += frame.rotation.col(2).cross(p - frame.translation_m).squaredNorm();
+      const DhJoint& dh = arm.joints[j];
+      const double theta = q(j) + dh.theta_offset_rad;
+      const Mat3 link_rotation = rotation_z(theta) * rotation_x(dh.alpha_rad);
+      const Vec3 link_origin_m(dh.a_m * std::cos(theta), dh.a_m * std::sin(theta), dh.d_m);
+      frame.translation_m += frame.rotation * link_origin_m;
+      frame.rotation = frame.rotation * link_rotation;
+    }
+  }
+  const double sq = 0.01 * M_PI / 180.0;  // a pendant's 0.01 deg
+  const double expected = std::sqrt((1e-10 + sq * sq * norm2 / 2.0 / 3.0) / (1e-6 + 2.0 * sq * sq));
+  const double lever = textio::noise_lever_m(1e-5, 1e-3, sq, arm, both);
+  EXPECT_NEAR(lever, expected, 1e-7 * expected);
+  EXPECT_GT(lever, 0.05);  // the joints' noise dominates the position's at a UR5e's reach
+  // Noise-free joints cannot weigh the orientation down: more joint noise, a longer lever.
+  EXPECT_GT(textio::noise_lever_m(1e-5, 1e-3, 2.0 * sq, arm, both), lever);
+}
+
+// The reader takes the joints' noise from their written resolution (a pendant's two decimals in
+// degrees; a log's full digits: none to speak of) when it is given the arm.
+TEST(OrientationInput, TheJointsWrittenResolutionEntersTheLever) {
+  test::TempDir dir;
+  const RobotModel arm = nominal_model(RobotType::ur5e);
+  textio::OrientationInput with_arm;
+  with_arm.arm = &arm;
+  textio::OrientationRead found;
+  Dataset<16> samples;
+  const std::string pendant = dir.write(
+      "pendant.csv",
+      "\"Base (°)\",\"Shoulder (°)\",\"Elbow (°)\",\"Wrist 1 (°)\",\"Wrist 2 (°)\",\"Wrist 3 (°)\",\"X (mm)\","
+      "\"Y (mm)\",\"Z (mm)\",\"RX (rad)\",\"RY (rad)\",\"RZ (rad)\"\n"
+      "20.72,-114.77,87.42,-62.33,-89.47,-68.88,-205.16,-220.39,628.03,0.018,3.137,-0.002\n"
+      "104.5,-99.06,129.93,-111.24,-91.05,12.93,215.05,-306.8,265.58,0.048,-3.068,-0.239\n");
+  ASSERT_TRUE(textio::read_samples_csv(pendant, &samples, {}, nullptr, with_arm, &found).ok());
+  EXPECT_NEAR(found.joint_sigma_rad, 0.01 * M_PI / 180.0, 1e-18);  // "104.5" is 104.50: the finest
+  std::vector<JointVector> poses;
+  for (const Sample& s : samples.samples())
+    if (s.target == 0) poses.push_back(s.q_rad);
+  EXPECT_EQ(found.lever_m,
+            textio::noise_lever_m(1e-5, 1e-3, found.joint_sigma_rad, arm, Span<const JointVector>(poses.data(), 2)));
+  EXPECT_LE((samples.samples()[1].point_m - samples.samples()[0].point_m).norm() - found.lever_m, 1e-15);
+  // Given joint noise wins; a lever given is used as given; no arm: the sigmas' ratio.
+  textio::OrientationInput given = with_arm;
+  given.joint_sigma_rad = 1e-3;
+  samples.clear();
+  ASSERT_TRUE(textio::read_samples_csv(pendant, &samples, {}, nullptr, given, &found).ok());
+  EXPECT_EQ(found.joint_sigma_rad, 1e-3);
+  given.lever_m = 0.02;
+  samples.clear();
+  ASSERT_TRUE(textio::read_samples_csv(pendant, &samples, {}, nullptr, given, &found).ok());
+  EXPECT_EQ(found.lever_m, 0.02);
+  EXPECT_EQ(found.joint_sigma_rad, 0.0);
+  samples.clear();
+  ASSERT_TRUE(textio::read_samples_csv(pendant, &samples, {}, nullptr, {}, &found).ok());
+  EXPECT_EQ(found.lever_m, 0.01);
+  // Full digits (some values short: "-1.2"): the finest is ~1e-17 rad, the lever the sigmas' ratio.
+  const std::string full = dir.write("full.csv", std::string(kRadHeader) + row(kQ, kPoint_m, kRotation_rad));
+  samples.clear();
+  ASSERT_TRUE(textio::read_samples_csv(full, &samples, {}, nullptr, with_arm, &found).ok());
+  EXPECT_LT(found.joint_sigma_rad, 1e-15);
+  EXPECT_NEAR(found.lever_m, 0.01, 1e-15);
+}
+
 TEST(OrientationInput, UnitsOfTheHeaderOrOptionsAndThePendantHeader) {
   test::TempDir dir;
   Dataset<8> reference;

@@ -132,23 +132,42 @@ TEST(Ur5ePendant, FitOnTwelvePosesPredictsTheOtherSix) {
 }
 
 /// Fits the pendant poses `train` (the file read as it is, Base (°) .. RZ (rad): each pose's
-/// rotation vector adds targets 2 and 3 at the lever of the stated noise, 0.01 mm / 0.001 rad
-/// = 10 mm, chosen from the pendant's rounding, not on held-out poses) with the command line's
-/// defaults and --split 1; returns the MAE [m] of predicting the poses `test`.
+/// rotation vector adds targets 2 and 3 at the lever of the noise, as the command line reads
+/// it: the rounding of the positions (0.01 mm) and of the rotation vector (0.001 rad), and of
+/// the joints (0.01°) propagated through the nominal arm, ~94 mm; chosen from the pendant's
+/// rounding, not on held-out poses) with the command line's defaults and --split 1; returns
+/// the MAE [m] of predicting the poses `test`.
 /// `joint_step_rad` > 0: the joints' rounding enters as joint reading noise (LmOptions::joint_sigma_rad
 /// in the same step units as the positions' 0.01 mm, textio::kDefaultPositionSigma_m).
 /// `controller_tcp`: as `--controller-tcp`, the base (identity) and the tool points are known, LM only.
+/// `largest_set_aside_w_ratio`, when given, receives the largest w / critical w of a pose the
+/// blunder test set aside (0: none); without it none may be set aside.
 double predict_with_orientation(const std::vector<std::size_t>& train, const std::vector<std::size_t>& test,
-                                double joint_step_rad = 0.0, bool controller_tcp = false) {
+                                double joint_step_rad = 0.0, bool controller_tcp = false,
+                                double* largest_set_aside_w_ratio = nullptr) {
   static Dataset<64> all;
   all.clear();
   textio::OrientationRead found;
-  const port::Error read = textio::read_samples_csv(kDir + "joint-eef-data.csv", &all, {}, nullptr, {}, &found);
+  RobotModel arm = nominal_model(RobotType::ur5e);  // the command line's: nominal, --tool 0,0,0
+  arm.tool_m = Vec3::Zero();
+  textio::OrientationInput orientation;
+  orientation.arm = &arm;
+  port::Error read = textio::read_samples_csv(kDir + "joint-eef-data.csv", &all, {}, nullptr, orientation, &found);
   EXPECT_TRUE(read.ok()) << read.message;
   EXPECT_EQ(found.poses, 18u);
-  EXPECT_EQ(found.lever_m, 0.01);
-  EXPECT_EQ(all.size(), 54u);
+  EXPECT_EQ(found.joint_sigma_rad, 0.01 * math::kRadPerDeg);  // the joints' written resolution
+  EXPECT_NEAR(found.lever_m, 0.095, 0.005);
   const std::vector<PendantReading> readings = read_pendant_csv();
+  // The command line reads the training poses only: their lever.
+  std::vector<JointVector> train_poses;
+  for (std::size_t pose : train) train_poses.push_back(readings[pose].q_rad);
+  orientation.lever_m =
+      textio::noise_lever_m(orientation.position_sigma_m, orientation.angle_sigma_rad, found.joint_sigma_rad, arm,
+                            Span<const JointVector>(train_poses.data(), train_poses.size()));
+  all.clear();
+  read = textio::read_samples_csv(kDir + "joint-eef-data.csv", &all, {}, nullptr, orientation, &found);
+  EXPECT_TRUE(read.ok()) << read.message;
+  EXPECT_EQ(all.size(), 54u);
   static Dataset<64> fit;
   fit.clear();
   for (std::size_t pose : train) {
@@ -178,8 +197,14 @@ double predict_with_orientation(const std::vector<std::size_t>& train, const std
   Status status = Status::invalid_argument;
   EXPECT_NO_HEAP(status = calibrate(start, &fit, options, &workspace, &result));
   EXPECT_EQ(status, Status::ok) << calibration_step_name(result.step);
-  EXPECT_EQ(result.train_count, 3 * train.size());
-  EXPECT_EQ(result.outlier_count, 0u);
+  if (largest_set_aside_w_ratio == nullptr) {
+    EXPECT_EQ(result.train_count, 3 * train.size());
+    EXPECT_EQ(result.outlier_count, 0u);
+  } else {
+    *largest_set_aside_w_ratio = 0.0;
+    for (const CalibrationOutlier& o : result.outlier_list())
+      *largest_set_aside_w_ratio = std::max(*largest_set_aside_w_ratio, o.w / o.critical_w);
+  }
   const CalibrationStage& final_stage = result.stages[result.stage_count - 1];
   if (controller_tcp) {  // kept bit for bit
     EXPECT_TRUE(final_stage.base_to_tracker.translation_m == Vec3::Zero());
@@ -198,17 +223,20 @@ TEST(Ur5ePendant, OrientationTooPredictsTheOtherSixBetter) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
   const double mae_m = predict_with_orientation({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}, {12, 13, 14, 15, 16, 17});
   RecordProperty("predicted_mae_um", static_cast<int>(mae_m * 1e6));
-  std::printf("UR5e pendant with orientation (lever 10 mm): 12 poses fitted, 6 predicted: MAE %.4f mm\n", mae_m * 1e3);
-  // Measured 0.0887 mm (positions only: 0.116 mm, the test above): better than every
-  // position-only scipy fit of this split (0.139-0.292 mm, docs/robust.md), short of the
-  // issue's 0.08 mm. Pinned so that a change for the worse fails.
-  EXPECT_LT(mae_m, 0.09e-3);
+  std::printf("UR5e pendant with orientation (lever from the noise): 12 poses fitted, 6 predicted: MAE %.4f mm\n",
+              mae_m * 1e3);
+  // Measured 0.0725 mm (at the sigmas' lever of 10 mm, without the joints' noise: 0.0887 mm;
+  // positions only: 0.116 mm, the test above): better than every position-only scipy fit of this
+  // split (0.139-0.292 mm, docs/robust.md), short of the issue's 0.070 mm. Pinned so that a
+  // change for the worse fails.
+  EXPECT_LT(mae_m, 0.075e-3);
 }
 
 // A split on which the significance test fixed tool_x, and with it (LM estimated the other
 // targets' tool points only while tool_x was free) targets 2 and 3 at their start: 5.97 mm
 // then; 0.078 mm while the job kept tool_x free with several targets; 0.0805 mm since LM
-// estimates them whenever the stage estimates the tool point (positions only: 0.080).
+// estimates them whenever the stage estimates the tool point (positions only: 0.080); 0.0785 mm
+// at the lever from the noise.
 TEST(Ur5ePendant, OrientationSplitWhereTheSignificanceTestFroze2And3) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
   const double mae_m = predict_with_orientation({4, 16, 5, 2, 3, 12, 17, 13, 11, 1, 0, 8}, {15, 10, 14, 9, 6, 7});
@@ -247,13 +275,22 @@ struct SplitFigures {
   double worst_m = 0.0;   ///< largest [m]
 };
 
-/// predict_with_orientation over the 20 splits.
-SplitFigures twenty_splits(double joint_step_rad, bool controller_tcp = false) {
+/// predict_with_orientation over the 20 splits; `set_aside`, when given, counts the splits on
+/// which the blunder test set a pose aside and `largest_w_ratio` receives the largest w / critical w
+/// of those (without them none may be set aside).
+SplitFigures twenty_splits(double joint_step_rad, bool controller_tcp = false, int* set_aside = nullptr,
+                           double* largest_w_ratio = nullptr) {
   std::vector<double> mae_m;
   for (const auto& permutation : kTwentySplits) {
     const std::vector<std::size_t> train(permutation, permutation + 12);
     const std::vector<std::size_t> test(permutation + 12, permutation + 18);
-    mae_m.push_back(predict_with_orientation(train, test, joint_step_rad, controller_tcp));
+    double ratio = 0.0;
+    mae_m.push_back(
+        predict_with_orientation(train, test, joint_step_rad, controller_tcp, set_aside != nullptr ? &ratio : nullptr));
+    if (set_aside != nullptr && ratio > 0.0) {
+      ++*set_aside;
+      *largest_w_ratio = std::max(*largest_w_ratio, ratio);
+    }
     std::printf(" %.4f", mae_m.back() * 1e3);
   }
   std::printf("\n");
@@ -265,21 +302,22 @@ SplitFigures twenty_splits(double joint_step_rad, bool controller_tcp = false) {
   return f;
 }
 
-// With orientation, measured: median 0.0853 mm, mean 0.0994 mm, worst 0.200 mm (0.0850 /
-// 0.0989 / 0.200 mm while the job never fixed tool_x with several targets; 4-8 mm on 4 splits
-// before that, when fixing tool_x froze targets 2 and 3).
+// With orientation, measured: median 0.0785 mm, mean 0.0870 mm, worst 0.190 mm, no pose set
+// aside (at the sigmas' lever of 10 mm, without the joints' noise: 0.0853 / 0.0994 / 0.200 mm;
+// 4-8 mm on 4 splits when fixing tool_x froze targets 2 and 3).
 TEST(Ur5ePendant, OrientationTwentySplits) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
   const SplitFigures f = twenty_splits(0.0);
   std::printf("UR5e pendant with orientation, 20 splits: median %.4f mm, mean %.4f mm, worst %.4f mm\n",
               f.median_m * 1e3, f.mean_m * 1e3, f.worst_m * 1e3);
-  EXPECT_LT(f.median_m, 0.087e-3);
-  EXPECT_LT(f.worst_m, 0.21e-3);  // no split with targets 2 and 3 frozen (4-8 mm)
+  EXPECT_LT(f.median_m, 0.080e-3);
+  EXPECT_LT(f.mean_m, 0.090e-3);
+  EXPECT_LT(f.worst_m, 0.20e-3);  // no split with targets 2 and 3 frozen (4-8 mm)
 }
 
-// The joints' 0.01 deg rounding as joint reading noise (LmOptions::joint_sigma_rad, docs/robust.md):
-// measured first-12 0.0935 mm (0.0887 without), 20 splits median 0.0936 mm (0.0853), mean 0.0975
-// mm (0.0994), worst 0.175 mm (0.200): fewer bad splits, a worse median. Not the default.
+// The joints' 0.01 deg rounding also as joint reading noise of each sample (LmOptions::joint_sigma_rad,
+// docs/robust.md): measured first-12 0.0973 mm (0.0725 without), 20 splits median 0.0868 mm
+// (0.0785), mean 0.0889 mm (0.0870), worst 0.183 mm (0.190): worse. Not the default.
 TEST(Ur5ePendant, JointNoiseOnTheTwentySplits) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
   const double step_rad = 0.01 * M_PI / 180.0;
@@ -290,16 +328,16 @@ TEST(Ur5ePendant, JointNoiseOnTheTwentySplits) {
       "UR5e pendant with orientation and joint noise 0.01 deg: first 12 %.4f mm; 20 splits: median %.4f mm, "
       "mean %.4f mm, worst %.4f mm\n",
       first12_m * 1e3, f.median_m * 1e3, f.mean_m * 1e3, f.worst_m * 1e3);
-  EXPECT_LT(first12_m, 0.095e-3);
-  EXPECT_LT(f.median_m, 0.095e-3);
-  EXPECT_LT(f.mean_m, 0.099e-3);
-  EXPECT_LT(f.worst_m, 0.18e-3);
+  EXPECT_LT(first12_m, 0.10e-3);
+  EXPECT_LT(f.median_m, 0.090e-3);
+  EXPECT_LT(f.mean_m, 0.092e-3);
+  EXPECT_LT(f.worst_m, 0.19e-3);
 }
 
 // The pendant's readings are the controller's own TCP: in the base frame, at the configured
 // TCP offset (here the flange). With both known (--controller-tcp) LM estimates joint 1
-// instead of a base. Measured: first-12 split 0.0745 mm (the issue's target 0.08 mm, scipy's
-// 0.066 mm); 0.0887 mm with base and tool fitted.
+// instead of a base. Measured: first-12 split 0.0629 mm (the issue's 0.070 mm, scipy's
+// 0.066 mm); 0.0725 mm with base and tool fitted.
 TEST(Ur5ePendant, ControllerTcpMeetsTheIssuesTargetOnTheFirstTwelve) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
   const double mae_m =
@@ -307,19 +345,28 @@ TEST(Ur5ePendant, ControllerTcpMeetsTheIssuesTargetOnTheFirstTwelve) {
   RecordProperty("predicted_mae_um", static_cast<int>(mae_m * 1e6));
   std::printf("UR5e pendant, controller TCP (base and tool known): 12 poses fitted, 6 predicted: MAE %.4f mm\n",
               mae_m * 1e3);
-  EXPECT_LT(mae_m, 0.08e-3);
+  EXPECT_LT(mae_m, 0.065e-3);
 }
 
-// Measured: median 0.0678 mm, mean 0.0709 mm, worst 0.145 mm (base and tool fitted: 0.0853 /
-// 0.0994 / 0.200 mm, OrientationTwentySplits).
+// Measured: median 0.0660 mm, mean 0.0663 mm, worst 0.0893 mm (base and tool fitted: 0.0785 /
+// 0.0870 / 0.190 mm, OrientationTwentySplits). On one split the blunder test sets one pose aside
+// at w 6.05 against 5.98 (1 % over): a stretched arm (elbow at 30 deg) whose virtual targets
+// share its position error, which the pose's test counts as three independent points
+// (docs/robust.md). No other pose on any split.
 TEST(Ur5ePendant, ControllerTcpTwentySplits) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
-  const SplitFigures f = twenty_splits(0.0, true);
-  std::printf("UR5e pendant, controller TCP, 20 splits: median %.4f mm, mean %.4f mm, worst %.4f mm\n",
-              f.median_m * 1e3, f.mean_m * 1e3, f.worst_m * 1e3);
-  EXPECT_LT(f.median_m, 0.070e-3);
-  EXPECT_LT(f.mean_m, 0.075e-3);
-  EXPECT_LT(f.worst_m, 0.15e-3);
+  int set_aside = 0;
+  double largest_w_ratio = 0.0;
+  const SplitFigures f = twenty_splits(0.0, true, &set_aside, &largest_w_ratio);
+  std::printf(
+      "UR5e pendant, controller TCP, 20 splits: median %.4f mm, mean %.4f mm, worst %.4f mm; a pose set aside on %d "
+      "split(s), largest w / critical %.3f\n",
+      f.median_m * 1e3, f.mean_m * 1e3, f.worst_m * 1e3, set_aside, largest_w_ratio);
+  EXPECT_LT(f.median_m, 0.068e-3);
+  EXPECT_LT(f.mean_m, 0.068e-3);
+  EXPECT_LT(f.worst_m, 0.095e-3);
+  EXPECT_LE(set_aside, 1);
+  EXPECT_LT(largest_w_ratio, 1.02);
 }
 
 TEST(Ur5ePendant, FloatFkIsNotGoodEnough) {
