@@ -246,10 +246,10 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
   }
   std::vector<std::size_t> lines;
   facts->orientation_input = config.orientation;
-  facts->orientation_input.arm = &config.speed_model;  // whose joints' reading noise the lever takes in
+  textio::OrientationInput orientation = config.orientation;
+  orientation.arm = &config.speed_model;  // whose joints' reading noise the lever takes in
   const port::Error r = textio::read_samples_csv(sources.samples, dataset, config.log_options.units, &lines,
-                                                 facts->orientation_input, &facts->orientation);
-  facts->orientation_input.arm = nullptr;  // config's, not the facts' to keep
+                                                 orientation, &facts->orientation);
   for (std::size_t line : lines) facts->sample_sources.push_back(sources.samples + ":" + std::to_string(line));
   if (!r.ok()) return r;
   facts->info_lines.push_back("input: " + sources.samples + " (" + std::to_string(dataset->size()) +

@@ -211,10 +211,6 @@ std::vector<T> with(std::vector<T> a, const std::vector<T>& b) {
 
 const std::vector<Quantity> kJointQuantities(kJointCount, Quantity::angle);
 
-}  // namespace
-
-namespace {
-
 /// A row whose orientation makes targets 2 and 3: added once the file is read, when the lever
 /// (which may depend on the joints' written resolution) is known.
 struct OrientedRow {

@@ -97,8 +97,6 @@ bool si_scale(std::string_view unit, Quantity quantity, double* scale) {
   return false;
 }
 
-LineReader::~LineReader() = default;
-
 bool written_resolution_exponent(std::string_view field, int* exponent) {
   int power = 0;
   const std::size_t e = field.find_first_of("eE");
@@ -128,6 +126,8 @@ bool written_resolution_exponent(std::string_view field, int* exponent) {
   *exponent = power - decimals;
   return true;
 }
+
+LineReader::~LineReader() = default;
 
 bool LineReader::open(const std::string& path, std::uint64_t max_bytes) {
   name_ = path;
