@@ -18,6 +18,7 @@
 #include "hivecal/sync/sample_extraction.hpp"
 #include "report/report.hpp"
 #include "streams/session.hpp"
+#include "textio/csv.hpp"
 #include "commands/calibrate_parts.hpp"
 
 namespace hivecal::cli {
@@ -287,19 +288,22 @@ std::string format_mm(double value_m) {
   return buf;
 }
 
-/// "noise: ..." — the fit's residual sigma against the tracker's noise (stated, or measured by
-/// repeated readings), and what the ratio says.
-std::string noise_statement(double fit_sigma_m, double tracker_sigma_m, bool measured) {
-  const double ratio = fit_sigma_m / tracker_sigma_m;
-  char line[320];
-  std::snprintf(
-      line, sizeof line, "noise: the fit's residual sigma %s mm per axis is %.1fx the tracker's %s %s mm%s%s",
-      format_mm(fit_sigma_m).c_str(), ratio, measured ? "measured" : "stated", format_mm(tracker_sigma_m).c_str(),
-      measured ? " (repeated readings)" : " (--tracker-sigma-um)",
-      ratio > 2.0
-          ? (measured ? ": unmodelled effects dominate the residuals, not the tracker"
-                      : ": unmodelled effects (or a wrong stated noise) dominate the residuals, not the tracker")
-          : ": the model explains the data to the measurement noise");
+/// "noise: ..." — the fit's residual sigma against the measurement noise and where that comes
+/// from (`source`: the report's noise source), and what the ratio says.
+std::string noise_statement(double fit_sigma_m, double noise_sigma_m, const std::string& source) {
+  const double ratio = fit_sigma_m / noise_sigma_m;
+  const bool measured = source == "repeated readings";
+  const char* what = measured             ? "the tracker's measured"
+                     : source == "stated" ? "the tracker's stated"
+                                          : "the measurement noise, the tracker's stated and the joints' reading,";
+  char line[360];
+  std::snprintf(line, sizeof line, "noise: the fit's residual sigma %s mm per axis is %.1fx %s %s mm%s%s",
+                format_mm(fit_sigma_m).c_str(), ratio, what, format_mm(noise_sigma_m).c_str(),
+                measured ? " (repeated readings)" : " (--tracker-sigma-um)",
+                ratio > 2.0 ? (measured ? ": unmodelled effects dominate the residuals, not the tracker"
+                                        : ": unmodelled effects (or a wrong stated noise) dominate the residuals, "
+                                          "not the tracker")
+                            : ": the model explains the data to the measurement noise");
   return line;
 }
 
@@ -307,12 +311,54 @@ std::string noise_statement(double fit_sigma_m, double tracker_sigma_m, bool mea
 /// simulated without noise. No tracker resolves 1 nm, so they say nothing of its noise [m].
 constexpr double kIdenticalReadingsSigma_m = 1e-9;
 
+/// Joints' noise that changes the measurement noise by less than this share of the tracker's is
+/// left out (a log written in full digits: ~1e-16 of it) [-].
+constexpr double kNegligibleJointNoise = 0.1;
+
+/// The joints' reading noise as noise of the tool point (the tracker's stated beside it): read
+/// with sigma_q (--joint-sigma-rad, else a rounding to their written resolution: step / sqrt(12)),
+/// the joints move the point by sigma_q |J| / sqrt(3) per axis through the arm
+/// (textio::joint_position_variance_m2 over the training poses). A line says so; the noise is
+/// the two together.
+void add_joint_reading_noise(const CalibrateSettings& settings, const RobotModel& start,
+                             const streams::SessionFacts& facts, Span<const Sample> train, report::ReportData* data) {
+  const bool given = settings.joint_sigma_rad > 0.0;
+  const double step_rad = facts.orientation.joint_resolution_rad;
+  const double joint_sigma_rad = given ? settings.joint_sigma_rad : step_rad / std::sqrt(12.0);
+  if (!(joint_sigma_rad > 0.0) || train.empty()) return;
+  std::vector<JointVector> poses;
+  for (const Sample& s : train)
+    if (s.target == 0) poses.push_back(s.q_rad);
+  const double joint_m = std::sqrt(
+      textio::joint_position_variance_m2(joint_sigma_rad, start, Span<const JointVector>(poses.data(), poses.size())));
+  if (!(joint_m > kNegligibleJointNoise * data->noise_sigma_m)) return;
+  const double stated_m = data->noise_sigma_m;
+  data->noise_sigma_m = std::sqrt(stated_m * stated_m + joint_m * joint_m);
+  data->noise_source = "stated, with the joints' reading";
+  char why[96];
+  if (given) {
+    std::snprintf(why, sizeof why, "read with sigma %.3g deg (--joint-sigma)", joint_sigma_rad / math::kRadPerDeg);
+  } else {
+    std::snprintf(why, sizeof why, "written to %.3g deg (a rounding: sigma %.2g deg)", step_rad / math::kRadPerDeg,
+                  joint_sigma_rad / math::kRadPerDeg);
+  }
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "joint noise: the joints, %s, move the tool point %s mm per axis through the arm: the measurement "
+                "noise is %s mm with the tracker's stated %s mm",
+                why, format_mm(joint_m).c_str(), format_mm(data->noise_sigma_m).c_str(), format_mm(stated_m).c_str());
+  data->info_lines.push_back(line);
+}
+
 /// The measurement noise: what repeated readings show when the input has them (a line says
-/// so, beside the stated figure), else the stated sigma.
-void measurement_noise(const CalibrateSettings& settings, const RepeatedReadingNoise& repeated,
-                       report::ReportData* data) {
+/// so, beside the stated figure), else the stated sigma with the joints' reading noise.
+void measurement_noise(const CalibrateSettings& settings, const RepeatedReadingNoise& repeated, const RobotModel& start,
+                       const streams::SessionFacts& facts, Span<const Sample> train, report::ReportData* data) {
   data->noise_sigma_m = settings.orientation.position_sigma_m;
-  if (repeated.groups == 0) return;
+  if (repeated.groups == 0) {
+    add_joint_reading_noise(settings, start, facts, train, data);
+    return;
+  }
   char line[300];
   if (repeated.sigma_m < kIdenticalReadingsSigma_m) {
     std::snprintf(line, sizeof line,
@@ -320,6 +366,7 @@ void measurement_noise(const CalibrateSettings& settings, const RepeatedReadingN
                   "noise): the stated %s mm is the noise",
                   repeated.readings, repeated.groups, format_mm(settings.orientation.position_sigma_m).c_str());
     data->info_lines.push_back(line);
+    add_joint_reading_noise(settings, start, facts, train, data);
     return;
   }
   data->noise_sigma_m = repeated.sigma_m;
@@ -477,10 +524,9 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     data.identifiability.significance_t = run.result.significance_t;
     data.fit_sigma_m = lm->residual_sigma_m;
   }
-  measurement_noise(settings, run.result.reading_noise, &data);
-  if (data.fit_sigma_m > 0.0) {
-    data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m, data.noise_source != "stated"));
-  }
+  measurement_noise(settings, run.result.reading_noise, start, facts, dataset.train(), &data);
+  if (data.fit_sigma_m > 0.0)
+    data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m, data.noise_source));
   data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
   data.has_stream = facts.has_stream;
   if (facts.has_stream) {

@@ -114,7 +114,7 @@ void error_figures(const ReportData& data, const std::vector<std::size_t>& shown
     }
     if (data.noise_sigma_m > 0.0) {
       spec.y_line = axis == 3 ? norm_um : per_axis_um;
-      spec.y_line_label = "tracker noise (" + data.noise_source + ")";
+      spec.y_line_label = "measurement noise (" + data.noise_source + ")";
     }
     const std::vector<double> ranks = index_axis(b.size());
     out->push_back(

@@ -154,13 +154,13 @@ struct ReportData {
   std::vector<ConvergenceSeries> convergence;  ///< one per stage
   std::vector<SampleRow> samples;              ///< every sample (training and test)
   std::vector<PredictionSet> predictions;      ///< first the uncalibrated model, last the result
-  double noise_sigma_m =
-      0.0;  ///< measurement noise per axis: the tracker's stated sigma, or what repeated readings show [m]; 0: unknown
-  std::string noise_source =
-      "stated";              ///< where noise_sigma_m comes from: "stated" (--tracker-sigma-um) or "repeated readings"
-  double fit_sigma_m = 0.0;  ///< the final fit's residual sigma per axis, sqrt(SSR / dof) [m]; 0: unknown
-  IdentifiabilityTable identifiability;                      ///< Table 3
-  std::vector<ParameterRow> parameters;                      ///< Table 4: estimated or changed parameters
+  double noise_sigma_m = 0.0;  ///< measurement noise per axis: the tracker's stated sigma (with the joints' reading),
+                               ///< or what repeated readings show [m]; 0: unknown
+  std::string noise_source = "stated";   ///< where noise_sigma_m comes from: "stated" (--tracker-sigma-um), "stated,
+                                         ///< with the joints' reading" or "repeated readings"
+  double fit_sigma_m = 0.0;              ///< the final fit's residual sigma per axis, sqrt(SSR / dof) [m]; 0: unknown
+  IdentifiabilityTable identifiability;  ///< Table 3
+  std::vector<ParameterRow> parameters;  ///< Table 4: estimated or changed parameters
   std::vector<std::pair<std::string, std::uint64_t>> drops;  ///< stream input: drop reason -> tracker points
   bool has_stream = false;                                   ///< the samples came from two streams
   PointTimeline timeline;                 ///< stream input: kept / drop reason per tracker point over time

@@ -241,9 +241,8 @@ double lever_for(const OrientationInput& orientation, double joint_resolution_ra
 
 }  // namespace
 
-double noise_lever_m(double position_sigma_m, double angle_sigma_rad, double joint_sigma_rad, const RobotModel& arm,
-                     Span<const JointVector> poses) {
-  if (!(joint_sigma_rad > 0.0) || poses.empty()) return position_sigma_m / angle_sigma_rad;
+double joint_position_variance_m2(double joint_sigma_rad, const RobotModel& arm, Span<const JointVector> poses) {
+  if (poses.empty()) return 0.0;
   constexpr double kStep_rad = 1e-6;  // central differences: the error is ~1e-12 of |J|
   double jacobian_norm2_m2 = 0.0;     // sum over the poses of |d point / d q|_F^2
   for (const JointVector& q_rad : poses) {
@@ -255,10 +254,16 @@ double noise_lever_m(double position_sigma_m, double angle_sigma_rad, double joi
       jacobian_norm2_m2 += ((fk_tool_point(arm, ahead) - fk_tool_point(arm, behind)) / (2.0 * kStep_rad)).squaredNorm();
     }
   }
-  const double q2 = joint_sigma_rad * joint_sigma_rad;
   const double mean_norm2_m2 = jacobian_norm2_m2 / static_cast<double>(poses.size());
-  const double position2 = position_sigma_m * position_sigma_m + q2 * mean_norm2_m2 / 3.0;
-  const double angle2 = angle_sigma_rad * angle_sigma_rad + 2.0 * q2;
+  return joint_sigma_rad * joint_sigma_rad * mean_norm2_m2 / 3.0;
+}
+
+double noise_lever_m(double position_sigma_m, double angle_sigma_rad, double joint_sigma_rad, const RobotModel& arm,
+                     Span<const JointVector> poses) {
+  if (!(joint_sigma_rad > 0.0) || poses.empty()) return position_sigma_m / angle_sigma_rad;
+  const double position2 =
+      position_sigma_m * position_sigma_m + joint_position_variance_m2(joint_sigma_rad, arm, poses);
+  const double angle2 = angle_sigma_rad * angle_sigma_rad + 2.0 * joint_sigma_rad * joint_sigma_rad;
   return std::sqrt(position2 / angle2);
 }
 
@@ -322,6 +327,7 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
         return std::string();
       },
       &row_lines, &columns);
+  read.joint_resolution_rad = columns.joint_resolution_rad;
   if (result.ok() && !oriented.empty()) {  // the virtual reflectors along the measured x and y axes
     read.lever_m = lever_for(orientation, columns.joint_resolution_rad, oriented, &read.joint_sigma_rad);
     read.poses = oriented.size();

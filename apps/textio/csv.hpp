@@ -49,12 +49,21 @@ struct OrientationInput {
   double lever() const { return lever_m < 0.0 ? position_sigma_m / angle_sigma_rad : lever_m; }
 };
 
-/// What read_samples_csv found of the orientation columns.
+/// What read_samples_csv found beside the samples: the orientation columns' use and the joints'
+/// written resolution.
 struct OrientationRead {
   std::size_t poses = 0;         ///< rows whose orientation became targets 2 and 3 [-]
   double lever_m = 0.0;          ///< the lever used [m] (0 when no row was used)
   double joint_sigma_rad = 0.0;  ///< the joint-reading noise the lever took in [rad] (0: none)
+  /// The resolution the joint columns are written in: the finest place value of a last digit
+  /// among their fields (a UR pendant's 0.01 deg; a log's full digits: ~1e-16) [rad]
+  double joint_resolution_rad = 0.0;
 };
+
+/// Per-axis variance of the tool point from joints read with noise sigma_q: sigma_q^2 |J|^2 / 3,
+/// J = d tool point / d q of `arm` (central differences), |J|^2 its squared Frobenius norm
+/// averaged over `poses`; 0 without poses [m^2].
+double joint_position_variance_m2(double joint_sigma_rad, const RobotModel& arm, Span<const JointVector> poses);
 
 /// The lever [m] at which a virtual point's noise from the measured orientation equals its
 /// position noise, the joints' reading noise sigma_q propagated through `arm` at `poses`: per

@@ -3,7 +3,9 @@
 // without, the stated --tracker-sigma-um.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <vector>
@@ -97,6 +99,45 @@ TEST(NoiseCli, WithoutRepeatsTheStatedNoise) {
   EXPECT_EQ(text.find("noise_source"), std::string::npos);
   EXPECT_NE(text.find("the tracker's stated"), std::string::npos);
   EXPECT_DOUBLE_EQ(number_after(text, "noise_sigma_m"), 10e-6);
+}
+
+// Joints written to 0.01 deg (as a UR pendant exports them) are read with that rounding's noise,
+// sigma = 0.01 deg / sqrt(12): through a UR5's reach ~20-30 um at the tool, far above a 1 um
+// tracker. The measurement noise takes it in, and the fit's residual is then at the noise (1x), not
+// "unmodelled effects" at 20x the tracker's.
+TEST(NoiseCli, JointsWrittenRoundedAddTheirNoise) {
+  const test::TempDir dir("hivecal_noise");
+  ASSERT_FALSE(dir.path().empty());
+  Random random(47);
+  const RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, 3e-4, 3e-4);
+  std::string text = "q1 [deg],q2 [deg],q3 [deg],q4 [deg],q5 [deg],q6 [deg],x,y,z\n";
+  for (int p = 0; p < 200; ++p) {
+    const JointVector q = test::random_joints(&random);
+    const Vec3 point_m = test::example_base_to_tracker().apply(fk_tool_point(truth, q)) +
+                         1e-6 * Vec3(random.normal(), random.normal(), random.normal());
+    char row[256];
+    std::snprintf(row, sizeof row, "%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.17g,%.17g,%.17g\n", q(0) * 180 / M_PI,
+                  q(1) * 180 / M_PI, q(2) * 180 / M_PI, q(3) * 180 / M_PI, q(4) * 180 / M_PI, q(5) * 180 / M_PI,
+                  point_m.x(), point_m.y(), point_m.z());
+    text += row;
+  }
+  const std::string result = dir.path() + "/result.json";
+  const int code =
+      test::run(cli::calibrate_main, {"--samples", dir.write("rounded.csv", text), "--method", "lm", "--out", result,
+                                      "--quiet", "--tracker-sigma-um", "1", "--keep-outliers"});
+  EXPECT_TRUE(code == cli::kExitOk || code == cli::kExitWarnings) << code;
+  std::string json;
+  ASSERT_TRUE(port::read_whole_file(result, port::kMaxTextInputBytes, &json).ok());
+  EXPECT_NE(json.find("\"noise_source\": \"stated, with the joints' reading\""), std::string::npos);
+  EXPECT_NE(json.find("joint noise: the joints, written to 0.01 deg (a rounding: sigma 0.0029 deg)"),
+            std::string::npos);
+  const double noise_m = number_after(json, "noise_sigma_m");
+  const double fit_m = number_after(json, "fit_sigma_m");
+  std::printf("joints written to 0.01 deg: measurement noise %.4f mm per axis, the fit's residual %.4f mm\n",
+              noise_m * 1e3, fit_m * 1e3);
+  EXPECT_GT(noise_m, 10e-6);  // the joints', not the tracker's 1 um
+  EXPECT_NEAR(fit_m / noise_m, 1.0, 0.25);
+  EXPECT_NE(json.find("the model explains the data to the measurement noise"), std::string::npos);
 }
 
 }  // namespace
