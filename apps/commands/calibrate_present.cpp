@@ -355,29 +355,27 @@ void add_joint_reading_noise(const CalibrateSettings& settings, const RobotModel
 void measurement_noise(const CalibrateSettings& settings, const RepeatedReadingNoise& repeated, const RobotModel& start,
                        const streams::SessionFacts& facts, Span<const Sample> train, report::ReportData* data) {
   data->noise_sigma_m = settings.orientation.position_sigma_m;
-  if (repeated.groups == 0) {
-    add_joint_reading_noise(settings, start, facts, train, data);
+  char line[300];
+  if (repeated.groups > 0 && repeated.sigma_m >= kIdenticalReadingsSigma_m) {
+    data->noise_sigma_m = repeated.sigma_m;
+    data->noise_source = "repeated readings";
+    std::snprintf(
+        line, sizeof line,
+        "tracker noise: %zu readings of %zu repeated points scatter %s mm per axis (x %s, y %s, z %s; stated %s mm)",
+        repeated.readings, repeated.groups, format_mm(repeated.sigma_m).c_str(),
+        format_mm(repeated.sigma_axis_m[0]).c_str(), format_mm(repeated.sigma_axis_m[1]).c_str(),
+        format_mm(repeated.sigma_axis_m[2]).c_str(), format_mm(settings.orientation.position_sigma_m).c_str());
+    data->info_lines.push_back(line);
     return;
   }
-  char line[300];
-  if (repeated.sigma_m < kIdenticalReadingsSigma_m) {
+  if (repeated.groups > 0) {
     std::snprintf(line, sizeof line,
                   "tracker noise: %zu readings of %zu repeated points are identical (rounded, or simulated without "
                   "noise): the stated %s mm is the noise",
                   repeated.readings, repeated.groups, format_mm(settings.orientation.position_sigma_m).c_str());
     data->info_lines.push_back(line);
-    add_joint_reading_noise(settings, start, facts, train, data);
-    return;
   }
-  data->noise_sigma_m = repeated.sigma_m;
-  data->noise_source = "repeated readings";
-  std::snprintf(
-      line, sizeof line,
-      "tracker noise: %zu readings of %zu repeated points scatter %s mm per axis (x %s, y %s, z %s; stated %s mm)",
-      repeated.readings, repeated.groups, format_mm(repeated.sigma_m).c_str(),
-      format_mm(repeated.sigma_axis_m[0]).c_str(), format_mm(repeated.sigma_axis_m[1]).c_str(),
-      format_mm(repeated.sigma_axis_m[2]).c_str(), format_mm(settings.orientation.position_sigma_m).c_str());
-  data->info_lines.push_back(line);
+  add_joint_reading_noise(settings, start, facts, train, data);
 }
 
 /// Collects each pose's test under the final calibration: the kept poses' w, the uncontrolled ones.
