@@ -409,6 +409,7 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
   table.alpha = run.options.blunder_test.alpha;
   table.sigma_source = sigma_source_name(r.blunder_test.sigma_source);
   table.sigma_m = r.blunder_test.sigma_m;
+  table.pooled_correlation = r.blunder_test.pooled_correlation;
   if (table.searched && r.final_stage() != nullptr) {
     const auto workspace = std::make_unique<ReliabilityWorkspace>();  // ~26 kB: not on the stack
     std::vector<std::uint32_t> aside;
@@ -425,6 +426,14 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
                   table.alpha * 100.0);
     data->info_lines.push_back(line);
     table.rows.push_back({streams::sample_source(facts, o.index), o.residual_m, o.w});
+  }
+  if (table.searched && table.pooled_correlation) {
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "blunder test: the readings of a pose share their error (their correlation pooled over the poses): "
+                  "a pose is tested as one error seen several times, not as independent readings (threshold w %.2f)",
+                  table.critical_w);
+    data->info_lines.push_back(line);
   }
   if (r.blunder_verdict == BlunderVerdict::model_error) {
     data->info_lines.push_back("blunder test: more than " + std::to_string(r.blunder_limit) +

@@ -83,6 +83,7 @@ void write_outliers(JsonWriter& json, const OutlierTable& o) {
   json.key("alpha").value(o.alpha);
   json.key("sigma_source").value(o.sigma_source);
   json.key("sigma_m").value(o.sigma_m);
+  if (o.pooled_correlation) json.key("pooled_correlation").value(true);  // only then: other results keep their bytes
   json.key("set_aside").begin_array();
   for (const OutlierRow& r : o.rows) {
     json.begin_object();
@@ -319,6 +320,8 @@ bool get_outliers(const JsonValue* v, OutlierTable* out) {
       !is_array(rows) || !is_array(uncontrolled) || !is_array(kept_w)) {
     return false;
   }
+  const JsonValue* pooled = v->find("pooled_correlation");
+  if (pooled != nullptr && !get_bool(pooled, &out->pooled_correlation)) return false;
   for (const JsonValue& r : rows->array) {
     OutlierRow row;
     if (!get_string(r.find("source"), &row.source) || !get_number(r.find("residual_m"), &row.residual_m) ||

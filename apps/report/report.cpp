@@ -525,6 +525,10 @@ std::string outlier_html(const OutlierTable& o) {
                 o.alpha * 100.0, o.critical_w, mm(o.sigma_m).c_str(),
                 o.sigma_source == "tracker" ? "the tracker's stated noise" : "from the fit's residuals");
   std::string s = "<h2>Blunders</h2>\n<p>" + std::string(test);
+  if (o.pooled_correlation) {
+    s += "The readings of a pose share their error (their correlation pooled over the poses): a pose is tested as one "
+         "error seen several times, not as independent readings. ";
+  }
   if (o.verdict == "model_error") {
     s += "More poses fail than a blunder explains: the model, not the data, is wrong (unmodelled effects); none "
          "removed. ";

@@ -87,6 +87,7 @@ struct OutlierTable {
   double alpha = 0.0;                     ///< the test's significance for the whole set [-]
   std::string sigma_source;               ///< "data" (the fit's residuals) or "tracker" (the stated noise)
   double sigma_m = 0.0;                   ///< the test's sigma per axis [m]
+  bool pooled_correlation = false;        ///< a pose's readings tested with their correlation pooled over the poses
   std::vector<OutlierRow> rows;           ///< the samples set aside, by increasing sample index
   std::vector<std::string> uncontrolled;  ///< poses whose redundancy is below the floor: never tested, by source
   std::vector<double> kept_w;             ///< w of every kept pose under the final calibration (the figure) [-]

@@ -292,6 +292,7 @@ TEST(Report, BlundersAndFoldsRoundTripThroughResultJson) {
   EXPECT_EQ(back.outliers.critical_w, 4.56);
   EXPECT_EQ(back.outliers.verdict, "removed");
   EXPECT_EQ(back.outliers.sigma_source, "data");
+  EXPECT_FALSE(back.outliers.pooled_correlation);
   EXPECT_EQ(back.outliers.kept_w, data.outliers.kept_w);
   EXPECT_EQ(back.outliers.uncontrolled, data.outliers.uncontrolled);
   ASSERT_EQ(back.outliers.rows.size(), 1u);
@@ -407,6 +408,25 @@ TEST(Report, EmptyAndDegenerateSeriesStillRender) {
   data.convergence = {{"flat", false, {1e-5, 1e-5}}, {"none", true, {}}};
   EXPECT_EQ(check_well_formed(report::render_html(data)), "");
   EXPECT_EQ(check_well_formed(report::svg_histogram(report::ChartSpec{"h", "x", "y"}, {"a"}, {{}}, 10)), "");
+}
+
+TEST(Report, PooledReadingsCorrelationIsSaidAndRoundTrips) {
+  // Several readings per pose tested with their pooled correlation: the key is written only
+  // then (other results keep their bytes), read back, and the page says it.
+  report::ReportData data = with_blunder_and_folds();
+  const std::string before = report::render_html(data);
+  EXPECT_EQ(before.find("share their error"), std::string::npos);
+  textio::JsonWriter plain;
+  record::write_report_data(plain, data);
+  EXPECT_EQ(plain.text().find("pooled_correlation"), std::string::npos);
+  data.outliers.pooled_correlation = true;
+  EXPECT_NE(report::render_html(data).find("The readings of a pose share their error"), std::string::npos);
+  textio::JsonValue value = written_report(data);
+  report::ReportData back;
+  ASSERT_TRUE(record::parse_report_data(value, "result.json", &back).ok());
+  EXPECT_TRUE(back.outliers.pooled_correlation);
+  value.object["outliers"].object["pooled_correlation"] = value.object["outliers"].object["alpha"];  // not a bool
+  EXPECT_FALSE(record::parse_report_data(value, "result.json", &back).ok());
 }
 
 }  // namespace

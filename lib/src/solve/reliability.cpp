@@ -127,6 +127,11 @@ struct UnitRows {
 /// The test's scale: from the data (the fit's SSR over its dof) or the tracker's stated sigma.
 struct Scale {
   SigmaSource source = SigmaSource::data;
+  bool correlated = false;  ///< the readings of a pose are correlated (ws->correlation)
+  /// With correlated readings, the statistic of a unit of n rows is taken as spread[n] times a
+  /// chi-square (or F) of n / spread[n] degrees of freedom (Satterthwaite): spread[n] =
+  /// |C_n|_F^2 / n, C_n the leading n x n block of the correlation (1 without correlation) [-].
+  double spread[kMaxUnitRows + 1] = {};
   double ssr_m2 = 0.0;      ///< the fit's weighted sum of squares [m^2]
   double dof = 0.0;         ///< its redundancy [-]
   double sigma_m = 0.0;     ///< sigma per axis [m]
@@ -138,15 +143,75 @@ struct Scale {
 
 /// Critical value of e^T Q^-1 e / sigma^2 for a unit of `rows` rows (sigma from the data: the
 /// fitted unit's own residual left out of it, F(rows, dof - rows); a predicted one's against
-/// the whole fit, F(rows, dof); the tracker's sigma: chi-square).
+/// the whole fit, F(rows, dof); the tracker's sigma: chi-square). With correlated readings the
+/// statistic is spread times one of rows / spread degrees of freedom: its eigenvalues are
+/// those of the correlation block (Q^-1 L C L^T = L^-T C L^T), whose trace is `rows` and
+/// squares sum to rows * spread.
 double critical_statistic(const Scale& scale, int rows, bool fitted) {
   double& cached = scale.critical[fitted ? 1 : 0][rows];
   if (cached > 0.0) return cached;
   const double m = static_cast<double>(rows);
-  cached = scale.source == SigmaSource::tracker
-               ? math::chi_square_upper_quantile(scale.unit_alpha, m)
-               : m * math::f_upper_quantile(scale.unit_alpha, m, fitted ? scale.dof - m : scale.dof);
+  if (!scale.correlated) {
+    cached = scale.source == SigmaSource::tracker
+                 ? math::chi_square_upper_quantile(scale.unit_alpha, m)
+                 : m * math::f_upper_quantile(scale.unit_alpha, m, fitted ? scale.dof - m : scale.dof);
+    return cached;
+  }
+  const double spread = scale.spread[rows];
+  const double h = m / spread;
+  cached = spread * (scale.source == SigmaSource::tracker
+                         ? math::chi_square_upper_quantile(scale.unit_alpha, h)
+                         : h * math::f_upper_quantile(scale.unit_alpha, h, fitted ? scale.dof - m : scale.dof));
   return cached;
+}
+
+/// The correlation of the residual rows of a pose's readings (row k: reading k / 3 of the
+/// pose, axis k % 3) pooled over the fitted poses of several readings into ws->correlation;
+/// false when a pair of rows has fewer than kMinPooledPoses poses. Only one axis between
+/// readings: the axes stay independent, as in the test of a pose of one reading (and the
+/// correlation a proper one, positive semi-definite). Why: on a real arm the
+/// model error moves every reflector of a pose, and the points a measured orientation adds,
+/// alike; tested as independent rows, a pose whose error is merely large among its
+/// neighbours' looks like a blunder of every reading at once.
+[[gnu::noinline]] bool pool_correlation(const Fit& fit, Span<const Sample> samples, ReliabilityWorkspace* ws) {
+  UnitMatrix& sum = ws->correlation;
+  UnitMatrix& pairs = ws->hat;  // the poses each entry sums over (the units' hat blocks come after)
+  sum.setZero();
+  pairs.setZero();
+  for (std::size_t begin = 0; begin < samples.size();) {
+    const std::size_t end = unit_end(samples, begin, fit.grouped);
+    const int rows = 3 * static_cast<int>(end - begin);
+    for (std::size_t s = begin; s < end && rows > 3; ++s) {
+      Mat3 tool_jacobian;
+      double raw_squared_m2 = 0.0;
+      const Vec3 residual_m = sample_rows(fit.model, fit.base, samples[s], fit.loss, fit.kept, &ws->jacobian,
+                                          &tool_jacobian, &raw_squared_m2);
+      for (int axis = 0; axis < 3; ++axis) ws->residual_m[3 * static_cast<int>(s - begin) + axis] = residual_m(axis);
+    }
+    for (int i = 0; i < rows && rows > 3; ++i) {
+      for (int j = 0; j < rows; ++j) {
+        sum(i, j) += ws->residual_m[i] * ws->residual_m[j];
+        pairs(i, j) += 1.0;
+      }
+    }
+    begin = end;
+  }
+  if (!(pairs(0, 3) >= static_cast<double>(kMinPooledPoses))) return false;  // not a set of several readings
+  for (int i = 0; i < kMaxUnitRows; ++i) {
+    for (int j = 0; j < kMaxUnitRows; ++j) {
+      if (pairs(i, j) > 0.0 && pairs(i, j) < static_cast<double>(kMinPooledPoses)) return false;
+    }
+  }
+  double variance[kMaxUnitRows] = {};
+  for (int i = 0; i < kMaxUnitRows; ++i) variance[i] = pairs(i, i) > 0.0 ? sum(i, i) / pairs(i, i) : 0.0;
+  for (int i = 0; i < kMaxUnitRows; ++i) {
+    for (int j = 0; j < kMaxUnitRows; ++j) {
+      const double scale = std::sqrt(variance[i] * variance[j]);
+      const bool pooled = i != j && i % 3 == j % 3 && pairs(i, j) > 0.0 && scale > 0.0;  // an axis between readings
+      sum(i, j) = pooled ? sum(i, j) / pairs(i, j) / scale : (i == j ? 1.0 : 0.0);
+    }
+  }
+  return true;
 }
 
 /// Tests one unit whose hat block and residual rows are in the workspace (the block is
@@ -167,7 +232,7 @@ UnitTest test_unit(const Scale& scale, const BlunderTestOptions& o, bool fitted,
   const bool can_test = !(fitted && scale.source == SigmaSource::data && scale.dof - n < 1.0);
   t.controlled = can_test && (!fitted || t.redundancy >= o.min_redundancy) && small_cholesky(&q, n);
   if (!t.controlled) return t;
-  const double quadratic_m2 = factored_quadratic(q, ws->residual_m, n);
+  const double quadratic_m2 = factored_quadratic(q, ws->residual_m, n);  // what leaving the unit out takes off the SSR
   double variance_m2 = scale.sigma_m * scale.sigma_m;
   if (scale.source == SigmaSource::data && fitted) {  // the others' sigma: the unit's own residual left out
     variance_m2 = std::fmax(scale.ssr_m2 - quadratic_m2, 0.0) / (scale.dof - static_cast<double>(n));
@@ -175,7 +240,13 @@ UnitTest test_unit(const Scale& scale, const BlunderTestOptions& o, bool fitted,
   const double critical = critical_statistic(scale, n, fitted);
   t.w = variance_m2 > 0.0 ? std::sqrt(quadratic_m2 / variance_m2) : 0.0;
   t.critical_w = std::sqrt(critical);
-  if (fitted) t.mdb_m = scale.sigma_m * std::sqrt(math::detectable_noncentrality(critical, n) / t.redundancy);
+  if (fitted && !scale.correlated) {
+    t.mdb_m = scale.sigma_m * std::sqrt(math::detectable_noncentrality(critical, n) / t.redundancy);
+  } else if (fitted) {  // a bias lambda moves the statistic by about lambda / spread in its own scale
+    const double spread = scale.spread[n];
+    const double lambda0 = spread * math::detectable_noncentrality(critical / spread, static_cast<double>(n) / spread);
+    t.mdb_m = scale.sigma_m * std::sqrt(lambda0 / t.redundancy);
+  }
   return t;
 }
 
@@ -255,6 +326,11 @@ Status test_for_blunders(const RobotModel& model, const RigidTransform& base, Sp
   scale.sigma_m = from_data ? summary->fit_sigma_m : options.tracker_sigma_m;
   summary->sigma_source = scale.source;
   summary->sigma_m = scale.sigma_m;
+  scale.correlated = from_data && fit.grouped && pool_correlation(fit, fitted, &ws);
+  summary->pooled_correlation = scale.correlated;
+  for (int n = 1; n <= kMaxUnitRows && scale.correlated; ++n) {
+    scale.spread[n] = ws.correlation.topLeftCorner(n, n).squaredNorm() / static_cast<double>(n);
+  }
   visit_units(fit, scale, options, fitted, true, &ws, visitor, summary);
   visit_units(fit, scale, options, predicted, false, &ws, visitor, summary);
   return Status::ok;

@@ -172,6 +172,100 @@ TEST(Reliability, ABlunderAboveItsDetectableBiasIsTheWorstPose) {
   }
 }
 
+/// `poses` poses of three reflectors on a plate, each pose moved as a whole by an error of
+/// `shared_m` per axis (what an unmodelled effect does to every reflector of a pose alike) and
+/// each reading by the tracker's 10 um; `blunder_m` added to reading `blunder_target` of pose
+/// `blunder_pose` (all three when -1). LM fits them, tool points included.
+Dataset<600> plate_dataset;
+void fit_shared_error_set(std::uint64_t seed, std::size_t poses, double shared_m, std::size_t blunder_pose = 0,
+                          int blunder_target = 0, double blunder_m = 0.0) {
+  const RobotModel model = test::with_plate(truth(seed), Vec3(0.01, 0.02, 0.1));
+  Random random(900 + seed);
+  plate_dataset.clear();
+  for (std::size_t i = 0; i < poses; ++i) {
+    const JointVector q = test::random_joints(&random);
+    const Vec3 shared = shared_m * test::gaussian_vector(&random);
+    for (int target = 0; target < 3; ++target) {
+      Vec3 point = test::example_base_to_tracker().apply(fk_target_point(model, q, target)) + shared +
+                   10e-6 * test::gaussian_vector(&random);
+      if (i == blunder_pose && (blunder_target < 0 || blunder_target == target))
+        point += Vec3(0.6, -0.8, 0.0) * blunder_m;
+      ASSERT_EQ(plate_dataset.add(q, point, target), Status::ok);
+    }
+  }
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = model.tool_m;
+  ASSERT_EQ(calibrate_lm(start, nullptr, plate_dataset.samples(), LmOptions{}, &lm_workspace, &fit), Status::ok);
+}
+
+BlunderTestSummary test_plate_fit(Collect* collect) {
+  BlunderTestSummary summary;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = test_for_blunders(fit.model, fit.base_to_tracker, plate_dataset.samples(),
+                                            Span<const Sample>(), fit.identifiability.kept_mask | kOtherTargetTools,
+                                            PointLoss{}, BlunderTestOptions{}, &reliability, collect, &summary));
+  EXPECT_EQ(status, Status::ok);
+  return summary;
+}
+
+TEST(Reliability, ReadingsOfAPoseThatShareTheirErrorAreNotBlundersTogether) {
+  // A real arm's residual is mostly model error, and it moves every reflector of a pose alike
+  // (and the points a measured orientation adds): the pose's 9 rows are then one error three
+  // times, whose statistic is 3 chi2(3), not chi2(9). Tested as independent rows, 0.2 mm per
+  // axis set aside 1-2 of the 120 poses on 3 of these 8 seeds (checked); with the readings'
+  // correlation pooled over the poses, none.
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    fit_shared_error_set(seed, 120, 0.2e-3);
+    Collect collect;
+    const BlunderTestSummary summary = test_plate_fit(&collect);
+    EXPECT_TRUE(summary.pooled_correlation) << seed;
+    EXPECT_EQ(summary.sigma_source, SigmaSource::data) << seed;
+    EXPECT_EQ(summary.rejected, 0u) << seed;
+    ASSERT_EQ(collect.units.size(), 120u);
+    // The threshold of 3 chi2(3) at alpha / n = 8.3e-6, sqrt(3 x 26.5) = 8.9, not chi2(9)'s 6.4.
+    EXPECT_GT(collect.units[0].critical_w, 8.7) << seed;
+    EXPECT_LT(collect.units[0].critical_w, 9.2) << seed;
+  }
+}
+
+TEST(Reliability, ReadingsWithTheirOwnErrorsKeepTheIndependentTest) {
+  // Tracker noise only: the pooled correlation is ~0 (+- 1/sqrt(n)), and the threshold that of
+  // 9 independent rows, sqrt(9 F(9, dof - 9)) at alpha / n = 8.3e-6: 6.4.
+  fit_shared_error_set(3, 120, 0.0);
+  Collect collect;
+  const BlunderTestSummary summary = test_plate_fit(&collect);
+  EXPECT_TRUE(summary.pooled_correlation);
+  EXPECT_EQ(summary.rejected, 0u);
+  EXPECT_GT(collect.units[0].critical_w, 6.3);
+  EXPECT_LT(collect.units[0].critical_w, 6.5);
+}
+
+TEST(Reliability, ABlunderAmongPosesThatShareTheirErrorIsFound) {
+  // 0.2 mm of shared error per axis: a 3 mm blunder on the whole pose, or on one of its
+  // reflectors, is the worst pose and rejected.
+  for (int target : {-1, 0, 2}) {
+    fit_shared_error_set(5, 120, 0.2e-3, 37, target, 3e-3);
+    Collect collect;
+    const BlunderTestSummary summary = test_plate_fit(&collect);
+    std::size_t worst = 0;
+    for (std::size_t k = 0; k < collect.units.size(); ++k) {
+      if (collect.units[k].w > collect.units[worst].w) worst = k;
+    }
+    EXPECT_EQ(worst, 37u) << target;
+    EXPECT_TRUE(collect.units[37].rejected())
+        << target << ": w " << collect.units[37].w << " critical " << collect.units[37].critical_w;
+    EXPECT_EQ(summary.rejected, 1u) << target;
+  }
+}
+
+TEST(Reliability, FewPosesOfSeveralReadingsAreTestedAsIndependent) {
+  // Below kMinPooledPoses poses a correlation is too uncertain to pool: the rows as independent.
+  fit_shared_error_set(2, kMinPooledPoses - 1, 0.2e-3);
+  Collect collect;
+  const BlunderTestSummary summary = test_plate_fit(&collect);
+  EXPECT_FALSE(summary.pooled_correlation);
+}
+
 TEST(Reliability, TooLittleRedundancyUsesTheTrackersSigma) {
   Random random(3);
   const RobotModel model = truth(3);

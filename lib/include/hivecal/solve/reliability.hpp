@@ -54,7 +54,10 @@ struct UnitTest {
   double redundancy =
       0.0;         ///< r = 1 - trace(H_uu) / rows: the share of a blunder its residual shows (predicted: 1) [-]
   double w = 0.0;  ///< sqrt(e^T Q^-1 e) / sigma, Q = I - H_uu (fitted) or I + H_uu (predicted) [-]
-  double critical_w = 0.0;  ///< w above which the unit is a blunder at the stated significance [-]
+  /// w above which the unit is a blunder at the stated significance; for a pose of several
+  /// readings tested on the data's sigma, with their correlation pooled over the fitted poses
+  /// (BlunderTestSummary::pooled_correlation) [-]
+  double critical_w = 0.0;
   double residual_m = 0.0;  ///< largest 3-D residual of its samples [m]
   double mdb_m = 0.0;       ///< minimal detectable bias (power 80 %): sigma sqrt(lambda0 / r); 0 when uncontrolled [m]
 
@@ -83,7 +86,14 @@ struct BlunderTestSummary {
   std::size_t fitted_units = 0;  ///< units in the fit [-]
   std::size_t uncontrolled = 0;  ///< fitted units below min_redundancy [-]
   std::size_t rejected = 0;      ///< controlled units above their critical w [-]
+  /// The readings of one pose were tested with their correlation pooled over the fitted poses
+  /// (several readings per pose, the data's sigma, at least kMinPooledPoses poses).
+  bool pooled_correlation = false;
 };
+
+/// Fitted poses a correlation between two readings of a pose is pooled over at least: below it,
+/// its standard error (~1/sqrt(n)) passes 0.18 and the readings are tested as independent [-].
+inline constexpr std::size_t kMinPooledPoses = 30;
 
 /// Scratch of the test (~24 kB): in the caller's memory plan, not on a small stack.
 struct ReliabilityWorkspace {
@@ -94,12 +104,14 @@ struct ReliabilityWorkspace {
   Eigen::Matrix<double, kMaxUnitRows, kFullParamCount> rows;  ///< a unit's scaled rows, Schur-reduced
   Eigen::Matrix<double, kMaxUnitRows, kFullParamCount> solved;  ///< the same through the inverse normal matrix
   Eigen::Matrix<double, kMaxUnitRows, kMaxUnitRows> hat;        ///< the unit's hat block H_uu, then I -+ H_uu factored
-  Eigen::Matrix<double, kMaxUnitRows, 3> tool_rows;             ///< its rows' own tool Jacobian t (other targets)
-  Eigen::Matrix<double, kMaxUnitRows, 3> tool_solved;           ///< D^-1 t^T per row
-  double residual_m[kMaxUnitRows] = {};                         ///< its residual rows [m]
-  FullJacobian jacobian;                                        ///< one sample's rows
-  FullParams row;                                               ///< one row, scaled
-  FullParams row_solved;                                        ///< H^-1 times it
+  Eigen::Matrix<double, kMaxUnitRows, kMaxUnitRows>
+      correlation;  ///< the readings' pooled correlation (row k: reading k / 3, axis k % 3)
+  Eigen::Matrix<double, kMaxUnitRows, 3> tool_rows;    ///< its rows' own tool Jacobian t (other targets)
+  Eigen::Matrix<double, kMaxUnitRows, 3> tool_solved;  ///< D^-1 t^T per row
+  double residual_m[kMaxUnitRows] = {};                ///< its residual rows [m]
+  FullJacobian jacobian;                               ///< one sample's rows
+  FullParams row;                                      ///< one row, scaled
+  FullParams row_solved;                               ///< H^-1 times it
 };
 
 /// Tests the units of `fitted` (the samples a least-squares fit at (model, base) used, with the
