@@ -418,14 +418,25 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
     BlunderTestSummary summary;
     test_final_calibration(r, dataset, run.options, workspace.get(), &tests, &summary);
   }
-  for (const CalibrationOutlier& o : r.outlier_list()) {
-    char line[300];
+  // One line per source: the samples a row of a measured orientation makes (its point and
+  // targets 2, 3) come from one line and go together, said once with their largest residual.
+  const Span<const CalibrationOutlier> outliers = r.outlier_list();
+  for (std::size_t k = 0; k < outliers.size();) {
+    const std::string source = streams::sample_source(facts, outliers[k].index);
+    const CalibrationOutlier& first = outliers[k];
+    double largest_m = first.residual_m;
+    std::size_t end = k + 1;
+    for (; end < outliers.size() && streams::sample_source(facts, outliers[end].index) == source; ++end) {
+      largest_m = std::max(largest_m, outliers[end].residual_m);
+    }
+    const std::string named = end - k > 1 ? source + " (" + std::to_string(end - k) + " samples)" : source;
+    char line[400];
     std::snprintf(line, sizeof line,
                   "set aside as a blunder: %s, residual %s mm, w %.2f > %.2f (alpha %.2g %% for the set)",
-                  streams::sample_source(facts, o.index).c_str(), format_mm(o.residual_m).c_str(), o.w, o.critical_w,
-                  table.alpha * 100.0);
+                  named.c_str(), format_mm(largest_m).c_str(), first.w, first.critical_w, table.alpha * 100.0);
     data->info_lines.push_back(line);
-    table.rows.push_back({streams::sample_source(facts, o.index), o.residual_m, o.w});
+    table.rows.push_back({named, largest_m, first.w});
+    k = end;
   }
   if (table.searched && table.pooled_correlation) {
     char line[300];

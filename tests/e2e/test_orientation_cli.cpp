@@ -194,6 +194,37 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   }
 }
 
+// The UR10 T-Mac export with its orientation through the command line: a bad row is named
+// once by its line, with the samples it made (its point and targets 2, 3), and the console
+// says that the readings of a pose were tested as sharing their error.
+TEST(OrientationCli, TMacBadRowsAreNamedOncePerLine) {
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur10-tmac/measurements_joint_configurations.csv");
+  const std::string export_path = test::shared_data_path("ur10-tmac/measurements_joint_configurations.csv");
+  const test::TempDir dir("hivecal_tmac_cli");
+  ASSERT_FALSE(dir.path().empty());
+  const std::string result = dir.path() + "/result.json";
+  ASSERT_EQ(
+      run(cli::calibrate_main, {"--samples", export_path, "--robot-model", "ur10", "--tool", "0,0,0.109", "--columns",
+                                "x=measurement_x[mm],y=measurement_y[mm],z=measurement_z[mm],rx=measurement_rx[deg],"
+                                "ry=measurement_ry[deg],rz=measurement_rz[deg]",
+                                "--orientation-form", "euler-xyz", "--quiet", "--out", result}),
+      0);
+  const std::string json = read_text(result);
+  const auto count = [&json](const std::string& text) {
+    std::size_t n = 0;
+    for (std::size_t at = json.find(text); at != std::string::npos; at = json.find(text, at + 1)) ++n;
+    return n;
+  };
+  for (const char* line : {"534", "856", "857"}) {
+    const std::string named = "measurements_joint_configurations.csv:" + std::string(line);
+    EXPECT_EQ(count("set aside as a blunder: " + export_path + ":" + line + " (3 samples), residual "), 1u) << line;
+    EXPECT_EQ(count(named + " (3 samples)\""), 1u) << line;  // the report's table: one row
+  }
+  EXPECT_EQ(json.find("csv:1065"), std::string::npos);  // a pose as far off as its neighbours stays
+  EXPECT_NE(json.find("blunder test: the readings of a pose share their error"), std::string::npos);
+  EXPECT_NE(json.find("\"pooled_correlation\": true"), std::string::npos);
+}
+
 // Compliance and harmonics on 12 poses of an arm whose readings are its controller's rigid FK:
 // the significance test keeps terms that fit the pendant's rounding, and the check on left-out
 // poses rejects every one; the result predicts as the rigid fit does, to the byte.
