@@ -389,8 +389,10 @@ class PoseTests final : public UnitTestVisitor {
       table_->uncontrolled.push_back(streams::sample_source(facts_, t.index));
     } else if (t.controlled && std::find(aside_.begin(), aside_.end(), t.index) == aside_.end()) {
       table_->kept_w.push_back(t.w);
+      if (t.fitted && t.rejected()) kept_failing.push_back(t);
     }
   }
+  std::vector<UnitTest> kept_failing;  ///< kept training poses above their threshold (BlunderVerdict::at_threshold)
 
  private:
   const streams::SessionFacts& facts_;
@@ -417,6 +419,14 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
     PoseTests tests(facts, std::move(aside), &table);
     BlunderTestSummary summary;
     test_final_calibration(r, dataset, run.options, workspace.get(), &tests, &summary);
+    for (const UnitTest& t : tests.kept_failing) {
+      char line[400];
+      std::snprintf(line, sizeof line,
+                    "kept at the threshold: %s, w %.2f > %.2f while fitted, below it when left out (the split moves "
+                    "with it, run after run): not set aside",
+                    streams::sample_source(facts, t.index).c_str(), t.w, t.critical_w);
+      data->info_lines.push_back(line);
+    }
   }
   // One line per source: the samples a row of a measured orientation makes (its point and
   // targets 2, 3) come from one line and go together, said once with their largest residual.

@@ -529,6 +529,10 @@ std::string outlier_html(const OutlierTable& o) {
     s += "The readings of a pose share their error (their correlation pooled over the poses): a pose is tested as one "
          "error seen several times, not as independent readings. ";
   }
+  if (o.verdict == "at_threshold") {
+    s += "A pose at the threshold fails the test while fitted and passes when left out (the split moves with it): "
+         "kept, named in the information above. ";
+  }
   if (o.verdict == "model_error") {
     s += "More poses fail than a blunder explains: the model, not the data, is wrong (unmodelled effects); none "
          "removed. ";

@@ -220,9 +220,13 @@ enum class BlunderVerdict : std::uint8_t {
   model_error,  ///< more than max_blunder_share of the poses failed: the model, not the data, is wrong; none removed by
                 ///< the test
   list_full,    ///< more blunders than kMaxCalibrationOutliers: the largest are set aside
+  /// a pose fails the test while fitted and passes when left out (the split moves with it),
+  /// run after run: kept, with those in `outliers` (failed both ways) set aside
+  at_threshold,
 };
 
-/// Lower-case name of a verdict ("not_searched", "clean", "removed", "model_error", "list_full").
+/// Lower-case name of a verdict ("not_searched", "clean", "removed", "model_error", "list_full",
+/// "at_threshold").
 const char* blunder_verdict_name(BlunderVerdict verdict);
 
 /// Blunders a job sets aside at most; a larger share of a set is not a blunder problem [-].

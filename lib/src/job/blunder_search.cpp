@@ -66,6 +66,18 @@ bool same_indices(const CalibrationOutlierList& a, const CalibrationOutlierList&
   return true;
 }
 
+void keep_common(const CalibrationOutlierList& other, CalibrationOutlierList* list) {
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < list->count; ++i) {
+    bool common = false;
+    for (std::size_t k = 0; k < other.count; ++k) common = common || other.indices[k] == list->indices[i];
+    if (!common) continue;
+    list->items[kept] = list->items[i];
+    list->indices[kept++] = list->indices[i];
+  }
+  list->count = kept;
+}
+
 namespace {
 
 /// At most this share of the samples is ever set aside: a blunder is a minority.

@@ -14,6 +14,9 @@ Span<const std::uint32_t> index_span(const CalibrationOutlierList& list);
 /// Whether two finished lists hold the same samples.
 bool same_indices(const CalibrationOutlierList& a, const CalibrationOutlierList& b);
 
+/// Keeps in the finished *list only the samples `other` (finished) holds too.
+void keep_common(const CalibrationOutlierList& other, CalibrationOutlierList* list);
+
 /// Consensus screen with the start geometry: the base fitted on random point triples (seeded,
 /// deterministic), the one with the least median residual over all samples kept (LMedS), and
 /// the samples far from it into *list. Errors: degenerate_geometry when no triple spans a

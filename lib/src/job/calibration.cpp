@@ -20,6 +20,7 @@ namespace {
 using detail::blunder_limit;
 using detail::blunder_test_loss;
 using detail::index_span;
+using detail::keep_common;
 using detail::same_indices;
 using detail::screen;
 using detail::search_blunders;
@@ -877,6 +878,7 @@ const char* blunder_verdict_name(BlunderVerdict verdict) {
     case BlunderVerdict::removed: return "removed";
     case BlunderVerdict::model_error: return "model_error";
     case BlunderVerdict::list_full: return "list_full";
+    case BlunderVerdict::at_threshold: return "at_threshold";
   }
   return "unknown";
 }
@@ -949,6 +951,18 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
     if (verdict == BlunderVerdict::not_searched || same_indices(tested, aside) || round == kMaxRounds) break;
     aside = tested;
   }
+  // No agreement: a pose at the threshold fails the test while fitted and passes when left out
+  // (the split moves with it), round after round. What the last two tests did not both flag is
+  // kept (a blunder is never made up), and the final run and test are of that set; a pose the
+  // final test still flags stays, and the verdict says so.
+  const bool undecided = verdict != BlunderVerdict::not_searched && !same_indices(tested, aside);
+  if (undecided) {
+    keep_common(tested, &aside);
+    status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
+    if (status != Status::ok) return status;
+    ++round;
+    verdict = search_blunders(dataset, options, *workspace, *result, &tested, &summary);
+  }
   // The residuals reported are the final calibration's (of the set the run left out), the w
   // the last test's.
   CalibrationResult& r = *result;
@@ -966,6 +980,9 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
     }
   }
   r.blunder_verdict = r.outlier_count > 0 && verdict == BlunderVerdict::clean ? BlunderVerdict::removed : verdict;
+  if (undecided && verdict == BlunderVerdict::clean && !same_indices(tested, aside)) {
+    r.blunder_verdict = BlunderVerdict::at_threshold;
+  }
   r.blunder_test = summary;
   r.blunder_limit = blunder_limit(*dataset, options);
   r.outlier_rounds = round;

@@ -65,5 +65,95 @@ TEST(CalibrationTargets, TargetsTwoAndThreeAreEstimatedWhenTheSignificanceTestFi
   EXPECT_GE(pruned_runs, 2);
 }
 
+// Three reflectors on an arm whose joints carry what the rigid model cannot take (an elbow
+// and a wrist that turn up to 0.5 mrad more than they read, once and twice per turn): after the
+// rigid fit each pose keeps ~0.1 mm per axis of error that moves its three reflectors alike. That
+// is model error, not blunders: the default job sets no pose aside, and still names a 3 mm
+// blunder. As independent readings (checked) the test found more than 5 % of the poses failing
+// on seed 1, called the model wrong, and with that set nothing aside: the 3 mm blunder too.
+constexpr std::size_t kPlatePoses = 100;
+Dataset<3 * kPlatePoses> plate;
+CalibrationWorkspace<3 * kPlatePoses> plate_workspace;
+
+void fill_plate_with_model_error(std::uint64_t seed, std::size_t blunder_pose, double blunder_m) {
+  Random random(seed);
+  const RobotModel truth =
+      test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
+  const RigidTransform base = test::example_base_to_tracker();
+  plate.clear();
+  for (std::size_t i = 0; i < kPlatePoses; ++i) {
+    const JointVector q = test::random_joints(&random);
+    JointVector turned = q;  // libm here, not the library's: the truth is the simulator's
+    turned(2) += 5e-4 * std::sin(q(2)) + 3e-4 * std::cos(2.0 * q(2));
+    turned(3) += 4e-4 * std::cos(q(3));
+    for (int target = 0; target < 3; ++target) {
+      Vec3 point = base.apply(fk_target_point(truth, turned, target)) + 1e-5 * test::gaussian_vector(&random);
+      if (i == blunder_pose) point += Vec3(0.0, 0.0, blunder_m);
+      ASSERT_EQ(plate.add(q, point, target), Status::ok);
+    }
+  }
+}
+
+TEST(CalibrationTargets, ModelErrorSharedByAPosesReflectorsIsNotABlunder) {
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    fill_plate_with_model_error(seed, kPlatePoses, 0.0);
+    RobotModel start = nominal_model(RobotType::ur5);
+    start.tool_m = kTool_m;
+    const CalibrationOptions options;  // the command line's defaults: ABC+LM, 70/30 split
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(start, &plate, options, &plate_workspace, &result));
+    ASSERT_EQ(status, Status::ok) << calibration_step_name(result.step);
+    std::printf("seed %d: fit sigma %.4f mm, %s, %zu set aside\n", static_cast<int>(seed),
+                result.blunder_test.fit_sigma_m * 1e3,
+                result.blunder_test.pooled_correlation ? "pooled" : "independent", result.outlier_count);
+    EXPECT_GT(result.blunder_test.fit_sigma_m, 5e-5) << seed;  // the model error dominates the 10 um noise
+    EXPECT_TRUE(result.blunder_test.pooled_correlation) << seed;
+    EXPECT_EQ(result.outlier_count, 0u) << seed;
+    // Seed 2 has a pose at the threshold (the test below); the others none.
+    EXPECT_EQ(result.blunder_verdict, seed == 2 ? BlunderVerdict::at_threshold : BlunderVerdict::clean) << seed;
+
+    fill_plate_with_model_error(seed, 17, 3e-3);
+    ASSERT_EQ(calibrate(start, &plate, options, &plate_workspace, &result), Status::ok);
+    ASSERT_EQ(result.outlier_count, 3u) << seed;  // the pose: its three samples
+    for (const CalibrationOutlier& o : result.outlier_list()) EXPECT_EQ(o.index / 3, 17u) << seed;
+  }
+}
+
+/// Each pose's test under the final calibration, by its first sample's index.
+class FailingPoses final : public UnitTestVisitor {
+ public:
+  void on_unit(const UnitTest& t) override {
+    if (t.rejected()) failing[failing_count++ % 8] = t;
+  }
+  UnitTest failing[8];
+  std::size_t failing_count = 0;
+};
+
+// A pose whose w is just above its threshold while fitted (8.69 against 8.62) and below it when
+// left out: setting it aside moves the 70/30 split of the others, and the next run flags it
+// again. The job used to stop after 4 such runs with the pose set aside though its last test
+// had not flagged it (w reported 0). Now what the last two tests did not both flag is kept, the
+// final run is of that set, and the verdict says so: nothing set aside, the pose named by the
+// final test as a kept one above its threshold.
+TEST(CalibrationTargets, APoseAtTheThresholdIsKeptAndSaidSo) {
+  fill_plate_with_model_error(2, kPlatePoses, 0.0);
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = kTool_m;
+  const CalibrationOptions options;
+  ASSERT_EQ(calibrate(start, &plate, options, &plate_workspace, &result), Status::ok);
+  EXPECT_EQ(result.blunder_verdict, BlunderVerdict::at_threshold);
+  EXPECT_EQ(result.outlier_count, 0u);
+  EXPECT_GT(result.outlier_rounds, 4u);  // the runs that did not agree, and the final one
+  static ReliabilityWorkspace reliability;
+  FailingPoses failing;
+  BlunderTestSummary summary;
+  ASSERT_EQ(test_final_calibration(result, plate, options, &reliability, &failing, &summary), Status::ok);
+  ASSERT_EQ(failing.failing_count, 1u);
+  EXPECT_TRUE(failing.failing[0].fitted);
+  EXPECT_EQ(failing.failing[0].index, 243u);  // pose 81, its three samples
+  EXPECT_EQ(failing.failing[0].samples, 3u);
+  EXPECT_LT(failing.failing[0].w, 1.02 * failing.failing[0].critical_w);
+}
+
 }  // namespace
 }  // namespace hivecal::calibration_targets_test
