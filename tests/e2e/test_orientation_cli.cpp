@@ -24,12 +24,6 @@ namespace {
 
 using test::run;
 
-std::string read_text(const std::string& path) {
-  std::string text;
-  EXPECT_TRUE(port::read_whole_file(path, port::kMaxTextInputBytes, &text).ok()) << path;
-  return text;
-}
-
 /// The first `count` comma-separated fields of `line`, joined by commas.
 std::string first_fields(const std::string& line, int count) {
   std::size_t end = 0;
@@ -72,7 +66,7 @@ struct PendantSplit {
 };
 
 void split_pendant_export(PendantSplit* split) {
-  const std::string file = read_text(test::shared_data_path("ur5e-pendant/joint-eef-data.csv"));
+  const std::string file = test::read_text_file(test::shared_data_path("ur5e-pendant/joint-eef-data.csv"));
   std::vector<std::string> lines;
   std::istringstream in(file);
   for (std::string line; std::getline(in, line);) {
@@ -116,7 +110,7 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   std::vector<std::string> args = common;
   args.insert(args.end(), {"--out", result});
   ASSERT_EQ(run(cli::calibrate_main, args), 0);
-  const std::string json = read_text(result);
+  const std::string json = test::read_text_file(result);
   EXPECT_NE(json.find("\"orientation\": {"), std::string::npos);
   EXPECT_NE(json.find("\"poses\": 12"), std::string::npos);
   // The lever from the noise: the joints written to 0.01 deg move the point far more than they
@@ -129,7 +123,7 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   EXPECT_NE(json.find("\"tools\""), std::string::npos);
 
   ASSERT_EQ(run(cli::predict_main, {"--calibration", result, "--joints", joints, "--out", predicted}), 0);
-  const double mae_m = held_out_mae_m(read_text(predicted), truth_m);
+  const double mae_m = held_out_mae_m(test::read_text_file(predicted), truth_m);
   std::printf("calibrate + predict on the pendant export, with orientation: held-out MAE %.4f mm\n", mae_m * 1e3);
   EXPECT_LT(mae_m, 0.075e-3);  // the job's 0.0725 mm (0.0887 mm at the sigmas' 0.01 m, below)
 
@@ -138,10 +132,10 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   args = common;
   args.insert(args.end(), {"--out", at_sigmas, "--orientation-lever-m", "0.01"});
   ASSERT_EQ(run(cli::calibrate_main, args), 0);
-  EXPECT_NE(read_text(at_sigmas).find("\"lever_m\": 0.01,"), std::string::npos);
-  EXPECT_EQ(read_text(at_sigmas).find("lever_joint_sigma_rad"), std::string::npos);
+  EXPECT_NE(test::read_text_file(at_sigmas).find("\"lever_m\": 0.01,"), std::string::npos);
+  EXPECT_EQ(test::read_text_file(at_sigmas).find("lever_joint_sigma_rad"), std::string::npos);
   ASSERT_EQ(run(cli::predict_main, {"--calibration", at_sigmas, "--joints", joints, "--out", predicted}), 0);
-  const double sigmas_mae_m = held_out_mae_m(read_text(predicted), truth_m);
+  const double sigmas_mae_m = held_out_mae_m(test::read_text_file(predicted), truth_m);
   std::printf("the same at the sigmas' lever of 0.01 m: held-out MAE %.4f mm\n", sigmas_mae_m * 1e3);
   EXPECT_GT(sigmas_mae_m, mae_m);
 
@@ -149,7 +143,7 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   args = common;
   args.insert(args.end(), {"--out", positions, "--orientation-lever-m", "0"});
   ASSERT_EQ(run(cli::calibrate_main, args), 0);
-  EXPECT_EQ(read_text(positions).find("\"orientation\""), std::string::npos);
+  EXPECT_EQ(test::read_text_file(positions).find("\"orientation\""), std::string::npos);
   // Stated sigmas must be positive.
   args = common;
   args.insert(args.end(), {"--out", positions, "--angle-sigma-rad", "0"});
@@ -161,7 +155,7 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   args = common;
   args.insert(args.end(), {"--out", whitened, "--joint-sigma-deg", "0.01"});
   ASSERT_EQ(run(cli::calibrate_main, args), 0);
-  const std::string whitened_json = read_text(whitened);
+  const std::string whitened_json = test::read_text_file(whitened);
   EXPECT_NE(whitened_json.find("\"joint_sigma_rad\": 0.000174532925199"), std::string::npos);
   EXPECT_NE(whitened_json, json);
   for (const char* bad : {"-0.01", "60"}) {
@@ -179,12 +173,12 @@ TEST(OrientationCli, PendantExportCalibratesWithItsOrientationAndSaysSo) {
   args = common;
   args.insert(args.end(), {"--out", tcp, "--controller-tcp"});
   ASSERT_EQ(run(cli::calibrate_main, args), 0);
-  const std::string tcp_json = read_text(tcp);
+  const std::string tcp_json = test::read_text_file(tcp);
   EXPECT_NE(tcp_json.find("\"known\": \"base (identity) and tool points"), std::string::npos);
   EXPECT_NE(tcp_json.find("known (--controller-tcp): the base (identity)"),
             std::string::npos);  // the report's info lines
   ASSERT_EQ(run(cli::predict_main, {"--calibration", tcp, "--joints", joints, "--out", predicted}), 0);
-  const double tcp_mae_m = held_out_mae_m(read_text(predicted), truth_m);
+  const double tcp_mae_m = held_out_mae_m(test::read_text_file(predicted), truth_m);
   std::printf("calibrate --controller-tcp + predict on the pendant export: held-out MAE %.4f mm\n", tcp_mae_m * 1e3);
   EXPECT_LT(tcp_mae_m, 0.065e-3);
   for (const char* method : {"abc+lm", "abc", "gsa+lm", "all"}) {
@@ -209,7 +203,7 @@ TEST(OrientationCli, TMacBadRowsAreNamedOncePerLine) {
                                 "ry=measurement_ry[deg],rz=measurement_rz[deg]",
                                 "--orientation-form", "euler-xyz", "--quiet", "--out", result}),
       0);
-  const std::string json = read_text(result);
+  const std::string json = test::read_text_file(result);
   const auto count = [&json](const std::string& text) {
     std::size_t n = 0;
     for (std::size_t at = json.find(text); at != std::string::npos; at = json.find(text, at + 1)) ++n;
@@ -246,7 +240,7 @@ TEST(OrientationCli, PendantExportRejectsEveryJointTermOnLeftOutPoses) {
   args = common;
   args.insert(args.end(), {"--out", dir.path() + "/terms.json", "--compliance", "--harmonics", "2"});
   ASSERT_EQ(run(cli::calibrate_main, args), 0);
-  const std::string json = read_text(dir.path() + "/terms.json");
+  const std::string json = test::read_text_file(dir.path() + "/terms.json");
   EXPECT_NE(json.find("compliance: the terms that passed the significance test do not predict left-out poses"),
             std::string::npos);
   EXPECT_NE(json.find("harmonics: the terms that passed the significance test do not predict left-out poses"),
@@ -265,7 +259,7 @@ TEST(OrientationCli, PendantExportRejectsEveryJointTermOnLeftOutPoses) {
     ASSERT_EQ(run(cli::predict_main,
                   {"--calibration", dir.path() + "/" + name + ".json", "--joints", joints, "--out", predicted}),
               0);
-    const std::string points = read_text(predicted);
+    const std::string points = test::read_text_file(predicted);
     if (rigid_points.empty()) {
       rigid_points = points;
       std::printf("pendant export, 12 poses, rigid: held-out MAE %.4f mm\n",

@@ -146,5 +146,30 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
   EXPECT_FALSE(record::read_calibration_json(mismatch, &again).ok());
 }
 
+// Three reflectors on an arm with joint errors no rigid model takes (testkit
+// fill_plate_with_joint_errors, seed 2): one pose sits at the blunder threshold, failing while
+// fitted and passing when left out. The command line keeps it, names it and says why, and the
+// result's verdict is at_threshold; a row set aside would have had to fail the final test.
+TEST(TargetsCli, APoseAtTheThresholdIsKeptAndNamedByItsLine) {
+  const test::TempDir dir("hivecal_threshold");
+  ASSERT_FALSE(dir.path().empty());
+  static Dataset<300> written;
+  written.clear();
+  const Vec3 tool_m(0.012, -0.006, 0.17);
+  test::fill_plate_with_joint_errors(2, 100, tool_m, 100, 0.0, &written);
+  const std::string samples = dir.write("plate.csv", textio::format_samples_csv(written.samples()));
+  const std::string result = dir.path() + "/result.json";
+  ASSERT_EQ(run(cli::calibrate_main, {"--samples", samples, "--robot-model", "ur5", "--tool", "0.012,-0.006,0.17",
+                                      "--quiet", "--out", result, "--report", dir.path() + "/report"}),
+            0);
+  const std::string json = test::read_text_file(result);
+  EXPECT_NE(json.find("\"blunder_verdict\": \"at_threshold\""), std::string::npos);
+  EXPECT_NE(json.find("kept at the threshold: " + samples + ":245, w 8."),
+            std::string::npos);  // pose 81: lines 245-247
+  EXPECT_EQ(json.find("set aside as a blunder"), std::string::npos);
+  EXPECT_NE(test::read_text_file(dir.path() + "/report/index.html").find("A pose at the threshold fails the test"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace hivecal::targets_cli_test

@@ -35,12 +35,6 @@ std::string g17(double v) {
   return buf;
 }
 
-std::string read_text(const std::string& path) {
-  std::string text;
-  EXPECT_TRUE(port::read_whole_file(path, port::kMaxTextInputBytes, &text).ok()) << path;
-  return text;
-}
-
 /// A CSV with every numeric field of the columns in [first, last] multiplied by `scale`
 /// (the header kept as it is: no unit in it).
 std::string scaled_csv(const std::string& text, std::size_t first, std::size_t last, double scale) {
@@ -106,8 +100,9 @@ class UnitsEndToEnd : public ::testing::Test {
         test::run(sim::simulate_main, {"--out-dir", *dir_, "--waypoints", "12", "--duration-s", "150", "--seed", "5"}),
         cli::kExitOk);
     // The same session with joints in degrees and points in millimetres, no unit in the headers.
-    ASSERT_TRUE(write(*dir_ + "/robot_deg.csv", scaled_csv(read_text(*dir_ + "/robot_joints.csv"), 1, 6, kDegPerRad)));
-    ASSERT_TRUE(write(*dir_ + "/tracker_mm.csv", scaled_csv(read_text(*dir_ + "/tracker.csv"), 1, 3, 1e3)));
+    ASSERT_TRUE(write(*dir_ + "/robot_deg.csv",
+                      scaled_csv(test::read_text_file(*dir_ + "/robot_joints.csv"), 1, 6, kDegPerRad)));
+    ASSERT_TRUE(write(*dir_ + "/tracker_mm.csv", scaled_csv(test::read_text_file(*dir_ + "/tracker.csv"), 1, 3, 1e3)));
   }
   static void TearDownTestSuite() {
     std::system(("rm -rf '" + *dir_ + "'").c_str());
@@ -156,8 +151,8 @@ TEST_F(UnitsEndToEnd, SamplesInMillimetresAndDegreesCalibrateAsSiAndExtractTakes
                       {"--robot", path("robot_deg.csv"), "--tracker", path("tracker_mm.csv"), "--angle-unit", "deg",
                        "--length-unit", "mm", "--samples", path("samples_from_mmdeg.csv")}),
             cli::kExitOk);
-  const std::string si = read_text(path("samples.csv"));
-  const std::string from_mmdeg = read_text(path("samples_from_mmdeg.csv"));
+  const std::string si = test::read_text_file(path("samples.csv"));
+  const std::string from_mmdeg = test::read_text_file(path("samples_from_mmdeg.csv"));
   EXPECT_EQ(std::count(si.begin(), si.end(), '\n'), std::count(from_mmdeg.begin(), from_mmdeg.end(), '\n'));
   // Paired samples in mm and deg.
   std::string mmdeg = scaled_csv(si, 0, 5, kDegPerRad);
@@ -179,7 +174,7 @@ TEST_F(UnitsEndToEnd, PredictTakesJointsInDegrees) {
   ASSERT_EQ(calibrate({"--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--out", path("p.json")}),
             cli::kExitOk);
   // The first ten robot rows as poses (t,q1..q6), in rad and in degrees.
-  const std::string robot = read_text(path("robot_joints.csv"));
+  const std::string robot = test::read_text_file(path("robot_joints.csv"));
   std::size_t cut = 0;
   for (int line = 0; line < 11; ++line) cut = robot.find('\n', cut) + 1;
   ASSERT_TRUE(write(path("poses.csv"), robot.substr(0, cut)));
@@ -190,8 +185,8 @@ TEST_F(UnitsEndToEnd, PredictTakesJointsInDegrees) {
   ASSERT_EQ(test::run(cli::predict_main, {"--calibration", path("p.json"), "--joints", path("poses_deg.csv"),
                                           "--angle-unit", "deg", "--out", path("pred_deg.csv")}),
             cli::kExitOk);
-  const std::string a = read_text(path("pred_si.csv"));
-  const std::string b = read_text(path("pred_deg.csv"));
+  const std::string a = test::read_text_file(path("pred_si.csv"));
+  const std::string b = test::read_text_file(path("pred_deg.csv"));
   ASSERT_EQ(std::count(a.begin(), a.end(), '\n'), 11);
   double worst = 0.0;
   std::size_t ia = a.find('\n') + 1;
@@ -214,14 +209,14 @@ TEST_F(UnitsEndToEnd, FitBeyondTheBoundsWritesItsResultAndExitsFive) {
   ASSERT_EQ(calibrate({"--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--method", "lm",
                        "--max-change-mm", "0.001", "--out", path("warned.json")}),
             cli::kExitWarnings);
-  const std::string json = read_text(path("warned.json"));
+  const std::string json = test::read_text_file(path("warned.json"));
   EXPECT_NE(json.find("\"warnings\""), std::string::npos);
   EXPECT_NE(json.find("more than 0.001 mm (--max-change-mm)"), std::string::npos);
   (void)result_of(path("warned.json"));  // a complete, readable result
   ASSERT_EQ(calibrate({"--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--method", "lm", "--out",
                        path("quiet.json")}),
             cli::kExitOk);
-  EXPECT_EQ(read_text(path("quiet.json")).find("\"warnings\""), std::string::npos);
+  EXPECT_EQ(test::read_text_file(path("quiet.json")).find("\"warnings\""), std::string::npos);
   EXPECT_EQ(calibrate({"--robot", path("robot.cap"), "--tracker", path("tracker.cap"), "--max-change-deg", "0", "--out",
                        path("bad.json")}),
             cli::kExitUsage);

@@ -23,12 +23,17 @@ int run(Main entry, std::vector<std::string> args) {
   return entry(static_cast<int>(argv.size()), argv.data());
 }
 
+/// A text file a command wrote (a result, a prediction), whole; a gtest failure if unreadable.
+inline std::string read_text_file(const std::string& file) {
+  std::string text;
+  EXPECT_TRUE(port::read_whole_file(file, port::kMaxTextInputBytes, &text).ok()) << file;
+  return text;
+}
+
 /// A JSON file a command wrote (a result, a report's data), parsed; a gtest failure otherwise.
 inline textio::JsonValue read_json_file(const std::string& file) {
-  std::string text;
   textio::JsonValue root;
-  EXPECT_TRUE(port::read_whole_file(file, port::kMaxTextInputBytes, &text).ok()) << file;
-  EXPECT_TRUE(textio::parse_json(text, &root).ok()) << file;
+  EXPECT_TRUE(textio::parse_json(read_text_file(file), &root).ok()) << file;
   return root;
 }
 

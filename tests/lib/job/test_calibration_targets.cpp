@@ -76,22 +76,8 @@ Dataset<3 * kPlatePoses> plate;
 CalibrationWorkspace<3 * kPlatePoses> plate_workspace;
 
 void fill_plate_with_model_error(std::uint64_t seed, std::size_t blunder_pose, double blunder_m) {
-  Random random(seed);
-  const RobotModel truth =
-      test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
-  const RigidTransform base = test::example_base_to_tracker();
   plate.clear();
-  for (std::size_t i = 0; i < kPlatePoses; ++i) {
-    const JointVector q = test::random_joints(&random);
-    JointVector turned = q;  // libm here, not the library's: the truth is the simulator's
-    turned(2) += 5e-4 * std::sin(q(2)) + 3e-4 * std::cos(2.0 * q(2));
-    turned(3) += 4e-4 * std::cos(q(3));
-    for (int target = 0; target < 3; ++target) {
-      Vec3 point = base.apply(fk_target_point(truth, turned, target)) + 1e-5 * test::gaussian_vector(&random);
-      if (i == blunder_pose) point += Vec3(0.0, 0.0, blunder_m);
-      ASSERT_EQ(plate.add(q, point, target), Status::ok);
-    }
-  }
+  test::fill_plate_with_joint_errors(seed, kPlatePoses, kTool_m, blunder_pose, blunder_m, &plate);
 }
 
 TEST(CalibrationTargets, ModelErrorSharedByAPosesReflectorsIsNotABlunder) {
