@@ -956,8 +956,9 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   // kept (a blunder is never made up), and the final run and test are of that set; a pose the
   // final test still flags stays, and the verdict says so.
   const bool undecided = verdict != BlunderVerdict::not_searched && !same_indices(tested, aside);
-  if (undecided) {
-    keep_common(tested, &aside);
+  const std::size_t last_aside = aside.count;
+  if (undecided) keep_common(tested, &aside);
+  if (undecided && aside.count != last_aside) {  // else the last run was of this set already
     status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
     if (status != Status::ok) return status;
     ++round;
