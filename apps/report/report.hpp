@@ -81,14 +81,14 @@ struct OutlierRow {
 /// The blunder search (the w-test of each pose, docs/robust.md): what it set aside, the
 /// threshold, which poses it cannot control.
 struct OutlierTable {
-  bool searched = false;                  ///< a blunder search ran (not --keep-outliers)
-  std::string verdict;                    ///< "clean", "removed", "model_error", "list_full", "not_searched"
-  double critical_w = 0.0;                ///< w above which a pose is a blunder (the training poses') [-]
-  double alpha = 0.0;                     ///< the test's significance for the whole set [-]
-  std::string sigma_source;               ///< "data" (the fit's residuals) or "tracker" (the stated noise)
-  double sigma_m = 0.0;                   ///< the test's sigma per axis [m]
-  bool pooled_correlation = false;        ///< a pose's readings tested with their correlation pooled over the poses
-  std::vector<OutlierRow> rows;           ///< the samples set aside, by increasing sample index
+  bool searched = false;            ///< a blunder search ran (not --keep-outliers)
+  std::string verdict;              ///< "clean", "removed", "model_error", "list_full", "at_threshold", "not_searched"
+  double critical_w = 0.0;          ///< w above which a pose is a blunder (the training poses') [-]
+  double alpha = 0.0;               ///< the test's significance for the whole set [-]
+  std::string sigma_source;         ///< "data" (the fit's residuals) or "tracker" (the stated noise)
+  double sigma_m = 0.0;             ///< the test's sigma per axis [m]
+  bool pooled_correlation = false;  ///< a pose's readings tested with their correlation pooled over the poses
+  std::vector<OutlierRow> rows;     ///< the samples set aside, by increasing sample index
   std::vector<std::string> uncontrolled;  ///< poses whose redundancy is below the floor: never tested, by source
   std::vector<double> kept_w;             ///< w of every kept pose under the final calibration (the figure) [-]
 };
