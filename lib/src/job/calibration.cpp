@@ -943,26 +943,25 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   BlunderVerdict verdict = BlunderVerdict::not_searched;
   BlunderTestSummary summary;
   std::size_t round = 0;
+  bool undecided = false;  // the runs did not agree within kMaxRounds
   while (true) {
     status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
     if (status != Status::ok) return status;
     ++round;
     verdict = search_blunders(dataset, options, *workspace, *result, &tested, &summary);
-    if (verdict == BlunderVerdict::not_searched || same_indices(tested, aside) || round == kMaxRounds) break;
-    aside = tested;
-  }
-  // No agreement: a pose at the threshold fails the test while fitted and passes when left out
-  // (the split moves with it), round after round. What the last two tests did not both flag is
-  // kept (a blunder is never made up), and the final run and test are of that set; a pose the
-  // final test still flags stays, and the verdict says so.
-  const bool undecided = verdict != BlunderVerdict::not_searched && !same_indices(tested, aside);
-  const std::size_t last_aside = aside.count;
-  if (undecided) keep_common(tested, &aside);
-  if (undecided && aside.count != last_aside) {  // else the last run was of this set already
-    status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
-    if (status != Status::ok) return status;
-    ++round;
-    verdict = search_blunders(dataset, options, *workspace, *result, &tested, &summary);
+    if (verdict == BlunderVerdict::not_searched || same_indices(tested, aside) || undecided) break;
+    if (round < kMaxRounds) {
+      aside = tested;
+      continue;
+    }
+    // No agreement: a pose at the threshold fails the test while fitted and passes when left
+    // out (the split moves with it), round after round. What the last two tests did not both
+    // flag is kept (a blunder is never made up), and one more run and test are of that set; a
+    // pose the final test still flags stays, and the verdict says so.
+    undecided = true;
+    const std::size_t last_aside = aside.count;
+    keep_common(tested, &aside);
+    if (aside.count == last_aside) break;  // the last run was of this set already
   }
   // The residuals reported are the final calibration's (of the set the run left out), the w
   // the last test's.
