@@ -420,6 +420,7 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
     BlunderTestSummary summary;
     test_final_calibration(r, dataset, run.options, workspace.get(), &tests, &summary);
     for (const UnitTest& t : tests.kept_failing) {
+      if (r.blunder_verdict != BlunderVerdict::at_threshold) break;  // model_error, list_full: said below
       char line[400];
       std::snprintf(line, sizeof line,
                     "kept at the threshold: %s, w %.2f > %.2f while fitted, below it when left out (the split moves "

@@ -171,5 +171,32 @@ TEST(TargetsCli, APoseAtTheThresholdIsKeptAndNamedByItsLine) {
             std::string::npos);
 }
 
+// Many poses failing is the model's fault, not a threshold's: no pose is named as kept at the
+// threshold (only the verdict at_threshold names those), and the console says the model is wrong.
+TEST(TargetsCli, ManyFailingPosesAreNotNamedAsAtTheThreshold) {
+  const test::TempDir dir("hivecal_many_failing");
+  ASSERT_FALSE(dir.path().empty());
+  static Dataset<256> written;
+  written.clear();
+  Random random(11);
+  RobotModel truth = nominal_model(RobotType::ur5);
+  truth.tool_m = Vec3(0.0, 0.0, 0.15);
+  test::fill_dataset(truth, test::example_base_to_tracker(), 200, 1e-5, &random, &written);
+  static Dataset<256> shifted;  // 15 of the 200 poses (7.5 %) 2 mm off: more than the 5 % a search removes
+  shifted.clear();
+  for (const Sample& s : written.samples()) {
+    ASSERT_EQ(shifted.add(s.q_rad, s.point_m + Vec3(0.0, 0.0, s.index % 13 == 5 ? 2e-3 : 0.0)), Status::ok);
+  }
+  const std::string samples = dir.write("shifted.csv", textio::format_samples_csv(shifted.samples()));
+  const std::string result = dir.path() + "/result.json";
+  const int code = run(cli::calibrate_main, {"--samples", samples, "--robot-model", "ur5", "--tool", "0,0,0.15",
+                                             "--method", "lm", "--quiet", "--out", result});
+  ASSERT_TRUE(code == 0 || code == 5) << code;  // 5: written, with a warning (the shifted poses bend the fit)
+  const std::string json = test::read_text_file(result);
+  EXPECT_NE(json.find("\"blunder_verdict\": \"model_error\""), std::string::npos);
+  EXPECT_NE(json.find("the model, not the data, is wrong"), std::string::npos);
+  EXPECT_EQ(json.find("kept at the threshold"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace hivecal::targets_cli_test
