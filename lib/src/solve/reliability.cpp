@@ -127,10 +127,10 @@ struct UnitRows {
 /// The test's scale: from the data (the fit's SSR over its dof) or the tracker's stated sigma.
 struct Scale {
   SigmaSource source = SigmaSource::data;
-  bool correlated = false;  ///< the readings of a pose are correlated (ws->correlation)
-  /// With correlated readings, the statistic of a unit of n rows is taken as spread[n] times a
-  /// chi-square (or F) of n / spread[n] degrees of freedom (Satterthwaite): spread[n] =
-  /// |C_n|_F^2 / n, C_n the leading n x n block of the correlation (1 without correlation) [-].
+  /// The statistic of a unit of n rows is taken as spread[n] times a chi-square (or F) of
+  /// n / spread[n] degrees of freedom (Satterthwaite): spread[n] = |C_n|_F^2 / n, C_n the
+  /// leading n x n block of the readings' pooled correlation; exactly 1 for independent rows,
+  /// which leaves every operation below exact (the bits of the plain chi-square or F) [-].
   double spread[kMaxUnitRows + 1] = {};
   double ssr_m2 = 0.0;      ///< the fit's weighted sum of squares [m^2]
   double dof = 0.0;         ///< its redundancy [-]
@@ -151,12 +151,6 @@ double critical_statistic(const Scale& scale, int rows, bool fitted) {
   double& cached = scale.critical[fitted ? 1 : 0][rows];
   if (cached > 0.0) return cached;
   const double m = static_cast<double>(rows);
-  if (!scale.correlated) {
-    cached = scale.source == SigmaSource::tracker
-                 ? math::chi_square_upper_quantile(scale.unit_alpha, m)
-                 : m * math::f_upper_quantile(scale.unit_alpha, m, fitted ? scale.dof - m : scale.dof);
-    return cached;
-  }
   const double spread = scale.spread[rows];
   const double h = m / spread;
   cached = spread * (scale.source == SigmaSource::tracker
@@ -181,14 +175,18 @@ double critical_statistic(const Scale& scale, int rows, bool fitted) {
   for (std::size_t begin = 0; begin < samples.size();) {
     const std::size_t end = unit_end(samples, begin, fit.grouped);
     const int rows = 3 * static_cast<int>(end - begin);
-    for (std::size_t s = begin; s < end && rows > 3; ++s) {
+    if (rows == 3) {  // a pose of one reading: nothing between readings
+      begin = end;
+      continue;
+    }
+    for (std::size_t s = begin; s < end; ++s) {
       Mat3 tool_jacobian;
       double raw_squared_m2 = 0.0;
       const Vec3 residual_m = sample_rows(fit.model, fit.base, samples[s], fit.loss, fit.kept, &ws->jacobian,
                                           &tool_jacobian, &raw_squared_m2);
       for (int axis = 0; axis < 3; ++axis) ws->residual_m[3 * static_cast<int>(s - begin) + axis] = residual_m(axis);
     }
-    for (int i = 0; i < rows && rows > 3; ++i) {
+    for (int i = 0; i < rows; ++i) {
       for (int j = 0; j < rows; ++j) {
         sum(i, j) += ws->residual_m[i] * ws->residual_m[j];
         pairs(i, j) += 1.0;
@@ -240,9 +238,7 @@ UnitTest test_unit(const Scale& scale, const BlunderTestOptions& o, bool fitted,
   const double critical = critical_statistic(scale, n, fitted);
   t.w = variance_m2 > 0.0 ? std::sqrt(quadratic_m2 / variance_m2) : 0.0;
   t.critical_w = std::sqrt(critical);
-  if (fitted && !scale.correlated) {
-    t.mdb_m = scale.sigma_m * std::sqrt(math::detectable_noncentrality(critical, n) / t.redundancy);
-  } else if (fitted) {  // a bias lambda moves the statistic by about lambda / spread in its own scale
+  if (fitted) {  // a bias lambda moves the statistic by about lambda / spread in its own scale
     const double spread = scale.spread[n];
     const double lambda0 = spread * math::detectable_noncentrality(critical / spread, static_cast<double>(n) / spread);
     t.mdb_m = scale.sigma_m * std::sqrt(lambda0 / t.redundancy);
@@ -326,10 +322,10 @@ Status test_for_blunders(const RobotModel& model, const RigidTransform& base, Sp
   scale.sigma_m = from_data ? summary->fit_sigma_m : options.tracker_sigma_m;
   summary->sigma_source = scale.source;
   summary->sigma_m = scale.sigma_m;
-  scale.correlated = from_data && fit.grouped && pool_correlation(fit, fitted, &ws);
-  summary->pooled_correlation = scale.correlated;
-  for (int n = 1; n <= kMaxUnitRows && scale.correlated; ++n) {
-    scale.spread[n] = ws.correlation.topLeftCorner(n, n).squaredNorm() / static_cast<double>(n);
+  summary->pooled_correlation = from_data && fit.grouped && pool_correlation(fit, fitted, &ws);
+  for (int n = 1; n <= kMaxUnitRows; ++n) {
+    scale.spread[n] =
+        summary->pooled_correlation ? ws.correlation.topLeftCorner(n, n).squaredNorm() / static_cast<double>(n) : 1.0;
   }
   visit_units(fit, scale, options, fitted, true, &ws, visitor, summary);
   visit_units(fit, scale, options, predicted, false, &ws, visitor, summary);
