@@ -180,6 +180,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, JobMemory*
   job.base_known = settings.controller_tcp;  // known_base_to_tracker: the identity
   job.tool_known = settings.controller_tcp;  // the start model's tool points: --tool and the orientation's lever
   job.significance_t = settings.significance_t;
+  job.significance_every_set = settings.significance_every_set;
   job.population_subset = settings.population_subset;
   job.lm.joint_sigma_rad = settings.joint_sigma_rad;
   job.lm.position_sigma_m = settings.orientation.position_sigma_m;

@@ -199,8 +199,13 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          ""},
         {"significance", "T|auto",
          "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leaving one pose out at a time, "
-         "up to 64 training samples)",
-         "2"},
+         "up to " +
+             std::to_string(kAutoSignificanceMaxSamples) +
+             " training samples). Not given: " + textio::format_double(kDefaultSignificance) +
+             " sigma, the geometry tested on small sets only (fewer training poses than " +
+             textio::format_double(kSignificancePosesPerParam) +
+             " per estimated parameter); a given T tests it on any set",
+         ""},
         {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
         {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
         {"report", "DIR", "write an HTML report with figures into DIR", ""},
@@ -296,9 +301,12 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   }
   if (options.get("significance") == "auto") {
     settings->significance_t = -1.0;  // lib: chosen by leaving one pose out at a time on small sets
-  } else if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
-             !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
-    return Error::usage("--significance must be 'auto' or a number in [0, 10]");
+  } else if (options.given("significance")) {
+    if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
+        !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
+      return Error::usage("--significance must be 'auto' or a number in [0, 10]");
+    }
+    settings->significance_every_set = true;
   }
   const bool samples = !options.get("samples").empty();
   const bool streams = !options.get("robot").empty() || !options.get("tracker").empty();

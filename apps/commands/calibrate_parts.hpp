@@ -36,7 +36,8 @@ struct CalibrateSettings {
   double train_fraction = 0.7;                           ///< --split
   bool robust = false;                                   ///< --robust
   bool keep_outliers = false;                            ///< --keep-outliers
-  double significance_t = 2.0;                           ///< --significance
+  double significance_t = kDefaultSignificance;          ///< --significance
+  bool significance_every_set = false;                   ///< --significance T given: the geometry tested on any set
   std::size_t population_subset =
       kDefaultPopulationSubset;  ///< --population-subset: a hybrid's ABC/GSA samples (0: all) [-]
   std::size_t cv_folds = 0;      ///< --cv K; 1: leave-one-out (lib's folds = 0); 0: no cross-validation

@@ -153,8 +153,10 @@ std::string holdout_line(const char* family, const JointTermHoldout& holdout, bo
   return buf;
 }
 
-std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pruned, double significance_t,
+std::vector<std::string> identifiability_lines(const LmResult& lm, const CalibrationResult& result,
                                                const RobotModel& model) {
+  const ParamMask pruned = result.lm_pruned_mask;
+  const double significance_t = result.significance_t;
   std::vector<std::string> lines;
   const IdentifiabilityReport& id = lm.identifiability;
   char buf[256];
@@ -179,6 +181,14 @@ std::vector<std::string> identifiability_lines(const LmResult& lm, ParamMask pru
                     "  fixed   %-8s (not significant: change below %.3g sigma; kept at its start value)",
                     full_param_name(k, model), level);
     }
+    lines.push_back(buf);
+  }
+  if (!result.geometry_tested && significance_t > 0.0) {
+    std::snprintf(buf, sizeof buf,
+                  "  significance test: the geometry is not tested on %zu%s training poses (%.3g or more per estimated "
+                  "rigid parameter, %zu): all are estimated, as a least-squares fit does (--significance T tests them)",
+                  result.significance_poses, result.significance_poses >= kDistinctPointLimit ? " or more" : "",
+                  kSignificancePosesPerParam, result.significance_params);
     lines.push_back(buf);
   }
   return lines;
@@ -530,8 +540,7 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
   }
   add_samples(dataset, run, &data);
   if (const LmResult* lm = run.final_lm(); lm != nullptr) {
-    for (const std::string& line :
-         identifiability_lines(*lm, run.result.lm_pruned_mask, run.result.significance_t, final_stage.model)) {
+    for (const std::string& line : identifiability_lines(*lm, run.result, final_stage.model)) {
       data.info_lines.push_back(line);
     }
     for (std::size_t k = 0; k < run.result.stage_count; ++k) {

@@ -233,6 +233,8 @@ std::string format_result_json(const CalibrationRecord& record) {
     if (record.final_lm != nullptr && record.result != nullptr) {
       write_lm_details(w, *record.final_lm, record.file.model);
       w.key("significance_t").value(record.result->significance_t);
+      if (!record.result->geometry_tested && record.result->significance_t > 0.0)
+        w.key("significance_geometry_tested").value(false);  // a larger set
       w.key("not_significant").begin_array();
       for (int k = 0; k < kFullParamCount; ++k)
         if (mask_has(record.result->lm_pruned_mask, k)) w.value(full_param_name(k, record.file.model));

@@ -1,10 +1,12 @@
 // A set larger than any fixed capacity of the library's own types: the command takes every
 // sample (its storage grows with the input) and the default job's ABC searches on a spanning
-// subset, said in Table 1's row, while LM refines on every training sample.
+// subset, said in Table 1's row, while LM refines on every training sample. A set of more
+// poses than 1.5 per parameter has its geometry estimated without the significance test, said.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
@@ -43,6 +45,39 @@ TEST(LargeSetCli, NineThousandPosesCalibrateWithTheDefaultJob) {
   const double test_mae_m = std::strtod(text.c_str() + test_mae + 14, nullptr);
   EXPECT_LT(test_mae_m, 20e-6);  // the noise (10 um per axis) and nothing more
   EXPECT_GT(test_mae_m, 10e-6);
+}
+
+// 60 poses of an arm whose geometry is the start's (every change is noise): the default
+// estimates all, says why in a line of the console and result.json, and marks the result; a
+// given --significance 2 tests the geometry on this set too and fixes what did not move.
+TEST(LargeSetCli, TheGeometryOfALargerSetIsNotTestedUnlessALevelIsGiven) {
+  const test::TempDir dir("hivecal_large");
+  ASSERT_FALSE(dir.path().empty());
+  static Dataset<60> written;
+  written.clear();
+  Random random(8);
+  const RobotModel truth = nominal_model(RobotType::ur5);
+  test::fill_dataset(truth, test::example_base_to_tracker(), 60, 1e-5, &random, &written);
+  const std::string samples = dir.write("sixty.csv", textio::format_samples_csv(written.samples()));
+  const std::string result = dir.path() + "/result.json";
+  const std::vector<std::string> args = {"--samples", samples, "--method", "lm", "--split", "1", "--out", result};
+  ::testing::internal::CaptureStdout();
+  const int code = test::run(cli::calibrate_main, args);
+  const std::string console = ::testing::internal::GetCapturedStdout();
+  ASSERT_EQ(code, cli::kExitOk);
+  const char* line = "significance test: the geometry is not tested on 60 training poses";
+  EXPECT_NE(console.find(line), std::string::npos) << console;
+  EXPECT_EQ(console.find("(not significant"), std::string::npos);
+  std::string text = test::read_text_file(result);
+  EXPECT_NE(text.find(line), std::string::npos);
+  EXPECT_NE(text.find("\"significance_geometry_tested\": false"), std::string::npos);
+  std::vector<std::string> given = args;
+  given.insert(given.end(), {"--significance", "2", "--quiet"});
+  ASSERT_EQ(test::run(cli::calibrate_main, given), cli::kExitOk);
+  text = test::read_text_file(result);
+  EXPECT_EQ(text.find(line), std::string::npos);
+  EXPECT_NE(text.find("(not significant: change below 2 sigma"), std::string::npos);
+  EXPECT_EQ(text.find("significance_geometry_tested"), std::string::npos);
 }
 
 }  // namespace

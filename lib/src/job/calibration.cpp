@@ -278,15 +278,30 @@ JointTermLevels joint_term_levels(const RobotModel& reference, double compliance
   return levels;
 }
 
+/// Whether fit_lm's significance test covers the geometry of a rigid fit of `samples` whose first
+/// attempt is `first`: on every set when the options ask for it, else on a small set only (fewer
+/// distinct configurations than kSignificancePosesPerParam per rigid parameter estimated). Records the decision
+/// and the counts in *r (as r->lm, the last fit's); the joint-term stages keep it.
+bool tests_geometry(const CalibrationOptions& o, Span<const Sample> samples, const LmResult& first,
+                    CalibrationResult* r) {
+  static_assert(kSignificancePosesPerParam * kRigidParamCount < kDistinctPointLimit, "the count must reach the bound");
+  r->significance_poses = distinct_configurations(samples);
+  r->significance_params = static_cast<std::size_t>(mask_count(first.identifiability.kept_mask & kAllParamsMask));
+  r->geometry_tested =
+      o.significance_every_set || static_cast<double>(r->significance_poses) <
+                                      kSignificancePosesPerParam * static_cast<double>(r->significance_params);
+  return r->geometry_tested;
+}
+
 /// The estimated model parameter (geometry or joint-term coefficient) whose change from
 /// `start` is least significant, below t standard deviations (a joint term: below its level
 /// >= t, its ratio scaled by t / level to compare); -1 when none is (or t <= 0). The joint terms
-/// are tried first, the geometry only when every estimated term clears its level: a new term
+/// are tried first, the geometry (when `geometry`) only when every estimated term clears its level: a new term
 /// must earn its place, never take a geometry parameter's. (Tried together, a joint's offset,
 /// whose sigma a free harmonic sum inflates, would go first, and the sum of sin q, cos 2q and
 /// sin 3q, flat over a joint's turn of +-1 rad, would take the offset's place at 20 sigma.)
 [[gnu::noinline]] int least_significant(const RobotModel& start, const LmResult& lm, double t,
-                                        const JointTermLevels& levels) {
+                                        const JointTermLevels& levels, bool geometry) {
   if (!(t > 0.0)) return -1;
   const ModelParams change = to_params(lm.model) - to_params(start);
   int weakest = -1;
@@ -303,7 +318,7 @@ JointTermLevels joint_term_levels(const RobotModel& reference, double compliance
     }
   };
   for (int i = kRigidParamCount; i < kRigidParamCount + lm.model.compliance.term_count; ++i) consider(i);
-  if (weakest >= 0) return weakest;
+  if (weakest >= 0 || !geometry) return weakest;
   for (int i = 0; i < kModelParamCount; ++i) consider(i);  // the base is not a model parameter
   return weakest;
 }
@@ -352,7 +367,8 @@ struct LmFitReport {
 /// plausible (implausible_joint_term, whatever the significance level: fixed at its start value,
 /// so that every result reads back) or (c) an estimated parameter's change is not significant
 /// (below significance_t sigma: fixed at its start value, one at a time, the least significant
-/// first; a small set then fits fewer parameters instead of its noise).
+/// first; a small set then fits fewer parameters instead of its noise; the geometry of a larger
+/// one is not tested, tests_geometry).
 Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   const RobotModel& reference = *fit.reference;
   const bool compliance = fit.compliance;
@@ -395,6 +411,7 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   for (int axis = 0; axis < 3; ++axis) lm.other_target_tools |= mask_has(free_mask, tool_param_index(axis));
   Status status = Status::ok;
   *pruned = 0;
+  bool geometry = r.geometry_tested;  // a joint-term stage: the rigid stage's; a rigid one decides below
   // Each attempt fixes one parameter at most: the geometry and the model's joint terms (not the
   // capacity's: the same attempts on every build).
   const int attempts = kModelParamCount + reference.compliance.term_count + 2;
@@ -408,7 +425,8 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     const JointTermLevels levels =
         joint_term_levels(reference, job.options.compliance.significance_t, r.lm.residual_dof);
     int weakest = implausible_joint_term(r.lm);
-    if (weakest < 0) weakest = least_significant(reference, r.lm, fit.significance_t, levels);
+    if (attempt == 0 && !compliance) geometry = tests_geometry(o, fit.samples, r.lm, &r);
+    if (weakest < 0) weakest = least_significant(reference, r.lm, fit.significance_t, levels, geometry);
     if (weakest >= 0) {
       *pruned |= param_bit(weakest);
       lm.params = LmParamSet::custom;

@@ -10,17 +10,33 @@ int target_count(Span<const Sample> samples) {
   return count;
 }
 
-std::size_t distinct_points(Span<const Sample> samples) {
-  std::size_t first[kDistinctPointLimit];  // a sample of each point found
+namespace {
+
+/// Classes of `samples` under `same` (an equivalence), counted up to kDistinctPointLimit.
+template <typename Same>
+std::size_t count_distinct(Span<const Sample> samples, Same same) {
+  std::size_t first[kDistinctPointLimit];  // a sample of each class found
   std::size_t count = 0;
   for (std::size_t i = 0; i < samples.size() && count < kDistinctPointLimit; ++i) {
     bool seen = false;
     for (std::size_t k = count; k-- > 0 && !seen;) {  // the latest first: a stop's samples are in a row
-      seen = same_point(samples[first[k]], samples[i]);
+      seen = same(samples[first[k]], samples[i]);
     }
     if (!seen) first[count++] = i;
   }
   return count;
+}
+
+}  // namespace
+
+std::size_t distinct_points(Span<const Sample> samples) {
+  return count_distinct(samples, same_point);
+}
+
+std::size_t distinct_configurations(Span<const Sample> samples) {
+  return count_distinct(samples, [](const Sample& a, const Sample& b) {
+    return (a.q_rad - b.q_rad).cwiseAbs().maxCoeff() <= kSameConfigurationTolerance_rad;
+  });
 }
 
 bool DatasetBase::move_to(Sample* storage, std::size_t capacity) {

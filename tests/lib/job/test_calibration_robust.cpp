@@ -305,6 +305,50 @@ TEST(CalibrationRobust, ParametersWithoutSignificantChangeAreFixedAtTheirStartVa
   }
 }
 
+// The geometry's significance test runs on small sets only: on every count of poses it ran
+// exactly when there were fewer than kSignificancePosesPerParam poses per estimated rigid
+// parameter; where it did not, nothing rigid is fixed and the fit is the one without the test,
+// bit for bit. The start is the truth with the tool point guessed off, so every geometry change
+// is noise and the test, where it runs, fixes some.
+TEST(CalibrationRobust, TheGeometrysSignificanceTestRunsOnSmallSetsOnly) {
+  RobotModel from = truth();
+  from.tool_m += Vec3(0.004, -0.003, 0.0);
+  int tested = 0;
+  int untested = 0;
+  for (std::size_t count = 12; count <= 64; count += 4) {
+    fill(count, &dataset);
+    const CalibrationOptions o = options(CalibrationMethod::lm);
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(from, &dataset, o, &workspace, &result));
+    ASSERT_EQ(status, Status::ok) << count;
+    EXPECT_EQ(result.significance_poses, count);
+    const bool small =
+        static_cast<double>(count) < kSignificancePosesPerParam * static_cast<double>(result.significance_params);
+    EXPECT_EQ(result.geometry_tested, small) << count << " poses, " << result.significance_params << " parameters";
+    if (small) {
+      ++tested;
+      EXPECT_NE(result.lm_pruned_mask & kAllParamsMask, 0u) << count;
+      continue;
+    }
+    ++untested;
+    EXPECT_EQ(result.lm_pruned_mask, 0u) << count;
+    fill(count, &dataset);
+    CalibrationOptions off = o;
+    off.significance_t = 0.0;
+    ASSERT_EQ(calibrate(from, &dataset, off, &workspace, &other), Status::ok);
+    EXPECT_TRUE(same_bits(result.stages[0].model, other.stages[0].model)) << count;
+    // Asked for every set, the test runs here too.
+    fill(count, &dataset);
+    CalibrationOptions every = o;
+    every.significance_every_set = true;
+    ASSERT_EQ(calibrate(from, &dataset, every, &workspace, &other), Status::ok);
+    EXPECT_TRUE(other.geometry_tested);
+    EXPECT_NE(other.lm_pruned_mask & kAllParamsMask, 0u) << count;
+  }
+  EXPECT_GT(tested, 0);
+  EXPECT_GT(untested, 0);
+}
+
 TEST(CalibrationRobust, AnAutomaticSignificanceLevelIsOneOfTheGridAndGivesThatLevelsBits) {
   for (std::size_t count : {12u, 20u}) {
     fill(count, &dataset);

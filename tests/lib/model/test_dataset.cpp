@@ -249,6 +249,32 @@ TEST(Dataset, CountsDistinctPointsNotSamples) {
   EXPECT_EQ(distinct_points(dataset.samples()), kDistinctPointLimit);
 }
 
+// A robot creeping into a stop (joints a few mrad apart, each reading its own pose) is one
+// configuration of the arm; the stops, any targets, are counted; the count stops at its limit.
+TEST(Dataset, CountsConfigurationsNotCreepingPoses) {
+  static Dataset<400> dataset;
+  dataset.clear();
+  const auto stop = [](int k) { return JointVector::Constant(0.1 * k); };
+  for (int k = 0; k < 6; ++k) {
+    for (int i = 0; i < 20; ++i) {
+      const JointVector creep = JointVector::Constant(-8e-4 * i);  // 15 mrad in all: within 1 degree
+      ASSERT_EQ(dataset.add(stop(k) + creep, Vec3::Zero(), 0), Status::ok);
+      ASSERT_EQ(dataset.add(stop(k) + creep, Vec3::Zero(), 1), Status::ok);
+    }
+  }
+  std::size_t configurations = 0;
+  EXPECT_NO_HEAP(configurations = distinct_configurations(dataset.samples()));
+  EXPECT_EQ(configurations, 6u);
+  EXPECT_EQ(dataset.pose_count(), 120u);  // each creeping reading is a pose of its own
+  JointVector moved = stop(2);
+  moved(0) += 0.03;  // two degrees in one joint: another configuration
+  ASSERT_EQ(dataset.add(moved, Vec3::Zero(), 0), Status::ok);
+  EXPECT_EQ(distinct_configurations(dataset.samples()), 7u);
+  dataset.clear();
+  for (int k = 0; k < 100; ++k) ASSERT_EQ(dataset.add(stop(k), Vec3::Zero()), Status::ok);
+  EXPECT_EQ(distinct_configurations(dataset.samples()), kDistinctPointLimit);
+}
+
 }  // namespace
 }  // namespace hivecal::dataset_test
 

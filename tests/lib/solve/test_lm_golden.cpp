@@ -28,7 +28,7 @@ constexpr std::uint64_t kLmTargetsGoldenDigest = 0xb4e9be8f76e40505ULL;
 // (LmParamSet::full_compliance) on a session bent in another form.
 constexpr std::uint64_t kLmComplianceGoldenDigest = 0xa3ac49f712835071ULL;
 // The calibration job with compliance enabled (LM, then LM+compliance).
-constexpr std::uint64_t kComplianceJobGoldenDigest = 0xa8225944972578ebULL;
+constexpr std::uint64_t kComplianceJobGoldenDigest = 0x94c348f66595554fULL;
 // The calibration job on a controller's own TCP readings: base and tool points known
 // (CalibrationOptions::base_known, tool_known), joint 1 estimated instead, three targets.
 constexpr std::uint64_t kKnownFramesJobGoldenDigest = 0xcf0b27224dd6de4cULL;

@@ -30,7 +30,11 @@ int target_count(Span<const Sample> samples);
 /// Joints that agree this closely are one robot pose: the samples of one stop of the robot
 /// (encoder noise is ~1e-5 rad; two poses a user plans differ by degrees) [rad].
 inline constexpr double kSamePoseTolerance_rad = 1e-3;
-/// distinct_points() counts up to this many, then stops (more is plenty for any model).
+/// Joints that agree this closely are one configuration of the arm for what the poses can
+/// determine: a robot creeping at a stop, a pose measured twice (a calibration's planned poses
+/// differ by degrees to tens of degrees; ~1 degree) [rad].
+inline constexpr double kSameConfigurationTolerance_rad = 0.0175;
+/// distinct_points() and distinct_configurations() count up to this many, then stop (more is plenty for any model).
 inline constexpr std::size_t kDistinctPointLimit = 64;
 
 /// Whether two samples were taken at one robot pose: joints within kSamePoseTolerance_rad
@@ -48,6 +52,9 @@ inline bool same_point(const Sample& a, const Sample& b) {
 /// kSamePoseTolerance_rad) and target, each worth 3 coordinates whatever its sample count;
 /// at most kDistinctPointLimit. Many samples of one stop determine no more than one.
 std::size_t distinct_points(Span<const Sample> samples);
+/// Distinct configurations of the arm in `samples` (joints more than kSameConfigurationTolerance_rad
+/// apart; any targets, any repeated readings), at most kDistinctPointLimit.
+std::size_t distinct_configurations(Span<const Sample> samples);
 
 /// End of the pose that starts at `begin`: the run of consecutive samples at joints equal to
 /// samples[begin]'s (its reflectors, its repeated readings) [-].
