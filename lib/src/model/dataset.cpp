@@ -12,7 +12,9 @@ int target_count(Span<const Sample> samples) {
 
 namespace {
 
-/// Classes of `samples` under `same` (an equivalence), counted up to kDistinctPointLimit.
+/// Classes of `samples` under `same`, each stood for by its first sample (a tolerance is not
+/// transitive: a sample joins the latest class whose first sample it matches), counted up to
+/// kDistinctPointLimit.
 template <typename Same>
 std::size_t count_distinct(Span<const Sample> samples, Same same) {
   std::size_t first[kDistinctPointLimit];  // a sample of each class found
