@@ -12,11 +12,16 @@ int target_count(Span<const Sample> samples) {
 
 namespace {
 
+/// Whether two samples are at one configuration of the arm (kSameConfigurationTolerance_rad).
+bool same_configuration(const Sample& a, const Sample& b) {
+  return (a.q_rad - b.q_rad).cwiseAbs().maxCoeff() <= kSameConfigurationTolerance_rad;
+}
+
 /// Classes of `samples` under `same`, each stood for by its first sample (a tolerance is not
 /// transitive: a sample joins the latest class whose first sample it matches), counted up to
-/// kDistinctPointLimit.
-template <typename Same>
-std::size_t count_distinct(Span<const Sample> samples, Same same) {
+/// kDistinctPointLimit. One loop for every relation (a function pointer, not a template: the
+/// firmware's flash holds one copy).
+std::size_t count_distinct(Span<const Sample> samples, bool (*same)(const Sample&, const Sample&)) {
   std::size_t first[kDistinctPointLimit];  // a sample of each class found
   std::size_t count = 0;
   for (std::size_t i = 0; i < samples.size() && count < kDistinctPointLimit; ++i) {
@@ -36,9 +41,7 @@ std::size_t distinct_points(Span<const Sample> samples) {
 }
 
 std::size_t distinct_configurations(Span<const Sample> samples) {
-  return count_distinct(samples, [](const Sample& a, const Sample& b) {
-    return (a.q_rad - b.q_rad).cwiseAbs().maxCoeff() <= kSameConfigurationTolerance_rad;
-  });
+  return count_distinct(samples, same_configuration);
 }
 
 bool DatasetBase::move_to(Sample* storage, std::size_t capacity) {
