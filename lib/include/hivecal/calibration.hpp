@@ -78,9 +78,9 @@ inline constexpr double kDefaultSignificance = 2.0;
 /// (and the base) of a small set only: fewer training poses (distinct_configurations) than this
 /// many per rigid parameter the fit estimates. A larger set estimates every identifiable one, as
 /// a least-squares fit does. Measured on a real UR10 (random parts of 12-1,000 poses, 23
-/// parameters, docs/robust.md): at 0.5-0.9 poses per parameter the test is what makes the fit
-/// predict (45 % and 4.5 % better), at 1.3 the two are within 1.2 %, from 1.5 on the test costs
-/// 0.1-2.2 % of held-out error [-].
+/// parameters, docs/robust.md): at 0.5 poses per parameter the test is what makes the fit
+/// predict (14 % better), at 0.9-1.3 the two are within 3 % either way, from 1.5 on the test
+/// costs 0.2-2.2 % of held-out error [-].
 inline constexpr double kSignificancePosesPerParam = 1.5;
 /// Default size of the spanning subset a hybrid's population stage searches on [samples]:
 /// plenty for the link lengths and the base (a few hundred equations per unknown), and the
