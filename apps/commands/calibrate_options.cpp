@@ -271,7 +271,7 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   }
   Error seeded = seed_option(options, "seed", &settings->seed);
   if (seeded.ok()) {
-    seeded = count_option(options, "population-subset", 0, kDefaultPopulationSubset, &settings->population_subset);
+    seeded = count_option(options, "population-subset", 0, kMaxPopulationSubset, &settings->population_subset);
   }
   if (!seeded.ok()) return seeded;
   if (!textio::parse_double(options.get("split"), &settings->train_fraction) ||

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "hivecal/calibration.hpp"
 #include "commands/commands.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/port/input_file.hpp"
@@ -36,7 +37,8 @@ TEST(LargeSetCli, NineThousandPosesCalibrateWithTheDefaultJob) {
   ASSERT_EQ(test::run(cli::calibrate_main, {"--samples", samples, "--out", result, "--quiet"}), cli::kExitOk);
   std::string text;
   ASSERT_TRUE(port::read_whole_file(result, port::kMaxTextInputBytes, &text).ok());
-  EXPECT_NE(text.find("searched on 256 of 6300 samples"), std::string::npos);
+  EXPECT_NE(text.find("searched on " + std::to_string(kDefaultPopulationSubset) + " of 6300 samples"),
+            std::string::npos);
   record::CalibrationFile file;
   ASSERT_TRUE(record::parse_calibration_json(text, result, &file).ok());
   const std::size_t hybrid = text.find("\"method\": \"ABC+LM\"", text.find("\"methods\""));  // Table 1's row

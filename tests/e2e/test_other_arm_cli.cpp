@@ -68,7 +68,7 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
     ASSERT_TRUE(port::read_whole_file(out, port::kMaxTextInputBytes, &text).ok());
     EXPECT_NE(text.find(k == 0 ? "\"standard-dh\"" : "\"modified-dh\""), std::string::npos);
     EXPECT_NE(text.find("\"abb-irb120\""), std::string::npos);
-    EXPECT_NE(text.find("\"paper-5, tool fitted\""), std::string::npos);  // ABC on the IRB120's five link lengths
+    EXPECT_NE(text.find("\"paper-5, tool fitted"), std::string::npos);  // ABC on the IRB120's five link lengths
     const port::Error parsed = record::parse_calibration_json(text, out, &results[k]);
     ASSERT_TRUE(parsed.ok()) << parsed.message;
     const double mae_m = fresh_mae_m(results[k], truth, base);

@@ -199,6 +199,14 @@ TEST(CalibrationJob, HybridSearchesASpanningSubsetOfLargeSets) {
       }
     }
   }
+  // The workspace holds room for more than the default: a larger subset is taken whole, and
+  // one past the room is cut to it.
+  for (const std::size_t wanted : {kMaxPopulationSubset, kMaxPopulationSubset + 1}) {
+    CalibrationOptions larger = quick_options(CalibrationMethod::abc_lm);
+    larger.population_subset = wanted;
+    ASSERT_EQ(calibrate(start(), &large, larger, &large_workspace, &other), Status::ok);
+    EXPECT_EQ(other.stages[0].searched_samples, kMaxPopulationSubset);
+  }
 }
 
 TEST(CalibrationJob, TrainingOnEverySampleLeavesNoTestRows) {
