@@ -37,18 +37,86 @@ struct JobMemory {
   CalibrationResult cv_scratch;  ///< each fold's result
 };
 
-/// Times the stages (lib takes no time) and prints one progress line per iteration on
-/// stderr, overwritten in place.
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// Wall time per part of the command (--profile), in the order first seen; a part seen again
+/// (a stage or w-test of the job's next run) adds up and counts its passes.
+class Profile {
+ public:
+  void add(const std::string& part, double seconds) {
+    for (Part& p : parts_) {
+      if (p.name == part) {
+        p.seconds += seconds;
+        ++p.passes;
+        return;
+      }
+    }
+    parts_.push_back(Part{part, seconds, 1});
+  }
+  /// Seconds of the parts whose name starts with `prefix`.
+  double sum(const std::string& prefix) const {
+    double total = 0.0;
+    for (const Part& p : parts_) total += p.name.compare(0, prefix.size(), prefix) == 0 ? p.seconds : 0.0;
+    return total;
+  }
+  void print(std::FILE* out, double total_seconds) const {
+    std::fprintf(out, "profile: wall time [s] of the command, %.3f in all\n", total_seconds);
+    double listed = 0.0;
+    for (const Part& p : parts_) {
+      std::fprintf(out, "  %-40s %8.3f", p.name.c_str(), p.seconds);
+      if (p.passes > 1) std::fprintf(out, "  (%d passes)", p.passes);
+      std::fprintf(out, "\n");
+      listed += p.seconds;
+    }
+    std::fprintf(out, "  %-40s %8.3f\n", "other (options, start geometry, memory)", total_seconds - listed);
+  }
+
+ private:
+  struct Part {
+    std::string name;
+    double seconds;
+    int passes;
+  };
+  std::vector<Part> parts_;
+};
+
+/// What --profile calls a phase of the job outside its stages.
+const char* phase_label(CalibrationPhase phase) {
+  switch (phase) {
+    case CalibrationPhase::screen: return "job: screen of the start geometry";
+    case CalibrationPhase::baseline: return "job: baseline fit";
+    case CalibrationPhase::blunder_test: return "job: w-test of the fit";
+  }
+  return "job: phase";
+}
+
+/// Times the stages and the job's phases (lib takes no time) and prints one progress line per
+/// iteration on stderr, overwritten in place.
 class JobObserver final : public CalibrationObserver {
  public:
-  explicit JobObserver(bool enabled) : enabled_(enabled) {}
+  explicit JobObserver(bool enabled, Profile* profile = nullptr) : enabled_(enabled), profile_(profile) {}
   ~JobObserver() { end_line(); }
+  void on_phase(CalibrationPhase phase, bool ended) override {
+    if (!ended) {
+      phase_start_ = Clock::now();
+    } else if (profile_ != nullptr) {
+      profile_->add(phase_label(phase), seconds_since(phase_start_));
+    }
+  }
   void on_stage_begin(std::size_t, CalibrationSolver solver) override {
     label_ = calibration_solver_name(solver);
-    start_ = std::chrono::steady_clock::now();
+    start_ = Clock::now();
   }
-  void on_stage_end(std::size_t index, const CalibrationStage&) override {
-    seconds[index] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  void on_stage_end(std::size_t index, const CalibrationStage& stage) override {
+    seconds[index] = seconds_since(start_);
+    if (profile_ != nullptr) {
+      profile_->add(std::string("job: ") + (stage.compliance ? "LM with joint terms" : label_) + " stage",
+                    seconds[index]);
+    }
     end_line();
   }
   void on_iteration(const SolverProgress& p) override {
@@ -74,9 +142,11 @@ class JobObserver final : public CalibrationObserver {
     printed_ = false;
   }
   bool enabled_;
+  Profile* profile_;  // null: no --profile
   const char* label_ = "";
   bool printed_ = false;
-  std::chrono::steady_clock::time_point start_;
+  Clock::time_point start_;
+  Clock::time_point phase_start_;
 };
 
 /// Where the results go, declared (and checked) before the long work.
@@ -167,7 +237,7 @@ Error cross_validation(const CalibrateSettings& settings, const RobotModel& star
   return Error{};
 }
 
-Error run(const CalibrateSettings& settings, const RobotModel& start, JobMemory* memory) {
+Error run(const CalibrateSettings& settings, const RobotModel& start, JobMemory* memory, Profile* profile) {
   CliDataset* dataset = &memory->dataset;
   Run* run = &memory->job;
   CalibrationOptions job;
@@ -188,10 +258,12 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, JobMemory*
   job.compliance.enabled = settings.compliance;
   if (settings.compliance) job.compliance.model = settings.compliance_model;
   auto& workspace = memory->workspace.for_samples(dataset->size());
-  JobObserver observer(settings.progress);
+  JobObserver observer(settings.progress, profile);
   run->target_count = target_count(dataset->samples());
   run->options = job;
+  const Clock::time_point job_start = Clock::now();
   const Status status = hivecal::calibrate(start, dataset, job, &workspace, &run->result, &observer);
+  profile->add("job: the rest (split, outlier lists)", seconds_since(job_start) - profile->sum("job: "));
   for (std::size_t k = 0; k < kMaxCalibrationStages; ++k) run->seconds[k] = observer.seconds[k];
   const CalibrationStep step = run->result.step;
   if (step == CalibrationStep::baseline) {
@@ -213,7 +285,11 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, JobMemory*
     return Error::failure(std::string(what) + " failed: " + status_message(status));
   }
   run->has_cv = settings.cv_folds > 0;
-  return run->has_cv ? cross_validation(settings, start, job, memory) : Error{};
+  if (!run->has_cv) return Error{};
+  const Clock::time_point cv_start = Clock::now();
+  const Error cv = cross_validation(settings, start, job, memory);
+  profile->add("cross-validation", seconds_since(cv_start));
+  return cv;
 }
 
 // --- write ------------------------------------------------------------------------------------
@@ -237,6 +313,8 @@ Error write_outputs(const Options& options, const CalibrateSettings& settings, c
 /// `*warnings`: the fit's plausibility warnings (fit_checks.hpp), printed on stderr; the
 /// outputs are written all the same.
 Error calibrate(const Options& options, std::vector<std::string>* warnings) {
+  const Clock::time_point command_start = Clock::now();
+  Profile profile;
   CalibrateSettings settings;
   Error error = calibrate_settings_from_options(options, &settings);
   port::OutputSet outputs;
@@ -249,12 +327,15 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   Run& job = memory->job;
   streams::SessionFacts facts;
   PointFates fates;
+  Clock::time_point part_start = Clock::now();
   if (error.ok()) error = load_dataset(options, settings, &dataset, &facts, &fates);
+  profile.add("read the input", seconds_since(part_start));
   if (error.ok()) textio::start_orientation_targets(facts.orientation, &start);
   job.from_controller = !options.get("ur-calibration").empty();
   job.link_length_count = link_length_set(start).count;
-  if (error.ok()) error = run(settings, start, memory.get());
+  if (error.ok()) error = run(settings, start, memory.get(), &profile);
   if (!error.ok()) return error;
+  part_start = Clock::now();
   report::ReportData data = present_calibration(settings, start, dataset, facts, job);
   if (facts.has_stream) data.timeline = fates.timeline(120);
   // Any output on stdout (the result, or --ur-deltas -) keeps the tables off it.
@@ -262,8 +343,12 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   print_calibration_tables(terminal, data, job);
   *warnings = fit_warnings(job.result, settings.bounds, data.parameters);
+  profile.add("final w-test, accuracy and tables", seconds_since(part_start));
+  part_start = Clock::now();
   error = write_outputs(options, settings, data, facts, job, *warnings, &outputs, ids);
+  profile.add("write the outputs", seconds_since(part_start));
   if (!error.ok()) return error;
+  if (settings.profile) profile.print(stderr, seconds_since(command_start));
   if (!result_on_stdout) std::fprintf(terminal, "\nresult: %s\n", options.get("out").c_str());
   if (!options.get("ur-deltas").empty()) std::fprintf(terminal, "UR deltas: %s\n", options.get("ur-deltas").c_str());
   if (!options.get("report").empty()) std::fprintf(terminal, "report: %s/index.html\n", options.get("report").c_str());

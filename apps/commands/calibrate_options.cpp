@@ -224,6 +224,10 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
         {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]",
          ""},
         {"quiet", "", "no progress on stderr", ""},
+        {"profile", "",
+         "print on stderr where the wall time went: reading the input, the job's screen, baseline, stages and "
+         "w-tests, cross-validation, tables and outputs",
+         ""},
         {"tracker-sigma-um", "S",
          "stated noise of the tracker per axis: the blunder test's sigma when the fit leaves too little redundancy, "
          "and the report's measurement noise (the same as --position-sigma-m) [um]",
@@ -328,6 +332,7 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   settings->bounds.max_angle_change_rad = max_deg * math::kRadPerDeg;
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
+  settings->profile = options.given("profile");
   const Error compliance = compliance_from_options(options, settings);
   if (!compliance.ok()) return compliance;
   error = orientation_options(options, &settings->orientation);

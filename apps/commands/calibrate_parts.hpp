@@ -42,6 +42,7 @@ struct CalibrateSettings {
       kDefaultPopulationSubset;  ///< --population-subset: a hybrid's ABC/GSA samples (0: all) [-]
   std::size_t cv_folds = 0;      ///< --cv K; 1: leave-one-out (lib's folds = 0); 0: no cross-validation
   bool progress = false;         ///< progress lines on stderr
+  bool profile = false;          ///< --profile: where the wall time went, on stderr
   textio::InputUnits units;      ///< --length-unit, --angle-unit of text inputs
   FitBounds bounds;              ///< --max-change-mm, --max-change-deg
   bool compliance = false;       ///< --compliance: an LM+compliance stage after the rigid LM

@@ -82,5 +82,42 @@ TEST(LargeSetCli, TheGeometryOfALargerSetIsNotTestedUnlessALevelIsGiven) {
   EXPECT_EQ(text.find("significance_geometry_tested"), std::string::npos);
 }
 
+// --profile says where the wall time went: the input, the job's phases and stages (each w-test
+// of a rerun adds a pass), the tables and the outputs, which with the rest add up to the total.
+TEST(LargeSetCli, TheProfileSaysWhereTheTimeWent) {
+  const test::TempDir dir("hivecal_large");
+  ASSERT_FALSE(dir.path().empty());
+  static Dataset<400> written;
+  written.clear();
+  Random random(9);
+  const RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, 1e-4, 1e-4);
+  test::fill_dataset(truth, test::example_base_to_tracker(), 400, 1e-5, &random, &written);
+  const std::string samples = dir.write("profiled.csv", textio::format_samples_csv(written.samples()));
+  const std::vector<std::string> args = {"--samples", samples, "--out", dir.path() + "/result.json", "--quiet"};
+  std::string err;
+  ASSERT_EQ(test::run_capturing_stderr(cli::calibrate_main, args, &err), cli::kExitOk);
+  EXPECT_EQ(err.find("profile:"), std::string::npos) << "only when asked";
+  std::vector<std::string> profiled = args;
+  profiled.push_back("--profile");
+  ASSERT_EQ(test::run_capturing_stderr(cli::calibrate_main, profiled, &err), cli::kExitOk);
+  const std::size_t head = err.find("profile: wall time [s] of the command, ");
+  ASSERT_NE(head, std::string::npos) << err;
+  const double total_s = std::strtod(err.c_str() + head + 38, nullptr);
+  EXPECT_GT(total_s, 0.0);
+  double listed_s = 0.0;
+  for (const char* part : {"read the input", "job: screen of the start geometry", "job: baseline fit", "job: ABC stage",
+                           "job: LM stage", "job: w-test of the fit", "job: the rest",
+                           "final w-test, accuracy and tables", "write the outputs", "other (options"}) {
+    const std::size_t at = err.find(std::string("\n  ") + part, head);
+    ASSERT_NE(at, std::string::npos) << part << "\n" << err;
+    const std::size_t end = err.find('\n', at + 1);
+    const std::string line = err.substr(at + 1, end - at - 1);
+    const double seconds = std::strtod(line.c_str() + 43, nullptr);  // after the 40-character label
+    EXPECT_GE(seconds, -1e-6) << line;
+    listed_s += seconds;
+  }
+  EXPECT_NEAR(listed_s, total_s, 0.006) << err;  // each printed to 1 ms
+}
+
 }  // namespace
 }  // namespace hivecal::large_set_cli_test

@@ -318,10 +318,23 @@ struct CalibrationResult {
   }
 };
 
-/// Optional hooks: stage begin and end (for timings, which lib does not take) and the
-/// solvers' per-iteration progress. The defaults do nothing and never cancel.
+/// The job's work outside its stages, as CalibrationObserver::on_phase reports it.
+enum class CalibrationPhase : std::uint8_t {
+  screen,        ///< the start geometry's consensus screen for gross blunders (once per job)
+  baseline,      ///< the uncalibrated baseline's tool point and base fit (once per run)
+  blunder_test,  ///< the w-test of a run's calibration, which decides whether the job runs again
+};
+
+/// Optional hooks: stage begin and end and the phases between them (for timings, which lib
+/// does not take) and the solvers' per-iteration progress. The defaults do nothing and never
+/// cancel.
 class CalibrationObserver : public ProgressObserver, public LmObserver {
  public:
+  /// When `phase` begins (`ended` false) and when it ends (true; also when it failed).
+  virtual void on_phase(CalibrationPhase phase, bool ended) {
+    (void)phase;
+    (void)ended;
+  }
   /// Before stage `index` with `solver` starts (its cost is built inside the stage).
   virtual void on_stage_begin(std::size_t index, CalibrationSolver solver) {
     (void)index;

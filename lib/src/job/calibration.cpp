@@ -721,6 +721,11 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
   return again;
 }
 
+/// Tells the observer, if any, that `phase` began or ended.
+void report_phase(CalibrationObserver* observer, CalibrationPhase phase, bool ended) {
+  if (observer != nullptr) observer->on_phase(phase, ended);
+}
+
 /// Runs one stage with the observer's begin/end around it, then its train/test errors.
 /// `hybrid`: the stage is a half of a hybrid (ABC/GSA: the start, on the spanning subset; LM:
 /// from the previous stage). `compliance`: the LM+compliance stage (solver lm).
@@ -780,7 +785,9 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
   r->train_count = dataset->train().size();
   r->test_count = dataset->test().size();
   r->train_points = distinct_points(dataset->train());
+  report_phase(observer, CalibrationPhase::baseline, false);
   Status status = fit_baseline(start, dataset->train(), options, *workspace, r);
+  report_phase(observer, CalibrationPhase::baseline, true);
   if (status != Status::ok) return fail(r, CalibrationStep::baseline, status);
   r->baseline.train = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->train());
   r->baseline.test = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->test());
@@ -953,7 +960,9 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   // The two lists live in the workspace (2.6 kB: not on a small target's stack).
   CalibrationOutlierList& aside = workspace->outlier_list(0);
   CalibrationOutlierList& tested = workspace->outlier_list(1);
+  report_phase(observer, CalibrationPhase::screen, false);
   status = screen(start, dataset, options, *workspace, &aside);
+  report_phase(observer, CalibrationPhase::screen, true);
   if (status != Status::ok) return fail(&reset(result), CalibrationStep::baseline, status);
   // Rerun until the w-test of the calibration sets aside what the run left out: a sample the
   // start geometry's screen flagged comes back when the calibration explains it.
@@ -966,7 +975,9 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
     status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
     if (status != Status::ok) return status;
     ++round;
+    report_phase(observer, CalibrationPhase::blunder_test, false);
     verdict = search_blunders(dataset, options, *workspace, *result, &tested, &summary);
+    report_phase(observer, CalibrationPhase::blunder_test, true);
     if (verdict == BlunderVerdict::not_searched || same_indices(tested, aside) || undecided) break;
     if (round < kMaxRounds) {
       aside = tested;
