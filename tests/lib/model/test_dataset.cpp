@@ -5,7 +5,9 @@
 #include <limits>
 #include <cstdlib>
 #include <set>
+#include <vector>
 
+#include "hivecal/core/random.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "testkit/alloc_trap.hpp"
 
@@ -280,6 +282,130 @@ TEST(Dataset, CountsConfigurationsNotCreepingPoses) {
 
 namespace hivecal::dataset_test {
 namespace {
+
+// The dataset's reorderings as they were first written, one sample moved at a time: an
+// insertion sort by index, a pose's block moved down over the gap sample by sample, the fold
+// rotated left one sample at a time. The library's n log n sort and block rotations must give
+// these orders exactly: every job's split, and so every golden digest, depends on them.
+using Samples = std::vector<Sample>;  ///< the reference's storage
+
+void reference_sort_by_index(Samples* v, std::size_t count) {
+  for (std::size_t i = 1; i < count; ++i) {
+    const Sample moving = (*v)[i];
+    std::size_t j = i;
+    for (; j > 0 && (*v)[j - 1].index > moving.index; --j) (*v)[j] = (*v)[j - 1];
+    (*v)[j] = moving;
+  }
+}
+
+std::size_t reference_pose_end(const Samples& v, std::size_t size, std::size_t begin) {
+  std::size_t end = begin + 1;
+  while (end < size && v[end].q_rad == v[begin].q_rad) ++end;
+  return end;
+}
+
+void reference_shuffle_poses(Samples* v, std::size_t size, std::uint64_t seed) {
+  reference_sort_by_index(v, size);
+  std::size_t poses = 0;
+  for (std::size_t i = 0; i < size; i = reference_pose_end(*v, size, i)) ++poses;
+  Random random(seed);
+  for (std::size_t placed_end = 0, remaining = poses; remaining > 1; --remaining) {
+    const auto pick = static_cast<std::size_t>(random.below(remaining));
+    std::size_t begin = placed_end;
+    for (std::size_t k = 0; k < pick; ++k) begin = reference_pose_end(*v, size, begin);
+    const std::size_t end = reference_pose_end(*v, size, begin);
+    for (std::size_t i = begin; i < end; ++i) {
+      const Sample moving = (*v)[i];
+      for (std::size_t j = i; j > placed_end + (i - begin); --j) (*v)[j] = (*v)[j - 1];
+      (*v)[placed_end + (i - begin)] = moving;
+    }
+    placed_end += end - begin;
+  }
+}
+
+void reference_rotate_left(Samples* v, std::size_t begin, std::size_t size, std::size_t by) {
+  for (std::size_t r = 0; r < by; ++r) {
+    const Sample first = (*v)[begin];
+    for (std::size_t i = begin; i + 1 < size; ++i) (*v)[i] = (*v)[i + 1];
+    (*v)[size - 1] = first;
+  }
+}
+
+std::vector<std::uint32_t> order_of(const DatasetBase& dataset) {
+  std::vector<std::uint32_t> order;
+  for (const Sample& s : dataset.samples()) order.push_back(s.index);
+  for (const Sample& s : dataset.set_aside()) order.push_back(s.index);
+  return order;
+}
+
+std::vector<std::uint32_t> order_of(const Samples& v) {
+  std::vector<std::uint32_t> order;
+  for (const Sample& s : v) order.push_back(s.index);
+  return order;
+}
+
+TEST(Dataset, ReordersExactlyAsOneSampleAtATime) {
+  static Dataset<400> dataset;
+  Random random(2026);
+  for (int trial = 0; trial < 200; ++trial) {
+    // Poses of 1 to 3 samples (targets or repeated readings), some set aside.
+    dataset.clear();
+    const auto poses = static_cast<int>(3 + random.below(trial < 100 ? 20 : 130));
+    for (int p = 0; p < poses; ++p) {
+      const auto readings = static_cast<int>(1 + random.below(3));
+      for (int k = 0; k < readings; ++k) {
+        ASSERT_EQ(dataset.add(JointVector::Constant(p), Vec3(p, k, trial), 0), Status::ok);
+      }
+    }
+    std::vector<std::uint32_t> aside;
+    for (std::size_t a = random.below(4); a > 0; --a)
+      aside.push_back(static_cast<std::uint32_t>(random.below(dataset.size())));
+    const std::uint64_t seed = random.next();
+    // A shuffled storage first (a previous split), then set_aside sorts and partitions.
+    ASSERT_EQ(dataset.split(0.7, seed ^ 1U), Status::ok);
+    Samples v(dataset.samples().begin(), dataset.samples().end());
+    EXPECT_NO_HEAP(dataset.set_aside(Span<const std::uint32_t>(aside.data(), aside.size())));
+    reference_sort_by_index(&v, v.size());
+    Samples kept;
+    Samples gone;
+    for (const Sample& s : v) {
+      bool out = false;
+      for (std::uint32_t index : aside) out = out || s.index == index;
+      (out ? gone : kept).push_back(s);
+    }
+    const std::size_t size = kept.size();
+    v = kept;
+    v.insert(v.end(), gone.begin(), gone.end());
+    ASSERT_EQ(order_of(dataset), order_of(v)) << "set_aside, trial " << trial;
+    // A split of whole poses.
+    if (dataset.pose_count() < dataset.size()) {
+      EXPECT_NO_HEAP(dataset.split(0.7, seed));
+      reference_shuffle_poses(&v, size, seed);
+      ASSERT_EQ(order_of(dataset), order_of(v)) << "split, trial " << trial;
+    }
+    // A fold: the poses shuffled again, the fold's block rotated to the end.
+    const std::size_t folds = 2 + random.below(dataset.pose_count() - 1);
+    const std::size_t fold = random.below(folds);
+    EXPECT_NO_HEAP(dataset.split_fold(fold, folds, seed));
+    const std::size_t fold_begin = dataset.size() - dataset.test().size();
+    if (dataset.pose_count() < dataset.size()) {
+      reference_shuffle_poses(&v, size, seed);
+    } else {
+      reference_sort_by_index(&v, size);
+      Random draws(seed);
+      for (std::size_t i = size - 1; i > 0; --i) std::swap(v[i], v[draws.below(i + 1)]);
+    }
+    std::size_t begin = 0;
+    std::size_t at_pose = 0;
+    const std::size_t fold_first_pose = fold * dataset.pose_count() / folds;
+    while (at_pose < fold_first_pose) {
+      begin = reference_pose_end(v, size, begin);
+      ++at_pose;
+    }
+    reference_rotate_left(&v, begin, size, size - fold_begin);
+    ASSERT_EQ(order_of(dataset), order_of(v)) << "split_fold, trial " << trial;
+  }
+}
 
 TEST(PoseRunEnd, ARunOfEqualJointsIsOnePoseAnyDifferenceEndsIt) {
   Sample s[5];
