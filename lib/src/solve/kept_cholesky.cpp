@@ -27,22 +27,26 @@ bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f) {
   return true;
 }
 
-/// x = A^-1 b over the factored parameters (U^T y = b, then U x = y); 0 elsewhere.
-void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x) {
+void cholesky_solve_compact(const KeptCholesky& f, double* v) {
   const NormalMatrix& u = f.upper;
-  double y[kFullParamCount];
-  for (int i = 0; i < f.count; ++i) {
-    double sum = b(f.index[i]);
-    for (int k = 0; k < i; ++k) sum -= u(k, i) * y[k];
-    y[i] = sum / u(i, i);
+  for (int i = 0; i < f.count; ++i) {  // U^T y = b
+    double sum = v[i];
+    for (int k = 0; k < i; ++k) sum -= u(k, i) * v[k];
+    v[i] = sum / u(i, i);
   }
+  for (int i = f.count - 1; i >= 0; --i) {  // U x = y
+    double sum = v[i];
+    for (int k = i + 1; k < f.count; ++k) sum -= u(i, k) * v[k];
+    v[i] = sum / u(i, i);
+  }
+}
+
+void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x) {
+  double v[kFullParamCount];
+  for (int i = 0; i < f.count; ++i) v[i] = b(f.index[i]);
+  cholesky_solve_compact(f, v);
   x->setZero();
-  for (int i = f.count - 1; i >= 0; --i) {
-    double sum = y[i];
-    for (int k = i + 1; k < f.count; ++k) sum -= u(i, k) * y[k];
-    y[i] = sum / u(i, i);
-    (*x)(f.index[i]) = y[i];
-  }
+  for (int i = 0; i < f.count; ++i) (*x)(f.index[i]) = v[i];
 }
 
 namespace {

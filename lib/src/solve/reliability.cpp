@@ -54,6 +54,14 @@ double factored_quadratic(const UnitMatrix& l, const double* e, int n) {
   return sum;
 }
 
+/// a . b over n entries summed in index order (a dot product of the full parameter vectors
+/// visits the same non-zero products in the same order).
+double ordered_dot(const double* a, const double* b, int n) {
+  double sum = 0.0;
+  for (int k = 0; k < n; ++k) sum += a[k] * b[k];
+  return sum;
+}
+
 /// The fit the units are tested against.
 struct Fit {
   const RobotModel& model;
@@ -77,6 +85,7 @@ struct UnitRows {
 /// The scratch lives in the workspace: this runs beside the job's deepest stack.
 [[gnu::noinline]] void unit_rows(const Fit& fit, Span<const Sample> samples, std::size_t begin, std::size_t end,
                                  ReliabilityWorkspace* ws, UnitRows* u) {
+  const KeptCholesky& f = ws->factor;
   ws->tool_rows.setZero();
   ws->tool_solved.setZero();
   int row_target[kMaxUnitRows] = {};
@@ -107,15 +116,21 @@ struct UnitRows {
         row_target[r] = sample.target;
       }
       ws->residual_m[r] = residual_m(axis);
-      for (int i = 0; i < kFullParamCount; ++i) b(i) = mask_has(fit.kept, i) ? b(i) * fit.scale(i) : 0.0;
-      cholesky_solve(ws->factor, b, &ws->row_solved);
-      ws->rows.row(r) = b.transpose();
-      ws->solved.row(r) = ws->row_solved.transpose();
+      // Over the estimated parameters only (the factor's, in its order): the others' entries
+      // were zeros, whose products left every sum below as it is.
+      double* const row = ws->rows.col(r).data();
+      double* const solved = ws->solved.col(r).data();
+      for (int k = 0; k < f.count; ++k) {
+        const int i = f.index[k];
+        row[k] = b(i) * fit.scale(i);
+        solved[k] = row[k];
+      }
+      cholesky_solve_compact(f, solved);
     }
   }
   for (int i = 0; i < u->count; ++i) {
     for (int j = 0; j < u->count; ++j) {
-      double value = ws->rows.row(i).dot(ws->solved.row(j));
+      double value = ordered_dot(ws->rows.col(i).data(), ws->solved.col(j).data(), f.count);
       if (row_target[i] != 0 && row_target[i] == row_target[j]) {
         value += ws->tool_rows.row(i).dot(ws->tool_solved.row(j));
       }

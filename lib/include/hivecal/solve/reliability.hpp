@@ -97,12 +97,13 @@ inline constexpr std::size_t kMinPooledPoses = 30;
 
 /// Scratch of the test (~24 kB): in the caller's memory plan, not on a small stack.
 struct ReliabilityWorkspace {
-  NormalEquations normal;                                     ///< the fit's normal equations at its point
-  NormalMatrix scaled;                                        ///< their column-scaled matrix (kept block), then unused
-  KeptCholesky factor;                                        ///< its Cholesky factor over the estimated parameters
-  TargetBlock blocks[kMaxTargets - 1];                        ///< the other targets' eliminated tool points
-  Eigen::Matrix<double, kMaxUnitRows, kFullParamCount> rows;  ///< a unit's scaled rows, Schur-reduced
-  Eigen::Matrix<double, kMaxUnitRows, kFullParamCount> solved;  ///< the same through the inverse normal matrix
+  NormalEquations normal;               ///< the fit's normal equations at its point
+  NormalMatrix scaled;                  ///< their column-scaled matrix (kept block), then unused
+  KeptCholesky factor;                  ///< its Cholesky factor over the estimated parameters
+  TargetBlock blocks[kMaxTargets - 1];  ///< the other targets' eliminated tool points
+  /// A unit's scaled rows, Schur-reduced, one per column over the factored parameters (factor.index).
+  Eigen::Matrix<double, kFullParamCount, kMaxUnitRows> rows;
+  Eigen::Matrix<double, kFullParamCount, kMaxUnitRows> solved;  ///< the same through the inverse normal matrix
   Eigen::Matrix<double, kMaxUnitRows, kMaxUnitRows> hat;        ///< the unit's hat block H_uu, then I -+ H_uu factored
   Eigen::Matrix<double, kMaxUnitRows, kMaxUnitRows>
       correlation;  ///< the readings' pooled correlation (row k: reading k / 3, axis k % 3)
@@ -110,8 +111,7 @@ struct ReliabilityWorkspace {
   Eigen::Matrix<double, kMaxUnitRows, 3> tool_solved;  ///< D^-1 t^T per row
   double residual_m[kMaxUnitRows] = {};                ///< its residual rows [m]
   FullJacobian jacobian;                               ///< one sample's rows
-  FullParams row;                                      ///< one row, scaled
-  FullParams row_solved;                               ///< H^-1 times it
+  FullParams row;                                      ///< one row of the Jacobian, Schur-reduced
 };
 
 /// Tests the units of `fitted` (the samples a least-squares fit at (model, base) used, with the
