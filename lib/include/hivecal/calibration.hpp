@@ -464,7 +464,8 @@ struct SubsetStorage<0> {
 /// tool points of up to `MaxTargets` reflectors (1: one reflector only, 3.6 kB less; the
 /// firmware's choice), and room for a hybrid's spanning subset of `SubsetCapacity` samples
 /// (4 B each; 0: a hybrid's population stage searches on every sample, as the paper's methods
-/// do), and GSA with up to `GsaPopulation` agents (0: no GSA phase, a job with GSA ends with
+/// do; by default none for up to kDefaultPopulationSubset samples, else room for up to
+/// kMaxPopulationSubset), and GSA with up to `GsaPopulation` agents (0: no GSA phase, a job with GSA ends with
 /// population_out_of_range; the firmware's choice, 7.2 kB less). Big: give it static storage.
 template <std::size_t Samples, typename CostScalar = double, std::size_t Population = 150,
           std::size_t TraceCapacity = 300, std::size_t JointTrigSamples = 0,
