@@ -57,12 +57,6 @@ class Profile {
     }
     parts_.push_back(Part{part, seconds, 1});
   }
-  /// Seconds of the parts whose name starts with `prefix`.
-  double sum(const std::string& prefix) const {
-    double total = 0.0;
-    for (const Part& p : parts_) total += p.name.compare(0, prefix.size(), prefix) == 0 ? p.seconds : 0.0;
-    return total;
-  }
   void print(std::FILE* out, double total_seconds) const {
     std::fprintf(out, "profile: wall time [s] of the command, %.3f in all\n", total_seconds);
     double listed = 0.0;
@@ -103,8 +97,8 @@ class JobObserver final : public CalibrationObserver {
   void on_phase(CalibrationPhase phase, bool ended) override {
     if (!ended) {
       phase_start_ = Clock::now();
-    } else if (profile_ != nullptr) {
-      profile_->add(phase_label(phase), seconds_since(phase_start_));
+    } else {
+      add(phase_label(phase), seconds_since(phase_start_));
     }
   }
   void on_stage_begin(std::size_t, CalibrationSolver solver) override {
@@ -113,12 +107,11 @@ class JobObserver final : public CalibrationObserver {
   }
   void on_stage_end(std::size_t index, const CalibrationStage& stage) override {
     seconds[index] = seconds_since(start_);
-    if (profile_ != nullptr) {
-      profile_->add(std::string("job: ") + (stage.compliance ? "LM with joint terms" : label_) + " stage",
-                    seconds[index]);
-    }
+    add(std::string("job: ") + calibration_stage_name(stage, nullptr) + " stage", seconds[index]);
     end_line();
   }
+  /// Wall time of the phases and stages reported so far [s].
+  double timed_seconds() const { return timed_s_; }
   void on_iteration(const SolverProgress& p) override {
     print("iteration %zu/%zu, best MAE %.2f um", p.iteration, p.iteration_count, p.best_cost * 1e6);
   }
@@ -137,12 +130,17 @@ class JobObserver final : public CalibrationObserver {
     std::fflush(stderr);
     printed_ = true;
   }
+  void add(const std::string& part, double part_s) {
+    timed_s_ += part_s;
+    if (profile_ != nullptr) profile_->add(part, part_s);
+  }
   void end_line() {
     if (enabled_ && printed_) std::fprintf(stderr, "\n");
     printed_ = false;
   }
   bool enabled_;
   Profile* profile_;  // null: no --profile
+  double timed_s_ = 0.0;
   const char* label_ = "";
   bool printed_ = false;
   Clock::time_point start_;
@@ -263,7 +261,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, JobMemory*
   run->options = job;
   const Clock::time_point job_start = Clock::now();
   const Status status = hivecal::calibrate(start, dataset, job, &workspace, &run->result, &observer);
-  profile->add("job: the rest (split, outlier lists)", seconds_since(job_start) - profile->sum("job: "));
+  profile->add("job: the rest (split, outlier lists)", seconds_since(job_start) - observer.timed_seconds());
   for (std::size_t k = 0; k < kMaxCalibrationStages; ++k) run->seconds[k] = observer.seconds[k];
   const CalibrationStep step = run->result.step;
   if (step == CalibrationStep::baseline) {

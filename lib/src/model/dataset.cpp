@@ -175,10 +175,6 @@ std::size_t DatasetBase::pose_start(std::size_t pose) const {
   return i;
 }
 
-void DatasetBase::rotate_to(std::size_t to, std::size_t begin, std::size_t end) {
-  rotate(storage_, to, begin, end);  // the block to `to`, the gap's samples after it in their order
-}
-
 void DatasetBase::shuffle_poses(std::uint64_t seed) {
   // The kept samples in the order of add(), then each pose's run moved as a whole: slot p takes
   // a uniformly drawn one of the poses not placed yet (they stay contiguous behind slot p).
@@ -190,7 +186,7 @@ void DatasetBase::shuffle_poses(std::uint64_t seed) {
     std::size_t begin = placed_end;
     for (std::size_t k = 0; k < pick; ++k) begin = pose_end(begin);
     const std::size_t end = pose_end(begin);
-    rotate_to(placed_end, begin, end);
+    rotate(storage_, placed_end, begin, end);  // the pose to the slot, the others after it in their order
     placed_end += end - begin;
   }
 }

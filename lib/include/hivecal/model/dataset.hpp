@@ -150,7 +150,6 @@ class DatasetBase {
   void shuffle(std::uint64_t seed);
   std::size_t pose_end(std::size_t begin) const;   // end of the run of equal joints at begin
   std::size_t pose_start(std::size_t pose) const;  // first sample of run `pose` in the current order
-  void rotate_to(std::size_t to, std::size_t begin, std::size_t end);  // block [begin, end) moved to `to` <= begin
   static std::size_t train_poses_of(double train_fraction, std::size_t poses);  // see train_count_for
   // split()'s training samples after shuffle_poses: whole poses nearest the fraction of the samples
   std::size_t train_count_of_poses(double train_fraction, std::size_t train_poses) const;
