@@ -12,6 +12,14 @@ int target_count(Span<const Sample> samples) {
 
 namespace {
 
+// While shuffle_poses runs, each sample carries its pose's new slot in the bits of
+// Sample::target above the target itself: the dataset has no memory but its samples, and the
+// library allocates none. Outside shuffle_poses those bits are 0.
+constexpr int kTargetBits = 2;
+static_assert(kMaxTargets <= (1 << kTargetBits), "the targets fit below the slot bits");
+/// Poses shuffle_poses can number: slot + 1 above kTargetBits stays a positive int.
+constexpr std::size_t kMaxShuffledPoses = (std::size_t{1} << (31 - kTargetBits)) - 1;
+
 /// Whether two samples are at one configuration of the arm (kSameConfigurationTolerance_rad).
 bool same_configuration(const Sample& a, const Sample& b) {
   return (a.q_rad - b.q_rad).cwiseAbs().maxCoeff() <= kSameConfigurationTolerance_rad;
@@ -58,6 +66,7 @@ Status DatasetBase::add(const JointVector& q_rad, const Vec3& point_m, int targe
   // A new sample joins every stored one. The empty Span is a null view (no storage, no heap):
   // set_aside() with it only moves the set-aside samples back in place.
   if (stored_ != size_) set_aside(Span<const std::uint32_t>());
+  if (stored_ >= kMaxShuffledPoses) return Status::dataset_full;  // see shuffle_poses
   if (full() && (!grow(stored_ + 1) || full())) return Status::dataset_full;
   storage_[size_].q_rad = q_rad;
   storage_[size_].point_m = point_m;
@@ -77,12 +86,19 @@ void DatasetBase::clear() {
 
 namespace {
 
-/// Moves s[root] down the max-heap of s[0, end) ordered by Sample::index.
+/// The order of sort_by_index: the pose's slot while shuffle_poses runs (else 0), then the
+/// order of add().
+std::uint64_t sort_key(const Sample& s) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(s.target) >> kTargetBits) << 32) | s.index;
+}
+
+/// Moves s[root] down the max-heap of s[0, end) ordered by sort_key.
 void sift_down(Sample* s, std::size_t root, std::size_t end) {
   const Sample moving = s[root];
+  const std::uint64_t moving_key = sort_key(moving);
   for (std::size_t child = 2 * root + 1; child < end; child = 2 * root + 1) {
-    if (child + 1 < end && s[child + 1].index > s[child].index) ++child;
-    if (s[child].index <= moving.index) break;
+    if (child + 1 < end && sort_key(s[child + 1]) > sort_key(s[child])) ++child;
+    if (sort_key(s[child]) <= moving_key) break;
     s[root] = s[child];
     root = child;
   }
@@ -115,7 +131,7 @@ void DatasetBase::sort_by_index(std::size_t count) {
   // without heap memory: a check (the order of add() is the common case), else heapsort,
   // n log n (an insertion sort's n^2 / 4 moves took 28 s on 200,000 shuffled samples).
   std::size_t sorted = 1;
-  while (sorted < count && storage_[sorted - 1].index < storage_[sorted].index) ++sorted;
+  while (sorted < count && sort_key(storage_[sorted - 1]) < sort_key(storage_[sorted])) ++sorted;
   if (sorted >= count) return;
   for (std::size_t root = count / 2; root-- > 0;) sift_down(storage_, root, count);
   for (std::size_t end = count - 1; end > 0; --end) {
@@ -175,20 +191,52 @@ std::size_t DatasetBase::pose_start(std::size_t pose) const {
   return i;
 }
 
+namespace {
+
+/// Where shuffle_poses looks for the k-th pose not placed yet: the poses in blocks of equal
+/// counts, each block's first sample and how many of its poses are still to place. A pick
+/// walks the counts, then one block (not every pose before it: that was n^2 / 2).
+struct PoseDirectory {
+  static constexpr std::size_t kBlocks = 256;
+  std::uint32_t first_sample[kBlocks];  ///< < kMaxShuffledPoses samples
+  std::uint32_t unplaced[kBlocks];
+};
+
+}  // namespace
+
 void DatasetBase::shuffle_poses(std::uint64_t seed) {
-  // The kept samples in the order of add(), then each pose's run moved as a whole: slot p takes
-  // a uniformly drawn one of the poses not placed yet (they stay contiguous behind slot p).
+  // Slot p takes a uniformly drawn one of the poses not placed yet, counted in the order of
+  // add(). The slots are marked on the samples (sort_key), then one sort moves every pose to
+  // its slot, its samples in their order.
   sort_by_index(size_);
-  Random random(seed);
-  std::size_t remaining = pose_count();
-  for (std::size_t placed_end = 0; remaining > 1; --remaining) {
-    const auto pick = static_cast<std::size_t>(random.below(static_cast<std::uint64_t>(remaining)));
-    std::size_t begin = placed_end;
-    for (std::size_t k = 0; k < pick; ++k) begin = pose_end(begin);
-    const std::size_t end = pose_end(begin);
-    rotate(storage_, placed_end, begin, end);  // the pose to the slot, the others after it in their order
-    placed_end += end - begin;
+  const std::size_t poses = pose_count();
+  if (poses > kMaxShuffledPoses) return;  // add() refuses that many samples
+  PoseDirectory directory;
+  const std::size_t per_block = (poses + PoseDirectory::kBlocks - 1) / PoseDirectory::kBlocks;
+  for (std::size_t pose = 0, i = 0; pose < poses; ++pose, i = pose_end(i)) {
+    if (pose % per_block == 0) {
+      directory.first_sample[pose / per_block] = static_cast<std::uint32_t>(i);
+      directory.unplaced[pose / per_block] = 0;
+    }
+    ++directory.unplaced[pose / per_block];
   }
+  Random random(seed);
+  for (std::size_t slot = 0; slot < poses; ++slot) {
+    const std::size_t remaining = poses - slot;
+    auto pick = remaining > 1 ? static_cast<std::size_t>(random.below(static_cast<std::uint64_t>(remaining))) : 0;
+    std::size_t block = 0;
+    for (; pick >= directory.unplaced[block]; ++block) pick -= directory.unplaced[block];
+    std::size_t begin = directory.first_sample[block];
+    for (;; begin = pose_end(begin)) {
+      if (sort_key(storage_[begin]) >> 32 == 0 && pick-- == 0) break;  // not placed yet
+    }
+    --directory.unplaced[block];
+    const std::size_t end = pose_end(begin);
+    const auto mark = static_cast<int>((slot + 1) << kTargetBits);
+    for (std::size_t i = begin; i < end; ++i) storage_[i].target |= mark;
+  }
+  sort_by_index(size_);
+  for (std::size_t i = 0; i < size_; ++i) storage_[i].target &= (1 << kTargetBits) - 1;
 }
 
 Status DatasetBase::split_fold(std::size_t fold, std::size_t folds, std::uint64_t seed) {

@@ -27,24 +27,47 @@ bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f) {
   return true;
 }
 
-void cholesky_solve_compact(const KeptCholesky& f, double* v) {
+namespace {
+
+/// cholesky_solve_compact on kWidth columns: each column gets the operations of a solve of it
+/// alone, in their order (the same bits), its running sum in a register; the columns' chains of
+/// subtractions are independent, so they overlap instead of each waiting on its own last result.
+// Not inlined: one copy of each width in the firmware's flash.
+template <std::size_t kWidth>
+[[gnu::noinline]] void solve_columns(const KeptCholesky& f, double* v, int stride) {
   const NormalMatrix& u = f.upper;
+  double* column[kWidth];
+  for (std::size_t r = 0; r < kWidth; ++r) column[r] = v + static_cast<std::ptrdiff_t>(r) * stride;
+  double sum[kWidth];
   for (int i = 0; i < f.count; ++i) {  // U^T y = b
-    double sum = v[i];
-    for (int k = 0; k < i; ++k) sum -= u(k, i) * v[k];
-    v[i] = sum / u(i, i);
+    for (std::size_t r = 0; r < kWidth; ++r) sum[r] = column[r][i];
+    for (int k = 0; k < i; ++k) {
+      for (std::size_t r = 0; r < kWidth; ++r) sum[r] -= u(k, i) * column[r][k];
+    }
+    for (std::size_t r = 0; r < kWidth; ++r) column[r][i] = sum[r] / u(i, i);
   }
   for (int i = f.count - 1; i >= 0; --i) {  // U x = y
-    double sum = v[i];
-    for (int k = i + 1; k < f.count; ++k) sum -= u(i, k) * v[k];
-    v[i] = sum / u(i, i);
+    for (std::size_t r = 0; r < kWidth; ++r) sum[r] = column[r][i];
+    for (int k = i + 1; k < f.count; ++k) {
+      for (std::size_t r = 0; r < kWidth; ++r) sum[r] -= u(i, k) * column[r][k];
+    }
+    for (std::size_t r = 0; r < kWidth; ++r) column[r][i] = sum[r] / u(i, i);
   }
+}
+
+}  // namespace
+
+void cholesky_solve_compact(const KeptCholesky& f, double* v, int stride, int count) {
+  // Three at a time: a pose's three rows (the w-test's units are 3 or 9 of them).
+  int first = 0;
+  for (; first + 3 <= count; first += 3) solve_columns<3>(f, v + first * stride, stride);
+  for (; first < count; ++first) solve_columns<1>(f, v + first * stride, stride);
 }
 
 void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x) {
   double v[kFullParamCount];
   for (int i = 0; i < f.count; ++i) v[i] = b(f.index[i]);
-  cholesky_solve_compact(f, v);
+  cholesky_solve_compact(f, v, 1, 1);
   x->setZero();
   for (int i = 0; i < f.count; ++i) (*x)(f.index[i]) = v[i];
 }

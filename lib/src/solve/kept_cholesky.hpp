@@ -14,9 +14,10 @@ bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f);
 /// x = A^-1 b over the factored parameters (U^T y = b, then U x = y); 0 elsewhere.
 void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x);
 
-/// The same in compact coordinates, in place: v[k] holds b at parameter f.index[k] on entry and
-/// x there on return (f.count values).
-void cholesky_solve_compact(const KeptCholesky& f, double* v);
+/// The same in compact coordinates, in place, for `count` right-hand sides: column r starts at
+/// v + r * stride (stride >= 1), and its entry k holds b at parameter f.index[k] on entry and x there on
+/// return (f.count values). Each column gets the bits of a solve of it alone.
+void cholesky_solve_compact(const KeptCholesky& f, double* v, int stride, int count);
 
 /// diag(A^-1) over the factored parameters, 0 elsewhere: A^-1 = W W^T with W = U^-1 (upper),
 /// built in *scratch.

@@ -521,6 +521,7 @@ namespace {
   // is mirrored below): a quarter of the full 37 x 37 products, the same bits.
   const IndexList list = indices_of(columns);
   const PerSampleContext context = per_sample_context(model);
+  double rows[3][kFullParamCount];  // the sample's Jacobian rows over the listed columns
   for (const Sample& sample : samples) {
     FullJacobian jacobian;
     Mat3 tool_jacobian;
@@ -530,14 +531,20 @@ namespace {
     const double squared = residual_m.squaredNorm();
     const double norm_m = std::sqrt(squared);
     const double weight = loss.weight(norm_m);
-    // Column by column: a 37 x 37 product temporary would be 11 kB of stack.
+    // Over the listed columns only, into the compact leading block of jtwj and jtwr
+    // (expand_compact places them): each entry adds w (j0a j0b + (j1a j1b + j2a j2b)), the sum
+    // of a 3-term dot product in Eigen's order, so a column of entries is independent work on
+    // contiguous memory (the compiler does two at once) with the bits of one at a time.
     for (int i = 0; i < list.count; ++i) {
-      const int a = list.index[i];
-      for (int j = i; j < list.count; ++j) {
-        const int b = list.index[j];
-        eq->jtwj(a, b) += weight * jacobian.col(a).dot(jacobian.col(b));
-      }
-      eq->jtwr(a) += weight * jacobian.col(a).dot(residual_m);
+      for (int r = 0; r < 3; ++r) rows[r][i] = jacobian(r, list.index[i]);
+    }
+    for (int j = 0; j < list.count; ++j) {
+      double* const column = &eq->jtwj(0, j);
+      const double b0 = rows[0][j];
+      const double b1 = rows[1][j];
+      const double b2 = rows[2][j];
+      for (int i = 0; i <= j; ++i) column[i] += weight * (rows[0][i] * b0 + (rows[1][i] * b1 + rows[2][i] * b2));
+      eq->jtwr(j) += weight * (b0 * residual_m(0) + (b1 * residual_m(1) + b2 * residual_m(2)));
     }
     eq->loss_sum_m2 += loss.rho(norm_m);
     eq->weighted_squares_m2 += weight * squared;
@@ -549,6 +556,7 @@ namespace {
     block.tool_residual_m += weight * (tool_jacobian.transpose() * residual_m);
     ++block.count;
   }
+  expand_compact(list, eq);
   for (const TargetBlock& block : eq->targets) {
     if (block.count == 0) continue;
     const Mat3 inverse = block.tool_tool.inverse();

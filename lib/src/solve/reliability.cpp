@@ -125,9 +125,9 @@ struct UnitRows {
         row[k] = b(i) * fit.scale(i);
         solved[k] = row[k];
       }
-      cholesky_solve_compact(f, solved);
     }
   }
+  cholesky_solve_compact(f, ws->solved.data(), static_cast<int>(ws->solved.outerStride()), u->count);
   for (int i = 0; i < u->count; ++i) {
     for (int j = 0; j < u->count; ++j) {
       double value = ordered_dot(ws->rows.col(i).data(), ws->solved.col(j).data(), f.count);

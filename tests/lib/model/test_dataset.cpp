@@ -5,6 +5,7 @@
 #include <limits>
 #include <cstdlib>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include "hivecal/core/random.hpp"
@@ -331,30 +332,32 @@ void reference_rotate_left(Samples* v, std::size_t begin, std::size_t size, std:
   }
 }
 
-std::vector<std::uint32_t> order_of(const DatasetBase& dataset) {
-  std::vector<std::uint32_t> order;
-  for (const Sample& s : dataset.samples()) order.push_back(s.index);
-  for (const Sample& s : dataset.set_aside()) order.push_back(s.index);
+/// Each sample's index and target, in storage order.
+std::vector<std::pair<std::uint32_t, int>> order_of(const DatasetBase& dataset) {
+  std::vector<std::pair<std::uint32_t, int>> order;
+  for (const Sample& s : dataset.samples()) order.emplace_back(s.index, s.target);
+  for (const Sample& s : dataset.set_aside()) order.emplace_back(s.index, s.target);
   return order;
 }
 
-std::vector<std::uint32_t> order_of(const Samples& v) {
-  std::vector<std::uint32_t> order;
-  for (const Sample& s : v) order.push_back(s.index);
+std::vector<std::pair<std::uint32_t, int>> order_of(const Samples& v) {
+  std::vector<std::pair<std::uint32_t, int>> order;
+  for (const Sample& s : v) order.emplace_back(s.index, s.target);
   return order;
 }
 
 TEST(Dataset, ReordersExactlyAsOneSampleAtATime) {
-  static Dataset<400> dataset;
+  static Dataset<3000> dataset;
   Random random(2026);
   for (int trial = 0; trial < 200; ++trial) {
-    // Poses of 1 to 3 samples (targets or repeated readings), some set aside.
+    // Poses of 1 to 3 samples (targets or repeated readings), some set aside; the last sets
+    // have more poses than the shuffle's directory has blocks.
     dataset.clear();
-    const auto poses = static_cast<int>(3 + random.below(trial < 100 ? 20 : 130));
+    const auto poses = static_cast<int>(3 + random.below(trial < 100 ? 20 : trial < 180 ? 130 : 900));
     for (int p = 0; p < poses; ++p) {
       const auto readings = static_cast<int>(1 + random.below(3));
       for (int k = 0; k < readings; ++k) {
-        ASSERT_EQ(dataset.add(JointVector::Constant(p), Vec3(p, k, trial), 0), Status::ok);
+        ASSERT_EQ(dataset.add(JointVector::Constant(p), Vec3(p, k, trial), k), Status::ok);
       }
     }
     std::vector<std::uint32_t> aside;

@@ -72,7 +72,8 @@ class DatasetBase {
   DatasetBase& operator=(const DatasetBase&) = delete;
 
   /// Appends a sample of target `target` (0-based). Errors: non_finite_input (NaN/Inf
-  /// anywhere), invalid_argument (target outside [0, kMaxTargets)), dataset_full (not stored).
+  /// anywhere), invalid_argument (target outside [0, kMaxTargets)), dataset_full (not stored:
+  /// no room, or 2^29 - 1 samples already, the most a split can number).
   /// Any earlier split is discarded (all samples count as training again).
   Status add(const JointVector& q_rad, const Vec3& point_m, int target = 0);
   /// Removes every sample.
