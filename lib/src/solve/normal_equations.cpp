@@ -326,30 +326,40 @@ namespace {
 /// whatever the target: its tool load is target 1's tool point).
 /// What the per-sample rows need of the model whatever the sample: its trig and the list of
 /// every column (computed once per pass, not once per sample: the same values).
+/// The joint trig (and compliance basis) of the pose last seen: a pose's targets are samples in
+/// a row with the same readings, and share them.
 struct PerSampleContext {
   ModelTrig trig;
   IndexList every_column;
+  const Sample* pose = nullptr;  ///< the sample whose readings pose_trig is of (null: none yet)
+  JointTrig pose_trig;
+  TermBasis pose_basis = {};
 };
 
 PerSampleContext per_sample_context(const RobotModel& model) {
-  return PerSampleContext{model_trig(model), indices_of(kAllParamsMask | kComplianceParamsMask)};
+  PerSampleContext context;
+  context.trig = model_trig(model);
+  context.every_column = indices_of(kAllParamsMask | kComplianceParamsMask);
+  return context;
 }
 
-Vec3 local_target_residual_jacobian(const RobotModel& model, const PerSampleContext& context, int target,
+Vec3 local_target_residual_jacobian(const RobotModel& model, PerSampleContext& context, int target,
                                     const RigidTransform& base_to_tracker, const Sample& sample,
                                     FullJacobian* local_jacobian) {
   double rows[3 * kGroupSamples][kFullParamCount] = {};  // see write_compliance_columns
   const Sample* const samples[1] = {&sample};
   const bool compliant = model.compliance.term_count > 0;
-  TermBasis basis[1] = {};
-  const JointTrig q_trig = compliant ? deflected_trig(model, sample.q_rad, &basis[0]) : joint_trig(sample.q_rad);
-  const JointTrig* const trig_of[1] = {&q_trig};
+  if (context.pose == nullptr || context.pose->q_rad != sample.q_rad) {
+    context.pose_trig = compliant ? deflected_trig(model, sample.q_rad, &context.pose_basis) : joint_trig(sample.q_rad);
+    context.pose = &sample;
+  }
+  const JointTrig* const trig_of[1] = {&context.pose_trig};
   RobotModel moved = model;  // the target's tool point: the tool does not enter the trig
   moved.tool_m = target_tool(model, target);
   Vec3 local_residual_m;
   add_rows<static_cast<std::size_t>(kGroupSamples)>(moved, context.trig, base_to_tracker, samples, trig_of,
-                                                    compliant ? basis : nullptr, 1, context.every_column, rows,
-                                                    &local_residual_m);
+                                                    compliant ? &context.pose_basis : nullptr, 1, context.every_column,
+                                                    rows, &local_residual_m);
   for (int c = 0; c < kFullParamCount; ++c)
     for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
   return local_residual_m;
@@ -359,7 +369,8 @@ Vec3 local_target_residual_jacobian(const RobotModel& model, const PerSampleCont
 
 Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
                              FullJacobian* local_jacobian) {
-  return local_target_residual_jacobian(model, per_sample_context(model), 0, base_to_tracker, sample, local_jacobian);
+  PerSampleContext context = per_sample_context(model);
+  return local_target_residual_jacobian(model, context, 0, base_to_tracker, sample, local_jacobian);
 }
 
 Vec3 full_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
@@ -481,7 +492,7 @@ void whiten_sample(double k, Vec3* residual_m, FullJacobian* jacobian, Mat3* too
 namespace {
 
 /// sample_rows with the model's per-sample context given.
-Vec3 sample_rows_in(const RobotModel& model, const PerSampleContext& context, const RigidTransform& base_to_tracker,
+Vec3 sample_rows_in(const RobotModel& model, PerSampleContext& context, const RigidTransform& base_to_tracker,
                     const Sample& sample, const PointLoss& loss, ParamMask columns, FullJacobian* jacobian,
                     Mat3* tool_jacobian, double* raw_squared_m2) {
   Vec3 residual_m = local_target_residual_jacobian(model, context, sample.target, base_to_tracker, sample, jacobian);
@@ -500,8 +511,9 @@ Vec3 sample_rows_in(const RobotModel& model, const PerSampleContext& context, co
 Vec3 sample_rows(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
                  const PointLoss& loss, ParamMask columns, FullJacobian* jacobian, Mat3* tool_jacobian,
                  double* raw_squared_m2) {
-  return sample_rows_in(model, per_sample_context(model), base_to_tracker, sample, loss, columns, jacobian,
-                        tool_jacobian, raw_squared_m2);
+  PerSampleContext context = per_sample_context(model);
+  return sample_rows_in(model, context, base_to_tracker, sample, loss, columns, jacobian, tool_jacobian,
+                        raw_squared_m2);
 }
 
 namespace {
@@ -520,7 +532,7 @@ namespace {
   // Only the estimated columns (the others are zero) and only the upper triangle (the lower one
   // is mirrored below): a quarter of the full 37 x 37 products, the same bits.
   const IndexList list = indices_of(columns);
-  const PerSampleContext context = per_sample_context(model);
+  PerSampleContext context = per_sample_context(model);
   double rows[3][kFullParamCount];  // the sample's Jacobian rows over the listed columns
   for (const Sample& sample : samples) {
     FullJacobian jacobian;
