@@ -24,14 +24,8 @@ JointTrig deflected_trig(const RobotModel& model, const JointVector& q_rad, Term
   return joint_trig(q_rad + compliance_deflection(model, q_rad, *basis));
 }
 
-/// The parameters of a mask as a list of indices, increasing, and where each of the 33
-/// columns sits in a compact row: the listed ones at 0..count-1 in order, the others after
-/// them (scratch that the normal-equation update never reads).
-struct IndexList {
-  int index[kFullParamCount];
-  int slot[kFullParamCount];
-  int count = 0;
-};
+/// IndexList's unlisted columns are scratch that the normal-equation update never reads.
+using detail::IndexList;
 
 IndexList indices_of(ParamMask mask) {
   IndexList list;
@@ -320,30 +314,19 @@ double histogram_bin_lower_m(int bin) {
 
 }  // namespace
 
-namespace {
-
-/// local_residual_jacobian with target `target`'s tool point (the deflection is the model's,
-/// whatever the target: its tool load is target 1's tool point).
-/// What the per-sample rows need of the model whatever the sample: its trig and the list of
-/// every column (computed once per pass, not once per sample: the same values).
-/// The joint trig (and compliance basis) of the pose last seen: a pose's targets are samples in
-/// a row with the same readings, and share them.
-struct PerSampleContext {
-  ModelTrig trig;
-  IndexList every_column;
-  const Sample* pose = nullptr;  ///< the sample whose readings pose_trig is of (null: none yet)
-  JointTrig pose_trig;
-  TermBasis pose_basis = {};
-};
-
-PerSampleContext per_sample_context(const RobotModel& model) {
-  PerSampleContext context;
+SampleRowsContext sample_rows_context(const RobotModel& model) {
+  SampleRowsContext context;
   context.trig = model_trig(model);
   context.every_column = indices_of(kAllParamsMask | kComplianceParamsMask);
   return context;
 }
 
-Vec3 local_target_residual_jacobian(const RobotModel& model, PerSampleContext& context, int target,
+namespace {
+
+/// local_residual_jacobian with target `target`'s tool point (the deflection is the model's,
+/// whatever the target: its tool load is target 1's tool point); the model's trig and the
+/// pose's joint trig from `context`, the latter computed when the readings change.
+Vec3 local_target_residual_jacobian(const RobotModel& model, SampleRowsContext& context, int target,
                                     const RigidTransform& base_to_tracker, const Sample& sample,
                                     FullJacobian* local_jacobian) {
   double rows[3 * kGroupSamples][kFullParamCount] = {};  // see write_compliance_columns
@@ -369,7 +352,7 @@ Vec3 local_target_residual_jacobian(const RobotModel& model, PerSampleContext& c
 
 Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
                              FullJacobian* local_jacobian) {
-  PerSampleContext context = per_sample_context(model);
+  SampleRowsContext context = sample_rows_context(model);
   return local_target_residual_jacobian(model, context, 0, base_to_tracker, sample, local_jacobian);
 }
 
@@ -492,7 +475,7 @@ void whiten_sample(double k, Vec3* residual_m, FullJacobian* jacobian, Mat3* too
 namespace {
 
 /// sample_rows with the model's per-sample context given.
-Vec3 sample_rows_in(const RobotModel& model, PerSampleContext& context, const RigidTransform& base_to_tracker,
+Vec3 sample_rows_in(const RobotModel& model, SampleRowsContext& context, const RigidTransform& base_to_tracker,
                     const Sample& sample, const PointLoss& loss, ParamMask columns, FullJacobian* jacobian,
                     Mat3* tool_jacobian, double* raw_squared_m2) {
   Vec3 residual_m = local_target_residual_jacobian(model, context, sample.target, base_to_tracker, sample, jacobian);
@@ -508,10 +491,9 @@ Vec3 sample_rows_in(const RobotModel& model, PerSampleContext& context, const Ri
 
 }  // namespace
 
-Vec3 sample_rows(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
-                 const PointLoss& loss, ParamMask columns, FullJacobian* jacobian, Mat3* tool_jacobian,
-                 double* raw_squared_m2) {
-  PerSampleContext context = per_sample_context(model);
+Vec3 sample_rows(const RobotModel& model, SampleRowsContext& context, const RigidTransform& base_to_tracker,
+                 const Sample& sample, const PointLoss& loss, ParamMask columns, FullJacobian* jacobian,
+                 Mat3* tool_jacobian, double* raw_squared_m2) {
   return sample_rows_in(model, context, base_to_tracker, sample, loss, columns, jacobian, tool_jacobian,
                         raw_squared_m2);
 }
@@ -532,7 +514,7 @@ namespace {
   // Only the estimated columns (the others are zero) and only the upper triangle (the lower one
   // is mirrored below): a quarter of the full 37 x 37 products, the same bits.
   const IndexList list = indices_of(columns);
-  PerSampleContext context = per_sample_context(model);
+  SampleRowsContext context = sample_rows_context(model);
   double rows[3][kFullParamCount];  // the sample's Jacobian rows over the listed columns
   for (const Sample& sample : samples) {
     FullJacobian jacobian;
@@ -564,7 +546,10 @@ namespace {
     if (sample.target == 0 || !eliminate) continue;
     TargetBlock& block = eq->targets[static_cast<std::size_t>(sample.target - 1)];
     block.tool_tool += weight * (tool_jacobian.transpose() * tool_jacobian);
-    block.tool_model += weight * (tool_jacobian.transpose() * jacobian);
+    for (int i = 0; i < list.count; ++i) {  // the other columns of J are 0, and so stay theirs
+      const int a = list.index[i];
+      block.tool_model.col(a) += weight * (tool_jacobian.transpose() * jacobian.col(a));
+    }
     block.tool_residual_m += weight * (tool_jacobian.transpose() * residual_m);
     ++block.count;
   }

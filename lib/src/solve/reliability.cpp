@@ -95,8 +95,8 @@ struct UnitRows {
     const Sample& sample = samples[s];
     Mat3 tool_jacobian;
     double raw_squared_m2 = 0.0;
-    const Vec3 residual_m =
-        sample_rows(fit.model, fit.base, sample, fit.loss, fit.kept, &ws->jacobian, &tool_jacobian, &raw_squared_m2);
+    const Vec3 residual_m = sample_rows(fit.model, ws->rows_context, fit.base, sample, fit.loss, fit.kept,
+                                        &ws->jacobian, &tool_jacobian, &raw_squared_m2);
     u->largest_m = std::fmax(u->largest_m, std::sqrt(raw_squared_m2));
     const TargetBlock* block = nullptr;
     if (sample.target > 0 && fit.other_tools) {
@@ -197,8 +197,8 @@ double critical_statistic(const Scale& scale, int rows, bool fitted) {
     for (std::size_t s = begin; s < end; ++s) {
       Mat3 tool_jacobian;
       double raw_squared_m2 = 0.0;
-      const Vec3 residual_m = sample_rows(fit.model, fit.base, samples[s], fit.loss, fit.kept, &ws->jacobian,
-                                          &tool_jacobian, &raw_squared_m2);
+      const Vec3 residual_m = sample_rows(fit.model, ws->rows_context, fit.base, samples[s], fit.loss, fit.kept,
+                                          &ws->jacobian, &tool_jacobian, &raw_squared_m2);
       for (int axis = 0; axis < 3; ++axis) ws->residual_m[3 * static_cast<int>(s - begin) + axis] = residual_m(axis);
     }
     for (int i = 0; i < rows; ++i) {
@@ -306,6 +306,7 @@ Status test_for_blunders(const RobotModel& model, const RigidTransform& base, Sp
   if (fitted.empty()) return Status::dataset_empty;
   ReliabilityWorkspace& ws = *workspace;
   ws.normal.targets = Span<TargetBlock>(ws.blocks, kMaxTargets - 1);
+  ws.rows_context = sample_rows_context(model);
   const ParamMask kept = estimated & ~kOtherTargetTools;
   Status status = accumulate_normal_equations(model, base, fitted, PointLoss{0.0, loss.joint_noise_ratio_rad_per_m},
                                               &ws.normal, estimated);

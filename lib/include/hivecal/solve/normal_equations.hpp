@@ -105,14 +105,38 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
                                    ParamMask columns = kAllParamsMask | kOtherTargetTools,
                                    Span<const JointTrig> sample_trig = {});
 
+namespace detail {
+/// The parameters of a mask as a list of indices, increasing, and where each of the columns
+/// sits in a compact row: the listed ones at 0..count-1 in order, the others after them.
+struct IndexList {
+  int index[kFullParamCount];
+  int slot[kFullParamCount];
+  int count = 0;
+};
+}  // namespace detail
+
+/// What the per-sample rows reuse from one call to the next on one model: the model's trig
+/// and the joint trig (and compliance basis) of the pose last seen, which that pose's next
+/// samples (its other targets, in a row) share. Make one per pass with sample_rows_context().
+struct SampleRowsContext {
+  ModelTrig trig;                               ///< the model's trig
+  detail::IndexList every_column;               ///< every parameter, in order
+  const Sample* pose = nullptr;                 ///< the sample pose_trig is of (null: none yet)
+  JointTrig pose_trig;                          ///< its joint trig (of the deflected pose when compliant)
+  double pose_basis[kMaxComplianceTerms] = {};  ///< its compliance basis [m] or [kg m]
+};
+/// A context for sample_rows on `model`.
+SampleRowsContext sample_rows_context(const RobotModel& model);
+
 /// One sample's rows as the normal equations sum them (the per-sample path): the residual in
 /// the base frame and dr/d(full parameters) into *jacobian, both whitened by `loss`'s joint
 /// noise; for a sample of a target k > 1 target 1's tool columns are zero and its own tool
 /// point's 3x3 Jacobian is in *tool_jacobian; columns outside `columns` zero. *raw_squared_m2
-/// is the unwhitened |r|^2 [m^2]. Returns the (whitened) residual [m].
-Vec3 sample_rows(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
-                 const PointLoss& loss, ParamMask columns, FullJacobian* jacobian, Mat3* tool_jacobian,
-                 double* raw_squared_m2);
+/// is the unwhitened |r|^2 [m^2]. `context`: sample_rows_context(model), the same for the
+/// calls of one pass (the same bits as a fresh one). Returns the (whitened) residual [m].
+Vec3 sample_rows(const RobotModel& model, SampleRowsContext& context, const RigidTransform& base_to_tracker,
+                 const Sample& sample, const PointLoss& loss, ParamMask columns, FullJacobian* jacobian,
+                 Mat3* tool_jacobian, double* raw_squared_m2);
 
 /// Loss sums only (no Jacobian, fk_tool_point), e.g. to compare candidate geometries: sum
 /// rho(|r_i|) and sum |r_i|^2 [m^2]. Agrees with accumulate_normal_equations to rounding.

@@ -111,6 +111,7 @@ struct ReliabilityWorkspace {
   Eigen::Matrix<double, kMaxUnitRows, 3> tool_solved;  ///< D^-1 t^T per row
   double residual_m[kMaxUnitRows] = {};                ///< its residual rows [m]
   FullJacobian jacobian;                               ///< one sample's rows
+  SampleRowsContext rows_context;                      ///< the tested model's, for every sample's rows
   FullParams row;                                      ///< one row of the Jacobian, Schur-reduced
 };
 
