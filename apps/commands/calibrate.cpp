@@ -83,7 +83,7 @@ const char* phase_label(CalibrationPhase phase) {
   switch (phase) {
     case CalibrationPhase::screen: return "job: screen of the start geometry";
     case CalibrationPhase::baseline: return "job: baseline fit";
-    case CalibrationPhase::blunder_test: return "job: w-test of the fit";
+    case CalibrationPhase::blunder_test: return "job: blunder search (w-tests, refits)";
   }
   return "job: phase";
 }

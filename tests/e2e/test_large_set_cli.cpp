@@ -106,7 +106,7 @@ TEST(LargeSetCli, TheProfileSaysWhereTheTimeWent) {
   EXPECT_GT(total_s, 0.0);
   double listed_s = 0.0;
   for (const char* part : {"read the input", "job: screen of the start geometry", "job: baseline fit", "job: ABC stage",
-                           "job: LM stage", "job: w-test of the fit", "job: the rest",
+                           "job: LM stage", "job: blunder search (w-tests, refits)", "job: the rest",
                            "final w-test, accuracy and tables", "write the outputs", "other (options"}) {
     const std::size_t at = err.find(std::string("\n  ") + part, head);
     ASSERT_NE(at, std::string::npos) << part << "\n" << err;
