@@ -58,7 +58,7 @@ template <std::size_t kWidth>
 }  // namespace
 
 void cholesky_solve_compact(const KeptCholesky& f, double* v, int stride, int count) {
-  // Three at a time: a pose's three rows (the w-test's units are 3 or 9 of them).
+  // Three at a time: a pose's three rows (a w-test unit has 3, 6 or 9 of them).
   int first = 0;
   for (; first + 3 <= count; first += 3) solve_columns<3>(f, v + first * stride, stride);
   for (; first < count; ++first) solve_columns<1>(f, v + first * stride, stride);
