@@ -198,8 +198,8 @@ namespace {
 /// walks the counts, then one block (not every pose before it: that was n^2 / 2).
 struct PoseDirectory {
   static constexpr std::size_t kBlocks = 256;
-  std::uint32_t first_sample[kBlocks];  ///< < kMaxShuffledPoses samples
-  std::uint32_t unplaced[kBlocks];
+  std::uint32_t first_sample[kBlocks];  ///< each block's first sample (add() keeps them below kMaxShuffledPoses)
+  std::uint32_t unplaced[kBlocks];      ///< each block's poses not placed yet
 };
 
 }  // namespace
@@ -209,8 +209,7 @@ void DatasetBase::shuffle_poses(std::uint64_t seed) {
   // add(). The slots are marked on the samples (sort_key), then one sort moves every pose to
   // its slot, its samples in their order.
   sort_by_index(size_);
-  const std::size_t poses = pose_count();
-  if (poses > kMaxShuffledPoses) return;  // add() refuses that many samples
+  const std::size_t poses = pose_count();  // below kMaxShuffledPoses: add() refuses more samples
   PoseDirectory directory;
   const std::size_t per_block = (poses + PoseDirectory::kBlocks - 1) / PoseDirectory::kBlocks;
   for (std::size_t pose = 0, i = 0; pose < poses; ++pose, i = pose_end(i)) {
