@@ -472,6 +472,12 @@ void blunder_report(const streams::SessionFacts& facts, const CliDataset& datase
                                " training pose(s) fail the w-test: the model, not the data, is wrong (unmodelled "
                                "effects); none removed by the test");
   }
+  if (r.blunder_verdict == BlunderVerdict::prediction_error) {
+    data->info_lines.push_back(
+        "blunder test: more than " + std::to_string(r.test_blunder_limit) +
+        " test pose(s) fail as predictions: the fit does not carry to poses it did not see (too few poses for its "
+        "parameters, or unmodelled effects), not bad readings; none of them set aside");
+  }
   for (const std::string& source : table.uncontrolled) {
     data->info_lines.push_back(
         "uncontrolled pose (redundancy below 0.1: a blunder there cannot be told from the "

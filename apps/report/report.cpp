@@ -537,6 +537,10 @@ std::string outlier_html(const OutlierTable& o) {
     s += "More poses fail than a blunder explains: the model, not the data, is wrong (unmodelled effects); none "
          "removed. ";
   }
+  if (o.verdict == "prediction_error") {
+    s += "More test poses fail as predictions than a blunder explains: the fit does not carry to poses it did not "
+         "see (too few poses for its parameters, or unmodelled effects); none of them set aside. ";
+  }
   if (!o.uncontrolled.empty()) {
     s += std::to_string(o.uncontrolled.size()) +
          " pose(s) uncontrolled (redundancy below 0.1: a blunder there cannot be told from the geometry): ";

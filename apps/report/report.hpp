@@ -82,7 +82,7 @@ struct OutlierRow {
 /// threshold, which poses it cannot control.
 struct OutlierTable {
   bool searched = false;            ///< a blunder search ran (not --keep-outliers)
-  std::string verdict;              ///< "clean", "removed", "model_error", "list_full", "at_threshold", "not_searched"
+  std::string verdict;              ///< blunder_verdict_name of the result ("clean", "removed", "model_error", ...)
   double critical_w = 0.0;          ///< w above which a pose is a blunder (the training poses') [-]
   double alpha = 0.0;               ///< the test's significance for the whole set [-]
   std::string sigma_source;         ///< "data" (the fit's residuals) or "tracker" (the stated noise)

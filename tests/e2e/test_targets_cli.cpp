@@ -199,4 +199,30 @@ TEST(TargetsCli, ManyFailingPosesAreNotNamedAsAtTheThreshold) {
 }
 
 }  // namespace
+// Few poses of an arm with unmodelled effects, the default split: the fit of 6 poses predicts
+// its 2 test poses no better than the effects and the test rejects both. The command line sets
+// none aside (a set shrunk by them failed its own test poses in turn, down to an unfittable
+// base frame), and the console, the result and the report say why.
+TEST(TargetsCli, TestPosesTheFitCannotPredictAreNotSetAside) {
+  const test::TempDir dir("hivecal_prediction_error");
+  ASSERT_FALSE(dir.path().empty());
+  static Dataset<16> written;
+  written.clear();
+  Random random(3);
+  RobotModel truth = nominal_model(RobotType::ur5);
+  truth.tool_m = Vec3(0.0, 0.0, 0.15);
+  test::fill_with_unmodelled_effect(truth, test::example_base_to_tracker(), 8, &random, &written);
+  const std::string samples = dir.write("few.csv", textio::format_samples_csv(written.samples()));
+  const std::string result = dir.path() + "/result.json";
+  const int code = run(cli::calibrate_main, {"--samples", samples, "--robot-model", "ur5", "--tool", "0,0,0.15",
+                                             "--quiet", "--out", result, "--report", dir.path() + "/report"});
+  ASSERT_TRUE(code == 0 || code == 5) << code;  // 5: written, with a warning (the test error)
+  const std::string json = test::read_text_file(result);
+  EXPECT_NE(json.find("\"blunder_verdict\": \"prediction_error\""), std::string::npos);
+  EXPECT_NE(json.find("1 test pose(s) fail as predictions"), std::string::npos);
+  EXPECT_EQ(json.find("set aside as a blunder"), std::string::npos);
+  EXPECT_NE(test::read_text_file(dir.path() + "/report/index.html").find("More test poses fail as predictions"),
+            std::string::npos);
+}
+
 }  // namespace hivecal::targets_cli_test

@@ -1,6 +1,8 @@
 // Deterministic synthetic robot/tracker data for tests (own PRNG: same on every target).
 #pragma once
 
+#include <cmath>
+
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/core/random.hpp"
@@ -62,6 +64,20 @@ inline void fill_dataset(const RobotModel& truth, const RigidTransform& base_to_
     Vec3 noise;
     noise << random->normal(), random->normal(), random->normal();
     (void)dataset->add(q, base_to_tracker.apply(fk_tool_point(truth, q)) + noise_m * noise);
+  }
+}
+
+/// fill_dataset with 10 um noise and an effect no rigid model holds, as a real arm's unmodelled
+/// deflections: up to 3 mm, smooth in the joints (the same draws as fill_dataset).
+inline void fill_with_unmodelled_effect(const RobotModel& truth, const RigidTransform& base_to_tracker,
+                                        std::size_t count, Random* random, DatasetBase* dataset) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const JointVector q = random_joints(random);
+    Vec3 noise;
+    noise << random->normal(), random->normal(), random->normal();
+    const Vec3 effect_m =
+        3e-3 * Vec3(std::sin(3.0 * q(0) + 2.0 * q(1)), std::cos(4.0 * q(2) - q(4)), std::sin(5.0 * q(3)));
+    (void)dataset->add(q, base_to_tracker.apply(fk_tool_point(truth, q)) + 10e-6 * noise + effect_m);
   }
 }
 

@@ -125,9 +125,10 @@ struct CalibrationOptions {
   bool keep_outliers = false;  ///< true: no blunder search, every sample is used
   BlunderTestOptions
       blunder_test;  ///< the w-test of the calibration's poses (significance, tracker sigma, redundancy floor)
-  /// Largest share of the training poses the w-test removes; more would go when the model,
-  /// not the data, is wrong (residuals of unmodelled effects): then none is removed and the
-  /// result says so (BlunderVerdict::model_error) [-].
+  /// Largest share of the training poses the w-test removes (at least one); more would go when
+  /// the model, not the data, is wrong (residuals of unmodelled effects): then none is removed
+  /// and the result says so (BlunderVerdict::model_error). The same share of the split's test
+  /// poses failing as predictions: none of them is set aside (BlunderVerdict::prediction_error) [-].
   double max_blunder_share = 0.05;
   double outlier_k =
       6.0;  ///< the consensus screen sets a sample aside when |r| > max(k sigma_robust, screen_floor_m) [-]
@@ -236,13 +237,16 @@ enum class BlunderVerdict : std::uint8_t {
   model_error,  ///< more than max_blunder_share of the poses failed: the model, not the data, is wrong; none removed by
                 ///< the test
   list_full,    ///< more blunders than kMaxCalibrationOutliers: the largest are set aside
+  /// more than max_blunder_share of the split's test poses fail as predictions: the fit does not
+  /// carry to poses it did not see (too few poses, unmodelled effects); none of them set aside
+  prediction_error,
   /// a pose fails the test while fitted and passes when left out (the split moves with it),
   /// run after run: kept, with those in `outliers` (failed both ways) set aside
   at_threshold,
 };
 
 /// Lower-case name of a verdict ("not_searched", "clean", "removed", "model_error", "list_full",
-/// "at_threshold").
+/// "prediction_error", "at_threshold").
 const char* blunder_verdict_name(BlunderVerdict verdict);
 
 /// Blunders a job sets aside at most; a larger share of a set is not a blunder problem [-].
@@ -299,6 +303,8 @@ struct CalibrationResult {
   BlunderTestSummary
       blunder_test;               ///< the last w-test of the final fit on its training poses (sigma, dof, uncontrolled)
   std::size_t blunder_limit = 0;  ///< training poses the w-test may remove (max_blunder_share) [-]
+  std::size_t test_blunder_limit =
+      0;  ///< test poses that may fail as predictions and be set aside (max_blunder_share) [-]
   /// The tracker's scatter over repeated readings of the kept samples (a blunder set aside is
   /// not noise); groups == 0 when the input repeats no reading.
   RepeatedReadingNoise reading_noise;

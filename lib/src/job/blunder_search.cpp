@@ -207,23 +207,49 @@ bool flag_outliers(const RobotModel& model, const RigidTransform& base, const Da
   return Status::ok;
 }
 
-/// Training poses the w-test may remove: max_blunder_share of them, at least one.
-std::size_t blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o) {
-  const Span<const Sample> train = dataset.train();
-  const bool grouped = target_count(dataset.samples()) > 1;
+namespace {
+
+/// Poses (units) in `samples`.
+std::size_t pose_count(Span<const Sample> samples, bool grouped) {
   std::size_t units = 0;
-  for (std::size_t i = 0; i < train.size(); i = unit_end(train, i, grouped)) ++units;
+  for (std::size_t i = 0; i < samples.size(); i = unit_end(samples, i, grouped)) ++units;
+  return units;
+}
+
+/// Poses of `units` that may fail the test as blunders: max_blunder_share of them, at least
+/// one; more is the model's error, not the data's.
+std::size_t share_limit(std::size_t units, const CalibrationOptions& o) {
   const auto share = static_cast<std::size_t>(o.max_blunder_share * static_cast<double>(units));
   return std::min<std::size_t>(share > 0 ? share : 1, kMaxCalibrationOutliers);
 }
 
+}  // namespace
+
+/// Training poses the w-test may remove: max_blunder_share of them, at least one.
+std::size_t blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o) {
+  return share_limit(pose_count(dataset.train(), target_count(dataset.samples()) > 1), o);
+}
+
+std::size_t test_blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o) {
+  return share_limit(pose_count(dataset.test(), target_count(dataset.samples()) > 1), o);
+}
+
 namespace {
 
-/// Keeps the controlled fitted unit that exceeds its threshold most (w / critical_w), and
-/// offers every rejected predicted unit's samples to the list.
+/// Where the split's test poses lie in the predicted span: [first, end) [-].
+struct PositionRange {
+  std::size_t first = 0;
+  std::size_t end = 0;
+  bool holds(std::size_t position) const { return position >= first && position < end; }
+};
+
+/// Keeps the controlled fitted unit that exceeds its threshold most (w / critical_w), offers
+/// every rejected predicted unit's samples to the list, and counts the test poses (`test`)
+/// that fail.
 class SnoopVisitor final : public UnitTestVisitor {
  public:
-  SnoopVisitor(Span<const Sample> predicted, CalibrationOutlierList* list) : predicted_(predicted), list_(list) {}
+  SnoopVisitor(Span<const Sample> predicted, CalibrationOutlierList* list, PositionRange test = {})
+      : predicted_(predicted), list_(list), test_(test) {}
   void on_unit(const UnitTest& t) override {
     if (!t.rejected()) return;
     if (t.fitted) {
@@ -233,19 +259,50 @@ class SnoopVisitor final : public UnitTestVisitor {
       }
       return;
     }
+    if (test_.holds(t.position)) {
+      ++failing_test_poses_;
+      largest_test_w_ = std::fmax(largest_test_w_, t.w);
+    }
     for (std::uint32_t k = 0; k < t.samples; ++k) {
       offer(list_, CalibrationOutlier{predicted_[t.position + k].index, t.residual_m, t.w, t.critical_w});
     }
   }
   bool has_worst() const { return worst_ratio_ > 1.0; }
   const UnitTest& worst() const { return worst_; }
+  std::size_t failing_test_poses() const { return failing_test_poses_; }
+  double largest_test_w() const { return largest_test_w_; }
 
  private:
   Span<const Sample> predicted_;
   CalibrationOutlierList* list_;
+  PositionRange test_;
   UnitTest worst_;
   double worst_ratio_ = 1.0;
+  std::size_t failing_test_poses_ = 0;
+  double largest_test_w_ = 0.0;
 };
+
+/// Whether a sample of `part` has this index.
+bool holds_index(Span<const Sample> part, std::uint32_t index) {
+  for (const Sample& s : part) {
+    if (s.index == index) return true;
+  }
+  return false;
+}
+
+/// Takes off a list being built the samples of `test` (the split's test poses) and those of
+/// `aside` (set aside by the screen or an earlier run) that fail no worse than a test pose
+/// (w <= largest_test_w): the test cannot tell them from the model's error.
+void drop_held_out(Span<const Sample> test, Span<const Sample> aside, double largest_test_w,
+                   CalibrationOutlierList* list) {
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < list->count; ++i) {
+    const CalibrationOutlier& item = list->items[i];
+    const bool drop = holds_index(test, item.index) || (item.w <= largest_test_w && holds_index(aside, item.index));
+    if (!drop) list->items[kept++] = item;
+  }
+  list->count = kept;
+}
 
 }  // namespace
 
@@ -357,11 +414,20 @@ void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, st
   }
   const std::size_t predicted_from = model_error ? dataset->size() : fitted;
   const Span<const Sample> predicted = all.subspan(predicted_from, stored - predicted_from);
-  SnoopVisitor visitor(predicted, found);
+  const PositionRange test{train - std::min(train, predicted_from), dataset->size() - predicted_from};
+  SnoopVisitor visitor(predicted, found, test);
   BlunderTestSummary pass;
   run_blunder_test(workspace, o, model, base, all.subspan(0, fitted), predicted, estimated, &visitor, &pass);
+  // The test poses obey the training poses' rule: more failing than a blunder explains is a fit
+  // that does not carry to poses it did not see (too few poses for its parameters, unmodelled
+  // effects), not bad readings; set aside, they would shrink the next run's set, whose fit
+  // predicts its own test poses no better, run after run. A pose set aside before stays aside
+  // only if it fails worse than every test pose.
+  const bool prediction_error = visitor.failing_test_poses() > test_blunder_limit(*dataset, o);
+  if (prediction_error) drop_held_out(dataset->test(), dataset->set_aside(), visitor.largest_test_w(), found);
   finish(found);
   if (model_error) return BlunderVerdict::model_error;
+  if (prediction_error) return BlunderVerdict::prediction_error;
   return found->count == kMaxCalibrationOutliers ? BlunderVerdict::list_full : BlunderVerdict::clean;
 }
 

@@ -27,6 +27,9 @@ Status screen(const RobotModel& start, DatasetBase* dataset, const CalibrationOp
 /// Training poses the w-test may remove: max_blunder_share of them, at least one [-].
 std::size_t blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o);
 
+/// The split's test poses that may fail as predictions and be set aside: the same share [-].
+std::size_t test_blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o);
+
 /// The loss the w-test whitens with: LM's joint noise, no Huber weights.
 PointLoss blunder_test_loss(const CalibrationOptions& o);
 

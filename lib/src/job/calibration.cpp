@@ -24,6 +24,7 @@ using detail::keep_common;
 using detail::same_indices;
 using detail::screen;
 using detail::search_blunders;
+using detail::test_blunder_limit;
 
 /// Which stages a method runs.
 struct StagePlan {
@@ -903,6 +904,7 @@ const char* blunder_verdict_name(BlunderVerdict verdict) {
     case BlunderVerdict::removed: return "removed";
     case BlunderVerdict::model_error: return "model_error";
     case BlunderVerdict::list_full: return "list_full";
+    case BlunderVerdict::prediction_error: return "prediction_error";
     case BlunderVerdict::at_threshold: return "at_threshold";
   }
   return "unknown";
@@ -1014,6 +1016,7 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   }
   r.blunder_test = summary;
   r.blunder_limit = blunder_limit(*dataset, options);
+  r.test_blunder_limit = test_blunder_limit(*dataset, options);
   r.outlier_rounds = round;
   return Status::ok;
 }

@@ -560,6 +560,51 @@ TEST(CalibrationBlunders, ManyFailingPosesAreTheModelNotBlundersAndNoneIsRemoved
   EXPECT_EQ(result.blunder_limit, 4u);  // 5 % of 90
 }
 
+/// `count` poses of the truth with unmodelled effects (test::fill_with_unmodelled_effect).
+void fill_with_model_error(std::size_t count, std::uint64_t seed, DatasetBase* out) {
+  Random random(seed);
+  out->clear();
+  test::fill_with_unmodelled_effect(truth(), test::example_base_to_tracker(), count, &random, out);
+}
+
+TEST(CalibrationBlunders, TestPosesThatAFewPosesCannotPredictAreNotBlunders) {
+  // Few poses of an arm with unmodelled effects: the fit of the 6 training poses predicts its 2
+  // test poses no better than the effects, and the w-test rejects both. Set aside, test poses
+  // shrink the next run's set, whose own test poses fail in turn (8 poses of the UR10 export
+  // went down to 2 training poses, and the base frame could not be fitted; here the runs did
+  // not agree in 5). More failing test poses than max_blunder_share are the model's error:
+  // none is set aside, in the first run.
+  fill_with_model_error(8, 41, &dataset);
+  CalibrationOptions o = options(CalibrationMethod::lm);
+  o.train_fraction = 0.7;
+  ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok) << calibration_step_name(result.step);
+  EXPECT_EQ(result.blunder_verdict, BlunderVerdict::prediction_error);
+  EXPECT_EQ(result.outlier_count, 0u);
+  EXPECT_EQ(result.train_count + result.test_count, 8u);
+  EXPECT_EQ(result.test_blunder_limit, 1u);
+  EXPECT_EQ(result.outlier_rounds, 1u);
+}
+
+TEST(CalibrationBlunders, SmallSetsWithModelErrorAndATestSplitFinishAndSetNothingAside) {
+  // Property over random small sets (8 to 20 poses) with unmodelled effects and a 0.7 split:
+  // the job finishes, every sample is trained on or tested, and none is set aside (there is no
+  // blunder). Before the test poses obeyed the share rule, 12 poses ended as 3 trained, 1
+  // tested and 8 "blunders" (seed 2).
+  for (std::uint64_t seed = 1; seed <= 16; ++seed) {
+    Random sizes(700 + seed);
+    const std::size_t count = 8 + static_cast<std::size_t>(sizes.below(13));
+    fill_with_model_error(count, 900 + seed, &dataset);
+    CalibrationOptions o = options(CalibrationMethod::lm);
+    o.train_fraction = 0.7;
+    const Status status = calibrate(start(), &dataset, o, &workspace, &result);
+    ASSERT_EQ(status, Status::ok) << seed << " (" << count << " poses): " << status_message(status) << " at "
+                                  << calibration_step_name(result.step);
+    EXPECT_EQ(result.train_count + result.test_count + result.outlier_count, count) << seed;
+    EXPECT_EQ(result.outlier_count, 0u) << seed << " (" << count
+                                        << " poses): no blunder in the set, none may be made up";
+  }
+}
+
 TEST(CalibrationBlunders, SmallAndDegenerateSetsFinishAndDropNothingSilently) {
   // Property over random small sets (5 to 16 poses, some of them repeated poses): the default
   // job (ABC+LM, --split 1) and its leave-one-out finish, or say why at the baseline step;
