@@ -369,7 +369,9 @@ void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, st
 /// calibration on its training poses).
 [[gnu::noinline]] BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o,
                                                  CalibrationWorkspaceBase& workspace, CalibrationResult& r,
-                                                 CalibrationOutlierList* found, BlunderTestSummary* summary) {
+                                                 CalibrationOutlierList* found, BlunderTestSummary* summary,
+                                                 bool* refitted) {
+  *refitted = false;
   found->count = 0;
   found->limit = kMaxCalibrationOutliers;
   const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
@@ -404,6 +406,7 @@ void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, st
     workspace.snoop_moves()[removed][1] = static_cast<std::uint32_t>(fitted);
     for (std::uint32_t k = worst.samples; k > 0; --k) dataset->swap_samples(worst.position + k - 1, --fitted);
     ++removed;
+    *refitted = true;
     if (refit(workspace, o, all.subspan(0, fitted), estimated, r, &base) != Status::ok) break;
   }
   if (model_error) {

@@ -35,8 +35,10 @@ PointLoss blunder_test_loss(const CalibrationOptions& o);
 
 /// Data snooping on the final calibration of `r` (one pose at a time, refitting), then the
 /// removed, test and set-aside samples tested as predictions; those that fail into *found.
-/// *summary: the first test (the final calibration on its training poses).
+/// *summary: the first test (the final calibration on its training poses). *refitted: r.lm
+/// holds a refit of fewer poses, no longer the final calibration's fit.
 BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o, CalibrationWorkspaceBase& workspace,
-                               CalibrationResult& r, CalibrationOutlierList* found, BlunderTestSummary* summary);
+                               CalibrationResult& r, CalibrationOutlierList* found, BlunderTestSummary* summary,
+                               bool* refitted);
 
 }  // namespace hivecal::detail

@@ -558,6 +558,13 @@ TEST(CalibrationBlunders, ManyFailingPosesAreTheModelNotBlundersAndNoneIsRemoved
   EXPECT_EQ(result.outlier_count, 0u);
   EXPECT_EQ(result.train_count, 90u);
   EXPECT_EQ(result.blunder_limit, 4u);  // 5 % of 90
+  // The search refitted fewer poses before it gave up; the result's LM details (sigmas,
+  // identifiability, iterations) are the final calibration's again, not its last refit's.
+  ASSERT_GT(result.stage_count, 0u);
+  const CalibrationStage& final_stage = result.stages[result.stage_count - 1];
+  EXPECT_EQ(result.lm.iterations, static_cast<int>(final_stage.iterations));
+  EXPECT_EQ(result.lm.rms_m, final_stage.best_cost_m);
+  EXPECT_TRUE(to_params(result.lm.model) == to_params(final_stage.model));
 }
 
 /// `count` poses of the truth with unmodelled effects (test::fill_with_unmodelled_effect).
