@@ -237,16 +237,16 @@ enum class BlunderVerdict : std::uint8_t {
   model_error,  ///< more than max_blunder_share of the poses failed: the model, not the data, is wrong; none removed by
                 ///< the test
   list_full,    ///< more blunders than kMaxCalibrationOutliers: the largest are set aside
-  /// more than max_blunder_share of the split's test poses fail as predictions: the fit does not
-  /// carry to poses it did not see (too few poses, unmodelled effects); none of them set aside
-  prediction_error,
   /// a pose fails the test while fitted and passes when left out (the split moves with it),
   /// run after run: kept, with those in `outliers` (failed both ways) set aside
   at_threshold,
+  /// more than max_blunder_share of the split's test poses fail as predictions: the fit does not
+  /// carry to poses it did not see (too few poses, unmodelled effects); none of them set aside
+  prediction_error,
 };
 
 /// Lower-case name of a verdict ("not_searched", "clean", "removed", "model_error", "list_full",
-/// "prediction_error", "at_threshold").
+/// "at_threshold", "prediction_error").
 const char* blunder_verdict_name(BlunderVerdict verdict);
 
 /// Blunders a job sets aside at most; a larger share of a set is not a blunder problem [-].
@@ -303,8 +303,7 @@ struct CalibrationResult {
   BlunderTestSummary
       blunder_test;               ///< the last w-test of the final fit on its training poses (sigma, dof, uncontrolled)
   std::size_t blunder_limit = 0;  ///< training poses the w-test may remove (max_blunder_share) [-]
-  std::size_t test_blunder_limit =
-      0;  ///< test poses that may fail as predictions and be set aside (max_blunder_share) [-]
+  std::size_t test_blunder_limit = 0;  ///< test poses that may fail as predictions (max_blunder_share) [-]
   /// The tracker's scatter over repeated readings of the kept samples (a blunder set aside is
   /// not noise); groups == 0 when the input repeats no reading.
   RepeatedReadingNoise reading_noise;

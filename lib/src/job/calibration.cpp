@@ -904,8 +904,8 @@ const char* blunder_verdict_name(BlunderVerdict verdict) {
     case BlunderVerdict::removed: return "removed";
     case BlunderVerdict::model_error: return "model_error";
     case BlunderVerdict::list_full: return "list_full";
-    case BlunderVerdict::prediction_error: return "prediction_error";
     case BlunderVerdict::at_threshold: return "at_threshold";
+    case BlunderVerdict::prediction_error: return "prediction_error";
   }
   return "unknown";
 }
