@@ -325,10 +325,11 @@ Status run_blunder_test(CalibrationWorkspaceBase& workspace, const CalibrationOp
 }
 
 /// Relative cost decrease at which a refit stops. A refit only decides which pose the next test
-/// looks at (the job's next run fits the set again from the start): stopped within a relative
-/// 1e-10 of its cost, its parameters are within sqrt(1e-10 dof) sigma of the optimum
-/// (delta^T N delta ~ 1e-10 SSR), 0.002 sigma for 10^4 poses, and a pose's w moves by less. LM's
-/// default 1e-12 spent up to 9 iterations, each a pass over the set, on rounding noise.
+/// looks at (the job runs the set again from the start for its result): stopped when a step
+/// lowers the cost by less than 1e-10 of it, its parameters are within about sqrt(1e-10 dof)
+/// sigma of the optimum (delta^T N delta ~ 1e-10 SSR), 0.002 sigma for 10^4 poses, and a pose's
+/// w moves by less. LM's default 1e-12 spent up to 9 iterations, each a pass over the set, on
+/// rounding noise.
 constexpr double kRefitCostTolerance = 1e-10;
 
 /// LM again on `fitted` from (workspace.lm_start(), *base) with the parameters of `estimated`,
