@@ -389,6 +389,14 @@ class CalibrationWorkspaceBase {
   virtual PopulationPhase open_gsa() = 0;
   /// Ends any open phase, builds an LM workspace (joint trig storage attached if the type has it).
   virtual LmWorkspace* open_lm() = 0;
+  /// An LM workspace with a result of its own.
+  struct LmScratch {
+    LmWorkspace* lm = nullptr;   ///< as open_lm()'s
+    LmResult* result = nullptr;  ///< where a fit that is not the job's goes (the blunder search's refits)
+  };
+  /// Ends any open phase, builds open_lm()'s workspace and a result beside it in the arena: the
+  /// job's result keeps its final fit.
+  virtual LmScratch open_lm_scratch() = 0;
   /// Ends the open phase (its objects are destroyed).
   virtual void close() = 0;
   /// The trace of stage `index` (< kMaxCalibrationStages).
@@ -494,6 +502,7 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
     LmWorkspace lm;
     detail::JointTrigStorage<JointTrigSamples> joint_trig;
     detail::TargetBlockStorage<2 * (MaxTargets - 1)> target_blocks;
+    LmResult scratch_result;  ///< open_lm_scratch()'s (4 kB on the firmware: the ABC phase is larger)
   };
   /// The blunder search's scratch.
   struct ResidualPhase {
@@ -528,6 +537,10 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
     lm_->lm.joint_trig = lm_->joint_trig.view();
     lm_->lm.target_blocks = lm_->target_blocks.view();
     return &lm_->lm;
+  }
+  LmScratch open_lm_scratch() override {
+    LmWorkspace* lm = open_lm();
+    return LmScratch{lm, &lm_->scratch_result};
   }
   ResidualScratch open_residuals() override {
     close();
@@ -609,7 +622,7 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
   }
   static constexpr std::size_t lm_bytes(std::size_t samples) {
     return detail::arena_round(sizeof(LmWorkspace)) + detail::arena_round(sizeof(TargetBlock) * kTargetBlocks) +
-           sizeof(JointTrig) * samples;
+           detail::arena_round(sizeof(LmResult)) + sizeof(JointTrig) * samples;
   }
   static constexpr std::size_t residual_bytes(std::size_t samples) {
     return detail::arena_round(sizeof(Vec3) * samples) + sizeof(double) * samples;
@@ -661,8 +674,14 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
     TargetBlock* blocks = detail::construct_array<TargetBlock>(at, kTargetBlocks);
     lm_->target_blocks = Span<TargetBlock>(blocks, kTargetBlocks);
     at += detail::arena_round(sizeof(TargetBlock) * kTargetBlocks);
+    lm_result_ = new (at) LmResult();
+    at += detail::arena_round(sizeof(LmResult));
     lm_->joint_trig = Span<JointTrig>(detail::construct_array<JointTrig>(at, samples_), samples_);
     return lm_;
+  }
+  LmScratch open_lm_scratch() override {
+    LmWorkspace* lm = open_lm();
+    return LmScratch{lm, lm == nullptr ? nullptr : lm_result_};
   }
   ResidualScratch open_residuals() override {
     close();
@@ -682,11 +701,13 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
     if (abc_ != nullptr) abc_->~Abc();
     if (gsa_ != nullptr) gsa_->~Gsa();
     if (lm_ != nullptr) lm_->~LmWorkspace();
+    if (lm_result_ != nullptr) lm_result_->~LmResult();
     if (reliability_ != nullptr) reliability_->~ReliabilityWorkspace();
     cost_ = nullptr;
     abc_ = nullptr;
     gsa_ = nullptr;
     lm_ = nullptr;
+    lm_result_ = nullptr;
     reliability_ = nullptr;
   }
   TraceBase& trace(std::size_t index) override { return traces_[index]; }
@@ -714,6 +735,7 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
   Abc* abc_ = nullptr;
   Gsa* gsa_ = nullptr;
   LmWorkspace* lm_ = nullptr;
+  LmResult* lm_result_ = nullptr;
   ReliabilityWorkspace* reliability_ = nullptr;
 };
 

@@ -333,10 +333,9 @@ Status run_blunder_test(CalibrationWorkspaceBase& workspace, const CalibrationOp
 constexpr double kRefitCostTolerance = 1e-10;
 
 /// LM again on `fitted` from (workspace.lm_start(), *base) with the parameters of `estimated`,
-/// the result back into both; r.lm is the scratch (the job's rerun writes it again).
+/// the result back into both; its details go to the LM phase's scratch result, not the job's.
 [[gnu::noinline]] Status refit(CalibrationWorkspaceBase& workspace, const CalibrationOptions& o,
-                               Span<const Sample> fitted, ParamMask estimated, CalibrationResult& r,
-                               RigidTransform* base) {
+                               Span<const Sample> fitted, ParamMask estimated, RigidTransform* base) {
   LmOptions lm = o.lm;
   lm.params = LmParamSet::custom;
   lm.custom_mask = estimated & ~kOtherTargetTools;
@@ -344,14 +343,16 @@ constexpr double kRefitCostTolerance = 1e-10;
   lm.loss = LmLoss::squared;
   lm.cost_tolerance = std::fmax(lm.cost_tolerance, kRefitCostTolerance);
   const RigidTransform start_base = *base;
-  LmWorkspace* lm_workspace = workspace.open_lm();
-  const Status status =
-      calibrate_lm(workspace.lm_start(), &start_base, fitted, lm, lm_workspace, &r.lm, nullptr, nullptr);
+  const CalibrationWorkspaceBase::LmScratch scratch = workspace.open_lm_scratch();
+  Status status =
+      calibrate_lm(workspace.lm_start(), &start_base, fitted, lm, scratch.lm, scratch.result, nullptr, nullptr);
+  if (status == Status::ok || status == Status::not_converged) {
+    workspace.lm_start() = scratch.result->model;
+    *base = scratch.result->base_to_tracker;
+    status = Status::ok;
+  }
   workspace.close();
-  if (status != Status::ok && status != Status::not_converged) return status;
-  workspace.lm_start() = r.lm.model;
-  *base = r.lm.base_to_tracker;
-  return Status::ok;
+  return status;
 }
 
 /// Moves the removed poses back where they were (latest first): the split as the run left it.
@@ -374,13 +375,12 @@ void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, st
 /// pose at a time, until none does; then the removed, test and set-aside samples are tested
 /// as predictions of that fit and those that fail fill *found. More removals than
 /// blunder_limit: the model, not the data, is wrong; the removals are undone and only the
-/// samples set aside before (the screen's) are tested. *summary: the first test (the final
-/// calibration on its training poses).
+/// samples set aside before (the screen's) are tested. The removals are undone at the end: the
+/// dataset is in the run's order again. *summary: the first test (the final calibration on its
+/// training poses).
 [[gnu::noinline]] BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o,
-                                                 CalibrationWorkspaceBase& workspace, CalibrationResult& r,
-                                                 CalibrationOutlierList* found, BlunderTestSummary* summary,
-                                                 bool* refitted) {
-  *refitted = false;
+                                                 CalibrationWorkspaceBase& workspace, const CalibrationResult& r,
+                                                 CalibrationOutlierList* found, BlunderTestSummary* summary) {
   found->count = 0;
   found->limit = kMaxCalibrationOutliers;
   const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
@@ -415,11 +415,11 @@ void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, st
     workspace.snoop_moves()[removed][1] = static_cast<std::uint32_t>(fitted);
     for (std::uint32_t k = worst.samples; k > 0; --k) dataset->swap_samples(worst.position + k - 1, --fitted);
     ++removed;
-    *refitted = true;
-    if (refit(workspace, o, all.subspan(0, fitted), estimated, r, &base) != Status::ok) break;
+    if (refit(workspace, o, all.subspan(0, fitted), estimated, &base) != Status::ok) break;
   }
   if (model_error) {
     undo_removals(dataset, workspace, removed, fitted);
+    removed = 0;
     fitted = train;
     model = final_stage.model;
     base = final_stage.base_to_tracker;
@@ -437,6 +437,8 @@ void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, st
   // only if it fails worse than every test pose.
   const bool prediction_error = visitor.failing_test_poses() > test_blunder_limit(*dataset, o);
   if (prediction_error) drop_held_out(dataset->test(), dataset->set_aside(), visitor.largest_test_w(), found);
+  // The samples back in the run's order: what is reported of the run is summed in it.
+  undo_removals(dataset, workspace, removed, fitted);
   finish(found);
   if (model_error) return BlunderVerdict::model_error;
   if (prediction_error) return BlunderVerdict::prediction_error;

@@ -35,10 +35,9 @@ PointLoss blunder_test_loss(const CalibrationOptions& o);
 
 /// Data snooping on the final calibration of `r` (one pose at a time, refitting), then the
 /// removed, test and set-aside samples tested as predictions; those that fail into *found.
-/// *summary: the first test (the final calibration on its training poses). *refitted: r.lm
-/// holds a refit of fewer poses, no longer the final calibration's fit.
+/// *summary: the first test (the final calibration on its training poses). The refits' details
+/// stay in the workspace's LM phase (open_lm_scratch): `r` keeps the final calibration's.
 BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o, CalibrationWorkspaceBase& workspace,
-                               CalibrationResult& r, CalibrationOutlierList* found, BlunderTestSummary* summary,
-                               bool* refitted);
+                               const CalibrationResult& r, CalibrationOutlierList* found, BlunderTestSummary* summary);
 
 }  // namespace hivecal::detail

@@ -973,13 +973,12 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   BlunderTestSummary summary;
   std::size_t round = 0;
   bool undecided = false;  // the runs did not agree within kMaxRounds
-  bool refitted = false;   // result->lm holds a refit of the search, not the last run's final fit
   while (true) {
     status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
     if (status != Status::ok) return status;
     ++round;
     report_phase(observer, CalibrationPhase::blunder_test, false);
-    verdict = search_blunders(dataset, options, *workspace, *result, &tested, &summary, &refitted);
+    verdict = search_blunders(dataset, options, *workspace, *result, &tested, &summary);
     report_phase(observer, CalibrationPhase::blunder_test, true);
     if (verdict == BlunderVerdict::not_searched || same_indices(tested, aside) || undecided) break;
     if (round < kMaxRounds) {
@@ -994,12 +993,6 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
     const std::size_t last_aside = aside.count;
     keep_common(tested, &aside);
     if (aside.count == last_aside) break;  // the last run was of this set already
-  }
-  // The last run's fit (its sigmas, identifiability, iterations) back in place of the search's
-  // refits: the same run again, the same bits.
-  if (refitted) {
-    status = run_once(start, dataset, options, workspace, result, observer, index_span(aside));
-    if (status != Status::ok) return status;
   }
   // The residuals reported are the final calibration's (of the set the run left out), the w
   // the last test's.

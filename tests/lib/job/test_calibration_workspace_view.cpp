@@ -101,6 +101,8 @@ TEST(CalibrationWorkspaceView, RefusesABadArenaAndAnUnattachedOneFailsCleanly) {
   EXPECT_EQ(view.samples(), 0u);
   EXPECT_EQ(view.open_abc().cost, nullptr);
   EXPECT_EQ(view.open_lm(), nullptr);
+  EXPECT_EQ(view.open_lm_scratch().lm, nullptr);
+  EXPECT_EQ(view.open_lm_scratch().result, nullptr);
   static Dataset<60> dataset;
   fill(60, &dataset);
   static CalibrationResult result;
