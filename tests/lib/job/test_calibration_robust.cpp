@@ -609,6 +609,15 @@ TEST(CalibrationBlunders, SmallSetsWithModelErrorAndATestSplitFinishAndSetNothin
     EXPECT_EQ(result.train_count + result.test_count + result.outlier_count, count) << seed;
     EXPECT_EQ(result.outlier_count, 0u) << seed << " (" << count
                                         << " poses): no blunder in the set, none may be made up";
+    // The samples are left in the order of the job's last run (the blunder search's removals
+    // undone): what is reported of the run is summed in it.
+    std::vector<std::uint32_t> left;
+    for (const Sample& s : dataset.samples()) left.push_back(s.index);
+    dataset.set_aside(Span<const std::uint32_t>());  // the order of add(), nothing set aside: as the job's runs start
+    ASSERT_EQ(dataset.split(o.train_fraction, o.seed), Status::ok);
+    std::vector<std::uint32_t> run;
+    for (const Sample& s : dataset.samples()) run.push_back(s.index);
+    EXPECT_EQ(left, run) << seed;
   }
 }
 
