@@ -209,13 +209,6 @@ bool flag_outliers(const RobotModel& model, const RigidTransform& base, const Da
 
 namespace {
 
-/// Poses (units) in `samples`.
-std::size_t pose_count(Span<const Sample> samples, bool grouped) {
-  std::size_t units = 0;
-  for (std::size_t i = 0; i < samples.size(); i = unit_end(samples, i, grouped)) ++units;
-  return units;
-}
-
 /// Poses of `units` that may fail the test as blunders: max_blunder_share of them, at least
 /// one; more is the model's error, not the data's.
 std::size_t share_limit(std::size_t units, const CalibrationOptions& o) {
@@ -227,11 +220,11 @@ std::size_t share_limit(std::size_t units, const CalibrationOptions& o) {
 
 /// Training poses the w-test may remove: max_blunder_share of them, at least one.
 std::size_t blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o) {
-  return share_limit(pose_count(dataset.train(), target_count(dataset.samples()) > 1), o);
+  return share_limit(count_units(dataset.train(), target_count(dataset.samples()) > 1), o);
 }
 
 std::size_t test_blunder_limit(const DatasetBase& dataset, const CalibrationOptions& o) {
-  return share_limit(pose_count(dataset.test(), target_count(dataset.samples()) > 1), o);
+  return share_limit(count_units(dataset.test(), target_count(dataset.samples()) > 1), o);
 }
 
 namespace {

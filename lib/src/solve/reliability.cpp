@@ -17,13 +17,6 @@ bool options_valid(const BlunderTestOptions& o) {
          o.min_redundancy >= 0.0 && o.min_redundancy < 1.0;
 }
 
-/// Units of `samples` (see unit_end).
-std::size_t count_units(Span<const Sample> samples, bool grouped) {
-  std::size_t count = 0;
-  for (std::size_t i = 0; i < samples.size(); i = unit_end(samples, i, grouped)) ++count;
-  return count;
-}
-
 /// In-place Cholesky of the leading n x n block of *a (lower triangle); false unless positive definite.
 bool small_cholesky(UnitMatrix* a, int n) {
   UnitMatrix& m = *a;
@@ -295,6 +288,12 @@ std::size_t unit_end(Span<const Sample> samples, std::size_t begin, bool grouped
     ++end;
   }
   return end;
+}
+
+std::size_t count_units(Span<const Sample> samples, bool grouped) {
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < samples.size(); i = unit_end(samples, i, grouped)) ++count;
+  return count;
 }
 
 Status test_for_blunders(const RobotModel& model, const RigidTransform& base, Span<const Sample> fitted,

@@ -131,4 +131,7 @@ Status test_for_blunders(const RobotModel& model, const RigidTransform& base, Sp
 /// samples at equal joints (at most kMaxUnitSamples), else the sample alone [-].
 std::size_t unit_end(Span<const Sample> samples, std::size_t begin, bool grouped);
 
+/// Units (poses, see unit_end) of `samples` [-].
+std::size_t count_units(Span<const Sample> samples, bool grouped);
+
 }  // namespace hivecal
