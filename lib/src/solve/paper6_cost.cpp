@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "hivecal/solve/cost.hpp"
 #include "hivecal/model/rigid_fit.hpp"
@@ -161,11 +162,7 @@ Status Paper6CostBase::add(const JointVector& q_rad, const Vec3& point_m, int ta
   (void)tool_point_jacobian(target_model, q_rad, &jacobian);
   const Vec3 predicted_m = fk_tool_point(target_model, q_rad);  // as evaluate_cost computes it
   if (size_ == 0) point_origin_m_ = predicted_m;
-  if (values_ != nullptr) {
-    store(predicted_m, point_m, jacobian, values_);
-  } else {
-    store(predicted_m, point_m, jacobian, compact_values_);
-  }
+  scalar_.store(*this, predicted_m, point_m, jacobian);
   ++size_;
   ready_ = false;
   return Status::ok;
@@ -219,7 +216,7 @@ Status Paper6CostBase::precompute(const Scalar* values) {
 Status Paper6CostBase::finalize() {
   ready_ = false;
   if (size_ < 3) return Status::too_few_samples;
-  const Status status = values_ != nullptr ? precompute(values_) : precompute(compact_values_);
+  const Status status = scalar_.precompute(*this);
   ready_ = status == Status::ok;
   return status;
 }
@@ -331,6 +328,48 @@ double Paper6CostBase::sum_abs_residuals(const Scalar* values, const Mat3& rotat
                      : residual_pass<false>(values, size_, values_per_sample_, stored, rotation, shift_m, tail_m);
 }
 
+namespace {
+
+/// The storage of scalar Scalar: the exact (double) or the compact (float) values.
+template <typename Scalar>
+Scalar* storage_of(double* values, float* compact_values) {
+  if constexpr (std::is_same_v<Scalar, double>) {
+    (void)compact_values;
+    return values;
+  } else {
+    (void)values;
+    return compact_values;
+  }
+}
+
+}  // namespace
+
+template <typename Scalar>
+void Paper6CostBase::store_on(Paper6CostBase& cost, const Vec3& predicted_m, const Vec3& measured_m,
+                              const ToolPointJacobian& jacobian) {
+  cost.store(predicted_m, measured_m, jacobian, storage_of<Scalar>(cost.values_, cost.compact_values_));
+}
+
+template <typename Scalar>
+Status Paper6CostBase::precompute_on(Paper6CostBase& cost) {
+  return cost.precompute(storage_of<Scalar>(cost.values_, cost.compact_values_));
+}
+
+template <typename Scalar>
+double Paper6CostBase::residual_sum_on(const Paper6CostBase& cost, const Mat3& rotation, const Vec3& shift_m,
+                                       const double* tail_m) {
+  const Scalar* values = storage_of<Scalar>(cost.values_, cost.compact_values_);
+  return cost.sum_abs_residuals(values, rotation, shift_m, tail_m);
+}
+
+// The two instantiations the constructors name (an image links those its costs use).
+template void Paper6CostBase::store_on<double>(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
+template void Paper6CostBase::store_on<float>(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
+template Status Paper6CostBase::precompute_on<double>(Paper6CostBase&);
+template Status Paper6CostBase::precompute_on<float>(Paper6CostBase&);
+template double Paper6CostBase::residual_sum_on<double>(const Paper6CostBase&, const Mat3&, const Vec3&, const double*);
+template double Paper6CostBase::residual_sum_on<float>(const Paper6CostBase&, const Mat3&, const Vec3&, const double*);
+
 double Paper6CostBase::mean_abs_error(const double* lengths_m, RigidTransform* base_to_tracker) const {
   if (!ready_) return std::numeric_limits<double>::quiet_NaN();
   const auto count = static_cast<int>(set_.count);
@@ -354,8 +393,7 @@ double Paper6CostBase::mean_abs_error(const double* lengths_m, RigidTransform* b
   StoredDirections stored_mean = StoredDirections::Zero();
   for (int k = 0; k < stored; ++k) stored_mean.col(k) = direction_mean_.col(first + k);
   const Vec3 shift_m = rotation * (point_mean_m_ + combine(stored_mean, tail_m, 0, stored)) - measured_mean_m_;
-  const double sum_m = values_ != nullptr ? sum_abs_residuals(values_, rotation, shift_m, tail_m)
-                                          : sum_abs_residuals(compact_values_, rotation, shift_m, tail_m);
+  const double sum_m = scalar_.residual_sum(*this, rotation, shift_m, tail_m);
   if (base_to_tracker != nullptr) {
     // In the reference frame m ~ E p + tau; in the tracker frame R = R_ref E, t = R_ref tau + t_ref.
     const Vec3 tau_m = (point_origin_m_ + measured_mean_m_) -

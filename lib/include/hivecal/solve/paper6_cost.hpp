@@ -159,9 +159,13 @@ class Paper6CostBase : public Objective {
  protected:
   /// `values`: paper6_storage_values(capacity, max_lengths) values, exact (double) or compact (float).
   Paper6CostBase(double* values, std::size_t capacity, std::size_t max_lengths)
-      : values_(values), capacity_(capacity), max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
+      : values_(values),
+        scalar_(ScalarOps{&store_on<double>, &precompute_on<double>, &residual_sum_on<double>}),
+        capacity_(capacity),
+        max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
   Paper6CostBase(float* values, std::size_t capacity, std::size_t max_lengths)
       : compact_values_(values),
+        scalar_(ScalarOps{&store_on<float>, &precompute_on<float>, &residual_sum_on<float>}),
         capacity_(capacity),
         max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
   ~Paper6CostBase() = default;
@@ -175,9 +179,26 @@ class Paper6CostBase : public Objective {
   template <typename Scalar>
   double sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m, const double* tail_m) const;
   double mean_abs_error(const double* lengths_m, RigidTransform* base_to_tracker) const;
+  // store, precompute and sum_abs_residuals on the storage of scalar Scalar.
+  template <typename Scalar>
+  static void store_on(Paper6CostBase& cost, const Vec3& predicted_m, const Vec3& measured_m,
+                       const ToolPointJacobian& jacobian);
+  template <typename Scalar>
+  static Status precompute_on(Paper6CostBase& cost);
+  template <typename Scalar>
+  static double residual_sum_on(const Paper6CostBase& cost, const Mat3& rotation, const Vec3& shift_m,
+                                const double* tail_m);
+  /// What depends on the storage's scalar, chosen by the constructor: an image whose costs
+  /// store one scalar links that scalar's code only (~3 kB each on the firmware).
+  struct ScalarOps {
+    void (*store)(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
+    Status (*precompute)(Paper6CostBase&);
+    double (*residual_sum)(const Paper6CostBase&, const Mat3&, const Vec3&, const double*);
+  };
 
   double* values_ = nullptr;         // exact layout, or
   float* compact_values_ = nullptr;  // compact layout (blocks, see kPaper6ValuesPerSample)
+  ScalarOps scalar_;
   std::size_t capacity_;
   std::size_t max_values_per_sample_;                       // what the storage holds per sample
   std::size_t values_per_sample_ = kPaper6ValuesPerSample;  // what the geometry needs: 6 + 3 x stored columns
