@@ -235,7 +235,8 @@ Error cross_validation(const CalibrateSettings& settings, const RobotModel& star
   return Error{};
 }
 
-Error run(const CalibrateSettings& settings, const RobotModel& start, JobMemory* memory, Profile* profile) {
+Error run(const CalibrateSettings& settings, const RobotModel& start, const streams::SessionFacts& facts,
+          JobMemory* memory, Profile* profile) {
   CliDataset* dataset = &memory->dataset;
   Run* run = &memory->job;
   CalibrationOptions job;
@@ -247,6 +248,10 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, JobMemory*
   job.keep_outliers = settings.keep_outliers;
   job.base_known = settings.controller_tcp;  // known_base_to_tracker: the identity
   job.tool_known = settings.controller_tcp;  // the start model's tool points: --tool and the orientation's lever
+  job.detect_controller_frames = settings.detect_controller_frames;
+  const double stated_m = settings.orientation.position_sigma_m;
+  const double joint_m = joint_point_noise_m(settings, start, facts, dataset->samples());
+  job.measurement_sigma_m = std::sqrt(stated_m * stated_m + joint_m * joint_m);  // the frames test's noise
   job.significance_t = settings.significance_t;
   job.significance_every_set = settings.significance_every_set;
   job.population_subset = settings.population_subset;
@@ -331,7 +336,7 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   if (error.ok()) textio::start_orientation_targets(facts.orientation, &start);
   job.from_controller = !options.get("ur-calibration").empty();
   job.link_length_count = link_length_set(start).count;
-  if (error.ok()) error = run(settings, start, memory.get(), &profile);
+  if (error.ok()) error = run(settings, start, facts, memory.get(), &profile);
   if (!error.ok()) return error;
   part_start = Clock::now();
   report::ReportData data = present_calibration(settings, start, dataset, facts, job);

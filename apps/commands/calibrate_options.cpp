@@ -195,8 +195,14 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
         {"controller-tcp", "",
          "the points are the controller's own TCP readings (a pendant export, RTDE actual_TCP_pose): in the base "
          "frame, at the TCP offset --tool; neither is fitted, joint 1's parameters are estimated instead (LM only; "
-         "implies --method lm)",
+         "implies --method lm); the same as --frames controller",
          ""},
+        {"frames", "auto|fitted|controller",
+         "the base -> tracker transform and the tool points: 'fitted' as for a tracker; 'controller' as "
+         "--controller-tcp; 'auto' fits them and, when the fitted base is within 10 mm and 10 mrad of the identity, "
+         "fits again with the controller's (the identity, --tool; LM only) and keeps that fit when it predicts "
+         "the training poses as well, each left out of the fit",
+         "auto"},
         {"significance", "T|auto",
          "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leaving one pose out at a time, "
          "up to " +
@@ -295,7 +301,16 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
     settings->cv_folds = static_cast<std::size_t>(folds);
   }
   settings->keep_outliers = options.given("keep-outliers");
-  settings->controller_tcp = options.given("controller-tcp");
+  const std::string frames = options.given("frames") ? options.get("frames") : "auto";
+  if (frames != "auto" && frames != "fitted" && frames != "controller") {
+    return Error::usage("--frames must be auto, fitted or controller, not " + port::quoted(frames));
+  }
+  settings->controller_tcp = options.given("controller-tcp") || frames == "controller";
+  settings->detect_controller_frames = frames == "auto";
+  if (settings->controller_tcp && options.given("controller-tcp") && options.given("frames") &&
+      frames != "controller") {
+    return Error::usage("--controller-tcp and --frames " + frames + " contradict each other");
+  }
   if (settings->controller_tcp) {
     if (options.given("method") && settings->method != CalibrationMethod::lm) {
       return Error::usage("--controller-tcp works with --method lm only (ABC and GSA fit their own base), not " +

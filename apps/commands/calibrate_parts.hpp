@@ -52,6 +52,9 @@ struct CalibrateSettings {
   textio::OrientationInput orientation;  ///< --position-sigma-m, --angle-sigma-rad, --orientation-lever-m
   double joint_sigma_rad = 0.0;          ///< --joint-sigma-rad / --joint-sigma-deg: joint reading noise (0: off) [rad]
   bool controller_tcp = false;           ///< --controller-tcp: base (identity) and tool (--tool) known, not fitted
+  /// --frames auto: the job tests the controller's frames when the fitted base is near the
+  /// identity (CalibrationOptions::detect_controller_frames)
+  bool detect_controller_frames = true;
 };
 
 /// The fate of every tracker point in the extraction pass (kept, or its drop reason), for the
@@ -92,6 +95,12 @@ const std::vector<OptionSpec>& calibrate_option_specs();
 Error calibrate_settings_from_options(const Options& options, CalibrateSettings* settings);
 
 /// Tables and figures of a run, and the text of the terminal.
+/// The joints' reading noise as noise of the tool point per axis over the poses of `samples`
+/// (--joint-sigma-rad, else a rounding to their written resolution, through the arm); 0 when
+/// it is negligible beside the tracker's stated noise [m].
+double joint_point_noise_m(const CalibrateSettings& settings, const RobotModel& start,
+                           const streams::SessionFacts& facts, Span<const Sample> samples);
+
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,
                                        const CliDataset& dataset, const streams::SessionFacts& facts, const Run& run);
 

@@ -317,13 +317,26 @@ std::string noise_statement(double fit_sigma_m, double noise_sigma_m, const std:
   return line;
 }
 
-/// Repeated readings that scatter less than this are identical: rounded by the exporting tool or
-/// simulated without noise. No tracker resolves 1 nm, so they say nothing of its noise [m].
-constexpr double kIdenticalReadingsSigma_m = 1e-9;
-
 /// Joints' noise that changes the measurement noise by less than this share of the tracker's is
 /// left out (a log written in full digits: ~1e-16 of it) [-].
 constexpr double kNegligibleJointNoise = 0.1;
+
+}  // namespace
+
+double joint_point_noise_m(const CalibrateSettings& settings, const RobotModel& start,
+                           const streams::SessionFacts& facts, Span<const Sample> samples) {
+  const double step_rad = facts.orientation.joint_resolution_rad;
+  const double joint_sigma_rad = settings.joint_sigma_rad > 0.0 ? settings.joint_sigma_rad : step_rad / std::sqrt(12.0);
+  if (!(joint_sigma_rad > 0.0) || samples.empty()) return 0.0;
+  std::vector<JointVector> poses;
+  for (const Sample& s : samples)
+    if (s.target == 0) poses.push_back(s.q_rad);
+  const double joint_m = std::sqrt(
+      textio::joint_position_variance_m2(joint_sigma_rad, start, Span<const JointVector>(poses.data(), poses.size())));
+  return joint_m > kNegligibleJointNoise * settings.orientation.position_sigma_m ? joint_m : 0.0;
+}
+
+namespace {
 
 /// The joints' reading noise as noise of the tool point (the tracker's stated beside it): read
 /// with sigma_q (--joint-sigma-rad, else a rounding to their written resolution: step / sqrt(12)),
@@ -335,14 +348,9 @@ void add_joint_reading_noise(const CalibrateSettings& settings, const RobotModel
   const bool given = settings.joint_sigma_rad > 0.0;
   const double step_rad = facts.orientation.joint_resolution_rad;
   const double joint_sigma_rad = given ? settings.joint_sigma_rad : step_rad / std::sqrt(12.0);
-  if (!(joint_sigma_rad > 0.0) || train.empty()) return;
-  std::vector<JointVector> poses;
-  for (const Sample& s : train)
-    if (s.target == 0) poses.push_back(s.q_rad);
-  const double joint_m = std::sqrt(
-      textio::joint_position_variance_m2(joint_sigma_rad, start, Span<const JointVector>(poses.data(), poses.size())));
-  if (!(joint_m > kNegligibleJointNoise * data->noise_sigma_m)) return;
   const double stated_m = data->noise_sigma_m;
+  const double joint_m = joint_point_noise_m(settings, start, facts, train);
+  if (joint_m == 0.0) return;
   data->noise_sigma_m = std::sqrt(stated_m * stated_m + joint_m * joint_m);
   data->noise_source = "stated, with the joints' reading";
   char why[96];
@@ -366,7 +374,7 @@ void measurement_noise(const CalibrateSettings& settings, const RepeatedReadingN
                        const streams::SessionFacts& facts, Span<const Sample> train, report::ReportData* data) {
   data->noise_sigma_m = settings.orientation.position_sigma_m;
   char line[300];
-  if (repeated.groups > 0 && repeated.sigma_m >= kIdenticalReadingsSigma_m) {
+  if (repeated.measured()) {
     data->noise_sigma_m = repeated.sigma_m;
     data->noise_source = "repeated readings";
     std::snprintf(
@@ -517,6 +525,33 @@ report::PointTimeline PointFates::timeline(std::size_t bins) const {
 
 /// Where sample `index` (Sample::index) came from: "file:line" for paired samples.
 /// Tables and figures of a run, and the text of the terminal.
+namespace {
+
+/// What the test of the controller's frames (--frames auto) found.
+std::string frames_line(const ControllerFramesTest& test) {
+  char gate[120];
+  std::snprintf(gate, sizeof gate, "frames: the fitted base is within %.0f mm and %.0f mrad of the identity",
+                kControllerBaseGate_m * 1e3, kControllerBaseGate_rad * 1e3);
+  if (test.status != Status::ok) {
+    return std::string(gate) + "; the fit with the controller's frames (the identity, --tool) cannot be tested (" +
+           status_message(test.status) + "): fitted";
+  }
+  char fit[220];
+  std::snprintf(fit, sizeof fit,
+                "with the base (identity) and the tool points (--tool) known the fit's residual sigma is %s mm per "
+                "axis against the measurement noise %s mm (at most %s mm)",
+                format_mm(test.residual_sigma_m).c_str(), format_mm(test.noise_sigma_m).c_str(),
+                format_mm(test.critical_sigma_m).c_str());
+  if (test.adopted) {
+    return std::string(gate) + ", and " + fit +
+           ": the points are the controller's own TCP readings; not fitted, joint 1 estimated instead, LM only "
+           "(--frames fitted fits them)";
+  }
+  return std::string(gate) + ", but " + fit + ": fitted";
+}
+
+}  // namespace
+
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,
                                        const CliDataset& dataset, const streams::SessionFacts& facts, const Run& run) {
   const CalibrationBaseline& uncalibrated = run.result.baseline;
@@ -533,6 +568,7 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     data.info_lines.push_back(
         "known (--controller-tcp): the base (identity) and the tool points; not fitted, joint 1 estimated instead");
   }
+  if (run.result.frames_test.tested) data.info_lines.push_back(frames_line(run.result.frames_test));
   const std::string joints = run.from_controller ? "controller" : "nominal";
   data.methods.push_back(method_row("uncalibrated", joints + (uncalibrated.tool_fitted ? ", tool fitted" : ""),
                                     uncalibrated.train, uncalibrated.test, 0.0, 0));

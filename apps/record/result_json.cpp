@@ -246,6 +246,19 @@ std::string format_result_json(const CalibrationRecord& record) {
       if (record.controller_tcp) {  // only when given, likewise
         w.key("known").value("base (identity) and tool points: the controller's TCP readings (--controller-tcp)");
       }
+      const ControllerFramesTest& frames = record.result->frames_test;
+      if (frames.tested) {  // only when the fitted base was near the identity, likewise
+        if (frames.adopted) {
+          w.key("known").value("base (identity) and tool points: the controller's TCP readings (--frames auto)");
+        }
+        w.key("frames_test").begin_object();
+        w.key("adopted").value(frames.adopted);
+        w.key("status").value(status_message(frames.status));
+        w.key("residual_sigma_m").value(frames.residual_sigma_m);
+        w.key("noise_sigma_m").value(frames.noise_sigma_m);
+        w.key("critical_sigma_m").value(frames.critical_sigma_m);
+        w.end_object();
+      }
     }
     write_ur_deltas(w, record.ur_deltas);
     if (record.facts != nullptr) {

@@ -145,6 +145,49 @@ struct CalibrationOptions {
   /// TCP readings are FK(q) * its configured TCP offset, exactly. Only with
   /// CalibrationMethod::lm [-].
   bool tool_known = false;
+  /// Whether the points may be a controller's own TCP readings (a pendant export, RTDE's
+  /// actual_TCP_pose) rather than a tracker's: the job fits the frames, and when the fitted
+  /// base is near the identity (kControllerBaseGate_m, kControllerBaseGate_rad) it runs again
+  /// with the controller's frames, base_known (the identity) and tool_known, LM only, and keeps
+  /// that fit when it explains the data to the measurement noise (ControllerFramesTest). No
+  /// effect with base_known or tool_known set, or a method without an LM stage [-].
+  bool detect_controller_frames = false;
+  /// The measurement noise per axis of a point, for detect_controller_frames: the tracker's
+  /// stated with the joints' reading noise through the arm (0: blunder_test.tracker_sigma_m);
+  /// repeated readings in the input, when they scatter, take its place [m].
+  double measurement_sigma_m = 0.0;
+};
+
+/// A fitted base this close to the identity makes the job test the controller's frames
+/// (detect_controller_frames): a tracker's frame is never within it, and a controller's base is
+/// the identity up to joint 1's calibration, a fraction of a millimetre and a milliradian [m].
+inline constexpr double kControllerBaseGate_m = 0.01;
+/// The same gate on the base's rotation angle [rad].
+inline constexpr double kControllerBaseGate_rad = 0.01;
+
+/// Level at which the controller's frames are rejected: their fit's residual sum against the
+/// measurement noise's chi-square (the blunder test's level: a controller's readings are the
+/// simpler hypothesis, given up only on strong evidence) [-].
+inline constexpr double kControllerFramesAlpha = 0.001;
+
+/// The test of CalibrationOptions::detect_controller_frames. The controller's frames (the base
+/// the identity, the tool points the start model's; joint 1 takes the base's z and rotation
+/// about z) are kept when the job's final fit with them explains the data to the measurement
+/// noise: its residual sigma within the chi-square bound of that noise at
+/// kControllerFramesAlpha. A fit that explains the data to the noise with fewer parameters is
+/// the better predictor; the fitted frames' smaller residual is then noise fitted (on 12 poses
+/// of a UR5e pendant export it is down to 0.55x the noise). A tracker's points (a tool guessed
+/// to a millimetre, a base registered through the nominal model) fit the controller's frames
+/// far above the noise and stay fitted.
+struct ControllerFramesTest {
+  bool tested = false;            ///< the fitted base was within the gate and the known frames' run was made [-]
+  bool adopted = false;           ///< the result is the fit with the controller's frames [-]
+  double residual_sigma_m = 0.0;  ///< residual sigma per axis of the fit with the controller's frames [m]
+  double noise_sigma_m = 0.0;     ///< the measurement noise per axis it is held against (measurement_sigma_m) [m]
+  double critical_sigma_m = 0.0;  ///< the largest residual sigma that noise explains at kControllerFramesAlpha [m]
+  /// Why the known frames' fit could not be tested although the base was within the gate (it
+  /// failed, set aside other samples, or left no residual degree of freedom): ok when it was.
+  Status status = Status::ok;
 };
 
 /// Lower-case name of a method as the command line spells it ("abc+lm", "all", ...).
@@ -307,6 +350,9 @@ struct CalibrationResult {
   /// The tracker's scatter over repeated readings of the kept samples (a blunder set aside is
   /// not noise); groups == 0 when the input repeats no reading.
   RepeatedReadingNoise reading_noise;
+  /// The test of the controller's frames (CalibrationOptions::detect_controller_frames); when
+  /// adopted, the result is that of the options with base_known, tool_known and LM only.
+  ControllerFramesTest frames_test;
 
   /// The samples set aside, by increasing index.
   Span<const CalibrationOutlier> outlier_list() const {
@@ -760,7 +806,9 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
 ///    above the workspace's capacity), dataset_full (more training samples than the
 ///    workspace's cost holds), solver_cancelled (the observer stopped LM).
 /// Parameters LM finds unidentifiable keep their start values (a hybrid's LM reruns from the
-/// start values of what it dropped). *result is always written when it is not null.
+/// start values of what it dropped). With options.detect_controller_frames the job runs up to
+/// three times (fitted frames, the controller's, the fitted again when those are rejected);
+/// result->frames_test says what it found. *result is always written when it is not null.
 Status calibrate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
                  CalibrationWorkspaceBase* workspace, CalibrationResult* result,
                  CalibrationObserver* observer = nullptr);
@@ -805,7 +853,8 @@ struct CrossValidationResult {
 /// options.keep_outliers, first the whole job on every sample finds the blunders, which stay
 /// aside; then the kept samples in the order of add() are shuffled with options.seed (as
 /// DatasetBase::split_fold) and each fold is calibrated on the other folds (no blunder search
-/// and no split of its own) and tested on its own samples. `scratch` receives each run in turn
+/// and no split of its own) and tested on its own samples; with options.detect_controller_frames
+/// the folds keep the frames that whole job chose. `scratch` receives each run in turn
 /// (the last fold's at the end). Folds and leave-one-out are over poses
 /// (DatasetBase::pose_count: with several targets a pose's samples stay together). Errors:
 /// those of calibrate() (the first failing fold's, in cv->status too); invalid_argument

@@ -953,9 +953,12 @@ const char* calibration_step_name(CalibrationStep step) {
   return "unknown";
 }
 
-Status calibrate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
-                 CalibrationWorkspaceBase* workspace, CalibrationResult* result, CalibrationObserver* observer) {
-  if (result == nullptr) return Status::invalid_argument;
+namespace {
+
+/// The job with the frames `options` say (fitted, or known): the screen, the runs and the
+/// blunder search.
+Status run_job(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+               CalibrationWorkspaceBase* workspace, CalibrationResult* result, CalibrationObserver* observer) {
   Status status = check_inputs(start, dataset, options, workspace, &reset(result));
   if (status != Status::ok) return status;
   if (options.keep_outliers) return run_once(start, dataset, options, workspace, result, observer, {});
@@ -1021,6 +1024,100 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   return Status::ok;
 }
 
+/// A fitted base within the gate of the identity (kControllerBaseGate_m, _rad).
+bool near_identity(const RigidTransform& base) {
+  // |R - I|_F / sqrt(2) is the rotation angle to first order (2 sin(angle / 2) exactly).
+  const double angle_rad = (base.rotation - Mat3::Identity()).norm() / std::sqrt(2.0);
+  return base.translation_m.norm() <= kControllerBaseGate_m && angle_rad <= kControllerBaseGate_rad;
+}
+
+/// The measurement noise per axis the controller's frames must explain the data to: the
+/// tracker's scatter over repeated readings when the input has them, else the stated one
+/// (CalibrationOptions::measurement_sigma_m, else the blunder test's tracker sigma) [m].
+double frames_noise_sigma_m(const CalibrationResult& r, const CalibrationOptions& options) {
+  if (r.reading_noise.measured()) return r.reading_noise.sigma_m;
+  return options.measurement_sigma_m > 0.0 ? options.measurement_sigma_m : options.blunder_test.tracker_sigma_m;
+}
+
+/// The test of the known frames' run (the result's, ended with `known_status`) after the
+/// fitted frames' run that trained on `fitted_train` samples and set aside `fitted_aside`.
+ControllerFramesTest test_controller_frames(Status known_status, std::size_t fitted_train, std::size_t fitted_aside,
+                                            const CalibrationResult& r, const CalibrationOptions& options) {
+  ControllerFramesTest test;
+  test.tested = true;
+  test.status = known_status;
+  if (test.status == Status::ok && !r.has_lm) test.status = Status::invalid_argument;
+  // Another pose set aside: not the same training samples.
+  if (test.status == Status::ok && (r.train_count != fitted_train || r.outlier_count != fitted_aside)) {
+    test.status = Status::invalid_argument;
+  }
+  if (test.status == Status::ok && r.lm.residual_dof < 1) test.status = Status::too_few_samples;
+  if (test.status != Status::ok) return test;
+  const double dof = static_cast<double>(r.lm.residual_dof);
+  test.residual_sigma_m = r.lm.residual_sigma_m;
+  test.noise_sigma_m = frames_noise_sigma_m(r, options);
+  test.critical_sigma_m =
+      test.noise_sigma_m * std::sqrt(math::chi_square_upper_quantile(kControllerFramesAlpha, dof) / dof);
+  test.adopted = test.residual_sigma_m <= test.critical_sigma_m;
+  return test;
+}
+
+/// Whether the job tests the controller's frames (CalibrationOptions::detect_controller_frames).
+bool detects_controller_frames(const CalibrationOptions& options) {
+  return options.detect_controller_frames && !options.base_known && !options.tool_known && plan_for(options.method).lm;
+}
+
+/// `options` without the test: the frames fitted.
+CalibrationOptions fitted_frames(const CalibrationOptions& options) {
+  CalibrationOptions fitted = options;
+  fitted.detect_controller_frames = false;
+  return fitted;
+}
+
+/// Sets the controller's frames in *o: the base the identity, the tool points the start
+/// model's, LM only (ABC and GSA fit their own base).
+void set_controller_frames(CalibrationOptions* o) {
+  o->method = CalibrationMethod::lm;
+  o->base_known = true;
+  o->known_base_to_tracker = RigidTransform{};
+  o->tool_known = true;
+}
+
+/// The job with the frames test (detects_controller_frames). Not inlined: its copies of the
+/// options stay off the stack of a job without it (the firmware's).
+[[gnu::noinline]] Status calibrate_detecting_frames(const RobotModel& start, DatasetBase* dataset,
+                                                    const CalibrationOptions& options,
+                                                    CalibrationWorkspaceBase* workspace, CalibrationResult* result,
+                                                    CalibrationObserver* observer) {
+  const CalibrationOptions fitted = fitted_frames(options);
+  Status status = run_job(start, dataset, fitted, workspace, result, observer);
+  const CalibrationStage* final_stage = result->final_stage();
+  if (status != Status::ok || !result->has_lm || final_stage == nullptr ||
+      !near_identity(final_stage->base_to_tracker)) {
+    return status;
+  }
+  const std::size_t fitted_train = result->train_count;
+  const std::size_t fitted_aside = result->outlier_count;
+  CalibrationOptions known = fitted;
+  set_controller_frames(&known);
+  status = run_job(start, dataset, known, workspace, result, observer);
+  const ControllerFramesTest test = test_controller_frames(status, fitted_train, fitted_aside, *result, options);
+  if (!test.adopted) status = run_job(start, dataset, fitted, workspace, result, observer);  // the same bits again
+  result->frames_test = test;
+  return status;
+}
+
+}  // namespace
+
+Status calibrate(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
+                 CalibrationWorkspaceBase* workspace, CalibrationResult* result, CalibrationObserver* observer) {
+  if (result == nullptr) return Status::invalid_argument;
+  if (detects_controller_frames(options)) {
+    return calibrate_detecting_frames(start, dataset, options, workspace, result, observer);
+  }
+  return run_job(start, dataset, options, workspace, result, observer);  // run_job reads no detect flag
+}
+
 Status test_final_calibration(const CalibrationResult& result, const DatasetBase& dataset,
                               const CalibrationOptions& options, ReliabilityWorkspace* workspace,
                               UnitTestVisitor* visitor, BlunderTestSummary* summary) {
@@ -1041,10 +1138,13 @@ Status cross_validate(const RobotModel& start, DatasetBase* dataset, const Calib
   new (cv) CrossValidationResult();
   Status status = Status::ok;
   std::size_t aside_count = 0;
-  if (!options.keep_outliers) {  // the blunders, found once on the whole set
+  CalibrationOptions fold_options = fitted_frames(options);
+  if (!options.keep_outliers ||
+      detects_controller_frames(options)) {  // blunders and frames, found once on the whole set
     status = calibrate(start, dataset, options, workspace, scratch, observer);
     if (status != Status::ok) return cv->status = status;
-    aside_count = scratch->outlier_count;
+    aside_count = scratch->outlier_count;  // 0 with keep_outliers
+    if (scratch->frames_test.adopted) set_controller_frames(&fold_options);
   } else if (dataset == nullptr || workspace == nullptr || !known(options) || !compliance_usable(start, options)) {
     return cv->status = Status::invalid_argument;
   }
@@ -1062,7 +1162,7 @@ Status cross_validate(const RobotModel& start, DatasetBase* dataset, const Calib
     CalibrationResult& r = reset(scratch);
     dataset->set_aside(aside_span);
     status = dataset->split_fold(f, k, options.seed);
-    if (status == Status::ok) status = run_split(start, dataset, options, workspace, &r, observer);
+    if (status == Status::ok) status = run_split(start, dataset, fold_options, workspace, &r, observer);
     if (status != Status::ok) return cv->status = status;
     CrossValidationFold& fold = cv->folds[f];
     fold.train_count = r.train_count;

@@ -9,7 +9,9 @@
 
 #include "hivecal/calibration.hpp"
 #include "hivecal/core/random.hpp"
+#include "hivecal/model/kinematics.hpp"
 #include "testkit/alloc_trap.hpp"
+#include "testkit/quick_job.hpp"
 #include "testkit/target_data.hpp"
 
 namespace hivecal::calibration_known_frames_test {
@@ -104,6 +106,148 @@ TEST(CalibrationKnownFrames, PopulationMethodsRefuseAKnownFrame) {
       EXPECT_EQ(result.step, CalibrationStep::input);
     }
   }
+}
+
+/// Whether the final stages of `a` and `b` hold the same geometry and base, bit for bit.
+bool same_final_fit(const CalibrationResult& a, const CalibrationResult& b) {
+  const CalibrationStage* x = a.final_stage();
+  const CalibrationStage* y = b.final_stage();
+  return x != nullptr && y != nullptr && to_params(x->model) == to_params(y->model) &&
+         x->base_to_tracker.rotation == y->base_to_tracker.rotation &&
+         x->base_to_tracker.translation_m == y->base_to_tracker.translation_m;
+}
+
+CalibrationResult reference;
+
+/// The default job (ABC+LM, a short population stage; a 0.7 split) with the frames test, its
+/// noise the readings'.
+CalibrationOptions detecting(double noise_m) {
+  CalibrationOptions options = test::quick_options(CalibrationMethod::abc_lm);
+  options.detect_controller_frames = true;
+  options.measurement_sigma_m = noise_m;
+  return options;
+}
+
+/// `options` with the controller's frames given, as --controller-tcp.
+CalibrationOptions known_frames(CalibrationOptions options) {
+  options.detect_controller_frames = false;
+  options.method = CalibrationMethod::lm;
+  options.base_known = true;
+  options.tool_known = true;
+  return options;
+}
+
+// Controller readings (base = identity, the tool points known: the start model's) through the
+// default job with the frames test: the fitted base falls within the gate, the fit with the
+// frames known explains the data to the noise, and the result is bit for bit the job with
+// them given (base_known, tool_known, LM), which predicts fresh poses within a few sigmas.
+TEST(CalibrationControllerFrames, ControllerReadingsAreRecognisedAndFittedWithTheirFrames) {
+  const double noise_m = 1e-5;
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    Random random(seed);
+    const RobotModel truth =
+        test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
+    dataset.clear();
+    fresh.clear();
+    test::fill_target_dataset(truth, RigidTransform(), 30, 3, noise_m, &random, &dataset);
+    test::fill_target_dataset(truth, RigidTransform(), 20, 3, 0.0, &random, &fresh);
+    RobotModel start = nominal_model(RobotType::ur5);
+    for (int t = 0; t < kMaxTargets; ++t) target_tool(&start, t) = target_tool(truth, t);
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(start, &dataset, detecting(noise_m), &workspace, &result));
+    ASSERT_EQ(status, Status::ok) << calibration_step_name(result.step);
+    const ControllerFramesTest& test = result.frames_test;
+    std::printf("seed %d: residual sigma %.4f mm, noise %.4f mm, at most %.4f mm\n", static_cast<int>(seed),
+                test.residual_sigma_m * 1e3, test.noise_sigma_m * 1e3, test.critical_sigma_m * 1e3);
+    EXPECT_TRUE(test.tested) << seed;
+    EXPECT_TRUE(test.adopted) << seed;
+    EXPECT_EQ(test.status, Status::ok);
+    EXPECT_EQ(test.noise_sigma_m, noise_m);
+    EXPECT_LT(worst_error_m(truth, fresh.samples()), 5.0 * noise_m) << seed;
+    ASSERT_EQ(calibrate(start, &dataset, known_frames(detecting(noise_m)), &workspace, &reference), Status::ok);
+    EXPECT_TRUE(same_final_fit(result, reference)) << seed;
+    EXPECT_FALSE(reference.frames_test.tested);
+  }
+}
+
+// Tracker points already in the robot's frame (a lab registered them) but with the tool point
+// guessed a millimetre off, as a tracker's user gives it: the base is within the gate, the
+// fit with the guessed tool fixed is far above the noise, and the job keeps the frames fitted,
+// bit for bit the job without the test. A base registered through the nominal geometry (its
+// error absorbed: 0.3 mm, 0.5 mrad) with the tool right fails the same way.
+TEST(CalibrationControllerFrames, TrackerPointsInTheRobotFrameKeepTheirFramesFitted) {
+  const double noise_m = 1e-5;
+  for (int registered = 0; registered < 2; ++registered) {
+    Random random(11 + static_cast<std::uint64_t>(registered));
+    const RobotModel truth =
+        test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
+    RigidTransform frame;  // where the points are: the robot's base, or a registration close to it
+    if (registered == 1) {
+      frame.rotation = Eigen::AngleAxisd(5e-4, Vec3(0.6, 0.8, 0.0)).toRotationMatrix();
+      frame.translation_m = Vec3(3e-4, -2e-4, 1e-4);
+    }
+    dataset.clear();
+    test::fill_target_dataset(truth, frame, 30, 3, noise_m, &random, &dataset);
+    RobotModel start = nominal_model(RobotType::ur5);
+    for (int t = 0; t < kMaxTargets; ++t) target_tool(&start, t) = target_tool(truth, t);
+    if (registered == 0) {
+      for (int t = 0; t < kMaxTargets; ++t) target_tool(&start, t) += Vec3(1e-3, -1e-3, 0.5e-3);
+    }
+    Status status = Status::invalid_argument;
+    EXPECT_NO_HEAP(status = calibrate(start, &dataset, detecting(noise_m), &workspace, &result));
+    ASSERT_EQ(status, Status::ok) << calibration_step_name(result.step);
+    const ControllerFramesTest& test = result.frames_test;
+    std::printf("%s: residual sigma %.4f mm against at most %.4f mm\n", registered ? "registered base" : "guessed tool",
+                test.residual_sigma_m * 1e3, test.critical_sigma_m * 1e3);
+    EXPECT_TRUE(test.tested) << registered;
+    EXPECT_FALSE(test.adopted) << registered;
+    EXPECT_GT(test.residual_sigma_m, 3.0 * test.critical_sigma_m) << registered;
+    CalibrationOptions fitted = detecting(noise_m);
+    fitted.detect_controller_frames = false;
+    ASSERT_EQ(calibrate(start, &dataset, fitted, &workspace, &reference), Status::ok);
+    EXPECT_TRUE(same_final_fit(result, reference)) << registered;
+  }
+}
+
+// A tracker's own frame, metres from the base, is never tested: one run, the same bits.
+TEST(CalibrationControllerFrames, ATrackerFrameIsNotTested) {
+  Random random(5);
+  const RobotModel truth = test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m);
+  dataset.clear();
+  test::fill_target_dataset(truth, test::example_base_to_tracker(), 30, 1, 1e-5, &random, &dataset);
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m = kTool_m;
+  ASSERT_EQ(calibrate(start, &dataset, detecting(1e-5), &workspace, &result), Status::ok);
+  EXPECT_FALSE(result.frames_test.tested);
+  CalibrationOptions fitted = detecting(1e-5);
+  fitted.detect_controller_frames = false;
+  ASSERT_EQ(calibrate(start, &dataset, fitted, &workspace, &reference), Status::ok);
+  EXPECT_TRUE(same_final_fit(result, reference));
+}
+
+// Cross-validation with the test: the folds keep the frames the whole job chose (here the
+// controller's), fold for fold the cross-validation with them given.
+TEST(CalibrationControllerFrames, CrossValidationFoldsKeepTheDetectedFrames) {
+  const double noise_m = 1e-5;
+  Random random(3);
+  const RobotModel truth =
+      test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
+  dataset.clear();
+  test::fill_target_dataset(truth, RigidTransform(), 30, 3, noise_m, &random, &dataset);
+  RobotModel start = nominal_model(RobotType::ur5);
+  for (int t = 0; t < kMaxTargets; ++t) target_tool(&start, t) = target_tool(truth, t);
+  static CrossValidationResult detected;
+  static CrossValidationResult given;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = cross_validate(start, &dataset, detecting(noise_m), 5, &workspace, &result, &detected));
+  ASSERT_EQ(status, Status::ok);
+  ASSERT_EQ(cross_validate(start, &dataset, known_frames(detecting(noise_m)), 5, &workspace, &result, &given),
+            Status::ok);
+  ASSERT_EQ(detected.fold_count, given.fold_count);
+  for (std::size_t f = 0; f < detected.fold_count; ++f) {
+    EXPECT_EQ(detected.folds[f].test.mae(ErrorAxis::norm_3d), given.folds[f].test.mae(ErrorAxis::norm_3d)) << f;
+  }
+  EXPECT_EQ(detected.mae_3d_m, given.mae_3d_m);
 }
 
 }  // namespace

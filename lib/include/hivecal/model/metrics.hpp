@@ -41,6 +41,10 @@ ErrorStats position_error_stats(const RobotModel& model, const RigidTransform& b
 AccuracyReport accuracy_report(const RobotModel& model, const RigidTransform& base_to_tracker,
                                const DatasetBase& dataset);
 
+/// Repeated readings that scatter less than this are identical: rounded by the exporting tool or
+/// simulated without noise. No tracker resolves 1 nm, so they say nothing of its noise [m].
+inline constexpr double kIdenticalReadingsSigma_m = 1e-9;
+
 /// The measurement noise that repeated readings show: a reflector read more than once at one
 /// pose (consecutive samples at equal joints with the same target; a pose as Dataset groups
 /// its samples) scatters by the tracker's noise alone, whatever the model's error. Joints
@@ -55,6 +59,9 @@ struct RepeatedReadingNoise {
   /// The three axes pooled: sqrt(sum |p - mean|^2 / (3 (readings - groups))) [m]; 0 when
   /// there is no group.
   double sigma_m = 0.0;
+
+  /// The readings scatter: they measure the tracker's noise (kIdenticalReadingsSigma_m).
+  bool measured() const { return groups > 0 && sigma_m >= kIdenticalReadingsSigma_m; }
 };
 
 /// The noise of repeated readings in `samples` (no model involved). A run of consecutive
