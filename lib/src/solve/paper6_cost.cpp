@@ -355,22 +355,15 @@ Status Paper6CostBase::precompute_on(Paper6CostBase& cost) {
   return cost.precompute(storage_of<Scalar>(cost.values_, cost.compact_values_));
 }
 
-template <typename Scalar>
-double Paper6CostBase::residual_sum_on(const Paper6CostBase& cost, const Mat3& rotation, const Vec3& shift_m,
-                                       const double* tail_m) {
-  const Scalar* values = storage_of<Scalar>(cost.values_, cost.compact_values_);
-  return cost.sum_abs_residuals(values, rotation, shift_m, tail_m);
-}
-
-// The two instantiations the constructors name (an image links those its costs use).
+// The instantiations the constructors name (an image links those its costs use).
 template void Paper6CostBase::store_on<double>(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
 template void Paper6CostBase::store_on<float>(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
 template Status Paper6CostBase::precompute_on<double>(Paper6CostBase&);
 template Status Paper6CostBase::precompute_on<float>(Paper6CostBase&);
-template double Paper6CostBase::residual_sum_on<double>(const Paper6CostBase&, const Mat3&, const Vec3&, const double*);
-template double Paper6CostBase::residual_sum_on<float>(const Paper6CostBase&, const Mat3&, const Vec3&, const double*);
 
-double Paper6CostBase::mean_abs_error(const double* lengths_m, RigidTransform* base_to_tracker) const {
+template <typename Scalar>
+double Paper6CostBase::mean_abs_error(const Scalar* values, const double* lengths_m,
+                                      RigidTransform* base_to_tracker) const {
   if (!ready_) return std::numeric_limits<double>::quiet_NaN();
   const auto count = static_cast<int>(set_.count);
   const auto stored = static_cast<int>(stored_count_);
@@ -393,7 +386,7 @@ double Paper6CostBase::mean_abs_error(const double* lengths_m, RigidTransform* b
   StoredDirections stored_mean = StoredDirections::Zero();
   for (int k = 0; k < stored; ++k) stored_mean.col(k) = direction_mean_.col(first + k);
   const Vec3 shift_m = rotation * (point_mean_m_ + combine(stored_mean, tail_m, 0, stored)) - measured_mean_m_;
-  const double sum_m = scalar_.residual_sum(*this, rotation, shift_m, tail_m);
+  const double sum_m = sum_abs_residuals(values, rotation, shift_m, tail_m);
   if (base_to_tracker != nullptr) {
     // In the reference frame m ~ E p + tau; in the tracker frame R = R_ref E, t = R_ref tau + t_ref.
     const Vec3 tau_m = (point_origin_m_ + measured_mean_m_) -
@@ -404,12 +397,20 @@ double Paper6CostBase::mean_abs_error(const double* lengths_m, RigidTransform* b
   return sum_m / static_cast<double>(size_);
 }
 
+template <typename Scalar>
+double Paper6CostBase::mean_abs_error_on(const Paper6CostBase& cost, const double* lengths_m,
+                                         RigidTransform* base_to_tracker) {
+  return cost.mean_abs_error(storage_of<Scalar>(cost.values_, cost.compact_values_), lengths_m, base_to_tracker);
+}
+template double Paper6CostBase::mean_abs_error_on<double>(const Paper6CostBase&, const double*, RigidTransform*);
+template double Paper6CostBase::mean_abs_error_on<float>(const Paper6CostBase&, const double*, RigidTransform*);
+
 Status Paper6CostBase::evaluate(const LinkLengths& lengths_m, double* mae_m, RigidTransform* base_to_tracker) const {
   if (!ready_ || lengths_m.count != set_.count) return Status::invalid_argument;
   for (std::size_t k = 0; k < set_.count; ++k) {
     if (!math::is_finite(lengths_m.data()[k])) return Status::non_finite_input;
   }
-  const double value_m = mean_abs_error(lengths_m.data(), base_to_tracker);
+  const double value_m = scalar_.mean_abs_error(*this, lengths_m.data(), base_to_tracker);
   if (!math::is_finite(value_m)) return Status::non_finite_input;
   *mae_m = value_m;
   return Status::ok;

@@ -138,7 +138,7 @@ class Paper6CostBase : public Objective {
   /// Number of link lengths K of the geometry given to reset().
   std::size_t dimension() const override { return set_.count; }
   /// MAE [m] at lengths_m[0..K) [m]; NaN when not finalised.
-  double evaluate(const double* lengths_m) override { return mean_abs_error(lengths_m, nullptr); }
+  double evaluate(const double* lengths_m) override { return scalar_.mean_abs_error(*this, lengths_m, nullptr); }
   /// Checked evaluation: the MAE [m] and, if base_to_tracker is not null, the refitted transform.
   /// Errors: invalid_argument (not finalised, or not K lengths), non_finite_input (NaN/Inf
   /// lengths or cost).
@@ -160,12 +160,12 @@ class Paper6CostBase : public Objective {
   /// `values`: paper6_storage_values(capacity, max_lengths) values, exact (double) or compact (float).
   Paper6CostBase(double* values, std::size_t capacity, std::size_t max_lengths)
       : values_(values),
-        scalar_(ScalarOps{&store_on<double>, &precompute_on<double>, &residual_sum_on<double>}),
+        scalar_(ScalarOps{&store_on<double>, &precompute_on<double>, &mean_abs_error_on<double>}),
         capacity_(capacity),
         max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
   Paper6CostBase(float* values, std::size_t capacity, std::size_t max_lengths)
       : compact_values_(values),
-        scalar_(ScalarOps{&store_on<float>, &precompute_on<float>, &residual_sum_on<float>}),
+        scalar_(ScalarOps{&store_on<float>, &precompute_on<float>, &mean_abs_error_on<float>}),
         capacity_(capacity),
         max_values_per_sample_(link_length_values_per_sample(max_lengths)) {}
   ~Paper6CostBase() = default;
@@ -178,22 +178,22 @@ class Paper6CostBase : public Objective {
   Status precompute(const Scalar* values);
   template <typename Scalar>
   double sum_abs_residuals(const Scalar* values, const Mat3& rotation, const Vec3& shift_m, const double* tail_m) const;
-  double mean_abs_error(const double* lengths_m, RigidTransform* base_to_tracker) const;
-  // store, precompute and sum_abs_residuals on the storage of scalar Scalar.
+  template <typename Scalar>
+  double mean_abs_error(const Scalar* values, const double* lengths_m, RigidTransform* base_to_tracker) const;
+  // store, precompute and mean_abs_error on the storage of scalar Scalar.
   template <typename Scalar>
   static void store_on(Paper6CostBase& cost, const Vec3& predicted_m, const Vec3& measured_m,
                        const ToolPointJacobian& jacobian);
   template <typename Scalar>
   static Status precompute_on(Paper6CostBase& cost);
   template <typename Scalar>
-  static double residual_sum_on(const Paper6CostBase& cost, const Mat3& rotation, const Vec3& shift_m,
-                                const double* tail_m);
+  static double mean_abs_error_on(const Paper6CostBase& cost, const double* lengths_m, RigidTransform* base_to_tracker);
   /// What depends on the storage's scalar, chosen by the constructor: an image whose costs
   /// store one scalar links that scalar's code only (~3 kB each on the firmware).
   struct ScalarOps {
     void (*store)(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
     Status (*precompute)(Paper6CostBase&);
-    double (*residual_sum)(const Paper6CostBase&, const Mat3&, const Vec3&, const double*);
+    double (*mean_abs_error)(const Paper6CostBase&, const double*, RigidTransform*);
   };
 
   double* values_ = nullptr;         // exact layout, or
