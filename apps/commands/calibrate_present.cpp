@@ -532,9 +532,13 @@ std::string frames_line(const ControllerFramesTest& test) {
   char gate[120];
   std::snprintf(gate, sizeof gate, "frames: the fitted base is within %.0f mm and %.0f mrad of the identity",
                 kControllerBaseGate_m * 1e3, kControllerBaseGate_rad * 1e3);
-  if (test.status != Status::ok) {
+  if (test.status != Status::ok) {  // ControllerFramesTest::status
+    const std::string why = test.status == Status::invalid_argument ? "it sets aside more samples as blunders"
+                            : test.status == Status::too_few_samples
+                                ? "it leaves no residual degree of freedom"
+                                : std::string("it failed: ") + status_message(test.status);
     return std::string(gate) + "; the fit with the controller's frames (the identity, --tool) cannot be tested (" +
-           status_message(test.status) + "): fitted";
+           why + "): fitted";
   }
   char fit[220];
   std::snprintf(fit, sizeof fit,

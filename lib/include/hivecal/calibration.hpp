@@ -185,8 +185,10 @@ struct ControllerFramesTest {
   double residual_sigma_m = 0.0;  ///< residual sigma per axis of the fit with the controller's frames [m]
   double noise_sigma_m = 0.0;     ///< the measurement noise per axis it is held against (measurement_sigma_m) [m]
   double critical_sigma_m = 0.0;  ///< the largest residual sigma that noise explains at kControllerFramesAlpha [m]
-  /// Why the known frames' fit could not be tested although the base was within the gate (it
-  /// failed, set aside other samples, or left no residual degree of freedom): ok when it was.
+  /// Why the known frames' fit could not be tested although the base was within the gate:
+  /// invalid_argument (it set aside more samples as blunders than the fitted frames: it
+  /// explains the data only without them), too_few_samples
+  /// (no residual degree of freedom), else the status its run failed with; ok when it was.
   Status status = Status::ok;
 };
 
