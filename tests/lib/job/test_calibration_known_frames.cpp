@@ -38,6 +38,22 @@ double worst_error_m(const RobotModel& truth, const Span<const Sample> samples) 
   return worst_m;
 }
 
+/// A perturbed UR5 (seeded) read as a controller reports its TCP: base = identity, a plate of
+/// three points at kTool_m known exactly; 30 poses with `noise_m` into `dataset`, 20
+/// noise-free ones into `fresh`. *start: the nominal UR5 with those tool points. Returns the truth.
+RobotModel controller_session(std::uint64_t seed, double noise_m, RobotModel* start) {
+  Random random(seed);
+  const RobotModel truth =
+      test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
+  dataset.clear();
+  fresh.clear();
+  test::fill_target_dataset(truth, RigidTransform(), 30, 3, noise_m, &random, &dataset);
+  test::fill_target_dataset(truth, RigidTransform(), 20, 3, 0.0, &random, &fresh);
+  *start = nominal_model(RobotType::ur5);
+  for (int t = 0; t < kMaxTargets; ++t) target_tool(start, t) = target_tool(truth, t);
+  return truth;
+}
+
 // A perturbed UR5 read as a controller reports its TCP (base = identity, the TCP offset and
 // two more points of the tool frame known exactly), 30 poses with 10 um noise. With both
 // known the job keeps them bit for bit, estimates theta1 and d1 (a fitted base makes them
@@ -45,17 +61,8 @@ double worst_error_m(const RobotModel& truth, const Span<const Sample> samples) 
 TEST(CalibrationKnownFrames, ControllerReadingsEstimateJointOneAndKeepBaseAndTool) {
   const double noise_m = 1e-5;
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
-    Random random(seed);
-    const RobotModel truth =
-        test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
-    const RigidTransform identity;
-    dataset.clear();
-    fresh.clear();
-    test::fill_target_dataset(truth, identity, 30, 3, noise_m, &random, &dataset);
-    test::fill_target_dataset(truth, identity, 20, 3, 0.0, &random, &fresh);
-    RobotModel start = nominal_model(RobotType::ur5);
-    start.tool_m = truth.tool_m;
-    for (int t = 1; t < kMaxTargets; ++t) target_tool(&start, t) = target_tool(truth, t);
+    RobotModel start;
+    const RobotModel truth = controller_session(seed, noise_m, &start);
     CalibrationOptions options;
     options.method = CalibrationMethod::lm;
     options.train_fraction = 1.0;
@@ -144,15 +151,8 @@ CalibrationOptions known_frames(CalibrationOptions options) {
 TEST(CalibrationControllerFrames, ControllerReadingsAreRecognisedAndFittedWithTheirFrames) {
   const double noise_m = 1e-5;
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
-    Random random(seed);
-    const RobotModel truth =
-        test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
-    dataset.clear();
-    fresh.clear();
-    test::fill_target_dataset(truth, RigidTransform(), 30, 3, noise_m, &random, &dataset);
-    test::fill_target_dataset(truth, RigidTransform(), 20, 3, 0.0, &random, &fresh);
-    RobotModel start = nominal_model(RobotType::ur5);
-    for (int t = 0; t < kMaxTargets; ++t) target_tool(&start, t) = target_tool(truth, t);
+    RobotModel start;
+    const RobotModel truth = controller_session(seed, noise_m, &start);
     Status status = Status::invalid_argument;
     EXPECT_NO_HEAP(status = calibrate(start, &dataset, detecting(noise_m), &workspace, &result));
     ASSERT_EQ(status, Status::ok) << calibration_step_name(result.step);
@@ -229,13 +229,8 @@ TEST(CalibrationControllerFrames, ATrackerFrameIsNotTested) {
 // controller's), fold for fold the cross-validation with them given.
 TEST(CalibrationControllerFrames, CrossValidationFoldsKeepTheDetectedFrames) {
   const double noise_m = 1e-5;
-  Random random(3);
-  const RobotModel truth =
-      test::with_plate(test::perturbed_parallel_model(RobotType::ur5, &random, 1e-3, 1e-3, kTool_m), kTool_m);
-  dataset.clear();
-  test::fill_target_dataset(truth, RigidTransform(), 30, 3, noise_m, &random, &dataset);
-  RobotModel start = nominal_model(RobotType::ur5);
-  for (int t = 0; t < kMaxTargets; ++t) target_tool(&start, t) = target_tool(truth, t);
+  RobotModel start;
+  (void)controller_session(3, noise_m, &start);
   static CrossValidationResult detected;
   static CrossValidationResult given;
   Status status = Status::invalid_argument;
