@@ -200,8 +200,9 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
         {"frames", "auto|fitted|controller",
          "the base -> tracker transform and the tool points: 'fitted' as for a tracker; 'controller' as "
          "--controller-tcp; 'auto' fits them and, when the fitted base is within 10 mm and 10 mrad of the identity, "
-         "fits again with the controller's (the identity, --tool; LM only) and keeps that fit when it predicts "
-         "the training poses as well, each left out of the fit",
+         "fits again with the controller's (the identity, --tool; LM only) and keeps that fit when its residual is "
+         "within what the measurement noise explains (chi-square at 0.1 %; --tracker-sigma-um with the joints' "
+         "reading noise)",
          "auto"},
         {"significance", "T|auto",
          "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leaving one pose out at a time, "

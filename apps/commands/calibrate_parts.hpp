@@ -94,13 +94,13 @@ const std::vector<OptionSpec>& calibrate_option_specs();
 /// The command line into *settings; a usage error names the option and what it must be.
 Error calibrate_settings_from_options(const Options& options, CalibrateSettings* settings);
 
-/// Tables and figures of a run, and the text of the terminal.
 /// The joints' reading noise as noise of the tool point per axis over the poses of `samples`
 /// (--joint-sigma-rad, else a rounding to their written resolution, through the arm); 0 when
 /// it is negligible beside the tracker's stated noise [m].
 double joint_point_noise_m(const CalibrateSettings& settings, const RobotModel& start,
                            const streams::SessionFacts& facts, Span<const Sample> samples);
 
+/// Tables and figures of a run, and the text of the terminal.
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,
                                        const CliDataset& dataset, const streams::SessionFacts& facts, const Run& run);
 

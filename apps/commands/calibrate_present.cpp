@@ -523,8 +523,6 @@ report::PointTimeline PointFates::timeline(std::size_t bins) const {
   return t;
 }
 
-/// Where sample `index` (Sample::index) came from: "file:line" for paired samples.
-/// Tables and figures of a run, and the text of the terminal.
 namespace {
 
 /// What the test of the controller's frames (--frames auto) found.
@@ -556,6 +554,7 @@ std::string frames_line(const ControllerFramesTest& test) {
 
 }  // namespace
 
+/// Tables and figures of a run, and the text of the terminal.
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,
                                        const CliDataset& dataset, const streams::SessionFacts& facts, const Run& run) {
   const CalibrationBaseline& uncalibrated = run.result.baseline;
