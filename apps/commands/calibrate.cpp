@@ -251,7 +251,9 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, const stre
   job.detect_controller_frames = settings.detect_controller_frames;
   const double stated_m = settings.orientation.position_sigma_m;
   const double joint_m = joint_point_noise_m(settings, start, facts, dataset->samples());
-  job.measurement_sigma_m = std::sqrt(stated_m * stated_m + joint_m * joint_m);  // the frames test's noise
+  // The frames test's noise, over every pose (the split comes later; the report's noise line
+  // takes the training poses).
+  job.measurement_sigma_m = std::sqrt(stated_m * stated_m + joint_m * joint_m);
   job.significance_t = settings.significance_t;
   job.significance_every_set = settings.significance_every_set;
   job.population_subset = settings.population_subset;
