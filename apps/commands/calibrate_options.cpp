@@ -202,7 +202,7 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "--controller-tcp; 'auto' fits them and, when the fitted base is within 10 mm and 10 mrad of the identity, "
          "fits again with the controller's (the identity, --tool; LM only) and keeps that fit when its residual is "
          "within what the measurement noise explains (chi-square at 0.1 %; --tracker-sigma-um with the joints' "
-         "reading noise)",
+         "reading noise). Not given with a --method other than lm: fitted ('all' is always fitted)",
          "auto"},
         {"significance", "T|auto",
          "LM fixes parameters whose change is below T sigma (0: off; auto: chosen by leaving one pose out at a time, "
@@ -307,7 +307,9 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
     return Error::usage("--frames must be auto, fitted or controller, not " + port::quoted(frames));
   }
   settings->controller_tcp = options.given("controller-tcp") || frames == "controller";
-  settings->detect_controller_frames = frames == "auto";
+  // Not given: auto unless a population method was asked for (it fits its own base).
+  const bool population_asked = options.given("method") && settings->method != CalibrationMethod::lm;
+  settings->detect_controller_frames = frames == "auto" && (options.given("frames") || !population_asked);
   if (settings->controller_tcp && options.given("controller-tcp") && options.given("frames") &&
       frames != "controller") {
     return Error::usage("--controller-tcp and --frames " + frames + " contradict each other");

@@ -245,6 +245,17 @@ TEST(OrientationCli, PendantExportIsRecognisedAsTheControllersReadings) {
   EXPECT_EQ(test::read_text_file(fitted).find("\"known\""), std::string::npos);
   EXPECT_GT(held_out_m(fitted), detected_m);
 
+  // A population method asked for keeps the frames fitted unless --frames auto is given too;
+  // the paper's comparison (--method all) always does.
+  for (const std::vector<std::string>& extra :
+       std::vector<std::vector<std::string>>{{"--method", "abc+lm"},
+                                             {"--method", "abc+lm", "--frames", "auto"},
+                                             {"--method", "all", "--frames", "auto"}}) {
+    const std::string asked = calibrate("method.json", extra, &console);
+    const bool detected_asked = extra.size() == 4 && extra[1] == "abc+lm";
+    EXPECT_EQ(test::read_text_file(asked).find("\"frames_test\"") != std::string::npos, detected_asked) << extra[1];
+  }
+
   for (const std::vector<std::string>& bad :
        std::vector<std::vector<std::string>>{{"--frames", "tracker"}, {"--frames", "fitted", "--controller-tcp"}}) {
     std::vector<std::string> args = common;

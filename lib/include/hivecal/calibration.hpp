@@ -150,7 +150,8 @@ struct CalibrationOptions {
   /// base is near the identity (kControllerBaseGate_m, kControllerBaseGate_rad) it runs again
   /// with the controller's frames, base_known (the identity) and tool_known, LM only, and keeps
   /// that fit when it explains the data to the measurement noise (ControllerFramesTest). No
-  /// effect with base_known or tool_known set, or a method without an LM stage [-].
+  /// effect with base_known or tool_known set, or a method other than lm, abc_lm and gsa_lm
+  /// (`all` compares the paper's three stages on the same frames) [-].
   bool detect_controller_frames = false;
   /// The measurement noise per axis of a point, for detect_controller_frames: the tracker's
   /// stated with the joints' reading noise through the arm (0: blunder_test.tracker_sigma_m);

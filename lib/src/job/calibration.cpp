@@ -1061,7 +1061,8 @@ ControllerFramesTest test_controller_frames(Status known_status, std::size_t fit
 
 /// Whether the job tests the controller's frames (CalibrationOptions::detect_controller_frames).
 bool detects_controller_frames(const CalibrationOptions& options) {
-  return options.detect_controller_frames && !options.base_known && !options.tool_known && plan_for(options.method).lm;
+  const bool ends_in_lm = plan_for(options.method).lm && options.method != CalibrationMethod::all;  // not a comparison
+  return options.detect_controller_frames && !options.base_known && !options.tool_known && ends_in_lm;
 }
 
 /// `options` without the test: the frames fitted.
