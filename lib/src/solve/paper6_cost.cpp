@@ -355,12 +355,6 @@ Status Paper6CostBase::precompute_on(Paper6CostBase& cost) {
   return cost.precompute(storage_of<Scalar>(cost.values_, cost.compact_values_));
 }
 
-// The instantiations the constructors name (an image links those its costs use).
-template void Paper6CostBase::store_on<double>(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
-template void Paper6CostBase::store_on<float>(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
-template Status Paper6CostBase::precompute_on<double>(Paper6CostBase&);
-template Status Paper6CostBase::precompute_on<float>(Paper6CostBase&);
-
 template <typename Scalar>
 double Paper6CostBase::mean_abs_error(const Scalar* values, const double* lengths_m,
                                       RigidTransform* base_to_tracker) const {
@@ -402,6 +396,12 @@ double Paper6CostBase::mean_abs_error_on(const Paper6CostBase& cost, const doubl
                                          RigidTransform* base_to_tracker) {
   return cost.mean_abs_error(storage_of<Scalar>(cost.values_, cost.compact_values_), lengths_m, base_to_tracker);
 }
+
+// The instantiations the constructors name (an image links those its costs use).
+template void Paper6CostBase::store_on<double>(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
+template void Paper6CostBase::store_on<float>(Paper6CostBase&, const Vec3&, const Vec3&, const ToolPointJacobian&);
+template Status Paper6CostBase::precompute_on<double>(Paper6CostBase&);
+template Status Paper6CostBase::precompute_on<float>(Paper6CostBase&);
 template double Paper6CostBase::mean_abs_error_on<double>(const Paper6CostBase&, const double*, RigidTransform*);
 template double Paper6CostBase::mean_abs_error_on<float>(const Paper6CostBase&, const double*, RigidTransform*);
 
