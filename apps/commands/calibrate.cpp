@@ -292,7 +292,8 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, const stre
   run->has_cv = settings.cv_folds > 0;
   if (!run->has_cv) return Error{};
   const Clock::time_point cv_start = Clock::now();
-  const Error cv = cross_validation(settings, start, job, memory);
+  // The frames the job chose: the cross-validation's own job runs once, not the test again.
+  const Error cv = cross_validation(settings, start, options_with_chosen_frames(job, run->result), memory);
   profile->add("cross-validation", seconds_since(cv_start));
   return cv;
 }

@@ -852,6 +852,11 @@ struct CrossValidationResult {
   double fold_mae_3d_max_m = 0.0;                       ///< largest fold 3-D MAE [m]
 };
 
+/// The options `result` was calibrated with: `options` with the frames its test chose
+/// (ControllerFramesTest: the controller's when adopted) and no test left to make; a second
+/// job with them (cross_validate's) runs once instead of repeating the test.
+CalibrationOptions options_with_chosen_frames(const CalibrationOptions& options, const CalibrationResult& result);
+
 /// K-fold cross-validation of the job of `options` (folds = 0: leave-one-out): unless
 /// options.keep_outliers, first the whole job on every sample finds the blunders, which stay
 /// aside; then the kept samples in the order of add() are shuffled with options.seed (as

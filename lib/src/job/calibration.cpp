@@ -1115,6 +1115,12 @@ Status calibrate(const RobotModel& start, DatasetBase* dataset, const Calibratio
   return run_job(start, dataset, options, workspace, result, observer);  // run_job reads no detect flag
 }
 
+CalibrationOptions options_with_chosen_frames(const CalibrationOptions& options, const CalibrationResult& result) {
+  CalibrationOptions chosen = fitted_frames(options);
+  if (result.frames_test.adopted) set_controller_frames(&chosen);
+  return chosen;
+}
+
 Status test_final_calibration(const CalibrationResult& result, const DatasetBase& dataset,
                               const CalibrationOptions& options, ReliabilityWorkspace* workspace,
                               UnitTestVisitor* visitor, BlunderTestSummary* summary) {
@@ -1141,7 +1147,7 @@ Status cross_validate(const RobotModel& start, DatasetBase* dataset, const Calib
     status = calibrate(start, dataset, options, workspace, scratch, observer);
     if (status != Status::ok) return cv->status = status;
     aside_count = scratch->outlier_count;  // 0 with keep_outliers
-    if (scratch->frames_test.adopted) set_controller_frames(&fold_options);
+    fold_options = options_with_chosen_frames(options, *scratch);
   } else if (dataset == nullptr || workspace == nullptr || !known(options) || !compliance_usable(start, options)) {
     return cv->status = Status::invalid_argument;
   }

@@ -167,6 +167,9 @@ TEST(CalibrationControllerFrames, ControllerReadingsAreRecognisedAndFittedWithTh
     ASSERT_EQ(calibrate(start, &dataset, known_frames(detecting(noise_m)), &workspace, &reference), Status::ok);
     EXPECT_TRUE(same_final_fit(result, reference)) << seed;
     EXPECT_FALSE(reference.frames_test.tested);
+    const CalibrationOptions chosen = options_with_chosen_frames(detecting(noise_m), result);
+    EXPECT_TRUE(chosen.base_known && chosen.tool_known && chosen.method == CalibrationMethod::lm);
+    EXPECT_FALSE(chosen.detect_controller_frames);
   }
 }
 
@@ -206,6 +209,7 @@ TEST(CalibrationControllerFrames, TrackerPointsInTheRobotFrameKeepTheirFramesFit
     fitted.detect_controller_frames = false;
     ASSERT_EQ(calibrate(start, &dataset, fitted, &workspace, &reference), Status::ok);
     EXPECT_TRUE(same_final_fit(result, reference)) << registered;
+    EXPECT_FALSE(options_with_chosen_frames(detecting(noise_m), result).base_known);
   }
 }
 
