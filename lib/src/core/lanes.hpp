@@ -73,6 +73,14 @@ template <class AnyLane>
 inline void store_any(double* value, const AnyLane& lane) {
   std::memcpy(value, &lane, sizeof lane);
 }
+/// A one-double lane: a plain access, which the compiler knows is aligned (a memcpy from a
+/// pointer it cannot trace became two unaligned word loads on 32-bit ARM).
+inline void load_any(const double* value, double* lane) {
+  *lane = *value;
+}
+inline void store_any(double* value, const double& lane) {
+  *value = lane;
+}
 
 #if defined(__x86_64__) && defined(__GNUC__)
 /// x86-64 machines with AVX2 (most since 2013) add a 4-double lane, chosen at run time
@@ -85,6 +93,16 @@ using WideLane = double __attribute__((vector_size(kWideLanes * sizeof(double)))
 /// True when this CPU runs the target("avx2") instances.
 inline bool wide_lanes_available() {
   return __builtin_cpu_supports("avx2") != 0;
+}
+/// Machines with AVX-512F (servers since 2017, Zen 4 and later) add an 8-double lane, chosen
+/// the same way, for the loops over contiguous columns (the normal equations' rank update);
+/// the Jacobian kernel stays at four: its lanes are scattered to their samples' rows, which
+/// eight lanes make slower.
+constexpr int kWiderLanes = 8;
+using WiderLane = double __attribute__((vector_size(kWiderLanes * sizeof(double))));
+/// True when this CPU runs the target("avx512f") instances.
+inline bool wider_lanes_available() {
+  return __builtin_cpu_supports("avx512f") != 0;
 }
 #endif
 

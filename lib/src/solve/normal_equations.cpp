@@ -47,7 +47,7 @@ constexpr int kBatchRows = 3 * kBatchSamples;
 /// Samples whose Jacobian rows one kernel call writes (one per double lane).
 constexpr int kGroupSamples = detail::kJacobianLanes;
 #ifdef HIVECAL_WIDE_LANES
-using WidestLane = lanes::WideLane;
+using WidestLane = lanes::WiderLane;
 constexpr int kWideGroupSamples = detail::kWideJacobianLanes;
 /// Samples the row buffer holds: a wide group, flushed as batches of kBatchSamples.
 constexpr int kHeldSamples = kWideGroupSamples;
@@ -55,8 +55,13 @@ constexpr int kHeldSamples = kWideGroupSamples;
 using WidestLane = lanes::Lane;
 constexpr int kHeldSamples = kBatchSamples;
 #endif
-static_assert(kBatchSamples % kGroupSamples == 0 && kHeldSamples % kBatchSamples == 0,
-              "groups and batches tile the row buffer");
+/// Batches one pass over the normal matrix adds, one after the other: each entry is loaded
+/// and stored once for them (more than two outgrow the registers and run slower).
+constexpr int kPassBatches = kHeldSamples >= 2 * kBatchSamples ? 2 : 1;
+constexpr int kPassSamples = kPassBatches * kBatchSamples;
+constexpr int kPassRows = 3 * kPassSamples;
+static_assert(kBatchSamples % kGroupSamples == 0 && kHeldSamples % kPassSamples == 0,
+              "groups, batches and passes tile the row buffer");
 
 /// Jacobian rows of a few samples over the listed columns, with their weights and residuals.
 struct RowBatch {
@@ -135,111 +140,195 @@ void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransfo
   }
 }
 
-/// column[k] += sum_j rows[j][k] * weight[j] for k in [0, count): each sum takes the rows in
-/// order, sizeof(Lane)/8 entries at a time, then single ones (the same bits at any lane
-/// width). The sum starts from the first product, not from 0 + it: they differ only in the
-/// sign of a zero, and the column, which starts at +0, never becomes -0 under addition.
+/// column[k] += sum_j rows[b][j][k] * weight[b][j] for k in [0, count), batch after batch:
+/// each batch's sum takes its rows in order, sizeof(Lane)/8 entries at a time, then single
+/// ones (the same bits at any lane width), and is added to the column on its own, as if the
+/// batches were flushed one after the other. A sum starts from the first product, not from
+/// 0 + it: they differ only in the sign of a zero, and the column, which starts at +0, never
+/// becomes -0 under addition.
 /// The last full lane may run past `count` (up to kFullParamCount): the entries below the
 /// diagonal it writes are scratch, overwritten by expand_compact's mirror, and the rows it
 /// reads there are initialised (the row buffers start zeroed).
 template <class Lane, std::size_t kRows>
-__attribute__((always_inline)) inline void add_weighted_rows(const double* const (&rows)[kRows],
-                                                             const double (&weight)[kRows], int count, double* column) {
+__attribute__((always_inline)) inline void add_weighted_rows(const double* const (&rows)[kPassBatches][kRows],
+                                                             const double (&weight)[kPassBatches][kRows], int count,
+                                                             double* column) {
   constexpr int kWidth = static_cast<int>(sizeof(Lane) / sizeof(double));
   // One bound for the lane loop (the lanes that start below `count` and end inside the
   // column): a second test per lane cost the loop a fifth of its instructions.
   const int lane_end = std::min(count, kFullParamCount - kWidth + 1);
   int k = 0;
   for (; k < lane_end; k += kWidth) {
-    Lane sum;
-    lanes::load_any(rows[0] + k, &sum);
-    sum *= weight[0];
-    for (std::size_t j = 1; j < kRows; ++j) {
-      Lane row;
-      lanes::load_any(rows[j] + k, &row);
-      sum += row * weight[j];
-    }
     Lane total;
     lanes::load_any(column + k, &total);
-    total += sum;
+    for (int b = 0; b < kPassBatches; ++b) {
+      Lane sum;
+      lanes::load_any(rows[b][0] + k, &sum);
+      sum *= weight[b][0];
+      for (std::size_t j = 1; j < kRows; ++j) {
+        Lane row;
+        lanes::load_any(rows[b][j] + k, &row);
+        sum += row * weight[b][j];
+      }
+      total += sum;
+    }
     lanes::store_any(column + k, total);
   }
   for (; k < count; ++k) {
-    double sum = rows[0][k] * weight[0];
-    for (std::size_t j = 1; j < kRows; ++j) sum += rows[j][k] * weight[j];
-    column[k] += sum;
+    for (int b = 0; b < kPassBatches; ++b) {
+      double sum = rows[b][0][k] * weight[b][0];
+      for (std::size_t j = 1; j < kRows; ++j) sum += rows[b][j][k] * weight[b][j];
+      column[k] += sum;
+    }
   }
 }
 
-/// eq += sum over the batch of w J^T J and w J^T r, in compact coordinates (entry (k, l) for
-/// columns index[k], index[l]; upper triangle), one contiguous column at a time. Unused rows
-/// are zero, which adds exact zeros. The base-translation columns (the last ones of the list,
+/// A pass's rows weighted at one column, w[b][j] = w_j J_j of batch b's row j, and each
+/// batch's gradient entry sum_j w_j J_j r_j (from 0, rows in order).
+__attribute__((always_inline)) inline void weigh_column(const double (*rows)[kFullParamCount], const double* weight,
+                                                        const double* residual_m, int column,
+                                                        double (&w)[kPassBatches][kBatchRows],
+                                                        double (&gradient)[kPassBatches]) {
+  for (int b = 0; b < kPassBatches; ++b) {
+    double sum = 0.0;
+    for (int j = 0; j < kBatchRows; ++j) {
+      const int row = b * kBatchRows + j;
+      w[b][j] = rows[row][column] * weight[row];
+      sum += w[b][j] * residual_m[row];
+    }
+    gradient[b] = sum;
+  }
+}
+
+/// weigh_column for the lane of columns first .. first + kWidth - 1 at once, into
+/// weighted[row][c] and gradient[b][c]: vector lanes where the rows have room for a whole
+/// one, else column by column (the same bits).
+template <class Lane, std::size_t kWidth>
+__attribute__((always_inline)) inline void weigh_columns(const double (*rows)[kFullParamCount], const double* weight,
+                                                         const double* residual_m, int first,
+                                                         double (&weighted)[kPassRows][kWidth],
+                                                         double (&gradient)[kPassBatches][kWidth]) {
+  constexpr int kColumns = static_cast<int>(kWidth);
+  if (first + kColumns <= kFullParamCount) {
+    for (int b = 0; b < kPassBatches; ++b) {
+      Lane sum = Lane{};
+      for (int j = 0; j < kBatchRows; ++j) {
+        const int row = b * kBatchRows + j;
+        Lane value;
+        lanes::load_any(rows[row] + first, &value);
+        value *= weight[row];
+        lanes::store_any(weighted[row], value);
+        sum += value * residual_m[row];
+      }
+      lanes::store_any(gradient[b], sum);
+    }
+    return;
+  }
+  for (int c = 0; first + c < kFullParamCount; ++c) {
+    double w[kPassBatches][kBatchRows];
+    double column_gradient[kPassBatches];
+    weigh_column(rows, weight, residual_m, first + c, w, column_gradient);
+    for (int b = 0; b < kPassBatches; ++b) {
+      gradient[b][c] = column_gradient[b];
+      for (int j = 0; j < kBatchRows; ++j) weighted[b * kBatchRows + j][c] = w[b][j];
+    }
+  }
+}
+
+/// The update of column l of the compact normal matrix by a pass's rows: w[b][j] is batch b's
+/// row j weighted at column l. The base-translation columns (the last ones of the list,
 /// identity blocks of J) are 1 on their axis' row and 0 elsewhere: their entries only take
 /// that row's products; the base-rotation columns e_k x p are exactly 0 on row k: their
 /// entries skip that row. The same sums without exact zeros, so the same bits.
 template <class Lane>
-__attribute__((always_inline)) inline void flush_batch_columns(RowBatch* batch, int first_sample,
-                                                               const IndexList& columns, NormalEquations* eq) {
-  const int count = columns.count;
-  const int held = std::min(kBatchSamples, batch->samples - first_sample);
-  double(*rows)[kFullParamCount] = batch->rows + 3 * first_sample;
-  double* weight = batch->weight + 3 * first_sample;
-  double* residual_m = batch->residual_m + 3 * first_sample;
-  for (int j = 3 * held; j < kBatchRows; ++j) {
-    for (int k = 0; k < count; ++k) rows[j][k] = 0.0;
-    weight[j] = 0.0;
-    residual_m[j] = 0.0;
-  }
-  const double* all_rows[kBatchRows];
-  for (int j = 0; j < kBatchRows; ++j) all_rows[j] = rows[j];
-  double* compact = eq->jtwj.data();
-  for (int l = 0; l < count; ++l) {
-    double w[kBatchRows];
-    double gradient = 0.0;
-    for (int j = 0; j < kBatchRows; ++j) {
-      w[j] = weight[j] * rows[j][l];
-      gradient += w[j] * residual_m[j];
-    }
-    eq->jtwr(l) += gradient;
-    double* column = compact + l * kFullParamCount;
-    const int parameter = columns.index[l];
-    if (parameter >= base_translation_param_index(0) && parameter < kRigidParamCount) {  // e_axis: one row per sample
-      const int axis = parameter - base_translation_param_index(0);
-      const double* axis_rows[kBatchSamples];
-      double axis_weights[kBatchSamples];
+__attribute__((always_inline)) inline void add_column(const double* const (&rows)[kPassBatches][kBatchRows],
+                                                      const double (&w)[kPassBatches][kBatchRows], int parameter, int l,
+                                                      double* column) {
+  if (parameter >= base_translation_param_index(0) && parameter < kRigidParamCount) {  // e_axis: one row per sample
+    const int axis = parameter - base_translation_param_index(0);
+    const double* axis_rows[kPassBatches][kBatchSamples];
+    double axis_weights[kPassBatches][kBatchSamples];
+    for (int b = 0; b < kPassBatches; ++b) {
       for (int s = 0; s < kBatchSamples; ++s) {
-        axis_rows[s] = rows[3 * s + axis];
-        axis_weights[s] = w[3 * s + axis];
+        axis_rows[b][s] = rows[b][3 * s + axis];
+        axis_weights[b][s] = w[b][3 * s + axis];
       }
-      add_weighted_rows<Lane>(axis_rows, axis_weights, l + 1, column);
-    } else if (parameter >= base_rotation_param_index(0) &&
-               parameter < base_translation_param_index(0)) {  // e_axis x p: 0 on the axis' row
-      const int axis = parameter - base_rotation_param_index(0);
-      const double* other_rows[2 * kBatchSamples];
-      double other_weights[2 * kBatchSamples];
+    }
+    add_weighted_rows<Lane>(axis_rows, axis_weights, l + 1, column);
+  } else if (parameter >= base_rotation_param_index(0) &&
+             parameter < base_translation_param_index(0)) {  // e_axis x p: 0 on the axis' row
+    const int axis = parameter - base_rotation_param_index(0);
+    const double* other_rows[kPassBatches][2 * kBatchSamples];
+    double other_weights[kPassBatches][2 * kBatchSamples];
+    for (int b = 0; b < kPassBatches; ++b) {
       int n = 0;
       for (int s = 0; s < kBatchSamples; ++s) {
         for (int r = 0; r < 3; ++r) {
           if (r == axis) continue;
-          other_rows[n] = rows[3 * s + r];
-          other_weights[n++] = w[3 * s + r];
+          other_rows[b][n] = rows[b][3 * s + r];
+          other_weights[b][n++] = w[b][3 * s + r];
         }
       }
-      add_weighted_rows<Lane>(other_rows, other_weights, l + 1, column);
-    } else {
-      add_weighted_rows<Lane>(all_rows, w, l + 1, column);
+    }
+    add_weighted_rows<Lane>(other_rows, other_weights, l + 1, column);
+  } else {
+    add_weighted_rows<Lane>(rows, w, l + 1, column);
+  }
+}
+
+/// eq += sum over a pass's samples (from first_sample) of w J^T J and w J^T r, batch after
+/// batch of kBatchSamples as if each were flushed on its own, in compact coordinates (entry
+/// (k, l) for columns index[k], index[l]; upper triangle), one contiguous column at a time.
+/// Rows beyond the samples held are zero, which adds exact zeros.
+template <class Lane>
+__attribute__((always_inline)) inline void flush_pass(RowBatch* batch, int first_sample, const IndexList& columns,
+                                                      NormalEquations* eq) {
+  constexpr std::size_t kWidth = sizeof(Lane) / sizeof(double);
+  constexpr int kColumns = static_cast<int>(kWidth);
+  const int count = columns.count;
+  const int held = std::min(kPassSamples, batch->samples - first_sample);
+  double(*rows)[kFullParamCount] = batch->rows + 3 * first_sample;
+  double* weight = batch->weight + 3 * first_sample;
+  double* residual_m = batch->residual_m + 3 * first_sample;
+  for (int j = 3 * held; j < kPassRows; ++j) {
+    for (int k = 0; k < count; ++k) rows[j][k] = 0.0;
+    weight[j] = 0.0;
+    residual_m[j] = 0.0;
+  }
+  const double* pass_rows[kPassBatches][kBatchRows];
+  for (int b = 0; b < kPassBatches; ++b)
+    for (int j = 0; j < kBatchRows; ++j) pass_rows[b][j] = rows[b * kBatchRows + j];
+  double* compact = eq->jtwj.data();
+  for (int first = 0; first < count; first += kColumns) {
+    // With vector lanes a lane of columns is weighed at once; scalar lanes weigh each column
+    // where it is used (a table of one column costs the firmware's loop its loads and stores).
+    double weighted[kPassRows][kWidth];
+    double gradients[kPassBatches][kWidth] = {};  // written whole by weigh_columns (GCC cannot tell)
+    if constexpr (kColumns > 1) weigh_columns<Lane, kWidth>(rows, weight, residual_m, first, weighted, gradients);
+    const int end = std::min(count, first + kColumns);
+    for (int l = first; l < end; ++l) {
+      double w[kPassBatches][kBatchRows];
+      double gradient[kPassBatches];
+      if constexpr (kColumns > 1) {
+        for (int b = 0; b < kPassBatches; ++b) {
+          gradient[b] = gradients[b][l - first];
+          for (int j = 0; j < kBatchRows; ++j) w[b][j] = weighted[b * kBatchRows + j][l - first];
+        }
+      } else {
+        weigh_column(rows, weight, residual_m, l, w, gradient);
+      }
+      for (int b = 0; b < kPassBatches; ++b) eq->jtwr(l) += gradient[b];
+      add_column<Lane>(pass_rows, w, columns.index[l], l, compact + l * kFullParamCount);
     }
   }
 }
 
-/// Flushes every sample held, kBatchSamples at a time in order (the sums are those of
-/// flushing each batch as it fills), and empties the buffer.
+/// Flushes every sample held, kPassSamples at a time in order (the sums are those of
+/// flushing each batch of kBatchSamples as it fills), and empties the buffer.
 template <class Lane>
 __attribute__((always_inline)) inline void flush_columns(RowBatch* batch, const IndexList& columns,
                                                          NormalEquations* eq) {
-  for (int first = 0; first < batch->samples; first += kBatchSamples) {
-    flush_batch_columns<Lane>(batch, first, columns, eq);
-  }
+  for (int first = 0; first < batch->samples; first += kPassSamples) flush_pass<Lane>(batch, first, columns, eq);
   batch->samples = 0;
 }
 
@@ -252,12 +341,17 @@ void flush(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
 __attribute__((target("avx2"))) void flush_wide(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
   flush_columns<lanes::WideLane>(batch, columns, eq);
 }
+/// flush on 8-double lanes, for CPUs with AVX-512F (lanes::wider_lanes_available).
+__attribute__((target("avx512f"))) void flush_wider(RowBatch* batch, const IndexList& columns, NormalEquations* eq) {
+  flush_columns<lanes::WiderLane>(batch, columns, eq);
+}
 #endif
 
 /// The flush this CPU runs fastest; all give the same bits.
 using FlushFunction = void (*)(RowBatch*, const IndexList&, NormalEquations*);
 FlushFunction fastest_flush() {
 #ifdef HIVECAL_WIDE_LANES
+  if (lanes::wider_lanes_available()) return flush_wider;
   if (lanes::wide_lanes_available()) return flush_wide;
 #endif
   return flush;
