@@ -5,6 +5,7 @@
 
 #include "hivecal/core/math.hpp"
 #include "hivecal/linalg/symmetric_eigen.hpp"
+#include "solve/kept_cholesky.hpp"
 
 namespace hivecal {
 namespace {
@@ -28,6 +29,14 @@ constexpr double kReportedComponentFloor = 1e-3;
 // within ~1e-5 rad (test_identifiability_cluster.cpp).
 constexpr double kNullBasisAngle = 1e-4;
 constexpr double kNullBasisOrthogonality = 1e-9;
+
+// The confirming round's certificate: no eigenvalue of the scaled block after a drop lies below
+// kCertificateMargin x the null threshold's eigenvalue (a shifted Cholesky factorisation
+// succeeds), so its eigen-decomposition would find no null direction. The margin covers the
+// rounding of both (relative ~1e-14 of the largest eigenvalue); thresholds whose squared
+// value is not far above that rounding (below kCertificateMinThreshold) always decompose.
+constexpr double kCertificateMargin = 2.0;
+constexpr double kCertificateMinThreshold = 1e-5;
 
 double singular_from_eigen(double eigenvalue) {
   return std::sqrt(eigenvalue > 0.0 ? eigenvalue : 0.0);
@@ -244,6 +253,17 @@ ParamMask drop_no_effect(const NormalMatrix& jtwj, ParamMask free_mask, double t
   return free_mask & ~no_effect;
 }
 
+/// Whether the scaled block over `mask` (in ws->scaled) provably has no eigenvalue below
+/// (threshold * sigma_bound)^2, sigma_bound at or above its largest singular value (the
+/// previous round's, whose block contains this one: Cauchy interlacing). Uses ws->rotated.
+bool certified_without_null(IdentifiabilityWorkspace* ws, ParamMask mask, double threshold, double sigma_bound) {
+  if (!(threshold >= kCertificateMinThreshold)) return false;
+  const double floor = threshold * sigma_bound;
+  int index[kFullParamCount];
+  const int count = mask_indices(mask, index);
+  return cholesky_factor_shifted(ws->scaled, index, count, kCertificateMargin * floor * floor, &ws->rotated);
+}
+
 Status check_arguments(const NormalMatrix& jtwj, ParamMask free_mask, double threshold) {
   if (!(threshold > 0.0 && threshold < 1.0)) return Status::invalid_argument;
   if (free_mask == 0 || (free_mask & ~kValidParamsMask) != 0) return Status::invalid_argument;
@@ -278,8 +298,8 @@ const char* unidentifiable_reason_name(UnidentifiableReason reason) {
 }
 
 Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
-                               IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report,
-                               ParamMask drop_first) {
+                               IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report, ParamMask drop_first,
+                               IdentifiabilityOutput output) {
   const Status status = check_arguments(jtwj, free_mask, threshold);
   if (status != Status::ok) return status;
   clear_report(report);
@@ -288,14 +308,21 @@ Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, do
   // Each round removes every direction it finds; a second round only confirms (or catches a
   // direction that was hidden below a stronger null one). Eigenvalues first, then the
   // vectors of the null directions only.
+  double previous_sigma_max = 0.0;
   for (bool first_round = true; mask != 0; first_round = false) {
     FullParams scale;
     scale_normal_matrix(jtwj, mask, kInactiveEigenvalue, &workspace->scaled, &scale);
+    if (!first_round && output == IdentifiabilityOutput::kept_set &&
+        certified_without_null(workspace, mask, threshold, previous_sigma_max)) {
+      report->kept_mask = mask;
+      return Status::ok;
+    }
     const int size = analysed_size(mask);
     if (!decompose(workspace, size)) return Status::singular_system;
     const FullParams& eigenvalues = workspace->eigenvalues;
     const int count = mask_count(mask);
     const double sigma_max = singular_from_eigen(eigenvalues(size - 1));
+    previous_sigma_max = sigma_max;
     if (first_round) {
       fill_spectrum(eigenvalues, size, count, report->singular_values_before, &report->singular_count_before,
                     &report->condition_before);

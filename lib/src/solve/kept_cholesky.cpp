@@ -6,25 +6,27 @@
 
 namespace hivecal {
 
-/// Factors a(kept, kept) = U^T U (plain Cholesky, column-oriented dot products over
-/// contiguous columns). False unless every pivot is positive and finite: the kept block of a
-/// scaled normal matrix is positive definite, damped or identifiable.
-bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f) {
-  f->count = mask_indices(kept, f->index);
-  NormalMatrix& u = f->upper;
-  for (int j = 0; j < f->count; ++j) {
-    const int pj = f->index[j];
+bool cholesky_factor_shifted(const NormalMatrix& a, const int* index, int count, double shift, NormalMatrix* upper) {
+  NormalMatrix& u = *upper;
+  for (int j = 0; j < count; ++j) {
+    const int pj = index[j];
     for (int i = 0; i < j; ++i) {
-      double sum = a(f->index[i], pj);
+      double sum = a(index[i], pj);
       for (int k = 0; k < i; ++k) sum -= u(k, i) * u(k, j);
       u(i, j) = sum / u(i, i);
     }
-    double pivot = a(pj, pj);
+    double pivot = a(pj, pj) - shift;
     for (int k = 0; k < j; ++k) pivot -= u(k, j) * u(k, j);
     if (!(pivot > 0.0) || !math::is_finite(pivot)) return false;
     u(j, j) = std::sqrt(pivot);
   }
   return true;
+}
+
+/// The kept block of a scaled normal matrix is positive definite, damped or identifiable.
+bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f) {
+  f->count = mask_indices(kept, f->index);
+  return cholesky_factor_shifted(a, f->index, f->count, 0.0, &f->upper);
 }
 
 namespace {

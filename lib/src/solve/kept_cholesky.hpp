@@ -11,6 +11,12 @@ namespace hivecal {
 /// contiguous columns). False unless every pivot is positive and finite.
 bool cholesky_factor(const NormalMatrix& a, ParamMask kept, KeptCholesky* f);
 
+/// Factors a(index, index) - shift I = U^T U over the `count` parameters listed in `index`
+/// into the leading count x count block of *upper (cholesky_factor's operations; shift 0
+/// gives its bits). False unless every pivot is positive and finite: with a shift, a proof
+/// that no eigenvalue of the block lies at or below it (up to rounding).
+bool cholesky_factor_shifted(const NormalMatrix& a, const int* index, int count, double shift, NormalMatrix* upper);
+
 /// x = A^-1 b over the factored parameters (U^T y = b, then U x = y); 0 elsewhere.
 void cholesky_solve(const KeptCholesky& f, const FullParams& b, FullParams* x);
 

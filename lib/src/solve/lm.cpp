@@ -246,14 +246,14 @@ Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
 /// names them; too_few_samples when even that does not get there.
 // `inline`: called from start() and move_to(), it would otherwise get a frame of its own on
 // the firmware's deepest stack path (calibrate_lm -> analyze_identifiability -> eigenvectors).
-inline Status analyse(Run* run) {
+inline Status analyse(Run* run, IdentifiabilityOutput output) {
   const int equations = 3 * static_cast<int>(run->samples.size());
   double threshold = run->options.identifiability_threshold;
   Status status = Status::ok;
   IdentifiabilityWorkspace* scratch = run->ws->scratch.open_identifiability();  // ends the step's and the trial's
   while (true) {
     status = analyze_identifiability(run->current->jtwj, run->free_mask, threshold, scratch,
-                                     &run->result->identifiability, harmonic_params_mask(run->point.model));
+                                     &run->result->identifiability, harmonic_params_mask(run->point.model), output);
     run->kept = run->result->identifiability.kept_mask;
     if (status != Status::ok || mask_count(run->kept) < equations) return status;
     if (threshold * 10.0 >= 1.0) return Status::too_few_samples;
@@ -289,7 +289,7 @@ Status move_to(Run* run, const Point& trial, bool* kept_changed) {
   if (status != Status::ok || run->reanalysed) return status;
   const ParamMask before = run->kept;
   run->reanalysed = true;
-  status = analyse(run);
+  status = analyse(run, IdentifiabilityOutput::report);
   *kept_changed = run->kept != before;
   return status;
 }
@@ -394,7 +394,15 @@ Status start(const RigidTransform* start_base_to_tracker, Run* run) {
   Status status = update_huber_threshold(run->options, run->samples, &point);
   if (status == Status::ok) status = accumulate(*run, point, run->current);
   if (status != Status::ok) return status;
-  return analyse(run);
+  // The kept set only: the analysis after the first accepted step reports (complete_report).
+  return analyse(run, IdentifiabilityOutput::kept_set);
+}
+
+/// A run that never accepted a step still has the start's analysis, made for its kept set:
+/// made again at the same point for the whole report (the same kept set).
+Status complete_report(Run* run) {
+  if (run->reanalysed) return Status::ok;
+  return analyse(run, IdentifiabilityOutput::report);
 }
 
 /// The kept set was chosen at the start and after the first accepted step; on a small or
@@ -404,7 +412,7 @@ Status start(const RigidTransform* start_base_to_tracker, Run* run) {
 [[gnu::noinline]] Status reanalyse_at_end(Run* run) {
   run->reanalysed = false;  // the analysis's columns: the free ones and the base translation
   Status status = accumulate(*run, run->point, run->current);
-  if (status == Status::ok) status = analyse(run);
+  if (status == Status::ok) status = analyse(run, IdentifiabilityOutput::report);
   run->reanalysed = true;
   if (status != Status::ok) return status;
   return parameter_sigmas(run->ws, *run->current, run->kept, run->result);
@@ -497,6 +505,8 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   if (status != Status::ok) return status;
   if (trace != nullptr) trace->push(rms_of(run.current->squares_sum_m2, samples.size()));
   result->termination = iterate(&run, trace, observer);
+  status = complete_report(&run);
+  if (status != Status::ok) return status;
   result->model = run.point.model;
   result->base_to_tracker = run.point.base;
   result->loss_sum_m2 = run.current->loss_sum_m2;

@@ -59,6 +59,13 @@ struct IdentifiabilityReport {
 /// Resets every field of *report to its default, in place.
 void clear_report(IdentifiabilityReport* report);
 
+/// How much of the report analyze_identifiability must fill.
+enum class IdentifiabilityOutput : std::uint8_t {
+  report = 1,    ///< everything, both spectra included
+  kept_set = 2,  ///< the kept set and the drops; the spectrum after dropping may be left out (a
+                 ///< Cholesky certificate instead of its eigen-decomposition: singular_count_after 0)
+};
+
 /// Scratch memory of the analysis (27 kB): keep it static or in the caller's workspace.
 struct IdentifiabilityWorkspace {
   NormalMatrix scaled;                ///< column-scaled normal matrix
@@ -76,10 +83,13 @@ struct IdentifiabilityWorkspace {
 /// A null direction drops the parameter with the largest component among those in
 /// `drop_first` (the joint harmonics: generic terms, dropped before the physical ones they
 /// mirror, e.g. a shoulder's gravity term), then among the rest in index order.
+/// With `output` kept_set, the round that confirms a drop (no null direction left) is a
+/// shifted Cholesky factorisation where it proves that, instead of an eigen-decomposition: the
+/// same kept set and drops, without singular_values_after and condition_after.
 /// Errors: invalid_argument (threshold not in (0, 1), empty or out-of-range mask),
 /// non_finite_input, singular_system (no parameter left).
 Status analyze_identifiability(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
                                IdentifiabilityWorkspace* workspace, IdentifiabilityReport* report,
-                               ParamMask drop_first = 0);
+                               ParamMask drop_first = 0, IdentifiabilityOutput output = IdentifiabilityOutput::report);
 
 }  // namespace hivecal
