@@ -1,5 +1,6 @@
 #include "hivecal/solve/identifiability.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -114,21 +115,38 @@ bool null_vectors(IdentifiabilityWorkspace* ws, int first_null, int null_count) 
   return true;
 }
 
-/// sigma of the scaled Jacobian along v: sqrt(v^T S v / v^T v) over the parameters in `mask`.
-double direction_sigma(const NormalMatrix& scaled, const FullParams& v, ParamMask mask) {
+/// Directions whose sigmas direction_sigmas sums side by side.
+constexpr int kSigmaGroup = 4;
+
+/// sigma of the scaled Jacobian along each of the n directions in columns first.. of
+/// `directions`: sqrt(v^T S v / v^T v) over the parameters in `mask`, into sigma[0..n). Each
+/// direction's sums take their terms in the same order as one at a time (the same bits);
+/// kSigmaGroup of them side by side, so that their chains of additions overlap.
+// Not inlined: its sums stay out of analyze_identifiability's frame, which is live below the
+// eigenvectors' (the firmware's deepest stack path).
+[[gnu::noinline]] void direction_sigmas(const NormalMatrix& scaled, const NormalMatrix& directions, int first, int n,
+                                        ParamMask mask, double* sigma) {
   int index[kFullParamCount];
   const int count = mask_indices(mask, index);
-  double quadratic = 0.0;
-  double length2 = 0.0;
-  for (int jb = 0; jb < count; ++jb) {
-    const int b = index[jb];
-    length2 += v(b) * v(b);
-    for (int ja = 0; ja < count; ++ja) {
-      const int a = index[ja];
-      quadratic += v(a) * scaled(a, b) * v(b);
+  for (int group = 0; group < n; group += kSigmaGroup) {
+    int column[kSigmaGroup];  // beyond n: a valid column whose sums are dropped
+    for (int t = 0; t < kSigmaGroup; ++t) column[t] = std::min(first + group + t, kFullParamCount - 1);
+    double quadratic[kSigmaGroup] = {};
+    double length2[kSigmaGroup] = {};
+    for (int jb = 0; jb < count; ++jb) {
+      const int b = index[jb];
+      for (int t = 0; t < kSigmaGroup; ++t) length2[t] += directions(b, column[t]) * directions(b, column[t]);
+      for (int ja = 0; ja < count; ++ja) {
+        const int a = index[ja];
+        for (int t = 0; t < kSigmaGroup; ++t) {
+          quadratic[t] += directions(a, column[t]) * scaled(a, b) * directions(b, column[t]);
+        }
+      }
+    }
+    for (int t = 0; t < kSigmaGroup && group + t < n; ++t) {
+      sigma[group + t] = length2[t] > 0.0 ? singular_from_eigen(quadratic[t] / length2[t]) : 0.0;
     }
   }
-  return length2 > 0.0 ? singular_from_eigen(quadratic / length2) : 0.0;
 }
 
 /// The largest components of a null combination, normalised so the dropped one is 1.
@@ -219,13 +237,15 @@ void drop_null_directions(IdentifiabilityWorkspace* ws, int null_count, double s
   const int n = null_count - count;
   for (int k = 0; k < n / 2; ++k) basis.col(count + k).swap(basis.col(null_count - 1 - k));
   express_in_kept(&basis, dropped, count, n);
+  double sigma[kFullParamCount];
+  direction_sigmas(ws->scaled, basis, count, n, analysed, sigma);
   for (int k = 0; k < n; ++k) {
     const FullParams direction = basis.col(count + k);
     DroppedParam& entry = report->dropped[report->dropped_count++];
     entry = DroppedParam{};
     entry.index = dropped[k];
     entry.reason = UnidentifiableReason::null_combination;
-    entry.singular_ratio = direction_sigma(ws->scaled, direction, analysed) / sigma_max;
+    entry.singular_ratio = sigma[k] / sigma_max;
     describe_combination(direction, dropped[k], analysed, &entry);
   }
 }

@@ -6,19 +6,51 @@
 
 namespace hivecal {
 
+namespace {
+
+/// Entry (i, j) of U from the finished rows above it: (a(index[i], index[j]) - sum_k u(k, i)
+/// u(k, j)) / u(i, i), the products subtracted in k order.
+inline double upper_entry(const NormalMatrix& a, const int* index, const NormalMatrix& u, int i, int j) {
+  double sum = a(index[i], index[j]);
+  for (int k = 0; k < i; ++k) sum -= u(k, i) * u(k, j);
+  return sum / u(i, i);
+}
+
+/// u(j, j) from column j's entries above it; false unless the pivot is positive and finite.
+inline bool diagonal_entry(const NormalMatrix& a, const int* index, double shift, NormalMatrix* u, int j) {
+  double pivot = a(index[j], index[j]) - shift;
+  for (int k = 0; k < j; ++k) pivot -= (*u)(k, j) * (*u)(k, j);
+  if (!(pivot > 0.0) || !math::is_finite(pivot)) return false;
+  (*u)(j, j) = std::sqrt(pivot);
+  return true;
+}
+
+}  // namespace
+
+// Two columns at a time: their entries above the first one's diagonal depend only on the
+// finished columns and on their own, so the two chains of subtractions overlap instead of
+// each waiting on its last result (each entry keeps its operations: the same bits).
 bool cholesky_factor_shifted(const NormalMatrix& a, const int* index, int count, double shift, NormalMatrix* upper) {
   NormalMatrix& u = *upper;
-  for (int j = 0; j < count; ++j) {
-    const int pj = index[j];
+  int j = 0;
+  for (; j + 1 < count; j += 2) {
     for (int i = 0; i < j; ++i) {
-      double sum = a(index[i], pj);
-      for (int k = 0; k < i; ++k) sum -= u(k, i) * u(k, j);
+      double sum = a(index[i], index[j]);
+      double next = a(index[i], index[j + 1]);
+      for (int k = 0; k < i; ++k) {
+        sum -= u(k, i) * u(k, j);
+        next -= u(k, i) * u(k, j + 1);
+      }
       u(i, j) = sum / u(i, i);
+      u(i, j + 1) = next / u(i, i);
     }
-    double pivot = a(pj, pj) - shift;
-    for (int k = 0; k < j; ++k) pivot -= u(k, j) * u(k, j);
-    if (!(pivot > 0.0) || !math::is_finite(pivot)) return false;
-    u(j, j) = std::sqrt(pivot);
+    if (!diagonal_entry(a, index, shift, upper, j)) return false;
+    u(j, j + 1) = upper_entry(a, index, u, j, j + 1);
+    if (!diagonal_entry(a, index, shift, upper, j + 1)) return false;
+  }
+  if (j < count) {
+    for (int i = 0; i < j; ++i) u(i, j) = upper_entry(a, index, u, i, j);
+    if (!diagonal_entry(a, index, shift, upper, j)) return false;
   }
   return true;
 }
