@@ -244,7 +244,7 @@ Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
 /// freedom, no noise estimate, an exact fit of the noise): then the threshold is raised tenfold
 /// at a time, so the weakest directions go first, until fewer remain than 3 N, and the report
 /// names them; too_few_samples when even that does not get there.
-// `inline`: called from start() and move_to(), it would otherwise get a frame of its own on
+// `inline`: called from start(), move_to() and at the end, it would otherwise get a frame of its own on
 // the firmware's deepest stack path (calibrate_lm -> analyze_identifiability -> eigenvectors).
 inline Status analyse(Run* run, IdentifiabilityOutput output) {
   const int equations = 3 * static_cast<int>(run->samples.size());

@@ -49,7 +49,7 @@ constexpr int kGroupSamples = detail::kJacobianLanes;
 #ifdef HIVECAL_WIDE_LANES
 using WidestLane = lanes::WiderLane;
 constexpr int kWideGroupSamples = detail::kWideJacobianLanes;
-/// Samples the row buffer holds: a wide group, flushed as batches of kBatchSamples.
+/// Samples the row buffer holds: a wide group, flushed in passes of kPassBatches batches.
 constexpr int kHeldSamples = kWideGroupSamples;
 #else
 using WidestLane = lanes::Lane;
