@@ -303,7 +303,7 @@ __attribute__((always_inline)) inline void flush_pass(RowBatch* batch, int first
     // With vector lanes a lane of columns is weighed at once; scalar lanes weigh each column
     // where it is used (a table of one column costs the firmware's loop its loads and stores).
     double weighted[kPassRows][kWidth];
-    double gradients[kPassBatches][kWidth] = {};  // written whole by weigh_columns (GCC cannot tell)
+    double gradients[kPassBatches][kWidth];
     if constexpr (kColumns > 1) weigh_columns<Lane, kWidth>(rows, weight, residual_m, first, weighted, gradients);
     const int end = std::min(count, first + kColumns);
     for (int l = first; l < end; ++l) {
