@@ -1,0 +1,92 @@
+// Prediction sigma, the calibration's domain and extrapolation (solve/prediction_uncertainty.hpp).
+#include "hivecal/solve/prediction_uncertainty.hpp"
+
+#include <cmath>
+
+#include "hivecal/core/math.hpp"
+
+namespace hivecal {
+
+double prediction_sigma_m(const RobotModel& model, const RigidTransform& base_to_tracker, const JointVector& q_rad,
+                          int target, const NormalMatrix& covariance, ParamMask estimated, PredictionFrame frame,
+                          const Vec3& target_tool_sigma_m) {
+  // The Jacobian in the base frame: the tracker frame's is R times it, and trace(J C J^T) does
+  // not see a rotation.
+  RobotModel moved = model;
+  if (target > 0) moved.tool_m = target_tool(model, target);
+  Sample sample;
+  sample.q_rad = q_rad;
+  FullJacobian jacobian;
+  (void)local_residual_jacobian(moved, base_to_tracker, sample, &jacobian);
+  if (target > 0) jacobian.middleCols<3>(tool_param_index(0)).setZero();  // target 1's tool point
+  if (frame == PredictionFrame::base) jacobian.middleCols<kBaseParamCount>(kModelParamCount).setZero();
+  int index[kFullParamCount];
+  const int count = mask_indices(estimated, index);
+  double variance_sum_m2 = target > 0 ? target_tool_sigma_m.squaredNorm() : 0.0;
+  for (int r = 0; r < 3; ++r) {
+    for (int a = 0; a < count; ++a) {
+      double row_dot = 0.0;  // (C J_r^T)_a
+      for (int b = 0; b < count; ++b) row_dot += covariance(index[a], index[b]) * jacobian(r, index[b]);
+      variance_sum_m2 += jacobian(r, index[a]) * row_dot;
+    }
+  }
+  return std::sqrt(std::fmax(variance_sum_m2, 0.0) / 3.0);
+}
+
+Status calibration_domain(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
+                          const NormalMatrix& covariance, ParamMask estimated,
+                          const Vec3 (&other_tools_sigma_m)[kMaxTargets - 1], CalibrationDomain* domain) {
+  if (domain == nullptr) return Status::invalid_argument;
+  if (samples.empty()) return Status::dataset_empty;
+  CalibrationDomain d;
+  d.joint_min_rad = samples[0].q_rad;
+  d.joint_max_rad = samples[0].q_rad;
+  Vec3 axis_sum = Vec3::Zero();
+  double variance_sum_m2 = 0.0;
+  for (std::size_t begin = 0; begin < samples.size();) {
+    const std::size_t end = pose_run_end(samples, begin);
+    const Sample* pose = &samples[begin];  // its target 1 reading, else its first
+    for (std::size_t k = begin; k < end; ++k)
+      if (samples[k].target == 0 && pose->target != 0) pose = &samples[k];
+    if (!all_finite(pose->q_rad)) return Status::non_finite_input;
+    d.joint_min_rad = d.joint_min_rad.cwiseMin(pose->q_rad);
+    d.joint_max_rad = d.joint_max_rad.cwiseMax(pose->q_rad);
+    axis_sum += fk_flange(model, pose->q_rad).rotation.col(2);
+    const Vec3 tool_sigma_m = pose->target > 0 ? other_tools_sigma_m[pose->target - 1] : Vec3(Vec3::Zero());
+    const double sigma_m = prediction_sigma_m(model, base_to_tracker, pose->q_rad, pose->target, covariance,
+                                              estimated, PredictionFrame::tracker, tool_sigma_m);
+    variance_sum_m2 += sigma_m * sigma_m;
+    d.max_sigma_m = std::fmax(d.max_sigma_m, sigma_m);
+    ++d.poses;
+    begin = end;
+  }
+  if (!(axis_sum.norm() > 0.0) || !std::isfinite(variance_sum_m2)) return Status::non_finite_input;
+  d.tool_axis_mean = axis_sum.normalized();
+  double angle_squares = 0.0;
+  for (std::size_t begin = 0; begin < samples.size(); begin = pose_run_end(samples, begin)) {
+    const Vec3 axis = fk_flange(model, samples[begin].q_rad).rotation.col(2);
+    const double angle_rad = math::atan2(axis.cross(d.tool_axis_mean).norm(), axis.dot(d.tool_axis_mean));
+    d.tool_axis_spread_rad = std::fmax(d.tool_axis_spread_rad, angle_rad);
+    angle_squares += angle_rad * angle_rad;
+  }
+  const double poses = static_cast<double>(d.poses);
+  d.tool_axis_rms_rad = std::sqrt(angle_squares / poses);
+  d.typical_sigma_m = std::sqrt(variance_sum_m2 / poses);
+  *domain = d;
+  return Status::ok;
+}
+
+Extrapolation extrapolation(const CalibrationDomain& domain, const JointVector& q_rad, double sigma_m) {
+  Extrapolation e;
+  e.sigma_beyond = domain.typical_sigma_m > 0.0 && sigma_m > domain.sigma_factor * domain.typical_sigma_m;
+  for (int j = 0; j < kJointCount; ++j) {
+    const double beyond_rad = std::fmax(domain.joint_min_rad(j) - q_rad(j), q_rad(j) - domain.joint_max_rad(j));
+    if (beyond_rad > domain.joint_margin_rad && beyond_rad > e.joint_beyond_rad) {
+      e.joint = j;
+      e.joint_beyond_rad = beyond_rad;
+    }
+  }
+  return e;
+}
+
+}  // namespace hivecal

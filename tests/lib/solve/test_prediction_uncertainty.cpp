@@ -1,0 +1,143 @@
+// Prediction sigma, the calibration's domain and extrapolation (solve/prediction_uncertainty.hpp):
+// the sigma against J C J^T built from full_residual_jacobian, a translation's variance seen
+// whole in the tracker frame and not at all in the base frame, the other targets' tool sigma,
+// the domain's ranges, spread and typical sigma against direct sums, and the two reasons for
+// an extrapolation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "hivecal/core/random.hpp"
+#include "hivecal/solve/prediction_uncertainty.hpp"
+#include "testkit/alloc_trap.hpp"
+#include "testkit/test_data.hpp"
+
+namespace hivecal::prediction_uncertainty_test {
+namespace {
+
+NormalMatrix covariance;
+Dataset<64> dataset;
+
+/// A random symmetric positive semi-definite covariance over `mask` (0 elsewhere) [m^2 ...].
+void random_covariance(ParamMask mask, Random* random) {
+  NormalMatrix a = NormalMatrix::Zero();
+  for (int i = 0; i < kFullParamCount; ++i)
+    for (int j = 0; j < kFullParamCount; ++j)
+      if (mask_has(mask, i)) a(i, j) = 1e-4 * random->normal();
+  covariance = a * a.transpose();
+}
+
+TEST(PredictionSigma, IsTheRootOfTheMeanAxisVarianceOfJCJt) {
+  Random random(3);
+  const RobotModel model = test::perturbed_model(nominal_model(RobotType::ur10), &random, 1e-3, 1e-3);
+  const RigidTransform base = test::example_base_to_tracker();
+  const ParamMask mask = kAllParamsMask & ~param_bit(3);  // one left out: its column must not count
+  random_covariance(mask, &random);
+  for (int k = 0; k < 5; ++k) {
+    Sample sample;
+    sample.q_rad = test::random_joints(&random);
+    FullJacobian jacobian;
+    (void)full_residual_jacobian(model, base, sample, &jacobian);
+    jacobian.col(3).setZero();
+    const double expected = std::sqrt((jacobian * covariance * jacobian.transpose()).trace() / 3.0);
+    double sigma = 0.0;
+    EXPECT_NO_HEAP(sigma = prediction_sigma_m(model, base, sample.q_rad, 0, covariance, mask));
+    EXPECT_NEAR(sigma, expected, 1e-12 * expected);
+  }
+}
+
+TEST(PredictionSigma, TheBaseCountsInTheTrackerFrameOnly) {
+  const RobotModel model = nominal_model(RobotType::ur5);
+  covariance.setZero();
+  const int tx = base_translation_param_index(0);
+  covariance(tx, tx) = 9e-8;  // 0.3 mm along the base's x
+  JointVector q;
+  q << 0.3, -1.2, 1.1, -1.4, -1.5, 0.2;
+  EXPECT_NEAR(prediction_sigma_m(model, test::example_base_to_tracker(), q, 0, covariance, param_bit(tx)),
+              3e-4 / std::sqrt(3.0), 1e-15);
+  EXPECT_EQ(prediction_sigma_m(model, test::example_base_to_tracker(), q, 0, covariance, param_bit(tx),
+                               PredictionFrame::base),
+            0.0);
+}
+
+TEST(PredictionSigma, AnotherTargetTakesItsOwnToolSigmaNotTargetOnes) {
+  RobotModel model = nominal_model(RobotType::ur5);
+  model.other_tools_m[0] = Vec3(0.05, 0.0, 0.1);
+  covariance.setZero();
+  const int tool_x = tool_param_index(0);
+  covariance(tool_x, tool_x) = 1e-6;
+  JointVector q;
+  q << 0.3, -1.2, 1.1, -1.4, -1.5, 0.2;
+  const RigidTransform base = test::example_base_to_tracker();
+  EXPECT_NEAR(prediction_sigma_m(model, base, q, 0, covariance, param_bit(tool_x)), 1e-3 / std::sqrt(3.0), 1e-15);
+  EXPECT_EQ(prediction_sigma_m(model, base, q, 1, covariance, param_bit(tool_x)), 0.0);
+  EXPECT_NEAR(prediction_sigma_m(model, base, q, 1, covariance, param_bit(tool_x), PredictionFrame::tracker,
+                                 Vec3(3e-4, 0.0, 4e-4)),
+              5e-4 / std::sqrt(3.0), 1e-15);
+}
+
+TEST(CalibrationDomain, RangesSpreadAndTypicalSigmaOfThePoses) {
+  Random random(8);
+  const RobotModel model = nominal_model(RobotType::ur5);
+  const RigidTransform base = test::example_base_to_tracker();
+  dataset.clear();
+  test::fill_dataset(model, base, 40, 0.0, &random, &dataset);
+  random_covariance(kAllParamsMask, &random);
+  const Vec3 no_tools[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
+  CalibrationDomain domain;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibration_domain(model, base, dataset.samples(), covariance, kAllParamsMask, no_tools,
+                                             &domain));
+  ASSERT_EQ(status, Status::ok);
+  EXPECT_EQ(domain.poses, 40u);
+  JointVector low = dataset.samples()[0].q_rad;
+  JointVector high = low;
+  Vec3 axis_sum = Vec3::Zero();
+  double squares = 0.0;
+  double largest = 0.0;
+  for (const Sample& s : dataset.samples()) {
+    low = low.cwiseMin(s.q_rad);
+    high = high.cwiseMax(s.q_rad);
+    axis_sum += fk_flange(model, s.q_rad).rotation.col(2);
+    const double sigma = prediction_sigma_m(model, base, s.q_rad, 0, covariance, kAllParamsMask);
+    squares += sigma * sigma;
+    largest = std::fmax(largest, sigma);
+  }
+  EXPECT_EQ(domain.joint_min_rad, low);
+  EXPECT_EQ(domain.joint_max_rad, high);
+  EXPECT_NEAR(domain.typical_sigma_m, std::sqrt(squares / 40.0), 1e-12 * domain.typical_sigma_m);
+  EXPECT_EQ(domain.max_sigma_m, largest);
+  double spread = 0.0;
+  for (const Sample& s : dataset.samples()) {
+    const Vec3 axis = fk_flange(model, s.q_rad).rotation.col(2);
+    spread = std::fmax(spread, std::acos(std::fmin(1.0, axis.dot(axis_sum.normalized()))));
+  }
+  EXPECT_NEAR(domain.tool_axis_spread_rad, spread, 1e-6);
+  EXPECT_GT(domain.tool_axis_spread_rad, domain.tool_axis_rms_rad);
+  EXPECT_EQ(calibration_domain(model, base, Span<const Sample>(), covariance, kAllParamsMask, no_tools, &domain),
+            Status::dataset_empty);
+}
+
+TEST(Extrapolation, AJointBeyondItsMarginOrASigmaBeyondItsMultiple) {
+  CalibrationDomain domain;
+  domain.joint_min_rad.setConstant(-1.0);
+  domain.joint_max_rad.setConstant(1.0);
+  domain.typical_sigma_m = 1e-5;
+  JointVector q = JointVector::Zero();
+  EXPECT_FALSE(extrapolation(domain, q, 2.9e-5).extrapolated());
+  EXPECT_TRUE(extrapolation(domain, q, 3.1e-5).sigma_beyond);
+  q(2) = 1.0 + 0.9 * kExtrapolationJointMargin_rad;
+  EXPECT_FALSE(extrapolation(domain, q, 1e-5).extrapolated());
+  q(4) = -1.0 - 1.5 * kExtrapolationJointMargin_rad;
+  q(2) = 1.0 + 1.1 * kExtrapolationJointMargin_rad;
+  const Extrapolation e = extrapolation(domain, q, 1e-5);
+  EXPECT_TRUE(e.extrapolated());
+  EXPECT_FALSE(e.sigma_beyond);
+  EXPECT_EQ(e.joint, 4);  // the furthest beyond
+  EXPECT_NEAR(e.joint_beyond_rad, 1.5 * kExtrapolationJointMargin_rad, 1e-15);
+  domain.typical_sigma_m = 0.0;  // no covariance: the joints alone
+  EXPECT_FALSE(extrapolation(domain, JointVector::Zero(), 1.0).extrapolated());
+}
+
+}  // namespace
+}  // namespace hivecal::prediction_uncertainty_test
