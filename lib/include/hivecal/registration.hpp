@@ -79,11 +79,11 @@ const char* registration_blunder_verdict_name(RegistrationBlunderVerdict verdict
 
 /// A pose the w-test set aside.
 struct RegistrationBlunder {
-  std::uint32_t index = 0;  ///< Sample::index of its first sample [-]
+  std::uint32_t index = 0;    ///< Sample::index of its first sample [-]
   std::uint32_t samples = 0;  ///< its samples [-]
-  double w = 0.0;           ///< its w [-]
-  double critical_w = 0.0;  ///< the threshold it exceeded [-]
-  double residual_m = 0.0;  ///< its largest 3-D residual [m]
+  double w = 0.0;             ///< its w [-]
+  double critical_w = 0.0;    ///< the threshold it exceeded [-]
+  double residual_m = 0.0;    ///< its largest 3-D residual [m]
 };
 
 /// A registration's answer (~45 kB with the covariance at the hosted capacity: keep it in the
@@ -97,17 +97,17 @@ struct RegistrationResult {
   /// Covariance of the registered parameters (sigma_hat^2 (J^T J)^-1 over `estimated`, 0
   /// elsewhere) [m^2], [m rad], [rad^2].
   NormalMatrix covariance;
-  Vec3 rotation_sigma_rad = Vec3::Zero();  ///< 1-sigma of the base rotation about the base's x, y, z [rad]
+  Vec3 rotation_sigma_rad = Vec3::Zero();   ///< 1-sigma of the base rotation about the base's x, y, z [rad]
   Vec3 translation_sigma_m = Vec3::Zero();  ///< 1-sigma of the base translation at the base origin [m]
   Vec3 tool_sigma_m = Vec3::Zero();         ///< frames: 1-sigma of target 1's tool point [m]
   Vec3 other_tools_sigma_m[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};  ///< frames: targets 2.. [m]
   /// The registration's own 1-sigma at its points: sqrt(mean prediction_sigma_m^2) over the
   /// fitted poses under `covariance` alone [m].
   double point_sigma_m = 0.0;
-  double condition = 0.0;      ///< condition number of the column-scaled normal matrix of `estimated` [-]
-  double spread_m = 0.0;       ///< RMS distance of the fitted points from their centroid [m]
-  double collinearity = 0.0;   ///< second principal spread of the fitted points over the first [-]
-  unsigned weakness = 0;       ///< RegistrationWeakness bits; 0: well determined
+  double condition = 0.0;          ///< condition number of the column-scaled normal matrix of `estimated` [-]
+  double spread_m = 0.0;           ///< RMS distance of the fitted points from their centroid [m]
+  double collinearity = 0.0;       ///< second principal spread of the fitted points over the first [-]
+  unsigned weakness = 0;           ///< RegistrationWeakness bits; 0: well determined
   std::size_t fitted_samples = 0;  ///< samples fitted (the first of the span after the call) [-]
   std::size_t fitted_poses = 0;    ///< poses fitted (runs of samples at equal joints) [-]
   double rms_m = 0.0;              ///< RMS 3-D residual of the fitted samples [m]
@@ -115,7 +115,7 @@ struct RegistrationResult {
   int residual_dof = 0;            ///< 3 N - registered parameters [-]
   double huber_threshold_m = 0.0;  ///< the fit's Huber k (its loss; 0: least squares) [m]
   int iterations = 0;              ///< LM iterations of the last fit [-]
-  LmTermination termination = LmTermination::max_iterations;  ///< why the last fit stopped
+  LmTermination termination = LmTermination::max_iterations;                    ///< why the last fit stopped
   RegistrationBlunderVerdict verdict = RegistrationBlunderVerdict::not_tested;  ///< the w-test's verdict
   std::size_t failing_poses = 0;  ///< poses failing the w-test in the first round (model_error: all kept) [-]
   RegistrationBlunder blunders[kMaxRegistrationBlunders];  ///< the poses set aside, in order
@@ -126,10 +126,10 @@ struct RegistrationResult {
 
 /// Scratch of a registration (~300 kB at the hosted capacity): the caller's memory plan.
 struct RegistrationWorkspace {
-  LmWorkspaceWithTargets lm;             ///< the fit's
-  LmResult fit;                          ///< the last fit's result
-  CorrelationScratch covariance;         ///< the covariance's and carry_covariance's
-  ReliabilityWorkspace reliability;      ///< the w-test's
+  LmWorkspaceWithTargets lm;         ///< the fit's
+  LmResult fit;                      ///< the last fit's result
+  CorrelationScratch covariance;     ///< the covariance's and carry_covariance's
+  ReliabilityWorkspace reliability;  ///< the w-test's
 };
 
 /// Registers `calibrated` on `samples`: starts from the rigid (Kabsch) fit of the base (frames:
@@ -153,7 +153,7 @@ Status register_frames(const RobotModel& calibrated, Span<Sample> samples, const
 /// *covariance may be the same matrix. *carried_estimated: estimated | B. Errors:
 /// dataset_empty, non_finite_input, singular_system.
 Status carry_covariance(const RegistrationResult& registration, Span<const Sample> fitted, ParamMask estimated,
-                        const NormalMatrix& calibrated_covariance, CorrelationScratch* scratch, NormalMatrix* covariance,
-                        ParamMask* carried_estimated);
+                        const NormalMatrix& calibrated_covariance, CorrelationScratch* scratch,
+                        NormalMatrix* covariance, ParamMask* carried_estimated);
 
 }  // namespace hivecal

@@ -142,8 +142,8 @@ Status fit_once(const RobotModel& calibrated, Span<const Sample> fitted, const R
   result->fitted_poses = pose_count_of(fitted);
   int dof = 0;
   const Status covariance =
-      parameter_covariance(fit.model, fit.base_to_tracker, fitted, PointLoss{fit.huber_threshold_m},
-                           result->estimated, &ws->covariance, &result->covariance, &dof);
+      parameter_covariance(fit.model, fit.base_to_tracker, fitted, PointLoss{fit.huber_threshold_m}, result->estimated,
+                           &ws->covariance, &result->covariance, &dof);
   if (covariance != Status::ok) return covariance;
   result->residual_dof = dof;
   result->residual_sigma_m = fit.residual_sigma_m;
@@ -159,9 +159,9 @@ Status fit_once(const RobotModel& calibrated, Span<const Sample> fitted, const R
   double variance_sum_m2 = 0.0;
   for (std::size_t begin = 0; begin < fitted.size(); begin = pose_run_end(fitted, begin)) {
     const Sample& s = fitted[begin];
-    const double sigma_m = prediction_sigma_m(fit.model, fit.base_to_tracker, s.q_rad, s.target, result->covariance,
-                                              result->estimated & ~kOtherTargetTools, PredictionFrame::tracker,
-                                              s.target > 0 ? fit.other_tools_sigma_m[s.target - 1] : Vec3(Vec3::Zero()));
+    const double sigma_m = prediction_sigma_m(
+        fit.model, fit.base_to_tracker, s.q_rad, s.target, result->covariance, result->estimated & ~kOtherTargetTools,
+        PredictionFrame::tracker, s.target > 0 ? fit.other_tools_sigma_m[s.target - 1] : Vec3(Vec3::Zero()));
     variance_sum_m2 += sigma_m * sigma_m;
   }
   result->point_sigma_m = std::sqrt(variance_sum_m2 / static_cast<double>(result->fitted_poses));
@@ -215,7 +215,8 @@ Status register_frames(const RobotModel& calibrated, Span<Sample> samples, const
       return Status::ok;
     }
     if (result->blunder_count == 0) {
-      const auto share = static_cast<std::size_t>(options.max_blunder_share * static_cast<double>(summary.fitted_units));
+      const auto share =
+          static_cast<std::size_t>(options.max_blunder_share * static_cast<double>(summary.fitted_units));
       limit = share > 0 ? share : 1;
       if (limit > kMaxRegistrationBlunders) limit = kMaxRegistrationBlunders;
       result->failing_poses = failing.failing;
@@ -248,8 +249,8 @@ Status register_frames(const RobotModel& calibrated, Span<Sample> samples, const
 }
 
 Status carry_covariance(const RegistrationResult& registration, Span<const Sample> fitted, ParamMask estimated,
-                        const NormalMatrix& calibrated_covariance, CorrelationScratch* scratch, NormalMatrix* covariance,
-                        ParamMask* carried_estimated) {
+                        const NormalMatrix& calibrated_covariance, CorrelationScratch* scratch,
+                        NormalMatrix* covariance, ParamMask* carried_estimated) {
   if (scratch == nullptr || covariance == nullptr || carried_estimated == nullptr) return Status::invalid_argument;
   const ParamMask registered = registration.estimated;
   const ParamMask others = estimated & ~registered & ~kOtherTargetTools;
@@ -257,9 +258,9 @@ Status carry_covariance(const RegistrationResult& registration, Span<const Sampl
   NormalEquations& eq = scratch->equations;
   eq.targets = Span<TargetBlock>(scratch->target_blocks, kMaxTargets - 1);
   // The registration's normal equations (its other tool points eliminated when it fitted them).
-  const Status accumulated =
-      accumulate_normal_equations(registration.model, registration.base_to_tracker, fitted,
-                                  PointLoss{registration.huber_threshold_m}, &eq, columns | (registered & kOtherTargetTools));
+  const Status accumulated = accumulate_normal_equations(registration.model, registration.base_to_tracker, fitted,
+                                                         PointLoss{registration.huber_threshold_m}, &eq,
+                                                         columns | (registered & kOtherTargetTools));
   if (accumulated != Status::ok) return accumulated;
   const ParamMask b_mask = registered & ~kOtherTargetTools;
   FullParams scale;
@@ -283,7 +284,8 @@ Status carry_covariance(const RegistrationResult& registration, Span<const Sampl
   for (int a = 0; a < b_count; ++a) {
     for (int j = 0; j < t_count; ++j) {
       double sum = 0.0;
-      for (int k = 0; k < t_count; ++k) sum += gain(b_index[a], t_index[k]) * calibrated_covariance(t_index[k], t_index[j]);
+      for (int k = 0; k < t_count; ++k)
+        sum += gain(b_index[a], t_index[k]) * calibrated_covariance(t_index[k], t_index[j]);
       gain_cov(b_index[a], t_index[j]) = sum;
     }
   }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "hivecal/core/math.hpp"
+#include "hivecal/model/compliance.hpp"
 
 namespace hivecal {
 
@@ -53,8 +54,8 @@ Status calibration_domain(const RobotModel& model, const RigidTransform& base_to
     d.joint_max_rad = d.joint_max_rad.cwiseMax(pose->q_rad);
     axis_sum += fk_flange(model, pose->q_rad).rotation.col(2);
     const Vec3 tool_sigma_m = pose->target > 0 ? other_tools_sigma_m[pose->target - 1] : Vec3(Vec3::Zero());
-    const double sigma_m = prediction_sigma_m(model, base_to_tracker, pose->q_rad, pose->target, covariance,
-                                              estimated, PredictionFrame::tracker, tool_sigma_m);
+    const double sigma_m = prediction_sigma_m(model, base_to_tracker, pose->q_rad, pose->target, covariance, estimated,
+                                              PredictionFrame::tracker, tool_sigma_m);
     variance_sum_m2 += sigma_m * sigma_m;
     d.max_sigma_m = std::fmax(d.max_sigma_m, sigma_m);
     ++d.poses;
@@ -72,14 +73,56 @@ Status calibration_domain(const RobotModel& model, const RigidTransform& base_to
   const double poses = static_cast<double>(d.poses);
   d.tool_axis_rms_rad = std::sqrt(angle_squares / poses);
   d.typical_sigma_m = std::sqrt(variance_sum_m2 / poses);
+  d.term_joints = term_joint_mask(model, samples);
   *domain = d;
   return Status::ok;
 }
 
-Extrapolation extrapolation(const CalibrationDomain& domain, const JointVector& q_rad, double sigma_m) {
+unsigned term_joint_mask(const RobotModel& model, Span<const Sample> samples) {
+  constexpr std::size_t kPoses = 16;  // spread over the samples
+  constexpr double kTurn_rad = 0.1;
+  const ComplianceModel& terms = model.compliance;
+  unsigned mask = 0;
+  bool gravity = false;
+  for (int t = 0; t < terms.term_count; ++t) {
+    if (terms.coefficient[t] == 0.0) continue;
+    if (is_harmonic(terms.terms[t])) {
+      mask |= 1U << static_cast<unsigned>(terms.terms[t].joint);
+    } else {
+      gravity = true;
+    }
+  }
+  if (!gravity || samples.empty()) return mask;
+  const std::size_t step = samples.size() > kPoses ? samples.size() / kPoses : 1;
+  for (std::size_t k = 0; k < samples.size(); k += step) {
+    double basis[kMaxComplianceTerms];
+    compliance_basis(model, samples[k].q_rad, basis);
+    for (int j = 0; j < kJointCount; ++j) {
+      JointVector turned = samples[k].q_rad;
+      turned(j) += kTurn_rad;
+      double turned_basis[kMaxComplianceTerms];
+      compliance_basis(model, turned, turned_basis);
+      for (int t = 0; t < terms.term_count; ++t) {
+        const bool counts = terms.coefficient[t] != 0.0 && !is_harmonic(terms.terms[t]);
+        const double scale = std::fmax(std::fabs(basis[t]), std::fabs(turned_basis[t]));
+        if (counts && std::fabs(turned_basis[t] - basis[t]) > 1e-9 * scale) mask |= 1U << static_cast<unsigned>(j);
+      }
+    }
+  }
+  return mask;
+}
+
+Extrapolation extrapolation(const CalibrationDomain& domain, const RobotModel& model, const JointVector& q_rad,
+                            double sigma_m) {
   Extrapolation e;
   e.sigma_beyond = domain.typical_sigma_m > 0.0 && sigma_m > domain.sigma_factor * domain.typical_sigma_m;
+  if (domain.tool_axis_mean.squaredNorm() > 0.0) {
+    const Vec3 axis = fk_flange(model, q_rad).rotation.col(2);
+    e.tool_axis_angle_rad = math::atan2(axis.cross(domain.tool_axis_mean).norm(), axis.dot(domain.tool_axis_mean));
+    e.tool_axis_beyond = e.tool_axis_angle_rad > domain.tool_axis_spread_rad + domain.tool_axis_margin_rad;
+  }
   for (int j = 0; j < kJointCount; ++j) {
+    if ((domain.term_joints & (1U << static_cast<unsigned>(j))) == 0) continue;
     const double beyond_rad = std::fmax(domain.joint_min_rad(j) - q_rad(j), q_rad(j) - domain.joint_max_rad(j));
     if (beyond_rad > domain.joint_margin_rad && beyond_rad > e.joint_beyond_rad) {
       e.joint = j;

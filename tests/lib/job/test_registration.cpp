@@ -227,8 +227,8 @@ TEST(Registration, TheCalibrationsCovarianceIsCarriedByTheRegistrationsGain) {
     unit_variance.setZero();
     unit_variance(k, k) = 1e-6;
     ParamMask estimated = 0;
-    ASSERT_EQ(carry_covariance(result, dataset.samples(), param_bit(k), unit_variance, &workspace.covariance,
-                               &carried, &estimated),
+    ASSERT_EQ(carry_covariance(result, dataset.samples(), param_bit(k), unit_variance, &workspace.covariance, &carried,
+                               &estimated),
               Status::ok);
     // The registration's own noise is zero here (a noise-free fit): only the carried part counts.
     JointVector q;

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "hivecal/core/random.hpp"
+#include "hivecal/model/compliance.hpp"
 #include "hivecal/solve/prediction_uncertainty.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/test_data.hpp"
@@ -86,8 +87,8 @@ TEST(CalibrationDomain, RangesSpreadAndTypicalSigmaOfThePoses) {
   const Vec3 no_tools[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
   CalibrationDomain domain;
   Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status = calibration_domain(model, base, dataset.samples(), covariance, kAllParamsMask, no_tools,
-                                             &domain));
+  EXPECT_NO_HEAP(status =
+                     calibration_domain(model, base, dataset.samples(), covariance, kAllParamsMask, no_tools, &domain));
   ASSERT_EQ(status, Status::ok);
   EXPECT_EQ(domain.poses, 40u);
   JointVector low = dataset.samples()[0].q_rad;
@@ -118,25 +119,85 @@ TEST(CalibrationDomain, RangesSpreadAndTypicalSigmaOfThePoses) {
             Status::dataset_empty);
 }
 
-TEST(Extrapolation, AJointBeyondItsMarginOrASigmaBeyondItsMultiple) {
+TEST(Extrapolation, ASigmaBeyondItsMultipleOrATermJointBeyondItsMargin) {
+  const RobotModel model = nominal_model(RobotType::ur5);
   CalibrationDomain domain;
   domain.joint_min_rad.setConstant(-1.0);
   domain.joint_max_rad.setConstant(1.0);
   domain.typical_sigma_m = 1e-5;
+  domain.term_joints = 0x3F;
   JointVector q = JointVector::Zero();
-  EXPECT_FALSE(extrapolation(domain, q, 2.9e-5).extrapolated());
-  EXPECT_TRUE(extrapolation(domain, q, 3.1e-5).sigma_beyond);
+  EXPECT_FALSE(extrapolation(domain, model, q, 2.9e-5).extrapolated());
+  EXPECT_TRUE(extrapolation(domain, model, q, 3.1e-5).sigma_beyond);
   q(2) = 1.0 + 0.9 * kExtrapolationJointMargin_rad;
-  EXPECT_FALSE(extrapolation(domain, q, 1e-5).extrapolated());
+  EXPECT_FALSE(extrapolation(domain, model, q, 1e-5).extrapolated());
   q(4) = -1.0 - 1.5 * kExtrapolationJointMargin_rad;
   q(2) = 1.0 + 1.1 * kExtrapolationJointMargin_rad;
-  const Extrapolation e = extrapolation(domain, q, 1e-5);
+  Extrapolation e = extrapolation(domain, model, q, 1e-5);
   EXPECT_TRUE(e.extrapolated());
   EXPECT_FALSE(e.sigma_beyond);
   EXPECT_EQ(e.joint, 4);  // the furthest beyond
   EXPECT_NEAR(e.joint_beyond_rad, 1.5 * kExtrapolationJointMargin_rad, 1e-15);
-  domain.typical_sigma_m = 0.0;  // no covariance: the joints alone
-  EXPECT_FALSE(extrapolation(domain, JointVector::Zero(), 1.0).extrapolated());
+  domain.term_joints = 1U << 2;  // only joint 3 has terms: joint 5 beyond its range does not count
+  e = extrapolation(domain, model, q, 1e-5);
+  EXPECT_EQ(e.joint, 2);
+  domain.term_joints = 0;  // a rigid chain holds at any reading
+  EXPECT_FALSE(extrapolation(domain, model, q, 1e-5).extrapolated());
+  domain.typical_sigma_m = 0.0;  // no covariance: no sigma test
+  EXPECT_FALSE(extrapolation(domain, model, JointVector::Zero(), 1.0).extrapolated());
+}
+
+TEST(Extrapolation, AToolAxisBeyondTheTrainingSpread) {
+  const RobotModel model = nominal_model(RobotType::ur5);
+  JointVector q;
+  q << 0.3, -1.2, 1.1, -1.4, -1.5, 0.2;
+  CalibrationDomain domain;
+  domain.joint_min_rad.setConstant(-3.0);
+  domain.joint_max_rad.setConstant(3.0);
+  domain.tool_axis_mean = fk_flange(model, q).rotation.col(2);
+  domain.tool_axis_spread_rad = 0.1;
+  JointVector tilted = q;
+  tilted(4) += 0.1 + 0.9 * kExtrapolationToolAxisMargin_rad;  // wrist 2 tilts the axis by as much
+  Extrapolation e = extrapolation(domain, model, tilted, 0.0);
+  EXPECT_FALSE(e.extrapolated());
+  EXPECT_NEAR(e.tool_axis_angle_rad, 0.1 + 0.9 * kExtrapolationToolAxisMargin_rad, 1e-9);
+  tilted(4) = q(4) + 0.1 + 1.1 * kExtrapolationToolAxisMargin_rad;
+  e = extrapolation(domain, model, tilted, 0.0);
+  EXPECT_TRUE(e.tool_axis_beyond);
+  EXPECT_TRUE(e.extrapolated());
+  JointVector turned = q;
+  turned(5) += 2.0;  // wrist 3 turns about the axis: not a new direction
+  EXPECT_FALSE(extrapolation(domain, model, turned, 0.0).extrapolated());
+}
+
+TEST(TermJointMask, TheJointsTheTermsDependOn) {
+  Random random(4);
+  RobotModel model = nominal_model(RobotType::ur5);
+  model.tool_m = Vec3(0.0, 0.0, 0.1);
+  dataset.clear();
+  test::fill_dataset(model, test::example_base_to_tracker(), 20, 0.0, &random, &dataset);
+  EXPECT_EQ(term_joint_mask(model, dataset.samples()), 0u);  // rigid
+  ASSERT_EQ(default_compliance_terms(model, Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &model.compliance),
+            Status::ok);
+  ASSERT_EQ(append_harmonic_terms(1, &model.compliance), Status::ok);
+  EXPECT_EQ(term_joint_mask(model, dataset.samples()), 0u);  // every coefficient 0
+  for (int t = 0; t < model.compliance.term_count; ++t) {
+    const ComplianceTerm& term = model.compliance.terms[t];
+    if (is_harmonic(term) && term.joint == 0) model.compliance.coefficient[t] = 1e-5;  // joint 1's harmonic
+  }
+  EXPECT_EQ(term_joint_mask(model, dataset.samples()), 1u);
+  for (int t = 0; t < model.compliance.term_count; ++t)
+    if (!is_harmonic(model.compliance.terms[t])) model.compliance.coefficient[t] = 1e-5;
+  unsigned mask = 0;
+  EXPECT_NO_HEAP(mask = term_joint_mask(model, dataset.samples()));
+  // Gravity along joint 1's axis: turning it changes no torque; the shoulder and elbow do.
+  EXPECT_EQ(mask & 1u, 1u);  // from the harmonic
+  EXPECT_NE(mask & 2u, 0u);
+  EXPECT_NE(mask & 4u, 0u);
+  model.compliance.coefficient[0] = 0.0;
+  for (int t = 0; t < model.compliance.term_count; ++t)
+    if (is_harmonic(model.compliance.terms[t])) model.compliance.coefficient[t] = 0.0;
+  EXPECT_EQ(term_joint_mask(model, dataset.samples()) & 1u, 0u);
 }
 
 }  // namespace
