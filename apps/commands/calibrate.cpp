@@ -178,42 +178,6 @@ Error start_geometry(const Options& options, const CalibrateSettings& settings, 
   return Error{};
 }
 
-/// The dataset, checked for size and split.
-Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
-                   streams::SessionFacts* facts, PointFates* fates) {
-  streams::SessionConfig config;
-  config.observer = fates;
-  config.speed_model = settings.robot.model;
-  config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
-  config.progress = settings.progress;
-  config.log_options.units = settings.units;
-  config.orientation = settings.orientation;
-  config.orientation.joint_sigma_rad = settings.joint_sigma_rad;  // 0: the joint columns' written resolution
-  Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
-  if (!error.ok()) return error;
-  error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config, dataset,
-                                facts);
-  if (!error.ok()) return error;
-  // No floor on the sample count: the identifiability analysis decides what the samples determine.
-  // The job splits; fewer than 3 training poses cannot even place the tracker frame.
-  const std::size_t train_poses = dataset->train_count_for(settings.train_fraction);
-  if (train_poses < 3 && train_poses < dataset->pose_count()) {
-    return Error::usage("--split " + options.get("split") + " leaves " + std::to_string(train_poses) +
-                        " training pose(s) of " + std::to_string(dataset->pose_count()) +
-                        "; the tracker frame needs at least 3");
-  }
-  // Folds hold out whole poses (with several reflectors, a pose's samples stay together).
-  const std::string units = dataset->pose_count() == dataset->size() ? " samples" : " poses";
-  if (settings.cv_folds > dataset->pose_count()) {
-    return Error::usage("--cv " + options.get("cv") + ": more folds than the " + std::to_string(dataset->pose_count()) +
-                        units);
-  }
-  if (settings.cv_folds == 1 && dataset->pose_count() > kMaxCrossValidationFolds) {
-    return Error::usage("--cv loo: at most " + std::to_string(kMaxCrossValidationFolds) + units + " (use --cv K)");
-  }
-  return Error{};
-}
-
 // --- run (the computation: lib's calibrate()) ---------------------------------------------------
 
 /// --cv after the job (whose messages name the failing step), then the dataset put back as
@@ -319,6 +283,7 @@ Error write_outputs(const Options& options, const CalibrateSettings& settings, c
 /// `*warnings`: the fit's plausibility warnings (fit_checks.hpp), printed on stderr; the
 /// outputs are written all the same.
 Error calibrate(const Options& options, std::vector<std::string>* warnings) {
+  if (options.given("fit")) return calibrate_registration(options, warnings);
   const Clock::time_point command_start = Clock::now();
   Profile profile;
   CalibrateSettings settings;
@@ -343,13 +308,18 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   if (!error.ok()) return error;
   part_start = Clock::now();
   report::ReportData data = present_calibration(settings, start, dataset, facts, job);
+  const double tables_s = seconds_since(part_start);
+  part_start = Clock::now();
+  add_uncertainty(settings, dataset, &job, &data);
+  profile.add("uncertainty: covariance and domain", seconds_since(part_start));
+  part_start = Clock::now();
   if (facts.has_stream) data.timeline = fates.timeline(120);
   // Any output on stdout (the result, or --ur-deltas -) keeps the tables off it.
   const bool result_on_stdout = options.get("out") == "-" || options.get("ur-deltas") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   print_calibration_tables(terminal, data, job);
   *warnings = fit_warnings(job.result, settings.bounds, data.parameters);
-  profile.add("final w-test, accuracy and tables", seconds_since(part_start));
+  profile.add("final w-test, accuracy and tables", tables_s + seconds_since(part_start));
   part_start = Clock::now();
   error = write_outputs(options, settings, data, facts, job, *warnings, &outputs, ids);
   profile.add("write the outputs", seconds_since(part_start));
@@ -363,6 +333,38 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
 }
 
 }  // namespace
+
+Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
+                   streams::SessionFacts* facts, PointFates* fates) {
+  RobotModel arm = settings.robot.model;
+  arm.tool_m = settings.tool_m;  // for tool speeds and the joints' noise only
+  streams::SessionConfig config = sample_session_config(settings, arm);
+  config.observer = fates;
+  config.progress = settings.progress;
+  Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
+  if (!error.ok()) return error;
+  error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config, dataset,
+                                facts);
+  if (!error.ok()) return error;
+  // No floor on the sample count: the identifiability analysis decides what the samples determine.
+  // The job splits; fewer than 3 training poses cannot even place the tracker frame.
+  const std::size_t train_poses = dataset->train_count_for(settings.train_fraction);
+  if (train_poses < 3 && train_poses < dataset->pose_count()) {
+    return Error::usage("--split " + options.get("split") + " leaves " + std::to_string(train_poses) +
+                        " training pose(s) of " + std::to_string(dataset->pose_count()) +
+                        "; the tracker frame needs at least 3");
+  }
+  // Folds hold out whole poses (with several reflectors, a pose's samples stay together).
+  const std::string units = dataset->pose_count() == dataset->size() ? " samples" : " poses";
+  if (settings.cv_folds > dataset->pose_count()) {
+    return Error::usage("--cv " + options.get("cv") + ": more folds than the " + std::to_string(dataset->pose_count()) +
+                        units);
+  }
+  if (settings.cv_folds == 1 && dataset->pose_count() > kMaxCrossValidationFolds) {
+    return Error::usage("--cv loo: at most " + std::to_string(kMaxCrossValidationFolds) + units + " (use --cv K)");
+  }
+  return Error{};
+}
 
 int calibrate_main(int argc, char** argv) {
   Options options;

@@ -115,51 +115,6 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
   return harmonics ? harmonic_terms_from_options(options, settings) : Error{};
 }
 
-/// --position-sigma-m, --angle-sigma-rad, --orientation-lever-m (csv.hpp, OrientationInput).
-Error orientation_options(const Options& options, textio::OrientationInput* orientation) {
-  if (options.given("position-sigma-m") && options.given("tracker-sigma-um")) {
-    return Error::usage("--tracker-sigma-um and --position-sigma-m say the same: give one");
-  }
-  Error error = number_option(options, "position-sigma-m", &orientation->position_sigma_m);
-  if (error.ok() && options.given("tracker-sigma-um")) {
-    double sigma_um = 0.0;
-    error = number_option(options, "tracker-sigma-um", &sigma_um);
-    orientation->position_sigma_m = sigma_um * 1e-6;
-    if (error.ok() && !(sigma_um > 0.0 && sigma_um < 1e6))
-      return Error::usage("--tracker-sigma-um must be in (0, 1e6)");
-  }
-  if (error.ok()) error = number_option(options, "angle-sigma-rad", &orientation->angle_sigma_rad);
-  if (error.ok() && options.given("orientation-lever-m"))
-    error = number_option(options, "orientation-lever-m", &orientation->lever_m);
-  if (!error.ok()) return error;
-  if (!(orientation->position_sigma_m > 0.0 && orientation->position_sigma_m < 1.0) ||
-      !(orientation->angle_sigma_rad > 0.0 && orientation->angle_sigma_rad < 1.0)) {
-    return Error::usage("--position-sigma-m and --angle-sigma-rad must be in (0, 1)");
-  }
-  if (options.given("orientation-lever-m") && !(orientation->lever_m >= 0.0 && orientation->lever_m <= 1.0)) {
-    return Error::usage("--orientation-lever-m must be in [0, 1] m");
-  }
-  const std::string form = options.get("orientation-form");
-  if (form == "euler-xyz") {
-    orientation->form = textio::OrientationForm::euler_xyz;
-  } else if (form != "rotation-vector") {
-    return Error::usage("--orientation-form must be rotation-vector or euler-xyz, not " + port::quoted(form));
-  }
-  return Error{};
-}
-
-/// --joint-sigma-rad or --joint-sigma-deg (not both), in [0, 1) rad.
-Error joint_sigma_option(const Options& options, double* sigma_rad) {
-  const bool in_degrees = options.given("joint-sigma-deg");
-  if (in_degrees && options.given("joint-sigma-rad"))
-    return Error::usage("give --joint-sigma-rad or --joint-sigma-deg, not both");
-  const Error error = number_option(options, in_degrees ? "joint-sigma-deg" : "joint-sigma-rad", sigma_rad);
-  if (!error.ok()) return error;
-  if (in_degrees) *sigma_rad *= math::kRadPerDeg;
-  if (!(*sigma_rad >= 0.0 && *sigma_rad < 1.0)) return Error::usage("--joint-sigma-rad must be in [0, 1) rad");
-  return Error{};
-}
-
 }  // namespace
 
 const std::vector<OptionSpec>& calibrate_option_specs() {
@@ -213,6 +168,11 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
              textio::format_double(kSignificancePosesPerParam) +
              " per estimated parameter); a given T tests it on any set",
          ""},
+        {"fit", "base|frames",
+         "register, not calibrate: fit only the base -> tracker transform (and with 'frames' every target's tool "
+         "point) of --robot-model RESULT.json to the inputs, keeping its arm and model terms; every pose registers "
+         "unless --split is given (docs/cli.md)",
+         ""},
         {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
         {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
         {"report", "DIR", "write an HTML report with figures into DIR", ""},
@@ -235,32 +195,8 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "print on stderr where the wall time went: reading the input, the job's screen, baseline, stages and "
          "w-tests, cross-validation, tables and outputs",
          ""},
-        {"tracker-sigma-um", "S",
-         "stated noise of the tracker per axis: the blunder test's sigma when the fit leaves too little redundancy, "
-         "and the report's measurement noise (the same as --position-sigma-m) [um]",
-         "10"},
-        {"position-sigma-m", "S",
-         "stated noise of the measured positions; with --angle-sigma-rad it weighs a measured orientation (rx, ry, rz "
-         "columns of --samples) [m]",
-         "1e-05"},
-        {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
-        {"joint-sigma-rad", "S",
-         "noise of the joint readings, in the units of --position-sigma-m (e.g. the readings' rounding step): LM "
-         "weighs each sample by its point covariance (errors in variables, docs/robust.md; 0: off), and a measured "
-         "orientation's lever takes it in [rad]",
-         "0"},
-        {"joint-sigma-deg", "S", "--joint-sigma-rad in degrees (a UR pendant export's rounding: 0.01) [deg]", ""},
-        {"orientation-form", "rotation-vector|euler-xyz",
-         "what rx, ry, rz are: the tool frame's rotation vector, or intrinsic X-Y-Z Euler angles (R = Rx(rx) Ry(ry) "
-         "Rz(rz), e.g. a Leica T-Mac export)",
-         "rotation-vector"},
-        {"orientation-lever-m", "L",
-         "a measured orientation adds two points at this lever along the tool frame's x and y axes (targets 2, 3; 0: "
-         "rx, ry, rz not used) [m] (default: from the noise: position and angle sigma, and the joints' (--joint-sigma-"
-         "rad, else their written resolution) through the arm)",
-         ""},
     };
-    for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
+    for (const OptionSpec& spec : sample_reader_option_specs()) list.push_back(spec);
     return list;
   }();
   return specs;
@@ -336,7 +272,7 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   if (streams && (options.get("robot").empty() || options.get("tracker").empty())) {
     return Error::usage("--robot and --tracker go together");
   }
-  error = input_units_option(options, &settings->units);
+  error = sample_reader_settings_from_options(options, settings);
   if (!error.ok()) return error;
   double max_mm = 0.0;
   double max_deg = 0.0;
@@ -351,11 +287,7 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
   settings->profile = options.given("profile");
-  const Error compliance = compliance_from_options(options, settings);
-  if (!compliance.ok()) return compliance;
-  error = orientation_options(options, &settings->orientation);
-  if (error.ok()) error = joint_sigma_option(options, &settings->joint_sigma_rad);
-  return error;
+  return compliance_from_options(options, settings);
 }
 
 }  // namespace hivecal::cli

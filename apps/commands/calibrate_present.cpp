@@ -20,6 +20,7 @@
 #include "streams/session.hpp"
 #include "textio/csv.hpp"
 #include "commands/calibrate_parts.hpp"
+#include "commands/uncertainty.hpp"
 
 namespace hivecal::cli {
 namespace {
@@ -630,6 +631,22 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     }
   }
   return data;
+}
+
+void add_uncertainty(const CalibrateSettings& settings, const CliDataset& dataset, Run* run, report::ReportData* data) {
+  const CalibrationStage& final_stage = run->final_stage();
+  const LmResult* lm = run->final_lm();
+  PointLoss loss;  // the final LM's, so that the covariance's diagonal is its sigmas squared
+  if (lm != nullptr) loss.huber_threshold_m = lm->huber_threshold_m;
+  if (settings.joint_sigma_rad > 0.0)
+    loss.joint_noise_ratio_rad_per_m = settings.joint_sigma_rad / settings.orientation.position_sigma_m;
+  const Vec3 none[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
+  std::string note;
+  compute_uncertainty(final_stage.model, final_stage.base_to_tracker, dataset.train(), loss,
+                      calibration_estimated_mask(run->result), lm != nullptr ? lm->other_tools_sigma_m : none,
+                      &run->uncertainty, &note);
+  if (!note.empty()) data->info_lines.push_back(note);
+  for (const std::string& line : domain_lines(run->uncertainty)) data->info_lines.push_back(line);
 }
 
 /// The terminal text (on stdout, or on stderr when stdout carries the result).

@@ -22,6 +22,7 @@ std::string calibration_result_json(const CalibrateSettings& settings, const rep
   file.base_to_tracker = final_stage.base_to_tracker;
   file.has_metrics = true;
   file.metrics = data.calibrated;
+  file.uncertainty = run.uncertainty;
   for (int t = 0; run.final_lm() != nullptr && t < final_stage.model.compliance.term_count; ++t) {
     const int k = compliance_param_index(t);
     if (mask_has(run.final_lm()->identifiability.kept_mask, k)) file.compliance_sigma[t] = run.final_lm()->sigma(k);

@@ -582,4 +582,18 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   return port::Error{};
 }
 
+std::vector<report::SampleRow> report_training_samples(const std::string& result_text, const std::string& source) {
+  textio::JsonValue root;
+  report::ReportData data;
+  const textio::JsonValue* saved = nullptr;
+  if (!textio::parse_json(result_text, &root).ok() || (saved = root.find("report")) == nullptr ||
+      !parse_report_data(*saved, source, &data).ok()) {
+    return {};
+  }
+  std::vector<report::SampleRow> train;
+  for (const report::SampleRow& sample : data.samples)
+    if (!sample.test) train.push_back(sample);
+  return train;
+}
+
 }  // namespace hivecal::record

@@ -417,6 +417,19 @@ std::string format_points_csv(const std::vector<Vec3>& points_m, const std::stri
   return out;
 }
 
+std::string format_predictions_csv(const std::vector<Vec3>& points_m, const std::vector<double>& sigma_m,
+                                   const std::vector<bool>& extrapolated, const std::string& length_unit) {
+  const bool mm = length_unit == "mm";
+  const double scale = mm ? 1e3 : 1.0;
+  std::string out = mm ? "x [mm],y [mm],z [mm],sigma [mm],extrapolated\n" : "x,y,z,sigma_m,extrapolated\n";
+  for (std::size_t k = 0; k < points_m.size(); ++k) {
+    const Vec3& p = points_m[k];
+    out += format_double(p.x() * scale) + "," + format_double(p.y() * scale) + "," + format_double(p.z() * scale) +
+           "," + format_double(sigma_m[k] * scale) + (extrapolated[k] ? ",1\n" : ",0\n");
+  }
+  return out;
+}
+
 std::string format_samples_csv(Span<const Sample> samples) {
   const bool targets = target_count(samples) > 1;
   std::string out = targets ? "q1,q2,q3,q4,q5,q6,x,y,z,target\n" : "q1,q2,q3,q4,q5,q6,x,y,z\n";

@@ -104,6 +104,11 @@ std::string format_joints_csv(Span<const JointVector> poses_rad);
 /// `x,y,z` rows with round-trip precision, in metres; with `length_unit` "mm" the header is
 /// `x [mm],y [mm],z [mm]` and the values are in millimetres (read back by the same reader).
 std::string format_points_csv(const std::vector<Vec3>& points_m, const std::string& length_unit = "m");
+/// format_points_csv with two columns after z: each point's 1-sigma per axis (`sigma_m`, in
+/// millimetres `sigma [mm]`) and `extrapolated` (1 or 0); `sigma_m` and `extrapolated` hold
+/// one entry per point.
+std::string format_predictions_csv(const std::vector<Vec3>& points_m, const std::vector<double>& sigma_m,
+                                   const std::vector<bool>& extrapolated, const std::string& length_unit = "m");
 /// `q1..q6,x,y,z` rows with round-trip precision (`,target` 1-based when several targets).
 std::string format_samples_csv(Span<const Sample> samples);
 

@@ -349,4 +349,60 @@ JsonWriter& JsonWriter::inline_array(const double* values, std::size_t count) {
   return *this;
 }
 
+namespace {
+
+/// The end of the JSON value that starts at `pos` (after blanks): past its closing quote or
+/// bracket, or the end of a scalar; text.size() when it does not end.
+std::size_t value_end(const std::string& text, std::size_t pos) {
+  int depth = 0;
+  for (std::size_t i = pos; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"') {
+      for (++i; i < text.size() && text[i] != '"'; ++i)
+        if (text[i] == '\\') ++i;
+      if (depth == 0) return i + 1;
+    } else if (c == '{' || c == '[') {
+      ++depth;
+    } else if (c == '}' || c == ']') {
+      if (depth == 0) return i;  // a scalar's end at its object's close
+      if (--depth == 0) return i + 1;
+    } else if (depth == 0 && (c == ',' || c == ' ' || c == '\n' || c == '\r' || c == '\t')) {
+      return i;
+    }
+  }
+  return text.size();
+}
+
+}  // namespace
+
+bool object_member_texts(const std::string& document, std::vector<JsonMemberText>* members) {
+  members->clear();
+  std::size_t i = document.find_first_not_of(" \t\r\n");
+  if (document.compare(i == std::string::npos ? document.size() : i, 3, "\xEF\xBB\xBF") == 0) i += 3;
+  i = document.find_first_not_of(" \t\r\n", i);
+  if (i == std::string::npos || document[i] != '{') return false;
+  for (++i;;) {
+    i = document.find_first_not_of(" \t\r\n,", i);
+    if (i == std::string::npos) return false;
+    if (document[i] == '}') return true;
+    if (document[i] != '"') return false;
+    const std::size_t key_end = value_end(document, i);
+    JsonValue key;
+    if (!parse_json(document.substr(i, key_end - i), &key).ok() || key.kind != JsonValue::Kind::string) return false;
+    const std::size_t colon = document.find_first_not_of(" \t\r\n", key_end);
+    if (colon == std::string::npos || document[colon] != ':') return false;
+    const std::size_t value = document.find_first_not_of(" \t\r\n", colon + 1);
+    if (value == std::string::npos) return false;
+    const std::size_t end = value_end(document, value);
+    members->push_back({key.string, document.substr(i, end - i)});
+    i = end;
+  }
+}
+
+std::string object_document(const std::vector<JsonMemberText>& members) {
+  std::string out = "{";
+  for (std::size_t k = 0; k < members.size(); ++k) out += (k == 0 ? "\n  " : ",\n  ") + members[k].text;
+  return out + (members.empty() ? "}\n" : "\n}\n");
+}
+
 }  // namespace hivecal::textio
