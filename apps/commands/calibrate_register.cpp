@@ -22,10 +22,10 @@ namespace hivecal::cli {
 namespace {
 
 /// Options that calibrate and a registration do not share: what they set is RESULT's.
-constexpr const char* kNotWithFit[] = {"method",         "params",      "population-subset", "robust",  "cv",
-                                       "controller-tcp", "frames",      "significance",      "tool",    "ur-calibration",
-                                       "compliance",     "harmonics",   "gravity",           "payload", "ur-deltas",
-                                       "report",         "max-change-mm", "max-change-deg"};
+constexpr const char* kNotWithFit[] = {
+    "method",       "params", "population-subset", "robust",        "cv",        "controller-tcp", "frames",
+    "significance", "tool",   "ur-calibration",    "compliance",    "harmonics", "gravity",        "payload",
+    "ur-deltas",    "report", "max-change-mm",     "max-change-deg"};
 
 Error refuse_calibration_options(const Options& options) {
   for (const char* name : kNotWithFit) {
@@ -64,8 +64,8 @@ std::string registered_result_json(const std::string& result_text, const record:
     calibration.text = "\"calibration_metrics\"" + metrics->text.substr(metrics->text.find(':'));
     members.push_back(calibration);
   }
-  for (const char* key : {"base_to_tracker", "metrics", "tool", "tools", "fitted", "registration", "covariance",
-                          "domain"}) {
+  for (const char* key :
+       {"base_to_tracker", "metrics", "tool", "tools", "fitted", "registration", "covariance", "domain"}) {
     const textio::JsonMemberText* replacement = find(fresh, key);
     textio::JsonMemberText* original = find(members, key);
     if (replacement != nullptr && original != nullptr) {
@@ -150,9 +150,9 @@ Error calibrate_registration(const Options& options, std::vector<std::string>* w
   const bool result_on_stdout = options.get("out") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   for (const std::string& line : facts.info_lines) std::fprintf(terminal, "%s\n", line.c_str());
-  std::fprintf(terminal, "registering %s (%s%s) on %zu of %zu samples%s\n", path.c_str(),
-               calibration.robot.c_str(), calibration.fitted.empty() ? "" : ", itself a registered result",
-               dataset->train().size(), dataset->size(),
+  std::fprintf(terminal, "registering %s (%s%s) on %zu of %zu samples%s\n", path.c_str(), calibration.robot.c_str(),
+               calibration.fitted.empty() ? "" : ", itself a registered result", dataset->train().size(),
+               dataset->size(),
                dataset->test().empty() ? " (every pose: --split F holds some out)" : "; the rest held out");
   for (const std::string& line : registration_lines(run, facts, warnings)) std::fprintf(terminal, "%s\n", line.c_str());
   if (!note.empty()) std::fprintf(terminal, "registration: %s\n", note.c_str());

@@ -65,13 +65,13 @@ Error predict(const Options& options) {
   std::vector<Vec3> points;
   std::vector<double> sigmas;
   std::vector<bool> extrapolated;
-  std::size_t flagged = 0;
+  ExtrapolationCount count;
   for (const JointVector& q : poses) {
     const Prediction p = predict_point(q, target - 1, in);
     points.push_back(p.point_m);
     sigmas.push_back(p.sigma_m);
     extrapolated.push_back(p.extrapolation.extrapolated());
-    if (p.extrapolation.extrapolated()) ++flagged;
+    count.add(p.extrapolation);
   }
   // write
   const bool uncertain = predict_point.has_uncertainty();
@@ -80,7 +80,7 @@ Error predict(const Options& options) {
                                        : textio::format_points_csv(points, output_unit));
   if (error.ok()) error = outputs.commit();
   if (error.ok() && uncertain) {
-    std::fprintf(stderr, "%s: %zu of %zu poses extrapolated (%s)\n", kPredictCommand, flagged, poses.size(),
+    std::fprintf(stderr, "%s: %s: extrapolated when %s\n", kPredictCommand, count.text().c_str(),
                  extrapolation_rule(calibration.uncertainty.domain).c_str());
   } else if (error.ok() && !nominal) {
     std::fprintf(stderr,

@@ -123,10 +123,11 @@ void apply_registration(const RegistrationRun& run, const std::string& calibrati
   const std::vector<Sample> train = training_samples(calibration_text);
   CalibrationDomain domain;
   if (train.empty() ||
-      calibration_domain(file->model, file->base_to_tracker, Span<const Sample>(train.data(), train.size()), *covariance,
-                         u.estimated & ~kOtherTargetTools, u.other_tools_sigma_m, &domain) != Status::ok) {
-    *note = "the calibration's training poses are not in it (no \"report\"): the domain's typical sigma is the "
-            "calibration's, before the registration";
+      calibration_domain(file->model, file->base_to_tracker, Span<const Sample>(train.data(), train.size()),
+                         *covariance, u.estimated & ~kOtherTargetTools, u.other_tools_sigma_m, &domain) != Status::ok) {
+    *note =
+        "the calibration's training poses are not in it (no \"report\"): the domain's typical sigma is the "
+        "calibration's, before the registration";
     return;
   }
   u.domain = domain;

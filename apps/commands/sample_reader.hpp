@@ -16,9 +16,10 @@ namespace hivecal::cli {
 
 /// The reader options' values.
 struct SampleReaderSettings {
-  textio::InputUnits units;              ///< --length-unit, --angle-unit, --columns of text inputs
-  textio::OrientationInput orientation;  ///< --position-sigma-m (--tracker-sigma-um), --angle-sigma-rad, --orientation-*
-  double joint_sigma_rad = 0.0;          ///< --joint-sigma-rad / --joint-sigma-deg: joint reading noise (0: off) [rad]
+  textio::InputUnits units;  ///< --length-unit, --angle-unit, --columns of text inputs
+  textio::OrientationInput
+      orientation;               ///< --position-sigma-m (--tracker-sigma-um), --angle-sigma-rad, --orientation-*
+  double joint_sigma_rad = 0.0;  ///< --joint-sigma-rad / --joint-sigma-deg: joint reading noise (0: off) [rad]
 };
 
 /// The reader options, in their --help order (the unit options and --columns last).

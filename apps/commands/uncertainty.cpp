@@ -41,7 +41,8 @@ void compute_uncertainty(const RobotModel& model, const RigidTransform& base_to_
 std::string extrapolation_rule(const CalibrationDomain& d) {
   std::string joints;  // the joints whose ranges count
   for (int j = 0; j < kJointCount; ++j)
-    if (d.term_joints & (1U << static_cast<unsigned>(j))) joints += (joints.empty() ? "q" : ", q") + std::to_string(j + 1);
+    if (d.term_joints & (1U << static_cast<unsigned>(j)))
+      joints += (joints.empty() ? "q" : ", q") + std::to_string(j + 1);
   char buf[200];
   std::string rule;
   if (d.typical_sigma_m > 0.0) {
@@ -67,8 +68,8 @@ std::vector<std::string> domain_lines(const record::CalibrationUncertainty& u) {
   std::string ranges;
   char buf[400];
   for (int j = 0; j < kJointCount; ++j) {
-    std::snprintf(buf, sizeof buf, "%sq%d %.1f..%.1f", j == 0 ? "" : ", ", j + 1,
-                  d.joint_min_rad(j) / math::kRadPerDeg, d.joint_max_rad(j) / math::kRadPerDeg);
+    std::snprintf(buf, sizeof buf, "%sq%d %.1f..%.1f", j == 0 ? "" : ", ", j + 1, d.joint_min_rad(j) / math::kRadPerDeg,
+                  d.joint_max_rad(j) / math::kRadPerDeg);
     ranges += buf;
   }
   std::snprintf(buf, sizeof buf, "domain: made on %zu poses, joints [deg] %s", d.poses, ranges.c_str());
@@ -91,6 +92,22 @@ std::vector<std::string> domain_lines(const record::CalibrationUncertainty& u) {
     lines.push_back("domain: a pose is extrapolated when " + rule + " (no covariance: no sigma)");
   }
   return lines;
+}
+
+void ExtrapolationCount::add(const Extrapolation& e) {
+  ++poses;
+  flagged += e.extrapolated() ? 1U : 0U;
+  sigma += e.sigma_beyond ? 1U : 0U;
+  tool_axis += e.tool_axis_beyond ? 1U : 0U;
+  joint += e.joint >= 0 ? 1U : 0U;
+}
+
+std::string ExtrapolationCount::text() const {
+  char buf[200];
+  std::snprintf(buf, sizeof buf,
+                "%zu of %zu poses extrapolated (by their sigma %zu, the tool axis %zu, a joint's range %zu)", flagged,
+                poses, sigma, tool_axis, joint);
+  return buf;
 }
 
 Predictor::Predictor(const record::CalibrationFile& calibration)

@@ -39,6 +39,19 @@ struct Prediction {
   Extrapolation extrapolation;  ///< against the calibration's domain (none without one)
 };
 
+/// How many predictions were extrapolations, and for which reason (a pose may have several).
+struct ExtrapolationCount {
+  std::size_t poses = 0;      ///< predictions counted [-]
+  std::size_t flagged = 0;    ///< extrapolated for any reason [-]
+  std::size_t sigma = 0;      ///< its sigma beyond the multiple [-]
+  std::size_t tool_axis = 0;  ///< the tool axis beyond the spread [-]
+  std::size_t joint = 0;      ///< a term joint beyond its range [-]
+  /// Counts one prediction.
+  void add(const Extrapolation& e);
+  /// "N of M poses extrapolated (sigma a, tool axis b, joint range c)".
+  std::string text() const;
+};
+
 /// Predicts points through a calibration result: base_to_tracker * FK(q) * tool of a target
 /// (PredictionFrame::tracker) or FK(q) * tool in the file's own base frame, with the sigma and
 /// the extrapolation test when the result carries a covariance and a domain. The one place

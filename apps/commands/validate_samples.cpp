@@ -60,25 +60,19 @@ std::size_t poses_in(Span<const Sample> samples) {
   return poses;
 }
 
-/// "flagged: a of b poses that miss by more than 1 mm, c of d of the others".
+/// "extrapolated: N of M ...; of those that miss by more than 1 mm a of b, of the others c of d".
 std::string extrapolation_line(const Validation& v) {
-  std::size_t misses = 0;
-  std::size_t flagged_misses = 0;
-  std::size_t flagged_others = 0;
+  ExtrapolationCount all;
+  ExtrapolationCount misses;
+  ExtrapolationCount others;
   for (const ScoredSample& s : v.samples) {
-    const bool miss = s.error_m.norm() > kMissBound_m;
-    const bool flagged = s.prediction.extrapolation.extrapolated();
-    misses += miss ? 1 : 0;
-    flagged_misses += miss && flagged ? 1 : 0;
-    flagged_others += !miss && flagged ? 1 : 0;
+    all.add(s.prediction.extrapolation);
+    (s.error_m.norm() > kMissBound_m ? misses : others).add(s.prediction.extrapolation);
   }
-  char line[300];
-  std::snprintf(line, sizeof line,
-                "extrapolated: %zu of %zu samples; of those that miss by more than %.0f mm %zu of %zu, of the others "
-                "%zu of %zu",
-                flagged_misses + flagged_others, v.samples.size(), kMissBound_m * 1e3, flagged_misses, misses,
-                flagged_others, v.samples.size() - misses);
-  return line;
+  char line[200];
+  std::snprintf(line, sizeof line, "; of those that miss by more than %.0f mm %zu of %zu, of the others %zu of %zu",
+                kMissBound_m * 1e3, misses.flagged, misses.poses, others.flagged, others.poses);
+  return "extrapolated: " + all.text() + line;
 }
 
 void print_validation(std::FILE* out, const std::string& samples_path, const Validation& v) {
@@ -141,7 +135,8 @@ std::string validation_json(const Options& options, const record::CalibrationFil
 
 Error validate_on_samples(const Options& options, std::vector<std::string>* warnings) {
   // parse
-  if (options.given("truth")) return Error::usage("give --truth (fresh random poses) or --samples (measured), not both");
+  if (options.given("truth"))
+    return Error::usage("give --truth (fresh random poses) or --samples (measured), not both");
   if (options.get("calibration").empty()) return Error::usage("--calibration is required (see --help)");
   SampleReaderSettings reader;
   Error error = sample_reader_settings_from_options(options, &reader);

@@ -233,18 +233,23 @@ port::Error parse_domain(const JsonValue& d, const std::string& source, Calibrat
     return true;
   };
   double poses = 0.0;
+  double term_joints = 0.0;
   const bool ok =
       number("poses", &poses) && read_json_numbers(d.find("joint_min_rad"), 6, domain->joint_min_rad.data()) &&
       read_json_numbers(d.find("joint_max_rad"), 6, domain->joint_max_rad.data()) &&
+      read_json_numbers(d.find("tool_axis_mean"), 3, domain->tool_axis_mean.data()) &&
       number("tool_axis_spread_rad", &domain->tool_axis_spread_rad) &&
       number("tool_axis_rms_rad", &domain->tool_axis_rms_rad) && number("typical_sigma_m", &domain->typical_sigma_m) &&
-      number("max_sigma_m", &domain->max_sigma_m) && number("sigma_factor", &domain->sigma_factor) &&
-      number("joint_margin_rad", &domain->joint_margin_rad);
-  if (!ok || poses < 0.0)
+      number("max_sigma_m", &domain->max_sigma_m) && number("term_joints", &term_joints) &&
+      number("sigma_factor", &domain->sigma_factor) && number("joint_margin_rad", &domain->joint_margin_rad) &&
+      number("tool_axis_margin_rad", &domain->tool_axis_margin_rad);
+  if (!ok || poses < 0.0 || !(term_joints >= 0.0 && term_joints < 64.0)) {
     return fail(source,
-                "\"domain\" needs poses, joint_min_rad, joint_max_rad (6 numbers each), "
-                "tool_axis_spread_rad, tool_axis_rms_rad, typical_sigma_m, max_sigma_m, "
-                "sigma_factor and joint_margin_rad");
+                "\"domain\" needs poses, joint_min_rad, joint_max_rad (6 numbers each), tool_axis_mean (3), "
+                "tool_axis_spread_rad, tool_axis_rms_rad, typical_sigma_m, max_sigma_m, term_joints (0 .. 63), "
+                "sigma_factor, joint_margin_rad and tool_axis_margin_rad");
+  }
+  domain->term_joints = static_cast<unsigned>(term_joints);
   domain->poses = static_cast<std::size_t>(poses);
   return port::Error{};
 }

@@ -155,7 +155,7 @@ struct Session {
   RigidTransform base = test::example_base_to_tracker();
   std::vector<JointVector> train;
   std::vector<JointVector> other;
-  std::string result;       // calibrate's result
+  std::string result;        // calibrate's result
   std::string moved_export;  // the other poses from the moved tracker
   Session() {
     Random random(23);
@@ -165,7 +165,7 @@ struct Session {
     moved_export = dir.write("moved.csv", export_text(arm, moved(base), other, &random));
     result = dir.path() + "/r.json";
     std::vector<std::string> args = {"--samples", train_csv, "--robot-model", "ur10", "--tool", "0,0,0.109",
-                                     "--method", "lm", "--split", "1", "--out", result};
+                                     "--method",  "lm",      "--split",       "1",    "--out",  result};
     args.insert(args.end(), kReader.begin(), kReader.end());
     testing::internal::CaptureStdout();
     EXPECT_EQ(run(cli::calibrate_main, args), cli::kExitOk);
@@ -208,7 +208,8 @@ TEST(CalibrateFit, CarriesTheCalibrationToAMovedTrackerAndEveryOtherMemberAsWrit
   // Register on the first 20 poses of the moved export.
   const std::string twenty = s.dir.write("twenty.csv", first_rows(test::read_text_file(s.moved_export), 20));
   const std::string registered = s.dir.path() + "/registered.json";
-  std::vector<std::string> args = {"--fit", "base", "--robot-model", s.result, "--samples", twenty, "--out", registered};
+  std::vector<std::string> args = {"--fit",     "base", "--robot-model", s.result,
+                                   "--samples", twenty, "--out",         registered};
   args.insert(args.end(), kReader.begin(), kReader.end());
   testing::internal::CaptureStdout();
   ASSERT_EQ(run(cli::calibrate_main, args), cli::kExitOk);
@@ -269,14 +270,10 @@ TEST(ValidateSamples, ItsFiguresArePredictPlusOnesOwnErrorsToAMicrometre) {
     std::size_t first = 0;
     if (fit) {
       calibration = s.dir.path() + "/registered20.json";
-      std::vector<std::string> reg = {"--fit",
-                                      "base",
-                                      "--robot-model",
-                                      s.result,
-                                      "--samples",
-                                      s.dir.write("first20.csv", first_rows(test::read_text_file(s.moved_export), 20)),
-                                      "--out",
-                                      calibration};
+      std::vector<std::string> reg = {
+          "--fit",  "base",      "--robot-model",
+          s.result, "--samples", s.dir.write("first20.csv", first_rows(test::read_text_file(s.moved_export), 20)),
+          "--out",  calibration};
       reg.insert(reg.end(), kReader.begin(), kReader.end());
       testing::internal::CaptureStdout();
       ASSERT_EQ(run(cli::calibrate_main, reg), cli::kExitOk);
@@ -338,18 +335,13 @@ TEST(PredictDomain, APoseWithTheToolTurnedAwayIsFlagged) {
   std::vector<JointVector> narrow;
   for (std::size_t k = 0; k < 40; ++k) narrow.push_back(test::tool_down_joints(s.arm, false, &random));
   const std::string narrow_result = s.dir.path() + "/narrow.json";
-  std::vector<std::string> args = {"--samples",
-                                   s.dir.write("narrow.csv", export_text(s.arm, s.base, narrow, &random)),
-                                   "--robot-model",
-                                   "ur10",
-                                   "--tool",
-                                   "0,0,0.109",
-                                   "--method",
-                                   "lm",
-                                   "--split",
-                                   "1",
-                                   "--out",
-                                   narrow_result};
+  std::vector<std::string> args = {
+      "--samples",     s.dir.write("narrow.csv", export_text(s.arm, s.base, narrow, &random)),
+      "--robot-model", "ur10",
+      "--tool",        "0,0,0.109",
+      "--method",      "lm",
+      "--split",       "1",
+      "--out",         narrow_result};
   args.insert(args.end(), kReader.begin(), kReader.end());
   testing::internal::CaptureStdout();
   const int code = run(cli::calibrate_main, args);
@@ -365,6 +357,9 @@ TEST(PredictDomain, APoseWithTheToolTurnedAwayIsFlagged) {
   std::size_t flagged = 0;
   for (const std::vector<double>& row : csv_rows(predicted, &header)) flagged += row[4] == 1.0 ? 1 : 0;
   EXPECT_GT(flagged, 100u) << err;  // of 120 random poses
+  unsigned by_tool_axis = 0;        // the reason: a direction the tool axis never took
+  ASSERT_EQ(std::sscanf(err.c_str() + err.find("the tool axis "), "the tool axis %u", &by_tool_axis), 1) << err;
+  EXPECT_GT(by_tool_axis, 100u) << err;
 }
 
 TEST(PredictColumns, ReadsTheJointsOfAnExportByTheNamesGiven) {
@@ -375,12 +370,12 @@ TEST(PredictColumns, ReadsTheJointsOfAnExportByTheNamesGiven) {
   const std::string by_name = s.dir.path() + "/by_name.csv";
   const std::string plain = s.dir.path() + "/plain.csv";
   std::string err;
-  ASSERT_EQ(test::run_capturing_stderr(cli::predict_main,
-                                       {"--calibration", s.result, "--joints", s.dir.write("renamed.csv", renamed),
-                                        "--columns", "q1=j1,q2=j2,q3=j3,q4=j4,q5=j5,q6=j6,x=measurement_x", "--out",
-                                        by_name},
-                                       &err),
-            cli::kExitOk)
+  ASSERT_EQ(
+      test::run_capturing_stderr(cli::predict_main,
+                                 {"--calibration", s.result, "--joints", s.dir.write("renamed.csv", renamed),
+                                  "--columns", "q1=j1,q2=j2,q3=j3,q4=j4,q5=j5,q6=j6,x=measurement_x", "--out", by_name},
+                                 &err),
+      cli::kExitOk)
       << err;
   ASSERT_EQ(test::run_capturing_stderr(cli::predict_main,
                                        {"--calibration", s.result, "--joints",
@@ -392,27 +387,30 @@ TEST(PredictColumns, ReadsTheJointsOfAnExportByTheNamesGiven) {
 
 TEST(RegistrationRefusals, WhatBelongsToACalibrationAndWhatCannotScore) {
   Session& s = session();
-  const std::vector<std::string> fit = {"--fit", "base", "--robot-model", s.result, "--samples", s.moved_export,
-                                        "--length-unit", "mm", "--columns",
-                                        "x=measurement_x,y=measurement_y,z=measurement_z", "--out",
-                                        s.dir.path() + "/x.json"};
+  const std::vector<std::string> fit = {"--fit",         "base",
+                                        "--robot-model", s.result,
+                                        "--samples",     s.moved_export,
+                                        "--length-unit", "mm",
+                                        "--columns",     "x=measurement_x,y=measurement_y,z=measurement_z",
+                                        "--out",         s.dir.path() + "/x.json"};
   test::expect_refusals(cli::calibrate_main, fit,
                         {{{"--method", "lm"}, "--method belongs to a calibration"},
                          {{"--harmonics", "2"}, "--harmonics belongs to a calibration"},
                          {{"--cv", "5"}, "--cv belongs to a calibration"},
                          {{"--report", s.dir.path() + "/rep"}, "--report belongs to a calibration"}});
   std::string err;
-  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
-                                       {"--fit", "sideways", "--robot-model", s.result, "--samples", s.moved_export},
-                                       &err),
-            cli::kExitUsage);
+  EXPECT_EQ(
+      test::run_capturing_stderr(cli::calibrate_main,
+                                 {"--fit", "sideways", "--robot-model", s.result, "--samples", s.moved_export}, &err),
+      cli::kExitUsage);
   EXPECT_NE(err.find("--fit must be 'base'"), std::string::npos) << err;
   EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
                                        {"--fit", "base", "--robot-model", "ur10", "--samples", s.moved_export}, &err),
             cli::kExitBadInput);
   EXPECT_NE(err.find("must be a result.json"), std::string::npos) << err;
-  const std::vector<std::string> validate = {"--calibration", s.result, "--samples", s.moved_export, "--length-unit",
-                                             "mm", "--columns", "x=measurement_x,y=measurement_y,z=measurement_z"};
+  const std::vector<std::string> validate = {
+      "--calibration", s.result, "--samples", s.moved_export,
+      "--length-unit", "mm",     "--columns", "x=measurement_x,y=measurement_y,z=measurement_z"};
   test::expect_refusals(cli::validate_main, validate,
                         {{{"--fit-poses", "20"}, "--fit-poses N needs --fit"},
                          {{"--fit", "base", "--fit-poses", "120"}, "leaves none of the 120 poses to score"},
