@@ -8,21 +8,27 @@
 
 namespace hivecal {
 
-double prediction_sigma_m(const RobotModel& model, const RigidTransform& base_to_tracker, const JointVector& q_rad,
-                          int target, const NormalMatrix& covariance, ParamMask estimated, PredictionFrame frame,
-                          const Vec3& target_tool_sigma_m) {
-  // The Jacobian in the base frame: the tracker frame's is R times it, and trace(J C J^T) does
-  // not see a rotation.
-  RobotModel moved = model;
-  if (target > 0) moved.tool_m = target_tool(model, target);
+namespace {
+
+/// prediction_sigma_m's sum, trace(J C J^T) + the other tool's variances [m^2], with the model's
+/// trig in `context` (one per model: sample_rows_context) and the estimated parameters listed
+/// in index[0 .. count - 1].
+double prediction_variance_sum_m2(const RobotModel& model, SampleRowsContext& context,
+                                  const RigidTransform& base_to_tracker, const JointVector& q_rad, int target,
+                                  const NormalMatrix& covariance, ParamMask estimated, const int* index, int count,
+                                  PredictionFrame frame, const Vec3& target_tool_sigma_m) {
+  // The Jacobian in the base frame (sample_rows' rows): the tracker frame's is R times it, and
+  // trace(J C J^T) does not see a rotation. Target 1's tool columns are 0 for another target.
   Sample sample;
   sample.q_rad = q_rad;
+  sample.target = target;
+  context.pose = nullptr;  // its joint trig is this pose's, not the last one's (it knows a pose by its address)
   FullJacobian jacobian;
-  (void)local_residual_jacobian(moved, base_to_tracker, sample, &jacobian);
-  if (target > 0) jacobian.middleCols<3>(tool_param_index(0)).setZero();  // target 1's tool point
+  Mat3 tool_jacobian;
+  double raw_squared_m2 = 0.0;
+  (void)sample_rows(model, context, base_to_tracker, sample, PointLoss{}, estimated, &jacobian, &tool_jacobian,
+                    &raw_squared_m2);
   if (frame == PredictionFrame::base) jacobian.middleCols<kBaseParamCount>(kModelParamCount).setZero();
-  int index[kFullParamCount];
-  const int count = mask_indices(estimated, index);
   double variance_sum_m2 = target > 0 ? target_tool_sigma_m.squaredNorm() : 0.0;
   for (int r = 0; r < 3; ++r) {
     for (int a = 0; a < count; ++a) {
@@ -31,7 +37,20 @@ double prediction_sigma_m(const RobotModel& model, const RigidTransform& base_to
       variance_sum_m2 += jacobian(r, index[a]) * row_dot;
     }
   }
-  return std::sqrt(std::fmax(variance_sum_m2, 0.0) / 3.0);
+  return variance_sum_m2;
+}
+
+}  // namespace
+
+double prediction_sigma_m(const RobotModel& model, const RigidTransform& base_to_tracker, const JointVector& q_rad,
+                          int target, const NormalMatrix& covariance, ParamMask estimated, PredictionFrame frame,
+                          const Vec3& target_tool_sigma_m) {
+  SampleRowsContext context = sample_rows_context(model);
+  int index[kFullParamCount];
+  const int count = mask_indices(estimated, index);
+  const double sum_m2 = prediction_variance_sum_m2(model, context, base_to_tracker, q_rad, target, covariance,
+                                                   estimated, index, count, frame, target_tool_sigma_m);
+  return std::sqrt(std::fmax(sum_m2, 0.0) / 3.0);
 }
 
 Status calibration_domain(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
@@ -44,6 +63,12 @@ Status calibration_domain(const RobotModel& model, const RigidTransform& base_to
   d.joint_max_rad = samples[0].q_rad;
   Vec3 axis_sum = Vec3::Zero();
   double variance_sum_m2 = 0.0;
+  SampleRowsContext context = sample_rows_context(model);
+  int index[kFullParamCount];
+  const int count = mask_indices(estimated, index);
+  std::size_t pose_total = 0;
+  for (std::size_t begin = 0; begin < samples.size(); begin = pose_run_end(samples, begin)) ++pose_total;
+  std::size_t sigma_poses = 0;  // the sigmas of pose k where k * kDomainSigmaPoses / pose_total steps on
   for (std::size_t begin = 0; begin < samples.size();) {
     const std::size_t end = pose_run_end(samples, begin);
     const Sample* pose = &samples[begin];  // its target 1 reading, else its first
@@ -53,12 +78,19 @@ Status calibration_domain(const RobotModel& model, const RigidTransform& base_to
     d.joint_min_rad = d.joint_min_rad.cwiseMin(pose->q_rad);
     d.joint_max_rad = d.joint_max_rad.cwiseMax(pose->q_rad);
     axis_sum += fk_flange(model, pose->q_rad).rotation.col(2);
-    const Vec3 tool_sigma_m = pose->target > 0 ? other_tools_sigma_m[pose->target - 1] : Vec3(Vec3::Zero());
-    const double sigma_m = prediction_sigma_m(model, base_to_tracker, pose->q_rad, pose->target, covariance, estimated,
-                                              PredictionFrame::tracker, tool_sigma_m);
-    variance_sum_m2 += sigma_m * sigma_m;
-    d.max_sigma_m = std::fmax(d.max_sigma_m, sigma_m);
-    ++d.poses;
+    const std::size_t k = d.poses++;
+    if (pose_total <= kDomainSigmaPoses ||
+        (k * kDomainSigmaPoses) / pose_total != ((k + 1) * kDomainSigmaPoses) / pose_total) {
+      const Vec3 tool_sigma_m = pose->target > 0 ? other_tools_sigma_m[pose->target - 1] : Vec3(Vec3::Zero());
+      const double variance_m2 =
+          std::fmax(prediction_variance_sum_m2(model, context, base_to_tracker, pose->q_rad, pose->target, covariance,
+                                               estimated, index, count, PredictionFrame::tracker, tool_sigma_m),
+                    0.0) /
+          3.0;
+      variance_sum_m2 += variance_m2;
+      d.max_sigma_m = std::fmax(d.max_sigma_m, std::sqrt(variance_m2));
+      ++sigma_poses;
+    }
     begin = end;
   }
   if (!(axis_sum.norm() > 0.0) || !std::isfinite(variance_sum_m2)) return Status::non_finite_input;
@@ -72,7 +104,7 @@ Status calibration_domain(const RobotModel& model, const RigidTransform& base_to
   }
   const double poses = static_cast<double>(d.poses);
   d.tool_axis_rms_rad = std::sqrt(angle_squares / poses);
-  d.typical_sigma_m = std::sqrt(variance_sum_m2 / poses);
+  d.typical_sigma_m = std::sqrt(variance_sum_m2 / static_cast<double>(sigma_poses));
   d.term_joints = term_joint_mask(model, samples);
   *domain = d;
   return Status::ok;

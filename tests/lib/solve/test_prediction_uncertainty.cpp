@@ -119,6 +119,28 @@ TEST(CalibrationDomain, RangesSpreadAndTypicalSigmaOfThePoses) {
             Status::dataset_empty);
 }
 
+TEST(CalibrationDomain, ALargeSetsSigmasAreThoseOfEvenlySpacedPoses) {
+  static Dataset<3000> large;
+  Random random(9);
+  const RobotModel model = nominal_model(RobotType::ur10);
+  const RigidTransform base = test::example_base_to_tracker();
+  large.clear();
+  test::fill_dataset(model, base, 3000, 0.0, &random, &large);
+  random_covariance(kAllParamsMask, &random);
+  const Vec3 no_tools[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
+  CalibrationDomain domain;
+  ASSERT_EQ(calibration_domain(model, base, large.samples(), covariance, kAllParamsMask, no_tools, &domain),
+            Status::ok);
+  EXPECT_EQ(domain.poses, 3000u);
+  double squares = 0.0;
+  for (const Sample& s : large.samples()) {
+    const double sigma = prediction_sigma_m(model, base, s.q_rad, 0, covariance, kAllParamsMask);
+    squares += sigma * sigma;
+  }
+  EXPECT_NEAR(domain.typical_sigma_m, std::sqrt(squares / 3000.0), 0.03 * domain.typical_sigma_m);
+  EXPECT_NE(domain.typical_sigma_m, std::sqrt(squares / 3000.0));  // a subset: not every pose
+}
+
 TEST(Extrapolation, ASigmaBeyondItsMultipleOrATermJointBeyondItsMargin) {
   const RobotModel model = nominal_model(RobotType::ur5);
   CalibrationDomain domain;

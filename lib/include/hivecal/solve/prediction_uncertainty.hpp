@@ -72,10 +72,17 @@ struct CalibrationDomain {
 /// but joint 1). 0 for a rigid model.
 unsigned term_joint_mask(const RobotModel& model, Span<const Sample> samples);
 
+/// Poses whose prediction sigma the domain's typical and largest sigma are taken over at most:
+/// evenly spaced among more (the RMS of a few thousand is the RMS of all to a few per cent, and
+/// a large set costs no more than this) [-].
+inline constexpr std::size_t kDomainSigmaPoses = 2048;
+
 /// The domain of `samples` (each run of samples at equal joints is one pose, its target 1
 /// point or, without one, its first sample's target) under `model` / `base_to_tracker` and the
 /// parameter covariance (`covariance` over `estimated`; target_tool_sigma_m as in
-/// prediction_sigma_m, indexed by target - 1). Errors: dataset_empty, non_finite_input.
+/// prediction_sigma_m, indexed by target - 1): the joint ranges and the tool axis over every
+/// pose, the sigmas over every pose up to kDomainSigmaPoses, else over that many evenly spaced.
+/// Errors: dataset_empty, non_finite_input.
 Status calibration_domain(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
                           const NormalMatrix& covariance, ParamMask estimated,
                           const Vec3 (&other_tools_sigma_m)[kMaxTargets - 1], CalibrationDomain* domain);
