@@ -171,45 +171,17 @@ std::vector<OptionSpec> input_unit_option_specs() {
       {"length-unit", "m|mm", "unit of lengths (x, y, z) in text inputs whose header names none (default: m)", ""},
       {"angle-unit", "rad|deg", "unit of joint angles in text inputs whose header names none (default: rad)", ""},
       {"columns", "C=NAME,...",
-       "read text inputs by column name: C (q1..q6, x, y, z) is the header's column NAME, e.g. x=measurement_x (ROS "
-       "and pendant joint names are recognised without it)",
+       "read text inputs by column name: C (q1..q6, x, y, z, rx, ry, rz) is the header's column NAME, or a sum of "
+       "columns, with an optional unit: x=measurement_x, x=x_t+x_dif[mm], q1=joint_1[deg] (ROS and pendant joint "
+       "names are recognised without it)",
        ""},
   };
 }
 
-/// --columns C=NAME,... into units->columns: C one of the fixed formats' columns, each once.
+/// --columns C=SPEC,... into units->columns (textio::parse_column_aliases: the grammar's one place).
 Error columns_option(const Options& options, textio::InputUnits* units) {
-  const std::string text = options.get("columns");
-  std::size_t begin = 0;
-  while (!text.empty() && begin <= text.size()) {
-    const std::size_t end = std::min(text.find(',', begin), text.size());
-    const std::string entry = text.substr(begin, end - begin);
-    const std::size_t equals = entry.find('=');
-    textio::ColumnAlias alias;
-    if (equals != std::string::npos) {
-      alias.column = textio::lower(textio::trim(entry.substr(0, equals)));
-      alias.header = textio::lower(textio::trim(entry.substr(equals + 1)));
-      const std::size_t bracket = alias.header.find('[');
-      if (bracket != std::string::npos && alias.header.back() == ']') {  // NAME[unit]
-        alias.unit = alias.header.substr(bracket + 1, alias.header.size() - bracket - 2);
-        alias.header = textio::lower(textio::trim(alias.header.substr(0, bracket)));
-      }
-    }
-    static const char* const kNamed[] = {"q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "t", "rx", "ry", "rz"};
-    const bool known = std::find_if(std::begin(kNamed), std::end(kNamed),
-                                    [&](const char* n) { return alias.column == n; }) != std::end(kNamed);
-    if (!known || alias.header.empty()) {
-      return Error::usage(
-          "--columns: " + port::quoted(entry) +
-          " is not C=NAME or C=NAME[unit] with C one of q1..q6, x, y, z, rx, ry, rz, t (e.g. x=measurement_x[mm])");
-    }
-    for (const textio::ColumnAlias& earlier : units->columns) {
-      if (earlier.column == alias.column) return Error::usage("--columns names " + alias.column + " twice");
-    }
-    units->columns.push_back(alias);
-    begin = end + 1;
-  }
-  return Error{};
+  const std::string problem = textio::parse_column_aliases(options.get("columns"), &units->columns);
+  return problem.empty() ? Error{} : Error::usage(problem);
 }
 
 Error declare_inputs(const Options& options, const std::vector<std::string>& output_names, port::OutputSet* outputs) {
