@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
+#include <limits>
 #include <cstdio>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -105,20 +107,51 @@ bool progress_enabled(const Options& options) {
   return !options.given("quiet") && isatty(STDERR_FILENO) != 0;
 }
 
+bool NumberRange::contains(double value) const {
+  return (lo_open ? value > lo : value >= lo) && (hi_open ? value < hi : value <= hi);
+}
+
+std::string NumberRange::text() const {
+  char range[96];
+  std::snprintf(range, sizeof range, "%c%g, %g%c", lo_open ? '(' : '[', lo, hi, hi_open ? ')' : ']');
+  return range + (unit.empty() ? "" : " " + unit);
+}
+
+Error check_number(const std::string& option, std::string_view text, const NumberRange& range, double* value) {
+  double parsed = 0.0;
+  textio::NumberText read = textio::parse_number(text, &parsed);
+  if (read == textio::NumberText::ok && std::isnan(parsed)) read = textio::NumberText::malformed;  // NaN: no value
+  const bool unbounded = std::isinf(range.lo) && std::isinf(range.hi);                             // number_option
+  const std::string within = unbounded ? "" : " within " + range.text();
+  const std::string got = ", got " + port::quoted(text);
+  switch (read) {
+    case textio::NumberText::ok: break;
+    case textio::NumberText::malformed:
+      return Error::usage(option + " must be a number" + within + got + ": not a number");
+    case textio::NumberText::overflow:
+      return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
+                          ": beyond a double's range (1.8e308)");
+    case textio::NumberText::underflow:
+      return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
+                          ": too small for a double (it underflows below 4.9e-324): give 0 or a larger value");
+  }
+  if (!range.contains(parsed)) return Error::usage(option + " must be within " + range.text() + got);
+  *value = parsed;
+  return Error{};
+}
+
 Error number_option(const Options& options, const std::string& name, double* value) {
-  if (textio::parse_double(options.get(name), value)) return Error{};
-  return Error::usage("--" + name + ": not a number: " + port::quoted(options.get(name)));
+  return check_number("--" + name, options.get(name),
+                      NumberRange{-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()},
+                      value);
+}
+
+Error ranged_option(const Options& options, const std::string& name, const NumberRange& range, double* value) {
+  return check_number("--" + name, options.get(name), range, value);
 }
 
 Error bounded_option(const Options& options, const std::string& name, double lo, double hi, double* value) {
-  Error error = number_option(options, name, value);
-  if (!error.ok()) return error;
-  if (!(*value >= lo && *value <= hi)) {
-    char range[80];
-    std::snprintf(range, sizeof range, "[%g, %g]", lo, hi);
-    return Error::usage("--" + name + " must be in " + range + ", not " + port::quoted(options.get(name)));
-  }
-  return Error{};
+  return ranged_option(options, name, NumberRange{lo, hi}, value);
 }
 
 Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi,
@@ -160,10 +193,32 @@ bool parse_vec3(std::string_view text, Vec3* value) {
   return true;
 }
 
+Error check_vec3(const std::string& option, std::string_view text, const std::string& what, const NumberRange& range,
+                 Vec3* value) {
+  const std::string shape = option + " must be X,Y,Z" + (what.empty() ? "" : " " + what) + ", each within " +
+                            range.text() + ", got " + port::quoted(text);
+  std::size_t start = 0;
+  Vec3 parsed = Vec3::Zero();
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::size_t comma = text.find(',', start);
+    if ((axis == 2) != (comma == std::string_view::npos)) return Error::usage(shape);
+    const std::string_view field = text.substr(start, axis == 2 ? std::string_view::npos : comma - start);
+    start = comma + 1;
+    const textio::NumberText read = textio::parse_number(field, &parsed(axis));
+    if (read == textio::NumberText::overflow) return Error::usage(shape + ": beyond a double's range (1.8e308)");
+    if (read == textio::NumberText::underflow) {
+      return Error::usage(shape + ": " + port::quoted(field) +
+                          " is too small for a double (it underflows below 4.9e-324): give 0 or a larger value");
+    }
+    if (read != textio::NumberText::ok || !range.contains(parsed(axis))) return Error::usage(shape);
+  }
+  *value = parsed;
+  return Error{};
+}
+
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
-  const std::string text = options.get(name);
-  if (parse_vec3(text, value_m) && value_m->allFinite()) return Error{};
-  return Error::usage("--" + name + " must be X,Y,Z in metres, each finite, not " + port::quoted(text));
+  return check_vec3("--" + name, options.get(name), "in metres",
+                    NumberRange{-kMaxPointOption_m, kMaxPointOption_m, false, false, "m"}, value_m);
 }
 
 std::vector<OptionSpec> input_unit_option_specs() {

@@ -19,19 +19,29 @@ namespace {
 Error payload_option(const Options& options, ArmMasses* masses) {
   const std::string text = options.get("payload");
   const std::size_t at = text.find('@');
-  const Error bad = Error::usage(
-      "--payload must be KG@X,Y,Z: a mass in kg >= 0 and its centre in the flange frame "
-      "in metres (e.g. 1.2@0,0,0.05), not " +
-      port::quoted(text));
+  if (at == std::string::npos) {
+    return Error::usage(
+        "--payload must be KG@X,Y,Z: a mass in kg and its centre in the flange frame in metres (e.g. "
+        "1.2@0,0,0.05), got " +
+        port::quoted(text));
+  }
   double kg = 0.0;
-  if (at == std::string::npos || !textio::parse_double(text.substr(0, at), &kg) || !(kg >= 0.0 && kg < 1e4)) return bad;
   Vec3 com_m = Vec3::Zero();
-  if (!parse_vec3(std::string_view(text).substr(at + 1), &com_m)) return bad;
-  if (!com_m.allFinite() || com_m.norm() > 10.0) return bad;
+  Error error = check_number("--payload must be KG@X,Y,Z: its mass KG", std::string_view(text).substr(0, at),
+                             NumberRange{0.0, 1e4, false, true, "kg"}, &kg);
+  if (error.ok()) {
+    error =
+        check_vec3("--payload must be KG@X,Y,Z: its centre", std::string_view(text).substr(at + 1),
+                   "in the flange frame", NumberRange{-kMaxToolOption_m, kMaxToolOption_m, false, false, "m"}, &com_m);
+  }
+  if (!error.ok()) return error;
   masses->payload_kg = kg;
   masses->payload_com_m = com_m;
   return Error{};
 }
+
+/// Largest component of --gravity (a direction of any length) [-].
+constexpr double kMaxGravityComponent = 1e6;
 
 /// --compliance, --gravity, --payload into settings->compliance_model (the default terms of the
 /// start model's nominal geometry); refused: a kind other than basis|masses, masses for an arm
@@ -46,10 +56,14 @@ Error gravity_terms_from_options(const Options& options, CalibrateSettings* sett
     return Error::usage("--payload needs --compliance masses (the basis kind weighs unit masses, not the payload)");
   }
   Vec3 gravity = Vec3::Zero();
-  if (!parse_vec3(options.get("gravity"), &gravity) || !gravity.allFinite() || !(gravity.norm() > 1e-9)) {
+  const Error direction =
+      check_vec3("--gravity", options.get("gravity"), "(the direction of gravity in the robot base frame, any length)",
+                 NumberRange{-kMaxGravityComponent, kMaxGravityComponent}, &gravity);
+  if (!direction.ok()) return direction;
+  if (!(gravity.norm() > 1e-9)) {
     return Error::usage(
         "--gravity must be X,Y,Z: the direction of gravity in the robot base frame, not zero (e.g. "
-        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), not " +
+        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), got " +
         port::quoted(options.get("gravity")));
   }
   ComplianceModel& model = settings->compliance_model;
@@ -120,25 +134,22 @@ Error orientation_options(const Options& options, textio::OrientationInput* orie
   if (options.given("position-sigma-m") && options.given("tracker-sigma-um")) {
     return Error::usage("--tracker-sigma-um and --position-sigma-m say the same: give one");
   }
-  Error error = number_option(options, "position-sigma-m", &orientation->position_sigma_m);
+  Error error = ranged_option(options, "position-sigma-m", NumberRange{0.0, 1.0, true, true, "m"},
+                              &orientation->position_sigma_m);
   if (error.ok() && options.given("tracker-sigma-um")) {
     double sigma_um = 0.0;
-    error = number_option(options, "tracker-sigma-um", &sigma_um);
+    error = ranged_option(options, "tracker-sigma-um", NumberRange{0.0, 1e6, true, true, "um"}, &sigma_um);
     orientation->position_sigma_m = sigma_um * 1e-6;
-    if (error.ok() && !(sigma_um > 0.0 && sigma_um < 1e6))
-      return Error::usage("--tracker-sigma-um must be in (0, 1e6)");
   }
-  if (error.ok()) error = number_option(options, "angle-sigma-rad", &orientation->angle_sigma_rad);
-  if (error.ok() && options.given("orientation-lever-m"))
-    error = number_option(options, "orientation-lever-m", &orientation->lever_m);
+  if (error.ok()) {
+    error = ranged_option(options, "angle-sigma-rad", NumberRange{0.0, 1.0, true, true, "rad"},
+                          &orientation->angle_sigma_rad);
+  }
+  if (error.ok() && options.given("orientation-lever-m")) {
+    error =
+        ranged_option(options, "orientation-lever-m", NumberRange{0.0, 1.0, false, false, "m"}, &orientation->lever_m);
+  }
   if (!error.ok()) return error;
-  if (!(orientation->position_sigma_m > 0.0 && orientation->position_sigma_m < 1.0) ||
-      !(orientation->angle_sigma_rad > 0.0 && orientation->angle_sigma_rad < 1.0)) {
-    return Error::usage("--position-sigma-m and --angle-sigma-rad must be in (0, 1)");
-  }
-  if (options.given("orientation-lever-m") && !(orientation->lever_m >= 0.0 && orientation->lever_m <= 1.0)) {
-    return Error::usage("--orientation-lever-m must be in [0, 1] m");
-  }
   const std::string form = options.get("orientation-form");
   if (form == "euler-xyz") {
     orientation->form = textio::OrientationForm::euler_xyz;
@@ -148,16 +159,26 @@ Error orientation_options(const Options& options, textio::OrientationInput* orie
   return Error{};
 }
 
-/// --joint-sigma-rad or --joint-sigma-deg (not both), in [0, 1) rad.
+/// --joint-sigma-rad or --joint-sigma-deg (not both), below 1 rad.
 Error joint_sigma_option(const Options& options, double* sigma_rad) {
   const bool in_degrees = options.given("joint-sigma-deg");
   if (in_degrees && options.given("joint-sigma-rad"))
     return Error::usage("give --joint-sigma-rad or --joint-sigma-deg, not both");
-  const Error error = number_option(options, in_degrees ? "joint-sigma-deg" : "joint-sigma-rad", sigma_rad);
-  if (!error.ok()) return error;
-  if (in_degrees) *sigma_rad *= math::kRadPerDeg;
-  if (!(*sigma_rad >= 0.0 && *sigma_rad < 1.0)) return Error::usage("--joint-sigma-rad must be in [0, 1) rad");
-  return Error{};
+  constexpr double kMaxJointSigma_rad = 1.0;
+  if (!in_degrees)
+    return ranged_option(options, "joint-sigma-rad", NumberRange{0.0, kMaxJointSigma_rad, false, true, "rad"},
+                         sigma_rad);
+  const Error error =
+      ranged_option(options, "joint-sigma-deg",
+                    NumberRange{0.0, kMaxJointSigma_rad * math::kDegPerRad, false, true, "deg"}, sigma_rad);
+  *sigma_rad *= math::kRadPerDeg;
+  return error;
+}
+
+/// --tool X,Y,Z [m], each within the robot description's bound on a tool point.
+Error tool_option(const Options& options, Vec3* tool_m) {
+  return check_vec3("--tool", options.get("tool"), "in metres",
+                    NumberRange{-kMaxToolOption_m, kMaxToolOption_m, false, false, "m"}, tool_m);
 }
 
 }  // namespace
@@ -270,7 +291,7 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   bool from_file = false;
   Error error = robot_model_option(options, "robot-model", &settings->robot, &from_file);
   if (error.ok() && from_file && !options.given("tool")) settings->tool_m = settings->robot.model.tool_m;
-  if (error.ok() && (!from_file || options.given("tool"))) error = vec3_option(options, "tool", &settings->tool_m);
+  if (error.ok() && (!from_file || options.given("tool"))) error = tool_option(options, &settings->tool_m);
   if (!error.ok()) return error;
   const std::string params = options.get("params");
   if (params != "full" && params != "paper")
@@ -285,10 +306,9 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
     seeded = count_option(options, "population-subset", 0, kMaxPopulationSubset, &settings->population_subset);
   }
   if (!seeded.ok()) return seeded;
-  if (!textio::parse_double(options.get("split"), &settings->train_fraction) ||
-      !(settings->train_fraction > 0.0 && settings->train_fraction <= 1.0)) {
-    return Error::usage("--split must be a fraction in (0, 1], not " + port::quoted(options.get("split")));
-  }
+  error = ranged_option(options, "split", NumberRange{0.0, 1.0, true, false, "(the training share)"},
+                        &settings->train_fraction);
+  if (!error.ok()) return error;
   const std::string cv = options.get("cv");
   double folds = 0.0;
   if (cv == "loo") {
@@ -296,8 +316,8 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   } else if (!cv.empty()) {
     if (!textio::parse_double(cv, &folds) || folds < 2.0 || folds > static_cast<double>(kMaxCrossValidationFolds) ||
         folds != static_cast<double>(static_cast<std::size_t>(folds))) {
-      return Error::usage("--cv must be 'loo' or a number of folds in [2, " + std::to_string(kMaxCrossValidationFolds) +
-                          "], not " + port::quoted(cv));
+      return Error::usage("--cv must be 'loo' or a number of folds within [2, " +
+                          std::to_string(kMaxCrossValidationFolds) + "], got " + port::quoted(cv));
     }
     settings->cv_folds = static_cast<std::size_t>(folds);
   }
@@ -324,10 +344,9 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   if (options.get("significance") == "auto") {
     settings->significance_t = -1.0;  // lib: chosen by leaving one pose out at a time on small sets
   } else if (options.given("significance")) {
-    if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
-        !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
-      return Error::usage("--significance must be 'auto' or a number in [0, 10]");
-    }
+    error = ranged_option(options, "significance", NumberRange{0.0, 10.0, false, false, "sigma (or 'auto')"},
+                          &settings->significance_t);
+    if (!error.ok()) return error;
     settings->significance_every_set = true;
   }
   const bool samples = !options.get("samples").empty();
@@ -340,12 +359,10 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   if (!error.ok()) return error;
   double max_mm = 0.0;
   double max_deg = 0.0;
-  error = number_option(options, "max-change-mm", &max_mm);
-  if (error.ok()) error = number_option(options, "max-change-deg", &max_deg);
+  error = ranged_option(options, "max-change-mm", NumberRange{0.0, 1e6, true, false, "mm"}, &max_mm);
+  if (error.ok())
+    error = ranged_option(options, "max-change-deg", NumberRange{0.0, 360.0, true, false, "deg"}, &max_deg);
   if (!error.ok()) return error;
-  if (!(max_mm > 0.0 && max_mm < 1e9) || !(max_deg > 0.0 && max_deg <= 360.0)) {
-    return Error::usage("--max-change-mm must be positive and --max-change-deg in (0, 360]");
-  }
   settings->bounds.max_length_change_m = max_mm * 1e-3;
   settings->bounds.max_angle_change_rad = max_deg * math::kRadPerDeg;
   settings->robust = options.given("robust");

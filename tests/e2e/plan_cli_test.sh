@@ -26,17 +26,17 @@ quick=(--restarts 1 --refine 0)
 
 # --- usage errors (exit 2)
 expect_plan 2 "--count, --tracker-position and --out are required" -- --count 10
-expect_plan 2 "--count must be in [1, 128]" -- "${cell[@]}" "${out[@]}" --count 0
+expect_plan 2 "--count must be within [1, 128]" -- "${cell[@]}" "${out[@]}" --count 0
 expect_plan 2 "--count must be a whole number" -- "${cell[@]}" "${out[@]}" --count 2.5
-expect_plan 2 "--dwell must be in [0.3" -- "${cell[@]}" "${out[@]}" --count 10 --dwell 0.1
+expect_plan 2 "--dwell must be within [0.3" -- "${cell[@]}" "${out[@]}" --count 10 --dwell 0.1
 expect_plan 2 "--objective must be d-optimal" -- "${cell[@]}" "${out[@]}" --count 10 --objective a-optimal
-expect_plan 2 "--restarts must be in [1, 64]" -- "${cell[@]}" "${out[@]}" --count 10 --restarts 0
-expect_plan 2 "--refine must be in [0, 16]" -- "${cell[@]}" "${out[@]}" --count 10 --refine 17
-expect_plan 2 "--prior-mm must be in [0, 1000]" -- "${cell[@]}" "${out[@]}" --count 10 --prior-mm -1
+expect_plan 2 "--restarts must be within [1, 64]" -- "${cell[@]}" "${out[@]}" --count 10 --restarts 0
+expect_plan 2 "--refine must be within [0, 16]" -- "${cell[@]}" "${out[@]}" --count 10 --refine 17
+expect_plan 2 "--prior-mm must be within [0, 1000]" -- "${cell[@]}" "${out[@]}" --count 10 --prior-mm -1
 expect_plan 2 "--params must be 'full' or 'paper'" -- "${cell[@]}" "${out[@]}" --count 10 --params all
 expect_plan 2 "unknown robot model 'ur7'" -- "${cell[@]}" "${out[@]}" --count 10 --robot-model ur7
 expect_plan 2 "--tracker-position must be X,Y,Z" -- "${cell[@]}" "${out[@]}" --count 10 --tracker-position 1,2
-expect_plan 2 "--acceptance-deg: not a number" -- "${cell[@]}" "${out[@]}" --count 10 --acceptance-deg wide
+expect_plan 2 "--acceptance-deg must be a number within [1, 180], got 'wide': not a number" -- "${cell[@]}" "${out[@]}" --count 10 --acceptance-deg wide
 expect_plan 2 "--candidates must be at least --count" -- "${cell[@]}" "${out[@]}" --count 20 --candidates 10
 # --- bad inputs (exit 3)
 expect_plan 3 "cannot open" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/missing.csv"

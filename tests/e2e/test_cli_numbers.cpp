@@ -1,0 +1,74 @@
+// Numbers and advice on the command line (issue 54 M1, M4, M6): every numeric option goes
+// through one check that names the option, its range with its unit and the value given, and
+// says why a text that is a number to the eye is not one to a double (1e-400 underflows, 1e400
+// overflows); messages advise only what the command has.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "cli/options.hpp"
+#include "commands/commands.hpp"
+#include "commands/streams.hpp"
+#include "testkit/cli_run.hpp"
+#include "testkit/temp_dir.hpp"
+
+namespace hivecal::cli_numbers_test {
+namespace {
+
+TEST(CliNumbers, OneCheckSaysTheRangeTheUnitAndWhy) {
+  double value = 0.0;
+  EXPECT_EQ(cli::check_number("--max-speed-mm-s", "1e9", cli::NumberRange{0.0, 1e6, true, true, "mm/s"}, &value).message,
+            "--max-speed-mm-s must be within (0, 1e+06) mm/s, got '1e9'");
+  EXPECT_EQ(cli::check_number("--x", "1e-400", cli::NumberRange{0.0, 1.0}, &value).message,
+            "--x must be within [0, 1], got '1e-400': too small for a double (it underflows below 4.9e-324): give 0 "
+            "or a larger value");
+  EXPECT_EQ(cli::check_number("--x", "-1e400", cli::NumberRange{0.0, 1.0}, &value).message,
+            "--x must be within [0, 1], got '-1e400': beyond a double's range (1.8e308)");
+  EXPECT_EQ(cli::check_number("--x", "0.5 mm", cli::NumberRange{0.0, 1.0, false, false, "m"}, &value).message,
+            "--x must be a number within [0, 1] m, got '0.5 mm': not a number");
+  EXPECT_EQ(cli::check_number("--x", "nan", cli::NumberRange{0.0, 1.0}, &value).fault, port::Fault::usage);
+  EXPECT_TRUE(cli::check_number("--x", "1e-310", cli::NumberRange{0.0, 1.0}, &value).ok());  // subnormal: a double
+  EXPECT_EQ(value, 1e-310);
+}
+
+TEST(CliNumbers, CalibrateNamesEachOptionItsRangeAndTheValue) {
+  test::expect_refusals(
+      cli::calibrate_main, {"--samples", "unread.csv", "--out", "unwritten.json"},
+      {
+          {{"--compliance", "--gravity", "1e300,0,0"},
+           "--gravity must be X,Y,Z (the direction of gravity in the robot base frame, any length), each within "
+           "[-1e+06, 1e+06], got '1e300,0,0'"},
+          {{"--tool", "1e-400,0,0"},
+           "--tool must be X,Y,Z in metres, each within [-10, 10] m, got '1e-400,0,0': '1e-400' is too small for a "
+           "double (it underflows below 4.9e-324)"},
+          {{"--tool", "0,0,1e9"}, "--tool must be X,Y,Z in metres, each within [-10, 10] m, got '0,0,1e9'"},
+          {{"--joint-sigma-deg", "100"}, "--joint-sigma-deg must be within [0, 57.2958) deg, got '100'"},
+          {{"--joint-sigma-rad", "1e9"}, "--joint-sigma-rad must be within [0, 1) rad, got '1e9'"},
+          {{"--max-change-mm", "1e10"}, "--max-change-mm must be within (0, 1e+06] mm, got '1e10'"},
+          {{"--max-change-deg", "0"}, "--max-change-deg must be within (0, 360] deg, got '0'"},
+          {{"--tracker-sigma-um", "1e9"}, "--tracker-sigma-um must be within (0, 1e+06) um, got '1e9'"},
+          {{"--position-sigma-m", "1e-400"}, "--position-sigma-m must be within (0, 1) m, got '1e-400': too small"},
+          {{"--orientation-lever-m", "2"}, "--orientation-lever-m must be within [0, 1] m, got '2'"},
+          {{"--split", "0"}, "--split must be within (0, 1] (the training share), got '0'"},
+          {{"--significance", "11"}, "--significance must be within [0, 10] sigma (or 'auto'), got '11'"},
+          {{"--compliance", "masses", "--robot-model", "ur5", "--payload", "1e-400@0,0,0"},
+           "--payload must be KG@X,Y,Z: its mass KG must be within [0, 10000) kg, got '1e-400': too small"},
+          {{"--compliance", "masses", "--robot-model", "ur5", "--payload", "1@0,0,11"},
+           "--payload must be KG@X,Y,Z: its centre must be X,Y,Z in the flange frame, each within [-10, 10] m"},
+      });
+}
+
+TEST(CliNumbers, StreamCommandsSayTheRealRange) {
+  test::expect_refusals(streams::extract_main, {"--robot", "r.cap", "--tracker", "t.cap"},
+                        {
+                            {{"--max-speed-mm-s", "1e9"}, "--max-speed-mm-s must be within (0, 1e+06), got '1e9'"},
+                            {{"--window-s", "61"}, "--window-s must be within [0, 60], got '61'"},
+                        });
+  test::expect_refusals(
+      streams::record_main, {"--robot-port", "/nonexistent/port"},
+      {{{"--duration-s", "-1"}, "--duration-s must be within [0, 1e+09] s (0: until Ctrl-C / SIGTERM), got '-1'"}});
+}
+
+}  // namespace
+}  // namespace hivecal::cli_numbers_test
