@@ -59,7 +59,7 @@ TEST(ColumnSpecs, ASumOfColumnsWithAUnitIsTheMeasuredPoint) {
   EXPECT_EQ(second.point_m.x(), (596.25 + 8.75) * 1e-3);
   EXPECT_EQ(second.point_m.y(), (-308.5 + 0.875) * 1e-3);
   EXPECT_EQ(second.point_m.z(), (-5.5 - 2.875) * 1e-3);  // a minus term
-  EXPECT_EQ(second.q_rad(0), 11.0 * math::kRadPerDeg);  // a plain joint spec with a unit still reads
+  EXPECT_EQ(second.q_rad(0), 11.0 * math::kRadPerDeg);   // a plain joint spec with a unit still reads
   EXPECT_EQ(second.q_rad(5), -61.0 * math::kRadPerDeg);
 }
 
@@ -142,7 +142,8 @@ TEST(ColumnSpecs, AMalformedSpecIsBlamedOnTheOptionAndQuoted) {
   const test::TempDir dir;
   const std::string path = dir.write("grid.csv", kTargetAndDifference);
   InputUnits units;
-  units.columns = aliases("x=x_t+x_diff[mm],y=y_t,z=z_t,q1=joint_1,q2=joint_2,q3=joint_3,q4=joint_4,q5=joint_5,q6=joint_6");
+  units.columns =
+      aliases("x=x_t+x_diff[mm],y=y_t,z=z_t,q1=joint_1,q2=joint_2,q3=joint_3,q4=joint_4,q5=joint_5,q6=joint_6");
   Dataset<8> dataset;
   port::Error error = read_samples_csv(path, &dataset, units);
   EXPECT_EQ(error.fault, port::Fault::usage);
@@ -187,10 +188,11 @@ TEST(DecimalCommas, ThousandsPointsInADecimalCommaFileAreRefusedNamingBothLines)
       dir.write("after.csv", "q1;q2;q3;q4;q5;q6;x;y;z\n0;0;0;0;0;0;845,3;-12,5;1\n0;0;0;0;0;0;2.568;-1.024,5;7\n");
   port::Error error = read_samples_csv(after, &dataset, mm);
   EXPECT_EQ(error.fault, port::Fault::input);
-  EXPECT_EQ(error.message, after +
-                               ":3: the file writes decimal commas (line 2, column 'x': '845,3') and points in thousands "
-                               "positions (line 3, column 'x': '2.568'): a thousands separator, which would be read as a "
-                               "decimal point; export the numbers without thousands separators");
+  EXPECT_EQ(error.message,
+            after +
+                ":3: the file writes decimal commas (line 2, column 'x': '845,3') and points in thousands "
+                "positions (line 3, column 'x': '2.568'): a thousands separator, which would be read as a "
+                "decimal point; export the numbers without thousands separators");
   // The other order: the thousands point first, the decimal comma later.
   const std::string before =
       dir.write("before.csv", "q1;q2;q3;q4;q5;q6;x;y;z\n0;0;0;0;0;0;1.250;3;1\n0;0;0;0;0;0;1;2;0,5\n");
