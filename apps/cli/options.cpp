@@ -52,6 +52,7 @@ int parse_options(const std::string& command, const std::string& summary, const 
                   int argc, char** argv, Options* options) {
   for (const OptionSpec& spec : specs) {
     if (!spec.default_value.empty()) options->defaults_[spec.name] = spec.default_value;
+    options->accepted_.insert(spec.name);
   }
   for (int i = 0; i < argc; ++i) {
     std::string arg = argv[i];
@@ -266,6 +267,7 @@ Error input_units_option(const Options& options, textio::InputUnits* units) {
   }
   units->length = length;
   units->angle = angle;
+  units->columns_option = options.accepts("columns");
   return columns_option(options, units);
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -49,12 +50,15 @@ class Options {
   bool given(const std::string& name) const { return values_.count(name) != 0; }
   /// Every option given on the command line, by name, with its value.
   const std::map<std::string, std::string>& given_values() const { return values_; }
+  /// True when the command has option `name` (its messages may suggest it).
+  bool accepts(const std::string& name) const { return accepted_.count(name) != 0; }
 
  private:
   friend int parse_options(const std::string&, const std::string&, const std::vector<OptionSpec>&, int, char**,
                            Options*);
   std::map<std::string, std::string> values_;
   std::map<std::string, std::string> defaults_;
+  std::set<std::string> accepted_;  ///< the command's option names
 };
 
 /// Parses argv (after the subcommand name). Returns -1 when the command should run;

@@ -4,6 +4,9 @@
 // overflows); messages advise only what the command has.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <string>
 #include <vector>
 
@@ -12,14 +15,16 @@
 #include "commands/streams.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/temp_dir.hpp"
+#include "textio/robot_description.hpp"
 
 namespace hivecal::cli_numbers_test {
 namespace {
 
 TEST(CliNumbers, OneCheckSaysTheRangeTheUnitAndWhy) {
   double value = 0.0;
-  EXPECT_EQ(cli::check_number("--max-speed-mm-s", "1e9", cli::NumberRange{0.0, 1e6, true, true, "mm/s"}, &value).message,
-            "--max-speed-mm-s must be within (0, 1e+06) mm/s, got '1e9'");
+  EXPECT_EQ(
+      cli::check_number("--max-speed-mm-s", "1e9", cli::NumberRange{0.0, 1e6, true, true, "mm/s"}, &value).message,
+      "--max-speed-mm-s must be within (0, 1e+06) mm/s, got '1e9'");
   EXPECT_EQ(cli::check_number("--x", "1e-400", cli::NumberRange{0.0, 1.0}, &value).message,
             "--x must be within [0, 1], got '1e-400': too small for a double (it underflows below 4.9e-324): give 0 "
             "or a larger value");
@@ -68,6 +73,50 @@ TEST(CliNumbers, StreamCommandsSayTheRealRange) {
   test::expect_refusals(
       streams::record_main, {"--robot-port", "/nonexistent/port"},
       {{{"--duration-s", "-1"}, "--duration-s must be within [0, 1e+09] s (0: until Ctrl-C / SIGTERM), got '-1'"}});
+}
+
+TEST(CliAdvice, ABuiltInRobotNameWinsOverAFolderOfThatName) {
+  const test::TempDir dir;
+  ASSERT_EQ(::mkdir((dir.path() + "/ur5e").c_str(), 0700), 0);
+  char previous[4096];
+  ASSERT_NE(::getcwd(previous, sizeof previous), nullptr);
+  ASSERT_EQ(::chdir(dir.path().c_str()), 0);
+  textio::RobotDescription robot;
+  bool from_file = true;
+  const port::Error builtin = textio::robot_description_from_value("ur5e", &robot, &from_file);
+  const port::Error named_file = textio::robot_description_from_value("./ur5e", &robot, nullptr);
+  ASSERT_EQ(::chdir(previous), 0);
+  EXPECT_TRUE(builtin.ok()) << builtin.message;
+  EXPECT_FALSE(from_file);
+  EXPECT_EQ(robot.robot, "ur5e");
+  EXPECT_NE(named_file.message.find("'./ur5e': is a folder, not a regular file"), std::string::npos)
+      << named_file.message;
+}
+
+TEST(CliAdvice, NoAdviceForOptionsTheCommandLacks) {
+  const test::TempDir dir;
+  const std::string joints = dir.write("joints.csv", "a,b,c,d,e,f\n0,0,0,0,0,0\n");
+  std::string err;
+  // check-robot and plan have no --columns: a header they cannot read does not suggest it.
+  EXPECT_EQ(test::run_capturing_stderr(cli::check_robot_main, {"--robot-model", "ur5", "--joints", joints}, &err),
+            cli::kExitBadInput);
+  EXPECT_NE(err.find("unexpected header 'a,b,c,d,e,f'"), std::string::npos) << err;
+  EXPECT_EQ(err.find("--columns"), std::string::npos) << err;
+  const std::string limits = dir.write("limits.csv", "low,high\n-1,1\n");
+  EXPECT_EQ(test::run_capturing_stderr(cli::plan_main,
+                                       {"--robot-model", "ur5", "--count", "5", "--tracker-position", "2,0.5,0.6",
+                                        "--joint-limits", limits, "--out", dir.path() + "/plan.csv"},
+                                       &err),
+            cli::kExitBadInput);
+  EXPECT_NE(err.find("unexpected header 'low,high'"), std::string::npos) << err;
+  EXPECT_EQ(err.find("--columns"), std::string::npos) << err;
+  // A device given as an input that cannot be read from stdin is not told to use '-'.
+  EXPECT_EQ(test::run_capturing_stderr(
+                cli::calibrate_main,
+                {"--robot", "/dev/null", "--tracker", "/dev/null", "--out", dir.path() + "/r.json"}, &err),
+            cli::kExitBadInput);
+  EXPECT_NE(err.find("'/dev/null': is a character device, not a regular file"), std::string::npos) << err;
+  EXPECT_EQ(err.find("stdin"), std::string::npos) << err;
 }
 
 }  // namespace
