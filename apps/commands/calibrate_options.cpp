@@ -1,4 +1,5 @@
 // hivecal calibrate: its options and their checks (calibrate_parts.hpp).
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,24 @@ Error payload_option(const Options& options, ArmMasses* masses) {
 /// Largest component of --gravity (a direction of any length) [-].
 constexpr double kMaxGravityComponent = 1e6;
 
+/// The built-in types whose published link masses --compliance masses weighs (nominal_arm_masses),
+/// for --help and the refusal alike: "ur3, ur5, ...".
+std::string types_with_masses() {
+  const std::string all = robot_type_names();
+  std::string names;
+  for (std::size_t begin = 0; begin < all.size();) {
+    const std::size_t end = std::min(all.find(',', begin), all.size());
+    const std::string name(textio::trim(std::string_view(all).substr(begin, end - begin)));
+    begin = end + 1;
+    RobotType type = RobotType::ur5;
+    ArmMasses masses;
+    if (robot_type_from_name(name.c_str(), &type) == Status::ok && nominal_arm_masses(type, &masses) == Status::ok) {
+      names += (names.empty() ? "" : ", ") + name;
+    }
+  }
+  return names;
+}
+
 /// --compliance, --gravity, --payload into settings->compliance_model (the default terms of the
 /// start model's nominal geometry); refused: a kind other than basis|masses, masses for an arm
 /// without published masses, a zero or non-finite gravity.
@@ -73,7 +92,7 @@ Error gravity_terms_from_options(const Options& options, CalibrateSettings* sett
         nominal_arm_masses(type, &model.masses) != Status::ok) {
       return Error::usage(
           "--compliance masses needs the arm's link masses, which are known here for the built-in types (" +
-          std::string(robot_type_names()) + ") only (by --robot-model's name); " + port::quoted(settings->robot.robot) +
+          types_with_masses() + ") only (by --robot-model's name); " + port::quoted(settings->robot.robot) +
           " has none: use --compliance basis");
     }
     if (options.given("payload")) {
@@ -241,7 +260,8 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
         {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
         {"compliance", "basis|masses",
          "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity "
-         "basis, or the link masses (UR5, UR10, UR3e, UR5e)",
+         "basis, or the link masses (" +
+             types_with_masses() + ")",
          "", "basis"},
         {"harmonics", "K",
          "also fit harmonics of orders 1 .. K of each joint's reading (encoder eccentricity, transmission error; "

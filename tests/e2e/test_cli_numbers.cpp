@@ -119,5 +119,31 @@ TEST(CliAdvice, NoAdviceForOptionsTheCommandLacks) {
   EXPECT_EQ(err.find("stdin"), std::string::npos) << err;
 }
 
+TEST(CliAdvice, TheArmsWithLinkMassesAreOneList) {
+  // --help and the refusal of an arm without masses name the same types: every built-in one.
+  ::testing::internal::CaptureStdout();
+  EXPECT_EQ(test::run(cli::calibrate_main, {"--help"}), cli::kExitOk);
+  const std::string help = ::testing::internal::GetCapturedStdout();
+  const std::string listed = "ur3, ur5, ur10, ur3e, ur5e, ur10e, ur16e";
+  EXPECT_NE(help.find("or the link masses (" + listed + ")"), std::string::npos) << help;
+  const test::TempDir dir;
+  const std::string arm =
+      dir.write("arm.json",
+                "{\"robot\": \"abb-irb120\", \"dh\": [{\"theta_offset\": 0, \"d\": 0.29, "
+                "\"a\": 0, \"alpha\": -1.5707963267948966}, {\"theta_offset\": -1.5707963267948966, "
+                "\"d\": 0, \"a\": 0.27, \"alpha\": 0}, {\"theta_offset\": 0, \"d\": 0, \"a\": "
+                "0.07, \"alpha\": -1.5707963267948966}, {\"theta_offset\": 0, \"d\": 0.302, \"a\": 0, "
+                "\"alpha\": 1.5707963267948966}, {\"theta_offset\": 0, \"d\": 0, \"a\": 0, "
+                "\"alpha\": -1.5707963267948966}, {\"theta_offset\": 0, \"d\": 0.072, \"a\": 0, "
+                "\"alpha\": 0}], \"tool\": [0, 0, 0]}\n");
+  std::string err;
+  EXPECT_EQ(
+      test::run_capturing_stderr(
+          cli::calibrate_main,
+          {"--samples", "unread.csv", "--robot-model", arm, "--compliance", "masses", "--out", "unwritten.json"}, &err),
+      cli::kExitUsage);
+  EXPECT_NE(err.find("known here for the built-in types (" + listed + ") only"), std::string::npos) << err;
+}
+
 }  // namespace
 }  // namespace hivecal::cli_numbers_test
