@@ -1,6 +1,7 @@
 // hivecal calibrate: inputs (paired samples, serial captures or CSV logs) -> dataset ->
 // lib's calibrate() (ABC / GSA / Levenberg-Marquardt) -> tables, result JSON, UR deltas and
 // HTML report. The settings, the renderers and the result file are in calibrate_*.cpp.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -236,6 +237,17 @@ Error cross_validation(const CalibrateSettings& settings, const RobotModel& star
   JobObserver quiet(false);
   const Status status = cross_validate(start, dataset, job, settings.cv_folds == 1 ? 0 : settings.cv_folds, &workspace,
                                        &memory->cv_scratch, &run->cv, &quiet);
+  // The samples each fold held out, drawn again as cross_validate drew them: what it set aside
+  // (left in the dataset), then split_fold's seeded order.
+  std::vector<std::uint32_t> cv_aside;
+  for (const Sample& s : dataset->set_aside()) cv_aside.push_back(s.index);
+  run->cv_held_out.assign(status == Status::ok ? run->cv.fold_count : 0, {});
+  for (std::size_t f = 0; f < run->cv_held_out.size(); ++f) {
+    dataset->set_aside(Span<const std::uint32_t>(cv_aside.data(), cv_aside.size()));
+    if (dataset->split_fold(f, run->cv.fold_count, job.seed) != Status::ok) break;
+    for (const Sample& s : dataset->test()) run->cv_held_out[f].push_back(s.index);
+    std::sort(run->cv_held_out[f].begin(), run->cv_held_out[f].end());
+  }
   std::vector<std::uint32_t> aside;
   for (const CalibrationOutlier& o : run->result.outlier_list()) aside.push_back(o.index);
   dataset->set_aside(Span<const std::uint32_t>(aside.data(), aside.size()));
@@ -357,7 +369,7 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   // Any output on stdout (the result, or --ur-deltas -) keeps the tables off it.
   const bool result_on_stdout = options.get("out") == "-" || options.get("ur-deltas") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
-  print_calibration_tables(terminal, data, job);
+  print_calibration_tables(terminal, data, facts, job);
   *warnings = fit_warnings(job.result, settings.bounds, data.parameters);
   profile.add("final w-test, accuracy and tables", seconds_since(part_start));
   part_start = Clock::now();

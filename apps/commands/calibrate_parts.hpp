@@ -78,8 +78,10 @@ struct Run {
   std::size_t link_length_count = kPaper6Dimension;  ///< lengths the population stages search [-]
   bool has_cv = false;                               ///< --cv ran: `cv` is meaningful
   CrossValidationResult cv;                          ///< per-fold held-out errors (~20 KB)
-  int target_count = 1;                              ///< targets (reflectors) in the samples: the result's "tools" [-]
-  CalibrationOptions options;                        ///< the job's options, as lib ran it
+  /// Per fold of `cv`: the Sample::index of each sample it held out, increasing.
+  std::vector<std::vector<std::uint32_t>> cv_held_out;
+  int target_count = 1;        ///< targets (reflectors) in the samples: the result's "tools" [-]
+  CalibrationOptions options;  ///< the job's options, as lib ran it
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).
@@ -104,8 +106,16 @@ double joint_point_noise_m(const CalibrateSettings& settings, const RobotModel& 
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,
                                        const CliDataset& dataset, const streams::SessionFacts& facts, const Run& run);
 
+/// What held_out_ranges() counts: "lines of FILE" (paired samples) or "samples (numbered from 1
+/// in the order extracted)".
+std::string held_out_unit(const streams::SessionFacts& facts);
+/// Samples `indices` (Sample::index) as ranges of what held_out_unit() counts: "2-4, 7, 9"
+/// (the lines of a row that made several samples once).
+std::string held_out_ranges(const streams::SessionFacts& facts, const std::vector<std::uint32_t>& indices);
+
 /// The terminal text (on stdout, or on stderr when stdout carries the result).
-void print_calibration_tables(std::FILE* out, const report::ReportData& data, const Run& run);
+void print_calibration_tables(std::FILE* out, const report::ReportData& data, const streams::SessionFacts& facts,
+                              const Run& run);
 
 /// The result file (robot-calibration/1 JSON) of a run. `warnings`: the fit's plausibility
 /// warnings, a "warnings" array when there are any.

@@ -12,6 +12,7 @@
 #include "testkit/temp_dir.hpp"
 #include "testkit/test_data.hpp"
 #include "textio/csv.hpp"
+#include "textio/json.hpp"
 
 namespace hivecal::calibrate_checks_cli_test {
 namespace {
@@ -34,7 +35,8 @@ TEST(CalibrateChecks, CrossValidationOnTooFewPosesSaysSo) {
   const std::string four = dir.write("four.csv", session_csv(RobotType::ur5, 4, 1));
   const std::string out = dir.path() + "/r.json";
   std::string err;
-  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main, {"--samples", three, "--split", "1", "--cv", "2", "--out", out}, &err),
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
+                                       {"--samples", three, "--split", "1", "--cv", "2", "--out", out}, &err),
             cli::kExitUsage);
   EXPECT_NE(err.find("--cv 2 on 3 samples: a fold trains on 1 of them, and a fit needs at least 3 (as --split's "
                      "training set): too few samples for 2 folds; measure more samples, or hold out fewer at a time "
@@ -42,7 +44,8 @@ TEST(CalibrateChecks, CrossValidationOnTooFewPosesSaysSo) {
             std::string::npos)
       << err;
   EXPECT_EQ(err.find("same joint positions"), std::string::npos) << err;
-  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main, {"--samples", three, "--split", "1", "--cv", "loo", "--out", out}, &err),
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
+                                       {"--samples", three, "--split", "1", "--cv", "loo", "--out", out}, &err),
             cli::kExitUsage);
   EXPECT_NE(err.find("--cv loo on 3 samples: a fold trains on 2 of them"), std::string::npos) << err;
   EXPECT_EQ(err.find("hold out fewer"), std::string::npos) << err;  // loo holds out one already
@@ -51,6 +54,54 @@ TEST(CalibrateChecks, CrossValidationOnTooFewPosesSaysSo) {
       cli::calibrate_main, {"--samples", four, "--cv", "loo", "--method", "lm", "--quiet", "--out", out}, &err);
   EXPECT_TRUE(code == cli::kExitOk || code == cli::kExitWarnings) << err;
   EXPECT_NE(test::read_text_file(out).find("\"cross_validation\""), std::string::npos);
+}
+
+/// "2-4, 7" -> {2, 3, 4, 7}.
+std::vector<std::size_t> expand_ranges(const std::string& ranges) {
+  std::vector<std::size_t> numbers;
+  std::size_t at = 0;
+  while (at < ranges.size()) {
+    std::size_t end = ranges.find(", ", at);
+    if (end == std::string::npos) end = ranges.size();
+    const std::string range = ranges.substr(at, end - at);
+    const std::size_t dash = range.find('-');
+    const std::size_t first = std::stoul(range.substr(0, dash));
+    const std::size_t last = dash == std::string::npos ? first : std::stoul(range.substr(dash + 1));
+    for (std::size_t n = first; n <= last; ++n) numbers.push_back(n);
+    at = end + 2;
+  }
+  return numbers;
+}
+
+TEST(CalibrateChecks, EachFoldSaysWhichLinesItHeldOut) {
+  const test::TempDir dir;
+  const std::string samples = dir.write("twelve.csv", session_csv(RobotType::ur5, 12, 3));
+  const std::string out = dir.path() + "/r.json";
+  ::testing::internal::CaptureStdout();
+  const int code = test::run(cli::calibrate_main, {"--samples", samples, "--cv", "3", "--method", "lm", "--out", out});
+  const std::string console = ::testing::internal::GetCapturedStdout();
+  ASSERT_TRUE(code == cli::kExitOk || code == cli::kExitWarnings) << console;
+  EXPECT_NE(console.find("  fold  train  test  MAE [mm]  held out (lines of " + samples + ")"), std::string::npos)
+      << console;
+  const textio::JsonValue result = test::read_json_file(out);
+  const textio::JsonValue* cv = result.find("cross_validation");
+  ASSERT_NE(cv, nullptr);
+  EXPECT_EQ(cv->find("held_out_of")->string, "lines of " + samples);
+  const textio::JsonValue* folds = cv->find("per_fold");
+  ASSERT_EQ(folds->array.size(), 3u);
+  std::vector<int> held_by(14, 0);  // lines 2 .. 13 hold the 12 poses
+  for (std::size_t k = 0; k < folds->array.size(); ++k) {
+    const textio::JsonValue& fold = folds->array[k];
+    const std::vector<std::size_t> lines = expand_ranges(fold.find("held_out")->string);
+    EXPECT_EQ(static_cast<double>(lines.size()), fold.find("test_count")->number) << k;
+    for (const std::size_t line : lines) {
+      ASSERT_TRUE(line >= 2 && line <= 13) << line;
+      ++held_by[line];
+    }
+    // The console shows the same ranges in the fold's row.
+    EXPECT_NE(console.find(fold.find("held_out")->string + "\n"), std::string::npos) << console;
+  }
+  for (std::size_t line = 2; line <= 13; ++line) EXPECT_EQ(held_by[line], 1) << "line " << line << " held out";
 }
 
 }  // namespace
