@@ -30,6 +30,7 @@ struct CalibrateSettings {
   textio::RobotDescription robot;  ///< --robot-model: built-in table or description file
   Vec3 tool_m =
       Vec3(0.0, 0.0, 0.1695);  ///< --tool (or the description file's): nominal tool point in the flange frame [m]
+  std::string tool_note;       ///< where --tool-transform put the tool point (a console line), "" without it
   bool paper_params = false;   ///< --params paper
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< --method
   std::uint64_t seed = 1;                                ///< --seed

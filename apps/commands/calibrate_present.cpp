@@ -566,6 +566,7 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
                             ")");
+  if (!settings.tool_note.empty()) data.info_lines.push_back(settings.tool_note);
   const std::string orientation = streams::orientation_line(facts);
   if (!orientation.empty()) data.info_lines.push_back(orientation);  // in the report's "info" too
   if (settings.controller_tcp) {

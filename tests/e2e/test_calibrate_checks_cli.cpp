@@ -104,5 +104,80 @@ TEST(CalibrateChecks, EachFoldSaysWhichLinesItHeldOut) {
   for (std::size_t line = 2; line <= 13; ++line) EXPECT_EQ(held_by[line], 1) << "line " << line << " held out";
 }
 
+TEST(CalibrateChecks, TheToolPointFromTheLabsFlangeProbeTransform) {
+  const test::TempDir dir;
+  const std::string samples = dir.write("session.csv", session_csv(RobotType::ur5, 30, 5));
+  // The probe's frame turned 90 deg about the flange axis, its origin 169.5 mm out: as a
+  // 4x4 of the tool frame's pose in the flange frame, and the other way round (a lab's T_TOOL_F).
+  const std::string tool_in_flange = dir.write("tool_in_flange.txt",
+                                               "0 -1 0 0\n"
+                                               "1 0 0 0\n"
+                                               "0 0 1 0.1695\n"
+                                               "0 0 0 1\n");
+  const std::string flange_in_tool = dir.write("flange_in_tool.txt",
+                                               "# T_TOOL_F\n"
+                                               "0. 1. 0. 0.\n"
+                                               "-1. 0. 0. 0.\n"
+                                               "0. 0. 1. -0.1695\n"
+                                               "0. 0. 0. 1.\n");
+  const std::string by_tool = dir.path() + "/by_tool.json";
+  ASSERT_EQ(test::run(cli::calibrate_main,
+                      {"--samples", samples, "--method", "lm", "--quiet", "--tool", "0,0,0.1695", "--out", by_tool}),
+            cli::kExitOk);
+  const std::string expected_tool =
+      test::read_text_file(by_tool).substr(test::read_text_file(by_tool).find("\"tool\""), 80);
+  for (const std::vector<std::string>& given :
+       {std::vector<std::string>{"--tool-transform", tool_in_flange},
+        std::vector<std::string>{"--tool-transform", flange_in_tool, "--tool-transform-inverse"}}) {
+    const std::string out = dir.path() + "/by_transform.json";
+    std::vector<std::string> args = {"--samples", samples, "--method", "lm", "--out", out};
+    args.insert(args.end(), given.begin(), given.end());
+    ::testing::internal::CaptureStdout();
+    const int code = test::run(cli::calibrate_main, args);
+    const std::string console = ::testing::internal::GetCapturedStdout();
+    ASSERT_EQ(code, cli::kExitOk) << console;
+    EXPECT_NE(console.find("tool point from --tool-transform " + given[1] + ": 0.000, 0.000, 169.500 mm"),
+              std::string::npos)
+        << console;
+    EXPECT_NE(console.find("its rotation, 90.000 deg, is not used"), std::string::npos) << console;
+    EXPECT_EQ(console.find("behind the flange"), std::string::npos) << console;
+    // The same start as --tool: the same calibrated tool point.
+    const std::string json = test::read_text_file(out);
+    EXPECT_EQ(json.substr(json.find("\"tool\""), 80), expected_tool);
+  }
+  // The lab's file read the wrong way round puts the point behind the flange: said, with the fix.
+  ::testing::internal::CaptureStdout();
+  test::run(cli::calibrate_main, {"--samples", samples, "--method", "lm", "--tool-transform", flange_in_tool, "--out",
+                                  dir.path() + "/behind.json"});
+  const std::string behind = ::testing::internal::GetCapturedStdout();
+  EXPECT_NE(behind.find("0.000, 0.000, -169.500 mm (the translation of the file's transform"), std::string::npos)
+      << behind;
+  EXPECT_NE(behind.find("the point lies behind the flange (z < 0): if the file is the flange's pose in the tool frame "
+                        "(a lab's T_TOOL_F), add --tool-transform-inverse (the point at 0.000, 0.000, 169.500 mm)"),
+            std::string::npos)
+      << behind;
+  // Refused: both tools, the inverse alone, a matrix that is no rigid transform, millimetres read as metres.
+  const std::string sheared = dir.write("sheared.txt", "1 0.1 0 0\n0 1 0 0\n0 0 1 0.1\n0 0 0 1\n");
+  const std::string in_mm = dir.write("mm.txt", "1 0 0 0\n0 1 0 0\n0 0 1 169.5\n0 0 0 1\n");
+  test::expect_refusals(
+      cli::calibrate_main, {"--samples", samples, "--out", dir.path() + "/no.json"},
+      {{{"--tool", "0,0,0.1", "--tool-transform", tool_in_flange}, "give --tool or --tool-transform, not both"},
+       {{"--tool-transform-inverse"}, "--tool-transform-inverse needs --tool-transform FILE"}});
+  std::string err;
+  EXPECT_EQ(test::run_capturing_stderr(
+                cli::calibrate_main,
+                {"--samples", samples, "--tool-transform", sheared, "--out", dir.path() + "/no.json"}, &err),
+            cli::kExitBadInput);
+  EXPECT_NE(err.find("sheared.txt: not a rigid transform"), std::string::npos) << err;
+  EXPECT_EQ(test::run_capturing_stderr(
+                cli::calibrate_main,
+                {"--samples", samples, "--tool-transform", in_mm, "--out", dir.path() + "/no.json"}, &err),
+            cli::kExitBadInput);
+  EXPECT_NE(err.find("mm.txt: its translation is 169.5 m long in [m] (more than 100 m): looks like millimetres: use "
+                     "--length-unit mm"),
+            std::string::npos)
+      << err;
+}
+
 }  // namespace
 }  // namespace hivecal::calibrate_checks_cli_test
