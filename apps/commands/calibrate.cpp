@@ -371,6 +371,9 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   print_calibration_tables(terminal, data, facts, job);
   *warnings = fit_warnings(job.result, settings.bounds, data.parameters);
+  // An implausible fit of a built-in UR: another type's nominal geometry may explain the data.
+  const std::string other_arm = warnings->empty() ? "" : other_arm_hint(settings.robot.robot, start, dataset.train());
+  if (!other_arm.empty()) warnings->push_back(other_arm);
   profile.add("final w-test, accuracy and tables", seconds_since(part_start));
   part_start = Clock::now();
   error = write_outputs(options, settings, data, facts, job, *warnings, &outputs, ids);

@@ -2,9 +2,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <string>
 
 #include "hivecal/core/math.hpp"
 #include "hivecal/model/full_params.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/solve/lm.hpp"
 
 namespace hivecal::cli {
 
@@ -34,7 +39,72 @@ std::string correlation_cause(const char* name, const std::vector<report::Parame
   return "";
 }
 
+/// The tool point's and the base's bits: what the job's baseline fits (fit_baseline).
+ParamMask baseline_mask() {
+  ParamMask mask = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    mask |= param_bit(tool_param_index(axis)) | param_bit(base_rotation_param_index(axis)) |
+            param_bit(base_translation_param_index(axis));
+  }
+  return mask;
+}
+
+/// Training MAE (3D) of `model` with its tool points and base fitted to `train` as the job's
+/// baseline fits them (closed form, then LM over the tool point and the base) [m]; +inf when
+/// the fit fails.
+double baseline_mae_m(RobotModel model, Span<const Sample> train, LmWorkspace* workspace, LmResult* fit) {
+  RigidTransform base;
+  if (fit_base_and_target_tools(train, &model, &base) != Status::ok) return HUGE_VAL;
+  LmOptions options;
+  options.params = LmParamSet::custom;
+  options.custom_mask = baseline_mask();
+  if (3 * train.size() > 9) {  // fewer samples: the closed form's base alone, as the job's baseline
+    const Status status = calibrate_lm(model, &base, train, options, workspace, fit);
+    if (status != Status::ok && status != Status::not_converged) return HUGE_VAL;
+    model = fit->model;
+    base = fit->base_to_tracker;
+  }
+  return position_error_stats(model, base, train).mae(ErrorAxis::norm_3d);
+}
+
 }  // namespace
+
+std::string other_arm_hint(const std::string& robot, const RobotModel& start, Span<const Sample> train) {
+  RobotType given = RobotType::ur5;
+  if (robot_type_from_name(robot.c_str(), &given) != Status::ok) return "";
+  const RobotModel nominal = nominal_model(given);
+  for (int j = 0; j < kJointCount; ++j) {  // a description file or a controller's calibration: not the table
+    const DhJoint& a = nominal.joints[j];
+    const DhJoint& b = start.joints[j];
+    if (a.theta_offset_rad != b.theta_offset_rad || a.d_m != b.d_m || a.a_m != b.a_m || a.alpha_rad != b.alpha_rad)
+      return "";
+  }
+  const auto workspace = std::make_unique<LmWorkspaceWithTargets>();
+  const auto fit = std::make_unique<LmResult>();
+  const double given_mae_m = baseline_mae_m(start, train, workspace.get(), fit.get());
+  RobotType best = given;
+  double best_mae_m = given_mae_m;
+  for (const RobotType other : {RobotType::ur3, RobotType::ur5, RobotType::ur10, RobotType::ur3e, RobotType::ur5e,
+                                RobotType::ur10e, RobotType::ur16e}) {
+    if (other == given) continue;
+    RobotModel model = nominal_model(other);
+    model.tool_m = start.tool_m;  // the same tool points to start from
+    for (int k = 0; k < kMaxTargets - 1; ++k) model.other_tools_m[k] = start.other_tools_m[k];
+    const double mae_m = baseline_mae_m(model, train, workspace.get(), fit.get());
+    if (mae_m < best_mae_m) {
+      best = other;
+      best_mae_m = mae_m;
+    }
+  }
+  if (best == given || !(best_mae_m < kOtherArmMaeRatio * given_mae_m)) return "";
+  const std::string name = robot_type_name(best);
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "this looks like a %s (--robot-model %s): its nominal geometry with the tool point and base fitted "
+                "leaves %.3f mm (MAE 3D) on the training samples, against %.3f mm for the %s given",
+                name.c_str(), name.c_str(), best_mae_m * 1e3, given_mae_m * 1e3, robot.c_str());
+  return line;
+}
 
 std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
                                       const std::vector<report::ParameterRow>& parameters) {

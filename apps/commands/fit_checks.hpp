@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "hivecal/model/dataset.hpp"
+
 #include "hivecal/calibration.hpp"
 #include "report/report.hpp"
 
@@ -28,5 +30,16 @@ bool model_param_is_angle(int index);
 /// another says so and what would separate them.
 std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
                                       const std::vector<report::ParameterRow>& parameters = {});
+
+/// Training MAE (3D) below which another built-in arm's nominal geometry "explains the data
+/// much better": this share of the given one's [-].
+inline constexpr double kOtherArmMaeRatio = 1.0 / 3.0;
+
+/// When `start` is a built-in UR type's nominal geometry (`robot` its name) and the nominal
+/// geometry of another built-in type, with the tool points and the base fitted to `train` as
+/// the job's baseline is, leaves less than kOtherArmMaeRatio of the training MAE (3D) that
+/// `start`'s leaves: "this looks like a ur10 (--robot-model ur10): ..." with both figures; ""
+/// otherwise (a description file, no clearly better arm). A few small LM fits (9 parameters).
+std::string other_arm_hint(const std::string& robot, const RobotModel& start, Span<const Sample> train);
 
 }  // namespace hivecal::cli

@@ -60,8 +60,8 @@ port::Error read_transform_text(const std::string& path, const InputUnits& units
   const double orthonormality = (rotation.transpose() * rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
   if (!last_row || !(orthonormality <= 1e-5) || !(rotation.determinant() > 0.0)) {
     char what[120];
-    std::snprintf(what, sizeof what, "last row %s, rotation orthonormal within %.1e, det %.6f", last_row ? "0 0 0 1" : "not 0 0 0 1",
-                  orthonormality, rotation.determinant());
+    std::snprintf(what, sizeof what, "last row %s, rotation orthonormal within %.1e, det %.6f",
+                  last_row ? "0 0 0 1" : "not 0 0 0 1", orthonormality, rotation.determinant());
     return port::Error::input(path + ": not a rigid transform (" + what +
                               "; expected the last row 0 0 0 1 and a rotation within 1e-5 of orthonormal, det 1)");
   }
@@ -73,8 +73,8 @@ port::Error read_transform_text(const std::string& path, const InputUnits& units
   const Vec3 translation_m = Vec3(m[0][3], m[1][3], m[2][3]) * scale;
   if (translation_m.norm() > kMaxPointDistance_m) {
     char far[160];
-    std::snprintf(far, sizeof far, ": its translation is %.4g m long in [%s] (more than %.0f m)",
-                  translation_m.norm(), unit.c_str(), kMaxPointDistance_m);
+    std::snprintf(far, sizeof far, ": its translation is %.4g m long in [%s] (more than %.0f m)", translation_m.norm(),
+                  unit.c_str(), kMaxPointDistance_m);
     return port::Error::input(path + far +
                               (units.length.empty() ? ": looks like millimetres: use --length-unit mm" : ""));
   }

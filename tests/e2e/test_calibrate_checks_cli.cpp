@@ -179,5 +179,29 @@ TEST(CalibrateChecks, TheToolPointFromTheLabsFlangeProbeTransform) {
       << err;
 }
 
+TEST(CalibrateChecks, AUr10CalibratedAsTheDefaultUr5GetsTheHint) {
+  const test::TempDir dir;
+  const std::string samples = dir.write("ur10.csv", session_csv(RobotType::ur10, 40, 7));
+  std::string err;
+  EXPECT_EQ(test::run_capturing_stderr(
+                cli::calibrate_main,
+                {"--samples", samples, "--method", "lm", "--quiet", "--out", dir.path() + "/r.json"}, &err),
+            cli::kExitWarnings);
+  EXPECT_NE(
+      err.find("warning: this looks like a ur10 (--robot-model ur10): its nominal geometry with the tool point and "
+               "base fitted leaves 0.0"),
+      std::string::npos)
+      << err;
+  EXPECT_NE(test::read_text_file(dir.path() + "/r.json").find("this looks like a ur10"), std::string::npos);
+  // With the right model there is nothing to say.
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
+                                       {"--samples", samples, "--robot-model", "ur10", "--method", "lm", "--quiet",
+                                        "--out", dir.path() + "/r10.json"},
+                                       &err),
+            cli::kExitOk)
+      << err;
+  EXPECT_EQ(err.find("looks like"), std::string::npos) << err;
+}
+
 }  // namespace
 }  // namespace hivecal::calibrate_checks_cli_test
