@@ -15,6 +15,8 @@
 #include "commands/streams.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/temp_dir.hpp"
+#include "record/result_json.hpp"
+#include "textio/json.hpp"
 #include "textio/robot_description.hpp"
 
 namespace hivecal::cli_numbers_test {
@@ -143,6 +145,40 @@ TEST(CliAdvice, TheArmsWithLinkMassesAreOneList) {
           {"--samples", "unread.csv", "--robot-model", arm, "--compliance", "masses", "--out", "unwritten.json"}, &err),
       cli::kExitUsage);
   EXPECT_NE(err.find("known here for the built-in types (" + listed + ") only"), std::string::npos) << err;
+}
+
+TEST(CliFigures, ValidateBoundsTheSimulatedComplianceAndSaysWhenAFigureIsNotFinite) {
+  const test::TempDir dir;
+  record::CalibrationFile file;
+  file.robot = "ur5";
+  file.model = nominal_model(RobotType::ur5);
+  const std::string calibration = dir.write("calibration.json", record::format_calibration_json(file));
+  const auto truth_with = [&](const char* joint2_rad) {
+    return dir.write("truth.json", record::format_calibration_json(file, [&](textio::JsonWriter& json) {
+                       json.key("simulation").begin_object().key("compliance").begin_object();
+                       json.key("joint2_rad").value(std::stod(joint2_rad)).key("joint3_rad").value(0.0);
+                       json.end_object().end_object();
+                     }));
+  };
+  std::string err;
+  EXPECT_EQ(
+      test::run_capturing_stderr(cli::validate_main,
+                                 {"--calibration", calibration, "--truth", truth_with("1e10"), "--poses", "10"}, &err),
+      cli::kExitBadInput);
+  EXPECT_NE(err.find("truth.json: \"simulation\".\"compliance\" joint2_rad = 10000000000 must be within +/-0.01 rad"),
+            std::string::npos)
+      << err;
+  // A calibration whose points overflow: the figures are no numbers, and it says so (exit 5).
+  record::CalibrationFile far = file;
+  far.base_to_tracker.translation_m = Vec3(1e308, -1e308, 0.0);
+  const std::string overflowing = dir.write("overflowing.json", record::format_calibration_json(far));
+  ::testing::internal::CaptureStdout();
+  const int code = test::run_capturing_stderr(
+      cli::validate_main, {"--calibration", overflowing, "--truth", truth_with("2e-4"), "--poses", "10"}, &err);
+  const std::string printed = ::testing::internal::GetCapturedStdout();
+  EXPECT_EQ(code, cli::kExitWarnings) << printed;
+  EXPECT_NE(err.find("warning: a validation figure is not finite (the predicted points overflow)"), std::string::npos)
+      << err;
 }
 
 }  // namespace
