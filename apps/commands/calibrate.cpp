@@ -338,6 +338,32 @@ Error write_outputs(const Options& options, const CalibrateSettings& settings, c
   return error.ok() ? outputs->commit() : error;
 }
 
+/// The training poses of the run against the parameters its model has (fit_checks.hpp): the
+/// fit's free rigid parameters (the set of --params, less the frames it knew) over a spread of
+/// poses with the input's targets, and the other targets' tool points when it fitted them.
+PoseSpan pose_span(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset,
+                   const streams::SessionFacts& facts, const Run& run) {
+  const CalibrationOptions chosen = options_with_chosen_frames(run.options, run.result);
+  ParamMask free_mask = lm_param_mask(settings.paper_params ? LmParamSet::link_lengths : LmParamSet::full, 0, start);
+  for (int axis = 0; axis < 3; ++axis) {
+    const ParamMask base = param_bit(base_rotation_param_index(axis)) | param_bit(base_translation_param_index(axis));
+    const ParamMask tool = param_bit(tool_param_index(axis));
+    if (settings.paper_params && !chosen.tool_known) free_mask |= tool;  // the paper's set with the tool fitted
+    if (chosen.base_known) free_mask &= ~base;
+    if (chosen.tool_known) free_mask &= ~tool;
+  }
+  PoseSpan span;
+  const Span<const Sample> train = dataset.train();
+  span.poses = distinct_configurations(train);
+  const std::size_t points = distinct_points(train);
+  if (span.poses >= kDistinctPointLimit || points >= kDistinctPointLimit) return span;  // plenty: no parameters asked
+  // A measured orientation's three points of a pose are a rigid triangle: 6 numbers, not 9.
+  span.coordinates = 3 * points - (facts.orientation.poses > 0 ? std::min(3 * span.poses, 3 * points) : 0);
+  span.parameters =
+      model_parameter_count(start, free_mask, run.target_count) + (chosen.tool_known ? 0 : 3 * (run.target_count - 1));
+  return span;
+}
+
 /// `*warnings`: the fit's plausibility warnings (fit_checks.hpp), printed on stderr; the
 /// outputs are written all the same.
 Error calibrate(const Options& options, std::vector<std::string>* warnings) {
@@ -370,9 +396,16 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   const bool result_on_stdout = options.get("out") == "-" || options.get("ur-deltas") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   print_calibration_tables(terminal, data, facts, job);
-  *warnings = fit_warnings(job.result, settings.bounds, data.parameters);
-  // An implausible fit of a built-in UR: another type's nominal geometry may explain the data.
-  const std::string other_arm = warnings->empty() ? "" : other_arm_hint(settings.robot.robot, start, dataset.train());
+  const PoseSpan span = pose_span(settings, start, dataset, facts, job);
+  *warnings = fit_warnings(job.result, settings.bounds, data.parameters, &span);
+  const std::string orientation =
+      constant_orientation_warning(facts.orientation.orientation_constant, data.fit_sigma_m, data.noise_sigma_m);
+  if (!orientation.empty()) warnings->push_back(orientation);
+  // An implausible fit of a built-in UR: another type's nominal geometry may explain the data
+  // (not on poses too few for the model, where any table fits about as well).
+  const bool spanned = span.parameters == 0 || span.coordinates > static_cast<std::size_t>(span.parameters);
+  const std::string other_arm =
+      warnings->empty() || !spanned ? "" : other_arm_hint(settings.robot.robot, start, dataset.train());
   if (!other_arm.empty()) warnings->push_back(other_arm);
   profile.add("final w-test, accuracy and tables", seconds_since(part_start));
   part_start = Clock::now();

@@ -244,8 +244,9 @@ const std::vector<Quantity> kJointQuantities(kJointCount, Quantity::angle);
 struct OrientedRow {
   JointVector q_rad;
   Vec3 point_m;
-  Vec3 x_axis;  ///< the measured tool frame's x axis in the tracker frame [-]
-  Vec3 y_axis;  ///< its y axis [-]
+  Vec3 angles_rad;  ///< rx, ry, rz as read (converted to rad)
+  Vec3 x_axis;      ///< the measured tool frame's x axis in the tracker frame [-]
+  Vec3 y_axis;      ///< its y axis [-]
 };
 
 std::string over_capacity(const DatasetBase& dataset, bool oriented) {
@@ -344,7 +345,7 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
               orientation.form == OrientationForm::euler_xyz
                   ? Mat3(rotation_x(angles_rad.x()) * rotation_y(angles_rad.y()) * rotation_z(angles_rad.z()))
                   : rotation_from_vector(angles_rad);
-          oriented.push_back(OrientedRow{q, point_m, rotation.col(0), rotation.col(1)});
+          oriented.push_back(OrientedRow{q, point_m, angles_rad, rotation.col(0), rotation.col(1)});
           samples_per_row.push_back(3);
           return std::string();
         }
@@ -359,6 +360,10 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
   if (result.ok() && !oriented.empty()) {  // the virtual reflectors along the measured x and y axes
     read.lever_m = lever_for(orientation, columns.joint_resolution_rad, oriented, &read.joint_sigma_rad);
     read.poses = oriented.size();
+    read.orientation_constant = oriented.size() >= 2;
+    for (const OrientedRow& row : oriented) {
+      read.orientation_constant = read.orientation_constant && row.angles_rad == oriented.front().angles_rad;
+    }
     for (std::size_t row = 0; row < oriented.size() && result.ok(); ++row) {
       const OrientedRow& o = oriented[row];
       const Vec3 points_m[3] = {o.point_m, o.point_m + read.lever_m * o.x_axis, o.point_m + read.lever_m * o.y_axis};

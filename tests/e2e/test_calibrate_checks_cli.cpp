@@ -8,11 +8,13 @@
 
 #include "commands/commands.hpp"
 #include "hivecal/core/random.hpp"
+#include "hivecal/plan/inverse_kinematics.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/temp_dir.hpp"
 #include "testkit/test_data.hpp"
 #include "textio/csv.hpp"
 #include "textio/json.hpp"
+#include "textio/text_util.hpp"
 
 namespace hivecal::calibrate_checks_cli_test {
 namespace {
@@ -27,6 +29,86 @@ std::string session_csv(RobotType type, std::size_t poses, std::uint64_t seed) {
   truth.tool_m = Vec3(0.0, 0.0, 0.1695);
   test::fill_dataset(truth, test::example_base_to_tracker(), poses, 1e-5, &random, &data);
   return textio::format_samples_csv(data.samples());
+}
+
+/// A pendant-like export of `poses` random poses of a nominal UR5e: q1..q6, the TCP (tool
+/// 0,0,0.1 m) in the base frame and its rotation vector rx, ry, rz, SI; with `constant_rotation`
+/// every row's rx, ry, rz are the first row's.
+std::string pendant_csv(std::size_t poses, std::uint64_t seed, bool constant_rotation) {
+  RobotModel arm = nominal_model(RobotType::ur5e);
+  arm.tool_m = Vec3(0.0, 0.0, 0.1);
+  Random random(seed);
+  std::string out = "q1,q2,q3,q4,q5,q6,x,y,z,rx,ry,rz\n";
+  Vec3 first_rotation = Vec3::Zero();
+  for (std::size_t i = 0; i < poses; ++i) {
+    const JointVector q = test::random_joints(&random);
+    const Vec3 point_m = fk_tool_point(arm, q);
+    Vec3 rotation = rotation_vector_of(fk_flange(arm, q).rotation);
+    if (i == 0) first_rotation = rotation;
+    if (constant_rotation) rotation = first_rotation;
+    for (int j = 0; j < kJointCount; ++j) out += textio::format_double(q(j)) + ",";
+    for (int k = 0; k < 3; ++k) out += textio::format_double(point_m(k)) + ",";
+    for (int k = 0; k < 3; ++k) out += textio::format_double(rotation(k)) + (k < 2 ? "," : "\n");
+  }
+  return out;
+}
+
+TEST(CalibrateChecks, TooFewPosesForTheModelAreSaid) {
+  const test::TempDir dir;
+  std::string err;
+  // Two pendant poses: each gives a position and an orientation, 12 numbers for some 30 parameters.
+  const std::string two = dir.write("two.csv", pendant_csv(2, 1, false));
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
+                                       {"--samples", two, "--robot-model", "ur5e", "--tool", "0,0,0.1", "--split", "1",
+                                        "--quiet", "--out", dir.path() + "/two.json"},
+                                       &err),
+            cli::kExitWarnings);
+  EXPECT_NE(err.find("warning: the 6 training samples stand at only 2 distinct poses (12 coordinates) for the "),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("too few poses for the model, so the fit passes through them"), std::string::npos) << err;
+  EXPECT_EQ(err.find("this looks like"), std::string::npos) << err;  // no other arm on two poses
+  // Six poses of one reflector: 18 coordinates for the UR5's 27 or so.
+  const std::string six = dir.write("six.csv", session_csv(RobotType::ur5, 6, 2));
+  EXPECT_EQ(
+      test::run_capturing_stderr(
+          cli::calibrate_main,
+          {"--samples", six, "--split", "1", "--method", "lm", "--quiet", "--out", dir.path() + "/six.json"}, &err),
+      cli::kExitWarnings);
+  EXPECT_NE(err.find("stand at only 6 distinct poses (18 coordinates) for the"), std::string::npos) << err;
+  EXPECT_NE(err.find("measure at least "), std::string::npos) << err;
+  // Forty poses span it: nothing to say.
+  const std::string forty = dir.write("forty.csv", session_csv(RobotType::ur5, 40, 2));
+  EXPECT_EQ(
+      test::run_capturing_stderr(
+          cli::calibrate_main,
+          {"--samples", forty, "--split", "1", "--method", "lm", "--quiet", "--out", dir.path() + "/forty.json"}, &err),
+      cli::kExitOk)
+      << err;
+}
+
+TEST(CalibrateChecks, ConstantOrientationColumnsAreSaid) {
+  const test::TempDir dir;
+  std::string err;
+  const std::string constant = dir.write("constant.csv", pendant_csv(12, 4, true));
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
+                                       {"--samples", constant, "--robot-model", "ur5e", "--tool", "0,0,0.1", "--split",
+                                        "1", "--quiet", "--out", dir.path() + "/constant.json"},
+                                       &err),
+            cli::kExitWarnings);
+  EXPECT_NE(err.find("warning: the orientation columns rx, ry, rz hold one value on every row, and the fit's residual "
+                     "sigma is "),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("the orientation carries no information here"), std::string::npos) << err;
+  // The measured orientation itself: consistent, nothing to say.
+  const std::string measured = dir.write("measured.csv", pendant_csv(12, 4, false));
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
+                                       {"--samples", measured, "--robot-model", "ur5e", "--tool", "0,0,0.1", "--split",
+                                        "1", "--quiet", "--out", dir.path() + "/measured.json"},
+                                       &err),
+            cli::kExitOk)
+      << err;
 }
 
 TEST(CalibrateChecks, CrossValidationOnTooFewPosesSaysSo) {
