@@ -12,6 +12,7 @@
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
+#include "commands/simulate.hpp"
 #include "commands/streams.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/temp_dir.hpp"
@@ -72,6 +73,8 @@ TEST(CliNumbers, StreamCommandsSayTheRealRange) {
                             {{"--max-speed-mm-s", "1e9"}, "--max-speed-mm-s must be within (0, 1e+06), got '1e9'"},
                             {{"--window-s", "61"}, "--window-s must be within [0, 60], got '61'"},
                         });
+  test::expect_refusals(sim::simulate_main, {"--out-dir", "/nonexistent/folder"},
+                        {{{"--length-sigma-um", "1e10"}, "--length-sigma-um must be within [0, 1e+09), got '1e10'"}});
   test::expect_refusals(
       streams::record_main, {"--robot-port", "/nonexistent/port"},
       {{{"--duration-s", "-1"}, "--duration-s must be within [0, 1e+09] s (0: until Ctrl-C / SIGTERM), got '-1'"}});
