@@ -5,9 +5,12 @@
 // base -> tracker fitted to the measurements.
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "cli/options.hpp"
@@ -34,29 +37,81 @@ namespace {
 
 constexpr std::size_t kNoReport = static_cast<std::size_t>(-1);
 
-/// The reaches of one commanded pose.
-struct PoseReaches {
-  Sample first;                  ///< the first reach (its joints: the command; its target)
-  std::size_t line = 0;          ///< file line of the first reach
-  std::vector<Vec3> measured_m;  ///< every reach's measured point [m]
+/// Joint cells of the grouping: kCellWidth_rad = 4 x kSamePoseTolerance_rad, so a sample's
+/// tolerance reaches into the next cell only in the joints where it lies within the tolerance
+/// of a cell's edge (on average 1.5 cells per joint, 11 of the 2^6 at most).
+constexpr double kCellWidth_rad = 4.0 * kSamePoseTolerance_rad;
+/// Beyond the tolerance itself, the slack that covers the rounding of a joint's cell [rad].
+constexpr double kCellSlack_rad = 1e-9;
+
+/// A cell of joint space and a target.
+struct JointCell {
+  std::array<std::int64_t, kJointCount> index{};  ///< floor(q_j / kCellWidth_rad) per joint [-]
+  int target = 0;                                 ///< the reflector [-]
+  bool operator==(const JointCell& other) const { return index == other.index && target == other.target; }
 };
 
-/// Samples grouped by pose and target, in the order of their first reach.
-std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::vector<std::size_t>& lines) {
-  std::vector<PoseReaches> poses;
-  for (const Sample& s : samples) {
-    PoseReaches* pose = nullptr;
-    for (PoseReaches& p : poses) {
-      if (same_point(p.first, s)) pose = &p;
-    }
-    if (pose == nullptr) {
-      poses.push_back(PoseReaches{s, s.index < lines.size() ? lines[s.index] : 0, {}});
-      pose = &poses.back();
-    }
-    pose->measured_m.push_back(s.point_m);
+struct JointCellHash {
+  std::size_t operator()(const JointCell& cell) const {
+    std::uint64_t h = static_cast<std::uint64_t>(cell.target);
+    for (const std::int64_t k : cell.index) h = (h ^ static_cast<std::uint64_t>(k)) * 0x9E3779B97F4A7C15ull;
+    return static_cast<std::size_t>(h ^ (h >> 29));
   }
+};
+
+/// The cell index of a joint angle (joints are read within a turn or two: far from the int64 ends).
+std::int64_t cell_index(double q_rad) {
+  return static_cast<std::int64_t>(std::floor(std::clamp(q_rad, -1e12, 1e12) / kCellWidth_rad));
+}
+
+}  // namespace
+
+std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::vector<std::size_t>& lines,
+                                       std::size_t* comparisons) {
+  std::vector<PoseReaches> poses;
+  std::unordered_map<JointCell, std::vector<std::size_t>, JointCellHash> cells;  // poses by their first reach's cell
+  std::size_t compared = 0;
+  for (const Sample& s : samples) {
+    // The cells within the tolerance of s: its own, and per joint the neighbour whose edge is near.
+    JointCell own{{}, s.target};
+    std::array<int, kJointCount> low{};
+    std::array<int, kJointCount> high{};
+    for (int j = 0; j < kJointCount; ++j) {
+      const std::int64_t k = cell_index(s.q_rad(j));
+      own.index[static_cast<std::size_t>(j)] = k;
+      const double from_lower_edge_rad = s.q_rad(j) - static_cast<double>(k) * kCellWidth_rad;
+      low[static_cast<std::size_t>(j)] = from_lower_edge_rad <= kSamePoseTolerance_rad + kCellSlack_rad ? -1 : 0;
+      high[static_cast<std::size_t>(j)] =
+          kCellWidth_rad - from_lower_edge_rad <= kSamePoseTolerance_rad + kCellSlack_rad ? 1 : 0;
+    }
+    std::size_t latest = poses.size();  // none
+    std::array<int, kJointCount> offset = low;
+    for (bool more = true; more;) {
+      JointCell cell = own;
+      for (std::size_t j = 0; j < offset.size(); ++j) cell.index[j] += offset[j];
+      if (const auto found = cells.find(cell); found != cells.end()) {
+        for (const std::size_t p : found->second) {
+          ++compared;
+          if ((latest == poses.size() || p > latest) && same_point(poses[p].first, s)) latest = p;
+        }
+      }
+      more = false;  // the next offset, joint 1 fastest
+      for (std::size_t j = 0; j < offset.size() && !more; ++j) {
+        more = offset[j] < high[j];
+        offset[j] = more ? offset[j] + 1 : low[j];
+      }
+    }
+    if (latest == poses.size()) {
+      cells[own].push_back(poses.size());
+      poses.push_back(PoseReaches{s, s.index < lines.size() ? lines[s.index] : 0, {}});
+    }
+    poses[latest].measured_m.push_back(s.point_m);
+  }
+  if (comparisons != nullptr) *comparisons = compared;
   return poses;
 }
+
+namespace {
 
 /// The command frame: a result's model and base -> tracker, or a nominal model with the
 /// base -> tracker fitted to every reach. *how says which.
