@@ -179,7 +179,7 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "ur5"},
         {"tool", "X,Y,Z",
          "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)",
-         "0,0,0.1695"},
+         kDefaultToolText},
         {"params", "full|paper",
          "full identifiable model, or the link lengths (every non-zero d and a; for UR the paper's six)", "full"},
         {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},

@@ -28,9 +28,8 @@ using CliDataset = HostDataset;
 /// Validated command-line settings.
 struct CalibrateSettings {
   textio::RobotDescription robot;  ///< --robot-model: built-in table or description file
-  Vec3 tool_m =
-      Vec3(0.0, 0.0, 0.1695);  ///< --tool (or the description file's): nominal tool point in the flange frame [m]
-  bool paper_params = false;   ///< --params paper
+  Vec3 tool_m = Vec3::Zero();      ///< --tool (kDefaultToolText) or the description file's: nominal tool point [m]
+  bool paper_params = false;       ///< --params paper
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< --method
   std::uint64_t seed = 1;                                ///< --seed
   double train_fraction = 0.7;                           ///< --split

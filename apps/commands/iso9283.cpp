@@ -28,6 +28,7 @@
 #include "report/svg.hpp"
 #include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
+#include "textio/json.hpp"
 #include "textio/text_util.hpp"
 #include "record/result_json.hpp"
 
@@ -113,25 +114,6 @@ std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::ve
 
 namespace {
 
-/// The command frame: a result's model and base -> tracker, or a nominal model with the
-/// base -> tracker fitted to every reach. *how says which.
-Error command_frame(const Options& options, Span<const Sample> samples, record::CalibrationFile* frame,
-                    std::string* how) {
-  if (!options.get("calibration").empty()) {
-    *how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
-    return record::read_calibration_json(options.get("calibration"), frame);
-  }
-  Error error = robot_model_option(options, "robot-model", frame);
-  if (error.ok()) error = vec3_option(options, "tool", &frame->model.tool_m);
-  if (!error.ok()) return error;
-  if (fit_base_to_tracker(frame->model, samples, &frame->base_to_tracker) != Status::ok) {
-    return Error::input(
-        "cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
-  }
-  *how = "commanded positions from the nominal " + frame->robot + " (base -> tracker fitted to the reaches)";
-  return Error{};
-}
-
 std::string mm(double value_m) {
   char text[32];
   const double value_mm = std::fabs(value_m) < 0.5e-7 ? 0.0 : value_m * 1e3;  // no "-0.0000"
@@ -139,7 +121,185 @@ std::string mm(double value_m) {
   return text;
 }
 
-Error iso9283(const Options& options) {
+/// ISO 9283's cycles per pose: fewer is warned of (RP_l from a few reaches is uncertain) [-].
+constexpr std::size_t kIsoCycles = 30;
+/// With --calibration, AP_P above this many times the calibration's own held-out MAE (3D)...
+constexpr double kApBoundPerOwnMae = 10.0;
+/// ...and above this, or above this alone when the result holds no metrics, is implausible [m].
+constexpr double kApBoundFloor_m = 1e-3;
+
+/// Where the commanded positions come from.
+struct CommandFrame {
+  record::CalibrationFile file;  ///< the model and base -> tracker
+  std::string how;               ///< says which, for the output
+  bool calibration = false;      ///< from --calibration (else the nominal model, base fitted to the reaches)
+  double own_mae_m = 0.0;        ///< the calibration's own MAE (3D) from its metrics; 0: none [m]
+  std::string own_mae_set;       ///< which samples that MAE is of: "held-out" or "training"
+};
+
+/// The calibration's own 3D MAE from result.json's "metrics": the held-out one, else the
+/// training one (--split 1); 0 when the file has none (a description, a hand-made result).
+void own_mae(const std::string& text, CommandFrame* frame) {
+  textio::JsonValue root;
+  if (!textio::parse_json(text, &root).ok() || root.find("metrics") == nullptr) return;
+  for (const char* set : {"test", "train"}) {
+    const textio::JsonValue* stats = root.find("metrics")->find(set);
+    const textio::JsonValue* count = stats != nullptr ? stats->find(record::kErrorCountKey) : nullptr;
+    const textio::JsonValue* mae = stats != nullptr ? stats->find("mae_m") : nullptr;
+    const textio::JsonValue* mae_3d = mae != nullptr ? mae->find(record::kErrorAxisKeys[3]) : nullptr;
+    if (count == nullptr || count->kind != textio::JsonValue::Kind::number || !(count->number > 0.0) ||
+        mae_3d == nullptr || mae_3d->kind != textio::JsonValue::Kind::number || !(mae_3d->number > 0.0)) {
+      continue;
+    }
+    frame->own_mae_m = mae_3d->number;
+    frame->own_mae_set = std::string(set) == "test" ? "held-out" : "training";
+    return;
+  }
+}
+
+/// The command frame: a result's model and base -> tracker, or a nominal model (its tool:
+/// --tool, else a description file's, else kDefaultToolText) with the base -> tracker fitted
+/// to every reach.
+Error command_frame(const Options& options, Span<const Sample> samples, CommandFrame* frame) {
+  if (!options.get("calibration").empty()) {
+    if (options.given("tool")) {
+      return Error::usage(
+          "--tool goes with --robot-model: a calibration result carries its own calibrated tool point (its \"tool\"), "
+          "which gives the commanded positions; leave --tool out, or give --robot-model instead of --calibration");
+    }
+    frame->calibration = true;
+    frame->how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
+    std::string text;
+    const Error read = record::read_calibration_json(options.get("calibration"), &frame->file, &text);
+    if (read.ok()) own_mae(text, frame);
+    return read;
+  }
+  bool from_file = false;
+  Error error = robot_model_option(options, "robot-model", &frame->file, &from_file);
+  if (error.ok() && (!from_file || options.given("tool")))
+    error = vec3_option(options, "tool", &frame->file.model.tool_m);
+  if (!error.ok()) return error;
+  if (fit_base_to_tracker(frame->file.model, samples, &frame->file.base_to_tracker) != Status::ok) {
+    return Error::input(
+        "cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
+  }
+  const Vec3& tool_m = frame->file.model.tool_m;
+  frame->how = "commanded positions from the nominal " + frame->file.robot + " (tool " + mm(tool_m.x()) + ", " +
+               mm(tool_m.y()) + ", " + mm(tool_m.z()) + " mm; base -> tracker fitted to the reaches)";
+  return Error{};
+}
+
+/// One pose's characteristics.
+struct PoseResult {
+  std::size_t pose = 0;   ///< index into the grouped poses [-]
+  PoseAccuracy accuracy;  ///< AP and RP
+};
+
+/// Poses reached fewer than kIsoCycles times: a warning (the figures stand, their RP_l is uncertain); "" when none.
+std::string cycles_warning(const std::vector<PoseResult>& results) {
+  std::size_t short_poses = 0;
+  std::size_t fewest = kIsoCycles;
+  for (const PoseResult& r : results) {
+    if (r.accuracy.cycles >= kIsoCycles) continue;
+    ++short_poses;
+    fewest = std::min(fewest, r.accuracy.cycles);
+  }
+  if (short_poses == 0) return "";
+  return std::to_string(short_poses) + " of " + std::to_string(results.size()) + " poses have fewer than " +
+         std::to_string(kIsoCycles) + " cycles (the fewest " + std::to_string(fewest) +
+         "): ISO 9283 asks for 30 cycles per pose; RP_l from fewer reaches is uncertain (plan --iso9283 --cycles 30)";
+}
+
+/// The plausibility bound of AP_P with a calibration [m] and how it was set.
+double ap_bound_m(const CommandFrame& frame, std::string* why) {
+  const double bound_m = std::max(kApBoundFloor_m, kApBoundPerOwnMae * frame.own_mae_m);
+  *why = frame.own_mae_m > 0.0 ? "10 x the calibration's own " + frame.own_mae_set + " MAE of " + mm(frame.own_mae_m) +
+                                     " mm, at least 1 mm"
+                               : "1 mm: the calibration holds no metrics";
+  return bound_m;
+}
+
+/// With --calibration: when a pose's AP_P is beyond the plausibility bound (ap_bound_m), the
+/// warning that makes the run exit 5, naming the cause (the base -> tracker registered again on
+/// these reaches says whether the frame or the model is at fault) and the remedy; "" otherwise.
+std::string frame_warning(const Options& options, const CommandFrame& frame, Span<const Sample> samples,
+                          const std::vector<PoseReaches>& poses, const std::vector<PoseResult>& results) {
+  if (!frame.calibration) return "";  // the nominal frame is fitted to these reaches
+  std::string bound_why;
+  const double bound_m = ap_bound_m(frame, &bound_why);
+  std::size_t beyond = 0;
+  const PoseResult* worst = &results.front();
+  for (const PoseResult& r : results) {
+    if (r.accuracy.accuracy_norm_m > bound_m) ++beyond;
+    if (r.accuracy.accuracy_norm_m > worst->accuracy.accuracy_norm_m) worst = &r;
+  }
+  if (beyond == 0) return "";
+  char head[400];
+  std::snprintf(head, sizeof head,
+                "%zu of %zu poses have AP_P beyond the plausibility bound %s mm (%s); the worst %s mm at pose %zu "
+                "(line %zu): ",
+                beyond, results.size(), mm(bound_m).c_str(), bound_why.c_str(),
+                mm(worst->accuracy.accuracy_norm_m).c_str(), worst->pose + 1, poses[worst->pose].line);
+  const std::string calibration = options.get("calibration");
+  const std::string register_again = "hivecal calibrate --robot-model " + calibration + " --fit base --samples " +
+                                     options.get("samples") + " --out registered.json";
+  RigidTransform registered;
+  if (fit_base_to_tracker(frame.file.model, samples, &registered) != Status::ok) {
+    return head +
+           std::string(
+               "the calibration does not match these measurements (the base -> tracker could not be "
+               "registered on them to tell why); if the tracker was set up anew, register the base "
+               "again (") +
+           register_again + ")";
+  }
+  double moved_m = 0.0;  // how far the registration moves a commanded point
+  double worst_registered_m = 0.0;
+  for (const PoseResult& r : results) {
+    const Vec3 base_point = fk_sample_point(frame.file.model, poses[r.pose].first);
+    moved_m = std::max(moved_m, (registered.apply(base_point) - frame.file.base_to_tracker.apply(base_point)).norm());
+    worst_registered_m = std::max(worst_registered_m, (r.accuracy.barycentre_m - registered.apply(base_point)).norm());
+  }
+  const std::string registration =
+      "registered again on these reaches, the base -> tracker moves the commanded "
+      "points by up to " +
+      mm(moved_m) + " mm and leaves a worst AP_P of " + mm(worst_registered_m) + " mm";
+  if (worst_registered_m <= bound_m) {
+    return head + std::string("the base -> tracker of ") + calibration + " does not match these measurements (" +
+           registration +
+           "): the tracker was set up anew or moved since the calibration. Register the base again on these "
+           "measurements, keeping the arm (" +
+           register_again + "), then run iso9283 with that result";
+  }
+  return std::string(head) + "the calibration does not predict these poses, not even with its base registered again (" +
+         registration +
+         "): another robot, tool or unit, or poses far outside the calibration's own? If the tracker was set up "
+         "anew, register the base again (" +
+         register_again + ")";
+}
+
+/// The outputs of one run: the table (CSV) and, with --report, the page.
+std::string table_csv(const std::vector<std::vector<std::string>>& rows) {
+  std::string table;
+  for (const std::vector<std::string>& row : rows) {
+    for (std::size_t c = 0; c < row.size(); ++c) table += row[c] + (c + 1 < row.size() ? "," : "\n");
+  }
+  return table;
+}
+
+std::string report_page(const std::string& how, const std::string& summary, const std::vector<std::string>& warnings,
+                        const std::vector<std::vector<std::string>>& rows) {
+  std::string items = "<li>" + report::xml_escape(how) + "</li>\n<li>" + report::xml_escape(summary) + "</li>\n";
+  for (const std::string& warning : warnings) items += "<li>warning: " + report::xml_escape(warning) + "</li>\n";
+  return report::html_page_head("ISO 9283 pose accuracy and repeatability") + "<ul>\n" + items + "</ul>\n" +
+         report::html_table(rows) +
+         "<p>AP_P: distance of the reaches' barycentre from the commanded position; RP_l = "
+         "mean distance of the reaches from their barycentre + 3 S_l (ISO 9283; docs/iso9283.md)."
+         "</p>\n</body>\n</html>\n";
+}
+
+/// The analysis. `*warnings`: printed after the outputs are written; `*implausible`: the frame
+/// check failed (exit 5, every output written).
+Error iso9283(const Options& options, std::vector<std::string>* warnings, bool* implausible) {
   if (options.get("samples").empty()) return Error::usage("--samples is required (see --help)");
   if (!options.get("calibration").empty() && options.given("robot-model")) {
     return Error::usage("give --calibration or --robot-model, not both: the command frame is one of them");
@@ -158,55 +318,51 @@ Error iso9283(const Options& options) {
   std::vector<std::size_t> lines;
   if (error.ok()) error = textio::read_samples_csv(options.get("samples"), &dataset, units, &lines);
   if (!error.ok()) return error;
-  record::CalibrationFile frame;
-  std::string how;
-  error = command_frame(options, dataset.samples(), &frame, &how);
+  CommandFrame frame;
+  error = command_frame(options, dataset.samples(), &frame);
   if (!error.ok()) return error;
   const std::vector<PoseReaches> poses = group_reaches(dataset.samples(), lines);
-  std::vector<std::vector<std::string>> rows = {
-      {"pose", "line", "target", "cycles", "AP_P [mm]", "AP_x [mm]", "AP_y [mm]", "AP_z [mm]", "RP_l [mm]"}};
-  std::size_t measured = 0;
-  std::size_t single = 0;
-  double worst_ap_m = 0.0;
-  double worst_rp_m = 0.0;
+  std::vector<PoseResult> results;
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const PoseReaches& p = poses[k];
-    PoseAccuracy accuracy;
-    const Vec3 commanded = frame.base_to_tracker.apply(fk_sample_point(frame.model, p.first));
-    if (pose_accuracy(Span<const Vec3>(p.measured_m.data(), p.measured_m.size()), commanded, &accuracy) != Status::ok) {
-      ++single;  // one reach: no repeatability
-      continue;
+    PoseResult r{k, {}};
+    const Vec3 commanded = frame.file.base_to_tracker.apply(fk_sample_point(frame.file.model, p.first));
+    // One reach: no repeatability, left out (counted).
+    if (pose_accuracy(Span<const Vec3>(p.measured_m.data(), p.measured_m.size()), commanded, &r.accuracy) ==
+        Status::ok) {
+      results.push_back(r);
     }
-    ++measured;
-    worst_ap_m = std::max(worst_ap_m, accuracy.accuracy_norm_m);
-    worst_rp_m = std::max(worst_rp_m, accuracy.repeatability_m);
-    rows.push_back({std::to_string(k + 1), std::to_string(p.line), std::to_string(p.first.target + 1),
-                    std::to_string(accuracy.cycles), mm(accuracy.accuracy_norm_m), mm(accuracy.accuracy_m.x()),
-                    mm(accuracy.accuracy_m.y()), mm(accuracy.accuracy_m.z()), mm(accuracy.repeatability_m)});
   }
-  if (measured == 0) {
+  if (results.empty()) {
     return Error::input(options.get("samples") +
                         ": no pose was reached twice (ISO 9283 needs the cycles of each pose; " +
                         std::to_string(poses.size()) + " poses, one reach each)");
   }
-  const std::string summary = std::to_string(measured) + " poses with repeated reaches (" + std::to_string(single) +
+  std::vector<std::vector<std::string>> rows = {
+      {"pose", "line", "target", "cycles", "AP_P [mm]", "AP_x [mm]", "AP_y [mm]", "AP_z [mm]", "RP_l [mm]"}};
+  double worst_ap_m = 0.0;
+  double worst_rp_m = 0.0;
+  for (const PoseResult& r : results) {
+    const PoseAccuracy& a = r.accuracy;
+    const PoseReaches& p = poses[r.pose];
+    worst_ap_m = std::max(worst_ap_m, a.accuracy_norm_m);
+    worst_rp_m = std::max(worst_rp_m, a.repeatability_m);
+    rows.push_back({std::to_string(r.pose + 1), std::to_string(p.line), std::to_string(p.first.target + 1),
+                    std::to_string(a.cycles), mm(a.accuracy_norm_m), mm(a.accuracy_m.x()), mm(a.accuracy_m.y()),
+                    mm(a.accuracy_m.z()), mm(a.repeatability_m)});
+  }
+  const std::string summary = std::to_string(results.size()) + " poses with repeated reaches (" +
+                              std::to_string(poses.size() - results.size()) +
                               " with one reach, left out); worst AP_P " + mm(worst_ap_m) + " mm, worst RP_l " +
                               mm(worst_rp_m) + " mm";
-  std::fprintf(options.get("out") == "-" ? stderr : stdout, "%s\n%s\n", how.c_str(), summary.c_str());
-  std::string table;
-  for (const std::vector<std::string>& row : rows) {
-    for (std::size_t c = 0; c < row.size(); ++c) table += row[c] + (c + 1 < row.size() ? "," : "\n");
-  }
-  error = outputs.stage_text(out_id, "", table);
-  if (error.ok() && report_id != kNoReport) {
-    error = outputs.stage_text(
-        report_id, "",
-        report::html_page_head("ISO 9283 pose accuracy and repeatability") + "<ul>\n<li>" + report::xml_escape(how) +
-            "</li>\n<li>" + report::xml_escape(summary) + "</li>\n</ul>\n" + report::html_table(rows) +
-            "<p>AP_P: distance of the reaches' barycentre from the commanded position; RP_l = "
-            "mean distance of the reaches from their barycentre + 3 S_l (ISO 9283; docs/iso9283.md)."
-            "</p>\n</body>\n</html>\n");
-  }
+  const std::string frame_problem = frame_warning(options, frame, dataset.samples(), poses, results);
+  *implausible = !frame_problem.empty();
+  for (const std::string& warning : {cycles_warning(results), frame_problem})
+    if (!warning.empty()) warnings->push_back(warning);
+  std::fprintf(options.get("out") == "-" ? stderr : stdout, "%s\n%s\n", frame.how.c_str(), summary.c_str());
+  error = outputs.stage_text(out_id, "", table_csv(rows));
+  if (error.ok() && report_id != kNoReport)
+    error = outputs.stage_text(report_id, "", report_page(frame.how, summary, *warnings, rows));
   return error.ok() ? outputs.commit() : error;
 }
 
@@ -398,7 +554,10 @@ int iso9283_main(int argc, char** argv) {
        ""},
       {"calibration", "FILE", "command frame: a calibration result (its model and base -> tracker)", ""},
       {"robot-model", "NAME|FILE", "or the nominal model, its base -> tracker fitted to the reaches", "ur5"},
-      {"tool", "X,Y,Z", "with --robot-model: the reflector in the flange frame [m]", "0,0,0"},
+      {"tool", "X,Y,Z",
+       "with --robot-model: the reflector in the flange frame [m] (a description file's when not given; not with "
+       "--calibration, whose tool is calibrated)",
+       kDefaultToolText},
       {"out", "FILE", "per-pose table (CSV: AP_P, AP_x/y/z, RP_l in mm); '-' for stdout", "-"},
       {"report", "FILE", "the same as an HTML page in the calibration report's style", ""},
   };
@@ -410,7 +569,12 @@ int iso9283_main(int argc, char** argv) {
                                    "the measured reaches (samples at the same joints within 1e-3 rad are one pose).",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
-  return exit_with(kIso9283Command, iso9283(options));
+  std::vector<std::string> warnings;
+  bool implausible = false;
+  const int code = exit_with(kIso9283Command, iso9283(options, &warnings, &implausible));
+  if (code != kExitOk) return code;
+  for (const std::string& warning : warnings) error(kIso9283Command, "warning: " + warning);
+  return implausible ? kExitWarnings : kExitOk;
 }
 
 }  // namespace hivecal::cli

@@ -324,7 +324,7 @@ int plan_main(int argc, char** argv) {
        "ur5e"},
       {"count", "N", "poses to measure (1 .. 128)", ""},
       {"tracker-position", "X,Y,Z", "tracker position in the robot base frame [m]", ""},
-      {"tool", "X,Y,Z", "reflector in the flange frame [m] (one target)", "0,0,0"},
+      {"tool", "X,Y,Z", "reflector in the flange frame [m] (one target)", kDefaultToolText},
       {"acceptance-deg", "DEG", "largest angle flange z - line to the tracker (red-ring reflector: 30)", "30"},
       {"floor-z", "M", "reflector and flange above this base z [m]", "0.05"},
       {"keep-out-radius", "M", "reflector and flange at least this far from the base z axis [m]", "0.15"},

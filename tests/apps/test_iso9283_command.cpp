@@ -50,8 +50,9 @@ TEST(Iso9283Grouping, SamePosesAsEverySampleAgainstEveryPose) {
     for (int j = 0; j < kJointCount; ++j) {
       // Half the poses on a multiple of the cell width (4 tolerances) or a tolerance beside it.
       const double edge = 4.0 * kSamePoseTolerance_rad * static_cast<double>(random.next() % 2000) - 4.0;
-      q(j) = k % 2 == 0 ? edge + kSamePoseTolerance_rad * static_cast<double>(random.next() % 3) - kSamePoseTolerance_rad
-                        : random.uniform(-3.0, 3.0);
+      q(j) = k % 2 == 0
+                 ? edge + kSamePoseTolerance_rad * static_cast<double>(random.next() % 3) - kSamePoseTolerance_rad
+                 : random.uniform(-3.0, 3.0);
     }
     commands.push_back(q);
   }

@@ -118,8 +118,9 @@ if "${run[@]}" plan --iso9283 0.4,-0.3,0.5,0.3 --tracker-position 2,0.5,0.6 --ou
   fail "plan --iso9283: $(cat "$work/iso.csv" "$work/iso.script")"; fi
 expect_plan 2 "--iso9283 must be X,Y,Z,SIDE" -- --iso9283 0.4,0.5,0.3 --tracker-position 2,0.5,0.6 "${out[@]}"
 # auto: the largest cube found whose five positions the arm reaches with the one orientation;
-# each listed joint solution puts the reflector there (checked through predict, the model's FK)
-if "${run[@]}" plan --iso9283 auto --robot-model ur5e --tracker-position 2,0.5,0.6 --out "$work/iso_auto.csv" >"$work/iso_auto.txt" 2>&1 &&
+# each listed joint solution puts the reflector there (checked through predict, the model's FK;
+# the reflector at the flange, as predict's built-in ur5e has it)
+if "${run[@]}" plan --iso9283 auto --robot-model ur5e --tool 0,0,0 --tracker-position 2,0.5,0.6 --out "$work/iso_auto.csv" >"$work/iso_auto.txt" 2>&1 &&
    cut -d, -f8-13 "$work/iso_auto.csv" >"$work/iso_q.csv" &&
    "${run[@]}" predict --robot-model ur5e --joints "$work/iso_q.csv" --out "$work/iso_fk.csv" 2>/dev/null &&
    paste -d, "$work/iso_fk.csv" <(cut -d, -f2-4 "$work/iso_auto.csv") | awk -F, 'NR > 1 {
