@@ -366,7 +366,11 @@ Error iso9283(const Options& options, std::vector<std::string>* warnings, bool* 
   return error.ok() ? outputs.commit() : error;
 }
 
-/// The cube of `--iso9283 X,Y,Z,SIDE` [m]: false when malformed or not a positive side.
+/// The smallest cube side of the test: P2..P5 then lie 14 mm from P1 (a smaller cube tests one
+/// point several times over); the side auto starts from [m].
+constexpr double kMinCubeSide_m = 0.02;
+
+/// The cube of `--iso9283 X,Y,Z,SIDE` [m]: false when malformed or the side not in [kMinCubeSide_m, 10].
 bool parse_cube(const std::string& text, Vec3* centre_m, double* side_m) {
   double values[4];
   std::size_t begin = 0;
@@ -380,7 +384,7 @@ bool parse_cube(const std::string& text, Vec3* centre_m, double* side_m) {
   }
   *centre_m = Vec3(values[0], values[1], values[2]);
   *side_m = values[3];
-  return *side_m > 0.0 && *side_m <= 10.0 && centre_m->norm() <= 10.0;
+  return *side_m >= kMinCubeSide_m && *side_m <= 10.0 && centre_m->norm() <= 10.0;
 }
 
 /// The rotation vector of the one tool orientation: flange z towards the tracker (or down).
@@ -412,6 +416,18 @@ bool reach(const RobotModel& model, const JointLimits& limits, const Vec3& posit
   return solve_flange_pose(model, limits, flange, InverseKinematicsOptions{}, random, q) == Status::ok;
 }
 
+/// What stands in the way of one position of the test.
+enum class PositionVerdict { reachable, below_floor, inside_keep_out, unreachable };
+
+/// Whether the reflector may be at `p` (above --floor-z, outside --keep-out-radius) and the arm
+/// reaches it with the orientation `rotation` within the limits (*q: its joints).
+PositionVerdict check_position(const RobotModel& model, const JointLimits& limits, const Vec3& p, const Vec3& rotation,
+                               double floor_z_m, double keep_out_m, Random* random, JointVector* q) {
+  if (p.z() < floor_z_m) return PositionVerdict::below_floor;
+  if (p.head<2>().norm() < keep_out_m) return PositionVerdict::inside_keep_out;
+  return reach(model, limits, p, rotation, random, q) ? PositionVerdict::reachable : PositionVerdict::unreachable;
+}
+
 /// Whether the arm reaches all five positions of the cube with the one orientation, above the
 /// floor and outside the keep-out cylinder.
 bool cube_reachable(const RobotModel& model, const JointLimits& limits, const Vec3& centre_m, double side_m,
@@ -420,7 +436,7 @@ bool cube_reachable(const RobotModel& model, const JointLimits& limits, const Ve
   iso_positions(centre_m, side_m, positions);
   for (const Vec3& p : positions) {
     JointVector q;
-    if (p.z() < floor_z_m || p.head<2>().norm() < keep_out_m || !reach(model, limits, p, rotation, random, &q))
+    if (check_position(model, limits, p, rotation, floor_z_m, keep_out_m, random, &q) != PositionVerdict::reachable)
       return false;
   }
   return true;
@@ -437,9 +453,10 @@ bool largest_cube(const RobotModel& model, const JointLimits& limits, const Vec3
     for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(limits.lower_rad(j), limits.upper_rad(j));
     const Vec3 centre = fk_tool_point(model, q);
     const Vec3 rotation = tool_rotation_vector(centre, tracker_m, tool_down);
-    if (!cube_reachable(model, limits, centre, std::max(*side_m, 0.02), rotation, floor_z_m, keep_out_m, &random))
+    if (!cube_reachable(model, limits, centre, std::max(*side_m, kMinCubeSide_m), rotation, floor_z_m, keep_out_m,
+                        &random))
       continue;
-    double low = std::max(*side_m, 0.02);
+    double low = std::max(*side_m, kMinCubeSide_m);
     double high = 2.0;
     for (int step = 0; step < 8; ++step) {
       const double mid = 0.5 * (low + high);
@@ -461,14 +478,48 @@ std::string pose_text(const Vec3& p, const Vec3& r) {
 
 }  // namespace
 
-Error plan_iso9283(const Options& options, const RobotModel& model, const JointLimits& limits) {
+/// A value as an option gives it (0.05, not 0.050000000000000003).
+std::string general_number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+/// Why the given cube cannot be the test: each position below the floor, inside the keep-out
+/// cylinder or out of reach, and what to do; "" when every position is reachable.
+std::string cube_problems(const Options& options, const Vec3 (&positions)[5], const PositionVerdict (&verdicts)[5],
+                          double floor_z_m, double keep_out_m, const std::string& cause) {
+  const std::pair<PositionVerdict, std::string> reasons[] = {
+      {PositionVerdict::below_floor, "below --floor-z " + general_number(floor_z_m) + " m"},
+      {PositionVerdict::inside_keep_out, "inside --keep-out-radius " + general_number(keep_out_m) + " m"},
+      {PositionVerdict::unreachable, "out of the arm's reach with the one orientation within the joint limits"}};
+  std::string problems;
+  for (const auto& [verdict, reason] : reasons) {
+    std::string which;
+    for (int k = 0; k < 5; ++k) {
+      if (verdicts[k] != verdict) continue;
+      char where[120];
+      std::snprintf(where, sizeof where, "P%d (%.4f, %.4f, %.4f m)", k + 1, positions[k].x(), positions[k].y(),
+                    positions[k].z());
+      which += (which.empty() ? "" : ", ") + std::string(where);
+    }
+    if (!which.empty()) problems += which + ": " + reason + "; ";
+  }
+  if (problems.empty()) return "";
+  return "--iso9283 " + options.get("iso9283") + ": " + problems + (cause.empty() ? std::string() : cause + "; ") +
+         "the test needs all five positions: choose another cube (smaller, or nearer the middle of the arm's "
+         "workspace), or --iso9283 auto (the largest cube the arm reaches)";
+}
+
+Error plan_iso9283(const Options& options, const RobotModel& model, const JointLimits& limits,
+                   const JointLimits& widest) {
   Vec3 centre_m;
   double side_m = 0.0;
   const bool automatic = options.get("iso9283") == "auto";
   if (!automatic && !parse_cube(options.get("iso9283"), &centre_m, &side_m)) {
     return Error::usage(
         "--iso9283 must be X,Y,Z,SIDE (the cube's centre in the base frame and its side, metres; "
-        "side in (0, 10]) or auto, not " +
+        "side in [0.02, 10]) or auto, not " +
         port::quoted(options.get("iso9283")));
   }
   Vec3 tracker_m;
@@ -488,11 +539,46 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   if (error.ok()) error = bounded_option(options, "keep-out-radius", 0.0, 10.0, &keep_out_m);
   if (!error.ok()) return error;
   if (options.get("out").empty()) return Error::usage("--out is required (see --help)");
-  if (automatic &&
-      !largest_cube(model, limits, tracker_m, options.given("tool-down"), floor_z_m, keep_out_m, &centre_m, &side_m)) {
-    return Error::failure(
-        "--iso9283 auto: no cube whose five positions the arm reaches with one orientation (move the "
-        "tracker, lower --floor-z or --keep-out-radius)");
+  const bool tool_down = options.given("tool-down");
+  if (automatic && !largest_cube(model, limits, tracker_m, tool_down, floor_z_m, keep_out_m, &centre_m, &side_m)) {
+    const std::string cause =
+        blame_tool_or_limits(options, model, limits, widest, [&](const RobotModel& m, const JointLimits& l) {
+          Vec3 centre;
+          double side = 0.0;
+          return largest_cube(m, l, tracker_m, tool_down, floor_z_m, keep_out_m, &centre, &side);
+        });
+    return Error::failure("--iso9283 auto: no cube whose five positions the arm reaches with one orientation (" +
+                          (cause.empty() ? "move the tracker, lower --floor-z or --keep-out-radius" : cause) + ")");
+  }
+  Vec3 positions[5];
+  iso_positions(centre_m, side_m, positions);
+  const Vec3 rotation = tool_rotation_vector(centre_m, tracker_m, tool_down);
+  // Each position with a joint solution of the model (the controller's own IK moves the arm;
+  // these say that one exists within the limits, and let `predict` check the list). A given
+  // cube is checked as auto's are: nothing is written for a position the arm cannot take.
+  const auto check_cube = [&](const RobotModel& m, const JointLimits& l, PositionVerdict(&verdicts)[5],
+                              JointVector(&q)[5]) {
+    Random random(9283);
+    bool all = true;
+    for (int k = 0; k < 5; ++k) {
+      verdicts[k] = check_position(m, l, positions[k], rotation, floor_z_m, keep_out_m, &random, &q[k]);
+      all = all && verdicts[k] == PositionVerdict::reachable;
+    }
+    return all;
+  };
+  PositionVerdict verdicts[5];
+  JointVector q[5];
+  if (!check_cube(model, limits, verdicts, q)) {
+    bool out_of_reach = false;
+    for (const PositionVerdict v : verdicts) out_of_reach = out_of_reach || v == PositionVerdict::unreachable;
+    const std::string cause = !out_of_reach ? std::string()
+                                            : blame_tool_or_limits(options, model, limits, widest,
+                                                                   [&](const RobotModel& m, const JointLimits& l) {
+                                                                     PositionVerdict other[5];
+                                                                     JointVector other_q[5];
+                                                                     return check_cube(m, l, other, other_q);
+                                                                   });
+    return Error::failure(cube_problems(options, positions, verdicts, floor_z_m, keep_out_m, cause));
   }
   port::OutputSet outputs;
   std::size_t out_id = 0;
@@ -502,25 +588,13 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (error.ok() && script) error = outputs.add_file(options.get("urscript"), "--urscript", &script_id);
   if (!error.ok()) return error;
-  Vec3 positions[5];
-  iso_positions(centre_m, side_m, positions);
-  const Vec3 rotation = tool_rotation_vector(centre_m, tracker_m, options.given("tool-down"));
-  // Each position with a joint solution of the model (the controller's own IK moves the arm;
-  // these say that one exists within the limits, and let `predict` check the list).
   std::string list = "pose,x,y,z,rx,ry,rz,q1,q2,q3,q4,q5,q6\n";
-  Random random(9283);
   for (int k = 0; k < 5; ++k) {
-    JointVector q;
-    const bool reachable = reach(model, limits, positions[k], rotation, &random, &q);
-    if (!reachable) {
-      std::fprintf(
-          stderr, "hivecal plan: warning: P%d is not reachable with this orientation within the joint limits\n", k + 1);
-    }
     list += "P" + std::to_string(k + 1) + "," + textio::format_double(positions[k].x()) + "," +
             textio::format_double(positions[k].y()) + "," + textio::format_double(positions[k].z()) + "," +
             textio::format_double(rotation.x()) + "," + textio::format_double(rotation.y()) + "," +
             textio::format_double(rotation.z());
-    for (int j = 0; j < kJointCount; ++j) list += "," + (reachable ? textio::format_double(q(j)) : std::string("nan"));
+    for (int j = 0; j < kJointCount; ++j) list += "," + textio::format_double(q[k](j));
     list += "\n";
   }
   char head[400];

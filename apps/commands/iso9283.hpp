@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "cli/options.hpp"
@@ -33,6 +35,17 @@ std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::ve
 /// --keep-out-radius) with one orientation facing --tracker-position (or tool down with
 /// --tool-down), written as a pose list (--out) and a URScript program of --cycles cycles
 /// (--urscript), each cycle P1, P5, P4, P3, P2 (every pose approached from one direction).
-Error plan_iso9283(const Options& options, const RobotModel& model, const JointLimits& limits);
+/// `widest`: the joint limits tried when `limits` leave no cube (blame_tool_or_limits).
+Error plan_iso9283(const Options& options, const RobotModel& model, const JointLimits& limits,
+                   const JointLimits& widest);
+
+/// Why nothing met the plan's constraints when that is the tool or the joint limits, "" when
+/// neither: `finds(model, limits)` searches again with the reflector at the flange (the tool is
+/// why when that finds something), then with `widest` instead of `limits` (narrower on some
+/// joint: the limits are why when that finds something). The text names --tool or the limits'
+/// source (--joint-limits FILE, or the description's) and what to do.
+std::string blame_tool_or_limits(const Options& options, const RobotModel& model, const JointLimits& limits,
+                                 const JointLimits& widest,
+                                 const std::function<bool(const RobotModel&, const JointLimits&)>& finds);
 
 }  // namespace hivecal::cli
