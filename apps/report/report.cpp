@@ -267,11 +267,10 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
       }
     }
     const std::string joint = std::to_string(j + 1);
-    ChartSpec spec =
-        chart("fig-residual-q" + joint,
-              before_after ? "Residual vs joint " + joint + ": rigid fit and " + after.method + ", every sample"
-                           : "Residual after calibration vs joint " + joint,
-              "q" + joint + " [deg]", "3D residual [um]");
+    ChartSpec spec = chart("fig-residual-q" + joint,
+                           before_after ? "Residual vs joint " + joint + ": rigid vs " + after.method
+                                        : "Residual after calibration vs joint " + joint,
+                           "q" + joint + " [deg]", "3D residual [um]");
     spec.width_px = 400;
     spec.height_px = 260;
     spec.fixed_y = true;

@@ -482,6 +482,33 @@ TEST(Svg, LegendListsOnlySeriesThatDrewSomething) {
   EXPECT_EQ(legend[0], "calibrated");
 }
 
+// "measurement noise (stated)" ran past the panel's right edge in the four error figures: a
+// long legend label wraps at a space, and the legend column is as wide as its widest line.
+TEST(Svg, LegendFitsInsideThePanel) {
+  ChartSpec spec{"t", "x", "y"};
+  spec.y_line = 1.0;
+  spec.y_line_label = "measurement noise (stated, with the joints' reading)";
+  const std::string svg = svg_chart(spec, {Series{"uncalibrated", {0, 1}, {1, 2}, false}});
+  const std::size_t at = svg.find("class='legend' data-series='measurement noise");
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t x_at = svg.find("x='", at) + 3;
+  const double x_px = std::stod(svg.substr(x_at));
+  const std::string text = svg.substr(svg.find('>', at) + 1, svg.find("</text>", at) - svg.find('>', at) - 1);
+  std::size_t widest = 0;  // characters of the longest line
+  for (std::size_t begin = 0, end = 0; begin < text.size(); begin = end + 1) {
+    const std::size_t open = text.find('>', begin);
+    if (text.compare(begin, 6, "<tspan") != 0 || open == std::string::npos) break;
+    end = text.find("</tspan>", open);
+    std::string line = text.substr(open + 1, end - open - 1);
+    for (std::size_t quote = line.find("&#39;"); quote != std::string::npos; quote = line.find("&#39;"))
+      line.replace(quote, 5, "'");
+    widest = std::max(widest, line.size());
+    end += 7;
+  }
+  EXPECT_GE(std::count(text.begin(), text.end(), '<'), 4) << text;  // two lines or more
+  EXPECT_LE(x_px + 7.0 * static_cast<double>(widest), spec.width_px) << text;
+}
+
 TEST(Svg, HistogramAxesStartAtZero) {
   const std::string svg =
       svg_histogram(ChartSpec{"t", "error [um]", "count"}, {"a", "b"}, {{1.5, 2.5, 9.0}, {3.0, 4.0}}, 10);

@@ -6,6 +6,7 @@
 #     the clock-sync profiles in result.json agree (residual well under the speeds);
 #   - no numeric tick label has more than three significant digits;
 #   - every legend entry has a drawn element of its series in the same figure;
+#   - no text runs past its figure's edges, as the browser lays it out;
 #   - `hivecal report --calibration` redraws the same figures, the same bytes twice;
 #   - a sample made a blunder is set aside and shown (table and figure), --cv draws its folds.
 #   tests/report/render_test.sh HIVECAL
@@ -58,6 +59,38 @@ orphan_legends() {  # orphan_legends DOM
   done
 }
 
+# Text laid out past its figure's edges by the browser (a legend entry cut at the panel's edge),
+# one "id: 'text'" per line: the page with a script that measures every <text> of every <svg>.
+overflowing_text() {  # overflowing_text HTML
+  local probe="$work/probe.html"
+  { sed '/^<\/body>$/,$d' "$1"; cat <<'JS'
+<script>
+const out = [];
+for (const svg of document.querySelectorAll('svg')) {
+  const box = svg.getBoundingClientRect();
+  for (const t of svg.querySelectorAll('text')) {
+    const r = t.getBoundingClientRect();
+    if (r.width > 0 && (r.left < box.left - 0.5 || r.right > box.right + 0.5 || r.top < box.top - 0.5 ||
+                        r.bottom > box.bottom + 0.5)) out.push(svg.id + ": '" + t.textContent + "'");
+  }
+}
+const pre = document.createElement('pre');
+pre.id = 'overflow';
+pre.textContent = out.length + ' overflowing\n' + out.join('\n');
+document.body.appendChild(pre);
+</script>
+</body>
+</html>
+JS
+  } >"$probe"
+  if ! render "$probe" "$work/probe.dom" || ! grep -q '<pre id="overflow">' "$work/probe.dom"; then
+    echo "(the measuring script did not run)"
+    return
+  fi
+  awk '/<pre id="overflow">/ { sub(/.*<pre id="overflow">/, ""); on = 1 }
+       on { done = sub(/<\/pre>.*/, ""); print; if (done) exit }' "$work/probe.dom" | tail -n +2
+}
+
 check_report() {  # check_report NAME HTML EXPECTED_IDS...
   local name=$1 html=$2
   shift 2
@@ -81,7 +114,10 @@ check_report() {  # check_report NAME HTML EXPECTED_IDS...
   legends=$(grep -o '<text class="legend"' "$dom" | wc -l)
   orphans=$(orphan_legends "$dom")
   if [ "$legends" -gt 10 ] && [ -z "$orphans" ]; then ok; else fail "$name: $legends legend entries; without a drawn element: $orphans"; fi
-  echo "$name: $svgs figures, $ticks tick labels, $legends legend entries checked"
+  local overflowing
+  overflowing=$(overflowing_text "$html")
+  if [ -z "$overflowing" ]; then ok; else fail "$name: text past its figure's edges: $overflowing"; fi
+  echo "$name: $svgs figures, $ticks tick labels, $legends legend entries and every text's edges checked"
 }
 
 # The checkers must be able to fail: a long label and an orphan legend entry are found.
@@ -94,6 +130,11 @@ if [ "$(long_ticks "$work/bad.dom" | tr '\n' ' ')" = "231.25 −0.01255 " ] &&
    [ "$(orphan_legends "$work/bad.dom")" = "fig-bad: 'measured'" ]; then ok; else
   fail "the checkers miss a long tick label or an orphan legend entry: $(long_ticks "$work/bad.dom") / $(orphan_legends "$work/bad.dom")"
 fi
+# ... and a legend entry cut at the panel's edge is found (the browser measures it).
+printf '<!DOCTYPE html>\n<html><body>\n<svg id="fig-cut" width="200" height="60"><text x="120" y="30">measurement noise (stated)</text><text x="10" y="30">fits</text></svg>\n</body>\n</html>\n' \
+  >"$work/cut.html"
+if [ "$(overflowing_text "$work/cut.html")" = "fig-cut: 'measurement noise (stated)'" ]; then ok; else
+  fail "the checker misses text past a figure's edge: '$(overflowing_text "$work/cut.html")'"; fi
 
 sim="$work/sim"
 "$hivecal" simulate --out-dir "$sim" --waypoints 20 --duration-s 250 --seed 5 >/dev/null || { echo "FAIL: simulate"; exit 1; }
