@@ -262,7 +262,7 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "ur5"},
         {"tool", "X,Y,Z",
          "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)",
-         "0,0,0.1695"},
+         kDefaultToolText},
         {"tool-transform", "FILE",
          "instead of --tool: a 4x4 transform (text, one row per line; lengths in --length-unit), the tool frame's "
          "pose in the flange frame, whose translation is the tool point (its rotation is not used)",

@@ -631,6 +631,7 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
           {f.train_count, f.test.count, f.train.mae(ErrorAxis::norm_3d), f.test.mae(ErrorAxis::norm_3d)});
     }
   }
+  report::keep_at_most(report::kReportSampleCap, &data);  // the result and the page stay small
   return data;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "commands/commands.hpp"
 #include "commands/host_storage.hpp"
 #include "hivecal/port/capture_file.hpp"
 #include "hivecal/port/output_files.hpp"
@@ -314,7 +315,7 @@ int extract_main(int argc, char** argv) {
        "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"robot-model", "NAME|FILE",
        std::string(robot_type_names()) + " or a robot description .json (nominal geometry for tool speeds)", "ur5"},
-      {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
+      {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", cli::kDefaultToolText},
       {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
       {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
       {"samples", "FILE", "write the paired samples q1..q6,x,y,z (CSV) here; '-' for stdout; empty: none", ""},
