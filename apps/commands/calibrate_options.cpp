@@ -1,4 +1,7 @@
 // hivecal calibrate: its options and their checks (calibrate_parts.hpp).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -8,6 +11,7 @@
 #include "commands/commands.hpp"
 #include "textio/robot_description.hpp"
 #include "textio/text_util.hpp"
+#include "textio/transform_text.hpp"
 #include "commands/calibrate_parts.hpp"
 
 namespace hivecal::cli {
@@ -19,18 +23,46 @@ namespace {
 Error payload_option(const Options& options, ArmMasses* masses) {
   const std::string text = options.get("payload");
   const std::size_t at = text.find('@');
-  const Error bad = Error::usage(
-      "--payload must be KG@X,Y,Z: a mass in kg >= 0 and its centre in the flange frame "
-      "in metres (e.g. 1.2@0,0,0.05), not " +
-      port::quoted(text));
+  if (at == std::string::npos) {
+    return Error::usage(
+        "--payload must be KG@X,Y,Z: a mass in kg and its centre in the flange frame in metres (e.g. "
+        "1.2@0,0,0.05), got " +
+        port::quoted(text));
+  }
   double kg = 0.0;
-  if (at == std::string::npos || !textio::parse_double(text.substr(0, at), &kg) || !(kg >= 0.0 && kg < 1e4)) return bad;
   Vec3 com_m = Vec3::Zero();
-  if (!parse_vec3(std::string_view(text).substr(at + 1), &com_m)) return bad;
-  if (!com_m.allFinite() || com_m.norm() > 10.0) return bad;
+  Error error = check_number("--payload must be KG@X,Y,Z: its mass KG", std::string_view(text).substr(0, at),
+                             NumberRange{0.0, 1e4, false, true, "kg"}, &kg);
+  if (error.ok()) {
+    error =
+        check_vec3("--payload must be KG@X,Y,Z: its centre", std::string_view(text).substr(at + 1),
+                   "in the flange frame", NumberRange{-kMaxToolOption_m, kMaxToolOption_m, false, false, "m"}, &com_m);
+  }
+  if (!error.ok()) return error;
   masses->payload_kg = kg;
   masses->payload_com_m = com_m;
   return Error{};
+}
+
+/// Largest component of --gravity (a direction of any length) [-].
+constexpr double kMaxGravityComponent = 1e6;
+
+/// The built-in types whose published link masses --compliance masses weighs (nominal_arm_masses),
+/// for --help and the refusal alike: "ur3, ur5, ...".
+std::string types_with_masses() {
+  const std::string all = robot_type_names();
+  std::string names;
+  for (std::size_t begin = 0; begin < all.size();) {
+    const std::size_t end = std::min(all.find(',', begin), all.size());
+    const std::string name(textio::trim(std::string_view(all).substr(begin, end - begin)));
+    begin = end + 1;
+    RobotType type = RobotType::ur5;
+    ArmMasses masses;
+    if (robot_type_from_name(name.c_str(), &type) == Status::ok && nominal_arm_masses(type, &masses) == Status::ok) {
+      names += (names.empty() ? "" : ", ") + name;
+    }
+  }
+  return names;
 }
 
 /// --compliance, --gravity, --payload into settings->compliance_model (the default terms of the
@@ -46,10 +78,14 @@ Error gravity_terms_from_options(const Options& options, CalibrateSettings* sett
     return Error::usage("--payload needs --compliance masses (the basis kind weighs unit masses, not the payload)");
   }
   Vec3 gravity = Vec3::Zero();
-  if (!parse_vec3(options.get("gravity"), &gravity) || !gravity.allFinite() || !(gravity.norm() > 1e-9)) {
+  const Error direction =
+      check_vec3("--gravity", options.get("gravity"), "(the direction of gravity in the robot base frame, any length)",
+                 NumberRange{-kMaxGravityComponent, kMaxGravityComponent}, &gravity);
+  if (!direction.ok()) return direction;
+  if (!(gravity.norm() > 1e-9)) {
     return Error::usage(
         "--gravity must be X,Y,Z: the direction of gravity in the robot base frame, not zero (e.g. "
-        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), not " +
+        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), got " +
         port::quoted(options.get("gravity")));
   }
   ComplianceModel& model = settings->compliance_model;
@@ -59,7 +95,7 @@ Error gravity_terms_from_options(const Options& options, CalibrateSettings* sett
         nominal_arm_masses(type, &model.masses) != Status::ok) {
       return Error::usage(
           "--compliance masses needs the arm's link masses, which are known here for the built-in types (" +
-          std::string(robot_type_names()) + ") only (by --robot-model's name); " + port::quoted(settings->robot.robot) +
+          types_with_masses() + ") only (by --robot-model's name); " + port::quoted(settings->robot.robot) +
           " has none: use --compliance basis");
     }
     if (options.given("payload")) {
@@ -115,6 +151,52 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
   return harmonics ? harmonic_terms_from_options(options, settings) : Error{};
 }
 
+/// --tool X,Y,Z [m], each within the robot description's bound on a tool point.
+Error tool_option(const Options& options, Vec3* tool_m) {
+  return check_vec3("--tool", options.get("tool"), "in metres",
+                    NumberRange{-kMaxToolOption_m, kMaxToolOption_m, false, false, "m"}, tool_m);
+}
+
+/// "x, y, z mm" of a point [m], to the micrometre (no "-0.000" for a rounding's sign).
+std::string millimetres(const Vec3& point_m) {
+  const Vec3 shown_mm = (point_m * 1e6).array().round() / 1e3 + 0.0;  // + 0.0: -0.0 becomes 0.0
+  char text[96];
+  std::snprintf(text, sizeof text, "%.3f, %.3f, %.3f mm", shown_mm.x(), shown_mm.y(), shown_mm.z());
+  return text;
+}
+
+/// --tool-transform FILE [--tool-transform-inverse]: the tool point is the origin of the tool
+/// frame in the flange frame, the translation of the file's transform (or of its inverse, when
+/// the file is the flange's pose in the tool frame); *note says so, and what the rotation is.
+Error tool_transform_option(const Options& options, const textio::InputUnits& units, Vec3* tool_m, std::string* note) {
+  const std::string path = options.get("tool-transform");
+  RigidTransform read;
+  const Error error = textio::read_transform_text(path, units, &read);
+  if (!error.ok()) return error;
+  const bool inverse = options.given("tool-transform-inverse");
+  const RigidTransform tool_in_flange = inverse ? read.inverse() : read;
+  const Vec3 other_m = inverse ? read.translation_m : read.inverse().translation_m;  // the other reading's point
+  *tool_m = tool_in_flange.translation_m;
+  if (tool_m->cwiseAbs().maxCoeff() > kMaxToolOption_m) {
+    return Error::usage("--tool-transform " + port::quoted(path) + " puts the tool point at " + millimetres(*tool_m) +
+                        ", beyond " + textio::format_double(kMaxToolOption_m) + " m of the flange");
+  }
+  const double cosine = std::clamp((tool_in_flange.rotation.trace() - 1.0) / 2.0, -1.0, 1.0);
+  char rotation[80];
+  std::snprintf(rotation, sizeof rotation, "%.3f deg", std::acos(cosine) * math::kDegPerRad);
+  *note = "tool point from --tool-transform " + path + ": " + millimetres(*tool_m) + " (the translation of " +
+          (inverse ? "the inverse of the file's transform" : "the file's transform") +
+          ", the tool frame's pose in the flange frame); its rotation, " + rotation +
+          ", is not used: a reflector is a point";
+  if (tool_m->z() < 0.0 && other_m.z() > 0.0) {
+    *note += "; the point lies behind the flange (z < 0): if the file is the " +
+             std::string(inverse ? "tool's pose in the flange frame, leave out --tool-transform-inverse"
+                                 : "flange's pose in the tool frame (a lab's T_TOOL_F), add --tool-transform-inverse") +
+             " (the point at " + millimetres(other_m) + ")";
+  }
+  return Error{};
+}
+
 }  // namespace
 
 const std::vector<OptionSpec>& calibrate_option_specs() {
@@ -134,7 +216,15 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "ur5"},
         {"tool", "X,Y,Z",
          "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)",
-         "0,0,0.1695"},
+         kDefaultToolText},
+        {"tool-transform", "FILE",
+         "instead of --tool: a 4x4 transform (text, one row per line; lengths in --length-unit), the tool frame's "
+         "pose in the flange frame, whose translation is the tool point (its rotation is not used)",
+         ""},
+        {"tool-transform-inverse", "",
+         "--tool-transform's file is the flange's pose in the tool frame (e.g. a lab's T_TOOL_F): its inverse's "
+         "translation is the tool point",
+         ""},
         {"params", "full|paper",
          "full identifiable model, or the link lengths (every non-zero d and a; for UR the paper's six)", "full"},
         {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
@@ -180,7 +270,8 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
         {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
         {"compliance", "basis|masses",
          "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity "
-         "basis, or the link masses (UR5, UR10, UR3e, UR5e)",
+         "basis, or the link masses (" +
+             types_with_masses() + ")",
          "", "basis"},
         {"harmonics", "K",
          "also fit harmonics of orders 1 .. K of each joint's reading (encoder eccentricity, transmission error; "
@@ -205,8 +296,19 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
 Error calibrate_settings_from_options(const Options& options, CalibrateSettings* settings) {
   bool from_file = false;
   Error error = robot_model_option(options, "robot-model", &settings->robot, &from_file);
-  if (error.ok() && from_file && !options.given("tool")) settings->tool_m = settings->robot.model.tool_m;
-  if (error.ok() && (!from_file || options.given("tool"))) error = vec3_option(options, "tool", &settings->tool_m);
+  if (error.ok()) error = sample_reader_settings_from_options(options, settings);
+  if (!error.ok()) return error;
+  const bool transform = options.given("tool-transform");
+  if (transform && options.given("tool")) return Error::usage("give --tool or --tool-transform, not both");
+  if (!transform && options.given("tool-transform-inverse")) {
+    return Error::usage("--tool-transform-inverse needs --tool-transform FILE");
+  }
+  if (from_file && !options.given("tool")) settings->tool_m = settings->robot.model.tool_m;
+  if (transform) {
+    error = tool_transform_option(options, settings->units, &settings->tool_m, &settings->tool_note);
+  } else if (!from_file || options.given("tool")) {
+    error = tool_option(options, &settings->tool_m);
+  }
   if (!error.ok()) return error;
   const std::string params = options.get("params");
   if (params != "full" && params != "paper")
@@ -221,10 +323,9 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
     seeded = count_option(options, "population-subset", 0, kMaxPopulationSubset, &settings->population_subset);
   }
   if (!seeded.ok()) return seeded;
-  if (!textio::parse_double(options.get("split"), &settings->train_fraction) ||
-      !(settings->train_fraction > 0.0 && settings->train_fraction <= 1.0)) {
-    return Error::usage("--split must be a fraction in (0, 1], not " + port::quoted(options.get("split")));
-  }
+  error = ranged_option(options, "split", NumberRange{0.0, 1.0, true, false, "(the training share)"},
+                        &settings->train_fraction);
+  if (!error.ok()) return error;
   const std::string cv = options.get("cv");
   double folds = 0.0;
   if (cv == "loo") {
@@ -232,8 +333,8 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   } else if (!cv.empty()) {
     if (!textio::parse_double(cv, &folds) || folds < 2.0 || folds > static_cast<double>(kMaxCrossValidationFolds) ||
         folds != static_cast<double>(static_cast<std::size_t>(folds))) {
-      return Error::usage("--cv must be 'loo' or a number of folds in [2, " + std::to_string(kMaxCrossValidationFolds) +
-                          "], not " + port::quoted(cv));
+      return Error::usage("--cv must be 'loo' or a number of folds within [2, " +
+                          std::to_string(kMaxCrossValidationFolds) + "], got " + port::quoted(cv));
     }
     settings->cv_folds = static_cast<std::size_t>(folds);
   }
@@ -260,10 +361,9 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   if (options.get("significance") == "auto") {
     settings->significance_t = -1.0;  // lib: chosen by leaving one pose out at a time on small sets
   } else if (options.given("significance")) {
-    if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
-        !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
-      return Error::usage("--significance must be 'auto' or a number in [0, 10]");
-    }
+    error = ranged_option(options, "significance", NumberRange{0.0, 10.0, false, false, "sigma (or 'auto')"},
+                          &settings->significance_t);
+    if (!error.ok()) return error;
     settings->significance_every_set = true;
   }
   const bool samples = !options.get("samples").empty();
@@ -272,16 +372,12 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   if (streams && (options.get("robot").empty() || options.get("tracker").empty())) {
     return Error::usage("--robot and --tracker go together");
   }
-  error = sample_reader_settings_from_options(options, settings);
-  if (!error.ok()) return error;
   double max_mm = 0.0;
   double max_deg = 0.0;
-  error = number_option(options, "max-change-mm", &max_mm);
-  if (error.ok()) error = number_option(options, "max-change-deg", &max_deg);
+  error = ranged_option(options, "max-change-mm", NumberRange{0.0, 1e6, true, false, "mm"}, &max_mm);
+  if (error.ok())
+    error = ranged_option(options, "max-change-deg", NumberRange{0.0, 360.0, true, false, "deg"}, &max_deg);
   if (!error.ok()) return error;
-  if (!(max_mm > 0.0 && max_mm < 1e9) || !(max_deg > 0.0 && max_deg <= 360.0)) {
-    return Error::usage("--max-change-mm must be positive and --max-change-deg in (0, 360]");
-  }
   settings->bounds.max_length_change_m = max_mm * 1e-3;
   settings->bounds.max_angle_change_rad = max_deg * math::kRadPerDeg;
   settings->robust = options.given("robust");

@@ -32,6 +32,7 @@ struct CalibrateSettings : SampleReaderSettings {
   textio::RobotDescription robot;  ///< --robot-model: built-in table or description file
   Vec3 tool_m =
       Vec3(0.0, 0.0, 0.1695);  ///< --tool (or the description file's): nominal tool point in the flange frame [m]
+  std::string tool_note;       ///< where --tool-transform put the tool point (a console line), "" without it
   bool paper_params = false;   ///< --params paper
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< --method
   std::uint64_t seed = 1;                                ///< --seed
@@ -77,9 +78,11 @@ struct Run {
   std::size_t link_length_count = kPaper6Dimension;  ///< lengths the population stages search [-]
   bool has_cv = false;                               ///< --cv ran: `cv` is meaningful
   CrossValidationResult cv;                          ///< per-fold held-out errors (~20 KB)
-  int target_count = 1;                              ///< targets (reflectors) in the samples: the result's "tools" [-]
-  CalibrationOptions options;                        ///< the job's options, as lib ran it
-  record::CalibrationUncertainty uncertainty;        ///< the final parameters' covariance, the training poses' domain
+  /// Per fold of `cv`: the Sample::index of each sample it held out, increasing.
+  std::vector<std::vector<std::uint32_t>> cv_held_out;
+  int target_count = 1;                        ///< targets (reflectors) in the samples: the result's "tools" [-]
+  CalibrationOptions options;                  ///< the job's options, as lib ran it
+  record::CalibrationUncertainty uncertainty;  ///< the final parameters' covariance, the training poses' domain
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).
@@ -117,8 +120,16 @@ void add_uncertainty(const CalibrateSettings& settings, const CliDataset& datase
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,
                                        const CliDataset& dataset, const streams::SessionFacts& facts, const Run& run);
 
+/// What held_out_ranges() counts: "lines of FILE" (paired samples) or "samples (numbered from 1
+/// in the order extracted)".
+std::string held_out_unit(const streams::SessionFacts& facts);
+/// Samples `indices` (Sample::index) as ranges of what held_out_unit() counts: "2-4, 7, 9"
+/// (the lines of a row that made several samples once).
+std::string held_out_ranges(const streams::SessionFacts& facts, const std::vector<std::uint32_t>& indices);
+
 /// The terminal text (on stdout, or on stderr when stdout carries the result).
-void print_calibration_tables(std::FILE* out, const report::ReportData& data, const Run& run);
+void print_calibration_tables(std::FILE* out, const report::ReportData& data, const streams::SessionFacts& facts,
+                              const Run& run);
 
 /// The result file (robot-calibration/1 JSON) of a run. `warnings`: the fit's plausibility
 /// warnings, a "warnings" array when there are any.

@@ -40,6 +40,9 @@ std::string calibration_result_json(const CalibrateSettings& settings, const rep
   record.ur_deltas = ur_deltas_between(settings.robot.model, final_stage.model);
   record.facts = &facts;
   record.cv = run.has_cv ? &run.cv : nullptr;
+  for (const std::vector<std::uint32_t>& fold : run.cv_held_out)
+    record.cv_held_out.push_back(held_out_ranges(facts, fold));
+  record.cv_held_out_of = held_out_unit(facts);
   record.warnings = warnings;
   record.report = &data;
   return record::format_result_json(record);

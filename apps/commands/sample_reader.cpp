@@ -12,25 +12,22 @@ Error orientation_options(const Options& options, textio::OrientationInput* orie
   if (options.given("position-sigma-m") && options.given("tracker-sigma-um")) {
     return Error::usage("--tracker-sigma-um and --position-sigma-m say the same: give one");
   }
-  Error error = number_option(options, "position-sigma-m", &orientation->position_sigma_m);
+  Error error = ranged_option(options, "position-sigma-m", NumberRange{0.0, 1.0, true, true, "m"},
+                              &orientation->position_sigma_m);
   if (error.ok() && options.given("tracker-sigma-um")) {
     double sigma_um = 0.0;
-    error = number_option(options, "tracker-sigma-um", &sigma_um);
+    error = ranged_option(options, "tracker-sigma-um", NumberRange{0.0, 1e6, true, true, "um"}, &sigma_um);
     orientation->position_sigma_m = sigma_um * 1e-6;
-    if (error.ok() && !(sigma_um > 0.0 && sigma_um < 1e6))
-      return Error::usage("--tracker-sigma-um must be in (0, 1e6)");
   }
-  if (error.ok()) error = number_option(options, "angle-sigma-rad", &orientation->angle_sigma_rad);
-  if (error.ok() && options.given("orientation-lever-m"))
-    error = number_option(options, "orientation-lever-m", &orientation->lever_m);
+  if (error.ok()) {
+    error = ranged_option(options, "angle-sigma-rad", NumberRange{0.0, 1.0, true, true, "rad"},
+                          &orientation->angle_sigma_rad);
+  }
+  if (error.ok() && options.given("orientation-lever-m")) {
+    error =
+        ranged_option(options, "orientation-lever-m", NumberRange{0.0, 1.0, false, false, "m"}, &orientation->lever_m);
+  }
   if (!error.ok()) return error;
-  if (!(orientation->position_sigma_m > 0.0 && orientation->position_sigma_m < 1.0) ||
-      !(orientation->angle_sigma_rad > 0.0 && orientation->angle_sigma_rad < 1.0)) {
-    return Error::usage("--position-sigma-m and --angle-sigma-rad must be in (0, 1)");
-  }
-  if (options.given("orientation-lever-m") && !(orientation->lever_m >= 0.0 && orientation->lever_m <= 1.0)) {
-    return Error::usage("--orientation-lever-m must be in [0, 1] m");
-  }
   const std::string form = options.get("orientation-form");
   if (form == "euler-xyz") {
     orientation->form = textio::OrientationForm::euler_xyz;
@@ -40,16 +37,20 @@ Error orientation_options(const Options& options, textio::OrientationInput* orie
   return Error{};
 }
 
-/// --joint-sigma-rad or --joint-sigma-deg (not both), in [0, 1) rad.
+/// --joint-sigma-rad or --joint-sigma-deg (not both), below 1 rad.
 Error joint_sigma_option(const Options& options, double* sigma_rad) {
   const bool in_degrees = options.given("joint-sigma-deg");
   if (in_degrees && options.given("joint-sigma-rad"))
     return Error::usage("give --joint-sigma-rad or --joint-sigma-deg, not both");
-  const Error error = number_option(options, in_degrees ? "joint-sigma-deg" : "joint-sigma-rad", sigma_rad);
-  if (!error.ok()) return error;
-  if (in_degrees) *sigma_rad *= math::kRadPerDeg;
-  if (!(*sigma_rad >= 0.0 && *sigma_rad < 1.0)) return Error::usage("--joint-sigma-rad must be in [0, 1) rad");
-  return Error{};
+  constexpr double kMaxJointSigma_rad = 1.0;
+  if (!in_degrees)
+    return ranged_option(options, "joint-sigma-rad", NumberRange{0.0, kMaxJointSigma_rad, false, true, "rad"},
+                         sigma_rad);
+  const Error error =
+      ranged_option(options, "joint-sigma-deg",
+                    NumberRange{0.0, kMaxJointSigma_rad * math::kDegPerRad, false, true, "deg"}, sigma_rad);
+  *sigma_rad *= math::kRadPerDeg;
+  return error;
 }
 
 }  // namespace

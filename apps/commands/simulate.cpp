@@ -105,7 +105,6 @@ constexpr double kMaxDuration_s = 3600.0;
 
 /// Builds the session configuration.
 Error configure(const cli::Options& options, SimConfig* config) {
-  Numbers numbers{options, Error{}};
   textio::RobotDescription robot;
   bool from_file = false;
   Error error = cli::robot_model_option(options, "robot-model", &robot, &from_file);
@@ -144,10 +143,8 @@ Error configure(const cli::Options& options, SimConfig* config) {
                                      std::tuple{"tool-sigma-um", &config->tool_sigma_m, 1e-6}}) {
     if (!options.given(name)) continue;
     double value = 0.0;
-    if (!numbers.get(name, &value)) return numbers.error;
-    if (!(value >= 0.0 && value < 1e9)) {
-      return Error::usage(std::string("--") + name + " must be a finite number, not negative");
-    }
+    error = cli::ranged_option(options, name, cli::NumberRange{0.0, 1e9, false, true}, &value);
+    if (!error.ok()) return error;
     *target = value * scale;
   }
   if (options.given("compliance-urad")) {

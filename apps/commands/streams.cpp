@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "commands/commands.hpp"
 #include "commands/host_storage.hpp"
 #include "hivecal/port/capture_file.hpp"
 #include "hivecal/port/output_files.hpp"
@@ -83,12 +84,9 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
   if (options.get("robot-port").empty() && options.get("tracker-port").empty()) {
     return Error::usage("give --robot-port and/or --tracker-port (see --help)");
   }
-  Error error = cli::number_option(options, "duration-s", duration_s);
+  Error error = cli::ranged_option(
+      options, "duration-s", cli::NumberRange{0.0, 1e9, false, false, "s (0: until Ctrl-C / SIGTERM)"}, duration_s);
   if (!error.ok()) return error;
-  if (!(*duration_s >= 0.0 && *duration_s <= 1e9)) {
-    return Error::usage("--duration-s must be 0 (until Ctrl-C / SIGTERM) or a positive number of seconds, not " +
-                        port::quoted(options.get("duration-s")));
-  }
   port::OutputSet checks;  // used for its checks only: captures are written live, not staged
   for (std::size_t k = 0; k < 2; ++k) {
     const StreamOptions& s = kStreams[k];
@@ -243,12 +241,10 @@ Error extract(const cli::Options& options) {
   double max_speed_mm_s = 0, window_s = 0;
   Error error = cli::robot_model_option(options, "robot-model", &robot);
   if (error.ok()) error = cli::vec3_option(options, "tool", &tool);
-  if (error.ok()) error = cli::number_option(options, "max-speed-mm-s", &max_speed_mm_s);
-  if (error.ok()) error = cli::number_option(options, "window-s", &window_s);
+  if (error.ok())
+    error = cli::ranged_option(options, "max-speed-mm-s", cli::NumberRange{0.0, 1e6, true, true}, &max_speed_mm_s);
+  if (error.ok()) error = cli::bounded_option(options, "window-s", 0.0, 60.0, &window_s);
   if (!error.ok()) return error;
-  if (!(max_speed_mm_s > 0 && max_speed_mm_s < 1e6) || !(window_s >= 0 && window_s <= 60)) {
-    return Error::usage("--max-speed-mm-s must be positive and --window-s in [0, 60] (see --help)");
-  }
   port::OutputSet outputs;
   std::size_t samples_id = 0;
   const std::string out = options.get("samples");
@@ -319,7 +315,7 @@ int extract_main(int argc, char** argv) {
        "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"robot-model", "NAME|FILE",
        std::string(robot_type_names()) + " or a robot description .json (nominal geometry for tool speeds)", "ur5"},
-      {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
+      {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", cli::kDefaultToolText},
       {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
       {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
       {"samples", "FILE", "write the paired samples q1..q6,x,y,z (CSV) here; '-' for stdout; empty: none", ""},

@@ -72,6 +72,15 @@ port::Error simulated_compliance_of(const std::string& path, ReferenceCompliance
       j3->kind != textio::JsonValue::Kind::number) {
     return port::Error::input(path + ": \"simulation\".\"compliance\" must hold numbers joint2_rad and joint3_rad");
   }
+  for (const textio::JsonValue* joint : {j2, j3}) {  // a joint's gravity deflection: bounded as a coefficient is
+    if (!(std::fabs(joint->number) <= kMaxJointTermCoefficient)) {
+      return port::Error::input(path + ": \"simulation\".\"compliance\" " +
+                                (joint == j2 ? "joint2_rad" : "joint3_rad") + " = " +
+                                textio::format_double(joint->number) + " must be within +/-" +
+                                textio::format_double(kMaxJointTermCoefficient) +
+                                " rad (a joint's deflection under gravity; real arms: 1e-6 .. 1e-4)");
+    }
+  }
   compliance->joint2_rad = j2->number;
   compliance->joint3_rad = j3->number;
   *found = true;
@@ -147,13 +156,20 @@ int validate_main(int argc, char** argv) {
   std::printf("validation on %ld fresh poses vs %s: MAE 3D %.2f um, max %.2f um%s\n", geometry.poses,
               options.get("truth").c_str(), geometry.mae_m * 1e6, geometry.max_m * 1e6,
               simulated || calibration.model.compliance.term_count > 0 ? " (geometry only, no compliance)" : "");
+  ValidationStats points;
   if (simulated) {  // where the simulated tool truly was: the truth bent by the simulator's compliance
-    const ValidationStats points = validate_on_fresh_poses(calibration.model, calibration.base_to_tracker, truth.model,
-                                                           truth.base_to_tracker, n, s, bent);
+    points = validate_on_fresh_poses(calibration.model, calibration.base_to_tracker, truth.model, truth.base_to_tracker,
+                                     n, s, bent);
     std::printf(
         "validation on %ld fresh poses vs the true tool points (the simulated compliance included): "
         "MAE 3D %.2f um, max %.2f um\n",
         points.poses, points.mae_m * 1e6, points.max_m * 1e6);
+  }
+  // A figure that is no number says nothing: the models' points overflowed (a huge file value).
+  if (!std::isfinite(geometry.mae_m + geometry.max_m + points.mae_m + points.max_m)) {
+    error(kValidateCommand,
+          "warning: a validation figure is not finite (the predicted points overflow): check the files' values");
+    return kExitWarnings;
   }
   return kExitOk;
 }

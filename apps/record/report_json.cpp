@@ -99,6 +99,7 @@ void write_outliers(JsonWriter& json, const OutlierTable& o) {
   json.key("kept_w").begin_array();
   for (double w : o.kept_w) json.value(w);
   json.end_array();
+  if (o.kept_total > 0) json.key("kept_total").value(static_cast<long long>(o.kept_total));  // only then: bytes kept
   json.end_object();
 }
 
@@ -340,6 +341,11 @@ bool get_outliers(const JsonValue* v, OutlierTable* out) {
     if (!get_number(&w, &value)) return false;
     out->kept_w.push_back(value);
   }
+  if (const JsonValue* total = v->find("kept_total"); total != nullptr) {  // a thinned report only
+    long long count = 0;
+    if (!get_count(total, &count) || static_cast<std::size_t>(count) <= out->kept_w.size()) return false;
+    out->kept_total = static_cast<std::size_t>(count);
+  }
   return true;
 }
 
@@ -479,6 +485,7 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
     json.end_object();
   }
   json.end_array();
+  if (data.sample_total > 0) json.key("sample_total").value(static_cast<long long>(data.sample_total));  // thinned only
   json.key("predictions").begin_array();
   for (const PredictionSet& p : data.predictions) {
     json.begin_object();
@@ -564,6 +571,12 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   if (!get_accuracy(value.find("calibrated"), &parsed.calibrated)) return bad("calibrated");
   if (!get_convergence(value.find("convergence"), &parsed.convergence)) return bad("convergence");
   if (!get_samples(value.find("samples"), &parsed.samples)) return bad("samples");
+  if (const JsonValue* total = value.find("sample_total"); total != nullptr) {  // a thinned report only
+    long long count = 0;
+    if (!get_count(total, &count) || static_cast<std::size_t>(count) <= parsed.samples.size())
+      return bad("sample_total");
+    parsed.sample_total = static_cast<std::size_t>(count);
+  }
   if (!get_predictions(value.find("predictions"), parsed.samples, &parsed.predictions)) return bad("predictions");
   if (!get_number(value.find("noise_sigma_m"), &parsed.noise_sigma_m)) return bad("noise_sigma_m");
   if (const JsonValue* noise_source = value.find("noise_source"); noise_source != nullptr) {  // measured noise only

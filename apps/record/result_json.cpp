@@ -153,7 +153,8 @@ void write_outliers(JsonWriter& w, const streams::SessionFacts* facts, const Cal
   w.end_array();
 }
 
-void write_cross_validation(JsonWriter& w, const CrossValidationResult& cv) {
+void write_cross_validation(JsonWriter& w, const CalibrationRecord& record) {
+  const CrossValidationResult& cv = *record.cv;
   w.key("cross_validation").begin_object();
   w.key("folds").value(static_cast<long long>(cv.fold_count));
   w.key("samples").value(static_cast<long long>(cv.sample_count));
@@ -161,6 +162,7 @@ void write_cross_validation(JsonWriter& w, const CrossValidationResult& cv) {
   w.key("baseline_mae_3d_m").value(cv.baseline_mae_3d_m);
   w.key("fold_mae_3d_mean_m").value(cv.fold_mae_3d_mean_m);
   w.key("fold_mae_3d_max_m").value(cv.fold_mae_3d_max_m);
+  if (!record.cv_held_out.empty()) w.key("held_out_of").value(record.cv_held_out_of);
   w.key("per_fold").begin_array();
   for (std::size_t k = 0; k < cv.fold_count; ++k) {
     w.begin_object();
@@ -168,6 +170,7 @@ void write_cross_validation(JsonWriter& w, const CrossValidationResult& cv) {
     w.key("test_count").value(static_cast<long long>(cv.folds[k].test.count));
     w.key("train_mae_3d_m").value(cv.folds[k].train.mae(ErrorAxis::norm_3d));
     w.key("test_mae_3d_m").value(cv.folds[k].test.mae(ErrorAxis::norm_3d));
+    if (k < record.cv_held_out.size()) w.key("held_out").value(record.cv_held_out[k]);
     w.end_object();
   }
   w.end_array();
@@ -427,7 +430,7 @@ std::string format_result_json(const CalibrationRecord& record) {
       }
     }
     if (record.result != nullptr) write_outliers(w, record.facts, *record.result);
-    if (record.cv != nullptr) write_cross_validation(w, *record.cv);
+    if (record.cv != nullptr) write_cross_validation(w, record);
     if (!record.warnings.empty()) {
       w.key("warnings").begin_array();
       for (const std::string& warning : record.warnings) w.value(warning);

@@ -73,8 +73,11 @@ struct CalibrationRecord {
   UrCalibrationDeltas ur_deltas;                 ///< the model as UR calibration.conf deltas from the start
   const streams::SessionFacts* facts = nullptr;  ///< input facts: clock, extraction, orientation, sources
   const CrossValidationResult* cv = nullptr;     ///< --cv's folds, else null
-  std::vector<std::string> warnings;             ///< the fit's plausibility warnings
-  const report::ReportData* report = nullptr;    ///< the tables and figures (key "report"), else not written
+  /// Per fold of `cv`: the samples it held out, as ranges of what names them ("2-4, 7"); may be empty.
+  std::vector<std::string> cv_held_out;
+  std::string cv_held_out_of;                  ///< what those ranges count: "lines of FILE", or sample numbers
+  std::vector<std::string> warnings;           ///< the fit's plausibility warnings
+  const report::ReportData* report = nullptr;  ///< the tables and figures (key "report"), else not written
   // file.uncertainty: "covariance" and "domain", after "report", when it holds them
 };
 

@@ -58,6 +58,9 @@ struct OrientationRead {
   /// The resolution the joint columns are written in: the finest place value of a last digit
   /// among their fields (a UR pendant's 0.01 deg; a log's full digits: ~1e-16) [rad]
   double joint_resolution_rad = 0.0;
+  /// Every row's rx, ry, rz are the same numbers (at least two rows): the columns say the tool
+  /// never turned, which the joints may contradict (a constant written for a missing reading).
+  bool orientation_constant = false;
 };
 
 /// Per-axis variance of the tool point from joints read with noise sigma_q: sigma_q^2 |J|^2 / 3,

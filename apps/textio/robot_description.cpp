@@ -508,13 +508,15 @@ port::Error read_robot_description(const std::string& path, RobotDescription* de
 }
 
 port::Error robot_description_from_value(const std::string& value, RobotDescription* description, bool* from_file) {
-  const bool is_file = !value.empty() && port::identify(value).exists;
+  RobotType type = RobotType::ur5;
+  // A built-in name wins over a file or folder of that name in the working directory: `./ur5e` names the file.
+  const bool builtin_name = robot_type_from_name(value.c_str(), &type) == Status::ok;
+  const bool is_file = !builtin_name && !value.empty() && port::identify(value).exists;
   const bool json_name = (value.size() >= 5 && value.compare(value.size() - 5, 5, ".json") == 0) ||
                          (value.size() >= 5 && value.compare(value.size() - 5, 5, ".urdf") == 0);
   if (from_file != nullptr) *from_file = is_file || json_name;
   if (is_file || json_name) return read_robot_description(value, description);
-  RobotType type = RobotType::ur5;
-  if (robot_type_from_name(value.c_str(), &type) != Status::ok) {
+  if (!builtin_name) {
     return port::Error::usage("unknown robot model " + port::quoted(value) + " (" + robot_type_names() +
                               ", or a robot description .json or .urdf file)");
   }

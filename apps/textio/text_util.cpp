@@ -26,13 +26,30 @@ std::string_view trim(std::string_view s) {
   return s.substr(first, last - first + 1);
 }
 
-bool parse_double(std::string_view field, double* value) {
+NumberText parse_number(std::string_view field, double* value) {
   field = trim(field);
-  if (field.empty()) return false;
+  if (field.empty()) return NumberText::malformed;
   if (field.front() == '+') field.remove_prefix(1);
   const char* end = field.data() + field.size();
-  const auto result = std::from_chars(field.data(), end, *value);
-  return result.ec == std::errc() && result.ptr == end;
+  double parsed = 0.0;
+  const auto result = std::from_chars(field.data(), end, parsed);
+  if (result.ptr != end) return NumberText::malformed;
+  if (result.ec == std::errc::result_out_of_range) {
+    // Too large or too small: a negative exponent, or no exponent and no non-zero integer digit, is small.
+    const std::size_t e = field.find_first_of("eE");
+    const std::string_view mantissa = field.substr(0, e);
+    const std::string_view integer = mantissa.substr(0, mantissa.find('.'));
+    const bool small = e != std::string_view::npos ? field.substr(e + 1, 1) == "-"
+                                                   : integer.find_first_not_of("-0") == std::string_view::npos;
+    return small ? NumberText::underflow : NumberText::overflow;
+  }
+  if (result.ec != std::errc()) return NumberText::malformed;
+  *value = parsed;
+  return NumberText::ok;
+}
+
+bool parse_double(std::string_view field, double* value) {
+  return parse_number(field, value) == NumberText::ok;
 }
 
 port::Error write_text_file(const std::string& path, const std::string& content) {

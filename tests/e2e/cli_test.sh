@@ -50,7 +50,7 @@ printf '{"convention": "modified-dh", "dh": []}\n' >"$work/arm.json"
 expect 3 "arm.json: \"dh\" must be an array of 6 joint objects" -- calibrate --samples "$work/joints.csv" --robot-model "$work/arm.json"
 expect 3 "no-such-arm.json': cannot open" -- calibrate --samples "$work/joints.csv" --robot-model "$work/no-such-arm.json"
 expect 2 "--method must be one of" -- calibrate --samples "$work/joints.csv" --method sgd
-expect 2 "--split must be a fraction" -- calibrate --samples "$work/joints.csv" --split 1.5
+expect 2 "--split must be within (0, 1]" -- calibrate --samples "$work/joints.csv" --split 1.5
 expect 2 "--tool must be X,Y,Z" -- calibrate --samples "$work/joints.csv" --tool 1,2
 expect 3 "unexpected header" -- calibrate --samples "$work/joints.csv" --out "$work/r1.json"
 no_file "$work/r1.json"
@@ -302,8 +302,8 @@ expect 3 "--rtde '127.0.0.1:1': Connection refused" -- record --rtde 127.0.0.1:1
 no_file "$work/rtde.txt"
 expect 2 "--rtde must be HOST or HOST:PORT (PORT 1 .. 65535), not 'ur5:99999'" -- record --rtde ur5:99999
 expect 2 "--rtde records the robot alone" -- record --rtde 127.0.0.1 --tracker-port "$work/p2"
-expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s -1
-expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s nan
+expect 2 "--duration-s must be within [0, 1e+09] s (0: until Ctrl-C / SIGTERM)" -- record --robot-port "$work/p1" --duration-s -1
+expect 2 "--duration-s must be a number within [0, 1e+09] s (0: until Ctrl-C / SIGTERM), got 'nan'" -- record --robot-port "$work/p1" --duration-s nan
 
 # --- progress: on stderr when it is a terminal (script(1) gives one), never in a pipe or with --quiet
 if command -v script >/dev/null; then
@@ -345,11 +345,11 @@ expect 2 "--seed must be a whole number" -- calibrate --samples "$work/paired.cs
 expect 2 "--seed must be a whole number" -- calibrate --samples "$work/paired.csv" --seed 18446744073709551616 --out "$work/n1.json"
 expect 2 "--seed must be a whole number" -- plan --robot-model ur5 --count 12 --tracker-position 2,0.5,0.6 --seed -1 --out "$work/n1.csv"
 expect 2 "--poses must be a whole number" -- validate --calibration "$work/model.json" --truth "$work/model.json" --poses 1.5
-expect 2 "--tool must be X,Y,Z in metres, each finite" -- calibrate --samples "$work/paired.csv" --tool 0,0,nan --out "$work/n1.json"
+expect 2 "--tool must be X,Y,Z in metres, each within [-10, 10] m" -- calibrate --samples "$work/paired.csv" --tool 0,0,nan --out "$work/n1.json"
 expect 2 "training pose(s) of" -- calibrate --samples "$work/paired.csv" --split 0.01 --out "$work/n1.json"
-expect 2 "--split must be a fraction in (0, 1], not '0'" -- calibrate --samples "$work/paired.csv" --split 0 --out "$work/n1.json"
-expect 2 "--drift-ppm must be in [-1000, 1000], not 'nan'" -- simulate --out-dir "$work/n2" --drift-ppm nan
-expect 2 "--waypoints must be in [2, 2000]" -- simulate --out-dir "$work/n2" --waypoints 100000
+expect 2 "--split must be within (0, 1] (the training share), got '0'" -- calibrate --samples "$work/paired.csv" --split 0 --out "$work/n1.json"
+expect 2 "--drift-ppm must be a number within [-1000, 1000], got 'nan'" -- simulate --out-dir "$work/n2" --drift-ppm nan
+expect 2 "--waypoints must be within [2, 2000]" -- simulate --out-dir "$work/n2" --waypoints 100000
 no_file "$work/n1.json"
 if "${run[@]}" calibrate --samples "$work/paired.csv" --method lm --split 1 --seed 9007199254740993 --out "$work/n3.json" >/dev/null 2>&1 &&
    grep -q '"seed": 9007199254740993' "$work/n3.json"; then pass; else fail "--seed 2^53+1 not kept exactly in result.json"; fi
