@@ -5,6 +5,7 @@
 // calibration (its cancelling +-204 m offsets), and the tracker frame where the result has it.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -348,6 +349,68 @@ TEST(UrdfImport, WhatIsNoSixJointSerialArmIsRefusedByLine) {
     EXPECT_FALSE(read.ok()) << c.message;
     EXPECT_NE(read.message.find(c.message), std::string::npos) << read.message << "\nwanted: " << c.message;
   }
+}
+
+// --- what a hostile file may hold: many links, deep nesting -------------------------------
+
+/// The nominal UR5 as hivecal exports it, with `extra` inserted before </robot>.
+std::string ur5_urdf_with(const std::string& extra) {
+  textio::RobotDescription ur5;
+  ur5.model = nominal_model(RobotType::ur5);
+  std::string urdf = textio::format_urdf(ur5, nullptr);
+  return urdf.insert(urdf.rfind("</robot>"), extra);
+}
+
+/// Seconds `parse` takes on `urdf`, with its error.
+double seconds_to_read(const std::string& urdf, textio::RobotDescription* robot, port::Error* error) {
+  const auto start = std::chrono::steady_clock::now();
+  *error = textio::parse_urdf_description(urdf, "arm.urdf", robot);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// 200,000 fixed links in a line after the tcp, and 200,000 fixed children of link_6: read in
+// linear time and without recursion (they took minutes and overflowed the stack). Not a timing
+// test: the bound only tells a hang from a read.
+TEST(UrdfImport, ManyFixedLinksReadInLinearTimeWithoutRecursion) {
+  constexpr int kLinks = 200000;
+  std::string line;
+  std::string parent = "tcp";
+  for (int i = 0; i < kLinks; ++i) {
+    const std::string link = "x" + std::to_string(i);
+    line += "<link name=\"" + link + "\"/><joint name=\"j" + link + "\" type=\"fixed\"><parent link=\"" + parent +
+            "\"/><child link=\"" + link + "\"/><origin xyz=\"0 0 0.000001\"/></joint>\n";
+    parent = link;
+  }
+  line += "<link name=\"tool0\"/><joint name=\"jt\" type=\"fixed\"><parent link=\"" + parent +
+          "\"/><child link=\"tool0\"/></joint>\n";
+  std::string children;
+  for (int i = 0; i < kLinks; ++i) {
+    const std::string link = "c" + std::to_string(i);
+    children += "<link name=\"" + link + "\"/><joint name=\"j" + link +
+                "\" type=\"fixed\"><parent link=\"link_6\"/><child link=\"" + link + "\"/></joint>\n";
+  }
+  const RobotModel ur5 = nominal_model(RobotType::ur5);
+  for (const std::string* extra : {&line, &children}) {
+    textio::RobotDescription robot;
+    port::Error error;
+    const double seconds = seconds_to_read(ur5_urdf_with(*extra), &robot, &error);
+    ASSERT_TRUE(error.ok()) << error.message;
+    EXPECT_LT(seconds, 10.0);
+    for (int i = 0; i < kJointCount; ++i) EXPECT_NEAR(robot.model.joints[i].a_m, ur5.joints[i].a_m, 1e-12) << i;
+    // The line's tool0 is 200,000 x 1 um beyond the tcp; the children leave the tcp where it is.
+    EXPECT_NEAR(robot.model.tool_m.z(), extra == &line ? kLinks * 1e-6 : 0.0, 1e-9);
+    std::printf("%d fixed links (%s): read in %.2f s\n", kLinks, extra == &line ? "a line" : "children", seconds);
+  }
+}
+
+TEST(UrdfImport, DeepNestingIsRefusedByLine) {
+  std::string nested;
+  for (int i = 0; i < 100000; ++i) nested += "<a>\n";
+  textio::RobotDescription robot;
+  port::Error error;
+  seconds_to_read(ur5_urdf_with(nested), &robot, &error);
+  EXPECT_NE(error.message.find("elements nested deeper than 64: not a URDF"), std::string::npos) << error.message;
+  EXPECT_EQ(error.message.rfind("arm.urdf:", 0), 0u) << error.message;
 }
 
 }  // namespace
