@@ -78,7 +78,7 @@ class XmlTagReader {
       const std::size_t open = text_.find('<', at_);
       if (open == std::string_view::npos) {
         if (open_.empty()) return refuse_at(0, "", refusal);
-        return refuse_at(open_.back().line, "<" + std::string(open_.back().name) + "> is never closed", refusal);
+        return refuse_at(open_.back().line, "<" + port::printable(open_.back().name) + "> is never closed", refusal);
       }
       advance_to(open);
       const std::string_view rest = text_.substr(open);
@@ -135,9 +135,9 @@ class XmlTagReader {
     if (tag->closing) {
       if (open_.empty() || open_.back().name != tag->name) {
         return refuse_at(tag_line,
-                         "</" + std::string(tag->name) + "> closes " +
+                         "</" + port::printable(tag->name) + "> closes " +
                              (open_.empty() ? std::string("nothing")
-                                            : "<" + std::string(open_.back().name) + "> of line " +
+                                            : "<" + port::printable(open_.back().name) + "> of line " +
                                                   std::to_string(open_.back().line)),
                          refusal);
       }
@@ -171,11 +171,11 @@ class XmlTagReader {
       const std::string_view key = body.substr(key_start, i - key_start);
       skip_blanks();
       if (i >= body.size() || body[i] != '=')
-        return refuse_at(tag->line, "attribute '" + std::string(key) + "' without a value", refusal);
+        return refuse_at(tag->line, "attribute " + port::quoted(key) + " without a value", refusal);
       ++i;
       skip_blanks();
       if (i >= body.size() || (body[i] != '"' && body[i] != '\''))
-        return refuse_at(tag->line, "attribute '" + std::string(key) + "' value not quoted", refusal);
+        return refuse_at(tag->line, "attribute " + port::quoted(key) + " value not quoted", refusal);
       const char quote = body[i++];
       const std::size_t end = body.find(quote, i);  // found: the tag's end was searched outside quotes
       tag->attributes.push_back(XmlAttribute{key, body.substr(i, end - i)});
@@ -207,7 +207,7 @@ bool read_triple(const XmlTag& tag, const char* key, const Vec3& fallback, Vec3*
   }
   if (count != 3 || !numbers || !std::isfinite(value->sum())) {
     return refuse_at(
-        tag.line, "<" + std::string(tag.name) + " " + key + "> must be three numbers, not '" + std::string(*text) + "'",
+        tag.line, "<" + port::printable(tag.name) + " " + key + "> must be three numbers, not " + port::quoted(*text),
         refusal);
   }
   return true;
@@ -226,6 +226,8 @@ struct UrdfJoint {
   Vec3 axis = Vec3::UnitX();  ///< in the joint frame (URDF's default is x)
   bool has_limit = false;     ///< <limit lower upper> given
   double lower_rad = 0.0, upper_rad = 0.0;
+  int mimic_line = 0;            ///< line of its <mimic>, 0 without
+  std::string_view mimic_joint;  ///< the joint its <mimic> follows
   bool movable() const { return type != JointType::fixed; }
 };
 
@@ -251,8 +253,8 @@ bool read_joint_type(const XmlTag& tag, UrdfJoint* joint, Refusal* refusal) {
     joint->type = JointType::fixed;
   } else {
     return refuse_at(tag.line,
-                     "joint '" + std::string(joint->name) + "' is " +
-                         (type.empty() ? "without a type" : "'" + std::string(type) + "'") +
+                     "joint " + port::quoted(joint->name) + " is " +
+                         (type.empty() ? "without a type" : port::quoted(type)) +
                          ": only revolute, continuous and fixed joints make a serial arm hivecal models",
                      refusal);
   }
@@ -277,37 +279,61 @@ bool read_joint_element(const XmlTag& tag, UrdfJoint* joint, Refusal* refusal) {
         !(joint->lower_rad < joint->upper_rad) || !(std::fabs(joint->lower_rad) <= kMaxJointLimit_rad) ||
         !(std::fabs(joint->upper_rad) <= kMaxJointLimit_rad)) {
       return refuse_at(tag.line,
-                       "joint '" + std::string(joint->name) +
-                           "' <limit>: lower below upper, both numbers within two turns (4 pi rad)",
+                       "joint " + port::quoted(joint->name) +
+                           " <limit>: lower below upper, both numbers within two turns (4 pi rad)",
                        refusal);
     }
     joint->has_limit = true;
   }
+  if (tag.name == "mimic") {
+    joint->mimic_line = tag.line;
+    joint->mimic_joint = tag.get("joint");
+  }
   if (tag.name == "axis") {
     if (!read_triple(tag, "xyz", Vec3::UnitX(), &joint->axis, refusal)) return false;
     if (!(joint->axis.norm() > 1e-9))
-      return refuse_at(joint->line, "joint '" + std::string(joint->name) + "': its axis is zero", refusal);
+      return refuse_at(joint->line, "joint " + port::quoted(joint->name) + ": its axis is zero", refusal);
     joint->axis.normalize();
   }
   return true;
 }
 
-/// A joint read whole into the tree: its links named, each link with one parent joint.
+/// A joint read whole into the tree: its links named, not the same link, each link with one
+/// parent joint.
 bool add_joint(const UrdfJoint& joint, UrdfTree* tree, Refusal* refusal) {
-  const std::string who = "joint '" + std::string(joint.name) + "'";
+  const std::string who = "joint " + port::quoted(joint.name);
   if (joint.parent.empty() || joint.child.empty())
     return refuse_at(joint.line, who + " needs a parent and a child link", refusal);
+  if (joint.parent == joint.child) {
+    return refuse_at(joint.line,
+                     who + " has link " + port::quoted(joint.child) + " as its parent and its child: a loop", refusal);
+  }
   const std::size_t index = tree->joints.size();
-  if (!tree->parent_joint.emplace(joint.child, index).second) {
-    return refuse_at(
-        joint.line,
-        who + ": link '" + std::string(joint.child) + "' already has a parent joint (a loop, or not a tree)", refusal);
+  const auto [parent, new_child] = tree->parent_joint.emplace(joint.child, index);
+  if (!new_child) {
+    const UrdfJoint& first = tree->joints[parent->second];
+    return refuse_at(joint.line,
+                     who + ": link " + port::quoted(joint.child) + " already has a parent joint, " +
+                         port::quoted(first.name) + " of line " + std::to_string(first.line) +
+                         " (a loop, or not a tree)",
+                     refusal);
   }
   const auto [first, inserted] = tree->first_child_joint.emplace(joint.parent, index);
   tree->next_sibling.push_back(inserted ? kNoJoint : first->second);
   first->second = index;
   tree->joints.push_back(joint);
   return true;
+}
+
+/// Names of one kind (links, joints) and the line of each: a name given twice is refused.
+bool unique_name(std::unordered_map<std::string_view, int>* seen, const char* kind, std::string_view name, int line,
+                 Refusal* refusal) {
+  const auto [first, inserted] = seen->emplace(name, line);
+  if (inserted) return true;
+  return refuse_at(line,
+                   std::string("a second ") + kind + " named " + port::quoted(name) + " (the first at line " +
+                       std::to_string(first->second) + "): each " + kind + " needs a name of its own",
+                   refusal);
 }
 
 /// The tree of the document's joints, read in one pass.
@@ -320,21 +346,34 @@ bool read_tree(std::string_view text, UrdfTree* tree, Refusal* refusal) {
   tree->next_sibling.reserve(joint_tags);
   tree->parent_joint.reserve(joint_tags);
   tree->first_child_joint.reserve(joint_tags);
+  std::unordered_map<std::string_view, int> link_names;
+  std::unordered_map<std::string_view, int> joint_names;
+  joint_names.reserve(joint_tags);
   XmlTagReader reader(text);
   XmlTag tag;
-  bool saw_root = false;
+  int root_line = 0;      // the <robot> element's
   bool in_joint = false;  // inside a <joint> of the robot
   UrdfJoint joint;
   while (reader.next(&tag, refusal)) {
-    if (!saw_root) {
+    if (root_line == 0) {
       if (tag.name != "robot" || tag.closing) break;
-      saw_root = true;
+      root_line = tag.line;
       tree->robot_name = tag.get("name");
+    } else if (tag.depth == 0 && !tag.closing) {
+      return refuse_at(tag.line,
+                       "a second top-level element <" + port::printable(tag.name) + "> after the <robot> of line " +
+                           std::to_string(root_line) + ": a URDF is one <robot> element (two files joined?)",
+                       refusal);
+    } else if (tag.depth == 1 && tag.name == "link" && !tag.closing) {
+      if (!unique_name(&link_names, "link", tag.get("name"), tag.line, refusal)) return false;
     } else if (tag.depth == 1 && tag.name == "joint" && !tag.closing) {
       joint = UrdfJoint();
       joint.line = tag.line;
       joint.name = tag.get("name");
-      if (!read_joint_type(tag, &joint, refusal)) return false;
+      if (!unique_name(&joint_names, "joint", joint.name, tag.line, refusal) ||
+          !read_joint_type(tag, &joint, refusal)) {
+        return false;
+      }
       in_joint = !tag.self_closing;
       if (tag.self_closing && !add_joint(joint, tree, refusal)) return false;
     } else if (in_joint && tag.depth == 1 && tag.closing) {
@@ -345,7 +384,7 @@ bool read_tree(std::string_view text, UrdfTree* tree, Refusal* refusal) {
     }
   }
   if (!refusal->what.empty()) return false;
-  if (!saw_root) return refuse_at(0, "not a URDF: the document is no <robot>", refusal);
+  if (root_line == 0) return refuse_at(0, "not a URDF: the document is no <robot>", refusal);
   return true;
 }
 
@@ -356,7 +395,7 @@ bool path_to_root(const UrdfTree& tree, std::string_view link, std::vector<const
        parent = tree.parent_joint.find(path->back()->parent)) {
     if (path->size() == tree.joints.size()) {
       return refuse_at(path->back()->line,
-                       "the joints above link '" + std::string(link) + "' go round in a loop: no root link", refusal);
+                       "the joints above link " + port::quoted(link) + " go round in a loop: no root link", refusal);
     }
     path->push_back(&tree.joints[parent->second]);
   }
@@ -591,9 +630,15 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
   std::vector<ChainJoint> chain;
   arm_chain(path, &chain);
   if (chain.size() != movable_count) {
-    return refuse(Refusal{last_movable->line, "the movable joints are not one serial chain (joint '" +
-                                                  std::string(last_movable->name) + "' has only " +
+    return refuse(Refusal{last_movable->line, "the movable joints are not one serial chain (joint " +
+                                                  port::quoted(last_movable->name) + " has only " +
                                                   std::to_string(chain.size()) + " movable joints before it)"});
+  }
+  for (const ChainJoint& link : chain) {
+    if (link.joint->mimic_line == 0) continue;
+    return refuse(Refusal{link.joint->mimic_line, "joint " + port::quoted(link.joint->name) + " follows joint " +
+                                                      port::quoted(link.joint->mimic_joint) +
+                                                      " (<mimic>): each joint of the arm must move on its own"});
   }
   EndLinks end;
   end_links(tree, last_movable->child, &end);

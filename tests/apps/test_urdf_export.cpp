@@ -5,6 +5,7 @@
 // calibration (its cancelling +-204 m offsets), and the tracker frame where the result has it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -334,7 +335,8 @@ TEST(UrdfImport, WhatIsNoSixJointSerialArmIsRefusedByLine) {
   const Case cases[] = {
       {prismatic, "arm.urdf:13: joint 'joint_1' is 'prismatic': only revolute, continuous and fixed joints"},
       {seven, "arm.urdf: 7 movable joints: hivecal models arms of exactly 6 revolute joints"},
-      {loop, "link 'link_3' already has a parent joint (a loop, or not a tree)"},
+      {loop,
+       "joint 'flange_joint': link 'link_3' already has a parent joint, 'joint_3' of line 27 (a loop, or not a tree)"},
       {skew_base, "joint 1's axis is not perpendicular to the root link's x axis"},
       {"<robot name=\"x\">\n<joint name=\"a\" type=\"fixed\">\n</robot>",
        "arm.urdf:3: </robot> closes <joint> of line 2"},
@@ -411,6 +413,77 @@ TEST(UrdfImport, DeepNestingIsRefusedByLine) {
   seconds_to_read(ur5_urdf_with(nested), &robot, &error);
   EXPECT_NE(error.message.find("elements nested deeper than 64: not a URDF"), std::string::npos) << error.message;
   EXPECT_EQ(error.message.rfind("arm.urdf:", 0), 0u) << error.message;
+}
+
+/// The 1-based line of the first `needle` in `text`.
+int line_of(const std::string& text, const std::string& needle) {
+  const std::size_t at = text.find(needle);
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+}
+
+/// `text` with the first `from` replaced by `to`.
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  return text.replace(text.find(from), from.size(), to);
+}
+
+void expect_refused(const std::string& urdf, const std::string& message) {
+  textio::RobotDescription robot;
+  const port::Error read = textio::parse_urdf_description(urdf, "arm.urdf", &robot);
+  EXPECT_FALSE(read.ok()) << message;
+  EXPECT_NE(read.message.find(message), std::string::npos) << read.message << "\nwanted: " << message;
+}
+
+// Names given twice, a joint that is its own parent, a joint that follows another (mimic) in the
+// arm, two <robot> elements: each refused by line, saying what it is.
+TEST(UrdfImport, TwiceNamedLoopsMimicAndTwoRobotsAreRefusedByLine) {
+  const std::string good = ur5_urdf_with("");
+  const std::string link_twice = ur5_urdf_with("  <link name=\"link_3\"/>\n");
+  expect_refused(link_twice, "arm.urdf:" + std::to_string(line_of(link_twice, "</robot>") - 1) +
+                                 ": a second link named 'link_3' (the first at line " +
+                                 std::to_string(line_of(good, "<link name=\"link_3\"")) +
+                                 "): each link needs a name of its own");
+  const std::string joint_twice = replaced(good, "<joint name=\"joint_4\"", "<joint name=\"joint_3\"");
+  expect_refused(joint_twice, "arm.urdf:" + std::to_string(line_of(good, "<joint name=\"joint_4\"")) +
+                                  ": a second joint named 'joint_3' (the first at line " +
+                                  std::to_string(line_of(good, "<joint name=\"joint_3\"")) + ")");
+  const std::string self_loop = ur5_urdf_with(
+      "  <link name=\"spinner\"/>\n  <joint name=\"spin\" type=\"fixed\"><parent link=\"spinner\"/><child "
+      "link=\"spinner\"/></joint>\n");
+  expect_refused(self_loop, "arm.urdf:" + std::to_string(line_of(self_loop, "<joint name=\"spin\"")) +
+                                ": joint 'spin' has link 'spinner' as its parent and its child: a loop");
+  const std::string mimic =
+      replaced(good, "<child link=\"link_4\"/>", "<child link=\"link_4\"/>\n<mimic joint=\"joint_3\"/>");
+  expect_refused(mimic,
+                 "arm.urdf:" + std::to_string(line_of(mimic, "<mimic")) +
+                     ": joint 'joint_4' follows joint 'joint_3' (<mimic>): each joint of the arm must move on its own");
+  const std::string two_robots = good + good.substr(good.find("<robot"));
+  expect_refused(two_robots, "arm.urdf:" + std::to_string(line_of(two_robots, "</robot>") + 1) +
+                                 ": a second top-level element <robot> after the <robot> of line " +
+                                 std::to_string(line_of(good, "<robot")) + ": a URDF is one <robot> element");
+}
+
+// Text of the file quoted in a message is cut after 80 bytes (docs/cli.md), whatever its length.
+TEST(UrdfImport, QuotesOfTheFileAreCutAt80Bytes) {
+  const std::string long_text(4000, 'x');
+  const std::string good = ur5_urdf_with("");
+  std::string no_tcp = good;  // the tcp renamed, and a second tip with a long name
+  for (std::size_t at = no_tcp.find("\"tcp\""); at != std::string::npos; at = no_tcp.find("\"tcp\""))
+    no_tcp.replace(at, 5, "\"tip\"");
+  no_tcp.insert(no_tcp.rfind("</robot>"), "<link name=\"" + long_text +
+                                              "\"/><joint name=\"j\" type=\"fixed\"><parent "
+                                              "link=\"link_6\"/><child link=\"" +
+                                              long_text + "\"/></joint>\n");
+  for (const std::string& urdf : {replaced(good, "type=\"revolute\"", "type=\"" + long_text + "\""),
+                                  replaced(good, "<origin xyz=\"0 0 0\"", "<origin xyz=\"" + long_text + "\""),
+                                  replaced(replaced(good, "name=\"joint_4\"", "name=\"" + long_text + "\""),
+                                           "name=\"joint_5\"", "name=\"" + long_text + "\""),
+                                  no_tcp}) {
+    textio::RobotDescription robot;
+    const port::Error read = textio::parse_urdf_description(urdf, "arm.urdf", &robot);
+    ASSERT_FALSE(read.ok());
+    EXPECT_LT(read.message.size(), 300u) << read.message;
+    EXPECT_NE(read.message.find("...[4000 bytes]"), std::string::npos) << read.message;
+  }
 }
 
 }  // namespace
