@@ -592,15 +592,6 @@ bool tool_links(const UrdfTree& tree, std::string_view arm_end, const EndLinks& 
   return true;
 }
 
-/// The pose at q = 0 of `link` in the root frame, through every joint above it.
-bool link_at_zero(const UrdfTree& tree, std::string_view link, RigidTransform* pose, Refusal* refusal) {
-  std::vector<const UrdfJoint*> path;
-  if (!path_to_root(tree, link, &path, refusal)) return false;
-  *pose = RigidTransform{};
-  for (const UrdfJoint* joint : path) *pose = pose->then_after(joint->origin);
-  return true;
-}
-
 }  // namespace
 
 port::Error parse_urdf_description(const std::string& text, const std::string& source_name,
@@ -658,14 +649,11 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
     model.joints[i] = dh_row(frame, next.translation_m, next.rotation * chain[i + 1].joint->axis, &following);
     frame = following;
   }
-  // Frame 6 (the flange): at the 'flange' link when there is one, else the last joint's child.
+  // Frame 6 (the flange): at the 'flange' link fixed to the arm's end when there is one (a link
+  // of that name elsewhere, a base's mounting flange, is not the arm's), else the last joint's child.
   const RigidTransform end_at_zero = joint_frame_at_zero(chain, chain.size() - 1);
-  RigidTransform flange_pose = end_at_zero;
-  if (end.has_flange) {
-    flange_pose = end_at_zero.then_after(pose_below(tree, last_movable->child, "flange"));
-  } else if (tree.parent_joint.count("flange") != 0 && !link_at_zero(tree, "flange", &flange_pose, &refusal)) {
-    return refuse(refusal);
-  }
+  const RigidTransform flange_pose =
+      end.has_flange ? end_at_zero.then_after(pose_below(tree, last_movable->child, "flange")) : end_at_zero;
   Frame frame6;
   frame6.z = frame.z;
   const Vec3 offset = flange_pose.translation_m - frame.origin;

@@ -486,5 +486,30 @@ TEST(UrdfImport, QuotesOfTheFileAreCutAt80Bytes) {
   }
 }
 
+// Frame 6 is placed at the 'flange' fixed to the arm's end only: a link of that name elsewhere
+// (here a mounting flange 1.9 m above the base) leaves the model as it is without it.
+TEST(UrdfImport, OnlyTheArmsOwnFlangePlacesFrame6) {
+  std::string arm = ur5_urdf_with("");
+  for (std::size_t at = arm.find("\"flange\""); at != std::string::npos; at = arm.find("\"flange\""))
+    arm.replace(at, 8, "\"wrist_plate\"");
+  const std::string mounted = replaced(arm, "</robot>",
+                                       "  <link name=\"flange\"/>\n  <joint name=\"mount\" type=\"fixed\"><parent "
+                                       "link=\"base_link\"/><child link=\"flange\"/><origin xyz=\"0 0 1.9\"/></joint>\n"
+                                       "</robot>");
+  textio::RobotDescription alone;
+  textio::RobotDescription with_mount;
+  ASSERT_TRUE(textio::parse_urdf_description(arm, "arm.urdf", &alone).ok());
+  const port::Error read = textio::parse_urdf_description(mounted, "arm.urdf", &with_mount);
+  ASSERT_TRUE(read.ok()) << read.message;
+  for (int i = 0; i < kJointCount; ++i) {
+    EXPECT_EQ(with_mount.model.joints[i].d_m, alone.model.joints[i].d_m) << i;
+    EXPECT_EQ(with_mount.model.joints[i].a_m, alone.model.joints[i].a_m) << i;
+    EXPECT_EQ(with_mount.model.joints[i].alpha_rad, alone.model.joints[i].alpha_rad) << i;
+    EXPECT_EQ(with_mount.model.joints[i].theta_offset_rad, alone.model.joints[i].theta_offset_rad) << i;
+  }
+  EXPECT_EQ(with_mount.model.tool_m, alone.model.tool_m);
+  EXPECT_EQ(with_mount.model.joints[5].d_m, 0.0);  // frame 6 at joint 6's child, the tool point 82.3 mm along z
+}
+
 }  // namespace
 }  // namespace hivecal::urdf_export_test
