@@ -26,6 +26,24 @@ struct RobotDescription {
   JointVector upper_rad = JointVector::Constant(2.0 * math::kPi);   ///< highest joint positions [rad]
 };
 
+/// What a robot description may hold, from JSON or URDF alike: beyond it is no robot and would
+/// predict NaN or nonsense in silence. Lengths: real factory calibrations carry cancelling
+/// offsets of hundreds of metres on UR's parallel joints (+/-204 m), so 1 km [m].
+inline constexpr double kMaxModelLength_m = 1000.0;
+/// Angles (DH offsets and twists, URDF's rpy): two turns; more is degrees [rad].
+inline constexpr double kMaxModelAngle_rad = 4.0 * math::kPi;
+/// Each coordinate of a tool point in the flange frame; more is millimetres [m].
+inline constexpr double kMaxToolLength_m = 10.0;
+/// What a bounded number of a robot description is.
+enum class ModelQuantity { length, angle, tool };
+/// "" when |value| is within the bound of its quantity; else what a refusal says after the key:
+/// " = V m is beyond 1000 m: not a robot" (angles: "... rad (two turns): degrees?", tool
+/// points: "...: millimetres?"). NaN is beyond every bound.
+std::string beyond_bound(double value, ModelQuantity quantity);
+/// Fault::input naming `source`, the row and the key, unless every DH number as the description's
+/// convention writes it and every tool point is within its bound.
+port::Error check_model_bounds(const RobotDescription& description, const std::string& source);
+
 /// The JSON name of a convention: "standard-dh" or "modified-dh".
 const char* dh_convention_name(DhConvention convention);
 /// Parses a robot description (format optional; "robot" optional, any name, "" when absent;

@@ -271,6 +271,18 @@ bool read_joint_element(const XmlTag& tag, UrdfJoint* joint, Refusal* refusal) {
         !read_triple(tag, "rpy", Vec3::Zero(), &origin.rpy_rad, refusal)) {
       return false;
     }
+    static const char* const kNames[2][3] = {{"x", "y", "z"}, {"roll", "pitch", "yaw"}};
+    for (int axis = 0; axis < 3; ++axis) {  // the robot description's bounds
+      for (int angle = 0; angle < 2; ++angle) {
+        const std::string beyond = angle == 0 ? beyond_bound(origin.xyz_m(axis), ModelQuantity::length)
+                                              : beyond_bound(origin.rpy_rad(axis), ModelQuantity::angle);
+        if (beyond.empty()) continue;
+        return refuse_at(tag.line,
+                         "joint " + port::quoted(joint->name) + " <origin " + (angle == 0 ? "xyz" : "rpy") + ">, " +
+                             kNames[angle][axis] + beyond,
+                         refusal);
+      }
+    }
     joint->origin = urdf_transform(origin);
   }
   if (tag.name == "limit" && joint->type == JointType::revolute && tag.find("lower") != nullptr &&
@@ -690,6 +702,8 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
     out.lower_rad(static_cast<Eigen::Index>(k)) = chain[k].joint->lower_rad;
     out.upper_rad(static_cast<Eigen::Index>(k)) = chain[k].joint->upper_rad;
   }
+  const port::Error bounded = check_model_bounds(out, source_name);  // the JSON description's bounds
+  if (!bounded.ok()) return bounded;
   // Exact or refused: the model's FK against the URDF's own on random poses.
   Random random(1);
   double worst_m = 0.0;

@@ -511,5 +511,26 @@ TEST(UrdfImport, OnlyTheArmsOwnFlangePlacesFrame6) {
   EXPECT_EQ(with_mount.model.joints[5].d_m, 0.0);  // frame 6 at joint 6's child, the tool point 82.3 mm along z
 }
 
+// The robot description's bounds hold for a URDF too (one place: textio::beyond_bound): on each
+// origin by line, on the DH table it makes and on its tool points.
+TEST(UrdfImport, TheDescriptionsBoundsHoldByLine) {
+  const std::string good = ur5_urdf_with("");
+  const std::string far = replaced(good, "<origin xyz=\"-0.42499999999999999 0 0\"", "<origin xyz=\"-1000000 0 0\"");
+  expect_refused(far, "arm.urdf:" + std::to_string(line_of(far, "-1000000")) +
+                          ": joint 'joint_3' <origin xyz>, x = -1000000 m is beyond 1000 m: not a robot");
+  const std::string degrees = replaced(good, "rpy=\"1.5707963267948966 0 0\"", "rpy=\"90 0 0\"");
+  expect_refused(degrees, "arm.urdf:" + std::to_string(line_of(degrees, "\"90 0 0\"")) +
+                              ": joint 'joint_2' <origin rpy>, roll = 90 rad is beyond 12.566370614359172 rad (two "
+                              "turns): degrees?");
+  const std::string long_tool = replaced(good, "<child link=\"tcp\"/>\n    <origin xyz=\"0 0 0\"",
+                                         "<child link=\"tcp\"/>\n    <origin xyz=\"0 0 50\"");
+  expect_refused(long_tool, "arm.urdf: tool point 1 (flange frame), z = 49.9999");
+  // Joint 3 tilted by 1 urad towards joint 2: the axes meet 425 km away, and so would its d.
+  std::string nearly_parallel = good;
+  const std::size_t axis = nearly_parallel.find("<axis", nearly_parallel.find("<joint name=\"joint_3\""));
+  nearly_parallel.replace(axis, std::string("<axis xyz=\"0 0 1\"/>").size(), "<axis xyz=\"0.000001 0 1\"/>");
+  expect_refused(nearly_parallel, "arm.urdf: its DH table, row 2: d = ");
+}
+
 }  // namespace
 }  // namespace hivecal::urdf_export_test
