@@ -59,7 +59,12 @@ Error check_robot(const Options& options) {
   }
   std::string s = "robot: " + robot.robot + " (" +
                   (from_file ? "file " + options.get("robot-model") : "built-in table") +
-                  ")\nconvention: " + textio::dh_convention_name(robot.convention) + "\n" + dh_table(robot);
+                  ")\nconvention: " + textio::dh_convention_name(robot.convention) + "\n";
+  if (robot.base_turned_by_pi) {
+    s += "base: UR's own, the URDF's root turned by 180 deg about z (ROS's 'base' frame): the table and the FK "
+         "below are in it\n";
+  }
+  s += dh_table(robot);
   if (robot.convention == DhConvention::modified) {
     s += fmt("base offset: alpha_0 %.6f deg, a_0 %.4f mm (folded into the table above as row 1's)\n",
              robot.modified_base.alpha0_rad * kDegPerRad, robot.modified_base.a0_m * 1e3);

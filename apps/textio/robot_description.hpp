@@ -22,6 +22,9 @@ struct RobotDescription {
   RobotModel model;                                  ///< the standard-DH table, tool point and compliance [m, rad]
   int target_count = 1;           ///< targets whose tool points `model` holds, 1 .. kMaxTargets ("tools" when > 1) [-]
   bool has_joint_limits = false;  ///< the file gave "joint_limits" (URDF: <limit>)
+  /// A UR arm read from a URDF whose root is UR's base turned by pi about z (ROS's base_link):
+  /// the model is UR's table in UR's own base (textio::is_ur_table_turned), not in the root's.
+  bool base_turned_by_pi = false;
   JointVector lower_rad = JointVector::Constant(-2.0 * math::kPi);  ///< lowest joint positions [rad]
   JointVector upper_rad = JointVector::Constant(2.0 * math::kPi);   ///< highest joint positions [rad]
 };

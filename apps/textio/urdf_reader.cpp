@@ -11,6 +11,7 @@
 #include "hivecal/model/dh_convention.hpp"
 #include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
+#include "textio/ur_kinematics.hpp"
 #include "textio/urdf.hpp"
 
 namespace hivecal::textio {
@@ -677,8 +678,13 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
   if (radial.norm() > 1e-10 && frame6.x.dot(frame.x) < 0.0) frame6.x = -frame6.x;  // as in dh_row
   last.a_m = radial.dot(frame6.x);
   last.theta_offset_rad = signed_angle(frame.x, frame6.x, frame.z);
+  // A flange whose x lies along joint 6's axis is ROS-Industrial's (x out of the flange, as ROS's
+  // ur_description writes it): its z is not frame 6's, which stays on the joint's axis.
+  const bool ros_industrial_flange = std::fabs(flange_pose.rotation.col(0).dot(frame.z)) > 1.0 - 1e-9;
   const Vec3 flange_z = flange_pose.rotation.col(2);
-  last.alpha_rad = std::fabs(flange_z.dot(frame6.x)) < 1e-9 ? signed_angle(frame.z, flange_z, frame6.x) : 0.0;
+  last.alpha_rad = !ros_industrial_flange && std::fabs(flange_z.dot(frame6.x)) < 1e-9
+                       ? signed_angle(frame.z, flange_z, frame6.x)
+                       : 0.0;
   frame6.origin = frame.origin + last.d_m * frame.z + last.a_m * frame6.x;
   frame6.z = Eigen::AngleAxisd(last.alpha_rad, frame6.x).toRotationMatrix() * frame.z;
   Mat3 rotation6;
@@ -689,9 +695,19 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
     target_tool(&model, static_cast<int>(k)) =
         rotation6.transpose() * (end_at_zero.then_after(tools[k].pose).translation_m - frame6.origin);
   }
+  // A UR arm whose root is REP-103's base_link (x forward; ROS's ur_description turns UR's base,
+  // x backward, by pi about z) comes out as UR's table with every a and alpha negated: it is read
+  // in UR's own base instead, so that UR's deltas, calibration.conf and kinematics YAML apply.
+  RigidTransform root_to_base = base.transform();
+  const bool ur_base = !(base.alpha0_rad != 0.0 || base.a0_m != 0.0) && is_ur_table_turned(model);
+  if (ur_base) {
+    model = turned_by_pi(model);
+    root_to_base = RigidTransform{Vec3(-1.0, -1.0, 1.0).asDiagonal(), Vec3::Zero()};  // Rz(pi), exactly
+  }
   RobotDescription out;
   out.robot = std::string(tree.robot_name);
   out.model = model;
+  out.base_turned_by_pi = ur_base;
   out.target_count = static_cast<int>(tools.size());
   const bool offset_base = base.alpha0_rad != 0.0 || base.a0_m != 0.0;
   out.convention = offset_base ? DhConvention::modified : DhConvention::standard;
@@ -713,7 +729,7 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
     const RigidTransform chain_end = chain_end_at(chain, q);
     for (std::size_t k = 0; k < tools.size(); ++k) {
       const Vec3 urdf_point = chain_end.then_after(tools[k].pose).translation_m;
-      const Vec3 dh_point = base.transform().apply(fk_target_point(model, q, static_cast<int>(k)));
+      const Vec3 dh_point = root_to_base.apply(fk_target_point(model, q, static_cast<int>(k)));
       worst_m = std::fmax(worst_m, (urdf_point - dh_point).norm());
     }
   }

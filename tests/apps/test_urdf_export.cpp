@@ -7,18 +7,27 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "cli/options.hpp"
+#include "commands/commands.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/dh_convention.hpp"
 #include "hivecal/model/ur_deltas.hpp"
+#include "testkit/cli_run.hpp"
+#include "testkit/other_arms.hpp"
 #include "testkit/shared_data.hpp"
+#include "testkit/temp_dir.hpp"
+#include "textio/csv.hpp"
 #include "textio/robot_description.hpp"
+#include "textio/text_util.hpp"
 #include "textio/ur_calibration_conf.hpp"
+#include "textio/ur_kinematics.hpp"
 #include "textio/urdf.hpp"
 
 namespace hivecal::urdf_export_test {
@@ -530,6 +539,237 @@ TEST(UrdfImport, TheDescriptionsBoundsHoldByLine) {
   const std::size_t axis = nearly_parallel.find("<axis", nearly_parallel.find("<joint name=\"joint_3\""));
   nearly_parallel.replace(axis, std::string("<axis xyz=\"0 0 1\"/>").size(), "<axis xyz=\"0.000001 0 1\"/>");
   expect_refused(nearly_parallel, "arm.urdf: its DH table, row 2: d = ");
+}
+
+// --- a ROS ur_description URDF ----------------------------------------------------------
+
+/// An origin element of `transform` (xyz/rpy to the bit).
+std::string origin_of(const RigidTransform& transform) {
+  const textio::UrdfOrigin origin = textio::urdf_origin(transform);
+  const auto triple = [](const Vec3& v) {
+    return textio::format_double(v.x() + 0.0) + " " + textio::format_double(v.y() + 0.0) + " " +
+           textio::format_double(v.z() + 0.0);
+  };
+  return "<origin xyz=\"" + triple(origin.xyz_m) + "\" rpy=\"" + triple(origin.rpy_rad) + "\"/>";
+}
+
+/// `model` (a UR table) in the shape of ROS's ur_description (ur_macro.xacro): base_link (REP-103:
+/// x forward) -> base_link_inertia turned by pi about z (UR's own base: x backward) -> the six
+/// joints at the kinematics YAML's frames (shoulder_link .. wrist_3_link) -> flange (ROS-Industrial:
+/// x out of the flange) -> tool0 (z out of the flange: UR's tool flange frame); base_link -> base
+/// (UR's base again, turned by pi).
+std::string ros_ur_description(const RobotModel& model) {
+  textio::UrKinematics kinematics;
+  std::string why;
+  EXPECT_TRUE(textio::ur_kinematics_from_model(model, &kinematics, &why)) << why;
+  const char* const links[] = {"shoulder_link", "upper_arm_link", "forearm_link",
+                               "wrist_1_link",  "wrist_2_link",   "wrist_3_link"};
+  const char* const joints[] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                                "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
+  const auto fixed = [](const std::string& name, const std::string& parent, const std::string& child,
+                        const std::string& rpy) {
+    return "  <joint name=\"" + name + "\" type=\"fixed\">\n    <parent link=\"" + parent + "\"/>\n    <child link=\"" +
+           child + "\"/>\n    <origin xyz=\"0 0 0\" rpy=\"" + rpy + "\"/>\n  </joint>\n";
+  };
+  std::string urdf =
+      "<?xml version=\"1.0\"?>\n<robot name=\"ur5\">\n  <link name=\"base_link\"/>\n"
+      "  <link name=\"base_link_inertia\"/>\n";
+  for (const char* link : links) urdf += "  <link name=\"" + std::string(link) + "\"/>\n";
+  urdf += "  <link name=\"base\"/>\n  <link name=\"flange\"/>\n  <link name=\"tool0\"/>\n";
+  urdf += fixed("base_link-base_link_inertia", "base_link", "base_link_inertia", "0 0 3.141592653589793");
+  std::string parent = "base_link_inertia";
+  for (int i = 0; i < kJointCount; ++i) {
+    urdf += "  <joint name=\"" + std::string(joints[i]) + "\" type=\"revolute\">\n    <parent link=\"" + parent +
+            "\"/>\n    <child link=\"" + links[i] + "\"/>\n    " + origin_of(kinematics.joint_frames[i]) +
+            "\n    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"-6.283185307179586\" upper=\"6.283185307179586\" "
+            "effort=\"150\" velocity=\"3.15\"/>\n  </joint>\n";
+    parent = links[i];
+  }
+  urdf += fixed("base_link-base_fixed_joint", "base_link", "base", "0 0 3.141592653589793");
+  urdf += fixed("wrist_3-flange", "wrist_3_link", "flange", "0 -1.5707963267948966 -1.5707963267948966");
+  urdf += fixed("flange-tool0", "flange", "tool0", "1.5707963267948966 0 1.5707963267948966");
+  return urdf + "</robot>\n";
+}
+
+/// Rz(pi), exactly: UR's base in ROS's base_link.
+const RigidTransform kTurnedByPi{Vec3(-1.0, -1.0, 1.0).asDiagonal(), Vec3::Zero()};
+
+/// Worst distance over 1,000 random joint vectors between link `tool` of `urdf` (by this file's
+/// own reader) and `model`'s tool point turned by pi (UR's base in the URDF's root).
+double worst_turned_error_m(const std::string& urdf, const std::string& tool, const RobotModel& model) {
+  const std::map<std::string, ReadJoint> joints = read_joints(urdf);
+  Random random(5);
+  double worst_m = 0.0;
+  for (int pose = 0; pose < 1000; ++pose) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    const Vec3 expected = kTurnedByPi.apply(fk_tool_point(model, q));
+    worst_m = std::fmax(worst_m, (link_pose(joints, tool, q).translation_m - expected).norm());
+  }
+  return worst_m;
+}
+
+/// `model` with its tool point at (0.01, 0.02, 0.15) m.
+RobotModel with_probe(RobotModel model) {
+  model.tool_m = Vec3(0.01, 0.02, 0.15);
+  return model;
+}
+
+/// The ROS description of `model` with a tcp 10, 20, 150 mm from tool0 (UR's TCP on the tool flange).
+std::string ros_ur_description_with_tcp(const RobotModel& model) {
+  return replaced(ros_ur_description(model), "</robot>",
+                  "  <link name=\"tcp\"/>\n  <joint name=\"tool0-tcp\" type=\"fixed\"><parent link=\"tool0\"/><child "
+                  "link=\"tcp\"/><origin xyz=\"0.01 0.02 0.15\"/></joint>\n</robot>");
+}
+
+// ROS's ur_description (base_link turned by pi from UR's base, a ROS-Industrial flange with x out
+// of it) is read as UR's own table in UR's base: the same chain exactly (1e-12 m by FK on random
+// joints), with the tcp where UR's TCP is, in the tool flange frame. It read as alpha_1 = -90 deg,
+// a_2 = +425 mm, a_3 = +392.25 mm and alpha_6 = 90 deg: UR's deltas and YAML came out turned.
+TEST(UrdfImport, RosUrDescriptionIsReadAsUrsOwnTable) {
+  const RobotModel ur5 = nominal_model(RobotType::ur5);
+  const std::string urdf = ros_ur_description_with_tcp(ur5);
+  textio::RobotDescription robot;
+  const port::Error read = textio::parse_urdf_description(urdf, "ur5.urdf", &robot);
+  ASSERT_TRUE(read.ok()) << read.message;
+  EXPECT_TRUE(robot.base_turned_by_pi);
+  EXPECT_EQ(robot.convention, DhConvention::standard);
+  for (int i = 0; i < kJointCount; ++i) {
+    EXPECT_NEAR(robot.model.joints[i].theta_offset_rad, ur5.joints[i].theta_offset_rad, 1e-12) << i;
+    EXPECT_NEAR(robot.model.joints[i].d_m, ur5.joints[i].d_m, 1e-12) << i;
+    EXPECT_NEAR(robot.model.joints[i].a_m, ur5.joints[i].a_m, 1e-12) << i;
+    EXPECT_NEAR(robot.model.joints[i].alpha_rad, ur5.joints[i].alpha_rad, 1e-12) << i;
+  }
+  EXPECT_LE((robot.model.tool_m - Vec3(0.01, 0.02, 0.15)).norm(), 1e-12);
+  const double worst_m = worst_turned_error_m(urdf, "tcp", robot.model);
+  EXPECT_LE(worst_m, 1e-12);
+  std::printf("ROS ur_description UR5: UR's table, Rz(pi) FK vs URDF worst %.2e m\n", worst_m);
+  // Every built-in UR the same way.
+  for (const RobotType type :
+       {RobotType::ur3, RobotType::ur10, RobotType::ur3e, RobotType::ur5e, RobotType::ur10e, RobotType::ur16e}) {
+    const std::string other = ros_ur_description_with_tcp(nominal_model(type));
+    textio::RobotDescription back;
+    ASSERT_TRUE(textio::parse_urdf_description(other, "ur.urdf", &back).ok()) << robot_type_name(type);
+    EXPECT_TRUE(back.base_turned_by_pi && textio::is_ur_table(back.model)) << robot_type_name(type);
+    EXPECT_LE(worst_turned_error_m(other, "tcp", back.model), 1e-12) << robot_type_name(type);
+    for (int i = 0; i < kJointCount; ++i)
+      EXPECT_NEAR(back.model.joints[i].a_m, nominal_model(type).joints[i].a_m, 1e-12) << robot_type_name(type);
+  }
+}
+
+// A table turned by pi (as the reader made it of a ROS URDF before, or a description written so)
+// is turned back before UR's own formats use it: the same YAML, calibration.conf deltas with UR's
+// signs, and a controller's calibration.conf applied with them.
+TEST(UrTable, TurnedTablesGiveUrsOwnOutputs) {
+  const RobotModel nominal = with_probe(nominal_model(RobotType::ur5e));
+  Random random(4);
+  RobotModel calibrated = nominal;
+  for (DhJoint& joint : calibrated.joints) {
+    joint.theta_offset_rad += random.uniform(-1e-3, 1e-3);
+    joint.d_m += random.uniform(-1e-3, 1e-3);
+    joint.a_m += random.uniform(-1e-3, 1e-3);
+    joint.alpha_rad += random.uniform(-1e-3, 1e-3);
+  }
+  const RobotModel turned = textio::turned_by_pi(calibrated);
+  EXPECT_TRUE(textio::is_ur_table(calibrated) && !textio::is_ur_table_turned(calibrated));
+  EXPECT_TRUE(textio::is_ur_table_turned(turned));
+  double worst_m = 0.0;
+  for (int pose = 0; pose < 1000; ++pose) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    worst_m = std::fmax(worst_m, (kTurnedByPi.apply(fk_tool_point(turned, q)) - fk_tool_point(calibrated, q)).norm());
+  }
+  EXPECT_LE(worst_m, 1e-12);  // the same chain
+  const RobotModel back = textio::turned_by_pi(turned);
+  for (int i = 0; i < kJointCount; ++i) {  // turning twice gives the model back, to the bit
+    EXPECT_EQ(back.joints[i].a_m, calibrated.joints[i].a_m);
+    EXPECT_EQ(back.joints[i].alpha_rad, calibrated.joints[i].alpha_rad);
+  }
+  textio::UrKinematics own;
+  textio::UrKinematics from_turned;
+  std::string why;
+  ASSERT_TRUE(textio::ur_kinematics_from_model(calibrated, &own, &why));
+  ASSERT_TRUE(textio::ur_kinematics_from_model(turned, &from_turned, &why));
+  EXPECT_EQ(textio::format_ur_kinematics_yaml(from_turned, "h"), textio::format_ur_kinematics_yaml(own, "h"));
+  const UrCalibrationDeltas expected = ur_deltas_between(nominal, calibrated);
+  const UrCalibrationDeltas deltas = textio::ur_deltas_in_ur_table(textio::turned_by_pi(nominal), turned);
+  EXPECT_EQ(textio::format_ur_calibration_conf(deltas), textio::format_ur_calibration_conf(expected));
+  const test::TempDir dir("hivecal_urtable");
+  const std::string conf = dir.write("calibration.conf", textio::format_ur_calibration_conf(expected));
+  RobotModel applied;
+  const port::Error read = textio::read_ur_calibrated_model(conf, textio::turned_by_pi(nominal), "ur5e", &applied);
+  ASSERT_TRUE(read.ok()) << read.message;
+  RobotModel expected_applied;
+  ASSERT_EQ(apply_ur_deltas(nominal, expected, &expected_applied), Status::ok);
+  for (int i = 0; i < kJointCount; ++i) {  // in the turned base still, the deltas applied with UR's signs
+    EXPECT_NEAR(applied.joints[i].a_m, textio::turned_by_pi(expected_applied).joints[i].a_m, 1e-15) << i;
+    EXPECT_NEAR(applied.joints[i].alpha_rad, textio::turned_by_pi(expected_applied).joints[i].alpha_rad, 1e-15) << i;
+    EXPECT_NEAR(applied.joints[i].d_m, expected_applied.joints[i].d_m, 1e-15) << i;
+  }
+}
+
+/// The numbers of a UR kinematics YAML or calibration.conf, in order.
+std::vector<double> numbers_of(const std::string& text) {
+  std::vector<double> numbers;
+  for (const char* at = text.c_str(); *at != '\0'; ++at) {
+    if (!((*at >= '0' && *at <= '9') || *at == '-') || (at > text.c_str() && std::isalnum(at[-1]) != 0)) continue;
+    char* end = nullptr;
+    const double value = std::strtod(at, &end);
+    if (end == at) continue;
+    numbers.push_back(value);
+    at = end - 1;
+  }
+  return numbers;
+}
+
+void expect_same_numbers(const std::string& a, const std::string& b, double tolerance, const char* what) {
+  const std::vector<double> x = numbers_of(a);
+  const std::vector<double> y = numbers_of(b);
+  ASSERT_EQ(x.size(), y.size()) << what;
+  for (std::size_t i = 0; i < x.size(); ++i) EXPECT_NEAR(x[i], y[i], tolerance) << what << " number " << i;
+}
+
+// The UR outputs of a ROS ur_description UR5 are the built-in UR5's: calibrate --ur-deltas (they
+// had a's and alpha's signs flipped), export --format ur-kinematics (180 deg off) and
+// --ur-calibration applied (with the wrong sign).
+TEST(UrdfImport, RosUrDescriptionGivesTheBuiltInArmsUrOutputs) {
+  const test::TempDir dir("hivecal_rosur");
+  ASSERT_FALSE(dir.path().empty());
+  const std::string urdf = dir.write("ur5.urdf", ros_ur_description(nominal_model(RobotType::ur5)));
+  Random random(54);
+  const RobotModel truth =
+      test::perturbed_keeping_parallel(nominal_model(RobotType::ur5), &random, 3e-4, 3e-4, Vec3(0.01, 0.02, 0.15));
+  static Dataset<150> samples;
+  samples.clear();
+  test::fill_other_arm(truth, test::example_base_to_tracker(), 150, 1e-6, &random, &samples);
+  const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples()));
+  std::string deltas[2];
+  std::string yaml[2];
+  std::string applied[2];
+  const std::string conf = dir.write(
+      "calibration.conf", textio::format_ur_calibration_conf(ur_deltas_between(nominal_model(RobotType::ur5), truth)));
+  const std::string models[2] = {urdf, "ur5"};
+  for (int k = 0; k < 2; ++k) {
+    const std::string at = dir.path() + "/" + std::to_string(k);
+    ASSERT_EQ(test::run(cli::calibrate_main,
+                        {"--robot-model", models[k], "--samples", csv, "--method", "lm", "--tool", "0.01,0.02,0.15",
+                         "--split", "1", "--out", at + ".json", "--ur-deltas", at + ".conf", "--quiet"}),
+              cli::kExitOk);
+    ASSERT_EQ(test::run(cli::export_main, {"--robot-model", models[k], "--format", "ur-kinematics", "--ur-hash", "h",
+                                           "--out", at + ".yaml"}),
+              cli::kExitOk);
+    ASSERT_EQ(test::run(cli::export_main, {"--robot-model", models[k], "--ur-calibration", conf, "--format",
+                                           "robot-json", "--out", at + "-applied.json"}),
+              cli::kExitOk);
+    deltas[k] = test::read_text_file(at + ".conf");
+    yaml[k] = test::read_text_file(at + ".yaml");
+    applied[k] = test::read_text_file(at + "-applied.json");
+  }
+  expect_same_numbers(deltas[0], deltas[1], 1e-9, "--ur-deltas");
+  expect_same_numbers(yaml[0], yaml[1], 1e-12, "ur-kinematics YAML");
+  applied[0].replace(applied[0].find("\"tool\""), std::string::npos, "");  // the URDF's tool0 is its tool point
+  applied[1].replace(applied[1].find("\"tool\""), std::string::npos, "");
+  expect_same_numbers(applied[0], applied[1], 1e-12, "--ur-calibration applied");
 }
 
 }  // namespace
