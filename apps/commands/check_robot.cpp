@@ -57,8 +57,9 @@ Error check_robot(const Options& options) {
     if (error.ok()) error = textio::read_joints_csv(options.get("joints"), &poses, units);
     if (!error.ok()) return error;
   }
-  std::string s = "robot: " + robot.robot + " (" +
-                  (from_file ? "file " + options.get("robot-model") : "built-in table") +
+  // The name and the path are the file's and the user's text: printed as every message prints input.
+  std::string s = "robot: " + port::printable(robot.robot) + " (" +
+                  (from_file ? "file " + port::printable(options.get("robot-model"), 4096) : "built-in table") +
                   ")\nconvention: " + textio::dh_convention_name(robot.convention) + "\n";
   if (robot.base_turned_by_pi) {
     s += "base: UR's own, the URDF's root turned by 180 deg about z (ROS's 'base' frame): the table and the FK "

@@ -553,6 +553,7 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
     return port::Error::input(source + ": \"report\".\"" + key + "\" is malformed");
   };
   if (!get_string(value.find("title"), &parsed.title)) return bad("title");
+  parsed.title = port::printable(parsed.title, 4096);  // it carries the robot's name: printable, as calibrate wrote it
   const JsonValue* info = value.find("info");
   if (!is_array(info)) return bad("info");
   for (const JsonValue& line : info->array) {
