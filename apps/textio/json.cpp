@@ -17,7 +17,7 @@ namespace {
 
 class JsonParser {
  public:
-  explicit JsonParser(const std::string& text) : text_(text) {}
+  explicit JsonParser(std::string_view text) : text_(text) {}
 
   bool parse_document(JsonValue* value, std::string* error) {
     skip_blanks();
@@ -241,7 +241,7 @@ class JsonParser {
     }
   }
 
-  const std::string& text_;
+  std::string_view text_;
   std::size_t pos_ = 0;
   std::string problem_;
 };
@@ -281,10 +281,10 @@ bool read_json_numbers(const JsonValue* value, std::size_t count, double* out) {
 port::Error parse_json(const std::string& text, JsonValue* value) {
   *value = JsonValue();
   std::string error;
-  // A UTF-8 byte order mark, as some editors write it, is not part of the document.
-  const bool bom = text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0;
-  const std::string without_bom = bom ? text.substr(3) : std::string();
-  if (JsonParser(bom ? without_bom : text).parse_document(value, &error)) return port::Error{};
+  std::string_view body;  // a UTF-8 byte order mark is not part of the document; UTF-16 is no JSON here
+  const port::Error encoding = utf8_text(text, "the document", &body);
+  if (!encoding.ok()) return encoding;
+  if (JsonParser(body).parse_document(value, &error)) return port::Error{};
   return port::Error::input(error);
 }
 

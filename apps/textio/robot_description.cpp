@@ -168,6 +168,9 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
 }
 
 port::Error parse_root(const std::string& text, const std::string& source, JsonValue* root) {
+  std::string_view body;
+  const port::Error encoding = utf8_text(text, source, &body);  // UTF-16 is not malformed JSON
+  if (!encoding.ok()) return encoding;
   const port::Error syntax = parse_json(text, root);
   if (!syntax.ok()) return fail(source, "malformed JSON: " + syntax.message);
   if (root->kind != JsonValue::Kind::object) return fail(source, "top level must be an object");
@@ -515,10 +518,21 @@ port::Error read_robot_description(const std::string& path, RobotDescription* de
   std::string text;
   const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
   if (!read.ok()) return read;
-  if (trim(text).empty()) return port::Error::input(path + ": empty file");
-  // A URDF (XML) or the JSON description, by content.
-  const port::Error parsed = trim(text)[0] == '<' ? parse_urdf_description(text, path, description)
-                                                  : parse_robot_description(text, path, description);
+  std::string_view body;
+  port::Error parsed = utf8_text(text, path, &body);
+  if (!parsed.ok()) return parsed;
+  const std::string_view start = trim(body);
+  if (start.empty()) return port::Error::input(path + ": empty file");
+  // A URDF (XML) or the JSON description, by content; anything else is neither (not "malformed JSON").
+  if (start[0] == '<') {
+    parsed = parse_urdf_description(body, path, description);
+  } else if (start[0] == '{') {
+    parsed = parse_robot_description(text, path, description);
+  } else {
+    return port::Error::input(path +
+                              ": not a robot description: a JSON description starts with '{', a URDF with '<'; " +
+                              "this file starts with " + port::quoted(start, 20));
+  }
   if (parsed.ok() && description->robot.empty()) {  // unnamed: the file's name without folder and .json
     const std::size_t slash = path.find_last_of('/');
     std::string stem = slash == std::string::npos ? path : path.substr(slash + 1);

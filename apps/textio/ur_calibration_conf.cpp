@@ -56,8 +56,9 @@ port::Error parse_ur_calibration_conf(const std::string& text, const std::string
   bool in_mounting = false;
   bool saw_mounting = false;
   std::size_t line_number = 0;
-  std::string_view rest(text);
-  if (rest.substr(0, 3) == "\xEF\xBB\xBF") rest.remove_prefix(3);  // a UTF-8 byte order mark
+  std::string_view rest;
+  const port::Error encoding = utf8_text(text, source_name, &rest);
+  if (!encoding.ok()) return encoding;
   while (!rest.empty()) {
     ++line_number;
     const std::size_t newline = rest.find('\n');

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "hivecal/core/types.hpp"
 #include "textio/robot_description.hpp"
@@ -51,7 +52,7 @@ std::string format_urdf(const RobotDescription& robot, const RigidTransform* bas
 /// its tips named tcp (tcp_2, tcp_3), else tool0, else its only tip; frame 6 at its 'flange' link
 /// when it has one (a 'flange' elsewhere is not the arm's), else at joint 6's child. The DH model's FK is checked
 /// against the URDF's on random poses (1e-9 m) or the file is refused; every refusal names the file (and line).
-port::Error parse_urdf_description(const std::string& text, const std::string& source_name,
+port::Error parse_urdf_description(std::string_view text, const std::string& source_name,
                                    RobotDescription* description);
 
 }  // namespace hivecal::textio

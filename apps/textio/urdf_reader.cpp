@@ -607,7 +607,7 @@ bool tool_links(const UrdfTree& tree, std::string_view arm_end, const EndLinks& 
 
 }  // namespace
 
-port::Error parse_urdf_description(const std::string& text, const std::string& source_name,
+port::Error parse_urdf_description(std::string_view text, const std::string& source_name,
                                    RobotDescription* description) {
   UrdfTree tree;
   Refusal refusal;
