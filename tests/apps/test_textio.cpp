@@ -174,6 +174,21 @@ TEST(TextJson, MalformedResultsAreNamed) {
     EXPECT_FALSE(r.ok());
     EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message;
   }
+  // A base beyond the 100 m a text input allows a point: not a tracker's frame (it predicted
+  // 1e300 m and scored "MAE inf" before).
+  record::CalibrationFile far = example_calibration();
+  for (const double x_m : {1e300, 101.0}) {
+    far.base_to_tracker.translation_m.x() = x_m;
+    record::CalibrationFile file;
+    const port::Error r = record::parse_calibration_json(record::format_calibration_json(far), "result.json", &file);
+    EXPECT_NE(r.message.find("result.json: \"base_to_tracker\" puts the robot's base "), std::string::npos)
+        << r.message;
+    EXPECT_NE(r.message.find(" m from the tracker, beyond 100 m: not a tracker's frame"), std::string::npos)
+        << r.message;
+  }
+  far.base_to_tracker.translation_m.x() = 99.0;
+  record::CalibrationFile file;
+  EXPECT_TRUE(record::parse_calibration_json(record::format_calibration_json(far), "result.json", &file).ok());
 }
 
 TEST(TextFiles, AtomicWriteReplacesOrLeavesNothing) {

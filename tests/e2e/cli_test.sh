@@ -361,6 +361,15 @@ expect 3 'huge_d.json: "dh"[0].d = 1.0000000000000001e+300 m is beyond 1000 m: n
 sed 's/"theta_offset": 0.0, "d": 0.0, "a": -0.425/"theta_offset": 1e20, "d": 0.0, "a": -0.425/' "$work/model.json" >"$work/huge_theta.json"
 expect 3 '"dh"[1].theta_offset = 1e+20 rad is beyond' -- predict --calibration "$work/huge_theta.json" --joints "$work/joints.csv" --out "$work/n4.csv"
 no_file "$work/n4.csv"
+# A base 1e300 m from the tracker was predicted, exported and scored "MAE inf" with exit 0.
+ur_result_json ur5 0.089159 -0.425 -0.39225 0.10915 0.09465 0.0823 "0, 0, 0" \
+  "[[1, 0, 0, 1e300], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]" >"$work/far_base.json"
+far='far_base.json: "base_to_tracker" puts the robot'"'"'s base 1.0000000000000001e+300 m from the tracker, beyond 100 m: not a tracker'"'"'s frame'
+expect 3 "$far" -- predict --calibration "$work/far_base.json" --joints "$work/joints.csv" --out "$work/n4.csv"
+expect 3 "$far" -- export --calibration "$work/far_base.json" --out "$work/n4.urdf"
+expect 3 "$far" -- validate --calibration "$work/far_base.json" --truth "$work/model.json"
+no_file "$work/n4.csv"
+no_file "$work/n4.urdf"
 
 expect 2 "--robot-port and --tracker-port name the same port" -- record --robot-port "$work/model.json" --tracker-port "$work/model.json" --robot-out "$work/rec1.cap" --tracker-out "$work/rec2.cap"
 expect 2 "--calibration and --joints both read stdin" -- predict --calibration - --joints - --out "$work/n6.csv"
