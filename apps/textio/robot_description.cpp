@@ -125,10 +125,10 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
     const bool standard = convention->kind == JsonValue::Kind::string && convention->string == "standard-dh";
     const bool modified = convention->kind == JsonValue::Kind::string && convention->string == "modified-dh";
     if (!standard && !modified) {
-      return fail(source,
-                  "unknown \"convention\"" +
-                      (convention->kind == JsonValue::Kind::string ? " '" + convention->string + "'" : std::string()) +
-                      ": \"standard-dh\" or \"modified-dh\"");
+      return fail(source, "unknown \"convention\"" +
+                              (convention->kind == JsonValue::Kind::string ? " " + port::quoted(convention->string)
+                                                                           : std::string()) +
+                              ": \"standard-dh\" or \"modified-dh\"");
     }
     parsed.convention = modified ? DhConvention::modified : DhConvention::standard;
   }

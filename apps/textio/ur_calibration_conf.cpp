@@ -34,7 +34,7 @@ std::string parse_six_values(std::string_view list, double* values) {
     const std::string_view field = list.substr(0, comma);
     if (count == kJointCount) return "more than 6 values";
     double v = 0.0;
-    if (!parse_double(field, &v)) return "not a number: '" + std::string(trim(field)) + "'";
+    if (!parse_double(field, &v)) return "not a number: " + port::quoted(trim(field));
     if (!math::is_finite(v)) return "value is NaN or Inf";
     values[count++] = v;
     if (comma == std::string_view::npos) break;

@@ -245,5 +245,22 @@ TEST(RobotDescription, ByteOrderMarksAndOtherEncodingsAreNamed) {
       << r.message;
 }
 
+// Text of the file quoted in a message is cut after 80 bytes (docs/cli.md), as port::quoted cuts
+// it: a 4,000-byte convention or calibration.conf value is not echoed whole.
+TEST(RobotDescription, QuotesOfTheFileAreCutAt80Bytes) {
+  const std::string long_text(4000, 'x');
+  textio::RobotDescription description;
+  const port::Error convention = textio::parse_robot_description(
+      "{\"convention\": \"" + long_text + "\", \"dh\": [], \"tool\": [0, 0, 0]}", "arm.json", &description);
+  UrCalibrationDeltas deltas;
+  const port::Error conf = textio::parse_ur_calibration_conf(
+      "[mounting]\ndelta_theta = [" + long_text + ", 0, 0, 0, 0, 0]\n", "calibration.conf", &deltas);
+  for (const port::Error& error : {convention, conf}) {
+    EXPECT_FALSE(error.ok());
+    EXPECT_LT(error.message.size(), 250u) << error.message;
+    EXPECT_NE(error.message.find("...[4000 bytes]'"), std::string::npos) << error.message;
+  }
+}
+
 }  // namespace
 }  // namespace hivecal::robot_description_test
