@@ -234,14 +234,31 @@ struct UrdfJoint {
 
 constexpr std::size_t kNoJoint = static_cast<std::size_t>(-1);
 
+/// A link as the joints see it (one table for every link: one look-up per name).
+struct UrdfLink {
+  int line = 0;                              ///< line of its <link>, 0 when only joints name it
+  std::size_t parent_joint = kNoJoint;       ///< the joint it is the child of
+  std::size_t first_child_joint = kNoJoint;  ///< a joint it is the parent of (more through next_sibling)
+};
+
 /// The joints of a URDF and how they hang together: the parent joint of each link and, for
 /// walking down, the joints below each link as a list through next_sibling.
 struct UrdfTree {
   std::string_view robot_name;
-  std::vector<UrdfJoint> joints;                                        ///< in file order
-  std::unordered_map<std::string_view, std::size_t> parent_joint;       ///< child link -> its joint
-  std::unordered_map<std::string_view, std::size_t> first_child_joint;  ///< link -> a joint below it
+  std::vector<UrdfJoint> joints;                         ///< in file order
+  std::unordered_map<std::string_view, UrdfLink> links;  ///< by name: every link a <link> or a joint names
   std::vector<std::size_t> next_sibling;  ///< per joint: the next joint of the same parent link, or kNoJoint
+
+  /// The joint whose child `link` is, or kNoJoint.
+  std::size_t parent_joint(std::string_view link) const {
+    const auto found = links.find(link);
+    return found == links.end() ? kNoJoint : found->second.parent_joint;
+  }
+  /// A joint whose parent `link` is, or kNoJoint.
+  std::size_t first_child_joint(std::string_view link) const {
+    const auto found = links.find(link);
+    return found == links.end() ? kNoJoint : found->second.first_child_joint;
+  }
 };
 
 bool read_joint_type(const XmlTag& tag, UrdfJoint* joint, Refusal* refusal) {
@@ -322,46 +339,50 @@ bool add_joint(const UrdfJoint& joint, UrdfTree* tree, Refusal* refusal) {
                      who + " has link " + port::quoted(joint.child) + " as its parent and its child: a loop", refusal);
   }
   const std::size_t index = tree->joints.size();
-  const auto [parent, new_child] = tree->parent_joint.emplace(joint.child, index);
-  if (!new_child) {
-    const UrdfJoint& first = tree->joints[parent->second];
+  UrdfLink& child = tree->links[joint.child];
+  if (child.parent_joint != kNoJoint) {
+    const UrdfJoint& first = tree->joints[child.parent_joint];
     return refuse_at(joint.line,
                      who + ": link " + port::quoted(joint.child) + " already has a parent joint, " +
                          port::quoted(first.name) + " of line " + std::to_string(first.line) +
                          " (a loop, or not a tree)",
                      refusal);
   }
-  const auto [first, inserted] = tree->first_child_joint.emplace(joint.parent, index);
-  tree->next_sibling.push_back(inserted ? kNoJoint : first->second);
-  first->second = index;
+  child.parent_joint = index;
+  UrdfLink& parent = tree->links[joint.parent];
+  tree->next_sibling.push_back(parent.first_child_joint);
+  parent.first_child_joint = index;
   tree->joints.push_back(joint);
   return true;
 }
 
-/// Names of one kind (links, joints) and the line of each: a name given twice is refused.
-bool unique_name(std::unordered_map<std::string_view, int>* seen, const char* kind, std::string_view name, int line,
-                 Refusal* refusal) {
-  const auto [first, inserted] = seen->emplace(name, line);
-  if (inserted) return true;
+/// *first_line (0: not yet) becomes `line`; a name given twice (links, joints) is refused.
+bool unique_name(int* first_line, const char* kind, std::string_view name, int line, Refusal* refusal) {
+  if (*first_line == 0) {
+    *first_line = line;
+    return true;
+  }
   return refuse_at(line,
                    std::string("a second ") + kind + " named " + port::quoted(name) + " (the first at line " +
-                       std::to_string(first->second) + "): each " + kind + " needs a name of its own",
+                       std::to_string(*first_line) + "): each " + kind + " needs a name of its own",
                    refusal);
 }
 
 /// The tree of the document's joints, read in one pass.
 bool read_tree(std::string_view text, UrdfTree* tree, Refusal* refusal) {
-  // Room for every joint at once: growing by doubling would hold up to three times their size.
-  std::size_t joint_tags = 0;
-  for (std::size_t at = text.find("<joint"); at != std::string_view::npos; at = text.find("<joint", at + 1))
-    ++joint_tags;
+  // Room for every joint and link at once: growing by doubling would hold up to three times
+  // their size, and rehash the tables each time.
+  const auto count = [&](std::string_view tag) {
+    std::size_t n = 0;
+    for (std::size_t at = text.find(tag); at != std::string_view::npos; at = text.find(tag, at + 1)) ++n;
+    return n;
+  };
+  const std::size_t joint_tags = count("<joint");
   tree->joints.reserve(joint_tags);
   tree->next_sibling.reserve(joint_tags);
-  tree->parent_joint.reserve(joint_tags);
-  tree->first_child_joint.reserve(joint_tags);
-  std::unordered_map<std::string_view, int> link_names;
-  std::unordered_map<std::string_view, int> joint_names;
-  joint_names.reserve(joint_tags);
+  tree->links.reserve(std::max(count("<link"), joint_tags + 1));
+  std::unordered_map<std::string_view, int> joint_lines;  // the line of each joint name
+  joint_lines.reserve(joint_tags);
   XmlTagReader reader(text);
   XmlTag tag;
   int root_line = 0;      // the <robot> element's
@@ -378,12 +399,12 @@ bool read_tree(std::string_view text, UrdfTree* tree, Refusal* refusal) {
                            std::to_string(root_line) + ": a URDF is one <robot> element (two files joined?)",
                        refusal);
     } else if (tag.depth == 1 && tag.name == "link" && !tag.closing) {
-      if (!unique_name(&link_names, "link", tag.get("name"), tag.line, refusal)) return false;
+      if (!unique_name(&tree->links[tag.get("name")].line, "link", tag.get("name"), tag.line, refusal)) return false;
     } else if (tag.depth == 1 && tag.name == "joint" && !tag.closing) {
       joint = UrdfJoint();
       joint.line = tag.line;
       joint.name = tag.get("name");
-      if (!unique_name(&joint_names, "joint", joint.name, tag.line, refusal) ||
+      if (!unique_name(&joint_lines[joint.name], "joint", joint.name, tag.line, refusal) ||
           !read_joint_type(tag, &joint, refusal)) {
         return false;
       }
@@ -404,13 +425,13 @@ bool read_tree(std::string_view text, UrdfTree* tree, Refusal* refusal) {
 /// The joints from the root to `link`, root first; refused when the parents go round in a loop.
 bool path_to_root(const UrdfTree& tree, std::string_view link, std::vector<const UrdfJoint*>* path, Refusal* refusal) {
   path->clear();
-  for (auto parent = tree.parent_joint.find(link); parent != tree.parent_joint.end();
-       parent = tree.parent_joint.find(path->back()->parent)) {
+  for (std::size_t parent = tree.parent_joint(link); parent != kNoJoint;
+       parent = tree.parent_joint(path->back()->parent)) {
     if (path->size() == tree.joints.size()) {
       return refuse_at(path->back()->line,
                        "the joints above link " + port::quoted(link) + " go round in a loop: no root link", refusal);
     }
-    path->push_back(&tree.joints[parent->second]);
+    path->push_back(&tree.joints[parent]);
   }
   std::reverse(path->begin(), path->end());
   return true;
@@ -547,14 +568,14 @@ void end_links(const UrdfTree& tree, std::string_view link, EndLinks* end) {
   std::vector<std::size_t> pending;
   for (std::string_view at = link;;) {
     end->has_flange = end->has_flange || at == "flange";
-    const auto below = tree.first_child_joint.find(at);
-    if (below == tree.first_child_joint.end()) {
+    const std::size_t below = tree.first_child_joint(at);
+    if (below == kNoJoint) {
       ++end->tip_count;
       if (end->first_tips.size() < EndLinks::kShownTips) end->first_tips.push_back(at);
       for (const char* tool : {"tcp", "tcp_2", "tcp_3", "tool0"})
         if (at == tool) end->named_tips.push_back(at);
     } else {
-      for (std::size_t j = below->second; j != kNoJoint; j = tree.next_sibling[j]) pending.push_back(j);
+      for (std::size_t j = below; j != kNoJoint; j = tree.next_sibling[j]) pending.push_back(j);
     }
     if (pending.empty()) return;
     at = tree.joints[pending.back()].child;
@@ -566,7 +587,7 @@ void end_links(const UrdfTree& tree, std::string_view link, EndLinks* end) {
 RigidTransform pose_below(const UrdfTree& tree, std::string_view above, std::string_view link) {
   RigidTransform pose;
   for (std::string_view at = link; at != above;) {
-    const UrdfJoint& joint = tree.joints[tree.parent_joint.at(at)];
+    const UrdfJoint& joint = tree.joints[tree.parent_joint(at)];
     pose = joint.origin.then_after(pose);
     at = joint.parent;
   }
