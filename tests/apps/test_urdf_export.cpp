@@ -380,8 +380,9 @@ double seconds_to_read(const std::string& urdf, textio::RobotDescription* robot,
 }
 
 // 200,000 fixed links in a line after the tcp, and 200,000 fixed children of link_6: read in
-// linear time and without recursion (they took minutes and overflowed the stack). Not a timing
-// test: the bound only tells a hang from a read.
+// linear time and without recursion (they overflowed the stack and took minutes). Not a timing
+// test: the bound only tells a hang from a read (~1 s here, emulated targets several times that;
+// the quadratic walk took ~2 minutes for the children natively).
 TEST(UrdfImport, ManyFixedLinksReadInLinearTimeWithoutRecursion) {
   constexpr int kLinks = 200000;
   std::string line;
@@ -406,7 +407,7 @@ TEST(UrdfImport, ManyFixedLinksReadInLinearTimeWithoutRecursion) {
     port::Error error;
     const double seconds = seconds_to_read(ur5_urdf_with(*extra), &robot, &error);
     ASSERT_TRUE(error.ok()) << error.message;
-    EXPECT_LT(seconds, 10.0);
+    EXPECT_LT(seconds, 30.0);
     for (int i = 0; i < kJointCount; ++i) EXPECT_NEAR(robot.model.joints[i].a_m, ur5.joints[i].a_m, 1e-12) << i;
     // The line's tool0 is 200,000 x 1 um beyond the tcp; the children leave the tcp where it is.
     EXPECT_NEAR(robot.model.tool_m.z(), extra == &line ? kLinks * 1e-6 : 0.0, 1e-9);
