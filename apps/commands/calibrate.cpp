@@ -283,7 +283,7 @@ Error write_outputs(const Options& options, const CalibrateSettings& settings, c
   const CalibrationStage& final_stage = run.final_stage();
   Error error = outputs->stage_text(ids.result, "", calibration_result_json(settings, data, facts, run, warnings));
   if (error.ok() && !options.get("ur-deltas").empty()) {
-    const UrCalibrationDeltas deltas = ur_deltas_between(settings.robot.model, final_stage.model);
+    const UrCalibrationDeltas deltas = textio::ur_deltas_in_ur_table(settings.robot.model, final_stage.model);
     error = outputs->stage_text(ids.ur_deltas, "", textio::format_ur_calibration_conf(deltas));
   }
   if (error.ok() && !options.get("report").empty()) {

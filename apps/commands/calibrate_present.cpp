@@ -562,7 +562,7 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
   const CalibrationBaseline& uncalibrated = run.result.baseline;
   const CalibrationStage& final_stage = run.final_stage();
   report::ReportData data;
-  data.title = "hivecal calibration: " + settings.robot.robot;
+  data.title = "hivecal calibration: " + port::printable(settings.robot.robot);  // the file's text, made safe
   data.input_lines = facts.info_lines;
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +

@@ -81,6 +81,11 @@ Error ur_kinematics_yaml(const Options& options, const record::CalibrationFile& 
   if (arm.convention != DhConvention::standard) {
     return Error::input("--format ur-kinematics: the arm is described in modified DH: not a UR arm; use --format urdf");
   }
+  if (textio::is_ur_table_turned(arm.model)) {
+    std::fprintf(stderr,
+                 "hivecal export: note: the arm's table is UR's with every a and alpha negated (described from a base "
+                 "turned by 180 deg about z, as ROS's base_link is): the YAML is written in UR's own base\n");
+  }
   textio::UrKinematics kinematics;
   std::string why;
   if (!textio::ur_kinematics_from_model(arm.model, &kinematics, &why))

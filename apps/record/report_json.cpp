@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "record/result_json.hpp"
+#include "textio/delimited.hpp"
 
 namespace hivecal::record {
 namespace {
@@ -210,7 +211,8 @@ bool get_model(const JsonValue& v, RobotModel* model, RigidTransform* transform)
       if (!model->other_tools_m[k].allFinite()) return false;
     }
   }
-  return params.allFinite() && transform->rotation.allFinite() && transform->translation_m.allFinite();
+  return params.allFinite() && transform->rotation.allFinite() &&
+         transform->translation_m.norm() <= textio::kMaxPointDistance_m;  // the result's own bound (NaN fails)
 }
 
 bool get_methods(const JsonValue* v, std::vector<MethodRow>* out) {
@@ -253,6 +255,9 @@ bool get_samples(const JsonValue* v, std::vector<SampleRow>* out) {
       return false;
     }
     row.measured_m = Vec3(xyz[0], xyz[1], xyz[2]);
+    if (!(row.measured_m.norm() <= textio::kMaxPointDistance_m)) return false;  // the text inputs' bounds
+    for (const double q : row.q_rad)
+      if (!(std::fabs(q) <= textio::kMaxJointLimit_rad)) return false;
     if (const JsonValue* target = s.find("target"); target != nullptr) {  // several reflectors only
       long long k = 0;
       if (!get_count(target, &k) || k >= kMaxTargets) return false;
@@ -560,6 +565,7 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
     return port::Error::input(source + ": \"report\".\"" + key + "\" is malformed");
   };
   if (!get_string(value.find("title"), &parsed.title)) return bad("title");
+  parsed.title = port::printable(parsed.title, 4096);  // it carries the robot's name: printable, as calibrate wrote it
   const JsonValue* info = value.find("info");
   if (!is_array(info)) return bad("info");
   for (const JsonValue& line : info->array) {

@@ -6,6 +6,7 @@
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/solve/lm.hpp"
 #include "record/report_json.hpp"
+#include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
 
 namespace hivecal::record {
@@ -42,8 +43,17 @@ port::Error parse_transform(const JsonValue& root, const std::string& source, Ri
   if (!last_row_ok || orthonormality > 1e-5 || rotation.determinant() <= 0.0) {
     return fail(source, "\"base_to_tracker\" is not a proper rigid transform");
   }
+  // The tracker sees the robot within the distance the text inputs allow a point: farther is no
+  // cell (a damaged or hand-made file), and would predict, export and score in silence.
+  const Vec3 translation_m = m.block<3, 1>(0, 3);
+  const double distance_m = std::hypot(translation_m.x(), translation_m.y(), translation_m.z());  // no overflow
+  if (!(distance_m <= textio::kMaxPointDistance_m)) {
+    return fail(source, "\"base_to_tracker\" puts the robot's base " + textio::format_double(distance_m) +
+                            " m from the tracker, beyond " + textio::format_double(textio::kMaxPointDistance_m) +
+                            " m: not a tracker's frame");
+  }
   transform->rotation = rotation_from_cross_covariance(rotation.transpose());  // nearest rotation
-  transform->translation_m = m.block<3, 1>(0, 3);
+  transform->translation_m = translation_m;
   return port::Error{};
 }
 

@@ -60,6 +60,29 @@ port::Error write_text_file(const std::string& path, const std::string& content)
   return result.ok() ? outputs.commit() : result;
 }
 
+port::Error utf8_text(std::string_view text, const std::string& source, std::string_view* body) {
+  // Which encoding the first bytes say: a byte order mark, or ASCII with its NUL bytes around
+  // ('<', '{' or a blank written in UTF-16 or UTF-32).
+  const auto starts = [&](std::string_view prefix) { return text.substr(0, prefix.size()) == prefix; };
+  const auto ascii_at = [&](std::size_t i) {
+    return i < text.size() && text[i] != '\0' && static_cast<unsigned char>(text[i]) < 0x80;
+  };
+  const auto nul_at = [&](std::size_t i) { return i < text.size() && text[i] == '\0'; };
+  const char* encoding = nullptr;
+  if (starts(std::string_view("\xFF\xFE\0\0", 4)) || (ascii_at(0) && nul_at(1) && nul_at(2) && nul_at(3))) {
+    encoding = "UTF-32 text (little-endian)";
+  } else if (starts(std::string_view("\0\0\xFE\xFF", 4)) || (nul_at(0) && nul_at(1) && nul_at(2) && ascii_at(3))) {
+    encoding = "UTF-32 text (big-endian)";
+  } else if (starts("\xFF\xFE") || (ascii_at(0) && nul_at(1))) {
+    encoding = "UTF-16 text (little-endian)";
+  } else if (starts("\xFE\xFF") || (nul_at(0) && ascii_at(1))) {
+    encoding = "UTF-16 text (big-endian)";
+  }
+  if (encoding != nullptr) return port::Error::input(source + ": " + encoding + ": save it as UTF-8");
+  *body = starts("\xEF\xBB\xBF") ? text.substr(3) : text;  // a UTF-8 byte order mark, as some editors write it
+  return port::Error{};
+}
+
 std::string format_double(double value) {
   // The characters of printf's "%.17g" in the C locale (the standard defines to_chars with a
   // precision so), about five times faster than snprintf: result.json writes every sample's

@@ -26,6 +26,10 @@ bool parse_double(std::string_view field, double* value);
 /// Writes `content` to `path` as the only output of a port::OutputSet (temporary beside it,
 /// rename; special files refused, symlink and mode kept). On failure an older file stays.
 port::Error write_text_file(const std::string& path, const std::string& content);
+/// `text` as hivecal reads a text file: without a UTF-8 byte order mark. UTF-16 and UTF-32 (by
+/// their byte order marks, or by the NUL bytes of ASCII so written) are refused: Fault::input
+/// "SOURCE: UTF-16 text (little-endian): save it as UTF-8".
+port::Error utf8_text(std::string_view text, const std::string& source, std::string_view* body);
 /// Formats a double so that it reads back to the same bits: printf's "%.17g", C locale.
 std::string format_double(double value);
 

@@ -200,6 +200,16 @@ TEST(Report, DataRoundTripsThroughResultJson) {
   const port::Error damaged = record::parse_report_data(value, "result.json", &back);
   EXPECT_FALSE(damaged.ok());
   EXPECT_NE(damaged.message.find("\"samples\""), std::string::npos) << damaged.message;
+  // Points, joints and frames beyond the text inputs' bounds (100 m, two turns) are no session.
+  textio::JsonValue far = written_report(data);
+  far.object["samples"].array[0].object["measured_m"].array[0].number = 1e300;
+  EXPECT_NE(record::parse_report_data(far, "result.json", &back).message.find("\"samples\""), std::string::npos);
+  far = written_report(data);
+  far.object["samples"].array[0].object["q_rad"].array[0].number = 100.0;
+  EXPECT_NE(record::parse_report_data(far, "result.json", &back).message.find("\"samples\""), std::string::npos);
+  far = written_report(data);
+  far.object["predictions"].array[0].object["translation_m"].array[0].number = 1e300;
+  EXPECT_NE(record::parse_report_data(far, "result.json", &back).message.find("\"predictions\""), std::string::npos);
 }
 
 /// The <svg> of figure `id` in `html` ("" if absent).

@@ -361,6 +361,15 @@ expect 3 'huge_d.json: "dh"[0].d = 1.0000000000000001e+300 m is beyond 1000 m: n
 sed 's/"theta_offset": 0.0, "d": 0.0, "a": -0.425/"theta_offset": 1e20, "d": 0.0, "a": -0.425/' "$work/model.json" >"$work/huge_theta.json"
 expect 3 '"dh"[1].theta_offset = 1e+20 rad is beyond' -- predict --calibration "$work/huge_theta.json" --joints "$work/joints.csv" --out "$work/n4.csv"
 no_file "$work/n4.csv"
+# A base 1e300 m from the tracker was predicted, exported and scored "MAE inf" with exit 0.
+ur_result_json ur5 0.089159 -0.425 -0.39225 0.10915 0.09465 0.0823 "0, 0, 0" \
+  "[[1, 0, 0, 1e300], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]" >"$work/far_base.json"
+far='far_base.json: "base_to_tracker" puts the robot'"'"'s base 1.0000000000000001e+300 m from the tracker, beyond 100 m: not a tracker'"'"'s frame'
+expect 3 "$far" -- predict --calibration "$work/far_base.json" --joints "$work/joints.csv" --out "$work/n4.csv"
+expect 3 "$far" -- export --calibration "$work/far_base.json" --out "$work/n4.urdf"
+expect 3 "$far" -- validate --calibration "$work/far_base.json" --truth "$work/model.json"
+no_file "$work/n4.csv"
+no_file "$work/n4.urdf"
 
 expect 2 "--robot-port and --tracker-port name the same port" -- record --robot-port "$work/model.json" --tracker-port "$work/model.json" --robot-out "$work/rec1.cap" --tracker-out "$work/rec2.cap"
 expect 2 "--calibration and --joints both read stdin" -- predict --calibration - --joints - --out "$work/n6.csv"
@@ -472,6 +481,25 @@ if "${run[@]}" check-robot "$work/ur5.urdf" >"$work/check.txt" 2>&1 && grep -q "
   fail "check-robot ur5.urdf: $(cat "$work/check.txt")"; fi
 if "${run[@]}" check-robot ur10e --joints "$work/joints.csv" | grep -q "^FK at pose 1 (q \[deg\] 0.000 -90.000 90.000 -90.000 -90.000 0.000)"; then pass; else
   fail "check-robot --joints"; fi
+# A robot's name is the file's text: its control bytes (a window title, a clear screen, a NUL that
+# ended the printout) reach no terminal and no report raw; every printed name is escaped as
+# messages are (port::printable).
+only_text() {  # FILE: holds no control byte but newline, tab and CR (UTF-8 bytes allowed)
+  [ -s "$1" ] && [ "$(LC_ALL=C tr -d '\n\t\r\040-\176\200-\377' <"$1" | wc -c)" -eq 0 ]
+}
+ur_result_json '\u001b]0;pwned\u0007\u001b[2J\u0000tail' 0.089159 -0.425 -0.39225 0.10915 0.09465 0.0823 "0.0, 0.0, 0.1" \
+  "[[1, 0, 0, 1], [0, 1, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]]" >"$work/hostile.json"
+if "${run[@]}" check-robot "$work/hostile.json" >"$work/hostile.txt" 2>&1 && only_text "$work/hostile.txt" &&
+   grep -qF 'robot: \x1b]0;pwned\x07\x1b[2J\x00tail (file ' "$work/hostile.txt" && grep -q "^convention: standard-dh$" "$work/hostile.txt"; then pass; else
+  fail "check-robot of a name with control bytes: $(od -c "$work/hostile.txt" | head -5)"; fi
+if "${run[@]}" calibrate --samples "$work/paired.csv" --robot-model "$work/hostile.json" --method lm --split 1 --out "$work/hostile_result.json" \
+     --report "$work/hostile_report" >/dev/null 2>&1 && only_text "$work/hostile_report/index.html" &&
+   grep -qF '<title>hivecal calibration: \x1b]0;pwned\x07\x1b[2J\x00tail</title>' "$work/hostile_report/index.html"; then pass; else
+  fail "calibrate --report of a name with control bytes"; fi
+sed 's/"title": "hivecal calibration: ur5"/"title": "\\u001b]0;pwned\\u0007"/' "$work/cap.json" >"$work/hostile_title.json"
+if grep -q 'u001b' "$work/hostile_title.json" && "${run[@]}" report --calibration "$work/hostile_title.json" --out "$work/hostile_redrawn" >/dev/null &&
+   only_text "$work/hostile_redrawn/index.html" && grep -qF '<title>\x1b]0;pwned\x07</title>' "$work/hostile_redrawn/index.html"; then pass; else
+  fail "report of a result whose title holds control bytes"; fi
 printf '<robot name="r">\n<joint name="j" type="prismatic"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/slider.urdf"
 expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- predict --robot-model "$work/slider.urdf" --joints "$work/joints.csv"
 expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- check-robot "$work/slider.urdf"
