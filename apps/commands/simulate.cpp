@@ -242,7 +242,8 @@ int simulate_main(int argc, char** argv) {
   port::OutputSet outputs;
   std::size_t folder = 0;
   error = declare_inputs(options, {"out-dir"}, &outputs);
-  if (error.ok()) error = outputs.add_folder(options.get("out-dir"), "--out-dir", &folder);
+  if (error.ok())
+    error = outputs.add_folder(options.get("out-dir"), "--out-dir", output_names(!options.given("serve")), &folder);
   if (error.ok()) error = check_not_overwriting(options);
   if (!error.ok()) return cli::exit_with(kSimulateCommand, error);
   const Session session(config);

@@ -418,6 +418,17 @@ if kill -0 "$pid" 2>/dev/null; then
 elif wait "$pid" && grep -q '^served ' "$work/serve.log"; then pass; else
   fail "simulate --serve after SIGTERM: $(cat "$work/serve.log")"; fi
 
+# --- issue 54: outputs named twice, concurrent runs, more signals, simulate's numbers
+# An output that is a file another output writes is refused before any input is read (the
+# report's page replaced the result): joints.csv is no samples file, yet the refusal comes first.
+mkdir -p "$work/rp"
+expect 2 "--report '$work/rp' writes '$work/rp/index.html', which is the same file as the output --out '$work/rp/index.html'" -- \
+  calibrate --samples "$work/joints.csv" --out "$work/rp/index.html" --report "$work/rp"
+expect 2 "writes '$work/rp/./index.html', which is the same file as the output --ur-deltas" -- \
+  calibrate --samples "$work/joints.csv" --out "$work/rp.json" --ur-deltas "$work/rp/index.html" --report "$work/rp/."
+no_file "$work/rp/index.html"
+expect 2 "--out: '  ' is blank: give a file name" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "  "
+expect 2 "--report: ' ' is blank: give a folder path" -- calibrate --samples "$work/joints.csv" --out "$work/b.json" --report " "
 expect 2 "--orientation-form must be rotation-vector or euler-xyz, not 'zyx'" -- calibrate --samples "$work/paired.csv" --orientation-form zyx --out "$work/o.json"
 expect 2 "is not C=NAME or C=NAME[unit] with C one of" -- calibrate --samples "$work/paired.csv" --columns "w=measurement_w" --out "$work/o.json"
 printf 'q1,q2,q3,q4,q5,q6,px [mm],y,z\n0,0,0,0,0,0,1,2,3\n' >"$work/conflict.csv"

@@ -71,6 +71,20 @@ std::string named(const std::string& label, const std::string& path) {
   return (label.empty() ? "" : label + " ") + quoted(path, 200);
 }
 
+/// Empty or white space only (a path such as "  " is a mistake, never a name meant).
+bool blank(const std::string& text) {
+  return text.find_first_not_of(" \t\r\n\v\f") == std::string::npos;
+}
+
+/// Refuses a path that is blank or ends in a blank name ("dir/  "; "report/" is "report").
+Error check_not_blank(const std::string& path, const std::string& label, const char* what) {
+  const std::size_t last = path.find_last_not_of('/');
+  const bool root = !path.empty() && last == std::string::npos;
+  if (root || (!blank(path) && !blank(name_of(path.substr(0, last + 1))))) return Error{};
+  return Error::usage(label + ": " + (path.empty() ? std::string("empty path") : quoted(path) + " is blank") +
+                      ": give " + what);
+}
+
 /// The folder exists and this process may create files in it.
 Error check_folder_writable(const std::string& folder, const std::string& who) {
   struct stat info {};
@@ -198,6 +212,7 @@ struct OutputSet::Output {
   bool is_stdout = false;                          ///< "-"
   bool is_folder = false;                          ///< a folder of files
   std::string target;                              ///< final path (a symlink resolved)
+  std::vector<std::string> names;                  ///< a folder: the files it will hold
   bool existed = false;                            ///< the file / folder was there before the run
   struct stat old {};                              ///< its metadata when it existed (a file)
   std::string temp_folder;                         ///< a new folder is built here, then renamed
@@ -212,18 +227,24 @@ OutputSet::~OutputSet() {
   abandon();
 }
 
-Error OutputSet::check_distinct(const FileIdentity& identity, const std::string& label, const std::string& path) const {
+Error OutputSet::check_distinct(const FileIdentity& identity, const std::string& who) const {
   for (const Input& input : inputs_) {
     if (same_file(identity, input.identity)) {
-      return Error::usage(named(label, path) + " is the same file as the input " + named(input.label, input.path) +
+      return Error::usage(who + " is the same file as the input " + named(input.label, input.path) +
                           ": refusing to overwrite an input");
     }
   }
   for (const auto& output : outputs_) {
     if (output->is_stdout) continue;
     if (same_file(identity, identify(output->target))) {
-      return Error::usage(named(label, path) + " is the same file as the output " + named(output->label, output->path) +
+      return Error::usage(who + " is the same file as the output " + named(output->label, output->path) +
                           ": each output needs its own path");
+    }
+    for (const std::string& name : output->names) {
+      if (same_file(identity, identify(join(output->target, name)))) {
+        return Error::usage(who + " is " + quoted(join(output->path, name), 200) + ", which the output " +
+                            named(output->label, output->path) + " writes: each output needs its own path");
+      }
     }
   }
   return Error{};
@@ -233,9 +254,15 @@ Error OutputSet::add_input(const std::string& path, const std::string& label) {
   if (path.empty() || path == "-") return Error{};
   Input input{label, path, identify(path)};
   for (const auto& output : outputs_) {
-    if (!output->is_stdout && same_file(input.identity, identify(output->target))) {
-      return Error::usage(named(output->label, output->path) + " is the same file as the input " + named(label, path) +
-                          ": refusing to overwrite an input");
+    if (output->is_stdout) continue;
+    std::string written = same_file(input.identity, identify(output->target)) ? output->path : "";
+    for (const std::string& name : output->names) {
+      if (same_file(input.identity, identify(join(output->target, name)))) written = join(output->path, name);
+    }
+    if (!written.empty()) {
+      return Error::usage(named(output->label, output->path) +
+                          (written == output->path ? "" : " writes " + quoted(written, 200) + ", which") +
+                          " is the same file as the input " + named(label, path) + ": refusing to overwrite an input");
     }
   }
   inputs_.push_back(std::move(input));
@@ -244,7 +271,8 @@ Error OutputSet::add_input(const std::string& path, const std::string& label) {
 
 Error OutputSet::add_file(const std::string& path, const std::string& label, std::size_t* id) {
   const std::string who = named(label, path);
-  if (path.empty()) return Error::usage(label + ": empty path");
+  Error error = check_not_blank(path, label, "a file name ('-': stdout)");
+  if (!error.ok()) return error;
   auto output = std::make_unique<Output>();
   output->label = label;
   output->path = path;
@@ -254,9 +282,9 @@ Error OutputSet::add_file(const std::string& path, const std::string& label, std
     }
     output->is_stdout = true;
   } else {
-    Error error = resolve_link(path, who, &output->target);
+    error = resolve_link(path, who, &output->target);
     if (error.ok()) error = check_file_target(output->target, who, &output->existed, &output->old);
-    if (error.ok()) error = check_distinct(identify(output->target), label, path);
+    if (error.ok()) error = check_distinct(identify(output->target), who);
     if (!error.ok()) return error;
   }
   *id = outputs_.size();
@@ -264,14 +292,17 @@ Error OutputSet::add_file(const std::string& path, const std::string& label, std
   return Error{};
 }
 
-Error OutputSet::add_folder(const std::string& path, const std::string& label, std::size_t* id) {
+Error OutputSet::add_folder(const std::string& path, const std::string& label, const std::vector<std::string>& names,
+                            std::size_t* id) {
   const std::string who = named(label, path);
-  if (path.empty() || path == "-") return Error::usage(label + ": a folder path is needed");
+  Error error = check_not_blank(path, label, "a folder path");
+  if (error.ok() && path == "-") error = Error::usage(label + ": a folder path is needed, not stdout ('-')");
+  if (!error.ok()) return error;
   auto output = std::make_unique<Output>();
   output->label = label;
   output->path = path;
   output->is_folder = true;
-  Error error = resolve_link(path, who, &output->target);
+  error = resolve_link(path, who, &output->target);
   if (!error.ok()) return error;
   struct stat info {};
   output->existed = ::stat(output->target.c_str(), &info) == 0;
@@ -279,8 +310,13 @@ Error OutputSet::add_folder(const std::string& path, const std::string& label, s
     return Error::output(who + ": exists and is " + kind_of(info.st_mode) + ", not a folder");
   }
   error = check_folder_writable(output->existed ? output->target : existing_ancestor(output->target), who);
-  if (error.ok()) error = check_distinct(identify(output->target), label, path);
+  if (error.ok()) error = check_distinct(identify(output->target), who);
+  for (std::size_t k = 0; k < names.size() && error.ok(); ++k) {
+    error = check_distinct(identify(join(output->target, names[k])),
+                           who + " writes " + quoted(join(path, names[k]), 200) + ", which");
+  }
   if (!error.ok()) return error;
+  output->names = names;
   *id = outputs_.size();
   outputs_.push_back(std::move(output));
   return Error{};
@@ -288,7 +324,9 @@ Error OutputSet::add_folder(const std::string& path, const std::string& label, s
 
 Error OutputSet::stage_in_folder(Output& folder, const std::string& name, StagedFile** file) {
   const std::string who = named(folder.label, join(folder.path, name));
-  if (name.empty() || name.find('/') != std::string::npos) return Error::usage(who + ": bad file name");
+  if (std::find(folder.names.begin(), folder.names.end(), name) == folder.names.end()) {
+    return Error::usage(who + ": internal: a file the folder was not declared with");
+  }
   std::string base;
   if (folder.existed) {
     base = folder.target;
@@ -312,8 +350,7 @@ Error OutputSet::stage_in_folder(Output& folder, const std::string& name, Staged
   struct stat old {};
   bool existed = false;
   if (folder.existed) {
-    Error error = check_file_target(final_path, who, &existed, &old);
-    if (error.ok() && existed) error = check_distinct(identify(final_path), folder.label, join(folder.path, name));
+    const Error error = check_file_target(final_path, who, &existed, &old);
     if (!error.ok()) return error;
     if (existed) {
       staged->mode_ = old.st_mode & 07777;
