@@ -429,6 +429,17 @@ expect 2 "writes '$work/rp/./index.html', which is the same file as the output -
 no_file "$work/rp/index.html"
 expect 2 "--out: '  ' is blank: give a file name" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "  "
 expect 2 "--report: ' ' is blank: give a folder path" -- calibrate --samples "$work/joints.csv" --out "$work/b.json" --report " "
+# stdout on a full device: the tables printed before the commit go first, and when they do
+# not arrive no output is replaced; a failure after the commit names the outputs written.
+if [ -w /dev/full ]; then
+  echo old >"$work/full.json"
+  err=$("${run[@]}" calibrate --samples "$work/paired.csv" --method lm --split 1 --out "$work/full.json" 2>&1 >/dev/full); code=$?
+  if [ "$code" -eq 4 ] && grep -qF "stdout: write failed: No space left on device; no output was replaced" <<<"$err" &&
+     [ "$(cat "$work/full.json")" = old ]; then pass; else fail "calibrate > /dev/full: exit $code: $err"; fi
+  err=$("${run[@]}" report --calibration "$work/cap.json" --out "$work/fullrep" 2>&1 >/dev/full); code=$?
+  if [ "$code" -eq 4 ] && grep -qF "stdout: write failed: No space left on device; the outputs were written before it: --out '$work/fullrep'" <<<"$err" &&
+     [ -s "$work/fullrep/index.html" ]; then pass; else fail "report --out DIR > /dev/full: exit $code: $err"; fi
+fi
 expect 2 "--orientation-form must be rotation-vector or euler-xyz, not 'zyx'" -- calibrate --samples "$work/paired.csv" --orientation-form zyx --out "$work/o.json"
 expect 2 "is not C=NAME or C=NAME[unit] with C one of" -- calibrate --samples "$work/paired.csv" --columns "w=measurement_w" --out "$work/o.json"
 printf 'q1,q2,q3,q4,q5,q6,px [mm],y,z\n0,0,0,0,0,0,1,2,3\n' >"$work/conflict.csv"

@@ -140,6 +140,12 @@ std::string existing_ancestor(const std::string& path) {
   return folder;
 }
 
+/// The outputs this process has committed ("--out 'r.json'"), for finish_stdout's message.
+std::vector<std::string>& written_outputs() {
+  static std::vector<std::string> written;
+  return written;
+}
+
 void sync_folder(const std::string& folder) {
   const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) return;
@@ -471,14 +477,17 @@ Error OutputSet::commit() {
       }
     }
   }
-  for (auto& output : outputs_) {  // stdout first: it cannot be taken back
+  // stdout first, what the run printed before (its tables) and an output staged for it: it
+  // cannot be taken back, and when it does not arrive no file is replaced.
+  for (auto& output : outputs_) {
     if (!error.ok() || !output->is_stdout || output->files.empty()) continue;
     const std::string& bytes = output->files.front()->memory_;
     if (std::fwrite(bytes.data(), 1, bytes.size(), stdout) != bytes.size()) {
       error = Error::output("stdout: write failed: " + system_message(errno));
     }
-    if (error.ok()) error = finish_stdout();
   }
+  if (error.ok()) error = finish_stdout();
+  if (!error.ok() && error.message.rfind("stdout:", 0) == 0) error.message += "; no output was replaced";
   for (auto& output : outputs_) {
     if (!error.ok()) break;
     if (output->is_stdout) continue;
@@ -531,6 +540,11 @@ Error OutputSet::commit() {
   }
   committed_ = true;
   abandon();  // whatever is left (after a failure) goes
+  if (error.ok()) {
+    for (const auto& output : outputs_) {
+      if (!output->is_stdout) written_outputs().push_back(named(output->label, output->path));
+    }
+  }
   return error;
 }
 
@@ -562,7 +576,10 @@ Error finish_stdout() {
   const bool flushed = std::fflush(stdout) == 0;
   if (flushed && std::ferror(stdout) == 0) return Error{};
   const int saved = errno;
-  return Error::output("stdout: write failed: " + (saved != 0 ? system_message(saved) : std::string("I/O error")));
+  std::string written;  // a failure after a commit must not read as "nothing was written"
+  for (const std::string& output : written_outputs()) written += (written.empty() ? "" : ", ") + output;
+  return Error::output("stdout: write failed: " + (saved != 0 ? system_message(saved) : std::string("I/O error")) +
+                       (written.empty() ? "" : "; the outputs were written before it: " + written));
 }
 
 }  // namespace hivecal::port

@@ -8,9 +8,10 @@
 //     the temporary goes beside the link's target, the link stays), every write, the fsync
 //     and the close checked; stdout's bytes are kept in memory;
 //  3. commit: the folders the outputs go into are locked (flock: concurrent runs commit one
-//     whole set after the other), stdout is written and flushed (a full device is an error),
-//     then every temporary is renamed onto its target with the old file's mode (and owner,
-//     when allowed).
+//     whole set after the other), stdout (an output staged for it, and whatever the run
+//     printed before) is written and flushed (a full device is an error, and nothing is
+//     replaced), then every temporary is renamed onto its target with the old file's mode (and
+//     owner, when allowed).
 // A set destroyed without commit() removes its temporaries: a failed run leaves no output; a
 // signal removes them too (temporaries.hpp), and waits while the set is moved into place.
 #pragma once
@@ -106,7 +107,8 @@ class OutputSet {
 };
 
 /// Flushes stdout and checks that everything printed on it was written (e.g. not to a full
-/// device); Fault::output with the reason otherwise.
+/// device); Fault::output with the reason otherwise, naming the outputs this process has
+/// committed already (a failure after a commit leaves them written).
 Error finish_stdout();
 
 }  // namespace hivecal::port
