@@ -440,6 +440,26 @@ if [ -w /dev/full ]; then
   if [ "$code" -eq 4 ] && grep -qF "stdout: write failed: No space left on device; the outputs were written before it: --out '$work/fullrep'" <<<"$err" &&
      [ -s "$work/fullrep/index.html" ]; then pass; else fail "report --out DIR > /dev/full: exit $code: $err"; fi
 fi
+# One folder named several ways (absolute and relative, sub/..) is locked once: the commit
+# waited for its own lock forever.
+mkdir -p "$work/h1/x/sub"
+if (cd "$work/h1/x" && timeout 120 "${run[@]}" calibrate --samples "$work/paired.csv" --method lm --split 1 \
+      --out "$work/h1/x/result.json" --ur-deltas sub/../d.conf --report report >/dev/null 2>&1) &&
+   [ -s "$work/h1/x/result.json" ] && [ -s "$work/h1/x/d.conf" ] && [ -s "$work/h1/x/report/index.html" ]; then pass; else
+  fail "calibrate with one folder named two ways: $(ls -A "$work/h1/x")"; fi
+# Six runs creating one report folder at once: each writes it whole (five failed with
+# "Directory not empty").
+mkdir -p "$work/m7"
+pids=()
+for i in 1 2 3 4 5 6; do
+  "${run[@]}" report --calibration "$work/cap.json" --out "$work/m7/report" >"$work/m7.$i.log" 2>&1 &
+  pids+=($!)
+done
+m7_failed=0
+for pid in "${pids[@]}"; do wait "$pid" || m7_failed=$((m7_failed + 1)); done
+if [ "$m7_failed" = 0 ] && cmp -s "$work/m7/report/index.html" "$work/redrawn/index.html" &&
+   [ "$(ls -A "$work/m7")" = report ] && [ "$(ls -A "$work/m7/report")" = index.html ]; then pass; else
+  fail "six concurrent reports into one new folder: $m7_failed failed: $(cat "$work"/m7.*.log) $(ls -A "$work/m7" "$work/m7/report")"; fi
 expect 2 "--orientation-form must be rotation-vector or euler-xyz, not 'zyx'" -- calibrate --samples "$work/paired.csv" --orientation-form zyx --out "$work/o.json"
 expect 2 "is not C=NAME or C=NAME[unit] with C one of" -- calibrate --samples "$work/paired.csv" --columns "w=measurement_w" --out "$work/o.json"
 printf 'q1,q2,q3,q4,q5,q6,px [mm],y,z\n0,0,0,0,0,0,1,2,3\n' >"$work/conflict.csv"

@@ -6,7 +6,12 @@
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <functional>
 
 #include <atomic>
 #include <cstdio>
@@ -215,6 +220,73 @@ TEST(OutputFiles, ABlankPathIsRefused) {
     EXPECT_EQ(error.fault, Fault::usage) << "'" << blank << "'";
   }
   EXPECT_NE(outputs.add_file("  ", "--out", &id).message.find("'  ' is blank"), std::string::npos);
+}
+
+/// Runs `commit` in a child process; true when it ended within `limit_s` with exit 0.
+bool commits_in_time(const std::function<bool()>& commit, int limit_s) {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(commit() ? 0 : 1);
+  for (int waited_ms = 0; waited_ms < limit_s * 1000; waited_ms += 20) {
+    int status = 0;
+    if (::waitpid(child, &status, WNOHANG) == child) return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    ::usleep(20000);
+  }
+  ::kill(child, SIGKILL);
+  ::waitpid(child, nullptr, 0);
+  return false;
+}
+
+TEST(OutputFiles, AFolderNamedTwoWaysIsLockedOnceAndTheCommitEnds) {
+  // --out $PWD/x/result.json --report report (inside x), sub/../d.conf, a symlinked folder:
+  // one folder under several names; a second flock on it waited for the first forever.
+  const test::TempDir dir("hivecal_port_files");
+  char* absolute = ::realpath(dir.path().c_str(), nullptr);
+  ASSERT_NE(absolute, nullptr);
+  const std::string x = absolute;
+  std::free(absolute);
+  ASSERT_EQ(::mkdir((x + "/sub").c_str(), 0755), 0);
+  ASSERT_EQ(::symlink(x.c_str(), (x + "/alias").c_str()), 0);
+  const bool committed = commits_in_time(
+      [&] {
+        if (::chdir(x.c_str()) != 0) return false;
+        OutputSet outputs;
+        std::size_t result = 0, deltas = 0, other = 0, report = 0;
+        return outputs.add_file(x + "/result.json", "--out", &result).ok() &&
+               outputs.add_file("sub/../d.conf", "--ur-deltas", &deltas).ok() &&
+               outputs.add_file("alias/other.csv", "--urscript", &other).ok() &&
+               outputs.add_folder("report", "--report", {"index.html"}, &report).ok() &&
+               outputs.stage_text(result, "", "{}").ok() && outputs.stage_text(deltas, "", "d").ok() &&
+               outputs.stage_text(other, "", "o").ok() && outputs.stage_text(report, "index.html", "<html>").ok() &&
+               outputs.commit().ok();
+      },
+      20);
+  EXPECT_TRUE(committed) << "the commit did not end (a folder locked twice?)";
+  EXPECT_EQ(read(x + "/result.json"), "{}");
+  EXPECT_EQ(read(x + "/d.conf"), "d");
+  EXPECT_EQ(read(x + "/other.csv"), "o");
+  EXPECT_EQ(read(x + "/report/index.html"), "<html>");
+}
+
+TEST(OutputFiles, TwoRunsCreatingOneFolderBothSucceed) {
+  // Concurrent runs with the same new --report folder: the one that commits second finds the
+  // folder made by the first and writes into it (it failed with "Directory not empty").
+  const test::TempDir dir("hivecal_port_files");
+  const std::string folder = dir.path() + "/report";
+  OutputSet first, second;
+  std::size_t a = 0, b = 0;
+  ASSERT_TRUE(first.add_folder(folder, "--report", {"index.html", "first.txt"}, &a).ok());
+  ASSERT_TRUE(second.add_folder(folder, "--report", {"index.html", "second.txt"}, &b).ok());
+  ASSERT_TRUE(first.stage_text(a, "index.html", "first").ok());
+  ASSERT_TRUE(first.stage_text(a, "first.txt", "1").ok());
+  ASSERT_TRUE(second.stage_text(b, "index.html", "second").ok());
+  ASSERT_TRUE(second.stage_text(b, "second.txt", "2").ok());
+  ASSERT_TRUE(first.commit().ok());
+  const Error error = second.commit();
+  ASSERT_TRUE(error.ok()) << error.message;
+  EXPECT_EQ(read(folder + "/index.html"), "second");  // the later run's set, whole
+  EXPECT_EQ(read(folder + "/first.txt"), "1");        // nothing of the first run lost
+  EXPECT_EQ(read(folder + "/second.txt"), "2");
+  EXPECT_EQ(std::system(("test \"$(ls -A '" + dir.path() + "')\" = report").c_str()), 0) << "temporaries left";
 }
 
 TEST(OutputFiles, ACommitWaitsForAnotherRunsCommitInTheSameFolder) {

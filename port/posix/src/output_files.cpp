@@ -222,6 +222,7 @@ struct OutputSet::Output {
   bool existed = false;                            ///< the file / folder was there before the run
   struct stat old {};                              ///< its metadata when it existed (a file)
   std::string temp_folder;                         ///< a new folder is built here, then renamed
+  std::string emptied_folder;                      ///< temp_folder once its files go one by one
   std::vector<std::unique_ptr<StagedFile>> files;  ///< staged content
   std::vector<std::string> finals;  ///< where each staged file goes (inside temp_folder for a new folder)
   std::vector<bool> moved;          ///< renamed into place already
@@ -419,41 +420,113 @@ Error OutputSet::stage_text(std::size_t id, const std::string& name, const std::
 namespace {
 
 /// Exclusive locks on the folders a commit writes into (flock on each folder itself: no lock
-/// file is left behind), taken in path order and released on destruction: concurrent runs
-/// on the same outputs replace them one set after the other, never interleaved.
+/// file is left behind), released on destruction: concurrent runs on the same outputs replace
+/// them one set after the other, never interleaved. Each folder is locked once however it is
+/// named ("x", "./x", "$PWD/x", a symlink: a second flock on a second descriptor of the same
+/// folder would wait for the first forever), all in the order of device and inode, which every
+/// run shares.
 class FolderLocks {
  public:
-  explicit FolderLocks(std::vector<std::string> folders) {
-    std::sort(folders.begin(), folders.end());
-    folders.erase(std::unique(folders.begin(), folders.end()), folders.end());
-    for (const std::string& folder : folders) {
-      const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-      if (fd < 0) continue;  // not there (yet): nothing to serialise on
-      while (::flock(fd, LOCK_EX) != 0 && errno == EINTR) {
-      }
-      fds_.push_back(fd);
-    }
-  }
-  ~FolderLocks() {
-    for (int fd : fds_) ::close(fd);  // closing releases the lock
-  }
+  FolderLocks() = default;
+  ~FolderLocks() { release(); }
   FolderLocks(const FolderLocks&) = delete;
   FolderLocks& operator=(const FolderLocks&) = delete;
 
+  /// Releases what is held and locks `folders` (one that is not there has nothing to lock).
+  void take(const std::vector<std::string>& folders) {
+    release();
+    struct Opened {
+      dev_t device;
+      ino_t inode;
+      int fd;
+    };
+    std::vector<Opened> opened;
+    for (const std::string& folder : folders) {
+      const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+      struct stat info {};
+      if (fd < 0) continue;  // not there (yet): nothing to serialise on
+      const bool known = ::fstat(fd, &info) == 0 && std::any_of(opened.begin(), opened.end(), [&](const Opened& o) {
+                           return o.device == info.st_dev && o.inode == info.st_ino;
+                         });
+      if (known) {
+        ::close(fd);
+      } else {
+        opened.push_back(Opened{info.st_dev, info.st_ino, fd});
+      }
+    }
+    std::sort(opened.begin(), opened.end(), [](const Opened& a, const Opened& b) {
+      return a.device != b.device ? a.device < b.device : a.inode < b.inode;
+    });
+    for (const Opened& o : opened) {
+      while (::flock(o.fd, LOCK_EX) != 0 && errno == EINTR) {
+      }
+      fds_.push_back(o.fd);
+    }
+  }
+
  private:
+  void release() {
+    for (int fd : fds_) ::close(fd);  // closing releases the lock
+    fds_.clear();
+  }
   std::vector<int> fds_;
 };
 
 }  // namespace
 
-Error OutputSet::commit() {
+std::vector<std::string> OutputSet::folders_to_lock() const {
   std::vector<std::string> folders;
   for (const auto& output : outputs_) {
-    if (!output->is_stdout) folders.push_back(existing_ancestor(output->target));  // the folder it goes into
+    if (output->is_stdout) continue;
+    struct stat info {};
+    const bool folder_there = output->is_folder && ::stat(output->target.c_str(), &info) == 0 && S_ISDIR(info.st_mode);
+    // A folder's files go into it; a file, or a new folder, into the folder above it.
+    folders.push_back(folder_there ? output->target : existing_ancestor(output->target));
   }
-  const FolderLocks locks(std::move(folders));
+  std::sort(folders.begin(), folders.end());
+  return folders;
+}
+
+Error OutputSet::write_into_folders_made_meanwhile() {
+  for (auto& output : outputs_) {
+    if (output->temp_folder.empty()) continue;
+    struct stat info {};
+    if (::stat(output->target.c_str(), &info) != 0) continue;  // still new: the whole folder is moved
+    if (!S_ISDIR(info.st_mode)) {
+      return Error::output(named(output->label, output->path) + ": became " + kind_of(info.st_mode) +
+                           " during the run; refusing to replace it");
+    }
+    // Another run made the folder since the declaration: its files go in one by one, as into
+    // a folder that was there (a file of that run's that this one writes is replaced whole).
+    for (std::size_t k = 0; k < output->files.size(); ++k) {
+      output->finals[k] = join(output->target, name_of(output->finals[k]));
+      struct stat old {};
+      if (::stat(output->finals[k].c_str(), &old) == 0 && S_ISREG(old.st_mode)) {
+        StagedFile& file = *output->files[k];
+        file.mode_ = old.st_mode & 07777;
+        file.set_owner_ = true;
+        file.owner_uid_ = old.st_uid;
+        file.owner_gid_ = old.st_gid;
+      }
+    }
+    output->emptied_folder = output->temp_folder;  // removed once its files have moved
+    output->temp_folder.clear();
+    output->existed = true;
+  }
+  return Error{};
+}
+
+Error OutputSet::commit() {
+  FolderLocks locks;
+  // A folder that appears while this run waits (another run made it) is locked too.
+  for (std::vector<std::string> folders = folders_to_lock();;) {
+    locks.take(folders);
+    std::vector<std::string> now = folders_to_lock();
+    if (now == folders) break;
+    folders = std::move(now);
+  }
+  Error error = write_into_folders_made_meanwhile();
   const SignalsHeld held;  // the set is moved whole: a signal now is delivered after abandon()
-  Error error;
   for (auto& output : outputs_) {
     for (auto& file : output->files) {
       const Error finished = file->finish();
@@ -564,6 +637,9 @@ void OutputSet::abandon() {
     }
     if (!output->temp_folder.empty() && !output->folder_moved) ::rmdir(output->temp_folder.c_str());
     unregister_temporary(output->temp_folder);
+    if (!output->emptied_folder.empty()) ::rmdir(output->emptied_folder.c_str());
+    unregister_temporary(output->emptied_folder);
+    output->emptied_folder.clear();
     output->files.clear();
     output->finals.clear();
     output->moved.clear();

@@ -7,11 +7,12 @@
 //  2. stage: each output is written to a temporary beside its target (a symlink is followed:
 //     the temporary goes beside the link's target, the link stays), every write, the fsync
 //     and the close checked; stdout's bytes are kept in memory;
-//  3. commit: the folders the outputs go into are locked (flock: concurrent runs commit one
-//     whole set after the other), stdout (an output staged for it, and whatever the run
-//     printed before) is written and flushed (a full device is an error, and nothing is
-//     replaced), then every temporary is renamed onto its target with the old file's mode (and
-//     owner, when allowed).
+//  3. commit: the folders the outputs go into are locked (flock, each folder once however it
+//     is named: concurrent runs commit one whole set after the other), stdout (an output
+//     staged for it, and whatever the run printed before) is written and flushed (a full
+//     device is an error, and nothing is replaced), then every temporary is renamed onto its target
+//     with the old file's mode (and owner, when allowed). A new folder that another run
+//     created meanwhile is written into as an existing one.
 // A set destroyed without commit() removes its temporaries: a failed run leaves no output; a
 // signal removes them too (temporaries.hpp), and waits while the set is moved into place.
 #pragma once
@@ -100,6 +101,8 @@ class OutputSet {
   };
   Error check_distinct(const FileIdentity& identity, const std::string& who) const;
   Error stage_in_folder(Output& folder, const std::string& name, StagedFile** file);
+  std::vector<std::string> folders_to_lock() const;
+  Error write_into_folders_made_meanwhile();
 
   std::vector<Input> inputs_;
   std::vector<std::unique_ptr<Output>> outputs_;
