@@ -390,17 +390,21 @@ interrupted() {
   local pid=$!
   sleep 1
   kill "-$1" "$pid"
-  wait "$pid"
+  wait "$pid" 2>/dev/null
 }
-interrupted INT "$work/sig/new"
-code=$?
-if [ "$code" = 130 ] && [ ! -e "$work/sig/new" ] && ! compgen -G "$work/sig/new.tmp.*" >/dev/null; then pass; else
-  fail "simulate after SIGINT: exit $code (want 130), left: $(ls -A "$work/sig" 2>&1)"; fi
+# ends_cleanly SIGNAL CODE DIR: interrupted exits with CODE and leaves DIR as it was: absent
+# without a temporary beside it, or empty.
+ends_cleanly() {
+  local code
+  interrupted "$1" "$3"
+  code=$?
+  if [ "$code" = "$2" ] && { { [ -d "$3" ] && [ -z "$(ls -A "$3")" ]; } ||
+       { [ ! -e "$3" ] && ! compgen -G "$3.tmp.*" >/dev/null; }; }; then pass; else
+    fail "simulate after SIG$1: exit $code (want $2), left: $(ls -A "$3" "$(dirname "$3")" 2>&1)"; fi
+}
+ends_cleanly INT 130 "$work/sig/new"
 mkdir -p "$work/sig/old"
-interrupted TERM "$work/sig/old"
-code=$?
-if [ "$code" = 143 ] && [ -z "$(ls -A "$work/sig/old")" ]; then pass; else
-  fail "simulate after SIGTERM: exit $code (want 143), left: $(ls -A "$work/sig/old")"; fi
+ends_cleanly TERM 143 "$work/sig/old"
 # simulate --serve whose reader left (its writes wait for room that never comes): SIGTERM
 # still ends it within seconds, with its stats line.
 "${run[@]}" simulate --serve --speed 0 --serve-delay-s 0.5 --out-dir "$work/sig/serve" --waypoints 4 --duration-s 30 \
@@ -460,6 +464,15 @@ for pid in "${pids[@]}"; do wait "$pid" || m7_failed=$((m7_failed + 1)); done
 if [ "$m7_failed" = 0 ] && cmp -s "$work/m7/report/index.html" "$work/redrawn/index.html" &&
    [ "$(ls -A "$work/m7")" = report ] && [ "$(ls -A "$work/m7/report")" = index.html ]; then pass; else
   fail "six concurrent reports into one new folder: $m7_failed failed: $(cat "$work"/m7.*.log) $(ls -A "$work/m7" "$work/m7/report")"; fi
+# SIGUSR1 and SIGALRM end a run as SIGTERM does, its temporaries removed; a file size limit
+# (SIGXFSZ) is an output error, exit 4, nothing left.
+ends_cleanly USR1 138 "$work/sig/usr1"
+mkdir -p "$work/sig/alrm"
+ends_cleanly ALRM 142 "$work/sig/alrm"
+mkdir -p "$work/sig/xfsz"
+code=$( (ulimit -f 200; "${run[@]}" simulate --out-dir "$work/sig/xfsz" --waypoints 40 --duration-s 300 >/dev/null 2>"$work/xfsz.err"); echo $?)
+if [ "$code" = 4 ] && grep -q "write failed: File too large" "$work/xfsz.err" && [ -z "$(ls -A "$work/sig/xfsz")" ]; then pass; else
+  fail "simulate over ulimit -f: exit $code (want 4), $(cat "$work/xfsz.err"), left: $(ls -A "$work/sig/xfsz")"; fi
 expect 2 "--orientation-form must be rotation-vector or euler-xyz, not 'zyx'" -- calibrate --samples "$work/paired.csv" --orientation-form zyx --out "$work/o.json"
 expect 2 "is not C=NAME or C=NAME[unit] with C one of" -- calibrate --samples "$work/paired.csv" --columns "w=measurement_w" --out "$work/o.json"
 printf 'q1,q2,q3,q4,q5,q6,px [mm],y,z\n0,0,0,0,0,0,1,2,3\n' >"$work/conflict.csv"
