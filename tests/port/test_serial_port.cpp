@@ -200,6 +200,26 @@ TEST(CaptureFile, ReplaysExactlyAndPaces) {
   ::unlink(path.c_str());
 }
 
+TEST(CaptureFile, ASecondRecorderOfTheSameFileIsRefusedEvenWithForce) {
+  // Two `record ... --robot-out same.txt --force`: both wrote the file, one recording lost.
+  const std::string path = temp_path("locked.cap");
+  const std::vector<std::uint8_t> first_bytes = pattern(300, 8);
+  CaptureWriter first;
+  ASSERT_TRUE(first.open(path, true).ok());
+  ASSERT_TRUE(first.write(first_bytes.data(), first_bytes.size()).ok());
+  CaptureWriter second;
+  const Error error = second.open(path, true);
+  EXPECT_EQ(error.fault, Fault::output);
+  EXPECT_NE(error.message.find("another process is recording into it"), std::string::npos) << error.message;
+  ASSERT_TRUE(first.close().ok());
+  CaptureFileSource replay(path);
+  ASSERT_TRUE(replay.open().ok());
+  EXPECT_EQ(read_bytes(&replay, first_bytes.size() + 1, 2000), first_bytes) << "the first recording was truncated";
+  CaptureWriter after;  // once the first has closed, --force replaces it
+  EXPECT_TRUE(after.open(path, true).ok());
+  ::unlink(path.c_str());
+}
+
 TEST(Recorder, CopiesTwoPortsToCaptures) {
   PtyPair robot;
   PtyPair tracker;

@@ -21,7 +21,9 @@ class CaptureWriter {
   CaptureWriter& operator=(const CaptureWriter&) = delete;
 
   /// Creates `path`; an existing file is an error unless `replace` (then a regular file is
-  /// truncated; a device, FIFO or folder is still refused). Fault::output on failure.
+  /// truncated; a device, FIFO or folder is still refused). The file stays locked (flock)
+  /// until close(): a file another writer holds is refused, never truncated. Fault::output on
+  /// failure.
   Error open(const std::string& path, bool replace);
   /// Writes all `count` bytes (retrying short writes and EINTR). Fault::output on failure.
   Error write(const std::uint8_t* bytes, std::size_t count);
