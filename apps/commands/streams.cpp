@@ -174,7 +174,7 @@ Error record_rtde(const cli::Options& options) {
           if (!created.ok()) return created;
           opened = true;
         }
-        return file.write(reinterpret_cast<const std::uint8_t*>(row.data()), row.size());
+        return file.write_whole(reinterpret_cast<const std::uint8_t*>(row.data()), row.size());
       },
       &stats);
   const Error closed = file.close();

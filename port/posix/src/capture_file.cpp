@@ -62,6 +62,20 @@ Error CaptureWriter::write(const std::uint8_t* bytes, std::size_t count) {
   return Error{};
 }
 
+Error CaptureWriter::write_whole(const std::uint8_t* bytes, std::size_t count) {
+  const std::uint64_t before = bytes_written_;
+  const Error error = write(bytes, count);
+  if (error.ok() || bytes_written_ == before) return error;
+  // A part went in (a full disk, `ulimit -f`): cut it off, the file ends at the last whole record.
+  if (::ftruncate(fd_, static_cast<off_t>(before)) != 0) {
+    return Error::output(error.message +
+                         "; a part of the last record stays (cannot cut it off: " + std::strerror(errno) + ")");
+  }
+  bytes_written_ = before;
+  return Error::output(error.message + "; the file ends at the last whole record (" + std::to_string(before) +
+                       " bytes)");
+}
+
 Error CaptureWriter::sync() {
   if (fd_ >= 0 && ::fsync(fd_) != 0 && errno != EINVAL) {  // EINVAL: a pipe or tty, nothing to sync
     return Error::output(path_ + ": fsync failed: " + std::strerror(errno));

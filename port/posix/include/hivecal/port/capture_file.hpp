@@ -27,6 +27,9 @@ class CaptureWriter {
   Error open(const std::string& path, bool replace);
   /// Writes all `count` bytes (retrying short writes and EINTR). Fault::output on failure.
   Error write(const std::uint8_t* bytes, std::size_t count);
+  /// Writes one record (a log row) whole: after a failed write the part that went in is cut
+  /// off again, so the file ends at the last whole record. Fault::output on failure.
+  Error write_whole(const std::uint8_t* bytes, std::size_t count);
   /// Forces the written bytes to storage (fsync).
   Error sync();
   /// sync() then close; the first failure of either. Safe to call twice.
