@@ -57,9 +57,13 @@ std::string rtde_log_header();
 /// Connects to `host`:`port`, negotiates protocol version 2, reads the controller version,
 /// sets up the recipe `timestamp,actual_q,actual_TCP_pose` at `frequency_hz`, starts, and
 /// hands one log row per data package to `write_row` (text ending in '\n', the header first)
-/// until *stop is set, `duration_s` passes or the controller closes; then pauses. Errors:
-/// input (no answer, refused version, a variable the controller does not know, a malformed
-/// package), output (write_row's).
+/// until *stop is set, `duration_s` passes (counted from the call: the connection and the
+/// setup take part of it) or the controller closes; then pauses. Each setup reply is due
+/// `reply_timeout_ms` after its request (text messages meanwhile do not extend it); a package
+/// the network delivers in parts is put together whatever the pauses between them, unless it
+/// stays unfinished for `reply_timeout_ms`. Errors: input (no answer, refused version, a
+/// variable the controller does not know, a malformed or stalled package, no data package
+/// for `reply_timeout_ms`), output (write_row's).
 Error record_rtde(const std::string& host, int port, const RtdeRecordOptions& options,
                   const volatile std::sig_atomic_t* stop, const std::function<Error(const std::string&)>& write_row,
                   RtdeStats* stats);
