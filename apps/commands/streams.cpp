@@ -125,6 +125,9 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
   return Error{};
 }
 
+/// The controller's text messages printed on stderr; more are only counted (the summary).
+constexpr std::uint64_t kTextMessagesShown = 20;
+
 /// `record --rtde HOST[:PORT]`: the controller's joint states through RTDE into a robot log
 /// (the RTDE recorder's text format, which every reader takes), written as it comes.
 Error record_rtde(const cli::Options& options) {
@@ -161,8 +164,14 @@ Error record_rtde(const cli::Options& options) {
   if (!error.ok()) return error;
   port::CaptureWriter file;  // rows are appended as they come: Ctrl-C loses nothing
   bool opened = false;
-  rtde.on_text = [](const std::string& text) {
-    std::fprintf(stderr, "hivecal record: controller says: %s\n", text.c_str());
+  std::uint64_t texts_shown = 0;  // a chattering controller does not flood the terminal
+  rtde.on_text = [&texts_shown](const std::string& text) {
+    if (texts_shown < kTextMessagesShown) {
+      std::fprintf(stderr, "hivecal record: controller says: %s\n", text.c_str());
+    } else if (texts_shown == kTextMessagesShown) {
+      std::fprintf(stderr, "hivecal record: further controller messages are counted, not shown\n");
+    }
+    ++texts_shown;
   };
   install_stop_handlers();
   port::RtdeStats stats;

@@ -3,8 +3,8 @@
 // as a log row with each value exactly as sent; text messages are passed on; an unknown
 // variable (NOT_FOUND), a refused protocol version, a host that never answers and a controller
 // that closes mid-stream each end as they should; and the hostile ones (issue 54): a package
-// cut by a pause is put together, a controller that only chatters or stops sending is timed
-// out.
+// cut by a pause is put together, a controller that only chatters is timed out, a flood is
+// refused.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -184,6 +184,29 @@ TEST(RtdeClient, AControllerThatStopsSendingDataEndsTheRecording) {
   expect_refused(r, "no data package for 500 ms");
   EXPECT_EQ(r.rows.size(), 21u);
   EXPECT_LT(r.took_ms, 3000);
+}
+
+TEST(RtdeClient, TrafficFarBeyondTheFrequencyIsRefused) {
+  // 87k packages/s at a requested 125 Hz were taken, to the disk and the terminal.
+  ControllerScript flood;
+  flood.data_packages = 100000;
+  const StandInController data(flood);
+  RtdeRecordOptions options;
+  options.frequency_hz = 125.0;
+  options.duration_s = 5.0;
+  Recording r = record_from(data, options);
+  expect_refused(r, "far more than the 125 Hz asked for");
+  EXPECT_LT(r.rows.size(), 1200u);
+  EXPECT_LT(r.took_ms, 2500);
+  ControllerScript chatter;
+  chatter.chatter_only = true;
+  chatter.chatter_after_start = true;
+  chatter.chatter_limit_s = 6.0;
+  const StandInController texts(chatter);
+  r = record_from(texts, options);
+  expect_refused(r, "far more than the 125 Hz asked for");
+  EXPECT_LT(r.texts.size(), 1200u);
+  EXPECT_LT(r.took_ms, 2500);
 }
 
 }  // namespace

@@ -158,6 +158,35 @@ class PackageReader {
   std::int64_t started_ms_ = 0;
 };
 
+/// Refuses traffic far beyond what was asked for: a UR controller sends `frequency_hz` data
+/// packages a second and a few text messages, so more than twice that, after a burst of
+/// kBurstPackages (a backlog the network delivers at once), is not its RTDE output, and would
+/// fill the disk and the terminal.
+class TrafficLimit {
+ public:
+  explicit TrafficLimit(double frequency_hz) : frequency_hz_(frequency_hz), start_ms_(monotonic_ms()) {}
+  /// Counts one package; an input error when the traffic passes the limit.
+  Error count() {
+    ++packages_;
+    if (packages_ <= kBurstPackages) return Error{};
+    const double elapsed_s = static_cast<double>(monotonic_ms() - start_ms_) * 1e-3;
+    if (static_cast<double>(packages_) <= kBurstPackages + 2.0 * frequency_hz_ * elapsed_s) return Error{};
+    char rate[64];
+    std::snprintf(rate, sizeof rate, "%llu packages in %.3f s", static_cast<unsigned long long>(packages_), elapsed_s);
+    char asked[32];
+    std::snprintf(asked, sizeof asked, "%g Hz", frequency_hz_);
+    return Error::input(std::string("--rtde: the controller sent ") + rate + ", far more than the " + asked +
+                        " asked for (at most twice that rate after a burst of " + std::to_string(kBurstPackages) +
+                        "): not a UR controller's RTDE output; refusing it");
+  }
+
+ private:
+  static constexpr std::uint64_t kBurstPackages = 1000;
+  double frequency_hz_;
+  std::int64_t start_ms_;
+  std::uint64_t packages_ = 0;
+};
+
 std::uint32_t be32(const std::uint8_t* p) {
   return (static_cast<std::uint32_t>(p[0]) << 24) | (static_cast<std::uint32_t>(p[1]) << 16) |
          (static_cast<std::uint32_t>(p[2]) << 8) | p[3];
@@ -189,11 +218,12 @@ std::string text_of(const std::vector<std::uint8_t>& payload) {
   return printable(source.empty() ? message : source + ": " + message, 300);
 }
 
-/// The connection being recorded: the socket's package reader, the
+/// The connection being recorded: the socket's package reader, the traffic limit, the
 /// options, the stop request and the moment after which nothing more is waited for.
 struct Session {
   int fd;
   PackageReader reader;
+  TrafficLimit traffic;
   const RtdeRecordOptions& options;
   const volatile std::sig_atomic_t* stop;
   std::int64_t end_ms;  ///< --duration-s passes (INT64_MAX without one)
@@ -219,6 +249,7 @@ Error request(Session& session, RtdePackage type, const std::vector<std::uint8_t
   for (;;) {
     std::uint8_t got = 0;
     const Received r = session.reader.next(deadline_ms, session.stop, &got, reply, &error);
+    if (error.ok() && r == Received::package) error = session.traffic.count();
     if (!error.ok()) return error;
     if (r == Received::timeout && deadline_ms < reply_due_ms) {
       return Error::input(std::string("--rtde: --duration-s passed before the controller answered '") + name + "' (" +
@@ -279,7 +310,13 @@ Error record_rtde(const std::string& host, int port, const RtdeRecordOptions& op
   const auto connect_ms = static_cast<int>(std::min<std::int64_t>(options.connect_timeout_ms, end_ms - begin_ms));
   Error error = connect_to(host, port, connect_ms, &socket);
   if (!error.ok()) return error;
-  Session session{socket.fd, PackageReader(socket.fd, options.reply_timeout_ms), options, stop, end_ms, stats};
+  Session session{socket.fd,
+                  PackageReader(socket.fd, options.reply_timeout_ms),
+                  TrafficLimit(options.frequency_hz),
+                  options,
+                  stop,
+                  end_ms,
+                  stats};
   std::vector<std::uint8_t> reply;
   error = request(session, RtdePackage::protocol_version, {0, kProtocolVersion}, &reply);
   if (error.ok() && (reply.size() != 1 || reply[0] != 1)) {
@@ -330,6 +367,7 @@ Error record_rtde(const std::string& host, int port, const RtdeRecordOptions& op
     std::uint8_t type = 0;
     // Wakes at least every 200 ms to check the duration and the stop request.
     const Received r = session.reader.next(std::min(now_ms + 200, end_ms), stop, &type, &reply, &error);
+    if (error.ok() && r == Received::package) error = session.traffic.count();
     if (!error.ok() || r == Received::stopped) break;
     if (r == Received::timeout) continue;
     if (r == Received::closed) {
