@@ -4,7 +4,7 @@
 // variable (NOT_FOUND), a refused protocol version, a host that never answers and a controller
 // that closes mid-stream each end as they should; and the hostile ones (issue 54): a package
 // cut by a pause is put together, a controller that only chatters is timed out, a flood is
-// refused.
+// refused, a row no reader takes ends the recording with the rows before it kept.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -207,6 +207,28 @@ TEST(RtdeClient, TrafficFarBeyondTheFrequencyIsRefused) {
   expect_refused(r, "far more than the 125 Hz asked for");
   EXPECT_LT(r.texts.size(), 1200u);
   EXPECT_LT(r.took_ms, 2500);
+}
+
+TEST(RtdeClient, ARowNoReaderTakesEndsTheRecordingKeepingTheRowsBefore) {
+  // NaN joints and timestamps that go back were written with success; every reader then
+  // refused the whole log.
+  ControllerScript nan;
+  nan.nan_at_package = 50;
+  nan.close_mid_stream = true;
+  const StandInController first(nan);
+  Recording r = record_from(first, RtdeRecordOptions());
+  expect_refused(r, "data package 51: actual_q_2 is NaN");
+  EXPECT_NE(r.error.message.find("the 50 rows before it are kept"), std::string::npos) << r.error.message;
+  EXPECT_EQ(r.rows.size(), 51u);
+  ControllerScript back;
+  back.backwards_at_package = 60;
+  back.close_mid_stream = true;
+  const StandInController second(back);
+  r = record_from(second, RtdeRecordOptions());
+  expect_refused(r,
+                 "data package 61: timestamp 1000.464000 s is before the previous package's "
+                 "1000.472000 s");
+  EXPECT_EQ(r.rows.size(), 61u);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -273,6 +274,39 @@ Error request(Session& session, RtdePackage type, const std::vector<std::uint8_t
 
 constexpr std::size_t kValues = 13;  // timestamp + actual_q (6) + actual_TCP_pose (6)
 
+/// The log column of value k of a data package (rtde_log_header's names).
+std::string column_name(std::size_t k) {
+  if (k == 0) return "timestamp";
+  return (k <= 6 ? "actual_q_" : "actual_TCP_pose_") + std::to_string((k - 1) % 6);
+}
+
+/// Refuses a data package no log reader would take: a value that is not finite, or a
+/// timestamp before the previous one (*last_timestamp_s, updated when the row is good).
+Error check_row(const std::vector<std::uint8_t>& payload, std::uint64_t package, double* last_timestamp_s) {
+  std::string problem;
+  for (std::size_t k = 0; k < kValues && problem.empty(); ++k) {
+    const double value = be_double(payload.data() + 1 + 8 * k);
+    if (!std::isfinite(value)) problem = column_name(k) + " is " + (value != value ? "NaN" : "infinite");
+  }
+  const double timestamp_s = be_double(payload.data() + 1);
+  char text[160];
+  if (problem.empty() && timestamp_s < *last_timestamp_s) {
+    std::snprintf(text, sizeof text, "timestamp %.6f s is before the previous package's %.6f s", timestamp_s,
+                  *last_timestamp_s);
+    problem = text;
+  } else if (problem.empty() && timestamp_s < 0.0) {
+    std::snprintf(text, sizeof text, "timestamp %.6f s is negative", timestamp_s);
+    problem = text;
+  }
+  if (problem.empty()) {
+    *last_timestamp_s = timestamp_s;
+    return Error{};
+  }
+  return Error::input("--rtde: data package " + std::to_string(package) + ": " + problem +
+                      "; no robot log reader takes such a row: the recording ends here (the " +
+                      std::to_string(package - 1) + " rows before it are kept)");
+}
+
 std::string format_row(const std::vector<std::uint8_t>& payload) {
   std::string row;
   char number[32];
@@ -353,6 +387,7 @@ Error record_rtde(const std::string& host, int port, const RtdeRecordOptions& op
   if (error.ok() && (reply.size() != 1 || reply[0] != 1))
     error = Error::input("--rtde: the controller refuses to start");
   if (error.ok()) error = write_row(rtde_log_header());
+  double last_timestamp_s = -std::numeric_limits<double>::infinity();
   std::int64_t last_data_ms = monotonic_ms();
   while (error.ok()) {
     const std::int64_t now_ms = monotonic_ms();
@@ -386,7 +421,8 @@ Error record_rtde(const std::string& host, int port, const RtdeRecordOptions& op
     }
     ++stats->data_packages;
     last_data_ms = monotonic_ms();
-    error = write_row(format_row(reply));
+    error = check_row(reply, stats->data_packages, &last_timestamp_s);
+    if (error.ok()) error = write_row(format_row(reply));
     if (error.ok()) ++stats->rows_written;
   }
   if (!stats->ended_by_controller) (void)send_package(socket.fd, RtdePackage::pause, {});  // best effort: leaving

@@ -64,7 +64,8 @@ std::string rtde_log_header();
 /// stays unfinished for `reply_timeout_ms`. Errors: input (no answer, refused version, a
 /// variable the controller does not know, a malformed or stalled package, no data package
 /// for `reply_timeout_ms`, traffic beyond twice `frequency_hz` after a burst of 1000
-/// packages), output (write_row's).
+/// packages, a row with a value that is not finite or a timestamp before the previous one:
+/// the rows before it are kept), output (write_row's).
 Error record_rtde(const std::string& host, int port, const RtdeRecordOptions& options,
                   const volatile std::sig_atomic_t* stop, const std::function<Error(const std::string&)>& write_row,
                   RtdeStats* stats);
