@@ -134,21 +134,12 @@ Error record_rtde(const cli::Options& options) {
   if (!options.get("robot-port").empty() || !options.get("tracker-port").empty()) {
     return Error::usage("--rtde records the robot alone: record the tracker's port in a second `hivecal record`");
   }
-  std::string host = options.get("rtde");
-  int port_number = 30004;
-  const std::size_t colon = host.rfind(':');
-  if (colon != std::string::npos && host.find(']') == std::string::npos) {
-    double value = 0.0;
-    if (!textio::parse_double(host.substr(colon + 1), &value) || !(value >= 1.0 && value <= 65535.0) ||
-        value != static_cast<double>(static_cast<int>(value))) {
-      return Error::usage("--rtde must be HOST or HOST:PORT (PORT 1 .. 65535), not " + port::quoted(host));
-    }
-    port_number = static_cast<int>(value);
-    host.resize(colon);
-  }
-  if (host.empty()) return Error::usage("--rtde needs a host name or address");
+  std::string host;
+  int port_number = port::kRtdePort;
+  Error error = port::parse_rtde_address(options.get("rtde"), &host, &port_number);
+  if (!error.ok()) return error;
   port::RtdeRecordOptions rtde;
-  Error error = cli::bounded_option(options, "duration-s", 0.0, 1e9, &rtde.duration_s);
+  error = cli::bounded_option(options, "duration-s", 0.0, 1e9, &rtde.duration_s);
   if (error.ok()) error = cli::bounded_option(options, "rtde-frequency", 1.0, 500.0, &rtde.frequency_hz);
   if (!error.ok()) return error;
   const std::string out = options.get("robot-out") == "robot.cap" && !options.given("robot-out")
@@ -188,8 +179,9 @@ Error record_rtde(const cli::Options& options) {
       &stats);
   const Error closed = file.close();
   if (error.ok()) error = closed;
+  const std::string address = host.find(':') == std::string::npos ? host : "[" + host + "]";
   std::printf("rtde %s:%d (URControl %u.%u.%u.%u) -> %s: %llu data packages, %llu rows, %llu text messages%s\n",
-              host.c_str(), port_number, stats.controller_version[0], stats.controller_version[1],
+              address.c_str(), port_number, stats.controller_version[0], stats.controller_version[1],
               stats.controller_version[2], stats.controller_version[3], out.c_str(),
               static_cast<unsigned long long>(stats.data_packages), static_cast<unsigned long long>(stats.rows_written),
               static_cast<unsigned long long>(stats.text_messages),
@@ -302,7 +294,7 @@ int record_main(int argc, char** argv) {
       {"tracker-baud", "N", "tracker line rate [bit/s]", std::to_string(port::kTrackerBaud)},
       {"duration-s", "S", "stop after this long [s]; 0: until Ctrl-C / SIGTERM", "0"},
       {"force", "", "replace existing capture files (never done without it)", ""},
-      {"rtde", "HOST[:PORT]",
+      {"rtde", "HOST[:PORT]|[IPv6]:PORT",
        "record a UR controller's joint states over RTDE (port 30004) into --robot-out as a robot log", ""},
       {"rtde-frequency", "HZ", "with --rtde: output rate (CB-series 125, e-Series up to 500) [Hz]", "125"},
   };

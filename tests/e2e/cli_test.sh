@@ -300,7 +300,7 @@ expect 2 "is the same file as the output --robot-out" -- record --robot-port "$w
 expect 2 "is the same file as the input --robot-port" -- record --robot-port "$work/p1" --robot-out "$work/p1"
 expect 3 "--rtde '127.0.0.1:1': Connection refused" -- record --rtde 127.0.0.1:1 --robot-out "$work/rtde.txt"
 no_file "$work/rtde.txt"
-expect 2 "--rtde must be HOST or HOST:PORT (PORT 1 .. 65535), not 'ur5:99999'" -- record --rtde ur5:99999
+expect 2 "--rtde must be HOST, HOST:PORT, an IPv6 address or [IPv6]:PORT (PORT 1 .. 65535), not 'ur5:99999'" -- record --rtde ur5:99999
 expect 2 "--rtde records the robot alone" -- record --rtde 127.0.0.1 --tracker-port "$work/p2"
 expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s -1
 expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s nan

@@ -231,5 +231,33 @@ TEST(RtdeClient, ARowNoReaderTakesEndsTheRecordingKeepingTheRowsBefore) {
   EXPECT_EQ(r.rows.size(), 61u);
 }
 
+TEST(RtdeClient, AnIpv6AddressIsTakenWithOrWithoutAPort) {
+  std::string host;
+  int port = 0;
+  ASSERT_TRUE(parse_rtde_address("[::1]:30005", &host, &port).ok());
+  EXPECT_EQ(host, "::1");
+  EXPECT_EQ(port, 30005);
+  ASSERT_TRUE(parse_rtde_address("::1", &host, &port).ok());
+  EXPECT_EQ(host, "::1");
+  EXPECT_EQ(port, kRtdePort);
+  ASSERT_TRUE(parse_rtde_address("[fe80::1%eth0]", &host, &port).ok());
+  EXPECT_EQ(host, "fe80::1%eth0");
+  ASSERT_TRUE(parse_rtde_address("ur5.local:30004", &host, &port).ok());
+  EXPECT_EQ(host, "ur5.local");
+  ASSERT_TRUE(parse_rtde_address("192.168.1.10", &host, &port).ok());
+  EXPECT_EQ(port, kRtdePort);
+  for (const char* bad : {"ur5:99999", "ur5:", ":30004", "[::1", "[::1]30004", "[::1]:", "[]:1", "ur5:3e4", ""}) {
+    EXPECT_EQ(parse_rtde_address(bad, &host, &port).fault, Fault::usage) << bad;
+  }
+  ControllerScript script;
+  script.ipv6 = true;
+  script.data_packages = 20;
+  script.close_mid_stream = true;
+  const StandInController controller(script);
+  const Recording r = record_from(controller, RtdeRecordOptions(), "::1");
+  ASSERT_TRUE(r.error.ok()) << r.error.message;
+  EXPECT_EQ(r.rows.size(), 21u);
+}
+
 }  // namespace
 }  // namespace hivecal::port::rtde_client_test

@@ -31,12 +31,18 @@ class Socket {
   int fd = -1;
 };
 
+/// host:port for messages, an IPv6 address in brackets.
+std::string address_text(const std::string& host, int port) {
+  const bool v6 = host.find(':') != std::string::npos;
+  return (v6 ? "[" + host + "]" : host) + ":" + std::to_string(port);
+}
+
 Error connect_to(const std::string& host, int port, int timeout_ms, Socket* socket) {
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
   hints.ai_socktype = SOCK_STREAM;
   addrinfo* found = nullptr;
-  const std::string where = quoted(host + ":" + std::to_string(port), 120);
+  const std::string where = quoted(address_text(host, port), 120);
   const int looked = ::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found);
   if (looked != 0) return Error::input("--rtde " + where + ": " + ::gai_strerror(looked));
   Error error = Error::input("--rtde " + where + ": no address");
@@ -318,6 +324,34 @@ std::string format_row(const std::vector<std::uint8_t>& payload) {
 }
 
 }  // namespace
+
+Error parse_rtde_address(const std::string& text, std::string* host, int* port) {
+  const Error refused = Error::usage(
+      "--rtde must be HOST, HOST:PORT, an IPv6 address or [IPv6]:PORT (PORT 1 .. 65535), not " + quoted(text));
+  *port = kRtdePort;
+  std::string port_text;
+  if (!text.empty() && text[0] == '[') {  // [IPv6] or [IPv6]:PORT
+    const std::size_t close = text.find(']');
+    if (close == std::string::npos || (close + 1 < text.size() && text[close + 1] != ':')) return refused;
+    *host = text.substr(1, close - 1);
+    if (close + 1 < text.size()) port_text = text.substr(close + 2);
+    if (close + 1 < text.size() && port_text.empty()) return refused;
+  } else if (std::count(text.begin(), text.end(), ':') == 1) {  // HOST:PORT
+    const std::size_t colon = text.find(':');
+    *host = text.substr(0, colon);
+    port_text = text.substr(colon + 1);
+    if (port_text.empty()) return refused;
+  } else {  // HOST, or an IPv6 address without a port
+    *host = text;
+  }
+  if (!port_text.empty()) {
+    if (port_text.size() > 5 || port_text.find_first_not_of("0123456789") != std::string::npos) return refused;
+    *port = std::stoi(port_text);
+    if (*port < 1 || *port > 65535) return refused;
+  }
+  if (host->empty()) return Error::usage("--rtde needs a host name or address, not " + quoted(text));
+  return Error{};
+}
 
 const std::vector<std::string>& rtde_recorded_variables() {
   static const std::vector<std::string> names = {"timestamp", "actual_q", "actual_TCP_pose"};

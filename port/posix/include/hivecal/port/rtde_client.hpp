@@ -54,6 +54,13 @@ struct RtdeRecordOptions {
 const std::vector<std::string>& rtde_recorded_variables();
 std::string rtde_log_header();
 
+/// The default RTDE port.
+inline constexpr int kRtdePort = 30004;
+
+/// Reads --rtde's value: HOST, HOST:PORT, an IPv6 address (`::1`, bare: no port) or
+/// [IPv6]:PORT; *port is kRtdePort when none is given. Fault::usage naming the forms otherwise.
+Error parse_rtde_address(const std::string& text, std::string* host, int* port);
+
 /// Connects to `host`:`port`, negotiates protocol version 2, reads the controller version,
 /// sets up the recipe `timestamp,actual_q,actual_TCP_pose` at `frequency_hz`, starts, and
 /// hands one log row per data package to `write_row` (text ending in '\n', the header first)
