@@ -191,12 +191,27 @@ Error check_not_overwriting(const cli::Options& options) {
                        "; refusing to overwrite a session (--force replaces it)");
 }
 
+/// How a live session is paced: --speed (0, or within [kMinServeSpeed, kMaxServeSpeed]) and
+/// --serve-delay-s; read before anything is written, so a bad value leaves nothing behind.
+struct Pacing {
+  double speed = 1.0;    ///< session seconds per second; 0: as fast as read
+  double delay_s = 0.0;  ///< wait before streaming [s]
+};
+
+Error pacing_options(const cli::Options& options, Pacing* pacing) {
+  Error error = cli::number_option(options, "speed", &pacing->speed);
+  if (error.ok() && !(pacing->speed == 0.0 || (pacing->speed >= kMinServeSpeed && pacing->speed <= kMaxServeSpeed))) {
+    char range[120];
+    std::snprintf(range, sizeof range, "--speed must be 0 (as fast as read) or in [%g, %g] session seconds per second",
+                  kMinServeSpeed, kMaxServeSpeed);
+    error = Error::usage(std::string(range) + ", not " + port::quoted(options.get("speed")));
+  }
+  if (error.ok()) error = cli::bounded_option(options, "serve-delay-s", 0.0, kMaxServeDelay_s, &pacing->delay_s);
+  return error;
+}
+
 /// Serves the session on two ptys, printing their paths first.
-Error serve(const Session& session, const cli::Options& options) {
-  Numbers numbers{options, Error{}};
-  double speed = 1.0;
-  double delay_s = 0.0;
-  if (!numbers.get("speed", &speed) || !numbers.get("serve-delay-s", &delay_s) || speed < 0) return numbers.error;
+Error serve(const Session& session, const Pacing& pacing) {
   port::PtyPair robot;
   port::PtyPair tracker;
   Error error = port::open_pty(&robot);
@@ -210,10 +225,10 @@ Error serve(const Session& session, const cli::Options& options) {
   action.sa_handler = request_stop;
   sigemptyset(&action.sa_mask);
   for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaction(s, &action, nullptr);
-  port::sleep_ms(static_cast<std::int64_t>(delay_s * 1000.0));
+  (void)port::sleep_ms(static_cast<std::int64_t>(pacing.delay_s * 1000.0), g_stop);
   ServeStats stats;
-  error = serve_session(session, robot, tracker, ServeOptions{speed}, &g_stop, &stats);
-  port::sleep_ms(500);  // let readers drain the ptys before the hangup
+  error = serve_session(session, robot, tracker, ServeOptions{pacing.speed}, &g_stop, &stats);
+  (void)port::sleep_ms(500, g_stop);  // let readers drain the ptys before the hangup
   port::close_pty(&robot);
   port::close_pty(&tracker);
   std::printf("served %llu robot frames (%llu bytes), %llu tracker frames (%llu bytes)\n",
@@ -237,7 +252,9 @@ int simulate_main(int argc, char** argv) {
                          option_specs(), argc, argv, &options);
   if (parsed >= 0) return parsed;
   SimConfig config;
+  Pacing pacing;
   Error error = configure(options, &config);
+  if (error.ok()) error = pacing_options(options, &pacing);
   if (!error.ok()) return cli::exit_with(kSimulateCommand, error);
   port::OutputSet outputs;
   std::size_t folder = 0;
@@ -251,7 +268,7 @@ int simulate_main(int argc, char** argv) {
   error = stage_outputs(session, !options.given("serve"), kTruthSampleMarginS, &outputs, folder);
   if (error.ok()) error = outputs.commit();
   if (!error.ok()) return cli::exit_with(kSimulateCommand, error);
-  return cli::exit_with(kSimulateCommand, options.given("serve") ? serve(session, options) : Error{});
+  return cli::exit_with(kSimulateCommand, options.given("serve") ? serve(session, pacing) : Error{});
 }
 
 }  // namespace hivecal::sim

@@ -414,13 +414,17 @@ for _ in $(seq 1 50); do grep -q '^tracker ' "$work/serve.log" 2>/dev/null && br
 robot_pty=$(awk '$1 == "robot" { print $2 }' "$work/serve.log")
 [ -n "$robot_pty" ] && timeout 5 head -c 100 "$robot_pty" >/dev/null
 sleep 1.5
-kill -TERM "$pid"
-for _ in $(seq 1 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-if kill -0 "$pid" 2>/dev/null; then
-  kill -KILL "$pid"
-  fail "simulate --serve ignored SIGTERM after its reader left"
-elif wait "$pid" && grep -q '^served ' "$work/serve.log"; then pass; else
-  fail "simulate --serve after SIGTERM: $(cat "$work/serve.log")"; fi
+# stops_on_term PID LOG WHEN: SIGTERM ends the server PID within 5 s, its stats line in LOG.
+stops_on_term() {
+  kill -TERM "$1"
+  for _ in $(seq 1 50); do kill -0 "$1" 2>/dev/null || break; sleep 0.1; done
+  if kill -0 "$1" 2>/dev/null; then
+    kill -KILL "$1"
+    fail "simulate --serve ignored SIGTERM $3"
+  elif wait "$1" && grep -q '^served ' "$2"; then pass; else
+    fail "simulate --serve after SIGTERM $3: $(cat "$2")"; fi
+}
+stops_on_term "$pid" "$work/serve.log" "after its reader left"
 
 # --- issue 54: outputs named twice, concurrent runs, more signals, simulate's numbers
 # An output that is a file another output writes is refused before any input is read (the
@@ -473,6 +477,28 @@ mkdir -p "$work/sig/xfsz"
 code=$( (ulimit -f 200; "${run[@]}" simulate --out-dir "$work/sig/xfsz" --waypoints 40 --duration-s 300 >/dev/null 2>"$work/xfsz.err"); echo $?)
 if [ "$code" = 4 ] && grep -q "write failed: File too large" "$work/xfsz.err" && [ -z "$(ls -A "$work/sig/xfsz")" ]; then pass; else
   fail "simulate over ulimit -f: exit $code (want 4), $(cat "$work/xfsz.err"), left: $(ls -A "$work/sig/xfsz")"; fi
+# simulate refuses a pacing or a delay it could not keep (NaN, 1e-9, 1e9, negative) before
+# writing anything.
+# (each under `timeout`: such a value, once accepted, served for ever)
+refused_serve() {  # refused_serve MESSAGE OPTIONS...: exit 2 and MESSAGE at once
+  local message=$1 err code
+  shift
+  err=$(timeout 20 "${run[@]}" simulate --serve --out-dir "$work/h2" --waypoints 4 --duration-s 30 "$@" 2>&1 >/dev/null); code=$?
+  if [ "$code" = 2 ] && grep -qF -- "$message" <<<"$err"; then pass; else fail "simulate --serve $*: exit $code (want 2): $err"; fi
+}
+for speed in nan 1e-9 -1 1e9; do
+  refused_serve "--speed must be 0 (as fast as read) or in [0.01, 10000] session seconds per second, not '$speed'" --speed "$speed"
+done
+for delay in nan 1e9 -1; do
+  refused_serve "--serve-delay-s must be in [0, 3600], not '$delay'" --serve-delay-s "$delay"
+done
+no_file "$work/h2"
+# A stop request ends the wait before streaming at once (it slept through SIGTERM).
+"${run[@]}" simulate --serve --serve-delay-s 600 --out-dir "$work/sig/delay" --waypoints 4 --duration-s 30 >"$work/delay.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 50); do grep -q '^tracker ' "$work/delay.log" 2>/dev/null && break; sleep 0.1; done
+stops_on_term "$pid" "$work/delay.log" "in its --serve-delay-s"
+
 expect 2 "--orientation-form must be rotation-vector or euler-xyz, not 'zyx'" -- calibrate --samples "$work/paired.csv" --orientation-form zyx --out "$work/o.json"
 expect 2 "is not C=NAME or C=NAME[unit] with C one of" -- calibrate --samples "$work/paired.csv" --columns "w=measurement_w" --out "$work/o.json"
 printf 'q1,q2,q3,q4,q5,q6,px [mm],y,z\n0,0,0,0,0,0,1,2,3\n' >"$work/conflict.csv"
