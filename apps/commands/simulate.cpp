@@ -63,16 +63,10 @@ const std::vector<cli::OptionSpec>& option_specs() {
   return specs;
 }
 
-/// Parses a number option; false (message printed) if malformed.
-/// Reads number options one after the other; the first bad one is kept in `error`.
-struct Numbers {
-  const cli::Options& options;  ///< the parsed command line
-  Error error;                  ///< the first failure
-  bool get(const char* name, double* value) {
-    if (error.ok()) error = cli::number_option(options, name, value);
-    return error.ok();
-  }
-};
+/// Largest simulated joint deflection (compliance, harmonics) [urad].
+constexpr double kMaxDeflection_urad = 1e4;
+/// Largest sigma of the geometry's simulated errors [um or urad].
+constexpr double kMaxErrorSigma = 1e5;
 
 /// --harmonic-urad J,K,S,C into config's harmonic_*.
 Error harmonic_option(const std::string& text, sim::SimConfig* config) {
@@ -86,11 +80,12 @@ Error harmonic_option(const std::string& text, sim::SimConfig* config) {
   }
   const bool whole = count == 4 && start == text.size() + 1;
   if (!whole || v[0] < 1.0 || v[0] > 6.0 || v[0] != std::floor(v[0]) || v[1] < 1.0 || v[1] > 3.0 ||
-      v[1] != std::floor(v[1]) || std::fabs(v[2]) > 1e4 || std::fabs(v[3]) > 1e4) {
+      v[1] != std::floor(v[1]) || !(std::fabs(v[2]) <= kMaxDeflection_urad) ||
+      !(std::fabs(v[3]) <= kMaxDeflection_urad)) {
     return Error::usage(
         "--harmonic-urad must be J,K,S,C: joint 1-6, order 1-3, sine and cosine amplitudes within "
-        "+-10000 urad (e.g. 3,1,60,50), not '" +
-        text + "'");
+        "+-10000 urad (e.g. 3,1,60,50), not " +
+        port::quoted(text));
   }
   config->harmonic_joint = static_cast<int>(v[0]) - 1;
   config->harmonic_order = static_cast<int>(v[1]);
@@ -105,7 +100,6 @@ constexpr double kMaxDuration_s = 3600.0;
 
 /// Builds the session configuration.
 Error configure(const cli::Options& options, SimConfig* config) {
-  Numbers numbers{options, Error{}};
   textio::RobotDescription robot;
   bool from_file = false;
   Error error = cli::robot_model_option(options, "robot-model", &robot, &from_file);
@@ -139,15 +133,15 @@ Error configure(const cli::Options& options, SimConfig* config) {
   } else if (options.get("errors") != "paper") {
     return Error::usage("--errors must be paper or large, not '" + options.get("errors") + "'");
   }
+  // The geometry's error sigmas up to 0.1 m / 0.1 rad, the deflections up to 10 mrad: far
+  // beyond any arm, still a session the pipeline can take.
   for (auto [name, target, scale] : {std::tuple{"length-sigma-um", &config->length_sigma_m, 1e-6},
                                      std::tuple{"angle-sigma-urad", &config->angle_sigma_rad, 1e-6},
                                      std::tuple{"tool-sigma-um", &config->tool_sigma_m, 1e-6}}) {
     if (!options.given(name)) continue;
     double value = 0.0;
-    if (!numbers.get(name, &value)) return numbers.error;
-    if (!(value >= 0.0 && value < 1e9)) {
-      return Error::usage(std::string("--") + name + " must be a finite number, not negative");
-    }
+    error = cli::bounded_option(options, name, 0.0, kMaxErrorSigma, &value);
+    if (!error.ok()) return error;
     *target = value * scale;
   }
   if (options.given("compliance-urad")) {
@@ -156,8 +150,10 @@ Error configure(const cli::Options& options, SimConfig* config) {
     double j2 = 0.0;
     double j3 = 0.0;
     if (comma == std::string::npos || !textio::parse_double(text.substr(0, comma), &j2) ||
-        !textio::parse_double(text.substr(comma + 1), &j3)) {
-      return Error::usage("--compliance-urad must be J2,J3 (e.g. 40,20), not '" + text + "'");
+        !textio::parse_double(text.substr(comma + 1), &j3) || !(std::fabs(j2) <= kMaxDeflection_urad) ||
+        !(std::fabs(j3) <= kMaxDeflection_urad)) {
+      return Error::usage("--compliance-urad must be J2,J3, each within +-10000 urad (e.g. 40,20), not " +
+                          port::quoted(text));
     }
     config->compliance_j2_rad = j2 * 1e-6;
     config->compliance_j3_rad = j3 * 1e-6;

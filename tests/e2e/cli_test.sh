@@ -477,8 +477,8 @@ mkdir -p "$work/sig/xfsz"
 code=$( (ulimit -f 200; "${run[@]}" simulate --out-dir "$work/sig/xfsz" --waypoints 40 --duration-s 300 >/dev/null 2>"$work/xfsz.err"); echo $?)
 if [ "$code" = 4 ] && grep -q "write failed: File too large" "$work/xfsz.err" && [ -z "$(ls -A "$work/sig/xfsz")" ]; then pass; else
   fail "simulate over ulimit -f: exit $code (want 4), $(cat "$work/xfsz.err"), left: $(ls -A "$work/sig/xfsz")"; fi
-# simulate refuses a pacing or a delay it could not keep (NaN, 1e-9, 1e9, negative) before
-# writing anything.
+# simulate refuses a pacing or a delay it could not keep (NaN, 1e-9, 1e9, negative) and
+# every simulated error that is not finite, before writing anything.
 # (each under `timeout`: such a value, once accepted, served for ever)
 refused_serve() {  # refused_serve MESSAGE OPTIONS...: exit 2 and MESSAGE at once
   local message=$1 err code
@@ -492,6 +492,11 @@ done
 for delay in nan 1e9 -1; do
   refused_serve "--serve-delay-s must be in [0, 3600], not '$delay'" --serve-delay-s "$delay"
 done
+expect 2 "--compliance-urad must be J2,J3, each within +-10000 urad (e.g. 40,20), not 'nan,0'" -- simulate --compliance-urad nan,0 --out-dir "$work/h2"
+expect 2 "--compliance-urad must be J2,J3" -- simulate --compliance-urad 1e300,0 --out-dir "$work/h2"
+expect 2 "--harmonic-urad must be J,K,S,C" -- simulate --harmonic-urad 3,1,nan,0 --out-dir "$work/h2"
+expect 2 "--length-sigma-um must be in [0, 100000], not 'inf'" -- simulate --length-sigma-um inf --out-dir "$work/h2"
+expect 2 "--angle-sigma-urad must be in [0, 100000], not '1e9'" -- simulate --angle-sigma-urad 1e9 --out-dir "$work/h2"
 no_file "$work/h2"
 # A stop request ends the wait before streaming at once (it slept through SIGTERM).
 "${run[@]}" simulate --serve --serve-delay-s 600 --out-dir "$work/sig/delay" --waypoints 4 --duration-s 30 >"$work/delay.log" 2>&1 &
