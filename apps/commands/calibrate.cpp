@@ -162,7 +162,7 @@ Error declare_outputs(const Options& options, port::OutputSet* outputs, OutputId
     error = outputs->add_file(options.get("ur-deltas"), "--ur-deltas", &ids->ur_deltas);
   }
   if (error.ok() && !options.get("report").empty()) {
-    error = outputs->add_folder(options.get("report"), "--report", &ids->report);
+    error = outputs->add_folder(options.get("report"), "--report", {report::kReportPageName}, &ids->report);
   }
   return error;
 }
@@ -287,7 +287,7 @@ Error write_outputs(const Options& options, const CalibrateSettings& settings, c
     error = outputs->stage_text(ids.ur_deltas, "", textio::format_ur_calibration_conf(deltas));
   }
   if (error.ok() && !options.get("report").empty()) {
-    error = outputs->stage_text(ids.report, "index.html", report::render_html(data));
+    error = outputs->stage_text(ids.report, report::kReportPageName, report::render_html(data));
   }
   return error.ok() ? outputs->commit() : error;
 }

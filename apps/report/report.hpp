@@ -203,6 +203,8 @@ std::string format_tables_text(const ReportData& data);
 std::vector<std::string> format_parameters_text(const ReportData& data);
 /// The whole HTML page (inline SVG, no scripts, no external resources).
 std::string render_html(const ReportData& data);
+/// The file render_html's page goes into, in the report's folder.
+inline constexpr const char* kReportPageName = "index.html";
 /// The ids of the figures render_html draws for `data`, in page order (for tests).
 std::vector<std::string> figure_ids(const ReportData& data);
 
