@@ -495,17 +495,19 @@ refused_serve() {  # refused_serve MESSAGE OPTIONS...: exit 2 and MESSAGE at onc
   err=$(timeout 20 "${run[@]}" simulate --serve --out-dir "$work/h2" --waypoints 4 --duration-s 30 "$@" 2>&1 >/dev/null); code=$?
   if [ "$code" = 2 ] && grep -qF -- "$message" <<<"$err"; then pass; else fail "simulate --serve $*: exit $code (want 2): $err"; fi
 }
-for speed in nan 1e-9 -1 1e9; do
-  refused_serve "--speed must be 0 (as fast as read) or in [0.01, 10000] session seconds per second, not '$speed'" --speed "$speed"
+refused_serve "--speed must be a number, got 'nan': not a number" --speed nan
+for speed in 1e-9 -1 1e9; do
+  refused_serve "--speed must be 0 (as fast as read) or within [0.01, 10000] session seconds per second, got '$speed'" --speed "$speed"
 done
 for delay in nan 1e9 -1; do
-  refused_serve "--serve-delay-s must be in [0, 3600], not '$delay'" --serve-delay-s "$delay"
+  refused_serve "--serve-delay-s must be" --serve-delay-s "$delay"
+  refused_serve "within [0, 3600], got '$delay'" --serve-delay-s "$delay"
 done
 expect 2 "--compliance-urad must be J2,J3, each within +-10000 urad (e.g. 40,20), not 'nan,0'" -- simulate --compliance-urad nan,0 --out-dir "$work/h2"
 expect 2 "--compliance-urad must be J2,J3" -- simulate --compliance-urad 1e300,0 --out-dir "$work/h2"
 expect 2 "--harmonic-urad must be J,K,S,C" -- simulate --harmonic-urad 3,1,nan,0 --out-dir "$work/h2"
-expect 2 "--length-sigma-um must be in [0, 100000], not 'inf'" -- simulate --length-sigma-um inf --out-dir "$work/h2"
-expect 2 "--angle-sigma-urad must be in [0, 100000], not '1e9'" -- simulate --angle-sigma-urad 1e9 --out-dir "$work/h2"
+expect 2 "--length-sigma-um must be within [0, 100000], got 'inf'" -- simulate --length-sigma-um inf --out-dir "$work/h2"
+expect 2 "--angle-sigma-urad must be within [0, 100000], got '1e9'" -- simulate --angle-sigma-urad 1e9 --out-dir "$work/h2"
 no_file "$work/h2"
 # A stop request ends the wait before streaming at once (it slept through SIGTERM).
 "${run[@]}" simulate --serve --serve-delay-s 600 --out-dir "$work/sig/delay" --waypoints 4 --duration-s 30 >"$work/delay.log" 2>&1 &

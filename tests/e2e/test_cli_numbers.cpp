@@ -74,7 +74,7 @@ TEST(CliNumbers, StreamCommandsSayTheRealRange) {
                             {{"--window-s", "61"}, "--window-s must be within [0, 60], got '61'"},
                         });
   test::expect_refusals(sim::simulate_main, {"--out-dir", "/nonexistent/folder"},
-                        {{{"--length-sigma-um", "1e10"}, "--length-sigma-um must be within [0, 1e+09), got '1e10'"}});
+                        {{{"--length-sigma-um", "1e10"}, "--length-sigma-um must be within [0, 100000], got '1e10'"}});
   test::expect_refusals(
       streams::record_main, {"--robot-port", "/nonexistent/port"},
       {{{"--duration-s", "-1"}, "--duration-s must be within [0, 1e+09] s (0: until Ctrl-C / SIGTERM), got '-1'"}});
