@@ -198,8 +198,9 @@ Error pacing_options(const cli::Options& options, Pacing* pacing) {
   Error error = cli::number_option(options, "speed", &pacing->speed);
   if (error.ok() && !(pacing->speed == 0.0 || (pacing->speed >= kMinServeSpeed && pacing->speed <= kMaxServeSpeed))) {
     char range[120];
-    std::snprintf(range, sizeof range, "--speed must be 0 (as fast as read) or within [%g, %g] session seconds per second",
-                  kMinServeSpeed, kMaxServeSpeed);
+    std::snprintf(range, sizeof range,
+                  "--speed must be 0 (as fast as read) or within [%g, %g] session seconds per second", kMinServeSpeed,
+                  kMaxServeSpeed);
     error = Error::usage(std::string(range) + ", got " + port::quoted(options.get("speed")));
   }
   if (error.ok()) error = cli::bounded_option(options, "serve-delay-s", 0.0, kMaxServeDelay_s, &pacing->delay_s);
