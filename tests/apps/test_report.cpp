@@ -115,6 +115,22 @@ TEST(Report, HtmlIsWellFormedAndSelfContained) {
   EXPECT_NE(html.find("-20.3 %"), std::string::npos);  // 75.4 -> 60.1 um
 }
 
+// Every text of the page goes through the messages' filter (port::printable), not only the
+// title: a file's name, a column's or a robot's with control bytes (a window title, a clear
+// screen, a NUL) reaches the page escaped, and UTF-8 (µm, °) as written.
+TEST(Report, NamesFromInputFilesReachThePageEscapedAndUtf8AsWritten) {
+  report::ReportData data = example();
+  data.input_lines = {"input: pa\x1b]0;evil\x07ired.csv (12 paired samples)"};
+  data.info_lines.push_back("columns: x=x_t\x1b[2J[\xc2\xb5m], q1=joint_1[\xc2\xb0]");
+  data.parameters[0].name = std::string("d1\0tail", 7);
+  const std::string html = report::render_html(data);
+  EXPECT_EQ(check_well_formed(html), "");
+  for (const char c : html) ASSERT_TRUE(static_cast<unsigned char>(c) >= 0x20 || c == '\n') << int(c);
+  EXPECT_NE(html.find("<li>input: pa\\x1b]0;evil\\x07ired.csv (12 paired samples)</li>"), std::string::npos);
+  EXPECT_NE(html.find("<li>columns: x=x_t\\x1b[2J[\xc2\xb5m], q1=joint_1[\xc2\xb0]</li>"), std::string::npos);
+  EXPECT_NE(html.find("<td>d1\\x00tail</td>"), std::string::npos);
+}
+
 TEST(Report, WithoutTestSetNoTestColumnsAndTrainingFigures) {
   report::ReportData data = example();
   for (report::MethodRow& m : data.methods) m.test = ErrorStats{};
