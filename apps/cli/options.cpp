@@ -132,9 +132,10 @@ Error check_number(const std::string& option, std::string_view text, const Numbe
     case textio::NumberText::overflow:
       return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
                           ": beyond a double's range (1.8e308)");
-    case textio::NumberText::underflow:
+    case textio::NumberText::underflow:  // 0 is the advice only where 0 is taken
       return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
-                          ": too small for a double (it underflows below 4.9e-324): give 0 or a larger value");
+                          ": too small for a double (it underflows below 4.9e-324): give " +
+                          (range.contains(0.0) ? "0 or " : "") + "a larger value");
   }
   if (!range.contains(parsed)) return Error::usage(option + " must be within " + range.text() + got);
   *value = parsed;
@@ -155,16 +156,21 @@ Error bounded_option(const Options& options, const std::string& name, double lo,
   return ranged_option(options, name, NumberRange{lo, hi}, value);
 }
 
-Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi,
-                   std::size_t* value) {
+Error check_count(const std::string& option, std::string_view text, const NumberRange& range, std::size_t* value) {
   double number = 0.0;
-  Error error = bounded_option(options, name, static_cast<double>(lo), static_cast<double>(hi), &number);
+  Error error = check_number(option, text, range, &number);
   if (!error.ok()) return error;
-  if (number != static_cast<double>(static_cast<std::size_t>(number))) {
-    return Error::usage("--" + name + " must be a whole number, not " + port::quoted(options.get(name)));
+  if (number < 0.0 || number != static_cast<double>(static_cast<std::size_t>(number))) {
+    return Error::usage(option + " must be a whole number, not " + port::quoted(text));
   }
   *value = static_cast<std::size_t>(number);
   return Error{};
+}
+
+Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi,
+                   std::size_t* value) {
+  return check_count("--" + name, options.get(name), NumberRange{static_cast<double>(lo), static_cast<double>(hi)},
+                     value);
 }
 
 Error seed_option(const Options& options, const std::string& name, std::uint64_t* value) {
@@ -180,31 +186,50 @@ Error seed_option(const Options& options, const std::string& name, std::uint64_t
   return Error{};
 }
 
-bool parse_vec3(std::string_view text, Vec3* value) {
-  std::size_t start = 0;
-  for (int axis = 0; axis < 3; ++axis) {
+namespace {
+
+/// `text` split at its commas into exactly `count` fields; false for another count.
+bool split_fields(std::string_view text, std::size_t count, std::vector<std::string_view>* fields) {
+  fields->clear();
+  for (std::size_t start = 0;;) {
     const std::size_t comma = text.find(',', start);
-    const bool last = axis == 2;
-    if (last != (comma == std::string_view::npos) ||
-        !textio::parse_double(text.substr(start, last ? std::string_view::npos : comma - start), &(*value)(axis))) {
-      return false;
-    }
+    fields->push_back(text.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+    if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
-  return true;
+  return fields->size() == count;
+}
+
+}  // namespace
+
+Error check_numbers(const std::string& option, std::string_view text, const std::string& what,
+                    const std::vector<NumberField>& fields, double* values) {
+  std::string form;
+  for (const NumberField& field : fields) form += (form.empty() ? "" : ",") + field.name;
+  std::vector<std::string_view> texts;
+  if (!split_fields(text, fields.size(), &texts)) {
+    return Error::usage(option + " must be " + form + (what.empty() ? "" : " (" + what + ")") + ", got " +
+                        port::quoted(text));
+  }
+  std::vector<double> parsed(fields.size(), 0.0);
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    const Error error =
+        check_number(option + " " + form + ": " + fields[k].name, texts[k], fields[k].range, &parsed[k]);
+    if (!error.ok()) return error;
+  }
+  std::copy(parsed.begin(), parsed.end(), values);
+  return Error{};
 }
 
 Error check_vec3(const std::string& option, std::string_view text, const std::string& what, const NumberRange& range,
                  Vec3* value) {
   const std::string shape = option + " must be X,Y,Z" + (what.empty() ? "" : " " + what) + ", each within " +
                             range.text() + ", got " + port::quoted(text);
-  std::size_t start = 0;
+  std::vector<std::string_view> fields;
+  if (!split_fields(text, 3, &fields)) return Error::usage(shape);
   Vec3 parsed = Vec3::Zero();
   for (int axis = 0; axis < 3; ++axis) {
-    const std::size_t comma = text.find(',', start);
-    if ((axis == 2) != (comma == std::string_view::npos)) return Error::usage(shape);
-    const std::string_view field = text.substr(start, axis == 2 ? std::string_view::npos : comma - start);
-    start = comma + 1;
+    const std::string_view field = fields[static_cast<std::size_t>(axis)];
     const textio::NumberText read = textio::parse_number(field, &parsed(axis));
     if (read == textio::NumberText::overflow) return Error::usage(shape + ": beyond a double's range (1.8e308)");
     if (read == textio::NumberText::underflow) {

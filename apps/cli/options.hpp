@@ -109,12 +109,25 @@ Error number_option(const Options& options, const std::string& name, double* val
 Error ranged_option(const Options& options, const std::string& name, const NumberRange& range, double* value);
 /// --<name> as a finite number within [lo, hi]; the message names the option and the range.
 Error bounded_option(const Options& options, const std::string& name, double lo, double hi, double* value);
-/// --<name> as a whole number within [lo, hi].
+/// `text` (the value of `option`) as a whole number within `range` (check_number); otherwise
+/// also Fault::usage "OPTION must be a whole number, not 'TEXT'".
+Error check_count(const std::string& option, std::string_view text, const NumberRange& range, std::size_t* value);
+/// --<name> as a whole number within [lo, hi] (check_count).
 Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi, std::size_t* value);
 /// --<name> as a seed: decimal digits, 0 .. 2^64 - 1, exactly (no rounding through a double).
 Error seed_option(const Options& options, const std::string& name, std::uint64_t* value);
-/// "X,Y,Z": exactly three numbers into *value; false otherwise.
-bool parse_vec3(std::string_view text, Vec3* value);
+/// One number of an option that takes several ("X,Y,Z,SIDE"): its name and its range.
+struct NumberField {
+  std::string name;   ///< as the option's form writes it, e.g. "SIDE"
+  NumberRange range;  ///< the values it may take
+};
+/// `text` (the value of `option`, e.g. "--iso9283") as one comma-separated number per field,
+/// each through check_number, into values[0 .. fields.size()). Otherwise Fault::usage: another
+/// count of numbers "OPTION must be N1,N2,... (WHAT), got 'TEXT'"; a number out of its range
+/// "OPTION N1,N2,...: NAME must be within RANGE, got 'X'" (check_number's reasons for one that is
+/// no number).
+Error check_numbers(const std::string& option, std::string_view text, const std::string& what,
+                    const std::vector<NumberField>& fields, double* values);
 /// `text` as X,Y,Z (the value of `option`, e.g. "--tool"), each within `range`; otherwise
 /// Fault::usage "OPTION must be X,Y,Z WHAT, each within RANGE, got 'TEXT'" (check_number's
 /// reasons for a coordinate that is no number).

@@ -327,16 +327,13 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
                         &settings->train_fraction);
   if (!error.ok()) return error;
   const std::string cv = options.get("cv");
-  double folds = 0.0;
   if (cv == "loo") {
     settings->cv_folds = 1;
   } else if (!cv.empty()) {
-    if (!textio::parse_double(cv, &folds) || folds < 2.0 || folds > static_cast<double>(kMaxCrossValidationFolds) ||
-        folds != static_cast<double>(static_cast<std::size_t>(folds))) {
-      return Error::usage("--cv must be 'loo' or a number of folds within [2, " +
-                          std::to_string(kMaxCrossValidationFolds) + "], got " + port::quoted(cv));
-    }
-    settings->cv_folds = static_cast<std::size_t>(folds);
+    error = check_count(
+        "--cv", cv, NumberRange{2.0, static_cast<double>(kMaxCrossValidationFolds), false, false, "folds, or 'loo'"},
+        &settings->cv_folds);
+    if (!error.ok()) return error;
   }
   settings->keep_outliers = options.given("keep-outliers");
   const std::string frames = options.given("frames") ? options.get("frames") : "auto";

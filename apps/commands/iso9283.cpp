@@ -370,21 +370,22 @@ Error iso9283(const Options& options, std::vector<std::string>* warnings, bool* 
 /// point several times over); the side auto starts from [m].
 constexpr double kMinCubeSide_m = 0.02;
 
-/// The cube of `--iso9283 X,Y,Z,SIDE` [m]: false when malformed or the side not in [kMinCubeSide_m, 10].
-bool parse_cube(const std::string& text, Vec3* centre_m, double* side_m) {
-  double values[4];
-  std::size_t begin = 0;
-  for (int k = 0; k < 4; ++k) {
-    const std::size_t end = k < 3 ? text.find(',', begin) : text.size();
-    if (end == std::string::npos || !textio::parse_double(text.substr(begin, end - begin), &values[k]) ||
-        !std::isfinite(values[k])) {
-      return false;
-    }
-    begin = end + 1;
-  }
+/// The cube of `--iso9283 X,Y,Z,SIDE` [m]: each coordinate of its centre within 10 m of the
+/// base, its side within [kMinCubeSide_m, 10] (cli::check_numbers: a bad number is named).
+Error cube_option(const Options& options, Vec3* centre_m, double* side_m) {
+  const NumberRange coordinate{-10.0, 10.0, false, false, "m"};
+  double values[4] = {};
+  const Error error = check_numbers("--iso9283", options.get("iso9283"),
+                                    "the cube's centre in the base frame and its side, in metres; or auto",
+                                    {{"X", coordinate},
+                                     {"Y", coordinate},
+                                     {"Z", coordinate},
+                                     {"SIDE", NumberRange{kMinCubeSide_m, 10.0, false, false, "m"}}},
+                                    values);
+  if (!error.ok()) return error;
   *centre_m = Vec3(values[0], values[1], values[2]);
   *side_m = values[3];
-  return *side_m >= kMinCubeSide_m && *side_m <= 10.0 && centre_m->norm() <= 10.0;
+  return Error{};
 }
 
 /// The rotation vector of the one tool orientation: flange z towards the tracker (or down).
@@ -516,18 +517,14 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   Vec3 centre_m;
   double side_m = 0.0;
   const bool automatic = options.get("iso9283") == "auto";
-  if (!automatic && !parse_cube(options.get("iso9283"), &centre_m, &side_m)) {
-    return Error::usage(
-        "--iso9283 must be X,Y,Z,SIDE (the cube's centre in the base frame and its side, metres; "
-        "side in [0.02, 10]) or auto, not " +
-        port::quoted(options.get("iso9283")));
-  }
+  Error error = automatic ? Error{} : cube_option(options, &centre_m, &side_m);
+  if (!error.ok()) return error;
   Vec3 tracker_m;
   std::size_t cycles = 0;
   double dwell_s = 0.0;
   double speed = 0.0;
   double acceleration = 0.0;
-  Error error = vec3_option(options, "tracker-position", &tracker_m);
+  error = vec3_option(options, "tracker-position", &tracker_m);
   if (error.ok()) error = count_option(options, "cycles", 1, 1000, &cycles);
   if (error.ok()) error = bounded_option(options, "dwell", 0.3, 3600.0, &dwell_s);
   if (error.ok()) error = bounded_option(options, "tool-speed", 1e-3, 1.0, &speed);

@@ -91,12 +91,13 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
   for (std::size_t k = 0; k < 2; ++k) {
     const StreamOptions& s = kStreams[k];
     if (options.get(s.port).empty()) continue;
-    double baud = 0.0;
-    error = cli::number_option(options, s.baud_option, &baud);
+    std::size_t baud = 0;  // a whole number (115200.5 was taken as 115200), then one the port can set
+    error = cli::count_option(options, s.baud_option, 1, 10000000, &baud);
     if (!error.ok()) return error;
-    bauds[k] = baud >= 1.0 && baud <= 1e7 ? static_cast<int>(baud) : 0;
+    bauds[k] = static_cast<int>(baud);
     if (!port::baud_supported(bauds[k])) {
-      return Error::usage(std::string("--") + s.baud_option + ": unsupported baud rate " + options.get(s.baud_option));
+      return Error::usage(std::string("--") + s.baud_option + ": unsupported baud rate " + options.get(s.baud_option) +
+                          " (the port takes " + port::supported_bauds() + " bit/s)");
     }
     error = checks.add_input(options.get(s.port), std::string("--") + s.port);
     if (!error.ok()) return error;

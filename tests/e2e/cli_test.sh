@@ -155,7 +155,7 @@ if [ "$kept_rc" = 5 ] && grep -q "warning: .* moved" "$work/kept.out" && ! grep 
 else
   fail "--keep-outliers"; cat "$work/kept.out"
 fi
-expect 2 "--cv must be 'loo' or a number of folds" -- calibrate --samples "$work/blunder.csv" --cv 1
+expect 2 "--cv must be within [2, 128] folds, or 'loo', got '1'" -- calibrate --samples "$work/blunder.csv" --cv 1
 # A CSV log with a bad row is a clear error naming file and line, and no result.
 { head -5 "$sim/tracker.csv"; echo "5.9,1,2"; } >"$work/short_tracker.csv"
 expect 3 "short_tracker.csv:6: 3 fields where the header has 5" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/short_tracker.csv" --out "$work/r5.json"
@@ -503,9 +503,9 @@ for delay in nan 1e9 -1; do
   refused_serve "--serve-delay-s must be" --serve-delay-s "$delay"
   refused_serve "within [0, 3600], got '$delay'" --serve-delay-s "$delay"
 done
-expect 2 "--compliance-urad must be J2,J3, each within +-10000 urad (e.g. 40,20), not 'nan,0'" -- simulate --compliance-urad nan,0 --out-dir "$work/h2"
-expect 2 "--compliance-urad must be J2,J3" -- simulate --compliance-urad 1e300,0 --out-dir "$work/h2"
-expect 2 "--harmonic-urad must be J,K,S,C" -- simulate --harmonic-urad 3,1,nan,0 --out-dir "$work/h2"
+expect 2 "--compliance-urad J2,J3: J2 must be a number within [-10000, 10000] urad, got 'nan': not a number" -- simulate --compliance-urad nan,0 --out-dir "$work/h2"
+expect 2 "--compliance-urad J2,J3: J2 must be within [-10000, 10000] urad, got '1e300'" -- simulate --compliance-urad 1e300,0 --out-dir "$work/h2"
+expect 2 "--harmonic-urad J,K,S,C: S must be a number within [-10000, 10000] urad, got 'nan'" -- simulate --harmonic-urad 3,1,nan,0 --out-dir "$work/h2"
 expect 2 "--length-sigma-um must be within [0, 100000], got 'inf'" -- simulate --length-sigma-um inf --out-dir "$work/h2"
 expect 2 "--angle-sigma-urad must be within [0, 100000], got '1e9'" -- simulate --angle-sigma-urad 1e9 --out-dir "$work/h2"
 no_file "$work/h2"

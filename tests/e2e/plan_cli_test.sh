@@ -138,7 +138,7 @@ expect_plan 2 "--iso9283 must be X,Y,Z,SIDE" -- --iso9283 0.4,0.5,0.3 --tracker-
 # A given cube is checked as auto's: too small, below the floor, inside the keep-out cylinder,
 # out of reach or with an absurd tool: refused by position, nothing written (no URScript for
 # positions the arm cannot take).
-expect_plan 2 "side in [0.02, 10]" -- --iso9283 0.4,-0.3,0.5,1e-9 --tracker-position 2,0.5,0.6 "${out[@]}"
+expect_plan 2 "--iso9283 X,Y,Z,SIDE: SIDE must be within [0.02, 10] m, got '1e-9'" -- --iso9283 0.4,-0.3,0.5,1e-9 --tracker-position 2,0.5,0.6 "${out[@]}"
 expect_plan 1 "P2 (0.2800, -0.4200, -0.0700 m), P3 (0.5200, -0.4200, -0.0700 m): below --floor-z 0.05 m" -- --iso9283 0.4,-0.3,0.05,0.3 --tracker-position 2,0.5,0.6 "${out[@]}"
 expect_plan 1 ": inside --keep-out-radius 0.15 m" -- --iso9283 0.1,0,0.5,0.1 --tracker-position 2,0.5,0.6 "${out[@]}"
 expect_plan 1 "P1 (2.0000, 0.0000, 0.5000 m)" -- --iso9283 2,0,0.5,0.3 --tracker-position 3,0.5,0.6 "${out[@]}" --urscript "$work/iso_far.script"
