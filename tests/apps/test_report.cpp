@@ -252,7 +252,9 @@ report::ReportData with_blunder_and_folds() {
   data.cross_validation.present = true;
   data.cross_validation.sample_count = 12;
   data.cross_validation.mae_3d_m = 61.3e-6;
-  data.cross_validation.folds = {{8, 4, 50.5e-6, 58.0e-6}, {8, 4, 49.0e-6, 71.5e-6}, {8, 4, 51.0e-6, 54.25e-6}};
+  data.cross_validation.held_out_of = "lines of samples.csv";
+  data.cross_validation.folds = {
+      {8, 4, 50.5e-6, 58.0e-6, "2-4, 13"}, {8, 4, 49.0e-6, 71.5e-6, "5-8"}, {8, 4, 51.0e-6, 54.25e-6, "9-12"}};
   data.identifiability.fixed = {"alpha2"};
   data.identifiability.significance_t = 2.0;
   return data;
@@ -279,8 +281,10 @@ TEST(Report, BlundersAndCrossValidationAreShown) {
   EXPECT_NE(outliers.find("data-series='set aside'"), std::string::npos);
   EXPECT_NE(outliers.find("data-series='kept'"), std::string::npos);
   EXPECT_NE(outliers.find("data-series='blunder threshold'"), std::string::npos);
-  // The folds: a row per fold and the overall held-out MAE as the figure's line.
-  EXPECT_NE(html.find("<td>2</td><td>8</td><td>4</td><td>49.0</td><td>71.5</td>"), std::string::npos);
+  // The folds: a row per fold with the file lines it held out (as the console and result.json
+  // say them), and the overall held-out MAE as the figure's line.
+  EXPECT_NE(html.find("<th>held-out MAE [um]</th><th>held out (lines of samples.csv)</th>"), std::string::npos);
+  EXPECT_NE(html.find("<td>2</td><td>8</td><td>4</td><td>49.0</td><td>71.5</td><td>5-8</td>"), std::string::npos);
   EXPECT_NE(html.find("3D MAE over every held-out sample 61.3 um (uncalibrated: 512.0 um)"), std::string::npos);
   const std::string folds = figure_svg(html, "fig-cv-folds");
   ASSERT_NE(folds, "");
@@ -336,7 +340,17 @@ TEST(Report, BlundersAndFoldsRoundTripThroughResultJson) {
     EXPECT_EQ(back.cross_validation.folds[k].test_count, data.cross_validation.folds[k].test_count);
     EXPECT_EQ(back.cross_validation.folds[k].train_mae_m, data.cross_validation.folds[k].train_mae_m);
     EXPECT_EQ(back.cross_validation.folds[k].test_mae_m, data.cross_validation.folds[k].test_mae_m);
+    EXPECT_EQ(back.cross_validation.folds[k].held_out, data.cross_validation.folds[k].held_out);
   }
+  EXPECT_EQ(back.cross_validation.held_out_of, "lines of samples.csv");
+  // A result written before the folds named their lines: read, the table without that column.
+  textio::JsonValue older = value;
+  older.object["cross_validation"].object.erase("held_out_of");
+  for (textio::JsonValue& fold : older.object["cross_validation"].object["folds"].array) fold.object.erase("held_out");
+  report::ReportData older_back;
+  ASSERT_TRUE(record::parse_report_data(older, "result.json", &older_back).ok());
+  EXPECT_EQ(older_back.cross_validation.folds.size(), 3u);
+  EXPECT_EQ(report::render_html(older_back).find("held out ("), std::string::npos);
   EXPECT_EQ(back.identifiability.fixed, std::vector<std::string>{"alpha2"});
   EXPECT_EQ(back.identifiability.significance_t, 2.0);
   EXPECT_EQ(report::render_html(back), report::render_html(as_written(data)));
