@@ -127,6 +127,28 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
 /// The controller's text messages printed on stderr; more are only counted (the summary).
 constexpr std::uint64_t kTextMessagesShown = 20;
 
+/// The summary line of `record --rtde`: what the log holds, or that this run wrote nothing (a
+/// controller that never sent a row, a file another recorder holds), without counts that read
+/// as if a recording were there.
+void print_rtde_summary(const std::string& host, int port_number, const std::string& out, bool written,
+                        const port::RtdeStats& stats) {
+  const std::string address = host.find(':') == std::string::npos ? host : "[" + host + "]";
+  const std::uint32_t* v = stats.controller_version;
+  char controller[64] = "";
+  if (v[0] + v[1] + v[2] + v[3] > 0)
+    std::snprintf(controller, sizeof controller, " (URControl %u.%u.%u.%u)", v[0], v[1], v[2], v[3]);
+  if (!written) {
+    std::printf("rtde %s:%d%s: nothing recorded, nothing written to %s (%llu text messages from the controller)\n",
+                address.c_str(), port_number, controller, port::printable(out, 4096).c_str(),
+                static_cast<unsigned long long>(stats.text_messages));
+    return;
+  }
+  std::printf("rtde %s:%d%s -> %s: %llu data packages, %llu rows, %llu text messages%s\n", address.c_str(), port_number,
+              controller, port::printable(out, 4096).c_str(), static_cast<unsigned long long>(stats.data_packages),
+              static_cast<unsigned long long>(stats.rows_written), static_cast<unsigned long long>(stats.text_messages),
+              stats.ended_by_controller ? "; the controller closed the connection" : "");
+}
+
 /// `record --rtde HOST[:PORT]`: the controller's joint states through RTDE into a robot log
 /// (the RTDE recorder's text format, which every reader takes), written as it comes.
 Error record_rtde(const cli::Options& options) {
@@ -178,13 +200,7 @@ Error record_rtde(const cli::Options& options) {
       &stats);
   const Error closed = file.close();
   if (error.ok()) error = closed;
-  const std::string address = host.find(':') == std::string::npos ? host : "[" + host + "]";
-  std::printf("rtde %s:%d (URControl %u.%u.%u.%u) -> %s: %llu data packages, %llu rows, %llu text messages%s\n",
-              address.c_str(), port_number, stats.controller_version[0], stats.controller_version[1],
-              stats.controller_version[2], stats.controller_version[3], out.c_str(),
-              static_cast<unsigned long long>(stats.data_packages), static_cast<unsigned long long>(stats.rows_written),
-              static_cast<unsigned long long>(stats.text_messages),
-              stats.ended_by_controller ? "; the controller closed the connection" : "");
+  print_rtde_summary(host, port_number, out, opened, stats);
   return error;
 }
 
