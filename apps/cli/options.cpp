@@ -10,8 +10,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "hivecal/core/math.hpp"
 #include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
+#include "textio/transform_text.hpp"
 
 namespace hivecal::cli {
 
@@ -245,6 +247,85 @@ Error check_vec3(const std::string& option, std::string_view text, const std::st
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
   return check_vec3("--" + name, options.get(name), "in metres",
                     NumberRange{-kMaxPointOption_m, kMaxPointOption_m, false, false, "m"}, value_m);
+}
+
+std::vector<OptionSpec> tool_option_specs(const std::string& tool_help) {
+  return {
+      {"tool", "X,Y,Z", tool_help, kDefaultToolText},
+      {"tool-transform", "FILE",
+       "instead of --tool: a 4x4 transform (text, one row per line; lengths in --length-unit), the tool frame's "
+       "pose in the flange frame, whose translation is the tool point (its rotation is not used)",
+       ""},
+      {"tool-transform-inverse", "",
+       "--tool-transform's file is the flange's pose in the tool frame (e.g. a lab's T_TOOL_F): its inverse's "
+       "translation is the tool point",
+       ""},
+  };
+}
+
+bool tool_given(const Options& options) {
+  return options.given("tool") || options.given("tool-transform");
+}
+
+namespace {
+
+/// "x, y, z mm" of a point [m], to the micrometre (no "-0.000" for a rounding's sign).
+std::string millimetres(const Vec3& point_m) {
+  const Vec3 shown_mm = (point_m * 1e6).array().round() / 1e3 + 0.0;  // + 0.0: -0.0 becomes 0.0
+  char text[96];
+  std::snprintf(text, sizeof text, "%.3f, %.3f, %.3f mm", shown_mm.x(), shown_mm.y(), shown_mm.z());
+  return text;
+}
+
+/// --tool-transform FILE [--tool-transform-inverse]: the tool point is the origin of the tool
+/// frame in the flange frame, the translation of the file's transform (or of its inverse, when
+/// the file is the flange's pose in the tool frame); *note says so, and what the rotation is.
+Error tool_transform_option(const Options& options, const textio::InputUnits& units, Vec3* tool_m, std::string* note) {
+  const std::string path = options.get("tool-transform");
+  RigidTransform read;
+  const Error error = textio::read_transform_text(path, units, &read);
+  if (!error.ok()) return error;
+  const bool inverse = options.given("tool-transform-inverse");
+  const RigidTransform tool_in_flange = inverse ? read.inverse() : read;
+  const Vec3 other_m = inverse ? read.translation_m : read.inverse().translation_m;  // the other reading's point
+  *tool_m = tool_in_flange.translation_m;
+  if (tool_m->cwiseAbs().maxCoeff() > kMaxToolOption_m) {
+    return Error::usage("--tool-transform " + port::quoted(path) + " puts the tool point at " + millimetres(*tool_m) +
+                        ", beyond " + textio::format_double(kMaxToolOption_m) + " m of the flange");
+  }
+  const double cosine = std::clamp((tool_in_flange.rotation.trace() - 1.0) / 2.0, -1.0, 1.0);
+  char rotation[80];
+  std::snprintf(rotation, sizeof rotation, "%.3f deg", std::acos(cosine) * math::kDegPerRad);
+  *note = "tool point from --tool-transform " + port::printable(path, 4096) + ": " + millimetres(*tool_m) +
+          " (the translation of " + (inverse ? "the inverse of the file's transform" : "the file's transform") +
+          ", the tool frame's pose in the flange frame); its rotation, " + rotation +
+          ", is not used: a reflector is a point";
+  if (tool_m->z() < 0.0 && other_m.z() > 0.0) {
+    *note += "; the point lies behind the flange (z < 0): if the file is the " +
+             std::string(inverse ? "tool's pose in the flange frame, leave out --tool-transform-inverse"
+                                 : "flange's pose in the tool frame (a lab's T_TOOL_F), add --tool-transform-inverse") +
+             " (the point at " + millimetres(other_m) + ")";
+  }
+  return Error{};
+}
+
+}  // namespace
+
+Error tool_point_option(const Options& options, const textio::InputUnits& units, const Vec3* description_tool_m,
+                        Vec3* tool_m, std::string* note) {
+  note->clear();
+  const bool transform = options.given("tool-transform");
+  if (transform && options.given("tool")) return Error::usage("give --tool or --tool-transform, not both");
+  if (!transform && options.given("tool-transform-inverse")) {
+    return Error::usage("--tool-transform-inverse needs --tool-transform FILE");
+  }
+  if (transform) return tool_transform_option(options, units, tool_m, note);
+  if (description_tool_m != nullptr && !options.given("tool")) {
+    *tool_m = *description_tool_m;
+    return Error{};
+  }
+  return check_vec3("--tool", options.get("tool"), "in metres",
+                    NumberRange{-kMaxToolOption_m, kMaxToolOption_m, false, false, "m"}, tool_m);
 }
 
 std::vector<OptionSpec> input_unit_option_specs() {

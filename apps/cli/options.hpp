@@ -140,6 +140,22 @@ constexpr double kMaxPointOption_m = textio::kMaxPointDistance_m;
 constexpr double kMaxToolOption_m = 10.0;
 /// --<name> as X,Y,Z in metres (e.g. --tracker-position), each within +-kMaxPointOption_m.
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
+/// The default --tool of every command that takes one (calibrate, extract, iso9283, plan): the
+/// reflector 169.5 mm along the flange z axis, as in the paper's session ("X,Y,Z" [m]).
+inline constexpr const char* kDefaultToolText = "0,0,0.1695";
+/// The options that give the tool point, for every command that takes one: --tool X,Y,Z (its
+/// help `tool_help`, default kDefaultToolText), or --tool-transform FILE [--tool-transform-inverse]
+/// (a lab's 4x4 flange/probe transform, lengths in --length-unit).
+std::vector<OptionSpec> tool_option_specs(const std::string& tool_help);
+/// The tool point [m] of tool_option_specs(): --tool-transform's (its translation, or its
+/// inverse's with --tool-transform-inverse; *note says what was read and where the point went),
+/// else --tool's, else `description_tool_m` (a robot description file's; nullptr: none), else
+/// kDefaultToolText; each within +-kMaxToolOption_m. --tool with --tool-transform is refused.
+/// *note is "" without --tool-transform.
+Error tool_point_option(const Options& options, const textio::InputUnits& units, const Vec3* description_tool_m,
+                        Vec3* tool_m, std::string* note);
+/// True when the run was given a tool point (--tool or --tool-transform).
+bool tool_given(const Options& options);
 /// The options of every command that reads text inputs: --length-unit, --angle-unit.
 std::vector<OptionSpec> input_unit_option_specs();
 /// --length-unit (m|mm) and --angle-unit (rad|deg) into *units ("" when not given: SI unless

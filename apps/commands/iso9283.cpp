@@ -158,14 +158,17 @@ void own_mae(const std::string& text, CommandFrame* frame) {
 }
 
 /// The command frame: a result's model and base -> tracker, or a nominal model (its tool:
-/// --tool, else a description file's, else kDefaultToolText) with the base -> tracker fitted
-/// to every reach.
-Error command_frame(const Options& options, Span<const Sample> samples, CommandFrame* frame) {
+/// --tool or --tool-transform, else a description file's, else kDefaultToolText) with the base ->
+/// tracker fitted to every reach.
+Error command_frame(const Options& options, const textio::InputUnits& units, Span<const Sample> samples,
+                    CommandFrame* frame) {
   if (!options.get("calibration").empty()) {
-    if (options.given("tool")) {
-      return Error::usage(
-          "--tool goes with --robot-model: a calibration result carries its own calibrated tool point (its \"tool\"), "
-          "which gives the commanded positions; leave --tool out, or give --robot-model instead of --calibration");
+    if (tool_given(options)) {
+      const std::string given = options.given("tool") ? "--tool" : "--tool-transform";
+      return Error::usage(given +
+                          " goes with --robot-model: a calibration result carries its own calibrated tool point (its "
+                          "\"tool\"), which gives the commanded positions; leave " +
+                          given + " out, or give --robot-model instead of --calibration");
     }
     frame->calibration = true;
     frame->how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
@@ -175,9 +178,12 @@ Error command_frame(const Options& options, Span<const Sample> samples, CommandF
     return read;
   }
   bool from_file = false;
+  std::string tool_note;
   Error error = robot_model_option(options, "robot-model", &frame->file, &from_file);
-  if (error.ok() && (!from_file || options.given("tool")))
-    error = vec3_option(options, "tool", &frame->file.model.tool_m);
+  if (error.ok()) {
+    error = tool_point_option(options, units, from_file ? &frame->file.model.tool_m : nullptr,
+                              &frame->file.model.tool_m, &tool_note);
+  }
   if (!error.ok()) return error;
   if (fit_base_to_tracker(frame->file.model, samples, &frame->file.base_to_tracker) != Status::ok) {
     return Error::input(
@@ -185,7 +191,8 @@ Error command_frame(const Options& options, Span<const Sample> samples, CommandF
   }
   const Vec3& tool_m = frame->file.model.tool_m;
   frame->how = "commanded positions from the nominal " + frame->file.robot + " (tool " + mm(tool_m.x()) + ", " +
-               mm(tool_m.y()) + ", " + mm(tool_m.z()) + " mm; base -> tracker fitted to the reaches)";
+               mm(tool_m.y()) + ", " + mm(tool_m.z()) + " mm; base -> tracker fitted to the reaches)" +
+               (tool_note.empty() ? "" : "; " + tool_note);
   return Error{};
 }
 
@@ -319,7 +326,7 @@ Error iso9283(const Options& options, std::vector<std::string>* warnings, bool* 
   if (error.ok()) error = textio::read_samples_csv(options.get("samples"), &dataset, units, &lines);
   if (!error.ok()) return error;
   CommandFrame frame;
-  error = command_frame(options, dataset.samples(), &frame);
+  error = command_frame(options, units, dataset.samples(), &frame);
   if (!error.ok()) return error;
   const std::vector<PoseReaches> poses = group_reaches(dataset.samples(), lines);
   std::vector<PoseResult> results;
@@ -625,13 +632,13 @@ int iso9283_main(int argc, char** argv) {
        ""},
       {"calibration", "FILE", "command frame: a calibration result (its model and base -> tracker)", ""},
       {"robot-model", "NAME|FILE", "or the nominal model, its base -> tracker fitted to the reaches", "ur5"},
-      {"tool", "X,Y,Z",
-       "with --robot-model: the reflector in the flange frame [m] (a description file's when not given; not with "
-       "--calibration, whose tool is calibrated)",
-       kDefaultToolText},
       {"out", "FILE", "per-pose table (CSV: AP_P, AP_x/y/z, RP_l in mm); '-' for stdout", "-"},
       {"report", "FILE", "the same as an HTML page in the calibration report's style", ""},
   };
+  const std::vector<OptionSpec> tool = tool_option_specs(
+      "with --robot-model: the reflector in the flange frame [m] (a description file's when not given; not with "
+      "--calibration, whose tool is calibrated)");
+  specs.insert(specs.begin() + 3, tool.begin(), tool.end());  // after --robot-model
   for (const OptionSpec& unit : input_unit_option_specs()) specs.push_back(unit);
   Options options;
   const int parsed = parse_options(kIso9283Command,

@@ -255,10 +255,16 @@ Error extract(const cli::Options& options) {
     return Error::usage("--robot and --tracker are required (see --help)");
   }
   textio::RobotDescription robot;
+  bool from_file = false;
+  textio::InputUnits units;
   Vec3 tool = Vec3::Zero();
+  std::string tool_note;
   double max_speed_mm_s = 0, window_s = 0;
-  Error error = cli::robot_model_option(options, "robot-model", &robot);
-  if (error.ok()) error = cli::vec3_option(options, "tool", &tool);
+  Error error = cli::robot_model_option(options, "robot-model", &robot, &from_file);
+  if (error.ok()) error = cli::input_units_option(options, &units);
+  if (error.ok()) {  // the tool point as calibrate takes it: the same samples from the same session
+    error = cli::tool_point_option(options, units, from_file ? &robot.model.tool_m : nullptr, &tool, &tool_note);
+  }
   if (error.ok())
     error = cli::ranged_option(options, "max-speed-mm-s", cli::NumberRange{0.0, 1e6, true, true}, &max_speed_mm_s);
   if (error.ok()) error = cli::bounded_option(options, "window-s", 0.0, 60.0, &window_s);
@@ -274,13 +280,14 @@ Error extract(const cli::Options& options) {
   config.speed_model.tool_m = tool;
   config.max_speed_m_s = max_speed_mm_s * 1e-3;
   config.window_s = window_s;
+  config.log_options.units = units;
   error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
-  if (error.ok()) error = cli::input_units_option(options, &config.log_options.units);
   if (!error.ok()) return error;
   const auto dataset = std::make_unique<cli::HostDataset>();  // as large as the captures' static samples
   SessionFacts facts;
   error = load_session({"", options.get("robot"), options.get("tracker")}, config, dataset.get(), &facts);
   std::FILE* terminal = out == "-" ? stderr : stdout;  // stdout may carry the samples
+  if (!tool_note.empty()) std::fprintf(terminal, "%s\n", tool_note.c_str());
   const bool counted = facts.run.robot.records > 0 && facts.run.tracker.records > 0;
   if (counted) {  // also when the clock fit failed: the counts tell why
     print_input(terminal, "robot  ", facts.run.robot);
@@ -333,11 +340,13 @@ int extract_main(int argc, char** argv) {
        "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"robot-model", "NAME|FILE",
        std::string(robot_type_names()) + " or a robot description .json (nominal geometry for tool speeds)", "ur5"},
-      {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", cli::kDefaultToolText},
       {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
       {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
       {"samples", "FILE", "write the paired samples q1..q6,x,y,z (CSV) here; '-' for stdout; empty: none", ""},
   };
+  const std::vector<cli::OptionSpec> tool = cli::tool_option_specs(
+      "nominal tool point in the flange frame [m] (for tool speeds; default: the description file's)");
+  specs.insert(specs.begin() + 4, tool.begin(), tool.end());
   for (const cli::OptionSpec& spec : cli::input_unit_option_specs()) specs.push_back(spec);
   cli::Options options;
   const int parsed =

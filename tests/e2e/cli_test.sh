@@ -550,6 +550,8 @@ if "${run[@]}" export --robot-model ur5e --format ur-kinematics --ur-hash calib_
   fail "export --format ur-kinematics"; fi
 expect 0 "hash calib_hivecal_" -- export --robot-model ur5e --format ur-kinematics --out "$work/ur5e-own.yaml"
 expect 2 "--ur-hash must be letters, digits and '_'" -- export --robot-model ur5e --format ur-kinematics --ur-hash 'a b'
+expect 2 "--ur-hash goes with --format ur-kinematics: a urdf has no calibration hash" -- export --robot-model ur5e --ur-hash calib_42 --out "$work/hash.urdf"
+no_file "$work/hash.urdf"
 # A URDF is a robot model (--robot-model FILE.urdf): predict checks it against the built-in
 # table, calibrate starts from it.
 "${run[@]}" export --robot-model ur5 --out "$work/ur5.urdf" 2>/dev/null
