@@ -590,6 +590,18 @@ sed 's/"title": "hivecal calibration: ur5"/"title": "\\u001b]0;pwned\\u0007"/' "
 if grep -q 'u001b' "$work/hostile_title.json" && "${run[@]}" report --calibration "$work/hostile_title.json" --out "$work/hostile_redrawn" >/dev/null &&
    only_text "$work/hostile_redrawn/index.html" && grep -qF '<title>\x1b]0;pwned\x07</title>' "$work/hostile_redrawn/index.html"; then pass; else
   fail "report of a result whose title holds control bytes"; fi
+# A samples file named with control bytes: its name reaches neither the terminal nor the page raw
+# (the input line, the report's every text, validate's line), each through port::printable.
+hostile_csv="$work/"$'pa\x1b]0;evil\x07ired.csv'
+cp "$work/paired.csv" "$hostile_csv"
+if "${run[@]}" calibrate --samples "$hostile_csv" --method lm --split 1 --out "$work/hn.json" --report "$work/hn_report" \
+     >"$work/hn.txt" 2>&1 &&
+   "${run[@]}" validate --calibration "$work/hn.json" --samples "$hostile_csv" --out "$work/hn_v.json" >>"$work/hn.txt" 2>&1 &&
+   only_text "$work/hn.txt" && only_text "$work/hn_report/index.html" &&
+   grep -qF "input: $work/pa\x1b]0;evil\x07ired.csv (" "$work/hn.txt" &&
+   grep -qF "validation on $work/pa\x1b]0;evil\x07ired.csv: " "$work/hn.txt" &&
+   grep -qF "<li>input: $work/pa\x1b]0;evil\x07ired.csv (" "$work/hn_report/index.html"; then pass; else
+  fail "a samples file named with control bytes: $(od -c "$work/hn.txt" | head -5)"; fi
 printf '<robot name="r">\n<joint name="j" type="prismatic"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/slider.urdf"
 expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- predict --robot-model "$work/slider.urdf" --joints "$work/joints.csv"
 expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- check-robot "$work/slider.urdf"
