@@ -411,11 +411,12 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   if (settings.cv_folds == 1 && dataset->pose_count() > kMaxCrossValidationFolds) {
     return Error::usage("--cv loo: at most " + std::to_string(kMaxCrossValidationFolds) + units + " (use --cv K)");
   }
+  if (settings.cv_folds == 0 || dataset->pose_count() == 0) return Error{};  // no folds to size
   // Each fold trains on the others (DatasetBase::split_fold): the largest fold held out leaves the fewest.
   const std::size_t poses = dataset->pose_count();
   const std::size_t folds = settings.cv_folds == 1 ? poses : settings.cv_folds;
   const std::size_t fold_train_poses = poses - (poses + folds - 1) / folds;
-  if (settings.cv_folds > 0 && fold_train_poses < 3) {
+  if (fold_train_poses < 3) {
     return Error::usage("--cv " + options.get("cv") + " on " + std::to_string(poses) + units + ": a fold trains on " +
                         std::to_string(fold_train_poses) + " of them, and a fit needs at least 3 (as --split's " +
                         "training set): too few" + units + " for " + std::to_string(folds) + " folds; measure more" +
