@@ -171,7 +171,8 @@ Error command_frame(const Options& options, const textio::InputUnits& units, Spa
                           given + " out, or give --robot-model instead of --calibration");
     }
     frame->calibration = true;
-    frame->how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
+    frame->how = "commanded positions from " + port::printable(options.get("calibration"), 4096) +
+                 " (its model and base -> tracker)";
     std::string text;
     const Error read = record::read_calibration_json(options.get("calibration"), &frame->file, &text);
     if (read.ok()) own_mae(text, frame);
@@ -190,9 +191,9 @@ Error command_frame(const Options& options, const textio::InputUnits& units, Spa
         "cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
   }
   const Vec3& tool_m = frame->file.model.tool_m;
-  frame->how = "commanded positions from the nominal " + frame->file.robot + " (tool " + mm(tool_m.x()) + ", " +
-               mm(tool_m.y()) + ", " + mm(tool_m.z()) + " mm; base -> tracker fitted to the reaches)" +
-               (tool_note.empty() ? "" : "; " + tool_note);
+  frame->how = "commanded positions from the nominal " + port::printable(frame->file.robot) + " (tool " +
+               mm(tool_m.x()) + ", " + mm(tool_m.y()) + ", " + mm(tool_m.z()) +
+               " mm; base -> tracker fitted to the reaches)" + (tool_note.empty() ? "" : "; " + tool_note);
   return Error{};
 }
 

@@ -108,7 +108,7 @@ Error robot_option(const Options& options, RobotModel* model, JointLimits* limit
   if (!options.get("joint-limits").empty()) {
     error = textio::read_joint_limits_csv(options.get("joint-limits"), &limits->lower_rad, &limits->upper_rad, units);
     if (!error.ok() || !(description.has_joint_limits || built_in)) return error;
-    return clamp_to_own_range(options, description.robot, own, limits);
+    return clamp_to_own_range(options, port::printable(description.robot), own, limits);  // the file's name, made safe
   }
   *limits = own;
   if (!description.has_joint_limits && !built_in) {

@@ -586,6 +586,20 @@ if "${run[@]}" calibrate --samples "$work/paired.csv" --robot-model "$work/hosti
      --report "$work/hostile_report" >/dev/null 2>&1 && only_text "$work/hostile_report/index.html" &&
    grep -qF '<title>hivecal calibration: \x1b]0;pwned\x07\x1b[2J\x00tail</title>' "$work/hostile_report/index.html"; then pass; else
   fail "calibrate --report of a name with control bytes"; fi
+# ... nor does any other command that prints it: a registration of that result, plan's clamped
+# limits (the description's own range named by its name), iso9283's command frame.
+sed 's/^  "tool": /  "joint_limits": [[-1, 1], [-1, 1], [-1, 1], [-1, 1], [-1, 1], [-1, 1]],\n  "tool": /' "$work/hostile.json" \
+  >"$work/hostile_limits.json"
+printf 'lower,upper\n-2,2\n-2,2\n-2,2\n-2,2\n-2,2\n-2,2\n' >"$work/wider.csv"
+{ "${run[@]}" calibrate --fit base --robot-model "$work/hostile_result.json" --samples "$work/paired.csv" --out "$work/hostile_reg.json"
+  "${run[@]}" plan --robot-model "$work/hostile_limits.json" --joint-limits "$work/wider.csv" --count 4 --tracker-position 2,0.5,0.6 \
+    --candidates 64 --restarts 1 --refine 0 --out "$work/hostile_plan.csv"
+  "${run[@]}" iso9283 --samples "$work/paired.csv" --robot-model "$work/hostile.json" --out "$work/hostile_iso.csv"
+} >"$work/hostile_more.txt" 2>&1
+if only_text "$work/hostile_more.txt" && grep -qF 'registering '"$work"'/hostile_result.json (\x1b]0;pwned' "$work/hostile_more.txt" &&
+   grep -qF "goes beyond the \x1b]0;pwned" "$work/hostile_more.txt" &&
+   grep -qF "commanded positions from the nominal \x1b]0;pwned" "$work/hostile_more.txt"; then pass; else
+  fail "registration, plan, iso9283 of a name with control bytes: $(od -c "$work/hostile_more.txt" | grep -m3 033)"; fi
 sed 's/"title": "hivecal calibration: ur5"/"title": "\\u001b]0;pwned\\u0007"/' "$work/cap.json" >"$work/hostile_title.json"
 if grep -q 'u001b' "$work/hostile_title.json" && "${run[@]}" report --calibration "$work/hostile_title.json" --out "$work/hostile_redrawn" >/dev/null &&
    only_text "$work/hostile_redrawn/index.html" && grep -qF '<title>\x1b]0;pwned\x07</title>' "$work/hostile_redrawn/index.html"; then pass; else
