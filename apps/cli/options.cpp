@@ -120,24 +120,42 @@ std::string NumberRange::text() const {
   return range + (unit.empty() ? "" : " " + unit);
 }
 
+namespace {
+
+/// Why a text that parse_number read as `read` is no value for `range` ("" for a number): the one
+/// wording of check_number and check_vec3. 0 is advised for an underflow only where 0 is taken.
+std::string number_reason(textio::NumberText read, const NumberRange& range) {
+  switch (read) {
+    case textio::NumberText::ok: return "";
+    case textio::NumberText::malformed: return "not a number";
+    case textio::NumberText::overflow: return "beyond a double's range (1.8e308)";
+    case textio::NumberText::underflow:
+      return std::string("too small for a double (it underflows below 4.9e-324): give ") +
+             (range.contains(0.0) ? "0 or " : "") + "a larger value";
+  }
+  return "";
+}
+
+/// parse_number, with NaN as no number (a NaN is no value of any option).
+textio::NumberText read_number(std::string_view text, double* value) {
+  const textio::NumberText read = textio::parse_number(text, value);
+  return read == textio::NumberText::ok && std::isnan(*value) ? textio::NumberText::malformed : read;
+}
+
+}  // namespace
+
 Error check_number(const std::string& option, std::string_view text, const NumberRange& range, double* value) {
   double parsed = 0.0;
-  textio::NumberText read = textio::parse_number(text, &parsed);
-  if (read == textio::NumberText::ok && std::isnan(parsed)) read = textio::NumberText::malformed;  // NaN: no value
-  const bool unbounded = std::isinf(range.lo) && std::isinf(range.hi);                             // number_option
+  const textio::NumberText read = read_number(text, &parsed);
+  const bool unbounded = std::isinf(range.lo) && std::isinf(range.hi);  // number_option
   const std::string within = unbounded ? "" : " within " + range.text();
   const std::string got = ", got " + port::quoted(text);
-  switch (read) {
-    case textio::NumberText::ok: break;
-    case textio::NumberText::malformed:
-      return Error::usage(option + " must be a number" + within + got + ": not a number");
-    case textio::NumberText::overflow:
-      return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
-                          ": beyond a double's range (1.8e308)");
-    case textio::NumberText::underflow:  // 0 is the advice only where 0 is taken
-      return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
-                          ": too small for a double (it underflows below 4.9e-324): give " +
-                          (range.contains(0.0) ? "0 or " : "") + "a larger value");
+  if (read == textio::NumberText::malformed) {
+    return Error::usage(option + " must be a number" + within + got + ": " + number_reason(read, range));
+  }
+  if (read != textio::NumberText::ok) {
+    return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got + ": " +
+                        number_reason(read, range));
   }
   if (!range.contains(parsed)) return Error::usage(option + " must be within " + range.text() + got);
   *value = parsed;
@@ -232,11 +250,9 @@ Error check_vec3(const std::string& option, std::string_view text, const std::st
   Vec3 parsed = Vec3::Zero();
   for (int axis = 0; axis < 3; ++axis) {
     const std::string_view field = fields[static_cast<std::size_t>(axis)];
-    const textio::NumberText read = textio::parse_number(field, &parsed(axis));
-    if (read == textio::NumberText::overflow) return Error::usage(shape + ": beyond a double's range (1.8e308)");
-    if (read == textio::NumberText::underflow) {
-      return Error::usage(shape + ": " + port::quoted(field) +
-                          " is too small for a double (it underflows below 4.9e-324): give 0 or a larger value");
+    const textio::NumberText read = read_number(field, &parsed(axis));
+    if (read == textio::NumberText::overflow || read == textio::NumberText::underflow) {
+      return Error::usage(shape + ": " + port::quoted(field) + " is " + number_reason(read, range));
     }
     if (read != textio::NumberText::ok || !range.contains(parsed(axis))) return Error::usage(shape);
   }
