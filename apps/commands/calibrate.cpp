@@ -260,6 +260,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, const stre
   job.lm.joint_sigma_rad = settings.joint_sigma_rad;
   job.lm.position_sigma_m = settings.orientation.position_sigma_m;
   job.blunder_test.tracker_sigma_m = settings.orientation.position_sigma_m;
+  job.prior = settings.prior;
   job.compliance.enabled = settings.compliance;
   if (settings.compliance) job.compliance.model = settings.compliance_model;
   auto& workspace = memory->workspace.for_samples(dataset->size());

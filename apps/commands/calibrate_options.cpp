@@ -148,6 +148,31 @@ Error orientation_options(const Options& options, textio::OrientationInput* orie
   return Error{};
 }
 
+/// --prior nominal|off and the tolerances of the start model it holds (--dh-tolerance-mm,
+/// --dh-tolerance-mrad, --tool-tolerance-mm), each positive and below 1 m / 1 rad.
+Error prior_options(const Options& options, LmPriorTolerances* prior) {
+  const std::string kind = options.get("prior");
+  if (kind != "nominal" && kind != "off") {
+    return Error::usage("--prior must be 'nominal' or 'off', not " + port::quoted(kind));
+  }
+  const char* const names[] = {"dh-tolerance-mm", "dh-tolerance-mrad", "tool-tolerance-mm"};
+  double* const values[] = {&prior->dh_length_m, &prior->dh_angle_rad, &prior->tool_m};
+  for (int k = 0; k < 3; ++k) {
+    if (kind == "off" && options.given(names[k])) {
+      return Error::usage(std::string("--") + names[k] + " goes with the prior: not with --prior off");
+    }
+    double value = 0.0;
+    const Error error = number_option(options, names[k], &value);
+    if (!error.ok()) return error;
+    if (!(value > 0.0 && value < 1000.0)) {
+      return Error::usage(std::string("--") + names[k] + " must be in (0, 1000), not " +
+                          port::quoted(options.get(names[k])));
+    }
+    *values[k] = kind == "off" ? 0.0 : value * 1e-3;
+  }
+  return Error{};
+}
+
 /// --joint-sigma-rad or --joint-sigma-deg (not both), in [0, 1) rad.
 Error joint_sigma_option(const Options& options, double* sigma_rad) {
   const bool in_degrees = options.given("joint-sigma-deg");
@@ -230,6 +255,16 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "0,0,-1"},
         {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]",
          ""},
+        {"prior", "nominal|off",
+         "LM holds the start model (its DH and the --tool point) as a prior with the tolerances below, so that what "
+         "the data do not determine stays at nominal (docs/solver-lm.md); off: plain least squares",
+         "nominal"},
+        {"dh-tolerance-mm", "X", "the prior's tolerance of each DH length (d, a) [mm]",
+         textio::format_double(kDefaultPriorTolerances.dh_length_m * 1e3)},
+        {"dh-tolerance-mrad", "X", "the prior's tolerance of each DH angle (theta offset, alpha) [mrad]",
+         textio::format_double(kDefaultPriorTolerances.dh_angle_rad * 1e3)},
+        {"tool-tolerance-mm", "X", "the prior's tolerance of each coordinate of the --tool point [mm]",
+         textio::format_double(kDefaultPriorTolerances.tool_m * 1e3)},
         {"quiet", "", "no progress on stderr", ""},
         {"profile", "",
          "print on stderr where the wall time went: reading the input, the job's screen, baseline, stages and "
@@ -355,6 +390,7 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   if (!compliance.ok()) return compliance;
   error = orientation_options(options, &settings->orientation);
   if (error.ok()) error = joint_sigma_option(options, &settings->joint_sigma_rad);
+  if (error.ok()) error = prior_options(options, &settings->prior);
   return error;
 }
 

@@ -55,6 +55,9 @@ struct CalibrateSettings {
   /// --frames auto: the job tests the controller's frames when the fitted base is near the
   /// identity (CalibrationOptions::detect_controller_frames)
   bool detect_controller_frames = true;
+  /// --prior, --dh-tolerance-mm, --dh-tolerance-mrad, --tool-tolerance-mm: the start model's
+  /// tolerances as LM's prior (all 0 with --prior off) [m], [rad]
+  LmPriorTolerances prior = kDefaultPriorTolerances;
 };
 
 /// The fate of every tracker point in the extraction pass (kept, or its drop reason), for the

@@ -611,6 +611,11 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
   if (data.fit_sigma_m > 0.0)
     data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m, data.noise_source));
   data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
+  if (const LmResult* lm = run.final_lm(); lm != nullptr) {
+    for (const std::string& line : prior_held_lines(*lm, run.options.prior, data.parameters)) {
+      data.info_lines.push_back(line);
+    }
+  }
   data.has_stream = facts.has_stream;
   if (facts.has_stream) {
     data.drops.emplace_back("kept", facts.run.counts.kept);

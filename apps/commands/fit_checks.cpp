@@ -34,7 +34,64 @@ std::string correlation_cause(const char* name, const std::vector<report::Parame
   return "";
 }
 
+/// Joint number (1-based) of a DH parameter's name ("d5" -> 5), 0 for any other name.
+int joint_of(const std::string& name) {
+  const bool dh =
+      name.rfind("theta", 0) == 0 || name.rfind("alpha", 0) == 0 || name.rfind("d", 0) == 0 || name.rfind("a", 0) == 0;
+  const char last = name.empty() ? '\0' : name.back();
+  return dh && last >= '1' && last <= '9' ? last - '0' : 0;
+}
+
+/// What poses would tell parameters `a` and `b` apart: more tool orientations when the tool
+/// point or the wrist (joints 5, 6) takes part, a wider range of each joint they belong to,
+/// poses spread wider when the base does.
+std::string what_separates(const std::string& a, const std::string& b) {
+  std::vector<std::string> ways;
+  const int joints[] = {joint_of(a), joint_of(b)};
+  const bool tool = a.rfind("tool", 0) == 0 || b.rfind("tool", 0) == 0;
+  if (tool || joints[0] >= 5 || joints[1] >= 5) ways.push_back("more tool orientations");
+  for (int k = 0; k < 2; ++k) {
+    if (joints[k] == 0 || (k == 1 && joints[1] == joints[0])) continue;
+    ways.push_back("a wider range of joint " + std::to_string(joints[k]));
+  }
+  if (a.rfind("base", 0) == 0 || b.rfind("base", 0) == 0) ways.push_back("poses spread wider over the workspace");
+  if (ways.empty()) ways.push_back("poses spread wider over every joint's range");
+  std::string text = ways[0];
+  for (std::size_t k = 1; k < ways.size(); ++k) text += " or " + ways[k];
+  return text;
+}
+
 }  // namespace
+
+std::vector<std::string> prior_held_lines(const LmResult& lm, const LmPriorTolerances& tolerances,
+                                          const std::vector<report::ParameterRow>& parameters) {
+  std::vector<std::string> lines;
+  for (int k = 0; k < kModelParamCount; ++k) {
+    const double tolerance = prior_tolerance(tolerances, k);
+    if (!mask_has(lm.identifiability.kept_mask, k) || !(tolerance > 0.0) ||
+        !(lm.sigma(k) > kPriorHeldSigmaShare * tolerance)) {
+      continue;
+    }
+    const bool angle = model_param_is_angle(k);
+    const double unit = 1e3;  // mm, mrad
+    char line[400];
+    std::snprintf(line, sizeof line,
+                  "  held    %-8s (by the nominal model's prior: sigma %.3g %s of its %.3g %s tolerance, the poses "
+                  "determine it less than the tolerance does",
+                  full_param_name(k), lm.sigma(k) * unit, angle ? "mrad" : "mm", tolerance * unit,
+                  angle ? "mrad" : "mm");
+    std::string text = line;
+    for (const report::ParameterRow& row : parameters) {
+      if (row.name != full_param_name(k) || row.correlated_with.empty()) continue;
+      std::snprintf(line, sizeof line, "; correlated %+.3f with %s in the data: %s would separate them",
+                    row.correlation, row.correlated_with.c_str(),
+                    what_separates(row.name, row.correlated_with).c_str());
+      text += line;
+    }
+    lines.push_back(text + ")");
+  }
+  return lines;
+}
 
 std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
                                       const std::vector<report::ParameterRow>& parameters) {

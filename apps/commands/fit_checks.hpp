@@ -29,4 +29,15 @@ bool model_param_is_angle(int index);
 std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
                                       const std::vector<report::ParameterRow>& parameters = {});
 
+/// A parameter is held by the prior when its sigma is above its tolerance / sqrt(2): the
+/// tolerance tells more about it than the poses do [-].
+inline constexpr double kPriorHeldSigmaShare = 0.70710678118654752;
+
+/// One line per DH or tool parameter of `lm` that the nominal model's prior (`tolerances`)
+/// holds more than the data do (kPriorHeldSigmaShare): its sigma against its tolerance, and,
+/// from `parameters` (Table 4's rows, the data's correlations), the parameter it is most
+/// correlated with and what poses would separate them. Empty without a prior.
+std::vector<std::string> prior_held_lines(const LmResult& lm, const LmPriorTolerances& tolerances,
+                                          const std::vector<report::ParameterRow>& parameters);
+
 }  // namespace hivecal::cli

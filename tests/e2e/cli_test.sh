@@ -232,6 +232,12 @@ no_file "$work/u4.json"
 # A fit beyond the change bounds: warnings on stderr, the result written all the same, exit 5.
 expect 5 "warning: a3 moved" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --method lm --max-change-mm 0.001 --out "$work/u5.json"
 if [ -s "$work/u5.json" ] && grep -q '"warnings"' "$work/u5.json"; then pass; else fail "exit 5 without its result"; fi
+# The nominal model's prior: its kind and tolerances are checked before any work.
+expect 2 "--prior must be 'nominal' or 'off', not 'flat'" -- calibrate --samples "$work/s.csv" --prior flat --out "$work/p1.json"
+expect 2 "--dh-tolerance-mm must be in (0, 1000), not '0'" -- calibrate --samples "$work/s.csv" --dh-tolerance-mm 0 --out "$work/p1.json"
+expect 2 "--tool-tolerance-mm goes with the prior: not with --prior off" -- \
+  calibrate --samples "$work/s.csv" --prior off --tool-tolerance-mm 5 --out "$work/p1.json"
+no_file "$work/p1.json"
 
 # --- hostile and careless use (issue 13): one check per case -----------------------------------
 good_predict=(predict --calibration "$work/result.json" --joints "$work/joints.csv")

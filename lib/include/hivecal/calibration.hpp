@@ -98,6 +98,11 @@ inline constexpr std::size_t kAutoSignificanceMaxSamples = 64;
 /// and where a refit per pose is cheap [-].
 inline constexpr std::size_t kJointTermHoldoutMaxSamples = kAutoSignificanceMaxSamples;
 
+/// Default manufacturing tolerances of the start model in the job's LM fits (the nominal model
+/// as a prior, docs/solver-lm.md): 1 mm per DH length, 5 mrad per DH angle, 20 mm per
+/// coordinate of the given tool point [m], [rad].
+inline constexpr LmPriorTolerances kDefaultPriorTolerances{1e-3, 5e-3, 0.02};
+
 /// Settings of one job; the defaults are the command-line tool's.
 struct CalibrationOptions {
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< solvers and their order
@@ -135,6 +140,10 @@ struct CalibrationOptions {
   double screen_floor_m = 0.01;        ///< smallest residual set aside by the start geometry's consensus screen [m]
   std::size_t consensus_trials = 200;  ///< point triples tried by the consensus (LMedS) screen [-]
   CalibrationCompliance compliance;    ///< joint compliance stage (off by default)
+  /// Every LM fit holds the start model (its DH and the given tool point) as a prior with these
+  /// tolerances, so that what the data do not determine stays at nominal; all 0: off, plain
+  /// least squares [m], [rad].
+  LmPriorTolerances prior = kDefaultPriorTolerances;
   /// The base -> tracker transform is known and not estimated: the points were measured in
   /// the robot's own frame (a teach pendant's or controller's TCP readings: the identity), or
   /// the base was calibrated before. Joint 1's parameters, which a fitted base absorbs, become

@@ -116,7 +116,8 @@ Status compliance_start(const RobotModel& start, const CalibrationCompliance& op
 
 /// The job's state while it runs: the inputs and where the result goes.
 struct Job {
-  const RobotModel& start;
+  const RobotModel& start;    ///< the baseline's model: the start joints with the tool point fitted
+  const RobotModel& nominal;  ///< the job's start model as given (the tool point given): the prior's centre
   DatasetBase& dataset;
   const CalibrationOptions& options;
   CalibrationWorkspaceBase& workspace;
@@ -397,6 +398,7 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     lm.params = LmParamSet::custom;
   }
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
+  lm.prior = detail::job_lm_prior(o, job.nominal);
   if (o.base_known || o.tool_known) {  // the base / the tool points stay where the options put them
     if (o.base_known) base = &o.known_base_to_tracker;
     lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) & ~known_params_mask(o);
@@ -794,7 +796,7 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
   r->baseline.test = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->test());
   // The stages start from the baseline's geometry: the start joints with the fitted tool point
   // (ABC / GSA move lengths only and would otherwise keep the tool guess's error).
-  Job job{r->baseline.model, *dataset, options, *workspace, *r, observer};
+  Job job{r->baseline.model, start, *dataset, options, *workspace, *r, observer};
   const StagePlan plan = plan_for(options.method);
   if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, plan.hybrid)) != Status::ok) return status;
   if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, plan.hybrid)) != Status::ok) return status;
@@ -981,7 +983,7 @@ Status run_job(const RobotModel& start, DatasetBase* dataset, const CalibrationO
     if (status != Status::ok) return status;
     ++round;
     report_phase(observer, CalibrationPhase::blunder_test, false);
-    verdict = search_blunders(dataset, options, *workspace, *result, &tested, &summary);
+    verdict = search_blunders(dataset, options, start, *workspace, *result, &tested, &summary);
     report_phase(observer, CalibrationPhase::blunder_test, true);
     if (verdict == BlunderVerdict::not_searched || same_indices(tested, aside) || undecided) break;
     if (round < kMaxRounds) {
