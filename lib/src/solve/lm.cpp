@@ -196,6 +196,7 @@ void clear_result(LmResult* result) {
 
 /// Everything one calibration works with.
 struct Run {
+  const RobotModel& start_model;  ///< where the fit started: a parameter found undetermined goes back there
   const LmOptions& options;
   Span<const Sample> samples;
   LmWorkspace* ws;
@@ -328,6 +329,28 @@ inline Status analyse(Run* run, IdentifiabilityOutput output) {
   }
 }
 
+/// Puts the model parameters and joint-term coefficients of `lost` in *model back to their
+/// values in `start`; true when one changed. (The base is an increment: it has no start value.)
+bool put_back(const RobotModel& start, ParamMask lost, RobotModel* model) {
+  if (lost == 0) return false;
+  ModelParams params = to_params(*model);
+  const ModelParams start_params = to_params(start);
+  bool changed = false;
+  for (int i = 0; i < kModelParamCount; ++i) {
+    if (!mask_has(lost, i) || params(i) == start_params(i)) continue;
+    params(i) = start_params(i);
+    changed = true;
+  }
+  if (changed) set_model_params(params, model);
+  for (int t = 0; t < model->compliance.term_count; ++t) {
+    double& coefficient = model->compliance.coefficient[t];
+    if (!mask_has(lost, compliance_param_index(t)) || coefficient == start.compliance.coefficient[t]) continue;
+    coefficient = start.compliance.coefficient[t];
+    changed = true;
+  }
+  return changed;
+}
+
 /// Copies the trial point's normal equations into *current, whose target blocks keep their
 /// storage: the trial's memory is the analysis's next.
 // Not inlined: its copies would widen calibrate_lm's frame, on the firmware's deepest path.
@@ -359,6 +382,11 @@ Status move_to(Run* run, const Point& trial, bool* kept_changed) {
     run->reanalysed = true;
     status = analyse(run, IdentifiabilityOutput::report);
     *kept_changed = run->kept != before;
+    // A parameter the first step moved and this analysis drops is not determined: back to its
+    // start value (else it would stay wherever that step put it), and the sums there.
+    if (status == Status::ok && put_back(run->start_model, before & ~run->kept, &run->point.model)) {
+      status = accumulate(*run, run->point, run->current);
+    }
   }
   if (status == Status::ok && update_prior_variance(run)) *kept_changed = true;  // the accepted point's variance
   return status;
@@ -576,7 +604,8 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   const double joint_noise_ratio =
       options.joint_sigma_rad > 0.0 ? options.joint_sigma_rad / options.position_sigma_m : 0.0;
   workspace->point = Point{start_model, RigidTransform{}, PointLoss{0.0, joint_noise_ratio}};
-  Run run{options,
+  Run run{start_model,
+          options,
           samples,
           workspace,
           result,

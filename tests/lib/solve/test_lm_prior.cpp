@@ -48,9 +48,9 @@ double fresh_mae_m(const LmResult& result, const RobotModel& truth, Span<const S
   const RigidTransform base = test::example_base_to_tracker();
   double sum_m = 0.0;
   for (const Sample& s : fresh) {
-    sum_m += (result.base_to_tracker.apply(fk_tool_point(result.model, s.q_rad)) -
-              base.apply(fk_tool_point(truth, s.q_rad)))
-                 .norm();
+    sum_m +=
+        (result.base_to_tracker.apply(fk_tool_point(result.model, s.q_rad)) - base.apply(fk_tool_point(truth, s.q_rad)))
+            .norm();
   }
   return sum_m / static_cast<double>(fresh.size());
 }
