@@ -31,7 +31,7 @@ TEST(PriorCli, AGridAtOneToolOrientationKeepsItsDhNearNominal) {
   test::fill_narrow_wrist_dataset(truth, 300, 0.3e-3, &random, &grid);
   const std::string samples = dir.write("grid.csv", textio::format_samples_csv(grid.samples()));
   const std::vector<std::string> common = {"--samples", samples, "--robot-model", "ur10", "--tool", "0,0,0.12",
-                                           "--method", "lm", "--quiet"};
+                                           "--method",  "lm",    "--quiet"};
   std::vector<std::string> plain = common;
   for (const char* o : {"--prior", "off", "--out"}) plain.push_back(o);
   plain.push_back(dir.path() + "/plain.json");

@@ -241,6 +241,35 @@ struct JointTermHoldout {
   bool passed = false;  ///< every fit finished and the improvement exceeds kHoldoutImprovementT improvement_se_m
 };
 
+/// A harmonic is admitted only when the training poses turn its joint through at least this
+/// share of its period (2 pi / order): over less, it is a polynomial the geometry holds too, and
+/// nothing ties it down beyond the poses' range [-].
+inline constexpr double kHarmonicMinPeriodShare = 0.75;
+/// A blocked fold holds out the training poses at one end of one joint's range: this share of
+/// them, the lowest or the highest readings of that joint [-].
+inline constexpr double kBlockedFoldShare = 0.2;
+
+/// A joint-term stage's added terms on poses beyond the training poses' joint ranges (blocked
+/// folds, docs/compliance.md): for each joint, its lowest and its highest kBlockedFoldShare of
+/// the training poses are held out in turn and predicted by the fit of the others (one
+/// Gauss-Newton step from the stage's fit), with the stage's terms and without the added ones.
+/// A joint whose ends its own added terms predict worse loses them; the stage keeps the previous
+/// fit when, over every joint's ends, the terms predict worse than without them.
+struct BlockedFoldCheck {
+  bool checked = false;  ///< the stage kept an added term, and the folds were predicted
+  /// Mean 3-D error of joint j's two end folds, each predicted by the fit of the others with the
+  /// stage's terms [m] (0 when not checked).
+  double with_terms_mae_m[kJointCount] = {};
+  double without_terms_mae_m[kJointCount] = {};  ///< the same without the added terms [m]
+  double with_all_mae_m = 0.0;                   ///< over every joint's ends, with the terms [m]
+  double without_all_mae_m = 0.0;                ///< the same without them [m]
+  /// Harmonics not admitted because the training poses turn their joint through less than
+  /// kHarmonicMinPeriodShare of their period.
+  ParamMask coverage_rejected = 0;
+  ParamMask fold_rejected = 0;  ///< added terms of joints whose end folds they predicted worse
+  bool passed = true;           ///< over every joint's ends, the kept terms predict no worse
+};
+
 /// What one solver stage produced.
 struct CalibrationStage {
   CalibrationSolver solver = CalibrationSolver::lm;  ///< which solver ran
@@ -252,7 +281,8 @@ struct CalibrationStage {
   /// new terms at their start values, and `lm` its details.
   bool rigid_kept = false;
   JointTermHoldout
-      holdout;  ///< a joint-term stage on a small set: its terms on left-out poses (rigid_kept when failed)
+      holdout;             ///< a joint-term stage on a small set: its terms on left-out poses (rigid_kept when failed)
+  BlockedFoldCheck folds;  ///< a joint-term stage: its terms beyond the training poses' joint ranges
   CalibrationParams params = CalibrationParams::paper;  ///< parameters it could move
   Status status = Status::ok;                           ///< ok, or not_converged (LM's last point kept)
   RobotModel model;                                     ///< calibrated geometry
@@ -266,6 +296,8 @@ struct CalibrationStage {
   ErrorStats train;            ///< errors on the training samples [m]
   ErrorStats test;             ///< errors on the test samples [m]
   Span<const double> trace_m;  ///< best cost (ABC/GSA: MAE, LM: RMS) per iteration [m]; views the workspace
+  ParamMask estimated = 0;     ///< LM: the parameters it estimated (its kept set)
+  double residual_sigma_m = 0.0;  ///< LM: its residual sigma per axis (LmResult::residual_sigma_m) [m]
 };
 
 /// Stages a job runs at most ('all': GSA, ABC, LM, then LM+compliance when enabled, and

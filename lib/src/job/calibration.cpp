@@ -12,14 +12,20 @@
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/model/spanning_subset.hpp"
+#include "job/blocked_folds.hpp"
 #include "job/blunder_search.hpp"
 
 namespace hivecal {
 namespace {
 
+using detail::blocked_fold_errors;
 using detail::blunder_limit;
 using detail::blunder_test_loss;
+using detail::FoldErrors;
+using detail::FoldFit;
+using detail::harmonics_short_of_their_period;
 using detail::index_span;
+using detail::job_lm_prior;
 using detail::keep_common;
 using detail::same_indices;
 using detail::screen;
@@ -546,6 +552,8 @@ void lm_stage(Job& job, Status status, bool refines_previous, bool compliance, T
   stage.iterations = static_cast<std::size_t>(r.lm.iterations);
   stage.best_cost_m = r.lm.rms_m;
   stage.trace_m = trace.values();
+  stage.estimated = r.lm.identifiability.kept_mask;
+  stage.residual_sigma_m = r.lm.residual_sigma_m;
 }
 
 /// LM from the start geometry, or (hybrid) from the previous stage's geometry and base, with
@@ -608,6 +616,8 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   stage.iterations = previous.iterations;
   stage.best_cost_m = previous.best_cost_m;
   stage.trace_m = previous.trace_m;
+  stage.estimated = previous.estimated;
+  stage.residual_sigma_m = previous.residual_sigma_m;
   return Status::ok;
 }
 
@@ -666,6 +676,127 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   return holdout;
 }
 
+/// The fit a joint-term stage adds its terms to (the previous stage's), for the blocked folds.
+struct PreviousFit {
+  std::size_t stage = 0;    ///< its slot
+  ParamMask estimated = 0;  ///< what it estimated
+  double sigma_m = 0.0;     ///< its residual sigma per axis [m]
+};
+
+/// Two fits' held-out errors summed over some folds: their sums, sums of squares and count.
+struct FoldComparison {
+  double with_m = 0.0;      ///< sum of the errors with the terms [m]
+  double without_m = 0.0;   ///< the same without them [m]
+  double with_m2 = 0.0;     ///< sum of the squared errors with the terms [m^2]
+  double without_m2 = 0.0;  ///< the same without them [m^2]
+  std::size_t count = 0;    ///< samples [-]
+  bool unsolved = false;    ///< a fold only the fit without the terms could make
+
+  /// The terms predict these folds worse by more than one standard error of the difference of
+  /// the two mean errors (each mean's variance from its errors' scatter), or not at all.
+  bool worse() const {
+    if (unsolved) return true;
+    if (count < 2) return false;
+    const double n = static_cast<double>(count);
+    const double with_mean_m = with_m / n;
+    const double without_mean_m = without_m / n;
+    const double variance_m2 = (std::fmax(0.0, with_m2 / n - with_mean_m * with_mean_m) +
+                                std::fmax(0.0, without_m2 / n - without_mean_m * without_mean_m)) /
+                               (n - 1.0);
+    return with_mean_m - without_mean_m > std::sqrt(variance_m2);
+  }
+  /// Adds joint `joint`'s two ends, over the folds `without` could make.
+  void add(const FoldErrors& with, const FoldErrors& without, int joint) {
+    for (int end = 0; end < 2; ++end) {
+      if (!without.solved[joint][end]) continue;
+      if (!with.solved[joint][end]) {
+        unsolved = true;
+        continue;
+      }
+      with_m += with.sum_m[joint][end];
+      without_m += without.sum_m[joint][end];
+      with_m2 += with.squares_m2[joint][end];
+      without_m2 += without.squares_m2[joint][end];
+      count += with.count[joint][end];
+    }
+  }
+  void add(const FoldComparison& other) {
+    with_m += other.with_m;
+    without_m += other.without_m;
+    with_m2 += other.with_m2;
+    without_m2 += other.without_m2;
+    count += other.count;
+    unsolved = unsolved || other.unsolved;
+  }
+};
+
+/// The added terms of fit.reference deflecting joint `joint` (0-based).
+ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint) {
+  ParamMask mask = 0;
+  for (int t = 0; t < reference.compliance.term_count; ++t) {
+    if (reference.compliance.terms[t].joint == joint) mask |= param_bit(compliance_param_index(t));
+  }
+  return mask & terms;
+}
+
+/// The blocked folds of a joint-term stage (BlockedFoldCheck): r.lm's fit against the previous
+/// fit's on each joint's range ends; a joint whose ends its own kept added terms predict worse
+/// (or not at all) loses them and the stage is fitted again, up to kMaxFoldRounds checks (a
+/// last one that still rejects terms fails the stage); *folds gets the last comparison and
+/// whether the kept terms pass over every joint's ends.
+[[gnu::noinline]] Status admit_for_the_workspace(Job& job, LmFit* fit, const PreviousFit& previous, ParamMask new_terms,
+                                                 const LmFitReport& report, BlockedFoldCheck* folds) {
+  constexpr int kMaxFoldRounds = 3;
+  CalibrationResult& r = job.result;
+  const PointLoss loss = blunder_test_loss(job.options);
+  const LmPrior prior = job_lm_prior(job.options, job.nominal);
+  const CalibrationStage& before = r.stages[previous.stage];
+  FoldErrors without;
+  bool without_made = false;
+  Status status = Status::ok;
+  for (int round = 0; (r.lm.identifiability.kept_mask & new_terms) != 0; ++round) {
+    if (!without_made) {
+      const FoldFit fit_without{&before.model, &before.base_to_tracker, previous.estimated, prior,
+                                previous.sigma_m * previous.sigma_m};
+      status = blocked_fold_errors(&job.dataset, fit_without, loss, job.workspace, &without);
+      if (status != Status::ok) return status;
+      without_made = true;
+    }
+    FoldErrors with;
+    const FoldFit fit_with{&r.lm.model, &r.lm.base_to_tracker, r.lm.identifiability.kept_mask, prior,
+                           r.lm.residual_sigma_m * r.lm.residual_sigma_m};
+    status = blocked_fold_errors(&job.dataset, fit_with, loss, job.workspace, &with);
+    if (status != Status::ok) return status;
+    *folds = BlockedFoldCheck{true, {}, {}, 0.0, 0.0, folds->coverage_rejected, folds->fold_rejected, true};
+    FoldComparison all;
+    ParamMask rejected = 0;
+    for (int joint = 0; joint < kJointCount; ++joint) {
+      FoldComparison ends;
+      ends.add(with, without, joint);
+      const double n = static_cast<double>(ends.count);
+      folds->with_terms_mae_m[joint] = ends.count > 0 ? ends.with_m / n : 0.0;
+      folds->without_terms_mae_m[joint] = ends.count > 0 ? ends.without_m / n : 0.0;
+      all.add(ends);
+      const ParamMask own = terms_of_joint(*fit->reference, r.lm.identifiability.kept_mask & new_terms, joint);
+      if (own != 0 && ends.worse()) rejected |= own;
+    }
+    const double n = static_cast<double>(all.count);
+    folds->with_all_mae_m = all.count > 0 ? all.with_m / n : 0.0;
+    folds->without_all_mae_m = all.count > 0 ? all.without_m / n : 0.0;
+    folds->passed = !all.worse();
+    if (rejected == 0) break;
+    folds->fold_rejected |= rejected;
+    if (round + 1 == kMaxFoldRounds) {  // still terms that do not hold beyond their joint's range
+      folds->passed = false;
+      break;
+    }
+    fit->fixed_terms |= rejected;
+    status = fit_lm(job, *fit, report);
+    if (status != Status::ok && status != Status::not_converged) return status;
+  }
+  return status;
+}
+
 /// The last rigid LM stage before slot r.stage_count: what every joint-term stage starts from.
 const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
   std::size_t k = r.stage_count - 1;
@@ -700,16 +831,28 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
     const int gravity_terms = r.stages[r.stage_count - 1].model.compliance.term_count;
     fit.fixed_terms = compliance_params_mask(gravity_terms) & ~r.lm.identifiability.kept_mask;
   }
-  const Status status = fit_lm(job, fit, LmFitReport{&trace, job.observer, pruned});
-  if (status != Status::ok && status != Status::not_converged) return status;
   // The terms this stage adds: every one after the rigid fit, the harmonics after LM+compliance.
   const ParamMask new_terms =
       after_compliance ? harmonic_params_mask(reference) : compliance_params_mask(reference.compliance.term_count);
-  if ((r.lm.identifiability.kept_mask & new_terms) == 0) return keep_previous_fit(job, pruned);
   const std::size_t index = r.stage_count;
+  // The previous fit: the blocked folds' reference.
+  const PreviousFit previous{index - 1, r.stages[index - 1].estimated, r.stages[index - 1].residual_sigma_m};
+  BlockedFoldCheck folds;
+  folds.coverage_rejected = harmonics_short_of_their_period(reference, job.dataset.train()) & new_terms;
+  fit.fixed_terms |= folds.coverage_rejected;
+  Status status = fit_lm(job, fit, LmFitReport{&trace, job.observer, pruned});
+  if (status != Status::ok && status != Status::not_converged) return status;
+  status = admit_for_the_workspace(job, &fit, previous, new_terms, LmFitReport{&trace, job.observer, pruned}, &folds);
+  if (status != Status::ok && status != Status::not_converged) return status;
+  if ((r.lm.identifiability.kept_mask & new_terms) == 0 || !folds.passed) {
+    const Status kept = keep_previous_fit(job, pruned);
+    r.stages[index].folds = folds;
+    return kept;
+  }
   const JointTermHoldout holdout = check_on_left_out_poses(job, fit, *pruned, new_terms);
-  if (!holdout.checked) {  // a larger set: the significance test decides
+  if (!holdout.checked) {  // a larger set: the significance test and the blocked folds decide
     lm_stage(job, status, true, true, trace);
+    r.stages[index].folds = folds;
     return Status::ok;
   }
   Status again = Status::ok;
@@ -721,6 +864,7 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
     again = keep_previous_fit(job, pruned);
   }
   r.stages[index].holdout = holdout;
+  r.stages[index].folds = folds;
   return again;
 }
 
