@@ -434,6 +434,13 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   // Predicted decrease of sum w|r + J d|^2: d^T S d + 2 lambda |d_s|^2 (scaled units), before
   // the trial's normal equations take the scratch that holds the step.
   const double predicted = model_decrease + 2.0 * run->damping * scaled_step.squaredNorm();
+  if (predicted <= options.cost_tolerance * current_loss_m2) {
+    // Not even the model promises a change the cost-change test would count: at the optimum up
+    // to rounding (a trial there is rejected, its damping raised, again and again, a pass each).
+    *stop = true;
+    *termination = LmTermination::cost_change;
+    return false;
+  }
   run->trial = run->ws->scratch.open_trial(run->trial_targets);
   const Status status = accumulate(*run, trial, run->trial);
   const double actual = current_loss_m2 - (run->trial->loss_sum_m2 + prior_cost(*run, trial));

@@ -140,6 +140,39 @@ TEST(LmPrior, NoToleranceIsLeastSquaresBitForBit) {
   EXPECT_EQ(s.result.prior_chi_square, 0.0);
 }
 
+/// Counts the iterations and the rejected trials since the last accepted one.
+class TrialCount final : public LmObserver {
+ public:
+  bool on_iteration(const LmIterationInfo& info) override {
+    trailing_rejections = info.accepted ? 0 : trailing_rejections + 1;
+    ++iterations;
+    return true;
+  }
+  int iterations = 0;           ///< iterations reported [-]
+  int trailing_rejections = 0;  ///< rejected trials after the last accepted one [-]
+};
+
+// At its optimum up to rounding a trial is rejected, the damping raised, and again, a pass over
+// the samples each: on a narrow-wrist grid of a UR5 with the prior 6 rejected trials ended the fit. A
+// step whose predicted decrease the cost-change test would not count is not tried.
+TEST(LmPrior, AStepThatPromisesNothingIsNotTried) {
+  Random random(6003);
+  RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, 1e-3, 1e-3);
+  truth.tool_m << 0.02, -0.015, 0.12;
+  RobotModel start = nominal_model(RobotType::ur5);
+  start.tool_m << 0.0, 0.0, 0.12;
+  auto& s = storage();
+  fill_narrow_wrist(truth, 300, 0.3e-3, &random, &s.train);
+  LmOptions options;
+  options.prior = LmPrior{&start, LmPriorTolerances{1e-3, 5e-3, 0.02}};
+  TrialCount count;
+  ASSERT_EQ(calibrate_lm(start, nullptr, s.train.samples(), options, &s.workspace, &s.result, nullptr, &count),
+            Status::ok);
+  EXPECT_EQ(s.result.termination, LmTermination::cost_change);
+  EXPECT_EQ(count.trailing_rejections, 0);
+  EXPECT_LE(count.iterations, 6);  // 11 before, 6 of them rejected trials at the end
+}
+
 TEST(LmPrior, SigmaOfEachKindIsItsTolerance) {
   RobotModel nominal = nominal_model(RobotType::ur5);
   const LmPrior prior{&nominal, LmPriorTolerances{1e-3, 5e-3, 0.02}};
