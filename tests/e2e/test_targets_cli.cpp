@@ -209,7 +209,7 @@ TEST(TargetsCli, TestPosesTheFitCannotPredictAreNotSetAside) {
   ASSERT_FALSE(dir.path().empty());
   static Dataset<16> written;
   written.clear();
-  Random random(4);
+  Random random(3);
   RobotModel truth = nominal_model(RobotType::ur5);
   truth.tool_m = Vec3(0.0, 0.0, 0.15);
   test::fill_with_unmodelled_effect(truth, test::example_base_to_tracker(), 8, &random, &written);

@@ -14,6 +14,7 @@
 #include "hivecal/model/spanning_subset.hpp"
 #include "job/blocked_folds.hpp"
 #include "job/blunder_search.hpp"
+#include "job/term_elimination.hpp"
 
 namespace hivecal {
 namespace {
@@ -27,6 +28,7 @@ using detail::harmonics_short_of_their_period;
 using detail::index_span;
 using detail::job_lm_prior;
 using detail::keep_common;
+using detail::linearised_term_fixes;
 using detail::same_indices;
 using detail::screen;
 using detail::search_blunders;
@@ -360,6 +362,9 @@ struct LmFit {
   /// Joint terms held at their start values: after LM+compliance, the gravity terms it did not
   /// keep (the harmonics' stage adds harmonics to that model, it does not reopen its choice).
   ParamMask fixed_terms = 0;
+  /// start_model is an earlier fit of this stage's terms (its coefficients kept, those of
+  /// fixed_terms put back to their start values): a refit takes a few iterations.
+  bool warm = false;
 };
 
 /// Where a fit reports: its trace, its observer (both may be null), the parameters fixed as
@@ -384,8 +389,15 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   TraceBase* trace = report.trace;
   ParamMask* pruned = report.pruned;
   RobotModel& from = job.workspace.lm_start();  // start_model is never this one: a stage's or the job's model
-  from = *fit.start_model;
-  if (compliance) from.compliance = reference.compliance;  // LM+compliance: the start terms on the fitted geometry
+  from = *fit.start_model;                      // a no-op when a warm start put it there already
+  // LM+compliance: the start terms on the fitted geometry (a warm start keeps its coefficients
+  // but those it now holds fixed).
+  if (compliance && !fit.warm) from.compliance = reference.compliance;
+  for (int t = 0; fit.warm && t < reference.compliance.term_count; ++t) {
+    if (mask_has(fit.fixed_terms, compliance_param_index(t))) {
+      from.compliance.coefficient[t] = reference.compliance.coefficient[t];
+    }
+  }
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
   LmOptions lm = o.lm;
@@ -419,6 +431,7 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   // after the significance test fixed tool_x (else they would stay at their start values).
   for (int axis = 0; axis < 3; ++axis) lm.other_target_tools |= mask_has(free_mask, tool_param_index(axis));
   Status status = Status::ok;
+  RigidTransform warm_base;  // the base a next attempt starts from
   *pruned = 0;
   bool geometry = r.geometry_tested;  // a joint-term stage: the rigid stage's; a rigid one decides below
   // Each attempt fixes one parameter at most: the geometry and the model's joint terms (not the
@@ -430,17 +443,39 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     status = calibrate_lm(from, base, fit.samples, lm, workspace, &r.lm, trace, report.observer);
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
-    bool again = fit.reset_moved && reset_dropped(reference, r.lm.identifiability, o.tool_known, &from);
+    // A next attempt starts where this one ended, with what it puts back at the reference values:
+    // a few iterations instead of a fit from the stage's start.
+    from = r.lm.model;
+    warm_base = r.lm.base_to_tracker;
+    base = &warm_base;
+    bool again = reset_dropped(reference, r.lm.identifiability, o.tool_known, &from) && fit.reset_moved;
     const JointTermLevels levels =
         joint_term_levels(reference, job.options.compliance.significance_t, r.lm.residual_dof);
     int weakest = implausible_joint_term(r.lm);
     if (attempt == 0 && !compliance) geometry = tests_geometry(o, fit.samples, r.lm, &r);
     if (weakest < 0) weakest = least_significant(reference, r.lm, fit.significance_t, levels, geometry);
-    if (weakest >= 0) {
-      *pruned |= param_bit(weakest);
+    ParamMask fixes = weakest >= 0 ? param_bit(weakest) : ParamMask{0};
+    if (compliance && weakest >= kRigidParamCount) {
+      // The terms the test would fix after this one, each after a refit: on the linearised
+      // fit at once (the refit below then takes them all).
+      const bool other_tools = (lm.other_target_tools || mask_has(r.lm.identifiability.kept_mask, tool_param_index(0)));
+      const FoldFit fitted{&r.lm.model, &r.lm.base_to_tracker,
+                           r.lm.identifiability.kept_mask | (other_tools ? kOtherTargetTools : ParamMask{0}), lm.prior,
+                           r.lm.residual_sigma_m * r.lm.residual_sigma_m};
+      ParamMask linearised = 0;
+      if (linearised_term_fixes(fitted, reference, fit.samples, blunder_test_loss(o), weakest, fit.significance_t,
+                                o.compliance.significance_t, r.lm.residual_sigma_m, r.lm.residual_dof, job.workspace,
+                                &linearised) == Status::ok) {
+        fixes |= linearised;
+      }
+    }
+    if (fixes != 0) {
+      *pruned |= fixes;
       lm.params = LmParamSet::custom;
       lm.custom_mask = free_mask & ~*pruned;
-      reset_param(reference, weakest, o.tool_known, &from);
+      for (int i = 0; i < kFullParamCount; ++i) {
+        if (mask_has(fixes, i)) reset_param(reference, i, o.tool_known, &from);
+      }
       again = true;
     }
     if (!again) break;
@@ -791,7 +826,14 @@ ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint
       break;
     }
     fit->fixed_terms |= rejected;
-    status = fit_lm(job, *fit, report);
+    // Fitted again from this fit (the workspace's start model; the base copied: LM clears r.lm).
+    LmFit again = *fit;
+    job.workspace.lm_start() = r.lm.model;
+    const RigidTransform warm_base = r.lm.base_to_tracker;
+    again.start_model = &job.workspace.lm_start();
+    again.base = &warm_base;
+    again.warm = true;
+    status = fit_lm(job, again, report);
     if (status != Status::ok && status != Status::not_converged) return status;
   }
   return status;

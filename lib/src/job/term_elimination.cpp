@@ -1,0 +1,115 @@
+// The joint-term test's refits in closed form (term_elimination.hpp).
+#include "job/term_elimination.hpp"
+
+#include <cmath>
+
+#include "hivecal/model/full_params.hpp"
+#include "solve/kept_cholesky.hpp"
+
+namespace hivecal::detail {
+namespace {
+
+/// Value of full-model parameter `index` (geometry or joint-term coefficient) of `model`.
+double value_of(const RobotModel& model, int index) {
+  if (index >= kRigidParamCount) return model.compliance.coefficient[index - kRigidParamCount];
+  return index < kModelParamCount ? to_params(model)(index) : 0.0;  // the base: an increment, 0
+}
+
+/// The next joint term to fix among `candidates`: the largest coefficient beyond
+/// kMaxJointTermCoefficient, else the least significant below its level; -1 when none is.
+int next_term(const RobotModel& reference, const FullParams& value, const FullParams& delta, const FullParams& variance,
+              ParamMask candidates, double significance_t, double compliance_t, int dof) {
+  int worst = -1;
+  double worst_abs = kMaxJointTermCoefficient;
+  for (int t = 0; t < reference.compliance.term_count; ++t) {
+    const int i = compliance_param_index(t);
+    if (mask_has(candidates, i) && std::fabs(value(i)) > worst_abs) {
+      worst_abs = std::fabs(value(i));
+      worst = i;
+    }
+  }
+  if (worst >= 0) return worst;
+  double weakest_ratio = 1.0;
+  for (int t = 0; t < reference.compliance.term_count; ++t) {
+    const int i = compliance_param_index(t);
+    if (!mask_has(candidates, i) || !(variance(i) > 0.0)) continue;
+    const double level = parameter_significance_level(reference, i, significance_t, compliance_t, dof);
+    const double ratio = std::fabs(delta(i)) / std::sqrt(variance(i)) / level;  // below 1: not significant
+    if (ratio < weakest_ratio) {
+      weakest_ratio = ratio;
+      worst = i;
+    }
+  }
+  return worst;
+}
+
+}  // namespace
+
+Status linearised_term_fixes(const FoldFit& fit, const RobotModel& reference, Span<const Sample> samples,
+                             const PointLoss& loss, int first, double significance_t, double compliance_t,
+                             double sigma_m, int dof, CalibrationWorkspaceBase& workspace, ParamMask* fixed) {
+  *fixed = param_bit(first);
+  const ParamMask params = fit.estimated & ~kOtherTargetTools;
+  ReliabilityWorkspace* ws = workspace.open_reliability();
+  ws->normal.targets = Span<TargetBlock>(ws->blocks, kMaxTargets - 1);  // the other tool points, eliminated
+  Status status = accumulate_normal_equations(*fit.model, *fit.base, samples, loss, &ws->normal, fit.estimated);
+  if (status != Status::ok) {
+    workspace.close();
+    return status;
+  }
+  NormalMatrix& jtwj = ws->normal.jtwj;
+  for (int i = 0; i < kModelParamCount; ++i) {
+    const double tolerance = lm_prior_sigma(fit.prior, i);
+    if (mask_has(params, i) && tolerance > 0.0) jtwj(i, i) += fit.variance_m2 / (tolerance * tolerance);
+  }
+  FullParams scale;
+  scale_normal_matrix(jtwj, params, 1.0, &ws->scaled, &scale);
+  if (!cholesky_factor(ws->scaled, params, &ws->factor)) {
+    workspace.close();
+    return Status::singular_system;
+  }
+  NormalMatrix& covariance = ws->scaled;  // (J^T W J + P)^-1, unscaled below [unit^2/m^2]
+  cholesky_inverse(ws->factor, &jtwj, &covariance);
+  int index[kFullParamCount];
+  const int count = mask_indices(params, index);
+  for (int a = 0; a < count; ++a) {
+    for (int b = 0; b < count; ++b) covariance(index[a], index[b]) *= scale(index[a]) * scale(index[b]);
+  }
+  FullParams value = FullParams::Zero();
+  FullParams delta = FullParams::Zero();
+  for (int k = 0; k < count; ++k) {
+    value(index[k]) = value_of(*fit.model, index[k]);
+    delta(index[k]) = value(index[k]) - value_of(reference, index[k]);
+  }
+  double squares_m2 = sigma_m * sigma_m * static_cast<double>(dof);
+  ParamMask candidates = params & kComplianceParamsMask;
+  for (int k = first; k >= 0;) {
+    // Fixing k at its reference: the others move by -C[:,k] delta_k / C_kk, their covariance
+    // loses C[:,k] C[k,:] / C_kk, the residual sum gains delta_k^2 / C_kk.
+    const double c_kk = covariance(k, k);
+    if (!(c_kk > 0.0)) break;
+    const double shift = delta(k) / c_kk;
+    squares_m2 += delta(k) * shift;
+    FullParams column = FullParams::Zero();
+    for (int a = 0; a < count; ++a) column(index[a]) = covariance(index[a], k);
+    for (int a = 0; a < count; ++a) {
+      delta(index[a]) -= column(index[a]) * shift;
+      value(index[a]) -= column(index[a]) * shift;
+    }
+    for (int a = 0; a < count; ++a) {
+      const double ratio = column(index[a]) / c_kk;
+      for (int b = 0; b < count; ++b) covariance(index[a], index[b]) -= ratio * column(index[b]);
+    }
+    candidates &= ~param_bit(k);
+    ++dof;
+    const double variance_m2 = dof > 0 ? squares_m2 / static_cast<double>(dof) : 0.0;
+    FullParams variance = FullParams::Zero();
+    for (int a = 0; a < count; ++a) variance(index[a]) = variance_m2 * covariance(index[a], index[a]);
+    k = next_term(reference, value, delta, variance, candidates, significance_t, compliance_t, dof);
+    if (k >= 0) *fixed |= param_bit(k);
+  }
+  workspace.close();
+  return Status::ok;
+}
+
+}  // namespace hivecal::detail
