@@ -270,6 +270,16 @@ struct BlockedFoldCheck {
   bool passed = true;           ///< over every joint's ends, the kept terms predict no worse
 };
 
+/// A fit's held-out errors on the blocked folds (BlockedFoldCheck), each joint's two ends. No
+/// member initializers (a workspace holds one: its constructor stays small in flash): made
+/// zero by value-initialization, `BlockedFoldErrors{}`.
+struct BlockedFoldErrors {
+  double sum_m[kJointCount][2];       ///< sum of the 3-D errors of the fold's samples [m]
+  double squares_m2[kJointCount][2];  ///< sum of their squares [m^2]
+  std::size_t count[kJointCount][2];  ///< samples of the fold [-]
+  bool solved[kJointCount][2];        ///< the fit of the others could be made (a positive definite system)
+};
+
 /// What one solver stage produced.
 struct CalibrationStage {
   CalibrationSolver solver = CalibrationSolver::lm;  ///< which solver ran
@@ -471,6 +481,9 @@ class CalibrationWorkspaceBase {
     Paper6CostBase* cost = nullptr;  ///< paper-6 cost with room for the training samples
     AbcSolverBase* abc = nullptr;    ///< set by open_abc()
     GsaSolverBase* gsa = nullptr;    ///< set by open_gsa()
+    /// The GSA stage (calibrate_paper6_gsa), set with `gsa`: a workspace without GSA never
+    /// references its code (the firmware's flash).
+    decltype(&calibrate_paper6_gsa) run_gsa = nullptr;
   };
   /// Ends any open phase, builds a cost and an ABC solver in the arena.
   virtual PopulationPhase open_abc() = 0;
@@ -506,6 +519,9 @@ class CalibrationWorkspaceBase {
   /// significant parameters put back): in the workspace, not on the stack under LM (a model
   /// with its compliance is 584 B, and the firmware's stack peak is inside LM).
   RobotModel& lm_start() { return lm_start_; }
+  /// Where a joint-term stage keeps the previous fit's errors on the blocked folds while it fits
+  /// again (BlockedFoldCheck): not on the stack under LM.
+  BlockedFoldErrors& previous_fold_errors() { return previous_fold_errors_; }
 
  protected:
   CalibrationWorkspaceBase() = default;
@@ -513,6 +529,7 @@ class CalibrationWorkspaceBase {
 
  private:
   RobotModel lm_start_;
+  BlockedFoldErrors previous_fold_errors_;
   std::uint32_t snoop_moves_[kMaxCalibrationOutliers][2] = {};
 };
 
@@ -618,7 +635,7 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
       return PopulationPhase{};  // no room for GSA
     } else {
       gsa_ = new (arena_) GsaPhase();
-      return PopulationPhase{&gsa_->cost, nullptr, &gsa_->solver};
+      return PopulationPhase{&gsa_->cost, nullptr, &gsa_->solver, &calibrate_paper6_gsa};
     }
   }
   LmWorkspace* open_lm() override {
@@ -754,7 +771,7 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
     close();
     if (arena_ == nullptr) return PopulationPhase{};
     gsa_ = new (arena_) Gsa();
-    return PopulationPhase{open_cost(sizeof(Gsa)), nullptr, gsa_};
+    return PopulationPhase{open_cost(sizeof(Gsa)), nullptr, gsa_, &calibrate_paper6_gsa};
   }
   LmWorkspace* open_lm() override {
     close();

@@ -65,41 +65,39 @@ std::size_t gather(DatasetBase* dataset, std::size_t first, std::size_t end, boo
   return front ? i - first : end - i;
 }
 
-/// The prior's weight of parameter i at the fit's variance factor [m^2/unit^2].
-double prior_weight(const FoldFit& fit, int i) {
-  const double sigma = lm_prior_sigma(fit.prior, i);
-  return sigma > 0.0 ? fit.variance_m2 / (sigma * sigma) : 0.0;
-}
-
 /// One fold: its normal equations `fold` (at the fit, in `ws->normal`) taken from the whole
-/// set's (`ws->scaled`, `whole_gradient`), the fit of the others by one Gauss-Newton step with
-/// the prior, and the fold's samples predicted by it; false when that system is not positive
-/// definite (the others do not determine the estimated parameters).
-bool predict_fold(const FoldFit& fit, ParamMask columns, const FullParams& whole_gradient, Span<const Sample> fold,
-                  ReliabilityWorkspace* ws, RobotModel* moved, double* sum_m, double* squares_m2) {
+/// set's with the prior (`ws->scaled`, `whole_gradient`), the fit of the others by one
+/// Gauss-Newton step, and the fold's samples predicted by it; false when that system is not
+/// positive definite (the others do not determine the estimated parameters).
+// Not inlined: its vectors stay off the stack while the normal equations are summed (the
+// firmware's stack budget).
+[[gnu::noinline]] bool predict_fold(const FoldFit& fit, ParamMask columns, const FullParams& whole_gradient,
+                                    Span<const Sample> fold, ReliabilityWorkspace* ws, RobotModel* moved, double* sum_m,
+                                    double* squares_m2) {
   NormalMatrix& system = ws->normal.jtwj;  // the others' normal matrix, in place of the fold's
   int index[kFullParamCount];
   const int count = mask_indices(columns, index);
-  FullParams gradient = whole_gradient - ws->normal.jtwr;
-  const ModelParams p = to_params(*fit.model);
-  const ModelParams nominal = fit.prior.nominal != nullptr ? to_params(*fit.prior.nominal) : p;
   for (int jb = 0; jb < count; ++jb) {
     const int b = index[jb];
     for (int ja = 0; ja < count; ++ja) system(index[ja], b) = ws->scaled(index[ja], b) - system(index[ja], b);
-    if (b < kModelParamCount) {
-      system(b, b) += prior_weight(fit, b);
-      gradient(b) += prior_weight(fit, b) * (p(b) - nominal(b));
-    }
   }
   FullParams scale;
   scale_kept_block(system, columns, &system, &scale);
   if (!cholesky_factor(system, columns, &ws->factor)) return false;
-  FullParams rhs = FullParams::Zero();
-  for (int k = 0; k < count; ++k) rhs(index[k]) = -gradient(index[k]) * scale(index[k]);
+  FullParams rhs;  // the others' gradient, scaled; then the step
+  rhs.setZero();
+  for (int k = 0; k < count; ++k) {
+    const int i = index[k];
+    rhs(i) = (ws->normal.jtwr(i) - whole_gradient(i)) * scale(i);
+  }
   FullParams step;
   cholesky_solve(ws->factor, rhs, &step);
-  for (int i = 0; i < kFullParamCount; ++i) step(i) = mask_has(columns, i) ? step(i) * scale(i) : 0.0;
-  if (!all_finite(step)) return false;
+  bool finite = true;
+  for (int i = 0; i < kFullParamCount; ++i) {
+    step(i) = mask_has(columns, i) ? step(i) * scale(i) : 0.0;
+    finite = finite && math::is_finite(step(i));
+  }
+  if (!finite) return false;
   *moved = *fit.model;
   RigidTransform base = *fit.base;
   apply_full_increment(step, moved, &base);
@@ -114,6 +112,22 @@ bool predict_fold(const FoldFit& fit, ParamMask columns, const FullParams& whole
 }
 
 }  // namespace
+
+Status fit_normal_equations(const FoldFit& fit, Span<const Sample> samples, const PointLoss& loss, ParamMask columns,
+                            NormalEquations* out) {
+  const Status status = accumulate_normal_equations(*fit.model, *fit.base, samples, loss, out, columns);
+  if (status != Status::ok || fit.prior.nominal == nullptr) return status;
+  const ModelParams p = to_params(*fit.model);
+  const ModelParams nominal = to_params(*fit.prior.nominal);
+  for (int i = 0; i < kModelParamCount; ++i) {
+    const double sigma = lm_prior_sigma(fit.prior, i);
+    if (!mask_has(columns, i) || !(sigma > 0.0)) continue;
+    const double weight = fit.variance_m2 / (sigma * sigma);
+    out->jtwj(i, i) += weight;
+    out->jtwr(i) += weight * (p(i) - nominal(i));
+  }
+  return Status::ok;
+}
 
 ParamMask harmonics_short_of_their_period(const RobotModel& model, Span<const Sample> train) {
   ParamMask short_of = 0;
@@ -143,9 +157,9 @@ Status blocked_fold_errors(DatasetBase* dataset, const FoldFit& fit, const Point
   const ParamMask columns = fit.estimated & ~kOtherTargetTools;
   ReliabilityWorkspace* ws = workspace.open_reliability();
   RobotModel& moved = workspace.lm_start();  // a fold's fit (not on the stack)
-  Status status = accumulate_normal_equations(*fit.model, *fit.base, dataset->train(), loss, &ws->normal, columns);
-  const FullParams whole_gradient = ws->normal.jtwr;
-  ws->scaled = ws->normal.jtwj;
+  Status status = fit_normal_equations(fit, dataset->train(), loss, columns, &ws->normal);
+  const FullParams whole_gradient = ws->normal.jtwr;  // with the prior's pull
+  ws->scaled = ws->normal.jtwj;                       // with the prior's weights
   for (int joint = 0; status == Status::ok && joint < kJointCount; ++joint) {
     for (int end = 0; end < 2 && status == Status::ok; ++end) {
       const bool low = end == 0;

@@ -16,12 +16,14 @@ struct FoldFit {
 };
 
 /// Each joint's two end folds' held-out errors under a fit.
-struct FoldErrors {
-  double sum_m[kJointCount][2] = {};       ///< sum of the 3-D errors of the fold's samples [m]
-  double squares_m2[kJointCount][2] = {};  ///< sum of their squares [m^2]
-  std::size_t count[kJointCount][2] = {};  ///< samples of the fold [-]
-  bool solved[kJointCount][2] = {};        ///< the fit of the others could be made (a positive definite system)
-};
+using FoldErrors = BlockedFoldErrors;
+
+/// The normal equations of `fit` on `samples` under `loss` into *out, with its prior: the
+/// pseudo-observations' weights on the diagonal and their pull (weight (p - nominal)) in the
+/// gradient, as LM sums them. `columns`: the parameters (kOtherTargetTools: the other targets'
+/// tool points eliminated, into out->targets). Errors: those of the normal equations.
+Status fit_normal_equations(const FoldFit& fit, Span<const Sample> samples, const PointLoss& loss, ParamMask columns,
+                            NormalEquations* out);
 
 /// The harmonic terms of `model` whose joint the training samples turn through less than
 /// kHarmonicMinPeriodShare of the term's period.

@@ -189,9 +189,9 @@ Status run_population(Job& job, CalibrationSolver solver, bool hybrid) {
     gsa.iterations = o.gsa_iterations;
     gsa.seed = o.seed;
     const CalibrationWorkspaceBase::PopulationPhase phase = job.workspace.open_gsa();
-    if (phase.gsa == nullptr) return Status::population_out_of_range;  // a workspace without GSA (firmware)
-    status = calibrate_paper6_gsa(job.start, job.dataset.train(), subset, gsa, o.paper6_half_width_m, phase.cost,
-                                  phase.gsa, &solved, &trace, job.observer);
+    if (phase.run_gsa == nullptr) return Status::population_out_of_range;  // a workspace without GSA (firmware)
+    status = phase.run_gsa(job.start, job.dataset.train(), subset, gsa, o.paper6_half_width_m, phase.cost, phase.gsa,
+                           &solved, &trace, job.observer);
   }
   job.workspace.close();
   if (status != Status::ok) return status;
@@ -362,10 +362,20 @@ struct LmFit {
   /// Joint terms held at their start values: after LM+compliance, the gravity terms it did not
   /// keep (the harmonics' stage adds harmonics to that model, it does not reopen its choice).
   ParamMask fixed_terms = 0;
-  /// start_model is an earlier fit of this stage's terms (its coefficients kept, those of
-  /// fixed_terms put back to their start values): a refit takes a few iterations.
+  /// Start where the last fit (r.lm) ended instead of start_model: its coefficients kept, those
+  /// of fixed_terms put back to their start values; a refit takes a few iterations.
   bool warm = false;
 };
+
+/// Joint terms a stage tests from which the test's fixes after the first are made on the
+/// linearised fit (term_elimination.hpp): below, a refit per fix is as cheap, and a build that
+/// holds fewer terms (the firmware's 4) leaves that code out [-].
+constexpr int kLinearisedFixesMinTerms = 5;
+
+/// Whether the test of `reference`'s joint terms makes its fixes on the linearised fit.
+constexpr bool linearised_fixes(const RobotModel& reference) {
+  return kMaxComplianceTerms >= kLinearisedFixesMinTerms && reference.compliance.term_count >= kLinearisedFixesMinTerms;
+}
 
 /// Where a fit reports: its trace, its observer (both may be null), the parameters fixed as
 /// not significant.
@@ -389,7 +399,14 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   TraceBase* trace = report.trace;
   ParamMask* pruned = report.pruned;
   RobotModel& from = job.workspace.lm_start();  // start_model is never this one: a stage's or the job's model
-  from = *fit.start_model;                      // a no-op when a warm start put it there already
+  RigidTransform warm_base;                     // the base a warm start or a next attempt starts from
+  if (fit.warm) {                               // where the last fit ended (r.lm, which LM clears: copied first)
+    from = job.result.lm.model;
+    warm_base = job.result.lm.base_to_tracker;
+    base = &warm_base;
+  } else {
+    from = *fit.start_model;
+  }
   // LM+compliance: the start terms on the fitted geometry (a warm start keeps its coefficients
   // but those it now holds fixed).
   if (compliance && !fit.warm) from.compliance = reference.compliance;
@@ -431,7 +448,6 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   // after the significance test fixed tool_x (else they would stay at their start values).
   for (int axis = 0; axis < 3; ++axis) lm.other_target_tools |= mask_has(free_mask, tool_param_index(axis));
   Status status = Status::ok;
-  RigidTransform warm_base;  // the base a next attempt starts from
   *pruned = 0;
   bool geometry = r.geometry_tested;  // a joint-term stage: the rigid stage's; a rigid one decides below
   // Each attempt fixes one parameter at most: the geometry and the model's joint terms (not the
@@ -455,7 +471,7 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     if (attempt == 0 && !compliance) geometry = tests_geometry(o, fit.samples, r.lm, &r);
     if (weakest < 0) weakest = least_significant(reference, r.lm, fit.significance_t, levels, geometry);
     ParamMask fixes = weakest >= 0 ? param_bit(weakest) : ParamMask{0};
-    if (compliance && weakest >= kRigidParamCount) {
+    if (compliance && weakest >= kRigidParamCount && linearised_fixes(reference)) {
       // The terms the test would fix after this one, each after a refit: on the linearised
       // fit at once (the refit below then takes them all).
       const bool other_tools = (lm.other_target_tools || mask_has(r.lm.identifiability.kept_mask, tool_param_index(0)));
@@ -726,44 +742,47 @@ struct FoldComparison {
   double without_m2 = 0.0;  ///< the same without them [m^2]
   std::size_t count = 0;    ///< samples [-]
   bool unsolved = false;    ///< a fold only the fit without the terms could make
+};
 
-  /// The terms predict these folds worse by more than one standard error of the difference of
-  /// the two mean errors (each mean's variance from its errors' scatter), or not at all.
-  bool worse() const {
-    if (unsolved) return true;
-    if (count < 2) return false;
-    const double n = static_cast<double>(count);
-    const double with_mean_m = with_m / n;
-    const double without_mean_m = without_m / n;
-    const double variance_m2 = (std::fmax(0.0, with_m2 / n - with_mean_m * with_mean_m) +
-                                std::fmax(0.0, without_m2 / n - without_mean_m * without_mean_m)) /
-                               (n - 1.0);
-    return with_mean_m - without_mean_m > std::sqrt(variance_m2);
-  }
-  /// Adds joint `joint`'s two ends, over the folds `without` could make.
-  void add(const FoldErrors& with, const FoldErrors& without, int joint) {
-    for (int end = 0; end < 2; ++end) {
-      if (!without.solved[joint][end]) continue;
-      if (!with.solved[joint][end]) {
-        unsolved = true;
-        continue;
-      }
-      with_m += with.sum_m[joint][end];
-      without_m += without.sum_m[joint][end];
-      with_m2 += with.squares_m2[joint][end];
-      without_m2 += without.squares_m2[joint][end];
-      count += with.count[joint][end];
+/// Adds joint `joint`'s two ends (over the folds `without` could make) to *into and to *all.
+void add_ends(const BlockedFoldErrors& with, const BlockedFoldErrors& without, int joint, FoldComparison* into,
+              FoldComparison* all) {
+  for (int end = 0; end < 2; ++end) {
+    if (!without.solved[joint][end]) continue;
+    if (!with.solved[joint][end]) {
+      into->unsolved = all->unsolved = true;
+      continue;
+    }
+    for (FoldComparison* c : {into, all}) {
+      c->with_m += with.sum_m[joint][end];
+      c->without_m += without.sum_m[joint][end];
+      c->with_m2 += with.squares_m2[joint][end];
+      c->without_m2 += without.squares_m2[joint][end];
+      c->count += with.count[joint][end];
     }
   }
-  void add(const FoldComparison& other) {
-    with_m += other.with_m;
-    without_m += other.without_m;
-    with_m2 += other.with_m2;
-    without_m2 += other.without_m2;
-    count += other.count;
-    unsolved = unsolved || other.unsolved;
-  }
-};
+}
+
+/// The terms predict the folds of `c` worse by more than one standard error of the difference
+/// of the two mean errors (each mean's variance from its errors' scatter), or not at all.
+bool worse(const FoldComparison& c) {
+  if (c.unsolved) return true;
+  if (c.count < 2) return false;
+  const double n = static_cast<double>(c.count);
+  const double with_mean_m = c.with_m / n;
+  const double without_mean_m = c.without_m / n;
+  const double variance_m2 = (std::fmax(0.0, c.with_m2 / n - with_mean_m * with_mean_m) +
+                              std::fmax(0.0, c.without_m2 / n - without_mean_m * without_mean_m)) /
+                             (n - 1.0);
+  return with_mean_m - without_mean_m > std::sqrt(variance_m2);
+}
+
+/// Mean errors with and without the terms over the folds of `c` into *with_m, *without_m [m].
+void fold_means(const FoldComparison& c, double* with_m, double* without_m) {
+  const double n = c.count > 0 ? static_cast<double>(c.count) : 1.0;
+  *with_m = c.count > 0 ? c.with_m / n : 0.0;
+  *without_m = c.count > 0 ? c.without_m / n : 0.0;
+}
 
 /// The added terms of fit.reference deflecting joint `joint` (0-based).
 ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint) {
@@ -772,6 +791,34 @@ ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint
     if (reference.compliance.terms[t].joint == joint) mask |= param_bit(compliance_param_index(t));
   }
   return mask & terms;
+}
+
+/// One check of the blocked folds: r.lm's fit against the previous fit's errors `without`; the
+/// comparison into *folds (its rejections kept), and the kept added terms of the joints whose
+/// ends they predict worse returned. Not inlined: its fold errors stay off the stack of the
+/// refits that follow (the firmware's stack budget).
+[[gnu::noinline]] Status compare_folds(Job& job, const LmFit& fit, const BlockedFoldErrors& without,
+                                       ParamMask new_terms, BlockedFoldCheck* folds, ParamMask* rejected) {
+  const CalibrationResult& r = job.result;
+  FoldErrors with{};
+  const FoldFit fit_with{&r.lm.model, &r.lm.base_to_tracker, r.lm.identifiability.kept_mask,
+                         job_lm_prior(job.options, job.nominal), r.lm.residual_sigma_m * r.lm.residual_sigma_m};
+  const Status status =
+      blocked_fold_errors(&job.dataset, fit_with, blunder_test_loss(job.options), job.workspace, &with);
+  if (status != Status::ok) return status;
+  folds->checked = true;
+  FoldComparison all;
+  *rejected = 0;
+  for (int joint = 0; joint < kJointCount; ++joint) {
+    FoldComparison ends;
+    add_ends(with, without, joint, &ends, &all);
+    fold_means(ends, &folds->with_terms_mae_m[joint], &folds->without_terms_mae_m[joint]);
+    const ParamMask own = terms_of_joint(*fit.reference, r.lm.identifiability.kept_mask & new_terms, joint);
+    if (own != 0 && worse(ends)) *rejected |= own;
+  }
+  fold_means(all, &folds->with_all_mae_m, &folds->without_all_mae_m);
+  folds->passed = !worse(all);
+  return Status::ok;
 }
 
 /// The blocked folds of a joint-term stage (BlockedFoldCheck): r.lm's fit against the previous
@@ -783,58 +830,27 @@ ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint
                                                  const LmFitReport& report, BlockedFoldCheck* folds) {
   constexpr int kMaxFoldRounds = 3;
   CalibrationResult& r = job.result;
-  const PointLoss loss = blunder_test_loss(job.options);
-  const LmPrior prior = job_lm_prior(job.options, job.nominal);
+  if ((r.lm.identifiability.kept_mask & new_terms) == 0) return Status::ok;
   const CalibrationStage& before = r.stages[previous.stage];
-  FoldErrors without;
-  bool without_made = false;
-  Status status = Status::ok;
-  for (int round = 0; (r.lm.identifiability.kept_mask & new_terms) != 0; ++round) {
-    if (!without_made) {
-      const FoldFit fit_without{&before.model, &before.base_to_tracker, previous.estimated, prior,
-                                previous.sigma_m * previous.sigma_m};
-      status = blocked_fold_errors(&job.dataset, fit_without, loss, job.workspace, &without);
-      if (status != Status::ok) return status;
-      without_made = true;
-    }
-    FoldErrors with;
-    const FoldFit fit_with{&r.lm.model, &r.lm.base_to_tracker, r.lm.identifiability.kept_mask, prior,
-                           r.lm.residual_sigma_m * r.lm.residual_sigma_m};
-    status = blocked_fold_errors(&job.dataset, fit_with, loss, job.workspace, &with);
-    if (status != Status::ok) return status;
-    *folds = BlockedFoldCheck{true, {}, {}, 0.0, 0.0, folds->coverage_rejected, folds->fold_rejected, true};
-    FoldComparison all;
+  BlockedFoldErrors& without = job.workspace.previous_fold_errors();
+  const FoldFit fit_without{&before.model, &before.base_to_tracker, previous.estimated,
+                            job_lm_prior(job.options, job.nominal), previous.sigma_m * previous.sigma_m};
+  Status status =
+      blocked_fold_errors(&job.dataset, fit_without, blunder_test_loss(job.options), job.workspace, &without);
+  for (int round = 0; status == Status::ok && (r.lm.identifiability.kept_mask & new_terms) != 0; ++round) {
     ParamMask rejected = 0;
-    for (int joint = 0; joint < kJointCount; ++joint) {
-      FoldComparison ends;
-      ends.add(with, without, joint);
-      const double n = static_cast<double>(ends.count);
-      folds->with_terms_mae_m[joint] = ends.count > 0 ? ends.with_m / n : 0.0;
-      folds->without_terms_mae_m[joint] = ends.count > 0 ? ends.without_m / n : 0.0;
-      all.add(ends);
-      const ParamMask own = terms_of_joint(*fit->reference, r.lm.identifiability.kept_mask & new_terms, joint);
-      if (own != 0 && ends.worse()) rejected |= own;
-    }
-    const double n = static_cast<double>(all.count);
-    folds->with_all_mae_m = all.count > 0 ? all.with_m / n : 0.0;
-    folds->without_all_mae_m = all.count > 0 ? all.without_m / n : 0.0;
-    folds->passed = !all.worse();
-    if (rejected == 0) break;
+    status = compare_folds(job, *fit, without, new_terms, folds, &rejected);
+    if (status != Status::ok || rejected == 0) break;
     folds->fold_rejected |= rejected;
     if (round + 1 == kMaxFoldRounds) {  // still terms that do not hold beyond their joint's range
       folds->passed = false;
       break;
     }
     fit->fixed_terms |= rejected;
-    // Fitted again from this fit (the workspace's start model; the base copied: LM clears r.lm).
-    LmFit again = *fit;
-    job.workspace.lm_start() = r.lm.model;
-    const RigidTransform warm_base = r.lm.base_to_tracker;
-    again.start_model = &job.workspace.lm_start();
-    again.base = &warm_base;
-    again.warm = true;
-    status = fit_lm(job, again, report);
-    if (status != Status::ok && status != Status::not_converged) return status;
+    fit->warm = true;  // fitted again from where this fit ended
+    status = fit_lm(job, *fit, report);
+    fit->warm = false;
+    if (status == Status::not_converged) status = Status::ok;
   }
   return status;
 }
@@ -879,7 +895,8 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
   const std::size_t index = r.stage_count;
   // The previous fit: the blocked folds' reference.
   const PreviousFit previous{index - 1, r.stages[index - 1].estimated, r.stages[index - 1].residual_sigma_m};
-  BlockedFoldCheck folds;
+  BlockedFoldCheck& folds = r.stages[index].folds;  // in the stage's slot: not on the stack under LM
+  folds = BlockedFoldCheck{};
   folds.coverage_rejected = harmonics_short_of_their_period(reference, job.dataset.train()) & new_terms;
   fit.fixed_terms |= folds.coverage_rejected;
   Status status = fit_lm(job, fit, LmFitReport{&trace, job.observer, pruned});
@@ -888,13 +905,11 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
   if (status != Status::ok && status != Status::not_converged) return status;
   if ((r.lm.identifiability.kept_mask & new_terms) == 0 || !folds.passed) {
     const Status kept = keep_previous_fit(job, pruned);
-    r.stages[index].folds = folds;
     return kept;
   }
   const JointTermHoldout holdout = check_on_left_out_poses(job, fit, *pruned, new_terms);
   if (!holdout.checked) {  // a larger set: the significance test and the blocked folds decide
     lm_stage(job, status, true, true, trace);
-    r.stages[index].folds = folds;
     return Status::ok;
   }
   Status again = Status::ok;
@@ -906,7 +921,6 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
     again = keep_previous_fit(job, pruned);
   }
   r.stages[index].holdout = holdout;
-  r.stages[index].folds = folds;
   return again;
 }
 

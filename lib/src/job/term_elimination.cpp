@@ -43,38 +43,30 @@ int next_term(const RobotModel& reference, const FullParams& value, const FullPa
   return worst;
 }
 
-}  // namespace
-
-Status linearised_term_fixes(const FoldFit& fit, const RobotModel& reference, Span<const Sample> samples,
-                             const PointLoss& loss, int first, double significance_t, double compliance_t,
-                             double sigma_m, int dof, CalibrationWorkspaceBase& workspace, ParamMask* fixed) {
-  *fixed = param_bit(first);
-  const ParamMask params = fit.estimated & ~kOtherTargetTools;
-  ReliabilityWorkspace* ws = workspace.open_reliability();
-  ws->normal.targets = Span<TargetBlock>(ws->blocks, kMaxTargets - 1);  // the other tool points, eliminated
-  Status status = accumulate_normal_equations(*fit.model, *fit.base, samples, loss, &ws->normal, fit.estimated);
-  if (status != Status::ok) {
-    workspace.close();
-    return status;
-  }
-  NormalMatrix& jtwj = ws->normal.jtwj;
-  for (int i = 0; i < kModelParamCount; ++i) {
-    const double tolerance = lm_prior_sigma(fit.prior, i);
-    if (mask_has(params, i) && tolerance > 0.0) jtwj(i, i) += fit.variance_m2 / (tolerance * tolerance);
-  }
+/// (J^T W J + P)^-1 over `params` from the normal equations in ws->normal, unscaled, into
+/// ws->scaled [unit^2/m^2]; false when they are not positive definite.
+// Not inlined, nor the elimination: their vectors stay off the stack while the sums run.
+[[gnu::noinline]] bool invert_normal_matrix(ParamMask params, ReliabilityWorkspace* ws) {
   FullParams scale;
-  scale_normal_matrix(jtwj, params, 1.0, &ws->scaled, &scale);
-  if (!cholesky_factor(ws->scaled, params, &ws->factor)) {
-    workspace.close();
-    return Status::singular_system;
-  }
-  NormalMatrix& covariance = ws->scaled;  // (J^T W J + P)^-1, unscaled below [unit^2/m^2]
-  cholesky_inverse(ws->factor, &jtwj, &covariance);
+  scale_normal_matrix(ws->normal.jtwj, params, 1.0, &ws->scaled, &scale);
+  if (!cholesky_factor(ws->scaled, params, &ws->factor)) return false;
+  NormalMatrix& covariance = ws->scaled;
+  cholesky_inverse(ws->factor, &ws->normal.jtwj, &covariance);
   int index[kFullParamCount];
   const int count = mask_indices(params, index);
   for (int a = 0; a < count; ++a) {
     for (int b = 0; b < count; ++b) covariance(index[a], index[b]) *= scale(index[a]) * scale(index[b]);
   }
+  return true;
+}
+
+/// The fixes after `first`, on the covariance in `covariance` (invert_normal_matrix's).
+[[gnu::noinline]] ParamMask eliminate(const FoldFit& fit, const RobotModel& reference, ParamMask params, int first,
+                                      double significance_t, double compliance_t, double sigma_m, int dof,
+                                      NormalMatrix& covariance) {
+  ParamMask fixed = param_bit(first);
+  int index[kFullParamCount];
+  const int count = mask_indices(params, index);
   FullParams value = FullParams::Zero();
   FullParams delta = FullParams::Zero();
   for (int k = 0; k < count; ++k) {
@@ -106,10 +98,27 @@ Status linearised_term_fixes(const FoldFit& fit, const RobotModel& reference, Sp
     FullParams variance = FullParams::Zero();
     for (int a = 0; a < count; ++a) variance(index[a]) = variance_m2 * covariance(index[a], index[a]);
     k = next_term(reference, value, delta, variance, candidates, significance_t, compliance_t, dof);
-    if (k >= 0) *fixed |= param_bit(k);
+    if (k >= 0) fixed |= param_bit(k);
+  }
+  return fixed;
+}
+
+}  // namespace
+
+Status linearised_term_fixes(const FoldFit& fit, const RobotModel& reference, Span<const Sample> samples,
+                             const PointLoss& loss, int first, double significance_t, double compliance_t,
+                             double sigma_m, int dof, CalibrationWorkspaceBase& workspace, ParamMask* fixed) {
+  *fixed = param_bit(first);
+  const ParamMask params = fit.estimated & ~kOtherTargetTools;
+  ReliabilityWorkspace* ws = workspace.open_reliability();
+  ws->normal.targets = Span<TargetBlock>(ws->blocks, kMaxTargets - 1);  // the other tool points, eliminated
+  Status status = fit_normal_equations(fit, samples, loss, fit.estimated, &ws->normal);
+  if (status == Status::ok && !invert_normal_matrix(params, ws)) status = Status::singular_system;
+  if (status == Status::ok) {
+    *fixed = eliminate(fit, reference, params, first, significance_t, compliance_t, sigma_m, dof, ws->scaled);
   }
   workspace.close();
-  return Status::ok;
+  return status;
 }
 
 }  // namespace hivecal::detail

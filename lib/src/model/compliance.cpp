@@ -17,37 +17,26 @@ double lever_m(const Vec3& z, const Vec3& origin_m, const Vec3& point_m, const V
   return z.dot((point_m - origin_m).cross(gravity));
 }
 
-/// sin and cos of k q_j, k = 1 .. kMaxHarmonicOrder, of the joints a model's harmonics turn:
-/// one sincos per joint (or none, from the readings' joint trig), the higher orders by the
-/// angle-sum formulas.
-struct HarmonicTrig {
-  double sin_kq[kJointCount][kMaxHarmonicOrder] = {};  ///< sin(k q_j) at [j][k - 1] [-]
-  double cos_kq[kJointCount][kMaxHarmonicOrder] = {};  ///< cos(k q_j) at [j][k - 1] [-]
-  bool made[kJointCount] = {};                         ///< joint j's entries are made
-};
-
-/// The basis of a harmonic term at joint readings q: sin or cos of order * q_j [-]. `trig`:
-/// the readings' joint trig, or null (computed here).
-double harmonic_basis(const ComplianceTerm& term, const JointVector& q_rad, const JointTrig* trig,
-                      HarmonicTrig* harmonic) {
+/// The basis of a harmonic term at joint readings q: sin or cos of order * q_j [-], from sin q_j
+/// and cos q_j (`trig`, the readings' joint trig, or computed here when null) by the angle sums.
+double harmonic_basis(const ComplianceTerm& term, const JointVector& q_rad, const JointTrig* trig) {
   const int j = term.joint;
-  if (!harmonic->made[j]) {
-    double* s = harmonic->sin_kq[j];
-    double* c = harmonic->cos_kq[j];
-    if (trig != nullptr) {
-      s[0] = trig->sin_q[j];
-      c[0] = trig->cos_q[j];
-    } else {
-      math::sincos(q_rad(j), &s[0], &c[0]);
-    }
-    for (int k = 1; k < kMaxHarmonicOrder; ++k) {
-      s[k] = s[k - 1] * c[0] + c[k - 1] * s[0];
-      c[k] = c[k - 1] * c[0] - s[k - 1] * s[0];
-    }
-    harmonic->made[j] = true;
+  double sin_q = 0.0;
+  double cos_q = 1.0;
+  if (trig != nullptr) {
+    sin_q = trig->sin_q[j];
+    cos_q = trig->cos_q[j];
+  } else {
+    math::sincos(q_rad(j), &sin_q, &cos_q);
   }
-  const int k = term.order - 1;
-  return term.kind == JointTermKind::harmonic_sin ? harmonic->sin_kq[j][k] : harmonic->cos_kq[j][k];
+  double sin_kq = sin_q;
+  double cos_kq = cos_q;
+  for (int k = 1; k < term.order; ++k) {
+    const double next_sin = sin_kq * cos_q + cos_kq * sin_q;
+    cos_kq = cos_kq * cos_q - sin_kq * sin_q;
+    sin_kq = next_sin;
+  }
+  return term.kind == JointTermKind::harmonic_sin ? sin_kq : cos_kq;
 }
 
 /// The basis of one gravity term over the rigid frames at the pose.
@@ -87,11 +76,10 @@ void compliance_basis(const RobotModel& model, const JointVector& q_rad, double 
   if (compliance.term_count == 0) return;
   RigidTransform frame[kJointCount + 1];
   if (has_gravity_term(compliance)) detail::rigid_frames(model, q_rad, frame);
-  HarmonicTrig harmonic;
   for (int t = 0; t < compliance.term_count; ++t) {
     const ComplianceTerm& term = compliance.terms[t];
-    basis[t] = is_harmonic(term) ? harmonic_basis(term, q_rad, trig, &harmonic)
-                                 : gravity_basis(compliance, term, model.tool_m, frame);
+    basis[t] =
+        is_harmonic(term) ? harmonic_basis(term, q_rad, trig) : gravity_basis(compliance, term, model.tool_m, frame);
   }
 }
 

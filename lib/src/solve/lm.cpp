@@ -224,15 +224,14 @@ double prior_weight(const Run& run, int i) {
   return sigma > 0.0 ? run.prior_variance_m2 / (sigma * sigma) : 0.0;
 }
 
-/// The prior's share of the gradient at `at`, weight (p - nominal), over the kept parameters
-/// [m^2/unit]. The base and the joint terms hold none.
-FullParams prior_gradient(const Run& run, const Point& at) {
-  FullParams gradient = FullParams::Zero();
-  if (!(run.prior_variance_m2 > 0.0)) return gradient;
+/// Adds the prior's share of the gradient at `at`, weight (p - nominal), over the kept
+/// parameters to *gradient [m^2/unit]. The base and the joint terms hold none.
+// Not inlined: its parameter vectors stay out of calibrate_lm's frame (the firmware's stack).
+[[gnu::noinline]] void add_prior_gradient(const Run& run, const Point& at, FullParams* gradient) {
+  if (!(run.prior_variance_m2 > 0.0)) return;
   const ModelParams p = to_params(at.model);
   const ModelParams nominal = to_params(*run.options.prior.nominal);
-  for (int i = 0; i < kModelParamCount; ++i) gradient(i) = prior_weight(run, i) * (p(i) - nominal(i));
-  return gradient;
+  for (int i = 0; i < kModelParamCount; ++i) (*gradient)(i) += prior_weight(run, i) * (p(i) - nominal(i));
 }
 
 /// The prior's share of the cost at `at`: sum of weight (p - nominal)^2 [m^2].
@@ -331,7 +330,8 @@ inline Status analyse(Run* run, IdentifiabilityOutput output) {
 
 /// Puts the model parameters and joint-term coefficients of `lost` in *model back to their
 /// values in `start`; true when one changed. (The base is an increment: it has no start value.)
-bool put_back(const RobotModel& start, ParamMask lost, RobotModel* model) {
+// Not inlined: its parameter vectors would widen calibrate_lm's frame, on the firmware's deepest path.
+[[gnu::noinline]] bool put_back(const RobotModel& start, ParamMask lost, RobotModel* model) {
   if (lost == 0) return false;
   ModelParams params = to_params(*model);
   const ModelParams start_params = to_params(start);
@@ -406,7 +406,8 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   FullParams& scaled_step = scratch->scaled_step;
   scale_kept_block(eq.jtwj, run->kept, &scratch->system, &scale);
   add_prior_diagonal(*run, scale, &scratch->system);
-  scratch->gradient = eq.jtwr + prior_gradient(*run, run->point);
+  scratch->gradient = eq.jtwr;
+  add_prior_gradient(*run, run->point, &scratch->gradient);
   const double current_loss_m2 = eq.loss_sum_m2 + prior_cost(*run, run->point);
   *stop = true;
   if (gradient_cosine(scratch->gradient, eq.weighted_squares_m2 + prior_cost(*run, run->point), scale, run->kept) <=

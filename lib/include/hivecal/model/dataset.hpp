@@ -154,7 +154,7 @@ class DatasetBase {
   /// The last split's arguments, for restore_split(): kind 0 none, 1 split(), 2 split_fold().
   struct SplitArguments {
     int kind = 0;
-    double train_fraction = 1.0;
+    double train_fraction = 0.0;
     std::size_t fold = 0;
     std::size_t folds = 0;
     std::uint64_t seed = 0;
