@@ -94,7 +94,7 @@ std::string rigid_kept_line(double significance_t, const RobotModel& model, bool
   double gravity_t = 0.0;
   double harmonic_t = 0.0;
   for (int t = 0; t < terms.term_count; ++t) {
-    const double level = parameter_significance_level(model, compliance_param_index(t), significance_t,
+    const double level = parameter_significance_level(model, compliance_param_index(model, t), significance_t,
                                                       CalibrationCompliance{}.significance_t, dof);
     (is_harmonic(terms.terms[t]) ? harmonic_t : gravity_t) = level;
   }
@@ -231,12 +231,12 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
                              lm->identifiability.kept_mask, scratch.get(), correlation.get()) == Status::ok;
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
-  for (int k = 0; k < kModelParamCount; ++k) {
+  for (int k = 0; k < model_param_count(stage.model); ++k) {
     const bool estimated = lm != nullptr && mask_has(lm->identifiability.kept_mask, k);
     if (!estimated && after(k) == before(k)) continue;
     report::ParameterRow row;
-    row.name = full_param_name(k);
-    row.angle = model_param_is_angle(k);
+    row.name = full_param_name(k, stage.model);
+    row.angle = model_param_is_angle(k, stage.model.joint_count);
     row.start = before(k);
     row.value = after(k);
     row.sigma = estimated ? lm->sigma(k) : 0.0;
@@ -245,7 +245,7 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
   }
   const ComplianceModel& compliance = stage.model.compliance;
   for (int t = 0; t < compliance.term_count; ++t) {  // LM+compliance: the coefficients, in their own unit
-    const int k = compliance_param_index(t);
+    const int k = compliance_param_index(stage.model, t);
     report::ParameterRow row;
     row.name = compliance_term_name(compliance, t);
     row.compliance_unit = textio::term_unit(compliance, t);
@@ -275,7 +275,7 @@ void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* 
   for (const bool test : {false, true}) {
     for (const Sample& s : test ? dataset.test() : dataset.train()) {
       report::SampleRow row;
-      for (int j = 0; j < kJointCount; ++j) row.q_rad[j] = s.q_rad(j);
+      for (int j = 0; j < kSixJoints; ++j) row.q_rad[j] = s.q_rad(j);
       row.measured_m = s.point_m;
       row.test = test;
       row.target = s.target;

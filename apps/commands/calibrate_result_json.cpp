@@ -23,7 +23,7 @@ std::string calibration_result_json(const CalibrateSettings& settings, const rep
   file.has_metrics = true;
   file.metrics = data.calibrated;
   for (int t = 0; run.final_lm() != nullptr && t < final_stage.model.compliance.term_count; ++t) {
-    const int k = compliance_param_index(t);
+    const int k = compliance_param_index(final_stage.model, t);
     if (mask_has(run.final_lm()->identifiability.kept_mask, k)) file.compliance_sigma[t] = run.final_lm()->sigma(k);
   }
   record.method = run.final_method();

@@ -27,11 +27,11 @@ std::string dh_table(const textio::RobotDescription& robot) {
   std::string s = robot.convention == DhConvention::modified
                       ? "joint  alpha(i-1) [deg]    a(i-1) [mm]   theta offset [deg]         d [mm]\n"
                       : "joint  theta offset [deg]         d [mm]          a [mm]      alpha [deg]\n";
-  ModifiedDhRow rows[kJointCount];
+  ModifiedDhRow rows[kSixJoints];
   Vec3 tool_m = robot.model.tool_m;
   if (robot.convention == DhConvention::modified)
     modified_dh_from_model(robot.model, robot.modified_base, rows, &tool_m);
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     if (robot.convention == DhConvention::modified) {
       const ModifiedDhRow& r = rows[j];
       s += fmt("%5.0f", j + 1) + fmt("  %16.6f  %13.4f  %19.6f  %13.4f\n", r.alpha_prev_rad * kDegPerRad,
@@ -72,7 +72,7 @@ Error check_robot(const Options& options) {
   s += "compliance terms: " + std::to_string(robot.model.compliance.term_count) + "\n";
   if (robot.has_joint_limits) {
     s += "joint limits [deg]:";
-    for (int j = 0; j < kJointCount; ++j)
+    for (int j = 0; j < kSixJoints; ++j)
       s += fmt(" %.1f..%.1f", robot.lower_rad(j) * kDegPerRad, robot.upper_rad(j) * kDegPerRad);
     s += "\n";
   } else {

@@ -60,7 +60,7 @@ double mae_m(const RobotModel& model, const RigidTransform& base_to_tracker,
              const std::vector<report::SampleRow>& samples) {
   double sum_m = 0.0;
   for (const report::SampleRow& s : samples) {
-    const JointVector q = Eigen::Map<const JointVector>(s.q_rad);
+    const JointVector q = joint_vector(s.q_rad);
     sum_m += (base_to_tracker.apply(fk_target_point(model, q, s.target)) - s.measured_m).norm();
   }
   return sum_m / static_cast<double>(samples.size());

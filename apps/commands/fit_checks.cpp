@@ -8,12 +8,6 @@
 
 namespace hivecal::cli {
 
-bool model_param_is_angle(int index) {
-  if (index < 0 || index >= kDhParamCount) return false;  // the tool point is a length
-  const int field = index % kParamsPerJoint;
-  return field == static_cast<int>(DhField::theta_offset) || field == static_cast<int>(DhField::alpha);
-}
-
 namespace {
 
 /// |correlation| above which a moved parameter's warning names the one it cannot be told from.
@@ -41,26 +35,27 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
   std::vector<std::string> warnings;
   const CalibrationStage* final_stage = result.final_stage();
   if (final_stage == nullptr) return warnings;
+  const RobotModel& model = final_stage->model;
   const ModelParams before = to_params(result.baseline.model);
-  const ModelParams after = to_params(final_stage->model);
+  const ModelParams after = to_params(model);
   char line[512];
-  for (int k = 0; k < kModelParamCount; ++k) {
+  for (int k = 0; k < model_param_count(model); ++k) {
     const double change = after(k) - before(k);
-    const bool angle = model_param_is_angle(k);
+    const bool angle = model_param_is_angle(k, model.joint_count);
     if (std::fabs(change) <= (angle ? bounds.max_angle_change_rad : bounds.max_length_change_m)) continue;
     if (angle) {
       std::snprintf(line, sizeof line,
                     "%s moved %+.3f deg (%.6f -> %.6f rad), more than %.3g deg (--max-change-deg): wrong model, "
                     "joint zero or units?",
-                    full_param_name(k), change * math::kDegPerRad, before(k), after(k),
+                    full_param_name(k, model), change * math::kDegPerRad, before(k), after(k),
                     bounds.max_angle_change_rad * math::kDegPerRad);
     } else {
       std::snprintf(line, sizeof line,
                     "%s moved %+.3f mm (%.6f -> %.6f m), more than %.3g mm (--max-change-mm): wrong model, tool "
                     "guess or units?",
-                    full_param_name(k), change * 1e3, before(k), after(k), bounds.max_length_change_m * 1e3);
+                    full_param_name(k, model), change * 1e3, before(k), after(k), bounds.max_length_change_m * 1e3);
     }
-    warnings.push_back(line + correlation_cause(full_param_name(k), parameters));
+    warnings.push_back(line + correlation_cause(full_param_name(k, model), parameters));
   }
   // Many samples of a few stops determine no more than those stops: 3 coordinates per distinct
   // point. No more of them than the parameters the fit determines (estimated, or fixed by the

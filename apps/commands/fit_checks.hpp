@@ -18,9 +18,6 @@ struct FitBounds {
   double max_angle_change_rad = 0.03490658503988659;  ///< theta offsets and alpha, 2 deg (--max-change-deg) [rad]
 };
 
-/// True when model parameter `index` (to_params order) is an angle (theta offset, alpha).
-bool model_param_is_angle(int index);
-
 /// The warnings about `result` (empty when none): one line per parameter of the final stage's
 /// model that moved beyond `bounds` from the baseline model (name, both values, the change),
 /// and one when the final stage's test MAE (3D) is above the baseline's (only with test samples).

@@ -223,7 +223,7 @@ bool largest_cube(const RobotModel& model, const JointLimits& limits, const Vec3
   *side_m = 0.0;
   for (int candidate = 0; candidate < 40; ++candidate) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(limits.lower_rad(j), limits.upper_rad(j));
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(limits.lower_rad(j), limits.upper_rad(j));
     const Vec3 centre = fk_tool_point(model, q);
     const Vec3 rotation = tool_rotation_vector(centre, tracker_m, tool_down);
     if (!cube_reachable(model, limits, centre, std::max(*side_m, 0.02), rotation, floor_z_m, keep_out_m, &random))
@@ -309,7 +309,7 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
             textio::format_double(positions[k].y()) + "," + textio::format_double(positions[k].z()) + "," +
             textio::format_double(rotation.x()) + "," + textio::format_double(rotation.y()) + "," +
             textio::format_double(rotation.z());
-    for (int j = 0; j < kJointCount; ++j) list += "," + (reachable ? textio::format_double(q(j)) : std::string("nan"));
+    for (int j = 0; j < kSixJoints; ++j) list += "," + (reachable ? textio::format_double(q(j)) : std::string("nan"));
     list += "\n";
   }
   char head[400];

@@ -79,7 +79,7 @@ Error params_option(const Options& options, const RobotModel& model, ParamMask* 
   if (params != "full" && params != "paper") {
     return Error::usage("--params must be 'full' or 'paper', not " + port::quoted(params));
   }
-  *mask = lm_param_mask(params == "full" ? LmParamSet::full : LmParamSet::link_lengths, kAllParamsMask, model);
+  *mask = lm_param_mask(params == "full" ? LmParamSet::full : LmParamSet::link_lengths, 0, model);
   return Error{};
 }
 
@@ -141,30 +141,29 @@ Error parse_request(const Options& options, PlanRequest* request) {
   return Error{};
 }
 
-std::string names_of(ParamMask mask) {
+std::string names_of(ParamMask mask, const RobotModel& model) {
   std::string out;
   for (int k = 0; k < kFullParamCount; ++k) {
-    if (mask_has(mask, k)) out += (out.empty() ? "" : " ") + std::string(full_param_name(k));
+    if (mask_has(mask, k)) out += (out.empty() ? "" : " ") + std::string(full_param_name(k, model));
   }
   return out.empty() ? "-" : out;
 }
 
-bool is_angle(int index) {
-  const bool dh_angle = index < kDhParamCount && (index % kParamsPerJoint == static_cast<int>(DhField::theta_offset) ||
-                                                  index % kParamsPerJoint == static_cast<int>(DhField::alpha));
-  return dh_angle || (index >= base_rotation_param_index(0) && index <= base_rotation_param_index(2));
+bool is_angle(int index, const RobotModel& model) {
+  return model_param_is_angle(index, model.joint_count) ||
+         (index >= base_rotation_param_index(model, 0) && index <= base_rotation_param_index(model, 2));
 }
 
 /// The dropped parameters of an analysis with the combination each one is redundant in.
-std::string dropped_lines(const IdentifiabilityReport& report) {
+std::string dropped_lines(const IdentifiabilityReport& report, const RobotModel& model) {
   std::string out;
   for (int i = 0; i < report.dropped_count; ++i) {
     const DroppedParam& d = report.dropped[i];
-    out += "  " + std::string(full_param_name(d.index)) + ": " + unidentifiable_reason_name(d.reason);
+    out += "  " + std::string(full_param_name(d.index, model)) + ": " + unidentifiable_reason_name(d.reason);
     if (d.reason == UnidentifiableReason::null_combination) {
       out += " (with";
       for (int k = 1; k < kNullComponentCount && d.component_index[k] >= 0; ++k) {
-        out += " " + std::string(full_param_name(d.component_index[k]));
+        out += " " + std::string(full_param_name(d.component_index[k], model));
       }
       out += ")";
     }
@@ -182,16 +181,18 @@ std::string report_text(const PlanRequest& request, const IdentifiabilityReport*
                     std::to_string(o.seed) + ")\n";
   out += "identifiable by the candidate pool: " + std::to_string(result.pool.kept_count()) + " of " +
          std::to_string(mask_count(o.free_mask)) + " parameters; no pose set under these constraints identifies:\n";
-  out += dropped_lines(result.pool);
+  const RobotModel& model = request.model;
+  out += dropped_lines(result.pool, model);
   out += "objective: " + std::to_string(result.objective.kept_count()) + " parameters, the tool " +
          text(o.prior_length_m * 1e3, "%g") + " mm off the flange axis in x and y (its prior)" +
          ((result.objective.kept_mask & ~result.pool.kept_mask) != 0
-              ? ": also " + names_of(result.objective.kept_mask & ~result.pool.kept_mask)
+              ? ": also " + names_of(result.objective.kept_mask & ~result.pool.kept_mask, model)
               : std::string()) +
          "\n";
   if (facing != nullptr) {
     out += "freeing the orientation (flange z within " + text(o.constraints.acceptance_rad * math::kDegPerRad, "%g") +
-           " deg of the tracker) makes identifiable: " + names_of(facing->kept_mask & ~result.pool.kept_mask) + "\n";
+           " deg of the tracker) makes identifiable: " + names_of(facing->kept_mask & ~result.pool.kept_mask, model) +
+           "\n";
   }
   const PoseSetQuality& r = result.random;
   const PoseSetQuality& p = result.planned;
@@ -205,14 +206,14 @@ std::string report_text(const PlanRequest& request, const IdentifiabilityReport*
   out += "  identifiable parameters    " + text(r.identifiability.kept_count(), "%9.0f") + "  " +
          text(p.identifiability.kept_count(), "%9.0f") + "\n";
   const ParamMask only_planned = p.identifiability.kept_mask & ~r.identifiability.kept_mask;
-  out += "  identifiable only when planned: " + names_of(only_planned) + "\n";
+  out += "  identifiable only when planned: " + names_of(only_planned, model) + "\n";
   out += "predicted sigma at " + text(o.noise_m * 1e6, "%g") + " um tracker noise (um or urad):\n";
   for (int k = 0; k < kFullParamCount; ++k) {
     if (!mask_has(r.identifiability.kept_mask | p.identifiability.kept_mask, k)) continue;
     const double unit = 1e6;  // m -> um, rad -> urad
-    const std::string name = full_param_name(k);
+    const std::string name = full_param_name(k, model);
     out += "  " + name + std::string(name.size() < 10 ? 10 - name.size() : 1, ' ') + text(r.sigma(k) * unit, "%9.2f") +
-           "  " + text(p.sigma(k) * unit, "%9.2f") + (is_angle(k) ? " urad" : " um") + "\n";
+           "  " + text(p.sigma(k) * unit, "%9.2f") + (is_angle(k, model) ? " urad" : " um") + "\n";
   }
   out += "session: " + text(result.travel_s, "%.1f") + " s of movej (" + text(result.unordered_travel_s, "%.1f") +
          " s unordered) + " + std::to_string(result.pose_count) + " x " + text(o.dwell_s, "%g") +
@@ -227,8 +228,8 @@ std::string urscript(const PlanOptions& o) {
                     ", about " + text(result.session_s, "%.0f") + " s\ndef hivecal_session():\n";
   for (std::size_t i = 0; i < result.pose_count; ++i) {
     out += "  movej([";
-    for (int j = 0; j < kJointCount; ++j)
-      out += textio::format_double(result.poses[i](j)) + (j + 1 < kJointCount ? ", " : "");
+    for (int j = 0; j < kSixJoints; ++j)
+      out += textio::format_double(result.poses[i](j)) + (j + 1 < kSixJoints ? ", " : "");
     out += "], a=" + text(o.joint_acceleration_rad_s2, "%.10g") + ", v=" + text(o.joint_speed_rad_s, "%.10g") +
            ")\n  sleep(" + text(o.dwell_s, "%.10g") + ")\n";
   }

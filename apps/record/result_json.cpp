@@ -110,10 +110,10 @@ void write_lm_details(JsonWriter& json, const LmResult& lm, const RobotModel& mo
 
 void write_ur_deltas(JsonWriter& json, const UrCalibrationDeltas& deltas) {
   json.key("ur_deltas").begin_object();
-  json.key("delta_theta").inline_array(deltas.delta_theta_rad, kJointCount);
-  json.key("delta_a").inline_array(deltas.delta_a_m, kJointCount);
-  json.key("delta_d").inline_array(deltas.delta_d_m, kJointCount);
-  json.key("delta_alpha").inline_array(deltas.delta_alpha_rad, kJointCount);
+  json.key("delta_theta").inline_array(deltas.delta_theta_rad, kSixJoints);
+  json.key("delta_a").inline_array(deltas.delta_a_m, kSixJoints);
+  json.key("delta_d").inline_array(deltas.delta_d_m, kSixJoints);
+  json.key("delta_alpha").inline_array(deltas.delta_alpha_rad, kSixJoints);
   json.end_object();
 }
 

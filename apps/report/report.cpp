@@ -645,7 +645,7 @@ PredictionSet predict_samples(const std::string& method, const RobotModel& model
   PredictionSet set{method, model, base_to_tracker, {}};
   for (const SampleRow& s : samples) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = s.q_rad[j];
+    for (int j = 0; j < kSixJoints; ++j) q(j) = s.q_rad[j];
     set.points_m.push_back(base_to_tracker.apply(fk_target_point(model, q, s.target)));
   }
   return set;

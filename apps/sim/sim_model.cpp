@@ -202,7 +202,7 @@ JointVector simulated_compliance(const RobotModel& truth, double j2_rad, double 
 JointVector Session::compliance(const JointVector& q_rad) const {
   JointVector dq = simulated_compliance(truth_.model, config_.compliance_j2_rad, config_.compliance_j3_rad, q_rad);
   const int j = config_.harmonic_joint;
-  if (j >= 0 && j < kJointCount) {
+  if (j >= 0 && j < kSixJoints) {
     const double angle = static_cast<double>(config_.harmonic_order) * q_rad(j);
     dq(j) += config_.harmonic_sin_rad * math::sin(angle) + config_.harmonic_cos_rad * math::cos(angle);
   }
@@ -255,7 +255,7 @@ bool RobotStream::next(JointStateRecord* record) {
     const JointVector qd = session_.joint_speeds_at(t_s);
     record->sequence = sequence;
     record->timestamp_us = t_us;
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       record->q_rad[j] = q(j);
       record->qd_rad_s[j] = qd(j);
       record->current_a[j] = static_cast<float>(0.8 * qd(j) + (j == 1 || j == 2 ? 1.5 * math::cos(q(1)) : 0.1));

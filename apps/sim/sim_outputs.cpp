@@ -80,7 +80,7 @@ std::string tracker_row(const TrackerPointRecord& r) {
 std::string truth_sample_row(const TruthSample& s) {
   std::string line =
       std::to_string(s.waypoint) + "," + seconds_text(s.tracker_us) + "," + textio::format_double(s.robot_us * 1e-6);
-  for (int j = 0; j < kJointCount; ++j) line += "," + textio::format_double(s.q_rad(j));
+  for (int j = 0; j < kSixJoints; ++j) line += "," + textio::format_double(s.q_rad(j));
   for (int a = 0; a < 3; ++a) line += "," + textio::format_double(s.point_m(a));
   return line + "\n";
 }
@@ -127,7 +127,7 @@ void write_simulation_members(const Session& session, double truth_margin_s, tex
   json.end_object();
   json.key("truth_sample_margin_s").value(truth_margin_s);
   json.key("waypoints").begin_array();
-  for (const JointVector& q : session.waypoints()) json.inline_array(q.data(), kJointCount);
+  for (const JointVector& q : session.waypoints()) json.inline_array(q.data(), kSixJoints);
   json.end_array();
   json.key("stops").begin_array();
   for (const Segment& s : session.schedule()) {

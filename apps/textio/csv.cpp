@@ -39,17 +39,17 @@ struct CsvFound {
 };
 
 /// Joint names as a UR teach pendant's export writes them ("Base (°)", ..., "Wrist 3 (°)").
-const char* const kPendantJointNames[kJointCount] = {"base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3"};
+const char* const kPendantJointNames[kSixJoints] = {"base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3"};
 
 /// Joint names as ROS (joint_states, the UR driver's URDF) writes them.
-const char* const kRosJointNames[kJointCount] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
-                                                 "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
+const char* const kRosJointNames[kSixJoints] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                                                "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
 
 /// True when header column `name` is schema column `wanted`: equal, or the pendant's or ROS's
 /// name of joint qN.
 bool column_matches(const std::string& name, const std::string& wanted) {
   if (name == wanted) return true;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     if (wanted == "q" + std::to_string(j + 1)) return name == kPendantJointNames[j] || name == kRosJointNames[j];
   }
   return false;
@@ -209,7 +209,7 @@ std::vector<T> with(std::vector<T> a, const std::vector<T>& b) {
   return a;
 }
 
-const std::vector<Quantity> kJointQuantities(kJointCount, Quantity::angle);
+const std::vector<Quantity> kJointQuantities(kSixJoints, Quantity::angle);
 
 /// A row whose orientation makes targets 2 and 3: added once the file is read, when the lever
 /// (which may depend on the joints' written resolution) is known.
@@ -246,7 +246,7 @@ double joint_position_variance_m2(double joint_sigma_rad, const RobotModel& arm,
   constexpr double kStep_rad = 1e-6;  // central differences: the error is ~1e-12 of |J|
   double jacobian_norm2_m2 = 0.0;     // sum over the poses of |d point / d q|_F^2
   for (const JointVector& q_rad : poses) {
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       JointVector ahead = q_rad;
       JointVector behind = q_rad;
       ahead(j) += kStep_rad;
@@ -307,7 +307,7 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
           target = static_cast<int>(named) - 1;
         }
         JointVector q;
-        for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
+        for (int j = 0; j < kSixJoints; ++j) q(j) = values[static_cast<std::size_t>(j)];
         const Vec3 point_m(values[6], values[7], values[8]);
         if (columns.group && given_lever_m > 0.0) {  // targets 2 and 3 once the lever is known
           const std::size_t at = values.size() - 3;
@@ -362,7 +362,7 @@ port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* p
                     const std::string error = check_finite(values, 0, 6);
                     if (!error.empty()) return error;
                     JointVector q;
-                    for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
+                    for (int j = 0; j < kSixJoints; ++j) q(j) = values[static_cast<std::size_t>(j)];
                     poses->push_back(q);
                     return std::string();
                   });
@@ -378,7 +378,7 @@ port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_ra
   port::Error error = read_csv(path, schema, units, [&](const std::vector<double>& values) {
     const std::string bad = check_finite(values, 0, 2);
     if (!bad.empty()) return bad;
-    if (rows == kJointCount) return std::string("more than six rows (one per joint)");
+    if (rows == kSixJoints) return std::string("more than six rows (one per joint)");
     if (!(std::fabs(values[0]) <= kMaxJointLimit_rad) || !(std::fabs(values[1]) <= kMaxJointLimit_rad)) {
       return std::string(
           "a limit beyond two turns (4 pi rad): degrees? name the unit in the header (lower [deg]) "
@@ -391,7 +391,7 @@ port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_ra
     return std::string();
   });
   if (!error.ok()) return error;
-  if (rows != kJointCount)
+  if (rows != kSixJoints)
     return port::Error::input(path + ": " + std::to_string(rows) + " rows, expected six (one per joint)");
   *lower_rad = lower;
   *upper_rad = upper;
@@ -401,7 +401,7 @@ port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_ra
 std::string format_joints_csv(Span<const JointVector> poses_rad) {
   std::string out = "q1,q2,q3,q4,q5,q6\n";
   for (const JointVector& q : poses_rad) {
-    for (int j = 0; j < kJointCount; ++j) out += format_double(q(j)) + (j + 1 < kJointCount ? "," : "\n");
+    for (int j = 0; j < kSixJoints; ++j) out += format_double(q(j)) + (j + 1 < kSixJoints ? "," : "\n");
   }
   return out;
 }
@@ -421,7 +421,7 @@ std::string format_samples_csv(Span<const Sample> samples) {
   const bool targets = target_count(samples) > 1;
   std::string out = targets ? "q1,q2,q3,q4,q5,q6,x,y,z,target\n" : "q1,q2,q3,q4,q5,q6,x,y,z\n";
   for (const Sample& s : samples) {
-    for (int j = 0; j < kJointCount; ++j) out += format_double(s.q_rad(j)) + ",";
+    for (int j = 0; j < kSixJoints; ++j) out += format_double(s.q_rad(j)) + ",";
     out += format_double(s.point_m.x()) + "," + format_double(s.point_m.y()) + "," + format_double(s.point_m.z());
     out += targets ? "," + std::to_string(s.target + 1) + "\n" : "\n";
   }

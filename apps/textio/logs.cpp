@@ -44,7 +44,7 @@ int find_time(const DelimitedReader& r) {
 }
 
 bool has_all(const DelimitedReader& r, const char* prefix, int first) {
-  for (int k = 0; k < kJointCount; ++k) {
+  for (int k = 0; k < kSixJoints; ++k) {
     if (r.find(column_name(prefix, first + k)) < 0) return false;
   }
   return true;
@@ -106,8 +106,8 @@ class TimeColumn {
 /// Columns of a robot log once its format is known: time and where each joint comes from.
 struct RobotLayout {
   TimeColumn time;
-  int q[kJointCount] = {};             ///< hivecal / RTDE: column of joint j
-  double q_scale[kJointCount] = {};    ///< its factor to rad
+  int q[kSixJoints] = {};              ///< hivecal / RTDE: column of joint j
+  double q_scale[kSixJoints] = {};     ///< its factor to rad
   std::vector<int> names;              ///< rostopic: field.nameK columns
   std::vector<int> positions;          ///< rostopic: field.positionK columns
   std::vector<double> position_scale;  ///< their factors to rad
@@ -115,7 +115,7 @@ struct RobotLayout {
 
 /// Columns "<prefix><first+j>" as the six joints.
 bool fixed_joints(DelimitedReader& r, const char* prefix, int first, RobotLayout* layout) {
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     layout->q[j] = r.find(column_name(prefix, first + j));
     if (!scale_of(r, layout->q[j], Quantity::angle, &layout->q_scale[j])) return false;
   }
@@ -138,7 +138,7 @@ bool robot_layout(DelimitedReader& r, LogFormat* format, RobotLayout* layout) {
       layout->positions.push_back(position);
       layout->position_scale.push_back(scale);
     }
-    if (layout->names.size() < static_cast<std::size_t>(kJointCount)) {
+    if (layout->names.size() < static_cast<std::size_t>(kSixJoints)) {
       return r.fail("rostopic log with " + std::to_string(layout->names.size()) +
                     " joints (field.nameK with field.positionK), expected at least 6");
     }
@@ -197,7 +197,7 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
   while (good && r.next_row()) {
     ++log.counters.rows;
     JointStateRecord record;
-    int source[kJointCount] = {};  // rostopic: which field.positionK holds joint j
+    int source[kSixJoints] = {};  // rostopic: which field.positionK holds joint j
     if (!layout.names.empty()) {
       names.clear();
       for (const int k : layout.names) names.push_back(r.fields()[static_cast<std::size_t>(k)]);
@@ -209,7 +209,7 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
     }
     bool repeated = false;
     if (!layout.time.read(r, &record.timestamp_us, &repeated)) break;
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       if (layout.names.empty()) {
         good = good && r.number(static_cast<std::size_t>(layout.q[j]), layout.q_scale[j], &record.q_rad[j]);
       } else {
@@ -218,7 +218,7 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
             good && r.number(static_cast<std::size_t>(layout.positions[k]), layout.position_scale[k], &record.q_rad[j]);
       }
     }
-    for (int j = 0; good && j < kJointCount; ++j) {
+    for (int j = 0; good && j < kSixJoints; ++j) {
       if (!std::isfinite(record.q_rad[j])) good = r.fail("joint " + std::to_string(j + 1) + ": NaN or Inf");
       const int column = layout.names.empty() ? layout.q[j] : layout.positions[static_cast<std::size_t>(source[j])];
       good = good && r.check_joint(j + 1, static_cast<std::size_t>(column), record.q_rad[j]);
@@ -337,7 +337,7 @@ const char* log_format_name(LogFormat format) {
 }
 
 bool parse_joint_names(std::string_view text, RobotLogOptions* options) {
-  std::array<std::string, kJointCount> names;
+  std::array<std::string, kSixJoints> names;
   std::size_t count = 0;
   for (std::size_t start = 0;;) {
     const std::size_t comma = std::min(text.find(',', start), text.size());

@@ -59,14 +59,14 @@ port::Error check_tool(const double (&point)[3], const std::string& what, const 
 
 /// The six rows as written: theta_offset, d, a, alpha (standard) or theta_offset, d, a_{i-1},
 /// alpha_{i-1} (modified); rows[j] = {theta_offset, d, a, alpha}.
-port::Error parse_dh_rows(const JsonValue& root, const std::string& source, double (&rows)[kJointCount][4]) {
+port::Error parse_dh_rows(const JsonValue& root, const std::string& source, double (&rows)[kSixJoints][4]) {
   const JsonValue* dh = root.find("dh");
   if (dh == nullptr) return fail(source, "missing \"dh\" (an array of 6 joint objects)");
-  if (dh->kind != JsonValue::Kind::array || dh->array.size() != kJointCount) {
+  if (dh->kind != JsonValue::Kind::array || dh->array.size() != kSixJoints) {
     return fail(source, "\"dh\" must be an array of 6 joint objects");
   }
   static const char* const kKeys[4] = {"theta_offset", "d", "a", "alpha"};
-  for (std::size_t j = 0; j < static_cast<std::size_t>(kJointCount); ++j) {
+  for (std::size_t j = 0; j < static_cast<std::size_t>(kSixJoints); ++j) {
     const JsonValue& row = dh->array[j];
     if (row.kind != JsonValue::Kind::object) return fail(source, "\"dh\"[" + std::to_string(j) + "] must be an object");
     for (std::size_t k = 0; k < 4; ++k) {
@@ -105,10 +105,10 @@ port::Error parse_other_tools(const JsonValue& root, const std::string& source, 
 port::Error parse_joint_limits(const JsonValue& root, const std::string& source, RobotDescription* description) {
   const JsonValue* limits = root.find("joint_limits");
   if (limits == nullptr) return port::Error{};
-  if (limits->kind != JsonValue::Kind::array || limits->array.size() != static_cast<std::size_t>(kJointCount)) {
+  if (limits->kind != JsonValue::Kind::array || limits->array.size() != static_cast<std::size_t>(kSixJoints)) {
     return fail(source, "\"joint_limits\" must be six [lower, upper] pairs in rad, joints 1 .. 6");
   }
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     double pair[2];
     const std::string at = "\"joint_limits\"[" + std::to_string(j) + "]";
     if (!read_json_numbers(&limits->array[static_cast<std::size_t>(j)], 2, pair)) {
@@ -146,7 +146,7 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
     }
     parsed.convention = modified ? DhConvention::modified : DhConvention::standard;
   }
-  double rows[kJointCount][4];
+  double rows[kSixJoints][4];
   port::Error r = parse_dh_rows(root, source, rows);
   if (!r.ok()) return r;
   double tool[3];
@@ -156,12 +156,12 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
   if (!r.ok()) return r;
   const Vec3 tool_m(tool[0], tool[1], tool[2]);
   if (parsed.convention == DhConvention::standard) {
-    for (int j = 0; j < kJointCount; ++j)
+    for (int j = 0; j < kSixJoints; ++j)
       parsed.model.joints[j] = DhJoint{rows[j][0], rows[j][1], rows[j][2], rows[j][3]};
     parsed.model.tool_m = tool_m;
   } else {
-    ModifiedDhRow modified[kJointCount];
-    for (int j = 0; j < kJointCount; ++j) modified[j] = ModifiedDhRow{rows[j][3], rows[j][2], rows[j][0], rows[j][1]};
+    ModifiedDhRow modified[kSixJoints];
+    for (int j = 0; j < kSixJoints; ++j) modified[j] = ModifiedDhRow{rows[j][3], rows[j][2], rows[j][0], rows[j][1]};
     if (model_from_modified_dh(modified, tool_m, &parsed.model, &parsed.modified_base) != Status::ok) {
       return fail(source, "\"dh\" or \"tool\" holds a number that is not finite");
     }
@@ -173,7 +173,7 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
     std::string what;
     const Mat3 to_file_base =
         parsed.convention == DhConvention::modified ? parsed.modified_base.transform().rotation : Mat3::Identity();
-    if (!read_compliance(*compliance, to_file_base, &parsed.model.compliance, &what)) {
+    if (!read_compliance(*compliance, to_file_base, parsed.model, &parsed.model.compliance, &what)) {
       return fail(source, "\"compliance\": " + what);
     }
   }
@@ -198,9 +198,9 @@ port::Error check_format(const JsonValue& root, const std::string& source, bool 
 }
 
 /// The DH rows of `description` in its own convention: {theta_offset, d, a, alpha} each, and the tool.
-void rows_as_written(const RobotDescription& description, double (&rows)[kJointCount][4], Vec3* tool_m) {
+void rows_as_written(const RobotDescription& description, double (&rows)[kSixJoints][4], Vec3* tool_m) {
   if (description.convention == DhConvention::standard) {
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       const DhJoint& joint = description.model.joints[j];
       rows[j][0] = joint.theta_offset_rad;
       rows[j][1] = joint.d_m;
@@ -210,9 +210,9 @@ void rows_as_written(const RobotDescription& description, double (&rows)[kJointC
     *tool_m = description.model.tool_m;
     return;
   }
-  ModifiedDhRow modified[kJointCount];
+  ModifiedDhRow modified[kSixJoints];
   modified_dh_from_model(description.model, description.modified_base, modified, tool_m);
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     rows[j][0] = modified[j].theta_offset_rad;
     rows[j][1] = modified[j].d_m;
     rows[j][2] = modified[j].a_prev_m;
@@ -233,7 +233,7 @@ bool read_load(const std::string& text, ComplianceLoad load, ComplianceTerm* ter
     term->frame = kToolLoadFrame;
     return true;
   }
-  for (int frame = 1; frame <= kJointCount; ++frame) {
+  for (int frame = 1; frame <= kSixJoints; ++frame) {
     if (text == "frame " + std::to_string(frame)) {
       term->frame = frame;
       return true;
@@ -245,7 +245,7 @@ bool read_load(const std::string& text, ComplianceLoad load, ComplianceTerm* ter
 /// Link centres of mass in the library's (standard) DH frames, the payload's in the flange frame.
 void write_masses(JsonWriter& json, const ArmMasses& masses) {
   json.key("masses").begin_object();
-  json.key("link_mass_kg").inline_array(masses.link_mass_kg, kJointCount);
+  json.key("link_mass_kg").inline_array(masses.link_mass_kg, kSixJoints);
   json.key("link_com_m").begin_array();
   for (const Vec3& com_m : masses.link_com_m) json.inline_array(com_m.data(), 3);
   json.end_array();
@@ -258,8 +258,8 @@ bool read_masses(const JsonValue* v, ArmMasses* masses, std::string* what) {
   *what = "\"masses\" must hold link_mass_kg (6 numbers), link_com_m (6 x [x, y, z]), payload_kg and payload_com_m";
   if (v == nullptr || v->kind != JsonValue::Kind::object) return false;
   const JsonValue* coms = v->find("link_com_m");
-  if (!read_json_numbers(v->find("link_mass_kg"), kJointCount, masses->link_mass_kg) || coms == nullptr ||
-      coms->kind != JsonValue::Kind::array || coms->array.size() != static_cast<std::size_t>(kJointCount) ||
+  if (!read_json_numbers(v->find("link_mass_kg"), kSixJoints, masses->link_mass_kg) || coms == nullptr ||
+      coms->kind != JsonValue::Kind::array || coms->array.size() != static_cast<std::size_t>(kSixJoints) ||
       !read_number(v->find("payload_kg"), &masses->payload_kg) ||
       !read_json_numbers(v->find("payload_com_m"), 3, masses->payload_com_m.data())) {
     return false;
@@ -312,7 +312,7 @@ bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::stri
   const JsonValue* unit = v.find("unit");
   ComplianceTerm& term = compliance->terms[t];
   if (v.kind != JsonValue::Kind::object || !read_number(v.find("joint"), &joint) || joint < 1.0 ||
-      joint > static_cast<double>(kJointCount) || joint != static_cast<double>(static_cast<int>(joint))) {
+      joint > static_cast<double>(kSixJoints) || joint != static_cast<double>(static_cast<int>(joint))) {
     *what = at + ".joint must be a joint number 1 .. 6";
     return false;
   }
@@ -375,7 +375,8 @@ void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const
   json.end_object();
 }
 
-bool read_compliance(const JsonValue& value, const Mat3& to_file_base, ComplianceModel* compliance, std::string* what) {
+bool read_compliance(const JsonValue& value, const Mat3& to_file_base, const RobotModel& model,
+                     ComplianceModel* compliance, std::string* what) {
   ComplianceModel parsed;
   const JsonValue* kind = value.find("kind");
   const JsonValue* terms = value.find("terms");
@@ -401,7 +402,7 @@ bool read_compliance(const JsonValue& value, const Mat3& to_file_base, Complianc
     if (!read_term(terms->array[static_cast<std::size_t>(t)], t, &parsed, what)) return false;
   if (parsed.load == ComplianceLoad::arm_masses && !read_masses(value.find("masses"), &parsed.masses, what))
     return false;
-  if (check_compliance(parsed) != Status::ok) {
+  if (check_compliance(parsed, model) != Status::ok) {
     *what =
         "not a usable compliance model (a term's load must lie beyond its joint, masses >= 0, every number finite, "
         "gravity_direction of unit length)";
@@ -415,7 +416,7 @@ void write_description_members(JsonWriter& json, const RobotDescription& file, c
   json.key("format").value(kFormat);
   json.key("robot").value(file.robot);
   json.key("convention").value(dh_convention_name(file.convention));
-  double rows[kJointCount][4];
+  double rows[kSixJoints][4];
   Vec3 tool_m;
   rows_as_written(file, rows, &tool_m);
   json.key("dh").begin_array();
@@ -449,7 +450,7 @@ void write_description_members(JsonWriter& json, const RobotDescription& file, c
   }
   if (file.has_joint_limits) {
     json.key("joint_limits").begin_array();
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       const double pair[2] = {file.lower_rad(j), file.upper_rad(j)};
       json.inline_array(pair, 2);
     }

@@ -62,8 +62,9 @@ port::Error parse_description_document(const std::string& text, const std::strin
 void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const Mat3& to_file_base,
                       const double* sigma = nullptr);
 /// Reads a "compliance" object written by write_compliance into *compliance (checked with
-/// check_compliance); false with *what naming the fault otherwise.
-bool read_compliance(const JsonValue& value, const Mat3& to_file_base, ComplianceModel* compliance, std::string* what);
+/// check_compliance for the joints of `model`); false with *what naming the fault otherwise.
+bool read_compliance(const JsonValue& value, const Mat3& to_file_base, const RobotModel& model,
+                     ComplianceModel* compliance, std::string* what);
 /// The unit of a compliance coefficient: "rad/m" (point loads) or "rad/(kg m)" (arm masses).
 const char* compliance_unit(ComplianceLoad load);
 /// The unit of term t's coefficient: its load's (compliance_unit), or "rad" for a harmonic.

@@ -31,7 +31,7 @@ std::string parse_six_values(std::string_view list, double* values) {
   while (!list.empty()) {
     const std::size_t comma = list.find(',');
     const std::string_view field = list.substr(0, comma);
-    if (count == kJointCount) return "more than 6 values";
+    if (count == kSixJoints) return "more than 6 values";
     double v = 0.0;
     if (!parse_double(field, &v)) return "not a number: '" + std::string(trim(field)) + "'";
     if (!math::is_finite(v)) return "value is NaN or Inf";
@@ -39,7 +39,7 @@ std::string parse_six_values(std::string_view list, double* values) {
     if (comma == std::string_view::npos) break;
     list.remove_prefix(comma + 1);
   }
-  if (count != kJointCount) return "expected 6 values, found " + std::to_string(count);
+  if (count != kSixJoints) return "expected 6 values, found " + std::to_string(count);
   return "";
 }
 
@@ -104,7 +104,7 @@ double ur_deltas_tool_shift_m(const RobotModel& nominal, const UrCalibrationDelt
   double worst_m = 0.0;
   for (int i = 0; i < kUrDeltaTestPoses; ++i) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-math::kPi, math::kPi);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-math::kPi, math::kPi);
     const double shift_m = (fk_tool_point(calibrated, q) - fk_tool_point(nominal, q)).norm();
     worst_m = shift_m > worst_m || !math::is_finite(shift_m) ? shift_m : worst_m;
   }
@@ -135,7 +135,7 @@ std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas) {
   for (const auto& row : rows) {
     out += row.name;
     out += " = [";
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       out += (j == 0 ? " " : ", ");
       out += format_double(row.values[j]);
     }

@@ -8,7 +8,7 @@
 namespace hivecal::textio {
 namespace {
 
-const char* const kFrameNames[kJointCount] = {"shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3"};
+const char* const kFrameNames[kSixJoints] = {"shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3"};
 
 /// Moves joint k's frame along its axis so that its d becomes 0 (see the header): the link
 /// part ends where joint k+1's axis meets joint k's x-y plane, joint k+1's d takes the rest.
@@ -49,9 +49,9 @@ bool ur_kinematics_from_model(const RobotModel& model, UrKinematics* kinematics,
         "YAML describes UR arms only; use --format urdf";
     return false;
   }
-  RigidTransform joint[kJointCount];
-  RigidTransform link[kJointCount];
-  for (int i = 0; i < kJointCount; ++i) {
+  RigidTransform joint[kSixJoints];
+  RigidTransform link[kSixJoints];
+  for (int i = 0; i < kSixJoints; ++i) {
     joint[i] = RigidTransform{rotation_z(j[i].theta_offset_rad), Vec3(0.0, 0.0, j[i].d_m)};
     link[i] = RigidTransform{rotation_x(j[i].alpha_rad), Vec3(j[i].a_m, 0.0, 0.0)};
   }
@@ -59,14 +59,14 @@ bool ur_kinematics_from_model(const RobotModel& model, UrKinematics* kinematics,
     move_along_axis(k, j[k].theta_offset_rad, j[k].alpha_rad, joint, link, &joint[k + 1]);
   }
   kinematics->joint_frames[0] = joint[0];
-  for (int i = 1; i < kJointCount; ++i) kinematics->joint_frames[i] = link[i - 1].then_after(joint[i]);
-  kinematics->flange = link[kJointCount - 1];
+  for (int i = 1; i < kSixJoints; ++i) kinematics->joint_frames[i] = link[i - 1].then_after(joint[i]);
+  kinematics->flange = link[kSixJoints - 1];
   return true;
 }
 
 std::string format_ur_kinematics_yaml(const UrKinematics& kinematics, const std::string& hash) {
   std::string s = "# Written by hivecal export (ROS UR description / driver kinematics parameters).\nkinematics:\n";
-  for (int i = 0; i < kJointCount; ++i) s += entry(kFrameNames[i], kinematics.joint_frames[i]);
+  for (int i = 0; i < kSixJoints; ++i) s += entry(kFrameNames[i], kinematics.joint_frames[i]);
   return s + "  hash: " + hash + "\n";
 }
 

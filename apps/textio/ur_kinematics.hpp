@@ -21,8 +21,8 @@ namespace hivecal::textio {
 
 /// The six joint frames of the YAML and the flange offset it cannot hold.
 struct UrKinematics {
-  RigidTransform joint_frames[kJointCount];  ///< shoulder .. wrist_3: previous link -> joint frame (before Rz(q_i))
-  RigidTransform flange;                     ///< L_6 = Tx(a_6) Rx(alpha_6): not in the YAML (identity on UR arms)
+  RigidTransform joint_frames[kSixJoints];  ///< shoulder .. wrist_3: previous link -> joint frame (before Rz(q_i))
+  RigidTransform flange;                    ///< L_6 = Tx(a_6) Rx(alpha_6): not in the YAML (identity on UR arms)
 };
 
 /// The YAML frames of `model` (standard DH); false with *why when the arm is not UR-shaped

@@ -97,12 +97,12 @@ std::string format_urdf(const RobotDescription& robot, const RigidTransform* bas
       ". -->\n"
       "<robot name=\"" +
       xml_name(robot.robot) + "\">\n" + link("base_link");
-  for (int i = 1; i <= kJointCount; ++i) s += link("link_" + std::to_string(i));
+  for (int i = 1; i <= kSixJoints; ++i) s += link("link_" + std::to_string(i));
   s += link("flange");
   for (int k = 0; k < robot.target_count; ++k) s += link(k == 0 ? "tcp" : "tcp_" + std::to_string(k + 1));
   RigidTransform before_joint = base_offset;  // from the previous link to the next joint's frame
   std::string parent = "base_link";
-  for (int i = 0; i < kJointCount; ++i) {
+  for (int i = 0; i < kSixJoints; ++i) {
     const DhJoint& joint = model.joints[i];
     s += revolute_joint(i + 1, parent, before_joint.then_after(rotation_only(rotation_z(joint.theta_offset_rad))),
                         limits, robot);

@@ -380,7 +380,7 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
   std::vector<const UrdfJoint*> movable;
   for (const UrdfJoint& joint : tree.joints)
     if (joint.movable()) movable.push_back(&joint);
-  if (movable.size() != static_cast<std::size_t>(kJointCount)) {
+  if (movable.size() != static_cast<std::size_t>(kSixJoints)) {
     return refuse(" " + std::to_string(movable.size()) +
                   " movable joints: hivecal models arms of exactly 6 revolute joints");
   }
@@ -415,7 +415,7 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
   Frame frame6;
   frame6.z = frame.z;
   const Vec3 offset = flange_pose.translation_m - frame.origin;
-  DhJoint& last = model.joints[kJointCount - 1];
+  DhJoint& last = model.joints[kSixJoints - 1];
   last.d_m = offset.dot(frame.z);
   const Vec3 radial = offset - last.d_m * frame.z;
   const Vec3 flange_x = flange_pose.rotation.col(0) - flange_pose.rotation.col(0).dot(frame.z) * frame.z;
@@ -453,7 +453,7 @@ port::Error parse_urdf_description(const std::string& text, const std::string& s
   double worst_m = 0.0;
   for (int pose = 0; pose < 100; ++pose) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-3.0, 3.0);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-3.0, 3.0);
     for (std::size_t k = 0; k < tools.size(); ++k) {
       const Vec3 urdf_point = pose_at(tree, tools[k], q).translation_m;
       const Vec3 dh_point = base.transform().apply(fk_target_point(model, q, static_cast<int>(k)));

@@ -74,14 +74,14 @@ TEST(RobotDescription, ResultsRoundTripInTheirOwnConvention) {
 // what the standard result predicts, to 1e-12 m.
 TEST(RobotDescription, ModifiedDhResultPredictsWhatTheStandardOneDoes) {
   for (OtherArm arm : test::kOtherArms) {
-    ModifiedDhRow rows[kJointCount];
+    ModifiedDhRow rows[kSixJoints];
     Vec3 tool_m;
     test::other_arm_modified(arm, ModifiedDhBase{}, rows, &tool_m);
     std::string text =
         "{\"robot\": \"" + std::string(test::other_arm_name(arm)) +
         "\", \"convention\": \"modified-dh\", \"vendor\": {\"note\": \"extra keys are allowed\"}, \"dh\": [";
     char buf[256];
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       std::snprintf(buf, sizeof buf, "%s{\"alpha\": %.17g, \"a\": %.17g, \"theta_offset\": %.17g, \"d\": %.17g}",
                     j == 0 ? "" : ", ", rows[j].alpha_prev_rad, rows[j].a_prev_m, rows[j].theta_offset_rad,
                     rows[j].d_m);

@@ -29,9 +29,9 @@ double worst_chain_error_m(const RobotModel& model, textio::UrKinematics* out = 
   double worst_m = 0.0;
   for (int pose = 0; pose < 200; ++pose) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
     RigidTransform chain;
-    for (int i = 0; i < kJointCount; ++i) {
+    for (int i = 0; i < kSixJoints; ++i) {
       const RigidTransform frame = textio::urdf_transform(textio::urdf_origin(kinematics.joint_frames[i]));
       chain = chain.then_after(frame).then_after(RigidTransform{rotation_z(q(i)), Vec3::Zero()});
     }

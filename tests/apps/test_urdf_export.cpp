@@ -105,7 +105,7 @@ double worst_tool_error_m(const textio::RobotDescription& robot, const std::map<
   double worst_m = 0.0;
   for (int pose = 0; pose < 200; ++pose) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
     for (std::size_t k = 0; k < tools.size(); ++k) {
       const Vec3 expected = file_base.apply(fk_target_point(robot.model, q, static_cast<int>(k)));
       worst_m = std::fmax(worst_m, (link_pose(joints, tools[k], q).translation_m - expected).norm());
@@ -174,9 +174,9 @@ TEST(UrdfExport, NominalAndCalibratedArmsAreTheirChains) {
 
 TEST(UrdfExport, ModifiedDhArmIsItsChain) {
   // An IRB120-like arm written in Craig's convention.
-  const ModifiedDhRow rows[kJointCount] = {{0.0, 0.0, 0.0, 0.29},    {-kPi / 2, 0.0, -kPi / 2, 0.0},
-                                           {0.0, 0.27, 0.0, 0.0},    {-kPi / 2, 0.07, 0.0, 0.302},
-                                           {kPi / 2, 0.0, 0.0, 0.0}, {-kPi / 2, 0.0, kPi, 0.072}};
+  const ModifiedDhRow rows[kSixJoints] = {{0.0, 0.0, 0.0, 0.29},    {-kPi / 2, 0.0, -kPi / 2, 0.0},
+                                          {0.0, 0.27, 0.0, 0.0},    {-kPi / 2, 0.07, 0.0, 0.302},
+                                          {kPi / 2, 0.0, 0.0, 0.0}, {-kPi / 2, 0.0, kPi, 0.072}};
   textio::RobotDescription robot;
   robot.convention = DhConvention::modified;
   ASSERT_EQ(model_from_modified_dh(rows, Vec3(0.0, 0.0, 0.1), &robot.model, &robot.modified_base), Status::ok);
@@ -254,7 +254,7 @@ TEST(UrdfImport, ExportedArmsReadBackAsTheSameModel) {
   ur5.model = nominal_model(RobotType::ur5);
   ur5.model.tool_m = Vec3(0.0, 0.0, 0.1695);
   const textio::RobotDescription back = expect_read_exactly(textio::format_urdf(ur5, nullptr), {"tcp"}, "UR5 URDF");
-  for (int i = 0; i < kJointCount; ++i) {  // the robot's own table, not an equivalent one turned by pi
+  for (int i = 0; i < kSixJoints; ++i) {  // the robot's own table, not an equivalent one turned by pi
     EXPECT_NEAR(back.model.joints[i].a_m, ur5.model.joints[i].a_m, 1e-12) << i;
     EXPECT_NEAR(back.model.joints[i].d_m, ur5.model.joints[i].d_m, 1e-12) << i;
     EXPECT_NEAR(back.model.joints[i].alpha_rad, ur5.model.joints[i].alpha_rad, 1e-12) << i;

@@ -100,7 +100,7 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
 TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
   const test::TempDir dir("hivecal_arm");
   ASSERT_FALSE(dir.path().empty());
-  ModifiedDhRow rows[kJointCount];
+  ModifiedDhRow rows[kSixJoints];
   Vec3 tool_m;
   const ModifiedDhBase offset{0.02, -0.015};
   test::other_arm_modified(OtherArm::kr6_r900, offset, rows, &tool_m);

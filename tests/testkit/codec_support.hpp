@@ -121,7 +121,7 @@ inline JointStateRecord random_joint_state(Random* random, std::uint16_t sequenc
   r.sequence = sequence;
   r.timestamp_us = timestamp_us;
   const bool raw = random->below(2) == 0;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     r.q_rad[j] = raw ? random_bits_f64(random) : random->uniform(-6.3, 6.3);
     r.qd_rad_s[j] = raw ? random_bits_f64(random) : random->uniform(-3.2, 3.2);
     r.current_a[j] = raw ? random_bits_f32(random) : static_cast<float>(random->uniform(-5.0, 5.0));

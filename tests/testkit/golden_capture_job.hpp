@@ -147,7 +147,7 @@ inline std::uint64_t capture_job_digest(const CaptureJobReport& r, bool calibrat
     d.add(c.lm.base_to_tracker.rotation);
     d.add(c.lm.base_to_tracker.translation_m);
     // The 33 rigid sigmas, then the model's compliance ones: a rigid result hashes as before.
-    d.add(c.lm.sigma.head(kRigidParamCount + c.lm.model.compliance.term_count));
+    d.add(c.lm.sigma.head(rigid_param_count(kSixJoints) + c.lm.model.compliance.term_count));
     d.add(c.lm.rms_m);
     d.add_u64(static_cast<std::uint64_t>(c.lm.iterations));
     d.add_mask(c.lm.identifiability.kept_mask);

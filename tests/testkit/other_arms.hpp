@@ -69,17 +69,17 @@ inline RobotModel other_arm_model(OtherArm arm) {
 
 /// The same arm as modified-DH (Craig) rows and tool, with a base offset in front of joint 1
 /// (alpha_0, a_0: zero for the vendors' tables; the tests also use a non-zero one).
-inline void other_arm_modified(OtherArm arm, const ModifiedDhBase& base, ModifiedDhRow (&rows)[kJointCount],
+inline void other_arm_modified(OtherArm arm, const ModifiedDhBase& base, ModifiedDhRow (&rows)[kSixJoints],
                                Vec3* tool_m) {
   modified_dh_from_model(other_arm_model(arm), base, rows, tool_m);
 }
 
 /// A modified-DH tool point from the definition (Rx(alpha_prev) Tx(a_prev) Rz(theta) Tz(d) per
 /// row), independent of dh_convention.hpp [m].
-inline Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kJointCount], const Vec3& tool_m,
+inline Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kSixJoints], const Vec3& tool_m,
                                  const JointVector& q_rad) {
   RigidTransform t;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     t = t.then_after(RigidTransform{rotation_x(rows[j].alpha_prev_rad), Vec3(rows[j].a_prev_m, 0.0, 0.0)});
     t = t.then_after(RigidTransform{rotation_z(q_rad(j) + rows[j].theta_offset_rad), Vec3(0.0, 0.0, rows[j].d_m)});
   }
@@ -92,7 +92,7 @@ inline Vec3 modified_chain_point(const ModifiedDhRow (&rows)[kJointCount], const
 inline RobotModel perturbed_keeping_parallel(const RobotModel& nominal, Random* random, double length_sigma_m,
                                              double angle_sigma_rad, const Vec3& tool_m) {
   RobotModel model = perturbed_model(nominal, random, length_sigma_m, angle_sigma_rad);
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     if (nominal.joints[j].alpha_rad == 0.0) model.joints[j].alpha_rad = 0.0;
   }
   model.tool_m = tool_m;

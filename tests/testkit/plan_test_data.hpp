@@ -44,7 +44,8 @@ inline std::uint64_t digest_of(const PlanResult& r) {
   Digest digest;
   for (std::size_t i = 0; i < r.pose_count; ++i) digest.add(r.poses[i]);
   digest.add(r.planned.log_det);
-  digest.add(r.planned.sigma.head<kRigidParamCount>());  // the rigid 33, as before the compliance coefficients
+  digest.add(
+      r.planned.sigma.head<rigid_param_count(kSixJoints)>());  // the rigid 33, as before the compliance coefficients
   digest.add(r.travel_s);
   return digest.value();
 }

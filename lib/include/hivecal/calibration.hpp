@@ -262,7 +262,7 @@ struct CalibrationStage {
 /// Stages a job runs at most ('all': GSA, ABC, LM, then LM+compliance when enabled, and
 /// LM+compliance+harmonics after it when the terms hold both families: a capacity that holds
 /// the harmonics, core/capacity.hpp).
-inline constexpr std::size_t kMaxCalibrationStages = kMaxJointTerms >= 4 + 2 * kJointCount ? 5 : 4;
+inline constexpr std::size_t kMaxCalibrationStages = kMaxJointTerms >= 4 + 2 * kSixJoints ? 5 : 4;
 
 /// The steps of a job, in order (CalibrationResult::step is the last one reached).
 enum class CalibrationStep : std::uint8_t { input, split, baseline, gsa, abc, lm, done };
@@ -797,9 +797,10 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
 /// the same set with the blunder never added. `observer` may be null. Returns ok (LM's
 /// not_converged counts as a result: its last point is used), or the failure, with
 /// result->step naming the step that failed:
-///  - input: invalid_argument (a null pointer, an unknown method or parameter set, compliance
-///    enabled without an LM stage or with terms that default_compliance_terms or
-///    check_compliance refuse), dataset_empty;
+///  - input: invalid_argument (a null pointer, an unknown method or parameter set, a start
+///    model that check_joint_layout refuses, compliance enabled without an LM stage or with
+///    terms that default_compliance_terms or check_compliance refuse), dataset_empty,
+///    joint_count_mismatch (a sample reads a joint beyond the model's: readings_fit_joint_count);
 ///  - split: invalid_argument (the fraction leaves no training sample);
 ///  - baseline: too_few_samples / degenerate_geometry (fewer than 3 non-collinear points: not
 ///    even the base frame is determined), the errors of fit_base_to_tracker;

@@ -64,7 +64,7 @@ Vec3 combine(const StoredDirections& columns, const double* t, int begin, int co
 LinkLengthSet link_length_set(const RobotModel& nominal) {
   const ModelParams params = to_params(nominal);
   LinkLengthSet set;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < nominal.joint_count; ++j) {
     for (DhField field : {DhField::d, DhField::a}) {
       const int index = model_param_index(j, field);
       if (params(index) != 0.0) set.param_index[set.count++] = index;
@@ -88,8 +88,11 @@ LinkLengths link_lengths(const RobotModel& model) {
 RobotModel with_link_lengths(const RobotModel& model, const LinkLengthSet& set, const double* lengths_m) {
   ModelParams params = to_params(model);
   for (std::size_t k = 0; k < set.count; ++k) params(set.param_index[k]) = lengths_m[k];
-  RobotModel out = from_params(params);
-  for (int k = 0; k < kMaxTargets - 1; ++k) out.other_tools_m[k] = model.other_tools_m[k];  // not among the 27
+  RobotModel out;  // rigid: the compliance is not the lengths' (with_link_lengths' contract)
+  out.joint_count = model.joint_count;
+  out.prismatic_joints = model.prismatic_joints;
+  set_model_params(params, &out);
+  for (int k = 0; k < kMaxTargets - 1; ++k) out.other_tools_m[k] = model.other_tools_m[k];  // not among the parameters
   return out;
 }
 

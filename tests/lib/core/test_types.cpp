@@ -34,7 +34,7 @@ Vec3 random_point(Random* random) {
 }
 
 TEST(Types, JointVectorHasOneEntryPerJoint) {
-  EXPECT_EQ(JointVector::RowsAtCompileTime, kJointCount);
+  EXPECT_EQ(JointVector::RowsAtCompileTime, kSixJoints);
   EXPECT_EQ(Vec3::RowsAtCompileTime, 3);
   EXPECT_EQ(Mat3::RowsAtCompileTime, 3);
   EXPECT_EQ(Mat3::ColsAtCompileTime, 3);
@@ -203,7 +203,7 @@ TEST(Types, AllFiniteChecksEveryCoefficient) {
   }
   JointVector q = JointVector::Zero();
   EXPECT_TRUE(all_finite(q));
-  q(kJointCount - 1) = nan;
+  q(kSixJoints - 1) = nan;
   EXPECT_FALSE(all_finite(q));
   // Expressions and blocks: the NaN outside the block is not seen.
   Mat3 with_nan = Mat3::Identity();

@@ -34,30 +34,30 @@ Mat4 trans(double x, double y, double z) {
 }
 
 /// The modified-DH tool point from its definition, in libm double precision [m].
-Vec3 reference_modified_fk(const ModifiedDhRow (&rows)[kJointCount], const Vec3& tool_m, const JointVector& q) {
+Vec3 reference_modified_fk(const ModifiedDhRow (&rows)[kSixJoints], const Vec3& tool_m, const JointVector& q) {
   Mat4 t = Mat4::Identity();
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     t = t * rot_x(rows[j].alpha_prev_rad) * trans(rows[j].a_prev_m, 0, 0) * rot_z(q(j) + rows[j].theta_offset_rad) *
         trans(0, 0, rows[j].d_m);
   }
   return (t * Eigen::Vector4d(tool_m.x(), tool_m.y(), tool_m.z(), 1.0)).head<3>();
 }
 
-void random_rows(Random* r, ModifiedDhRow (&rows)[kJointCount]) {
+void random_rows(Random* r, ModifiedDhRow (&rows)[kSixJoints]) {
   for (ModifiedDhRow& row : rows)
     row = ModifiedDhRow{r->uniform(-3.1, 3.1), r->uniform(-0.5, 0.5), r->uniform(-3.1, 3.1), r->uniform(-0.5, 0.5)};
 }
 
 JointVector random_joints(Random* r) {
   JointVector q;
-  for (int j = 0; j < kJointCount; ++j) q(j) = r->uniform(-3.1, 3.1);
+  for (int j = 0; j < kSixJoints; ++j) q(j) = r->uniform(-3.1, 3.1);
   return q;
 }
 
 TEST(DhConvention, ModifiedArmsHaveTheirToolPointsInTheStandardModel) {
   Random random(41);
   for (int arm = 0; arm < 200; ++arm) {
-    ModifiedDhRow rows[kJointCount];
+    ModifiedDhRow rows[kSixJoints];
     random_rows(&random, rows);
     const Vec3 tool(random.uniform(-0.1, 0.1), random.uniform(-0.1, 0.1), random.uniform(0.0, 0.2));
     RobotModel model;
@@ -77,13 +77,13 @@ TEST(DhConvention, ModifiedArmsHaveTheirToolPointsInTheStandardModel) {
 TEST(DhConvention, RowsComeBackAsTheyWereAndCalibratedWristLinksFoldIntoTheTool) {
   Random random(42);
   for (int arm = 0; arm < 100; ++arm) {
-    ModifiedDhRow rows[kJointCount];
+    ModifiedDhRow rows[kSixJoints];
     random_rows(&random, rows);
     const Vec3 tool(0.01, -0.02, 0.12);
     RobotModel model;
     ModifiedDhBase base;
     ASSERT_EQ(model_from_modified_dh(rows, tool, &model, &base), Status::ok);
-    ModifiedDhRow back[kJointCount];
+    ModifiedDhRow back[kSixJoints];
     Vec3 back_tool;
     EXPECT_NO_HEAP(modified_dh_from_model(model, base, back, &back_tool));
     EXPECT_EQ(std::memcmp(back, rows, sizeof rows), 0) << "arm " << arm;
@@ -106,7 +106,7 @@ TEST(DhConvention, RowsComeBackAsTheyWereAndCalibratedWristLinksFoldIntoTheTool)
 }
 
 TEST(DhConvention, RefusesNonFiniteRows) {
-  ModifiedDhRow rows[kJointCount];
+  ModifiedDhRow rows[kSixJoints];
   rows[3].d_m = std::nan("");
   RobotModel model;
   ModifiedDhBase base;

@@ -38,7 +38,7 @@ TEST(InverseKinematics, PosesOfRandomJointsAreReachedWithinTheLimits) {
   for (int trial = 0; trial < 40; ++trial) {
     const RobotModel model = test::perturbed_model(nominal_model(RobotType::ur5), &draws, 1e-3, 1e-3);
     JointVector q_true;
-    for (int j = 0; j < kJointCount; ++j) q_true(j) = draws.uniform(-3.0, 3.0);
+    for (int j = 0; j < kSixJoints; ++j) q_true(j) = draws.uniform(-3.0, 3.0);
     const RigidTransform target = fk_flange(model, q_true);
     Random starts(100 + static_cast<std::uint64_t>(trial));
     JointVector q;
@@ -48,7 +48,7 @@ TEST(InverseKinematics, PosesOfRandomJointsAreReachedWithinTheLimits) {
     const RigidTransform reached = fk_flange(model, q);
     EXPECT_LT((reached.translation_m - target.translation_m).norm(), 1e-6) << trial;
     EXPECT_LT(rotation_vector_of(target.rotation * reached.rotation.transpose()).norm(), 1e-6) << trial;
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       EXPECT_GE(q(j), limits.lower_rad(j));
       EXPECT_LE(q(j), limits.upper_rad(j));
     }

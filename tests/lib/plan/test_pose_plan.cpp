@@ -48,7 +48,7 @@ TEST(PosePlan, EveryPlannedPoseMeetsEveryConstraint) {
     EXPECT_GE(reflector.head<2>().norm(), options.constraints.keep_out_radius_m) << i;
     const Vec3 line = (options.constraints.tracker_m - reflector).normalized();
     EXPECT_GE(flange.rotation.col(2).dot(line), cos_acceptance - 1e-12) << i;
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       EXPECT_GE(q(j), options.constraints.limits.lower_rad(j));
       EXPECT_LE(q(j), options.constraints.limits.upper_rad(j));
     }
@@ -328,7 +328,7 @@ TEST(PosePlan, ToolDownLeavesParametersThatNoPoseSetIdentifies) {
   std::printf("[plan] tool down: the pool keeps %d of 33; facing the tracker %d; freeing the orientation adds:",
               result.pool.kept_count(), facing.kept_count());
   for (int k = 0; k < kFullParamCount; ++k) {
-    if (mask_has(gained, k)) std::printf(" %s", full_param_name(k));
+    if (mask_has(gained, k)) std::printf(" %s", full_param_name(k, kSixJoints));
   }
   std::printf("\n");
   // Three more null directions with the joint 6 axis always vertical (the dropping rule names
@@ -336,7 +336,7 @@ TEST(PosePlan, ToolDownLeavesParametersThatNoPoseSetIdentifies) {
   // combination of theta4 and a4, d4 one of alpha4 (d2, d3 are lost either way).
   EXPECT_EQ(result.pool.kept_mask & ~facing.kept_mask, 0u);  // down identifies nothing more
   EXPECT_EQ(gained, param_bit(model_param_index(0, DhField::a)) | param_bit(model_param_index(3, DhField::d)) |
-                        param_bit(tool_param_index(2)));
+                        param_bit(tool_param_index(kSixJoints, 2)));
   // Every tool-down plan, whatever it selects, keeps at most what its pool keeps.
   EXPECT_EQ(result.planned.identifiability.kept_mask & ~result.pool.kept_mask, 0u);
 }

@@ -39,7 +39,7 @@ void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest
   digest->add(r.base_to_tracker.rotation);
   digest->add(r.base_to_tracker.translation_m);
   // The 33 rigid sigmas, then the model's compliance ones: a rigid result hashes as before.
-  digest->add(r.sigma.head(kRigidParamCount + r.model.compliance.term_count));
+  digest->add(r.sigma.head(rigid_param_count(kSixJoints) + r.model.compliance.term_count));
   digest->add(r.loss_sum_m2);
   digest->add(r.rms_m);
   digest->add(r.residual_sigma_m);
@@ -189,7 +189,7 @@ void add_job_result(Status status, const CalibrationResult& result, bool complia
     digest->add(stage.base_to_tracker.translation_m);
     digest->add(stage.test.mae(ErrorAxis::norm_3d));
   }
-  if (sigma) digest->add(result.lm.sigma.head(kRigidParamCount));
+  if (sigma) digest->add(result.lm.sigma.head(rigid_param_count(kSixJoints)));
   digest->add_mask(result.lm.identifiability.kept_mask);
   digest->add_mask(result.lm_pruned_mask);
   digest->add_u64(result.outlier_count);

@@ -97,7 +97,7 @@ void feed_synthetic(SampleExtractorBase* extractor, const ClockFit& clock, doubl
     JointStateRecord joint;
     joint.timestamp_us = static_cast<std::uint64_t>(robot_t_us);
     const JointVector q = joints_at((static_cast<double>(joint.timestamp_us) - robot_start_us) * 1e-6);
-    for (int j = 0; j < kJointCount; ++j) joint.q_rad[j] = q(j);
+    for (int j = 0; j < kSixJoints; ++j) joint.q_rad[j] = q(j);
     EXPECT_NO_HEAP(extractor->push_robot(joint));
     robot_t_us += std::round(8000.0 + 500.0 * random.normal());
   }
@@ -261,7 +261,7 @@ ExtractionCounts counts_around_a_robot_gap(const ExtractionConfig& config) {
     if (t_us > 5000000 && t_us < 5100000) continue;
     JointStateRecord joint;
     joint.timestamp_us = t_us;
-    for (int j = 0; j < kJointCount; ++j) joint.q_rad[j] = home_pose()(j);
+    for (int j = 0; j < kSixJoints; ++j) joint.q_rad[j] = home_pose()(j);
     (void)extractor.push_robot(joint);
   }
   for (int i = 10; i < 90; ++i) {

@@ -43,7 +43,7 @@ JointStateRecord vector1_record() {
   JointStateRecord r;
   r.sequence = 7;
   r.timestamp_us = 1000000;
-  const double q[kJointCount] = {0.0, -math::kHalfPi, math::kHalfPi, -math::kHalfPi, -math::kHalfPi, 0.0};
+  const double q[kSixJoints] = {0.0, -math::kHalfPi, math::kHalfPi, -math::kHalfPi, -math::kHalfPi, 0.0};
   std::memcpy(r.q_rad, q, sizeof q);
   return r;
 }
@@ -140,9 +140,9 @@ TEST(CodecVectors, DecodeToTheStatedValues) {
 
   EXPECT_EQ(handler.joint.sequence, 7);
   EXPECT_EQ(handler.joint.timestamp_us, 1000000u);
-  const double q[kJointCount] = {0.0, -1.5707963267948966, 1.5707963267948966, -1.5707963267948966, -1.5707963267948966,
-                                 0.0};
-  for (int j = 0; j < kJointCount; ++j) {
+  const double q[kSixJoints] = {0.0, -1.5707963267948966, 1.5707963267948966, -1.5707963267948966, -1.5707963267948966,
+                                0.0};
+  for (int j = 0; j < kSixJoints; ++j) {
     EXPECT_EQ(handler.joint.q_rad[j], q[j]) << j;
     EXPECT_EQ(handler.joint.qd_rad_s[j], 0.0);
     EXPECT_EQ(handler.joint.current_a[j], 0.0f);

@@ -59,7 +59,7 @@ TEST(Records, FieldWidthsMatchTheSpecTables) {
   static_assert(std::is_same_v<decltype(TrackerPointRecord::timestamp_us), std::uint64_t>, "u64");
   static_assert(std::is_same_v<decltype(DeviceInfoRecord::timestamp_us), std::uint64_t>, "u64");
   // JOINT_STATE, 120 bytes: 6 x f64 position, 6 x f64 velocity, 6 x f32 current.
-  EXPECT_EQ(kJointCount, 6);
+  EXPECT_EQ(kSixJoints, 6);
   static_assert(std::is_same_v<std::remove_extent_t<decltype(JointStateRecord::q_rad)>, double>, "f64");
   static_assert(std::is_same_v<std::remove_extent_t<decltype(JointStateRecord::qd_rad_s)>, double>, "f64");
   static_assert(std::is_same_v<std::remove_extent_t<decltype(JointStateRecord::current_a)>, float>, "f32");
