@@ -72,7 +72,7 @@ void Session::build_truth(Random* random) {
     (void)apply_ur_deltas(truth_.nominal, config_.deltas, &truth_.model);
   } else {
     truth_.model = truth_.nominal;
-    for (DhJoint& joint : truth_.model.joints) {
+    for (DhJoint& joint : model_joints(&truth_.model)) {
       joint.theta_offset_rad += config_.angle_sigma_rad * random->normal();
       joint.d_m += config_.length_sigma_m * random->normal();
       joint.a_m += config_.length_sigma_m * random->normal();

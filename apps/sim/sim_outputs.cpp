@@ -67,7 +67,7 @@ bool write_csv(const Session& session, const char* header, Row row, port::Staged
 
 std::string robot_row(const JointStateRecord& r) {
   std::string line = seconds_text(r.timestamp_us);
-  for (const double q : r.q_rad) line += "," + textio::format_double(q);
+  for (int j = 0; j < r.joint_count; ++j) line += "," + textio::format_double(r.q_rad[j]);
   return line + "\n";
 }
 

@@ -247,7 +247,7 @@ void write_masses(JsonWriter& json, const ArmMasses& masses) {
   json.key("masses").begin_object();
   json.key("link_mass_kg").inline_array(masses.link_mass_kg, kSixJoints);
   json.key("link_com_m").begin_array();
-  for (const Vec3& com_m : masses.link_com_m) json.inline_array(com_m.data(), 3);
+  for (int link = 0; link < kSixJoints; ++link) json.inline_array(masses.link_com_m[link].data(), 3);
   json.end_array();
   json.key("payload_kg").value(masses.payload_kg);
   json.key("payload_com_m").inline_array(masses.payload_com_m.data(), 3);

@@ -158,7 +158,7 @@ TEST(UrdfExport, NominalAndCalibratedArmsAreTheirChains) {
   for (int trial = 0; trial < 5; ++trial) {
     textio::RobotDescription robot;
     robot.model = nominal_model(RobotType::ur5);
-    for (DhJoint& joint : robot.model.joints) {
+    for (DhJoint& joint : model_joints(&robot.model)) {
       joint.theta_offset_rad += trial == 0 ? kPi / 2 : random.uniform(-kPi, kPi);
       joint.d_m += random.uniform(-0.05, 0.05);
       joint.a_m += random.uniform(-0.05, 0.05);
@@ -218,14 +218,15 @@ TEST(UrdfExport, RobotJsonReadsBackAsTheSameArm) {
   textio::RobotDescription back;
   ASSERT_TRUE(textio::parse_robot_description(textio::format_robot_description(robot), "r.json", &back).ok());
   EXPECT_TRUE(back.has_joint_limits);
-  EXPECT_EQ(back.lower_rad, robot.lower_rad);
-  EXPECT_EQ(back.upper_rad, robot.upper_rad);
+  EXPECT_EQ(back.lower_rad.head(kSixJoints),
+            robot.lower_rad.head(kSixJoints));  // the joints beyond the arm's are not read
+  EXPECT_EQ(back.upper_rad.head(kSixJoints), robot.upper_rad.head(kSixJoints));
   // And through URDF: the limits are the joints' <limit>.
   textio::RobotDescription from_urdf;
   ASSERT_TRUE(textio::parse_urdf_description(textio::format_urdf(robot, nullptr), "r.urdf", &from_urdf).ok());
   EXPECT_TRUE(from_urdf.has_joint_limits);
-  EXPECT_EQ(from_urdf.lower_rad, robot.lower_rad);
-  EXPECT_EQ(from_urdf.upper_rad, robot.upper_rad);
+  EXPECT_EQ(from_urdf.lower_rad.head(kSixJoints), robot.lower_rad.head(kSixJoints));
+  EXPECT_EQ(from_urdf.upper_rad.head(kSixJoints), robot.upper_rad.head(kSixJoints));
   EXPECT_EQ(back.robot, robot.robot);
   EXPECT_EQ(back.model.joints[2].a_m, robot.model.joints[2].a_m);
   EXPECT_EQ(back.model.tool_m, robot.model.tool_m);
@@ -264,7 +265,7 @@ TEST(UrdfImport, ExportedArmsReadBackAsTheSameModel) {
   for (int trial = 0; trial < 10; ++trial) {
     textio::RobotDescription robot;
     robot.model = nominal_model(RobotType::ur10e);
-    for (DhJoint& joint : robot.model.joints) {
+    for (DhJoint& joint : model_joints(&robot.model)) {
       joint.theta_offset_rad += random.uniform(-0.5, 0.5);
       joint.d_m += random.uniform(-0.05, 0.05);
       joint.a_m += random.uniform(-0.05, 0.05);

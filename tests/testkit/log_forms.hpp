@@ -44,7 +44,7 @@ inline std::string hivecal_robot_csv(const std::vector<JointStateRecord>& record
   std::string out = "t,q1,q2,q3,q4,q5,q6\n";
   for (const JointStateRecord& r : records) {
     out += seconds(r.timestamp_us);
-    for (const double q : r.q_rad) out += "," + g17(q);
+    for (int j = 0; j < r.joint_count; ++j) out += "," + g17(r.q_rad[j]);
     out += "\n";
   }
   return out;
@@ -61,8 +61,8 @@ inline std::string rtde_log(const std::vector<JointStateRecord>& records, char s
   out.reserve(out.size() + records.size() * 256);  // ~250 bytes a row: one allocation, not ~30
   for (const JointStateRecord& r : records) {
     out += seconds(r.timestamp_us);
-    for (const double q : r.q_rad) (out += separator) += g17(q + 0.01);
-    for (const double q : r.q_rad) (out += separator) += g17(q);
+    for (int j = 0; j < r.joint_count; ++j) (out += separator) += g17(r.q_rad[j] + 0.01);
+    for (int j = 0; j < r.joint_count; ++j) (out += separator) += g17(r.q_rad[j]);
     for (int k = 0; k < kSixJoints; ++k) (out += separator) += "0.5";
     out += "\n";
   }

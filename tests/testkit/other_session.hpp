@@ -104,7 +104,7 @@ inline OtherSession make_other_session(const OtherSessionConfig& config) {
   s.nominal = nominal_model(config.robot);
   s.nominal.tool_m = Vec3(0.012, -0.018, 0.115);  // a reflector nest off the flange axis
   s.truth = s.nominal;
-  for (DhJoint& j : s.truth.joints) {
+  for (DhJoint& j : model_joints(&s.truth)) {
     j.theta_offset_rad += 60e-6 * random.normal();
     j.d_m += 60e-6 * random.normal();
     j.a_m += 60e-6 * random.normal();

@@ -12,24 +12,31 @@ struct Link {
   Vec3 translation_m;
 };
 
-/// The link of a joint of type `type` at reading q (revolute: q turns theta [rad]; prismatic: q
-/// slides d [m]) with its twist's sin and cos given.
-Link dh_link(const DhJoint& joint, JointType type, double sa, double ca, double q) {
-  const bool revolute = type == JointType::revolute;
+/// The link of a revolute joint at reading q [rad] with its twist's sin and cos given.
+__attribute__((always_inline)) inline Link revolute_link(const DhJoint& joint, double sa, double ca, double q_rad) {
   double st = 0.0;
   double ct = 0.0;
-  math::sincos(revolute ? q + joint.theta_offset_rad : joint.theta_offset_rad, &st, &ct);
+  math::sincos(q_rad + joint.theta_offset_rad, &st, &ct);
   Link link;
   link.rotation << ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca;
-  link.translation_m << joint.a_m * ct, joint.a_m * st, revolute ? joint.d_m : joint.d_m + q;
+  link.translation_m << joint.a_m * ct, joint.a_m * st, joint.d_m;
   return link;
 }
 
-Link dh_link(const DhJoint& joint, JointType type, double q) {
+/// The link of joint j of `model` at reading q with its twist's sin and cos given: q turns theta
+/// (revolute, [rad]) or slides d (prismatic, [m]: the link of a joint at theta_offset, d + q).
+__attribute__((always_inline)) inline Link dh_link(const RobotModel& model, int j, double sa, double ca, double q) {
+  if (joint_type(model, j) == JointType::revolute) return revolute_link(model.joints[j], sa, ca, q);
+  DhJoint slid = model.joints[j];
+  slid.d_m += q;
+  return revolute_link(slid, sa, ca, 0.0);
+}
+
+Link dh_link(const RobotModel& model, int j, double q) {
   double sa = 0.0;
   double ca = 0.0;
-  math::sincos(joint.alpha_rad, &sa, &ca);
-  return dh_link(joint, type, sa, ca, q);
+  math::sincos(model.joints[j].alpha_rad, &sa, &ca);
+  return dh_link(model, j, sa, ca, q);
 }
 
 struct NominalTable {
@@ -154,7 +161,7 @@ namespace detail {
 void rigid_frames(const RobotModel& model, const JointVector& q_rad, RigidTransform (&frame)[kMaxJoints + 1]) {
   frame[0] = RigidTransform{};
   for (int j = 0; j < model.joint_count; ++j) {
-    const Link link = dh_link(model.joints[j], joint_type(model, j), q_rad(j));
+    const Link link = dh_link(model, j, q_rad(j));
     frame[j + 1].translation_m = frame[j].rotation * link.translation_m + frame[j].translation_m;
     frame[j + 1].rotation = frame[j].rotation * link.rotation;
   }
@@ -173,7 +180,7 @@ JointVector deflected(const RobotModel& model, const JointVector& q_rad) {
 RigidTransform rigid_flange(const RobotModel& model, const JointVector& q_rad) {
   RigidTransform pose;
   for (int j = 0; j < model.joint_count; ++j) {
-    const Link link = dh_link(model.joints[j], joint_type(model, j), q_rad(j));
+    const Link link = dh_link(model, j, q_rad(j));
     pose.translation_m = pose.rotation * link.translation_m + pose.translation_m;
     pose.rotation = pose.rotation * link.rotation;
   }
@@ -184,8 +191,15 @@ RigidTransform rigid_flange(const RobotModel& model, const JointVector& q_rad) {
 Vec3 rigid_point(const RobotModel& model, const ModelTrig& trig, const Vec3& tool_m, const JointVector& q_rad) {
   // Innermost first: p <- R_j p + t_j needs only matrix-vector products.
   Vec3 point_m = tool_m;
+  if (all_revolute(model)) {  // the loop of the arms the library mostly sees, without a test per joint
+    for (int j = model.joint_count - 1; j >= 0; --j) {
+      const Link link = revolute_link(model.joints[j], trig.sin_alpha[j], trig.cos_alpha[j], q_rad(j));
+      point_m = link.rotation * point_m + link.translation_m;
+    }
+    return point_m;
+  }
   for (int j = model.joint_count - 1; j >= 0; --j) {
-    const Link link = dh_link(model.joints[j], joint_type(model, j), trig.sin_alpha[j], trig.cos_alpha[j], q_rad(j));
+    const Link link = dh_link(model, j, trig.sin_alpha[j], trig.cos_alpha[j], q_rad(j));
     point_m = link.rotation * point_m + link.translation_m;
   }
   return point_m;

@@ -24,6 +24,12 @@ JointTrig deflected_trig(const RobotModel& model, const JointVector& q_rad, Term
   return joint_trig(model, q_rad + compliance_deflection(model, q_rad, *basis));
 }
 
+/// The columns a model of `model`'s joint count has: its rigid parameters and the build's joint
+/// terms (every_column of its sample_rows_context; 73 for six joints and 40 terms).
+int model_column_count(const RobotModel& model) {
+  return rigid_param_count(model) + kMaxComplianceTerms;
+}
+
 /// IndexList's unlisted columns are scratch that the normal-equation update never reads.
 using detail::IndexList;
 
@@ -445,8 +451,11 @@ Vec3 local_target_residual_jacobian(const RobotModel& model, SampleRowsContext& 
   add_rows<static_cast<std::size_t>(kGroupSamples)>(moved, context.trig, base_to_tracker, samples, trig_of,
                                                     compliant ? &context.pose_basis : nullptr, 1, context.every_column,
                                                     rows, &local_residual_m);
-  for (int c = 0; c < kFullParamCount; ++c)
+  // The model's columns (every_column lists them in place); those a build holds beyond them are 0.
+  const int model_columns = model_column_count(model);
+  for (int c = 0; c < model_columns; ++c)
     for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
+  local_jacobian->rightCols(kFullParamCount - model_columns).setZero();
   return local_residual_m;
 }
 

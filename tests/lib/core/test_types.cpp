@@ -33,8 +33,8 @@ Vec3 random_point(Random* random) {
   return Vec3(random->uniform(-3.0, 3.0), random->uniform(-3.0, 3.0), random->uniform(-3.0, 3.0));
 }
 
-TEST(Types, JointVectorHasOneEntryPerJoint) {
-  EXPECT_EQ(JointVector::RowsAtCompileTime, kSixJoints);
+TEST(Types, JointVectorHasRoomForEveryJointTheBuildHolds) {
+  EXPECT_EQ(JointVector::RowsAtCompileTime, kMaxJoints);
   EXPECT_EQ(Vec3::RowsAtCompileTime, 3);
   EXPECT_EQ(Mat3::RowsAtCompileTime, 3);
   EXPECT_EQ(Mat3::ColsAtCompileTime, 3);

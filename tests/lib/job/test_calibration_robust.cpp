@@ -424,8 +424,10 @@ TEST(CalibrationRobust, SetsThatDetermineNothingAreRefused) {
   EXPECT_EQ(calibrate(start(), &dataset, options(CalibrationMethod::lm), &workspace, &result), Status::too_few_samples);
   EXPECT_EQ(result.step, CalibrationStep::baseline);
   dataset.clear();
+  JointVector q;
+  q << 0.3, 0.3, 0.3, 0.3, 0.3, 0.3;
   for (int i = 0; i < 6; ++i) {  // one joint position, six readings: one point
-    ASSERT_EQ(dataset.add(JointVector::Constant(0.3), Vec3(1.0, 0.5, 0.2)), Status::ok);
+    ASSERT_EQ(dataset.add(q, Vec3(1.0, 0.5, 0.2)), Status::ok);
   }
   EXPECT_EQ(calibrate(start(), &dataset, options(CalibrationMethod::lm), &workspace, &result),
             Status::degenerate_geometry);

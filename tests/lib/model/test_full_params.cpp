@@ -75,7 +75,8 @@ RobotModel compliant_model(Random* random) {
 TEST(FullParams, LayoutIsGeometryThenBaseThenCompliance) {
   EXPECT_EQ(kBaseParamCount, 6);
   EXPECT_EQ(rigid_param_count(kSixJoints), 33);
-  EXPECT_EQ(kFullParamCount, rigid_param_count(kSixJoints) + kMaxJointTerms);  // 37, 61 or 73: the build's capacity
+  EXPECT_EQ(kFullParamCount, rigid_param_count(kMaxJoints) + kMaxJointTerms);  // 37, 73 or 81: the build's capacity
+  // A six-joint model's layout in a build of any capacity (below: the six-joint indices).
   EXPECT_EQ(base_rotation_param_index(kSixJoints, 0), 27);
   EXPECT_EQ(base_rotation_param_index(kSixJoints, 2), 29);
   EXPECT_EQ(base_translation_param_index(kSixJoints, 0), 30);
@@ -84,10 +85,12 @@ TEST(FullParams, LayoutIsGeometryThenBaseThenCompliance) {
   EXPECT_EQ(compliance_param_index(kSixJoints, 3), 36);
   EXPECT_EQ(param_bit(0), ParamMask{1});
   EXPECT_EQ(param_bit(36), ParamMask{0x1000000000});
-  EXPECT_EQ(rigid_params_mask(kSixJoints), ParamMask{0x1FFFFFFFF});  // bits 0 .. 32
+  EXPECT_EQ(rigid_params_mask(kSixJoints), ParamMask{0x1FFFFFFFF});            // bits 0 .. 32
+  const int six_joint_count = rigid_param_count(kSixJoints) + kMaxJointTerms;  // a six-joint model's parameters
   EXPECT_EQ(compliance_params_mask(kSixJoints, kMaxComplianceTerms),
-            ((ParamMask{1} << kFullParamCount) - 1U) & ~rigid_params_mask(kSixJoints));  // 33 ..
-  EXPECT_EQ(valid_params_mask(kSixJoints), (ParamMask{1} << kFullParamCount) - 1U);      // every parameter
+            ((ParamMask{1} << six_joint_count) - 1U) & ~rigid_params_mask(kSixJoints));  // 33 ..
+  EXPECT_EQ(valid_params_mask(kSixJoints), (ParamMask{1} << six_joint_count) - 1U);      // every parameter
+  EXPECT_EQ(valid_params_mask(kMaxJoints), (ParamMask{1} << kFullParamCount) - 1U);      // the capacity
   EXPECT_EQ(kOtherTargetTools, param_bit(kFullParamCount));                              // past every parameter
   EXPECT_EQ(compliance_params_mask(kSixJoints, 0), ParamMask{0});
   EXPECT_EQ(compliance_params_mask(kSixJoints, 1), ParamMask{0x200000000});
@@ -125,7 +128,7 @@ TEST(FullParams, MaskCountAndIndicesAgreeWithABitLoopOnRandomMasks) {
       ASSERT_LT(index[k], kFullParamCount);
       rebuilt |= ParamMask{1} << static_cast<unsigned>(index[k]);
     }
-    EXPECT_EQ(rebuilt, mask & valid_params_mask(kSixJoints)) << hex(mask);
+    EXPECT_EQ(rebuilt, mask & valid_params_mask(kMaxJoints)) << hex(mask);
   }
   int index[kFullParamCount] = {};
   EXPECT_EQ(mask_count(kOtherTargetTools), 0);  // not a parameter
@@ -145,13 +148,17 @@ TEST(FullParams, EveryParameterHasItsName) {
   const char* names[kFullParamCount] = {};
   EXPECT_NO_HEAP(for (int i = 0; i < kFullParamCount; ++i) names[i] = full_param_name(i, kSixJoints));
   for (int i = 0; i < rigid_param_count(kSixJoints) + 4; ++i) EXPECT_STREQ(names[i], kExpected[i]) << i;
-  for (int i = rigid_param_count(kSixJoints) + 4; i < kFullParamCount; ++i) {  // a larger capacity: the same pattern
+  const int six_joint_count = rigid_param_count(kSixJoints) + kMaxJointTerms;
+  for (int i = rigid_param_count(kSixJoints) + 4; i < six_joint_count; ++i) {  // a larger capacity: the same pattern
     EXPECT_EQ(std::string(names[i]), "compliance" + std::to_string(i - rigid_param_count(kSixJoints) + 1)) << i;
   }
   EXPECT_STREQ(full_param_name(model_param_index(4, DhField::d), kSixJoints), "d5");
   EXPECT_STREQ(full_param_name(base_translation_param_index(kSixJoints, 1), kSixJoints), "base_ty");
   EXPECT_STREQ(full_param_name(compliance_param_index(kSixJoints, 1), kSixJoints), "compliance2");
   EXPECT_STREQ(full_param_name(-7, kSixJoints), "?");
+  if (six_joint_count < kFullParamCount) {  // beyond a six-joint model's
+    EXPECT_STREQ(names[six_joint_count], "?");
+  }
   EXPECT_STREQ(full_param_name(kFullParamCount + 1, kSixJoints), "?");
 }
 

@@ -35,7 +35,7 @@ constexpr std::uint64_t kKnownFramesJobGoldenDigest = 0xcf0b27224dd6de4cULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));
-  digest->add(to_params(r.model));
+  digest->add(to_params(r.model).head(model_param_count(r.model)));
   digest->add(r.base_to_tracker.rotation);
   digest->add(r.base_to_tracker.translation_m);
   // The 33 rigid sigmas, then the model's compliance ones: a rigid result hashes as before.
@@ -182,7 +182,7 @@ void add_job_result(Status status, const CalibrationResult& result, bool complia
   digest->add_u64(static_cast<std::uint64_t>(status));
   digest->add_u64(result.stage_count);
   for (const CalibrationStage& stage : result.stage_list()) {
-    digest->add(to_params(stage.model));
+    digest->add(to_params(stage.model).head(model_param_count(stage.model)));
     // The four default point terms' slots (zero in a rigid stage), whatever the build's capacity.
     for (int k = 0; compliance && k < 4; ++k) digest->add(stage.model.compliance.coefficient[k]);
     digest->add(stage.base_to_tracker.rotation);

@@ -165,7 +165,7 @@ TEST(CodecCountedJoints, MalformedPacketsAreCountedByWhatIsWrong) {
   Records records;
   const DecoderStats stats =
       decode(concat({frame_with_crc(zero_joints), frame_with_crc(count_says_more), frame_with_crc(padding),
-                                  frame_with_crc(other_type), frame_with_crc(other_version), encode(r)}),
+                     frame_with_crc(other_type), frame_with_crc(other_version), encode(r)}),
              &records);
   EXPECT_EQ(records.count, 1u);
   EXPECT_EQ(stats.bad_payloads, 2u);  // no joints; non-zero padding

@@ -89,6 +89,14 @@ inline void set_joint_type(RobotModel* model, int joint, JointType type) {
   model->prismatic_joints =
       type == JointType::prismatic ? model->prismatic_joints | bit : model->prismatic_joints & ~bit;
 }
+/// The joints of `model`: joint_count of them (for range loops).
+inline Span<const DhJoint> model_joints(const RobotModel& model) {
+  return Span<const DhJoint>(model.joints, static_cast<std::size_t>(model.joint_count));
+}
+/// The same, writable.
+inline Span<DhJoint> model_joints(RobotModel* model) {
+  return Span<DhJoint>(model->joints, static_cast<std::size_t>(model->joint_count));
+}
 /// True when every joint of `model` is revolute.
 inline bool all_revolute(const RobotModel& model) {
   return model.prismatic_joints == 0;
