@@ -43,6 +43,29 @@ inline CheckLog tool_point_fast_path_agrees_with_pose_chain(int poses_per_type) 
   return log;
 }
 
+/// The analytic Jacobian of `model` at q equals central finite differences of fk_tool_point for
+/// each of its parameters (model_param_count), and is 0 in the columns beyond them; into *log.
+inline void jacobian_matches_central_differences_at(const RobotModel& model, const JointVector& q, CheckLog* log) {
+  ToolPointJacobian jacobian;
+  const Vec3 point = tool_point_jacobian(model, q, &jacobian);
+  log->less((point - fk_tool_point(model, q)).norm(), 1e-14, "Jacobian's point vs fk_tool_point [m]");
+  const ModelParams params = to_params(model);
+  for (int k = 0; k < model_param_count(model); ++k) {
+    const double h = 1e-6;
+    ModelParams plus = params;
+    ModelParams minus = params;
+    plus(k) += h;
+    minus(k) -= h;
+    const Vec3 numeric =
+        (fk_tool_point(with_model_params(model, plus), q) - fk_tool_point(with_model_params(model, minus), q)) /
+        (2 * h);
+    log->less((numeric - jacobian.col(k)).norm(), 1e-8, "Jacobian column vs central difference");
+  }
+  for (int k = model_param_count(model); k < kMaxModelParamCount; ++k) {
+    log->check(jacobian.col(k).isZero(), "Jacobian column beyond the model's is 0");
+  }
+}
+
 /// Property: the analytic Jacobian equals central finite differences for random geometries
 /// and poses (`trials` of them), for all 27 parameters.
 inline CheckLog jacobian_matches_central_differences(int trials) {
@@ -51,22 +74,7 @@ inline CheckLog jacobian_matches_central_differences(int trials) {
   for (int trial = 0; trial < trials; ++trial) {
     RobotModel model = perturbed_model(nominal_model(RobotType::ur5), &random, 5e-3, 5e-3);
     model.tool_m << random.uniform(-0.05, 0.05), random.uniform(-0.05, 0.05), random.uniform(0.0, 0.2);
-    const JointVector q = random_joints(&random);
-    ToolPointJacobian jacobian;
-    const Vec3 point = tool_point_jacobian(model, q, &jacobian);
-    log.less((point - fk_tool_point(model, q)).norm(), 1e-14, "Jacobian's point vs fk_tool_point [m]");
-    const ModelParams params = to_params(model);
-    for (int k = 0; k < model_param_count(kSixJoints); ++k) {
-      const double h = 1e-6;
-      ModelParams plus = params;
-      ModelParams minus = params;
-      plus(k) += h;
-      minus(k) -= h;
-      const Vec3 numeric =
-          (fk_tool_point(with_model_params(model, plus), q) - fk_tool_point(with_model_params(model, minus), q)) /
-          (2 * h);
-      log.less((numeric - jacobian.col(k)).norm(), 1e-8, "Jacobian column vs central difference");
-    }
+    jacobian_matches_central_differences_at(model, random_joints(&random), &log);
   }
   return log;
 }

@@ -365,5 +365,89 @@ TEST(Compliance, HarmonicsAppendAfterTheGravityTermsUpToTheBuildsCapacity) {
   EXPECT_STREQ(compliance_term_name(third, needed_third - 1), "h_j6_cos3");
 }
 
+/// A UR5e lifted by a vertical linear axis (a prismatic joint 1 along the base z, then the arm's
+/// six joints): the lift carries the whole arm's weight along its axis.
+RobotModel lifted_ur5e() {
+  const RobotModel ur5e = nominal_model(RobotType::ur5e);
+  RobotModel model;
+  model.joint_count = 7;
+  set_joint_type(&model, 0, JointType::prismatic);
+  for (int j = 0; j < kSixJoints; ++j) model.joints[j + 1] = ur5e.joints[j];
+  model.tool_m << 0.01, -0.02, 0.15;
+  return model;
+}
+
+TEST(Compliance, APrismaticJointCarriesTheWeightAlongItsAxis) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints";
+  Random random(163);
+  for (ComplianceLoad load : {ComplianceLoad::point, ComplianceLoad::arm_masses}) {
+    RobotModel model = lifted_ur5e();
+    ComplianceModel& c = model.compliance;
+    c.load = load;
+    c.gravity_direction = Vec3(0.0, 0.0, -1.0);
+    c.term_count = 1;
+    c.terms[0] = ComplianceTerm{0, load == ComplianceLoad::point ? kToolLoadFrame : 0};
+    c.coefficient[0] = 2e-6;  // [m/kg]: the lift's stiffness
+    if (load == ComplianceLoad::arm_masses) {
+      ASSERT_EQ(nominal_arm_masses(RobotType::ur5e, &c.masses), Status::ok);  // links 1 .. 6 of the arm
+      for (int link = kSixJoints; link > 0; --link) {  // one link on: the carriage carries the arm's six
+        c.masses.link_mass_kg[link] = c.masses.link_mass_kg[link - 1];
+        c.masses.link_com_m[link] = c.masses.link_com_m[link - 1];
+      }
+      c.masses.link_mass_kg[0] = 0.0;
+      c.masses.payload_kg = 1.5;
+    }
+    ASSERT_EQ(check_compliance(c, model), Status::ok);
+    double total_kg = 1.0;  // the point load's unit mass
+    if (load == ComplianceLoad::arm_masses) {
+      total_kg = c.masses.payload_kg;
+      for (int link = 0; link < model.joint_count; ++link) total_kg += c.masses.link_mass_kg[link];
+    }
+    RobotModel rigid = model;
+    rigid.compliance.term_count = 0;
+    for (int i = 0; i < 20; ++i) {
+      JointVector q = test::random_joints(&random);
+      for (int j = kSixJoints; j > 0; --j) q(j) = q(j - 1);
+      q(0) = random.uniform(0.0, 1.0);
+      double basis[kMaxComplianceTerms];
+      JointVector dq;
+      EXPECT_NO_HEAP(dq = compliance_deflection(model, q, basis));
+      // The weight along the axis, whatever the arm's pose: z0 . g = -1 per kg.
+      EXPECT_NEAR(basis[0], -total_kg, 1e-12 * total_kg);
+      EXPECT_EQ(dq(0), c.coefficient[0] * basis[0]);
+      for (int j = 1; j < model.joint_count; ++j) EXPECT_EQ(dq(j), 0.0);
+      EXPECT_TRUE(same_bits(fk_tool_point(model, q), fk_tool_point(rigid, q + dq)));
+    }
+  }
+}
+
+TEST(Compliance, TermsMustBeOfTheModelsJointsAndHarmonicsOfItsRevoluteOnes) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints";
+  const RobotModel lifted = lifted_ur5e();
+  ComplianceModel c;
+  EXPECT_EQ(append_harmonic_terms(1, lifted, &c), Status::ok);
+  EXPECT_EQ(c.term_count, 2 * kSixJoints);  // the six revolute joints, not the lift
+  EXPECT_EQ(harmonic_term_count(lifted, 2), 4 * kSixJoints);
+  for (int t = 0; t < c.term_count; ++t) EXPECT_NE(c.terms[t].joint, 0) << t;
+  EXPECT_STREQ(compliance_term_name(c, 0), "h_j2_sin1");
+  EXPECT_STREQ(compliance_term_name(c, c.term_count - 1), "h_j7_cos1");
+  EXPECT_EQ(check_compliance(c, lifted), Status::ok);
+  ComplianceModel bad = c;
+  bad.terms[0].joint = 0;  // a harmonic of the lift's length
+  EXPECT_EQ(check_compliance(bad, lifted), Status::invalid_argument);
+  bad = c;
+  bad.terms[0].joint = 7;  // beyond the model's joints
+  EXPECT_EQ(check_compliance(bad, lifted), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(c, nominal_model(RobotType::ur5e)), Status::invalid_argument);  // j7 of a six-joint arm
+  ComplianceModel point;
+  point.term_count = 2;
+  point.terms[0] = ComplianceTerm{1, 7};  // the flange frame of seven joints
+  point.terms[1] = ComplianceTerm{1, 8};  // no eighth DH frame (but in a build of seven, the tool's number)
+  EXPECT_EQ(check_compliance(point, lifted), kToolLoadFrame == 8 ? Status::ok : Status::invalid_argument);
+  point.term_count = 1;
+  EXPECT_EQ(check_compliance(point, lifted), Status::ok);
+  EXPECT_STREQ(compliance_term_name(point, 0), "c_j2_o7");
+}
+
 }  // namespace
 }  // namespace hivecal::compliance_test

@@ -105,6 +105,63 @@ TEST(DhConvention, RowsComeBackAsTheyWereAndCalibratedWristLinksFoldIntoTheTool)
   }
 }
 
+/// The modified-DH tool point of `count` rows from the definition, q adding to d on the joints
+/// whose bit of `prismatic` is set [m].
+Vec3 reference_modified_fk(const ModifiedDhRow* rows, int count, std::uint32_t prismatic, const Vec3& tool_m,
+                           const JointVector& q) {
+  Mat4 t = Mat4::Identity();
+  for (int j = 0; j < count; ++j) {
+    const bool slides = (prismatic >> j & 1U) != 0;
+    t = t * rot_x(rows[j].alpha_prev_rad) * trans(rows[j].a_prev_m, 0, 0) *
+        rot_z(rows[j].theta_offset_rad + (slides ? 0.0 : q(j))) * trans(0, 0, rows[j].d_m + (slides ? q(j) : 0.0));
+  }
+  return (t * Eigen::Vector4d(tool_m.x(), tool_m.y(), tool_m.z(), 1.0)).head<3>();
+}
+
+TEST(DhConvention, AnyJointCountAndPrismaticJointsConvertExactly) {
+  Random random(43);
+  for (int arm = 0; arm < 200; ++arm) {
+    const int count = 1 + static_cast<int>(random.below(static_cast<std::uint64_t>(kMaxJoints)));
+    const auto prismatic = static_cast<std::uint32_t>(random.below(std::uint64_t{1} << count));
+    ModifiedDhRow rows[kMaxJoints];
+    for (int j = 0; j < count; ++j) {
+      rows[j] = ModifiedDhRow{random.uniform(-3.1, 3.1), random.uniform(-0.5, 0.5), random.uniform(-3.1, 3.1),
+                              random.uniform(-0.5, 0.5)};
+    }
+    const Vec3 tool(0.01, -0.02, 0.12);
+    RobotModel model;
+    ModifiedDhBase base;
+    Status status = Status::invalid_argument;
+    const Span<const ModifiedDhRow> given(rows, static_cast<std::size_t>(count));
+    EXPECT_NO_HEAP(status = model_from_modified_dh(given, tool, &model, &base, prismatic));
+    ASSERT_EQ(status, Status::ok);
+    EXPECT_EQ(model.joint_count, count);
+    EXPECT_EQ(model.prismatic_joints, prismatic);
+    EXPECT_EQ(check_joint_layout(model), Status::ok);
+    for (int pose = 0; pose < 5; ++pose) {
+      JointVector q;
+      for (int j = 0; j < count; ++j) q(j) = random.uniform(-3.1, 3.1);
+      const Vec3 expected = reference_modified_fk(rows, count, prismatic, tool, q);
+      EXPECT_LT((base.transform().apply(fk_tool_point(model, q)) - expected).norm(), 1e-12) << count;
+    }
+    ModifiedDhRow back[kMaxJoints];
+    Vec3 back_tool;
+    EXPECT_EQ(modified_dh_from_model(model, base, Span<ModifiedDhRow>(back), &back_tool), count);
+    EXPECT_EQ(std::memcmp(back, rows, sizeof(ModifiedDhRow) * static_cast<std::size_t>(count)), 0) << "arm " << arm;
+    EXPECT_EQ(back_tool, tool);
+    EXPECT_EQ(
+        modified_dh_from_model(model, base, Span<ModifiedDhRow>(back, static_cast<std::size_t>(count - 1)), &back_tool),
+        0);  // no room for the rows: nothing written
+  }
+  ModifiedDhRow rows[kMaxJoints + 1];
+  RobotModel model;
+  ModifiedDhBase base;
+  EXPECT_EQ(model_from_modified_dh(Span<const ModifiedDhRow>(), Vec3::Zero(), &model, &base), Status::invalid_argument);
+  EXPECT_EQ(model_from_modified_dh(rows, Vec3::Zero(), &model, &base), Status::invalid_argument);  // one too many
+  EXPECT_EQ(model_from_modified_dh(Span<const ModifiedDhRow>(rows, 2), Vec3::Zero(), &model, &base, 0b100),
+            Status::invalid_argument);  // a third joint's type for two rows
+}
+
 TEST(DhConvention, RefusesNonFiniteRows) {
   ModifiedDhRow rows[kSixJoints];
   rows[3].d_m = std::nan("");

@@ -13,6 +13,7 @@
 #include "hivecal/plan/pose_plan.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
+#include "testkit/other_arms.hpp"
 #include "testkit/plan_test_data.hpp"
 #include "testkit/test_data.hpp"
 
@@ -339,6 +340,38 @@ TEST(PosePlan, ToolDownLeavesParametersThatNoPoseSetIdentifies) {
                         param_bit(tool_param_index(kSixJoints, 2)));
   // Every tool-down plan, whatever it selects, keeps at most what its pool keeps.
   EXPECT_EQ(result.planned.identifiability.kept_mask & ~result.pool.kept_mask, 0u);
+}
+
+// A seven-joint arm plans as any other: its extra joint is the planner's freedom (more poses
+// meet the constraints), not an error; tool-down, a UR wrist's rule, needs six joints.
+TEST(PosePlan, ASevenJointArmPlansWithinItsLimits) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints";
+  RobotModel model = test::many_joint_arm_model(test::ManyJointArm::iiwa14);
+  model.tool_m = kNominalTool;
+  PlanOptions options = small_options(256, 20, 7);
+  options.restarts = 1;
+  options.refine_passes = 1;
+  options.free_mask = lm_param_mask(LmParamSet::full, 0, model);
+  for (int j = 0; j < 7; ++j) {
+    options.constraints.limits.lower_rad(j) = -2.0;
+    options.constraints.limits.upper_rad(j) = 2.0;
+  }
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = plan_session(model, options, &workspace, &result));
+  ASSERT_EQ(status, Status::ok) << status_message(status);
+  ASSERT_EQ(result.pose_count, 20u);
+  for (std::size_t i = 0; i < result.pose_count; ++i) {
+    const JointVector& q = result.poses[i];
+    EXPECT_TRUE(pose_meets_constraints(model, options.constraints, q)) << i;
+    for (int j = 0; j < 7; ++j) {
+      EXPECT_GE(q(j), -2.0);
+      EXPECT_LE(q(j), 2.0);
+    }
+    for (int j = 7; j < kMaxJoints; ++j) EXPECT_EQ(q(j), 0.0);  // nothing beyond the arm's joints
+  }
+  EXPECT_GE(result.planned.identifiability.kept_count(), result.pool.kept_count());  // what the pool identifies
+  options.constraints.orientation = PlanOrientation::tool_down;
+  EXPECT_EQ(plan_session(model, options, &workspace, &result), Status::invalid_argument);
 }
 
 }  // namespace
