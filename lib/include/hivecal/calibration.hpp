@@ -326,7 +326,8 @@ const char* calibration_step_name(CalibrationStep step);
 
 /// Everything a job returns (~6 KB with the LmResult and the blunder list: static storage on a small target).
 struct CalibrationResult {
-  Status status = Status::invalid_argument;       ///< ok, or why the job stopped at `step`
+  CalibrationResult();                       ///< nothing run yet (out of line: the firmware's flash holds one copy)
+  Status status = Status::invalid_argument;  ///< ok, or why the job stopped at `step`
   CalibrationStep step = CalibrationStep::input;  ///< done on success, else the step that failed
   std::size_t train_count = 0;                    ///< training samples [-]
   std::size_t test_count = 0;                     ///< test samples [-]

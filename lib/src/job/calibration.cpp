@@ -820,6 +820,12 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
 }
 
 /// Resets *result in place (no 5 KB temporary on the stack).
+}  // namespace
+
+CalibrationResult::CalibrationResult() = default;
+
+namespace {
+
 CalibrationResult& reset(CalibrationResult* result) {
   result->~CalibrationResult();
   return *new (result) CalibrationResult();

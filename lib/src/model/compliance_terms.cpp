@@ -119,6 +119,11 @@ constexpr HarmonicNames kHarmonicNames = harmonic_names();
 
 }  // namespace
 
+// Out of line: every RobotModel builds one, and the firmware's flash holds one copy.
+ArmMasses::ArmMasses() {
+  for (Vec3& com_m : link_com_m) com_m.setZero();
+}
+
 Status check_compliance(const ComplianceModel& compliance, const RobotModel& model) {
   if (compliance.term_count < 0 || compliance.term_count > kMaxComplianceTerms) return Status::invalid_argument;
   if (compliance.term_count == 0) return Status::ok;  // rigid: the other fields are not read

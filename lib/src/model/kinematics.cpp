@@ -25,11 +25,12 @@ __attribute__((always_inline)) inline Link revolute_link(const DhJoint& joint, d
 
 /// The link of joint j of `model` at reading q with its twist's sin and cos given: q turns theta
 /// (revolute, [rad]) or slides d (prismatic, [m]: the link of a joint at theta_offset, d + q).
+/// One copy of the link's arithmetic for both types (the firmware's flash).
 __attribute__((always_inline)) inline Link dh_link(const RobotModel& model, int j, double sa, double ca, double q) {
-  if (joint_type(model, j) == JointType::revolute) return revolute_link(model.joints[j], sa, ca, q);
-  DhJoint slid = model.joints[j];
-  slid.d_m += q;
-  return revolute_link(slid, sa, ca, 0.0);
+  const bool revolute = joint_type(model, j) == JointType::revolute;
+  DhJoint joint = model.joints[j];
+  if (!revolute) joint.d_m += q;
+  return revolute_link(joint, sa, ca, revolute ? q : 0.0);
 }
 
 Link dh_link(const RobotModel& model, int j, double q) {
@@ -100,20 +101,6 @@ void set_model_params(const ModelParams& p, RobotModel* model) {
     joint.alpha_rad = p(model_param_index(j, DhField::alpha));
   }
   for (int axis = 0; axis < 3; ++axis) model->tool_m(axis) = p(tool_param_index(*model, axis));
-}
-
-Status check_joint_layout(const RobotModel& model) {
-  if (model.joint_count < 1 || model.joint_count > kMaxJoints) return Status::invalid_argument;
-  if (model.joint_count < 32 && (model.prismatic_joints >> static_cast<unsigned>(model.joint_count)) != 0) {
-    return Status::invalid_argument;
-  }
-  for (int j = model.joint_count; j < kMaxJoints; ++j) {
-    const DhJoint& unused = model.joints[j];
-    if (unused.theta_offset_rad != 0.0 || unused.d_m != 0.0 || unused.a_m != 0.0 || unused.alpha_rad != 0.0) {
-      return Status::invalid_argument;
-    }
-  }
-  return Status::ok;
 }
 
 RobotModel nominal_model(RobotType type) {
@@ -191,13 +178,6 @@ RigidTransform rigid_flange(const RobotModel& model, const JointVector& q_rad) {
 Vec3 rigid_point(const RobotModel& model, const ModelTrig& trig, const Vec3& tool_m, const JointVector& q_rad) {
   // Innermost first: p <- R_j p + t_j needs only matrix-vector products.
   Vec3 point_m = tool_m;
-  if (all_revolute(model)) {  // the loop of the arms the library mostly sees, without a test per joint
-    for (int j = model.joint_count - 1; j >= 0; --j) {
-      const Link link = revolute_link(model.joints[j], trig.sin_alpha[j], trig.cos_alpha[j], q_rad(j));
-      point_m = link.rotation * point_m + link.translation_m;
-    }
-    return point_m;
-  }
   for (int j = model.joint_count - 1; j >= 0; --j) {
     const Link link = dh_link(model, j, trig.sin_alpha[j], trig.cos_alpha[j], q_rad(j));
     point_m = link.rotation * point_m + link.translation_m;

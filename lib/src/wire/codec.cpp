@@ -163,11 +163,15 @@ struct WireTraits {
   static void notify(FrameHandler& handler, const Record& record) { (handler.*Callback)(record); }
 };
 
-/// The joints' values of a joint record: positions, then velocities, then currents.
+/// The joints' values of a joint record: positions, then velocities, then currents. One copy,
+/// not unrolled, serves both versions' layouts (the firmware's flash).
 template <typename Io, typename Record>
-void joint_values(Io& io, Record& record, int joints) {
+[[gnu::noinline, gnu::noclone]] void joint_values(Io& io, Record& record, int joints) {
+#pragma GCC unroll 1
   for (int j = 0; j < joints; ++j) io.f64(record.q_rad[j]);
+#pragma GCC unroll 1
   for (int j = 0; j < joints; ++j) io.f64(record.qd_rad_s[j]);
+#pragma GCC unroll 1
   for (int j = 0; j < joints; ++j) io.f32(record.current_a[j]);
 }
 

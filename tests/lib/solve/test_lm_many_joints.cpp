@@ -176,8 +176,8 @@ TEST(ManyJointArms, TheRailsLinkIsTheBasesButForTheAngleToTheArm) {
   SKIP_WITHOUT_SEVEN_JOINTS();
   RigidTransform base;
   (void)simulate(ManyJointArm::rail_ur10, 5399, 200, 1e-5, &base);
-  ASSERT_EQ(calibrate_lm(start_of(ManyJointArm::rail_ur10), nullptr, lm().train.samples(), LmOptions{},
-                         &lm().workspace, &lm().result),
+  ASSERT_EQ(calibrate_lm(start_of(ManyJointArm::rail_ur10), nullptr, lm().train.samples(), LmOptions{}, &lm().workspace,
+                         &lm().result),
             Status::ok);
   const IdentifiabilityReport& report = lm().result.identifiability;
   for (DhField field : {DhField::theta_offset, DhField::d, DhField::a}) {
@@ -237,7 +237,6 @@ TEST(ManyJointArms, ReadingsOfMoreJointsThanTheModelAreRefused) {
   EXPECT_EQ(calibrate_lm(bad, nullptr, lm().train.samples(), LmOptions{}, &lm().workspace, &lm().result),
             Status::invalid_argument);
 }
-
 
 // The joint terms' columns: d(point)/d(coefficient) is the column of the term's joint variable
 // (theta of a revolute joint, d of a prismatic one) times its basis, as a central difference of

@@ -80,9 +80,7 @@ constexpr bool is_harmonic(const ComplianceTerm& term) {
 
 /// Masses and centres of mass of the links and the payload (ComplianceLoad::arm_masses).
 struct ArmMasses {
-  ArmMasses() {
-    for (Vec3& com_m : link_com_m) com_m.setZero();
-  }
+  ArmMasses();                           ///< no masses: every mass and centre 0
   double link_mass_kg[kMaxJoints] = {};  ///< mass of link 1 .. joint_count (moved by joint 1 ..) [kg]
   /// Centre of mass of link j + 1 in DH frame j + 1 (the frame at the link's end) [m].
   Vec3 link_com_m[kMaxJoints];
