@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
+#include <limits>
 #include <cstdio>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -50,6 +52,7 @@ int parse_options(const std::string& command, const std::string& summary, const 
                   int argc, char** argv, Options* options) {
   for (const OptionSpec& spec : specs) {
     if (!spec.default_value.empty()) options->defaults_[spec.name] = spec.default_value;
+    options->accepted_.insert(spec.name);
   }
   for (int i = 0; i < argc; ++i) {
     std::string arg = argv[i];
@@ -105,20 +108,51 @@ bool progress_enabled(const Options& options) {
   return !options.given("quiet") && isatty(STDERR_FILENO) != 0;
 }
 
+bool NumberRange::contains(double value) const {
+  return (lo_open ? value > lo : value >= lo) && (hi_open ? value < hi : value <= hi);
+}
+
+std::string NumberRange::text() const {
+  char range[96];
+  std::snprintf(range, sizeof range, "%c%g, %g%c", lo_open ? '(' : '[', lo, hi, hi_open ? ')' : ']');
+  return range + (unit.empty() ? "" : " " + unit);
+}
+
+Error check_number(const std::string& option, std::string_view text, const NumberRange& range, double* value) {
+  double parsed = 0.0;
+  textio::NumberText read = textio::parse_number(text, &parsed);
+  if (read == textio::NumberText::ok && std::isnan(parsed)) read = textio::NumberText::malformed;  // NaN: no value
+  const bool unbounded = std::isinf(range.lo) && std::isinf(range.hi);                             // number_option
+  const std::string within = unbounded ? "" : " within " + range.text();
+  const std::string got = ", got " + port::quoted(text);
+  switch (read) {
+    case textio::NumberText::ok: break;
+    case textio::NumberText::malformed:
+      return Error::usage(option + " must be a number" + within + got + ": not a number");
+    case textio::NumberText::overflow:
+      return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
+                          ": beyond a double's range (1.8e308)");
+    case textio::NumberText::underflow:
+      return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
+                          ": too small for a double (it underflows below 4.9e-324): give 0 or a larger value");
+  }
+  if (!range.contains(parsed)) return Error::usage(option + " must be within " + range.text() + got);
+  *value = parsed;
+  return Error{};
+}
+
 Error number_option(const Options& options, const std::string& name, double* value) {
-  if (textio::parse_double(options.get(name), value)) return Error{};
-  return Error::usage("--" + name + ": not a number: " + port::quoted(options.get(name)));
+  return check_number("--" + name, options.get(name),
+                      NumberRange{-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()},
+                      value);
+}
+
+Error ranged_option(const Options& options, const std::string& name, const NumberRange& range, double* value) {
+  return check_number("--" + name, options.get(name), range, value);
 }
 
 Error bounded_option(const Options& options, const std::string& name, double lo, double hi, double* value) {
-  Error error = number_option(options, name, value);
-  if (!error.ok()) return error;
-  if (!(*value >= lo && *value <= hi)) {
-    char range[80];
-    std::snprintf(range, sizeof range, "[%g, %g]", lo, hi);
-    return Error::usage("--" + name + " must be in " + range + ", not " + port::quoted(options.get(name)));
-  }
-  return Error{};
+  return ranged_option(options, name, NumberRange{lo, hi}, value);
 }
 
 Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi,
@@ -160,10 +194,32 @@ bool parse_vec3(std::string_view text, Vec3* value) {
   return true;
 }
 
+Error check_vec3(const std::string& option, std::string_view text, const std::string& what, const NumberRange& range,
+                 Vec3* value) {
+  const std::string shape = option + " must be X,Y,Z" + (what.empty() ? "" : " " + what) + ", each within " +
+                            range.text() + ", got " + port::quoted(text);
+  std::size_t start = 0;
+  Vec3 parsed = Vec3::Zero();
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::size_t comma = text.find(',', start);
+    if ((axis == 2) != (comma == std::string_view::npos)) return Error::usage(shape);
+    const std::string_view field = text.substr(start, axis == 2 ? std::string_view::npos : comma - start);
+    start = comma + 1;
+    const textio::NumberText read = textio::parse_number(field, &parsed(axis));
+    if (read == textio::NumberText::overflow) return Error::usage(shape + ": beyond a double's range (1.8e308)");
+    if (read == textio::NumberText::underflow) {
+      return Error::usage(shape + ": " + port::quoted(field) +
+                          " is too small for a double (it underflows below 4.9e-324): give 0 or a larger value");
+    }
+    if (read != textio::NumberText::ok || !range.contains(parsed(axis))) return Error::usage(shape);
+  }
+  *value = parsed;
+  return Error{};
+}
+
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
-  const std::string text = options.get(name);
-  if (parse_vec3(text, value_m) && value_m->allFinite()) return Error{};
-  return Error::usage("--" + name + " must be X,Y,Z in metres, each finite, not " + port::quoted(text));
+  return check_vec3("--" + name, options.get(name), "in metres",
+                    NumberRange{-kMaxPointOption_m, kMaxPointOption_m, false, false, "m"}, value_m);
 }
 
 std::vector<OptionSpec> input_unit_option_specs() {
@@ -171,45 +227,17 @@ std::vector<OptionSpec> input_unit_option_specs() {
       {"length-unit", "m|mm", "unit of lengths (x, y, z) in text inputs whose header names none (default: m)", ""},
       {"angle-unit", "rad|deg", "unit of joint angles in text inputs whose header names none (default: rad)", ""},
       {"columns", "C=NAME,...",
-       "read text inputs by column name: C (q1..q6, x, y, z) is the header's column NAME, e.g. x=measurement_x (ROS "
-       "and pendant joint names are recognised without it)",
+       "read text inputs by column name: C (q1..q6, x, y, z, rx, ry, rz) is the header's column NAME, or a sum of "
+       "columns, with an optional unit: x=measurement_x, x=x_t+x_dif[mm], q1=joint_1[deg] (ROS and pendant joint "
+       "names are recognised without it)",
        ""},
   };
 }
 
-/// --columns C=NAME,... into units->columns: C one of the fixed formats' columns, each once.
+/// --columns C=SPEC,... into units->columns (textio::parse_column_aliases: the grammar's one place).
 Error columns_option(const Options& options, textio::InputUnits* units) {
-  const std::string text = options.get("columns");
-  std::size_t begin = 0;
-  while (!text.empty() && begin <= text.size()) {
-    const std::size_t end = std::min(text.find(',', begin), text.size());
-    const std::string entry = text.substr(begin, end - begin);
-    const std::size_t equals = entry.find('=');
-    textio::ColumnAlias alias;
-    if (equals != std::string::npos) {
-      alias.column = textio::lower(textio::trim(entry.substr(0, equals)));
-      alias.header = textio::lower(textio::trim(entry.substr(equals + 1)));
-      const std::size_t bracket = alias.header.find('[');
-      if (bracket != std::string::npos && alias.header.back() == ']') {  // NAME[unit]
-        alias.unit = alias.header.substr(bracket + 1, alias.header.size() - bracket - 2);
-        alias.header = textio::lower(textio::trim(alias.header.substr(0, bracket)));
-      }
-    }
-    static const char* const kNamed[] = {"q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "t", "rx", "ry", "rz"};
-    const bool known = std::find_if(std::begin(kNamed), std::end(kNamed),
-                                    [&](const char* n) { return alias.column == n; }) != std::end(kNamed);
-    if (!known || alias.header.empty()) {
-      return Error::usage(
-          "--columns: " + port::quoted(entry) +
-          " is not C=NAME or C=NAME[unit] with C one of q1..q6, x, y, z, rx, ry, rz, t (e.g. x=measurement_x[mm])");
-    }
-    for (const textio::ColumnAlias& earlier : units->columns) {
-      if (earlier.column == alias.column) return Error::usage("--columns names " + alias.column + " twice");
-    }
-    units->columns.push_back(alias);
-    begin = end + 1;
-  }
-  return Error{};
+  const std::string problem = textio::parse_column_aliases(options.get("columns"), &units->columns);
+  return problem.empty() ? Error{} : Error::usage(problem);
 }
 
 Error declare_inputs(const Options& options, const std::vector<std::string>& output_names, port::OutputSet* outputs) {
@@ -239,6 +267,7 @@ Error input_units_option(const Options& options, textio::InputUnits* units) {
   }
   units->length = length;
   units->angle = angle;
+  units->columns_option = options.accepts("columns");
   return columns_option(options, units);
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -49,12 +50,15 @@ class Options {
   bool given(const std::string& name) const { return values_.count(name) != 0; }
   /// Every option given on the command line, by name, with its value.
   const std::map<std::string, std::string>& given_values() const { return values_; }
+  /// True when the command has option `name` (its messages may suggest it).
+  bool accepts(const std::string& name) const { return accepted_.count(name) != 0; }
 
  private:
   friend int parse_options(const std::string&, const std::string&, const std::vector<OptionSpec>&, int, char**,
                            Options*);
   std::map<std::string, std::string> values_;
   std::map<std::string, std::string> defaults_;
+  std::set<std::string> accepted_;  ///< the command's option names
 };
 
 /// Parses argv (after the subcommand name). Returns -1 when the command should run;
@@ -79,17 +83,49 @@ Error declare_inputs(const Options& options, const std::vector<std::string>& out
 bool progress_enabled(const Options& options);
 
 // --- option helpers shared by the commands (one parser per kind of value)
-/// --<name> as a number; Fault::usage naming the option otherwise.
+/// The values a number on the command line may take: lo .. hi, either end open or closed, in
+/// `unit`. Every numeric option is checked against one (check_number): docs/cli.md, "Numbers
+/// on the command line".
+struct NumberRange {
+  double lo = 0.0;       ///< smallest value (or the open end below it)
+  double hi = 0.0;       ///< largest value (or the open end above it)
+  bool lo_open = false;  ///< lo itself is refused: "(lo, ..."
+  bool hi_open = false;  ///< hi itself is refused: "..., hi)"
+  std::string unit{};    ///< what the message names after the range ("mm", "deg"); "" for none
+  /// True for a finite value within the range.
+  bool contains(double value) const;
+  /// "[0, 1) rad", "(0, 1e+06] mm": the range as the messages write it.
+  std::string text() const;
+};
+/// The one check of a number given on the command line: `text` (the value of `option`, named
+/// with its dashes, e.g. "--tool") as a finite number within `range`. Otherwise Fault::usage
+/// "OPTION must be within RANGE, got 'TEXT'", with what is wrong when it is not a number at all
+/// ("not a number", "beyond a double's range", "underflows a double: give 0 or ...").
+Error check_number(const std::string& option, std::string_view text, const NumberRange& range, double* value);
+/// --<name> as any number but NaN, Inf included (the caller checks its range; check_number's
+/// reasons for a text that is none). Prefer ranged_option.
 Error number_option(const Options& options, const std::string& name, double* value);
-/// "X,Y,Z": exactly three numbers into *value; false otherwise.
-bool parse_vec3(std::string_view text, Vec3* value);
+/// --<name> as a number within `range` (check_number).
+Error ranged_option(const Options& options, const std::string& name, const NumberRange& range, double* value);
 /// --<name> as a finite number within [lo, hi]; the message names the option and the range.
 Error bounded_option(const Options& options, const std::string& name, double lo, double hi, double* value);
 /// --<name> as a whole number within [lo, hi].
 Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi, std::size_t* value);
 /// --<name> as a seed: decimal digits, 0 .. 2^64 - 1, exactly (no rounding through a double).
 Error seed_option(const Options& options, const std::string& name, std::uint64_t* value);
-/// --<name> as X,Y,Z in metres (e.g. --tool), each finite.
+/// "X,Y,Z": exactly three numbers into *value; false otherwise.
+bool parse_vec3(std::string_view text, Vec3* value);
+/// `text` as X,Y,Z (the value of `option`, e.g. "--tool"), each within `range`; otherwise
+/// Fault::usage "OPTION must be X,Y,Z WHAT, each within RANGE, got 'TEXT'" (check_number's
+/// reasons for a coordinate that is no number).
+Error check_vec3(const std::string& option, std::string_view text, const std::string& what, const NumberRange& range,
+                 Vec3* value);
+/// Largest coordinate of a point option in metres (--tracker-position, --tool): the text
+/// readers' bound on a point (textio::kMaxPointDistance_m) [m].
+constexpr double kMaxPointOption_m = textio::kMaxPointDistance_m;
+/// Largest coordinate of a tool point option (--tool of calibrate): the robot description's [m].
+constexpr double kMaxToolOption_m = 10.0;
+/// --<name> as X,Y,Z in metres (e.g. --tracker-position), each within +-kMaxPointOption_m.
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
 /// The options of every command that reads text inputs: --length-unit, --angle-unit.
 std::vector<OptionSpec> input_unit_option_specs();

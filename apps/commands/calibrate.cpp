@@ -1,6 +1,7 @@
 // hivecal calibrate: inputs (paired samples, serial captures or CSV logs) -> dataset ->
 // lib's calibrate() (ABC / GSA / Levenberg-Marquardt) -> tables, result JSON, UR deltas and
 // HTML report. The settings, the renderers and the result file are in calibrate_*.cpp.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -161,7 +162,7 @@ Error declare_outputs(const Options& options, port::OutputSet* outputs, OutputId
     error = outputs->add_file(options.get("ur-deltas"), "--ur-deltas", &ids->ur_deltas);
   }
   if (error.ok() && !options.get("report").empty()) {
-    error = outputs->add_folder(options.get("report"), "--report", &ids->report);
+    error = outputs->add_folder(options.get("report"), "--report", {report::kReportPageName}, &ids->report);
   }
   return error;
 }
@@ -178,42 +179,6 @@ Error start_geometry(const Options& options, const CalibrateSettings& settings, 
   return Error{};
 }
 
-/// The dataset, checked for size and split.
-Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
-                   streams::SessionFacts* facts, PointFates* fates) {
-  streams::SessionConfig config;
-  config.observer = fates;
-  config.speed_model = settings.robot.model;
-  config.speed_model.tool_m = settings.tool_m;  // for tool speeds only
-  config.progress = settings.progress;
-  config.log_options.units = settings.units;
-  config.orientation = settings.orientation;
-  config.orientation.joint_sigma_rad = settings.joint_sigma_rad;  // 0: the joint columns' written resolution
-  Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
-  if (!error.ok()) return error;
-  error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config, dataset,
-                                facts);
-  if (!error.ok()) return error;
-  // No floor on the sample count: the identifiability analysis decides what the samples determine.
-  // The job splits; fewer than 3 training poses cannot even place the tracker frame.
-  const std::size_t train_poses = dataset->train_count_for(settings.train_fraction);
-  if (train_poses < 3 && train_poses < dataset->pose_count()) {
-    return Error::usage("--split " + options.get("split") + " leaves " + std::to_string(train_poses) +
-                        " training pose(s) of " + std::to_string(dataset->pose_count()) +
-                        "; the tracker frame needs at least 3");
-  }
-  // Folds hold out whole poses (with several reflectors, a pose's samples stay together).
-  const std::string units = dataset->pose_count() == dataset->size() ? " samples" : " poses";
-  if (settings.cv_folds > dataset->pose_count()) {
-    return Error::usage("--cv " + options.get("cv") + ": more folds than the " + std::to_string(dataset->pose_count()) +
-                        units);
-  }
-  if (settings.cv_folds == 1 && dataset->pose_count() > kMaxCrossValidationFolds) {
-    return Error::usage("--cv loo: at most " + std::to_string(kMaxCrossValidationFolds) + units + " (use --cv K)");
-  }
-  return Error{};
-}
-
 // --- run (the computation: lib's calibrate()) ---------------------------------------------------
 
 /// --cv after the job (whose messages name the failing step), then the dataset put back as
@@ -226,6 +191,17 @@ Error cross_validation(const CalibrateSettings& settings, const RobotModel& star
   JobObserver quiet(false);
   const Status status = cross_validate(start, dataset, job, settings.cv_folds == 1 ? 0 : settings.cv_folds, &workspace,
                                        &memory->cv_scratch, &run->cv, &quiet);
+  // The samples each fold held out, drawn again as cross_validate drew them: what it set aside
+  // (left in the dataset), then split_fold's seeded order.
+  std::vector<std::uint32_t> cv_aside;
+  for (const Sample& s : dataset->set_aside()) cv_aside.push_back(s.index);
+  run->cv_held_out.assign(status == Status::ok ? run->cv.fold_count : 0, {});
+  for (std::size_t f = 0; f < run->cv_held_out.size(); ++f) {
+    dataset->set_aside(Span<const std::uint32_t>(cv_aside.data(), cv_aside.size()));
+    if (dataset->split_fold(f, run->cv.fold_count, job.seed) != Status::ok) break;
+    for (const Sample& s : dataset->test()) run->cv_held_out[f].push_back(s.index);
+    std::sort(run->cv_held_out[f].begin(), run->cv_held_out[f].end());
+  }
   std::vector<std::uint32_t> aside;
   for (const CalibrationOutlier& o : run->result.outlier_list()) aside.push_back(o.index);
   dataset->set_aside(Span<const std::uint32_t>(aside.data(), aside.size()));
@@ -307,18 +283,46 @@ Error write_outputs(const Options& options, const CalibrateSettings& settings, c
   const CalibrationStage& final_stage = run.final_stage();
   Error error = outputs->stage_text(ids.result, "", calibration_result_json(settings, data, facts, run, warnings));
   if (error.ok() && !options.get("ur-deltas").empty()) {
-    const UrCalibrationDeltas deltas = ur_deltas_between(settings.robot.model, final_stage.model);
+    const UrCalibrationDeltas deltas = textio::ur_deltas_in_ur_table(settings.robot.model, final_stage.model);
     error = outputs->stage_text(ids.ur_deltas, "", textio::format_ur_calibration_conf(deltas));
   }
   if (error.ok() && !options.get("report").empty()) {
-    error = outputs->stage_text(ids.report, "index.html", report::render_html(data));
+    error = outputs->stage_text(ids.report, report::kReportPageName, report::render_html(data));
   }
   return error.ok() ? outputs->commit() : error;
+}
+
+/// The training poses of the run against the parameters its model has (fit_checks.hpp): the
+/// fit's free rigid parameters (the set of --params, less the frames it knew) over a spread of
+/// poses with the input's targets, and the other targets' tool points when it fitted them.
+PoseSpan pose_span(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset,
+                   const streams::SessionFacts& facts, const Run& run) {
+  const CalibrationOptions chosen = options_with_chosen_frames(run.options, run.result);
+  ParamMask free_mask = lm_param_mask(settings.paper_params ? LmParamSet::link_lengths : LmParamSet::full, 0, start);
+  for (int axis = 0; axis < 3; ++axis) {
+    const ParamMask base =
+        param_bit(base_rotation_param_index(start, axis)) | param_bit(base_translation_param_index(start, axis));
+    const ParamMask tool = param_bit(tool_param_index(start, axis));
+    if (settings.paper_params && !chosen.tool_known) free_mask |= tool;  // the paper's set with the tool fitted
+    if (chosen.base_known) free_mask &= ~base;
+    if (chosen.tool_known) free_mask &= ~tool;
+  }
+  PoseSpan span;
+  const Span<const Sample> train = dataset.train();
+  span.poses = distinct_configurations(train);
+  const std::size_t points = distinct_points(train);
+  if (span.poses >= kDistinctPointLimit || points >= kDistinctPointLimit) return span;  // plenty: no parameters asked
+  // A measured orientation's three points of a pose are a rigid triangle: 6 numbers, not 9.
+  span.coordinates = 3 * points - (facts.orientation.poses > 0 ? std::min(3 * span.poses, 3 * points) : 0);
+  span.parameters =
+      model_parameter_count(start, free_mask, run.target_count) + (chosen.tool_known ? 0 : 3 * (run.target_count - 1));
+  return span;
 }
 
 /// `*warnings`: the fit's plausibility warnings (fit_checks.hpp), printed on stderr; the
 /// outputs are written all the same.
 Error calibrate(const Options& options, std::vector<std::string>* warnings) {
+  if (options.given("fit")) return calibrate_registration(options, warnings);
   const Clock::time_point command_start = Clock::now();
   Profile profile;
   CalibrateSettings settings;
@@ -343,13 +347,28 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   if (!error.ok()) return error;
   part_start = Clock::now();
   report::ReportData data = present_calibration(settings, start, dataset, facts, job);
+  const double tables_s = seconds_since(part_start);
+  part_start = Clock::now();
+  add_uncertainty(settings, dataset, &job, &data);
+  profile.add("uncertainty: covariance and domain", seconds_since(part_start));
+  part_start = Clock::now();
   if (facts.has_stream) data.timeline = fates.timeline(120);
   // Any output on stdout (the result, or --ur-deltas -) keeps the tables off it.
   const bool result_on_stdout = options.get("out") == "-" || options.get("ur-deltas") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
-  print_calibration_tables(terminal, data, job);
-  *warnings = fit_warnings(job.result, settings.bounds, data.parameters);
-  profile.add("final w-test, accuracy and tables", seconds_since(part_start));
+  print_calibration_tables(terminal, data, facts, job);
+  const PoseSpan span = pose_span(settings, start, dataset, facts, job);
+  *warnings = fit_warnings(job.result, settings.bounds, data.parameters, &span);
+  const std::string orientation =
+      constant_orientation_warning(facts.orientation.orientation_constant, data.fit_sigma_m, data.noise_sigma_m);
+  if (!orientation.empty()) warnings->push_back(orientation);
+  // An implausible fit of a built-in UR: another type's nominal geometry may explain the data
+  // (not on poses too few for the model, where any table fits about as well).
+  const bool spanned = span.parameters == 0 || span.coordinates > static_cast<std::size_t>(span.parameters);
+  const std::string other_arm =
+      warnings->empty() || !spanned ? "" : other_arm_hint(settings.robot.robot, start, dataset.train());
+  if (!other_arm.empty()) warnings->push_back(other_arm);
+  profile.add("final w-test, accuracy and tables", tables_s + seconds_since(part_start));
   part_start = Clock::now();
   error = write_outputs(options, settings, data, facts, job, *warnings, &outputs, ids);
   profile.add("write the outputs", seconds_since(part_start));
@@ -363,6 +382,49 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
 }
 
 }  // namespace
+
+Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
+                   streams::SessionFacts* facts, PointFates* fates) {
+  RobotModel arm = settings.robot.model;
+  arm.tool_m = settings.tool_m;  // for tool speeds and the joints' noise only
+  streams::SessionConfig config = sample_session_config(settings, arm);
+  config.observer = fates;
+  config.progress = settings.progress;
+  Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
+  if (!error.ok()) return error;
+  error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config, dataset,
+                                facts);
+  if (!error.ok()) return error;
+  // No floor on the sample count: the identifiability analysis decides what the samples determine.
+  // The job splits; fewer than 3 training poses cannot even place the tracker frame.
+  const std::size_t train_poses = dataset->train_count_for(settings.train_fraction);
+  if (train_poses < 3 && train_poses < dataset->pose_count()) {
+    return Error::usage("--split " + options.get("split") + " leaves " + std::to_string(train_poses) +
+                        " training pose(s) of " + std::to_string(dataset->pose_count()) +
+                        "; the tracker frame needs at least 3");
+  }
+  // Folds hold out whole poses (with several reflectors, a pose's samples stay together).
+  const std::string units = dataset->pose_count() == dataset->size() ? " samples" : " poses";
+  if (settings.cv_folds > dataset->pose_count()) {
+    return Error::usage("--cv " + options.get("cv") + ": more folds than the " + std::to_string(dataset->pose_count()) +
+                        units);
+  }
+  if (settings.cv_folds == 1 && dataset->pose_count() > kMaxCrossValidationFolds) {
+    return Error::usage("--cv loo: at most " + std::to_string(kMaxCrossValidationFolds) + units + " (use --cv K)");
+  }
+  if (settings.cv_folds == 0 || dataset->pose_count() == 0) return Error{};  // no folds to size
+  // Each fold trains on the others (DatasetBase::split_fold): the largest fold held out leaves the fewest.
+  const std::size_t poses = dataset->pose_count();
+  const std::size_t folds = settings.cv_folds == 1 ? poses : settings.cv_folds;
+  const std::size_t fold_train_poses = poses - (poses + folds - 1) / folds;
+  if (fold_train_poses < 3) {
+    return Error::usage("--cv " + options.get("cv") + " on " + std::to_string(poses) + units + ": a fold trains on " +
+                        std::to_string(fold_train_poses) + " of them, and a fit needs at least 3 (as --split's " +
+                        "training set): too few" + units + " for " + std::to_string(folds) + " folds; measure more" +
+                        units + (folds < poses ? ", or hold out fewer at a time (more folds; --cv loo: one)" : ""));
+  }
+  return Error{};
+}
 
 int calibrate_main(int argc, char** argv) {
   Options options;

@@ -1,4 +1,7 @@
 // hivecal calibrate: its options and their checks (calibrate_parts.hpp).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -8,6 +11,7 @@
 #include "commands/commands.hpp"
 #include "textio/robot_description.hpp"
 #include "textio/text_util.hpp"
+#include "textio/transform_text.hpp"
 #include "commands/calibrate_parts.hpp"
 
 namespace hivecal::cli {
@@ -19,18 +23,46 @@ namespace {
 Error payload_option(const Options& options, ArmMasses* masses) {
   const std::string text = options.get("payload");
   const std::size_t at = text.find('@');
-  const Error bad = Error::usage(
-      "--payload must be KG@X,Y,Z: a mass in kg >= 0 and its centre in the flange frame "
-      "in metres (e.g. 1.2@0,0,0.05), not " +
-      port::quoted(text));
+  if (at == std::string::npos) {
+    return Error::usage(
+        "--payload must be KG@X,Y,Z: a mass in kg and its centre in the flange frame in metres (e.g. "
+        "1.2@0,0,0.05), got " +
+        port::quoted(text));
+  }
   double kg = 0.0;
-  if (at == std::string::npos || !textio::parse_double(text.substr(0, at), &kg) || !(kg >= 0.0 && kg < 1e4)) return bad;
   Vec3 com_m = Vec3::Zero();
-  if (!parse_vec3(std::string_view(text).substr(at + 1), &com_m)) return bad;
-  if (!com_m.allFinite() || com_m.norm() > 10.0) return bad;
+  Error error = check_number("--payload must be KG@X,Y,Z: its mass KG", std::string_view(text).substr(0, at),
+                             NumberRange{0.0, 1e4, false, true, "kg"}, &kg);
+  if (error.ok()) {
+    error =
+        check_vec3("--payload must be KG@X,Y,Z: its centre", std::string_view(text).substr(at + 1),
+                   "in the flange frame", NumberRange{-kMaxToolOption_m, kMaxToolOption_m, false, false, "m"}, &com_m);
+  }
+  if (!error.ok()) return error;
   masses->payload_kg = kg;
   masses->payload_com_m = com_m;
   return Error{};
+}
+
+/// Largest component of --gravity (a direction of any length) [-].
+constexpr double kMaxGravityComponent = 1e6;
+
+/// The built-in types whose published link masses --compliance masses weighs (nominal_arm_masses),
+/// for --help and the refusal alike: "ur3, ur5, ...".
+std::string types_with_masses() {
+  const std::string all = robot_type_names();
+  std::string names;
+  for (std::size_t begin = 0; begin < all.size();) {
+    const std::size_t end = std::min(all.find(',', begin), all.size());
+    const std::string name(textio::trim(std::string_view(all).substr(begin, end - begin)));
+    begin = end + 1;
+    RobotType type = RobotType::ur5;
+    ArmMasses masses;
+    if (robot_type_from_name(name.c_str(), &type) == Status::ok && nominal_arm_masses(type, &masses) == Status::ok) {
+      names += (names.empty() ? "" : ", ") + name;
+    }
+  }
+  return names;
 }
 
 /// --compliance, --gravity, --payload into settings->compliance_model (the default terms of the
@@ -46,10 +78,14 @@ Error gravity_terms_from_options(const Options& options, CalibrateSettings* sett
     return Error::usage("--payload needs --compliance masses (the basis kind weighs unit masses, not the payload)");
   }
   Vec3 gravity = Vec3::Zero();
-  if (!parse_vec3(options.get("gravity"), &gravity) || !gravity.allFinite() || !(gravity.norm() > 1e-9)) {
+  const Error direction =
+      check_vec3("--gravity", options.get("gravity"), "(the direction of gravity in the robot base frame, any length)",
+                 NumberRange{-kMaxGravityComponent, kMaxGravityComponent}, &gravity);
+  if (!direction.ok()) return direction;
+  if (!(gravity.norm() > 1e-9)) {
     return Error::usage(
         "--gravity must be X,Y,Z: the direction of gravity in the robot base frame, not zero (e.g. "
-        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), not " +
+        "0,0,-1 for a floor mount, 0,0,1 for a ceiling mount), got " +
         port::quoted(options.get("gravity")));
   }
   ComplianceModel& model = settings->compliance_model;
@@ -59,7 +95,7 @@ Error gravity_terms_from_options(const Options& options, CalibrateSettings* sett
         nominal_arm_masses(type, &model.masses) != Status::ok) {
       return Error::usage(
           "--compliance masses needs the arm's link masses, which are known here for the built-in types (" +
-          std::string(robot_type_names()) + ") only (by --robot-model's name); " + port::quoted(settings->robot.robot) +
+          types_with_masses() + ") only (by --robot-model's name); " + port::quoted(settings->robot.robot) +
           " has none: use --compliance basis");
     }
     if (options.given("payload")) {
@@ -116,48 +152,49 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
   return harmonics ? harmonic_terms_from_options(options, settings) : Error{};
 }
 
-/// --position-sigma-m, --angle-sigma-rad, --orientation-lever-m (csv.hpp, OrientationInput).
-Error orientation_options(const Options& options, textio::OrientationInput* orientation) {
-  if (options.given("position-sigma-m") && options.given("tracker-sigma-um")) {
-    return Error::usage("--tracker-sigma-um and --position-sigma-m say the same: give one");
-  }
-  Error error = number_option(options, "position-sigma-m", &orientation->position_sigma_m);
-  if (error.ok() && options.given("tracker-sigma-um")) {
-    double sigma_um = 0.0;
-    error = number_option(options, "tracker-sigma-um", &sigma_um);
-    orientation->position_sigma_m = sigma_um * 1e-6;
-    if (error.ok() && !(sigma_um > 0.0 && sigma_um < 1e6))
-      return Error::usage("--tracker-sigma-um must be in (0, 1e6)");
-  }
-  if (error.ok()) error = number_option(options, "angle-sigma-rad", &orientation->angle_sigma_rad);
-  if (error.ok() && options.given("orientation-lever-m"))
-    error = number_option(options, "orientation-lever-m", &orientation->lever_m);
-  if (!error.ok()) return error;
-  if (!(orientation->position_sigma_m > 0.0 && orientation->position_sigma_m < 1.0) ||
-      !(orientation->angle_sigma_rad > 0.0 && orientation->angle_sigma_rad < 1.0)) {
-    return Error::usage("--position-sigma-m and --angle-sigma-rad must be in (0, 1)");
-  }
-  if (options.given("orientation-lever-m") && !(orientation->lever_m >= 0.0 && orientation->lever_m <= 1.0)) {
-    return Error::usage("--orientation-lever-m must be in [0, 1] m");
-  }
-  const std::string form = options.get("orientation-form");
-  if (form == "euler-xyz") {
-    orientation->form = textio::OrientationForm::euler_xyz;
-  } else if (form != "rotation-vector") {
-    return Error::usage("--orientation-form must be rotation-vector or euler-xyz, not " + port::quoted(form));
-  }
-  return Error{};
+/// --tool X,Y,Z [m], each within the robot description's bound on a tool point.
+Error tool_option(const Options& options, Vec3* tool_m) {
+  return check_vec3("--tool", options.get("tool"), "in metres",
+                    NumberRange{-kMaxToolOption_m, kMaxToolOption_m, false, false, "m"}, tool_m);
 }
 
-/// --joint-sigma-rad or --joint-sigma-deg (not both), in [0, 1) rad.
-Error joint_sigma_option(const Options& options, double* sigma_rad) {
-  const bool in_degrees = options.given("joint-sigma-deg");
-  if (in_degrees && options.given("joint-sigma-rad"))
-    return Error::usage("give --joint-sigma-rad or --joint-sigma-deg, not both");
-  const Error error = number_option(options, in_degrees ? "joint-sigma-deg" : "joint-sigma-rad", sigma_rad);
+/// "x, y, z mm" of a point [m], to the micrometre (no "-0.000" for a rounding's sign).
+std::string millimetres(const Vec3& point_m) {
+  const Vec3 shown_mm = (point_m * 1e6).array().round() / 1e3 + 0.0;  // + 0.0: -0.0 becomes 0.0
+  char text[96];
+  std::snprintf(text, sizeof text, "%.3f, %.3f, %.3f mm", shown_mm.x(), shown_mm.y(), shown_mm.z());
+  return text;
+}
+
+/// --tool-transform FILE [--tool-transform-inverse]: the tool point is the origin of the tool
+/// frame in the flange frame, the translation of the file's transform (or of its inverse, when
+/// the file is the flange's pose in the tool frame); *note says so, and what the rotation is.
+Error tool_transform_option(const Options& options, const textio::InputUnits& units, Vec3* tool_m, std::string* note) {
+  const std::string path = options.get("tool-transform");
+  RigidTransform read;
+  const Error error = textio::read_transform_text(path, units, &read);
   if (!error.ok()) return error;
-  if (in_degrees) *sigma_rad *= math::kRadPerDeg;
-  if (!(*sigma_rad >= 0.0 && *sigma_rad < 1.0)) return Error::usage("--joint-sigma-rad must be in [0, 1) rad");
+  const bool inverse = options.given("tool-transform-inverse");
+  const RigidTransform tool_in_flange = inverse ? read.inverse() : read;
+  const Vec3 other_m = inverse ? read.translation_m : read.inverse().translation_m;  // the other reading's point
+  *tool_m = tool_in_flange.translation_m;
+  if (tool_m->cwiseAbs().maxCoeff() > kMaxToolOption_m) {
+    return Error::usage("--tool-transform " + port::quoted(path) + " puts the tool point at " + millimetres(*tool_m) +
+                        ", beyond " + textio::format_double(kMaxToolOption_m) + " m of the flange");
+  }
+  const double cosine = std::clamp((tool_in_flange.rotation.trace() - 1.0) / 2.0, -1.0, 1.0);
+  char rotation[80];
+  std::snprintf(rotation, sizeof rotation, "%.3f deg", std::acos(cosine) * math::kDegPerRad);
+  *note = "tool point from --tool-transform " + path + ": " + millimetres(*tool_m) + " (the translation of " +
+          (inverse ? "the inverse of the file's transform" : "the file's transform") +
+          ", the tool frame's pose in the flange frame); its rotation, " + rotation +
+          ", is not used: a reflector is a point";
+  if (tool_m->z() < 0.0 && other_m.z() > 0.0) {
+    *note += "; the point lies behind the flange (z < 0): if the file is the " +
+             std::string(inverse ? "tool's pose in the flange frame, leave out --tool-transform-inverse"
+                                 : "flange's pose in the tool frame (a lab's T_TOOL_F), add --tool-transform-inverse") +
+             " (the point at " + millimetres(other_m) + ")";
+  }
   return Error{};
 }
 
@@ -180,7 +217,15 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "ur5"},
         {"tool", "X,Y,Z",
          "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)",
-         "0,0,0.1695"},
+         kDefaultToolText},
+        {"tool-transform", "FILE",
+         "instead of --tool: a 4x4 transform (text, one row per line; lengths in --length-unit), the tool frame's "
+         "pose in the flange frame, whose translation is the tool point (its rotation is not used)",
+         ""},
+        {"tool-transform-inverse", "",
+         "--tool-transform's file is the flange's pose in the tool frame (e.g. a lab's T_TOOL_F): its inverse's "
+         "translation is the tool point",
+         ""},
         {"params", "full|paper",
          "full identifiable model, or the link lengths (every non-zero d and a; for UR the paper's six)", "full"},
         {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
@@ -214,6 +259,11 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
              textio::format_double(kSignificancePosesPerParam) +
              " per estimated parameter); a given T tests it on any set",
          ""},
+        {"fit", "base|frames",
+         "register, not calibrate: fit only the base -> tracker transform (and with 'frames' every target's tool "
+         "point) of --robot-model RESULT.json to the inputs, keeping its arm and model terms; every pose registers "
+         "unless --split is given (docs/cli.md)",
+         ""},
         {"out", "FILE", "calibration result (robot-calibration/1 JSON; '-': stdout)", "result.json"},
         {"ur-deltas", "FILE", "also write the model as UR calibration.conf [mounting] deltas", ""},
         {"report", "DIR", "write an HTML report with figures into DIR", ""},
@@ -221,7 +271,8 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
         {"max-change-deg", "X", "warn (exit 5) when an angle moves more than this from the start geometry [deg]", "2"},
         {"compliance", "basis|masses",
          "also fit the joints' gravity deflection (LM+compliance stage, docs/compliance.md): the generic gravity "
-         "basis, or the link masses (UR5, UR10, UR3e, UR5e)",
+         "basis, or the link masses (" +
+             types_with_masses() + ")",
          "", "basis"},
         {"harmonics", "K",
          "also fit harmonics of orders 1 .. K of each joint's reading (encoder eccentricity, transmission error; "
@@ -236,32 +287,8 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "print on stderr where the wall time went: reading the input, the job's screen, baseline, stages and "
          "w-tests, cross-validation, tables and outputs",
          ""},
-        {"tracker-sigma-um", "S",
-         "stated noise of the tracker per axis: the blunder test's sigma when the fit leaves too little redundancy, "
-         "and the report's measurement noise (the same as --position-sigma-m) [um]",
-         "10"},
-        {"position-sigma-m", "S",
-         "stated noise of the measured positions; with --angle-sigma-rad it weighs a measured orientation (rx, ry, rz "
-         "columns of --samples) [m]",
-         "1e-05"},
-        {"angle-sigma-rad", "S", "stated noise of the measured orientations rx, ry, rz [rad]", "0.001"},
-        {"joint-sigma-rad", "S",
-         "noise of the joint readings, in the units of --position-sigma-m (e.g. the readings' rounding step): LM "
-         "weighs each sample by its point covariance (errors in variables, docs/robust.md; 0: off), and a measured "
-         "orientation's lever takes it in [rad]",
-         "0"},
-        {"joint-sigma-deg", "S", "--joint-sigma-rad in degrees (a UR pendant export's rounding: 0.01) [deg]", ""},
-        {"orientation-form", "rotation-vector|euler-xyz",
-         "what rx, ry, rz are: the tool frame's rotation vector, or intrinsic X-Y-Z Euler angles (R = Rx(rx) Ry(ry) "
-         "Rz(rz), e.g. a Leica T-Mac export)",
-         "rotation-vector"},
-        {"orientation-lever-m", "L",
-         "a measured orientation adds two points at this lever along the tool frame's x and y axes (targets 2, 3; 0: "
-         "rx, ry, rz not used) [m] (default: from the noise: position and angle sigma, and the joints' (--joint-sigma-"
-         "rad, else their written resolution) through the arm)",
-         ""},
     };
-    for (const OptionSpec& spec : input_unit_option_specs()) list.push_back(spec);
+    for (const OptionSpec& spec : sample_reader_option_specs()) list.push_back(spec);
     return list;
   }();
   return specs;
@@ -270,8 +297,19 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
 Error calibrate_settings_from_options(const Options& options, CalibrateSettings* settings) {
   bool from_file = false;
   Error error = robot_model_option(options, "robot-model", &settings->robot, &from_file);
-  if (error.ok() && from_file && !options.given("tool")) settings->tool_m = settings->robot.model.tool_m;
-  if (error.ok() && (!from_file || options.given("tool"))) error = vec3_option(options, "tool", &settings->tool_m);
+  if (error.ok()) error = sample_reader_settings_from_options(options, settings);
+  if (!error.ok()) return error;
+  const bool transform = options.given("tool-transform");
+  if (transform && options.given("tool")) return Error::usage("give --tool or --tool-transform, not both");
+  if (!transform && options.given("tool-transform-inverse")) {
+    return Error::usage("--tool-transform-inverse needs --tool-transform FILE");
+  }
+  if (from_file && !options.given("tool")) settings->tool_m = settings->robot.model.tool_m;
+  if (transform) {
+    error = tool_transform_option(options, settings->units, &settings->tool_m, &settings->tool_note);
+  } else if (!from_file || options.given("tool")) {
+    error = tool_option(options, &settings->tool_m);
+  }
   if (!error.ok()) return error;
   const std::string params = options.get("params");
   if (params != "full" && params != "paper")
@@ -286,10 +324,9 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
     seeded = count_option(options, "population-subset", 0, kMaxPopulationSubset, &settings->population_subset);
   }
   if (!seeded.ok()) return seeded;
-  if (!textio::parse_double(options.get("split"), &settings->train_fraction) ||
-      !(settings->train_fraction > 0.0 && settings->train_fraction <= 1.0)) {
-    return Error::usage("--split must be a fraction in (0, 1], not " + port::quoted(options.get("split")));
-  }
+  error = ranged_option(options, "split", NumberRange{0.0, 1.0, true, false, "(the training share)"},
+                        &settings->train_fraction);
+  if (!error.ok()) return error;
   const std::string cv = options.get("cv");
   double folds = 0.0;
   if (cv == "loo") {
@@ -297,8 +334,8 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   } else if (!cv.empty()) {
     if (!textio::parse_double(cv, &folds) || folds < 2.0 || folds > static_cast<double>(kMaxCrossValidationFolds) ||
         folds != static_cast<double>(static_cast<std::size_t>(folds))) {
-      return Error::usage("--cv must be 'loo' or a number of folds in [2, " + std::to_string(kMaxCrossValidationFolds) +
-                          "], not " + port::quoted(cv));
+      return Error::usage("--cv must be 'loo' or a number of folds within [2, " +
+                          std::to_string(kMaxCrossValidationFolds) + "], got " + port::quoted(cv));
     }
     settings->cv_folds = static_cast<std::size_t>(folds);
   }
@@ -325,10 +362,9 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   if (options.get("significance") == "auto") {
     settings->significance_t = -1.0;  // lib: chosen by leaving one pose out at a time on small sets
   } else if (options.given("significance")) {
-    if (!textio::parse_double(options.get("significance"), &settings->significance_t) ||
-        !(settings->significance_t >= 0.0 && settings->significance_t <= 10.0)) {
-      return Error::usage("--significance must be 'auto' or a number in [0, 10]");
-    }
+    error = ranged_option(options, "significance", NumberRange{0.0, 10.0, false, false, "sigma (or 'auto')"},
+                          &settings->significance_t);
+    if (!error.ok()) return error;
     settings->significance_every_set = true;
   }
   const bool samples = !options.get("samples").empty();
@@ -337,26 +373,18 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   if (streams && (options.get("robot").empty() || options.get("tracker").empty())) {
     return Error::usage("--robot and --tracker go together");
   }
-  error = input_units_option(options, &settings->units);
-  if (!error.ok()) return error;
   double max_mm = 0.0;
   double max_deg = 0.0;
-  error = number_option(options, "max-change-mm", &max_mm);
-  if (error.ok()) error = number_option(options, "max-change-deg", &max_deg);
+  error = ranged_option(options, "max-change-mm", NumberRange{0.0, 1e6, true, false, "mm"}, &max_mm);
+  if (error.ok())
+    error = ranged_option(options, "max-change-deg", NumberRange{0.0, 360.0, true, false, "deg"}, &max_deg);
   if (!error.ok()) return error;
-  if (!(max_mm > 0.0 && max_mm < 1e9) || !(max_deg > 0.0 && max_deg <= 360.0)) {
-    return Error::usage("--max-change-mm must be positive and --max-change-deg in (0, 360]");
-  }
   settings->bounds.max_length_change_m = max_mm * 1e-3;
   settings->bounds.max_angle_change_rad = max_deg * math::kRadPerDeg;
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
   settings->profile = options.given("profile");
-  const Error compliance = compliance_from_options(options, settings);
-  if (!compliance.ok()) return compliance;
-  error = orientation_options(options, &settings->orientation);
-  if (error.ok()) error = joint_sigma_option(options, &settings->joint_sigma_rad);
-  return error;
+  return compliance_from_options(options, settings);
 }
 
 }  // namespace hivecal::cli

@@ -12,8 +12,10 @@
 #include "cli/options.hpp"
 #include "commands/fit_checks.hpp"
 #include "commands/host_storage.hpp"
+#include "commands/sample_reader.hpp"
 #include "hivecal/calibration.hpp"
 #include "hivecal/sync/sample_extraction.hpp"
+#include "record/result_json.hpp"
 #include "report/report.hpp"
 #include "streams/session.hpp"
 #include "textio/csv.hpp"
@@ -25,11 +27,12 @@ namespace hivecal::cli {
 /// The command's dataset: as large as its input.
 using CliDataset = HostDataset;
 
-/// Validated command-line settings.
-struct CalibrateSettings {
+/// Validated command-line settings (the reader options' among them).
+struct CalibrateSettings : SampleReaderSettings {
   textio::RobotDescription robot;  ///< --robot-model: built-in table or description file
   Vec3 tool_m =
       Vec3(0.0, 0.0, 0.1695);  ///< --tool (or the description file's): nominal tool point in the flange frame [m]
+  std::string tool_note;       ///< where --tool-transform put the tool point (a console line), "" without it
   bool paper_params = false;   ///< --params paper
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< --method
   std::uint64_t seed = 1;                                ///< --seed
@@ -43,15 +46,12 @@ struct CalibrateSettings {
   std::size_t cv_folds = 0;      ///< --cv K; 1: leave-one-out (lib's folds = 0); 0: no cross-validation
   bool progress = false;         ///< progress lines on stderr
   bool profile = false;          ///< --profile: where the wall time went, on stderr
-  textio::InputUnits units;      ///< --length-unit, --angle-unit of text inputs
   FitBounds bounds;              ///< --max-change-mm, --max-change-deg
   bool compliance = false;       ///< --compliance: an LM+compliance stage after the rigid LM
   /// --compliance basis|masses: the terms (default_compliance_terms), unit gravity direction
   /// (--gravity) and, for masses, the arm's masses and the payload (--payload); zero coefficients.
   ComplianceModel compliance_model;
-  textio::OrientationInput orientation;  ///< --position-sigma-m, --angle-sigma-rad, --orientation-lever-m
-  double joint_sigma_rad = 0.0;          ///< --joint-sigma-rad / --joint-sigma-deg: joint reading noise (0: off) [rad]
-  bool controller_tcp = false;           ///< --controller-tcp: base (identity) and tool (--tool) known, not fitted
+  bool controller_tcp = false;  ///< --controller-tcp: base (identity) and tool (--tool) known, not fitted
   /// --frames auto: the job tests the controller's frames when the fitted base is near the
   /// identity (CalibrationOptions::detect_controller_frames)
   bool detect_controller_frames = true;
@@ -78,8 +78,11 @@ struct Run {
   std::size_t link_length_count = kPaper6Dimension;  ///< lengths the population stages search [-]
   bool has_cv = false;                               ///< --cv ran: `cv` is meaningful
   CrossValidationResult cv;                          ///< per-fold held-out errors (~20 KB)
-  int target_count = 1;                              ///< targets (reflectors) in the samples: the result's "tools" [-]
-  CalibrationOptions options;                        ///< the job's options, as lib ran it
+  /// Per fold of `cv`: the Sample::index of each sample it held out, increasing.
+  std::vector<std::vector<std::uint32_t>> cv_held_out;
+  int target_count = 1;                        ///< targets (reflectors) in the samples: the result's "tools" [-]
+  CalibrationOptions options;                  ///< the job's options, as lib ran it
+  record::CalibrationUncertainty uncertainty;  ///< the final parameters' covariance, the training poses' domain
   /// The job's answer (run() returns an error when no stage ran).
   const CalibrationStage& final_stage() const { return result.stages[result.stage_count - 1]; }
   /// Its name ("ABC+LM", ...).
@@ -94,18 +97,39 @@ const std::vector<OptionSpec>& calibrate_option_specs();
 /// The command line into *settings; a usage error names the option and what it must be.
 Error calibrate_settings_from_options(const Options& options, CalibrateSettings* settings);
 
+/// The dataset of the command line's inputs (samples, or two streams), checked for the split
+/// and --cv; `fates` sees each tracker point of streams.
+Error load_dataset(const Options& options, const CalibrateSettings& settings, CliDataset* dataset,
+                   streams::SessionFacts* facts, PointFates* fates);
+
+/// `calibrate --fit base|frames --robot-model RESULT.json`: registers RESULT on the inputs
+/// instead of calibrating (calibrate_register.cpp); *warnings as calibrate's.
+Error calibrate_registration(const Options& options, std::vector<std::string>* warnings);
+
 /// The joints' reading noise as noise of the tool point per axis over the poses of `samples`
 /// (--joint-sigma-rad, else a rounding to their written resolution, through the arm); 0 when
 /// it is negligible beside the tracker's stated noise [m].
 double joint_point_noise_m(const CalibrateSettings& settings, const RobotModel& start,
                            const streams::SessionFacts& facts, Span<const Sample> samples);
 
+/// The final parameters' covariance and the training poses' domain into run->uncertainty
+/// (compute_uncertainty); its statement joins data->info_lines.
+void add_uncertainty(const CalibrateSettings& settings, const CliDataset& dataset, Run* run, report::ReportData* data);
+
 /// Tables and figures of a run, and the text of the terminal.
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,
                                        const CliDataset& dataset, const streams::SessionFacts& facts, const Run& run);
 
+/// What held_out_ranges() counts: "lines of FILE" (paired samples) or "samples (numbered from 1
+/// in the order extracted)".
+std::string held_out_unit(const streams::SessionFacts& facts);
+/// Samples `indices` (Sample::index) as ranges of what held_out_unit() counts: "2-4, 7, 9"
+/// (the lines of a row that made several samples once).
+std::string held_out_ranges(const streams::SessionFacts& facts, const std::vector<std::uint32_t>& indices);
+
 /// The terminal text (on stdout, or on stderr when stdout carries the result).
-void print_calibration_tables(std::FILE* out, const report::ReportData& data, const Run& run);
+void print_calibration_tables(std::FILE* out, const report::ReportData& data, const streams::SessionFacts& facts,
+                              const Run& run);
 
 /// The result file (robot-calibration/1 JSON) of a run. `warnings`: the fit's plausibility
 /// warnings, a "warnings" array when there are any.

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -20,6 +21,7 @@
 #include "streams/session.hpp"
 #include "textio/csv.hpp"
 #include "commands/calibrate_parts.hpp"
+#include "commands/uncertainty.hpp"
 
 namespace hivecal::cli {
 namespace {
@@ -560,11 +562,12 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
   const CalibrationBaseline& uncalibrated = run.result.baseline;
   const CalibrationStage& final_stage = run.final_stage();
   report::ReportData data;
-  data.title = "hivecal calibration: " + settings.robot.robot;
+  data.title = "hivecal calibration: " + port::printable(settings.robot.robot);  // the file's text, made safe
   data.input_lines = facts.info_lines;
   data.info_lines.push_back("samples: " + std::to_string(dataset.size()) + " (train " +
                             std::to_string(dataset.train().size()) + ", test " + std::to_string(dataset.test().size()) +
                             ")");
+  if (!settings.tool_note.empty()) data.info_lines.push_back(settings.tool_note);
   const std::string orientation = streams::orientation_line(facts);
   if (!orientation.empty()) data.info_lines.push_back(orientation);  // in the report's "info" too
   if (settings.controller_tcp) {
@@ -629,11 +632,71 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
           {f.train_count, f.test.count, f.train.mae(ErrorAxis::norm_3d), f.test.mae(ErrorAxis::norm_3d)});
     }
   }
+  report::keep_at_most(report::kReportSampleCap, &data);  // the result and the page stay small
   return data;
 }
 
+void add_uncertainty(const CalibrateSettings& settings, const CliDataset& dataset, Run* run, report::ReportData* data) {
+  const CalibrationStage& final_stage = run->final_stage();
+  const LmResult* lm = run->final_lm();
+  PointLoss loss;  // the final LM's, so that the covariance's diagonal is its sigmas squared
+  if (lm != nullptr) loss.huber_threshold_m = lm->huber_threshold_m;
+  if (settings.joint_sigma_rad > 0.0)
+    loss.joint_noise_ratio_rad_per_m = settings.joint_sigma_rad / settings.orientation.position_sigma_m;
+  const Vec3 none[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
+  std::string note;
+  compute_uncertainty(final_stage.model, final_stage.base_to_tracker, dataset.train(), loss,
+                      calibration_estimated_mask(run->result), lm != nullptr ? lm->other_tools_sigma_m : none,
+                      &run->uncertainty, &note);
+  if (!note.empty()) data->info_lines.push_back(note);
+  for (const std::string& line : domain_lines(run->uncertainty)) data->info_lines.push_back(line);
+}
+
+std::string held_out_unit(const streams::SessionFacts& facts) {
+  if (facts.has_stream || facts.sample_sources.empty()) return "samples (numbered from 1 in the order extracted)";
+  const std::string& first = facts.sample_sources.front();
+  return "lines of " + first.substr(0, first.rfind(':'));
+}
+
+std::string held_out_ranges(const streams::SessionFacts& facts, const std::vector<std::uint32_t>& indices) {
+  const bool by_line = !facts.has_stream && !facts.sample_sources.empty();
+  std::vector<std::size_t> numbers;
+  for (const std::uint32_t index : indices) {
+    std::size_t number = index + 1;
+    if (by_line && index < facts.sample_sources.size()) {  // "FILE:LINE" (session.cpp)
+      const std::string& source = facts.sample_sources[index];
+      number = static_cast<std::size_t>(std::strtoull(source.c_str() + source.rfind(':') + 1, nullptr, 10));
+    }
+    numbers.push_back(number);
+  }
+  std::sort(numbers.begin(), numbers.end());
+  numbers.erase(std::unique(numbers.begin(), numbers.end()), numbers.end());
+  std::string text;
+  for (std::size_t i = 0; i < numbers.size();) {
+    std::size_t last = i;
+    while (last + 1 < numbers.size() && numbers[last + 1] == numbers[last] + 1) ++last;
+    text += (text.empty() ? "" : ", ") + std::to_string(numbers[i]) +
+            (last > i ? "-" + std::to_string(numbers[last]) : std::string());
+    i = last + 1;
+  }
+  return text;
+}
+
+namespace {
+
+/// `ranges` cut at a comma before `width` characters, "…" marking the rest (the console's
+/// fold table; result.json holds them whole).
+std::string cut_ranges(const std::string& ranges, std::size_t width) {
+  if (ranges.size() <= width) return ranges;
+  const std::size_t comma = ranges.rfind(", ", width - 5);
+  return ranges.substr(0, comma == std::string::npos ? width - 5 : comma) + ", ...";
+}
+
+}  // namespace
+
 /// The terminal text (on stdout, or on stderr when stdout carries the result).
-void print_calibration_tables(std::FILE* out, const report::ReportData& data, const Run& run) {
+void print_calibration_tables(std::FILE* out, const report::ReportData& data, const streams::SessionFacts& facts,
+                              const Run& run) {
   for (const std::string& line : data.input_lines) std::fprintf(out, "%s\n", line.c_str());
   for (const std::string& line : data.info_lines) std::fprintf(out, "%s\n", line.c_str());
   std::fprintf(out, "\n%s", report::format_tables_text(data).c_str());
@@ -641,10 +704,12 @@ void print_calibration_tables(std::FILE* out, const report::ReportData& data, co
     const CrossValidationResult& cv = run.cv;
     std::fprintf(out, "\nCross-validation (%zu folds over %zu samples, held-out 3-D MAE):\n", cv.fold_count,
                  cv.sample_count);
-    std::fprintf(out, "  fold  train  test  MAE [mm]\n");
+    std::fprintf(out, "  fold  train  test  MAE [mm]  held out (%s)\n", held_out_unit(facts).c_str());
     for (std::size_t k = 0; k < cv.fold_count; ++k) {
-      std::fprintf(out, "  %4zu  %5zu  %4zu  %8s\n", k + 1, cv.folds[k].train_count, cv.folds[k].test.count,
-                   format_mm(cv.folds[k].test.mae(ErrorAxis::norm_3d)).c_str());
+      const std::string held_out =
+          k < run.cv_held_out.size() ? cut_ranges(held_out_ranges(facts, run.cv_held_out[k]), 60) : "";
+      std::fprintf(out, "  %4zu  %5zu  %4zu  %8s  %s\n", k + 1, cv.folds[k].train_count, cv.folds[k].test.count,
+                   format_mm(cv.folds[k].test.mae(ErrorAxis::norm_3d)).c_str(), held_out.c_str());
     }
     std::fprintf(out, "  all held-out samples: %s mm (fold mean %s, worst %s; uncalibrated %s mm)\n",
                  format_mm(cv.mae_3d_m).c_str(), format_mm(cv.fold_mae_3d_mean_m).c_str(),

@@ -57,9 +57,15 @@ Error check_robot(const Options& options) {
     if (error.ok()) error = textio::read_joints_csv(options.get("joints"), &poses, units);
     if (!error.ok()) return error;
   }
-  std::string s = "robot: " + robot.robot + " (" +
-                  (from_file ? "file " + options.get("robot-model") : "built-in table") +
-                  ")\nconvention: " + textio::dh_convention_name(robot.convention) + "\n" + dh_table(robot);
+  // The name and the path are the file's and the user's text: printed as every message prints input.
+  std::string s = "robot: " + port::printable(robot.robot) + " (" +
+                  (from_file ? "file " + port::printable(options.get("robot-model"), 4096) : "built-in table") +
+                  ")\nconvention: " + textio::dh_convention_name(robot.convention) + "\n";
+  if (robot.base_turned_by_pi) {
+    s += "base: UR's own, the URDF's root turned by 180 deg about z (ROS's 'base' frame): the table and the FK "
+         "below are in it\n";
+  }
+  s += dh_table(robot);
   if (robot.convention == DhConvention::modified) {
     s += fmt("base offset: alpha_0 %.6f deg, a_0 %.4f mm (folded into the table above as row 1's)\n",
              robot.modified_base.alpha0_rad * kDegPerRad, robot.modified_base.a0_m * 1e3);

@@ -6,6 +6,7 @@
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
+#include "commands/uncertainty.hpp"
 #include "hivecal/core/digest.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/port/output_files.hpp"
@@ -40,21 +41,6 @@ Error load_arm(const Options& options, record::CalibrationFile* arm, bool* has_t
   return textio::read_ur_calibrated_model(options.get("ur-calibration"), nominal, robot.robot, &robot.model);
 }
 
-/// The training samples a result (its text) keeps in its report (none when it has no report).
-std::vector<report::SampleRow> training_samples(const std::string& result_text, const std::string& result_path) {
-  textio::JsonValue root;
-  report::ReportData data;
-  const textio::JsonValue* saved = nullptr;
-  if (!textio::parse_json(result_text, &root).ok() || (saved = root.find("report")) == nullptr ||
-      !record::parse_report_data(*saved, result_path, &data).ok()) {
-    return {};
-  }
-  std::vector<report::SampleRow> train;
-  for (const report::SampleRow& sample : data.samples)
-    if (!sample.test) train.push_back(sample);
-  return train;
-}
-
 /// Mean 3D distance of `model`'s predictions from the samples' tracker points [m].
 double mae_m(const RobotModel& model, const RigidTransform& base_to_tracker,
              const std::vector<report::SampleRow>& samples) {
@@ -76,8 +62,9 @@ void say_what_is_left_out(const record::CalibrationFile& arm, const std::string&
                "written in %s: the chain is the rigid geometry only; predict with the result file for the full "
                "model\n",
                arm.model.compliance.term_count, format == "urdf" ? "URDF" : "the UR kinematics YAML");
-  const std::vector<report::SampleRow> train =
-      result_text.empty() ? std::vector<report::SampleRow>() : training_samples(result_text, result_path);
+  const std::vector<report::SampleRow> train = result_text.empty()
+                                                   ? std::vector<report::SampleRow>()
+                                                   : record::report_training_samples(result_text, result_path);
   if (train.empty()) return;
   RobotModel rigid = arm.model;
   rigid.compliance = ComplianceModel{};
@@ -93,6 +80,11 @@ void say_what_is_left_out(const record::CalibrationFile& arm, const std::string&
 Error ur_kinematics_yaml(const Options& options, const record::CalibrationFile& arm, std::string* yaml) {
   if (arm.convention != DhConvention::standard) {
     return Error::input("--format ur-kinematics: the arm is described in modified DH: not a UR arm; use --format urdf");
+  }
+  if (textio::is_ur_table_turned(arm.model)) {
+    std::fprintf(stderr,
+                 "hivecal export: note: the arm's table is UR's with every a and alpha negated (described from a base "
+                 "turned by 180 deg about z, as ROS's base_link is): the YAML is written in UR's own base\n");
   }
   textio::UrKinematics kinematics;
   std::string why;
@@ -149,6 +141,8 @@ Error export_arm(const Options& options) {
   error = load_arm(options, &arm, &has_tracker, &result_text);
   if (!error.ok()) return error;
   say_what_is_left_out(arm, format, result_text, options.get("calibration"));
+  for (const std::string& line : domain_lines(arm.uncertainty))  // what the exported model holds within
+    std::fprintf(stderr, "hivecal export: note: %s\n", line.c_str());
   std::string text;
   if (format == "urdf") {
     text = textio::format_urdf(arm, has_tracker ? &arm.base_to_tracker : nullptr);

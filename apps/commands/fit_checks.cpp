@@ -1,10 +1,20 @@
 #include "commands/fit_checks.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "hivecal/core/math.hpp"
 #include "hivecal/model/full_params.hpp"
+#include "hivecal/model/metrics.hpp"
+#include "hivecal/model/rigid_fit.hpp"
+#include "hivecal/solve/identifiability.hpp"
+#include "hivecal/solve/lm.hpp"
+#include "hivecal/solve/normal_equations.hpp"
+#include "hivecal/core/random.hpp"
 
 namespace hivecal::cli {
 
@@ -28,17 +38,124 @@ std::string correlation_cause(const char* name, const std::vector<report::Parame
   return "";
 }
 
+/// The tool point's and the base's bits of `model`: what the job's baseline fits (fit_baseline).
+ParamMask baseline_mask(const RobotModel& model) {
+  ParamMask mask = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    mask |= param_bit(tool_param_index(model, axis)) | param_bit(base_rotation_param_index(model, axis)) |
+            param_bit(base_translation_param_index(model, axis));
+  }
+  return mask;
+}
+
+/// Training MAE (3D) of `model` with its tool points and base fitted to `train` as the job's
+/// baseline fits them (closed form, then LM over the tool point and the base) [m]; +inf when
+/// the fit fails.
+double baseline_mae_m(RobotModel model, Span<const Sample> train, LmWorkspace* workspace, LmResult* fit) {
+  RigidTransform base;
+  if (fit_base_and_target_tools(train, &model, &base) != Status::ok) return HUGE_VAL;
+  LmOptions options;
+  options.params = LmParamSet::custom;
+  options.custom_mask = baseline_mask(model);
+  if (3 * train.size() > 9) {  // fewer samples: the closed form's base alone, as the job's baseline
+    const Status status = calibrate_lm(model, &base, train, options, workspace, fit);
+    if (status != Status::ok && status != Status::not_converged) return HUGE_VAL;
+    model = fit->model;
+    base = fit->base_to_tracker;
+  }
+  return position_error_stats(model, base, train).mae(ErrorAxis::norm_3d);
+}
+
 }  // namespace
 
+std::string other_arm_hint(const std::string& robot, const RobotModel& start, Span<const Sample> train) {
+  RobotType given = RobotType::ur5;
+  if (robot_type_from_name(robot.c_str(), &given) != Status::ok) return "";
+  const RobotModel nominal = nominal_model(given);
+  for (int j = 0; j < kSixJoints; ++j) {  // a description file or a controller's calibration: not the table
+    const DhJoint& a = nominal.joints[j];
+    const DhJoint& b = start.joints[j];
+    if (a.theta_offset_rad != b.theta_offset_rad || a.d_m != b.d_m || a.a_m != b.a_m || a.alpha_rad != b.alpha_rad)
+      return "";
+  }
+  const auto workspace = std::make_unique<LmWorkspaceWithTargets>();
+  const auto fit = std::make_unique<LmResult>();
+  const double given_mae_m = baseline_mae_m(start, train, workspace.get(), fit.get());
+  RobotType best = given;
+  double best_mae_m = given_mae_m;
+  for (const RobotType other : {RobotType::ur3, RobotType::ur5, RobotType::ur10, RobotType::ur3e, RobotType::ur5e,
+                                RobotType::ur10e, RobotType::ur16e}) {
+    if (other == given) continue;
+    RobotModel model = nominal_model(other);
+    model.tool_m = start.tool_m;  // the same tool points to start from
+    for (int k = 0; k < kMaxTargets - 1; ++k) model.other_tools_m[k] = start.other_tools_m[k];
+    const double mae_m = baseline_mae_m(model, train, workspace.get(), fit.get());
+    if (mae_m < best_mae_m) {
+      best = other;
+      best_mae_m = mae_m;
+    }
+  }
+  if (best == given || !(best_mae_m < kOtherArmMaeRatio * given_mae_m)) return "";
+  const std::string name = robot_type_name(best);
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "this looks like a %s (--robot-model %s): its nominal geometry with the tool point and base fitted "
+                "leaves %.3f mm (MAE 3D) on the training samples, against %.3f mm for the %s given",
+                name.c_str(), name.c_str(), best_mae_m * 1e3, given_mae_m * 1e3, robot.c_str());
+  return line;
+}
+
+int model_parameter_count(const RobotModel& start, ParamMask free_mask, int targets) {
+  constexpr int kPoses = 48;  // well spread: a UR's 33 need some 15; the analysis is ~0.2 ms
+  std::vector<Sample> samples;
+  Random random(1);
+  for (int pose = 0; pose < kPoses; ++pose) {
+    JointVector q;  // the validate command's workspace: shoulder up, tool down-ish
+    q << random.uniform(-3.0, 3.0), random.uniform(-2.6, -0.5), random.uniform(-2.4, 2.4), random.uniform(-3.0, 0.0),
+        random.uniform(-2.8, -0.3), random.uniform(-3.0, 3.0);
+    for (int target = 0; target < targets; ++target) {
+      Sample sample;
+      sample.q_rad = q;
+      sample.point_m = fk_target_point(start, q, target);
+      sample.target = target;
+      sample.index = static_cast<std::uint32_t>(samples.size());
+      samples.push_back(sample);
+    }
+  }
+  const auto normal = std::make_unique<NormalEquations>();
+  const auto workspace = std::make_unique<IdentifiabilityWorkspace>();
+  const auto report = std::make_unique<IdentifiabilityReport>();
+  const ParamMask rigid = free_mask & rigid_params_mask(start);
+  if (accumulate_normal_equations(start, RigidTransform{}, Span<const Sample>(samples.data(), samples.size()),
+                                  PointLoss{}, normal.get(), rigid) != Status::ok ||
+      analyze_identifiability(normal->jtwj, rigid, kDefaultIdentifiabilityThreshold, workspace.get(), report.get(), 0,
+                              IdentifiabilityOutput::kept_set) != Status::ok) {
+    return 0;
+  }
+  return report->kept_count();
+}
+
+std::string constant_orientation_warning(bool constant, double fit_sigma_m, double noise_sigma_m) {
+  if (!constant || !(fit_sigma_m > kConstantOrientationNoiseRatio * noise_sigma_m)) return "";
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "the orientation columns rx, ry, rz hold one value on every row, and the fit's residual sigma is "
+                "%.0fx the measurement noise: the orientation carries no information here (the joints turn the tool, "
+                "the columns say it never turned) and contradicts the positions; leave it out (--orientation-lever-m "
+                "0) or export the measured orientation",
+                fit_sigma_m / noise_sigma_m);
+  return line;
+}
+
 std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
-                                      const std::vector<report::ParameterRow>& parameters) {
+                                      const std::vector<report::ParameterRow>& parameters, const PoseSpan* span) {
   std::vector<std::string> warnings;
   const CalibrationStage* final_stage = result.final_stage();
   if (final_stage == nullptr) return warnings;
   const RobotModel& model = final_stage->model;
   const ModelParams before = to_params(result.baseline.model);
   const ModelParams after = to_params(model);
-  char line[512];
+  char line[1024];
   for (int k = 0; k < model_param_count(model); ++k) {
     const double change = after(k) - before(k);
     const bool angle = model_param_is_angle(k, model.joint_count);
@@ -62,7 +179,22 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
   // significance test; not the structural nulls the identifiability analysis drops) leaves no
   // redundancy: the poses do not span the model, and test samples of the same stops do not show it.
   const int determined = result.has_lm ? mask_count(result.lm.identifiability.kept_mask | result.lm_pruned_mask) : 0;
-  if (determined > 0 && 3 * result.train_points <= static_cast<std::size_t>(determined)) {
+  // The parameters the model has, not those the fit kept: with few poses the identifiability
+  // analysis drops what they cannot tell apart, and the fit passes through them.
+  if (span != nullptr && span->parameters > 0 && span->coordinates <= static_cast<std::size_t>(span->parameters)) {
+    const double per_pose =
+        static_cast<double>(span->coordinates) / static_cast<double>(std::max<std::size_t>(span->poses, 1));
+    const int needed = static_cast<int>(std::floor(span->parameters / per_pose)) + 1;
+    std::snprintf(line, sizeof line,
+                  "the %zu training samples stand at only %zu distinct poses (%zu coordinates) for the %d "
+                  "parameters this model has over a spread of poses (the fit estimated %d and dropped the others, "
+                  "which these poses cannot tell apart): too few poses for the model, so the fit passes through them "
+                  "and its training error says nothing of other poses; the poses do not span the model: measure at "
+                  "least %d poses spread over every joint's range (hivecal plan)",
+                  result.train_count, span->poses, span->coordinates, span->parameters,
+                  result.has_lm ? result.lm.identifiability.kept_count() : 0, needed);
+    warnings.push_back(line);
+  } else if (span == nullptr && determined > 0 && 3 * result.train_points <= static_cast<std::size_t>(determined)) {
     std::snprintf(line, sizeof line,
                   "the %zu training samples stand at only %zu distinct poses (%zu coordinates) for the %d parameters "
                   "the fit determines: the poses do not span the model, so the calibration holds near these poses "

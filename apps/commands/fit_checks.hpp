@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "hivecal/model/dataset.hpp"
+
 #include "hivecal/calibration.hpp"
 #include "report/report.hpp"
 
@@ -18,12 +20,51 @@ struct FitBounds {
   double max_angle_change_rad = 0.03490658503988659;  ///< theta offsets and alpha, 2 deg (--max-change-deg) [rad]
 };
 
+/// The training poses against what the model needs (the span warning of fit_warnings).
+struct PoseSpan {
+  std::size_t poses = 0;        ///< distinct training configurations, at most kDistinctPointLimit [-]
+  std::size_t coordinates = 0;  ///< their independent coordinates: 3 per distinct point, less the 3 of the rigid
+                                ///< triangle a measured orientation makes of each pose [-]
+  int parameters = 0;  ///< what a spread of poses determines of the fit's free parameters (model_parameter_count),
+                       ///< with the other targets' tool points when fitted [-]
+};
+
+/// Parameters a spread of poses determines for `start` over `free_mask` (rigid: no joint terms;
+/// the model's, not the data's): the identifiability analysis (kDefaultIdentifiabilityThreshold)
+/// of 48 seeded random configurations, each measured at `targets` targets (start's tool points,
+/// held fixed), base at the identity [-]; 0 when the analysis fails.
+int model_parameter_count(const RobotModel& start, ParamMask free_mask, int targets);
+
 /// The warnings about `result` (empty when none): one line per parameter of the final stage's
 /// model that moved beyond `bounds` from the baseline model (name, both values, the change),
 /// and one when the final stage's test MAE (3D) is above the baseline's (only with test samples).
 /// `parameters` (Table 4's rows, may be empty): a moved parameter with |correlation| > 0.95 to
-/// another says so and what would separate them.
+/// another says so and what would separate them. Too few poses: with `span`, when its
+/// coordinates are no more than the parameters the model has (the identifiability analysis
+/// drops what the poses cannot tell apart, so the fit passes through them); without it, when
+/// 3 per distinct training point are no more than the parameters the fit determined.
 std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
-                                      const std::vector<report::ParameterRow>& parameters = {});
+                                      const std::vector<report::ParameterRow>& parameters = {},
+                                      const PoseSpan* span = nullptr);
+
+/// Residual sigma over the measurement noise above which constant orientation columns are
+/// said to contradict the positions [-].
+inline constexpr double kConstantOrientationNoiseRatio = 10.0;
+
+/// "the orientation columns rx, ry, rz hold one value on every row ..." when they do
+/// (`constant`) and the fit's residual sigma is above kConstantOrientationNoiseRatio times the
+/// measurement noise; "" otherwise.
+std::string constant_orientation_warning(bool constant, double fit_sigma_m, double noise_sigma_m);
+
+/// Training MAE (3D) below which another built-in arm's nominal geometry "explains the data
+/// much better": this share of the given one's [-].
+inline constexpr double kOtherArmMaeRatio = 1.0 / 3.0;
+
+/// When `start` is a built-in UR type's nominal geometry (`robot` its name) and the nominal
+/// geometry of another built-in type, with the tool points and the base fitted to `train` as
+/// the job's baseline is, leaves less than kOtherArmMaeRatio of the training MAE (3D) that
+/// `start`'s leaves: "this looks like a ur10 (--robot-model ur10): ..." with both figures; ""
+/// otherwise (a description file, no clearly better arm). A few small LM fits (9 parameters).
+std::string other_arm_hint(const std::string& robot, const RobotModel& start, Span<const Sample> train);
 
 }  // namespace hivecal::cli

@@ -5,9 +5,12 @@
 // base -> tracker fitted to the measurements.
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "cli/options.hpp"
@@ -25,6 +28,7 @@
 #include "report/svg.hpp"
 #include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
+#include "textio/json.hpp"
 #include "textio/text_util.hpp"
 #include "record/result_json.hpp"
 
@@ -34,48 +38,81 @@ namespace {
 
 constexpr std::size_t kNoReport = static_cast<std::size_t>(-1);
 
-/// The reaches of one commanded pose.
-struct PoseReaches {
-  Sample first;                  ///< the first reach (its joints: the command; its target)
-  std::size_t line = 0;          ///< file line of the first reach
-  std::vector<Vec3> measured_m;  ///< every reach's measured point [m]
+/// Joint cells of the grouping: kCellWidth_rad = 4 x kSamePoseTolerance_rad, so a sample's
+/// tolerance reaches into the next cell only in the joints where it lies within the tolerance
+/// of a cell's edge (on average 1.5 cells per joint, 11 of the 2^6 at most).
+constexpr double kCellWidth_rad = 4.0 * kSamePoseTolerance_rad;
+/// Beyond the tolerance itself, the slack that covers the rounding of a joint's cell [rad].
+constexpr double kCellSlack_rad = 1e-9;
+
+/// A cell of joint space and a target.
+struct JointCell {
+  std::array<std::int64_t, kSixJoints> index{};  ///< floor(q_j / kCellWidth_rad) per joint [-]
+  int target = 0;                                ///< the reflector [-]
+  bool operator==(const JointCell& other) const { return index == other.index && target == other.target; }
 };
 
-/// Samples grouped by pose and target, in the order of their first reach.
-std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::vector<std::size_t>& lines) {
-  std::vector<PoseReaches> poses;
-  for (const Sample& s : samples) {
-    PoseReaches* pose = nullptr;
-    for (PoseReaches& p : poses) {
-      if (same_point(p.first, s)) pose = &p;
-    }
-    if (pose == nullptr) {
-      poses.push_back(PoseReaches{s, s.index < lines.size() ? lines[s.index] : 0, {}});
-      pose = &poses.back();
-    }
-    pose->measured_m.push_back(s.point_m);
+struct JointCellHash {
+  std::size_t operator()(const JointCell& cell) const {
+    std::uint64_t h = static_cast<std::uint64_t>(cell.target);
+    for (const std::int64_t k : cell.index) h = (h ^ static_cast<std::uint64_t>(k)) * 0x9E3779B97F4A7C15ull;
+    return static_cast<std::size_t>(h ^ (h >> 29));
   }
+};
+
+/// The cell index of a joint angle (joints are read within a turn or two: far from the int64 ends).
+std::int64_t cell_index(double q_rad) {
+  return static_cast<std::int64_t>(std::floor(std::clamp(q_rad, -1e12, 1e12) / kCellWidth_rad));
+}
+
+}  // namespace
+
+std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::vector<std::size_t>& lines,
+                                       std::size_t* comparisons) {
+  std::vector<PoseReaches> poses;
+  std::unordered_map<JointCell, std::vector<std::size_t>, JointCellHash> cells;  // poses by their first reach's cell
+  std::size_t compared = 0;
+  for (const Sample& s : samples) {
+    // The cells within the tolerance of s: its own, and per joint the neighbour whose edge is near.
+    JointCell own{{}, s.target};
+    std::array<int, kSixJoints> low{};
+    std::array<int, kSixJoints> high{};
+    for (int j = 0; j < kSixJoints; ++j) {
+      const std::int64_t k = cell_index(s.q_rad(j));
+      own.index[static_cast<std::size_t>(j)] = k;
+      const double from_lower_edge_rad = s.q_rad(j) - static_cast<double>(k) * kCellWidth_rad;
+      low[static_cast<std::size_t>(j)] = from_lower_edge_rad <= kSamePoseTolerance_rad + kCellSlack_rad ? -1 : 0;
+      high[static_cast<std::size_t>(j)] =
+          kCellWidth_rad - from_lower_edge_rad <= kSamePoseTolerance_rad + kCellSlack_rad ? 1 : 0;
+    }
+    std::size_t latest = poses.size();  // none
+    std::array<int, kSixJoints> offset = low;
+    for (bool more = true; more;) {
+      JointCell cell = own;
+      for (std::size_t j = 0; j < offset.size(); ++j) cell.index[j] += offset[j];
+      if (const auto found = cells.find(cell); found != cells.end()) {
+        for (const std::size_t p : found->second) {
+          ++compared;
+          if ((latest == poses.size() || p > latest) && same_point(poses[p].first, s)) latest = p;
+        }
+      }
+      more = false;  // the next offset, joint 1 fastest
+      for (std::size_t j = 0; j < offset.size() && !more; ++j) {
+        more = offset[j] < high[j];
+        offset[j] = more ? offset[j] + 1 : low[j];
+      }
+    }
+    if (latest == poses.size()) {
+      cells[own].push_back(poses.size());
+      poses.push_back(PoseReaches{s, s.index < lines.size() ? lines[s.index] : 0, {}});
+    }
+    poses[latest].measured_m.push_back(s.point_m);
+  }
+  if (comparisons != nullptr) *comparisons = compared;
   return poses;
 }
 
-/// The command frame: a result's model and base -> tracker, or a nominal model with the
-/// base -> tracker fitted to every reach. *how says which.
-Error command_frame(const Options& options, Span<const Sample> samples, record::CalibrationFile* frame,
-                    std::string* how) {
-  if (!options.get("calibration").empty()) {
-    *how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
-    return record::read_calibration_json(options.get("calibration"), frame);
-  }
-  Error error = robot_model_option(options, "robot-model", frame);
-  if (error.ok()) error = vec3_option(options, "tool", &frame->model.tool_m);
-  if (!error.ok()) return error;
-  if (fit_base_to_tracker(frame->model, samples, &frame->base_to_tracker) != Status::ok) {
-    return Error::input(
-        "cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
-  }
-  *how = "commanded positions from the nominal " + frame->robot + " (base -> tracker fitted to the reaches)";
-  return Error{};
-}
+namespace {
 
 std::string mm(double value_m) {
   char text[32];
@@ -84,7 +121,185 @@ std::string mm(double value_m) {
   return text;
 }
 
-Error iso9283(const Options& options) {
+/// ISO 9283's cycles per pose: fewer is warned of (RP_l from a few reaches is uncertain) [-].
+constexpr std::size_t kIsoCycles = 30;
+/// With --calibration, AP_P above this many times the calibration's own held-out MAE (3D)...
+constexpr double kApBoundPerOwnMae = 10.0;
+/// ...and above this, or above this alone when the result holds no metrics, is implausible [m].
+constexpr double kApBoundFloor_m = 1e-3;
+
+/// Where the commanded positions come from.
+struct CommandFrame {
+  record::CalibrationFile file;  ///< the model and base -> tracker
+  std::string how;               ///< says which, for the output
+  bool calibration = false;      ///< from --calibration (else the nominal model, base fitted to the reaches)
+  double own_mae_m = 0.0;        ///< the calibration's own MAE (3D) from its metrics; 0: none [m]
+  std::string own_mae_set;       ///< which samples that MAE is of: "held-out" or "training"
+};
+
+/// The calibration's own 3D MAE from result.json's "metrics": the held-out one, else the
+/// training one (--split 1); 0 when the file has none (a description, a hand-made result).
+void own_mae(const std::string& text, CommandFrame* frame) {
+  textio::JsonValue root;
+  if (!textio::parse_json(text, &root).ok() || root.find("metrics") == nullptr) return;
+  for (const char* set : {"test", "train"}) {
+    const textio::JsonValue* stats = root.find("metrics")->find(set);
+    const textio::JsonValue* count = stats != nullptr ? stats->find(record::kErrorCountKey) : nullptr;
+    const textio::JsonValue* mae = stats != nullptr ? stats->find("mae_m") : nullptr;
+    const textio::JsonValue* mae_3d = mae != nullptr ? mae->find(record::kErrorAxisKeys[3]) : nullptr;
+    if (count == nullptr || count->kind != textio::JsonValue::Kind::number || !(count->number > 0.0) ||
+        mae_3d == nullptr || mae_3d->kind != textio::JsonValue::Kind::number || !(mae_3d->number > 0.0)) {
+      continue;
+    }
+    frame->own_mae_m = mae_3d->number;
+    frame->own_mae_set = std::string(set) == "test" ? "held-out" : "training";
+    return;
+  }
+}
+
+/// The command frame: a result's model and base -> tracker, or a nominal model (its tool:
+/// --tool, else a description file's, else kDefaultToolText) with the base -> tracker fitted
+/// to every reach.
+Error command_frame(const Options& options, Span<const Sample> samples, CommandFrame* frame) {
+  if (!options.get("calibration").empty()) {
+    if (options.given("tool")) {
+      return Error::usage(
+          "--tool goes with --robot-model: a calibration result carries its own calibrated tool point (its \"tool\"), "
+          "which gives the commanded positions; leave --tool out, or give --robot-model instead of --calibration");
+    }
+    frame->calibration = true;
+    frame->how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
+    std::string text;
+    const Error read = record::read_calibration_json(options.get("calibration"), &frame->file, &text);
+    if (read.ok()) own_mae(text, frame);
+    return read;
+  }
+  bool from_file = false;
+  Error error = robot_model_option(options, "robot-model", &frame->file, &from_file);
+  if (error.ok() && (!from_file || options.given("tool")))
+    error = vec3_option(options, "tool", &frame->file.model.tool_m);
+  if (!error.ok()) return error;
+  if (fit_base_to_tracker(frame->file.model, samples, &frame->file.base_to_tracker) != Status::ok) {
+    return Error::input(
+        "cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
+  }
+  const Vec3& tool_m = frame->file.model.tool_m;
+  frame->how = "commanded positions from the nominal " + frame->file.robot + " (tool " + mm(tool_m.x()) + ", " +
+               mm(tool_m.y()) + ", " + mm(tool_m.z()) + " mm; base -> tracker fitted to the reaches)";
+  return Error{};
+}
+
+/// One pose's characteristics.
+struct PoseResult {
+  std::size_t pose = 0;   ///< index into the grouped poses [-]
+  PoseAccuracy accuracy;  ///< AP and RP
+};
+
+/// Poses reached fewer than kIsoCycles times: a warning (the figures stand, their RP_l is uncertain); "" when none.
+std::string cycles_warning(const std::vector<PoseResult>& results) {
+  std::size_t short_poses = 0;
+  std::size_t fewest = kIsoCycles;
+  for (const PoseResult& r : results) {
+    if (r.accuracy.cycles >= kIsoCycles) continue;
+    ++short_poses;
+    fewest = std::min(fewest, r.accuracy.cycles);
+  }
+  if (short_poses == 0) return "";
+  return std::to_string(short_poses) + " of " + std::to_string(results.size()) + " poses have fewer than " +
+         std::to_string(kIsoCycles) + " cycles (the fewest " + std::to_string(fewest) +
+         "): ISO 9283 asks for 30 cycles per pose; RP_l from fewer reaches is uncertain (plan --iso9283 --cycles 30)";
+}
+
+/// The plausibility bound of AP_P with a calibration [m] and how it was set.
+double ap_bound_m(const CommandFrame& frame, std::string* why) {
+  const double bound_m = std::max(kApBoundFloor_m, kApBoundPerOwnMae * frame.own_mae_m);
+  *why = frame.own_mae_m > 0.0 ? "10 x the calibration's own " + frame.own_mae_set + " MAE of " + mm(frame.own_mae_m) +
+                                     " mm, at least 1 mm"
+                               : "1 mm: the calibration holds no metrics";
+  return bound_m;
+}
+
+/// With --calibration: when a pose's AP_P is beyond the plausibility bound (ap_bound_m), the
+/// warning that makes the run exit 5, naming the cause (the base -> tracker registered again on
+/// these reaches says whether the frame or the model is at fault) and the remedy; "" otherwise.
+std::string frame_warning(const Options& options, const CommandFrame& frame, Span<const Sample> samples,
+                          const std::vector<PoseReaches>& poses, const std::vector<PoseResult>& results) {
+  if (!frame.calibration) return "";  // the nominal frame is fitted to these reaches
+  std::string bound_why;
+  const double bound_m = ap_bound_m(frame, &bound_why);
+  std::size_t beyond = 0;
+  const PoseResult* worst = &results.front();
+  for (const PoseResult& r : results) {
+    if (r.accuracy.accuracy_norm_m > bound_m) ++beyond;
+    if (r.accuracy.accuracy_norm_m > worst->accuracy.accuracy_norm_m) worst = &r;
+  }
+  if (beyond == 0) return "";
+  char head[400];
+  std::snprintf(head, sizeof head,
+                "%zu of %zu poses have AP_P beyond the plausibility bound %s mm (%s); the worst %s mm at pose %zu "
+                "(line %zu): ",
+                beyond, results.size(), mm(bound_m).c_str(), bound_why.c_str(),
+                mm(worst->accuracy.accuracy_norm_m).c_str(), worst->pose + 1, poses[worst->pose].line);
+  const std::string calibration = options.get("calibration");
+  const std::string register_again = "hivecal calibrate --robot-model " + calibration + " --fit base --samples " +
+                                     options.get("samples") + " --out registered.json";
+  RigidTransform registered;
+  if (fit_base_to_tracker(frame.file.model, samples, &registered) != Status::ok) {
+    return head +
+           std::string(
+               "the calibration does not match these measurements (the base -> tracker could not be "
+               "registered on them to tell why); if the tracker was set up anew, register the base "
+               "again (") +
+           register_again + ")";
+  }
+  double moved_m = 0.0;  // how far the registration moves a commanded point
+  double worst_registered_m = 0.0;
+  for (const PoseResult& r : results) {
+    const Vec3 base_point = fk_sample_point(frame.file.model, poses[r.pose].first);
+    moved_m = std::max(moved_m, (registered.apply(base_point) - frame.file.base_to_tracker.apply(base_point)).norm());
+    worst_registered_m = std::max(worst_registered_m, (r.accuracy.barycentre_m - registered.apply(base_point)).norm());
+  }
+  const std::string registration =
+      "registered again on these reaches, the base -> tracker moves the commanded "
+      "points by up to " +
+      mm(moved_m) + " mm and leaves a worst AP_P of " + mm(worst_registered_m) + " mm";
+  if (worst_registered_m <= bound_m) {
+    return head + std::string("the base -> tracker of ") + calibration + " does not match these measurements (" +
+           registration +
+           "): the tracker was set up anew or moved since the calibration. Register the base again on these "
+           "measurements, keeping the arm (" +
+           register_again + "), then run iso9283 with that result";
+  }
+  return std::string(head) + "the calibration does not predict these poses, not even with its base registered again (" +
+         registration +
+         "): another robot, tool or unit, or poses far outside the calibration's own? If the tracker was set up "
+         "anew, register the base again (" +
+         register_again + ")";
+}
+
+/// The outputs of one run: the table (CSV) and, with --report, the page.
+std::string table_csv(const std::vector<std::vector<std::string>>& rows) {
+  std::string table;
+  for (const std::vector<std::string>& row : rows) {
+    for (std::size_t c = 0; c < row.size(); ++c) table += row[c] + (c + 1 < row.size() ? "," : "\n");
+  }
+  return table;
+}
+
+std::string report_page(const std::string& how, const std::string& summary, const std::vector<std::string>& warnings,
+                        const std::vector<std::vector<std::string>>& rows) {
+  std::string items = "<li>" + report::xml_escape(how) + "</li>\n<li>" + report::xml_escape(summary) + "</li>\n";
+  for (const std::string& warning : warnings) items += "<li>warning: " + report::xml_escape(warning) + "</li>\n";
+  return report::html_page_head("ISO 9283 pose accuracy and repeatability") + "<ul>\n" + items + "</ul>\n" +
+         report::html_table(rows) +
+         "<p>AP_P: distance of the reaches' barycentre from the commanded position; RP_l = "
+         "mean distance of the reaches from their barycentre + 3 S_l (ISO 9283; docs/iso9283.md)."
+         "</p>\n</body>\n</html>\n";
+}
+
+/// The analysis. `*warnings`: printed after the outputs are written; `*implausible`: the frame
+/// check failed (exit 5, every output written).
+Error iso9283(const Options& options, std::vector<std::string>* warnings, bool* implausible) {
   if (options.get("samples").empty()) return Error::usage("--samples is required (see --help)");
   if (!options.get("calibration").empty() && options.given("robot-model")) {
     return Error::usage("give --calibration or --robot-model, not both: the command frame is one of them");
@@ -103,59 +318,59 @@ Error iso9283(const Options& options) {
   std::vector<std::size_t> lines;
   if (error.ok()) error = textio::read_samples_csv(options.get("samples"), &dataset, units, &lines);
   if (!error.ok()) return error;
-  record::CalibrationFile frame;
-  std::string how;
-  error = command_frame(options, dataset.samples(), &frame, &how);
+  CommandFrame frame;
+  error = command_frame(options, dataset.samples(), &frame);
   if (!error.ok()) return error;
   const std::vector<PoseReaches> poses = group_reaches(dataset.samples(), lines);
-  std::vector<std::vector<std::string>> rows = {
-      {"pose", "line", "target", "cycles", "AP_P [mm]", "AP_x [mm]", "AP_y [mm]", "AP_z [mm]", "RP_l [mm]"}};
-  std::size_t measured = 0;
-  std::size_t single = 0;
-  double worst_ap_m = 0.0;
-  double worst_rp_m = 0.0;
+  std::vector<PoseResult> results;
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const PoseReaches& p = poses[k];
-    PoseAccuracy accuracy;
-    const Vec3 commanded = frame.base_to_tracker.apply(fk_sample_point(frame.model, p.first));
-    if (pose_accuracy(Span<const Vec3>(p.measured_m.data(), p.measured_m.size()), commanded, &accuracy) != Status::ok) {
-      ++single;  // one reach: no repeatability
-      continue;
+    PoseResult r{k, {}};
+    const Vec3 commanded = frame.file.base_to_tracker.apply(fk_sample_point(frame.file.model, p.first));
+    // One reach: no repeatability, left out (counted).
+    if (pose_accuracy(Span<const Vec3>(p.measured_m.data(), p.measured_m.size()), commanded, &r.accuracy) ==
+        Status::ok) {
+      results.push_back(r);
     }
-    ++measured;
-    worst_ap_m = std::max(worst_ap_m, accuracy.accuracy_norm_m);
-    worst_rp_m = std::max(worst_rp_m, accuracy.repeatability_m);
-    rows.push_back({std::to_string(k + 1), std::to_string(p.line), std::to_string(p.first.target + 1),
-                    std::to_string(accuracy.cycles), mm(accuracy.accuracy_norm_m), mm(accuracy.accuracy_m.x()),
-                    mm(accuracy.accuracy_m.y()), mm(accuracy.accuracy_m.z()), mm(accuracy.repeatability_m)});
   }
-  if (measured == 0) {
+  if (results.empty()) {
     return Error::input(options.get("samples") +
                         ": no pose was reached twice (ISO 9283 needs the cycles of each pose; " +
                         std::to_string(poses.size()) + " poses, one reach each)");
   }
-  const std::string summary = std::to_string(measured) + " poses with repeated reaches (" + std::to_string(single) +
+  std::vector<std::vector<std::string>> rows = {
+      {"pose", "line", "target", "cycles", "AP_P [mm]", "AP_x [mm]", "AP_y [mm]", "AP_z [mm]", "RP_l [mm]"}};
+  double worst_ap_m = 0.0;
+  double worst_rp_m = 0.0;
+  for (const PoseResult& r : results) {
+    const PoseAccuracy& a = r.accuracy;
+    const PoseReaches& p = poses[r.pose];
+    worst_ap_m = std::max(worst_ap_m, a.accuracy_norm_m);
+    worst_rp_m = std::max(worst_rp_m, a.repeatability_m);
+    rows.push_back({std::to_string(r.pose + 1), std::to_string(p.line), std::to_string(p.first.target + 1),
+                    std::to_string(a.cycles), mm(a.accuracy_norm_m), mm(a.accuracy_m.x()), mm(a.accuracy_m.y()),
+                    mm(a.accuracy_m.z()), mm(a.repeatability_m)});
+  }
+  const std::string summary = std::to_string(results.size()) + " poses with repeated reaches (" +
+                              std::to_string(poses.size() - results.size()) +
                               " with one reach, left out); worst AP_P " + mm(worst_ap_m) + " mm, worst RP_l " +
                               mm(worst_rp_m) + " mm";
-  std::fprintf(options.get("out") == "-" ? stderr : stdout, "%s\n%s\n", how.c_str(), summary.c_str());
-  std::string table;
-  for (const std::vector<std::string>& row : rows) {
-    for (std::size_t c = 0; c < row.size(); ++c) table += row[c] + (c + 1 < row.size() ? "," : "\n");
-  }
-  error = outputs.stage_text(out_id, "", table);
-  if (error.ok() && report_id != kNoReport) {
-    error = outputs.stage_text(
-        report_id, "",
-        report::html_page_head("ISO 9283 pose accuracy and repeatability") + "<ul>\n<li>" + report::xml_escape(how) +
-            "</li>\n<li>" + report::xml_escape(summary) + "</li>\n</ul>\n" + report::html_table(rows) +
-            "<p>AP_P: distance of the reaches' barycentre from the commanded position; RP_l = "
-            "mean distance of the reaches from their barycentre + 3 S_l (ISO 9283; docs/iso9283.md)."
-            "</p>\n</body>\n</html>\n");
-  }
+  const std::string frame_problem = frame_warning(options, frame, dataset.samples(), poses, results);
+  *implausible = !frame_problem.empty();
+  for (const std::string& warning : {cycles_warning(results), frame_problem})
+    if (!warning.empty()) warnings->push_back(warning);
+  std::fprintf(options.get("out") == "-" ? stderr : stdout, "%s\n%s\n", frame.how.c_str(), summary.c_str());
+  error = outputs.stage_text(out_id, "", table_csv(rows));
+  if (error.ok() && report_id != kNoReport)
+    error = outputs.stage_text(report_id, "", report_page(frame.how, summary, *warnings, rows));
   return error.ok() ? outputs.commit() : error;
 }
 
-/// The cube of `--iso9283 X,Y,Z,SIDE` [m]: false when malformed or not a positive side.
+/// The smallest cube side of the test: P2..P5 then lie 14 mm from P1 (a smaller cube tests one
+/// point several times over); the side auto starts from [m].
+constexpr double kMinCubeSide_m = 0.02;
+
+/// The cube of `--iso9283 X,Y,Z,SIDE` [m]: false when malformed or the side not in [kMinCubeSide_m, 10].
 bool parse_cube(const std::string& text, Vec3* centre_m, double* side_m) {
   double values[4];
   std::size_t begin = 0;
@@ -169,7 +384,7 @@ bool parse_cube(const std::string& text, Vec3* centre_m, double* side_m) {
   }
   *centre_m = Vec3(values[0], values[1], values[2]);
   *side_m = values[3];
-  return *side_m > 0.0 && *side_m <= 10.0 && centre_m->norm() <= 10.0;
+  return *side_m >= kMinCubeSide_m && *side_m <= 10.0 && centre_m->norm() <= 10.0;
 }
 
 /// The rotation vector of the one tool orientation: flange z towards the tracker (or down).
@@ -201,6 +416,18 @@ bool reach(const RobotModel& model, const JointLimits& limits, const Vec3& posit
   return solve_flange_pose(model, limits, flange, InverseKinematicsOptions{}, random, q) == Status::ok;
 }
 
+/// What stands in the way of one position of the test.
+enum class PositionVerdict { reachable, below_floor, inside_keep_out, unreachable };
+
+/// Whether the reflector may be at `p` (above --floor-z, outside --keep-out-radius) and the arm
+/// reaches it with the orientation `rotation` within the limits (*q: its joints).
+PositionVerdict check_position(const RobotModel& model, const JointLimits& limits, const Vec3& p, const Vec3& rotation,
+                               double floor_z_m, double keep_out_m, Random* random, JointVector* q) {
+  if (p.z() < floor_z_m) return PositionVerdict::below_floor;
+  if (p.head<2>().norm() < keep_out_m) return PositionVerdict::inside_keep_out;
+  return reach(model, limits, p, rotation, random, q) ? PositionVerdict::reachable : PositionVerdict::unreachable;
+}
+
 /// Whether the arm reaches all five positions of the cube with the one orientation, above the
 /// floor and outside the keep-out cylinder.
 bool cube_reachable(const RobotModel& model, const JointLimits& limits, const Vec3& centre_m, double side_m,
@@ -209,7 +436,7 @@ bool cube_reachable(const RobotModel& model, const JointLimits& limits, const Ve
   iso_positions(centre_m, side_m, positions);
   for (const Vec3& p : positions) {
     JointVector q;
-    if (p.z() < floor_z_m || p.head<2>().norm() < keep_out_m || !reach(model, limits, p, rotation, random, &q))
+    if (check_position(model, limits, p, rotation, floor_z_m, keep_out_m, random, &q) != PositionVerdict::reachable)
       return false;
   }
   return true;
@@ -226,9 +453,10 @@ bool largest_cube(const RobotModel& model, const JointLimits& limits, const Vec3
     for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(limits.lower_rad(j), limits.upper_rad(j));
     const Vec3 centre = fk_tool_point(model, q);
     const Vec3 rotation = tool_rotation_vector(centre, tracker_m, tool_down);
-    if (!cube_reachable(model, limits, centre, std::max(*side_m, 0.02), rotation, floor_z_m, keep_out_m, &random))
+    if (!cube_reachable(model, limits, centre, std::max(*side_m, kMinCubeSide_m), rotation, floor_z_m, keep_out_m,
+                        &random))
       continue;
-    double low = std::max(*side_m, 0.02);
+    double low = std::max(*side_m, kMinCubeSide_m);
     double high = 2.0;
     for (int step = 0; step < 8; ++step) {
       const double mid = 0.5 * (low + high);
@@ -250,14 +478,48 @@ std::string pose_text(const Vec3& p, const Vec3& r) {
 
 }  // namespace
 
-Error plan_iso9283(const Options& options, const RobotModel& model, const JointLimits& limits) {
+/// A value as an option gives it (0.05, not 0.050000000000000003).
+std::string general_number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+/// Why the given cube cannot be the test: each position below the floor, inside the keep-out
+/// cylinder or out of reach, and what to do; "" when every position is reachable.
+std::string cube_problems(const Options& options, const Vec3 (&positions)[5], const PositionVerdict (&verdicts)[5],
+                          double floor_z_m, double keep_out_m, const std::string& cause) {
+  const std::pair<PositionVerdict, std::string> reasons[] = {
+      {PositionVerdict::below_floor, "below --floor-z " + general_number(floor_z_m) + " m"},
+      {PositionVerdict::inside_keep_out, "inside --keep-out-radius " + general_number(keep_out_m) + " m"},
+      {PositionVerdict::unreachable, "out of the arm's reach with the one orientation within the joint limits"}};
+  std::string problems;
+  for (const auto& [verdict, reason] : reasons) {
+    std::string which;
+    for (int k = 0; k < 5; ++k) {
+      if (verdicts[k] != verdict) continue;
+      char where[120];
+      std::snprintf(where, sizeof where, "P%d (%.4f, %.4f, %.4f m)", k + 1, positions[k].x(), positions[k].y(),
+                    positions[k].z());
+      which += (which.empty() ? "" : ", ") + std::string(where);
+    }
+    if (!which.empty()) problems += which + ": " + reason + "; ";
+  }
+  if (problems.empty()) return "";
+  return "--iso9283 " + options.get("iso9283") + ": " + problems + (cause.empty() ? std::string() : cause + "; ") +
+         "the test needs all five positions: choose another cube (smaller, or nearer the middle of the arm's "
+         "workspace), or --iso9283 auto (the largest cube the arm reaches)";
+}
+
+Error plan_iso9283(const Options& options, const RobotModel& model, const JointLimits& limits,
+                   const JointLimits& widest) {
   Vec3 centre_m;
   double side_m = 0.0;
   const bool automatic = options.get("iso9283") == "auto";
   if (!automatic && !parse_cube(options.get("iso9283"), &centre_m, &side_m)) {
     return Error::usage(
         "--iso9283 must be X,Y,Z,SIDE (the cube's centre in the base frame and its side, metres; "
-        "side in (0, 10]) or auto, not " +
+        "side in [0.02, 10]) or auto, not " +
         port::quoted(options.get("iso9283")));
   }
   Vec3 tracker_m;
@@ -277,11 +539,46 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   if (error.ok()) error = bounded_option(options, "keep-out-radius", 0.0, 10.0, &keep_out_m);
   if (!error.ok()) return error;
   if (options.get("out").empty()) return Error::usage("--out is required (see --help)");
-  if (automatic &&
-      !largest_cube(model, limits, tracker_m, options.given("tool-down"), floor_z_m, keep_out_m, &centre_m, &side_m)) {
-    return Error::failure(
-        "--iso9283 auto: no cube whose five positions the arm reaches with one orientation (move the "
-        "tracker, lower --floor-z or --keep-out-radius)");
+  const bool tool_down = options.given("tool-down");
+  if (automatic && !largest_cube(model, limits, tracker_m, tool_down, floor_z_m, keep_out_m, &centre_m, &side_m)) {
+    const std::string cause =
+        blame_tool_or_limits(options, model, limits, widest, [&](const RobotModel& m, const JointLimits& l) {
+          Vec3 centre;
+          double side = 0.0;
+          return largest_cube(m, l, tracker_m, tool_down, floor_z_m, keep_out_m, &centre, &side);
+        });
+    return Error::failure("--iso9283 auto: no cube whose five positions the arm reaches with one orientation (" +
+                          (cause.empty() ? "move the tracker, lower --floor-z or --keep-out-radius" : cause) + ")");
+  }
+  Vec3 positions[5];
+  iso_positions(centre_m, side_m, positions);
+  const Vec3 rotation = tool_rotation_vector(centre_m, tracker_m, tool_down);
+  // Each position with a joint solution of the model (the controller's own IK moves the arm;
+  // these say that one exists within the limits, and let `predict` check the list). A given
+  // cube is checked as auto's are: nothing is written for a position the arm cannot take.
+  const auto check_cube = [&](const RobotModel& m, const JointLimits& l, PositionVerdict(&verdicts)[5],
+                              JointVector(&q)[5]) {
+    Random random(9283);
+    bool all = true;
+    for (int k = 0; k < 5; ++k) {
+      verdicts[k] = check_position(m, l, positions[k], rotation, floor_z_m, keep_out_m, &random, &q[k]);
+      all = all && verdicts[k] == PositionVerdict::reachable;
+    }
+    return all;
+  };
+  PositionVerdict verdicts[5];
+  JointVector q[5];
+  if (!check_cube(model, limits, verdicts, q)) {
+    bool out_of_reach = false;
+    for (const PositionVerdict v : verdicts) out_of_reach = out_of_reach || v == PositionVerdict::unreachable;
+    const std::string cause = !out_of_reach ? std::string()
+                                            : blame_tool_or_limits(options, model, limits, widest,
+                                                                   [&](const RobotModel& m, const JointLimits& l) {
+                                                                     PositionVerdict other[5];
+                                                                     JointVector other_q[5];
+                                                                     return check_cube(m, l, other, other_q);
+                                                                   });
+    return Error::failure(cube_problems(options, positions, verdicts, floor_z_m, keep_out_m, cause));
   }
   port::OutputSet outputs;
   std::size_t out_id = 0;
@@ -291,25 +588,13 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (error.ok() && script) error = outputs.add_file(options.get("urscript"), "--urscript", &script_id);
   if (!error.ok()) return error;
-  Vec3 positions[5];
-  iso_positions(centre_m, side_m, positions);
-  const Vec3 rotation = tool_rotation_vector(centre_m, tracker_m, options.given("tool-down"));
-  // Each position with a joint solution of the model (the controller's own IK moves the arm;
-  // these say that one exists within the limits, and let `predict` check the list).
   std::string list = "pose,x,y,z,rx,ry,rz,q1,q2,q3,q4,q5,q6\n";
-  Random random(9283);
   for (int k = 0; k < 5; ++k) {
-    JointVector q;
-    const bool reachable = reach(model, limits, positions[k], rotation, &random, &q);
-    if (!reachable) {
-      std::fprintf(
-          stderr, "hivecal plan: warning: P%d is not reachable with this orientation within the joint limits\n", k + 1);
-    }
     list += "P" + std::to_string(k + 1) + "," + textio::format_double(positions[k].x()) + "," +
             textio::format_double(positions[k].y()) + "," + textio::format_double(positions[k].z()) + "," +
             textio::format_double(rotation.x()) + "," + textio::format_double(rotation.y()) + "," +
             textio::format_double(rotation.z());
-    for (int j = 0; j < kSixJoints; ++j) list += "," + (reachable ? textio::format_double(q(j)) : std::string("nan"));
+    for (int j = 0; j < kSixJoints; ++j) list += "," + textio::format_double(q[k](j));
     list += "\n";
   }
   char head[400];
@@ -343,7 +628,10 @@ int iso9283_main(int argc, char** argv) {
        ""},
       {"calibration", "FILE", "command frame: a calibration result (its model and base -> tracker)", ""},
       {"robot-model", "NAME|FILE", "or the nominal model, its base -> tracker fitted to the reaches", "ur5"},
-      {"tool", "X,Y,Z", "with --robot-model: the reflector in the flange frame [m]", "0,0,0"},
+      {"tool", "X,Y,Z",
+       "with --robot-model: the reflector in the flange frame [m] (a description file's when not given; not with "
+       "--calibration, whose tool is calibrated)",
+       kDefaultToolText},
       {"out", "FILE", "per-pose table (CSV: AP_P, AP_x/y/z, RP_l in mm); '-' for stdout", "-"},
       {"report", "FILE", "the same as an HTML page in the calibration report's style", ""},
   };
@@ -355,7 +643,12 @@ int iso9283_main(int argc, char** argv) {
                                    "the measured reaches (samples at the same joints within 1e-3 rad are one pose).",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
-  return exit_with(kIso9283Command, iso9283(options));
+  std::vector<std::string> warnings;
+  bool implausible = false;
+  const int code = exit_with(kIso9283Command, iso9283(options, &warnings, &implausible));
+  if (code != kExitOk) return code;
+  for (const std::string& warning : warnings) error(kIso9283Command, "warning: " + warning);
+  return implausible ? kExitWarnings : kExitOk;
 }
 
 }  // namespace hivecal::cli

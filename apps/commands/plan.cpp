@@ -2,6 +2,7 @@
 // them (docs/planning.md). The selection is the library's (hivecal/plan/pose_plan.hpp); this
 // file parses, prints the before/after report and writes the joints CSV and URScript.
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -28,8 +29,9 @@ PlanResult result;
 
 /// What the command line asked for beyond PlanOptions.
 struct PlanRequest {
-  RobotModel model;     ///< nominal geometry with the reflector
-  PlanOptions options;  ///< the library's settings
+  RobotModel model;           ///< nominal geometry with the reflector
+  PlanOptions options;        ///< the library's settings
+  JointLimits widest_limits;  ///< tried when options' limits leave no pose (robot_option)
 };
 
 std::string text(double value, const char* format) {
@@ -43,28 +45,67 @@ bool stdout_carries_output(const Options& options) {
   return options.get("out") == "-" || options.get("urscript") == "-" || options.get("svg") == "-";
 }
 
-/// The arm and its joint limits: --joint-limits, else the description's own ("joint_limits",
-/// URDF <limit>), else a built-in type's controller limits, else +-2 pi (said on stderr).
-Error robot_option(const Options& options, RobotModel* model, JointLimits* limits) {
+/// Within this of the arm's own range, --joint-limits are taken as that range without a word
+/// (360 deg read from a file is 2 pi to the last bit or two) [rad].
+constexpr double kLimitSlack_rad = 1e-9;
+
+/// --joint-limits clamped to the arm's own range `own` (a built-in type's controller limits, or
+/// the description's): a limit beyond it is said on stderr and clamped (the controller would
+/// refuse a pose there); a joint whose given range lies outside the arm's is refused.
+Error clamp_to_own_range(const Options& options, const std::string& arm, const JointLimits& own, JointLimits* limits) {
+  for (int j = 0; j < kSixJoints; ++j) {
+    double& lower = limits->lower_rad(j);
+    double& upper = limits->upper_rad(j);
+    const double own_lower = own.lower_rad(j);
+    const double own_upper = own.upper_rad(j);
+    if (!(std::max(lower, own_lower) < std::min(upper, own_upper))) {
+      return Error::input(options.get("joint-limits") + ": joint " + std::to_string(j + 1) + " [" +
+                          text(lower, "%.4f") + ", " + text(upper, "%.4f") + "] rad lies outside the " + arm +
+                          "'s own range [" + text(own_lower, "%.4f") + ", " + text(own_upper, "%.4f") + "] rad");
+    }
+    if (lower < own_lower - kLimitSlack_rad || upper > own_upper + kLimitSlack_rad) {
+      std::fprintf(stderr,
+                   "hivecal plan: warning: --joint-limits joint %d [%.4f, %.4f] rad goes beyond the %s's own range "
+                   "[%.4f, %.4f] rad: clamped to it\n",
+                   j + 1, lower, upper, arm.c_str(), own_lower, own_upper);
+    }
+    lower = std::max(lower, own_lower);
+    upper = std::min(upper, own_upper);
+  }
+  return Error{};
+}
+
+/// The arm and its joint limits: --joint-limits (clamped to the arm's own range when that is
+/// known), else the description's own ("joint_limits", URDF <limit>), else a built-in type's
+/// controller limits, else +-2 pi (said on stderr). *widest: the limits to try when these leave
+/// no pose (a built-in type's own, else +-2 pi).
+Error robot_option(const Options& options, RobotModel* model, JointLimits* limits, JointLimits* widest) {
   textio::RobotDescription description;
   bool from_file = false;
   Error error = robot_model_option(options, "robot-model", &description, &from_file);
   if (!error.ok()) return error;
   *model = description.model;
   RobotType type = RobotType::ur5;
+  const bool built_in = !from_file && robot_type_from_name(description.robot.c_str(), &type) == Status::ok;
+  JointLimits own;  // the arm's own range: the description's, a built-in type's, else none known
+  if (description.has_joint_limits) {
+    own.lower_rad = description.lower_rad;
+    own.upper_rad = description.upper_rad;
+  } else if (built_in) {
+    own = default_joint_limits(type);
+  }
+  *widest = built_in ? own : JointLimits{};
   if (!options.get("joint-limits").empty()) {
     textio::InputUnits units;
     error = input_units_option(options, &units);
-    if (!error.ok()) return error;
-    return textio::read_joint_limits_csv(options.get("joint-limits"), &limits->lower_rad, &limits->upper_rad, units);
+    if (error.ok()) {
+      error = textio::read_joint_limits_csv(options.get("joint-limits"), &limits->lower_rad, &limits->upper_rad, units);
+    }
+    if (!error.ok() || !(description.has_joint_limits || built_in)) return error;
+    return clamp_to_own_range(options, description.robot, own, limits);
   }
-  if (description.has_joint_limits) {
-    limits->lower_rad = description.lower_rad;
-    limits->upper_rad = description.upper_rad;
-  } else if (!from_file && robot_type_from_name(description.robot.c_str(), &type) == Status::ok) {
-    *limits = default_joint_limits(type);
-  } else {
-    *limits = JointLimits{};
+  *limits = own;
+  if (!description.has_joint_limits && !built_in) {
     std::fprintf(stderr,
                  "hivecal plan: %s gives no joint limits: assuming +-360 deg for every joint (--joint-limits FILE, or "
                  "\"joint_limits\" in the description, sets them)\n",
@@ -101,7 +142,7 @@ Error parse_request(const Options& options, PlanRequest* request) {
   }
   PlanOptions& o = request->options;
   PlanConstraints& c = o.constraints;
-  Error error = robot_option(options, &request->model, &c.limits);
+  Error error = robot_option(options, &request->model, &c.limits, &request->widest_limits);
   if (error.ok()) error = vec3_option(options, "tool", &request->model.tool_m);
   if (error.ok()) error = vec3_option(options, "tracker-position", &c.tracker_m);
   if (error.ok()) error = count_option(options, "count", 1, kPlanPoseCapacity, &o.pose_count);
@@ -266,13 +307,40 @@ std::string svg_figure(const PlanRequest& request) {
   return out + "</svg>\n";
 }
 
+}  // namespace
+
+std::string blame_tool_or_limits(const Options& options, const RobotModel& model, const JointLimits& limits,
+                                 const JointLimits& widest,
+                                 const std::function<bool(const RobotModel&, const JointLimits&)>& finds) {
+  RobotModel at_flange = model;
+  at_flange.tool_m = Vec3::Zero();
+  if (!model.tool_m.isZero() && finds(at_flange, limits)) {
+    return "the tool is why: --tool " + options.get("tool") + " puts the reflector " +
+           text(model.tool_m.norm(), "%.4g") +
+           " m from the flange (with the reflector at the flange the search finds some); --tool is the reflector in "
+           "the flange frame, in metres (millimetres given?)";
+  }
+  const bool limited =
+      (limits.lower_rad - widest.lower_rad).maxCoeff() > 0.0 || (limits.upper_rad - widest.upper_rad).minCoeff() < 0.0;
+  if (limited && finds(model, widest)) {
+    return "the joint limits are why: " +
+           (options.get("joint-limits").empty() ? std::string("the description's joint_limits")
+                                                : "--joint-limits " + options.get("joint-limits")) +
+           " leave none (with the arm's full range the search finds some): widen them";
+  }
+  return "";
+}
+
+namespace {
+
 Error plan(const Options& options) {
   if (options.given("iso9283")) {
     RobotModel model;
     JointLimits limits;
-    Error error = robot_option(options, &model, &limits);
+    JointLimits widest;
+    Error error = robot_option(options, &model, &limits, &widest);
     if (error.ok()) error = vec3_option(options, "tool", &model.tool_m);
-    return error.ok() ? plan_iso9283(options, model, limits) : error;
+    return error.ok() ? plan_iso9283(options, model, limits, widest) : error;
   }
   PlanRequest request;
   Error error = parse_request(options, &request);
@@ -302,8 +370,17 @@ Error plan(const Options& options) {
   }
   const Status status = plan_session(request.model, request.options, &workspace, &result);
   if (status == Status::too_few_samples) {
+    const std::string cause =
+        blame_tool_or_limits(options, request.model, request.options.constraints.limits, request.widest_limits,
+                             [&](const RobotModel& model, const JointLimits& limits) {
+                               PlanOptions probe = request.options;
+                               probe.constraints.limits = limits;
+                               std::size_t attempts = 0;
+                               return generate_candidates(model, probe, &workspace, &attempts) == Status::ok;
+                             });
     return Error::failure("too few poses meet the constraints (" + std::to_string(request.options.candidate_count) +
-                          " candidates wanted): move the tracker, widen --acceptance-deg or lower --floor-z");
+                          " candidates wanted): " +
+                          (cause.empty() ? "move the tracker, widen --acceptance-deg or lower --floor-z" : cause));
   }
   if (status != Status::ok) return Error::failure(std::string("planning failed: ") + status_message(status));
 
@@ -325,7 +402,7 @@ int plan_main(int argc, char** argv) {
        "ur5e"},
       {"count", "N", "poses to measure (1 .. 128)", ""},
       {"tracker-position", "X,Y,Z", "tracker position in the robot base frame [m]", ""},
-      {"tool", "X,Y,Z", "reflector in the flange frame [m] (one target)", "0,0,0"},
+      {"tool", "X,Y,Z", "reflector in the flange frame [m] (one target)", kDefaultToolText},
       {"acceptance-deg", "DEG", "largest angle flange z - line to the tracker (red-ring reflector: 30)", "30"},
       {"floor-z", "M", "reflector and flange above this base z [m]", "0.05"},
       {"keep-out-radius", "M", "reflector and flange at least this far from the base z axis [m]", "0.15"},

@@ -8,6 +8,7 @@
 #include "textio/robot_description.hpp"
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
+#include "commands/uncertainty.hpp"
 #include "record/result_json.hpp"
 
 namespace hivecal::cli {
@@ -59,19 +60,35 @@ Error predict(const Options& options) {
   r = textio::read_joints_csv(options.get("joints"), &poses, units);
   if (!r.ok()) return r;
   // run
+  const Predictor predict_point(calibration);
+  const PredictionFrame in = frame == "base" || nominal ? PredictionFrame::base : PredictionFrame::tracker;
   std::vector<Vec3> points;
-  points.reserve(poses.size());
-  // The file's own base frame: for modified DH the frame before Rx(alpha_0) Tx(a_0).
-  const RigidTransform file_base =
-      calibration.convention == DhConvention::modified ? calibration.modified_base.transform() : RigidTransform{};
+  std::vector<double> sigmas;
+  std::vector<bool> extrapolated;
+  ExtrapolationCount count;
   for (const JointVector& q : poses) {
-    const Vec3 chain_point = fk_target_point(calibration.model, q, target - 1);
-    points.push_back(frame == "base" || nominal ? file_base.apply(chain_point)
-                                                : calibration.base_to_tracker.apply(chain_point));
+    const Prediction p = predict_point(q, target - 1, in);
+    points.push_back(p.point_m);
+    sigmas.push_back(p.sigma_m);
+    extrapolated.push_back(p.extrapolation.extrapolated());
+    count.add(p.extrapolation);
   }
   // write
-  error = outputs.stage_text(out_id, "", textio::format_points_csv(points, output_unit));
-  return error.ok() ? outputs.commit() : error;
+  const bool uncertain = predict_point.has_uncertainty();
+  error = outputs.stage_text(out_id, "",
+                             uncertain ? textio::format_predictions_csv(points, sigmas, extrapolated, output_unit)
+                                       : textio::format_points_csv(points, output_unit));
+  if (error.ok()) error = outputs.commit();
+  if (error.ok() && uncertain) {
+    std::fprintf(stderr, "%s: %s: extrapolated when %s\n", kPredictCommand, count.text().c_str(),
+                 extrapolation_rule(calibration.uncertainty.domain).c_str());
+  } else if (error.ok() && !nominal) {
+    std::fprintf(stderr,
+                 "%s: %s holds no covariance and domain (made before they were written): no sigma_m, no "
+                 "extrapolated column\n",
+                 kPredictCommand, options.get("calibration").c_str());
+  }
+  return error;
 }
 
 }  // namespace
@@ -84,10 +101,14 @@ int predict_main(int argc, char** argv) {
       {"joints", "FILE", "poses to predict: CSV q1..q6 [rad], optional leading t column ('-': stdin)", ""},
       {"frame", "tracker|base", "frame of the predicted positions", "tracker"},
       {"target", "K", "which target's (reflector's) positions: 1 .. the result's \"tools\" count", "1"},
-      {"out", "FILE", "predicted positions x,y,z [m] (CSV); '-' for stdout", "-"},
+      {"out", "FILE",
+       "predicted positions x,y,z [m] (CSV; '-' for stdout), with a result's covariance and domain also sigma_m (1 "
+       "sigma per axis) and extrapolated (0/1)",
+       "-"},
       {"output-length-unit", "m|mm", "unit of the predicted positions (mm: header x [mm],y [mm],z [mm])", "m"},
   };
-  specs.push_back(input_unit_option_specs()[1]);  // --angle-unit: the poses are joints only
+  for (const OptionSpec& spec : input_unit_option_specs())  // the poses are joints: no length unit
+    if (spec.name != "length-unit") specs.push_back(spec);
   Options options;
   const int parsed = parse_options(kPredictCommand,
                                    "Predicts the tool position of each joint pose with a calibrated model:\n"

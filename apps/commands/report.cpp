@@ -43,14 +43,14 @@ Error make_report(const Options& options) {
   port::OutputSet outputs;
   std::size_t out_id = 0;
   Error error = declare_inputs(options, {"out"}, &outputs);
-  if (error.ok()) error = outputs.add_folder(options.get("out"), "--out", &out_id);
+  if (error.ok()) error = outputs.add_folder(options.get("out"), "--out", {report::kReportPageName}, &out_id);
   if (!error.ok()) return error;
   report::ReportData data;
   error = load_report_data(options.get("calibration"), &data);
   if (!error.ok()) return error;
-  error = outputs.stage_text(out_id, "index.html", report::render_html(data));
+  error = outputs.stage_text(out_id, report::kReportPageName, report::render_html(data));
   if (error.ok()) error = outputs.commit();
-  if (error.ok()) std::printf("report: %s/index.html\n", options.get("out").c_str());
+  if (error.ok()) std::printf("report: %s/%s\n", options.get("out").c_str(), report::kReportPageName);
   return error;
 }
 

@@ -63,16 +63,10 @@ const std::vector<cli::OptionSpec>& option_specs() {
   return specs;
 }
 
-/// Parses a number option; false (message printed) if malformed.
-/// Reads number options one after the other; the first bad one is kept in `error`.
-struct Numbers {
-  const cli::Options& options;  ///< the parsed command line
-  Error error;                  ///< the first failure
-  bool get(const char* name, double* value) {
-    if (error.ok()) error = cli::number_option(options, name, value);
-    return error.ok();
-  }
-};
+/// Largest simulated joint deflection (compliance, harmonics) [urad].
+constexpr double kMaxDeflection_urad = 1e4;
+/// Largest sigma of the geometry's simulated errors [um or urad].
+constexpr double kMaxErrorSigma = 1e5;
 
 /// --harmonic-urad J,K,S,C into config's harmonic_*.
 Error harmonic_option(const std::string& text, sim::SimConfig* config) {
@@ -86,11 +80,12 @@ Error harmonic_option(const std::string& text, sim::SimConfig* config) {
   }
   const bool whole = count == 4 && start == text.size() + 1;
   if (!whole || v[0] < 1.0 || v[0] > 6.0 || v[0] != std::floor(v[0]) || v[1] < 1.0 || v[1] > 3.0 ||
-      v[1] != std::floor(v[1]) || std::fabs(v[2]) > 1e4 || std::fabs(v[3]) > 1e4) {
+      v[1] != std::floor(v[1]) || !(std::fabs(v[2]) <= kMaxDeflection_urad) ||
+      !(std::fabs(v[3]) <= kMaxDeflection_urad)) {
     return Error::usage(
         "--harmonic-urad must be J,K,S,C: joint 1-6, order 1-3, sine and cosine amplitudes within "
-        "+-10000 urad (e.g. 3,1,60,50), not '" +
-        text + "'");
+        "+-10000 urad (e.g. 3,1,60,50), not " +
+        port::quoted(text));
   }
   config->harmonic_joint = static_cast<int>(v[0]) - 1;
   config->harmonic_order = static_cast<int>(v[1]);
@@ -105,7 +100,6 @@ constexpr double kMaxDuration_s = 3600.0;
 
 /// Builds the session configuration.
 Error configure(const cli::Options& options, SimConfig* config) {
-  Numbers numbers{options, Error{}};
   textio::RobotDescription robot;
   bool from_file = false;
   Error error = cli::robot_model_option(options, "robot-model", &robot, &from_file);
@@ -139,15 +133,15 @@ Error configure(const cli::Options& options, SimConfig* config) {
   } else if (options.get("errors") != "paper") {
     return Error::usage("--errors must be paper or large, not '" + options.get("errors") + "'");
   }
+  // The geometry's error sigmas up to 0.1 m / 0.1 rad, the deflections up to 10 mrad: far
+  // beyond any arm, still a session the pipeline can take.
   for (auto [name, target, scale] : {std::tuple{"length-sigma-um", &config->length_sigma_m, 1e-6},
                                      std::tuple{"angle-sigma-urad", &config->angle_sigma_rad, 1e-6},
                                      std::tuple{"tool-sigma-um", &config->tool_sigma_m, 1e-6}}) {
     if (!options.given(name)) continue;
     double value = 0.0;
-    if (!numbers.get(name, &value)) return numbers.error;
-    if (!(value >= 0.0 && value < 1e9)) {
-      return Error::usage(std::string("--") + name + " must be a finite number, not negative");
-    }
+    error = cli::bounded_option(options, name, 0.0, kMaxErrorSigma, &value);
+    if (!error.ok()) return error;
     *target = value * scale;
   }
   if (options.given("compliance-urad")) {
@@ -156,8 +150,10 @@ Error configure(const cli::Options& options, SimConfig* config) {
     double j2 = 0.0;
     double j3 = 0.0;
     if (comma == std::string::npos || !textio::parse_double(text.substr(0, comma), &j2) ||
-        !textio::parse_double(text.substr(comma + 1), &j3)) {
-      return Error::usage("--compliance-urad must be J2,J3 (e.g. 40,20), not '" + text + "'");
+        !textio::parse_double(text.substr(comma + 1), &j3) || !(std::fabs(j2) <= kMaxDeflection_urad) ||
+        !(std::fabs(j3) <= kMaxDeflection_urad)) {
+      return Error::usage("--compliance-urad must be J2,J3, each within +-10000 urad (e.g. 40,20), not " +
+                          port::quoted(text));
     }
     config->compliance_j2_rad = j2 * 1e-6;
     config->compliance_j3_rad = j3 * 1e-6;
@@ -191,12 +187,28 @@ Error check_not_overwriting(const cli::Options& options) {
                        "; refusing to overwrite a session (--force replaces it)");
 }
 
+/// How a live session is paced: --speed (0, or within [kMinServeSpeed, kMaxServeSpeed]) and
+/// --serve-delay-s; read before anything is written, so a bad value leaves nothing behind.
+struct Pacing {
+  double speed = 1.0;    ///< session seconds per second; 0: as fast as read
+  double delay_s = 0.0;  ///< wait before streaming [s]
+};
+
+Error pacing_options(const cli::Options& options, Pacing* pacing) {
+  Error error = cli::number_option(options, "speed", &pacing->speed);
+  if (error.ok() && !(pacing->speed == 0.0 || (pacing->speed >= kMinServeSpeed && pacing->speed <= kMaxServeSpeed))) {
+    char range[120];
+    std::snprintf(range, sizeof range,
+                  "--speed must be 0 (as fast as read) or within [%g, %g] session seconds per second", kMinServeSpeed,
+                  kMaxServeSpeed);
+    error = Error::usage(std::string(range) + ", got " + port::quoted(options.get("speed")));
+  }
+  if (error.ok()) error = cli::bounded_option(options, "serve-delay-s", 0.0, kMaxServeDelay_s, &pacing->delay_s);
+  return error;
+}
+
 /// Serves the session on two ptys, printing their paths first.
-Error serve(const Session& session, const cli::Options& options) {
-  Numbers numbers{options, Error{}};
-  double speed = 1.0;
-  double delay_s = 0.0;
-  if (!numbers.get("speed", &speed) || !numbers.get("serve-delay-s", &delay_s) || speed < 0) return numbers.error;
+Error serve(const Session& session, const Pacing& pacing) {
   port::PtyPair robot;
   port::PtyPair tracker;
   Error error = port::open_pty(&robot);
@@ -210,10 +222,10 @@ Error serve(const Session& session, const cli::Options& options) {
   action.sa_handler = request_stop;
   sigemptyset(&action.sa_mask);
   for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaction(s, &action, nullptr);
-  port::sleep_ms(static_cast<std::int64_t>(delay_s * 1000.0));
+  (void)port::sleep_ms(static_cast<std::int64_t>(pacing.delay_s * 1000.0), g_stop);
   ServeStats stats;
-  error = serve_session(session, robot, tracker, ServeOptions{speed}, &g_stop, &stats);
-  port::sleep_ms(500);  // let readers drain the ptys before the hangup
+  error = serve_session(session, robot, tracker, ServeOptions{pacing.speed}, &g_stop, &stats);
+  (void)port::sleep_ms(500, g_stop);  // let readers drain the ptys before the hangup
   port::close_pty(&robot);
   port::close_pty(&tracker);
   std::printf("served %llu robot frames (%llu bytes), %llu tracker frames (%llu bytes)\n",
@@ -237,12 +249,15 @@ int simulate_main(int argc, char** argv) {
                          option_specs(), argc, argv, &options);
   if (parsed >= 0) return parsed;
   SimConfig config;
+  Pacing pacing;
   Error error = configure(options, &config);
+  if (error.ok()) error = pacing_options(options, &pacing);
   if (!error.ok()) return cli::exit_with(kSimulateCommand, error);
   port::OutputSet outputs;
   std::size_t folder = 0;
   error = declare_inputs(options, {"out-dir"}, &outputs);
-  if (error.ok()) error = outputs.add_folder(options.get("out-dir"), "--out-dir", &folder);
+  if (error.ok())
+    error = outputs.add_folder(options.get("out-dir"), "--out-dir", output_names(!options.given("serve")), &folder);
   if (error.ok()) error = check_not_overwriting(options);
   if (!error.ok()) return cli::exit_with(kSimulateCommand, error);
   const Session session(config);
@@ -250,7 +265,7 @@ int simulate_main(int argc, char** argv) {
   error = stage_outputs(session, !options.given("serve"), kTruthSampleMarginS, &outputs, folder);
   if (error.ok()) error = outputs.commit();
   if (!error.ok()) return cli::exit_with(kSimulateCommand, error);
-  return cli::exit_with(kSimulateCommand, options.given("serve") ? serve(session, options) : Error{});
+  return cli::exit_with(kSimulateCommand, options.given("serve") ? serve(session, pacing) : Error{});
 }
 
 }  // namespace hivecal::sim

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "commands/commands.hpp"
 #include "commands/host_storage.hpp"
 #include "hivecal/port/capture_file.hpp"
 #include "hivecal/port/output_files.hpp"
@@ -83,12 +84,9 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
   if (options.get("robot-port").empty() && options.get("tracker-port").empty()) {
     return Error::usage("give --robot-port and/or --tracker-port (see --help)");
   }
-  Error error = cli::number_option(options, "duration-s", duration_s);
+  Error error = cli::ranged_option(
+      options, "duration-s", cli::NumberRange{0.0, 1e9, false, false, "s (0: until Ctrl-C / SIGTERM)"}, duration_s);
   if (!error.ok()) return error;
-  if (!(*duration_s >= 0.0 && *duration_s <= 1e9)) {
-    return Error::usage("--duration-s must be 0 (until Ctrl-C / SIGTERM) or a positive number of seconds, not " +
-                        port::quoted(options.get("duration-s")));
-  }
   port::OutputSet checks;  // used for its checks only: captures are written live, not staged
   for (std::size_t k = 0; k < 2; ++k) {
     const StreamOptions& s = kStreams[k];
@@ -125,27 +123,21 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
   return Error{};
 }
 
+/// The controller's text messages printed on stderr; more are only counted (the summary).
+constexpr std::uint64_t kTextMessagesShown = 20;
+
 /// `record --rtde HOST[:PORT]`: the controller's joint states through RTDE into a robot log
 /// (the RTDE recorder's text format, which every reader takes), written as it comes.
 Error record_rtde(const cli::Options& options) {
   if (!options.get("robot-port").empty() || !options.get("tracker-port").empty()) {
     return Error::usage("--rtde records the robot alone: record the tracker's port in a second `hivecal record`");
   }
-  std::string host = options.get("rtde");
-  int port_number = 30004;
-  const std::size_t colon = host.rfind(':');
-  if (colon != std::string::npos && host.find(']') == std::string::npos) {
-    double value = 0.0;
-    if (!textio::parse_double(host.substr(colon + 1), &value) || !(value >= 1.0 && value <= 65535.0) ||
-        value != static_cast<double>(static_cast<int>(value))) {
-      return Error::usage("--rtde must be HOST or HOST:PORT (PORT 1 .. 65535), not " + port::quoted(host));
-    }
-    port_number = static_cast<int>(value);
-    host.resize(colon);
-  }
-  if (host.empty()) return Error::usage("--rtde needs a host name or address");
+  std::string host;
+  int port_number = port::kRtdePort;
+  Error error = port::parse_rtde_address(options.get("rtde"), &host, &port_number);
+  if (!error.ok()) return error;
   port::RtdeRecordOptions rtde;
-  Error error = cli::bounded_option(options, "duration-s", 0.0, 1e9, &rtde.duration_s);
+  error = cli::bounded_option(options, "duration-s", 0.0, 1e9, &rtde.duration_s);
   if (error.ok()) error = cli::bounded_option(options, "rtde-frequency", 1.0, 500.0, &rtde.frequency_hz);
   if (!error.ok()) return error;
   const std::string out = options.get("robot-out") == "robot.cap" && !options.given("robot-out")
@@ -161,8 +153,14 @@ Error record_rtde(const cli::Options& options) {
   if (!error.ok()) return error;
   port::CaptureWriter file;  // rows are appended as they come: Ctrl-C loses nothing
   bool opened = false;
-  rtde.on_text = [](const std::string& text) {
-    std::fprintf(stderr, "hivecal record: controller says: %s\n", text.c_str());
+  std::uint64_t texts_shown = 0;  // a chattering controller does not flood the terminal
+  rtde.on_text = [&texts_shown](const std::string& text) {
+    if (texts_shown < kTextMessagesShown) {
+      std::fprintf(stderr, "hivecal record: controller says: %s\n", text.c_str());
+    } else if (texts_shown == kTextMessagesShown) {
+      std::fprintf(stderr, "hivecal record: further controller messages are counted, not shown\n");
+    }
+    ++texts_shown;
   };
   install_stop_handlers();
   port::RtdeStats stats;
@@ -174,13 +172,14 @@ Error record_rtde(const cli::Options& options) {
           if (!created.ok()) return created;
           opened = true;
         }
-        return file.write(reinterpret_cast<const std::uint8_t*>(row.data()), row.size());
+        return file.write_whole(reinterpret_cast<const std::uint8_t*>(row.data()), row.size());
       },
       &stats);
   const Error closed = file.close();
   if (error.ok()) error = closed;
+  const std::string address = host.find(':') == std::string::npos ? host : "[" + host + "]";
   std::printf("rtde %s:%d (URControl %u.%u.%u.%u) -> %s: %llu data packages, %llu rows, %llu text messages%s\n",
-              host.c_str(), port_number, stats.controller_version[0], stats.controller_version[1],
+              address.c_str(), port_number, stats.controller_version[0], stats.controller_version[1],
               stats.controller_version[2], stats.controller_version[3], out.c_str(),
               static_cast<unsigned long long>(stats.data_packages), static_cast<unsigned long long>(stats.rows_written),
               static_cast<unsigned long long>(stats.text_messages),
@@ -243,12 +242,10 @@ Error extract(const cli::Options& options) {
   double max_speed_mm_s = 0, window_s = 0;
   Error error = cli::robot_model_option(options, "robot-model", &robot);
   if (error.ok()) error = cli::vec3_option(options, "tool", &tool);
-  if (error.ok()) error = cli::number_option(options, "max-speed-mm-s", &max_speed_mm_s);
-  if (error.ok()) error = cli::number_option(options, "window-s", &window_s);
+  if (error.ok())
+    error = cli::ranged_option(options, "max-speed-mm-s", cli::NumberRange{0.0, 1e6, true, true}, &max_speed_mm_s);
+  if (error.ok()) error = cli::bounded_option(options, "window-s", 0.0, 60.0, &window_s);
   if (!error.ok()) return error;
-  if (!(max_speed_mm_s > 0 && max_speed_mm_s < 1e6) || !(window_s >= 0 && window_s <= 60)) {
-    return Error::usage("--max-speed-mm-s must be positive and --window-s in [0, 60] (see --help)");
-  }
   port::OutputSet outputs;
   std::size_t samples_id = 0;
   const std::string out = options.get("samples");
@@ -293,7 +290,7 @@ int record_main(int argc, char** argv) {
       {"tracker-baud", "N", "tracker line rate [bit/s]", std::to_string(port::kTrackerBaud)},
       {"duration-s", "S", "stop after this long [s]; 0: until Ctrl-C / SIGTERM", "0"},
       {"force", "", "replace existing capture files (never done without it)", ""},
-      {"rtde", "HOST[:PORT]",
+      {"rtde", "HOST[:PORT]|[IPv6]:PORT",
        "record a UR controller's joint states over RTDE (port 30004) into --robot-out as a robot log", ""},
       {"rtde-frequency", "HZ", "with --rtde: output rate (CB-series 125, e-Series up to 500) [Hz]", "125"},
   };
@@ -319,7 +316,7 @@ int extract_main(int argc, char** argv) {
        "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"robot-model", "NAME|FILE",
        std::string(robot_type_names()) + " or a robot description .json (nominal geometry for tool speeds)", "ur5"},
-      {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", "0,0,0.1695"},
+      {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", cli::kDefaultToolText},
       {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
       {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
       {"samples", "FILE", "write the paired samples q1..q6,x,y,z (CSV) here; '-' for stdout; empty: none", ""},

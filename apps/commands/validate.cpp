@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
+#include "commands/sample_reader.hpp"
 #include "commands/validation.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/port/input_file.hpp"
@@ -69,6 +72,15 @@ port::Error simulated_compliance_of(const std::string& path, ReferenceCompliance
       j3->kind != textio::JsonValue::Kind::number) {
     return port::Error::input(path + ": \"simulation\".\"compliance\" must hold numbers joint2_rad and joint3_rad");
   }
+  for (const textio::JsonValue* joint : {j2, j3}) {  // a joint's gravity deflection: bounded as a coefficient is
+    if (!(std::fabs(joint->number) <= kMaxJointTermCoefficient)) {
+      return port::Error::input(path + ": \"simulation\".\"compliance\" " +
+                                (joint == j2 ? "joint2_rad" : "joint3_rad") + " = " +
+                                textio::format_double(joint->number) + " must be within +/-" +
+                                textio::format_double(kMaxJointTermCoefficient) +
+                                " rad (a joint's deflection under gravity; real arms: 1e-6 .. 1e-4)");
+    }
+  }
   compliance->joint2_rad = j2->number;
   compliance->joint3_rad = j3->number;
   *found = true;
@@ -78,20 +90,46 @@ port::Error simulated_compliance_of(const std::string& path, ReferenceCompliance
 }  // namespace
 
 int validate_main(int argc, char** argv) {
-  const std::vector<OptionSpec> specs = {
+  std::vector<OptionSpec> specs = {
       {"calibration", "FILE", "calibration result to check (robot-calibration/1 JSON)", ""},
       {"truth", "FILE", "reference geometry (robot-calibration/1 JSON, e.g. the simulator's truth.json)", ""},
-      {"poses", "N", "number of fresh random poses", "1000"},
-      {"seed", "N", "seed of the poses", "7"},
+      {"poses", "N", "with --truth: number of fresh random poses", "1000"},
+      {"seed", "N", "with --truth: seed of the poses", "7"},
+      {"samples", "FILE",
+       "or measured samples q1..q6,x,y,z[,rx,ry,rz] (read as calibrate reads them; '-': stdin): MAE, sigma and max "
+       "per axis and 3D, each pose's error by file line",
+       ""},
+      {"fit", "base|frames",
+       "with --samples: register the calibration on them first (the base -> tracker transform; 'frames': and the tool "
+       "points)",
+       ""},
+      {"fit-poses", "N", "with --fit: register on the first N poses of --samples and score the others (default: all)",
+       ""},
+      {"keep-outliers", "", "with --fit: no w-test of the registration's poses", ""},
+      {"out", "FILE", "with --samples: the metrics and the per-pose table as JSON ('-': stdout)", ""},
   };
+  for (const OptionSpec& spec : sample_reader_option_specs()) specs.push_back(spec);
   Options options;
   const int parsed = parse_options(kValidateCommand,
-                                   "Predicts the tool point of fresh random poses with both geometries (each with its\n"
-                                   "own base -> tracker transform) and reports how far apart they are.",
+                                   "With --truth: predicts the tool point of fresh random poses with both geometries\n"
+                                   "(each with its own base -> tracker transform) and reports how far apart they are.\n"
+                                   "With --samples: scores the calibration on measured samples (after registering it\n"
+                                   "on them with --fit).",
                                    specs, argc, argv, &options);
   if (parsed >= 0) return parsed;
+  if (options.given("samples")) {
+    std::vector<std::string> warnings;
+    const int code = exit_with(kValidateCommand, validate_on_samples(options, &warnings));
+    for (const std::string& warning : warnings) cli::error(kValidateCommand, "warning: " + warning);
+    return code == kExitOk && !warnings.empty() ? kExitWarnings : code;
+  }
+  for (const char* name : {"fit", "fit-poses", "keep-outliers", "out"}) {
+    if (options.given(name))
+      return exit_with(kValidateCommand, Error::usage(std::string("--") + name + " needs --samples"));
+  }
   if (options.get("calibration").empty() || options.get("truth").empty()) {
-    return exit_with(kValidateCommand, Error::usage("--calibration and --truth are required (see --help)"));
+    return exit_with(kValidateCommand,
+                     Error::usage("--calibration and --truth (or --samples) are required (see --help)"));
   }
   std::size_t poses = 0;
   std::uint64_t seed = 0;
@@ -118,13 +156,20 @@ int validate_main(int argc, char** argv) {
   std::printf("validation on %ld fresh poses vs %s: MAE 3D %.2f um, max %.2f um%s\n", geometry.poses,
               options.get("truth").c_str(), geometry.mae_m * 1e6, geometry.max_m * 1e6,
               simulated || calibration.model.compliance.term_count > 0 ? " (geometry only, no compliance)" : "");
+  ValidationStats points;
   if (simulated) {  // where the simulated tool truly was: the truth bent by the simulator's compliance
-    const ValidationStats points = validate_on_fresh_poses(calibration.model, calibration.base_to_tracker, truth.model,
-                                                           truth.base_to_tracker, n, s, bent);
+    points = validate_on_fresh_poses(calibration.model, calibration.base_to_tracker, truth.model, truth.base_to_tracker,
+                                     n, s, bent);
     std::printf(
         "validation on %ld fresh poses vs the true tool points (the simulated compliance included): "
         "MAE 3D %.2f um, max %.2f um\n",
         points.poses, points.mae_m * 1e6, points.max_m * 1e6);
+  }
+  // A figure that is no number says nothing: the models' points overflowed (a huge file value).
+  if (!std::isfinite(geometry.mae_m + geometry.max_m + points.mae_m + points.max_m)) {
+    error(kValidateCommand,
+          "warning: a validation figure is not finite (the predicted points overflow): check the files' values");
+    return kExitWarnings;
   }
   return kExitOk;
 }

@@ -1,9 +1,13 @@
-// Validation of a calibration against a reference geometry on fresh random poses (what
-// `hivecal validate` prints; the hosted tests use the same function).
+// Validation of a calibration: against a reference geometry on fresh random poses (what
+// `hivecal validate --truth` prints; the hosted tests use the same function), or on measured
+// samples (`validate --samples`).
 #pragma once
 
 #include <cstdint>
+#include <string>
+#include <vector>
 
+#include "cli/options.hpp"
 #include "hivecal/model/kinematics.hpp"
 
 namespace hivecal::cli {
@@ -29,5 +33,9 @@ ValidationStats validate_on_fresh_poses(const RobotModel& model, const RigidTran
                                         const RobotModel& reference, const RigidTransform& reference_base_to_tracker,
                                         long poses, std::uint64_t seed,
                                         const ReferenceCompliance& reference_compliance = {});
+
+/// `validate --samples`: the calibration scored on measured samples, after registering it on
+/// them with --fit (validate_samples.cpp); *warnings: the registration's (exit 5).
+Error validate_on_samples(const Options& options, std::vector<std::string>* warnings);
 
 }  // namespace hivecal::cli

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "record/result_json.hpp"
+#include "textio/delimited.hpp"
 
 namespace hivecal::record {
 namespace {
@@ -107,6 +108,7 @@ void write_outliers(JsonWriter& json, const OutlierTable& o) {
   json.key("kept_w").begin_array();
   for (double w : o.kept_w) json.value(w);
   json.end_array();
+  if (o.kept_total > 0) json.key("kept_total").value(static_cast<long long>(o.kept_total));  // only then: bytes kept
   json.end_object();
 }
 
@@ -245,7 +247,8 @@ bool get_model(const JsonValue& v, RobotModel* model, RigidTransform* transform)
       if (!model->other_tools_m[k].allFinite()) return false;
     }
   }
-  return params.allFinite() && transform->rotation.allFinite() && transform->translation_m.allFinite();
+  return params.allFinite() && transform->rotation.allFinite() &&
+         transform->translation_m.norm() <= textio::kMaxPointDistance_m;  // the result's own bound (NaN fails)
 }
 
 bool get_methods(const JsonValue* v, std::vector<MethodRow>* out) {
@@ -288,6 +291,9 @@ bool get_samples(const JsonValue* v, std::vector<SampleRow>* out) {
       return false;
     }
     row.measured_m = Vec3(xyz[0], xyz[1], xyz[2]);
+    if (!(row.measured_m.norm() <= textio::kMaxPointDistance_m)) return false;  // the text inputs' bounds
+    for (const double q : row.q_rad)
+      if (!(std::fabs(q) <= textio::kMaxJointLimit_rad)) return false;
     if (const JsonValue* target = s.find("target"); target != nullptr) {  // several reflectors only
       long long k = 0;
       if (!get_count(target, &k) || k >= kMaxTargets) return false;
@@ -375,6 +381,11 @@ bool get_outliers(const JsonValue* v, OutlierTable* out) {
     double value = 0.0;
     if (!get_number(&w, &value)) return false;
     out->kept_w.push_back(value);
+  }
+  if (const JsonValue* total = v->find("kept_total"); total != nullptr) {  // a thinned report only
+    long long count = 0;
+    if (!get_count(total, &count) || static_cast<std::size_t>(count) <= out->kept_w.size()) return false;
+    out->kept_total = static_cast<std::size_t>(count);
   }
   return true;
 }
@@ -515,6 +526,7 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
     json.end_object();
   }
   json.end_array();
+  if (data.sample_total > 0) json.key("sample_total").value(static_cast<long long>(data.sample_total));  // thinned only
   json.key("predictions").begin_array();
   for (const PredictionSet& p : data.predictions) {
     json.begin_object();
@@ -589,6 +601,7 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
     return port::Error::input(source + ": \"report\".\"" + key + "\" is malformed");
   };
   if (!get_string(value.find("title"), &parsed.title)) return bad("title");
+  parsed.title = port::printable(parsed.title, 4096);  // it carries the robot's name: printable, as calibrate wrote it
   const JsonValue* info = value.find("info");
   if (!is_array(info)) return bad("info");
   for (const JsonValue& line : info->array) {
@@ -600,6 +613,12 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   if (!get_accuracy(value.find("calibrated"), &parsed.calibrated)) return bad("calibrated");
   if (!get_convergence(value.find("convergence"), &parsed.convergence)) return bad("convergence");
   if (!get_samples(value.find("samples"), &parsed.samples)) return bad("samples");
+  if (const JsonValue* total = value.find("sample_total"); total != nullptr) {  // a thinned report only
+    long long count = 0;
+    if (!get_count(total, &count) || static_cast<std::size_t>(count) <= parsed.samples.size())
+      return bad("sample_total");
+    parsed.sample_total = static_cast<std::size_t>(count);
+  }
   if (!get_predictions(value.find("predictions"), parsed.samples, &parsed.predictions)) return bad("predictions");
   if (!get_number(value.find("noise_sigma_m"), &parsed.noise_sigma_m)) return bad("noise_sigma_m");
   if (const JsonValue* noise_source = value.find("noise_source"); noise_source != nullptr) {  // measured noise only
@@ -616,6 +635,20 @@ port::Error parse_report_data(const JsonValue& value, const std::string& source,
   if (!get_cross_validation(value.find("cross_validation"), &parsed.cross_validation)) return bad("cross_validation");
   *data = parsed;
   return port::Error{};
+}
+
+std::vector<report::SampleRow> report_training_samples(const std::string& result_text, const std::string& source) {
+  textio::JsonValue root;
+  report::ReportData data;
+  const textio::JsonValue* saved = nullptr;
+  if (!textio::parse_json(result_text, &root).ok() || (saved = root.find("report")) == nullptr ||
+      !parse_report_data(*saved, source, &data).ok()) {
+    return {};
+  }
+  std::vector<report::SampleRow> train;
+  for (const report::SampleRow& sample : data.samples)
+    if (!sample.test) train.push_back(sample);
+  return train;
 }
 
 }  // namespace hivecal::record

@@ -6,6 +6,7 @@
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/solve/lm.hpp"
 #include "record/report_json.hpp"
+#include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
 
 namespace hivecal::record {
@@ -42,8 +43,17 @@ port::Error parse_transform(const JsonValue& root, const std::string& source, Ri
   if (!last_row_ok || orthonormality > 1e-5 || rotation.determinant() <= 0.0) {
     return fail(source, "\"base_to_tracker\" is not a proper rigid transform");
   }
+  // The tracker sees the robot within the distance the text inputs allow a point: farther is no
+  // cell (a damaged or hand-made file), and would predict, export and score in silence.
+  const Vec3 translation_m = m.block<3, 1>(0, 3);
+  const double distance_m = std::hypot(translation_m.x(), translation_m.y(), translation_m.z());  // no overflow
+  if (!(distance_m <= textio::kMaxPointDistance_m)) {
+    return fail(source, "\"base_to_tracker\" puts the robot's base " + textio::format_double(distance_m) +
+                            " m from the tracker, beyond " + textio::format_double(textio::kMaxPointDistance_m) +
+                            " m: not a tracker's frame");
+  }
   transform->rotation = rotation_from_cross_covariance(rotation.transpose());  // nearest rotation
-  transform->translation_m = m.block<3, 1>(0, 3);
+  transform->translation_m = translation_m;
   return port::Error{};
 }
 
@@ -153,7 +163,8 @@ void write_outliers(JsonWriter& w, const streams::SessionFacts* facts, const Cal
   w.end_array();
 }
 
-void write_cross_validation(JsonWriter& w, const CrossValidationResult& cv) {
+void write_cross_validation(JsonWriter& w, const CalibrationRecord& record) {
+  const CrossValidationResult& cv = *record.cv;
   w.key("cross_validation").begin_object();
   w.key("folds").value(static_cast<long long>(cv.fold_count));
   w.key("samples").value(static_cast<long long>(cv.sample_count));
@@ -161,6 +172,7 @@ void write_cross_validation(JsonWriter& w, const CrossValidationResult& cv) {
   w.key("baseline_mae_3d_m").value(cv.baseline_mae_3d_m);
   w.key("fold_mae_3d_mean_m").value(cv.fold_mae_3d_mean_m);
   w.key("fold_mae_3d_max_m").value(cv.fold_mae_3d_max_m);
+  if (!record.cv_held_out.empty()) w.key("held_out_of").value(record.cv_held_out_of);
   w.key("per_fold").begin_array();
   for (std::size_t k = 0; k < cv.fold_count; ++k) {
     w.begin_object();
@@ -168,13 +180,163 @@ void write_cross_validation(JsonWriter& w, const CrossValidationResult& cv) {
     w.key("test_count").value(static_cast<long long>(cv.folds[k].test.count));
     w.key("train_mae_3d_m").value(cv.folds[k].train.mae(ErrorAxis::norm_3d));
     w.key("test_mae_3d_m").value(cv.folds[k].test.mae(ErrorAxis::norm_3d));
+    if (k < record.cv_held_out.size()) w.key("held_out").value(record.cv_held_out[k]);
     w.end_object();
   }
   w.end_array();
   w.end_object();
 }
 
+void write_joint_vector(JsonWriter& w, const char* name, const JointVector& q) {
+  w.key(name).inline_array(q.data(), kSixJoints);
+}
+
+/// The full-model index of a parameter named as full_param_name(k, model) writes it; -1: none.
+int param_index_of(const std::string& name, const RobotModel& model) {
+  for (int k = 0; k < kFullParamCount; ++k)
+    if (name == full_param_name(k, model)) return k;
+  return -1;
+}
+
+port::Error parse_covariance(const JsonValue& c, const std::string& source, const RobotModel& model,
+                             CalibrationUncertainty* u) {
+  const auto bad = [&](const std::string& what) { return fail(source, "\"covariance\": " + what); };
+  const JsonValue* names = c.find("parameters");
+  const JsonValue* rows = c.find("matrix");
+  if (names == nullptr || names->kind != JsonValue::Kind::array || rows == nullptr ||
+      rows->kind != JsonValue::Kind::array || rows->array.size() != names->array.size()) {
+    return bad("needs \"parameters\" and a square \"matrix\" of as many rows");
+  }
+  const std::size_t n = names->array.size();
+  std::vector<int> index(n);
+  for (std::size_t a = 0; a < n; ++a) {
+    const JsonValue& name = names->array[a];
+    index[a] = name.kind == JsonValue::Kind::string ? param_index_of(name.string, model) : -1;
+    if (index[a] < 0) return bad("unknown parameter " + port::quoted(name.string));
+    u->estimated |= param_bit(index[a]);
+  }
+  NormalMatrix m = NormalMatrix::Zero();
+  std::vector<double> row(n);
+  for (std::size_t a = 0; a < n; ++a) {
+    if (!read_json_numbers(&rows->array[a], n, row.data()))
+      return bad("row " + std::to_string(a) + " must hold " + std::to_string(n) + " numbers");
+    for (std::size_t b = 0; b < n; ++b) m(index[a], index[b]) = row[b];
+  }
+  if (!m.allFinite()) return bad("not finite");
+  u->set_covariance(m);
+  if (const JsonValue* other = c.find("other_tools_sigma_m"); other != nullptr) {
+    if (other->kind != JsonValue::Kind::array || other->array.size() > kMaxTargets - 1)
+      return bad("other_tools_sigma_m");
+    for (std::size_t k = 0; k < other->array.size(); ++k)
+      if (!read_json_numbers(&other->array[k], 3, u->other_tools_sigma_m[k].data())) return bad("other_tools_sigma_m");
+    u->estimated |= kOtherTargetTools;
+  }
+  const JsonValue* sigma = c.find("residual_sigma_m");
+  const JsonValue* dof = c.find("residual_dof");
+  if (sigma != nullptr && sigma->kind == JsonValue::Kind::number) u->residual_sigma_m = sigma->number;
+  if (dof != nullptr && dof->kind == JsonValue::Kind::number) u->residual_dof = static_cast<int>(dof->number);
+  return port::Error{};
+}
+
+port::Error parse_domain(const JsonValue& d, const std::string& source, CalibrationDomain* domain) {
+  const auto number = [&](const char* key, double* value) {
+    const JsonValue* v = d.find(key);
+    if (v == nullptr || v->kind != JsonValue::Kind::number || !std::isfinite(v->number)) return false;
+    *value = v->number;
+    return true;
+  };
+  double poses = 0.0;
+  double term_joints = 0.0;
+  const bool ok =
+      number("poses", &poses) && read_json_numbers(d.find("joint_min_rad"), 6, domain->joint_min_rad.data()) &&
+      read_json_numbers(d.find("joint_max_rad"), 6, domain->joint_max_rad.data()) &&
+      read_json_numbers(d.find("tool_axis_mean"), 3, domain->tool_axis_mean.data()) &&
+      number("tool_axis_spread_rad", &domain->tool_axis_spread_rad) &&
+      number("tool_axis_rms_rad", &domain->tool_axis_rms_rad) && number("typical_sigma_m", &domain->typical_sigma_m) &&
+      number("max_sigma_m", &domain->max_sigma_m) && number("term_joints", &term_joints) &&
+      number("sigma_factor", &domain->sigma_factor) && number("joint_margin_rad", &domain->joint_margin_rad) &&
+      number("tool_axis_margin_rad", &domain->tool_axis_margin_rad);
+  if (!ok || poses < 0.0 || !(term_joints >= 0.0 && term_joints < 64.0)) {
+    return fail(source,
+                "\"domain\" needs poses, joint_min_rad, joint_max_rad (6 numbers each), tool_axis_mean (3), "
+                "tool_axis_spread_rad, tool_axis_rms_rad, typical_sigma_m, max_sigma_m, term_joints (0 .. 63), "
+                "sigma_factor, joint_margin_rad and tool_axis_margin_rad");
+  }
+  domain->term_joints = static_cast<unsigned>(term_joints);
+  domain->poses = static_cast<std::size_t>(poses);
+  return port::Error{};
+}
+
+/// The optional "covariance", "domain" and "fitted" of a result.
+port::Error parse_uncertainty(const JsonValue& root, const std::string& source, CalibrationFile* file) {
+  if (const JsonValue* c = root.find("covariance"); c != nullptr) {
+    const port::Error r = parse_covariance(*c, source, file->model, &file->uncertainty);
+    if (!r.ok()) return r;
+  }
+  if (const JsonValue* d = root.find("domain"); d != nullptr) {
+    const port::Error r = parse_domain(*d, source, &file->uncertainty.domain);
+    if (!r.ok()) return r;
+    file->uncertainty.has_domain = true;
+  }
+  if (const JsonValue* f = root.find("fitted"); f != nullptr && f->kind == JsonValue::Kind::string)
+    file->fitted = f->string;
+  return port::Error{};
+}
+
 }  // namespace
+
+NormalMatrix CalibrationUncertainty::covariance_matrix() const {
+  if (covariance.size() != static_cast<std::size_t>(kFullParamCount * kFullParamCount)) return NormalMatrix::Zero();
+  return Eigen::Map<const NormalMatrix>(covariance.data());
+}
+
+void CalibrationUncertainty::set_covariance(const NormalMatrix& matrix) {
+  covariance.assign(matrix.data(), matrix.data() + matrix.size());
+}
+
+void write_uncertainty(JsonWriter& w, const CalibrationUncertainty& u, const RobotModel& model) {
+  if (u.has_covariance()) {
+    const NormalMatrix c = u.covariance_matrix();
+    int index[kFullParamCount];
+    const int n = mask_indices(u.estimated, index);
+    w.key("covariance").begin_object();
+    w.key("parameters").begin_array();
+    for (int a = 0; a < n; ++a) w.value(full_param_name(index[a], model));
+    w.end_array();
+    w.key("matrix").begin_array();
+    std::vector<double> row(static_cast<std::size_t>(n));
+    for (int a = 0; a < n; ++a) {
+      for (int b = 0; b < n; ++b) row[static_cast<std::size_t>(b)] = c(index[a], index[b]);
+      w.inline_array(row.data(), row.size());
+    }
+    w.end_array();
+    if ((u.estimated & kOtherTargetTools) != 0) {
+      w.key("other_tools_sigma_m").begin_array();
+      for (const Vec3& sigma : u.other_tools_sigma_m) w.inline_array(sigma.data(), 3);
+      w.end_array();
+    }
+    w.key("residual_sigma_m").value(u.residual_sigma_m);
+    w.key("residual_dof").value(static_cast<long long>(u.residual_dof));
+    w.end_object();
+  }
+  if (u.has_domain) {
+    const CalibrationDomain& d = u.domain;
+    w.key("domain").begin_object();
+    w.key("poses").value(static_cast<long long>(d.poses));
+    write_joint_vector(w, "joint_min_rad", d.joint_min_rad);
+    write_joint_vector(w, "joint_max_rad", d.joint_max_rad);
+    w.key("tool_axis_mean").inline_array(d.tool_axis_mean.data(), 3);
+    w.key("tool_axis_spread_rad").value(d.tool_axis_spread_rad);
+    w.key("tool_axis_rms_rad").value(d.tool_axis_rms_rad);
+    w.key("typical_sigma_m").value(d.typical_sigma_m);
+    w.key("max_sigma_m").value(d.max_sigma_m);
+    w.key("term_joints").value(static_cast<long long>(d.term_joints));
+    w.key("sigma_factor").value(d.sigma_factor);
+    w.key("joint_margin_rad").value(d.joint_margin_rad);
+    w.key("tool_axis_margin_rad").value(d.tool_axis_margin_rad);
+    w.end_object();
+  }
+}
 
 void write_error_stats(JsonWriter& json, const ErrorStats& stats) {
   json.begin_object();
@@ -278,7 +440,7 @@ std::string format_result_json(const CalibrationRecord& record) {
       }
     }
     if (record.result != nullptr) write_outliers(w, record.facts, *record.result);
-    if (record.cv != nullptr) write_cross_validation(w, *record.cv);
+    if (record.cv != nullptr) write_cross_validation(w, record);
     if (!record.warnings.empty()) {
       w.key("warnings").begin_array();
       for (const std::string& warning : record.warnings) w.value(warning);
@@ -288,6 +450,7 @@ std::string format_result_json(const CalibrationRecord& record) {
       w.key("report");  // what `hivecal report` draws the page from
       write_report_data(w, *record.report);
     }
+    write_uncertainty(w, record.file.uncertainty, record.file.model);
   });
 }
 
@@ -296,6 +459,7 @@ port::Error parse_calibration_json(const std::string& text, const std::string& s
   CalibrationFile parsed;
   port::Error r = textio::parse_description_document(text, source_name, true, &parsed, &root);
   if (r.ok()) r = parse_transform(root, source_name, &parsed.base_to_tracker);
+  if (r.ok()) r = parse_uncertainty(root, source_name, &parsed);
   if (!r.ok()) return r;
   if (parsed.convention == DhConvention::modified) {
     parsed.base_to_tracker = parsed.base_to_tracker.then_after(parsed.modified_base.transform());

@@ -12,12 +12,34 @@
 #include "hivecal/calibration.hpp"
 #include "hivecal/model/metrics.hpp"
 #include "hivecal/model/ur_deltas.hpp"
+#include "hivecal/solve/normal_equations.hpp"
+#include "hivecal/solve/prediction_uncertainty.hpp"
 #include "report/report.hpp"
 #include "streams/session.hpp"
 #include "textio/json.hpp"
 #include "textio/robot_description.hpp"
 
 namespace hivecal::record {
+
+/// The parameter covariance and the calibration's domain a result carries (keys "covariance"
+/// and "domain", docs/formats.md): predict's sigma_m and extrapolated columns.
+struct CalibrationUncertainty {
+  /// C = sigma_hat^2 (J^T W J)^-1 over `estimated` (parameter_covariance), kFullParamCount^2
+  /// values in NormalMatrix's (column-major) order; empty: the file holds none [m^2, m rad, rad^2].
+  std::vector<double> covariance;
+  ParamMask estimated = 0;  ///< the parameters of `covariance` (kOtherTargetTools: targets 2.. eliminated)
+  Vec3 other_tools_sigma_m[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};  ///< targets 2..'s own 1-sigma [m]
+  double residual_sigma_m = 0.0;                                             ///< sigma_hat per axis [m]
+  int residual_dof = 0;                                                      ///< its degrees of freedom [-]
+  bool has_domain = false;                                                   ///< `domain` was computed / read
+  CalibrationDomain domain;  ///< the training poses: joint ranges, tool orientation spread, typical sigma
+
+  bool has_covariance() const { return !covariance.empty(); }  ///< the file holds a covariance
+  /// The covariance as the library's matrix (zero without one).
+  NormalMatrix covariance_matrix() const;
+  /// Sets the covariance from the library's matrix.
+  void set_covariance(const NormalMatrix& matrix);
+};
 
 /// What a result file must hold to predict positions, plus its accuracy figures.
 struct CalibrationFile : textio::RobotDescription {
@@ -29,6 +51,8 @@ struct CalibrationFile : textio::RobotDescription {
   /// Standard deviation of each compliance coefficient (model.compliance's unit); 0: unknown,
   /// not written.
   double compliance_sigma[kMaxComplianceTerms] = {};
+  CalibrationUncertainty uncertainty;  ///< "covariance" and "domain", when the file holds them
+  std::string fitted;  ///< "fitted": what a registration fitted ("base", "frames"); "" for a calibration
 };
 
 /// A calibration run as result.json records it: the calibrated model and the facts of the run.
@@ -49,9 +73,17 @@ struct CalibrationRecord {
   UrCalibrationDeltas ur_deltas;                 ///< the model as UR calibration.conf deltas from the start
   const streams::SessionFacts* facts = nullptr;  ///< input facts: clock, extraction, orientation, sources
   const CrossValidationResult* cv = nullptr;     ///< --cv's folds, else null
-  std::vector<std::string> warnings;             ///< the fit's plausibility warnings
-  const report::ReportData* report = nullptr;    ///< the tables and figures (key "report"), else not written
+  /// Per fold of `cv`: the samples it held out, as ranges of what names them ("2-4, 7"); may be empty.
+  std::vector<std::string> cv_held_out;
+  std::string cv_held_out_of;                  ///< what those ranges count: "lines of FILE", or sample numbers
+  std::vector<std::string> warnings;           ///< the fit's plausibility warnings
+  const report::ReportData* report = nullptr;  ///< the tables and figures (key "report"), else not written
+  // file.uncertainty: "covariance" and "domain", after "report", when it holds them
 };
+
+/// Writes the "covariance" and "domain" members of `uncertainty` (what it holds) with the
+/// parameter names of `model`.
+void write_uncertainty(textio::JsonWriter& json, const CalibrationUncertainty& uncertainty, const RobotModel& model);
 
 /// The keys of an ErrorStats' axes in result.json, in ErrorStats' axis order.
 inline constexpr const char* kErrorAxisKeys[kErrorAxisCount] = {"x", "y", "z", "3d"};

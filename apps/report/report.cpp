@@ -1,10 +1,11 @@
 #include "report/report.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <algorithm>
 #include <limits>
 
 #include "hivecal/core/math.hpp"
@@ -88,11 +89,75 @@ double max_of(const std::vector<double>& v) {
   return m;
 }
 
-using Figure = std::pair<std::string, std::string>;  // id, <h3> + <svg>
+/// One figure of the page.
+struct Figure {
+  std::string id;       ///< its <svg id>
+  std::string svg;      ///< the <svg> element
+  std::string drawn{};  ///< what of the data it draws when not all of it ("" when all), for its caption
+};
+
+// What a figure draws at most: beyond, an evenly spaced subset (its caption says how many).
+// A scatter of thousands of points is a solid block and a page of 10^5 elements opens slowly
+// (12,000 samples drew 10.4 MB that took 11 s to open).
+constexpr std::size_t kScatterPointCap = 1000;  ///< markers of one panel [-]
+constexpr std::size_t kArrowCap = 400;          ///< arrows of one set [-]
+constexpr std::size_t kCurvePointCap = 1000;    ///< ranks of one sorted curve (its ends among them) [-]
+
+/// `keep` of the positions 0 .. n-1, evenly spaced, floor((k + 1/2) n / keep) for k < keep;
+/// every position when keep >= n [-].
+std::vector<std::size_t> evenly_spaced(std::size_t n, std::size_t keep) {
+  std::vector<std::size_t> at;
+  for (std::size_t k = 0; k < std::min(n, keep); ++k) {
+    at.push_back(keep >= n ? k
+                           : static_cast<std::size_t>((2 * static_cast<std::uint64_t>(k) + 1) * n /
+                                                      (2 * static_cast<std::uint64_t>(keep))));
+  }
+  return at;
+}
+
+/// `keep` (>= 2) of the ranks 0 .. n-1, evenly spaced from the first to the last,
+/// round(k (n - 1) / (keep - 1)); every rank when keep >= n [-].
+std::vector<std::size_t> spanning_ranks(std::size_t n, std::size_t keep) {
+  if (keep >= n || keep < 2) return evenly_spaced(n, n);
+  std::vector<std::size_t> at;
+  const std::uint64_t steps = keep - 1;
+  for (std::uint64_t k = 0; k < keep; ++k)
+    at.push_back(static_cast<std::size_t>((2 * k * (n - 1) + steps) / (2 * steps)));
+  return at;
+}
+
+/// 12000 -> "12,000".
+std::string count_text(std::size_t n) {
+  std::string digits = std::to_string(n);
+  for (std::size_t at = digits.size(); at > 3; at -= 3) digits.insert(at - 3, ",");
+  return digits;
+}
+
+/// The caption's note of a figure that draws `drawn` of `of` items ("" when all).
+std::string drawn_note(std::size_t drawn, std::size_t of, const std::string& items) {
+  return drawn < of ? count_text(drawn) + " of " + count_text(of) + " " + items + " drawn, evenly spaced." : "";
+}
+
+/// The sorted values `v` at no more than kCurvePointCap ranks as a line: x the rank (1-based)
+/// times `rank_scale` (the run's samples per drawn one).
+Series sorted_curve(const std::string& name, const std::vector<double>& v, double rank_scale) {
+  Series s{name, {}, {}, false};
+  for (const std::size_t k : spanning_ranks(v.size(), kCurvePointCap)) {
+    s.x.push_back(static_cast<double>(k + 1) * rank_scale);
+    s.y.push_back(v[k]);
+  }
+  return s;
+}
 
 /// Sorted error per sample before and after, 3D and per axis (shared scale), with the noise level.
 void error_figures(const ReportData& data, const std::vector<std::size_t>& shown, const std::string& set_name,
                    std::vector<Figure>* out) {
+  // A report that keeps a subset of the samples draws the ranks of the run's: its test (or
+  // training) samples per kept one.
+  const std::size_t run_count = set_name == "test" ? data.calibrated.test.count : data.calibrated.train.count;
+  const double rank_scale = data.sample_total > 0 && run_count > shown.size()
+                                ? static_cast<double>(run_count) / static_cast<double>(shown.size())
+                                : 1.0;
   const PredictionSet& before = data.predictions.front();
   const PredictionSet& after = data.predictions.back();
   // Mean |N(0, s)| per axis is s*sqrt(2/pi); the mean 3D norm of isotropic noise is s*sqrt(8/pi).
@@ -116,14 +181,17 @@ void error_figures(const ReportData& data, const std::vector<std::size_t>& shown
       spec.y_line = axis == 3 ? norm_um : per_axis_um;
       spec.y_line_label = "measurement noise (" + data.noise_source + ")";
     }
-    const std::vector<double> ranks = index_axis(b.size());
     out->push_back(
-        {spec.id, svg_chart(spec, {Series{before.method, ranks, b, false}, Series{after.method, ranks, a, false}})});
+        {spec.id,
+         svg_chart(spec, {sorted_curve(before.method, b, rank_scale), sorted_curve(after.method, a, rank_scale)}),
+         drawn_note(std::min(b.size(), kCurvePointCap), b.size(), "ranks")});
   }
 }
 
 /// Error vectors on the x-y and x-z planes, magnified by a stated round factor.
-void vector_figures(const ReportData& data, const std::vector<std::size_t>& shown, std::vector<Figure>* out) {
+void vector_figures(const ReportData& data, const std::vector<std::size_t>& all_shown, std::vector<Figure>* out) {
+  std::vector<std::size_t> shown;  // at most kArrowCap arrows a set
+  for (const std::size_t k : evenly_spaced(all_shown.size(), kArrowCap)) shown.push_back(all_shown[k]);
   const PredictionSet* sets[] = {&data.predictions.front(), &data.predictions.back()};
   double largest_um = 0.0;
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
@@ -163,7 +231,8 @@ void vector_figures(const ReportData& data, const std::vector<std::size_t>& show
                            std::string("Error vectors, x-") + names[axis] + " plane (measured -> predicted)", "x [mm]",
                            std::string(names[axis]) + " [mm]");
     spec.height_px = 420;
-    out->push_back({spec.id, svg_arrows(spec, arrows, bar_mm, label)});
+    out->push_back({spec.id, svg_arrows(spec, arrows, bar_mm, label),
+                    drawn_note(shown.size(), all_shown.size(), "samples' arrows")});
   }
 }
 
@@ -174,7 +243,7 @@ void distribution_figures(const ReportData& data, const std::vector<std::size_t>
   for (const PredictionSet& set : data.predictions) {
     const std::vector<double> e = sorted(errors_um(data, set, shown, 3));
     Series s{set.method, {}, {}, false};
-    for (std::size_t k = 0; k < e.size(); ++k) {  // a step function
+    for (const std::size_t k : spanning_ranks(e.size(), kCurvePointCap)) {  // a step function (at most its cap's steps)
       const double below = static_cast<double>(k) / static_cast<double>(e.size());
       const double at = static_cast<double>(k + 1) / static_cast<double>(e.size());
       s.x.insert(s.x.end(), {e[k], e[k]});
@@ -185,7 +254,8 @@ void distribution_figures(const ReportData& data, const std::vector<std::size_t>
   ChartSpec spec =
       chart("fig-cdf", "Empirical CDF of the 3D error (" + set_name + " samples)", "3D error [um]", "share of samples");
   spec.fixed_y = true;
-  out->push_back({spec.id, svg_chart(spec, cdf)});
+  out->push_back(
+      {spec.id, svg_chart(spec, cdf), drawn_note(std::min(shown.size(), kCurvePointCap), shown.size(), "steps")});
   out->push_back({"fig-histogram", svg_histogram(chart("fig-histogram", "3D error histogram (" + set_name + " samples)",
                                                        "3D error [um]", "samples"),
                                                  {data.predictions.front().method, data.predictions.back().method},
@@ -247,62 +317,87 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   const std::vector<double> residual_um = residuals_um(data, after);
   const std::vector<double> rigid_um = rigid != nullptr ? residuals_um(data, *rigid) : std::vector<double>{};
   const double y_hi = std::max(max_of(residual_um), max_of(rigid_um));
+  const std::vector<std::size_t> drawn = evenly_spaced(residual_um.size(), kScatterPointCap);
   for (int j = 0; j < 6; ++j) {
     const bool before_after = rigid != nullptr && deflected_joint(after.model, j);
     const double deg = math::kDegPerRad;
     std::vector<Series> series;
     if (before_after) {
       series = {Series{rigid->method + " (rigid)", {}, {}, true}, Series{after.method, {}, {}, true}};
-      for (std::size_t i = 0; i < residual_um.size() && i < rigid_um.size(); ++i) {
+      for (const std::size_t i : drawn) {
+        if (i >= rigid_um.size()) continue;
         for (Series* s : {&series[0], &series[1]}) s->x.push_back(data.samples[i].q_rad[j] * deg);
         series[0].y.push_back(rigid_um[i]);
         series[1].y.push_back(residual_um[i]);
       }
     } else {
       series = {Series{"training", {}, {}, true}, Series{"test", {}, {}, true}};
-      for (std::size_t i = 0; i < residual_um.size(); ++i) {
+      for (const std::size_t i : drawn) {
         Series& s = series[data.samples[i].test ? 1 : 0];
         s.x.push_back(data.samples[i].q_rad[j] * deg);
         s.y.push_back(residual_um[i]);
       }
     }
     const std::string joint = std::to_string(j + 1);
-    ChartSpec spec =
-        chart("fig-residual-q" + joint,
-              before_after ? "Residual vs joint " + joint + ": rigid fit and " + after.method + ", every sample"
-                           : "Residual after calibration vs joint " + joint,
-              "q" + joint + " [deg]", "3D residual [um]");
+    ChartSpec spec = chart("fig-residual-q" + joint,
+                           before_after ? "Residual vs joint " + joint + ": rigid vs " + after.method
+                                        : "Residual after calibration vs joint " + joint,
+                           "q" + joint + " [deg]", "3D residual [um]");
     spec.width_px = 400;
     spec.height_px = 260;
     spec.fixed_y = true;
     spec.y_hi = y_hi;
-    out->push_back({spec.id, svg_chart(spec, series)});
+    const std::string both = before_after ? " Both fits on the same samples, training and test." : "";
+    out->push_back({spec.id, svg_chart(spec, series), drawn_note(drawn.size(), residual_um.size(), "samples") + both});
   }
 }
 
 /// Every pose's normalised residual w under the final calibration, sorted, the set-aside ones
 /// marked, with the test's threshold: the same numbers as the console and the table.
 void outlier_figure(const ReportData& data, std::vector<Figure>* out) {
-  if (!data.outliers.searched || data.outliers.kept_w.empty()) return;
-  std::vector<std::pair<double, bool>> w;  // [-], set aside
-  for (double value : data.outliers.kept_w) w.emplace_back(value, false);
-  for (const OutlierRow& o : data.outliers.rows) w.emplace_back(o.w, true);
-  std::sort(w.begin(), w.end());
-  Series kept{"kept", {}, {}, true};
+  const OutlierTable& o = data.outliers;
+  if (!o.searched || o.kept_w.empty()) return;
+  // Each kept w with its rank among the kept poses: kept_w holds every one, or (kept_total)
+  // the sorted values at spanning ranks of them.
+  std::vector<double> kept = o.kept_w;
+  std::sort(kept.begin(), kept.end());
+  const std::size_t kept_count = o.kept_total > 0 ? o.kept_total : kept.size();
+  const std::vector<std::size_t> kept_rank =
+      o.kept_total > 0 ? spanning_ranks(kept_count, kept.size()) : evenly_spaced(kept.size(), kept.size());
+  // At most kScatterPointCap markers: the kept ones at spanning ranks, every set-aside one.
+  struct Point {
+    double w;        // [-]
+    bool aside;      // set aside as a blunder
+    std::size_t at;  // rank among the kept poses (kept), or the kept poses below it (set aside)
+  };
+  std::vector<Point> points;
+  const std::vector<std::size_t> drawn = spanning_ranks(kept.size(), kScatterPointCap);
+  for (const std::size_t k : drawn) points.push_back({kept[k], false, kept_rank[k]});
+  for (const OutlierRow& r : o.rows) {
+    const auto below = static_cast<std::size_t>(std::upper_bound(kept.begin(), kept.end(), r.w) - kept.begin());
+    points.push_back({r.w, true, below == 0 ? 0 : kept_rank[below - 1] + 1});
+  }
+  std::sort(points.begin(), points.end(),
+            [](const Point& a, const Point& b) { return a.w < b.w || (a.w == b.w && !a.aside && b.aside); });
+  Series kept_series{"kept", {}, {}, true};
   Series aside{"set aside", {}, {}, true};
-  for (std::size_t k = 0; k < w.size(); ++k) {
-    Series& s = w[k].second ? aside : kept;
-    s.x.push_back(static_cast<double>(k + 1));
-    s.y.push_back(w[k].first);
+  std::size_t aside_below = 0;  // set-aside poses ranked before this point
+  for (const Point& p : points) {
+    Series& s = p.aside ? aside : kept_series;
+    s.x.push_back(static_cast<double>(p.at + aside_below + 1));
+    s.y.push_back(p.w);
+    aside_below += p.aside ? 1 : 0;
   }
   ChartSpec spec =
       chart("fig-outliers", "Normalised residual w of each pose after calibration, sorted", "poses, by rank", "w [-]");
   spec.log_y = true;
-  if (data.outliers.critical_w > 0.0) {
-    spec.y_line = data.outliers.critical_w;
+  if (o.critical_w > 0.0) {
+    spec.y_line = o.critical_w;
     spec.y_line_label = "blunder threshold";
   }
-  out->push_back({spec.id, svg_chart(spec, {kept, aside})});
+  std::string note = drawn_note(drawn.size(), kept_count, "kept poses");
+  if (!note.empty() && !o.rows.empty()) note += " Every set-aside pose drawn.";
+  out->push_back({spec.id, svg_chart(spec, {kept_series, aside}), note});
 }
 
 /// --cv: the held-out (and training) 3-D MAE of each fold, the overall held-out MAE as a line.
@@ -640,6 +735,39 @@ ClockMatchSeries clock_match_series(const std::vector<ClockMatchBin>& bins, doub
   return series;
 }
 
+void keep_at_most(std::size_t cap, ReportData* data) {
+  const std::size_t n = data->samples.size();
+  if (n > cap) {
+    std::vector<std::size_t> sets[2];  // training, test
+    for (std::size_t i = 0; i < n; ++i) sets[data->samples[i].test ? 1 : 0].push_back(i);
+    // The test samples' share of the cap, at least one when there are any.
+    std::size_t keep_test = static_cast<std::size_t>((static_cast<std::uint64_t>(sets[1].size()) * cap + n / 2) / n);
+    keep_test = std::min(sets[1].size(), std::max<std::size_t>(keep_test, sets[1].empty() ? 0 : 1));
+    const std::size_t keeps[2] = {cap - keep_test, keep_test};
+    std::vector<std::size_t> kept;
+    for (int set = 0; set < 2; ++set)
+      for (const std::size_t k : evenly_spaced(sets[set].size(), keeps[set])) kept.push_back(sets[set][k]);
+    std::sort(kept.begin(), kept.end());
+    std::vector<SampleRow> samples;
+    for (const std::size_t i : kept) samples.push_back(data->samples[i]);
+    data->samples = samples;
+    for (PredictionSet& set : data->predictions) {
+      std::vector<Vec3> points_m;
+      for (const std::size_t i : kept)
+        if (i < set.points_m.size()) points_m.push_back(set.points_m[i]);
+      set.points_m = points_m;
+    }
+    data->sample_total = n;
+  }
+  OutlierTable& o = data->outliers;
+  if (o.kept_w.size() > cap) {
+    std::vector<double> sorted_w = sorted(o.kept_w);
+    o.kept_w.clear();
+    for (const std::size_t k : spanning_ranks(sorted_w.size(), cap)) o.kept_w.push_back(sorted_w[k]);
+    o.kept_total = sorted_w.size();
+  }
+}
+
 PredictionSet predict_samples(const std::string& method, const RobotModel& model, const RigidTransform& base_to_tracker,
                               const std::vector<SampleRow>& samples) {
   PredictionSet set{method, model, base_to_tracker, {}};
@@ -669,7 +797,7 @@ std::vector<std::string> format_parameters_text(const ReportData& data) {
 
 std::vector<std::string> figure_ids(const ReportData& data) {
   std::vector<std::string> ids;
-  for (const auto& figure : all_figures(data)) ids.push_back(figure.first);
+  for (const Figure& figure : all_figures(data)) ids.push_back(figure.id);
   return ids;
 }
 
@@ -722,8 +850,15 @@ std::string render_html(const ReportData& data) {
     s += "<h2>Table 4: parameters (start, calibrated, change, sigma)</h2>\n" + html_table(parameter_rows(data));
   }
   s += "<h2>Figures</h2>\n";
-  for (const auto& [id, svg] : all_figures(data)) {
-    s += "<figure>\n" + svg + "<figcaption>" + xml_escape(caption(id)) + "</figcaption>\n</figure>\n";
+  if (data.sample_total > 0) {
+    s += "<p>The report keeps " + count_text(data.samples.size()) + " of the run's " + count_text(data.sample_total) +
+         " samples, evenly spaced in the training and in the test samples: the figures are drawn from them, the "
+         "tables are over every sample.</p>\n";
+  }
+  for (const Figure& figure : all_figures(data)) {
+    const std::string note = figure.drawn.empty() ? "" : " " + figure.drawn;
+    s += "<figure>\n" + figure.svg + "<figcaption>" + xml_escape(caption(figure.id) + note) +
+         "</figcaption>\n</figure>\n";
   }
   return s + "</body>\n</html>\n";
 }

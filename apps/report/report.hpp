@@ -91,6 +91,9 @@ struct OutlierTable {
   std::vector<OutlierRow> rows;     ///< the samples set aside, by increasing sample index
   std::vector<std::string> uncontrolled;  ///< poses whose redundancy is below the floor: never tested, by source
   std::vector<double> kept_w;             ///< w of every kept pose under the final calibration (the figure) [-]
+  /// Kept poses when kept_w holds only the w at evenly spaced ranks of them, sorted (keep_at_most;
+  /// 0: kept_w holds every kept pose's) [-].
+  std::size_t kept_total = 0;
 };
 
 /// One fold of a cross-validation.
@@ -153,8 +156,11 @@ struct ReportData {
   AccuracyReport uncalibrated;           ///< Table 2, before
   AccuracyReport calibrated;             ///< Table 2, after (the chosen method)
   std::vector<ConvergenceSeries> convergence;  ///< one per stage
-  std::vector<SampleRow> samples;              ///< every sample (training and test)
-  std::vector<PredictionSet> predictions;      ///< first the uncalibrated model, last the result
+  std::vector<SampleRow> samples;              ///< every sample (training and test), or a subset: sample_total
+  /// The run's samples when `samples` holds an evenly spaced subset of them (keep_at_most; 0:
+  /// `samples` holds every sample) [-].
+  std::size_t sample_total = 0;
+  std::vector<PredictionSet> predictions;  ///< first the uncalibrated model, last the result
   double noise_sigma_m = 0.0;  ///< measurement noise per axis: the tracker's stated sigma (with the joints' reading),
                                ///< or what repeated readings show [m]; 0: unknown
   std::string noise_source = "stated";   ///< where noise_sigma_m comes from: "stated" (--tracker-sigma-um), "stated,
@@ -170,6 +176,19 @@ struct ReportData {
   CrossValidationTable cross_validation;  ///< --cv: held-out errors per fold
 };
 
+/// Samples a report keeps, in result.json and on the page (keep_at_most): a larger run keeps an
+/// evenly spaced subset of its training and of its test samples, this many in all, and as many
+/// of its poses' w; the tables' statistics are over every sample. The result stays ~1.5 MB
+/// whatever the run's size (10^6 samples wrote 271 MiB, more than any command reads) [-].
+inline constexpr std::size_t kReportSampleCap = 5000;
+
+/// Thins `data` to at most `cap` samples (an evenly spaced subset of the training samples and
+/// of the test samples, in proportion, in their order, with each prediction set's points) and
+/// `cap` kept poses' w (the sorted values at evenly spaced ranks, the smallest and the largest
+/// among them), recording the totals (sample_total, OutlierTable::kept_total). Data within the
+/// cap is left as it is.
+void keep_at_most(std::size_t cap, ReportData* data);
+
 /// A prediction set of `model` for every sample of `samples` (result.json keeps the model,
 /// not the points: both calibrate and `hivecal report` compute them here, the same bits).
 PredictionSet predict_samples(const std::string& method, const RobotModel& model, const RigidTransform& base_to_tracker,
@@ -184,6 +203,8 @@ std::string format_tables_text(const ReportData& data);
 std::vector<std::string> format_parameters_text(const ReportData& data);
 /// The whole HTML page (inline SVG, no scripts, no external resources).
 std::string render_html(const ReportData& data);
+/// The file render_html's page goes into, in the report's folder.
+inline constexpr const char* kReportPageName = "index.html";
 /// The ids of the figures render_html draws for `data`, in page order (for tests).
 std::vector<std::string> figure_ids(const ReportData& data);
 

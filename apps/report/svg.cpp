@@ -157,8 +157,54 @@ struct LegendEntry {
   std::string colour;  ///< fill of its swatch
 };
 
-/// Legend rows for the non-empty names; each carries data-series so that a checker can find
-/// the element it stands for.
+// The legend column right of the plot: a swatch, a gap, the label in lines of at most
+// kLegendLineChars characters (broken at spaces), the widest line estimated at
+// kCharWidth_px a character: Chromium's default sans-serif on Debian (DejaVu Sans) averages
+// ~6.3 px at the charts' 11 px, its widest capitals ~8 px; the render test measures it.
+constexpr double kCharWidth_px = 7.0;
+constexpr std::size_t kLegendLineChars = 22;
+constexpr double kSwatchAndGap_px = 14.0;
+constexpr double kLegendMargin_px = 10.0;
+/// The least legend column: the plot's right edge as it always was for short labels [px].
+constexpr double kMinLegendColumn_px = 120.0;
+
+/// Characters of UTF-8 `text` (continuation bytes not counted).
+std::size_t characters(const std::string& text) {
+  std::size_t n = 0;
+  for (const char c : text) n += (static_cast<unsigned char>(c) & 0xC0) != 0x80 ? 1 : 0;
+  return n;
+}
+
+/// `name` in lines of at most kLegendLineChars characters, broken at spaces (a longer word
+/// stays whole).
+std::vector<std::string> legend_lines(const std::string& name) {
+  std::vector<std::string> lines;
+  std::string line;
+  for (std::size_t at = 0; at < name.size();) {
+    const std::size_t end = std::min(name.find(' ', at), name.size());
+    const std::string word = name.substr(at, end - at);
+    if (!line.empty() && characters(line) + 1 + characters(word) > kLegendLineChars) {
+      lines.push_back(line);
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+    at = end + 1;
+  }
+  if (!line.empty() || lines.empty()) lines.push_back(line);
+  return lines;
+}
+
+/// Width of the legend column for `names` (the plot ends where it begins) [px].
+double legend_column_px(const std::vector<std::string>& names) {
+  double widest_px = 0.0;
+  for (const std::string& name : names)
+    for (const std::string& line : legend_lines(name))
+      widest_px = std::max(widest_px, kCharWidth_px * static_cast<double>(characters(line)));
+  return std::max(kMinLegendColumn_px, kSwatchAndGap_px + widest_px + kLegendMargin_px);
+}
+
+/// Legend rows for the non-empty names, from (x, y); a long name takes several lines. Each
+/// carries data-series so that a checker can find the element it stands for.
 std::string legend(const std::vector<LegendEntry>& entries, double x, double y) {
   std::string s;
   double row = y - 14.0;
@@ -167,8 +213,16 @@ std::string legend(const std::vector<LegendEntry>& entries, double x, double y) 
     row += 14.0;
     s += "<rect class='swatch' x='" + fmt("%.1f", x) + "' y='" + fmt("%.1f", row - 8) +
          "' width='10' height='10' fill='" + e.colour + "'/>\n";
-    s += "<text class='legend' data-series='" + xml_escape(e.name) + "' x='" + fmt("%.1f", x + 14) + "' y='" +
-         fmt("%.1f", row + 1) + "'>" + xml_escape(e.name) + "</text>\n";
+    const std::vector<std::string> lines = legend_lines(e.name);
+    s += "<text class='legend' data-series='" + xml_escape(e.name) + "' x='" + fmt("%.1f", x + kSwatchAndGap_px) +
+         "' y='" + fmt("%.1f", row + 1) + "'>";
+    for (std::size_t k = 0; k < lines.size(); ++k) {
+      s += lines.size() == 1 ? xml_escape(lines[k])
+                             : "<tspan x='" + fmt("%.1f", x + kSwatchAndGap_px) + "' dy='" + (k == 0 ? "0" : "13") +
+                                   "'>" + xml_escape(lines[k]) + "</tspan>";
+    }
+    s += "</text>\n";
+    row += 13.0 * static_cast<double>(lines.size() - 1);
   }
   return s;
 }
@@ -252,7 +306,11 @@ std::string svg_chart(const ChartSpec& spec, const std::vector<Series>& series) 
   const std::vector<double> line = {spec.y_line};
   if (spec.fixed_y) ys = {&fixed};
   if (!spec.y_line_label.empty()) ys.push_back(&line);
-  const Axis x = make_axis(xs, false, 70.0, spec.width_px - 130.0);
+  std::vector<std::string> names;
+  for (const Series& s : series) names.push_back(s.name);
+  if (!spec.y_line_label.empty()) names.push_back(spec.y_line_label);
+  const double legend_px = legend_column_px(names);
+  const Axis x = make_axis(xs, false, 70.0, spec.width_px - legend_px - 10.0);
   const Axis y = make_axis(ys, spec.log_y, spec.height_px - 45.0, 28.0);
   std::string out = open_svg(spec) + frame(spec, x, y);
   std::vector<LegendEntry> entries;  // only the series that drew something
@@ -280,7 +338,7 @@ std::string svg_chart(const ChartSpec& spec, const std::vector<Series>& series) 
     entries.push_back({drawn ? s.name : std::string(), colour});
   }
   out += reference_line(spec, x, y, &entries);
-  out += legend(entries, spec.width_px - 120.0, 40.0);
+  out += legend(entries, spec.width_px - legend_px, 40.0);
   return out + "</svg>\n";
 }
 
@@ -304,7 +362,8 @@ std::string svg_histogram(const ChartSpec& spec, const std::vector<std::string>&
   }
   const std::vector<double> x_range = {0.0, max_value};
   const std::vector<double> y_range = {0.0, max_count};
-  const Axis x = make_axis({&x_range}, false, 70.0, spec.width_px - 130.0, true);
+  const double legend_px = legend_column_px(names);
+  const Axis x = make_axis({&x_range}, false, 70.0, spec.width_px - legend_px - 10.0, true);
   const Axis y = make_axis({&y_range}, false, spec.height_px - 45.0, 28.0, true);
   std::string out = open_svg(spec) + frame(spec, x, y);
   const double bin_width = max_value / bins;
@@ -326,7 +385,7 @@ std::string svg_histogram(const ChartSpec& spec, const std::vector<std::string>&
     }
     entries.push_back({drawn ? name : std::string(), kColours[k % 6]});
   }
-  out += legend(entries, spec.width_px - 120.0, 40.0);
+  out += legend(entries, spec.width_px - legend_px, 40.0);
   return out + "</svg>\n";
 }
 
@@ -340,7 +399,10 @@ std::string svg_arrows(const ChartSpec& spec, const std::vector<ArrowSet>& sets,
       ys.insert(ys.end(), {a.y[i], a.y[i] + a.dy[i]});
     }
   }
-  Axis x = make_axis({&xs}, false, 70.0, spec.width_px - 130.0);
+  std::vector<std::string> names;
+  for (const ArrowSet& a : sets) names.push_back(a.name);
+  const double legend_px = legend_column_px(names);
+  Axis x = make_axis({&xs}, false, 70.0, spec.width_px - legend_px - 10.0);
   Axis y = make_axis({&ys}, false, spec.height_px - 45.0, 28.0);
   equal_aspect(&x, &y);
   std::string out = open_svg(spec);
@@ -366,7 +428,7 @@ std::string svg_arrows(const ChartSpec& spec, const std::vector<ArrowSet>& sets,
     entries.push_back({drawn ? a.name : std::string(), kColours[k % 6]});
   }
   // The reference arrow: its length in pixels is scale_length on the x axis.
-  const double left = spec.width_px - 120.0;
+  const double left = spec.width_px - legend_px;
   const double bottom = spec.height_px - 80.0;
   const double length_px = std::fabs(x.to_px(x.lo + scale_length) - x.px_lo);
   out += "<line class='scale' x1='" + fmt("%.1f", left) + "' y1='" + fmt("%.1f", bottom) + "' x2='" +
@@ -380,7 +442,7 @@ std::string svg_arrows(const ChartSpec& spec, const std::vector<ArrowSet>& sets,
     line_y += 14.0;
     at = end + 1;
   }
-  out += legend(entries, spec.width_px - 120.0, 40.0);
+  out += legend(entries, spec.width_px - legend_px, 40.0);
   return out + "</svg>\n";
 }
 

@@ -8,11 +8,16 @@
 namespace hivecal::sim {
 namespace {
 
-/// Sleeps until session time t_s is due at `speed` (nothing when speed is 0).
-void wait_until_due(double t_s, double speed, std::int64_t start_ms) {
+/// Sleeps until session time t_s is due at `speed` (nothing when speed is 0) or a stop is
+/// requested.
+void wait_until_due(double t_s, double speed, std::int64_t start_ms, const std::atomic<bool>* stop) {
   if (speed <= 0.0) return;
   const auto due_ms = start_ms + static_cast<std::int64_t>(t_s / speed * 1000.0);
-  port::sleep_ms(due_ms - port::monotonic_ms());
+  if (stop == nullptr) {
+    port::sleep_ms(due_ms - port::monotonic_ms());
+  } else {
+    (void)port::sleep_ms(due_ms - port::monotonic_ms(), *stop);
+  }
 }
 
 /// Writes one frame; false on failure (*error says it) or on a stop request (*error empty).
@@ -45,12 +50,12 @@ bool serve_frames(const Session& session, const port::PtyPair& robot, const port
   while (ok && (has_joint || has_point) && !(stop != nullptr && stop->load())) {
     frame.clear();
     if (has_point && (!has_joint || tracker_stream.last_true_time_s() < robot_stream.last_true_time_s())) {
-      wait_until_due(tracker_stream.last_true_time_s(), options.speed, start_ms);
+      wait_until_due(tracker_stream.last_true_time_s(), options.speed, start_ms, stop);
       ok = append_frame(point, &frame) &&
            send(tracker.master_fd, frame, stop, &stats->tracker_bytes, &stats->tracker_frames, error, "tracker");
       has_point = tracker_stream.next(&point);
     } else {
-      wait_until_due(robot_stream.last_true_time_s(), options.speed, start_ms);
+      wait_until_due(robot_stream.last_true_time_s(), options.speed, start_ms, stop);
       ok = append_frame(joint, &frame) &&
            send(robot.master_fd, frame, stop, &stats->robot_bytes, &stats->robot_frames, error, "robot");
       has_joint = robot_stream.next(&joint);

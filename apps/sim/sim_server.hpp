@@ -12,9 +12,16 @@
 
 namespace hivecal::sim {
 
+/// The pacing a live session accepts besides 0 [session seconds per second]: slower would
+/// stretch a session over years, faster is "as fast as read" (0) in all but name.
+inline constexpr double kMinServeSpeed = 0.01;
+inline constexpr double kMaxServeSpeed = 1e4;
+/// The longest wait before streaming [s].
+inline constexpr double kMaxServeDelay_s = 3600.0;
+
 /// Pacing of a live session.
 struct ServeOptions {
-  double speed = 1.0;  ///< session seconds per wall-clock second; 0: no pacing
+  double speed = 1.0;  ///< session seconds per wall-clock second; 0: no pacing (else kMinServeSpeed .. kMaxServeSpeed)
 };
 
 /// What was served.

@@ -25,6 +25,7 @@ struct CsvSchema {
   std::vector<std::string>
       optional_group;             ///< angle columns found by name after them, all or none (values appended last)
   bool angles_are_joints = true;  ///< angle columns are joint positions (checked within one turn)
+  bool nameable = true;           ///< --columns can name the columns (textio::parse_column_aliases)
 };
 
 /// Which optional columns a file had.
@@ -63,11 +64,28 @@ std::string mapped_name(const InputUnits& units, const std::string& wanted) {
   return "";
 }
 
+/// "--columns 'x=x_t+x_dif': no column 'x_dif' in PATH (its columns: ...)" for an alias whose
+/// column (or a term of whose sum) the header lacks.
+std::string misnamed_column(const DelimitedReader& r, const ColumnAlias& alias) {
+  std::string absent;
+  for (const ColumnTerm& term : column_terms(alias.header)) {
+    if (r.find(term.name) < 0) absent += (absent.empty() ? "" : ", ") + port::quoted(term.name, 40);
+  }
+  if (absent.empty()) absent = port::quoted(alias.header, 40);
+  std::string listed;
+  for (std::size_t k = 0; k < r.header_column_count(); ++k) {
+    listed += (k == 0 ? "" : ", ") + r.columns()[k].name;
+  }
+  return "--columns " + port::quoted(column_alias_text(alias)) + ": no column " + absent + " in the header of " +
+         r.name() + " (its columns: " + port::printable(listed, 200) + ")";
+}
+
 /// Where each schema column is in the header: in order from `offset` (the fixed format), or,
 /// when that does not match, found by name anywhere (a mapped name first, then its own, the
-/// pendant's and ROS's names). Empty with *missing set to the columns not found.
+/// pendant's and ROS's names). Empty with *missing set to the columns not found, and
+/// *misnamed to the first --columns entry whose name the header lacks ("" when none).
 std::vector<std::size_t> locate_columns(const DelimitedReader& r, const CsvSchema& schema, const InputUnits& units,
-                                        std::size_t offset, std::string* missing) {
+                                        std::size_t offset, std::string* missing, std::string* misnamed) {
   const std::vector<Column>& header = r.columns();
   std::vector<std::size_t> at;
   bool in_order = units.columns.empty() && header.size() >= offset + schema.columns.size();
@@ -86,6 +104,11 @@ std::vector<std::size_t> locate_columns(const DelimitedReader& r, const CsvSchem
         found = static_cast<int>(k);
     }
     if (found < 0) *missing += (missing->empty() ? "" : ", ") + (mapped.empty() ? wanted : wanted + "=" + mapped);
+    if (found < 0 && !mapped.empty() && misnamed->empty()) {
+      for (const ColumnAlias& alias : units.columns) {
+        if (alias.column == wanted) *misnamed = misnamed_column(r, alias);
+      }
+    }
     at.push_back(static_cast<std::size_t>(found));
   }
   if (!missing->empty()) at.clear();
@@ -109,16 +132,21 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   DelimitedReader r;
   r.set_units(units);
   if (!r.open(path, port::kMaxTextInputBytes)) return port::Error::input(r.error());
-  if (!r.read_header()) return port::Error::input(r.error() + " (expected header " + expected + ")");
+  if (!r.read_header()) {  // the expected header helps when there is none; not with a --columns problem
+    return port::Error::input(r.error() + (r.header_line().empty() ? " (expected header " + expected + ")" : ""));
+  }
   const std::vector<Column>& header = r.columns();
   const std::size_t offset =
       (!schema.optional_leading.empty() && !header.empty() && header[0].name == schema.optional_leading) ? 1 : 0;
   std::string missing;
-  const std::vector<std::size_t> at = locate_columns(r, schema, units, offset, &missing);
+  std::string misnamed;
+  const std::vector<std::size_t> at = locate_columns(r, schema, units, offset, &missing, &misnamed);
+  if (!misnamed.empty()) return port::Error::usage(misnamed);  // the option's fault, not the file's
   if (at.empty()) {
+    const bool hint = schema.nameable && units.columns_option;  // only where the command has --columns
     return port::Error::input(r.where() + "unexpected header " + port::quoted(r.header_line()) + ", expected " +
                               expected + " (or these columns by name anywhere; not found: " + missing +
-                              "; name them with --columns, e.g. x=measurement_x)");
+                              (hint ? "; name them with --columns, e.g. x=measurement_x" : "") + ")");
   }
   const bool in_order = at[0] == offset;  // the fixed format (a named header may happen to agree)
   std::vector<double> scales(schema.columns.size());
@@ -216,8 +244,9 @@ const std::vector<Quantity> kJointQuantities(kSixJoints, Quantity::angle);
 struct OrientedRow {
   JointVector q_rad;
   Vec3 point_m;
-  Vec3 x_axis;  ///< the measured tool frame's x axis in the tracker frame [-]
-  Vec3 y_axis;  ///< its y axis [-]
+  Vec3 angles_rad;  ///< rx, ry, rz as read (converted to rad)
+  Vec3 x_axis;      ///< the measured tool frame's x axis in the tracker frame [-]
+  Vec3 y_axis;      ///< its y axis [-]
 };
 
 std::string over_capacity(const DatasetBase& dataset, bool oriented) {
@@ -316,7 +345,7 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
               orientation.form == OrientationForm::euler_xyz
                   ? Mat3(rotation_x(angles_rad.x()) * rotation_y(angles_rad.y()) * rotation_z(angles_rad.z()))
                   : rotation_from_vector(angles_rad);
-          oriented.push_back(OrientedRow{q, point_m, rotation.col(0), rotation.col(1)});
+          oriented.push_back(OrientedRow{q, point_m, angles_rad, rotation.col(0), rotation.col(1)});
           samples_per_row.push_back(3);
           return std::string();
         }
@@ -331,6 +360,10 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
   if (result.ok() && !oriented.empty()) {  // the virtual reflectors along the measured x and y axes
     read.lever_m = lever_for(orientation, columns.joint_resolution_rad, oriented, &read.joint_sigma_rad);
     read.poses = oriented.size();
+    read.orientation_constant = oriented.size() >= 2;
+    for (const OrientedRow& row : oriented) {
+      read.orientation_constant = read.orientation_constant && row.angles_rad == oriented.front().angles_rad;
+    }
     for (std::size_t row = 0; row < oriented.size() && result.ok(); ++row) {
       const OrientedRow& o = oriented[row];
       const Vec3 points_m[3] = {o.point_m, o.point_m + read.lever_m * o.x_axis, o.point_m + read.lever_m * o.y_axis};
@@ -375,6 +408,7 @@ port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_ra
   int rows = 0;
   CsvSchema schema{{"lower", "upper"}, {Quantity::angle, Quantity::angle}, "", "", {}};
   schema.angles_are_joints = false;  // a limit may span two turns (J6 +-720 deg)
+  schema.nameable = false;           // --columns names q1..q6, x, y, z, ...: not lower, upper
   port::Error error = read_csv(path, schema, units, [&](const std::vector<double>& values) {
     const std::string bad = check_finite(values, 0, 2);
     if (!bad.empty()) return bad;
@@ -413,6 +447,19 @@ std::string format_points_csv(const std::vector<Vec3>& points_m, const std::stri
   for (const Vec3& p : points_m) {
     out +=
         format_double(p.x() * scale) + "," + format_double(p.y() * scale) + "," + format_double(p.z() * scale) + "\n";
+  }
+  return out;
+}
+
+std::string format_predictions_csv(const std::vector<Vec3>& points_m, const std::vector<double>& sigma_m,
+                                   const std::vector<bool>& extrapolated, const std::string& length_unit) {
+  const bool mm = length_unit == "mm";
+  const double scale = mm ? 1e3 : 1.0;
+  std::string out = mm ? "x [mm],y [mm],z [mm],sigma [mm],extrapolated\n" : "x,y,z,sigma_m,extrapolated\n";
+  for (std::size_t k = 0; k < points_m.size(); ++k) {
+    const Vec3& p = points_m[k];
+    out += format_double(p.x() * scale) + "," + format_double(p.y() * scale) + "," + format_double(p.z() * scale) +
+           "," + format_double(sigma_m[k] * scale) + (extrapolated[k] ? ",1\n" : ",0\n");
   }
   return out;
 }

@@ -58,6 +58,9 @@ struct OrientationRead {
   /// The resolution the joint columns are written in: the finest place value of a last digit
   /// among their fields (a UR pendant's 0.01 deg; a log's full digits: ~1e-16) [rad]
   double joint_resolution_rad = 0.0;
+  /// Every row's rx, ry, rz are the same numbers (at least two rows): the columns say the tool
+  /// never turned, which the joints may contradict (a constant written for a missing reading).
+  bool orientation_constant = false;
 };
 
 /// Per-axis variance of the tool point from joints read with noise sigma_q: sigma_q^2 |J|^2 / 3,
@@ -104,6 +107,11 @@ std::string format_joints_csv(Span<const JointVector> poses_rad);
 /// `x,y,z` rows with round-trip precision, in metres; with `length_unit` "mm" the header is
 /// `x [mm],y [mm],z [mm]` and the values are in millimetres (read back by the same reader).
 std::string format_points_csv(const std::vector<Vec3>& points_m, const std::string& length_unit = "m");
+/// format_points_csv with two columns after z: each point's 1-sigma per axis (`sigma_m`, in
+/// millimetres `sigma [mm]`) and `extrapolated` (1 or 0); `sigma_m` and `extrapolated` hold
+/// one entry per point.
+std::string format_predictions_csv(const std::vector<Vec3>& points_m, const std::vector<double>& sigma_m,
+                                   const std::vector<bool>& extrapolated, const std::string& length_unit = "m");
 /// `q1..q6,x,y,z` rows with round-trip precision (`,target` 1-based when several targets).
 std::string format_samples_csv(Span<const Sample> samples);
 

@@ -1,5 +1,6 @@
 #include "textio/delimited.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -55,7 +56,109 @@ Delimiter delimiter_of(std::string_view header) {
   return Delimiter::spaces;
 }
 
+/// The columns --columns may name (the fixed formats' and the orientation's).
+const char* const kAliasColumns[] = {"q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "t", "rx", "ry", "rz"};
+
+/// True for a unit si_scale() knows for any quantity.
+bool known_unit(std::string_view unit) {
+  double scale = 0.0;
+  return si_scale(unit, Quantity::length, &scale) || si_scale(unit, Quantity::angle, &scale) ||
+         si_scale(unit, Quantity::time, &scale);
+}
+
+/// True for a number written with points in thousands positions only: "2.568", "-1.234.567"
+/// (not "0.568": no thousands separator follows a lone zero).
+bool thousands_pointed(std::string_view field) {
+  if (!field.empty() && (field.front() == '-' || field.front() == '+')) field.remove_prefix(1);
+  const std::size_t point = field.find('.');
+  if (point == std::string_view::npos || point == 0 || point > 3 || field.front() == '0') return false;
+  for (std::size_t i = 0; i < point; ++i) {
+    if (field[i] < '0' || field[i] > '9') return false;
+  }
+  std::size_t at = point;
+  while (at < field.size()) {  // groups ".ddd"
+    if (field[at] != '.' || at + 4 > field.size()) return false;
+    for (std::size_t i = at + 1; i < at + 4; ++i) {
+      if (field[i] < '0' || field[i] > '9') return false;
+    }
+    at += 4;
+  }
+  return true;
+}
+
 }  // namespace
+
+std::vector<ColumnTerm> column_terms(std::string_view expression) {
+  std::vector<ColumnTerm> terms;
+  expression = trim(expression);
+  double sign = 1.0;
+  std::size_t start = 0;
+  if (!expression.empty() && (expression.front() == '-' || expression.front() == '+')) {
+    sign = expression.front() == '-' ? -1.0 : 1.0;
+    start = 1;
+  }
+  for (;;) {
+    const std::size_t stop = expression.find_first_of("+-", start);
+    const std::string_view name =
+        trim(expression.substr(start, stop == std::string_view::npos ? std::string_view::npos : stop - start));
+    if (name.empty()) return {};
+    terms.push_back(ColumnTerm{lower(name), sign});
+    if (stop == std::string_view::npos) return terms;
+    sign = expression[stop] == '-' ? -1.0 : 1.0;
+    start = stop + 1;
+  }
+}
+
+std::string column_alias_text(const ColumnAlias& alias) {
+  return alias.column + "=" + alias.header + (alias.unit.empty() ? "" : "[" + alias.unit + "]");
+}
+
+std::string parse_column_aliases(std::string_view text, std::vector<ColumnAlias>* aliases) {
+  const std::size_t first_new = aliases->size();
+  std::size_t begin = 0;
+  while (!text.empty() && begin <= text.size()) {
+    const std::size_t end = std::min(text.find(',', begin), text.size());
+    const std::string_view entry = text.substr(begin, end - begin);
+    begin = end + 1;
+    const std::string shown = "--columns: " + port::quoted(entry);
+    const std::size_t equals = entry.find('=');
+    ColumnAlias alias;
+    std::string_view spec;
+    if (equals != std::string_view::npos) {
+      alias.column = lower(trim(entry.substr(0, equals)));
+      spec = trim(entry.substr(equals + 1));
+    }
+    const bool known = std::find_if(std::begin(kAliasColumns), std::end(kAliasColumns),
+                                    [&](const char* name) { return alias.column == name; }) != std::end(kAliasColumns);
+    if (!known || spec.empty()) {
+      return shown +
+             " is not C=NAME or C=NAME[unit] with C one of q1..q6, x, y, z, rx, ry, rz, t (e.g. x=measurement_x[mm], "
+             "or a sum of columns x=x_t+x_dif[mm])";
+    }
+    const std::size_t open = spec.find('[');
+    const std::size_t close = spec.find(']');
+    if (open != std::string_view::npos || close != std::string_view::npos) {
+      if (open == std::string_view::npos || close != spec.size() - 1 || spec.find('[', open + 1) != spec.npos) {
+        return shown + ": a unit goes in one pair of brackets at the end, C=NAME[unit] (e.g. x=measurement_x[mm])";
+      }
+      alias.unit = unit_of(spec.substr(open + 1, close - open - 1));
+      spec = trim(spec.substr(0, open));
+      if (!known_unit(alias.unit)) {
+        return shown + ": unknown unit " + port::quoted("[" + alias.unit + "]", 16) +
+               "; one of [m], [mm], [um], [rad], [deg], [s], [ms], [us], [ns]";
+      }
+    }
+    alias.header = lower(spec);
+    if (column_terms(alias.header).empty()) {
+      return shown + ": a name is missing in the sum (C=NAME, or C=NAME+NAME-NAME..., e.g. x=x_t+x_dif[mm])";
+    }
+    for (std::size_t k = first_new; k < aliases->size(); ++k) {
+      if ((*aliases)[k].column == alias.column) return "--columns names " + alias.column + " twice";
+    }
+    aliases->push_back(alias);
+  }
+  return "";
+}
 
 const char* delimiter_name(Delimiter d) {
   switch (d) {
@@ -230,23 +333,85 @@ bool DelimitedReader::read_header() {
       }
       columns_.push_back(column_of(token));
     }
-    // A unit given with a --columns name ("rx=measurement_rx[deg]") is that column's header unit.
-    for (const ColumnAlias& alias : units_.columns) {
-      if (alias.unit.empty()) continue;
+    header_columns_ = columns_.size();
+    return add_sum_columns();
+  }
+  if (!lines_.error().empty()) return false;
+  error_ = lines_.name() + ": empty file (no header line)";
+  return false;
+}
+
+bool DelimitedReader::add_sum_columns() {
+  sums_.clear();
+  for (const ColumnAlias& alias : units_.columns) {
+    const bool whole = find(alias.header) >= 0;  // a name that holds '+' or '-' itself
+    const std::vector<ColumnTerm> terms =
+        whole ? std::vector<ColumnTerm>{{alias.header, 1.0}} : column_terms(alias.header);
+    bool complete = !terms.empty();
+    for (const ColumnTerm& term : terms) {
+      complete = complete && find(term.name) >= 0;
+      // A unit given with a --columns name ("rx=measurement_rx[deg]") is that column's header unit.
       for (Column& column : columns_) {
-        if (column.name != alias.header) continue;
+        if (alias.unit.empty() || column.name != term.name) continue;
         if (!column.unit.empty() && column.unit != alias.unit) {
           return fail("column " + port::quoted(column.name, 32) + " is in [" + column.unit +
                       "] by its header, but --columns gives [" + alias.unit + "]");
         }
         column.unit = alias.unit;
+        column.unit_from_option = true;
       }
     }
-    return true;
+    // A sum whose terms are not all here is the reader's to report (a log ignores --columns).
+    if (whole || !complete) continue;
+    SumColumn sum;
+    Column column{alias.header, "", false};
+    for (const ColumnTerm& term : terms) {
+      const Column& read = columns_[static_cast<std::size_t>(find(term.name))];
+      if (!sum.index.empty() && read.unit != column.unit) {
+        return fail("--columns " + port::quoted(column_alias_text(alias)) + ": its terms are in [" + column.unit +
+                    "] and [" + read.unit + "] by the header: a sum needs one unit");
+      }
+      column.unit = read.unit;
+      column.unit_from_option = column.unit_from_option || read.unit_from_option;
+      sum.index.push_back(static_cast<std::size_t>(find(term.name)));
+      sum.sign.push_back(term.sign);
+    }
+    sums_.push_back(sum);
+    columns_.push_back(column);
   }
-  if (!lines_.error().empty()) return false;
-  error_ = lines_.name() + ": empty file (no header line)";
-  return false;
+  sum_fields_.assign(sums_.size(), std::string());
+  return true;
+}
+
+bool DelimitedReader::compute_sums() {
+  for (std::size_t k = 0; k < sums_.size(); ++k) {
+    double total = 0.0;
+    for (std::size_t t = 0; t < sums_[k].index.size(); ++t) {
+      double term = 0.0;
+      if (!number(sums_[k].index[t], 1.0, &term)) return false;
+      total += sums_[k].sign[t] * term;
+    }
+    sum_fields_[k] = format_double(total);  // reads back to the same bits
+  }
+  for (const std::string& field : sum_fields_) fields_.push_back(field);
+  return true;
+}
+
+bool DelimitedReader::check_separators(std::size_t index, std::string_view field) {
+  if (delimiter_ == Delimiter::comma || index >= header_columns_) return true;  // a sum's field is ours
+  const bool comma = field.find(',') != std::string_view::npos;
+  SeparatorSeen& seen = comma ? decimal_comma_ : thousands_point_;
+  if ((!comma && !thousands_pointed(field)) || seen.line != 0) return true;
+  seen = SeparatorSeen{lines_.line_number(), columns_[index].name, std::string(field)};
+  if (decimal_comma_.line == 0 || thousands_point_.line == 0) return true;
+  const std::string comma_at = "line " + std::to_string(decimal_comma_.line) + ", column " +
+                               port::quoted(decimal_comma_.column, 32) + ": " + port::quoted(decimal_comma_.text, 32);
+  const std::string point_at = "line " + std::to_string(thousands_point_.line) + ", column " +
+                               port::quoted(thousands_point_.column, 32) + ": " +
+                               port::quoted(thousands_point_.text, 32);
+  return fail("the file writes decimal commas (" + comma_at + ") and points in thousands positions (" + point_at +
+              "): a thousands separator, which would be read as a decimal point; export the numbers without "
+              "thousands separators");
 }
 
 int DelimitedReader::find(std::string_view name) const {
@@ -288,13 +453,13 @@ bool DelimitedReader::next_row() {
   while (lines_.next(&line)) {
     if (trim(line).empty()) continue;
     if (!split(line)) return false;
-    if (fields_.size() != columns_.size()) {
-      const bool decimal_comma = delimiter_ == Delimiter::comma && fields_.size() > columns_.size();
-      return fail(std::to_string(fields_.size()) + " fields where the header has " + std::to_string(columns_.size()) +
+    if (fields_.size() != header_columns_) {
+      const bool decimal_comma = delimiter_ == Delimiter::comma && fields_.size() > header_columns_;
+      return fail(std::to_string(fields_.size()) + " fields where the header has " + std::to_string(header_columns_) +
                   " (" + delimiter_name(delimiter_) + "-separated)" +
                   (decimal_comma ? ": a comma used as decimal separator? Export with a '.' decimal point" : ""));
     }
-    return true;
+    return compute_sums();
   }
   return false;
 }
@@ -306,7 +471,7 @@ bool DelimitedReader::number(std::size_t index, double scale, double* value) {
   const auto parsed = std::from_chars(field.data(), end, *value);
   if (!field.empty() && parsed.ec == std::errc() && parsed.ptr == end) {
     *value *= scale;
-    return true;
+    return check_separators(index, field);
   }
   // A field separated by ';', a tab or spaces may use a decimal comma (as a lab's locale
   // exports it): one comma and no point is read as the decimal separator.
@@ -318,7 +483,7 @@ bool DelimitedReader::number(std::size_t index, double scale, double* value) {
     const auto dotted_parsed = std::from_chars(dotted.data(), dotted.data() + dotted.size(), *value);
     if (dotted_parsed.ec == std::errc() && dotted_parsed.ptr == dotted.data() + dotted.size()) {
       *value *= scale;
-      return true;
+      return check_separators(index, field);
     }
   }
   const std::string column = port::quoted(columns_[index].name, 32);
@@ -350,15 +515,17 @@ bool DelimitedReader::column_scale(std::size_t index, Quantity quantity, double*
                                                               : none;
   if (!si_scale(c.unit, quantity, scale)) {
     return fail("column " + port::quoted(c.name, 32) + ": unit " + port::quoted("[" + c.unit + "]", 16) +
-                " is not one of " + kAccepted[q]);
+                (c.unit_from_option ? " (given by --columns)" : "") + " is not one of " + kAccepted[q]);
   }
   if (c.unit.empty()) {
     if (si_scale(declared, quantity, scale)) return true;
     return fail(std::string(kOption[q]) + " " + port::quoted(declared, 16) + " is not one of " + kAccepted[q]);
   }
   if (!declared.empty() && declared != c.unit) {
-    return fail("column " + port::quoted(c.name, 32) + " is in [" + c.unit + "] by its header, but " + kOption[q] +
-                " " + declared + " was given: the header unit and the option disagree");
+    return fail("column " + port::quoted(c.name, 32) + " is in [" + c.unit + "] by " +
+                (c.unit_from_option ? "--columns" : "its header") + ", but " + kOption[q] + " " + declared +
+                " was given: the " +
+                (c.unit_from_option ? "two options disagree" : "header unit and the option disagree"));
   }
   return true;
 }

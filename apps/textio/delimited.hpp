@@ -33,12 +33,34 @@ enum class Quantity { length, angle, time };
 bool si_scale(std::string_view unit, Quantity quantity, double* scale);
 
 /// One --columns entry: the format's column and the header name it has in the file (both as
-/// Column::name: lower case, unit stripped).
+/// Column::name: lower case, unit stripped), or a sum of header columns ("x_t+x_dif").
 struct ColumnAlias {
   std::string column;  ///< e.g. "x"
-  std::string header;  ///< e.g. "measurement_x"
+  std::string header;  ///< e.g. "measurement_x", or "x_t+x_dif" (column_terms)
   std::string unit;    ///< e.g. "mm" from "measurement_x[mm]": the column's unit when its header gives none
 };
+
+/// One term of a --columns sum: a header column and its sign.
+struct ColumnTerm {
+  std::string name;   ///< the header column (Column::name)
+  double sign = 1.0;  ///< +1 or -1
+};
+
+/// The --columns grammar (docs/formats.md, "Exports as a lab writes them"), in one place for
+/// every reader: `C=SPEC,...` with C one of q1..q6, x, y, z, rx, ry, rz, t and SPEC a header column NAME or
+/// a sum of them, `[-]NAME{(+|-)NAME}`, optionally followed by `[unit]` (m, mm, um or µm, rad,
+/// deg, s, ms, us, ns), each C once. Names and units are lower-cased, blanks around them
+/// ignored. Appends to *aliases; returns "" or the problem, quoting the option's entry.
+std::string parse_column_aliases(std::string_view text, std::vector<ColumnAlias>* aliases);
+
+/// The terms of a --columns SPEC without its unit: "x_t+x_dif" -> {x_t, +1}, {x_dif, +1};
+/// "-x_dif" -> {x_dif, -1}; a name with neither sign is one term. A header column whose whole
+/// name is `expression` is read as that column instead (a name may hold '+' or '-'). Empty
+/// when a term is empty ("a++b", "a+").
+std::vector<ColumnTerm> column_terms(std::string_view expression);
+
+/// "C=SPEC[unit]" of an alias, as the messages quote it.
+std::string column_alias_text(const ColumnAlias& alias);
 
 /// Units the user declared for text columns whose header gives none (--length-unit,
 /// --angle-unit); "" for not declared: the format's SI unit. A bracket unit in a header
@@ -49,6 +71,8 @@ struct InputUnits {
   /// Columns the user named (--columns x=measurement_x,...): a fixed format's column (x, q1,
   /// ...) found under another header name; the file is then read by name.
   std::vector<ColumnAlias> columns{};
+  /// The command takes --columns: a header without the expected columns may suggest it.
+  bool columns_option = true;
 };
 
 /// Largest |joint| read as plausible: one turn either way [rad].
@@ -115,8 +139,9 @@ const char* delimiter_name(Delimiter delimiter);
 /// One header column: name in lower case without blanks, quotes and unit; unit text (in
 /// brackets or parentheses after the name).
 struct Column {
-  std::string name;  ///< e.g. "x" for "X [mm]"
-  std::string unit;  ///< e.g. "mm" from "[mm]" or "(mm)", "deg" from "(°)"; "" when the header gives none
+  std::string name;               ///< e.g. "x" for "X [mm]"
+  std::string unit;               ///< e.g. "mm" from "[mm]" or "(mm)", "deg" from "(°)"; "" when the header gives none
+  bool unit_from_option = false;  ///< the unit was given by --columns (NAME[unit]), not by the header
 };
 
 /// Delimited text, header first, then one row of fields per non-blank line.
@@ -146,19 +171,27 @@ class DelimitedReader {
   /// error() set beyond one turn (|r| > 2 pi; "looks like degrees: use --angle-unit deg" when
   /// no unit was named); true for NaN/Inf (the caller's to refuse).
   bool check_rotation(const std::size_t index[3], const double vector_rad[3]);
-  /// Reads the header (first non-blank line): delimiter and columns. False with error() set
-  /// for an empty file or a binary one.
+  /// Reads the header (first non-blank line): delimiter and columns. A --columns sum
+  /// (InputUnits::columns, column_terms) whose terms are all in the header becomes one more
+  /// column after the header's, named by its SPEC, whose field in each row is the sum of its
+  /// terms (in their one unit, which is the column's). False with error() set for an empty
+  /// file, a binary one, or a unit --columns gives that the header contradicts.
   bool read_header();
-  const std::vector<Column>& columns() const { return columns_; }  ///< the header's columns
-  Delimiter delimiter() const { return delimiter_; }               ///< the header's delimiter
-  const std::string& header_line() const { return header_; }       ///< the header as read
+  const std::vector<Column>& columns() const { return columns_; }      ///< the header's columns, then the sums
+  std::size_t header_column_count() const { return header_columns_; }  ///< columns of the header line itself
+  Delimiter delimiter() const { return delimiter_; }                   ///< the header's delimiter
+  const std::string& header_line() const { return header_; }           ///< the header as read
   /// Index of the first column named `name` (lower case), or -1.
   int find(std::string_view name) const;
-  /// The next data row (blank lines skipped); false at the end or on an error (error() set).
+  /// The next data row (blank lines skipped), with the sums of read_header() computed; false
+  /// at the end or on an error (error() set).
   bool next_row();
   const std::vector<std::string_view>& fields() const { return fields_; }  ///< the row's fields, trimmed
   /// Field `index` of the row as a number times `scale`; false with error() set naming the
-  /// line, the column and the text (a comma decimal separator is named as such).
+  /// line, the column and the text (a comma decimal separator is named as such). In a file
+  /// that is not comma-separated a single decimal comma is read; a file whose numbers hold
+  /// decimal commas and, elsewhere, points in thousands positions ("2.568": 2,568 written with
+  /// a thousands separator) is refused at the second of the two, naming both lines.
   bool number(std::size_t index, double scale, double* value);
   /// Field `index` as an unsigned integer; false (no error set) when it is not all digits.
   bool whole_number(std::size_t index, std::uint64_t* value) const;
@@ -173,6 +206,25 @@ class DelimitedReader {
 
  private:
   bool split(std::string_view line);
+  /// Appends the --columns sums of the header's columns (read_header).
+  bool add_sum_columns();
+  /// Fills the row's sum fields (next_row).
+  bool compute_sums();
+  /// Notes a number field's separators: false with error() set when the file holds decimal
+  /// commas and thousands points both.
+  bool check_separators(std::size_t index, std::string_view field);
+
+  /// A column that is a sum of header columns.
+  struct SumColumn {
+    std::vector<std::size_t> index;  ///< the terms' header columns
+    std::vector<double> sign;        ///< their signs, +1 or -1
+  };
+  /// Where a number was first written in one style: its line (0: not yet seen) and text.
+  struct SeparatorSeen {
+    std::size_t line = 0;  ///< 1-based line [-]
+    std::string column;    ///< its column's name
+    std::string text;      ///< the field as written
+  };
 
   /// True when column `index` was read in SI because neither its header nor the user named a unit.
   bool unit_assumed(std::size_t index, Quantity quantity) const;
@@ -183,6 +235,11 @@ class DelimitedReader {
   std::vector<Column> columns_;
   std::string header_;
   std::vector<std::string_view> fields_;
+  std::size_t header_columns_ = 0;       ///< columns of the header line itself (the sums follow)
+  std::vector<SumColumn> sums_;          ///< the --columns sums, columns header_columns_ ...
+  std::vector<std::string> sum_fields_;  ///< the row's sums as text (%.17g), which fields_ views
+  SeparatorSeen decimal_comma_;          ///< the first number with a decimal comma
+  SeparatorSeen thousands_point_;        ///< the first number with a point in a thousands position
   std::string error_;
 };
 

@@ -17,7 +17,7 @@ namespace {
 
 class JsonParser {
  public:
-  explicit JsonParser(const std::string& text) : text_(text) {}
+  explicit JsonParser(std::string_view text) : text_(text) {}
 
   bool parse_document(JsonValue* value, std::string* error) {
     skip_blanks();
@@ -123,28 +123,64 @@ class JsonParser {
         case 'n': out->push_back('\n'); break;
         case 'r': out->push_back('\r'); break;
         case 't': out->push_back('\t'); break;
-        case 'u': {
-          if (pos_ + 4 > text_.size()) return fail("short \\u escape");
-          unsigned code = 0;
-          for (int i = 0; i < 4; ++i) {
-            const char h = text_[pos_++];
-            code <<= 4U;
-            if (h >= '0' && h <= '9')
-              code |= static_cast<unsigned>(h - '0');
-            else if (h >= 'a' && h <= 'f')
-              code |= static_cast<unsigned>(h - 'a' + 10);
-            else if (h >= 'A' && h <= 'F')
-              code |= static_cast<unsigned>(h - 'A' + 10);
-            else
-              return fail("bad \\u escape");
-          }
-          out->push_back(code < 0x80 ? static_cast<char>(code) : '?');  // names here are ASCII
+        case 'u':
+          if (!unicode_escape(out)) return false;
           break;
-        }
         default: return fail("bad escape");
       }
     }
     return fail("unterminated string");
+  }
+
+  /// Four hex digits at pos_ into *code.
+  bool hex4(unsigned* code) {
+    if (pos_ + 4 > text_.size()) return fail("short \\u escape");
+    *code = 0;
+    for (int i = 0; i < 4; ++i) {
+      const char h = text_[pos_++];
+      *code <<= 4U;
+      if (h >= '0' && h <= '9')
+        *code |= static_cast<unsigned>(h - '0');
+      else if (h >= 'a' && h <= 'f')
+        *code |= static_cast<unsigned>(h - 'a' + 10);
+      else if (h >= 'A' && h <= 'F')
+        *code |= static_cast<unsigned>(h - 'A' + 10);
+      else
+        return fail("bad \\u escape");
+    }
+    return true;
+  }
+
+  /// The code point of a backslash-u escape (a surrogate pair: two of them), appended as UTF-8.
+  bool unicode_escape(std::string* out) {
+    unsigned code = 0;
+    if (!hex4(&code)) return false;
+    if (code >= 0xDC00 && code <= 0xDFFF) return fail("\\u escape of a low surrogate without its high half");
+    if (code >= 0xD800 && code <= 0xDBFF) {  // the high half: the low half must follow
+      unsigned low = 0;
+      if (text_.compare(pos_, 2, "\\u") != 0) return fail("\\u escape of a high surrogate without its low half");
+      pos_ += 2;
+      if (!hex4(&low)) return false;
+      if (low < 0xDC00 || low > 0xDFFF) return fail("\\u escape of a high surrogate without its low half");
+      code = 0x10000U + ((code - 0xD800U) << 10U) + (low - 0xDC00U);
+    }
+    const auto byte = [](unsigned value) { return static_cast<char>(static_cast<unsigned char>(value)); };
+    if (code < 0x80U) {
+      out->push_back(byte(code));
+    } else if (code < 0x800U) {
+      out->push_back(byte(0xC0U | (code >> 6U)));
+      out->push_back(byte(0x80U | (code & 0x3FU)));
+    } else if (code < 0x10000U) {
+      out->push_back(byte(0xE0U | (code >> 12U)));
+      out->push_back(byte(0x80U | ((code >> 6U) & 0x3FU)));
+      out->push_back(byte(0x80U | (code & 0x3FU)));
+    } else {
+      out->push_back(byte(0xF0U | (code >> 18U)));
+      out->push_back(byte(0x80U | ((code >> 12U) & 0x3FU)));
+      out->push_back(byte(0x80U | ((code >> 6U) & 0x3FU)));
+      out->push_back(byte(0x80U | (code & 0x3FU)));
+    }
+    return true;
   }
 
   bool parse_array(JsonValue* v, int depth) {
@@ -205,7 +241,7 @@ class JsonParser {
     }
   }
 
-  const std::string& text_;
+  std::string_view text_;
   std::size_t pos_ = 0;
   std::string problem_;
 };
@@ -245,10 +281,10 @@ bool read_json_numbers(const JsonValue* value, std::size_t count, double* out) {
 port::Error parse_json(const std::string& text, JsonValue* value) {
   *value = JsonValue();
   std::string error;
-  // A UTF-8 byte order mark, as some editors write it, is not part of the document.
-  const bool bom = text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0;
-  const std::string without_bom = bom ? text.substr(3) : std::string();
-  if (JsonParser(bom ? without_bom : text).parse_document(value, &error)) return port::Error{};
+  std::string_view body;  // a UTF-8 byte order mark is not part of the document; UTF-16 is no JSON here
+  const port::Error encoding = utf8_text(text, "the document", &body);
+  if (!encoding.ok()) return encoding;
+  if (JsonParser(body).parse_document(value, &error)) return port::Error{};
   return port::Error::input(error);
 }
 
@@ -347,6 +383,62 @@ JsonWriter& JsonWriter::inline_array(const double* values, std::size_t count) {
   for (std::size_t i = 0; i < count; ++i) out_ += (i == 0 ? "" : ", ") + number_text(values[i]);
   out_ += ']';
   return *this;
+}
+
+namespace {
+
+/// The end of the JSON value that starts at `pos` (after blanks): past its closing quote or
+/// bracket, or the end of a scalar; text.size() when it does not end.
+std::size_t value_end(const std::string& text, std::size_t pos) {
+  int depth = 0;
+  for (std::size_t i = pos; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"') {
+      for (++i; i < text.size() && text[i] != '"'; ++i)
+        if (text[i] == '\\') ++i;
+      if (depth == 0) return i + 1;
+    } else if (c == '{' || c == '[') {
+      ++depth;
+    } else if (c == '}' || c == ']') {
+      if (depth == 0) return i;  // a scalar's end at its object's close
+      if (--depth == 0) return i + 1;
+    } else if (depth == 0 && (c == ',' || c == ' ' || c == '\n' || c == '\r' || c == '\t')) {
+      return i;
+    }
+  }
+  return text.size();
+}
+
+}  // namespace
+
+bool object_member_texts(const std::string& document, std::vector<JsonMemberText>* members) {
+  members->clear();
+  std::size_t i = document.find_first_not_of(" \t\r\n");
+  if (document.compare(i == std::string::npos ? document.size() : i, 3, "\xEF\xBB\xBF") == 0) i += 3;
+  i = document.find_first_not_of(" \t\r\n", i);
+  if (i == std::string::npos || document[i] != '{') return false;
+  for (++i;;) {
+    i = document.find_first_not_of(" \t\r\n,", i);
+    if (i == std::string::npos) return false;
+    if (document[i] == '}') return true;
+    if (document[i] != '"') return false;
+    const std::size_t key_end = value_end(document, i);
+    JsonValue key;
+    if (!parse_json(document.substr(i, key_end - i), &key).ok() || key.kind != JsonValue::Kind::string) return false;
+    const std::size_t colon = document.find_first_not_of(" \t\r\n", key_end);
+    if (colon == std::string::npos || document[colon] != ':') return false;
+    const std::size_t value = document.find_first_not_of(" \t\r\n", colon + 1);
+    if (value == std::string::npos) return false;
+    const std::size_t end = value_end(document, value);
+    members->push_back({key.string, document.substr(i, end - i)});
+    i = end;
+  }
+}
+
+std::string object_document(const std::vector<JsonMemberText>& members) {
+  std::string out = "{";
+  for (std::size_t k = 0; k < members.size(); ++k) out += (k == 0 ? "\n  " : ",\n  ") + members[k].text;
+  return out + (members.empty() ? "}\n" : "\n}\n");
 }
 
 }  // namespace hivecal::textio

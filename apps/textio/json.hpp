@@ -32,6 +32,22 @@ port::Error parse_json(const std::string& text, JsonValue* value);
 /// partly written).
 bool read_json_numbers(const JsonValue* value, std::size_t count, double* out);
 
+/// One member of a JSON object as it is written: its key, and its text from the key's opening
+/// quote to the end of its value (nested members and layout as they are).
+struct JsonMemberText {
+  std::string key;   ///< the member's key, unescaped
+  std::string text;  ///< `"key": value` as written
+};
+
+/// The members of the object a JSON document is, in their written order, each as written: a
+/// file carried forward with some members replaced keeps the others byte for byte. False when
+/// the document is not an object (parse_json checks the rest).
+bool object_member_texts(const std::string& document, std::vector<JsonMemberText>* members);
+
+/// An object document of `members` laid out as JsonWriter writes one (two-space indentation,
+/// a newline at the end).
+std::string object_document(const std::vector<JsonMemberText>& members);
+
 /// Streaming writer with two-space indentation; numbers as %.17g (NaN/Inf written as null).
 class JsonWriter {
  public:

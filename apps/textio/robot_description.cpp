@@ -23,14 +23,6 @@ bool read_number(const JsonValue* v, double* out) {
   return true;
 }
 
-// What a model file may hold: anything beyond is not a robot and would predict NaN or
-// nonsense in silence. Lengths: real factory calibrations carry cancelling offsets of
-// hundreds of metres on UR's parallel joints (+/-204 m), so 1 km; angles: two turns; the tool
-// point: 10 m; a joint term's coefficient: kMaxJointTermCoefficient.
-constexpr double kMaxModelLength_m = 1000.0;
-constexpr double kMaxModelAngle_rad = 4.0 * math::kPi;
-constexpr double kMaxToolLength_m = 10.0;
-
 /// Reads number `key` of DH row j into *out, within its bound; the error names the row and key.
 port::Error row_number(const JsonValue& row, std::size_t j, const char* key, const std::string& source, double* out) {
   const std::string at = "\"dh\"[" + std::to_string(j) + "]." + key;
@@ -38,21 +30,15 @@ port::Error row_number(const JsonValue& row, std::size_t j, const char* key, con
   if (v == nullptr) return fail(source, "\"dh\"[" + std::to_string(j) + "]: missing \"" + key + "\"");
   if (!read_number(v, out)) return fail(source, at + " must be a number");
   const bool angle = std::string(key) == "theta_offset" || std::string(key) == "alpha";
-  const double bound = angle ? kMaxModelAngle_rad : kMaxModelLength_m;
-  if (!(std::fabs(*out) <= bound)) {
-    return fail(source, at + " = " + format_double(*out) + (angle ? " rad" : " m") + " is beyond " +
-                            format_double(bound) + (angle ? " rad (two turns): degrees?" : " m: not a robot"));
-  }
-  return port::Error{};
+  const std::string beyond = beyond_bound(*out, angle ? ModelQuantity::angle : ModelQuantity::length);
+  return beyond.empty() ? port::Error{} : fail(source, at + beyond);
 }
 
 /// The tool point(s) within kMaxToolLength_m; `what` names the key in the message.
 port::Error check_tool(const double (&point)[3], const std::string& what, const std::string& source) {
   for (double value : point) {
-    if (!(std::fabs(value) <= kMaxToolLength_m)) {
-      return fail(source, what + " holds " + format_double(value) + " m, beyond " + format_double(kMaxToolLength_m) +
-                              " m: millimetres?");
-    }
+    const std::string beyond = beyond_bound(value, ModelQuantity::tool);
+    if (!beyond.empty()) return fail(source, what + beyond);
   }
   return port::Error{};
 }
@@ -139,10 +125,10 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
     const bool standard = convention->kind == JsonValue::Kind::string && convention->string == "standard-dh";
     const bool modified = convention->kind == JsonValue::Kind::string && convention->string == "modified-dh";
     if (!standard && !modified) {
-      return fail(source,
-                  "unknown \"convention\"" +
-                      (convention->kind == JsonValue::Kind::string ? " '" + convention->string + "'" : std::string()) +
-                      ": \"standard-dh\" or \"modified-dh\"");
+      return fail(source, "unknown \"convention\"" +
+                              (convention->kind == JsonValue::Kind::string ? " " + port::quoted(convention->string)
+                                                                           : std::string()) +
+                              ": \"standard-dh\" or \"modified-dh\"");
     }
     parsed.convention = modified ? DhConvention::modified : DhConvention::standard;
   }
@@ -182,6 +168,9 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
 }
 
 port::Error parse_root(const std::string& text, const std::string& source, JsonValue* root) {
+  std::string_view body;
+  const port::Error encoding = utf8_text(text, source, &body);  // UTF-16 is not malformed JSON
+  if (!encoding.ok()) return encoding;
   const port::Error syntax = parse_json(text, root);
   if (!syntax.ok()) return fail(source, "malformed JSON: " + syntax.message);
   if (root->kind != JsonValue::Kind::object) return fail(source, "top level must be an object");
@@ -335,6 +324,44 @@ bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::stri
 }
 
 }  // namespace
+
+std::string beyond_bound(double value, ModelQuantity quantity) {
+  const double bound = quantity == ModelQuantity::angle  ? kMaxModelAngle_rad
+                       : quantity == ModelQuantity::tool ? kMaxToolLength_m
+                                                         : kMaxModelLength_m;
+  if (std::fabs(value) <= bound) return "";
+  const char* unit = quantity == ModelQuantity::angle ? " rad" : " m";
+  const char* cause = quantity == ModelQuantity::angle  ? " (two turns): degrees?"
+                      : quantity == ModelQuantity::tool ? ": millimetres?"
+                                                        : ": not a robot";
+  return " = " + format_double(value) + unit + " is beyond " + format_double(bound) + unit + cause;
+}
+
+port::Error check_model_bounds(const RobotDescription& description, const std::string& source) {
+  static const char* const kKeys[4] = {"theta_offset", "d", "a", "alpha"};
+  double rows[kSixJoints][4];
+  Vec3 tool_m;
+  rows_as_written(description, rows, &tool_m);
+  for (int j = 0; j < kSixJoints; ++j) {
+    for (int k = 0; k < 4; ++k) {
+      const std::string beyond =
+          beyond_bound(rows[j][k], k == 0 || k == 3 ? ModelQuantity::angle : ModelQuantity::length);
+      if (!beyond.empty()) return fail(source, "its DH table, row " + std::to_string(j + 1) + ": " + kKeys[k] + beyond);
+    }
+  }
+  for (int t = 0; t < description.target_count; ++t) {
+    RobotDescription target = description;
+    target.model.tool_m = hivecal::target_tool(description.model, t);
+    rows_as_written(target, rows, &tool_m);
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string beyond = beyond_bound(tool_m(axis), ModelQuantity::tool);
+      if (!beyond.empty()) {
+        return fail(source, "tool point " + std::to_string(t + 1) + " (flange frame), " + "xyz"[axis] + beyond);
+      }
+    }
+  }
+  return port::Error{};
+}
 
 const char* compliance_unit(ComplianceLoad load) {
   return load == ComplianceLoad::arm_masses ? "rad/(kg m)" : "rad/m";
@@ -492,10 +519,21 @@ port::Error read_robot_description(const std::string& path, RobotDescription* de
   std::string text;
   const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
   if (!read.ok()) return read;
-  if (trim(text).empty()) return port::Error::input(path + ": empty file");
-  // A URDF (XML) or the JSON description, by content.
-  const port::Error parsed = trim(text)[0] == '<' ? parse_urdf_description(text, path, description)
-                                                  : parse_robot_description(text, path, description);
+  std::string_view body;
+  port::Error parsed = utf8_text(text, path, &body);
+  if (!parsed.ok()) return parsed;
+  const std::string_view start = trim(body);
+  if (start.empty()) return port::Error::input(path + ": empty file");
+  // A URDF (XML) or the JSON description, by content; anything else is neither (not "malformed JSON").
+  if (start[0] == '<') {
+    parsed = parse_urdf_description(body, path, description);
+  } else if (start[0] == '{') {
+    parsed = parse_robot_description(text, path, description);
+  } else {
+    return port::Error::input(path +
+                              ": not a robot description: a JSON description starts with '{', a URDF with '<'; " +
+                              "this file starts with " + port::quoted(start, 20));
+  }
   if (parsed.ok() && description->robot.empty()) {  // unnamed: the file's name without folder and .json
     const std::size_t slash = path.find_last_of('/');
     std::string stem = slash == std::string::npos ? path : path.substr(slash + 1);
@@ -509,13 +547,15 @@ port::Error read_robot_description(const std::string& path, RobotDescription* de
 }
 
 port::Error robot_description_from_value(const std::string& value, RobotDescription* description, bool* from_file) {
-  const bool is_file = !value.empty() && port::identify(value).exists;
+  RobotType type = RobotType::ur5;
+  // A built-in name wins over a file or folder of that name in the working directory: `./ur5e` names the file.
+  const bool builtin_name = robot_type_from_name(value.c_str(), &type) == Status::ok;
+  const bool is_file = !builtin_name && !value.empty() && port::identify(value).exists;
   const bool json_name = (value.size() >= 5 && value.compare(value.size() - 5, 5, ".json") == 0) ||
                          (value.size() >= 5 && value.compare(value.size() - 5, 5, ".urdf") == 0);
   if (from_file != nullptr) *from_file = is_file || json_name;
   if (is_file || json_name) return read_robot_description(value, description);
-  RobotType type = RobotType::ur5;
-  if (robot_type_from_name(value.c_str(), &type) != Status::ok) {
+  if (!builtin_name) {
     return port::Error::usage("unknown robot model " + port::quoted(value) + " (" + robot_type_names() +
                               ", or a robot description .json or .urdf file)");
   }

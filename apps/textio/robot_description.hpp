@@ -22,9 +22,30 @@ struct RobotDescription {
   RobotModel model;                                  ///< the standard-DH table, tool point and compliance [m, rad]
   int target_count = 1;           ///< targets whose tool points `model` holds, 1 .. kMaxTargets ("tools" when > 1) [-]
   bool has_joint_limits = false;  ///< the file gave "joint_limits" (URDF: <limit>)
+  /// A UR arm read from a URDF whose root is UR's base turned by pi about z (ROS's base_link):
+  /// the model is UR's table in UR's own base (textio::is_ur_table_turned), not in the root's.
+  bool base_turned_by_pi = false;
   JointVector lower_rad = JointVector::Constant(-2.0 * math::kPi);  ///< lowest joint positions [rad]
   JointVector upper_rad = JointVector::Constant(2.0 * math::kPi);   ///< highest joint positions [rad]
 };
+
+/// What a robot description may hold, from JSON or URDF alike: beyond it is no robot and would
+/// predict NaN or nonsense in silence. Lengths: real factory calibrations carry cancelling
+/// offsets of hundreds of metres on UR's parallel joints (+/-204 m), so 1 km [m].
+inline constexpr double kMaxModelLength_m = 1000.0;
+/// Angles (DH offsets and twists, URDF's rpy): two turns; more is degrees [rad].
+inline constexpr double kMaxModelAngle_rad = 4.0 * math::kPi;
+/// Each coordinate of a tool point in the flange frame; more is millimetres [m].
+inline constexpr double kMaxToolLength_m = 10.0;
+/// What a bounded number of a robot description is.
+enum class ModelQuantity { length, angle, tool };
+/// "" when |value| is within the bound of its quantity; else what a refusal says after the key:
+/// " = V m is beyond 1000 m: not a robot" (angles: "... rad (two turns): degrees?", tool
+/// points: "...: millimetres?"). NaN is beyond every bound.
+std::string beyond_bound(double value, ModelQuantity quantity);
+/// Fault::input naming `source`, the row and the key, unless every DH number as the description's
+/// convention writes it and every tool point is within its bound.
+port::Error check_model_bounds(const RobotDescription& description, const std::string& source);
 
 /// The JSON name of a convention: "standard-dh" or "modified-dh".
 const char* dh_convention_name(DhConvention convention);
@@ -35,8 +56,9 @@ port::Error parse_robot_description(const std::string& text, const std::string& 
 /// Reads and parses a robot description file; without "robot" the arm is named after the
 /// file ("irb120" for .../irb120.json).
 port::Error read_robot_description(const std::string& path, RobotDescription* description);
-/// `--robot-model VALUE`: a file (an existing path, or a name ending in .json) or a built-in
-/// table name (ur5, ...; tool at the flange). Usage-style errors name the value. *from_file
+/// `--robot-model VALUE`: a built-in table name (ur5, ...; tool at the flange; it wins over a
+/// file or folder of that name, which `./ur5` names) or a file (an existing path, or a name
+/// ending in .json or .urdf). Usage-style errors name the value. *from_file
 /// (optional) says which it was.
 port::Error robot_description_from_value(const std::string& value, RobotDescription* description,
                                          bool* from_file = nullptr);

@@ -8,6 +8,7 @@
 #include "hivecal/core/random.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "textio/text_util.hpp"
+#include "textio/ur_kinematics.hpp"
 
 namespace hivecal::textio {
 namespace {
@@ -33,7 +34,7 @@ std::string parse_six_values(std::string_view list, double* values) {
     const std::string_view field = list.substr(0, comma);
     if (count == kSixJoints) return "more than 6 values";
     double v = 0.0;
-    if (!parse_double(field, &v)) return "not a number: '" + std::string(trim(field)) + "'";
+    if (!parse_double(field, &v)) return "not a number: " + port::quoted(trim(field));
     if (!math::is_finite(v)) return "value is NaN or Inf";
     values[count++] = v;
     if (comma == std::string_view::npos) break;
@@ -55,8 +56,9 @@ port::Error parse_ur_calibration_conf(const std::string& text, const std::string
   bool in_mounting = false;
   bool saw_mounting = false;
   std::size_t line_number = 0;
-  std::string_view rest(text);
-  if (rest.substr(0, 3) == "\xEF\xBB\xBF") rest.remove_prefix(3);  // a UTF-8 byte order mark
+  std::string_view rest;
+  const port::Error encoding = utf8_text(text, source_name, &rest);
+  if (!encoding.ok()) return encoding;
   while (!rest.empty()) {
     ++line_number;
     const std::size_t newline = rest.find('\n');
@@ -147,10 +149,20 @@ std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas) {
 port::Error read_ur_calibrated_model(const std::string& path, const RobotModel& nominal, const std::string& model_name,
                                      RobotModel* calibrated) {
   UrCalibrationDeltas deltas;
+  const bool turned = is_ur_table_turned(nominal);
+  const RobotModel ur_table = turned ? turned_by_pi(nominal) : nominal;
   port::Error r = read_ur_calibration_conf(path, &deltas);
-  if (r.ok()) r = check_ur_deltas_plausible(nominal, deltas, path, model_name);
-  if (r.ok()) (void)apply_ur_deltas(nominal, deltas, calibrated);  // finite: the reader refuses NaN
+  if (r.ok()) r = check_ur_deltas_plausible(ur_table, deltas, path, port::printable(model_name));
+  if (!r.ok()) return r;
+  RobotModel applied;
+  (void)apply_ur_deltas(ur_table, deltas, &applied);  // finite: the reader refuses NaN
+  *calibrated = turned ? turned_by_pi(applied) : applied;
   return r;
+}
+
+UrCalibrationDeltas ur_deltas_in_ur_table(const RobotModel& nominal, const RobotModel& calibrated) {
+  if (!is_ur_table_turned(nominal)) return ur_deltas_between(nominal, calibrated);
+  return ur_deltas_between(turned_by_pi(nominal), turned_by_pi(calibrated));
 }
 
 }  // namespace hivecal::textio

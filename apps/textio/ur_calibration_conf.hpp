@@ -34,9 +34,16 @@ port::Error check_ur_deltas_plausible(const RobotModel& nominal, const UrCalibra
                                       const std::string& source_name, const std::string& model_name);
 
 /// `nominal` with the deltas of the calibration.conf at `path` applied, after reading it and
-/// check_ur_deltas_plausible (messages name `path` and `model_name`).
+/// check_ur_deltas_plausible (messages name `path` and `model_name`). The deltas are UR's, in
+/// UR's table: a `nominal` turned by pi (is_ur_table_turned) gets them in UR's table and is
+/// turned back, so *calibrated stays in nominal's base.
 port::Error read_ur_calibrated_model(const std::string& path, const RobotModel& nominal, const std::string& model_name,
                                      RobotModel* calibrated);
+
+/// The calibration.conf deltas that turn `nominal` into `calibrated` (two models of one arm in
+/// one base), in UR's table: a pair turned by pi (is_ur_table_turned of `nominal`) is turned
+/// back first, so that the controller, which applies them to its own table, gets their signs.
+UrCalibrationDeltas ur_deltas_in_ur_table(const RobotModel& nominal, const RobotModel& calibrated);
 
 /// Writes deltas in calibration.conf's [mounting] syntax (%.17g).
 std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas);

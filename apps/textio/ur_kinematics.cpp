@@ -10,6 +10,18 @@ namespace {
 
 const char* const kFrameNames[kSixJoints] = {"shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3"};
 
+constexpr double kAxisTolerance = 0.1;  // sin or cos of a twist that makes two axes parallel or perpendicular [-]
+
+/// -x, exactly, and +0 for 0 (a -0 would be written as such).
+double negated(double x) {
+  return 0.0 - x;
+}
+
+/// x and y negated: a point or direction in a frame turned by pi about its z.
+Vec3 turned(const Vec3& v) {
+  return Vec3(negated(v.x()), negated(v.y()), v.z());
+}
+
 /// Moves joint k's frame along its axis so that its d becomes 0 (see the header): the link
 /// part ends where joint k+1's axis meets joint k's x-y plane, joint k+1's d takes the rest.
 void move_along_axis(int k, const double theta_k, const double alpha_k, RigidTransform* joint, RigidTransform* link,
@@ -39,8 +51,35 @@ std::string entry(const char* name, const RigidTransform& frame) {
 
 }  // namespace
 
-bool ur_kinematics_from_model(const RobotModel& model, UrKinematics* kinematics, std::string* why) {
-  constexpr double kAxisTolerance = 0.1;  // sin or cos of a twist [-]
+bool is_ur_table(const RobotModel& model) {
+  const DhJoint* j = model.joints;
+  return std::sin(j[0].alpha_rad) > 1.0 - kAxisTolerance && std::fabs(std::sin(j[1].alpha_rad)) < kAxisTolerance &&
+         std::fabs(std::sin(j[2].alpha_rad)) < kAxisTolerance && std::sin(j[3].alpha_rad) > 1.0 - kAxisTolerance &&
+         std::sin(j[4].alpha_rad) < kAxisTolerance - 1.0 && j[1].a_m < 0.0 && j[2].a_m < 0.0;
+}
+
+RobotModel turned_by_pi(const RobotModel& model) {
+  // Rz(pi) Rz(q + theta) Tz(d) Tx(-a) Rx(-alpha) = Rz(q + theta) Tz(d) Tx(a) Rx(alpha) Rz(pi): each
+  // row carries the turn to the next frame, so the chain ends turned by pi as well.
+  RobotModel out = model;
+  for (DhJoint& joint : out.joints) {
+    joint.a_m = negated(joint.a_m);
+    joint.alpha_rad = negated(joint.alpha_rad);
+  }
+  for (int k = 0; k < kMaxTargets; ++k) target_tool(&out, k) = turned(target_tool(model, k));
+  ComplianceModel& compliance = out.compliance;
+  compliance.gravity_direction = turned(compliance.gravity_direction);
+  for (Vec3& com_m : compliance.masses.link_com_m) com_m = turned(com_m);
+  compliance.masses.payload_com_m = turned(compliance.masses.payload_com_m);
+  return out;
+}
+
+bool is_ur_table_turned(const RobotModel& model) {
+  return !is_ur_table(model) && is_ur_table(turned_by_pi(model));
+}
+
+bool ur_kinematics_from_model(const RobotModel& model_as_given, UrKinematics* kinematics, std::string* why) {
+  const RobotModel model = is_ur_table_turned(model_as_given) ? turned_by_pi(model_as_given) : model_as_given;
   const DhJoint* j = model.joints;
   if (!(std::fabs(std::cos(j[0].alpha_rad)) < kAxisTolerance && std::fabs(std::sin(j[1].alpha_rad)) < kAxisTolerance &&
         std::fabs(std::sin(j[2].alpha_rad)) < kAxisTolerance)) {

@@ -25,8 +25,23 @@ struct UrKinematics {
   RigidTransform flange;                    ///< L_6 = Tx(a_6) Rx(alpha_6): not in the YAML (identity on UR arms)
 };
 
-/// The YAML frames of `model` (standard DH); false with *why when the arm is not UR-shaped
-/// (joint 2 perpendicular to joint 1, joints 2, 3 and 4 parallel, within 0.1 rad).
+/// True when `model` (standard DH) has UR's own table's signs: alpha_1 and alpha_4 near +pi/2,
+/// alpha_5 near -pi/2, alpha_2 and alpha_3 near 0 (sines within 0.1), a_2 and a_3 negative.
+bool is_ur_table(const RobotModel& model);
+/// The same arm in frames turned by pi about their z: the base and every DH frame. The chain is
+/// unchanged: FK(q) = Rz(pi) * FK_turned(q) (every a and alpha negated, theta and d kept, the
+/// tool points' x and y negated, and the compliance's gravity direction and centres of mass
+/// likewise). Exact (sign changes only); turning twice gives the model back.
+RobotModel turned_by_pi(const RobotModel& model);
+/// True when `model` is not UR's table but turned_by_pi makes it UR's (is_ur_table): a UR arm
+/// described from a base turned by pi, as ROS's ur_description's base_link is (REP-103: x
+/// forward; UR's base: x backward). UR's own formats (calibration.conf deltas, the kinematics
+/// YAML) are in UR's base, so such a model is turned before they use it.
+bool is_ur_table_turned(const RobotModel& model);
+
+/// The YAML frames of `model` (standard DH; a table turned by pi, is_ur_table_turned, is turned
+/// first: the YAML's frames are in UR's base, base_link_inertia); false with *why when the arm
+/// is not UR-shaped (joint 2 perpendicular to joint 1, joints 2, 3 and 4 parallel, within 0.1 rad).
 bool ur_kinematics_from_model(const RobotModel& model, UrKinematics* kinematics, std::string* why);
 
 /// The YAML document: `kinematics:` with the six frames (x y z roll pitch yaw) and `hash`.

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "hivecal/core/types.hpp"
 #include "textio/robot_description.hpp"
@@ -47,10 +48,11 @@ std::string format_urdf(const RobotDescription& robot, const RigidTransform* bas
 /// Reads a URDF arm (docs/formats.md "URDF in"): exactly six revolute or continuous joints in one
 /// serial chain, fixed joints anywhere, any axis directions; joint 1's axis must meet the root
 /// link's x axis at a right angle (the DH model's base: identity, or Rx(alpha_0) Tx(a_0) as
-/// modified DH). The tool points: links tcp (tcp_2, tcp_3), else tool0, else the only tip; frame
-/// 6 at a 'flange' link when there is one. The DH model's FK is checked against the URDF's on
-/// random poses (1e-9 m) or the file is refused; every refusal names the file (and line).
-port::Error parse_urdf_description(const std::string& text, const std::string& source_name,
+/// modified DH). The arm's end: joint 6's child and the links fixed below it; the tool points are
+/// its tips named tcp (tcp_2, tcp_3), else tool0, else its only tip; frame 6 at its 'flange' link
+/// when it has one (a 'flange' elsewhere is not the arm's), else at joint 6's child. The DH model's FK is checked
+/// against the URDF's on random poses (1e-9 m) or the file is refused; every refusal names the file (and line).
+port::Error parse_urdf_description(std::string_view text, const std::string& source_name,
                                    RobotDescription* description);
 
 }  // namespace hivecal::textio

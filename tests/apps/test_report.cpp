@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "hivecal/core/random.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "report/report.hpp"
 #include "record/report_json.hpp"
@@ -199,6 +200,16 @@ TEST(Report, DataRoundTripsThroughResultJson) {
   const port::Error damaged = record::parse_report_data(value, "result.json", &back);
   EXPECT_FALSE(damaged.ok());
   EXPECT_NE(damaged.message.find("\"samples\""), std::string::npos) << damaged.message;
+  // Points, joints and frames beyond the text inputs' bounds (100 m, two turns) are no session.
+  textio::JsonValue far = written_report(data);
+  far.object["samples"].array[0].object["measured_m"].array[0].number = 1e300;
+  EXPECT_NE(record::parse_report_data(far, "result.json", &back).message.find("\"samples\""), std::string::npos);
+  far = written_report(data);
+  far.object["samples"].array[0].object["q_rad"].array[0].number = 100.0;
+  EXPECT_NE(record::parse_report_data(far, "result.json", &back).message.find("\"samples\""), std::string::npos);
+  far = written_report(data);
+  far.object["predictions"].array[0].object["translation_m"].array[0].number = 1e300;
+  EXPECT_NE(record::parse_report_data(far, "result.json", &back).message.find("\"predictions\""), std::string::npos);
 }
 
 /// The <svg> of figure `id` in `html` ("" if absent).
@@ -429,6 +440,120 @@ TEST(Report, PooledReadingsCorrelationIsSaidAndRoundTrips) {
   EXPECT_FALSE(record::parse_report_data(value, "result.json", &back).ok());
 }
 
+/// A run of `count` samples (70 % training, training first, as calibrate orders them) with
+/// the uncalibrated and a calibrated prediction, a tracker noise and every pose's w.
+report::ReportData large_run(std::size_t count) {
+  report::ReportData data = with_blunder_and_folds();
+  data.samples.clear();
+  data.outliers.kept_w.clear();
+  const RobotModel model = nominal_model(RobotType::ur5);
+  Random random(12000);
+  for (std::size_t i = 0; i < count; ++i) {
+    report::SampleRow row;
+    JointVector q;
+    for (int j = 0; j < 6; ++j) q(j) = row.q_rad[j] = random.uniform(-2.5, 2.5);
+    row.measured_m = fk_tool_point(model, q) + Vec3(random.normal(), random.normal(), random.normal()) * 1e-5;
+    row.test = i >= count * 7 / 10;
+    data.samples.push_back(row);
+    data.outliers.kept_w.push_back(std::fabs(random.normal()));
+  }
+  RigidTransform shifted;
+  shifted.translation_m = Vec3(7e-5, -6e-5, 0);
+  data.predictions = {report::predict_samples("uncalibrated", model, shifted, data.samples),
+                      report::predict_samples("ABC+LM", model, RigidTransform{}, data.samples)};
+  data.calibrated.train.count = count * 7 / 10;
+  data.calibrated.test.count = count - count * 7 / 10;
+  data.noise_sigma_m = 10e-6;
+  return data;
+}
+
+/// Elements of `svg` that carry a series (the markers, lines and arrows drawn).
+std::size_t drawn_elements(const std::string& svg) {
+  std::size_t n = 0;
+  for (const char* tag : {"<circle data-series=", "<line data-series=", "<polyline data-series="}) {
+    for (std::size_t at = svg.find(tag); at != std::string::npos; at = svg.find(tag, at + 1)) ++n;
+  }
+  return n;
+}
+
+// A run of 12,000 samples drew every one of them (12,000 markers per joint panel, solid
+// blocks; 10.4 MB that took 11 s to open): each figure draws an evenly spaced subset within its
+// cap, and its caption says how many.
+TEST(Report, LargeRunsDrawAtMostTheFiguresCaps) {
+  const report::ReportData data = large_run(5000);
+  const std::string html = report::render_html(data);
+  EXPECT_EQ(check_well_formed(html), "");
+  for (int j = 1; j <= 6; ++j) {
+    const std::string svg = figure_svg(html, "fig-residual-q" + std::to_string(j));
+    ASSERT_FALSE(svg.empty()) << j;
+    EXPECT_EQ(drawn_elements(svg), 1000u) << j;
+  }
+  EXPECT_NE(html.find("1,000 of 5,000 samples drawn, evenly spaced."), std::string::npos);
+  EXPECT_EQ(drawn_elements(figure_svg(html, "fig-vectors-xy")), 2 * 400u);
+  EXPECT_NE(html.find("400 of 1,500 samples&#39; arrows drawn, evenly spaced."), std::string::npos);
+  // The kept poses' w at 1,000 ranks and the set-aside one; the curves through 1,000 ranks.
+  EXPECT_EQ(drawn_elements(figure_svg(html, "fig-outliers")), 1000u + 1u + 1u);  // + the threshold line
+  const std::string error_3d = figure_svg(html, "fig-error-3d");
+  const std::size_t polyline = error_3d.find("<polyline");
+  ASSERT_NE(polyline, std::string::npos);
+  const std::string points = error_3d.substr(polyline, error_3d.find("/>", polyline) - polyline);
+  EXPECT_EQ(std::count(points.begin(), points.end(), ','), 1000);
+  EXPECT_LT(html.size(), 1200000u);
+}
+
+// The report keeps at most kReportSampleCap samples and kept w, evenly spaced, so that the
+// result of any run stays readable by every command (10^6 samples wrote a 271 MiB result that
+// predict, export and report refused); the page redrawn from it is the same.
+TEST(Report, LargeRunsKeepAnEvenlySpacedSubset) {
+  report::ReportData data = large_run(20000);
+  const std::vector<report::SampleRow> all = data.samples;
+  const std::vector<double> all_w = data.outliers.kept_w;
+  report::keep_at_most(report::kReportSampleCap, &data);
+  ASSERT_EQ(data.samples.size(), report::kReportSampleCap);
+  EXPECT_EQ(data.sample_total, 20000u);
+  const auto test_count = std::count_if(data.samples.begin(), data.samples.end(), [](const auto& s) { return s.test; });
+  EXPECT_EQ(test_count, 1500);  // the test samples' share, 30 %
+  // Every kept sample is one of the run's, in order, with its own predictions.
+  std::size_t from = 0;
+  for (std::size_t i = 0; i < data.samples.size(); ++i) {
+    while (from < all.size() && all[from].measured_m != data.samples[i].measured_m) ++from;
+    ASSERT_LT(from, all.size()) << i;
+  }
+  for (const report::PredictionSet& set : data.predictions) {
+    const report::PredictionSet again =
+        report::predict_samples(set.method, set.model, set.base_to_tracker, data.samples);
+    EXPECT_EQ(set.points_m, again.points_m) << set.method;
+  }
+  // The w at spanning ranks: the smallest and the largest among them.
+  ASSERT_EQ(data.outliers.kept_w.size(), report::kReportSampleCap);
+  EXPECT_EQ(data.outliers.kept_total, 20000u);
+  EXPECT_EQ(data.outliers.kept_w.front(), *std::min_element(all_w.begin(), all_w.end()));
+  EXPECT_EQ(data.outliers.kept_w.back(), *std::max_element(all_w.begin(), all_w.end()));
+  // Its JSON is a quarter of the run's, and reads back to the same page.
+  textio::JsonWriter json;
+  record::write_report_data(json, data);
+  EXPECT_LT(json.text().size(), 1700000u);
+  report::ReportData back;
+  ASSERT_TRUE(record::parse_report_data(written_report(data), "result.json", &back).ok());
+  EXPECT_EQ(back.sample_total, 20000u);
+  EXPECT_EQ(back.outliers.kept_total, 20000u);
+  EXPECT_EQ(report::render_html(back), report::render_html(as_written(data)));
+  EXPECT_NE(report::render_html(back).find("The report keeps 5,000 of the run's 20,000 samples"), std::string::npos);
+  // A run within the cap is kept whole, and its JSON has no totals (earlier results keep their bytes).
+  report::ReportData small = large_run(300);
+  report::keep_at_most(report::kReportSampleCap, &small);
+  EXPECT_EQ(small.samples.size(), 300u);
+  EXPECT_EQ(small.sample_total, 0u);
+  textio::JsonWriter small_json;
+  record::write_report_data(small_json, small);
+  EXPECT_EQ(small_json.text().find("sample_total"), std::string::npos);
+  EXPECT_EQ(small_json.text().find("kept_total"), std::string::npos);
+  // A total below the samples held is refused.
+  textio::JsonValue value = written_report(data);
+  value.object["sample_total"].number = 10.0;
+  EXPECT_FALSE(record::parse_report_data(value, "result.json", &back).ok());
+}
+
 }  // namespace
 }  // namespace hivecal::report_test
 
@@ -480,6 +605,33 @@ TEST(Svg, LegendListsOnlySeriesThatDrewSomething) {
   const std::vector<std::string> legend = texts_of_class(svg, "legend");
   ASSERT_EQ(legend.size(), 1u);
   EXPECT_EQ(legend[0], "calibrated");
+}
+
+// "measurement noise (stated)" ran past the panel's right edge in the four error figures: a
+// long legend label wraps at a space, and the legend column is as wide as its widest line.
+TEST(Svg, LegendFitsInsideThePanel) {
+  ChartSpec spec{"t", "x", "y"};
+  spec.y_line = 1.0;
+  spec.y_line_label = "measurement noise (stated, with the joints' reading)";
+  const std::string svg = svg_chart(spec, {Series{"uncalibrated", {0, 1}, {1, 2}, false}});
+  const std::size_t at = svg.find("class='legend' data-series='measurement noise");
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t x_at = svg.find("x='", at) + 3;
+  const double x_px = std::stod(svg.substr(x_at));
+  const std::string text = svg.substr(svg.find('>', at) + 1, svg.find("</text>", at) - svg.find('>', at) - 1);
+  std::size_t widest = 0;  // characters of the longest line
+  for (std::size_t begin = 0, end = 0; begin < text.size(); begin = end + 1) {
+    const std::size_t open = text.find('>', begin);
+    if (text.compare(begin, 6, "<tspan") != 0 || open == std::string::npos) break;
+    end = text.find("</tspan>", open);
+    std::string line = text.substr(open + 1, end - open - 1);
+    for (std::size_t quote = line.find("&#39;"); quote != std::string::npos; quote = line.find("&#39;"))
+      line.replace(quote, 5, "'");
+    widest = std::max(widest, line.size());
+    end += 7;
+  }
+  EXPECT_GE(std::count(text.begin(), text.end(), '<'), 4) << text;  // two lines or more
+  EXPECT_LE(x_px + 7.0 * static_cast<double>(widest), spec.width_px) << text;
 }
 
 TEST(Svg, HistogramAxesStartAtZero) {

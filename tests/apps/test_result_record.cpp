@@ -1,10 +1,13 @@
 // The result file from its record (apps/record/result_json.hpp): the optional members appear
-// exactly when the record holds them, outliers name their source, and the model reads back
-// with the same bits.
+// exactly when the record holds them, outliers name their source, the model reads back with
+// the same bits, and so do the covariance and the domain (a malformed one refused by its key);
+// a result's members as written (textio's object_member_texts) make the same document again.
 #include <gtest/gtest.h>
 
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "hivecal/calibration.hpp"
 #include "record/result_json.hpp"
@@ -85,6 +88,75 @@ TEST(ResultRecord, TheModelReadsBackWithTheSameBits) {
   EXPECT_EQ(back.model.joints[1].a_m, r.file.model.joints[1].a_m);
   EXPECT_EQ(back.model.tool_m, r.file.model.tool_m);
   EXPECT_EQ(back.base_to_tracker.translation_m, r.file.base_to_tracker.translation_m);
+}
+
+TEST(ResultRecord, TheCovarianceAndTheDomainReadBackWithTheSameBits) {
+  record::CalibrationRecord r = minimal_record();
+  record::CalibrationUncertainty& u = r.file.uncertainty;
+  NormalMatrix c = NormalMatrix::Zero();
+  const int a2 = 6;  // a2, alpha1 and base_tx
+  const int alpha1 = 3;
+  const int tx = base_translation_param_index(kSixJoints, 0);
+  c(a2, a2) = 4.1e-9;
+  c(alpha1, alpha1) = 2.3e-8;
+  c(tx, tx) = 9.7e-8;
+  c(a2, tx) = c(tx, a2) = -1.3e-8;
+  u.set_covariance(c);
+  u.estimated = param_bit(a2) | param_bit(alpha1) | param_bit(tx);
+  u.residual_sigma_m = 1.1e-5;
+  u.residual_dof = 40;
+  u.has_domain = true;
+  u.domain.poses = 30;
+  u.domain.joint_min_rad << -1.0, -2.0, -0.5, -3.0, -2.5, -0.1;
+  u.domain.joint_max_rad << 1.0, -0.5, 2.0, 0.0, -0.3, 3.0;
+  u.domain.tool_axis_mean = Vec3(0.0, 0.6, -0.8);
+  u.domain.tool_axis_spread_rad = 0.3;
+  u.domain.typical_sigma_m = 2.2e-5;
+  u.domain.term_joints = 6;
+  const std::string text = record::format_result_json(r);
+  const textio::JsonValue root = parsed(text);
+  ASSERT_NE(root.find("covariance"), nullptr);
+  EXPECT_EQ(root.find("covariance")->find("parameters")->array[0].string, "alpha1");
+  record::CalibrationFile back;
+  ASSERT_TRUE(record::parse_calibration_json(text, "r.json", &back).ok());
+  EXPECT_EQ(back.uncertainty.covariance_matrix(), c);
+  EXPECT_EQ(back.uncertainty.estimated, u.estimated);
+  EXPECT_EQ(back.uncertainty.residual_dof, 40);
+  EXPECT_EQ(back.uncertainty.domain.joint_min_rad, u.domain.joint_min_rad);
+  EXPECT_EQ(back.uncertainty.domain.tool_axis_mean, u.domain.tool_axis_mean);
+  EXPECT_EQ(back.uncertainty.domain.term_joints, 6u);
+  EXPECT_EQ(back.uncertainty.domain.typical_sigma_m, 2.2e-5);
+  // A name the model does not have, fewer names than rows: refused by the key.
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"\"alpha1\",", "\"alpha9\","},
+                                 std::pair<std::string, std::string>{"\"alpha1\",", ""}}) {
+    std::string bad = text;
+    const std::size_t at = bad.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    bad.replace(at, from.size(), to);
+    const port::Error error = record::parse_calibration_json(bad, "r.json", &back);
+    EXPECT_FALSE(error.ok()) << to;
+    EXPECT_NE(error.message.find("r.json: \"covariance\""), std::string::npos) << error.message;
+  }
+}
+
+TEST(ResultRecord, ItsMembersAsWrittenMakeTheSameDocumentAgain) {
+  const std::string text = record::format_result_json(minimal_record());
+  std::vector<textio::JsonMemberText> members;
+  ASSERT_TRUE(textio::object_member_texts(text, &members));
+  ASSERT_GT(members.size(), 8u);
+  EXPECT_EQ(members[0].key, "format");
+  EXPECT_EQ(members[0].text.substr(0, 9), "\"format\":");
+  EXPECT_EQ(textio::object_document(members), text);
+  // Strings with brackets, commas and escaped quotes inside, nested arrays, a member spelled
+  // with an escape: each member whole.
+  const std::string odd = "{ \"a\" : \"x, ] } \\\" y\",\"b\":[[1,2],{\"c\":\"}\"}] ,\"d\\u0041\":-1.5e3}";
+  ASSERT_TRUE(textio::object_member_texts(odd, &members));
+  ASSERT_EQ(members.size(), 3u);
+  EXPECT_EQ(members[0].text, "\"a\" : \"x, ] } \\\" y\"");
+  EXPECT_EQ(members[1].text, "\"b\":[[1,2],{\"c\":\"}\"}]");
+  EXPECT_EQ(members[2].key, "dA");
+  EXPECT_EQ(members[2].text, "\"d\\u0041\":-1.5e3");
+  EXPECT_FALSE(textio::object_member_texts("[1, 2]", &members));
 }
 
 }  // namespace

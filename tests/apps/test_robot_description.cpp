@@ -8,6 +8,8 @@
 #include "testkit/other_arms.hpp"
 #include "testkit/temp_dir.hpp"
 #include "textio/robot_description.hpp"
+#include "textio/ur_calibration_conf.hpp"
+#include "textio/urdf.hpp"
 #include "record/result_json.hpp"
 
 namespace hivecal::robot_description_test {
@@ -177,6 +179,87 @@ TEST(RobotDescription, BadDescriptionsNameFileAndKey) {
   EXPECT_TRUE(
       textio::parse_robot_description("{\"dh\": " + rows + ", \"tool\": [0, 0, 0.1]}", "arm.json", &description).ok());
   EXPECT_EQ(description.convention, DhConvention::standard);
+}
+
+/// ASCII `text` as UTF-16 (little- or big-endian) or UTF-32 little-endian, with `bom` first.
+std::string wide(const std::string& text, int width, bool big_endian, const std::string& bom) {
+  std::string out = bom;
+  for (const char c : text) {
+    std::string unit(static_cast<std::size_t>(width), '\0');
+    unit[big_endian ? unit.size() - 1 : 0] = c;
+    out += unit;
+  }
+  return out;
+}
+
+// A robot file with a UTF-8 byte order mark reads as without it; UTF-16 and UTF-32 are refused
+// with what to do, and what is neither JSON nor XML is not called malformed JSON.
+TEST(RobotDescription, ByteOrderMarksAndOtherEncodingsAreNamed) {
+  const test::TempDir dir("hivecal_test");
+  textio::RobotDescription ur5;
+  ur5.model = nominal_model(RobotType::ur5);
+  const std::string urdf = textio::format_urdf(ur5, nullptr);
+  const std::string json = textio::format_robot_description(ur5);
+  for (const std::string& text : {urdf, json}) {
+    textio::RobotDescription plain;
+    textio::RobotDescription marked;
+    const std::string name = text == urdf ? "arm.urdf" : "arm.json";
+    ASSERT_TRUE(textio::read_robot_description(dir.write(name, text), &plain).ok());
+    const port::Error read = textio::read_robot_description(dir.write("bom-" + name, "\xEF\xBB\xBF" + text), &marked);
+    ASSERT_TRUE(read.ok()) << read.message;
+    EXPECT_EQ(to_params(marked.model), to_params(plain.model));
+  }
+  const struct {
+    std::string text;
+    const char* expected;
+  } cases[] = {
+      {wide(urdf, 2, false, "\xFF\xFE"), "wide.urdf: UTF-16 text (little-endian): save it as UTF-8"},
+      {wide(urdf, 2, false, ""), "wide.urdf: UTF-16 text (little-endian): save it as UTF-8"},
+      {wide(urdf, 2, true, "\xFE\xFF"), "wide.urdf: UTF-16 text (big-endian): save it as UTF-8"},
+      {wide(json, 2, true, ""), "wide.urdf: UTF-16 text (big-endian): save it as UTF-8"},
+      {wide(urdf, 4, false, std::string("\xFF\xFE\0\0", 4)),
+       "wide.urdf: UTF-32 text (little-endian): save it as UTF-8"},
+      {"robot arm:\n" + urdf,
+       "wide.urdf: not a robot description: a JSON description starts with '{', a URDF with '<'; this file starts "
+       "with 'robot arm:\\x0a<?xml ver...["},
+  };
+  for (const auto& c : cases) {
+    textio::RobotDescription description;
+    const port::Error r = textio::read_robot_description(dir.write("wide.urdf", c.text), &description);
+    EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message << "\nwanted: " << c.expected;
+    EXPECT_EQ(r.message.find("JSON:"), std::string::npos) << r.message;
+  }
+  // A result and a calibration.conf alike.
+  record::CalibrationFile result;
+  const std::string wide_result = dir.write(
+      "result.json", wide(record::format_calibration_json(arm_result(OtherArm::irb120, DhConvention::standard, 1)), 2,
+                          false, "\xFF\xFE"));
+  port::Error r = record::read_calibration_json(wide_result, &result);
+  EXPECT_NE(r.message.find("result.json: UTF-16 text (little-endian): save it as UTF-8"), std::string::npos)
+      << r.message;
+  UrCalibrationDeltas deltas;
+  r = textio::read_ur_calibration_conf(
+      dir.write("calibration.conf", wide("[mounting]\ndelta_theta = [0, 0, 0, 0, 0, 0]\n", 2, false, "\xFF\xFE")),
+      &deltas);
+  EXPECT_NE(r.message.find("calibration.conf: UTF-16 text (little-endian): save it as UTF-8"), std::string::npos)
+      << r.message;
+}
+
+// Text of the file quoted in a message is cut after 80 bytes (docs/cli.md), as port::quoted cuts
+// it: a 4,000-byte convention or calibration.conf value is not echoed whole.
+TEST(RobotDescription, QuotesOfTheFileAreCutAt80Bytes) {
+  const std::string long_text(4000, 'x');
+  textio::RobotDescription description;
+  const port::Error convention = textio::parse_robot_description(
+      "{\"convention\": \"" + long_text + "\", \"dh\": [], \"tool\": [0, 0, 0]}", "arm.json", &description);
+  UrCalibrationDeltas deltas;
+  const port::Error conf = textio::parse_ur_calibration_conf(
+      "[mounting]\ndelta_theta = [" + long_text + ", 0, 0, 0, 0, 0]\n", "calibration.conf", &deltas);
+  for (const port::Error& error : {convention, conf}) {
+    EXPECT_FALSE(error.ok());
+    EXPECT_LT(error.message.size(), 250u) << error.message;
+    EXPECT_NE(error.message.find("...[4000 bytes]'"), std::string::npos) << error.message;
+  }
 }
 
 }  // namespace

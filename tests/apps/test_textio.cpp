@@ -119,6 +119,30 @@ TEST(TextJson, AByteOrderMarkIsNotPartOfTheDocument) {
   EXPECT_FALSE(textio::parse_json("\xEF\xBB" + text, &root).ok());  // half a mark is junk
 }
 
+// \u escapes are code points written as UTF-8 (a surrogate pair is one code point); half a pair
+// is no text and is refused. They read as "?" before.
+TEST(TextJson, UnicodeEscapesBecomeUtf8) {
+  textio::JsonValue root;
+  ASSERT_TRUE(
+      textio::parse_json(R"({"robot": "\u0420\u043e\u0431\u043e\u0442 \u00b5 \u20ac \ud83e\udd16 A\u0000"})", &root)
+          .ok());
+  EXPECT_EQ(root.find("robot")->string, std::string("\xd0\xa0\xd0\xbe\xd0\xb1\xd0\xbe\xd1\x82 \xc2\xb5 \xe2\x82\xac "
+                                                    "\xf0\x9f\xa4\x96 A\0",
+                                                    25));
+  for (const char* lone :
+       {R"({"r": "\ud83e"})", R"({"r": "\ud83e\u0041"})", R"({"r": "\udd16"})", R"({"r": "\ud83e\"})"}) {
+    const port::Error error = textio::parse_json(lone, &root);
+    EXPECT_NE(error.message.find("surrogate"), std::string::npos) << lone << ": " << error.message;
+  }
+  // A name so written survives a result's round trip.
+  record::CalibrationFile file = example_calibration();
+  ASSERT_TRUE(textio::parse_json(R"({"r": "\u0420\ud83e\udd16"})", &root).ok());
+  file.robot = root.find("r")->string;
+  record::CalibrationFile back;
+  ASSERT_TRUE(record::parse_calibration_json(record::format_calibration_json(file), "result.json", &back).ok());
+  EXPECT_EQ(back.robot, file.robot);
+}
+
 TEST(TextJson, MalformedResultsAreNamed) {
   const std::string good = record::format_calibration_json(example_calibration());
   auto replaced = [&](const std::string& from, const std::string& to) {
@@ -150,6 +174,21 @@ TEST(TextJson, MalformedResultsAreNamed) {
     EXPECT_FALSE(r.ok());
     EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message;
   }
+  // A base beyond the 100 m a text input allows a point: not a tracker's frame (it predicted
+  // 1e300 m and scored "MAE inf" before).
+  record::CalibrationFile far = example_calibration();
+  for (const double x_m : {1e300, 101.0}) {
+    far.base_to_tracker.translation_m.x() = x_m;
+    record::CalibrationFile file;
+    const port::Error r = record::parse_calibration_json(record::format_calibration_json(far), "result.json", &file);
+    EXPECT_NE(r.message.find("result.json: \"base_to_tracker\" puts the robot's base "), std::string::npos)
+        << r.message;
+    EXPECT_NE(r.message.find(" m from the tracker, beyond 100 m: not a tracker's frame"), std::string::npos)
+        << r.message;
+  }
+  far.base_to_tracker.translation_m.x() = 99.0;
+  record::CalibrationFile file;
+  EXPECT_TRUE(record::parse_calibration_json(record::format_calibration_json(far), "result.json", &file).ok());
 }
 
 TEST(TextFiles, AtomicWriteReplacesOrLeavesNothing) {

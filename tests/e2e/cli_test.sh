@@ -50,7 +50,7 @@ printf '{"convention": "modified-dh", "dh": []}\n' >"$work/arm.json"
 expect 3 "arm.json: \"dh\" must be an array of 6 joint objects" -- calibrate --samples "$work/joints.csv" --robot-model "$work/arm.json"
 expect 3 "no-such-arm.json': cannot open" -- calibrate --samples "$work/joints.csv" --robot-model "$work/no-such-arm.json"
 expect 2 "--method must be one of" -- calibrate --samples "$work/joints.csv" --method sgd
-expect 2 "--split must be a fraction" -- calibrate --samples "$work/joints.csv" --split 1.5
+expect 2 "--split must be within (0, 1]" -- calibrate --samples "$work/joints.csv" --split 1.5
 expect 2 "--tool must be X,Y,Z" -- calibrate --samples "$work/joints.csv" --tool 1,2
 expect 3 "unexpected header" -- calibrate --samples "$work/joints.csv" --out "$work/r1.json"
 no_file "$work/r1.json"
@@ -102,7 +102,7 @@ fi
 # this simulated session (simulate --seed 5 --waypoints 12 --duration-s 150) is committed.
 # Update the digest only for an intended change of the computation or the format.
 if ! grep -q '"seconds"' "$work/cap.json"; then pass; else fail "a result file holds run times"; fi
-result_sha256=0b15ce9f9cd85ef52b1c89c4a013f8f7fad528974c08ee11c147a3bca7e98e0e
+result_sha256=a22dd80e37eeb80db32246fff32aace887090c8f9e4e73dcbc563ef3644521d0
 if [ "$(sha256sum <"$work/cap.json" | cut -d' ' -f1)" = "$result_sha256" ]; then
   pass
 else
@@ -300,10 +300,10 @@ expect 2 "is the same file as the output --robot-out" -- record --robot-port "$w
 expect 2 "is the same file as the input --robot-port" -- record --robot-port "$work/p1" --robot-out "$work/p1"
 expect 3 "--rtde '127.0.0.1:1': Connection refused" -- record --rtde 127.0.0.1:1 --robot-out "$work/rtde.txt"
 no_file "$work/rtde.txt"
-expect 2 "--rtde must be HOST or HOST:PORT (PORT 1 .. 65535), not 'ur5:99999'" -- record --rtde ur5:99999
+expect 2 "--rtde must be HOST, HOST:PORT, an IPv6 address or [IPv6]:PORT (PORT 1 .. 65535), not 'ur5:99999'" -- record --rtde ur5:99999
 expect 2 "--rtde records the robot alone" -- record --rtde 127.0.0.1 --tracker-port "$work/p2"
-expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s -1
-expect 2 "--duration-s must be 0" -- record --robot-port "$work/p1" --duration-s nan
+expect 2 "--duration-s must be within [0, 1e+09] s (0: until Ctrl-C / SIGTERM)" -- record --robot-port "$work/p1" --duration-s -1
+expect 2 "--duration-s must be a number within [0, 1e+09] s (0: until Ctrl-C / SIGTERM), got 'nan'" -- record --robot-port "$work/p1" --duration-s nan
 
 # --- progress: on stderr when it is a terminal (script(1) gives one), never in a pipe or with --quiet
 if command -v script >/dev/null; then
@@ -345,11 +345,11 @@ expect 2 "--seed must be a whole number" -- calibrate --samples "$work/paired.cs
 expect 2 "--seed must be a whole number" -- calibrate --samples "$work/paired.csv" --seed 18446744073709551616 --out "$work/n1.json"
 expect 2 "--seed must be a whole number" -- plan --robot-model ur5 --count 12 --tracker-position 2,0.5,0.6 --seed -1 --out "$work/n1.csv"
 expect 2 "--poses must be a whole number" -- validate --calibration "$work/model.json" --truth "$work/model.json" --poses 1.5
-expect 2 "--tool must be X,Y,Z in metres, each finite" -- calibrate --samples "$work/paired.csv" --tool 0,0,nan --out "$work/n1.json"
+expect 2 "--tool must be X,Y,Z in metres, each within [-10, 10] m" -- calibrate --samples "$work/paired.csv" --tool 0,0,nan --out "$work/n1.json"
 expect 2 "training pose(s) of" -- calibrate --samples "$work/paired.csv" --split 0.01 --out "$work/n1.json"
-expect 2 "--split must be a fraction in (0, 1], not '0'" -- calibrate --samples "$work/paired.csv" --split 0 --out "$work/n1.json"
-expect 2 "--drift-ppm must be in [-1000, 1000], not 'nan'" -- simulate --out-dir "$work/n2" --drift-ppm nan
-expect 2 "--waypoints must be in [2, 2000]" -- simulate --out-dir "$work/n2" --waypoints 100000
+expect 2 "--split must be within (0, 1] (the training share), got '0'" -- calibrate --samples "$work/paired.csv" --split 0 --out "$work/n1.json"
+expect 2 "--drift-ppm must be a number within [-1000, 1000], got 'nan'" -- simulate --out-dir "$work/n2" --drift-ppm nan
+expect 2 "--waypoints must be within [2, 2000]" -- simulate --out-dir "$work/n2" --waypoints 100000
 no_file "$work/n1.json"
 if "${run[@]}" calibrate --samples "$work/paired.csv" --method lm --split 1 --seed 9007199254740993 --out "$work/n3.json" >/dev/null 2>&1 &&
    grep -q '"seed": 9007199254740993' "$work/n3.json"; then pass; else fail "--seed 2^53+1 not kept exactly in result.json"; fi
@@ -361,6 +361,15 @@ expect 3 'huge_d.json: "dh"[0].d = 1.0000000000000001e+300 m is beyond 1000 m: n
 sed 's/"theta_offset": 0.0, "d": 0.0, "a": -0.425/"theta_offset": 1e20, "d": 0.0, "a": -0.425/' "$work/model.json" >"$work/huge_theta.json"
 expect 3 '"dh"[1].theta_offset = 1e+20 rad is beyond' -- predict --calibration "$work/huge_theta.json" --joints "$work/joints.csv" --out "$work/n4.csv"
 no_file "$work/n4.csv"
+# A base 1e300 m from the tracker was predicted, exported and scored "MAE inf" with exit 0.
+ur_result_json ur5 0.089159 -0.425 -0.39225 0.10915 0.09465 0.0823 "0, 0, 0" \
+  "[[1, 0, 0, 1e300], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]" >"$work/far_base.json"
+far='far_base.json: "base_to_tracker" puts the robot'"'"'s base 1.0000000000000001e+300 m from the tracker, beyond 100 m: not a tracker'"'"'s frame'
+expect 3 "$far" -- predict --calibration "$work/far_base.json" --joints "$work/joints.csv" --out "$work/n4.csv"
+expect 3 "$far" -- export --calibration "$work/far_base.json" --out "$work/n4.urdf"
+expect 3 "$far" -- validate --calibration "$work/far_base.json" --truth "$work/model.json"
+no_file "$work/n4.csv"
+no_file "$work/n4.urdf"
 
 expect 2 "--robot-port and --tracker-port name the same port" -- record --robot-port "$work/model.json" --tracker-port "$work/model.json" --robot-out "$work/rec1.cap" --tracker-out "$work/rec2.cap"
 expect 2 "--calibration and --joints both read stdin" -- predict --calibration - --joints - --out "$work/n6.csv"
@@ -390,17 +399,21 @@ interrupted() {
   local pid=$!
   sleep 1
   kill "-$1" "$pid"
-  wait "$pid"
+  wait "$pid" 2>/dev/null
 }
-interrupted INT "$work/sig/new"
-code=$?
-if [ "$code" = 130 ] && [ ! -e "$work/sig/new" ] && ! compgen -G "$work/sig/new.tmp.*" >/dev/null; then pass; else
-  fail "simulate after SIGINT: exit $code (want 130), left: $(ls -A "$work/sig" 2>&1)"; fi
+# ends_cleanly SIGNAL CODE DIR: interrupted exits with CODE and leaves DIR as it was: absent
+# without a temporary beside it, or empty.
+ends_cleanly() {
+  local code
+  interrupted "$1" "$3"
+  code=$?
+  if [ "$code" = "$2" ] && { { [ -d "$3" ] && [ -z "$(ls -A "$3")" ]; } ||
+       { [ ! -e "$3" ] && ! compgen -G "$3.tmp.*" >/dev/null; }; }; then pass; else
+    fail "simulate after SIG$1: exit $code (want $2), left: $(ls -A "$3" "$(dirname "$3")" 2>&1)"; fi
+}
+ends_cleanly INT 130 "$work/sig/new"
 mkdir -p "$work/sig/old"
-interrupted TERM "$work/sig/old"
-code=$?
-if [ "$code" = 143 ] && [ -z "$(ls -A "$work/sig/old")" ]; then pass; else
-  fail "simulate after SIGTERM: exit $code (want 143), left: $(ls -A "$work/sig/old")"; fi
+ends_cleanly TERM 143 "$work/sig/old"
 # simulate --serve whose reader left (its writes wait for room that never comes): SIGTERM
 # still ends it within seconds, with its stats line.
 "${run[@]}" simulate --serve --speed 0 --serve-delay-s 0.5 --out-dir "$work/sig/serve" --waypoints 4 --duration-s 30 \
@@ -410,13 +423,97 @@ for _ in $(seq 1 50); do grep -q '^tracker ' "$work/serve.log" 2>/dev/null && br
 robot_pty=$(awk '$1 == "robot" { print $2 }' "$work/serve.log")
 [ -n "$robot_pty" ] && timeout 5 head -c 100 "$robot_pty" >/dev/null
 sleep 1.5
-kill -TERM "$pid"
-for _ in $(seq 1 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-if kill -0 "$pid" 2>/dev/null; then
-  kill -KILL "$pid"
-  fail "simulate --serve ignored SIGTERM after its reader left"
-elif wait "$pid" && grep -q '^served ' "$work/serve.log"; then pass; else
-  fail "simulate --serve after SIGTERM: $(cat "$work/serve.log")"; fi
+# stops_on_term PID LOG WHEN: SIGTERM ends the server PID within 5 s, its stats line in LOG.
+stops_on_term() {
+  kill -TERM "$1"
+  for _ in $(seq 1 50); do kill -0 "$1" 2>/dev/null || break; sleep 0.1; done
+  if kill -0 "$1" 2>/dev/null; then
+    kill -KILL "$1"
+    fail "simulate --serve ignored SIGTERM $3"
+  elif wait "$1" && grep -q '^served ' "$2"; then pass; else
+    fail "simulate --serve after SIGTERM $3: $(cat "$2")"; fi
+}
+stops_on_term "$pid" "$work/serve.log" "after its reader left"
+
+# --- issue 54: outputs named twice, concurrent runs, more signals, simulate's numbers
+# An output that is a file another output writes is refused before any input is read (the
+# report's page replaced the result): joints.csv is no samples file, yet the refusal comes first.
+mkdir -p "$work/rp"
+expect 2 "--report '$work/rp' writes '$work/rp/index.html', which is the same file as the output --out '$work/rp/index.html'" -- \
+  calibrate --samples "$work/joints.csv" --out "$work/rp/index.html" --report "$work/rp"
+expect 2 "writes '$work/rp/./index.html', which is the same file as the output --ur-deltas" -- \
+  calibrate --samples "$work/joints.csv" --out "$work/rp.json" --ur-deltas "$work/rp/index.html" --report "$work/rp/."
+no_file "$work/rp/index.html"
+expect 2 "--out: '  ' is blank: give a file name" -- predict --calibration "$work/result.json" --joints "$work/joints.csv" --out "  "
+expect 2 "--report: ' ' is blank: give a folder path" -- calibrate --samples "$work/joints.csv" --out "$work/b.json" --report " "
+# stdout on a full device: the tables printed before the commit go first, and when they do
+# not arrive no output is replaced; a failure after the commit names the outputs written.
+if [ -w /dev/full ]; then
+  echo old >"$work/full.json"
+  err=$("${run[@]}" calibrate --samples "$work/paired.csv" --method lm --split 1 --out "$work/full.json" 2>&1 >/dev/full); code=$?
+  if [ "$code" -eq 4 ] && grep -qF "stdout: write failed: No space left on device; no output was replaced" <<<"$err" &&
+     [ "$(cat "$work/full.json")" = old ]; then pass; else fail "calibrate > /dev/full: exit $code: $err"; fi
+  err=$("${run[@]}" report --calibration "$work/cap.json" --out "$work/fullrep" 2>&1 >/dev/full); code=$?
+  if [ "$code" -eq 4 ] && grep -qF "stdout: write failed: No space left on device; the outputs were written before it: --out '$work/fullrep'" <<<"$err" &&
+     [ -s "$work/fullrep/index.html" ]; then pass; else fail "report --out DIR > /dev/full: exit $code: $err"; fi
+fi
+# One folder named several ways (absolute and relative, sub/..) is locked once: the commit
+# waited for its own lock forever.
+mkdir -p "$work/h1/x/sub"
+if (cd "$work/h1/x" && timeout 120 "${run[@]}" calibrate --samples "$work/paired.csv" --method lm --split 1 \
+      --out "$work/h1/x/result.json" --ur-deltas sub/../d.conf --report report >/dev/null 2>&1) &&
+   [ -s "$work/h1/x/result.json" ] && [ -s "$work/h1/x/d.conf" ] && [ -s "$work/h1/x/report/index.html" ]; then pass; else
+  fail "calibrate with one folder named two ways: $(ls -A "$work/h1/x")"; fi
+# Six runs creating one report folder at once: each writes it whole (five failed with
+# "Directory not empty").
+mkdir -p "$work/m7"
+pids=()
+for i in 1 2 3 4 5 6; do
+  "${run[@]}" report --calibration "$work/cap.json" --out "$work/m7/report" >"$work/m7.$i.log" 2>&1 &
+  pids+=($!)
+done
+m7_failed=0
+for pid in "${pids[@]}"; do wait "$pid" || m7_failed=$((m7_failed + 1)); done
+if [ "$m7_failed" = 0 ] && cmp -s "$work/m7/report/index.html" "$work/redrawn/index.html" &&
+   [ "$(ls -A "$work/m7")" = report ] && [ "$(ls -A "$work/m7/report")" = index.html ]; then pass; else
+  fail "six concurrent reports into one new folder: $m7_failed failed: $(cat "$work"/m7.*.log) $(ls -A "$work/m7" "$work/m7/report")"; fi
+# SIGUSR1 and SIGALRM end a run as SIGTERM does, its temporaries removed; a file size limit
+# (SIGXFSZ) is an output error, exit 4, nothing left.
+ends_cleanly USR1 138 "$work/sig/usr1"
+mkdir -p "$work/sig/alrm"
+ends_cleanly ALRM 142 "$work/sig/alrm"
+mkdir -p "$work/sig/xfsz"
+code=$( (ulimit -f 200; "${run[@]}" simulate --out-dir "$work/sig/xfsz" --waypoints 40 --duration-s 300 >/dev/null 2>"$work/xfsz.err"); echo $?)
+if [ "$code" = 4 ] && grep -q "write failed: File too large" "$work/xfsz.err" && [ -z "$(ls -A "$work/sig/xfsz")" ]; then pass; else
+  fail "simulate over ulimit -f: exit $code (want 4), $(cat "$work/xfsz.err"), left: $(ls -A "$work/sig/xfsz")"; fi
+# simulate refuses a pacing or a delay it could not keep (NaN, 1e-9, 1e9, negative) and
+# every simulated error that is not finite, before writing anything.
+# (each under `timeout`: such a value, once accepted, served for ever)
+refused_serve() {  # refused_serve MESSAGE OPTIONS...: exit 2 and MESSAGE at once
+  local message=$1 err code
+  shift
+  err=$(timeout 20 "${run[@]}" simulate --serve --out-dir "$work/h2" --waypoints 4 --duration-s 30 "$@" 2>&1 >/dev/null); code=$?
+  if [ "$code" = 2 ] && grep -qF -- "$message" <<<"$err"; then pass; else fail "simulate --serve $*: exit $code (want 2): $err"; fi
+}
+refused_serve "--speed must be a number, got 'nan': not a number" --speed nan
+for speed in 1e-9 -1 1e9; do
+  refused_serve "--speed must be 0 (as fast as read) or within [0.01, 10000] session seconds per second, got '$speed'" --speed "$speed"
+done
+for delay in nan 1e9 -1; do
+  refused_serve "--serve-delay-s must be" --serve-delay-s "$delay"
+  refused_serve "within [0, 3600], got '$delay'" --serve-delay-s "$delay"
+done
+expect 2 "--compliance-urad must be J2,J3, each within +-10000 urad (e.g. 40,20), not 'nan,0'" -- simulate --compliance-urad nan,0 --out-dir "$work/h2"
+expect 2 "--compliance-urad must be J2,J3" -- simulate --compliance-urad 1e300,0 --out-dir "$work/h2"
+expect 2 "--harmonic-urad must be J,K,S,C" -- simulate --harmonic-urad 3,1,nan,0 --out-dir "$work/h2"
+expect 2 "--length-sigma-um must be within [0, 100000], got 'inf'" -- simulate --length-sigma-um inf --out-dir "$work/h2"
+expect 2 "--angle-sigma-urad must be within [0, 100000], got '1e9'" -- simulate --angle-sigma-urad 1e9 --out-dir "$work/h2"
+no_file "$work/h2"
+# A stop request ends the wait before streaming at once (it slept through SIGTERM).
+"${run[@]}" simulate --serve --serve-delay-s 600 --out-dir "$work/sig/delay" --waypoints 4 --duration-s 30 >"$work/delay.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 50); do grep -q '^tracker ' "$work/delay.log" 2>/dev/null && break; sleep 0.1; done
+stops_on_term "$pid" "$work/delay.log" "in its --serve-delay-s"
 
 expect 2 "--orientation-form must be rotation-vector or euler-xyz, not 'zyx'" -- calibrate --samples "$work/paired.csv" --orientation-form zyx --out "$work/o.json"
 expect 2 "is not C=NAME or C=NAME[unit] with C one of" -- calibrate --samples "$work/paired.csv" --columns "w=measurement_w" --out "$work/o.json"
@@ -472,6 +569,25 @@ if "${run[@]}" check-robot "$work/ur5.urdf" >"$work/check.txt" 2>&1 && grep -q "
   fail "check-robot ur5.urdf: $(cat "$work/check.txt")"; fi
 if "${run[@]}" check-robot ur10e --joints "$work/joints.csv" | grep -q "^FK at pose 1 (q \[deg\] 0.000 -90.000 90.000 -90.000 -90.000 0.000)"; then pass; else
   fail "check-robot --joints"; fi
+# A robot's name is the file's text: its control bytes (a window title, a clear screen, a NUL that
+# ended the printout) reach no terminal and no report raw; every printed name is escaped as
+# messages are (port::printable).
+only_text() {  # FILE: holds no control byte but newline, tab and CR (UTF-8 bytes allowed)
+  [ -s "$1" ] && [ "$(LC_ALL=C tr -d '\n\t\r\040-\176\200-\377' <"$1" | wc -c)" -eq 0 ]
+}
+ur_result_json '\u001b]0;pwned\u0007\u001b[2J\u0000tail' 0.089159 -0.425 -0.39225 0.10915 0.09465 0.0823 "0.0, 0.0, 0.1" \
+  "[[1, 0, 0, 1], [0, 1, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]]" >"$work/hostile.json"
+if "${run[@]}" check-robot "$work/hostile.json" >"$work/hostile.txt" 2>&1 && only_text "$work/hostile.txt" &&
+   grep -qF 'robot: \x1b]0;pwned\x07\x1b[2J\x00tail (file ' "$work/hostile.txt" && grep -q "^convention: standard-dh$" "$work/hostile.txt"; then pass; else
+  fail "check-robot of a name with control bytes: $(od -c "$work/hostile.txt" | head -5)"; fi
+if "${run[@]}" calibrate --samples "$work/paired.csv" --robot-model "$work/hostile.json" --method lm --split 1 --out "$work/hostile_result.json" \
+     --report "$work/hostile_report" >/dev/null 2>&1 && only_text "$work/hostile_report/index.html" &&
+   grep -qF '<title>hivecal calibration: \x1b]0;pwned\x07\x1b[2J\x00tail</title>' "$work/hostile_report/index.html"; then pass; else
+  fail "calibrate --report of a name with control bytes"; fi
+sed 's/"title": "hivecal calibration: ur5"/"title": "\\u001b]0;pwned\\u0007"/' "$work/cap.json" >"$work/hostile_title.json"
+if grep -q 'u001b' "$work/hostile_title.json" && "${run[@]}" report --calibration "$work/hostile_title.json" --out "$work/hostile_redrawn" >/dev/null &&
+   only_text "$work/hostile_redrawn/index.html" && grep -qF '<title>\x1b]0;pwned\x07</title>' "$work/hostile_redrawn/index.html"; then pass; else
+  fail "report of a result whose title holds control bytes"; fi
 printf '<robot name="r">\n<joint name="j" type="prismatic"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/slider.urdf"
 expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- predict --robot-model "$work/slider.urdf" --joints "$work/joints.csv"
 expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- check-robot "$work/slider.urdf"

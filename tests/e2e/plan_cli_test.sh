@@ -26,17 +26,17 @@ quick=(--restarts 1 --refine 0)
 
 # --- usage errors (exit 2)
 expect_plan 2 "--count, --tracker-position and --out are required" -- --count 10
-expect_plan 2 "--count must be in [1, 128]" -- "${cell[@]}" "${out[@]}" --count 0
+expect_plan 2 "--count must be within [1, 128]" -- "${cell[@]}" "${out[@]}" --count 0
 expect_plan 2 "--count must be a whole number" -- "${cell[@]}" "${out[@]}" --count 2.5
-expect_plan 2 "--dwell must be in [0.3" -- "${cell[@]}" "${out[@]}" --count 10 --dwell 0.1
+expect_plan 2 "--dwell must be within [0.3" -- "${cell[@]}" "${out[@]}" --count 10 --dwell 0.1
 expect_plan 2 "--objective must be d-optimal" -- "${cell[@]}" "${out[@]}" --count 10 --objective a-optimal
-expect_plan 2 "--restarts must be in [1, 64]" -- "${cell[@]}" "${out[@]}" --count 10 --restarts 0
-expect_plan 2 "--refine must be in [0, 16]" -- "${cell[@]}" "${out[@]}" --count 10 --refine 17
-expect_plan 2 "--prior-mm must be in [0, 1000]" -- "${cell[@]}" "${out[@]}" --count 10 --prior-mm -1
+expect_plan 2 "--restarts must be within [1, 64]" -- "${cell[@]}" "${out[@]}" --count 10 --restarts 0
+expect_plan 2 "--refine must be within [0, 16]" -- "${cell[@]}" "${out[@]}" --count 10 --refine 17
+expect_plan 2 "--prior-mm must be within [0, 1000]" -- "${cell[@]}" "${out[@]}" --count 10 --prior-mm -1
 expect_plan 2 "--params must be 'full' or 'paper'" -- "${cell[@]}" "${out[@]}" --count 10 --params all
 expect_plan 2 "unknown robot model 'ur7'" -- "${cell[@]}" "${out[@]}" --count 10 --robot-model ur7
 expect_plan 2 "--tracker-position must be X,Y,Z" -- "${cell[@]}" "${out[@]}" --count 10 --tracker-position 1,2
-expect_plan 2 "--acceptance-deg: not a number" -- "${cell[@]}" "${out[@]}" --count 10 --acceptance-deg wide
+expect_plan 2 "--acceptance-deg must be a number within [1, 180], got 'wide': not a number" -- "${cell[@]}" "${out[@]}" --count 10 --acceptance-deg wide
 expect_plan 2 "--candidates must be at least --count" -- "${cell[@]}" "${out[@]}" --count 20 --candidates 10
 # --- bad inputs (exit 3)
 expect_plan 3 "cannot open" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/missing.csv"
@@ -107,6 +107,24 @@ if "${run[@]}" plan "${cell[@]}" "${quick[@]}" --robot-model "$work/ur5e_lim.jso
   fail "plan with the description's joint_limits: $(cat "$work/desc.err")"; fi
 sed 's/^  "tool": /  "joint_limits": [[1, -1], [-1, 1], [-1, 1], [-1, 1], [-1, 1], [-1, 1]],\n  "tool": /' "$work/ur5e.json" >"$work/ur5e_bad.json"
 expect_plan 3 '"joint_limits"[0] = [1, -1] rad: lower must be below upper' -- "${cell[@]}" "${out[@]}" --count 10 --robot-model "$work/ur5e_bad.json"
+# Limits beyond the arm's own range (+-12 rad on a UR5e, whose elbow turns +-180 deg and the
+# others +-360 deg): clamped to it, each said; a joint whose range lies outside the arm's: refused.
+printf 'lower,upper\n-12,12\n-12,12\n-12,12\n-12,12\n-12,12\n-12,12\n' >"$work/wide.csv"
+if "${run[@]}" plan "${cell[@]}" "${quick[@]}" --count 30 --joint-limits "$work/wide.csv" --out "$work/wide_poses.csv" \
+     2>"$work/wide.err" >/dev/null &&
+   [ "$(grep -c "goes beyond the ur5e's own range" "$work/wide.err")" -eq 6 ] &&
+   grep -q "joint 3 \[-12.0000, 12.0000\] rad goes beyond the ur5e's own range \[-3.1416, 3.1416\] rad: clamped to it" "$work/wide.err" &&
+   awk -F, 'NR > 1 { for (j = 1; j <= 6; ++j) { v = $j < 0 ? -$j : $j; if (v > (j == 3 ? 3.14159266 : 6.28318531)) bad = 1 } }
+     END { exit bad }' "$work/wide_poses.csv" && [ "$(wc -l <"$work/wide_poses.csv")" -eq 31 ]; then pass; else
+  fail "plan --joint-limits beyond the arm's range: $(cat "$work/wide.err")"; fi
+printf 'lower,upper\n7,8\n-1,1\n-1,1\n-1,1\n-1,1\n-1,1\n' >"$work/outside.csv"
+expect_plan 3 "joint 1 [7.0000, 8.0000] rad lies outside the ur5e's own range [-6.2832, 6.2832] rad" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/outside.csv"
+# --- nothing found: the message names the cause (an absurd tool, limits that leave no pose)
+expect_plan 2 "--tool must be X,Y,Z in metres, each within [-100, 100] m, got '0,0,1e9'" -- "${cell[@]}" "${out[@]}" --count 10 --tool 0,0,1e9
+expect_plan 1 "the tool is why: --tool 0,0,50 puts the reflector 50 m from the flange" -- "${cell[@]}" "${out[@]}" --count 10 --tool 0,0,50
+printf 'lower,upper\n-0.01,0.01\n-0.01,0.01\n-0.01,0.01\n-0.01,0.01\n-0.01,0.01\n-0.01,0.01\n' >"$work/tight.csv"
+expect_plan 1 "the joint limits are why: --joint-limits $work/tight.csv leave none" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/tight.csv"
+expect_plan 1 "move the tracker" -- "${cell[@]}" "${out[@]}" --count 10 --floor-z 5
 
 # --- the ISO 9283 test: the cube's five positions (P2..P5 on the diagonals, 10 % of a diagonal
 # from the corners: 0.8 x half a diagonal from P1) with one orientation, and the cycles program
@@ -117,9 +135,20 @@ if "${run[@]}" plan --iso9283 0.4,-0.3,0.5,0.3 --tracker-position 2,0.5,0.6 --ou
    [ "$(grep -c '^    movel(p[1-5], a=1.2, v=0.25)$' "$work/iso.script")" -eq 5 ] && grep -q '^  while (cycle < 30):$' "$work/iso.script"; then pass; else
   fail "plan --iso9283: $(cat "$work/iso.csv" "$work/iso.script")"; fi
 expect_plan 2 "--iso9283 must be X,Y,Z,SIDE" -- --iso9283 0.4,0.5,0.3 --tracker-position 2,0.5,0.6 "${out[@]}"
+# A given cube is checked as auto's: too small, below the floor, inside the keep-out cylinder,
+# out of reach or with an absurd tool: refused by position, nothing written (no URScript for
+# positions the arm cannot take).
+expect_plan 2 "side in [0.02, 10]" -- --iso9283 0.4,-0.3,0.5,1e-9 --tracker-position 2,0.5,0.6 "${out[@]}"
+expect_plan 1 "P2 (0.2800, -0.4200, -0.0700 m), P3 (0.5200, -0.4200, -0.0700 m): below --floor-z 0.05 m" -- --iso9283 0.4,-0.3,0.05,0.3 --tracker-position 2,0.5,0.6 "${out[@]}"
+expect_plan 1 ": inside --keep-out-radius 0.15 m" -- --iso9283 0.1,0,0.5,0.1 --tracker-position 2,0.5,0.6 "${out[@]}"
+expect_plan 1 "P1 (2.0000, 0.0000, 0.5000 m)" -- --iso9283 2,0,0.5,0.3 --tracker-position 3,0.5,0.6 "${out[@]}" --urscript "$work/iso_far.script"
+no_file "$work/iso_far.script"
+expect_plan 1 "the tool is why: --tool 0,0,50" -- --iso9283 0.4,-0.3,0.5,0.3 --tool 0,0,50 --tracker-position 2,0.5,0.6 "${out[@]}"
+expect_plan 1 "--iso9283 auto: no cube whose five positions the arm reaches with one orientation (the tool is why" -- --iso9283 auto --tool 0,0,50 --tracker-position 2,0.5,0.6 "${out[@]}"
 # auto: the largest cube found whose five positions the arm reaches with the one orientation;
-# each listed joint solution puts the reflector there (checked through predict, the model's FK)
-if "${run[@]}" plan --iso9283 auto --robot-model ur5e --tracker-position 2,0.5,0.6 --out "$work/iso_auto.csv" >"$work/iso_auto.txt" 2>&1 &&
+# each listed joint solution puts the reflector there (checked through predict, the model's FK;
+# the reflector at the flange, as predict's built-in ur5e has it)
+if "${run[@]}" plan --iso9283 auto --robot-model ur5e --tool 0,0,0 --tracker-position 2,0.5,0.6 --out "$work/iso_auto.csv" >"$work/iso_auto.txt" 2>&1 &&
    cut -d, -f8-13 "$work/iso_auto.csv" >"$work/iso_q.csv" &&
    "${run[@]}" predict --robot-model ur5e --joints "$work/iso_q.csv" --out "$work/iso_fk.csv" 2>/dev/null &&
    paste -d, "$work/iso_fk.csv" <(cut -d, -f2-4 "$work/iso_auto.csv") | awk -F, 'NR > 1 {

@@ -31,13 +31,13 @@ std::string first_fields(const std::string& line, int count) {
   return line.substr(0, end);
 }
 
-/// MAE [m] of `predict`'s output (x,y,z rows after a header) against `truth_m`; 1 m when
-/// a row does not parse or the count differs.
+/// MAE [m] of `predict`'s output (x,y,z[,sigma_m,extrapolated] rows after a header) against
+/// `truth_m`; 1 m when a row does not parse or the count differs.
 double held_out_mae_m(const std::string& csv, const std::vector<Vec3>& truth_m) {
   std::vector<Vec3> points;
   std::istringstream rows(csv);
   std::string row;
-  std::getline(rows, row);  // x,y,z
+  std::getline(rows, row);  // x,y,z,sigma_m,extrapolated
   while (std::getline(rows, row)) {
     std::vector<double> v;
     std::istringstream cells(row);
@@ -46,7 +46,7 @@ double held_out_mae_m(const std::string& csv, const std::vector<Vec3>& truth_m) 
       if (!textio::parse_double(cell, &x)) return 1.0;
       v.push_back(x);
     }
-    if (v.size() != 3u) return 1.0;
+    if (v.size() != 3u && v.size() != 5u) return 1.0;
     points.emplace_back(v[0], v[1], v[2]);
   }
   if (points.size() != truth_m.size() || points.empty()) return 1.0;

@@ -6,7 +6,12 @@
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <functional>
 
 #include <atomic>
 #include <cstdio>
@@ -112,7 +117,7 @@ TEST(OutputFiles, NothingAppearsUnlessEverythingIsCommitted) {
   const auto stage_result_and_report = [&dir](OutputSet* outputs) {
     std::size_t result = 0, report = 0;
     return outputs->add_file(dir.path() + "/result.json", "--out", &result).ok() &&
-           outputs->add_folder(dir.path() + "/report/deep", "--report", &report).ok() &&
+           outputs->add_folder(dir.path() + "/report/deep", "--report", {"index.html"}, &report).ok() &&
            outputs->stage_text(result, "", "{}").ok() && outputs->stage_text(report, "index.html", "<html>").ok();
   };
   {
@@ -147,7 +152,7 @@ TEST(OutputFiles, ANewReportFolderTakesTheUmask) {
   {
     OutputSet outputs;
     std::size_t report = 0;
-    ASSERT_TRUE(outputs.add_folder(dir.path() + "/report", "--report", &report).ok());
+    ASSERT_TRUE(outputs.add_folder(dir.path() + "/report", "--report", {"index.html"}, &report).ok());
     ASSERT_TRUE(outputs.stage_text(report, "index.html", "<html>").ok());
     ASSERT_TRUE(outputs.commit().ok());
   }
@@ -155,18 +160,133 @@ TEST(OutputFiles, ANewReportFolderTakesTheUmask) {
   EXPECT_EQ(mode_of(dir.path() + "/report") & 0777, 0755u);
 }
 
-TEST(OutputFiles, AFileOfAnOutputFolderThatIsAnInputIsRefused) {
+TEST(OutputFiles, AFileOfAnOutputFolderThatIsAnInputIsRefusedAtDeclaration) {
   const test::TempDir dir("hivecal_port_files");
   ASSERT_TRUE(write_one(dir.path() + "/truth.json", "input").ok());
   OutputSet outputs;
   std::size_t folder = 0;
   ASSERT_TRUE(outputs.add_input(dir.path() + "/truth.json", "--robot-model").ok());
-  ASSERT_TRUE(outputs.add_folder(dir.path(), "--out-dir", &folder).ok());
-  const Error error = outputs.stage_text(folder, "truth.json", "output");
+  const Error error = outputs.add_folder(dir.path(), "--out-dir", {"robot.cap", "truth.json"}, &folder);
   EXPECT_EQ(error.fault, Fault::usage);
-  EXPECT_NE(error.message.find("is the same file as the input --robot-model"), std::string::npos) << error.message;
-  outputs.abandon();
+  EXPECT_NE(error.message.find("truth.json', which is the same file as the input --robot-model"), std::string::npos)
+      << error.message;
+  // Declared the other way round: the input comes after the folder.
+  OutputSet later;
+  ASSERT_TRUE(later.add_folder(dir.path(), "--out-dir", {"truth.json"}, &folder).ok());
+  EXPECT_EQ(later.add_input(dir.path() + "/truth.json", "--robot-model").fault, Fault::usage);
   EXPECT_EQ(read(dir.path() + "/truth.json"), "input");
+}
+
+TEST(OutputFiles, AFileThatAnOutputFolderWritesIsRefusedBeforeAnyWork) {
+  // calibrate --out rp/index.html --report rp: the report's page would replace the result.
+  const test::TempDir dir("hivecal_port_files");
+  const std::string report = dir.path() + "/rp";
+  ASSERT_EQ(::mkdir(report.c_str(), 0755), 0);
+  for (const bool page_exists : {false, true}) {
+    if (page_exists) {
+      ASSERT_TRUE(write_one(report + "/index.html", "old page").ok());
+    }
+    OutputSet outputs;
+    std::size_t result = 0, folder = 0;
+    ASSERT_TRUE(outputs.add_file(report + "/index.html", "--out", &result).ok());
+    Error error = outputs.add_folder(report, "--report", {"index.html"}, &folder);
+    EXPECT_EQ(error.fault, Fault::usage) << page_exists;
+    EXPECT_NE(error.message.find("--report '" + report + "' writes '" + report +
+                                 "/index.html', which is the same file as the output --out"),
+              std::string::npos)
+        << error.message;
+    OutputSet reversed;  // the folder first: the file is refused, both options named
+    ASSERT_TRUE(reversed.add_folder(report + "/", "--report", {"index.html"}, &folder).ok());
+    error = reversed.add_file(dir.path() + "/./rp/index.html", "--ur-deltas", &result);
+    EXPECT_EQ(error.fault, Fault::usage) << page_exists;
+    EXPECT_NE(error.message.find("--ur-deltas"), std::string::npos) << error.message;
+    EXPECT_NE(error.message.find("which the output --report"), std::string::npos) << error.message;
+  }
+  EXPECT_EQ(read(report + "/index.html"), "old page");
+  OutputSet beside;  // a file of the folder's that the folder does not write is fine
+  std::size_t a = 0, b = 0;
+  EXPECT_TRUE(beside.add_folder(report, "--report", {"index.html"}, &a).ok());
+  EXPECT_TRUE(beside.add_file(report + "/result.json", "--out", &b).ok());
+}
+
+TEST(OutputFiles, ABlankPathIsRefused) {
+  OutputSet outputs;
+  std::size_t id = 0;
+  for (const char* blank : {"", "  ", "\t", "sub/ "}) {
+    Error error = outputs.add_file(blank, "--out", &id);
+    EXPECT_EQ(error.fault, Fault::usage) << "'" << blank << "'";
+    EXPECT_NE(error.message.find("--out: "), std::string::npos) << error.message;
+    error = outputs.add_folder(blank, "--report", {"index.html"}, &id);
+    EXPECT_EQ(error.fault, Fault::usage) << "'" << blank << "'";
+  }
+  EXPECT_NE(outputs.add_file("  ", "--out", &id).message.find("'  ' is blank"), std::string::npos);
+}
+
+/// Runs `commit` in a child process; true when it ended within `limit_s` with exit 0.
+bool commits_in_time(const std::function<bool()>& commit, int limit_s) {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(commit() ? 0 : 1);
+  for (int waited_ms = 0; waited_ms < limit_s * 1000; waited_ms += 20) {
+    int status = 0;
+    if (::waitpid(child, &status, WNOHANG) == child) return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    ::usleep(20000);
+  }
+  ::kill(child, SIGKILL);
+  ::waitpid(child, nullptr, 0);
+  return false;
+}
+
+TEST(OutputFiles, AFolderNamedTwoWaysIsLockedOnceAndTheCommitEnds) {
+  // --out $PWD/x/result.json --report report (inside x), sub/../d.conf, a symlinked folder:
+  // one folder under several names; a second flock on it waited for the first forever.
+  const test::TempDir dir("hivecal_port_files");
+  char* absolute = ::realpath(dir.path().c_str(), nullptr);
+  ASSERT_NE(absolute, nullptr);
+  const std::string x = absolute;
+  std::free(absolute);
+  ASSERT_EQ(::mkdir((x + "/sub").c_str(), 0755), 0);
+  ASSERT_EQ(::symlink(x.c_str(), (x + "/alias").c_str()), 0);
+  const bool committed = commits_in_time(
+      [&] {
+        if (::chdir(x.c_str()) != 0) return false;
+        OutputSet outputs;
+        std::size_t result = 0, deltas = 0, other = 0, report = 0;
+        return outputs.add_file(x + "/result.json", "--out", &result).ok() &&
+               outputs.add_file("sub/../d.conf", "--ur-deltas", &deltas).ok() &&
+               outputs.add_file("alias/other.csv", "--urscript", &other).ok() &&
+               outputs.add_folder("report", "--report", {"index.html"}, &report).ok() &&
+               outputs.stage_text(result, "", "{}").ok() && outputs.stage_text(deltas, "", "d").ok() &&
+               outputs.stage_text(other, "", "o").ok() && outputs.stage_text(report, "index.html", "<html>").ok() &&
+               outputs.commit().ok();
+      },
+      20);
+  EXPECT_TRUE(committed) << "the commit did not end (a folder locked twice?)";
+  EXPECT_EQ(read(x + "/result.json"), "{}");
+  EXPECT_EQ(read(x + "/d.conf"), "d");
+  EXPECT_EQ(read(x + "/other.csv"), "o");
+  EXPECT_EQ(read(x + "/report/index.html"), "<html>");
+}
+
+TEST(OutputFiles, TwoRunsCreatingOneFolderBothSucceed) {
+  // Concurrent runs with the same new --report folder: the one that commits second finds the
+  // folder made by the first and writes into it (it failed with "Directory not empty").
+  const test::TempDir dir("hivecal_port_files");
+  const std::string folder = dir.path() + "/report";
+  OutputSet first, second;
+  std::size_t a = 0, b = 0;
+  ASSERT_TRUE(first.add_folder(folder, "--report", {"index.html", "first.txt"}, &a).ok());
+  ASSERT_TRUE(second.add_folder(folder, "--report", {"index.html", "second.txt"}, &b).ok());
+  ASSERT_TRUE(first.stage_text(a, "index.html", "first").ok());
+  ASSERT_TRUE(first.stage_text(a, "first.txt", "1").ok());
+  ASSERT_TRUE(second.stage_text(b, "index.html", "second").ok());
+  ASSERT_TRUE(second.stage_text(b, "second.txt", "2").ok());
+  ASSERT_TRUE(first.commit().ok());
+  const Error error = second.commit();
+  ASSERT_TRUE(error.ok()) << error.message;
+  EXPECT_EQ(read(folder + "/index.html"), "second");  // the later run's set, whole
+  EXPECT_EQ(read(folder + "/first.txt"), "1");        // nothing of the first run lost
+  EXPECT_EQ(read(folder + "/second.txt"), "2");
+  EXPECT_EQ(std::system(("test \"$(ls -A '" + dir.path() + "')\" = report").c_str()), 0) << "temporaries left";
 }
 
 TEST(OutputFiles, ACommitWaitsForAnotherRunsCommitInTheSameFolder) {

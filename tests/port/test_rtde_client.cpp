@@ -1,148 +1,57 @@
-// The RTDE client against a stand-in UR controller in this test (a thread speaking the
-// documented protocol on a loopback socket): every data package it sends arrives as a log row
-// with each value exactly as sent; text messages are passed on; an unknown variable
-// (NOT_FOUND), a refused protocol version, a host that never answers and a controller that
-// closes mid-stream each end as they should.
+// The RTDE client against a stand-in UR controller (testkit/rtde_controller.hpp: a thread
+// speaking the documented protocol on a loopback socket): every data package it sends arrives
+// as a log row with each value exactly as sent; text messages are passed on; an unknown
+// variable (NOT_FOUND), a refused protocol version, a host that never answers and a controller
+// that closes mid-stream each end as they should; and the hostile ones (issue 54): a package
+// cut by a pause is put together, a controller that only chatters is timed out, a flood is
+// refused, a row no reader takes ends the recording with the rows before it kept.
 #include <gtest/gtest.h>
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
-#include <algorithm>
-#include <atomic>
 #include <cstdlib>
-#include <cstring>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "hivecal/port/byte_source.hpp"
 #include "hivecal/port/rtde_client.hpp"
+#include "testkit/rtde_controller.hpp"
 
 namespace hivecal::port::rtde_client_test {
 namespace {
 
-/// How the stand-in controller behaves.
-struct ControllerScript {
-  int data_packages = 500;        ///< sent after start
-  bool accept_version = true;     ///< answer V with 1
-  std::string unknown_variable;   ///< answered NOT_FOUND
-  bool close_mid_stream = false;  ///< close after the data instead of waiting for P
-  bool answer = true;             ///< false: never read or answer anything
+using test::ControllerScript;
+using test::rtde_value_of;
+using test::StandInController;
+
+/// What one recording against a stand-in controller gave.
+struct Recording {
+  Error error;                     ///< record_rtde's outcome
+  std::vector<std::string> rows;   ///< what it handed to write_row (the header first)
+  std::vector<std::string> texts;  ///< the text messages passed on
+  RtdeStats stats;                 ///< its counts
+  std::int64_t took_ms = 0;        ///< how long it ran [ms]
 };
 
-double value_of(int package, int k) {
-  return k == 0 ? 1000.0 + package * 0.008 : package * 1e-3 + k * 0.1 + 1.0 / 3.0;
+/// The recording ended as refused input, its message holding `part`.
+void expect_refused(const Recording& r, const std::string& part) {
+  EXPECT_EQ(r.error.fault, Fault::input) << r.error.message;
+  EXPECT_NE(r.error.message.find(part), std::string::npos) << r.error.message;
 }
 
-void put_be_double(std::vector<std::uint8_t>* out, double value) {
-  std::uint64_t bits = 0;
-  std::memcpy(&bits, &value, sizeof bits);
-  for (int k = 7; k >= 0; --k) out->push_back(static_cast<std::uint8_t>(bits >> (8 * k)));
+Recording record_from(const StandInController& controller, RtdeRecordOptions options,
+                      const std::string& host = "127.0.0.1") {
+  Recording out;
+  options.on_text = [&out](const std::string& t) { out.texts.push_back(t); };
+  const std::int64_t start_ms = monotonic_ms();
+  out.error = record_rtde(
+      host, controller.port(), options, nullptr,
+      [&out](const std::string& row) {
+        out.rows.push_back(row);
+        return Error{};
+      },
+      &out.stats);
+  out.took_ms = monotonic_ms() - start_ms;
+  return out;
 }
-
-void send_all(int fd, char type, const std::vector<std::uint8_t>& payload) {
-  const std::size_t size = 3 + payload.size();
-  std::vector<std::uint8_t> bytes = {static_cast<std::uint8_t>(size >> 8), static_cast<std::uint8_t>(size & 0xff),
-                                     static_cast<std::uint8_t>(type)};
-  bytes.insert(bytes.end(), payload.begin(), payload.end());
-  (void)!::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL);
-}
-
-bool receive_package(int fd, char* type, std::vector<std::uint8_t>* payload) {
-  std::uint8_t header[3];
-  if (::recv(fd, header, 3, MSG_WAITALL) != 3) return false;
-  const std::size_t size = (static_cast<std::size_t>(header[0]) << 8) | header[1];
-  *type = static_cast<char>(header[2]);
-  payload->assign(size - 3, 0);
-  return payload->empty() ||
-         ::recv(fd, payload->data(), payload->size(), MSG_WAITALL) == static_cast<ssize_t>(payload->size());
-}
-
-/// A listening loopback socket and the controller thread serving one client.
-class StandInController {
- public:
-  explicit StandInController(ControllerScript script) : script_(std::move(script)) {
-    listener_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    EXPECT_EQ(::bind(listener_, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
-    EXPECT_EQ(::listen(listener_, 1), 0);
-    socklen_t size = sizeof address;
-    ::getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &size);
-    port_ = ntohs(address.sin_port);
-    if (script_.answer) thread_ = std::thread([this] { serve(); });
-  }
-  ~StandInController() {
-    if (thread_.joinable()) thread_.join();
-    ::close(listener_);
-  }
-  int port() const { return port_; }
-  double requested_frequency() const { return frequency_; }
-
- private:
-  void serve() {
-    const int fd = ::accept(listener_, nullptr, nullptr);
-    if (fd < 0) return;
-    char type = 0;
-    std::vector<std::uint8_t> payload;
-    while (receive_package(fd, &type, &payload)) {
-      if (type == 'V') {
-        send_all(fd, 'V', {static_cast<std::uint8_t>(script_.accept_version ? 1 : 0)});
-        if (!script_.accept_version) break;
-      } else if (type == 'v') {
-        send_all(fd, 'v', {0, 0, 0, 5, 0, 0, 0, 11, 0, 0, 0, 0, 0, 0, 48, 57});  // 5.11.0.12345
-      } else if (type == 'O') {
-        std::uint64_t bits = 0;
-        for (int k = 0; k < 8; ++k) bits = (bits << 8) | payload[static_cast<std::size_t>(k)];
-        std::memcpy(&frequency_, &bits, sizeof bits);
-        const std::string names(payload.begin() + 8, payload.end());
-        std::string types;
-        std::size_t at = 0;
-        while (at <= names.size()) {
-          const std::size_t end = std::min(names.find(',', at), names.size());
-          const std::string name = names.substr(at, end - at);
-          const char* t = name == script_.unknown_variable ? "NOT_FOUND" : name == "timestamp" ? "DOUBLE" : "VECTOR6D";
-          types += (types.empty() ? "" : ",") + std::string(t);
-          at = end + 1;
-        }
-        std::vector<std::uint8_t> reply = {1};
-        reply.insert(reply.end(), types.begin(), types.end());
-        send_all(fd, 'O', reply);
-      } else if (type == 'S') {
-        send_all(fd, 'S', {1});
-        for (int p = 0; p < script_.data_packages; ++p) {
-          if (p == 10) {
-            const std::string message = "safety check passed";
-            const std::string source = "stand-in";
-            std::vector<std::uint8_t> text = {static_cast<std::uint8_t>(message.size())};
-            text.insert(text.end(), message.begin(), message.end());
-            text.push_back(static_cast<std::uint8_t>(source.size()));
-            text.insert(text.end(), source.begin(), source.end());
-            text.push_back(1);
-            send_all(fd, 'M', text);
-          }
-          std::vector<std::uint8_t> data = {1};
-          for (int k = 0; k < 13; ++k) put_be_double(&data, value_of(p, k));
-          send_all(fd, 'U', data);
-        }
-        if (script_.close_mid_stream) break;
-      } else if (type == 'P') {
-        send_all(fd, 'P', {1});
-        break;
-      }
-    }
-    ::close(fd);
-  }
-
-  ControllerScript script_;
-  int listener_ = -1;
-  int port_ = 0;
-  double frequency_ = 0.0;
-  std::thread thread_;
-};
 
 TEST(RtdeClient, EveryPackageArrivesAsSent) {
   ControllerScript script;
@@ -175,7 +84,7 @@ TEST(RtdeClient, EveryPackageArrivesAsSent) {
     for (int k = 0; k < 13; ++k) {
       char* end = nullptr;
       const double value = std::strtod(at, &end);
-      ASSERT_EQ(value, value_of(p, k)) << "package " << p << " value " << k;  // exactly as sent
+      ASSERT_EQ(value, rtde_value_of(p, k)) << "package " << p << " value " << k;  // exactly as sent
       at = end;
     }
   }
@@ -216,6 +125,138 @@ TEST(RtdeClient, ARefusedVersionAndASilentHostEndWithAReason) {
   quick.reply_timeout_ms = 300;
   error = record_rtde("127.0.0.1", mute.port(), quick, nullptr, nothing, &stats);
   EXPECT_NE(error.message.find("no reply to 'V' within 300 ms"), std::string::npos) << error.message;
+}
+
+TEST(RtdeClient, APackageCutByAPauseIsPutTogether) {
+  // One TCP retransmission pauses a package mid-way for over 200 ms: the bytes read are kept
+  // and the rest completes it (it ended the recording as "a package of N bytes").
+  ControllerScript script;
+  script.data_packages = 300;
+  script.pause_in_package = 100;
+  script.pause_ms = 700;
+  script.close_mid_stream = true;
+  const StandInController controller(script);
+  const Recording r = record_from(controller, RtdeRecordOptions());
+  ASSERT_TRUE(r.error.ok()) << r.error.message;
+  EXPECT_EQ(r.stats.data_packages, 300u);
+  ASSERT_EQ(r.rows.size(), 301u);
+  EXPECT_EQ(std::strtod(r.rows[101].c_str(), nullptr), rtde_value_of(100, 0));
+  EXPECT_GE(r.took_ms, 600);
+}
+
+TEST(RtdeClient, AControllerThatOnlyChattersIsTimedOut) {
+  // Text messages, never the reply: each reset the reply timer, so it waited forever.
+  ControllerScript script;
+  script.chatter_only = true;
+  script.chatter_period_ms = 5;  // 200 a second: a chatty controller, not a flood
+  script.chatter_limit_s = 6.0;
+  const StandInController controller(script);
+  RtdeRecordOptions options;
+  options.reply_timeout_ms = 500;
+  const Recording r = record_from(controller, options);
+  expect_refused(r, "no reply to 'V' within 500 ms");
+  EXPECT_LT(r.took_ms, 2500);
+  EXPECT_TRUE(r.rows.empty());
+}
+
+TEST(RtdeClient, TheDurationBoundsTheSetup) {
+  ControllerScript script;
+  script.chatter_only = true;
+  script.chatter_period_ms = 5;  // 200 a second: a chatty controller, not a flood
+  script.chatter_limit_s = 6.0;
+  const StandInController controller(script);
+  RtdeRecordOptions options;
+  options.duration_s = 0.5;  // the 5 s reply timeout would come later
+  const Recording r = record_from(controller, options);
+  expect_refused(r, "--duration-s passed before the controller answered 'V'");
+  EXPECT_LT(r.took_ms, 2500);
+}
+
+TEST(RtdeClient, AControllerThatStopsSendingDataEndsTheRecording) {
+  ControllerScript script;
+  script.data_packages = 20;
+  script.data_period_ms = 8;
+  const StandInController controller(script);
+  RtdeRecordOptions options;
+  options.reply_timeout_ms = 500;
+  options.duration_s = 10.0;
+  const Recording r = record_from(controller, options);
+  expect_refused(r, "no data package for 500 ms");
+  EXPECT_EQ(r.rows.size(), 21u);
+  EXPECT_LT(r.took_ms, 3000);
+}
+
+TEST(RtdeClient, TrafficFarBeyondTheFrequencyIsRefused) {
+  // 87k packages/s at a requested 125 Hz were taken, to the disk and the terminal.
+  ControllerScript flood;
+  flood.data_packages = 100000;
+  const StandInController data(flood);
+  RtdeRecordOptions options;
+  options.frequency_hz = 125.0;
+  options.duration_s = 5.0;
+  Recording r = record_from(data, options);
+  expect_refused(r, "far more than the 125 Hz asked for");
+  EXPECT_LT(r.rows.size(), 1200u);
+  EXPECT_LT(r.took_ms, 2500);
+  ControllerScript chatter;
+  chatter.chatter_only = true;
+  chatter.chatter_after_start = true;
+  chatter.chatter_limit_s = 6.0;
+  const StandInController texts(chatter);
+  r = record_from(texts, options);
+  expect_refused(r, "far more than the 125 Hz asked for");
+  EXPECT_LT(r.texts.size(), 1200u);
+  EXPECT_LT(r.took_ms, 2500);
+}
+
+TEST(RtdeClient, ARowNoReaderTakesEndsTheRecordingKeepingTheRowsBefore) {
+  // NaN joints and timestamps that go back were written with success; every reader then
+  // refused the whole log.
+  ControllerScript nan;
+  nan.nan_at_package = 50;
+  nan.close_mid_stream = true;
+  const StandInController first(nan);
+  Recording r = record_from(first, RtdeRecordOptions());
+  expect_refused(r, "data package 51: actual_q_2 is NaN");
+  EXPECT_NE(r.error.message.find("the 50 rows before it are kept"), std::string::npos) << r.error.message;
+  EXPECT_EQ(r.rows.size(), 51u);
+  ControllerScript back;
+  back.backwards_at_package = 60;
+  back.close_mid_stream = true;
+  const StandInController second(back);
+  r = record_from(second, RtdeRecordOptions());
+  expect_refused(r,
+                 "data package 61: timestamp 1000.464000 s is before the previous package's "
+                 "1000.472000 s");
+  EXPECT_EQ(r.rows.size(), 61u);
+}
+
+TEST(RtdeClient, AnIpv6AddressIsTakenWithOrWithoutAPort) {
+  std::string host;
+  int port = 0;
+  ASSERT_TRUE(parse_rtde_address("[::1]:30005", &host, &port).ok());
+  EXPECT_EQ(host, "::1");
+  EXPECT_EQ(port, 30005);
+  ASSERT_TRUE(parse_rtde_address("::1", &host, &port).ok());
+  EXPECT_EQ(host, "::1");
+  EXPECT_EQ(port, kRtdePort);
+  ASSERT_TRUE(parse_rtde_address("[fe80::1%eth0]", &host, &port).ok());
+  EXPECT_EQ(host, "fe80::1%eth0");
+  ASSERT_TRUE(parse_rtde_address("ur5.local:30004", &host, &port).ok());
+  EXPECT_EQ(host, "ur5.local");
+  ASSERT_TRUE(parse_rtde_address("192.168.1.10", &host, &port).ok());
+  EXPECT_EQ(port, kRtdePort);
+  for (const char* bad : {"ur5:99999", "ur5:", ":30004", "[::1", "[::1]30004", "[::1]:", "[]:1", "ur5:3e4", ""}) {
+    EXPECT_EQ(parse_rtde_address(bad, &host, &port).fault, Fault::usage) << bad;
+  }
+  ControllerScript script;
+  script.ipv6 = true;
+  script.data_packages = 20;
+  script.close_mid_stream = true;
+  const StandInController controller(script);
+  const Recording r = record_from(controller, RtdeRecordOptions(), "::1");
+  ASSERT_TRUE(r.error.ok()) << r.error.message;
+  EXPECT_EQ(r.rows.size(), 21u);
 }
 
 }  // namespace

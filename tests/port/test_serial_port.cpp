@@ -10,6 +10,8 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
+#include <functional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -49,6 +51,30 @@ std::vector<std::uint8_t> read_bytes(ByteSource* port, std::size_t count, int li
 /// A temporary path under the test's working directory.
 std::string temp_path(const std::string& name) {
   return "hivecal_port_test_" + std::to_string(::getpid()) + "_" + name;
+}
+
+/// Runs `work` in a child process whose files may not grow beyond `max_bytes` (a full disk;
+/// SIGXFSZ ignored, as hivecal has it: the write fails with EFBIG); what it returns.
+std::string with_file_size_limit(rlim_t max_bytes, const std::function<std::string()>& work) {
+  int report[2];
+  if (::pipe(report) != 0) return "no pipe";
+  const pid_t child = ::fork();
+  if (child == 0) {
+    std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{max_bytes, max_bytes};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    const std::string result = work();
+    (void)!::write(report[1], result.data(), result.size());
+    ::_exit(0);
+  }
+  ::close(report[1]);
+  std::string result;
+  char buffer[512];
+  for (ssize_t got; (got = ::read(report[0], buffer, sizeof buffer)) > 0;)
+    result.append(buffer, static_cast<std::size_t>(got));
+  ::close(report[0]);
+  ::waitpid(child, nullptr, 0);
+  return result;
 }
 
 TEST(SerialPort, DeliversEveryByteOfDribbledWrites) {
@@ -200,6 +226,46 @@ TEST(CaptureFile, ReplaysExactlyAndPaces) {
   ::unlink(path.c_str());
 }
 
+TEST(CaptureFile, ASecondRecorderOfTheSameFileIsRefusedEvenWithForce) {
+  // Two `record ... --robot-out same.txt --force`: both wrote the file, one recording lost.
+  const std::string path = temp_path("locked.cap");
+  const std::vector<std::uint8_t> first_bytes = pattern(300, 8);
+  CaptureWriter first;
+  ASSERT_TRUE(first.open(path, true).ok());
+  ASSERT_TRUE(first.write(first_bytes.data(), first_bytes.size()).ok());
+  CaptureWriter second;
+  const Error error = second.open(path, true);
+  EXPECT_EQ(error.fault, Fault::output);
+  EXPECT_NE(error.message.find("another process is recording into it"), std::string::npos) << error.message;
+  ASSERT_TRUE(first.close().ok());
+  CaptureFileSource replay(path);
+  ASSERT_TRUE(replay.open().ok());
+  EXPECT_EQ(read_bytes(&replay, first_bytes.size() + 1, 2000), first_bytes) << "the first recording was truncated";
+  CaptureWriter after;  // once the first has closed, --force replaces it
+  EXPECT_TRUE(after.open(path, true).ok());
+  ::unlink(path.c_str());
+}
+
+TEST(CaptureFile, ARecordThatDoesNotFitIsCutOffAndTheFileEndsWhole) {
+  // A full disk (here the file size limit) in the middle of a log row: the part that went in
+  // is cut off again, so that every reader still takes the file.
+  const std::string path = temp_path("rows.txt");
+  const std::string message = with_file_size_limit(1000, [&path] {
+    CaptureWriter writer;
+    const std::string line = std::string(63, 'r') + "\n";
+    if (!writer.open(path, true).ok()) return std::string("not opened");
+    Error error;
+    while (error.ok()) error = writer.write_whole(reinterpret_cast<const std::uint8_t*>(line.data()), line.size());
+    (void)writer.close();
+    return error.message;
+  });
+  EXPECT_NE(message.find("the file ends at the last whole record (960 bytes)"), std::string::npos) << message;
+  CaptureFileSource replay(path);
+  ASSERT_TRUE(replay.open().ok());
+  EXPECT_EQ(read_bytes(&replay, 2000, 2000).size(), 960u);  // 15 rows of 64 bytes
+  ::unlink(path.c_str());
+}
+
 TEST(Recorder, CopiesTwoPortsToCaptures) {
   PtyPair robot;
   PtyPair tracker;
@@ -255,14 +321,7 @@ TEST(Recorder, CountsWhatTheCaptureHoldsWhenTheDiskIsFull) {
   ASSERT_TRUE(source_writer.open(source_path, true).ok());
   ASSERT_TRUE(source_writer.write(bytes.data(), bytes.size()).ok());
   ASSERT_TRUE(source_writer.close().ok());
-  int report[2];
-  ASSERT_EQ(::pipe(report), 0);
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {  // a limit of 1,000 bytes per file, in a child only
-    std::signal(SIGXFSZ, SIG_IGN);
-    const rlimit limit{1000, 1000};
-    ::setrlimit(RLIMIT_FSIZE, &limit);
+  const std::string reported = with_file_size_limit(1000, [&] {
     CaptureFileSource source(source_path);
     CaptureWriter writer;
     std::uint64_t out[3] = {0, 0, 0};
@@ -272,15 +331,11 @@ TEST(Recorder, CountsWhatTheCaptureHoldsWhenTheDiskIsFull) {
       out[1] = stats.bytes[0];
       out[2] = stats.bytes_read[0];
     }
-    (void)!::write(report[1], out, sizeof out);
-    ::_exit(0);
-  }
-  ::close(report[1]);
+    return std::string(reinterpret_cast<const char*>(out), sizeof out);
+  });
   std::uint64_t got[3] = {9, 0, 0};
-  EXPECT_EQ(::read(report[0], got, sizeof got), static_cast<ssize_t>(sizeof got));
-  ::close(report[0]);
-  int status = 0;
-  ::waitpid(child, &status, 0);
+  ASSERT_EQ(reported.size(), sizeof got);
+  std::memcpy(got, reported.data(), sizeof got);
   EXPECT_EQ(got[0], 0u) << "the failed write is an error";
   EXPECT_EQ(got[1], 1000u) << "bytes in the capture";
   EXPECT_EQ(got[2], bytes.size()) << "bytes read";

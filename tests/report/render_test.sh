@@ -6,8 +6,11 @@
 #     the clock-sync profiles in result.json agree (residual well under the speeds);
 #   - no numeric tick label has more than three significant digits;
 #   - every legend entry has a drawn element of its series in the same figure;
+#   - no text runs past its figure's edges, as the browser lays it out;
 #   - `hivecal report --calibration` redraws the same figures, the same bytes twice;
-#   - a sample made a blunder is set aside and shown (table and figure), --cv draws its folds.
+#   - a sample made a blunder is set aside and shown (table and figure), --cv draws its folds;
+#   - a run of 12,000 samples: the result and the page stay small (the report keeps 5,000
+#     samples, each figure draws at most its cap, the captions say so), redrawn the same.
 #   tests/report/render_test.sh HIVECAL
 set -uo pipefail
 hivecal=${1:?usage: render_test.sh HIVECAL}
@@ -58,6 +61,38 @@ orphan_legends() {  # orphan_legends DOM
   done
 }
 
+# Text laid out past its figure's edges by the browser (a legend entry cut at the panel's edge),
+# one "id: 'text'" per line: the page with a script that measures every <text> of every <svg>.
+overflowing_text() {  # overflowing_text HTML
+  local probe="$work/probe.html"
+  { sed '/^<\/body>$/,$d' "$1"; cat <<'JS'
+<script>
+const out = [];
+for (const svg of document.querySelectorAll('svg')) {
+  const box = svg.getBoundingClientRect();
+  for (const t of svg.querySelectorAll('text')) {
+    const r = t.getBoundingClientRect();
+    if (r.width > 0 && (r.left < box.left - 0.5 || r.right > box.right + 0.5 || r.top < box.top - 0.5 ||
+                        r.bottom > box.bottom + 0.5)) out.push(svg.id + ": '" + t.textContent + "'");
+  }
+}
+const pre = document.createElement('pre');
+pre.id = 'overflow';
+pre.textContent = out.length + ' overflowing\n' + out.join('\n');
+document.body.appendChild(pre);
+</script>
+</body>
+</html>
+JS
+  } >"$probe"
+  if ! render "$probe" "$work/probe.dom" || ! grep -q '<pre id="overflow">' "$work/probe.dom"; then
+    echo "(the measuring script did not run)"
+    return
+  fi
+  awk '/<pre id="overflow">/ { sub(/.*<pre id="overflow">/, ""); on = 1 }
+       on { done = sub(/<\/pre>.*/, ""); print; if (done) exit }' "$work/probe.dom" | tail -n +2
+}
+
 check_report() {  # check_report NAME HTML EXPECTED_IDS...
   local name=$1 html=$2
   shift 2
@@ -81,7 +116,10 @@ check_report() {  # check_report NAME HTML EXPECTED_IDS...
   legends=$(grep -o '<text class="legend"' "$dom" | wc -l)
   orphans=$(orphan_legends "$dom")
   if [ "$legends" -gt 10 ] && [ -z "$orphans" ]; then ok; else fail "$name: $legends legend entries; without a drawn element: $orphans"; fi
-  echo "$name: $svgs figures, $ticks tick labels, $legends legend entries checked"
+  local overflowing
+  overflowing=$(overflowing_text "$html")
+  if [ -z "$overflowing" ]; then ok; else fail "$name: text past its figure's edges: $overflowing"; fi
+  echo "$name: $svgs figures, $ticks tick labels, $legends legend entries and every text's edges checked"
 }
 
 # The checkers must be able to fail: a long label and an orphan legend entry are found.
@@ -94,6 +132,11 @@ if [ "$(long_ticks "$work/bad.dom" | tr '\n' ' ')" = "231.25 −0.01255 " ] &&
    [ "$(orphan_legends "$work/bad.dom")" = "fig-bad: 'measured'" ]; then ok; else
   fail "the checkers miss a long tick label or an orphan legend entry: $(long_ticks "$work/bad.dom") / $(orphan_legends "$work/bad.dom")"
 fi
+# ... and a legend entry cut at the panel's edge is found (the browser measures it).
+printf '<!DOCTYPE html>\n<html><body>\n<svg id="fig-cut" width="200" height="60"><text x="120" y="30">measurement noise (stated)</text><text x="10" y="30">fits</text></svg>\n</body>\n</html>\n' \
+  >"$work/cut.html"
+if [ "$(overflowing_text "$work/cut.html")" = "fig-cut: 'measurement noise (stated)'" ]; then ok; else
+  fail "the checker misses text past a figure's edge: '$(overflowing_text "$work/cut.html")'"; fi
 
 sim="$work/sim"
 "$hivecal" simulate --out-dir "$sim" --waypoints 20 --duration-s 250 --seed 5 >/dev/null || { echo "FAIL: simulate"; exit 1; }
@@ -180,6 +223,40 @@ if "$hivecal" calibrate --samples "$work/samples.csv" --compliance --out "$work/
   then ok; else fail "report --calibration draws other compliance tables or figures than calibrate --report"; fi
 else
   fail "calibrate --compliance from samples"
+fi
+
+# A run of 12,000 samples (the simulated arm's truth through predict, 10 um noise): the result
+# keeps 5,000 of them (it was 3.3 MB, and 271 MiB at 10^6 samples, more than the commands read),
+# the page draws at most 1,000 markers a joint panel and 400 arrows a set and says so (it was
+# 10.4 MB of solid blocks), and `hivecal report` redraws it the same.
+awk 'BEGIN { srand(12000); print "q1,q2,q3,q4,q5,q6"; for (i = 0; i < 12000; ++i)
+  printf "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f\n", rand() * 6 - 3, -rand() * 2.5 - 0.3, rand() * 2.4 - 1.2, rand() * 4 - 2,
+    rand() * 3 - 1.5, rand() * 6 - 3 }' >"$work/large_joints.csv"
+if "$hivecal" predict --calibration "$sim/truth.json" --joints "$work/large_joints.csv" --out "$work/large_points.csv" &&
+   paste -d, "$work/large_joints.csv" "$work/large_points.csv" | awk -F, 'BEGIN { srand(12001); OFS = "," }
+     NR == 1 { print "q1,q2,q3,q4,q5,q6,x,y,z"; next }
+     { for (k = 7; k <= 9; ++k) $k = sprintf("%.9f", $k + (rand() + rand() + rand() - 1.5) * 2e-5); print }' \
+     >"$work/large.csv" &&
+   "$hivecal" calibrate --samples "$work/large.csv" --out "$work/large.json" --report "$work/large" --quiet >/dev/null; then
+  check_report large "$work/large/index.html" "${common[@]}"
+  result_bytes=$(stat -c %s "$work/large.json")
+  page_bytes=$(stat -c %s "$work/large/index.html")
+  kept=$(grep -c '"q_rad": ' "$work/large.json")
+  if [ "$kept" -eq 5000 ] && grep -q '"sample_total": 12000' "$work/large.json" && [ "$result_bytes" -lt 2000000 ] &&
+     [ "$page_bytes" -lt 1500000 ]; then ok; else
+    fail "12,000 samples: $kept samples kept in a $result_bytes-byte result, a $page_bytes-byte page"; fi
+  markers=$(figures_of "$work/large.dom" | grep '^fig-residual-q1' | grep -o '<circle data-series' | wc -l)
+  arrows=$(figures_of "$work/large.dom" | grep '^fig-vectors-xy' | grep -o '<line data-series' | wc -l)
+  if [ "$markers" -eq 1000 ] && [ "$arrows" -eq 800 ] &&
+     grep -q "1,000 of 5,000 samples drawn, evenly spaced." "$work/large/index.html" &&
+     grep -q "The report keeps 5,000 of the run's 12,000 samples" "$work/large/index.html"; then ok; else
+    fail "12,000 samples: $markers markers in fig-residual-q1, $arrows arrows in fig-vectors-xy, or no caption saying so"; fi
+  if "$hivecal" report --calibration "$work/large.json" --out "$work/large-again" >/dev/null &&
+     cmp -s <(sed -n '/<h2>Table 2/,$p' "$work/large/index.html") <(sed -n '/<h2>Table 2/,$p' "$work/large-again/index.html")
+  then ok; else fail "report --calibration of the 12,000-sample result draws another page"; fi
+  echo "large: 12,000 samples, result $result_bytes bytes (5,000 samples kept), page $page_bytes bytes"
+else
+  fail "calibrate 12,000 samples"
 fi
 
 echo "report.render: $passed passed, $failed failed"

@@ -38,5 +38,7 @@
 #include "hivecal/solve/objective.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
 #include "hivecal/solve/population_stage.hpp"
+#include "hivecal/solve/prediction_uncertainty.hpp"
 #include "hivecal/plan/pose_plan.hpp"
 #include "hivecal/calibration.hpp"
+#include "hivecal/registration.hpp"

@@ -1,6 +1,7 @@
 #include "hivecal/port/capture_file.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -23,14 +24,28 @@ Error CaptureWriter::open(const std::string& path, bool replace) {
   if (replace && ::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) {
     return Error::output(quoted(path, 200) + ": not a regular file; refusing to write a capture over it");
   }
-  const int mode = replace ? O_TRUNC : O_EXCL;  // never truncates an existing capture unasked
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | mode | O_CLOEXEC, 0666);
+  // Never truncates an existing capture unasked; with `replace`, only once it is locked.
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | (replace ? 0 : O_EXCL) | O_CLOEXEC, 0666);
   if (fd_ < 0) {
     return Error::output(quoted(path, 200) + (errno == EEXIST
                                                   ? ": exists; refusing to overwrite a capture (--force replaces it)"
                                                   : ": cannot create: " + system_message(errno)));
   }
-  return Error{};
+  // Held while recording: a second recorder of the same file (even with --force) is refused
+  // instead of both writing it and one recording being lost.
+  Error error;
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    error = Error::output(quoted(path, 200) + (errno == EWOULDBLOCK
+                                                   ? ": another process is recording into it; refusing to replace it"
+                                                   : ": cannot lock: " + system_message(errno)));
+  } else if (replace && ::ftruncate(fd_, 0) != 0) {
+    error = Error::output(quoted(path, 200) + ": cannot truncate: " + system_message(errno));
+  }
+  if (!error.ok()) {
+    ::close(fd_);
+    fd_ = -1;
+  }
+  return error;
 }
 
 Error CaptureWriter::write(const std::uint8_t* bytes, std::size_t count) {
@@ -45,6 +60,20 @@ Error CaptureWriter::write(const std::uint8_t* bytes, std::size_t count) {
     bytes_written_ += static_cast<std::uint64_t>(put);
   }
   return Error{};
+}
+
+Error CaptureWriter::write_whole(const std::uint8_t* bytes, std::size_t count) {
+  const std::uint64_t before = bytes_written_;
+  const Error error = write(bytes, count);
+  if (error.ok() || bytes_written_ == before) return error;
+  // A part went in (a full disk, `ulimit -f`): cut it off, the file ends at the last whole record.
+  if (::ftruncate(fd_, static_cast<off_t>(before)) != 0) {
+    return Error::output(error.message +
+                         "; a part of the last record stays (cannot cut it off: " + std::strerror(errno) + ")");
+  }
+  bytes_written_ = before;
+  return Error::output(error.message + "; the file ends at the last whole record (" + std::to_string(before) +
+                       " bytes)");
 }
 
 Error CaptureWriter::sync() {

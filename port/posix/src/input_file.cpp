@@ -92,8 +92,7 @@ Error InputFile::open(const std::string& path, std::uint64_t max_bytes) {
   }
   if (!S_ISREG(info.st_mode)) {
     ::close(fd);
-    return Error::input(name + ": is " + describe_type(info.st_mode) +
-                        ", not a regular file (give a file, or '-' to read stdin)");
+    return Error::input(name + ": is " + describe_type(info.st_mode) + ", not a regular file");
   }
   const auto size = static_cast<std::uint64_t>(info.st_size);
   if (size > max_bytes) {

@@ -71,6 +71,20 @@ std::string named(const std::string& label, const std::string& path) {
   return (label.empty() ? "" : label + " ") + quoted(path, 200);
 }
 
+/// Empty or white space only (a path such as "  " is a mistake, never a name meant).
+bool blank(const std::string& text) {
+  return text.find_first_not_of(" \t\r\n\v\f") == std::string::npos;
+}
+
+/// Refuses a path that is blank or ends in a blank name ("dir/  "; "report/" is "report").
+Error check_not_blank(const std::string& path, const std::string& label, const char* what) {
+  const std::size_t last = path.find_last_not_of('/');
+  const bool root = !path.empty() && last == std::string::npos;
+  if (root || (!blank(path) && !blank(name_of(path.substr(0, last + 1))))) return Error{};
+  return Error::usage(label + ": " + (path.empty() ? std::string("empty path") : quoted(path) + " is blank") +
+                      ": give " + what);
+}
+
 /// The folder exists and this process may create files in it.
 Error check_folder_writable(const std::string& folder, const std::string& who) {
   struct stat info {};
@@ -124,6 +138,12 @@ std::string existing_ancestor(const std::string& path) {
   struct stat info {};
   while (::stat(folder.c_str(), &info) != 0 && folder != "." && folder != "/") folder = folder_of(folder);
   return folder;
+}
+
+/// The outputs this process has committed ("--out 'r.json'"), for finish_stdout's message.
+std::vector<std::string>& written_outputs() {
+  static std::vector<std::string> written;
+  return written;
 }
 
 void sync_folder(const std::string& folder) {
@@ -198,9 +218,11 @@ struct OutputSet::Output {
   bool is_stdout = false;                          ///< "-"
   bool is_folder = false;                          ///< a folder of files
   std::string target;                              ///< final path (a symlink resolved)
+  std::vector<std::string> names;                  ///< a folder: the files it will hold
   bool existed = false;                            ///< the file / folder was there before the run
   struct stat old {};                              ///< its metadata when it existed (a file)
   std::string temp_folder;                         ///< a new folder is built here, then renamed
+  std::string emptied_folder;                      ///< temp_folder once its files go one by one
   std::vector<std::unique_ptr<StagedFile>> files;  ///< staged content
   std::vector<std::string> finals;  ///< where each staged file goes (inside temp_folder for a new folder)
   std::vector<bool> moved;          ///< renamed into place already
@@ -212,18 +234,24 @@ OutputSet::~OutputSet() {
   abandon();
 }
 
-Error OutputSet::check_distinct(const FileIdentity& identity, const std::string& label, const std::string& path) const {
+Error OutputSet::check_distinct(const FileIdentity& identity, const std::string& who) const {
   for (const Input& input : inputs_) {
     if (same_file(identity, input.identity)) {
-      return Error::usage(named(label, path) + " is the same file as the input " + named(input.label, input.path) +
+      return Error::usage(who + " is the same file as the input " + named(input.label, input.path) +
                           ": refusing to overwrite an input");
     }
   }
   for (const auto& output : outputs_) {
     if (output->is_stdout) continue;
     if (same_file(identity, identify(output->target))) {
-      return Error::usage(named(label, path) + " is the same file as the output " + named(output->label, output->path) +
+      return Error::usage(who + " is the same file as the output " + named(output->label, output->path) +
                           ": each output needs its own path");
+    }
+    for (const std::string& name : output->names) {
+      if (same_file(identity, identify(join(output->target, name)))) {
+        return Error::usage(who + " is " + quoted(join(output->path, name), 200) + ", which the output " +
+                            named(output->label, output->path) + " writes: each output needs its own path");
+      }
     }
   }
   return Error{};
@@ -233,9 +261,15 @@ Error OutputSet::add_input(const std::string& path, const std::string& label) {
   if (path.empty() || path == "-") return Error{};
   Input input{label, path, identify(path)};
   for (const auto& output : outputs_) {
-    if (!output->is_stdout && same_file(input.identity, identify(output->target))) {
-      return Error::usage(named(output->label, output->path) + " is the same file as the input " + named(label, path) +
-                          ": refusing to overwrite an input");
+    if (output->is_stdout) continue;
+    std::string written = same_file(input.identity, identify(output->target)) ? output->path : "";
+    for (const std::string& name : output->names) {
+      if (same_file(input.identity, identify(join(output->target, name)))) written = join(output->path, name);
+    }
+    if (!written.empty()) {
+      return Error::usage(named(output->label, output->path) +
+                          (written == output->path ? "" : " writes " + quoted(written, 200) + ", which") +
+                          " is the same file as the input " + named(label, path) + ": refusing to overwrite an input");
     }
   }
   inputs_.push_back(std::move(input));
@@ -244,7 +278,8 @@ Error OutputSet::add_input(const std::string& path, const std::string& label) {
 
 Error OutputSet::add_file(const std::string& path, const std::string& label, std::size_t* id) {
   const std::string who = named(label, path);
-  if (path.empty()) return Error::usage(label + ": empty path");
+  Error error = check_not_blank(path, label, "a file name ('-': stdout)");
+  if (!error.ok()) return error;
   auto output = std::make_unique<Output>();
   output->label = label;
   output->path = path;
@@ -254,9 +289,9 @@ Error OutputSet::add_file(const std::string& path, const std::string& label, std
     }
     output->is_stdout = true;
   } else {
-    Error error = resolve_link(path, who, &output->target);
+    error = resolve_link(path, who, &output->target);
     if (error.ok()) error = check_file_target(output->target, who, &output->existed, &output->old);
-    if (error.ok()) error = check_distinct(identify(output->target), label, path);
+    if (error.ok()) error = check_distinct(identify(output->target), who);
     if (!error.ok()) return error;
   }
   *id = outputs_.size();
@@ -264,14 +299,17 @@ Error OutputSet::add_file(const std::string& path, const std::string& label, std
   return Error{};
 }
 
-Error OutputSet::add_folder(const std::string& path, const std::string& label, std::size_t* id) {
+Error OutputSet::add_folder(const std::string& path, const std::string& label, const std::vector<std::string>& names,
+                            std::size_t* id) {
   const std::string who = named(label, path);
-  if (path.empty() || path == "-") return Error::usage(label + ": a folder path is needed");
+  Error error = check_not_blank(path, label, "a folder path");
+  if (error.ok() && path == "-") error = Error::usage(label + ": a folder path is needed, not stdout ('-')");
+  if (!error.ok()) return error;
   auto output = std::make_unique<Output>();
   output->label = label;
   output->path = path;
   output->is_folder = true;
-  Error error = resolve_link(path, who, &output->target);
+  error = resolve_link(path, who, &output->target);
   if (!error.ok()) return error;
   struct stat info {};
   output->existed = ::stat(output->target.c_str(), &info) == 0;
@@ -279,8 +317,13 @@ Error OutputSet::add_folder(const std::string& path, const std::string& label, s
     return Error::output(who + ": exists and is " + kind_of(info.st_mode) + ", not a folder");
   }
   error = check_folder_writable(output->existed ? output->target : existing_ancestor(output->target), who);
-  if (error.ok()) error = check_distinct(identify(output->target), label, path);
+  if (error.ok()) error = check_distinct(identify(output->target), who);
+  for (std::size_t k = 0; k < names.size() && error.ok(); ++k) {
+    error = check_distinct(identify(join(output->target, names[k])),
+                           who + " writes " + quoted(join(path, names[k]), 200) + ", which");
+  }
   if (!error.ok()) return error;
+  output->names = names;
   *id = outputs_.size();
   outputs_.push_back(std::move(output));
   return Error{};
@@ -288,7 +331,9 @@ Error OutputSet::add_folder(const std::string& path, const std::string& label, s
 
 Error OutputSet::stage_in_folder(Output& folder, const std::string& name, StagedFile** file) {
   const std::string who = named(folder.label, join(folder.path, name));
-  if (name.empty() || name.find('/') != std::string::npos) return Error::usage(who + ": bad file name");
+  if (std::find(folder.names.begin(), folder.names.end(), name) == folder.names.end()) {
+    return Error::usage(who + ": internal: a file the folder was not declared with");
+  }
   std::string base;
   if (folder.existed) {
     base = folder.target;
@@ -312,8 +357,7 @@ Error OutputSet::stage_in_folder(Output& folder, const std::string& name, Staged
   struct stat old {};
   bool existed = false;
   if (folder.existed) {
-    Error error = check_file_target(final_path, who, &existed, &old);
-    if (error.ok() && existed) error = check_distinct(identify(final_path), folder.label, join(folder.path, name));
+    const Error error = check_file_target(final_path, who, &existed, &old);
     if (!error.ok()) return error;
     if (existed) {
       staged->mode_ = old.st_mode & 07777;
@@ -376,41 +420,113 @@ Error OutputSet::stage_text(std::size_t id, const std::string& name, const std::
 namespace {
 
 /// Exclusive locks on the folders a commit writes into (flock on each folder itself: no lock
-/// file is left behind), taken in path order and released on destruction: concurrent runs
-/// on the same outputs replace them one set after the other, never interleaved.
+/// file is left behind), released on destruction: concurrent runs on the same outputs replace
+/// them one set after the other, never interleaved. Each folder is locked once however it is
+/// named ("x", "./x", "$PWD/x", a symlink: a second flock on a second descriptor of the same
+/// folder would wait for the first forever), all in the order of device and inode, which every
+/// run shares.
 class FolderLocks {
  public:
-  explicit FolderLocks(std::vector<std::string> folders) {
-    std::sort(folders.begin(), folders.end());
-    folders.erase(std::unique(folders.begin(), folders.end()), folders.end());
-    for (const std::string& folder : folders) {
-      const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-      if (fd < 0) continue;  // not there (yet): nothing to serialise on
-      while (::flock(fd, LOCK_EX) != 0 && errno == EINTR) {
-      }
-      fds_.push_back(fd);
-    }
-  }
-  ~FolderLocks() {
-    for (int fd : fds_) ::close(fd);  // closing releases the lock
-  }
+  FolderLocks() = default;
+  ~FolderLocks() { release(); }
   FolderLocks(const FolderLocks&) = delete;
   FolderLocks& operator=(const FolderLocks&) = delete;
 
+  /// Releases what is held and locks `folders` (one that is not there has nothing to lock).
+  void take(const std::vector<std::string>& folders) {
+    release();
+    struct Opened {
+      dev_t device;
+      ino_t inode;
+      int fd;
+    };
+    std::vector<Opened> opened;
+    for (const std::string& folder : folders) {
+      const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+      struct stat info {};
+      if (fd < 0) continue;  // not there (yet): nothing to serialise on
+      const bool known = ::fstat(fd, &info) == 0 && std::any_of(opened.begin(), opened.end(), [&](const Opened& o) {
+                           return o.device == info.st_dev && o.inode == info.st_ino;
+                         });
+      if (known) {
+        ::close(fd);
+      } else {
+        opened.push_back(Opened{info.st_dev, info.st_ino, fd});
+      }
+    }
+    std::sort(opened.begin(), opened.end(), [](const Opened& a, const Opened& b) {
+      return a.device != b.device ? a.device < b.device : a.inode < b.inode;
+    });
+    for (const Opened& o : opened) {
+      while (::flock(o.fd, LOCK_EX) != 0 && errno == EINTR) {
+      }
+      fds_.push_back(o.fd);
+    }
+  }
+
  private:
+  void release() {
+    for (int fd : fds_) ::close(fd);  // closing releases the lock
+    fds_.clear();
+  }
   std::vector<int> fds_;
 };
 
 }  // namespace
 
-Error OutputSet::commit() {
+std::vector<std::string> OutputSet::folders_to_lock() const {
   std::vector<std::string> folders;
   for (const auto& output : outputs_) {
-    if (!output->is_stdout) folders.push_back(existing_ancestor(output->target));  // the folder it goes into
+    if (output->is_stdout) continue;
+    struct stat info {};
+    const bool folder_there = output->is_folder && ::stat(output->target.c_str(), &info) == 0 && S_ISDIR(info.st_mode);
+    // A folder's files go into it; a file, or a new folder, into the folder above it.
+    folders.push_back(folder_there ? output->target : existing_ancestor(output->target));
   }
-  const FolderLocks locks(std::move(folders));
+  std::sort(folders.begin(), folders.end());
+  return folders;
+}
+
+Error OutputSet::write_into_folders_made_meanwhile() {
+  for (auto& output : outputs_) {
+    if (output->temp_folder.empty()) continue;
+    struct stat info {};
+    if (::stat(output->target.c_str(), &info) != 0) continue;  // still new: the whole folder is moved
+    if (!S_ISDIR(info.st_mode)) {
+      return Error::output(named(output->label, output->path) + ": became " + kind_of(info.st_mode) +
+                           " during the run; refusing to replace it");
+    }
+    // Another run made the folder since the declaration: its files go in one by one, as into
+    // a folder that was there (a file of that run's that this one writes is replaced whole).
+    for (std::size_t k = 0; k < output->files.size(); ++k) {
+      output->finals[k] = join(output->target, name_of(output->finals[k]));
+      struct stat old {};
+      if (::stat(output->finals[k].c_str(), &old) == 0 && S_ISREG(old.st_mode)) {
+        StagedFile& file = *output->files[k];
+        file.mode_ = old.st_mode & 07777;
+        file.set_owner_ = true;
+        file.owner_uid_ = old.st_uid;
+        file.owner_gid_ = old.st_gid;
+      }
+    }
+    output->emptied_folder = output->temp_folder;  // removed once its files have moved
+    output->temp_folder.clear();
+    output->existed = true;
+  }
+  return Error{};
+}
+
+Error OutputSet::commit() {
+  FolderLocks locks;
+  // A folder that appears while this run waits (another run made it) is locked too.
+  for (std::vector<std::string> folders = folders_to_lock();;) {
+    locks.take(folders);
+    std::vector<std::string> now = folders_to_lock();
+    if (now == folders) break;
+    folders = std::move(now);
+  }
+  Error error = write_into_folders_made_meanwhile();
   const SignalsHeld held;  // the set is moved whole: a signal now is delivered after abandon()
-  Error error;
   for (auto& output : outputs_) {
     for (auto& file : output->files) {
       const Error finished = file->finish();
@@ -434,14 +550,17 @@ Error OutputSet::commit() {
       }
     }
   }
-  for (auto& output : outputs_) {  // stdout first: it cannot be taken back
+  // stdout first, what the run printed before (its tables) and an output staged for it: it
+  // cannot be taken back, and when it does not arrive no file is replaced.
+  for (auto& output : outputs_) {
     if (!error.ok() || !output->is_stdout || output->files.empty()) continue;
     const std::string& bytes = output->files.front()->memory_;
     if (std::fwrite(bytes.data(), 1, bytes.size(), stdout) != bytes.size()) {
       error = Error::output("stdout: write failed: " + system_message(errno));
     }
-    if (error.ok()) error = finish_stdout();
   }
+  if (error.ok()) error = finish_stdout();
+  if (!error.ok() && error.message.rfind("stdout:", 0) == 0) error.message += "; no output was replaced";
   for (auto& output : outputs_) {
     if (!error.ok()) break;
     if (output->is_stdout) continue;
@@ -494,6 +613,11 @@ Error OutputSet::commit() {
   }
   committed_ = true;
   abandon();  // whatever is left (after a failure) goes
+  if (error.ok()) {
+    for (const auto& output : outputs_) {
+      if (!output->is_stdout) written_outputs().push_back(named(output->label, output->path));
+    }
+  }
   return error;
 }
 
@@ -513,6 +637,9 @@ void OutputSet::abandon() {
     }
     if (!output->temp_folder.empty() && !output->folder_moved) ::rmdir(output->temp_folder.c_str());
     unregister_temporary(output->temp_folder);
+    if (!output->emptied_folder.empty()) ::rmdir(output->emptied_folder.c_str());
+    unregister_temporary(output->emptied_folder);
+    output->emptied_folder.clear();
     output->files.clear();
     output->finals.clear();
     output->moved.clear();
@@ -525,7 +652,10 @@ Error finish_stdout() {
   const bool flushed = std::fflush(stdout) == 0;
   if (flushed && std::ferror(stdout) == 0) return Error{};
   const int saved = errno;
-  return Error::output("stdout: write failed: " + (saved != 0 ? system_message(saved) : std::string("I/O error")));
+  std::string written;  // a failure after a commit must not read as "nothing was written"
+  for (const std::string& output : written_outputs()) written += (written.empty() ? "" : ", ") + output;
+  return Error::output("stdout: write failed: " + (saved != 0 ? system_message(saved) : std::string("I/O error")) +
+                       (written.empty() ? "" : "; the outputs were written before it: " + written));
 }
 
 }  // namespace hivecal::port

@@ -15,7 +15,12 @@ constexpr int kSlots = 256;
 /// null. Written by the main thread only; read by the handler, which interrupts it.
 std::atomic<char*> g_slots[kSlots];
 
-constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
+/// Every signal whose default action ends the process and that a user, a shell or a job
+/// system sends (kill -USR1, an alarm, a CPU limit, Ctrl-backslash), besides those that report a
+/// fault of the process itself (SIGSEGV...). SIGPIPE is ignored by main() (writes fail with
+/// EPIPE) and SIGXFSZ here (writes beyond `ulimit -f` fail with EFBIG): both become output
+/// errors that the normal path reports, its temporaries removed.
+constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGVTALRM, SIGPROF, SIGXCPU};
 
 void remove_kind(char kind) {
   for (std::atomic<char*>& slot : g_slots) {
@@ -73,6 +78,7 @@ void remove_temporaries_on_signals() {
   const sigset_t all = ending_signals();
   action.sa_mask = all;  // one handler at a time
   for (int s : kSignals) (void)::sigaction(s, &action, nullptr);
+  (void)::signal(SIGXFSZ, SIG_IGN);
 }
 
 SignalsHeld::SignalsHeld() {

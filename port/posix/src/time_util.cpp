@@ -18,4 +18,14 @@ void sleep_ms(std::int64_t ms) {
   }
 }
 
+bool sleep_ms(std::int64_t ms, const std::atomic<bool>& stop) {
+  constexpr std::int64_t kSlice_ms = 100;
+  const std::int64_t end_ms = monotonic_ms() + (ms > 0 ? ms : 0);
+  for (std::int64_t left_ms = ms; !stop.load(); left_ms = end_ms - monotonic_ms()) {
+    if (left_ms <= 0) return true;
+    sleep_ms(left_ms < kSlice_ms ? left_ms : kSlice_ms);
+  }
+  return false;
+}
+
 }  // namespace hivecal::port

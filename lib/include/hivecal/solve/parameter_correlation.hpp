@@ -1,6 +1,6 @@
-// Correlations of the estimated parameters of a least-squares fit: the normalised inverse of
-// its normal equations at the result. Which parameters the data cannot tell apart (|rho|
-// near 1) explains a large move or a dropped parameter (docs/solvers-lm.md, "Parameter
+// Correlations and covariance of the estimated parameters of a least-squares fit: the
+// (normalised, or scaled by the residual variance) inverse of its normal equations at the result. Which parameters the
+// data cannot tell apart (|rho| near 1) explains a large move or a dropped parameter (docs/solvers-lm.md, "Parameter
 // correlations"). Kept out of the job's result: the matrix and its scratch are five
 // NormalMatrix (~43 kB each at the hosted capacity), beyond the firmware's RAM; a caller that
 // wants it supplies the storage.
@@ -32,6 +32,17 @@ struct CorrelationScratch {
 Status parameter_correlations(const RobotModel& model, const RigidTransform& base_to_tracker,
                               Span<const Sample> samples, const PointLoss& loss, ParamMask kept,
                               CorrelationScratch* scratch, NormalMatrix* correlation);
+
+/// The covariance of the parameters in `kept` at `model` / `base_to_tracker` from `samples`
+/// under `loss`: C = sigma_hat^2 (J^T W J)^-1 over the kept parameters (targets 2.. whose
+/// tool points `kept` estimates, kOtherTargetTools, eliminated as LM does: C is their
+/// marginal), sigma_hat^2 = sum w |r|^2 / (3 N - p - 3 per eliminated target), LM's residual
+/// variance; sqrt(C_kk) is LmResult::sigma(k) at LM's result [m^2], [m rad] or [rad^2].
+/// Entries of parameters not kept are 0. *residual_dof (optional): that 3 N - p - ... [-].
+/// Errors: those of parameter_correlations, too_few_samples (no residual degree of freedom).
+Status parameter_covariance(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
+                            const PointLoss& loss, ParamMask kept, CorrelationScratch* scratch,
+                            NormalMatrix* covariance, int* residual_dof = nullptr);
 
 /// The parameter most correlated with parameter k among the kept ones (k itself excluded),
 /// and that correlation [-]. -1 and 0 when none is kept or every correlation is 0.

@@ -2,6 +2,7 @@
 // interface. Bytes only: framing and decoding live in the library.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -41,5 +42,8 @@ class ByteSource {
 std::int64_t monotonic_ms();
 /// Sleeps `ms` milliseconds, resuming after signals.
 void sleep_ms(std::int64_t ms);
+/// Sleeps `ms` milliseconds or until *stop is set (checked at least every 100 ms); false
+/// when stopped.
+bool sleep_ms(std::int64_t ms, const std::atomic<bool>& stop);
 
 }  // namespace hivecal::port

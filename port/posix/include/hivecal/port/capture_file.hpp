@@ -21,10 +21,15 @@ class CaptureWriter {
   CaptureWriter& operator=(const CaptureWriter&) = delete;
 
   /// Creates `path`; an existing file is an error unless `replace` (then a regular file is
-  /// truncated; a device, FIFO or folder is still refused). Fault::output on failure.
+  /// truncated; a device, FIFO or folder is still refused). The file stays locked (flock)
+  /// until close(): a file another writer holds is refused, never truncated. Fault::output on
+  /// failure.
   Error open(const std::string& path, bool replace);
   /// Writes all `count` bytes (retrying short writes and EINTR). Fault::output on failure.
   Error write(const std::uint8_t* bytes, std::size_t count);
+  /// Writes one record (a log row) whole: after a failed write the part that went in is cut
+  /// off again, so the file ends at the last whole record. Fault::output on failure.
+  Error write_whole(const std::uint8_t* bytes, std::size_t count);
   /// Forces the written bytes to storage (fsync).
   Error sync();
   /// sync() then close; the first failure of either. Safe to call twice.

@@ -1,15 +1,18 @@
 // The outputs of one run, written all or nothing (docs/cli.md "Outputs"):
-//  1. declare: every output (file, folder, or '-' for stdout) and every input is declared
-//     before the long work; an output that is a device, FIFO, socket or folder, whose folder
-//     does not exist or is not writable, or that is an input or another output of the run
-//     (same realpath, or same device + inode) is refused at once;
+//  1. declare: every output (file, folder with the names of the files it will hold, or '-' for
+//     stdout) and every input is declared before the long work; an output that is blank, a
+//     device, FIFO, socket or folder, whose folder does not exist or is not writable, or that
+//     is an input, another output or a file another output writes (same realpath, or same
+//     device + inode) is refused at once;
 //  2. stage: each output is written to a temporary beside its target (a symlink is followed:
 //     the temporary goes beside the link's target, the link stays), every write, the fsync
 //     and the close checked; stdout's bytes are kept in memory;
-//  3. commit: the folders the outputs go into are locked (flock: concurrent runs commit one
-//     whole set after the other), stdout is written and flushed (a full device is an error),
-//     then every temporary is renamed onto its target with the old file's mode (and owner,
-//     when allowed).
+//  3. commit: the folders the outputs go into are locked (flock, each folder once however it
+//     is named: concurrent runs commit one whole set after the other), stdout (an output
+//     staged for it, and whatever the run printed before) is written and flushed (a full
+//     device is an error, and nothing is replaced), then every temporary is renamed onto its target
+//     with the old file's mode (and owner, when allowed). A new folder that another run
+//     created meanwhile is written into as an existing one.
 // A set destroyed without commit() removes its temporaries: a failed run leaves no output; a
 // signal removes them too (temporaries.hpp), and waits while the set is moved into place.
 #pragma once
@@ -73,8 +76,9 @@ class OutputSet {
   /// Declares an output file ("-": stdout) and checks that it can be written; *id names it.
   Error add_file(const std::string& path, const std::string& label, std::size_t* id);
   /// Declares an output folder (created with its missing parents at commit; files already
-  /// in it that the run does not write stay).
-  Error add_folder(const std::string& path, const std::string& label, std::size_t* id);
+  /// in it that the run does not write stay) that will hold the files `names` (no others).
+  Error add_folder(const std::string& path, const std::string& label, const std::vector<std::string>& names,
+                   std::size_t* id);
 
   /// Starts the content of output file `id`, or of file `name` inside output folder `id`.
   /// The StagedFile belongs to the set; call finish() on it when written.
@@ -95,8 +99,10 @@ class OutputSet {
     std::string path;
     FileIdentity identity;
   };
-  Error check_distinct(const FileIdentity& identity, const std::string& label, const std::string& path) const;
+  Error check_distinct(const FileIdentity& identity, const std::string& who) const;
   Error stage_in_folder(Output& folder, const std::string& name, StagedFile** file);
+  std::vector<std::string> folders_to_lock() const;
+  Error write_into_folders_made_meanwhile();
 
   std::vector<Input> inputs_;
   std::vector<std::unique_ptr<Output>> outputs_;
@@ -104,7 +110,8 @@ class OutputSet {
 };
 
 /// Flushes stdout and checks that everything printed on it was written (e.g. not to a full
-/// device); Fault::output with the reason otherwise.
+/// device); Fault::output with the reason otherwise, naming the outputs this process has
+/// committed already (a failure after a commit leaves them written).
 Error finish_stdout();
 
 }  // namespace hivecal::port

@@ -54,12 +54,25 @@ struct RtdeRecordOptions {
 const std::vector<std::string>& rtde_recorded_variables();
 std::string rtde_log_header();
 
+/// The default RTDE port.
+inline constexpr int kRtdePort = 30004;
+
+/// Reads --rtde's value: HOST, HOST:PORT, an IPv6 address (`::1`, bare: no port) or
+/// [IPv6]:PORT; *port is kRtdePort when none is given. Fault::usage naming the forms otherwise.
+Error parse_rtde_address(const std::string& text, std::string* host, int* port);
+
 /// Connects to `host`:`port`, negotiates protocol version 2, reads the controller version,
 /// sets up the recipe `timestamp,actual_q,actual_TCP_pose` at `frequency_hz`, starts, and
 /// hands one log row per data package to `write_row` (text ending in '\n', the header first)
-/// until *stop is set, `duration_s` passes or the controller closes; then pauses. Errors:
-/// input (no answer, refused version, a variable the controller does not know, a malformed
-/// package), output (write_row's).
+/// until *stop is set, `duration_s` passes (counted from the call: the connection and the
+/// setup take part of it) or the controller closes; then pauses. Each setup reply is due
+/// `reply_timeout_ms` after its request (text messages meanwhile do not extend it); a package
+/// the network delivers in parts is put together whatever the pauses between them, unless it
+/// stays unfinished for `reply_timeout_ms`. Errors: input (no answer, refused version, a
+/// variable the controller does not know, a malformed or stalled package, no data package
+/// for `reply_timeout_ms`, traffic beyond twice `frequency_hz` after a burst of 1000
+/// packages, a row with a value that is not finite or a timestamp before the previous one:
+/// the rows before it are kept), output (write_row's).
 Error record_rtde(const std::string& host, int port, const RtdeRecordOptions& options,
                   const volatile std::sig_atomic_t* stop, const std::function<Error(const std::string&)>& write_row,
                   RtdeStats* stats);

@@ -17,10 +17,12 @@ void register_temporary(const std::string& path, bool is_folder);
 /// The temporary is gone or became an output: a signal leaves it alone.
 void unregister_temporary(const std::string& path);
 
-/// Installs the handlers for SIGINT, SIGTERM and SIGHUP.
+/// Installs the handlers for SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM,
+/// SIGVTALRM, SIGPROF and SIGXCPU, and ignores SIGXFSZ (a write beyond the file size limit
+/// then fails with EFBIG, an output error).
 void remove_temporaries_on_signals();
 
-/// Blocks SIGINT, SIGTERM and SIGHUP while alive (a set of outputs is moved into place
+/// Blocks the signals remove_temporaries_on_signals() handles while alive (a set of outputs is moved into place
 /// whole); a signal that came meanwhile is delivered on destruction.
 class SignalsHeld {
  public:
