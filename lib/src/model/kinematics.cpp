@@ -25,12 +25,12 @@ __attribute__((always_inline)) inline Link revolute_link(const DhJoint& joint, d
 
 /// The link of joint j of `model` at reading q with its twist's sin and cos given: q turns theta
 /// (revolute, [rad]) or slides d (prismatic, [m]: the link of a joint at theta_offset, d + q).
-/// One copy of the link's arithmetic for both types (the firmware's flash).
+/// A revolute joint takes the arithmetic of before joints had types, without a select.
 __attribute__((always_inline)) inline Link dh_link(const RobotModel& model, int j, double sa, double ca, double q) {
-  const bool revolute = joint_type(model, j) == JointType::revolute;
-  DhJoint joint = model.joints[j];
-  if (!revolute) joint.d_m += q;
-  return revolute_link(joint, sa, ca, revolute ? q : 0.0);
+  if (joint_type(model, j) == JointType::revolute) return revolute_link(model.joints[j], sa, ca, q);
+  DhJoint slid = model.joints[j];
+  slid.d_m += q;
+  return revolute_link(slid, sa, ca, 0.0);
 }
 
 Link dh_link(const RobotModel& model, int j, double q) {
@@ -174,8 +174,15 @@ RigidTransform rigid_flange(const RobotModel& model, const JointVector& q_rad) {
   return pose;
 }
 
-/// The rigid chain from the tool point `tool_m` inwards (twist trig from `trig`).
-Vec3 rigid_point(const RobotModel& model, const ModelTrig& trig, const Vec3& tool_m, const JointVector& q_rad) {
+/// The sin and cos of the joints' twists, all that the point's recursion reads (the model's first
+/// joint_count; the rest not written).
+struct TwistTrig {
+  const double* sin_alpha;  ///< sine of alpha_j [-]
+  const double* cos_alpha;  ///< cosine of alpha_j [-]
+};
+
+/// The rigid chain from the tool point `tool_m` inwards.
+Vec3 rigid_point(const RobotModel& model, TwistTrig trig, const Vec3& tool_m, const JointVector& q_rad) {
   // Innermost first: p <- R_j p + t_j needs only matrix-vector products.
   Vec3 point_m = tool_m;
   for (int j = model.joint_count - 1; j >= 0; --j) {
@@ -184,6 +191,21 @@ Vec3 rigid_point(const RobotModel& model, const ModelTrig& trig, const Vec3& too
   }
   return point_m;
 }
+
+Vec3 rigid_point(const RobotModel& model, const ModelTrig& trig, const Vec3& tool_m, const JointVector& q_rad) {
+  return rigid_point(model, TwistTrig{trig.sin_alpha, trig.cos_alpha}, tool_m, q_rad);
+}
+
+/// The twists' sin and cos of a one-shot FK call, computed into storage of the caller's that
+/// is not cleared (the joints beyond the model's are not read).
+struct TwistStorage {
+  double sin_alpha[kMaxJoints];
+  double cos_alpha[kMaxJoints];
+  explicit TwistStorage(const RobotModel& model) {
+    for (int j = 0; j < model.joint_count; ++j) math::sincos(model.joints[j].alpha_rad, &sin_alpha[j], &cos_alpha[j]);
+  }
+  TwistTrig trig() const { return TwistTrig{sin_alpha, cos_alpha}; }
+};
 
 }  // namespace
 
@@ -202,20 +224,6 @@ ModelTrig model_trig(const RobotModel& model) {
   return trig;
 }
 
-namespace {
-
-/// The twist half of model_trig, all that fk_tool_point reads (it takes sin/cos of q + offset
-/// directly): half the trig of a one-shot FK call.
-ModelTrig twist_trig(const RobotModel& model) {
-  ModelTrig trig;
-  for (int j = 0; j < model.joint_count; ++j) {
-    math::sincos(model.joints[j].alpha_rad, &trig.sin_alpha[j], &trig.cos_alpha[j]);
-  }
-  return trig;
-}
-
-}  // namespace
-
 JointTrig joint_trig(const RobotModel& model, const JointVector& q_rad) {
   JointTrig trig;
   for (int j = 0; j < model.joint_count; ++j) {
@@ -230,14 +238,17 @@ JointTrig joint_trig(const RobotModel& model, const JointVector& q_rad) {
 }
 
 Vec3 fk_tool_point(const RobotModel& model, const JointVector& q_rad) {
-  return fk_tool_point(model, twist_trig(model), q_rad);
+  const TwistStorage twist(model);  // the twist half of model_trig: fk_tool_point takes sin/cos of q + offset directly
+  if (model.compliance.term_count == 0) return rigid_point(model, twist.trig(), model.tool_m, q_rad);
+  return rigid_point(model, twist.trig(), model.tool_m, deflected(model, q_rad));
 }
 
 Vec3 fk_target_point(const RobotModel& model, const JointVector& q_rad, int target) {
   // The same recursion with the target's tool point (the same bits as fk_tool_point for
   // target 0); the deflection is the model's, whatever the target.
-  if (model.compliance.term_count == 0) return rigid_point(model, twist_trig(model), target_tool(model, target), q_rad);
-  return rigid_point(model, twist_trig(model), target_tool(model, target), deflected(model, q_rad));
+  const TwistStorage twist(model);
+  if (model.compliance.term_count == 0) return rigid_point(model, twist.trig(), target_tool(model, target), q_rad);
+  return rigid_point(model, twist.trig(), target_tool(model, target), deflected(model, q_rad));
 }
 
 Vec3 fk_target_point(const RobotModel& model, const ModelTrig& trig, const JointVector& q_rad, int target) {

@@ -15,9 +15,22 @@ static_assert(sizeof(DeviceInfoRecord::name) == kDeviceNameBytes + 1, "name hold
 static_assert(kMaxSpecFrameBytes == 138, "JOINT_STATE: 136-byte packet + COBS code byte + delimiter");
 static_assert(kMaxJoints <= 255, "JOINT_STATE version 2 counts its joints in one byte");
 
+/// Whether the target stores integers as the wire does (little-endian): then a field is one copy
+/// of its bytes, not a shift per byte.
+constexpr bool kWireOrderIsNative =
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__)
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
+#else
+    false;
+#endif
+
 /// Little-endian unsigned integer of `bytes` (<= 8) bytes at `data`.
 std::uint64_t load_le(const std::uint8_t* data, std::size_t bytes) {
   std::uint64_t value = 0;
+  if constexpr (kWireOrderIsNative) {
+    std::memcpy(&value, data, bytes);  // the low `bytes` bytes of the value, as on the wire
+    return value;
+  }
   for (std::size_t i = 0; i < bytes; ++i) value |= static_cast<std::uint64_t>(data[i]) << (8u * i);
   return value;
 }
@@ -70,6 +83,11 @@ class PacketWriter {
   void put(std::uint64_t value, std::size_t bytes) {
     if (bytes > capacity_ - size_) {
       ok_ = false;
+      return;
+    }
+    if constexpr (kWireOrderIsNative) {
+      std::memcpy(packet_ + size_, &value, bytes);  // the low `bytes` bytes, as the wire wants them
+      size_ += bytes;
       return;
     }
     for (std::size_t i = 0; i < bytes; ++i) packet_[size_++] = static_cast<std::uint8_t>(value >> (8u * i));
@@ -164,7 +182,8 @@ struct WireTraits {
 };
 
 /// The joints' values of a joint record: positions, then velocities, then currents. One copy,
-/// not unrolled, serves both versions' layouts (the firmware's flash).
+/// its loops over the joints not unrolled (a field's bytes are), serves both versions' layouts
+/// (the firmware's flash).
 template <typename Io, typename Record>
 [[gnu::noinline, gnu::noclone]] void joint_values(Io& io, Record& record, int joints) {
 #pragma GCC unroll 1
