@@ -10,8 +10,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "hivecal/core/math.hpp"
 #include "textio/delimited.hpp"
 #include "textio/text_util.hpp"
+#include "textio/transform_text.hpp"
 
 namespace hivecal::cli {
 
@@ -118,23 +120,42 @@ std::string NumberRange::text() const {
   return range + (unit.empty() ? "" : " " + unit);
 }
 
+namespace {
+
+/// Why a text that parse_number read as `read` is no value for `range` ("" for a number): the one
+/// wording of check_number and check_vec3. 0 is advised for an underflow only where 0 is taken.
+std::string number_reason(textio::NumberText read, const NumberRange& range) {
+  switch (read) {
+    case textio::NumberText::ok: return "";
+    case textio::NumberText::malformed: return "not a number";
+    case textio::NumberText::overflow: return "beyond a double's range (1.8e308)";
+    case textio::NumberText::underflow:
+      return std::string("too small for a double (it underflows below 4.9e-324): give ") +
+             (range.contains(0.0) ? "0 or " : "") + "a larger value";
+  }
+  return "";
+}
+
+/// parse_number, with NaN as no number (a NaN is no value of any option).
+textio::NumberText read_number(std::string_view text, double* value) {
+  const textio::NumberText read = textio::parse_number(text, value);
+  return read == textio::NumberText::ok && std::isnan(*value) ? textio::NumberText::malformed : read;
+}
+
+}  // namespace
+
 Error check_number(const std::string& option, std::string_view text, const NumberRange& range, double* value) {
   double parsed = 0.0;
-  textio::NumberText read = textio::parse_number(text, &parsed);
-  if (read == textio::NumberText::ok && std::isnan(parsed)) read = textio::NumberText::malformed;  // NaN: no value
-  const bool unbounded = std::isinf(range.lo) && std::isinf(range.hi);                             // number_option
+  const textio::NumberText read = read_number(text, &parsed);
+  const bool unbounded = std::isinf(range.lo) && std::isinf(range.hi);  // number_option
   const std::string within = unbounded ? "" : " within " + range.text();
   const std::string got = ", got " + port::quoted(text);
-  switch (read) {
-    case textio::NumberText::ok: break;
-    case textio::NumberText::malformed:
-      return Error::usage(option + " must be a number" + within + got + ": not a number");
-    case textio::NumberText::overflow:
-      return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
-                          ": beyond a double's range (1.8e308)");
-    case textio::NumberText::underflow:
-      return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got +
-                          ": too small for a double (it underflows below 4.9e-324): give 0 or a larger value");
+  if (read == textio::NumberText::malformed) {
+    return Error::usage(option + " must be a number" + within + got + ": " + number_reason(read, range));
+  }
+  if (read != textio::NumberText::ok) {
+    return Error::usage(option + " must be" + (unbounded ? " a number" : within) + got + ": " +
+                        number_reason(read, range));
   }
   if (!range.contains(parsed)) return Error::usage(option + " must be within " + range.text() + got);
   *value = parsed;
@@ -155,16 +176,21 @@ Error bounded_option(const Options& options, const std::string& name, double lo,
   return ranged_option(options, name, NumberRange{lo, hi}, value);
 }
 
-Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi,
-                   std::size_t* value) {
+Error check_count(const std::string& option, std::string_view text, const NumberRange& range, std::size_t* value) {
   double number = 0.0;
-  Error error = bounded_option(options, name, static_cast<double>(lo), static_cast<double>(hi), &number);
+  Error error = check_number(option, text, range, &number);
   if (!error.ok()) return error;
-  if (number != static_cast<double>(static_cast<std::size_t>(number))) {
-    return Error::usage("--" + name + " must be a whole number, not " + port::quoted(options.get(name)));
+  if (number < 0.0 || number != static_cast<double>(static_cast<std::size_t>(number))) {
+    return Error::usage(option + " must be a whole number, not " + port::quoted(text));
   }
   *value = static_cast<std::size_t>(number);
   return Error{};
+}
+
+Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi,
+                   std::size_t* value) {
+  return check_count("--" + name, options.get(name), NumberRange{static_cast<double>(lo), static_cast<double>(hi)},
+                     value);
 }
 
 Error seed_option(const Options& options, const std::string& name, std::uint64_t* value) {
@@ -180,36 +206,53 @@ Error seed_option(const Options& options, const std::string& name, std::uint64_t
   return Error{};
 }
 
-bool parse_vec3(std::string_view text, Vec3* value) {
-  std::size_t start = 0;
-  for (int axis = 0; axis < 3; ++axis) {
+namespace {
+
+/// `text` split at its commas into exactly `count` fields; false for another count.
+bool split_fields(std::string_view text, std::size_t count, std::vector<std::string_view>* fields) {
+  fields->clear();
+  for (std::size_t start = 0;;) {
     const std::size_t comma = text.find(',', start);
-    const bool last = axis == 2;
-    if (last != (comma == std::string_view::npos) ||
-        !textio::parse_double(text.substr(start, last ? std::string_view::npos : comma - start), &(*value)(axis))) {
-      return false;
-    }
+    fields->push_back(text.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+    if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
-  return true;
+  return fields->size() == count;
+}
+
+}  // namespace
+
+Error check_numbers(const std::string& option, std::string_view text, const std::string& what,
+                    const std::vector<NumberField>& fields, double* values) {
+  std::string form;
+  for (const NumberField& field : fields) form += (form.empty() ? "" : ",") + field.name;
+  std::vector<std::string_view> texts;
+  if (!split_fields(text, fields.size(), &texts)) {
+    return Error::usage(option + " must be " + form + (what.empty() ? "" : " (" + what + ")") + ", got " +
+                        port::quoted(text));
+  }
+  std::vector<double> parsed(fields.size(), 0.0);
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    const Error error =
+        check_number(option + " " + form + ": " + fields[k].name, texts[k], fields[k].range, &parsed[k]);
+    if (!error.ok()) return error;
+  }
+  std::copy(parsed.begin(), parsed.end(), values);
+  return Error{};
 }
 
 Error check_vec3(const std::string& option, std::string_view text, const std::string& what, const NumberRange& range,
                  Vec3* value) {
   const std::string shape = option + " must be X,Y,Z" + (what.empty() ? "" : " " + what) + ", each within " +
                             range.text() + ", got " + port::quoted(text);
-  std::size_t start = 0;
+  std::vector<std::string_view> fields;
+  if (!split_fields(text, 3, &fields)) return Error::usage(shape);
   Vec3 parsed = Vec3::Zero();
   for (int axis = 0; axis < 3; ++axis) {
-    const std::size_t comma = text.find(',', start);
-    if ((axis == 2) != (comma == std::string_view::npos)) return Error::usage(shape);
-    const std::string_view field = text.substr(start, axis == 2 ? std::string_view::npos : comma - start);
-    start = comma + 1;
-    const textio::NumberText read = textio::parse_number(field, &parsed(axis));
-    if (read == textio::NumberText::overflow) return Error::usage(shape + ": beyond a double's range (1.8e308)");
-    if (read == textio::NumberText::underflow) {
-      return Error::usage(shape + ": " + port::quoted(field) +
-                          " is too small for a double (it underflows below 4.9e-324): give 0 or a larger value");
+    const std::string_view field = fields[static_cast<std::size_t>(axis)];
+    const textio::NumberText read = read_number(field, &parsed(axis));
+    if (read == textio::NumberText::overflow || read == textio::NumberText::underflow) {
+      return Error::usage(shape + ": " + port::quoted(field) + " is " + number_reason(read, range));
     }
     if (read != textio::NumberText::ok || !range.contains(parsed(axis))) return Error::usage(shape);
   }
@@ -220,6 +263,85 @@ Error check_vec3(const std::string& option, std::string_view text, const std::st
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m) {
   return check_vec3("--" + name, options.get(name), "in metres",
                     NumberRange{-kMaxPointOption_m, kMaxPointOption_m, false, false, "m"}, value_m);
+}
+
+std::vector<OptionSpec> tool_option_specs(const std::string& tool_help) {
+  return {
+      {"tool", "X,Y,Z", tool_help, kDefaultToolText},
+      {"tool-transform", "FILE",
+       "instead of --tool: a 4x4 transform (text, one row per line; lengths in --length-unit), the tool frame's "
+       "pose in the flange frame, whose translation is the tool point (its rotation is not used)",
+       ""},
+      {"tool-transform-inverse", "",
+       "--tool-transform's file is the flange's pose in the tool frame (e.g. a lab's T_TOOL_F): its inverse's "
+       "translation is the tool point",
+       ""},
+  };
+}
+
+bool tool_given(const Options& options) {
+  return options.given("tool") || options.given("tool-transform");
+}
+
+namespace {
+
+/// "x, y, z mm" of a point [m], to the micrometre (no "-0.000" for a rounding's sign).
+std::string millimetres(const Vec3& point_m) {
+  const Vec3 shown_mm = (point_m * 1e6).array().round() / 1e3 + 0.0;  // + 0.0: -0.0 becomes 0.0
+  char text[96];
+  std::snprintf(text, sizeof text, "%.3f, %.3f, %.3f mm", shown_mm.x(), shown_mm.y(), shown_mm.z());
+  return text;
+}
+
+/// --tool-transform FILE [--tool-transform-inverse]: the tool point is the origin of the tool
+/// frame in the flange frame, the translation of the file's transform (or of its inverse, when
+/// the file is the flange's pose in the tool frame); *note says so, and what the rotation is.
+Error tool_transform_option(const Options& options, const textio::InputUnits& units, Vec3* tool_m, std::string* note) {
+  const std::string path = options.get("tool-transform");
+  RigidTransform read;
+  const Error error = textio::read_transform_text(path, units, &read);
+  if (!error.ok()) return error;
+  const bool inverse = options.given("tool-transform-inverse");
+  const RigidTransform tool_in_flange = inverse ? read.inverse() : read;
+  const Vec3 other_m = inverse ? read.translation_m : read.inverse().translation_m;  // the other reading's point
+  *tool_m = tool_in_flange.translation_m;
+  if (tool_m->cwiseAbs().maxCoeff() > kMaxToolOption_m) {
+    return Error::usage("--tool-transform " + port::quoted(path) + " puts the tool point at " + millimetres(*tool_m) +
+                        ", beyond " + textio::format_double(kMaxToolOption_m) + " m of the flange");
+  }
+  const double cosine = std::clamp((tool_in_flange.rotation.trace() - 1.0) / 2.0, -1.0, 1.0);
+  char rotation[80];
+  std::snprintf(rotation, sizeof rotation, "%.3f deg", std::acos(cosine) * math::kDegPerRad);
+  *note = "tool point from --tool-transform " + port::printable(path, 4096) + ": " + millimetres(*tool_m) +
+          " (the translation of " + (inverse ? "the inverse of the file's transform" : "the file's transform") +
+          ", the tool frame's pose in the flange frame); its rotation, " + rotation +
+          ", is not used: a reflector is a point";
+  if (tool_m->z() < 0.0 && other_m.z() > 0.0) {
+    *note += "; the point lies behind the flange (z < 0): if the file is the " +
+             std::string(inverse ? "tool's pose in the flange frame, leave out --tool-transform-inverse"
+                                 : "flange's pose in the tool frame (a lab's T_TOOL_F), add --tool-transform-inverse") +
+             " (the point at " + millimetres(other_m) + ")";
+  }
+  return Error{};
+}
+
+}  // namespace
+
+Error tool_point_option(const Options& options, const textio::InputUnits& units, const Vec3* description_tool_m,
+                        Vec3* tool_m, std::string* note) {
+  note->clear();
+  const bool transform = options.given("tool-transform");
+  if (transform && options.given("tool")) return Error::usage("give --tool or --tool-transform, not both");
+  if (!transform && options.given("tool-transform-inverse")) {
+    return Error::usage("--tool-transform-inverse needs --tool-transform FILE");
+  }
+  if (transform) return tool_transform_option(options, units, tool_m, note);
+  if (description_tool_m != nullptr && !options.given("tool")) {
+    *tool_m = *description_tool_m;
+    return Error{};
+  }
+  return check_vec3("--tool", options.get("tool"), "in metres",
+                    NumberRange{-kMaxToolOption_m, kMaxToolOption_m, false, false, "m"}, tool_m);
 }
 
 std::vector<OptionSpec> input_unit_option_specs() {

@@ -109,12 +109,25 @@ Error number_option(const Options& options, const std::string& name, double* val
 Error ranged_option(const Options& options, const std::string& name, const NumberRange& range, double* value);
 /// --<name> as a finite number within [lo, hi]; the message names the option and the range.
 Error bounded_option(const Options& options, const std::string& name, double lo, double hi, double* value);
-/// --<name> as a whole number within [lo, hi].
+/// `text` (the value of `option`) as a whole number within `range` (check_number); otherwise
+/// also Fault::usage "OPTION must be a whole number, not 'TEXT'".
+Error check_count(const std::string& option, std::string_view text, const NumberRange& range, std::size_t* value);
+/// --<name> as a whole number within [lo, hi] (check_count).
 Error count_option(const Options& options, const std::string& name, std::size_t lo, std::size_t hi, std::size_t* value);
 /// --<name> as a seed: decimal digits, 0 .. 2^64 - 1, exactly (no rounding through a double).
 Error seed_option(const Options& options, const std::string& name, std::uint64_t* value);
-/// "X,Y,Z": exactly three numbers into *value; false otherwise.
-bool parse_vec3(std::string_view text, Vec3* value);
+/// One number of an option that takes several ("X,Y,Z,SIDE"): its name and its range.
+struct NumberField {
+  std::string name;   ///< as the option's form writes it, e.g. "SIDE"
+  NumberRange range;  ///< the values it may take
+};
+/// `text` (the value of `option`, e.g. "--iso9283") as one comma-separated number per field,
+/// each through check_number, into values[0 .. fields.size()). Otherwise Fault::usage: another
+/// count of numbers "OPTION must be N1,N2,... (WHAT), got 'TEXT'"; a number out of its range
+/// "OPTION N1,N2,...: NAME must be within RANGE, got 'X'" (check_number's reasons for one that is
+/// no number).
+Error check_numbers(const std::string& option, std::string_view text, const std::string& what,
+                    const std::vector<NumberField>& fields, double* values);
 /// `text` as X,Y,Z (the value of `option`, e.g. "--tool"), each within `range`; otherwise
 /// Fault::usage "OPTION must be X,Y,Z WHAT, each within RANGE, got 'TEXT'" (check_number's
 /// reasons for a coordinate that is no number).
@@ -127,6 +140,22 @@ constexpr double kMaxPointOption_m = textio::kMaxPointDistance_m;
 constexpr double kMaxToolOption_m = 10.0;
 /// --<name> as X,Y,Z in metres (e.g. --tracker-position), each within +-kMaxPointOption_m.
 Error vec3_option(const Options& options, const std::string& name, Vec3* value_m);
+/// The default --tool of every command that takes one (calibrate, extract, iso9283, plan): the
+/// reflector 169.5 mm along the flange z axis, as in the paper's session ("X,Y,Z" [m]).
+inline constexpr const char* kDefaultToolText = "0,0,0.1695";
+/// The options that give the tool point, for every command that takes one: --tool X,Y,Z (its
+/// help `tool_help`, default kDefaultToolText), or --tool-transform FILE [--tool-transform-inverse]
+/// (a lab's 4x4 flange/probe transform, lengths in --length-unit).
+std::vector<OptionSpec> tool_option_specs(const std::string& tool_help);
+/// The tool point [m] of tool_option_specs(): --tool-transform's (its translation, or its
+/// inverse's with --tool-transform-inverse; *note says what was read and where the point went),
+/// else --tool's, else `description_tool_m` (a robot description file's; nullptr: none), else
+/// kDefaultToolText; each within +-kMaxToolOption_m. --tool with --tool-transform is refused.
+/// *note is "" without --tool-transform.
+Error tool_point_option(const Options& options, const textio::InputUnits& units, const Vec3* description_tool_m,
+                        Vec3* tool_m, std::string* note);
+/// True when the run was given a tool point (--tool or --tool-transform).
+bool tool_given(const Options& options);
 /// The options of every command that reads text inputs: --length-unit, --angle-unit.
 std::vector<OptionSpec> input_unit_option_specs();
 /// --length-unit (m|mm) and --angle-unit (rad|deg) into *units ("" when not given: SI unless

@@ -152,52 +152,6 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
   return harmonics ? harmonic_terms_from_options(options, settings) : Error{};
 }
 
-/// --tool X,Y,Z [m], each within the robot description's bound on a tool point.
-Error tool_option(const Options& options, Vec3* tool_m) {
-  return check_vec3("--tool", options.get("tool"), "in metres",
-                    NumberRange{-kMaxToolOption_m, kMaxToolOption_m, false, false, "m"}, tool_m);
-}
-
-/// "x, y, z mm" of a point [m], to the micrometre (no "-0.000" for a rounding's sign).
-std::string millimetres(const Vec3& point_m) {
-  const Vec3 shown_mm = (point_m * 1e6).array().round() / 1e3 + 0.0;  // + 0.0: -0.0 becomes 0.0
-  char text[96];
-  std::snprintf(text, sizeof text, "%.3f, %.3f, %.3f mm", shown_mm.x(), shown_mm.y(), shown_mm.z());
-  return text;
-}
-
-/// --tool-transform FILE [--tool-transform-inverse]: the tool point is the origin of the tool
-/// frame in the flange frame, the translation of the file's transform (or of its inverse, when
-/// the file is the flange's pose in the tool frame); *note says so, and what the rotation is.
-Error tool_transform_option(const Options& options, const textio::InputUnits& units, Vec3* tool_m, std::string* note) {
-  const std::string path = options.get("tool-transform");
-  RigidTransform read;
-  const Error error = textio::read_transform_text(path, units, &read);
-  if (!error.ok()) return error;
-  const bool inverse = options.given("tool-transform-inverse");
-  const RigidTransform tool_in_flange = inverse ? read.inverse() : read;
-  const Vec3 other_m = inverse ? read.translation_m : read.inverse().translation_m;  // the other reading's point
-  *tool_m = tool_in_flange.translation_m;
-  if (tool_m->cwiseAbs().maxCoeff() > kMaxToolOption_m) {
-    return Error::usage("--tool-transform " + port::quoted(path) + " puts the tool point at " + millimetres(*tool_m) +
-                        ", beyond " + textio::format_double(kMaxToolOption_m) + " m of the flange");
-  }
-  const double cosine = std::clamp((tool_in_flange.rotation.trace() - 1.0) / 2.0, -1.0, 1.0);
-  char rotation[80];
-  std::snprintf(rotation, sizeof rotation, "%.3f deg", std::acos(cosine) * math::kDegPerRad);
-  *note = "tool point from --tool-transform " + path + ": " + millimetres(*tool_m) + " (the translation of " +
-          (inverse ? "the inverse of the file's transform" : "the file's transform") +
-          ", the tool frame's pose in the flange frame); its rotation, " + rotation +
-          ", is not used: a reflector is a point";
-  if (tool_m->z() < 0.0 && other_m.z() > 0.0) {
-    *note += "; the point lies behind the flange (z < 0): if the file is the " +
-             std::string(inverse ? "tool's pose in the flange frame, leave out --tool-transform-inverse"
-                                 : "flange's pose in the tool frame (a lab's T_TOOL_F), add --tool-transform-inverse") +
-             " (the point at " + millimetres(other_m) + ")";
-  }
-  return Error{};
-}
-
 }  // namespace
 
 const std::vector<OptionSpec>& calibrate_option_specs() {
@@ -215,17 +169,6 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          std::string("nominal geometry: ") + robot_type_names() +
              ", or a robot description .json (standard or modified DH; a result file works)",
          "ur5"},
-        {"tool", "X,Y,Z",
-         "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)",
-         kDefaultToolText},
-        {"tool-transform", "FILE",
-         "instead of --tool: a 4x4 transform (text, one row per line; lengths in --length-unit), the tool frame's "
-         "pose in the flange frame, whose translation is the tool point (its rotation is not used)",
-         ""},
-        {"tool-transform-inverse", "",
-         "--tool-transform's file is the flange's pose in the tool frame (e.g. a lab's T_TOOL_F): its inverse's "
-         "translation is the tool point",
-         ""},
         {"params", "full|paper",
          "full identifiable model, or the link lengths (every non-zero d and a; for UR the paper's six)", "full"},
         {"method", "abc+lm|gsa+lm|lm|abc|gsa|all", "solver; 'all' runs GSA, ABC and LM (Table 1)", "abc+lm"},
@@ -288,6 +231,10 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "w-tests, cross-validation, tables and outputs",
          ""},
     };
+    const std::vector<OptionSpec> tool = tool_option_specs(
+        "nominal retroreflector centre in the flange frame [m] (LM refines it; default: the description file's)");
+    list.insert(std::find_if(list.begin(), list.end(), [](const OptionSpec& spec) { return spec.name == "params"; }),
+                tool.begin(), tool.end());
     for (const OptionSpec& spec : sample_reader_option_specs()) list.push_back(spec);
     return list;
   }();
@@ -299,17 +246,8 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   Error error = robot_model_option(options, "robot-model", &settings->robot, &from_file);
   if (error.ok()) error = sample_reader_settings_from_options(options, settings);
   if (!error.ok()) return error;
-  const bool transform = options.given("tool-transform");
-  if (transform && options.given("tool")) return Error::usage("give --tool or --tool-transform, not both");
-  if (!transform && options.given("tool-transform-inverse")) {
-    return Error::usage("--tool-transform-inverse needs --tool-transform FILE");
-  }
-  if (from_file && !options.given("tool")) settings->tool_m = settings->robot.model.tool_m;
-  if (transform) {
-    error = tool_transform_option(options, settings->units, &settings->tool_m, &settings->tool_note);
-  } else if (!from_file || options.given("tool")) {
-    error = tool_option(options, &settings->tool_m);
-  }
+  error = tool_point_option(options, settings->units, from_file ? &settings->robot.model.tool_m : nullptr,
+                            &settings->tool_m, &settings->tool_note);
   if (!error.ok()) return error;
   const std::string params = options.get("params");
   if (params != "full" && params != "paper")
@@ -328,16 +266,13 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
                         &settings->train_fraction);
   if (!error.ok()) return error;
   const std::string cv = options.get("cv");
-  double folds = 0.0;
   if (cv == "loo") {
     settings->cv_folds = 1;
   } else if (!cv.empty()) {
-    if (!textio::parse_double(cv, &folds) || folds < 2.0 || folds > static_cast<double>(kMaxCrossValidationFolds) ||
-        folds != static_cast<double>(static_cast<std::size_t>(folds))) {
-      return Error::usage("--cv must be 'loo' or a number of folds within [2, " +
-                          std::to_string(kMaxCrossValidationFolds) + "], got " + port::quoted(cv));
-    }
-    settings->cv_folds = static_cast<std::size_t>(folds);
+    error = check_count(
+        "--cv", cv, NumberRange{2.0, static_cast<double>(kMaxCrossValidationFolds), false, false, "folds, or 'loo'"},
+        &settings->cv_folds);
+    if (!error.ok()) return error;
   }
   settings->keep_outliers = options.given("keep-outliers");
   const std::string frames = options.given("frames") ? options.get("frames") : "auto";

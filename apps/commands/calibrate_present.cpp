@@ -626,10 +626,12 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     data.cross_validation.sample_count = run.cv.sample_count;
     data.cross_validation.mae_3d_m = run.cv.mae_3d_m;
     data.cross_validation.baseline_mae_3d_m = run.cv.baseline_mae_3d_m;
+    if (run.cv_held_out.size() == run.cv.fold_count) data.cross_validation.held_out_of = held_out_unit(facts);
     for (std::size_t k = 0; k < run.cv.fold_count; ++k) {
       const CrossValidationFold& f = run.cv.folds[k];
       data.cross_validation.folds.push_back(
-          {f.train_count, f.test.count, f.train.mae(ErrorAxis::norm_3d), f.test.mae(ErrorAxis::norm_3d)});
+          {f.train_count, f.test.count, f.train.mae(ErrorAxis::norm_3d), f.test.mae(ErrorAxis::norm_3d),
+           data.cross_validation.held_out_of.empty() ? std::string() : held_out_ranges(facts, run.cv_held_out[k])});
     }
   }
   report::keep_at_most(report::kReportSampleCap, &data);  // the result and the page stay small

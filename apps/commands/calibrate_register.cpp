@@ -150,7 +150,8 @@ Error calibrate_registration(const Options& options, std::vector<std::string>* w
   const bool result_on_stdout = options.get("out") == "-";
   std::FILE* terminal = result_on_stdout ? stderr : stdout;
   for (const std::string& line : facts.info_lines) std::fprintf(terminal, "%s\n", line.c_str());
-  std::fprintf(terminal, "registering %s (%s%s) on %zu of %zu samples%s\n", path.c_str(), calibration.robot.c_str(),
+  std::fprintf(terminal, "registering %s (%s%s) on %zu of %zu samples%s\n", port::printable(path, 4096).c_str(),
+               port::printable(calibration.robot).c_str(),
                calibration.fitted.empty() ? "" : ", itself a registered result", dataset->train().size(),
                dataset->size(),
                dataset->test().empty() ? " (every pose: --split F holds some out)" : "; the rest held out");

@@ -16,10 +16,6 @@ inline constexpr const char* kCheckRobotCommand = "check-robot";
 inline constexpr const char* kIso9283Command = "iso9283";
 inline constexpr const char* kDemoCommand = "demo";
 
-/// The default --tool of every command that takes one (calibrate, extract, iso9283, plan): the
-/// reflector 169.5 mm along the flange z axis, as in the paper's session ("X,Y,Z" [m]).
-inline constexpr const char* kDefaultToolText = "0,0,0.1695";
-
 int predict_main(int argc, char** argv);      ///< positions of poses from a calibration result
 int calibrate_main(int argc, char** argv);    ///< geometry from tracker data: tables, result, report
 int report_main(int argc, char** argv);       ///< the HTML report again from a result file

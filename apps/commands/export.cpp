@@ -124,6 +124,10 @@ Error export_arm(const Options& options) {
     return Error::usage("--format must be urdf, ur-kinematics or robot-json, not " + port::quoted(format));
   }
   const std::string hash = options.get("ur-hash");
+  if (options.given("ur-hash") && format != "ur-kinematics") {  // it was dropped without a word
+    return Error::usage("--ur-hash goes with --format ur-kinematics: a " + format +
+                        " has no calibration hash; leave it out, or give --format ur-kinematics");
+  }
   for (const char c : hash) {
     if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_')) {
       return Error::usage("--ur-hash must be letters, digits and '_' (e.g. calib_12788084448423163542), not " +

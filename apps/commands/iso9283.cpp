@@ -158,34 +158,42 @@ void own_mae(const std::string& text, CommandFrame* frame) {
 }
 
 /// The command frame: a result's model and base -> tracker, or a nominal model (its tool:
-/// --tool, else a description file's, else kDefaultToolText) with the base -> tracker fitted
-/// to every reach.
-Error command_frame(const Options& options, Span<const Sample> samples, CommandFrame* frame) {
+/// --tool or --tool-transform, else a description file's, else kDefaultToolText) with the base ->
+/// tracker fitted to every reach.
+Error command_frame(const Options& options, const textio::InputUnits& units, Span<const Sample> samples,
+                    CommandFrame* frame) {
   if (!options.get("calibration").empty()) {
-    if (options.given("tool")) {
-      return Error::usage(
-          "--tool goes with --robot-model: a calibration result carries its own calibrated tool point (its \"tool\"), "
-          "which gives the commanded positions; leave --tool out, or give --robot-model instead of --calibration");
+    if (tool_given(options)) {
+      const std::string given = options.given("tool") ? "--tool" : "--tool-transform";
+      return Error::usage(given +
+                          " goes with --robot-model: a calibration result carries its own calibrated tool point (its "
+                          "\"tool\"), which gives the commanded positions; leave " +
+                          given + " out, or give --robot-model instead of --calibration");
     }
     frame->calibration = true;
-    frame->how = "commanded positions from " + options.get("calibration") + " (its model and base -> tracker)";
+    frame->how = "commanded positions from " + port::printable(options.get("calibration"), 4096) +
+                 " (its model and base -> tracker)";
     std::string text;
     const Error read = record::read_calibration_json(options.get("calibration"), &frame->file, &text);
     if (read.ok()) own_mae(text, frame);
     return read;
   }
   bool from_file = false;
+  std::string tool_note;
   Error error = robot_model_option(options, "robot-model", &frame->file, &from_file);
-  if (error.ok() && (!from_file || options.given("tool")))
-    error = vec3_option(options, "tool", &frame->file.model.tool_m);
+  if (error.ok()) {
+    error = tool_point_option(options, units, from_file ? &frame->file.model.tool_m : nullptr,
+                              &frame->file.model.tool_m, &tool_note);
+  }
   if (!error.ok()) return error;
   if (fit_base_to_tracker(frame->file.model, samples, &frame->file.base_to_tracker) != Status::ok) {
     return Error::input(
         "cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
   }
   const Vec3& tool_m = frame->file.model.tool_m;
-  frame->how = "commanded positions from the nominal " + frame->file.robot + " (tool " + mm(tool_m.x()) + ", " +
-               mm(tool_m.y()) + ", " + mm(tool_m.z()) + " mm; base -> tracker fitted to the reaches)";
+  frame->how = "commanded positions from the nominal " + port::printable(frame->file.robot) + " (tool " +
+               mm(tool_m.x()) + ", " + mm(tool_m.y()) + ", " + mm(tool_m.z()) +
+               " mm; base -> tracker fitted to the reaches)" + (tool_note.empty() ? "" : "; " + tool_note);
   return Error{};
 }
 
@@ -319,7 +327,7 @@ Error iso9283(const Options& options, std::vector<std::string>* warnings, bool* 
   if (error.ok()) error = textio::read_samples_csv(options.get("samples"), &dataset, units, &lines);
   if (!error.ok()) return error;
   CommandFrame frame;
-  error = command_frame(options, dataset.samples(), &frame);
+  error = command_frame(options, units, dataset.samples(), &frame);
   if (!error.ok()) return error;
   const std::vector<PoseReaches> poses = group_reaches(dataset.samples(), lines);
   std::vector<PoseResult> results;
@@ -370,21 +378,22 @@ Error iso9283(const Options& options, std::vector<std::string>* warnings, bool* 
 /// point several times over); the side auto starts from [m].
 constexpr double kMinCubeSide_m = 0.02;
 
-/// The cube of `--iso9283 X,Y,Z,SIDE` [m]: false when malformed or the side not in [kMinCubeSide_m, 10].
-bool parse_cube(const std::string& text, Vec3* centre_m, double* side_m) {
-  double values[4];
-  std::size_t begin = 0;
-  for (int k = 0; k < 4; ++k) {
-    const std::size_t end = k < 3 ? text.find(',', begin) : text.size();
-    if (end == std::string::npos || !textio::parse_double(text.substr(begin, end - begin), &values[k]) ||
-        !std::isfinite(values[k])) {
-      return false;
-    }
-    begin = end + 1;
-  }
+/// The cube of `--iso9283 X,Y,Z,SIDE` [m]: each coordinate of its centre within 10 m of the
+/// base, its side within [kMinCubeSide_m, 10] (cli::check_numbers: a bad number is named).
+Error cube_option(const Options& options, Vec3* centre_m, double* side_m) {
+  const NumberRange coordinate{-10.0, 10.0, false, false, "m"};
+  double values[4] = {};
+  const Error error = check_numbers("--iso9283", options.get("iso9283"),
+                                    "the cube's centre in the base frame and its side, in metres; or auto",
+                                    {{"X", coordinate},
+                                     {"Y", coordinate},
+                                     {"Z", coordinate},
+                                     {"SIDE", NumberRange{kMinCubeSide_m, 10.0, false, false, "m"}}},
+                                    values);
+  if (!error.ok()) return error;
   *centre_m = Vec3(values[0], values[1], values[2]);
   *side_m = values[3];
-  return *side_m >= kMinCubeSide_m && *side_m <= 10.0 && centre_m->norm() <= 10.0;
+  return Error{};
 }
 
 /// The rotation vector of the one tool orientation: flange z towards the tracker (or down).
@@ -516,18 +525,14 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   Vec3 centre_m;
   double side_m = 0.0;
   const bool automatic = options.get("iso9283") == "auto";
-  if (!automatic && !parse_cube(options.get("iso9283"), &centre_m, &side_m)) {
-    return Error::usage(
-        "--iso9283 must be X,Y,Z,SIDE (the cube's centre in the base frame and its side, metres; "
-        "side in [0.02, 10]) or auto, not " +
-        port::quoted(options.get("iso9283")));
-  }
+  Error error = automatic ? Error{} : cube_option(options, &centre_m, &side_m);
+  if (!error.ok()) return error;
   Vec3 tracker_m;
   std::size_t cycles = 0;
   double dwell_s = 0.0;
   double speed = 0.0;
   double acceleration = 0.0;
-  Error error = vec3_option(options, "tracker-position", &tracker_m);
+  error = vec3_option(options, "tracker-position", &tracker_m);
   if (error.ok()) error = count_option(options, "cycles", 1, 1000, &cycles);
   if (error.ok()) error = bounded_option(options, "dwell", 0.3, 3600.0, &dwell_s);
   if (error.ok()) error = bounded_option(options, "tool-speed", 1e-3, 1.0, &speed);
@@ -628,13 +633,13 @@ int iso9283_main(int argc, char** argv) {
        ""},
       {"calibration", "FILE", "command frame: a calibration result (its model and base -> tracker)", ""},
       {"robot-model", "NAME|FILE", "or the nominal model, its base -> tracker fitted to the reaches", "ur5"},
-      {"tool", "X,Y,Z",
-       "with --robot-model: the reflector in the flange frame [m] (a description file's when not given; not with "
-       "--calibration, whose tool is calibrated)",
-       kDefaultToolText},
       {"out", "FILE", "per-pose table (CSV: AP_P, AP_x/y/z, RP_l in mm); '-' for stdout", "-"},
       {"report", "FILE", "the same as an HTML page in the calibration report's style", ""},
   };
+  const std::vector<OptionSpec> tool = tool_option_specs(
+      "with --robot-model: the reflector in the flange frame [m] (a description file's when not given; not with "
+      "--calibration, whose tool is calibrated)");
+  specs.insert(specs.begin() + 3, tool.begin(), tool.end());  // after --robot-model
   for (const OptionSpec& unit : input_unit_option_specs()) specs.push_back(unit);
   Options options;
   const int parsed = parse_options(kIso9283Command,

@@ -75,15 +75,25 @@ Error clamp_to_own_range(const Options& options, const std::string& arm, const J
   return Error{};
 }
 
-/// The arm and its joint limits: --joint-limits (clamped to the arm's own range when that is
-/// known), else the description's own ("joint_limits", URDF <limit>), else a built-in type's
-/// controller limits, else +-2 pi (said on stderr). *widest: the limits to try when these leave
-/// no pose (a built-in type's own, else +-2 pi).
+/// The arm, its tool point and its joint limits. The tool: --tool or --tool-transform, else the
+/// description's, else the default (cli::tool_point_option, as calibrate takes it). The limits:
+/// --joint-limits (clamped to the arm's own range when that is known), else the description's
+/// own ("joint_limits", URDF <limit>), else a built-in type's controller limits, else +-2 pi
+/// (said on stderr). *widest: the limits to try when these leave no pose (a built-in type's
+/// own, else +-2 pi).
 Error robot_option(const Options& options, RobotModel* model, JointLimits* limits, JointLimits* widest) {
   textio::RobotDescription description;
   bool from_file = false;
+  textio::InputUnits units;
+  std::string tool_note;
   Error error = robot_model_option(options, "robot-model", &description, &from_file);
+  if (error.ok()) error = input_units_option(options, &units);
+  if (error.ok()) {
+    error = tool_point_option(options, units, from_file ? &description.model.tool_m : nullptr,
+                              &description.model.tool_m, &tool_note);
+  }
   if (!error.ok()) return error;
+  if (!tool_note.empty()) std::fprintf(stderr, "hivecal plan: %s\n", tool_note.c_str());
   *model = description.model;
   RobotType type = RobotType::ur5;
   const bool built_in = !from_file && robot_type_from_name(description.robot.c_str(), &type) == Status::ok;
@@ -96,13 +106,9 @@ Error robot_option(const Options& options, RobotModel* model, JointLimits* limit
   }
   *widest = built_in ? own : JointLimits{};
   if (!options.get("joint-limits").empty()) {
-    textio::InputUnits units;
-    error = input_units_option(options, &units);
-    if (error.ok()) {
-      error = textio::read_joint_limits_csv(options.get("joint-limits"), &limits->lower_rad, &limits->upper_rad, units);
-    }
+    error = textio::read_joint_limits_csv(options.get("joint-limits"), &limits->lower_rad, &limits->upper_rad, units);
     if (!error.ok() || !(description.has_joint_limits || built_in)) return error;
-    return clamp_to_own_range(options, description.robot, own, limits);
+    return clamp_to_own_range(options, port::printable(description.robot), own, limits);  // the file's name, made safe
   }
   *limits = own;
   if (!description.has_joint_limits && !built_in) {
@@ -143,7 +149,6 @@ Error parse_request(const Options& options, PlanRequest* request) {
   PlanOptions& o = request->options;
   PlanConstraints& c = o.constraints;
   Error error = robot_option(options, &request->model, &c.limits, &request->widest_limits);
-  if (error.ok()) error = vec3_option(options, "tool", &request->model.tool_m);
   if (error.ok()) error = vec3_option(options, "tracker-position", &c.tracker_m);
   if (error.ok()) error = count_option(options, "count", 1, kPlanPoseCapacity, &o.pose_count);
   if (error.ok()) error = count_option(options, "candidates", 1, kPlanCandidateCapacity, &o.candidate_count);
@@ -315,8 +320,11 @@ std::string blame_tool_or_limits(const Options& options, const RobotModel& model
   RobotModel at_flange = model;
   at_flange.tool_m = Vec3::Zero();
   if (!model.tool_m.isZero() && finds(at_flange, limits)) {
-    return "the tool is why: --tool " + options.get("tool") + " puts the reflector " +
-           text(model.tool_m.norm(), "%.4g") +
+    const std::string tool = options.given("tool-transform")
+                                 ? "--tool-transform " + port::quoted(options.get("tool-transform"))
+                             : options.given("tool") ? "--tool " + options.get("tool")
+                                                     : "the tool point " + options.get("tool");
+    return "the tool is why: " + tool + " puts the reflector " + text(model.tool_m.norm(), "%.4g") +
            " m from the flange (with the reflector at the flange the search finds some); --tool is the reflector in "
            "the flange frame, in metres (millimetres given?)";
   }
@@ -333,13 +341,37 @@ std::string blame_tool_or_limits(const Options& options, const RobotModel& model
 
 namespace {
 
+/// An option of the other mode (pose planning, or the ISO 9283 test) is refused: it was read by
+/// neither and dropped without a word (--count with --iso9283, --cycles without it).
+Error refuse_the_other_modes_options(const Options& options) {
+  static const char* const kPlanningOnly[] = {
+      "count",      "acceptance-deg", "params", "objective",   "candidates",         "seed", "noise-um", "prior-mm",
+      "prior-mrad", "restarts",       "refine", "joint-speed", "joint-acceleration", "svg"};
+  static const char* const kIsoOnly[] = {"cycles", "tool-speed", "tool-acceleration"};
+  const bool iso = options.given("iso9283");
+  if (iso) {
+    for (const char* name : kPlanningOnly) {
+      if (options.given(name)) {
+        return Error::usage(std::string("--") + name +
+                            " is an option of pose planning, not of the ISO 9283 test (--iso9283): leave it out");
+      }
+    }
+    return Error{};
+  }
+  for (const char* name : kIsoOnly) {
+    if (options.given(name)) return Error::usage(std::string("--") + name + " goes with --iso9283 (the ISO 9283 test)");
+  }
+  return Error{};
+}
+
 Error plan(const Options& options) {
+  const Error other = refuse_the_other_modes_options(options);
+  if (!other.ok()) return other;
   if (options.given("iso9283")) {
     RobotModel model;
     JointLimits limits;
     JointLimits widest;
-    Error error = robot_option(options, &model, &limits, &widest);
-    if (error.ok()) error = vec3_option(options, "tool", &model.tool_m);
+    const Error error = robot_option(options, &model, &limits, &widest);
     return error.ok() ? plan_iso9283(options, model, limits, widest) : error;
   }
   PlanRequest request;
@@ -402,7 +434,6 @@ int plan_main(int argc, char** argv) {
        "ur5e"},
       {"count", "N", "poses to measure (1 .. 128)", ""},
       {"tracker-position", "X,Y,Z", "tracker position in the robot base frame [m]", ""},
-      {"tool", "X,Y,Z", "reflector in the flange frame [m] (one target)", kDefaultToolText},
       {"acceptance-deg", "DEG", "largest angle flange z - line to the tracker (red-ring reflector: 30)", "30"},
       {"floor-z", "M", "reflector and flange above this base z [m]", "0.05"},
       {"keep-out-radius", "M", "reflector and flange at least this far from the base z axis [m]", "0.15"},
@@ -434,7 +465,11 @@ int plan_main(int argc, char** argv) {
       {"tool-speed", "M/S", "with --iso9283: movel speed", "0.25"},
       {"tool-acceleration", "M/S2", "with --iso9283: movel acceleration", "1.2"},
   };
-  specs.push_back(input_unit_option_specs()[1]);  // --angle-unit: of --joint-limits
+  const std::vector<OptionSpec> tool =
+      tool_option_specs("reflector in the flange frame [m] (one target; default: the description file's)");
+  specs.insert(specs.begin() + 3, tool.begin(), tool.end());  // after --tracker-position
+  specs.push_back(input_unit_option_specs()[0]);              // --length-unit: of --tool-transform
+  specs.push_back(input_unit_option_specs()[1]);              // --angle-unit: of --joint-limits
   Options options;
   const int parsed =
       parse_options(kPlanCommand,

@@ -18,7 +18,6 @@
 #include "sim/sim_model.hpp"
 #include "sim/sim_outputs.hpp"
 #include "sim/sim_server.hpp"
-#include "textio/text_util.hpp"
 #include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal::sim {
@@ -68,24 +67,18 @@ constexpr double kMaxDeflection_urad = 1e4;
 /// Largest sigma of the geometry's simulated errors [um or urad].
 constexpr double kMaxErrorSigma = 1e5;
 
-/// --harmonic-urad J,K,S,C into config's harmonic_*.
+/// --harmonic-urad J,K,S,C into config's harmonic_*: the joint and the order whole numbers, the
+/// amplitudes within +-kMaxDeflection_urad (cli::check_numbers).
 Error harmonic_option(const std::string& text, sim::SimConfig* config) {
+  const cli::NumberRange amplitude{-kMaxDeflection_urad, kMaxDeflection_urad, false, false, "urad"};
   double v[4] = {};
-  std::size_t start = 0;
-  int count = 0;
-  for (; count < 4 && start <= text.size(); ++count) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    if (!textio::parse_double(text.substr(start, comma - start), &v[count])) break;
-    start = comma + 1;
-  }
-  const bool whole = count == 4 && start == text.size() + 1;
-  if (!whole || v[0] < 1.0 || v[0] > 6.0 || v[0] != std::floor(v[0]) || v[1] < 1.0 || v[1] > 3.0 ||
-      v[1] != std::floor(v[1]) || !(std::fabs(v[2]) <= kMaxDeflection_urad) ||
-      !(std::fabs(v[3]) <= kMaxDeflection_urad)) {
-    return Error::usage(
-        "--harmonic-urad must be J,K,S,C: joint 1-6, order 1-3, sine and cosine amplitudes within "
-        "+-10000 urad (e.g. 3,1,60,50), not " +
-        port::quoted(text));
+  const Error error = cli::check_numbers(
+      "--harmonic-urad", text, "joint, order, sine and cosine amplitudes, e.g. 3,1,60,50",
+      {{"J", cli::NumberRange{1.0, 6.0}}, {"K", cli::NumberRange{1.0, 3.0}}, {"S", amplitude}, {"C", amplitude}}, v);
+  if (!error.ok()) return error;
+  if (v[0] != std::floor(v[0]) || v[1] != std::floor(v[1])) {
+    return Error::usage("--harmonic-urad J,K,S,C: the joint J and the order K are whole numbers, got " +
+                        port::quoted(text));
   }
   config->harmonic_joint = static_cast<int>(v[0]) - 1;
   config->harmonic_order = static_cast<int>(v[1]);
@@ -145,18 +138,14 @@ Error configure(const cli::Options& options, SimConfig* config) {
     *target = value * scale;
   }
   if (options.given("compliance-urad")) {
-    const std::string text = options.get("compliance-urad");
-    const std::size_t comma = text.find(',');
-    double j2 = 0.0;
-    double j3 = 0.0;
-    if (comma == std::string::npos || !textio::parse_double(text.substr(0, comma), &j2) ||
-        !textio::parse_double(text.substr(comma + 1), &j3) || !(std::fabs(j2) <= kMaxDeflection_urad) ||
-        !(std::fabs(j3) <= kMaxDeflection_urad)) {
-      return Error::usage("--compliance-urad must be J2,J3, each within +-10000 urad (e.g. 40,20), not " +
-                          port::quoted(text));
-    }
-    config->compliance_j2_rad = j2 * 1e-6;
-    config->compliance_j3_rad = j3 * 1e-6;
+    const cli::NumberRange deflection{-kMaxDeflection_urad, kMaxDeflection_urad, false, false, "urad"};
+    double j_urad[2] = {};
+    error = cli::check_numbers("--compliance-urad", options.get("compliance-urad"),
+                               "joints 2 and 3's gravity deflection, e.g. 40,20",
+                               {{"J2", deflection}, {"J3", deflection}}, j_urad);
+    if (!error.ok()) return error;
+    config->compliance_j2_rad = j_urad[0] * 1e-6;
+    config->compliance_j3_rad = j_urad[1] * 1e-6;
   }
   if (options.given("harmonic-urad")) {
     const Error harmonic = harmonic_option(options.get("harmonic-urad"), config);

@@ -91,12 +91,13 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
   for (std::size_t k = 0; k < 2; ++k) {
     const StreamOptions& s = kStreams[k];
     if (options.get(s.port).empty()) continue;
-    double baud = 0.0;
-    error = cli::number_option(options, s.baud_option, &baud);
+    std::size_t baud = 0;  // a whole number (115200.5 was taken as 115200), then one the port can set
+    error = cli::count_option(options, s.baud_option, 1, 10000000, &baud);
     if (!error.ok()) return error;
-    bauds[k] = baud >= 1.0 && baud <= 1e7 ? static_cast<int>(baud) : 0;
+    bauds[k] = static_cast<int>(baud);
     if (!port::baud_supported(bauds[k])) {
-      return Error::usage(std::string("--") + s.baud_option + ": unsupported baud rate " + options.get(s.baud_option));
+      return Error::usage(std::string("--") + s.baud_option + ": unsupported baud rate " + options.get(s.baud_option) +
+                          " (the port takes " + port::supported_bauds() + " bit/s)");
     }
     error = checks.add_input(options.get(s.port), std::string("--") + s.port);
     if (!error.ok()) return error;
@@ -125,6 +126,28 @@ Error check_record_options(const cli::Options& options, double* duration_s, int*
 
 /// The controller's text messages printed on stderr; more are only counted (the summary).
 constexpr std::uint64_t kTextMessagesShown = 20;
+
+/// The summary line of `record --rtde`: what the log holds, or that this run wrote nothing (a
+/// controller that never sent a row, a file another recorder holds), without counts that read
+/// as if a recording were there.
+void print_rtde_summary(const std::string& host, int port_number, const std::string& out, bool written,
+                        const port::RtdeStats& stats) {
+  const std::string address = host.find(':') == std::string::npos ? host : "[" + host + "]";
+  const std::uint32_t* v = stats.controller_version;
+  char controller[64] = "";
+  if (v[0] + v[1] + v[2] + v[3] > 0)
+    std::snprintf(controller, sizeof controller, " (URControl %u.%u.%u.%u)", v[0], v[1], v[2], v[3]);
+  if (!written) {
+    std::printf("rtde %s:%d%s: nothing recorded, nothing written to %s (%llu text messages from the controller)\n",
+                address.c_str(), port_number, controller, port::printable(out, 4096).c_str(),
+                static_cast<unsigned long long>(stats.text_messages));
+    return;
+  }
+  std::printf("rtde %s:%d%s -> %s: %llu data packages, %llu rows, %llu text messages%s\n", address.c_str(), port_number,
+              controller, port::printable(out, 4096).c_str(), static_cast<unsigned long long>(stats.data_packages),
+              static_cast<unsigned long long>(stats.rows_written), static_cast<unsigned long long>(stats.text_messages),
+              stats.ended_by_controller ? "; the controller closed the connection" : "");
+}
 
 /// `record --rtde HOST[:PORT]`: the controller's joint states through RTDE into a robot log
 /// (the RTDE recorder's text format, which every reader takes), written as it comes.
@@ -177,13 +200,7 @@ Error record_rtde(const cli::Options& options) {
       &stats);
   const Error closed = file.close();
   if (error.ok()) error = closed;
-  const std::string address = host.find(':') == std::string::npos ? host : "[" + host + "]";
-  std::printf("rtde %s:%d (URControl %u.%u.%u.%u) -> %s: %llu data packages, %llu rows, %llu text messages%s\n",
-              address.c_str(), port_number, stats.controller_version[0], stats.controller_version[1],
-              stats.controller_version[2], stats.controller_version[3], out.c_str(),
-              static_cast<unsigned long long>(stats.data_packages), static_cast<unsigned long long>(stats.rows_written),
-              static_cast<unsigned long long>(stats.text_messages),
-              stats.ended_by_controller ? "; the controller closed the connection" : "");
+  print_rtde_summary(host, port_number, out, opened, stats);
   return error;
 }
 
@@ -238,10 +255,16 @@ Error extract(const cli::Options& options) {
     return Error::usage("--robot and --tracker are required (see --help)");
   }
   textio::RobotDescription robot;
+  bool from_file = false;
+  textio::InputUnits units;
   Vec3 tool = Vec3::Zero();
+  std::string tool_note;
   double max_speed_mm_s = 0, window_s = 0;
-  Error error = cli::robot_model_option(options, "robot-model", &robot);
-  if (error.ok()) error = cli::vec3_option(options, "tool", &tool);
+  Error error = cli::robot_model_option(options, "robot-model", &robot, &from_file);
+  if (error.ok()) error = cli::input_units_option(options, &units);
+  if (error.ok()) {  // the tool point as calibrate takes it: the same samples from the same session
+    error = cli::tool_point_option(options, units, from_file ? &robot.model.tool_m : nullptr, &tool, &tool_note);
+  }
   if (error.ok())
     error = cli::ranged_option(options, "max-speed-mm-s", cli::NumberRange{0.0, 1e6, true, true}, &max_speed_mm_s);
   if (error.ok()) error = cli::bounded_option(options, "window-s", 0.0, 60.0, &window_s);
@@ -257,13 +280,14 @@ Error extract(const cli::Options& options) {
   config.speed_model.tool_m = tool;
   config.max_speed_m_s = max_speed_mm_s * 1e-3;
   config.window_s = window_s;
+  config.log_options.units = units;
   error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
-  if (error.ok()) error = cli::input_units_option(options, &config.log_options.units);
   if (!error.ok()) return error;
   const auto dataset = std::make_unique<cli::HostDataset>();  // as large as the captures' static samples
   SessionFacts facts;
   error = load_session({"", options.get("robot"), options.get("tracker")}, config, dataset.get(), &facts);
   std::FILE* terminal = out == "-" ? stderr : stdout;  // stdout may carry the samples
+  if (!tool_note.empty()) std::fprintf(terminal, "%s\n", tool_note.c_str());
   const bool counted = facts.run.robot.records > 0 && facts.run.tracker.records > 0;
   if (counted) {  // also when the clock fit failed: the counts tell why
     print_input(terminal, "robot  ", facts.run.robot);
@@ -316,11 +340,13 @@ int extract_main(int argc, char** argv) {
        "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
       {"robot-model", "NAME|FILE",
        std::string(robot_type_names()) + " or a robot description .json (nominal geometry for tool speeds)", "ur5"},
-      {"tool", "X,Y,Z", "nominal tool point in the flange frame [m] (for tool speeds)", cli::kDefaultToolText},
       {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
       {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
       {"samples", "FILE", "write the paired samples q1..q6,x,y,z (CSV) here; '-' for stdout; empty: none", ""},
   };
+  const std::vector<cli::OptionSpec> tool = cli::tool_option_specs(
+      "nominal tool point in the flange frame [m] (for tool speeds; default: the description file's)");
+  specs.insert(specs.begin() + 4, tool.begin(), tool.end());
   for (const cli::OptionSpec& spec : cli::input_unit_option_specs()) specs.push_back(spec);
   cli::Options options;
   const int parsed =

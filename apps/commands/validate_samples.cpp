@@ -76,7 +76,8 @@ std::string extrapolation_line(const Validation& v) {
 }
 
 void print_validation(std::FILE* out, const std::string& samples_path, const Validation& v) {
-  std::fprintf(out, "\nvalidation on %s: %zu samples scored%s\n", samples_path.c_str(), v.stats.count,
+  std::fprintf(out, "\nvalidation on %s: %zu samples scored%s\n", port::printable(samples_path, 4096).c_str(),
+               v.stats.count,
                v.registered_poses == 0 ? ""
                : v.same_poses          ? " (the registration's own poses: optimistic; --fit-poses N scores the rest)"
                                        : " (not the registration's poses)");

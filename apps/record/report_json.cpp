@@ -117,6 +117,7 @@ void write_cross_validation(JsonWriter& json, const CrossValidationTable& cv) {
   json.key("samples").value(static_cast<long long>(cv.sample_count));
   json.key("mae_3d_m").value(cv.mae_3d_m);
   json.key("baseline_mae_3d_m").value(cv.baseline_mae_3d_m);
+  if (!cv.held_out_of.empty()) json.key("held_out_of").value(cv.held_out_of);
   json.key("folds").begin_array();
   for (const FoldRow& f : cv.folds) {
     json.begin_object();
@@ -124,6 +125,7 @@ void write_cross_validation(JsonWriter& json, const CrossValidationTable& cv) {
     json.key("test_count").value(static_cast<long long>(f.test_count));
     json.key("train_mae_3d_m").value(f.train_mae_m);
     json.key("test_mae_3d_m").value(f.test_mae_m);
+    if (!cv.held_out_of.empty()) json.key("held_out").value(f.held_out);
     json.end_object();
   }
   json.end_array();
@@ -400,12 +402,16 @@ bool get_cross_validation(const JsonValue* v, CrossValidationTable* out) {
   }
   out->present = true;
   out->sample_count = static_cast<std::size_t>(samples);
+  // The held-out lines: in results written since issue 54, absent in older ones (no column then).
+  const JsonValue* held_out_of = v->find("held_out_of");
+  if (held_out_of != nullptr && !get_string(held_out_of, &out->held_out_of)) return false;
   for (const JsonValue& f : folds->array) {
     FoldRow row;
     long long train = 0, test = 0;
     if (!get_count(f.find("train_count"), &train) || !get_count(f.find("test_count"), &test) ||
         !get_number(f.find("train_mae_3d_m"), &row.train_mae_m) ||
-        !get_number(f.find("test_mae_3d_m"), &row.test_mae_m)) {
+        !get_number(f.find("test_mae_3d_m"), &row.test_mae_m) ||
+        (held_out_of != nullptr && !get_string(f.find("held_out"), &row.held_out))) {
       return false;
     }
     row.train_count = static_cast<std::size_t>(train);

@@ -656,12 +656,16 @@ std::string outlier_html(const OutlierTable& o) {
 }
 
 std::vector<std::vector<std::string>> cross_validation_rows(const CrossValidationTable& cv) {
+  // Which samples each fold held out (file lines), when the run said: a fold far off names them.
+  const bool held_out = !cv.held_out_of.empty();
   std::vector<std::vector<std::string>> rows = {
       {"fold", "train samples", "test samples", "train MAE [um]", "held-out MAE [um]"}};
+  if (held_out) rows[0].push_back("held out (" + cv.held_out_of + ")");
   for (std::size_t k = 0; k < cv.folds.size(); ++k) {
     const FoldRow& f = cv.folds[k];
     rows.push_back({std::to_string(k + 1), std::to_string(f.train_count), std::to_string(f.test_count),
                     um(f.train_mae_m), um(f.test_mae_m)});
+    if (held_out) rows.back().push_back(f.held_out);
   }
   return rows;
 }

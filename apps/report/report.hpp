@@ -102,6 +102,7 @@ struct FoldRow {
   std::size_t test_count = 0;   ///< samples held out [-]
   double train_mae_m = 0.0;     ///< 3-D MAE on its training samples [m]
   double test_mae_m = 0.0;      ///< 3-D MAE on its held-out samples [m]
+  std::string held_out{};  ///< which it held out, as ranges of CrossValidationTable::held_out_of ("2-4, 7"); "" unknown
 };
 
 /// A cross-validation's folds (--cv).
@@ -110,6 +111,7 @@ struct CrossValidationTable {
   std::size_t sample_count = 0;    ///< samples split into folds [-]
   double mae_3d_m = 0.0;           ///< 3-D MAE over every held-out sample of every fold [m]
   double baseline_mae_3d_m = 0.0;  ///< the same for each fold's uncalibrated baseline [m]
+  std::string held_out_of;         ///< what FoldRow::held_out counts: "lines of FILE" or "samples (...)"; "" unknown
   std::vector<FoldRow> folds;      ///< per fold, in fold order
 };
 

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "hivecal/port/error.hpp"
+
 namespace hivecal::report {
 namespace {
 
@@ -281,8 +283,11 @@ int significant_digits(const std::string& label) {
 }
 
 std::string xml_escape(const std::string& text) {
+  // Through the messages' filter first (whole, not cut): a name an input file gives (the robot's,
+  // a file's, a column's) reaches the page with its control bytes escaped, its UTF-8 as written.
+  const std::string shown = port::printable(text, text.size());
   std::string out;
-  for (char c : text) {
+  for (char c : shown) {
     switch (c) {
       case '&': out += "&amp;"; break;
       case '<': out += "&lt;"; break;

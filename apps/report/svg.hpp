@@ -69,7 +69,8 @@ double nice_step(double raw);
 /// Significant digits of a plain decimal tick label: "231.25" -> 5, "1250" -> 3, "0.025" -> 2.
 int significant_digits(const std::string& label);
 
-/// Text escaped for XML/HTML content and attributes.
+/// Text for XML/HTML content and attributes: through port::printable (control bytes and what is
+/// no UTF-8 as \xNN), then the markup characters escaped. Every text of the report goes through it.
 std::string xml_escape(const std::string& text);
 
 }  // namespace hivecal::report

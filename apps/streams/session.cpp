@@ -6,9 +6,13 @@
 #include "hivecal/sync/sample_extraction.hpp"
 #include "textio/csv.hpp"
 #include "textio/logs.hpp"
+#include "hivecal/port/error.hpp"
 
 namespace hivecal::streams {
 namespace {
+
+/// Longest path printed whole in the input lines (PATH_MAX) [bytes].
+constexpr std::size_t kShownPathBytes = 4096;
 
 /// The stream path: two captures -> clock fit -> quasi-static samples.
 /// "[decode] pass 1/2 (clock): 45 %" on stderr, in place, when a percent changes.
@@ -241,7 +245,9 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
     return port::Error::usage("--robot and --tracker go together");
   }
   if (streams) {
-    facts->info_lines.push_back("input: robot " + sources.robot + ", tracker " + sources.tracker);
+    // The paths as printed (terminal, report): escaped as every name from outside is.
+    facts->info_lines.push_back("input: robot " + port::printable(sources.robot, kShownPathBytes) + ", tracker " +
+                                port::printable(sources.tracker, kShownPathBytes));
     return load_streams(sources, config, dataset, facts);
   }
   std::vector<std::size_t> lines;
@@ -250,10 +256,10 @@ port::Error load_session(const SessionSources& sources, const SessionConfig& con
   orientation.arm = &config.speed_model;  // whose joints' reading noise the lever takes in
   const port::Error r = textio::read_samples_csv(sources.samples, dataset, config.log_options.units, &lines,
                                                  orientation, &facts->orientation);
-  for (std::size_t line : lines) facts->sample_sources.push_back(sources.samples + ":" + std::to_string(line));
+  const std::string shown = port::printable(sources.samples, kShownPathBytes);  // in tables, warnings, the report
+  for (std::size_t line : lines) facts->sample_sources.push_back(shown + ":" + std::to_string(line));
   if (!r.ok()) return r;
-  facts->info_lines.push_back("input: " + sources.samples + " (" + std::to_string(dataset->size()) +
-                              " paired samples)");
+  facts->info_lines.push_back("input: " + shown + " (" + std::to_string(dataset->size()) + " paired samples)");
   return port::Error{};
 }
 

@@ -272,8 +272,22 @@ bool LineReader::refill() {
   return true;
 }
 
+bool LineReader::read_encoding() {
+  while (from_file_ && !eof_ && end_ - begin_ < 4) {  // the four bytes that tell UTF-32 from UTF-16
+    if (!refill()) return false;
+  }
+  std::string_view body;
+  const port::Error encoding = utf8_text(std::string_view(data_ + begin_, end_ - begin_), name_, &body);
+  if (!encoding.ok()) return fail(encoding.message);
+  const std::size_t mark = (end_ - begin_) - body.size();  // a UTF-8 byte order mark's bytes
+  begin_ += mark;
+  bytes_read_ += mark;
+  return true;
+}
+
 bool LineReader::next(std::string_view* line) {
   if (!error_.empty() || data_ == nullptr) return false;
+  if (line_number_ == 0 && bytes_read_ == 0 && !read_encoding()) return false;
   std::size_t length = 0;
   bool ended = false;  // by a '\n'
   for (;;) {
@@ -297,7 +311,6 @@ bool LineReader::next(std::string_view* line) {
   std::string_view text(data_ + begin_, length);
   begin_ += length + (ended ? 1 : 0);
   bytes_read_ += length + (ended ? 1 : 0);
-  if (line_number_ == 1 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM
   for (std::size_t i = 0; i < text.size(); ++i) {
     const auto c = static_cast<unsigned char>(text[i]);
     if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7f) {

@@ -87,9 +87,10 @@ constexpr double kMaxPointDistance_m = 100.0;
 /// that is not a plain decimal number (nan, inf, hexadecimal, empty).
 bool written_resolution_exponent(std::string_view field, int* exponent);
 
-/// Lines of a text file or of text in memory, without their end (\n, \r\n). A UTF-8 BOM
-/// on line 1 is skipped. Stops with error() set at a binary byte, a line over
-/// kMaxLineBytes or a read error.
+/// Lines of a text file or of text in memory, without their end (\n, \r\n). Its first bytes
+/// go through utf8_text (text_util.hpp): a UTF-8 BOM is skipped, UTF-16 and UTF-32 stop it
+/// ("save it as UTF-8"). Stops with error() set at a binary byte, a line over kMaxLineBytes or
+/// a read error.
 class LineReader {
  public:
   LineReader() = default;
@@ -113,6 +114,8 @@ class LineReader {
  private:
   bool refill();
   bool fail(const std::string& problem);
+  /// Before the first line: the encoding its first bytes say (utf8_text); false with error() set.
+  bool read_encoding();
 
   std::string name_;
   port::InputFile file_;

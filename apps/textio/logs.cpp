@@ -372,40 +372,57 @@ std::string describe_log(LogFormat format, const LogCounters& c) {
   return out;
 }
 
+namespace {
+
+/// True when `head` (a file's first bytes) starts with a line of text that names columns: a letter
+/// and a delimiter in 3+ bytes of printable ASCII or whole UTF-8 characters ("(°)", "[µm]").
+bool header_line(std::string_view head) {
+  bool delimiter = false;
+  bool letter = false;
+  std::size_t at = 0;
+  for (; at < head.size() && head[at] != '\n'; ++at) {
+    const auto c = static_cast<unsigned char>(head[at]);
+    const std::size_t length = port::utf8_sequence_bytes(head, at);
+    if (length > 1) {
+      at += length - 1;
+      continue;
+    }
+    // A capture's frames end in 0x00 and are mostly bytes outside printable ASCII.
+    if (!((c >= 0x20 && c < 0x7f) || c == '\t' || c == '\r')) return false;
+    delimiter = delimiter || c == ',' || c == ';' || c == '\t' || c == ' ';
+    letter = letter || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z');
+  }
+  return delimiter && letter && at >= 3;
+}
+
+}  // namespace
+
 StreamFileKind detect_stream_file(const std::string& path) {
   struct stat info {};
   if (::stat(path.c_str(), &info) == 0 && S_ISDIR(info.st_mode)) return StreamFileKind::ros2_bag;
   port::InputFile file;  // regular files only: a device or FIFO is left to the capture reader to refuse
   if (!file.open(path, port::kMaxStreamInputBytes).ok() || file.is_stdin()) return StreamFileKind::capture;
-  unsigned char head[4096];
+  char bytes[4096];
   std::size_t got = 0;
-  if (file.read(head, sizeof head, &got) != Status::ok) return StreamFileKind::capture;
-  if (got >= 8 && std::memcmp(head, kMcapMagic, 8) == 0) return StreamFileKind::mcap;
-  if (got >= 16 && std::memcmp(head, kSqliteMagic, 16) == 0) return StreamFileKind::ros2_bag;
-  std::size_t at = (got >= 3 && head[0] == 0xEF && head[1] == 0xBB && head[2] == 0xBF) ? 3 : 0;  // BOM
-  bool delimiter = false;
-  bool letter = false;
-  const std::size_t start = at;
-  for (; at < got && head[at] != '\n'; ++at) {
-    const unsigned char c = head[at];
-    // A header may carry a unit in UTF-8 ("(°)", "[µm]"): a whole multi-byte sequence is text.
-    const std::size_t continuation = c >= 0xC2 && c <= 0xDF   ? 1
-                                     : c >= 0xE0 && c <= 0xEF ? 2
-                                     : c >= 0xF0 && c <= 0xF4 ? 3
-                                                              : 0;
-    bool sequence = continuation > 0 && at + continuation < got;
-    for (std::size_t k = 1; sequence && k <= continuation; ++k) sequence = (head[at + k] & 0xC0) == 0x80;
-    if (sequence) {
-      at += continuation;
-      continue;
-    }
-    // A capture's frames end in 0x00 and are mostly bytes outside printable ASCII.
-    if (!((c >= 0x20 && c < 0x7f) || c == '\t' || c == '\r')) return StreamFileKind::capture;
-    delimiter = delimiter || c == ',' || c == ';' || c == '\t' || c == ' ';
-    letter = letter || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z');
+  if (file.read(reinterpret_cast<unsigned char*>(bytes), sizeof bytes, &got) != Status::ok) {
+    return StreamFileKind::capture;
   }
-  // A header names at least two columns: a letter and a delimiter in a line of 3+ bytes.
-  return delimiter && letter && at - start >= 3 ? StreamFileKind::text_log : StreamFileKind::capture;
+  const std::string_view head(bytes, got);
+  if (got >= 8 && std::memcmp(bytes, kMcapMagic, 8) == 0) return StreamFileKind::mcap;
+  if (got >= 16 && std::memcmp(bytes, kSqliteMagic, 16) == 0) return StreamFileKind::ros2_bag;
+  std::string_view body;
+  if (utf8_text(head, path, &body).ok()) return header_line(body) ? StreamFileKind::text_log : StreamFileKind::capture;
+  // UTF-16 or UTF-32 by its first bytes (utf8_text). A capture may start so too (an idle 0x00
+  // before a frame): a log only when its first line, without the byte order mark and the NUL
+  // bytes (a character beyond ASCII as one '?'), is a header; the text reader then says to save
+  // it as UTF-8.
+  std::string narrow;
+  for (const char c : head) {
+    if (c != '\0') narrow += c;
+  }
+  if (narrow.rfind("\xFF\xFE", 0) == 0 || narrow.rfind("\xFE\xFF", 0) == 0) narrow.erase(0, 2);  // the mark
+  for (char& c : narrow) c = static_cast<unsigned char>(c) < 0x80 ? c : '?';
+  return header_line(narrow) ? StreamFileKind::text_log : StreamFileKind::capture;
 }
 
 RobotLog read_robot_log(const std::string& path, const RobotLogOptions& options) {

@@ -1,7 +1,8 @@
 // `hivecal record --rtde` against a stand-in UR controller (testkit/rtde_controller.hpp): an
 // IPv6 address with a port, a chattering controller that does not flood the terminal, a full
 // disk that leaves the log ending at a whole row (exit 4), and a second recording into the
-// same file refused even with --force (exit 4) while the first keeps its rows (issue 54).
+// same file refused even with --force (exit 4, its summary saying it wrote nothing) while the
+// first keeps its rows (issue 54).
 #include <gtest/gtest.h>
 
 #include <sys/resource.h>
@@ -125,12 +126,18 @@ TEST(RecordRtde, ASecondRecordingIntoTheSameFileFailsEvenWithForce) {
   }
   for (int k = 0; k < 200 && lines_of(read_all(out)) < 3; ++k) port::sleep_ms(10);  // the first is recording
   std::string err;
+  ::testing::internal::CaptureStdout();
   const int code = test::run_capturing_stderr(
       streams::record_main,
       {"--rtde", "127.0.0.1:" + std::to_string(second.port()), "--robot-out", out, "--force", "--duration-s", "10"},
       &err);
+  const std::string summary = ::testing::internal::GetCapturedStdout();
   EXPECT_EQ(code, cli::kExitOutputError);
   EXPECT_NE(err.find("another process is recording into it"), std::string::npos) << err;
+  // Its summary says it wrote nothing (it said "-> same.txt: 0 data packages, 0 rows", as if
+  // the file held an empty recording of its own).
+  EXPECT_NE(summary.find(": nothing recorded, nothing written to " + out), std::string::npos) << summary;
+  EXPECT_EQ(summary.find("data packages"), std::string::npos) << summary;
   int status = 0;
   ASSERT_EQ(::waitpid(child, &status, 0), child);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == cli::kExitOk);

@@ -115,6 +115,22 @@ TEST(Report, HtmlIsWellFormedAndSelfContained) {
   EXPECT_NE(html.find("-20.3 %"), std::string::npos);  // 75.4 -> 60.1 um
 }
 
+// Every text of the page goes through the messages' filter (port::printable), not only the
+// title: a file's name, a column's or a robot's with control bytes (a window title, a clear
+// screen, a NUL) reaches the page escaped, and UTF-8 (µm, °) as written.
+TEST(Report, NamesFromInputFilesReachThePageEscapedAndUtf8AsWritten) {
+  report::ReportData data = example();
+  data.input_lines = {"input: pa\x1b]0;evil\x07ired.csv (12 paired samples)"};
+  data.info_lines.push_back("columns: x=x_t\x1b[2J[\xc2\xb5m], q1=joint_1[\xc2\xb0]");
+  data.parameters[0].name = std::string("d1\0tail", 7);
+  const std::string html = report::render_html(data);
+  EXPECT_EQ(check_well_formed(html), "");
+  for (const char c : html) ASSERT_TRUE(static_cast<unsigned char>(c) >= 0x20 || c == '\n') << int(c);
+  EXPECT_NE(html.find("<li>input: pa\\x1b]0;evil\\x07ired.csv (12 paired samples)</li>"), std::string::npos);
+  EXPECT_NE(html.find("<li>columns: x=x_t\\x1b[2J[\xc2\xb5m], q1=joint_1[\xc2\xb0]</li>"), std::string::npos);
+  EXPECT_NE(html.find("<td>d1\\x00tail</td>"), std::string::npos);
+}
+
 TEST(Report, WithoutTestSetNoTestColumnsAndTrainingFigures) {
   report::ReportData data = example();
   for (report::MethodRow& m : data.methods) m.test = ErrorStats{};
@@ -236,7 +252,9 @@ report::ReportData with_blunder_and_folds() {
   data.cross_validation.present = true;
   data.cross_validation.sample_count = 12;
   data.cross_validation.mae_3d_m = 61.3e-6;
-  data.cross_validation.folds = {{8, 4, 50.5e-6, 58.0e-6}, {8, 4, 49.0e-6, 71.5e-6}, {8, 4, 51.0e-6, 54.25e-6}};
+  data.cross_validation.held_out_of = "lines of samples.csv";
+  data.cross_validation.folds = {
+      {8, 4, 50.5e-6, 58.0e-6, "2-4, 13"}, {8, 4, 49.0e-6, 71.5e-6, "5-8"}, {8, 4, 51.0e-6, 54.25e-6, "9-12"}};
   data.identifiability.fixed = {"alpha2"};
   data.identifiability.significance_t = 2.0;
   return data;
@@ -263,8 +281,10 @@ TEST(Report, BlundersAndCrossValidationAreShown) {
   EXPECT_NE(outliers.find("data-series='set aside'"), std::string::npos);
   EXPECT_NE(outliers.find("data-series='kept'"), std::string::npos);
   EXPECT_NE(outliers.find("data-series='blunder threshold'"), std::string::npos);
-  // The folds: a row per fold and the overall held-out MAE as the figure's line.
-  EXPECT_NE(html.find("<td>2</td><td>8</td><td>4</td><td>49.0</td><td>71.5</td>"), std::string::npos);
+  // The folds: a row per fold with the file lines it held out (as the console and result.json
+  // say them), and the overall held-out MAE as the figure's line.
+  EXPECT_NE(html.find("<th>held-out MAE [um]</th><th>held out (lines of samples.csv)</th>"), std::string::npos);
+  EXPECT_NE(html.find("<td>2</td><td>8</td><td>4</td><td>49.0</td><td>71.5</td><td>5-8</td>"), std::string::npos);
   EXPECT_NE(html.find("3D MAE over every held-out sample 61.3 um (uncalibrated: 512.0 um)"), std::string::npos);
   const std::string folds = figure_svg(html, "fig-cv-folds");
   ASSERT_NE(folds, "");
@@ -320,7 +340,17 @@ TEST(Report, BlundersAndFoldsRoundTripThroughResultJson) {
     EXPECT_EQ(back.cross_validation.folds[k].test_count, data.cross_validation.folds[k].test_count);
     EXPECT_EQ(back.cross_validation.folds[k].train_mae_m, data.cross_validation.folds[k].train_mae_m);
     EXPECT_EQ(back.cross_validation.folds[k].test_mae_m, data.cross_validation.folds[k].test_mae_m);
+    EXPECT_EQ(back.cross_validation.folds[k].held_out, data.cross_validation.folds[k].held_out);
   }
+  EXPECT_EQ(back.cross_validation.held_out_of, "lines of samples.csv");
+  // A result written before the folds named their lines: read, the table without that column.
+  textio::JsonValue older = value;
+  older.object["cross_validation"].object.erase("held_out_of");
+  for (textio::JsonValue& fold : older.object["cross_validation"].object["folds"].array) fold.object.erase("held_out");
+  report::ReportData older_back;
+  ASSERT_TRUE(record::parse_report_data(older, "result.json", &older_back).ok());
+  EXPECT_EQ(older_back.cross_validation.folds.size(), 3u);
+  EXPECT_EQ(report::render_html(older_back).find("held out ("), std::string::npos);
   EXPECT_EQ(back.identifiability.fixed, std::vector<std::string>{"alpha2"});
   EXPECT_EQ(back.identifiability.significance_t, 2.0);
   EXPECT_EQ(report::render_html(back), report::render_html(as_written(data)));

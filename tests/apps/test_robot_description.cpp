@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "testkit/log_forms.hpp"
 #include "testkit/other_arms.hpp"
 #include "testkit/temp_dir.hpp"
 #include "textio/robot_description.hpp"
@@ -181,17 +182,6 @@ TEST(RobotDescription, BadDescriptionsNameFileAndKey) {
   EXPECT_EQ(description.convention, DhConvention::standard);
 }
 
-/// ASCII `text` as UTF-16 (little- or big-endian) or UTF-32 little-endian, with `bom` first.
-std::string wide(const std::string& text, int width, bool big_endian, const std::string& bom) {
-  std::string out = bom;
-  for (const char c : text) {
-    std::string unit(static_cast<std::size_t>(width), '\0');
-    unit[big_endian ? unit.size() - 1 : 0] = c;
-    out += unit;
-  }
-  return out;
-}
-
 // A robot file with a UTF-8 byte order mark reads as without it; UTF-16 and UTF-32 are refused
 // with what to do, and what is neither JSON nor XML is not called malformed JSON.
 TEST(RobotDescription, ByteOrderMarksAndOtherEncodingsAreNamed) {
@@ -213,11 +203,11 @@ TEST(RobotDescription, ByteOrderMarksAndOtherEncodingsAreNamed) {
     std::string text;
     const char* expected;
   } cases[] = {
-      {wide(urdf, 2, false, "\xFF\xFE"), "wide.urdf: UTF-16 text (little-endian): save it as UTF-8"},
-      {wide(urdf, 2, false, ""), "wide.urdf: UTF-16 text (little-endian): save it as UTF-8"},
-      {wide(urdf, 2, true, "\xFE\xFF"), "wide.urdf: UTF-16 text (big-endian): save it as UTF-8"},
-      {wide(json, 2, true, ""), "wide.urdf: UTF-16 text (big-endian): save it as UTF-8"},
-      {wide(urdf, 4, false, std::string("\xFF\xFE\0\0", 4)),
+      {test::wide_text(urdf, 2, false, "\xFF\xFE"), "wide.urdf: UTF-16 text (little-endian): save it as UTF-8"},
+      {test::wide_text(urdf, 2, false, ""), "wide.urdf: UTF-16 text (little-endian): save it as UTF-8"},
+      {test::wide_text(urdf, 2, true, "\xFE\xFF"), "wide.urdf: UTF-16 text (big-endian): save it as UTF-8"},
+      {test::wide_text(json, 2, true, ""), "wide.urdf: UTF-16 text (big-endian): save it as UTF-8"},
+      {test::wide_text(urdf, 4, false, std::string("\xFF\xFE\0\0", 4)),
        "wide.urdf: UTF-32 text (little-endian): save it as UTF-8"},
       {"robot arm:\n" + urdf,
        "wide.urdf: not a robot description: a JSON description starts with '{', a URDF with '<'; this file starts "
@@ -232,14 +222,16 @@ TEST(RobotDescription, ByteOrderMarksAndOtherEncodingsAreNamed) {
   // A result and a calibration.conf alike.
   record::CalibrationFile result;
   const std::string wide_result = dir.write(
-      "result.json", wide(record::format_calibration_json(arm_result(OtherArm::irb120, DhConvention::standard, 1)), 2,
-                          false, "\xFF\xFE"));
+      "result.json",
+      test::wide_text(record::format_calibration_json(arm_result(OtherArm::irb120, DhConvention::standard, 1)), 2,
+                      false, "\xFF\xFE"));
   port::Error r = record::read_calibration_json(wide_result, &result);
   EXPECT_NE(r.message.find("result.json: UTF-16 text (little-endian): save it as UTF-8"), std::string::npos)
       << r.message;
   UrCalibrationDeltas deltas;
   r = textio::read_ur_calibration_conf(
-      dir.write("calibration.conf", wide("[mounting]\ndelta_theta = [0, 0, 0, 0, 0, 0]\n", 2, false, "\xFF\xFE")),
+      dir.write("calibration.conf",
+                test::wide_text("[mounting]\ndelta_theta = [0, 0, 0, 0, 0, 0]\n", 2, false, "\xFF\xFE")),
       &deltas);
   EXPECT_NE(r.message.find("calibration.conf: UTF-16 text (little-endian): save it as UTF-8"), std::string::npos)
       << r.message;

@@ -18,6 +18,7 @@
 #include "hivecal/port/error.hpp"
 #include "sim/sim_model.hpp"
 #include "testkit/log_forms.hpp"
+#include "textio/csv.hpp"
 #include "textio/delimited.hpp"
 #include "textio/logs.hpp"
 #include "textio/ros2_bag.hpp"
@@ -305,6 +306,55 @@ TEST(TextLogs, DetectionByContent) {
     for (char& c : noise) c = static_cast<char>(1 + random.below(255));
     ASSERT_EQ(textio::detect_stream_file(dir.write("noise.cap", noise)), StreamFileKind::capture) << trial;
   }
+}
+
+// Every text reader sees the encoding the way the robot files do (textio::utf8_text): a UTF-8
+// byte order mark is read past, UTF-16 and UTF-32 are refused with "save it as UTF-8". A log in
+// UTF-16 was "binary byte 0x00" or, as --robot/--tracker, read as a capture ("no valid frame");
+// a capture that starts with an idle 0x00 stays a capture.
+TEST(TextLogs, Utf16AndUtf32TextIsNamedByEveryReader) {
+  const test::TempDir dir("hivecal_logs");
+  using textio::StreamFileKind;
+  const std::string robot = "t,q1,q2,q3,q4,q5,q6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n";
+  const std::string tracker = "Time [ms];X [mm];Y [mm];Z [mm]\n100;1;2;3\n200;1;2;3\n";
+  const std::string pendant = "\"Base (\xc2\xb0)\",\"Shoulder (\xc2\xb0)\"\n1,2\n";  // a unit beyond ASCII
+  const struct {
+    std::string text;
+    const char* encoding;
+  } wide[] = {
+      {test::wide_text(robot, 2, false, "\xFF\xFE"), "UTF-16 text (little-endian)"},
+      {test::wide_text(robot, 2, false, ""), "UTF-16 text (little-endian)"},
+      {test::wide_text(robot, 2, true, "\xFE\xFF"), "UTF-16 text (big-endian)"},
+      {test::wide_text(robot, 4, false, std::string("\xFF\xFE\0\0", 4)), "UTF-32 text (little-endian)"},
+      {test::wide_text(robot, 4, true, ""), "UTF-32 text (big-endian)"},
+  };
+  for (const auto& w : wide) {
+    const std::string path = dir.write("robot.csv", w.text);
+    EXPECT_EQ(textio::detect_stream_file(path), StreamFileKind::text_log) << w.encoding;
+    const textio::RobotLog log = textio::read_robot_log(path);
+    EXPECT_EQ(log.error, path + ": " + w.encoding + ": save it as UTF-8");
+    std::vector<JointVector> poses;
+    const port::Error joints = textio::read_joints_csv(path, &poses);
+    EXPECT_NE(joints.message.find(path + ": " + w.encoding + ": save it as UTF-8"), std::string::npos)
+        << joints.message;
+  }
+  const std::string wide_tracker = dir.write("tracker.csv", test::wide_text(tracker, 2, false, "\xFF\xFE"));
+  EXPECT_EQ(textio::read_tracker_log(wide_tracker).error,
+            wide_tracker + ": UTF-16 text (little-endian): save it as UTF-8");
+  std::string wide_pendant = "\xFF\xFE";  // UTF-16 of the degree sign: 0xB0 0x00
+  for (const char c : pendant) wide_pendant += c == '\xc2' ? std::string() : std::string{c, '\0'};
+  EXPECT_EQ(textio::detect_stream_file(dir.write("pendant.csv", wide_pendant)), StreamFileKind::text_log);
+  // A UTF-8 byte order mark is read past by every reader, in a file and in memory.
+  const std::string marked = dir.write("marked.csv", "\xEF\xBB\xBF" + robot);
+  EXPECT_EQ(textio::read_robot_log(marked).records.size(), 2u);
+  EXPECT_EQ(textio::parse_robot_log("\xEF\xBB\xBF" + robot, "memory").records.size(), 2u);
+  std::vector<JointVector> poses;
+  EXPECT_TRUE(textio::read_joints_csv(marked, &poses).ok());
+  EXPECT_EQ(poses.size(), 2u);
+  // Captures, also one that starts with idle 0x00 bytes, are captures still.
+  std::string capture = std::string(4, '\0') + "\x05\x01\x02\x03\x04";
+  for (int k = 0; k < 40; ++k) capture += std::string("\x0b\x01\x02\x0c\x9a\xf0\x11\x22\x33\x44", 10) + '\0';
+  EXPECT_EQ(textio::detect_stream_file(dir.write("idle.cap", capture)), StreamFileKind::capture);
 }
 
 TEST(TextLogs, CdrJointStateDecodesAndRefusesJunk) {

@@ -155,7 +155,7 @@ if [ "$kept_rc" = 5 ] && grep -q "warning: .* moved" "$work/kept.out" && ! grep 
 else
   fail "--keep-outliers"; cat "$work/kept.out"
 fi
-expect 2 "--cv must be 'loo' or a number of folds" -- calibrate --samples "$work/blunder.csv" --cv 1
+expect 2 "--cv must be within [2, 128] folds, or 'loo', got '1'" -- calibrate --samples "$work/blunder.csv" --cv 1
 # A CSV log with a bad row is a clear error naming file and line, and no result.
 { head -5 "$sim/tracker.csv"; echo "5.9,1,2"; } >"$work/short_tracker.csv"
 expect 3 "short_tracker.csv:6: 3 fields where the header has 5" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/short_tracker.csv" --out "$work/r5.json"
@@ -503,9 +503,9 @@ for delay in nan 1e9 -1; do
   refused_serve "--serve-delay-s must be" --serve-delay-s "$delay"
   refused_serve "within [0, 3600], got '$delay'" --serve-delay-s "$delay"
 done
-expect 2 "--compliance-urad must be J2,J3, each within +-10000 urad (e.g. 40,20), not 'nan,0'" -- simulate --compliance-urad nan,0 --out-dir "$work/h2"
-expect 2 "--compliance-urad must be J2,J3" -- simulate --compliance-urad 1e300,0 --out-dir "$work/h2"
-expect 2 "--harmonic-urad must be J,K,S,C" -- simulate --harmonic-urad 3,1,nan,0 --out-dir "$work/h2"
+expect 2 "--compliance-urad J2,J3: J2 must be a number within [-10000, 10000] urad, got 'nan': not a number" -- simulate --compliance-urad nan,0 --out-dir "$work/h2"
+expect 2 "--compliance-urad J2,J3: J2 must be within [-10000, 10000] urad, got '1e300'" -- simulate --compliance-urad 1e300,0 --out-dir "$work/h2"
+expect 2 "--harmonic-urad J,K,S,C: S must be a number within [-10000, 10000] urad, got 'nan'" -- simulate --harmonic-urad 3,1,nan,0 --out-dir "$work/h2"
 expect 2 "--length-sigma-um must be within [0, 100000], got 'inf'" -- simulate --length-sigma-um inf --out-dir "$work/h2"
 expect 2 "--angle-sigma-urad must be within [0, 100000], got '1e9'" -- simulate --angle-sigma-urad 1e9 --out-dir "$work/h2"
 no_file "$work/h2"
@@ -550,6 +550,8 @@ if "${run[@]}" export --robot-model ur5e --format ur-kinematics --ur-hash calib_
   fail "export --format ur-kinematics"; fi
 expect 0 "hash calib_hivecal_" -- export --robot-model ur5e --format ur-kinematics --out "$work/ur5e-own.yaml"
 expect 2 "--ur-hash must be letters, digits and '_'" -- export --robot-model ur5e --format ur-kinematics --ur-hash 'a b'
+expect 2 "--ur-hash goes with --format ur-kinematics: a urdf has no calibration hash" -- export --robot-model ur5e --ur-hash calib_42 --out "$work/hash.urdf"
+no_file "$work/hash.urdf"
 # A URDF is a robot model (--robot-model FILE.urdf): predict checks it against the built-in
 # table, calibrate starts from it.
 "${run[@]}" export --robot-model ur5 --out "$work/ur5.urdf" 2>/dev/null
@@ -584,10 +586,36 @@ if "${run[@]}" calibrate --samples "$work/paired.csv" --robot-model "$work/hosti
      --report "$work/hostile_report" >/dev/null 2>&1 && only_text "$work/hostile_report/index.html" &&
    grep -qF '<title>hivecal calibration: \x1b]0;pwned\x07\x1b[2J\x00tail</title>' "$work/hostile_report/index.html"; then pass; else
   fail "calibrate --report of a name with control bytes"; fi
+# ... nor does any other command that prints it: a registration of that result, plan's clamped
+# limits (the description's own range named by its name), iso9283's command frame.
+sed 's/^  "tool": /  "joint_limits": [[-1, 1], [-1, 1], [-1, 1], [-1, 1], [-1, 1], [-1, 1]],\n  "tool": /' "$work/hostile.json" \
+  >"$work/hostile_limits.json"
+printf 'lower,upper\n-2,2\n-2,2\n-2,2\n-2,2\n-2,2\n-2,2\n' >"$work/wider.csv"
+{ "${run[@]}" calibrate --fit base --robot-model "$work/hostile_result.json" --samples "$work/paired.csv" --out "$work/hostile_reg.json"
+  "${run[@]}" plan --robot-model "$work/hostile_limits.json" --joint-limits "$work/wider.csv" --count 4 --tracker-position 2,0.5,0.6 \
+    --candidates 64 --restarts 1 --refine 0 --out "$work/hostile_plan.csv"
+  "${run[@]}" iso9283 --samples "$work/paired.csv" --robot-model "$work/hostile.json" --out "$work/hostile_iso.csv"
+} >"$work/hostile_more.txt" 2>&1
+if only_text "$work/hostile_more.txt" && grep -qF 'registering '"$work"'/hostile_result.json (\x1b]0;pwned' "$work/hostile_more.txt" &&
+   grep -qF "goes beyond the \x1b]0;pwned" "$work/hostile_more.txt" &&
+   grep -qF "commanded positions from the nominal \x1b]0;pwned" "$work/hostile_more.txt"; then pass; else
+  fail "registration, plan, iso9283 of a name with control bytes: $(od -c "$work/hostile_more.txt" | grep -m3 033)"; fi
 sed 's/"title": "hivecal calibration: ur5"/"title": "\\u001b]0;pwned\\u0007"/' "$work/cap.json" >"$work/hostile_title.json"
 if grep -q 'u001b' "$work/hostile_title.json" && "${run[@]}" report --calibration "$work/hostile_title.json" --out "$work/hostile_redrawn" >/dev/null &&
    only_text "$work/hostile_redrawn/index.html" && grep -qF '<title>\x1b]0;pwned\x07</title>' "$work/hostile_redrawn/index.html"; then pass; else
   fail "report of a result whose title holds control bytes"; fi
+# A samples file named with control bytes: its name reaches neither the terminal nor the page raw
+# (the input line, the report's every text, validate's line), each through port::printable.
+hostile_csv="$work/"$'pa\x1b]0;evil\x07ired.csv'
+cp "$work/paired.csv" "$hostile_csv"
+if "${run[@]}" calibrate --samples "$hostile_csv" --method lm --split 1 --out "$work/hn.json" --report "$work/hn_report" \
+     >"$work/hn.txt" 2>&1 &&
+   "${run[@]}" validate --calibration "$work/hn.json" --samples "$hostile_csv" --out "$work/hn_v.json" >>"$work/hn.txt" 2>&1 &&
+   only_text "$work/hn.txt" && only_text "$work/hn_report/index.html" &&
+   grep -qF "input: $work/pa\x1b]0;evil\x07ired.csv (" "$work/hn.txt" &&
+   grep -qF "validation on $work/pa\x1b]0;evil\x07ired.csv: " "$work/hn.txt" &&
+   grep -qF "<li>input: $work/pa\x1b]0;evil\x07ired.csv (" "$work/hn_report/index.html"; then pass; else
+  fail "a samples file named with control bytes: $(od -c "$work/hn.txt" | head -5)"; fi
 printf '<robot name="r">\n<joint name="j" type="prismatic"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/slider.urdf"
 expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- predict --robot-model "$work/slider.urdf" --joints "$work/joints.csv"
 expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- check-robot "$work/slider.urdf"

@@ -120,8 +120,8 @@ if "${run[@]}" plan "${cell[@]}" "${quick[@]}" --count 30 --joint-limits "$work/
 printf 'lower,upper\n7,8\n-1,1\n-1,1\n-1,1\n-1,1\n-1,1\n' >"$work/outside.csv"
 expect_plan 3 "joint 1 [7.0000, 8.0000] rad lies outside the ur5e's own range [-6.2832, 6.2832] rad" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/outside.csv"
 # --- nothing found: the message names the cause (an absurd tool, limits that leave no pose)
-expect_plan 2 "--tool must be X,Y,Z in metres, each within [-100, 100] m, got '0,0,1e9'" -- "${cell[@]}" "${out[@]}" --count 10 --tool 0,0,1e9
-expect_plan 1 "the tool is why: --tool 0,0,50 puts the reflector 50 m from the flange" -- "${cell[@]}" "${out[@]}" --count 10 --tool 0,0,50
+expect_plan 2 "--tool must be X,Y,Z in metres, each within [-10, 10] m, got '0,0,1e9'" -- "${cell[@]}" "${out[@]}" --count 10 --tool 0,0,1e9
+expect_plan 1 "the tool is why: --tool 0,0,5 puts the reflector 5 m from the flange" -- "${cell[@]}" "${out[@]}" --count 10 --tool 0,0,5
 printf 'lower,upper\n-0.01,0.01\n-0.01,0.01\n-0.01,0.01\n-0.01,0.01\n-0.01,0.01\n-0.01,0.01\n' >"$work/tight.csv"
 expect_plan 1 "the joint limits are why: --joint-limits $work/tight.csv leave none" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/tight.csv"
 expect_plan 1 "move the tracker" -- "${cell[@]}" "${out[@]}" --count 10 --floor-z 5
@@ -135,16 +135,19 @@ if "${run[@]}" plan --iso9283 0.4,-0.3,0.5,0.3 --tracker-position 2,0.5,0.6 --ou
    [ "$(grep -c '^    movel(p[1-5], a=1.2, v=0.25)$' "$work/iso.script")" -eq 5 ] && grep -q '^  while (cycle < 30):$' "$work/iso.script"; then pass; else
   fail "plan --iso9283: $(cat "$work/iso.csv" "$work/iso.script")"; fi
 expect_plan 2 "--iso9283 must be X,Y,Z,SIDE" -- --iso9283 0.4,0.5,0.3 --tracker-position 2,0.5,0.6 "${out[@]}"
+# An option of the other mode is refused, not dropped without a word.
+expect_plan 2 "--count is an option of pose planning, not of the ISO 9283 test (--iso9283): leave it out" -- --iso9283 auto --count 10 --tracker-position 2,0.5,0.6 "${out[@]}"
+expect_plan 2 "--cycles goes with --iso9283 (the ISO 9283 test)" -- "${cell[@]}" "${out[@]}" --count 10 --cycles 5
 # A given cube is checked as auto's: too small, below the floor, inside the keep-out cylinder,
 # out of reach or with an absurd tool: refused by position, nothing written (no URScript for
 # positions the arm cannot take).
-expect_plan 2 "side in [0.02, 10]" -- --iso9283 0.4,-0.3,0.5,1e-9 --tracker-position 2,0.5,0.6 "${out[@]}"
+expect_plan 2 "--iso9283 X,Y,Z,SIDE: SIDE must be within [0.02, 10] m, got '1e-9'" -- --iso9283 0.4,-0.3,0.5,1e-9 --tracker-position 2,0.5,0.6 "${out[@]}"
 expect_plan 1 "P2 (0.2800, -0.4200, -0.0700 m), P3 (0.5200, -0.4200, -0.0700 m): below --floor-z 0.05 m" -- --iso9283 0.4,-0.3,0.05,0.3 --tracker-position 2,0.5,0.6 "${out[@]}"
 expect_plan 1 ": inside --keep-out-radius 0.15 m" -- --iso9283 0.1,0,0.5,0.1 --tracker-position 2,0.5,0.6 "${out[@]}"
 expect_plan 1 "P1 (2.0000, 0.0000, 0.5000 m)" -- --iso9283 2,0,0.5,0.3 --tracker-position 3,0.5,0.6 "${out[@]}" --urscript "$work/iso_far.script"
 no_file "$work/iso_far.script"
-expect_plan 1 "the tool is why: --tool 0,0,50" -- --iso9283 0.4,-0.3,0.5,0.3 --tool 0,0,50 --tracker-position 2,0.5,0.6 "${out[@]}"
-expect_plan 1 "--iso9283 auto: no cube whose five positions the arm reaches with one orientation (the tool is why" -- --iso9283 auto --tool 0,0,50 --tracker-position 2,0.5,0.6 "${out[@]}"
+expect_plan 1 "the tool is why: --tool 0,0,5" -- --iso9283 0.4,-0.3,0.5,0.3 --tool 0,0,5 --tracker-position 2,0.5,0.6 "${out[@]}"
+expect_plan 1 "--iso9283 auto: no cube whose five positions the arm reaches with one orientation (the tool is why" -- --iso9283 auto --tool 0,0,5 --tracker-position 2,0.5,0.6 "${out[@]}"
 # auto: the largest cube found whose five positions the arm reaches with the one orientation;
 # each listed joint solution puts the reflector there (checked through predict, the model's FK;
 # the reflector at the flange, as predict's built-in ur5e has it)

@@ -3,13 +3,16 @@
 // lab's flange -> probe transform as the tool, a hint when the arm looks like another UR.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
 #include "commands/commands.hpp"
+#include "commands/streams.hpp"
 #include "hivecal/core/random.hpp"
 #include "hivecal/plan/inverse_kinematics.hpp"
 #include "testkit/cli_run.hpp"
+#include "testkit/sim_capture.hpp"
 #include "testkit/temp_dir.hpp"
 #include "testkit/test_data.hpp"
 #include "textio/csv.hpp"
@@ -259,6 +262,82 @@ TEST(CalibrateChecks, TheToolPointFromTheLabsFlangeProbeTransform) {
                      "--length-unit mm"),
             std::string::npos)
       << err;
+}
+
+/// What `entry` writes to `out` (one of `args`) when run with `args`, its console swallowed;
+/// "<exit N>" when it fails.
+template <typename Main>
+std::string output_of(Main entry, const std::vector<std::string>& args, const std::string& out) {
+  ::testing::internal::CaptureStdout();
+  std::string err;
+  const int code = test::run_capturing_stderr(entry, args, &err);
+  ::testing::internal::GetCapturedStdout();
+  return code == cli::kExitOk ? test::read_text_file(out) : "<exit " + std::to_string(code) + ">: " + err;
+}
+
+// --tool-transform was calibrate's only: plan, iso9283 and extract take the lab's 4x4 through the
+// same option helper (cli::tool_point_option), in --length-unit, and give what --tool gives with
+// its translation; iso9283 refuses it beside a calibration as it refuses --tool.
+TEST(CalibrateChecks, TheLabsTransformIsTheToolOfEveryCommandThatTakesOne) {
+  const test::TempDir dir;
+  const std::string in_mm = dir.write("tool_in_flange_mm.txt", "0 -1 0 10\n1 0 0 20\n0 0 1 150\n0 0 0 1\n");
+  const std::vector<std::string> transform = {"--tool-transform", in_mm, "--length-unit", "mm"};
+  const std::string in_m = dir.write("tool_in_flange.txt", "0 -1 0 0.01\n1 0 0 0.02\n0 0 1 0.15\n0 0 0 1\n");
+  const std::vector<std::string> transform_m = {"--tool-transform", in_m};  // the reaches are in metres
+  const auto with = [](std::vector<std::string> args, const std::vector<std::string>& tool) {
+    args.insert(args.end(), tool.begin(), tool.end());
+    return args;
+  };
+  // plan: the same poses.
+  const std::string planned = dir.path() + "/planned.csv";
+  const std::vector<std::string> plan = {"--robot-model", "ur5e", "--count",    "6", "--tracker-position", "2,0.5,0.6",
+                                         "--candidates",  "256",  "--restarts", "1", "--refine",           "0",
+                                         "--out",         planned};
+  const std::string by_tool = output_of(cli::plan_main, with(plan, {"--tool", "0.01,0.02,0.15"}), planned);
+  EXPECT_EQ(by_tool.substr(0, 18), "q1,q2,q3,q4,q5,q6\n") << by_tool;
+  EXPECT_EQ(output_of(cli::plan_main, with(plan, transform), planned), by_tool);
+  EXPECT_NE(output_of(cli::plan_main, plan, planned), by_tool);  // the tool matters to what is planned
+  // iso9283 with the nominal model: the same table.
+  RobotModel arm = nominal_model(RobotType::ur5);
+  arm.tool_m = Vec3(0.01, 0.02, 0.15);
+  Random random(9283);
+  std::string reaches = "q1,q2,q3,q4,q5,q6,x,y,z\n";
+  for (int pose = 0; pose < 5; ++pose) {
+    const JointVector q = test::random_joints(&random);
+    for (int cycle = 0; cycle < 3; ++cycle) {
+      const Vec3 point_m = test::example_base_to_tracker().apply(fk_tool_point(arm, q)) +
+                           Vec3(random.normal(), random.normal(), random.normal()) * 1e-5;
+      for (int j = 0; j < kSixJoints; ++j) reaches += textio::format_double(q(j)) + ",";
+      reaches += textio::format_double(point_m.x()) + "," + textio::format_double(point_m.y()) + "," +
+                 textio::format_double(point_m.z()) + "\n";
+    }
+  }
+  const std::string reached = dir.write("reaches.csv", reaches);
+  const std::string table = dir.path() + "/iso.csv";
+  const std::vector<std::string> iso = {"--samples", reached, "--robot-model", "ur5", "--out", table};
+  const std::string iso_by_tool = output_of(cli::iso9283_main, with(iso, {"--tool", "0.01,0.02,0.15"}), table);
+  EXPECT_EQ(std::count(iso_by_tool.begin(), iso_by_tool.end(), '\n'), 6) << iso_by_tool;
+  EXPECT_EQ(output_of(cli::iso9283_main, with(iso, transform_m), table), iso_by_tool);
+  EXPECT_NE(output_of(cli::iso9283_main, iso, table), iso_by_tool);
+  std::string err;
+  EXPECT_EQ(test::run_capturing_stderr(
+                cli::iso9283_main,
+                with({"--samples", reached, "--calibration", "unread.json", "--out", table}, transform_m), &err),
+            cli::kExitUsage);
+  EXPECT_NE(err.find("--tool-transform goes with --robot-model: a calibration result carries its own calibrated tool"),
+            std::string::npos)
+      << err;
+  // extract: the same samples (its tool sets the speeds that tell the arm still).
+  const test::SimCapture& capture = test::sim_capture();
+  const std::string robot = dir.write("robot.cap", std::string(capture.robot_bytes.begin(), capture.robot_bytes.end()));
+  const std::string tracker =
+      dir.write("tracker.cap", std::string(capture.tracker_bytes.begin(), capture.tracker_bytes.end()));
+  const std::string pairs = dir.path() + "/pairs.csv";
+  const std::vector<std::string> extract = {"--robot", robot, "--tracker", tracker, "--samples", pairs};
+  const std::string extracted = output_of(streams::extract_main, with(extract, {"--tool", "0.01,0.02,0.15"}), pairs);
+  EXPECT_GT(std::count(extracted.begin(), extracted.end(), '\n'), 10) << extracted.substr(0, 200);
+  EXPECT_EQ(output_of(streams::extract_main, with(extract, transform), pairs), extracted);
+  EXPECT_NE(output_of(streams::extract_main, with(extract, {"--tool", "0,0,1"}), pairs), extracted);
 }
 
 TEST(CalibrateChecks, AUr10CalibratedAsTheDefaultUr5GetsTheHint) {

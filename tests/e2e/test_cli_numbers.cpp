@@ -80,6 +80,62 @@ TEST(CliNumbers, StreamCommandsSayTheRealRange) {
       {{{"--duration-s", "-1"}, "--duration-s must be within [0, 1e+09] s (0: until Ctrl-C / SIGTERM), got '-1'"}});
 }
 
+// Options of several numbers (plan's cube, simulate's deflections and harmonic, --cv, the baud
+// rates) went through their own parsers: 1e-400 or NaN was "not X,Y,Z,SIDE" without the reason,
+// 115200.5 baud was taken as 115200. Each number now goes through check_number, named by its
+// place in the option's form; 0 is advised for an underflow only where 0 is taken.
+TEST(CliNumbers, EachNumberOfAnOptionOfSeveralIsCheckedAsOne) {
+  double value = 0.0;
+  EXPECT_EQ(cli::check_number("--x", "1e-400", cli::NumberRange{0.0, 1.0, true, false}, &value).message,
+            "--x must be within (0, 1], got '1e-400': too small for a double (it underflows below 4.9e-324): give a "
+            "larger value");
+  double values[2] = {};
+  const std::vector<cli::NumberField> pair = {{"A", cli::NumberRange{0.0, 1.0}}, {"B", cli::NumberRange{2.0, 3.0}}};
+  EXPECT_TRUE(cli::check_numbers("--ab", "0.5,2.5", "two numbers", pair, values).ok());
+  EXPECT_EQ(values[1], 2.5);
+  EXPECT_EQ(cli::check_numbers("--ab", "0.5", "two numbers", pair, values).message,
+            "--ab must be A,B (two numbers), got '0.5'");
+  EXPECT_EQ(cli::check_numbers("--ab", "0.5,4", "two numbers", pair, values).message,
+            "--ab A,B: B must be within [2, 3], got '4'");
+  std::size_t count = 0;
+  EXPECT_EQ(cli::check_count("--n", "2.5", cli::NumberRange{0.0, 9.0}, &count).message,
+            "--n must be a whole number, not '2.5'");
+  const std::vector<std::string> cell = {"--tracker-position", "2,0.5,0.6", "--out", "/nonexistent/folder/iso.csv"};
+  test::expect_refusals(
+      cli::plan_main, cell,
+      {
+          {{"--iso9283", "0.4,-0.3,0.5,1e-9"}, "--iso9283 X,Y,Z,SIDE: SIDE must be within [0.02, 10] m, got '1e-9'"},
+          {{"--iso9283", "0.4,-0.3,1e-400,0.3"},
+           "--iso9283 X,Y,Z,SIDE: Z must be within [-10, 10] m, got '1e-400': too small for a double"},
+          {{"--iso9283", "0.4,nan,0.5,0.3"},
+           "--iso9283 X,Y,Z,SIDE: Y must be a number within [-10, 10] m, got 'nan': not a number"},
+          {{"--iso9283", "0.4,0.5,0.3"}, "--iso9283 must be X,Y,Z,SIDE (the cube's centre in the base frame"},
+      });
+  test::expect_refusals(
+      sim::simulate_main, {"--out-dir", "/nonexistent/folder"},
+      {
+          {{"--compliance-urad", "1e-400,0"},
+           "--compliance-urad J2,J3: J2 must be within [-10000, 10000] urad, got '1e-400': too small for a double"},
+          {{"--compliance-urad", "40,nan"}, "--compliance-urad J2,J3: J3 must be a number within"},
+          {{"--harmonic-urad", "3,1,1e5,0"},
+           "--harmonic-urad J,K,S,C: S must be within [-10000, 10000] urad, got '1e5'"},
+          {{"--harmonic-urad", "3.5,1,60,50"}, "the joint J and the order K are whole numbers, got '3.5,1,60,50'"},
+          {{"--harmonic-urad", "7,1,60,50"}, "--harmonic-urad J,K,S,C: J must be within [1, 6], got '7'"},
+      });
+  test::expect_refusals(
+      cli::calibrate_main, {"--samples", "unread.csv", "--out", "unwritten.json"},
+      {
+          {{"--cv", "1e-400"}, "--cv must be within [2, 128] folds, or 'loo', got '1e-400': too small"},
+          {{"--cv", "2.5"}, "--cv must be a whole number, not '2.5'"},
+      });
+  test::expect_refusals(
+      streams::record_main, {"--robot-port", "/nonexistent/port"},
+      {
+          {{"--robot-baud", "115200.5"}, "--robot-baud must be a whole number, not '115200.5'"},
+          {{"--robot-baud", "1234"}, "--robot-baud: unsupported baud rate 1234 (the port takes 9600, 19200, 38400"},
+      });
+}
+
 TEST(CliAdvice, ABuiltInRobotNameWinsOverAFolderOfThatName) {
   const test::TempDir dir;
   ASSERT_EQ(::mkdir((dir.path() + "/ur5e").c_str(), 0700), 0);

@@ -2,13 +2,15 @@
 // rostopic, tracker exports, CDR JointState). Input: byte 0 picks the reader (robot log,
 // tracker log, CDR message), the rest is the file. Invariants, any breach traps: ok and
 // error exclusive; records non-empty, strictly increasing in time, finite where valid; an
-// error is one bounded line of printable ASCII (control bytes of the input escaped).
+// error is one bounded line of printable text (control bytes of the input and what is no UTF-8
+// escaped).
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
 
+#include "hivecal/port/error.hpp"
 #include "textio/logs.hpp"
 #include "textio/ros2_bag.hpp"
 
@@ -22,7 +24,13 @@ void require(bool condition) {
 
 void check_error(const std::string& error) {
   require(error.size() < 1024);
-  for (const char c : error) require(c >= 0x20 && c < 0x7f);
+  for (std::size_t i = 0; i < error.size();) {  // printable ASCII, or whole UTF-8 characters beyond C1
+    const std::size_t length = port::utf8_sequence_bytes(error, i);
+    const auto c = static_cast<unsigned char>(error[i]);
+    require(length == 1 ? c >= 0x20 && c < 0x7f
+                        : length > 1 && !(c == 0xC2 && static_cast<unsigned char>(error[i + 1]) < 0xA0));
+    i += length;
+  }
 }
 
 template <typename Log, typename Valid>

@@ -382,5 +382,25 @@ TEST(Messages, HugeAndBinaryTextIsEscapedAndCut) {
   EXPECT_EQ(quoted("x\ny"), "'x\\x0ay'");
 }
 
+// UTF-8 is shown as written ("µm" was "\xc2\xb5m" in every message and the report): only what
+// steers a terminal (C0, DEL, C1: U+009B is a CSI), the bidirectional overrides and isolates,
+// and bytes that are no UTF-8 (a lone continuation, an overlong form, a surrogate, beyond
+// U+10FFFF, a character cut by the file's end) are escaped; a cut never splits a character.
+TEST(Messages, Utf8IsKeptAndOnlyWhatSteersTheTerminalIsEscaped) {
+  EXPECT_EQ(printable("[\xc2\xb5m] 90\xc2\xb0 \xd0\xa0 \xe2\x82\xac \xf0\x9f\x98\x80"),
+            "[\xc2\xb5m] 90\xc2\xb0 \xd0\xa0 \xe2\x82\xac \xf0\x9f\x98\x80");
+  EXPECT_EQ(printable("a\xc2\x9b"
+                      "2Jb"),
+            "a\\xc2\\x9b2Jb");                                  // C1 CSI
+  EXPECT_EQ(printable("x\xe2\x80\xaey"), "x\\xe2\\x80\\xaey");  // right-to-left override
+  EXPECT_EQ(printable("x\xe2\x81\xa6y"), "x\\xe2\\x81\\xa6y");  // left-to-right isolate
+  EXPECT_EQ(printable("\x80|\xc0\x80|\xed\xa0\x80|\xf5\x80\x80\x80|\xe2\x82"),
+            "\\x80|\\xc0\\x80|\\xed\\xa0\\x80|\\xf5\\x80\\x80\\x80|\\xe2\\x82");
+  EXPECT_EQ(printable("ab\xc2\xb5", 3), "ab...[4 bytes]");  // the cut falls inside the µ: not shown
+  EXPECT_EQ(printable("ab\xc2\xb5", 4), "ab\xc2\xb5");
+  EXPECT_EQ(utf8_sequence_bytes("\xf4\x8f\xbf\xbf", 0), 4u);  // U+10FFFF
+  EXPECT_EQ(utf8_sequence_bytes("\xf4\x90\x80\x80", 0), 0u);  // beyond it
+}
+
 }  // namespace
 }  // namespace hivecal::port::port_files_test

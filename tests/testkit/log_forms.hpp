@@ -39,6 +39,18 @@ inline std::string seconds(std::uint64_t t_us) {
   return b;
 }
 
+/// ASCII `text` as an editor saves it in UTF-16 (`width` 2) or UTF-32 (`width` 4), little- or
+/// big-endian, with `bom` (its byte order mark, or "") first.
+inline std::string wide_text(const std::string& text, int width, bool big_endian, const std::string& bom) {
+  std::string out = bom;
+  for (const char c : text) {
+    std::string unit(static_cast<std::size_t>(width), '\0');
+    unit[big_endian ? unit.size() - 1 : 0] = c;
+    out += unit;
+  }
+  return out;
+}
+
 /// hivecal's robot log: t,q1..q6.
 inline std::string hivecal_robot_csv(const std::vector<JointStateRecord>& records) {
   std::string out = "t,q1,q2,q3,q4,q5,q6\n";

@@ -1,6 +1,7 @@
 #include "hivecal/port/serial_port.hpp"
 
 #include <fcntl.h>
+#include <iterator>
 #include <sys/file.h>
 #include <poll.h>
 #include <termios.h>
@@ -13,18 +14,20 @@
 namespace hivecal::port {
 namespace {
 
+/// The rates termios sets here, with their constants.
+constexpr struct {
+  int baud;
+  speed_t speed;
+} kBauds[] = {{9600, B9600},     {19200, B19200},   {38400, B38400},   {57600, B57600},
+              {115200, B115200}, {230400, B230400}, {460800, B460800}, {921600, B921600}};
+
 bool baud_constant(int baud, speed_t* speed) {
-  switch (baud) {
-    case 9600: *speed = B9600; return true;
-    case 19200: *speed = B19200; return true;
-    case 38400: *speed = B38400; return true;
-    case 57600: *speed = B57600; return true;
-    case 115200: *speed = B115200; return true;
-    case 230400: *speed = B230400; return true;
-    case 460800: *speed = B460800; return true;
-    case 921600: *speed = B921600; return true;
-    default: return false;
+  for (const auto& b : kBauds) {
+    if (b.baud != baud) continue;
+    *speed = b.speed;
+    return true;
   }
+  return false;
 }
 
 /// errno values that mean the device itself is gone (unplugged, pty master closed).
@@ -38,6 +41,14 @@ bool device_lost(int error_number) {
 bool baud_supported(int baud) {
   speed_t speed = 0;
   return baud_constant(baud, &speed);
+}
+
+std::string supported_bauds() {
+  std::string text;
+  for (const auto& b : kBauds) {
+    text += (text.empty() ? "" : &b == &kBauds[std::size(kBauds) - 1] ? " or " : ", ") + std::to_string(b.baud);
+  }
+  return text;
 }
 
 SerialPort::SerialPort(SerialOptions options) : options_(std::move(options)) {}

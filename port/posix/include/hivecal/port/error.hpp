@@ -31,10 +31,16 @@ struct Error {
   static Error output(std::string m) { return Error{Fault::output, std::move(m)}; }    ///< output failed
 };
 
-/// Text from outside (file content, a path, an argument) made safe to print: control bytes,
-/// DEL and bytes >= 0x80 become \xNN, and it is cut after `max_bytes` input bytes with a note
-/// of the full length. Every message that echoes foreign text goes through this.
+/// Text from outside (file content, a path, an argument, a name a file gives) made safe to
+/// print: control bytes (C0, DEL, C1), the bidirectional overrides and isolates, and bytes that
+/// are no valid UTF-8 become \xNN (per byte); other UTF-8 is kept ("µm", "°"). Cut after at
+/// most `max_bytes` input bytes (never inside a character) with a note of the full length.
+/// The one filter of every message that echoes foreign text, and of the report's text.
 std::string printable(std::string_view text, std::size_t max_bytes = 80);
+
+/// Bytes of the well-formed UTF-8 character at `text[at]` (1 for ASCII, 2..4 for a multi-byte
+/// one: no overlong form, no surrogate, at most U+10FFFF); 0 when there is none there.
+std::size_t utf8_sequence_bytes(std::string_view text, std::size_t at);
 
 /// `text` quoted for a message: '<printable(text, max_bytes)>'.
 std::string quoted(std::string_view text, std::size_t max_bytes = 80);

@@ -26,6 +26,8 @@ struct SerialOptions {
 
 /// True for the baud rates termios can set here (9600 .. 921600).
 bool baud_supported(int baud);
+/// Those rates for a message: "9600, 19200, ... or 921600".
+std::string supported_bauds();
 
 /// A serial port (or any tty, e.g. a pseudo-terminal) read as a byte stream.
 class SerialPort final : public ByteSource {
