@@ -327,6 +327,9 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   Profile profile;
   CalibrateSettings settings;
   Error error = calibrate_settings_from_options(options, &settings);
+  if (error.ok() && options.given("ur-deltas")) {
+    error = textio::require_ur_joints(settings.robot.model, settings.robot.robot, "--ur-deltas (calibration.conf)");
+  }
   port::OutputSet outputs;
   OutputIds ids;
   if (error.ok()) error = declare_outputs(options, &outputs, &ids);

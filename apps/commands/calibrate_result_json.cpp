@@ -37,7 +37,8 @@ std::string calibration_result_json(const CalibrateSettings& settings, const rep
   record.joint_sigma_rad = settings.joint_sigma_rad;
   record.joint_sigma_position_sigma_m = settings.orientation.position_sigma_m;
   record.controller_tcp = settings.controller_tcp;
-  record.ur_deltas = textio::ur_deltas_in_ur_table(settings.robot.model, final_stage.model);
+  record.ur_shape = has_ur_joints(settings.robot.model);
+  if (record.ur_shape) record.ur_deltas = textio::ur_deltas_in_ur_table(settings.robot.model, final_stage.model);
   record.facts = &facts;
   record.cv = run.has_cv ? &run.cv : nullptr;
   for (const std::vector<std::uint32_t>& fold : run.cv_held_out)

@@ -49,7 +49,7 @@ void write_model(JsonWriter& json, const PredictionSet& set) {
   json.key("translation_m").inline_array(set.base_to_tracker.translation_m.data(), 3);
   if (set.model.compliance.term_count > 0) {  // rigid models: the key is left out (the bytes stay as before)
     json.key("compliance");
-    textio::write_compliance(json, set.model.compliance, Mat3::Identity());
+    textio::write_compliance(json, set.model, Mat3::Identity());
   }
   bool several_targets = false;  // one reflector: the key is left out (the bytes stay as before)
   for (const Vec3& tool_m : set.model.other_tools_m) several_targets = several_targets || !tool_m.isZero();

@@ -79,6 +79,9 @@ struct InputUnits {
 constexpr double kMaxJointMagnitude_rad = 6.283185307179586;
 /// Largest joint limit a file may give: two turns (a J6 of +-720 deg) [rad].
 constexpr double kMaxJointLimit_rad = 2.0 * kMaxJointMagnitude_rad;
+/// Largest |position| or limit of a prismatic joint read as plausible (a rail of 100 m; more is
+/// millimetres) [m].
+constexpr double kMaxJointTravel_m = 100.0;
 /// Farthest point from the tracker (or base) origin read as plausible [m].
 constexpr double kMaxPointDistance_m = 100.0;
 

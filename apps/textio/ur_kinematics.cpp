@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
 #include "textio/urdf.hpp"
 
 namespace hivecal::textio {
@@ -53,9 +54,10 @@ std::string entry(const char* name, const RigidTransform& frame) {
 
 bool is_ur_table(const RobotModel& model) {
   const DhJoint* j = model.joints;
-  return std::sin(j[0].alpha_rad) > 1.0 - kAxisTolerance && std::fabs(std::sin(j[1].alpha_rad)) < kAxisTolerance &&
-         std::fabs(std::sin(j[2].alpha_rad)) < kAxisTolerance && std::sin(j[3].alpha_rad) > 1.0 - kAxisTolerance &&
-         std::sin(j[4].alpha_rad) < kAxisTolerance - 1.0 && j[1].a_m < 0.0 && j[2].a_m < 0.0;
+  return has_ur_joints(model) && std::sin(j[0].alpha_rad) > 1.0 - kAxisTolerance &&
+         std::fabs(std::sin(j[1].alpha_rad)) < kAxisTolerance && std::fabs(std::sin(j[2].alpha_rad)) < kAxisTolerance &&
+         std::sin(j[3].alpha_rad) > 1.0 - kAxisTolerance && std::sin(j[4].alpha_rad) < kAxisTolerance - 1.0 &&
+         j[1].a_m < 0.0 && j[2].a_m < 0.0;
 }
 
 RobotModel turned_by_pi(const RobotModel& model) {
@@ -79,6 +81,11 @@ bool is_ur_table_turned(const RobotModel& model) {
 }
 
 bool ur_kinematics_from_model(const RobotModel& model_as_given, UrKinematics* kinematics, std::string* why) {
+  if (!has_ur_joints(model_as_given)) {
+    *why = "the UR kinematics YAML describes UR arms (six revolute joints); this arm has " +
+           joint_shape(model_as_given) + ": use --format urdf";
+    return false;
+  }
   const RobotModel model = is_ur_table_turned(model_as_given) ? turned_by_pi(model_as_given) : model_as_given;
   const DhJoint* j = model.joints;
   if (!(std::fabs(std::cos(j[0].alpha_rad)) < kAxisTolerance && std::fabs(std::sin(j[1].alpha_rad)) < kAxisTolerance &&

@@ -25,7 +25,7 @@ struct UrKinematics {
   RigidTransform flange;                    ///< L_6 = Tx(a_6) Rx(alpha_6): not in the YAML (identity on UR arms)
 };
 
-/// True when `model` (standard DH) has UR's own table's signs: alpha_1 and alpha_4 near +pi/2,
+/// True when `model` (standard DH) has six revolute joints and UR's own table's signs: alpha_1 and alpha_4 near +pi/2,
 /// alpha_5 near -pi/2, alpha_2 and alpha_3 near 0 (sines within 0.1), a_2 and a_3 negative.
 bool is_ur_table(const RobotModel& model);
 /// The same arm in frames turned by pi about their z: the base and every DH frame. The chain is

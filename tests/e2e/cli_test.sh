@@ -47,7 +47,7 @@ expect 2 "give either --samples, or --robot and --tracker" -- calibrate
 expect 2 "--robot and --tracker go together" -- calibrate --robot "$work/joints.csv"
 expect 2 "unknown robot model 'ur7'" -- calibrate --samples "$work/joints.csv" --robot-model ur7
 printf '{"convention": "modified-dh", "dh": []}\n' >"$work/arm.json"
-expect 3 "arm.json: \"dh\" must be an array of 6 joint objects" -- calibrate --samples "$work/joints.csv" --robot-model "$work/arm.json"
+expect 3 "arm.json: \"dh\" must be an array of 1 to 8 joint objects, one per joint (it has 0 rows)" -- calibrate --samples "$work/joints.csv" --robot-model "$work/arm.json"
 expect 3 "no-such-arm.json': cannot open" -- calibrate --samples "$work/joints.csv" --robot-model "$work/no-such-arm.json"
 expect 2 "--method must be one of" -- calibrate --samples "$work/joints.csv" --method sgd
 expect 2 "--split must be within (0, 1]" -- calibrate --samples "$work/joints.csv" --split 1.5
