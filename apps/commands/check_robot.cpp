@@ -54,6 +54,7 @@ Error check_robot(const Options& options) {
   if (!options.get("joints").empty()) {
     textio::InputUnits units;
     error = input_units_option(options, &units);
+    units.joints = textio::input_joints(robot.model);
     if (error.ok()) error = textio::read_joints_csv(options.get("joints"), &poses, units);
     if (!error.ok()) return error;
   }

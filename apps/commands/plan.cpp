@@ -15,6 +15,7 @@
 #include "report/svg.hpp"
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal::cli {
 
@@ -52,8 +53,9 @@ constexpr double kLimitSlack_rad = 1e-9;
 /// --joint-limits clamped to the arm's own range `own` (a built-in type's controller limits, or
 /// the description's): a limit beyond it is said on stderr and clamped (the controller would
 /// refuse a pose there); a joint whose given range lies outside the arm's is refused.
-Error clamp_to_own_range(const Options& options, const std::string& arm, const JointLimits& own, JointLimits* limits) {
-  for (int j = 0; j < kSixJoints; ++j) {
+Error clamp_to_own_range(const Options& options, const std::string& arm, int joints, const JointLimits& own,
+                         JointLimits* limits) {
+  for (int j = 0; j < joints; ++j) {
     double& lower = limits->lower_rad(j);
     double& upper = limits->upper_rad(j);
     const double own_lower = own.lower_rad(j);
@@ -88,12 +90,25 @@ Error robot_option(const Options& options, RobotModel* model, JointLimits* limit
   std::string tool_note;
   Error error = robot_model_option(options, "robot-model", &description, &from_file);
   if (error.ok()) error = input_units_option(options, &units);
+  units.joints = textio::input_joints(description.model);
   if (error.ok()) {
     error = tool_point_option(options, units, from_file ? &description.model.tool_m : nullptr,
                               &description.model.tool_m, &tool_note);
   }
   if (!error.ok()) return error;
   if (!tool_note.empty()) std::fprintf(stderr, "hivecal plan: %s\n", tool_note.c_str());
+  if (!options.get("urscript").empty()) {  // movej and movel are a UR controller's
+    error = textio::require_ur_joints(description.model, description.robot, "--urscript (URScript)");
+    if (!error.ok()) return error;
+  }
+  for (int j = 0; j < description.model.joint_count; ++j) {  // a slide's travel has no default
+    if (joint_type(description.model, j) != JointType::prismatic || description.has_joint_limits ||
+        !options.get("joint-limits").empty())
+      continue;
+    return Error::usage(port::printable(description.robot) + "'s joint " + std::to_string(j + 1) +
+                        " is prismatic: its travel has no default; give \"joint_limits\" in the description or "
+                        "--joint-limits FILE (a prismatic joint's row in m)");
+  }
   *model = description.model;
   RobotType type = RobotType::ur5;
   const bool built_in = !from_file && robot_type_from_name(description.robot.c_str(), &type) == Status::ok;
@@ -108,7 +123,8 @@ Error robot_option(const Options& options, RobotModel* model, JointLimits* limit
   if (!options.get("joint-limits").empty()) {
     error = textio::read_joint_limits_csv(options.get("joint-limits"), &limits->lower_rad, &limits->upper_rad, units);
     if (!error.ok() || !(description.has_joint_limits || built_in)) return error;
-    return clamp_to_own_range(options, port::printable(description.robot), own, limits);  // the file's name, made safe
+    return clamp_to_own_range(options, port::printable(description.robot), model->joint_count, own,
+                              limits);  // the file's name, made safe
   }
   *limits = own;
   if (!description.has_joint_limits && !built_in) {
@@ -273,7 +289,7 @@ std::string urscript(const PlanOptions& o) {
   std::string out = "# hivecal plan: " + std::to_string(result.pose_count) + " poses, seed " + std::to_string(o.seed) +
                     ", about " + text(result.session_s, "%.0f") + " s\ndef hivecal_session():\n";
   for (std::size_t i = 0; i < result.pose_count; ++i) {
-    out += "  movej([";
+    out += "  movej([";  // a UR arm's six joints (robot_option refuses others)
     for (int j = 0; j < kSixJoints; ++j)
       out += textio::format_double(result.poses[i](j)) + (j + 1 < kSixJoints ? ", " : "");
     out += "], a=" + text(o.joint_acceleration_rad_s2, "%.10g") + ", v=" + text(o.joint_speed_rad_s, "%.10g") +
@@ -417,8 +433,9 @@ Error plan(const Options& options) {
   if (status != Status::ok) return Error::failure(std::string("planning failed: ") + status_message(status));
 
   std::fputs(report_text(request, down ? &facing : nullptr).c_str(), stdout_carries_output(options) ? stderr : stdout);
-  error = outputs.stage_text(out_id, "",
-                             textio::format_joints_csv(Span<const JointVector>(result.poses, result.pose_count)));
+  error = outputs.stage_text(
+      out_id, "",
+      textio::format_joints_csv(Span<const JointVector>(result.poses, result.pose_count), request.model.joint_count));
   if (error.ok() && script) error = outputs.stage_text(script_id, "", urscript(request.options));
   if (error.ok() && svg) error = outputs.stage_text(svg_id, "", svg_figure(request));
   return error.ok() ? outputs.commit() : error;

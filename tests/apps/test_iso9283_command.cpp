@@ -72,7 +72,7 @@ TEST(Iso9283Grouping, SamePosesAsEverySampleAgainstEveryPose) {
   }
   const std::vector<cli::PoseReaches> expected = group_by_definition(samples);
   const std::vector<cli::PoseReaches> grouped =
-      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {});
+      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {}, kSixJoints);
   ASSERT_GT(expected.size(), commands.size() * 2);  // the jitter made poses of their own
   ASSERT_EQ(grouped.size(), expected.size());
   for (std::size_t p = 0; p < expected.size(); ++p) {
@@ -95,9 +95,28 @@ TEST(Iso9283Grouping, WorkIsLinearInTheSamples) {
     for (const JointVector& q : commands) samples.push_back(sample_at(q, samples.size(), 0));
   std::size_t comparisons = 0;
   const std::vector<cli::PoseReaches> grouped =
-      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {}, &comparisons);
+      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {}, kSixJoints, &comparisons);
   ASSERT_EQ(grouped.size(), commands.size());
   for (const cli::PoseReaches& pose : grouped) EXPECT_EQ(pose.measured_m.size(), 3u);
+  EXPECT_LE(comparisons, 2 * samples.size());
+}
+
+// A seven-joint arm's poses that differ in the seventh joint alone are told apart by its cells
+// too: the work stays linear (cells of six joints put them all in one).
+TEST(Iso9283Grouping, TheCellsHoldEveryJointOfTheArm) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  Random random(7);
+  std::vector<JointVector> commands(3000, JointVector::Zero());
+  for (JointVector& q : commands) q(6) = random.uniform(-3.0, 3.0);
+  std::vector<Sample> samples;
+  for (int cycle = 0; cycle < 3; ++cycle)
+    for (const JointVector& q : commands) samples.push_back(sample_at(q, samples.size(), 0));
+  std::size_t comparisons = 0;
+  const std::vector<cli::PoseReaches> grouped =
+      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {}, 7, &comparisons);
+  const std::vector<cli::PoseReaches> expected = group_by_definition(samples);
+  ASSERT_EQ(grouped.size(), expected.size());
+  for (std::size_t p = 0; p < expected.size(); ++p) EXPECT_EQ(grouped[p].first.index, expected[p].first.index) << p;
   EXPECT_LE(comparisons, 2 * samples.size());
 }
 

@@ -744,7 +744,7 @@ TEST(UrdfImport, RosUrDescriptionGivesTheBuiltInArmsUrOutputs) {
   static Dataset<150> samples;
   samples.clear();
   test::fill_other_arm(truth, test::example_base_to_tracker(), 150, 1e-6, &random, &samples);
-  const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples()));
+  const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples(), kSixJoints));
   std::string deltas[2];
   std::string yaml[2];
   std::string applied[2];

@@ -31,7 +31,7 @@ std::string session_csv(RobotType type, std::size_t poses, std::uint64_t seed) {
   RobotModel truth = nominal_model(type);
   truth.tool_m = Vec3(0.0, 0.0, 0.1695);
   test::fill_dataset(truth, test::example_base_to_tracker(), poses, 1e-5, &random, &data);
-  return textio::format_samples_csv(data.samples());
+  return textio::format_samples_csv(data.samples(), kSixJoints);
 }
 
 /// A pendant-like export of `poses` random poses of a nominal UR5e: q1..q6, the TCP (tool
