@@ -236,6 +236,7 @@ Error run(const CalibrateSettings& settings, const RobotModel& start, const stre
   job.lm.joint_sigma_rad = settings.joint_sigma_rad;
   job.lm.position_sigma_m = settings.orientation.position_sigma_m;
   job.blunder_test.tracker_sigma_m = settings.orientation.position_sigma_m;
+  job.prior = settings.prior;
   job.compliance.enabled = settings.compliance;
   if (settings.compliance) job.compliance.model = settings.compliance_model;
   auto& workspace = memory->workspace.for_samples(dataset->size());
@@ -352,7 +353,7 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   report::ReportData data = present_calibration(settings, start, dataset, facts, job);
   const double tables_s = seconds_since(part_start);
   part_start = Clock::now();
-  add_uncertainty(settings, dataset, &job, &data);
+  add_uncertainty(settings, start, dataset, &job, &data);
   profile.add("uncertainty: covariance and domain", seconds_since(part_start));
   part_start = Clock::now();
   if (facts.has_stream) data.timeline = fates.timeline(120);

@@ -152,6 +152,28 @@ Error compliance_from_options(const Options& options, CalibrateSettings* setting
   return harmonics ? harmonic_terms_from_options(options, settings) : Error{};
 }
 
+/// --prior nominal|off and the tolerances of the start model it holds (--dh-tolerance-mm,
+/// --dh-tolerance-mrad, --tool-tolerance-mm), each positive and below 1 m / 1 rad.
+Error prior_options(const Options& options, LmPriorTolerances* prior) {
+  const std::string kind = options.get("prior");
+  if (kind != "nominal" && kind != "off") {
+    return Error::usage("--prior must be 'nominal' or 'off', not " + port::quoted(kind));
+  }
+  const char* const names[] = {"dh-tolerance-mm", "dh-tolerance-mrad", "tool-tolerance-mm"};
+  double* const values[] = {&prior->dh_length_m, &prior->dh_angle_rad, &prior->tool_m};
+  for (int k = 0; k < 3; ++k) {
+    if (kind == "off" && options.given(names[k])) {
+      return Error::usage(std::string("--") + names[k] + " goes with the prior: not with --prior off");
+    }
+    double value = 0.0;
+    const Error error =
+        ranged_option(options, names[k], NumberRange{0.0, 1000.0, true, true, k == 1 ? "mrad" : "mm"}, &value);
+    if (!error.ok()) return error;
+    *values[k] = kind == "off" ? 0.0 : value * 1e-3;
+  }
+  return Error{};
+}
+
 }  // namespace
 
 const std::vector<OptionSpec>& calibrate_option_specs() {
@@ -225,6 +247,16 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
          "0,0,-1"},
         {"payload", "KG@X,Y,Z", "with --compliance masses: payload mass [kg] and its centre in the flange frame [m]",
          ""},
+        {"prior", "nominal|off",
+         "LM holds the start model (its DH and the --tool point) as a prior with the tolerances below, so that what "
+         "the data do not determine stays at nominal (docs/solver-lm.md); off: plain least squares",
+         "nominal"},
+        {"dh-tolerance-mm", "X", "the prior's tolerance of each DH length (d, a) [mm]",
+         textio::format_double(kDefaultPriorTolerances.dh_length_m * 1e3)},
+        {"dh-tolerance-mrad", "X", "the prior's tolerance of each DH angle (theta offset, alpha) [mrad]",
+         textio::format_double(kDefaultPriorTolerances.dh_angle_rad * 1e3)},
+        {"tool-tolerance-mm", "X", "the prior's tolerance of each coordinate of the --tool point [mm]",
+         textio::format_double(kDefaultPriorTolerances.tool_m * 1e3)},
         {"quiet", "", "no progress on stderr", ""},
         {"profile", "",
          "print on stderr where the wall time went: reading the input, the job's screen, baseline, stages and "
@@ -319,7 +351,9 @@ Error calibrate_settings_from_options(const Options& options, CalibrateSettings*
   settings->robust = options.given("robust");
   settings->progress = progress_enabled(options);
   settings->profile = options.given("profile");
-  return compliance_from_options(options, settings);
+  const Error compliance = compliance_from_options(options, settings);
+  if (!compliance.ok()) return compliance;
+  return prior_options(options, &settings->prior);
 }
 
 }  // namespace hivecal::cli

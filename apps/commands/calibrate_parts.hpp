@@ -55,6 +55,9 @@ struct CalibrateSettings : SampleReaderSettings {
   /// --frames auto: the job tests the controller's frames when the fitted base is near the
   /// identity (CalibrationOptions::detect_controller_frames)
   bool detect_controller_frames = true;
+  /// --prior, --dh-tolerance-mm, --dh-tolerance-mrad, --tool-tolerance-mm: the start model's
+  /// tolerances as LM's prior (all 0 with --prior off) [m], [rad]
+  LmPriorTolerances prior = kDefaultPriorTolerances;
 };
 
 /// The fate of every tracker point in the extraction pass (kept, or its drop reason), for the
@@ -114,7 +117,8 @@ double joint_point_noise_m(const CalibrateSettings& settings, const RobotModel& 
 
 /// The final parameters' covariance and the training poses' domain into run->uncertainty
 /// (compute_uncertainty); its statement joins data->info_lines.
-void add_uncertainty(const CalibrateSettings& settings, const CliDataset& dataset, Run* run, report::ReportData* data);
+void add_uncertainty(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset, Run* run,
+                     report::ReportData* data);
 
 /// Tables and figures of a run, and the text of the terminal.
 report::ReportData present_calibration(const CalibrateSettings& settings, const RobotModel& start,

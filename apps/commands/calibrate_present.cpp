@@ -155,6 +155,61 @@ std::string holdout_line(const char* family, const JointTermHoldout& holdout, bo
   return buf;
 }
 
+/// The names of the parameters of `mask` in `model`, comma separated.
+std::string parameter_names(ParamMask mask, const RobotModel& model) {
+  std::string names;
+  for (int k = 0; k < kFullParamCount; ++k) {
+    if (!mask_has(mask, k)) continue;
+    names += (names.empty() ? "" : ", ") + std::string(full_param_name(k, model));
+  }
+  return names;
+}
+
+/// The blocked folds of a joint-term stage of `family` ("compliance", "harmonics"): the terms
+/// not admitted by their period, the folds' errors, the terms not admitted by them and, when they
+/// failed, which fit is kept.
+std::vector<std::string> blocked_fold_lines(const char* family, const BlockedFoldCheck& folds, const RobotModel& model,
+                                            bool after_compliance) {
+  std::vector<std::string> lines;
+  char buf[1200];
+  if (folds.coverage_rejected != 0) {
+    std::snprintf(buf, sizeof buf,
+                  "%s: not admitted: %s (the training poses turn their joint through less than %.3g of their period: "
+                  "nothing ties them down beyond the poses' range)",
+                  family, parameter_names(folds.coverage_rejected, model).c_str(), kHarmonicMinPeriodShare);
+    lines.push_back(buf);
+  }
+  if (!folds.checked) return lines;
+  std::string per_joint;
+  for (int j = 0; j < model.joint_count; ++j) {
+    if (!(folds.with_terms_mae_m[j] > 0.0)) continue;
+    char part[80];
+    std::snprintf(part, sizeof part, "%sjoint %d %.4f / %.4f", per_joint.empty() ? "" : ", ", j + 1,
+                  folds.with_terms_mae_m[j] * 1e3, folds.without_terms_mae_m[j] * 1e3);
+    per_joint += part;
+  }
+  std::snprintf(buf, sizeof buf,
+                "%s: beyond the training poses' joint ranges (each joint's lowest and highest %.0f %% of them "
+                "predicted by a fit of the others) MAE %.4f mm with the terms, %.4f mm without (per joint's ends, mm, "
+                "with / without: %s)",
+                family, kBlockedFoldShare * 100.0, folds.with_all_mae_m * 1e3, folds.without_all_mae_m * 1e3,
+                per_joint.c_str());
+  lines.push_back(buf);
+  if (folds.fold_rejected != 0) {
+    std::snprintf(buf, sizeof buf, "%s: not admitted: %s (they predict their own joint's range ends worse)", family,
+                  parameter_names(folds.fold_rejected, model).c_str());
+    lines.push_back(buf);
+  }
+  if (!folds.passed) {
+    std::snprintf(buf, sizeof buf,
+                  "%s: the terms that passed the significance test do not hold beyond the training poses' joint "
+                  "ranges: the %s fit is kept",
+                  family, after_compliance ? "LM+compliance" : "rigid");
+    lines.push_back(buf);
+  }
+  return lines;
+}
+
 std::vector<std::string> identifiability_lines(const LmResult& lm, const CalibrationResult& result,
                                                const RobotModel& model) {
   const ParamMask pruned = result.lm_pruned_mask;
@@ -594,10 +649,17 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     for (std::size_t k = 0; k < run.result.stage_count; ++k) {
       const CalibrationStage& stage = run.result.stages[k];
       const bool after_compliance = k > 0 && run.result.stages[k - 1].compliance;
+      const char* name = run.result.stage_name(k);  // "LM+compliance", "LM+harmonics", ...
+      const char* family = after_compliance ? "harmonics" : name + (std::strncmp(name, "LM+", 3) == 0 ? 3 : 0);
+      if (stage.compliance) {
+        for (const std::string& line : blocked_fold_lines(family, stage.folds, stage.model, after_compliance)) {
+          data.info_lines.push_back(line);
+        }
+      }
       if (stage.holdout.checked) {
-        const char* name = run.result.stage_name(k);  // "LM+compliance", "LM+harmonics", ...
-        const char* family = after_compliance ? "harmonics" : name + (std::strncmp(name, "LM+", 3) == 0 ? 3 : 0);
         data.info_lines.push_back(holdout_line(family, stage.holdout, after_compliance));
+      } else if (stage.folds.checked && !stage.folds.passed) {
+        // said by blocked_fold_lines
       } else if (stage.rigid_kept && k + 1 == run.result.stage_count) {
         data.info_lines.push_back(
             rigid_kept_line(run.result.significance_t, final_stage.model, after_compliance, lm->residual_dof));
@@ -614,6 +676,11 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
   if (data.fit_sigma_m > 0.0)
     data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m, data.noise_source));
   data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
+  if (const LmResult* lm = run.final_lm(); lm != nullptr) {
+    for (const std::string& line : prior_held_lines(*lm, run.options.prior, data.parameters)) {
+      data.info_lines.push_back(line);
+    }
+  }
   data.has_stream = facts.has_stream;
   if (facts.has_stream) {
     data.drops.emplace_back("kept", facts.run.counts.kept);
@@ -638,7 +705,8 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
   return data;
 }
 
-void add_uncertainty(const CalibrateSettings& settings, const CliDataset& dataset, Run* run, report::ReportData* data) {
+void add_uncertainty(const CalibrateSettings& settings, const RobotModel& start, const CliDataset& dataset, Run* run,
+                     report::ReportData* data) {
   const CalibrationStage& final_stage = run->final_stage();
   const LmResult* lm = run->final_lm();
   PointLoss loss;  // the final LM's, so that the covariance's diagonal is its sigmas squared
@@ -647,7 +715,9 @@ void add_uncertainty(const CalibrateSettings& settings, const CliDataset& datase
     loss.joint_noise_ratio_rad_per_m = settings.joint_sigma_rad / settings.orientation.position_sigma_m;
   const Vec3 none[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
   std::string note;
-  compute_uncertainty(final_stage.model, final_stage.base_to_tracker, dataset.train(), loss,
+  // The prior every LM fit of the job held (its sigmas are the posterior's).
+  const LmPrior prior = lm != nullptr ? lm_prior(start, settings.prior) : LmPrior{};
+  compute_uncertainty(final_stage.model, final_stage.base_to_tracker, dataset.train(), loss, prior,
                       calibration_estimated_mask(run->result), lm != nullptr ? lm->other_tools_sigma_m : none,
                       &run->uncertainty, &note);
   if (!note.empty()) data->info_lines.push_back(note);

@@ -2,12 +2,16 @@
 // robot description JSON (what --robot-model reads).
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "cli/options.hpp"
 #include "commands/commands.hpp"
 #include "commands/uncertainty.hpp"
+#include "hivecal/calibration.hpp"
 #include "hivecal/core/digest.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "hivecal/port/input_file.hpp"
 #include "hivecal/port/output_files.hpp"
 #include "record/report_json.hpp"
@@ -41,39 +45,127 @@ Error load_arm(const Options& options, record::CalibrationFile* arm, bool* has_t
   return textio::read_ur_calibrated_model(options.get("ur-calibration"), nominal, robot.robot, &robot.model);
 }
 
+/// `model`'s point of a sample (its target) in the tracker frame [m].
+Vec3 predicted_m(const RobotModel& model, const RigidTransform& base_to_tracker, const report::SampleRow& s) {
+  return base_to_tracker.apply(fk_target_point(model, joint_vector(s.q_rad), s.target));
+}
+
 /// Mean 3D distance of `model`'s predictions from the samples' tracker points [m].
 double mae_m(const RobotModel& model, const RigidTransform& base_to_tracker,
              const std::vector<report::SampleRow>& samples) {
   double sum_m = 0.0;
-  for (const report::SampleRow& s : samples) {
-    const JointVector q = joint_vector(s.q_rad);
-    sum_m += (base_to_tracker.apply(fk_target_point(model, q, s.target)) - s.measured_m).norm();
-  }
+  for (const report::SampleRow& s : samples) sum_m += (predicted_m(model, base_to_tracker, s) - s.measured_m).norm();
   return sum_m / static_cast<double>(samples.size());
 }
 
-/// What a format cannot hold is said, with what leaving it out costs on the result's own
-/// training samples, never dropped in silence.
-void say_what_is_left_out(const record::CalibrationFile& arm, const std::string& format, const std::string& result_text,
-                          const std::string& result_path) {
-  if (arm.model.compliance.term_count == 0 || format == "robot-json") return;
-  std::fprintf(stderr,
-               "hivecal export: note: the model's %d compliance terms (joint deflection under gravity) cannot be "
-               "written in %s: the chain is the rigid geometry only; predict with the result file for the full "
-               "model\n",
-               arm.model.compliance.term_count, format == "urdf" ? "URDF" : "the UR kinematics YAML");
+/// "2 compliance term(s) (joint deflection under gravity) and 12 harmonic term(s) (joint-angle
+/// harmonics: ...)": each kind of the terms in use (a coefficient other than 0); "" when none is.
+std::string terms_text(const ComplianceModel& compliance) {
+  int harmonics = 0;
+  int gravity = 0;
+  for (int t = 0; t < compliance.term_count; ++t) {
+    if (compliance.coefficient[t] == 0.0) continue;
+    (is_harmonic(compliance.terms[t]) ? harmonics : gravity) += 1;
+  }
+  std::string text;
+  if (gravity > 0) text = std::to_string(gravity) + " compliance term(s) (joint deflection under gravity)";
+  if (gravity > 0 && harmonics > 0) text += " and ";
+  if (harmonics > 0) {
+    text += std::to_string(harmonics) +
+            " harmonic term(s) (joint-angle harmonics: encoder eccentricity, transmission error)";
+  }
+  return text;
+}
+
+/// The rigid chain that best reproduces a model with joint terms: LM fits the rigid model's
+/// geometry, tool points and base (every parameter the poses identify, the model's rigid part
+/// as the prior with the job's tolerances) to the full model's points of the training poses.
+struct RigidApproximation {
+  RobotModel model;                ///< the rigid chain [m, rad]
+  RigidTransform base_to_tracker;  ///< its base -> tracker transform
+  double mean_m = 0.0;             ///< mean distance from the full model's points over the poses [m]
+  double max_m = 0.0;              ///< the largest [m]
+};
+
+/// Fits the rigid chain of `arm` (joint terms) to its own predictions of `train`; false when LM fails.
+bool fit_rigid_chain(const record::CalibrationFile& arm, const std::vector<report::SampleRow>& train,
+                     RigidApproximation* out) {
+  std::vector<Sample> samples;
+  samples.reserve(train.size());
+  for (const report::SampleRow& s : train) {
+    Sample sample;
+    sample.q_rad = joint_vector(s.q_rad);
+    sample.point_m = predicted_m(arm.model, arm.base_to_tracker, s);
+    sample.target = s.target;
+    sample.index = static_cast<std::uint32_t>(samples.size());
+    samples.push_back(sample);
+  }
+  RobotModel rigid = arm.model;
+  rigid.compliance = ComplianceModel{};
+  LmOptions options;
+  options.other_target_tools = arm.target_count > 1;
+  options.prior = LmPrior{&rigid, kDefaultPriorTolerances};
+  const auto workspace = std::make_unique<LmWorkspaceWithTargets>();
+  const auto result = std::make_unique<LmResult>();
+  const Status status = calibrate_lm(rigid, &arm.base_to_tracker, Span<const Sample>(samples.data(), samples.size()),
+                                     options, workspace.get(), result.get());
+  if (status != Status::ok && status != Status::not_converged) return false;
+  out->model = result->model;
+  out->base_to_tracker = result->base_to_tracker;
+  out->mean_m = 0.0;
+  out->max_m = 0.0;
+  for (const Sample& s : samples) {
+    const double gap_m =
+        (out->base_to_tracker.apply(fk_target_point(out->model, s.q_rad, s.target)) - s.point_m).norm();
+    out->mean_m += gap_m / static_cast<double>(samples.size());
+    out->max_m = std::fmax(out->max_m, gap_m);
+  }
+  return true;
+}
+
+/// What a format cannot hold is said, never dropped in silence: a model with joint terms goes
+/// out as the rigid chain fitted to it over the result's training poses (*arm then holds it),
+/// with the difference that remains, and what the terms' rigid part alone would have cost.
+void write_rigid_chain_of_terms(const std::string& format, const std::string& result_text,
+                                const std::string& result_path, record::CalibrationFile* arm) {
+  if (arm->model.compliance.term_count == 0 || format == "robot-json") return;
+  const char* into = format == "urdf" ? "URDF" : "the UR kinematics YAML";
+  const std::string terms = terms_text(arm->model.compliance);
+  if (terms.empty()) {  // every term at 0 (none admitted): the model is its rigid chain
+    arm->model.compliance = ComplianceModel{};
+    return;
+  }
   const std::vector<report::SampleRow> train = result_text.empty()
                                                    ? std::vector<report::SampleRow>()
                                                    : record::report_training_samples(result_text, result_path);
-  if (train.empty()) return;
-  RobotModel rigid = arm.model;
-  rigid.compliance = ComplianceModel{};
-  const double full_m = mae_m(arm.model, arm.base_to_tracker, train);
-  const double rigid_m = mae_m(rigid, arm.base_to_tracker, train);
+  RigidApproximation fitted;
+  if (train.empty() || !fit_rigid_chain(*arm, train, &fitted)) {
+    std::fprintf(stderr,
+                 "hivecal export: note: the model's %s cannot be written in %s, and the file keeps no training poses "
+                 "to fit a rigid chain to the full model on: the chain is the rigid geometry as it is; predict with "
+                 "the result file (or --format robot-json) for the full model\n",
+                 terms.c_str(), into);
+    arm->model.compliance = ComplianceModel{};
+    return;
+  }
+  RobotModel rigid_part = arm->model;
+  rigid_part.compliance = ComplianceModel{};
+  const double full_m = mae_m(arm->model, arm->base_to_tracker, train);
+  const double part_m = mae_m(rigid_part, arm->base_to_tracker, train);
+  const double chain_m = mae_m(fitted.model, fitted.base_to_tracker, train);
+  std::fprintf(
+      stderr,
+      "hivecal export: note: the model's %s cannot be written in %s: the chain written is the rigid chain that "
+      "best reproduces the full model on the result's %zu training samples (tool points and tracker frame "
+      "fitted with it), %.2f um from the full model's points on average, %.2f um at most; predict with the "
+      "result file (or --format robot-json) for the full model\n",
+      terms.c_str(), into, train.size(), fitted.mean_m * 1e6, fitted.max_m * 1e6);
   std::fprintf(stderr,
-               "hivecal export: note: on the result's %zu training samples the MAE (3D) is %.2f um with the compliance "
-               "and %.2f um with the rigid chain (%+.2f um)\n",
-               train.size(), full_m * 1e6, rigid_m * 1e6, (rigid_m - full_m) * 1e6);
+               "hivecal export: note: on those samples the MAE (3D) is %.2f um with the full model, %.2f um with the "
+               "chain written, %.2f um with the full model's rigid part alone\n",
+               full_m * 1e6, chain_m * 1e6, part_m * 1e6);
+  arm->model = fitted.model;
+  arm->base_to_tracker = fitted.base_to_tracker;
 }
 
 /// The ROS UR kinematics YAML of `arm`, its hash the robot's (--ur-hash) or one of its own.
@@ -144,7 +236,7 @@ Error export_arm(const Options& options) {
   std::string result_text;  // read once: the arm, and the training samples of its report
   error = load_arm(options, &arm, &has_tracker, &result_text);
   if (!error.ok()) return error;
-  say_what_is_left_out(arm, format, result_text, options.get("calibration"));
+  write_rigid_chain_of_terms(format, result_text, options.get("calibration"), &arm);
   for (const std::string& line : domain_lines(arm.uncertainty))  // what the exported model holds within
     std::fprintf(stderr, "hivecal export: note: %s\n", line.c_str());
   std::string text;

@@ -66,6 +66,33 @@ double baseline_mae_m(RobotModel model, Span<const Sample> train, LmWorkspace* w
   return position_error_stats(model, base, train).mae(ErrorAxis::norm_3d);
 }
 
+/// Joint number (1-based) of a DH parameter's name ("d5" -> 5), 0 for any other name.
+int joint_of(const std::string& name) {
+  const bool dh =
+      name.rfind("theta", 0) == 0 || name.rfind("alpha", 0) == 0 || name.rfind("d", 0) == 0 || name.rfind("a", 0) == 0;
+  const char last = name.empty() ? '\0' : name.back();
+  return dh && last >= '1' && last <= '9' ? last - '0' : 0;
+}
+
+/// What poses would tell parameters `a` and `b` apart: more tool orientations when the tool
+/// point or the wrist (joints 5, 6) takes part, a wider range of each joint they belong to,
+/// poses spread wider when the base does.
+std::string what_separates(const std::string& a, const std::string& b) {
+  std::vector<std::string> ways;
+  const int joints[] = {joint_of(a), joint_of(b)};
+  const bool tool = a.rfind("tool", 0) == 0 || b.rfind("tool", 0) == 0;
+  if (tool || joints[0] >= 5 || joints[1] >= 5) ways.push_back("more tool orientations");
+  for (int k = 0; k < 2; ++k) {
+    if (joints[k] == 0 || (k == 1 && joints[1] == joints[0])) continue;
+    ways.push_back("a wider range of joint " + std::to_string(joints[k]));
+  }
+  if (a.rfind("base", 0) == 0 || b.rfind("base", 0) == 0) ways.push_back("poses spread wider over the workspace");
+  if (ways.empty()) ways.push_back("poses spread wider over every joint's range");
+  std::string text = ways[0];
+  for (std::size_t k = 1; k < ways.size(); ++k) text += " or " + ways[k];
+  return text;
+}
+
 }  // namespace
 
 std::string other_arm_hint(const std::string& robot, const RobotModel& start, Span<const Sample> train) {
@@ -147,6 +174,37 @@ std::string constant_orientation_warning(bool constant, double fit_sigma_m, doub
   return line;
 }
 
+std::vector<std::string> prior_held_lines(const LmResult& lm, const LmPriorTolerances& tolerances,
+                                          const std::vector<report::ParameterRow>& parameters) {
+  std::vector<std::string> lines;
+  const int joints = lm.model.joint_count;
+  for (int k = 0; k < model_param_count(joints); ++k) {
+    const double tolerance = prior_tolerance(tolerances, joints, k);
+    if (!mask_has(lm.identifiability.kept_mask, k) || !(tolerance > 0.0) ||
+        !(lm.sigma(k) > kPriorHeldSigmaShare * tolerance)) {
+      continue;
+    }
+    const bool angle = model_param_is_angle(k, joints);
+    const double unit = 1e3;  // mm, mrad
+    char line[400];
+    std::snprintf(line, sizeof line,
+                  "  held    %-8s (by the nominal model's prior: sigma %.3g %s of its %.3g %s tolerance, the poses "
+                  "determine it less than the tolerance does",
+                  full_param_name(k, joints), lm.sigma(k) * unit, angle ? "mrad" : "mm", tolerance * unit,
+                  angle ? "mrad" : "mm");
+    std::string text = line;
+    for (const report::ParameterRow& row : parameters) {
+      if (row.name != full_param_name(k, joints) || row.correlated_with.empty()) continue;
+      std::snprintf(line, sizeof line, "; correlated %+.3f with %s in the data: %s would separate them",
+                    row.correlation, row.correlated_with.c_str(),
+                    what_separates(row.name, row.correlated_with).c_str());
+      text += line;
+    }
+    lines.push_back(text + ")");
+  }
+  return lines;
+}
+
 std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
                                       const std::vector<report::ParameterRow>& parameters, const PoseSpan* span) {
   std::vector<std::string> warnings;
@@ -201,6 +259,16 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
                   "only, and test samples at the same poses do not show it; measure more poses spread over every "
                   "joint's range (hivecal plan)",
                   result.train_count, result.train_points, 3 * result.train_points, determined);
+    warnings.push_back(line);
+  }
+  // The prior holds what the data cannot move, so a wrong arm, joint zero or unit no longer
+  // shows as parameters moved by centimetres: it shows as a residual no calibrated arm leaves.
+  const double train_mae_m = final_stage->train.mae(ErrorAxis::norm_3d);
+  if (final_stage->train.count > 0 && train_mae_m > kImplausibleTrainMae_m) {
+    std::snprintf(line, sizeof line,
+                  "the calibrated model leaves %.3f mm (MAE 3D) on its own training samples, more than the %.3g mm "
+                  "no calibrated arm leaves: wrong model (--robot-model), joint zero, tool guess or units?",
+                  train_mae_m * 1e3, kImplausibleTrainMae_m * 1e3);
     warnings.push_back(line);
   }
   // Worse by more than 1 %: a start model the fit leaves as it was (every change not significant)

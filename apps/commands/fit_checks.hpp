@@ -37,15 +37,20 @@ int model_parameter_count(const RobotModel& start, ParamMask free_mask, int targ
 
 /// The warnings about `result` (empty when none): one line per parameter of the final stage's
 /// model that moved beyond `bounds` from the baseline model (name, both values, the change),
-/// and one when the final stage's test MAE (3D) is above the baseline's (only with test samples).
-/// `parameters` (Table 4's rows, may be empty): a moved parameter with |correlation| > 0.95 to
-/// another says so and what would separate them. Too few poses: with `span`, when its
+/// one when its training MAE (3D) is above kImplausibleTrainMae_m, and one when the final stage's test MAE (3D) is
+/// above the baseline's (only with test samples). `parameters` (Table 4's rows, may be empty): a moved parameter with
+/// |correlation| > 0.95 to another says so and what would separate them. Too few poses: with `span`, when its
 /// coordinates are no more than the parameters the model has (the identifiability analysis
 /// drops what the poses cannot tell apart, so the fit passes through them); without it, when
 /// 3 per distinct training point are no more than the parameters the fit determined.
 std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
                                       const std::vector<report::ParameterRow>& parameters = {},
                                       const PoseSpan* span = nullptr);
+
+/// Training MAE (3D) of a calibrated model beyond which the model, not the arm, is wrong: a
+/// calibrated industrial arm leaves well under a millimetre, its unmodelled effects included;
+/// a wrong arm type, joint zero, tool guess or unit leaves centimetres [m].
+inline constexpr double kImplausibleTrainMae_m = 0.010;
 
 /// Residual sigma over the measurement noise above which constant orientation columns are
 /// said to contradict the positions [-].
@@ -66,5 +71,16 @@ inline constexpr double kOtherArmMaeRatio = 1.0 / 3.0;
 /// `start`'s leaves: "this looks like a ur10 (--robot-model ur10): ..." with both figures; ""
 /// otherwise (a description file, no clearly better arm). A few small LM fits (9 parameters).
 std::string other_arm_hint(const std::string& robot, const RobotModel& start, Span<const Sample> train);
+
+/// A parameter is held by the prior when its sigma is above its tolerance / sqrt(2): the
+/// tolerance tells more about it than the poses do [-].
+inline constexpr double kPriorHeldSigmaShare = 0.70710678118654752;
+
+/// One line per DH or tool parameter of `lm` that the nominal model's prior (`tolerances`)
+/// holds more than the data do (kPriorHeldSigmaShare): its sigma against its tolerance, and,
+/// from `parameters` (Table 4's rows, the data's correlations), the parameter it is most
+/// correlated with and what poses would separate them. Empty without a prior.
+std::vector<std::string> prior_held_lines(const LmResult& lm, const LmPriorTolerances& tolerances,
+                                          const std::vector<report::ParameterRow>& parameters);
 
 }  // namespace hivecal::cli

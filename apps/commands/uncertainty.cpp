@@ -11,14 +11,15 @@
 namespace hivecal::cli {
 
 void compute_uncertainty(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> train,
-                         const PointLoss& loss, ParamMask estimated, const Vec3 (&other_tools_sigma_m)[kMaxTargets - 1],
+                         const PointLoss& loss, const LmPrior& prior, ParamMask estimated,
+                         const Vec3 (&other_tools_sigma_m)[kMaxTargets - 1],
                          record::CalibrationUncertainty* uncertainty, std::string* note) {
   *uncertainty = record::CalibrationUncertainty{};
   const auto scratch = std::make_unique<CorrelationScratch>();  // ~220 kB: not on the stack
   const auto covariance = std::make_unique<NormalMatrix>();
   int dof = 0;
-  const Status status =
-      parameter_covariance(model, base_to_tracker, train, loss, estimated, scratch.get(), covariance.get(), &dof);
+  const Status status = parameter_covariance(model, base_to_tracker, train, loss, estimated, scratch.get(),
+                                             covariance.get(), &dof, prior);
   if (status == Status::ok) {
     uncertainty->set_covariance(*covariance);
     uncertainty->estimated = estimated;

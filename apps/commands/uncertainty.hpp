@@ -15,12 +15,14 @@
 namespace hivecal::cli {
 
 /// The covariance of the parameters `estimated` at `model` / `base_to_tracker` over the
-/// training samples `train` under `loss` (lib's parameter_covariance), targets 2..'s own
+/// training samples `train` under `loss` and the fit's `prior` (lib's parameter_covariance: the
+/// posterior when the fit held one), targets 2..'s own
 /// sigmas beside it, and the domain of the training poses under it (calibration_domain).
 /// Without a covariance (a fit without residual degrees of freedom, or not determined) the
 /// domain holds the joint ranges and spread alone, and *note says why.
 void compute_uncertainty(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> train,
-                         const PointLoss& loss, ParamMask estimated, const Vec3 (&other_tools_sigma_m)[kMaxTargets - 1],
+                         const PointLoss& loss, const LmPrior& prior, ParamMask estimated,
+                         const Vec3 (&other_tools_sigma_m)[kMaxTargets - 1],
                          record::CalibrationUncertainty* uncertainty, std::string* note);
 
 /// When a prediction counts as extrapolated under `domain`, in words ("its sigma exceeds 3x the

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -120,7 +121,9 @@ TEST(RealExport, OnFiftyPosesTheDefaultEstimatesTheGeometryAndPredictsTheOthersB
 // and the w-test rejects most of them. Set aside as blunders, they shrank the next run's set,
 // whose test poses failed in turn: 8 of these poses (lines 466 760 770 260 397 1445 91 176)
 // went down to 2 training poses and the job stopped, "cannot fit the tracker frame". Now more
-// failing test poses than max_blunder_share are the model's error: none is set aside.
+// failing test poses than max_blunder_share are the model's error: none is set aside. With the
+// nominal model as a prior (the default) those 8 poses' fit predicts its test poses (clean);
+// plain least squares fails them (prediction_error).
 TEST(RealExport, SmallPartsFinishAndTheirTestPosesAreNotMadeBlunders) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur10-tmac/measurements_joint_configurations.csv");
   std::vector<std::size_t> lines;
@@ -138,11 +141,15 @@ TEST(RealExport, SmallPartsFinishAndTheirTestPosesAreNotMadeBlunders) {
   };
   const CalibrationOptions options;  // the command line's defaults: ABC+LM, 70/30 split
   fill_part({466, 760, 770, 260, 397, 1445, 91, 176});
-  ASSERT_EQ(calibrate(tmac_start(), &part, options, &workspace, &result), Status::ok)
-      << calibration_step_name(result.step);
-  EXPECT_EQ(result.blunder_verdict, BlunderVerdict::prediction_error);
-  EXPECT_EQ(result.outlier_count, 0u);
-  EXPECT_EQ(result.train_count + result.test_count, 8u);
+  for (const bool prior : {true, false}) {
+    CalibrationOptions fit = options;
+    if (!prior) fit.prior = LmPriorTolerances{};
+    ASSERT_EQ(calibrate(tmac_start(), &part, fit, &workspace, &result), Status::ok)
+        << calibration_step_name(result.step);
+    EXPECT_EQ(result.blunder_verdict, prior ? BlunderVerdict::clean : BlunderVerdict::prediction_error);
+    EXPECT_EQ(result.outlier_count, 0u);
+    EXPECT_EQ(result.train_count + result.test_count, 8u);
+  }
   // Random parts of 8 to 20 poses, the export's three bad readings (lines 534, 856, 857) left out.
   Random random(2027);
   int clean = 0;
@@ -166,6 +173,63 @@ TEST(RealExport, SmallPartsFinishAndTheirTestPosesAreNotMadeBlunders) {
   }
   std::printf("UR10 export, 16 random parts of 8-20 poses: %d with no pose set aside\n", clean);
   EXPECT_GE(clean, 14);
+}
+
+// The transfer problem (issue 52): trained on one end of joint 1's range (the poses below or
+// above the middle of its -180 .. -45 degrees) and used on the other. Joint terms admitted on a
+// random split alone carried badly there (--harmonics 3: 3.77 / 1.20 mm against the rigid fit's
+// 0.51 / 0.47 mm); admitted only where their joint covers three quarters of their period and where
+// they predict each joint's range ends (blocked folds), they carry at least as well as the rigid
+// fit (--compliance --harmonics 2 within 5 %, the issue's bound) and still help inside the half.
+/// Mean 3-D error of the final stage of `r` on `samples` [m].
+double carried_mae_m(const CalibrationResult& r, Span<const Sample> samples) {
+  const CalibrationStage& fit = r.stages[r.stage_count - 1];
+  double sum_m = 0.0;
+  for (const Sample& s : samples)
+    sum_m += (fit.base_to_tracker.apply(fk_sample_point(fit.model, s)) - s.point_m).norm();
+  return sum_m / static_cast<double>(samples.size());
+}
+
+TEST(RealExport, JointTermsTrainedOnOneEndOfJoint1CarryToTheOther) {
+  if (kMaxComplianceTerms < 4 + 3 * 2 * kSixJoints) GTEST_SKIP() << "a build without room for the harmonics";
+  HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur10-tmac/measurements_joint_configurations.csv");
+  read_tmac_positions(nullptr);
+  static Dataset<kCapacity> halves[2];
+  double lowest = dataset.samples()[0].q_rad(0);
+  double highest = lowest;
+  for (const Sample& s : dataset.samples()) {
+    lowest = std::fmin(lowest, s.q_rad(0));
+    highest = std::fmax(highest, s.q_rad(0));
+  }
+  for (Dataset<kCapacity>& half : halves) half.clear();
+  for (const Sample& s : dataset.samples()) {
+    ASSERT_EQ(halves[s.q_rad(0) < 0.5 * (lowest + highest) ? 0 : 1].add(s.q_rad, s.point_m), Status::ok);
+  }
+  for (int trained = 0; trained < 2; ++trained) {
+    const Span<const Sample> other = halves[1 - trained].samples();
+    CalibrationOptions rigid;
+    ASSERT_EQ(calibrate(tmac_start(), &halves[trained], rigid, &workspace, &result), Status::ok);
+    const double rigid_m = carried_mae_m(result, other);
+    const double rigid_inside_m = result.stages[result.stage_count - 1].test.mae(ErrorAxis::norm_3d);
+    for (const int orders : {2, 3}) {
+      CalibrationOptions terms;
+      terms.compliance.enabled = true;
+      if (orders == 2) {
+        ASSERT_EQ(default_compliance_terms(tmac_start(), Vec3(0.0, 0.0, -1.0), ComplianceLoad::point,
+                                           &terms.compliance.model),
+                  Status::ok);
+      }
+      ASSERT_EQ(append_harmonic_terms(orders, tmac_start(), &terms.compliance.model), Status::ok);
+      ASSERT_EQ(calibrate(tmac_start(), &halves[trained], terms, &workspace, &result), Status::ok);
+      const double carried_m = carried_mae_m(result, other);
+      const double inside_m = result.stages[result.stage_count - 1].test.mae(ErrorAxis::norm_3d);
+      std::printf("trained on the %s half, %s: carried %.4f mm (rigid %.4f), inside %.4f mm (rigid %.4f)\n",
+                  trained == 0 ? "low" : "high", orders == 2 ? "--compliance --harmonics 2" : "--harmonics 3",
+                  carried_m * 1e3, rigid_m * 1e3, inside_m * 1e3, rigid_inside_m * 1e3);
+      EXPECT_LE(carried_m, 1.05 * rigid_m);
+      EXPECT_LT(inside_m, rigid_inside_m);
+    }
+  }
 }
 
 // The same export's 6-DoF probe orientation (measurement_rx/ry/rz, degrees, intrinsic X-Y-Z

@@ -44,8 +44,8 @@ TEST(TextJoints, SevenJointSamplesAndPosesRoundTrip) {
   EXPECT_EQ(text.substr(0, text.find('\n')), "q1,q2,q3,q4,q5,q6,q7,x,y,z");
   static Dataset<16> read_back;
   read_back.clear();
-  const port::Error read = textio::read_samples_csv(dir.write("s.csv", text), &read_back,
-                                                    units_of(test::ManyJointArm::iiwa14));
+  const port::Error read =
+      textio::read_samples_csv(dir.write("s.csv", text), &read_back, units_of(test::ManyJointArm::iiwa14));
   ASSERT_TRUE(read.ok()) << read.message;
   ASSERT_EQ(read_back.size(), 12u);
   for (std::size_t i = 0; i < 12; ++i) {
@@ -99,8 +99,9 @@ TEST(TextJoints, ColumnsNameEveryJointOfTheArmAndNoMore) {
   const std::string path = dir.write(
       "grid.csv",
       "x_t,y_t,z_t,joint_1,joint_2,joint_3,joint_4,joint_5,joint_6,joint_7\n500,-300,2,10,-20,30,-40,50,-60,70\n");
-  const std::string six_joints = "x=x_t[mm],y=y_t[mm],z=z_t[mm],q1=joint_1[deg],q2=joint_2[deg],q3=joint_3[deg],"
-                                 "q4=joint_4[deg],q5=joint_5[deg],q6=joint_6[deg]";
+  const std::string six_joints =
+      "x=x_t[mm],y=y_t[mm],z=z_t[mm],q1=joint_1[deg],q2=joint_2[deg],q3=joint_3[deg],"
+      "q4=joint_4[deg],q5=joint_5[deg],q6=joint_6[deg]";
   static Dataset<4> dataset;
   dataset.clear();
   textio::InputUnits six;
@@ -140,7 +141,8 @@ TEST(TextJoints, APrismaticJointIsALengthAndUrNamesAreAUrs) {
   dataset.clear();
   textio::InputUnits rail = units_of(test::ManyJointArm::rail_ur10);
   const std::string header = "q1,q2,q3,q4,q5,q6,q7,x,y,z\n";
-  port::Error error = textio::read_samples_csv(dir.write("mm.csv", header + "1250,0,0,0,0,0,0,1,2,3\n"), &dataset, rail);
+  port::Error error =
+      textio::read_samples_csv(dir.write("mm.csv", header + "1250,0,0,0,0,0,0,1,2,3\n"), &dataset, rail);
   EXPECT_NE(error.message.find("mm.csv:2: prismatic joint q1 = 1250 looks like millimetres: use --length-unit mm"),
             std::string::npos)
       << error.message;
@@ -165,8 +167,7 @@ TEST(TextJoints, JointLimitsAreOneRowPerJoint) {
   std::string seven_rows = "lower,upper\n";
   for (int j = 0; j < 7; ++j) seven_rows += "-2,2\n";
   port::Error error = textio::read_joint_limits_csv(dir.write("l7.csv", seven_rows), &lower, &upper);
-  EXPECT_NE(error.message.find(":8: more than 6 rows (one per joint: the robot model has 6 joints)"),
-            std::string::npos)
+  EXPECT_NE(error.message.find(":8: more than 6 rows (one per joint: the robot model has 6 joints)"), std::string::npos)
       << error.message;
   if (kMaxJoints < 7) return;
   error = textio::read_joint_limits_csv(dir.write("l7.csv", seven_rows), &lower, &upper,

@@ -102,7 +102,7 @@ fi
 # this simulated session (simulate --seed 5 --waypoints 12 --duration-s 150) is committed.
 # Update the digest only for an intended change of the computation or the format.
 if ! grep -q '"seconds"' "$work/cap.json"; then pass; else fail "a result file holds run times"; fi
-result_sha256=a22dd80e37eeb80db32246fff32aace887090c8f9e4e73dcbc563ef3644521d0
+result_sha256=53d4ca9c337d126c2c4d8bd363175f3f42de8f02065996cafe89031db30b5a1e
 if [ "$(sha256sum <"$work/cap.json" | cut -d' ' -f1)" = "$result_sha256" ]; then
   pass
 else
@@ -232,6 +232,12 @@ no_file "$work/u4.json"
 # A fit beyond the change bounds: warnings on stderr, the result written all the same, exit 5.
 expect 5 "warning: a3 moved" -- calibrate --robot "$sim/robot.cap" --tracker "$sim/tracker.cap" --method lm --max-change-mm 0.001 --out "$work/u5.json"
 if [ -s "$work/u5.json" ] && grep -q '"warnings"' "$work/u5.json"; then pass; else fail "exit 5 without its result"; fi
+# The nominal model's prior: its kind and tolerances are checked before any work.
+expect 2 "--prior must be 'nominal' or 'off', not 'flat'" -- calibrate --samples "$work/s.csv" --prior flat --out "$work/p1.json"
+expect 2 "--dh-tolerance-mm must be within (0, 1000) mm, got '0'" -- calibrate --samples "$work/s.csv" --dh-tolerance-mm 0 --out "$work/p1.json"
+expect 2 "--tool-tolerance-mm goes with the prior: not with --prior off" -- \
+  calibrate --samples "$work/s.csv" --prior off --tool-tolerance-mm 5 --out "$work/p1.json"
+no_file "$work/p1.json"
 
 # --- hostile and careless use (issue 13): one check per case -----------------------------------
 good_predict=(predict --calibration "$work/result.json" --joints "$work/joints.csv")

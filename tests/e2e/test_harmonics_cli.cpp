@@ -1,6 +1,7 @@
-// `hivecal calibrate --harmonics K` on a simulated session whose elbow encoder is eccentric
-// (`simulate --harmonic-urad`): the LM+harmonics stage, the result's "harmonic" terms read back
-// to the same model, the test error against the rigid stage, and what the options refuse.
+// `hivecal calibrate --harmonics K` on a simulated session whose base has a second harmonic
+// error (`simulate --harmonic-urad`, a gear's): the LM+harmonics stage, the result's "harmonic"
+// terms read back to the same model, the test error against the rigid stage, the harmonics the
+// waypoints do not turn their joint through (not admitted, and said), and what the options refuse.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -21,14 +22,14 @@ namespace {
 
 using test::run;
 
-/// The elbow turns 150 urad sin(q3) + 100 urad cos(q3) more than it reads (60 um at the tool).
+/// The base turns 150 urad sin(2 q1) + 100 urad cos(2 q1) more than it reads (~100 um at the tool).
 class HarmonicsCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new test::TempDir("hivecal_harmonics");
     ASSERT_FALSE(dir_->path().empty());
     ASSERT_EQ(run(sim::simulate_main, {"--out-dir", dir_->path(), "--seed", "3", "--compliance-urad", "0,0",
-                                       "--harmonic-urad", "3,1,150,100"}),
+                                       "--harmonic-urad", "1,2,150,100"}),
               cli::kExitOk);
   }
   static void TearDownTestSuite() {
@@ -43,7 +44,7 @@ class HarmonicsCli : public ::testing::Test {
 };
 test::TempDir* HarmonicsCli::dir_ = nullptr;
 
-TEST_F(HarmonicsCli, TheStageFindsTheElbowsHarmonicAndTheResultReadsBack) {
+TEST_F(HarmonicsCli, TheStageFindsTheBasesSecondHarmonicAndTheResultReadsBack) {
   if (4 * kSixJoints > kMaxComplianceTerms)
     GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " joint terms";
   std::vector<std::string> args = inputs();
@@ -61,20 +62,28 @@ TEST_F(HarmonicsCli, TheStageFindsTheElbowsHarmonicAndTheResultReadsBack) {
   const double harmonic_m = harmonic.find("test_mae_m")->number;
   std::printf("test MAE: LM %.2f um, LM+harmonics %.2f um\n", 1e6 * rigid_m, 1e6 * harmonic_m);
   EXPECT_LT(harmonic_m, 0.95 * rigid_m);
-  // 24 terms, each with its function, order and unit; the elbow's first harmonic estimated.
+  // 24 terms, each with its function, order and unit; the base's second harmonic estimated.
   const textio::JsonValue* terms = root.find("compliance")->find("terms");
   ASSERT_NE(terms, nullptr);
   ASSERT_EQ(terms->array.size(), 24u);
-  bool elbow_estimated = false;
+  int base_estimated = 0;
   for (const textio::JsonValue& term : terms->array) {
     EXPECT_EQ(term.find("unit")->string, "rad");
     EXPECT_EQ(term.find("load"), nullptr);
     const std::string name = term.find("name")->string;
     const std::string function = term.find("harmonic")->string;
     EXPECT_EQ(name.substr(name.size() - 4), function.substr(0, 3) + function.substr(4)) << name << " " << function;
-    if (name.rfind("h_j3_", 0) == 0 && name.back() == '1' && term.find("sigma") != nullptr) elbow_estimated = true;
+    if (name.rfind("h_j1_", 0) == 0 && name.back() == '2' && term.find("sigma") != nullptr) ++base_estimated;
   }
-  EXPECT_TRUE(elbow_estimated);
+  EXPECT_EQ(base_estimated, 2);
+  // The waypoints turn the elbow through less than three quarters of a turn: its first harmonic
+  // is not admitted, and the result's report says why.
+  const std::string text = test::read_text_file(path("h.json"));
+  const std::size_t line = text.find("harmonics: not admitted: ");
+  ASSERT_NE(line, std::string::npos);
+  const std::string said = text.substr(line, text.find('\n', line) - line);
+  EXPECT_NE(said.find("h_j3_sin1, h_j3_cos1"), std::string::npos) << said;
+  EXPECT_NE(said.find("turn their joint through less than 0.75 of their period"), std::string::npos) << said;
   // Read back: the same terms and coefficients, bit for bit.
   record::CalibrationFile file;
   ASSERT_TRUE(record::read_calibration_json(path("h.json"), &file).ok());

@@ -116,11 +116,11 @@ TEST(JointCountCli, SevenJointSamplesCalibrateAndAreNeverCutToSix) {
   record::CalibrationFile lab_result;
   ASSERT_TRUE(record::read_calibration_json(from_lab, &lab_result).ok());
   EXPECT_LT(fresh_mae_m(lab_result, truth, base), 5e-5);
-  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
-                                       {"--robot-model", arm, "--samples", lab, "--columns",
-                                        columns.substr(0, columns.find(",q7")) + ",x=px[mm],y=py[mm],z=pz[mm]",
-                                        "--out", refused, "--quiet"},
-                                       &err),
+  EXPECT_EQ(test::run_capturing_stderr(
+                cli::calibrate_main,
+                {"--robot-model", arm, "--samples", lab, "--columns",
+                 columns.substr(0, columns.find(",q7")) + ",x=px[mm],y=py[mm],z=pz[mm]", "--out", refused, "--quiet"},
+                &err),
             cli::kExitUsage);
   EXPECT_NE(err.find("--columns names q1..q6, but the robot model has 7 joints (q1..q7): name q7 too"),
             std::string::npos)
@@ -145,8 +145,8 @@ TEST(JointCountCli, PlanFollowsTheArmsJoints) {
   std::string limits = "lower,upper\n";
   for (int j = 0; j < 7; ++j) limits += j == 6 ? "-3,3\n" : "-1.5,1.5\n";
   const std::string limits_csv = dir.write("limits.csv", limits);
-  const std::vector<std::string> cell = {"--robot-model", arm, "--count", "12", "--tracker-position", "2,0.5,0.6",
-                                         "--restarts", "1"};
+  const std::vector<std::string> cell = {"--robot-model",      arm,         "--count",    "12",
+                                         "--tracker-position", "2,0.5,0.6", "--restarts", "1"};
   const std::string poses = dir.path() + "/poses.csv";
   std::vector<std::string> args = cell;
   for (const char* more : {"--joint-limits", limits_csv.c_str(), "--out", poses.c_str()}) args.push_back(more);

@@ -73,9 +73,9 @@ inline CaptureJobConfig golden_compliance_job_config() {
 }
 
 /// The committed digests: every target must reproduce them.
-inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0xd9f123129716bc89ULL;
-inline constexpr std::uint64_t kLmJobGoldenDigest = 0xf38fcea5d163e0c6ULL;
-inline constexpr std::uint64_t kComplianceJobGoldenDigest = 0x29edbf41aa60d03aULL;
+inline constexpr std::uint64_t kCaptureJobGoldenDigest = 0x8cd7dbfaf4874615ULL;
+inline constexpr std::uint64_t kLmJobGoldenDigest = 0xaaca46d548438fdeULL;
+inline constexpr std::uint64_t kComplianceJobGoldenDigest = 0xe2882a8274aca303ULL;
 
 /// Static storage of a job: the dataset, and one arena for the capture passes, then the job.
 struct CaptureJobWorkspace {

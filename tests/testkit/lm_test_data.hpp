@@ -51,6 +51,23 @@ inline Vec3 joint6_axis(const RobotModel& model, const JointVector& q_rad) {
   return fk_flange(model, q_rad).rotation * Vec3(0.0, s, c);
 }
 
+/// `count` random UR poses with wrist 2 held within +-0.05 rad of -pi/2 (a grid at one tool
+/// orientation: d5 and alpha5 move the tool point alike there, told apart only by the tool
+/// point's offset from the flange axis), seen by a tracker at example_base_to_tracker() with
+/// 10 um noise and an unmodelled deflection of up to `effect_m`, smooth in the joints.
+inline void fill_narrow_wrist_dataset(const RobotModel& truth, std::size_t count, double effect_m, Random* random,
+                                      DatasetBase* dataset) {
+  const RigidTransform base = example_base_to_tracker();
+  for (std::size_t i = 0; i < count; ++i) {
+    JointVector q = random_joints(random);
+    q(4) = -math::kHalfPi + random->uniform(-0.05, 0.05);
+    const Vec3 noise = gaussian_vector(random);
+    const Vec3 effect =
+        effect_m * Vec3(std::sin(3.0 * q(0) + 2.0 * q(1)), std::cos(4.0 * q(2) - q(4)), std::sin(5.0 * q(3)));
+    (void)dataset->add(q, base.apply(fk_tool_point(truth, q)) + 10e-6 * noise + effect);
+  }
+}
+
 /// Random q1, q2, q3, q6 and the q4, q5 (Newton on the true model) that point joint 6's
 /// axis straight down; `flipped` picks the other wrist branch (q5 near +pi/2).
 inline JointVector tool_down_joints(const RobotModel& truth, bool flipped, Random* random) {

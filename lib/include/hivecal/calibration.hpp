@@ -98,6 +98,11 @@ inline constexpr std::size_t kAutoSignificanceMaxSamples = 64;
 /// and where a refit per pose is cheap [-].
 inline constexpr std::size_t kJointTermHoldoutMaxSamples = kAutoSignificanceMaxSamples;
 
+/// Default manufacturing tolerances of the start model in the job's LM fits (the nominal model
+/// as a prior, docs/solver-lm.md): 1 mm per DH length, 5 mrad per DH angle, 20 mm per
+/// coordinate of the given tool point [m], [rad].
+inline constexpr LmPriorTolerances kDefaultPriorTolerances{1e-3, 5e-3, 0.02};
+
 /// Settings of one job; the defaults are the command-line tool's.
 struct CalibrationOptions {
   CalibrationMethod method = CalibrationMethod::abc_lm;  ///< solvers and their order
@@ -135,6 +140,10 @@ struct CalibrationOptions {
   double screen_floor_m = 0.01;        ///< smallest residual set aside by the start geometry's consensus screen [m]
   std::size_t consensus_trials = 200;  ///< point triples tried by the consensus (LMedS) screen [-]
   CalibrationCompliance compliance;    ///< joint compliance stage (off by default)
+  /// Every LM fit holds the start model (its DH and the given tool point) as a prior with these
+  /// tolerances, so that what the data do not determine stays at nominal; all 0: off, plain
+  /// least squares [m], [rad].
+  LmPriorTolerances prior = kDefaultPriorTolerances;
   /// The base -> tracker transform is known and not estimated: the points were measured in
   /// the robot's own frame (a teach pendant's or controller's TCP readings: the identity), or
   /// the base was calibrated before. Joint 1's parameters, which a fitted base absorbs, become
@@ -232,6 +241,45 @@ struct JointTermHoldout {
   bool passed = false;  ///< every fit finished and the improvement exceeds kHoldoutImprovementT improvement_se_m
 };
 
+/// A harmonic is admitted only when the training poses turn its joint through at least this
+/// share of its period (2 pi / order): over less, it is a polynomial the geometry holds too, and
+/// nothing ties it down beyond the poses' range [-].
+inline constexpr double kHarmonicMinPeriodShare = 0.75;
+/// A blocked fold holds out the training poses at one end of one joint's range: this share of
+/// them, the lowest or the highest readings of that joint [-].
+inline constexpr double kBlockedFoldShare = 0.2;
+
+/// A joint-term stage's added terms on poses beyond the training poses' joint ranges (blocked
+/// folds, docs/compliance.md): for each joint, its lowest and its highest kBlockedFoldShare of
+/// the training poses are held out in turn and predicted by the fit of the others (one
+/// Gauss-Newton step from the stage's fit), with the stage's terms and without the added ones.
+/// A joint whose ends its own added terms predict worse loses them; the stage keeps the previous
+/// fit when, over every joint's ends, the terms predict worse than without them.
+struct BlockedFoldCheck {
+  bool checked = false;  ///< the stage kept an added term, and the folds were predicted
+  /// Mean 3-D error of joint j's two end folds, each predicted by the fit of the others with the
+  /// stage's terms [m] (0 when not checked).
+  double with_terms_mae_m[kMaxJoints] = {};
+  double without_terms_mae_m[kMaxJoints] = {};  ///< the same without the added terms [m]
+  double with_all_mae_m = 0.0;                  ///< over every joint's ends, with the terms [m]
+  double without_all_mae_m = 0.0;               ///< the same without them [m]
+  /// Harmonics not admitted because the training poses turn their joint through less than
+  /// kHarmonicMinPeriodShare of their period.
+  ParamMask coverage_rejected = 0;
+  ParamMask fold_rejected = 0;  ///< added terms of joints whose end folds they predicted worse
+  bool passed = true;           ///< over every joint's ends, the kept terms predict no worse
+};
+
+/// A fit's held-out errors on the blocked folds (BlockedFoldCheck), each joint's two ends. No
+/// member initializers (a workspace holds one: its constructor stays small in flash): made
+/// zero by value-initialization, `BlockedFoldErrors{}`.
+struct BlockedFoldErrors {
+  double sum_m[kMaxJoints][2];       ///< sum of the 3-D errors of the fold's samples [m]
+  double squares_m2[kMaxJoints][2];  ///< sum of their squares [m^2]
+  std::size_t count[kMaxJoints][2];  ///< samples of the fold [-]
+  bool solved[kMaxJoints][2];        ///< the fit of the others could be made (a positive definite system)
+};
+
 /// What one solver stage produced.
 struct CalibrationStage {
   CalibrationSolver solver = CalibrationSolver::lm;  ///< which solver ran
@@ -243,7 +291,8 @@ struct CalibrationStage {
   /// new terms at their start values, and `lm` its details.
   bool rigid_kept = false;
   JointTermHoldout
-      holdout;  ///< a joint-term stage on a small set: its terms on left-out poses (rigid_kept when failed)
+      holdout;             ///< a joint-term stage on a small set: its terms on left-out poses (rigid_kept when failed)
+  BlockedFoldCheck folds;  ///< a joint-term stage: its terms beyond the training poses' joint ranges
   CalibrationParams params = CalibrationParams::paper;  ///< parameters it could move
   Status status = Status::ok;                           ///< ok, or not_converged (LM's last point kept)
   RobotModel model;                                     ///< calibrated geometry
@@ -257,6 +306,8 @@ struct CalibrationStage {
   ErrorStats train;            ///< errors on the training samples [m]
   ErrorStats test;             ///< errors on the test samples [m]
   Span<const double> trace_m;  ///< best cost (ABC/GSA: MAE, LM: RMS) per iteration [m]; views the workspace
+  ParamMask estimated = 0;     ///< LM: the parameters it estimated (its kept set)
+  double residual_sigma_m = 0.0;  ///< LM: its residual sigma per axis (LmResult::residual_sigma_m) [m]
 };
 
 /// Stages a job runs at most ('all': GSA, ABC, LM, then LM+compliance when enabled, and
@@ -431,6 +482,9 @@ class CalibrationWorkspaceBase {
     Paper6CostBase* cost = nullptr;  ///< paper-6 cost with room for the training samples
     AbcSolverBase* abc = nullptr;    ///< set by open_abc()
     GsaSolverBase* gsa = nullptr;    ///< set by open_gsa()
+    /// The GSA stage (calibrate_paper6_gsa), set with `gsa`: a workspace without GSA never
+    /// references its code (the firmware's flash).
+    decltype(&calibrate_paper6_gsa) run_gsa = nullptr;
   };
   /// Ends any open phase, builds a cost and an ABC solver in the arena.
   virtual PopulationPhase open_abc() = 0;
@@ -466,6 +520,9 @@ class CalibrationWorkspaceBase {
   /// significant parameters put back): in the workspace, not on the stack under LM (a model
   /// with its compliance is 584 B, and the firmware's stack peak is inside LM).
   RobotModel& lm_start() { return lm_start_; }
+  /// Where a joint-term stage keeps the previous fit's errors on the blocked folds while it fits
+  /// again (BlockedFoldCheck): not on the stack under LM.
+  BlockedFoldErrors& previous_fold_errors() { return previous_fold_errors_; }
 
  protected:
   CalibrationWorkspaceBase() = default;
@@ -473,6 +530,7 @@ class CalibrationWorkspaceBase {
 
  private:
   RobotModel lm_start_;
+  BlockedFoldErrors previous_fold_errors_;
   std::uint32_t snoop_moves_[kMaxCalibrationOutliers][2] = {};
 };
 
@@ -578,7 +636,7 @@ class CalibrationWorkspace final : public CalibrationWorkspaceBase {
       return PopulationPhase{};  // no room for GSA
     } else {
       gsa_ = new (arena_) GsaPhase();
-      return PopulationPhase{&gsa_->cost, nullptr, &gsa_->solver};
+      return PopulationPhase{&gsa_->cost, nullptr, &gsa_->solver, &calibrate_paper6_gsa};
     }
   }
   LmWorkspace* open_lm() override {
@@ -714,7 +772,7 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
     close();
     if (arena_ == nullptr) return PopulationPhase{};
     gsa_ = new (arena_) Gsa();
-    return PopulationPhase{open_cost(sizeof(Gsa)), nullptr, gsa_};
+    return PopulationPhase{open_cost(sizeof(Gsa)), nullptr, gsa_, &calibrate_paper6_gsa};
   }
   LmWorkspace* open_lm() override {
     close();

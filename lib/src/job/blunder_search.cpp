@@ -299,6 +299,10 @@ void drop_held_out(Span<const Sample> test, Span<const Sample> aside, double lar
 
 }  // namespace
 
+LmPrior job_lm_prior(const CalibrationOptions& o, const RobotModel& nominal) {
+  return lm_prior(nominal, o.prior);
+}
+
 /// The loss the w-test whitens with: LM's joint noise, no Huber weights.
 PointLoss blunder_test_loss(const CalibrationOptions& o) {
   return PointLoss{0.0, o.lm.joint_sigma_rad > 0.0 ? o.lm.joint_sigma_rad / o.lm.position_sigma_m : 0.0};
@@ -328,8 +332,10 @@ constexpr double kRefitCostTolerance = 1e-10;
 /// LM again on `fitted` from (workspace.lm_start(), *base) with the parameters of `estimated`,
 /// the result back into both; its details go to the LM phase's scratch result, not the job's.
 [[gnu::noinline]] Status refit(CalibrationWorkspaceBase& workspace, const CalibrationOptions& o,
-                               Span<const Sample> fitted, ParamMask estimated, RigidTransform* base) {
+                               const RobotModel& nominal, Span<const Sample> fitted, ParamMask estimated,
+                               RigidTransform* base) {
   LmOptions lm = o.lm;
+  lm.prior = job_lm_prior(o, nominal);
   lm.params = LmParamSet::custom;
   lm.custom_mask = estimated & ~kOtherTargetTools;
   lm.other_target_tools = (estimated & kOtherTargetTools) != 0;
@@ -372,8 +378,9 @@ void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, st
 /// dataset is in the run's order again. *summary: the first test (the final calibration on its
 /// training poses).
 [[gnu::noinline]] BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o,
-                                                 CalibrationWorkspaceBase& workspace, const CalibrationResult& r,
-                                                 CalibrationOutlierList* found, BlunderTestSummary* summary) {
+                                                 const RobotModel& nominal, CalibrationWorkspaceBase& workspace,
+                                                 const CalibrationResult& r, CalibrationOutlierList* found,
+                                                 BlunderTestSummary* summary) {
   found->count = 0;
   found->limit = kMaxCalibrationOutliers;
   const CalibrationStage& final_stage = r.stages[r.stage_count - 1];
@@ -408,7 +415,7 @@ void undo_removals(DatasetBase* dataset, CalibrationWorkspaceBase& workspace, st
     workspace.snoop_moves()[removed][1] = static_cast<std::uint32_t>(fitted);
     for (std::uint32_t k = worst.samples; k > 0; --k) dataset->swap_samples(worst.position + k - 1, --fitted);
     ++removed;
-    if (refit(workspace, o, all.subspan(0, fitted), estimated, &base) != Status::ok) break;
+    if (refit(workspace, o, nominal, all.subspan(0, fitted), estimated, &base) != Status::ok) break;
   }
   if (model_error) {
     undo_removals(dataset, workspace, removed, fitted);

@@ -36,8 +36,14 @@ PointLoss blunder_test_loss(const CalibrationOptions& o);
 /// Data snooping on the final calibration of `r` (one pose at a time, refitting), then the
 /// removed, test and set-aside samples tested as predictions; those that fail into *found.
 /// *summary: the first test (the final calibration on its training poses). The refits' details
-/// stay in the workspace's LM phase (open_lm_scratch): `r` keeps the final calibration's.
-BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o, CalibrationWorkspaceBase& workspace,
-                               const CalibrationResult& r, CalibrationOutlierList* found, BlunderTestSummary* summary);
+/// stay in the workspace's LM phase (open_lm_scratch): `r` keeps the final calibration's. The
+/// refits hold the job's prior around `nominal` (job_lm_prior).
+BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o, const RobotModel& nominal,
+                               CalibrationWorkspaceBase& workspace, const CalibrationResult& r,
+                               CalibrationOutlierList* found, BlunderTestSummary* summary);
+
+/// The prior every LM fit of the job holds: the start model `nominal` (the job's, with the
+/// given tool point) with the options' tolerances; none when they are all 0.
+LmPrior job_lm_prior(const CalibrationOptions& o, const RobotModel& nominal);
 
 }  // namespace hivecal::detail

@@ -12,15 +12,23 @@
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/rigid_fit.hpp"
 #include "hivecal/model/spanning_subset.hpp"
+#include "job/blocked_folds.hpp"
 #include "job/blunder_search.hpp"
+#include "job/term_elimination.hpp"
 
 namespace hivecal {
 namespace {
 
+using detail::blocked_fold_errors;
 using detail::blunder_limit;
 using detail::blunder_test_loss;
+using detail::FoldErrors;
+using detail::FoldFit;
+using detail::harmonics_short_of_their_period;
 using detail::index_span;
+using detail::job_lm_prior;
 using detail::keep_common;
+using detail::linearised_term_fixes;
 using detail::same_indices;
 using detail::screen;
 using detail::search_blunders;
@@ -116,7 +124,8 @@ Status compliance_start(const RobotModel& start, const CalibrationCompliance& op
 
 /// The job's state while it runs: the inputs and where the result goes.
 struct Job {
-  const RobotModel& start;
+  const RobotModel& start;    ///< the baseline's model: the start joints with the tool point fitted
+  const RobotModel& nominal;  ///< the job's start model as given (the tool point given): the prior's centre
   DatasetBase& dataset;
   const CalibrationOptions& options;
   CalibrationWorkspaceBase& workspace;
@@ -181,9 +190,9 @@ Status run_population(Job& job, CalibrationSolver solver, bool hybrid) {
     gsa.iterations = o.gsa_iterations;
     gsa.seed = o.seed;
     const CalibrationWorkspaceBase::PopulationPhase phase = job.workspace.open_gsa();
-    if (phase.gsa == nullptr) return Status::population_out_of_range;  // a workspace without GSA (firmware)
-    status = calibrate_paper6_gsa(job.start, job.dataset.train(), subset, gsa, o.paper6_half_width_m, phase.cost,
-                                  phase.gsa, &solved, &trace, job.observer);
+    if (phase.run_gsa == nullptr) return Status::population_out_of_range;  // a workspace without GSA (firmware)
+    status = phase.run_gsa(job.start, job.dataset.train(), subset, gsa, o.paper6_half_width_m, phase.cost, phase.gsa,
+                           &solved, &trace, job.observer);
   }
   job.workspace.close();
   if (status != Status::ok) return status;
@@ -360,7 +369,20 @@ struct LmFit {
   /// Joint terms held at their start values: after LM+compliance, the gravity terms it did not
   /// keep (the harmonics' stage adds harmonics to that model, it does not reopen its choice).
   ParamMask fixed_terms = 0;
+  /// Start where the last fit (r.lm) ended instead of start_model: its coefficients kept, those
+  /// of fixed_terms put back to their start values; a refit takes a few iterations.
+  bool warm = false;
 };
+
+/// Joint terms a stage tests from which the test's fixes after the first are made on the
+/// linearised fit (term_elimination.hpp): below, a refit per fix is as cheap, and a build that
+/// holds fewer terms (the firmware's 4) leaves that code out [-].
+constexpr int kLinearisedFixesMinTerms = 5;
+
+/// Whether the test of `reference`'s joint terms makes its fixes on the linearised fit.
+constexpr bool linearised_fixes(const RobotModel& reference) {
+  return kMaxComplianceTerms >= kLinearisedFixesMinTerms && reference.compliance.term_count >= kLinearisedFixesMinTerms;
+}
 
 /// Where a fit reports: its trace, its observer (both may be null), the parameters fixed as
 /// not significant.
@@ -384,8 +406,22 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   TraceBase* trace = report.trace;
   ParamMask* pruned = report.pruned;
   RobotModel& from = job.workspace.lm_start();  // start_model is never this one: a stage's or the job's model
-  from = *fit.start_model;
-  if (compliance) from.compliance = reference.compliance;  // LM+compliance: the start terms on the fitted geometry
+  RigidTransform warm_base;                     // the base a warm start or a next attempt starts from
+  if (fit.warm) {                               // where the last fit ended (r.lm, which LM clears: copied first)
+    from = job.result.lm.model;
+    warm_base = job.result.lm.base_to_tracker;
+    base = &warm_base;
+  } else {
+    from = *fit.start_model;
+  }
+  // LM+compliance: the start terms on the fitted geometry (a warm start keeps its coefficients
+  // but those it now holds fixed).
+  if (compliance && !fit.warm) from.compliance = reference.compliance;
+  for (int t = 0; fit.warm && t < reference.compliance.term_count; ++t) {
+    if (mask_has(fit.fixed_terms, compliance_param_index(reference, t))) {
+      from.compliance.coefficient[t] = reference.compliance.coefficient[t];
+    }
+  }
   const CalibrationOptions& o = job.options;
   CalibrationResult& r = job.result;
   LmOptions lm = o.lm;
@@ -403,6 +439,7 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     lm.params = LmParamSet::custom;
   }
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
+  lm.prior = detail::job_lm_prior(o, job.nominal);
   if (o.base_known || o.tool_known) {  // the base / the tool points stay where the options put them
     if (o.base_known) base = &o.known_base_to_tracker;
     lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) & ~known_params_mask(o, reference);
@@ -430,17 +467,41 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     status = calibrate_lm(from, base, fit.samples, lm, workspace, &r.lm, trace, report.observer);
     job.workspace.close();
     if (status != Status::ok && status != Status::not_converged) return status;
-    bool again = fit.reset_moved && reset_dropped(reference, r.lm.identifiability, o.tool_known, &from);
+    // A next attempt starts where this one ended, with what it puts back at the reference values:
+    // a few iterations instead of a fit from the stage's start.
+    from = r.lm.model;
+    warm_base = r.lm.base_to_tracker;
+    base = &warm_base;
+    // The other targets' tool points stay where this attempt put them (the next one starts there).
+    bool again = reset_dropped(reference, r.lm.identifiability, true, &from) && fit.reset_moved;
     const JointTermLevels levels =
         joint_term_levels(reference, job.options.compliance.significance_t, r.lm.residual_dof);
     int weakest = implausible_joint_term(r.lm);
     if (attempt == 0 && !compliance) geometry = tests_geometry(o, fit.samples, r.lm, &r);
     if (weakest < 0) weakest = least_significant(reference, r.lm, fit.significance_t, levels, geometry);
-    if (weakest >= 0) {
-      *pruned |= param_bit(weakest);
+    ParamMask fixes = weakest >= 0 ? param_bit(weakest) : ParamMask{0};
+    if (compliance && weakest >= rigid_param_count(reference) && linearised_fixes(reference)) {
+      // The terms the test would fix after this one, each after a refit: on the linearised
+      // fit at once (the refit below then takes them all).
+      const bool other_tools =
+          (lm.other_target_tools || mask_has(r.lm.identifiability.kept_mask, tool_param_index(reference, 0)));
+      const FoldFit fitted{&r.lm.model, &r.lm.base_to_tracker,
+                           r.lm.identifiability.kept_mask | (other_tools ? kOtherTargetTools : ParamMask{0}), lm.prior,
+                           r.lm.residual_sigma_m * r.lm.residual_sigma_m};
+      ParamMask linearised = 0;
+      if (linearised_term_fixes(fitted, reference, fit.samples, blunder_test_loss(o), weakest, fit.significance_t,
+                                o.compliance.significance_t, r.lm.residual_sigma_m, r.lm.residual_dof, job.workspace,
+                                &linearised) == Status::ok) {
+        fixes |= linearised;
+      }
+    }
+    if (fixes != 0) {
+      *pruned |= fixes;
       lm.params = LmParamSet::custom;
       lm.custom_mask = free_mask & ~*pruned;
-      reset_param(reference, weakest, o.tool_known, &from);
+      for (int i = 0; i < kFullParamCount; ++i) {
+        if (mask_has(fixes, i)) reset_param(reference, i, true, &from);
+      }
       again = true;
     }
     if (!again) break;
@@ -552,6 +613,8 @@ void lm_stage(Job& job, Status status, bool refines_previous, bool compliance, T
   stage.iterations = static_cast<std::size_t>(r.lm.iterations);
   stage.best_cost_m = r.lm.rms_m;
   stage.trace_m = trace.values();
+  stage.estimated = r.lm.identifiability.kept_mask;
+  stage.residual_sigma_m = r.lm.residual_sigma_m;
 }
 
 /// LM from the start geometry, or (hybrid) from the previous stage's geometry and base, with
@@ -614,6 +677,8 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   stage.iterations = previous.iterations;
   stage.best_cost_m = previous.best_cost_m;
   stage.trace_m = previous.trace_m;
+  stage.estimated = previous.estimated;
+  stage.residual_sigma_m = previous.residual_sigma_m;
   return Status::ok;
 }
 
@@ -672,6 +737,134 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   return holdout;
 }
 
+/// The fit a joint-term stage adds its terms to (the previous stage's), for the blocked folds.
+struct PreviousFit {
+  std::size_t stage = 0;    ///< its slot
+  ParamMask estimated = 0;  ///< what it estimated
+  double sigma_m = 0.0;     ///< its residual sigma per axis [m]
+};
+
+/// Two fits' held-out errors summed over some folds: their sums, sums of squares and count.
+struct FoldComparison {
+  double with_m = 0.0;      ///< sum of the errors with the terms [m]
+  double without_m = 0.0;   ///< the same without them [m]
+  double with_m2 = 0.0;     ///< sum of the squared errors with the terms [m^2]
+  double without_m2 = 0.0;  ///< the same without them [m^2]
+  std::size_t count = 0;    ///< samples [-]
+  bool unsolved = false;    ///< a fold only the fit without the terms could make
+};
+
+/// Adds joint `joint`'s two ends (over the folds `without` could make) to *into and to *all.
+void add_ends(const BlockedFoldErrors& with, const BlockedFoldErrors& without, int joint, FoldComparison* into,
+              FoldComparison* all) {
+  for (int end = 0; end < 2; ++end) {
+    if (!without.solved[joint][end]) continue;
+    if (!with.solved[joint][end]) {
+      into->unsolved = all->unsolved = true;
+      continue;
+    }
+    for (FoldComparison* c : {into, all}) {
+      c->with_m += with.sum_m[joint][end];
+      c->without_m += without.sum_m[joint][end];
+      c->with_m2 += with.squares_m2[joint][end];
+      c->without_m2 += without.squares_m2[joint][end];
+      c->count += with.count[joint][end];
+    }
+  }
+}
+
+/// The terms predict the folds of `c` worse by more than one standard error of the difference
+/// of the two mean errors (each mean's variance from its errors' scatter), or not at all.
+bool worse(const FoldComparison& c) {
+  if (c.unsolved) return true;
+  if (c.count < 2) return false;
+  const double n = static_cast<double>(c.count);
+  const double with_mean_m = c.with_m / n;
+  const double without_mean_m = c.without_m / n;
+  const double variance_m2 = (std::fmax(0.0, c.with_m2 / n - with_mean_m * with_mean_m) +
+                              std::fmax(0.0, c.without_m2 / n - without_mean_m * without_mean_m)) /
+                             (n - 1.0);
+  return with_mean_m - without_mean_m > std::sqrt(variance_m2);
+}
+
+/// Mean errors with and without the terms over the folds of `c` into *with_m, *without_m [m].
+void fold_means(const FoldComparison& c, double* with_m, double* without_m) {
+  const double n = c.count > 0 ? static_cast<double>(c.count) : 1.0;
+  *with_m = c.count > 0 ? c.with_m / n : 0.0;
+  *without_m = c.count > 0 ? c.without_m / n : 0.0;
+}
+
+/// The added terms of fit.reference deflecting joint `joint` (0-based).
+ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint) {
+  ParamMask mask = 0;
+  for (int t = 0; t < reference.compliance.term_count; ++t) {
+    if (reference.compliance.terms[t].joint == joint) mask |= param_bit(compliance_param_index(reference, t));
+  }
+  return mask & terms;
+}
+
+/// One check of the blocked folds: r.lm's fit against the previous fit's errors `without`; the
+/// comparison into *folds (its rejections kept), and the kept added terms of the joints whose
+/// ends they predict worse returned. Not inlined: its fold errors stay off the stack of the
+/// refits that follow (the firmware's stack budget).
+[[gnu::noinline]] Status compare_folds(Job& job, const LmFit& fit, const BlockedFoldErrors& without,
+                                       ParamMask new_terms, BlockedFoldCheck* folds, ParamMask* rejected) {
+  const CalibrationResult& r = job.result;
+  FoldErrors with{};
+  const FoldFit fit_with{&r.lm.model, &r.lm.base_to_tracker, r.lm.identifiability.kept_mask,
+                         job_lm_prior(job.options, job.nominal), r.lm.residual_sigma_m * r.lm.residual_sigma_m};
+  const Status status =
+      blocked_fold_errors(&job.dataset, fit_with, blunder_test_loss(job.options), job.workspace, &with);
+  if (status != Status::ok) return status;
+  folds->checked = true;
+  FoldComparison all;
+  *rejected = 0;
+  for (int joint = 0; joint < fit.reference->joint_count; ++joint) {
+    FoldComparison ends;
+    add_ends(with, without, joint, &ends, &all);
+    fold_means(ends, &folds->with_terms_mae_m[joint], &folds->without_terms_mae_m[joint]);
+    const ParamMask own = terms_of_joint(*fit.reference, r.lm.identifiability.kept_mask & new_terms, joint);
+    if (own != 0 && worse(ends)) *rejected |= own;
+  }
+  fold_means(all, &folds->with_all_mae_m, &folds->without_all_mae_m);
+  folds->passed = !worse(all);
+  return Status::ok;
+}
+
+/// The blocked folds of a joint-term stage (BlockedFoldCheck): r.lm's fit against the previous
+/// fit's on each joint's range ends; a joint whose ends its own kept added terms predict worse
+/// (or not at all) loses them and the stage is fitted again, up to kMaxFoldRounds checks (a
+/// last one that still rejects terms fails the stage); *folds gets the last comparison and
+/// whether the kept terms pass over every joint's ends.
+[[gnu::noinline]] Status admit_for_the_workspace(Job& job, LmFit* fit, const PreviousFit& previous, ParamMask new_terms,
+                                                 const LmFitReport& report, BlockedFoldCheck* folds) {
+  constexpr int kMaxFoldRounds = 3;
+  CalibrationResult& r = job.result;
+  if ((r.lm.identifiability.kept_mask & new_terms) == 0) return Status::ok;
+  const CalibrationStage& before = r.stages[previous.stage];
+  BlockedFoldErrors& without = job.workspace.previous_fold_errors();
+  const FoldFit fit_without{&before.model, &before.base_to_tracker, previous.estimated,
+                            job_lm_prior(job.options, job.nominal), previous.sigma_m * previous.sigma_m};
+  Status status =
+      blocked_fold_errors(&job.dataset, fit_without, blunder_test_loss(job.options), job.workspace, &without);
+  for (int round = 0; status == Status::ok && (r.lm.identifiability.kept_mask & new_terms) != 0; ++round) {
+    ParamMask rejected = 0;
+    status = compare_folds(job, *fit, without, new_terms, folds, &rejected);
+    if (status != Status::ok || rejected == 0) break;
+    folds->fold_rejected |= rejected;
+    if (round + 1 == kMaxFoldRounds) {  // still terms that do not hold beyond their joint's range
+      folds->passed = false;
+      break;
+    }
+    fit->fixed_terms |= rejected;
+    fit->warm = true;  // fitted again from where this fit ended
+    status = fit_lm(job, *fit, report);
+    fit->warm = false;
+    if (status == Status::not_converged) status = Status::ok;
+  }
+  return status;
+}
+
 /// The last rigid LM stage before slot r.stage_count: what every joint-term stage starts from.
 const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
   std::size_t k = r.stage_count - 1;
@@ -706,14 +899,25 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
     const int gravity_terms = r.stages[r.stage_count - 1].model.compliance.term_count;
     fit.fixed_terms = compliance_params_mask(reference.joint_count, gravity_terms) & ~r.lm.identifiability.kept_mask;
   }
-  const Status status = fit_lm(job, fit, LmFitReport{&trace, job.observer, pruned});
-  if (status != Status::ok && status != Status::not_converged) return status;
   // The terms this stage adds: every one after the rigid fit, the harmonics after LM+compliance.
   const ParamMask new_terms = after_compliance ? harmonic_params_mask(reference) : compliance_params_mask(reference);
-  if ((r.lm.identifiability.kept_mask & new_terms) == 0) return keep_previous_fit(job, pruned);
   const std::size_t index = r.stage_count;
+  // The previous fit: the blocked folds' reference.
+  const PreviousFit previous{index - 1, r.stages[index - 1].estimated, r.stages[index - 1].residual_sigma_m};
+  BlockedFoldCheck& folds = r.stages[index].folds;  // in the stage's slot: not on the stack under LM
+  folds = BlockedFoldCheck{};
+  folds.coverage_rejected = harmonics_short_of_their_period(reference, job.dataset.train()) & new_terms;
+  fit.fixed_terms |= folds.coverage_rejected;
+  Status status = fit_lm(job, fit, LmFitReport{&trace, job.observer, pruned});
+  if (status != Status::ok && status != Status::not_converged) return status;
+  status = admit_for_the_workspace(job, &fit, previous, new_terms, LmFitReport{&trace, job.observer, pruned}, &folds);
+  if (status != Status::ok && status != Status::not_converged) return status;
+  if ((r.lm.identifiability.kept_mask & new_terms) == 0 || !folds.passed) {
+    const Status kept = keep_previous_fit(job, pruned);
+    return kept;
+  }
   const JointTermHoldout holdout = check_on_left_out_poses(job, fit, *pruned, new_terms);
-  if (!holdout.checked) {  // a larger set: the significance test decides
+  if (!holdout.checked) {  // a larger set: the significance test and the blocked folds decide
     lm_stage(job, status, true, true, trace);
     return Status::ok;
   }
@@ -802,7 +1006,7 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
   r->baseline.test = position_error_stats(r->baseline.model, r->baseline.base_to_tracker, dataset->test());
   // The stages start from the baseline's geometry: the start joints with the fitted tool point
   // (ABC / GSA move lengths only and would otherwise keep the tool guess's error).
-  Job job{r->baseline.model, *dataset, options, *workspace, *r, observer};
+  Job job{r->baseline.model, start, *dataset, options, *workspace, *r, observer};
   const StagePlan plan = plan_for(options.method);
   if (plan.gsa && (status = run_stage(job, CalibrationSolver::gsa, plan.hybrid)) != Status::ok) return status;
   if (plan.abc && (status = run_stage(job, CalibrationSolver::abc, plan.hybrid)) != Status::ok) return status;
@@ -999,7 +1203,7 @@ Status run_job(const RobotModel& start, DatasetBase* dataset, const CalibrationO
     if (status != Status::ok) return status;
     ++round;
     report_phase(observer, CalibrationPhase::blunder_test, false);
-    verdict = search_blunders(dataset, options, *workspace, *result, &tested, &summary);
+    verdict = search_blunders(dataset, options, start, *workspace, *result, &tested, &summary);
     report_phase(observer, CalibrationPhase::blunder_test, true);
     if (verdict == BlunderVerdict::not_searched || same_indices(tested, aside) || undecided) break;
     if (round < kMaxRounds) {

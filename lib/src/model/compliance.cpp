@@ -17,11 +17,25 @@ double lever_m(const Vec3& z, const Vec3& origin_m, const Vec3& point_m, const V
   return z.dot((point_m - origin_m).cross(gravity));
 }
 
-/// The basis of a harmonic term at joint readings q: sin or cos of order * q_j [-].
-double harmonic_basis(const ComplianceTerm& term, const JointVector& q_rad) {
-  double sin_kq = 0.0;
-  double cos_kq = 1.0;
-  math::sincos(static_cast<double>(term.order) * q_rad(term.joint), &sin_kq, &cos_kq);
+/// The basis of a harmonic term at joint readings q: sin or cos of order * q_j [-], from sin q_j
+/// and cos q_j (`trig`, the readings' joint trig, or computed here when null) by the angle sums.
+double harmonic_basis(const ComplianceTerm& term, const JointVector& q_rad, const JointTrig* trig) {
+  const int j = term.joint;
+  double sin_q = 0.0;
+  double cos_q = 1.0;
+  if (trig != nullptr) {
+    sin_q = trig->sin_q[j];
+    cos_q = trig->cos_q[j];
+  } else {
+    math::sincos(q_rad(j), &sin_q, &cos_q);
+  }
+  double sin_kq = sin_q;
+  double cos_kq = cos_q;
+  for (int k = 1; k < term.order; ++k) {
+    const double next_sin = sin_kq * cos_q + cos_kq * sin_q;
+    cos_kq = cos_kq * cos_q - sin_kq * sin_q;
+    sin_kq = next_sin;
+  }
   return term.kind == JointTermKind::harmonic_sin ? sin_kq : cos_kq;
 }
 
@@ -64,7 +78,8 @@ bool has_gravity_term(const ComplianceModel& compliance) {
 
 }  // namespace
 
-void compliance_basis(const RobotModel& model, const JointVector& q_rad, double (&basis)[kMaxComplianceTerms]) {
+void compliance_basis(const RobotModel& model, const JointVector& q_rad, double (&basis)[kMaxComplianceTerms],
+                      const JointTrig* trig) {
   for (double& b : basis) b = 0.0;
   const ComplianceModel& compliance = model.compliance;
   if (compliance.term_count == 0) return;
@@ -72,7 +87,7 @@ void compliance_basis(const RobotModel& model, const JointVector& q_rad, double 
   if (has_gravity_term(compliance)) detail::rigid_frames(model, q_rad, frame);
   for (int t = 0; t < compliance.term_count; ++t) {
     const ComplianceTerm& term = compliance.terms[t];
-    basis[t] = is_harmonic(term) ? harmonic_basis(term, q_rad) : gravity_basis(model, term, frame);
+    basis[t] = is_harmonic(term) ? harmonic_basis(term, q_rad, trig) : gravity_basis(model, term, frame);
   }
 }
 
@@ -82,9 +97,9 @@ JointVector compliance_deflection(const RobotModel& model, const JointVector& q_
 }
 
 JointVector compliance_deflection(const RobotModel& model, const JointVector& q_rad,
-                                  double (&basis)[kMaxComplianceTerms]) {
+                                  double (&basis)[kMaxComplianceTerms], const JointTrig* trig) {
   JointVector dq = JointVector::Zero();
-  compliance_basis(model, q_rad, basis);
+  compliance_basis(model, q_rad, basis, trig);
   const ComplianceModel& compliance = model.compliance;
   for (int t = 0; t < compliance.term_count; ++t) dq(compliance.terms[t].joint) += compliance.coefficient[t] * basis[t];
   return dq;

@@ -84,6 +84,7 @@ Status DatasetBase::add(const JointVector& q_rad, const Vec3& point_m, int targe
   ++size_;
   stored_ = size_;
   train_count_ = size_;
+  last_split_ = SplitArguments{};
   return Status::ok;
 }
 
@@ -91,6 +92,7 @@ void DatasetBase::clear() {
   size_ = 0;
   stored_ = 0;
   train_count_ = 0;
+  last_split_ = SplitArguments{};
 }
 
 namespace {
@@ -163,6 +165,7 @@ void DatasetBase::set_aside(Span<const std::uint32_t> indices) {
   }
   size_ = kept;
   train_count_ = size_;
+  last_split_ = SplitArguments{};
 }
 
 void DatasetBase::swap_samples(std::size_t a, std::size_t b) {
@@ -261,6 +264,15 @@ Status DatasetBase::split_fold(std::size_t fold, std::size_t folds, std::uint64_
   const std::size_t end = pose_start((fold + 1) * poses / folds);
   rotate(storage_, begin, end, size_);  // the fold's block to the end, both parts in their order
   train_count_ = size_ - (end - begin);
+  last_split_ = SplitArguments{2, 1.0, fold, folds, seed};
+  return Status::ok;
+}
+
+Status DatasetBase::restore_split() {
+  const SplitArguments last = last_split_;
+  sort_by_index(size_);  // split() shuffles the order it finds: the one it found, the order of add()
+  if (last.kind == 1) return split(last.train_fraction, last.seed);
+  if (last.kind == 2) return split_fold(last.fold, last.folds, last.seed);
   return Status::ok;
 }
 
@@ -278,6 +290,7 @@ Status DatasetBase::split(double train_fraction, std::uint64_t seed) {
   const std::size_t poses = pose_count();
   const std::size_t train_poses = train_poses_of(train_fraction, poses);
   if (train_poses == 0) return Status::invalid_argument;
+  last_split_ = SplitArguments{1, train_fraction, 0, 0, seed};
   if (poses == size_ || train_poses == poses) {  // one sample per pose, or no test: the draws as always
     shuffle(seed);
     train_count_ = train_poses == poses ? size_ : train_poses;

@@ -431,7 +431,13 @@ Vec3 tool_point_jacobian(const RobotModel& model, const JointVector& q_rad, Tool
   const JointTrig* const trig_of[1] = {&q_trig};
   const detail::JacobianRowsTarget target[1] = {{{rows[0], rows[1], rows[2]}, slot}};
   Vec3 point_m;
+#ifdef HIVECAL_LANES_ARE_VECTORS
   detail::jacobian_lanes<double, 1>(model, model_trig(model), trig_of, detail::LaneTargets<1>{target}, &point_m);
+#else  // one lane of double (bare metal): the kernel's own copy, not a second one of it (flash)
+  Vec3 points_m[1];
+  detail::tool_point_jacobian_rows(model, model_trig(model), trig_of, target, points_m);
+  point_m = points_m[0];
+#endif
   for (int c = 0; c < kMaxModelParamCount; ++c)
     for (int r = 0; r < 3; ++r) (*jacobian)(r, c) = rows[r][c];
   return point_m;

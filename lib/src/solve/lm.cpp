@@ -20,6 +20,9 @@ constexpr double kHuberNoiseMultiple = 3.0;
 constexpr double kMaxDamping = 1e16;
 // Joint positions closer than this count as the same pose [rad].
 constexpr double kSamePose_rad = 1e-9;
+// The prior's variance factor, re-estimated at every accepted point, has converged when it moves
+// by less than this share: the prior's pull on a parameter is proportional to it [-].
+constexpr double kPriorVarianceTolerance = 1e-3;
 
 bool options_valid(const LmOptions& o, const RobotModel& start) {
   const bool tolerances_ok = o.cost_tolerance >= 0.0 && o.step_tolerance_m >= 0.0 && o.gradient_tolerance >= 0.0;
@@ -30,7 +33,12 @@ bool options_valid(const LmOptions& o, const RobotModel& start) {
       o.params != LmParamSet::custom || (o.custom_mask != 0 && (o.custom_mask & ~valid_params_mask(start)) == 0);
   const bool joint_noise_ok = o.joint_sigma_rad >= 0.0 && o.joint_sigma_rad < 1.0 &&
                               (o.joint_sigma_rad == 0.0 || (o.position_sigma_m > 0.0 && o.position_sigma_m < 1.0));
-  return o.max_iterations >= 1 && tolerances_ok && damping_ok && huber_ok && threshold_ok && mask_ok && joint_noise_ok;
+  const LmPriorTolerances& t = o.prior.tolerance;
+  const bool prior_ok = t.dh_length_m >= 0.0 && t.dh_angle_rad >= 0.0 && t.tool_m >= 0.0 &&
+                        math::is_finite(t.dh_length_m + t.dh_angle_rad + t.tool_m) &&
+                        (o.prior.nominal == nullptr || all_finite(to_params(*o.prior.nominal)));
+  return o.max_iterations >= 1 && tolerances_ok && damping_ok && huber_ok && threshold_ok && mask_ok &&
+         joint_noise_ok && prior_ok;
 }
 
 bool poses_distinct(Span<const Sample> samples) {
@@ -66,26 +74,27 @@ Status update_huber_threshold(const LmOptions& options, Span<const Sample> sampl
   return status;
 }
 
-/// Largest |cos| between a scaled Jacobian column and the weighted residual.
-double gradient_cosine(const NormalEquations& eq, const FullParams& scale, ParamMask kept) {
-  if (!(eq.weighted_squares_m2 > 0.0)) return 0.0;
+/// Largest |cos| between a scaled Jacobian column and the weighted residual: `gradient` is
+/// J^T W r (with the prior's share), `squares_m2` sum w |r|^2 (with the prior's cost).
+double gradient_cosine(const FullParams& gradient, double squares_m2, const FullParams& scale, ParamMask kept) {
+  if (!(squares_m2 > 0.0)) return 0.0;
   double largest = 0.0;
   for (int i = 0; i < kFullParamCount; ++i) {
-    if (mask_has(kept, i)) largest = std::fmax(largest, std::fabs(eq.jtwr(i) * scale(i)));
+    if (mask_has(kept, i)) largest = std::fmax(largest, std::fabs(gradient(i) * scale(i)));
   }
-  return largest / std::sqrt(eq.weighted_squares_m2);
+  return largest / std::sqrt(squares_m2);
 }
 
 /// Solves (D H D + damping I) step_s = -D g over the kept parameters, with D H D already in
-/// s->system (damped in place); returns the step in parameter units (D step_s), 0 outside
-/// `kept`. False when the system cannot be solved.
-bool solve_step(LmStepScratch* s, const NormalEquations& eq, const FullParams& scale, ParamMask kept, double damping,
-                FullParams* step, FullParams* scaled_step) {
+/// s->system (damped in place) and g in s->gradient; returns the step in parameter units
+/// (D step_s), 0 outside `kept`. False when the system cannot be solved.
+bool solve_step(LmStepScratch* s, const FullParams& scale, ParamMask kept, double damping, FullParams* step,
+                FullParams* scaled_step) {
   FullParams rhs = FullParams::Zero();
   for (int i = 0; i < kFullParamCount; ++i) {
     if (!mask_has(kept, i)) continue;
     s->system(i, i) += damping;
-    rhs(i) = -eq.jtwr(i) * scale(i);
+    rhs(i) = -s->gradient(i) * scale(i);
   }
   if (!cholesky_factor(s->system, kept, &s->factorization)) return false;
   cholesky_solve(s->factorization, rhs, scaled_step);
@@ -133,29 +142,6 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
       result->other_tools_sigma_m[k](axis) = std::sqrt(std::fmax(variance, 0.0) * variance_m2);
     }
   }
-}
-
-/// sigma_p = sqrt(diag(H^-1) * sum w r^2 / (3N - p)) over the kept parameters, from the
-/// normal equations at the final point (Jacobi-scaled for conditioning).
-Status parameter_sigmas(LmWorkspace* ws, const NormalEquations& eq, ParamMask kept, LmResult* result) {
-  int eliminated = 0;  // the other targets' tool points, 3 parameters each
-  for (const TargetBlock& block : eq.targets) eliminated += block.count > 0 ? 3 : 0;
-  const int dof = 3 * static_cast<int>(eq.count) - mask_count(kept) - eliminated;
-  result->residual_dof = dof;
-  LmStepScratch* s = ws->scratch.open_step();
-  FullParams scale;
-  scale_kept_block(eq.jtwj, kept, &s->system, &scale);
-  if (!cholesky_factor(s->system, kept, &s->factorization)) return Status::singular_system;
-  const double variance_m2 = eq.weighted_squares_m2 / static_cast<double>(dof);
-  result->residual_sigma_m = std::sqrt(variance_m2);
-  FullParams inverse_diagonal;
-  cholesky_inverse_diagonal(s->factorization, &s->system, &inverse_diagonal);
-  result->sigma.setZero();
-  for (int i = 0; i < kFullParamCount; ++i) {
-    if (mask_has(kept, i)) result->sigma(i) = std::sqrt(std::fmax(inverse_diagonal(i), 0.0) * variance_m2) * scale(i);
-  }
-  other_tool_sigmas(s->factorization, eq, scale, kept, variance_m2, result);
-  return all_finite(result->sigma) ? Status::ok : Status::singular_system;
 }
 
 /// Checks every input; fills *free_mask.
@@ -207,11 +193,13 @@ void clear_result(LmResult* result) {
   result->residual_sigma_m = 0.0;
   result->huber_threshold_m = 0.0;
   result->iterations = 0;
+  result->prior_chi_square = 0.0;
   result->termination = LmTermination::max_iterations;
 }
 
 /// Everything one calibration works with.
 struct Run {
+  const RobotModel& start_model;  ///< where the fit started: a parameter found undetermined goes back there
   const LmOptions& options;
   Span<const Sample> samples;
   LmWorkspace* ws;
@@ -226,7 +214,87 @@ struct Run {
   double damping;
   double growth;
   bool reanalysed;  ///< the analysis has been repeated after the first accepted step
+  /// The prior's pseudo-observations weigh (p - nominal)^2 / tolerance^2 by this: the fit's
+  /// variance factor sum w |r|^2 / dof at the last accepted point (0: no prior) [m^2].
+  double prior_variance_m2 = 0.0;
 };
+
+/// The prior's weight of parameter i, variance factor / tolerance^2, where it holds one and i
+/// is kept; 0 elsewhere [m^2/unit^2].
+double prior_weight(const Run& run, int i) {
+  if (!mask_has(run.kept, i)) return 0.0;
+  const double sigma = lm_prior_sigma(run.options.prior, i);
+  return sigma > 0.0 ? run.prior_variance_m2 / (sigma * sigma) : 0.0;
+}
+
+/// Adds the prior's share of the gradient at `at`, weight (p - nominal), over the kept
+/// parameters to *gradient [m^2/unit]. The base and the joint terms hold none.
+// Not inlined: its parameter vectors stay out of calibrate_lm's frame (the firmware's stack).
+[[gnu::noinline]] void add_prior_gradient(const Run& run, const Point& at, FullParams* gradient) {
+  if (!(run.prior_variance_m2 > 0.0)) return;
+  const ModelParams p = to_params(at.model);
+  const ModelParams nominal = to_params(*run.options.prior.nominal);
+  for (int i = 0; i < model_param_count(at.model); ++i) (*gradient)(i) += prior_weight(run, i) * (p(i) - nominal(i));
+}
+
+/// The prior's share of the cost at `at`: sum of weight (p - nominal)^2 [m^2].
+double prior_cost(const Run& run, const Point& at) {
+  if (!(run.prior_variance_m2 > 0.0)) return 0.0;
+  const ModelParams p = to_params(at.model);
+  const ModelParams nominal = to_params(*run.options.prior.nominal);
+  double cost_m2 = 0.0;
+  for (int i = 0; i < model_param_count(at.model); ++i)
+    cost_m2 += prior_weight(run, i) * (p(i) - nominal(i)) * (p(i) - nominal(i));
+  return cost_m2;
+}
+
+/// Adds the prior's weights to the diagonal of a system scaled by `scale` over the kept parameters.
+void add_prior_diagonal(const Run& run, const FullParams& scale, NormalMatrix* system) {
+  for (int i = 0; i < model_param_count(run.point.model); ++i)
+    (*system)(i, i) += prior_weight(run, i) * scale(i) * scale(i);
+}
+
+/// Residual degrees of freedom of normal equations over `kept`: 3N - p - 3 per eliminated target.
+int residual_dof_of(const NormalEquations& eq, ParamMask kept) {
+  int eliminated = 0;  // the other targets' tool points, 3 parameters each
+  for (const TargetBlock& block : eq.targets) eliminated += block.count > 0 ? 3 : 0;
+  return 3 * static_cast<int>(eq.count) - mask_count(kept) - eliminated;
+}
+
+/// The prior's variance factor at the current point: the residuals' sum w |r|^2 / dof (at
+/// least one degree of freedom), 0 without a prior. Returns whether it moved by more than
+/// kPriorVarianceTolerance: the cost the iterations minimise changed with it.
+bool update_prior_variance(Run* run) {
+  if (run->options.prior.nominal == nullptr) return false;
+  const int dof = std::max(1, residual_dof_of(*run->current, run->kept));
+  const double before_m2 = run->prior_variance_m2;
+  run->prior_variance_m2 = run->current->weighted_squares_m2 / static_cast<double>(dof);
+  return !(std::fabs(run->prior_variance_m2 - before_m2) <= kPriorVarianceTolerance * run->prior_variance_m2);
+}
+
+/// sigma_p = sqrt(diag((H + P)^-1) * sum w r^2 / (3N - p)) over the kept parameters, from the
+/// normal equations at the final point (Jacobi-scaled for conditioning) and the prior's
+/// weights P (with a prior: the posterior's sigmas; a parameter the data do not determine
+/// keeps about its tolerance).
+Status parameter_sigmas(const Run& run, const NormalEquations& eq, ParamMask kept, LmResult* result) {
+  const int dof = residual_dof_of(eq, kept);
+  result->residual_dof = dof;
+  LmStepScratch* s = run.ws->scratch.open_step();
+  FullParams scale;
+  scale_kept_block(eq.jtwj, kept, &s->system, &scale);
+  add_prior_diagonal(run, scale, &s->system);
+  if (!cholesky_factor(s->system, kept, &s->factorization)) return Status::singular_system;
+  const double variance_m2 = eq.weighted_squares_m2 / static_cast<double>(dof);
+  result->residual_sigma_m = std::sqrt(variance_m2);
+  FullParams inverse_diagonal;
+  cholesky_inverse_diagonal(s->factorization, &s->system, &inverse_diagonal);
+  result->sigma.setZero();
+  for (int i = 0; i < kFullParamCount; ++i) {
+    if (mask_has(kept, i)) result->sigma(i) = std::sqrt(std::fmax(inverse_diagonal(i), 0.0) * variance_m2) * scale(i);
+  }
+  other_tool_sigmas(s->factorization, eq, scale, kept, variance_m2, result);
+  return all_finite(result->sigma) ? Status::ok : Status::singular_system;
+}
 
 /// Normal equations of `at` into *out: over the kept parameters, or, while an analysis is
 /// ahead, over the free ones plus the base translation (the analysis's reference scale, see
@@ -264,6 +332,29 @@ inline Status analyse(Run* run, IdentifiabilityOutput output) {
   }
 }
 
+/// Puts the model parameters and joint-term coefficients of `lost` in *model back to their
+/// values in `start`; true when one changed. (The base is an increment: it has no start value.)
+// Not inlined: its parameter vectors would widen calibrate_lm's frame, on the firmware's deepest path.
+[[gnu::noinline]] bool put_back(const RobotModel& start, ParamMask lost, RobotModel* model) {
+  if (lost == 0) return false;
+  ModelParams params = to_params(*model);
+  const ModelParams start_params = to_params(start);
+  bool changed = false;
+  for (int i = 0; i < model_param_count(*model); ++i) {
+    if (!mask_has(lost, i) || params(i) == start_params(i)) continue;
+    params(i) = start_params(i);
+    changed = true;
+  }
+  if (changed) set_model_params(params, model);
+  for (int t = 0; t < model->compliance.term_count; ++t) {
+    double& coefficient = model->compliance.coefficient[t];
+    if (!mask_has(lost, compliance_param_index(*model, t)) || coefficient == start.compliance.coefficient[t]) continue;
+    coefficient = start.compliance.coefficient[t];
+    changed = true;
+  }
+  return changed;
+}
+
 /// Copies the trial point's normal equations into *current, whose target blocks keep their
 /// storage: the trial's memory is the analysis's next.
 // Not inlined: its copies would widen calibrate_lm's frame, on the firmware's deepest path.
@@ -278,7 +369,8 @@ inline Status analyse(Run* run, IdentifiabilityOutput output) {
 /// is a property of the geometry, and a start on a special configuration (a tool point on the
 /// flange axis hides theta6 and couples joint 5 with it) has ranks the solution does not: so
 /// the analysis made at the start is repeated after the first accepted step, at a generic
-/// point, and that one is reported. Sets *kept_changed when it changed the kept set.
+/// point, and that one is reported. Sets *kept_changed when it changed the kept set or the
+/// prior's variance factor (either changes what the iterations converge to).
 Status move_to(Run* run, const Point& trial, bool* kept_changed) {
   run->point = trial;
   adopt_trial(*run->trial, run->current);
@@ -289,11 +381,18 @@ Status move_to(Run* run, const Point& trial, bool* kept_changed) {
   if (status == Status::ok && run->point.loss.huber_threshold_m != threshold_before_m) {
     status = accumulate(*run, run->point, run->current);  // IRLS weights for the updated scale
   }
-  if (status != Status::ok || run->reanalysed) return status;
-  const ParamMask before = run->kept;
-  run->reanalysed = true;
-  status = analyse(run, IdentifiabilityOutput::report);
-  *kept_changed = run->kept != before;
+  if (status == Status::ok && !run->reanalysed) {
+    const ParamMask before = run->kept;
+    run->reanalysed = true;
+    status = analyse(run, IdentifiabilityOutput::report);
+    *kept_changed = run->kept != before;
+    // A parameter the first step moved and this analysis drops is not determined: back to its
+    // start value (else it would stay wherever that step put it), and the sums there.
+    if (status == Status::ok && put_back(run->start_model, before & ~run->kept, &run->point.model)) {
+      status = accumulate(*run, run->point, run->current);
+    }
+  }
+  if (status == Status::ok && update_prior_variance(run)) *kept_changed = true;  // the accepted point's variance
   return status;
 }
 
@@ -310,16 +409,23 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   FullParams& step = scratch->step;
   FullParams& scaled_step = scratch->scaled_step;
   scale_kept_block(eq.jtwj, run->kept, &scratch->system, &scale);
+  add_prior_diagonal(*run, scale, &scratch->system);
+  scratch->gradient = eq.jtwr;
+  add_prior_gradient(*run, run->point, &scratch->gradient);
+  const double current_loss_m2 = eq.loss_sum_m2 + prior_cost(*run, run->point);
   *stop = true;
-  if (gradient_cosine(eq, scale, run->kept) <= options.gradient_tolerance) {
+  if (gradient_cosine(scratch->gradient, eq.weighted_squares_m2 + prior_cost(*run, run->point), scale, run->kept) <=
+      options.gradient_tolerance) {
     *termination = LmTermination::gradient;
     return false;
   }
-  if (!solve_step(scratch, eq, scale, run->kept, run->damping, &step, &scaled_step)) {
+  if (!solve_step(scratch, scale, run->kept, run->damping, &step, &scaled_step)) {
     *stop = false;
     return false;
   }
-  const double model_decrease = scaled_quadratic(eq.jtwj, scale, run->kept, scaled_step);
+  double model_decrease = scaled_quadratic(eq.jtwj, scale, run->kept, scaled_step);
+  for (int i = 0; i < model_param_count(run->point.model); ++i)
+    model_decrease += prior_weight(*run, i) * step(i) * step(i);
   if (std::sqrt(model_decrease / static_cast<double>(eq.count)) < options.step_tolerance_m) {
     *termination = LmTermination::step_size;
     return false;
@@ -334,15 +440,22 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   // Predicted decrease of sum w|r + J d|^2: d^T S d + 2 lambda |d_s|^2 (scaled units), before
   // the trial's normal equations take the scratch that holds the step.
   const double predicted = model_decrease + 2.0 * run->damping * scaled_step.squaredNorm();
+  if (predicted <= options.cost_tolerance * current_loss_m2) {
+    // Not even the model promises a change the cost-change test would count: at the optimum up
+    // to rounding (a trial there is rejected, its damping raised, again and again, a pass each).
+    *stop = true;
+    *termination = LmTermination::cost_change;
+    return false;
+  }
   run->trial = run->ws->scratch.open_trial(run->trial_targets);
   const Status status = accumulate(*run, trial, run->trial);
-  const double actual = eq.loss_sum_m2 - run->trial->loss_sum_m2;
+  const double actual = current_loss_m2 - (run->trial->loss_sum_m2 + prior_cost(*run, trial));
   const double gain = status == Status::ok && predicted > 0.0 ? actual / predicted : -1.0;
   if (!(gain > 0.0)) return false;
   const double cube = 2.0 * gain - 1.0;
   run->damping *= std::fmax(1.0 / 3.0, 1.0 - cube * cube * cube);
   run->growth = 2.0;
-  const bool small_change = actual <= options.cost_tolerance * eq.loss_sum_m2;
+  const bool small_change = actual <= options.cost_tolerance * current_loss_m2;
   bool kept_changed = false;
   if (move_to(run, trial, &kept_changed) != Status::ok) {
     *stop = true;  // cannot happen: the same point evaluated finite a moment ago
@@ -398,7 +511,9 @@ Status start(const RigidTransform* start_base_to_tracker, Run* run) {
   if (status == Status::ok) status = accumulate(*run, point, run->current);
   if (status != Status::ok) return status;
   // The kept set only: the analysis after the first accepted step reports (complete_report).
-  return analyse(run, IdentifiabilityOutput::kept_set);
+  status = analyse(run, IdentifiabilityOutput::kept_set);
+  if (status == Status::ok) update_prior_variance(run);
+  return status;
 }
 
 /// A run that never accepted a step still has the start's analysis, made for its kept set:
@@ -418,7 +533,7 @@ Status complete_report(Run* run) {
   if (status == Status::ok) status = analyse(run, IdentifiabilityOutput::report);
   run->reanalysed = true;
   if (status != Status::ok) return status;
-  return parameter_sigmas(run->ws, *run->current, run->kept, run->result);
+  return parameter_sigmas(*run, *run->current, run->kept, run->result);
 }
 
 Status status_of(LmTermination termination) {
@@ -461,6 +576,23 @@ const char* lm_termination_name(LmTermination termination) {
   return "cancelled";
 }
 
+double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int index) {
+  if (index < 0 || index >= model_param_count(joint_count)) return 0.0;
+  if (index >= kParamsPerJoint * joint_count) return tolerance.tool_m;
+  const int field = index % kParamsPerJoint;
+  const bool angle = field == static_cast<int>(DhField::theta_offset) || field == static_cast<int>(DhField::alpha);
+  return angle ? tolerance.dh_angle_rad : tolerance.dh_length_m;
+}
+
+double lm_prior_sigma(const LmPrior& prior, int index) {
+  return prior.nominal == nullptr ? 0.0 : prior_tolerance(prior.tolerance, prior.nominal->joint_count, index);
+}
+
+LmPrior lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerance) {
+  const bool any = tolerance.dh_length_m > 0.0 || tolerance.dh_angle_rad > 0.0 || tolerance.tool_m > 0.0;
+  return any ? LmPrior{&nominal, tolerance} : LmPrior{};
+}
+
 ParamMask lm_param_mask(LmParamSet set, ParamMask custom, const RobotModel& start) {
   switch (set) {
     case LmParamSet::full: return rigid_params_mask(start);
@@ -491,7 +623,8 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   const double joint_noise_ratio =
       options.joint_sigma_rad > 0.0 ? options.joint_sigma_rad / options.position_sigma_m : 0.0;
   workspace->point = Point{start_model, RigidTransform{}, PointLoss{0.0, joint_noise_ratio}};
-  Run run{options,
+  Run run{start_model,
+          options,
           samples,
           workspace,
           result,
@@ -504,7 +637,8 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
           workspace->target_blocks.subspan(blocks, blocks),
           options.initial_damping,
           2.0,
-          false};
+          false,
+          0.0};
   status = start(start_base_to_tracker, &run);
   if (status != Status::ok) return status;
   if (trace != nullptr) trace->push(rms_of(run.current->squares_sum_m2, samples.size()));
@@ -516,7 +650,8 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   result->loss_sum_m2 = run.current->loss_sum_m2;
   result->rms_m = rms_of(run.current->squares_sum_m2, samples.size());
   result->huber_threshold_m = run.point.loss.huber_threshold_m;
-  status = parameter_sigmas(workspace, *run.current, run.kept, result);
+  result->prior_chi_square = run.prior_variance_m2 > 0.0 ? prior_cost(run, run.point) / run.prior_variance_m2 : 0.0;
+  status = parameter_sigmas(run, *run.current, run.kept, result);
   if (status == Status::singular_system) status = reanalyse_at_end(&run);
   if (status != Status::ok) return status;
   return status_of(result->termination);

@@ -18,10 +18,44 @@ Vec3 point_residual(const RobotModel& model, const ModelTrig& trig, const RigidT
 /// The basis of each compliance term at a sample's readings [m] or [kg m].
 using TermBasis = double[kMaxComplianceTerms];
 
+/// A deflection below this is turned by the series below instead of sincos [rad].
+constexpr double kSmallDeflection_rad = 1.0 / 64.0;
+
+/// sin and cos of a small angle |x| <= kSmallDeflection_rad by their Taylor series (the first
+/// term left out is below 2e-22 there): the same operations on every target.
+void small_sincos(double x, double* sin_x, double* cos_x) {
+  const double x2 = x * x;
+  *sin_x = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
+  *cos_x = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+}
+
 /// For a model with compliance terms: the joint trig of a sample's deflected pose (where the
-/// kernel differentiates; the bits of fk_tool_point's deflected readings) and its basis.
-JointTrig deflected_trig(const RobotModel& model, const JointVector& q_rad, TermBasis* basis) {
-  return joint_trig(model, q_rad + compliance_deflection(model, q_rad, *basis));
+/// kernel differentiates) from the readings' joint trig `reading` and the deflection dq: the
+/// angle sums with sin and cos of dq (a series for a small one; a reading without a term keeps
+/// its bits; a prismatic joint's slide moved by dq), and the terms' basis (whose harmonics use
+/// `reading` too). No sincos per sample when `reading` is stored; `reading` is joint_trig(q)
+/// either way, so the bits are the same.
+JointTrig deflected_trig(const RobotModel& model, const JointVector& q_rad, const JointTrig& reading,
+                         TermBasis* basis) {
+  const JointVector dq = compliance_deflection(model, q_rad, *basis, &reading);
+  JointTrig trig = reading;
+  for (int j = 0; j < model.joint_count; ++j) {
+    if (dq(j) == 0.0) continue;
+    if (joint_type(model, j) == JointType::prismatic) {
+      trig.slide_m[j] = reading.slide_m[j] + dq(j);  // the bits of joint_trig(q + dq)
+      continue;
+    }
+    double sin_dq = 0.0;
+    double cos_dq = 1.0;
+    if (std::fabs(dq(j)) <= kSmallDeflection_rad) {
+      small_sincos(dq(j), &sin_dq, &cos_dq);
+    } else {
+      math::sincos(dq(j), &sin_dq, &cos_dq);
+    }
+    trig.sin_q[j] = reading.sin_q[j] * cos_dq + reading.cos_q[j] * sin_dq;
+    trig.cos_q[j] = reading.cos_q[j] * cos_dq - reading.sin_q[j] * sin_dq;
+  }
+  return trig;
 }
 
 /// The columns a model of `model`'s joint count has: its rigid parameters and the build's joint
@@ -440,8 +474,8 @@ Vec3 local_target_residual_jacobian(const RobotModel& model, SampleRowsContext& 
   const Sample* const samples[1] = {&sample};
   const bool compliant = model.compliance.term_count > 0;
   if (context.pose == nullptr || context.pose->q_rad != sample.q_rad) {
-    context.pose_trig =
-        compliant ? deflected_trig(model, sample.q_rad, &context.pose_basis) : joint_trig(model, sample.q_rad);
+    context.pose_trig = joint_trig(model, sample.q_rad);
+    if (compliant) context.pose_trig = deflected_trig(model, sample.q_rad, context.pose_trig, &context.pose_basis);
     context.pose = &sample;
   }
   const JointTrig* const trig_of[1] = {&context.pose_trig};
@@ -526,8 +560,10 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
   for (int k = 0; k < count; ++k) {
     const std::size_t i = first + static_cast<std::size_t>(k);
     group[k] = &samples[i];
-    if (compliant) {  // the stored trig is of the readings, not of the deflected pose
-      computed[k] = deflected_trig(model, samples[i].q_rad, &basis[k]);
+    if (compliant) {  // the stored trig is of the readings: turned by the deflection
+      computed[k] =
+          deflected_trig(model, samples[i].q_rad,
+                         stored_trig.empty() ? joint_trig(model, samples[i].q_rad) : stored_trig[i], &basis[k]);
     } else if (stored_trig.empty()) {
       computed[k] = joint_trig(model, samples[i].q_rad);
     }

@@ -20,11 +20,16 @@ Status accumulate_kept(const RobotModel& model, const RigidTransform& base_to_tr
 
 /// The inverse of the Jacobi-scaled kept block of scratch->equations into *scaled_inverse,
 /// (S A S)^-1 with S = *scale: A^-1 = S (S A S)^-1 S over the kept parameters.
-Status scaled_kept_inverse(ParamMask kept, CorrelationScratch* scratch, NormalMatrix* scaled_inverse,
-                           FullParams* scale) {
+/// With `prior_weights` (the prior's P, diagonal [m^2/unit^2]), (S (A + P) S)^-1.
+Status scaled_kept_inverse(ParamMask kept, CorrelationScratch* scratch, NormalMatrix* scaled_inverse, FullParams* scale,
+                           const FullParams* prior_weights = nullptr) {
   // Unit diagonal over `kept` (the factor is better conditioned), factored over the kept
   // parameters only: the same pivots whatever the build's capacity for joint terms.
   scale_normal_matrix(scratch->equations.jtwj, kept, 1.0, &scratch->scaled, scale);
+  if (prior_weights != nullptr) {
+    for (int i = 0; i < kFullParamCount; ++i)
+      if (mask_has(kept, i)) scratch->scaled(i, i) += (*prior_weights)(i) * (*scale)(i) * (*scale)(i);
+  }
   if (!cholesky_factor(scratch->scaled, kept, &scratch->factor)) return Status::singular_system;
   cholesky_inverse(scratch->factor, &scratch->inverse_factor, scaled_inverse);
   return Status::ok;
@@ -52,7 +57,7 @@ Status parameter_correlations(const RobotModel& model, const RigidTransform& bas
 
 Status parameter_covariance(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
                             const PointLoss& loss, ParamMask kept, CorrelationScratch* scratch,
-                            NormalMatrix* covariance, int* residual_dof) {
+                            NormalMatrix* covariance, int* residual_dof, const LmPrior& prior) {
   if (scratch == nullptr || covariance == nullptr) return Status::invalid_argument;
   const Status accumulated = accumulate_kept(model, base_to_tracker, samples, loss, kept, scratch);
   if (accumulated != Status::ok) return accumulated;
@@ -61,10 +66,16 @@ Status parameter_covariance(const RobotModel& model, const RigidTransform& base_
   for (const TargetBlock& block : eq.targets) eliminated += block.count > 0 ? 3 : 0;
   const int dof = 3 * static_cast<int>(eq.count) - mask_count(kept) - eliminated;
   if (dof <= 0) return Status::too_few_samples;
-  FullParams scale;
-  const Status inverted = scaled_kept_inverse(kept, scratch, covariance, &scale);
-  if (inverted != Status::ok) return inverted;
   const double variance_m2 = eq.weighted_squares_m2 / static_cast<double>(dof);
+  // The prior's pseudo-observations weigh as in LM: variance factor / tolerance^2.
+  FullParams prior_weights = FullParams::Zero();
+  for (int i = 0; i < kFullParamCount; ++i) {
+    const double sigma = lm_prior_sigma(prior, i);
+    if (sigma > 0.0) prior_weights(i) = variance_m2 / (sigma * sigma);
+  }
+  FullParams scale;
+  const Status inverted = scaled_kept_inverse(kept, scratch, covariance, &scale, &prior_weights);
+  if (inverted != Status::ok) return inverted;
   for (int i = 0; i < kFullParamCount; ++i) {
     for (int j = 0; j < kFullParamCount; ++j) {
       const bool both = mask_has(kept, i) && mask_has(kept, j);

@@ -582,10 +582,13 @@ TEST(CalibrationBlunders, TestPosesThatAFewPosesCannotPredictAreNotBlunders) {
   // shrink the next run's set, whose own test poses fail in turn (8 poses of the UR10 export
   // went down to 2 training poses, and the base frame could not be fitted; here the runs did
   // not agree in 5). More failing test poses than max_blunder_share are the model's error:
-  // none is set aside, in the first run.
+  // none is set aside, in the first run. Plain least squares: with the default prior the fit
+  // of 6 poses stays near the nominal model where they do not determine it and predicts its
+  // test poses (the verdict is clean).
   fill_with_model_error(8, 41, &dataset);
   CalibrationOptions o = options(CalibrationMethod::lm);
   o.train_fraction = 0.7;
+  o.prior = LmPriorTolerances{};
   ASSERT_EQ(calibrate(start(), &dataset, o, &workspace, &result), Status::ok) << calibration_step_name(result.step);
   EXPECT_EQ(result.blunder_verdict, BlunderVerdict::prediction_error);
   EXPECT_EQ(result.outlier_count, 0u);

@@ -436,5 +436,43 @@ TEST(Dataset, ReadingsFitAJointCountWhenTheJointsBeyondItAreZero) {
   EXPECT_TRUE(readings_fit_joint_count(Span<const Sample>(), 1));
 }
 
+/// Reverses the first `count` samples by exchanges, as a caller that reorders does.
+void reverse_first(DatasetBase* dataset, std::size_t count) {
+  for (std::size_t i = 0; i < count / 2; ++i) dataset->swap_samples(i, count - 1 - i);
+}
+
+TEST(Dataset, RestoreSplitMakesTheLastSplitsOrderAgain) {
+  static Dataset<64> dataset;
+  dataset.clear();
+  for (int i = 0; i < 60; ++i) {  // poses of two samples (two targets) and of one
+    const int target = i % 3 == 1 ? 1 : 0;
+    const int pose = i - (target == 1 ? 1 : 0);
+    ASSERT_EQ(dataset.add(JointVector::Constant(pose), Vec3::Constant(i), target), Status::ok);
+  }
+  reverse_first(&dataset, dataset.size());  // no split yet: back in the order of add()
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = dataset.restore_split());
+  EXPECT_EQ(status, Status::ok);
+  for (std::size_t i = 0; i < dataset.size(); ++i) EXPECT_EQ(dataset.samples()[i].index, i);
+  ASSERT_EQ(dataset.split(0.7, 9), Status::ok);
+  const auto split = order_of(dataset);
+  const std::size_t train = dataset.train().size();
+  reverse_first(&dataset, train);
+  ASSERT_NE(order_of(dataset), split);
+  EXPECT_NO_HEAP(status = dataset.restore_split());
+  EXPECT_EQ(status, Status::ok);
+  EXPECT_EQ(order_of(dataset), split);
+  EXPECT_EQ(dataset.train().size(), train);
+  ASSERT_EQ(dataset.split_fold(2, 5, 4), Status::ok);
+  const auto fold = order_of(dataset);
+  reverse_first(&dataset, dataset.train().size());
+  EXPECT_EQ(dataset.restore_split(), Status::ok);
+  EXPECT_EQ(order_of(dataset), fold);
+  dataset.set_aside(Span<const std::uint32_t>());  // a set aside discards the split
+  reverse_first(&dataset, dataset.size());
+  EXPECT_EQ(dataset.restore_split(), Status::ok);
+  for (std::size_t i = 0; i < dataset.size(); ++i) EXPECT_EQ(dataset.samples()[i].index, i);
+}
+
 }  // namespace
 }  // namespace hivecal::dataset_test

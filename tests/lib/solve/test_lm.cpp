@@ -337,5 +337,29 @@ TEST(Lm, SharedScratchCarriesNothingBetweenUses) {
   EXPECT_TRUE(first.base_to_tracker.rotation == lm().result.base_to_tracker.rotation);
 }
 
+// A parameter the start's analysis keeps and the analysis after the first step drops goes back
+// to its start value: theta6 turns the tool point about joint 6's axis, which a6 = 1 mm holds
+// off at the start; the first step takes a6 to the truth's 0, where theta6 moves nothing.
+TEST(Lm, WhatTheSecondAnalysisDropsGoesBackToItsStart) {
+  RobotModel truth = nominal_model(RobotType::ur5);
+  truth.tool_m << 0.0, 0.0, 0.1;
+  RobotModel start = truth;
+  start.joints[5].a_m = 1e-3;
+  auto& s = lm();
+  s.train.clear();
+  Random random(5206);
+  test::fill_dataset(truth, test::example_base_to_tracker(), 60, 10e-6, &random, &s.train);
+  LmOptions options;
+  options.params = LmParamSet::custom;
+  options.custom_mask =
+      param_bit(model_param_index(5, DhField::theta_offset)) | param_bit(model_param_index(5, DhField::a));
+  for (int i = 0; i < kBaseParamCount; ++i) options.custom_mask |= param_bit(model_param_count(kSixJoints) + i);
+  ASSERT_EQ(calibrate_lm(start, nullptr, s.train.samples(), options, &s.workspace, &s.result), Status::ok);
+  const int theta6 = model_param_index(5, DhField::theta_offset);
+  EXPECT_FALSE(mask_has(s.result.identifiability.kept_mask, theta6));
+  EXPECT_EQ(s.result.model.joints[5].theta_offset_rad, start.joints[5].theta_offset_rad);
+  EXPECT_LT(std::fabs(s.result.model.joints[5].a_m), 1e-5);
+}
+
 }  // namespace
 }  // namespace hivecal::lm_test

@@ -22,6 +22,8 @@
 
 namespace hivecal {
 
+struct JointTrig;  // model/kinematics.hpp: sin and cos of a pose's joint readings
+
 struct RobotModel;
 enum class RobotType : int;
 
@@ -112,14 +114,18 @@ Status check_compliance(const ComplianceModel& compliance, const RobotModel& mod
 
 /// The basis of each of the model's terms at joint readings q (rigid FK of `model`), into
 /// basis[0 .. term_count - 1]; the rest 0. [m] (point), [kg m] (arm masses) or [-] (harmonics).
-void compliance_basis(const RobotModel& model, const JointVector& q_rad, double (&basis)[kMaxComplianceTerms]);
+/// A harmonic of order k is sin or cos of k q_j from sin q_j and cos q_j by the angle-sum
+/// formulas; `trig`, when given, holds them (joint_trig(q): the same bits), else they are computed.
+void compliance_basis(const RobotModel& model, const JointVector& q_rad, double (&basis)[kMaxComplianceTerms],
+                      const JointTrig* trig = nullptr);
 
 /// The joints' deflection at readings q: dq_j = sum of coefficient_t * basis_t over the terms
 /// of joint j [rad]; zero when term_count is 0.
 JointVector compliance_deflection(const RobotModel& model, const JointVector& q_rad);
-/// The same, with the basis of each term (compliance_basis) into basis[].
+/// The same, with the basis of each term (compliance_basis, `trig` the readings' joint trig or
+/// null) into basis[].
 JointVector compliance_deflection(const RobotModel& model, const JointVector& q_rad,
-                                  double (&basis)[kMaxComplianceTerms]);
+                                  double (&basis)[kMaxComplianceTerms], const JointTrig* trig = nullptr);
 
 /// The default terms of `load` for `model` (its nominal geometry) with gravity along
 /// `gravity_direction` (normalised here), into *compliance: terms, term_count, load, the unit

@@ -123,6 +123,11 @@ class DatasetBase {
   /// least min(3, train_count_for(train_fraction)) poses, at least one pose for the test).
   /// Errors: dataset_empty, invalid_argument (fraction not in (0, 1] or leaving no training sample).
   Status split(double train_fraction, std::uint64_t seed);
+  /// Puts the kept samples back in the order the last split() or split_fold() made (a
+  /// function of the kept samples and its arguments: made again), or, without one since the
+  /// last add(), set_aside() or clear(), in the order of add(): for a caller that reordered
+  /// them with swap_samples() and cannot undo each swap. Returns that call's status.
+  Status restore_split();
   /// Nominal training poses of split(train_fraction, ...): round(train_fraction * pose_count()), or
   /// 0 when the fraction is not in (0, 1]; the split keeps at least min(3, this) (a caller can
   /// check a split before a long job) [-].
@@ -149,6 +154,14 @@ class DatasetBase {
   std::size_t size_ = 0;    // kept samples (the set-aside ones follow them)
   std::size_t stored_ = 0;  // kept + set aside
   std::size_t train_count_ = 0;
+  /// The last split's arguments, for restore_split(): kind 0 none, 1 split(), 2 split_fold().
+  struct SplitArguments {
+    int kind = 0;
+    double train_fraction = 0.0;
+    std::size_t fold = 0;
+    std::size_t folds = 0;
+    std::uint64_t seed = 0;
+  } last_split_;
 
   void sort_by_index(std::size_t count);  // the first `count` samples in the order of add()
   void shuffle(std::uint64_t seed);

@@ -48,6 +48,32 @@ enum class LmTermination : std::uint8_t {
 /// Lower-case name of a termination reason ("cost_change", ...).
 const char* lm_termination_name(LmTermination termination);
 
+/// Manufacturing tolerances of the nominal model, one standard deviation per element; 0: no
+/// prior on that kind (docs/solver-lm.md, "The nominal model as a prior").
+struct LmPriorTolerances {
+  double dh_length_m = 0.0;   ///< each DH length (d, a) [m]
+  double dh_angle_rad = 0.0;  ///< each DH angle (theta offset, alpha) [rad]
+  double tool_m = 0.0;        ///< each coordinate of target 1's tool point [m]
+};
+
+/// The nominal model as a prior: each toleranced parameter is also observed at its nominal
+/// value with its tolerance (a pseudo-observation), weighed against the point residuals by the
+/// fit's own variance factor, so that a direction the data do not determine stays at nominal.
+/// No prior on the base, the joint terms or the tool points of targets 2.. .
+struct LmPrior {
+  const RobotModel* nominal = nullptr;  ///< the centre (DH and target 1's tool point); null: no prior
+  LmPriorTolerances tolerance;          ///< its tolerances [m], [rad]
+};
+
+/// The tolerance of full-model parameter `index` of a model of `joint_count` joints: of its kind
+/// for a DH element or target 1's tool point, 0 for every other parameter [m] or [rad].
+double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int index);
+/// The prior's standard deviation of full-model parameter `index`: prior_tolerance, 0 without
+/// a nominal [m] or [rad].
+double lm_prior_sigma(const LmPrior& prior, int index);
+/// The prior around `nominal` with `tolerance`; none (a null nominal) when every tolerance is 0.
+LmPrior lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerance);
+
 /// Solver settings; the defaults suit tracker data in metres.
 struct LmOptions {
   int max_iterations = 100;         ///< LM iterations, rejected steps included [-]
@@ -71,6 +97,9 @@ struct LmOptions {
   /// docs/robust.md); 0: off, ordinary least squares, the same bits [rad].
   double joint_sigma_rad = 0.0;
   double position_sigma_m = 1e-5;  ///< stated noise of the measured points, the unit joint_sigma_rad is weighed in [m]
+  /// The nominal model as a prior on the free parameters it tolerances (none by default: plain
+  /// least squares, the same bits) [-].
+  LmPrior prior;
 };
 
 /// The free-parameter mask of a parameter set (`custom` for LmParamSet::custom; `start`
@@ -113,6 +142,9 @@ struct LmResult {
   double huber_threshold_m = 0.0;  ///< Huber k used last [m]; 0 for least squares
   int iterations = 0;              ///< iterations run, rejected steps included
   int residual_dof = 0;  ///< 3N - p - the other targets' tool points: residual_sigma_m's degrees of freedom [-]
+  /// With a prior: sum over the toleranced parameters of ((p - nominal) / tolerance)^2 at the
+  /// result, the pseudo-observations' share of the cost in units of the variance factor [-].
+  double prior_chi_square = 0.0;
   LmTermination termination = LmTermination::max_iterations;  ///< why it stopped
 };
 
@@ -131,6 +163,7 @@ struct LmStepScratch {
   FullParams scale;            ///< column scale of the system [unit/-]
   FullParams step;             ///< the step in parameter units [m] or [rad]
   FullParams scaled_step;      ///< the step in scaled units [-]
+  FullParams gradient;         ///< J^T W r and the prior's share, the step's right-hand side [m^2/unit]
 };
 
 /// A point of the search: geometry, base and loss. The solver's current and trial points live

@@ -39,10 +39,13 @@ Status parameter_correlations(const RobotModel& model, const RigidTransform& bas
 /// marginal), sigma_hat^2 = sum w |r|^2 / (3 N - p - 3 per eliminated target), LM's residual
 /// variance; sqrt(C_kk) is LmResult::sigma(k) at LM's result [m^2], [m rad] or [rad^2].
 /// Entries of parameters not kept are 0. *residual_dof (optional): that 3 N - p - ... [-].
+/// With the fit's `prior`, the posterior: C = sigma_hat^2 (J^T W J + P)^-1, P = sigma_hat^2 /
+/// tolerance^2 on each toleranced parameter, as LM weighs it (a direction the data do not
+/// determine keeps about its tolerance).
 /// Errors: those of parameter_correlations, too_few_samples (no residual degree of freedom).
 Status parameter_covariance(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,
                             const PointLoss& loss, ParamMask kept, CorrelationScratch* scratch,
-                            NormalMatrix* covariance, int* residual_dof = nullptr);
+                            NormalMatrix* covariance, int* residual_dof = nullptr, const LmPrior& prior = LmPrior{});
 
 /// The parameter most correlated with parameter k among the kept ones (k itself excluded),
 /// and that correlation [-]. -1 and 0 when none is kept or every correlation is 0.
