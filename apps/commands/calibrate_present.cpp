@@ -332,7 +332,8 @@ void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* 
   for (const bool test : {false, true}) {
     for (const Sample& s : test ? dataset.test() : dataset.train()) {
       report::SampleRow row;
-      for (int j = 0; j < kSixJoints; ++j) row.q_rad[j] = s.q_rad(j);
+      row.joint_count = run.final_stage().model.joint_count;
+      for (int j = 0; j < row.joint_count; ++j) row.q_rad[j] = s.q_rad(j);
       row.measured_m = s.point_m;
       row.test = test;
       row.target = s.target;
@@ -721,7 +722,8 @@ void add_uncertainty(const CalibrateSettings& settings, const RobotModel& start,
                       calibration_estimated_mask(run->result), lm != nullptr ? lm->other_tools_sigma_m : none,
                       &run->uncertainty, &note);
   if (!note.empty()) data->info_lines.push_back(note);
-  for (const std::string& line : domain_lines(run->uncertainty)) data->info_lines.push_back(line);
+  for (const std::string& line : domain_lines(run->uncertainty, final_stage.model.joint_count))
+    data->info_lines.push_back(line);
 }
 
 std::string held_out_unit(const streams::SessionFacts& facts) {

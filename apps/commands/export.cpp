@@ -237,7 +237,8 @@ Error export_arm(const Options& options) {
   error = load_arm(options, &arm, &has_tracker, &result_text);
   if (!error.ok()) return error;
   write_rigid_chain_of_terms(format, result_text, options.get("calibration"), &arm);
-  for (const std::string& line : domain_lines(arm.uncertainty))  // what the exported model holds within
+  for (const std::string& line :
+       domain_lines(arm.uncertainty, arm.model.joint_count))  // what the exported model holds within
     std::fprintf(stderr, "hivecal export: note: %s\n", line.c_str());
   std::string text;
   if (format == "urdf") {

@@ -99,6 +99,7 @@ std::string other_arm_hint(const std::string& robot, const RobotModel& start, Sp
   RobotType given = RobotType::ur5;
   if (robot_type_from_name(robot.c_str(), &given) != Status::ok) return "";
   const RobotModel nominal = nominal_model(given);
+  if (start.joint_count != nominal.joint_count) return "";
   for (int j = 0; j < kSixJoints; ++j) {  // a description file or a controller's calibration: not the table
     const DhJoint& a = nominal.joints[j];
     const DhJoint& b = start.joints[j];

@@ -35,7 +35,7 @@ std::vector<Sample> training_samples(const std::string& calibration_text) {
   std::vector<Sample> samples;
   for (const report::SampleRow& row : record::report_training_samples(calibration_text, "")) {
     Sample s;
-    for (int j = 0; j < kSixJoints; ++j) s.q_rad(j) = row.q_rad[j];
+    for (int j = 0; j < row.joint_count; ++j) s.q_rad(j) = row.q_rad[j];
     s.point_m = row.measured_m;
     s.target = row.target;
     samples.push_back(s);

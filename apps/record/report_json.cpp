@@ -288,8 +288,11 @@ bool get_samples(const JsonValue* v, std::vector<SampleRow>* out) {
   for (const JsonValue& s : v->array) {
     SampleRow row;
     double xyz[3];
-    if (!get_numbers(s.find("q_rad"), 6, row.q_rad) || !get_numbers(s.find("measured_m"), 3, xyz) ||
-        !get_bool(s.find("test"), &row.test)) {
+    const JsonValue* joints = s.find("q_rad");  // one per joint of the arm
+    row.joint_count = is_array(joints) ? static_cast<int>(joints->array.size()) : 0;
+    if (row.joint_count < 1 || row.joint_count > kMaxJoints ||
+        !get_numbers(joints, static_cast<std::size_t>(row.joint_count), row.q_rad) ||
+        !get_numbers(s.find("measured_m"), 3, xyz) || !get_bool(s.find("test"), &row.test)) {
       return false;
     }
     row.measured_m = Vec3(xyz[0], xyz[1], xyz[2]);
@@ -525,7 +528,7 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
   json.key("samples").begin_array();
   for (const SampleRow& s : data.samples) {
     json.begin_object();
-    json.key("q_rad").inline_array(s.q_rad, 6);
+    json.key("q_rad").inline_array(s.q_rad, static_cast<std::size_t>(s.joint_count));
     json.key("measured_m").inline_array(s.measured_m.data(), 3);
     json.key("test").value(s.test);
     if (s.target != 0) json.key("target").value(static_cast<long long>(s.target));

@@ -70,6 +70,16 @@ TEST(JointCountCli, SevenJointSamplesCalibrateAndAreNeverCutToSix) {
   ASSERT_TRUE(record::read_calibration_json(result, &calibrated).ok());
   EXPECT_EQ(calibrated.model.joint_count, 7);
   EXPECT_LT(fresh_mae_m(calibrated, truth, base), 5e-5);
+  // The report's samples carry the seven joints, its domain names q7's range, and `report` reads
+  // the result back.
+  const textio::JsonValue root = test::read_json_file(result);
+  const textio::JsonValue* report = root.find("report");
+  ASSERT_NE(report, nullptr);
+  EXPECT_EQ(report->find("samples")->array[0].find("q_rad")->array.size(), 7u);
+  std::string info_lines;
+  for (const textio::JsonValue& line : report->find("info")->array) info_lines += line.string + "\n";
+  EXPECT_NE(info_lines.find(", q7 "), std::string::npos) << info_lines;
+  EXPECT_EQ(test::run(cli::report_main, {"--calibration", result, "--out", dir.path() + "/report"}), cli::kExitOk);
 
   // predict reads q1..q7 poses and gives the true points.
   Random fresh(7);
