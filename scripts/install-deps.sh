@@ -8,6 +8,7 @@ packages=(
   clang libclang-rt-14-dev                                # libFuzzer targets (decoder, log readers)
   clang-format                                            # the code's style, checked in CTest (code.format)
   libsqlite3-dev                                          # ROS 2 bags (rosbag2 sqlite3 storage)
+  liborocos-kdl-dev libkdl-parser-dev                     # the exported URDF read by ROS's own libraries (tests/kdl)
   qemu-user qemu-system-arm                               # running cross-built tests
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf            # Linux ARM edge controllers
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib  # Cortex-M
