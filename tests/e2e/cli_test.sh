@@ -622,9 +622,9 @@ if "${run[@]}" calibrate --samples "$hostile_csv" --method lm --split 1 --out "$
    grep -qF "validation on $work/pa\x1b]0;evil\x07ired.csv: " "$work/hn.txt" &&
    grep -qF "<li>input: $work/pa\x1b]0;evil\x07ired.csv (" "$work/hn_report/index.html"; then pass; else
   fail "a samples file named with control bytes: $(od -c "$work/hn.txt" | head -5)"; fi
-printf '<robot name="r">\n<joint name="j" type="prismatic"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/slider.urdf"
-expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- predict --robot-model "$work/slider.urdf" --joints "$work/joints.csv"
-expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- check-robot "$work/slider.urdf"
+printf '<robot name="r">\n<joint name="j" type="floating"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/free.urdf"
+expect 3 "free.urdf:2: joint 'j' is 'floating' (a free body" -- predict --robot-model "$work/free.urdf" --joints "$work/joints.csv"
+expect 3 "free.urdf:2: joint 'j' is 'floating' (a free body" -- check-robot "$work/free.urdf"
 expect 2 "give either --calibration (a result) or --robot-model" -- export --calibration "$work/model.json" --robot-model ur5
 expect 2 "--format must be urdf, ur-kinematics or robot-json, not 'sdf'" -- export --robot-model ur5 --format sdf
 expect 2 "is the same file as the input --calibration" -- export --calibration "$work/model.json" --out "$work/model.json"
