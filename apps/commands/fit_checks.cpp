@@ -99,8 +99,8 @@ std::string other_arm_hint(const std::string& robot, const RobotModel& start, Sp
   RobotType given = RobotType::ur5;
   if (robot_type_from_name(robot.c_str(), &given) != Status::ok) return "";
   const RobotModel nominal = nominal_model(given);
-  if (start.joint_count != nominal.joint_count) return "";
-  for (int j = 0; j < kSixJoints; ++j) {  // a description file or a controller's calibration: not the table
+  if (nominal.joint_count != start.joint_count) return "";
+  for (int j = 0; j < nominal.joint_count; ++j) {  // a description file or a controller's calibration: not the table
     const DhJoint& a = nominal.joints[j];
     const DhJoint& b = start.joints[j];
     if (a.theta_offset_rad != b.theta_offset_rad || a.d_m != b.d_m || a.a_m != b.a_m || a.alpha_rad != b.alpha_rad)
@@ -111,10 +111,9 @@ std::string other_arm_hint(const std::string& robot, const RobotModel& start, Sp
   const double given_mae_m = baseline_mae_m(start, train, workspace.get(), fit.get());
   RobotType best = given;
   double best_mae_m = given_mae_m;
-  for (const RobotType other : {RobotType::ur3, RobotType::ur5, RobotType::ur10, RobotType::ur3e, RobotType::ur5e,
-                                RobotType::ur10e, RobotType::ur16e}) {
-    if (other == given) continue;
+  for (const RobotType other : builtin_robot_types()) {  // the arms of as many joints as the one given
     RobotModel model = nominal_model(other);
+    if (other == given || model.joint_count != nominal.joint_count) continue;
     model.tool_m = start.tool_m;  // the same tool points to start from
     for (int k = 0; k < kMaxTargets - 1; ++k) model.other_tools_m[k] = start.other_tools_m[k];
     const double mae_m = baseline_mae_m(model, train, workspace.get(), fit.get());

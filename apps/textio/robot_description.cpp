@@ -607,6 +607,10 @@ port::Error robot_description_from_value(const std::string& value, RobotDescript
   RobotDescription builtin;
   builtin.robot = robot_type_name(type);
   builtin.model = nominal_model(type);
+  builtin.convention = nominal_convention(type, &builtin.modified_base);  // the maker's (Franka: modified)
+  // The seven-axis arms' published limits travel with the description (plan, result.json, URDF);
+  // UR's +-360 deg joints carry none, as before.
+  builtin.has_joint_limits = maker_joint_limits(type, &builtin.lower_rad, &builtin.upper_rad) == Status::ok;
   *description = builtin;
   return port::Error{};
 }

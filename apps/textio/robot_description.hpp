@@ -59,10 +59,10 @@ port::Error parse_robot_description(const std::string& text, const std::string& 
 /// Reads and parses a robot description file; without "robot" the arm is named after the
 /// file ("irb120" for .../irb120.json).
 port::Error read_robot_description(const std::string& path, RobotDescription* description);
-/// `--robot-model VALUE`: a built-in table name (ur5, ...; tool at the flange; it wins over a
-/// file or folder of that name, which `./ur5` names) or a file (an existing path, or a name
-/// ending in .json or .urdf). Usage-style errors name the value. *from_file
-/// (optional) says which it was.
+/// `--robot-model VALUE`: a built-in table name (ur5, iiwa14, ...; tool at the flange; in the
+/// maker's convention, with the maker's joint limits where published; it wins over a file or
+/// folder of that name, which `./ur5` names) or a file (an existing path, or a name ending in
+/// .json or .urdf). Usage-style errors name the value. *from_file (optional) says which it was.
 port::Error robot_description_from_value(const std::string& value, RobotDescription* description,
                                          bool* from_file = nullptr);
 

@@ -2,6 +2,7 @@
 
 #include "hivecal/core/math.hpp"
 #include "model/kinematics_detail.hpp"
+#include "model/seven_axis_arms.hpp"
 
 namespace hivecal {
 namespace {
@@ -64,10 +65,19 @@ const NominalTable& table_of(RobotType type) {
     case RobotType::ur3e: return kUr3e;
     case RobotType::ur10e: return kUr10e;
     case RobotType::ur16e: return kUr16e;
-    case RobotType::ur5: break;
+    case RobotType::ur5:
+    default: break;  // the seven-axis arms are seven_axis_arms.cpp's
   }
   return kUr5;
 }
+
+constexpr RobotType kBuiltinTypes[] = {RobotType::ur3,    RobotType::ur5,   RobotType::ur10,  RobotType::ur3e,
+                                       RobotType::ur5e,   RobotType::ur10e, RobotType::ur16e,
+#if HIVECAL_MAX_JOINTS >= 7
+                                       RobotType::iiwa14, RobotType::panda, RobotType::fr3,   RobotType::gen3,
+                                       RobotType::wam
+#endif
+};
 
 bool names_equal(const char* a, const char* b) {
   while (*a != '\0' && *a == *b) {
@@ -103,9 +113,14 @@ void set_model_params(const ModelParams& p, RobotModel* model) {
   for (int axis = 0; axis < 3; ++axis) model->tool_m(axis) = p(tool_param_index(*model, axis));
 }
 
+Span<const RobotType> builtin_robot_types() {
+  return Span<const RobotType>(kBuiltinTypes, sizeof kBuiltinTypes / sizeof kBuiltinTypes[0]);
+}
+
 RobotModel nominal_model(RobotType type) {
-  const NominalTable& table = table_of(type);
   RobotModel model;
+  if (detail::seven_axis_model(type, &model)) return model;
+  const NominalTable& table = table_of(type);
   model.joint_count = kSixJoints;
   for (int j = 0; j < kSixJoints; ++j) {
     model.joints[j] = DhJoint{0.0, table.d_m[j], table.a_m[j], kUrAlpha_rad[j]};
@@ -114,6 +129,7 @@ RobotModel nominal_model(RobotType type) {
 }
 
 const char* robot_type_name(RobotType type) {
+  if (const char* name = detail::seven_axis_name(type); name != nullptr) return name;
   switch (type) {
     case RobotType::ur3: return "ur3";
     case RobotType::ur10: return "ur10";
@@ -121,20 +137,23 @@ const char* robot_type_name(RobotType type) {
     case RobotType::ur3e: return "ur3e";
     case RobotType::ur10e: return "ur10e";
     case RobotType::ur16e: return "ur16e";
-    case RobotType::ur5: break;
+    case RobotType::ur5:
+    default: break;
   }
   return "ur5";
 }
 
 const char* robot_type_names() {
+#if HIVECAL_MAX_JOINTS >= 7
+  return "ur3, ur5, ur10, ur3e, ur5e, ur10e, ur16e, iiwa14, panda, fr3, gen3, wam";
+#else
   return "ur3, ur5, ur10, ur3e, ur5e, ur10e, ur16e";
+#endif
 }
 
 Status robot_type_from_name(const char* name, RobotType* type) {
-  constexpr RobotType kAll[] = {RobotType::ur3,  RobotType::ur5,   RobotType::ur10, RobotType::ur3e,
-                                RobotType::ur5e, RobotType::ur10e, RobotType::ur16e};
   if (name == nullptr) return Status::invalid_argument;
-  for (RobotType candidate : kAll) {
+  for (RobotType candidate : kBuiltinTypes) {
     if (names_equal(name, robot_type_name(candidate))) {
       *type = candidate;
       return Status::ok;

@@ -557,8 +557,9 @@ const char* plan_criterion_name(PlanCriterion criterion) {
 }
 
 JointLimits default_joint_limits(RobotType type) {
-  (void)type;  // every built-in UR type has the same controller limits
   JointLimits limits;
+  if (maker_joint_limits(type, &limits.lower_rad, &limits.upper_rad) == Status::ok) return limits;
+  // every built-in UR type has the same controller limits
   limits.lower_rad(2) = -math::kPi;
   limits.upper_rad(2) = math::kPi;
   return limits;

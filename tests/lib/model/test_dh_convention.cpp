@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <cstring>
+#include <string>
 
 #include "hivecal/core/random.hpp"
 #include "hivecal/model/dh_convention.hpp"
@@ -203,6 +204,41 @@ TEST(RobotTables, EverySeriesByNameWithUniversalRobotsLengths) {
   RobotType type = RobotType::ur5;
   EXPECT_EQ(robot_type_from_name("ur20", &type), Status::invalid_argument);
 }
+
+TEST(RobotTables, EachBuiltinTypeInItsMakersConvention) {
+  for (const RobotType type : builtin_robot_types()) {
+    ModifiedDhBase base{1.0, 1.0};
+    DhConvention convention = DhConvention::standard;
+    EXPECT_NO_HEAP(convention = nominal_convention(type, &base));
+    const std::string name = robot_type_name(type);
+    const bool franka = name == "panda" || name == "fr3";
+    EXPECT_EQ(convention, franka || name == "gen3" ? DhConvention::modified : DhConvention::standard) << name;
+    EXPECT_EQ(base.a0_m, 0.0) << name;
+    EXPECT_EQ(base.alpha0_rad, name == "gen3" ? math::kPi : 0.0) << name;  // Kinova's base to frame 0
+  }
+}
+
+#if HIVECAL_MAX_JOINTS >= 7
+TEST(RobotTables, FrankasRowsComeBackAsFrankaPublishesThem) {
+  // frankaemika.github.io/docs/control_parameters.html: (a, d, alpha) of joints 1 .. 7, the
+  // flange's d 0.107 on joint 7's row (Tz after Rz(q7) Tz(0): the same frame).
+  const double h = math::kHalfPi;
+  const ModifiedDhRow published[7] = {{0.0, 0.0, 0.0, 0.333}, {-h, 0.0, 0.0, 0.0},       {h, 0.0, 0.0, 0.316},
+                                      {h, 0.0825, 0.0, 0.0},  {-h, -0.0825, 0.0, 0.384}, {h, 0.0, 0.0, 0.0},
+                                      {h, 0.088, 0.0, 0.107}};
+  for (const RobotType type : {RobotType::panda, RobotType::fr3}) {
+    ModifiedDhBase base;
+    ASSERT_EQ(nominal_convention(type, &base), DhConvention::modified);
+    ModifiedDhRow rows[kMaxJoints];
+    Vec3 tool_m = Vec3::Ones();
+    ASSERT_EQ(modified_dh_from_model(nominal_model(type), base, rows, &tool_m), 7);
+    for (int j = 0; j < 7; ++j) {
+      EXPECT_EQ(std::memcmp(&rows[j], &published[j], sizeof published[j]), 0) << "row " << j + 1;
+    }
+    EXPECT_EQ(tool_m, Vec3::Zero());
+  }
+}
+#endif
 
 }  // namespace
 }  // namespace hivecal::dh_convention_test

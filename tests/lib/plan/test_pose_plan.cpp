@@ -374,5 +374,27 @@ TEST(PosePlan, ASevenJointArmPlansWithinItsLimits) {
   EXPECT_EQ(plan_session(model, options, &workspace, &result), Status::invalid_argument);
 }
 
+// A built-in type's limits: UR's controller's (+-360 deg, the elbow +-180 deg); a seven-axis
+// arm's maker's, which plan keeps when the command names the arm.
+TEST(PosePlan, DefaultLimitsAreTheControllersForUrAndTheMakersForTheOthers) {
+  JointLimits limits;
+  EXPECT_NO_HEAP(limits = default_joint_limits(RobotType::ur10e));
+  EXPECT_EQ(limits.lower_rad(0), -2.0 * math::kPi);
+  EXPECT_EQ(limits.upper_rad(2), math::kPi);
+#if HIVECAL_MAX_JOINTS >= 7
+  for (const RobotType type : {RobotType::iiwa14, RobotType::panda, RobotType::fr3, RobotType::gen3, RobotType::wam}) {
+    JointVector lower;
+    JointVector upper;
+    ASSERT_EQ(maker_joint_limits(type, &lower, &upper), Status::ok);
+    EXPECT_NO_HEAP(limits = default_joint_limits(type));
+    EXPECT_EQ(limits.lower_rad, lower) << robot_type_name(type);
+    EXPECT_EQ(limits.upper_rad, upper) << robot_type_name(type);
+  }
+  limits = default_joint_limits(RobotType::wam);
+  EXPECT_EQ(limits.lower_rad(4), -4.76);  // Barrett's stops, not +-2 pi
+  EXPECT_EQ(limits.upper_rad(3), 3.1);
+#endif
+}
+
 }  // namespace
 }  // namespace hivecal::pose_plan_test

@@ -57,4 +57,12 @@ Status model_from_modified_dh(Span<const ModifiedDhRow> rows, const Vec3& tool_m
 /// the same points.
 int modified_dh_from_model(const RobotModel& model, const ModifiedDhBase& base, Span<ModifiedDhRow> rows, Vec3* tool_m);
 
+/// The convention a built-in type's table is written in, and into *base its base offset (zero
+/// for standard): standard for Universal Robots', the KUKA LBR iiwa's and the Barrett WAM's
+/// tables; modified for the Franka arms (as Franka publishes them) and for the Kinova Gen3, whose
+/// classic table turns the base by pi about x before joint 1 (alpha_0 = pi here: a fixed rotation
+/// in front of the chain has no standard-DH row). FK in the maker's base frame is
+/// base->transform() * FK(nominal_model(type)).
+DhConvention nominal_convention(RobotType type, ModifiedDhBase* base);
+
 }  // namespace hivecal

@@ -143,18 +143,46 @@ inline RobotModel with_model_params(const RobotModel& model, const ModelParams& 
   return out;
 }
 
-/// Robot types with built-in nominal tables.
-enum class RobotType : int { ur3, ur5, ur10, ur5e, ur3e, ur10e, ur16e };
+/// Robot types with built-in nominal tables: Universal Robots' six-axis arms and, in builds whose
+/// models hold seven joints (HIVECAL_MAX_JOINTS >= 7: the hosted ones), seven-axis arms from their
+/// makers' published tables (a six-joint build has no such type).
+enum class RobotType : int {
+  ur3,
+  ur5,
+  ur10,
+  ur5e,
+  ur3e,
+  ur10e,
+  ur16e,
+#if HIVECAL_MAX_JOINTS >= 7
+  iiwa14,  ///< KUKA LBR iiwa 14 R820
+  panda,   ///< Franka Emika Robot (Panda)
+  fr3,     ///< Franka Research 3: the Panda's kinematics, its own joint limits
+  gen3,    ///< Kinova Gen3 with 7 DoF (spherical wrist)
+  wam,     ///< Barrett WAM with 7 DoF
+#endif
+};
 
-/// Nominal (datasheet) geometry of a robot type (six revolute joints); the tool point is at the flange.
+/// The built-in types in the order robot_type_names() lists them (UR's first).
+Span<const RobotType> builtin_robot_types();
+/// Nominal (published) geometry of a robot type: its joint count, each joint revolute, and the
+/// tool point at the maker's flange. A table the maker writes in modified DH, or with a fixed
+/// rotation before joint 1, comes as its standard-DH chain; nominal_convention
+/// (model/dh_convention.hpp) gives the convention and the base offset in front of it.
 RobotModel nominal_model(RobotType type);
-/// The names robot_type_from_name accepts, for messages: "ur3, ur5, ur10, ur3e, ur5e, ur10e, ur16e".
+/// The names robot_type_from_name accepts, for messages: "ur3, ur5, ur10, ur3e, ur5e, ur10e,
+/// ur16e" and, in a build of seven joints or more, ", iiwa14, panda, fr3, gen3, wam".
 const char* robot_type_names();
 /// Lower-case name of a robot type ("ur5").
 const char* robot_type_name(RobotType type);
-/// Parses "ur3", "ur5", "ur10" (CB3) or "ur3e", "ur5e", "ur10e", "ur16e" (e-Series);
-/// Status::invalid_argument otherwise.
+/// Parses a name of robot_type_names() ("ur3", "ur5", "ur10" (CB3), "ur3e", "ur5e", "ur10e",
+/// "ur16e" (e-Series), "iiwa14", ...); Status::invalid_argument otherwise.
 Status robot_type_from_name(const char* name, RobotType* type);
+/// The maker's position limits of each joint of a built-in seven-axis type ([rad]; an endless
+/// joint +-2 pi, as are the entries beyond its joints): Status::ok, or invalid_argument for a UR
+/// type, whose joints turn +-360 deg (plan/pose_plan.hpp's default_joint_limits says how
+/// planning keeps them).
+Status maker_joint_limits(RobotType type, JointVector* lower_rad, JointVector* upper_rad);
 
 /// The FK functions below apply the model's compliance when it has terms: the rigid chain at
 /// q + compliance_deflection(model, q), the same deflection for every target (its load is

@@ -41,8 +41,9 @@ struct JointLimits {
   JointVector upper_rad = JointVector::Constant(2.0 * math::kPi);   ///< highest joint positions [rad] or [m]
 };
 
-/// The limits of the UR arms' controllers (every joint +/-360 deg, the elbow +/-180 deg, as in
-/// Universal Robots' ROS description), the same for every built-in type.
+/// The joint limits of a built-in type: the maker's (maker_joint_limits) for the seven-axis
+/// arms; for the UR arms their controllers' (every joint +/-360 deg, the elbow +/-180 deg, as in
+/// Universal Robots' ROS description), the same for every UR type.
 JointLimits default_joint_limits(RobotType type);
 
 /// Which way the reflector must face.
