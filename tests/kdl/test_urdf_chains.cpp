@@ -37,11 +37,6 @@ test::KdlChain chain_of(const std::string& urdf, const std::string& root, const 
   return chain;
 }
 
-/// The model's joints as KDL takes them (chain order, rad or m).
-std::vector<double> joint_values(const RobotModel& model, const JointVector& q) {
-  return std::vector<double>(q.data(), q.data() + model.joint_count);
-}
-
 /// Largest difference of two poses: the translation's [m], or a rotation entry's times 1 m.
 double pose_difference_m(const RigidTransform& a, const RigidTransform& b) {
   return std::fmax((a.translation_m - b.translation_m).norm(), (a.rotation - b.rotation).cwiseAbs().maxCoeff());
@@ -72,7 +67,7 @@ TEST(UrdfKdlChains, ExportedSevenJointArmsAreHivecalsForwardKinematicsToANanomet
     double worst_m = 0.0;
     for (int pose = 0; pose < kPoses; ++pose) {
       const JointVector q = test::many_joint_arm_joints(arm, &random);
-      const std::vector<double> values = joint_values(robot.model, q);
+      const std::vector<double> values = test::joint_values(robot.model, q);
       worst_m = std::fmax(worst_m, pose_difference_m(flange.fk(values), fk_flange(robot.model, q)));
       worst_m = std::fmax(worst_m, (tcp.fk(values).translation_m - fk_tool_point(robot.model, q)).norm());
       worst_m = std::fmax(worst_m, (tcp_2.fk(values).translation_m - fk_target_point(robot.model, q, 1)).norm());
@@ -112,7 +107,7 @@ TEST(UrdfKdlChains, AUrTenOnARailReadInIsKdlsForwardKinematicsToANanometre) {
   for (int pose = 0; pose < kPoses; ++pose) {
     JointVector q = test::many_joint_arm_joints(test::ManyJointArm::rail_ur10, &random);
     q(0) = random.uniform(test::kRailLower_m, test::kRailUpper_m);  // the fixture's whole rail
-    const std::vector<double> values = joint_values(robot.model, q);
+    const std::vector<double> values = test::joint_values(robot.model, q);
     const Vec3 kdl_m = fixture.fk(values).translation_m;
     worst_read_m = std::fmax(worst_read_m, (kdl_m - file_base.apply(fk_tool_point(robot.model, q))).norm());
     worst_exported_m = std::fmax(worst_exported_m, (kdl_m - exported.fk(values).translation_m).norm());
