@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands/commands.hpp"
+#include "commands/simulate.hpp"
 #include "hivecal/core/math.hpp"
 #include "record/result_json.hpp"
 #include "testkit/cli_run.hpp"
@@ -192,6 +193,37 @@ TEST(JointCountCli, PlanFollowsTheArmsJoints) {
                         {{{"--out", poses},
                           "ur10-on-rail's joint 1 is prismatic: its travel has no default; give \"joint_limits\" in "
                           "the description or --joint-limits FILE (a prismatic joint's row in m)"}});
+}
+
+// `simulate` of a seven-joint description writes q1..q7 logs and version-2 joint records; the
+// captures go through clock sync and extraction and calibrate to the tracker noise (10 um).
+TEST(JointCountCli, SimulatedSevenJointCapturesCalibrateToTheNoise) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  const test::TempDir dir("hivecal_joints");
+  textio::RobotDescription description;
+  description.robot = "kuka-iiwa14";
+  description.model = test::many_joint_arm_model(ManyJointArm::iiwa14);
+  const std::string arm = dir.write("iiwa14.json", textio::format_robot_description(description));
+  const std::string session = dir.path() + "/session";
+  ASSERT_EQ(test::run(sim::simulate_main, {"--robot-model", arm, "--out-dir", session, "--errors", "large",
+                                           "--compliance-urad", "0,0", "--duration-s", "300", "--waypoints", "30"}),
+            cli::kExitOk);
+  const std::string log = test::read_text_file(session + "/robot_joints.csv");
+  EXPECT_EQ(log.substr(0, log.find('\n')), "t,q1,q2,q3,q4,q5,q6,q7");
+  const std::string result = dir.path() + "/result.json";
+  ASSERT_EQ(test::run(cli::calibrate_main,
+                      {"--robot", session + "/robot.cap", "--tracker", session + "/tracker.cap", "--robot-model", arm,
+                       "--tool", "0,0,0.1", "--method", "lm", "--out", result, "--quiet"}),
+            cli::kExitOk);
+  record::CalibrationFile calibrated;
+  record::CalibrationFile truth;
+  ASSERT_TRUE(record::read_calibration_json(result, &calibrated).ok());
+  ASSERT_TRUE(record::read_calibration_json(session + "/truth.json", &truth).ok());
+  EXPECT_EQ(truth.model.joint_count, 7);
+  const textio::JsonValue root = test::read_json_file(result);
+  const double test_mae_m = root.find("metrics")->find("test")->find("mae_m")->find("3d")->number;
+  EXPECT_LT(test_mae_m, 25e-6);
+  EXPECT_LT(fresh_mae_m(calibrated, truth.model, truth.base_to_tracker), 30e-6);
 }
 
 }  // namespace
