@@ -47,6 +47,14 @@ std::string lab_export(Span<const Sample> samples) {
   return out;
 }
 
+/// The test's seven-joint arm as a description (its nominal, tool 100 mm out).
+textio::RobotDescription iiwa_description() {
+  textio::RobotDescription description;
+  description.robot = "kuka-iiwa14";
+  description.model = test::many_joint_arm_model(ManyJointArm::iiwa14);
+  return description;
+}
+
 TEST(JointCountCli, SevenJointSamplesCalibrateAndAreNeverCutToSix) {
   if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
   const test::TempDir dir("hivecal_joints");
@@ -56,10 +64,7 @@ TEST(JointCountCli, SevenJointSamplesCalibrateAndAreNeverCutToSix) {
   static Dataset<200> samples;
   samples.clear();
   test::fill_many_joint_arm(ManyJointArm::iiwa14, truth, base, 200, 1e-5, &random, &samples);
-  textio::RobotDescription description;
-  description.robot = "kuka-iiwa14";
-  description.model = test::many_joint_arm_model(ManyJointArm::iiwa14);
-  description.model.tool_m = Vec3(0.0, 0.0, 0.1);
+  const textio::RobotDescription description = iiwa_description();
   const std::string arm = dir.write("iiwa14.json", textio::format_robot_description(description));
   const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples(), 7));
 
@@ -144,9 +149,7 @@ TEST(JointCountCli, SevenJointSamplesCalibrateAndAreNeverCutToSix) {
 TEST(JointCountCli, PlanFollowsTheArmsJoints) {
   if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
   const test::TempDir dir("hivecal_joints");
-  textio::RobotDescription description;
-  description.robot = "kuka-iiwa14";
-  description.model = test::many_joint_arm_model(ManyJointArm::iiwa14);
+  textio::RobotDescription description = iiwa_description();
   description.has_joint_limits = true;
   for (int j = 0; j < 7; ++j) {
     description.lower_rad(j) = -2.0 - 0.1 * j;
@@ -200,10 +203,7 @@ TEST(JointCountCli, PlanFollowsTheArmsJoints) {
 TEST(JointCountCli, SimulatedSevenJointCapturesCalibrateToTheNoise) {
   if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
   const test::TempDir dir("hivecal_joints");
-  textio::RobotDescription description;
-  description.robot = "kuka-iiwa14";
-  description.model = test::many_joint_arm_model(ManyJointArm::iiwa14);
-  const std::string arm = dir.write("iiwa14.json", textio::format_robot_description(description));
+  const std::string arm = dir.write("iiwa14.json", textio::format_robot_description(iiwa_description()));
   const std::string session = dir.path() + "/session";
   ASSERT_EQ(test::run(sim::simulate_main, {"--robot-model", arm, "--out-dir", session, "--errors", "large",
                                            "--compliance-urad", "0,0", "--duration-s", "300", "--waypoints", "30"}),
