@@ -224,6 +224,36 @@ TEST(JointCountCli, SimulatedSevenJointCapturesCalibrateToTheNoise) {
   const double test_mae_m = root.find("metrics")->find("test")->find("mae_m")->find("3d")->number;
   EXPECT_LT(test_mae_m, 25e-6);
   EXPECT_LT(fresh_mae_m(calibrated, truth.model, truth.base_to_tracker), 30e-6);
+  // The seven-joint captures against a six-joint model: refused naming the records' fault.
+  std::string err;
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
+                                       {"--robot", session + "/robot.cap", "--tracker", session + "/tracker.cap",
+                                        "--robot-model", "ur5", "--out", dir.path() + "/ur5.json", "--quiet"},
+                                       &err),
+            cli::kExitBadInput);
+  EXPECT_NE(err.find(" robot records carry another joint count than the robot model's 6 joints (q1..q6): the joint "
+                     "states of another arm? (--robot-model names the arm)"),
+            std::string::npos)
+      << err;
+  // Its CSV logs (t,q1..q7) read as the arm's seven joints, and are refused for six.
+  const std::vector<std::string> logs = {
+      "--robot", session + "/robot_joints.csv", "--tracker", session + "/tracker.csv", "--method", "lm", "--quiet"};
+  std::vector<std::string> seven = logs;
+  for (const std::string& more : {std::string("--robot-model"), arm, std::string("--tool"), std::string("0,0,0.1"),
+                                  std::string("--out"), dir.path() + "/logs.json"})
+    seven.push_back(more);
+  ASSERT_EQ(test::run(cli::calibrate_main, seven), cli::kExitOk);
+  record::CalibrationFile from_logs;
+  ASSERT_TRUE(record::read_calibration_json(dir.path() + "/logs.json", &from_logs).ok());
+  EXPECT_LT(fresh_mae_m(from_logs, truth.model, truth.base_to_tracker), 30e-6);
+  std::vector<std::string> six = logs;
+  for (const char* more : {"--robot-model", "ur5", "--out"}) six.push_back(more);
+  six.push_back(dir.path() + "/six.json");
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main, six, &err), cli::kExitBadInput);
+  EXPECT_NE(err.find("robot_joints.csv:1: its header has joint columns q1..q7, but the robot model has 6 joints "
+                     "(q1..q6): the joints of another arm?"),
+            std::string::npos)
+      << err;
 }
 
 }  // namespace
