@@ -540,7 +540,6 @@ port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_ra
   return error;
 }
 
-/// "q1,q2,...,qN" for N joints.
 std::string joint_header(int joints) {
   std::string out;
   for (int j = 0; j < joints; ++j) out += (j == 0 ? "q" : ",q") + std::to_string(j + 1);

@@ -109,6 +109,8 @@ port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* p
 port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad,
                                   const InputUnits& units = {});
 
+/// "q1,q2,...,qN": the joint columns of an arm of N = `joints` joints.
+std::string joint_header(int joints);
 /// `q1..qN` rows (N = `joints`) with round-trip precision (the poses-to-predict format).
 std::string format_joints_csv(Span<const JointVector> poses_rad, int joints);
 /// `x,y,z` rows with round-trip precision, in metres; with `length_unit` "mm" the header is

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands/commands.hpp"
+#include "commands/simulate.hpp"
 #include "hivecal/core/math.hpp"
 #include "record/result_json.hpp"
 #include "testkit/cli_run.hpp"
@@ -46,6 +47,14 @@ std::string lab_export(Span<const Sample> samples) {
   return out;
 }
 
+/// The test's seven-joint arm as a description (its nominal, tool 100 mm out).
+textio::RobotDescription iiwa_description() {
+  textio::RobotDescription description;
+  description.robot = "kuka-iiwa14";
+  description.model = test::many_joint_arm_model(ManyJointArm::iiwa14);
+  return description;
+}
+
 TEST(JointCountCli, SevenJointSamplesCalibrateAndAreNeverCutToSix) {
   if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
   const test::TempDir dir("hivecal_joints");
@@ -55,10 +64,7 @@ TEST(JointCountCli, SevenJointSamplesCalibrateAndAreNeverCutToSix) {
   static Dataset<200> samples;
   samples.clear();
   test::fill_many_joint_arm(ManyJointArm::iiwa14, truth, base, 200, 1e-5, &random, &samples);
-  textio::RobotDescription description;
-  description.robot = "kuka-iiwa14";
-  description.model = test::many_joint_arm_model(ManyJointArm::iiwa14);
-  description.model.tool_m = Vec3(0.0, 0.0, 0.1);
+  const textio::RobotDescription description = iiwa_description();
   const std::string arm = dir.write("iiwa14.json", textio::format_robot_description(description));
   const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples(), 7));
 
@@ -143,9 +149,7 @@ TEST(JointCountCli, SevenJointSamplesCalibrateAndAreNeverCutToSix) {
 TEST(JointCountCli, PlanFollowsTheArmsJoints) {
   if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
   const test::TempDir dir("hivecal_joints");
-  textio::RobotDescription description;
-  description.robot = "kuka-iiwa14";
-  description.model = test::many_joint_arm_model(ManyJointArm::iiwa14);
+  textio::RobotDescription description = iiwa_description();
   description.has_joint_limits = true;
   for (int j = 0; j < 7; ++j) {
     description.lower_rad(j) = -2.0 - 0.1 * j;
@@ -192,6 +196,64 @@ TEST(JointCountCli, PlanFollowsTheArmsJoints) {
                         {{{"--out", poses},
                           "ur10-on-rail's joint 1 is prismatic: its travel has no default; give \"joint_limits\" in "
                           "the description or --joint-limits FILE (a prismatic joint's row in m)"}});
+}
+
+// `simulate` of a seven-joint description writes q1..q7 logs and version-2 joint records; the
+// captures go through clock sync and extraction and calibrate to the tracker noise (10 um).
+TEST(JointCountCli, SimulatedSevenJointCapturesCalibrateToTheNoise) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  const test::TempDir dir("hivecal_joints");
+  const std::string arm = dir.write("iiwa14.json", textio::format_robot_description(iiwa_description()));
+  const std::string session = dir.path() + "/session";
+  ASSERT_EQ(test::run(sim::simulate_main, {"--robot-model", arm, "--out-dir", session, "--errors", "large",
+                                           "--compliance-urad", "0,0", "--duration-s", "300", "--waypoints", "30"}),
+            cli::kExitOk);
+  const std::string log = test::read_text_file(session + "/robot_joints.csv");
+  EXPECT_EQ(log.substr(0, log.find('\n')), "t,q1,q2,q3,q4,q5,q6,q7");
+  const std::string result = dir.path() + "/result.json";
+  ASSERT_EQ(test::run(cli::calibrate_main,
+                      {"--robot", session + "/robot.cap", "--tracker", session + "/tracker.cap", "--robot-model", arm,
+                       "--tool", "0,0,0.1", "--method", "lm", "--out", result, "--quiet"}),
+            cli::kExitOk);
+  record::CalibrationFile calibrated;
+  record::CalibrationFile truth;
+  ASSERT_TRUE(record::read_calibration_json(result, &calibrated).ok());
+  ASSERT_TRUE(record::read_calibration_json(session + "/truth.json", &truth).ok());
+  EXPECT_EQ(truth.model.joint_count, 7);
+  const textio::JsonValue root = test::read_json_file(result);
+  const double test_mae_m = root.find("metrics")->find("test")->find("mae_m")->find("3d")->number;
+  EXPECT_LT(test_mae_m, 25e-6);
+  EXPECT_LT(fresh_mae_m(calibrated, truth.model, truth.base_to_tracker), 30e-6);
+  // The seven-joint captures against a six-joint model: refused naming the records' fault.
+  std::string err;
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main,
+                                       {"--robot", session + "/robot.cap", "--tracker", session + "/tracker.cap",
+                                        "--robot-model", "ur5", "--out", dir.path() + "/ur5.json", "--quiet"},
+                                       &err),
+            cli::kExitBadInput);
+  EXPECT_NE(err.find(" robot records carry another joint count than the robot model's 6 joints (q1..q6): the joint "
+                     "states of another arm? (--robot-model names the arm)"),
+            std::string::npos)
+      << err;
+  // Its CSV logs (t,q1..q7) read as the arm's seven joints, and are refused for six.
+  const std::vector<std::string> logs = {
+      "--robot", session + "/robot_joints.csv", "--tracker", session + "/tracker.csv", "--method", "lm", "--quiet"};
+  std::vector<std::string> seven = logs;
+  for (const std::string& more : {std::string("--robot-model"), arm, std::string("--tool"), std::string("0,0,0.1"),
+                                  std::string("--out"), dir.path() + "/logs.json"})
+    seven.push_back(more);
+  ASSERT_EQ(test::run(cli::calibrate_main, seven), cli::kExitOk);
+  record::CalibrationFile from_logs;
+  ASSERT_TRUE(record::read_calibration_json(dir.path() + "/logs.json", &from_logs).ok());
+  EXPECT_LT(fresh_mae_m(from_logs, truth.model, truth.base_to_tracker), 30e-6);
+  std::vector<std::string> six = logs;
+  for (const char* more : {"--robot-model", "ur5", "--out"}) six.push_back(more);
+  six.push_back(dir.path() + "/six.json");
+  EXPECT_EQ(test::run_capturing_stderr(cli::calibrate_main, six, &err), cli::kExitBadInput);
+  EXPECT_NE(err.find("robot_joints.csv:1: its header has joint columns q1..q7, but the robot model has 6 joints "
+                     "(q1..q6): the joints of another arm?"),
+            std::string::npos)
+      << err;
 }
 
 }  // namespace
