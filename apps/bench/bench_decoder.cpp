@@ -59,7 +59,7 @@ void make_robot_capture(Capture* capture) {
              device_info(DeviceKind::robot, 125.0f, "ur5-sim", next_sequence(*capture), 8000 * i));
     record.sequence = next_sequence(*capture);
     record.timestamp_us = 8000 * i;
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       record.q_rad[j] = random.uniform(-3.0, 3.0);
       record.qd_rad_s[j] = random.uniform(-1.0, 1.0);
       record.current_a[j] = static_cast<float>(random.uniform(-2.0, 2.0));

@@ -49,8 +49,8 @@ bool parse_estimated(const char* list, hivecal::ParamMask* mask) {
     const std::size_t end = std::min(names.find(',', begin), names.size());
     const std::string name = names.substr(begin, end - begin);
     int found = -1;
-    for (int k = 0; k < hivecal::kRigidParamCount; ++k) {
-      if (name == hivecal::full_param_name(k)) found = k;
+    for (int k = 0; k < hivecal::rigid_param_count(hivecal::kSixJoints); ++k) {
+      if (name == hivecal::full_param_name(k, hivecal::kSixJoints)) found = k;
     }
     if (found < 0) return false;
     *mask |= hivecal::param_bit(found);
@@ -62,10 +62,10 @@ bool parse_estimated(const char* list, hivecal::ParamMask* mask) {
 void write_result(std::FILE* out, const hivecal::RobotModel& model, const hivecal::RigidTransform& base) {
   std::fprintf(out, "{\n  \"format\": \"robot-calibration/1\",\n  \"robot\": \"ur5\",\n");
   std::fprintf(out, "  \"convention\": \"standard-dh\",\n  \"dh\": [\n");
-  for (int j = 0; j < hivecal::kJointCount; ++j) {
+  for (int j = 0; j < hivecal::kSixJoints; ++j) {
     const hivecal::DhJoint& dh = model.joints[j];
     std::fprintf(out, "    {\"theta_offset\": %.17g, \"d\": %.17g, \"a\": %.17g, \"alpha\": %.17g}%s\n",
-                 dh.theta_offset_rad, dh.d_m, dh.a_m, dh.alpha_rad, j + 1 < hivecal::kJointCount ? "," : "");
+                 dh.theta_offset_rad, dh.d_m, dh.a_m, dh.alpha_rad, j + 1 < hivecal::kSixJoints ? "," : "");
   }
   std::fprintf(out, "  ],\n  \"tool\": [%.17g, %.17g, %.17g],\n  \"base_to_tracker\": [\n", model.tool_m.x(),
                model.tool_m.y(), model.tool_m.z());

@@ -27,10 +27,10 @@ void print_report(const char* title, const LmResult& r, Status status, const Dat
               lm_termination_name(r.termination), r.rms_m * 1e6, report.kept_count(), mask_count(report.free_mask));
   for (int d = 0; d < report.dropped_count; ++d) {
     const DroppedParam& e = report.dropped[d];
-    std::printf("  drop %-8s %-16s sigma ratio %8.1e   ", full_param_name(e.index),
+    std::printf("  drop %-8s %-16s sigma ratio %8.1e   ", full_param_name(e.index, r.model),
                 unidentifiable_reason_name(e.reason), e.singular_ratio);
     for (int c = 0; c < kNullComponentCount && e.component_index[c] >= 0; ++c) {
-      std::printf(" %+.3f %s", e.component[c], full_param_name(e.component_index[c]));
+      std::printf(" %+.3f %s", e.component[c], full_param_name(e.component_index[c], r.model));
     }
     std::printf("\n");
   }

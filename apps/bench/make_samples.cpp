@@ -25,6 +25,6 @@ int main(int argc, char** argv) {
       hivecal::test::perturbed_model(hivecal::nominal_model(hivecal::RobotType::ur5), &random, 1e-4, 1e-4);
   hivecal::test::fill_dataset(truth, hivecal::test::example_base_to_tracker(), storage.size(), 10e-6, &random,
                               &dataset);
-  const std::string text = hivecal::textio::format_samples_csv(dataset.samples());
+  const std::string text = hivecal::textio::format_samples_csv(dataset.samples(), hivecal::kSixJoints);
   return std::fwrite(text.data(), 1, text.size(), stdout) == text.size() ? 0 : 1;
 }

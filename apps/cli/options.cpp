@@ -349,7 +349,8 @@ std::vector<OptionSpec> input_unit_option_specs() {
       {"length-unit", "m|mm", "unit of lengths (x, y, z) in text inputs whose header names none (default: m)", ""},
       {"angle-unit", "rad|deg", "unit of joint angles in text inputs whose header names none (default: rad)", ""},
       {"columns", "C=NAME,...",
-       "read text inputs by column name: C (q1..q6, x, y, z, rx, ry, rz) is the header's column NAME, or a sum of "
+       "read text inputs by column name: C (q1..qN: the arm's N joints, x, y, z, rx, ry, rz) is the header's column "
+       "NAME, or a sum of "
        "columns, with an optional unit: x=measurement_x, x=x_t+x_dif[mm], q1=joint_1[deg] (ROS and pendant joint "
        "names are recognised without it)",
        ""},

@@ -301,8 +301,9 @@ PoseSpan pose_span(const CalibrateSettings& settings, const RobotModel& start, c
   const CalibrationOptions chosen = options_with_chosen_frames(run.options, run.result);
   ParamMask free_mask = lm_param_mask(settings.paper_params ? LmParamSet::link_lengths : LmParamSet::full, 0, start);
   for (int axis = 0; axis < 3; ++axis) {
-    const ParamMask base = param_bit(base_rotation_param_index(axis)) | param_bit(base_translation_param_index(axis));
-    const ParamMask tool = param_bit(tool_param_index(axis));
+    const ParamMask base =
+        param_bit(base_rotation_param_index(start, axis)) | param_bit(base_translation_param_index(start, axis));
+    const ParamMask tool = param_bit(tool_param_index(start, axis));
     if (settings.paper_params && !chosen.tool_known) free_mask |= tool;  // the paper's set with the tool fitted
     if (chosen.base_known) free_mask &= ~base;
     if (chosen.tool_known) free_mask &= ~tool;
@@ -327,6 +328,9 @@ Error calibrate(const Options& options, std::vector<std::string>* warnings) {
   Profile profile;
   CalibrateSettings settings;
   Error error = calibrate_settings_from_options(options, &settings);
+  if (error.ok() && options.given("ur-deltas")) {
+    error = textio::require_ur_joints(settings.robot.model, settings.robot.robot, "--ur-deltas (calibration.conf)");
+  }
   port::OutputSet outputs;
   OutputIds ids;
   if (error.ok()) error = declare_outputs(options, &outputs, &ids);

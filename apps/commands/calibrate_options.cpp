@@ -118,8 +118,9 @@ Error harmonic_terms_from_options(const Options& options, CalibrateSettings* set
   const Error error = count_option(options, "harmonics", 1, static_cast<std::size_t>(kMaxHarmonicOrder), &orders);
   if (!error.ok()) return error;
   ComplianceModel& model = settings->compliance_model;
-  const int needed = model.term_count + 2 * kJointCount * static_cast<int>(orders);
-  if (append_harmonic_terms(static_cast<int>(orders), &model) != Status::ok) {
+  const RobotModel& arm = settings->robot.model;  // a harmonic per revolute joint
+  const int needed = model.term_count + harmonic_term_count(arm, static_cast<int>(orders));
+  if (append_harmonic_terms(static_cast<int>(orders), arm, &model) != Status::ok) {
     return Error::usage("--harmonics " + options.get("harmonics") + " needs " + std::to_string(needed) +
                         " joint terms with the others; this build holds " + std::to_string(kMaxComplianceTerms) +
                         " (HIVECAL_MAX_JOINT_TERMS): use fewer orders");

@@ -96,7 +96,7 @@ std::string rigid_kept_line(double significance_t, const RobotModel& model, bool
   double gravity_t = 0.0;
   double harmonic_t = 0.0;
   for (int t = 0; t < terms.term_count; ++t) {
-    const double level = parameter_significance_level(model, compliance_param_index(t), significance_t,
+    const double level = parameter_significance_level(model, compliance_param_index(model, t), significance_t,
                                                       CalibrationCompliance{}.significance_t, dof);
     (is_harmonic(terms.terms[t]) ? harmonic_t : gravity_t) = level;
   }
@@ -181,7 +181,7 @@ std::vector<std::string> blocked_fold_lines(const char* family, const BlockedFol
   }
   if (!folds.checked) return lines;
   std::string per_joint;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < model.joint_count; ++j) {
     if (!(folds.with_terms_mae_m[j] > 0.0)) continue;
     char part[80];
     std::snprintf(part, sizeof part, "%sjoint %d %.4f / %.4f", per_joint.empty() ? "" : ", ", j + 1,
@@ -288,12 +288,12 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
                              lm->identifiability.kept_mask, scratch.get(), correlation.get()) == Status::ok;
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(stage.model);
-  for (int k = 0; k < kModelParamCount; ++k) {
+  for (int k = 0; k < model_param_count(stage.model); ++k) {
     const bool estimated = lm != nullptr && mask_has(lm->identifiability.kept_mask, k);
     if (!estimated && after(k) == before(k)) continue;
     report::ParameterRow row;
-    row.name = full_param_name(k);
-    row.angle = model_param_is_angle(k);
+    row.name = full_param_name(k, stage.model);
+    row.angle = model_param_is_angle(k, stage.model.joint_count);
     row.start = before(k);
     row.value = after(k);
     row.sigma = estimated ? lm->sigma(k) : 0.0;
@@ -302,7 +302,7 @@ std::vector<report::ParameterRow> parameter_rows(const CalibrationStage& stage, 
   }
   const ComplianceModel& compliance = stage.model.compliance;
   for (int t = 0; t < compliance.term_count; ++t) {  // LM+compliance: the coefficients, in their own unit
-    const int k = compliance_param_index(t);
+    const int k = compliance_param_index(stage.model, t);
     report::ParameterRow row;
     row.name = compliance_term_name(compliance, t);
     row.compliance_unit = textio::term_unit(compliance, t);
@@ -332,7 +332,8 @@ void add_samples(const CliDataset& dataset, const Run& run, report::ReportData* 
   for (const bool test : {false, true}) {
     for (const Sample& s : test ? dataset.test() : dataset.train()) {
       report::SampleRow row;
-      for (int j = 0; j < kJointCount; ++j) row.q_rad[j] = s.q_rad(j);
+      row.joint_count = run.final_stage().model.joint_count;
+      for (int j = 0; j < row.joint_count; ++j) row.q_rad[j] = s.q_rad(j);
       row.measured_m = s.point_m;
       row.test = test;
       row.target = s.target;
@@ -721,7 +722,8 @@ void add_uncertainty(const CalibrateSettings& settings, const RobotModel& start,
                       calibration_estimated_mask(run->result), lm != nullptr ? lm->other_tools_sigma_m : none,
                       &run->uncertainty, &note);
   if (!note.empty()) data->info_lines.push_back(note);
-  for (const std::string& line : domain_lines(run->uncertainty)) data->info_lines.push_back(line);
+  for (const std::string& line : domain_lines(run->uncertainty, final_stage.model.joint_count))
+    data->info_lines.push_back(line);
 }
 
 std::string held_out_unit(const streams::SessionFacts& facts) {

@@ -157,7 +157,8 @@ Error calibrate_registration(const Options& options, std::vector<std::string>* w
                dataset->test().empty() ? " (every pose: --split F holds some out)" : "; the rest held out");
   for (const std::string& line : registration_lines(run, facts, warnings)) std::fprintf(terminal, "%s\n", line.c_str());
   if (!note.empty()) std::fprintf(terminal, "registration: %s\n", note.c_str());
-  for (const std::string& line : domain_lines(registered.uncertainty)) std::fprintf(terminal, "%s\n", line.c_str());
+  for (const std::string& line : domain_lines(registered.uncertainty, registered.model.joint_count))
+    std::fprintf(terminal, "%s\n", line.c_str());
   print_metrics(terminal, registered.metrics);
   // write
   error = outputs.stage_text(out_id, "", registered_result_json(result_text, registered, run, facts, *warnings));

@@ -24,7 +24,7 @@ std::string calibration_result_json(const CalibrateSettings& settings, const rep
   file.metrics = data.calibrated;
   file.uncertainty = run.uncertainty;
   for (int t = 0; run.final_lm() != nullptr && t < final_stage.model.compliance.term_count; ++t) {
-    const int k = compliance_param_index(t);
+    const int k = compliance_param_index(final_stage.model, t);
     if (mask_has(run.final_lm()->identifiability.kept_mask, k)) file.compliance_sigma[t] = run.final_lm()->sigma(k);
   }
   record.method = run.final_method();
@@ -37,7 +37,8 @@ std::string calibration_result_json(const CalibrateSettings& settings, const rep
   record.joint_sigma_rad = settings.joint_sigma_rad;
   record.joint_sigma_position_sigma_m = settings.orientation.position_sigma_m;
   record.controller_tcp = settings.controller_tcp;
-  record.ur_deltas = textio::ur_deltas_in_ur_table(settings.robot.model, final_stage.model);
+  record.ur_shape = has_ur_joints(settings.robot.model);
+  if (record.ur_shape) record.ur_deltas = textio::ur_deltas_in_ur_table(settings.robot.model, final_stage.model);
   record.facts = &facts;
   record.cv = run.has_cv ? &run.cv : nullptr;
   for (const std::vector<std::uint32_t>& fold : run.cv_held_out)

@@ -22,27 +22,55 @@ std::string fmt(const char* format, double a, double b = 0.0, double c = 0.0, do
   return text;
 }
 
-/// The table as the file's convention writes it, in mm and degrees.
+const char* type_name(const RobotModel& model, int joint) {
+  return joint_type(model, joint) == JointType::prismatic ? "prismatic" : "revolute";
+}
+
+/// The table as the file's convention writes it, in mm and degrees, a row per joint with its type.
 std::string dh_table(const textio::RobotDescription& robot) {
   std::string s = robot.convention == DhConvention::modified
-                      ? "joint  alpha(i-1) [deg]    a(i-1) [mm]   theta offset [deg]         d [mm]\n"
-                      : "joint  theta offset [deg]         d [mm]          a [mm]      alpha [deg]\n";
-  ModifiedDhRow rows[kJointCount];
+                      ? "joint  alpha(i-1) [deg]    a(i-1) [mm]   theta offset [deg]         d [mm]  type\n"
+                      : "joint  theta offset [deg]         d [mm]          a [mm]      alpha [deg]  type\n";
+  ModifiedDhRow rows[kMaxJoints];
   Vec3 tool_m = robot.model.tool_m;
   if (robot.convention == DhConvention::modified)
     modified_dh_from_model(robot.model, robot.modified_base, rows, &tool_m);
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < robot.model.joint_count; ++j) {
     if (robot.convention == DhConvention::modified) {
       const ModifiedDhRow& r = rows[j];
-      s += fmt("%5.0f", j + 1) + fmt("  %16.6f  %13.4f  %19.6f  %13.4f\n", r.alpha_prev_rad * kDegPerRad,
+      s += fmt("%5.0f", j + 1) + fmt("  %16.6f  %13.4f  %19.6f  %13.4f", r.alpha_prev_rad * kDegPerRad,
                                      r.a_prev_m * 1e3, r.theta_offset_rad * kDegPerRad, r.d_m * 1e3);
     } else {
       const DhJoint& r = robot.model.joints[j];
-      s += fmt("%5.0f", j + 1) + fmt("  %18.6f  %13.4f  %14.4f  %15.6f\n", r.theta_offset_rad * kDegPerRad, r.d_m * 1e3,
+      s += fmt("%5.0f", j + 1) + fmt("  %18.6f  %13.4f  %14.4f  %15.6f", r.theta_offset_rad * kDegPerRad, r.d_m * 1e3,
                                      r.a_m * 1e3, r.alpha_rad * kDegPerRad);
     }
+    s += std::string("  ") + type_name(robot.model, j) + "\n";
   }
   return s;
+}
+
+/// "joint limits: 1 -170.0..170.0 deg, ..." (a prismatic joint's in mm), or what plan assumes without them.
+std::string joint_limits_line(const textio::RobotDescription& robot) {
+  if (!robot.has_joint_limits) return "joint limits: none given (plan assumes a built-in type's, else +-360 deg)\n";
+  std::string s = "joint limits:";
+  for (int j = 0; j < robot.model.joint_count; ++j) {
+    const bool slides = joint_type(robot.model, j) == JointType::prismatic;
+    const double scale = slides ? 1e3 : kDegPerRad;
+    s += fmt(j == 0 ? " %.0f" : ", %.0f", j + 1) +
+         fmt(slides ? " %.1f..%.1f mm" : " %.1f..%.1f deg", robot.lower_rad(j) * scale, robot.upper_rad(j) * scale);
+  }
+  return s + "\n";
+}
+
+/// " (q [deg] 0.000 -90.000 ...)": the pose's joints, a prismatic one's in mm.
+std::string pose_text(const RobotModel& model, const JointVector& q) {
+  std::string s = " (q [deg] ";
+  for (int j = 0; j < model.joint_count; ++j) {
+    const bool slides = joint_type(model, j) == JointType::prismatic;
+    s += fmt(j == 0 ? "%.3f" : " %.3f", q(j) * (slides ? 1e3 : kDegPerRad)) + (slides ? " mm" : "");
+  }
+  return s + ")";
 }
 
 Error check_robot(const Options& options) {
@@ -54,6 +82,7 @@ Error check_robot(const Options& options) {
   if (!options.get("joints").empty()) {
     textio::InputUnits units;
     error = input_units_option(options, &units);
+    units.joints = textio::input_joints(robot.model);
     if (error.ok()) error = textio::read_joints_csv(options.get("joints"), &poses, units);
     if (!error.ok()) return error;
   }
@@ -76,14 +105,7 @@ Error check_robot(const Options& options) {
          fmt("%.4f, %.4f, %.4f mm\n", t.x() * 1e3, t.y() * 1e3, t.z() * 1e3);
   }
   s += "compliance terms: " + std::to_string(robot.model.compliance.term_count) + "\n";
-  if (robot.has_joint_limits) {
-    s += "joint limits [deg]:";
-    for (int j = 0; j < kJointCount; ++j)
-      s += fmt(" %.1f..%.1f", robot.lower_rad(j) * kDegPerRad, robot.upper_rad(j) * kDegPerRad);
-    s += "\n";
-  } else {
-    s += "joint limits: none given (plan assumes a built-in type's, else +-360 deg)\n";
-  }
+  s += joint_limits_line(robot);
   // FK in the file's own base frame: at zero, then at each given pose.
   const RigidTransform file_base =
       robot.convention == DhConvention::modified ? robot.modified_base.transform() : RigidTransform{};
@@ -91,8 +113,7 @@ Error check_robot(const Options& options) {
   for (std::size_t p = 0; p < poses.size(); ++p) {
     const JointVector& q = poses[p];
     s += p == 0 ? "FK at q = 0" : "FK at pose " + std::to_string(p);
-    s += fmt(" (q [deg] %.3f %.3f %.3f", q(0) * kDegPerRad, q(1) * kDegPerRad, q(2) * kDegPerRad) +
-         fmt(" %.3f %.3f %.3f):", q(3) * kDegPerRad, q(4) * kDegPerRad, q(5) * kDegPerRad);
+    s += pose_text(robot.model, q) + ":";
     for (int k = 0; k < robot.target_count; ++k) {
       const Vec3 point = file_base.apply(fk_target_point(robot.model, q, k));
       s += fmt(" tool %.0f at", k + 1) + fmt(" %.4f, %.4f, %.4f mm", point.x() * 1e3, point.y() * 1e3, point.z() * 1e3);

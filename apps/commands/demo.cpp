@@ -25,7 +25,7 @@ int demo_main(int argc, char** argv) {
   Random random(1);
   const RobotModel nominal = nominal_model(RobotType::ur5);
   RobotModel truth = nominal;
-  for (DhJoint& joint : truth.joints) {
+  for (DhJoint& joint : model_joints(&truth)) {
     joint.d_m += 2e-4 * random.normal();
     joint.a_m += 2e-4 * random.normal();
   }

@@ -47,7 +47,7 @@ Error load_arm(const Options& options, record::CalibrationFile* arm, bool* has_t
 
 /// `model`'s point of a sample (its target) in the tracker frame [m].
 Vec3 predicted_m(const RobotModel& model, const RigidTransform& base_to_tracker, const report::SampleRow& s) {
-  return base_to_tracker.apply(fk_target_point(model, Eigen::Map<const JointVector>(s.q_rad), s.target));
+  return base_to_tracker.apply(fk_target_point(model, joint_vector(s.q_rad), s.target));
 }
 
 /// Mean 3D distance of `model`'s predictions from the samples' tracker points [m].
@@ -94,7 +94,7 @@ bool fit_rigid_chain(const record::CalibrationFile& arm, const std::vector<repor
   samples.reserve(train.size());
   for (const report::SampleRow& s : train) {
     Sample sample;
-    sample.q_rad = Eigen::Map<const JointVector>(s.q_rad);
+    sample.q_rad = joint_vector(s.q_rad);
     sample.point_m = predicted_m(arm.model, arm.base_to_tracker, s);
     sample.target = s.target;
     sample.index = static_cast<std::uint32_t>(samples.size());
@@ -237,7 +237,8 @@ Error export_arm(const Options& options) {
   error = load_arm(options, &arm, &has_tracker, &result_text);
   if (!error.ok()) return error;
   write_rigid_chain_of_terms(format, result_text, options.get("calibration"), &arm);
-  for (const std::string& line : domain_lines(arm.uncertainty))  // what the exported model holds within
+  for (const std::string& line :
+       domain_lines(arm.uncertainty, arm.model.joint_count))  // what the exported model holds within
     std::fprintf(stderr, "hivecal export: note: %s\n", line.c_str());
   std::string text;
   if (format == "urdf") {

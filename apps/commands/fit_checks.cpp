@@ -18,12 +18,6 @@
 
 namespace hivecal::cli {
 
-bool model_param_is_angle(int index) {
-  if (index < 0 || index >= kDhParamCount) return false;  // the tool point is a length
-  const int field = index % kParamsPerJoint;
-  return field == static_cast<int>(DhField::theta_offset) || field == static_cast<int>(DhField::alpha);
-}
-
 namespace {
 
 /// |correlation| above which a moved parameter's warning names the one it cannot be told from.
@@ -44,12 +38,12 @@ std::string correlation_cause(const char* name, const std::vector<report::Parame
   return "";
 }
 
-/// The tool point's and the base's bits: what the job's baseline fits (fit_baseline).
-ParamMask baseline_mask() {
+/// The tool point's and the base's bits of `model`: what the job's baseline fits (fit_baseline).
+ParamMask baseline_mask(const RobotModel& model) {
   ParamMask mask = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    mask |= param_bit(tool_param_index(axis)) | param_bit(base_rotation_param_index(axis)) |
-            param_bit(base_translation_param_index(axis));
+    mask |= param_bit(tool_param_index(model, axis)) | param_bit(base_rotation_param_index(model, axis)) |
+            param_bit(base_translation_param_index(model, axis));
   }
   return mask;
 }
@@ -62,7 +56,7 @@ double baseline_mae_m(RobotModel model, Span<const Sample> train, LmWorkspace* w
   if (fit_base_and_target_tools(train, &model, &base) != Status::ok) return HUGE_VAL;
   LmOptions options;
   options.params = LmParamSet::custom;
-  options.custom_mask = baseline_mask();
+  options.custom_mask = baseline_mask(model);
   if (3 * train.size() > 9) {  // fewer samples: the closed form's base alone, as the job's baseline
     const Status status = calibrate_lm(model, &base, train, options, workspace, fit);
     if (status != Status::ok && status != Status::not_converged) return HUGE_VAL;
@@ -105,7 +99,8 @@ std::string other_arm_hint(const std::string& robot, const RobotModel& start, Sp
   RobotType given = RobotType::ur5;
   if (robot_type_from_name(robot.c_str(), &given) != Status::ok) return "";
   const RobotModel nominal = nominal_model(given);
-  for (int j = 0; j < kJointCount; ++j) {  // a description file or a controller's calibration: not the table
+  if (nominal.joint_count != start.joint_count) return "";
+  for (int j = 0; j < nominal.joint_count; ++j) {  // a description file or a controller's calibration: not the table
     const DhJoint& a = nominal.joints[j];
     const DhJoint& b = start.joints[j];
     if (a.theta_offset_rad != b.theta_offset_rad || a.d_m != b.d_m || a.a_m != b.a_m || a.alpha_rad != b.alpha_rad)
@@ -116,10 +111,9 @@ std::string other_arm_hint(const std::string& robot, const RobotModel& start, Sp
   const double given_mae_m = baseline_mae_m(start, train, workspace.get(), fit.get());
   RobotType best = given;
   double best_mae_m = given_mae_m;
-  for (const RobotType other : {RobotType::ur3, RobotType::ur5, RobotType::ur10, RobotType::ur3e, RobotType::ur5e,
-                                RobotType::ur10e, RobotType::ur16e}) {
-    if (other == given) continue;
+  for (const RobotType other : builtin_robot_types()) {  // the arms of as many joints as the one given
     RobotModel model = nominal_model(other);
+    if (other == given || model.joint_count != nominal.joint_count) continue;
     model.tool_m = start.tool_m;  // the same tool points to start from
     for (int k = 0; k < kMaxTargets - 1; ++k) model.other_tools_m[k] = start.other_tools_m[k];
     const double mae_m = baseline_mae_m(model, train, workspace.get(), fit.get());
@@ -158,7 +152,7 @@ int model_parameter_count(const RobotModel& start, ParamMask free_mask, int targ
   const auto normal = std::make_unique<NormalEquations>();
   const auto workspace = std::make_unique<IdentifiabilityWorkspace>();
   const auto report = std::make_unique<IdentifiabilityReport>();
-  const ParamMask rigid = free_mask & kAllParamsMask;
+  const ParamMask rigid = free_mask & rigid_params_mask(start);
   if (accumulate_normal_equations(start, RigidTransform{}, Span<const Sample>(samples.data(), samples.size()),
                                   PointLoss{}, normal.get(), rigid) != Status::ok ||
       analyze_identifiability(normal->jtwj, rigid, kDefaultIdentifiabilityThreshold, workspace.get(), report.get(), 0,
@@ -183,23 +177,24 @@ std::string constant_orientation_warning(bool constant, double fit_sigma_m, doub
 std::vector<std::string> prior_held_lines(const LmResult& lm, const LmPriorTolerances& tolerances,
                                           const std::vector<report::ParameterRow>& parameters) {
   std::vector<std::string> lines;
-  for (int k = 0; k < kModelParamCount; ++k) {
-    const double tolerance = prior_tolerance(tolerances, k);
+  const int joints = lm.model.joint_count;
+  for (int k = 0; k < model_param_count(joints); ++k) {
+    const double tolerance = prior_tolerance(tolerances, joints, k);
     if (!mask_has(lm.identifiability.kept_mask, k) || !(tolerance > 0.0) ||
         !(lm.sigma(k) > kPriorHeldSigmaShare * tolerance)) {
       continue;
     }
-    const bool angle = model_param_is_angle(k);
+    const bool angle = model_param_is_angle(k, joints);
     const double unit = 1e3;  // mm, mrad
     char line[400];
     std::snprintf(line, sizeof line,
                   "  held    %-8s (by the nominal model's prior: sigma %.3g %s of its %.3g %s tolerance, the poses "
                   "determine it less than the tolerance does",
-                  full_param_name(k), lm.sigma(k) * unit, angle ? "mrad" : "mm", tolerance * unit,
+                  full_param_name(k, joints), lm.sigma(k) * unit, angle ? "mrad" : "mm", tolerance * unit,
                   angle ? "mrad" : "mm");
     std::string text = line;
     for (const report::ParameterRow& row : parameters) {
-      if (row.name != full_param_name(k) || row.correlated_with.empty()) continue;
+      if (row.name != full_param_name(k, joints) || row.correlated_with.empty()) continue;
       std::snprintf(line, sizeof line, "; correlated %+.3f with %s in the data: %s would separate them",
                     row.correlation, row.correlated_with.c_str(),
                     what_separates(row.name, row.correlated_with).c_str());
@@ -215,26 +210,27 @@ std::vector<std::string> fit_warnings(const CalibrationResult& result, const Fit
   std::vector<std::string> warnings;
   const CalibrationStage* final_stage = result.final_stage();
   if (final_stage == nullptr) return warnings;
+  const RobotModel& model = final_stage->model;
   const ModelParams before = to_params(result.baseline.model);
-  const ModelParams after = to_params(final_stage->model);
+  const ModelParams after = to_params(model);
   char line[1024];
-  for (int k = 0; k < kModelParamCount; ++k) {
+  for (int k = 0; k < model_param_count(model); ++k) {
     const double change = after(k) - before(k);
-    const bool angle = model_param_is_angle(k);
+    const bool angle = model_param_is_angle(k, model.joint_count);
     if (std::fabs(change) <= (angle ? bounds.max_angle_change_rad : bounds.max_length_change_m)) continue;
     if (angle) {
       std::snprintf(line, sizeof line,
                     "%s moved %+.3f deg (%.6f -> %.6f rad), more than %.3g deg (--max-change-deg): wrong model, "
                     "joint zero or units?",
-                    full_param_name(k), change * math::kDegPerRad, before(k), after(k),
+                    full_param_name(k, model), change * math::kDegPerRad, before(k), after(k),
                     bounds.max_angle_change_rad * math::kDegPerRad);
     } else {
       std::snprintf(line, sizeof line,
                     "%s moved %+.3f mm (%.6f -> %.6f m), more than %.3g mm (--max-change-mm): wrong model, tool "
                     "guess or units?",
-                    full_param_name(k), change * 1e3, before(k), after(k), bounds.max_length_change_m * 1e3);
+                    full_param_name(k, model), change * 1e3, before(k), after(k), bounds.max_length_change_m * 1e3);
     }
-    warnings.push_back(line + correlation_cause(full_param_name(k), parameters));
+    warnings.push_back(line + correlation_cause(full_param_name(k, model), parameters));
   }
   // Many samples of a few stops determine no more than those stops: 3 coordinates per distinct
   // point. No more of them than the parameters the fit determines (estimated, or fixed by the

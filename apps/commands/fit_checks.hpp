@@ -20,9 +20,6 @@ struct FitBounds {
   double max_angle_change_rad = 0.03490658503988659;  ///< theta offsets and alpha, 2 deg (--max-change-deg) [rad]
 };
 
-/// True when model parameter `index` (to_params order) is an angle (theta offset, alpha).
-bool model_param_is_angle(int index);
-
 /// The training poses against what the model needs (the span warning of fit_warnings).
 struct PoseSpan {
   std::size_t poses = 0;        ///< distinct training configurations, at most kDistinctPointLimit [-]
@@ -68,8 +65,9 @@ std::string constant_orientation_warning(bool constant, double fit_sigma_m, doub
 /// much better": this share of the given one's [-].
 inline constexpr double kOtherArmMaeRatio = 1.0 / 3.0;
 
-/// When `start` is a built-in UR type's nominal geometry (`robot` its name) and the nominal
-/// geometry of another built-in type, with the tool points and the base fitted to `train` as
+/// When `start` is a built-in type's nominal geometry (`robot` its name) and the nominal
+/// geometry of another built-in type of as many joints (a UR for a UR, a seven-axis arm for a
+/// seven-axis one), with the tool points and the base fitted to `train` as
 /// the job's baseline is, leaves less than kOtherArmMaeRatio of the training MAE (3D) that
 /// `start`'s leaves: "this looks like a ur10 (--robot-model ur10): ..." with both figures; ""
 /// otherwise (a description file, no clearly better arm). A few small LM fits (9 parameters).

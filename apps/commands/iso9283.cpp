@@ -47,8 +47,8 @@ constexpr double kCellSlack_rad = 1e-9;
 
 /// A cell of joint space and a target.
 struct JointCell {
-  std::array<std::int64_t, kJointCount> index{};  ///< floor(q_j / kCellWidth_rad) per joint [-]
-  int target = 0;                                 ///< the reflector [-]
+  std::array<std::int64_t, kMaxJoints> index{};  ///< floor(q_j / kCellWidth_rad) per joint (0 beyond the arm's) [-]
+  int target = 0;                                ///< the reflector [-]
   bool operator==(const JointCell& other) const { return index == other.index && target == other.target; }
 };
 
@@ -67,7 +67,7 @@ std::int64_t cell_index(double q_rad) {
 
 }  // namespace
 
-std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::vector<std::size_t>& lines,
+std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::vector<std::size_t>& lines, int joints,
                                        std::size_t* comparisons) {
   std::vector<PoseReaches> poses;
   std::unordered_map<JointCell, std::vector<std::size_t>, JointCellHash> cells;  // poses by their first reach's cell
@@ -75,9 +75,9 @@ std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::ve
   for (const Sample& s : samples) {
     // The cells within the tolerance of s: its own, and per joint the neighbour whose edge is near.
     JointCell own{{}, s.target};
-    std::array<int, kJointCount> low{};
-    std::array<int, kJointCount> high{};
-    for (int j = 0; j < kJointCount; ++j) {
+    std::array<int, kMaxJoints> low{};  // joints beyond the arm's: 0 .. 0, their cell 0
+    std::array<int, kMaxJoints> high{};
+    for (int j = 0; j < joints; ++j) {
       const std::int64_t k = cell_index(s.q_rad(j));
       own.index[static_cast<std::size_t>(j)] = k;
       const double from_lower_edge_rad = s.q_rad(j) - static_cast<double>(k) * kCellWidth_rad;
@@ -86,7 +86,7 @@ std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::ve
           kCellWidth_rad - from_lower_edge_rad <= kSamePoseTolerance_rad + kCellSlack_rad ? 1 : 0;
     }
     std::size_t latest = poses.size();  // none
-    std::array<int, kJointCount> offset = low;
+    std::array<int, kMaxJoints> offset = low;
     for (bool more = true; more;) {
       JointCell cell = own;
       for (std::size_t j = 0; j < offset.size(); ++j) cell.index[j] += offset[j];
@@ -158,10 +158,9 @@ void own_mae(const std::string& text, CommandFrame* frame) {
 }
 
 /// The command frame: a result's model and base -> tracker, or a nominal model (its tool:
-/// --tool or --tool-transform, else a description file's, else kDefaultToolText) with the base ->
-/// tracker fitted to every reach.
-Error command_frame(const Options& options, const textio::InputUnits& units, Span<const Sample> samples,
-                    CommandFrame* frame) {
+/// --tool or --tool-transform, else a description file's, else kDefaultToolText) whose base ->
+/// tracker fit_nominal_frame fits to the reaches.
+Error command_frame(const Options& options, const textio::InputUnits& units, CommandFrame* frame) {
   if (!options.get("calibration").empty()) {
     if (tool_given(options)) {
       const std::string given = options.given("tool") ? "--tool" : "--tool-transform";
@@ -186,15 +185,18 @@ Error command_frame(const Options& options, const textio::InputUnits& units, Spa
                               &frame->file.model.tool_m, &tool_note);
   }
   if (!error.ok()) return error;
-  if (fit_base_to_tracker(frame->file.model, samples, &frame->file.base_to_tracker) != Status::ok) {
-    return Error::input(
-        "cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
-  }
   const Vec3& tool_m = frame->file.model.tool_m;
   frame->how = "commanded positions from the nominal " + port::printable(frame->file.robot) + " (tool " +
                mm(tool_m.x()) + ", " + mm(tool_m.y()) + ", " + mm(tool_m.z()) +
                " mm; base -> tracker fitted to the reaches)" + (tool_note.empty() ? "" : "; " + tool_note);
   return Error{};
+}
+
+/// A nominal frame's base -> tracker, fitted to every reach (a calibration's is its own).
+Error fit_nominal_frame(Span<const Sample> samples, CommandFrame* frame) {
+  if (frame->calibration || fit_base_to_tracker(frame->file.model, samples, &frame->file.base_to_tracker) == Status::ok)
+    return Error{};
+  return Error::input("cannot fit the base -> tracker transform of the nominal model to the reaches (too few poses?)");
 }
 
 /// One pose's characteristics.
@@ -323,13 +325,14 @@ Error iso9283(const Options& options, std::vector<std::string>* warnings, bool* 
   cli::HostDataset dataset;
   textio::InputUnits units;
   error = input_units_option(options, &units);
+  CommandFrame frame;  // its model first: the reaches carry its joints
+  if (error.ok()) error = command_frame(options, units, &frame);
+  units.joints = textio::input_joints(frame.file.model);
   std::vector<std::size_t> lines;
   if (error.ok()) error = textio::read_samples_csv(options.get("samples"), &dataset, units, &lines);
+  if (error.ok()) error = fit_nominal_frame(dataset.samples(), &frame);
   if (!error.ok()) return error;
-  CommandFrame frame;
-  error = command_frame(options, units, dataset.samples(), &frame);
-  if (!error.ok()) return error;
-  const std::vector<PoseReaches> poses = group_reaches(dataset.samples(), lines);
+  const std::vector<PoseReaches> poses = group_reaches(dataset.samples(), lines, frame.file.model.joint_count);
   std::vector<PoseResult> results;
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const PoseReaches& p = poses[k];
@@ -459,7 +462,7 @@ bool largest_cube(const RobotModel& model, const JointLimits& limits, const Vec3
   *side_m = 0.0;
   for (int candidate = 0; candidate < 40; ++candidate) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(limits.lower_rad(j), limits.upper_rad(j));
+    for (int j = 0; j < model.joint_count; ++j) q(j) = random.uniform(limits.lower_rad(j), limits.upper_rad(j));
     const Vec3 centre = fk_tool_point(model, q);
     const Vec3 rotation = tool_rotation_vector(centre, tracker_m, tool_down);
     if (!cube_reachable(model, limits, centre, std::max(*side_m, kMinCubeSide_m), rotation, floor_z_m, keep_out_m,
@@ -593,13 +596,15 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
   if (error.ok()) error = outputs.add_file(options.get("out"), "--out", &out_id);
   if (error.ok() && script) error = outputs.add_file(options.get("urscript"), "--urscript", &script_id);
   if (!error.ok()) return error;
-  std::string list = "pose,x,y,z,rx,ry,rz,q1,q2,q3,q4,q5,q6\n";
+  std::string list = "pose,x,y,z,rx,ry,rz";
+  for (int j = 0; j < model.joint_count; ++j) list += ",q" + std::to_string(j + 1);
+  list += "\n";
   for (int k = 0; k < 5; ++k) {
     list += "P" + std::to_string(k + 1) + "," + textio::format_double(positions[k].x()) + "," +
             textio::format_double(positions[k].y()) + "," + textio::format_double(positions[k].z()) + "," +
             textio::format_double(rotation.x()) + "," + textio::format_double(rotation.y()) + "," +
             textio::format_double(rotation.z());
-    for (int j = 0; j < kJointCount; ++j) list += "," + textio::format_double(q[k](j));
+    for (int j = 0; j < model.joint_count; ++j) list += "," + textio::format_double(q[k](j));
     list += "\n";
   }
   char head[400];

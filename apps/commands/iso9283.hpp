@@ -24,9 +24,9 @@ struct PoseReaches {
 /// latest pose whose first reach is the same point (same_point: joints within
 /// kSamePoseTolerance_rad, same target), else starts a pose. `lines[s.index]` is the file line
 /// of sample s. Linear in the samples: the poses are hashed by cells of their first reach's
-/// joints, and a sample compares only with the poses of the cells its tolerance touches (at
-/// most 2^6); *comparisons (optional) counts the same_point calls made.
-std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::vector<std::size_t>& lines,
+/// joints (the arm's `joints`), and a sample compares only with the poses of the cells its
+/// tolerance touches (at most 2^joints); *comparisons (optional) counts the same_point calls made.
+std::vector<PoseReaches> group_reaches(Span<const Sample> samples, const std::vector<std::size_t>& lines, int joints,
                                        std::size_t* comparisons = nullptr);
 
 /// `plan --iso9283 X,Y,Z,SIDE|auto`: the standard's five positions in the cube (centre X, Y, Z

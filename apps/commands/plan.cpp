@@ -15,6 +15,7 @@
 #include "report/svg.hpp"
 #include "textio/csv.hpp"
 #include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
 
 namespace hivecal::cli {
 
@@ -52,8 +53,9 @@ constexpr double kLimitSlack_rad = 1e-9;
 /// --joint-limits clamped to the arm's own range `own` (a built-in type's controller limits, or
 /// the description's): a limit beyond it is said on stderr and clamped (the controller would
 /// refuse a pose there); a joint whose given range lies outside the arm's is refused.
-Error clamp_to_own_range(const Options& options, const std::string& arm, const JointLimits& own, JointLimits* limits) {
-  for (int j = 0; j < kJointCount; ++j) {
+Error clamp_to_own_range(const Options& options, const std::string& arm, int joints, const JointLimits& own,
+                         JointLimits* limits) {
+  for (int j = 0; j < joints; ++j) {
     double& lower = limits->lower_rad(j);
     double& upper = limits->upper_rad(j);
     const double own_lower = own.lower_rad(j);
@@ -88,12 +90,25 @@ Error robot_option(const Options& options, RobotModel* model, JointLimits* limit
   std::string tool_note;
   Error error = robot_model_option(options, "robot-model", &description, &from_file);
   if (error.ok()) error = input_units_option(options, &units);
+  units.joints = textio::input_joints(description.model);
   if (error.ok()) {
     error = tool_point_option(options, units, from_file ? &description.model.tool_m : nullptr,
                               &description.model.tool_m, &tool_note);
   }
   if (!error.ok()) return error;
   if (!tool_note.empty()) std::fprintf(stderr, "hivecal plan: %s\n", tool_note.c_str());
+  if (!options.get("urscript").empty()) {  // movej and movel are a UR controller's
+    error = textio::require_ur_joints(description.model, description.robot, "--urscript (URScript)");
+    if (!error.ok()) return error;
+  }
+  for (int j = 0; j < description.model.joint_count; ++j) {  // a slide's travel has no default
+    if (joint_type(description.model, j) != JointType::prismatic || description.has_joint_limits ||
+        !options.get("joint-limits").empty())
+      continue;
+    return Error::usage(port::printable(description.robot) + "'s joint " + std::to_string(j + 1) +
+                        " is prismatic: its travel has no default; give \"joint_limits\" in the description or "
+                        "--joint-limits FILE (a prismatic joint's row in m)");
+  }
   *model = description.model;
   RobotType type = RobotType::ur5;
   const bool built_in = !from_file && robot_type_from_name(description.robot.c_str(), &type) == Status::ok;
@@ -108,7 +123,8 @@ Error robot_option(const Options& options, RobotModel* model, JointLimits* limit
   if (!options.get("joint-limits").empty()) {
     error = textio::read_joint_limits_csv(options.get("joint-limits"), &limits->lower_rad, &limits->upper_rad, units);
     if (!error.ok() || !(description.has_joint_limits || built_in)) return error;
-    return clamp_to_own_range(options, port::printable(description.robot), own, limits);  // the file's name, made safe
+    return clamp_to_own_range(options, port::printable(description.robot), model->joint_count, own,
+                              limits);  // the file's name, made safe
   }
   *limits = own;
   if (!description.has_joint_limits && !built_in) {
@@ -126,7 +142,7 @@ Error params_option(const Options& options, const RobotModel& model, ParamMask* 
   if (params != "full" && params != "paper") {
     return Error::usage("--params must be 'full' or 'paper', not " + port::quoted(params));
   }
-  *mask = lm_param_mask(params == "full" ? LmParamSet::full : LmParamSet::link_lengths, kAllParamsMask, model);
+  *mask = lm_param_mask(params == "full" ? LmParamSet::full : LmParamSet::link_lengths, 0, model);
   return Error{};
 }
 
@@ -187,30 +203,29 @@ Error parse_request(const Options& options, PlanRequest* request) {
   return Error{};
 }
 
-std::string names_of(ParamMask mask) {
+std::string names_of(ParamMask mask, const RobotModel& model) {
   std::string out;
   for (int k = 0; k < kFullParamCount; ++k) {
-    if (mask_has(mask, k)) out += (out.empty() ? "" : " ") + std::string(full_param_name(k));
+    if (mask_has(mask, k)) out += (out.empty() ? "" : " ") + std::string(full_param_name(k, model));
   }
   return out.empty() ? "-" : out;
 }
 
-bool is_angle(int index) {
-  const bool dh_angle = index < kDhParamCount && (index % kParamsPerJoint == static_cast<int>(DhField::theta_offset) ||
-                                                  index % kParamsPerJoint == static_cast<int>(DhField::alpha));
-  return dh_angle || (index >= base_rotation_param_index(0) && index <= base_rotation_param_index(2));
+bool is_angle(int index, const RobotModel& model) {
+  return model_param_is_angle(index, model.joint_count) ||
+         (index >= base_rotation_param_index(model, 0) && index <= base_rotation_param_index(model, 2));
 }
 
 /// The dropped parameters of an analysis with the combination each one is redundant in.
-std::string dropped_lines(const IdentifiabilityReport& report) {
+std::string dropped_lines(const IdentifiabilityReport& report, const RobotModel& model) {
   std::string out;
   for (int i = 0; i < report.dropped_count; ++i) {
     const DroppedParam& d = report.dropped[i];
-    out += "  " + std::string(full_param_name(d.index)) + ": " + unidentifiable_reason_name(d.reason);
+    out += "  " + std::string(full_param_name(d.index, model)) + ": " + unidentifiable_reason_name(d.reason);
     if (d.reason == UnidentifiableReason::null_combination) {
       out += " (with";
       for (int k = 1; k < kNullComponentCount && d.component_index[k] >= 0; ++k) {
-        out += " " + std::string(full_param_name(d.component_index[k]));
+        out += " " + std::string(full_param_name(d.component_index[k], model));
       }
       out += ")";
     }
@@ -228,16 +243,18 @@ std::string report_text(const PlanRequest& request, const IdentifiabilityReport*
                     std::to_string(o.seed) + ")\n";
   out += "identifiable by the candidate pool: " + std::to_string(result.pool.kept_count()) + " of " +
          std::to_string(mask_count(o.free_mask)) + " parameters; no pose set under these constraints identifies:\n";
-  out += dropped_lines(result.pool);
+  const RobotModel& model = request.model;
+  out += dropped_lines(result.pool, model);
   out += "objective: " + std::to_string(result.objective.kept_count()) + " parameters, the tool " +
          text(o.prior_length_m * 1e3, "%g") + " mm off the flange axis in x and y (its prior)" +
          ((result.objective.kept_mask & ~result.pool.kept_mask) != 0
-              ? ": also " + names_of(result.objective.kept_mask & ~result.pool.kept_mask)
+              ? ": also " + names_of(result.objective.kept_mask & ~result.pool.kept_mask, model)
               : std::string()) +
          "\n";
   if (facing != nullptr) {
     out += "freeing the orientation (flange z within " + text(o.constraints.acceptance_rad * math::kDegPerRad, "%g") +
-           " deg of the tracker) makes identifiable: " + names_of(facing->kept_mask & ~result.pool.kept_mask) + "\n";
+           " deg of the tracker) makes identifiable: " + names_of(facing->kept_mask & ~result.pool.kept_mask, model) +
+           "\n";
   }
   const PoseSetQuality& r = result.random;
   const PoseSetQuality& p = result.planned;
@@ -251,14 +268,14 @@ std::string report_text(const PlanRequest& request, const IdentifiabilityReport*
   out += "  identifiable parameters    " + text(r.identifiability.kept_count(), "%9.0f") + "  " +
          text(p.identifiability.kept_count(), "%9.0f") + "\n";
   const ParamMask only_planned = p.identifiability.kept_mask & ~r.identifiability.kept_mask;
-  out += "  identifiable only when planned: " + names_of(only_planned) + "\n";
+  out += "  identifiable only when planned: " + names_of(only_planned, model) + "\n";
   out += "predicted sigma at " + text(o.noise_m * 1e6, "%g") + " um tracker noise (um or urad):\n";
   for (int k = 0; k < kFullParamCount; ++k) {
     if (!mask_has(r.identifiability.kept_mask | p.identifiability.kept_mask, k)) continue;
     const double unit = 1e6;  // m -> um, rad -> urad
-    const std::string name = full_param_name(k);
+    const std::string name = full_param_name(k, model);
     out += "  " + name + std::string(name.size() < 10 ? 10 - name.size() : 1, ' ') + text(r.sigma(k) * unit, "%9.2f") +
-           "  " + text(p.sigma(k) * unit, "%9.2f") + (is_angle(k) ? " urad" : " um") + "\n";
+           "  " + text(p.sigma(k) * unit, "%9.2f") + (is_angle(k, model) ? " urad" : " um") + "\n";
   }
   out += "session: " + text(result.travel_s, "%.1f") + " s of movej (" + text(result.unordered_travel_s, "%.1f") +
          " s unordered) + " + std::to_string(result.pose_count) + " x " + text(o.dwell_s, "%g") +
@@ -272,9 +289,9 @@ std::string urscript(const PlanOptions& o) {
   std::string out = "# hivecal plan: " + std::to_string(result.pose_count) + " poses, seed " + std::to_string(o.seed) +
                     ", about " + text(result.session_s, "%.0f") + " s\ndef hivecal_session():\n";
   for (std::size_t i = 0; i < result.pose_count; ++i) {
-    out += "  movej([";
-    for (int j = 0; j < kJointCount; ++j)
-      out += textio::format_double(result.poses[i](j)) + (j + 1 < kJointCount ? ", " : "");
+    out += "  movej([";  // a UR arm's six joints (robot_option refuses others)
+    for (int j = 0; j < kSixJoints; ++j)
+      out += textio::format_double(result.poses[i](j)) + (j + 1 < kSixJoints ? ", " : "");
     out += "], a=" + text(o.joint_acceleration_rad_s2, "%.10g") + ", v=" + text(o.joint_speed_rad_s, "%.10g") +
            ")\n  sleep(" + text(o.dwell_s, "%.10g") + ")\n";
   }
@@ -416,8 +433,9 @@ Error plan(const Options& options) {
   if (status != Status::ok) return Error::failure(std::string("planning failed: ") + status_message(status));
 
   std::fputs(report_text(request, down ? &facing : nullptr).c_str(), stdout_carries_output(options) ? stderr : stdout);
-  error = outputs.stage_text(out_id, "",
-                             textio::format_joints_csv(Span<const JointVector>(result.poses, result.pose_count)));
+  error = outputs.stage_text(
+      out_id, "",
+      textio::format_joints_csv(Span<const JointVector>(result.poses, result.pose_count), request.model.joint_count));
   if (error.ok() && script) error = outputs.stage_text(script_id, "", urscript(request.options));
   if (error.ok() && svg) error = outputs.stage_text(svg_id, "", svg_figure(request));
   return error.ok() ? outputs.commit() : error;

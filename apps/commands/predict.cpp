@@ -57,6 +57,7 @@ Error predict(const Options& options) {
   textio::InputUnits units;
   error = input_units_option(options, &units);
   if (!error.ok()) return error;
+  units.joints = textio::input_joints(calibration.model);
   r = textio::read_joints_csv(options.get("joints"), &poses, units);
   if (!r.ok()) return r;
   // run

@@ -22,11 +22,11 @@ std::string axes_text(const Vec3& v, double scale) {
   return buf;
 }
 
-/// The names of the registered parameters in `mask` ("base_rx, ...").
-std::string registered_param_names(ParamMask mask) {
+/// The names of the registered parameters in `mask` of `model` ("base_rx, ...").
+std::string registered_param_names(ParamMask mask, const RobotModel& model) {
   std::string names;
   for (int k = 0; k < kFullParamCount; ++k)
-    if (mask_has(mask, k)) names += (names.empty() ? "" : ", ") + std::string(full_param_name(k));
+    if (mask_has(mask, k)) names += (names.empty() ? "" : ", ") + std::string(full_param_name(k, model));
   return names;
 }
 
@@ -35,7 +35,7 @@ std::vector<Sample> training_samples(const std::string& calibration_text) {
   std::vector<Sample> samples;
   for (const report::SampleRow& row : record::report_training_samples(calibration_text, "")) {
     Sample s;
-    for (int j = 0; j < kJointCount; ++j) s.q_rad(j) = row.q_rad[j];
+    for (int j = 0; j < row.joint_count; ++j) s.q_rad(j) = row.q_rad[j];
     s.point_m = row.measured_m;
     s.target = row.target;
     samples.push_back(s);
@@ -79,7 +79,7 @@ Error register_calibration(const record::CalibrationFile& calibration, Span<cons
   const std::string what = std::string("--fit ") + registration_fit_name(fit);
   if (status == Status::too_few_samples) {
     return Error::input(what + ": " + std::to_string(samples.size()) + " samples are too few to fit " +
-                        std::to_string(mask_count(registration_mask(fit))) +
+                        std::to_string(mask_count(registration_mask(fit, calibration.model))) +
                         " parameters (3 coordinates each): measure at least 3 poses (4 with --fit frames) at "
                         "non-collinear tool points");
   }
@@ -198,7 +198,7 @@ std::vector<std::string> registration_lines(const RegistrationRun& run, const st
     warnings->push_back(buf);
   }
   if (r.weakness & kRegistrationUndetermined) {
-    warnings->push_back("registration weak: the points do not determine " + registered_param_names(r.dropped) +
+    warnings->push_back("registration weak: the points do not determine " + registered_param_names(r.dropped, r.model) +
                         ": kept at the start (the rigid fit's, or the calibration's) value");
   }
   return lines;

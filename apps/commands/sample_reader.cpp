@@ -97,6 +97,7 @@ streams::SessionConfig sample_session_config(const SampleReaderSettings& setting
   streams::SessionConfig config;
   config.speed_model = arm;
   config.log_options.units = settings.units;
+  config.log_options.units.joints = textio::input_joints(arm);  // q1..qN of the arm's N joints
   config.orientation = settings.orientation;
   config.orientation.joint_sigma_rad = settings.joint_sigma_rad;  // 0: the joint columns' written resolution
   return config;

@@ -281,6 +281,7 @@ Error extract(const cli::Options& options) {
   config.max_speed_m_s = max_speed_mm_s * 1e-3;
   config.window_s = window_s;
   config.log_options.units = units;
+  config.log_options.units.joints = textio::input_joints(robot.model);
   error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (!error.ok()) return error;
   const auto dataset = std::make_unique<cli::HostDataset>();  // as large as the captures' static samples
@@ -297,7 +298,7 @@ Error extract(const cli::Options& options) {
   print_clock(terminal, facts.run.clock);
   print_counts(terminal, facts.run.counts);
   if (out.empty()) return Error{};
-  error = outputs.stage_text(samples_id, "", textio::format_samples_csv(dataset->samples()));
+  error = outputs.stage_text(samples_id, "", textio::format_samples_csv(dataset->samples(), robot.model.joint_count));
   return error.ok() ? outputs.commit() : error;
 }
 

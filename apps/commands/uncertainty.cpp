@@ -40,8 +40,8 @@ void compute_uncertainty(const RobotModel& model, const RigidTransform& base_to_
 }
 
 std::string extrapolation_rule(const CalibrationDomain& d) {
-  std::string joints;  // the joints whose ranges count
-  for (int j = 0; j < kJointCount; ++j)
+  std::string joints;                   // the joints whose ranges count
+  for (int j = 0; j < kMaxJoints; ++j)  // the bits of the arm's joints
     if (d.term_joints & (1U << static_cast<unsigned>(j)))
       joints += (joints.empty() ? "q" : ", q") + std::to_string(j + 1);
   char buf[200];
@@ -62,13 +62,13 @@ std::string extrapolation_rule(const CalibrationDomain& d) {
   return rule;
 }
 
-std::vector<std::string> domain_lines(const record::CalibrationUncertainty& u) {
+std::vector<std::string> domain_lines(const record::CalibrationUncertainty& u, int joints) {
   std::vector<std::string> lines;
   if (!u.has_domain) return lines;
   const CalibrationDomain& d = u.domain;
   std::string ranges;
   char buf[400];
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < joints; ++j) {
     std::snprintf(buf, sizeof buf, "%sq%d %.1f..%.1f", j == 0 ? "" : ", ", j + 1, d.joint_min_rad(j) / math::kRadPerDeg,
                   d.joint_max_rad(j) / math::kRadPerDeg);
     ranges += buf;

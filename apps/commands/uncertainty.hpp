@@ -31,8 +31,8 @@ std::string extrapolation_rule(const CalibrationDomain& domain);
 
 /// The domain statement: the training poses' joint ranges [deg], the tool axis's spread, the
 /// predictions' typical 1-sigma there and when a prediction counts as extrapolated. Empty
-/// without a domain.
-std::vector<std::string> domain_lines(const record::CalibrationUncertainty& uncertainty);
+/// without a domain. `joints`: the arm's joint count (the ranges of q1 .. q<joints>).
+std::vector<std::string> domain_lines(const record::CalibrationUncertainty& uncertainty, int joints);
 
 /// One predicted point, its 1-sigma and whether it is an extrapolation.
 struct Prediction {

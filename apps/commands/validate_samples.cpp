@@ -200,7 +200,8 @@ Error validate_on_samples(const Options& options, std::vector<std::string>* warn
     for (const std::string& line : registration_lines(*run, facts, warnings)) std::fprintf(out, "%s\n", line.c_str());
     if (!note.empty()) std::fprintf(out, "registration: %s\n", note.c_str());
   }
-  for (const std::string& line : domain_lines(calibration.uncertainty)) std::fprintf(out, "%s\n", line.c_str());
+  for (const std::string& line : domain_lines(calibration.uncertainty, calibration.model.joint_count))
+    std::fprintf(out, "%s\n", line.c_str());
   const Predictor predict_point(calibration);
   v.has_uncertainty = predict_point.has_uncertainty();
   v.stats = position_error_stats(calibration.model, calibration.base_to_tracker, scored);

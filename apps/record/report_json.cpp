@@ -27,11 +27,19 @@ void write_accuracy(JsonWriter& json, const AccuracyReport& r) {
   json.end_object();
 }
 
-/// A model and transform: "params" (the 27 DH and tool values, kinematics.hpp order),
+/// A model and transform: "params" (the 4 DH values per joint and the tool point, kinematics.hpp
+/// order: 27 for six joints), "prismatic" (the 1-based prismatic joints, when there are any),
 /// "rotation" (3 rows) and "translation_m"; exact bits, no re-orthonormalisation.
 void write_model(JsonWriter& json, const PredictionSet& set) {
   const ModelParams params = to_params(set.model);
-  json.key("params").inline_array(params.data(), kModelParamCount);
+  json.key("params").inline_array(params.data(), static_cast<std::size_t>(model_param_count(set.model)));
+  if (!all_revolute(set.model)) {
+    std::vector<double> prismatic;
+    for (int j = 0; j < set.model.joint_count; ++j) {
+      if (joint_type(set.model, j) == JointType::prismatic) prismatic.push_back(j + 1);
+    }
+    json.key("prismatic").inline_array(prismatic.data(), prismatic.size());
+  }
   json.key("rotation").begin_array();
   for (int r = 0; r < 3; ++r) {
     const Vec3 row = set.base_to_tracker.rotation.row(r).transpose();
@@ -41,7 +49,7 @@ void write_model(JsonWriter& json, const PredictionSet& set) {
   json.key("translation_m").inline_array(set.base_to_tracker.translation_m.data(), 3);
   if (set.model.compliance.term_count > 0) {  // rigid models: the key is left out (the bytes stay as before)
     json.key("compliance");
-    textio::write_compliance(json, set.model.compliance, Mat3::Identity());
+    textio::write_compliance(json, set.model, Mat3::Identity());
   }
   bool several_targets = false;  // one reflector: the key is left out (the bytes stay as before)
   for (const Vec3& tool_m : set.model.other_tools_m) several_targets = several_targets || !tool_m.isZero();
@@ -188,11 +196,36 @@ bool get_accuracy(const JsonValue* v, AccuracyReport* out) {
          get_stats(v->find("overall"), &out->overall);
 }
 
+/// The joints of a "params" array of 4 values per joint and the tool point's 3; 0 when its
+/// length is not that of a model the build holds.
+int joint_count_of(const JsonValue* params) {
+  if (!is_array(params) || params->array.size() < 3 || (params->array.size() - 3) % kParamsPerJoint != 0) return 0;
+  const auto joints = static_cast<int>((params->array.size() - 3) / kParamsPerJoint);
+  return joints >= 1 && joints <= kMaxJoints ? joints : 0;
+}
+
+/// The joint types of "prismatic" (1-based joint numbers; absent: all revolute) into *model.
+bool get_joint_types(const JsonValue* prismatic, RobotModel* model) {
+  if (prismatic == nullptr) return true;
+  if (!is_array(prismatic)) return false;
+  for (const JsonValue& joint : prismatic->array) {
+    if (joint.kind != JsonValue::Kind::number || !(joint.number >= 1.0) ||
+        !(joint.number <= static_cast<double>(model->joint_count)) || joint.number != std::floor(joint.number)) {
+      return false;
+    }
+    set_joint_type(model, static_cast<int>(joint.number) - 1, JointType::prismatic);
+  }
+  return true;
+}
+
 bool get_model(const JsonValue& v, RobotModel* model, RigidTransform* transform) {
-  ModelParams params;
+  ModelParams params = ModelParams::Zero();
   const JsonValue* rotation = v.find("rotation");
-  if (!get_numbers(v.find("params"), kModelParamCount, params.data()) || !is_array(rotation) ||
-      rotation->array.size() != 3 || !get_numbers(v.find("translation_m"), 3, transform->translation_m.data())) {
+  const int joints = joint_count_of(v.find("params"));
+  if (joints == 0 ||
+      !get_numbers(v.find("params"), static_cast<std::size_t>(model_param_count(joints)), params.data()) ||
+      !is_array(rotation) || rotation->array.size() != 3 ||
+      !get_numbers(v.find("translation_m"), 3, transform->translation_m.data())) {
     return false;
   }
   for (std::size_t r = 0; r < 3; ++r) {
@@ -201,10 +234,13 @@ bool get_model(const JsonValue& v, RobotModel* model, RigidTransform* transform)
     for (std::size_t c = 0; c < 3; ++c)
       transform->rotation(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = row[c];
   }
-  *model = from_params(params);
+  *model = RobotModel{};
+  model->joint_count = joints;
+  set_model_params(params, model);
+  if (!get_joint_types(v.find("prismatic"), model)) return false;
   if (const JsonValue* compliance = v.find("compliance"); compliance != nullptr) {  // compliant models only
     std::string what;
-    if (!textio::read_compliance(*compliance, Mat3::Identity(), &model->compliance, &what)) return false;
+    if (!textio::read_compliance(*compliance, Mat3::Identity(), *model, &model->compliance, &what)) return false;
   }
   if (const JsonValue* others = v.find("other_tools_m"); others != nullptr) {  // several reflectors only
     if (!is_array(others) || others->array.size() != static_cast<std::size_t>(kMaxTargets - 1)) return false;
@@ -252,8 +288,11 @@ bool get_samples(const JsonValue* v, std::vector<SampleRow>* out) {
   for (const JsonValue& s : v->array) {
     SampleRow row;
     double xyz[3];
-    if (!get_numbers(s.find("q_rad"), 6, row.q_rad) || !get_numbers(s.find("measured_m"), 3, xyz) ||
-        !get_bool(s.find("test"), &row.test)) {
+    const JsonValue* joints = s.find("q_rad");  // one per joint of the arm
+    row.joint_count = is_array(joints) ? static_cast<int>(joints->array.size()) : 0;
+    if (row.joint_count < 1 || row.joint_count > kMaxJoints ||
+        !get_numbers(joints, static_cast<std::size_t>(row.joint_count), row.q_rad) ||
+        !get_numbers(s.find("measured_m"), 3, xyz) || !get_bool(s.find("test"), &row.test)) {
       return false;
     }
     row.measured_m = Vec3(xyz[0], xyz[1], xyz[2]);
@@ -489,7 +528,7 @@ void write_report_data(JsonWriter& json, const ReportData& data) {
   json.key("samples").begin_array();
   for (const SampleRow& s : data.samples) {
     json.begin_object();
-    json.key("q_rad").inline_array(s.q_rad, 6);
+    json.key("q_rad").inline_array(s.q_rad, static_cast<std::size_t>(s.joint_count));
     json.key("measured_m").inline_array(s.measured_m.data(), 3);
     json.key("test").value(s.test);
     if (s.target != 0) json.key("target").value(static_cast<long long>(s.target));

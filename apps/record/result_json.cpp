@@ -120,10 +120,10 @@ void write_lm_details(JsonWriter& json, const LmResult& lm, const RobotModel& mo
 
 void write_ur_deltas(JsonWriter& json, const UrCalibrationDeltas& deltas) {
   json.key("ur_deltas").begin_object();
-  json.key("delta_theta").inline_array(deltas.delta_theta_rad, kJointCount);
-  json.key("delta_a").inline_array(deltas.delta_a_m, kJointCount);
-  json.key("delta_d").inline_array(deltas.delta_d_m, kJointCount);
-  json.key("delta_alpha").inline_array(deltas.delta_alpha_rad, kJointCount);
+  json.key("delta_theta").inline_array(deltas.delta_theta_rad, kSixJoints);
+  json.key("delta_a").inline_array(deltas.delta_a_m, kSixJoints);
+  json.key("delta_d").inline_array(deltas.delta_d_m, kSixJoints);
+  json.key("delta_alpha").inline_array(deltas.delta_alpha_rad, kSixJoints);
   json.end_object();
 }
 
@@ -187,8 +187,8 @@ void write_cross_validation(JsonWriter& w, const CalibrationRecord& record) {
   w.end_object();
 }
 
-void write_joint_vector(JsonWriter& w, const char* name, const JointVector& q) {
-  w.key(name).inline_array(q.data(), kJointCount);
+void write_joint_vector(JsonWriter& w, const char* name, const JointVector& q, int joints) {
+  w.key(name).inline_array(q.data(), static_cast<std::size_t>(joints));
 }
 
 /// The full-model index of a parameter named as full_param_name(k, model) writes it; -1: none.
@@ -238,7 +238,7 @@ port::Error parse_covariance(const JsonValue& c, const std::string& source, cons
   return port::Error{};
 }
 
-port::Error parse_domain(const JsonValue& d, const std::string& source, CalibrationDomain* domain) {
+port::Error parse_domain(const JsonValue& d, const std::string& source, int joints, CalibrationDomain* domain) {
   const auto number = [&](const char* key, double* value) {
     const JsonValue* v = d.find(key);
     if (v == nullptr || v->kind != JsonValue::Kind::number || !std::isfinite(v->number)) return false;
@@ -248,8 +248,9 @@ port::Error parse_domain(const JsonValue& d, const std::string& source, Calibrat
   double poses = 0.0;
   double term_joints = 0.0;
   const bool ok =
-      number("poses", &poses) && read_json_numbers(d.find("joint_min_rad"), 6, domain->joint_min_rad.data()) &&
-      read_json_numbers(d.find("joint_max_rad"), 6, domain->joint_max_rad.data()) &&
+      number("poses", &poses) &&
+      read_json_numbers(d.find("joint_min_rad"), static_cast<std::size_t>(joints), domain->joint_min_rad.data()) &&
+      read_json_numbers(d.find("joint_max_rad"), static_cast<std::size_t>(joints), domain->joint_max_rad.data()) &&
       read_json_numbers(d.find("tool_axis_mean"), 3, domain->tool_axis_mean.data()) &&
       number("tool_axis_spread_rad", &domain->tool_axis_spread_rad) &&
       number("tool_axis_rms_rad", &domain->tool_axis_rms_rad) && number("typical_sigma_m", &domain->typical_sigma_m) &&
@@ -258,9 +259,10 @@ port::Error parse_domain(const JsonValue& d, const std::string& source, Calibrat
       number("tool_axis_margin_rad", &domain->tool_axis_margin_rad);
   if (!ok || poses < 0.0 || !(term_joints >= 0.0 && term_joints < 64.0)) {
     return fail(source,
-                "\"domain\" needs poses, joint_min_rad, joint_max_rad (6 numbers each), tool_axis_mean (3), "
-                "tool_axis_spread_rad, tool_axis_rms_rad, typical_sigma_m, max_sigma_m, term_joints (0 .. 63), "
-                "sigma_factor, joint_margin_rad and tool_axis_margin_rad");
+                "\"domain\" needs poses, joint_min_rad, joint_max_rad (" + std::to_string(joints) +
+                    " numbers each, one per joint), tool_axis_mean (3), "
+                    "tool_axis_spread_rad, tool_axis_rms_rad, typical_sigma_m, max_sigma_m, term_joints (0 .. 63), "
+                    "sigma_factor, joint_margin_rad and tool_axis_margin_rad");
   }
   domain->term_joints = static_cast<unsigned>(term_joints);
   domain->poses = static_cast<std::size_t>(poses);
@@ -274,7 +276,7 @@ port::Error parse_uncertainty(const JsonValue& root, const std::string& source, 
     if (!r.ok()) return r;
   }
   if (const JsonValue* d = root.find("domain"); d != nullptr) {
-    const port::Error r = parse_domain(*d, source, &file->uncertainty.domain);
+    const port::Error r = parse_domain(*d, source, file->model.joint_count, &file->uncertainty.domain);
     if (!r.ok()) return r;
     file->uncertainty.has_domain = true;
   }
@@ -323,8 +325,8 @@ void write_uncertainty(JsonWriter& w, const CalibrationUncertainty& u, const Rob
     const CalibrationDomain& d = u.domain;
     w.key("domain").begin_object();
     w.key("poses").value(static_cast<long long>(d.poses));
-    write_joint_vector(w, "joint_min_rad", d.joint_min_rad);
-    write_joint_vector(w, "joint_max_rad", d.joint_max_rad);
+    write_joint_vector(w, "joint_min_rad", d.joint_min_rad, model.joint_count);
+    write_joint_vector(w, "joint_max_rad", d.joint_max_rad, model.joint_count);
     w.key("tool_axis_mean").inline_array(d.tool_axis_mean.data(), 3);
     w.key("tool_axis_spread_rad").value(d.tool_axis_spread_rad);
     w.key("tool_axis_rms_rad").value(d.tool_axis_rms_rad);
@@ -422,7 +424,7 @@ std::string format_result_json(const CalibrationRecord& record) {
         w.end_object();
       }
     }
-    write_ur_deltas(w, record.ur_deltas);
+    if (record.ur_shape) write_ur_deltas(w, record.ur_deltas);  // calibration.conf is a UR's
     if (record.facts != nullptr) {
       const streams::SessionFacts& facts = *record.facts;
       write_input_facts(w, facts);

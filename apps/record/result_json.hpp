@@ -71,6 +71,7 @@ struct CalibrationRecord {
   double joint_sigma_position_sigma_m = 0.0;     ///< the position sigma it was weighed against [m]
   bool controller_tcp = false;                   ///< base and tool known (the controller's TCP readings)
   UrCalibrationDeltas ur_deltas;                 ///< the model as UR calibration.conf deltas from the start
+  bool ur_shape = true;                          ///< the arm has a UR's joints (has_ur_joints): ur_deltas written
   const streams::SessionFacts* facts = nullptr;  ///< input facts: clock, extraction, orientation, sources
   const CrossValidationResult* cv = nullptr;     ///< --cv's folds, else null
   /// Per fold of `cv`: the samples it held out, as ranges of what names them ("2-4, 7"); may be empty.

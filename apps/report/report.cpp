@@ -318,7 +318,7 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   const std::vector<double> rigid_um = rigid != nullptr ? residuals_um(data, *rigid) : std::vector<double>{};
   const double y_hi = std::max(max_of(residual_um), max_of(rigid_um));
   const std::vector<std::size_t> drawn = evenly_spaced(residual_um.size(), kScatterPointCap);
-  for (int j = 0; j < 6; ++j) {
+  for (int j = 0; j < after.model.joint_count; ++j) {
     const bool before_after = rigid != nullptr && deflected_joint(after.model, j);
     const double deg = math::kDegPerRad;
     std::vector<Series> series;
@@ -777,7 +777,7 @@ PredictionSet predict_samples(const std::string& method, const RobotModel& model
   PredictionSet set{method, model, base_to_tracker, {}};
   for (const SampleRow& s : samples) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = s.q_rad[j];
+    for (int j = 0; j < s.joint_count; ++j) q(j) = s.q_rad[j];
     set.points_m.push_back(base_to_tracker.apply(fk_target_point(model, q, s.target)));
   }
   return set;

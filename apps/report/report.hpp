@@ -37,7 +37,8 @@ struct ConvergenceSeries {
 
 /// One paired sample as the figures need it.
 struct SampleRow {
-  double q_rad[6] = {};            ///< joint angles [rad]
+  double q_rad[kMaxJoints] = {};   ///< joint positions: angles [rad], a prismatic joint's [m]
+  int joint_count = kSixJoints;    ///< joints of the arm: q_rad's first entries [-]
   Vec3 measured_m = Vec3::Zero();  ///< tracker point [m]
   bool test = false;               ///< held out (test set), else training
   int target = 0;                  ///< reflector measured, 0-based (several targets) [-]

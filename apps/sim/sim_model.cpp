@@ -72,7 +72,7 @@ void Session::build_truth(Random* random) {
     (void)apply_ur_deltas(truth_.nominal, config_.deltas, &truth_.model);
   } else {
     truth_.model = truth_.nominal;
-    for (DhJoint& joint : truth_.model.joints) {
+    for (DhJoint& joint : model_joints(&truth_.model)) {
       joint.theta_offset_rad += config_.angle_sigma_rad * random->normal();
       joint.d_m += config_.length_sigma_m * random->normal();
       joint.a_m += config_.length_sigma_m * random->normal();
@@ -106,7 +106,8 @@ JointVector Session::random_waypoint(Random* random) const {
   // take poses spread over their joints, above the base plane.
   const RobotModel& model = truth_.nominal;
   const double reach_m = -(model.joints[1].a_m + model.joints[2].a_m);
-  if (!(reach_m > 0.2)) return general_waypoint(random);
+  if (!(reach_m > 0.2) || model.joint_count != kSixJoints || model.prismatic_joints != 0)
+    return general_waypoint(random);
   for (;;) {
     JointVector q;
     q(0) = random->uniform(-1.6, 1.6);
@@ -130,6 +131,10 @@ JointVector Session::general_waypoint(Random* random) const {
     q(3) = random->uniform(-1.5, 1.5);
     q(4) = random->uniform(0.3, 1.6);
     q(5) = random->uniform(-1.5, 1.5);
+    for (int j = kSixJoints; j < truth_.nominal.joint_count; ++j) q(j) = random->uniform(-1.5, 1.5);  // a 7th ..
+    for (int j = 0; j < truth_.nominal.joint_count; ++j) {  // a slide anywhere on its first half metre
+      if (joint_type(truth_.nominal, j) == JointType::prismatic) q(j) = 0.5 * std::fabs(q(j)) / 1.6;
+    }
     if (random->uniform(0.0, 1.0) < 0.5) q(4) = -q(4);  // both wrist branches
     if (fk_tool_point(truth_.nominal, q).z() > 0.05) break;
   }
@@ -202,7 +207,7 @@ JointVector simulated_compliance(const RobotModel& truth, double j2_rad, double 
 JointVector Session::compliance(const JointVector& q_rad) const {
   JointVector dq = simulated_compliance(truth_.model, config_.compliance_j2_rad, config_.compliance_j3_rad, q_rad);
   const int j = config_.harmonic_joint;
-  if (j >= 0 && j < kJointCount) {
+  if (j >= 0 && j < truth_.model.joint_count) {
     const double angle = static_cast<double>(config_.harmonic_order) * q_rad(j);
     dq(j) += config_.harmonic_sin_rad * math::sin(angle) + config_.harmonic_cos_rad * math::cos(angle);
   }
@@ -255,7 +260,8 @@ bool RobotStream::next(JointStateRecord* record) {
     const JointVector qd = session_.joint_speeds_at(t_s);
     record->sequence = sequence;
     record->timestamp_us = t_us;
-    for (int j = 0; j < kJointCount; ++j) {
+    record->joint_count = session_.truth().model.joint_count;
+    for (int j = 0; j < record->joint_count; ++j) {
       record->q_rad[j] = q(j);
       record->qd_rad_s[j] = qd(j);
       record->current_a[j] = static_cast<float>(0.8 * qd(j) + (j == 1 || j == 2 ? 1.5 * math::cos(q(1)) : 0.1));

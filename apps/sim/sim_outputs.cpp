@@ -67,7 +67,7 @@ bool write_csv(const Session& session, const char* header, Row row, port::Staged
 
 std::string robot_row(const JointStateRecord& r) {
   std::string line = seconds_text(r.timestamp_us);
-  for (const double q : r.q_rad) line += "," + textio::format_double(q);
+  for (int j = 0; j < r.joint_count; ++j) line += "," + textio::format_double(r.q_rad[j]);
   return line + "\n";
 }
 
@@ -77,10 +77,10 @@ std::string tracker_row(const TrackerPointRecord& r) {
   return line + "," + std::to_string(r.status) + "\n";
 }
 
-std::string truth_sample_row(const TruthSample& s) {
+std::string truth_sample_row(const TruthSample& s, int joints) {
   std::string line =
       std::to_string(s.waypoint) + "," + seconds_text(s.tracker_us) + "," + textio::format_double(s.robot_us * 1e-6);
-  for (int j = 0; j < kJointCount; ++j) line += "," + textio::format_double(s.q_rad(j));
+  for (int j = 0; j < joints; ++j) line += "," + textio::format_double(s.q_rad(j));
   for (int a = 0; a < 3; ++a) line += "," + textio::format_double(s.point_m(a));
   return line + "\n";
 }
@@ -127,7 +127,8 @@ void write_simulation_members(const Session& session, double truth_margin_s, tex
   json.end_object();
   json.key("truth_sample_margin_s").value(truth_margin_s);
   json.key("waypoints").begin_array();
-  for (const JointVector& q : session.waypoints()) json.inline_array(q.data(), kJointCount);
+  for (const JointVector& q : session.waypoints())
+    json.inline_array(q.data(), static_cast<std::size_t>(session.truth().model.joint_count));
   json.end_array();
   json.key("stops").begin_array();
   for (const Segment& s : session.schedule()) {
@@ -152,8 +153,9 @@ bool write_truth_json(const Session& session, double truth_margin_s, port::Stage
 }
 
 bool write_truth_samples(const Session& session, double margin_s, port::StagedFile& file) {
-  file.write("waypoint,t_tracker,t_robot,q1,q2,q3,q4,q5,q6,x,y,z\n");
-  for (const TruthSample& s : truth_samples(session, margin_s)) file.write(truth_sample_row(s));
+  const int joints = session.truth().model.joint_count;
+  file.write("waypoint,t_tracker,t_robot," + textio::joint_header(joints) + ",x,y,z\n");
+  for (const TruthSample& s : truth_samples(session, margin_s)) file.write(truth_sample_row(s, joints));
   return true;
 }
 
@@ -188,7 +190,8 @@ port::Error stage_outputs(const Session& session, bool with_captures, double tru
        [&](port::StagedFile& f) { return write_capture<TrackerStream, TrackerPointRecord>(session, f); }},
       {kLogAndTruthNames[0],
        [&](port::StagedFile& f) {
-         return write_csv<RobotStream, JointStateRecord>(session, "t,q1,q2,q3,q4,q5,q6", robot_row, f);
+         const std::string header = "t," + textio::joint_header(session.truth().model.joint_count);
+         return write_csv<RobotStream, JointStateRecord>(session, header.c_str(), robot_row, f);
        }},
       {kLogAndTruthNames[1],
        [&](port::StagedFile& f) {

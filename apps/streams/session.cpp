@@ -166,6 +166,14 @@ port::Error load_streams(const SessionSources& sources, const SessionConfig& con
                               (report.robot.records == 0 ? "robot" : "tracker") +
                               (empty.is_log() ? " log" : " capture"));
   }
+  if (report.clock_status == Status::joint_count_mismatch) {  // the records of another arm: never cut nor padded
+    const int joints = config.speed_model.joint_count;
+    return port::Error::input(std::to_string(report.clock_stats.robot_joint_count_mismatches) + " of the " +
+                              std::to_string(report.clock_stats.robot_records) +
+                              " robot records carry another joint count than the robot model's " +
+                              std::to_string(joints) + " joints (q1..q" + std::to_string(joints) +
+                              "): the joint states of another arm? (--robot-model names the arm)");
+  }
   if (report.clock_status != Status::ok) {
     return port::Error::input(std::string("clock relation not found: ") + clock_failure_cause(report));
   }

@@ -1,6 +1,7 @@
 #include "textio/csv.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -23,9 +24,9 @@ struct CsvSchema {
   std::string optional_leading;      ///< a column that may come first (ignored), or ""
   std::string optional_trailing;     ///< a unitless column that may follow them (its value appended), or ""
   std::vector<std::string>
-      optional_group;             ///< angle columns found by name after them, all or none (values appended last)
-  bool angles_are_joints = true;  ///< angle columns are joint positions (checked within one turn)
-  bool nameable = true;           ///< --columns can name the columns (textio::parse_column_aliases)
+      optional_group;      ///< angle columns found by name after them, all or none (values appended last)
+  std::size_t joints = 0;  ///< the first `joints` columns are the arm's joints q1.. (InputUnits::joints)
+  bool nameable = true;    ///< --columns can name the columns (textio::parse_column_aliases)
 };
 
 /// Which optional columns a file had.
@@ -37,20 +38,22 @@ struct CsvFound {
   /// value does not coarsen it), in the first joint column's unit converted to rad; 0 when not
   /// known [rad].
   double joint_resolution_rad = 0.0;
+  /// The factor to SI of each schema column, in order [SI per unit].
+  std::vector<double> scales{};
 };
 
 /// Joint names as a UR teach pendant's export writes them ("Base (°)", ..., "Wrist 3 (°)").
-const char* const kPendantJointNames[kJointCount] = {"base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3"};
+const char* const kPendantJointNames[kSixJoints] = {"base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3"};
 
 /// Joint names as ROS (joint_states, the UR driver's URDF) writes them.
-const char* const kRosJointNames[kJointCount] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
-                                                 "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
+const char* const kRosJointNames[kSixJoints] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                                                "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
 
-/// True when header column `name` is schema column `wanted`: equal, or the pendant's or ROS's
-/// name of joint qN.
-bool column_matches(const std::string& name, const std::string& wanted) {
+/// True when header column `name` is schema column `wanted`: equal, or (`ur_names`: the arm has
+/// a UR's six revolute joints) the pendant's or ROS's name of joint qN.
+bool column_matches(const std::string& name, const std::string& wanted, bool ur_names) {
   if (name == wanted) return true;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; ur_names && j < kSixJoints; ++j) {
     if (wanted == "q" + std::to_string(j + 1)) return name == kPendantJointNames[j] || name == kRosJointNames[j];
   }
   return false;
@@ -87,10 +90,11 @@ std::string misnamed_column(const DelimitedReader& r, const ColumnAlias& alias) 
 std::vector<std::size_t> locate_columns(const DelimitedReader& r, const CsvSchema& schema, const InputUnits& units,
                                         std::size_t offset, std::string* missing, std::string* misnamed) {
   const std::vector<Column>& header = r.columns();
+  const bool ur_names = units.joints.count == kSixJoints && units.joints.prismatic == 0;
   std::vector<std::size_t> at;
   bool in_order = units.columns.empty() && header.size() >= offset + schema.columns.size();
   for (std::size_t i = 0; in_order && i < schema.columns.size(); ++i) {
-    in_order = column_matches(header[offset + i].name, schema.columns[i]);
+    in_order = column_matches(header[offset + i].name, schema.columns[i], ur_names);
     at.push_back(offset + i);
   }
   if (in_order) return at;
@@ -100,7 +104,7 @@ std::vector<std::size_t> locate_columns(const DelimitedReader& r, const CsvSchem
     const std::string mapped = mapped_name(units, wanted);
     int found = -1;
     for (std::size_t k = 0; found < 0 && k < header.size(); ++k) {
-      if (mapped.empty() ? column_matches(header[k].name, wanted) : header[k].name == mapped)
+      if (mapped.empty() ? column_matches(header[k].name, wanted, ur_names) : header[k].name == mapped)
         found = static_cast<int>(k);
     }
     if (found < 0) *missing += (missing->empty() ? "" : ", ") + (mapped.empty() ? wanted : wanted + "=" + mapped);
@@ -119,6 +123,67 @@ std::string join(const std::vector<std::string>& names) {
   std::string out;
   for (const std::string& n : names) out += (out.empty() ? "" : ",") + n;
   return out;
+}
+
+/// The header column that --columns' naming of the arm's last joint predicts for one joint
+/// more ("joint_7" when q6=joint_6), or "" when that name holds no joint number.
+std::string next_joint_column(const InputUnits& units) {
+  const int joints = units.joints.count;
+  const std::string last = mapped_name(units, "q" + std::to_string(joints));
+  const std::string number = std::to_string(joints);
+  const std::size_t at = last.rfind(number);
+  if (at == std::string::npos || column_terms(last).size() != 1) return "";
+  const bool digit_before = at > 0 && std::isdigit(static_cast<unsigned char>(last[at - 1])) != 0;
+  const bool digit_after =
+      at + number.size() < last.size() && std::isdigit(static_cast<unsigned char>(last[at + number.size()])) != 0;
+  if (digit_before || digit_after) return "";  // "joint_16" is no joint 6
+  return last.substr(0, at) + std::to_string(joints + 1) + last.substr(at + number.size());
+}
+
+/// Fault::usage for a --columns entry naming a joint beyond the arm's (q7=... for six joints),
+/// Fault::input for a header with a joint column beyond them (q7 for six joints, or joint_7 when
+/// --columns names q6=joint_6: never cut) or (`missing`: what was not found) without all of
+/// them, naming both counts; ok otherwise.
+port::Error check_joint_count(const DelimitedReader& r, const InputUnits& units, const std::string& missing) {
+  const int joints = units.joints.count;
+  const std::string model = "the robot model has " + std::to_string(joints) + (joints == 1 ? " joint (" : " joints (") +
+                            joint_names(joints) + ")";
+  for (const ColumnAlias& alias : units.columns) {
+    if (joint_number(alias.column) > joints)
+      return port::Error::usage("--columns " + port::quoted(column_alias_text(alias)) + ": " + model);
+  }
+  const std::string next = next_joint_column(units);
+  if (!next.empty() && r.find(next) >= 0) {
+    return port::Error::input(r.name() + ": its header has a column " + port::quoted(next) + " after --columns' q" +
+                              std::to_string(joints) + "=" + mapped_name(units, "q" + std::to_string(joints)) +
+                              ", but " + model + ": the joints of another arm? (--robot-model names the arm)");
+  }
+  int highest = 0;   // the highest qK in the header or --columns
+  int in_a_row = 0;  // q1 .. q<in_a_row> all there
+  for (int k = 1; k <= 99; ++k) {
+    const std::string name = "q" + std::to_string(k);
+    if (r.find(name) < 0 && mapped_name(units, name).empty()) continue;
+    highest = k;
+    if (in_a_row == k - 1) in_a_row = k;
+  }
+  if (highest > joints) {
+    return port::Error::input(r.name() + ": its header has joint columns up to q" + std::to_string(highest) + ", but " +
+                              model + ": the joints of another arm? (--robot-model names the arm)");
+  }
+  if (!missing.empty() && in_a_row > 0 && in_a_row < joints && highest == in_a_row) {
+    const bool named = std::any_of(units.columns.begin(), units.columns.end(),
+                                   [](const ColumnAlias& alias) { return joint_number(alias.column) > 0; });
+    if (named) {  // the header may well hold the rest under names of its own
+      const std::string rest =
+          "q" + std::to_string(in_a_row + 1) + (in_a_row + 1 < joints ? "..q" + std::to_string(joints) : std::string());
+      return port::Error::usage("--columns names " + joint_names(in_a_row) + ", but " + model + ": name " + rest +
+                                " too");
+    }
+    return port::Error::input(r.name() + ": its header has " + std::to_string(in_a_row) + " joint columns (" +
+                              joint_names(in_a_row) + "), but " + model +
+                              ": the joints of another arm? (--robot-model names the arm)");
+  }
+  return port::Error{};
 }
 
 /// Reads the whole file (through the one delimited-text reader, delimited.hpp) into
@@ -142,6 +207,10 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   std::string misnamed;
   const std::vector<std::size_t> at = locate_columns(r, schema, units, offset, &missing, &misnamed);
   if (!misnamed.empty()) return port::Error::usage(misnamed);  // the option's fault, not the file's
+  if (schema.joints > 0) {
+    const port::Error counted = check_joint_count(r, units, missing);
+    if (!counted.ok()) return counted;
+  }
   if (at.empty()) {
     const bool hint = schema.nameable && units.columns_option;  // only where the command has --columns
     return port::Error::input(r.where() + "unexpected header " + port::quoted(r.header_line()) + ", expected " +
@@ -154,8 +223,9 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   std::size_t first_length = 0;      // their first value's place in the row's values
   for (std::size_t i = 0; i < scales.size(); ++i) {
     if (!r.column_scale(at[i], schema.quantities[i], &scales[i])) return port::Error::input(r.error());
-    if (schema.quantities[i] == Quantity::length && lengths.empty()) first_length = i;
-    if (schema.quantities[i] == Quantity::length) lengths.push_back(at[i]);
+    const bool point = schema.quantities[i] == Quantity::length && i >= schema.joints;  // x, y, z
+    if (point && lengths.empty()) first_length = i;
+    if (point) lengths.push_back(at[i]);
   }
   // The optional columns: right after the fixed columns, or by name in a named header.
   const std::size_t trailing_from = in_order ? offset + schema.columns.size() : 0;
@@ -180,7 +250,7 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
   for (std::size_t k = 0; k < group.size(); ++k) {
     if (!r.column_scale(group[k], Quantity::angle, &group_scales[k])) return port::Error::input(r.error());
   }
-  if (found != nullptr) *found = CsvFound{has_trailing, !group.empty()};
+  if (found != nullptr) *found = CsvFound{has_trailing, !group.empty(), 0.0, scales};
   const std::size_t group_at = schema.columns.size() + (has_trailing ? 1 : 0);
   std::vector<double> values(group_at + group.size());
   int finest_joint_exponent = std::numeric_limits<int>::max();  // of the joints' written resolution
@@ -196,7 +266,9 @@ port::Error read_csv(const std::string& path, const CsvSchema& schema, const Inp
     if (group.size() == 3 && !r.check_rotation(group.data(), &values[group_at])) return port::Error::input(r.error());
     for (std::size_t i = 0; i < schema.columns.size(); ++i) {
       if (!r.number(at[i], scales[i], &values[i])) return port::Error::input(r.error());
-      if (schema.quantities[i] == Quantity::angle && schema.angles_are_joints) {
+      if (i < schema.joints && schema.quantities[i] == Quantity::length) {  // a prismatic joint
+        if (!r.check_slide(++joint, at[i], values[i])) return port::Error::input(r.error());
+      } else if (i < schema.joints) {
         if (!r.check_joint(++joint, at[i], values[i])) return port::Error::input(r.error());
         int exponent = 0;
         if (written_resolution_exponent(r.fields()[at[i]], &exponent))
@@ -229,15 +301,25 @@ std::string check_finite(const std::vector<double>& values, std::size_t first, s
   return "";
 }
 
-const std::vector<std::string> kJointColumns = {"q1", "q2", "q3", "q4", "q5", "q6"};
+/// The joint columns of the arm: q1 .. q<count>.
+std::vector<std::string> joint_columns(const InputJoints& joints) {
+  std::vector<std::string> names;
+  for (int j = 0; j < joints.count; ++j) names.push_back("q" + std::to_string(j + 1));
+  return names;
+}
+
+/// What each joint column measures: a prismatic joint a length, a revolute one an angle.
+std::vector<Quantity> joint_quantities(const InputJoints& joints) {
+  std::vector<Quantity> quantities;
+  for (int j = 0; j < joints.count; ++j) quantities.push_back(joints.slides(j) ? Quantity::length : Quantity::angle);
+  return quantities;
+}
 
 template <typename T>
 std::vector<T> with(std::vector<T> a, const std::vector<T>& b) {
   a.insert(a.end(), b.begin(), b.end());
   return a;
 }
-
-const std::vector<Quantity> kJointQuantities(kJointCount, Quantity::angle);
 
 /// A row whose orientation makes targets 2 and 3: added once the file is read, when the lever
 /// (which may depend on the joints' written resolution) is known.
@@ -270,12 +352,16 @@ double lever_for(const OrientationInput& orientation, double joint_resolution_ra
 
 }  // namespace
 
+InputJoints input_joints(const RobotModel& model) {
+  return InputJoints{model.joint_count, model.prismatic_joints};
+}
+
 double joint_position_variance_m2(double joint_sigma_rad, const RobotModel& arm, Span<const JointVector> poses) {
   if (poses.empty()) return 0.0;
   constexpr double kStep_rad = 1e-6;  // central differences: the error is ~1e-12 of |J|
   double jacobian_norm2_m2 = 0.0;     // sum over the poses of |d point / d q|_F^2
   for (const JointVector& q_rad : poses) {
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < arm.joint_count; ++j) {
       JointVector ahead = q_rad;
       JointVector behind = q_rad;
       ahead(j) += kStep_rad;
@@ -299,11 +385,14 @@ double noise_lever_m(double position_sigma_m, double angle_sigma_rad, double joi
 port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, const InputUnits& units,
                              std::vector<std::size_t>* lines, const OrientationInput& orientation,
                              OrientationRead* found) {
-  const CsvSchema schema{with(kJointColumns, {"x", "y", "z"}),
-                         with(kJointQuantities, {Quantity::length, Quantity::length, Quantity::length}),
+  const int joints = units.joints.count;
+  const std::size_t n = static_cast<std::size_t>(joints);
+  const CsvSchema schema{with(joint_columns(units.joints), {"x", "y", "z"}),
+                         with(joint_quantities(units.joints), {Quantity::length, Quantity::length, Quantity::length}),
                          "",
                          "target",
-                         {"rx", "ry", "rz"}};
+                         {"rx", "ry", "rz"},
+                         n};
   const double given_lever_m = orientation.lever();
   if (!(given_lever_m >= 0.0 && math::is_finite(given_lever_m))) {
     return port::Error::usage("orientation lever " + format_double(given_lever_m) +
@@ -317,7 +406,7 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
   port::Error result = read_csv(
       path, schema, units,
       [&](const std::vector<double>& values) {
-        const std::string error = check_finite(values, 0, 9);
+        const std::string error = check_finite(values, 0, n + 3);
         if (!error.empty()) return error;
         if (columns.group && !check_finite(values, values.size() - 3, 3).empty()) {
           return std::string("NaN or Inf in the rotation vector rx, ry, rz");
@@ -329,15 +418,15 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
         }
         int target = 0;  // 0-based; no target column: every row is target 1
         if (columns.trailing) {
-          const double named = values[9];
+          const double named = values[n + 3];
           if (!(named >= 1.0 && named <= kMaxTargets && named == std::floor(named))) {
             return "target " + format_double(named) + " is not an integer from 1 to " + std::to_string(kMaxTargets);
           }
           target = static_cast<int>(named) - 1;
         }
         JointVector q;
-        for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
-        const Vec3 point_m(values[6], values[7], values[8]);
+        for (int j = 0; j < joints; ++j) q(j) = values[static_cast<std::size_t>(j)];
+        const Vec3 point_m(values[n], values[n + 1], values[n + 2]);
         if (columns.group && given_lever_m > 0.0) {  // targets 2 and 3 once the lever is known
           const std::size_t at = values.size() - 3;
           const Vec3 angles_rad(values[at], values[at + 1], values[at + 2]);
@@ -390,52 +479,77 @@ void start_orientation_targets(const OrientationRead& read, RobotModel* start) {
 }
 
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units) {
-  return read_csv(path, CsvSchema{kJointColumns, kJointQuantities, "t", "", {}}, units,
-                  [&](const std::vector<double>& values) {
-                    const std::string error = check_finite(values, 0, 6);
-                    if (!error.empty()) return error;
-                    JointVector q;
-                    for (int j = 0; j < kJointCount; ++j) q(j) = values[static_cast<std::size_t>(j)];
-                    poses->push_back(q);
-                    return std::string();
-                  });
+  const int joints = units.joints.count;
+  const CsvSchema schema{joint_columns(units.joints),     joint_quantities(units.joints), "t", "", {},
+                         static_cast<std::size_t>(joints)};
+  return read_csv(path, schema, units, [&](const std::vector<double>& values) {
+    const std::string error = check_finite(values, 0, static_cast<std::size_t>(joints));
+    if (!error.empty()) return error;
+    JointVector q;
+    for (int j = 0; j < joints; ++j) q(j) = values[static_cast<std::size_t>(j)];
+    poses->push_back(q);
+    return std::string();
+  });
 }
 
 port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad,
                                   const InputUnits& units) {
   JointVector lower;
   JointVector upper;
+  const InputJoints& joints = units.joints;
+  const std::string one_per_joint = "one per joint: the robot model has " + std::to_string(joints.count) + " joints";
   int rows = 0;
+  CsvFound found;
   CsvSchema schema{{"lower", "upper"}, {Quantity::angle, Quantity::angle}, "", "", {}};
-  schema.angles_are_joints = false;  // a limit may span two turns (J6 +-720 deg)
-  schema.nameable = false;           // --columns names q1..q6, x, y, z, ...: not lower, upper
-  port::Error error = read_csv(path, schema, units, [&](const std::vector<double>& values) {
-    const std::string bad = check_finite(values, 0, 2);
-    if (!bad.empty()) return bad;
-    if (rows == kJointCount) return std::string("more than six rows (one per joint)");
-    if (!(std::fabs(values[0]) <= kMaxJointLimit_rad) || !(std::fabs(values[1]) <= kMaxJointLimit_rad)) {
-      return std::string(
-          "a limit beyond two turns (4 pi rad): degrees? name the unit in the header (lower [deg]) "
-          "or give --angle-unit deg");
-    }
-    if (!(values[0] < values[1])) return std::string("lower limit not below the upper one");
-    lower(rows) = values[0];
-    upper(rows) = values[1];
-    ++rows;
-    return std::string();
-  });
+  schema.nameable = false;  // --columns names q1..qN, x, y, z, ...: not lower, upper
+  // A limit may span two turns (J6 +-720 deg): the columns are no joint positions (schema.joints 0).
+  port::Error error = read_csv(
+      path, schema, units,
+      [&](const std::vector<double>& values) {
+        const std::string bad = check_finite(values, 0, 2);
+        if (!bad.empty()) return bad;
+        if (rows == joints.count) return "more than " + std::to_string(joints.count) + " rows (" + one_per_joint + ")";
+        if (joints.slides(rows)) {  // a prismatic joint's limits: lengths in m, the angle unit not applied
+          if (found.scales[0] != 1.0 || found.scales[1] != 1.0) {
+            return "joint " + std::to_string(rows + 1) +
+                   " is prismatic: its limits are in m, and this file's are angles in another unit than rad: give "
+                   "them in rad and m";
+          }
+          if (!(std::fabs(values[0]) <= kMaxJointTravel_m) || !(std::fabs(values[1]) <= kMaxJointTravel_m)) {
+            return "joint " + std::to_string(rows + 1) + " is prismatic: a limit beyond " +
+                   format_double(kMaxJointTravel_m) + " m: millimetres?";
+          }
+        } else if (!(std::fabs(values[0]) <= kMaxJointLimit_rad) || !(std::fabs(values[1]) <= kMaxJointLimit_rad)) {
+          return std::string(
+              "a limit beyond two turns (4 pi rad): degrees? name the unit in the header (lower [deg]) "
+              "or give --angle-unit deg");
+        }
+        if (!(values[0] < values[1])) return std::string("lower limit not below the upper one");
+        lower(rows) = values[0];
+        upper(rows) = values[1];
+        ++rows;
+        return std::string();
+      },
+      nullptr, &found);
   if (!error.ok()) return error;
-  if (rows != kJointCount)
-    return port::Error::input(path + ": " + std::to_string(rows) + " rows, expected six (one per joint)");
+  if (rows != joints.count)
+    return port::Error::input(path + ": " + std::to_string(rows) + " rows, expected " + std::to_string(joints.count) +
+                              " (" + one_per_joint + ")");
   *lower_rad = lower;
   *upper_rad = upper;
   return error;
 }
 
-std::string format_joints_csv(Span<const JointVector> poses_rad) {
-  std::string out = "q1,q2,q3,q4,q5,q6\n";
+std::string joint_header(int joints) {
+  std::string out;
+  for (int j = 0; j < joints; ++j) out += (j == 0 ? "q" : ",q") + std::to_string(j + 1);
+  return out;
+}
+
+std::string format_joints_csv(Span<const JointVector> poses_rad, int joints) {
+  std::string out = joint_header(joints) + "\n";
   for (const JointVector& q : poses_rad) {
-    for (int j = 0; j < kJointCount; ++j) out += format_double(q(j)) + (j + 1 < kJointCount ? "," : "\n");
+    for (int j = 0; j < joints; ++j) out += format_double(q(j)) + (j + 1 < joints ? "," : "\n");
   }
   return out;
 }
@@ -464,11 +578,11 @@ std::string format_predictions_csv(const std::vector<Vec3>& points_m, const std:
   return out;
 }
 
-std::string format_samples_csv(Span<const Sample> samples) {
+std::string format_samples_csv(Span<const Sample> samples, int joints) {
   const bool targets = target_count(samples) > 1;
-  std::string out = targets ? "q1,q2,q3,q4,q5,q6,x,y,z,target\n" : "q1,q2,q3,q4,q5,q6,x,y,z\n";
+  std::string out = joint_header(joints) + (targets ? ",x,y,z,target\n" : ",x,y,z\n");
   for (const Sample& s : samples) {
-    for (int j = 0; j < kJointCount; ++j) out += format_double(s.q_rad(j)) + ",";
+    for (int j = 0; j < joints; ++j) out += format_double(s.q_rad(j)) + ",";
     out += format_double(s.point_m.x()) + "," + format_double(s.point_m.y()) + "," + format_double(s.point_m.z());
     out += targets ? "," + std::to_string(s.target + 1) + "\n" : "\n";
   }

@@ -77,12 +77,18 @@ double joint_position_variance_m2(double joint_sigma_rad, const RobotModel& arm,
 double noise_lever_m(double position_sigma_m, double angle_sigma_rad, double joint_sigma_rad, const RobotModel& arm,
                      Span<const JointVector> poses);
 
-/// Reads paired static samples (`q1..q6,x,y,z`, optionally `target` after z: the reflector,
+/// The joints of `model` as text inputs carry them (InputUnits::joints): its joint count and
+/// which joints are prismatic.
+InputJoints input_joints(const RobotModel& model);
+
+/// Reads paired static samples (`q1..qN,x,y,z`: N the arm's joints, `units.joints`, a file with
+/// more or fewer joint columns refused naming both counts; optionally `target` after z: the reflector,
 /// 1 .. kMaxTargets, 1 when absent; optionally `rx,ry,rz` after them: a measured orientation,
 /// see OrientationInput, not together with `target`) into a dataset; reports a full dataset as
-/// an error. The joints may be named as a UR pendant writes them (`Base`, `Shoulder`, `Elbow`,
-/// `Wrist 1..3`). Columns without a bracket unit are in `units` (SI when not declared); joints
-/// and rotation vectors beyond one turn and points beyond 100 m are refused with the likely
+/// an error. The joints of a UR-shaped arm may be named as a UR pendant writes them (`Base`,
+/// `Shoulder`, `Elbow`, `Wrist 1..3`). Columns without a bracket unit are in `units` (SI when not
+/// declared; a prismatic joint's a length); joints and rotation vectors beyond one turn, a
+/// prismatic joint beyond 100 m and points beyond 100 m are refused with the likely
 /// cause (delimited.hpp). `lines`, when given, receives the 1-based file line of each sample
 /// added, in order (a row with an orientation: its line three times). `found`, when given,
 /// says how the orientation was used.
@@ -94,16 +100,19 @@ port::Error read_samples_csv(const std::string& path, DatasetBase* dataset, cons
 /// orientation was used. The job estimates them (any flange-to-tool rotation).
 void start_orientation_targets(const OrientationRead& read, RobotModel* start);
 
-/// Reads poses to predict (`q1..q6`, optionally preceded by `t`), units and checks as above.
+/// Reads poses to predict (`q1..qN`, optionally preceded by `t`), joints, units and checks as above.
 port::Error read_joints_csv(const std::string& path, std::vector<JointVector>* poses, const InputUnits& units = {});
 
 /// Reads joint limits: header `lower,upper` (rad, or the unit in brackets, or `units`' angle
-/// unit), exactly six rows (joint 1 .. 6), lower < upper, each within two turns (4 pi rad).
+/// unit), exactly one row per joint of `units.joints`, lower < upper, each within two turns (4
+/// pi rad); a prismatic joint's row in m (within 100 m; the file's angle unit must be rad).
 port::Error read_joint_limits_csv(const std::string& path, JointVector* lower_rad, JointVector* upper_rad,
                                   const InputUnits& units = {});
 
-/// `q1..q6` rows with round-trip precision (the poses-to-predict format).
-std::string format_joints_csv(Span<const JointVector> poses_rad);
+/// "q1,q2,...,qN": the joint columns of an arm of N = `joints` joints.
+std::string joint_header(int joints);
+/// `q1..qN` rows (N = `joints`) with round-trip precision (the poses-to-predict format).
+std::string format_joints_csv(Span<const JointVector> poses_rad, int joints);
 /// `x,y,z` rows with round-trip precision, in metres; with `length_unit` "mm" the header is
 /// `x [mm],y [mm],z [mm]` and the values are in millimetres (read back by the same reader).
 std::string format_points_csv(const std::vector<Vec3>& points_m, const std::string& length_unit = "m");
@@ -112,7 +121,8 @@ std::string format_points_csv(const std::vector<Vec3>& points_m, const std::stri
 /// one entry per point.
 std::string format_predictions_csv(const std::vector<Vec3>& points_m, const std::vector<double>& sigma_m,
                                    const std::vector<bool>& extrapolated, const std::string& length_unit = "m");
-/// `q1..q6,x,y,z` rows with round-trip precision (`,target` 1-based when several targets).
-std::string format_samples_csv(Span<const Sample> samples);
+/// `q1..qN,x,y,z` rows (N = `joints`) with round-trip precision (`,target` 1-based when several
+/// targets).
+std::string format_samples_csv(Span<const Sample> samples, int joints);
 
 }  // namespace hivecal::textio

@@ -56,8 +56,9 @@ Delimiter delimiter_of(std::string_view header) {
   return Delimiter::spaces;
 }
 
-/// The columns --columns may name (the fixed formats' and the orientation's).
-const char* const kAliasColumns[] = {"q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "t", "rx", "ry", "rz"};
+/// The columns --columns may name besides the joints q1 .. q<kMaxJoints> (the fixed formats' and
+/// the orientation's).
+const char* const kAliasColumns[] = {"x", "y", "z", "t", "rx", "ry", "rz"};
 
 /// True for a unit si_scale() knows for any quantity.
 bool known_unit(std::string_view unit) {
@@ -109,6 +110,20 @@ std::vector<ColumnTerm> column_terms(std::string_view expression) {
   }
 }
 
+std::string joint_names(int count) {
+  return count == 1 ? std::string("q1") : "q1..q" + std::to_string(count);
+}
+
+int joint_number(const std::string& column) {
+  if (column.size() < 2 || column.size() > 3 || column[0] != 'q' || column[1] == '0') return 0;
+  int k = 0;
+  for (std::size_t i = 1; i < column.size(); ++i) {
+    if (column[i] < '0' || column[i] > '9') return 0;
+    k = 10 * k + (column[i] - '0');
+  }
+  return k;
+}
+
 std::string column_alias_text(const ColumnAlias& alias) {
   return alias.column + "=" + alias.header + (alias.unit.empty() ? "" : "[" + alias.unit + "]");
 }
@@ -128,12 +143,14 @@ std::string parse_column_aliases(std::string_view text, std::vector<ColumnAlias>
       alias.column = lower(trim(entry.substr(0, equals)));
       spec = trim(entry.substr(equals + 1));
     }
-    const bool known = std::find_if(std::begin(kAliasColumns), std::end(kAliasColumns),
+    const int joint = joint_number(alias.column);
+    const bool known = (joint >= 1 && joint <= kMaxJoints) ||
+                       std::find_if(std::begin(kAliasColumns), std::end(kAliasColumns),
                                     [&](const char* name) { return alias.column == name; }) != std::end(kAliasColumns);
     if (!known || spec.empty()) {
-      return shown +
-             " is not C=NAME or C=NAME[unit] with C one of q1..q6, x, y, z, rx, ry, rz, t (e.g. x=measurement_x[mm], "
-             "or a sum of columns x=x_t+x_dif[mm])";
+      return shown + " is not C=NAME or C=NAME[unit] with C one of " + joint_names(kMaxJoints) +
+             " (the arm's joints), x, y, z, rx, ry, rz, t (e.g. x=measurement_x[mm], or a sum of columns "
+             "x=x_t+x_dif[mm])";
     }
     const std::size_t open = spec.find('[');
     const std::size_t close = spec.find(']');
@@ -553,6 +570,20 @@ bool DelimitedReader::check_joint(int joint, std::size_t index, double q_rad) {
     return fail(what + " looks like degrees: use --angle-unit deg (joints are read in rad without it)");
   return fail(what + " is more than one turn (|q| > 2 pi rad) in the unit " +
               (columns_[index].unit.empty() ? "of --angle-unit" : "of its header") + ": not a joint position");
+}
+
+bool DelimitedReader::check_slide(int joint, std::size_t index, double q_m) {
+  if (!std::isfinite(q_m) || std::fabs(q_m) <= kMaxJointTravel_m) return true;  // NaN: the caller's message
+  const std::string name = "q" + std::to_string(joint);
+  const std::string& column = columns_[index].name;
+  std::string what = "prismatic joint " + name + (column == name ? "" : " (column " + port::quoted(column, 32) + ")") +
+                     " = " + port::printable(fields_[index], 40);
+  if (unit_assumed(index, Quantity::length))
+    return fail(what + " looks like millimetres: use --length-unit mm (lengths are read in m without it)");
+  char beyond[64];
+  std::snprintf(beyond, sizeof beyond, " is more than %.0f m in the unit ", kMaxJointTravel_m);
+  return fail(what + beyond + (columns_[index].unit.empty() ? "of --length-unit" : "of its header") +
+              ": not a joint position");
 }
 
 bool DelimitedReader::check_point(const std::size_t index[3], const double point_m[3]) {

@@ -17,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "hivecal/core/joints.hpp"
 #include "hivecal/port/input_file.hpp"
 
 namespace hivecal::textio {
@@ -65,6 +66,20 @@ std::string column_alias_text(const ColumnAlias& alias);
 /// Units the user declared for text columns whose header gives none (--length-unit,
 /// --angle-unit); "" for not declared: the format's SI unit. A bracket unit in a header
 /// wins; a declared unit that differs from it is an error.
+/// The joints a text input's rows carry, as the robot model has them: q1 .. q<count>, a
+/// prismatic joint's position a length (its unit --length-unit's), a revolute one's an angle.
+struct InputJoints {
+  int count = kSixJoints;       ///< joints of the arm, 1 .. kMaxJoints [-]
+  std::uint32_t prismatic = 0;  ///< bit j set: joint j + 1 is prismatic [-]
+  /// True when joint j (0-based) is prismatic.
+  bool slides(int j) const { return (prismatic >> static_cast<unsigned>(j) & 1U) != 0; }
+};
+
+/// "q1..q6" for six joints ("q1" for one).
+std::string joint_names(int count);
+/// The number K when `column` is "qK" (K = 1 .. 99), else 0.
+int joint_number(const std::string& column);
+
 struct InputUnits {
   std::string length;  ///< "m", "mm" or "" (lengths: x, y, z)
   std::string angle;   ///< "rad", "deg" or "" (joints)
@@ -73,12 +88,18 @@ struct InputUnits {
   std::vector<ColumnAlias> columns{};
   /// The command takes --columns: a header without the expected columns may suggest it.
   bool columns_option = true;
+  /// The arm's joints (the robot model's: textio::input_joints): the joint columns a file must
+  /// have, no more and no fewer; six revolute by default.
+  InputJoints joints{};
 };
 
 /// Largest |joint| read as plausible: one turn either way [rad].
 constexpr double kMaxJointMagnitude_rad = 6.283185307179586;
 /// Largest joint limit a file may give: two turns (a J6 of +-720 deg) [rad].
 constexpr double kMaxJointLimit_rad = 2.0 * kMaxJointMagnitude_rad;
+/// Largest |position| or limit of a prismatic joint read as plausible (a rail of 100 m; more is
+/// millimetres) [m].
+constexpr double kMaxJointTravel_m = 100.0;
 /// Farthest point from the tracker (or base) origin read as plausible [m].
 constexpr double kMaxPointDistance_m = 100.0;
 
@@ -166,6 +187,9 @@ class DelimitedReader {
   /// set ("joint q3 = 95.2 looks like degrees: use --angle-unit deg") beyond
   /// kMaxJointMagnitude_rad; true for NaN/Inf (refused by the caller with its own message).
   bool check_joint(int joint, std::size_t index, double q_rad);
+  /// The same for a prismatic joint read as `q_m`: beyond kMaxJointTravel_m "... looks like
+  /// millimetres: use --length-unit mm".
+  bool check_slide(int joint, std::size_t index, double q_m);
   /// Checks a point read from fields `index[0..2]` as `point_m`: false with error() set
   /// ("... looks like millimetres: use --length-unit mm") beyond kMaxPointDistance_m; true
   /// for NaN/Inf (the caller's to refuse: a lost beam may carry NaN).

@@ -17,8 +17,8 @@ bool TimeOrder::accept(std::uint64_t t_us, bool* repeated, std::string* problem)
   return true;
 }
 
-bool map_joints_by_name(const std::vector<std::string_view>& names,
-                        const std::array<std::string, kJointCount>& expected, int source[kJointCount]) {
+bool map_joints_by_name(const std::vector<std::string_view>& names, const std::array<std::string, kSixJoints>& expected,
+                        int source[kSixJoints]) {
   bool all = true;
   for (std::size_t j = 0; j < expected.size(); ++j) {
     source[j] = -1;
@@ -36,7 +36,7 @@ std::string join_names(const std::vector<std::string_view>& names) {
   return out;
 }
 
-std::string missing_joints_message(const std::string& file, const std::array<std::string, kJointCount>& expected,
+std::string missing_joints_message(const std::string& file, const std::array<std::string, kSixJoints>& expected,
                                    const std::string& names_found) {
   return file + ": no message names all of the joints " +
          join_names(std::vector<std::string_view>(expected.begin(), expected.end())) + "; the log names " +

@@ -27,12 +27,12 @@ class TimeOrder {
 
 /// Joint j of the robot is names[source[j]]; false when one of `expected` is not in `names`
 /// (names not expected, e.g. a gripper's, are ignored).
-bool map_joints_by_name(const std::vector<std::string_view>& names,
-                        const std::array<std::string, kJointCount>& expected, int source[kJointCount]);
+bool map_joints_by_name(const std::vector<std::string_view>& names, const std::array<std::string, kSixJoints>& expected,
+                        int source[kSixJoints]);
 /// "a, b, c" of names, for messages.
 std::string join_names(const std::vector<std::string_view>& names);
 /// The error of a ROS log none of whose messages names all expected joints.
-std::string missing_joints_message(const std::string& file, const std::array<std::string, kJointCount>& expected,
+std::string missing_joints_message(const std::string& file, const std::array<std::string, kSixJoints>& expected,
                                    const std::string& names_found);
 
 }  // namespace hivecal::textio

@@ -44,7 +44,7 @@ int find_time(const DelimitedReader& r) {
 }
 
 bool has_all(const DelimitedReader& r, const char* prefix, int first) {
-  for (int k = 0; k < kJointCount; ++k) {
+  for (int k = 0; k < kSixJoints; ++k) {
     if (r.find(column_name(prefix, first + k)) < 0) return false;
   }
   return true;
@@ -106,25 +106,43 @@ class TimeColumn {
 /// Columns of a robot log once its format is known: time and where each joint comes from.
 struct RobotLayout {
   TimeColumn time;
-  int q[kJointCount] = {};             ///< hivecal / RTDE: column of joint j
-  double q_scale[kJointCount] = {};    ///< its factor to rad
+  int joint_count = kSixJoints;        ///< joints per record: the arm's (hivecal), six (RTDE, rostopic)
+  int q[kMaxJoints] = {};              ///< hivecal / RTDE: column of joint j
+  double q_scale[kMaxJoints] = {};     ///< its factor to rad (a prismatic joint's to m)
+  std::uint32_t prismatic = 0;         ///< bit j: joint j is prismatic (its column a length)
   std::vector<int> names;              ///< rostopic: field.nameK columns
   std::vector<int> positions;          ///< rostopic: field.positionK columns
   std::vector<double> position_scale;  ///< their factors to rad
 };
 
-/// Columns "<prefix><first+j>" as the six joints.
+/// Columns "<prefix><first+j>" as the layout's joints (a prismatic one a length).
 bool fixed_joints(DelimitedReader& r, const char* prefix, int first, RobotLayout* layout) {
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < layout->joint_count; ++j) {
     layout->q[j] = r.find(column_name(prefix, first + j));
-    if (!scale_of(r, layout->q[j], Quantity::angle, &layout->q_scale[j])) return false;
+    const Quantity quantity =
+        (layout->prismatic >> static_cast<unsigned>(j) & 1U) != 0 ? Quantity::length : Quantity::angle;
+    if (!scale_of(r, layout->q[j], quantity, &layout->q_scale[j])) return false;
   }
   return true;
 }
 
+/// A hivecal log's joints: q1 .. qN for the arm's N (`joints`); another count is refused naming both.
+bool hivecal_joints(DelimitedReader& r, const InputJoints& joints, RobotLayout* layout) {
+  int count = 0;
+  while (count < 99 && r.find(column_name("q", count + 1)) >= 0) ++count;
+  if (count != joints.count) {
+    return r.fail("its header has joint columns q1..q" + std::to_string(count) + ", but the robot model has " +
+                  std::to_string(joints.count) + " joints (" + joint_names(joints.count) +
+                  "): the joints of another arm? (--robot-model names the arm)");
+  }
+  layout->joint_count = joints.count;
+  layout->prismatic = joints.prismatic;
+  return fixed_joints(r, "q", 1, layout);
+}
+
 /// Recognises the robot format from the header; false with a message naming what was
 /// expected and what was found.
-bool robot_layout(DelimitedReader& r, LogFormat* format, RobotLayout* layout) {
+bool robot_layout(DelimitedReader& r, const InputJoints& joints, LogFormat* format, RobotLayout* layout) {
   const int stamp = r.find("field.header.stamp");
   if (stamp >= 0 && r.find("field.name0") >= 0) {
     *format = LogFormat::rostopic;
@@ -138,7 +156,7 @@ bool robot_layout(DelimitedReader& r, LogFormat* format, RobotLayout* layout) {
       layout->positions.push_back(position);
       layout->position_scale.push_back(scale);
     }
-    if (layout->names.size() < static_cast<std::size_t>(kJointCount)) {
+    if (layout->names.size() < static_cast<std::size_t>(kSixJoints)) {
       return r.fail("rostopic log with " + std::to_string(layout->names.size()) +
                     " joints (field.nameK with field.positionK), expected at least 6");
     }
@@ -149,9 +167,9 @@ bool robot_layout(DelimitedReader& r, LogFormat* format, RobotLayout* layout) {
     *format = LogFormat::ur_rtde;
     return fixed_joints(r, "actual_q_", 0, layout) && layout->time.init(r, r.find("timestamp"), "s");
   }
-  if (has_all(r, "q", 1) && time >= 0) {
+  if (r.find("q1") >= 0 && time >= 0) {
     *format = LogFormat::hivecal_robot;
-    return fixed_joints(r, "q", 1, layout) && layout->time.init(r, time, "s");
+    return hivecal_joints(r, joints, layout) && layout->time.init(r, time, "s");
   }
   if (has_all(r, "target_q_", 0)) {
     return r.fail(
@@ -192,12 +210,12 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
   r.set_units(options.units);
   RobotLayout layout;
   std::string first_names;  // rostopic: the names of the first row, for a message
-  bool good = r.read_header() && robot_layout(r, &log.format, &layout);
+  bool good = r.read_header() && robot_layout(r, options.units.joints, &log.format, &layout);
   std::vector<std::string_view> names;
   while (good && r.next_row()) {
     ++log.counters.rows;
     JointStateRecord record;
-    int source[kJointCount] = {};  // rostopic: which field.positionK holds joint j
+    int source[kSixJoints] = {};  // rostopic: which field.positionK holds joint j
     if (!layout.names.empty()) {
       names.clear();
       for (const int k : layout.names) names.push_back(r.fields()[static_cast<std::size_t>(k)]);
@@ -209,7 +227,8 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
     }
     bool repeated = false;
     if (!layout.time.read(r, &record.timestamp_us, &repeated)) break;
-    for (int j = 0; j < kJointCount; ++j) {
+    record.joint_count = layout.joint_count;
+    for (int j = 0; j < layout.joint_count; ++j) {
       if (layout.names.empty()) {
         good = good && r.number(static_cast<std::size_t>(layout.q[j]), layout.q_scale[j], &record.q_rad[j]);
       } else {
@@ -218,10 +237,12 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
             good && r.number(static_cast<std::size_t>(layout.positions[k]), layout.position_scale[k], &record.q_rad[j]);
       }
     }
-    for (int j = 0; good && j < kJointCount; ++j) {
+    for (int j = 0; good && j < layout.joint_count; ++j) {
       if (!std::isfinite(record.q_rad[j])) good = r.fail("joint " + std::to_string(j + 1) + ": NaN or Inf");
       const int column = layout.names.empty() ? layout.q[j] : layout.positions[static_cast<std::size_t>(source[j])];
-      good = good && r.check_joint(j + 1, static_cast<std::size_t>(column), record.q_rad[j]);
+      const bool slides = (layout.prismatic >> static_cast<unsigned>(j) & 1U) != 0;
+      good = good && (slides ? r.check_slide(j + 1, static_cast<std::size_t>(column), record.q_rad[j])
+                             : r.check_joint(j + 1, static_cast<std::size_t>(column), record.q_rad[j]));
     }
     if (!good) break;
     keep_record(record, repeated, &log);
@@ -337,7 +358,7 @@ const char* log_format_name(LogFormat format) {
 }
 
 bool parse_joint_names(std::string_view text, RobotLogOptions* options) {
-  std::array<std::string, kJointCount> names;
+  std::array<std::string, kSixJoints> names;
   std::size_t count = 0;
   for (std::size_t start = 0;;) {
     const std::size_t comma = std::min(text.find(',', start), text.size());

@@ -36,13 +36,13 @@ enum class LogFormat {
 const char* log_format_name(LogFormat format);
 
 /// The UR drivers' joint names, joints 1..6 in order.
-inline const std::array<std::string, kJointCount> kUrJointNames = {
+inline const std::array<std::string, kSixJoints> kUrJointNames = {
     "shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"};
 
 /// How to read a robot log.
 struct RobotLogOptions {
   /// Names of joints 1..6 in ROS logs (`field.nameK`, bag `name`), in the robot's order.
-  std::array<std::string, kJointCount> joint_names = kUrJointNames;
+  std::array<std::string, kSixJoints> joint_names = kUrJointNames;
   /// Units of joint columns without a bracket unit (--angle-unit); a bag's are rad by definition.
   InputUnits units;
 };

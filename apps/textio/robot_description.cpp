@@ -43,23 +43,40 @@ port::Error check_tool(const double (&point)[3], const std::string& what, const 
   return port::Error{};
 }
 
-/// The six rows as written: theta_offset, d, a, alpha (standard) or theta_offset, d, a_{i-1},
-/// alpha_{i-1} (modified); rows[j] = {theta_offset, d, a, alpha}.
-port::Error parse_dh_rows(const JsonValue& root, const std::string& source, double (&rows)[kJointCount][4]) {
+/// The rows as written (1 .. kMaxJoints of them, *count): theta_offset, d, a, alpha (standard)
+/// or theta_offset, d, a_{i-1}, alpha_{i-1} (modified); rows[j] = {theta_offset, d, a, alpha}.
+/// A row's optional "type" ("revolute", the default, or "prismatic") sets bit j of *prismatic.
+port::Error parse_dh_rows(const JsonValue& root, const std::string& source, double (&rows)[kMaxJoints][4], int* count,
+                          std::uint32_t* prismatic) {
+  const std::string shape = "an array of 1 to " + std::to_string(kMaxJoints) + " joint objects, one per joint";
   const JsonValue* dh = root.find("dh");
-  if (dh == nullptr) return fail(source, "missing \"dh\" (an array of 6 joint objects)");
-  if (dh->kind != JsonValue::Kind::array || dh->array.size() != kJointCount) {
-    return fail(source, "\"dh\" must be an array of 6 joint objects");
+  if (dh == nullptr) return fail(source, "missing \"dh\" (" + shape + ")");
+  if (dh->kind != JsonValue::Kind::array || dh->array.empty() ||
+      dh->array.size() > static_cast<std::size_t>(kMaxJoints)) {
+    const std::string rows_given =
+        dh->kind == JsonValue::Kind::array ? " (it has " + std::to_string(dh->array.size()) + " rows)" : std::string();
+    return fail(source, "\"dh\" must be " + shape + rows_given);
   }
   static const char* const kKeys[4] = {"theta_offset", "d", "a", "alpha"};
-  for (std::size_t j = 0; j < static_cast<std::size_t>(kJointCount); ++j) {
+  *prismatic = 0;
+  for (std::size_t j = 0; j < dh->array.size(); ++j) {
     const JsonValue& row = dh->array[j];
     if (row.kind != JsonValue::Kind::object) return fail(source, "\"dh\"[" + std::to_string(j) + "] must be an object");
     for (std::size_t k = 0; k < 4; ++k) {
       port::Error r = row_number(row, j, kKeys[k], source, &rows[j][k]);
       if (!r.ok()) return r;
     }
+    if (const JsonValue* type = row.find("type"); type != nullptr) {
+      const bool revolute = type->kind == JsonValue::Kind::string && type->string == "revolute";
+      const bool slides = type->kind == JsonValue::Kind::string && type->string == "prismatic";
+      if (!revolute && !slides) {
+        return fail(source, "\"dh\"[" + std::to_string(j) + "].type must be \"revolute\" (q turns theta) or " +
+                                "\"prismatic\" (q moves d)");
+      }
+      if (slides) *prismatic |= 1U << j;
+    }
   }
+  *count = static_cast<int>(dh->array.size());
   return port::Error{};
 }
 
@@ -87,23 +104,34 @@ port::Error parse_other_tools(const JsonValue& root, const std::string& source, 
   return port::Error{};
 }
 
-/// Optional "joint_limits": six [lower, upper] pairs [rad], lower < upper, within two turns.
+/// Optional "joint_limits": one [lower, upper] pair per joint of the description's model, lower <
+/// upper, a revolute joint's in rad within two turns, a prismatic joint's in m within
+/// kMaxJointTravel_m.
 port::Error parse_joint_limits(const JsonValue& root, const std::string& source, RobotDescription* description) {
   const JsonValue* limits = root.find("joint_limits");
   if (limits == nullptr) return port::Error{};
-  if (limits->kind != JsonValue::Kind::array || limits->array.size() != static_cast<std::size_t>(kJointCount)) {
-    return fail(source, "\"joint_limits\" must be six [lower, upper] pairs in rad, joints 1 .. 6");
+  const int joints = description->model.joint_count;
+  if (limits->kind != JsonValue::Kind::array || limits->array.size() != static_cast<std::size_t>(joints)) {
+    const std::string pairs = limits->kind == JsonValue::Kind::array
+                                  ? std::to_string(limits->array.size()) + " pairs for "
+                                  : std::string("not an array of pairs for ");
+    return fail(source, "\"joint_limits\" must be one [lower, upper] pair per joint (" + pairs +
+                            std::to_string(joints) + " joints in \"dh\")");
   }
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < joints; ++j) {
+    const bool slides = joint_type(description->model, j) == JointType::prismatic;
+    const char* unit = slides ? " m" : " rad";
+    const double bound = slides ? kMaxJointTravel_m : kMaxJointLimit_rad;
     double pair[2];
     const std::string at = "\"joint_limits\"[" + std::to_string(j) + "]";
     if (!read_json_numbers(&limits->array[static_cast<std::size_t>(j)], 2, pair)) {
-      return fail(source, at + " must be [lower, upper] in rad");
+      return fail(source, at + " must be [lower, upper] in" + unit);
     }
-    if (!(pair[0] < pair[1]) || !(std::fabs(pair[0]) <= kMaxJointLimit_rad) ||
-        !(std::fabs(pair[1]) <= kMaxJointLimit_rad)) {
-      return fail(source, at + " = [" + format_double(pair[0]) + ", " + format_double(pair[1]) +
-                              "] rad: lower must be below upper, both within two turns (4 pi rad; degrees?)");
+    if (!(pair[0] < pair[1]) || !(std::fabs(pair[0]) <= bound) || !(std::fabs(pair[1]) <= bound)) {
+      return fail(source, at + " = [" + format_double(pair[0]) + ", " + format_double(pair[1]) + "]" + unit +
+                              ": lower must be below upper, both within " +
+                              (slides ? format_double(bound) + " m (a prismatic joint; millimetres?)"
+                                      : std::string("two turns (4 pi rad; degrees?)")));
     }
     description->lower_rad(j) = pair[0];
     description->upper_rad(j) = pair[1];
@@ -132,8 +160,10 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
     }
     parsed.convention = modified ? DhConvention::modified : DhConvention::standard;
   }
-  double rows[kJointCount][4];
-  port::Error r = parse_dh_rows(root, source, rows);
+  double rows[kMaxJoints][4];
+  int joints = 0;
+  std::uint32_t prismatic = 0;
+  port::Error r = parse_dh_rows(root, source, rows, &joints, &prismatic);
   if (!r.ok()) return r;
   double tool[3];
   if (root.find("tool") == nullptr) return fail(source, "missing \"tool\" ([x, y, z] in metres)");
@@ -142,13 +172,17 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
   if (!r.ok()) return r;
   const Vec3 tool_m(tool[0], tool[1], tool[2]);
   if (parsed.convention == DhConvention::standard) {
-    for (int j = 0; j < kJointCount; ++j)
-      parsed.model.joints[j] = DhJoint{rows[j][0], rows[j][1], rows[j][2], rows[j][3]};
+    parsed.model.joint_count = joints;
+    parsed.model.prismatic_joints = prismatic;
+    for (int j = 0; j < kMaxJoints; ++j) {
+      parsed.model.joints[j] = j < joints ? DhJoint{rows[j][0], rows[j][1], rows[j][2], rows[j][3]} : DhJoint{};
+    }
     parsed.model.tool_m = tool_m;
   } else {
-    ModifiedDhRow modified[kJointCount];
-    for (int j = 0; j < kJointCount; ++j) modified[j] = ModifiedDhRow{rows[j][3], rows[j][2], rows[j][0], rows[j][1]};
-    if (model_from_modified_dh(modified, tool_m, &parsed.model, &parsed.modified_base) != Status::ok) {
+    ModifiedDhRow modified[kMaxJoints];
+    for (int j = 0; j < joints; ++j) modified[j] = ModifiedDhRow{rows[j][3], rows[j][2], rows[j][0], rows[j][1]};
+    const Span<const ModifiedDhRow> written(modified, static_cast<std::size_t>(joints));
+    if (model_from_modified_dh(written, tool_m, &parsed.model, &parsed.modified_base, prismatic) != Status::ok) {
       return fail(source, "\"dh\" or \"tool\" holds a number that is not finite");
     }
   }
@@ -159,7 +193,7 @@ port::Error parse_description(const JsonValue& root, const std::string& source, 
     std::string what;
     const Mat3 to_file_base =
         parsed.convention == DhConvention::modified ? parsed.modified_base.transform().rotation : Mat3::Identity();
-    if (!read_compliance(*compliance, to_file_base, &parsed.model.compliance, &what)) {
+    if (!read_compliance(*compliance, to_file_base, parsed.model, &parsed.model.compliance, &what)) {
       return fail(source, "\"compliance\": " + what);
     }
   }
@@ -186,10 +220,12 @@ port::Error check_format(const JsonValue& root, const std::string& source, bool 
   return port::Error{};
 }
 
-/// The DH rows of `description` in its own convention: {theta_offset, d, a, alpha} each, and the tool.
-void rows_as_written(const RobotDescription& description, double (&rows)[kJointCount][4], Vec3* tool_m) {
+/// The DH rows of `description` in its own convention: {theta_offset, d, a, alpha} each (its
+/// model's joint_count rows), and the tool.
+void rows_as_written(const RobotDescription& description, double (&rows)[kMaxJoints][4], Vec3* tool_m) {
+  const int joints = description.model.joint_count;
   if (description.convention == DhConvention::standard) {
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < joints; ++j) {
       const DhJoint& joint = description.model.joints[j];
       rows[j][0] = joint.theta_offset_rad;
       rows[j][1] = joint.d_m;
@@ -199,9 +235,9 @@ void rows_as_written(const RobotDescription& description, double (&rows)[kJointC
     *tool_m = description.model.tool_m;
     return;
   }
-  ModifiedDhRow modified[kJointCount];
+  ModifiedDhRow modified[kMaxJoints];
   modified_dh_from_model(description.model, description.modified_base, modified, tool_m);
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < joints; ++j) {
     rows[j][0] = modified[j].theta_offset_rad;
     rows[j][1] = modified[j].d_m;
     rows[j][2] = modified[j].a_prev_m;
@@ -216,13 +252,13 @@ std::string load_name(const ComplianceModel& compliance, const ComplianceTerm& t
   return "frame " + std::to_string(term.frame);
 }
 
-bool read_load(const std::string& text, ComplianceLoad load, ComplianceTerm* term) {
+bool read_load(const std::string& text, ComplianceLoad load, int joints, ComplianceTerm* term) {
   if (load == ComplianceLoad::arm_masses) return text == "arm masses";
   if (text == "tool") {
     term->frame = kToolLoadFrame;
     return true;
   }
-  for (int frame = 1; frame <= kJointCount; ++frame) {
+  for (int frame = 1; frame <= joints; ++frame) {
     if (text == "frame " + std::to_string(frame)) {
       term->frame = frame;
       return true;
@@ -232,23 +268,26 @@ bool read_load(const std::string& text, ComplianceLoad load, ComplianceTerm* ter
 }
 
 /// Link centres of mass in the library's (standard) DH frames, the payload's in the flange frame.
-void write_masses(JsonWriter& json, const ArmMasses& masses) {
+void write_masses(JsonWriter& json, const ArmMasses& masses, int joints) {
   json.key("masses").begin_object();
-  json.key("link_mass_kg").inline_array(masses.link_mass_kg, kJointCount);
+  json.key("link_mass_kg").inline_array(masses.link_mass_kg, static_cast<std::size_t>(joints));
   json.key("link_com_m").begin_array();
-  for (const Vec3& com_m : masses.link_com_m) json.inline_array(com_m.data(), 3);
+  for (int link = 0; link < joints; ++link) json.inline_array(masses.link_com_m[link].data(), 3);
   json.end_array();
   json.key("payload_kg").value(masses.payload_kg);
   json.key("payload_com_m").inline_array(masses.payload_com_m.data(), 3);
   json.end_object();
 }
 
-bool read_masses(const JsonValue* v, ArmMasses* masses, std::string* what) {
-  *what = "\"masses\" must hold link_mass_kg (6 numbers), link_com_m (6 x [x, y, z]), payload_kg and payload_com_m";
+bool read_masses(const JsonValue* v, int joints, ArmMasses* masses, std::string* what) {
+  const std::string n = std::to_string(joints);
+  *what = "\"masses\" must hold link_mass_kg (" + n + " numbers, one per joint), link_com_m (" + n +
+          " x [x, y, z]), payload_kg and payload_com_m";
   if (v == nullptr || v->kind != JsonValue::Kind::object) return false;
   const JsonValue* coms = v->find("link_com_m");
-  if (!read_json_numbers(v->find("link_mass_kg"), kJointCount, masses->link_mass_kg) || coms == nullptr ||
-      coms->kind != JsonValue::Kind::array || coms->array.size() != static_cast<std::size_t>(kJointCount) ||
+  if (!read_json_numbers(v->find("link_mass_kg"), static_cast<std::size_t>(joints), masses->link_mass_kg) ||
+      coms == nullptr || coms->kind != JsonValue::Kind::array ||
+      coms->array.size() != static_cast<std::size_t>(joints) ||
       !read_number(v->find("payload_kg"), &masses->payload_kg) ||
       !read_json_numbers(v->find("payload_com_m"), 3, masses->payload_com_m.data())) {
     return false;
@@ -277,36 +316,39 @@ bool read_harmonic(const std::string& text, ComplianceTerm* term) {
 }
 
 /// A term's basis: "harmonic" ("sin K" / "cos K") or "load" (gravity), into *term.
-bool read_basis(const JsonValue& v, const std::string& at, const ComplianceModel& compliance, ComplianceTerm* term,
-                std::string* what) {
+bool read_basis(const JsonValue& v, const std::string& at, const ComplianceModel& compliance, int joints,
+                ComplianceTerm* term, std::string* what) {
   if (const JsonValue* harmonic = v.find("harmonic"); harmonic != nullptr) {
     if (harmonic->kind == JsonValue::Kind::string && read_harmonic(harmonic->string, term)) return true;
     *what = at + ".harmonic must be \"sin K\" or \"cos K\" (K = 1 .. " + std::to_string(kMaxHarmonicOrder) + ")";
     return false;
   }
   const JsonValue* load = v.find("load");
-  if (load != nullptr && load->kind == JsonValue::Kind::string && read_load(load->string, compliance.load, term)) {
+  if (load != nullptr && load->kind == JsonValue::Kind::string &&
+      read_load(load->string, compliance.load, joints, term)) {
     return true;
   }
   *what = at + ".load must be " +
-          (compliance.load == ComplianceLoad::arm_masses ? "\"arm masses\"" : "\"frame K\" (K = 1 .. 6) or \"tool\"") +
+          (compliance.load == ComplianceLoad::arm_masses
+               ? std::string("\"arm masses\"")
+               : "\"frame K\" (K = 1 .. " + std::to_string(joints) + ") or \"tool\"") +
           ", or the term a \"harmonic\"";
   return false;
 }
 
 /// One term of a "terms" array into term `t` of *compliance.
-bool read_term(const JsonValue& v, int t, ComplianceModel* compliance, std::string* what) {
+bool read_term(const JsonValue& v, int t, int joints, ComplianceModel* compliance, std::string* what) {
   const std::string at = "\"terms\"[" + std::to_string(t) + "]";
   double joint = 0.0;
   const JsonValue* unit = v.find("unit");
   ComplianceTerm& term = compliance->terms[t];
   if (v.kind != JsonValue::Kind::object || !read_number(v.find("joint"), &joint) || joint < 1.0 ||
-      joint > static_cast<double>(kJointCount) || joint != static_cast<double>(static_cast<int>(joint))) {
-    *what = at + ".joint must be a joint number 1 .. 6";
+      joint > static_cast<double>(joints) || joint != static_cast<double>(static_cast<int>(joint))) {
+    *what = at + ".joint must be a joint number 1 .. " + std::to_string(joints);
     return false;
   }
   term = ComplianceTerm{static_cast<int>(joint) - 1, 0, JointTermKind::gravity, 0};
-  if (!read_basis(v, at, *compliance, &term, what)) return false;
+  if (!read_basis(v, at, *compliance, joints, &term, what)) return false;
   if (!read_number(v.find("coefficient"), &compliance->coefficient[t]) ||
       !(std::fabs(compliance->coefficient[t]) <= kMaxJointTermCoefficient)) {
     *what = at + ".coefficient must be a number within +/-" + format_double(kMaxJointTermCoefficient) +
@@ -339,10 +381,10 @@ std::string beyond_bound(double value, ModelQuantity quantity) {
 
 port::Error check_model_bounds(const RobotDescription& description, const std::string& source) {
   static const char* const kKeys[4] = {"theta_offset", "d", "a", "alpha"};
-  double rows[kJointCount][4];
+  double rows[kMaxJoints][4];
   Vec3 tool_m;
   rows_as_written(description, rows, &tool_m);
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < description.model.joint_count; ++j) {
     for (int k = 0; k < 4; ++k) {
       const std::string beyond =
           beyond_bound(rows[j][k], k == 0 || k == 3 ? ModelQuantity::angle : ModelQuantity::length);
@@ -375,8 +417,8 @@ const char* compliance_kind_name(ComplianceLoad load) {
   return load == ComplianceLoad::arm_masses ? "masses" : "basis";
 }
 
-void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const Mat3& to_file_base,
-                      const double* sigma) {
+void write_compliance(JsonWriter& json, const RobotModel& model, const Mat3& to_file_base, const double* sigma) {
+  const ComplianceModel& compliance = model.compliance;
   json.begin_object();
   json.key("kind").value(compliance_kind_name(compliance.load));
   const Vec3 gravity = to_file_base * compliance.gravity_direction;
@@ -398,11 +440,12 @@ void write_compliance(JsonWriter& json, const ComplianceModel& compliance, const
     json.end_object();
   }
   json.end_array();
-  if (compliance.load == ComplianceLoad::arm_masses) write_masses(json, compliance.masses);
+  if (compliance.load == ComplianceLoad::arm_masses) write_masses(json, compliance.masses, model.joint_count);
   json.end_object();
 }
 
-bool read_compliance(const JsonValue& value, const Mat3& to_file_base, ComplianceModel* compliance, std::string* what) {
+bool read_compliance(const JsonValue& value, const Mat3& to_file_base, const RobotModel& model,
+                     ComplianceModel* compliance, std::string* what) {
   ComplianceModel parsed;
   const JsonValue* kind = value.find("kind");
   const JsonValue* terms = value.find("terms");
@@ -425,10 +468,11 @@ bool read_compliance(const JsonValue& value, const Mat3& to_file_base, Complianc
   }
   parsed.term_count = static_cast<int>(terms->array.size());
   for (int t = 0; t < parsed.term_count; ++t)
-    if (!read_term(terms->array[static_cast<std::size_t>(t)], t, &parsed, what)) return false;
-  if (parsed.load == ComplianceLoad::arm_masses && !read_masses(value.find("masses"), &parsed.masses, what))
+    if (!read_term(terms->array[static_cast<std::size_t>(t)], t, model.joint_count, &parsed, what)) return false;
+  if (parsed.load == ComplianceLoad::arm_masses &&
+      !read_masses(value.find("masses"), model.joint_count, &parsed.masses, what))
     return false;
-  if (check_compliance(parsed) != Status::ok) {
+  if (check_compliance(parsed, model) != Status::ok) {
     *what =
         "not a usable compliance model (a term's load must lie beyond its joint, masses >= 0, every number finite, "
         "gravity_direction of unit length)";
@@ -442,16 +486,18 @@ void write_description_members(JsonWriter& json, const RobotDescription& file, c
   json.key("format").value(kFormat);
   json.key("robot").value(file.robot);
   json.key("convention").value(dh_convention_name(file.convention));
-  double rows[kJointCount][4];
+  double rows[kMaxJoints][4];
   Vec3 tool_m;
   rows_as_written(file, rows, &tool_m);
   json.key("dh").begin_array();
-  for (const double(&values)[4] : rows) {
+  const bool typed = !all_revolute(file.model);  // an all-revolute arm's rows need no "type"
+  for (int j = 0; j < file.model.joint_count; ++j) {
     json.begin_object();
-    json.key("theta_offset").value(values[0]);
-    json.key("d").value(values[1]);
-    json.key("a").value(values[2]);
-    json.key("alpha").value(values[3]);
+    json.key("theta_offset").value(rows[j][0]);
+    json.key("d").value(rows[j][1]);
+    json.key("a").value(rows[j][2]);
+    json.key("alpha").value(rows[j][3]);
+    if (typed) json.key("type").value(joint_type(file.model, j) == JointType::prismatic ? "prismatic" : "revolute");
     json.end_object();
   }
   json.end_array();
@@ -470,13 +516,13 @@ void write_description_members(JsonWriter& json, const RobotDescription& file, c
   if (file.model.compliance.term_count > 0) {
     json.key("compliance");
     write_compliance(
-        json, file.model.compliance,
+        json, file.model,
         file.convention == DhConvention::modified ? file.modified_base.transform().rotation : Mat3::Identity(),
         compliance_sigma);
   }
   if (file.has_joint_limits) {
     json.key("joint_limits").begin_array();
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < file.model.joint_count; ++j) {
       const double pair[2] = {file.lower_rad(j), file.upper_rad(j)};
       json.inline_array(pair, 2);
     }
@@ -561,6 +607,10 @@ port::Error robot_description_from_value(const std::string& value, RobotDescript
   RobotDescription builtin;
   builtin.robot = robot_type_name(type);
   builtin.model = nominal_model(type);
+  builtin.convention = nominal_convention(type, &builtin.modified_base);  // the maker's (Franka: modified)
+  // The seven-axis arms' published limits travel with the description (plan, result.json, URDF);
+  // UR's +-360 deg joints carry none, as before.
+  builtin.has_joint_limits = maker_joint_limits(type, &builtin.lower_rad, &builtin.upper_rad) == Status::ok;
   *description = builtin;
   return port::Error{};
 }

@@ -177,7 +177,7 @@ class BagFile {
       const auto* data = static_cast<const std::uint8_t*>(sqlite3_column_blob(statement_, 0));
       const auto size = static_cast<std::size_t>(sqlite3_column_bytes(statement_, 0));
       if (!decode_joint_state_cdr(data, size, &message, &problem)) return fail_message(log, problem);
-      int source[kJointCount];
+      int source[kSixJoints];
       if (!map_joints_by_name(message.names, options.joint_names, source)) {
         if (first_names->empty()) *first_names = join_names(message.names);
         ++log->counters.missing_joints;
@@ -187,7 +187,7 @@ class BagFile {
       record.timestamp_us = message.stamp_us;
       bool repeated = false;
       if (!order->accept(record.timestamp_us, &repeated, &problem)) return fail_message(log, problem);
-      for (int j = 0; j < kJointCount; ++j) {
+      for (int j = 0; j < kSixJoints; ++j) {
         record.q_rad[j] = message.positions_rad[static_cast<std::size_t>(source[j])];
         if (!std::isfinite(record.q_rad[j]))
           return fail_message(log, "joint " + std::to_string(j + 1) + ": NaN or Inf");

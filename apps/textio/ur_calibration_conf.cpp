@@ -32,7 +32,7 @@ std::string parse_six_values(std::string_view list, double* values) {
   while (!list.empty()) {
     const std::size_t comma = list.find(',');
     const std::string_view field = list.substr(0, comma);
-    if (count == kJointCount) return "more than 6 values";
+    if (count == kSixJoints) return "more than 6 values";
     double v = 0.0;
     if (!parse_double(field, &v)) return "not a number: " + port::quoted(trim(field));
     if (!math::is_finite(v)) return "value is NaN or Inf";
@@ -40,7 +40,7 @@ std::string parse_six_values(std::string_view list, double* values) {
     if (comma == std::string_view::npos) break;
     list.remove_prefix(comma + 1);
   }
-  if (count != kJointCount) return "expected 6 values, found " + std::to_string(count);
+  if (count != kSixJoints) return "expected 6 values, found " + std::to_string(count);
   return "";
 }
 
@@ -92,6 +92,25 @@ port::Error parse_ur_calibration_conf(const std::string& text, const std::string
   return port::Error{};
 }
 
+std::string joint_shape(const RobotModel& model) {
+  const std::string count = std::to_string(model.joint_count);
+  if (all_revolute(model)) return count + (model.joint_count == 1 ? " revolute joint" : " revolute joints");
+  std::string prismatic;
+  int slides = 0;
+  for (int j = 0; j < model.joint_count; ++j) {
+    if (joint_type(model, j) != JointType::prismatic) continue;
+    prismatic += (slides++ == 0 ? "" : ", ") + std::to_string(j + 1);
+  }
+  return count + (model.joint_count == 1 ? " joint, " : " joints, ") + (slides == 1 ? "joint " : "joints ") +
+         prismatic + " prismatic";
+}
+
+port::Error require_ur_joints(const RobotModel& model, const std::string& model_name, const std::string& feature) {
+  if (has_ur_joints(model)) return port::Error{};
+  return port::Error::usage(feature + " is a Universal Robots controller's (six revolute joints); " +
+                            port::printable(model_name, 60) + " has " + joint_shape(model));
+}
+
 port::Error read_ur_calibration_conf(const std::string& path, UrCalibrationDeltas* deltas) {
   std::string text;
   const port::Error read = port::read_whole_file(path, port::kMaxTextInputBytes, &text);
@@ -106,7 +125,7 @@ double ur_deltas_tool_shift_m(const RobotModel& nominal, const UrCalibrationDelt
   double worst_m = 0.0;
   for (int i = 0; i < kUrDeltaTestPoses; ++i) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-math::kPi, math::kPi);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-math::kPi, math::kPi);
     const double shift_m = (fk_tool_point(calibrated, q) - fk_tool_point(nominal, q)).norm();
     worst_m = shift_m > worst_m || !math::is_finite(shift_m) ? shift_m : worst_m;
   }
@@ -137,7 +156,7 @@ std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas) {
   for (const auto& row : rows) {
     out += row.name;
     out += " = [";
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       out += (j == 0 ? " " : ", ");
       out += format_double(row.values[j]);
     }
@@ -148,10 +167,12 @@ std::string format_ur_calibration_conf(const UrCalibrationDeltas& deltas) {
 
 port::Error read_ur_calibrated_model(const std::string& path, const RobotModel& nominal, const std::string& model_name,
                                      RobotModel* calibrated) {
+  port::Error r = require_ur_joints(nominal, model_name, "a calibration.conf");
+  if (!r.ok()) return r;
   UrCalibrationDeltas deltas;
   const bool turned = is_ur_table_turned(nominal);
   const RobotModel ur_table = turned ? turned_by_pi(nominal) : nominal;
-  port::Error r = read_ur_calibration_conf(path, &deltas);
+  r = read_ur_calibration_conf(path, &deltas);
   if (r.ok()) r = check_ur_deltas_plausible(ur_table, deltas, path, port::printable(model_name));
   if (!r.ok()) return r;
   RobotModel applied;

@@ -9,6 +9,12 @@
 
 namespace hivecal::textio {
 
+/// The joints of `model` in words: "7 revolute joints", "7 joints, joint 1 prismatic".
+std::string joint_shape(const RobotModel& model);
+/// Fault::usage unless `model` has a UR's joints (has_ur_joints: six revolute): "`feature` is a
+/// Universal Robots controller's (six revolute joints); `model_name` has 7 revolute joints".
+port::Error require_ur_joints(const RobotModel& model, const std::string& model_name, const std::string& feature);
+
 /// Parses calibration.conf text; needs delta_theta, delta_a, delta_d and delta_alpha in
 /// [mounting], six finite numbers each. `source_name` prefixes error messages.
 port::Error parse_ur_calibration_conf(const std::string& text, const std::string& source_name,

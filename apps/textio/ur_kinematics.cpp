@@ -3,12 +3,13 @@
 #include <cmath>
 
 #include "textio/text_util.hpp"
+#include "textio/ur_calibration_conf.hpp"
 #include "textio/urdf.hpp"
 
 namespace hivecal::textio {
 namespace {
 
-const char* const kFrameNames[kJointCount] = {"shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3"};
+const char* const kFrameNames[kSixJoints] = {"shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3"};
 
 constexpr double kAxisTolerance = 0.1;  // sin or cos of a twist that makes two axes parallel or perpendicular [-]
 
@@ -53,9 +54,10 @@ std::string entry(const char* name, const RigidTransform& frame) {
 
 bool is_ur_table(const RobotModel& model) {
   const DhJoint* j = model.joints;
-  return std::sin(j[0].alpha_rad) > 1.0 - kAxisTolerance && std::fabs(std::sin(j[1].alpha_rad)) < kAxisTolerance &&
-         std::fabs(std::sin(j[2].alpha_rad)) < kAxisTolerance && std::sin(j[3].alpha_rad) > 1.0 - kAxisTolerance &&
-         std::sin(j[4].alpha_rad) < kAxisTolerance - 1.0 && j[1].a_m < 0.0 && j[2].a_m < 0.0;
+  return has_ur_joints(model) && std::sin(j[0].alpha_rad) > 1.0 - kAxisTolerance &&
+         std::fabs(std::sin(j[1].alpha_rad)) < kAxisTolerance && std::fabs(std::sin(j[2].alpha_rad)) < kAxisTolerance &&
+         std::sin(j[3].alpha_rad) > 1.0 - kAxisTolerance && std::sin(j[4].alpha_rad) < kAxisTolerance - 1.0 &&
+         j[1].a_m < 0.0 && j[2].a_m < 0.0;
 }
 
 RobotModel turned_by_pi(const RobotModel& model) {
@@ -79,6 +81,11 @@ bool is_ur_table_turned(const RobotModel& model) {
 }
 
 bool ur_kinematics_from_model(const RobotModel& model_as_given, UrKinematics* kinematics, std::string* why) {
+  if (!has_ur_joints(model_as_given)) {
+    *why = "the UR kinematics YAML describes UR arms (six revolute joints); this arm has " +
+           joint_shape(model_as_given) + ": use --format urdf";
+    return false;
+  }
   const RobotModel model = is_ur_table_turned(model_as_given) ? turned_by_pi(model_as_given) : model_as_given;
   const DhJoint* j = model.joints;
   if (!(std::fabs(std::cos(j[0].alpha_rad)) < kAxisTolerance && std::fabs(std::sin(j[1].alpha_rad)) < kAxisTolerance &&
@@ -88,9 +95,9 @@ bool ur_kinematics_from_model(const RobotModel& model_as_given, UrKinematics* ki
         "YAML describes UR arms only; use --format urdf";
     return false;
   }
-  RigidTransform joint[kJointCount];
-  RigidTransform link[kJointCount];
-  for (int i = 0; i < kJointCount; ++i) {
+  RigidTransform joint[kSixJoints];
+  RigidTransform link[kSixJoints];
+  for (int i = 0; i < kSixJoints; ++i) {
     joint[i] = RigidTransform{rotation_z(j[i].theta_offset_rad), Vec3(0.0, 0.0, j[i].d_m)};
     link[i] = RigidTransform{rotation_x(j[i].alpha_rad), Vec3(j[i].a_m, 0.0, 0.0)};
   }
@@ -98,14 +105,14 @@ bool ur_kinematics_from_model(const RobotModel& model_as_given, UrKinematics* ki
     move_along_axis(k, j[k].theta_offset_rad, j[k].alpha_rad, joint, link, &joint[k + 1]);
   }
   kinematics->joint_frames[0] = joint[0];
-  for (int i = 1; i < kJointCount; ++i) kinematics->joint_frames[i] = link[i - 1].then_after(joint[i]);
-  kinematics->flange = link[kJointCount - 1];
+  for (int i = 1; i < kSixJoints; ++i) kinematics->joint_frames[i] = link[i - 1].then_after(joint[i]);
+  kinematics->flange = link[kSixJoints - 1];
   return true;
 }
 
 std::string format_ur_kinematics_yaml(const UrKinematics& kinematics, const std::string& hash) {
   std::string s = "# Written by hivecal export (ROS UR description / driver kinematics parameters).\nkinematics:\n";
-  for (int i = 0; i < kJointCount; ++i) s += entry(kFrameNames[i], kinematics.joint_frames[i]);
+  for (int i = 0; i < kSixJoints; ++i) s += entry(kFrameNames[i], kinematics.joint_frames[i]);
   return s + "  hash: " + hash + "\n";
 }
 

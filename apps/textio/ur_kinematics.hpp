@@ -21,11 +21,11 @@ namespace hivecal::textio {
 
 /// The six joint frames of the YAML and the flange offset it cannot hold.
 struct UrKinematics {
-  RigidTransform joint_frames[kJointCount];  ///< shoulder .. wrist_3: previous link -> joint frame (before Rz(q_i))
-  RigidTransform flange;                     ///< L_6 = Tx(a_6) Rx(alpha_6): not in the YAML (identity on UR arms)
+  RigidTransform joint_frames[kSixJoints];  ///< shoulder .. wrist_3: previous link -> joint frame (before Rz(q_i))
+  RigidTransform flange;                    ///< L_6 = Tx(a_6) Rx(alpha_6): not in the YAML (identity on UR arms)
 };
 
-/// True when `model` (standard DH) has UR's own table's signs: alpha_1 and alpha_4 near +pi/2,
+/// True when `model` (standard DH) has six revolute joints and UR's own table's signs: alpha_1 and alpha_4 near +pi/2,
 /// alpha_5 near -pi/2, alpha_2 and alpha_3 near 0 (sines within 0.1), a_2 and a_3 negative.
 bool is_ur_table(const RobotModel& model);
 /// The same arm in frames turned by pi about their z: the base and every DH frame. The chain is

@@ -36,18 +36,23 @@ std::string fixed_joint(const std::string& name, const std::string& parent, cons
          child + "\"/>\n" + origin_element(origin) + "  </joint>\n";
 }
 
-std::string revolute_joint(int number, const std::string& parent, const RigidTransform& origin, UrdfLimits limits,
-                           const RobotDescription& robot) {
+/// Joint `number` (1-based) of the arm: revolute (turning about z of its origin) or prismatic
+/// (sliding along it), with the description's limits or the placeholders.
+std::string movable_joint(int number, const std::string& parent, const RigidTransform& origin, const UrdfLimits& limits,
+                          const RobotDescription& robot) {
   const std::string n = std::to_string(number);
+  const bool slides = joint_type(robot.model, number - 1) == JointType::prismatic;
+  double lower = slides ? limits.lower_m : limits.lower_rad;
+  double upper = slides ? limits.upper_m : limits.upper_rad;
   if (robot.has_joint_limits) {  // the description's own
-    limits.lower_rad = robot.lower_rad(number - 1);
-    limits.upper_rad = robot.upper_rad(number - 1);
+    lower = robot.lower_rad(number - 1);
+    upper = robot.upper_rad(number - 1);
   }
-  return "  <joint name=\"joint_" + n + "\" type=\"revolute\">\n    <parent link=\"" + parent +
-         "\"/>\n    <child link=\"link_" + n + "\"/>\n" + origin_element(origin) +
-         "    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"" + format_double(limits.lower_rad) + "\" upper=\"" +
-         format_double(limits.upper_rad) + "\" effort=\"" + format_double(limits.effort_nm) + "\" velocity=\"" +
-         format_double(limits.velocity_rad_s) + "\"/>\n  </joint>\n";
+  return "  <joint name=\"joint_" + n + "\" type=\"" + (slides ? "prismatic" : "revolute") +
+         "\">\n    <parent link=\"" + parent + "\"/>\n    <child link=\"link_" + n + "\"/>\n" + origin_element(origin) +
+         "    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"" + format_double(lower) + "\" upper=\"" +
+         format_double(upper) + "\" effort=\"" + format_double(slides ? limits.effort_n : limits.effort_nm) +
+         "\" velocity=\"" + format_double(slides ? limits.velocity_m_s : limits.velocity_rad_s) + "\"/>\n  </joint>\n";
 }
 
 /// A name safe inside an XML attribute (the robot's name is free text).
@@ -97,15 +102,17 @@ std::string format_urdf(const RobotDescription& robot, const RigidTransform* bas
       ". -->\n"
       "<robot name=\"" +
       xml_name(robot.robot) + "\">\n" + link("base_link");
-  for (int i = 1; i <= kJointCount; ++i) s += link("link_" + std::to_string(i));
+  for (int i = 1; i <= model.joint_count; ++i) s += link("link_" + std::to_string(i));
   s += link("flange");
   for (int k = 0; k < robot.target_count; ++k) s += link(k == 0 ? "tcp" : "tcp_" + std::to_string(k + 1));
   RigidTransform before_joint = base_offset;  // from the previous link to the next joint's frame
   std::string parent = "base_link";
-  for (int i = 0; i < kJointCount; ++i) {
+  for (int i = 0; i < model.joint_count; ++i) {
+    // Revolute: Rz(theta_offset) Rz(q) Tz(d) ...; prismatic: Rz(theta) Tz(q) Tz(d) ...: the
+    // joint's motion between the same two fixed parts either way.
     const DhJoint& joint = model.joints[i];
-    s += revolute_joint(i + 1, parent, before_joint.then_after(rotation_only(rotation_z(joint.theta_offset_rad))),
-                        limits, robot);
+    s += movable_joint(i + 1, parent, before_joint.then_after(rotation_only(rotation_z(joint.theta_offset_rad))),
+                       limits, robot);
     before_joint = row_after_joint(joint);
     parent = "link_" + std::to_string(i + 1);
   }

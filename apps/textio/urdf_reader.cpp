@@ -217,19 +217,21 @@ bool read_triple(const XmlTag& tag, const char* key, const Vec3& fallback, Vec3*
 // --- the kinematic tree ------------------------------------------------------------------
 
 /// The joint types a serial arm is made of.
-enum class JointType { revolute, continuous, fixed };
+enum class UrdfJointType { revolute, continuous, prismatic, fixed };
 
 struct UrdfJoint {
   std::string_view name, parent, child;  ///< as written (views into the document)
-  JointType type = JointType::fixed;
-  int line = 0;               ///< line of <joint>
-  RigidTransform origin;      ///< parent link -> joint frame
-  Vec3 axis = Vec3::UnitX();  ///< in the joint frame (URDF's default is x)
-  bool has_limit = false;     ///< <limit lower upper> given
-  double lower_rad = 0.0, upper_rad = 0.0;
+  UrdfJointType type = UrdfJointType::fixed;
+  int line = 0;                  ///< line of <joint>
+  RigidTransform origin;         ///< parent link -> joint frame
+  Vec3 axis = Vec3::UnitX();     ///< in the joint frame (URDF's default is x)
+  bool has_limit = false;        ///< <limit lower upper> given
+  double lower = 0.0;            ///< lowest position [rad], a prismatic joint's [m]
+  double upper = 0.0;            ///< highest position [rad], a prismatic joint's [m]
   int mimic_line = 0;            ///< line of its <mimic>, 0 without
   std::string_view mimic_joint;  ///< the joint its <mimic> follows
-  bool movable() const { return type != JointType::fixed; }
+  bool movable() const { return type != UrdfJointType::fixed; }
+  bool slides() const { return type == UrdfJointType::prismatic; }
 };
 
 constexpr std::size_t kNoJoint = static_cast<std::size_t>(-1);
@@ -264,16 +266,21 @@ struct UrdfTree {
 bool read_joint_type(const XmlTag& tag, UrdfJoint* joint, Refusal* refusal) {
   const std::string_view type = tag.get("type");
   if (type == "revolute") {
-    joint->type = JointType::revolute;
+    joint->type = UrdfJointType::revolute;
   } else if (type == "continuous") {
-    joint->type = JointType::continuous;
+    joint->type = UrdfJointType::continuous;
+  } else if (type == "prismatic") {
+    joint->type = UrdfJointType::prismatic;
   } else if (type == "fixed") {
-    joint->type = JointType::fixed;
+    joint->type = UrdfJointType::fixed;
   } else {
+    const char* why = type == "floating" ? " (a free body, six degrees of freedom)"
+                      : type == "planar" ? " (a motion in a plane, three degrees of freedom)"
+                                         : "";
     return refuse_at(tag.line,
                      "joint " + port::quoted(joint->name) + " is " +
-                         (type.empty() ? "without a type" : port::quoted(type)) +
-                         ": only revolute, continuous and fixed joints make a serial arm hivecal models",
+                         (type.empty() ? "without a type" : port::quoted(type)) + why +
+                         ": only revolute, continuous, prismatic and fixed joints make a serial arm hivecal models",
                      refusal);
   }
   return true;
@@ -303,14 +310,15 @@ bool read_joint_element(const XmlTag& tag, UrdfJoint* joint, Refusal* refusal) {
     }
     joint->origin = urdf_transform(origin);
   }
-  if (tag.name == "limit" && joint->type == JointType::revolute && tag.find("lower") != nullptr &&
-      tag.find("upper") != nullptr) {
-    if (!parse_double(tag.get("lower"), &joint->lower_rad) || !parse_double(tag.get("upper"), &joint->upper_rad) ||
-        !(joint->lower_rad < joint->upper_rad) || !(std::fabs(joint->lower_rad) <= kMaxJointLimit_rad) ||
-        !(std::fabs(joint->upper_rad) <= kMaxJointLimit_rad)) {
+  const bool limited = joint->type == UrdfJointType::revolute || joint->slides();  // continuous: none
+  if (tag.name == "limit" && limited && tag.find("lower") != nullptr && tag.find("upper") != nullptr) {
+    const double bound = joint->slides() ? kMaxJointTravel_m : kMaxJointLimit_rad;
+    if (!parse_double(tag.get("lower"), &joint->lower) || !parse_double(tag.get("upper"), &joint->upper) ||
+        !(joint->lower < joint->upper) || !(std::fabs(joint->lower) <= bound) || !(std::fabs(joint->upper) <= bound)) {
       return refuse_at(tag.line,
-                       "joint " + port::quoted(joint->name) +
-                           " <limit>: lower below upper, both numbers within two turns (4 pi rad)",
+                       "joint " + port::quoted(joint->name) + " <limit>: lower below upper, both numbers within " +
+                           (joint->slides() ? format_double(bound) + " m (a prismatic joint; millimetres?)"
+                                            : std::string("two turns (4 pi rad)")),
                        refusal);
     }
     joint->has_limit = true;
@@ -457,13 +465,18 @@ void arm_chain(const std::vector<const UrdfJoint*>& path, std::vector<ChainJoint
   }
 }
 
+/// What a joint at position `q` does to its child: a turn about its axis [rad], or a slide
+/// along it [m].
+RigidTransform joint_motion(const UrdfJoint& joint, double q) {
+  if (joint.slides()) return RigidTransform{Mat3::Identity(), q * joint.axis};
+  return RigidTransform{Eigen::AngleAxisd(q, joint.axis).toRotationMatrix(), Vec3::Zero()};
+}
+
 /// The frame of the last chain joint after its motion, in the root frame, at joints `q`.
 RigidTransform chain_end_at(const std::vector<ChainJoint>& chain, const JointVector& q) {
   RigidTransform pose;
-  for (std::size_t k = 0; k < chain.size(); ++k) {
-    const Eigen::AngleAxisd turn(q(static_cast<Eigen::Index>(k)), chain[k].joint->axis);
-    pose = pose.then_after(chain[k].before).then_after(RigidTransform{turn.toRotationMatrix(), Vec3::Zero()});
-  }
+  for (std::size_t k = 0; k < chain.size(); ++k)
+    pose = pose.then_after(chain[k].before).then_after(joint_motion(*chain[k].joint, q(static_cast<Eigen::Index>(k))));
   return pose;
 }
 
@@ -638,17 +651,21 @@ port::Error parse_urdf_description(std::string_view text, const std::string& sou
   };
   const auto refuse_whole = [&](const std::string& why) { return refuse(Refusal{0, why}); };
   if (!read_tree(text, &tree, &refusal)) return refuse(refusal);
-  // The arm: the movable joints on the path to the tips, exactly six, in one line.
+  // The arm: the movable joints on the path to the tips, 1 .. kMaxJoints of them, in one line.
   std::size_t movable_count = 0;
   const UrdfJoint* last_movable = nullptr;
   for (const UrdfJoint& joint : tree.joints) {
     if (!joint.movable()) continue;
-    ++movable_count;
+    if (++movable_count > static_cast<std::size_t>(kMaxJoints)) {
+      return refuse(Refusal{joint.line, "joint " + port::quoted(joint.name) + " is movable joint " +
+                                            std::to_string(movable_count) + ": hivecal models arms of 1 to " +
+                                            std::to_string(kMaxJoints) + " joints (this build's capacity)"});
+    }
     last_movable = &joint;
   }
-  if (movable_count != static_cast<std::size_t>(kJointCount)) {
-    return refuse_whole(std::to_string(movable_count) +
-                        " movable joints: hivecal models arms of exactly 6 revolute joints");
+  if (last_movable == nullptr) {
+    return refuse_whole("no movable joint: an arm has 1 to " + std::to_string(kMaxJoints) +
+                        " revolute, continuous or prismatic joints");
   }
   std::vector<const UrdfJoint*> path;
   if (!path_to_root(tree, last_movable->child, &path, &refusal)) return refuse(refusal);
@@ -673,48 +690,54 @@ port::Error parse_urdf_description(std::string_view text, const std::string& sou
   // Axes at q = 0 in the root frame, then the DH frames between them.
   ModifiedDhBase base;
   Frame frame;
+  // A slide moves along its direction wherever its line is drawn: joint 1's through the root's
+  // origin (no base offset), a later one's through its joint frame.
   const RigidTransform joint1 = joint_frame_at_zero(chain, 0);
-  if (!base_frame(joint1.translation_m, joint1.rotation * chain[0].joint->axis, &base, &frame, &what))
+  const Vec3 joint1_point = chain[0].joint->slides() ? Vec3::Zero() : joint1.translation_m;
+  if (!base_frame(joint1_point, joint1.rotation * chain[0].joint->axis, &base, &frame, &what))
     return refuse_whole(what);
   RobotModel model;
+  model.joint_count = static_cast<int>(chain.size());
+  for (std::size_t k = 0; k < chain.size(); ++k)
+    if (chain[k].joint->slides()) set_joint_type(&model, static_cast<int>(k), JointType::prismatic);
   for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
     const RigidTransform next = joint_frame_at_zero(chain, i + 1);
     Frame following;
     model.joints[i] = dh_row(frame, next.translation_m, next.rotation * chain[i + 1].joint->axis, &following);
     frame = following;
   }
-  // Frame 6 (the flange): at the 'flange' link fixed to the arm's end when there is one (a link
+  // Frame n (the flange): at the 'flange' link fixed to the arm's end when there is one (a link
   // of that name elsewhere, a base's mounting flange, is not the arm's), else the last joint's child.
   const RigidTransform end_at_zero = joint_frame_at_zero(chain, chain.size() - 1);
   const RigidTransform flange_pose =
       end.has_flange ? end_at_zero.then_after(pose_below(tree, last_movable->child, "flange")) : end_at_zero;
-  Frame frame6;
-  frame6.z = frame.z;
+  Frame frame_n;
+  frame_n.z = frame.z;
   const Vec3 offset = flange_pose.translation_m - frame.origin;
-  DhJoint& last = model.joints[kJointCount - 1];
+  DhJoint& last = model.joints[chain.size() - 1];
   last.d_m = offset.dot(frame.z);
   const Vec3 radial = offset - last.d_m * frame.z;
   const Vec3 flange_x = flange_pose.rotation.col(0) - flange_pose.rotation.col(0).dot(frame.z) * frame.z;
-  frame6.x = radial.norm() > 1e-10 ? radial.normalized() : (flange_x.norm() > 1e-6 ? flange_x.normalized() : frame.x);
-  if (radial.norm() > 1e-10 && frame6.x.dot(frame.x) < 0.0) frame6.x = -frame6.x;  // as in dh_row
-  last.a_m = radial.dot(frame6.x);
-  last.theta_offset_rad = signed_angle(frame.x, frame6.x, frame.z);
-  // A flange whose x lies along joint 6's axis is ROS-Industrial's (x out of the flange, as ROS's
-  // ur_description writes it): its z is not frame 6's, which stays on the joint's axis.
+  frame_n.x = radial.norm() > 1e-10 ? radial.normalized() : (flange_x.norm() > 1e-6 ? flange_x.normalized() : frame.x);
+  if (radial.norm() > 1e-10 && frame_n.x.dot(frame.x) < 0.0) frame_n.x = -frame_n.x;  // as in dh_row
+  last.a_m = radial.dot(frame_n.x);
+  last.theta_offset_rad = signed_angle(frame.x, frame_n.x, frame.z);
+  // A flange whose x lies along the last joint's axis is ROS-Industrial's (x out of the flange, as ROS's
+  // ur_description writes it): its z is not frame n's, which stays on the joint's axis.
   const bool ros_industrial_flange = std::fabs(flange_pose.rotation.col(0).dot(frame.z)) > 1.0 - 1e-9;
   const Vec3 flange_z = flange_pose.rotation.col(2);
-  last.alpha_rad = !ros_industrial_flange && std::fabs(flange_z.dot(frame6.x)) < 1e-9
-                       ? signed_angle(frame.z, flange_z, frame6.x)
+  last.alpha_rad = !ros_industrial_flange && std::fabs(flange_z.dot(frame_n.x)) < 1e-9
+                       ? signed_angle(frame.z, flange_z, frame_n.x)
                        : 0.0;
-  frame6.origin = frame.origin + last.d_m * frame.z + last.a_m * frame6.x;
-  frame6.z = Eigen::AngleAxisd(last.alpha_rad, frame6.x).toRotationMatrix() * frame.z;
-  Mat3 rotation6;
-  rotation6.col(0) = frame6.x;
-  rotation6.col(2) = frame6.z;
-  rotation6.col(1) = frame6.z.cross(frame6.x);
+  frame_n.origin = frame.origin + last.d_m * frame.z + last.a_m * frame_n.x;
+  frame_n.z = Eigen::AngleAxisd(last.alpha_rad, frame_n.x).toRotationMatrix() * frame.z;
+  Mat3 rotation_n;
+  rotation_n.col(0) = frame_n.x;
+  rotation_n.col(2) = frame_n.z;
+  rotation_n.col(1) = frame_n.z.cross(frame_n.x);
   for (std::size_t k = 0; k < tools.size(); ++k) {
     target_tool(&model, static_cast<int>(k)) =
-        rotation6.transpose() * (end_at_zero.then_after(tools[k].pose).translation_m - frame6.origin);
+        rotation_n.transpose() * (end_at_zero.then_after(tools[k].pose).translation_m - frame_n.origin);
   }
   // A UR arm whose root is REP-103's base_link (x forward; ROS's ur_description turns UR's base,
   // x backward, by pi about z) comes out as UR's table with every a and alpha negated: it is read
@@ -736,8 +759,8 @@ port::Error parse_urdf_description(std::string_view text, const std::string& sou
   for (std::size_t k = 0; k < chain.size(); ++k) {  // a continuous joint (or one without <limit>) keeps +-2 pi
     if (!chain[k].joint->has_limit) continue;
     out.has_joint_limits = true;
-    out.lower_rad(static_cast<Eigen::Index>(k)) = chain[k].joint->lower_rad;
-    out.upper_rad(static_cast<Eigen::Index>(k)) = chain[k].joint->upper_rad;
+    out.lower_rad(static_cast<Eigen::Index>(k)) = chain[k].joint->lower;
+    out.upper_rad(static_cast<Eigen::Index>(k)) = chain[k].joint->upper;
   }
   const port::Error bounded = check_model_bounds(out, source_name);  // the JSON description's bounds
   if (!bounded.ok()) return bounded;
@@ -746,7 +769,7 @@ port::Error parse_urdf_description(std::string_view text, const std::string& sou
   double worst_m = 0.0;
   for (int pose = 0; pose < 100; ++pose) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-3.0, 3.0);
+    for (int j = 0; j < model.joint_count; ++j) q(j) = random.uniform(-3.0, 3.0);  // [rad], a slide's [m]
     const RigidTransform chain_end = chain_end_at(chain, q);
     for (std::size_t k = 0; k < tools.size(); ++k) {
       const Vec3 urdf_point = chain_end.then_after(tools[k].pose).translation_m;

@@ -41,14 +41,22 @@ const std::string kTargetAndDifference =
 
 const char* const kSumSpec =
     "x=x_t+x_dif[mm],y=y_t + y_dif [mm],z=z_t-z_dif[mm],q1=joint_1[deg],q2=joint_2[deg],q3=joint_3[deg],"
-    "q4=joint_4[deg],q5=joint_5[deg],q6=joint_6[deg]";
+    "q4=joint_4[deg],q5=joint_5[deg],q6=joint_6[deg],q7=joint_7[deg]";
+
+/// The units of the seven-joint arm the export is of (revolute joints).
+InputUnits seven_joints() {
+  InputUnits units;
+  units.joints.count = 7;
+  return units;
+}
 
 TEST(ColumnSpecs, ASumOfColumnsWithAUnitIsTheMeasuredPoint) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
   const test::TempDir dir;
   const std::string path = dir.write("grid.csv", kTargetAndDifference);
-  InputUnits units;
+  InputUnits units = seven_joints();
   units.columns = aliases(kSumSpec);
-  ASSERT_EQ(units.columns.size(), 9u);
+  ASSERT_EQ(units.columns.size(), 10u);
   EXPECT_EQ(units.columns[1].header, "y_t + y_dif");
   EXPECT_EQ(units.columns[1].unit, "mm");
   Dataset<8> dataset;
@@ -61,6 +69,7 @@ TEST(ColumnSpecs, ASumOfColumnsWithAUnitIsTheMeasuredPoint) {
   EXPECT_EQ(second.point_m.z(), (-5.5 - 2.875) * 1e-3);  // a minus term
   EXPECT_EQ(second.q_rad(0), 11.0 * math::kRadPerDeg);   // a plain joint spec with a unit still reads
   EXPECT_EQ(second.q_rad(5), -61.0 * math::kRadPerDeg);
+  EXPECT_EQ(second.q_rad(6), 7.0 * math::kRadPerDeg);
 }
 
 TEST(ColumnSpecs, EveryReaderOfTheColumnSpecTakesSums) {
@@ -93,7 +102,8 @@ TEST(ColumnSpecs, AHeaderNameThatHoldsASignIsReadWhole) {
 
 TEST(ColumnSpecs, TheWamGridReadsAsTargetPlusDifference) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("wam-grid/3D_WAM_uncalibrated_grid_cleaned.csv");
-  InputUnits units;
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  InputUnits units = seven_joints();
   units.columns = aliases(kSumSpec);
   units.columns[2] = aliases("z=z_t+z_dif[mm]")[0];
   Dataset<256> dataset;

@@ -39,7 +39,7 @@ double worst_point_difference_m(const RobotModel& a, const RobotModel& b) {
   double worst_m = 0.0;
   for (int i = 0; i < 200; ++i) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-3.0, 3.0);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-3.0, 3.0);
     worst_m = std::fmax(worst_m, (fk_tool_point(a, q) - fk_tool_point(b, q)).norm());
   }
   return worst_m;
@@ -137,7 +137,7 @@ TEST(ComplianceJson, UnusableKeysAreRefusedByName) {
 record::CalibrationFile harmonic_ur5e() {
   record::CalibrationFile file = compliant_ur5e(ComplianceLoad::point, Vec3(0.0, 0.0, -1.0));
   ComplianceModel& c = file.model.compliance;
-  EXPECT_EQ(append_harmonic_terms(2, &c), Status::ok);
+  EXPECT_EQ(append_harmonic_terms(2, file.model, &c), Status::ok);
   for (int t = 4; t < c.term_count; ++t) {
     c.coefficient[t] = 3e-5 * (t % 2 == 0 ? 1.0 : -0.7) / (t - 3);
     file.compliance_sigma[t] = 2e-6;
@@ -146,7 +146,7 @@ record::CalibrationFile harmonic_ur5e() {
 }
 
 TEST(ComplianceJson, HarmonicTermsRoundTripToTheSameBits) {
-  if (4 + 4 * kJointCount > kMaxComplianceTerms) GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " terms";
+  if (4 + 4 * kSixJoints > kMaxComplianceTerms) GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " terms";
   const record::CalibrationFile file = harmonic_ur5e();
   const std::string text = record::format_calibration_json(file);
   const std::size_t term = text.find("\"name\": \"h_j3_cos2\"");
@@ -165,7 +165,7 @@ TEST(ComplianceJson, HarmonicTermsRoundTripToTheSameBits) {
 }
 
 TEST(ComplianceJson, UnusableHarmonicsAreRefusedByName) {
-  if (4 + 4 * kJointCount > kMaxComplianceTerms) GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " terms";
+  if (4 + 4 * kSixJoints > kMaxComplianceTerms) GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " terms";
   const std::string good = record::format_calibration_json(harmonic_ur5e());
   struct Case {
     const char* from;  ///< replaced at its first place after the first harmonic term (terms[4])

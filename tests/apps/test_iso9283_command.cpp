@@ -47,7 +47,7 @@ TEST(Iso9283Grouping, SamePosesAsEverySampleAgainstEveryPose) {
   std::vector<JointVector> commands;
   for (int k = 0; k < 40; ++k) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       // Half the poses on a multiple of the cell width (4 tolerances) or a tolerance beside it.
       const double edge = 4.0 * kSamePoseTolerance_rad * static_cast<double>(random.next() % 2000) - 4.0;
       q(j) = k % 2 == 0
@@ -59,20 +59,20 @@ TEST(Iso9283Grouping, SamePosesAsEverySampleAgainstEveryPose) {
   // Near neighbours: poses within two tolerances of another, so that a reach can match both.
   for (int k = 0; k < 10; ++k) {
     JointVector q = commands[static_cast<std::size_t>(k)];
-    q(k % kJointCount) += 1.5 * kSamePoseTolerance_rad;
+    q(k % kSixJoints) += 1.5 * kSamePoseTolerance_rad;
     commands.push_back(q);
   }
   std::vector<Sample> samples;
   for (int cycle = 0; cycle < 6; ++cycle) {
     for (const JointVector& command : commands) {
       JointVector q = command;
-      for (int j = 0; j < kJointCount; ++j) q(j) += random.uniform(-1.3, 1.3) * kSamePoseTolerance_rad;
+      for (int j = 0; j < kSixJoints; ++j) q(j) += random.uniform(-1.3, 1.3) * kSamePoseTolerance_rad;
       samples.push_back(sample_at(q, samples.size(), cycle % 3 == 2 ? 1 : 0));
     }
   }
   const std::vector<cli::PoseReaches> expected = group_by_definition(samples);
   const std::vector<cli::PoseReaches> grouped =
-      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {});
+      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {}, kSixJoints);
   ASSERT_GT(expected.size(), commands.size() * 2);  // the jitter made poses of their own
   ASSERT_EQ(grouped.size(), expected.size());
   for (std::size_t p = 0; p < expected.size(); ++p) {
@@ -89,15 +89,34 @@ TEST(Iso9283Grouping, WorkIsLinearInTheSamples) {
   Random random(9283);
   std::vector<JointVector> commands(20000);
   for (JointVector& q : commands)
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-3.0, 3.0);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-3.0, 3.0);
   std::vector<Sample> samples;
   for (int cycle = 0; cycle < 3; ++cycle)
     for (const JointVector& q : commands) samples.push_back(sample_at(q, samples.size(), 0));
   std::size_t comparisons = 0;
   const std::vector<cli::PoseReaches> grouped =
-      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {}, &comparisons);
+      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {}, kSixJoints, &comparisons);
   ASSERT_EQ(grouped.size(), commands.size());
   for (const cli::PoseReaches& pose : grouped) EXPECT_EQ(pose.measured_m.size(), 3u);
+  EXPECT_LE(comparisons, 2 * samples.size());
+}
+
+// A seven-joint arm's poses that differ in the seventh joint alone are told apart by its cells
+// too: the work stays linear (cells of six joints put them all in one).
+TEST(Iso9283Grouping, TheCellsHoldEveryJointOfTheArm) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  Random random(7);
+  std::vector<JointVector> commands(3000, JointVector::Zero());
+  for (JointVector& q : commands) q(6) = random.uniform(-3.0, 3.0);
+  std::vector<Sample> samples;
+  for (int cycle = 0; cycle < 3; ++cycle)
+    for (const JointVector& q : commands) samples.push_back(sample_at(q, samples.size(), 0));
+  std::size_t comparisons = 0;
+  const std::vector<cli::PoseReaches> grouped =
+      cli::group_reaches(Span<const Sample>(samples.data(), samples.size()), {}, 7, &comparisons);
+  const std::vector<cli::PoseReaches> expected = group_by_definition(samples);
+  ASSERT_EQ(grouped.size(), expected.size());
+  for (std::size_t p = 0; p < expected.size(); ++p) EXPECT_EQ(grouped[p].first.index, expected[p].first.index) << p;
   EXPECT_LE(comparisons, 2 * samples.size());
 }
 

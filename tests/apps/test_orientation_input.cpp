@@ -32,7 +32,7 @@ std::string number(double v) {
 std::string row(const JointVector& q, const Vec3& p, const Vec3& r, double q_scale = 1.0, double p_scale = 1.0,
                 double r_scale = 1.0) {
   std::string out;
-  for (int j = 0; j < kJointCount; ++j) out += number(q(j) * q_scale) + ",";
+  for (int j = 0; j < kSixJoints; ++j) out += number(q(j) * q_scale) + ",";
   for (int k = 0; k < 3; ++k) out += number(p(k) * p_scale) + ",";
   for (int k = 0; k < 3; ++k) out += number(r(k) * r_scale) + (k < 2 ? "," : "\n");
   return out;
@@ -119,7 +119,7 @@ TEST(OrientationInput, TheLeverFromTheNoiseTakesTheJointsIn) {
   for (const JointVector& q : poses) {
     const Vec3 p = fk_tool_point(arm, q);
     RigidTransform frame;  // base frame of joint 1: its axis is z, its origin 0
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       norm2 += frame.rotation.col(2).cross(p - frame.translation_m).squaredNorm();
       const DhJoint& dh = arm.joints[j];
       const double theta = q(j) + dh.theta_offset_rad;
@@ -255,7 +255,7 @@ TEST(OrientationInput, BadOrientationsAreRefusedWithFileAndLine) {
 std::string names_of(ParamMask mask) {
   std::string names;
   for (int i = 0; i < kFullParamCount; ++i) {
-    if (mask_has(mask, i)) names += std::string(names.empty() ? "" : " ") + full_param_name(i);
+    if (mask_has(mask, i)) names += std::string(names.empty() ? "" : " ") + full_param_name(i, kSixJoints);
   }
   return names;
 }

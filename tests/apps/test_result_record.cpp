@@ -96,7 +96,7 @@ TEST(ResultRecord, TheCovarianceAndTheDomainReadBackWithTheSameBits) {
   NormalMatrix c = NormalMatrix::Zero();
   const int a2 = 6;  // a2, alpha1 and base_tx
   const int alpha1 = 3;
-  const int tx = base_translation_param_index(0);
+  const int tx = base_translation_param_index(kSixJoints, 0);
   c(a2, a2) = 4.1e-9;
   c(alpha1, alpha1) = 2.3e-8;
   c(tx, tx) = 9.7e-8;

@@ -77,14 +77,14 @@ TEST(RobotDescription, ResultsRoundTripInTheirOwnConvention) {
 // what the standard result predicts, to 1e-12 m.
 TEST(RobotDescription, ModifiedDhResultPredictsWhatTheStandardOneDoes) {
   for (OtherArm arm : test::kOtherArms) {
-    ModifiedDhRow rows[kJointCount];
+    ModifiedDhRow rows[kSixJoints];
     Vec3 tool_m;
     test::other_arm_modified(arm, ModifiedDhBase{}, rows, &tool_m);
     std::string text =
         "{\"robot\": \"" + std::string(test::other_arm_name(arm)) +
         "\", \"convention\": \"modified-dh\", \"vendor\": {\"note\": \"extra keys are allowed\"}, \"dh\": [";
     char buf[256];
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       std::snprintf(buf, sizeof buf, "%s{\"alpha\": %.17g, \"a\": %.17g, \"theta_offset\": %.17g, \"d\": %.17g}",
                     j == 0 ? "" : ", ", rows[j].alpha_prev_rad, rows[j].a_prev_m, rows[j].theta_offset_rad,
                     rows[j].d_m);
@@ -159,8 +159,13 @@ TEST(RobotDescription, BadDescriptionsNameFileAndKey) {
   } cases[] = {
       {"{\"dh\": " + rows + "}", "arm.json: missing \"tool\""},
       {"{\"tool\": [0, 0, 0.1]}", "arm.json: missing \"dh\""},
-      {"{\"dh\": [{}], \"tool\": [0, 0, 0.1]}", "\"dh\" must be an array of 6"},
-      {"{\"dh\": " + rows.substr(0, rows.rfind(", {")) + "], \"tool\": [0, 0, 0.1]}", "\"dh\" must be an array of 6"},
+      {"{\"dh\": [{}], \"tool\": [0, 0, 0.1]}", "\"dh\"[0]: missing \"theta_offset\""},
+      {"{\"dh\": [], \"tool\": [0, 0, 0.1]}", "\"dh\" must be an array of 1 to " + std::to_string(kMaxJoints)},
+      {"{\"dh\": " + rows.substr(0, rows.size() - 1) + ", " + rows.substr(1, rows.size() - 1) +
+           ", \"tool\": [0, 0, 0.1]}",
+       "joint objects, one per joint (it has 12 rows)"},
+      {"{\"dh\": [{\"theta_offset\": 0, \"d\": 0, \"a\": 0, \"alpha\": 0, \"type\": \"linear\"}], \"tool\": [0, 0, 0]}",
+       "\"dh\"[0].type must be \"revolute\" (q turns theta) or \"prismatic\" (q moves d)"},
       {"{\"convention\": \"dh\", \"dh\": " + rows + ", \"tool\": [0, 0, 0.1]}", "unknown \"convention\" 'dh'"},
       {"{\"dh\": " + rows + ", \"tool\": [0, 0]}", "\"tool\" must be [x, y, z]"},
       {"{\"format\": \"x\", \"dh\": " + rows + ", \"tool\": [0, 0, 0.1]}", "\"format\""},
@@ -180,6 +185,123 @@ TEST(RobotDescription, BadDescriptionsNameFileAndKey) {
   EXPECT_TRUE(
       textio::parse_robot_description("{\"dh\": " + rows + ", \"tool\": [0, 0, 0.1]}", "arm.json", &description).ok());
   EXPECT_EQ(description.convention, DhConvention::standard);
+}
+
+// Arms of seven joints and one with a prismatic joint (a UR10 on a rail) are descriptions and
+// results like any other: their rows, types, joint limits (a slide's in metres), masses and
+// term joints are read per joint and written back to the same bits in either convention; an
+// all-revolute arm's rows carry no "type" (a six-joint file is written as before).
+TEST(RobotDescription, ArmsOfAnyJointCountRoundTripWithTheirJointTypes) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  for (const test::ManyJointArm arm : test::kManyJointArms) {
+    for (const DhConvention convention : {DhConvention::standard, DhConvention::modified}) {
+      Random random(17 + static_cast<std::uint64_t>(arm));
+      record::CalibrationFile file;
+      file.robot = test::many_joint_arm_name(arm);
+      file.convention = convention;
+      if (convention == DhConvention::modified) file.modified_base = ModifiedDhBase{0.013, -0.021};
+      file.model = test::many_joint_arm_truth(arm, &random);
+      file.base_to_tracker = test::example_base_to_tracker();
+      file.has_joint_limits = true;
+      for (int j = 0; j < 7; ++j) {
+        file.lower_rad(j) = joint_type(file.model, j) == JointType::prismatic ? 0.0 : -2.9 + 0.1 * j;
+        file.upper_rad(j) = joint_type(file.model, j) == JointType::prismatic ? 2.0 : 2.9 - 0.1 * j;
+      }
+      ComplianceModel& compliance = file.model.compliance;
+      compliance.load = ComplianceLoad::arm_masses;
+      compliance.term_count = 2;
+      compliance.terms[0] = ComplianceTerm{1, 0, JointTermKind::gravity, 0};
+      compliance.terms[1] = ComplianceTerm{6, 0, JointTermKind::harmonic_sin, 1};
+      compliance.coefficient[0] = 2e-6;
+      compliance.coefficient[1] = 3e-5;
+      for (int j = 0; j < 7; ++j) {
+        compliance.masses.link_mass_kg[j] = 1.0 + j;
+        compliance.masses.link_com_m[j] = Vec3(0.01 * j, 0.0, -0.02);
+      }
+      const std::string text = record::format_calibration_json(file);
+      record::CalibrationFile back;
+      const port::Error r = record::parse_calibration_json(text, "r.json", &back);
+      ASSERT_TRUE(r.ok()) << r.message;
+      const char* name = test::many_joint_arm_name(arm);
+      EXPECT_EQ(back.model.joint_count, 7) << name;
+      EXPECT_EQ(back.model.prismatic_joints, file.model.prismatic_joints) << name;
+      EXPECT_EQ(text.find("\"type\"") != std::string::npos, arm == test::ManyJointArm::rail_ur10) << name;
+      EXPECT_EQ(text.find("\"ur_deltas\""), std::string::npos) << name;  // a controller file of UR arms only
+      EXPECT_TRUE(back.lower_rad == file.lower_rad) << name;
+      EXPECT_TRUE(back.upper_rad == file.upper_rad) << name;
+      EXPECT_EQ(back.model.compliance.masses.link_mass_kg[6], 7.0) << name;
+      EXPECT_EQ(back.model.compliance.terms[1].joint, 6) << name;
+      record::CalibrationFile again;
+      ASSERT_TRUE(record::parse_calibration_json(record::format_calibration_json(back), "r2.json", &again).ok());
+      EXPECT_EQ(to_params(again.model), to_params(back.model)) << name;
+      if (convention == DhConvention::standard) {
+        EXPECT_EQ(to_params(back.model), to_params(file.model)) << name;
+      }
+      // The same points (modified DH: of the rigid chain; the fold of a7, alpha7 into the tool
+      // moves frame 7, in which link 7's centre of mass is given, by a7).
+      RobotModel read = back.model;
+      RobotModel written = file.model;
+      if (convention == DhConvention::modified) read.compliance = written.compliance = ComplianceModel{};
+      for (int i = 0; i < 50; ++i) {
+        const JointVector q = test::many_joint_arm_joints(arm, &random);
+        EXPECT_LE((fk_tool_point(read, q) - fk_tool_point(written, q)).norm(), 1e-12) << name;
+      }
+    }
+  }
+}
+
+// What a description of N joints must give per joint is refused naming the counts: limits
+// (a slide's within 100 m: millimetres?), masses, a term's joint.
+TEST(RobotDescription, PerJointMembersFollowTheRows) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  textio::RobotDescription rail;
+  rail.robot = "rail";
+  rail.model = test::many_joint_arm_model(test::ManyJointArm::rail_ur10);
+  const std::string text = textio::format_robot_description(rail);
+  const std::string head = text.substr(0, text.rfind('}'));
+  const std::string six_pairs = "[[0, 2], [-3, 3], [-3, 3], [-3, 3], [-3, 3], [-3, 3]]";
+  const struct {
+    std::string members;
+    std::string expected;
+  } cases[] = {
+      {", \"joint_limits\": " + six_pairs,
+       "\"joint_limits\" must be one [lower, upper] pair per joint (6 pairs for 7 joints in \"dh\")"},
+      {", \"joint_limits\": [[0, 2000], " + six_pairs.substr(1),
+       "\"joint_limits\"[0] = [0, 2000] m: lower must be below upper, both within 100 m (a prismatic joint; "
+       "millimetres?)"},
+      {", \"compliance\": {\"kind\": \"basis\", \"gravity_direction\": [0, 0, -1], \"terms\": [{\"joint\": 8, "
+       "\"load\": \"tool\", \"coefficient\": 1e-6}]}",
+       "\"terms\"[0].joint must be a joint number 1 .. 7"},
+      {", \"compliance\": {\"kind\": \"basis\", \"gravity_direction\": [0, 0, -1], \"terms\": [{\"joint\": 2, "
+       "\"load\": \"frame 8\", \"coefficient\": 1e-6}]}",
+       "\"terms\"[0].load must be \"frame K\" (K = 1 .. 7) or \"tool\""},
+      {", \"compliance\": {\"kind\": \"masses\", \"gravity_direction\": [0, 0, -1], \"terms\": [{\"joint\": 2, "
+       "\"load\": \"arm masses\", \"coefficient\": 1e-6}], \"masses\": {\"link_mass_kg\": [1, 1, 1, 1, 1, 1], "
+       "\"link_com_m\": [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]], \"payload_kg\": 0, "
+       "\"payload_com_m\": [0, 0, 0]}}",
+       "\"masses\" must hold link_mass_kg (7 numbers, one per joint), link_com_m (7 x [x, y, z])"},
+  };
+  for (const auto& c : cases) {
+    textio::RobotDescription description;
+    const port::Error r = textio::parse_robot_description(head + c.members + "}", "rail.json", &description);
+    EXPECT_FALSE(r.ok()) << c.expected;
+    EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message << "\nwanted: " << c.expected;
+  }
+  textio::RobotDescription limited;
+  const port::Error r = textio::parse_robot_description(
+      head + ", \"joint_limits\": [[0, 2], " + six_pairs.substr(1) + "}", "rail.json", &limited);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_EQ(limited.upper_rad(0), 2.0);
+  EXPECT_EQ(limited.upper_rad(6), 3.0);
+  EXPECT_EQ(limited.model.prismatic_joints, 1U);
+  // UR's controller files refuse the arm with what it is.
+  RobotModel calibrated;
+  const port::Error conf = textio::read_ur_calibrated_model("no-such.conf", rail.model, "rail", &calibrated);
+  EXPECT_EQ(conf.fault, port::Fault::usage);
+  EXPECT_NE(conf.message.find("a calibration.conf is a Universal Robots controller's (six revolute joints); rail "
+                              "has 7 joints, joint 1 prismatic"),
+            std::string::npos)
+      << conf.message;
 }
 
 // A robot file with a UTF-8 byte order mark reads as without it; UTF-16 and UTF-32 are refused

@@ -88,7 +88,7 @@ TEST(StreamCommands, SimulateTakesTheTrueGeometryFromACalibrationConf) {
   record::CalibrationFile truth;
   ASSERT_TRUE(record::read_calibration_json(dir + "/truth.json", &truth).ok());
   EXPECT_EQ(truth.robot, "ur5e");
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     EXPECT_DOUBLE_EQ(truth.model.joints[j].a_m, expected.joints[j].a_m);
     EXPECT_DOUBLE_EQ(truth.model.joints[j].d_m, expected.joints[j].d_m);
     EXPECT_DOUBLE_EQ(truth.model.joints[j].theta_offset_rad, expected.joints[j].theta_offset_rad);

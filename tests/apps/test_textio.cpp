@@ -27,7 +27,7 @@ TEST(TextCsv, SamplesAndJointsRoundTripAndCapacity) {
   static Dataset<16> written;
   written.clear();
   test::fill_dataset(nominal_model(RobotType::ur5), test::example_base_to_tracker(), 10, 1e-5, &random, &written);
-  const std::string path = dir.write("s.csv", textio::format_samples_csv(written.samples()));
+  const std::string path = dir.write("s.csv", textio::format_samples_csv(written.samples(), kSixJoints));
   static Dataset<16> read_back;
   read_back.clear();
   ASSERT_TRUE(textio::read_samples_csv(path, &read_back).ok());

@@ -58,7 +58,7 @@ void expect_same_joints(const textio::RobotLog& log, const std::vector<JointStat
   ASSERT_EQ(log.records.size(), expected.size());
   for (std::size_t i = 0; i < expected.size(); ++i) {
     ASSERT_EQ(log.records[i].timestamp_us, expected[i].timestamp_us) << i;
-    for (int j = 0; j < kJointCount; ++j) ASSERT_EQ(log.records[i].q_rad[j], expected[i].q_rad[j]) << i << " " << j;
+    for (int j = 0; j < kSixJoints; ++j) ASSERT_EQ(log.records[i].q_rad[j], expected[i].q_rad[j]) << i << " " << j;
   }
 }
 
@@ -76,7 +76,7 @@ TEST(TextLogs, RobotFormsGiveTheSameRecords) {
   const textio::RobotLog ros = textio::parse_robot_log(test::rostopic_log(joints), "js.csv");
   EXPECT_EQ(ros.format, LogFormat::rostopic);
   expect_same_joints(ros, joints);  // mapped by name from the driver's order
-  const int reversed[kJointCount] = {5, 4, 3, 2, 1, 0};
+  const int reversed[kSixJoints] = {5, 4, 3, 2, 1, 0};
   expect_same_joints(textio::parse_robot_log(test::rostopic_log(joints, reversed), "js2.csv"), joints);
   EXPECT_EQ(ros.counters.rows, joints.size());
   EXPECT_EQ(ros.counters.records, joints.size());
@@ -98,7 +98,7 @@ TEST(TextLogs, RostopicJointNamesAreAnArgumentAndExtraJointsAreIgnored) {
   ASSERT_EQ(log.records.size(), 2u);
   EXPECT_EQ(log.counters.missing_joints, 1u);  // the gripper-only message
   for (const JointStateRecord& r : log.records) {
-    for (int j = 0; j < kJointCount; ++j) EXPECT_EQ(r.q_rad[j], j + 1.0);
+    for (int j = 0; j < kSixJoints; ++j) EXPECT_EQ(r.q_rad[j], j + 1.0);
   }
   EXPECT_EQ(log.records[0].timestamp_us, 1000000u);
   // With the UR defaults no row names the joints: the message lists both sides.
@@ -424,7 +424,7 @@ TEST(TextLogs, TenMinuteRtdeLogParsesFast) {
   std::vector<JointStateRecord> joints(300000);
   for (std::size_t i = 0; i < joints.size(); ++i) {
     joints[i].timestamp_us = 1000000 + 2000 * i;
-    for (int j = 0; j < kJointCount; ++j) joints[i].q_rad[j] = 0.1 * j + 1e-6 * static_cast<double>(i % 977);
+    for (int j = 0; j < kSixJoints; ++j) joints[i].q_rad[j] = 0.1 * j + 1e-6 * static_cast<double>(i % 977);
   }
   const test::TempDir dir("hivecal_logs");
   const std::string path = dir.write("rtde.csv", test::rtde_log(joints));

@@ -46,7 +46,7 @@ const Dataset<16>& session() {
 std::string samples_text(const std::string& header, double angle_scale, double length_scale) {
   std::string out = header + "\n";
   for (const Sample& s : session().samples()) {
-    for (int j = 0; j < kJointCount; ++j) out += g17(s.q_rad(j) / angle_scale) + ",";
+    for (int j = 0; j < kSixJoints; ++j) out += g17(s.q_rad(j) / angle_scale) + ",";
     out += g17(s.point_m.x() / length_scale) + "," + g17(s.point_m.y() / length_scale) + "," +
            g17(s.point_m.z() / length_scale) + "\n";
   }
@@ -128,7 +128,7 @@ TEST(Units, PosesToPredictInDegrees) {
   for (const Sample& s : session().samples()) {
     si_text += "0";
     deg_text += "0";
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       si_text += "," + g17(s.q_rad(j));
       deg_text += "," + g17(s.q_rad(j) * kDegPerRad);
     }
@@ -156,7 +156,7 @@ std::string robot_log(const std::string& header, char separator, double scale) {
   for (const Sample& s : session().samples()) {
     out += g17(t);
     t += 0.008;
-    for (int j = 0; j < kJointCount; ++j) out += separator + g17(s.q_rad(j) * scale);
+    for (int j = 0; j < kSixJoints; ++j) out += separator + g17(s.q_rad(j) * scale);
     out += "\n";
   }
   return out;
@@ -166,7 +166,7 @@ void expect_joints(const textio::RobotLog& log, const char* what) {
   ASSERT_TRUE(log.ok) << what << ": " << log.error;
   ASSERT_EQ(log.records.size(), session().size()) << what;
   for (std::size_t i = 0; i < log.records.size(); ++i) {
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       EXPECT_NEAR(log.records[i].q_rad[j], session().samples()[i].q_rad(j), kSame) << what;
     }
   }
@@ -182,10 +182,10 @@ TEST(Units, RobotLogsInDegrees) {
   expect_joints(textio::parse_robot_log(robot_log(rtde_header, ' ', kDegPerRad), "rtde.csv", deg), "RTDE deg");
   // rostopic echo -p /joint_states, joints named (here in the driver's order 3, 2, 1, 4, 5, 6).
   std::string rostopic = "%time,field.header.seq,field.header.stamp,field.header.frame_id";
-  for (int k = 0; k < kJointCount; ++k) rostopic += ",field.name" + std::to_string(k);
-  for (int k = 0; k < kJointCount; ++k) rostopic += ",field.position" + std::to_string(k);
+  for (int k = 0; k < kSixJoints; ++k) rostopic += ",field.name" + std::to_string(k);
+  for (int k = 0; k < kSixJoints; ++k) rostopic += ",field.position" + std::to_string(k);
   rostopic += "\n";
-  const int order[kJointCount] = {2, 1, 0, 3, 4, 5};
+  const int order[kSixJoints] = {2, 1, 0, 3, 4, 5};
   std::uint64_t stamp_ns = 1700000000000000000ULL;
   for (const Sample& s : session().samples()) {
     rostopic += std::to_string(stamp_ns) + ",0," + std::to_string(stamp_ns) + ",base";

@@ -29,9 +29,9 @@ double worst_chain_error_m(const RobotModel& model, textio::UrKinematics* out = 
   double worst_m = 0.0;
   for (int pose = 0; pose < 200; ++pose) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
     RigidTransform chain;
-    for (int i = 0; i < kJointCount; ++i) {
+    for (int i = 0; i < kSixJoints; ++i) {
       const RigidTransform frame = textio::urdf_transform(textio::urdf_origin(kinematics.joint_frames[i]));
       chain = chain.then_after(frame).then_after(RigidTransform{rotation_z(q(i)), Vec3::Zero()});
     }
@@ -61,7 +61,7 @@ TEST(UrKinematicsExport, CalibratedArmsAreTheirChains) {
   Random random(21);
   for (int trial = 0; trial < 20; ++trial) {
     RobotModel model = nominal_model(trial % 2 == 0 ? RobotType::ur5 : RobotType::ur10e);
-    for (DhJoint& joint : model.joints) {
+    for (DhJoint& joint : model_joints(&model)) {
       joint.theta_offset_rad += random.uniform(-0.05, 0.05);
       joint.d_m += random.uniform(-0.01, 0.01);
       joint.a_m += random.uniform(-0.01, 0.01);
@@ -86,7 +86,7 @@ TEST(UrKinematicsExport, RealUr5eFactoryCalibrationLosesItsOffsets) {
   RobotModel model;
   ASSERT_EQ(apply_ur_deltas(nominal_model(RobotType::ur5e), deltas, &model), Status::ok);
   double largest_d_m = 0.0;
-  for (const DhJoint& joint : model.joints) largest_d_m = std::fmax(largest_d_m, std::fabs(joint.d_m));
+  for (const DhJoint& joint : model_joints(model)) largest_d_m = std::fmax(largest_d_m, std::fabs(joint.d_m));
   EXPECT_GT(largest_d_m, 100.0) << "the file's cancelling offsets";
   textio::UrKinematics k;
   const double worst_m = worst_chain_error_m(model, &k);

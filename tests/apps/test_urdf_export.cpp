@@ -1,8 +1,9 @@
 // `hivecal export --format urdf`: the chain written is the model. The URDF is read back here
 // with a reader of its own (joint origins xyz/rpy composed as URDF defines them, revolute joints
-// turning about their axis) and must put every tcp where the library's FK puts it, to 1e-9 m,
-// on random poses: nominal arms, large random calibrations, modified DH, a real UR5e factory
-// calibration (its cancelling +-204 m offsets), and the tracker frame where the result has it.
+// turning about their axis, prismatic ones sliding along it) and must put every tcp where the
+// library's FK puts it, to 1e-9 m, on random poses: nominal arms, large random calibrations,
+// modified DH, a real UR5e factory calibration (its cancelling +-204 m offsets), 7-axis arms and
+// a UR10 on a rail, and the tracker frame where the result has it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,6 +22,7 @@
 #include "hivecal/model/ur_deltas.hpp"
 #include "testkit/cli_run.hpp"
 #include "testkit/other_arms.hpp"
+#include "testkit/urdf_arms.hpp"
 #include "testkit/shared_data.hpp"
 #include "testkit/temp_dir.hpp"
 #include "textio/csv.hpp"
@@ -100,14 +102,18 @@ RigidTransform link_pose(const std::map<std::string, ReadJoint>& joints, const s
     if (joint.type == "revolute" || joint.type == "continuous") {
       pose = pose.then_after(RigidTransform{about_axis(joint.axis.normalized(), q(movable)), Vec3::Zero()});
       ++movable;
+    } else if (joint.type == "prismatic") {
+      pose = pose.then_after(RigidTransform{Mat3::Identity(), q(movable) * joint.axis.normalized()});
+      ++movable;
     }
   }
   if (movable_before != nullptr) *movable_before = movable;
   return pose;
 }
 
-/// Worst distance over 200 random poses between each target's point by the library's FK (in
-/// the description's base frame) and the URDF link `tools[k]` composed by this file's reader.
+/// Worst distance over 200 random poses (revolute joints +-2 pi rad, prismatic ones +-2 m)
+/// between each target's point by the library's FK (in the description's base frame) and the
+/// URDF link `tools[k]` composed by this file's reader.
 double worst_tool_error_m(const textio::RobotDescription& robot, const std::map<std::string, ReadJoint>& joints,
                           const std::vector<std::string>& tools) {
   const RigidTransform file_base =
@@ -116,7 +122,9 @@ double worst_tool_error_m(const textio::RobotDescription& robot, const std::map<
   double worst_m = 0.0;
   for (int pose = 0; pose < 200; ++pose) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    for (int j = 0; j < robot.model.joint_count; ++j)
+      q(j) = joint_type(robot.model, j) == JointType::prismatic ? random.uniform(-2.0, 2.0)
+                                                                : random.uniform(-2.0 * kPi, 2.0 * kPi);
     for (std::size_t k = 0; k < tools.size(); ++k) {
       const Vec3 expected = file_base.apply(fk_target_point(robot.model, q, static_cast<int>(k)));
       worst_m = std::fmax(worst_m, (link_pose(joints, tools[k], q).translation_m - expected).norm());
@@ -128,7 +136,7 @@ double worst_tool_error_m(const textio::RobotDescription& robot, const std::map<
 /// Every target's tcp from the URDF against the library's FK (in the description's base frame).
 void expect_chain_equals_model(const textio::RobotDescription& robot, const char* label) {
   const std::map<std::string, ReadJoint> joints = read_joints(textio::format_urdf(robot, nullptr));
-  ASSERT_EQ(joints.size(), 7u + static_cast<std::size_t>(robot.target_count)) << label;
+  ASSERT_EQ(joints.size(), static_cast<std::size_t>(robot.model.joint_count + 1 + robot.target_count)) << label;
   std::vector<std::string> tools;
   for (int k = 0; k < robot.target_count; ++k) tools.push_back(k == 0 ? "tcp" : "tcp_" + std::to_string(k + 1));
   const double worst_m = worst_tool_error_m(robot, joints, tools);
@@ -169,7 +177,7 @@ TEST(UrdfExport, NominalAndCalibratedArmsAreTheirChains) {
   for (int trial = 0; trial < 5; ++trial) {
     textio::RobotDescription robot;
     robot.model = nominal_model(RobotType::ur5);
-    for (DhJoint& joint : robot.model.joints) {
+    for (DhJoint& joint : model_joints(&robot.model)) {
       joint.theta_offset_rad += trial == 0 ? kPi / 2 : random.uniform(-kPi, kPi);
       joint.d_m += random.uniform(-0.05, 0.05);
       joint.a_m += random.uniform(-0.05, 0.05);
@@ -184,16 +192,22 @@ TEST(UrdfExport, NominalAndCalibratedArmsAreTheirChains) {
 }
 
 TEST(UrdfExport, ModifiedDhArmIsItsChain) {
-  // An IRB120-like arm written in Craig's convention.
-  const ModifiedDhRow rows[kJointCount] = {{0.0, 0.0, 0.0, 0.29},    {-kPi / 2, 0.0, -kPi / 2, 0.0},
-                                           {0.0, 0.27, 0.0, 0.0},    {-kPi / 2, 0.07, 0.0, 0.302},
-                                           {kPi / 2, 0.0, 0.0, 0.0}, {-kPi / 2, 0.0, kPi, 0.072}};
-  textio::RobotDescription robot;
-  robot.convention = DhConvention::modified;
-  ASSERT_EQ(model_from_modified_dh(rows, Vec3(0.0, 0.0, 0.1), &robot.model, &robot.modified_base), Status::ok);
-  robot.modified_base.alpha0_rad = 0.01;  // a base offset that is not the identity
-  robot.modified_base.a0_m = 0.02;
-  expect_chain_equals_model(robot, "modified-DH IRB120-like");
+  // An IRB120-like arm written in Craig's convention, and a Franka-like arm of seven joints.
+  const ModifiedDhRow irb120[kSixJoints] = {{0.0, 0.0, 0.0, 0.29},    {-kPi / 2, 0.0, -kPi / 2, 0.0},
+                                            {0.0, 0.27, 0.0, 0.0},    {-kPi / 2, 0.07, 0.0, 0.302},
+                                            {kPi / 2, 0.0, 0.0, 0.0}, {-kPi / 2, 0.0, kPi, 0.072}};
+  ModifiedDhRow franka[7];
+  test::franka_rows(franka);
+  const Span<const ModifiedDhRow> arms[] = {irb120, franka};
+  for (const Span<const ModifiedDhRow> rows : arms) {
+    if (rows.size() > static_cast<std::size_t>(kMaxJoints)) continue;  // a build of six joints
+    textio::RobotDescription robot;
+    robot.convention = DhConvention::modified;
+    ASSERT_EQ(model_from_modified_dh(rows, Vec3(0.0, 0.0, 0.1), &robot.model, &robot.modified_base), Status::ok);
+    robot.modified_base.alpha0_rad = 0.01;  // a base offset that is not the identity
+    robot.modified_base.a0_m = 0.02;
+    expect_chain_equals_model(robot, rows.size() == 7 ? "modified-DH Franka-like" : "modified-DH IRB120-like");
+  }
 }
 
 TEST(UrdfExport, RealUr5eFactoryCalibrationIsItsChain) {
@@ -229,14 +243,15 @@ TEST(UrdfExport, RobotJsonReadsBackAsTheSameArm) {
   textio::RobotDescription back;
   ASSERT_TRUE(textio::parse_robot_description(textio::format_robot_description(robot), "r.json", &back).ok());
   EXPECT_TRUE(back.has_joint_limits);
-  EXPECT_EQ(back.lower_rad, robot.lower_rad);
-  EXPECT_EQ(back.upper_rad, robot.upper_rad);
+  EXPECT_EQ(back.lower_rad.head(kSixJoints),
+            robot.lower_rad.head(kSixJoints));  // the joints beyond the arm's are not read
+  EXPECT_EQ(back.upper_rad.head(kSixJoints), robot.upper_rad.head(kSixJoints));
   // And through URDF: the limits are the joints' <limit>.
   textio::RobotDescription from_urdf;
   ASSERT_TRUE(textio::parse_urdf_description(textio::format_urdf(robot, nullptr), "r.urdf", &from_urdf).ok());
   EXPECT_TRUE(from_urdf.has_joint_limits);
-  EXPECT_EQ(from_urdf.lower_rad, robot.lower_rad);
-  EXPECT_EQ(from_urdf.upper_rad, robot.upper_rad);
+  EXPECT_EQ(from_urdf.lower_rad.head(kSixJoints), robot.lower_rad.head(kSixJoints));
+  EXPECT_EQ(from_urdf.upper_rad.head(kSixJoints), robot.upper_rad.head(kSixJoints));
   EXPECT_EQ(back.robot, robot.robot);
   EXPECT_EQ(back.model.joints[2].a_m, robot.model.joints[2].a_m);
   EXPECT_EQ(back.model.tool_m, robot.model.tool_m);
@@ -265,7 +280,7 @@ TEST(UrdfImport, ExportedArmsReadBackAsTheSameModel) {
   ur5.model = nominal_model(RobotType::ur5);
   ur5.model.tool_m = Vec3(0.0, 0.0, 0.1695);
   const textio::RobotDescription back = expect_read_exactly(textio::format_urdf(ur5, nullptr), {"tcp"}, "UR5 URDF");
-  for (int i = 0; i < kJointCount; ++i) {  // the robot's own table, not an equivalent one turned by pi
+  for (int i = 0; i < kSixJoints; ++i) {  // the robot's own table, not an equivalent one turned by pi
     EXPECT_NEAR(back.model.joints[i].a_m, ur5.model.joints[i].a_m, 1e-12) << i;
     EXPECT_NEAR(back.model.joints[i].d_m, ur5.model.joints[i].d_m, 1e-12) << i;
     EXPECT_NEAR(back.model.joints[i].alpha_rad, ur5.model.joints[i].alpha_rad, 1e-12) << i;
@@ -275,7 +290,7 @@ TEST(UrdfImport, ExportedArmsReadBackAsTheSameModel) {
   for (int trial = 0; trial < 10; ++trial) {
     textio::RobotDescription robot;
     robot.model = nominal_model(RobotType::ur10e);
-    for (DhJoint& joint : robot.model.joints) {
+    for (DhJoint& joint : model_joints(&robot.model)) {
       joint.theta_offset_rad += random.uniform(-0.5, 0.5);
       joint.d_m += random.uniform(-0.05, 0.05);
       joint.a_m += random.uniform(-0.05, 0.05);
@@ -325,7 +340,7 @@ TEST(UrdfImport, AnyAxesAndFixedJointsBetween) {
   EXPECT_EQ(robot.convention, DhConvention::modified);  // joint 1 about -z: base Rx(pi)
 }
 
-TEST(UrdfImport, WhatIsNoSixJointSerialArmIsRefusedByLine) {
+TEST(UrdfImport, WhatIsNoSerialArmIsRefusedByLine) {
   textio::RobotDescription ur5;
   ur5.model = nominal_model(RobotType::ur5);
   const std::string good = textio::format_urdf(ur5, nullptr);
@@ -337,13 +352,19 @@ TEST(UrdfImport, WhatIsNoSixJointSerialArmIsRefusedByLine) {
     text.replace(text.find(from), from.size(), to);
     return text;
   };
-  const std::string prismatic = replaced(good, "type=\"revolute\"", "type=\"prismatic\"");
-  const std::string seven = replaced(good, "type=\"fixed\"", "type=\"revolute\"");  // the flange joint moves too
+  const std::string floating = replaced(good, "type=\"revolute\"", "type=\"floating\"");
+  const std::string planar = replaced(good, "type=\"revolute\"", "type=\"planar\"");
+  std::string fixed_only = good;
+  for (std::size_t at = fixed_only.find("\"revolute\""); at != std::string::npos; at = fixed_only.find("\"revolute\""))
+    fixed_only.replace(at, 10, "\"fixed\"");
   const std::string loop = replaced(good, "<child link=\"flange\"/>", "<child link=\"link_3\"/>");
   const std::string skew_base = replaced(good, "<axis xyz=\"0 0 1\"/>", "<axis xyz=\"1 0 0\"/>");
   const Case cases[] = {
-      {prismatic, "arm.urdf:13: joint 'joint_1' is 'prismatic': only revolute, continuous and fixed joints"},
-      {seven, "arm.urdf: 7 movable joints: hivecal models arms of exactly 6 revolute joints"},
+      {floating,
+       "arm.urdf:13: joint 'joint_1' is 'floating' (a free body, six degrees of freedom): only revolute, continuous, "
+       "prismatic and fixed joints make a serial arm hivecal models"},
+      {planar, "arm.urdf:13: joint 'joint_1' is 'planar' (a motion in a plane, three degrees of freedom): only"},
+      {fixed_only, "arm.urdf: no movable joint: an arm has 1 to "},
       {loop,
        "joint 'flange_joint': link 'link_3' already has a parent joint, 'joint_3' of line 27 (a loop, or not a tree)"},
       {skew_base, "joint 1's axis is not perpendicular to the root link's x axis"},
@@ -408,7 +429,7 @@ TEST(UrdfImport, ManyFixedLinksReadInLinearTimeWithoutRecursion) {
     const double seconds = seconds_to_read(ur5_urdf_with(*extra), &robot, &error);
     ASSERT_TRUE(error.ok()) << error.message;
     EXPECT_LT(seconds, 30.0);
-    for (int i = 0; i < kJointCount; ++i) EXPECT_NEAR(robot.model.joints[i].a_m, ur5.joints[i].a_m, 1e-12) << i;
+    for (int i = 0; i < kSixJoints; ++i) EXPECT_NEAR(robot.model.joints[i].a_m, ur5.joints[i].a_m, 1e-12) << i;
     // The line's tool0 is 200,000 x 1 um beyond the tcp; the children leave the tcp where it is.
     EXPECT_NEAR(robot.model.tool_m.z(), extra == &line ? kLinks * 1e-6 : 0.0, 1e-9);
     std::printf("%d fixed links (%s): read in %.2f s\n", kLinks, extra == &line ? "a line" : "children", seconds);
@@ -511,7 +532,7 @@ TEST(UrdfImport, OnlyTheArmsOwnFlangePlacesFrame6) {
   ASSERT_TRUE(textio::parse_urdf_description(arm, "arm.urdf", &alone).ok());
   const port::Error read = textio::parse_urdf_description(mounted, "arm.urdf", &with_mount);
   ASSERT_TRUE(read.ok()) << read.message;
-  for (int i = 0; i < kJointCount; ++i) {
+  for (int i = 0; i < kSixJoints; ++i) {
     EXPECT_EQ(with_mount.model.joints[i].d_m, alone.model.joints[i].d_m) << i;
     EXPECT_EQ(with_mount.model.joints[i].a_m, alone.model.joints[i].a_m) << i;
     EXPECT_EQ(with_mount.model.joints[i].alpha_rad, alone.model.joints[i].alpha_rad) << i;
@@ -579,7 +600,7 @@ std::string ros_ur_description(const RobotModel& model) {
   urdf += "  <link name=\"base\"/>\n  <link name=\"flange\"/>\n  <link name=\"tool0\"/>\n";
   urdf += fixed("base_link-base_link_inertia", "base_link", "base_link_inertia", "0 0 3.141592653589793");
   std::string parent = "base_link_inertia";
-  for (int i = 0; i < kJointCount; ++i) {
+  for (int i = 0; i < kSixJoints; ++i) {
     urdf += "  <joint name=\"" + std::string(joints[i]) + "\" type=\"revolute\">\n    <parent link=\"" + parent +
             "\"/>\n    <child link=\"" + links[i] + "\"/>\n    " + origin_of(kinematics.joint_frames[i]) +
             "\n    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"-6.283185307179586\" upper=\"6.283185307179586\" "
@@ -603,7 +624,7 @@ double worst_turned_error_m(const std::string& urdf, const std::string& tool, co
   double worst_m = 0.0;
   for (int pose = 0; pose < 1000; ++pose) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
     const Vec3 expected = kTurnedByPi.apply(fk_tool_point(model, q));
     worst_m = std::fmax(worst_m, (link_pose(joints, tool, q).translation_m - expected).norm());
   }
@@ -635,7 +656,7 @@ TEST(UrdfImport, RosUrDescriptionIsReadAsUrsOwnTable) {
   ASSERT_TRUE(read.ok()) << read.message;
   EXPECT_TRUE(robot.base_turned_by_pi);
   EXPECT_EQ(robot.convention, DhConvention::standard);
-  for (int i = 0; i < kJointCount; ++i) {
+  for (int i = 0; i < kSixJoints; ++i) {
     EXPECT_NEAR(robot.model.joints[i].theta_offset_rad, ur5.joints[i].theta_offset_rad, 1e-12) << i;
     EXPECT_NEAR(robot.model.joints[i].d_m, ur5.joints[i].d_m, 1e-12) << i;
     EXPECT_NEAR(robot.model.joints[i].a_m, ur5.joints[i].a_m, 1e-12) << i;
@@ -653,7 +674,7 @@ TEST(UrdfImport, RosUrDescriptionIsReadAsUrsOwnTable) {
     ASSERT_TRUE(textio::parse_urdf_description(other, "ur.urdf", &back).ok()) << robot_type_name(type);
     EXPECT_TRUE(back.base_turned_by_pi && textio::is_ur_table(back.model)) << robot_type_name(type);
     EXPECT_LE(worst_turned_error_m(other, "tcp", back.model), 1e-12) << robot_type_name(type);
-    for (int i = 0; i < kJointCount; ++i)
+    for (int i = 0; i < kSixJoints; ++i)
       EXPECT_NEAR(back.model.joints[i].a_m, nominal_model(type).joints[i].a_m, 1e-12) << robot_type_name(type);
   }
 }
@@ -677,12 +698,12 @@ TEST(UrTable, TurnedTablesGiveUrsOwnOutputs) {
   double worst_m = 0.0;
   for (int pose = 0; pose < 1000; ++pose) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(-2.0 * kPi, 2.0 * kPi);
     worst_m = std::fmax(worst_m, (kTurnedByPi.apply(fk_tool_point(turned, q)) - fk_tool_point(calibrated, q)).norm());
   }
   EXPECT_LE(worst_m, 1e-12);  // the same chain
   const RobotModel back = textio::turned_by_pi(turned);
-  for (int i = 0; i < kJointCount; ++i) {  // turning twice gives the model back, to the bit
+  for (int i = 0; i < kSixJoints; ++i) {  // turning twice gives the model back, to the bit
     EXPECT_EQ(back.joints[i].a_m, calibrated.joints[i].a_m);
     EXPECT_EQ(back.joints[i].alpha_rad, calibrated.joints[i].alpha_rad);
   }
@@ -702,7 +723,7 @@ TEST(UrTable, TurnedTablesGiveUrsOwnOutputs) {
   ASSERT_TRUE(read.ok()) << read.message;
   RobotModel expected_applied;
   ASSERT_EQ(apply_ur_deltas(nominal, expected, &expected_applied), Status::ok);
-  for (int i = 0; i < kJointCount; ++i) {  // in the turned base still, the deltas applied with UR's signs
+  for (int i = 0; i < kSixJoints; ++i) {  // in the turned base still, the deltas applied with UR's signs
     EXPECT_NEAR(applied.joints[i].a_m, textio::turned_by_pi(expected_applied).joints[i].a_m, 1e-15) << i;
     EXPECT_NEAR(applied.joints[i].alpha_rad, textio::turned_by_pi(expected_applied).joints[i].alpha_rad, 1e-15) << i;
     EXPECT_NEAR(applied.joints[i].d_m, expected_applied.joints[i].d_m, 1e-15) << i;
@@ -743,7 +764,7 @@ TEST(UrdfImport, RosUrDescriptionGivesTheBuiltInArmsUrOutputs) {
   static Dataset<150> samples;
   samples.clear();
   test::fill_other_arm(truth, test::example_base_to_tracker(), 150, 1e-6, &random, &samples);
-  const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples()));
+  const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples(), kSixJoints));
   std::string deltas[2];
   std::string yaml[2];
   std::string applied[2];
@@ -771,6 +792,113 @@ TEST(UrdfImport, RosUrDescriptionGivesTheBuiltInArmsUrOutputs) {
   applied[0].replace(applied[0].find("\"tool\""), std::string::npos, "");  // the URDF's tool0 is its tool point
   applied[1].replace(applied[1].find("\"tool\""), std::string::npos, "");
   expect_same_numbers(applied[0], applied[1], 1e-12, "--ur-calibration applied");
+}
+
+// --- arms of other joint counts: 7-axis arms, a UR10 on a rail ------------------------------
+
+// The test kit's perturbed 7-axis arms (an iiwa 14, a Franka) and its UR10 on a rail go out as
+// seven joints, the rail's prismatic with its limits in metres, each the model's chain (the
+// Franka in its own modified DH: ModifiedDhArmIsItsChain).
+TEST(UrdfExport, SevenAxisArmsAndARailAreTheirChains) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  Random random(53);
+  for (const test::ManyJointArm arm : test::kManyJointArms) {
+    const textio::RobotDescription robot = test::many_joint_description(arm, &random);
+    ASSERT_EQ(robot.model.joint_count, 7);
+    expect_chain_equals_model(robot, test::many_joint_arm_name(arm));
+    const std::string urdf = textio::format_urdf(robot, nullptr);
+    const bool rail = arm == test::ManyJointArm::rail_ur10;
+    EXPECT_EQ(urdf.find("<joint name=\"joint_1\" type=\"prismatic\">") != std::string::npos, rail);
+    EXPECT_EQ(urdf.find("type=\"prismatic\"", urdf.find("joint_2")), std::string::npos);
+    const std::string first_limit = urdf.substr(urdf.find("<limit", urdf.find("joint_1")));
+    EXPECT_EQ(first_limit.rfind(rail ? "<limit lower=\"0\" upper=\"2\" effort=\"1000\" velocity=\"1\"/>"
+                                     : "<limit lower=\"-2.8999999999999999\" upper=\"2.8999999999999999\"",
+                                0),
+              0u)
+        << first_limit.substr(0, 80);
+    EXPECT_NE(urdf.find("<joint name=\"joint_7\" type=\"revolute\">"), std::string::npos);
+    EXPECT_EQ(urdf.find("joint_8"), std::string::npos);
+  }
+}
+
+// What export writes for them reads back as the same arm: seven joints, the same types and
+// limits, every tool point where the URDF has it.
+TEST(UrdfImport, ExportedSevenAxisArmsAndARailReadBackAsTheSameArm) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  Random random(54);
+  for (const test::ManyJointArm arm : test::kManyJointArms) {
+    const textio::RobotDescription robot = test::many_joint_description(arm, &random);
+    const textio::RobotDescription back =
+        expect_read_exactly(textio::format_urdf(robot, nullptr), {"tcp", "tcp_2"}, test::many_joint_arm_name(arm));
+    EXPECT_EQ(back.model.joint_count, 7) << test::many_joint_arm_name(arm);
+    EXPECT_EQ(back.model.prismatic_joints, robot.model.prismatic_joints) << test::many_joint_arm_name(arm);
+    EXPECT_TRUE(back.has_joint_limits);
+    EXPECT_EQ(back.lower_rad.head(7), robot.lower_rad.head(7)) << test::many_joint_arm_name(arm);
+    EXPECT_EQ(back.upper_rad.head(7), robot.upper_rad.head(7)) << test::many_joint_arm_name(arm);
+    EXPECT_EQ(check_joint_layout(back.model), Status::ok);
+  }
+}
+
+// The test fixture: a UR10 as ROS's ur_description writes it, on a rail along the world's y.
+// Joint 1 is the rail (prismatic, 0 .. 3 m), joints 2 .. 7 the UR10's; the DH model is exact.
+TEST(UrdfImport, UrTenOnARailReadsAsSevenJointsTheRailFirst) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints holds no seven-joint arm";
+  const textio::RobotDescription robot = expect_read_exactly(test::kRailUr10Urdf, {"tcp"}, "UR10 on a rail");
+  EXPECT_EQ(robot.robot, "ur10_on_rail");
+  ASSERT_EQ(robot.model.joint_count, 7);
+  EXPECT_EQ(robot.model.prismatic_joints, 1u);          // the rail, and only it
+  EXPECT_EQ(robot.convention, DhConvention::modified);  // the rail along y: a base Rx(-pi/2)
+  EXPECT_FALSE(robot.base_turned_by_pi);                // not a six-joint UR arm
+  EXPECT_TRUE(robot.has_joint_limits);
+  EXPECT_EQ(robot.lower_rad(0), test::kRailLower_m);
+  EXPECT_EQ(robot.upper_rad(0), test::kRailUpper_m);
+  EXPECT_EQ(robot.lower_rad(3), -kPi);  // the elbow's +-180 deg
+  EXPECT_EQ(robot.upper_rad(3), kPi);
+  const RobotModel ur10 = nominal_model(RobotType::ur10);
+  EXPECT_NEAR(std::fabs(robot.model.joints[2].a_m), std::fabs(ur10.joints[1].a_m), 1e-9);  // upper arm
+  EXPECT_NEAR(std::fabs(robot.model.joints[3].a_m), std::fabs(ur10.joints[2].a_m), 1e-9);  // forearm
+}
+
+// What is no serial arm in the fixture is refused by line: a joint that follows another, a
+// link with two parents, joints going round above the arm, a floating or planar joint; and an
+// arm of more joints than the build holds, at the first joint beyond them.
+TEST(UrdfImport, RailArmFaultsAndTooManyJointsAreRefusedByLine) {
+  const std::string good = test::kRailUr10Urdf;
+  const std::string mimic = replaced(good, "<child link=\"forearm_link\"/>",
+                                     "<child link=\"forearm_link\"/>\n    <mimic joint=\"shoulder_lift_joint\"/>");
+  expect_refused(mimic,
+                 "arm.urdf:" + std::to_string(line_of(mimic, "<mimic")) +
+                     ": joint 'elbow_joint' follows joint 'shoulder_lift_joint' (<mimic>): each joint of the arm "
+                     "must move on its own");
+  const std::string second_parent = replaced(good, "<child link=\"tcp\"/>", "<child link=\"carriage\"/>");
+  expect_refused(second_parent, "arm.urdf:" + std::to_string(line_of(good, "<joint name=\"tool0-tcp\"")) +
+                                    ": joint 'tool0-tcp': link 'carriage' already has a parent joint, 'rail_joint' of "
+                                    "line " +
+                                    std::to_string(line_of(good, "<joint name=\"rail_joint\"")) +
+                                    " (a loop, or not a tree)");
+  const std::string round = replaced(good, "<parent link=\"world\"/>", "<parent link=\"tcp\"/>");
+  expect_refused(round, "arm.urdf:");
+  expect_refused(round, ": the joints above link 'wrist_3_link' go round in a loop: no root link");
+  const std::string floating =
+      replaced(good, "\"carriage-base_link\" type=\"fixed\"", "\"carriage-base_link\" type=\"floating\"");
+  expect_refused(floating, "arm.urdf:" + std::to_string(line_of(good, "<joint name=\"carriage-base_link\"")) +
+                               ": joint 'carriage-base_link' is 'floating' (a free body, six degrees of freedom)");
+  const std::string planar = replaced(good, "type=\"prismatic\"", "type=\"planar\"");
+  expect_refused(planar, "arm.urdf:" + std::to_string(line_of(good, "<joint name=\"rail_joint\"")) +
+                             ": joint 'rail_joint' is 'planar' (a motion in a plane, three degrees of freedom)");
+  // kMaxJoints joints read; one more (the flange joint turning too) is refused at that joint.
+  textio::RobotDescription longest;
+  longest.model.joint_count = kMaxJoints;
+  for (int j = 0; j < kMaxJoints; ++j) longest.model.joints[j] = DhJoint{0.1 * j, 0.2, 0.1, j % 2 == 0 ? 1.2 : -0.7};
+  const std::string most = textio::format_urdf(longest, nullptr);
+  textio::RobotDescription read;
+  ASSERT_TRUE(textio::parse_urdf_description(most, "arm.urdf", &read).ok());
+  EXPECT_EQ(read.model.joint_count, kMaxJoints);
+  const std::string too_many = replaced(most, "\"flange_joint\" type=\"fixed\"", "\"flange_joint\" type=\"revolute\"");
+  expect_refused(too_many, "arm.urdf:" + std::to_string(line_of(too_many, "<joint name=\"flange_joint\"")) +
+                               ": joint 'flange_joint' is movable joint " + std::to_string(kMaxJoints + 1) +
+                               ": hivecal models arms of 1 to " + std::to_string(kMaxJoints) +
+                               " joints (this build's capacity)");
 }
 
 }  // namespace

@@ -31,7 +31,7 @@ no_file "$work/p3.csv"
 head -c 200 "$work/result.json" >"$work/cut.json"
 expect 3 "malformed JSON" -- predict --calibration "$work/cut.json" --joints "$work/joints.csv" --out "$work/p4.csv"
 printf 'q1,q2,q3\n1,2,3\n' >"$work/badjoints.csv"
-expect 3 "unexpected header" -- predict --calibration "$work/result.json" --joints "$work/badjoints.csv" --out "$work/p5.csv"
+expect 3 "its header has 3 joint columns (q1..q3), but the robot model has 6 joints (q1..q6)" -- predict --calibration "$work/result.json" --joints "$work/badjoints.csv" --out "$work/p5.csv"
 no_file "$work/p5.csv"
 printf 'q1,q2,q3,q4,q5,q6\n0,0,inf,0,0,0\n' >"$work/infjoints.csv"
 expect 3 "NaN or Inf" -- predict --calibration "$work/result.json" --joints "$work/infjoints.csv" --out "$work/p6.csv"
@@ -47,7 +47,7 @@ expect 2 "give either --samples, or --robot and --tracker" -- calibrate
 expect 2 "--robot and --tracker go together" -- calibrate --robot "$work/joints.csv"
 expect 2 "unknown robot model 'ur7'" -- calibrate --samples "$work/joints.csv" --robot-model ur7
 printf '{"convention": "modified-dh", "dh": []}\n' >"$work/arm.json"
-expect 3 "arm.json: \"dh\" must be an array of 6 joint objects" -- calibrate --samples "$work/joints.csv" --robot-model "$work/arm.json"
+expect 3 "arm.json: \"dh\" must be an array of 1 to 8 joint objects, one per joint (it has 0 rows)" -- calibrate --samples "$work/joints.csv" --robot-model "$work/arm.json"
 expect 3 "no-such-arm.json': cannot open" -- calibrate --samples "$work/joints.csv" --robot-model "$work/no-such-arm.json"
 expect 2 "--method must be one of" -- calibrate --samples "$work/joints.csv" --method sgd
 expect 2 "--split must be within (0, 1]" -- calibrate --samples "$work/joints.csv" --split 1.5
@@ -622,9 +622,9 @@ if "${run[@]}" calibrate --samples "$hostile_csv" --method lm --split 1 --out "$
    grep -qF "validation on $work/pa\x1b]0;evil\x07ired.csv: " "$work/hn.txt" &&
    grep -qF "<li>input: $work/pa\x1b]0;evil\x07ired.csv (" "$work/hn_report/index.html"; then pass; else
   fail "a samples file named with control bytes: $(od -c "$work/hn.txt" | head -5)"; fi
-printf '<robot name="r">\n<joint name="j" type="prismatic"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/slider.urdf"
-expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- predict --robot-model "$work/slider.urdf" --joints "$work/joints.csv"
-expect 3 "slider.urdf:2: joint 'j' is 'prismatic'" -- check-robot "$work/slider.urdf"
+printf '<robot name="r">\n<joint name="j" type="floating"><parent link="a"/><child link="b"/></joint>\n</robot>\n' >"$work/free.urdf"
+expect 3 "free.urdf:2: joint 'j' is 'floating' (a free body" -- predict --robot-model "$work/free.urdf" --joints "$work/joints.csv"
+expect 3 "free.urdf:2: joint 'j' is 'floating' (a free body" -- check-robot "$work/free.urdf"
 expect 2 "give either --calibration (a result) or --robot-model" -- export --calibration "$work/model.json" --robot-model ur5
 expect 2 "--format must be urdf, ur-kinematics or robot-json, not 'sdf'" -- export --robot-model ur5 --format sdf
 expect 2 "is the same file as the input --calibration" -- export --calibration "$work/model.json" --out "$work/model.json"

@@ -43,7 +43,7 @@ expect_plan 3 "cannot open" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limit
 printf 'min,max\n-1,1\n' >"$work/badlimits.csv"
 expect_plan 3 "unexpected header" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/badlimits.csv"
 printf 'lower,upper\n-1,1\n-1,1\n-1,1\n-1,1\n-1,1\n' >"$work/fivelimits.csv"
-expect_plan 3 "expected six" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/fivelimits.csv"
+expect_plan 3 "5 rows, expected 6 (one per joint: the robot model has 6 joints)" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/fivelimits.csv"
 printf 'lower,upper\n-1,1\n-1,1\n1,-1\n-1,1\n-1,1\n-1,1\n' >"$work/swapped.csv"
 expect_plan 3 "lower limit not below the upper one" -- "${cell[@]}" "${out[@]}" --count 10 --joint-limits "$work/swapped.csv"
 # --- nothing meets the constraints (exit 1), an output that cannot be written (exit 4)

@@ -31,7 +31,7 @@ std::string session_csv(RobotType type, std::size_t poses, std::uint64_t seed) {
   RobotModel truth = nominal_model(type);
   truth.tool_m = Vec3(0.0, 0.0, 0.1695);
   test::fill_dataset(truth, test::example_base_to_tracker(), poses, 1e-5, &random, &data);
-  return textio::format_samples_csv(data.samples());
+  return textio::format_samples_csv(data.samples(), kSixJoints);
 }
 
 /// A pendant-like export of `poses` random poses of a nominal UR5e: q1..q6, the TCP (tool
@@ -49,7 +49,7 @@ std::string pendant_csv(std::size_t poses, std::uint64_t seed, bool constant_rot
     Vec3 rotation = rotation_vector_of(fk_flange(arm, q).rotation);
     if (i == 0) first_rotation = rotation;
     if (constant_rotation) rotation = first_rotation;
-    for (int j = 0; j < kJointCount; ++j) out += textio::format_double(q(j)) + ",";
+    for (int j = 0; j < kSixJoints; ++j) out += textio::format_double(q(j)) + ",";
     for (int k = 0; k < 3; ++k) out += textio::format_double(point_m(k)) + ",";
     for (int k = 0; k < 3; ++k) out += textio::format_double(rotation(k)) + (k < 2 ? "," : "\n");
   }
@@ -307,7 +307,7 @@ TEST(CalibrateChecks, TheLabsTransformIsTheToolOfEveryCommandThatTakesOne) {
     for (int cycle = 0; cycle < 3; ++cycle) {
       const Vec3 point_m = test::example_base_to_tracker().apply(fk_tool_point(arm, q)) +
                            Vec3(random.normal(), random.normal(), random.normal()) * 1e-5;
-      for (int j = 0; j < kJointCount; ++j) reaches += textio::format_double(q(j)) + ",";
+      for (int j = 0; j < kSixJoints; ++j) reaches += textio::format_double(q(j)) + ",";
       reaches += textio::format_double(point_m.x()) + "," + textio::format_double(point_m.y()) + "," +
                  textio::format_double(point_m.z()) + "\n";
     }

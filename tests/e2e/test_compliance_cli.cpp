@@ -129,14 +129,14 @@ TEST_F(ComplianceCli, ResultHoldsTheCompliancePredictAppliesIt) {
   for (const textio::JsonValue& s : samples->array) {
     if (s.find("test")->boolean) continue;
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = s.find("q_rad")->array.at(static_cast<std::size_t>(j)).number;
+    for (int j = 0; j < kSixJoints; ++j) q(j) = s.find("q_rad")->array.at(static_cast<std::size_t>(j)).number;
     joints.push_back(q);
     const textio::JsonValue* m = s.find("measured_m");
     measured.emplace_back(m->array.at(0).number, m->array.at(1).number, m->array.at(2).number);
   }
   ASSERT_GT(joints.size(), 100u);
-  const std::string joints_csv =
-      dir_->write("train_joints.csv", textio::format_joints_csv(Span<const JointVector>(joints.data(), joints.size())));
+  const std::string joints_csv = dir_->write(
+      "train_joints.csv", textio::format_joints_csv(Span<const JointVector>(joints.data(), joints.size()), kSixJoints));
   ASSERT_EQ(run(cli::predict_main, {"--calibration", out, "--joints", joints_csv, "--out", path("compliant.csv")}),
             cli::kExitOk);
   const std::vector<Vec3> points = read_points(path("compliant.csv"));

@@ -45,7 +45,7 @@ class HarmonicsCli : public ::testing::Test {
 test::TempDir* HarmonicsCli::dir_ = nullptr;
 
 TEST_F(HarmonicsCli, TheStageFindsTheBasesSecondHarmonicAndTheResultReadsBack) {
-  if (4 * kJointCount > kMaxComplianceTerms)
+  if (4 * kSixJoints > kMaxComplianceTerms)
     GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " joint terms";
   std::vector<std::string> args = inputs();
   args.insert(args.end(), {"--method", "lm", "--harmonics", "2", "--out", path("h.json")});

@@ -32,7 +32,7 @@ TEST(LargeSetCli, NineThousandPosesCalibrateWithTheDefaultJob) {
   Random random(5);
   const RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, 1e-4, 1e-4);
   test::fill_dataset(truth, test::example_base_to_tracker(), kPoses, 1e-5, &random, &written);
-  const std::string samples = dir.write("large.csv", textio::format_samples_csv(written.samples()));
+  const std::string samples = dir.write("large.csv", textio::format_samples_csv(written.samples(), kSixJoints));
   const std::string result = dir.path() + "/result.json";
   ASSERT_EQ(test::run(cli::calibrate_main, {"--samples", samples, "--out", result, "--quiet"}), cli::kExitOk);
   std::string text;
@@ -60,7 +60,7 @@ TEST(LargeSetCli, TheGeometryOfALargerSetIsNotTestedUnlessALevelIsGiven) {
   Random random(8);
   const RobotModel truth = nominal_model(RobotType::ur5);
   test::fill_dataset(truth, test::example_base_to_tracker(), 60, 1e-5, &random, &written);
-  const std::string samples = dir.write("sixty.csv", textio::format_samples_csv(written.samples()));
+  const std::string samples = dir.write("sixty.csv", textio::format_samples_csv(written.samples(), kSixJoints));
   const std::string result = dir.path() + "/result.json";
   const std::vector<std::string> args = {"--samples", samples, "--method", "lm", "--split", "1", "--out", result};
   ::testing::internal::CaptureStdout();
@@ -92,7 +92,7 @@ TEST(LargeSetCli, TheProfileSaysWhereTheTimeWent) {
   Random random(9);
   const RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, 1e-4, 1e-4);
   test::fill_dataset(truth, test::example_base_to_tracker(), 400, 1e-5, &random, &written);
-  const std::string samples = dir.write("profiled.csv", textio::format_samples_csv(written.samples()));
+  const std::string samples = dir.write("profiled.csv", textio::format_samples_csv(written.samples(), kSixJoints));
   const std::vector<std::string> args = {"--samples", samples, "--out", dir.path() + "/result.json", "--quiet"};
   std::string err;
   ASSERT_EQ(test::run_capturing_stderr(cli::calibrate_main, args, &err), cli::kExitOk);

@@ -47,7 +47,7 @@ record::CalibrationFile calibrate(const std::string& dir, const std::string& nam
 
 void expect_same(const record::CalibrationFile& a, const record::CalibrationFile& b, double tolerance,
                  const char* what) {
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     EXPECT_NEAR(a.model.joints[j].a_m, b.model.joints[j].a_m, tolerance) << what << " joint " << j;
     EXPECT_NEAR(a.model.joints[j].d_m, b.model.joints[j].d_m, tolerance) << what << " joint " << j;
     EXPECT_NEAR(a.model.joints[j].theta_offset_rad, b.model.joints[j].theta_offset_rad, tolerance) << what;

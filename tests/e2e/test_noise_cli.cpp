@@ -45,7 +45,7 @@ std::string write_set(const test::TempDir& dir, std::size_t poses, int repeats, 
       (void)written.add(q, measured_m);
     }
   }
-  return dir.write("set.csv", textio::format_samples_csv(written.samples()));
+  return dir.write("set.csv", textio::format_samples_csv(written.samples(), kSixJoints));
 }
 
 std::string calibrate(const test::TempDir& dir, const std::string& samples, bool keep_outliers = true) {

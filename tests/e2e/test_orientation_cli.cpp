@@ -334,7 +334,7 @@ TEST(OrientationCli, TMacBadRowsAreNamedOncePerLine) {
 // folds, the check on left-out poses rejected them.)
 TEST(OrientationCli, PendantExportRejectsEveryJointTermOnLeftOutPoses) {
   HIVECAL_SKIP_WITHOUT_SHARED_DATA("ur5e-pendant/joint-eef-data.csv");
-  if (4 * kJointCount > kMaxComplianceTerms)
+  if (4 * kSixJoints > kMaxComplianceTerms)
     GTEST_SKIP() << "this build holds " << kMaxComplianceTerms << " joint terms";
   PendantSplit split;
   ASSERT_NO_FATAL_FAILURE(split_pendant_export(&split));

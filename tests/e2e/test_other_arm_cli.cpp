@@ -54,7 +54,7 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
   static Dataset<200> samples;
   samples.clear();
   test::fill_other_arm(truth, base, 200, 1e-5, &random, &samples);
-  const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples()));
+  const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples(), kSixJoints));
   const std::string standard = dir.write("irb120.json", description_text(DhConvention::standard));
   const std::string modified = dir.write("irb120-craig.json", description_text(DhConvention::modified));
 
@@ -100,7 +100,7 @@ TEST(OtherArmCli, CalibratesAnIrb120DescriptionInEitherConvention) {
 TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
   const test::TempDir dir("hivecal_arm");
   ASSERT_FALSE(dir.path().empty());
-  ModifiedDhRow rows[kJointCount];
+  ModifiedDhRow rows[kSixJoints];
   Vec3 tool_m;
   const ModifiedDhBase offset{0.02, -0.015};
   test::other_arm_modified(OtherArm::kr6_r900, offset, rows, &tool_m);
@@ -114,8 +114,8 @@ TEST(OtherArmCli, PredictsInTheModifiedDhFilesOwnFrames) {
   Random random(4);
   std::vector<JointVector> poses;
   for (int i = 0; i < 20; ++i) poses.push_back(test::other_arm_joints(&random));
-  const std::string joints_csv =
-      dir.write("joints.csv", textio::format_joints_csv(Span<const JointVector>(poses.data(), poses.size())));
+  const std::string joints_csv = dir.write(
+      "joints.csv", textio::format_joints_csv(Span<const JointVector>(poses.data(), poses.size()), kSixJoints));
   for (const char* frame : {"base", "tracker"}) {
     const std::string out = dir.path() + "/" + frame + ".csv";
     ASSERT_EQ(run(cli::predict_main, {"--calibration", result, "--joints", joints_csv, "--frame", frame, "--out", out}),

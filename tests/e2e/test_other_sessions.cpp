@@ -54,7 +54,7 @@ void expect_captures_near_oracle(const test::OtherSessionConfig& config, const c
   ASSERT_TRUE(write_bytes(robot, session.robot_capture));
   ASSERT_TRUE(write_bytes(tracker, session.tracker_capture));
   const port::Error written = textio::write_text_file(
-      ideal, textio::format_samples_csv(Span<const Sample>(session.oracle.data(), session.oracle.size())));
+      ideal, textio::format_samples_csv(Span<const Sample>(session.oracle.data(), session.oracle.size()), kSixJoints));
   ASSERT_TRUE(written.ok()) << written.message;
   char tool[96];
   std::snprintf(tool, sizeof tool, "%.6f,%.6f,%.6f", session.nominal.tool_m.x(), session.nominal.tool_m.y(),

@@ -122,8 +122,9 @@ TEST_F(PaperSession, CapturesReachTheValidationMaeOfIdealSamplesWithin10Percent)
       for (int axis = 0; axis < 3; ++axis) s.point_m(axis) += config.tracker_noise_m * noise.normal();
       ideal.push_back(s);
     }
-    const port::Error written = textio::write_text_file(
-        path("ideal_samples.csv"), textio::format_samples_csv(Span<const Sample>(ideal.data(), ideal.size())));
+    const port::Error written =
+        textio::write_text_file(path("ideal_samples.csv"),
+                                textio::format_samples_csv(Span<const Sample>(ideal.data(), ideal.size()), kSixJoints));
     ASSERT_TRUE(written.ok()) << written.message;
     ASSERT_EQ(run(cli::calibrate_main,
                   {"--samples", path("ideal_samples.csv"), "--out", path("ideal.json"), "--split", "1", "--quiet"}),

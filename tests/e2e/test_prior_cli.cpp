@@ -29,7 +29,7 @@ TEST(PriorCli, AGridAtOneToolOrientationKeepsItsDhNearNominal) {
   static Dataset<400> grid;
   grid.clear();
   test::fill_narrow_wrist_dataset(truth, 300, 0.3e-3, &random, &grid);
-  const std::string samples = dir.write("grid.csv", textio::format_samples_csv(grid.samples()));
+  const std::string samples = dir.write("grid.csv", textio::format_samples_csv(grid.samples(), kSixJoints));
   const std::vector<std::string> common = {"--samples", samples, "--robot-model", "ur10", "--tool", "0,0,0.12",
                                            "--method",  "lm",    "--quiet"};
   std::vector<std::string> plain = common;
@@ -48,7 +48,8 @@ TEST(PriorCli, AGridAtOneToolOrientationKeepsItsDhNearNominal) {
   ASSERT_TRUE(record::read_calibration_json(dir.path() + "/prior.json", &prior_file).ok());
   const ModelParams nominal = to_params(nominal_model(RobotType::ur10));
   const ModelParams fitted = to_params(prior_file.model);
-  for (int i = 0; i < kDhParamCount; ++i) EXPECT_LT(std::fabs(fitted(i) - nominal(i)), 5e-3) << full_param_name(i);
+  for (int i = 0; i < kParamsPerJoint * kSixJoints; ++i)
+    EXPECT_LT(std::fabs(fitted(i) - nominal(i)), 5e-3) << full_param_name(i, kSixJoints);
   EXPECT_GT(std::fabs(to_params(plain_file.model)(model_param_index(4, DhField::alpha)) -
                       nominal(model_param_index(4, DhField::alpha))),
             0.05);

@@ -56,7 +56,7 @@ std::string export_text(const RobotModel& arm, const RigidTransform& base, const
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const Vec3 p_mm = 1e3 * (base.apply(fk_tool_point(arm, poses[k])) + 1e-5 * test::gaussian_vector(random));
     text += std::to_string(k);
-    for (int j = 0; j < kJointCount; ++j) text += ";" + textio::format_double(poses[k](j));
+    for (int j = 0; j < kSixJoints; ++j) text += ";" + textio::format_double(poses[k](j));
     for (int a = 0; a < 3; ++a) text += ";" + textio::format_double(p_mm(a));
     text += "\n";
   }
@@ -67,7 +67,7 @@ std::string export_text(const RobotModel& arm, const RigidTransform& base, const
 std::string joints_text(const std::vector<JointVector>& poses) {
   std::string text = "q1,q2,q3,q4,q5,q6\n";
   for (const JointVector& q : poses) {
-    for (int j = 0; j < kJointCount; ++j) text += (j == 0 ? "" : ",") + textio::format_double(q(j));
+    for (int j = 0; j < kSixJoints; ++j) text += (j == 0 ? "" : ",") + textio::format_double(q(j));
     text += "\n";
   }
   return text;
@@ -194,7 +194,7 @@ TEST(ResultUncertainty, TheCovarianceIsTheSigmasSquaredAndTheDomainTheTrainingPo
   const textio::JsonValue* domain = root.find("domain");
   ASSERT_NE(domain, nullptr);
   EXPECT_EQ(domain->find("poses")->number, 150.0);
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     double low = 10.0;
     for (const JointVector& q : session().train) low = std::fmin(low, q(j));
     EXPECT_EQ(domain->find("joint_min_rad")->array[static_cast<std::size_t>(j)].number, low);

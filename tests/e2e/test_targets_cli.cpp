@@ -30,7 +30,7 @@ TEST(TargetsCsv, TargetColumnIsReadAndABadOneRefusedWithItsLine) {
   written.clear();
   const RobotModel truth = test::with_plate(nominal_model(RobotType::ur5), Vec3(0.0, 0.0, 0.17));
   test::fill_target_dataset(truth, test::example_base_to_tracker(), 5, 3, 1e-5, &random, &written);
-  const std::string text = textio::format_samples_csv(written.samples());
+  const std::string text = textio::format_samples_csv(written.samples(), kSixJoints);
   EXPECT_EQ(text.substr(0, text.find('\n')), "q1,q2,q3,q4,q5,q6,x,y,z,target");
   static Dataset<64> read_back;
   read_back.clear();
@@ -88,7 +88,7 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
   static Dataset<300> samples;
   samples.clear();
   test::fill_target_dataset(truth, base, 80, 3, 1e-5, &random, &samples);
-  const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples()));
+  const std::string csv = dir.write("samples.csv", textio::format_samples_csv(samples.samples(), kSixJoints));
   const std::string result = dir.path() + "/result.json";
   ASSERT_EQ(run(cli::calibrate_main, {"--robot-model", "ur5", "--tool", "0,0,0.17", "--samples", csv, "--method", "lm",
                                       "--out", result, "--quiet"}),
@@ -100,8 +100,8 @@ TEST(TargetsCli, CalibratesThreeReflectorsAndPredictsEachTarget) {
 
   std::vector<JointVector> poses;
   for (int i = 0; i < 30; ++i) poses.push_back(test::random_joints(&random));
-  const std::string joints_csv =
-      dir.write("joints.csv", textio::format_joints_csv(Span<const JointVector>(poses.data(), poses.size())));
+  const std::string joints_csv = dir.write(
+      "joints.csv", textio::format_joints_csv(Span<const JointVector>(poses.data(), poses.size()), kSixJoints));
   for (int target = 1; target <= 3; ++target) {
     const std::vector<Vec3> points = predict_target(dir, result, joints_csv, target);
     ASSERT_EQ(points.size(), poses.size());
@@ -157,7 +157,7 @@ TEST(TargetsCli, APoseAtTheThresholdIsKeptAndNamedByItsLine) {
   written.clear();
   const Vec3 tool_m(0.012, -0.006, 0.17);
   test::fill_plate_with_joint_errors(2, 100, tool_m, 100, 0.0, &written);
-  const std::string samples = dir.write("plate.csv", textio::format_samples_csv(written.samples()));
+  const std::string samples = dir.write("plate.csv", textio::format_samples_csv(written.samples(), kSixJoints));
   const std::string result = dir.path() + "/result.json";
   ASSERT_EQ(run(cli::calibrate_main, {"--samples", samples, "--robot-model", "ur5", "--tool", "0.012,-0.006,0.17",
                                       "--quiet", "--out", result, "--report", dir.path() + "/report"}),
@@ -187,7 +187,7 @@ TEST(TargetsCli, ManyFailingPosesAreNotNamedAsAtTheThreshold) {
   for (const Sample& s : written.samples()) {
     ASSERT_EQ(shifted.add(s.q_rad, s.point_m + Vec3(0.0, 0.0, s.index % 13 == 5 ? 2e-3 : 0.0)), Status::ok);
   }
-  const std::string samples = dir.write("shifted.csv", textio::format_samples_csv(shifted.samples()));
+  const std::string samples = dir.write("shifted.csv", textio::format_samples_csv(shifted.samples(), kSixJoints));
   const std::string result = dir.path() + "/result.json";
   const int code = run(cli::calibrate_main, {"--samples", samples, "--robot-model", "ur5", "--tool", "0,0,0.15",
                                              "--method", "lm", "--quiet", "--out", result});
@@ -213,7 +213,7 @@ TEST(TargetsCli, TestPosesTheFitCannotPredictAreNotSetAside) {
   RobotModel truth = nominal_model(RobotType::ur5);
   truth.tool_m = Vec3(0.0, 0.0, 0.15);
   test::fill_with_unmodelled_effect(truth, test::example_base_to_tracker(), 8, &random, &written);
-  const std::string samples = dir.write("few.csv", textio::format_samples_csv(written.samples()));
+  const std::string samples = dir.write("few.csv", textio::format_samples_csv(written.samples(), kSixJoints));
   const std::string result = dir.path() + "/result.json";
   const int code =
       run(cli::calibrate_main, {"--samples", samples, "--robot-model", "ur5", "--tool", "0,0,0.15", "--quiet", "--out",

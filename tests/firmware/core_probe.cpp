@@ -66,7 +66,7 @@ void run_sincos(unsigned repeats) {
   double sum = 0.0;
   for (unsigned r = 0; r < repeats; ++r) {
     for (const Sample& s : g_dataset.samples()) {
-      for (int j = 0; j < kJointCount; ++j) {
+      for (int j = 0; j < kSixJoints; ++j) {
         double sine = 0.0;
         double cosine = 0.0;
         math::sincos(s.q_rad(j), &sine, &cosine);

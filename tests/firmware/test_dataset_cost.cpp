@@ -108,7 +108,7 @@ FW_TEST(Cost, TrueModelHasZeroCostAndRefitFindsTheTracker) {
   FW_CHECK_LT((fitted.rotation - scene.base_to_tracker.rotation).norm(), 1e-12);
   FW_CHECK_LT((fitted.translation_m - scene.base_to_tracker.translation_m).norm(), 1e-12);
   double sos = 1.0;
-  FW_ASSERT_EQ(evaluate_cost(to_params(scene.truth), scene.dataset.samples(), CostKind::sum_squares, BaseFrame::fixed,
+  FW_ASSERT_EQ(evaluate_cost(scene.truth, scene.dataset.samples(), CostKind::sum_squares, BaseFrame::fixed,
                              &scene.base_to_tracker, &sos),
                Status::ok);
   FW_CHECK_LT(sos, 1e-20);
@@ -157,9 +157,9 @@ FW_TEST(Cost, BadInputsGetSpecificErrors) {
   FW_CHECK_EQ(evaluate_cost(scene.truth, scene.dataset.samples().subspan(0, 2), CostKind::mean_abs_3d, BaseFrame::refit,
                             &fitted, &cost),
               Status::too_few_samples);
-  ModelParams params = to_params(scene.truth);
-  params(5) = std::numeric_limits<double>::infinity();
-  FW_CHECK_EQ(evaluate_cost(params, scene.dataset.samples(), CostKind::mean_abs_3d, BaseFrame::fixed, &fitted, &cost),
+  RobotModel infinite = scene.truth;
+  infinite.joints[1].d_m = std::numeric_limits<double>::infinity();
+  FW_CHECK_EQ(evaluate_cost(infinite, scene.dataset.samples(), CostKind::mean_abs_3d, BaseFrame::fixed, &fitted, &cost),
               Status::non_finite_input);
   static Dataset<8> one_pose;  // all samples at one pose: the base transform is undetermined
   one_pose.clear();

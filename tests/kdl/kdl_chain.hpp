@@ -15,8 +15,14 @@
 #include <vector>
 
 #include "hivecal/core/types.hpp"
+#include "hivecal/model/kinematics.hpp"
 
 namespace hivecal::test {
+
+/// The model's joints as KDL takes them (chain order, rad or m): its joint_count of q's entries.
+inline std::vector<double> joint_values(const RobotModel& model, const JointVector& q) {
+  return std::vector<double>(q.data(), q.data() + model.joint_count);
+}
 
 /// The chain of a URDF from one link to another, read by kdl_parser.
 class KdlChain {

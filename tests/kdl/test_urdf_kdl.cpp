@@ -41,10 +41,6 @@ test::KdlChain chain_of(const std::string& urdf, const std::string& root, const 
   return chain;
 }
 
-std::vector<double> joint_values(const JointVector& q) {
-  return std::vector<double>(q.data(), q.data() + q.size());
-}
-
 /// The training samples a result's report keeps.
 std::vector<report::SampleRow> training_samples(const std::string& result) {
   textio::JsonValue root;
@@ -77,7 +73,7 @@ double urdf_mae_m(const std::string& urdf, const std::vector<report::SampleRow>&
 double model_mae_m(const record::CalibrationFile& file, const std::vector<report::SampleRow>& samples) {
   double sum_m = 0.0;
   for (const report::SampleRow& s : samples) {
-    const JointVector q = Eigen::Map<const JointVector>(s.q_rad);
+    const JointVector q = joint_vector(s.q_rad);
     sum_m += (file.base_to_tracker.apply(fk_tool_point(file.model, q)) - s.measured_m).norm();
   }
   return sum_m / static_cast<double>(samples.size());
@@ -129,7 +125,7 @@ TEST_F(UrdfKdl, ARigidResultsUrdfIsHivecalsForwardKinematicsToANanometre) {
   double worst_m = 0.0;
   for (int i = 0; i < 200; ++i) {
     const JointVector q = test::random_joints(&random);
-    const Vec3 kdl_m = tcp.fk(joint_values(q)).translation_m;
+    const Vec3 kdl_m = tcp.fk(test::joint_values(file.model, q)).translation_m;
     const Vec3 hivecal_m = fk_tool_point(file.model, q);
     worst_m = std::fmax(worst_m, (kdl_m - hivecal_m).norm());
     worst_m = std::fmax(worst_m, (tracker.inverse().apply(kdl_m) - file.base_to_tracker.apply(hivecal_m)).norm());

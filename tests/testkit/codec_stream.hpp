@@ -62,9 +62,9 @@ inline void append_frame(const std::uint8_t* frame, std::size_t size, std::uint8
 /// stream's sequence number and timestamp in its header, framed.
 inline std::size_t make_unknown_frame(Random* random, std::uint16_t sequence, std::uint64_t timestamp_us,
                                       std::uint8_t* frame) {
-  std::uint8_t packet[kMaxPacketBytes];
+  std::uint8_t packet[kMaxSpecPacketBytes];
   const std::size_t size =
-      kPacketHeaderBytes + kPacketCrcBytes + static_cast<std::size_t>(random->below(kMaxPacketBytes - 15));
+      kPacketHeaderBytes + kPacketCrcBytes + static_cast<std::size_t>(random->below(kMaxSpecPacketBytes - 15));
   packet[0] = kProtocolVersion;
   const std::uint64_t pick = random->below(253);
   packet[1] = static_cast<std::uint8_t>(pick == 0 ? 0 : pick + 3);  // 0x00 or 0x04..0xFF

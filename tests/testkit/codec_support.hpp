@@ -41,7 +41,7 @@ inline void add_stats(Digest* digest, const DecoderStats& stats) {
 
 /// Field-by-field bit equality (struct padding excluded; NaN payloads compared as bits).
 inline bool same_bits(const JointStateRecord& a, const JointStateRecord& b) {
-  return a.sequence == b.sequence && a.timestamp_us == b.timestamp_us &&
+  return a.sequence == b.sequence && a.timestamp_us == b.timestamp_us && a.joint_count == b.joint_count &&
          std::memcmp(a.q_rad, b.q_rad, sizeof a.q_rad) == 0 &&
          std::memcmp(a.qd_rad_s, b.qd_rad_s, sizeof a.qd_rad_s) == 0 &&
          std::memcmp(a.current_a, b.current_a, sizeof a.current_a) == 0;
@@ -61,12 +61,13 @@ inline void add_f32(Digest* digest, float value) {
   std::memcpy(&bits, &value, sizeof bits);
   digest->add_u64(bits);
 }
+/// The record's joints only (a six-joint record hashes as in a build of six).
 inline void add_record(Digest* digest, const JointStateRecord& r) {
   digest->add_u64(r.sequence);
   digest->add_u64(r.timestamp_us);
-  for (double v : r.q_rad) digest->add(v);
-  for (double v : r.qd_rad_s) digest->add(v);
-  for (float v : r.current_a) add_f32(digest, v);
+  for (int j = 0; j < r.joint_count; ++j) digest->add(r.q_rad[j]);
+  for (int j = 0; j < r.joint_count; ++j) digest->add(r.qd_rad_s[j]);
+  for (int j = 0; j < r.joint_count; ++j) add_f32(digest, r.current_a[j]);
 }
 inline void add_record(Digest* digest, const TrackerPointRecord& r) {
   digest->add_u64(r.sequence);
@@ -121,7 +122,7 @@ inline JointStateRecord random_joint_state(Random* random, std::uint16_t sequenc
   r.sequence = sequence;
   r.timestamp_us = timestamp_us;
   const bool raw = random->below(2) == 0;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     r.q_rad[j] = raw ? random_bits_f64(random) : random->uniform(-6.3, 6.3);
     r.qd_rad_s[j] = raw ? random_bits_f64(random) : random->uniform(-3.2, 3.2);
     r.current_a[j] = raw ? random_bits_f32(random) : static_cast<float>(random->uniform(-5.0, 5.0));

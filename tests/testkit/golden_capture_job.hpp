@@ -136,24 +136,24 @@ inline std::uint64_t capture_job_digest(const CaptureJobReport& r, bool calibrat
   d.add_u64(r.samples);
   d.add_u64(c.train_count);
   if (const CalibrationStage* abc = find_stage(c, CalibrationSolver::abc)) {
-    d.add(to_params(abc->model));
+    d.add(to_params(abc->model).head(model_param_count(abc->model)));
     d.add(abc->base_to_tracker.rotation);
     d.add(abc->base_to_tracker.translation_m);
     d.add(abc->best_cost_m);
     d.add_u64(abc->evaluations);
   }
   if (c.has_lm) {
-    d.add(to_params(c.lm.model));
+    d.add(to_params(c.lm.model).head(model_param_count(c.lm.model)));
     d.add(c.lm.base_to_tracker.rotation);
     d.add(c.lm.base_to_tracker.translation_m);
     // The 33 rigid sigmas, then the model's compliance ones: a rigid result hashes as before.
-    d.add(c.lm.sigma.head(kRigidParamCount + c.lm.model.compliance.term_count));
+    d.add(c.lm.sigma.head(rigid_param_count(kSixJoints) + c.lm.model.compliance.term_count));
     d.add(c.lm.rms_m);
     d.add_u64(static_cast<std::uint64_t>(c.lm.iterations));
     d.add_mask(c.lm.identifiability.kept_mask);
   }
   // Issue 11: the baseline's fitted tool and base, what LM fixed as not significant, the blunders.
-  d.add(to_params(c.baseline.model));
+  d.add(to_params(c.baseline.model).head(model_param_count(c.baseline.model)));
   d.add(c.baseline.base_to_tracker.translation_m);
   d.add_mask(c.lm_pruned_mask);
   d.add_u64(c.outlier_count);

@@ -27,14 +27,14 @@ inline std::uint64_t core_golden_digest() {
   fill_dataset(truth, example_base_to_tracker(), 300, 1e-5, &random, &dataset);
   Digest digest;
   for (const Sample& s : dataset.samples()) {
-    digest.add(s.q_rad);
+    digest.add(s.q_rad.head(kSixJoints));
     digest.add(s.point_m);
     const RigidTransform flange = fk_flange(truth, s.q_rad);
     digest.add(flange.rotation);
     digest.add(flange.translation_m);
     ToolPointJacobian jacobian;
     digest.add(tool_point_jacobian(truth, s.q_rad, &jacobian));
-    digest.add(jacobian);
+    digest.add(jacobian.leftCols(model_param_count(truth)));
   }
   RobotModel nominal = nominal_model(RobotType::ur5);
   nominal.tool_m = truth.tool_m;

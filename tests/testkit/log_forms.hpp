@@ -20,10 +20,10 @@
 namespace hivecal::test {
 
 /// The UR drivers' joint names, joints 1..6.
-inline const char* const kUrJoints[kJointCount] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
-                                                   "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
+inline const char* const kUrJoints[kSixJoints] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                                                  "wrist_1_joint",      "wrist_2_joint",       "wrist_3_joint"};
 /// The order ur_robot_driver publishes them in (alphabetical): joint indices 0-based.
-inline const int kDriverOrder[kJointCount] = {2, 1, 0, 3, 4, 5};
+inline const int kDriverOrder[kSixJoints] = {2, 1, 0, 3, 4, 5};
 
 /// "%.17g", as the tools print (std::to_chars with a precision is printf's %.*g, several
 /// times faster: the ten-minute log test writes 3.6 million of them).
@@ -56,7 +56,7 @@ inline std::string hivecal_robot_csv(const std::vector<JointStateRecord>& record
   std::string out = "t,q1,q2,q3,q4,q5,q6\n";
   for (const JointStateRecord& r : records) {
     out += seconds(r.timestamp_us);
-    for (const double q : r.q_rad) out += "," + g17(q);
+    for (int j = 0; j < r.joint_count; ++j) out += "," + g17(r.q_rad[j]);
     out += "\n";
   }
   return out;
@@ -67,15 +67,15 @@ inline std::string hivecal_robot_csv(const std::vector<JointStateRecord>& record
 inline std::string rtde_log(const std::vector<JointStateRecord>& records, char separator = ' ') {
   std::string out = "timestamp";
   for (const char* field : {"target_q_", "actual_q_", "actual_TCP_pose_"}) {
-    for (int k = 0; k < kJointCount; ++k) out += separator + std::string(field) + std::to_string(k);
+    for (int k = 0; k < kSixJoints; ++k) out += separator + std::string(field) + std::to_string(k);
   }
   out += "\n";
   out.reserve(out.size() + records.size() * 256);  // ~250 bytes a row: one allocation, not ~30
   for (const JointStateRecord& r : records) {
     out += seconds(r.timestamp_us);
-    for (const double q : r.q_rad) (out += separator) += g17(q + 0.01);
-    for (const double q : r.q_rad) (out += separator) += g17(q);
-    for (int k = 0; k < kJointCount; ++k) (out += separator) += "0.5";
+    for (int j = 0; j < r.joint_count; ++j) (out += separator) += g17(r.q_rad[j] + 0.01);
+    for (int j = 0; j < r.joint_count; ++j) (out += separator) += g17(r.q_rad[j]);
+    for (int k = 0; k < kSixJoints; ++k) (out += separator) += "0.5";
     out += "\n";
   }
   return out;
@@ -83,19 +83,19 @@ inline std::string rtde_log(const std::vector<JointStateRecord>& records, char s
 
 /// `rostopic echo -p /joint_states`: ns times, joints in `order` (indices of joints 1..6).
 inline std::string rostopic_log(const std::vector<JointStateRecord>& records,
-                                const int order[kJointCount] = kDriverOrder) {
+                                const int order[kSixJoints] = kDriverOrder) {
   std::string out = "%time,field.header.seq,field.header.stamp,field.header.frame_id";
   for (const char* field : {"name", "position", "velocity", "effort"}) {
-    for (int k = 0; k < kJointCount; ++k) out += ",field." + std::string(field) + std::to_string(k);
+    for (int k = 0; k < kSixJoints; ++k) out += ",field." + std::string(field) + std::to_string(k);
   }
   out += "\n";
   std::uint64_t seq = 0;
   for (const JointStateRecord& r : records) {
     const std::uint64_t stamp_ns = r.timestamp_us * 1000;
     out += std::to_string(stamp_ns + 2345678) + "," + std::to_string(seq++) + "," + std::to_string(stamp_ns) + ",";
-    for (int k = 0; k < kJointCount; ++k) out += std::string(",") + kUrJoints[order[k]];
-    for (int k = 0; k < kJointCount; ++k) out += "," + g17(r.q_rad[order[k]]);
-    for (int k = 0; k < 2 * kJointCount; ++k) out += ",0.0";
+    for (int k = 0; k < kSixJoints; ++k) out += std::string(",") + kUrJoints[order[k]];
+    for (int k = 0; k < kSixJoints; ++k) out += "," + g17(r.q_rad[order[k]]);
+    for (int k = 0; k < 2 * kSixJoints; ++k) out += ",0.0";
     out += "\n";
   }
   return out;
@@ -164,7 +164,7 @@ inline std::vector<std::uint8_t> joint_state_cdr(std::uint64_t t_us, const std::
 /// Writes a rosbag2 folder `dir` (created by the caller): metadata.yaml and dir_0.db3 with
 /// /joint_states (joints in `order`) and an unrelated /tf topic. False on a sqlite error.
 inline bool write_ros2_bag(const std::string& dir, const std::vector<JointStateRecord>& records,
-                           const int order[kJointCount] = kDriverOrder) {
+                           const int order[kSixJoints] = kDriverOrder) {
   std::FILE* yaml = std::fopen((dir + "/metadata.yaml").c_str(), "w");
   if (yaml == nullptr) return false;
   std::fputs(
@@ -187,10 +187,10 @@ inline bool write_ros2_bag(const std::string& dir, const std::vector<JointStateR
   ok = ok && sqlite3_prepare_v2(db, "INSERT INTO messages(topic_id, timestamp, data) VALUES(?1, ?2, ?3)", -1, &insert,
                                 nullptr) == SQLITE_OK;
   std::vector<std::string> names;
-  for (int k = 0; k < kJointCount; ++k) names.push_back(kUrJoints[order[k]]);
+  for (int k = 0; k < kSixJoints; ++k) names.push_back(kUrJoints[order[k]]);
   for (std::size_t i = 0; ok && i < records.size(); ++i) {
     std::vector<double> positions;
-    for (int k = 0; k < kJointCount; ++k) positions.push_back(records[i].q_rad[order[k]]);
+    for (int k = 0; k < kSixJoints; ++k) positions.push_back(records[i].q_rad[order[k]]);
     const std::vector<std::uint8_t> data = joint_state_cdr(records[i].timestamp_us, names, positions);
     const std::uint8_t tf[8] = {0, 1, 0, 0, 0, 0, 0, 0};
     for (int topic : {2, 1}) {

@@ -104,7 +104,7 @@ inline OtherSession make_other_session(const OtherSessionConfig& config) {
   s.nominal = nominal_model(config.robot);
   s.nominal.tool_m = Vec3(0.012, -0.018, 0.115);  // a reflector nest off the flange axis
   s.truth = s.nominal;
-  for (DhJoint& j : s.truth.joints) {
+  for (DhJoint& j : model_joints(&s.truth)) {
     j.theta_offset_rad += 60e-6 * random.normal();
     j.d_m += 60e-6 * random.normal();
     j.a_m += 60e-6 * random.normal();
@@ -173,7 +173,7 @@ inline OtherSession make_other_session(const OtherSessionConfig& config) {
     record.timestamp_us = kRobotStartUs + static_cast<std::uint64_t>(std::llround(time_s * 1e6));
     const JointVector q = joints_at(time_s);
     const JointVector q_next = joints_at(time_s + 1e-3);
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       record.q_rad[j] = q(j);
       record.qd_rad_s[j] = (q_next(j) - q(j)) * 1e3;
     }

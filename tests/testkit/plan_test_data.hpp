@@ -42,9 +42,10 @@ inline PlanOptions small_options(std::size_t candidates, std::size_t poses, std:
 /// Digest of a plan's poses, criterion, rigid sigmas and path time.
 inline std::uint64_t digest_of(const PlanResult& r) {
   Digest digest;
-  for (std::size_t i = 0; i < r.pose_count; ++i) digest.add(r.poses[i]);
+  for (std::size_t i = 0; i < r.pose_count; ++i) digest.add(r.poses[i].head(kSixJoints));
   digest.add(r.planned.log_det);
-  digest.add(r.planned.sigma.head<kRigidParamCount>());  // the rigid 33, as before the compliance coefficients
+  digest.add(
+      r.planned.sigma.head<rigid_param_count(kSixJoints)>());  // the rigid 33, as before the compliance coefficients
   digest.add(r.travel_s);
   return digest.value();
 }

@@ -43,7 +43,7 @@ inline bool same_samples(const DatasetBase& a, const DatasetBase& b) {
   for (std::size_t i = 0; i < a.size(); ++i) {
     const Sample& x = a.samples()[i];
     const Sample& y = b.samples()[i];
-    if (std::memcmp(x.q_rad.data(), y.q_rad.data(), sizeof(double) * kJointCount) != 0) return false;
+    if (std::memcmp(x.q_rad.data(), y.q_rad.data(), sizeof(double) * kSixJoints) != 0) return false;
     if (std::memcmp(x.point_m.data(), y.point_m.data(), sizeof(double) * 3) != 0) return false;
   }
   return true;

@@ -13,7 +13,7 @@ namespace hivecal::test {
 inline RobotModel perturbed_model(const RobotModel& nominal, Random* random, double length_sigma_m,
                                   double angle_sigma_rad) {
   RobotModel model = nominal;
-  for (DhJoint& joint : model.joints) {
+  for (DhJoint& joint : model_joints(&model)) {
     joint.theta_offset_rad += angle_sigma_rad * random->normal();
     joint.d_m += length_sigma_m * random->normal();
     joint.a_m += length_sigma_m * random->normal();

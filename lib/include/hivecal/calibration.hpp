@@ -259,10 +259,10 @@ struct BlockedFoldCheck {
   bool checked = false;  ///< the stage kept an added term, and the folds were predicted
   /// Mean 3-D error of joint j's two end folds, each predicted by the fit of the others with the
   /// stage's terms [m] (0 when not checked).
-  double with_terms_mae_m[kJointCount] = {};
-  double without_terms_mae_m[kJointCount] = {};  ///< the same without the added terms [m]
-  double with_all_mae_m = 0.0;                   ///< over every joint's ends, with the terms [m]
-  double without_all_mae_m = 0.0;                ///< the same without them [m]
+  double with_terms_mae_m[kMaxJoints] = {};
+  double without_terms_mae_m[kMaxJoints] = {};  ///< the same without the added terms [m]
+  double with_all_mae_m = 0.0;                  ///< over every joint's ends, with the terms [m]
+  double without_all_mae_m = 0.0;               ///< the same without them [m]
   /// Harmonics not admitted because the training poses turn their joint through less than
   /// kHarmonicMinPeriodShare of their period.
   ParamMask coverage_rejected = 0;
@@ -274,10 +274,10 @@ struct BlockedFoldCheck {
 /// member initializers (a workspace holds one: its constructor stays small in flash): made
 /// zero by value-initialization, `BlockedFoldErrors{}`.
 struct BlockedFoldErrors {
-  double sum_m[kJointCount][2];       ///< sum of the 3-D errors of the fold's samples [m]
-  double squares_m2[kJointCount][2];  ///< sum of their squares [m^2]
-  std::size_t count[kJointCount][2];  ///< samples of the fold [-]
-  bool solved[kJointCount][2];        ///< the fit of the others could be made (a positive definite system)
+  double sum_m[kMaxJoints][2];       ///< sum of the 3-D errors of the fold's samples [m]
+  double squares_m2[kMaxJoints][2];  ///< sum of their squares [m^2]
+  std::size_t count[kMaxJoints][2];  ///< samples of the fold [-]
+  bool solved[kMaxJoints][2];        ///< the fit of the others could be made (a positive definite system)
 };
 
 /// What one solver stage produced.
@@ -313,7 +313,7 @@ struct CalibrationStage {
 /// Stages a job runs at most ('all': GSA, ABC, LM, then LM+compliance when enabled, and
 /// LM+compliance+harmonics after it when the terms hold both families: a capacity that holds
 /// the harmonics, core/capacity.hpp).
-inline constexpr std::size_t kMaxCalibrationStages = kMaxJointTerms >= 4 + 2 * kJointCount ? 5 : 4;
+inline constexpr std::size_t kMaxCalibrationStages = kMaxJointTerms >= 4 + 2 * kSixJoints ? 5 : 4;
 
 /// The steps of a job, in order (CalibrationResult::step is the last one reached).
 enum class CalibrationStep : std::uint8_t { input, split, baseline, gsa, abc, lm, done };
@@ -377,7 +377,8 @@ const char* calibration_step_name(CalibrationStep step);
 
 /// Everything a job returns (~6 KB with the LmResult and the blunder list: static storage on a small target).
 struct CalibrationResult {
-  Status status = Status::invalid_argument;       ///< ok, or why the job stopped at `step`
+  CalibrationResult();                       ///< nothing run yet (out of line: the firmware's flash holds one copy)
+  Status status = Status::invalid_argument;  ///< ok, or why the job stopped at `step`
   CalibrationStep step = CalibrationStep::input;  ///< done on success, else the step that failed
   std::size_t train_count = 0;                    ///< training samples [-]
   std::size_t test_count = 0;                     ///< test samples [-]
@@ -855,9 +856,10 @@ class CalibrationWorkspaceView final : public CalibrationWorkspaceBase {
 /// the same set with the blunder never added. `observer` may be null. Returns ok (LM's
 /// not_converged counts as a result: its last point is used), or the failure, with
 /// result->step naming the step that failed:
-///  - input: invalid_argument (a null pointer, an unknown method or parameter set, compliance
-///    enabled without an LM stage or with terms that default_compliance_terms or
-///    check_compliance refuse), dataset_empty;
+///  - input: invalid_argument (a null pointer, an unknown method or parameter set, a start
+///    model that check_joint_layout refuses, compliance enabled without an LM stage or with
+///    terms that default_compliance_terms or check_compliance refuse), dataset_empty,
+///    joint_count_mismatch (a sample reads a joint beyond the model's: readings_fit_joint_count);
 ///  - split: invalid_argument (the fraction leaves no training sample);
 ///  - baseline: too_few_samples / degenerate_geometry (fewer than 3 non-collinear points: not
 ///    even the base frame is determined), the errors of fit_base_to_tracker;

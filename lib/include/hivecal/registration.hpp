@@ -29,8 +29,8 @@ enum class RegistrationFit : std::uint8_t {
 
 /// Lower-case name of a fit ("base", "frames").
 const char* registration_fit_name(RegistrationFit fit);
-/// The parameters a fit moves (with kOtherTargetTools for frames).
-ParamMask registration_mask(RegistrationFit fit);
+/// The parameters a fit moves in those of `model` (with kOtherTargetTools for frames).
+ParamMask registration_mask(RegistrationFit fit, const RobotModel& model);
 
 /// Settings of a registration.
 struct RegistrationOptions {

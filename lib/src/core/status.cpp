@@ -28,6 +28,7 @@ const char* status_message(Status status) {
     case Status::poses_not_distinct: return "all samples at the same joint positions";
     case Status::solver_cancelled: return "solver cancelled by its observer";
     case Status::read_failed: return "reading the byte stream failed";
+    case Status::joint_count_mismatch: return "joint readings of another joint count than the robot model";
   }
   return "unknown status";
 }

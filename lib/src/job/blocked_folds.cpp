@@ -119,7 +119,7 @@ Status fit_normal_equations(const FoldFit& fit, Span<const Sample> samples, cons
   if (status != Status::ok || fit.prior.nominal == nullptr) return status;
   const ModelParams p = to_params(*fit.model);
   const ModelParams nominal = to_params(*fit.prior.nominal);
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(*fit.model); ++i) {
     const double sigma = lm_prior_sigma(fit.prior, i);
     if (!mask_has(columns, i) || !(sigma > 0.0)) continue;
     const double weight = fit.variance_m2 / (sigma * sigma);
@@ -142,7 +142,8 @@ ParamMask harmonics_short_of_their_period(const RobotModel& model, Span<const Sa
       highest = std::fmax(highest, s.q_rad(term.joint));
     }
     const double period_rad = 2.0 * math::kPi / static_cast<double>(term.order);
-    if (highest - lowest < kHarmonicMinPeriodShare * period_rad) short_of |= param_bit(compliance_param_index(t));
+    if (highest - lowest < kHarmonicMinPeriodShare * period_rad)
+      short_of |= param_bit(compliance_param_index(model, t));
   }
   return short_of;
 }
@@ -160,7 +161,7 @@ Status blocked_fold_errors(DatasetBase* dataset, const FoldFit& fit, const Point
   Status status = fit_normal_equations(fit, dataset->train(), loss, columns, &ws->normal);
   const FullParams whole_gradient = ws->normal.jtwr;  // with the prior's pull
   ws->scaled = ws->normal.jtwj;                       // with the prior's weights
-  for (int joint = 0; status == Status::ok && joint < kJointCount; ++joint) {
+  for (int joint = 0; status == Status::ok && joint < fit.model->joint_count; ++joint) {
     for (int end = 0; end < 2 && status == Status::ok; ++end) {
       const bool low = end == 0;
       const double threshold_rad = fold_threshold_rad(dataset->train(), joint, wanted, low);

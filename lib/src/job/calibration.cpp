@@ -60,25 +60,25 @@ bool known(const CalibrationOptions& options) {
           options.method == CalibrationMethod::lm);  // ABC/GSA fit their own
 }
 
-/// The tool point's three bits.
-ParamMask tool_params_mask() {
+/// The tool point's three bits in the parameters of `model`.
+ParamMask tool_params_mask(const RobotModel& model) {
   ParamMask mask = 0;
-  for (int axis = 0; axis < 3; ++axis) mask |= param_bit(tool_param_index(axis));
+  for (int axis = 0; axis < 3; ++axis) mask |= param_bit(tool_param_index(model, axis));
   return mask;
 }
 
-/// The six base parameters' bits.
-ParamMask base_params_mask() {
+/// The six base parameters' bits in the parameters of `model`.
+ParamMask base_params_mask(const RobotModel& model) {
   ParamMask mask = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    mask |= param_bit(base_rotation_param_index(axis)) | param_bit(base_translation_param_index(axis));
+    mask |= param_bit(base_rotation_param_index(model, axis)) | param_bit(base_translation_param_index(model, axis));
   }
   return mask;
 }
 
 /// The base and tool bits the options hold fixed (base_known, tool_known).
-ParamMask known_params_mask(const CalibrationOptions& options) {
-  return (options.base_known ? base_params_mask() : 0) | (options.tool_known ? tool_params_mask() : 0);
+ParamMask known_params_mask(const CalibrationOptions& options, const RobotModel& model) {
+  return (options.base_known ? base_params_mask(model) : 0) | (options.tool_known ? tool_params_mask(model) : 0);
 }
 
 /// The compliance model the LM+compliance stage starts from: the options' terms, or the
@@ -104,7 +104,7 @@ Status compliance_start(const RobotModel& start, const CalibrationCompliance& op
     }
     out->term_count = kept;
   }
-  return check_compliance(*out) == Status::ok ? Status::ok : Status::invalid_argument;
+  return check_compliance(*out, start) == Status::ok ? Status::ok : Status::invalid_argument;
 }
 
 /// The options' joint terms are gravity terms followed by harmonics (both families, in that
@@ -161,7 +161,8 @@ Span<const std::uint32_t> population_subset(Job& job) {
   const std::size_t wanted = std::min(job.options.population_subset, room.size());
   if (wanted == 0 || train.size() <= wanted) return Span<const std::uint32_t>();
   const ResidualScratch scratch = job.workspace.open_residuals();
-  const std::size_t count = spanning_subset(train, scratch.residual_m, Span<std::uint32_t>(room.data(), wanted));
+  const std::size_t count =
+      spanning_subset(train, job.start.joint_count, scratch.residual_m, Span<std::uint32_t>(room.data(), wanted));
   job.workspace.close();
   return Span<const std::uint32_t>(room.data(), count);
 }
@@ -220,7 +221,7 @@ void set_params(const ModelParams& params, bool keep_other_tools, RobotModel* mo
   const ModelParams start_params = to_params(start);
   ModelParams params = to_params(*from);
   bool changed = false;
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(start); ++i) {
     if (mask_has(report.free_mask, i) && !mask_has(report.kept_mask, i) && params(i) != start_params(i)) {
       params(i) = start_params(i);
       changed = true;
@@ -228,7 +229,7 @@ void set_params(const ModelParams& params, bool keep_other_tools, RobotModel* mo
   }
   bool compliance_changed = false;
   for (int t = 0; t < from->compliance.term_count; ++t) {  // the compliance coefficients likewise
-    const int i = compliance_param_index(t);
+    const int i = compliance_param_index(*from, t);
     double& coefficient = from->compliance.coefficient[t];
     if (mask_has(report.free_mask, i) && !mask_has(report.kept_mask, i) &&
         coefficient != start.compliance.coefficient[t]) {
@@ -242,14 +243,16 @@ void set_params(const ModelParams& params, bool keep_other_tools, RobotModel* mo
 
 /// The value of full-model parameter `index` (geometry or compliance coefficient) in `model`.
 double model_value(const RobotModel& model, int index) {
-  if (index >= kRigidParamCount) return model.compliance.coefficient[index - kRigidParamCount];
+  const int rigid_count = rigid_param_count(model);
+  if (index >= rigid_count) return model.compliance.coefficient[index - rigid_count];
   return to_params(model)(index);
 }
 
 /// Puts parameter `index` (geometry or compliance) of *model back to its value in `start`.
 [[gnu::noinline]] void reset_param(const RobotModel& start, int index, bool keep_other_tools, RobotModel* model) {
-  if (index >= kRigidParamCount) {
-    model->compliance.coefficient[index - kRigidParamCount] = start.compliance.coefficient[index - kRigidParamCount];
+  const int rigid_count = rigid_param_count(start);
+  if (index >= rigid_count) {
+    model->compliance.coefficient[index - rigid_count] = start.compliance.coefficient[index - rigid_count];
     return;
   }
   ModelParams params = to_params(*model);
@@ -294,9 +297,11 @@ JointTermLevels joint_term_levels(const RobotModel& reference, double compliance
 /// and the counts in *r (as r->lm, the last fit's); the joint-term stages keep it.
 bool tests_geometry(const CalibrationOptions& o, Span<const Sample> samples, const LmResult& first,
                     CalibrationResult* r) {
-  static_assert(kSignificancePosesPerParam * kRigidParamCount < kDistinctPointLimit, "the count must reach the bound");
+  static_assert(kSignificancePosesPerParam * kMaxRigidParamCount < kDistinctPointLimit,
+                "the count must reach the bound");
   r->significance_poses = distinct_configurations(samples);
-  r->significance_params = static_cast<std::size_t>(mask_count(first.identifiability.kept_mask & kAllParamsMask));
+  r->significance_params =
+      static_cast<std::size_t>(mask_count(first.identifiability.kept_mask & rigid_params_mask(first.model)));
   r->geometry_tested =
       o.significance_every_set || static_cast<double>(r->significance_poses) <
                                       kSignificancePosesPerParam * static_cast<double>(r->significance_params);
@@ -314,22 +319,24 @@ bool tests_geometry(const CalibrationOptions& o, Span<const Sample> samples, con
                                         const JointTermLevels& levels, bool geometry) {
   if (!(t > 0.0)) return -1;
   const ModelParams change = to_params(lm.model) - to_params(start);
+  const int model_count = model_param_count(lm.model);
+  const int rigid_count = rigid_param_count(lm.model);
   int weakest = -1;
   double weakest_ratio = t;
   const auto consider = [&](int i) {
     if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) return;
-    const double delta = i < kModelParamCount ? change(i) : model_value(lm.model, i) - model_value(start, i);
+    const double delta = i < model_count ? change(i) : model_value(lm.model, i) - model_value(start, i);
     const double level = mask_has(levels.harmonics, i) ? levels.harmonic_t : levels.gravity_t;
-    const double ratio = i < kRigidParamCount ? std::fabs(delta) / lm.sigma(i)
-                                              : std::fabs(delta) / lm.sigma(i) * (t / std::fmax(t, level));
+    const double ratio =
+        i < rigid_count ? std::fabs(delta) / lm.sigma(i) : std::fabs(delta) / lm.sigma(i) * (t / std::fmax(t, level));
     if (ratio < weakest_ratio) {
       weakest_ratio = ratio;
       weakest = i;
     }
   };
-  for (int i = kRigidParamCount; i < kRigidParamCount + lm.model.compliance.term_count; ++i) consider(i);
+  for (int i = rigid_count; i < rigid_count + lm.model.compliance.term_count; ++i) consider(i);
   if (weakest >= 0 || !geometry) return weakest;
-  for (int i = 0; i < kModelParamCount; ++i) consider(i);  // the base is not a model parameter
+  for (int i = 0; i < model_count; ++i) consider(i);  // the base is not a model parameter
   return weakest;
 }
 
@@ -339,7 +346,7 @@ int implausible_joint_term(const LmResult& lm) {
   int worst = -1;
   double worst_abs = kMaxJointTermCoefficient;
   for (int t = 0; t < lm.model.compliance.term_count; ++t) {
-    const int index = compliance_param_index(t);
+    const int index = compliance_param_index(lm.model, t);
     const double magnitude = std::fabs(lm.model.compliance.coefficient[t]);
     if (!mask_has(lm.identifiability.kept_mask, index) || magnitude <= worst_abs) continue;  // NaN: picked
     worst_abs = magnitude;
@@ -411,7 +418,7 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   // but those it now holds fixed).
   if (compliance && !fit.warm) from.compliance = reference.compliance;
   for (int t = 0; fit.warm && t < reference.compliance.term_count; ++t) {
-    if (mask_has(fit.fixed_terms, compliance_param_index(t))) {
+    if (mask_has(fit.fixed_terms, compliance_param_index(reference, t))) {
       from.compliance.coefficient[t] = reference.compliance.coefficient[t];
     }
   }
@@ -424,19 +431,18 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   if (o.params == CalibrationParams::paper && r.baseline.tool_fitted) {
     // The tool point is estimated too: it was not known (the baseline fitted it), and lengths
     // searched against a tool fitted at the nominal lengths keep that fit's bias.
-    lm.custom_mask = lm_param_mask(LmParamSet::link_lengths, 0, reference) | tool_params_mask();
+    lm.custom_mask = lm_param_mask(LmParamSet::link_lengths, 0, reference) | tool_params_mask(reference);
     lm.params = LmParamSet::custom;
   }
   if (o.params == CalibrationParams::paper && compliance) {
-    lm.custom_mask =
-        lm_param_mask(lm.params, lm.custom_mask, reference) | compliance_params_mask(reference.compliance.term_count);
+    lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) | compliance_params_mask(reference);
     lm.params = LmParamSet::custom;
   }
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
   lm.prior = detail::job_lm_prior(o, job.nominal);
   if (o.base_known || o.tool_known) {  // the base / the tool points stay where the options put them
     if (o.base_known) base = &o.known_base_to_tracker;
-    lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) & ~known_params_mask(o);
+    lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) & ~known_params_mask(o, reference);
     lm.params = LmParamSet::custom;
   }
   if (fit.fixed_terms != 0) {
@@ -446,13 +452,15 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
   const ParamMask free_mask = lm_param_mask(lm.params, lm.custom_mask, reference);
   // The other targets' tool points are free whenever the stage estimates the tool point, also
   // after the significance test fixed tool_x (else they would stay at their start values).
-  for (int axis = 0; axis < 3; ++axis) lm.other_target_tools |= mask_has(free_mask, tool_param_index(axis));
+  for (int axis = 0; axis < 3; ++axis) {
+    lm.other_target_tools |= mask_has(free_mask, tool_param_index(reference, axis));
+  }
   Status status = Status::ok;
   *pruned = 0;
   bool geometry = r.geometry_tested;  // a joint-term stage: the rigid stage's; a rigid one decides below
   // Each attempt fixes one parameter at most: the geometry and the model's joint terms (not the
   // capacity's: the same attempts on every build).
-  const int attempts = kModelParamCount + reference.compliance.term_count + 2;
+  const int attempts = model_param_count(reference) + reference.compliance.term_count + 2;
   for (int attempt = 0; attempt < attempts; ++attempt) {
     if (trace != nullptr) trace->clear();
     LmWorkspace* workspace = job.workspace.open_lm();
@@ -472,10 +480,11 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     if (attempt == 0 && !compliance) geometry = tests_geometry(o, fit.samples, r.lm, &r);
     if (weakest < 0) weakest = least_significant(reference, r.lm, fit.significance_t, levels, geometry);
     ParamMask fixes = weakest >= 0 ? param_bit(weakest) : ParamMask{0};
-    if (compliance && weakest >= kRigidParamCount && linearised_fixes(reference)) {
+    if (compliance && weakest >= rigid_param_count(reference) && linearised_fixes(reference)) {
       // The terms the test would fix after this one, each after a refit: on the linearised
       // fit at once (the refit below then takes them all).
-      const bool other_tools = (lm.other_target_tools || mask_has(r.lm.identifiability.kept_mask, tool_param_index(0)));
+      const bool other_tools =
+          (lm.other_target_tools || mask_has(r.lm.identifiability.kept_mask, tool_param_index(reference, 0)));
       const FoldFit fitted{&r.lm.model, &r.lm.base_to_tracker,
                            r.lm.identifiability.kept_mask | (other_tools ? kOtherTargetTools : ParamMask{0}), lm.prior,
                            r.lm.residual_sigma_m * r.lm.residual_sigma_m};
@@ -651,7 +660,7 @@ Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
   // rest comes from the previous stage.
   CalibrationStage& stage = r.stages[index];
   RobotModel& model = stage.model;
-  for (int j = 0; j < kJointCount; ++j) model.joints[j] = previous.model.joints[j];
+  for (int j = 0; j < kMaxJoints; ++j) model.joints[j] = previous.model.joints[j];
   for (int t = 0; t < kMaxTargets; ++t) target_tool(&model, t) = target_tool(previous.model, t);
   for (int t = 0; t < previous.model.compliance.term_count; ++t) {
     model.compliance.coefficient[t] = previous.model.compliance.coefficient[t];
@@ -789,7 +798,7 @@ void fold_means(const FoldComparison& c, double* with_m, double* without_m) {
 ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint) {
   ParamMask mask = 0;
   for (int t = 0; t < reference.compliance.term_count; ++t) {
-    if (reference.compliance.terms[t].joint == joint) mask |= param_bit(compliance_param_index(t));
+    if (reference.compliance.terms[t].joint == joint) mask |= param_bit(compliance_param_index(reference, t));
   }
   return mask & terms;
 }
@@ -810,7 +819,7 @@ ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint
   folds->checked = true;
   FoldComparison all;
   *rejected = 0;
-  for (int joint = 0; joint < kJointCount; ++joint) {
+  for (int joint = 0; joint < fit.reference->joint_count; ++joint) {
     FoldComparison ends;
     add_ends(with, without, joint, &ends, &all);
     fold_means(ends, &folds->with_terms_mae_m[joint], &folds->without_terms_mae_m[joint]);
@@ -888,11 +897,10 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
   fit.significance_t = r.significance_t;
   if (after_compliance) {  // r.lm is LM+compliance's: its gravity terms (this model's first ones)
     const int gravity_terms = r.stages[r.stage_count - 1].model.compliance.term_count;
-    fit.fixed_terms = compliance_params_mask(gravity_terms) & ~r.lm.identifiability.kept_mask;
+    fit.fixed_terms = compliance_params_mask(reference.joint_count, gravity_terms) & ~r.lm.identifiability.kept_mask;
   }
   // The terms this stage adds: every one after the rigid fit, the harmonics after LM+compliance.
-  const ParamMask new_terms =
-      after_compliance ? harmonic_params_mask(reference) : compliance_params_mask(reference.compliance.term_count);
+  const ParamMask new_terms = after_compliance ? harmonic_params_mask(reference) : compliance_params_mask(reference);
   const std::size_t index = r.stage_count;
   // The previous fit: the blocked folds' reference.
   const PreviousFit previous{index - 1, r.stages[index - 1].estimated, r.stages[index - 1].residual_sigma_m};
@@ -960,7 +968,8 @@ Status fit_baseline(const RobotModel& start, Span<const Sample> train, const Cal
                     CalibrationWorkspaceBase& workspace, CalibrationResult* r) {
   r->baseline.model = start;  // with several targets, their tool points fitted with the base
   Status status = Status::ok;
-  const ParamMask fitted_mask = (base_params_mask() | tool_params_mask()) & ~known_params_mask(options);
+  const ParamMask fitted_mask =
+      (base_params_mask(start) | tool_params_mask(start)) & ~known_params_mask(options, start);
   const int fitted = mask_count(fitted_mask);
   if (options.base_known) {
     r->baseline.base_to_tracker = options.known_base_to_tracker;
@@ -1015,6 +1024,12 @@ Status run_split(const RobotModel& start, DatasetBase* dataset, const Calibratio
 }
 
 /// Resets *result in place (no 5 KB temporary on the stack).
+}  // namespace
+
+CalibrationResult::CalibrationResult() = default;
+
+namespace {
+
 CalibrationResult& reset(CalibrationResult* result) {
   result->~CalibrationResult();
   return *new (result) CalibrationResult();
@@ -1043,11 +1058,15 @@ bool compliance_usable(const RobotModel& start, const CalibrationOptions& option
 /// Input checks shared by calibrate() and cross_validate().
 Status check_inputs(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
                     CalibrationWorkspaceBase* workspace, CalibrationResult* r) {
-  if (dataset == nullptr || workspace == nullptr || !known(options) || !compliance_usable(start, options)) {
+  if (dataset == nullptr || workspace == nullptr || !known(options) || check_joint_layout(start) != Status::ok ||
+      !compliance_usable(start, options)) {
     return fail(r, CalibrationStep::input, Status::invalid_argument);
   }
   dataset->set_aside(Span<const std::uint32_t>());
   if (dataset->size() == 0) return fail(r, CalibrationStep::input, Status::dataset_empty);
+  if (!readings_fit_joint_count(dataset->samples(), start.joint_count)) {
+    return fail(r, CalibrationStep::input, Status::joint_count_mismatch);
+  }
   return Status::ok;
 }
 
@@ -1115,7 +1134,7 @@ const char* blunder_verdict_name(BlunderVerdict verdict) {
 
 double parameter_significance_level(const RobotModel& model, int index, double significance_t, double compliance_t,
                                     int dof) {
-  if (index < kRigidParamCount) return significance_t;
+  if (index < rigid_param_count(model)) return significance_t;
   const JointTermLevels levels = joint_term_levels(model, compliance_t, dof);
   return std::fmax(significance_t, mask_has(levels.harmonics, index) ? levels.harmonic_t : levels.gravity_t);
 }

@@ -27,11 +27,11 @@ const char* registration_blunder_verdict_name(RegistrationBlunderVerdict verdict
   return "?";
 }
 
-ParamMask registration_mask(RegistrationFit fit) {
+ParamMask registration_mask(RegistrationFit fit, const RobotModel& model) {
   ParamMask mask = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    mask |= param_bit(base_rotation_param_index(axis)) | param_bit(base_translation_param_index(axis));
-    if (fit == RegistrationFit::frames) mask |= param_bit(tool_param_index(axis));
+    mask |= param_bit(base_rotation_param_index(model, axis)) | param_bit(base_translation_param_index(model, axis));
+    if (fit == RegistrationFit::frames) mask |= param_bit(tool_param_index(model, axis));
   }
   return fit == RegistrationFit::frames ? mask | kOtherTargetTools : mask;
 }
@@ -122,7 +122,7 @@ Status fit_once(const RobotModel& calibrated, Span<const Sample> fitted, const R
   if (!(result->spread_m > kCoincidentSpread_m) || !(result->collinearity > kCollinearSpread)) {
     return Status::degenerate_geometry;
   }
-  const ParamMask registered = registration_mask(options.fit);
+  const ParamMask registered = registration_mask(options.fit, start);
   LmOptions lm = options.lm;
   lm.params = LmParamSet::custom;
   lm.custom_mask = registered & ~kOtherTargetTools;
@@ -148,9 +148,9 @@ Status fit_once(const RobotModel& calibrated, Span<const Sample> fitted, const R
   result->residual_dof = dof;
   result->residual_sigma_m = fit.residual_sigma_m;
   for (int axis = 0; axis < 3; ++axis) {
-    const int r = base_rotation_param_index(axis);
-    const int t = base_translation_param_index(axis);
-    const int tool = tool_param_index(axis);
+    const int r = base_rotation_param_index(fit.model, axis);
+    const int t = base_translation_param_index(fit.model, axis);
+    const int tool = tool_param_index(fit.model, axis);
     result->rotation_sigma_rad(axis) = std::sqrt(result->covariance(r, r));
     result->translation_sigma_m(axis) = std::sqrt(result->covariance(t, t));
     result->tool_sigma_m(axis) = std::sqrt(result->covariance(tool, tool));

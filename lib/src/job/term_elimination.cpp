@@ -11,8 +11,9 @@ namespace {
 
 /// Value of full-model parameter `index` (geometry or joint-term coefficient) of `model`.
 double value_of(const RobotModel& model, int index) {
-  if (index >= kRigidParamCount) return model.compliance.coefficient[index - kRigidParamCount];
-  return index < kModelParamCount ? to_params(model)(index) : 0.0;  // the base: an increment, 0
+  const int rigid = rigid_param_count(model);
+  if (index >= rigid) return model.compliance.coefficient[index - rigid];
+  return index < model_param_count(model) ? to_params(model)(index) : 0.0;  // the base: an increment, 0
 }
 
 /// The next joint term to fix among `candidates`: the largest coefficient beyond
@@ -22,7 +23,7 @@ int next_term(const RobotModel& reference, const FullParams& value, const FullPa
   int worst = -1;
   double worst_abs = kMaxJointTermCoefficient;
   for (int t = 0; t < reference.compliance.term_count; ++t) {
-    const int i = compliance_param_index(t);
+    const int i = compliance_param_index(reference, t);
     if (mask_has(candidates, i) && std::fabs(value(i)) > worst_abs) {
       worst_abs = std::fabs(value(i));
       worst = i;
@@ -31,7 +32,7 @@ int next_term(const RobotModel& reference, const FullParams& value, const FullPa
   if (worst >= 0) return worst;
   double weakest_ratio = 1.0;
   for (int t = 0; t < reference.compliance.term_count; ++t) {
-    const int i = compliance_param_index(t);
+    const int i = compliance_param_index(reference, t);
     if (!mask_has(candidates, i) || !(variance(i) > 0.0)) continue;
     const double level = parameter_significance_level(reference, i, significance_t, compliance_t, dof);
     const double ratio = std::fabs(delta(i)) / std::sqrt(variance(i)) / level;  // below 1: not significant
@@ -74,7 +75,7 @@ int next_term(const RobotModel& reference, const FullParams& value, const FullPa
     delta(index[k]) = value(index[k]) - value_of(reference, index[k]);
   }
   double squares_m2 = sigma_m * sigma_m * static_cast<double>(dof);
-  ParamMask candidates = params & kComplianceParamsMask;
+  ParamMask candidates = params & compliance_params_mask(reference.joint_count, kMaxComplianceTerms);
   for (int k = first; k >= 0;) {
     // Fixing k at its reference: the others move by -C[:,k] delta_k / C_kk, their covariance
     // loses C[:,k] C[k,:] / C_kk, the residual sum gains delta_k^2 / C_kk.

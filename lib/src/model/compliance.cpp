@@ -39,24 +39,33 @@ double harmonic_basis(const ComplianceTerm& term, const JointVector& q_rad, cons
   return term.kind == JointTermKind::harmonic_sin ? sin_kq : cos_kq;
 }
 
+/// What a unit mass at `point_m` loads a joint with, per unit g: the torque about its axis `z`
+/// through `origin_m` (revolute, [m]), or the weight along its axis (prismatic, [-]).
+double joint_load(JointType type, const Vec3& z, const Vec3& origin_m, const Vec3& point_m, const Vec3& gravity) {
+  return type == JointType::revolute ? lever_m(z, origin_m, point_m, gravity) : z.dot(gravity);
+}
+
 /// The basis of one gravity term over the rigid frames at the pose.
-double gravity_basis(const ComplianceModel& compliance, const ComplianceTerm& term, const Vec3& tool_m,
-                     const RigidTransform (&frame)[kJointCount + 1]) {
+double gravity_basis(const RobotModel& model, const ComplianceTerm& term,
+                     const RigidTransform (&frame)[kMaxJoints + 1]) {
+  const ComplianceModel& compliance = model.compliance;
+  const int joints = model.joint_count;
+  const JointType type = joint_type(model, term.joint);
   const Vec3 z = frame[term.joint].rotation.col(2);
   const Vec3& origin_m = frame[term.joint].translation_m;
   const Vec3& g = compliance.gravity_direction;
   if (compliance.load == ComplianceLoad::point) {
     const Vec3 point_m =
-        term.frame == kToolLoadFrame ? frame[kJointCount].apply(tool_m) : frame[term.frame].translation_m;
-    return lever_m(z, origin_m, point_m, g);
+        term.frame == kToolLoadFrame ? frame[joints].apply(model.tool_m) : frame[term.frame].translation_m;
+    return joint_load(type, z, origin_m, point_m, g);
   }
-  // Every mass joint j carries: the links it moves (j + 1 .. 6), then the payload.
+  // Every mass joint j carries: the links it moves (j + 1 .. joint_count), then the payload.
   const ArmMasses& masses = compliance.masses;
   double sum = 0.0;
-  for (int link = term.joint; link < kJointCount; ++link) {
-    sum += masses.link_mass_kg[link] * lever_m(z, origin_m, frame[link + 1].apply(masses.link_com_m[link]), g);
+  for (int link = term.joint; link < joints; ++link) {
+    sum += masses.link_mass_kg[link] * joint_load(type, z, origin_m, frame[link + 1].apply(masses.link_com_m[link]), g);
   }
-  return sum + masses.payload_kg * lever_m(z, origin_m, frame[kJointCount].apply(masses.payload_com_m), g);
+  return sum + masses.payload_kg * joint_load(type, z, origin_m, frame[joints].apply(masses.payload_com_m), g);
 }
 
 /// True when any of the model's terms is a gravity term (its basis needs the rigid frames).
@@ -74,12 +83,11 @@ void compliance_basis(const RobotModel& model, const JointVector& q_rad, double 
   for (double& b : basis) b = 0.0;
   const ComplianceModel& compliance = model.compliance;
   if (compliance.term_count == 0) return;
-  RigidTransform frame[kJointCount + 1];
+  RigidTransform frame[kMaxJoints + 1];
   if (has_gravity_term(compliance)) detail::rigid_frames(model, q_rad, frame);
   for (int t = 0; t < compliance.term_count; ++t) {
     const ComplianceTerm& term = compliance.terms[t];
-    basis[t] =
-        is_harmonic(term) ? harmonic_basis(term, q_rad, trig) : gravity_basis(compliance, term, model.tool_m, frame);
+    basis[t] = is_harmonic(term) ? harmonic_basis(term, q_rad, trig) : gravity_basis(model, term, frame);
   }
 }
 

@@ -2,10 +2,12 @@
 // for size on bare metal, lib/CMakeLists.txt); their evaluation at a pose is compliance.cpp.
 #include "hivecal/model/compliance.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "hivecal/core/math.hpp"
 #include "hivecal/model/kinematics.hpp"
+#include "core/names.hpp"
 #include "model/kinematics_detail.hpp"
 
 namespace hivecal {
@@ -18,8 +20,8 @@ bool finite_vec(const Vec3& v) {
   return math::is_finite(v.x()) && math::is_finite(v.y()) && math::is_finite(v.z());
 }
 
-Status check_masses(const ArmMasses& masses) {
-  for (int link = 0; link < kJointCount; ++link) {
+Status check_masses(const ArmMasses& masses, int joint_count) {
+  for (int link = 0; link < joint_count; ++link) {
     if (!math::is_finite(masses.link_mass_kg[link]) || !finite_vec(masses.link_com_m[link]))
       return Status::non_finite_input;
     if (masses.link_mass_kg[link] < 0.0) return Status::invalid_argument;
@@ -28,14 +30,16 @@ Status check_masses(const ArmMasses& masses) {
   return masses.payload_kg < 0.0 ? Status::invalid_argument : Status::ok;
 }
 
-Status check_term(const ComplianceModel& compliance, const ComplianceTerm& term) {
-  if (term.joint < 0 || term.joint >= kJointCount) return Status::invalid_argument;
+Status check_term(const ComplianceModel& compliance, const RobotModel& model, const ComplianceTerm& term) {
+  if (term.joint < 0 || term.joint >= model.joint_count) return Status::invalid_argument;
   if (term.kind == JointTermKind::harmonic_sin || term.kind == JointTermKind::harmonic_cos) {
-    return term.order >= 1 && term.order <= kMaxHarmonicOrder ? Status::ok : Status::invalid_argument;
+    const bool revolute = joint_type(model, term.joint) == JointType::revolute;
+    return revolute && term.order >= 1 && term.order <= kMaxHarmonicOrder ? Status::ok : Status::invalid_argument;
   }
   if (term.kind != JointTermKind::gravity) return Status::invalid_argument;
   if (compliance.load == ComplianceLoad::arm_masses) return Status::ok;
-  return term.frame > term.joint && term.frame <= kToolLoadFrame ? Status::ok : Status::invalid_argument;
+  const bool dh_frame = term.frame > term.joint && term.frame <= model.joint_count;
+  return dh_frame || term.frame == kToolLoadFrame ? Status::ok : Status::invalid_argument;
 }
 
 // Universal Robots, "DH Parameters for calculations of kinematics and dynamics"
@@ -47,23 +51,23 @@ Status check_term(const ComplianceModel& compliance, const ComplianceTerm& term)
 // mapped back, its UR5e file gives the page's UR5e table to the digit, and its UR10e file the page's
 // UR10e rows (links 1 to 5; link 6 is the file's). The UR10e's centres are the UR10's, the UR3's
 // the UR3e's.
-constexpr double kUr3eMass_kg[kJointCount] = {1.98, 3.4445, 1.437, 0.871, 0.805, 0.261};
-constexpr double kUr3eCom_m[kJointCount][3] = {{0.0, -0.02, 0.0}, {0.13, 0.0, 0.1157}, {0.05, 0.0, 0.0238},
-                                               {0.0, 0.0, 0.01},  {0.0, 0.0, 0.01},    {0.0, 0.0, -0.02}};
-constexpr double kUr5eMass_kg[kJointCount] = {3.761, 8.058, 2.846, 1.37, 1.3, 0.365};
-constexpr double kUr5eCom_m[kJointCount][3] = {{0.0, -0.02561, 0.00193}, {0.2125, 0.0, 0.11336}, {0.15, 0.0, 0.0265},
-                                               {0.0, -0.0018, 0.01634},  {0.0, 0.0018, 0.01634}, {0.0, 0.0, -0.001159}};
+constexpr double kUr3eMass_kg[kSixJoints] = {1.98, 3.4445, 1.437, 0.871, 0.805, 0.261};
+constexpr double kUr3eCom_m[kSixJoints][3] = {{0.0, -0.02, 0.0}, {0.13, 0.0, 0.1157}, {0.05, 0.0, 0.0238},
+                                              {0.0, 0.0, 0.01},  {0.0, 0.0, 0.01},    {0.0, 0.0, -0.02}};
+constexpr double kUr5eMass_kg[kSixJoints] = {3.761, 8.058, 2.846, 1.37, 1.3, 0.365};
+constexpr double kUr5eCom_m[kSixJoints][3] = {{0.0, -0.02561, 0.00193}, {0.2125, 0.0, 0.11336}, {0.15, 0.0, 0.0265},
+                                              {0.0, -0.0018, 0.01634},  {0.0, 0.0018, 0.01634}, {0.0, 0.0, -0.001159}};
 
 // The UR5's centres of mass are the UR5e's (both sources give the same numbers): its masses only.
-constexpr double kUr5Mass_kg[kJointCount] = {3.7, 8.393, 2.33, 1.219, 1.219, 0.1879};
-constexpr double kUr10Mass_kg[kJointCount] = {7.1, 12.7, 4.27, 2.0, 2.0, 0.365};
-constexpr double kUr10Com_m[kJointCount][3] = {{0.021, 0.0, 0.027}, {0.38, 0.0, 0.158},  {0.24, 0.0, 0.068},
-                                               {0.0, 0.007, 0.018}, {0.0, 0.007, 0.018}, {0.0, 0.0, -0.026}};
-constexpr double kUr3Mass_kg[kJointCount] = {2.0, 3.42, 1.26, 0.8, 0.8, 0.35};
-constexpr double kUr10eMass_kg[kJointCount] = {7.369, 13.051, 3.989, 2.1, 1.98, 0.615};
-constexpr double kUr16eMass_kg[kJointCount] = {7.369, 10.45, 4.321, 2.18, 2.033, 0.907};
-constexpr double kUr16eCom_m[kJointCount][3] = {{0.0, -0.016, 0.03},  {0.302, 0.0, 0.16},  {0.194, 0.0, 0.065},
-                                                {0.0, -0.009, 0.011}, {0.0, 0.018, 0.012}, {0.0, 0.0, -0.044}};
+constexpr double kUr5Mass_kg[kSixJoints] = {3.7, 8.393, 2.33, 1.219, 1.219, 0.1879};
+constexpr double kUr10Mass_kg[kSixJoints] = {7.1, 12.7, 4.27, 2.0, 2.0, 0.365};
+constexpr double kUr10Com_m[kSixJoints][3] = {{0.021, 0.0, 0.027}, {0.38, 0.0, 0.158},  {0.24, 0.0, 0.068},
+                                              {0.0, 0.007, 0.018}, {0.0, 0.007, 0.018}, {0.0, 0.0, -0.026}};
+constexpr double kUr3Mass_kg[kSixJoints] = {2.0, 3.42, 1.26, 0.8, 0.8, 0.35};
+constexpr double kUr10eMass_kg[kSixJoints] = {7.369, 13.051, 3.989, 2.1, 1.98, 0.615};
+constexpr double kUr16eMass_kg[kSixJoints] = {7.369, 10.45, 4.321, 2.18, 2.033, 0.907};
+constexpr double kUr16eCom_m[kSixJoints][3] = {{0.0, -0.016, 0.03},  {0.302, 0.0, 0.16},  {0.194, 0.0, 0.065},
+                                               {0.0, -0.009, 0.011}, {0.0, 0.018, 0.012}, {0.0, 0.0, -0.044}};
 
 /// One arm's published table: its link masses [kg] and centres of mass [m].
 struct PublishedArm {
@@ -77,27 +81,50 @@ constexpr PublishedArm kPublishedArms[] = {
     {RobotType::ur3, kUr3Mass_kg, kUr3eCom_m},     {RobotType::ur10e, kUr10eMass_kg, kUr10Com_m},
     {RobotType::ur16e, kUr16eMass_kg, kUr16eCom_m}};
 
-constexpr const char* kTermNames[kJointCount][kToolLoadFrame + 1] = {
-    {"c_j1_o1", "c_j1_o2", "c_j1_o3", "c_j1_o4", "c_j1_o5", "c_j1_o6", "c_j1_tool", "c_j1_mass"},
-    {"c_j2_o1", "c_j2_o2", "c_j2_o3", "c_j2_o4", "c_j2_o5", "c_j2_o6", "c_j2_tool", "c_j2_mass"},
-    {"c_j3_o1", "c_j3_o2", "c_j3_o3", "c_j3_o4", "c_j3_o5", "c_j3_o6", "c_j3_tool", "c_j3_mass"},
-    {"c_j4_o1", "c_j4_o2", "c_j4_o3", "c_j4_o4", "c_j4_o5", "c_j4_o6", "c_j4_tool", "c_j4_mass"},
-    {"c_j5_o1", "c_j5_o2", "c_j5_o3", "c_j5_o4", "c_j5_o5", "c_j5_o6", "c_j5_tool", "c_j5_mass"},
-    {"c_j6_o1", "c_j6_o2", "c_j6_o3", "c_j6_o4", "c_j6_o5", "c_j6_o6", "c_j6_tool", "c_j6_mass"}};
-static_assert(kJointCount == 6 && kToolLoadFrame == 7, "one name row per joint, one column per frame + mass");
+/// Column of a joint's name row that names its arm-mass term; the point frames 1 .. kMaxJoints
+/// come first, then the tool (kToolLoadFrame).
+constexpr int kMassNameColumn = kToolLoadFrame;
 
-constexpr const char* kHarmonicNames[kJointCount][2][kMaxHarmonicOrder] = {
-    {{"h_j1_sin1", "h_j1_sin2", "h_j1_sin3"}, {"h_j1_cos1", "h_j1_cos2", "h_j1_cos3"}},
-    {{"h_j2_sin1", "h_j2_sin2", "h_j2_sin3"}, {"h_j2_cos1", "h_j2_cos2", "h_j2_cos3"}},
-    {{"h_j3_sin1", "h_j3_sin2", "h_j3_sin3"}, {"h_j3_cos1", "h_j3_cos2", "h_j3_cos3"}},
-    {{"h_j4_sin1", "h_j4_sin2", "h_j4_sin3"}, {"h_j4_cos1", "h_j4_cos2", "h_j4_cos3"}},
-    {{"h_j5_sin1", "h_j5_sin2", "h_j5_sin3"}, {"h_j5_cos1", "h_j5_cos2", "h_j5_cos3"}},
-    {{"h_j6_sin1", "h_j6_sin2", "h_j6_sin3"}, {"h_j6_cos1", "h_j6_cos2", "h_j6_cos3"}}};
-static_assert(kMaxHarmonicOrder == 3, "one name per joint, function and order");
+/// "c_j<joint>_o<frame>", "c_j<joint>_tool", "c_j<joint>_mass" for every joint and frame the build holds.
+struct TermNames {
+  detail::Name name[kMaxJoints][kMassNameColumn + 1];
+};
+constexpr TermNames term_names() {
+  TermNames names;
+  for (int j = 0; j < kMaxJoints; ++j) {
+    for (int frame = 1; frame <= kMaxJoints; ++frame)
+      names.name[j][frame - 1] = detail::numbered_name("c_j", j + 1, "_o", frame);
+    names.name[j][kToolLoadFrame - 1] = detail::numbered_name("c_j", j + 1, "_tool");
+    names.name[j][kMassNameColumn] = detail::numbered_name("c_j", j + 1, "_mass");
+  }
+  return names;
+}
+constexpr TermNames kTermNames = term_names();
+
+/// "h_j<joint>_sin<order>", "h_j<joint>_cos<order>" for every joint the build holds.
+struct HarmonicNames {
+  detail::Name name[kMaxJoints][2][kMaxHarmonicOrder];
+};
+constexpr HarmonicNames harmonic_names() {
+  HarmonicNames names;
+  for (int j = 0; j < kMaxJoints; ++j) {
+    for (int k = 1; k <= kMaxHarmonicOrder; ++k) {
+      names.name[j][0][k - 1] = detail::numbered_name("h_j", j + 1, "_sin", k);
+      names.name[j][1][k - 1] = detail::numbered_name("h_j", j + 1, "_cos", k);
+    }
+  }
+  return names;
+}
+constexpr HarmonicNames kHarmonicNames = harmonic_names();
 
 }  // namespace
 
-Status check_compliance(const ComplianceModel& compliance) {
+// Out of line: every RobotModel builds one, and the firmware's flash holds one copy.
+ArmMasses::ArmMasses() {
+  for (Vec3& com_m : link_com_m) com_m.setZero();
+}
+
+Status check_compliance(const ComplianceModel& compliance, const RobotModel& model) {
   if (compliance.term_count < 0 || compliance.term_count > kMaxComplianceTerms) return Status::invalid_argument;
   if (compliance.term_count == 0) return Status::ok;  // rigid: the other fields are not read
   if (compliance.load != ComplianceLoad::point && compliance.load != ComplianceLoad::arm_masses) {
@@ -107,10 +134,11 @@ Status check_compliance(const ComplianceModel& compliance) {
   if (std::fabs(compliance.gravity_direction.norm() - 1.0) > 1e-9) return Status::invalid_argument;
   for (int t = 0; t < compliance.term_count; ++t) {
     if (!math::is_finite(compliance.coefficient[t])) return Status::non_finite_input;
-    const Status term = check_term(compliance, compliance.terms[t]);
+    const Status term = check_term(compliance, model, compliance.terms[t]);
     if (term != Status::ok) return term;
   }
-  return compliance.load == ComplianceLoad::arm_masses ? check_masses(compliance.masses) : Status::ok;
+  return compliance.load == ComplianceLoad::arm_masses ? check_masses(compliance.masses, model.joint_count)
+                                                       : Status::ok;
 }
 
 Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_direction, ComplianceLoad load,
@@ -119,12 +147,13 @@ Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_dir
   const double norm = gravity_direction.norm();
   if (!(norm > 0.0)) return Status::invalid_argument;
   const Vec3 g = gravity_direction / norm;
-  RigidTransform frame[kJointCount + 1];
+  RigidTransform frame[kMaxJoints + 1];
   detail::rigid_frames(model, JointVector::Zero(), frame);
-  int horizontal[kJointCount];
+  int horizontal[kMaxJoints];
   int count = 0;
-  for (int j = 0; j < kJointCount; ++j) {
-    if (std::fabs(frame[j].rotation.col(2).dot(g)) < kHorizontalCos) horizontal[count++] = j;
+  for (int j = 0; j < model.joint_count; ++j) {
+    const bool revolute = joint_type(model, j) == JointType::revolute;
+    if (revolute && std::fabs(frame[j].rotation.col(2).dot(g)) < kHorizontalCos) horizontal[count++] = j;
   }
   ComplianceModel out = *compliance;
   for (double& c : out.coefficient) c = 0.0;
@@ -136,8 +165,9 @@ Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_dir
     if (count < 2) return Status::invalid_argument;
     const int shoulder = horizontal[0];
     const int elbow = horizontal[1];
-    // The wrist is DH frame 4 (a UR's), or the elbow's link end when the elbow comes later.
-    const int wrist = elbow + 1 > 4 ? elbow + 1 : 4;
+    // The wrist is DH frame 4 (a UR's), or the elbow's link end when the elbow comes later (and
+    // at most the flange of a shorter arm).
+    const int wrist = std::min(elbow + 1 > 4 ? elbow + 1 : 4, model.joint_count);
     constexpr int kPointTermCount = 4;
     const ComplianceTerm terms[kPointTermCount] = {
         {shoulder, shoulder + 1}, {shoulder, wrist}, {elbow, wrist}, {elbow, kToolLoadFrame}};
@@ -151,12 +181,13 @@ Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_dir
   return Status::ok;
 }
 
-Status append_harmonic_terms(int orders, ComplianceModel* compliance) {
+Status append_harmonic_terms(int orders, const RobotModel& model, ComplianceModel* compliance) {
   if (orders < 1 || orders > kMaxHarmonicOrder) return Status::invalid_argument;
-  const int added = kJointCount * orders * 2;
+  const int added = harmonic_term_count(model, orders);
   if (compliance->term_count < 0 || compliance->term_count + added > kMaxComplianceTerms)
     return Status::invalid_argument;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < model.joint_count; ++j) {
+    if (joint_type(model, j) != JointType::revolute) continue;
     for (int k = 1; k <= orders; ++k) {
       for (const JointTermKind kind : {JointTermKind::harmonic_sin, JointTermKind::harmonic_cos}) {
         compliance->terms[compliance->term_count] = ComplianceTerm{j, 0, kind, k};
@@ -167,10 +198,16 @@ Status append_harmonic_terms(int orders, ComplianceModel* compliance) {
   return Status::ok;
 }
 
+int harmonic_term_count(const RobotModel& model, int orders) {
+  int revolute = 0;
+  for (int j = 0; j < model.joint_count; ++j) revolute += joint_type(model, j) == JointType::revolute ? 1 : 0;
+  return 2 * revolute * orders;
+}
+
 Status nominal_arm_masses(RobotType type, ArmMasses* masses) {
   for (const PublishedArm& arm : kPublishedArms) {
     if (arm.type != type) continue;
-    for (int link = 0; link < kJointCount; ++link) {
+    for (int link = 0; link < kSixJoints; ++link) {
       masses->link_mass_kg[link] = arm.mass_kg[link];
       masses->link_com_m[link] = Vec3(arm.com_m[link][0], arm.com_m[link][1], arm.com_m[link][2]);
     }
@@ -182,14 +219,14 @@ Status nominal_arm_masses(RobotType type, ArmMasses* masses) {
 const char* compliance_term_name(const ComplianceModel& compliance, int t) {
   if (t < 0 || t >= compliance.term_count) return "?";
   const ComplianceTerm& term = compliance.terms[t];
-  if (term.joint < 0 || term.joint >= kJointCount) return "?";
+  if (term.joint < 0 || term.joint >= kMaxJoints) return "?";
   if (is_harmonic(term)) {
     if (term.order < 1 || term.order > kMaxHarmonicOrder) return "?";
-    return kHarmonicNames[term.joint][term.kind == JointTermKind::harmonic_sin ? 0 : 1][term.order - 1];
+    return kHarmonicNames.name[term.joint][term.kind == JointTermKind::harmonic_sin ? 0 : 1][term.order - 1].text;
   }
-  if (compliance.load == ComplianceLoad::arm_masses) return kTermNames[term.joint][kToolLoadFrame];
+  if (compliance.load == ComplianceLoad::arm_masses) return kTermNames.name[term.joint][kMassNameColumn].text;
   if (term.frame < 1 || term.frame > kToolLoadFrame) return "?";
-  return kTermNames[term.joint][term.frame - 1];
+  return kTermNames.name[term.joint][term.frame - 1].text;
 }
 
 }  // namespace hivecal

@@ -4,6 +4,15 @@
 
 namespace hivecal {
 
+bool readings_fit_joint_count(Span<const Sample> samples, int joint_count) {
+  for (const Sample& sample : samples) {
+    for (int j = joint_count; j < kMaxJoints; ++j) {
+      if (sample.q_rad(j) != 0.0) return false;
+    }
+  }
+  return true;
+}
+
 int target_count(Span<const Sample> samples) {
   int count = 1;
   for (const Sample& sample : samples) count = sample.target + 1 > count ? sample.target + 1 : count;

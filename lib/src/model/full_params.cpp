@@ -3,24 +3,41 @@
 #include <cmath>
 
 #include "hivecal/core/math.hpp"
+#include "core/names.hpp"
 
 namespace hivecal {
 namespace {
 
-/// The rigid model's parameters, then the joint terms' generic names up to the largest capacity.
-constexpr const char* kParamNames[kRigidParamCount + 40] = {
-    "theta1",       "d1",           "a1",           "alpha1",       "theta2",       "d2",           "a2",
-    "alpha2",       "theta3",       "d3",           "a3",           "alpha3",       "theta4",       "d4",
-    "a4",           "alpha4",       "theta5",       "d5",           "a5",           "alpha5",       "theta6",
-    "d6",           "a6",           "alpha6",       "tool_x",       "tool_y",       "tool_z",       "base_rx",
-    "base_ry",      "base_rz",      "base_tx",      "base_ty",      "base_tz",      "compliance1",  "compliance2",
-    "compliance3",  "compliance4",  "compliance5",  "compliance6",  "compliance7",  "compliance8",  "compliance9",
-    "compliance10", "compliance11", "compliance12", "compliance13", "compliance14", "compliance15", "compliance16",
-    "compliance17", "compliance18", "compliance19", "compliance20", "compliance21", "compliance22", "compliance23",
-    "compliance24", "compliance25", "compliance26", "compliance27", "compliance28", "compliance29", "compliance30",
-    "compliance31", "compliance32", "compliance33", "compliance34", "compliance35", "compliance36", "compliance37",
-    "compliance38", "compliance39", "compliance40"};
-static_assert(kMaxComplianceTerms <= 40, "one name per joint term");
+/// "theta<j>", "d<j>", "a<j>", "alpha<j>" of every joint the build holds, joint-major.
+struct DhNames {
+  detail::Name name[kMaxJoints * kParamsPerJoint];
+};
+constexpr DhNames dh_names() {
+  DhNames names;
+  for (int j = 0; j < kMaxJoints; ++j) {
+    names.name[model_param_index(j, DhField::theta_offset)] = detail::numbered_name("theta", j + 1);
+    names.name[model_param_index(j, DhField::d)] = detail::numbered_name("d", j + 1);
+    names.name[model_param_index(j, DhField::a)] = detail::numbered_name("a", j + 1);
+    names.name[model_param_index(j, DhField::alpha)] = detail::numbered_name("alpha", j + 1);
+  }
+  return names;
+}
+constexpr DhNames kDhNames = dh_names();
+
+/// "compliance1" .. of every joint term the build holds.
+struct TermNumberNames {
+  detail::Name name[kMaxComplianceTerms];
+};
+constexpr TermNumberNames term_number_names() {
+  TermNumberNames names;
+  for (int t = 0; t < kMaxComplianceTerms; ++t) names.name[t] = detail::numbered_name("compliance", t + 1);
+  return names;
+}
+constexpr TermNumberNames kTermNumberNames = term_number_names();
+
+/// The tool point's, then the base's six parameters, in index order.
+constexpr const char* kToolAndBaseNames[kToolParamCount + kBaseParamCount] = {
+    "tool_x", "tool_y", "tool_z", "base_rx", "base_ry", "base_rz", "base_tx", "base_ty", "base_tz"};
 
 constexpr const char* kOtherToolNames[kMaxTargets - 1][3] = {{"tool2_x", "tool2_y", "tool2_z"},
                                                              {"tool3_x", "tool3_y", "tool3_z"}};
@@ -50,19 +67,26 @@ int mask_indices(ParamMask mask, int (&index)[kFullParamCount]) {
 ParamMask harmonic_params_mask(const RobotModel& model) {
   ParamMask mask = 0;
   for (int t = 0; t < model.compliance.term_count; ++t) {
-    if (is_harmonic(model.compliance.terms[t])) mask |= param_bit(compliance_param_index(t));
+    if (is_harmonic(model.compliance.terms[t])) mask |= param_bit(compliance_param_index(model, t));
   }
   return mask;
 }
 
-const char* full_param_name(int index) {
-  if (index < 0 || index >= kFullParamCount) return "?";
-  return kParamNames[index];
+const char* full_param_name(int index, int joint_count) {
+  if (joint_count < 1 || joint_count > kMaxJoints || index < 0) return "?";
+  const int dh_count = joint_count * kParamsPerJoint;
+  if (index < dh_count) return kDhNames.name[index].text;
+  const int rigid_count = rigid_param_count(joint_count);
+  if (index < rigid_count) return kToolAndBaseNames[index - dh_count];
+  if (index < rigid_count + kMaxComplianceTerms) return kTermNumberNames.name[index - rigid_count].text;
+  return "?";
 }
 
 const char* full_param_name(int index, const RobotModel& model) {
-  if (index < kRigidParamCount || index >= kFullParamCount) return full_param_name(index);
-  return compliance_term_name(model.compliance, index - kRigidParamCount);
+  const int rigid_count = rigid_param_count(model);
+  if (index < rigid_count || index >= rigid_count + kMaxComplianceTerms)
+    return full_param_name(index, model.joint_count);
+  return compliance_term_name(model.compliance, index - rigid_count);
 }
 
 Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
@@ -85,12 +109,14 @@ Mat3 rotation_from_vector(const Vec3& rotation_vector_rad) {
 }
 
 void apply_full_increment(const FullParams& increment, RobotModel* model, RigidTransform* base_to_tracker) {
-  set_model_params(to_params(*model) + increment.head<kModelParamCount>(), model);
+  // The geometry entries of the increment are laid out as ModelParams for the model's joint
+  // count (the entries after them, the base's and the terms', are not read back).
+  set_model_params(to_params(*model) + increment.head<kMaxModelParamCount>(), model);
   for (int t = 0; t < model->compliance.term_count; ++t) {
-    model->compliance.coefficient[t] += increment(compliance_param_index(t));
+    model->compliance.coefficient[t] += increment(compliance_param_index(*model, t));
   }
-  const Vec3 rotation_rad = increment.segment<3>(base_rotation_param_index(0));
-  const Vec3 translation_m = increment.segment<3>(base_translation_param_index(0));
+  const Vec3 rotation_rad = increment.segment<3>(base_rotation_param_index(*model, 0));
+  const Vec3 translation_m = increment.segment<3>(base_translation_param_index(*model, 0));
   base_to_tracker->translation_m += base_to_tracker->rotation * translation_m;
   base_to_tracker->rotation = base_to_tracker->rotation * rotation_from_vector(rotation_rad);
 }

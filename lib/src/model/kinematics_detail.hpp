@@ -10,14 +10,15 @@
 namespace hivecal::detail {
 
 /// The rigid chain's frames at joint readings q (no compliance): frame[0] the base, frame[k]
-/// DH frame k (after joint k), frame[kJointCount] the flange, as fk_flange composes them.
-void rigid_frames(const RobotModel& model, const JointVector& q_rad, RigidTransform (&frame)[kJointCount + 1]);
+/// DH frame k (after joint k), frame[model.joint_count] the flange, as fk_flange composes them
+/// (the entries beyond it are not written).
+void rigid_frames(const RobotModel& model, const JointVector& q_rad, RigidTransform (&frame)[kMaxJoints + 1]);
 
-/// Where tool_point_jacobian_rows writes: column c of the 3 x 27 Jacobian goes to
+/// Where tool_point_jacobian_rows writes: column c of the 3 x model_param_count Jacobian goes to
 /// row[r][slot[c]], r = 0..2. Any permutation works; unwanted columns may point at scratch.
 struct JacobianRowsTarget {
   double* row[3];   ///< start of the x, y and z rows
-  const int* slot;  ///< position of each of the 27 model columns in the rows
+  const int* slot;  ///< position of each of the model columns in the rows
 };
 
 /// Width of the batched kernel: one sample per lane (lanes::kLanes).

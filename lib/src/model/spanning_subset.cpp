@@ -17,16 +17,17 @@ double wrapped_rad(double angle_rad) {
 
 }  // namespace
 
-double pose_distance_sq(const Sample& a, const Sample& b) {
+double pose_distance_sq(const Sample& a, const Sample& b, int joint_count) {
   double sum_rad2 = a.target == b.target ? 0.0 : math::kPi * math::kPi;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < joint_count; ++j) {
     const double difference_rad = wrapped_rad(a.q_rad[j] - b.q_rad[j]);
     sum_rad2 += difference_rad * difference_rad;
   }
   return sum_rad2;
 }
 
-std::size_t spanning_subset(Span<const Sample> samples, Span<double> scratch, Span<std::uint32_t> chosen) {
+std::size_t spanning_subset(Span<const Sample> samples, int joint_count, Span<double> scratch,
+                            Span<std::uint32_t> chosen) {
   const std::size_t count = std::min(samples.size(), chosen.size());
   if (count == 0 || scratch.size() < samples.size()) return 0;
   constexpr double kChosen = -1.0;  // below every distance: never chosen again
@@ -38,7 +39,8 @@ std::size_t spanning_subset(Span<const Sample> samples, Span<double> scratch, Sp
     // One pass: each sample's distance to the set (now with `latest`) and the farthest of them.
     std::size_t farthest = 0;
     for (std::size_t i = 0; i < samples.size(); ++i) {
-      if (scratch[i] != kChosen) scratch[i] = std::min(scratch[i], pose_distance_sq(samples[i], samples[latest]));
+      if (scratch[i] != kChosen)
+        scratch[i] = std::min(scratch[i], pose_distance_sq(samples[i], samples[latest], joint_count));
       if (scratch[i] > scratch[farthest]) farthest = i;  // strict: ties keep the lower position
     }
     chosen[k] = static_cast<std::uint32_t>(farthest);

@@ -8,7 +8,10 @@ namespace hivecal {
 namespace {
 
 using PoseError = Eigen::Matrix<double, 6, 1>;
-using PoseJacobian = Eigen::Matrix<double, 6, 6>;
+/// d(pose error) / d(joints): one column per joint of the model (fixed capacity, no heap).
+using PoseJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxJoints>;
+/// The damped normal matrix over the joints.
+using JointNormal = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxJoints>;
 
 /// Commanded minus reached: position [m], then the rotation vector of the remaining turn [rad].
 PoseError pose_error(const RobotModel& model, const RigidTransform& target, const JointVector& q_rad) {
@@ -19,14 +22,16 @@ PoseError pose_error(const RobotModel& model, const RigidTransform& target, cons
   return e;
 }
 
-/// Wraps each joint by whole turns into its limits where it can; false when a joint stays outside.
-bool wrap_into_limits(const JointLimits& limits, JointVector* q_rad) {
+/// Wraps each revolute joint by whole turns into its limits where it can; false when a joint
+/// stays outside.
+bool wrap_into_limits(const RobotModel& model, const JointLimits& limits, JointVector* q_rad) {
   constexpr double kTurn_rad = 2.0 * math::kPi;
   bool inside = true;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < model.joint_count; ++j) {
     double& q = (*q_rad)(j);
-    while (q > limits.upper_rad(j) && q - kTurn_rad >= limits.lower_rad(j)) q -= kTurn_rad;
-    while (q < limits.lower_rad(j) && q + kTurn_rad <= limits.upper_rad(j)) q += kTurn_rad;
+    const bool turns = joint_type(model, j) == JointType::revolute;
+    while (turns && q > limits.upper_rad(j) && q - kTurn_rad >= limits.lower_rad(j)) q -= kTurn_rad;
+    while (turns && q < limits.lower_rad(j) && q + kTurn_rad <= limits.upper_rad(j)) q += kTurn_rad;
     inside = inside && q >= limits.lower_rad(j) && q <= limits.upper_rad(j);
   }
   return inside;
@@ -64,25 +69,29 @@ Status solve_flange_pose(const RobotModel& model, const JointLimits& limits, con
                          const InverseKinematicsOptions& options, Random* random, JointVector* q_out) {
   if (random == nullptr || q_out == nullptr || !options_valid(options)) return Status::invalid_argument;
   if (!target.translation_m.allFinite() || !target.rotation.allFinite()) return Status::non_finite_input;
-  constexpr double kStep_rad = 1e-7;  // numeric Jacobian's step
+  constexpr double kStep = 1e-7;  // numeric Jacobian's step [rad] or [m]
+  const int joints = model.joint_count;
   for (int start = 0; start < options.starts; ++start) {
     JointVector q;
-    for (int j = 0; j < kJointCount; ++j) q(j) = random->uniform(limits.lower_rad(j), limits.upper_rad(j));
+    for (int j = 0; j < joints; ++j) q(j) = random->uniform(limits.lower_rad(j), limits.upper_rad(j));
     for (int iteration = 0; iteration < options.iterations; ++iteration) {
       const PoseError e = pose_error(model, target, q);
       if (e.head<3>().norm() < options.position_tolerance_m && e.tail<3>().norm() < options.angle_tolerance_rad) {
-        if (!wrap_into_limits(limits, &q)) break;  // this start's solution is outside: the next start
+        if (!wrap_into_limits(model, limits, &q)) break;  // this start's solution is outside: the next start
         *q_out = q;
         return Status::ok;
       }
-      PoseJacobian jacobian;
-      for (int j = 0; j < kJointCount; ++j) {
+      // A redundant arm (more than six joints) has many solutions: the damping picks the
+      // smallest step towards one of them.
+      PoseJacobian jacobian(6, joints);
+      for (int j = 0; j < joints; ++j) {
         JointVector moved = q;
-        moved(j) += kStep_rad;
-        jacobian.col(j) = (e - pose_error(model, target, moved)) / kStep_rad;
+        moved(j) += kStep;
+        jacobian.col(j) = (e - pose_error(model, target, moved)) / kStep;
       }
-      const PoseJacobian normal = jacobian.transpose() * jacobian + options.damping * PoseJacobian::Identity();
-      q += normal.ldlt().solve(jacobian.transpose() * e);
+      const JointNormal normal =
+          jacobian.transpose() * jacobian + options.damping * JointNormal::Identity(joints, joints);
+      q.head(joints) += normal.ldlt().solve(jacobian.transpose() * e);
     }
   }
   return Status::not_converged;

@@ -30,38 +30,42 @@ bool point_allowed(const PlanConstraints& c, const Vec3& p_m) {
   return p_m.z() >= c.floor_z_m && radial2 >= c.keep_out_radius_m * c.keep_out_radius_m;
 }
 
-bool within_limits(const JointLimits& limits, const JointVector& q) {
-  for (int j = 0; j < kJointCount; ++j) {
+bool within_limits(const JointLimits& limits, const JointVector& q, int joint_count) {
+  for (int j = 0; j < joint_count; ++j) {
     if (!(q(j) >= limits.lower_rad(j) && q(j) <= limits.upper_rad(j))) return false;
   }
   return true;
 }
 
-bool limits_valid(const JointLimits& limits) {
+bool limits_valid(const JointLimits& limits, int joint_count) {
   if (!all_finite(limits.lower_rad) || !all_finite(limits.upper_rad)) return false;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < joint_count; ++j) {
     if (!(limits.lower_rad(j) < limits.upper_rad(j))) return false;
   }
   return true;
 }
 
-bool options_valid(const PlanOptions& o) {
+/// Whether the options can plan for `model`: tool_down sets a UR's wrist (point_wrist_down), so
+/// it needs a six-joint arm.
+bool options_valid(const PlanOptions& o, const RobotModel& model) {
   const PlanConstraints& c = o.constraints;
-  const bool cell_ok = limits_valid(c.limits) && all_finite(c.tracker_m) && c.acceptance_rad > 0.0 &&
+  const bool orientation_ok = c.orientation != PlanOrientation::tool_down || model.joint_count == kSixJoints;
+  const bool cell_ok = limits_valid(c.limits, model.joint_count) && all_finite(c.tracker_m) && c.acceptance_rad > 0.0 &&
                        c.acceptance_rad <= math::kPi && math::is_finite(c.floor_z_m) && c.keep_out_radius_m >= 0.0 &&
                        math::is_finite(c.keep_out_radius_m) && c.tool_down_tolerance_rad > 0.0 &&
                        c.tool_down_tolerance_rad <= math::kPi;
   const bool counts_ok = o.pose_count >= 1 && o.pose_count <= kPlanPoseCapacity && o.candidate_count >= o.pose_count &&
                          o.candidate_count <= kPlanCandidateCapacity;
-  const bool mask_ok = o.free_mask != 0 && (o.free_mask & ~kValidParamsMask) == 0;
+  const bool mask_ok = o.free_mask != 0 && (o.free_mask & ~valid_params_mask(model)) == 0;
   const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
   const bool timing_ok = o.noise_m > 0.0 && math::is_finite(o.noise_m) && o.joint_speed_rad_s > 0.0 &&
                          math::is_finite(o.joint_speed_rad_s) && o.joint_acceleration_rad_s2 > 0.0 &&
                          math::is_finite(o.joint_acceleration_rad_s2) && o.dwell_s >= 0.0 && math::is_finite(o.dwell_s);
   const bool prior_ok = o.prior_length_m >= 0.0 && math::is_finite(o.prior_length_m) && o.prior_angle_rad >= 0.0 &&
                         math::is_finite(o.prior_angle_rad);
-  return cell_ok && counts_ok && mask_ok && threshold_ok && timing_ok && prior_ok && o.max_exchange_passes >= 0 &&
-         o.restarts >= 1 && o.refine_passes >= 0;
+  return orientation_ok && cell_ok && counts_ok && mask_ok && threshold_ok && timing_ok && prior_ok &&
+         o.max_exchange_passes >= 0 && o.restarts >= 1 && o.refine_passes >= 0 &&
+         check_joint_layout(model) == Status::ok;
 }
 
 /// Shifts q by whole turns into [lower, upper] when a turn fits (q4 of the tool-down wrist).
@@ -79,9 +83,9 @@ void point_wrist_down(const PlanConstraints& c, JointVector* q) {
 }
 
 /// One seeded draw: every joint uniform within its limits; tool_down overrides q4 and q5.
-JointVector draw_joints(const PlanConstraints& c, std::size_t branch, Random* random) {
+JointVector draw_joints(const PlanConstraints& c, int joint_count, std::size_t branch, Random* random) {
   JointVector q;
-  for (int j = 0; j < kJointCount; ++j) q(j) = random->uniform(c.limits.lower_rad(j), c.limits.upper_rad(j));
+  for (int j = 0; j < joint_count; ++j) q(j) = random->uniform(c.limits.lower_rad(j), c.limits.upper_rad(j));
   if (c.orientation == PlanOrientation::tool_down) {
     q(4) = branch % 2 == 0 ? -math::kHalfPi : math::kHalfPi;
     point_wrist_down(c, &q);
@@ -339,7 +343,7 @@ double refine_pose(const RobotModel& model, const RobotModel& objective, const P
     bool improved = true;
     while (improved) {
       improved = false;
-      for (int j = 0; j < kJointCount; ++j) {
+      for (int j = 0; j < model.joint_count; ++j) {
         if (down && (j == 3 || j == 4)) continue;
         for (int sign = -1; sign <= 1; sign += 2) {
           Sample trial = *pose;
@@ -459,14 +463,14 @@ FullParams pool_scale(const NormalMatrix& jtj, std::size_t count, ParamMask mask
   return scale;
 }
 
-/// The diagonal added to the scaled information: the prior precision of each parameter
-/// (noise / prior sigma)^2 in the selection's scale, at least kRidge; the base has no prior.
-FullParams prior_ridge(const NormalMatrix& jtj, const FullParams& scale, const PlanOptions& o) {
+/// The diagonal added to the scaled information: the prior precision of each geometry parameter
+/// of `model` (noise / prior sigma)^2 in the selection's scale, at least kRidge; the base has no
+/// prior.
+FullParams prior_ridge(const RobotModel& model, const NormalMatrix& jtj, const FullParams& scale,
+                       const PlanOptions& o) {
   FullParams ridge = FullParams::Constant(kRidge);
-  for (int k = 0; k < kModelParamCount; ++k) {
-    const bool is_angle =
-        k < kJointCount * kParamsPerJoint && (k % kParamsPerJoint == static_cast<int>(DhField::theta_offset) ||
-                                              k % kParamsPerJoint == static_cast<int>(DhField::alpha));
+  for (int k = 0; k < model_param_count(model); ++k) {
+    const bool is_angle = model_param_is_angle(k, model.joint_count);
     const double prior = is_angle ? o.prior_angle_rad : o.prior_length_m;
     if (prior > 0.0 && jtj(k, k) > 0.0) {
       const double precision = (o.noise_m / prior) * (o.noise_m / prior);  // in units of the noise's
@@ -553,15 +557,16 @@ const char* plan_criterion_name(PlanCriterion criterion) {
 }
 
 JointLimits default_joint_limits(RobotType type) {
-  (void)type;  // every built-in UR type has the same controller limits
   JointLimits limits;
+  if (maker_joint_limits(type, &limits.lower_rad, &limits.upper_rad) == Status::ok) return limits;
+  // every built-in UR type has the same controller limits
   limits.lower_rad(2) = -math::kPi;
   limits.upper_rad(2) = math::kPi;
   return limits;
 }
 
 bool pose_meets_constraints(const RobotModel& model, const PlanConstraints& c, const JointVector& q_rad) {
-  if (!within_limits(c.limits, q_rad)) return false;
+  if (!within_limits(c.limits, q_rad, model.joint_count)) return false;
   const RigidTransform flange = fk_flange(model, q_rad);
   const Vec3 reflector = flange.apply(model.tool_m);
   if (!point_allowed(c, reflector) || !point_allowed(c, flange.translation_m)) return false;
@@ -580,13 +585,13 @@ bool pose_meets_constraints(const RobotModel& model, const PlanConstraints& c, c
 
 Status generate_candidates(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
                            std::size_t* attempts) {
-  if (!options_valid(options)) return Status::invalid_argument;
+  if (!options_valid(options, model)) return Status::invalid_argument;
   Random random(options.seed);
   const std::size_t limit = kPlanAttemptsPerCandidate * options.candidate_count;
   std::size_t found = 0;
   std::size_t draws = 0;
   while (found < options.candidate_count && draws < limit) {
-    const JointVector q = draw_joints(options.constraints, draws, &random);
+    const JointVector q = draw_joints(options.constraints, model.joint_count, draws, &random);
     ++draws;
     if (!pose_meets_constraints(model, options.constraints, q)) continue;
     workspace->candidates[found].q_rad = q;
@@ -653,7 +658,7 @@ double order_poses(JointVector* poses, std::size_t count, const PlanOptions& opt
 }
 
 Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace, PlanResult* result) {
-  if (!options_valid(options)) return Status::invalid_argument;
+  if (!options_valid(options, model)) return Status::invalid_argument;
   if (!all_finite(to_params(model))) return Status::non_finite_input;
   *result = PlanResult{};
   Status status = Status::ok;
@@ -687,7 +692,7 @@ Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWor
   const ParamMask mask = result->objective.kept_mask;
   const FullParams scale = pool_scale(workspace->normal.jtwj, options.candidate_count, mask);
   if (options.criterion != PlanCriterion::i_optimal_workspace) workspace->pool_information = workspace->normal.jtwj;
-  workspace->ridge = prior_ridge(workspace->normal.jtwj, scale, options);
+  workspace->ridge = prior_ridge(model, workspace->normal.jtwj, scale, options);
   mean_scaled_information(workspace->pool_information, options.candidate_count, scale, mask,
                           &workspace->pool_information);
 

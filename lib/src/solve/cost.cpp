@@ -26,10 +26,4 @@ Status evaluate_cost(const RobotModel& model, Span<const Sample> samples, CostKi
   return Status::ok;
 }
 
-Status evaluate_cost(const ModelParams& params, Span<const Sample> samples, CostKind kind, BaseFrame base_frame,
-                     RigidTransform* base_to_tracker, double* cost) {
-  if (!all_finite(params)) return Status::non_finite_input;
-  return evaluate_cost(from_params(params), samples, kind, base_frame, base_to_tracker, cost);
-}
-
 }  // namespace hivecal

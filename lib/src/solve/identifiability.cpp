@@ -18,7 +18,7 @@ constexpr double kInactiveEigenvalue = -1.0;
 // basis) for a parameter to be dropped. Parameters are tried from the lowest index: a DH
 // parameter before the tool, the tool before the base, d2 and d3 before d4 (the tool and
 // base frame are what a user measures and reuses; d4 carries the parallel-axis sum). The
-// leverages square-sum to the null dimension, so some parameter always has >= 1/sqrt(33).
+// leverages square-sum to the null dimension, so some parameter always has >= 1/sqrt(p).
 constexpr double kMinDropLeverage = 0.1;
 // Components smaller than this (relative to the dropped one) are not worth reporting.
 constexpr double kReportedComponentFloor = 1e-3;
@@ -251,7 +251,7 @@ void drop_null_directions(IdentifiabilityWorkspace* ws, int null_count, double s
 }
 
 /// Drops and reports the free parameters whose column norm is below threshold * the largest
-/// column of all 33 (the base translation columns, |e_k| per sample, are among them when
+/// column of all (the base translation columns, |e_k| per sample, are among them when
 /// accumulated, so a single free parameter is still judged against a physical scale);
 /// returns the free ones left.
 ParamMask drop_no_effect(const NormalMatrix& jtwj, ParamMask free_mask, double threshold,
@@ -286,7 +286,7 @@ bool certified_without_null(IdentifiabilityWorkspace* ws, ParamMask mask, double
 
 Status check_arguments(const NormalMatrix& jtwj, ParamMask free_mask, double threshold) {
   if (!(threshold > 0.0 && threshold < 1.0)) return Status::invalid_argument;
-  if (free_mask == 0 || (free_mask & ~kValidParamsMask) != 0) return Status::invalid_argument;
+  if (free_mask == 0 || (free_mask & ~valid_params_mask(kMaxJoints)) != 0) return Status::invalid_argument;
   if (!all_finite(jtwj)) return Status::non_finite_input;
   return Status::ok;
 }

@@ -24,13 +24,13 @@ constexpr double kSamePose_rad = 1e-9;
 // by less than this share: the prior's pull on a parameter is proportional to it [-].
 constexpr double kPriorVarianceTolerance = 1e-3;
 
-bool options_valid(const LmOptions& o) {
+bool options_valid(const LmOptions& o, const RobotModel& start) {
   const bool tolerances_ok = o.cost_tolerance >= 0.0 && o.step_tolerance_m >= 0.0 && o.gradient_tolerance >= 0.0;
   const bool damping_ok = o.initial_damping > 0.0 && o.initial_damping < kMaxDamping;
   const bool huber_ok = o.huber_threshold_m >= 0.0 && math::is_finite(o.huber_threshold_m);
   const bool threshold_ok = o.identifiability_threshold > 0.0 && o.identifiability_threshold < 1.0;
   const bool mask_ok =
-      o.params != LmParamSet::custom || (o.custom_mask != 0 && (o.custom_mask & ~kValidParamsMask) == 0);
+      o.params != LmParamSet::custom || (o.custom_mask != 0 && (o.custom_mask & ~valid_params_mask(start)) == 0);
   const bool joint_noise_ok = o.joint_sigma_rad >= 0.0 && o.joint_sigma_rad < 1.0 &&
                               (o.joint_sigma_rad == 0.0 || (o.position_sigma_m > 0.0 && o.position_sigma_m < 1.0));
   const LmPriorTolerances& t = o.prior.tolerance;
@@ -57,8 +57,8 @@ using Point = LmPoint;
 
 /// Whether the run estimates the other targets' tool points: with target 1's tool_x, or
 /// when asked to (the job's stage estimates the tool point even after fixing tool_x).
-bool other_tools_free(const LmOptions& options, ParamMask free_mask) {
-  return options.other_target_tools || mask_has(free_mask, tool_param_index(0));
+bool other_tools_free(const LmOptions& options, ParamMask free_mask, const RobotModel& model) {
+  return options.other_target_tools || mask_has(free_mask, tool_param_index(model, 0));
 }
 
 /// The Huber threshold to use at `point`: fixed, or from the median residual norm.
@@ -147,7 +147,9 @@ double scaled_quadratic(const NormalMatrix& jtwj, const FullParams& scale, Param
 /// Checks every input; fills *free_mask.
 Status validate_inputs(const RobotModel& start_model, const RigidTransform* start_base, Span<const Sample> samples,
                        const LmOptions& options, ParamMask* free_mask) {
-  if (!options_valid(options)) return Status::invalid_argument;
+  if (check_joint_layout(start_model) != Status::ok || !options_valid(options, start_model)) {
+    return Status::invalid_argument;
+  }
   if (samples.empty()) return Status::dataset_empty;
   *free_mask = lm_param_mask(options.params, options.custom_mask, start_model);
   // No floor beyond the base frame: with few samples the identifiability analysis keeps fewer
@@ -155,22 +157,23 @@ Status validate_inputs(const RobotModel& start_model, const RigidTransform* star
   const int determinable = std::min(mask_count(*free_mask), kBaseParamCount);
   if (3 * samples.size() <= static_cast<std::size_t>(determinable)) return Status::too_few_samples;
   if (!all_finite(to_params(start_model))) return Status::non_finite_input;
-  const Status compliance = check_compliance(start_model.compliance);
+  const Status compliance = check_compliance(start_model.compliance, start_model);
   if (compliance != Status::ok) return compliance;
   if (start_base != nullptr && !transform_finite(*start_base)) return Status::non_finite_input;
   for (const Sample& sample : samples) {
     if (!all_finite(sample.q_rad) || !all_finite(sample.point_m)) return Status::non_finite_input;
     if (sample.target < 0 || sample.target >= kMaxTargets) return Status::invalid_argument;
   }
+  if (!readings_fit_joint_count(samples, start_model.joint_count)) return Status::joint_count_mismatch;
   if (!poses_distinct(samples)) return Status::poses_not_distinct;
   return Status::ok;
 }
 
 /// Fills `storage` with the joint trig of every sample and returns the filled part; empty
 /// when it cannot hold them all.
-Span<const JointTrig> store_joint_trig(Span<const Sample> samples, Span<JointTrig> storage) {
+Span<const JointTrig> store_joint_trig(const RobotModel& model, Span<const Sample> samples, Span<JointTrig> storage) {
   if (storage.size() < samples.size()) return {};
-  for (std::size_t i = 0; i < samples.size(); ++i) storage[i] = joint_trig(samples[i].q_rad);
+  for (std::size_t i = 0; i < samples.size(); ++i) storage[i] = joint_trig(model, samples[i].q_rad);
   return Span<const JointTrig>(storage.data(), samples.size());
 }
 
@@ -231,7 +234,7 @@ double prior_weight(const Run& run, int i) {
   if (!(run.prior_variance_m2 > 0.0)) return;
   const ModelParams p = to_params(at.model);
   const ModelParams nominal = to_params(*run.options.prior.nominal);
-  for (int i = 0; i < kModelParamCount; ++i) (*gradient)(i) += prior_weight(run, i) * (p(i) - nominal(i));
+  for (int i = 0; i < model_param_count(at.model); ++i) (*gradient)(i) += prior_weight(run, i) * (p(i) - nominal(i));
 }
 
 /// The prior's share of the cost at `at`: sum of weight (p - nominal)^2 [m^2].
@@ -240,14 +243,15 @@ double prior_cost(const Run& run, const Point& at) {
   const ModelParams p = to_params(at.model);
   const ModelParams nominal = to_params(*run.options.prior.nominal);
   double cost_m2 = 0.0;
-  for (int i = 0; i < kModelParamCount; ++i)
+  for (int i = 0; i < model_param_count(at.model); ++i)
     cost_m2 += prior_weight(run, i) * (p(i) - nominal(i)) * (p(i) - nominal(i));
   return cost_m2;
 }
 
 /// Adds the prior's weights to the diagonal of a system scaled by `scale` over the kept parameters.
 void add_prior_diagonal(const Run& run, const FullParams& scale, NormalMatrix* system) {
-  for (int i = 0; i < kModelParamCount; ++i) (*system)(i, i) += prior_weight(run, i) * scale(i) * scale(i);
+  for (int i = 0; i < model_param_count(run.point.model); ++i)
+    (*system)(i, i) += prior_weight(run, i) * scale(i) * scale(i);
 }
 
 /// Residual degrees of freedom of normal equations over `kept`: 3N - p - 3 per eliminated target.
@@ -299,10 +303,10 @@ Status accumulate(const Run& run, const Point& at, NormalEquations* out) {
   ParamMask columns = run.kept;
   if (!run.reanalysed) {
     columns = run.free_mask;
-    for (int axis = 0; axis < 3; ++axis) columns |= param_bit(base_translation_param_index(axis));
+    for (int axis = 0; axis < 3; ++axis) columns |= param_bit(base_translation_param_index(at.model, axis));
   }
   // The other targets' tool points are free with target 1's (not in the link-length set).
-  if (other_tools_free(run.options, run.free_mask)) columns |= kOtherTargetTools;
+  if (other_tools_free(run.options, run.free_mask, at.model)) columns |= kOtherTargetTools;
   return accumulate_normal_equations(at.model, at.base, run.samples, at.loss, out, columns, run.sample_trig);
 }
 
@@ -336,7 +340,7 @@ inline Status analyse(Run* run, IdentifiabilityOutput output) {
   ModelParams params = to_params(*model);
   const ModelParams start_params = to_params(start);
   bool changed = false;
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(*model); ++i) {
     if (!mask_has(lost, i) || params(i) == start_params(i)) continue;
     params(i) = start_params(i);
     changed = true;
@@ -344,7 +348,7 @@ inline Status analyse(Run* run, IdentifiabilityOutput output) {
   if (changed) set_model_params(params, model);
   for (int t = 0; t < model->compliance.term_count; ++t) {
     double& coefficient = model->compliance.coefficient[t];
-    if (!mask_has(lost, compliance_param_index(t)) || coefficient == start.compliance.coefficient[t]) continue;
+    if (!mask_has(lost, compliance_param_index(*model, t)) || coefficient == start.compliance.coefficient[t]) continue;
     coefficient = start.compliance.coefficient[t];
     changed = true;
   }
@@ -420,7 +424,8 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
     return false;
   }
   double model_decrease = scaled_quadratic(eq.jtwj, scale, run->kept, scaled_step);
-  for (int i = 0; i < kModelParamCount; ++i) model_decrease += prior_weight(*run, i) * step(i) * step(i);
+  for (int i = 0; i < model_param_count(run->point.model); ++i)
+    model_decrease += prior_weight(*run, i) * step(i) * step(i);
   if (std::sqrt(model_decrease / static_cast<double>(eq.count)) < options.step_tolerance_m) {
     *termination = LmTermination::step_size;
     return false;
@@ -494,7 +499,7 @@ Status start(const RigidTransform* start_base_to_tracker, Run* run) {
   Point& point = run->point;
   if (start_base_to_tracker != nullptr) {
     point.base = *start_base_to_tracker;
-  } else if (other_tools_free(run->options, run->free_mask)) {
+  } else if (other_tools_free(run->options, run->free_mask, point.model)) {
     // The other targets' tool points are rarely known: least squares for the start geometry.
     const Status fit = fit_base_and_target_tools(run->samples, &point.model, &point.base);
     if (fit != Status::ok) return fit;
@@ -571,16 +576,16 @@ const char* lm_termination_name(LmTermination termination) {
   return "cancelled";
 }
 
-double prior_tolerance(const LmPriorTolerances& tolerance, int index) {
-  if (index < 0 || index >= kModelParamCount) return 0.0;
-  if (index >= kDhParamCount) return tolerance.tool_m;
+double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int index) {
+  if (index < 0 || index >= model_param_count(joint_count)) return 0.0;
+  if (index >= kParamsPerJoint * joint_count) return tolerance.tool_m;
   const int field = index % kParamsPerJoint;
   const bool angle = field == static_cast<int>(DhField::theta_offset) || field == static_cast<int>(DhField::alpha);
   return angle ? tolerance.dh_angle_rad : tolerance.dh_length_m;
 }
 
 double lm_prior_sigma(const LmPrior& prior, int index) {
-  return prior.nominal == nullptr ? 0.0 : prior_tolerance(prior.tolerance, index);
+  return prior.nominal == nullptr ? 0.0 : prior_tolerance(prior.tolerance, prior.nominal->joint_count, index);
 }
 
 LmPrior lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerance) {
@@ -590,15 +595,15 @@ LmPrior lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerance) 
 
 ParamMask lm_param_mask(LmParamSet set, ParamMask custom, const RobotModel& start) {
   switch (set) {
-    case LmParamSet::full: return kAllParamsMask;
-    case LmParamSet::full_compliance: return kAllParamsMask | compliance_params_mask(start.compliance.term_count);
-    case LmParamSet::custom: return custom & kValidParamsMask;
+    case LmParamSet::full: return rigid_params_mask(start);
+    case LmParamSet::full_compliance: return rigid_params_mask(start) | compliance_params_mask(start);
+    case LmParamSet::custom: return custom & valid_params_mask(start);
     case LmParamSet::link_lengths: break;
   }
   const LinkLengthSet lengths = link_length_set(start);
   ParamMask mask = 0;
   for (std::size_t k = 0; k < lengths.count; ++k) mask |= param_bit(lengths.param_index[k]);
-  for (int i = 0; i < kBaseParamCount; ++i) mask |= param_bit(kModelParamCount + i);
+  for (int i = 0; i < kBaseParamCount; ++i) mask |= param_bit(model_param_count(start) + i);
   return mask;
 }
 
@@ -610,7 +615,8 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   if (status != Status::ok) return status;
   const std::size_t blocks = workspace->target_blocks.size() / 2;  // per NormalEquations
   workspace->normal.targets = workspace->target_blocks.subspan(0, blocks);
-  if (other_tools_free(options, free_mask) && static_cast<std::size_t>(target_count(samples) - 1) > blocks) {
+  if (other_tools_free(options, free_mask, start_model) &&
+      static_cast<std::size_t>(target_count(samples) - 1) > blocks) {
     return Status::dimension_out_of_range;  // the workspace has no room for these targets' tool points
   }
   clear_result(result);
@@ -625,7 +631,7 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
           free_mask,
           0,
           workspace->point,
-          store_joint_trig(samples, workspace->joint_trig),
+          store_joint_trig(start_model, samples, workspace->joint_trig),
           &workspace->normal,
           nullptr,
           workspace->target_blocks.subspan(blocks, blocks),

@@ -32,14 +32,19 @@ void small_sincos(double x, double* sin_x, double* cos_x) {
 /// For a model with compliance terms: the joint trig of a sample's deflected pose (where the
 /// kernel differentiates) from the readings' joint trig `reading` and the deflection dq: the
 /// angle sums with sin and cos of dq (a series for a small one; a reading without a term keeps
-/// its bits), and the terms' basis (whose harmonics use `reading` too). No sincos per sample
-/// when `reading` is stored; `reading` is joint_trig(q) either way, so the bits are the same.
+/// its bits; a prismatic joint's slide moved by dq), and the terms' basis (whose harmonics use
+/// `reading` too). No sincos per sample when `reading` is stored; `reading` is joint_trig(q)
+/// either way, so the bits are the same.
 JointTrig deflected_trig(const RobotModel& model, const JointVector& q_rad, const JointTrig& reading,
                          TermBasis* basis) {
   const JointVector dq = compliance_deflection(model, q_rad, *basis, &reading);
   JointTrig trig = reading;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < model.joint_count; ++j) {
     if (dq(j) == 0.0) continue;
+    if (joint_type(model, j) == JointType::prismatic) {
+      trig.slide_m[j] = reading.slide_m[j] + dq(j);  // the bits of joint_trig(q + dq)
+      continue;
+    }
     double sin_dq = 0.0;
     double cos_dq = 1.0;
     if (std::fabs(dq(j)) <= kSmallDeflection_rad) {
@@ -53,11 +58,20 @@ JointTrig deflected_trig(const RobotModel& model, const JointVector& q_rad, cons
   return trig;
 }
 
+/// The columns a model of `model`'s joint count has: its rigid parameters and the build's joint
+/// terms (every_column of its sample_rows_context; 73 for six joints and 40 terms).
+int model_column_count(const RobotModel& model) {
+  return rigid_param_count(model) + kMaxComplianceTerms;
+}
+
 /// IndexList's unlisted columns are scratch that the normal-equation update never reads.
 using detail::IndexList;
 
-IndexList indices_of(ParamMask mask) {
+IndexList indices_of(ParamMask mask, int joint_count) {
   IndexList list;
+  list.base_rotation = base_rotation_param_index(joint_count, 0);
+  list.base_translation = base_translation_param_index(joint_count, 0);
+  list.base_end = rigid_param_count(joint_count);
   list.count = mask_indices(mask, list.index);
   int unlisted = list.count;
   for (int k = 0; k < list.count; ++k) list.slot[list.index[k]] = k;
@@ -116,18 +130,22 @@ void kernel_rows(const RobotModel& model, const ModelTrig& trig, const JointTrig
 }
 
 /// The compliance columns of one sample's rows for the terms the model has: term t's is
-/// d(point)/d(theta_offset of its joint), taken at the deflected pose, times the term's basis
+/// d(point)/d(its joint's reading: the theta_offset column of a revolute joint, the d column of a
+/// prismatic one), taken at the deflected pose, times the term's basis
 /// (the basis's own dependence on the geometry is second order and left out,
 /// docs/solver-lm.md); 0 for every term when `basis` is null (a rigid model). The slots of the
 /// terms a model does not have are never written: the row buffers start zeroed, which keeps
 /// them 0 (a build holds room for 40 terms; writing 40 zeros per sample cost the update a
 /// tenth of its time).
-void write_compliance_columns(const ComplianceModel& compliance, const TermBasis* basis, const IndexList& columns,
+void write_compliance_columns(const RobotModel& model, const TermBasis* basis, const IndexList& columns,
                               double (*rows)[kFullParamCount]) {
+  const ComplianceModel& compliance = model.compliance;
   for (int t = 0; t < compliance.term_count; ++t) {
-    const int slot = columns.slot[compliance_param_index(t)];
-    const int theta_slot = columns.slot[model_param_index(compliance.terms[t].joint, DhField::theta_offset)];
-    for (int r = 0; r < 3; ++r) rows[r][slot] = basis != nullptr ? rows[r][theta_slot] * (*basis)[t] : 0.0;
+    const int joint = compliance.terms[t].joint;
+    const int slot = columns.slot[compliance_param_index(model, t)];
+    const DhField variable = joint_type(model, joint) == JointType::revolute ? DhField::theta_offset : DhField::d;
+    const int variable_slot = columns.slot[model_param_index(joint, variable)];
+    for (int r = 0; r < 3; ++r) rows[r][slot] = basis != nullptr ? rows[r][variable_slot] * (*basis)[t] : 0.0;
   }
 }
 
@@ -150,12 +168,11 @@ void add_rows(const RobotModel& model, const ModelTrig& trig, const RigidTransfo
   Vec3 point_m[kWidth];
   kernel_rows<kWidth>(model, trig, lane_trig, target, point_m);
   for (int k = 0; k < static_cast<int>(kWidth); ++k) {
-    write_compliance_columns(model.compliance, basis != nullptr && k < count ? &basis[k] : nullptr, columns,
-                             rows + 3 * k);
+    write_compliance_columns(model, basis != nullptr && k < count ? &basis[k] : nullptr, columns, rows + 3 * k);
   }
   // d(Exp(w) p)/dw_k at w = 0 is e_k x p; the translation increment is along the base axes.
-  const int* rotation_slot = columns.slot + base_rotation_param_index(0);
-  const int* translation_slot = columns.slot + base_translation_param_index(0);
+  const int* rotation_slot = columns.slot + columns.base_rotation;
+  const int* translation_slot = columns.slot + columns.base_translation;
   for (int k = 0; k < count; ++k) {
     const Vec3& p = point_m[k];
     const double moment[3][3] = {{0.0, -p.z(), p.y()}, {p.z(), 0.0, -p.x()}, {-p.y(), p.x(), 0.0}};  // e_a x p
@@ -271,10 +288,11 @@ __attribute__((always_inline)) inline void weigh_columns(const double (*rows)[kF
 /// entries skip that row. The same sums without exact zeros, so the same bits.
 template <class Lane>
 __attribute__((always_inline)) inline void add_column(const double* const (&rows)[kPassBatches][kBatchRows],
-                                                      const double (&w)[kPassBatches][kBatchRows], int parameter, int l,
-                                                      double* column) {
-  if (parameter >= base_translation_param_index(0) && parameter < kRigidParamCount) {  // e_axis: one row per sample
-    const int axis = parameter - base_translation_param_index(0);
+                                                      const double (&w)[kPassBatches][kBatchRows],
+                                                      const IndexList& columns, int l, double* column) {
+  const int parameter = columns.index[l];
+  if (parameter >= columns.base_translation && parameter < columns.base_end) {  // e_axis: one row per sample
+    const int axis = parameter - columns.base_translation;
     const double* axis_rows[kPassBatches][kBatchSamples];
     double axis_weights[kPassBatches][kBatchSamples];
     for (int b = 0; b < kPassBatches; ++b) {
@@ -284,9 +302,9 @@ __attribute__((always_inline)) inline void add_column(const double* const (&rows
       }
     }
     add_weighted_rows<Lane>(axis_rows, axis_weights, l + 1, column);
-  } else if (parameter >= base_rotation_param_index(0) &&
-             parameter < base_translation_param_index(0)) {  // e_axis x p: 0 on the axis' row
-    const int axis = parameter - base_rotation_param_index(0);
+  } else if (parameter >= columns.base_rotation &&
+             parameter < columns.base_translation) {  // e_axis x p: 0 on the axis' row
+    const int axis = parameter - columns.base_rotation;
     const double* other_rows[kPassBatches][2 * kBatchSamples];
     double other_weights[kPassBatches][2 * kBatchSamples];
     for (int b = 0; b < kPassBatches; ++b) {
@@ -347,7 +365,7 @@ __attribute__((always_inline)) inline void flush_pass(RowBatch* batch, int first
         weigh_column(rows, weight, residual_m, l, w, gradient);
       }
       for (int b = 0; b < kPassBatches; ++b) eq->jtwr(l) += gradient[b];
-      add_column<Lane>(pass_rows, w, columns.index[l], l, compact + l * kFullParamCount);
+      add_column<Lane>(pass_rows, w, columns, l, compact + l * kFullParamCount);
     }
   }
 }
@@ -440,7 +458,7 @@ double histogram_bin_lower_m(int bin) {
 SampleRowsContext sample_rows_context(const RobotModel& model) {
   SampleRowsContext context;
   context.trig = model_trig(model);
-  context.every_column = indices_of(kAllParamsMask | kComplianceParamsMask);
+  context.every_column = indices_of(valid_params_mask(model), model.joint_count);
   return context;
 }
 
@@ -456,7 +474,7 @@ Vec3 local_target_residual_jacobian(const RobotModel& model, SampleRowsContext& 
   const Sample* const samples[1] = {&sample};
   const bool compliant = model.compliance.term_count > 0;
   if (context.pose == nullptr || context.pose->q_rad != sample.q_rad) {
-    context.pose_trig = joint_trig(sample.q_rad);
+    context.pose_trig = joint_trig(model, sample.q_rad);
     if (compliant) context.pose_trig = deflected_trig(model, sample.q_rad, context.pose_trig, &context.pose_basis);
     context.pose = &sample;
   }
@@ -467,8 +485,11 @@ Vec3 local_target_residual_jacobian(const RobotModel& model, SampleRowsContext& 
   add_rows<static_cast<std::size_t>(kGroupSamples)>(moved, context.trig, base_to_tracker, samples, trig_of,
                                                     compliant ? &context.pose_basis : nullptr, 1, context.every_column,
                                                     rows, &local_residual_m);
-  for (int c = 0; c < kFullParamCount; ++c)
+  // The model's columns (every_column lists them in place); those a build holds beyond them are 0.
+  const int model_columns = model_column_count(model);
+  for (int c = 0; c < model_columns; ++c)
     for (int r = 0; r < 3; ++r) (*local_jacobian)(r, c) = rows[r][c];
+  local_jacobian->rightCols(kFullParamCount - model_columns).setZero();
   return local_residual_m;
 }
 
@@ -540,10 +561,11 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
     const std::size_t i = first + static_cast<std::size_t>(k);
     group[k] = &samples[i];
     if (compliant) {  // the stored trig is of the readings: turned by the deflection
-      computed[k] = deflected_trig(model, samples[i].q_rad,
-                                   stored_trig.empty() ? joint_trig(samples[i].q_rad) : stored_trig[i], &basis[k]);
+      computed[k] =
+          deflected_trig(model, samples[i].q_rad,
+                         stored_trig.empty() ? joint_trig(model, samples[i].q_rad) : stored_trig[i], &basis[k]);
     } else if (stored_trig.empty()) {
-      computed[k] = joint_trig(samples[i].q_rad);
+      computed[k] = joint_trig(model, samples[i].q_rad);
     }
     group_trig[k] = compliant || stored_trig.empty() ? &computed[k] : &stored_trig[i];
   }
@@ -567,13 +589,15 @@ void add_group(const RobotModel& model, const ModelTrig& trig, const RigidTransf
 }
 
 /// Whitens one sample's residual, Jacobian and tool Jacobian in place by L^-1, L L^T = I +
-/// k^2 J_q J_q^T, with J_q the Jacobian's theta columns (d point / d q) and k = sigma_q / sigma_p:
-/// the covariance of a point from joints read with sigma_q, in units of the point noise. 3x3
-/// Cholesky by hand (the same operations on every target). Nothing to do when k is 0.
-void whiten_sample(double k, Vec3* residual_m, FullJacobian* jacobian, Mat3* tool_jacobian) {
+/// k^2 J_q J_q^T, with J_q the Jacobian's theta columns of the revolute joints (d point / d q)
+/// and k = sigma_q / sigma_p: the covariance of a point from joints read with sigma_q, in units
+/// of the point noise (a prismatic joint's reading, a length, is taken as exact). 3x3 Cholesky
+/// by hand (the same operations on every target). Nothing to do when k is 0.
+void whiten_sample(const RobotModel& model, double k, Vec3* residual_m, FullJacobian* jacobian, Mat3* tool_jacobian) {
   if (!(k > 0.0)) return;
   Mat3 c = Mat3::Identity();
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < model.joint_count; ++j) {
+    if (joint_type(model, j) != JointType::revolute) continue;
     const Vec3 column = k * jacobian->col(model_param_index(j, DhField::theta_offset));
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) c(a, b) += column(a) * column(b);
@@ -604,10 +628,10 @@ Vec3 sample_rows_in(const RobotModel& model, SampleRowsContext& context, const R
                     const Sample& sample, const PointLoss& loss, ParamMask columns, FullJacobian* jacobian,
                     Mat3* tool_jacobian, double* raw_squared_m2) {
   Vec3 residual_m = local_target_residual_jacobian(model, context, sample.target, base_to_tracker, sample, jacobian);
-  *tool_jacobian = jacobian->block<3, 3>(0, tool_param_index(0));
+  *tool_jacobian = jacobian->block<3, 3>(0, tool_param_index(model, 0));
   *raw_squared_m2 = residual_m.squaredNorm();
-  whiten_sample(loss.joint_noise_ratio_rad_per_m, &residual_m, jacobian, tool_jacobian);
-  if (sample.target != 0) jacobian->block<3, 3>(0, tool_param_index(0)).setZero();  // not target 1's tool
+  whiten_sample(model, loss.joint_noise_ratio_rad_per_m, &residual_m, jacobian, tool_jacobian);
+  if (sample.target != 0) jacobian->block<3, 3>(0, tool_param_index(model, 0)).setZero();  // not target 1's tool
   for (int c = 0; c < kFullParamCount; ++c) {
     if (!mask_has(columns, c)) jacobian->col(c).setZero();
   }
@@ -638,7 +662,7 @@ namespace {
   for (TargetBlock& block : eq->targets) block = TargetBlock{};
   // Only the estimated columns (the others are zero) and only the upper triangle (the lower one
   // is mirrored below): a quarter of the full 37 x 37 products, the same bits.
-  const IndexList list = indices_of(columns);
+  const IndexList list = indices_of(columns, model.joint_count);
   SampleRowsContext context = sample_rows_context(model);
   double rows[3][kFullParamCount];  // the sample's Jacobian rows over the listed columns
   for (const Sample& sample : samples) {
@@ -683,7 +707,7 @@ namespace {
     if (block.count == 0) continue;
     const Mat3 inverse = block.tool_tool.inverse();
     const Eigen::Matrix<double, 3, kFullParamCount> solved = inverse * block.tool_model;
-    for (int a = 0; a < kFullParamCount; ++a) {  // no 33 x 33 temporary (see above)
+    for (int a = 0; a < kFullParamCount; ++a) {  // no p x p temporary (see above)
       for (int b = 0; b < kFullParamCount; ++b) eq->jtwj(a, b) -= block.tool_model.col(a).dot(solved.col(b));
       eq->jtwr(a) -= solved.col(a).dot(block.tool_residual_m);
     }
@@ -722,7 +746,7 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
   if (target_count(samples) > 1 || loss.joint_noise_ratio_rad_per_m > 0.0) {
     return accumulate_several_targets(model, base_to_tracker, samples, loss, &eq, columns);
   }
-  const IndexList list = indices_of(columns);
+  const IndexList list = indices_of(columns, model.joint_count);
   const ModelTrig trig = model_trig(model);
   const FlushFunction flush_batch = fastest_flush();
   RowBatch batch;
@@ -749,6 +773,12 @@ Status accumulate_normal_equations(const RobotModel& model, const RigidTransform
     return Status::non_finite_input;
   }
   return Status::ok;
+}
+
+Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
+                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* out) {
+  return accumulate_normal_equations(model, base_to_tracker, samples, loss, out,
+                                     rigid_params_mask(model) | kOtherTargetTools);
 }
 
 Status evaluate_point_loss(const RobotModel& model, const RigidTransform& base_to_tracker, Span<const Sample> samples,

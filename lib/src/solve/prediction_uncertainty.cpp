@@ -28,7 +28,8 @@ double prediction_variance_sum_m2(const RobotModel& model, SampleRowsContext& co
   double raw_squared_m2 = 0.0;
   (void)sample_rows(model, context, base_to_tracker, sample, PointLoss{}, estimated, &jacobian, &tool_jacobian,
                     &raw_squared_m2);
-  if (frame == PredictionFrame::base) jacobian.middleCols<kBaseParamCount>(kModelParamCount).setZero();
+  if (frame == PredictionFrame::base)
+    jacobian.middleCols<kBaseParamCount>(base_rotation_param_index(model, 0)).setZero();
   double variance_sum_m2 = target > 0 ? target_tool_sigma_m.squaredNorm() : 0.0;
   for (int r = 0; r < 3; ++r) {
     for (int a = 0; a < count; ++a) {
@@ -129,7 +130,7 @@ unsigned term_joint_mask(const RobotModel& model, Span<const Sample> samples) {
   for (std::size_t k = 0; k < samples.size(); k += step) {
     double basis[kMaxComplianceTerms];
     compliance_basis(model, samples[k].q_rad, basis);
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < model.joint_count; ++j) {
       JointVector turned = samples[k].q_rad;
       turned(j) += kTurn_rad;
       double turned_basis[kMaxComplianceTerms];
@@ -153,7 +154,7 @@ Extrapolation extrapolation(const CalibrationDomain& domain, const RobotModel& m
     e.tool_axis_angle_rad = math::atan2(axis.cross(domain.tool_axis_mean).norm(), axis.dot(domain.tool_axis_mean));
     e.tool_axis_beyond = e.tool_axis_angle_rad > domain.tool_axis_spread_rad + domain.tool_axis_margin_rad;
   }
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < model.joint_count; ++j) {
     if ((domain.term_joints & (1U << static_cast<unsigned>(j))) == 0) continue;
     const double beyond_rad = std::fmax(domain.joint_min_rad(j) - q_rad(j), q_rad(j) - domain.joint_max_rad(j));
     if (beyond_rad > domain.joint_margin_rad && beyond_rad > e.joint_beyond_rad) {

@@ -49,6 +49,11 @@ bool ClockEstimatorBase::config_ok() const {
 void ClockEstimatorBase::push_robot(const JointStateRecord& record) {
   ++stats_.robot_records;
   const JointVector q = detail::joints_of(record);
+  if (record.joint_count != config_.speed_model.joint_count) {
+    ++stats_.robot_rejected;
+    ++stats_.robot_joint_count_mismatches;
+    return;
+  }
   if (!all_finite(q) || (robot_started_ && record.timestamp_us <= robot_last_us_)) {
     ++stats_.robot_rejected;
     return;
@@ -219,6 +224,7 @@ detail::ClockProfiles ClockEstimatorBase::profiles() const {
 Status ClockEstimatorBase::estimate(ClockFit* fit) {
   if (!config_ok()) return Status::invalid_argument;
   set_aside_held();  // a jump that never came back nor went on: the last points were blunders
+  if (stats_.robot_joint_count_mismatches > 0) return Status::joint_count_mismatch;
   if (stats_.robot_knots < 4 || stats_.tracker_points < 4) return Status::clock_fit_failed;
   const detail::ClockProfiles view = profiles();
   detail::CoarseLag coarse;

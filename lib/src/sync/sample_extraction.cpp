@@ -108,6 +108,7 @@ Status SampleExtractorBase::drop(double tracker_us, DropReason reason) {
 Status SampleExtractorBase::push_robot(const JointStateRecord& record) {
   if (!config_ok()) return Status::invalid_argument;
   ++counts_.robot_records;
+  if (record.joint_count != config_.speed_model.joint_count) return Status::joint_count_mismatch;
   const JointVector q = detail::joints_of(record);
   const double t_us = detail::us_to_double(record.timestamp_us);
   if (!all_finite(q) || (robot_started_ && !(t_us > robot_latest_us_))) {

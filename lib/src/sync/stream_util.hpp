@@ -12,10 +12,10 @@ namespace hivecal::detail {
 /// Quiet NaN: marks an unknown profile value.
 inline constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
 
-/// The joint positions of a record as a vector [rad].
+/// The joint positions of a record as a vector [rad] (its joint_count entries, zeros after).
 inline JointVector joints_of(const JointStateRecord& record) {
   JointVector q;
-  for (int j = 0; j < kJointCount; ++j) q(j) = record.q_rad[j];
+  for (int j = 0; j < record.joint_count && j < kMaxJoints; ++j) q(j) = record.q_rad[j];
   return q;
 }
 

@@ -33,8 +33,8 @@ Vec3 random_point(Random* random) {
   return Vec3(random->uniform(-3.0, 3.0), random->uniform(-3.0, 3.0), random->uniform(-3.0, 3.0));
 }
 
-TEST(Types, JointVectorHasOneEntryPerJoint) {
-  EXPECT_EQ(JointVector::RowsAtCompileTime, kJointCount);
+TEST(Types, JointVectorHasRoomForEveryJointTheBuildHolds) {
+  EXPECT_EQ(JointVector::RowsAtCompileTime, kMaxJoints);
   EXPECT_EQ(Vec3::RowsAtCompileTime, 3);
   EXPECT_EQ(Mat3::RowsAtCompileTime, 3);
   EXPECT_EQ(Mat3::ColsAtCompileTime, 3);
@@ -203,7 +203,7 @@ TEST(Types, AllFiniteChecksEveryCoefficient) {
   }
   JointVector q = JointVector::Zero();
   EXPECT_TRUE(all_finite(q));
-  q(kJointCount - 1) = nan;
+  q(kSixJoints - 1) = nan;
   EXPECT_FALSE(all_finite(q));
   // Expressions and blocks: the NaN outside the block is not seen.
   Mat3 with_nan = Mat3::Identity();

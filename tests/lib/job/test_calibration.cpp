@@ -30,7 +30,7 @@ Dataset<kSamples> dataset;
 bool same_bits(const RobotModel& a, const RobotModel& b) {
   const ModelParams pa = to_params(a);
   const ModelParams pb = to_params(b);
-  return std::memcmp(pa.data(), pb.data(), sizeof(double) * kModelParamCount) == 0;
+  return std::memcmp(pa.data(), pb.data(), sizeof(double) * model_param_count(kSixJoints)) == 0;
 }
 
 /// A perturbed UR5 seen by a tracker with 10 um noise.
@@ -113,8 +113,9 @@ TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
   baseline_options.params = LmParamSet::custom;
   baseline_options.custom_mask = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    baseline_options.custom_mask |= param_bit(tool_param_index(axis)) | param_bit(base_rotation_param_index(axis)) |
-                                    param_bit(base_translation_param_index(axis));
+    baseline_options.custom_mask |= param_bit(tool_param_index(kSixJoints, axis)) |
+                                    param_bit(base_rotation_param_index(kSixJoints, axis)) |
+                                    param_bit(base_translation_param_index(kSixJoints, axis));
   }
   ASSERT_EQ(calibrate_lm(start(), &base, dataset.train(), baseline_options, &lm_workspace, &lm), Status::ok);
   const RobotModel baseline = lm.model;
@@ -137,7 +138,7 @@ TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
   ModelParams from = to_params(lm.model);
   const ModelParams nominal = to_params(baseline);
   bool reset = false;
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
     if (!mask_has(lm.identifiability.kept_mask, i) && from(i) != nominal(i)) {
       from(i) = nominal(i);
       reset = true;
@@ -145,8 +146,10 @@ TEST(CalibrationJob, HybridHasTheBitsOfTheStageFunctionsCalledByHand) {
   }
   EXPECT_TRUE(reset) << "ABC moves d1, which the full model cannot separate from the base";
   const RigidTransform warm_base = lm.base_to_tracker;
-  ASSERT_EQ(calibrate_lm(from_params(from), &warm_base, dataset.train(), lm_options, &lm_workspace, &lm), Status::ok);
-  for (int i = 0; i < kModelParamCount; ++i) {
+  ASSERT_EQ(
+      calibrate_lm(with_model_params(baseline, from), &warm_base, dataset.train(), lm_options, &lm_workspace, &lm),
+      Status::ok);
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
     if (!mask_has(lm.identifiability.kept_mask, i)) {
       EXPECT_EQ(to_params(last(result).model)(i), nominal(i)) << i;
     }
@@ -179,7 +182,7 @@ TEST(CalibrationJob, HybridSearchesASpanningSubsetOfLargeSets) {
   ASSERT_EQ(large.split(0.7, 1), Status::ok);
   static double scratch[kLarge];
   std::uint32_t subset[kDefaultPopulationSubset] = {};
-  ASSERT_EQ(spanning_subset(large.train(), Span<double>(scratch), Span<std::uint32_t>(subset)),
+  ASSERT_EQ(spanning_subset(large.train(), kSixJoints, Span<double>(scratch), Span<std::uint32_t>(subset)),
             kDefaultPopulationSubset);
   static Paper6Cost<kLarge> cost;
   static AbcSolver<20, kPaper6Dimension> abc;

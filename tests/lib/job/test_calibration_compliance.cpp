@@ -49,12 +49,12 @@ JointVector simulator_deflection(const RobotModel& truth, const JointVector& q) 
 JointVector payload_deflection(const RobotModel& truth, const JointVector& q) {
   const RigidTransform flange = fk_flange(truth, q);
   const Vec3 payload_m = flange.apply(truth.tool_m + Vec3(0.0, 0.0, 0.1));
-  const double compliance[kJointCount] = {0.0, 12e-6, 15e-6, 0.0, 0.0, 0.0};
+  const double compliance[kSixJoints] = {0.0, 12e-6, 15e-6, 0.0, 0.0, 0.0};
   JointVector d = JointVector::Zero();
   for (int j = 1; j <= 2; ++j) {
     RobotModel cut = truth;
     JointVector q_cut = q;
-    for (int k = j; k < kJointCount; ++k) {
+    for (int k = j; k < kSixJoints; ++k) {
       cut.joints[k] = DhJoint{};
       q_cut(k) = 0.0;
     }
@@ -180,8 +180,9 @@ TEST(CalibrationCompliance, AnArmThatDoesNotBendKeepsTheRigidFit) {
   // No term passed: the stage is the rigid fit, bit for bit (the rigid stage was run again).
   EXPECT_TRUE(result.stages[1].rigid_kept);
   EXPECT_FALSE(result.stages[0].rigid_kept);
-  for (int i = 0; i < kModelParamCount; ++i) {
-    EXPECT_EQ(to_params(result.stages[1].model)(i), to_params(result.stages[0].model)(i)) << full_param_name(i);
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
+    EXPECT_EQ(to_params(result.stages[1].model)(i), to_params(result.stages[0].model)(i))
+        << full_param_name(i, kSixJoints);
   }
   EXPECT_TRUE(result.stages[1].base_to_tracker.translation_m == result.stages[0].base_to_tracker.translation_m);
   EXPECT_EQ(v.compliant_m, v.rigid_m);

@@ -72,7 +72,7 @@ void fill_turned(std::uint64_t seed, std::size_t count, double noise_m, Turned t
     if (elbow_half_range_rad > 0.0) q(2) = random.uniform(-elbow_half_range_rad, elbow_half_range_rad);
     JointVector reading = q;
     if (reading_step_rad > 0.0) {
-      for (int j = 0; j < kJointCount; ++j) reading(j) = reading_step_rad * std::round(q(j) / reading_step_rad);
+      for (int j = 0; j < kSixJoints; ++j) reading(j) = reading_step_rad * std::round(q(j) / reading_step_rad);
     }
     (void)out->add(reading, base.apply(fk_tool_point(truth, turned(q))) + noise_m * test::gaussian_vector(&random));
   }
@@ -100,18 +100,18 @@ CalibrationOptions harmonic_options(int orders = 2) {
   CalibrationOptions options;
   options.method = CalibrationMethod::lm;
   options.compliance.enabled = true;
-  EXPECT_EQ(append_harmonic_terms(orders, &options.compliance.model), Status::ok);
+  EXPECT_EQ(append_harmonic_terms(orders, RobotModel{}, &options.compliance.model), Status::ok);
   return options;
 }
 
 bool capacity_holds_harmonics() {
-  return 2 * kJointCount * 2 <= kMaxComplianceTerms;
+  return 2 * kSixJoints * 2 <= kMaxComplianceTerms;
 }
 
 TEST(CalibrationHarmonics, TrueHarmonicsAreRecoveredWithinTheirSigma) {
   if (!capacity_holds_harmonics()) {  // the bare-metal capacity: refused at the input step
     CalibrationOptions options;
-    EXPECT_EQ(append_harmonic_terms(2, &options.compliance.model), Status::invalid_argument);
+    EXPECT_EQ(append_harmonic_terms(2, RobotModel{}, &options.compliance.model), Status::invalid_argument);
     return;
   }
   fill(true, 31, kSamples, &dataset);
@@ -129,7 +129,7 @@ TEST(CalibrationHarmonics, TrueHarmonicsAreRecoveredWithinTheirSigma) {
     for (int phase = 0; phase < 2; ++phase) {
       const int t = h.joint * 4 + (h.order - 1) * 2 + phase;  // append_harmonic_terms' order
       const double truth = phase == 0 ? h.sin_rad : h.cos_rad;
-      const double sigma = result.lm.sigma(compliance_param_index(t));
+      const double sigma = result.lm.sigma(compliance_param_index(kSixJoints, t));
       std::printf("  %s: true %.1f urad, fitted %.1f +- %.1f urad\n", compliance_term_name(c, t), 1e6 * truth,
                   1e6 * c.coefficient[t], 1e6 * sigma);
       if (sigma == 0.0) continue;  // fixed by the significance test
@@ -183,7 +183,7 @@ TEST(CalibrationHarmonics, TheTermsTestRefitsOnceNotOncePerTerm) {
 TEST(CalibrationHarmonics, AnArmWithoutHarmonicsRejectsEveryTermOnAtLeast95PercentOfSeeds) {
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
   for (const int orders : {2, kMaxHarmonicOrder}) {
-    if (orders * kJointCount * 2 > kMaxComplianceTerms) continue;  // beyond this build
+    if (orders * kSixJoints * 2 > kMaxComplianceTerms) continue;  // beyond this build
     int clean = 0;
     for (std::uint64_t seed = 1; seed <= 40; ++seed) {
       fill(false, 100 + seed, 120, &dataset);
@@ -191,7 +191,7 @@ TEST(CalibrationHarmonics, AnArmWithoutHarmonicsRejectsEveryTermOnAtLeast95Perce
                 Status::ok);
       ASSERT_EQ(result.stage_count, 2u);
       const ComplianceModel& c = result.stages[1].model.compliance;
-      ASSERT_EQ(c.term_count, orders * kJointCount * 2);
+      ASSERT_EQ(c.term_count, orders * kSixJoints * 2);
       int kept = 0;
       for (int t = 0; t < c.term_count; ++t) kept += c.coefficient[t] != 0.0 ? 1 : 0;
       if (kept > 0) {
@@ -246,8 +246,8 @@ TEST(CalibrationHarmonics, OnASmallSetTermsThatDoNotPredictLeftOutPosesAreReject
   options.compliance.enabled = false;
   ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);
   ASSERT_EQ(result.stage_count, 1u);
-  for (int i = 0; i < kModelParamCount; ++i) {
-    EXPECT_EQ(to_params(harmonics.model)(i), to_params(result.stages[0].model)(i)) << full_param_name(i);
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
+    EXPECT_EQ(to_params(harmonics.model)(i), to_params(result.stages[0].model)(i)) << full_param_name(i, kSixJoints);
   }
   EXPECT_TRUE(harmonics.base_to_tracker.translation_m == result.stages[0].base_to_tracker.translation_m);
 }
@@ -267,8 +267,9 @@ TEST(CalibrationHarmonics, OnASmallSetTermsThatPredictLeftOutPosesStay) {
   EXPECT_FALSE(harmonics.rigid_kept);
   const ComplianceModel& c = harmonics.model.compliance;
   const int base_sin1 = 0;  // append_harmonic_terms' order: joint, order, sine then cosine
-  EXPECT_NEAR(c.coefficient[base_sin1], 500e-6, 3.0 * result.lm.sigma(compliance_param_index(base_sin1)));
-  EXPECT_NEAR(c.coefficient[base_sin1 + 1], -400e-6, 3.0 * result.lm.sigma(compliance_param_index(base_sin1 + 1)));
+  EXPECT_NEAR(c.coefficient[base_sin1], 500e-6, 3.0 * result.lm.sigma(compliance_param_index(kSixJoints, base_sin1)));
+  EXPECT_NEAR(c.coefficient[base_sin1 + 1], -400e-6,
+              3.0 * result.lm.sigma(compliance_param_index(kSixJoints, base_sin1 + 1)));
 }
 
 // A coefficient no robot has (a 20 mrad eccentric base: a file in the wrong unit, or terms that
@@ -289,7 +290,8 @@ TEST(CalibrationHarmonics, ACoefficientBeyondWhatARobotHasIsFixed) {
   const int base_cos1 = 1;  // append_harmonic_terms' order: joint, order, sine then cosine
   // Fixed by the bound; or the terms left beside it did not hold beyond the poses' joint ranges
   // (blocked folds), and the stage kept the rigid fit.
-  EXPECT_TRUE(mask_has(result.lm_pruned_mask | final_stage.folds.fold_rejected, compliance_param_index(base_cos1)) ||
+  EXPECT_TRUE(mask_has(result.lm_pruned_mask | final_stage.folds.fold_rejected,
+                       compliance_param_index(kSixJoints, base_cos1)) ||
               final_stage.rigid_kept);
   EXPECT_EQ(c.coefficient[base_cos1], 0.0);
 }
@@ -308,8 +310,8 @@ TEST(CalibrationHarmonics, AHarmonicWhoseJointTurnsTooLittleOfItsPeriodIsNotAdmi
     ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);
     const CalibrationStage& harmonics = result.stages[1];
     const int elbow_sin1 = 2 * 2;  // orders 1 only: joint, sine then cosine
-    const ParamMask elbow_terms =
-        param_bit(compliance_param_index(elbow_sin1)) | param_bit(compliance_param_index(elbow_sin1 + 1));
+    const ParamMask elbow_terms = param_bit(compliance_param_index(kSixJoints, elbow_sin1)) |
+                                  param_bit(compliance_param_index(kSixJoints, elbow_sin1 + 1));
     const bool narrow = half_range_rad < 2.0;
     EXPECT_EQ((harmonics.folds.coverage_rejected & elbow_terms) == elbow_terms, narrow) << half_range_rad;
     EXPECT_EQ(harmonics.model.compliance.coefficient[elbow_sin1] != 0.0, !narrow) << half_range_rad;
@@ -326,7 +328,7 @@ void calibrate_both_families(bool harmonics) {
   ASSERT_EQ(default_compliance_terms(nominal_model(RobotType::ur5), Vec3(0.0, 0.0, -1.0), ComplianceLoad::point,
                                      &options.compliance.model),
             Status::ok);
-  ASSERT_EQ(append_harmonic_terms(2, &options.compliance.model), Status::ok);
+  ASSERT_EQ(append_harmonic_terms(2, RobotModel{}, &options.compliance.model), Status::ok);
   Status status = Status::invalid_argument;
   EXPECT_NO_HEAP(status = calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result));
   ASSERT_EQ(status, Status::ok);
@@ -349,8 +351,8 @@ TEST(CalibrationHarmonics, WithGravityTermsEachFamilyHasItsStageAndAnArmWithoutH
   const CalibrationStage& both = result.stages[2];
   EXPECT_FALSE(gravity.rigid_kept);  // the arm bends
   EXPECT_TRUE(both.rigid_kept);      // but has no harmonic: the gravity fit, bit for bit
-  for (int i = 0; i < kModelParamCount; ++i) {
-    EXPECT_EQ(to_params(both.model)(i), to_params(gravity.model)(i)) << full_param_name(i);
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
+    EXPECT_EQ(to_params(both.model)(i), to_params(gravity.model)(i)) << full_param_name(i, kSixJoints);
   }
   for (int t = 0; t < both.model.compliance.term_count; ++t) {
     const double expected = t < 4 ? gravity.model.compliance.coefficient[t] : 0.0;
@@ -379,7 +381,7 @@ TEST(CalibrationHarmonics, HarmonicsBeforeGravityTermsRunAsOneStage) {
       default_compliance_terms(nominal_model(RobotType::ur5), Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &gravity),
       Status::ok);
   ComplianceModel& terms = options.compliance.model;  // the harmonics first: no model extends another
-  ASSERT_EQ(append_harmonic_terms(1, &terms), Status::ok);
+  ASSERT_EQ(append_harmonic_terms(1, RobotModel{}, &terms), Status::ok);
   for (int t = 0; t < gravity.term_count; ++t) terms.terms[terms.term_count++] = gravity.terms[t];
   ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);
   ASSERT_EQ(result.stage_count, 2u);

@@ -78,7 +78,8 @@ TEST(CalibrationKnownFrames, ControllerReadingsEstimateJointOneAndKeepBaseAndToo
     const ParamMask kept = result.lm.identifiability.kept_mask;
     EXPECT_TRUE(mask_has(kept, model_param_index(0, DhField::theta_offset)));
     EXPECT_TRUE(mask_has(kept, model_param_index(0, DhField::d)));
-    for (int i = 0; i < 6; ++i) EXPECT_FALSE(mask_has(kept, kModelParamCount + i)) << "base parameter " << i;
+    for (int i = 0; i < 6; ++i)
+      EXPECT_FALSE(mask_has(kept, model_param_count(kSixJoints) + i)) << "base parameter " << i;
     const double joint1_d_error_m = std::fabs(stage.model.joints[0].d_m - truth.joints[0].d_m);
     const double worst_m = worst_error_m(truth, fresh.samples());
     std::printf("seed %d: %d estimated, d1 error %.4f mm, worst fresh error %.4f mm\n", static_cast<int>(seed),

@@ -50,7 +50,7 @@ TEST(CalibrationTargets, TargetsTwoAndThreeAreEstimatedWhenTheSignificanceTestFi
     Status status = Status::invalid_argument;
     EXPECT_NO_HEAP(status = calibrate(start, &dataset, options, &workspace, &result));
     ASSERT_EQ(status, Status::ok) << calibration_step_name(result.step);
-    const bool tool_x_pruned = mask_has(result.lm_pruned_mask, tool_param_index(0));
+    const bool tool_x_pruned = mask_has(result.lm_pruned_mask, tool_param_index(kSixJoints, 0));
     const CalibrationStage& stage = result.stages[result.stage_count - 1];
     double worst_m = 0.0;
     for (const Sample& s : fresh.samples()) {

@@ -60,7 +60,7 @@ bool same_bits(const CalibrationResult& a, const CalibrationResult& b) {
   for (std::size_t k = 0; k < a.stage_count; ++k) {
     const ModelParams pa = to_params(a.stages[k].model);
     const ModelParams pb = to_params(b.stages[k].model);
-    if (std::memcmp(pa.data(), pb.data(), sizeof(double) * kModelParamCount) != 0) return false;
+    if (std::memcmp(pa.data(), pb.data(), sizeof(double) * model_param_count(kSixJoints)) != 0) return false;
     if (std::memcmp(&a.stages[k].test, &b.stages[k].test, sizeof(ErrorStats)) != 0) return false;
   }
   return true;

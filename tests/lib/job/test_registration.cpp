@@ -32,7 +32,7 @@ RobotModel calibrated_arm(Random* random) {
   RobotModel model = test::perturbed_parallel_model(RobotType::ur10, random, 1e-3, 1e-3, Vec3(0.01, -0.02, 0.11));
   EXPECT_EQ(default_compliance_terms(model, Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &model.compliance),
             Status::ok);
-  EXPECT_EQ(append_harmonic_terms(1, &model.compliance), Status::ok);
+  EXPECT_EQ(append_harmonic_terms(1, model, &model.compliance), Status::ok);
   for (int t = 0; t < model.compliance.term_count; ++t) model.compliance.coefficient[t] = 3e-5 * random->normal();
   return model;
 }
@@ -103,8 +103,8 @@ TEST(Registration, TheFramesFitAlsoFindsAReflectorSetAnew) {
   EXPECT_EQ(result.verdict, RegistrationBlunderVerdict::none);
   ModelParams arm_without_tool = to_params(arm);
   ModelParams result_without_tool = to_params(result.model);
-  arm_without_tool.tail<3>().setZero();
-  result_without_tool.tail<3>().setZero();
+  arm_without_tool.segment<3>(tool_param_index(arm, 0)).setZero();
+  result_without_tool.segment<3>(tool_param_index(arm, 0)).setZero();
   EXPECT_EQ(arm_without_tool, result_without_tool);  // DH untouched
 }
 
@@ -209,7 +209,7 @@ TEST(Registration, TheCalibrationsCovarianceIsCarriedByTheRegistrationsGain) {
     EXPECT_NO_HEAP(status = carry_covariance(result, dataset.samples(), param_bit(k), unit_variance,
                                              &workspace.covariance, &carried, &estimated));
     ASSERT_EQ(status, Status::ok);
-    EXPECT_EQ(estimated, param_bit(k) | registration_mask(RegistrationFit::base));
+    EXPECT_EQ(estimated, param_bit(k) | registration_mask(RegistrationFit::base, arm));
     EXPECT_EQ(carried(k, k), 1.0);
     constexpr double kStep = 1e-6;
     ModelParams p = to_params(arm);
@@ -219,7 +219,8 @@ TEST(Registration, TheCalibrationsCovarianceIsCarriedByTheRegistrationsGain) {
     ASSERT_EQ(register_frames(moved, all_samples(), options, &workspace, &moved_result), Status::ok);
     const Eigen::Matrix<double, 6, 1> d = base_increment(result.base_to_tracker, moved_result.base_to_tracker);
     for (int b = 0; b < kBaseParamCount; ++b) {
-      EXPECT_NEAR(carried(kModelParamCount + b, k) * kStep, d(b), 1e-3 * kStep) << full_param_name(k) << " " << b;
+      EXPECT_NEAR(carried(model_param_count(kSixJoints) + b, k) * kStep, d(b), 1e-3 * kStep)
+          << full_param_name(k, kSixJoints) << " " << b;
     }
   }
   // theta1 is taken by base_rz whole: it no longer moves a prediction; d2 still does.

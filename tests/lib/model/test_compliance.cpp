@@ -37,9 +37,9 @@ RobotModel compliant_ur5e(ComplianceLoad load) {
 RigidTransform frame_by_truncation(const RobotModel& model, const JointVector& q, int k) {
   RobotModel cut = model;
   cut.compliance.term_count = 0;
-  for (int j = k; j < kJointCount; ++j) cut.joints[j] = DhJoint{};
+  for (int j = k; j < kSixJoints; ++j) cut.joints[j] = DhJoint{};
   JointVector q_cut = q;
-  for (int j = k; j < kJointCount; ++j) q_cut(j) = 0.0;
+  for (int j = k; j < kSixJoints; ++j) q_cut(j) = 0.0;
   return fk_flange(cut, q_cut);
 }
 
@@ -82,15 +82,15 @@ TEST(Compliance, DeflectionIsTheRigidChainAtQPlusDqComputedByHand) {
     model.compliance.gravity_direction = Vec3(0.3, -0.2, -1.0).normalized();  // a tilted mount
     const double scale = load == ComplianceLoad::point ? 1e-3 : 1e-4;
     for (int t = 0; t < model.compliance.term_count; ++t) model.compliance.coefficient[t] = scale * (1.0 + 0.5 * t);
-    ASSERT_EQ(check_compliance(model.compliance), Status::ok);
+    ASSERT_EQ(check_compliance(model.compliance, model), Status::ok);
     RobotModel rigid = model;
     rigid.compliance.term_count = 0;
     const Vec3& g = model.compliance.gravity_direction;
     const ArmMasses& masses = model.compliance.masses;
     for (int i = 0; i < 30; ++i) {
       const JointVector q = test::random_joints(&random);
-      RigidTransform frame[kJointCount + 1];
-      for (int k = 0; k <= kJointCount; ++k) frame[k] = frame_by_truncation(model, q, k);
+      RigidTransform frame[kSixJoints + 1];
+      for (int k = 0; k <= kSixJoints; ++k) frame[k] = frame_by_truncation(model, q, k);
       JointVector dq = JointVector::Zero();
       for (int t = 0; t < model.compliance.term_count; ++t) {
         const ComplianceTerm& term = model.compliance.terms[t];
@@ -99,13 +99,13 @@ TEST(Compliance, DeflectionIsTheRigidChainAtQPlusDqComputedByHand) {
         double basis = 0.0;
         if (load == ComplianceLoad::point) {
           const Vec3 p =
-              term.frame == kToolLoadFrame ? frame[kJointCount].apply(model.tool_m) : frame[term.frame].translation_m;
+              term.frame == kToolLoadFrame ? frame[kSixJoints].apply(model.tool_m) : frame[term.frame].translation_m;
           basis = z.dot((p - o).cross(g));
         } else {
-          for (int link = term.joint; link < kJointCount; ++link) {
+          for (int link = term.joint; link < kSixJoints; ++link) {
             basis += masses.link_mass_kg[link] * z.dot((frame[link + 1].apply(masses.link_com_m[link]) - o).cross(g));
           }
-          basis += masses.payload_kg * z.dot((frame[kJointCount].apply(masses.payload_com_m) - o).cross(g));
+          basis += masses.payload_kg * z.dot((frame[kSixJoints].apply(masses.payload_com_m) - o).cross(g));
         }
         dq(term.joint) += model.compliance.coefficient[t] * basis;
       }
@@ -127,8 +127,8 @@ TEST(Compliance, DeflectionIsTheRigidChainAtQPlusDqComputedByHand) {
 TEST(Compliance, UnitMassBasisIsTheHorizontalLeverArmOfAPlanarArm) {
   // Every axis along base z, gravity along -y: a planar arm in a vertical plane (x horizontal).
   RobotModel model;
-  const double a_m[kJointCount] = {0.4, 0.3, 0.2, 0.0, 0.0, 0.0};
-  for (int j = 0; j < kJointCount; ++j) model.joints[j] = DhJoint{0.0, 0.0, a_m[j], 0.0};
+  const double a_m[kSixJoints] = {0.4, 0.3, 0.2, 0.0, 0.0, 0.0};
+  for (int j = 0; j < kSixJoints; ++j) model.joints[j] = DhJoint{0.0, 0.0, a_m[j], 0.0};
   model.tool_m << 0.05, 0.0, 0.0;
   ComplianceModel& c = model.compliance;
   ASSERT_EQ(default_compliance_terms(model, Vec3(0.0, -2.0, 0.0), ComplianceLoad::point, &c), Status::ok);
@@ -245,12 +245,12 @@ TEST(Compliance, MassesBasisIsTheWeightedSumOfPointBases) {
     for (int t = 0; t < masses.compliance.term_count; ++t) {
       const int joint = masses.compliance.terms[t].joint;
       double expected = 0.0;
-      for (int frame = joint + 1; frame <= kJointCount; ++frame) {
+      for (int frame = joint + 1; frame <= kSixJoints; ++frame) {
         point.compliance.terms[0] = ComplianceTerm{joint, frame};
         double b[kMaxComplianceTerms];
         compliance_basis(point, q, b);
         const double m = masses.compliance.masses.link_mass_kg[frame - 1] +
-                         (frame == kJointCount ? masses.compliance.masses.payload_kg : 0.0);
+                         (frame == kSixJoints ? masses.compliance.masses.payload_kg : 0.0);
         expected += m * b[0];
       }
       EXPECT_NEAR(mass_basis[t], expected, 1e-13);
@@ -260,48 +260,48 @@ TEST(Compliance, MassesBasisIsTheWeightedSumOfPointBases) {
 
 TEST(Compliance, CheckRejectsWhatTheModelCannotUse) {
   ComplianceModel c = compliant_ur5e(ComplianceLoad::point).compliance;
-  EXPECT_EQ(check_compliance(c), Status::ok);
-  EXPECT_EQ(check_compliance(ComplianceModel{}), Status::ok);
+  EXPECT_EQ(check_compliance(c, RobotModel{}), Status::ok);
+  EXPECT_EQ(check_compliance(ComplianceModel{}, RobotModel{}), Status::ok);
   ComplianceModel rigid;
   rigid.gravity_direction = Vec3::Zero();  // not read without terms
-  EXPECT_EQ(check_compliance(rigid), Status::ok);
+  EXPECT_EQ(check_compliance(rigid, RobotModel{}), Status::ok);
   ComplianceModel bad = c;
   bad.term_count = kMaxComplianceTerms + 1;
-  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::invalid_argument);
   bad = c;
   bad.term_count = 5;  // a term left at its defaults: a point load at frame 0, not beyond joint 1
-  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::invalid_argument);
   bad = c;
   bad.terms[1].frame = 1;  // not beyond joint 1 (0-based)
-  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::invalid_argument);
   bad = c;
   bad.terms[3].frame = kToolLoadFrame + 1;
-  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::invalid_argument);
   bad = c;
   bad.coefficient[2] = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(check_compliance(bad), Status::non_finite_input);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::non_finite_input);
   bad = c;
   bad.gravity_direction = Vec3(0.0, 0.0, -2.0);
-  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::invalid_argument);
   bad = compliant_ur5e(ComplianceLoad::arm_masses).compliance;
   bad.masses.link_mass_kg[2] = -1.0;
-  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::invalid_argument);
   bad = c;
   bad.terms[0] = ComplianceTerm{1, 0, JointTermKind::harmonic_sin, 0};  // order 0: a constant
-  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::invalid_argument);
   bad.terms[0].order = kMaxHarmonicOrder + 1;
-  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::invalid_argument);
   bad.terms[0].order = kMaxHarmonicOrder;
-  EXPECT_EQ(check_compliance(bad), Status::ok);  // a harmonic needs no frame
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::ok);  // a harmonic needs no frame
   bad.terms[0].kind = static_cast<JointTermKind>(3);
-  EXPECT_EQ(check_compliance(bad), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(bad, RobotModel{}), Status::invalid_argument);
 }
 
 /// A UR5e with only harmonic terms: orders 1 .. `orders` of every joint, given coefficients.
 RobotModel harmonic_ur5e(int orders, Random* random) {
   RobotModel model = nominal_model(RobotType::ur5e);
   model.tool_m << 0.01, -0.02, 0.15;
-  EXPECT_EQ(append_harmonic_terms(orders, &model.compliance), Status::ok);
+  EXPECT_EQ(append_harmonic_terms(orders, model, &model.compliance), Status::ok);
   for (int t = 0; t < model.compliance.term_count; ++t) model.compliance.coefficient[t] = random->uniform(-2e-4, 2e-4);
   return model;
 }
@@ -310,12 +310,12 @@ TEST(Compliance, HarmonicsDeflectTheirJointBySinAndCosOfItsOwnReading) {
   Random random(2501);
   const RobotModel model = harmonic_ur5e(1, &random);
   ASSERT_EQ(model.compliance.term_count, 12);
-  EXPECT_EQ(check_compliance(model.compliance), Status::ok);
+  EXPECT_EQ(check_compliance(model.compliance, model), Status::ok);
   for (int i = 0; i < 50; ++i) {
     const JointVector q = test::random_joints(&random);
     JointVector dq;
     EXPECT_NO_HEAP(dq = compliance_deflection(model, q));
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       // Terms 2j, 2j + 1: the sine and the cosine of joint j (append_harmonic_terms' order).
       const double expected = model.compliance.coefficient[2 * j] * std::sin(q(j)) +
                               model.compliance.coefficient[2 * j + 1] * std::cos(q(j));
@@ -330,18 +330,18 @@ TEST(Compliance, HarmonicsDeflectTheirJointBySinAndCosOfItsOwnReading) {
 TEST(Compliance, HarmonicsAppendAfterTheGravityTermsUpToTheBuildsCapacity) {
   ComplianceModel c = compliant_ur5e(ComplianceLoad::point).compliance;
   ASSERT_EQ(c.term_count, 4);
-  EXPECT_EQ(append_harmonic_terms(0, &c), Status::invalid_argument);
-  EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder + 1, &c), Status::invalid_argument);
+  EXPECT_EQ(append_harmonic_terms(0, RobotModel{}, &c), Status::invalid_argument);
+  EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder + 1, RobotModel{}, &c), Status::invalid_argument);
   EXPECT_EQ(c.term_count, 4);  // a refusal leaves the model as it was
-  const int needed = 4 + 2 * kJointCount * 2;
+  const int needed = 4 + 2 * kSixJoints * 2;
   if (needed > kMaxComplianceTerms) {  // the bare-metal capacity holds the gravity terms only
-    EXPECT_EQ(append_harmonic_terms(2, &c), Status::invalid_argument);
+    EXPECT_EQ(append_harmonic_terms(2, RobotModel{}, &c), Status::invalid_argument);
     EXPECT_EQ(c.term_count, 4);
     return;
   }
-  ASSERT_EQ(append_harmonic_terms(2, &c), Status::ok);
+  ASSERT_EQ(append_harmonic_terms(2, RobotModel{}, &c), Status::ok);
   EXPECT_EQ(c.term_count, needed);
-  EXPECT_EQ(check_compliance(c), Status::ok);
+  EXPECT_EQ(check_compliance(c, RobotModel{}), Status::ok);
   EXPECT_STREQ(compliance_term_name(c, 3), "c_j3_tool");
   EXPECT_STREQ(compliance_term_name(c, 4), "h_j1_sin1");
   EXPECT_STREQ(compliance_term_name(c, 5), "h_j1_cos1");
@@ -349,20 +349,104 @@ TEST(Compliance, HarmonicsAppendAfterTheGravityTermsUpToTheBuildsCapacity) {
   EXPECT_STREQ(compliance_term_name(c, 7), "h_j1_cos2");
   EXPECT_STREQ(compliance_term_name(c, 8), "h_j2_sin1");
   EXPECT_STREQ(compliance_term_name(c, needed - 1), "h_j6_cos2");
-  EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder, &c), Status::invalid_argument);  // over capacity
+  EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder, RobotModel{}, &c), Status::invalid_argument);  // over capacity
   // Three orders of six joints with the gravity terms: the hosted builds' 40.
   ComplianceModel third = compliant_ur5e(ComplianceLoad::point).compliance;
-  const int needed_third = 4 + kMaxHarmonicOrder * kJointCount * 2;
+  const int needed_third = 4 + kMaxHarmonicOrder * kSixJoints * 2;
   if (needed_third > kMaxComplianceTerms) {
-    EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder, &third), Status::invalid_argument);
+    EXPECT_EQ(append_harmonic_terms(kMaxHarmonicOrder, RobotModel{}, &third), Status::invalid_argument);
     return;
   }
-  ASSERT_EQ(append_harmonic_terms(kMaxHarmonicOrder, &third), Status::ok);
+  ASSERT_EQ(append_harmonic_terms(kMaxHarmonicOrder, RobotModel{}, &third), Status::ok);
   EXPECT_EQ(third.term_count, needed_third);
-  EXPECT_EQ(check_compliance(third), Status::ok);
+  EXPECT_EQ(check_compliance(third, RobotModel{}), Status::ok);
   EXPECT_STREQ(compliance_term_name(third, 8), "h_j1_sin3");
   EXPECT_STREQ(compliance_term_name(third, 9), "h_j1_cos3");
   EXPECT_STREQ(compliance_term_name(third, needed_third - 1), "h_j6_cos3");
+}
+
+/// A UR5e lifted by a vertical linear axis (a prismatic joint 1 along the base z, then the arm's
+/// six joints): the lift carries the whole arm's weight along its axis.
+RobotModel lifted_ur5e() {
+  const RobotModel ur5e = nominal_model(RobotType::ur5e);
+  RobotModel model;
+  model.joint_count = 7;
+  set_joint_type(&model, 0, JointType::prismatic);
+  for (int j = 0; j < kSixJoints; ++j) model.joints[j + 1] = ur5e.joints[j];
+  model.tool_m << 0.01, -0.02, 0.15;
+  return model;
+}
+
+TEST(Compliance, APrismaticJointCarriesTheWeightAlongItsAxis) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints";
+  Random random(163);
+  for (ComplianceLoad load : {ComplianceLoad::point, ComplianceLoad::arm_masses}) {
+    RobotModel model = lifted_ur5e();
+    ComplianceModel& c = model.compliance;
+    c.load = load;
+    c.gravity_direction = Vec3(0.0, 0.0, -1.0);
+    c.term_count = 1;
+    c.terms[0] = ComplianceTerm{0, load == ComplianceLoad::point ? kToolLoadFrame : 0};
+    c.coefficient[0] = 2e-6;  // [m/kg]: the lift's stiffness
+    if (load == ComplianceLoad::arm_masses) {
+      ASSERT_EQ(nominal_arm_masses(RobotType::ur5e, &c.masses), Status::ok);  // links 1 .. 6 of the arm
+      for (int link = kSixJoints; link > 0; --link) {  // one link on: the carriage carries the arm's six
+        c.masses.link_mass_kg[link] = c.masses.link_mass_kg[link - 1];
+        c.masses.link_com_m[link] = c.masses.link_com_m[link - 1];
+      }
+      c.masses.link_mass_kg[0] = 0.0;
+      c.masses.payload_kg = 1.5;
+    }
+    ASSERT_EQ(check_compliance(c, model), Status::ok);
+    double total_kg = 1.0;  // the point load's unit mass
+    if (load == ComplianceLoad::arm_masses) {
+      total_kg = c.masses.payload_kg;
+      for (int link = 0; link < model.joint_count; ++link) total_kg += c.masses.link_mass_kg[link];
+    }
+    RobotModel rigid = model;
+    rigid.compliance.term_count = 0;
+    for (int i = 0; i < 20; ++i) {
+      JointVector q = test::random_joints(&random);
+      for (int j = kSixJoints; j > 0; --j) q(j) = q(j - 1);
+      q(0) = random.uniform(0.0, 1.0);
+      double basis[kMaxComplianceTerms];
+      JointVector dq;
+      EXPECT_NO_HEAP(dq = compliance_deflection(model, q, basis));
+      // The weight along the axis, whatever the arm's pose: z0 . g = -1 per kg.
+      EXPECT_NEAR(basis[0], -total_kg, 1e-12 * total_kg);
+      EXPECT_EQ(dq(0), c.coefficient[0] * basis[0]);
+      for (int j = 1; j < model.joint_count; ++j) EXPECT_EQ(dq(j), 0.0);
+      EXPECT_TRUE(same_bits(fk_tool_point(model, q), fk_tool_point(rigid, q + dq)));
+    }
+  }
+}
+
+TEST(Compliance, TermsMustBeOfTheModelsJointsAndHarmonicsOfItsRevoluteOnes) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints";
+  const RobotModel lifted = lifted_ur5e();
+  ComplianceModel c;
+  EXPECT_EQ(append_harmonic_terms(1, lifted, &c), Status::ok);
+  EXPECT_EQ(c.term_count, 2 * kSixJoints);  // the six revolute joints, not the lift
+  EXPECT_EQ(harmonic_term_count(lifted, 2), 4 * kSixJoints);
+  for (int t = 0; t < c.term_count; ++t) EXPECT_NE(c.terms[t].joint, 0) << t;
+  EXPECT_STREQ(compliance_term_name(c, 0), "h_j2_sin1");
+  EXPECT_STREQ(compliance_term_name(c, c.term_count - 1), "h_j7_cos1");
+  EXPECT_EQ(check_compliance(c, lifted), Status::ok);
+  ComplianceModel bad = c;
+  bad.terms[0].joint = 0;  // a harmonic of the lift's length
+  EXPECT_EQ(check_compliance(bad, lifted), Status::invalid_argument);
+  bad = c;
+  bad.terms[0].joint = 7;  // beyond the model's joints
+  EXPECT_EQ(check_compliance(bad, lifted), Status::invalid_argument);
+  EXPECT_EQ(check_compliance(c, nominal_model(RobotType::ur5e)), Status::invalid_argument);  // j7 of a six-joint arm
+  ComplianceModel point;
+  point.term_count = 2;
+  point.terms[0] = ComplianceTerm{1, 7};  // the flange frame of seven joints
+  point.terms[1] = ComplianceTerm{1, 8};  // no eighth DH frame (but in a build of seven, the tool's number)
+  EXPECT_EQ(check_compliance(point, lifted), kToolLoadFrame == 8 ? Status::ok : Status::invalid_argument);
+  point.term_count = 1;
+  EXPECT_EQ(check_compliance(point, lifted), Status::ok);
+  EXPECT_STREQ(compliance_term_name(point, 0), "c_j2_o7");
 }
 
 }  // namespace

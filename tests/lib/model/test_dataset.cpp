@@ -422,6 +422,20 @@ TEST(PoseRunEnd, ARunOfEqualJointsIsOnePoseAnyDifferenceEndsIt) {
   EXPECT_EQ(pose_run_end(all, 4), 5u);
 }
 
+TEST(Dataset, ReadingsFitAJointCountWhenTheJointsBeyondItAreZero) {
+  static Dataset<4> dataset;
+  dataset.clear();
+  JointVector q;
+  q << 0.1, -0.2, 0.3, 0.4;
+  ASSERT_EQ(dataset.add(q, Vec3::Zero()), Status::ok);
+  bool fits = false;
+  EXPECT_NO_HEAP(fits = readings_fit_joint_count(dataset.samples(), 4));
+  EXPECT_TRUE(fits);
+  EXPECT_TRUE(readings_fit_joint_count(dataset.samples(), kMaxJoints));
+  EXPECT_FALSE(readings_fit_joint_count(dataset.samples(), 3));
+  EXPECT_TRUE(readings_fit_joint_count(Span<const Sample>(), 1));
+}
+
 /// Reverses the first `count` samples by exchanges, as a caller that reorders does.
 void reverse_first(DatasetBase* dataset, std::size_t count) {
   for (std::size_t i = 0; i < count / 2; ++i) dataset->swap_samples(i, count - 1 - i);

@@ -74,29 +74,34 @@ RobotModel compliant_model(Random* random) {
 
 TEST(FullParams, LayoutIsGeometryThenBaseThenCompliance) {
   EXPECT_EQ(kBaseParamCount, 6);
-  EXPECT_EQ(kRigidParamCount, 33);
-  EXPECT_EQ(kFullParamCount, kRigidParamCount + kMaxJointTerms);  // 37, 61 or 73: the build's capacity
-  EXPECT_EQ(base_rotation_param_index(0), 27);
-  EXPECT_EQ(base_rotation_param_index(2), 29);
-  EXPECT_EQ(base_translation_param_index(0), 30);
-  EXPECT_EQ(base_translation_param_index(2), 32);
-  EXPECT_EQ(compliance_param_index(0), 33);
-  EXPECT_EQ(compliance_param_index(3), 36);
+  EXPECT_EQ(rigid_param_count(kSixJoints), 33);
+  EXPECT_EQ(kFullParamCount, rigid_param_count(kMaxJoints) + kMaxJointTerms);  // 37, 73 or 81: the build's capacity
+  // A six-joint model's layout in a build of any capacity (below: the six-joint indices).
+  EXPECT_EQ(base_rotation_param_index(kSixJoints, 0), 27);
+  EXPECT_EQ(base_rotation_param_index(kSixJoints, 2), 29);
+  EXPECT_EQ(base_translation_param_index(kSixJoints, 0), 30);
+  EXPECT_EQ(base_translation_param_index(kSixJoints, 2), 32);
+  EXPECT_EQ(compliance_param_index(kSixJoints, 0), 33);
+  EXPECT_EQ(compliance_param_index(kSixJoints, 3), 36);
   EXPECT_EQ(param_bit(0), ParamMask{1});
   EXPECT_EQ(param_bit(36), ParamMask{0x1000000000});
-  EXPECT_EQ(kAllParamsMask, ParamMask{0x1FFFFFFFF});                                             // bits 0 .. 32
-  EXPECT_EQ(kComplianceParamsMask, ((ParamMask{1} << kFullParamCount) - 1U) & ~kAllParamsMask);  // 33 ..
-  EXPECT_EQ(kValidParamsMask, (ParamMask{1} << kFullParamCount) - 1U);                           // every parameter
-  EXPECT_EQ(kOtherTargetTools, param_bit(kFullParamCount));                                      // past every parameter
-  EXPECT_EQ(compliance_params_mask(0), ParamMask{0});
-  EXPECT_EQ(compliance_params_mask(1), ParamMask{0x200000000});
-  EXPECT_EQ(compliance_params_mask(2), ParamMask{0x600000000});
-  EXPECT_EQ(compliance_params_mask(4), ParamMask{0x1E00000000});  // bits 33 .. 36
-  EXPECT_EQ(compliance_params_mask(kMaxComplianceTerms), kComplianceParamsMask);
-  EXPECT_TRUE(mask_has(kAllParamsMask, 32));
-  EXPECT_FALSE(mask_has(kAllParamsMask, 33));
-  EXPECT_TRUE(mask_has(kComplianceParamsMask, 33));
-  EXPECT_FALSE(mask_has(kComplianceParamsMask, 0));
+  EXPECT_EQ(rigid_params_mask(kSixJoints), ParamMask{0x1FFFFFFFF});            // bits 0 .. 32
+  const int six_joint_count = rigid_param_count(kSixJoints) + kMaxJointTerms;  // a six-joint model's parameters
+  EXPECT_EQ(compliance_params_mask(kSixJoints, kMaxComplianceTerms),
+            ((ParamMask{1} << six_joint_count) - 1U) & ~rigid_params_mask(kSixJoints));  // 33 ..
+  EXPECT_EQ(valid_params_mask(kSixJoints), (ParamMask{1} << six_joint_count) - 1U);      // every parameter
+  EXPECT_EQ(valid_params_mask(kMaxJoints), (ParamMask{1} << kFullParamCount) - 1U);      // the capacity
+  EXPECT_EQ(kOtherTargetTools, param_bit(kFullParamCount));                              // past every parameter
+  EXPECT_EQ(compliance_params_mask(kSixJoints, 0), ParamMask{0});
+  EXPECT_EQ(compliance_params_mask(kSixJoints, 1), ParamMask{0x200000000});
+  EXPECT_EQ(compliance_params_mask(kSixJoints, 2), ParamMask{0x600000000});
+  EXPECT_EQ(compliance_params_mask(kSixJoints, 4), ParamMask{0x1E00000000});  // bits 33 .. 36
+  EXPECT_EQ(compliance_params_mask(kSixJoints, kMaxComplianceTerms),
+            compliance_params_mask(kSixJoints, kMaxComplianceTerms));
+  EXPECT_TRUE(mask_has(rigid_params_mask(kSixJoints), 32));
+  EXPECT_FALSE(mask_has(rigid_params_mask(kSixJoints), 33));
+  EXPECT_TRUE(mask_has(compliance_params_mask(kSixJoints, kMaxComplianceTerms), 33));
+  EXPECT_FALSE(mask_has(compliance_params_mask(kSixJoints, kMaxComplianceTerms), 0));
 }
 
 TEST(FullParams, MaskCountAndIndicesAgreeWithABitLoopOnRandomMasks) {
@@ -123,34 +128,38 @@ TEST(FullParams, MaskCountAndIndicesAgreeWithABitLoopOnRandomMasks) {
       ASSERT_LT(index[k], kFullParamCount);
       rebuilt |= ParamMask{1} << static_cast<unsigned>(index[k]);
     }
-    EXPECT_EQ(rebuilt, mask & kValidParamsMask) << hex(mask);
+    EXPECT_EQ(rebuilt, mask & valid_params_mask(kMaxJoints)) << hex(mask);
   }
   int index[kFullParamCount] = {};
   EXPECT_EQ(mask_count(kOtherTargetTools), 0);  // not a parameter
   EXPECT_EQ(mask_indices(kOtherTargetTools | param_bit(5), index), 1);
   EXPECT_EQ(index[0], 5);
-  EXPECT_EQ(mask_count(kAllParamsMask), 33);
-  EXPECT_EQ(mask_count(compliance_params_mask(3)), 3);
+  EXPECT_EQ(mask_count(rigid_params_mask(kSixJoints)), 33);
+  EXPECT_EQ(mask_count(compliance_params_mask(kSixJoints, 3)), 3);
 }
 
 TEST(FullParams, EveryParameterHasItsName) {
-  static const char* const kExpected[kRigidParamCount + 4] = {
+  static const char* const kExpected[rigid_param_count(kSixJoints) + 4] = {
       "theta1",  "d1",          "a1",          "alpha1",      "theta2",     "d2",      "a2",      "alpha2",
       "theta3",  "d3",          "a3",          "alpha3",      "theta4",     "d4",      "a4",      "alpha4",
       "theta5",  "d5",          "a5",          "alpha5",      "theta6",     "d6",      "a6",      "alpha6",
       "tool_x",  "tool_y",      "tool_z",      "base_rx",     "base_ry",    "base_rz", "base_tx", "base_ty",
       "base_tz", "compliance1", "compliance2", "compliance3", "compliance4"};
   const char* names[kFullParamCount] = {};
-  EXPECT_NO_HEAP(for (int i = 0; i < kFullParamCount; ++i) names[i] = full_param_name(i));
-  for (int i = 0; i < kRigidParamCount + 4; ++i) EXPECT_STREQ(names[i], kExpected[i]) << i;
-  for (int i = kRigidParamCount + 4; i < kFullParamCount; ++i) {  // a larger capacity: the same pattern
-    EXPECT_EQ(std::string(names[i]), "compliance" + std::to_string(i - kRigidParamCount + 1)) << i;
+  EXPECT_NO_HEAP(for (int i = 0; i < kFullParamCount; ++i) names[i] = full_param_name(i, kSixJoints));
+  for (int i = 0; i < rigid_param_count(kSixJoints) + 4; ++i) EXPECT_STREQ(names[i], kExpected[i]) << i;
+  const int six_joint_count = rigid_param_count(kSixJoints) + kMaxJointTerms;
+  for (int i = rigid_param_count(kSixJoints) + 4; i < six_joint_count; ++i) {  // a larger capacity: the same pattern
+    EXPECT_EQ(std::string(names[i]), "compliance" + std::to_string(i - rigid_param_count(kSixJoints) + 1)) << i;
   }
-  EXPECT_STREQ(full_param_name(model_param_index(4, DhField::d)), "d5");
-  EXPECT_STREQ(full_param_name(base_translation_param_index(1)), "base_ty");
-  EXPECT_STREQ(full_param_name(compliance_param_index(1)), "compliance2");
-  EXPECT_STREQ(full_param_name(-7), "?");
-  EXPECT_STREQ(full_param_name(kFullParamCount + 1), "?");
+  EXPECT_STREQ(full_param_name(model_param_index(4, DhField::d), kSixJoints), "d5");
+  EXPECT_STREQ(full_param_name(base_translation_param_index(kSixJoints, 1), kSixJoints), "base_ty");
+  EXPECT_STREQ(full_param_name(compliance_param_index(kSixJoints, 1), kSixJoints), "compliance2");
+  EXPECT_STREQ(full_param_name(-7, kSixJoints), "?");
+  if (six_joint_count < kFullParamCount) {  // beyond a six-joint model's
+    EXPECT_STREQ(names[six_joint_count], "?");
+  }
+  EXPECT_STREQ(full_param_name(kFullParamCount + 1, kSixJoints), "?");
 }
 
 TEST(FullParams, ComplianceNamesFollowTheModelsTerms) {
@@ -162,20 +171,20 @@ TEST(FullParams, ComplianceNamesFollowTheModelsTerms) {
   const auto name = [&](int index) { return names[index + 1]; };
   // The UR5's default point terms (compliance.hpp): shoulder (joint 2) with loads at frames 2
   // and 4, elbow (joint 3) with loads at frame 4 and the tool.
-  EXPECT_STREQ(name(compliance_param_index(0)), "c_j2_o2");
-  EXPECT_STREQ(name(compliance_param_index(1)), "c_j2_o4");
-  EXPECT_STREQ(name(compliance_param_index(2)), "c_j3_o4");
-  EXPECT_STREQ(name(compliance_param_index(3)), "c_j3_tool");
+  EXPECT_STREQ(name(compliance_param_index(kSixJoints, 0)), "c_j2_o2");
+  EXPECT_STREQ(name(compliance_param_index(kSixJoints, 1)), "c_j2_o4");
+  EXPECT_STREQ(name(compliance_param_index(kSixJoints, 2)), "c_j3_o4");
+  EXPECT_STREQ(name(compliance_param_index(kSixJoints, 3)), "c_j3_tool");
   EXPECT_STREQ(name(0), "theta1");  // the rigid ones keep their plain names
-  EXPECT_STREQ(name(base_rotation_param_index(1)), "base_ry");
+  EXPECT_STREQ(name(base_rotation_param_index(kSixJoints, 1)), "base_ry");
   EXPECT_STREQ(name(-1), "?");
   EXPECT_STREQ(name(kFullParamCount), "?");
   model.compliance.term_count = 2;  // terms 3 and 4 are not the model's
-  EXPECT_STREQ(full_param_name(compliance_param_index(1), model), "c_j2_o4");
-  EXPECT_STREQ(full_param_name(compliance_param_index(2), model), "?");
-  EXPECT_STREQ(full_param_name(compliance_param_index(3), model), "?");
+  EXPECT_STREQ(full_param_name(compliance_param_index(kSixJoints, 1), model), "c_j2_o4");
+  EXPECT_STREQ(full_param_name(compliance_param_index(kSixJoints, 2), model), "?");
+  EXPECT_STREQ(full_param_name(compliance_param_index(kSixJoints, 3), model), "?");
   const RobotModel rigid = nominal_model(RobotType::ur10);
-  EXPECT_STREQ(full_param_name(compliance_param_index(0), rigid), "?");
+  EXPECT_STREQ(full_param_name(compliance_param_index(kSixJoints, 0), rigid), "?");
 }
 
 TEST(FullParams, OtherToolNamesCoverTargetsTwoAndThreeOnly) {
@@ -231,18 +240,18 @@ TEST(ApplyFullIncrement, AddsToTheModelAndToTheUsedComplianceTermsOnly) {
     const RobotModel before = model;
     FullParams increment;
     for (int i = 0; i < kFullParamCount; ++i) increment(i) = 1e-3 * random.normal();
-    increment.segment<kBaseParamCount>(kModelParamCount).setZero();  // the base is the next test's
+    increment.segment<kBaseParamCount>(model_param_count(kSixJoints)).setZero();  // the base is the next test's
     EXPECT_NO_HEAP(apply_full_increment(increment, &model, &base));
     const ModelParams after_params = to_params(model);
     const ModelParams before_params = to_params(before);
-    for (int i = 0; i < kModelParamCount; ++i) {
-      EXPECT_EQ(after_params(i), before_params(i) + increment(i)) << full_param_name(i);
+    for (int i = 0; i < model_param_count(kSixJoints); ++i) {
+      EXPECT_EQ(after_params(i), before_params(i) + increment(i)) << full_param_name(i, kSixJoints);
     }
     EXPECT_EQ(model.joints[1].a_m, before.joints[1].a_m + increment(model_param_index(1, DhField::a)));
-    EXPECT_EQ(model.tool_m.z(), before.tool_m.z() + increment(tool_param_index(2)));
+    EXPECT_EQ(model.tool_m.z(), before.tool_m.z() + increment(tool_param_index(kSixJoints, 2)));
     for (int t = 0; t < 2; ++t) {
       EXPECT_EQ(model.compliance.coefficient[t],
-                before.compliance.coefficient[t] + increment(compliance_param_index(t)));
+                before.compliance.coefficient[t] + increment(compliance_param_index(kSixJoints, t)));
     }
     // Terms 3 and 4 are not in use (term_count 2): their coefficients stay.
     EXPECT_EQ(model.compliance.coefficient[2], before.compliance.coefficient[2]);
@@ -270,8 +279,8 @@ TEST(ApplyFullIncrement, ComposesTheBaseAsALocalIncrement) {
     const Vec3 rotation = (trial % 2 == 0 ? 1e-3 : 0.8) * gaussian(&random);
     const Vec3 translation = 0.1 * gaussian(&random);
     FullParams increment = FullParams::Zero();
-    increment.segment<3>(base_rotation_param_index(0)) = rotation;
-    increment.segment<3>(base_translation_param_index(0)) = translation;
+    increment.segment<3>(base_rotation_param_index(kSixJoints, 0)) = rotation;
+    increment.segment<3>(base_translation_param_index(kSixJoints, 0)) = translation;
     EXPECT_NO_HEAP(apply_full_increment(increment, &model, &base));
     // base <- base * (Exp(rotation), translation), Exp by Eigen's angle-axis.
     const Mat3 exp = Eigen::AngleAxisd(rotation.norm(), rotation.normalized()).toRotationMatrix();
@@ -284,8 +293,8 @@ TEST(ApplyFullIncrement, ComposesTheBaseAsALocalIncrement) {
   RigidTransform base;
   base.translation_m << 0.0, 0.0, 2.0;
   FullParams increment = FullParams::Zero();
-  increment(base_rotation_param_index(2)) = 0.5 * math::kPi;
-  increment(base_translation_param_index(0)) = 1.0;
+  increment(base_rotation_param_index(kSixJoints, 2)) = 0.5 * math::kPi;
+  increment(base_translation_param_index(kSixJoints, 0)) = 1.0;
   apply_full_increment(increment, &model, &base);
   EXPECT_LT((base.translation_m - Vec3(1.0, 0.0, 2.0)).norm(), 1e-15);
   EXPECT_LT((base.rotation * Vec3(1.0, 0.0, 0.0) - Vec3(0.0, 1.0, 0.0)).norm(), 1e-15);
@@ -299,8 +308,8 @@ TEST(ApplyFullIncrement, BaseRzAndTzMoveTheRobotLikeTheta1AndD1) {
     const double h_rad = random.uniform(-0.05, 0.05);
     const double h_m = random.uniform(-0.05, 0.05);
     FullParams through_base = FullParams::Zero();
-    through_base(base_rotation_param_index(2)) = h_rad;
-    through_base(base_translation_param_index(2)) = h_m;
+    through_base(base_rotation_param_index(kSixJoints, 2)) = h_rad;
+    through_base(base_translation_param_index(kSixJoints, 2)) = h_m;
     FullParams through_joint = FullParams::Zero();
     through_joint(model_param_index(0, DhField::theta_offset)) = h_rad;
     through_joint(model_param_index(0, DhField::d)) = h_m;

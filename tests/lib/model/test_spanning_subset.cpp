@@ -27,11 +27,11 @@ TEST(SpanningSubset, WrappedJointsAreOnePose) {
   JointVector turned = q;
   turned(0) += 2.0 * math::kPi;
   turned(5) -= 4.0 * math::kPi;
-  EXPECT_NEAR(pose_distance_sq(sample_at(q), sample_at(turned)), 0.0, 1e-24);
+  EXPECT_NEAR(pose_distance_sq(sample_at(q), sample_at(turned), kSixJoints), 0.0, 1e-24);
   JointVector across = q;  // 3.0 and -3.0 rad are 0.28 rad apart, not 6
   across(5) = -3.0;
-  EXPECT_NEAR(pose_distance_sq(sample_at(q), sample_at(across)), std::pow(2.0 * math::kPi - 6.0, 2), 1e-12);
-  EXPECT_NEAR(pose_distance_sq(sample_at(q, 0), sample_at(q, 1)), math::kPi * math::kPi, 1e-12);
+  EXPECT_NEAR(pose_distance_sq(sample_at(q), sample_at(across), kSixJoints), std::pow(2.0 * math::kPi - 6.0, 2), 1e-12);
+  EXPECT_NEAR(pose_distance_sq(sample_at(q, 0), sample_at(q, 1), kSixJoints), math::kPi * math::kPi, 1e-12);
 }
 
 // Many samples in a few tight clusters of poses (a robot's stops, or a grid that favours
@@ -42,7 +42,7 @@ TEST(SpanningSubset, TakesOneSampleOfEveryClusterFirst) {
     constexpr int kClusters = 12;
     JointVector centres[kClusters];
     for (JointVector& c : centres) {
-      for (int j = 0; j < kJointCount; ++j) c(j) = rng.uniform(-math::kPi, math::kPi);
+      for (int j = 0; j < kSixJoints; ++j) c(j) = rng.uniform(-math::kPi, math::kPi);
     }
     std::vector<Sample> samples;
     std::vector<int> cluster_of;
@@ -50,14 +50,14 @@ TEST(SpanningSubset, TakesOneSampleOfEveryClusterFirst) {
       // uneven: cluster 0 holds half the samples
       const int c = rng.uniform(0.0, 1.0) < 0.5 ? 0 : 1 + static_cast<int>(rng.below(kClusters - 1));
       JointVector q = centres[c];
-      for (int j = 0; j < kJointCount; ++j) q(j) += rng.uniform(-1e-3, 1e-3);
+      for (int j = 0; j < kSixJoints; ++j) q(j) += rng.uniform(-1e-3, 1e-3);
       samples.push_back(sample_at(q));
       cluster_of.push_back(c);
     }
     std::vector<double> scratch(samples.size());
     std::uint32_t chosen[kClusters] = {};
     std::size_t count = 0;
-    EXPECT_NO_HEAP(count = spanning_subset(Span<const Sample>(samples.data(), samples.size()),
+    EXPECT_NO_HEAP(count = spanning_subset(Span<const Sample>(samples.data(), samples.size()), kSixJoints,
                                            Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>(chosen)));
     ASSERT_EQ(count, static_cast<std::size_t>(kClusters)) << "seed " << seed;
     std::set<int> clusters;
@@ -76,28 +76,32 @@ TEST(SpanningSubset, IsDeterministicAndBoundedByTheRoom) {
   Random rng(7);
   std::vector<Sample> samples(300);
   for (Sample& s : samples) {
-    for (int j = 0; j < kJointCount; ++j) s.q_rad(j) = rng.uniform(-3.0, 3.0);
+    for (int j = 0; j < kSixJoints; ++j) s.q_rad(j) = rng.uniform(-3.0, 3.0);
     s.target = rng.uniform(0.0, 1.0) < 0.3 ? 1 : 0;
   }
   std::vector<double> scratch(samples.size());
   const Span<const Sample> all(samples.data(), samples.size());
   std::uint32_t a[40] = {};
   std::uint32_t b[40] = {};
-  ASSERT_EQ(spanning_subset(all, Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>(a)), 40u);
-  ASSERT_EQ(spanning_subset(all, Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>(b)), 40u);
+  ASSERT_EQ(spanning_subset(all, kSixJoints, Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>(a)),
+            40u);
+  ASSERT_EQ(spanning_subset(all, kSixJoints, Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>(b)),
+            40u);
   for (int k = 0; k < 40; ++k) EXPECT_EQ(a[k], b[k]);
   int second_target = 0;
   for (std::uint32_t position : a) second_target += samples[position].target;
   EXPECT_GT(second_target, 0);  // both reflectors are represented
 
   std::uint32_t room[400] = {};  // more room than samples: every sample, in order
-  ASSERT_EQ(spanning_subset(all, Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>(room)), 300u);
+  ASSERT_EQ(spanning_subset(all, kSixJoints, Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>(room)),
+            300u);
   for (std::uint32_t k = 0; k < 300; ++k) EXPECT_EQ(room[k], k);
 
   // Too little scratch, no room or no samples: nothing chosen.
-  EXPECT_EQ(spanning_subset(all, Span<double>(scratch.data(), 299), Span<std::uint32_t>(a)), 0u);
-  EXPECT_EQ(spanning_subset(all, Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>()), 0u);
-  EXPECT_EQ(spanning_subset(Span<const Sample>(), Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>(a)),
+  EXPECT_EQ(spanning_subset(all, kSixJoints, Span<double>(scratch.data(), 299), Span<std::uint32_t>(a)), 0u);
+  EXPECT_EQ(spanning_subset(all, kSixJoints, Span<double>(scratch.data(), scratch.size()), Span<std::uint32_t>()), 0u);
+  EXPECT_EQ(spanning_subset(Span<const Sample>(), kSixJoints, Span<double>(scratch.data(), scratch.size()),
+                            Span<std::uint32_t>(a)),
             0u);
 }
 

@@ -19,7 +19,7 @@ namespace {
 /// Random deltas of the given sizes [m], [rad].
 UrCalibrationDeltas random_deltas(Random* random, double length_m, double angle_rad) {
   UrCalibrationDeltas d;
-  for (int j = 0; j < kJointCount; ++j) {
+  for (int j = 0; j < kSixJoints; ++j) {
     d.delta_theta_rad[j] = angle_rad * random->normal();
     d.delta_a_m[j] = length_m * random->normal();
     d.delta_d_m[j] = length_m * random->normal();
@@ -67,7 +67,7 @@ TEST(UrDeltas, KnownDeltasMoveTheDatasheetPoint) {
   // Every other field keeps its bits.
   const ModelParams before = to_params(nominal);
   const ModelParams after = to_params(calibrated);
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
     if (i == model_param_index(1, DhField::a) || i == model_param_index(0, DhField::d) ||
         i == model_param_index(3, DhField::d)) {
       continue;
@@ -83,7 +83,7 @@ TEST(UrDeltas, ThetaDeltasAreJointOffsets) {
     const RobotModel nominal = nominal_model(type);
     UrCalibrationDeltas deltas;
     JointVector offset;
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       deltas.delta_theta_rad[j] = random.uniform(-0.3, 0.3);
       offset(j) = deltas.delta_theta_rad[j];
     }
@@ -116,7 +116,7 @@ TEST(UrDeltas, DeltasRoundTripThroughTheModelTheyMade) {
     ASSERT_EQ(apply_ur_deltas(nominal, deltas, &calibrated), Status::ok);
     UrCalibrationDeltas back;
     EXPECT_NO_HEAP(back = ur_deltas_between(nominal, calibrated));
-    for (int k = 0; k < 4 * kJointCount; ++k) {
+    for (int k = 0; k < 4 * kSixJoints; ++k) {
       // (n + d) - n differs from d by at most half an ulp of n + d (|n| < 2 m).
       EXPECT_NEAR(value(back, k), value(deltas, k), 2.3e-16) << trial << " " << k;
     }
@@ -134,7 +134,7 @@ TEST(UrDeltas, DeltasBetweenAreFieldDifferencesAndIgnoreTheTool) {
   calibrated.other_tools_m[1] << 0.0, 0.0, 0.1;
   UrCalibrationDeltas d;
   EXPECT_NO_HEAP(d = ur_deltas_between(nominal, calibrated));
-  for (int k = 0; k < 4 * kJointCount; ++k) {
+  for (int k = 0; k < 4 * kSixJoints; ++k) {
     double expected = 0.0;
     if (k == 4 * 2 + 0) expected = 0.25;
     if (k == 4 * 4 + 3) expected = -0.125;
@@ -175,7 +175,7 @@ TEST(UrDeltas, AnyNonFiniteDeltaIsRefusedAndTheOutputLeftAlone) {
                                -std::numeric_limits<double>::infinity()};
   RobotModel sentinel = nominal_model(RobotType::ur3);
   sentinel.tool_m << 7.0, 8.0, 9.0;
-  for (int k = 0; k < 4 * kJointCount; ++k) {
+  for (int k = 0; k < 4 * kSixJoints; ++k) {
     for (const double bad : bad_values) {
       UrCalibrationDeltas deltas = good;
       field(&deltas, k) = bad;

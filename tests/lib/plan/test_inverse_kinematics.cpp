@@ -9,6 +9,7 @@
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/plan/inverse_kinematics.hpp"
 #include "testkit/alloc_trap.hpp"
+#include "testkit/other_arms.hpp"
 #include "testkit/test_data.hpp"
 
 namespace hivecal::inverse_kinematics_test {
@@ -32,26 +33,33 @@ TEST(InverseKinematics, RotationVectorsRoundTripAtEveryAngle) {
   }
 }
 
+/// Solves for `target` with starts seeded by `seed` and checks the joints reach it within the
+/// tolerances and `limits`, nothing beyond the model's joints.
+void expect_reached(const RobotModel& model, const JointLimits& limits, const RigidTransform& target,
+                    std::uint64_t seed) {
+  Random starts(seed);
+  JointVector q;
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = solve_flange_pose(model, limits, target, InverseKinematicsOptions{}, &starts, &q));
+  ASSERT_EQ(status, Status::ok) << seed;
+  const RigidTransform reached = fk_flange(model, q);
+  EXPECT_LT((reached.translation_m - target.translation_m).norm(), 1e-6) << seed;
+  EXPECT_LT(rotation_vector_of(target.rotation * reached.rotation.transpose()).norm(), 1e-6) << seed;
+  for (int j = 0; j < model.joint_count; ++j) {
+    EXPECT_GE(q(j), limits.lower_rad(j));
+    EXPECT_LE(q(j), limits.upper_rad(j));
+  }
+  for (int j = model.joint_count; j < kMaxJoints; ++j) EXPECT_EQ(q(j), 0.0);
+}
+
 TEST(InverseKinematics, PosesOfRandomJointsAreReachedWithinTheLimits) {
   Random draws(11);
   const JointLimits limits = default_joint_limits(RobotType::ur5);
   for (int trial = 0; trial < 40; ++trial) {
     const RobotModel model = test::perturbed_model(nominal_model(RobotType::ur5), &draws, 1e-3, 1e-3);
     JointVector q_true;
-    for (int j = 0; j < kJointCount; ++j) q_true(j) = draws.uniform(-3.0, 3.0);
-    const RigidTransform target = fk_flange(model, q_true);
-    Random starts(100 + static_cast<std::uint64_t>(trial));
-    JointVector q;
-    Status status = Status::invalid_argument;
-    EXPECT_NO_HEAP(status = solve_flange_pose(model, limits, target, InverseKinematicsOptions{}, &starts, &q));
-    ASSERT_EQ(status, Status::ok) << trial;
-    const RigidTransform reached = fk_flange(model, q);
-    EXPECT_LT((reached.translation_m - target.translation_m).norm(), 1e-6) << trial;
-    EXPECT_LT(rotation_vector_of(target.rotation * reached.rotation.transpose()).norm(), 1e-6) << trial;
-    for (int j = 0; j < kJointCount; ++j) {
-      EXPECT_GE(q(j), limits.lower_rad(j));
-      EXPECT_LE(q(j), limits.upper_rad(j));
-    }
+    for (int j = 0; j < kSixJoints; ++j) q_true(j) = draws.uniform(-3.0, 3.0);
+    expect_reached(model, limits, fk_flange(model, q_true), 100 + static_cast<std::uint64_t>(trial));
   }
 }
 
@@ -71,6 +79,23 @@ TEST(InverseKinematics, AnUnreachablePoseAndBadArgumentsAreRefused) {
   no_starts.starts = 0;
   EXPECT_EQ(solve_flange_pose(model, limits, far, no_starts, &random, &q), Status::invalid_argument);
   EXPECT_EQ(solve_flange_pose(model, limits, far, InverseKinematicsOptions{}, nullptr, &q), Status::invalid_argument);
+}
+
+// A seven-joint arm has a continuum of joints for a pose: any one within the limits will do.
+TEST(InverseKinematics, ARedundantArmReachesPosesWithinItsLimits) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints";
+  Random draws(12);
+  const RobotModel model = test::many_joint_arm_model(test::ManyJointArm::iiwa14);
+  JointLimits limits;
+  const double limit_rad[7] = {2.96, 2.09, 2.96, 2.09, 2.96, 2.09, 3.05};  // the iiwa 14's
+  for (int j = 0; j < 7; ++j) {
+    limits.lower_rad(j) = -limit_rad[j];
+    limits.upper_rad(j) = limit_rad[j];
+  }
+  for (int trial = 0; trial < 20; ++trial) {
+    const JointVector q_true = test::many_joint_arm_joints(test::ManyJointArm::iiwa14, &draws);
+    expect_reached(model, limits, fk_flange(model, q_true), 200 + static_cast<std::uint64_t>(trial));
+  }
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "hivecal/plan/pose_plan.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/lm_test_data.hpp"
+#include "testkit/other_arms.hpp"
 #include "testkit/plan_test_data.hpp"
 #include "testkit/test_data.hpp"
 
@@ -48,7 +49,7 @@ TEST(PosePlan, EveryPlannedPoseMeetsEveryConstraint) {
     EXPECT_GE(reflector.head<2>().norm(), options.constraints.keep_out_radius_m) << i;
     const Vec3 line = (options.constraints.tracker_m - reflector).normalized();
     EXPECT_GE(flange.rotation.col(2).dot(line), cos_acceptance - 1e-12) << i;
-    for (int j = 0; j < kJointCount; ++j) {
+    for (int j = 0; j < kSixJoints; ++j) {
       EXPECT_GE(q(j), options.constraints.limits.lower_rad(j));
       EXPECT_LE(q(j), options.constraints.limits.upper_rad(j));
     }
@@ -328,7 +329,7 @@ TEST(PosePlan, ToolDownLeavesParametersThatNoPoseSetIdentifies) {
   std::printf("[plan] tool down: the pool keeps %d of 33; facing the tracker %d; freeing the orientation adds:",
               result.pool.kept_count(), facing.kept_count());
   for (int k = 0; k < kFullParamCount; ++k) {
-    if (mask_has(gained, k)) std::printf(" %s", full_param_name(k));
+    if (mask_has(gained, k)) std::printf(" %s", full_param_name(k, kSixJoints));
   }
   std::printf("\n");
   // Three more null directions with the joint 6 axis always vertical (the dropping rule names
@@ -336,9 +337,63 @@ TEST(PosePlan, ToolDownLeavesParametersThatNoPoseSetIdentifies) {
   // combination of theta4 and a4, d4 one of alpha4 (d2, d3 are lost either way).
   EXPECT_EQ(result.pool.kept_mask & ~facing.kept_mask, 0u);  // down identifies nothing more
   EXPECT_EQ(gained, param_bit(model_param_index(0, DhField::a)) | param_bit(model_param_index(3, DhField::d)) |
-                        param_bit(tool_param_index(2)));
+                        param_bit(tool_param_index(kSixJoints, 2)));
   // Every tool-down plan, whatever it selects, keeps at most what its pool keeps.
   EXPECT_EQ(result.planned.identifiability.kept_mask & ~result.pool.kept_mask, 0u);
+}
+
+// A seven-joint arm plans as any other: its extra joint is the planner's freedom (more poses
+// meet the constraints), not an error; tool-down, a UR wrist's rule, needs six joints.
+TEST(PosePlan, ASevenJointArmPlansWithinItsLimits) {
+  if (kMaxJoints < 7) GTEST_SKIP() << "a build of six joints";
+  RobotModel model = test::many_joint_arm_model(test::ManyJointArm::iiwa14);
+  model.tool_m = kNominalTool;
+  PlanOptions options = small_options(256, 20, 7);
+  options.restarts = 1;
+  options.refine_passes = 1;
+  options.free_mask = lm_param_mask(LmParamSet::full, 0, model);
+  for (int j = 0; j < 7; ++j) {
+    options.constraints.limits.lower_rad(j) = -2.0;
+    options.constraints.limits.upper_rad(j) = 2.0;
+  }
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = plan_session(model, options, &workspace, &result));
+  ASSERT_EQ(status, Status::ok) << status_message(status);
+  ASSERT_EQ(result.pose_count, 20u);
+  for (std::size_t i = 0; i < result.pose_count; ++i) {
+    const JointVector& q = result.poses[i];
+    EXPECT_TRUE(pose_meets_constraints(model, options.constraints, q)) << i;
+    for (int j = 0; j < 7; ++j) {
+      EXPECT_GE(q(j), -2.0);
+      EXPECT_LE(q(j), 2.0);
+    }
+    for (int j = 7; j < kMaxJoints; ++j) EXPECT_EQ(q(j), 0.0);  // nothing beyond the arm's joints
+  }
+  EXPECT_GE(result.planned.identifiability.kept_count(), result.pool.kept_count());  // what the pool identifies
+  options.constraints.orientation = PlanOrientation::tool_down;
+  EXPECT_EQ(plan_session(model, options, &workspace, &result), Status::invalid_argument);
+}
+
+// A built-in type's limits: UR's controller's (+-360 deg, the elbow +-180 deg); a seven-axis
+// arm's maker's, which plan keeps when the command names the arm.
+TEST(PosePlan, DefaultLimitsAreTheControllersForUrAndTheMakersForTheOthers) {
+  JointLimits limits;
+  EXPECT_NO_HEAP(limits = default_joint_limits(RobotType::ur10e));
+  EXPECT_EQ(limits.lower_rad(0), -2.0 * math::kPi);
+  EXPECT_EQ(limits.upper_rad(2), math::kPi);
+#if HIVECAL_MAX_JOINTS >= 7
+  for (const RobotType type : {RobotType::iiwa14, RobotType::panda, RobotType::fr3, RobotType::gen3, RobotType::wam}) {
+    JointVector lower;
+    JointVector upper;
+    ASSERT_EQ(maker_joint_limits(type, &lower, &upper), Status::ok);
+    EXPECT_NO_HEAP(limits = default_joint_limits(type));
+    EXPECT_EQ(limits.lower_rad, lower) << robot_type_name(type);
+    EXPECT_EQ(limits.upper_rad, upper) << robot_type_name(type);
+  }
+  limits = default_joint_limits(RobotType::wam);
+  EXPECT_EQ(limits.lower_rad(4), -4.76);  // Barrett's stops, not +-2 pi
+  EXPECT_EQ(limits.upper_rad(3), 3.1);
+#endif
 }
 
 }  // namespace

@@ -38,8 +38,8 @@ TEST_F(CostFixture, TrueModelHasZeroCostAndRefitFindsTheTracker) {
   EXPECT_LT((fitted.rotation - base_to_tracker.rotation).norm(), 1e-12);
   EXPECT_LT((fitted.translation_m - base_to_tracker.translation_m).norm(), 1e-12);
   double sos = 1.0;
-  EXPECT_NO_HEAP(s = evaluate_cost(to_params(truth), dataset().samples(), CostKind::sum_squares, BaseFrame::fixed,
-                                   &base_to_tracker, &sos));
+  EXPECT_NO_HEAP(
+      s = evaluate_cost(truth, dataset().samples(), CostKind::sum_squares, BaseFrame::fixed, &base_to_tracker, &sos));
   ASSERT_EQ(s, Status::ok);
   EXPECT_LT(sos, 1e-20);
 }
@@ -92,9 +92,9 @@ TEST_F(CostFixture, BadInputsGetSpecificErrors) {
             Status::invalid_argument);
   EXPECT_EQ(evaluate_cost(truth, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::fixed, &fitted, nullptr),
             Status::invalid_argument);
-  ModelParams params = to_params(truth);
-  params(5) = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(evaluate_cost(params, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::fixed, &fitted, &cost),
+  RobotModel infinite = truth;
+  infinite.joints[1].d_m = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(evaluate_cost(infinite, dataset().samples(), CostKind::mean_abs_3d, BaseFrame::fixed, &fitted, &cost),
             Status::non_finite_input);
   // All samples at one pose: the base transform is undetermined.
   static Dataset<8> one_pose;

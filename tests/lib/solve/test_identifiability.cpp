@@ -19,9 +19,9 @@ constexpr int kD2 = model_param_index(1, DhField::d);
 constexpr int kD3 = model_param_index(2, DhField::d);
 constexpr int kD4 = model_param_index(3, DhField::d);
 constexpr int kD6 = model_param_index(5, DhField::d);
-constexpr int kToolZ = tool_param_index(2);
-constexpr int kBaseRz = base_rotation_param_index(2);
-constexpr int kBaseTz = base_translation_param_index(2);
+constexpr int kToolZ = tool_param_index(kSixJoints, 2);
+constexpr int kBaseRz = base_rotation_param_index(kSixJoints, 2);
+constexpr int kBaseTz = base_translation_param_index(kSixJoints, 2);
 
 ParamMask mask_of(std::initializer_list<int> indices) {
   ParamMask mask = 0;
@@ -33,7 +33,7 @@ ParamMask mask_of(std::initializer_list<int> indices) {
 ParamMask wrist_and_tool() {
   ParamMask mask = 0;
   for (int f = 0; f < kParamsPerJoint; ++f) mask |= param_bit(5 * kParamsPerJoint + f);
-  for (int axis = 0; axis < 3; ++axis) mask |= param_bit(tool_param_index(axis));
+  for (int axis = 0; axis < 3; ++axis) mask |= param_bit(tool_param_index(kSixJoints, axis));
   return mask;
 }
 
@@ -80,17 +80,17 @@ void expect_generic_ur_structure(const IdentifiabilityReport& report) {
   for (int d = 0; d < report.dropped_count; ++d) {
     const DroppedParam& entry = report.dropped[d];
     EXPECT_EQ(entry.reason, UnidentifiableReason::null_combination);
-    EXPECT_LT(entry.singular_ratio, 1e-6) << full_param_name(entry.index);
+    EXPECT_LT(entry.singular_ratio, 1e-6) << full_param_name(entry.index, kSixJoints);
     EXPECT_EQ(entry.component_index[0], entry.index);
     EXPECT_EQ(entry.component[0], 1.0);
     // Each combination stays inside the group that explains it.
     const ParamMask m = members(entry);
     const bool in_group = (m & ~mask_of({kTheta1, kBaseRz})) == 0 || (m & ~mask_of({kD1, kBaseTz})) == 0 ||
                           (m & ~mask_of({kD2, kD3, kD4})) == 0 || (m & ~wrist_and_tool()) == 0;
-    EXPECT_TRUE(in_group) << full_param_name(entry.index);
-    EXPECT_GE(mask_count(m), 2) << full_param_name(entry.index);
+    EXPECT_TRUE(in_group) << full_param_name(entry.index, kSixJoints);
+    EXPECT_GE(mask_count(m), 2) << full_param_name(entry.index, kSixJoints);
   }
-  ASSERT_EQ(report.singular_count_before, kRigidParamCount);
+  ASSERT_EQ(report.singular_count_before, rigid_param_count(kSixJoints));
   ASSERT_EQ(report.singular_count_after, 25);
   const double sigma_max = report.singular_values_before[0];
   for (int k = 1; k < report.singular_count_before; ++k) {
@@ -116,7 +116,7 @@ TEST(Identifiability, GenericPosesDropExactlyTheUrRedundancies) {
       dataset.clear();
       test::fill_dataset(truth, test::example_base_to_tracker(), 100, 0.0, &random, &dataset);
       expect_generic_ur_structure(
-          analyse(normal_equations(truth, test::example_base_to_tracker(), dataset), kAllParamsMask));
+          analyse(normal_equations(truth, test::example_base_to_tracker(), dataset), rigid_params_mask(kSixJoints)));
     }
   }
 }
@@ -141,8 +141,9 @@ TEST(Identifiability, ToolAlwaysDownDropsTheToolHeightAgainstTheBaseHeight) {
     const ParamMask m = members(entry);
     return (m & tool_height) != 0 && (m & base_height) != 0;
   };
-  const IdentifiabilityReport generic_report = analyse(normal_equations(truth, base, generic), kAllParamsMask);
-  const IdentifiabilityReport down_report = analyse(normal_equations(truth, base, down), kAllParamsMask);
+  const IdentifiabilityReport generic_report =
+      analyse(normal_equations(truth, base, generic), rigid_params_mask(kSixJoints));
+  const IdentifiabilityReport down_report = analyse(normal_equations(truth, base, down), rigid_params_mask(kSixJoints));
   EXPECT_EQ(down_report.kept_count(), generic_report.kept_count() - 1);
   EXPECT_EQ(down_report.dropped_count, generic_report.dropped_count + 1);
   int generic_couplings = 0;
@@ -177,7 +178,8 @@ TEST(Identifiability, FixedBaseMakesTheta1AndD1Identifiable) {
   static Dataset<100> dataset;
   dataset.clear();
   test::fill_dataset(truth, test::example_base_to_tracker(), 100, 0.0, &random, &dataset);
-  const ParamMask model_only = kAllParamsMask & ~(((ParamMask{1} << kBaseParamCount) - 1U) << kModelParamCount);
+  const ParamMask model_only =
+      rigid_params_mask(kSixJoints) & ~(((ParamMask{1} << kBaseParamCount) - 1U) << model_param_count(kSixJoints));
   const IdentifiabilityReport report =
       analyse(normal_equations(truth, test::example_base_to_tracker(), dataset), model_only);
   EXPECT_EQ(report.free_mask, model_only);
@@ -229,27 +231,27 @@ TEST(Identifiability, BadArguments) {
     EXPECT_NO_HEAP(analysed = analyze_identifiability(jtj, mask, threshold, &ws, &report));
     EXPECT_EQ(analysed, expected);
   };
-  check(kAllParamsMask, 0.0, Status::invalid_argument);
-  check(kAllParamsMask, 1.0, Status::invalid_argument);
+  check(rigid_params_mask(kSixJoints), 0.0, Status::invalid_argument);
+  check(rigid_params_mask(kSixJoints), 1.0, Status::invalid_argument);
   check(0, 1e-4, Status::invalid_argument);
   check(param_bit(kFullParamCount), 1e-4, Status::invalid_argument);  // beyond the compliance coefficients
   jtj(3, 3) = std::nan("");
-  check(kAllParamsMask, 1e-4, Status::non_finite_input);
+  check(rigid_params_mask(kSixJoints), 1e-4, Status::non_finite_input);
   jtj.setZero();
-  check(kAllParamsMask, 1e-4, Status::singular_system);
+  check(rigid_params_mask(kSixJoints), 1e-4, Status::singular_system);
 }
 
 TEST(Identifiability, ParameterNames) {
   const char* names[kFullParamCount + 2] = {};
-  EXPECT_NO_HEAP(for (int i = -1; i <= kFullParamCount; ++i) names[i + 1] = full_param_name(i));
+  EXPECT_NO_HEAP(for (int i = -1; i <= kFullParamCount; ++i) names[i + 1] = full_param_name(i, kSixJoints));
   const auto name = [&](int index) { return names[index + 1]; };
   EXPECT_STREQ(name(kTheta1), "theta1");
   EXPECT_STREQ(name(kD2), "d2");
   EXPECT_STREQ(name(model_param_index(2, DhField::a)), "a3");
   EXPECT_STREQ(name(model_param_index(3, DhField::alpha)), "alpha4");
-  EXPECT_STREQ(name(tool_param_index(0)), "tool_x");
+  EXPECT_STREQ(name(tool_param_index(kSixJoints, 0)), "tool_x");
   EXPECT_STREQ(name(kToolZ), "tool_z");
-  EXPECT_STREQ(name(base_rotation_param_index(0)), "base_rx");
+  EXPECT_STREQ(name(base_rotation_param_index(kSixJoints, 0)), "base_rx");
   EXPECT_STREQ(name(kBaseTz), "base_tz");
   EXPECT_STREQ(name(-1), "?");
   EXPECT_STREQ(name(kFullParamCount), "?");

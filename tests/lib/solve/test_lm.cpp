@@ -70,9 +70,9 @@ void expect_exact_recovery(RobotType type, std::uint64_t seed) {
   const ModelParams estimated = to_params(r.model);
   const ModelParams truth = to_params(s.truth);
   int checked = 0;
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
     if (!mask_has(alone, i)) continue;
-    EXPECT_NEAR(estimated(i), truth(i), 1e-9) << full_param_name(i);
+    EXPECT_NEAR(estimated(i), truth(i), 1e-9) << full_param_name(i, kSixJoints);
     ++checked;
   }
   EXPECT_GE(checked, 15);
@@ -115,10 +115,10 @@ TEST(Lm, WithNoiseRecoversWithinNoiseAndWithinSigma) {
   const ParamMask alone = r.identifiability.kept_mask & ~combination_members(r.identifiability);
   const ModelParams estimated = to_params(r.model);
   const ModelParams truth = to_params(s.truth);
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
     if (!mask_has(alone, i)) continue;
-    EXPECT_GT(r.sigma(i), 0.0) << full_param_name(i);
-    EXPECT_LT(std::fabs(estimated(i) - truth(i)), 4.0 * r.sigma(i)) << full_param_name(i);
+    EXPECT_GT(r.sigma(i), 0.0) << full_param_name(i, kSixJoints);
+    EXPECT_LT(std::fabs(estimated(i) - truth(i)), 4.0 * r.sigma(i)) << full_param_name(i, kSixJoints);
   }
   // d2 and d3 are held, so sigma(d4) is the sigma of the sum d2 + d3 + d4.
   const int d4 = model_param_index(3, DhField::d);
@@ -140,7 +140,7 @@ TEST(Lm, SigmaMatchesMonteCarloSpread) {
   poses.clear();
   test::fill_dataset(truth, base, 120, 0.0, &random, &poses);
   const int watched[] = {model_param_index(1, DhField::a), model_param_index(3, DhField::alpha),
-                         model_param_index(4, DhField::theta_offset), tool_param_index(2)};
+                         model_param_index(4, DhField::theta_offset), tool_param_index(kSixJoints, 2)};
   constexpr int kRuns = 24;
   double sum[4] = {};
   double sum2[4] = {};
@@ -164,8 +164,8 @@ TEST(Lm, SigmaMatchesMonteCarloSpread) {
   for (int k = 0; k < 4; ++k) {
     const double mean = sum[k] / kRuns;
     const double spread = std::sqrt((sum2[k] - kRuns * mean * mean) / (kRuns - 1));
-    EXPECT_GT(spread, 0.6 * sigma_mean[k]) << full_param_name(watched[k]);
-    EXPECT_LT(spread, 1.5 * sigma_mean[k]) << full_param_name(watched[k]);
+    EXPECT_GT(spread, 0.6 * sigma_mean[k]) << full_param_name(watched[k], kSixJoints);
+    EXPECT_LT(spread, 1.5 * sigma_mean[k]) << full_param_name(watched[k], kSixJoints);
   }
 }
 
@@ -184,12 +184,12 @@ TEST(Lm, Paper6MovesOnlyItsParameters) {
   EXPECT_EQ(mask_count(report.free_mask), 12);
   EXPECT_EQ(report.kept_count(), 11);  // d1 trades against the base height
   EXPECT_FALSE(mask_has(report.kept_mask, model_param_index(0, DhField::d)) &&
-               mask_has(report.kept_mask, base_translation_param_index(2)));
+               mask_has(report.kept_mask, base_translation_param_index(kSixJoints, 2)));
   const ModelParams before = to_params(start);
   const ModelParams after = to_params(lm().result.model);
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
     if (!mask_has(report.kept_mask, i)) {
-      EXPECT_EQ(after(i), before(i)) << full_param_name(i);
+      EXPECT_EQ(after(i), before(i)) << full_param_name(i, kSixJoints);
     }
   }
   EXPECT_NE(after(model_param_index(1, DhField::a)), before(model_param_index(1, DhField::a)));
@@ -330,7 +330,8 @@ TEST(Lm, SharedScratchCarriesNothingBetweenUses) {
   EXPECT_EQ(first.identifiability.kept_mask, lm().result.identifiability.kept_mask);
   EXPECT_EQ(first.iterations, lm().result.iterations);
   EXPECT_EQ(first.rms_m, lm().result.rms_m);
-  for (int i = 0; i < kModelParamCount; ++i) EXPECT_EQ(to_params(first.model)(i), to_params(lm().result.model)(i));
+  for (int i = 0; i < model_param_count(kSixJoints); ++i)
+    EXPECT_EQ(to_params(first.model)(i), to_params(lm().result.model)(i));
   for (int i = 0; i < kFullParamCount; ++i) EXPECT_EQ(first.sigma(i), lm().result.sigma(i));
   EXPECT_TRUE(first.base_to_tracker.translation_m == lm().result.base_to_tracker.translation_m);
   EXPECT_TRUE(first.base_to_tracker.rotation == lm().result.base_to_tracker.rotation);
@@ -352,7 +353,7 @@ TEST(Lm, WhatTheSecondAnalysisDropsGoesBackToItsStart) {
   options.params = LmParamSet::custom;
   options.custom_mask =
       param_bit(model_param_index(5, DhField::theta_offset)) | param_bit(model_param_index(5, DhField::a));
-  for (int i = 0; i < kBaseParamCount; ++i) options.custom_mask |= param_bit(kModelParamCount + i);
+  for (int i = 0; i < kBaseParamCount; ++i) options.custom_mask |= param_bit(model_param_count(kSixJoints) + i);
   ASSERT_EQ(calibrate_lm(start, nullptr, s.train.samples(), options, &s.workspace, &s.result), Status::ok);
   const int theta6 = model_param_index(5, DhField::theta_offset);
   EXPECT_FALSE(mask_has(s.result.identifiability.kept_mask, theta6));

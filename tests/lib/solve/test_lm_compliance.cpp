@@ -62,7 +62,7 @@ TEST(LmCompliance, CoefficientColumnsMatchCentralDifferences) {
       minus.compliance.coefficient[t] -= h;
       const Vec3 numeric =
           base.rotation * (fk_tool_point(plus, sample.q_rad) - fk_tool_point(minus, sample.q_rad)) / (2 * h);
-      const Vec3 analytic = jacobian.col(compliance_param_index(t));
+      const Vec3 analytic = jacobian.col(compliance_param_index(kSixJoints, t));
       EXPECT_LT((numeric - analytic).norm(), 1e-6 * (1.0 + analytic.norm()))
           << compliance_term_name(model.compliance, t);
       EXPECT_GT(analytic.norm(), 1e-3);
@@ -77,14 +77,15 @@ TEST(LmCompliance, RigidModelHasZeroCoefficientColumnsAndTheRigidParamSet) {
   sample.q_rad = test::random_joints(&random);
   FullJacobian jacobian;
   (void)full_residual_jacobian(rigid, test::example_base_to_tracker(), sample, &jacobian);
-  for (int t = 0; t < kMaxComplianceTerms; ++t) EXPECT_EQ(jacobian.col(compliance_param_index(t)).norm(), 0.0);
-  EXPECT_EQ(lm_param_mask(LmParamSet::full, 0, compliant_truth()), kAllParamsMask);
+  for (int t = 0; t < kMaxComplianceTerms; ++t)
+    EXPECT_EQ(jacobian.col(compliance_param_index(kSixJoints, t)).norm(), 0.0);
+  EXPECT_EQ(lm_param_mask(LmParamSet::full, 0, compliant_truth()), rigid_params_mask(kSixJoints));
   EXPECT_EQ(lm_param_mask(LmParamSet::full_compliance, 0, compliant_truth()),
-            kAllParamsMask | compliance_params_mask(4));  // the model's four terms
-  EXPECT_EQ(lm_param_mask(LmParamSet::full_compliance, 0, rigid), kAllParamsMask);
-  EXPECT_STREQ(full_param_name(compliance_param_index(1), compliant_truth()), "c_j2_o4");
-  EXPECT_STREQ(full_param_name(compliance_param_index(1)), "compliance2");
-  EXPECT_STREQ(full_param_name(compliance_param_index(1), rigid), "?");
+            rigid_params_mask(kSixJoints) | compliance_params_mask(kSixJoints, 4));  // the model's four terms
+  EXPECT_EQ(lm_param_mask(LmParamSet::full_compliance, 0, rigid), rigid_params_mask(kSixJoints));
+  EXPECT_STREQ(full_param_name(compliance_param_index(kSixJoints, 1), compliant_truth()), "c_j2_o4");
+  EXPECT_STREQ(full_param_name(compliance_param_index(kSixJoints, 1), kSixJoints), "compliance2");
+  EXPECT_STREQ(full_param_name(compliance_param_index(kSixJoints, 1), rigid), "?");
   EXPECT_STREQ(full_param_name(3, rigid), "alpha1");
 }
 
@@ -108,9 +109,9 @@ TEST(LmCompliance, RecoversTheCoefficientsOfItsOwnFormWithoutNoise) {
   EXPECT_LT(result.rms_m, 1e-9);
   const RobotModel start = zero_compliance_start(truth, false);
   for (int t = 0; t < truth.compliance.term_count; ++t) {
-    EXPECT_TRUE(mask_has(result.identifiability.kept_mask, compliance_param_index(t)));
+    EXPECT_TRUE(mask_has(result.identifiability.kept_mask, compliance_param_index(kSixJoints, t)));
     EXPECT_NEAR(result.model.compliance.coefficient[t], truth.compliance.coefficient[t], 1e-9);
-    EXPECT_GT(result.sigma(compliance_param_index(t)), 0.0);
+    EXPECT_GT(result.sigma(compliance_param_index(kSixJoints, t)), 0.0);
   }
   // Without the compliance set, the same start keeps its (zero) coefficients and fits worse.
   LmOptions rigid;
@@ -139,9 +140,9 @@ TEST(LmCompliance, ToolDownPosesDropWhatTheyCannotSeparate) {
     const int index = report.dropped[k].index;
     dropped += std::string(" ") + full_param_name(index, start) + "(" +
                unidentifiable_reason_name(report.dropped[k].reason) + ")";
-    if (index >= kRigidParamCount) {
+    if (index >= rigid_param_count(kSixJoints)) {
       ++compliance_dropped;
-      EXPECT_EQ(result.model.compliance.coefficient[index - kRigidParamCount], 0.0);  // held at its start
+      EXPECT_EQ(result.model.compliance.coefficient[index - rigid_param_count(kSixJoints)], 0.0);  // held at its start
       EXPECT_EQ(result.sigma(index), 0.0);
     }
   }
@@ -158,11 +159,11 @@ TEST(LmCompliance, ToolDownPosesDropWhatTheyCannotSeparate) {
 TEST(LmCompliance, RecoversJointHarmonicsWithTheGravityTermsWithoutNoise) {
   RobotModel truth = compliant_truth();
   const int gravity_terms = truth.compliance.term_count;
-  if (gravity_terms + 2 * kJointCount > kMaxComplianceTerms) {  // a capacity for the gravity terms only
-    EXPECT_EQ(append_harmonic_terms(1, &truth.compliance), Status::invalid_argument);
+  if (gravity_terms + 2 * kSixJoints > kMaxComplianceTerms) {  // a capacity for the gravity terms only
+    EXPECT_EQ(append_harmonic_terms(1, truth, &truth.compliance), Status::invalid_argument);
     return;
   }
-  ASSERT_EQ(append_harmonic_terms(1, &truth.compliance), Status::ok);
+  ASSERT_EQ(append_harmonic_terms(1, truth, &truth.compliance), Status::ok);
   Random random(2502);
   for (int t = gravity_terms; t < truth.compliance.term_count; ++t) {
     truth.compliance.coefficient[t] = random.uniform(-100e-6, 100e-6);  // 0.1 mrad: an eccentric encoder
@@ -178,13 +179,13 @@ TEST(LmCompliance, RecoversJointHarmonicsWithTheGravityTermsWithoutNoise) {
   const IdentifiabilityReport& report = result.identifiability;
   int dropped_term = -1;
   for (int d = 0; d < report.dropped_count; ++d) {
-    if (report.dropped[d].index < kRigidParamCount) continue;
+    if (report.dropped[d].index < rigid_param_count(kSixJoints)) continue;
     EXPECT_EQ(dropped_term, -1) << "a second joint term dropped: " << full_param_name(report.dropped[d].index, start);
     dropped_term = report.dropped[d].index;
   }
   EXPECT_STREQ(full_param_name(dropped_term, start), "h_j2_cos1");
   for (int t = 0; t < truth.compliance.term_count; ++t) {
-    const int k = compliance_param_index(t);
+    const int k = compliance_param_index(kSixJoints, t);
     if (k == dropped_term) continue;
     EXPECT_TRUE(mask_has(report.kept_mask, k)) << compliance_term_name(truth.compliance, t);
     // c_j2_o2 absorbs the dropped harmonic's share; every other term is recovered to 0.1 % of

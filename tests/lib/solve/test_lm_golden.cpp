@@ -35,11 +35,11 @@ constexpr std::uint64_t kKnownFramesJobGoldenDigest = 0x5df87ca3e87c640dULL;
 
 void add_result(const LmResult& r, Status status, const TraceBase& trace, Digest* digest) {
   digest->add_u64(static_cast<std::uint64_t>(status));
-  digest->add(to_params(r.model));
+  digest->add(to_params(r.model).head(model_param_count(r.model)));
   digest->add(r.base_to_tracker.rotation);
   digest->add(r.base_to_tracker.translation_m);
   // The 33 rigid sigmas, then the model's compliance ones: a rigid result hashes as before.
-  digest->add(r.sigma.head(kRigidParamCount + r.model.compliance.term_count));
+  digest->add(r.sigma.head(rigid_param_count(kSixJoints) + r.model.compliance.term_count));
   digest->add(r.loss_sum_m2);
   digest->add(r.rms_m);
   digest->add(r.residual_sigma_m);
@@ -182,14 +182,14 @@ void add_job_result(Status status, const CalibrationResult& result, bool complia
   digest->add_u64(static_cast<std::uint64_t>(status));
   digest->add_u64(result.stage_count);
   for (const CalibrationStage& stage : result.stage_list()) {
-    digest->add(to_params(stage.model));
+    digest->add(to_params(stage.model).head(model_param_count(stage.model)));
     // The four default point terms' slots (zero in a rigid stage), whatever the build's capacity.
     for (int k = 0; compliance && k < 4; ++k) digest->add(stage.model.compliance.coefficient[k]);
     digest->add(stage.base_to_tracker.rotation);
     digest->add(stage.base_to_tracker.translation_m);
     digest->add(stage.test.mae(ErrorAxis::norm_3d));
   }
-  if (sigma) digest->add(result.lm.sigma.head(kRigidParamCount));
+  if (sigma) digest->add(result.lm.sigma.head(rigid_param_count(kSixJoints)));
   digest->add_mask(result.lm.identifiability.kept_mask);
   digest->add_mask(result.lm_pruned_mask);
   digest->add_u64(result.outlier_count);

@@ -28,7 +28,7 @@ test::LmTestStorage<300, LmWorkspaceWithTargets>& lm() {
 
 JointVector rounded(const JointVector& q_rad) {
   JointVector out;
-  for (int j = 0; j < kJointCount; ++j) out(j) = std::round(q_rad(j) / kStep_rad) * kStep_rad;
+  for (int j = 0; j < kSixJoints; ++j) out(j) = std::round(q_rad(j) / kStep_rad) * kStep_rad;
   return out;
 }
 

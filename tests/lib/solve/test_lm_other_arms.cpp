@@ -89,7 +89,8 @@ TEST(OtherArms, LinkLengthSetIsEveryNonZeroDAndA) {
     EXPECT_NO_HEAP(set = link_length_set(test::other_arm_model(c.arm)));
     ASSERT_EQ(set.count, c.count) << test::other_arm_name(c.arm);
     EXPECT_TRUE(set.has_d1());
-    for (std::size_t k = 0; k < c.count; ++k) EXPECT_EQ(set.param_index[k], c.index[k]) << full_param_name(c.index[k]);
+    for (std::size_t k = 0; k < c.count; ++k)
+      EXPECT_EQ(set.param_index[k], c.index[k]) << full_param_name(c.index[k], kSixJoints);
     ParamMask mask = 0;
     EXPECT_NO_HEAP(mask = lm_param_mask(LmParamSet::link_lengths, 0, test::other_arm_model(c.arm)));
     EXPECT_EQ(mask_count(mask), static_cast<int>(c.count) + kBaseParamCount);
@@ -152,12 +153,12 @@ TEST(OtherArms, LmRecoversTheIdentifiableGeometryWithinNoise) {
 // the modified rows: LM on the converted model reproduces the true points exactly.
 TEST(OtherArms, LmRecoversModifiedDhTruthsExactly) {
   for (OtherArm arm : test::kOtherArms) {
-    ModifiedDhRow nominal[kJointCount];
+    ModifiedDhRow nominal[kSixJoints];
     Vec3 tool_m;
     test::other_arm_modified(arm, ModifiedDhBase{0.02, -0.015}, nominal, &tool_m);
     Random random(500 + static_cast<std::uint64_t>(arm));
-    ModifiedDhRow truth[kJointCount];
-    for (int j = 0; j < kJointCount; ++j) {
+    ModifiedDhRow truth[kSixJoints];
+    for (int j = 0; j < kSixJoints; ++j) {
       truth[j] = nominal[j];
       truth[j].theta_offset_rad += 3e-4 * random.normal();
       truth[j].d_m += 3e-4 * random.normal();
@@ -218,9 +219,10 @@ TEST(OtherArms, IdentifiabilityFindsTheParallelAxisCombination) {
     EXPECT_FALSE(mask_has(report.kept_mask, d2) && mask_has(report.kept_mask, d3)) << test::other_arm_name(arm);
     // d1 trades against the base height on every arm
     EXPECT_FALSE(mask_has(report.kept_mask, model_param_index(0, DhField::d)) &&
-                 mask_has(report.kept_mask, base_translation_param_index(2)));
+                 mask_has(report.kept_mask, base_translation_param_index(kSixJoints, 2)));
     std::printf("%s: dropped", test::other_arm_name(arm));
-    for (int d = 0; d < report.dropped_count; ++d) std::printf(" %s", full_param_name(report.dropped[d].index));
+    for (int d = 0; d < report.dropped_count; ++d)
+      std::printf(" %s", full_param_name(report.dropped[d].index, kSixJoints));
     std::printf("\n");
   }
 }
@@ -269,11 +271,11 @@ TEST(OtherArms, GsaAndAbcOnTheLinkLengthsImproveANonUrArm) {
     const ModelParams before = to_params(r.baseline.model);  // nominal joints, the fitted tool
     for (int stage = 0; stage < 2; ++stage) {
       const ModelParams after = to_params(r.stages[stage].model);
-      for (int i = 0; i < kModelParamCount; ++i) {
+      for (int i = 0; i < model_param_count(kSixJoints); ++i) {
         bool length = false;
         for (std::size_t k = 0; k < set.count; ++k) length = length || set.param_index[k] == i;
         if (!length) {
-          EXPECT_EQ(after(i), before(i)) << full_param_name(i);
+          EXPECT_EQ(after(i), before(i)) << full_param_name(i, kSixJoints);
         }
       }
     }

@@ -87,9 +87,9 @@ TEST(LmPrior, ADirectionThePosesBarelyDetermineStaysAtNominal) {
               plain_alpha5_rad * 1e3, change(s.result, start, 4, DhField::alpha) * 1e3,
               change(s.result, start, 4, DhField::d) * 1e3, plain_mae_m * 1e6, prior_mae_m * 1e6);
   EXPECT_GT(std::fabs(plain_alpha5_rad), 0.05);
-  for (int i = 0; i < kDhParamCount; ++i) {
+  for (int i = 0; i < kParamsPerJoint * kSixJoints; ++i) {
     const double moved = to_params(s.result.model)(i) - to_params(start)(i);
-    EXPECT_LT(std::fabs(moved), 5e-3) << full_param_name(i);  // 5 mm, 5 mrad
+    EXPECT_LT(std::fabs(moved), 5e-3) << full_param_name(i, kSixJoints);  // 5 mm, 5 mrad
   }
   EXPECT_LT(prior_mae_m, 1.01 * plain_mae_m);
   // What only the prior determines keeps about its tolerance as sigma: the posterior's.
@@ -117,9 +117,10 @@ TEST(LmPrior, WhatThePosesDetermineIsEstimatedAsWithoutIt) {
   with_prior.prior = LmPrior{&start, LmPriorTolerances{1e-3, 5e-3, 0.02}};
   ASSERT_EQ(calibrate_lm(start, nullptr, s.train.samples(), with_prior, &s.workspace, &s.result), Status::ok);
   EXPECT_EQ(s.result.identifiability.kept_mask, kept);
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
     if (!mask_has(kept, i)) continue;
-    EXPECT_LT(std::fabs(to_params(s.result.model)(i) - plain(i)), 0.1 * s.result.sigma(i)) << full_param_name(i);
+    EXPECT_LT(std::fabs(to_params(s.result.model)(i) - plain(i)), 0.1 * s.result.sigma(i))
+        << full_param_name(i, kSixJoints);
   }
 }
 
@@ -180,10 +181,10 @@ TEST(LmPrior, SigmaOfEachKindIsItsTolerance) {
   EXPECT_EQ(lm_prior_sigma(prior, model_param_index(3, DhField::d)), 1e-3);
   EXPECT_EQ(lm_prior_sigma(prior, model_param_index(4, DhField::alpha)), 5e-3);
   EXPECT_EQ(lm_prior_sigma(prior, model_param_index(0, DhField::theta_offset)), 5e-3);
-  EXPECT_EQ(lm_prior_sigma(prior, tool_param_index(2)), 0.02);
-  EXPECT_EQ(lm_prior_sigma(prior, base_rotation_param_index(0)), 0.0);
-  EXPECT_EQ(lm_prior_sigma(prior, compliance_param_index(0)), 0.0);
-  EXPECT_EQ(lm_prior_sigma(LmPrior{}, tool_param_index(0)), 0.0);
+  EXPECT_EQ(lm_prior_sigma(prior, tool_param_index(kSixJoints, 2)), 0.02);
+  EXPECT_EQ(lm_prior_sigma(prior, base_rotation_param_index(kSixJoints, 0)), 0.0);
+  EXPECT_EQ(lm_prior_sigma(prior, compliance_param_index(kSixJoints, 0)), 0.0);
+  EXPECT_EQ(lm_prior_sigma(LmPrior{}, tool_param_index(kSixJoints, 0)), 0.0);
 }
 
 TEST(LmPrior, NegativeOrNonFiniteTolerancesAreRefused) {

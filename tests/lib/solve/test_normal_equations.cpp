@@ -72,7 +72,7 @@ TEST(FullModel, ResidualJacobianMatchesCentralDifferences) {
       const Vec3 numeric = (plus_base.apply(fk_tool_point(plus_model, sample.q_rad)) -
                             minus_base.apply(fk_tool_point(minus_model, sample.q_rad))) /
                            (2.0 * h);
-      EXPECT_LT((numeric - jacobian.col(k)).norm(), 1e-8) << full_param_name(k) << " trial " << trial;
+      EXPECT_LT((numeric - jacobian.col(k)).norm(), 1e-8) << full_param_name(k, kSixJoints) << " trial " << trial;
     }
   }
 }

@@ -98,7 +98,7 @@ void expect_covariance_matches_fit(ParamMask kept, const char* what) {
       continue;
     }
     const double sigma = std::sqrt(covariance(i, i));
-    EXPECT_NEAR(sigma, fit.sigma(i), 1e-9 * fit.sigma(i)) << what << " " << full_param_name(i);
+    EXPECT_NEAR(sigma, fit.sigma(i), 1e-9 * fit.sigma(i)) << what << " " << full_param_name(i, kSixJoints);
     for (int j = 0; j < kFullParamCount; ++j) {
       if (!mask_has(kept, j)) continue;
       EXPECT_NEAR(covariance(i, j), covariance(j, i), 1e-12 * std::fabs(covariance(i, i) + covariance(j, j)));
@@ -134,7 +134,8 @@ TEST(ParameterCovariance, RefusesASetWithoutResidualDegreesOfFreedom) {
   // The base alone on two samples: 6 equations, 6 parameters.
   ParamMask base = 0;
   for (int axis = 0; axis < 3; ++axis)
-    base |= param_bit(base_rotation_param_index(axis)) | param_bit(base_translation_param_index(axis));
+    base |= param_bit(base_rotation_param_index(kSixJoints, axis)) |
+            param_bit(base_translation_param_index(kSixJoints, axis));
   const Span<const Sample> two(dataset.samples().data(), 2);
   EXPECT_EQ(parameter_covariance(fit.model, fit.base_to_tracker, two, PointLoss{}, base, &scratch, &covariance),
             Status::too_few_samples);
@@ -159,8 +160,8 @@ TEST(ParameterCorrelation, StrongestPartnerIsTheLargestMagnitudeOffTheDiagonal) 
 TEST(ParameterCorrelation, RefusesWhatItCannotInvert) {
   fit_random_set(11, 30);
   // Every rigid parameter at once: the base and the first joint's offsets are not separable.
-  EXPECT_EQ(parameter_correlations(fit.model, fit.base_to_tracker, dataset.samples(), PointLoss{}, kAllParamsMask,
-                                   &scratch, &correlation),
+  EXPECT_EQ(parameter_correlations(fit.model, fit.base_to_tracker, dataset.samples(), PointLoss{},
+                                   rigid_params_mask(kSixJoints), &scratch, &correlation),
             Status::singular_system);
   EXPECT_EQ(parameter_correlations(fit.model, fit.base_to_tracker, Span<const Sample>(), PointLoss{},
                                    fit.identifiability.kept_mask, &scratch, &correlation),

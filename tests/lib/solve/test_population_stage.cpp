@@ -103,7 +103,7 @@ void expect_stage_result(const Paper6StageResult& r, const RobotModel& truth, do
   // Only the six lengths move, each inside start +/- half width.
   const ModelParams got = to_params(r.model);
   const ModelParams from = to_params(start());
-  for (int i = 0; i < kModelParamCount; ++i) {
+  for (int i = 0; i < model_param_count(kSixJoints); ++i) {
     bool is_length = false;
     for (int k : kLengthIndex) is_length = is_length || k == i;
     if (is_length) {

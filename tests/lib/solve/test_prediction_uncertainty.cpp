@@ -32,7 +32,7 @@ TEST(PredictionSigma, IsTheRootOfTheMeanAxisVarianceOfJCJt) {
   Random random(3);
   const RobotModel model = test::perturbed_model(nominal_model(RobotType::ur10), &random, 1e-3, 1e-3);
   const RigidTransform base = test::example_base_to_tracker();
-  const ParamMask mask = kAllParamsMask & ~param_bit(3);  // one left out: its column must not count
+  const ParamMask mask = rigid_params_mask(kSixJoints) & ~param_bit(3);  // one left out: its column must not count
   random_covariance(mask, &random);
   for (int k = 0; k < 5; ++k) {
     Sample sample;
@@ -50,7 +50,7 @@ TEST(PredictionSigma, IsTheRootOfTheMeanAxisVarianceOfJCJt) {
 TEST(PredictionSigma, TheBaseCountsInTheTrackerFrameOnly) {
   const RobotModel model = nominal_model(RobotType::ur5);
   covariance.setZero();
-  const int tx = base_translation_param_index(0);
+  const int tx = base_translation_param_index(kSixJoints, 0);
   covariance(tx, tx) = 9e-8;  // 0.3 mm along the base's x
   JointVector q;
   q << 0.3, -1.2, 1.1, -1.4, -1.5, 0.2;
@@ -65,7 +65,7 @@ TEST(PredictionSigma, AnotherTargetTakesItsOwnToolSigmaNotTargetOnes) {
   RobotModel model = nominal_model(RobotType::ur5);
   model.other_tools_m[0] = Vec3(0.05, 0.0, 0.1);
   covariance.setZero();
-  const int tool_x = tool_param_index(0);
+  const int tool_x = tool_param_index(kSixJoints, 0);
   covariance(tool_x, tool_x) = 1e-6;
   JointVector q;
   q << 0.3, -1.2, 1.1, -1.4, -1.5, 0.2;
@@ -83,12 +83,12 @@ TEST(CalibrationDomain, RangesSpreadAndTypicalSigmaOfThePoses) {
   const RigidTransform base = test::example_base_to_tracker();
   dataset.clear();
   test::fill_dataset(model, base, 40, 0.0, &random, &dataset);
-  random_covariance(kAllParamsMask, &random);
+  random_covariance(rigid_params_mask(kSixJoints), &random);
   const Vec3 no_tools[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
   CalibrationDomain domain;
   Status status = Status::invalid_argument;
-  EXPECT_NO_HEAP(status =
-                     calibration_domain(model, base, dataset.samples(), covariance, kAllParamsMask, no_tools, &domain));
+  EXPECT_NO_HEAP(status = calibration_domain(model, base, dataset.samples(), covariance, rigid_params_mask(kSixJoints),
+                                             no_tools, &domain));
   ASSERT_EQ(status, Status::ok);
   EXPECT_EQ(domain.poses, 40u);
   JointVector low = dataset.samples()[0].q_rad;
@@ -100,7 +100,7 @@ TEST(CalibrationDomain, RangesSpreadAndTypicalSigmaOfThePoses) {
     low = low.cwiseMin(s.q_rad);
     high = high.cwiseMax(s.q_rad);
     axis_sum += fk_flange(model, s.q_rad).rotation.col(2);
-    const double sigma = prediction_sigma_m(model, base, s.q_rad, 0, covariance, kAllParamsMask);
+    const double sigma = prediction_sigma_m(model, base, s.q_rad, 0, covariance, rigid_params_mask(kSixJoints));
     squares += sigma * sigma;
     largest = std::fmax(largest, sigma);
   }
@@ -115,7 +115,8 @@ TEST(CalibrationDomain, RangesSpreadAndTypicalSigmaOfThePoses) {
   }
   EXPECT_NEAR(domain.tool_axis_spread_rad, spread, 1e-6);
   EXPECT_GT(domain.tool_axis_spread_rad, domain.tool_axis_rms_rad);
-  EXPECT_EQ(calibration_domain(model, base, Span<const Sample>(), covariance, kAllParamsMask, no_tools, &domain),
+  EXPECT_EQ(calibration_domain(model, base, Span<const Sample>(), covariance, rigid_params_mask(kSixJoints), no_tools,
+                               &domain),
             Status::dataset_empty);
 }
 
@@ -126,15 +127,16 @@ TEST(CalibrationDomain, ALargeSetsSigmasAreThoseOfEvenlySpacedPoses) {
   const RigidTransform base = test::example_base_to_tracker();
   large.clear();
   test::fill_dataset(model, base, 3000, 0.0, &random, &large);
-  random_covariance(kAllParamsMask, &random);
+  random_covariance(rigid_params_mask(kSixJoints), &random);
   const Vec3 no_tools[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
   CalibrationDomain domain;
-  ASSERT_EQ(calibration_domain(model, base, large.samples(), covariance, kAllParamsMask, no_tools, &domain),
-            Status::ok);
+  ASSERT_EQ(
+      calibration_domain(model, base, large.samples(), covariance, rigid_params_mask(kSixJoints), no_tools, &domain),
+      Status::ok);
   EXPECT_EQ(domain.poses, 3000u);
   double squares = 0.0;
   for (const Sample& s : large.samples()) {
-    const double sigma = prediction_sigma_m(model, base, s.q_rad, 0, covariance, kAllParamsMask);
+    const double sigma = prediction_sigma_m(model, base, s.q_rad, 0, covariance, rigid_params_mask(kSixJoints));
     squares += sigma * sigma;
   }
   EXPECT_NEAR(domain.typical_sigma_m, std::sqrt(squares / 3000.0), 0.03 * domain.typical_sigma_m);
@@ -201,7 +203,7 @@ TEST(TermJointMask, TheJointsTheTermsDependOn) {
   EXPECT_EQ(term_joint_mask(model, dataset.samples()), 0u);  // rigid
   ASSERT_EQ(default_compliance_terms(model, Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &model.compliance),
             Status::ok);
-  ASSERT_EQ(append_harmonic_terms(1, &model.compliance), Status::ok);
+  ASSERT_EQ(append_harmonic_terms(1, model, &model.compliance), Status::ok);
   EXPECT_EQ(term_joint_mask(model, dataset.samples()), 0u);  // every coefficient 0
   for (int t = 0; t < model.compliance.term_count; ++t) {
     const ComplianceTerm& term = model.compliance.terms[t];

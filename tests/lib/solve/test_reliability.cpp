@@ -283,11 +283,11 @@ TEST(Reliability, BadArgumentsAreRefused) {
   BlunderTestSummary summary;
   BlunderTestOptions options;
   options.alpha = 0.0;
-  EXPECT_EQ(test_for_blunders(fit.model, fit.base_to_tracker, dataset.samples(), {}, kAllParamsMask, PointLoss{},
-                              options, &reliability, nullptr, &summary),
+  EXPECT_EQ(test_for_blunders(fit.model, fit.base_to_tracker, dataset.samples(), {}, rigid_params_mask(kSixJoints),
+                              PointLoss{}, options, &reliability, nullptr, &summary),
             Status::invalid_argument);
-  EXPECT_EQ(test_for_blunders(fit.model, fit.base_to_tracker, Span<const Sample>(), {}, kAllParamsMask, PointLoss{},
-                              BlunderTestOptions{}, &reliability, nullptr, &summary),
+  EXPECT_EQ(test_for_blunders(fit.model, fit.base_to_tracker, Span<const Sample>(), {}, rigid_params_mask(kSixJoints),
+                              PointLoss{}, BlunderTestOptions{}, &reliability, nullptr, &summary),
             Status::dataset_empty);
 }
 

@@ -228,7 +228,7 @@ TEST(ClockSync, FailsWithoutMotion) {
   const RobotModel model = nominal_model(RobotType::ur5);
   ClockEstimatorBase& estimator = estimator_with(make_clock_sync_config(model));
   JointStateRecord joint;
-  for (int j = 0; j < kJointCount; ++j) joint.q_rad[j] = 0.3 * j - 1.0;
+  for (int j = 0; j < kSixJoints; ++j) joint.q_rad[j] = 0.3 * j - 1.0;
   for (int i = 0; i < 40000; ++i) {
     joint.timestamp_us = 1000000ULL + 8000ULL * static_cast<std::uint64_t>(i);
     estimator.push_robot(joint);
@@ -262,7 +262,7 @@ Status estimate_back_and_forth(CycleLength cycle_s) {
     JointStateRecord joint;
     joint.timestamp_us = 8000ULL * static_cast<std::uint64_t>(i);
     const JointVector q = joints_at(static_cast<double>(i) * 0.008);
-    for (int j = 0; j < kJointCount; ++j) joint.q_rad[j] = q(j);
+    for (int j = 0; j < kSixJoints; ++j) joint.q_rad[j] = q(j);
     estimator.push_robot(joint);
   }
   for (int i = 0; i < 2900; ++i) {

@@ -97,7 +97,7 @@ void feed_synthetic(SampleExtractorBase* extractor, const ClockFit& clock, doubl
     JointStateRecord joint;
     joint.timestamp_us = static_cast<std::uint64_t>(robot_t_us);
     const JointVector q = joints_at((static_cast<double>(joint.timestamp_us) - robot_start_us) * 1e-6);
-    for (int j = 0; j < kJointCount; ++j) joint.q_rad[j] = q(j);
+    for (int j = 0; j < kSixJoints; ++j) joint.q_rad[j] = q(j);
     EXPECT_NO_HEAP(extractor->push_robot(joint));
     robot_t_us += std::round(8000.0 + 500.0 * random.normal());
   }
@@ -261,7 +261,7 @@ ExtractionCounts counts_around_a_robot_gap(const ExtractionConfig& config) {
     if (t_us > 5000000 && t_us < 5100000) continue;
     JointStateRecord joint;
     joint.timestamp_us = t_us;
-    for (int j = 0; j < kJointCount; ++j) joint.q_rad[j] = home_pose()(j);
+    for (int j = 0; j < kSixJoints; ++j) joint.q_rad[j] = home_pose()(j);
     (void)extractor.push_robot(joint);
   }
   for (int i = 10; i < 90; ++i) {
@@ -471,6 +471,38 @@ TEST(Extraction, ConstantMemoryOverHours) {
   EXPECT_GT(counts.robot_records, 890000u);
   EXPECT_EQ(counts.kept, 512u);
   EXPECT_GT(counts.dropped_by(DropReason::dataset_full), 5000u);
+}
+
+// Joint records of another joint count than the robot model are another arm's: refused by the
+// extractor (the status says why) and the clock estimator (counted, and its fit says why),
+// never cut or padded.
+TEST(Extraction, RecordsOfAnotherJointCountAreRefused) {
+  static Dataset<64> dataset;
+  dataset.clear();
+  static SampleExtractor<> extractor(make_extraction_config(kUr5), known_clock(0.0, 0.0), &dataset);
+  extractor.reset(make_extraction_config(kUr5), known_clock(0.0, 0.0), &dataset);
+  JointStateRecord six;
+  six.timestamp_us = 1000;
+  EXPECT_EQ(extractor.push_robot(six), Status::ok);
+  JointStateRecord seven = six;
+  seven.timestamp_us = 9000;
+  seven.joint_count = 7;
+  Status status = Status::ok;
+  EXPECT_NO_HEAP(status = extractor.push_robot(seven));
+  EXPECT_EQ(status, Status::joint_count_mismatch);
+
+  static ClockEstimator<> estimator(make_clock_sync_config(kUr5));
+  estimator.reset();
+  for (int k = 0; k < 100; ++k) {
+    JointStateRecord r;
+    r.timestamp_us = 8000 * static_cast<std::uint64_t>(k + 1);
+    r.joint_count = k == 50 ? 5 : kSixJoints;
+    estimator.push_robot(r);
+  }
+  EXPECT_EQ(estimator.stats().robot_joint_count_mismatches, 1u);
+  EXPECT_EQ(estimator.stats().robot_rejected, 1u);
+  ClockFit fit;
+  EXPECT_EQ(estimator.estimate(&fit), Status::joint_count_mismatch);
 }
 
 }  // namespace

@@ -43,7 +43,7 @@ JointStateRecord vector1_record() {
   JointStateRecord r;
   r.sequence = 7;
   r.timestamp_us = 1000000;
-  const double q[kJointCount] = {0.0, -math::kHalfPi, math::kHalfPi, -math::kHalfPi, -math::kHalfPi, 0.0};
+  const double q[kSixJoints] = {0.0, -math::kHalfPi, math::kHalfPi, -math::kHalfPi, -math::kHalfPi, 0.0};
   std::memcpy(r.q_rad, q, sizeof q);
   return r;
 }
@@ -140,9 +140,9 @@ TEST(CodecVectors, DecodeToTheStatedValues) {
 
   EXPECT_EQ(handler.joint.sequence, 7);
   EXPECT_EQ(handler.joint.timestamp_us, 1000000u);
-  const double q[kJointCount] = {0.0, -1.5707963267948966, 1.5707963267948966, -1.5707963267948966, -1.5707963267948966,
-                                 0.0};
-  for (int j = 0; j < kJointCount; ++j) {
+  const double q[kSixJoints] = {0.0, -1.5707963267948966, 1.5707963267948966, -1.5707963267948966, -1.5707963267948966,
+                                0.0};
+  for (int j = 0; j < kSixJoints; ++j) {
     EXPECT_EQ(handler.joint.q_rad[j], q[j]) << j;
     EXPECT_EQ(handler.joint.qd_rad_s[j], 0.0);
     EXPECT_EQ(handler.joint.current_a[j], 0.0f);
@@ -179,7 +179,7 @@ TEST(CodecVectors, EncodeToTheExactBytes) {
   EXPECT_EQ(encode(vector1_record(), encode_joint_state), test::from_hex(kJointStateVector));
   EXPECT_EQ(encode(vector2_record(), encode_tracker_point), test::from_hex(kTrackerPointVector));
   EXPECT_EQ(encode(vector3_record(), encode_device_info), test::from_hex(kDeviceInfoVector));
-  EXPECT_EQ(test::from_hex(kJointStateVector).size(), kMaxFrameBytes);
+  EXPECT_EQ(test::from_hex(kJointStateVector).size(), kMaxSpecFrameBytes);
 }
 
 TEST(CodecEncode, RefusesShortBuffersAndNullOutput) {
@@ -291,15 +291,15 @@ TEST(CodecDecode, CountsEveryRejectionAndResynchronises) {
   const Bytes good = test::from_hex(kTrackerPointVector);
   const Bytes packet = packet_of_frame(good);
   const Bytes flipped = patched(good, 20, static_cast<std::uint8_t>(good[20] ^ 0x10));  // CRC failure
-  const Bytes bad_version = patched(packet, 0, 2);
+  const Bytes bad_version = patched(packet, 0, 3);
   const Bytes unknown = patched(packet, 1, 0x04);
   Bytes wrong_length = packet;
   wrong_length.push_back(0);  // TRACKER_POINT one byte too long, CRC valid
   const Bytes short_packet = frame_of_packet(Bytes{1, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0});  // 15 bytes with CRC
   const Bytes cobs_broken = {0x09, 0x01, 0x02, 0x00};                                  // code runs past the end
-  const Bytes oversized(kMaxFrameBytes, 0x41);                                         // 138 bytes, no delimiter
-  Bytes just_fits(kMaxFrameBytes - 1, 0x41);  // 137 bytes: not oversized; one COBS run, CRC wrong
-  just_fits[0] = static_cast<std::uint8_t>(kMaxFrameBytes - 1);
+  const Bytes oversized(kMaxSpecFrameBytes, 0x41);                                     // 138 bytes, no delimiter
+  Bytes just_fits(kMaxSpecFrameBytes - 1, 0x41);  // 137 bytes: not oversized; one COBS run, CRC wrong
+  just_fits[0] = static_cast<std::uint8_t>(kMaxSpecFrameBytes - 1);
   just_fits.push_back(0);
   Bytes oversized_frame = oversized;
   oversized_frame.push_back(0);
@@ -431,7 +431,7 @@ Bytes frame_of(const Packet& p) {
       return frame_of_packet(packet);
     }
     case Kind::bad_version:
-      return frame_of_packet(patched(packet_of_frame(encode(tracker, encode_tracker_point)), 0, 2));
+      return frame_of_packet(patched(packet_of_frame(encode(tracker, encode_tracker_point)), 0, 3));
     case Kind::bad_crc: {
       const Bytes frame = encode(tracker, encode_tracker_point);
       return patched(frame, 20, static_cast<std::uint8_t>(frame[20] ^ 0x10));
@@ -523,7 +523,7 @@ TEST(CodecSequence, SkippedIntactPacketsAreNotLost) {
   EXPECT_EQ(stats.bad_lengths, 1u);
   EXPECT_EQ(stats.crc_failures, 1u);
   EXPECT_EQ(stats.bad_versions, 1u);
-  EXPECT_EQ(stats.sequence_gaps, 2u);  // 105 -> 107 (CRC failure), 107 -> 109 (version 2)
+  EXPECT_EQ(stats.sequence_gaps, 2u);  // 105 -> 107 (CRC failure), 107 -> 109 (version 3)
   EXPECT_EQ(stats.packets_lost, 2u);
   EXPECT_EQ(stats.sequence_resets, 0u);
 

@@ -10,6 +10,7 @@
 #include <type_traits>
 
 #include "hivecal/core/random.hpp"
+#include "hivecal/wire/codec.hpp"
 #include "hivecal/wire/records.hpp"
 #include "testkit/alloc_trap.hpp"
 #include "testkit/codec_support.hpp"
@@ -59,17 +60,21 @@ TEST(Records, FieldWidthsMatchTheSpecTables) {
   static_assert(std::is_same_v<decltype(TrackerPointRecord::timestamp_us), std::uint64_t>, "u64");
   static_assert(std::is_same_v<decltype(DeviceInfoRecord::timestamp_us), std::uint64_t>, "u64");
   // JOINT_STATE, 120 bytes: 6 x f64 position, 6 x f64 velocity, 6 x f32 current.
-  EXPECT_EQ(kJointCount, 6);
+  EXPECT_EQ(kSixJoints, 6);
   static_assert(std::is_same_v<std::remove_extent_t<decltype(JointStateRecord::q_rad)>, double>, "f64");
   static_assert(std::is_same_v<std::remove_extent_t<decltype(JointStateRecord::qd_rad_s)>, double>, "f64");
   static_assert(std::is_same_v<std::remove_extent_t<decltype(JointStateRecord::current_a)>, float>, "f32");
   static_assert(std::numeric_limits<double>::is_iec559 && sizeof(double) == 8, "IEEE-754 binary64");
   static_assert(std::numeric_limits<float>::is_iec559 && sizeof(float) == 4, "IEEE-754 binary32");
+  // The record holds the build's joints (version 2 carries up to kMaxJoints); six of each is 120.
   const JointStateRecord joint;
-  EXPECT_EQ(std::extent_v<decltype(JointStateRecord::q_rad)>, 6u);
-  EXPECT_EQ(std::extent_v<decltype(JointStateRecord::qd_rad_s)>, 6u);
-  EXPECT_EQ(std::extent_v<decltype(JointStateRecord::current_a)>, 6u);
-  EXPECT_EQ(sizeof joint.q_rad + sizeof joint.qd_rad_s + sizeof joint.current_a, 120u);
+  EXPECT_EQ(joint.joint_count, 6);
+  EXPECT_EQ(std::extent_v<decltype(JointStateRecord::q_rad)>, static_cast<std::size_t>(kMaxJoints));
+  EXPECT_EQ(std::extent_v<decltype(JointStateRecord::qd_rad_s)>, static_cast<std::size_t>(kMaxJoints));
+  EXPECT_EQ(std::extent_v<decltype(JointStateRecord::current_a)>, static_cast<std::size_t>(kMaxJoints));
+  EXPECT_EQ((sizeof joint.q_rad + sizeof joint.qd_rad_s + sizeof joint.current_a) / kMaxJoints * 6, 120u);
+  EXPECT_EQ(kJointStatePayloadBytes, 120u);
+  EXPECT_EQ(counted_joint_state_payload_bytes(6), 124u);  // the count and its padding first
   // TRACKER_POINT, 28 bytes: 3 x f64 position, u8 status, 3 bytes padding.
   const TrackerPointRecord point;
   static_assert(std::is_same_v<std::remove_extent_t<decltype(TrackerPointRecord::point_m)>, double>, "f64");

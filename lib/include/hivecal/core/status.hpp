@@ -42,6 +42,8 @@ enum class Status : std::uint8_t {
   solver_cancelled,    ///< the progress observer asked the solver to stop
   // Stream input.
   read_failed,  ///< a byte source reported an I/O error
+  // Joint counts (added with models of any joint count).
+  joint_count_mismatch,  ///< joint records or samples of another joint count than the robot model
 };
 
 /// A short, stable, human-readable name for a status (for logs and CLI messages).

@@ -11,9 +11,60 @@
 
 namespace hivecal {
 
-using Vec3 = Eigen::Matrix<double, 3, 1>;                   ///< a point or direction [m] or [-]
-using Mat3 = Eigen::Matrix<double, 3, 3>;                   ///< a rotation or 3x3 moment
-using JointVector = Eigen::Matrix<double, kJointCount, 1>;  ///< joint positions [rad]
+using Vec3 = Eigen::Matrix<double, 3, 1>;  ///< a point or direction [m] or [-]
+using Mat3 = Eigen::Matrix<double, 3, 3>;  ///< a rotation or 3x3 moment
+
+/// Joint positions of one pose: entry j is joint j + 1's reading, [rad] for a revolute joint,
+/// [m] for a prismatic one. Room for kMaxJoints; a model of fewer joints reads the first
+/// RobotModel::joint_count and the rest stay 0 (a default-built vector is all zeros), so that
+/// whole vectors compare, copy and check as the model's joints do.
+class JointVector : public Eigen::Matrix<double, kMaxJoints, 1> {
+ public:
+  using Base = Eigen::Matrix<double, kMaxJoints, 1>;  ///< the storage
+
+  JointVector() : Base(Base::Zero()) {}
+  // Implicit on purpose: Eigen expressions of joint vectors convert as they do between matrices.
+  template <typename OtherDerived>
+  JointVector(const Eigen::MatrixBase<OtherDerived>& other) : Base(other) {}  // NOLINT(google-explicit-constructor)
+  template <typename OtherDerived>
+  JointVector& operator=(const Eigen::MatrixBase<OtherDerived>& other) {
+    Base::operator=(other);
+    return *this;
+  }
+
+  /// The readings of `q << q1, q2, ...`: joints 1, 2, ... in order (evaluated in that order), at
+  /// most kMaxJoints; the joints after the last one given are 0.
+  class Readings {
+   public:
+    Readings(JointVector* vector, double first) : vector_(vector) {
+      vector_->setZero();
+      (*vector_)(0) = first;
+    }
+    /// The next joint's reading.
+    Readings& operator,(double value) {
+      eigen_assert(next_ < kMaxJoints && "no more readings than the build's joints");
+      if (next_ < kMaxJoints) (*vector_)(next_++) = value;
+      return *this;
+    }
+    /// The vector filled.
+    JointVector& finished() { return *vector_; }
+
+   private:
+    JointVector* vector_;
+    int next_ = 1;
+  };
+  /// Starts `q << q1, q2, ...` (Readings).
+  Readings operator<<(double first) { return Readings(this, first); }
+};
+
+/// The joint vector of the readings q[0 .. count - 1] (count <= kMaxJoints), zeros after them.
+template <std::size_t kCount>
+JointVector joint_vector(const double (&q)[kCount]) {
+  static_assert(kCount <= static_cast<std::size_t>(kMaxJoints), "no more readings than the build's joints");
+  JointVector v;
+  for (std::size_t j = 0; j < kCount; ++j) v(static_cast<Eigen::Index>(j)) = q[j];
+  return v;
+}
 
 /// Proper rigid motion y = rotation * x + translation_m.
 struct RigidTransform {

@@ -17,9 +17,10 @@
 
 namespace hivecal {
 
-/// Largest matrix the solver decomposes: the full calibration model's parameters, 33 rigid +
-/// the build's joint terms (37 or 73; normal_equations.hpp checks that the two agree).
-inline constexpr int kSymmetricCapacity = 33 + kMaxJointTerms;
+/// Largest matrix the solver decomposes: the full calibration model's parameters, 4 per joint,
+/// 3 of the tool and 6 of the base for the build's joint capacity (33 for six joints), and its
+/// joint terms (37 for six joints and 4 terms; normal_equations.hpp checks that the two agree).
+inline constexpr int kSymmetricCapacity = 4 * kMaxJoints + 9 + kMaxJointTerms;
 /// The working matrix: the leading size x size block is decomposed (10.9 kB at 37, 29.1 kB at 61, 41.6 kB at 73).
 using SymmetricMatrix = Eigen::Matrix<double, kSymmetricCapacity, kSymmetricCapacity>;
 /// Eigenvalues, or one column of eigenvectors, of that block.

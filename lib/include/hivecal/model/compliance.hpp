@@ -6,8 +6,10 @@
 //   basis = sum over the term's point masses m at P of  z_j . ((P - o_j) x g_hat) * m
 // (z_j, o_j: axis and origin of DH frame j, the frame joint j turns about, 0-based joints;
 // g_hat: unit gravity direction in the robot base frame). The tool point is then the rigid FK at
-// q + dq: the deflection adds to the joint reading as theta_offset does. With no term the model
-// is rigid and every FK gives the bits of the rigid chain.
+// q + dq: the deflection adds to the joint reading as theta_offset does. A prismatic joint is
+// loaded by the weight along its axis instead, basis = z_j . g_hat * m (per unit g), and
+// deflects along it. With no term the model is rigid and every FK gives the bits of the rigid
+// chain.
 //
 // A term may instead be a harmonic of its joint's reading, basis sin(k q_j) or cos(k q_j)
 // (k = 1 .. kMaxHarmonicOrder): the classic model of encoder eccentricity (k = 1) and gear
@@ -28,8 +30,9 @@ enum class RobotType : int;
 /// Most compliance terms one model holds (each is one more LM parameter): the build's
 /// capacity for joint terms (core/capacity.hpp).
 inline constexpr int kMaxComplianceTerms = kMaxJointTerms;
-/// The frame number of a point load at the tool point (target 1's), after DH frames 1 .. 6.
-inline constexpr int kToolLoadFrame = kJointCount + 1;
+/// The frame number of a point load at the tool point (target 1's): beyond the DH frames 1 ..
+/// joint_count of any model the build holds (7 for six joints).
+inline constexpr int kToolLoadFrame = kMaxJoints + 1;
 
 /// What the basis of a model's terms weighs.
 enum class ComplianceLoad : int {
@@ -64,8 +67,8 @@ inline constexpr double kMaxJointTermCoefficient = 1e-2;
 /// or a harmonic of the joint's reading (encoder eccentricity, transmission error).
 struct ComplianceTerm {
   int joint = 0;  ///< deflecting joint, 0-based (1 = a UR's shoulder) [-]
-  /// Point load: DH frame 1 .. 6 whose origin holds the unit mass, or kToolLoadFrame (7) for
-  /// the tool point; must lie beyond the joint (> joint). Unused (0) for arm masses and
+  /// Point load: DH frame 1 .. joint_count whose origin holds the unit mass, or kToolLoadFrame
+  /// for the tool point; must lie beyond the joint (> joint). Unused (0) for arm masses and
   /// harmonics [-].
   int frame = 0;
   JointTermKind kind = JointTermKind::gravity;  ///< gravity torque or harmonic
@@ -77,15 +80,15 @@ constexpr bool is_harmonic(const ComplianceTerm& term) {
   return term.kind != JointTermKind::gravity;
 }
 
-/// Masses and centres of mass of the six links and the payload (ComplianceLoad::arm_masses).
+/// Masses and centres of mass of the links and the payload (ComplianceLoad::arm_masses).
 struct ArmMasses {
-  double link_mass_kg[kJointCount] = {};  ///< mass of link 1 .. 6 (moved by joint 1 .. 6) [kg]
+  ArmMasses();                           ///< no masses: every mass and centre 0
+  double link_mass_kg[kMaxJoints] = {};  ///< mass of link 1 .. joint_count (moved by joint 1 ..) [kg]
   /// Centre of mass of link j + 1 in DH frame j + 1 (the frame at the link's end) [m].
-  Vec3 link_com_m[kJointCount] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  Vec3 link_com_m[kMaxJoints];
   double payload_kg = 0.0;            ///< payload (tool, reflector mount) mass [kg]
   Vec3 payload_com_m = Vec3::Zero();  ///< payload centre of mass in the flange frame [m]
 };
-static_assert(kJointCount == 6, "link_com_m's initialiser lists six points");
 
 /// The joints' errors beyond the rigid chain in a RobotModel: gravity compliance terms and
 /// joint-angle harmonics, each deflecting its joint by coefficient * basis. term_count 0 = rigid. Laid out without
@@ -101,12 +104,13 @@ struct ComplianceModel {
   ComplianceLoad load = ComplianceLoad::point;    ///< what every gravity term's basis weighs
 };
 
-/// Status::ok when `compliance` is usable: rigid (term_count 0, the rest unread), or
-/// term_count in [1, kMaxComplianceTerms], joints in [0, 6), point frames in (joint,
-/// kToolLoadFrame], harmonic orders in [1, kMaxHarmonicOrder], finite coefficients, masses >= 0 and
-/// finite, and a finite gravity direction of unit length (within 1e-9); invalid_argument or
-/// non_finite_input otherwise.
-Status check_compliance(const ComplianceModel& compliance);
+/// Status::ok when `compliance` is usable for the joints of `model` (whose own compliance is not
+/// read): rigid (term_count 0, the rest unread), or term_count in [1, kMaxComplianceTerms],
+/// joints in [0, joint_count), point frames in (joint, joint_count] or kToolLoadFrame,
+/// harmonics of revolute joints only with orders in [1, kMaxHarmonicOrder], finite
+/// coefficients, masses >= 0 and finite, and a finite gravity direction of unit length (within
+/// 1e-9); invalid_argument or non_finite_input otherwise.
+Status check_compliance(const ComplianceModel& compliance, const RobotModel& model);
 
 /// The basis of each of the model's terms at joint readings q (rigid FK of `model`), into
 /// basis[0 .. term_count - 1]; the rest 0. [m] (point), [kg m] (arm masses) or [-] (harmonics).
@@ -127,19 +131,23 @@ JointVector compliance_deflection(const RobotModel& model, const JointVector& q_
 /// `gravity_direction` (normalised here), into *compliance: terms, term_count, load, the unit
 /// gravity direction, zero coefficients; the masses are left as they are. The shoulder is the
 /// first joint whose axis is horizontal at q = 0 (|z . g_hat| < cos 45 deg), the elbow the
-/// next one. Point: (shoulder, its link's end = frame shoulder + 1), (shoulder, frame 4 =
-/// wrist), (elbow, frame 4), (elbow, tool). Arm masses: one term per horizontal joint among the
-/// first four. invalid_argument when gravity is zero or not finite, or no joint (point: no two
-/// joints) is horizontal. docs/compliance.md says why these.
+/// next one (revolute joints: a horizontal axis carries the arm's weight as a torque). Point:
+/// (shoulder, its link's end = frame shoulder + 1), (shoulder, frame 4 = wrist), (elbow, frame
+/// 4), (elbow, tool). Arm masses: one term per horizontal joint among the first four.
+/// invalid_argument when gravity is zero or not finite, or no joint (point: no two joints) is
+/// horizontal. docs/compliance.md says why these.
 Status default_compliance_terms(const RobotModel& model, const Vec3& gravity_direction, ComplianceLoad load,
                                 ComplianceModel* compliance);
 
-/// Appends the harmonics of orders 1 .. `orders` of every joint's reading to *compliance:
-/// per joint and order a sine and a cosine term with zero coefficients. invalid_argument when
-/// `orders` is outside [1, kMaxHarmonicOrder] or the terms would not fit in
-/// kMaxComplianceTerms (the build's capacity: 28 holds the 4 gravity terms and orders 1 .. 2,
-/// 40 orders 1 .. 3).
-Status append_harmonic_terms(int orders, ComplianceModel* compliance);
+/// Appends the harmonics of orders 1 .. `orders` of every revolute joint of `model` (whose own
+/// compliance is not read) to *compliance: per joint and order a sine and a cosine term with
+/// zero coefficients (a prismatic joint's reading is a length: it has none). invalid_argument
+/// when `orders` is outside [1, kMaxHarmonicOrder] or the terms would not fit in
+/// kMaxComplianceTerms (the build's capacity: for six joints 28 holds the 4 gravity terms and
+/// orders 1 .. 2, 40 orders 1 .. 3).
+Status append_harmonic_terms(int orders, const RobotModel& model, ComplianceModel* compliance);
+/// The terms append_harmonic_terms(orders) adds to `model`: two per revolute joint and order [-].
+int harmonic_term_count(const RobotModel& model, int orders);
 
 /// Universal Robots' published link masses and centres of mass of `type` into *masses (payload
 /// left as it is): every RobotType (the CB-series UR3, UR5, UR10 and the e-Series UR3e, UR5e,

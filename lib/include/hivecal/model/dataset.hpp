@@ -27,6 +27,9 @@ struct Sample {
 
 /// Number of distinct targets `samples` use: the largest target index + 1 (1 when empty) [-].
 int target_count(Span<const Sample> samples);
+/// True when no sample has a reading beyond the first `joint_count` joints (they are 0): the
+/// samples can be of a model of that many joints.
+bool readings_fit_joint_count(Span<const Sample> samples, int joint_count);
 /// Joints that agree this closely are one robot pose: the samples of one stop of the robot
 /// (encoder noise is ~1e-5 rad; two poses a user plans differ by degrees) [rad].
 inline constexpr double kSamePoseTolerance_rad = 1e-3;

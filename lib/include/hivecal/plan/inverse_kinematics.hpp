@@ -1,7 +1,8 @@
 // Inverse kinematics of a flange pose: the joints that put the flange frame at a commanded
 // pose, within joint limits. A damped Gauss-Newton on the 6-D pose error (position, and the
 // rotation vector of the remaining turn) with a numeric Jacobian, from seeded random starts:
-// any 6-joint chain of the model, no closed form needed, and the same bits on every target.
+// any chain of the model (a redundant one too: the damped step chooses among the solutions), no
+// closed form needed, and the same bits on every target.
 #pragma once
 
 #include "hivecal/core/random.hpp"
@@ -25,8 +26,8 @@ struct InverseKinematicsOptions {
 Vec3 rotation_vector_of(const Mat3& r);
 
 /// Joints that put the flange of `model` at `target` (robot base frame), every joint within
-/// `limits` (a turn more or less is the same pose: each joint is wrapped into its range when
-/// it can be). Starts are drawn from `random`. Errors: not_converged (no start reached the
+/// `limits` (a turn more or less is the same pose: each revolute joint is wrapped into its range
+/// when it can be). Starts are drawn from `random`. Errors: not_converged (no start reached the
 /// tolerances inside the limits), invalid_argument (options), non_finite_input (target).
 Status solve_flange_pose(const RobotModel& model, const JointLimits& limits, const RigidTransform& target,
                          const InverseKinematicsOptions& options, Random* random, JointVector* q_out);

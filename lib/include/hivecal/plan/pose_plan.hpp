@@ -34,14 +34,16 @@ inline constexpr std::size_t kPlanPoseCapacity = 128;
 /// Random draws per requested candidate before the generator gives up [-].
 inline constexpr std::size_t kPlanAttemptsPerCandidate = 400;
 
-/// Joint position limits [rad].
+/// Joint position limits, one entry per joint of the model planned for ([m] for a prismatic
+/// joint): the entries beyond its joint count are not read.
 struct JointLimits {
-  JointVector lower_rad = JointVector::Constant(-2.0 * math::kPi);  ///< lowest joint positions [rad]
-  JointVector upper_rad = JointVector::Constant(2.0 * math::kPi);   ///< highest joint positions [rad]
+  JointVector lower_rad = JointVector::Constant(-2.0 * math::kPi);  ///< lowest joint positions [rad] or [m]
+  JointVector upper_rad = JointVector::Constant(2.0 * math::kPi);   ///< highest joint positions [rad] or [m]
 };
 
-/// The limits of the UR arms' controllers (every joint +/-360 deg, the elbow +/-180 deg, as in
-/// Universal Robots' ROS description), the same for every built-in type.
+/// The joint limits of a built-in type: the maker's (maker_joint_limits) for the seven-axis
+/// arms; for the UR arms their controllers' (every joint +/-360 deg, the elbow +/-180 deg, as in
+/// Universal Robots' ROS description), the same for every UR type.
 JointLimits default_joint_limits(RobotType type);
 
 /// Which way the reflector must face.
@@ -78,7 +80,8 @@ struct PlanOptions {
   std::size_t pose_count = 40;  ///< poses selected, 1 .. kPlanPoseCapacity and <= candidate_count [-]
   std::uint64_t seed = 1;       ///< seed of the candidate draws [-]
   PlanCriterion criterion = PlanCriterion::i_optimal_workspace;  ///< what the selection maximises
-  ParamMask free_mask = kAllParamsMask;  ///< parameters the calibration may move (lm_param_mask) [-]
+  /// Parameters the calibration may move (lm_param_mask of the model planned for) [-].
+  ParamMask free_mask = rigid_params_mask(kSixJoints);
   double identifiability_threshold = kDefaultIdentifiabilityThreshold;  ///< as LmOptions [-]
   int max_exchange_passes = 8;    ///< Fedorov exchange passes over the selection [-]
   double prior_length_m = 1e-3;   ///< prior sigma of the geometry's lengths and the tool (0: none) [m]
@@ -146,8 +149,9 @@ bool pose_meets_constraints(const RobotModel& model, const PlanConstraints& cons
 
 /// Draws options.candidate_count configurations meeting the constraints into
 /// workspace->candidates (seeded; tool_down: q5 = -/+ pi/2 alternately and q4 from q2, q3, as
-/// a UR's wrist must be for joint 6 to point down). Errors: invalid_argument,
-/// too_few_samples (fewer found in kPlanAttemptsPerCandidate draws each).
+/// a UR's wrist must be for joint 6 to point down). Errors: invalid_argument (options, a
+/// model's joint layout, tool_down for an arm of other than six joints), too_few_samples (fewer
+/// found in kPlanAttemptsPerCandidate draws each).
 Status generate_candidates(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace,
                            std::size_t* attempts);
 
@@ -177,8 +181,8 @@ double order_poses(JointVector* poses, std::size_t count, const PlanOptions& opt
 
 /// The whole plan: candidates, pool identifiability, greedy + exchange selection (restarts),
 /// order, qualities of the plan and of a random set of the same size, durations.
-/// Errors: invalid_argument (options), too_few_samples, singular_system (nothing identifiable),
-/// non_finite_input, errors of analyze_identifiability.
+/// Errors: invalid_argument (options: as generate_candidates), too_few_samples, singular_system
+/// (nothing identifiable), non_finite_input, errors of analyze_identifiability.
 Status plan_session(const RobotModel& model, const PlanOptions& options, PlanWorkspace* workspace, PlanResult* result);
 
 }  // namespace hivecal

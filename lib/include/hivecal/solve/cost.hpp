@@ -29,8 +29,4 @@ enum class BaseFrame : int {
 Status evaluate_cost(const RobotModel& model, Span<const Sample> samples, CostKind kind, BaseFrame base_frame,
                      RigidTransform* base_to_tracker, double* cost);
 
-/// The same for a parameter vector (see to_params / from_params).
-Status evaluate_cost(const ModelParams& params, Span<const Sample> samples, CostKind kind, BaseFrame base_frame,
-                     RigidTransform* base_to_tracker, double* cost);
-
 }  // namespace hivecal

@@ -77,7 +77,7 @@ struct IdentifiabilityWorkspace {
 
 /// Analyses normal equations J^T W J (from accumulate_normal_equations) over the parameters
 /// in `free_mask`: drops no-effect columns (norm below threshold * the largest diagonal
-/// entry of all 33: accumulate the base translation columns too, whose norm sqrt(sum w) is
+/// entry of all: accumulate the base translation columns too, whose norm sqrt(sum w) is
 /// the physical reference), then null directions (sigma_k / sigma_max of the column-scaled
 /// Jacobian below threshold), and fills *report.
 /// A null direction drops the parameter with the largest component among those in

@@ -1,4 +1,4 @@
-// Levenberg-Marquardt calibration of the full model (27 geometry parameters + base ->
+// Levenberg-Marquardt calibration of the full model (the geometry parameters + base ->
 // tracker transform) from paired samples: streaming normal equations with column scaling,
 // automatic identifiability (identifiability.hpp), Nielsen damping, optional Huber loss by
 // IRLS, parameter standard deviations. No heap; the large matrices live in LmWorkspace.
@@ -22,7 +22,7 @@ namespace hivecal {
 
 /// Which parameters the solver may move (before the identifiability analysis).
 enum class LmParamSet : std::uint8_t {
-  full,             ///< the rigid model's 33; the analysis drops what the data cannot determine
+  full,             ///< the rigid model's (33 for six joints); the analysis drops what the data cannot determine
   link_lengths,     ///< the start model's link lengths (link_length_set: for UR the paper's d1, a2, a3, d4, d5, d6) and
                     ///< the base transform
   custom,           ///< LmOptions::custom_mask
@@ -65,9 +65,9 @@ struct LmPrior {
   LmPriorTolerances tolerance;          ///< its tolerances [m], [rad]
 };
 
-/// The tolerance of full-model parameter `index`: of its kind for a DH element or target 1's
-/// tool point, 0 for every other parameter [m] or [rad].
-double prior_tolerance(const LmPriorTolerances& tolerance, int index);
+/// The tolerance of full-model parameter `index` of a model of `joint_count` joints: of its kind
+/// for a DH element or target 1's tool point, 0 for every other parameter [m] or [rad].
+double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int index);
 /// The prior's standard deviation of full-model parameter `index`: prior_tolerance, 0 without
 /// a nominal [m] or [rad].
 double lm_prior_sigma(const LmPrior& prior, int index);
@@ -86,7 +86,8 @@ struct LmOptions {
   double huber_threshold_m = 0.0;  ///< Huber k [m]; 0: 3 x noise sigma estimated from the median residual
   double identifiability_threshold = kDefaultIdentifiabilityThreshold;  ///< sigma_k / sigma_max to drop [-]
   LmParamSet params = LmParamSet::full;                                 ///< which parameters may move
-  ParamMask custom_mask = kAllParamsMask;                               ///< free parameters when params == custom
+  /// Free parameters when params == custom (of the start model's valid_params_mask) [-].
+  ParamMask custom_mask = rigid_params_mask(kSixJoints);
   /// Estimate the other targets' tool points (targets 2..) even when the free set fixes target
   /// 1's tool_x (e.g. a significance test fixed it); false: only while tool_x is free [-].
   bool other_target_tools = false;
@@ -234,8 +235,9 @@ struct LmWorkspaceWithTargets : LmWorkspace {
 /// returns an input error. The optional `trace` receives the RMS residual [m] at the start
 /// and after each iteration; `observer` is called after each iteration.
 /// Errors: dataset_empty; too_few_samples (3 N <= number of free parameters);
-/// non_finite_input (start model, base or samples); invalid_argument (options, or a start
-/// compliance that check_compliance refuses);
+/// non_finite_input (start model, base or samples); invalid_argument (options, a start model
+/// that check_joint_layout refuses, or a start compliance that check_compliance refuses);
+/// joint_count_mismatch (a sample reads a joint beyond the model's: readings_fit_joint_count);
 /// poses_not_distinct (all samples at one joint position); errors of fit_base_to_tracker;
 /// singular_system (no identifiable parameter or an unsolvable step);
 /// not_converged (iteration limit, *result holds the last point);

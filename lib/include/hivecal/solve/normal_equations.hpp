@@ -1,6 +1,6 @@
 // The streaming normal equations of the full model's point residuals
 // r_i = base_to_tracker * FK(q_i) * tool - m_i (docs/solver-lm.md): per-sample residual and
-// Jacobian, column scaling, the Huber loss, and sums over samples that never store an N x 33
+// Jacobian, column scaling, the Huber loss, and sums over samples that never store an N x p
 // matrix. The parameters themselves (indices, masks, names, increments) are in
 // model/full_params.hpp.
 #pragma once
@@ -19,19 +19,20 @@
 
 namespace hivecal {
 
-/// A 33x33 matrix such as J^T W J [m^2/unit^2]; 8.7 kB, keep it out of small stacks.
+/// A matrix over every parameter the build holds, such as J^T W J [m^2/unit^2] (37 x 37 for six
+/// joints and four terms: 10.9 kB); keep it out of small stacks.
 using NormalMatrix = Eigen::Matrix<double, kFullParamCount, kFullParamCount>;
 static_assert(kFullParamCount == kSymmetricCapacity, "the eigen-solver is sized for the full model");
 
 /// Residual r = base_to_tracker * FK(q) * tool - point [m] of one sample and, into
 /// *jacobian, dr/d(full parameters): R [J_tool | -skew(p) | I], with R the base rotation,
-/// J_tool the 3x27 tool-point Jacobian and p the tool point in the base frame.
+/// J_tool the tool-point Jacobian (3 x model_param_count) and p the tool point in the base frame.
 Vec3 full_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
                             FullJacobian* jacobian);
 
 /// The same in the robot base frame: returns R^T r [m] and [J_tool | -skew(p) | I] into
 /// *local_jacobian. R is orthonormal, so J^T J = J_local^T J_local and J^T r = J_local^T R^T r:
-/// the normal equations need no rotation of the 3x33 Jacobian.
+/// the normal equations need no rotation of the Jacobian.
 Vec3 local_residual_jacobian(const RobotModel& model, const RigidTransform& base_to_tracker, const Sample& sample,
                              FullJacobian* local_jacobian);
 
@@ -60,9 +61,9 @@ struct PointLoss {
   double weight(double norm_m) const;
 };
 
-/// The tool point t of one target 2.. as a parameter block beside the 33 (docs/solver-lm.md,
+/// The tool point t of one target 2.. as a parameter block beside the model's (docs/solver-lm.md,
 /// "Several targets"): with T = d r / d t (3x3), D = sum w T^T T, S = sum w T^T J (J the
-/// 33 columns) and c = sum w T^T r, the block is eliminated from the normal equations
+/// model's columns) and c = sum w T^T r, the block is eliminated from the normal equations
 /// (Schur complement: H - S^T D^-1 S, g - S^T D^-1 c) and its step follows from the others'.
 struct TargetBlock {
   Mat3 tool_tool = Mat3::Zero();  ///< D [-]
@@ -72,7 +73,7 @@ struct TargetBlock {
   std::size_t count = 0;  ///< samples of this target summed; 0: the block is not eliminated
 };
 
-/// Weighted normal equations of the point residuals, summed sample by sample (no N x 33
+/// Weighted normal equations of the point residuals, summed sample by sample (no N x p
 /// matrix is ever stored).
 struct NormalEquations {
   NormalMatrix jtwj;                 ///< sum w_i J_i^T J_i [m^2/unit^2]
@@ -88,7 +89,7 @@ struct NormalEquations {
   Span<TargetBlock> targets;
 };
 
-/// The step of the eliminated target tool points that goes with `step` of the 33:
+/// The step of the eliminated target tool points that goes with `step` of the model's parameters:
 /// t_k += -D_k^-1 (c_k + S_k step), for every target block of `eq` with samples.
 void apply_target_step(const NormalEquations& eq, const FullParams& step, RobotModel* model);
 
@@ -102,16 +103,22 @@ void apply_target_step(const NormalEquations& eq, const FullParams& step, RobotM
 /// The same bits either way. Errors: dataset_empty, non_finite_input (a NaN or Inf residual or Jacobian).
 Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
                                    Span<const Sample> samples, const PointLoss& loss, NormalEquations* out,
-                                   ParamMask columns = kAllParamsMask | kOtherTargetTools,
-                                   Span<const JointTrig> sample_trig = {});
+                                   ParamMask columns, Span<const JointTrig> sample_trig = {});
+/// The same over the model's rigid parameters (rigid_params_mask) and the other targets' tool points.
+Status accumulate_normal_equations(const RobotModel& model, const RigidTransform& base_to_tracker,
+                                   Span<const Sample> samples, const PointLoss& loss, NormalEquations* out);
 
 namespace detail {
 /// The parameters of a mask as a list of indices, increasing, and where each of the columns
-/// sits in a compact row: the listed ones at 0..count-1 in order, the others after them.
+/// sits in a compact row: the listed ones at 0..count-1 in order, the others after them; and
+/// where the base's columns are for the model's joint count.
 struct IndexList {
   int index[kFullParamCount];
   int slot[kFullParamCount];
   int count = 0;
+  int base_rotation = 0;     ///< index of the base's first rotation parameter
+  int base_translation = 0;  ///< index of the base's first translation parameter
+  int base_end = 0;          ///< one past the base's last parameter
 };
 }  // namespace detail
 

@@ -29,8 +29,8 @@ namespace hivecal {
 
 /// Number of lengths the paper calibrates (a UR arm's link lengths; the firmware's capacity).
 inline constexpr std::size_t kPaper6Dimension = 6;
-/// Most link lengths a model can have: every d and a of the six joints.
-inline constexpr std::size_t kMaxLinkLengths = 2 * static_cast<std::size_t>(kJointCount);
+/// Most link lengths a model can have: every d and a of its joints.
+inline constexpr std::size_t kMaxLinkLengths = 2 * static_cast<std::size_t>(kMaxJoints);
 /// Default half-width of the search box around the nominal lengths [m].
 inline constexpr double kPaper6DefaultHalfWidth_m = 2e-3;
 
@@ -49,7 +49,7 @@ LinkLengthSet link_length_set(const RobotModel& nominal);
 /// The link lengths of one arm: the first `count` entries of `values_m`, zeros after them
 /// (fixed capacity kMaxLinkLengths; the count is the arm's: 5 for an IRB120, 6 for UR).
 struct LinkLengths {
-  /// Room for every d and a of the six joints [m].
+  /// Room for every d and a of the joints [m].
   using Values = Eigen::Matrix<double, static_cast<int>(kMaxLinkLengths), 1>;
   std::size_t count = 0;             ///< number of lengths K [-]
   Values values_m = Values::Zero();  ///< the lengths in [0, count), zero after [m]

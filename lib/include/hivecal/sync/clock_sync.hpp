@@ -86,14 +86,15 @@ struct ClockFit {
 inline constexpr std::size_t kClockSetAsideLog = 8;
 
 struct ClockProfileStats {
-  std::uint64_t robot_records = 0;            ///< JointStateRecords pushed
-  std::uint64_t robot_rejected = 0;           ///< of which out of time order or non-finite
-  std::uint64_t robot_beyond_capacity = 0;    ///< of which after the profile was full
-  std::uint64_t robot_gaps = 0;               ///< robot gaps longer than max_robot_gap_us
-  std::uint64_t tracker_records = 0;          ///< TrackerPointRecords pushed
-  std::uint64_t tracker_not_valid = 0;        ///< of which status not valid or non-finite point
-  std::uint64_t tracker_rejected = 0;         ///< of which out of time order
-  std::uint64_t tracker_beyond_capacity = 0;  ///< of which after the profile was full
+  std::uint64_t robot_records = 0;                 ///< JointStateRecords pushed
+  std::uint64_t robot_rejected = 0;                ///< of which out of time order, non-finite or of another joint count
+  std::uint64_t robot_beyond_capacity = 0;         ///< of which after the profile was full
+  std::uint64_t robot_gaps = 0;                    ///< robot gaps longer than max_robot_gap_us
+  std::uint64_t robot_joint_count_mismatches = 0;  ///< of the rejected, of another joint count than the speed model
+  std::uint64_t tracker_records = 0;               ///< TrackerPointRecords pushed
+  std::uint64_t tracker_not_valid = 0;             ///< of which status not valid or non-finite point
+  std::uint64_t tracker_rejected = 0;              ///< of which out of time order
+  std::uint64_t tracker_beyond_capacity = 0;       ///< of which after the profile was full
   std::uint64_t tracker_set_aside =
       0;  ///< of which valid but set aside as blunders (an implausible jump away and back)
   std::uint64_t set_aside_tracker_us[kClockSetAsideLog] =
@@ -159,12 +160,14 @@ class ClockEstimatorBase {
   ClockEstimatorBase(const ClockEstimatorBase&) = delete;
   ClockEstimatorBase& operator=(const ClockEstimatorBase&) = delete;
 
-  /// Folds one robot record into the robot profile (out-of-order or non-finite ones are counted, not used).
+  /// Folds one robot record into the robot profile (out-of-order or non-finite ones, and those of
+  /// another joint count than the speed model's, are counted, not used).
   void push_robot(const JointStateRecord& record);
   /// Folds one tracker record into the tracker profile (only status valid with a finite point is used).
   void push_tracker(const TrackerPointRecord& record);
   /// Estimates the clock relation from what was pushed so far. Errors: invalid_argument
-  /// (config), clock_fit_failed (too little overlapping motion, weak or ambiguous
+  /// (config), joint_count_mismatch (a robot record of another joint count than the speed
+  /// model's), clock_fit_failed (too little overlapping motion, weak or ambiguous
   /// correlation, fit outside max_drift). *fit is written only on success.
   Status estimate(ClockFit* fit);
   /// What `fit` (from estimate() on the same records) matched: the chords of the fine fit

@@ -118,7 +118,8 @@ class SampleExtractorBase {
   SampleExtractorBase& operator=(const SampleExtractorBase&) = delete;
 
   /// Adds a robot record and decides the tracker points it completes. Errors:
-  /// invalid_argument (config), dataset_full (a quasi-static point was not stored).
+  /// invalid_argument (config), dataset_full (a quasi-static point was not stored),
+  /// joint_count_mismatch (the record's joint count is not the speed model's: not used).
   Status push_robot(const JointStateRecord& record);
   /// Adds a tracker record and decides what is complete. Errors as push_robot.
   Status push_tracker(const TrackerPointRecord& record);

@@ -8,13 +8,15 @@
 
 namespace hivecal {
 
-/// One JOINT_STATE packet of the robot stream (125 Hz nominal).
+/// One joint-state packet of the robot stream (125 Hz nominal): JOINT_STATE (six joints) or
+/// JOINT_STATE_N (any count up to kMaxJoints). A prismatic joint's values are [m], [m/s].
 struct JointStateRecord {
-  std::uint16_t sequence = 0;         ///< +1 per packet, wraps 65535 -> 0
-  std::uint64_t timestamp_us = 0;     ///< robot clock [us]
-  double q_rad[kJointCount] = {};     ///< joint positions [rad]
-  double qd_rad_s[kJointCount] = {};  ///< joint velocities [rad/s]
-  float current_a[kJointCount] = {};  ///< motor currents [A]
+  std::uint16_t sequence = 0;        ///< +1 per packet, wraps 65535 -> 0
+  std::uint64_t timestamp_us = 0;    ///< robot clock [us]
+  int joint_count = kSixJoints;      ///< joints in the record, 1 .. kMaxJoints [-]
+  double q_rad[kMaxJoints] = {};     ///< joint positions [rad]; the first joint_count are used
+  double qd_rad_s[kMaxJoints] = {};  ///< joint velocities [rad/s]
+  float current_a[kMaxJoints] = {};  ///< motor currents [A]
 };
 
 /// TRACKER_POINT status byte (serial-protocol.md); any other value is not valid either.
