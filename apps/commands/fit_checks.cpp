@@ -205,6 +205,16 @@ std::vector<std::string> prior_held_lines(const LmResult& lm, const LmPriorToler
   return lines;
 }
 
+std::string prior_widened_line(double scale, const LmPriorTolerances& widened) {
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "prior: the poses put the nominal model farther off than its tolerances allow (the prior's chi-square "
+                "beyond its 5 %% quantile): tolerances widened x%.2f to %.3g mm per DH length, %.3g mrad per DH "
+                "angle, %.3g mm per tool coordinate (--dh-tolerance-mm, --dh-tolerance-mrad, --tool-tolerance-mm)",
+                scale, widened.dh_length_m * 1e3, widened.dh_angle_rad * 1e3, widened.tool_m * 1e3);
+  return line;
+}
+
 std::vector<std::string> fit_warnings(const CalibrationResult& result, const FitBounds& bounds,
                                       const std::vector<report::ParameterRow>& parameters, const PoseSpan* span) {
   std::vector<std::string> warnings;

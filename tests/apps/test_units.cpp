@@ -11,7 +11,9 @@
 
 #include "commands/fit_checks.hpp"
 #include "report/report.hpp"
+#include "hivecal/calibration.hpp"
 #include "hivecal/core/random.hpp"
+#include "hivecal/solve/lm.hpp"
 #include "hivecal/model/ur_deltas.hpp"
 #include "testkit/shared_data.hpp"
 #include "testkit/temp_dir.hpp"
@@ -422,6 +424,25 @@ TEST(FitWarnings, AMoveOfAStronglyCorrelatedParameterNamesItsPartner) {
   warnings = cli::fit_warnings(fitted(before, after, 1e-3, 1e-4), cli::FitBounds{}, {a3, theta5});
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_EQ(warnings[0].find("correlated"), std::string::npos) << warnings[0];
+}
+
+// A fit whose data widened the prior's tolerances (LmResult::prior_tolerance_scale) says by how
+// much and to what, and its held lines weigh each sigma against the widened tolerance.
+TEST(PriorLines, WidenedTolerancesAreSaidAndHeldAgainst) {
+  const LmPriorTolerances widened = widened_tolerances(kDefaultPriorTolerances, 2.0);
+  const std::string line = cli::prior_widened_line(2.0, widened);
+  EXPECT_NE(line.find("widened x2.00 to 2 mm per DH length, 10 mrad per DH angle, 40 mm per tool coordinate"),
+            std::string::npos)
+      << line;
+  static LmResult lm;
+  lm.model = nominal_model(RobotType::ur5);
+  const int d4 = model_param_index(3, DhField::d);
+  lm.identifiability.kept_mask = param_bit(d4);
+  lm.sigma.setZero();
+  lm.sigma(d4) = 1.5e-3;
+  const std::vector<std::string> held = cli::prior_held_lines(lm, widened, {});
+  ASSERT_EQ(held.size(), 1u);
+  EXPECT_NE(held[0].find("sigma 1.5 mm of its 2 mm tolerance"), std::string::npos) << held[0];
 }
 
 }  // namespace

@@ -107,21 +107,26 @@ TEST(WamGridCli, CalibratesTheRealSevenAxisArmAsACarefulLeastSquaresFitDoes) {
   ASSERT_EQ(grid.size(), 216u);
   const double reference_m = least_squares_test_mae_m(wam.model, &grid);
 
-  const double default_m = calibrate_test_mae_m(dir, "default", {});
+  // The default widens the prior's tolerances (x2.24: its chi-square beyond the 5 % quantile) and
+  // estimates alpha5 -2.15 deg off nominal (least squares -2.99 deg, sigma 0.3 deg: the grid
+  // determines it), beyond --max-change-deg's 2 deg: exit 5, the warning names it.
+  const double default_m = calibrate_test_mae_m(dir, "default", {}, cli::kExitWarnings);
   // Plain least squares moves what the grid hardly determines by centimetres (d6 -29 mm, alpha6
   // -11 deg, correlated 0.999): exit 5, its warnings, the result written.
   const double plain_m = calibrate_test_mae_m(dir, "plain", {"--prior", "off"}, cli::kExitWarnings);
-  const double terms_m = calibrate_test_mae_m(dir, "terms", {"--compliance", "--harmonics", "2"});
+  const double terms_m = calibrate_test_mae_m(dir, "terms", {"--compliance", "--harmonics", "2"}, cli::kExitWarnings);
   const double plain_terms_m = calibrate_test_mae_m(
       dir, "plain-terms", {"--compliance", "--harmonics", "2", "--prior", "off"}, cli::kExitWarnings);
   std::printf(
       "held-out 3-D MAE: least squares %.4f mm; calibrate %.4f mm (--prior off %.4f), --compliance --harmonics 2 "
       "%.4f mm (--prior off %.4f)\n",
       reference_m * 1e3, default_m * 1e3, plain_m * 1e3, terms_m * 1e3, plain_terms_m * 1e3);
-  // Plain least squares is the careful fit's optimum; the default's prior (1 mm, 5 mrad) holds
-  // what the grid determines only weakly near nominal, which costs these held-out grid poses 4.5 %.
+  // Plain least squares is the careful fit's optimum. The default's prior (1 mm, 5 mrad) is
+  // checked against the data: its chi-square is beyond what the tolerances allow, they widen
+  // (x2.24) and the fit comes within 1.5 % (2.098 mm, +4.5 %, at the stated tolerances); what the
+  // grid determines only weakly (d6, alpha6) still stays within millimetres of nominal.
   EXPECT_LE(plain_m, 1.01 * reference_m);
-  EXPECT_LE(default_m, 1.05 * reference_m);
+  EXPECT_LE(default_m, 1.02 * reference_m);
   // The joint terms, each admitted by its significance and the blocked folds, predict held-out
   // poses better than the rigid fit.
   EXPECT_LT(terms_m, default_m);

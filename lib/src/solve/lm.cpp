@@ -6,6 +6,7 @@
 
 #include "hivecal/solve/cost.hpp"
 #include "hivecal/solve/paper6_cost.hpp"
+#include "hivecal/core/distributions.hpp"
 #include "hivecal/core/math.hpp"
 #include "solve/kept_cholesky.hpp"
 
@@ -23,6 +24,17 @@ constexpr double kSamePose_rad = 1e-9;
 // The prior's variance factor, re-estimated at every accepted point, has converged when it moves
 // by less than this share: the prior's pull on a parameter is proportional to it [-].
 constexpr double kPriorVarianceTolerance = 1e-3;
+// The check of the prior's tolerances against the data (docs/solver-lm.md, "Tolerances checked
+// against the data"): the tolerances are widened when the prior's chi-square exceeds its upper
+// quantile at this level on the pseudo-observations' redundancy, the level of geodesy's global
+// test (a false alarm widens tolerances the data hardly contradict: by little) [-],
+constexpr double kPriorToleranceTestLevel = 0.05;
+// then re-estimated until the widening changes by less than this share [-],
+constexpr double kPriorScaleTolerance = 0.01;
+// in at most this many rounds, each a continued fit [-].
+constexpr int kMaxPriorRounds = 8;
+// Fewer redundant pseudo-observations than this test nothing: the data determine too little [-].
+constexpr double kMinPriorRedundancy = 0.5;
 
 bool options_valid(const LmOptions& o, const RobotModel& start) {
   const bool tolerances_ok = o.cost_tolerance >= 0.0 && o.step_tolerance_m >= 0.0 && o.gradient_tolerance >= 0.0;
@@ -194,6 +206,7 @@ void clear_result(LmResult* result) {
   result->huber_threshold_m = 0.0;
   result->iterations = 0;
   result->prior_chi_square = 0.0;
+  result->prior_tolerance_scale = 1.0;
   result->termination = LmTermination::max_iterations;
 }
 
@@ -217,13 +230,15 @@ struct Run {
   /// The prior's pseudo-observations weigh (p - nominal)^2 / tolerance^2 by this: the fit's
   /// variance factor sum w |r|^2 / dof at the last accepted point (0: no prior) [m^2].
   double prior_variance_m2 = 0.0;
+  /// The prior's tolerances are the stated ones times this (the variance-component check) [-].
+  double tolerance_scale = 1.0;
 };
 
 /// The prior's weight of parameter i, variance factor / tolerance^2, where it holds one and i
 /// is kept; 0 elsewhere [m^2/unit^2].
 double prior_weight(const Run& run, int i) {
   if (!mask_has(run.kept, i)) return 0.0;
-  const double sigma = lm_prior_sigma(run.options.prior, i);
+  const double sigma = lm_prior_sigma(run.options.prior, i) * run.tolerance_scale;
   return sigma > 0.0 ? run.prior_variance_m2 / (sigma * sigma) : 0.0;
 }
 
@@ -467,11 +482,11 @@ bool try_step(Run* run, bool* stop, LmTermination* termination) {
   return true;
 }
 
-/// The Levenberg-Marquardt iterations until a test fires or the budget is spent. Every
-/// iteration that tried a step is traced and reported to the observer.
-LmTermination iterate(Run* run, TraceBase* trace, LmObserver* observer) {
+/// The Levenberg-Marquardt iterations until a test fires or result->iterations reaches
+/// `iteration_limit`. Every iteration that tried a step is traced and reported to the observer.
+LmTermination iterate(Run* run, TraceBase* trace, LmObserver* observer, int iteration_limit) {
   LmResult* result = run->result;
-  while (result->iterations < run->options.max_iterations) {
+  while (result->iterations < iteration_limit) {
     const int iteration = ++result->iterations;
     bool stop = false;
     LmTermination termination = LmTermination::no_progress;
@@ -548,6 +563,53 @@ Status status_of(LmTermination termination) {
   return Status::ok;
 }
 
+/// The result at the current point: geometry, loss, the prior's chi-square and the sigmas.
+Status finish(Run* run) {
+  LmResult* result = run->result;
+  result->model = run->point.model;
+  result->base_to_tracker = run->point.base;
+  result->loss_sum_m2 = run->current->loss_sum_m2;
+  result->rms_m = rms_of(run->current->squares_sum_m2, run->samples.size());
+  result->huber_threshold_m = run->point.loss.huber_threshold_m;
+  result->prior_chi_square = run->prior_variance_m2 > 0.0 ? prior_cost(*run, run->point) / run->prior_variance_m2 : 0.0;
+  result->prior_tolerance_scale = run->tolerance_scale;
+  Status status = parameter_sigmas(*run, *run->current, run->kept, result);
+  if (status == Status::singular_system) status = reanalyse_at_end(run);
+  return status;
+}
+
+/// The prior's variance component at a converged result (Helmert's estimate, as geodetic
+/// adjustment checks a group of observations): f = sum_i ((p_i - nominal_i) / tau_i)^2 / sum_i
+/// r_i, r_i = 1 - P_ii C_ii the redundancy of pseudo-observation i (its weight P_ii times its
+/// posterior variance C_ii = sigma_i^2 / variance factor). With the stated tolerances a chi-square
+/// test on sum r_i degrees of freedom decides (kPriorToleranceTestLevel): the data put the nominal
+/// model farther than its tolerances allow, or not (then nothing changes: the same bits). Once
+/// widened, the tolerances follow sqrt(f) (never below the stated ones) until it settles
+/// (kPriorScaleTolerance). True when it widened (or re-estimated) them: the fit goes on.
+bool widen_tolerances(Run* run) {
+  const LmResult& result = *run->result;
+  if (!(run->prior_variance_m2 > 0.0) || status_of(result.termination) != Status::ok) return false;
+  const double variance_m2 = result.residual_sigma_m * result.residual_sigma_m;
+  if (!(variance_m2 > 0.0)) return false;
+  double redundancy = 0.0;
+  for (int i = 0; i < model_param_count(run->point.model); ++i) {
+    const double weight = prior_weight(*run, i);
+    if (weight > 0.0) redundancy += 1.0 - weight * result.sigma(i) * result.sigma(i) / variance_m2;
+  }
+  if (!(redundancy >= kMinPriorRedundancy)) return false;
+  const double chi_square = result.prior_chi_square;
+  // The upper quantile exceeds the degrees of freedom: a chi-square below them passes untested.
+  if (run->tolerance_scale == 1.0 &&
+      (chi_square <= redundancy ||
+       !(chi_square > math::chi_square_upper_quantile(kPriorToleranceTestLevel, redundancy)))) {
+    return false;
+  }
+  const double scale = std::fmax(1.0, run->tolerance_scale * std::sqrt(chi_square / redundancy));
+  if (std::fabs(scale - run->tolerance_scale) <= kPriorScaleTolerance * run->tolerance_scale) return false;
+  run->tolerance_scale = scale;
+  return true;
+}
+
 }  // namespace
 
 // Out of line: one copy of the objects' construction (the reduction's zeroed arrays), not one
@@ -586,6 +648,10 @@ double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int 
 
 double lm_prior_sigma(const LmPrior& prior, int index) {
   return prior.nominal == nullptr ? 0.0 : prior_tolerance(prior.tolerance, prior.nominal->joint_count, index);
+}
+
+LmPriorTolerances widened_tolerances(const LmPriorTolerances& stated, double scale) {
+  return LmPriorTolerances{stated.dh_length_m * scale, stated.dh_angle_rad * scale, stated.tool_m * scale};
 }
 
 LmPrior lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerance) {
@@ -642,17 +708,15 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
   status = start(start_base_to_tracker, &run);
   if (status != Status::ok) return status;
   if (trace != nullptr) trace->push(rms_of(run.current->squares_sum_m2, samples.size()));
-  result->termination = iterate(&run, trace, observer);
+  result->termination = iterate(&run, trace, observer, options.max_iterations);
   status = complete_report(&run);
-  if (status != Status::ok) return status;
-  result->model = run.point.model;
-  result->base_to_tracker = run.point.base;
-  result->loss_sum_m2 = run.current->loss_sum_m2;
-  result->rms_m = rms_of(run.current->squares_sum_m2, samples.size());
-  result->huber_threshold_m = run.point.loss.huber_threshold_m;
-  result->prior_chi_square = run.prior_variance_m2 > 0.0 ? prior_cost(run, run.point) / run.prior_variance_m2 : 0.0;
-  status = parameter_sigmas(run, *run.current, run.kept, result);
-  if (status == Status::singular_system) status = reanalyse_at_end(&run);
+  if (status == Status::ok) status = finish(&run);
+  // The prior's tolerances checked against the data: widened and the fit continued, each round
+  // with an iteration budget of its own, while the prior's variance component asks for it.
+  for (int round = 0; status == Status::ok && round < kMaxPriorRounds && widen_tolerances(&run); ++round) {
+    result->termination = iterate(&run, trace, observer, result->iterations + options.max_iterations);
+    status = finish(&run);
+  }
   if (status != Status::ok) return status;
   return status_of(result->termination);
 }

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 
 #include "hivecal/core/random.hpp"
@@ -187,6 +188,13 @@ TEST(LmPrior, SigmaOfEachKindIsItsTolerance) {
   EXPECT_EQ(lm_prior_sigma(LmPrior{}, tool_param_index(kSixJoints, 0)), 0.0);
 }
 
+TEST(LmPrior, WidenedTolerancesScaleEveryKind) {
+  const LmPriorTolerances widened = widened_tolerances(LmPriorTolerances{1e-3, 5e-3, 0.02}, 2.5);
+  EXPECT_DOUBLE_EQ(widened.dh_length_m, 2.5e-3);
+  EXPECT_DOUBLE_EQ(widened.dh_angle_rad, 12.5e-3);
+  EXPECT_DOUBLE_EQ(widened.tool_m, 0.05);
+}
+
 TEST(LmPrior, NegativeOrNonFiniteTolerancesAreRefused) {
   const RobotModel start = start_ur10();
   auto& s = storage();
@@ -197,6 +205,75 @@ TEST(LmPrior, NegativeOrNonFiniteTolerancesAreRefused) {
     options.prior = LmPrior{&start, LmPriorTolerances{bad, 5e-3, 0.02}};
     EXPECT_EQ(calibrate_lm(start, nullptr, s.train.samples(), options, &s.workspace, &s.result),
               Status::invalid_argument);
+  }
+}
+
+/// Fresh-pose MAE [m] of least squares and of the prior at the stated tolerances on `train`,
+/// and the prior's widening.
+struct PriorCheckFigures {
+  double plain_mae_m = 0.0;  ///< least squares on fresh poses [m]
+  double prior_mae_m = 0.0;  ///< with the prior on fresh poses [m]
+  double scale = 0.0;        ///< LmResult::prior_tolerance_scale [-]
+  ModelParams prior_params;  ///< the prior's estimate
+};
+
+PriorCheckFigures fit_both(const RobotModel& truth, const RobotModel& start, Span<const Sample> train,
+                           Span<const Sample> fresh) {
+  auto& s = storage();
+  PriorCheckFigures figures;
+  EXPECT_EQ(calibrate_lm(start, nullptr, train, LmOptions{}, &s.workspace, &s.result), Status::ok);
+  figures.plain_mae_m = fresh_mae_m(s.result, truth, fresh);
+  LmOptions with_prior;
+  with_prior.prior = LmPrior{&start, LmPriorTolerances{1e-3, 5e-3, 0.02}};
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train, with_prior, &s.workspace, &s.result));
+  EXPECT_EQ(status, Status::ok);
+  figures.prior_mae_m = fresh_mae_m(s.result, truth, fresh);
+  figures.scale = s.result.prior_tolerance_scale;
+  figures.prior_params = to_params(s.result.model);
+  std::printf("tolerances x%.3f (prior chi-square %.2f); fresh poses: least squares %.2f um, prior %.2f um\n",
+              figures.scale, s.result.prior_chi_square, figures.plain_mae_m * 1e6, figures.prior_mae_m * 1e6);
+  return figures;
+}
+
+/// A UR5 `length_m` / `angle_rad` off nominal (seed `seed`), the tool point known, 60
+/// well-spread poses with up to 3 mm of an effect no rigid model holds (the residual sigma a real
+/// arm's model error gives), 300 fresh ones: fit_both's figures, *start the start model.
+PriorCheckFigures figures_of_an_arm_off_nominal(std::uint64_t seed, double length_m, double angle_rad,
+                                                RobotModel* start) {
+  Random random(seed);
+  RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &random, length_m, angle_rad);
+  truth.tool_m << 0.02, -0.015, 0.12;
+  *start = nominal_model(RobotType::ur5);
+  start->tool_m = truth.tool_m;
+  auto& s = storage();
+  s.train.clear();
+  s.fresh.clear();
+  test::fill_with_unmodelled_effect(truth, test::example_base_to_tracker(), 60, &random, &s.train);
+  test::fill_dataset(truth, test::example_base_to_tracker(), 300, 0.0, &random, &s.fresh);
+  return fit_both(truth, *start, s.train.samples(), s.fresh.samples());
+}
+
+TEST(LmPrior, AnArmFarBeyondItsTolerancesWidensThemAndPredictsAsLeastSquares) {
+  // 10 mm / 20 mrad off: at 1 mm / 5 mrad the prior pulls what the poses determine less than the
+  // residuals do back towards a nominal the data contradict (4.8 mm on fresh poses against least
+  // squares' 1.4 mm); its chi-square says so, the tolerances widen, and the fit predicts fresh
+  // poses as least squares does.
+  RobotModel start;
+  const PriorCheckFigures figures = figures_of_an_arm_off_nominal(5301, 10e-3, 20e-3, &start);
+  EXPECT_GT(figures.scale, 2.0);
+  EXPECT_LT(figures.prior_mae_m, 1.01 * figures.plain_mae_m);
+}
+
+TEST(LmPrior, AnArmWithinItsTolerancesKeepsThemExactly) {
+  // 0.5 mm / 2 mrad off: the prior's chi-square is what its tolerances allow, the tolerances stay
+  // as stated (factor exactly 1: the fit of the fixed prior, the same bits).
+  RobotModel start;
+  const PriorCheckFigures figures = figures_of_an_arm_off_nominal(5302, 0.5e-3, 2e-3, &start);
+  EXPECT_EQ(figures.scale, 1.0);
+  for (int i = 0; i < kParamsPerJoint * kSixJoints; ++i) {
+    const double moved = figures.prior_params(i) - to_params(start)(i);
+    EXPECT_LT(std::fabs(moved), 10e-3) << full_param_name(i, kSixJoints);
   }
 }
 

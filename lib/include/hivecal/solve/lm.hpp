@@ -71,6 +71,8 @@ double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int 
 /// The prior's standard deviation of full-model parameter `index`: prior_tolerance, 0 without
 /// a nominal [m] or [rad].
 double lm_prior_sigma(const LmPrior& prior, int index);
+/// `stated` times `scale` (LmResult::prior_tolerance_scale): the tolerances a fit held [m], [rad].
+LmPriorTolerances widened_tolerances(const LmPriorTolerances& stated, double scale);
 /// The prior around `nominal` with `tolerance`; none (a null nominal) when every tolerance is 0.
 LmPrior lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerance);
 
@@ -145,6 +147,10 @@ struct LmResult {
   /// With a prior: sum over the toleranced parameters of ((p - nominal) / tolerance)^2 at the
   /// result, the pseudo-observations' share of the cost in units of the variance factor [-].
   double prior_chi_square = 0.0;
+  /// The factor the prior's tolerances were widened by: 1 unless the data put the nominal model
+  /// significantly farther than its tolerances allow (the prior's variance component, docs/solver-lm.md
+  /// "Tolerances checked against the data"); the fit, its sigmas and prior_chi_square hold the widened ones [-].
+  double prior_tolerance_scale = 1.0;
   LmTermination termination = LmTermination::max_iterations;  ///< why it stopped
 };
 
