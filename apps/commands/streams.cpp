@@ -282,6 +282,7 @@ Error extract(const cli::Options& options) {
   config.window_s = window_s;
   config.log_options.units = units;
   config.log_options.units.joints = textio::input_joints(robot.model);
+  config.log_options.arm_name = robot.robot;
   error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (!error.ok()) return error;
   const auto dataset = std::make_unique<cli::HostDataset>();  // as large as the captures' static samples

@@ -143,7 +143,8 @@ bool hivecal_joints(DelimitedReader& r, const InputJoints& joints, RobotLayout* 
 
 /// Recognises the robot format from the header; false with a message naming what was
 /// expected and what was found.
-bool robot_layout(DelimitedReader& r, const InputJoints& joints, LogFormat* format, RobotLayout* layout) {
+bool robot_layout(DelimitedReader& r, const RobotLogOptions& options, LogFormat* format, RobotLayout* layout) {
+  const InputJoints& joints = options.units.joints;
   const int stamp = r.find("field.header.stamp");
   if (stamp >= 0 && r.find("field.name0") >= 0) {
     *format = LogFormat::rostopic;
@@ -171,10 +172,10 @@ bool robot_layout(DelimitedReader& r, const InputJoints& joints, LogFormat* form
   if (has_all(r, "actual_q_", 0) && r.find("timestamp") >= 0) {
     *format = LogFormat::ur_rtde;
     if (!ur_joints(joints)) {
+      const std::string arm = options.arm_name.empty() ? "" : " " + port::quoted(options.arm_name, 60);
       return r.fail(
-          "a UR RTDE log (actual_q_0..actual_q_5: a UR controller's six revolute joints), but the robot model "
-          "has " +
-          std::to_string(joints.count) + " joints (" + joint_names(joints.count) +
+          "a UR RTDE log (actual_q_0..actual_q_5: a UR controller's six revolute joints), but the robot model" + arm +
+          " has " + std::to_string(joints.count) + " joints (" + joint_names(joints.count) +
           (joints.prismatic != 0 ? ", a prismatic one among them" : "") +
           "): RTDE is UR's alone; give the arm's joints as t,q1..q" + std::to_string(joints.count) +
           " (docs/formats.md) or --robot-model the UR that recorded it");
@@ -224,7 +225,7 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
   r.set_units(options.units);
   RobotLayout layout;
   std::string first_names;  // rostopic: the names of the first row, for a message
-  bool good = r.read_header() && robot_layout(r, options.units.joints, &log.format, &layout);
+  bool good = r.read_header() && robot_layout(r, options, &log.format, &layout);
   std::vector<std::string_view> names;
   while (good && r.next_row()) {
     ++log.counters.rows;

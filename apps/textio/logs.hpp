@@ -49,6 +49,8 @@ struct RobotLogOptions {
   /// Units of joint columns without a bracket unit (--angle-unit), and the arm's joints
   /// (units.joints: how many, which slide); a bag's are rad by definition.
   InputUnits units;
+  /// The arm's name for messages (--robot-model's: "iiwa14"); "" when not known.
+  std::string arm_name{};
 };
 
 /// 1 .. kMaxJoints different comma-separated joint names into options->joint_names; false

@@ -176,11 +176,14 @@ TEST(TextLogs, RtdeLogsAreAUrsAlone) {
   textio::RobotLogOptions rail;  // a UR on a rail: six revolute joints and a slide
   rail.units.joints.count = 7;
   rail.units.joints.prismatic = 1;
-  EXPECT_NE(textio::parse_robot_log(rtde, "rtde.txt", rail)
-                .error.find("rtde.txt:1: a UR RTDE log (actual_q_0..actual_q_5: a UR controller's six revolute "
-                            "joints), but the robot model has 7 joints (q1..q7, a prismatic one among them): RTDE is "
-                            "UR's alone"),
-            std::string::npos)
+  rail.arm_name = "ur10-rail";
+  EXPECT_NE(
+      textio::parse_robot_log(rtde, "rtde.txt", rail)
+          .error.find(
+              "rtde.txt:1: a UR RTDE log (actual_q_0..actual_q_5: a UR controller's six revolute "
+              "joints), but the robot model 'ur10-rail' has 7 joints (q1..q7, a prismatic one among them): RTDE is "
+              "UR's alone"),
+      std::string::npos)
       << textio::parse_robot_log(rtde, "rtde.txt", rail).error;
   textio::RobotLogOptions six_with_slide;
   six_with_slide.units.joints.prismatic = 1;
