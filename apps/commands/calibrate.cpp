@@ -394,6 +394,7 @@ Error load_dataset(const Options& options, const CalibrateSettings& settings, Cl
   streams::SessionConfig config = sample_session_config(settings, arm);
   config.observer = fates;
   config.progress = settings.progress;
+  config.log_options.arm_name = settings.robot.robot;
   Error error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (!error.ok()) return error;
   error = streams::load_session({options.get("samples"), options.get("robot"), options.get("tracker")}, config, dataset,

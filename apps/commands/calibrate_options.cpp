@@ -182,10 +182,12 @@ const std::vector<OptionSpec>& calibrate_option_specs() {
         {"robot", "FILE|BAG",
          "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
         {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
-        {"joint-names", "N1,..,N6",
-         "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
+        {"joint-names", "N1,..,NN",
+         "joint names in ROS logs (rostopic, bag), the arm's joints 1..N in order (default: a UR's the UR "
+         "drivers', another arm's the message's own order)",
+         ""},
         {"samples", "FILE",
-         "paired static samples q1..q6,x,y,z[,rx,ry,rz] (CSV; '-': stdin) instead of --robot/--tracker", ""},
+         "paired static samples q1..qN,x,y,z[,rx,ry,rz] (CSV; '-': stdin) instead of --robot/--tracker", ""},
         {"ur-calibration", "FILE", "UR calibration.conf: start from the controller's calibration", ""},
         {"robot-model", "NAME|FILE",
          std::string("nominal geometry: ") + robot_type_names() +

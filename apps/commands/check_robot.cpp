@@ -130,7 +130,7 @@ int check_robot_main(int argc, char** argv) {
   std::vector<OptionSpec> specs = {
       {"robot-model", "NAME|FILE",
        "the robot file (description .json, .urdf or a result) or a built-in name; also the first argument", ""},
-      {"joints", "FILE", "poses whose tool points to print: CSV q1..q6", ""},
+      {"joints", "FILE", "poses whose tool points to print: CSV q1..qN (the arm's N joints)", ""},
   };
   specs.push_back(input_unit_option_specs()[1]);  // --angle-unit of --joints
   // `hivecal check-robot FILE` as well as `--robot-model FILE`.

@@ -634,7 +634,8 @@ Error plan_iso9283(const Options& options, const RobotModel& model, const JointL
 
 int iso9283_main(int argc, char** argv) {
   std::vector<OptionSpec> specs = {
-      {"samples", "FILE", "measured reaches: paired samples q1..q6,x,y,z, every commanded pose reached several times",
+      {"samples", "FILE",
+       "measured reaches: paired samples q1..qN (the arm's N joints),x,y,z, every commanded pose reached several times",
        ""},
       {"calibration", "FILE", "command frame: a calibration result (its model and base -> tracker)", ""},
       {"robot-model", "NAME|FILE", "or the nominal model, its base -> tracker fitted to the reaches", "ur5"},

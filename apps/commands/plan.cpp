@@ -471,7 +471,7 @@ int plan_main(int argc, char** argv) {
       {"joint-speed", "RAD/S", "movej joint speed", "1.05"},
       {"joint-acceleration", "RAD/S2", "movej joint acceleration", "1.4"},
       {"dwell", "S", "wait at each pose (>= 0.3 s: the extraction needs the arm still at 10 Hz)", "1"},
-      {"out", "FILE", "planned poses, CSV q1..q6 [rad] in visiting order ('-': stdout)", ""},
+      {"out", "FILE", "planned poses, CSV q1..qN [rad] in visiting order ('-': stdout)", ""},
       {"urscript", "FILE", "URScript program: movej + sleep(dwell) per pose", ""},
       {"svg", "FILE", "figure: reflector positions planned vs random (top and side views)", ""},
       {"iso9283", "X,Y,Z,SIDE",

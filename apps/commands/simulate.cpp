@@ -50,7 +50,8 @@ const std::vector<cli::OptionSpec>& option_specs() {
       {"tool-sigma-um", "X", "sigma of the true tool's error per axis [um] (default: from --errors)", ""},
       {"compliance-urad", "J2,J3", "joint 2 and 3 gravity deflection [urad] (default: from --errors)", ""},
       {"harmonic-urad", "J,K,S,C",
-       "joint J (1-6) turns by S sin(K q) + C cos(K q) [urad] more than it reads: an eccentric encoder (K = 1) or "
+       "joint J (1 .. the arm's joint count) turns by S sin(K q) + C cos(K q) [urad] more than it reads: an eccentric "
+       "encoder (K = 1) or "
        "a gear's transmission error",
        ""},
       {"calibration-conf", "FILE", "true geometry = nominal + the [mounting] deltas of this UR calibration.conf", ""},
@@ -68,13 +69,19 @@ constexpr double kMaxDeflection_urad = 1e4;
 constexpr double kMaxErrorSigma = 1e5;
 
 /// --harmonic-urad J,K,S,C into config's harmonic_*: the joint and the order whole numbers, the
-/// amplitudes within +-kMaxDeflection_urad (cli::check_numbers).
+/// amplitudes within +-kMaxDeflection_urad (cli::check_numbers), the joint one of the arm's
+/// `joint_count` (config->nominal's, read before).
 Error harmonic_option(const std::string& text, sim::SimConfig* config) {
+  const int joint_count = config->nominal.joint_count;
   const cli::NumberRange amplitude{-kMaxDeflection_urad, kMaxDeflection_urad, false, false, "urad"};
   double v[4] = {};
-  const Error error = cli::check_numbers(
-      "--harmonic-urad", text, "joint, order, sine and cosine amplitudes, e.g. 3,1,60,50",
-      {{"J", cli::NumberRange{1.0, 6.0}}, {"K", cli::NumberRange{1.0, 3.0}}, {"S", amplitude}, {"C", amplitude}}, v);
+  const Error error =
+      cli::check_numbers("--harmonic-urad", text, "joint, order, sine and cosine amplitudes, e.g. 3,1,60,50",
+                         {{"J", cli::NumberRange{1.0, static_cast<double>(joint_count)}},
+                          {"K", cli::NumberRange{1.0, 3.0}},
+                          {"S", amplitude},
+                          {"C", amplitude}},
+                         v);
   if (!error.ok()) return error;
   if (v[0] != std::floor(v[0]) || v[1] != std::floor(v[1])) {
     return Error::usage("--harmonic-urad J,K,S,C: the joint J and the order K are whole numbers, got " +

@@ -282,6 +282,7 @@ Error extract(const cli::Options& options) {
   config.window_s = window_s;
   config.log_options.units = units;
   config.log_options.units.joints = textio::input_joints(robot.model);
+  config.log_options.arm_name = robot.robot;
   error = streams::joint_names_option(options.get("joint-names"), &config.log_options);
   if (!error.ok()) return error;
   const auto dataset = std::make_unique<cli::HostDataset>();  // as large as the captures' static samples
@@ -337,13 +338,15 @@ int extract_main(int argc, char** argv) {
       {"robot", "FILE|BAG",
        "robot joints: serial capture, hivecal CSV, UR RTDE or rostopic log, ROS 2 bag (by content)", ""},
       {"tracker", "FILE", "tracker points: serial capture, hivecal CSV or tracker export (by content)", ""},
-      {"joint-names", "N1,..,N6",
-       "joint names in ROS logs (rostopic, bag), joints 1..6 in order (default: the UR drivers')", ""},
+      {"joint-names", "N1,..,NN",
+       "joint names in ROS logs (rostopic, bag), the arm's joints 1..N in order (default: a UR's the UR "
+       "drivers', another arm's the message's own order)",
+       ""},
       {"robot-model", "NAME|FILE",
        std::string(robot_type_names()) + " or a robot description .json (nominal geometry for tool speeds)", "ur5"},
       {"max-speed-mm-s", "X", "quasi-static threshold: tool speed at the tracker instant [mm/s]", "2"},
       {"window-s", "S", "optional stability window around each instant, both streams still over it; 0: off [s]", "0"},
-      {"samples", "FILE", "write the paired samples q1..q6,x,y,z (CSV) here; '-' for stdout; empty: none", ""},
+      {"samples", "FILE", "write the paired samples q1..qN,x,y,z (CSV) here; '-' for stdout; empty: none", ""},
   };
   const std::vector<cli::OptionSpec> tool = cli::tool_option_specs(
       "nominal tool point in the flange frame [m] (for tool speeds; default: the description file's)");

@@ -29,9 +29,17 @@ ValidationStats validate_on_fresh_poses(const RobotModel& model, const RigidTran
   ValidationStats stats;
   double sum_m = 0.0;
   for (long i = 0; i < poses; ++i) {
-    JointVector q;  // the workspace the simulator and the paper use: shoulder up, tool down-ish
-    q << random.uniform(-3.0, 3.0), random.uniform(-2.6, -0.5), random.uniform(-2.4, 2.4), random.uniform(-3.0, 0.0),
-        random.uniform(-2.8, -0.3), random.uniform(-3.0, 3.0);
+    JointVector q = JointVector::Zero();  // the workspace the simulator and the paper use: shoulder up, tool down-ish
+    const double first_six[kSixJoints][2] = {{-3.0, 3.0}, {-2.6, -0.5}, {-2.4, 2.4},
+                                             {-3.0, 0.0}, {-2.8, -0.3}, {-3.0, 3.0}};
+    for (int j = 0; j < kSixJoints; ++j) q(j) = random.uniform(first_six[j][0], first_six[j][1]);
+    // A 7th .. joint turns as the simulator's (a slide anywhere on its first half metre), drawn
+    // after the six so that a six-joint arm's poses stay as they were.
+    for (int j = kSixJoints; j < std::max(model.joint_count, reference.joint_count); ++j)
+      q(j) = random.uniform(-1.5, 1.5);
+    for (int j = 0; j < model.joint_count; ++j) {
+      if (joint_type(model, j) == JointType::prismatic) q(j) = 0.5 * std::fabs(q(j)) / 3.0;
+    }
     const Vec3 a = base_to_tracker.apply(fk_tool_point(model, q));
     const JointVector q_reference =
         bent ? JointVector(q + sim::simulated_compliance(reference, reference_compliance.joint2_rad,
@@ -96,7 +104,8 @@ int validate_main(int argc, char** argv) {
       {"poses", "N", "with --truth: number of fresh random poses", "1000"},
       {"seed", "N", "with --truth: seed of the poses", "7"},
       {"samples", "FILE",
-       "or measured samples q1..q6,x,y,z[,rx,ry,rz] (read as calibrate reads them; '-': stdin): MAE, sigma and max "
+       "or measured samples q1..qN,x,y,z[,rx,ry,rz] (the arm's N joints; read as calibrate reads them; '-': stdin): "
+       "MAE, sigma and max "
        "per axis and 3D, each pose's error by file line",
        ""},
       {"fit", "base|frames",
@@ -142,6 +151,12 @@ int validate_main(int argc, char** argv) {
        {std::pair{options.get("calibration"), &calibration}, std::pair{options.get("truth"), &truth}}) {
     const port::Error r = record::read_calibration_json(path, file);
     if (!r.ok()) return exit_with(kValidateCommand, r);
+  }
+  if (calibration.model.joint_count != truth.model.joint_count) {  // the same poses mean nothing to both
+    return exit_with(kValidateCommand,
+                     port::Error::input("--calibration's arm has " + std::to_string(calibration.model.joint_count) +
+                                        " joints but --truth's " + std::to_string(truth.model.joint_count) +
+                                        ": the geometries of two different arms"));
   }
   ReferenceCompliance bent;
   bool simulated = false;

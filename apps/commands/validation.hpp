@@ -27,8 +27,9 @@ struct ReferenceCompliance {
 };
 
 /// Draws `poses` random poses (seeded; the workspace the simulator and the paper use: shoulder
-/// up, tool down-ish) and compares the tool points predicted by both geometries (each with
-/// its own compliance model, if any; the reference bent by `reference_compliance` too).
+/// up, tool down-ish; a 7th .. joint within +-1.5 rad, a slide on its first half metre) and compares the tool points
+/// predicted by both geometries (each with its own compliance model, if any; the reference bent by
+/// `reference_compliance` too).
 ValidationStats validate_on_fresh_poses(const RobotModel& model, const RigidTransform& base_to_tracker,
                                         const RobotModel& reference, const RigidTransform& reference_base_to_tracker,
                                         long poses, std::uint64_t seed,

@@ -115,8 +115,16 @@ std::string clock_failure_cause(const CaptureRunReport& report) {
 }  // namespace
 
 port::Error joint_names_option(const std::string& value, textio::RobotLogOptions* log_options) {
-  if (value.empty() || textio::parse_joint_names(value, log_options)) return port::Error{};
-  return port::Error::usage("--joint-names needs six different comma-separated names, joints 1..6 in order");
+  const int joints = log_options->units.joints.count;  // the arm's: set before
+  const std::string form = "--joint-names needs " + std::to_string(joints) +
+                           " different comma-separated names, the robot model's joints " + textio::joint_names(joints) +
+                           " in order";
+  if (value.empty()) return port::Error{};
+  if (!textio::parse_joint_names(value, log_options)) return port::Error::usage(form);
+  if (log_options->joint_names.size() == static_cast<std::size_t>(joints)) return port::Error{};
+  const std::size_t given = log_options->joint_names.size();
+  log_options->joint_names.clear();
+  return port::Error::usage(form + ", got " + std::to_string(given) + " (" + port::quoted(value, 200) + ")");
 }
 
 namespace {

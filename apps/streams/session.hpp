@@ -20,7 +20,7 @@ namespace hivecal::streams {
 
 /// Where the data of a session is.
 struct SessionSources {
-  std::string samples;  ///< paired samples CSV q1..q6,x,y,z ('-': stdin), or "" for streams
+  std::string samples;  ///< paired samples CSV q1..qN,x,y,z ('-': stdin), or "" for streams
   std::string robot;    ///< robot stream: capture, or a log of any tool (textio/logs.hpp), or a ROS 2 bag
   std::string tracker;  ///< tracker stream: capture, or hivecal's tracker log or a tracker export
 };

@@ -48,7 +48,7 @@ struct ColumnTerm {
 };
 
 /// The --columns grammar (docs/formats.md, "Exports as a lab writes them"), in one place for
-/// every reader: `C=SPEC,...` with C one of q1..q6, x, y, z, rx, ry, rz, t and SPEC a header column NAME or
+/// every reader: `C=SPEC,...` with C one of q1..qN, x, y, z, rx, ry, rz, t and SPEC a header column NAME or
 /// a sum of them, `[-]NAME{(+|-)NAME}`, optionally followed by `[unit]` (m, mm, um or µm, rad,
 /// deg, s, ms, us, ns), each C once. Names and units are lower-cased, blanks around them
 /// ignored. Appends to *aliases; returns "" or the problem, quoting the option's entry.

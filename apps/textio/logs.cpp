@@ -21,7 +21,7 @@ constexpr std::uint8_t kBeamLostStatus = 1;
 const char* const kTimeNames[] = {"t", "time", "timestamp"};
 
 const char* const kRobotFormats =
-    "t,q1..q6 (hivecal), timestamp + actual_q_0..actual_q_5 (UR RTDE recorder) or field.header.stamp + "
+    "t,q1..qN (hivecal), timestamp + actual_q_0..actual_q_5 (UR RTDE recorder) or field.header.stamp + "
     "field.nameK + field.positionK (rostopic echo -p /joint_states)";
 const char* const kTrackerFormats = "a time column (t, time or timestamp) and x, y, z, units in brackets allowed";
 
@@ -43,6 +43,7 @@ int find_time(const DelimitedReader& r) {
   return -1;
 }
 
+/// True when the header has the UR's six columns "<prefix><first>" .. "<prefix><first+5>".
 bool has_all(const DelimitedReader& r, const char* prefix, int first) {
   for (int k = 0; k < kSixJoints; ++k) {
     if (r.find(column_name(prefix, first + k)) < 0) return false;
@@ -54,7 +55,7 @@ bool looks_like_tracker(const DelimitedReader& r) {
   return find_time(r) >= 0 && r.find("x") >= 0 && r.find("y") >= 0 && r.find("z") >= 0;
 }
 bool looks_like_robot(const DelimitedReader& r) {
-  return has_all(r, "q", 1) || has_all(r, "actual_q_", 0) || has_all(r, "target_q_", 0) ||
+  return r.find("q1") >= 0 || has_all(r, "actual_q_", 0) || has_all(r, "target_q_", 0) ||
          r.find("field.header.stamp") >= 0;
 }
 
@@ -106,7 +107,7 @@ class TimeColumn {
 /// Columns of a robot log once its format is known: time and where each joint comes from.
 struct RobotLayout {
   TimeColumn time;
-  int joint_count = kSixJoints;        ///< joints per record: the arm's (hivecal), six (RTDE, rostopic)
+  int joint_count = kSixJoints;        ///< joints per record: the arm's (RTDE: a UR's six)
   int q[kMaxJoints] = {};              ///< hivecal / RTDE: column of joint j
   double q_scale[kMaxJoints] = {};     ///< its factor to rad (a prismatic joint's to m)
   std::uint32_t prismatic = 0;         ///< bit j: joint j is prismatic (its column a length)
@@ -142,7 +143,8 @@ bool hivecal_joints(DelimitedReader& r, const InputJoints& joints, RobotLayout* 
 
 /// Recognises the robot format from the header; false with a message naming what was
 /// expected and what was found.
-bool robot_layout(DelimitedReader& r, const InputJoints& joints, LogFormat* format, RobotLayout* layout) {
+bool robot_layout(DelimitedReader& r, const RobotLogOptions& options, LogFormat* format, RobotLayout* layout) {
+  const InputJoints& joints = options.units.joints;
   const int stamp = r.find("field.header.stamp");
   if (stamp >= 0 && r.find("field.name0") >= 0) {
     *format = LogFormat::rostopic;
@@ -156,15 +158,28 @@ bool robot_layout(DelimitedReader& r, const InputJoints& joints, LogFormat* form
       layout->positions.push_back(position);
       layout->position_scale.push_back(scale);
     }
-    if (layout->names.size() < static_cast<std::size_t>(kSixJoints)) {
+    layout->joint_count = joints.count;
+    layout->prismatic = joints.prismatic;
+    if (layout->names.size() < static_cast<std::size_t>(joints.count)) {
       return r.fail("rostopic log with " + std::to_string(layout->names.size()) +
-                    " joints (field.nameK with field.positionK), expected at least 6");
+                    " joints (field.nameK with field.positionK), but the robot model has " +
+                    std::to_string(joints.count) + " joints (" + joint_names(joints.count) +
+                    "): the joints of another arm? (--robot-model names the arm)");
     }
     return layout->time.init(r, stamp, "ns");
   }
   const int time = find_time(r);
   if (has_all(r, "actual_q_", 0) && r.find("timestamp") >= 0) {
     *format = LogFormat::ur_rtde;
+    if (!ur_joints(joints)) {
+      const std::string arm = options.arm_name.empty() ? "" : " " + port::quoted(options.arm_name, 60);
+      return r.fail(
+          "a UR RTDE log (actual_q_0..actual_q_5: a UR controller's six revolute joints), but the robot model" + arm +
+          " has " + std::to_string(joints.count) + " joints (" + joint_names(joints.count) +
+          (joints.prismatic != 0 ? ", a prismatic one among them" : "") +
+          "): RTDE is UR's alone; give the arm's joints as t,q1..q" + std::to_string(joints.count) +
+          " (docs/formats.md) or --robot-model the UR that recorded it");
+    }
     return fixed_joints(r, "actual_q_", 0, layout) && layout->time.init(r, r.find("timestamp"), "s");
   }
   if (r.find("q1") >= 0 && time >= 0) {
@@ -210,16 +225,21 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
   r.set_units(options.units);
   RobotLayout layout;
   std::string first_names;  // rostopic: the names of the first row, for a message
-  bool good = r.read_header() && robot_layout(r, options.units.joints, &log.format, &layout);
+  bool good = r.read_header() && robot_layout(r, options, &log.format, &layout);
   std::vector<std::string_view> names;
   while (good && r.next_row()) {
     ++log.counters.rows;
     JointStateRecord record;
-    int source[kSixJoints] = {};  // rostopic: which field.positionK holds joint j
+    int source[kMaxJoints] = {};  // rostopic: which field.positionK holds joint j
     if (!layout.names.empty()) {
       names.clear();
       for (const int k : layout.names) names.push_back(r.fields()[static_cast<std::size_t>(k)]);
-      if (!map_joints_by_name(names, options.joint_names, source)) {
+      const JointMatch match = match_joints(names, options, source);
+      if (match == JointMatch::other_count) {
+        good = r.fail(other_joint_count_message(names, options.units.joints));
+        break;
+      }
+      if (match == JointMatch::missing) {
         if (first_names.empty()) first_names = join_names(names);
         ++log.counters.missing_joints;
         continue;
@@ -249,7 +269,7 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
   }
   finish_rows(r, &log);
   if (log.error.empty() && log.records.empty() && log.counters.missing_joints > 0) {
-    log.error = missing_joints_message(r.name(), options.joint_names, first_names);
+    log.error = missing_joints_message(r.name(), expected_joint_names(options), first_names);
   }
   log.ok = log.error.empty();
   return log;
@@ -358,23 +378,23 @@ const char* log_format_name(LogFormat format) {
 }
 
 bool parse_joint_names(std::string_view text, RobotLogOptions* options) {
-  std::array<std::string, kSixJoints> names;
-  std::size_t count = 0;
+  std::vector<std::string> names;
   for (std::size_t start = 0;;) {
     const std::size_t comma = std::min(text.find(',', start), text.size());
     const std::string_view name = trim(text.substr(start, comma - start));
-    if (name.empty() || count == names.size()) return false;
-    if (std::find(names.begin(), names.begin() + static_cast<std::ptrdiff_t>(count), name) !=
-        names.begin() + static_cast<std::ptrdiff_t>(count)) {
-      return false;  // a joint named twice: two columns would be read as one
-    }
-    names[count++] = std::string(name);
+    if (name.empty() || names.size() == static_cast<std::size_t>(kMaxJoints)) return false;
+    // A joint named twice: two columns would be read as one.
+    if (std::find(names.begin(), names.end(), name) != names.end()) return false;
+    names.emplace_back(name);
     if (comma == text.size()) break;
     start = comma + 1;
   }
-  if (count != names.size()) return false;
-  options->joint_names = names;
+  options->joint_names = std::move(names);
   return true;
+}
+
+bool ur_joints(const InputJoints& joints) {
+  return joints.count == kSixJoints && joints.prismatic == 0;
 }
 
 std::string describe_log(LogFormat format, const LogCounters& c) {

@@ -177,21 +177,33 @@ class BagFile {
       const auto* data = static_cast<const std::uint8_t*>(sqlite3_column_blob(statement_, 0));
       const auto size = static_cast<std::size_t>(sqlite3_column_bytes(statement_, 0));
       if (!decode_joint_state_cdr(data, size, &message, &problem)) return fail_message(log, problem);
-      int source[kSixJoints];
-      if (!map_joints_by_name(message.names, options.joint_names, source)) {
+      int source[kMaxJoints];
+      const JointMatch match = match_joints(message.names, options, source);
+      if (match == JointMatch::other_count) {
+        return fail_message(log, other_joint_count_message(message.names, options.units.joints));
+      }
+      if (match == JointMatch::missing) {
         if (first_names->empty()) *first_names = join_names(message.names);
         ++log->counters.missing_joints;
         continue;
       }
+      const InputJoints& joints = options.units.joints;
       JointStateRecord record;
       record.timestamp_us = message.stamp_us;
+      record.joint_count = joints.count;
       bool repeated = false;
       if (!order->accept(record.timestamp_us, &repeated, &problem)) return fail_message(log, problem);
-      for (int j = 0; j < kSixJoints; ++j) {
+      for (int j = 0; j < joints.count; ++j) {
         record.q_rad[j] = message.positions_rad[static_cast<std::size_t>(source[j])];
         if (!std::isfinite(record.q_rad[j]))
           return fail_message(log, "joint " + std::to_string(j + 1) + ": NaN or Inf");
-        if (std::fabs(record.q_rad[j]) > kMaxJointMagnitude_rad) {
+        if (joints.slides(j)) {
+          if (std::fabs(record.q_rad[j]) > kMaxJointTravel_m) {
+            return fail_message(log, "prismatic joint q" + std::to_string(j + 1) + " = " +
+                                         format_double(record.q_rad[j]) +
+                                         " m is beyond any slide: not a joint position (JointState is in m)");
+          }
+        } else if (std::fabs(record.q_rad[j]) > kMaxJointMagnitude_rad) {
           return fail_message(log, "joint q" + std::to_string(j + 1) + " = " + format_double(record.q_rad[j]) +
                                        " rad is more than one turn: not a joint position (JointState is in rad)");
         }
@@ -280,7 +292,7 @@ RobotLog read_ros2_bag_joint_states(const std::string& path, const RobotLogOptio
   log.counters.records = log.records.size();
   if (log.counters.rows == 0) log.error = path + ": no /joint_states message";
   if (log.error.empty() && log.records.empty())
-    log.error = missing_joints_message(path, options.joint_names, first_names);
+    log.error = missing_joints_message(path, expected_joint_names(options), first_names);
   log.ok = log.error.empty();
   return log;
 }

@@ -106,9 +106,89 @@ TEST(TextLogs, RostopicJointNamesAreAnArgumentAndExtraJointsAreIgnored) {
   EXPECT_FALSE(ur.ok);
   EXPECT_NE(ur.error.find("no message names all of the joints shoulder_pan_joint"), std::string::npos) << ur.error;
   EXPECT_NE(ur.error.find("'j6, j5, gripper"), std::string::npos) << ur.error;
-  EXPECT_FALSE(textio::parse_joint_names("a,b,c,d,e", &options));
-  EXPECT_FALSE(textio::parse_joint_names("a,b,c,d,e,f,g", &options));
   EXPECT_FALSE(textio::parse_joint_names("a,b,,d,e,f", &options));
+  EXPECT_FALSE(textio::parse_joint_names("a,b,c,a", &options));
+  std::string too_many = "j0";
+  for (int j = 1; j <= kMaxJoints; ++j) too_many += ",j" + std::to_string(j);
+  EXPECT_FALSE(textio::parse_joint_names(too_many, &options));        // kMaxJoints + 1 names
+  ASSERT_TRUE(textio::parse_joint_names("a,b,c,d,e,f,g", &options));  // a seven-joint arm's
+  EXPECT_EQ(options.joint_names.size(), 7u);
+}
+
+/// The options of a seven-revolute-joint arm's logs.
+textio::RobotLogOptions seven_joint_options() {
+  textio::RobotLogOptions options;
+  options.units.joints.count = 7;
+  return options;
+}
+
+/// A rostopic log of `names` (one message per line of positions 1 .. names.size()).
+std::string rostopic_named(const std::vector<std::string>& names) {
+  std::string out = "%time,field.header.stamp";
+  for (std::size_t k = 0; k < names.size(); ++k) out += ",field.name" + std::to_string(k);
+  for (std::size_t k = 0; k < names.size(); ++k) out += ",field.position" + std::to_string(k);
+  for (int row = 0; row < 2; ++row) {
+    out += "\n1000" + std::to_string(row) + "00000,1000" + std::to_string(row) + "00000";
+    for (const std::string& n : names) out += "," + n;
+    for (std::size_t k = 0; k < names.size(); ++k) out += "," + std::to_string(0.1 * static_cast<double>(k + 1));
+  }
+  return out + "\n";
+}
+
+TEST(TextLogs, RosLogsCarryTheArmsJointCount) {
+  // A seven-joint arm's JointState: its joints in the message's order without names.
+  const std::vector<std::string> panda = {"panda_joint1", "panda_joint2", "panda_joint3", "panda_joint4",
+                                          "panda_joint5", "panda_joint6", "panda_joint7"};
+  const textio::RobotLog log = textio::parse_robot_log(rostopic_named(panda), "p.csv", seven_joint_options());
+  ASSERT_TRUE(log.ok) << log.error;
+  ASSERT_EQ(log.records.size(), 2u);
+  EXPECT_EQ(log.records[1].joint_count, 7);
+  for (int j = 0; j < 7; ++j) EXPECT_DOUBLE_EQ(log.records[1].q_rad[j], 0.1 * (j + 1));
+  // By name (--joint-names): the joints picked from a message with the gripper's in another order.
+  textio::RobotLogOptions named = seven_joint_options();
+  ASSERT_TRUE(textio::parse_joint_names("a7,a6,a5,a4,a3,a2,a1", &named));
+  const textio::RobotLog by_name =
+      textio::parse_robot_log(rostopic_named({"a1", "a2", "a3", "finger", "a4", "a5", "a6", "a7"}), "n.csv", named);
+  ASSERT_TRUE(by_name.ok) << by_name.error;
+  EXPECT_EQ(by_name.records[0].joint_count, 7);
+  EXPECT_DOUBLE_EQ(by_name.records[0].q_rad[0], 0.8);  // a7
+  EXPECT_DOUBLE_EQ(by_name.records[0].q_rad[6], 0.1);  // a1
+  // Without names, a message of another joint count is refused naming both counts.
+  std::vector<std::string> with_fingers = panda;
+  with_fingers.push_back("panda_finger_joint1");
+  EXPECT_NE(textio::parse_robot_log(rostopic_named(with_fingers), "f.csv", seven_joint_options())
+                .error.find("f.csv:2: it names 8 joints ('panda_joint1, "),
+            std::string::npos);
+  EXPECT_NE(textio::parse_robot_log(rostopic_named(with_fingers), "f.csv", seven_joint_options())
+                .error.find("), but the robot model has 7 joints (q1..q7): the joints of another arm? (--robot-model "
+                            "names the arm; --joint-names N1,..,N7 picks the arm's joints by name, in order)"),
+            std::string::npos)
+      << textio::parse_robot_log(rostopic_named(with_fingers), "f.csv", seven_joint_options()).error;
+  // A UR's six joints against the seven-joint arm: refused by the header.
+  EXPECT_NE(textio::parse_robot_log(test::rostopic_log(session_records().joints), "u.csv", seven_joint_options())
+                .error.find("u.csv:1: rostopic log with 6 joints (field.nameK with field.positionK), but the robot "
+                            "model has 7 joints (q1..q7)"),
+            std::string::npos);
+}
+
+TEST(TextLogs, RtdeLogsAreAUrsAlone) {
+  const std::string rtde = test::rtde_log(session_records().joints);
+  textio::RobotLogOptions rail;  // a UR on a rail: six revolute joints and a slide
+  rail.units.joints.count = 7;
+  rail.units.joints.prismatic = 1;
+  rail.arm_name = "ur10-rail";
+  EXPECT_NE(
+      textio::parse_robot_log(rtde, "rtde.txt", rail)
+          .error.find(
+              "rtde.txt:1: a UR RTDE log (actual_q_0..actual_q_5: a UR controller's six revolute "
+              "joints), but the robot model 'ur10-rail' has 7 joints (q1..q7, a prismatic one among them): RTDE is "
+              "UR's alone"),
+      std::string::npos)
+      << textio::parse_robot_log(rtde, "rtde.txt", rail).error;
+  textio::RobotLogOptions six_with_slide;
+  six_with_slide.units.joints.prismatic = 1;
+  EXPECT_FALSE(textio::parse_robot_log(rtde, "rtde.txt", six_with_slide).ok);
+  EXPECT_TRUE(textio::parse_robot_log(rtde, "rtde.txt").ok);
 }
 
 TEST(TextLogs, RostopicUnixNanosecondsAreExact) {
@@ -238,14 +318,15 @@ TEST(TextLogs, EveryRefusalIsNamed) {
       {"timestamp target_q_0 target_q_1 target_q_2 target_q_3 target_q_4 target_q_5\n1 0 0 0 0 0 0\n", true,
        "f.csv:1: UR RTDE log without timestamp and actual_q_0..actual_q_5: target_q_k are the commanded positions"},
       {"Zeit;Achse 1;Achse 2\n1;2;3\n", true,
-       "f.csv:1: not a robot joint log: expected t,q1..q6 (hivecal), timestamp + actual_q_0..actual_q_5 (UR RTDE "
+       "f.csv:1: not a robot joint log: expected t,q1..qN (hivecal), timestamp + actual_q_0..actual_q_5 (UR RTDE "
        "recorder) or field.header.stamp + field.nameK + field.positionK (rostopic echo -p /joint_states); found "
        "'Zeit;Achse 1;Achse 2' (semicolon-separated, 3 columns)"},
       {"a,b\n1,2\n", false,
        "f.csv:1: not a tracker log: expected a time column (t, time or timestamp) and x, y, z, units in brackets "
        "allowed; found 'a,b' (comma-separated, 2 columns)"},
       {"%time,field.header.stamp,field.name0,field.position0\n1,1,a,0\n", true,
-       "f.csv:1: rostopic log with 1 joints (field.nameK with field.positionK), expected at least 6"},
+       "f.csv:1: rostopic log with 1 joints (field.nameK with field.positionK), but the robot model has 6 joints "
+       "(q1..q6): the joints of another arm?"},
   };
   for (const auto& c : cases) {
     const std::string error = error_of(c.text, c.robot);
@@ -372,6 +453,44 @@ TEST(TextLogs, CdrJointStateDecodesAndRefusesJunk) {
 }
 
 #if HIVECAL_HAVE_SQLITE3
+TEST(TextLogs, Ros2BagCarriesTheArmsJointCount) {
+  std::vector<JointStateRecord> records(3);
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    records[i].timestamp_us = 1000 + 8000 * i;
+    records[i].joint_count = 7;
+    for (int j = 0; j < 7; ++j) records[i].q_rad[j] = 0.01 * static_cast<double>(i) + 0.1 * j;
+  }
+  const std::vector<std::string> iiwa = {"iiwa_joint_1", "iiwa_joint_2", "iiwa_joint_3", "iiwa_joint_4",
+                                         "iiwa_joint_5", "iiwa_joint_6", "iiwa_joint_7"};
+  const test::TempDir dir("hivecal_logs7");
+  ASSERT_TRUE(test::write_ros2_bag_joints(dir.path(), records, iiwa, {0, 1, 2, 3, 4, 5, 6}));
+  const textio::RobotLog bag = textio::read_robot_log(dir.path(), seven_joint_options());
+  ASSERT_TRUE(bag.ok) << bag.error;
+  ASSERT_EQ(bag.records.size(), 3u);
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    EXPECT_EQ(bag.records[i].joint_count, 7);
+    for (int j = 0; j < 7; ++j) EXPECT_EQ(bag.records[i].q_rad[j], records[i].q_rad[j]) << i << " " << j;
+  }
+  // Named in another order: mapped by name.
+  textio::RobotLogOptions named = seven_joint_options();
+  ASSERT_TRUE(
+      textio::parse_joint_names("iiwa_joint_7,iiwa_joint_6,iiwa_joint_5,iiwa_joint_4,iiwa_joint_3,"
+                                "iiwa_joint_2,iiwa_joint_1",
+                                &named));
+  const textio::RobotLog reversed = textio::read_robot_log(dir.path(), named);
+  ASSERT_TRUE(reversed.ok) << reversed.error;
+  EXPECT_EQ(reversed.records[2].q_rad[0], records[2].q_rad[6]);
+  // The same bag for a UR: UR's names are not in it; for an eight-joint arm: another count.
+  EXPECT_NE(textio::read_robot_log(dir.path()).error.find("no message names all of the joints shoulder_pan_joint"),
+            std::string::npos);
+  textio::RobotLogOptions eight;
+  eight.units.joints.count = 8;
+  const std::string error = textio::read_robot_log(dir.path(), eight).error;
+  EXPECT_NE(error.find("bag_0.db3: /joint_states message 1: it names 7 joints ('iiwa_joint_1, "), std::string::npos)
+      << error;
+  EXPECT_NE(error.find("but the robot model has 8 joints (q1..q8)"), std::string::npos) << error;
+}
+
 TEST(TextLogs, Ros2BagGivesTheSameRecords) {
   const test::TempDir dir("hivecal_logs");
   const std::vector<JointStateRecord>& joints = session_records().joints;

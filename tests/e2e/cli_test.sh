@@ -186,10 +186,10 @@ printf 'Time [ms],X [mm],Y [mm],Z [mm]\n1500,1000,5,2,3\n' >"$work/comma2.csv"
 expect 3 "a comma used as decimal separator?" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$work/comma2.csv" --out "$work/r9.json"
 expect 2 "--columns: 'x:measurement_x' is not C=NAME" -- calibrate --samples "$work/comma.csv" --columns x:measurement_x --out "$work/r9.json"
 printf 'Zeit;Achse 1;Achse 2\n1;2;3\n' >"$work/other.csv"
-expect 3 "other.csv:1: not a robot joint log: expected t,q1..q6" -- calibrate --robot "$work/other.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
+expect 3 "other.csv:1: not a robot joint log: expected t,q1..qN" -- calibrate --robot "$work/other.csv" --tracker "$sim/tracker.csv" --out "$work/r9.json"
 no_file "$work/r9.json"
-expect 2 "--joint-names needs six different comma-separated names" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b --out "$work/r9.json"
-expect 2 "--joint-names needs six different comma-separated names" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b,c,d,e,a --out "$work/r9.json"
+expect 2 "--joint-names needs 6 different comma-separated names, the robot model's joints q1..q6 in order, got 2 ('a,b')" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b --out "$work/r9.json"
+expect 2 "--joint-names needs 6 different comma-separated names, the robot model's joints q1..q6 in order" -- calibrate --robot "$sim/robot_joints.csv" --tracker "$sim/tracker.csv" --joint-names a,b,c,d,e,a --out "$work/r9.json"
 # A unit in UTF-8 in a header ("[µs]", "(°)") is a text log, not a capture.
 { printf 'time [\302\265s],X [mm],Y [mm],Z [mm]\n'; tail -n +2 "$sim/tracker.csv" | awk -F, -v OFS=, '{ print $1 * 1e6, $2 * 1e3, $3 * 1e3, $4 * 1e3 }'; } >"$work/tracker_us.csv"
 if "${run[@]}" calibrate --robot "$sim/robot_joints.csv" --tracker "$work/tracker_us.csv" --method lm --out "$work/r10.json" >/dev/null 2>"$work/r10.err"; then pass; else

@@ -122,6 +122,12 @@ TEST(CliNumbers, EachNumberOfAnOptionOfSeveralIsCheckedAsOne) {
           {{"--harmonic-urad", "3.5,1,60,50"}, "the joint J and the order K are whole numbers, got '3.5,1,60,50'"},
           {{"--harmonic-urad", "7,1,60,50"}, "--harmonic-urad J,K,S,C: J must be within [1, 6], got '7'"},
       });
+  // The joint of a harmonic is one of the arm's: seven for an iiwa 14.
+  test::expect_refusals(
+      sim::simulate_main, {"--out-dir", "/nonexistent/folder", "--robot-model", "iiwa14"},
+      {
+          {{"--harmonic-urad", "8,1,60,50"}, "--harmonic-urad J,K,S,C: J must be within [1, 7], got '8'"},
+      });
   test::expect_refusals(
       cli::calibrate_main, {"--samples", "unread.csv", "--out", "unwritten.json"},
       {

@@ -162,9 +162,10 @@ inline std::vector<std::uint8_t> joint_state_cdr(std::uint64_t t_us, const std::
 
 #if HIVECAL_HAVE_SQLITE3
 /// Writes a rosbag2 folder `dir` (created by the caller): metadata.yaml and dir_0.db3 with
-/// /joint_states (joints in `order`) and an unrelated /tf topic. False on a sqlite error.
-inline bool write_ros2_bag(const std::string& dir, const std::vector<JointStateRecord>& records,
-                           const int order[kSixJoints] = kDriverOrder) {
+/// /joint_states (message joint k named names[k], its position the record's joint order[k])
+/// and an unrelated /tf topic. False on a sqlite error.
+inline bool write_ros2_bag_joints(const std::string& dir, const std::vector<JointStateRecord>& records,
+                                  const std::vector<std::string>& names, const std::vector<int>& order) {
   std::FILE* yaml = std::fopen((dir + "/metadata.yaml").c_str(), "w");
   if (yaml == nullptr) return false;
   std::fputs(
@@ -186,11 +187,9 @@ inline bool write_ros2_bag(const std::string& dir, const std::vector<JointStateR
   sqlite3_stmt* insert = nullptr;
   ok = ok && sqlite3_prepare_v2(db, "INSERT INTO messages(topic_id, timestamp, data) VALUES(?1, ?2, ?3)", -1, &insert,
                                 nullptr) == SQLITE_OK;
-  std::vector<std::string> names;
-  for (int k = 0; k < kSixJoints; ++k) names.push_back(kUrJoints[order[k]]);
   for (std::size_t i = 0; ok && i < records.size(); ++i) {
     std::vector<double> positions;
-    for (int k = 0; k < kSixJoints; ++k) positions.push_back(records[i].q_rad[order[k]]);
+    for (const int k : order) positions.push_back(records[i].q_rad[k]);
     const std::vector<std::uint8_t> data = joint_state_cdr(records[i].timestamp_us, names, positions);
     const std::uint8_t tf[8] = {0, 1, 0, 0, 0, 0, 0, 0};
     for (int topic : {2, 1}) {
@@ -209,6 +208,14 @@ inline bool write_ros2_bag(const std::string& dir, const std::vector<JointStateR
   ok = ok && sqlite3_exec(db, "COMMIT;", nullptr, nullptr, nullptr) == SQLITE_OK;
   sqlite3_close(db);
   return ok;
+}
+
+/// The same with a UR's six joints named as its driver names them, in `order`.
+inline bool write_ros2_bag(const std::string& dir, const std::vector<JointStateRecord>& records,
+                           const int order[kSixJoints] = kDriverOrder) {
+  std::vector<std::string> names;
+  for (int k = 0; k < kSixJoints; ++k) names.push_back(kUrJoints[order[k]]);
+  return write_ros2_bag_joints(dir, records, names, std::vector<int>(order, order + kSixJoints));
 }
 #endif
 
