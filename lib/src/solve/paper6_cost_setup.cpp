@@ -92,8 +92,10 @@ void Paper6CostBase::store(const Vec3& predicted_m, const Vec3& measured_m, cons
   const std::size_t first = set_.count - stored_count_;  // d1 (not stored) comes first
   for (int r = 0; r < 3; ++r) {
     const auto row = static_cast<std::size_t>(r);
-    values[paper6_layout::value_index(paper6_layout::kPointValue + row, size_, values_per_sample_)] = static_cast<Scalar>(point_m(r));
-    values[paper6_layout::value_index(paper6_layout::kErrorValue + row, size_, values_per_sample_)] = static_cast<Scalar>(error_m(r));
+    values[paper6_layout::value_index(paper6_layout::kPointValue + row, size_, values_per_sample_)] =
+        static_cast<Scalar>(point_m(r));
+    values[paper6_layout::value_index(paper6_layout::kErrorValue + row, size_, values_per_sample_)] =
+        static_cast<Scalar>(error_m(r));
     for (std::size_t k = 0; k < stored_count_; ++k) {
       values[paper6_layout::value_index(paper6_layout::kDirectionValue + 3 * k + row, size_, values_per_sample_)] =
           static_cast<Scalar>(jacobian(r, set_.param_index[first + k]));
