@@ -9,7 +9,7 @@
 // result struct out. No heap, no clock: a caller that wants stage timings takes them in its
 // CalibrationObserver. Method and figures: docs/architecture.md, "The calibration job".
 // The job's types have their own headers (hivecal/job/): the options, the result, the
-// workspace; this one includes them all and is the entry to use.
+// workspace and the joint-term families; this one includes them all and is the entry to use.
 #pragma once
 
 #include <cstddef>
@@ -19,6 +19,7 @@
 #include "hivecal/job/calibration_options.hpp"
 #include "hivecal/job/calibration_result.hpp"
 #include "hivecal/job/calibration_workspace.hpp"
+#include "hivecal/job/joint_term_families.hpp"
 #include "hivecal/model/dataset.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/solve/lm.hpp"

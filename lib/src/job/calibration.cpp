@@ -43,7 +43,9 @@ CalibrationResult& reset(CalibrationResult* result) {
 bool compliance_usable(const RobotModel& start, const CalibrationOptions& options) {
   if (!options.compliance.enabled) return true;
   ComplianceModel model;
-  return plan_for(options.method).lm && compliance_start(start, options.compliance, false, &model) == Status::ok;
+  return plan_for(options.method).lm &&
+         compliance_start(start, options.compliance, all_joint_term_families(kJointTermFamilyCount), &model) ==
+             Status::ok;
 }
 
 /// Input checks shared by calibrate() and cross_validate().

@@ -57,8 +57,7 @@ const char* blunder_verdict_name(BlunderVerdict verdict) {
 double parameter_significance_level(const RobotModel& model, int index, double significance_t, double compliance_t,
                                     int dof) {
   if (index < rigid_param_count(model)) return significance_t;
-  const detail::JointTermLevels levels = detail::joint_term_levels(model, compliance_t, dof);
-  return std::fmax(significance_t, mask_has(levels.harmonics, index) ? levels.harmonic_t : levels.gravity_t);
+  return std::fmax(significance_t, joint_term_levels(model, compliance_t, dof).of(index));
 }
 
 const char* calibration_solver_name(CalibrationSolver solver) {
@@ -71,13 +70,7 @@ const char* calibration_solver_name(CalibrationSolver solver) {
 }
 
 const char* calibration_stage_name(const CalibrationStage& stage, const CalibrationStage* previous) {
-  if (stage.compliance) {
-    const ComplianceModel& terms = stage.model.compliance;
-    int harmonics = 0;
-    for (int t = 0; t < terms.term_count; ++t) harmonics += is_harmonic(terms.terms[t]) ? 1 : 0;
-    if (harmonics == 0) return "LM+compliance";
-    return harmonics == terms.term_count ? "LM+harmonics" : "LM+compliance+harmonics";
-  }
+  if (stage.compliance) return joint_term_stage_name(joint_term_families_of(stage.model.compliance));
   if (stage.solver != CalibrationSolver::lm || !stage.refines_previous || previous == nullptr) {
     return calibration_solver_name(stage.solver);
   }

@@ -1,6 +1,7 @@
 // The calibration job's steps across its files, internal to the job (calibration.hpp is the
-// entry, calibration.cpp): the job's state, the stages of a method (stages.cpp), one LM fit
-// with its significance test (lm_fit.cpp) and the joint-term stages (joint_terms.cpp).
+// entry, calibration.cpp): the job's state, the stages of a method with their LM fits and the
+// significance test (stages.cpp; one file: one copy of the models' assignment in the firmware's
+// flash) and the joint-term stages (joint_terms.cpp).
 #pragma once
 
 #include <cstddef>
@@ -52,7 +53,7 @@ Status run_lm(Job& job, bool hybrid, ParamMask* pruned);
 Status run_split(const RobotModel& start, DatasetBase* dataset, const CalibrationOptions& options,
                  CalibrationWorkspaceBase* workspace, CalibrationResult* r, CalibrationObserver* observer);
 
-// ---- lm_fit.cpp: one LM fit of the job and its significance test
+// ---- stages.cpp too: one LM fit of the job, its significance test and the left-out poses
 
 /// The tool point's three bits in the parameters of `model`.
 ParamMask tool_params_mask(const RobotModel& model);
@@ -62,17 +63,6 @@ ParamMask base_params_mask(const RobotModel& model);
 
 /// The base and tool bits the options hold fixed (base_known, tool_known).
 ParamMask known_params_mask(const CalibrationOptions& options, const RobotModel& model);
-
-/// The levels the joint terms of a stage must clear [-].
-struct JointTermLevels {
-  double gravity_t = 0.0;   ///< a gravity term: CalibrationCompliance::significance_t
-  double harmonic_t = 0.0;  ///< a harmonic: that, raised for the whole family (harmonic_level)
-  ParamMask harmonics = 0;  ///< the harmonic terms' parameters
-};
-
-/// The levels of `reference`'s joint terms. `compliance_t`: CalibrationCompliance::significance_t;
-/// `dof`: the fit's residual degrees of freedom.
-JointTermLevels joint_term_levels(const RobotModel& reference, double compliance_t, int dof);
 
 /// One LM fit of the job: what it starts from, what it may move, on which samples.
 struct LmFit {
@@ -117,37 +107,30 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report);
 /// kDefaultSignificance.
 double choose_significance(Job& job, const RobotModel& from, const RigidTransform* base, bool reset);
 
-/// Whether training sample i is the first of its pose (same_pose).
-bool first_of_its_pose(Span<const Sample> train, std::size_t i);
+/// JointTermHoldout for a joint-term stage `stage_fit` that kept some of `new_terms` with the
+/// parameters `pruned` fixed: each training pose left out in turn, the others fitted twice with
+/// the stage's choice of parameters (no significance test of their own), with and without the
+/// `new_terms`. Overwrites r.lm; the dataset's order is restored.
+JointTermHoldout check_on_left_out_poses(Job& job, const LmFit& stage_fit, ParamMask pruned, ParamMask new_terms);
 
-/// Moves the first n samples' ones at the pose of `pose` (same_pose: every target) to the end of
-/// the n, each with one exchange; moved[m] receives the position the m-th exchange took it from,
-/// so that put_pose_back restores the order. Returns how many moved [-].
-std::size_t move_pose_to_end(DatasetBase& dataset, std::size_t n, const Sample& pose, std::uint8_t* moved);
+/// The joint terms a stage of the families `families` (kJointTermFamilies) starts from: the
+/// options' terms, or (none given) each family's default ones for `start`'s geometry
+/// (JointTermFamily::default_size), then those of the families in `families` alone, in their
+/// order. invalid_argument when there are none or they are unusable.
+Status compliance_start(const RobotModel& start, const CalibrationCompliance& options, JointTermFamilySet families,
+                        ComplianceModel* out);
 
-/// Undoes move_pose_to_end: the exchanges in reverse order.
-void put_pose_back(DatasetBase& dataset, std::size_t n, const std::uint8_t* moved, std::size_t count);
-
-/// Sum of the 3-D errors of `samples` under r.lm's fit [m].
-double left_out_error_sum_m(const LmResult& lm, Span<const Sample> samples);
+/// The joint-term stages of the options' terms (plan_joint_term_stages of kJointTermFamilies):
+/// one per family in the table's order when the terms come in that order (as the command line
+/// builds them: LM+compliance, then LM+compliance+harmonics), else one of every term.
+JointTermStages joint_term_stages(const RobotModel& start, const CalibrationCompliance& options);
 
 // ---- joint_terms.cpp: the joint-term stages (docs/compliance.md)
 
-/// The compliance model the LM+compliance stage starts from: the options' terms, or the
-/// default ones of `start`'s geometry; `gravity_only`: without the harmonics. invalid_argument
-/// when there are none or they are unusable.
-Status compliance_start(const RobotModel& start, const CalibrationCompliance& options, bool gravity_only,
-                        ComplianceModel* out);
-
-/// The options' joint terms are gravity terms followed by harmonics (both families, in that
-/// order, as the command line builds them): the job then runs LM+compliance (the gravity terms)
-/// before LM+compliance+harmonics, so that Table 1 shows what each family bought; the second
-/// stage's model extends the first's. Any other mix runs as one stage.
-bool gravity_stage_first(const RobotModel& start, const CalibrationCompliance& options);
-
-/// LM+compliance: from the rigid LM stage's geometry and base, the geometry and the joint terms
-/// (`gravity_only`: the gravity terms alone, before the harmonics' stage) together, at the
-/// rigid stage's significance level (joint_terms.cpp says how its terms are admitted).
-Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only);
+/// A joint-term stage: from the rigid LM stage's geometry and base, the geometry and the terms
+/// of the families `families` together, at the rigid stage's significance level, each term at
+/// its family's level; the terms it adds to the previous joint-term stage's admitted by their
+/// families' rules (joint_terms.cpp).
+Status run_compliance_lm(Job& job, ParamMask* pruned, JointTermFamilySet families);
 
 }  // namespace hivecal::detail

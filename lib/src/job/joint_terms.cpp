@@ -1,7 +1,8 @@
-// The joint-term stages (job.hpp, docs/compliance.md): LM+compliance and
-// LM+compliance+harmonics after the rigid LM, their terms admitted by the significance test,
-// the harmonics' period coverage, the blocked folds and, on a small set, left-out poses; when
-// none is admitted, the previous fit kept.
+// The joint-term stages (job.hpp, docs/compliance.md): a stage per family of
+// kJointTermFamilies in its order (LM+compliance, then LM+compliance+harmonics) after the rigid
+// LM, or one of every term; a stage's new terms admitted by the significance test at their
+// family's level, their family's coverage rule (the harmonics' period), the blocked folds and,
+// on a small set, left-out poses; when none is admitted, the previous fit kept.
 #include <cmath>
 
 #include "job/blocked_folds.hpp"
@@ -11,8 +12,9 @@
 namespace hivecal::detail {
 namespace {
 
-/// No new joint term is significant: the data show neither bending nor (after LM+compliance)
-/// a harmonic, and the previous fit (the rigid one, or LM+compliance) is the answer (this
+/// No new joint term is admitted: the data show none of the stage's new families (neither
+/// bending nor, after LM+compliance, a harmonic), and the previous fit (the rigid one, or the
+/// previous joint-term stage's, e.g. LM+compliance) is the answer (this
 /// stage's own pruning of the geometry would differ from it). The previous stage runs again (the
 /// same inputs, so the same bits) so that r.lm holds its details; this stage is its copy with
 /// the new terms at their start values.
@@ -21,8 +23,9 @@ namespace {
   const std::size_t index = r.stage_count;
   r.stage_count = index - 1;  // the previous stage refills its own slot and trace
   const CalibrationStage& previous = r.stages[r.stage_count];
-  const Status status =
-      previous.compliance ? run_compliance_lm(job, pruned, true) : run_lm(job, previous.refines_previous, pruned);
+  const Status status = previous.compliance
+                            ? run_compliance_lm(job, pruned, joint_term_families_of(previous.model.compliance))
+                            : run_lm(job, previous.refines_previous, pruned);
   r.stage_count = index;
   if (status != Status::ok) return status;
   // This slot's model holds the stage's terms at their start values (run_compliance_lm's
@@ -50,61 +53,6 @@ namespace {
   stage.estimated = previous.estimated;
   stage.residual_sigma_m = previous.residual_sigma_m;
   return Status::ok;
-}
-
-/// JointTermHoldout for a joint-term stage `stage_fit` that kept some of `new_terms` with the
-/// parameters `pruned` fixed: each training pose left out in turn, the others fitted twice with
-/// the stage's choice of parameters (no significance test of their own), with and without the
-/// `new_terms`. Overwrites r.lm; the dataset's order is restored.
-[[gnu::noinline]] JointTermHoldout check_on_left_out_poses(Job& job, const LmFit& stage_fit, ParamMask pruned,
-                                                           ParamMask new_terms) {
-  JointTermHoldout holdout;
-  const std::size_t n = job.dataset.train().size();
-  if (n > kJointTermHoldoutMaxSamples) return holdout;
-  holdout.checked = true;
-  static_assert(kJointTermHoldoutMaxSamples <= 256, "move_pose_to_end records positions in a byte");
-  std::uint8_t moved[kJointTermHoldoutMaxSamples];
-  double error_m[2] = {0.0, 0.0};  // the pose's error: [0] without the added terms, [1] with them
-  double with_sum_m = 0.0;
-  double without_sum_m = 0.0;
-  double improvement_squares_m2 = 0.0;
-  bool finished = true;
-  for (std::size_t i = 0; finished && i < n; ++i) {
-    if (!first_of_its_pose(job.dataset.train(), i)) continue;
-    const Sample pose = job.dataset.train()[i];  // a copy: the move reorders the samples
-    const std::size_t count = move_pose_to_end(job.dataset, n, pose, moved);
-    finished = count < n;  // a single pose cannot be left out
-    for (int with_terms = 1; finished && with_terms >= 0; --with_terms) {
-      LmFit fit = stage_fit;
-      fit.samples = job.dataset.train().subspan(0, n - count);
-      fit.significance_t = 0.0;
-      fit.fixed_terms |= pruned | (with_terms == 1 ? ParamMask{0} : new_terms);
-      ParamMask fold_pruned = 0;
-      LmFitReport report;
-      report.pruned = &fold_pruned;
-      const Status status = fit_lm(job, fit, report);
-      finished = status == Status::ok || status == Status::not_converged;
-      error_m[with_terms] = left_out_error_sum_m(job.result.lm, job.dataset.train().subspan(n - count, count)) /
-                            static_cast<double>(count);
-    }
-    put_pose_back(job.dataset, n, moved, count);
-    if (!finished) break;
-    with_sum_m += error_m[1];
-    without_sum_m += error_m[0];
-    improvement_squares_m2 += (error_m[0] - error_m[1]) * (error_m[0] - error_m[1]);
-    ++holdout.poses;
-  }
-  if (holdout.poses == 0) return holdout;
-  const double poses = static_cast<double>(holdout.poses);
-  holdout.with_terms_mae_m = with_sum_m / poses;
-  holdout.without_terms_mae_m = without_sum_m / poses;
-  const double improvement_m = holdout.without_terms_mae_m - holdout.with_terms_mae_m;
-  const double variance_m2 =
-      holdout.poses > 1 ? std::fmax(0.0, improvement_squares_m2 - poses * improvement_m * improvement_m) / (poses - 1.0)
-                        : 0.0;
-  holdout.improvement_se_m = std::sqrt(variance_m2 / poses);
-  holdout.passed = finished && holdout.poses > 1 && improvement_m > kHoldoutImprovementT * holdout.improvement_se_m;
-  return holdout;
 }
 
 /// The fit a joint-term stage adds its terms to (the previous stage's), for the blocked folds.
@@ -244,46 +192,14 @@ const CalibrationStage& rigid_lm_stage(const CalibrationResult& r) {
 
 }  // namespace
 
-Status compliance_start(const RobotModel& start, const CalibrationCompliance& options, bool gravity_only,
-                        ComplianceModel* out) {
-  *out = options.model;
-  if (out->term_count == 0) {
-    const Status status = default_compliance_terms(start, options.model.gravity_direction, options.model.load, out);
-    if (status != Status::ok) return status;
-  }
-  if (gravity_only) {  // the gravity terms in their order, the harmonics' slots back to their defaults
-    int kept = 0;
-    for (int t = 0; t < out->term_count; ++t) {
-      if (is_harmonic(out->terms[t])) continue;
-      out->terms[kept] = out->terms[t];
-      out->coefficient[kept++] = out->coefficient[t];
-    }
-    for (int t = kept; t < out->term_count; ++t) {
-      out->terms[t] = ComplianceTerm{};
-      out->coefficient[t] = 0.0;
-    }
-    out->term_count = kept;
-  }
-  return check_compliance(*out, start) == Status::ok ? Status::ok : Status::invalid_argument;
-}
-
-[[gnu::noinline]] bool gravity_stage_first(const RobotModel& start, const CalibrationCompliance& options) {
-  ComplianceModel terms;
-  if (compliance_start(start, options, false, &terms) != Status::ok) return false;
-  int gravity = 0;  // the leading gravity terms
-  while (gravity < terms.term_count && !is_harmonic(terms.terms[gravity])) ++gravity;
-  for (int t = gravity; t < terms.term_count; ++t)
-    if (!is_harmonic(terms.terms[t])) return false;
-  return gravity > 0 && gravity < terms.term_count;
-}
-
-[[gnu::noinline]] Status run_compliance_lm(Job& job, ParamMask* pruned, bool gravity_only) {
+[[gnu::noinline]] Status run_compliance_lm(Job& job, ParamMask* pruned, JointTermFamilySet families) {
   CalibrationResult& r = job.result;
   const CalibrationStage& rigid = rigid_lm_stage(r);
-  const bool after_compliance = r.stages[r.stage_count - 1].compliance;
+  const CalibrationStage& before = r.stages[r.stage_count - 1];
+  const bool after_compliance = before.compliance;  // a previous joint-term stage: this one adds families
   RobotModel& reference = r.stages[r.stage_count].model;
   reference = job.start;
-  const Status terms = compliance_start(job.start, job.options.compliance, gravity_only, &reference.compliance);
+  const Status terms = compliance_start(job.start, job.options.compliance, families, &reference.compliance);
   if (terms != Status::ok) return terms;  // checked at the input step
   TraceBase& trace = job.workspace.trace(r.stage_count);
   LmFit fit;
@@ -294,22 +210,26 @@ Status compliance_start(const RobotModel& start, const CalibrationCompliance& op
   fit.compliance = true;
   fit.samples = job.dataset.train();
   fit.significance_t = r.significance_t;
-  if (after_compliance) {  // r.lm is LM+compliance's: its gravity terms (this model's first ones)
-    const int gravity_terms = r.stages[r.stage_count - 1].model.compliance.term_count;
-    fit.fixed_terms = compliance_params_mask(reference.joint_count, gravity_terms) & ~r.lm.identifiability.kept_mask;
+  // The terms this stage adds: every one after the rigid fit, those of its new families after a
+  // joint-term stage (the harmonics after LM+compliance), whose choice it does not reopen: r.lm
+  // is that stage's, its terms this model's first ones, those it did not keep held.
+  ParamMask new_terms = compliance_params_mask(reference);
+  if (after_compliance) {
+    const int previous_terms = before.model.compliance.term_count;
+    fit.fixed_terms = compliance_params_mask(reference.joint_count, previous_terms) & ~r.lm.identifiability.kept_mask;
+    new_terms = joint_term_params_mask(reference, families & ~joint_term_families_of(before.model.compliance));
   }
-  // The terms this stage adds: every one after the rigid fit, the harmonics after LM+compliance.
-  const ParamMask new_terms = after_compliance ? harmonic_params_mask(reference) : compliance_params_mask(reference);
   const std::size_t index = r.stage_count;
   // The previous fit: the blocked folds' reference.
   const PreviousFit previous{index - 1, r.stages[index - 1].estimated, r.stages[index - 1].residual_sigma_m};
   BlockedFoldCheck& folds = r.stages[index].folds;  // in the stage's slot: not on the stack under LM
   folds = BlockedFoldCheck{};
-  folds.coverage_rejected = harmonics_short_of_their_period(reference, job.dataset.train()) & new_terms;
+  folds.coverage_rejected = uncovered_joint_terms(reference, job.dataset.train()) & new_terms;  // the period
   fit.fixed_terms |= folds.coverage_rejected;
   Status status = fit_lm(job, fit, LmFitReport{&trace, job.observer, pruned});
   if (status != Status::ok && status != Status::not_converged) return status;
-  status = admit_for_the_workspace(job, &fit, previous, new_terms, LmFitReport{&trace, job.observer, pruned}, &folds);
+  status = admit_for_the_workspace(job, &fit, previous, new_terms & blocked_fold_terms(reference),
+                                   LmFitReport{&trace, job.observer, pruned}, &folds);
   if (status != Status::ok && status != Status::not_converged) return status;
   if ((r.lm.identifiability.kept_mask & new_terms) == 0 || !folds.passed) {
     const Status kept = keep_previous_fit(job, pruned);

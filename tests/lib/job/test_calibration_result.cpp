@@ -12,8 +12,9 @@ namespace {
 
 TEST(CalibrationResultNames, EveryStepAndVerdictHasItsOwnName) {
   std::set<std::string> steps;
-  for (CalibrationStep step : {CalibrationStep::input, CalibrationStep::split, CalibrationStep::baseline,
-                               CalibrationStep::gsa, CalibrationStep::abc, CalibrationStep::lm, CalibrationStep::done}) {
+  for (CalibrationStep step :
+       {CalibrationStep::input, CalibrationStep::split, CalibrationStep::baseline, CalibrationStep::gsa,
+        CalibrationStep::abc, CalibrationStep::lm, CalibrationStep::done}) {
     steps.insert(calibration_step_name(step));
   }
   EXPECT_EQ(steps, (std::set<std::string>{"input", "split", "baseline", "gsa", "abc", "lm", "done"}));

@@ -48,13 +48,10 @@ struct CalibrationCompliance {
   /// a new model term, not a correction to a known one, so it must clear this (and at least
   /// significance_t) to stay; below it the term is fixed at its start value. The harmonics,
   /// many generic terms, clear a level raised so that an arm without harmonics keeps one by
-  /// chance at most kHarmonicFamilyAlpha of the time (24 terms: 3.53) [-].
+  /// chance at most kHarmonicFamilyAlpha of the time (24 terms: 3.53; each family's level:
+  /// JointTermFamily::level) [-].
   double significance_t = 3.0;
 };
-
-/// Chance that a stage keeps any of its harmonic terms on an arm without harmonics
-/// (Bonferroni over the terms; CalibrationCompliance::significance_t) [-].
-inline constexpr double kHarmonicFamilyAlpha = 0.01;
 
 /// Default level of LM's significance test: a parameter whose change is below 2 sigma is fixed [-].
 inline constexpr double kDefaultSignificance = 2.0;

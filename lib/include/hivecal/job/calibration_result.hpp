@@ -11,6 +11,7 @@
 #include "hivecal/core/status.hpp"
 #include "hivecal/core/types.hpp"
 #include "hivecal/job/calibration_options.hpp"
+#include "hivecal/job/joint_term_families.hpp"
 #include "hivecal/model/full_params.hpp"
 #include "hivecal/model/kinematics.hpp"
 #include "hivecal/model/metrics.hpp"
@@ -69,10 +70,6 @@ struct JointTermHoldout {
   bool passed = false;  ///< every fit finished and the improvement exceeds kHoldoutImprovementT improvement_se_m
 };
 
-/// A harmonic is admitted only when the training poses turn its joint through at least this
-/// share of its period (2 pi / order): over less, it is a polynomial the geometry holds too, and
-/// nothing ties it down beyond the poses' range [-].
-inline constexpr double kHarmonicMinPeriodShare = 0.75;
 /// A blocked fold holds out the training poses at one end of one joint's range: this share of
 /// them, the lowest or the highest readings of that joint [-].
 inline constexpr double kBlockedFoldShare = 0.2;
