@@ -40,9 +40,9 @@ TEST(JointTermFamilies, EveryTermKindIsOneFamilysAndEachEntryBuildsItsTermsPerJo
   EXPECT_NO_HEAP(terms = both_families());
   if (kMaxComplianceTerms < 4 + 24) return;  // the bare-metal capacity holds the gravity terms only
   ComplianceModel gravity;
-  ASSERT_EQ(default_compliance_terms(nominal_model(RobotType::ur5), Vec3(0.0, 0.0, -1.0), ComplianceLoad::point,
-                                     &gravity),
-            Status::ok);
+  ASSERT_EQ(
+      default_compliance_terms(nominal_model(RobotType::ur5), Vec3(0.0, 0.0, -1.0), ComplianceLoad::point, &gravity),
+      Status::ok);
   ASSERT_EQ(terms.term_count, gravity.term_count + 24);  // a sine and a cosine per joint and order
   for (int t = 0; t < terms.term_count; ++t) {
     const int family = joint_term_family(terms.terms[t]);
@@ -144,9 +144,9 @@ TEST(JointTermFamilies, ANewFamilyIsOneEntryItsStageLevelAndRulesFollow) {
   for (int t = 0; t < model.compliance.term_count; ++t) {
     const int index = compliance_param_index(model, t);
     const ComplianceTerm& term = model.compliance.terms[t];
-    const double expected = !is_harmonic(term)   ? compliance_t
-                            : term.order == 1 ? harmonic_term_level(compliance_t, 12, dof)
-                                              : compliance_t + 1.0;
+    const double expected = !is_harmonic(term) ? compliance_t
+                            : term.order == 1  ? harmonic_term_level(compliance_t, 12, dof)
+                                               : compliance_t + 1.0;
     EXPECT_EQ(levels.of(index), expected) << compliance_term_name(model.compliance, t);
   }
   // The library's table: both orders one family of 24, a level raised for 24 terms.
@@ -219,8 +219,7 @@ TEST(JointTermFamilies, TheJobRunsTheTablesStagesAndKeepsATermOnlyAtItsFamilysLe
   ASSERT_NE(final_stage, nullptr);
   ASSERT_FALSE(final_stage->rigid_kept);
   const RobotModel& fitted = result.lm.model;
-  const JointTermLevels levels =
-      joint_term_levels(fitted, options.compliance.significance_t, result.lm.residual_dof);
+  const JointTermLevels levels = joint_term_levels(fitted, options.compliance.significance_t, result.lm.residual_dof);
   int kept = 0;
   for (int t = 0; t < fitted.compliance.term_count; ++t) {
     const int index = compliance_param_index(fitted, t);
@@ -228,8 +227,7 @@ TEST(JointTermFamilies, TheJobRunsTheTablesStagesAndKeepsATermOnlyAtItsFamilysLe
     ++kept;
     ASSERT_GE(joint_term_family(fitted.compliance.terms[t]), 0);
     const double ratio = std::fabs(fitted.compliance.coefficient[t]) / result.lm.sigma(index);
-    EXPECT_GE(ratio, std::fmax(result.significance_t, levels.of(index)))
-        << compliance_term_name(fitted.compliance, t);
+    EXPECT_GE(ratio, std::fmax(result.significance_t, levels.of(index))) << compliance_term_name(fitted.compliance, t);
   }
   EXPECT_GT(kept, 0);
 }

@@ -84,8 +84,8 @@ ParamMask harmonics_short_of_their_period(const RobotModel& model, Span<const Sa
 /// turn their joint through most of their period. Both are checked on the blocked folds.
 inline constexpr JointTermFamily kJointTermFamilies[] = {
     {"compliance", &is_gravity_term, &append_gravity_terms, 1, &gravity_term_level, nullptr, true},
-    {"harmonics", &is_harmonic, &append_harmonics_of_orders, 0, &harmonic_term_level,
-     &harmonics_short_of_their_period, true},
+    {"harmonics", &is_harmonic, &append_harmonics_of_orders, 0, &harmonic_term_level, &harmonics_short_of_their_period,
+     true},
 };
 /// Families in kJointTermFamilies [-].
 inline constexpr int kJointTermFamilyCount = static_cast<int>(sizeof(kJointTermFamilies) / sizeof(JointTermFamily));
@@ -112,7 +112,7 @@ ParamMask joint_term_params_mask(const RobotModel& model, JointTermFamilySet set
 
 /// The joint-term stages of `terms`, each the set of families its model holds.
 struct JointTermStages {
-  int count = 0;                                              ///< stages [-]
+  int count = 0;                                            ///< stages [-]
   JointTermFamilySet families[kMaxJointTermFamilies] = {};  ///< per stage, in order
 };
 /// The stages that admit `terms`: when they hold more than one family, each family's terms
@@ -126,7 +126,7 @@ JointTermStages plan_joint_term_stages(const ComplianceModel& terms,
 /// The level each family of `model`'s terms must clear in a fit with `dof` residual degrees of
 /// freedom (JointTermFamily::level over the family's count of terms in the model).
 struct JointTermLevels {
-  double level_t[kMaxJointTermFamilies] = {};   ///< per family of the table [-]
+  double level_t[kMaxJointTermFamilies] = {};     ///< per family of the table [-]
   ParamMask members[kMaxJointTermFamilies] = {};  ///< per family, its terms' parameters
   int family_count = 0;                           ///< entries used [-]
   double unknown_t = 0.0;                         ///< a term of no family: compliance_t [-]
