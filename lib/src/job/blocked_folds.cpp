@@ -129,25 +129,6 @@ Status fit_normal_equations(const FoldFit& fit, Span<const Sample> samples, cons
   return Status::ok;
 }
 
-ParamMask harmonics_short_of_their_period(const RobotModel& model, Span<const Sample> train) {
-  ParamMask short_of = 0;
-  if (train.empty()) return short_of;
-  for (int t = 0; t < model.compliance.term_count; ++t) {
-    const ComplianceTerm& term = model.compliance.terms[t];
-    if (!is_harmonic(term)) continue;
-    double lowest = train[0].q_rad(term.joint);
-    double highest = lowest;
-    for (const Sample& s : train) {
-      lowest = std::fmin(lowest, s.q_rad(term.joint));
-      highest = std::fmax(highest, s.q_rad(term.joint));
-    }
-    const double period_rad = 2.0 * math::kPi / static_cast<double>(term.order);
-    if (highest - lowest < kHarmonicMinPeriodShare * period_rad)
-      short_of |= param_bit(compliance_param_index(model, t));
-  }
-  return short_of;
-}
-
 Status blocked_fold_errors(DatasetBase* dataset, const FoldFit& fit, const PointLoss& loss,
                            CalibrationWorkspaceBase& workspace, FoldErrors* out) {
   *out = FoldErrors{};

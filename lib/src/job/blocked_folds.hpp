@@ -25,10 +25,6 @@ using FoldErrors = BlockedFoldErrors;
 Status fit_normal_equations(const FoldFit& fit, Span<const Sample> samples, const PointLoss& loss, ParamMask columns,
                             NormalEquations* out);
 
-/// The harmonic terms of `model` whose joint the training samples turn through less than
-/// kHarmonicMinPeriodShare of the term's period.
-ParamMask harmonics_short_of_their_period(const RobotModel& model, Span<const Sample> train);
-
 /// The blocked folds of `dataset`'s training samples (each joint's lowest and highest
 /// kBlockedFoldShare of them) predicted, each by one Gauss-Newton step of `fit` on the other
 /// training samples (the normal equations of all minus the fold's, with the prior), into *out.

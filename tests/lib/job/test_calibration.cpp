@@ -330,27 +330,3 @@ TEST(CalibrationJob, SaysWhichStepFailedAndWhy) {
 
 }  // namespace
 }  // namespace hivecal::calibration_test
-
-namespace hivecal::calibration_test {
-namespace {
-
-TEST(CalibrationMethodNames, EveryNameReadsBackAndTheListHoldsEachOnce) {
-  const std::string list = calibration_method_names();
-  std::string joined;
-  for (CalibrationMethod m : {CalibrationMethod::abc_lm, CalibrationMethod::gsa_lm, CalibrationMethod::lm,
-                              CalibrationMethod::abc, CalibrationMethod::gsa, CalibrationMethod::all}) {
-    CalibrationMethod read = CalibrationMethod::all == m ? CalibrationMethod::lm : CalibrationMethod::all;
-    ASSERT_EQ(calibration_method_from_name(calibration_method_name(m), &read), Status::ok);
-    EXPECT_EQ(read, m);
-    joined += (joined.empty() ? "" : ", ") + std::string(calibration_method_name(m));
-  }
-  EXPECT_EQ(list, joined);
-  CalibrationMethod untouched = CalibrationMethod::gsa;
-  EXPECT_EQ(calibration_method_from_name("ABC", &untouched), Status::invalid_argument);
-  EXPECT_EQ(calibration_method_from_name("abc+", &untouched), Status::invalid_argument);
-  EXPECT_EQ(calibration_method_from_name(nullptr, &untouched), Status::invalid_argument);
-  EXPECT_EQ(untouched, CalibrationMethod::gsa);
-}
-
-}  // namespace
-}  // namespace hivecal::calibration_test

@@ -1,6 +1,7 @@
-// A workspace sized at run time (CalibrationWorkspaceView over the caller's arena) and a
-// dataset that grows (DatasetBase::grow): the same bits as the fixed-capacity types, no heap
-// in the library, and the errors of a bad arena.
+// The job's workspace (job/calibration_workspace.hpp): a workspace sized at run time
+// (CalibrationWorkspaceView over the caller's arena) and a dataset that grows
+// (DatasetBase::grow) give the same bits as the fixed-capacity types, no heap in the library,
+// and the errors of a bad arena.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -12,7 +13,7 @@
 #include "testkit/quick_job.hpp"
 #include "testkit/test_data.hpp"
 
-namespace hivecal::calibration_workspace_view_test {
+namespace hivecal::calibration_workspace_test {
 namespace {
 
 constexpr std::size_t kSamples = 400;
@@ -149,4 +150,4 @@ TEST(DatasetGrowth, ADatasetThatGrowsKeepsEverySampleAndItsSetAsideOnes) {
 }
 
 }  // namespace
-}  // namespace hivecal::calibration_workspace_view_test
+}  // namespace hivecal::calibration_workspace_test
