@@ -135,14 +135,12 @@ JointTermStages plan_joint_term_stages(const ComplianceModel& terms, Span<const 
   int order[kMaxJointTermFamilies];
   int seen = 0;
   bool in_table_order = true;
-  unsigned set = 0;
   for (int t = 0; t < terms.term_count; ++t) {
     const int family = joint_term_family(terms.terms[t], families);
     if (seen > 0 && family == order[seen - 1]) continue;
     in_table_order = in_table_order && family >= 0 && (seen == 0 || family > order[seen - 1]);
     if (!in_table_order) break;
     order[seen++] = family;
-    set |= 1u << family;
   }
   if (!in_table_order || seen < 2) {
     stages.count = 1;

@@ -181,11 +181,19 @@ struct WireTraits {
   static void notify(FrameHandler& handler, const Record& record) { (handler.*Callback)(record); }
 };
 
+// GCC: no constant-propagated clones of it either (each one a copy in flash); clang has no
+// such attribute and makes none here.
+#if defined(__clang__)
+#define HIVECAL_NOINLINE_NOCLONE [[gnu::noinline]]
+#else
+#define HIVECAL_NOINLINE_NOCLONE [[gnu::noinline, gnu::noclone]]
+#endif
+
 /// The joints' values of a joint record: positions, then velocities, then currents. One copy,
 /// its loops over the joints not unrolled (a field's bytes are), serves both versions' layouts
 /// (the firmware's flash).
 template <typename Io, typename Record>
-[[gnu::noinline, gnu::noclone]] void joint_values(Io& io, Record& record, int joints) {
+HIVECAL_NOINLINE_NOCLONE void joint_values(Io& io, Record& record, int joints) {
 #pragma GCC unroll 1
   for (int j = 0; j < joints; ++j) io.f64(record.q_rad[j]);
 #pragma GCC unroll 1
