@@ -235,10 +235,7 @@ void write_registration(textio::JsonWriter& w, const RegistrationRun& run, const
   for (std::size_t k = 0; k < r.blunder_count; ++k) {
     const RegistrationBlunder& b = r.blunders[k];
     w.begin_object();
-    w.key("source").value(streams::sample_source(facts, b.index));
-    w.key("residual_m").value(b.residual_m);
-    w.key("w").value(b.w);
-    w.key("critical_w").value(b.critical_w);
+    record::write_w_test_members(w, streams::sample_source(facts, b.index), b.residual_m, b.w, b.critical_w);
     w.end_object();
   }
   w.end_array();

@@ -154,10 +154,7 @@ void write_outliers(JsonWriter& w, const streams::SessionFacts* facts, const Cal
   for (const CalibrationOutlier& o : result.outlier_list()) {
     w.begin_object();
     w.key("index").value(static_cast<long long>(o.index));
-    w.key("source").value(streams::sample_source(sources, o.index));
-    w.key("residual_m").value(o.residual_m);
-    w.key("w").value(o.w);
-    w.key("critical_w").value(o.critical_w);
+    write_w_test_members(w, streams::sample_source(sources, o.index), o.residual_m, o.w, o.critical_w);
     w.end_object();
   }
   w.end_array();
@@ -338,6 +335,13 @@ void write_uncertainty(JsonWriter& w, const CalibrationUncertainty& u, const Rob
     w.key("tool_axis_margin_rad").value(d.tool_axis_margin_rad);
     w.end_object();
   }
+}
+
+void write_w_test_members(JsonWriter& json, const std::string& source, double residual_m, double w, double critical_w) {
+  json.key("source").value(source);
+  json.key("residual_m").value(residual_m);
+  json.key("w").value(w);
+  json.key("critical_w").value(critical_w);
 }
 
 void write_error_stats(JsonWriter& json, const ErrorStats& stats) {

@@ -100,6 +100,11 @@ struct ErrorStatsField {
 inline constexpr ErrorStatsField kErrorStatsFields[] = {
     {"mae_m", &ErrorStats::mae_m}, {"sigma_m", &ErrorStats::sigma_m}, {"max_m", &ErrorStats::max_m}};
 
+/// Writes one w-test row's members: "source" (its file line or sample), "residual_m" [m], "w"
+/// and "critical_w" [-] (a blunder set aside, by the calibration or by a registration).
+void write_w_test_members(textio::JsonWriter& json, const std::string& source, double residual_m, double w,
+                          double critical_w);
+
 /// Writes one ErrorStats as {"count", "mae_m": {x, y, z, 3d}, "sigma_m": {...}, "max_m": {...}}.
 void write_error_stats(textio::JsonWriter& json, const ErrorStats& stats);
 

@@ -249,7 +249,9 @@ JointTrig joint_trig(const RobotModel& model, const JointVector& q_rad) {
     if (joint_type(model, j) == JointType::revolute) {
       math::sincos(q_rad(j), &trig.sin_q[j], &trig.cos_q[j]);
     } else {
-      trig.cos_q[j] = 1.0;  // theta is the offset alone: sin(0 + offset), cos(0 + offset) exactly
+      // No trig call here (nor libm's): a prismatic joint turns nothing, so theta is the offset
+      // alone and sin(0), cos(0) are exactly 0 and 1 (sin_q stays 0 from JointTrig's init).
+      trig.cos_q[j] = 1.0;
       trig.slide_m[j] = q_rad(j);
     }
   }
