@@ -320,13 +320,15 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
   const std::vector<std::size_t> drawn = evenly_spaced(residual_um.size(), kScatterPointCap);
   for (int j = 0; j < after.model.joint_count; ++j) {
     const bool before_after = rigid != nullptr && deflected_joint(after.model, j);
-    const double deg = math::kDegPerRad;
+    // A prismatic joint's reading is a length [m], drawn in mm; a revolute one's in degrees.
+    const bool prismatic = joint_type(after.model, j) == JointType::prismatic;
+    const double to_axis = prismatic ? 1e3 : math::kDegPerRad;  // [mm/m] or [deg/rad]
     std::vector<Series> series;
     if (before_after) {
       series = {Series{rigid->method + " (rigid)", {}, {}, true}, Series{after.method, {}, {}, true}};
       for (const std::size_t i : drawn) {
         if (i >= rigid_um.size()) continue;
-        for (Series* s : {&series[0], &series[1]}) s->x.push_back(data.samples[i].q_rad[j] * deg);
+        for (Series* s : {&series[0], &series[1]}) s->x.push_back(data.samples[i].q_rad[j] * to_axis);
         series[0].y.push_back(rigid_um[i]);
         series[1].y.push_back(residual_um[i]);
       }
@@ -334,7 +336,7 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
       series = {Series{"training", {}, {}, true}, Series{"test", {}, {}, true}};
       for (const std::size_t i : drawn) {
         Series& s = series[data.samples[i].test ? 1 : 0];
-        s.x.push_back(data.samples[i].q_rad[j] * deg);
+        s.x.push_back(data.samples[i].q_rad[j] * to_axis);
         s.y.push_back(residual_um[i]);
       }
     }
@@ -342,7 +344,7 @@ void joint_figures(const ReportData& data, std::vector<Figure>* out) {
     ChartSpec spec = chart("fig-residual-q" + joint,
                            before_after ? "Residual vs joint " + joint + ": rigid vs " + after.method
                                         : "Residual after calibration vs joint " + joint,
-                           "q" + joint + " [deg]", "3D residual [um]");
+                           "q" + joint + (prismatic ? " [mm]" : " [deg]"), "3D residual [um]");
     spec.width_px = 400;
     spec.height_px = 260;
     spec.fixed_y = true;

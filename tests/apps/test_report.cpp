@@ -131,6 +131,19 @@ TEST(Report, NamesFromInputFilesReachThePageEscapedAndUtf8AsWritten) {
   EXPECT_NE(html.find("<td>d1\\x00tail</td>"), std::string::npos);
 }
 
+// A prismatic joint's reading is a length: its residual figure's axis is in mm, a revolute
+// joint's in degrees.
+TEST(Report, APrismaticJointsFigureIsDrawnInMillimetres) {
+  report::ReportData data = example();
+  set_joint_type(&data.predictions.back().model, 0, JointType::prismatic);
+  const std::string html = report::render_html(data);
+  EXPECT_NE(html.find("q1 [mm]"), std::string::npos);
+  EXPECT_EQ(html.find("q1 [deg]"), std::string::npos);
+  EXPECT_NE(html.find("q2 [deg]"), std::string::npos);
+  const std::string revolute = report::render_html(example());
+  EXPECT_NE(revolute.find("q1 [deg]"), std::string::npos);
+}
+
 TEST(Report, WithoutTestSetNoTestColumnsAndTrainingFigures) {
   report::ReportData data = example();
   for (report::MethodRow& m : data.methods) m.test = ErrorStats{};

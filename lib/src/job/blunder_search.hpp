@@ -43,7 +43,10 @@ BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o
                                CalibrationOutlierList* found, BlunderTestSummary* summary);
 
 /// The prior every LM fit of the job holds: the start model `nominal` (the job's, with the
-/// given tool point) with the options' tolerances; none when they are all 0.
-LmPrior job_lm_prior(const CalibrationOptions& o, const RobotModel& nominal);
+/// given tool point) with the options' tolerances times `tolerance_scale`; none when they are
+/// all 0. A fit passes 1 (LM checks the stated tolerances against the data itself); the folds
+/// and eliminations that predict from a fit pass its LmResult::prior_tolerance_scale, the
+/// tolerances that fit held [-].
+LmPrior job_lm_prior(const CalibrationOptions& o, const RobotModel& nominal, double tolerance_scale);
 
 }  // namespace hivecal::detail

@@ -39,13 +39,19 @@ CalibrationResult& reset(CalibrationResult* result) {
   return *new (result) CalibrationResult();
 }
 
-/// The compliance options are usable: off, or on with an LM stage and terms.
+/// The compliance options are usable: off, or on with an LM stage and terms, and the method's
+/// stages and the terms' stages within the result's kMaxCalibrationStages (a build of few terms
+/// holds fewer stages: a small arm's terms of both families could ask for one more).
 bool compliance_usable(const RobotModel& start, const CalibrationOptions& options) {
   if (!options.compliance.enabled) return true;
   ComplianceModel model;
-  return plan_for(options.method).lm &&
-         compliance_start(start, options.compliance, all_joint_term_families(kJointTermFamilyCount), &model) ==
-             Status::ok;
+  const detail::StagePlan plan = plan_for(options.method);
+  if (!plan.lm || compliance_start(start, options.compliance, all_joint_term_families(kJointTermFamilyCount), &model) !=
+                      Status::ok) {
+    return false;
+  }
+  const int stages = int{plan.gsa} + int{plan.abc} + 1 + plan_joint_term_stages(model).count;
+  return stages <= static_cast<int>(kMaxCalibrationStages);
 }
 
 /// Input checks shared by calibrate() and cross_validate().
