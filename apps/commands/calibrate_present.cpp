@@ -678,8 +678,9 @@ report::ReportData present_calibration(const CalibrateSettings& settings, const 
     data.info_lines.push_back(noise_statement(data.fit_sigma_m, data.noise_sigma_m, data.noise_source));
   data.parameters = parameter_rows(final_stage, run.final_lm(), start, dataset.train());
   if (const LmResult* lm = run.final_lm(); lm != nullptr) {
-    const LmPriorTolerances held = widened_tolerances(run.options.prior, lm->prior_tolerance_scale);
-    if (lm->prior_tolerance_scale > 1.0) data.info_lines.push_back(prior_widened_line(lm->prior_tolerance_scale, held));
+    const LmPriorTolerances& held = lm->prior_tolerances;
+    if (tolerances_widened(run.options.prior, held))
+      data.info_lines.push_back(prior_widened_line(run.options.prior, held));
     for (const std::string& line : prior_held_lines(*lm, held, data.parameters)) {
       data.info_lines.push_back(line);
     }
@@ -719,8 +720,7 @@ void add_uncertainty(const CalibrateSettings& settings, const RobotModel& start,
   const Vec3 none[kMaxTargets - 1] = {Vec3::Zero(), Vec3::Zero()};
   std::string note;
   // The prior every LM fit of the job held (its sigmas are the posterior's).
-  const LmPrior prior =
-      lm != nullptr ? lm_prior(start, widened_tolerances(settings.prior, lm->prior_tolerance_scale)) : LmPrior{};
+  const LmPrior prior = lm != nullptr ? lm_prior(start, lm->prior_tolerances) : LmPrior{};
   compute_uncertainty(final_stage.model, final_stage.base_to_tracker, dataset.train(), loss, prior,
                       calibration_estimated_mask(run->result), lm != nullptr ? lm->other_tools_sigma_m : none,
                       &run->uncertainty, &note);

@@ -205,13 +205,17 @@ std::vector<std::string> prior_held_lines(const LmResult& lm, const LmPriorToler
   return lines;
 }
 
-std::string prior_widened_line(double scale, const LmPriorTolerances& widened) {
-  char line[400];
+std::string prior_widened_line(const LmPriorTolerances& stated, const LmPriorTolerances& widened) {
+  const auto factor = [](double held, double given) { return given > 0.0 ? held / given : 1.0; };
+  char line[480];
   std::snprintf(line, sizeof line,
                 "prior: the poses put the nominal model farther off than its tolerances allow (the prior's chi-square "
-                "beyond its 5 %% quantile): tolerances widened x%.2f to %.3g mm per DH length, %.3g mrad per DH "
-                "angle, %.3g mm per tool coordinate (--dh-tolerance-mm, --dh-tolerance-mrad, --tool-tolerance-mm)",
-                scale, widened.dh_length_m * 1e3, widened.dh_angle_rad * 1e3, widened.tool_m * 1e3);
+                "beyond its 5 %% quantile): tolerances widened to %.3g mm per DH length (x%.2f), %.3g mrad per DH "
+                "angle (x%.2f), %.3g mm per tool coordinate (x%.2f) (--dh-tolerance-mm, --dh-tolerance-mrad, "
+                "--tool-tolerance-mm)",
+                widened.dh_length_m * 1e3, factor(widened.dh_length_m, stated.dh_length_m), widened.dh_angle_rad * 1e3,
+                factor(widened.dh_angle_rad, stated.dh_angle_rad), widened.tool_m * 1e3,
+                factor(widened.tool_m, stated.tool_m));
   return line;
 }
 

@@ -84,8 +84,8 @@ inline constexpr double kPriorHeldSigmaShare = 0.70710678118654752;
 std::vector<std::string> prior_held_lines(const LmResult& lm, const LmPriorTolerances& tolerances,
                                           const std::vector<report::ParameterRow>& parameters);
 
-/// The line that says the data widened the prior's tolerances (LmResult::prior_tolerance_scale
-/// `scale` above 1) to `widened`.
-std::string prior_widened_line(double scale, const LmPriorTolerances& widened);
+/// The line that says the data widened the prior's tolerances from `stated` to `widened`
+/// (LmResult::prior_tolerances), each kind by its factor.
+std::string prior_widened_line(const LmPriorTolerances& stated, const LmPriorTolerances& widened);
 
 }  // namespace hivecal::cli

@@ -426,12 +426,16 @@ TEST(FitWarnings, AMoveOfAStronglyCorrelatedParameterNamesItsPartner) {
   EXPECT_EQ(warnings[0].find("correlated"), std::string::npos) << warnings[0];
 }
 
-// A fit whose data widened the prior's tolerances (LmResult::prior_tolerance_scale) says by how
-// much and to what, and its held lines weigh each sigma against the widened tolerance.
+// A fit whose data widened the prior's tolerances (LmResult::prior_tolerances) says to what and
+// by how much per kind, and its held lines weigh each sigma against the widened tolerance.
 TEST(PriorLines, WidenedTolerancesAreSaidAndHeldAgainst) {
-  const LmPriorTolerances widened = widened_tolerances(kDefaultPriorTolerances, 2.0);
-  const std::string line = cli::prior_widened_line(2.0, widened);
-  EXPECT_NE(line.find("widened x2.00 to 2 mm per DH length, 10 mrad per DH angle, 40 mm per tool coordinate"),
+  LmPriorTolerances widened = widened_tolerances(kDefaultPriorTolerances, 2.0);
+  widened.dh_angle_rad = 3.0 * kDefaultPriorTolerances.dh_angle_rad;
+  EXPECT_TRUE(tolerances_widened(kDefaultPriorTolerances, widened));
+  EXPECT_FALSE(tolerances_widened(kDefaultPriorTolerances, kDefaultPriorTolerances));
+  const std::string line = cli::prior_widened_line(kDefaultPriorTolerances, widened);
+  EXPECT_NE(line.find("widened to 2 mm per DH length (x2.00), 15 mrad per DH angle (x3.00), 40 mm per tool "
+                      "coordinate (x2.00)"),
             std::string::npos)
       << line;
   static LmResult lm;

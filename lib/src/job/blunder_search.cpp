@@ -299,8 +299,8 @@ void drop_held_out(Span<const Sample> test, Span<const Sample> aside, double lar
 
 }  // namespace
 
-LmPrior job_lm_prior(const CalibrationOptions& o, const RobotModel& nominal, double tolerance_scale) {
-  return lm_prior(nominal, tolerance_scale == 1.0 ? o.prior : widened_tolerances(o.prior, tolerance_scale));
+LmPrior job_lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerances) {
+  return lm_prior(nominal, tolerances);
 }
 
 /// The loss the w-test whitens with: LM's joint noise, no Huber weights.
@@ -335,7 +335,7 @@ constexpr double kRefitCostTolerance = 1e-10;
                                const RobotModel& nominal, Span<const Sample> fitted, ParamMask estimated,
                                RigidTransform* base) {
   LmOptions lm = o.lm;
-  lm.prior = job_lm_prior(o, nominal, 1.0);
+  lm.prior = job_lm_prior(nominal, o.prior);
   lm.params = LmParamSet::custom;
   lm.custom_mask = estimated & ~kOtherTargetTools;
   lm.other_target_tools = (estimated & kOtherTargetTools) != 0;

@@ -42,11 +42,10 @@ BlunderVerdict search_blunders(DatasetBase* dataset, const CalibrationOptions& o
                                CalibrationWorkspaceBase& workspace, const CalibrationResult& r,
                                CalibrationOutlierList* found, BlunderTestSummary* summary);
 
-/// The prior every LM fit of the job holds: the start model `nominal` (the job's, with the
-/// given tool point) with the options' tolerances times `tolerance_scale`; none when they are
-/// all 0. A fit passes 1 (LM checks the stated tolerances against the data itself); the folds
-/// and eliminations that predict from a fit pass its LmResult::prior_tolerance_scale, the
-/// tolerances that fit held [-].
-LmPrior job_lm_prior(const CalibrationOptions& o, const RobotModel& nominal, double tolerance_scale);
+/// The prior of the job around the start model `nominal` (the job's, with the given tool point)
+/// with `tolerances`; none when they are all 0. A fit passes the options' (LM checks them against
+/// the data itself); the folds and eliminations that predict from a fit pass the tolerances that
+/// fit held (LmResult::prior_tolerances).
+LmPrior job_lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerances);
 
 }  // namespace hivecal::detail

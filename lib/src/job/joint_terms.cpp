@@ -52,7 +52,7 @@ namespace {
   stage.trace_m = previous.trace_m;
   stage.estimated = previous.estimated;
   stage.residual_sigma_m = previous.residual_sigma_m;
-  stage.prior_tolerance_scale = previous.prior_tolerance_scale;
+  stage.prior_tolerances = previous.prior_tolerances;
   return Status::ok;
 }
 
@@ -131,7 +131,7 @@ ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint
   const CalibrationResult& r = job.result;
   FoldErrors with{};
   const FoldFit fit_with{&r.lm.model, &r.lm.base_to_tracker, r.lm.identifiability.kept_mask,
-                         job_lm_prior(job.options, job.nominal, r.lm.prior_tolerance_scale),
+                         job_lm_prior(job.nominal, r.lm.prior_tolerances),
                          r.lm.residual_sigma_m * r.lm.residual_sigma_m};
   const Status status =
       blocked_fold_errors(&job.dataset, fit_with, blunder_test_loss(job.options), job.workspace, &with);
@@ -164,8 +164,7 @@ ParamMask terms_of_joint(const RobotModel& reference, ParamMask terms, int joint
   const CalibrationStage& before = r.stages[previous.stage];
   BlockedFoldErrors& without = job.workspace.previous_fold_errors();
   const FoldFit fit_without{&before.model, &before.base_to_tracker, previous.estimated,
-                            job_lm_prior(job.options, job.nominal, before.prior_tolerance_scale),
-                            previous.sigma_m * previous.sigma_m};
+                            job_lm_prior(job.nominal, before.prior_tolerances), previous.sigma_m * previous.sigma_m};
   Status status =
       blocked_fold_errors(&job.dataset, fit_without, blunder_test_loss(job.options), job.workspace, &without);
   for (int round = 0; status == Status::ok && (r.lm.identifiability.kept_mask & new_terms) != 0; ++round) {

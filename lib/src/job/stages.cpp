@@ -27,7 +27,7 @@ CalibrationStage& population_stage(Job& job, CalibrationSolver solver, const Pap
   stage.evaluations = solved.evaluations;
   stage.iterations = solved.iterations;
   stage.best_cost_m = solved.best_cost_m;
-  stage.prior_tolerance_scale = 1.0;  // no prior on a population search
+  stage.prior_tolerances = LmPriorTolerances{};  // no prior on a population search
   return stage;
 }
 
@@ -351,7 +351,7 @@ void lm_stage(Job& job, Status status, bool refines_previous, bool compliance, T
   stage.trace_m = trace.values();
   stage.estimated = r.lm.identifiability.kept_mask;
   stage.residual_sigma_m = r.lm.residual_sigma_m;
-  stage.prior_tolerance_scale = r.lm.prior_tolerance_scale;
+  stage.prior_tolerances = r.lm.prior_tolerances;
 }
 
 Status run_lm(Job& job, bool hybrid, ParamMask* pruned) {
@@ -461,7 +461,7 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
     lm.params = LmParamSet::custom;
   }
   lm.loss = o.robust ? LmLoss::huber : LmLoss::squared;
-  lm.prior = detail::job_lm_prior(o, job.nominal, 1.0);
+  lm.prior = detail::job_lm_prior(job.nominal, o.prior);
   if (o.base_known || o.tool_known) {  // the base / the tool points stay where the options put them
     if (o.base_known) base = &o.known_base_to_tracker;
     lm.custom_mask = lm_param_mask(lm.params, lm.custom_mask, reference) & ~known_params_mask(o, reference);
@@ -508,7 +508,7 @@ Status fit_lm(Job& job, const LmFit& fit, const LmFitReport& report) {
           (lm.other_target_tools || mask_has(r.lm.identifiability.kept_mask, tool_param_index(reference, 0)));
       const FoldFit fitted{&r.lm.model, &r.lm.base_to_tracker,
                            r.lm.identifiability.kept_mask | (other_tools ? kOtherTargetTools : ParamMask{0}),
-                           detail::job_lm_prior(o, job.nominal, r.lm.prior_tolerance_scale),
+                           detail::job_lm_prior(job.nominal, r.lm.prior_tolerances),
                            r.lm.residual_sigma_m * r.lm.residual_sigma_m};
       ParamMask linearised = 0;
       if (linearised_term_fixes(fitted, reference, fit.samples, blunder_test_loss(o), weakest, fit.significance_t,

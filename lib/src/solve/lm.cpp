@@ -206,7 +206,7 @@ void clear_result(LmResult* result) {
   result->huber_threshold_m = 0.0;
   result->iterations = 0;
   result->prior_chi_square = 0.0;
-  result->prior_tolerance_scale = 1.0;
+  result->prior_tolerances = LmPriorTolerances{};
   result->termination = LmTermination::max_iterations;
 }
 
@@ -230,15 +230,19 @@ struct Run {
   /// The prior's pseudo-observations weigh (p - nominal)^2 / tolerance^2 by this: the fit's
   /// variance factor sum w |r|^2 / dof at the last accepted point (0: no prior) [m^2].
   double prior_variance_m2 = 0.0;
-  /// The prior's tolerances are the stated ones times this (the variance-component check) [-].
-  double tolerance_scale = 1.0;
+  /// The prior's tolerances: the stated ones, or per kind widened by the variance-component
+  /// check (widen_tolerances) [m], [rad].
+  LmPriorTolerances tolerances;
+  /// The check found the stated tolerances too tight: from then on each kind follows its estimate.
+  bool widened = false;
 };
 
 /// The prior's weight of parameter i, variance factor / tolerance^2, where it holds one and i
 /// is kept; 0 elsewhere [m^2/unit^2].
 double prior_weight(const Run& run, int i) {
   if (!mask_has(run.kept, i)) return 0.0;
-  const double sigma = lm_prior_sigma(run.options.prior, i) * run.tolerance_scale;
+  const RobotModel* nominal = run.options.prior.nominal;
+  const double sigma = nominal != nullptr ? prior_tolerance(run.tolerances, nominal->joint_count, i) : 0.0;
   return sigma > 0.0 ? run.prior_variance_m2 / (sigma * sigma) : 0.0;
 }
 
@@ -572,42 +576,82 @@ Status finish(Run* run) {
   result->rms_m = rms_of(run->current->squares_sum_m2, run->samples.size());
   result->huber_threshold_m = run->point.loss.huber_threshold_m;
   result->prior_chi_square = run->prior_variance_m2 > 0.0 ? prior_cost(*run, run->point) / run->prior_variance_m2 : 0.0;
-  result->prior_tolerance_scale = run->tolerance_scale;
+  result->prior_tolerances = run->options.prior.nominal != nullptr ? run->tolerances : LmPriorTolerances{};
   Status status = parameter_sigmas(*run, *run->current, run->kept, result);
   if (status == Status::singular_system) status = reanalyse_at_end(run);
   return status;
 }
 
-/// The prior's variance component at a converged result (Helmert's estimate, as geodetic
-/// adjustment checks a group of observations): f = sum_i ((p_i - nominal_i) / tau_i)^2 / sum_i
-/// r_i, r_i = 1 - P_ii C_ii the redundancy of pseudo-observation i (its weight P_ii times its
-/// posterior variance C_ii = sigma_i^2 / variance factor). With the stated tolerances a chi-square
-/// test on sum r_i degrees of freedom decides (kPriorToleranceTestLevel): the data put the nominal
-/// model farther than its tolerances allow, or not (then nothing changes: the same bits). Once
-/// widened, the tolerances follow sqrt(f) (never below the stated ones) until it settles
-/// (kPriorScaleTolerance). True when it widened (or re-estimated) them: the fit goes on.
+/// The kinds of toleranced parameter, each a group of pseudo-observations with a variance
+/// component of its own: DH lengths, DH angles, target 1's tool point.
+enum PriorKind { kDhLengths, kDhAngles, kToolPoint, kPriorKinds };
+
+PriorKind prior_kind(int joint_count, int index) {
+  if (index >= kParamsPerJoint * joint_count) return kToolPoint;
+  const int field = index % kParamsPerJoint;
+  const bool angle = field == static_cast<int>(DhField::theta_offset) || field == static_cast<int>(DhField::alpha);
+  return angle ? kDhAngles : kDhLengths;
+}
+
+double tolerance_of(const LmPriorTolerances& tolerances, PriorKind kind) {
+  return kind == kDhLengths ? tolerances.dh_length_m : kind == kDhAngles ? tolerances.dh_angle_rad : tolerances.tool_m;
+}
+
+void set_tolerance(LmPriorTolerances* tolerances, PriorKind kind, double value) {
+  (kind == kDhLengths  ? tolerances->dh_length_m
+   : kind == kDhAngles ? tolerances->dh_angle_rad
+                       : tolerances->tool_m) = value;
+}
+
+/// The prior's variance components at a converged result (Helmert's estimate, as geodetic
+/// adjustment checks groups of observations): over the pseudo-observations of one kind,
+/// f = sum_i ((p_i - nominal_i) / tau_i)^2 / sum_i r_i, r_i = 1 - P_ii C_ii the redundancy of
+/// pseudo-observation i (its weight P_ii times its posterior variance C_ii = sigma_i^2 / variance
+/// factor). With the stated tolerances a chi-square test over every kind on sum r_i degrees of
+/// freedom decides (kPriorToleranceTestLevel): the data put the nominal model farther than its
+/// tolerances allow, or not (then nothing changes: the same bits). Once widened, each kind's
+/// tolerance follows sqrt(f) of its own pseudo-observations (never below the stated one; a kind
+/// with too little redundancy keeps its tolerance) until every one settles (kPriorScaleTolerance):
+/// lengths and angles are observations of different kinds, and the ratio of their stated
+/// tolerances is a guess the data may correct. True when it widened (or re-estimated) them.
 bool widen_tolerances(Run* run) {
   const LmResult& result = *run->result;
   if (!(run->prior_variance_m2 > 0.0) || status_of(result.termination) != Status::ok) return false;
   const double variance_m2 = result.residual_sigma_m * result.residual_sigma_m;
   if (!(variance_m2 > 0.0)) return false;
-  double redundancy = 0.0;
+  const ModelParams p = to_params(run->point.model);
+  const ModelParams nominal = to_params(*run->options.prior.nominal);
+  const int joint_count = run->options.prior.nominal->joint_count;
+  double redundancy[kPriorKinds] = {0.0, 0.0, 0.0};
+  double chi_square[kPriorKinds] = {0.0, 0.0, 0.0};
   for (int i = 0; i < model_param_count(run->point.model); ++i) {
     const double weight = prior_weight(*run, i);
-    if (weight > 0.0) redundancy += 1.0 - weight * result.sigma(i) * result.sigma(i) / variance_m2;
+    if (!(weight > 0.0)) continue;
+    const PriorKind kind = prior_kind(joint_count, i);
+    redundancy[kind] += 1.0 - weight * result.sigma(i) * result.sigma(i) / variance_m2;
+    chi_square[kind] += weight * (p(i) - nominal(i)) * (p(i) - nominal(i)) / run->prior_variance_m2;
   }
-  if (!(redundancy >= kMinPriorRedundancy)) return false;
-  const double chi_square = result.prior_chi_square;
-  // The upper quantile exceeds the degrees of freedom: a chi-square below them passes untested.
-  if (run->tolerance_scale == 1.0 &&
-      (chi_square <= redundancy ||
-       !(chi_square > math::chi_square_upper_quantile(kPriorToleranceTestLevel, redundancy)))) {
-    return false;
+  if (!run->widened) {
+    const double total_redundancy = redundancy[kDhLengths] + redundancy[kDhAngles] + redundancy[kToolPoint];
+    const double total = result.prior_chi_square;
+    // The upper quantile exceeds the degrees of freedom: a chi-square below them passes untested.
+    if (!(total_redundancy >= kMinPriorRedundancy) || total <= total_redundancy ||
+        !(total > math::chi_square_upper_quantile(kPriorToleranceTestLevel, total_redundancy))) {
+      return false;
+    }
+    run->widened = true;
   }
-  const double scale = std::fmax(1.0, run->tolerance_scale * std::sqrt(chi_square / redundancy));
-  if (std::fabs(scale - run->tolerance_scale) <= kPriorScaleTolerance * run->tolerance_scale) return false;
-  run->tolerance_scale = scale;
-  return true;
+  bool moved = false;
+  for (int k = 0; k < kPriorKinds; ++k) {
+    const PriorKind kind = static_cast<PriorKind>(k);
+    if (!(redundancy[kind] >= kMinPriorRedundancy)) continue;
+    const double held = tolerance_of(run->tolerances, kind);
+    const double widened = std::fmax(tolerance_of(run->options.prior.tolerance, kind),
+                                     held * std::sqrt(chi_square[kind] / redundancy[kind]));
+    moved = moved || std::fabs(widened - held) > kPriorScaleTolerance * held;
+    set_tolerance(&run->tolerances, kind, widened);
+  }
+  return moved;
 }
 
 }  // namespace
@@ -640,10 +684,7 @@ const char* lm_termination_name(LmTermination termination) {
 
 double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int index) {
   if (index < 0 || index >= model_param_count(joint_count)) return 0.0;
-  if (index >= kParamsPerJoint * joint_count) return tolerance.tool_m;
-  const int field = index % kParamsPerJoint;
-  const bool angle = field == static_cast<int>(DhField::theta_offset) || field == static_cast<int>(DhField::alpha);
-  return angle ? tolerance.dh_angle_rad : tolerance.dh_length_m;
+  return tolerance_of(tolerance, prior_kind(joint_count, index));
 }
 
 double lm_prior_sigma(const LmPrior& prior, int index) {
@@ -652,6 +693,11 @@ double lm_prior_sigma(const LmPrior& prior, int index) {
 
 LmPriorTolerances widened_tolerances(const LmPriorTolerances& stated, double scale) {
   return LmPriorTolerances{stated.dh_length_m * scale, stated.dh_angle_rad * scale, stated.tool_m * scale};
+}
+
+bool tolerances_widened(const LmPriorTolerances& stated, const LmPriorTolerances& held) {
+  return held.dh_length_m > stated.dh_length_m || held.dh_angle_rad > stated.dh_angle_rad ||
+         held.tool_m > stated.tool_m;
 }
 
 LmPrior lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerance) {
@@ -704,7 +750,9 @@ Status calibrate_lm(const RobotModel& start_model, const RigidTransform* start_b
           options.initial_damping,
           2.0,
           false,
-          0.0};
+          0.0,
+          options.prior.tolerance,
+          false};
   status = start(start_base_to_tracker, &run);
   if (status != Status::ok) return status;
   if (trace != nullptr) trace->push(rms_of(run.current->squares_sum_m2, samples.size()));

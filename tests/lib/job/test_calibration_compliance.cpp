@@ -234,7 +234,7 @@ TEST(CalibrationCompliance, ArmMassesBasisAlsoBeatsTheRigidFit) {
 
 // A start model 10 mm / 20 mrad off the arm: the prior's tolerances widen in the rigid fit and
 // again in the joint-term stage, each stage records its factor (CalibrationStage::
-// prior_tolerance_scale), and the blocked folds and eliminations that predict from a stage hold
+// prior_tolerances), and the blocked folds and eliminations that predict from a stage hold
 // that stage's tolerances (job_lm_prior with its factor), not the stated ones.
 TEST(CalibrationCompliance, AStartFarOffNominalWidensThePriorInEveryStageAndItsFoldsHoldIt) {
   fill(Bending::other_session, 11, 120, &dataset);
@@ -245,18 +245,22 @@ TEST(CalibrationCompliance, AStartFarOffNominalWidensThePriorInEveryStageAndItsF
   EXPECT_NO_HEAP(status = calibrate(far_start, &dataset, compliance_options(), &workspace, &result));
   ASSERT_EQ(status, Status::ok);
   ASSERT_EQ(result.stage_count, 2u);
-  EXPECT_GT(result.stages[0].prior_tolerance_scale, 1.5);
-  EXPECT_GT(result.stages[1].prior_tolerance_scale, 1.5);
+  const CalibrationOptions stated = compliance_options();
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_GT(result.stages[k].prior_tolerances.dh_length_m, 1.5 * stated.prior.dh_length_m) << k;
+    EXPECT_GT(result.stages[k].prior_tolerances.dh_angle_rad, 1.5 * stated.prior.dh_angle_rad) << k;
+  }
   EXPECT_TRUE(result.stages[1].folds.checked);
-  EXPECT_EQ(result.stages[1].prior_tolerance_scale, result.lm.prior_tolerance_scale);
+  EXPECT_EQ(result.stages[1].prior_tolerances.dh_length_m, result.lm.prior_tolerances.dh_length_m);
+  EXPECT_EQ(result.stages[1].prior_tolerances.dh_angle_rad, result.lm.prior_tolerances.dh_angle_rad);
   double mae_m[2];
   for (int k = 0; k < 2; ++k) {
     mae_m[k] = position_error_stats(result.stages[k].model, result.stages[k].base_to_tracker, fresh.samples())
                    .mae(ErrorAxis::norm_3d);
   }
-  std::printf("  far start: tolerances x%.2f / x%.2f; fresh-pose MAE rigid %.2f um, LM+compliance %.2f um\n",
-              result.stages[0].prior_tolerance_scale, result.stages[1].prior_tolerance_scale, 1e6 * mae_m[0],
-              1e6 * mae_m[1]);
+  std::printf("  far start: tolerances %.3g mm / %.3g mrad; fresh-pose MAE rigid %.2f um, LM+compliance %.2f um\n",
+              result.lm.prior_tolerances.dh_length_m * 1e3, result.lm.prior_tolerances.dh_angle_rad * 1e3,
+              1e6 * mae_m[0], 1e6 * mae_m[1]);
   EXPECT_LE(mae_m[1], 0.85 * mae_m[0]);
 }
 

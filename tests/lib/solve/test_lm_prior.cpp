@@ -213,7 +213,7 @@ TEST(LmPrior, NegativeOrNonFiniteTolerancesAreRefused) {
 struct PriorCheckFigures {
   double plain_mae_m = 0.0;  ///< least squares on fresh poses [m]
   double prior_mae_m = 0.0;  ///< with the prior on fresh poses [m]
-  double scale = 0.0;        ///< LmResult::prior_tolerance_scale [-]
+  LmPriorTolerances held;    ///< LmResult::prior_tolerances [m], [rad]
   ModelParams prior_params;  ///< the prior's estimate
 };
 
@@ -229,10 +229,13 @@ PriorCheckFigures fit_both(const RobotModel& truth, const RobotModel& start, Spa
   EXPECT_NO_HEAP(status = calibrate_lm(start, nullptr, train, with_prior, &s.workspace, &s.result));
   EXPECT_EQ(status, Status::ok);
   figures.prior_mae_m = fresh_mae_m(s.result, truth, fresh);
-  figures.scale = s.result.prior_tolerance_scale;
+  figures.held = s.result.prior_tolerances;
   figures.prior_params = to_params(s.result.model);
-  std::printf("tolerances x%.3f (prior chi-square %.2f); fresh poses: least squares %.2f um, prior %.2f um\n",
-              figures.scale, s.result.prior_chi_square, figures.plain_mae_m * 1e6, figures.prior_mae_m * 1e6);
+  std::printf(
+      "tolerances %.3g mm / %.3g mrad / %.3g mm (prior chi-square %.2f); fresh poses: least squares %.2f um, "
+      "prior %.2f um\n",
+      figures.held.dh_length_m * 1e3, figures.held.dh_angle_rad * 1e3, figures.held.tool_m * 1e3,
+      s.result.prior_chi_square, figures.plain_mae_m * 1e6, figures.prior_mae_m * 1e6);
   return figures;
 }
 
@@ -261,7 +264,20 @@ TEST(LmPrior, AnArmFarBeyondItsTolerancesWidensThemAndPredictsAsLeastSquares) {
   // poses as least squares does.
   RobotModel start;
   const PriorCheckFigures figures = figures_of_an_arm_off_nominal(5301, 10e-3, 20e-3, &start);
-  EXPECT_GT(figures.scale, 2.0);
+  EXPECT_GT(figures.held.dh_length_m, 2.0e-3);
+  EXPECT_GT(figures.held.dh_angle_rad, 10e-3);
+  EXPECT_LT(figures.prior_mae_m, 1.01 * figures.plain_mae_m);
+}
+
+TEST(LmPrior, EachKindOfToleranceFollowsItsOwnPseudoObservations) {
+  // Lengths 10 mm off, angles within their 5 mrad: the lengths' tolerance widens, the angles'
+  // stays near what was stated (each kind is a variance component of its own; one common factor
+  // would have widened the angles as much as the lengths).
+  RobotModel start;
+  const PriorCheckFigures figures = figures_of_an_arm_off_nominal(5303, 10e-3, 1e-3, &start);
+  EXPECT_GT(figures.held.dh_length_m, 3.0e-3);
+  EXPECT_LT(figures.held.dh_angle_rad / 5e-3, 0.5 * figures.held.dh_length_m / 1e-3);
+  EXPECT_GE(figures.held.dh_angle_rad, 5e-3);  // never below the stated tolerance
   EXPECT_LT(figures.prior_mae_m, 1.01 * figures.plain_mae_m);
 }
 
@@ -270,7 +286,9 @@ TEST(LmPrior, AnArmWithinItsTolerancesKeepsThemExactly) {
   // as stated (factor exactly 1: the fit of the fixed prior, the same bits).
   RobotModel start;
   const PriorCheckFigures figures = figures_of_an_arm_off_nominal(5302, 0.5e-3, 2e-3, &start);
-  EXPECT_EQ(figures.scale, 1.0);
+  EXPECT_EQ(figures.held.dh_length_m, 1e-3);
+  EXPECT_EQ(figures.held.dh_angle_rad, 5e-3);
+  EXPECT_EQ(figures.held.tool_m, 0.02);
   for (int i = 0; i < kParamsPerJoint * kSixJoints; ++i) {
     const double moved = figures.prior_params(i) - to_params(start)(i);
     EXPECT_LT(std::fabs(moved), 10e-3) << full_param_name(i, kSixJoints);

@@ -133,8 +133,8 @@ struct CalibrationStage {
   Span<const double> trace_m;  ///< best cost (ABC/GSA: MAE, LM: RMS) per iteration [m]; views the workspace
   ParamMask estimated = 0;     ///< LM: the parameters it estimated (its kept set)
   double residual_sigma_m = 0.0;  ///< LM: its residual sigma per axis (LmResult::residual_sigma_m) [m]
-  /// LM: the factor its prior's tolerances were widened by (LmResult::prior_tolerance_scale) [-]
-  double prior_tolerance_scale = 1.0;
+  /// LM: the tolerances its prior held (LmResult::prior_tolerances); zero: no prior [m], [rad]
+  LmPriorTolerances prior_tolerances;
 };
 
 /// Stages a job runs at most ('all': GSA, ABC, LM, then LM+compliance when enabled, and

@@ -71,8 +71,10 @@ double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int 
 /// The prior's standard deviation of full-model parameter `index`: prior_tolerance, 0 without
 /// a nominal [m] or [rad].
 double lm_prior_sigma(const LmPrior& prior, int index);
-/// `stated` times `scale` (LmResult::prior_tolerance_scale): the tolerances a fit held [m], [rad].
+/// `stated` times `scale`, every kind alike [m], [rad].
 LmPriorTolerances widened_tolerances(const LmPriorTolerances& stated, double scale);
+/// Whether `held` (LmResult::prior_tolerances) is wider than `stated` in any kind.
+bool tolerances_widened(const LmPriorTolerances& stated, const LmPriorTolerances& held);
 /// The prior around `nominal` with `tolerance`; none (a null nominal) when every tolerance is 0.
 LmPrior lm_prior(const RobotModel& nominal, const LmPriorTolerances& tolerance);
 
@@ -147,10 +149,11 @@ struct LmResult {
   /// With a prior: sum over the toleranced parameters of ((p - nominal) / tolerance)^2 at the
   /// result, the pseudo-observations' share of the cost in units of the variance factor [-].
   double prior_chi_square = 0.0;
-  /// The factor the prior's tolerances were widened by: 1 unless the data put the nominal model
-  /// significantly farther than its tolerances allow (the prior's variance component, docs/solver-lm.md
-  /// "Tolerances checked against the data"); the fit, its sigmas and prior_chi_square hold the widened ones [-].
-  double prior_tolerance_scale = 1.0;
+  /// The tolerances the prior held: the stated ones unless the data put the nominal model
+  /// significantly farther off than they allow, then each kind (DH lengths, DH angles, tool)
+  /// widened by its own variance component (docs/solver-lm.md "Tolerances checked against the
+  /// data"); the fit, its sigmas and prior_chi_square hold these. Zero without a prior [m], [rad].
+  LmPriorTolerances prior_tolerances;
   LmTermination termination = LmTermination::max_iterations;  ///< why it stopped
 };
 
