@@ -176,13 +176,6 @@ void set_params(const ModelParams& params, bool keep_other_tools, RobotModel* mo
   return changed || compliance_changed;
 }
 
-/// The value of full-model parameter `index` (geometry or compliance coefficient) in `model`.
-double model_value(const RobotModel& model, int index) {
-  const int rigid_count = rigid_param_count(model);
-  if (index >= rigid_count) return model.compliance.coefficient[index - rigid_count];
-  return to_params(model)(index);
-}
-
 /// Puts parameter `index` (geometry or compliance) of *model back to its value in `start`.
 [[gnu::noinline]] void reset_param(const RobotModel& start, int index, bool keep_other_tools, RobotModel* model) {
   const int rigid_count = rigid_param_count(start);
@@ -231,7 +224,7 @@ bool tests_geometry(const CalibrationOptions& o, Span<const Sample> samples, con
   double weakest_ratio = t;
   const auto consider = [&](int i) {
     if (!mask_has(lm.identifiability.kept_mask, i) || !(lm.sigma(i) > 0.0)) return;
-    const double delta = i < model_count ? change(i) : model_value(lm.model, i) - model_value(start, i);
+    const double delta = i < model_count ? change(i) : full_param_value(lm.model, i) - full_param_value(start, i);
     const double level = levels.of(i);
     const double ratio =
         i < rigid_count ? std::fabs(delta) / lm.sigma(i) : std::fabs(delta) / lm.sigma(i) * (t / std::fmax(t, level));

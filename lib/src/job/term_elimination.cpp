@@ -9,13 +9,6 @@
 namespace hivecal::detail {
 namespace {
 
-/// Value of full-model parameter `index` (geometry or joint-term coefficient) of `model`.
-double value_of(const RobotModel& model, int index) {
-  const int rigid = rigid_param_count(model);
-  if (index >= rigid) return model.compliance.coefficient[index - rigid];
-  return index < model_param_count(model) ? to_params(model)(index) : 0.0;  // the base: an increment, 0
-}
-
 /// The next joint term to fix among `candidates`: the largest coefficient beyond
 /// kMaxJointTermCoefficient, else the least significant below its level; -1 when none is.
 int next_term(const RobotModel& reference, const FullParams& value, const FullParams& delta, const FullParams& variance,
@@ -71,8 +64,8 @@ int next_term(const RobotModel& reference, const FullParams& value, const FullPa
   FullParams value = FullParams::Zero();
   FullParams delta = FullParams::Zero();
   for (int k = 0; k < count; ++k) {
-    value(index[k]) = value_of(*fit.model, index[k]);
-    delta(index[k]) = value(index[k]) - value_of(reference, index[k]);
+    value(index[k]) = full_param_value(*fit.model, index[k]);
+    delta(index[k]) = value(index[k]) - full_param_value(reference, index[k]);
   }
   double squares_m2 = sigma_m * sigma_m * static_cast<double>(dof);
   ParamMask candidates = params & compliance_params_mask(reference.joint_count, kMaxComplianceTerms);

@@ -121,4 +121,10 @@ void apply_full_increment(const FullParams& increment, RobotModel* model, RigidT
   base_to_tracker->rotation = base_to_tracker->rotation * rotation_from_vector(rotation_rad);
 }
 
+double full_param_value(const RobotModel& model, int index) {
+  const int rigid = rigid_param_count(model);
+  if (index >= rigid) return model.compliance.coefficient[index - rigid];
+  return index < model_param_count(model) ? model_param(model, index) : 0.0;
+}
+
 }  // namespace hivecal

@@ -102,6 +102,19 @@ ModelParams to_params(const RobotModel& model) {
   return p;
 }
 
+double model_param(const RobotModel& model, int index) {
+  const int dh_count = kParamsPerJoint * model.joint_count;
+  if (index >= dh_count) return model.tool_m(index - dh_count);
+  const DhJoint& joint = model.joints[index / kParamsPerJoint];
+  switch (static_cast<DhField>(index % kParamsPerJoint)) {
+    case DhField::theta_offset: return joint.theta_offset_rad;
+    case DhField::d: return joint.d_m;
+    case DhField::a: return joint.a_m;
+    case DhField::alpha: break;
+  }
+  return joint.alpha_rad;
+}
+
 void set_model_params(const ModelParams& p, RobotModel* model) {
   for (int j = 0; j < model->joint_count; ++j) {
     DhJoint& joint = model->joints[j];

@@ -588,9 +588,7 @@ enum PriorKind { kDhLengths, kDhAngles, kToolPoint, kPriorKinds };
 
 PriorKind prior_kind(int joint_count, int index) {
   if (index >= kParamsPerJoint * joint_count) return kToolPoint;
-  const int field = index % kParamsPerJoint;
-  const bool angle = field == static_cast<int>(DhField::theta_offset) || field == static_cast<int>(DhField::alpha);
-  return angle ? kDhAngles : kDhLengths;
+  return model_param_is_angle(index, joint_count) ? kDhAngles : kDhLengths;
 }
 
 double tolerance_of(const LmPriorTolerances& tolerances, PriorKind kind) {
@@ -614,14 +612,14 @@ void set_tolerance(LmPriorTolerances* tolerances, PriorKind kind, double value) 
 /// with too little redundancy keeps its tolerance) until every one settles (kPriorScaleTolerance):
 /// lengths and angles are observations of different kinds, and the ratio of their stated
 /// tolerances is a guess the data may correct. True when it widened (or re-estimated) them.
-bool widen_tolerances(Run* run) {
+// Not inlined: its parameter vectors would widen calibrate_lm's frame, on the firmware's deepest path.
+[[gnu::noinline]] bool widen_tolerances(Run* run) {
   const LmResult& result = *run->result;
   if (!(run->prior_variance_m2 > 0.0) || status_of(result.termination) != Status::ok) return false;
   const double variance_m2 = result.residual_sigma_m * result.residual_sigma_m;
   if (!(variance_m2 > 0.0)) return false;
-  const ModelParams p = to_params(run->point.model);
-  const ModelParams nominal = to_params(*run->options.prior.nominal);
-  const int joint_count = run->options.prior.nominal->joint_count;
+  const RobotModel& nominal = *run->options.prior.nominal;
+  const int joint_count = nominal.joint_count;
   double redundancy[kPriorKinds] = {0.0, 0.0, 0.0};
   double chi_square[kPriorKinds] = {0.0, 0.0, 0.0};
   for (int i = 0; i < model_param_count(run->point.model); ++i) {
@@ -629,7 +627,8 @@ bool widen_tolerances(Run* run) {
     if (!(weight > 0.0)) continue;
     const PriorKind kind = prior_kind(joint_count, i);
     redundancy[kind] += 1.0 - weight * result.sigma(i) * result.sigma(i) / variance_m2;
-    chi_square[kind] += weight * (p(i) - nominal(i)) * (p(i) - nominal(i)) / run->prior_variance_m2;
+    const double deviation = model_param(run->point.model, i) - model_param(nominal, i);
+    chi_square[kind] += weight * deviation * deviation / run->prior_variance_m2;
   }
   if (!run->widened) {
     const double total_redundancy = redundancy[kDhLengths] + redundancy[kDhAngles] + redundancy[kToolPoint];

@@ -146,4 +146,8 @@ Mat3 rotation_from_vector(const Vec3& rotation_vector_rad);
 /// compose as base <- base * (Exp(rotation), translation).
 void apply_full_increment(const FullParams& increment, RobotModel* model, RigidTransform* base_to_tracker);
 
+/// The value of full-model parameter `index` in `model`: a geometry parameter (model_param) or a
+/// joint term's coefficient; 0 for the base's six (held as an increment, not a value).
+double full_param_value(const RobotModel& model, int index);
+
 }  // namespace hivecal

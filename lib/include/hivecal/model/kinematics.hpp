@@ -132,6 +132,9 @@ using ToolPointJacobian = Eigen::Matrix<double, 3, kMaxModelParamCount>;
 
 /// Flattens a model into its parameter vector.
 ModelParams to_params(const RobotModel& model);
+/// Geometry parameter `index` (in [0, model_param_count(model))) of `model`: to_params(model)(index)
+/// without the vector (a caller's stack on the firmware) [m] or [rad].
+double model_param(const RobotModel& model, int index);
 /// Writes the geometry parameters into *model in place (as many as its joint count has); its
 /// joint count and types, its other targets' tool points and its compliance, which are not
 /// among them, stay as they are.
