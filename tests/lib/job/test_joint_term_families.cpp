@@ -232,5 +232,31 @@ TEST(JointTermFamilies, TheJobRunsTheTablesStagesAndKeepsATermOnlyAtItsFamilysLe
   EXPECT_GT(kept, 0);
 }
 
+// Every method's stages and the terms' stages within the result's kMaxCalibrationStages: 'all'
+// (GSA, ABC, LM) with both families asks for five, which the hosted result holds; a build that
+// holds fewer refuses the job at the input step instead of writing past its stages.
+TEST(JointTermFamilies, AJobOfMoreStagesThanTheResultHoldsIsRefusedAtTheInputStep) {
+  if (kMaxComplianceTerms < 4 + 24) return;
+  fill(43, 120, &dataset);
+  CalibrationOptions options;
+  options.method = CalibrationMethod::all;
+  options.abc_food_sources = options.gsa_agents = 20;  // the workspace's population capacity
+  options.abc_cycles = options.gsa_iterations = 30;
+  options.compliance.enabled = true;
+  options.compliance.model = both_families();
+  const std::size_t needed = 3 + static_cast<std::size_t>(plan_joint_term_stages(options.compliance.model).count);
+  ASSERT_EQ(needed, 5u);
+  Status status = Status::invalid_argument;
+  EXPECT_NO_HEAP(status = calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result));
+  if (needed > kMaxCalibrationStages) {
+    EXPECT_EQ(status, Status::invalid_argument);
+    EXPECT_EQ(result.step, CalibrationStep::input);
+  } else {
+    ASSERT_EQ(status, Status::ok);
+    EXPECT_EQ(result.stage_count, needed);
+    EXPECT_STREQ(result.stage_name(4), "LM+compliance+harmonics");
+  }
+}
+
 }  // namespace
 }  // namespace hivecal::joint_term_families_test
