@@ -429,8 +429,8 @@ TEST(FitWarnings, AMoveOfAStronglyCorrelatedParameterNamesItsPartner) {
 // A fit whose data widened the prior's tolerances (LmResult::prior_tolerances) says to what and
 // by how much per kind, and its held lines weigh each sigma against the widened tolerance.
 TEST(PriorLines, WidenedTolerancesAreSaidAndHeldAgainst) {
-  LmPriorTolerances widened = widened_tolerances(kDefaultPriorTolerances, 2.0);
-  widened.dh_angle_rad = 3.0 * kDefaultPriorTolerances.dh_angle_rad;
+  const LmPriorTolerances widened{2.0 * kDefaultPriorTolerances.dh_length_m, 3.0 * kDefaultPriorTolerances.dh_angle_rad,
+                                  2.0 * kDefaultPriorTolerances.tool_m};
   EXPECT_TRUE(tolerances_widened(kDefaultPriorTolerances, widened));
   EXPECT_FALSE(tolerances_widened(kDefaultPriorTolerances, kDefaultPriorTolerances));
   const std::string line = cli::prior_widened_line(kDefaultPriorTolerances, widened);

@@ -612,7 +612,7 @@ void set_tolerance(LmPriorTolerances* tolerances, PriorKind kind, double value) 
 /// with too little redundancy keeps its tolerance) until every one settles (kPriorScaleTolerance):
 /// lengths and angles are observations of different kinds, and the ratio of their stated
 /// tolerances is a guess the data may correct. True when it widened (or re-estimated) them.
-// Not inlined: its parameter vectors would widen calibrate_lm's frame, on the firmware's deepest path.
+// Not inlined: its sums per kind stay out of calibrate_lm's frame, on the firmware's deepest path.
 [[gnu::noinline]] bool widen_tolerances(Run* run) {
   const LmResult& result = *run->result;
   if (!(run->prior_variance_m2 > 0.0) || status_of(result.termination) != Status::ok) return false;
@@ -688,10 +688,6 @@ double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int 
 
 double lm_prior_sigma(const LmPrior& prior, int index) {
   return prior.nominal == nullptr ? 0.0 : prior_tolerance(prior.tolerance, prior.nominal->joint_count, index);
-}
-
-LmPriorTolerances widened_tolerances(const LmPriorTolerances& stated, double scale) {
-  return LmPriorTolerances{stated.dh_length_m * scale, stated.dh_angle_rad * scale, stated.tool_m * scale};
 }
 
 bool tolerances_widened(const LmPriorTolerances& stated, const LmPriorTolerances& held) {

@@ -188,13 +188,6 @@ TEST(LmPrior, SigmaOfEachKindIsItsTolerance) {
   EXPECT_EQ(lm_prior_sigma(LmPrior{}, tool_param_index(kSixJoints, 0)), 0.0);
 }
 
-TEST(LmPrior, WidenedTolerancesScaleEveryKind) {
-  const LmPriorTolerances widened = widened_tolerances(LmPriorTolerances{1e-3, 5e-3, 0.02}, 2.5);
-  EXPECT_DOUBLE_EQ(widened.dh_length_m, 2.5e-3);
-  EXPECT_DOUBLE_EQ(widened.dh_angle_rad, 12.5e-3);
-  EXPECT_DOUBLE_EQ(widened.tool_m, 0.05);
-}
-
 TEST(LmPrior, NegativeOrNonFiniteTolerancesAreRefused) {
   const RobotModel start = start_ur10();
   auto& s = storage();

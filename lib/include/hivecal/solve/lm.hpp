@@ -71,8 +71,6 @@ double prior_tolerance(const LmPriorTolerances& tolerance, int joint_count, int 
 /// The prior's standard deviation of full-model parameter `index`: prior_tolerance, 0 without
 /// a nominal [m] or [rad].
 double lm_prior_sigma(const LmPrior& prior, int index);
-/// `stated` times `scale`, every kind alike [m], [rad].
-LmPriorTolerances widened_tolerances(const LmPriorTolerances& stated, double scale);
 /// Whether `held` (LmResult::prior_tolerances) is wider than `stated` in any kind.
 bool tolerances_widened(const LmPriorTolerances& stated, const LmPriorTolerances& held);
 /// The prior around `nominal` with `tolerance`; none (a null nominal) when every tolerance is 0.
