@@ -103,9 +103,11 @@ void line(const char* label, std::uint64_t value) {
   print("\n");
 }
 
-// Static: the workspace (dataset + phase arena) and the report are far too big for a stack.
+// Static: the workspace (dataset + phase arena) and the report are far too big for a stack, and
+// the job's options would take a tenth of it for the whole run.
 test::CaptureJobWorkspace workspace;
 test::CaptureJobReport report;
+test::CaptureJobConfig job_config;
 char command_line[256];
 
 /// The settings a command line asks for; false if it is not understood.
@@ -212,17 +214,16 @@ int main() {
   std::strncpy(command_line, board_command_line(), sizeof command_line - 1);
   char* words[5] = {};
   const int count = split_words(command_line, words, 5);
-  test::CaptureJobConfig config;
   std::uint64_t golden = 0;
-  if (!parse_config(words, count, &config, &golden)) {
+  if (!parse_config(words, count, &job_config, &golden)) {
     print(
         "usage: capture_job <robot.cap> <tracker.cap> golden | lm | compliance | <food sources> <cycles> "
         "[clock|extraction|abc|lm|compliance]\n");
     return 1;
   }
   SemihostingCaptures captures(words[0], words[1]);
-  const Status status = test::run_capture_job(captures, config, &workspace, &report);
-  print_results(config, status);
+  const Status status = test::run_capture_job(captures, job_config, &workspace, &report);
+  print_results(job_config, status);
   print_memory();
   if (status != Status::ok) return 1;
   if (golden != 0) {

@@ -84,7 +84,15 @@ struct CaptureJobWorkspace {
                                                  : sizeof(JobCalibrationWorkspace);
   Dataset<kJobSamples> dataset;                                         ///< the samples of the captures
   alignas(alignof(std::max_align_t)) unsigned char arena[kArenaBytes];  ///< capture, then calibration workspace
+  RobotModel nominal;  ///< the job's start model (here, not on the stack the job runs on)
 };
+
+/// ws->nominal: `config`'s robot and tool. Not inlined: the table's copy stays off the stack of
+/// the job that follows.
+[[gnu::noinline]] inline void set_job_nominal(const CaptureJobConfig& config, CaptureJobWorkspace* ws) {
+  ws->nominal = nominal_model(config.robot);
+  ws->nominal.tool_m = config.tool_m;
+}
 
 /// The results of a run (static storage: the CalibrationResult alone is ~5 KB).
 struct CaptureJobReport {
@@ -178,8 +186,8 @@ inline Status run_capture_job(CaptureSource& source, const CaptureJobConfig& con
                               CaptureJobReport* report) {
   report->~CaptureJobReport();
   CaptureJobReport& r = *new (report) CaptureJobReport();  // in place: no 5 KB temporary on the stack
-  RobotModel nominal = nominal_model(config.robot);
-  nominal.tool_m = config.tool_m;
+  set_job_nominal(config, ws);
+  const RobotModel& nominal = ws->nominal;
   JobCaptureWorkspace* capture = new (ws->arena) JobCaptureWorkspace();
   Status status = config.stop_after == JobStop::clock
                       ? estimate_capture_clock(nominal, source, capture, &r.capture)
