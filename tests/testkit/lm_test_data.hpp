@@ -3,6 +3,8 @@
 // combinations a calibrated model is compared on (own PRNG: the same on every target).
 #pragma once
 
+#include <cmath>
+
 #include <Eigen/LU>
 
 #include "hivecal/model/dataset.hpp"
@@ -151,6 +153,29 @@ inline Vec3 tool_in_frame5(const RobotModel& model, double q6_rad) {
 /// d2 + d3 + d4: the only combination of the parallel joints' offsets the data determines.
 inline double parallel_offset_sum_m(const RobotModel& model) {
   return model.joints[1].d_m + model.joints[2].d_m + model.joints[3].d_m;
+}
+
+/// `count` samples of a perturbed UR5 at random poses with `noise_m` tracker noise: the arm turns
+/// to turned(q) when its joints read q; `reading_step_rad` > 0: the readings rounded to that
+/// step, as a pendant shows them; `elbow_half_range_rad` > 0: the elbow drawn within +- it.
+template <typename Turned>
+void fill_turned(std::uint64_t seed, std::size_t count, double noise_m, Turned turned, DatasetBase* out,
+                 double reading_step_rad = 0.0, double elbow_half_range_rad = 0.0) {
+  Random model_random(2503);
+  RobotModel truth = perturbed_model(nominal_model(RobotType::ur5), &model_random, 1e-3, 1e-3);
+  truth.tool_m << 0.02, -0.015, 0.12;
+  const RigidTransform base = example_base_to_tracker();
+  Random random(seed);
+  out->clear();
+  for (std::size_t i = 0; i < count; ++i) {
+    JointVector q = random_joints(&random);
+    if (elbow_half_range_rad > 0.0) q(2) = random.uniform(-elbow_half_range_rad, elbow_half_range_rad);
+    JointVector reading = q;
+    if (reading_step_rad > 0.0) {
+      for (int j = 0; j < kSixJoints; ++j) reading(j) = reading_step_rad * std::round(q(j) / reading_step_rad);
+    }
+    (void)out->add(reading, base.apply(fk_tool_point(truth, turned(q))) + noise_m * gaussian_vector(&random));
+  }
 }
 
 }  // namespace hivecal::test

@@ -55,29 +55,6 @@ JointVector true_joints(bool harmonics, const JointVector& q, bool bends = false
   return turned;
 }
 
-/// `count` samples of a perturbed UR5 at random poses with `noise_m` tracker noise: the arm turns
-/// to turned(q) when its joints read q; `reading_step_rad` > 0: the readings rounded to that
-/// step, as a pendant shows them; `elbow_half_range_rad` > 0: the elbow drawn within +- it.
-template <typename Turned>
-void fill_turned(std::uint64_t seed, std::size_t count, double noise_m, Turned turned, DatasetBase* out,
-                 double reading_step_rad = 0.0, double elbow_half_range_rad = 0.0) {
-  Random model_random(2503);
-  RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &model_random, 1e-3, 1e-3);
-  truth.tool_m << 0.02, -0.015, 0.12;
-  const RigidTransform base = test::example_base_to_tracker();
-  Random random(seed);
-  out->clear();
-  for (std::size_t i = 0; i < count; ++i) {
-    JointVector q = test::random_joints(&random);
-    if (elbow_half_range_rad > 0.0) q(2) = random.uniform(-elbow_half_range_rad, elbow_half_range_rad);
-    JointVector reading = q;
-    if (reading_step_rad > 0.0) {
-      for (int j = 0; j < kSixJoints; ++j) reading(j) = reading_step_rad * std::round(q(j) / reading_step_rad);
-    }
-    (void)out->add(reading, base.apply(fk_tool_point(truth, turned(q))) + noise_m * test::gaussian_vector(&random));
-  }
-}
-
 /// Joint `joint` (0-based) turns sin_rad sin(q) + cos_rad cos(q) more than it reads (an
 /// eccentric encoder).
 auto eccentric_joint(int joint, double sin_rad, double cos_rad) {
@@ -90,7 +67,7 @@ auto eccentric_joint(int joint, double sin_rad, double cos_rad) {
 
 /// `count` samples of the arm of true_joints with 15 um tracker noise.
 void fill(bool harmonics, std::uint64_t seed, std::size_t count, DatasetBase* out, bool bends = false) {
-  fill_turned(
+  test::fill_turned(
       seed, count, 15e-6, [&](const JointVector& q) { return true_joints(harmonics, q, bends); }, out);
 }
 
@@ -228,7 +205,7 @@ const CalibrationStage& calibrate_small_set() {
 TEST(CalibrationHarmonics, OnASmallSetTermsThatDoNotPredictLeftOutPosesAreRejected) {
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
   const double step_rad = 0.01 * 3.14159265358979323846 / 180.0;
-  fill_turned(
+  test::fill_turned(
       76, 20, 1e-6, [](const JointVector& q) { return q; }, &dataset, step_rad);
   const CalibrationStage harmonics = calibrate_small_set();
   const JointTermHoldout& holdout = harmonics.holdout;
@@ -258,7 +235,7 @@ TEST(CalibrationHarmonics, OnASmallSetTermsThatDoNotPredictLeftOutPosesAreReject
 // quarters of a turn on 30 poses, does not admit a first harmonic: kHarmonicMinPeriodShare.)
 TEST(CalibrationHarmonics, OnASmallSetTermsThatPredictLeftOutPosesStay) {
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
-  fill_turned(62, 30, 5e-6, eccentric_joint(0, 500e-6, -400e-6), &dataset);
+  test::fill_turned(62, 30, 5e-6, eccentric_joint(0, 500e-6, -400e-6), &dataset);
   const CalibrationStage& harmonics = calibrate_small_set();
   const JointTermHoldout& holdout = harmonics.holdout;
   ASSERT_TRUE(holdout.checked);
@@ -277,7 +254,7 @@ TEST(CalibrationHarmonics, OnASmallSetTermsThatPredictLeftOutPosesStay) {
 // result the job writes reads back (the readers refuse beyond kMaxJointTermCoefficient).
 TEST(CalibrationHarmonics, ACoefficientBeyondWhatARobotHasIsFixed) {
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
-  fill_turned(63, 100, 15e-6, eccentric_joint(0, 0.0, 2.0 * kMaxJointTermCoefficient), &dataset);
+  test::fill_turned(63, 100, 15e-6, eccentric_joint(0, 0.0, 2.0 * kMaxJointTermCoefficient), &dataset);
   CalibrationOptions options = harmonic_options();
   options.significance_t = 0.0;  // no significance test: the bound holds by itself
   ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);
@@ -304,7 +281,7 @@ TEST(CalibrationHarmonics, AHarmonicWhoseJointTurnsTooLittleOfItsPeriodIsNotAdmi
   if (!capacity_holds_harmonics()) return;  // TrueHarmonicsAreRecoveredWithinTheirSigma checks the refusal
   const auto elbow = eccentric_joint(2, 300e-6, -200e-6);
   for (const double half_range_rad : {1.5, 2.9}) {
-    fill_turned(64, 120, 10e-6, elbow, &dataset, 0.0, half_range_rad);
+    test::fill_turned(64, 120, 10e-6, elbow, &dataset, 0.0, half_range_rad);
     CalibrationOptions options = harmonic_options(1);
     options.train_fraction = 1.0;
     ASSERT_EQ(calibrate(nominal_model(RobotType::ur5), &dataset, options, &workspace, &result), Status::ok);

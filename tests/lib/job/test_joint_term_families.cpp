@@ -171,21 +171,15 @@ TEST(JointTermFamilies, ANewFamilyIsOneEntryItsStageLevelAndRulesFollow) {
 /// `count` samples of a perturbed UR5 whose shoulder and elbow sag and whose base and elbow are
 /// eccentric (true_joints of test_calibration_harmonics.cpp), 15 um tracker noise.
 void fill(std::uint64_t seed, std::size_t count, DatasetBase* out) {
-  Random model_random(2503);
-  RobotModel truth = test::perturbed_model(nominal_model(RobotType::ur5), &model_random, 1e-3, 1e-3);
-  truth.tool_m << 0.02, -0.015, 0.12;
-  const RigidTransform base = test::example_base_to_tracker();
-  Random random(seed);
-  out->clear();
-  for (std::size_t i = 0; i < count; ++i) {
-    const JointVector q = test::random_joints(&random);
-    JointVector turned = q;
+  const auto turned = [](const JointVector& q) {
+    JointVector t = q;
     const double forearm = std::cos(q(1) + q(2));
-    turned(1) += 60e-6 * (0.425 * std::cos(q(1)) + 0.392 * forearm) / 0.817;
-    turned(2) += 30e-6 * forearm + 60e-6 * std::sin(q(2)) + 50e-6 * std::cos(q(2));
-    turned(0) += 50e-6 * std::sin(q(0)) - 40e-6 * std::cos(q(0));
-    (void)out->add(q, base.apply(fk_tool_point(truth, turned)) + 15e-6 * test::gaussian_vector(&random));
-  }
+    t(1) += 60e-6 * (0.425 * std::cos(q(1)) + 0.392 * forearm) / 0.817;
+    t(2) += 30e-6 * forearm + 60e-6 * std::sin(q(2)) + 50e-6 * std::cos(q(2));
+    t(0) += 50e-6 * std::sin(q(0)) - 40e-6 * std::cos(q(0));
+    return t;
+  };
+  test::fill_turned(seed, count, 15e-6, turned, out);
 }
 
 constexpr std::size_t kSamples = 256;
