@@ -107,10 +107,9 @@ class TimeColumn {
 /// Columns of a robot log once its format is known: time and where each joint comes from.
 struct RobotLayout {
   TimeColumn time;
-  int joint_count = kSixJoints;        ///< joints per record: the arm's (RTDE: a UR's six)
+  InputJoints joints;                  ///< joints per record and which slide: the arm's (RTDE: a UR's six)
   int q[kMaxJoints] = {};              ///< hivecal / RTDE: column of joint j
   double q_scale[kMaxJoints] = {};     ///< its factor to rad (a prismatic joint's to m)
-  std::uint32_t prismatic = 0;         ///< bit j: joint j is prismatic (its column a length)
   std::vector<int> names;              ///< rostopic: field.nameK columns
   std::vector<int> positions;          ///< rostopic: field.positionK columns
   std::vector<double> position_scale;  ///< their factors to rad
@@ -118,10 +117,9 @@ struct RobotLayout {
 
 /// Columns "<prefix><first+j>" as the layout's joints (a prismatic one a length).
 bool fixed_joints(DelimitedReader& r, const char* prefix, int first, RobotLayout* layout) {
-  for (int j = 0; j < layout->joint_count; ++j) {
+  for (int j = 0; j < layout->joints.count; ++j) {
     layout->q[j] = r.find(column_name(prefix, first + j));
-    const Quantity quantity =
-        (layout->prismatic >> static_cast<unsigned>(j) & 1U) != 0 ? Quantity::length : Quantity::angle;
+    const Quantity quantity = layout->joints.slides(j) ? Quantity::length : Quantity::angle;
     if (!scale_of(r, layout->q[j], quantity, &layout->q_scale[j])) return false;
   }
   return true;
@@ -136,8 +134,7 @@ bool hivecal_joints(DelimitedReader& r, const InputJoints& joints, RobotLayout* 
                   std::to_string(joints.count) + " joints (" + joint_names(joints.count) +
                   "): the joints of another arm? (--robot-model names the arm)");
   }
-  layout->joint_count = joints.count;
-  layout->prismatic = joints.prismatic;
+  layout->joints = joints;
   return fixed_joints(r, "q", 1, layout);
 }
 
@@ -158,8 +155,7 @@ bool robot_layout(DelimitedReader& r, const RobotLogOptions& options, LogFormat*
       layout->positions.push_back(position);
       layout->position_scale.push_back(scale);
     }
-    layout->joint_count = joints.count;
-    layout->prismatic = joints.prismatic;
+    layout->joints = joints;
     if (layout->names.size() < static_cast<std::size_t>(joints.count)) {
       return r.fail("rostopic log with " + std::to_string(layout->names.size()) +
                     " joints (field.nameK with field.positionK), but the robot model has " +
@@ -247,8 +243,8 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
     }
     bool repeated = false;
     if (!layout.time.read(r, &record.timestamp_us, &repeated)) break;
-    record.joint_count = layout.joint_count;
-    for (int j = 0; j < layout.joint_count; ++j) {
+    record.joint_count = layout.joints.count;
+    for (int j = 0; j < layout.joints.count; ++j) {
       if (layout.names.empty()) {
         good = good && r.number(static_cast<std::size_t>(layout.q[j]), layout.q_scale[j], &record.q_rad[j]);
       } else {
@@ -257,12 +253,12 @@ RobotLog read_robot_rows(DelimitedReader& r, const RobotLogOptions& options) {
             good && r.number(static_cast<std::size_t>(layout.positions[k]), layout.position_scale[k], &record.q_rad[j]);
       }
     }
-    for (int j = 0; good && j < layout.joint_count; ++j) {
+    for (int j = 0; good && j < layout.joints.count; ++j) {
       if (!std::isfinite(record.q_rad[j])) good = r.fail("joint " + std::to_string(j + 1) + ": NaN or Inf");
       const int column = layout.names.empty() ? layout.q[j] : layout.positions[static_cast<std::size_t>(source[j])];
-      const bool slides = (layout.prismatic >> static_cast<unsigned>(j) & 1U) != 0;
-      good = good && (slides ? r.check_slide(j + 1, static_cast<std::size_t>(column), record.q_rad[j])
-                             : r.check_joint(j + 1, static_cast<std::size_t>(column), record.q_rad[j]));
+      good =
+          good && (layout.joints.slides(j) ? r.check_slide(j + 1, static_cast<std::size_t>(column), record.q_rad[j])
+                                           : r.check_joint(j + 1, static_cast<std::size_t>(column), record.q_rad[j]));
     }
     if (!good) break;
     keep_record(record, repeated, &log);
